@@ -1,0 +1,412 @@
+//! Rust emitter: graph cone of a kernel → SSA `let` bindings → `quote!` tokens → `syn::File`
+//! → `prettyplease` (DESIGN.md "Emit"; DEPENDENCIES.md §4: SSA avoids the token-pasting
+//! precedence pitfall). Constants are printed with Rust's shortest round-trip formatting, so
+//! every `f64` survives exactly. sin/cos of one joint variable share a `sin_cos` call.
+
+use std::fmt::Write as _;
+use std::str::FromStr;
+
+use proc_macro2::{Ident, Literal, Span, TokenStream};
+use quote::{format_ident, quote};
+
+use crate::CodegenError;
+use crate::graph::{Graph, Id, Node};
+use crate::kernels::{Arg, CONTACT_FIELDS, Dim, KernelDef, OutKind};
+use crate::report::OpCounts;
+use crate::robot::Layout;
+
+/// Tokens of an `f64` literal (exact: shortest representation that round-trips).
+pub fn f64_tokens(v: f64) -> TokenStream {
+    if v.is_nan() {
+        return quote!(f64::NAN);
+    }
+    if v.is_infinite() {
+        return if v > 0.0 {
+            quote!(f64::INFINITY)
+        } else {
+            quote!(f64::NEG_INFINITY)
+        };
+    }
+    let s = format!("{:?}", v.abs());
+    let lit = Literal::from_str(&s).unwrap_or_else(|_| Literal::f64_unsuffixed(v.abs()));
+    if v < 0.0 { quote!(-#lit) } else { quote!(#lit) }
+}
+
+fn dim_tokens(d: Dim) -> TokenStream {
+    match d {
+        Dim::Nq => quote!(NQ),
+        Dim::Lit(n) => {
+            let l = Literal::usize_unsuffixed(n);
+            quote!(#l)
+        }
+    }
+}
+
+fn array_type(dims: &[Dim]) -> TokenStream {
+    let mut t = quote!(f64);
+    for &d in dims.iter().rev() {
+        let dt = dim_tokens(d);
+        t = quote!([#t; #dt]);
+    }
+    t
+}
+
+fn dim_value(d: Dim, nq: usize) -> usize {
+    match d {
+        Dim::Nq => nq,
+        Dim::Lit(n) => n,
+    }
+}
+
+/// Element access paths (`[i][j]` suffixes) of an array with `dims`, row-major.
+fn index_paths(dims: &[Dim], nq: usize) -> Vec<TokenStream> {
+    let mut paths = vec![TokenStream::new()];
+    for &d in dims {
+        let n = dim_value(d, nq);
+        let mut next = Vec::with_capacity(paths.len() * n);
+        for p in &paths {
+            for i in 0..n {
+                let l = Literal::usize_unsuffixed(i);
+                next.push(quote!(#p[#l]));
+            }
+        }
+        paths = next;
+    }
+    paths
+}
+
+/// Emitted body of one kernel plus its operation counts.
+pub struct EmittedKernel {
+    /// The function item tokens.
+    pub tokens: TokenStream,
+    /// Operation counts.
+    pub ops: OpCounts,
+}
+
+fn var_tokens(layout: &Layout, v: u32) -> TokenStream {
+    let v = v as usize;
+    let nq = layout.nq;
+    let lit = |i: usize| Literal::usize_unsuffixed(i);
+    if v < nq {
+        let i = lit(v);
+        quote!(q[#i])
+    } else if v < 2 * nq {
+        let i = lit(v - nq);
+        quote!(qd[#i])
+    } else if v < 2 * nq + 3 {
+        let i = lit(v - 2 * nq);
+        quote!(omega[#i])
+    } else if v == 2 * nq + 3 {
+        quote!(eps)
+    } else {
+        let i = lit(v - 2 * nq - 4);
+        quote!(p[#i])
+    }
+}
+
+/// Emit one kernel as a Rust function.
+pub fn emit_kernel(
+    g: &Graph,
+    layout: &Layout,
+    k: &KernelDef,
+) -> Result<EmittedKernel, CodegenError> {
+    let roots: Vec<Id> = k
+        .outputs
+        .iter()
+        .flat_map(|o| o.ids.iter().copied())
+        .collect();
+    let mark = g.cone(&roots);
+    let max = roots.iter().map(|r| r.index() + 1).max().unwrap_or(0);
+    let mut refs: Vec<Option<TokenStream>> = vec![None; max];
+    let mut stmts: Vec<TokenStream> = Vec::new();
+    let mut ops = OpCounts::default();
+    let mut counter = 0usize;
+    let fresh = |counter: &mut usize| {
+        let id = format_ident!("t{}", *counter);
+        *counter += 1;
+        id
+    };
+    for i in 0..max {
+        if !mark[i] || refs[i].is_some() {
+            continue;
+        }
+        let node = g.node(Id(i as u32));
+        let r = |id: Id, refs: &Vec<Option<TokenStream>>| -> TokenStream {
+            refs[id.index()]
+                .clone()
+                .expect("internal: child emitted before parent")
+        };
+        let expr: TokenStream = match node {
+            Node::Const(b) => {
+                refs[i] = Some(f64_tokens(f64::from_bits(b)));
+                continue;
+            }
+            Node::Var(v) => {
+                refs[i] = Some(var_tokens(layout, v));
+                continue;
+            }
+            Node::Sin(a) | Node::Cos(a) => {
+                let x = r(a, &refs);
+                let is_sin = matches!(node, Node::Sin(_));
+                // The partner node (cos for sin and vice versa), if it is in the cone.
+                let partner = (i + 1..max).find(|&j| {
+                    mark[j]
+                        && match g.node(Id(j as u32)) {
+                            Node::Cos(b) if is_sin => b == a,
+                            Node::Sin(b) if !is_sin => b == a,
+                            _ => false,
+                        }
+                });
+                ops.sincos += 1;
+                match partner {
+                    Some(j) => {
+                        let s = fresh(&mut counter);
+                        let c = fresh(&mut counter);
+                        stmts.push(quote!(let (#s, #c) = sin_cos(#x);));
+                        ops.temporaries += 2;
+                        let (si, ci) = if is_sin { (i, j) } else { (j, i) };
+                        refs[si] = Some(quote!(#s));
+                        refs[ci] = Some(quote!(#c));
+                    }
+                    None => {
+                        let t = fresh(&mut counter);
+                        if is_sin {
+                            stmts.push(quote!(let #t = sin_cos(#x).0;));
+                        } else {
+                            stmts.push(quote!(let #t = sin_cos(#x).1;));
+                        }
+                        ops.temporaries += 1;
+                        refs[i] = Some(quote!(#t));
+                    }
+                }
+                continue;
+            }
+            Node::Add(a, b) => {
+                ops.add += 1;
+                let (x, y) = (r(a, &refs), r(b, &refs));
+                quote!(#x + #y)
+            }
+            Node::Sub(a, b) => {
+                ops.add += 1;
+                let (x, y) = (r(a, &refs), r(b, &refs));
+                quote!(#x - #y)
+            }
+            Node::Mul(a, b) => {
+                ops.mul += 1;
+                let (x, y) = (r(a, &refs), r(b, &refs));
+                quote!(#x * #y)
+            }
+            Node::Div(a, b) => {
+                ops.div += 1;
+                let (x, y) = (r(a, &refs), r(b, &refs));
+                quote!(#x / #y)
+            }
+            Node::Neg(a) => {
+                ops.neg += 1;
+                let x = r(a, &refs);
+                quote!(-#x)
+            }
+            Node::Sqrt(a) => {
+                ops.sqrt += 1;
+                let x = r(a, &refs);
+                quote!(f64::sqrt(#x))
+            }
+            Node::Abs(a) => {
+                ops.other += 1;
+                let x = r(a, &refs);
+                quote!(f64::abs(#x))
+            }
+            Node::Min(a, b) => {
+                ops.other += 1;
+                let (x, y) = (r(a, &refs), r(b, &refs));
+                quote!(f64::min(#x, #y))
+            }
+            Node::Max(a, b) => {
+                ops.other += 1;
+                let (x, y) = (r(a, &refs), r(b, &refs));
+                quote!(f64::max(#x, #y))
+            }
+            Node::IfLt(a, b, t, f) => {
+                ops.other += 1;
+                let (x, y, tt, ff) = (r(a, &refs), r(b, &refs), r(t, &refs), r(f, &refs));
+                quote!(if #x < #y { #tt } else { #ff })
+            }
+        };
+        let t = fresh(&mut counter);
+        stmts.push(quote!(let #t = #expr;));
+        ops.temporaries += 1;
+        refs[i] = Some(quote!(#t));
+    }
+
+    // Output assignments.
+    let mut params: Vec<TokenStream> = Vec::new();
+    for a in &k.inputs {
+        params.push(match a {
+            Arg::Q => quote!(q: &[f64; NQ]),
+            Arg::Qd => quote!(qd: &[f64; NQ]),
+            Arg::Omega => quote!(omega: &[f64; 3]),
+            Arg::Eps => quote!(eps: f64),
+            Arg::P => quote!(p: &[f64; NP]),
+        });
+    }
+    for o in &k.outputs {
+        let name = Ident::new(&o.name, Span::call_site());
+        let val = |id: Id| {
+            refs[id.index()]
+                .clone()
+                .expect("internal: output not emitted")
+        };
+        match &o.kind {
+            OutKind::Scalar => {
+                params.push(quote!(#name: &mut f64));
+                let v = val(o.ids[0]);
+                stmts.push(quote!(*#name = #v;));
+            }
+            OutKind::Array(dims) => {
+                let ty = array_type(dims);
+                params.push(quote!(#name: &mut #ty));
+                for (path, &id) in index_paths(dims, layout.nq).iter().zip(&o.ids) {
+                    let v = val(id);
+                    stmts.push(quote!(#name #path = #v;));
+                }
+            }
+            OutKind::Contact => {
+                params.push(quote!(#name: &mut Contact));
+                let mut it = o.ids.iter();
+                for (field, dims, _) in CONTACT_FIELDS {
+                    let f = Ident::new(field, Span::call_site());
+                    for path in index_paths(dims, layout.nq) {
+                        let id = *it.next().ok_or_else(|| {
+                            CodegenError::Internal("contact output size mismatch".into())
+                        })?;
+                        let v = val(id);
+                        stmts.push(quote!(#name.#f #path = #v;));
+                    }
+                }
+            }
+        }
+    }
+    let fname = Ident::new(&k.name, Span::call_site());
+    let mut doc = String::new();
+    let _ = write!(doc, " {}", k.doc);
+    let mut doc_lines = vec![doc, String::new(), " Arguments, in order:".to_string()];
+    for a in &k.inputs {
+        doc_lines.push(
+            match a {
+                Arg::Q => " * `q`: joint angles (rad)",
+                Arg::Qd => " * `qd`: joint velocities (rad/s)",
+                Arg::Omega => " * `omega`: ball angular velocity, world axes (rad/s)",
+                Arg::Eps => " * `eps`: smoothing width ε of |x| ≈ √(x² + ε²) (m)",
+                Arg::P => {
+                    " * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)"
+                }
+            }
+            .to_string(),
+        );
+    }
+    for o in &k.outputs {
+        doc_lines.push(format!(
+            " * `{}`: output (see above), fully overwritten",
+            o.name
+        ));
+    }
+    doc_lines.push(String::new());
+    doc_lines.push(format!(
+        " Cost: {} add/sub, {} mul, {} div, {} sqrt, {} sin/cos, {} neg, {} other; {} temporaries.",
+        ops.add, ops.mul, ops.div, ops.sqrt, ops.sincos, ops.neg, ops.other, ops.temporaries
+    ));
+    let docs = doc_lines.iter().map(|l| quote!(#[doc = #l]));
+    let tokens = quote! {
+        #(#docs)*
+        #[inline]
+        #[allow(unused_variables)]
+        pub fn #fname(#(#params),*) {
+            #(#stmts)*
+        }
+    };
+    Ok(EmittedKernel { tokens, ops })
+}
+
+/// The item `fn sin_cos` of `trig.rs`, made private, for inclusion in generated files.
+fn sin_cos_item() -> Result<TokenStream, CodegenError> {
+    let file: syn::File = syn::parse_str(include_str!("trig.rs"))
+        .map_err(|e| CodegenError::Internal(format!("trig.rs does not parse: {e}")))?;
+    for item in file.items {
+        if let syn::Item::Fn(mut f) = item
+            && f.sig.ident == "sin_cos"
+        {
+            f.vis = syn::Visibility::Inherited;
+            return Ok(quote!(#f));
+        }
+    }
+    Err(CodegenError::Internal("trig.rs has no fn sin_cos".into()))
+}
+
+/// Emit the whole scene module file.
+#[allow(clippy::too_many_arguments)]
+pub fn emit_file(
+    scene_name: &str,
+    nq: usize,
+    params: &[(String, f64)],
+    kernel_names: &[String],
+    source_text: &str,
+    kernel_tokens: Vec<TokenStream>,
+    with_contact: bool,
+) -> Result<String, CodegenError> {
+    let nq_l = Literal::usize_unsuffixed(nq);
+    let np_l = Literal::usize_unsuffixed(params.len());
+    let pnames = params.iter().map(|p| p.0.as_str());
+    let pdefs = params.iter().map(|p| f64_tokens(p.1));
+    let knames = kernel_names.iter().map(|s| s.as_str());
+    let contact = if with_contact {
+        let fields = CONTACT_FIELDS.iter().map(|(f, dims, doc)| {
+            let id = Ident::new(f, Span::call_site());
+            let ty = array_type(dims);
+            let d = format!(" {doc}");
+            quote!(#[doc = #d] pub #id: #ty,)
+        });
+        quote! {
+            /// Contact geometry between the last link and the ball (paper Sect. 2.2),
+            /// world axes, SI units. Filled by `contact` / `contact_smooth`.
+            #[derive(Debug, Clone, Copy, Default, PartialEq)]
+            pub struct Contact {
+                #(#fields)*
+            }
+        }
+    } else {
+        TokenStream::new()
+    };
+    let sin_cos = sin_cos_item()?;
+    let tokens = quote! {
+        /// Number of joints.
+        pub const NQ: usize = #nq_l;
+        /// Number of runtime parameters.
+        pub const NP: usize = #np_l;
+        /// Names of the runtime parameters, in the order of `p`.
+        pub const PARAM_NAMES: [&str; NP] = [#(#pnames),*];
+        /// Default values of the runtime parameters (the values in the scene file).
+        pub const PARAM_DEFAULTS: [f64; NP] = [#(#pdefs),*];
+        /// Names of the kernels emitted for this scene.
+        pub const KERNELS: &[&str] = &[#(#knames),*];
+        /// Name of the scene.
+        pub const SCENE_NAME: &str = #scene_name;
+        /// The scene file's text.
+        pub const SCENE_TOML: &str = #source_text;
+        #contact
+        #sin_cos
+        #(#kernel_tokens)*
+    };
+    let file: syn::File = syn::parse2(tokens)
+        .map_err(|e| CodegenError::Internal(format!("emitted code does not parse: {e}")))?;
+    let body = prettyplease::unparse(&file);
+    let mut out = String::new();
+    out.push_str("// @generated by bf-codegen from scene `");
+    out.push_str(scene_name);
+    out.push_str("`. Do not edit: regenerate with `ball-finger generate`.\n");
+    out.push_str(
+        "// Conventions: standard DH unless the scene says otherwise, world axes, SI units,\n\
+         // matrices row-major (see docs/kernels.md).\n",
+    );
+    out.push_str(&body);
+    Ok(out)
+}

@@ -1,0 +1,136 @@
+//! Interpreter: evaluates graph nodes in `f64` or in double-double ([`crate::dd::Dd`]).
+//!
+//! Used by `eval_all` (the CLI `eval` of scene files that are not built in), by the tests
+//! that compare emitted kernels with the graph they came from, and for accuracy measurements
+//! (f64 kernel vs double-double evaluation of the same graph).
+
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use crate::dd::Dd;
+use crate::graph::{Graph, Id, Node};
+
+/// Arithmetic the interpreter needs.
+pub trait Scalar:
+    Copy
+    + PartialOrd
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// Exact conversion from `f64`.
+    fn from_f64(v: f64) -> Self;
+    /// (sin x, cos x).
+    fn sin_cos(self) -> (Self, Self);
+    /// √x.
+    fn sqrt(self) -> Self;
+    /// |x|.
+    fn abs(self) -> Self;
+    /// Nearest `f64`.
+    fn to_f64(self) -> f64;
+}
+
+impl Scalar for f64 {
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        crate::trig::sin_cos(self)
+    }
+    fn sqrt(self) -> Self {
+        f64::sqrt(self)
+    }
+    fn abs(self) -> Self {
+        f64::abs(self)
+    }
+    fn to_f64(self) -> f64 {
+        self
+    }
+}
+
+impl Scalar for Dd {
+    fn from_f64(v: f64) -> Self {
+        Dd::new(v)
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        Dd::sin_cos(self)
+    }
+    fn sqrt(self) -> Self {
+        Dd::sqrt(self)
+    }
+    fn abs(self) -> Self {
+        Dd::abs(self)
+    }
+    fn to_f64(self) -> f64 {
+        Dd::to_f64(self)
+    }
+}
+
+/// A compiled evaluation order for a set of outputs (the cone, children first).
+#[derive(Debug, Clone)]
+pub struct Tape {
+    nodes: Vec<(usize, Node)>,
+    outputs: Vec<Id>,
+    size: usize,
+}
+
+impl Tape {
+    /// Compile the cone of `outputs`.
+    pub fn new(g: &Graph, outputs: &[Id]) -> Self {
+        let mark = g.cone(outputs);
+        let size = outputs.iter().map(|o| o.index() + 1).max().unwrap_or(0);
+        let nodes = (0..size)
+            .filter(|&i| mark[i])
+            .map(|i| (i, g.node(Id(i as u32))))
+            .collect();
+        Tape {
+            nodes,
+            outputs: outputs.to_vec(),
+            size,
+        }
+    }
+
+    /// Evaluate the outputs for the input variables `vars` (layout of [`crate::robot::Layout`]).
+    /// Variables beyond `vars.len()` read as 0.
+    pub fn eval<S: Scalar>(&self, vars: &[S]) -> Vec<S> {
+        let zero = S::from_f64(0.0);
+        let mut v: Vec<S> = vec![zero; self.size];
+        for &(i, n) in &self.nodes {
+            v[i] = match n {
+                Node::Const(b) => S::from_f64(f64::from_bits(b)),
+                Node::Var(k) => vars.get(k as usize).copied().unwrap_or(zero),
+                Node::Add(a, b) => v[a.index()] + v[b.index()],
+                Node::Sub(a, b) => v[a.index()] - v[b.index()],
+                Node::Mul(a, b) => v[a.index()] * v[b.index()],
+                Node::Div(a, b) => v[a.index()] / v[b.index()],
+                Node::Neg(a) => -v[a.index()],
+                Node::Sin(a) => v[a.index()].sin_cos().0,
+                Node::Cos(a) => v[a.index()].sin_cos().1,
+                Node::Sqrt(a) => v[a.index()].sqrt(),
+                Node::Abs(a) => v[a.index()].abs(),
+                Node::Min(a, b) => {
+                    let (x, y) = (v[a.index()], v[b.index()]);
+                    if y < x { y } else { x }
+                }
+                Node::Max(a, b) => {
+                    let (x, y) = (v[a.index()], v[b.index()]);
+                    if y > x { y } else { x }
+                }
+                Node::IfLt(a, b, t, f) => {
+                    if v[a.index()] < v[b.index()] {
+                        v[t.index()]
+                    } else {
+                        v[f.index()]
+                    }
+                }
+            };
+        }
+        self.outputs.iter().map(|o| v[o.index()]).collect()
+    }
+}
+
+/// Evaluate `outputs` once (compiles a [`Tape`]).
+pub fn eval<S: Scalar>(g: &Graph, outputs: &[Id], vars: &[S]) -> Vec<S> {
+    Tape::new(g, outputs).eval(vars)
+}

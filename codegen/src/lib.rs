@@ -1,0 +1,253 @@
+//! bf-codegen: scene file (DH table, inertias, ball) → verified flat Rust dynamics kernels.
+//!
+//! Pipeline (DESIGN.md "codegen"): [`spec`] (scene types) → [`robot`] (kinematics eq. 67–71,
+//! dynamics eq. 22a/72–79, contact eq. 2–13/58–59 as [`graph`] expressions, derivatives by
+//! [`diff`]) → [`kernels`] (the catalogue of docs/kernels.md) → [`emit`] (SSA Rust code) with a
+//! [`report`]; [`interp`] evaluates the same graphs in f64 or double-double ([`dd`]).
+//!
+//! Entry points: [`generate`] (code + report) and [`eval_all`] (numbers for one state).
+
+pub mod dd;
+pub mod diff;
+pub mod emit;
+pub mod graph;
+pub mod interp;
+pub mod kernels;
+pub mod report;
+pub mod robot;
+pub mod spec;
+pub mod trig;
+
+use std::time::Instant;
+
+use serde::ser::{Serialize, SerializeMap, Serializer};
+
+pub use kernels::ALL_KERNELS;
+pub use report::{KernelReport, OpCounts, Report};
+pub use robot::Model;
+pub use spec::Scene;
+
+/// Errors of the generator.
+#[derive(Debug, thiserror::Error)]
+pub enum CodegenError {
+    /// The scene cannot be turned into kernels (unknown kernel or parameter, missing ball, …).
+    #[error("scene error: {0}")]
+    Scene(String),
+    /// Bad numeric input to [`eval_all`] (wrong length, non-finite value).
+    #[error("input error: {0}")]
+    Input(String),
+    /// A bug in the generator.
+    #[error("internal generator error: {0}")]
+    Internal(String),
+}
+
+/// Result of [`generate`].
+#[derive(Debug, Clone)]
+pub struct Generated {
+    /// The Rust source of the scene module (formatted, deterministic).
+    pub code: String,
+    /// Operation counts per kernel and timing.
+    pub report: Report,
+}
+
+fn check_kernel_list(scene: &Scene) -> Result<(), CodegenError> {
+    for (i, k) in scene.kernels.iter().enumerate() {
+        if !ALL_KERNELS.contains(&k.as_str()) {
+            return Err(CodegenError::Scene(format!(
+                "unknown kernel `{k}` in `kernels`; known kernels: {}",
+                ALL_KERNELS.join(", ")
+            )));
+        }
+        if scene.kernels[..i].contains(k) {
+            return Err(CodegenError::Scene(format!(
+                "kernel `{k}` listed twice in `kernels`"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Generate the Rust module of `scene`. `source_text` is the scene file's text, embedded as
+/// `SCENE_TOML`. Output is byte-identical for identical input.
+pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenError> {
+    let start = Instant::now();
+    check_kernel_list(scene)?;
+    let mut model = Model::new(scene)?;
+    let mut defs = Vec::new();
+    for k in &scene.kernels {
+        defs.push(kernels::build_kernel(&mut model, k)?);
+    }
+    let mut tokens = Vec::new();
+    let mut reports = Vec::new();
+    for d in &defs {
+        let e = emit::emit_kernel(&model.g, &model.layout, d)?;
+        tokens.push(e.tokens);
+        reports.push(KernelReport {
+            name: d.name.clone(),
+            ops: e.ops,
+        });
+    }
+    let with_contact = scene.kernels.iter().any(|k| k.starts_with("contact"));
+    let code = emit::emit_file(
+        &scene.name,
+        model.nq(),
+        &model.params,
+        &scene.kernels,
+        source_text,
+        tokens,
+        with_contact,
+    )?;
+    let report = Report {
+        scene: scene.name.clone(),
+        nq: model.nq(),
+        params: model.params.iter().map(|p| p.0.clone()).collect(),
+        graph_nodes: model.g.len(),
+        kernels: reports,
+        seconds: start.elapsed().as_secs_f64(),
+        code_bytes: code.len(),
+    };
+    Ok(Generated { code, report })
+}
+
+/// A named numeric output of [`eval_all`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum EvalValue {
+    /// A scalar.
+    Scalar(f64),
+    /// A vector.
+    Vector(Vec<f64>),
+    /// A row-major matrix.
+    Matrix(Vec<Vec<f64>>),
+}
+
+impl Serialize for EvalValue {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            EvalValue::Scalar(v) => v.serialize(s),
+            EvalValue::Vector(v) => v.serialize(s),
+            EvalValue::Matrix(v) => v.serialize(s),
+        }
+    }
+}
+
+/// Named outputs of [`eval_all`], in a fixed order (serialises as a JSON object in that order).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct EvalOutput {
+    /// (name, value) pairs: p_e, R3, J_p, J_o, M, C, Cqd, g, then for scenes with a ball
+    /// alpha, sat_alpha, p_c, h, J_c, sat_alpha_smooth, p_c_smooth, h_smooth, J_c_smooth.
+    pub entries: Vec<(String, EvalValue)>,
+}
+
+impl EvalOutput {
+    /// The value called `name`.
+    pub fn get(&self, name: &str) -> Option<&EvalValue> {
+        self.entries.iter().find(|e| e.0 == name).map(|e| &e.1)
+    }
+}
+
+impl Serialize for EvalOutput {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.entries.len()))?;
+        for (k, v) in &self.entries {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+fn check_finite(name: &str, v: &[f64]) -> Result<(), CodegenError> {
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        return Err(CodegenError::Input(format!(
+            "{name} contains a non-finite value {x}"
+        )));
+    }
+    Ok(())
+}
+
+/// Evaluate kinematics, dynamics and (if the scene has a ball and contact) contact quantities
+/// of `scene` at one state with the interpreter, using the scene's constant values (runtime
+/// parameters at their defaults). Every quantity is computed regardless of `kernels`.
+pub fn eval_all(
+    scene: &Scene,
+    q: &[f64],
+    qd: &[f64],
+    omega: [f64; 3],
+    eps: f64,
+) -> Result<EvalOutput, CodegenError> {
+    let mut model = Model::new(scene)?;
+    let n = model.nq();
+    if q.len() != n || qd.len() != n {
+        return Err(CodegenError::Input(format!(
+            "the scene has {n} joints but q has {} and qd has {} entries",
+            q.len(),
+            qd.len()
+        )));
+    }
+    check_finite("q", q)?;
+    check_finite("qd", qd)?;
+    check_finite("omega", &omega)?;
+    check_finite("eps", &[eps])?;
+    let layout = model.layout;
+    let mut vars = vec![0.0; layout.n_vars()];
+    vars[..n].copy_from_slice(q);
+    vars[n..2 * n].copy_from_slice(qd);
+    vars[2 * n..2 * n + 3].copy_from_slice(&omega);
+    vars[2 * n + 3] = eps;
+    for (i, p) in model.params.iter().enumerate() {
+        vars[layout.param(i) as usize] = p.1;
+    }
+
+    // Collect (name, shape, ids), then evaluate all in one tape.
+    enum Shape {
+        S,
+        V,
+        M(usize),
+    }
+    let mut items: Vec<(String, Shape, Vec<graph::Id>)> = Vec::new();
+    let tip = model.tip_pose();
+    items.push(("p_e".into(), Shape::V, tip.t.to_vec()));
+    items.push((
+        "R3".into(),
+        Shape::M(3),
+        tip.r.iter().flatten().copied().collect(),
+    ));
+    let (jp, jo) = model.tip_jacobian();
+    items.push(("J_p".into(), Shape::M(n), jp.concat()));
+    items.push(("J_o".into(), Shape::M(n), jo.concat()));
+    let m = model.mass_matrix();
+    items.push(("M".into(), Shape::M(n), m.concat()));
+    let c = model.coriolis_matrix();
+    items.push(("C".into(), Shape::M(n), c.concat()));
+    let cqd = model.coriolis_qd();
+    items.push(("Cqd".into(), Shape::V, cqd));
+    let g = model.gravity();
+    items.push(("g".into(), Shape::V, g));
+    if scene.ball.is_some() && scene.contact.is_some() {
+        let ce = model.contact(false)?;
+        items.push(("alpha".into(), Shape::S, vec![ce.alpha]));
+        items.push(("sat_alpha".into(), Shape::S, vec![ce.sat_alpha]));
+        items.push(("p_c".into(), Shape::V, ce.p_c.to_vec()));
+        items.push(("h".into(), Shape::S, vec![ce.h]));
+        items.push(("J_c".into(), Shape::M(n), ce.j_c.concat()));
+        let cs = model.contact(true)?;
+        items.push(("sat_alpha_smooth".into(), Shape::S, vec![cs.sat_alpha]));
+        items.push(("p_c_smooth".into(), Shape::V, cs.p_c.to_vec()));
+        items.push(("h_smooth".into(), Shape::S, vec![cs.h]));
+        items.push(("J_c_smooth".into(), Shape::M(n), cs.j_c.concat()));
+    }
+    let all: Vec<graph::Id> = items.iter().flat_map(|i| i.2.iter().copied()).collect();
+    let vals = interp::eval::<f64>(&model.g, &all, &vars);
+    let mut off = 0;
+    let mut out = EvalOutput::default();
+    for (name, shape, ids) in items {
+        let v = &vals[off..off + ids.len()];
+        off += ids.len();
+        let value = match shape {
+            Shape::S => EvalValue::Scalar(v[0]),
+            Shape::V => EvalValue::Vector(v.to_vec()),
+            Shape::M(cols) => EvalValue::Matrix(v.chunks(cols).map(|r| r.to_vec()).collect()),
+        };
+        out.entries.push((name, value));
+    }
+    Ok(out)
+}

@@ -1,0 +1,880 @@
+//! Robot front-end: scene (DH table, inertias, ball) → graph expressions of every kernel.
+//!
+//! Symbols and paper equations (conventions of PARAMS.md):
+//! * DH link transforms A_i (Table 1), world frames T_i = T_base A_1 ⋯ A_i, tip = T_n T_tool:
+//!   p_e and [ê_x3 ê_y3 ê_z3] of eq. 67–68;
+//! * geometric Jacobians of the tip (eq. 69–71) and of every link COG (J_P^i, J_O^i of eq. 22a),
+//!   J̇ q̇ of the tip;
+//! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
+//!   expressed in the link's own frame so M depends only on relative joint angles;
+//! * ∂M/∂q, Christoffel symbols c_ijk and C (eq. 76–79), C q̇ = Ṁ q̇ − ∂T/∂q;
+//! * U = −Σ m_i g_0ᵀ p_i (sign convention of PARAMS.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
+//! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one;
+//! * contact geometry (Sect. 2.2): α (eq. 2), sat (eq. 3) or smooth sat (eq. 58–59), p_c,
+//!   r_c, h (eq. 4), n (eq. 11), J_c (eq. 7), v_c (eq. 6), Δv (eq. 13), ṙ_c, ḣ, J̇_c q̇ (eq. 33).
+//!
+//! Trigonometry: only sin/cos of single joint coordinates appear; constant DH angles are
+//! folded exactly (angle sums in product form).
+
+use crate::CodegenError;
+use crate::diff;
+use crate::graph::{Graph, Id, M3, V3, m3_transpose};
+use crate::spec::{Angle, DhConvention, RotationSpec, Scene, TransformSpec};
+
+/// Layout of the input variables of the graph: q, q̇, ω, ε, then the runtime parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    /// Number of joints.
+    pub nq: usize,
+    /// Number of runtime parameters.
+    pub np: usize,
+}
+
+impl Layout {
+    /// Variable index of q_i.
+    pub fn q(&self, i: usize) -> u32 {
+        i as u32
+    }
+    /// Variable index of q̇_i.
+    pub fn qd(&self, i: usize) -> u32 {
+        (self.nq + i) as u32
+    }
+    /// Variable index of ω_i (ball angular velocity).
+    pub fn omega(&self, i: usize) -> u32 {
+        (2 * self.nq + i) as u32
+    }
+    /// Variable index of ε (smooth saturation).
+    pub fn eps(&self) -> u32 {
+        (2 * self.nq + 3) as u32
+    }
+    /// Variable index of runtime parameter `i`.
+    pub fn param(&self, i: usize) -> u32 {
+        (2 * self.nq + 4 + i) as u32
+    }
+    /// Total number of variables.
+    pub fn n_vars(&self) -> usize {
+        2 * self.nq + 4 + self.np
+    }
+}
+
+/// A rigid transform (R, t) of graph nodes: x ↦ R x + t.
+#[derive(Debug, Clone, Copy)]
+pub struct Pose {
+    /// Rotation.
+    pub r: M3,
+    /// Translation.
+    pub t: V3,
+}
+
+/// Contact quantities (fields of the emitted `Contact` struct).
+#[derive(Debug, Clone)]
+pub struct ContactExprs {
+    /// α, eq. 2.
+    pub alpha: Id,
+    /// sat(α) (exact or smooth).
+    pub sat_alpha: Id,
+    /// p_c, eq. 3.
+    pub p_c: V3,
+    /// r_c = p_c − o_b.
+    pub r_c: V3,
+    /// h, eq. 4.
+    pub h: Id,
+    /// n, eq. 11.
+    pub n: V3,
+    /// J_c (3 × NQ, row-major), eq. 7.
+    pub j_c: Vec<Vec<Id>>,
+    /// v_c = J_c q̇, eq. 6.
+    pub v_c: V3,
+    /// Δv = ω × r_c − v_c, eq. 13.
+    pub delta_v: V3,
+    /// ḣ = n · ṙ_c.
+    pub h_dot: Id,
+    /// ṙ_c.
+    pub rc_dot: V3,
+    /// J̇_c q̇.
+    pub jc_dot_qd: V3,
+}
+
+/// The scene's symbolic model: one graph holding every requested quantity.
+#[derive(Debug)]
+pub struct Model {
+    /// The expression graph.
+    pub g: Graph,
+    /// Input layout.
+    pub layout: Layout,
+    /// Runtime parameter names and default values (in `runtime_parameters` order).
+    pub params: Vec<(String, f64)>,
+    scene: Scene,
+    consts: Vec<(String, f64)>,
+    sc: Vec<(Id, Id)>,
+    a_mats: Vec<Pose>,
+    a_invs: Vec<Pose>,
+    world: Vec<Pose>,
+    tip: Pose,
+    cache: Cache,
+}
+
+#[derive(Debug, Default)]
+struct Cache {
+    com_world: Option<Vec<V3>>,
+    tip_jac: Option<(Vec<Vec<Id>>, Vec<Vec<Id>>)>,
+    mass: Option<Vec<Vec<Id>>>,
+    dmass: Option<Vec<Vec<Vec<Id>>>>,
+    potential: Option<Id>,
+    gravity: Option<Vec<Id>>,
+    cqd: Option<Vec<Id>>,
+    rnea: Option<Vec<Id>>,
+}
+
+impl Model {
+    /// Build the kinematic skeleton of `scene` (world frames of every link, tip frame).
+    pub fn new(scene: &Scene) -> Result<Self, CodegenError> {
+        let nq = scene.links.len();
+        if nq == 0 {
+            return Err(CodegenError::Scene("the scene has no links".into()));
+        }
+        let consts = scene.constants();
+        let mut params = Vec::new();
+        for name in &scene.runtime_parameters {
+            let Some((_, v)) = consts.iter().find(|(n, _)| n == name) else {
+                let known: Vec<&str> = consts.iter().map(|c| c.0.as_str()).collect();
+                return Err(CodegenError::Scene(format!(
+                    "unknown runtime parameter `{name}`; known constants: {}",
+                    known.join(", ")
+                )));
+            };
+            if params.iter().any(|(n, _): &(String, f64)| n == name) {
+                return Err(CodegenError::Scene(format!(
+                    "runtime parameter `{name}` listed twice"
+                )));
+            }
+            params.push((name.clone(), *v));
+        }
+        let layout = Layout {
+            nq,
+            np: params.len(),
+        };
+        let mut m = Model {
+            g: Graph::new(),
+            layout,
+            params,
+            scene: scene.clone(),
+            consts,
+            sc: Vec::new(),
+            a_mats: Vec::new(),
+            a_invs: Vec::new(),
+            world: Vec::new(),
+            tip: Pose {
+                r: [[Id(0); 3]; 3],
+                t: [Id(0); 3],
+            },
+            cache: Cache::default(),
+        };
+        m.build_kinematics()?;
+        Ok(m)
+    }
+
+    /// Number of joints.
+    pub fn nq(&self) -> usize {
+        self.layout.nq
+    }
+
+    /// The scene this model was built from.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// A named constant: a runtime parameter variable or a baked constant.
+    pub fn constant(&mut self, name: &str) -> Id {
+        if let Some(i) = self.params.iter().position(|(n, _)| n == name) {
+            return self.g.var(self.layout.param(i));
+        }
+        let v = self
+            .consts
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|c| c.1)
+            .unwrap_or_else(|| panic!("internal: constant `{name}` not in the table"));
+        self.g.constant(v)
+    }
+
+    fn cvec(&mut self, prefix: &str) -> V3 {
+        [
+            self.constant(&format!("{prefix}.x")),
+            self.constant(&format!("{prefix}.y")),
+            self.constant(&format!("{prefix}.z")),
+        ]
+    }
+
+    /// (cos, sin) of a named DH angle: of the runtime parameter if `name` is one (a single
+    /// variable, so still accurate), else the exact constant.
+    fn named_angle_cs(&mut self, name: &str, a: Angle) -> (Id, Id) {
+        if self.params.iter().any(|(n, _)| n == name) {
+            let v = self.constant(name);
+            return (self.g.cos(v), self.g.sin(v));
+        }
+        self.angle_cs(a)
+    }
+
+    fn angle_cs(&mut self, a: Angle) -> (Id, Id) {
+        match a {
+            Angle::Radians(x) => (self.g.constant(x.cos()), self.g.constant(x.sin())),
+            Angle::PiMultiple { num, den } => (self.g.cos_pi(num, den), self.g.sin_pi(num, den)),
+        }
+    }
+
+    fn rotation(&mut self, r: &Option<RotationSpec>) -> Result<M3, CodegenError> {
+        let Some(r) = r else {
+            return Ok(self.g.m3_identity());
+        };
+        match r {
+            RotationSpec::Matrix(m) => {
+                let mut out = [[Id(0); 3]; 3];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        out[i][j] = self.g.constant(m[i][j]);
+                    }
+                }
+                Ok(out)
+            }
+            RotationSpec::Axis { axis, angle } => {
+                let (c, s) = self.angle_cs(*angle);
+                let (z, o) = (self.g.zero(), self.g.one());
+                let ns = self.g.neg(s);
+                Ok(match axis.as_str() {
+                    "x" => [[o, z, z], [z, c, ns], [z, s, c]],
+                    "y" => [[c, z, s], [z, o, z], [ns, z, c]],
+                    "z" => [[c, ns, z], [s, c, z], [z, z, o]],
+                    other => {
+                        return Err(CodegenError::Scene(format!(
+                            "rotation axis must be \"x\", \"y\" or \"z\", got {other:?}"
+                        )));
+                    }
+                })
+            }
+        }
+    }
+
+    fn transform(&mut self, t: &TransformSpec, prefix: &str) -> Result<Pose, CodegenError> {
+        let r = self.rotation(&t.rotation)?;
+        let t = self.cvec(&format!("{prefix}.translation"));
+        Ok(Pose { r, t })
+    }
+
+    fn compose(&mut self, a: &Pose, b: &Pose) -> Pose {
+        let r = self.g.m3_mul(&a.r, &b.r);
+        let rt = self.g.m3_mul_v(&a.r, b.t);
+        let t = self.g.v3_add(rt, a.t);
+        Pose { r, t }
+    }
+
+    fn build_kinematics(&mut self) -> Result<(), CodegenError> {
+        let n = self.nq();
+        let links = self.scene.links.clone();
+        for (i, l) in links.iter().enumerate() {
+            let qi = self.g.var(self.layout.q(i));
+            let (sq, cq) = (self.g.sin(qi), self.g.cos(qi));
+            // θ = q + offset in product form: only sin/cos of the bare joint variable.
+            let offset_name = format!("link{}.offset", i + 1);
+            let offset_runtime = self.params.iter().any(|(n, _)| *n == offset_name);
+            let (ct, st) = match (l.offset, offset_runtime) {
+                (None, false) => (cq, sq),
+                (o, _) => {
+                    let o = o.unwrap_or(Angle::Radians(0.0));
+                    let (co, so) = self.named_angle_cs(&offset_name, o);
+                    let a = self.g.mul(cq, co);
+                    let b = self.g.mul(sq, so);
+                    let c = self.g.mul(sq, co);
+                    let d = self.g.mul(cq, so);
+                    (self.g.sub(a, b), self.g.add(c, d))
+                }
+            };
+            self.sc.push((st, ct));
+            let (ca, sa) = self.named_angle_cs(&format!("link{}.alpha", i + 1), l.alpha);
+            let a = self.constant(&format!("link{}.a", i + 1));
+            let d = self.constant(&format!("link{}.d", i + 1));
+            let g = &mut self.g;
+            let z = g.zero();
+            let (nst, nsa) = (g.neg(st), g.neg(sa));
+            let (a_pose, inv_pose) = match self.scene.dh {
+                DhConvention::Standard => {
+                    // A = Rz(θ) Tz(d) Tx(a) Rx(α)
+                    let r = [
+                        [ct, g.mul(nst, ca), g.mul(st, sa)],
+                        [st, g.mul(ct, ca), g.mul(ct, nsa)],
+                        [z, sa, ca],
+                    ];
+                    let t = [g.mul(a, ct), g.mul(a, st), d];
+                    // A⁻¹ = Rx(−α) Tx(−a) Tz(−d) Rz(−θ): Rᵀ and −Rᵀt = −[a, d sα, d cα]
+                    // in closed form (no cos²+sin² left for the simplifier).
+                    let ri = m3_transpose(&r);
+                    let na = g.neg(a);
+                    let dsa = g.mul(d, sa);
+                    let dca = g.mul(d, ca);
+                    let ti = [na, g.neg(dsa), g.neg(dca)];
+                    (Pose { r, t }, Pose { r: ri, t: ti })
+                }
+                DhConvention::Modified => {
+                    // A = Rx(α) Tx(a) Rz(θ) Tz(d)
+                    let r = [
+                        [ct, nst, z],
+                        [g.mul(ca, st), g.mul(ca, ct), nsa],
+                        [g.mul(sa, st), g.mul(sa, ct), ca],
+                    ];
+                    let t = [a, g.mul(nsa, d), g.mul(ca, d)];
+                    // A⁻¹ = Tz(−d) Rz(−θ) Tx(−a) Rx(−α): t⁻¹ = [−a cθ, a sθ, −d].
+                    let ri = m3_transpose(&r);
+                    let act = g.mul(a, ct);
+                    let ti = [g.neg(act), g.mul(a, st), g.neg(d)];
+                    (Pose { r, t }, Pose { r: ri, t: ti })
+                }
+            };
+            self.a_mats.push(a_pose);
+            self.a_invs.push(inv_pose);
+        }
+        let base_spec = self.scene.base.clone();
+        let base = self.transform(&base_spec, "base")?;
+        self.world.push(base);
+        for i in 0..n {
+            let prev = self.world[i];
+            let a = self.a_mats[i];
+            let w = self.compose(&prev, &a);
+            self.world.push(w);
+        }
+        self.tip = match self.scene.tool.clone() {
+            None => self.world[n],
+            Some(t) => {
+                let tool = self.transform(&t, "tool")?;
+                let last = self.world[n];
+                self.compose(&last, &tool)
+            }
+        };
+        Ok(())
+    }
+
+    /// World pose of DH frame `i` (0 = base frame, n = last link, without tool).
+    pub fn world_frame(&self, i: usize) -> Pose {
+        self.world[i]
+    }
+
+    /// World pose of the tip (last DH frame with the tool transform).
+    pub fn tip_pose(&self) -> Pose {
+        self.tip
+    }
+
+    /// World poses of frames 1..NQ, the last one including the tool (kernel `frames`).
+    pub fn frames(&self) -> Vec<Pose> {
+        let n = self.nq();
+        let mut v: Vec<Pose> = self.world[1..n].to_vec();
+        v.push(self.tip);
+        v
+    }
+
+    /// Index of the frame whose z axis is joint j's axis (0-based joint): z_{j−1} for
+    /// standard DH (frame j in 1-based numbering of `world`), z_j for modified DH.
+    fn axis_frame(&self, j: usize) -> usize {
+        match self.scene.dh {
+            DhConvention::Standard => j,
+            DhConvention::Modified => j + 1,
+        }
+    }
+
+    /// Link i's COG in its own frame (0-based link).
+    fn com_local(&mut self, i: usize) -> V3 {
+        self.cvec(&format!("link{}.com", i + 1))
+    }
+
+    /// World COG positions p_i of every link.
+    pub fn com_world(&mut self) -> Vec<V3> {
+        if let Some(c) = &self.cache.com_world {
+            return c.clone();
+        }
+        let mut out = Vec::new();
+        for i in 0..self.nq() {
+            let c = self.com_local(i);
+            let w = self.world[i + 1];
+            let rc = self.g.m3_mul_v(&w.r, c);
+            out.push(self.g.v3_add(w.t, rc));
+        }
+        self.cache.com_world = Some(out.clone());
+        out
+    }
+
+    /// World geometric Jacobian (J_P, J_O), each 3 × NQ row-major, of a point `p` rigidly
+    /// attached to link `link` (0-based); columns of later joints are 0.
+    pub fn point_jacobian(&mut self, p: V3, link: usize) -> (Vec<Vec<Id>>, Vec<Vec<Id>>) {
+        let n = self.nq();
+        let z = self.g.zero();
+        let mut jp = vec![vec![z; n]; 3];
+        let mut jo = vec![vec![z; n]; 3];
+        for j in 0..=link {
+            let f = self.world[self.axis_frame(j)];
+            let axis = [f.r[0][2], f.r[1][2], f.r[2][2]];
+            let d = self.g.v3_sub(p, f.t);
+            let c = self.g.v3_cross(axis, d);
+            for k in 0..3 {
+                jp[k][j] = c[k];
+                jo[k][j] = axis[k];
+            }
+        }
+        (jp, jo)
+    }
+
+    /// Tip Jacobian (J_p, J_o), eq. 69–71.
+    pub fn tip_jacobian(&mut self) -> (Vec<Vec<Id>>, Vec<Vec<Id>>) {
+        if let Some(j) = &self.cache.tip_jac {
+            return j.clone();
+        }
+        let p = self.tip.t;
+        let n = self.nq();
+        let j = self.point_jacobian(p, n - 1);
+        self.cache.tip_jac = Some(j.clone());
+        j
+    }
+
+    /// Jacobians of every link COG (world axes).
+    pub fn com_jacobians(&mut self) -> Vec<(Vec<Vec<Id>>, Vec<Vec<Id>>)> {
+        let coms = self.com_world();
+        (0..self.nq())
+            .map(|i| self.point_jacobian(coms[i], i))
+            .collect()
+    }
+
+    fn q_vars(&self) -> Vec<u32> {
+        (0..self.nq()).map(|i| self.layout.q(i)).collect()
+    }
+
+    fn qd_ids(&mut self) -> Vec<Id> {
+        (0..self.nq())
+            .map(|i| self.g.var(self.layout.qd(i)))
+            .collect()
+    }
+
+    fn matvec(&mut self, m: &[Vec<Id>], v: &[Id]) -> Vec<Id> {
+        m.iter().map(|r| self.g.dot(r, v)).collect()
+    }
+
+    /// d/dt along q̇ (q̇ held constant).
+    fn dt(&mut self, outs: &[Id]) -> Vec<Id> {
+        let vars = self.q_vars();
+        let rates = self.qd_ids();
+        diff::time_derivative(&mut self.g, outs, &vars, &rates)
+    }
+
+    /// J̇ q̇ of the tip: [linear; angular].
+    pub fn tip_jdot_qd(&mut self) -> Vec<Id> {
+        let (jp, jo) = self.tip_jacobian();
+        let qd = self.qd_ids();
+        let mut v = self.matvec(&jp, &qd);
+        v.extend(self.matvec(&jo, &qd));
+        self.dt(&v)
+    }
+
+    /// Mass matrix M(q), eq. 22a, from link-frame Jacobians.
+    pub fn mass_matrix(&mut self) -> Vec<Vec<Id>> {
+        if let Some(m) = &self.cache.mass {
+            return m.clone();
+        }
+        let n = self.nq();
+        let z = self.g.zero();
+        let mut mm = vec![vec![z; n]; n];
+        for i in 0..n {
+            // Walk from frame i+1 (link i) back to the base: inv = T^{i+1}_{f}.
+            let c = self.com_local(i);
+            let mass = self.constant(&format!("link{}.mass", i + 1));
+            let inertia = self.link_inertia(i);
+            let mut cols_p: Vec<V3> = vec![[z; 3]; n];
+            let mut cols_o: Vec<V3> = vec![[z; 3]; n];
+            let mut inv = Pose {
+                r: self.g.m3_identity(),
+                t: [z; 3],
+            };
+            // Frames from i+1 down to 0; record those that are joint-axis frames of joints ≤ i.
+            let mut frame = i + 1;
+            loop {
+                for j in 0..=i {
+                    if self.axis_frame(j) == frame {
+                        let axis = [inv.r[0][2], inv.r[1][2], inv.r[2][2]];
+                        let r = self.g.v3_sub(c, inv.t);
+                        cols_p[j] = self.g.v3_cross(axis, r);
+                        cols_o[j] = axis;
+                    }
+                }
+                if frame == 0 {
+                    break;
+                }
+                let ai = self.a_invs[frame - 1];
+                inv = self.compose(&inv, &ai);
+                frame -= 1;
+            }
+            // I ω products: (I J_O)_k for each column.
+            let i_cols: Vec<V3> = cols_o
+                .iter()
+                .map(|&o| self.g.m3_mul_v(&inertia, o))
+                .collect();
+            for a in 0..=i {
+                for b in a..=i {
+                    let pp = self.g.v3_dot(cols_p[a], cols_p[b]);
+                    let mp = self.g.mul(mass, pp);
+                    let oo = self.g.v3_dot(cols_o[a], i_cols[b]);
+                    let t = self.g.add(mp, oo);
+                    mm[a][b] = self.g.add(mm[a][b], t);
+                }
+            }
+        }
+        for a in 0..n {
+            for b in 0..a {
+                mm[a][b] = mm[b][a];
+            }
+        }
+        self.cache.mass = Some(mm.clone());
+        mm
+    }
+
+    fn link_inertia(&mut self, i: usize) -> M3 {
+        let p = format!("link{}.inertia", i + 1);
+        let xx = self.constant(&format!("{p}.xx"));
+        let yy = self.constant(&format!("{p}.yy"));
+        let zz = self.constant(&format!("{p}.zz"));
+        let xy = self.constant(&format!("{p}.xy"));
+        let xz = self.constant(&format!("{p}.xz"));
+        let yz = self.constant(&format!("{p}.yz"));
+        [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
+    }
+
+    /// ∂M/∂q: `out[k][i][j]` = ∂M_ij/∂q_k.
+    pub fn dmass_dq(&mut self) -> Vec<Vec<Vec<Id>>> {
+        if let Some(d) = &self.cache.dmass {
+            return d.clone();
+        }
+        let n = self.nq();
+        let m = self.mass_matrix();
+        let flat: Vec<Id> = m.iter().flatten().copied().collect();
+        let mut out = Vec::new();
+        for k in 0..n {
+            let d = diff::partial(&mut self.g, &flat, self.layout.q(k));
+            out.push(d.chunks(n).map(|c| c.to_vec()).collect::<Vec<_>>());
+        }
+        self.cache.dmass = Some(out.clone());
+        out
+    }
+
+    /// Christoffel symbols `c[i][j][k]` = ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i).
+    pub fn christoffel(&mut self) -> Vec<Vec<Vec<Id>>> {
+        let n = self.nq();
+        let dm = self.dmass_dq();
+        let half = self.g.constant(0.5);
+        let mut c = vec![vec![vec![Id(0); n]; n]; n];
+        for i in 0..n {
+            for j in 0..n {
+                for k in 0..n {
+                    let a = self.g.add(dm[k][i][j], dm[j][i][k]);
+                    let b = self.g.sub(a, dm[i][j][k]);
+                    c[i][j][k] = self.g.mul(half, b);
+                }
+            }
+        }
+        c
+    }
+
+    /// C(q, q̇), C_ij = Σ_k c_ijk q̇_k.
+    pub fn coriolis_matrix(&mut self) -> Vec<Vec<Id>> {
+        let c = self.christoffel();
+        let qd = self.qd_ids();
+        c.iter()
+            .map(|ci| ci.iter().map(|cij| self.g.dot(cij, &qd)).collect())
+            .collect()
+    }
+
+    /// C q̇ = Ṁ q̇ − ∂T/∂q with T = ½ q̇ᵀ M q̇ (equivalent to the Christoffel form).
+    pub fn coriolis_qd(&mut self) -> Vec<Id> {
+        if let Some(c) = &self.cache.cqd {
+            return c.clone();
+        }
+        let n = self.nq();
+        let m = self.mass_matrix();
+        let qd = self.qd_ids();
+        let flat: Vec<Id> = m.iter().flatten().copied().collect();
+        let mdot = self.dt(&flat);
+        let mdot: Vec<Vec<Id>> = mdot.chunks(n).map(|c| c.to_vec()).collect();
+        let mdq = self.matvec(&mdot, &qd);
+        // T = ½ q̇ᵀ M q̇; ∂T/∂q in one reverse sweep.
+        let mq = self.matvec(&m, &qd);
+        let tq = self.g.dot(&qd, &mq);
+        let half = self.g.constant(0.5);
+        let one = self.g.one();
+        let t = self.g.mul(half, tq);
+        let vars = self.q_vars();
+        let dtdq = diff::reverse(&mut self.g, &[(t, one)], &vars);
+        let out: Vec<Id> = (0..n).map(|i| self.g.sub(mdq[i], dtdq[i])).collect();
+        self.cache.cqd = Some(out.clone());
+        out
+    }
+
+    /// U(q) = −Σ m_i g_0ᵀ p_i.
+    pub fn potential(&mut self) -> Id {
+        if let Some(u) = self.cache.potential {
+            return u;
+        }
+        let coms = self.com_world();
+        let g0 = self.cvec("gravity");
+        let mut terms = Vec::new();
+        for (i, p) in coms.iter().enumerate() {
+            let m = self.constant(&format!("link{}.mass", i + 1));
+            let gp = self.g.v3_dot(g0, *p);
+            terms.push(self.g.mul(m, gp));
+        }
+        let s = self.g.sum(&terms);
+        let u = self.g.neg(s);
+        self.cache.potential = Some(u);
+        u
+    }
+
+    /// g(q) = ∂U/∂q.
+    pub fn gravity(&mut self) -> Vec<Id> {
+        if let Some(g) = &self.cache.gravity {
+            return g.clone();
+        }
+        let u = self.potential();
+        let one = self.g.one();
+        let vars = self.q_vars();
+        let gr = diff::reverse(&mut self.g, &[(u, one)], &vars);
+        self.cache.gravity = Some(gr.clone());
+        gr
+    }
+
+    /// C q̇ + g (Lagrangian path).
+    pub fn cqd_g(&mut self) -> Vec<Id> {
+        let c = self.coriolis_qd();
+        let g = self.gravity();
+        c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect()
+    }
+
+    /// C q̇ + g by recursive Newton–Euler with q̈ = 0 in link frames.
+    pub fn cqd_g_rnea(&mut self) -> Vec<Id> {
+        if let Some(r) = &self.cache.rnea {
+            return r.clone();
+        }
+        let n = self.nq();
+        let z = self.g.zero();
+        let qd = self.qd_ids();
+        let modified = self.scene.dh == DhConvention::Modified;
+        // Base frame: a_0 = −g_0 in base axes (gravity as a fictitious upward acceleration).
+        let g0 = self.cvec("gravity");
+        let base_r = self.world[0].r;
+        let ng0 = [self.g.neg(g0[0]), self.g.neg(g0[1]), self.g.neg(g0[2])];
+        let mut acc = self.g.m3_tmul_v(&base_r, ng0);
+        let mut w: V3 = [z; 3];
+        let mut wd: V3 = [z; 3];
+        struct LinkState {
+            f: V3,
+            nn: V3,
+        }
+        let mut st: Vec<LinkState> = Vec::new();
+        for i in 0..n {
+            let a = self.a_mats[i];
+            let u = if modified {
+                let o = self.g.one();
+                [z, z, o]
+            } else {
+                // z_{i−1} in frame i: third row of R^{i−1}_i.
+                [a.r[2][0], a.r[2][1], a.r[2][2]]
+            };
+            let uq = self.g.v3_scale(qd[i], u);
+            let w_prev = self.g.m3_tmul_v(&a.r, w);
+            let wd_prev = self.g.m3_tmul_v(&a.r, wd);
+            let wi = self.g.v3_add(w_prev, uq);
+            let cr = self.g.v3_cross(w_prev, uq);
+            let wdi = self.g.v3_add(wd_prev, cr);
+            let ai = if modified {
+                // Frame i origin is fixed in link i−1: a_i = Rᵀ(a + ω̇×t + ω×(ω×t)).
+                let t = a.t;
+                let x = self.g.v3_cross(wd, t);
+                let y0 = self.g.v3_cross(w, t);
+                let y = self.g.v3_cross(w, y0);
+                let s = self.g.v3_add(acc, x);
+                let s = self.g.v3_add(s, y);
+                self.g.m3_tmul_v(&a.r, s)
+            } else {
+                // o_{i−1} lies on joint i's axis: a_i = Rᵀa_{i−1} + ω̇_i×r + ω_i×(ω_i×r),
+                // r = o_i − o_{i−1} in frame i = Rᵀ t (closed form [a, d sα, d cα]).
+                let r = [
+                    self.g.neg(self.a_invs[i].t[0]),
+                    self.g.neg(self.a_invs[i].t[1]),
+                    self.g.neg(self.a_invs[i].t[2]),
+                ];
+                let ap = self.g.m3_tmul_v(&a.r, acc);
+                let x = self.g.v3_cross(wdi, r);
+                let y0 = self.g.v3_cross(wi, r);
+                let y = self.g.v3_cross(wi, y0);
+                let s = self.g.v3_add(ap, x);
+                self.g.v3_add(s, y)
+            };
+            let c = self.com_local(i);
+            let x = self.g.v3_cross(wdi, c);
+            let y0 = self.g.v3_cross(wi, c);
+            let y = self.g.v3_cross(wi, y0);
+            let ac = self.g.v3_add(ai, x);
+            let ac = self.g.v3_add(ac, y);
+            let m = self.constant(&format!("link{}.mass", i + 1));
+            let f = self.g.v3_scale(m, ac);
+            let inertia = self.link_inertia(i);
+            let iw = self.g.m3_mul_v(&inertia, wi);
+            let iwd = self.g.m3_mul_v(&inertia, wdi);
+            let wiw = self.g.v3_cross(wi, iw);
+            let nn = self.g.v3_add(iwd, wiw);
+            st.push(LinkState { f, nn });
+            acc = ai;
+            w = wi;
+            wd = wdi;
+        }
+        // Backward pass: F_i, moment n_i about o_i, in frame i.
+        let mut f_next: V3 = [z; 3];
+        let mut n_next: V3 = [z; 3];
+        let mut tau = vec![z; n];
+        for i in (0..n).rev() {
+            let (ff, nf) = if i + 1 < n {
+                let a = self.a_mats[i + 1];
+                let ff = self.g.m3_mul_v(&a.r, f_next);
+                let nf = self.g.m3_mul_v(&a.r, n_next);
+                let tf = self.g.v3_cross(a.t, ff);
+                (ff, self.g.v3_add(nf, tf))
+            } else {
+                ([z; 3], [z; 3])
+            };
+            let fi = self.g.v3_add(ff, st[i].f);
+            let c = self.com_local(i);
+            let cf = self.g.v3_cross(c, st[i].f);
+            let ni = self.g.v3_add(nf, cf);
+            let ni = self.g.v3_add(ni, st[i].nn);
+            if modified {
+                tau[i] = ni[2];
+            } else {
+                let a = self.a_mats[i];
+                let u = [a.r[2][0], a.r[2][1], a.r[2][2]];
+                let r = [
+                    self.g.neg(self.a_invs[i].t[0]),
+                    self.g.neg(self.a_invs[i].t[1]),
+                    self.g.neg(self.a_invs[i].t[2]),
+                ];
+                // Moment about o_{i−1} (on joint i's axis): n_i + r × F_i.
+                let rf = self.g.v3_cross(r, fi);
+                let m = self.g.v3_add(ni, rf);
+                tau[i] = self.g.v3_dot(u, m);
+            }
+            f_next = fi;
+            n_next = ni;
+        }
+        self.cache.rnea = Some(tau.clone());
+        tau
+    }
+
+    /// Contact quantities (Sect. 2.2); `smooth` selects the smooth saturation (eq. 58–59).
+    pub fn contact(&mut self, smooth: bool) -> Result<ContactExprs, CodegenError> {
+        let (Some(_), Some(cs)) = (&self.scene.ball, &self.scene.contact) else {
+            return Err(CodegenError::Scene(
+                "contact kernels need both [ball] and [contact] in the scene".into(),
+            ));
+        };
+        let tip_only = cs.kind == "tip";
+        if !tip_only && cs.kind != "segment" {
+            return Err(CodegenError::Scene(format!(
+                "contact.kind must be \"segment\" or \"tip\", got {:?}",
+                cs.kind
+            )));
+        }
+        if !tip_only && self.scene.dh == DhConvention::Modified {
+            return Err(CodegenError::Scene(
+                "contact.kind = \"segment\" needs the last link's length a_n, which a modified \
+                 DH table does not hold; use kind = \"tip\""
+                    .into(),
+            ));
+        }
+        let n = self.nq();
+        let tip = self.tip;
+        let pe = tip.t;
+        let ex = [tip.r[0][0], tip.r[1][0], tip.r[2][0]];
+        let ob = self.cvec("ball.center");
+        let radius = self.constant("ball.radius");
+        let d = self.g.v3_sub(ob, pe);
+        let alpha = self.g.v3_dot(d, ex);
+        let sat = if tip_only {
+            self.g.zero()
+        } else {
+            let an = self.constant(&format!("link{n}.a"));
+            let lo = self.g.neg(an);
+            let hi = self.g.zero();
+            if smooth {
+                // sat = ½(L + U + |x − L| − |x − U|), |y| ≈ √(y² + ε²)
+                let eps = self.g.var(self.layout.eps());
+                let e2 = self.g.square(eps);
+                let xl = self.g.sub(alpha, lo);
+                let xl2 = self.g.square(xl);
+                let s1 = self.g.add(xl2, e2);
+                let r1 = self.g.sqrt(s1);
+                let xu = self.g.sub(alpha, hi);
+                let xu2 = self.g.square(xu);
+                let s2 = self.g.add(xu2, e2);
+                let r2 = self.g.sqrt(s2);
+                let lu = self.g.add(lo, hi);
+                let t = self.g.add(lu, r1);
+                let t = self.g.sub(t, r2);
+                let h = self.g.constant(0.5);
+                self.g.mul(h, t)
+            } else {
+                self.g.sat(alpha, lo, hi)
+            }
+        };
+        let sx = self.g.v3_scale(sat, ex);
+        let p_c = self.g.v3_add(pe, sx);
+        let r_c = self.g.v3_sub(p_c, ob);
+        let rr = self.g.v3_dot(r_c, r_c);
+        let norm = self.g.sqrt(rr);
+        let h = self.g.sub(norm, radius);
+        let nv = [
+            self.g.div(r_c[0], norm),
+            self.g.div(r_c[1], norm),
+            self.g.div(r_c[2], norm),
+        ];
+        let (jp, jo) = self.tip_jacobian();
+        let z = self.g.zero();
+        let mut j_c = vec![vec![z; n]; 3];
+        for col in 0..n {
+            let o = [jo[0][col], jo[1][col], jo[2][col]];
+            let exo = self.g.v3_cross(ex, o);
+            for r in 0..3 {
+                let t = self.g.mul(sat, exo[r]);
+                j_c[r][col] = self.g.sub(jp[r][col], t);
+            }
+        }
+        let qd = self.qd_ids();
+        let vc = self.matvec(&j_c, &qd);
+        let v_c = [vc[0], vc[1], vc[2]];
+        let om = [
+            self.g.var(self.layout.omega(0)),
+            self.g.var(self.layout.omega(1)),
+            self.g.var(self.layout.omega(2)),
+        ];
+        let wr = self.g.v3_cross(om, r_c);
+        let delta_v = self.g.v3_sub(wr, v_c);
+        let rcd = self.dt(&r_c);
+        let rc_dot = [rcd[0], rcd[1], rcd[2]];
+        let h_dot = self.g.v3_dot(nv, rc_dot);
+        let jcd = self.dt(&v_c);
+        let jc_dot_qd = [jcd[0], jcd[1], jcd[2]];
+        Ok(ContactExprs {
+            alpha,
+            sat_alpha: sat,
+            p_c,
+            r_c,
+            h,
+            n: nv,
+            j_c,
+            v_c,
+            delta_v,
+            h_dot,
+            rc_dot,
+            jc_dot_qd,
+        })
+    }
+}

@@ -1,0 +1,118 @@
+//! The crate's error type: every physical or numerical failure of Sect. 2–3 and 7 is a typed
+//! variant (singular Γ of eq. 33, Painlevé for the slip normal force of eq. 37, no contact for
+//! queries that need h = 0, eq. 8), so callers never see NaN.
+
+use thiserror::Error;
+
+/// Which kind of Painlevé failure (paper Sect. 7) the slip normal force exhibits.
+///
+/// With the normal constraint acceleration a(λ_n) = a_free + k λ_n (k = effective inverse mass
+/// including the kinetic-friction direction), the complementarity conditions (48) at acceleration
+/// level have: no solution when k ≤ 0 and a_free < 0, two solutions (free and in contact) when
+/// k ≤ 0 and a_free ≥ 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PainleveKind {
+    /// No consistent contact force exists (k ≤ 0, a_free < 0).
+    Inconsistent,
+    /// More than one consistent solution exists (k ≤ 0, a_free ≥ 0).
+    NonUnique,
+}
+
+/// Errors of bf-model.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ModelError {
+    /// A physical parameter is out of range (negative friction, zero radius, NaN, ...).
+    #[error("invalid parameter `{name}` = {value}: {reason}")]
+    InvalidParameter {
+        /// Parameter name, e.g. `"mu_k"`.
+        name: &'static str,
+        /// The offending value (or a representative entry).
+        value: f64,
+        /// What is required.
+        reason: &'static str,
+    },
+    /// A state, torque or kernel output contains NaN or ±inf.
+    #[error("non-finite {what}")]
+    NonFinite {
+        /// What was non-finite, e.g. `"state"`, `"torque"`, `"mass matrix"`.
+        what: &'static str,
+    },
+    /// The kernel parameter vector has the wrong length.
+    #[error("kernel parameter vector has length {got}, scene `{scene}` expects {expected}")]
+    ParameterCount {
+        /// Scene name.
+        scene: &'static str,
+        /// Expected length (the scene's NP).
+        expected: usize,
+        /// Supplied length.
+        got: usize,
+    },
+    /// The scene text could not be used (missing ball / friction section, parse error, ...).
+    #[error("scene `{scene}`: {message}")]
+    Scene {
+        /// Scene name.
+        scene: String,
+        /// Explanation.
+        message: String,
+    },
+    /// A contact-mode quantity was requested at a state that is not in contact.
+    #[error("not in contact: h = {h:e} m, |h| must be <= {tolerance:e} m")]
+    NotInContact {
+        /// Signed distance h (eq. 4).
+        h: f64,
+        /// Accepted |h| (see `TransitionSettings::contact_tolerance`).
+        tolerance: f64,
+    },
+    /// An impact law was applied while the finger separates from the ball (n·v_c > 0).
+    #[error("impact requested while separating: n·v_c = {normal_velocity:e} m/s > 0")]
+    Separating {
+        /// n·J_c q̇⁻ (eq. 36).
+        normal_velocity: f64,
+    },
+    /// The finger mass matrix M_f(q) is not symmetric positive definite.
+    #[error("finger mass matrix is not positive definite")]
+    MassMatrixNotPositiveDefinite,
+    /// Γ = G M⁻¹ Gᵀ (eq. 33) is singular: the finger cannot move along the contact normal
+    /// (Jᵀ_c n ≈ 0), e.g. a stretched finger touching along its own axis.
+    #[error("singular contact: Γ = G M⁻¹ Gᵀ is (nearly) singular, reciprocal condition {rcond:e}")]
+    SingularContact {
+        /// Estimate of the reciprocal condition number of Γ (or of nᵀ J_c M_f⁻¹ J_cᵀ n relative to
+        /// ‖J_c M_f⁻¹ J_cᵀ‖).
+        rcond: f64,
+    },
+    /// J_c is singular, so Newton's law (eq. 39) cannot be solved for q̇⁺.
+    #[error(
+        "contact Jacobian J_c is singular (reciprocal condition {rcond:e}); eq. 39 has no unique q̇⁺"
+    )]
+    SingularContactJacobian {
+        /// Reciprocal condition estimate of J_c.
+        rcond: f64,
+    },
+    /// Painlevé paradox in slip (Sect. 7): the effective normal inverse mass
+    /// nᵀ J_c M_f⁻¹ J_cᵀ (n + μ_k t̂) is not positive.
+    #[error(
+        "Painlevé paradox ({kind:?}): slip normal inverse mass {effective_inverse_mass:e} <= 0, \
+         free normal acceleration {free_normal_acceleration:e}"
+    )]
+    Painleve {
+        /// No solution or several solutions.
+        kind: PainleveKind,
+        /// nᵀ J_c M_f⁻¹ J_cᵀ (n + μ_k t̂).
+        effective_inverse_mass: f64,
+        /// Normal constraint acceleration with λ = 0.
+        free_normal_acceleration: f64,
+    },
+    /// Slip requested with (almost) zero tangential relative velocity and no direction hint
+    /// (eq. 20 undefined).
+    #[error("slip direction undefined: |Δv_∥| = {tangential_speed:e} m/s and no direction hint")]
+    UndefinedSlipDirection {
+        /// |T_n Δv|.
+        tangential_speed: f64,
+    },
+    /// An iterative solve (maximum-dissipation impact, eq. 42) did not converge.
+    #[error("{what} did not converge")]
+    NoConvergence {
+        /// Which solve.
+        what: &'static str,
+    },
+}

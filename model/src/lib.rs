@@ -1,0 +1,68 @@
+//! bf-model: typed ball-and-finger physics on top of the generated kernels (paper Sect. 2–3).
+//!
+//! # Layers
+//! 1. **Evaluated kinematics** ([`ContactKinematics`]): everything the physics needs at one state
+//!    x = (q, q̇, ω) — M_f, C q̇ + g, U, and the contact geometry of eq. 2–13 (h, ḣ, n, r_c, ṙ_c,
+//!    J_c, J̇_c q̇, v_c, Δv). It is filled by a [`Kernels`] implementation. The product path is
+//!    [`kernels`]: thin wrappers around `bf_generated::<scene>` (every contact quantity comes from
+//!    generated code, so the optimiser can differentiate the same expressions). Tests may fill it
+//!    from an independent reference (bf-testkit) through the same trait.
+//! 2. **Physics** (pure functions of [`ContactKinematics`] + [`Params`]):
+//!    - [`dynamics`]: mode dynamics (eq. 26, 29, 31–38, 44–47): [`dynamics::free`],
+//!      [`dynamics::stick`], [`dynamics::slip`] return accelerations (q̈, ω̇) and the contact
+//!      force λ on the finger (world axes) with its decomposition λ_n, λ_∥, σ (eq. 12, 15–18).
+//!    - [`impact`]: the four impact laws of Sect. 2.5 selected by [`ImpactLaw`]
+//!      (eq. 39, 40–41, 42, 43), each returning (q̇⁺, ω⁺, ι) and whether the contact sticks.
+//!    - [`transitions`]: mode-transition predicates of Sect. 3.1 (eq. 48–50) with tolerances in
+//!      [`TransitionSettings`], and the velocity updates at Slip→Stick / Stick→Slip.
+//!    - [`energy`]: kinetic + potential energy and the power balance.
+//! 3. **[`Model`]**: kernels + [`Params`] + [`TransitionSettings`] with convenience methods
+//!    (`model.stick(&state, &tau)`, `model.impact(&state, law)`, ...). [`fixtures`] builds the
+//!    paper and human scenes from `bf_generated`.
+//!
+//! # Conventions (PARAMS.md)
+//! - λ and ι are the force / impulse **exerted on the finger**, world axes. The ball receives
+//!   −λ at r_c, i.e. the torque −r_c × λ (eq. 29b).
+//! - G = [J_c  S(r_c)] (eq. 27), so G [q̇; ω] = J_c q̇ + r_c × ω = −Δv with Δv = ω × r_c − v_c
+//!   (eq. 13): Δv is the velocity of the ball surface relative to the finger, and kinetic friction
+//!   on the finger points along Δv (eq. 20).
+//! - Generalised contact force G^T λ = [J_cᵀ λ; −r_c × λ] (eq. 28, 44).
+//! - M_f q̈ + C q̇ + μ_v q̇ + g = τ + J_cᵀ λ;  I_b ω̇ + ω × I_b ω + D ω = −r_c × λ (eq. 29).
+//! - SI units throughout. Vectors are `nalgebra` [`Vec3`] / [`Mat3`].
+//!
+//! # Failure modes
+//! Every failure is a typed [`ModelError`], never a NaN: invalid parameters, non-finite states,
+//! contact queries far from contact, singular Γ (finger unable to move along the normal at the
+//! contact), and inconsistent / non-unique contact forces (Painlevé, Sect. 7).
+//!
+//! # Example
+//! ```ignore
+//! use bf_model::{fixtures, State, Vec3};
+//! let model = fixtures::paper_scene()?;
+//! let x = State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::zeros());
+//! let acc = model.free(&x, &Vec3::zeros())?;
+//! ```
+
+pub mod dynamics;
+pub mod energy;
+mod error;
+pub mod impact;
+pub mod kernels;
+mod kinematics;
+mod linalg;
+mod params;
+mod state;
+pub mod transitions;
+
+pub use dynamics::{Accelerations, ContactForce, ContactMatrices};
+pub use error::{ModelError, PainleveKind};
+pub use impact::{ImpactLaw, ImpactOutcome};
+pub use kernels::{ContactVariant, Kernels, Model};
+pub use kinematics::{ContactGeometry, ContactKinematics};
+pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
+pub use params::Params;
+pub use state::{Mode, State};
+pub use transitions::TransitionSettings;
+
+/// Result alias of this crate.
+pub type Result<T> = std::result::Result<T, ModelError>;

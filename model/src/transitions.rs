@@ -1,0 +1,269 @@
+//! Mode validity and transitions (paper Sect. 3.1, eq. 48–50, Fig. 2–3).
+//!
+//! | function | paper |
+//! |---|---|
+//! | [`free_to_contact`] | eq. 50: h < 0 ∨ (h = 0 ∧ ḣ < 0) ∨ (h = ḣ = 0 ∧ ḧ < 0) |
+//! | [`stick_to_slip`] | σ ≤ 0 (eq. 18–19) |
+//! | [`slip_to_stick`] | ‖Δv‖ ≤ ε ∧ d‖Δv‖/dt < 0 |
+//! | [`contact_to_free`] | λ_n < 0 (eq. 48) |
+//! | [`slip_to_stick_update`] | velocities projected onto Δv = 0 with the sticking impulse (eq. 40–41) |
+//! | [`stick_to_slip_update`] | minimal (M-norm) velocity change giving Δv⁺ = `slip_kick` · λ_∥/‖λ_∥‖ |
+//! | [`check`] | first transition that fires in a given mode |
+//!
+//! Equalities are replaced by tolerances ([`TransitionSettings`]) as Sect. 3.1 prescribes.
+
+use crate::dynamics::{
+    Accelerations, ContactForce, factor_gamma, matrices_with_mass, normal_acceleration,
+    relative_acceleration, require_contact,
+};
+use crate::impact::{ImpactOutcome, apply_given_impulse, project_stick};
+use crate::{ContactKinematics, Mode, ModelError, Params, Result};
+
+/// Tolerances of the physics layer and of the transition predicates.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TransitionSettings {
+    /// Contact-mode queries (stick, slip, impacts) accept |h| ≤ `contact_tolerance` · r and
+    /// return `NotInContact` otherwise. Dimensionless, a fraction of the ball radius r; allows the
+    /// drift of h in contact modes (Sect. 3.1). (default: 1e-3)
+    pub contact_tolerance: f64,
+    /// |h| ≤ `h_eps` · r counts as h = 0 in eq. 50. Dimensionless. (default: 1e-9)
+    pub h_eps: f64,
+    /// |ḣ| ≤ `hdot_eps` counts as ḣ = 0 in eq. 50; impacts with n·v_c > `hdot_eps` are refused
+    /// as separating (m/s). (default: 1e-9)
+    pub hdot_eps: f64,
+    /// ε of Sect. 3.1: Slip→Stick needs ‖Δv‖ ≤ ε; a post-impact ‖Δv⁺‖ ≤ ε counts as sticking
+    /// (m/s). (default: 1e-6)
+    pub slip_eps: f64,
+    /// ‖Δv‖ set by the Stick→Slip velocity update (m/s); must exceed `slip_eps` so that the
+    /// Slip→Stick condition does not fire immediately. (default: 2e-6)
+    pub slip_kick: f64,
+    /// Below this ‖Δv_∥‖ the slip direction of eq. 20 is undefined and a hint is needed (m/s).
+    /// (default: 1e-12)
+    pub slip_direction_tol: f64,
+    /// Reciprocal-condition threshold below which Γ (eq. 33), nᵀ W n relative to ‖W‖ or J_c
+    /// count as singular. Dimensionless. (default: 1e-10)
+    pub singular_rcond: f64,
+    /// Slip is reported as a Painlevé paradox when the effective normal inverse mass
+    /// nᵀ W (n + μ_k t̂) ≤ `painleve_margin` · nᵀ W n. Dimensionless. (default: 1e-9)
+    pub painleve_margin: f64,
+}
+
+impl Default for TransitionSettings {
+    fn default() -> Self {
+        Self {
+            contact_tolerance: 1e-3,
+            h_eps: 1e-9,
+            hdot_eps: 1e-9,
+            slip_eps: 1e-6,
+            slip_kick: 2e-6,
+            slip_direction_tol: 1e-12,
+            singular_rcond: 1e-10,
+            painleve_margin: 1e-9,
+        }
+    }
+}
+
+impl TransitionSettings {
+    /// Error naming the first field that is negative, NaN, or (for `slip_kick`) not above
+    /// `slip_eps`.
+    pub fn validate(&self) -> Result<()> {
+        let fields: [(&'static str, f64); 8] = [
+            ("contact_tolerance", self.contact_tolerance),
+            ("h_eps", self.h_eps),
+            ("hdot_eps", self.hdot_eps),
+            ("slip_eps", self.slip_eps),
+            ("slip_kick", self.slip_kick),
+            ("slip_direction_tol", self.slip_direction_tol),
+            ("singular_rcond", self.singular_rcond),
+            ("painleve_margin", self.painleve_margin),
+        ];
+        for (name, value) in fields {
+            if !value.is_finite() || value < 0.0 {
+                return Err(ModelError::InvalidParameter {
+                    name,
+                    value,
+                    reason: "tolerance must be finite and >= 0",
+                });
+            }
+        }
+        if self.slip_kick <= self.slip_eps {
+            return Err(ModelError::InvalidParameter {
+                name: "slip_kick",
+                value: self.slip_kick,
+                reason: "must be > slip_eps",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A transition that fires (Fig. 2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Transition {
+    /// Free → in contact: apply an impact law (eq. 50).
+    Impact,
+    /// Stick → Slip (σ ≤ 0).
+    StickToSlip,
+    /// Slip → Stick (‖Δv‖ ≤ ε, decreasing).
+    SlipToStick,
+    /// Stick/Slip → Free (λ_n < 0).
+    ContactToFree,
+}
+
+/// Eq. 50 with tolerances. `free` must be the free-mode accelerations at `kin` (ḧ needs q̈).
+pub fn free_to_contact(
+    kin: &ContactKinematics,
+    params: &Params,
+    free: &Accelerations,
+    settings: &TransitionSettings,
+) -> bool {
+    let c = &kin.contact;
+    let h_tol = settings.h_eps * params.ball_radius();
+    if c.h < -h_tol {
+        return true;
+    }
+    if c.h.abs() > h_tol {
+        return false;
+    }
+    if c.h_dot < -settings.hdot_eps {
+        return true;
+    }
+    c.h_dot.abs() <= settings.hdot_eps && normal_acceleration(kin, &free.qdd) < 0.0
+}
+
+/// Stick → Slip: σ ≤ 0 (static friction cannot hold, eq. 19). Requires λ_n ≥ 0 (otherwise
+/// [`contact_to_free`] applies).
+pub fn stick_to_slip(force: &ContactForce) -> bool {
+    force.lambda_n >= 0.0 && force.sigma <= 0.0
+}
+
+/// Slip → Stick: ‖Δv‖ ≤ ε and d‖Δv‖/dt < 0 (Δv·Δv̇ < 0), or Δv = 0 exactly.
+pub fn slip_to_stick(
+    kin: &ContactKinematics,
+    slip: &Accelerations,
+    settings: &TransitionSettings,
+) -> bool {
+    let dv = kin.contact.delta_v;
+    let s = dv.norm();
+    if s > settings.slip_eps {
+        return false;
+    }
+    s == 0.0 || dv.dot(&relative_acceleration(kin, &slip.qdd, &slip.omega_dot)) < 0.0
+}
+
+/// Contact → Free: λ_n < 0 (eq. 48 would be violated).
+pub fn contact_to_free(force: &ContactForce) -> bool {
+    force.lambda_n < 0.0
+}
+
+/// The first transition that fires from `mode` given the accelerations computed in that mode
+/// (priority: ContactToFree before StickToSlip / SlipToStick).
+pub fn check(
+    mode: Mode,
+    kin: &ContactKinematics,
+    params: &Params,
+    acc: &Accelerations,
+    settings: &TransitionSettings,
+) -> Option<Transition> {
+    match mode {
+        Mode::Free => free_to_contact(kin, params, acc, settings).then_some(Transition::Impact),
+        Mode::Stick => {
+            if contact_to_free(&acc.force) {
+                Some(Transition::ContactToFree)
+            } else if stick_to_slip(&acc.force) {
+                Some(Transition::StickToSlip)
+            } else {
+                None
+            }
+        }
+        Mode::Slip => {
+            if contact_to_free(&acc.force) {
+                Some(Transition::ContactToFree)
+            } else if slip_to_stick(kin, acc, settings) {
+                Some(Transition::SlipToStick)
+            } else {
+                None
+            }
+        }
+    }
+}
+
+/// Slip → Stick reset: project (q̇, ω) onto Δv = 0 with the sticking impulse ι = Γ⁻¹ Δv
+/// (eq. 40–41); the M-norm-closest consistent velocities. Also removes a drifted n·v_c.
+pub fn slip_to_stick_update(
+    kin: &ContactKinematics,
+    params: &Params,
+    settings: &TransitionSettings,
+) -> Result<ImpactOutcome> {
+    project_stick(kin, params, settings)
+}
+
+/// Stick → Slip reset: at the end of sticking Δv ≈ 0 and eq. 20 is undefined, so set
+/// Δv⁺ = `slip_kick` · t̂ with t̂ = λ_∥/‖λ_∥‖ (the friction direction continues), by the
+/// impulse ι = Γ⁻¹(Δv⁻ − Δv⁺) (minimal change in the kinetic-energy norm). n·v_c⁺ = 0.
+pub fn stick_to_slip_update(
+    kin: &ContactKinematics,
+    params: &Params,
+    stick_force: &ContactForce,
+    settings: &TransitionSettings,
+) -> Result<ImpactOutcome> {
+    require_contact(kin, params, settings)?;
+    let n = kin.contact.n;
+    let lt = stick_force.lambda_t - n * n.dot(&stick_force.lambda_t);
+    let s = lt.norm();
+    if !(s.is_finite() && s > 0.0) {
+        return Err(ModelError::UndefinedSlipDirection {
+            tangential_speed: 0.0,
+        });
+    }
+    let target = lt * (settings.slip_kick / s);
+    let (mats, _) = matrices_with_mass(kin, params)?;
+    let g = factor_gamma(&mats, settings)?;
+    let iota = g.solve(&(kin.contact.delta_v - target));
+    let mut out = apply_given_impulse(kin, params, settings, &iota)?;
+    out.mode = Mode::Slip;
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_settings_valid_and_bad_rejected() {
+        let s = TransitionSettings::default();
+        assert!(s.validate().is_ok());
+        let bad = TransitionSettings {
+            slip_eps: f64::NAN,
+            ..s
+        };
+        let e = bad.validate().unwrap_err();
+        assert!(e.to_string().contains("slip_eps"), "{e}");
+        let bad = TransitionSettings {
+            slip_kick: s.slip_eps,
+            ..s
+        };
+        assert!(
+            bad.validate()
+                .unwrap_err()
+                .to_string()
+                .contains("slip_kick")
+        );
+        let bad = TransitionSettings {
+            contact_tolerance: -1.0,
+            ..s
+        };
+        assert!(bad.validate().is_err());
+    }
+
+    #[test]
+    fn force_predicates() {
+        let n = crate::Vec3::z();
+        let f = ContactForce::new(crate::Vec3::new(0.5, 0.0, 1.0), &n, 0.8);
+        assert!(!stick_to_slip(&f) && !contact_to_free(&f));
+        let f = ContactForce::new(crate::Vec3::new(0.9, 0.0, 1.0), &n, 0.8);
+        assert!(stick_to_slip(&f));
+        let f = ContactForce::new(crate::Vec3::new(0.0, 0.0, -1.0), &n, 0.8);
+        assert!(contact_to_free(&f) && !stick_to_slip(&f));
+    }
+}

@@ -1,0 +1,248 @@
+//! Sparse primal-dual interior-point NLP solver — an Ipopt replacement (Wächter & Biegler,
+//! "On the implementation of an interior-point filter line-search algorithm for large-scale
+//! nonlinear programming", Math. Program. 106, 2006; cited as W&B).
+//!
+//! It solves the collocation NLPs of the paper's trajectory optimisation (Sect. 4) and any
+//! [`Nlp`]:
+//!
+//! ```text
+//! min f(x)  s.t.  g_L ≤ g(x) ≤ g_U,  x_L ≤ x ≤ x_U
+//! ```
+//!
+//! Symbols (W&B notation): `c(x) = 0` the internal equality constraints (inequalities get
+//! slacks), `y` = λ their multipliers, `z_L, z_U` bound multipliers, μ the barrier parameter,
+//! `θ = ‖c‖₁` infeasibility, `φ_μ` barrier objective, δ_w/δ_c the inertia-correction shifts of the
+//! KKT matrix (eq. (13)), τ the fraction-to-boundary parameter (eq. (15)), `E_μ` the scaled
+//! optimality error (eq. (5)).
+//!
+//! Modules: [`nlp`] (problem trait, derivative checker), [`settings`], [`solution`],
+//! [`kkt`] (KKT assembly and the faer LDLᵀ [`KktSolver`]), `stdform` (user problem → standard
+//! form), `core` (the algorithm), `restoration` (feasibility restoration problem), and with the
+//! `ipopt` feature [`ipopt_adapter`].
+//!
+//! ```no_run
+//! use bf_optim::ipm::{solve, Settings};
+//! # fn demo(problem: &dyn bf_optim::ipm::Nlp) -> Result<(), bf_optim::OptimError> {
+//! let sol = solve(problem, &Settings::default())?;
+//! println!("{:?} f = {} after {} iterations", sol.status, sol.objective, sol.iterations);
+//! # Ok(()) }
+//! ```
+
+mod core;
+pub mod kkt;
+pub mod nlp;
+mod restoration;
+pub mod settings;
+pub mod solution;
+mod stdform;
+
+#[cfg(feature = "ipopt")]
+pub mod ipopt_adapter;
+
+use std::time::Instant;
+
+pub use kkt::{FaerLdlt, Inertia, KktSolver};
+pub use nlp::{BOUND_INF, DerivativeReport, Nlp, NlpScaling, check_derivatives};
+pub use settings::{MuStrategy, ScalingMethod, Settings};
+pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};
+
+use self::core::{Core, CoreStart, Ctx};
+use crate::error::OptimError;
+use stdform::{Reformulated, StdProblem};
+
+/// Solves `nlp` from its initial point with `settings`.
+pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError> {
+    solve_with(nlp, settings, None, None)
+}
+
+/// Solves `nlp`, optionally from a primal-dual warm start (its multipliers in the convention of
+/// [`Solution`]; consider a small `mu_init`, e.g. 1e-6, and small `warm_start_bound_push`) and
+/// with a per-iteration callback (return `false` to stop with [`Status::UserStop`]).
+pub fn solve_with(
+    nlp: &dyn Nlp,
+    settings: &Settings,
+    warm: Option<&WarmStart>,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<Solution, OptimError> {
+    settings.validate()?;
+    let t_start = Instant::now();
+    let n = nlp.num_variables();
+    let m = nlp.num_constraints();
+    let x0_user = match warm {
+        Some(w) => {
+            for (what, len, exp) in [
+                ("warm-start x", w.x.len(), n),
+                ("warm-start lambda", w.lambda.len(), m),
+                ("warm-start z_l", w.z_l.len(), n),
+                ("warm-start z_u", w.z_u.len(), n),
+            ] {
+                if len != exp {
+                    return Err(OptimError::DimensionMismatch { what, expected: exp, found: len });
+                }
+            }
+            w.x.clone()
+        }
+        None => {
+            let mut x = vec![0.0; n];
+            nlp.initial_point(&mut x);
+            x
+        }
+    };
+    let mut reform = Reformulated::new(nlp, settings, &x0_user)?;
+    // Evaluate slacks at the initial point clamped into the bounds so that fixed variables and
+    // bound-violating starts do not produce NaN in the slack initialisation.
+    let x0c: Vec<f64> = (0..n)
+        .map(|j| {
+            let v = x0_user[j].clamp(reform.x_l_user[j], reform.x_u_user[j]);
+            if v.is_nan() { x0_user[j] } else { v }
+        })
+        .collect();
+    let x_int = reform.to_internal(&x0c);
+    let os = reform.obj_scale;
+    let nint = reform.n();
+    let start = match warm {
+        None => CoreStart {
+            x: x_int,
+            y: None,
+            z_l: None,
+            z_u: None,
+            mu: settings.mu_init,
+            bound_push: settings.bound_push,
+            bound_frac: settings.bound_frac,
+            mult_floor: 0.0,
+            relax_bounds: true,
+            restoration: false,
+        },
+        Some(w) => {
+            let mut y = vec![0.0; m];
+            let mut zl = vec![0.0; nint];
+            let mut zu = vec![0.0; nint];
+            for i in 0..m {
+                y[i] = w.lambda[i] * os / reform.con_scale[i];
+                let s = reform.slack[i];
+                if s != usize::MAX {
+                    if y[i] < 0.0 {
+                        zl[s] = -y[i];
+                    } else {
+                        zu[s] = y[i];
+                    }
+                }
+            }
+            for (k, &j) in reform.free.iter().enumerate() {
+                zl[k] = w.z_l[j] * os;
+                zu[k] = w.z_u[j] * os;
+            }
+            CoreStart {
+                x: x_int,
+                y: Some(y),
+                z_l: Some(zl),
+                z_u: Some(zu),
+                mu: settings.mu_init,
+                bound_push: settings.warm_start_bound_push,
+                bound_frac: settings.warm_start_bound_push,
+                mult_floor: settings.warm_start_mult_bound_push,
+                relax_bounds: true,
+                restoration: false,
+            }
+        }
+    };
+    let mut ctx = Ctx {
+        settings,
+        timing: Timing::default(),
+        counters: Counters::default(),
+        iter: 0,
+        start: t_start,
+        callback,
+    };
+    let out = {
+        let mut core = Core::new(&mut reform, settings, &start)?;
+        core.run(&mut ctx, &start)?
+    };
+    // Map back to user space.
+    let mut x = reform.to_user(&out.x);
+    for j in 0..n {
+        x[j] = x[j].clamp(reform.x_l_user[j], reform.x_u_user[j]);
+    }
+    let lambda: Vec<f64> = (0..m).map(|i| out.y[i] * reform.con_scale[i] / os).collect();
+    let mut z_l = vec![0.0; n];
+    let mut z_u = vec![0.0; n];
+    for (k, &j) in reform.free.iter().enumerate() {
+        z_l[j] = out.z_l[k] / os;
+        z_u[j] = out.z_u[k] / os;
+    }
+    let t_eval = Instant::now();
+    let objective = nlp.objective(&x);
+    let mut g = vec![0.0; m];
+    nlp.constraints(&x, &mut g);
+    let mut grad = vec![0.0; n];
+    nlp.gradient(&x, &mut grad);
+    let jp = reform.user_jac_pattern().to_vec();
+    let mut jv = vec![0.0; jp.len()];
+    nlp.jacobian_values(&x, &mut jv);
+    ctx.timing.function_evals += t_eval.elapsed();
+    let mut rd = grad;
+    for (k, &(r, c)) in jp.iter().enumerate() {
+        rd[c] += jv[k] * lambda[r];
+    }
+    // Fixed variables: their multipliers are the reduced gradient.
+    for j in 0..n {
+        if reform.inv[j] == usize::MAX {
+            if rd[j] >= 0.0 {
+                z_l[j] = rd[j];
+            } else {
+                z_u[j] = -rd[j];
+            }
+        }
+    }
+    let mut dual_inf = 0.0f64;
+    for j in 0..n {
+        dual_inf = dual_inf.max((rd[j] - z_l[j] + z_u[j]).abs());
+    }
+    let mut viol = 0.0f64;
+    for i in 0..m {
+        viol = viol.max(reform.g_l[i] - g[i]).max(g[i] - reform.g_u[i]);
+    }
+    let mut compl = 0.0f64;
+    for j in 0..n {
+        if reform.x_l_user[j].is_finite() {
+            compl = compl.max(((x[j] - reform.x_l_user[j]) * z_l[j]).abs());
+        }
+        if reform.x_u_user[j].is_finite() {
+            compl = compl.max(((reform.x_u_user[j] - x[j]) * z_u[j]).abs());
+        }
+    }
+    for i in 0..m {
+        if reform.slack[i] != usize::MAX {
+            let s = reform.slack[i];
+            let gi = g[i];
+            if reform.g_l[i].is_finite() {
+                compl = compl.max(((gi - reform.g_l[i]) * out.z_l[s] * reform.con_scale[i] / os).abs());
+            }
+            if reform.g_u[i].is_finite() {
+                compl = compl.max(((reform.g_u[i] - gi) * out.z_u[s] * reform.con_scale[i] / os).abs());
+            }
+        }
+    }
+    ctx.timing.total = t_start.elapsed();
+    if settings.print_level > 0 {
+        println!(
+            "status {:?}: f = {:.10e}, iterations {}, constraint violation {:.2e}, dual infeasibility {:.2e}",
+            out.status, objective, ctx.iter, viol, dual_inf
+        );
+    }
+    Ok(Solution {
+        status: out.status,
+        x,
+        lambda,
+        z_l,
+        z_u,
+        objective,
+        iterations: ctx.iter,
+        constraint_violation: viol.max(0.0),
+        dual_infeasibility: dual_inf,
+        complementarity: compl,
+        mu: out.mu,
+        timing: ctx.timing,
+        counters: ctx.counters,
+    })
+}

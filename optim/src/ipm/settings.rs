@@ -1,0 +1,284 @@
+//! Solver settings. Names and defaults follow Ipopt's options (Wächter & Biegler 2006, Sect. 2–3
+//! and Table 1) wherever an equivalent exists.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::OptimError;
+
+/// Barrier-parameter update rule.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum MuStrategy {
+    /// Fiacco–McCormick: solve each barrier problem to `E_μ ≤ κ_ε μ`, then
+    /// `μ ← max(tol/10, min(κ_μ μ, μ^θ_μ))` (Wächter & Biegler eq. (7)).
+    #[default]
+    Monotone,
+    /// LOQO rule `μ = σ · sᵀz / n_c` with `σ = 0.1 min(0.05 (1−ξ)/ξ, 2)³`, `ξ = min sᵢzᵢ / avg`,
+    /// recomputed every iteration; safeguarded by falling back to monotone mode when the
+    /// optimality error stops decreasing (Nocedal, Wächter & Waltz 2009, "free/fixed" modes).
+    Adaptive,
+}
+
+/// How the objective and constraints are scaled internally.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum ScalingMethod {
+    /// No scaling.
+    None,
+    /// Ipopt's gradient-based scaling: each function is scaled so that its gradient at the
+    /// initial point has ∞-norm ≤ `scaling_max_gradient` (factors never exceed 1).
+    #[default]
+    GradientBased,
+    /// Use [`Nlp::scaling`](crate::ipm::Nlp::scaling) (falls back to none if it returns `None`).
+    User,
+}
+
+/// Settings of the interior-point solver. All fields are public; [`Settings::validate`] checks ranges.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Settings {
+    /// Desired scaled optimality error `E_0` (default: 1e-8).
+    pub tol: f64,
+    /// Unscaled constraint violation required for `Solved` (default: 1e-4).
+    pub constr_viol_tol: f64,
+    /// Unscaled dual infeasibility required for `Solved` (default: 1.0).
+    pub dual_inf_tol: f64,
+    /// Unscaled complementarity required for `Solved` (default: 1e-4).
+    pub compl_inf_tol: f64,
+    /// "Acceptable" scaled optimality error (default: 1e-6).
+    pub acceptable_tol: f64,
+    /// Consecutive acceptable iterations before stopping with `Acceptable` (default: 15; 0 disables).
+    pub acceptable_iter: usize,
+    /// Unscaled constraint violation for the acceptable level (default: 1e-2).
+    pub acceptable_constr_viol_tol: f64,
+    /// Maximum number of iterations, restoration iterations included (default: 3000).
+    pub max_iter: usize,
+    /// Wall-clock limit in seconds (default: 1e20, i.e. none).
+    pub max_wall_time: f64,
+    /// Barrier-parameter strategy (default: monotone).
+    pub mu_strategy: MuStrategy,
+    /// Initial barrier parameter (default: 0.1).
+    pub mu_init: f64,
+    /// Smallest barrier parameter (default: 1e-11; the monotone rule also stops at tol/10).
+    pub mu_min: f64,
+    /// Linear decrease factor κ_μ (default: 0.2).
+    pub mu_linear_decrease: f64,
+    /// Superlinear decrease power θ_μ (default: 1.5).
+    pub mu_superlinear_power: f64,
+    /// Barrier subproblem tolerance factor κ_ε (default: 10).
+    pub barrier_tol_factor: f64,
+    /// Minimum fraction-to-boundary parameter τ_min (default: 0.99).
+    pub tau_min: f64,
+    /// Absolute push of the initial point into the bounds κ_1 (default: 1e-2).
+    pub bound_push: f64,
+    /// Relative push κ_2 (fraction of the bound interval) (default: 1e-2).
+    pub bound_frac: f64,
+    /// Initial value of the bound multipliers (default: 1.0).
+    pub bound_mult_init: f64,
+    /// Relative relaxation of all bounds, `x_L ← x_L − r max(1, |x_L|)` (default: 1e-8).
+    pub bound_relax_factor: f64,
+    /// Least-squares initial λ is discarded if its ∞-norm exceeds this (default: 1e3).
+    pub constr_mult_init_max: f64,
+    /// Push of the primal point into the bounds for a warm start (default: 1e-3).
+    pub warm_start_bound_push: f64,
+    /// Minimum value of warm-start bound multipliers (default: 1e-3).
+    pub warm_start_mult_bound_push: f64,
+    /// Bound-multiplier safeguard κ_Σ (default: 1e10).
+    pub kappa_sigma: f64,
+    /// Damping of one-sided bounded variables κ_d (default: 1e-5).
+    pub kappa_d: f64,
+    /// Scaling method (default: gradient based).
+    pub scaling: ScalingMethod,
+    /// Target maximal gradient for gradient-based scaling (default: 100).
+    pub scaling_max_gradient: f64,
+    /// Extra objective factor applied on top of the scaling method (default: 1.0).
+    pub obj_scaling_factor: f64,
+    /// First trial δ_w of the inertia correction (default: 1e-4).
+    pub first_hessian_perturbation: f64,
+    /// Smallest δ_w (default: 1e-20).
+    pub min_hessian_perturbation: f64,
+    /// Largest δ_w before giving up on the step (default: 1e40).
+    pub max_hessian_perturbation: f64,
+    /// δ_w decrease factor κ_w⁻ (default: 1/3).
+    pub perturb_dec_fact: f64,
+    /// δ_w increase factor κ_w⁺ (default: 8).
+    pub perturb_inc_fact: f64,
+    /// δ_w first increase factor κ̄_w⁺ (default: 100).
+    pub perturb_inc_fact_first: f64,
+    /// δ_c = δ̄_c μ^κ_c used for a singular Jacobian: δ̄_c (default: 1e-8).
+    pub jacobian_regularization_value: f64,
+    /// κ_c (default: 0.25).
+    pub jacobian_regularization_exponent: f64,
+    /// Static −δ_c always on the constraint block so that the unpivoted LDLᵀ never meets an exact
+    /// zero dual pivot; the step is refined against the unregularized matrix (default: 1e-9).
+    pub static_dual_regularization: f64,
+    /// Maximum iterative-refinement steps per solve (default: 3).
+    pub max_refinement_steps: usize,
+    /// Relative residual at which refinement stops (default: 1e-10).
+    pub refinement_tol: f64,
+    /// Filter margin γ_θ (default: 1e-5).
+    pub gamma_theta: f64,
+    /// Filter margin γ_φ (default: 1e-8).
+    pub gamma_phi: f64,
+    /// Switching-rule constant δ (default: 1).
+    pub switching_delta: f64,
+    /// Switching exponent s_θ (default: 1.1).
+    pub s_theta: f64,
+    /// Switching exponent s_φ (default: 2.3).
+    pub s_phi: f64,
+    /// Armijo constant η_φ (default: 1e-8).
+    pub eta_phi: f64,
+    /// Maximum second-order corrections per line search (default: 4).
+    pub max_soc: usize,
+    /// Required θ reduction between consecutive corrections κ_soc (default: 0.99).
+    pub kappa_soc: f64,
+    /// Backtracking factor (default: 0.5).
+    pub alpha_red_factor: f64,
+    /// Reject trial points whose barrier objective rises by more than this many orders of
+    /// magnitude (default: 5).
+    pub obj_max_inc: f64,
+    /// Enable the feasibility restoration phase (default: true).
+    pub restoration: bool,
+    /// Penalty ρ of the restoration problem (default: 1000).
+    pub resto_penalty: f64,
+    /// Required infeasibility reduction κ_resto to leave restoration (default: 0.9).
+    pub resto_required_reduction: f64,
+    /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this (default: 1e20).
+    pub diverging_iterates_tol: f64,
+    /// Stop with `Unbounded` if the unscaled objective drops below −this at a feasible iterate
+    /// (default: 1e20).
+    pub unbounded_objective: f64,
+    /// Scaling cap s_max of the optimality error (default: 100).
+    pub s_max: f64,
+    /// 0 = silent, 1 = Ipopt-style iteration log on stdout, 2 = also restoration details
+    /// (default: 0).
+    pub print_level: u8,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            tol: 1e-8,
+            constr_viol_tol: 1e-4,
+            dual_inf_tol: 1.0,
+            compl_inf_tol: 1e-4,
+            acceptable_tol: 1e-6,
+            acceptable_iter: 15,
+            acceptable_constr_viol_tol: 1e-2,
+            max_iter: 3000,
+            max_wall_time: 1e20,
+            mu_strategy: MuStrategy::Monotone,
+            mu_init: 0.1,
+            mu_min: 1e-11,
+            mu_linear_decrease: 0.2,
+            mu_superlinear_power: 1.5,
+            barrier_tol_factor: 10.0,
+            tau_min: 0.99,
+            bound_push: 1e-2,
+            bound_frac: 1e-2,
+            bound_mult_init: 1.0,
+            bound_relax_factor: 1e-8,
+            constr_mult_init_max: 1e3,
+            warm_start_bound_push: 1e-3,
+            warm_start_mult_bound_push: 1e-3,
+            kappa_sigma: 1e10,
+            kappa_d: 1e-5,
+            scaling: ScalingMethod::GradientBased,
+            scaling_max_gradient: 100.0,
+            obj_scaling_factor: 1.0,
+            first_hessian_perturbation: 1e-4,
+            min_hessian_perturbation: 1e-20,
+            max_hessian_perturbation: 1e40,
+            perturb_dec_fact: 1.0 / 3.0,
+            perturb_inc_fact: 8.0,
+            perturb_inc_fact_first: 100.0,
+            jacobian_regularization_value: 1e-8,
+            jacobian_regularization_exponent: 0.25,
+            static_dual_regularization: 1e-9,
+            max_refinement_steps: 3,
+            refinement_tol: 1e-10,
+            gamma_theta: 1e-5,
+            gamma_phi: 1e-8,
+            switching_delta: 1.0,
+            s_theta: 1.1,
+            s_phi: 2.3,
+            eta_phi: 1e-8,
+            max_soc: 4,
+            kappa_soc: 0.99,
+            alpha_red_factor: 0.5,
+            obj_max_inc: 5.0,
+            restoration: true,
+            resto_penalty: 1000.0,
+            resto_required_reduction: 0.9,
+            diverging_iterates_tol: 1e20,
+            unbounded_objective: 1e20,
+            s_max: 100.0,
+            print_level: 0,
+        }
+    }
+}
+
+impl Settings {
+    /// Checks that every parameter is in its valid range.
+    pub fn validate(&self) -> Result<(), OptimError> {
+        let pos = |name: &'static str, v: f64| {
+            if v > 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(OptimError::InvalidSetting { name, msg: format!("must be positive and finite, got {v}") })
+            }
+        };
+        let unit = |name: &'static str, v: f64| {
+            if v > 0.0 && v < 1.0 {
+                Ok(())
+            } else {
+                Err(OptimError::InvalidSetting { name, msg: format!("must be in (0, 1), got {v}") })
+            }
+        };
+        pos("tol", self.tol)?;
+        pos("constr_viol_tol", self.constr_viol_tol)?;
+        pos("dual_inf_tol", self.dual_inf_tol)?;
+        pos("compl_inf_tol", self.compl_inf_tol)?;
+        pos("acceptable_tol", self.acceptable_tol)?;
+        pos("acceptable_constr_viol_tol", self.acceptable_constr_viol_tol)?;
+        pos("mu_init", self.mu_init)?;
+        pos("mu_min", self.mu_min)?;
+        unit("mu_linear_decrease", self.mu_linear_decrease)?;
+        if !(self.mu_superlinear_power > 1.0 && self.mu_superlinear_power < 2.0) {
+            return Err(OptimError::InvalidSetting {
+                name: "mu_superlinear_power",
+                msg: format!("must be in (1, 2), got {}", self.mu_superlinear_power),
+            });
+        }
+        pos("barrier_tol_factor", self.barrier_tol_factor)?;
+        unit("tau_min", self.tau_min)?;
+        pos("bound_push", self.bound_push)?;
+        if !(self.bound_frac > 0.0 && self.bound_frac <= 0.5) {
+            return Err(OptimError::InvalidSetting { name: "bound_frac", msg: "must be in (0, 0.5]".into() });
+        }
+        pos("bound_mult_init", self.bound_mult_init)?;
+        if !(self.bound_relax_factor >= 0.0) {
+            return Err(OptimError::InvalidSetting { name: "bound_relax_factor", msg: "must be ≥ 0".into() });
+        }
+        pos("warm_start_bound_push", self.warm_start_bound_push)?;
+        pos("warm_start_mult_bound_push", self.warm_start_mult_bound_push)?;
+        pos("kappa_sigma", self.kappa_sigma)?;
+        pos("scaling_max_gradient", self.scaling_max_gradient)?;
+        pos("obj_scaling_factor", self.obj_scaling_factor)?;
+        pos("first_hessian_perturbation", self.first_hessian_perturbation)?;
+        pos("max_hessian_perturbation", self.max_hessian_perturbation)?;
+        unit("perturb_dec_fact", self.perturb_dec_fact)?;
+        pos("perturb_inc_fact", self.perturb_inc_fact)?;
+        pos("perturb_inc_fact_first", self.perturb_inc_fact_first)?;
+        unit("gamma_theta", self.gamma_theta)?;
+        unit("gamma_phi", self.gamma_phi)?;
+        unit("eta_phi", self.eta_phi)?;
+        unit("alpha_red_factor", self.alpha_red_factor)?;
+        unit("kappa_soc", self.kappa_soc)?;
+        unit("resto_required_reduction", self.resto_required_reduction)?;
+        pos("resto_penalty", self.resto_penalty)?;
+        pos("s_max", self.s_max)?;
+        if !(self.max_wall_time > 0.0) {
+            return Err(OptimError::InvalidSetting { name: "max_wall_time", msg: "must be positive".into() });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,154 @@
+//! Result types of a solve: termination status, primal-dual solution, statistics and the
+//! per-iteration record passed to the log and the user callback.
+
+use std::time::Duration;
+
+use serde::{Deserialize, Serialize};
+
+/// Why the solver stopped. Only `Solved` and `Acceptable` carry a (locally) optimal point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Status {
+    /// Scaled optimality error ≤ `tol` and the unscaled tolerances hold.
+    Solved,
+    /// `acceptable_iter` consecutive iterates met the acceptable tolerances.
+    Acceptable,
+    /// `max_iter` reached.
+    MaxIterations,
+    /// `max_wall_time` reached.
+    MaxTime,
+    /// The restoration phase converged to a stationary point of the infeasibility: the
+    /// constraints are (locally) infeasible.
+    LocallyInfeasible,
+    /// The Newton step became negligible relative to x without meeting the tolerances.
+    SearchDirectionTooSmall,
+    /// ‖x‖_∞ exceeded `diverging_iterates_tol` (typically an unbounded problem).
+    DivergingIterates,
+    /// The objective dropped below −`unbounded_objective` at a feasible point.
+    Unbounded,
+    /// The line search failed and the restoration phase could not find an acceptable point.
+    RestorationFailed,
+    /// No usable Newton step (inertia correction exhausted δ_w).
+    ErrorInStepComputation,
+    /// The callback asked to stop.
+    UserStop,
+}
+
+impl Status {
+    /// `Solved` or `Acceptable`.
+    pub fn is_success(self) -> bool {
+        matches!(self, Status::Solved | Status::Acceptable)
+    }
+}
+
+/// Wall-clock time spent in each part of the algorithm (exclusive of each other).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    /// Whole solve.
+    pub total: Duration,
+    /// Objective and constraint evaluations (including those at line-search trial points).
+    pub function_evals: Duration,
+    /// Gradient, Jacobian and Hessian evaluations.
+    pub derivative_evals: Duration,
+    /// Building the KKT matrix and right-hand sides.
+    pub kkt_assembly: Duration,
+    /// Symbolic analysis and numeric factorizations (all inertia-correction attempts).
+    pub factorization: Duration,
+    /// Triangular solves and iterative refinement.
+    pub solve: Duration,
+    /// Line-search bookkeeping (filter, step sizes), excluding its function evaluations.
+    pub line_search: Duration,
+}
+
+/// Counters of a solve.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Counters {
+    /// Objective evaluations.
+    pub objective_evals: usize,
+    /// Constraint evaluations.
+    pub constraint_evals: usize,
+    /// Hessian evaluations.
+    pub hessian_evals: usize,
+    /// Numeric factorizations.
+    pub factorizations: usize,
+    /// Iterations spent in the restoration phase (included in `iterations`).
+    pub restoration_iterations: usize,
+    /// Second-order corrections that were accepted.
+    pub soc_accepted: usize,
+}
+
+/// Result of a solve (unscaled, in the user's variables).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Solution {
+    /// Termination status.
+    pub status: Status,
+    /// Final primal point (length n), projected onto the original variable bounds.
+    pub x: Vec<f64>,
+    /// Constraint multipliers λ (length m), Lagrangian `f + λᵀg`.
+    pub lambda: Vec<f64>,
+    /// Lower-bound multipliers z_L ≥ 0 (length n, zero for variables without a lower bound).
+    pub z_l: Vec<f64>,
+    /// Upper-bound multipliers z_U ≥ 0 (length n).
+    pub z_u: Vec<f64>,
+    /// Objective f(x).
+    pub objective: f64,
+    /// Iterations (restoration included).
+    pub iterations: usize,
+    /// Max violation of the variable and constraint bounds, unscaled.
+    pub constraint_violation: f64,
+    /// ‖∇f + Jᵀλ − z_L + z_U‖_∞, unscaled.
+    pub dual_infeasibility: f64,
+    /// Max complementarity |(x − x_L) z_L|, |(x_U − x) z_U| (including constraint slacks), unscaled.
+    pub complementarity: f64,
+    /// Final barrier parameter.
+    pub mu: f64,
+    /// Time breakdown.
+    pub timing: Timing,
+    /// Counters.
+    pub counters: Counters,
+}
+
+/// What happened in one iteration (the columns of the Ipopt-style log).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct IterationInfo {
+    /// Iteration number (0 = initial point).
+    pub iter: usize,
+    /// True for iterations of the restoration phase.
+    pub restoration: bool,
+    /// Unscaled objective (for restoration iterations: the restoration objective).
+    pub objective: f64,
+    /// Max constraint violation ‖c‖_∞ of the internal (scaled) problem.
+    pub inf_pr: f64,
+    /// Scaled dual infeasibility ‖∇L‖_∞.
+    pub inf_du: f64,
+    /// Barrier parameter μ.
+    pub mu: f64,
+    /// ‖Δx‖_∞ of the step taken to reach this iterate.
+    pub step_norm: f64,
+    /// Hessian regularization δ_w used for that step (0 = none).
+    pub delta_w: f64,
+    /// Dual step size.
+    pub alpha_du: f64,
+    /// Primal step size.
+    pub alpha_pr: f64,
+    /// Line-search trials.
+    pub ls_trials: usize,
+}
+
+/// A primal-dual starting point (user variables; multipliers as returned in [`Solution`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WarmStart {
+    /// Primal point (length n).
+    pub x: Vec<f64>,
+    /// Constraint multipliers (length m).
+    pub lambda: Vec<f64>,
+    /// Lower-bound multipliers (length n).
+    pub z_l: Vec<f64>,
+    /// Upper-bound multipliers (length n).
+    pub z_u: Vec<f64>,
+}
+
+impl From<&Solution> for WarmStart {
+    fn from(s: &Solution) -> Self {
+        Self { x: s.x.clone(), lambda: s.lambda.clone(), z_l: s.z_l.clone(), z_u: s.z_u.clone() }
+    }
+}

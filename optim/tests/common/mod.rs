@@ -1,0 +1,2 @@
+//! Shared test problems.
+pub mod double_integrator;

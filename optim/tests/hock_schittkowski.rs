@@ -1,0 +1,324 @@
+//! Hock–Schittkowski suite: every transcribed problem is solved from the published starting point
+//! and the objective is compared with the published optimum `f*` (relative 1e-6, absolute floor
+//! 1e-6 when `f* = 0`). Independent checks of the transcription: the published `x*` is feasible
+//! and reproduces `f*`; hyper-dual derivatives agree with central finite differences.
+
+mod hs;
+
+use bf_optim::ipm::{MuStrategy, Settings, Solution, Status, check_derivatives, solve};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn rel_err(f: f64, fstar: f64) -> f64 {
+    (f - fstar).abs() / fstar.abs().max(1.0)
+}
+
+#[test]
+fn transcription_matches_published_optima() {
+    let mut checked = 0;
+    for p in hs::all() {
+        let Some(xs) = &p.xstar else { continue };
+        let f = p.f_val(xs);
+        // Published x* are rounded to ~7 digits, so allow 1e-5.
+        assert!(
+            rel_err(f, p.fstar) < 1e-5,
+            "{}: f(x*) = {f}, published f* = {}",
+            p.name,
+            p.fstar
+        );
+        let v = p.violation(xs);
+        assert!(
+            v < 1e-4,
+            "{}: published x* violates constraints by {v}",
+            p.name
+        );
+        checked += 1;
+    }
+    assert!(checked >= 40);
+}
+
+#[test]
+fn derivatives_match_finite_differences() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for p in hs::all() {
+        for trial in 0..2 {
+            let x: Vec<f64> =
+                p.x0.iter()
+                    .map(|v| {
+                        v + if trial == 0 {
+                            0.0
+                        } else {
+                            rng.random_range(-0.3..0.3)
+                        }
+                    })
+                    .collect();
+            // keep HS064's 1/x terms away from the pole
+            let x: Vec<f64> = x
+                .iter()
+                .map(|v| {
+                    if p.name == "HS064" {
+                        v.abs().max(0.5)
+                    } else {
+                        *v
+                    }
+                })
+                .collect();
+            let lam: Vec<f64> = (0..p.m).map(|_| rng.random_range(-2.0..2.0)).collect();
+            let rep = check_derivatives(&p, &x, 0.7, &lam, 1e-6);
+            assert!(rep.max_error() < 1e-5, "{}: {rep:?}", p.name);
+        }
+    }
+}
+
+/// A deliberately wrong gradient must be caught by the checker.
+#[test]
+fn derivative_checker_detects_errors() {
+    struct Wrong(hs::Hs);
+    impl bf_optim::ipm::Nlp for Wrong {
+        fn num_variables(&self) -> usize {
+            self.0.num_variables()
+        }
+        fn num_constraints(&self) -> usize {
+            self.0.num_constraints()
+        }
+        fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+            self.0.variable_bounds(l, u)
+        }
+        fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+            self.0.constraint_bounds(l, u)
+        }
+        fn initial_point(&self, x: &mut [f64]) {
+            self.0.initial_point(x)
+        }
+        fn objective(&self, x: &[f64]) -> f64 {
+            self.0.objective(x)
+        }
+        fn gradient(&self, x: &[f64], g: &mut [f64]) {
+            self.0.gradient(x, g);
+            g[0] *= 1.01;
+        }
+        fn constraints(&self, x: &[f64], g: &mut [f64]) {
+            self.0.constraints(x, g)
+        }
+        fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+            self.0.jacobian_structure()
+        }
+        fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
+            self.0.jacobian_values(x, v)
+        }
+        fn hessian_structure(&self) -> Vec<(usize, usize)> {
+            self.0.hessian_structure()
+        }
+        fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
+            self.0.hessian_values(x, s, l, v)
+        }
+    }
+    let p = hs::all().into_iter().find(|p| p.name == "HS071").unwrap();
+    let x = p.x0.clone();
+    let w = Wrong(p);
+    let rep = check_derivatives(&w, &x, 1.0, &[0.5, -0.5], 1e-6);
+    assert!(rep.gradient.0 > 1e-3 && rep.gradient.1 == 0, "{rep:?}");
+}
+
+/// Problems on which a local method may legitimately stop at another KKT point than the
+/// published (global) optimum, per μ strategy. For these the test verifies independently that
+/// the returned point is a KKT point and that its objective is not below the published f*.
+const OTHER_LOCAL_MIN_MONOTONE: &[&str] = &["HS002", "HS016", "HS020", "HS044"];
+const OTHER_LOCAL_MIN_ADAPTIVE: &[&str] = &["HS002", "HS016", "HS020", "HS033"];
+/// HS013's minimiser violates every constraint qualification (no multipliers exist), so an
+/// interior-point method can only approach it with diverging multipliers.
+const DEGENERATE: &[&str] = &["HS013"];
+
+/// Independent first-order check from the problem's own derivatives (hyper-dual numbers):
+/// returns max(|∇f + Jᵀλ − z_L + z_U|, multiplier sign errors, complementarity, infeasibility).
+fn kkt_error(p: &hs::Hs, sol: &Solution) -> f64 {
+    use bf_optim::ipm::Nlp;
+    let n = p.num_variables();
+    let mut r = vec![0.0; n];
+    p.gradient(&sol.x, &mut r);
+    let mut jv = vec![0.0; p.m * n];
+    p.jacobian_values(&sol.x, &mut jv);
+    for i in 0..p.m {
+        for j in 0..n {
+            r[j] += sol.lambda[i] * jv[i * n + j];
+        }
+    }
+    let mut err = 0.0f64;
+    for j in 0..n {
+        err = err.max((r[j] - sol.z_l[j] + sol.z_u[j]).abs());
+        err = err.max(-sol.z_l[j]).max(-sol.z_u[j]);
+        if p.xl[j].is_finite() {
+            err = err.max((sol.z_l[j] * (sol.x[j] - p.xl[j])).abs());
+        }
+        if p.xu[j].is_finite() {
+            err = err.max((sol.z_u[j] * (p.xu[j] - sol.x[j])).abs());
+        }
+    }
+    let g = p.g_val(&sol.x);
+    for i in p.neq..p.m {
+        // g_i ≥ 0 is a lower bound: with L = f + λᵀg its multiplier is λ_i ≤ 0.
+        err = err.max(sol.lambda[i]).max((sol.lambda[i] * g[i]).abs());
+    }
+    err.max(p.violation(&sol.x))
+}
+
+fn run_suite(
+    settings: &Settings,
+    other_local: &[&str],
+) -> Vec<(String, Status, usize, f64, f64, bool)> {
+    let mut failures = Vec::new();
+    let mut rows = Vec::new();
+    for p in hs::all() {
+        let sol = solve(&p, settings).unwrap_or_else(|e| panic!("{}: {e}", p.name));
+        let at_published = sol.status.is_success() && rel_err(sol.objective, p.fstar) <= 1e-6;
+        let ok = if DEGENERATE.contains(&p.name) {
+            sol.status.is_success() && (sol.objective - p.fstar).abs() < 2e-2
+        } else if other_local.contains(&p.name) {
+            let e = kkt_error(&p, &sol);
+            sol.status.is_success()
+                && e < 1e-6
+                && sol.objective >= p.fstar - 1e-6 * p.fstar.abs().max(1.0)
+        } else {
+            at_published && kkt_error(&p, &sol) < 1e-6
+        };
+        if !ok {
+            failures.push(format!(
+                "{}: {:?} after {} it, f = {:.10e}, f* = {:.10e}, KKT error {:.2e}",
+                p.name,
+                sol.status,
+                sol.iterations,
+                sol.objective,
+                p.fstar,
+                kkt_error(&p, &sol)
+            ));
+        }
+        rows.push((
+            p.name.to_string(),
+            sol.status,
+            sol.iterations,
+            sol.objective,
+            p.fstar,
+            at_published,
+        ));
+    }
+    assert!(failures.is_empty(), "failures:\n{}", failures.join("\n"));
+    rows
+}
+
+#[test]
+fn hs_suite_reaches_published_optima() {
+    let rows = run_suite(&Settings::default(), OTHER_LOCAL_MIN_MONOTONE);
+    let at_published = rows.iter().filter(|r| r.5).count();
+    assert!(
+        at_published >= 60,
+        "only {at_published} problems reached the published optimum"
+    );
+}
+
+#[test]
+fn hs_suite_adaptive_mu() {
+    let settings = Settings {
+        mu_strategy: MuStrategy::Adaptive,
+        ..Settings::default()
+    };
+    let rows = run_suite(&settings, OTHER_LOCAL_MIN_ADAPTIVE);
+    let at_published = rows.iter().filter(|r| r.5).count();
+    assert!(
+        at_published >= 60,
+        "only {at_published} problems reached the published optimum"
+    );
+}
+
+/// Regenerates `optim/HS_RESULTS.md`:
+/// `cargo test --release -p bf-optim --test hock_schittkowski -- --ignored write_results_table`
+#[test]
+#[ignore = "writes optim/HS_RESULTS.md"]
+fn write_results_table() {
+    use std::fmt::Write;
+    let mono = run_suite(&Settings::default(), OTHER_LOCAL_MIN_MONOTONE);
+    let adap = run_suite(
+        &Settings {
+            mu_strategy: MuStrategy::Adaptive,
+            ..Settings::default()
+        },
+        OTHER_LOCAL_MIN_ADAPTIVE,
+    );
+    let problems = hs::all();
+    let mut s = String::new();
+    writeln!(s, "# Hock–Schittkowski results of `bf_optim::ipm`\n").unwrap();
+    writeln!(s, "Generated by `cargo test --release -p bf-optim --test hock_schittkowski -- --ignored write_results_table`.").unwrap();
+    writeln!(s, "Default settings (tol 1e-8); `f*` is the published optimum (Hock & Schittkowski 1981); ✓ = relative error ≤ 1e-6.").unwrap();
+    writeln!(s, "`local` = a different KKT point (verified independently from the problem's derivatives; objective ≥ f*).").unwrap();
+    writeln!(s, "IPOPT iteration counts are **not measured** (the optional `ipopt` feature was not built for this table).\n").unwrap();
+    writeln!(s, "| problem | n | m | tags | f* | monotone: iters | status | f | adaptive: iters | status | f |").unwrap();
+    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|").unwrap();
+    for ((p, a), b) in problems.iter().zip(&mono).zip(&adap) {
+        let mark = |r: &(String, Status, usize, f64, f64, bool)| {
+            if r.5 {
+                "✓".to_string()
+            } else if DEGENERATE.contains(&p.name) {
+                "degenerate".into()
+            } else {
+                "local".into()
+            }
+        };
+        writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.10e} | {} | {:?} {} | {:.10e} | {} | {:?} {} | {:.10e} |",
+            p.name,
+            p.x0.len(),
+            p.m,
+            p.tags,
+            p.fstar,
+            a.2,
+            a.1,
+            mark(a),
+            a.3,
+            b.2,
+            b.1,
+            mark(b),
+            b.3
+        )
+        .unwrap();
+    }
+    let tot = |v: &[(String, Status, usize, f64, f64, bool)]| v.iter().map(|r| r.2).sum::<usize>();
+    let ok = |v: &[(String, Status, usize, f64, f64, bool)]| v.iter().filter(|r| r.5).count();
+    writeln!(
+        s,
+        "\nTotals: monotone {} iterations, {}/{} at f*; adaptive {} iterations, {}/{} at f*.",
+        tot(&mono),
+        ok(&mono),
+        mono.len(),
+        tot(&adap),
+        ok(&adap),
+        adap.len()
+    )
+    .unwrap();
+    std::fs::write(concat!(env!("CARGO_MANIFEST_DIR"), "/HS_RESULTS.md"), s).unwrap();
+}
+
+/// Debug helper: `HS_NAME=HS013 cargo test --release -p bf-optim --test hock_schittkowski -- --ignored debug_one --nocapture`
+#[test]
+#[ignore = "manual debugging aid (prints the iteration log of one problem)"]
+fn debug_one() {
+    let name = std::env::var("HS_NAME").unwrap_or_else(|_| "HS071".into());
+    let adaptive = std::env::var("HS_ADAPTIVE").is_ok();
+    let p = hs::all()
+        .into_iter()
+        .find(|p| p.name == name)
+        .expect("unknown problem");
+    let settings = Settings {
+        print_level: 2,
+        mu_strategy: if adaptive {
+            MuStrategy::Adaptive
+        } else {
+            MuStrategy::Monotone
+        },
+        ..Settings::default()
+    };
+    let sol = solve(&p, &settings).unwrap();
+    println!(
+        "{:?} x = {:?} f = {} z_l = {:?} z_u = {:?} lambda = {:?}",
+        sol.status, sol.x, sol.objective, sol.z_l, sol.z_u, sol.lambda
+    );
+}

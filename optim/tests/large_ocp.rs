@@ -1,0 +1,125 @@
+//! Large sparse NLP: trapezoidal collocation of the minimum-energy double integrator with
+//! 4000 intervals (12 003 variables, 8 000 equality constraints, fixed boundary variables).
+//! Checked against the closed-form optimum `J* = 12`, `u*(t) = 6 − 12t`, the costates
+//! `λ_p = 24`, `λ_v(t) = 12 − 24t` (discrete multipliers of the defects), and an independent
+//! KKT-residual computation from the problem's own derivatives.
+
+mod common;
+
+use bf_optim::ipm::{
+    Nlp, Settings, Solution, Status, WarmStart, check_derivatives, solve, solve_with,
+};
+use common::double_integrator::DoubleIntegrator;
+
+/// ‖∇f + Jᵀλ − z_L + z_U‖_∞ and max constraint violation, computed from the problem itself.
+fn kkt_residual(p: &dyn Nlp, s: &Solution) -> (f64, f64) {
+    let n = p.num_variables();
+    let m = p.num_constraints();
+    let mut r = vec![0.0; n];
+    p.gradient(&s.x, &mut r);
+    let jp = p.jacobian_structure();
+    let mut jv = vec![0.0; jp.len()];
+    p.jacobian_values(&s.x, &mut jv);
+    for (k, &(i, j)) in jp.iter().enumerate() {
+        r[j] += jv[k] * s.lambda[i];
+    }
+    for j in 0..n {
+        r[j] += -s.z_l[j] + s.z_u[j];
+    }
+    let mut g = vec![0.0; m];
+    p.constraints(&s.x, &mut g);
+    let (mut gl, mut gu) = (vec![0.0; m], vec![0.0; m]);
+    p.constraint_bounds(&mut gl, &mut gu);
+    let viol = (0..m).fold(0.0f64, |a, i| a.max(gl[i] - g[i]).max(g[i] - gu[i]));
+    (r.iter().fold(0.0f64, |a, v| a.max(v.abs())), viol)
+}
+
+#[test]
+fn double_integrator_derivatives() {
+    let mut p = DoubleIntegrator::new(6);
+    p.drag = 0.7;
+    let x: Vec<f64> = (0..p.num_variables())
+        .map(|i| 0.3 + 0.1 * (i as f64 * 1.7).sin())
+        .collect();
+    let lam: Vec<f64> = (0..p.num_constraints()).map(|i| (i as f64).cos()).collect();
+    let rep = check_derivatives(&p, &x, 1.3, &lam, 1e-6);
+    assert!(rep.max_error() < 1e-6, "{rep:?}");
+}
+
+#[test]
+fn double_integrator_12k_variables_matches_closed_form() {
+    let n_int = 4000;
+    let p = DoubleIntegrator::new(n_int);
+    assert!(p.num_variables() > 12_000);
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    // Trapezoidal discretisation error is O(h²) = O(6e-8); J* = 12.
+    assert!(
+        (sol.objective - 12.0).abs() < 1e-5 * 12.0,
+        "J = {}",
+        sol.objective
+    );
+    let h = 1.0 / n_int as f64;
+    // The trapezoidal scheme's endpoint controls carry an O(h) artefact (half-weighted in the
+    // quadrature); interior nodes match u* to O(h²).
+    for k in [0, n_int] {
+        let t = k as f64 * h;
+        assert!((sol.x[DoubleIntegrator::u(k)] - (6.0 - 12.0 * t)).abs() < 10.0 * h);
+    }
+    let mut u_err = 0.0f64;
+    for k in 1..n_int {
+        let t = k as f64 * h;
+        u_err = u_err.max((sol.x[DoubleIntegrator::u(k)] - (6.0 - 12.0 * t)).abs());
+    }
+    assert!(u_err < 1e-5, "max |u − u*| = {u_err}");
+    // Costates from the defect multipliers (sign convention L = f + λᵀc).
+    let mut lp_err = 0.0f64;
+    let mut lv_err = 0.0f64;
+    for k in 0..n_int {
+        let tm = (k as f64 + 0.5) * h;
+        lp_err = lp_err.max((sol.lambda[2 * k] - 24.0).abs());
+        lv_err = lv_err.max((sol.lambda[2 * k + 1] - (12.0 - 24.0 * tm)).abs());
+    }
+    assert!(
+        lp_err < 1e-3 && lv_err < 1e-3,
+        "costate errors {lp_err} {lv_err}"
+    );
+    let (du, pr) = kkt_residual(&p, &sol);
+    assert!(
+        du < 1e-6 && pr < 1e-8,
+        "independent KKT residual: dual {du}, primal {pr}"
+    );
+    assert!(sol.iterations < 30, "{} iterations", sol.iterations);
+}
+
+#[test]
+fn nonlinear_drag_with_active_control_bound() {
+    let mut p = DoubleIntegrator::new(2000);
+    p.drag = 0.5;
+    p.u_max = 5.0;
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    let (du, pr) = kkt_residual(&p, &sol);
+    assert!(du < 1e-6 && pr < 1e-8, "dual {du}, primal {pr}");
+    // The bound must be active at t = 0 (unconstrained u*(0) = 6 > 5) with z_U > 0.
+    assert!((sol.x[DoubleIntegrator::u(0)] - 5.0).abs() < 1e-5);
+    assert!(sol.z_u[DoubleIntegrator::u(0)] > 1e-6);
+    // Bounding the control and adding drag can only increase the minimum energy.
+    assert!(sol.objective > 12.0);
+    // Warm start from the solution converges almost immediately to the same point.
+    let settings = Settings {
+        mu_init: 1e-9,
+        warm_start_bound_push: 1e-9,
+        warm_start_mult_bound_push: 1e-12,
+        ..Settings::default()
+    };
+    let ws = WarmStart::from(&sol);
+    let sol2 = solve_with(&p, &settings, Some(&ws), None).unwrap();
+    assert_eq!(sol2.status, Status::Solved);
+    assert!(
+        sol2.iterations <= 3,
+        "warm start took {} iterations",
+        sol2.iterations
+    );
+    assert!((sol2.objective - sol.objective).abs() < 1e-7 * sol.objective);
+}

@@ -1,0 +1,396 @@
+//! Termination statuses and API behaviour on small problems whose answer is known by hand:
+//! infeasible → `LocallyInfeasible`, unbounded → `DivergingIterates`/`Unbounded`, NaN trial
+//! points are cut by the line search, callbacks, warm starts, fixed variables, range constraints,
+//! scaling invariance and input validation.
+
+mod hs;
+
+use bf_optim::OptimError;
+use bf_optim::ipm::{
+    IterationInfo, Nlp, ScalingMethod, Settings, Status, WarmStart, solve, solve_with,
+};
+use hs::Hs;
+use hs::dual::D;
+
+const INF: f64 = f64::INFINITY;
+
+fn none(_: &[D]) -> Vec<D> {
+    Vec::new()
+}
+
+fn problem(
+    x0: &[f64],
+    xl: &[f64],
+    xu: &[f64],
+    neq: usize,
+    m: usize,
+    f: fn(&[D]) -> D,
+    g: fn(&[D]) -> Vec<D>,
+) -> Hs {
+    Hs {
+        name: "custom",
+        tags: "",
+        x0: x0.to_vec(),
+        xl: xl.to_vec(),
+        xu: xu.to_vec(),
+        neq,
+        m,
+        f,
+        g,
+        fstar: f64::NAN,
+        xstar: None,
+    }
+}
+
+#[test]
+fn infeasible_inequalities_are_detected() {
+    // x₁² + x₂² ≤ 1 and x₁ + x₂ ≥ 3 cannot both hold (max of x₁+x₂ on the disc is √2).
+    let p = problem(
+        &[0.0, 0.0],
+        &[-INF; 2],
+        &[INF; 2],
+        0,
+        2,
+        |x| x[0] * x[0] + x[1] * x[1],
+        |x| vec![1.0 - x[0] * x[0] - x[1] * x[1], x[0] + x[1] - 3.0],
+    );
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
+    assert!(sol.iterations < 200);
+    // The infeasibility minimiser lies on the diagonal between the disc and the half-plane.
+    assert!((sol.x[0] - sol.x[1]).abs() < 1e-3, "{:?}", sol.x);
+}
+
+#[test]
+fn infeasible_equality_is_detected() {
+    // x² + 1 = 0 has no real solution; the infeasibility is stationary at x = 0.
+    let p = problem(
+        &[3.0],
+        &[-INF],
+        &[INF],
+        1,
+        1,
+        |x| x[0],
+        |x| vec![x[0] * x[0] + 1.0],
+    );
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
+    assert!(sol.x[0].abs() < 1e-3);
+    assert!(sol.iterations < 200);
+}
+
+#[test]
+fn infeasible_bounds_and_linear_constraint() {
+    // 0 ≤ x ≤ 1 (both) with x₁ + x₂ = 3.
+    let p = problem(
+        &[0.5, 0.5],
+        &[0.0; 2],
+        &[1.0; 2],
+        1,
+        1,
+        |x| x[0] * x[1],
+        |x| vec![x[0] + x[1] - 3.0],
+    );
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
+    assert!(sol.iterations < 200);
+}
+
+#[test]
+fn unbounded_problems_report_divergence() {
+    // min −x₁ − x₂ s.t. x₁ − x₂ = 0, x ≥ 0: unbounded below along x₁ = x₂ → ∞.
+    let p = problem(
+        &[1.0, 2.0],
+        &[0.0; 2],
+        &[INF; 2],
+        1,
+        1,
+        |x| -x[0] - x[1],
+        |x| vec![x[0] - x[1]],
+    );
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert!(
+        matches!(sol.status, Status::DivergingIterates | Status::Unbounded),
+        "{:?}",
+        sol.status
+    );
+    assert!(sol.iterations < 200);
+    // Unconstrained cubic, unbounded below.
+    let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0].powi(3) + x[0], none);
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert!(
+        matches!(sol.status, Status::DivergingIterates | Status::Unbounded),
+        "{:?}",
+        sol.status
+    );
+    assert!(sol.iterations < 200);
+}
+
+#[test]
+fn non_finite_trial_points_are_cut() {
+    // f = x ln x is NaN for x < 0; Newton from x = 3 overshoots to x < 0 (step −(ln 3 + 1)·3).
+    let p = problem(&[3.0], &[-INF], &[INF], 0, 0, |x| x[0] * x[0].ln(), none);
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    let e = std::f64::consts::E;
+    assert!((sol.x[0] - 1.0 / e).abs() < 1e-7);
+    assert!((sol.objective + 1.0 / e).abs() < 1e-12);
+}
+
+#[test]
+fn non_finite_initial_point_is_an_error() {
+    let p = problem(&[-1.0], &[-INF], &[INF], 0, 0, |x| x[0].sqrt(), none);
+    assert!(matches!(
+        solve(&p, &Settings::default()),
+        Err(OptimError::NonFinite { .. })
+    ));
+}
+
+#[test]
+fn invalid_input_is_rejected() {
+    let p = problem(&[0.0], &[1.0], &[0.0], 0, 0, |x| x[0], none);
+    assert!(matches!(
+        solve(&p, &Settings::default()),
+        Err(OptimError::InvalidBounds { .. })
+    ));
+    let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0] * x[0], none);
+    let bad = Settings {
+        tau_min: 1.5,
+        ..Settings::default()
+    };
+    assert!(matches!(
+        solve(&p, &bad),
+        Err(OptimError::InvalidSetting { .. })
+    ));
+    let ws = WarmStart {
+        x: vec![0.0; 2],
+        lambda: vec![],
+        z_l: vec![0.0],
+        z_u: vec![0.0],
+    };
+    assert!(matches!(
+        solve_with(&p, &Settings::default(), Some(&ws), None),
+        Err(OptimError::DimensionMismatch { .. })
+    ));
+}
+
+fn hs071() -> Hs {
+    hs::all().into_iter().find(|p| p.name == "HS071").unwrap()
+}
+
+#[test]
+fn callback_sees_every_iteration_and_can_stop() {
+    let p = hs071();
+    let mut seen: Vec<IterationInfo> = Vec::new();
+    let mut cb = |i: &IterationInfo| {
+        seen.push(*i);
+        true
+    };
+    let sol = solve_with(&p, &Settings::default(), None, Some(&mut cb)).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    assert_eq!(seen.len(), sol.iterations + 1);
+    assert!(seen.windows(2).all(|w| w[1].iter == w[0].iter + 1));
+    let mut stop = |i: &IterationInfo| i.iter < 3;
+    let sol = solve_with(&p, &Settings::default(), None, Some(&mut stop)).unwrap();
+    assert_eq!(sol.status, Status::UserStop);
+    assert_eq!(sol.iterations, 3);
+}
+
+#[test]
+fn iteration_and_time_limits() {
+    let p = hs071();
+    let sol = solve(
+        &p,
+        &Settings {
+            max_iter: 2,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(sol.status, Status::MaxIterations);
+    assert_eq!(sol.iterations, 2);
+    let sol = solve(
+        &p,
+        &Settings {
+            max_wall_time: 1e-12,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(sol.status, Status::MaxTime);
+}
+
+#[test]
+fn warm_start_converges_immediately() {
+    let p = hs071();
+    let sol = solve(&p, &Settings::default()).unwrap();
+    let s = Settings {
+        mu_init: 1e-9,
+        warm_start_bound_push: 1e-9,
+        warm_start_mult_bound_push: 1e-12,
+        ..Settings::default()
+    };
+    let sol2 = solve_with(&p, &s, Some(&WarmStart::from(&sol)), None).unwrap();
+    assert_eq!(sol2.status, Status::Solved);
+    assert!(sol2.iterations <= 2, "{} iterations", sol2.iterations);
+    assert!((sol2.objective - 17.0140173).abs() < 1e-6);
+}
+
+#[test]
+fn fixed_variables_and_their_multipliers() {
+    // HS071 with x₁ fixed at its optimal value 1 has the same optimum; the fixed variable's
+    // multiplier is the reduced gradient ∂f/∂x₁ + λᵀ ∂g/∂x₁ (checked independently).
+    let mut p = hs071();
+    p.xl[0] = 1.0;
+    p.xu[0] = 1.0;
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    assert!((sol.objective - 17.0140173).abs() < 1e-6);
+    let mut grad = vec![0.0; 4];
+    p.gradient(&sol.x, &mut grad);
+    let mut jv = vec![0.0; 8];
+    p.jacobian_values(&sol.x, &mut jv);
+    let red = grad[0] + sol.lambda[0] * jv[0] + sol.lambda[1] * jv[4];
+    assert!((sol.z_l[0] - sol.z_u[0] - red).abs() < 1e-8);
+    // HS071's unfixed optimum also has x₁ at its lower bound with the same multiplier.
+    let free = solve(&hs071(), &Settings::default()).unwrap();
+    assert!(
+        (sol.z_l[0] - free.z_l[0]).abs() < 1e-5,
+        "{} vs {}",
+        sol.z_l[0],
+        free.z_l[0]
+    );
+}
+
+/// min (x−2)² + (y−1)² s.t. 0 ≤ x + y ≤ 1 (a two-sided range row): the solution is the
+/// projection (1, 0) of (2, 1) onto x + y = 1, f = 2, multiplier λ = 2 on the upper side.
+struct Range;
+impl Nlp for Range {
+    fn num_variables(&self) -> usize {
+        2
+    }
+    fn num_constraints(&self) -> usize {
+        1
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l.fill(-1e20);
+        u.fill(1e20);
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l[0] = 0.0;
+        u[0] = 1.0;
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        x.fill(0.0);
+    }
+    fn objective(&self, x: &[f64]) -> f64 {
+        (x[0] - 2.0).powi(2) + (x[1] - 1.0).powi(2)
+    }
+    fn gradient(&self, x: &[f64], g: &mut [f64]) {
+        g[0] = 2.0 * (x[0] - 2.0);
+        g[1] = 2.0 * (x[1] - 1.0);
+    }
+    fn constraints(&self, x: &[f64], g: &mut [f64]) {
+        g[0] = x[0] + x[1];
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        vec![(0, 0), (0, 1)]
+    }
+    fn jacobian_values(&self, _x: &[f64], v: &mut [f64]) {
+        v.fill(1.0);
+    }
+    fn hessian_structure(&self) -> Vec<(usize, usize)> {
+        vec![(0, 0), (1, 1)]
+    }
+    fn hessian_values(&self, _x: &[f64], s: f64, _l: &[f64], v: &mut [f64]) {
+        v.fill(2.0 * s);
+    }
+}
+
+#[test]
+fn two_sided_range_constraint_and_infinite_bounds() {
+    let sol = solve(&Range, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    assert!(
+        (sol.x[0] - 1.0).abs() < 1e-7 && sol.x[1].abs() < 1e-7,
+        "{:?}",
+        sol.x
+    );
+    assert!((sol.objective - 2.0).abs() < 1e-7);
+    // ∇f + λ∇g = 0 at (1, 0): (−2, −2) + λ(1, 1) = 0 → λ = 2.
+    assert!((sol.lambda[0] - 2.0).abs() < 1e-6, "{:?}", sol.lambda);
+    assert!(sol.dual_infeasibility < 1e-7 && sol.constraint_violation < 1e-8);
+}
+
+/// HS071 with the objective multiplied by 1e4 and constraints by 1e3 (same minimiser).
+struct Scaled(Hs);
+impl Nlp for Scaled {
+    fn num_variables(&self) -> usize {
+        4
+    }
+    fn num_constraints(&self) -> usize {
+        2
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.0.variable_bounds(l, u)
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.0.constraint_bounds(l, u)
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        self.0.initial_point(x)
+    }
+    fn objective(&self, x: &[f64]) -> f64 {
+        1e4 * self.0.objective(x)
+    }
+    fn gradient(&self, x: &[f64], g: &mut [f64]) {
+        self.0.gradient(x, g);
+        g.iter_mut().for_each(|v| *v *= 1e4);
+    }
+    fn constraints(&self, x: &[f64], g: &mut [f64]) {
+        self.0.constraints(x, g);
+        g.iter_mut().for_each(|v| *v *= 1e3);
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.0.jacobian_structure()
+    }
+    fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
+        self.0.jacobian_values(x, v);
+        v.iter_mut().for_each(|e| *e *= 1e3);
+    }
+    fn hessian_structure(&self) -> Vec<(usize, usize)> {
+        self.0.hessian_structure()
+    }
+    fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
+        let l2: Vec<f64> = l.iter().map(|v| v * 1e3).collect();
+        self.0.hessian_values(x, s * 1e4, &l2, v)
+    }
+}
+
+#[test]
+fn gradient_scaling_handles_badly_scaled_functions() {
+    let base = solve(&hs071(), &Settings::default()).unwrap();
+    for scaling in [ScalingMethod::GradientBased, ScalingMethod::None] {
+        let sol = solve(
+            &Scaled(hs071()),
+            &Settings {
+                scaling,
+                ..Settings::default()
+            },
+        )
+        .unwrap();
+        assert!(sol.status.is_success(), "{scaling:?}: {:?}", sol.status);
+        for j in 0..4 {
+            assert!(
+                (sol.x[j] - base.x[j]).abs() < 1e-5,
+                "{scaling:?}: {:?} vs {:?}",
+                sol.x,
+                base.x
+            );
+        }
+        // multipliers scale back: λ_scaled = λ · 1e4 / 1e3
+        assert!(
+            (sol.lambda[0] - 10.0 * base.lambda[0]).abs() < 1e-4 * base.lambda[0].abs().max(1.0)
+        );
+    }
+}

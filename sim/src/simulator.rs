@@ -1,0 +1,745 @@
+//! `Simulator`: the step-to-event loop over a [`HybridSystem`] (paper Sect. 3.2, Fig. 3).
+//!
+//! Detailed API (diffsol style, STYLE.md §0 item 8):
+//! ```text
+//! let mut sim = Simulator::new(&sys, settings, mode0, t0, &x0, t_end)?;
+//! loop {
+//!     match sim.step()? {
+//!         StopReason::Step => {}
+//!         StopReason::RootFound { .. } => sim.apply_reset()?,   // state is already at the root
+//!         StopReason::TEndReached | StopReason::Terminated => break,
+//!     }
+//! }
+//! let out = sim.finish();
+//! ```
+//! or simply [`simulate`] / [`Simulator::run`], which return the partial trajectory inside a
+//! [`SimFailure`] when the run fails.
+//!
+//! Each accepted step is followed by guard scanning on its dense output ([`crate::events`]);
+//! if an event is found the state is moved back to the event time (`state_mut_back` in diffsol's
+//! terms), a pre-event sample is recorded, and `step()` returns `RootFound`. `apply_reset` runs
+//! the reset map, logs the event, applies the Zeno guard, and checks whether the new mode has a
+//! directional guard already beyond its zero (then the next `step()` reports that event at the
+//! same instant: a chained transition, bounded by `max_chained_events`).
+
+use crate::events::{GuardProbe, beyond_triggered, scan_guard};
+use crate::integrator::{
+    FAC_MAX, FAC_MIN, PI_BETA, PI_SAFE, StepBuffers, dopri5_step, error_norm, initial_step,
+    rk4_step,
+};
+use crate::trajectory::{
+    EventRecord, SampleKind, SimOutput, SimStats, Trajectory, events_csv, output_json, write_atomic,
+};
+use crate::{Guard, HybridSystem, Method, SimError, SimSettings, Transition};
+use std::collections::VecDeque;
+use std::fmt::Debug;
+use std::path::Path;
+
+/// What one call of [`Simulator::step`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StopReason {
+    /// An integration step was accepted without events.
+    Step,
+    /// A guard fired at `t`; the state has been moved to the event time (pre-reset). Call
+    /// [`Simulator::apply_reset`] (or `step()` again, which applies it first).
+    RootFound {
+        /// Event time (s).
+        t: f64,
+        /// Guard index in the current mode.
+        guard: usize,
+        /// Guard name.
+        name: &'static str,
+    },
+    /// `t_end` was reached.
+    TEndReached,
+    /// A reset returned [`Transition::Terminate`].
+    Terminated,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Pending {
+    guard: usize,
+    reported: bool,
+    chained: bool,
+}
+
+/// The hybrid simulator state machine. See the module docs for the loop.
+pub struct Simulator<'s, S: HybridSystem> {
+    sys: &'s S,
+    set: SimSettings,
+    t_start: f64,
+    t_end: f64,
+    t: f64,
+    x: Vec<f64>,
+    mode: S::Mode,
+    f: Vec<f64>,
+    f_valid: bool,
+    h: f64,
+    err_old: f64,
+    last_rejected: bool,
+    guards: Vec<Guard>,
+    gval: Vec<f64>,
+    masked: Vec<bool>,
+    pending: Option<Pending>,
+    buf: StepBuffers,
+    traj: Trajectory<S::Mode>,
+    events: Vec<EventRecord<S::Mode>>,
+    stats: SimStats,
+    recent_events: VecDeque<f64>,
+    chain: usize,
+    last_event_t: Option<f64>,
+    next_grid: u64,
+    finished: Option<StopReason>,
+    steps_attempted: usize,
+    last_drift: Option<f64>,
+}
+
+fn mode_name<M: Debug>(m: &M) -> String {
+    format!("{m:?}")
+}
+
+impl<'s, S: HybridSystem> Simulator<'s, S> {
+    /// Sets up a run of `sys` from (`t0`, `x0`) in `mode0` until `t_end`. Validates the
+    /// settings, the dimensions, finiteness of `x0` and `t_end > t0`, evaluates the guards of
+    /// `mode0` (a directional guard already beyond its zero fires at the first `step()`).
+    pub fn new(
+        sys: &'s S,
+        settings: SimSettings,
+        mode0: S::Mode,
+        t0: f64,
+        x0: &[f64],
+        t_end: f64,
+    ) -> Result<Self, SimError> {
+        settings.validate()?;
+        let n = sys.dim();
+        if x0.len() != n {
+            return Err(SimError::DimensionMismatch {
+                what: "initial state",
+                expected: n,
+                found: x0.len(),
+            });
+        }
+        if !t0.is_finite() || !t_end.is_finite() || t_end <= t0 {
+            return Err(SimError::InvalidSetting {
+                name: "t_end",
+                msg: format!("need finite t_end > t0, got t0 = {t0}, t_end = {t_end}"),
+            });
+        }
+        if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
+            return Err(SimError::NonFinite {
+                what: format!("initial state component {i}"),
+                t: t0,
+                mode: mode_name(&mode0),
+            });
+        }
+        let mut sim = Simulator {
+            sys,
+            t_start: t0,
+            t_end,
+            t: t0,
+            x: x0.to_vec(),
+            mode: mode0,
+            f: vec![0.0; n],
+            f_valid: false,
+            h: 0.0,
+            err_old: 1e-4,
+            last_rejected: false,
+            guards: Vec::new(),
+            gval: Vec::new(),
+            masked: Vec::new(),
+            pending: None,
+            buf: StepBuffers::new(n),
+            traj: Trajectory::default(),
+            events: Vec::new(),
+            stats: SimStats::default(),
+            recent_events: VecDeque::new(),
+            chain: 0,
+            last_event_t: None,
+            next_grid: 0,
+            finished: None,
+            steps_attempted: 0,
+            last_drift: None,
+            set: settings,
+        };
+        sim.sys.check_valid(sim.mode, t0, &sim.x)?;
+        sim.traj
+            .push(t0, &sim.x, sim.mode, SampleKind::Initial, None);
+        if sim.set.output_dt.is_some() {
+            sim.traj.push(t0, &sim.x, sim.mode, SampleKind::Grid, None);
+            sim.next_grid = 1;
+        }
+        sim.enter_mode(false)?;
+        sim.h = match (sim.set.method, sim.set.h_init) {
+            (Method::Rk4 { h }, _) => h,
+            (Method::Dopri5, Some(h)) => h.min(sim.set.h_max),
+            (Method::Dopri5, None) => {
+                sim.ensure_f()?;
+                initial_step(
+                    sys,
+                    sim.mode,
+                    t0,
+                    &sim.x,
+                    &sim.f,
+                    sim.set.rtol,
+                    sim.set.atol,
+                    sim.set.h_max,
+                )?
+            }
+        };
+        sim.stats.rhs_evals += 1;
+        Ok(sim)
+    }
+
+    /// Current time.
+    pub fn t(&self) -> f64 {
+        self.t
+    }
+
+    /// Current state.
+    pub fn x(&self) -> &[f64] {
+        &self.x
+    }
+
+    /// Current mode.
+    pub fn mode(&self) -> S::Mode {
+        self.mode
+    }
+
+    /// Trajectory recorded so far.
+    pub fn trajectory(&self) -> &Trajectory<S::Mode> {
+        &self.traj
+    }
+
+    /// Event log so far.
+    pub fn events(&self) -> &[EventRecord<S::Mode>] {
+        &self.events
+    }
+
+    /// Counters so far.
+    pub fn stats(&self) -> SimStats {
+        self.stats
+    }
+
+    fn ensure_f(&mut self) -> Result<(), SimError> {
+        if !self.f_valid {
+            self.sys.rhs(self.mode, self.t, &self.x, &mut self.f)?;
+            self.stats.rhs_evals += 1;
+            if self.f.iter().any(|v| !v.is_finite()) {
+                return Err(self.non_finite("vector field"));
+            }
+            self.f_valid = true;
+        }
+        Ok(())
+    }
+
+    fn non_finite(&self, what: &str) -> SimError {
+        SimError::NonFinite {
+            what: what.to_string(),
+            t: self.t,
+            mode: mode_name(&self.mode),
+        }
+    }
+
+    /// (Re)loads the guards of the current mode at the current state, masks those on their
+    /// surface, and schedules an immediate event for a directional guard beyond its zero.
+    fn enter_mode(&mut self, chained: bool) -> Result<(), SimError> {
+        self.guards = self.sys.guards(self.mode);
+        let m = self.guards.len();
+        self.gval.resize(m, 0.0);
+        self.sys
+            .guard_values(self.mode, self.t, &self.x, &mut self.gval)?;
+        self.stats.guard_evals += 1;
+        if let Some(j) = self.gval.iter().position(|v| !v.is_finite()) {
+            return Err(self.non_finite(&format!("guard `{}`", self.guards[j].name)));
+        }
+        let tol = self.set.guard_zero_tol;
+        self.masked = self.gval.iter().map(|v| v.abs() <= tol).collect();
+        let imm = (0..m).find(|&j| beyond_triggered(self.guards[j].direction, self.gval[j], tol));
+        self.pending = imm.map(|guard| Pending {
+            guard,
+            reported: false,
+            chained,
+        });
+        Ok(())
+    }
+
+    /// Advances the simulation by one accepted step, or up to the next event, or reports the
+    /// end. A pending event from the previous call is applied first.
+    pub fn step(&mut self) -> Result<StopReason, SimError> {
+        if let Some(r) = self.finished {
+            return Ok(r);
+        }
+        if let Some(p) = self.pending {
+            if !p.reported {
+                self.pending = Some(Pending {
+                    reported: true,
+                    ..p
+                });
+                return Ok(StopReason::RootFound {
+                    t: self.t,
+                    guard: p.guard,
+                    name: self.guards[p.guard].name,
+                });
+            }
+            self.apply_reset()?;
+            return self.step();
+        }
+        let remaining = self.t_end - self.t;
+        if remaining <= 0.0 {
+            self.finished = Some(StopReason::TEndReached);
+            return Ok(StopReason::TEndReached);
+        }
+        self.ensure_f()?;
+        let fixed = matches!(self.set.method, Method::Rk4 { .. });
+        let mut h = self.h.min(self.set.h_max);
+        if fixed {
+            if let Method::Rk4 { h: hf } = self.set.method {
+                h = hf;
+            }
+        }
+        // Stretch/shrink the last step onto t_end instead of leaving a sliver.
+        let mut last = false;
+        if self.t + 1.01 * h >= self.t_end {
+            h = remaining;
+            last = true;
+        }
+        loop {
+            self.steps_attempted += 1;
+            if self.steps_attempted > self.set.max_steps {
+                return Err(SimError::MaxSteps {
+                    t: self.t,
+                    max_steps: self.set.max_steps,
+                    mode: mode_name(&self.mode),
+                });
+            }
+            if fixed {
+                rk4_step(
+                    self.sys,
+                    self.mode,
+                    self.t,
+                    &self.x,
+                    &self.f,
+                    h,
+                    &mut self.buf,
+                )?;
+                self.stats.rhs_evals += 4;
+            } else {
+                dopri5_step(
+                    self.sys,
+                    self.mode,
+                    self.t,
+                    &self.x,
+                    &self.f,
+                    h,
+                    &mut self.buf,
+                )?;
+                self.stats.rhs_evals += 6;
+            }
+            let finite = self
+                .buf
+                .x1
+                .iter()
+                .chain(&self.buf.f1)
+                .all(|v| v.is_finite());
+            let err = if !finite {
+                f64::INFINITY
+            } else if fixed {
+                0.0
+            } else {
+                error_norm(
+                    &self.buf.err,
+                    &self.x,
+                    &self.buf.x1,
+                    self.set.rtol,
+                    self.set.atol,
+                )
+            };
+            if err <= 1.0 {
+                if !fixed {
+                    let expo1 = 0.2 - PI_BETA * 0.75;
+                    let fac11 = err.max(1e-300).powf(expo1);
+                    let fac = (fac11 / self.err_old.powf(PI_BETA) / PI_SAFE)
+                        .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                    let mut h_new = h / fac;
+                    if self.last_rejected {
+                        h_new = h_new.min(h);
+                    }
+                    self.err_old = err.max(1e-4);
+                    self.last_rejected = false;
+                    self.h = h_new.min(self.set.h_max);
+                }
+                break;
+            }
+            self.stats.rejected_steps += 1;
+            self.last_rejected = true;
+            last = false;
+            h = if err.is_finite() {
+                let fac11 = err.powf(0.2 - PI_BETA * 0.75);
+                h / (fac11 / PI_SAFE).min(1.0 / FAC_MIN)
+            } else {
+                0.25 * h
+            };
+            if h < self.set.h_min {
+                return Err(if finite {
+                    SimError::StepSizeTooSmall {
+                        t: self.t,
+                        h,
+                        mode: mode_name(&self.mode),
+                    }
+                } else {
+                    self.non_finite("step (stage values)")
+                });
+            }
+        }
+        self.stats.accepted_steps += 1;
+        let t1 = if last { self.t_end } else { self.t + h };
+        match self.locate(t1)? {
+            Some((guard, te)) => {
+                let mut xe = vec![0.0; self.x.len()];
+                if te > self.t {
+                    self.buf.dense.eval(te, &mut xe);
+                } else {
+                    xe.copy_from_slice(&self.x);
+                }
+                self.emit_grid(te);
+                self.t = te;
+                self.x = xe;
+                self.f_valid = false;
+                self.traj
+                    .push(self.t, &self.x, self.mode, SampleKind::EventPre, None);
+                self.pending = Some(Pending {
+                    guard,
+                    reported: true,
+                    chained: false,
+                });
+                Ok(StopReason::RootFound {
+                    t: te,
+                    guard,
+                    name: self.guards[guard].name,
+                })
+            }
+            None => {
+                self.emit_grid(t1);
+                self.t = t1;
+                std::mem::swap(&mut self.x, &mut self.buf.x1);
+                std::mem::swap(&mut self.f, &mut self.buf.f1);
+                self.f_valid = true;
+                self.last_drift = self.sys.project(self.mode, self.t, &mut self.x)?;
+                if let Some(d) = self.last_drift {
+                    self.stats.max_drift = self.stats.max_drift.max(d.abs());
+                    // The projection moved x off the FSAL point.
+                    self.f_valid = false;
+                }
+                if self.x.iter().any(|v| !v.is_finite()) {
+                    return Err(self.non_finite("state after projection"));
+                }
+                self.sys.check_valid(self.mode, self.t, &self.x)?;
+                if self.set.record_steps {
+                    self.traj.push(
+                        self.t,
+                        &self.x,
+                        self.mode,
+                        SampleKind::Step,
+                        self.last_drift,
+                    );
+                }
+                // Guard values at the new step start (after projection).
+                self.sys
+                    .guard_values(self.mode, self.t, &self.x, &mut self.gval)?;
+                self.stats.guard_evals += 1;
+                if self.t >= self.t_end {
+                    self.finished = Some(StopReason::TEndReached);
+                    return Ok(StopReason::TEndReached);
+                }
+                Ok(StopReason::Step)
+            }
+        }
+    }
+
+    /// Scans every guard over the step just accepted (dense output in `self.buf.dense`) and
+    /// returns the earliest event (guard index, time).
+    fn locate(&mut self, t1: f64) -> Result<Option<(usize, f64)>, SimError> {
+        let m = self.guards.len();
+        if m == 0 {
+            return Ok(None);
+        }
+        let kk = self.set.event_subdivisions;
+        let t0 = self.t;
+        let ts: Vec<f64> = (0..=kk)
+            .map(|k| {
+                if k == kk {
+                    t1
+                } else {
+                    t0 + (t1 - t0) * k as f64 / kk as f64
+                }
+            })
+            .collect();
+        let mut probe = GuardProbe {
+            sys: self.sys,
+            mode: self.mode,
+            dense: &self.buf.dense,
+            x: vec![0.0; self.x.len()],
+            g: vec![0.0; m],
+            evals: 0,
+        };
+        // vals[j][k] = g_j(ts[k])
+        let mut vals = vec![vec![0.0; kk + 1]; m];
+        for j in 0..m {
+            vals[j][0] = self.gval[j];
+        }
+        let mut gk = vec![0.0; m];
+        for k in 1..=kk {
+            probe.dense.eval(ts[k], &mut probe.x);
+            self.sys.guard_values(self.mode, ts[k], &probe.x, &mut gk)?;
+            probe.evals += 1;
+            for j in 0..m {
+                if !gk[j].is_finite() {
+                    return Err(SimError::NonFinite {
+                        what: format!("guard `{}`", self.guards[j].name),
+                        t: ts[k],
+                        mode: mode_name(&self.mode),
+                    });
+                }
+                vals[j][k] = gk[j];
+            }
+        }
+        let mut best: Option<(usize, f64)> = None;
+        let mut new_mask = self.masked.clone();
+        for j in 0..m {
+            let scan = scan_guard(
+                &mut probe,
+                j,
+                &self.guards[j],
+                self.masked[j],
+                &ts,
+                &vals[j],
+                self.set.event_tol,
+                self.set.guard_zero_tol,
+            )?;
+            new_mask[j] = scan.still_masked;
+            if let Some(te) = scan.t_event {
+                if best.is_none_or(|(_, tb)| te < tb) {
+                    best = Some((j, te));
+                }
+            }
+        }
+        self.stats.guard_evals += probe.evals;
+        if best.is_none() {
+            self.masked = new_mask;
+        }
+        Ok(best)
+    }
+
+    /// Records uniform-grid samples in (previous grid time, `t_upto`] from the current dense
+    /// output.
+    fn emit_grid(&mut self, t_upto: f64) {
+        let Some(dt) = self.set.output_dt else {
+            return;
+        };
+        let mut xg = vec![0.0; self.x.len()];
+        loop {
+            let tg = self.t_start + self.next_grid as f64 * dt;
+            if tg > t_upto || tg > self.t_end {
+                break;
+            }
+            self.buf.dense.eval(tg, &mut xg);
+            self.traj.push(tg, &xg, self.mode, SampleKind::Grid, None);
+            self.next_grid += 1;
+        }
+    }
+
+    /// Applies the reset of the pending event (the state must be at the event time, which
+    /// `step()` guarantees): runs the reset map, logs the event, enforces the Zeno and chain
+    /// limits, and enters the new mode. No-op if no event is pending.
+    pub fn apply_reset(&mut self) -> Result<(), SimError> {
+        let Some(p) = self.pending.take() else {
+            return Ok(());
+        };
+        let t = self.t;
+        let mode_before = self.mode;
+        let x_pre = self.x.clone();
+        let tr = self.sys.reset(self.mode, p.guard, t, &mut self.x)?;
+        if self.x.iter().any(|v| !v.is_finite()) {
+            return Err(self.non_finite(&format!(
+                "state after reset of guard `{}`",
+                self.guards[p.guard].name
+            )));
+        }
+        self.stats.events += 1;
+        self.chain = match self.last_event_t {
+            Some(tl) if (t - tl).abs() <= 2.0 * self.set.event_tol => self.chain + 1,
+            _ => 1,
+        };
+        self.last_event_t = Some(t);
+        self.recent_events.push_back(t);
+        while self
+            .recent_events
+            .front()
+            .is_some_and(|&tf| tf < t - self.set.zeno_window)
+        {
+            self.recent_events.pop_front();
+        }
+        let mode_after = match tr {
+            Transition::To(m) => Some(m),
+            Transition::Terminate => None,
+        };
+        self.events.push(EventRecord {
+            t,
+            guard: self.guards[p.guard].name,
+            guard_index: p.guard,
+            mode_before,
+            mode_after,
+            x_pre,
+            x_post: self.x.clone(),
+            chained: p.chained,
+        });
+        if self.recent_events.len() > self.set.zeno_max_events {
+            return Err(SimError::Zeno {
+                t,
+                mode: mode_name(&mode_before),
+                count: self.recent_events.len(),
+            });
+        }
+        if self.chain > self.set.max_chained_events {
+            return Err(SimError::ChainLimit {
+                t,
+                mode: mode_name(&self.mode),
+                count: self.chain,
+            });
+        }
+        self.f_valid = false;
+        match mode_after {
+            None => {
+                self.traj
+                    .push(t, &self.x, self.mode, SampleKind::EventPost, None);
+                self.finished = Some(StopReason::Terminated);
+            }
+            Some(m) => {
+                self.mode = m;
+                self.traj
+                    .push(t, &self.x, self.mode, SampleKind::EventPost, None);
+                self.sys.check_valid(self.mode, t, &self.x)?;
+                self.enter_mode(true)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Consumes the simulator and returns what was computed.
+    pub fn finish(self) -> SimOutput<S::Mode> {
+        SimOutput {
+            terminated: self.finished == Some(StopReason::Terminated),
+            trajectory: self.traj,
+            events: self.events,
+            stats: self.stats,
+            t_final: self.t,
+            mode_final: self.mode,
+        }
+    }
+
+    /// Runs to `t_end` (or termination). On failure, returns the error together with the
+    /// partial trajectory and event log up to the last accepted point.
+    pub fn run(mut self) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
+        loop {
+            let r = match self.step() {
+                Ok(StopReason::Step) => Ok(()),
+                Ok(StopReason::RootFound { .. }) => self.apply_reset(),
+                Ok(StopReason::TEndReached | StopReason::Terminated) => break,
+                Err(e) => Err(e),
+            };
+            if let Err(error) = r {
+                let (t, mode) = (self.t, self.mode);
+                return Err(Box::new(SimFailure {
+                    error,
+                    t,
+                    mode: Some(mode),
+                    partial: self.finish(),
+                }));
+            }
+        }
+        Ok(self.finish())
+    }
+}
+
+/// A failed run: the error, where it happened, and everything computed before it.
+#[derive(Debug)]
+pub struct SimFailure<M> {
+    /// The error that stopped the run.
+    pub error: SimError,
+    /// Time at which the run stopped.
+    pub t: f64,
+    /// Mode at that time (`None` if the run could not even start).
+    pub mode: Option<M>,
+    /// Trajectory, events and statistics up to the failure.
+    pub partial: SimOutput<M>,
+}
+
+impl<M: Debug> std::fmt::Display for SimFailure<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "simulation failed at t = {} ({} samples, {} events kept): {}",
+            self.t,
+            self.partial.trajectory.len(),
+            self.partial.events.len(),
+            self.error
+        )
+    }
+}
+
+impl<M: Debug> std::error::Error for SimFailure<M> {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        Some(&self.error)
+    }
+}
+
+impl<M: Debug> SimFailure<M> {
+    /// Writes the partial trajectory, events and the error message as JSON (same layout as
+    /// [`SimOutput::write_json`] plus `"error"`).
+    pub fn write_json(&self, path: &Path) -> Result<(), SimError> {
+        let p = &self.partial;
+        let bytes = output_json(
+            &p.trajectory,
+            &p.events,
+            p.stats,
+            p.t_final,
+            &p.mode_final,
+            p.terminated,
+            Some(self.error.to_string()),
+        )?;
+        write_atomic(path, &bytes)
+    }
+
+    /// Writes the partial event log as CSV.
+    pub fn write_events_csv(&self, path: &Path) -> Result<(), SimError> {
+        write_atomic(path, &events_csv(&self.partial.events)?)
+    }
+}
+
+/// Convenience wrapper: [`Simulator::new`] + [`Simulator::run`]. A setup error (bad settings,
+/// NaN initial state, `t_end <= t0`, ...) is returned as a failure with an empty trajectory.
+pub fn simulate<S: HybridSystem>(
+    sys: &S,
+    settings: SimSettings,
+    mode0: S::Mode,
+    t0: f64,
+    x0: &[f64],
+    t_end: f64,
+) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
+    match Simulator::new(sys, settings, mode0, t0, x0, t_end) {
+        Ok(sim) => sim.run(),
+        Err(error) => Err(Box::new(SimFailure {
+            error,
+            t: t0,
+            mode: Some(mode0),
+            partial: SimOutput {
+                trajectory: Trajectory::default(),
+                events: Vec::new(),
+                stats: SimStats::default(),
+                t_final: t0,
+                mode_final: mode0,
+                terminated: false,
+            },
+        })),
+    }
+}

@@ -1,0 +1,131 @@
+//! `ball-finger eval SCENE --q .. --qd .. [--omega ..] [--eps ..]`: one JSON object with the
+//! kinematics (eq. 67–71), dynamics (eq. 72–79, Christoffel C) and contact quantities
+//! (eq. 2–7, smooth variant eq. 58–59) at one state. Built-in scenes (the file's text equals the
+//! one compiled into `bf-generated`) go through the compiled kernels; any other file through
+//! the generator's interpreter. Key order and layout are fixed (matrices row-major).
+
+use crate::cli::EvalArgs;
+use crate::io::parse_list;
+use anyhow::{Context, Result};
+use bf_codegen::{EvalOutput, EvalValue, Scene};
+
+/// Run `eval`.
+pub fn run(args: &EvalArgs) -> Result<()> {
+    let (scene, text) = super::load_scene(&args.scene)?;
+    let n = scene.links.len();
+    let q = parse_list("--q", &args.q, Some(n))?;
+    let qd = parse_list("--qd", &args.qd, Some(n))?;
+    let omega = match &args.omega {
+        Some(s) => parse_list("--omega", s, Some(3))?,
+        None => vec![0.0; 3],
+    };
+    let omega = [omega[0], omega[1], omega[2]];
+    let eps = args
+        .eps
+        .or(scene.contact.as_ref().map(|c| c.smooth_eps))
+        .unwrap_or(0.01);
+    if !(eps.is_finite() && eps > 0.0) {
+        anyhow::bail!("--eps must be a finite positive number (got {eps})");
+    }
+    let (out, source) = match eval_builtin(&scene, &text, &q, &qd, omega, eps) {
+        Some(out) => (out, "compiled kernels"),
+        None => (
+            bf_codegen::eval_all(&scene, &q, &qd, omega, eps)
+                .with_context(|| format!("{}: evaluation failed", args.scene.display()))?,
+            "interpreter",
+        ),
+    };
+    eprintln!("evaluated {} through the {source}", scene.name);
+    println!("{}", serde_json::to_string(&out)?);
+    Ok(())
+}
+
+fn vec3(v: &[f64]) -> EvalValue {
+    EvalValue::Vector(v.to_vec())
+}
+
+fn mat<const C: usize>(rows: &[[f64; C]]) -> EvalValue {
+    EvalValue::Matrix(rows.iter().map(|r| r.to_vec()).collect())
+}
+
+macro_rules! eval_dynamics {
+    ($m:ident, $q:expr, $qd:expr, $out:expr) => {{
+        use bf_generated::$m as k;
+        let p = &k::PARAM_DEFAULTS;
+        let q: [f64; k::NQ] = $q.try_into().ok()?;
+        let qd: [f64; k::NQ] = $qd.try_into().ok()?;
+        let mut pos = [[0.0; 3]; k::NQ];
+        let mut rot = [[[0.0; 3]; 3]; k::NQ];
+        k::frames(&q, p, &mut pos, &mut rot);
+        let (mut jp, mut jo) = ([[0.0; k::NQ]; 3], [[0.0; k::NQ]; 3]);
+        k::tip_jacobian(&q, p, &mut jp, &mut jo);
+        let mut m = [[0.0; k::NQ]; k::NQ];
+        k::mass_matrix(&q, p, &mut m);
+        let mut c = [[0.0; k::NQ]; k::NQ];
+        k::coriolis_matrix(&q, &qd, p, &mut c);
+        let (mut cqd, mut g) = ([0.0; k::NQ], [0.0; k::NQ]);
+        k::coriolis_qd(&q, &qd, p, &mut cqd);
+        k::gravity(&q, p, &mut g);
+        let e = &mut $out.entries;
+        e.push(("p_e".into(), vec3(&pos[k::NQ - 1])));
+        e.push(("R3".into(), mat(&rot[k::NQ - 1])));
+        e.push(("J_p".into(), mat(&jp)));
+        e.push(("J_o".into(), mat(&jo)));
+        e.push(("M".into(), mat(&m)));
+        e.push(("C".into(), mat(&c)));
+        e.push(("Cqd".into(), EvalValue::Vector(cqd.to_vec())));
+        e.push(("g".into(), EvalValue::Vector(g.to_vec())));
+        (q, qd)
+    }};
+}
+
+macro_rules! eval_contact {
+    ($m:ident, $q:expr, $qd:expr, $omega:expr, $eps:expr, $out:expr) => {{
+        use bf_generated::$m as k;
+        let p = &k::PARAM_DEFAULTS;
+        let mut c = k::Contact::default();
+        k::contact(&$q, &$qd, &$omega, p, &mut c);
+        let mut s = k::Contact::default();
+        k::contact_smooth(&$q, &$qd, &$omega, $eps, p, &mut s);
+        let e = &mut $out.entries;
+        e.push(("alpha".into(), EvalValue::Scalar(c.alpha)));
+        e.push(("sat_alpha".into(), EvalValue::Scalar(c.sat_alpha)));
+        e.push(("p_c".into(), vec3(&c.p_c)));
+        e.push(("h".into(), EvalValue::Scalar(c.h)));
+        e.push(("J_c".into(), mat(&c.j_c)));
+        e.push(("sat_alpha_smooth".into(), EvalValue::Scalar(s.sat_alpha)));
+        e.push(("p_c_smooth".into(), vec3(&s.p_c)));
+        e.push(("h_smooth".into(), EvalValue::Scalar(s.h)));
+        e.push(("J_c_smooth".into(), mat(&s.j_c)));
+    }};
+}
+
+/// Evaluate through the compiled kernels when `text` is exactly a built-in scene's source.
+fn eval_builtin(
+    scene: &Scene,
+    text: &str,
+    q: &[f64],
+    qd: &[f64],
+    omega: [f64; 3],
+    eps: f64,
+) -> Option<EvalOutput> {
+    let mut out = EvalOutput::default();
+    match scene.name.as_str() {
+        "paper" if text == bf_generated::paper::SCENE_TOML => {
+            let (q, qd) = eval_dynamics!(paper, q, qd, out);
+            eval_contact!(paper, q, qd, omega, eps, out);
+        }
+        "human" if text == bf_generated::human::SCENE_TOML => {
+            let (q, qd) = eval_dynamics!(human, q, qd, out);
+            eval_contact!(human, q, qd, omega, eps, out);
+        }
+        "puma560" if text == bf_generated::puma560::SCENE_TOML => {
+            eval_dynamics!(puma560, q, qd, out);
+        }
+        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => {
+            eval_dynamics!(iiwa7, q, qd, out);
+        }
+        _ => return None,
+    }
+    Some(out)
+}

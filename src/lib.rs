@@ -1,0 +1,11 @@
+//! ball-finger: the command implementations behind the `ball-finger` binary, shared with the
+//! integration tests in `tests/` and the benchmarks in `benches/`.
+//!
+//! The pipeline (see `../shared/DESIGN.md`): a scene file (`scenes/*.toml`, DH table of paper
+//! Table 1 plus inertias) → `bf-codegen` (symbolic kinematics/dynamics, Appendix A/B and
+//! eq. 22–33) → `bf-generated` (flat kernels) → `bf-model` (Sect. 2–3 physics) →
+//! `bf-sim` (hybrid simulation, Fig. 3) and `bf-optim` (Sect. 4 optimal control).
+
+pub mod cli;
+pub mod commands;
+pub mod io;

@@ -1,0 +1,329 @@
+//! The paper's Appendix A (eq. 67–71) and Appendix B (eq. 72–79) transcribed LITERALLY as
+//! printed (`*_printed`), next to the corrected forms (`*_corrected`) derived from the DH
+//! table. The tests at the bottom compare both against [`crate::reference::Reference`] over
+//! random states and non-unit parameters; every disagreement is documented in
+//! `docs/appendix-errata.md`.
+//!
+//! Notation. Appendix A: `s_{ij…k}` = sin(q_i + q_j + … + q_k), a barred index enters with a
+//! minus sign (`s_{1\bar2\bar3}` = sin(q1 − q2 − q3)). Appendix B: `s_{xyz}` =
+//! sin(x q1 + y q2 + z q3) with integer coefficients, trailing zeros omitted (`s_{11}` =
+//! sin(q1 + q2), `s_{01}` = sin q2, `s_{022}` = sin(2q2 + 2q3)), a barred digit is negative.
+//!
+//! | function | paper | status |
+//! |---|---|---|
+//! | [`p_e_printed`] / [`p_e_corrected`] | eq. 67 | the constant `2ℓ` must be `2r` (o_f = (2r,0,0)) |
+//! | [`frame3_axes_printed`] | eq. 68 | correct |
+//! | [`jp_printed`] / [`jp_corrected`] | eq. 70 | sign of entry (3,3) |
+//! | [`jo_printed`] | eq. 71 | correct |
+//! | [`gravity_printed`] / [`gravity_corrected`] | eq. 72–73 | `s_{11\bar1}` must be `s_{111}` (rows 2, 3); `g_0` is the scalar magnitude g |
+//! | [`potential_printed`] / [`potential_corrected`] | eq. 22b | sign (U = −Σ m g_0ᵀ p) |
+//! | [`mass_matrix_printed`] | eq. 74–75 | correct |
+//! | [`psi_printed`], [`coriolis_printed`] | eq. 76–79 | correct (ψ are Christoffel symbols) |
+
+use crate::reference::{ContactKind, Pose, RefBall, RefLink, Reference};
+use crate::small::axis_rotation;
+use bf_codegen::spec::DhConvention;
+
+/// Parameters of the appendix formulas (the paper's numbers use ℓ = r = 1).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AppendixParams {
+    /// Link length ℓ (all three links), m.
+    pub l: f64,
+    /// Ball radius r (base at o_f = (2r, 0, 0)), m.
+    pub r: f64,
+    /// Link masses m_1..m_3, kg.
+    pub m: [f64; 3],
+    /// I_xx of links 1..3 about the COG, link axes, kg m².
+    pub ixx: [f64; 3],
+    /// I_yy of links 1..3.
+    pub iyy: [f64; 3],
+    /// I_zz of links 1..3.
+    pub izz: [f64; 3],
+    /// Gravity magnitude g (g_0 = (0, 0, −g)), m/s².
+    pub g: f64,
+}
+
+impl AppendixParams {
+    /// The project's paper scene (PARAMS.md): ℓ = r = 1, m = 0.02 kg,
+    /// I = diag(1.0677, 2.3177, 2.0833)e-3 kg m², g = 9.81.
+    pub fn paper() -> Self {
+        AppendixParams {
+            l: 1.0,
+            r: 1.0,
+            m: [0.02; 3],
+            ixx: [1.0677e-3; 3],
+            iyy: [2.3177e-3; 3],
+            izz: [2.0833e-3; 3],
+            g: 9.81,
+        }
+    }
+
+    /// The reference model of the same finger (Table 1 DH, base at (2r,0,0) rotated −90° about
+    /// y, COG at the link middle (−ℓ/2, 0, 0), ball of radius r at the origin).
+    pub fn reference(&self) -> Reference {
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        let links = (0..3)
+            .map(|i| RefLink {
+                a: self.l,
+                alpha: if i == 0 { half_pi } else { 0.0 },
+                d: 0.0,
+                offset: 0.0,
+                mass: self.m[i],
+                com: [-self.l / 2.0, 0.0, 0.0],
+                inertia: [
+                    [self.ixx[i], 0.0, 0.0],
+                    [0.0, self.iyy[i], 0.0],
+                    [0.0, 0.0, self.izz[i]],
+                ],
+            })
+            .collect();
+        Reference {
+            convention: DhConvention::Standard,
+            base: Pose {
+                rotation: axis_rotation(1, -half_pi),
+                translation: [2.0 * self.r, 0.0, 0.0],
+            },
+            tool: None,
+            gravity: [0.0, 0.0, -self.g],
+            links,
+            ball: Some(RefBall {
+                center: [0.0; 3],
+                radius: self.r,
+            }),
+            contact_kind: Some(ContactKind::Segment),
+            mu_v: 0.0,
+        }
+    }
+}
+
+/// Appendix A: sin of a signed sum of joints, `sa(q, &[1, -2, -3])` = s_{1\bar2\bar3}.
+fn sa(q: &[f64; 3], idx: &[i32]) -> f64 {
+    sum_a(q, idx).sin()
+}
+
+/// Appendix A: cos of a signed sum of joints.
+fn ca(q: &[f64; 3], idx: &[i32]) -> f64 {
+    sum_a(q, idx).cos()
+}
+
+fn sum_a(q: &[f64; 3], idx: &[i32]) -> f64 {
+    idx.iter()
+        .map(|&i| {
+            let v = q[(i.unsigned_abs() - 1) as usize];
+            if i < 0 { -v } else { v }
+        })
+        .sum()
+}
+
+/// Appendix B: s_{xyz} = sin(x q1 + y q2 + z q3) (missing trailing coefficients are 0).
+fn sb(q: &[f64; 3], c: &[i32]) -> f64 {
+    sum_b(q, c).sin()
+}
+
+/// Appendix B: c_{xyz} = cos(x q1 + y q2 + z q3).
+fn cb(q: &[f64; 3], c: &[i32]) -> f64 {
+    sum_b(q, c).cos()
+}
+
+fn sum_b(q: &[f64; 3], c: &[i32]) -> f64 {
+    c.iter().zip(q).map(|(&x, &v)| f64::from(x) * v).sum()
+}
+
+/// eq. 67 as printed: p_e = [−s23 − s2 + 2; ½(s123 + s1̄2̄3 + s12 + s12̄) + s1; ½(c12̄3̄ + c123
+/// + c12̄ + c12) + c1] ℓ.
+pub fn p_e_printed(q: &[f64; 3], l: f64) -> [f64; 3] {
+    [
+        (-sa(q, &[2, 3]) - sa(q, &[2]) + 2.0) * l,
+        (0.5 * (sa(q, &[1, 2, 3]) + sa(q, &[1, -2, -3]) + sa(q, &[1, 2]) + sa(q, &[1, -2]))
+            + sa(q, &[1]))
+            * l,
+        (0.5 * (ca(q, &[1, -2, -3]) + ca(q, &[1, 2, 3]) + ca(q, &[1, -2]) + ca(q, &[1, 2]))
+            + ca(q, &[1]))
+            * l,
+    ]
+}
+
+/// eq. 67 corrected: the base offset is o_f = (2r, 0, 0), so the constant is 2r, not 2ℓ.
+pub fn p_e_corrected(q: &[f64; 3], l: f64, r: f64) -> [f64; 3] {
+    let p = p_e_printed(q, l);
+    [p[0] - 2.0 * l + 2.0 * r, p[1], p[2]]
+}
+
+/// eq. 68 as printed: the columns are e_x3, e_y3, e_z3 (row-major 3×3).
+pub fn frame3_axes_printed(q: &[f64; 3]) -> [[f64; 3]; 3] {
+    [
+        [-sa(q, &[2, 3]), -ca(q, &[2, 3]), 0.0],
+        [
+            0.5 * (sa(q, &[1, 2, 3]) + sa(q, &[1, -2, -3])),
+            0.5 * (ca(q, &[1, 2, 3]) - ca(q, &[1, -2, -3])),
+            -ca(q, &[1]),
+        ],
+        [
+            0.5 * (ca(q, &[1, -2, -3]) + ca(q, &[1, 2, 3])),
+            0.5 * (sa(q, &[1, -2, -3]) - sa(q, &[1, 2, 3])),
+            sa(q, &[1]),
+        ],
+    ]
+}
+
+/// eq. 70 as printed (with J_21, J_31 below it).
+pub fn jp_printed(q: &[f64; 3], l: f64) -> [[f64; 3]; 3] {
+    let j21 = 0.5 * (ca(q, &[1, -2, -3]) + ca(q, &[1, 2, 3]) + ca(q, &[1, -2]) + ca(q, &[1, 2]))
+        + ca(q, &[1]);
+    let j31 = -0.5 * (sa(q, &[1, 2, 3]) + sa(q, &[1, -2, -3]) + sa(q, &[1, 2]) + sa(q, &[1, -2]))
+        - sa(q, &[1]);
+    let m = [
+        [0.0, -ca(q, &[2, 3]) - ca(q, &[2]), -ca(q, &[2, 3])],
+        [
+            j21,
+            0.5 * (ca(q, &[1, 2, 3]) - ca(q, &[1, -2, -3]) - ca(q, &[1, -2]) + ca(q, &[1, 2])),
+            0.5 * (ca(q, &[1, 2, 3]) - ca(q, &[1, -2, -3])),
+        ],
+        [
+            j31,
+            0.5 * (sa(q, &[1, -2, -3]) - sa(q, &[1, 2, 3]) - sa(q, &[1, 2]) + sa(q, &[1, -2])),
+            -0.5 * (sa(q, &[1, -2, -3]) - sa(q, &[1, 2, 3])),
+        ],
+    ];
+    m.map(|row| row.map(|x| x * l))
+}
+
+/// eq. 70 corrected: entry (3,3) is +½(s_{1\bar2\bar3} − s_{123}) ℓ = −c1 s23 ℓ.
+pub fn jp_corrected(q: &[f64; 3], l: f64) -> [[f64; 3]; 3] {
+    let mut m = jp_printed(q, l);
+    m[2][2] = -m[2][2];
+    m
+}
+
+/// eq. 71 as printed.
+pub fn jo_printed(q: &[f64; 3]) -> [[f64; 3]; 3] {
+    [
+        [-1.0, 0.0, 0.0],
+        [0.0, -ca(q, &[1]), -ca(q, &[1])],
+        [0.0, sa(q, &[1]), sa(q, &[1])],
+    ]
+}
+
+/// eq. 72–73 as printed, with `g0` the number substituted for the printed symbol g_0.
+pub fn gravity_printed(q: &[f64; 3], p: &AppendixParams, g0: f64) -> [f64; 3] {
+    let [m1, m2, m3] = p.m;
+    let g11 = 2.0 * m1 * sb(q, &[1])
+        + (sb(q, &[1, 1]) + sb(q, &[1, -1]) + 4.0 * sb(q, &[1])) * m2
+        + (sb(q, &[1, 1, 1])
+            + sb(q, &[1, -1, -1])
+            + 2.0 * sb(q, &[1, 1])
+            + 2.0 * sb(q, &[1, -1])
+            + 4.0 * sb(q, &[1]))
+            * m3;
+    let g2 = m2 * (sb(q, &[1, 1]) - sb(q, &[1, -1]))
+        + (sb(q, &[1, 1, -1]) - sb(q, &[1, -1, -1]) + 2.0 * sb(q, &[1, 1]) - 2.0 * sb(q, &[1, -1]))
+            * m3;
+    let g3 = m3 * (sb(q, &[1, 1, -1]) - sb(q, &[1, -1, -1]));
+    let f = -p.l / 4.0 * g0;
+    [f * g11, f * g2, f * g3]
+}
+
+/// eq. 72 corrected: `s_{11\bar1}` → `s_{111}` in rows 2 and 3, and g_0 is the magnitude g
+/// (g_0 = (0,0,−g) of eq. 22b would flip the sign).
+pub fn gravity_corrected(q: &[f64; 3], p: &AppendixParams) -> [f64; 3] {
+    let [m1, m2, m3] = p.m;
+    let g11 = 2.0 * m1 * sb(q, &[1])
+        + (sb(q, &[1, 1]) + sb(q, &[1, -1]) + 4.0 * sb(q, &[1])) * m2
+        + (sb(q, &[1, 1, 1])
+            + sb(q, &[1, -1, -1])
+            + 2.0 * sb(q, &[1, 1])
+            + 2.0 * sb(q, &[1, -1])
+            + 4.0 * sb(q, &[1]))
+            * m3;
+    let g2 = m2 * (sb(q, &[1, 1]) - sb(q, &[1, -1]))
+        + (sb(q, &[1, 1, 1]) - sb(q, &[1, -1, -1]) + 2.0 * sb(q, &[1, 1]) - 2.0 * sb(q, &[1, -1]))
+            * m3;
+    let g3 = m3 * (sb(q, &[1, 1, 1]) - sb(q, &[1, -1, -1]));
+    let f = -p.l / 4.0 * p.g;
+    [f * g11, f * g2, f * g3]
+}
+
+/// eq. 22b as printed, U_f = Σ m_i g_0ᵀ p_i with g_0 = (0, 0, −g); `coms` are the world COGs.
+pub fn potential_printed(p: &AppendixParams, coms: &[[f64; 3]]) -> f64 {
+    coms.iter().zip(p.m).map(|(c, m)| m * (-p.g) * c[2]).sum()
+}
+
+/// eq. 22b corrected (PARAMS.md): U_f = −Σ m_i g_0ᵀ p_i = Σ m_i g z_i.
+pub fn potential_corrected(p: &AppendixParams, coms: &[[f64; 3]]) -> f64 {
+    -potential_printed(p, coms)
+}
+
+/// m_11 of eq. 75 as printed.
+pub fn m11_printed(q: &[f64; 3], p: &AppendixParams) -> f64 {
+    let [m1, m2, m3] = p.m;
+    let [_, ixx2, ixx3] = p.ixx;
+    let [iyy1, iyy2, iyy3] = p.iyy;
+    let l2 = p.l * p.l;
+    (1.0 / 8.0) * (-4.0 * ixx3 + 4.0 * iyy3 + m3 * l2) * cb(q, &[0, 2, 2])
+        + 0.5 * m3 * l2 * cb(q, &[0, 2, 1])
+        + (1.0 / 8.0) * (8.0 * cb(q, &[0, 1]) + 9.0) * m2 * l2
+        + (1.0 / 8.0) * ((m2 + 4.0 * m3) * l2 - 4.0 * ixx2 + 4.0 * iyy2) * cb(q, &[0, 2, 0])
+        + 0.5 * (iyy2 + ixx3 + iyy3 + ixx2)
+        + (1.0 / 8.0)
+            * (16.0 * cb(q, &[0, 1]) + 4.0 * cb(q, &[0, 0, 1]) + 8.0 * cb(q, &[0, 1, 1]) + 13.0)
+            * m3
+            * l2
+        + iyy1
+        + 0.25 * m1 * l2
+}
+
+/// eq. 74 as printed.
+pub fn mass_matrix_printed(q: &[f64; 3], p: &AppendixParams) -> [[f64; 3]; 3] {
+    let [_, m2, m3] = p.m;
+    let [_, izz2, izz3] = p.izz;
+    let l2 = p.l * p.l;
+    let c001 = cb(q, &[0, 0, 1]);
+    let m22 = 0.25 * m2 * l2 + (c001 + 1.25) * m3 * l2 + izz2 + izz3;
+    let m23 = 0.25 * (2.0 * c001 + 1.0) * m3 * l2 + izz3;
+    let m33 = 0.25 * m3 * l2 + izz3;
+    [
+        [m11_printed(q, p), 0.0, 0.0],
+        [0.0, m22, m23],
+        [0.0, m23, m33],
+    ]
+}
+
+/// ψ_ijk of eq. 77–79 as printed (`out[i][j][k]`, 0-based), all others zero.
+pub fn psi_printed(q: &[f64; 3], p: &AppendixParams) -> [[[f64; 3]; 3]; 3] {
+    let [_, m2, m3] = p.m;
+    let [_, ixx2, ixx3] = p.ixx;
+    let [_, iyy2, iyy3] = p.iyy;
+    let l2 = p.l * p.l;
+    let psi112 = (1.0 / 8.0) * (4.0 * ixx3 - 4.0 * iyy3 - m3 * l2) * sb(q, &[0, 2, 2])
+        - 0.5 * m3 * l2 * sb(q, &[0, 2, 1])
+        - (1.0 / 8.0) * ((4.0 * m3 + m2) * l2 - 4.0 * ixx2 + 4.0 * iyy2) * sb(q, &[0, 2])
+        - 0.5 * m3 * l2 * sb(q, &[0, 1, 1])
+        - (0.5 * m2 + m3) * l2 * sb(q, &[0, 1]);
+    let psi113 = (1.0 / 8.0) * (4.0 * ixx3 - 4.0 * iyy3 - m3 * l2) * sb(q, &[0, 2, 2])
+        - 0.25 * m3 * l2 * (2.0 * sb(q, &[0, 1, 1]) + sb(q, &[0, 0, 1]) + sb(q, &[0, 2, 1]));
+    let psi223 = -0.5 * m3 * l2 * sb(q, &[0, 0, 1]);
+    let mut out = [[[0.0; 3]; 3]; 3];
+    out[0][0][1] = psi112;
+    out[0][1][0] = psi112;
+    out[1][0][0] = -psi112;
+    out[0][0][2] = psi113;
+    out[0][2][0] = psi113;
+    out[2][0][0] = -psi113;
+    out[1][1][2] = psi223;
+    out[1][2][1] = psi223;
+    out[1][2][2] = psi223;
+    out[2][1][1] = -psi223;
+    out
+}
+
+/// C(q, q̇) of eq. 76 with the printed ψ.
+pub fn coriolis_printed(q: &[f64; 3], qd: &[f64; 3], p: &AppendixParams) -> [[f64; 3]; 3] {
+    let psi = psi_printed(q, p);
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = (0..3).map(|k| psi[i][j][k] * qd[k]).sum();
+        }
+    }
+    c
+}

@@ -1,0 +1,22 @@
+//! bf-testkit: independent reference implementations used only by tests (never by product
+//! code).
+//!
+//! * [`reference`]: kinematics, Lagrangian dynamics (eq. 22–24, 76), gravity (eq. 72 with the
+//!   PARAMS.md sign), contact geometry (eq. 2–13, 33, 58–59) for any scene, with exact
+//!   derivatives from dual numbers; and a recursive Newton–Euler inverse dynamics.
+//! * [`appendix`]: the paper's Appendix A (eq. 67–71) and Appendix B (eq. 72–79) transcribed
+//!   literally, plus the corrected forms (see docs/appendix-errata.md).
+//! * [`small`]: generic fixed-size linear algebra used by both.
+
+pub mod appendix;
+pub mod error;
+pub mod reference;
+pub mod small;
+
+pub use error::TestkitError;
+pub use reference::{ContactKind, Pose, RefBall, RefContact, RefLink, Reference};
+
+#[cfg(test)]
+mod appendix_tests;
+#[cfg(test)]
+mod reference_tests;

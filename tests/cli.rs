@@ -1,0 +1,223 @@
+//! End-to-end tests of the `ball-finger` binary: `eval` through the compiled kernels must agree
+//! with `eval` through the interpreter (two independent evaluation paths of the same graphs),
+//! `generate` must be deterministic and produce the code compiled into `bf-generated`, and bad
+//! user input must give a clear error and a non-zero exit code, never a panic.
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ball-finger"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bf-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    bin()
+        .current_dir(root())
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn assert_clean_failure(out: &Output, must_mention: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success(),
+        "expected failure, got success; stderr: {stderr}"
+    );
+    assert!(
+        !stderr.contains("panicked"),
+        "panic instead of an error: {stderr}"
+    );
+    for m in must_mention {
+        assert!(stderr.contains(m), "stderr should mention {m:?}: {stderr}");
+    }
+}
+
+fn eval_json(scene: &str) -> (serde_json::Value, String) {
+    let out = run(&[
+        "eval",
+        scene,
+        "--q",
+        "0.3,-0.5,0.8",
+        "--qd",
+        "0.1,0.2,-0.3",
+        "--omega",
+        "0,0.5,1",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    (
+        serde_json::from_str(&text).expect("eval prints one JSON object"),
+        text,
+    )
+}
+
+fn flatten(v: &serde_json::Value, out: &mut Vec<f64>) {
+    match v {
+        serde_json::Value::Number(n) => out.push(n.as_f64().unwrap()),
+        serde_json::Value::Array(a) => a.iter().for_each(|x| flatten(x, out)),
+        other => panic!("unexpected JSON value {other}"),
+    }
+}
+
+#[test]
+fn eval_compiled_and_interpreted_agree_on_every_key() {
+    let (compiled, compiled_text) = eval_json("scenes/paper.toml");
+    // Same scene, different text (a comment): not the built-in source → interpreter path.
+    let dir = tmpdir("eval");
+    let copy = dir.join("paper_copy.toml");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
+    std::fs::write(&copy, format!("# a user's copy\n{text}")).unwrap();
+    let (interpreted, _) = eval_json(copy.to_str().unwrap());
+    let keys = [
+        "p_e",
+        "R3",
+        "J_p",
+        "J_o",
+        "M",
+        "C",
+        "Cqd",
+        "g",
+        "alpha",
+        "sat_alpha",
+        "p_c",
+        "h",
+        "J_c",
+        "sat_alpha_smooth",
+        "p_c_smooth",
+        "h_smooth",
+        "J_c_smooth",
+    ];
+    // The documented key order is part of the interface.
+    let positions: Vec<usize> = keys
+        .iter()
+        .map(|k| compiled_text.find(&format!("\"{k}\":")).expect(k))
+        .collect();
+    assert!(
+        positions.windows(2).all(|w| w[0] < w[1]),
+        "key order {positions:?}"
+    );
+    assert_eq!(compiled.as_object().unwrap().len(), keys.len());
+    for k in keys {
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        flatten(&compiled[k], &mut a);
+        flatten(&interpreted[k], &mut b);
+        assert_eq!(a.len(), b.len(), "{k}");
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-12 * (1.0 + x.abs()), "{k}: {x} vs {y}");
+        }
+    }
+    // Physical sanity independent of the code under test: R3 orthonormal, |n| implied by h.
+    let mut r = Vec::new();
+    flatten(&compiled["R3"], &mut r);
+    for i in 0..3 {
+        for j in 0..3 {
+            let dot: f64 = (0..3).map(|k| r[3 * k + i] * r[3 * k + j]).sum();
+            assert!((dot - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
+        }
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn generate_is_deterministic_and_writes_atomically() {
+    let dir = tmpdir("gen");
+    let a = dir.join("a.rs");
+    let out = run(&["generate", "scenes/paper.toml", "-o", a.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = run(&["generate", "scenes/paper.toml"]);
+    assert!(stdout.status.success());
+    let file = std::fs::read(&a).unwrap();
+    assert_eq!(file, stdout.stdout, "file and stdout output differ");
+    assert!(String::from_utf8_lossy(&file).contains("@generated"));
+    let report = run(&[
+        "generate",
+        "scenes/paper.toml",
+        "-o",
+        a.to_str().unwrap(),
+        "--report",
+    ]);
+    let text = String::from_utf8_lossy(&report.stdout);
+    assert!(text.contains("mass_matrix"), "report lists kernels: {text}");
+    let leftovers = std::fs::read_dir(&dir).unwrap().count();
+    assert_eq!(leftovers, 1, "no temporary files left behind");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn bad_cli_input_gives_clear_errors() {
+    assert_clean_failure(
+        &run(&["eval", "scenes/nope.toml", "--q", "0,0,0", "--qd", "0,0,0"]),
+        &["scenes/nope.toml"],
+    );
+    assert_clean_failure(
+        &run(&[
+            "eval",
+            "scenes/paper.toml",
+            "--q",
+            "0,NaN,0",
+            "--qd",
+            "0,0,0",
+        ]),
+        &["--q", "element 2"],
+    );
+    assert_clean_failure(
+        &run(&["eval", "scenes/paper.toml", "--q", "0,0", "--qd", "0,0,0"]),
+        &["--q", "expected 3"],
+    );
+    assert_clean_failure(
+        &run(&[
+            "eval",
+            "scenes/paper.toml",
+            "--q",
+            "0,0,0",
+            "--qd",
+            "0,0,0",
+            "--eps",
+            "-1",
+        ]),
+        &["--eps"],
+    );
+    let dir = tmpdir("bad");
+    let bad = dir.join("bad.toml");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
+    std::fs::write(&bad, text.replacen("mass = 0.02", "mass = -0.02", 1)).unwrap();
+    assert_clean_failure(
+        &run(&["generate", bad.to_str().unwrap()]),
+        &["bad.toml", "mass"],
+    );
+    let out_file = dir.join("never.rs");
+    assert_clean_failure(
+        &run(&[
+            "generate",
+            bad.to_str().unwrap(),
+            "-o",
+            out_file.to_str().unwrap(),
+        ]),
+        &["mass"],
+    );
+    assert!(!out_file.exists(), "no output file on failure");
+    assert_clean_failure(
+        &run(&["optimize", "--problem", "periodic-qc"]),
+        &["not implemented"],
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
