@@ -8,6 +8,6 @@ fn probe() {
     let mut c = [[0.0; 7]; 7];
     let mut v = [0.0; 7];
     let _ = (&mut m, &mut c, &mut v);
-    g::coriolis_matrix(&q, &q, &p, &mut c);
+    g::cqd_g(&q, &q, &p, &mut v);
     println!("{m:?} {c:?} {v:?}");
 }

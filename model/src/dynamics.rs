@@ -174,7 +174,7 @@ fn f_finger(kin: &ContactKinematics, params: &Params, tau: &Vec3) -> Vec3 {
 /// Ball generalised force f_b = ω × I_b ω + D ω (eq. 32, bottom).
 fn f_ball(kin: &ContactKinematics, params: &Params) -> Vec3 {
     let w = &kin.state.omega;
-    -w.cross(&(params.ball_inertia() * w)) + w * params.socket_damping()
+    w.cross(&(params.ball_inertia() * w)) + w * params.socket_damping()
 }
 
 fn check_tau(tau: &Vec3) -> Result<()> {
@@ -302,8 +302,7 @@ pub fn slip(
     let n = &c.n;
     let d = n + t_hat * params.mu_k();
     let k = n.dot(&(mats.w * d));
-    let a_free = c.n_dot().dot(&c.v_c) + n.dot(&c.jc_dot_qd)
-        - n.dot(&(c.j_c * chol.solve(&f_finger(kin, params, tau))));
+    let a_free = n.dot(&c.jc_dot_qd) - n.dot(&(c.j_c * chol.solve(&f_finger(kin, params, tau))));
     if !(k > settings.painleve_margin * mats.n_w_n) {
         let kind = if a_free < 0.0 {
             PainleveKind::Inconsistent

@@ -97,7 +97,7 @@ fn illinois<S: HybridSystem>(
         let mut m = b - fb * (b - a) / (fb - fa);
         // Bisect when false position stalls (bracket not halved within 3 iterations) or falls
         // outside the open bracket through rounding.
-        if it % 3 == 0 {
+        if it.is_multiple_of(3) {
             if b - a > 0.5 * width_ref {
                 m = 0.5 * (a + b);
             }

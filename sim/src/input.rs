@@ -451,7 +451,8 @@ mod tests {
         let pd = PdController::new(vec![2.0, 3.0], vec![0.5, 1.0], vec![1.0, -1.0]).unwrap();
         let mut o = [0.0; 2];
         pd.tau(0.0, &[0.5, 0.0], &[1.0, -2.0], &mut o).unwrap();
-        assert_eq!(o, [2.0 * 0.5 - 0.5, 3.0 * -1.0 + 2.0]);
+        // τ = kp (target − q) − kd q̇ = [2·0.5 − 0.5·1, 3·(−1) − 1·(−2)].
+        assert_eq!(o, [0.5, -1.0]);
         assert!(pd.tau(0.0, &[0.0], &[0.0, 0.0], &mut o).is_err());
         assert!(PdController::new(vec![1.0], vec![1.0, 2.0], vec![0.0]).is_err());
         assert!(PdController::new(vec![f64::NAN], vec![1.0], vec![0.0]).is_err());

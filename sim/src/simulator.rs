@@ -292,10 +292,8 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
         self.ensure_f()?;
         let fixed = matches!(self.set.method, Method::Rk4 { .. });
         let mut h = self.h.min(self.set.h_max);
-        if fixed {
-            if let Method::Rk4 { h: hf } = self.set.method {
-                h = hf;
-            }
+        if let Method::Rk4 { h: hf } = self.set.method {
+            h = hf;
         }
         // Stretch/shrink the last step onto t_end instead of leaving a sliver.
         let mut last = false;
@@ -517,10 +515,10 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
                 self.set.guard_zero_tol,
             )?;
             new_mask[j] = scan.still_masked;
-            if let Some(te) = scan.t_event {
-                if best.is_none_or(|(_, tb)| te < tb) {
-                    best = Some((j, te));
-                }
+            if let Some(te) = scan.t_event
+                && best.is_none_or(|(_, tb)| te < tb)
+            {
+                best = Some((j, te));
             }
         }
         self.stats.guard_evals += probe.evals;
