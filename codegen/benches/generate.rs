@@ -1,5 +1,4 @@
-//! Generation time per scene (targets: finger < 50 ms, 7-DOF < 1 s), and the emitted
-//! `sin_cos` against `f64::sin_cos`.
+//! Generation time per scene (targets: finger < 50 ms, 7-DOF < 1 s).
 
 use std::hint::black_box;
 
@@ -19,29 +18,5 @@ fn generation(c: &mut Criterion) {
     g.finish();
 }
 
-fn trig(c: &mut Criterion) {
-    let xs: Vec<f64> = (0..64).map(|i| -3.0 + 0.1 * i as f64).collect();
-    c.bench_function("sin_cos/emitted x64", |b| {
-        b.iter(|| {
-            let mut acc = 0.0;
-            for &x in black_box(&xs) {
-                let (s, c) = bf_codegen::trig::sin_cos(x);
-                acc += s + c;
-            }
-            acc
-        })
-    });
-    c.bench_function("sin_cos/std x64", |b| {
-        b.iter(|| {
-            let mut acc = 0.0;
-            for &x in black_box(&xs) {
-                let (s, c) = f64::sin_cos(x);
-                acc += s + c;
-            }
-            acc
-        })
-    });
-}
-
-criterion_group!(benches, trig, generation);
+criterion_group!(benches, generation);
 criterion_main!(benches);

@@ -74,7 +74,7 @@ impl Dd {
         // π/2 as three doubles (≈ 160 bits), so the reduction stays accurate next to
         // multiples of π/2. Any integer k near x/(π/2) works: the series converges for every
         // r; k·P1 is exact as a double-double product.
-        const P1: f64 = 1.5707963267948966;
+        const P1: f64 = std::f64::consts::FRAC_PI_2;
         const P2: f64 = 6.123233995736766e-17;
         const P3: f64 = -1.4973849048591698e-33;
         let kf = (self.hi / P1).round();

@@ -162,7 +162,7 @@ pub fn emit_kernel(
                     Some(j) => {
                         let s = fresh(&mut counter);
                         let c = fresh(&mut counter);
-                        stmts.push(quote!(let (#s, #c) = sin_cos(#x);));
+                        stmts.push(quote!(let (#s, #c) = f64::sin_cos(#x);));
                         ops.temporaries += 2;
                         let (si, ci) = if is_sin { (i, j) } else { (j, i) };
                         refs[si] = Some(quote!(#s));
@@ -171,9 +171,9 @@ pub fn emit_kernel(
                     None => {
                         let t = fresh(&mut counter);
                         if is_sin {
-                            stmts.push(quote!(let #t = sin_cos(#x).0;));
+                            stmts.push(quote!(let #t = f64::sin(#x);));
                         } else {
-                            stmts.push(quote!(let #t = sin_cos(#x).1;));
+                            stmts.push(quote!(let #t = f64::cos(#x);));
                         }
                         ops.temporaries += 1;
                         refs[i] = Some(quote!(#t));
@@ -327,19 +327,68 @@ pub fn emit_kernel(
     Ok(EmittedKernel { tokens, ops })
 }
 
-/// The item `fn sin_cos` of `trig.rs`, made private, for inclusion in generated files.
-fn sin_cos_item() -> Result<TokenStream, CodegenError> {
-    let file: syn::File = syn::parse_str(include_str!("trig.rs"))
-        .map_err(|e| CodegenError::Internal(format!("trig.rs does not parse: {e}")))?;
-    for item in file.items {
-        if let syn::Item::Fn(mut f) = item
-            && f.sig.ident == "sin_cos"
-        {
-            f.vis = syn::Visibility::Inherited;
-            return Ok(quote!(#f));
+/// `v.push(x)` / `v.extend(x.iter().flatten()…copied())` for an array of rank `rank`.
+fn flatten_push(x: TokenStream, rank: usize) -> TokenStream {
+    match rank {
+        0 => quote!(v.push(#x);),
+        1 => quote!(v.extend_from_slice(&#x);),
+        _ => {
+            let flats = (1..rank).map(|_| quote!(.flatten()));
+            quote!(v.extend(#x.iter() #(#flats)* .copied());)
         }
     }
-    Err(CodegenError::Internal("trig.rs has no fn sin_cos".into()))
+}
+
+/// Tokens of the match arm of kernel `k` in `eval_flat`.
+fn eval_flat_arm(k: &KernelDef) -> TokenStream {
+    let fname = Ident::new(&k.name, Span::call_site());
+    let name = k.name.as_str();
+    let mut decls = Vec::new();
+    let mut args: Vec<TokenStream> = k
+        .inputs
+        .iter()
+        .map(|a| match a {
+            Arg::Q => quote!(q),
+            Arg::Qd => quote!(qd),
+            Arg::Omega => quote!(omega),
+            Arg::Eps => quote!(eps),
+            Arg::P => quote!(p),
+        })
+        .collect();
+    let mut pushes = Vec::new();
+    for o in &k.outputs {
+        let id = format_ident!("out_{}", o.name);
+        match &o.kind {
+            OutKind::Scalar => {
+                decls.push(quote!(let mut #id = 0.0;));
+                pushes.push(quote!(v.push(#id);));
+            }
+            OutKind::Array(dims) => {
+                let mut init = quote!(0.0);
+                for &d in dims.iter().rev() {
+                    let dt = dim_tokens(d);
+                    init = quote!([#init; #dt]);
+                }
+                decls.push(quote!(let mut #id = #init;));
+                pushes.push(flatten_push(quote!(#id), dims.len()));
+            }
+            OutKind::Contact => {
+                decls.push(quote!(let mut #id = Contact::default();));
+                for (field, dims, _) in CONTACT_FIELDS {
+                    let f = Ident::new(field, Span::call_site());
+                    pushes.push(flatten_push(quote!(#id.#f), dims.len()));
+                }
+            }
+        }
+        args.push(quote!(&mut #id));
+    }
+    quote! {
+        #name => {
+            #(#decls)*
+            #fname(#(#args),*);
+            #(#pushes)*
+        }
+    }
 }
 
 /// Emit the whole scene module file.
@@ -348,16 +397,18 @@ pub fn emit_file(
     scene_name: &str,
     nq: usize,
     params: &[(String, f64)],
-    kernel_names: &[String],
+    defs: &[KernelDef],
     source_text: &str,
     kernel_tokens: Vec<TokenStream>,
     with_contact: bool,
 ) -> Result<String, CodegenError> {
+    let kernel_names: Vec<&str> = defs.iter().map(|d| d.name.as_str()).collect();
+    let arms = defs.iter().map(eval_flat_arm);
     let nq_l = Literal::usize_unsuffixed(nq);
     let np_l = Literal::usize_unsuffixed(params.len());
     let pnames = params.iter().map(|p| p.0.as_str());
     let pdefs = params.iter().map(|p| f64_tokens(p.1));
-    let knames = kernel_names.iter().map(|s| s.as_str());
+    let knames = kernel_names.iter();
     let contact = if with_contact {
         let fields = CONTACT_FIELDS.iter().map(|(f, dims, doc)| {
             let id = Ident::new(f, Span::call_site());
@@ -376,7 +427,6 @@ pub fn emit_file(
     } else {
         TokenStream::new()
     };
-    let sin_cos = sin_cos_item()?;
     let tokens = quote! {
         /// Number of joints.
         pub const NQ: usize = #nq_l;
@@ -393,8 +443,26 @@ pub fn emit_file(
         /// The scene file's text.
         pub const SCENE_TOML: &str = #source_text;
         #contact
-        #sin_cos
         #(#kernel_tokens)*
+        /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
+        /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.
+        /// For tests and the CLI: unlike the kernels, this allocates.
+        #[allow(unused_variables)]
+        pub fn eval_flat(
+            name: &str,
+            q: &[f64; NQ],
+            qd: &[f64; NQ],
+            omega: &[f64; 3],
+            eps: f64,
+            p: &[f64; NP],
+        ) -> Option<Vec<f64>> {
+            let mut v = Vec::new();
+            match name {
+                #(#arms)*
+                _ => return None,
+            }
+            Some(v)
+        }
     };
     let file: syn::File = syn::parse2(tokens)
         .map_err(|e| CodegenError::Internal(format!("emitted code does not parse: {e}")))?;

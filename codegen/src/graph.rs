@@ -277,8 +277,8 @@ impl Graph {
     pub fn add(&mut self, a: Id, b: Id) -> Id {
         match (self.as_const(a), self.as_const(b)) {
             (Some(x), Some(y)) => return self.constant(x + y),
-            (Some(x), _) if x == 0.0 => return b,
-            (_, Some(y)) if y == 0.0 => return a,
+            (Some(0.0), _) => return b,
+            (_, Some(0.0)) => return a,
             _ => {}
         }
         if let Some(r) = self.add_reassoc(a, b, false) {
@@ -317,8 +317,8 @@ impl Graph {
         }
         match (self.as_const(a), self.as_const(b)) {
             (Some(x), Some(y)) => return self.constant(x - y),
-            (Some(x), _) if x == 0.0 => return self.neg(b),
-            (_, Some(y)) if y == 0.0 => return a,
+            (Some(0.0), _) => return self.neg(b),
+            (_, Some(0.0)) => return a,
             _ => {}
         }
         if let Some(r) = self.add_reassoc(a, b, true) {
@@ -349,9 +349,9 @@ impl Graph {
         };
         match (self.as_const(a), self.as_const(b)) {
             (Some(x), Some(y)) => return self.constant(x * y),
-            (Some(x), _) if x == 0.0 => return self.zero(),
-            (Some(x), _) if x == 1.0 => return b,
-            (Some(x), _) if x == -1.0 => return self.neg(b),
+            (Some(0.0), _) => return self.zero(),
+            (Some(1.0), _) => return b,
+            (Some(-1.0), _) => return self.neg(b),
             (Some(x), _) if x < 0.0 => {
                 let c = self.constant(-x);
                 let m = self.mul(c, b);
@@ -387,9 +387,9 @@ impl Graph {
     pub fn div(&mut self, a: Id, b: Id) -> Id {
         match (self.as_const(a), self.as_const(b)) {
             (Some(x), Some(y)) => return self.constant(x / y),
-            (Some(x), _) if x == 0.0 => return self.zero(),
-            (_, Some(y)) if y == 1.0 => return a,
-            (_, Some(y)) if y == -1.0 => return self.neg(a),
+            (Some(0.0), _) => return self.zero(),
+            (_, Some(1.0)) => return a,
+            (_, Some(-1.0)) => return self.neg(a),
             (_, Some(y)) if y != 0.0 && y.is_finite() => {
                 // Division by a power of two is an exact multiplication.
                 let inv = 1.0 / y;

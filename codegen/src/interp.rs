@@ -36,7 +36,7 @@ impl Scalar for f64 {
         v
     }
     fn sin_cos(self) -> (Self, Self) {
-        crate::trig::sin_cos(self)
+        f64::sin_cos(self)
     }
     fn sqrt(self) -> Self {
         f64::sqrt(self)

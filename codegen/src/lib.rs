@@ -16,7 +16,6 @@ pub mod kernels;
 pub mod report;
 pub mod robot;
 pub mod spec;
-pub mod trig;
 
 use std::time::Instant;
 
@@ -92,7 +91,7 @@ pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenEr
         &scene.name,
         model.nq(),
         &model.params,
-        &scene.kernels,
+        &defs,
         source_text,
         tokens,
         with_contact,

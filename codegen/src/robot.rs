@@ -66,6 +66,9 @@ pub struct Pose {
     pub t: V3,
 }
 
+/// A pair of 3 × NQ Jacobians (translational, rotational), row-major.
+pub type JacPair = (Vec<Vec<Id>>, Vec<Vec<Id>>);
+
 /// Contact quantities (fields of the emitted `Contact` struct).
 #[derive(Debug, Clone)]
 pub struct ContactExprs {
@@ -117,7 +120,7 @@ pub struct Model {
 #[derive(Debug, Default)]
 struct Cache {
     com_world: Option<Vec<V3>>,
-    tip_jac: Option<(Vec<Vec<Id>>, Vec<Vec<Id>>)>,
+    tip_jac: Option<JacPair>,
     mass: Option<Vec<Vec<Id>>>,
     dmass: Option<Vec<Vec<Vec<Id>>>>,
     potential: Option<Id>,
@@ -402,7 +405,7 @@ impl Model {
 
     /// World geometric Jacobian (J_P, J_O), each 3 × NQ row-major, of a point `p` rigidly
     /// attached to link `link` (0-based); columns of later joints are 0.
-    pub fn point_jacobian(&mut self, p: V3, link: usize) -> (Vec<Vec<Id>>, Vec<Vec<Id>>) {
+    pub fn point_jacobian(&mut self, p: V3, link: usize) -> JacPair {
         let n = self.nq();
         let z = self.g.zero();
         let mut jp = vec![vec![z; n]; 3];
@@ -421,7 +424,7 @@ impl Model {
     }
 
     /// Tip Jacobian (J_p, J_o), eq. 69–71.
-    pub fn tip_jacobian(&mut self) -> (Vec<Vec<Id>>, Vec<Vec<Id>>) {
+    pub fn tip_jacobian(&mut self) -> JacPair {
         if let Some(j) = &self.cache.tip_jac {
             return j.clone();
         }
@@ -433,7 +436,7 @@ impl Model {
     }
 
     /// Jacobians of every link COG (world axes).
-    pub fn com_jacobians(&mut self) -> Vec<(Vec<Vec<Id>>, Vec<Vec<Id>>)> {
+    pub fn com_jacobians(&mut self) -> Vec<JacPair> {
         let coms = self.com_world();
         (0..self.nq())
             .map(|i| self.point_jacobian(coms[i], i))

@@ -7,8 +7,10 @@
 //! States (seeded): random configurations, the stretched finger (q2 = … = 0), folded ones
 //! (q_i = ±π), q̇ of size 1e3 and 1e-12, large |q| (~1e4 rad), and — for the scenes with a
 //! ball — states exactly on the ball (h = 0 by bisection) touching with the fingertip and
-//! with the side of the last link. Tolerance: |kernel − reference| ≤ 1e-12 · max(1, ‖ref‖∞)
-//! per output array (mixed absolute/relative).
+//! with the side of the last link; for `human` (runtime parameters) also non-default `p`.
+//! Tolerance per output array: |kernel − reference|∞ ≤ 1e-12 · max(1, ‖ref‖∞, s), with s the
+//! size of the summed terms for velocity-dependent outputs (|q̇|·|M| for C, |q̇|²·|M| for C q̇,
+//! |q̇| for v_c, ṙ_c, ḣ, |q̇|² for J̇ q̇).
 
 use bf_testkit::Reference;
 use rand::{Rng, SeedableRng};
@@ -17,8 +19,9 @@ use std::f64::consts::PI;
 
 const TOL: f64 = 1e-12;
 
-/// Call a kernel through an opaque function pointer: inlining every (large) generated kernel
-/// into one test function made LLVM's debug-info pass overflow its stack.
+/// Call a kernel through an opaque function pointer, so each large `#[inline]` kernel is
+/// compiled once as its own function instead of being inlined into these long test functions
+/// (a rustc/LLVM stack overflow in debug-info emission was seen while building this file).
 macro_rules! call {
     ($f:path; $($a:expr),* $(,)?) => {{
         let f = std::hint::black_box($f as fn($(call!(@ty $a)),*));

@@ -302,8 +302,9 @@ pub fn slip(
     let n = &c.n;
     let d = n + t_hat * params.mu_k();
     let k = n.dot(&(mats.w * d));
-    let a_free = n.dot(&c.jc_dot_qd) - n.dot(&(c.j_c * chol.solve(&f_finger(kin, params, tau))));
-    if !(k > settings.painleve_margin * mats.n_w_n) {
+    let a_free = c.n_dot().dot(&c.v_c) + n.dot(&c.jc_dot_qd)
+        - n.dot(&(c.j_c * chol.solve(&f_finger(kin, params, tau))));
+    if k.is_nan() || k <= settings.painleve_margin * mats.n_w_n {
         let kind = if a_free < 0.0 {
             PainleveKind::Inconsistent
         } else {

@@ -109,6 +109,16 @@ pub enum ModelError {
         /// |T_n Δv|.
         tangential_speed: f64,
     },
+    /// A name (impact law, scene, ...) that is not known.
+    #[error("unknown {what} `{name}`; expected one of: {expected}")]
+    UnknownName {
+        /// What kind of name.
+        what: &'static str,
+        /// The name given.
+        name: String,
+        /// The accepted names.
+        expected: &'static str,
+    },
     /// An iterative solve (maximum-dissipation impact, eq. 42) did not converge.
     #[error("{what} did not converge")]
     NoConvergence {

@@ -27,7 +27,7 @@ pub enum ContactVariant {
 
 /// Evaluation of one 3-DOF contact scene's kernels. Implementations hold their runtime
 /// parameter vector; they must not panic for finite inputs.
-pub trait Kernels {
+pub trait Kernels: std::fmt::Debug {
     /// Scene name (the generated module's name).
     fn scene_name(&self) -> &str;
     /// The scene file's text (ball, friction constants, ...).
@@ -274,6 +274,16 @@ impl<K: Kernels> Model<K> {
         )
     }
 
+    /// Configuration correction Δq towards h = 0 (see [`transitions::project_configuration`]).
+    pub fn project_configuration(&self, x: &State) -> Result<Vec3> {
+        transitions::project_configuration(&self.evaluate(x)?, &self.params, &self.settings)
+    }
+
+    /// Velocities made consistent with `mode` (see [`transitions::project_velocity`]).
+    pub fn project_velocity(&self, mode: Mode, x: &State) -> Result<ImpactOutcome> {
+        transitions::project_velocity(mode, &self.evaluate(x)?, &self.params, &self.settings)
+    }
+
     /// Energy at `x`.
     pub fn energy(&self, x: &State) -> Result<Energy> {
         Ok(energy::energy(&self.evaluate(x)?, &self.params))
@@ -294,3 +304,114 @@ impl<K: Kernels> Model<K> {
         ))
     }
 }
+
+/// Implements [`Kernels`] for a generated 3-DOF contact scene module `bf_generated::$module`.
+macro_rules! generated_kernels {
+    ($(#[$meta:meta])* $ty:ident, $module:ident) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq)]
+        pub struct $ty {
+            p: [f64; bf_generated::$module::NP],
+        }
+
+        const _: () = assert!(bf_generated::$module::NQ == 3, "contact scenes have 3 joints");
+
+        impl $ty {
+            /// Kernels with the scene's default runtime parameters (`PARAM_DEFAULTS`).
+            pub fn new() -> Self {
+                Self { p: bf_generated::$module::PARAM_DEFAULTS }
+            }
+
+            /// Kernels with explicit runtime parameters (layout `PARAM_NAMES`); the length
+            /// must be `NP` and every value finite.
+            pub fn with_params(p: &[f64]) -> Result<Self> {
+                let p: [f64; bf_generated::$module::NP] =
+                    p.try_into().map_err(|_| ModelError::ParameterCount {
+                        scene: bf_generated::$module::SCENE_NAME,
+                        expected: bf_generated::$module::NP,
+                        got: p.len(),
+                    })?;
+                if !p.iter().all(|v| v.is_finite()) {
+                    return Err(ModelError::NonFinite { what: "kernel parameters" });
+                }
+                Ok(Self { p })
+            }
+        }
+
+        impl Default for $ty {
+            fn default() -> Self {
+                Self::new()
+            }
+        }
+
+        impl Kernels for $ty {
+            fn scene_name(&self) -> &str {
+                bf_generated::$module::SCENE_NAME
+            }
+            fn scene_toml(&self) -> &str {
+                bf_generated::$module::SCENE_TOML
+            }
+            fn param_names(&self) -> &[&str] {
+                &bf_generated::$module::PARAM_NAMES
+            }
+            fn param_values(&self) -> &[f64] {
+                &self.p
+            }
+            fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+                let mut m = [[0.0; 3]; 3];
+                let mut c = [0.0; 3];
+                bf_generated::$module::mass_cqd_g(q, qd, &self.p, &mut m, &mut c);
+                (m, c)
+            }
+            fn potential(&self, q: &[f64; 3]) -> f64 {
+                let mut u = 0.0;
+                bf_generated::$module::potential(q, &self.p, &mut u);
+                u
+            }
+            fn contact(
+                &self,
+                q: &[f64; 3],
+                qd: &[f64; 3],
+                omega: &[f64; 3],
+                variant: ContactVariant,
+            ) -> ContactGeometry {
+                let mut c = bf_generated::$module::Contact::default();
+                match variant {
+                    ContactVariant::Exact => {
+                        bf_generated::$module::contact(q, qd, omega, &self.p, &mut c)
+                    }
+                    ContactVariant::Smooth(eps) => {
+                        bf_generated::$module::contact_smooth(q, qd, omega, eps, &self.p, &mut c)
+                    }
+                }
+                ContactGeometry::from_arrays(
+                    c.alpha,
+                    c.sat_alpha,
+                    &c.p_c,
+                    &c.r_c,
+                    c.h,
+                    &c.n,
+                    &c.j_c,
+                    &c.v_c,
+                    &c.delta_v,
+                    c.h_dot,
+                    &c.rc_dot,
+                    &c.jc_dot_qd,
+                )
+            }
+        }
+    };
+}
+
+generated_kernels!(
+    /// Generated kernels of the paper's robotic finger (`bf_generated::paper`, scenes/paper.toml).
+    PaperKernels,
+    paper
+);
+
+generated_kernels!(
+    /// Generated kernels of the human finger (`bf_generated::human`, scenes/human.toml; runtime
+    /// parameters `ball.radius`, `link3.mass`).
+    HumanKernels,
+    human
+);

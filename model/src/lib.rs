@@ -12,13 +12,32 @@
 //!      [`dynamics::stick`], [`dynamics::slip`] return accelerations (q̈, ω̇) and the contact
 //!      force λ on the finger (world axes) with its decomposition λ_n, λ_∥, σ (eq. 12, 15–18).
 //!    - [`impact`]: the four impact laws of Sect. 2.5 selected by [`ImpactLaw`]
-//!      (eq. 39, 40–41, 42, 43), each returning (q̇⁺, ω⁺, ι) and whether the contact sticks.
+//!      (eq. 39, 40–41, 42, 43), each returning (q̇⁺, ω⁺, ι) and whether the contact sticks;
+//!      plus `ImpactLaw::NormalImpulse`, the energy-consistent frictionless reading of eq. 39
+//!      (the literal eq. 39 can increase kinetic energy, see [`impact`]).
 //!    - [`transitions`]: mode-transition predicates of Sect. 3.1 (eq. 48–50) with tolerances in
 //!      [`TransitionSettings`], and the velocity updates at Slip→Stick / Stick→Slip.
 //!    - [`energy`]: kinetic + potential energy and the power balance.
 //! 3. **[`Model`]**: kernels + [`Params`] + [`TransitionSettings`] with convenience methods
 //!    (`model.stick(&state, &tau)`, `model.impact(&state, law)`, ...). [`fixtures`] builds the
 //!    paper and human scenes from `bf_generated`.
+//!
+//! # Simulator recipe (Fig. 2–3)
+//! ```text
+//! Free:  acc = model.free(x, τ);  transition(Free, ..) == Some(Impact)  (eq. 50, locate h = 0)
+//!        → out = model.impact(x, law);  x.qd, x.omega = out.qd, out.omega;  mode = out.mode
+//!          (then check λ_n of that mode: λ_n < 0 → Free)
+//! Stick: acc = model.stick(x, τ);  ContactToFree if λ_n < 0;  StickToSlip if σ ≤ 0
+//!        → out = model.stick_to_slip_update(x, &acc.force)  (Δv⁺ = slip_kick along λ_∥)
+//! Slip:  acc = model.slip(x, τ, hint);  ContactToFree if λ_n < 0;  SlipToStick if ‖Δv‖ ≤ ε
+//!        and decreasing → out = model.slip_to_stick_update(x)  (projection onto Δv = 0)
+//! ```
+//! Contact modes let h drift within `TransitionSettings::contact_tolerance` (Sect. 3.1);
+//! beyond it they return `NotInContact`. `ModelError::Painleve` in slip means the
+//! complementarity problem has no / several solutions (Sect. 7): the simulator must decide.
+//! The ball's inertia I_b is taken in world axes and constant (the state has no ball
+//! orientation): exact for the paper's isotropic ball; for a non-isotropic I_b the equations are
+//! the instantaneous world-frame Euler equations I_b ω̇ + ω × I_b ω = torque.
 //!
 //! # Conventions (PARAMS.md)
 //! - λ and ι are the force / impulse **exerted on the finger**, world axes. The ball receives
@@ -36,16 +55,24 @@
 //! contact), and inconsistent / non-unique contact forces (Painlevé, Sect. 7).
 //!
 //! # Example
-//! ```ignore
-//! use bf_model::{fixtures, State, Vec3};
+//! ```
+//! use bf_model::{fixtures, ImpactLaw, State, Vec3};
+//! # fn main() -> Result<(), bf_model::ModelError> {
 //! let model = fixtures::paper_scene()?;
-//! let x = State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::zeros());
-//! let acc = model.free(&x, &Vec3::zeros())?;
+//! let x = State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::new(0.0, 0.0, 2.0));
+//! let acc = model.free(&x, &Vec3::new(0.1, 0.0, 0.0))?;
+//! assert!(acc.qdd.iter().all(|v| v.is_finite()));
+//! // contact-mode queries refuse states that are not in contact
+//! assert!(model.stick(&x, &Vec3::zeros()).is_err() || model.evaluate(&x)?.contact.h.abs() < 1e-3);
+//! # let _ = ImpactLaw::ALL;
+//! # Ok(())
+//! # }
 //! ```
 
 pub mod dynamics;
 pub mod energy;
 mod error;
+pub mod fixtures;
 pub mod impact;
 pub mod kernels;
 mod kinematics;
@@ -57,7 +84,7 @@ pub mod transitions;
 pub use dynamics::{Accelerations, ContactForce, ContactMatrices};
 pub use error::{ModelError, PainleveKind};
 pub use impact::{ImpactLaw, ImpactOutcome};
-pub use kernels::{ContactVariant, Kernels, Model};
+pub use kernels::{ContactVariant, HumanKernels, Kernels, Model, PaperKernels};
 pub use kinematics::{ContactGeometry, ContactKinematics};
 pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
 pub use params::Params;

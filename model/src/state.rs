@@ -3,8 +3,11 @@
 use crate::linalg::Vec3;
 use crate::{ModelError, Result};
 
-/// Discrete mode of the hybrid system (Sect. 2.6, Fig. 2–3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+/// Discrete mode of the hybrid system (Sect. 2.6, Fig. 2–3). Serialised in lowercase.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "lowercase")]
 pub enum Mode {
     /// No contact, λ = 0 (eq. 26, 45).
     Free,

@@ -9,6 +9,8 @@
 //! | [`slip_to_stick_update`] | velocities projected onto Δv = 0 with the sticking impulse (eq. 40–41) |
 //! | [`stick_to_slip_update`] | minimal (M-norm) velocity change giving Δv⁺ = `slip_kick` · λ_∥/‖λ_∥‖ |
 //! | [`check`] | first transition that fires in a given mode |
+//! | [`project_configuration`] | drift control of h (eq. 8): M_f-metric Newton step Δq = −h M_f⁻¹ J_cᵀ n / nᵀ W n |
+//! | [`project_velocity`] | drift control of eq. 46 (Stick: Δv = 0) or eq. 36 (Slip: n·v_c = 0) by the M-norm-closest velocities |
 //!
 //! Equalities are replaced by tolerances ([`TransitionSettings`]) as Sect. 3.1 prescribes.
 
@@ -19,8 +21,10 @@ use crate::dynamics::{
 use crate::impact::{ImpactOutcome, apply_given_impulse, project_stick};
 use crate::{ContactKinematics, Mode, ModelError, Params, Result};
 
-/// Tolerances of the physics layer and of the transition predicates.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Tolerances of the physics layer and of the transition predicates. Deserialisable with
+/// missing fields taking their defaults.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
 pub struct TransitionSettings {
     /// Contact-mode queries (stick, slip, impacts) accept |h| ≤ `contact_tolerance` · r and
     /// return `NotInContact` otherwise. Dimensionless, a fraction of the ball radius r; allows the
@@ -98,7 +102,8 @@ impl TransitionSettings {
 }
 
 /// A transition that fires (Fig. 2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Transition {
     /// Free → in contact: apply an impact law (eq. 50).
     Impact,
@@ -223,6 +228,44 @@ pub fn stick_to_slip_update(
     let mut out = apply_given_impulse(kin, params, settings, &iota)?;
     out.mode = Mode::Slip;
     Ok(out)
+}
+
+/// One Newton step of h(q) = 0 that is smallest in the M_f metric:
+/// Δq = −h M_f⁻¹ J_cᵀ n / (nᵀ J_c M_f⁻¹ J_cᵀ n) (∇h = J_cᵀ n with the exact sat). Returns Δq;
+/// h(q + Δq) = O(h²). Use to control the drift of h in contact modes (Sect. 3.1).
+pub fn project_configuration(
+    kin: &ContactKinematics,
+    params: &Params,
+    settings: &TransitionSettings,
+) -> Result<crate::Vec3> {
+    let (mats, _) = matrices_with_mass(kin, params)?;
+    crate::dynamics::require_normal_mobility(&mats, settings)?;
+    Ok(mats.minv_jct * kin.contact.n * (-kin.contact.h / mats.n_w_n))
+}
+
+/// Velocities made consistent with `mode` by the M-norm-closest change: Stick → Δv = 0
+/// (sticking impulse, eq. 41); Slip → n·v_c = 0 (normal impulse ι = −n (n·v_c)/nᵀ W n, ω
+/// unchanged); Free → unchanged (zero impulse).
+pub fn project_velocity(
+    mode: Mode,
+    kin: &ContactKinematics,
+    params: &Params,
+    settings: &TransitionSettings,
+) -> Result<ImpactOutcome> {
+    match mode {
+        Mode::Free => apply_given_impulse(kin, params, settings, &crate::Vec3::zeros()),
+        Mode::Stick => project_stick(kin, params, settings),
+        Mode::Slip => {
+            require_contact(kin, params, settings)?;
+            let (mats, _) = matrices_with_mass(kin, params)?;
+            crate::dynamics::require_normal_mobility(&mats, settings)?;
+            let n = kin.contact.n;
+            let iota = n * (-kin.contact.normal_velocity() / mats.n_w_n);
+            let mut out = apply_given_impulse(kin, params, settings, &iota)?;
+            out.mode = Mode::Slip;
+            Ok(out)
+        }
+    }
 }
 
 #[cfg(test)]

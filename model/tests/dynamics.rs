@@ -301,6 +301,7 @@ fn stretched_finger_along_normal_gives_singular_gamma() {
         bf_model::ImpactLaw::Stick,
         bf_model::ImpactLaw::MaxDissipation,
         bf_model::ImpactLaw::MinRelativeVelocity,
+        bf_model::ImpactLaw::NormalImpulse,
     ] {
         let e = model.impact(&x, law).unwrap_err();
         assert!(

@@ -276,3 +276,37 @@ fn bad_parameters_and_inputs_are_rejected_with_clear_messages() {
         Err(ModelError::NonFinite { what: "torque" })
     );
 }
+
+#[test]
+fn projections_remove_drift() {
+    let mut rng = ChaCha8Rng::seed_from_u64(27);
+    let model = paper_ref_model_aniso();
+    for _ in 0..15 {
+        // configuration: perturb a contact configuration, one step shrinks h quadratically
+        let q0 = contact_configuration(&model, &mut rng);
+        let q = q0 + rvec(&mut rng, 1e-3);
+        let x = State::new(q, Vec3::zeros(), Vec3::zeros());
+        let h0 = model.evaluate(&x).unwrap().contact.h;
+        let dq = model.project_configuration(&x).unwrap();
+        let h1 = model
+            .evaluate(&State::new(q + dq, Vec3::zeros(), Vec3::zeros()))
+            .unwrap()
+            .contact
+            .h;
+        assert!(h1.abs() < 50.0 * h0 * h0 + 1e-15, "h {h0} -> {h1}");
+        // velocities: slip projection removes n·v_c only, stick projection removes Δv
+        let x = slip_state(&model, &mut rng);
+        let kin = model.evaluate(&x).unwrap();
+        let n = kin.contact.n;
+        let drift = kin.contact.j_c.try_inverse().unwrap() * (n * 0.01);
+        let xd = State::new(x.q, x.qd + drift, x.omega);
+        let o = model.project_velocity(Mode::Slip, &xd).unwrap();
+        assert!(n.dot(&(kin.contact.j_c * o.qd)).abs() < 1e-12);
+        assert_eq!(o.omega, xd.omega);
+        assert!(o.kinetic_energy_change <= 0.0);
+        let o = model.project_velocity(Mode::Stick, &xd).unwrap();
+        assert!(o.delta_v.norm() < 1e-10);
+        let o = model.project_velocity(Mode::Free, &xd).unwrap();
+        assert_eq!((o.qd, o.omega), (xd.qd, xd.omega));
+    }
+}

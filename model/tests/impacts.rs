@@ -7,7 +7,9 @@
 //! - maximum dissipation: |ι_∥| ≤ μ_k ι_n, energy does not increase, and its kinetic energy is
 //!   the minimum found by a brute-force search over the friction cone (dense grid + local
 //!   refinement, computed without Γ);
-//! - minimum relative velocity: ι_∥ ∥ Δv_∥⁻, 0 ≤ μ ≤ μ_k, |Δv⁺| minimal over a dense μ grid.
+//! - minimum relative velocity: ι_∥ ∥ Δv_∥⁻, 0 ≤ μ ≤ μ_k, |Δv⁺| minimal over a dense μ grid;
+//! - normal impulse (frictionless reading of eq. 39): ι ∥ n, ω unchanged, energy loss
+//!   ½ (n·v_c⁻)² / nᵀW n.
 
 mod common;
 
@@ -246,5 +248,26 @@ fn separating_contact_is_refused() {
             model.impact(&away, law),
             Err(ModelError::Separating { .. })
         ));
+    }
+}
+
+#[test]
+fn normal_impulse_law_is_frictionless_and_dissipative() {
+    let mut rng = ChaCha8Rng::seed_from_u64(16);
+    let model = paper_ref_model_aniso();
+    for _ in 0..20 {
+        let x = approach_state(&model, &mut rng);
+        let kin = model.evaluate(&x).unwrap();
+        let o = model.impact(&x, ImpactLaw::NormalImpulse).unwrap();
+        let n = kin.contact.n;
+        assert!(o.impulse_t.norm() < 1e-12 * o.impulse.norm());
+        assert!(o.impulse_n > 0.0);
+        assert!((o.omega - x.omega).norm() < 1e-12 * (1.0 + x.omega.norm()));
+        assert!(n.dot(&(kin.contact.j_c * o.qd)).abs() < 1e-10);
+        // ΔT = −½ (n·v_c⁻)² / nᵀ W n with W from M_f directly
+        let w = kin.contact.j_c * kin.m_f.try_inverse().unwrap() * kin.contact.j_c.transpose();
+        let vn = kin.contact.normal_velocity();
+        let expect = -0.5 * vn * vn / n.dot(&(w * n));
+        assert!((o.kinetic_energy_change - expect).abs() < 1e-10 * expect.abs());
     }
 }

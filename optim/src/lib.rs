@@ -8,5 +8,7 @@
 
 pub mod error;
 pub mod ipm;
+pub mod ocp;
+pub mod problems;
 
 pub use error::OptimError;

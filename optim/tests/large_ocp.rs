@@ -123,3 +123,67 @@ fn nonlinear_drag_with_active_control_bound() {
     );
     assert!((sol2.objective - sol.objective).abs() < 1e-7 * sol.objective);
 }
+
+#[test]
+fn chebyshev_collocation_derivatives() {
+    let mut p = common::cheb::ChebDoubleIntegrator::new(2, 2, 5);
+    p.drag = 0.4;
+    let x: Vec<f64> = (0..p.num_variables()).map(|i| 0.2 + 0.3 * (i as f64 * 0.77).sin()).collect();
+    let lam: Vec<f64> = (0..p.num_constraints()).map(|i| (i as f64 * 1.3).cos()).collect();
+    let rep = check_derivatives(&p, &x, 0.9, &lam, 1e-6);
+    assert!(rep.max_error() < 1e-6, "{rep:?}");
+}
+
+/// 3 axes × 80 segments × 30 LGR nodes: 21 609 variables, 14 400 constraints with dense
+/// 30 × 31 differentiation blocks. The optimal states are cubic polynomials, which the
+/// LGR collocation represents exactly, so J matches the closed form to near machine precision.
+#[test]
+fn chebyshev_collocation_21k_variables_matches_closed_form() {
+    let p = common::cheb::ChebDoubleIntegrator::new(3, 80, 30);
+    assert!(p.num_variables() > 20_000);
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    let jstar = p.closed_form();
+    assert!((sol.objective - jstar).abs() < 1e-7 * jstar, "J = {}, J* = {jstar}", sol.objective);
+    let mut u_err = 0.0f64;
+    for node in 0..p.nodes() - 1 {
+        let t = p.time(node);
+        for a in 0..3 {
+            u_err = u_err.max((sol.x[p.u(node, a)] - 6.0 * p.distance[a] * (1.0 - 2.0 * t)).abs());
+        }
+    }
+    // The first LGR weight of each segment is 2/N² (times h/2), so the dual-infeasibility
+    // tolerance allows ~1e-4 errors in those controls; J itself is accurate to ~1e-12.
+    assert!(u_err < 1e-3, "max |u − u*| = {u_err}");
+    let (du, pr) = kkt_residual(&p, &sol);
+    assert!(du < 1e-6 && pr < 1e-8, "independent KKT residual: dual {du}, primal {pr}");
+}
+
+#[test]
+fn chebyshev_exact_solution_is_feasible() {
+    let p = common::cheb::ChebDoubleIntegrator::new(3, 4, 30);
+    let mut x = vec![0.0; p.num_variables()];
+    for node in 0..p.nodes() {
+        let t = p.time(node);
+        for a in 0..3 {
+            let d = p.distance[a];
+            x[p.p(node, a)] = d * (3.0 * t * t - 2.0 * t * t * t);
+            x[p.v(node, a)] = 6.0 * d * (t - t * t);
+            // the final node's control enters no equation (see cheb.rs): optimal value 0
+            x[p.u(node, a)] = if node + 1 == p.nodes() { 0.0 } else { 6.0 * d * (1.0 - 2.0 * t) };
+        }
+    }
+    let mut g = vec![0.0; p.num_constraints()];
+    p.constraints(&x, &mut g);
+    let viol = g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    assert!(viol < 1e-10, "{viol}");
+    assert!((p.objective(&x) - p.closed_form()).abs() < 1e-10, "{}", p.objective(&x));
+}
+
+#[test]
+#[ignore = "manual debugging aid"]
+fn debug_cheb() {
+    let p = common::cheb::ChebDoubleIntegrator::new(3, 80, 30);
+    let sol = solve(&p, &Settings { print_level: 3, ..Settings::default() }).unwrap();
+    println!("{:?} J = {} timing {:?}", sol.status, sol.objective, sol.timing);
+}

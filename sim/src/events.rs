@@ -14,15 +14,18 @@
 //! **Guards starting on the surface.** Right after a reset (or at the initial time) a guard with
 //! |g| ≤ `guard_zero_tol` is *masked*: its start value is not used as a bracket end (that would
 //! re-trigger the event just handled, or, if ignored, hide the next genuine crossing — the
-//! diffsol failure recorded in DEPENDENCIES.md §5). Instead the samples are read in time order:
-//! * the first sample that moved to the *non-triggered* side of the start value (s·g > max(s·g₀,
-//!   0)) unmasks the guard and normal bracketing continues from it;
-//! * a first sample beyond −`guard_zero_tol` on the *triggered* side means the state went into
-//!   the guard region: probe points t₀ + (t_k − t₀)/2ⁱ (down to `event_tol`) look for an
-//!   excursion to the non-triggered side right after t₀ (a short flight, possibly lower than the
-//!   tolerance band) and bracket it if found; otherwise the state slid out of the band and the
-//!   exit time is bisected to `event_tol` (the "small violation" of Sect. 3.1);
-//! * samples inside the band keep the guard masked into the next step.
+//! diffsol failure recorded in DEPENDENCIES.md §5). Instead:
+//! * the samples are scanned for the first one, t_k, that is clearly off the surface
+//!   (directional: on the valid side of the start value, s·g > max(s·g₀, 0), or beyond
+//!   −`guard_zero_tol` on the triggered side; `Either`: |g| > |g₀|); if there is none the guard
+//!   stays masked into the next step;
+//! * (t₀, t_k] is refined by probes t₀ + (t_k − t₀)/2ⁱ down to `event_tol` (≈ 40 guard
+//!   evaluations, once per masked guard after a reset), and read in time order: a departure to
+//!   the valid side followed by a return (a short flight, even one lower than the tolerance
+//!   band) is bracketed and root-found; a departure straight into the triggered region (the
+//!   state slid out of the band: eq. 50's h = ḣ = 0 ∧ ḧ < 0) fires at the band-exit time,
+//!   bisected to `event_tol` (the "small violation" of Sect. 3.1); otherwise the guard is
+//!   unmasked and normal bracketing continues from t_k.
 //!
 //! A directional guard that is *beyond* the tolerance on its triggered side right after a reset
 //! fires immediately (handled by the simulator as a chained transition).

@@ -16,6 +16,7 @@
 //! * [`trajectory`] — [`Trajectory`], [`EventRecord`], JSON/CSV writers (atomic).
 //! * [`input`] — [`Input`] torques τ(t, q, q̇): [`TorqueSeries`] (CSV/JSON) and [`PdController`].
 //! * [`toys`] — systems with closed-form event times used by tests and benches.
+//! * [`ball_finger`] — the finger–ball model of bf-model as a [`HybridSystem`].
 //!
 //! ```
 //! use bf_sim::{simulate, SimSettings, toys::{BouncingBall, BallMode}};
@@ -26,6 +27,7 @@
 //! assert!((out.events[0].t - t1).abs() < 1e-10);
 //! ```
 
+pub mod ball_finger;
 pub mod error;
 pub mod events;
 pub mod input;

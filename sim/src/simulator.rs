@@ -174,6 +174,7 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             (Method::Dopri5, Some(h)) => h.min(sim.set.h_max),
             (Method::Dopri5, None) => {
                 sim.ensure_f()?;
+                sim.stats.rhs_evals += 1;
                 initial_step(
                     sys,
                     sim.mode,
@@ -186,7 +187,6 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
                 )?
             }
         };
-        sim.stats.rhs_evals += 1;
         Ok(sim)
     }
 

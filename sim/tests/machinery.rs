@@ -2,8 +2,8 @@
 //!
 //! The guard (x − 1)² − 0.01 is positive, dips below zero on (0.9, 1.1) and comes back: two
 //! crossings inside one large step. Direction filters must pick the right one; interior
-//! sub-samples must see the dip (a scheme that only compares the step's end points sees
-//! + → + and misses both — shown by `event_subdivisions = 1`). Several guards crossing in one
+//! sub-samples must see the dip (a scheme that only compares the step's end points sees two
+//! positive values and misses both — shown by `event_subdivisions = 1`). Several guards in one
 //! step must yield the earliest. Resets that keep landing beyond a guard must stop with the
 //! chain limit instead of looping, and the step()/apply_reset() API must reproduce run() bit for
 //! bit (determinism).
@@ -17,8 +17,10 @@ use bf_sim::{
 /// of directional guards that have fired: a fired directional guard is retired (its region is
 /// left for good, as with a mode change), `Either` guards stay as crossing counters.
 struct Line {
-    guards: Vec<(Guard, fn(f64) -> f64)>,
+    guards: Vec<(Guard, GuardFn)>,
 }
+
+type GuardFn = fn(f64) -> f64;
 
 impl Line {
     fn active(&self, mask: u32) -> Vec<usize> {
@@ -95,7 +97,7 @@ fn parabola(x: f64) -> f64 {
 
 #[test]
 fn double_crossing_in_one_step_and_direction_filters() {
-    let cases: [(Guard, fn(f64) -> f64, Vec<f64>); 3] = [
+    let cases: [(Guard, GuardFn, Vec<f64>); 3] = [
         (Guard::falling("dip"), dip, vec![0.9]),
         (Guard::rising("dip"), neg_dip, vec![0.9]),
         (Guard::either("dip"), dip, vec![0.9, 1.1]),

@@ -223,10 +223,6 @@ fn contact_kind_of(spec: &ContactSpec) -> Result<ContactKind, TestkitError> {
     }
 }
 
-fn to_vec3(v: V3<f64>) -> [f64; 3] {
-    v
-}
-
 fn eps3(v: V3<Dual64>) -> [f64; 3] {
     [v[0].eps, v[1].eps, v[2].eps]
 }
@@ -385,6 +381,9 @@ impl Reference {
 
     /// Forward kinematics: every DH frame as a 4×4 world transform, the tip frame and the joint
     /// axes, by literally multiplying the elementary DH factors.
+    ///
+    /// # Panics
+    /// If `q.len() != self.nq()` (a test-programming error; every method taking `q` calls this).
     pub fn kinematics<T: Real>(&self, q: &[T]) -> Kinematics<T> {
         assert_eq!(q.len(), self.nq(), "q has the wrong length");
         let base: H4<T> = h_from(&lift33(self.base.rotation), lift3(self.base.translation));
@@ -785,7 +784,7 @@ impl Reference {
             n: re3(g.n),
             j_c,
             v_c,
-            delta_v: to_vec3(delta_v),
+            delta_v,
             h_dot: g.h.eps,
             rc_dot: eps3(g.r_c),
             jc_dot_qd,

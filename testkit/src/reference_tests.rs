@@ -611,3 +611,24 @@ fn scene_conversion_and_parameter_names() {
     let d = dual_along(&[1.0, 2.0], &[3.0, 4.0]);
     assert_eq!((d[1].re, d[1].eps), (2.0, 4.0));
 }
+
+/// Error paths: a massless arm has a singular M, contact needs a ball, bad TOML is reported.
+#[test]
+fn error_paths() {
+    let mut robot = AppendixParams::paper().reference();
+    for l in robot.links.iter_mut() {
+        l.mass = 0.0;
+        l.inertia = [[0.0; 3]; 3];
+    }
+    let err = robot.forward_dynamics(&[0.1, 0.2, 0.3], &[0.0; 3], &[0.0; 3]);
+    assert_eq!(err, Err(crate::TestkitError::SingularMassMatrix));
+    robot.ball = None;
+    assert_eq!(
+        robot.contact(&[0.0; 3], &[0.0; 3], &[0.0; 3], None),
+        Err(crate::TestkitError::NoBall)
+    );
+    assert!(matches!(
+        Reference::from_scene_toml("name = 3", "bad.toml"),
+        Err(crate::TestkitError::InvalidScene(_))
+    ));
+}

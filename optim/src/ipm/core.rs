@@ -82,7 +82,9 @@ struct Errors {
 
 impl Errors {
     fn e(&self, compl: f64) -> f64 {
-        (self.dual_inf / self.s_d).max(self.primal_inf).max(compl / self.s_c)
+        (self.dual_inf / self.s_d)
+            .max(self.primal_inf)
+            .max(compl / self.s_c)
     }
 }
 
@@ -149,12 +151,16 @@ pub(crate) struct Core<'p> {
 }
 
 enum LsOutcome {
-    Accepted { alpha: f64, trials: usize, soc: bool },
+    Accepted { alpha: f64, trials: usize },
     Failed,
 }
 
 impl<'p> Core<'p> {
-    pub fn new(prob: &'p mut dyn StdProblem, settings: &Settings, start: &CoreStart) -> Result<Self, OptimError> {
+    pub fn new(
+        prob: &'p mut dyn StdProblem,
+        settings: &Settings,
+        start: &CoreStart,
+    ) -> Result<Self, OptimError> {
         let n = prob.n();
         let m = prob.m();
         let mut xl = prob.x_lower().to_vec();
@@ -239,7 +245,11 @@ impl<'p> Core<'p> {
 
     fn eval_fc(&mut self, ctx: &mut Ctx<'_, '_>, trial: bool) -> (f64, bool) {
         let t = Instant::now();
-        let (x, c) = if trial { (&self.x_t, &mut self.c_t) } else { (&self.x, &mut self.c) };
+        let (x, c) = if trial {
+            (&self.x_t, &mut self.c_t)
+        } else {
+            (&self.x, &mut self.c)
+        };
         let f = self.prob.eval_f(x);
         self.prob.eval_c(x, c);
         ctx.counters.objective_evals += 1;
@@ -357,8 +367,18 @@ impl<'p> Core<'p> {
         let zsum = norm_1(&self.zl) + norm_1(&self.zu);
         let smax = settings.s_max;
         let s_d = (smax.max((norm_1(&self.y) + zsum) / ((self.m + self.n) as f64).max(1.0))) / smax;
-        let s_c = if nz > 0 { smax.max(zsum / nz as f64) / smax } else { 1.0 };
-        Errors { dual_inf: norm_inf(&rd), primal_inf: norm_inf(&self.c), compl0, s_d, s_c }
+        let s_c = if nz > 0 {
+            smax.max(zsum / nz as f64) / smax
+        } else {
+            1.0
+        };
+        Errors {
+            dual_inf: norm_inf(&rd),
+            primal_inf: norm_inf(&self.c),
+            compl0,
+            s_d,
+            s_c,
+        }
     }
 
     fn compl_mu(&self, mu: f64) -> f64 {
@@ -376,7 +396,12 @@ impl<'p> Core<'p> {
         }
         let mut sum = 0.0;
         let mut min = f64::INFINITY;
-        for (s, z) in self.sl.iter().zip(&self.zl).chain(self.su.iter().zip(&self.zu)) {
+        for (s, z) in self
+            .sl
+            .iter()
+            .zip(&self.zl)
+            .chain(self.su.iter().zip(&self.zu))
+        {
             sum += s * z;
             min = min.min(s * z);
         }
@@ -387,7 +412,11 @@ impl<'p> Core<'p> {
     fn unscaled(&self, e: &Errors) -> (f64, f64, f64) {
         let (os, cs) = self.prob.scales();
         let primal = match cs {
-            Some(cs) => self.c.iter().zip(cs).fold(0.0f64, |a, (c, s)| a.max((c / s).abs())),
+            Some(cs) => self
+                .c
+                .iter()
+                .zip(cs)
+                .fold(0.0f64, |a, (c, s)| a.max((c / s).abs())),
             None => e.primal_inf,
         };
         (e.dual_inf / os, primal, e.compl0 / os)
@@ -450,7 +479,11 @@ impl<'p> Core<'p> {
             for step in 0..=settings.max_refinement_steps {
                 self.kkt.mat.sym_matvec(&self.sol, &mut self.resid);
                 for i in 0..nm {
-                    let extra = if i >= self.n { shift * self.sol[i] } else { 0.0 };
+                    let extra = if i >= self.n {
+                        shift * self.sol[i]
+                    } else {
+                        0.0
+                    };
                     self.resid[i] = self.rhs[i] - self.resid[i] - extra;
                 }
                 let rn = norm_inf(&self.resid) / bnorm;
@@ -482,7 +515,12 @@ impl<'p> Core<'p> {
 
     /// Assembles and factors `K`, correcting the inertia (W&B Algorithm IC), then solves for the
     /// Newton step of the current right-hand side.
-    fn compute_step(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings, use_hessian: bool) -> StepResult {
+    fn compute_step(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        use_hessian: bool,
+    ) -> StepResult {
         let t = Instant::now();
         for j in 0..self.n {
             self.diag_x[j] = 0.0;
@@ -493,39 +531,58 @@ impl<'p> Core<'p> {
         for (k, &j) in self.up.iter().enumerate() {
             self.diag_x[j] += self.zu[k] / self.su[k];
         }
-        let static_c = if self.m > 0 { settings.static_dual_regularization } else { 0.0 };
+        let static_c = if self.m > 0 {
+            settings.static_dual_regularization
+        } else {
+            0.0
+        };
         self.delta_c = static_c;
         self.delta_c_target = 0.0;
         self.delta_w = 0.0;
         if use_hessian {
-            self.kkt.assemble(&self.hess, &self.jac, &self.diag_x, -self.delta_c);
+            self.kkt
+                .assemble(&self.hess, &self.jac, &self.diag_x, -self.delta_c);
         } else {
             let zeros = vec![0.0; self.hess.len()];
-            self.kkt.assemble(&zeros, &self.jac, &self.diag_x, -self.delta_c);
+            self.kkt
+                .assemble(&zeros, &self.jac, &self.diag_x, -self.delta_c);
         }
         ctx.timing.kkt_assembly += t.elapsed();
         let mut singular_handled = false;
         loop {
-            let inertia = self.factor_current(ctx);
+            let mut inertia = self.factor_current(ctx);
             let good = match inertia {
                 Some(i) => i.positive == self.n && i.negative == self.m,
                 None => false,
             };
+            if settings.print_level > 2 {
+                println!(
+                    "    KKT: delta_w {:.2e} delta_c {:.2e} inertia {:?} (want {}+, {}-)",
+                    self.delta_w, self.delta_c, inertia, self.n, self.m
+                );
+            }
             if good {
                 let res = self.solve_refined(ctx, settings);
+                if settings.print_level > 2 {
+                    println!("    KKT: relative residual after refinement {res:.2e}");
+                }
                 if res <= 1e-5 {
                     if self.delta_w > 0.0 {
                         self.delta_w_last = self.delta_w;
                     }
                     return StepResult::Ok;
                 }
+                // Right inertia but refinement cannot reach the exact system: the matrix is
+                // (numerically) singular and static pivoting hid it.
+                inertia = None;
             }
             // Wrong inertia, singular, or inaccurate: perturb.
             let old_w = self.delta_w;
             let old_c = self.delta_c;
             if inertia.is_none() && !singular_handled && self.m > 0 {
                 singular_handled = true;
-                let dc = settings.jacobian_regularization_value * self.mu.powf(settings.jacobian_regularization_exponent);
+                let dc = settings.jacobian_regularization_value
+                    * self.mu.powf(settings.jacobian_regularization_exponent);
                 self.delta_c = dc.max(static_c);
                 self.delta_c_target = self.delta_c;
                 if old_w == 0.0 {
@@ -539,7 +596,8 @@ impl<'p> Core<'p> {
                 self.delta_w = if self.delta_w_last == 0.0 {
                     settings.first_hessian_perturbation
                 } else {
-                    (settings.perturb_dec_fact * self.delta_w_last).max(settings.min_hessian_perturbation)
+                    (settings.perturb_dec_fact * self.delta_w_last)
+                        .max(settings.min_hessian_perturbation)
                 };
             } else if self.delta_w_last == 0.0 {
                 self.delta_w *= settings.perturb_inc_fact_first;
@@ -550,7 +608,8 @@ impl<'p> Core<'p> {
                 return StepResult::Failed;
             }
             let t = Instant::now();
-            self.kkt.shift_diagonal(self.delta_w - old_w, self.delta_c - old_c);
+            self.kkt
+                .shift_diagonal(self.delta_w - old_w, self.delta_c - old_c);
             ctx.timing.kkt_assembly += t.elapsed();
         }
     }
@@ -598,7 +657,12 @@ impl<'p> Core<'p> {
     fn max_step_dual(&self) -> f64 {
         let tau = self.tau;
         let mut a: f64 = 1.0;
-        for (z, dz) in self.zl.iter().zip(&self.dzl).chain(self.zu.iter().zip(&self.dzu)) {
+        for (z, dz) in self
+            .zl
+            .iter()
+            .zip(&self.dzl)
+            .chain(self.zu.iter().zip(&self.dzu))
+        {
             if *dz < 0.0 {
                 a = a.min(-tau * z / dz);
             }
@@ -641,13 +705,15 @@ impl<'p> Core<'p> {
             return (false, false);
         }
         let switching = gphi_dx < 0.0
-            && alpha * (-gphi_dx).powf(settings.s_phi) > settings.switching_delta * theta.powf(settings.s_theta);
+            && alpha * (-gphi_dx).powf(settings.s_phi)
+                > settings.switching_delta * theta.powf(settings.s_theta);
         let eps = 10.0 * f64::EPSILON * phi.abs().max(1.0);
         if theta <= self.theta_min && switching {
             let armijo = phi_t - phi - eps <= settings.eta_phi * alpha * gphi_dx;
             return (armijo, true);
         }
-        let ok = theta_t <= (1.0 - settings.gamma_theta) * theta || phi_t - eps <= phi - settings.gamma_phi * theta;
+        let ok = theta_t <= (1.0 - settings.gamma_theta) * theta
+            || phi_t - eps <= phi - settings.gamma_phi * theta;
         (ok, false)
     }
 
@@ -656,7 +722,10 @@ impl<'p> Core<'p> {
         let a = if gphi_dx < 0.0 {
             let b = g.min(settings.gamma_phi * theta / (-gphi_dx));
             if theta <= self.theta_min {
-                b.min(settings.switching_delta * theta.powf(settings.s_theta) / (-gphi_dx).powf(settings.s_phi))
+                b.min(
+                    settings.switching_delta * theta.powf(settings.s_theta)
+                        / (-gphi_dx).powf(settings.s_phi),
+                )
             } else {
                 b
             }
@@ -689,17 +758,19 @@ impl<'p> Core<'p> {
             if ok {
                 let theta_t = norm_1(&self.c_t);
                 let phi_t = self.barrier_value(&self.x_t, f_t);
-                let (acc, ftype) = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
+                let (acc, ftype) =
+                    self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
                 if acc {
                     if !ftype {
                         self.augment_filter(theta, phi, settings);
                     }
                     self.f_t = f_t;
-                    break LsOutcome::Accepted { alpha, trials, soc: false };
+                    break LsOutcome::Accepted { alpha, trials };
                 }
                 if trials == 1 && theta_t >= theta && settings.max_soc > 0 && self.m > 0 {
-                    if let Some(a) = self.second_order_correction(ctx, settings, alpha, theta, phi) {
-                        break LsOutcome::Accepted { alpha: a, trials, soc: true };
+                    if let Some(a) = self.second_order_correction(ctx, settings, alpha, theta, phi)
+                    {
+                        break LsOutcome::Accepted { alpha: a, trials };
                     }
                 }
             }
@@ -720,9 +791,19 @@ impl<'p> Core<'p> {
         theta: f64,
         phi: f64,
     ) -> Option<f64> {
-        let mut c_soc: Vec<f64> = self.c.iter().zip(&self.c_t).map(|(c, ct)| alpha * c + ct).collect();
+        let mut c_soc: Vec<f64> = self
+            .c
+            .iter()
+            .zip(&self.c_t)
+            .map(|(c, ct)| alpha * c + ct)
+            .collect();
         let mut theta_old = theta;
-        let saved = (self.dx.clone(), self.dy.clone(), self.dzl.clone(), self.dzu.clone());
+        let saved = (
+            self.dx.clone(),
+            self.dy.clone(),
+            self.dzl.clone(),
+            self.dzu.clone(),
+        );
         for _ in 0..settings.max_soc {
             self.set_rhs(Some(&c_soc));
             self.solve_refined(ctx, settings);
@@ -738,7 +819,8 @@ impl<'p> Core<'p> {
             let theta_t = norm_1(&self.c_t);
             let phi_t = self.barrier_value(&self.x_t, f_t);
             let gphi_dx = dot(&self.grad_phi, &self.dx);
-            let (acc, ftype) = self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
+            let (acc, ftype) =
+                self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
             if acc {
                 if !ftype {
                     self.augment_filter(theta, phi, settings);
@@ -771,7 +853,12 @@ impl<'p> Core<'p> {
         let t = Instant::now();
         let ones = vec![1.0; self.n];
         let zeros = vec![0.0; self.hess.len()];
-        self.kkt.assemble(&zeros, &self.jac, &ones, -settings.static_dual_regularization);
+        self.kkt.assemble(
+            &zeros,
+            &self.jac,
+            &ones,
+            -settings.static_dual_regularization,
+        );
         ctx.timing.kkt_assembly += t.elapsed();
         self.delta_c = settings.static_dual_regularization;
         self.delta_c_target = 0.0;
@@ -818,7 +905,11 @@ impl<'p> Core<'p> {
         if settings.print_level == 0 {
             return;
         }
-        let rg = if info.delta_w > 0.0 { format!("{:5.1}", info.delta_w.log10()) } else { "    -".to_string() };
+        let rg = if info.delta_w > 0.0 {
+            format!("{:5.1}", info.delta_w.log10())
+        } else {
+            "    -".to_string()
+        };
         println!(
             "{:4}{} {:14.7e} {:8.2e} {:8.2e} {:5.1} {:8.2e} {} {:8.2e} {:8.2e} {:3}",
             info.iter,
@@ -844,16 +935,32 @@ impl<'p> Core<'p> {
         for (k, &j) in self.up.iter().enumerate() {
             zu[j] = self.zu[k];
         }
-        CoreOutput { status, x: self.x.clone(), y: self.y.clone(), z_l: zl, z_u: zu, mu: self.mu, early_stopped: early }
+        CoreOutput {
+            status,
+            x: self.x.clone(),
+            y: self.y.clone(),
+            z_l: zl,
+            z_u: zu,
+            mu: self.mu,
+            early_stopped: early,
+        }
     }
 
     /// Runs the algorithm from `start`.
-    pub fn run(&mut self, ctx: &mut Ctx<'_, '_>, start: &CoreStart) -> Result<CoreOutput, OptimError> {
+    pub fn run(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        start: &CoreStart,
+    ) -> Result<CoreOutput, OptimError> {
         let settings = ctx.settings;
         // Symbolic analysis once per run.
         {
             let t = Instant::now();
-            self.solver.analyse(self.n + self.m, &self.kkt.mat.col_ptr, &self.kkt.mat.row_idx)?;
+            self.solver.analyse(
+                self.n + self.m,
+                &self.kkt.mat.col_ptr,
+                &self.kkt.mat.row_idx,
+            )?;
             ctx.timing.factorization += t.elapsed();
         }
         // Initial point (W&B Sect. 3.6).
@@ -874,10 +981,16 @@ impl<'p> Core<'p> {
         let (f, ok) = self.eval_fc(ctx, false);
         self.f = f;
         if !ok {
-            return Err(OptimError::NonFinite { iter: ctx.iter, what: "objective or constraints at the initial point" });
+            return Err(OptimError::NonFinite {
+                iter: ctx.iter,
+                what: "objective or constraints at the initial point",
+            });
         }
         if !self.eval_derivs(ctx) {
-            return Err(OptimError::NonFinite { iter: ctx.iter, what: "gradient or Jacobian at the initial point" });
+            return Err(OptimError::NonFinite {
+                iter: ctx.iter,
+                what: "gradient or Jacobian at the initial point",
+            });
         }
         match &start.y {
             Some(y) => self.y.copy_from_slice(y),
@@ -886,7 +999,10 @@ impl<'p> Core<'p> {
         let theta0 = norm_1(&self.c);
         self.theta_max = 1e4 * theta0.max(1.0);
         self.theta_min = 1e-4 * theta0.max(1.0);
-        let mu_floor = settings.mu_min.max(settings.tol / (settings.barrier_tol_factor + 1.0)).min(self.mu);
+        let mu_floor = settings
+            .mu_min
+            .max(settings.tol / (settings.barrier_tol_factor + 1.0))
+            .min(self.mu);
         let mut acceptable_count = 0usize;
         let mut last = IterationInfo {
             iter: ctx.iter,
@@ -999,7 +1115,9 @@ impl<'p> Core<'p> {
                 }
                 loop {
                     let e_mu = err.e(self.compl_mu(self.mu));
-                    if (e_mu <= settings.barrier_tol_factor * self.mu || force_mu_decrease) && self.mu > mu_floor {
+                    if (e_mu <= settings.barrier_tol_factor * self.mu || force_mu_decrease)
+                        && self.mu > mu_floor
+                    {
                         force_mu_decrease = false;
                         let new_mu = (settings.mu_linear_decrease * self.mu)
                             .min(self.mu.powf(settings.mu_superlinear_power))
@@ -1018,7 +1136,10 @@ impl<'p> Core<'p> {
             }
             // search direction
             if !self.eval_hessian(ctx) {
-                return Err(OptimError::NonFinite { iter: ctx.iter, what: "Hessian" });
+                return Err(OptimError::NonFinite {
+                    iter: ctx.iter,
+                    what: "Hessian",
+                });
             }
             self.compute_grad_phi();
             self.set_rhs(None);
@@ -1056,7 +1177,7 @@ impl<'p> Core<'p> {
                 } else {
                     tiny_count = 0;
                     match self.line_search(ctx, settings) {
-                        LsOutcome::Accepted { alpha, trials: tr, soc: _ } => {
+                        LsOutcome::Accepted { alpha, trials: tr } => {
                             accepted_alpha = alpha;
                             trials = tr;
                         }
@@ -1078,7 +1199,11 @@ impl<'p> Core<'p> {
                     continue;
                 }
                 if self.restoration || !settings.restoration {
-                    let st = if step_ok { Status::RestorationFailed } else { Status::ErrorInStepComputation };
+                    let st = if step_ok {
+                        Status::RestorationFailed
+                    } else {
+                        Status::ErrorInStepComputation
+                    };
                     return Ok(self.output(st, false));
                 }
                 if e0 <= settings.acceptable_tol && pr_u <= settings.acceptable_constr_viol_tol {
@@ -1123,7 +1248,10 @@ impl<'p> Core<'p> {
                 self.zu[k] = self.zu[k].min(ks * mu / s).max(mu / (ks * s));
             }
             if !self.eval_derivs(ctx) {
-                return Err(OptimError::NonFinite { iter: ctx.iter, what: "gradient or Jacobian" });
+                return Err(OptimError::NonFinite {
+                    iter: ctx.iter,
+                    what: "gradient or Jacobian",
+                });
             }
             ctx.iter += 1;
             if self.restoration {
@@ -1140,7 +1268,11 @@ impl<'p> Core<'p> {
     /// Feasibility restoration (W&B Sect. 3.3): minimise `ρ‖p + n‖₁ + ζ/2 ‖D_R (x − x_R)‖²`
     /// s.t. `c(x) − p + n = 0` with the same IPM, stopping as soon as the outer filter accepts.
     /// Returns `Some(status)` when the outer solve must stop.
-    fn restoration_phase(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> Result<Option<Status>, OptimError> {
+    fn restoration_phase(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+    ) -> Result<Option<Status>, OptimError> {
         let theta = norm_1(&self.c);
         let phi = self.barrier_value(&self.x, self.f);
         self.augment_filter(theta, phi, settings);
@@ -1201,7 +1333,8 @@ impl<'p> Core<'p> {
             println!("  entering restoration phase (theta = {theta:.3e}, mu_R = {mu_r:.3e})");
         }
         let out = {
-            let mut rp = RestorationProblem::new(&mut *self.prob, x_ref, rho, self.mu.sqrt(), outer);
+            let mut rp =
+                RestorationProblem::new(&mut *self.prob, x_ref, rho, self.mu.sqrt(), outer);
             let mut inner = Core::new(&mut rp, settings, &start)?;
             inner.delta_w_last = self.delta_w_last;
             inner.run(ctx, &start)?
@@ -1219,7 +1352,10 @@ impl<'p> Core<'p> {
             }
             me.f = f;
             if !me.eval_derivs(ctx) {
-                return Err(OptimError::NonFinite { iter: ctx.iter, what: "gradient or Jacobian after restoration" });
+                return Err(OptimError::NonFinite {
+                    iter: ctx.iter,
+                    what: "gradient or Jacobian after restoration",
+                });
             }
             for (k, &j) in me.lo.iter().enumerate() {
                 me.zl[k] = out.z_l[j];
@@ -1249,7 +1385,10 @@ impl<'p> Core<'p> {
                 self.prob.eval_c(&x_in, &mut c);
                 let (_, cs) = self.prob.scales();
                 let viol = match cs {
-                    Some(cs) => c.iter().zip(cs).fold(0.0f64, |a, (c, s)| a.max((c / s).abs())),
+                    Some(cs) => c
+                        .iter()
+                        .zip(cs)
+                        .fold(0.0f64, |a, (c, s)| a.max((c / s).abs())),
                     None => norm_inf(&c),
                 };
                 if viol > settings.constr_viol_tol {

@@ -78,7 +78,12 @@ impl LowerCsc {
 /// [`solve`](KktSolver::solve).
 pub trait KktSolver {
     /// Symbolic analysis (ordering, elimination tree, storage) of the lower-triangle pattern.
-    fn analyse(&mut self, dim: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<(), OptimError>;
+    fn analyse(
+        &mut self,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+    ) -> Result<(), OptimError>;
     /// Numeric factorization of the matrix with the analysed pattern and these values.
     ///
     /// Returns the inertia of the computed factor, or `None` when a pivot was exactly zero or
@@ -100,6 +105,15 @@ pub struct FaerLdlt {
     factored: bool,
     /// Force the simplicial (`Some(false)`) or supernodal (`Some(true)`) variant; `None` = automatic.
     pub supernodal: Option<bool>,
+    /// Static pivoting: pivots with |d| ≤ `pivot_epsilon` are replaced by `±pivot_delta`
+    /// (absolute values; sign kept, zero → +; not relative to max|K_ij|, which the barrier
+    /// terms Σ make as large as 1e10). Structurally zero diagonals (states
+    /// without cost in collocation NLPs) otherwise stop the unpivoted LDLᵀ when AMD eliminates
+    /// them first; the caller refines against the exact matrix. 0 disables (exact zero pivots
+    /// then report a singular matrix).
+    pub pivot_epsilon: f64,
+    /// Replacement magnitude for tiny pivots (see `pivot_epsilon`).
+    pub pivot_delta: f64,
 }
 
 impl std::fmt::Debug for FaerLdlt {
@@ -116,7 +130,7 @@ impl std::fmt::Debug for FaerLdlt {
 impl FaerLdlt {
     /// A solver that picks simplicial/supernodal automatically (faer's flop-ratio rule).
     pub fn new() -> Self {
-        Self::default()
+        Self { pivot_epsilon: 1e-14, pivot_delta: 1e-4, ..Self::default() }
     }
 
     /// Whether the symbolic analysis chose the supernodal variant.
@@ -175,10 +189,16 @@ impl FaerLdlt {
 }
 
 impl KktSolver for FaerLdlt {
-    fn analyse(&mut self, dim: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<(), OptimError> {
+    fn analyse(
+        &mut self,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+    ) -> Result<(), OptimError> {
         self.col_ptr = col_ptr.to_vec();
         self.row_idx = row_idx.to_vec();
-        let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, &self.col_ptr, None, &self.row_idx);
+        let pattern =
+            SymbolicSparseColMatRef::new_checked(dim, dim, &self.col_ptr, None, &self.row_idx);
         let threshold = match self.supernodal {
             None => SupernodalThreshold::AUTO,
             Some(true) => SupernodalThreshold::FORCE_SUPERNODAL,
@@ -199,10 +219,9 @@ impl KktSolver for FaerLdlt {
             sym.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, params),
             sym.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]);
-        self.mem = Some(
-            MemBuffer::try_new(req)
-                .map_err(|_| OptimError::Factorization("out of memory for the KKT workspace".into()))?,
-        );
+        self.mem = Some(MemBuffer::try_new(req).map_err(|_| {
+            OptimError::Factorization("out of memory for the KKT workspace".into())
+        })?);
         self.l_values = vec![0.0; sym.len_val()];
         self.symbolic = Some(sym);
         self.factored = false;
@@ -219,11 +238,16 @@ impl KktSolver for FaerLdlt {
             values,
         );
         let stack = MemStack::new(mem);
+        let regularization = LdltRegularization {
+            dynamic_regularization_signs: None,
+            dynamic_regularization_delta: self.pivot_delta,
+            dynamic_regularization_epsilon: self.pivot_epsilon,
+        };
         let res = sym.factorize_numeric_ldlt(
             &mut self.l_values,
             a,
             Side::Lower,
-            LdltRegularization::default(),
+            regularization,
             Par::Seq,
             stack,
             Default::default(),
@@ -247,7 +271,12 @@ impl KktSolver for FaerLdlt {
         let n = rhs.len();
         let ldlt = LdltRef::<usize, f64>::new(sym, &self.l_values);
         let stack = MemStack::new(mem);
-        ldlt.solve_in_place_with_conj(Conj::No, MatMut::from_column_major_slice_mut(rhs, n, 1), Par::Seq, stack);
+        ldlt.solve_in_place_with_conj(
+            Conj::No,
+            MatMut::from_column_major_slice_mut(rhs, n, 1),
+            Par::Seq,
+            stack,
+        );
     }
 }
 
@@ -393,7 +422,13 @@ mod tests {
         (0..n).map(|i| a[i][i]).collect()
     }
 
-    fn check(n: usize, m: usize, hess: &[(usize, usize, f64)], jac: &[(usize, usize, f64)], sup: Option<bool>) {
+    fn check(
+        n: usize,
+        m: usize,
+        hess: &[(usize, usize, f64)],
+        jac: &[(usize, usize, f64)],
+        sup: Option<bool>,
+    ) {
         let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
         let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
         let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
@@ -417,7 +452,10 @@ mod tests {
             negative: eig.iter().filter(|&&e| e < 0.0).count(),
             zero: 0,
         };
-        let mut s = FaerLdlt { supernodal: sup, ..Default::default() };
+        let mut s = FaerLdlt {
+            supernodal: sup,
+            ..Default::default()
+        };
         s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
         let inertia = s.factor(&pat.mat.values).expect("nonsingular");
         assert_eq!(inertia, expect, "supernodal={sup:?}");
@@ -425,8 +463,20 @@ mod tests {
         let mut x = b.clone();
         s.solve(&mut x);
         let mut r = vec![0.0; dim];
+        // Unpivoted LDLᵀ on an indefinite matrix loses a few digits; two refinement steps
+        // (as the IPM does) recover them.
+        for _ in 0..2 {
+            pat.mat.sym_matvec(&x, &mut r);
+            let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
+            s.solve(&mut c);
+            x.iter_mut().zip(&c).for_each(|(x, c)| *x += c);
+        }
         pat.mat.sym_matvec(&x, &mut r);
-        let res = r.iter().zip(&b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let res = r
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert!(res < 1e-8, "residual {res}");
     }
 
@@ -443,7 +493,13 @@ mod tests {
             (3, 2, -0.2),
             (3, 3, 0.1), // duplicate entry: summed
         ];
-        let jac = vec![(0, 0, 1.0), (0, 1, 2.0), (1, 2, 1.0), (1, 3, -1.0), (1, 1, 0.5)];
+        let jac = vec![
+            (0, 0, 1.0),
+            (0, 1, 2.0),
+            (1, 2, 1.0),
+            (1, 3, -1.0),
+            (1, 1, 0.5),
+        ];
         for sup in [None, Some(true), Some(false)] {
             check(4, 2, &hess, &jac, sup);
         }
@@ -452,7 +508,15 @@ mod tests {
         let m = 20;
         let mut hess = Vec::new();
         for i in 0..n {
-            hess.push((i, i, if i % 7 == 0 { -2.0 } else { 4.0 + (i as f64).cos() }));
+            hess.push((
+                i,
+                i,
+                if i % 7 == 0 {
+                    -2.0
+                } else {
+                    4.0 + (i as f64).cos()
+                },
+            ));
             if i + 1 < n {
                 hess.push((i + 1, i, 0.9));
             }
@@ -463,7 +527,11 @@ mod tests {
         let mut jac = Vec::new();
         for r in 0..m {
             for k in 0..4 {
-                jac.push((r, (3 * r + k * 2) % n, 1.0 + 0.1 * k as f64 + 0.01 * r as f64));
+                jac.push((
+                    r,
+                    (3 * r + k * 2) % n,
+                    1.0 + 0.1 * k as f64 + 0.01 * r as f64,
+                ));
             }
         }
         for sup in [Some(true), Some(false)] {
@@ -476,8 +544,43 @@ mod tests {
         // x-block zero and no constraint coupling on variable 1: exact zero pivot.
         let mut pat = KktPattern::new(2, 1, &[], &[(0, 0)]);
         pat.assemble(&[], &[1.0], &[0.0, 0.0], 0.0);
-        let mut s = FaerLdlt::new();
+        let mut s = FaerLdlt { pivot_epsilon: 0.0, pivot_delta: 0.0, ..FaerLdlt::new() };
         s.analyse(3, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
         assert!(s.factor(&pat.mat.values).is_none());
+    }
+
+    /// Structurally zero primal diagonals (variables without curvature, like collocation states
+    /// without cost): static pivoting keeps the factorization alive, the inertia stays (n, m)
+    /// and iterative refinement recovers the exact solution.
+    #[test]
+    fn static_pivoting_with_zero_primal_diagonal() {
+        // chain: x0 -(c0)- x1 -(c1)- x2, cost only on x2; n = 3, m = 2, H = diag(0, 0, 1)
+        let hess = [(2, 2)];
+        let jac = [(0, 0), (0, 1), (1, 1), (1, 2)];
+        let mut pat = KktPattern::new(3, 2, &hess, &jac);
+        pat.assemble(&[1.0], &[1.0, -1.0, 1.0, -1.0], &[0.0; 3], -1e-9);
+        for sup in [Some(true), Some(false)] {
+            let mut s = FaerLdlt { supernodal: sup, ..FaerLdlt::new() };
+            s.analyse(5, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+            // With pivoting disabled the zero pivot (if eliminated first) would stop LDLᵀ;
+            // with it the factor exists and has the KKT inertia.
+            let inertia = s.factor(&pat.mat.values).expect("factor");
+            assert_eq!(inertia, Inertia { positive: 3, negative: 2, zero: 0 });
+            let b = [1.0, -2.0, 0.5, 0.3, -0.7];
+            let mut x = b;
+            s.solve(&mut x);
+            let mut r = [0.0; 5];
+            for _ in 0..5 {
+                pat.mat.sym_matvec(&x, &mut r);
+                let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
+                s.solve(&mut c);
+                for i in 0..5 {
+                    x[i] += c[i];
+                }
+            }
+            pat.mat.sym_matvec(&x, &mut r);
+            let res = r.iter().zip(&b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(res < 1e-12, "refined residual {res}");
+        }
     }
 }

@@ -77,7 +77,11 @@ pub fn solve_with(
                 ("warm-start z_u", w.z_u.len(), n),
             ] {
                 if len != exp {
-                    return Err(OptimError::DimensionMismatch { what, expected: exp, found: len });
+                    return Err(OptimError::DimensionMismatch {
+                        what,
+                        expected: exp,
+                        found: len,
+                    });
                 }
             }
             w.x.clone()
@@ -163,7 +167,9 @@ pub fn solve_with(
     for j in 0..n {
         x[j] = x[j].clamp(reform.x_l_user[j], reform.x_u_user[j]);
     }
-    let lambda: Vec<f64> = (0..m).map(|i| out.y[i] * reform.con_scale[i] / os).collect();
+    let lambda: Vec<f64> = (0..m)
+        .map(|i| out.y[i] * reform.con_scale[i] / os)
+        .collect();
     let mut z_l = vec![0.0; n];
     let mut z_u = vec![0.0; n];
     for (k, &j) in reform.free.iter().enumerate() {
@@ -216,10 +222,12 @@ pub fn solve_with(
             let s = reform.slack[i];
             let gi = g[i];
             if reform.g_l[i].is_finite() {
-                compl = compl.max(((gi - reform.g_l[i]) * out.z_l[s] * reform.con_scale[i] / os).abs());
+                compl =
+                    compl.max(((gi - reform.g_l[i]) * out.z_l[s] * reform.con_scale[i] / os).abs());
             }
             if reform.g_u[i].is_finite() {
-                compl = compl.max(((reform.g_u[i] - gi) * out.z_u[s] * reform.con_scale[i] / os).abs());
+                compl =
+                    compl.max(((reform.g_u[i] - gi) * out.z_u[s] * reform.con_scale[i] / os).abs());
             }
         }
     }

@@ -86,24 +86,37 @@ impl DerivativeReport {
 /// full symmetric matrix built from the lower-triangle triplets) against differences of
 /// `σ_f ∇f + Jᵀλ`. Costs `O(n)` function and derivative evaluations (one column at a time, no
 /// dense `n × n` storage).
-pub fn check_derivatives(nlp: &dyn Nlp, x: &[f64], obj_factor: f64, lambda: &[f64], h: f64) -> DerivativeReport {
+pub fn check_derivatives(
+    nlp: &dyn Nlp,
+    x: &[f64],
+    obj_factor: f64,
+    lambda: &[f64],
+    h: f64,
+) -> DerivativeReport {
     let n = nlp.num_variables();
     let m = nlp.num_constraints();
     let mut rep = DerivativeReport::default();
     if x.len() != n || lambda.len() != m {
-        rep.pattern_errors.push(format!("x has {} entries (n = {n}), lambda {} (m = {m})", x.len(), lambda.len()));
+        rep.pattern_errors.push(format!(
+            "x has {} entries (n = {n}), lambda {} (m = {m})",
+            x.len(),
+            lambda.len()
+        ));
         return rep;
     }
     let jp = nlp.jacobian_structure();
     let hp = nlp.hessian_structure();
     for (k, &(r, c)) in jp.iter().enumerate() {
         if r >= m || c >= n {
-            rep.pattern_errors.push(format!("jacobian entry {k} = ({r}, {c}) out of range"));
+            rep.pattern_errors
+                .push(format!("jacobian entry {k} = ({r}, {c}) out of range"));
         }
     }
     for (k, &(r, c)) in hp.iter().enumerate() {
         if r >= n || c >= n || r < c {
-            rep.pattern_errors.push(format!("hessian entry {k} = ({r}, {c}) out of range or above the diagonal"));
+            rep.pattern_errors.push(format!(
+                "hessian entry {k} = ({r}, {c}) out of range or above the diagonal"
+            ));
         }
     }
     if !rep.pattern_errors.is_empty() {

@@ -46,7 +46,13 @@ pub(crate) struct RestorationProblem<'a> {
 }
 
 impl<'a> RestorationProblem<'a> {
-    pub fn new(orig: &'a mut dyn StdProblem, x_ref: Vec<f64>, rho: f64, zeta: f64, outer: OuterInfo) -> Self {
+    pub fn new(
+        orig: &'a mut dyn StdProblem,
+        x_ref: Vec<f64>,
+        rho: f64,
+        zeta: f64,
+        outer: OuterInfo,
+    ) -> Self {
         let n0 = orig.n();
         let m = orig.m();
         let mut xl = outer.xl.clone();
@@ -64,7 +70,10 @@ impl<'a> RestorationProblem<'a> {
         for j in 0..n0 {
             hess_pat.push((j, j));
         }
-        let dr2 = x_ref.iter().map(|v| (1.0f64).min(1.0 / v.abs()).powi(2)).collect();
+        let dr2 = x_ref
+            .iter()
+            .map(|v| (1.0f64).min(1.0 / v.abs()).powi(2))
+            .collect();
         Self {
             orig,
             n0,
@@ -133,7 +142,8 @@ impl StdProblem for RestorationProblem<'_> {
         }
     }
     fn eval_hess(&mut self, w: &[f64], obj_factor: f64, y: &[f64], v: &mut [f64]) {
-        self.orig.eval_hess(&w[..self.n0], 0.0, y, &mut v[..self.n_orig_hess]);
+        self.orig
+            .eval_hess(&w[..self.n0], 0.0, y, &mut v[..self.n_orig_hess]);
         for j in 0..self.n0 {
             v[self.n_orig_hess + j] = obj_factor * self.zeta * self.dr2[j];
         }
@@ -180,7 +190,10 @@ impl StdProblem for RestorationProblem<'_> {
         if !phi.is_finite() {
             return false;
         }
-        self.outer.filter.iter().all(|&(ft, fp)| theta < ft || phi < fp)
+        self.outer
+            .filter
+            .iter()
+            .all(|&(ft, fp)| theta < ft || phi < fp)
     }
     fn scales(&self) -> (f64, Option<&[f64]>) {
         (1.0, None)

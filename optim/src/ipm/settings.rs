@@ -144,7 +144,7 @@ pub struct Settings {
     /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this (default: 1e20).
     pub diverging_iterates_tol: f64,
     /// Stop with `Unbounded` if the unscaled objective drops below −this at a feasible iterate
-    /// (default: 1e20).
+    /// (default: 1e15; the collocation objectives of this project are O(1)–O(1e4)).
     pub unbounded_objective: f64,
     /// Scaling cap s_max of the optimality error (default: 100).
     pub s_max: f64,
@@ -209,7 +209,7 @@ impl Default for Settings {
             resto_penalty: 1000.0,
             resto_required_reduction: 0.9,
             diverging_iterates_tol: 1e20,
-            unbounded_objective: 1e20,
+            unbounded_objective: 1e15,
             s_max: 100.0,
             print_level: 0,
         }
@@ -223,14 +223,20 @@ impl Settings {
             if v > 0.0 && v.is_finite() {
                 Ok(())
             } else {
-                Err(OptimError::InvalidSetting { name, msg: format!("must be positive and finite, got {v}") })
+                Err(OptimError::InvalidSetting {
+                    name,
+                    msg: format!("must be positive and finite, got {v}"),
+                })
             }
         };
         let unit = |name: &'static str, v: f64| {
             if v > 0.0 && v < 1.0 {
                 Ok(())
             } else {
-                Err(OptimError::InvalidSetting { name, msg: format!("must be in (0, 1), got {v}") })
+                Err(OptimError::InvalidSetting {
+                    name,
+                    msg: format!("must be in (0, 1), got {v}"),
+                })
             }
         };
         pos("tol", self.tol)?;
@@ -238,7 +244,10 @@ impl Settings {
         pos("dual_inf_tol", self.dual_inf_tol)?;
         pos("compl_inf_tol", self.compl_inf_tol)?;
         pos("acceptable_tol", self.acceptable_tol)?;
-        pos("acceptable_constr_viol_tol", self.acceptable_constr_viol_tol)?;
+        pos(
+            "acceptable_constr_viol_tol",
+            self.acceptable_constr_viol_tol,
+        )?;
         pos("mu_init", self.mu_init)?;
         pos("mu_min", self.mu_min)?;
         unit("mu_linear_decrease", self.mu_linear_decrease)?;
@@ -252,18 +261,30 @@ impl Settings {
         unit("tau_min", self.tau_min)?;
         pos("bound_push", self.bound_push)?;
         if !(self.bound_frac > 0.0 && self.bound_frac <= 0.5) {
-            return Err(OptimError::InvalidSetting { name: "bound_frac", msg: "must be in (0, 0.5]".into() });
+            return Err(OptimError::InvalidSetting {
+                name: "bound_frac",
+                msg: "must be in (0, 0.5]".into(),
+            });
         }
         pos("bound_mult_init", self.bound_mult_init)?;
         if !(self.bound_relax_factor >= 0.0) {
-            return Err(OptimError::InvalidSetting { name: "bound_relax_factor", msg: "must be ≥ 0".into() });
+            return Err(OptimError::InvalidSetting {
+                name: "bound_relax_factor",
+                msg: "must be ≥ 0".into(),
+            });
         }
         pos("warm_start_bound_push", self.warm_start_bound_push)?;
-        pos("warm_start_mult_bound_push", self.warm_start_mult_bound_push)?;
+        pos(
+            "warm_start_mult_bound_push",
+            self.warm_start_mult_bound_push,
+        )?;
         pos("kappa_sigma", self.kappa_sigma)?;
         pos("scaling_max_gradient", self.scaling_max_gradient)?;
         pos("obj_scaling_factor", self.obj_scaling_factor)?;
-        pos("first_hessian_perturbation", self.first_hessian_perturbation)?;
+        pos(
+            "first_hessian_perturbation",
+            self.first_hessian_perturbation,
+        )?;
         pos("max_hessian_perturbation", self.max_hessian_perturbation)?;
         unit("perturb_dec_fact", self.perturb_dec_fact)?;
         pos("perturb_inc_fact", self.perturb_inc_fact)?;
@@ -277,7 +298,10 @@ impl Settings {
         pos("resto_penalty", self.resto_penalty)?;
         pos("s_max", self.s_max)?;
         if !(self.max_wall_time > 0.0) {
-            return Err(OptimError::InvalidSetting { name: "max_wall_time", msg: "must be positive".into() });
+            return Err(OptimError::InvalidSetting {
+                name: "max_wall_time",
+                msg: "must be positive".into(),
+            });
         }
         Ok(())
     }

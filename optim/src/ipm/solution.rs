@@ -149,6 +149,11 @@ pub struct WarmStart {
 
 impl From<&Solution> for WarmStart {
     fn from(s: &Solution) -> Self {
-        Self { x: s.x.clone(), lambda: s.lambda.clone(), z_l: s.z_l.clone(), z_u: s.z_u.clone() }
+        Self {
+            x: s.x.clone(),
+            lambda: s.lambda.clone(),
+            z_l: s.z_l.clone(),
+            z_u: s.z_u.clone(),
+        }
     }
 }

@@ -93,7 +93,11 @@ impl<'a> Reformulated<'a> {
         let n = nlp.num_variables();
         let m = nlp.num_constraints();
         if x0.len() != n {
-            return Err(OptimError::DimensionMismatch { what: "initial point", expected: n, found: x0.len() });
+            return Err(OptimError::DimensionMismatch {
+                what: "initial point",
+                expected: n,
+                found: x0.len(),
+            });
         }
         let mut x_l = vec![0.0; n];
         let mut x_u = vec![0.0; n];
@@ -102,8 +106,18 @@ impl<'a> Reformulated<'a> {
         let mut g_u = vec![0.0; m];
         nlp.constraint_bounds(&mut g_l, &mut g_u);
         for j in 0..n {
-            if x_l[j].is_nan() || x_u[j].is_nan() || x_l[j] > x_u[j] || x_l[j] >= BOUND_INF || x_u[j] <= -BOUND_INF {
-                return Err(OptimError::InvalidBounds { what: "variable", index: j, lower: x_l[j], upper: x_u[j] });
+            if x_l[j].is_nan()
+                || x_u[j].is_nan()
+                || x_l[j] > x_u[j]
+                || x_l[j] >= BOUND_INF
+                || x_u[j] <= -BOUND_INF
+            {
+                return Err(OptimError::InvalidBounds {
+                    what: "variable",
+                    index: j,
+                    lower: x_l[j],
+                    upper: x_u[j],
+                });
             }
             if is_inf(x_l[j]) {
                 x_l[j] = f64::NEG_INFINITY;
@@ -113,8 +127,18 @@ impl<'a> Reformulated<'a> {
             }
         }
         for i in 0..m {
-            if g_l[i].is_nan() || g_u[i].is_nan() || g_l[i] > g_u[i] || g_l[i] >= BOUND_INF || g_u[i] <= -BOUND_INF {
-                return Err(OptimError::InvalidBounds { what: "constraint", index: i, lower: g_l[i], upper: g_u[i] });
+            if g_l[i].is_nan()
+                || g_u[i].is_nan()
+                || g_l[i] > g_u[i]
+                || g_l[i] >= BOUND_INF
+                || g_u[i] <= -BOUND_INF
+            {
+                return Err(OptimError::InvalidBounds {
+                    what: "constraint",
+                    index: i,
+                    lower: g_l[i],
+                    upper: g_u[i],
+                });
             }
             if is_inf(g_l[i]) {
                 g_l[i] = f64::NEG_INFINITY;
@@ -126,13 +150,23 @@ impl<'a> Reformulated<'a> {
         let user_jac_pat = nlp.jacobian_structure();
         for (k, &(r, c)) in user_jac_pat.iter().enumerate() {
             if r >= m || c >= n {
-                return Err(OptimError::InvalidPattern { what: "jacobian", index: k, row: r, col: c });
+                return Err(OptimError::InvalidPattern {
+                    what: "jacobian",
+                    index: k,
+                    row: r,
+                    col: c,
+                });
             }
         }
         let user_hess_pat = nlp.hessian_structure();
         for (k, &(r, c)) in user_hess_pat.iter().enumerate() {
             if r >= n || c >= n || r < c {
-                return Err(OptimError::InvalidPattern { what: "hessian", index: k, row: r, col: c });
+                return Err(OptimError::InvalidPattern {
+                    what: "hessian",
+                    index: k,
+                    row: r,
+                    col: c,
+                });
             }
         }
         let mut free = Vec::new();
@@ -279,7 +313,11 @@ impl<'a> Reformulated<'a> {
             x[k] = x_user[j];
         }
         for j in 0..self.n_user {
-            self.xu_full[j] = if self.inv[j] == usize::MAX { self.x_l_user[j] } else { x_user[j] };
+            self.xu_full[j] = if self.inv[j] == usize::MAX {
+                self.x_l_user[j]
+            } else {
+                x_user[j]
+            };
         }
         self.nlp.constraints(&self.xu_full, &mut self.g_buf);
         for i in 0..self.m_user {
@@ -303,11 +341,6 @@ impl<'a> Reformulated<'a> {
         for (k, &j) in self.free.iter().enumerate() {
             self.xu_full[j] = x[k];
         }
-    }
-
-    /// The user problem.
-    pub fn nlp(&self) -> &'a dyn Nlp {
-        self.nlp
     }
 
     /// User Jacobian pattern.
@@ -375,8 +408,12 @@ impl StdProblem for Reformulated<'_> {
             self.lam_buf[i] = y[i] * self.con_scale[i];
         }
         debug_assert_eq!(self.hess_buf.len(), self.user_hess_len);
-        self.nlp
-            .hessian_values(&self.xu_full, obj_factor * self.obj_scale, &self.lam_buf, &mut self.hess_buf);
+        self.nlp.hessian_values(
+            &self.xu_full,
+            obj_factor * self.obj_scale,
+            &self.lam_buf,
+            &mut self.hess_buf,
+        );
         for (k, &src) in self.hess_src.iter().enumerate() {
             v[k] = self.hess_buf[src];
         }

@@ -1,2 +1,3 @@
 //! Shared test problems.
+pub mod cheb;
 pub mod double_integrator;

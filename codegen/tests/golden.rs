@@ -1,0 +1,120 @@
+//! Golden file and determinism of the emitter, plus the golden file compiled and checked
+//! against the textbook closed forms of a planar two-link arm (M, C q̇, g, J).
+//!
+//! Refresh the golden file with `BF_OVERWRITE_GOLDEN=1 cargo test --release -p bf-codegen
+//! --test golden` after an intended change of the emitted code.
+
+#[allow(clippy::all, clippy::pedantic, missing_docs, dead_code)]
+mod planar2 {
+    include!("golden/planar2.rs");
+}
+
+use bf_codegen::{Scene, generate};
+
+const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden");
+
+fn planar2_scene() -> (Scene, String) {
+    let path = format!("{DIR}/planar2.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    (Scene::from_toml_str(&text, &path).unwrap(), text)
+}
+
+#[test]
+fn golden_file_is_current() {
+    let (scene, text) = planar2_scene();
+    let code = generate(&scene, &text).unwrap().code;
+    let path = format!("{DIR}/planar2.rs");
+    if std::env::var("BF_OVERWRITE_GOLDEN").as_deref() == Ok("1") {
+        std::fs::write(&path, &code).unwrap();
+        return;
+    }
+    let golden = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        golden == code,
+        "emitted code differs from {path}; if intended, rerun with BF_OVERWRITE_GOLDEN=1"
+    );
+}
+
+#[test]
+fn generation_is_deterministic() {
+    for name in ["paper", "human", "puma560", "iiwa7"] {
+        let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let text = std::fs::read_to_string(&path).unwrap();
+        let scene = Scene::from_toml_str(&text, &path).unwrap();
+        let a = generate(&scene, &text).unwrap();
+        // A second run in another thread (fresh hash seeds for every HashMap).
+        let (s2, t2) = (scene.clone(), text.clone());
+        let b = std::thread::spawn(move || generate(&s2, &t2).unwrap())
+            .join()
+            .unwrap();
+        assert!(a.code == b.code, "{name}: output differs between runs");
+        assert_eq!(a.report.kernels, b.report.kernels);
+        assert!(a.code.starts_with("// @generated"));
+    }
+}
+
+#[test]
+fn planar_arm_matches_textbook_closed_forms() {
+    let (l1, l2, lc1, lc2) = (1.0, 0.8, 0.45, 0.3);
+    let (i1, i2, m1) = (0.1, 0.05, 1.2);
+    let g0 = 9.81;
+    for (k, m2) in [0.7, 1.9, 1e-3].into_iter().enumerate() {
+        let p = [m2];
+        for j in 0..20 {
+            let t = (k * 20 + j) as f64;
+            let q = [(1.3 * t).sin() * 3.0, (0.7 * t + 0.2).cos() * 3.0];
+            let qd = [(2.1 * t).cos() * 2.0, (0.3 * t).sin() * 2.0];
+            let (s2, c2) = q[1].sin_cos();
+            let c1 = q[0].cos();
+            let c12 = (q[0] + q[1]).cos();
+            let mm = [
+                [
+                    m1 * lc1 * lc1 + i1 + m2 * (l1 * l1 + lc2 * lc2 + 2.0 * l1 * lc2 * c2) + i2,
+                    m2 * (lc2 * lc2 + l1 * lc2 * c2) + i2,
+                ],
+                [m2 * (lc2 * lc2 + l1 * lc2 * c2) + i2, m2 * lc2 * lc2 + i2],
+            ];
+            let h = m2 * l1 * lc2 * s2;
+            let cqd = [-h * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]), h * qd[0] * qd[0]];
+            let g = [
+                (m1 * lc1 + m2 * l1) * g0 * c1 + m2 * lc2 * g0 * c12,
+                m2 * lc2 * g0 * c12,
+            ];
+            let mut m = [[0.0; 2]; 2];
+            let mut v = [0.0; 2];
+            planar2::mass_cqd_g(&q, &qd, &p, &mut m, &mut v);
+            let mut gv = [0.0; 2];
+            planar2::gravity(&q, &p, &mut gv);
+            let mut cv = [0.0; 2];
+            planar2::coriolis_qd(&q, &qd, &p, &mut cv);
+            let mut lag = [0.0; 2];
+            planar2::cqd_g(&q, &qd, &p, &mut lag);
+            for a in 0..2 {
+                for b in 0..2 {
+                    assert!((m[a][b] - mm[a][b]).abs() < 1e-13, "M[{a}][{b}]");
+                }
+                assert!((gv[a] - g[a]).abs() < 1e-12, "g[{a}]");
+                assert!((cv[a] - cqd[a]).abs() < 1e-12, "C qd[{a}]");
+                assert!((v[a] - cqd[a] - g[a]).abs() < 1e-12, "RNEA C qd + g[{a}]");
+                assert!((lag[a] - cqd[a] - g[a]).abs() < 1e-12, "Lagrangian C qd + g[{a}]");
+            }
+            // Tip Jacobian of the planar arm.
+            let s1 = q[0].sin();
+            let s12 = (q[0] + q[1]).sin();
+            let mut jp = [[0.0; 2]; 3];
+            let mut jo = [[0.0; 2]; 3];
+            planar2::tip_jacobian(&q, &p, &mut jp, &mut jo);
+            let want = [[-l1 * s1 - l2 * s12, -l2 * s12], [l1 * c1 + l2 * c12, l2 * c12]];
+            for a in 0..2 {
+                for b in 0..2 {
+                    assert!((jp[a][b] - want[a][b]).abs() < 1e-14);
+                }
+            }
+            assert_eq!(jo, [[0.0, 0.0], [0.0, 0.0], [1.0, 1.0]]);
+            assert_eq!(jp[2], [0.0, 0.0]);
+        }
+    }
+    assert_eq!(planar2::NQ, 2);
+    assert_eq!(planar2::PARAM_NAMES, ["link2.mass"]);
+    assert_eq!(planar2::PARAM_DEFAULTS, [0.7]);
+}

@@ -1,0 +1,56 @@
+//! Multiphase optimal control by pseudospectral collocation (paper Sect. 4–5).
+//!
+//! * [`nodes`]: Legendre–Gauss / Gauss–Radau nodes, weights, differentiation matrices;
+//! * [`block`]: graph functions with exact Jacobians and Hessians (bf-codegen `diff`);
+//! * [`problem`]: the multiphase problem (eq. 57): phases, node functions, point functions;
+//! * [`transcription`]: the sparse NLP handed to the interior-point solver ([`crate::ipm`]);
+//! * [`trajectory`]: extraction and interpolation of the solution.
+
+pub mod block;
+pub mod nodes;
+pub mod problem;
+pub mod trajectory;
+pub mod transcription;
+
+pub use block::GraphFn;
+pub use problem::{NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef};
+pub use trajectory::{PhaseTrajectory, extract};
+pub use transcription::{Mesh, PhaseLayout, Transcription};
+
+use crate::ipm::{IterationInfo, Settings, Solution, WarmStart, solve_with};
+
+/// Errors of the collocation layer and the problem library.
+#[derive(Debug, thiserror::Error)]
+pub enum OcpError {
+    /// The problem description is inconsistent.
+    #[error("invalid problem: {0}")]
+    InvalidProblem(String),
+    /// Unknown problem name.
+    #[error("unknown problem `{0}`; known: {1}")]
+    UnknownProblem(String, String),
+    /// The scene or model could not be built.
+    #[error("model: {0}")]
+    Model(String),
+    /// The NLP solver failed (breakdown, not non-convergence).
+    #[error(transparent)]
+    Solver(#[from] crate::OptimError),
+    /// Reading or writing a file.
+    #[error("i/o on {path}: {msg}")]
+    Io {
+        /// The file.
+        path: String,
+        /// What happened.
+        msg: String,
+    },
+}
+
+/// Solves the transcribed problem with the interior-point solver (optional primal-dual warm
+/// start and per-iteration callback; return `false` from it to stop).
+pub fn solve_nlp(
+    tr: &Transcription,
+    settings: &Settings,
+    warm: Option<&WarmStart>,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<Solution, OcpError> {
+    Ok(solve_with(tr, settings, warm, callback)?)
+}

@@ -1,0 +1,213 @@
+//! Multiphase optimal-control problem description (paper Sect. 4.1–4.2, eq. 51 and 57).
+//!
+//! A problem is a sequence of [`Phase`]s, each with a prescribed mode (its node function), a
+//! free duration T⁽ⁱ⁾ with bounds, differential states x, algebraic node variables a (e.g. q̈,
+//! ω̇, λ so that the dynamics is imposed in implicit form), controls u; cost integrands L_j
+//! (eq. 51c) accumulated into global cost states c_j(t_f) (eq. 60); static parameters (e.g.
+//! the impact impulse ι of eq. 40); and [`PointFunction`]s over phase end points, durations
+//! and parameters for the event (57c) and linkage (57d) constraints.
+
+use bf_codegen::graph::{Graph, Id};
+
+/// Transcription scheme.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Scheme {
+    /// Legendre–Gauss collocation (Benson/Garg form): N Gauss points plus the initial point,
+    /// final state by Gauss quadrature. `points` = N per phase.
+    Lg,
+    /// Legendre–Gauss–Radau collocation with `elements` equal elements per phase (hp), each
+    /// with `points / elements` (rounded up) Radau points.
+    Radau {
+        /// Number of elements per phase (≥ 1).
+        elements: usize,
+    },
+}
+
+/// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
+///
+/// Graph variables `x`, `a`, `u` and `duration` are the node's local variables; `fixed` sets
+/// other graph inputs (ε, runtime parameters). `xdot` must have `x.len()` entries (the
+/// collocation imposes ẋ = xdot); `costs` has one integrand per cost state of the problem.
+#[derive(Debug, Clone)]
+pub struct NodeFunction {
+    /// Expression graph.
+    pub graph: Graph,
+    /// Graph variables of the differential states.
+    pub x: Vec<u32>,
+    /// Graph variables of the algebraic node variables.
+    pub a: Vec<u32>,
+    /// Graph variables of the controls.
+    pub u: Vec<u32>,
+    /// A graph variable (unused by the expressions) for the phase duration.
+    pub duration: u32,
+    /// Values of other graph inputs.
+    pub fixed: Vec<(u32, f64)>,
+    /// State derivatives ẋ.
+    pub xdot: Vec<Id>,
+    /// Path constraints g (equalities have equal bounds).
+    pub path: Vec<Id>,
+    /// Bounds of `path`.
+    pub path_bounds: Vec<(f64, f64)>,
+    /// Cost integrands L_j (one per problem cost state).
+    pub costs: Vec<Id>,
+}
+
+/// A variable a [`PointFunction`] reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum VarRef {
+    /// State component `i` at the start of phase `phase`.
+    Initial {
+        /// Phase index.
+        phase: usize,
+        /// State component.
+        i: usize,
+    },
+    /// State component `i` at the end of phase `phase`.
+    Final {
+        /// Phase index.
+        phase: usize,
+        /// State component.
+        i: usize,
+    },
+    /// Duration of phase `phase`.
+    Duration(usize),
+    /// Static parameter `i`.
+    Param(usize),
+}
+
+/// Event/linkage constraints `lo ≤ e(…) ≤ hi` over end points, durations and parameters.
+#[derive(Debug, Clone)]
+pub struct PointFunction {
+    /// Name (for diagnostics).
+    pub name: String,
+    /// Expression graph.
+    pub graph: Graph,
+    /// Graph variable ↔ problem variable.
+    pub vars: Vec<(u32, VarRef)>,
+    /// Values of other graph inputs.
+    pub fixed: Vec<(u32, f64)>,
+    /// The constraint expressions.
+    pub outputs: Vec<Id>,
+    /// Their bounds.
+    pub bounds: Vec<(f64, f64)>,
+}
+
+/// Initial guess of a phase: samples at normalised times s ∈ [0, 1] (ascending), linearly
+/// interpolated; one sample means a constant guess.
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct PhaseGuess {
+    /// Normalised sample times.
+    pub s: Vec<f64>,
+    /// States at the samples.
+    pub x: Vec<Vec<f64>>,
+    /// Algebraic variables at the samples.
+    pub a: Vec<Vec<f64>>,
+    /// Controls at the samples.
+    pub u: Vec<Vec<f64>>,
+    /// Duration.
+    pub duration: f64,
+}
+
+impl PhaseGuess {
+    /// A constant guess.
+    pub fn constant(x: Vec<f64>, a: Vec<f64>, u: Vec<f64>, duration: f64) -> Self {
+        PhaseGuess { s: vec![0.0], x: vec![x], a: vec![a], u: vec![u], duration }
+    }
+
+    fn interp(s: &[f64], v: &[Vec<f64>], t: f64, n: usize) -> Vec<f64> {
+        if v.is_empty() {
+            return vec![0.0; n];
+        }
+        let s = &s[..s.len().min(v.len())];
+        let k = s.partition_point(|&x| x <= t);
+        let pick = |i: usize| -> Vec<f64> {
+            let mut r = v[i].clone();
+            r.resize(n, 0.0);
+            r
+        };
+        if k == 0 {
+            return pick(0);
+        }
+        if k >= s.len() {
+            return pick(s.len() - 1);
+        }
+        let (a, b) = (pick(k - 1), pick(k));
+        let th = if s[k] > s[k - 1] { (t - s[k - 1]) / (s[k] - s[k - 1]) } else { 0.0 };
+        a.iter().zip(&b).map(|(a, b)| a + th * (b - a)).collect()
+    }
+
+    /// States at normalised time `t` (`n` components).
+    pub fn x_at(&self, t: f64, n: usize) -> Vec<f64> {
+        Self::interp(&self.s, &self.x, t, n)
+    }
+    /// Algebraic variables at `t`.
+    pub fn a_at(&self, t: f64, n: usize) -> Vec<f64> {
+        Self::interp(&self.s, &self.a, t, n)
+    }
+    /// Controls at `t`.
+    pub fn u_at(&self, t: f64, n: usize) -> Vec<f64> {
+        Self::interp(&self.s, &self.u, t, n)
+    }
+}
+
+/// One phase of the multiphase problem.
+#[derive(Debug, Clone)]
+pub struct Phase {
+    /// Name (e.g. "free", "stick").
+    pub name: String,
+    /// Node function (dynamics, path constraints, cost integrands).
+    pub node: NodeFunction,
+    /// Bounds of the states (also at the phase end points).
+    pub x_bounds: Vec<(f64, f64)>,
+    /// Bounds of the algebraic variables.
+    pub a_bounds: Vec<(f64, f64)>,
+    /// Bounds of the controls.
+    pub u_bounds: Vec<(f64, f64)>,
+    /// Bounds of the duration.
+    pub duration_bounds: (f64, f64),
+    /// Collocation points (per phase; per element for Radau see [`Scheme`]).
+    pub points: usize,
+    /// Initial guess.
+    pub guess: PhaseGuess,
+}
+
+/// The objective φ(c(t_f)) (eq. 60).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Objective {
+    /// c_j(t_f).
+    Cost(usize),
+    /// c_j(t_f) / c_k(t_f) (eq. 60).
+    Ratio(usize, usize),
+}
+
+/// A static decision parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// Name.
+    pub name: String,
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+    /// Initial guess.
+    pub guess: f64,
+}
+
+/// A multiphase optimal-control problem (eq. 57).
+#[derive(Debug, Clone)]
+pub struct Ocp {
+    /// Phases in time order.
+    pub phases: Vec<Phase>,
+    /// Number of cost states.
+    pub n_costs: usize,
+    /// Static parameters.
+    pub params: Vec<Param>,
+    /// Event and linkage constraints.
+    pub points: Vec<PointFunction>,
+    /// Bounds of the cost states c_j(t_f) (empty: unbounded); e.g. a required rotation angle.
+    pub cost_bounds: Vec<(f64, f64)>,
+    /// Objective.
+    pub objective: Objective,
+    /// Transcription.
+    pub scheme: Scheme,
+}

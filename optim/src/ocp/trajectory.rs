@@ -1,0 +1,101 @@
+//! Solution extraction: per-phase times, states at the state points, algebraic variables and
+//! controls at the collocation nodes, and Lagrange interpolation (dense output).
+
+use super::nodes::lagrange_basis;
+use super::transcription::Transcription;
+
+/// One phase of a solved (or guessed) trajectory.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PhaseTrajectory {
+    /// Start time t_0 of the phase (sum of the previous durations).
+    pub t0: f64,
+    /// Duration T.
+    pub duration: f64,
+    /// τ ∈ [−1, 1] of the state points.
+    pub state_tau: Vec<f64>,
+    /// States at the state points.
+    pub x: Vec<Vec<f64>>,
+    /// τ of the collocation nodes.
+    pub node_tau: Vec<f64>,
+    /// Index of each node's state point.
+    pub node_state: Vec<usize>,
+    /// Quadrature weight of each node on [−1, 1] (∫ f dt ≈ T/2 Σ w_k f_k).
+    pub node_weight: Vec<f64>,
+    /// Algebraic variables at the nodes.
+    pub a: Vec<Vec<f64>>,
+    /// Controls at the nodes.
+    pub u: Vec<Vec<f64>>,
+    /// Element ranges of state points (interpolation support).
+    pub elements: Vec<(usize, usize)>,
+}
+
+impl PhaseTrajectory {
+    /// Time of normalised τ.
+    pub fn time(&self, tau: f64) -> f64 {
+        self.t0 + 0.5 * (tau + 1.0) * self.duration
+    }
+
+    fn element_of(&self, tau: f64) -> (usize, usize) {
+        for &(a, b) in &self.elements {
+            if tau <= self.state_tau[b - 1] {
+                return (a, b);
+            }
+        }
+        *self.elements.last().unwrap_or(&(0, self.state_tau.len()))
+    }
+
+    /// State at τ (Lagrange interpolation within the element).
+    pub fn x_at(&self, tau: f64) -> Vec<f64> {
+        let (a, b) = self.element_of(tau);
+        let l = lagrange_basis(&self.state_tau[a..b], tau);
+        let nx = self.x.first().map_or(0, |v| v.len());
+        (0..nx).map(|i| (a..b).zip(&l).map(|(p, w)| w * self.x[p][i]).sum()).collect()
+    }
+
+    fn node_interp(&self, v: &[Vec<f64>], tau: f64) -> Vec<f64> {
+        let (a, b) = self.element_of(tau);
+        let ks: Vec<usize> = (0..self.node_tau.len()).filter(|&k| (a..b).contains(&self.node_state[k])).collect();
+        let taus: Vec<f64> = ks.iter().map(|&k| self.node_tau[k]).collect();
+        let l = lagrange_basis(&taus, tau);
+        let n = v.first().map_or(0, |r| r.len());
+        (0..n).map(|i| ks.iter().zip(&l).map(|(&k, w)| w * v[k][i]).sum()).collect()
+    }
+
+    /// Controls at τ (polynomial through the element's collocation nodes).
+    pub fn u_at(&self, tau: f64) -> Vec<f64> {
+        self.node_interp(&self.u, tau)
+    }
+
+    /// Algebraic variables at τ.
+    pub fn a_at(&self, tau: f64) -> Vec<f64> {
+        self.node_interp(&self.a, tau)
+    }
+}
+
+/// Splits the NLP vector `x` into phase trajectories.
+pub fn extract(tr: &Transcription, x: &[f64]) -> Vec<PhaseTrajectory> {
+    let mut t0 = 0.0;
+    let mut out = Vec::new();
+    for l in &tr.phases {
+        let duration = x[l.t];
+        let ns = l.mesh.n_state_points();
+        let xs = (0..ns).map(|p| (0..l.nx).map(|i| x[l.x(p, i)]).collect()).collect();
+        let nk = l.mesh.colloc.len();
+        let a = (0..nk).map(|k| (0..l.na).map(|i| x[l.a(k, i)]).collect()).collect();
+        let u = (0..nk).map(|k| (0..l.nu).map(|i| x[l.u(k, i)]).collect()).collect();
+        out.push(PhaseTrajectory {
+            t0,
+            duration,
+            state_tau: l.mesh.state_tau.clone(),
+            x: xs,
+            node_tau: l.mesh.colloc.iter().map(|c| c.tau).collect(),
+            node_state: l.mesh.colloc.iter().map(|c| c.state_point).collect(),
+            node_weight: l.mesh.colloc.iter().map(|c| c.weight).collect(),
+            a,
+            u,
+            elements: l.mesh.elements.iter().map(|r| (r.start, r.end)).collect(),
+        });
+        t0 += duration;
+    }
+    out
+}

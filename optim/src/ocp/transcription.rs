@@ -1,0 +1,645 @@
+//! Pseudospectral transcription of an [`Ocp`] into a sparse [`Nlp`] (paper Sect. 4–5).
+//!
+//! Per phase with duration T and collocation nodes τ_k (Legendre–Gauss, or Radau per element):
+//!
+//! ```text
+//! defects   Σ_j D_kj X_j − s_k (T/2) f(X_k, A_k, U_k) = 0       (k = 1..N_c)
+//! LG end    X_f − X_0 − Σ_k w_k (T/2) f_k = 0                    (Benson/Garg form)
+//! path      g_L ≤ g(X_k, A_k, U_k) ≤ g_U
+//! costs     c_j − Σ_phases Σ_k w_k s_k (T/2) L_j(X_k, A_k, U_k) = 0   (eq. 51c, c(0) = 0)
+//! ```
+//! with s_k = 1/K for K Radau elements (1 for LG). The objective is c_j or c_j/c_k (eq. 60), a
+//! function of two NLP variables only, so its Hessian stays sparse. Event and linkage
+//! constraints (57c–d) are [`PointFunction`]s. All nonlinear pieces are [`GraphFn`]s with
+//! exact Jacobians and Hessians; the NLP's derivatives are their scattered sums.
+
+use super::block::GraphFn;
+use super::nodes::{differentiation_matrix, legendre_gauss, legendre_gauss_radau};
+use super::problem::{Objective, Ocp, Scheme, VarRef};
+use super::OcpError;
+use crate::ipm::{BOUND_INF, Nlp};
+
+/// Collocation mesh of one phase (normalised time τ ∈ [−1, 1]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    /// τ of the state points (first = −1, last = +1).
+    pub state_tau: Vec<f64>,
+    /// Collocation nodes.
+    pub colloc: Vec<Colloc>,
+    /// True for LG (final state by quadrature).
+    pub gauss_end: bool,
+    /// Elements: ranges of state points (for interpolation).
+    pub elements: Vec<std::ops::Range<usize>>,
+}
+
+/// One collocation node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Colloc {
+    /// Index of the node's state point.
+    pub state_point: usize,
+    /// τ of the node.
+    pub tau: f64,
+    /// Defect scale s_k.
+    pub scale: f64,
+    /// Quadrature weight on [−1, 1] for the phase (includes s_k).
+    pub weight: f64,
+    /// Defect row: (state point, D coefficient).
+    pub drow: Vec<(usize, f64)>,
+}
+
+impl Mesh {
+    /// Builds the mesh for `scheme` with `points` collocation points per phase.
+    pub fn new(scheme: Scheme, points: usize) -> Result<Mesh, OcpError> {
+        if points < 2 {
+            return Err(OcpError::InvalidProblem(format!("need at least 2 collocation points, got {points}")));
+        }
+        match scheme {
+            Scheme::Lg => {
+                let (t, w) = legendre_gauss(points);
+                let mut sup = vec![-1.0];
+                sup.extend(&t);
+                let d = differentiation_matrix(&sup);
+                let colloc = (0..points)
+                    .map(|k| Colloc {
+                        state_point: k + 1,
+                        tau: t[k],
+                        scale: 1.0,
+                        weight: w[k],
+                        drow: (0..=points).map(|j| (j, d[k + 1][j])).collect(),
+                    })
+                    .collect();
+                let mut state_tau = sup;
+                state_tau.push(1.0);
+                Ok(Mesh { state_tau, colloc, gauss_end: true, elements: vec![0..points + 1] })
+            }
+            Scheme::Radau { elements } => {
+                if elements == 0 {
+                    return Err(OcpError::InvalidProblem("Radau needs at least one element".into()));
+                }
+                let n = points.div_ceil(elements).max(2);
+                let (t, w) = legendre_gauss_radau(n);
+                let mut sup = t.clone();
+                sup.push(1.0);
+                let d = differentiation_matrix(&sup);
+                let kf = elements as f64;
+                let mut state_tau = Vec::new();
+                let mut colloc = Vec::new();
+                let mut ranges = Vec::new();
+                for e in 0..elements {
+                    let base = e * n;
+                    for j in 0..n {
+                        let tau = -1.0 + (2.0 * e as f64 + t[j] + 1.0) / kf;
+                        state_tau.push(tau);
+                        colloc.push(Colloc {
+                            state_point: base + j,
+                            tau,
+                            scale: 1.0 / kf,
+                            weight: w[j] / kf,
+                            drow: (0..=n).map(|i| (base + i, d[j][i])).collect(),
+                        });
+                    }
+                    ranges.push(base..base + n + 1);
+                }
+                state_tau.push(1.0);
+                Ok(Mesh { state_tau, colloc, gauss_end: false, elements: ranges })
+            }
+        }
+    }
+
+    /// Number of state points.
+    pub fn n_state_points(&self) -> usize {
+        self.state_tau.len()
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Instance {
+    f: usize,
+    map: Vec<usize>,
+    targets: Vec<Vec<(usize, f64)>>,
+}
+
+/// Variable and row offsets of one phase.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhaseLayout {
+    /// Mesh.
+    pub mesh: Mesh,
+    /// Number of states, algebraic variables, controls.
+    pub nx: usize,
+    /// Algebraic variables per node.
+    pub na: usize,
+    /// Controls per node.
+    pub nu: usize,
+    /// First state variable (point-major: point p, component i at `x0 + p nx + i`).
+    pub x0: usize,
+    /// First algebraic variable (node-major).
+    pub a0: usize,
+    /// First control (node-major).
+    pub u0: usize,
+    /// Duration variable.
+    pub t: usize,
+}
+
+impl PhaseLayout {
+    /// Index of state component `i` at state point `p`.
+    pub fn x(&self, p: usize, i: usize) -> usize {
+        self.x0 + p * self.nx + i
+    }
+    /// Index of algebraic variable `i` at node `k`.
+    pub fn a(&self, k: usize, i: usize) -> usize {
+        self.a0 + k * self.na + i
+    }
+    /// Index of control `i` at node `k`.
+    pub fn u(&self, k: usize, i: usize) -> usize {
+        self.u0 + k * self.nu + i
+    }
+}
+
+/// The transcribed NLP.
+#[derive(Debug, Clone)]
+pub struct Transcription {
+    /// Per-phase layout.
+    pub phases: Vec<PhaseLayout>,
+    /// First parameter variable.
+    pub p0: usize,
+    /// First cost-state variable.
+    pub c0: usize,
+    /// Objective.
+    pub objective: Objective,
+    n: usize,
+    m: usize,
+    xl: Vec<f64>,
+    xu: Vec<f64>,
+    gl: Vec<f64>,
+    gu: Vec<f64>,
+    x_init: Vec<f64>,
+    linear: Vec<(usize, usize, f64)>,
+    fns: Vec<GraphFn>,
+    inst: Vec<Instance>,
+    jac_pattern: Vec<(usize, usize)>,
+    hess_pattern: Vec<(usize, usize)>,
+    /// Row names by range, for diagnostics.
+    pub row_blocks: Vec<(String, std::ops::Range<usize>)>,
+}
+
+fn clean_bound(v: f64, lower: bool) -> f64 {
+    if v.is_nan() {
+        if lower { -BOUND_INF } else { BOUND_INF }
+    } else {
+        v
+    }
+}
+
+impl Transcription {
+    /// Transcribes `ocp`.
+    pub fn new(ocp: &Ocp) -> Result<Transcription, OcpError> {
+        if ocp.phases.is_empty() {
+            return Err(OcpError::InvalidProblem("no phases".into()));
+        }
+        let nc = ocp.n_costs;
+        match ocp.objective {
+            Objective::Cost(j) if j < nc => {}
+            Objective::Ratio(j, k) if j < nc && k < nc && j != k => {}
+            o => return Err(OcpError::InvalidProblem(format!("objective {o:?} with {nc} cost states"))),
+        }
+        let mut n = 0;
+        let mut layouts = Vec::new();
+        for ph in &ocp.phases {
+            let nd = &ph.node;
+            let (nx, na, nu) = (nd.x.len(), nd.a.len(), nd.u.len());
+            let bad = |w: &str| OcpError::InvalidProblem(format!("phase `{}`: {w}", ph.name));
+            if nd.xdot.len() != nx {
+                return Err(bad("xdot must have one entry per state"));
+            }
+            if nd.costs.len() != nc {
+                return Err(bad("one cost integrand per cost state required"));
+            }
+            if nd.path.len() != nd.path_bounds.len() {
+                return Err(bad("path bounds length"));
+            }
+            if ph.x_bounds.len() != nx || ph.a_bounds.len() != na || ph.u_bounds.len() != nu {
+                return Err(bad("bounds lengths"));
+            }
+            let mesh = Mesh::new(ocp.scheme, ph.points)?;
+            let ns = mesh.n_state_points();
+            let ncol = mesh.colloc.len();
+            let x0 = n;
+            let a0 = x0 + ns * nx;
+            let u0 = a0 + ncol * na;
+            let t = u0 + ncol * nu;
+            n = t + 1;
+            layouts.push(PhaseLayout { mesh, nx, na, nu, x0, a0, u0, t });
+        }
+        let p0 = n;
+        n += ocp.params.len();
+        let c0 = n;
+        n += nc;
+
+        // Variable bounds and initial point.
+        let mut xl = vec![-BOUND_INF; n];
+        let mut xu = vec![BOUND_INF; n];
+        let mut x_init = vec![0.0; n];
+        for (ph, l) in ocp.phases.iter().zip(&layouts) {
+            let g = &ph.guess;
+            for (p, &tau) in l.mesh.state_tau.iter().enumerate() {
+                let s = 0.5 * (tau + 1.0);
+                let xg = g.x_at(s, l.nx);
+                for i in 0..l.nx {
+                    xl[l.x(p, i)] = clean_bound(ph.x_bounds[i].0, true);
+                    xu[l.x(p, i)] = clean_bound(ph.x_bounds[i].1, false);
+                    x_init[l.x(p, i)] = xg[i];
+                }
+            }
+            for (k, c) in l.mesh.colloc.iter().enumerate() {
+                let s = 0.5 * (c.tau + 1.0);
+                let ag = g.a_at(s, l.na);
+                let ug = g.u_at(s, l.nu);
+                for i in 0..l.na {
+                    xl[l.a(k, i)] = clean_bound(ph.a_bounds[i].0, true);
+                    xu[l.a(k, i)] = clean_bound(ph.a_bounds[i].1, false);
+                    x_init[l.a(k, i)] = ag[i];
+                }
+                for i in 0..l.nu {
+                    xl[l.u(k, i)] = clean_bound(ph.u_bounds[i].0, true);
+                    xu[l.u(k, i)] = clean_bound(ph.u_bounds[i].1, false);
+                    x_init[l.u(k, i)] = ug[i];
+                }
+            }
+            xl[l.t] = ph.duration_bounds.0;
+            xu[l.t] = ph.duration_bounds.1;
+            x_init[l.t] = g.duration;
+        }
+        if !ocp.cost_bounds.is_empty() {
+            if ocp.cost_bounds.len() != nc {
+                return Err(OcpError::InvalidProblem("cost_bounds needs one entry per cost state".into()));
+            }
+            for (j, b) in ocp.cost_bounds.iter().enumerate() {
+                xl[c0 + j] = clean_bound(b.0, true);
+                xu[c0 + j] = clean_bound(b.1, false);
+            }
+        }
+        for (i, p) in ocp.params.iter().enumerate() {
+            xl[p0 + i] = p.lower;
+            xu[p0 + i] = p.upper;
+            x_init[p0 + i] = p.guess;
+        }
+
+        // Rows.
+        let mut m = 0;
+        let mut gl = Vec::new();
+        let mut gu = Vec::new();
+        let mut linear = Vec::new();
+        let mut fns = Vec::new();
+        let mut inst = Vec::new();
+        let mut row_blocks = Vec::new();
+        let cost_row0 = {
+            // cost rows are placed first so their index is known while scanning phases.
+            for j in 0..nc {
+                gl.push(0.0);
+                gu.push(0.0);
+                linear.push((j, c0 + j, 1.0));
+            }
+            m += nc;
+            row_blocks.push(("cost states".to_string(), 0..nc));
+            0
+        };
+        for (pi, (ph, l)) in ocp.phases.iter().zip(&layouts).enumerate() {
+            let nd = &ph.node;
+            let mut graph = nd.graph.clone();
+            let mut scaled = Vec::new();
+            let t_var = graph.var(nd.duration);
+            let half = graph.constant(0.5);
+            let ht = graph.mul(half, t_var);
+            for &e in &nd.xdot {
+                scaled.push(graph.mul(ht, e));
+            }
+            let n_path = nd.path.len();
+            scaled.extend(nd.path.iter().copied());
+            for &e in &nd.costs {
+                scaled.push(graph.mul(ht, e));
+            }
+            let mut locals = nd.x.clone();
+            locals.extend(&nd.a);
+            locals.extend(&nd.u);
+            locals.push(nd.duration);
+            let f = GraphFn::new(&mut graph, &scaled, &locals, &nd.fixed);
+            let fid = fns.len();
+            fns.push(f);
+            let ncol = l.mesh.colloc.len();
+            let def0 = m;
+            m += ncol * l.nx;
+            for _ in 0..ncol * l.nx {
+                gl.push(0.0);
+                gu.push(0.0);
+            }
+            row_blocks.push((format!("phase {pi} ({}) defects", ph.name), def0..m));
+            let end0 = m;
+            if l.mesh.gauss_end {
+                m += l.nx;
+                let last = l.mesh.n_state_points() - 1;
+                for i in 0..l.nx {
+                    gl.push(0.0);
+                    gu.push(0.0);
+                    linear.push((end0 + i, l.x(last, i), 1.0));
+                    linear.push((end0 + i, l.x(0, i), -1.0));
+                }
+                row_blocks.push((format!("phase {pi} ({}) quadrature end", ph.name), end0..m));
+            }
+            let path0 = m;
+            m += ncol * n_path;
+            for _ in 0..ncol {
+                for b in &nd.path_bounds {
+                    gl.push(clean_bound(b.0, true));
+                    gu.push(clean_bound(b.1, false));
+                }
+            }
+            row_blocks.push((format!("phase {pi} ({}) path", ph.name), path0..m));
+            for (k, c) in l.mesh.colloc.iter().enumerate() {
+                for i in 0..l.nx {
+                    for &(sp, dv) in &c.drow {
+                        if dv != 0.0 {
+                            linear.push((def0 + k * l.nx + i, l.x(sp, i), dv));
+                        }
+                    }
+                }
+                let mut map = Vec::new();
+                for i in 0..l.nx {
+                    map.push(l.x(c.state_point, i));
+                }
+                for i in 0..l.na {
+                    map.push(l.a(k, i));
+                }
+                for i in 0..l.nu {
+                    map.push(l.u(k, i));
+                }
+                map.push(l.t);
+                let mut targets = Vec::new();
+                for i in 0..l.nx {
+                    let mut t = vec![(def0 + k * l.nx + i, -c.scale)];
+                    if l.mesh.gauss_end {
+                        t.push((end0 + i, -c.weight));
+                    }
+                    targets.push(t);
+                }
+                for i in 0..n_path {
+                    targets.push(vec![(path0 + k * n_path + i, 1.0)]);
+                }
+                for j in 0..nc {
+                    targets.push(vec![(cost_row0 + j, -c.weight)]);
+                }
+                inst.push(Instance { f: fid, map, targets });
+            }
+        }
+        for pf in &ocp.points {
+            if pf.outputs.len() != pf.bounds.len() {
+                return Err(OcpError::InvalidProblem(format!("point function `{}`: bounds length", pf.name)));
+            }
+            let mut map = Vec::new();
+            for &(_, r) in &pf.vars {
+                let idx = match r {
+                    VarRef::Initial { phase, i } | VarRef::Final { phase, i } => {
+                        let l = layouts.get(phase).filter(|l| i < l.nx).ok_or_else(|| {
+                            OcpError::InvalidProblem(format!("point function `{}`: bad reference {r:?}", pf.name))
+                        })?;
+                        if matches!(r, VarRef::Initial { .. }) { l.x(0, i) } else { l.x(l.mesh.n_state_points() - 1, i) }
+                    }
+                    VarRef::Duration(p) => {
+                        layouts.get(p).map(|l| l.t).ok_or_else(|| {
+                            OcpError::InvalidProblem(format!("point function `{}`: bad phase {p}", pf.name))
+                        })?
+                    }
+                    VarRef::Param(i) => {
+                        if i >= ocp.params.len() {
+                            return Err(OcpError::InvalidProblem(format!("point function `{}`: bad param {i}", pf.name)));
+                        }
+                        p0 + i
+                    }
+                };
+                map.push(idx);
+            }
+            let mut sorted = map.clone();
+            sorted.sort_unstable();
+            if sorted.windows(2).any(|w| w[0] == w[1]) {
+                return Err(OcpError::InvalidProblem(format!("point function `{}` reads a variable twice", pf.name)));
+            }
+            let mut graph = pf.graph.clone();
+            let locals: Vec<u32> = pf.vars.iter().map(|v| v.0).collect();
+            let f = GraphFn::new(&mut graph, &pf.outputs, &locals, &pf.fixed);
+            let r0 = m;
+            let targets = (0..pf.outputs.len()).map(|i| vec![(r0 + i, 1.0)]).collect();
+            for b in &pf.bounds {
+                gl.push(clean_bound(b.0, true));
+                gu.push(clean_bound(b.1, false));
+            }
+            m += pf.outputs.len();
+            row_blocks.push((pf.name.clone(), r0..m));
+            inst.push(Instance { f: fns.len(), map, targets });
+            fns.push(f);
+        }
+
+        let mut jac_pattern: Vec<(usize, usize)> = linear.iter().map(|&(r, c, _)| (r, c)).collect();
+        let mut hess_pattern = Vec::new();
+        for it in &inst {
+            let f = &fns[it.f];
+            for &(o, lv) in f.jacobian_pattern() {
+                for &(r, _) in &it.targets[o] {
+                    jac_pattern.push((r, it.map[lv]));
+                }
+            }
+            for &(i, j) in f.hessian_pattern() {
+                let (a, b) = (it.map[i], it.map[j]);
+                hess_pattern.push((a.max(b), a.min(b)));
+            }
+        }
+        match ocp.objective {
+            Objective::Cost(_) => {}
+            Objective::Ratio(j, k) => {
+                let (a, b) = (c0 + j, c0 + k);
+                hess_pattern.push((a.max(b), a.min(b)));
+                hess_pattern.push((c0 + k, c0 + k));
+            }
+        }
+        let mut tr = Transcription {
+            phases: layouts,
+            p0,
+            c0,
+            objective: ocp.objective,
+            n,
+            m,
+            xl,
+            xu,
+            gl,
+            gu,
+            x_init,
+            linear,
+            fns,
+            inst,
+            jac_pattern,
+            hess_pattern,
+            row_blocks,
+        };
+        tr.init_cost_states();
+        Ok(tr)
+    }
+
+    /// Sets the cost-state entries of the initial point to the quadrature of their integrands
+    /// along the guess (consistent c(t_f)); a ratio's denominator that vanishes there is set to
+    /// 1 so that the objective is finite at the start.
+    fn init_cost_states(&mut self) {
+        let nc = self.n - self.c0;
+        for j in 0..nc {
+            self.x_init[self.c0 + j] = 0.0;
+        }
+        let mut g = vec![0.0; self.m];
+        self.constraints(&self.x_init.clone(), &mut g);
+        for j in 0..nc {
+            let v = -g[j];
+            self.x_init[self.c0 + j] = if v.is_finite() { v } else { 0.0 };
+        }
+        if let Objective::Ratio(_, k) = self.objective
+            && self.x_init[self.c0 + k].abs() < 1e-8
+        {
+            self.x_init[self.c0 + k] = 1.0;
+        }
+    }
+
+    fn locals(&self, it: &Instance, x: &[f64]) -> Vec<f64> {
+        it.map.iter().map(|&i| x[i]).collect()
+    }
+
+    /// Replaces the initial point (e.g. for a warm start); length `n`.
+    pub fn set_initial_point(&mut self, x: &[f64]) -> Result<(), OcpError> {
+        if x.len() != self.n {
+            return Err(OcpError::InvalidProblem(format!("initial point has {} entries, expected {}", x.len(), self.n)));
+        }
+        self.x_init.copy_from_slice(x);
+        Ok(())
+    }
+
+    /// The current initial point.
+    pub fn initial(&self) -> &[f64] {
+        &self.x_init
+    }
+
+    /// Constraint bounds (lower, upper).
+    pub fn row_bounds(&self) -> (&[f64], &[f64]) {
+        (&self.gl, &self.gu)
+    }
+
+    /// Variable bounds (lower, upper).
+    pub fn var_bounds(&self) -> (&[f64], &[f64]) {
+        (&self.xl, &self.xu)
+    }
+
+    /// Largest violation of the constraint bounds at `x`, and the row where it occurs.
+    pub fn max_violation(&self, x: &[f64]) -> (f64, usize) {
+        let mut g = vec![0.0; self.m];
+        self.constraints(x, &mut g);
+        let mut worst = (0.0, 0);
+        for r in 0..self.m {
+            let v = (self.gl[r] - g[r]).max(g[r] - self.gu[r]).max(0.0);
+            if v > worst.0 || v.is_nan() {
+                worst = (v, r);
+            }
+        }
+        worst
+    }
+
+    /// Name of the block that contains `row`.
+    pub fn row_name(&self, row: usize) -> &str {
+        self.row_blocks.iter().find(|b| b.1.contains(&row)).map(|b| b.0.as_str()).unwrap_or("?")
+    }
+}
+
+impl Nlp for Transcription {
+    fn num_variables(&self) -> usize {
+        self.n
+    }
+    fn num_constraints(&self) -> usize {
+        self.m
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower.copy_from_slice(&self.xl);
+        upper.copy_from_slice(&self.xu);
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        lower.copy_from_slice(&self.gl);
+        upper.copy_from_slice(&self.gu);
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        x.copy_from_slice(&self.x_init);
+    }
+    fn objective(&self, x: &[f64]) -> f64 {
+        match self.objective {
+            Objective::Cost(j) => x[self.c0 + j],
+            Objective::Ratio(j, k) => x[self.c0 + j] / x[self.c0 + k],
+        }
+    }
+    fn gradient(&self, x: &[f64], grad: &mut [f64]) {
+        grad.iter_mut().for_each(|v| *v = 0.0);
+        match self.objective {
+            Objective::Cost(j) => grad[self.c0 + j] = 1.0,
+            Objective::Ratio(j, k) => {
+                let (a, b) = (x[self.c0 + j], x[self.c0 + k]);
+                grad[self.c0 + j] = 1.0 / b;
+                grad[self.c0 + k] = -a / (b * b);
+            }
+        }
+    }
+    fn constraints(&self, x: &[f64], g: &mut [f64]) {
+        g.iter_mut().for_each(|v| *v = 0.0);
+        for &(r, c, v) in &self.linear {
+            g[r] += v * x[c];
+        }
+        for it in &self.inst {
+            let y = self.fns[it.f].eval(&self.locals(it, x));
+            for (o, ts) in it.targets.iter().enumerate() {
+                for &(r, c) in ts {
+                    g[r] += c * y[o];
+                }
+            }
+        }
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.jac_pattern.clone()
+    }
+    fn jacobian_values(&self, x: &[f64], values: &mut [f64]) {
+        let mut k = 0;
+        for &(_, _, v) in &self.linear {
+            values[k] = v;
+            k += 1;
+        }
+        for it in &self.inst {
+            let f = &self.fns[it.f];
+            let jv = f.jacobian(&self.locals(it, x));
+            for (e, &(o, _)) in f.jacobian_pattern().iter().enumerate() {
+                for &(_, c) in &it.targets[o] {
+                    values[k] = c * jv[e];
+                    k += 1;
+                }
+            }
+        }
+    }
+    fn hessian_structure(&self) -> Vec<(usize, usize)> {
+        self.hess_pattern.clone()
+    }
+    fn hessian_values(&self, x: &[f64], obj_factor: f64, lambda: &[f64], values: &mut [f64]) {
+        let mut k = 0;
+        for it in &self.inst {
+            let f = &self.fns[it.f];
+            let w: Vec<f64> =
+                it.targets.iter().map(|ts| ts.iter().map(|&(r, c)| c * lambda[r]).sum()).collect();
+            let hv = f.hessian(&self.locals(it, x), &w);
+            for v in hv {
+                values[k] = v;
+                k += 1;
+            }
+        }
+        if let Objective::Ratio(j, kk) = self.objective {
+            let (a, b) = (x[self.c0 + j], x[self.c0 + kk]);
+            // φ = a/b: ∂²φ/∂a∂b = −1/b², ∂²φ/∂b² = 2a/b³.
+            values[k] = obj_factor * (-1.0 / (b * b));
+            values[k + 1] = obj_factor * (2.0 * a / (b * b * b));
+        }
+    }
+}

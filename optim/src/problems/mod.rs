@@ -1,0 +1,664 @@
+//! Problem library (paper Sect. 4.1 archetypes, Sect. 6.1 periodic problems) and the library
+//! API the CLI calls: [`build`] → [`solve`] → [`OcpSolution`] (JSON) and
+//! [`OcpSolution::write_torques_csv`] (sim/README.md format).
+//!
+//! | name | phases | objective |
+//! |---|---|---|
+//! | `periodic-qc` | free–stick–free, periodic | QC ratio (eq. 60, 64–65), w = 1, ω_ref = (0,0,2.2) |
+//! | `periodic-cot` | free–stick–free, periodic | COT ratio (eq. 60–63), w = 10, ω̂ = (1,−1,0)/√2, period ≤ 10 s |
+//! | `periodic-cot-human` | as `periodic-cot` | human scene: 0 ≤ q2 ≤ 90°, 0 ≤ q3 ≤ 100° |
+//! | `reach` | free | ∫(1 + ‖τ‖²): from rest at q⁰ to touching the ball at rest |
+//! | `reorient` | free–stick | ∫(1 + 0.1‖τ‖²) s.t. ∫ω_z dt = π/2 (ball turned by 90° about z) |
+//! | `rotate-ref` | free–stick | ∫‖ω − ω_ref‖² + 0.1‖τ‖² over a fixed 3 s horizon, ω_ref = (0,0,1) |
+//! | `rotate-fast` | free–stick | ∫(0.01‖τ‖² − ω_z) over a fixed 2 s horizon |
+//!
+//! Common constraints: |τ_i| ≤ τ_max (1 N m), h ≥ 0 in free approach phases, λ_n ≥ 0 and the
+//! smooth friction cone in stick, the sticking impact law (eq. 40) with ι_n ≥ 0,
+//! 0 ≤ h(t_f⁽¹⁾) ≤ 10⁻⁴ and h⁽³⁾ ≥ −10⁻⁴ (Sect. 7 work-arounds), Δv = 0 at the stick phase's
+//! end point (Gauss points exclude it).
+
+pub mod bf;
+
+use std::path::Path;
+use std::time::Instant;
+
+use bf_codegen::Scene;
+use serde::{Deserialize, Serialize};
+
+use crate::ipm::{IterationInfo, Settings, Status, WarmStart};
+use crate::ocp::{
+    Objective, Ocp, OcpError, Param, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme, Transcription,
+    VarRef, extract, solve_nlp,
+};
+use bf::{CostKind, Diagnostics, EndQuantity, Mode, NodeOptions, Physics};
+
+/// Names of the problems [`build`] knows.
+pub const PROBLEMS: &[&str] =
+    &["periodic-qc", "periodic-cot", "periodic-cot-human", "reach", "reorient", "rotate-ref", "rotate-fast"];
+
+/// Upper bound of the total period of the COT problems (s): the COT ratio is otherwise free
+/// to trade period length against efficiency without limit.
+pub const COT_MAX_PERIOD: f64 = 10.0;
+
+/// The constant joint configuration of the default initial guess (PARAMS.md: "q constant
+/// nonzero"): the finger bent towards the ball, h ≈ 0.95 r.
+pub const Q_GUESS: [f64; 3] = [0.1, 0.6, 0.9];
+
+/// A configuration pressed into the ball (h < 0) used to find the contact configuration of
+/// the geometric guess by bisection on the segment [`Q_GUESS`] → `Q_DEEP`.
+pub const Q_DEEP: [f64; 3] = [0.1, 1.0, 1.6];
+
+/// Kind of the initial guess.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GuessKind {
+    /// PARAMS.md / Sect. 6.1: q ≡ q⁰ = [`Q_GUESS`], t_f⁽ⁱ⁾ = i, all else 0.
+    Paper,
+    /// Geometric: free phases move linearly between q⁰ and a contact configuration q_c
+    /// (h(q_c) = 0, found by bisection), stick phases hold q_c; velocities consistent.
+    Contact,
+    /// `Paper` first; if the solve fails, `Contact` (the default strategy).
+    Auto,
+}
+
+/// Settings of [`build`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ProblemSettings {
+    /// Collocation points per phase (paper: 30).
+    pub points: usize,
+    /// Transcription scheme.
+    pub scheme: Scheme,
+    /// ε of the smooth saturation (eq. 59); `None` = the scene's `smooth_eps` (0.01).
+    pub epsilon: Option<f64>,
+    /// Warm start from a previous solution (interpolated onto the new mesh).
+    #[serde(skip)]
+    pub warm_start: Option<OcpSolution>,
+    /// Impulse friction cone at the impact (eq. 66).
+    pub impulse_cone: bool,
+    /// ḣ margins of Sect. 7 (ḣ ≤ −m in the approach, ḣ ≥ m in the release phase).
+    pub hdot_margin: Option<f64>,
+    /// Initial guess (ignored with a warm start).
+    pub guess: GuessKind,
+    /// Interior-point iteration limit.
+    pub max_iter: usize,
+    /// Solver log level (0 silent).
+    pub print_level: u8,
+}
+
+impl Default for ProblemSettings {
+    fn default() -> Self {
+        ProblemSettings {
+            points: 30,
+            scheme: Scheme::Lg,
+            epsilon: None,
+            warm_start: None,
+            impulse_cone: false,
+            hdot_margin: None,
+            guess: GuessKind::Auto,
+            max_iter: 1500,
+            print_level: 0,
+        }
+    }
+}
+
+/// A transcribed problem ready to solve.
+#[derive(Debug, Clone)]
+pub struct BuiltProblem {
+    /// Problem name.
+    pub name: String,
+    /// Scene.
+    pub scene: Scene,
+    /// Physical constants.
+    pub physics: Physics,
+    /// Mode of every phase.
+    pub modes: Vec<Mode>,
+    /// The multiphase problem.
+    pub ocp: Ocp,
+    /// Its transcription.
+    pub nlp: Transcription,
+    /// ε used.
+    pub epsilon: f64,
+    /// Settings used.
+    pub settings: ProblemSettings,
+}
+
+/// Trajectory samples (at the collocation state points or on a dense grid).
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Samples {
+    /// Time (s).
+    pub t: Vec<f64>,
+    /// Phase index of each sample.
+    pub phase: Vec<usize>,
+    /// Joint angles.
+    pub q: Vec<Vec<f64>>,
+    /// Joint rates.
+    pub qd: Vec<Vec<f64>>,
+    /// Ball angular velocity.
+    pub omega: Vec<Vec<f64>>,
+    /// Torques.
+    pub tau: Vec<Vec<f64>>,
+    /// Contact force λ (zero in free phases).
+    pub lambda: Vec<Vec<f64>>,
+    /// Distance h (eq. 4).
+    pub h: Vec<f64>,
+    /// Slip margin σ = μ_s λ_n − ‖λ_∥‖ (eq. 18; zero in free phases).
+    pub sigma: Vec<f64>,
+    /// α (eq. 2).
+    pub alpha: Vec<f64>,
+}
+
+/// Result of [`solve`]; serialises to `solution.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OcpSolution {
+    /// Problem name.
+    pub problem: String,
+    /// Solver status.
+    pub status: Status,
+    /// Objective φ.
+    pub objective: f64,
+    /// Cost states c_1(t_f), c_2(t_f).
+    pub c1: f64,
+    /// Second cost state.
+    pub c2: f64,
+    /// Phase modes.
+    pub modes: Vec<Mode>,
+    /// Phase durations (s).
+    pub phase_durations: Vec<f64>,
+    /// Total duration (period for the periodic problems).
+    pub period: f64,
+    /// Mean ω over [0, t_f] (quadrature).
+    pub mean_omega: [f64; 3],
+    /// Impact impulse ι (if any).
+    pub impulse: Vec<f64>,
+    /// Interior-point iterations (all continuation stages).
+    pub iterations: usize,
+    /// Wall time of the solve (s, all stages).
+    pub solve_seconds: f64,
+    /// Strategy stages run: (description, status, iterations).
+    pub stages: Vec<(String, Status, usize)>,
+    /// Final constraint violation.
+    pub constraint_violation: f64,
+    /// Final dual infeasibility.
+    pub dual_infeasibility: f64,
+    /// Collocation points per phase and scheme.
+    pub points: usize,
+    /// Scheme.
+    pub scheme: Scheme,
+    /// ε of the smooth saturation.
+    pub epsilon: f64,
+    /// Values at the state points.
+    pub nodes: Samples,
+    /// Dense interpolation (100 samples per phase).
+    pub dense: Samples,
+    /// Raw per-phase collocation data (warm starts, interpolation).
+    pub raw: Vec<PhaseTrajectory>,
+    /// Static parameters.
+    pub params: Vec<f64>,
+    /// Primal-dual point of the final NLP (for an exact warm start on the same mesh).
+    #[serde(skip)]
+    pub nlp_warm: Option<WarmStart>,
+}
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
+    OcpError::Io { path: path.display().to_string(), msg: e.to_string() }
+}
+
+impl OcpSolution {
+    /// Writes `solution.json`.
+    pub fn write_json(&self, path: &Path) -> Result<(), OcpError> {
+        let s = serde_json::to_string_pretty(self).map_err(|e| io_err(path, e))?;
+        std::fs::write(path, s).map_err(|e| io_err(path, e))
+    }
+
+    /// Reads a solution written by [`OcpSolution::write_json`].
+    pub fn read_json(path: &Path) -> Result<OcpSolution, OcpError> {
+        let s = std::fs::read_to_string(path).map_err(|e| io_err(path, e))?;
+        serde_json::from_str(&s).map_err(|e| io_err(path, e))
+    }
+
+    /// The torques as `t,tau1,...,tauN` CSV (sim/README.md): dense samples with strictly
+    /// increasing times (a sample equal in time to the previous one, at a phase boundary, is
+    /// dropped), full precision.
+    pub fn torques_csv(&self) -> String {
+        let nq = self.dense.tau.first().map_or(0, |v| v.len());
+        let mut s = String::from("t");
+        for i in 1..=nq {
+            s.push_str(&format!(",tau{i}"));
+        }
+        s.push('\n');
+        let mut last = f64::NEG_INFINITY;
+        for (k, &t) in self.dense.t.iter().enumerate() {
+            if t <= last || !t.is_finite() {
+                continue;
+            }
+            last = t;
+            s.push_str(&format!("{t:?}"));
+            for v in &self.dense.tau[k] {
+                s.push_str(&format!(",{v:?}"));
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// Writes [`OcpSolution::torques_csv`] to `path`.
+    pub fn write_torques_csv(&self, path: &Path) -> Result<(), OcpError> {
+        std::fs::write(path, self.torques_csv()).map_err(|e| io_err(path, e))
+    }
+}
+
+/// Scene text by name (`paper`, `human`).
+fn scene_by_name(name: &str) -> Result<Scene, OcpError> {
+    let text = match name {
+        "paper" => bf_generated::paper::SCENE_TOML,
+        "human" => bf_generated::human::SCENE_TOML,
+        _ => return Err(OcpError::Model(format!("unknown scene {name}"))),
+    };
+    Scene::from_toml_str(text, name).map_err(|e| OcpError::Model(e.to_string()))
+}
+
+struct PhaseDef {
+    mode: Mode,
+    h: Option<(f64, f64)>,
+    hdot: Option<(f64, f64)>,
+    duration: (f64, f64),
+    guess_duration: f64,
+}
+
+#[allow(clippy::type_complexity)]
+fn make_phases(
+    scene: &Scene,
+    ph: &Physics,
+    defs: &[PhaseDef],
+    cost: CostKind,
+    eps: f64,
+    points: usize,
+    q_limits: &[(f64, f64)],
+) -> Result<Vec<Phase>, OcpError> {
+    let nq = ph.nq;
+    let mut out = Vec::new();
+    for d in defs {
+        let (node, _) = bf::node_function(
+            scene,
+            ph,
+            &NodeOptions { mode: d.mode, cost, h_bounds: d.h, hdot_bounds: d.hdot, eps },
+        )?;
+        let mut x_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); 2 * nq + 3];
+        x_bounds[..nq].copy_from_slice(q_limits);
+        let na = node.a.len();
+        let mut xg = vec![0.0; 2 * nq + 3];
+        for i in 0..nq {
+            xg[i] = Q_GUESS[i % 3];
+            let (lo, hi) = q_limits[i];
+            if lo.is_finite() || hi.is_finite() {
+                xg[i] = xg[i].clamp(lo, hi);
+            }
+        }
+        out.push(Phase {
+            name: format!("{:?}", d.mode).to_lowercase(),
+            node,
+            x_bounds,
+            a_bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); na],
+            u_bounds: ph.tau_max.iter().map(|&t| (-t, t)).collect(),
+            duration_bounds: d.duration,
+            points,
+            guess: PhaseGuess::constant(xg, vec![0.0; na], vec![0.0; nq], d.guess_duration),
+        });
+    }
+    Ok(out)
+}
+
+fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
+    let mut g = bf_codegen::graph::Graph::new();
+    let v: Vec<_> = (0..nphases as u32).map(|i| g.var(i)).collect();
+    let s = g.sum(&v);
+    PointFunction {
+        name: name.into(),
+        graph: g,
+        vars: (0..nphases).map(|i| (i as u32, VarRef::Duration(i))).collect(),
+        fixed: vec![],
+        outputs: vec![s],
+        bounds: vec![(lo, hi)],
+    }
+}
+
+/// Fixes x(0) of phase 0 to `x0`.
+fn initial_state(x0: &[f64]) -> PointFunction {
+    let mut g = bf_codegen::graph::Graph::new();
+    let v: Vec<_> = (0..x0.len() as u32).map(|i| g.var(i)).collect();
+    PointFunction {
+        name: "initial state".into(),
+        graph: g,
+        vars: (0..x0.len()).map(|i| (i as u32, VarRef::Initial { phase: 0, i })).collect(),
+        fixed: vec![],
+        outputs: v,
+        bounds: x0.iter().map(|&x| (x, x)).collect(),
+    }
+}
+
+/// Fixes components `idx` of the final state of `phase` to 0.
+fn final_zero(phase: usize, idx: &[usize], name: &str) -> PointFunction {
+    let mut g = bf_codegen::graph::Graph::new();
+    let v: Vec<_> = (0..idx.len() as u32).map(|i| g.var(i)).collect();
+    PointFunction {
+        name: name.into(),
+        graph: g,
+        vars: idx.iter().enumerate().map(|(k, &i)| (k as u32, VarRef::Final { phase, i })).collect(),
+        fixed: vec![],
+        outputs: v,
+        bounds: vec![(0.0, 0.0); idx.len()],
+    }
+}
+
+/// Builds the named problem.
+pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, OcpError> {
+    let scene_name = if name == "periodic-cot-human" { "human" } else { "paper" };
+    let scene = scene_by_name(scene_name)?;
+    let ph = Physics::new(&scene)?;
+    let eps = settings.epsilon.or(scene.contact.as_ref().map(|c| c.smooth_eps)).unwrap_or(0.01);
+    if !(eps.is_finite() && eps > 0.0) {
+        return Err(OcpError::InvalidProblem(format!("epsilon must be positive, got {eps}")));
+    }
+    let nq = ph.nq;
+    let nx = 2 * nq + 3;
+    let r = ph.radius;
+    let tol_h = 1e-4;
+    let free_limits = vec![(f64::NEG_INFINITY, f64::INFINITY); nq];
+    let margin = settings.hdot_margin;
+    let pts = settings.points;
+    let mut cost_bounds = vec![];
+    let (defs, cost, objective, mut points, params): (Vec<PhaseDef>, CostKind, Objective, Vec<PointFunction>, Vec<Param>);
+    let iota_params = || -> Vec<Param> {
+        (0..3)
+            .map(|i| Param { name: format!("iota{}", i + 1), lower: -1e3, upper: 1e3, guess: 0.0 })
+            .collect()
+    };
+    let q_limits = if scene_name == "human" { ph.q_limits.clone() } else { free_limits };
+    let mut x_rest = vec![0.0; nx];
+    x_rest[..nq].copy_from_slice(&Q_GUESS[..nq.min(3)]);
+    match name {
+        "periodic-qc" | "periodic-cot" | "periodic-cot-human" => {
+            let qc = name == "periodic-qc";
+            defs = vec![
+                PhaseDef { mode: Mode::Free, h: Some((0.0, f64::INFINITY)), hdot: margin.map(|m| (f64::NEG_INFINITY, -m)), duration: (0.01, 5.0), guess_duration: 1.0 },
+                PhaseDef { mode: Mode::Stick, h: None, hdot: None, duration: (0.01, 5.0), guess_duration: 1.0 },
+                PhaseDef { mode: Mode::Free, h: Some((-tol_h, f64::INFINITY)), hdot: margin.map(|m| (m, f64::INFINITY)), duration: (0.01, 5.0), guess_duration: 1.0 },
+            ];
+            cost = if qc {
+                CostKind::Qc { w: 1.0, omega_ref: [0.0, 0.0, 2.2] }
+            } else {
+                let s = std::f64::consts::FRAC_1_SQRT_2;
+                CostKind::Cot { w: 10.0, omega_hat: [s, -s, 0.0] }
+            };
+            objective = Objective::Ratio(0, 1);
+            params = iota_params();
+            points = vec![
+                bf::end_point(&scene, eps, 0, false, EndQuantity::H(0.3 * r, f64::INFINITY), "h(0) >= 0.3 r")?,
+                bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "0 <= h1(tf) <= 1e-4")?,
+                bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
+                bf::end_point(&scene, eps, 1, true, EndQuantity::DeltaV, "stick end: delta v = 0")?,
+                bf::continuity(nx, 1, 2, "stick -> free continuity"),
+                bf::continuity(nx, 2, 0, "periodicity"),
+            ];
+            if !qc {
+                points.push(duration_sum(3, 0.0, COT_MAX_PERIOD, "period <= 10 s"));
+                // The rotation measure must stay positive for the ratio to be meaningful.
+                cost_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)];
+            }
+        }
+        "reach" => {
+            defs = vec![PhaseDef { mode: Mode::Free, h: Some((0.0, f64::INFINITY)), hdot: None, duration: (0.05, 10.0), guess_duration: 1.0 }];
+            cost = CostKind::TimeEffort { w: 1.0 };
+            objective = Objective::Cost(0);
+            params = vec![];
+            points = vec![
+                initial_state(&x_rest),
+                bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "touch: 0 <= h(tf) <= 1e-4")?,
+                final_zero(0, &(nq..2 * nq).collect::<Vec<_>>(), "at rest at tf"),
+            ];
+        }
+        "reorient" | "rotate-ref" | "rotate-fast" => {
+            defs = vec![
+                PhaseDef { mode: Mode::Free, h: Some((0.0, f64::INFINITY)), hdot: None, duration: (0.05, 5.0), guess_duration: 1.0 },
+                PhaseDef { mode: Mode::Stick, h: None, hdot: None, duration: (0.05, 5.0), guess_duration: 1.0 },
+            ];
+            params = iota_params();
+            points = vec![
+                initial_state(&x_rest),
+                bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "0 <= h1(tf) <= 1e-4")?,
+                bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
+                bf::end_point(&scene, eps, 1, true, EndQuantity::DeltaV, "stick end: delta v = 0")?,
+            ];
+            objective = Objective::Cost(0);
+            match name {
+                "reorient" => {
+                    cost = CostKind::Reorient { w: 0.1, axis: [0.0, 0.0, 1.0] };
+                    let th = std::f64::consts::FRAC_PI_2;
+                    cost_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY), (th, th)];
+                    points.push(duration_sum(2, 0.1, 10.0, "total time <= 10 s"));
+                }
+                "rotate-ref" => {
+                    cost = CostKind::Track { w: 0.1, omega_ref: [0.0, 0.0, 1.0] };
+                    points.push(duration_sum(2, 3.0, 3.0, "horizon = 3 s"));
+                }
+                _ => {
+                    cost = CostKind::Spin { w: 0.01, axis: [0.0, 0.0, 1.0] };
+                    points.push(duration_sum(2, 2.0, 2.0, "horizon = 2 s"));
+                }
+            }
+        }
+        _ => return Err(OcpError::UnknownProblem(name.into(), PROBLEMS.join(", "))),
+    }
+    let modes: Vec<Mode> = defs.iter().map(|d| d.mode).collect();
+    let mut phases = make_phases(&scene, &ph, &defs, cost, eps, pts, &q_limits)?;
+    if let Some(ws) = &settings.warm_start {
+        apply_warm_start(&mut phases, ws);
+    } else if settings.guess == GuessKind::Contact {
+        contact_guess(&scene, eps, &mut phases, &modes)?;
+    }
+    let mut params = params;
+    if let Some(ws) = &settings.warm_start {
+        for (p, v) in params.iter_mut().zip(&ws.params) {
+            p.guess = *v;
+        }
+    }
+    let ocp = Ocp { phases, n_costs: 2, params, points, cost_bounds, objective, scheme: settings.scheme };
+    let nlp = Transcription::new(&ocp)?;
+    Ok(BuiltProblem { name: name.into(), scene, physics: ph, modes, ocp, nlp, epsilon: eps, settings: settings.clone() })
+}
+
+/// The contact configuration q_c on the segment Q_GUESS → Q_DEEP with h(q_c) = 0.
+fn contact_configuration(diag: &Diagnostics, nq: usize) -> Vec<f64> {
+    let at = |s: f64| -> Vec<f64> {
+        let mut x = vec![0.0; 2 * nq + 3];
+        for i in 0..nq.min(3) {
+            x[i] = Q_GUESS[i] + s * (Q_DEEP[i] - Q_GUESS[i]);
+        }
+        x
+    };
+    let (mut lo, mut hi) = (0.0, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if diag.eval(&at(mid)).h > 0.0 { lo = mid } else { hi = mid }
+    }
+    at(lo)[..nq].to_vec()
+}
+
+fn contact_guess(scene: &Scene, eps: f64, phases: &mut [Phase], modes: &[Mode]) -> Result<(), OcpError> {
+    let diag = Diagnostics::new(scene, eps)?;
+    let nq = scene.links.len();
+    let qc = contact_configuration(&diag, nq);
+    let qf: Vec<f64> = phases[0].guess.x[0][..nq].to_vec();
+    let n = phases.len();
+    for (k, ph) in phases.iter_mut().enumerate() {
+        let (qa, qb) = match modes[k] {
+            Mode::Stick => (qc.clone(), qc.clone()),
+            Mode::Free if k + 1 < n && modes[k + 1] == Mode::Stick => (qf.clone(), qc.clone()),
+            Mode::Free if k > 0 => (qc.clone(), qf.clone()),
+            // A lone free phase (reach) approaches the ball.
+            Mode::Free => (qf.clone(), qc.clone()),
+        };
+        let t = ph.guess.duration;
+        let mut xa = ph.guess.x[0].clone();
+        let mut xb = xa.clone();
+        for i in 0..nq {
+            xa[i] = qa[i];
+            xb[i] = qb[i];
+            let v = (qb[i] - qa[i]) / t;
+            xa[nq + i] = v;
+            xb[nq + i] = v;
+        }
+        ph.guess.s = vec![0.0, 1.0];
+        ph.guess.x = vec![xa, xb];
+    }
+    Ok(())
+}
+
+fn apply_warm_start(phases: &mut [Phase], ws: &OcpSolution) {
+    for (ph, raw) in phases.iter_mut().zip(&ws.raw) {
+        let taus: Vec<f64> = (0..=40).map(|k| -1.0 + 2.0 * k as f64 / 40.0).collect();
+        let s: Vec<f64> = taus.iter().map(|t| 0.5 * (t + 1.0)).collect();
+        ph.guess = PhaseGuess {
+            s,
+            x: taus.iter().map(|&t| raw.x_at(t)).collect(),
+            a: taus.iter().map(|&t| raw.a_at(t)).collect(),
+            u: taus.iter().map(|&t| raw.u_at(t)).collect(),
+            duration: raw.duration,
+        };
+    }
+}
+
+fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense: bool) -> Samples {
+    let nq = p.physics.nq;
+    let mut s = Samples::default();
+    for (pi, tr) in traj.iter().enumerate() {
+        let taus: Vec<f64> =
+            if dense { (0..100).map(|k| -1.0 + 2.0 * k as f64 / 99.0).collect() } else { tr.state_tau.clone() };
+        for (k, &tau) in taus.iter().enumerate() {
+            let x = if dense { tr.x_at(tau) } else { tr.x[k].clone() };
+            let u = tr.u_at(tau);
+            let a = tr.a_at(tau);
+            let lam = if p.modes[pi] == Mode::Stick && a.len() >= nq + 6 {
+                a[nq + 3..nq + 6].to_vec()
+            } else {
+                vec![0.0; 3]
+            };
+            let c = diag.eval(&x);
+            let ln: f64 = lam.iter().zip(&c.n).map(|(a, b)| a * b).sum();
+            let par: Vec<f64> = (0..3).map(|i| lam[i] - ln * c.n[i]).collect();
+            let sigma = if p.modes[pi] == Mode::Stick {
+                p.physics.mu_s * ln - par.iter().map(|v| v * v).sum::<f64>().sqrt()
+            } else {
+                0.0
+            };
+            s.t.push(tr.time(tau));
+            s.phase.push(pi);
+            s.q.push(x[..nq].to_vec());
+            s.qd.push(x[nq..2 * nq].to_vec());
+            s.omega.push(x[2 * nq..2 * nq + 3].to_vec());
+            s.tau.push(u);
+            s.lambda.push(lam);
+            s.h.push(c.h);
+            s.sigma.push(sigma);
+            s.alpha.push(c.alpha);
+        }
+    }
+    s
+}
+
+/// Builds the [`OcpSolution`] of `p` at the NLP point `x`.
+pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSolution, OcpError> {
+    let diag = Diagnostics::new(&p.scene, p.epsilon)?;
+    let traj = extract(&p.nlp, x);
+    let nq = p.physics.nq;
+    let period: f64 = traj.iter().map(|t| t.duration).sum();
+    let mut mean = [0.0; 3];
+    for tr in &traj {
+        for (k, &sp) in tr.node_state.iter().enumerate() {
+            for i in 0..3 {
+                mean[i] += 0.5 * tr.duration * tr.node_weight[k] * tr.x[sp][2 * nq + i];
+            }
+        }
+    }
+    if period > 0.0 {
+        mean.iter_mut().for_each(|v| *v /= period);
+    }
+    let c0 = p.nlp.c0;
+    let np = p.ocp.params.len();
+    let (viol, _) = p.nlp.max_violation(x);
+    Ok(OcpSolution {
+        problem: p.name.clone(),
+        status,
+        objective: crate::ipm::Nlp::objective(&p.nlp, x),
+        c1: x[c0],
+        c2: x[c0 + 1],
+        modes: p.modes.clone(),
+        phase_durations: traj.iter().map(|t| t.duration).collect(),
+        period,
+        mean_omega: mean,
+        impulse: x[p.nlp.p0..p.nlp.p0 + np].to_vec(),
+        iterations: 0,
+        solve_seconds: 0.0,
+        stages: vec![],
+        constraint_violation: viol,
+        dual_infeasibility: f64::NAN,
+        points: p.settings.points,
+        scheme: p.settings.scheme,
+        epsilon: p.epsilon,
+        nodes: samples(p, &diag, &traj, false),
+        dense: samples(p, &diag, &traj, true),
+        raw: traj,
+        params: x[p.nlp.p0..p.nlp.p0 + np].to_vec(),
+        nlp_warm: None,
+    })
+}
+
+/// Interior-point settings used by [`solve`].
+pub fn solver_settings(s: &ProblemSettings) -> Settings {
+    Settings { max_iter: s.max_iter, print_level: s.print_level, tol: 1e-8, ..Settings::default() }
+}
+
+type Callback<'a> = Option<&'a mut dyn FnMut(&IterationInfo) -> bool>;
+
+fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
+    match c {
+        Some(f) => Some(&mut **f),
+        None => None,
+    }
+}
+
+/// Solves `p`. Default strategy ([`GuessKind::Auto`]): solve from the PARAMS.md guess (or
+/// the warm start); if that does not succeed, solve again from the geometric
+/// [`GuessKind::Contact`] guess. `callback` sees every iteration (return
+/// `false` to stop).
+pub fn solve(
+    p: &BuiltProblem,
+    mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<OcpSolution, OcpError> {
+    let start = Instant::now();
+    let settings = solver_settings(&p.settings);
+    let mut stages = Vec::new();
+    let mut iters = 0;
+    let sol = solve_nlp(&p.nlp, &settings, None, reborrow(&mut callback))?;
+    iters += sol.iterations;
+    stages.push((format!("{:?} guess, eps {}", if p.settings.warm_start.is_some() { GuessKind::Auto } else { p.settings.guess }, p.epsilon), sol.status, sol.iterations));
+    let mut best = (sol, p);
+    let fallback;
+    if !best.0.status.is_success() && p.settings.warm_start.is_none() && p.settings.guess == GuessKind::Auto {
+        let s1 = ProblemSettings { guess: GuessKind::Contact, ..p.settings.clone() };
+        fallback = build(&p.name, &s1)?;
+        let sol1 = solve_nlp(&fallback.nlp, &settings, None, reborrow(&mut callback))?;
+        iters += sol1.iterations;
+        stages.push((format!("Contact guess, eps {}", p.epsilon), sol1.status, sol1.iterations));
+        best = (sol1, &fallback);
+    }
+    let (sol, pp) = best;
+    let mut out = solution_at(pp, &sol.x, sol.status)?;
+    out.iterations = iters;
+    out.solve_seconds = start.elapsed().as_secs_f64();
+    out.stages = stages;
+    out.constraint_violation = sol.constraint_violation;
+    out.dual_infeasibility = sol.dual_infeasibility;
+    out.nlp_warm = Some(WarmStart::from(&sol));
+    Ok(out)
+}

@@ -1,0 +1,880 @@
+//! Line figures over plain data, rendered to SVG and PNG with the same layout.
+//!
+//! [`LineFigure`]: one axes with [`Series`], switching-time markers (the phase boundaries
+//! t_f^(i) of Sect. 4.2 / Fig. 6), horizontal limit lines ([`HLine`], e.g. the torque limit
+//! |τ_i| ≤ 1 N m) and shaded x-intervals ([`Band`], e.g. the sticking phase).
+//! [`PanelFigure`]: several `LineFigure`s stacked in rows or side by side (e.g. ω_x, ω_y, ω_z).
+//!
+//! Non-finite points (and non-positive points on a log axis) split a series into separate line
+//! pieces — a gap, as in other plotting tools — and are counted in [`RenderReport::skipped_points`].
+//! Colours follow a 10-colour qualitative palette and dash patterns cycle with period 4, so the
+//! first 20 automatically styled series of a figure are pairwise distinct even in grey-scale print.
+
+use crate::{FONT, PlotError, ensure_font};
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Colour of a series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Colour {
+    /// Palette colour chosen from the series index within its figure.
+    #[default]
+    Auto,
+    /// Fixed colour (r, g, b).
+    Rgb(u8, u8, u8),
+}
+
+/// Dash pattern of a series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Dash {
+    /// Pattern chosen from the series index within its figure (solid, dashed, dotted, long dash).
+    #[default]
+    Auto,
+    /// Continuous line.
+    Solid,
+    /// 10 px dash, 6 px gap.
+    Dashed,
+    /// Dots.
+    Dotted,
+    /// 20 px dash, 7 px gap.
+    LongDash,
+}
+
+/// Axis scale.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Scale {
+    /// Linear axis.
+    #[default]
+    Linear,
+    /// Decadic logarithmic axis; non-positive values are skipped.
+    Log10,
+}
+
+/// Where the legend goes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LegendPos {
+    /// The corner of the plotting area that covers the fewest data points.
+    #[default]
+    Auto,
+    /// Upper left corner.
+    UpperLeft,
+    /// Upper right corner.
+    UpperRight,
+    /// Lower left corner.
+    LowerLeft,
+    /// Lower right corner.
+    LowerRight,
+    /// No legend.
+    Hidden,
+}
+
+/// How the panels of a [`PanelFigure`] are arranged.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Layout {
+    /// Stacked vertically (one panel per row).
+    #[default]
+    Rows,
+    /// Side by side (one panel per column).
+    Columns,
+}
+
+/// Appearance of one series.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SeriesStyle {
+    /// Line colour (default: [`Colour::Auto`]).
+    pub colour: Colour,
+    /// Dash pattern (default: [`Dash::Auto`]).
+    pub dash: Dash,
+    /// Line width in pixels (default: 2).
+    pub width: u32,
+    /// Draw a filled circle at every point (default: false; used by work–precision plots).
+    pub markers: bool,
+    /// Show the series in the legend (default: true).
+    pub in_legend: bool,
+}
+
+impl Default for SeriesStyle {
+    fn default() -> Self {
+        Self { colour: Colour::Auto, dash: Dash::Auto, width: 2, markers: false, in_legend: true }
+    }
+}
+
+/// One named polyline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Series {
+    /// Legend text.
+    pub name: String,
+    /// Points (x, y) in data units, drawn in this order.
+    pub points: Vec<(f64, f64)>,
+    /// Appearance.
+    pub style: SeriesStyle,
+}
+
+impl Series {
+    /// A series with the default (automatic) style.
+    pub fn new(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Self { name: name.into(), points, style: SeriesStyle::default() }
+    }
+
+    /// The same series with another style.
+    pub fn styled(mut self, style: SeriesStyle) -> Self {
+        self.style = style;
+        self
+    }
+}
+
+/// A horizontal reference line across the whole axes (limits, bounds, zero lines).
+#[derive(Clone, Debug, PartialEq)]
+pub struct HLine {
+    /// Ordinate in data units.
+    pub y: f64,
+    /// Legend text; empty: not in the legend.
+    pub label: String,
+    /// Colour (default grey when [`Colour::Auto`]).
+    pub colour: Colour,
+}
+
+/// A shaded x-interval spanning the full height of the axes (e.g. a contact phase).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Band {
+    /// Left end in data units.
+    pub x0: f64,
+    /// Right end in data units.
+    pub x1: f64,
+    /// Legend text (shown once per distinct label); empty: not in the legend.
+    pub label: String,
+}
+
+/// A single axes with several series.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LineFigure {
+    /// Caption above the axes (may be empty inside a [`PanelFigure`]).
+    pub title: String,
+    /// x-axis description including the unit, e.g. "t [s]".
+    pub x_label: String,
+    /// y-axis description including the unit, e.g. "ω [rad/s]".
+    pub y_label: String,
+    /// The data.
+    pub series: Vec<Series>,
+    /// Vertical dashed lines with a short label at the top (phase switching times).
+    pub vertical_markers: Vec<(f64, String)>,
+    /// Horizontal reference lines.
+    pub hlines: Vec<HLine>,
+    /// Shaded x-intervals.
+    pub bands: Vec<Band>,
+    /// x-axis scale (default linear).
+    pub x_scale: Scale,
+    /// y-axis scale (default linear).
+    pub y_scale: Scale,
+    /// Fixed x range in data units; `None`: fitted to the data.
+    pub x_range: Option<(f64, f64)>,
+    /// Fixed y range in data units; `None`: fitted to the data (+5 % padding).
+    pub y_range: Option<(f64, f64)>,
+    /// Same data-to-pixel scale on both axes (for geometric views; linear axes only).
+    pub equal_aspect: bool,
+    /// Legend placement (default [`LegendPos::Auto`]).
+    pub legend: LegendPos,
+    /// Output size in pixels when rendered alone (default 1000 × 600).
+    pub size: (u32, u32),
+}
+
+impl LineFigure {
+    /// An empty figure with title and axis descriptions; add series before rendering.
+    pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: Vec::new(),
+            vertical_markers: Vec::new(),
+            hlines: Vec::new(),
+            bands: Vec::new(),
+            x_scale: Scale::Linear,
+            y_scale: Scale::Linear,
+            x_range: None,
+            y_range: None,
+            equal_aspect: false,
+            legend: LegendPos::Auto,
+            size: (1000, 600),
+        }
+    }
+
+    /// Number of points over all series that will not be drawn (NaN/inf, or ≤ 0 on a log axis).
+    pub fn skipped_points(&self) -> usize {
+        self.series
+            .iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|&&(x, y)| tx(x, self.x_scale).is_none() || tx(y, self.y_scale).is_none())
+            .count()
+    }
+}
+
+/// Several axes in one image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PanelFigure {
+    /// Overall caption.
+    pub title: String,
+    /// The panels, top to bottom ([`Layout::Rows`]) or left to right ([`Layout::Columns`]).
+    pub panels: Vec<LineFigure>,
+    /// Arrangement.
+    pub layout: Layout,
+    /// Output size in pixels; `None`: 1000 × (60 + 300 n) for rows, (520 n) × 620 for columns.
+    pub size: Option<(u32, u32)>,
+}
+
+/// What a render call produced.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RenderReport {
+    /// `[stem.svg, stem.png]`.
+    pub paths: [PathBuf; 2],
+    /// Points not drawn (NaN/inf, or ≤ 0 on a log axis), over all panels.
+    pub skipped_points: usize,
+}
+
+/// Renders `fig` to `<stem>.svg` and `<stem>.png` (parent directories are created).
+pub fn render(fig: &LineFigure, stem: impl AsRef<Path>) -> Result<[PathBuf; 2], PlotError> {
+    render_report(fig, stem).map(|r| r.paths)
+}
+
+/// As [`render`], also reporting how many points were skipped.
+pub fn render_report(fig: &LineFigure, stem: impl AsRef<Path>) -> Result<RenderReport, PlotError> {
+    render_impl("", std::slice::from_ref(fig), Layout::Rows, fig.size, stem.as_ref())
+}
+
+/// Renders a multi-panel figure to `<stem>.svg` and `<stem>.png`.
+pub fn render_panels(fig: &PanelFigure, stem: impl AsRef<Path>) -> Result<[PathBuf; 2], PlotError> {
+    render_panels_report(fig, stem).map(|r| r.paths)
+}
+
+/// As [`render_panels`], also reporting how many points were skipped.
+pub fn render_panels_report(
+    fig: &PanelFigure,
+    stem: impl AsRef<Path>,
+) -> Result<RenderReport, PlotError> {
+    if fig.panels.is_empty() {
+        return Err(PlotError::NoSeries(fig.title.clone()));
+    }
+    let n = fig.panels.len() as u32;
+    let size = fig.size.unwrap_or(match fig.layout {
+        Layout::Rows => (1000, 60 + 300 * n),
+        Layout::Columns => (520 * n, 620),
+    });
+    render_impl(&fig.title, &fig.panels, fig.layout, size, stem.as_ref())
+}
+
+// ---------------------------------------------------------------------------------------------
+
+/// Qualitative palette (Tableau 10): distinguishable, and dark enough on white.
+const PALETTE: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+];
+
+/// The palette colour of automatically styled series number `i` (public so tests and callers can
+/// match colours in the output).
+pub fn palette(i: usize) -> (u8, u8, u8) {
+    PALETTE[i % PALETTE.len()]
+}
+
+const DASHES: [Dash; 4] = [Dash::Solid, Dash::Dashed, Dash::Dotted, Dash::LongDash];
+
+/// Maps a data value into plotting coordinates (log10 on log axes); `None` if not plottable.
+fn tx(v: f64, s: Scale) -> Option<f64> {
+    match s {
+        Scale::Linear => v.is_finite().then_some(v),
+        Scale::Log10 => (v.is_finite() && v > 0.0).then(|| v.log10()),
+    }
+}
+
+struct PreparedSeries {
+    name: String,
+    pieces: Vec<Vec<(f64, f64)>>,
+    colour: RGBColor,
+    dash: Dash,
+    width: u32,
+    markers: bool,
+    in_legend: bool,
+}
+
+struct Prepared {
+    series: Vec<PreparedSeries>,
+    skipped: usize,
+    /// Ranges in plotting coordinates (before the equal-aspect adjustment).
+    xr: (f64, f64),
+    yr: (f64, f64),
+}
+
+fn invalid(fig: &LineFigure, what: &str, detail: String) -> PlotError {
+    PlotError::InvalidInput { figure: fig.title.clone(), what: what.into(), detail }
+}
+
+fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
+    if fig.series.is_empty() {
+        return Err(PlotError::NoSeries(fig.title.clone()));
+    }
+    let mut out = Vec::with_capacity(fig.series.len());
+    let mut skipped = 0;
+    for (i, s) in fig.series.iter().enumerate() {
+        if s.points.is_empty() {
+            return Err(PlotError::EmptySeries { figure: fig.title.clone(), series: s.name.clone() });
+        }
+        let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+        let mut bad = 0;
+        for &(x, y) in &s.points {
+            match (tx(x, fig.x_scale), tx(y, fig.y_scale)) {
+                (Some(a), Some(b)) => pieces.last_mut().map_or((), |p| p.push((a, b))),
+                _ => {
+                    bad += 1;
+                    if pieces.last().is_some_and(|p| !p.is_empty()) {
+                        pieces.push(Vec::new());
+                    }
+                }
+            }
+        }
+        pieces.retain(|p| !p.is_empty());
+        if pieces.is_empty() {
+            return Err(PlotError::NoFinitePoints {
+                figure: fig.title.clone(),
+                series: s.name.clone(),
+                skipped: bad,
+            });
+        }
+        skipped += bad;
+        let (r, g, b) = match s.style.colour {
+            Colour::Auto => palette(i),
+            Colour::Rgb(r, g, b) => (r, g, b),
+        };
+        let dash = match s.style.dash {
+            Dash::Auto => DASHES[i % DASHES.len()],
+            d => d,
+        };
+        out.push(PreparedSeries {
+            name: s.name.clone(),
+            pieces,
+            colour: RGBColor(r, g, b),
+            dash,
+            width: s.style.width.max(1),
+            markers: s.style.markers,
+            in_legend: s.style.in_legend && !s.name.is_empty(),
+        });
+    }
+    let pts = || out.iter().flat_map(|s| s.pieces.iter().flatten());
+    let fold = |f: fn(&(f64, f64)) -> f64| {
+        pts().map(f).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+    };
+    let check = |r: Option<(f64, f64)>, s: Scale, what: &str| -> Result<Option<(f64, f64)>, PlotError> {
+        match r {
+            None => Ok(None),
+            Some((a, b)) => match (tx(a, s), tx(b, s)) {
+                (Some(a2), Some(b2)) if a2 < b2 => Ok(Some((a2, b2))),
+                _ => Err(invalid(fig, what, format!("({a}, {b}) is not an increasing finite range"))),
+            },
+        }
+    };
+    let xr_fixed = check(fig.x_range, fig.x_scale, "x_range")?;
+    let yr_fixed = check(fig.y_range, fig.y_scale, "y_range")?;
+    for &(t, ref l) in &fig.vertical_markers {
+        if !t.is_finite() {
+            return Err(invalid(fig, "vertical marker", format!("'{l}' at {t}")));
+        }
+    }
+    for h in &fig.hlines {
+        if tx(h.y, fig.y_scale).is_none() {
+            return Err(invalid(fig, "horizontal line", format!("'{}' at {}", h.label, h.y)));
+        }
+    }
+    for b in &fig.bands {
+        if !(b.x0.is_finite() && b.x1.is_finite() && b.x0 <= b.x1) {
+            return Err(invalid(fig, "band", format!("'{}' [{}, {}]", b.label, b.x0, b.x1)));
+        }
+    }
+    let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), 0.0));
+    let yr = yr_fixed.unwrap_or_else(|| {
+        let (mut lo, mut hi) = fold(|p| p.1);
+        for h in &fig.hlines {
+            if let Some(y) = tx(h.y, fig.y_scale) {
+                lo = lo.min(y);
+                hi = hi.max(y);
+            }
+        }
+        widen((lo, hi), 0.05)
+    });
+    Ok(Prepared { series: out, skipped, xr, yr })
+}
+
+/// Pads a range by `frac` of its span and makes degenerate ranges non-empty.
+fn widen((lo, hi): (f64, f64), frac: f64) -> (f64, f64) {
+    let span = hi - lo;
+    if span > 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        (lo - frac * span, hi + frac * span)
+    } else {
+        let d = if lo.abs() > 0.0 { 0.1 * lo.abs() } else { 1.0 };
+        (lo - d, hi + d)
+    }
+}
+
+/// Tick label text for plotting coordinate `v` on an axis spanning `span`.
+fn tick_label(v: f64, span: f64, scale: Scale) -> String {
+    match scale {
+        Scale::Log10 => {
+            let k = v.round();
+            if (v - k).abs() < 1e-6 {
+                format!("1e{}", k as i64)
+            } else {
+                format!("{:.0e}", 10f64.powf(v))
+            }
+        }
+        Scale::Linear => {
+            if v.abs() < 1e-9 * span.max(1e-300) {
+                return "0".into();
+            }
+            let step = span / 8.0;
+            let s = if v.abs() >= 1e5 || step < 1e-4 {
+                format!("{v:.2e}")
+            } else {
+                let dec = (-step.log10().floor()).clamp(0.0, 6.0) as usize;
+                format!("{v:.dec$}")
+            };
+            match s.strip_prefix('-') {
+                Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+                _ => s,
+            }
+        }
+    }
+}
+
+fn de<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
+}
+
+// Layout constants (pixels). Shared by SVG and PNG so both look the same.
+const MARGIN: u32 = 14;
+const X_LABEL_AREA: u32 = 58;
+const Y_LABEL_AREA: u32 = 92;
+const TITLE_FONT: u32 = 24;
+const PANEL_TITLE_FONT: u32 = 20;
+const DESC_FONT: u32 = 18;
+const TICK_FONT: u32 = 15;
+const LEGEND_FONT: u32 = 15;
+const MARKER_FONT: u32 = 13;
+
+fn render_impl(
+    title: &str,
+    panels: &[LineFigure],
+    layout: Layout,
+    size: (u32, u32),
+    stem: &Path,
+) -> Result<RenderReport, PlotError> {
+    ensure_font()?;
+    let prepared = panels.iter().map(prepare).collect::<Result<Vec<_>, _>>()?;
+    let skipped_points = prepared.iter().map(|p| p.skipped).sum();
+    if size.0 < 200 || size.1 < 150 {
+        return Err(PlotError::InvalidInput {
+            figure: title.into(),
+            what: "size".into(),
+            detail: format!("{size:?} is too small (min 200 × 150)"),
+        });
+    }
+    let svg_path = with_ext(stem, "svg");
+    let png_path = with_ext(stem, "png");
+    if let Some(dir) = svg_path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io { path: dir.into(), source })?;
+    }
+
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
+        draw_all(&root, title, panels, &prepared, layout)?;
+        root.present().map_err(de)?;
+    }
+    write_atomic(&svg_path, svg.as_bytes())?;
+
+    let tmp = tmp_sibling(&png_path);
+    let res = (|| {
+        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+        draw_all(&root, title, panels, &prepared, layout)?;
+        root.present().map_err(de)
+    })();
+    match res {
+        Ok(()) => std::fs::rename(&tmp, &png_path)
+            .map_err(|source| PlotError::Io { path: png_path.clone(), source })?,
+        Err(e) => {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
+    }
+    Ok(RenderReport { paths: [svg_path, png_path], skipped_points })
+}
+
+/// `stem` with `.ext` appended (not replacing: stems like `fig6.omega` keep their dot).
+fn with_ext(stem: &Path, ext: &str) -> PathBuf {
+    let mut s = stem.as_os_str().to_owned();
+    s.push(".");
+    s.push(ext);
+    PathBuf::from(s)
+}
+
+/// A temporary name next to `path`, keeping its extension (the bitmap encoder picks the
+/// format from it).
+fn tmp_sibling(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp{}.{ext}", std::process::id()))
+}
+
+/// Writes `bytes` to `path` via a temporary sibling and a rename, so readers never see a
+/// partially written file.
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io { path: dir.into(), source })?;
+    }
+    let tmp = tmp_sibling(path);
+    std::fs::write(&tmp, bytes).map_err(|source| PlotError::Io { path: tmp.clone(), source })?;
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        PlotError::Io { path: path.into(), source }
+    })
+}
+
+fn draw_all<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    panels: &[LineFigure],
+    prepared: &[Prepared],
+    layout: Layout,
+) -> Result<(), PlotError> {
+    root.fill(&WHITE).map_err(de)?;
+    let body = if title.is_empty() {
+        root.clone()
+    } else {
+        root.titled(title, (FONT, TITLE_FONT)).map_err(de)?
+    };
+    let n = panels.len();
+    let areas = match layout {
+        Layout::Rows => body.split_evenly((n, 1)),
+        Layout::Columns => body.split_evenly((1, n)),
+    };
+    let title_font = if n > 1 || !title.is_empty() { PANEL_TITLE_FONT } else { TITLE_FONT };
+    for ((area, fig), prep) in areas.iter().zip(panels).zip(prepared) {
+        draw_panel(area, fig, prep, title_font)?;
+    }
+    Ok(())
+}
+
+fn dash_element(
+    pts: Vec<(i32, i32)>,
+    dash: Dash,
+    style: ShapeStyle,
+) -> DashedPathElement<std::vec::IntoIter<(i32, i32)>, i32> {
+    let (on, off) = dash_pattern(dash);
+    DashedPathElement::new(pts, on, off, style)
+}
+
+/// (dash, gap) in pixels; solid lines are one very long dash.
+fn dash_pattern(d: Dash) -> (i32, i32) {
+    match d {
+        Dash::Auto | Dash::Solid => (1_000_000, 1),
+        Dash::Dashed => (10, 6),
+        Dash::Dotted => (2, 5),
+        Dash::LongDash => (20, 7),
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    fig: &LineFigure,
+    prep: &Prepared,
+    title_font: u32,
+) -> Result<(), PlotError> {
+    let inner = if fig.title.is_empty() {
+        area.clone()
+    } else {
+        area.titled(&fig.title, (FONT, title_font)).map_err(de)?
+    };
+    let (w, h) = inner.dim_in_pixel();
+    let pw = w.saturating_sub(Y_LABEL_AREA + 3 * MARGIN).max(10) as f64;
+    let ph = h.saturating_sub(X_LABEL_AREA + 2 * MARGIN).max(10) as f64;
+    let (mut xr, mut yr) = (prep.xr, prep.yr);
+    if fig.equal_aspect {
+        // Grow the range whose data-per-pixel is smaller so both axes share one scale.
+        let sx = (xr.1 - xr.0) / pw;
+        let sy = (yr.1 - yr.0) / ph;
+        if sx > sy {
+            let c = 0.5 * (yr.0 + yr.1);
+            yr = (c - 0.5 * sx * ph, c + 0.5 * sx * ph);
+        } else {
+            let c = 0.5 * (xr.0 + xr.1);
+            xr = (c - 0.5 * sy * pw, c + 0.5 * sy * pw);
+        }
+    }
+    let mut chart = ChartBuilder::on(&inner)
+        .margin(MARGIN)
+        .margin_right(2 * MARGIN)
+        .x_label_area_size(X_LABEL_AREA)
+        .y_label_area_size(Y_LABEL_AREA)
+        .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
+        .map_err(de)?;
+    let (xs, ys) = (xr.1 - xr.0, yr.1 - yr.0);
+    let (xsc, ysc) = (fig.x_scale, fig.y_scale);
+    let xfmt = move |v: &f64| tick_label(*v, xs, xsc);
+    let yfmt = move |v: &f64| tick_label(*v, ys, ysc);
+    chart
+        .configure_mesh()
+        .x_desc(fig.x_label.as_str())
+        .y_desc(fig.y_label.as_str())
+        .axis_desc_style((FONT, DESC_FONT))
+        .label_style((FONT, TICK_FONT))
+        .x_labels(9)
+        .y_labels(7)
+        .x_label_formatter(&xfmt)
+        .y_label_formatter(&yfmt)
+        .bold_line_style(RGBColor(215, 215, 215))
+        .light_line_style(RGBColor(242, 242, 242))
+        .axis_style(RGBColor(60, 60, 60))
+        .draw()
+        .map_err(de)?;
+
+    // Shaded bands.
+    let band_fill = RGBColor(110, 110, 110).mix(0.13);
+    let mut band_labels: Vec<&str> = Vec::new();
+    for b in &fig.bands {
+        let (Some(a), Some(c)) = (tx(b.x0, xsc), tx(b.x1, xsc)) else { continue };
+        let (a, c) = (a.max(xr.0), c.min(xr.1));
+        if a >= c {
+            continue;
+        }
+        let anno = chart
+            .draw_series(std::iter::once(Rectangle::new([(a, yr.0), (c, yr.1)], band_fill.filled())))
+            .map_err(de)?;
+        if !b.label.is_empty() && !band_labels.contains(&b.label.as_str()) {
+            band_labels.push(&b.label);
+            anno.label(b.label.as_str()).legend(move |(x, y)| {
+                Rectangle::new([(x, y - 6), (x + 24, y + 6)], band_fill.filled())
+            });
+        }
+    }
+
+    // Horizontal reference lines.
+    for hl in &fig.hlines {
+        let Some(y) = tx(hl.y, ysc) else { continue };
+        let c = match hl.colour {
+            Colour::Auto => RGBColor(70, 70, 70),
+            Colour::Rgb(r, g, b) => RGBColor(r, g, b),
+        };
+        let style = c.stroke_width(2);
+        let anno = chart
+            .draw_series(DashedLineSeries::new(vec![(xr.0, y), (xr.1, y)], 14, 5, style))
+            .map_err(de)?;
+        if !hl.label.is_empty() {
+            anno.label(hl.label.as_str())
+                .legend(move |(x, y)| dash_element(vec![(x, y), (x + 24, y)], Dash::LongDash, style));
+        }
+    }
+
+    // Switching-time markers; labels are staggered when they would collide.
+    let marker_style = RGBColor(90, 90, 90).stroke_width(1);
+    let mut last_px = f64::NEG_INFINITY;
+    let mut level = 0;
+    let mut marker_boxes: Vec<(f64, f64)> = Vec::new(); // pixel x of label starts, for the legend
+    for (t, label) in &fig.vertical_markers {
+        let Some(x) = tx(*t, xsc) else { continue };
+        if x < xr.0 || x > xr.1 {
+            continue;
+        }
+        chart
+            .draw_series(DashedLineSeries::new(vec![(x, yr.0), (x, yr.1)], 5, 4, marker_style))
+            .map_err(de)?;
+        if label.is_empty() {
+            continue;
+        }
+        let px = (x - xr.0) / xs * pw;
+        let width = 8.0 * label.chars().count() as f64 + 8.0;
+        level = if px - last_px < width { (level + 1) % 3 } else { 0 };
+        last_px = px;
+        marker_boxes.push((px, px + width));
+        let text = Text::new(
+            label.clone(),
+            (4, 4 + 16 * level),
+            (FONT, MARKER_FONT).into_font().color(&RGBColor(60, 60, 60)),
+        );
+        chart
+            .draw_series(std::iter::once(EmptyElement::at((x, yr.1)) + text))
+            .map_err(de)?;
+    }
+
+    // Data.
+    for s in &prep.series {
+        let style = s.colour.stroke_width(s.width);
+        let mut labelled = false;
+        for piece in &s.pieces {
+            let anno = match s.dash {
+                Dash::Auto | Dash::Solid => {
+                    chart.draw_series(LineSeries::new(piece.iter().copied(), style)).map_err(de)?
+                }
+                d => {
+                    let (on, off) = dash_pattern(d);
+                    chart
+                        .draw_series(DashedLineSeries::new(piece.iter().copied(), on, off, style))
+                        .map_err(de)?
+                }
+            };
+            if s.in_legend && !labelled {
+                labelled = true;
+                let (dash, markers) = (s.dash, s.markers);
+                anno.label(s.name.as_str()).legend(move |(x, y)| {
+                    let base = EmptyElement::at((x, y)) + dash_element(vec![(0, 0), (24, 0)], dash, style);
+                    // A transparent dot when there are no markers keeps one element type.
+                    let dot = if markers { style.filled() } else { TRANSPARENT.filled() };
+                    base + Circle::new((12, 0), 4, dot)
+                });
+            }
+            if s.markers {
+                chart
+                    .draw_series(piece.iter().map(|&p| Circle::new(p, 4, style.filled())))
+                    .map_err(de)?;
+            }
+        }
+    }
+
+    // Legend.
+    let entries: Vec<&str> = prep
+        .series
+        .iter()
+        .filter(|s| s.in_legend)
+        .map(|s| s.name.as_str())
+        .chain(fig.hlines.iter().filter(|h| !h.label.is_empty()).map(|h| h.label.as_str()))
+        .chain(band_labels.iter().copied())
+        .collect();
+    if entries.is_empty() || fig.legend == LegendPos::Hidden {
+        return Ok(());
+    }
+    let pos = match fig.legend {
+        LegendPos::UpperLeft => SeriesLabelPosition::UpperLeft,
+        LegendPos::UpperRight => SeriesLabelPosition::UpperRight,
+        LegendPos::LowerLeft => SeriesLabelPosition::LowerLeft,
+        LegendPos::LowerRight => SeriesLabelPosition::LowerRight,
+        LegendPos::Auto | LegendPos::Hidden => {
+            let longest = entries
+                .iter()
+                .map(|e| inner.estimate_text_size(e, &TextStyle::from((FONT, LEGEND_FONT).into_font())).map_or(200, |d| d.0))
+                .max()
+                .unwrap_or(0) as f64;
+            let box_w = longest + 60.0;
+            let box_h = 22.0 * entries.len() as f64 + 16.0;
+            auto_legend(prep, &marker_boxes, xr, yr, (pw, ph), (box_w, box_h))
+        }
+    };
+    chart
+        .configure_series_labels()
+        .position(pos)
+        .margin(10)
+        .legend_area_size(32)
+        .label_font((FONT, LEGEND_FONT))
+        .background_style(WHITE.mix(0.88))
+        .border_style(RGBColor(160, 160, 160))
+        .draw()
+        .map_err(de)?;
+    Ok(())
+}
+
+/// The corner whose legend-sized box covers the fewest data points (and marker labels).
+fn auto_legend(
+    prep: &Prepared,
+    marker_boxes: &[(f64, f64)],
+    xr: (f64, f64),
+    yr: (f64, f64),
+    (pw, ph): (f64, f64),
+    (bw, bh): (f64, f64),
+) -> SeriesLabelPosition {
+    // Candidates in preference order; pixel boxes measured from the top-left of the plot.
+    let cands = [
+        (SeriesLabelPosition::UpperRight, pw - bw - 10.0, 10.0),
+        (SeriesLabelPosition::UpperLeft, 10.0, 10.0),
+        (SeriesLabelPosition::LowerRight, pw - bw - 10.0, ph - bh - 10.0),
+        (SeriesLabelPosition::LowerLeft, 10.0, ph - bh - 10.0),
+    ];
+    let to_px = |(x, y): (f64, f64)| ((x - xr.0) / (xr.1 - xr.0) * pw, (yr.1 - y) / (yr.1 - yr.0) * ph);
+    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
+    for (pos, x0, y0) in cands {
+        let inside = |(px, py): (f64, f64)| px >= x0 - 6.0 && px <= x0 + bw + 6.0 && py >= y0 - 6.0 && py <= y0 + bh + 6.0;
+        let mut count = 0usize;
+        for s in &prep.series {
+            for piece in &s.pieces {
+                // Sample densely enough that a line crossing the box is seen even between points.
+                for w in piece.windows(2) {
+                    let (a, b) = (to_px(w[0]), to_px(w[1]));
+                    let n = ((b.0 - a.0).hypot(b.1 - a.1) / 4.0).ceil().clamp(1.0, 200.0) as usize;
+                    count += (0..n)
+                        .filter(|&k| {
+                            let f = k as f64 / n as f64;
+                            inside((a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1)))
+                        })
+                        .count();
+                }
+                if piece.len() == 1 && inside(to_px(piece[0])) {
+                    count += 1;
+                }
+            }
+        }
+        for &(m0, m1) in marker_boxes {
+            if m1 >= x0 && m0 <= x0 + bw && y0 < 60.0 {
+                count += 50;
+            }
+        }
+        if count < best.0 {
+            best = (count, pos);
+        }
+    }
+    best.1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short_and_signless_zero() {
+        assert_eq!(tick_label(0.0, 2.0, Scale::Linear), "0");
+        assert_eq!(tick_label(-1e-17, 2.0, Scale::Linear), "0");
+        assert_eq!(tick_label(0.25, 2.0, Scale::Linear), "0.25");
+        assert_eq!(tick_label(-3.0, 16.0, Scale::Log10), "1e-3");
+        assert_eq!(tick_label(2.0, 16.0, Scale::Linear), "2");
+    }
+
+    #[test]
+    fn widen_handles_degenerate_ranges() {
+        assert_eq!(widen((0.0, 0.0), 0.05), (-1.0, 1.0));
+        let (a, b) = widen((2.0, 2.0), 0.05);
+        assert!(a < 2.0 && b > 2.0);
+        let (a, b) = widen((0.0, 10.0), 0.1);
+        assert!((a + 1.0).abs() < 1e-12 && (b - 11.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nan_splits_series_and_is_counted() {
+        let mut f = LineFigure::new("t", "x", "y");
+        f.series.push(Series::new("a", vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 2.0), (3.0, 3.0)]));
+        let p = prepare(&f).unwrap();
+        assert_eq!(p.skipped, 1);
+        assert_eq!(p.series[0].pieces.len(), 2);
+        assert_eq!(f.skipped_points(), 1);
+    }
+
+    #[test]
+    fn log_axis_rejects_non_positive() {
+        let mut f = LineFigure::new("t", "x", "y");
+        f.y_scale = Scale::Log10;
+        f.series.push(Series::new("a", vec![(1.0, 0.0), (2.0, -1.0)]));
+        assert!(matches!(prepare(&f), Err(PlotError::NoFinitePoints { skipped: 2, .. })));
+    }
+}
