@@ -18,19 +18,30 @@ fn generate_reports_every_kernel() {
     .unwrap();
     let g = generate(&sc, &text).unwrap();
     let names: Vec<&str> = g.report.kernels.iter().map(|k| k.name.as_str()).collect();
-    assert_eq!(names, sc.kernels.iter().map(|s| s.as_str()).collect::<Vec<_>>());
+    assert_eq!(
+        names,
+        sc.kernels.iter().map(|s| s.as_str()).collect::<Vec<_>>()
+    );
     for k in &g.report.kernels {
         assert!(g.code.contains(&format!("pub fn {}(", k.name)));
         assert!(k.ops.temporaries > 0);
     }
     // mass matrix of the finger: M depends on q2, q3 only (2 sin/cos), structural zeros emit
     // no arithmetic, and the whole kernel is small.
-    let mm = g.report.kernels.iter().find(|k| k.name == "mass_matrix").unwrap();
+    let mm = g
+        .report
+        .kernels
+        .iter()
+        .find(|k| k.name == "mass_matrix")
+        .unwrap();
     assert_eq!(mm.ops.sincos, 2);
     assert!(mm.ops.total() < 80, "{:?}", mm.ops);
     let text = g.report.to_string();
     assert!(text.contains("mass_matrix") && text.contains("generated in"));
-    assert!(g.code.contains("m[0][1] = 0.0;"), "M_12 of the finger is a structural zero");
+    assert!(
+        g.code.contains("m[0][1] = 0.0;"),
+        "M_12 of the finger is a structural zero"
+    );
 }
 
 #[test]
@@ -64,12 +75,29 @@ fn eval_all_outputs_and_input_errors() {
     assert_eq!(
         names,
         [
-            "p_e", "R3", "J_p", "J_o", "M", "C", "Cqd", "g", "alpha", "sat_alpha", "p_c", "h",
-            "J_c", "sat_alpha_smooth", "p_c_smooth", "h_smooth", "J_c_smooth"
+            "p_e",
+            "R3",
+            "J_p",
+            "J_o",
+            "M",
+            "C",
+            "Cqd",
+            "g",
+            "alpha",
+            "sat_alpha",
+            "p_c",
+            "h",
+            "J_c",
+            "sat_alpha_smooth",
+            "p_c_smooth",
+            "h_smooth",
+            "J_c_smooth"
         ]
     );
     // Cqd = C q̇
-    let (EvalValue::Matrix(c), EvalValue::Vector(cqd)) = (out.get("C").unwrap(), out.get("Cqd").unwrap()) else {
+    let (EvalValue::Matrix(c), EvalValue::Vector(cqd)) =
+        (out.get("C").unwrap(), out.get("Cqd").unwrap())
+    else {
         panic!("shapes")
     };
     for i in 0..3 {
@@ -97,7 +125,14 @@ fn runtime_parameters_scale_masses_and_lengths() {
     let mut sc: Scene = scene("paper");
     let mut names = Vec::new();
     for i in 1..=3 {
-        for f in ["mass", "inertia.xx", "inertia.yy", "inertia.zz", "a", "com.x"] {
+        for f in [
+            "mass",
+            "inertia.xx",
+            "inertia.yy",
+            "inertia.zz",
+            "a",
+            "com.x",
+        ] {
             names.push(format!("link{i}.{f}"));
         }
     }
@@ -120,7 +155,13 @@ fn runtime_parameters_scale_masses_and_lengths() {
             st.p = names
                 .iter()
                 .zip(&base)
-                .map(|(n, v)| if n.contains("mass") || n.contains("inertia") { v * s } else { *v })
+                .map(|(n, v)| {
+                    if n.contains("mass") || n.contains("inertia") {
+                        v * s
+                    } else {
+                        *v
+                    }
+                })
                 .collect();
             let m1 = ev(&m, &mm, &st);
             let c1 = ev(&m, &cqdg, &st);
@@ -158,7 +199,9 @@ fn runtime_parameters_scale_masses_and_lengths() {
             });
             let g2 = ev(&m, &grav, &st);
             for (a, b) in g2.iter().zip(&g0) {
-                assert!((a / s - b).abs() <= 1e-13 * g0.iter().fold(1e-6f64, |x, y| x.max(y.abs())));
+                assert!(
+                    (a / s - b).abs() <= 1e-13 * g0.iter().fold(1e-6f64, |x, y| x.max(y.abs()))
+                );
             }
             // accuracy against double-double at the scaled parameters
             let exact: Vec<Dd> = ev_as::<Dd>(&m, &cqdg, &st);

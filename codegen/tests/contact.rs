@@ -72,7 +72,10 @@ fn closest_point_and_distance() {
         let mut pe_ex: Vec<_> = tip.t.to_vec();
         pe_ex.extend([tip.r[0][0], tip.r[1][0], tip.r[2][0]]);
         let sc = m.scene().clone();
-        let (ob, r) = (sc.ball.as_ref().unwrap().center, sc.ball.as_ref().unwrap().radius);
+        let (ob, r) = (
+            sc.ball.as_ref().unwrap().center,
+            sc.ball.as_ref().unwrap().radius,
+        );
         let len = sc.links.last().unwrap().a;
         let mut rng = rng(31);
         for _ in 0..200 {
@@ -83,10 +86,16 @@ fn closest_point_and_distance() {
             let mut best = f64::INFINITY;
             for k in 0..=20_000 {
                 let t = -len * k as f64 / 20_000.0;
-                let d: f64 = (0..3).map(|i| (g[i] + t * g[3 + i] - ob[i]).powi(2)).sum::<f64>();
+                let d: f64 = (0..3)
+                    .map(|i| (g[i] + t * g[3 + i] - ob[i]).powi(2))
+                    .sum::<f64>();
                 best = best.min(d.sqrt() - r);
             }
-            assert!((v.h - best).abs() < 1e-7, "{name}: h {} vs brute force {best}", v.h);
+            assert!(
+                (v.h - best).abs() < 1e-7,
+                "{name}: h {} vs brute force {best}",
+                v.h
+            );
             assert!(v.sat <= 0.0 && v.sat >= -len, "{name}: sat out of range");
             let alpha: f64 = (0..3).map(|i| (ob[i] - g[i]) * g[3 + i]).sum();
             assert!((v.alpha - alpha).abs() < 1e-14, "{name}: alpha (eq. 2)");
@@ -147,11 +156,18 @@ fn velocities_and_time_derivatives() {
             // ṙ_c, ḣ, J̇_c q̇ along q(t) = q + t q̇.
             let pa = unpack(&ev(&m, &all, &s.moved(&s.qd, h)), nq);
             let pb = unpack(&ev(&m, &all, &s.moved(&s.qd, -h)), nq);
-            let rcd: Vec<f64> = (0..3).map(|i| (pa.r_c[i] - pb.r_c[i]) / (2.0 * h)).collect();
+            let rcd: Vec<f64> = (0..3)
+                .map(|i| (pa.r_c[i] - pb.r_c[i]) / (2.0 * h))
+                .collect();
             assert!(rel_err(&v.rc_dot, &rcd, 1.0) < 1e-7, "{name}: rc_dot");
-            assert!((v.h_dot - (pa.h - pb.h) / (2.0 * h)).abs() < 1e-7, "{name}: h_dot");
+            assert!(
+                (v.h_dot - (pa.h - pb.h) / (2.0 * h)).abs() < 1e-7,
+                "{name}: h_dot"
+            );
             // J̇_c q̇ = d/dt (J_c(q(t)) q̇) with q̇ fixed = d/dt v_c.
-            let jd: Vec<f64> = (0..3).map(|i| (pa.v_c[i] - pb.v_c[i]) / (2.0 * h)).collect();
+            let jd: Vec<f64> = (0..3)
+                .map(|i| (pa.v_c[i] - pb.v_c[i]) / (2.0 * h))
+                .collect();
             assert!(rel_err(&v.jc_dot_qd, &jd, 1.0) < 1e-6, "{name}: jc_dot_qd");
         }
     }
@@ -178,7 +194,8 @@ fn smooth_saturation_tends_to_exact_and_is_bounded() {
             assert!(sm.sat < 0.0 && sm.sat > -len, "{name}");
             assert!((sm.sat - e.sat).abs() <= 0.5 * 0.01 + 1e-15, "{name}");
             let want = 0.5
-                * (-len + ((e.alpha + len).powi(2) + 1e-4).sqrt() - (e.alpha.powi(2) + 1e-4).sqrt());
+                * (-len + ((e.alpha + len).powi(2) + 1e-4).sqrt()
+                    - (e.alpha.powi(2) + 1e-4).sqrt());
             assert!((sm.sat - want).abs() < 1e-14, "{name}: eq. 58-59");
         }
     }
@@ -189,7 +206,10 @@ fn tip_contact_has_no_saturation() {
     let mut m = Model::new(&test_scene("modified4")).unwrap();
     let nq = m.nq();
     let c = m.contact(false).unwrap();
-    assert!(m.g.is_zero(c.sat_alpha), "tip contact: sat must be the constant 0");
+    assert!(
+        m.g.is_zero(c.sat_alpha),
+        "tip contact: sat must be the constant 0"
+    );
     let cs = m.contact(true).unwrap();
     assert!(m.g.is_zero(cs.sat_alpha));
     let (jp, _) = m.tip_jacobian();

@@ -65,7 +65,10 @@ fn fd_partial(g: &Graph, f: &[Id], x: &[f64], k: usize, h: f64) -> Vec<f64> {
     b[k] -= h;
     let fa = eval::<f64>(g, f, &a);
     let fb = eval::<f64>(g, f, &b);
-    fa.iter().zip(&fb).map(|(p, m)| (p - m) / (2.0 * h)).collect()
+    fa.iter()
+        .zip(&fb)
+        .map(|(p, m)| (p - m) / (2.0 * h))
+        .collect()
 }
 
 fn close(a: f64, b: f64, tol: f64) -> bool {
@@ -129,7 +132,12 @@ fn hessian_is_symmetric_and_matches_finite_differences() {
             let col = fd_partial(&g, &grad, &x, j, 1e-5);
             for i in 0..NV as usize {
                 assert!(close(hv[i][j], hv[j][i], 1e-12), "H not symmetric");
-                assert!(close(hv[i][j], col[i], 1e-5), "H[{i}][{j}] {} vs FD {}", hv[i][j], col[i]);
+                assert!(
+                    close(hv[i][j], col[i], 1e-5),
+                    "H[{i}][{j}] {} vs FD {}",
+                    hv[i][j],
+                    col[i]
+                );
             }
         }
     }
@@ -164,12 +172,7 @@ fn piecewise_operations() {
     let lo = g.constant(-1.0);
     let hi = g.zero();
     let xy = g.mul(x, y);
-    let fs = [
-        g.abs(xy),
-        g.min(x, y),
-        g.max(x, y),
-        g.sat(xy, lo, hi),
-    ];
+    let fs = [g.abs(xy), g.min(x, y), g.max(x, y), g.sat(xy, lo, hi)];
     let mut rng = ChaCha8Rng::seed_from_u64(45);
     let vars = [0u32, 1];
     let grad: Vec<Vec<Id>> = fs

@@ -113,7 +113,9 @@ fn gravity_is_gradient_of_potential() {
         for _ in 0..20 {
             let s = State::random(&m, &mut rng);
             let gv = ev(&m, &g, &s);
-            let fdg: Vec<f64> = (0..n).map(|k| fd(&m, &[u], &s, &unit(n, k), 1e-5)[0]).collect();
+            let fdg: Vec<f64> = (0..n)
+                .map(|k| fd(&m, &[u], &s, &unit(n, k), 1e-5)[0])
+                .collect();
             let e = rel_err(&gv, &fdg, 1e-2);
             assert!(e < 1e-7, "{name}: g vs dU/dq: {e}");
         }
@@ -170,7 +172,10 @@ fn newton_euler_agrees_with_lagrangian() {
             let a = ev(&m, &lag, &s);
             let b = ev(&m, &rnea, &s);
             let e = rel_err(&a, &b, 1e-3);
-            assert!(e < 1e-12, "{name}: RNEA vs Lagrangian: {e} ({a:?} vs {b:?})");
+            assert!(
+                e < 1e-12,
+                "{name}: RNEA vs Lagrangian: {e} ({a:?} vs {b:?})"
+            );
         }
     }
 }

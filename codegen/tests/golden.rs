@@ -75,7 +75,10 @@ fn planar_arm_matches_textbook_closed_forms() {
                 [m2 * (lc2 * lc2 + l1 * lc2 * c2) + i2, m2 * lc2 * lc2 + i2],
             ];
             let h = m2 * l1 * lc2 * s2;
-            let cqd = [-h * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]), h * qd[0] * qd[0]];
+            let cqd = [
+                -h * (2.0 * qd[0] * qd[1] + qd[1] * qd[1]),
+                h * qd[0] * qd[0],
+            ];
             let g = [
                 (m1 * lc1 + m2 * l1) * g0 * c1 + m2 * lc2 * g0 * c12,
                 m2 * lc2 * g0 * c12,
@@ -96,7 +99,10 @@ fn planar_arm_matches_textbook_closed_forms() {
                 assert!((gv[a] - g[a]).abs() < 1e-12, "g[{a}]");
                 assert!((cv[a] - cqd[a]).abs() < 1e-12, "C qd[{a}]");
                 assert!((v[a] - cqd[a] - g[a]).abs() < 1e-12, "RNEA C qd + g[{a}]");
-                assert!((lag[a] - cqd[a] - g[a]).abs() < 1e-12, "Lagrangian C qd + g[{a}]");
+                assert!(
+                    (lag[a] - cqd[a] - g[a]).abs() < 1e-12,
+                    "Lagrangian C qd + g[{a}]"
+                );
             }
             // Tip Jacobian of the planar arm.
             let s1 = q[0].sin();
@@ -104,7 +110,10 @@ fn planar_arm_matches_textbook_closed_forms() {
             let mut jp = [[0.0; 2]; 3];
             let mut jo = [[0.0; 2]; 3];
             planar2::tip_jacobian(&q, &p, &mut jp, &mut jo);
-            let want = [[-l1 * s1 - l2 * s12, -l2 * s12], [l1 * c1 + l2 * c12, l2 * c12]];
+            let want = [
+                [-l1 * s1 - l2 * s12, -l2 * s12],
+                [l1 * c1 + l2 * c12, l2 * c12],
+            ];
             for a in 0..2 {
                 for b in 0..2 {
                     assert!((jp[a][b] - want[a][b]).abs() < 1e-14);

@@ -41,10 +41,16 @@ fn rx(al: f64) -> M4 {
     rt([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]], [0.0; 3])
 }
 fn tz(d: f64) -> M4 {
-    rt([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [0.0, 0.0, d])
+    rt(
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        [0.0, 0.0, d],
+    )
 }
 fn tx(a: f64) -> M4 {
-    rt([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]], [a, 0.0, 0.0])
+    rt(
+        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        [a, 0.0, 0.0],
+    )
 }
 
 /// World transforms of frames 0..=n and the tip, straight from the DH definitions.
@@ -97,12 +103,19 @@ fn frames_match_numeric_dh_chain() {
             let (refs, tip) = reference_frames(&sc, &s.q);
             for i in 0..n {
                 let got = ev(&m, &pose_ids(&frames[i]), &s);
-                let want = if i + 1 == n { m4_flat(&tip) } else { m4_flat(&refs[i + 1]) };
+                let want = if i + 1 == n {
+                    m4_flat(&tip)
+                } else {
+                    m4_flat(&refs[i + 1])
+                };
                 let e = rel_err(&got, &want, 1.0);
                 assert!(e < 1e-14, "{name}: frame {} differs by {e}", i + 1);
             }
             let wf = ev(&m, &pose_ids(&m.world_frame(n)), &s);
-            assert!(rel_err(&wf, &m4_flat(&refs[n]), 1.0) < 1e-14, "{name}: last DH frame");
+            assert!(
+                rel_err(&wf, &m4_flat(&refs[n]), 1.0) < 1e-14,
+                "{name}: last DH frame"
+            );
             let _ = m.tip_jacobian();
         }
     }
@@ -129,7 +142,8 @@ fn tip_jacobian_matches_finite_differences() {
                 assert!(rel_err(&col, &dp, 1.0) < 1e-8, "{name}: J_p column {k}");
                 // Ṙ Rᵀ = S(ω): ω_x = (ṘRᵀ)_21, ω_y = (ṘRᵀ)_02, ω_z = (ṘRᵀ)_10.
                 let dr = fd(&m, &rot, &s, &unit(n, k), 1e-6);
-                let w = |i: usize, j: usize| (0..3).map(|l| dr[i * 3 + l] * r[j * 3 + l]).sum::<f64>();
+                let w =
+                    |i: usize, j: usize| (0..3).map(|l| dr[i * 3 + l] * r[j * 3 + l]).sum::<f64>();
                 let omega = [w(2, 1), w(0, 2), w(1, 0)];
                 let col: Vec<f64> = (0..3).map(|i| jov[i * n + k]).collect();
                 assert!(rel_err(&col, &omega, 1.0) < 1e-8, "{name}: J_o column {k}");
@@ -175,7 +189,10 @@ fn tip_jdot_qd_matches_finite_differences() {
                 .map(|r| (0..n).map(|c| dj[r * n + c] * s.qd[c]).sum())
                 .collect();
             let got = ev(&m, &jdq, &s);
-            assert!(rel_err(&got, &want, 1.0) < 1e-7, "{name}: Jdot qd {got:?} vs {want:?}");
+            assert!(
+                rel_err(&got, &want, 1.0) < 1e-7,
+                "{name}: Jdot qd {got:?} vs {want:?}"
+            );
         }
     }
 }
@@ -206,10 +223,13 @@ fn mass_matrix_gives_kinetic_energy_of_link_motion() {
                 let rot: Vec<_> = m.world_frame(i + 1).r.iter().flatten().copied().collect();
                 let r = ev(&m, &rot, &s);
                 let dr = fd(&m, &rot, &s, &s.qd, 1e-6);
-                let w = |a: usize, b: usize| (0..3).map(|k| dr[a * 3 + k] * r[b * 3 + k]).sum::<f64>();
+                let w =
+                    |a: usize, b: usize| (0..3).map(|k| dr[a * 3 + k] * r[b * 3 + k]).sum::<f64>();
                 let om = [w(2, 1), w(0, 2), w(1, 0)];
                 // body-frame ω = Rᵀ ω
-                let ob: Vec<f64> = (0..3).map(|c| (0..3).map(|k| r[k * 3 + c] * om[k]).sum()).collect();
+                let ob: Vec<f64> = (0..3)
+                    .map(|c| (0..3).map(|k| r[k * 3 + c] * om[k]).sum())
+                    .collect();
                 let inertia = sc.link_inertia(i);
                 let mut rot_e = 0.0;
                 for a in 0..3 {

@@ -2,11 +2,11 @@
 //! interpreter of the same graphs: |q| up to 1e6 rad (and periodicity in q), q̇ of 1e3 and
 //! 1e-12, stretched (q2 = q3 = 0) and folded (q3 = π) fingers.
 
+use bf_codegen::Scene;
 use bf_codegen::dd::Dd;
 use bf_codegen::interp::Tape;
 use bf_codegen::kernels::build_kernel;
 use bf_codegen::robot::Model;
-use bf_codegen::Scene;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -30,7 +30,11 @@ macro_rules! accuracy {
                 continue;
             }
             let def = build_kernel(&mut model, k).unwrap();
-            let ids: Vec<_> = def.outputs.iter().flat_map(|o| o.ids.iter().copied()).collect();
+            let ids: Vec<_> = def
+                .outputs
+                .iter()
+                .flat_map(|o| o.ids.iter().copied())
+                .collect();
             let tape = Tape::new(&model.g, &ids);
             for &(q, qd) in &$states {
                 let q: [f64; s::NQ] = q;
@@ -48,13 +52,17 @@ macro_rules! accuracy {
                     vars[2 * s::NQ + i] = Dd::new(omega[i]);
                 }
                 vars[2 * s::NQ + 3] = Dd::new(eps);
-                for i in 0..s::NP {
-                    vars[l.param(i) as usize] = Dd::new(p[i]);
+                for (i, pi) in p.iter().enumerate() {
+                    vars[l.param(i) as usize] = Dd::new(*pi);
                 }
                 let exact = tape.eval::<Dd>(&vars);
                 let got = s::eval_flat(k, &q, &qd, &omega, eps, &p).unwrap();
                 let e = rel(&got, &exact, 1e-300);
-                assert!(e < $tol, "{}::{k}: relative error {e:e} at q = {q:?}, qd = {qd:?}", stringify!($m));
+                assert!(
+                    e < $tol,
+                    "{}::{k}: relative error {e:e} at q = {q:?}, qd = {qd:?}",
+                    stringify!($m)
+                );
                 worst = worst.max(e);
             }
         }
@@ -63,10 +71,24 @@ macro_rules! accuracy {
 }
 
 const DYN: &[&str] = &[
-    "mass_matrix", "coriolis_matrix", "coriolis_qd", "gravity", "cqd_g", "cqd_g_rnea",
-    "mass_cqd_g", "dmass_dq", "christoffel",
+    "mass_matrix",
+    "coriolis_matrix",
+    "coriolis_qd",
+    "gravity",
+    "cqd_g",
+    "cqd_g_rnea",
+    "mass_cqd_g",
+    "dmass_dq",
+    "christoffel",
 ];
-const KIN: &[&str] = &["frames", "tip_jacobian", "com_jacobians", "tip_jdot_qd", "contact", "contact_smooth"];
+const KIN: &[&str] = &[
+    "frames",
+    "tip_jacobian",
+    "com_jacobians",
+    "tip_jdot_qd",
+    "contact",
+    "contact_smooth",
+];
 
 fn finger_states(rng: &mut ChaCha8Rng, qscale: f64, qdscale: f64) -> Vec<([f64; 3], [f64; 3])> {
     (0..30)
@@ -86,7 +108,9 @@ fn paper_accurate_for_huge_angles_and_velocities() {
         let w1 = accuracy!(paper, DYN, states.clone(), 1e-13);
         let w2 = accuracy!(paper, KIN, states.clone(), 1e-13);
         let w3 = accuracy!(human, DYN, states, 1e-13);
-        eprintln!("|q| < {qs:e}, |qd| < {qds:e}: worst relative error dyn {w1:.1e}, kin {w2:.1e}, human {w3:.1e}");
+        eprintln!(
+            "|q| < {qs:e}, |qd| < {qds:e}: worst relative error dyn {w1:.1e}, kin {w2:.1e}, human {w3:.1e}"
+        );
     }
 }
 
@@ -94,7 +118,11 @@ fn paper_accurate_for_huge_angles_and_velocities() {
 fn paper_accurate_stretched_and_folded() {
     let mut states = Vec::new();
     for q1 in [0.0, 0.7, -2.0] {
-        for (q2, q3) in [(0.0, 0.0), (0.0, std::f64::consts::PI), (std::f64::consts::FRAC_PI_2, -std::f64::consts::PI)] {
+        for (q2, q3) in [
+            (0.0, 0.0),
+            (0.0, std::f64::consts::PI),
+            (std::f64::consts::FRAC_PI_2, -std::f64::consts::PI),
+        ] {
             states.push(([q1, q2, q3], [0.5, -1.0, 2.0]));
         }
     }

@@ -2,10 +2,10 @@
 //! same graphs (random states and perturbed runtime parameters). Both perform the same f64
 //! operations in the same order, so the results must be bit-identical.
 
+use bf_codegen::Scene;
 use bf_codegen::interp::Tape;
 use bf_codegen::kernels::build_kernel;
 use bf_codegen::robot::Model;
-use bf_codegen::Scene;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -21,12 +21,24 @@ macro_rules! check_scene {
             assert_eq!(n, s::PARAM_NAMES[i]);
             assert_eq!(v.to_bits(), s::PARAM_DEFAULTS[i].to_bits());
         }
-        assert_eq!(s::KERNELS, scene.kernels.iter().map(|k| k.as_str()).collect::<Vec<_>>().as_slice());
+        assert_eq!(
+            s::KERNELS,
+            scene
+                .kernels
+                .iter()
+                .map(|k| k.as_str())
+                .collect::<Vec<_>>()
+                .as_slice()
+        );
         let mut rng = ChaCha8Rng::seed_from_u64($seed);
         let mut compared = 0usize;
         for &k in s::KERNELS {
             let def = build_kernel(&mut model, k).unwrap();
-            let ids: Vec<_> = def.outputs.iter().flat_map(|o| o.ids.iter().copied()).collect();
+            let ids: Vec<_> = def
+                .outputs
+                .iter()
+                .flat_map(|o| o.ids.iter().copied())
+                .collect();
             let tape = Tape::new(&model.g, &ids);
             for _ in 0..25 {
                 let q: [f64; s::NQ] = std::array::from_fn(|_| rng.random_range(-4.0..4.0));
@@ -41,12 +53,17 @@ macro_rules! check_scene {
                 vars[s::NQ..2 * s::NQ].copy_from_slice(&qd);
                 vars[2 * s::NQ..2 * s::NQ + 3].copy_from_slice(&omega);
                 vars[2 * s::NQ + 3] = eps;
-                for i in 0..s::NP {
-                    vars[l.param(i) as usize] = p[i];
+                for (i, pi) in p.iter().enumerate() {
+                    vars[l.param(i) as usize] = *pi;
                 }
                 let want = tape.eval::<f64>(&vars);
                 let got = s::eval_flat(k, &q, &qd, &omega, eps, &p).unwrap();
-                assert_eq!(got.len(), want.len(), "{}::{k}: output size", stringify!($m));
+                assert_eq!(
+                    got.len(),
+                    want.len(),
+                    "{}::{k}: output size",
+                    stringify!($m)
+                );
                 for (j, (a, b)) in got.iter().zip(&want).enumerate() {
                     assert!(
                         a.to_bits() == b.to_bits(),
@@ -57,7 +74,17 @@ macro_rules! check_scene {
                 compared += got.len();
             }
         }
-        assert!(s::eval_flat("no_such_kernel", &[0.0; s::NQ], &[0.0; s::NQ], &[0.0; 3], 0.01, &s::PARAM_DEFAULTS).is_none());
+        assert!(
+            s::eval_flat(
+                "no_such_kernel",
+                &[0.0; s::NQ],
+                &[0.0; s::NQ],
+                &[0.0; 3],
+                0.01,
+                &s::PARAM_DEFAULTS
+            )
+            .is_none()
+        );
         assert!(compared > 0);
     }};
 }

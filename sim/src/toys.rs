@@ -23,7 +23,7 @@
 
 use crate::{Guard, HybridSystem, SimError, Transition};
 
-/// Harmonic oscillator x' = v, v' = −ω² x (state [x, v]); no guards.
+/// Harmonic oscillator x' = v, v' = −ω² x (state `[x, v]`); no guards.
 #[derive(Debug, Clone, Copy)]
 pub struct Oscillator {
     /// Angular frequency ω (rad/s).
@@ -79,7 +79,7 @@ impl HybridSystem for CrossingOscillator {
     }
 }
 
-/// Planar pendulum θ'' = −(g/l) sin θ (state [θ, θ']).
+/// Planar pendulum θ'' = −(g/l) sin θ (state `[θ, θ']`).
 #[derive(Debug, Clone, Copy)]
 pub struct Pendulum {
     /// Gravity (m/s²).
@@ -116,7 +116,7 @@ impl HybridSystem for Pendulum {
     }
 }
 
-/// x' = x² (state [x]); finite-time blow-up at t = 1/x₀ for x₀ > 0.
+/// x' = x² (state `[x]`); finite-time blow-up at t = 1/x₀ for x₀ > 0.
 #[derive(Debug, Clone, Copy)]
 pub struct BlowUp;
 
@@ -149,7 +149,7 @@ pub enum BallMode {
     Resting,
 }
 
-/// Point mass falling onto the plane y = 0 (state [y, v]); see the module docs.
+/// Point mass falling onto the plane y = 0 (state `[y, v]`); see the module docs.
 #[derive(Debug, Clone, Copy)]
 pub struct BouncingBall {
     /// Gravity g (m/s²).
@@ -303,7 +303,7 @@ pub enum BlockMode {
     SlipNeg,
 }
 
-/// Block on a frictional plane under the tent force F(t) (state [x, v]); see the module docs.
+/// Block on a frictional plane under the tent force F(t) (state `[x, v]`); see the module docs.
 #[derive(Debug, Clone, Copy)]
 pub struct FrictionBlock {
     /// Mass m (kg).

@@ -13,14 +13,20 @@ pub const SCENES: [&str; 4] = ["paper", "human", "puma560", "iiwa7"];
 
 /// Load `scenes/<name>.toml`.
 pub fn scene(name: &str) -> Scene {
-    Scene::load(format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR")))
-        .unwrap_or_else(|e| panic!("{e}"))
+    Scene::load(format!(
+        "{}/../scenes/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Load `codegen/tests/scenes/<name>.toml` (test-only scenes).
 pub fn test_scene(name: &str) -> Scene {
-    Scene::load(format!("{}/tests/scenes/{name}.toml", env!("CARGO_MANIFEST_DIR")))
-        .unwrap_or_else(|e| panic!("{e}"))
+    Scene::load(format!(
+        "{}/tests/scenes/{name}.toml",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Every scene: the four of `scenes/` and the test-only ones.
@@ -102,13 +108,7 @@ pub fn ev_as<S: Scalar>(model: &Model, ids: &[Id], s: &State) -> Vec<S> {
 }
 
 /// Central finite difference of `f` along `dir` at `s` (step h).
-pub fn fd(
-    model: &Model,
-    ids: &[Id],
-    s: &State,
-    dir: &[f64],
-    h: f64,
-) -> Vec<f64> {
+pub fn fd(model: &Model, ids: &[Id], s: &State, dir: &[f64], h: f64) -> Vec<f64> {
     let a = ev(model, ids, &s.moved(dir, h));
     let b = ev(model, ids, &s.moved(dir, -h));
     a.iter().zip(&b).map(|(x, y)| (x - y) / (2.0 * h)).collect()

@@ -767,11 +767,13 @@ impl<'p> Core<'p> {
                     self.f_t = f_t;
                     break LsOutcome::Accepted { alpha, trials };
                 }
-                if trials == 1 && theta_t >= theta && settings.max_soc > 0 && self.m > 0 {
-                    if let Some(a) = self.second_order_correction(ctx, settings, alpha, theta, phi)
-                    {
-                        break LsOutcome::Accepted { alpha: a, trials };
-                    }
+                if trials == 1
+                    && theta_t >= theta
+                    && settings.max_soc > 0
+                    && self.m > 0
+                    && let Some(a) = self.second_order_correction(ctx, settings, alpha, theta, phi)
+                {
+                    break LsOutcome::Accepted { alpha: a, trials };
                 }
             }
             alpha *= settings.alpha_red_factor;
@@ -1033,15 +1035,16 @@ impl<'p> Core<'p> {
             last.inf_pr = err.primal_inf;
             last.inf_du = err.dual_inf;
             last.mu = self.mu;
-            if lines % 10 == 0 {
+            if lines.is_multiple_of(10) {
                 self.log_header(settings);
             }
             lines += 1;
             self.log(settings, &last);
-            if let Some(cb) = ctx.callback.as_mut() {
-                if !cb(&last) {
-                    return Ok(self.output(Status::UserStop, false));
-                }
+            if let Some(cb) = ctx.callback.as_mut()
+                && !cb(&last)
+            {
+                return Ok(self.output(Status::UserStop, false));
+            }
             }
             if self.restoration && self.prob.early_stop(&self.x) {
                 return Ok(self.output(Status::Solved, true));

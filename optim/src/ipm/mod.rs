@@ -101,7 +101,7 @@ pub fn solve_with(
             if v.is_nan() { x0_user[j] } else { v }
         })
         .collect();
-    let x_int = reform.to_internal(&x0c);
+    let x_int = reform.internal_point(&x0c);
     let os = reform.obj_scale;
     let nint = reform.n();
     let start = match warm {

@@ -267,7 +267,7 @@ impl Settings {
             });
         }
         pos("bound_mult_init", self.bound_mult_init)?;
-        if !(self.bound_relax_factor >= 0.0) {
+        if self.bound_relax_factor.is_nan() || self.bound_relax_factor < 0.0 {
             return Err(OptimError::InvalidSetting {
                 name: "bound_relax_factor",
                 msg: "must be ≥ 0".into(),
@@ -297,7 +297,7 @@ impl Settings {
         unit("resto_required_reduction", self.resto_required_reduction)?;
         pos("resto_penalty", self.resto_penalty)?;
         pos("s_max", self.s_max)?;
-        if !(self.max_wall_time > 0.0) {
+        if self.max_wall_time.is_nan() || self.max_wall_time <= 0.0 {
             return Err(OptimError::InvalidSetting {
                 name: "max_wall_time",
                 msg: "must be positive".into(),

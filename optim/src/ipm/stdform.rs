@@ -307,7 +307,7 @@ impl<'a> Reformulated<'a> {
     }
 
     /// Internal point from a user point (slacks set to the scaled constraint values).
-    pub fn to_internal(&mut self, x_user: &[f64]) -> Vec<f64> {
+    pub fn internal_point(&mut self, x_user: &[f64]) -> Vec<f64> {
         let mut x = vec![0.0; self.xl.len()];
         for (k, &j) in self.free.iter().enumerate() {
             x[k] = x_user[j];

@@ -12,6 +12,8 @@
 //! | `rotate-ref` | free–stick | ∫‖ω − ω_ref‖² + 0.1‖τ‖² over a fixed 3 s horizon, ω_ref = (0,0,1) |
 //! | `rotate-fast` | free–stick | ∫(0.01‖τ‖² − ω_z) over a fixed 2 s horizon |
 //!
+//! The periodic problems start the period at the apex of the free arc (ḣ(0) = 0), which
+//! removes the time-shift degeneracy of the free arc without changing the optimum.
 //! Common constraints: |τ_i| ≤ τ_max (1 N m), h ≥ 0 in free approach phases, λ_n ≥ 0 and the
 //! smooth friction cone in stick, the sticking impact law (eq. 40) with ι_n ≥ 0,
 //! 0 ≤ h(t_f⁽¹⁾) ≤ 10⁻⁴ and h⁽³⁾ ≥ −10⁻⁴ (Sect. 7 work-arounds), Δv = 0 at the stick phase's
@@ -79,6 +81,9 @@ pub struct ProblemSettings {
     pub hdot_margin: Option<f64>,
     /// Initial guess (ignored with a warm start).
     pub guess: GuessKind,
+    /// Interior-point settings (`None`: defaults with `tol` = 1e-8); `max_iter` and
+    /// `print_level` below override theirs.
+    pub ipm: Option<Settings>,
     /// Interior-point iteration limit.
     pub max_iter: usize,
     /// Solver log level (0 silent).
@@ -95,6 +100,7 @@ impl Default for ProblemSettings {
             impulse_cone: false,
             hdot_margin: None,
             guess: GuessKind::Auto,
+            ipm: None,
             max_iter: 1500,
             print_level: 0,
         }
@@ -394,6 +400,11 @@ pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, Ocp
             params = iota_params();
             points = vec![
                 bf::end_point(&scene, eps, 0, false, EndQuantity::H(0.3 * r, f64::INFINITY), "h(0) >= 0.3 r")?,
+                // The period may start anywhere on the free arc with h ≥ 0.3 r: a continuum of
+                // equivalent optima (a flat direction that stalls Newton's method). Starting at
+                // the arc's apex (ḣ(0) = 0) picks one without changing the optimal value, since
+                // the apex is where h is largest.
+                bf::end_point(&scene, eps, 0, false, EndQuantity::HDot(0.0, 0.0), "apex start: hdot(0) = 0")?,
                 bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "0 <= h1(tf) <= 1e-4")?,
                 bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
                 bf::end_point(&scene, eps, 1, true, EndQuantity::DeltaV, "stick end: delta v = 0")?,
@@ -615,7 +626,8 @@ pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSol
 
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
-    Settings { max_iter: s.max_iter, print_level: s.print_level, tol: 1e-8, ..Settings::default() }
+    let base = s.ipm.clone().unwrap_or_else(|| Settings { tol: 1e-8, ..Settings::default() });
+    Settings { max_iter: s.max_iter, print_level: s.print_level, ..base }
 }
 
 type Callback<'a> = Option<&'a mut dyn FnMut(&IterationInfo) -> bool>;
