@@ -544,6 +544,15 @@ impl Graph {
         acc
     }
 
+    /// Number of operations (non-constant, non-variable nodes) needed to evaluate `roots`.
+    pub fn cost(&self, roots: &[Id]) -> usize {
+        let mark = self.cone(roots);
+        mark.iter()
+            .zip(&self.nodes)
+            .filter(|(m, n)| **m && !matches!(n, Node::Const(_) | Node::Var(_)))
+            .count()
+    }
+
     /// Mark every node in the cone (transitive children) of `roots`.
     pub fn cone(&self, roots: &[Id]) -> Vec<bool> {
         let Some(max) = roots.iter().map(|r| r.index()).max() else {

@@ -277,15 +277,16 @@ pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenE
             )
         }
         "mass_cqd_g" => {
-            // C q̇ + g by Newton–Euler: O(n) expressions against O(n³) for the Lagrangian
-            // path (puma560: 462 vs 2503 operations); both agree to rounding (tested).
+            // C q̇ + g by Newton–Euler or by the Christoffel symbols, whichever needs fewer
+            // operations together with M (Newton–Euler for arms: O(n) expressions; the
+            // Christoffel form for the finger). Both agree to rounding (tested).
             let m = model.mass_matrix();
-            let v = model.cqd_g_rnea();
+            let v = model.cqd_g_cheapest(&flat2(&m));
             (
                 vec![Q, Qd, P],
                 vec![arr("m", &[Nq, Nq], flat2(&m)), arr("cqd_g", &[Nq], v)],
-                "M(q) (kg m², eq. 22a) and C q̇ + g (N m, recursive Newton–Euler) in one kernel \
-                 (shared subexpressions)."
+                "M(q) (kg m², eq. 22a) and C q̇ + g (N m; recursive Newton–Euler or Christoffel \
+                 symbols, whichever is cheaper) in one kernel (shared subexpressions)."
                     .into(),
             )
         }

@@ -589,11 +589,40 @@ impl Model {
             .collect()
     }
 
-    /// C q̇ = Ṁ q̇ − ∂T/∂q with T = ½ q̇ᵀ M q̇ (equivalent to the Christoffel form).
+    /// C q̇ + g with the cheaper of the Newton–Euler and Christoffel paths, counting the
+    /// operations shared with `with` (e.g. the entries of M computed in the same kernel).
+    pub fn cqd_g_cheapest(&mut self, with: &[Id]) -> Vec<Id> {
+        let rnea = self.cqd_g_rnea();
+        let c = self.coriolis_qd_christoffel();
+        let g = self.gravity();
+        let chr: Vec<Id> = c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect();
+        let cost = |m: &Model, v: &[Id]| {
+            let mut all = with.to_vec();
+            all.extend_from_slice(v);
+            m.g.cost(&all)
+        };
+        if cost(self, &chr) < cost(self, &rnea) {
+            chr
+        } else {
+            rnea
+        }
+    }
+
+    /// C q̇ (Lagrangian): the cheaper of Ṁ q̇ − ∂T/∂q (T = ½ q̇ᵀ M q̇) and the contraction of
+    /// the Christoffel symbols; both equal Σ_jk c_ijk q̇_j q̇_k.
     pub fn coriolis_qd(&mut self) -> Vec<Id> {
         if let Some(c) = &self.cache.cqd {
             return c.clone();
         }
+        let a = self.coriolis_qd_energy();
+        let b = self.coriolis_qd_christoffel();
+        let out = if self.g.cost(&b) < self.g.cost(&a) { b } else { a };
+        self.cache.cqd = Some(out.clone());
+        out
+    }
+
+    /// C q̇ = Ṁ q̇ − ∂T/∂q with T = ½ q̇ᵀ M q̇.
+    pub fn coriolis_qd_energy(&mut self) -> Vec<Id> {
         let n = self.nq();
         let m = self.mass_matrix();
         let qd = self.qd_ids();
@@ -609,9 +638,35 @@ impl Model {
         let t = self.g.mul(half, tq);
         let vars = self.q_vars();
         let dtdq = diff::reverse(&mut self.g, &[(t, one)], &vars);
-        let out: Vec<Id> = (0..n).map(|i| self.g.sub(mdq[i], dtdq[i])).collect();
-        self.cache.cqd = Some(out.clone());
-        out
+        (0..n).map(|i| self.g.sub(mdq[i], dtdq[i])).collect()
+    }
+
+    /// C q̇ from the Christoffel symbols with the symmetric contraction
+    /// (C q̇)_i = Σ_j c_ijj q̇_j² + 2 Σ_{j<k} c_ijk q̇_j q̇_k.
+    pub fn coriolis_qd_christoffel(&mut self) -> Vec<Id> {
+        let n = self.nq();
+        let c = self.christoffel();
+        let qd = self.qd_ids();
+        let two = self.g.constant(2.0);
+        let mut prods = vec![vec![Id(0); n]; n];
+        for j in 0..n {
+            for k in j..n {
+                let p = self.g.mul(qd[j], qd[k]);
+                prods[j][k] = if j == k { p } else { self.g.mul(two, p) };
+            }
+        }
+        (0..n)
+            .map(|i| {
+                let mut acc = self.g.zero();
+                for j in 0..n {
+                    for k in j..n {
+                        let t = self.g.mul(c[i][j][k], prods[j][k]);
+                        acc = self.g.add(acc, t);
+                    }
+                }
+                acc
+            })
+            .collect()
     }
 
     /// U(q) = −Σ m_i g_0ᵀ p_i.

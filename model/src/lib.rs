@@ -32,6 +32,8 @@
 //! Slip:  acc = model.slip(x, τ, hint);  ContactToFree if λ_n < 0;  SlipToStick if ‖Δv‖ ≤ ε
 //!        and decreasing → out = model.slip_to_stick_update(x)  (projection onto Δv = 0)
 //! ```
+//! For event location use the continuous [`transitions::guards`] (h/r, λ_n, σ, ‖Δv‖ − ε),
+//! and for drift control [`Model::project_configuration`] / [`Model::project_velocity`].
 //! Contact modes let h drift within `TransitionSettings::contact_tolerance` (Sect. 3.1);
 //! beyond it they return `NotInContact`. `ModelError::Painleve` in slip means the
 //! complementarity problem has no / several solutions (Sect. 7): the simulator must decide.
@@ -56,15 +58,17 @@
 //!
 //! # Example
 //! ```
-//! use bf_model::{fixtures, ImpactLaw, State, Vec3};
+//! use bf_model::{fixtures, Mode, ModelError, State, Vec3};
 //! # fn main() -> Result<(), bf_model::ModelError> {
 //! let model = fixtures::paper_scene()?;
-//! let x = State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::new(0.0, 0.0, 2.0));
-//! let acc = model.free(&x, &Vec3::new(0.1, 0.0, 0.0))?;
-//! assert!(acc.qdd.iter().all(|v| v.is_finite()));
+//! // finger bent away from the ball (h > 0), ball spinning about z
+//! let x = State::new(Vec3::new(0.0, -1.0, 0.0), Vec3::zeros(), Vec3::new(0.0, 0.0, 2.0));
+//! let tau = Vec3::new(0.1, 0.0, 0.0);
+//! let acc = model.accelerations(Mode::Free, &x, &tau)?;
+//! let power = model.power_balance(&x, &tau, &acc.force)?; // dE/dt
+//! assert!(power.total < 0.0); // at rest the finger gains no energy; the socket damps ω
 //! // contact-mode queries refuse states that are not in contact
-//! assert!(model.stick(&x, &Vec3::zeros()).is_err() || model.evaluate(&x)?.contact.h.abs() < 1e-3);
-//! # let _ = ImpactLaw::ALL;
+//! assert!(matches!(model.stick(&x, &tau), Err(ModelError::NotInContact { .. })));
 //! # Ok(())
 //! # }
 //! ```
@@ -89,7 +93,7 @@ pub use kinematics::{ContactGeometry, ContactKinematics};
 pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
 pub use params::Params;
 pub use state::{Mode, State};
-pub use transitions::TransitionSettings;
+pub use transitions::{Guard, Transition, TransitionSettings};
 
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, ModelError>;

@@ -9,6 +9,7 @@
 //! | [`slip_to_stick_update`] | velocities projected onto Δv = 0 with the sticking impulse (eq. 40–41) |
 //! | [`stick_to_slip_update`] | minimal (M-norm) velocity change giving Δv⁺ = `slip_kick` · λ_∥/‖λ_∥‖ |
 //! | [`check`] | first transition that fires in a given mode |
+//! | [`guards`] | continuous guard functions (h/r, λ_n, σ, ‖Δv‖ − ε) for event location by root finding |
 //! | [`project_configuration`] | drift control of h (eq. 8): M_f-metric Newton step Δq = −h M_f⁻¹ J_cᵀ n / nᵀ W n |
 //! | [`project_velocity`] | drift control of eq. 46 (Stick: Δv = 0) or eq. 36 (Slip: n·v_c = 0) by the M-norm-closest velocities |
 //!
@@ -190,6 +191,47 @@ pub fn check(
                 None
             }
         }
+    }
+}
+
+/// A scalar guard: `transition` fires when `value` crosses zero from above (value ≤ 0).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Guard {
+    /// The transition this guard triggers.
+    pub transition: Transition,
+    /// Guard value; positive while the current mode is valid.
+    pub value: f64,
+}
+
+/// Continuous guard functions of `mode` for event location (Sect. 3.1: "the solver has to
+/// pinpoint when the transition condition becomes satisfied with equality"):
+/// Free: h / r (Impact; the ḣ, ḧ parts of eq. 50 matter only at h = 0, see
+/// [`free_to_contact`]); Stick: λ_n (ContactToFree), σ (StickToSlip); Slip: λ_n
+/// (ContactToFree), ‖Δv‖ − ε (SlipToStick; crossing downwards implies d‖Δv‖/dt < 0).
+pub fn guards(
+    mode: Mode,
+    kin: &ContactKinematics,
+    params: &Params,
+    acc: &Accelerations,
+    settings: &TransitionSettings,
+) -> [Option<Guard>; 2] {
+    let g = |transition, value| Some(Guard { transition, value });
+    match mode {
+        Mode::Free => [
+            g(Transition::Impact, kin.contact.h / params.ball_radius()),
+            None,
+        ],
+        Mode::Stick => [
+            g(Transition::ContactToFree, acc.force.lambda_n),
+            g(Transition::StickToSlip, acc.force.sigma),
+        ],
+        Mode::Slip => [
+            g(Transition::ContactToFree, acc.force.lambda_n),
+            g(
+                Transition::SlipToStick,
+                kin.contact.delta_v.norm() - settings.slip_eps,
+            ),
+        ],
     }
 }
 

@@ -310,3 +310,36 @@ fn projections_remove_drift() {
         assert_eq!((o.qd, o.omega), (xd.qd, xd.omega));
     }
 }
+
+#[test]
+fn guards_agree_with_predicates() {
+    let mut rng = ChaCha8Rng::seed_from_u64(28);
+    let model = paper_ref_model();
+    let (p, s) = (*model.params(), *model.settings());
+    for _ in 0..30 {
+        let tau = rvec(&mut rng, 1.0);
+        let x = stick_state(&model, &mut rng);
+        let kin = model.evaluate(&x).unwrap();
+        let acc = model.stick(&x, &tau).unwrap();
+        let g = transitions::guards(Mode::Stick, &kin, &p, &acc, &s);
+        let fired: Vec<Transition> = g
+            .iter()
+            .flatten()
+            .filter(|g| g.value <= 0.0)
+            .map(|g| g.transition)
+            .collect();
+        match transitions::check(Mode::Stick, &kin, &p, &acc, &s) {
+            Some(t) => assert!(fired.contains(&t)),
+            None => assert!(fired.is_empty() || (acc.force.lambda_n == 0.0)),
+        }
+        let kin_free = model.evaluate(&x).unwrap();
+        let g = transitions::guards(
+            Mode::Free,
+            &kin_free,
+            &p,
+            &model.free(&x, &tau).unwrap(),
+            &s,
+        );
+        assert_eq!(g[0].unwrap().value, kin_free.contact.h / p.ball_radius());
+    }
+}

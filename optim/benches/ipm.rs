@@ -53,16 +53,25 @@ fn bench_ipm(c: &mut Criterion) {
     for (name, p) in [
         ("trapezoid double integrator (12k vars)", &trap as &dyn Nlp),
         ("LGR 3-axis, 80 x 30 nodes (21.6k vars)", &lgr as &dyn Nlp),
-        ("LGR 3-axis with drag, 20 x 30 nodes (5.4k vars)", &lgr_small as &dyn Nlp),
+        (
+            "LGR 3-axis with drag, 20 x 30 nodes (5.4k vars)",
+            &lgr_small as &dyn Nlp,
+        ),
     ] {
         let sol = solve(p, &settings).expect("solve");
         report(name, p, &sol);
     }
     let mut g = c.benchmark_group("ipm");
     g.sample_size(10);
-    g.bench_function("trapezoid_double_integrator_12k", |b| b.iter(|| black_box(solve(&trap, &settings).unwrap())));
-    g.bench_function("lgr_drag_5k", |b| b.iter(|| black_box(solve(&lgr_small, &settings).unwrap())));
-    g.bench_function("lgr_21k", |b| b.iter(|| black_box(solve(&lgr, &settings).unwrap())));
+    g.bench_function("trapezoid_double_integrator_12k", |b| {
+        b.iter(|| black_box(solve(&trap, &settings).unwrap()))
+    });
+    g.bench_function("lgr_drag_5k", |b| {
+        b.iter(|| black_box(solve(&lgr_small, &settings).unwrap()))
+    });
+    g.bench_function("lgr_21k", |b| {
+        b.iter(|| black_box(solve(&lgr, &settings).unwrap()))
+    });
     g.finish();
 }
 

@@ -128,8 +128,12 @@ fn nonlinear_drag_with_active_control_bound() {
 fn chebyshev_collocation_derivatives() {
     let mut p = common::cheb::ChebDoubleIntegrator::new(2, 2, 5);
     p.drag = 0.4;
-    let x: Vec<f64> = (0..p.num_variables()).map(|i| 0.2 + 0.3 * (i as f64 * 0.77).sin()).collect();
-    let lam: Vec<f64> = (0..p.num_constraints()).map(|i| (i as f64 * 1.3).cos()).collect();
+    let x: Vec<f64> = (0..p.num_variables())
+        .map(|i| 0.2 + 0.3 * (i as f64 * 0.77).sin())
+        .collect();
+    let lam: Vec<f64> = (0..p.num_constraints())
+        .map(|i| (i as f64 * 1.3).cos())
+        .collect();
     let rep = check_derivatives(&p, &x, 0.9, &lam, 1e-6);
     assert!(rep.max_error() < 1e-6, "{rep:?}");
 }
@@ -144,7 +148,11 @@ fn chebyshev_collocation_21k_variables_matches_closed_form() {
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::Solved);
     let jstar = p.closed_form();
-    assert!((sol.objective - jstar).abs() < 1e-7 * jstar, "J = {}, J* = {jstar}", sol.objective);
+    assert!(
+        (sol.objective - jstar).abs() < 1e-7 * jstar,
+        "J = {}, J* = {jstar}",
+        sol.objective
+    );
     let mut u_err = 0.0f64;
     for node in 0..p.nodes() - 1 {
         let t = p.time(node);
@@ -156,7 +164,10 @@ fn chebyshev_collocation_21k_variables_matches_closed_form() {
     // tolerance allows ~1e-4 errors in those controls; J itself is accurate to ~1e-12.
     assert!(u_err < 1e-3, "max |u − u*| = {u_err}");
     let (du, pr) = kkt_residual(&p, &sol);
-    assert!(du < 1e-6 && pr < 1e-8, "independent KKT residual: dual {du}, primal {pr}");
+    assert!(
+        du < 1e-6 && pr < 1e-8,
+        "independent KKT residual: dual {du}, primal {pr}"
+    );
 }
 
 #[test]
@@ -170,20 +181,38 @@ fn chebyshev_exact_solution_is_feasible() {
             x[p.p(node, a)] = d * (3.0 * t * t - 2.0 * t * t * t);
             x[p.v(node, a)] = 6.0 * d * (t - t * t);
             // the final node's control enters no equation (see cheb.rs): optimal value 0
-            x[p.u(node, a)] = if node + 1 == p.nodes() { 0.0 } else { 6.0 * d * (1.0 - 2.0 * t) };
+            x[p.u(node, a)] = if node + 1 == p.nodes() {
+                0.0
+            } else {
+                6.0 * d * (1.0 - 2.0 * t)
+            };
         }
     }
     let mut g = vec![0.0; p.num_constraints()];
     p.constraints(&x, &mut g);
     let viol = g.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     assert!(viol < 1e-10, "{viol}");
-    assert!((p.objective(&x) - p.closed_form()).abs() < 1e-10, "{}", p.objective(&x));
+    assert!(
+        (p.objective(&x) - p.closed_form()).abs() < 1e-10,
+        "{}",
+        p.objective(&x)
+    );
 }
 
 #[test]
 #[ignore = "manual debugging aid"]
 fn debug_cheb() {
     let p = common::cheb::ChebDoubleIntegrator::new(3, 80, 30);
-    let sol = solve(&p, &Settings { print_level: 3, ..Settings::default() }).unwrap();
-    println!("{:?} J = {} timing {:?}", sol.status, sol.objective, sol.timing);
+    let sol = solve(
+        &p,
+        &Settings {
+            print_level: 3,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
+    println!(
+        "{:?} J = {} timing {:?}",
+        sol.status, sol.objective, sol.timing
+    );
 }

@@ -8,7 +8,10 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn settings(points: usize) -> ProblemSettings {
-    ProblemSettings { points, ..ProblemSettings::default() }
+    ProblemSettings {
+        points,
+        ..ProblemSettings::default()
+    }
 }
 
 #[test]
@@ -16,7 +19,13 @@ fn nlp_derivatives_match_finite_differences() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
     for name in ["periodic-qc", "periodic-cot", "reach", "reorient"] {
         for scheme in [Scheme::Lg, Scheme::Radau { elements: 2 }] {
-            let s = ProblemSettings { points: 4, scheme, impulse_cone: true, hdot_margin: Some(0.01), ..ProblemSettings::default() };
+            let s = ProblemSettings {
+                points: 4,
+                scheme,
+                impulse_cone: true,
+                hdot_margin: Some(0.01),
+                ..ProblemSettings::default()
+            };
             let p = build(name, &s).unwrap();
             let n = p.nlp.num_variables();
             let m = p.nlp.num_constraints();
@@ -39,21 +48,35 @@ fn nlp_derivatives_match_finite_differences() {
 #[ignore = "exploration"]
 fn explore() {
     let name = std::env::var("BF_PROBLEM").unwrap_or("periodic-qc".into());
-    let pts: usize = std::env::var("BF_POINTS").ok().and_then(|v| v.parse().ok()).unwrap_or(30);
-    let mut s = ProblemSettings { print_level: 1, ..settings(pts) };
+    let pts: usize = std::env::var("BF_POINTS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(30);
+    let mut s = ProblemSettings {
+        print_level: 1,
+        ..settings(pts)
+    };
     if let Ok(w) = std::env::var("BF_WARM") {
-        s.warm_start = Some(bf_optim::problems::OcpSolution::read_json(std::path::Path::new(&w)).unwrap());
+        s.warm_start =
+            Some(bf_optim::problems::OcpSolution::read_json(std::path::Path::new(&w)).unwrap());
     }
     if std::env::var("BF_RADAU").is_ok() {
         s.scheme = Scheme::Radau { elements: 3 };
     }
     if let Ok(g) = std::env::var("BF_GUESS") {
-        s.guess = if g == "contact" { bf_optim::problems::GuessKind::Contact } else { bf_optim::problems::GuessKind::Paper };
+        s.guess = if g == "contact" {
+            bf_optim::problems::GuessKind::Contact
+        } else {
+            bf_optim::problems::GuessKind::Paper
+        };
     }
     if let Ok(it) = std::env::var("BF_ITER") {
         s.max_iter = it.parse().unwrap();
     }
-    let mut ipm = bf_optim::ipm::Settings { tol: 1e-8, ..Default::default() };
+    let mut ipm = bf_optim::ipm::Settings {
+        tol: 1e-8,
+        ..Default::default()
+    };
     if std::env::var("BF_ADAPTIVE").is_ok() {
         ipm.mu_strategy = bf_optim::ipm::MuStrategy::Adaptive;
     }
@@ -66,6 +89,19 @@ fn explore() {
     println!("initial violation {v} at row {r} ({})", p.nlp.row_name(r));
     let t = std::time::Instant::now();
     let sol = solve(&p, None).unwrap();
-    println!("{name}: {:?} obj {} period {} durations {:?} mean ω {:?} iters {} stages {:?} {:.1}s", sol.status, sol.objective, sol.period, sol.phase_durations, sol.mean_omega, sol.iterations, sol.stages, t.elapsed().as_secs_f64());
-    sol.write_json(std::path::Path::new(&std::env::var("BF_OUT").unwrap_or(format!("/tmp/{name}.json")))).unwrap();
+    println!(
+        "{name}: {:?} obj {} period {} durations {:?} mean ω {:?} iters {} stages {:?} {:.1}s",
+        sol.status,
+        sol.objective,
+        sol.period,
+        sol.phase_durations,
+        sol.mean_omega,
+        sol.iterations,
+        sol.stages,
+        t.elapsed().as_secs_f64()
+    );
+    sol.write_json(std::path::Path::new(
+        &std::env::var("BF_OUT").unwrap_or(format!("/tmp/{name}.json")),
+    ))
+    .unwrap();
 }

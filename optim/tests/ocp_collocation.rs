@@ -4,7 +4,8 @@
 use bf_codegen::graph::Graph;
 use bf_optim::ipm::{Settings, Status, check_derivatives};
 use bf_optim::ocp::{
-    NodeFunction, Objective, Ocp, Phase, PhaseGuess, PointFunction, Scheme, Transcription, VarRef, solve_nlp,
+    NodeFunction, Objective, Ocp, Phase, PhaseGuess, PointFunction, Scheme, Transcription, VarRef,
+    solve_nlp,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -81,7 +82,10 @@ fn boundary(nphases: usize) -> Vec<PointFunction> {
 }
 
 fn quiet() -> Settings {
-    Settings { tol: 1e-10, ..Settings::default() }
+    Settings {
+        tol: 1e-10,
+        ..Settings::default()
+    }
 }
 
 #[test]
@@ -100,7 +104,11 @@ fn rest_to_rest_min_energy_matches_closed_form() {
         let tr = Transcription::new(&ocp).unwrap();
         let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
         assert_eq!(sol.status, Status::Solved, "{scheme:?}");
-        assert!((sol.objective - 12.0).abs() < 1e-7, "{scheme:?}: {}", sol.objective);
+        assert!(
+            (sol.objective - 12.0).abs() < 1e-7,
+            "{scheme:?}: {}",
+            sol.objective
+        );
         let traj = bf_optim::ocp::extract(&tr, &sol.x);
         for (k, &tau) in traj[0].node_tau.iter().enumerate() {
             let t = traj[0].time(tau);
@@ -109,7 +117,10 @@ fn rest_to_rest_min_energy_matches_closed_form() {
         // Dense interpolation of the state: p(t) = 3t² − 2t³.
         for t in [0.1, 0.37, 0.8] {
             let x = traj[0].x_at(2.0 * t - 1.0);
-            assert!((x[0] - (3.0 * t * t - 2.0 * t * t * t)).abs() < 1e-7, "{scheme:?} t={t}");
+            assert!(
+                (x[0] - (3.0 * t * t - 2.0 * t * t * t)).abs() < 1e-7,
+                "{scheme:?} t={t}"
+            );
         }
     }
 }
@@ -144,7 +155,11 @@ fn free_final_time_two_phases() {
         let tr = Transcription::new(&ocp).unwrap();
         let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
         assert_eq!(sol.status, Status::Solved);
-        assert!((sol.objective - j_star).abs() < 1e-6, "{scheme:?}: {} vs {j_star}", sol.objective);
+        assert!(
+            (sol.objective - j_star).abs() < 1e-6,
+            "{scheme:?}: {} vs {j_star}",
+            sol.objective
+        );
         let total = sol.x[tr.phases[0].t] + sol.x[tr.phases[1].t];
         assert!((total - t_star).abs() < 1e-5, "{total} vs {t_star}");
     }
@@ -159,7 +174,7 @@ fn ratio_objective_hits_duration_bound() {
         params: vec![],
         points: boundary(1),
         cost_bounds: vec![],
-            objective: Objective::Ratio(0, 1),
+        objective: Objective::Ratio(0, 1),
         scheme: Scheme::Lg,
     };
     let tr = Transcription::new(&ocp).unwrap();
@@ -290,7 +305,13 @@ fn brachistochrone_minimum_time() {
         u_bounds: vec![(-0.5, 3.5)],
         duration_bounds: (0.01, 5.0),
         points: 20,
-        guess: PhaseGuess { s: vec![0.0, 1.0], x: vec![vec![0.0; 3], vec![1.0, 0.6, 3.0]], a: vec![], u: vec![vec![1.0]], duration: 0.5 },
+        guess: PhaseGuess {
+            s: vec![0.0, 1.0],
+            x: vec![vec![0.0; 3], vec![1.0, 0.6, 3.0]],
+            a: vec![],
+            u: vec![vec![1.0]],
+            duration: 0.5,
+        },
     };
     let mut pg = Graph::new();
     let ids: Vec<_> = (0..5).map(|i| pg.var(i)).collect();
@@ -313,7 +334,7 @@ fn brachistochrone_minimum_time() {
             bounds: vec![(0.0, 0.0), (0.0, 0.0), (0.0, 0.0), (1.0, 1.0), (0.6, 0.6)],
         }],
         cost_bounds: vec![],
-            objective: Objective::Cost(0),
+        objective: Objective::Cost(0),
         scheme: Scheme::Lg,
     };
     // Cycloid x = R(φ − sin φ), y = R(1 − cos φ): solve (φ − sin φ)/(1 − cos φ) = 1/0.6, then
@@ -330,5 +351,9 @@ fn brachistochrone_minimum_time() {
     let tr = Transcription::new(&ocp).unwrap();
     let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
     assert!(sol.status.is_success(), "{:?}", sol.status);
-    assert!((sol.objective - t_ref).abs() < 1e-6, "{} vs {t_ref}", sol.objective);
+    assert!(
+        (sol.objective - t_ref).abs() < 1e-6,
+        "{} vs {t_ref}",
+        sol.objective
+    );
 }

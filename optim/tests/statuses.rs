@@ -399,6 +399,14 @@ fn gradient_scaling_handles_badly_scaled_functions() {
 #[ignore = "manual debugging aid"]
 fn debug_cubic() {
     let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0].powi(3) + x[0], none);
-    let sol = solve(&p, &Settings { print_level: 3, max_iter: 30, ..Settings::default() }).unwrap();
+    let sol = solve(
+        &p,
+        &Settings {
+            print_level: 3,
+            max_iter: 30,
+            ..Settings::default()
+        },
+    )
+    .unwrap();
     println!("{:?}", sol.status);
 }

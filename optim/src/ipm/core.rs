@@ -46,6 +46,8 @@ pub(crate) struct CoreStart {
     /// the outer problem's relaxed ones).
     pub relax_bounds: bool,
     pub restoration: bool,
+    /// A previously analysed KKT solver to reuse (see [`super::Workspace`]).
+    pub kkt_solver: std::cell::Cell<Option<FaerLdlt>>,
 }
 
 /// Result of a core run in internal variables.
@@ -124,6 +126,9 @@ pub(crate) struct Core<'p> {
     solver: FaerLdlt,
     diag_x: Vec<f64>,
     delta_w_last: f64,
+    /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
+    /// factorization per iteration on collocation KKTs whose states carry no curvature).
+    skip_zero_trial: bool,
     delta_w: f64,
     delta_c: f64,
     delta_c_target: f64,
@@ -208,9 +213,10 @@ impl<'p> Core<'p> {
             grad_phi: vec![0.0; n],
             jty: vec![0.0; n],
             kkt,
-            solver: FaerLdlt::new(),
+            solver: start.kkt_solver.take().unwrap_or_else(FaerLdlt::new),
             diag_x: vec![0.0; n],
             delta_w_last: 0.0,
+            skip_zero_trial: false,
             delta_w: 0.0,
             delta_c: 0.0,
             delta_c_target: 0.0,
@@ -547,6 +553,11 @@ impl<'p> Core<'p> {
             self.kkt
                 .assemble(&zeros, &self.jac, &self.diag_x, -self.delta_c);
         }
+        let first_w = settings.perturb_dec_fact * self.delta_w_last;
+        if use_hessian && self.skip_zero_trial && first_w >= 1e-12 {
+            self.delta_w = first_w.max(settings.min_hessian_perturbation);
+            self.kkt.shift_diagonal(self.delta_w, 0.0);
+        }
         ctx.timing.kkt_assembly += t.elapsed();
         let mut singular_handled = false;
         loop {
@@ -567,6 +578,9 @@ impl<'p> Core<'p> {
                     println!("    KKT: relative residual after refinement {res:.2e}");
                 }
                 if res <= 1e-5 {
+                    if self.delta_w == 0.0 && use_hessian {
+                        self.skip_zero_trial = false;
+                    }
                     if self.delta_w > 0.0 {
                         self.delta_w_last = self.delta_w;
                     }
@@ -577,6 +591,9 @@ impl<'p> Core<'p> {
                 inertia = None;
             }
             // Wrong inertia, singular, or inaccurate: perturb.
+            if self.delta_w == 0.0 && use_hessian {
+                self.skip_zero_trial = true;
+            }
             let old_w = self.delta_w;
             let old_c = self.delta_c;
             if inertia.is_none() && !singular_handled && self.m > 0 {
@@ -948,6 +965,11 @@ impl<'p> Core<'p> {
         }
     }
 
+    /// Hands the (analysed) KKT solver back for reuse by a later solve.
+    pub fn into_kkt_solver(self) -> FaerLdlt {
+        self.solver
+    }
+
     /// Runs the algorithm from `start`.
     pub fn run(
         &mut self,
@@ -1044,7 +1066,6 @@ impl<'p> Core<'p> {
                 && !cb(&last)
             {
                 return Ok(self.output(Status::UserStop, false));
-            }
             }
             if self.restoration && self.prob.early_stop(&self.x) {
                 return Ok(self.output(Status::Solved, true));
@@ -1331,6 +1352,7 @@ impl<'p> Core<'p> {
             mult_floor: 1e-12,
             relax_bounds: false,
             restoration: true,
+            kkt_solver: std::cell::Cell::new(None),
         };
         if settings.print_level > 1 {
             println!("  entering restoration phase (theta = {theta:.3e}, mu_R = {mu_r:.3e})");

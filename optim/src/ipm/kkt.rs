@@ -130,7 +130,11 @@ impl std::fmt::Debug for FaerLdlt {
 impl FaerLdlt {
     /// A solver that picks simplicial/supernodal automatically (faer's flop-ratio rule).
     pub fn new() -> Self {
-        Self { pivot_epsilon: 1e-14, pivot_delta: 1e-4, ..Self::default() }
+        Self {
+            pivot_epsilon: 1e-14,
+            pivot_delta: 1e-4,
+            ..Self::default()
+        }
     }
 
     /// Whether the symbolic analysis chose the supernodal variant.
@@ -195,6 +199,12 @@ impl KktSolver for FaerLdlt {
         col_ptr: &[usize],
         row_idx: &[usize],
     ) -> Result<(), OptimError> {
+        // Same pattern as the last analysis (repeated solves of one NLP structure): keep the
+        // symbolic factorization and the workspace.
+        if self.symbolic.is_some() && self.col_ptr == col_ptr && self.row_idx == row_idx {
+            self.factored = false;
+            return Ok(());
+        }
         self.col_ptr = col_ptr.to_vec();
         self.row_idx = row_idx.to_vec();
         let pattern =
@@ -544,7 +554,11 @@ mod tests {
         // x-block zero and no constraint coupling on variable 1: exact zero pivot.
         let mut pat = KktPattern::new(2, 1, &[], &[(0, 0)]);
         pat.assemble(&[], &[1.0], &[0.0, 0.0], 0.0);
-        let mut s = FaerLdlt { pivot_epsilon: 0.0, pivot_delta: 0.0, ..FaerLdlt::new() };
+        let mut s = FaerLdlt {
+            pivot_epsilon: 0.0,
+            pivot_delta: 0.0,
+            ..FaerLdlt::new()
+        };
         s.analyse(3, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
         assert!(s.factor(&pat.mat.values).is_none());
     }
@@ -560,12 +574,22 @@ mod tests {
         let mut pat = KktPattern::new(3, 2, &hess, &jac);
         pat.assemble(&[1.0], &[1.0, -1.0, 1.0, -1.0], &[0.0; 3], -1e-9);
         for sup in [Some(true), Some(false)] {
-            let mut s = FaerLdlt { supernodal: sup, ..FaerLdlt::new() };
+            let mut s = FaerLdlt {
+                supernodal: sup,
+                ..FaerLdlt::new()
+            };
             s.analyse(5, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
             // With pivoting disabled the zero pivot (if eliminated first) would stop LDLᵀ;
             // with it the factor exists and has the KKT inertia.
             let inertia = s.factor(&pat.mat.values).expect("factor");
-            assert_eq!(inertia, Inertia { positive: 3, negative: 2, zero: 0 });
+            assert_eq!(
+                inertia,
+                Inertia {
+                    positive: 3,
+                    negative: 2,
+                    zero: 0
+                }
+            );
             let b = [1.0, -2.0, 0.5, 0.3, -0.7];
             let mut x = b;
             s.solve(&mut x);
@@ -579,7 +603,11 @@ mod tests {
                 }
             }
             pat.mat.sym_matvec(&x, &mut r);
-            let res = r.iter().zip(&b).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let res = r
+                .iter()
+                .zip(&b)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             assert!(res < 1e-12, "refined residual {res}");
         }
     }

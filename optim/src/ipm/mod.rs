@@ -55,10 +55,38 @@ pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError>
     solve_with(nlp, settings, None, None)
 }
 
+/// State kept between solves of NLPs with the same sparsity structure: the KKT solver with its
+/// symbolic analysis (AMD ordering, elimination tree, supernodes) and workspace. Pass the same
+/// `Workspace` to [`solve_in`] for repeated solves (parameter sweeps, mesh-fixed re-solves, warm
+/// starts); a different pattern is detected and re-analysed automatically.
+#[derive(Debug, Default)]
+pub struct Workspace {
+    kkt: Option<FaerLdlt>,
+}
+
+impl Workspace {
+    /// An empty workspace.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
 /// Solves `nlp`, optionally from a primal-dual warm start (its multipliers in the convention of
 /// [`Solution`]; consider a small `mu_init`, e.g. 1e-6, and small `warm_start_bound_push`) and
 /// with a per-iteration callback (return `false` to stop with [`Status::UserStop`]).
 pub fn solve_with(
+    nlp: &dyn Nlp,
+    settings: &Settings,
+    warm: Option<&WarmStart>,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<Solution, OptimError> {
+    solve_in(&mut Workspace::new(), nlp, settings, warm, callback)
+}
+
+/// [`solve_with`] reusing (and updating) `workspace` so that repeated solves of the same
+/// structure skip the symbolic analysis of the KKT matrix.
+pub fn solve_in(
+    workspace: &mut Workspace,
     nlp: &dyn Nlp,
     settings: &Settings,
     warm: Option<&WarmStart>,
@@ -116,6 +144,7 @@ pub fn solve_with(
             mult_floor: 0.0,
             relax_bounds: true,
             restoration: false,
+            kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
         },
         Some(w) => {
             let mut y = vec![0.0; m];
@@ -147,6 +176,7 @@ pub fn solve_with(
                 mult_floor: settings.warm_start_mult_bound_push,
                 relax_bounds: true,
                 restoration: false,
+                kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
             }
         }
     };
@@ -160,7 +190,9 @@ pub fn solve_with(
     };
     let out = {
         let mut core = Core::new(&mut reform, settings, &start)?;
-        core.run(&mut ctx, &start)?
+        let out = core.run(&mut ctx, &start);
+        workspace.kkt = Some(core.into_kkt_solver());
+        out?
     };
     // Map back to user space.
     let mut x = reform.to_user(&out.x);

@@ -65,8 +65,11 @@ impl GraphFn {
         let jac: Vec<(usize, usize)> = order.iter().map(|&k| jac[k]).collect();
         let jac_ids: Vec<Id> = order.iter().map(|&k| jac_ids[k]).collect();
         let jac_tape = Tape::new(g, &jac_ids);
-        let weighted: Vec<(Id, Id)> =
-            outputs.iter().enumerate().map(|(i, &o)| (o, g.var((weight_base + i) as u32))).collect();
+        let weighted: Vec<(Id, Id)> = outputs
+            .iter()
+            .enumerate()
+            .map(|(i, &o)| (o, g.var((weight_base + i) as u32)))
+            .collect();
         let h = diff::hessian(g, &weighted, local_vars);
         let mut hess = Vec::new();
         let mut hess_ids = Vec::new();

@@ -13,7 +13,9 @@ pub mod trajectory;
 pub mod transcription;
 
 pub use block::GraphFn;
-pub use problem::{NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef};
+pub use problem::{
+    NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
+};
 pub use trajectory::{PhaseTrajectory, extract};
 pub use transcription::{Mesh, PhaseLayout, Transcription};
 

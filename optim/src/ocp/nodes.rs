@@ -136,7 +136,11 @@ mod tests {
     use super::*;
 
     fn exact_monomial_integral(k: usize) -> f64 {
-        if k % 2 == 1 { 0.0 } else { 2.0 / (k as f64 + 1.0) }
+        if k % 2 == 1 {
+            0.0
+        } else {
+            2.0 / (k as f64 + 1.0)
+        }
     }
 
     #[test]
@@ -145,7 +149,10 @@ mod tests {
             let (x, w) = legendre_gauss(n);
             for k in 0..2 * n {
                 let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k as i32)).sum();
-                assert!((q - exact_monomial_integral(k)).abs() < 1e-13, "n={n} k={k} q={q}");
+                assert!(
+                    (q - exact_monomial_integral(k)).abs() < 1e-13,
+                    "n={n} k={k} q={q}"
+                );
             }
             // Nodes are roots of P_n.
             for &t in &x {
@@ -165,7 +172,10 @@ mod tests {
             assert_eq!(x[0], -1.0);
             for k in 0..(2 * n - 1) {
                 let q: f64 = x.iter().zip(&w).map(|(x, w)| w * x.powi(k as i32)).sum();
-                assert!((q - exact_monomial_integral(k)).abs() < 1e-13, "n={n} k={k}");
+                assert!(
+                    (q - exact_monomial_integral(k)).abs() < 1e-13,
+                    "n={n} k={k}"
+                );
             }
             assert!(x.windows(2).all(|p| p[0] < p[1]));
         }

@@ -111,7 +111,13 @@ pub struct PhaseGuess {
 impl PhaseGuess {
     /// A constant guess.
     pub fn constant(x: Vec<f64>, a: Vec<f64>, u: Vec<f64>, duration: f64) -> Self {
-        PhaseGuess { s: vec![0.0], x: vec![x], a: vec![a], u: vec![u], duration }
+        PhaseGuess {
+            s: vec![0.0],
+            x: vec![x],
+            a: vec![a],
+            u: vec![u],
+            duration,
+        }
     }
 
     fn interp(s: &[f64], v: &[Vec<f64>], t: f64, n: usize) -> Vec<f64> {
@@ -132,7 +138,11 @@ impl PhaseGuess {
             return pick(s.len() - 1);
         }
         let (a, b) = (pick(k - 1), pick(k));
-        let th = if s[k] > s[k - 1] { (t - s[k - 1]) / (s[k] - s[k - 1]) } else { 0.0 };
+        let th = if s[k] > s[k - 1] {
+            (t - s[k - 1]) / (s[k] - s[k - 1])
+        } else {
+            0.0
+        };
         a.iter().zip(&b).map(|(a, b)| a + th * (b - a)).collect()
     }
 

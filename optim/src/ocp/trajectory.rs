@@ -49,16 +49,22 @@ impl PhaseTrajectory {
         let (a, b) = self.element_of(tau);
         let l = lagrange_basis(&self.state_tau[a..b], tau);
         let nx = self.x.first().map_or(0, |v| v.len());
-        (0..nx).map(|i| (a..b).zip(&l).map(|(p, w)| w * self.x[p][i]).sum()).collect()
+        (0..nx)
+            .map(|i| (a..b).zip(&l).map(|(p, w)| w * self.x[p][i]).sum())
+            .collect()
     }
 
     fn node_interp(&self, v: &[Vec<f64>], tau: f64) -> Vec<f64> {
         let (a, b) = self.element_of(tau);
-        let ks: Vec<usize> = (0..self.node_tau.len()).filter(|&k| (a..b).contains(&self.node_state[k])).collect();
+        let ks: Vec<usize> = (0..self.node_tau.len())
+            .filter(|&k| (a..b).contains(&self.node_state[k]))
+            .collect();
         let taus: Vec<f64> = ks.iter().map(|&k| self.node_tau[k]).collect();
         let l = lagrange_basis(&taus, tau);
         let n = v.first().map_or(0, |r| r.len());
-        (0..n).map(|i| ks.iter().zip(&l).map(|(&k, w)| w * v[k][i]).sum()).collect()
+        (0..n)
+            .map(|i| ks.iter().zip(&l).map(|(&k, w)| w * v[k][i]).sum())
+            .collect()
     }
 
     /// Controls at τ (polynomial through the element's collocation nodes).
@@ -79,10 +85,16 @@ pub fn extract(tr: &Transcription, x: &[f64]) -> Vec<PhaseTrajectory> {
     for l in &tr.phases {
         let duration = x[l.t];
         let ns = l.mesh.n_state_points();
-        let xs = (0..ns).map(|p| (0..l.nx).map(|i| x[l.x(p, i)]).collect()).collect();
+        let xs = (0..ns)
+            .map(|p| (0..l.nx).map(|i| x[l.x(p, i)]).collect())
+            .collect();
         let nk = l.mesh.colloc.len();
-        let a = (0..nk).map(|k| (0..l.na).map(|i| x[l.a(k, i)]).collect()).collect();
-        let u = (0..nk).map(|k| (0..l.nu).map(|i| x[l.u(k, i)]).collect()).collect();
+        let a = (0..nk)
+            .map(|k| (0..l.na).map(|i| x[l.a(k, i)]).collect())
+            .collect();
+        let u = (0..nk)
+            .map(|k| (0..l.nu).map(|i| x[l.u(k, i)]).collect())
+            .collect();
         out.push(PhaseTrajectory {
             t0,
             duration,

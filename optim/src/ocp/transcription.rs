@@ -13,10 +13,10 @@
 //! constraints (57c–d) are [`PointFunction`]s. All nonlinear pieces are [`GraphFn`]s with
 //! exact Jacobians and Hessians; the NLP's derivatives are their scattered sums.
 
+use super::OcpError;
 use super::block::GraphFn;
 use super::nodes::{differentiation_matrix, legendre_gauss, legendre_gauss_radau};
 use super::problem::{Objective, Ocp, Scheme, VarRef};
-use super::OcpError;
 use crate::ipm::{BOUND_INF, Nlp};
 
 /// Collocation mesh of one phase (normalised time τ ∈ [−1, 1]).
@@ -51,7 +51,9 @@ impl Mesh {
     /// Builds the mesh for `scheme` with `points` collocation points per phase.
     pub fn new(scheme: Scheme, points: usize) -> Result<Mesh, OcpError> {
         if points < 2 {
-            return Err(OcpError::InvalidProblem(format!("need at least 2 collocation points, got {points}")));
+            return Err(OcpError::InvalidProblem(format!(
+                "need at least 2 collocation points, got {points}"
+            )));
         }
         match scheme {
             Scheme::Lg => {
@@ -70,11 +72,18 @@ impl Mesh {
                     .collect();
                 let mut state_tau = sup;
                 state_tau.push(1.0);
-                Ok(Mesh { state_tau, colloc, gauss_end: true, elements: vec![0..points + 1] })
+                Ok(Mesh {
+                    state_tau,
+                    colloc,
+                    gauss_end: true,
+                    elements: vec![0..points + 1],
+                })
             }
             Scheme::Radau { elements } => {
                 if elements == 0 {
-                    return Err(OcpError::InvalidProblem("Radau needs at least one element".into()));
+                    return Err(OcpError::InvalidProblem(
+                        "Radau needs at least one element".into(),
+                    ));
                 }
                 let n = points.div_ceil(elements).max(2);
                 let (t, w) = legendre_gauss_radau(n);
@@ -101,7 +110,12 @@ impl Mesh {
                     ranges.push(base..base + n + 1);
                 }
                 state_tau.push(1.0);
-                Ok(Mesh { state_tau, colloc, gauss_end: false, elements: ranges })
+                Ok(Mesh {
+                    state_tau,
+                    colloc,
+                    gauss_end: false,
+                    elements: ranges,
+                })
             }
         }
     }
@@ -200,7 +214,11 @@ impl Transcription {
         match ocp.objective {
             Objective::Cost(j) if j < nc => {}
             Objective::Ratio(j, k) if j < nc && k < nc && j != k => {}
-            o => return Err(OcpError::InvalidProblem(format!("objective {o:?} with {nc} cost states"))),
+            o => {
+                return Err(OcpError::InvalidProblem(format!(
+                    "objective {o:?} with {nc} cost states"
+                )));
+            }
         }
         let mut n = 0;
         let mut layouts = Vec::new();
@@ -228,7 +246,16 @@ impl Transcription {
             let u0 = a0 + ncol * na;
             let t = u0 + ncol * nu;
             n = t + 1;
-            layouts.push(PhaseLayout { mesh, nx, na, nu, x0, a0, u0, t });
+            layouts.push(PhaseLayout {
+                mesh,
+                nx,
+                na,
+                nu,
+                x0,
+                a0,
+                u0,
+                t,
+            });
         }
         let p0 = n;
         n += ocp.params.len();
@@ -271,7 +298,9 @@ impl Transcription {
         }
         if !ocp.cost_bounds.is_empty() {
             if ocp.cost_bounds.len() != nc {
-                return Err(OcpError::InvalidProblem("cost_bounds needs one entry per cost state".into()));
+                return Err(OcpError::InvalidProblem(
+                    "cost_bounds needs one entry per cost state".into(),
+                ));
             }
             for (j, b) in ocp.cost_bounds.iter().enumerate() {
                 xl[c0 + j] = clean_bound(b.0, true);
@@ -387,30 +416,48 @@ impl Transcription {
                 for j in 0..nc {
                     targets.push(vec![(cost_row0 + j, -c.weight)]);
                 }
-                inst.push(Instance { f: fid, map, targets });
+                inst.push(Instance {
+                    f: fid,
+                    map,
+                    targets,
+                });
             }
         }
         for pf in &ocp.points {
             if pf.outputs.len() != pf.bounds.len() {
-                return Err(OcpError::InvalidProblem(format!("point function `{}`: bounds length", pf.name)));
+                return Err(OcpError::InvalidProblem(format!(
+                    "point function `{}`: bounds length",
+                    pf.name
+                )));
             }
             let mut map = Vec::new();
             for &(_, r) in &pf.vars {
                 let idx = match r {
                     VarRef::Initial { phase, i } | VarRef::Final { phase, i } => {
                         let l = layouts.get(phase).filter(|l| i < l.nx).ok_or_else(|| {
-                            OcpError::InvalidProblem(format!("point function `{}`: bad reference {r:?}", pf.name))
+                            OcpError::InvalidProblem(format!(
+                                "point function `{}`: bad reference {r:?}",
+                                pf.name
+                            ))
                         })?;
-                        if matches!(r, VarRef::Initial { .. }) { l.x(0, i) } else { l.x(l.mesh.n_state_points() - 1, i) }
+                        if matches!(r, VarRef::Initial { .. }) {
+                            l.x(0, i)
+                        } else {
+                            l.x(l.mesh.n_state_points() - 1, i)
+                        }
                     }
-                    VarRef::Duration(p) => {
-                        layouts.get(p).map(|l| l.t).ok_or_else(|| {
-                            OcpError::InvalidProblem(format!("point function `{}`: bad phase {p}", pf.name))
-                        })?
-                    }
+                    VarRef::Duration(p) => layouts.get(p).map(|l| l.t).ok_or_else(|| {
+                        OcpError::InvalidProblem(format!(
+                            "point function `{}`: bad phase {p}",
+                            pf.name
+                        ))
+                    })?,
                     VarRef::Param(i) => {
                         if i >= ocp.params.len() {
-                            return Err(OcpError::InvalidProblem(format!("point function `{}`: bad param {i}", pf.name)));
+                            return Err(OcpError::InvalidProblem(format!(
+                                "point function `{}`: bad param {i}",
+                                pf.name
+                            )));
                         }
                         p0 + i
                     }
@@ -420,7 +467,10 @@ impl Transcription {
             let mut sorted = map.clone();
             sorted.sort_unstable();
             if sorted.windows(2).any(|w| w[0] == w[1]) {
-                return Err(OcpError::InvalidProblem(format!("point function `{}` reads a variable twice", pf.name)));
+                return Err(OcpError::InvalidProblem(format!(
+                    "point function `{}` reads a variable twice",
+                    pf.name
+                )));
             }
             let mut graph = pf.graph.clone();
             let locals: Vec<u32> = pf.vars.iter().map(|v| v.0).collect();
@@ -433,7 +483,11 @@ impl Transcription {
             }
             m += pf.outputs.len();
             row_blocks.push((pf.name.clone(), r0..m));
-            inst.push(Instance { f: fns.len(), map, targets });
+            inst.push(Instance {
+                f: fns.len(),
+                map,
+                targets,
+            });
             fns.push(f);
         }
 
@@ -510,7 +564,11 @@ impl Transcription {
     /// Replaces the initial point (e.g. for a warm start); length `n`.
     pub fn set_initial_point(&mut self, x: &[f64]) -> Result<(), OcpError> {
         if x.len() != self.n {
-            return Err(OcpError::InvalidProblem(format!("initial point has {} entries, expected {}", x.len(), self.n)));
+            return Err(OcpError::InvalidProblem(format!(
+                "initial point has {} entries, expected {}",
+                x.len(),
+                self.n
+            )));
         }
         self.x_init.copy_from_slice(x);
         Ok(())
@@ -547,7 +605,11 @@ impl Transcription {
 
     /// Name of the block that contains `row`.
     pub fn row_name(&self, row: usize) -> &str {
-        self.row_blocks.iter().find(|b| b.1.contains(&row)).map(|b| b.0.as_str()).unwrap_or("?")
+        self.row_blocks
+            .iter()
+            .find(|b| b.1.contains(&row))
+            .map(|b| b.0.as_str())
+            .unwrap_or("?")
     }
 }
 
@@ -627,8 +689,11 @@ impl Nlp for Transcription {
         let mut k = 0;
         for it in &self.inst {
             let f = &self.fns[it.f];
-            let w: Vec<f64> =
-                it.targets.iter().map(|ts| ts.iter().map(|&(r, c)| c * lambda[r]).sum()).collect();
+            let w: Vec<f64> = it
+                .targets
+                .iter()
+                .map(|ts| ts.iter().map(|&(r, c)| c * lambda[r]).sum())
+                .collect();
             let hv = f.hessian(&self.locals(it, x), &w);
             for v in hv {
                 values[k] = v;

@@ -103,12 +103,17 @@ pub struct Physics {
 impl Physics {
     /// Reads the constants of `scene` (needs `[ball]`, `[contact]`).
     pub fn new(scene: &Scene) -> Result<Physics, OcpError> {
-        let ball = scene.ball.as_ref().ok_or_else(|| OcpError::Model("the scene has no [ball]".into()))?;
+        let ball = scene
+            .ball
+            .as_ref()
+            .ok_or_else(|| OcpError::Model("the scene has no [ball]".into()))?;
         if scene.contact.is_none() {
             return Err(OcpError::Model("the scene has no [contact]".into()));
         }
-        let (mu_s, mu_v, damping) =
-            scene.friction.as_ref().map_or((0.0, 0.0, 0.0), |f| (f.mu_s, f.mu_v, f.socket_damping));
+        let (mu_s, mu_v, damping) = scene
+            .friction
+            .as_ref()
+            .map_or((0.0, 0.0, 0.0), |f| (f.mu_s, f.mu_v, f.socket_damping));
         Ok(Physics {
             nq: scene.links.len(),
             ib: scene.ball_inertia().unwrap_or([[0.0; 3]; 3]),
@@ -119,9 +124,18 @@ impl Physics {
             q_limits: scene
                 .links
                 .iter()
-                .map(|l| (l.q_min.unwrap_or(f64::NEG_INFINITY), l.q_max.unwrap_or(f64::INFINITY)))
+                .map(|l| {
+                    (
+                        l.q_min.unwrap_or(f64::NEG_INFINITY),
+                        l.q_max.unwrap_or(f64::INFINITY),
+                    )
+                })
                 .collect(),
-            tau_max: scene.links.iter().map(|l| l.tau_max.unwrap_or(f64::INFINITY)).collect(),
+            tau_max: scene
+                .links
+                .iter()
+                .map(|l| l.tau_max.unwrap_or(f64::INFINITY))
+                .collect(),
         })
     }
 }
@@ -269,11 +283,23 @@ pub struct NodeOptions {
 
 /// Node function of one phase; returns it with the variable indices. Path rows: finger
 /// dynamics (nq), ball (3), then [stick: Δv (3), λ_n, cone], then [h], then [ḣ].
-pub fn node_function(scene: &Scene, ph: &Physics, opt: &NodeOptions) -> Result<(NodeFunction, NodeVars), OcpError> {
-    let Built { mut model, fixed, base } = build_model(scene, opt.eps)?;
+pub fn node_function(
+    scene: &Scene,
+    ph: &Physics,
+    opt: &NodeOptions,
+) -> Result<(NodeFunction, NodeVars), OcpError> {
+    let Built {
+        mut model,
+        fixed,
+        base,
+    } = build_model(scene, opt.eps)?;
     let nq = ph.nq;
     let lay = model.layout;
-    let xv: Vec<u32> = (0..nq).map(|i| lay.q(i)).chain((0..nq).map(|i| lay.qd(i))).chain((0..3).map(|i| lay.omega(i))).collect();
+    let xv: Vec<u32> = (0..nq)
+        .map(|i| lay.q(i))
+        .chain((0..nq).map(|i| lay.qd(i)))
+        .chain((0..3).map(|i| lay.omega(i)))
+        .collect();
     let mut next = base;
     let mut take = |n: usize| -> Vec<u32> {
         let r = (next..next + n as u32).collect();
@@ -282,19 +308,29 @@ pub fn node_function(scene: &Scene, ph: &Physics, opt: &NodeOptions) -> Result<(
     };
     let qdd_v = take(nq);
     let wd_v = take(3);
-    let lam_v = if opt.mode == Mode::Stick { take(3) } else { vec![] };
+    let lam_v = if opt.mode == Mode::Stick {
+        take(3)
+    } else {
+        vec![]
+    };
     let tau_v = take(nq);
     let t_v = take(1)[0];
     let mass = model.mass_matrix();
     let bias = model.cqd_g_rnea();
-    let ce = model.contact(true).map_err(|e| OcpError::Model(e.to_string()))?;
+    let ce = model
+        .contact(true)
+        .map_err(|e| OcpError::Model(e.to_string()))?;
     let g = &mut model.g;
     let qd = vars(g, &xv[nq..2 * nq]);
     let w = v3(&vars(g, &xv[2 * nq..]));
     let qdd = vars(g, &qdd_v);
     let wd = v3(&vars(g, &wd_v));
     let tau = vars(g, &tau_v);
-    let lam = if opt.mode == Mode::Stick { Some(v3(&vars(g, &lam_v))) } else { None };
+    let lam = if opt.mode == Mode::Stick {
+        Some(v3(&vars(g, &lam_v)))
+    } else {
+        None
+    };
     let muv = g.constant(ph.mu_v);
     let mut path = Vec::new();
     let mut bounds = Vec::new();
@@ -365,11 +401,29 @@ pub fn node_function(scene: &Scene, ph: &Physics, opt: &NodeOptions) -> Result<(
         path_bounds: bounds,
         costs,
     };
-    Ok((nf, NodeVars { x: xv, qdd: qdd_v, wd: wd_v, lambda: lam_v, tau: tau_v, duration: t_v }))
+    Ok((
+        nf,
+        NodeVars {
+            x: xv,
+            qdd: qdd_v,
+            wd: wd_v,
+            lambda: lam_v,
+            tau: tau_v,
+            duration: t_v,
+        },
+    ))
 }
 
 fn state_refs(phase: usize, nx: usize, fin: bool) -> Vec<VarRef> {
-    (0..nx).map(|i| if fin { VarRef::Final { phase, i } } else { VarRef::Initial { phase, i } }).collect()
+    (0..nx)
+        .map(|i| {
+            if fin {
+                VarRef::Final { phase, i }
+            } else {
+                VarRef::Initial { phase, i }
+            }
+        })
+        .collect()
 }
 
 /// Contact quantity of a phase end-point state, bounded: `h` or `ḣ` or the stick constraint.
@@ -384,25 +438,51 @@ pub enum EndQuantity {
 }
 
 /// A point function on the state at the start (`fin = false`) or end of `phase`.
-pub fn end_point(scene: &Scene, eps: f64, phase: usize, fin: bool, what: EndQuantity, name: &str) -> Result<PointFunction, OcpError> {
-    let Built { mut model, fixed, .. } = build_model(scene, eps)?;
+pub fn end_point(
+    scene: &Scene,
+    eps: f64,
+    phase: usize,
+    fin: bool,
+    what: EndQuantity,
+    name: &str,
+) -> Result<PointFunction, OcpError> {
+    let Built {
+        mut model, fixed, ..
+    } = build_model(scene, eps)?;
     let nq = model.nq();
     let nx = 2 * nq + 3;
-    let ce = model.contact(true).map_err(|e| OcpError::Model(e.to_string()))?;
+    let ce = model
+        .contact(true)
+        .map_err(|e| OcpError::Model(e.to_string()))?;
     let (outputs, bounds) = match what {
         EndQuantity::H(lo, hi) => (vec![ce.h], vec![(lo, hi)]),
         EndQuantity::HDot(lo, hi) => (vec![ce.h_dot], vec![(lo, hi)]),
         EndQuantity::DeltaV => (ce.delta_v.to_vec(), vec![(0.0, 0.0); 3]),
     };
     let lay = model.layout;
-    let gv: Vec<u32> = (0..nq).map(|i| lay.q(i)).chain((0..nq).map(|i| lay.qd(i))).chain((0..3).map(|i| lay.omega(i))).collect();
+    let gv: Vec<u32> = (0..nq)
+        .map(|i| lay.q(i))
+        .chain((0..nq).map(|i| lay.qd(i)))
+        .chain((0..3).map(|i| lay.omega(i)))
+        .collect();
     let refs = state_refs(phase, nx, fin);
     // Only the variables the outputs depend on (q for h; all for ḣ and Δv).
     let needed: Vec<(u32, VarRef)> = match what {
-        EndQuantity::H(..) => gv[..nq].iter().copied().zip(refs[..nq].iter().copied()).collect(),
+        EndQuantity::H(..) => gv[..nq]
+            .iter()
+            .copied()
+            .zip(refs[..nq].iter().copied())
+            .collect(),
         _ => gv.iter().copied().zip(refs).collect(),
     };
-    Ok(PointFunction { name: name.into(), graph: std::mem::take(&mut model.g), vars: needed, fixed, outputs, bounds })
+    Ok(PointFunction {
+        name: name.into(),
+        graph: std::mem::take(&mut model.g),
+        vars: needed,
+        fixed,
+        outputs,
+        bounds,
+    })
 }
 
 /// Continuity x⁽ᵇ⁾(start) − x⁽ᵃ⁾(end) = 0 (or periodicity x⁽ᵃ⁾(end) = x⁽ᵇ⁾(start)).
@@ -414,22 +494,48 @@ pub fn continuity(nx: usize, from_phase: usize, to_phase: usize, name: &str) -> 
         let a = g.var(2 * i as u32);
         let b = g.var(2 * i as u32 + 1);
         outputs.push(g.sub(b, a));
-        vars.push((2 * i as u32, VarRef::Final { phase: from_phase, i }));
+        vars.push((
+            2 * i as u32,
+            VarRef::Final {
+                phase: from_phase,
+                i,
+            },
+        ));
         vars.push((2 * i as u32 + 1, VarRef::Initial { phase: to_phase, i }));
     }
-    PointFunction { name: name.into(), graph: g, vars, fixed: vec![], outputs, bounds: vec![(0.0, 0.0); nx] }
+    PointFunction {
+        name: name.into(),
+        graph: g,
+        vars,
+        fixed: vec![],
+        outputs,
+        bounds: vec![(0.0, 0.0); nx],
+    }
 }
 
 /// Sticking impact (eq. 40) between the end of `free_phase` and the start of `free_phase + 1`,
 /// with the impulse ι = params `iota0..iota0+3`: q⁺ = q⁻, M (q̇⁺ − q̇⁻) − J_cᵀ ι = 0,
 /// I_b (ω⁺ − ω⁻) + r_c × ι = 0, ω⁺ × r_c − J_c q̇⁺ = 0, ι_n ≥ 0 and optionally the impulse
 /// cone (eq. 66, squared form).
-pub fn impact(scene: &Scene, ph: &Physics, eps: f64, free_phase: usize, iota0: usize, impulse_cone: bool) -> Result<PointFunction, OcpError> {
-    let Built { mut model, fixed, base } = build_model(scene, eps)?;
+pub fn impact(
+    scene: &Scene,
+    ph: &Physics,
+    eps: f64,
+    free_phase: usize,
+    iota0: usize,
+    impulse_cone: bool,
+) -> Result<PointFunction, OcpError> {
+    let Built {
+        mut model,
+        fixed,
+        base,
+    } = build_model(scene, eps)?;
     let nq = ph.nq;
     let lay = model.layout;
     let mass = model.mass_matrix();
-    let ce = model.contact(true).map_err(|e| OcpError::Model(e.to_string()))?;
+    let ce = model
+        .contact(true)
+        .map_err(|e| OcpError::Model(e.to_string()))?;
     let g = &mut model.g;
     let mut vars_list = Vec::new();
     let qm: Vec<u32> = (0..nq).map(|i| lay.q(i)).collect();
@@ -443,8 +549,20 @@ pub fn impact(scene: &Scene, ph: &Physics, eps: f64, free_phase: usize, iota0: u
     let pre: Vec<u32> = qm.iter().chain(&qdm).chain(&wm).copied().collect();
     let post: Vec<u32> = qp.iter().chain(&qdp).chain(&wp).copied().collect();
     for i in 0..nx {
-        vars_list.push((pre[i], VarRef::Final { phase: free_phase, i }));
-        vars_list.push((post[i], VarRef::Initial { phase: free_phase + 1, i }));
+        vars_list.push((
+            pre[i],
+            VarRef::Final {
+                phase: free_phase,
+                i,
+            },
+        ));
+        vars_list.push((
+            post[i],
+            VarRef::Initial {
+                phase: free_phase + 1,
+                i,
+            },
+        ));
     }
     for (i, &v) in io.iter().enumerate() {
         vars_list.push((v, VarRef::Param(iota0 + i)));
@@ -489,7 +607,14 @@ pub fn impact(scene: &Scene, ph: &Physics, eps: f64, free_phase: usize, iota0: u
         out.push(g.sub(a, ii));
         bounds.push((0.0, f64::INFINITY));
     }
-    Ok(PointFunction { name: "impact (eq. 40)".into(), graph: std::mem::take(&mut model.g), vars: vars_list, fixed, outputs: out, bounds })
+    Ok(PointFunction {
+        name: "impact (eq. 40)".into(),
+        graph: std::mem::take(&mut model.g),
+        vars: vars_list,
+        fixed,
+        outputs: out,
+        bounds,
+    })
 }
 
 /// Evaluator of contact diagnostics (α, sat α, h, ḣ, n, r_c, Δv) at a state.
@@ -521,12 +646,23 @@ pub struct ContactValues {
 impl Diagnostics {
     /// Compiles the contact quantities of `scene` with smooth-saturation ε.
     pub fn new(scene: &Scene, eps: f64) -> Result<Self, OcpError> {
-        let Built { mut model, fixed, base } = build_model(scene, eps)?;
-        let ce = model.contact(true).map_err(|e| OcpError::Model(e.to_string()))?;
+        let Built {
+            mut model,
+            fixed,
+            base,
+        } = build_model(scene, eps)?;
+        let ce = model
+            .contact(true)
+            .map_err(|e| OcpError::Model(e.to_string()))?;
         let mut outs = vec![ce.alpha, ce.sat_alpha, ce.h, ce.h_dot];
         outs.extend(ce.n);
         outs.extend(ce.delta_v);
-        Ok(Diagnostics { tape: Tape::new(&model.g, &outs), n_vars: base as usize, nq: model.nq(), fixed })
+        Ok(Diagnostics {
+            tape: Tape::new(&model.g, &outs),
+            n_vars: base as usize,
+            nq: model.nq(),
+            fixed,
+        })
     }
 
     /// Evaluates at x = (q, q̇, ω).
@@ -538,6 +674,13 @@ impl Diagnostics {
             v[i as usize] = val;
         }
         let o = self.tape.eval(&v);
-        ContactValues { alpha: o[0], sat_alpha: o[1], h: o[2], h_dot: o[3], n: [o[4], o[5], o[6]], delta_v: [o[7], o[8], o[9]] }
+        ContactValues {
+            alpha: o[0],
+            sat_alpha: o[1],
+            h: o[2],
+            h_dot: o[3],
+            n: [o[4], o[5], o[6]],
+            delta_v: [o[7], o[8], o[9]],
+        }
     }
 }

@@ -29,14 +29,21 @@ use serde::{Deserialize, Serialize};
 
 use crate::ipm::{IterationInfo, Settings, Status, WarmStart};
 use crate::ocp::{
-    Objective, Ocp, OcpError, Param, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme, Transcription,
-    VarRef, extract, solve_nlp,
+    Objective, Ocp, OcpError, Param, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme,
+    Transcription, VarRef, extract, solve_nlp,
 };
 use bf::{CostKind, Diagnostics, EndQuantity, Mode, NodeOptions, Physics};
 
 /// Names of the problems [`build`] knows.
-pub const PROBLEMS: &[&str] =
-    &["periodic-qc", "periodic-cot", "periodic-cot-human", "reach", "reorient", "rotate-ref", "rotate-fast"];
+pub const PROBLEMS: &[&str] = &[
+    "periodic-qc",
+    "periodic-cot",
+    "periodic-cot-human",
+    "reach",
+    "reorient",
+    "rotate-ref",
+    "rotate-fast",
+];
 
 /// Upper bound of the total period of the COT problems (s): the COT ratio is otherwise free
 /// to trade period length against efficiency without limit.
@@ -206,7 +213,10 @@ pub struct OcpSolution {
 }
 
 fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
-    OcpError::Io { path: path.display().to_string(), msg: e.to_string() }
+    OcpError::Io {
+        path: path.display().to_string(),
+        msg: e.to_string(),
+    }
 }
 
 impl OcpSolution {
@@ -287,7 +297,13 @@ fn make_phases(
         let (node, _) = bf::node_function(
             scene,
             ph,
-            &NodeOptions { mode: d.mode, cost, h_bounds: d.h, hdot_bounds: d.hdot, eps },
+            &NodeOptions {
+                mode: d.mode,
+                cost,
+                h_bounds: d.h,
+                hdot_bounds: d.hdot,
+                eps,
+            },
         )?;
         let mut x_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); 2 * nq + 3];
         x_bounds[..nq].copy_from_slice(q_limits);
@@ -321,7 +337,9 @@ fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
     PointFunction {
         name: name.into(),
         graph: g,
-        vars: (0..nphases).map(|i| (i as u32, VarRef::Duration(i))).collect(),
+        vars: (0..nphases)
+            .map(|i| (i as u32, VarRef::Duration(i)))
+            .collect(),
         fixed: vec![],
         outputs: vec![s],
         bounds: vec![(lo, hi)],
@@ -335,7 +353,9 @@ fn initial_state(x0: &[f64]) -> PointFunction {
     PointFunction {
         name: "initial state".into(),
         graph: g,
-        vars: (0..x0.len()).map(|i| (i as u32, VarRef::Initial { phase: 0, i })).collect(),
+        vars: (0..x0.len())
+            .map(|i| (i as u32, VarRef::Initial { phase: 0, i }))
+            .collect(),
         fixed: vec![],
         outputs: v,
         bounds: x0.iter().map(|&x| (x, x)).collect(),
@@ -349,7 +369,11 @@ fn final_zero(phase: usize, idx: &[usize], name: &str) -> PointFunction {
     PointFunction {
         name: name.into(),
         graph: g,
-        vars: idx.iter().enumerate().map(|(k, &i)| (k as u32, VarRef::Final { phase, i })).collect(),
+        vars: idx
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| (k as u32, VarRef::Final { phase, i }))
+            .collect(),
         fixed: vec![],
         outputs: v,
         bounds: vec![(0.0, 0.0); idx.len()],
@@ -358,12 +382,21 @@ fn final_zero(phase: usize, idx: &[usize], name: &str) -> PointFunction {
 
 /// Builds the named problem.
 pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, OcpError> {
-    let scene_name = if name == "periodic-cot-human" { "human" } else { "paper" };
+    let scene_name = if name == "periodic-cot-human" {
+        "human"
+    } else {
+        "paper"
+    };
     let scene = scene_by_name(scene_name)?;
     let ph = Physics::new(&scene)?;
-    let eps = settings.epsilon.or(scene.contact.as_ref().map(|c| c.smooth_eps)).unwrap_or(0.01);
+    let eps = settings
+        .epsilon
+        .or(scene.contact.as_ref().map(|c| c.smooth_eps))
+        .unwrap_or(0.01);
     if !(eps.is_finite() && eps > 0.0) {
-        return Err(OcpError::InvalidProblem(format!("epsilon must be positive, got {eps}")));
+        return Err(OcpError::InvalidProblem(format!(
+            "epsilon must be positive, got {eps}"
+        )));
     }
     let nq = ph.nq;
     let nx = 2 * nq + 3;
@@ -373,41 +406,108 @@ pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, Ocp
     let margin = settings.hdot_margin;
     let pts = settings.points;
     let mut cost_bounds = vec![];
-    let (defs, cost, objective, mut points, params): (Vec<PhaseDef>, CostKind, Objective, Vec<PointFunction>, Vec<Param>);
+    let (defs, cost, objective, mut points, params): (
+        Vec<PhaseDef>,
+        CostKind,
+        Objective,
+        Vec<PointFunction>,
+        Vec<Param>,
+    );
     let iota_params = || -> Vec<Param> {
         (0..3)
-            .map(|i| Param { name: format!("iota{}", i + 1), lower: -1e3, upper: 1e3, guess: 0.0 })
+            .map(|i| Param {
+                name: format!("iota{}", i + 1),
+                lower: -1e3,
+                upper: 1e3,
+                guess: 0.0,
+            })
             .collect()
     };
-    let q_limits = if scene_name == "human" { ph.q_limits.clone() } else { free_limits };
+    let q_limits = if scene_name == "human" {
+        ph.q_limits.clone()
+    } else {
+        free_limits
+    };
     let mut x_rest = vec![0.0; nx];
     x_rest[..nq].copy_from_slice(&Q_GUESS[..nq.min(3)]);
     match name {
         "periodic-qc" | "periodic-cot" | "periodic-cot-human" => {
             let qc = name == "periodic-qc";
             defs = vec![
-                PhaseDef { mode: Mode::Free, h: Some((0.0, f64::INFINITY)), hdot: margin.map(|m| (f64::NEG_INFINITY, -m)), duration: (0.01, 5.0), guess_duration: 1.0 },
-                PhaseDef { mode: Mode::Stick, h: None, hdot: None, duration: (0.01, 5.0), guess_duration: 1.0 },
-                PhaseDef { mode: Mode::Free, h: Some((-tol_h, f64::INFINITY)), hdot: margin.map(|m| (m, f64::INFINITY)), duration: (0.01, 5.0), guess_duration: 1.0 },
+                PhaseDef {
+                    mode: Mode::Free,
+                    h: Some((0.0, f64::INFINITY)),
+                    hdot: margin.map(|m| (f64::NEG_INFINITY, -m)),
+                    duration: (0.01, 5.0),
+                    guess_duration: 1.0,
+                },
+                PhaseDef {
+                    mode: Mode::Stick,
+                    h: None,
+                    hdot: None,
+                    duration: (0.01, 5.0),
+                    guess_duration: 1.0,
+                },
+                PhaseDef {
+                    mode: Mode::Free,
+                    h: Some((-tol_h, f64::INFINITY)),
+                    hdot: margin.map(|m| (m, f64::INFINITY)),
+                    duration: (0.01, 5.0),
+                    guess_duration: 1.0,
+                },
             ];
             cost = if qc {
-                CostKind::Qc { w: 1.0, omega_ref: [0.0, 0.0, 2.2] }
+                CostKind::Qc {
+                    w: 1.0,
+                    omega_ref: [0.0, 0.0, 2.2],
+                }
             } else {
                 let s = std::f64::consts::FRAC_1_SQRT_2;
-                CostKind::Cot { w: 10.0, omega_hat: [s, -s, 0.0] }
+                CostKind::Cot {
+                    w: 10.0,
+                    omega_hat: [s, -s, 0.0],
+                }
             };
             objective = Objective::Ratio(0, 1);
             params = iota_params();
             points = vec![
-                bf::end_point(&scene, eps, 0, false, EndQuantity::H(0.3 * r, f64::INFINITY), "h(0) >= 0.3 r")?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    0,
+                    false,
+                    EndQuantity::H(0.3 * r, f64::INFINITY),
+                    "h(0) >= 0.3 r",
+                )?,
                 // The period may start anywhere on the free arc with h ≥ 0.3 r: a continuum of
                 // equivalent optima (a flat direction that stalls Newton's method). Starting at
                 // the arc's apex (ḣ(0) = 0) picks one without changing the optimal value, since
                 // the apex is where h is largest.
-                bf::end_point(&scene, eps, 0, false, EndQuantity::HDot(0.0, 0.0), "apex start: hdot(0) = 0")?,
-                bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "0 <= h1(tf) <= 1e-4")?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    0,
+                    false,
+                    EndQuantity::HDot(0.0, 0.0),
+                    "apex start: hdot(0) = 0",
+                )?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    0,
+                    true,
+                    EndQuantity::H(0.0, tol_h),
+                    "0 <= h1(tf) <= 1e-4",
+                )?,
                 bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
-                bf::end_point(&scene, eps, 1, true, EndQuantity::DeltaV, "stick end: delta v = 0")?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    1,
+                    true,
+                    EndQuantity::DeltaV,
+                    "stick end: delta v = 0",
+                )?,
                 bf::continuity(nx, 1, 2, "stick -> free continuity"),
                 bf::continuity(nx, 2, 0, "periodicity"),
             ];
@@ -418,42 +518,90 @@ pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, Ocp
             }
         }
         "reach" => {
-            defs = vec![PhaseDef { mode: Mode::Free, h: Some((0.0, f64::INFINITY)), hdot: None, duration: (0.05, 10.0), guess_duration: 1.0 }];
+            defs = vec![PhaseDef {
+                mode: Mode::Free,
+                h: Some((0.0, f64::INFINITY)),
+                hdot: None,
+                duration: (0.05, 10.0),
+                guess_duration: 1.0,
+            }];
             cost = CostKind::TimeEffort { w: 1.0 };
             objective = Objective::Cost(0);
             params = vec![];
             points = vec![
                 initial_state(&x_rest),
-                bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "touch: 0 <= h(tf) <= 1e-4")?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    0,
+                    true,
+                    EndQuantity::H(0.0, tol_h),
+                    "touch: 0 <= h(tf) <= 1e-4",
+                )?,
                 final_zero(0, &(nq..2 * nq).collect::<Vec<_>>(), "at rest at tf"),
             ];
         }
         "reorient" | "rotate-ref" | "rotate-fast" => {
             defs = vec![
-                PhaseDef { mode: Mode::Free, h: Some((0.0, f64::INFINITY)), hdot: None, duration: (0.05, 5.0), guess_duration: 1.0 },
-                PhaseDef { mode: Mode::Stick, h: None, hdot: None, duration: (0.05, 5.0), guess_duration: 1.0 },
+                PhaseDef {
+                    mode: Mode::Free,
+                    h: Some((0.0, f64::INFINITY)),
+                    hdot: None,
+                    duration: (0.05, 5.0),
+                    guess_duration: 1.0,
+                },
+                PhaseDef {
+                    mode: Mode::Stick,
+                    h: None,
+                    hdot: None,
+                    duration: (0.05, 5.0),
+                    guess_duration: 1.0,
+                },
             ];
             params = iota_params();
             points = vec![
                 initial_state(&x_rest),
-                bf::end_point(&scene, eps, 0, true, EndQuantity::H(0.0, tol_h), "0 <= h1(tf) <= 1e-4")?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    0,
+                    true,
+                    EndQuantity::H(0.0, tol_h),
+                    "0 <= h1(tf) <= 1e-4",
+                )?,
                 bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
-                bf::end_point(&scene, eps, 1, true, EndQuantity::DeltaV, "stick end: delta v = 0")?,
+                bf::end_point(
+                    &scene,
+                    eps,
+                    1,
+                    true,
+                    EndQuantity::DeltaV,
+                    "stick end: delta v = 0",
+                )?,
             ];
             objective = Objective::Cost(0);
             match name {
                 "reorient" => {
-                    cost = CostKind::Reorient { w: 0.1, axis: [0.0, 0.0, 1.0] };
+                    cost = CostKind::Reorient {
+                        w: 0.1,
+                        axis: [0.0, 0.0, 1.0],
+                    };
                     let th = std::f64::consts::FRAC_PI_2;
                     cost_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY), (th, th)];
                     points.push(duration_sum(2, 0.1, 10.0, "total time <= 10 s"));
                 }
                 "rotate-ref" => {
-                    cost = CostKind::Track { w: 0.1, omega_ref: [0.0, 0.0, 1.0] };
+                    cost = CostKind::Track {
+                        w: 0.1,
+                        omega_ref: [0.0, 0.0, 1.0],
+                    };
                     points.push(duration_sum(2, 3.0, 3.0, "horizon = 3 s"));
                 }
                 _ => {
-                    cost = CostKind::Spin { w: 0.01, axis: [0.0, 0.0, 1.0] };
+                    cost = CostKind::Spin {
+                        w: 0.01,
+                        axis: [0.0, 0.0, 1.0],
+                    };
                     points.push(duration_sum(2, 2.0, 2.0, "horizon = 2 s"));
                 }
             }
@@ -473,9 +621,26 @@ pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, Ocp
             p.guess = *v;
         }
     }
-    let ocp = Ocp { phases, n_costs: 2, params, points, cost_bounds, objective, scheme: settings.scheme };
+    let ocp = Ocp {
+        phases,
+        n_costs: 2,
+        params,
+        points,
+        cost_bounds,
+        objective,
+        scheme: settings.scheme,
+    };
     let nlp = Transcription::new(&ocp)?;
-    Ok(BuiltProblem { name: name.into(), scene, physics: ph, modes, ocp, nlp, epsilon: eps, settings: settings.clone() })
+    Ok(BuiltProblem {
+        name: name.into(),
+        scene,
+        physics: ph,
+        modes,
+        ocp,
+        nlp,
+        epsilon: eps,
+        settings: settings.clone(),
+    })
 }
 
 /// The contact configuration q_c on the segment Q_GUESS → Q_DEEP with h(q_c) = 0.
@@ -490,12 +655,21 @@ fn contact_configuration(diag: &Diagnostics, nq: usize) -> Vec<f64> {
     let (mut lo, mut hi) = (0.0, 1.0);
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
-        if diag.eval(&at(mid)).h > 0.0 { lo = mid } else { hi = mid }
+        if diag.eval(&at(mid)).h > 0.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
     }
     at(lo)[..nq].to_vec()
 }
 
-fn contact_guess(scene: &Scene, eps: f64, phases: &mut [Phase], modes: &[Mode]) -> Result<(), OcpError> {
+fn contact_guess(
+    scene: &Scene,
+    eps: f64,
+    phases: &mut [Phase],
+    modes: &[Mode],
+) -> Result<(), OcpError> {
     let diag = Diagnostics::new(scene, eps)?;
     let nq = scene.links.len();
     let qc = contact_configuration(&diag, nq);
@@ -543,8 +717,11 @@ fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense
     let nq = p.physics.nq;
     let mut s = Samples::default();
     for (pi, tr) in traj.iter().enumerate() {
-        let taus: Vec<f64> =
-            if dense { (0..100).map(|k| -1.0 + 2.0 * k as f64 / 99.0).collect() } else { tr.state_tau.clone() };
+        let taus: Vec<f64> = if dense {
+            (0..100).map(|k| -1.0 + 2.0 * k as f64 / 99.0).collect()
+        } else {
+            tr.state_tau.clone()
+        };
         for (k, &tau) in taus.iter().enumerate() {
             let x = if dense { tr.x_at(tau) } else { tr.x[k].clone() };
             let u = tr.u_at(tau);
@@ -626,8 +803,15 @@ pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSol
 
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
-    let base = s.ipm.clone().unwrap_or_else(|| Settings { tol: 1e-8, ..Settings::default() });
-    Settings { max_iter: s.max_iter, print_level: s.print_level, ..base }
+    let base = s.ipm.clone().unwrap_or_else(|| Settings {
+        tol: 1e-8,
+        ..Settings::default()
+    });
+    Settings {
+        max_iter: s.max_iter,
+        print_level: s.print_level,
+        ..base
+    }
 }
 
 type Callback<'a> = Option<&'a mut dyn FnMut(&IterationInfo) -> bool>;
@@ -653,15 +837,37 @@ pub fn solve(
     let mut iters = 0;
     let sol = solve_nlp(&p.nlp, &settings, None, reborrow(&mut callback))?;
     iters += sol.iterations;
-    stages.push((format!("{:?} guess, eps {}", if p.settings.warm_start.is_some() { GuessKind::Auto } else { p.settings.guess }, p.epsilon), sol.status, sol.iterations));
+    stages.push((
+        format!(
+            "{:?} guess, eps {}",
+            if p.settings.warm_start.is_some() {
+                GuessKind::Auto
+            } else {
+                p.settings.guess
+            },
+            p.epsilon
+        ),
+        sol.status,
+        sol.iterations,
+    ));
     let mut best = (sol, p);
     let fallback;
-    if !best.0.status.is_success() && p.settings.warm_start.is_none() && p.settings.guess == GuessKind::Auto {
-        let s1 = ProblemSettings { guess: GuessKind::Contact, ..p.settings.clone() };
+    if !best.0.status.is_success()
+        && p.settings.warm_start.is_none()
+        && p.settings.guess == GuessKind::Auto
+    {
+        let s1 = ProblemSettings {
+            guess: GuessKind::Contact,
+            ..p.settings.clone()
+        };
         fallback = build(&p.name, &s1)?;
         let sol1 = solve_nlp(&fallback.nlp, &settings, None, reborrow(&mut callback))?;
         iters += sol1.iterations;
-        stages.push((format!("Contact guess, eps {}", p.epsilon), sol1.status, sol1.iterations));
+        stages.push((
+            format!("Contact guess, eps {}", p.epsilon),
+            sol1.status,
+            sol1.iterations,
+        ));
         best = (sol1, &fallback);
     }
     let (sol, pp) = best;

@@ -33,7 +33,12 @@ pub struct ChebDoubleIntegrator {
 fn barycentric_diff(x: &[f64]) -> Vec<Vec<f64>> {
     let n = x.len();
     let w: Vec<f64> = (0..n)
-        .map(|j| 1.0 / (0..n).filter(|&k| k != j).map(|k| x[j] - x[k]).product::<f64>())
+        .map(|j| {
+            1.0 / (0..n)
+                .filter(|&k| k != j)
+                .map(|k| x[j] - x[k])
+                .product::<f64>()
+        })
         .collect();
     let mut d = vec![vec![0.0; n]; n];
     for i in 0..n {
@@ -66,7 +71,9 @@ fn legendre(n: usize, x: f64) -> (f64, f64) {
 /// LGR nodes (τ_0 = −1) and weights: Newton on P_{N−1} + P_N from Chebyshev–Radau guesses.
 fn lgr(n: usize) -> (Vec<f64>, Vec<f64>) {
     let pi = std::f64::consts::PI;
-    let mut x: Vec<f64> = (0..n).map(|j| -(2.0 * pi * j as f64 / (2 * n - 1) as f64).cos()).collect();
+    let mut x: Vec<f64> = (0..n)
+        .map(|j| -(2.0 * pi * j as f64 / (2 * n - 1) as f64).cos())
+        .collect();
     for xi in x.iter_mut().skip(1) {
         for _ in 0..100 {
             let h = 1e-7;
@@ -114,7 +121,16 @@ impl ChebDoubleIntegrator {
         }
         weight[segments * order] = 1e-3 * weight[0];
         let distance = (0..axes).map(|a| [1.0, 2.0, -1.0, 0.5][a % 4]).collect();
-        Self { axes, segments, order, distance, drag: 0.0, diff, weight, tau }
+        Self {
+            axes,
+            segments,
+            order,
+            distance,
+            drag: 0.0,
+            diff,
+            weight,
+            tau,
+        }
     }
     pub fn nodes(&self) -> usize {
         self.segments * self.order + 1
