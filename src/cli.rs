@@ -69,17 +69,39 @@ pub struct EvalArgs {
 /// Arguments of `simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Scene file.
+    /// Scene file. Only the built-in contact scenes (scenes/paper.toml, scenes/human.toml,
+    /// unmodified) can be simulated: simulation runs on the compiled kernels.
     #[arg(long, default_value = "scenes/paper.toml")]
     pub scene: PathBuf,
-    /// Joint torque time series (CSV or JSON, as written by `optimize`).
-    #[arg(long)]
+    /// Joint torque time series (CSV `t,tau1,tau2,tau3` or JSON `{"t":[..],"tau":[[..],..]}`,
+    /// as written by `optimize`; see sim/README.md).
+    #[arg(long, conflicts_with = "pd")]
     pub torques: Option<PathBuf>,
-    /// PD controller target joint angles (comma-separated).
+    /// PD controller target joint angles (comma-separated, rad): τ = kp (target − q) − kd q̇.
+    /// Without --torques and --pd the joints are unactuated (τ = 0).
     #[arg(long, allow_hyphen_values = true)]
     pub pd: Option<String>,
+    /// PD gains `kp,kd` (all joints) or `kp1,kp2,kp3,kd1,kd2,kd3` (N m/rad, N m s/rad).
+    #[arg(long, allow_hyphen_values = true, default_value = "1.0,0.2")]
+    pub pd_gains: String,
+    /// Initial joint angles q(0) (rad, comma-separated) [default: 0.1,0.5,0.5].
+    #[arg(long, allow_hyphen_values = true)]
+    pub q0: Option<String>,
+    /// Initial joint velocities q̇(0) (rad/s) [default: 0,0,0].
+    #[arg(long, allow_hyphen_values = true)]
+    pub qd0: Option<String>,
+    /// Initial ball angular velocity ω(0) (rad/s, world axes) [default: 0,0,0].
+    #[arg(long, allow_hyphen_values = true)]
+    pub omega0: Option<String>,
+    /// Initial mode: free, stick or slip (contact modes need h(q0) ≈ 0).
+    #[arg(long, default_value = "free")]
+    pub mode0: String,
+    /// Initial state file (JSON): `{"q":[..],"qd":[..],"omega":[..],"mode":"free"}`; `qd`,
+    /// `omega` and `mode` are optional. --q0/--qd0/--omega0/--mode0 override its entries.
+    #[arg(long)]
+    pub init: Option<PathBuf>,
     /// End time (s).
-    #[arg(long, default_value_t = 10.0)]
+    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
     pub t_end: f64,
     /// Integrator: dopri5 or rk4.
     #[arg(long, default_value = "dopri5")]
@@ -87,10 +109,29 @@ pub struct SimulateArgs {
     /// Relative tolerance of the adaptive integrator.
     #[arg(long, default_value_t = 1e-8)]
     pub rtol: f64,
-    /// Impact law: newton, stick, max-dissipation or min-slip.
+    /// Absolute tolerance of the adaptive integrator [default: 1e-2 · rtol].
+    #[arg(long)]
+    pub atol: Option<f64>,
+    /// Fixed step of rk4 (s).
+    #[arg(long, default_value_t = 1e-3)]
+    pub step: f64,
+    /// Largest step of dopri5 (s).
+    #[arg(long, default_value_t = 0.05)]
+    pub h_max: f64,
+    /// Step limit (accepted + rejected); the run stops with an error when it is reached.
+    #[arg(long, default_value_t = 10_000_000)]
+    pub max_steps: usize,
+    /// Impact law: newton, stick, max-dissipation, min-slip (or normal-impulse).
     #[arg(long, default_value = "newton")]
     pub impact_law: String,
-    /// Output directory.
+    /// Disable the projection of h and of the velocity constraint after contact steps (the
+    /// drift is then only bounded by the integrator tolerance and the contact tolerance).
+    #[arg(long)]
+    pub no_projection: bool,
+    /// Also store samples on the uniform grid k · dt (s), besides every step and event.
+    #[arg(long)]
+    pub output_dt: Option<f64>,
+    /// Output directory (trajectory.{json,csv}, events.{json,csv}, summary.json).
     #[arg(long, default_value = "out/simulate")]
     pub out: PathBuf,
 }

@@ -11,7 +11,7 @@ fn main() {
     let result = match cli.command {
         Command::Generate(a) => commands::generate::run(&a),
         Command::Eval(a) => commands::eval::run(&a),
-        Command::Simulate(_) => commands::not_yet("simulate", 5),
+        Command::Simulate(a) => commands::simulate::run(&a),
         Command::Optimize(_) => commands::not_yet("optimize", 6),
         Command::Paper(a) => commands::paper::run(&a),
         Command::Report(_) => commands::not_yet("report", 7),

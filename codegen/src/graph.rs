@@ -273,6 +273,84 @@ impl Graph {
         })
     }
 
+    /// Expand `id` (times `coef`) into linear terms (node, coefficient) and a constant:
+    /// through sums, differences, negations and constant multiples, at most `depth` levels.
+    fn expand(&self, id: Id, coef: f64, depth: u32, terms: &mut Vec<(Id, f64)>, cst: &mut f64) {
+        match self.nodes[id.index()] {
+            Node::Const(b) => *cst += coef * f64::from_bits(b),
+            Node::Add(a, b) if depth > 0 => {
+                self.expand(a, coef, depth - 1, terms, cst);
+                self.expand(b, coef, depth - 1, terms, cst);
+            }
+            Node::Sub(a, b) if depth > 0 => {
+                self.expand(a, coef, depth - 1, terms, cst);
+                self.expand(b, -coef, depth - 1, terms, cst);
+            }
+            Node::Neg(a) if depth > 0 => self.expand(a, -coef, depth - 1, terms, cst),
+            Node::Mul(c, x) if self.as_const(c).is_some() => {
+                let k = self.as_const(c).unwrap_or(1.0);
+                terms.push((x, coef * k));
+            }
+            _ => terms.push((id, coef)),
+        }
+    }
+
+    /// a ± b as a collected linear combination, if collecting merges or cancels terms
+    /// (e.g. 2x − (x + y) → x − y); `None` leaves the sum to the plain rules.
+    fn collect_sum(&mut self, a: Id, b: Id, negate_b: bool) -> Option<Id> {
+        const DEPTH: u32 = 3;
+        const MAX_TERMS: usize = 8;
+        let mut terms = Vec::new();
+        let mut cst = 0.0;
+        self.expand(a, 1.0, DEPTH, &mut terms, &mut cst);
+        self.expand(
+            b,
+            if negate_b { -1.0 } else { 1.0 },
+            DEPTH,
+            &mut terms,
+            &mut cst,
+        );
+        if terms.len() > MAX_TERMS || terms.len() < 2 {
+            return None;
+        }
+        terms.sort_by_key(|t| t.0);
+        let before = terms.len();
+        let mut merged: Vec<(Id, f64)> = Vec::with_capacity(before);
+        for (id, c) in terms {
+            match merged.last_mut() {
+                Some(last) if last.0 == id => last.1 += c,
+                _ => merged.push((id, c)),
+            }
+        }
+        if merged.len() == before {
+            return None;
+        }
+        merged.retain(|t| t.1 != 0.0);
+        // Rebuild: positive terms first (in id order), then subtract the negative ones.
+        let mut acc: Option<Id> = None;
+        for &(id, c) in merged.iter().filter(|t| t.1 > 0.0) {
+            let k = self.constant(c);
+            let t = self.mul(k, id);
+            acc = Some(match acc {
+                None => t,
+                Some(x) => self.add(x, t),
+            });
+        }
+        for &(id, c) in merged.iter().filter(|t| t.1 < 0.0) {
+            let k = self.constant(-c);
+            let t = self.mul(k, id);
+            acc = Some(match acc {
+                None => self.neg(t),
+                Some(x) => self.sub(x, t),
+            });
+        }
+        let k = self.constant(cst);
+        Some(match acc {
+            None => k,
+            Some(x) => self.add(x, k),
+        })
+    }
+
     /// a + b
     pub fn add(&mut self, a: Id, b: Id) -> Id {
         match (self.as_const(a), self.as_const(b)) {
@@ -280,6 +358,13 @@ impl Graph {
             (Some(0.0), _) => return b,
             (_, Some(0.0)) => return a,
             _ => {}
+        }
+        if a == b {
+            let two = self.constant(2.0);
+            return self.mul(two, a);
+        }
+        if let Some(r) = self.collect_sum(a, b, false) {
+            return r;
         }
         if let Some(r) = self.add_reassoc(a, b, false) {
             return r;
@@ -320,6 +405,9 @@ impl Graph {
             (Some(0.0), _) => return self.neg(b),
             (_, Some(0.0)) => return a,
             _ => {}
+        }
+        if let Some(r) = self.collect_sum(a, b, true) {
+            return r;
         }
         if let Some(r) = self.add_reassoc(a, b, true) {
             return r;

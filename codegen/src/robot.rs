@@ -616,7 +616,11 @@ impl Model {
         }
         let a = self.coriolis_qd_energy();
         let b = self.coriolis_qd_christoffel();
-        let out = if self.g.cost(&b) < self.g.cost(&a) { b } else { a };
+        let out = if self.g.cost(&b) < self.g.cost(&a) {
+            b
+        } else {
+            a
+        };
         self.cache.cqd = Some(out.clone());
         out
     }

@@ -150,3 +150,59 @@ fn appendix_b_dynamics() {
         }
     }
 }
+
+/// eq. 76–79: the Christoffel symbols ψ_ijk of the paper finger (all others zero).
+#[test]
+fn appendix_b_christoffel_symbols() {
+    use bf_codegen::robot::Model;
+    let scene = paper();
+    let mut model = Model::new(&scene).unwrap();
+    let ch: Vec<_> = model
+        .christoffel()
+        .into_iter()
+        .flatten()
+        .flatten()
+        .collect();
+    let (l, m2, m3) = (1.0, 0.02, 0.02);
+    let (ixx, iyy) = (1.0677e-3, 2.3177e-3);
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for _ in 0..50 {
+        let q: Vec<f64> = (0..3).map(|_| rng.random_range(-3.2..3.2)).collect();
+        let (q1, q2, q3) = (q[0], q[1], q[2]);
+        let s = |x: f64, y: f64, z: f64| (x * q1 + y * q2 + z * q3).sin();
+        let l2 = l * l;
+        let p112 = 0.125 * (4.0 * ixx - 4.0 * iyy - m3 * l2) * s(0., 2., 2.)
+            - 0.5 * m3 * l2 * s(0., 2., 1.)
+            - 0.125 * ((4.0 * m3 + m2) * l2 - 4.0 * ixx + 4.0 * iyy) * s(0., 2., 0.)
+            - 0.5 * m3 * l2 * s(0., 1., 1.)
+            - (0.5 * m2 + m3) * l2 * s(0., 1., 0.);
+        let p113 = 0.125 * (4.0 * ixx - 4.0 * iyy - m3 * l2) * s(0., 2., 2.)
+            - 0.25 * m3 * l2 * (2.0 * s(0., 1., 1.) + s(0., 0., 1.) + s(0., 2., 1.));
+        let p223 = -0.5 * m3 * l2 * s(0., 0., 1.);
+        let mut want = [[[0.0; 3]; 3]; 3];
+        want[0][0][1] = p112;
+        want[0][1][0] = p112;
+        want[1][0][0] = -p112;
+        want[0][0][2] = p113;
+        want[0][2][0] = p113;
+        want[2][0][0] = -p113;
+        want[1][1][2] = p223;
+        want[1][2][1] = p223;
+        want[1][2][2] = p223;
+        want[2][1][1] = -p223;
+        let state: Vec<f64> = q.iter().copied().chain([0.0; 7]).collect();
+        let got = bf_codegen::interp::eval::<f64>(&model.g, &ch, &state);
+        for i in 0..3 {
+            for j in 0..3 {
+                for k in 0..3 {
+                    close(
+                        got[i * 9 + j * 3 + k],
+                        want[i][j][k],
+                        1e-13,
+                        &format!("psi_{}{}{} (eq. 77-79)", i + 1, j + 1, k + 1),
+                    );
+                }
+            }
+        }
+    }
+}

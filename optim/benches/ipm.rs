@@ -13,7 +13,7 @@ mod double_integrator;
 use std::hint::black_box;
 use std::time::Duration;
 
-use bf_optim::ipm::{Nlp, Settings, Solution, solve};
+use bf_optim::ipm::{Nlp, Settings, Solution, Workspace, solve, solve_in};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn per_iter(d: Duration, it: usize) -> f64 {
@@ -71,6 +71,11 @@ fn bench_ipm(c: &mut Criterion) {
     });
     g.bench_function("lgr_21k", |b| {
         b.iter(|| black_box(solve(&lgr, &settings).unwrap()))
+    });
+    // Same solve with the KKT symbolic analysis kept in a reused workspace.
+    let mut ws = Workspace::new();
+    g.bench_function("lgr_21k_reused_workspace", |b| {
+        b.iter(|| black_box(solve_in(&mut ws, &lgr, &settings, None, None).unwrap()))
     });
     g.finish();
 }

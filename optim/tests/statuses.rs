@@ -410,3 +410,21 @@ fn debug_cubic() {
     .unwrap();
     println!("{:?}", sol.status);
 }
+
+#[test]
+fn workspace_reuse_gives_identical_results_and_handles_pattern_changes() {
+    use bf_optim::ipm::{Workspace, solve_in};
+    let mut ws = Workspace::new();
+    let p = hs071();
+    let a = solve_in(&mut ws, &p, &Settings::default(), None, None).unwrap();
+    let b = solve_in(&mut ws, &p, &Settings::default(), None, None).unwrap();
+    assert_eq!(a.x, b.x);
+    assert_eq!(a.iterations, b.iterations);
+    // a different structure through the same workspace is re-analysed
+    let q = hs::all().into_iter().find(|p| p.name == "HS100").unwrap();
+    let c = solve_in(&mut ws, &q, &Settings::default(), None, None).unwrap();
+    assert_eq!(c.status, Status::Solved);
+    assert!((c.objective - 680.6300573).abs() < 1e-6 * 680.0);
+    let d = solve_in(&mut ws, &p, &Settings::default(), None, None).unwrap();
+    assert_eq!(a.x, d.x);
+}

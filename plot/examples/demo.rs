@@ -1,17 +1,39 @@
 //! Renders a few demo figures to the directory given as first argument (default `out/plot-demo`).
 use bf_plot::*;
 fn main() -> Result<(), PlotError> {
-    let dir = std::env::args().nth(1).unwrap_or_else(|| "out/plot-demo".into());
+    let dir = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "out/plot-demo".into());
     let dir = std::path::Path::new(&dir);
     let r = render_report(&sat::fig4_saturation(&[0.01, 0.1], 801), dir.join("fig4"))?;
     println!("{:?}", r);
     let mut f = LineFigure::new("Eight series", "t [s]", "y [-]");
     for k in 0..8 {
-        f.series.push(Series::new(format!("series {k}"), (0..200).map(|i| { let t = i as f64 * 0.05; (t, (t + k as f64 * 0.4).sin() * (1.0 + 0.1 * k as f64)) }).collect()));
+        f.series.push(Series::new(
+            format!("series {k}"),
+            (0..200)
+                .map(|i| {
+                    let t = i as f64 * 0.05;
+                    (t, (t + k as f64 * 0.4).sin() * (1.0 + 0.1 * k as f64))
+                })
+                .collect(),
+        ));
     }
-    f.vertical_markers = vec![(2.0, "impact".into()), (2.3, "lift-off".into()), (7.0, "t_f".into())];
-    f.hlines.push(HLine { y: 1.6, label: "limit".into(), colour: Colour::Auto });
-    f.bands.push(Band { x0: 2.0, x1: 2.3, label: "contact".into() });
+    f.vertical_markers = vec![
+        (2.0, "impact".into()),
+        (2.3, "lift-off".into()),
+        (7.0, "t_f".into()),
+    ];
+    f.hlines.push(HLine {
+        y: 1.6,
+        label: "limit".into(),
+        colour: Colour::Auto,
+    });
+    f.bands.push(Band {
+        x0: 2.0,
+        x1: 2.3,
+        label: "contact".into(),
+    });
     println!("{:?}", render(&f, dir.join("eight"))?);
     Ok(())
 }

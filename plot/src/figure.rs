@@ -97,7 +97,13 @@ pub struct SeriesStyle {
 
 impl Default for SeriesStyle {
     fn default() -> Self {
-        Self { colour: Colour::Auto, dash: Dash::Auto, width: 2, markers: false, in_legend: true }
+        Self {
+            colour: Colour::Auto,
+            dash: Dash::Auto,
+            width: 2,
+            markers: false,
+            in_legend: true,
+        }
     }
 }
 
@@ -115,7 +121,11 @@ pub struct Series {
 impl Series {
     /// A series with the default (automatic) style.
     pub fn new(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
-        Self { name: name.into(), points, style: SeriesStyle::default() }
+        Self {
+            name: name.into(),
+            points,
+            style: SeriesStyle::default(),
+        }
     }
 
     /// The same series with another style.
@@ -182,7 +192,11 @@ pub struct LineFigure {
 
 impl LineFigure {
     /// An empty figure with title and axis descriptions; add series before rendering.
-    pub fn new(title: impl Into<String>, x_label: impl Into<String>, y_label: impl Into<String>) -> Self {
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
         Self {
             title: title.into(),
             x_label: x_label.into(),
@@ -240,7 +254,13 @@ pub fn render(fig: &LineFigure, stem: impl AsRef<Path>) -> Result<[PathBuf; 2], 
 
 /// As [`render`], also reporting how many points were skipped.
 pub fn render_report(fig: &LineFigure, stem: impl AsRef<Path>) -> Result<RenderReport, PlotError> {
-    render_impl("", std::slice::from_ref(fig), Layout::Rows, fig.size, stem.as_ref())
+    render_impl(
+        "",
+        std::slice::from_ref(fig),
+        Layout::Rows,
+        fig.size,
+        stem.as_ref(),
+    )
 }
 
 /// Renders a multi-panel figure to `<stem>.svg` and `<stem>.png`.
@@ -315,7 +335,11 @@ struct Prepared {
 }
 
 fn invalid(fig: &LineFigure, what: &str, detail: String) -> PlotError {
-    PlotError::InvalidInput { figure: fig.title.clone(), what: what.into(), detail }
+    PlotError::InvalidInput {
+        figure: fig.title.clone(),
+        what: what.into(),
+        detail,
+    }
 }
 
 fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
@@ -326,7 +350,10 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
     let mut skipped = 0;
     for (i, s) in fig.series.iter().enumerate() {
         if s.points.is_empty() {
-            return Err(PlotError::EmptySeries { figure: fig.title.clone(), series: s.name.clone() });
+            return Err(PlotError::EmptySeries {
+                figure: fig.title.clone(),
+                series: s.name.clone(),
+            });
         }
         let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
         let mut bad = 0;
@@ -370,17 +397,26 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
     }
     let pts = || out.iter().flat_map(|s| s.pieces.iter().flatten());
     let fold = |f: fn(&(f64, f64)) -> f64| {
-        pts().map(f).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v), hi.max(v)))
+        pts()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
     };
-    let check = |r: Option<(f64, f64)>, s: Scale, what: &str| -> Result<Option<(f64, f64)>, PlotError> {
-        match r {
-            None => Ok(None),
-            Some((a, b)) => match (tx(a, s), tx(b, s)) {
-                (Some(a2), Some(b2)) if a2 < b2 => Ok(Some((a2, b2))),
-                _ => Err(invalid(fig, what, format!("({a}, {b}) is not an increasing finite range"))),
-            },
-        }
-    };
+    let check =
+        |r: Option<(f64, f64)>, s: Scale, what: &str| -> Result<Option<(f64, f64)>, PlotError> {
+            match r {
+                None => Ok(None),
+                Some((a, b)) => match (tx(a, s), tx(b, s)) {
+                    (Some(a2), Some(b2)) if a2 < b2 => Ok(Some((a2, b2))),
+                    _ => Err(invalid(
+                        fig,
+                        what,
+                        format!("({a}, {b}) is not an increasing finite range"),
+                    )),
+                },
+            }
+        };
     let xr_fixed = check(fig.x_range, fig.x_scale, "x_range")?;
     let yr_fixed = check(fig.y_range, fig.y_scale, "y_range")?;
     for &(t, ref l) in &fig.vertical_markers {
@@ -390,12 +426,20 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
     }
     for h in &fig.hlines {
         if tx(h.y, fig.y_scale).is_none() {
-            return Err(invalid(fig, "horizontal line", format!("'{}' at {}", h.label, h.y)));
+            return Err(invalid(
+                fig,
+                "horizontal line",
+                format!("'{}' at {}", h.label, h.y),
+            ));
         }
     }
     for b in &fig.bands {
         if !(b.x0.is_finite() && b.x1.is_finite() && b.x0 <= b.x1) {
-            return Err(invalid(fig, "band", format!("'{}' [{}, {}]", b.label, b.x0, b.x1)));
+            return Err(invalid(
+                fig,
+                "band",
+                format!("'{}' [{}, {}]", b.label, b.x0, b.x1),
+            ));
         }
     }
     let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), 0.0));
@@ -407,9 +451,20 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
                 hi = hi.max(y);
             }
         }
-        widen((lo, hi), 0.05)
+        let (lo, hi) = widen((lo, hi), 0.05);
+        // Head room for the switching-time labels drawn along the top edge.
+        if fig.vertical_markers.iter().any(|(_, l)| !l.is_empty()) {
+            (lo, hi + 0.08 * (hi - lo))
+        } else {
+            (lo, hi)
+        }
     });
-    Ok(Prepared { series: out, skipped, xr, yr })
+    Ok(Prepared {
+        series: out,
+        skipped,
+        xr,
+        yr,
+    })
 }
 
 /// Pads a range by `frac` of its span and makes degenerate ranges non-empty.
@@ -442,8 +497,15 @@ fn tick_label(v: f64, span: f64, scale: Scale) -> String {
             let s = if v.abs() >= 1e5 || step < 1e-4 {
                 format!("{v:.2e}")
             } else {
-                let dec = (-step.log10().floor()).clamp(0.0, 6.0) as usize;
-                format!("{v:.dec$}")
+                // One digit more than the step needs, then trailing zeros trimmed: 0.25 stays
+                // 0.25, 0.50 becomes 0.5, 1.00 becomes 1.
+                let dec = (1.0 - step.log10().floor()).clamp(0.0, 7.0) as usize;
+                let s = format!("{v:.dec$}");
+                if s.contains('.') {
+                    s.trim_end_matches('0').trim_end_matches('.').to_string()
+                } else {
+                    s
+                }
             };
             match s.strip_prefix('-') {
                 Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
@@ -488,7 +550,10 @@ fn render_impl(
     let svg_path = with_ext(stem, "svg");
     let png_path = with_ext(stem, "png");
     if let Some(dir) = svg_path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io { path: dir.into(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io {
+            path: dir.into(),
+            source,
+        })?;
     }
 
     let mut svg = String::new();
@@ -506,14 +571,19 @@ fn render_impl(
         root.present().map_err(de)
     })();
     match res {
-        Ok(()) => std::fs::rename(&tmp, &png_path)
-            .map_err(|source| PlotError::Io { path: png_path.clone(), source })?,
+        Ok(()) => std::fs::rename(&tmp, &png_path).map_err(|source| PlotError::Io {
+            path: png_path.clone(),
+            source,
+        })?,
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
             return Err(e);
         }
     }
-    Ok(RenderReport { paths: [svg_path, png_path], skipped_points })
+    Ok(RenderReport {
+        paths: [svg_path, png_path],
+        skipped_points,
+    })
 }
 
 /// `stem` with `.ext` appended (not replacing: stems like `fig6.omega` keep their dot).
@@ -527,8 +597,14 @@ fn with_ext(stem: &Path, ext: &str) -> PathBuf {
 /// A temporary name next to `path`, keeping its extension (the bitmap encoder picks the
 /// format from it).
 fn tmp_sibling(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let ext = path.extension().map(|e| e.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
     path.with_file_name(format!(".{name}.tmp{}.{ext}", std::process::id()))
 }
 
@@ -536,13 +612,22 @@ fn tmp_sibling(path: &Path) -> PathBuf {
 /// partially written file.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io { path: dir.into(), source })?;
+        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io {
+            path: dir.into(),
+            source,
+        })?;
     }
     let tmp = tmp_sibling(path);
-    std::fs::write(&tmp, bytes).map_err(|source| PlotError::Io { path: tmp.clone(), source })?;
+    std::fs::write(&tmp, bytes).map_err(|source| PlotError::Io {
+        path: tmp.clone(),
+        source,
+    })?;
     std::fs::rename(&tmp, path).map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
-        PlotError::Io { path: path.into(), source }
+        PlotError::Io {
+            path: path.into(),
+            source,
+        }
     })
 }
 
@@ -564,7 +649,11 @@ fn draw_all<DB: DrawingBackend>(
         Layout::Rows => body.split_evenly((n, 1)),
         Layout::Columns => body.split_evenly((1, n)),
     };
-    let title_font = if n > 1 || !title.is_empty() { PANEL_TITLE_FONT } else { TITLE_FONT };
+    let title_font = if n > 1 || !title.is_empty() {
+        PANEL_TITLE_FONT
+    } else {
+        TITLE_FONT
+    };
     for ((area, fig), prep) in areas.iter().zip(panels).zip(prepared) {
         draw_panel(area, fig, prep, title_font)?;
     }
@@ -648,13 +737,18 @@ fn draw_panel<DB: DrawingBackend>(
     let band_fill = RGBColor(110, 110, 110).mix(0.13);
     let mut band_labels: Vec<&str> = Vec::new();
     for b in &fig.bands {
-        let (Some(a), Some(c)) = (tx(b.x0, xsc), tx(b.x1, xsc)) else { continue };
+        let (Some(a), Some(c)) = (tx(b.x0, xsc), tx(b.x1, xsc)) else {
+            continue;
+        };
         let (a, c) = (a.max(xr.0), c.min(xr.1));
         if a >= c {
             continue;
         }
         let anno = chart
-            .draw_series(std::iter::once(Rectangle::new([(a, yr.0), (c, yr.1)], band_fill.filled())))
+            .draw_series(std::iter::once(Rectangle::new(
+                [(a, yr.0), (c, yr.1)],
+                band_fill.filled(),
+            )))
             .map_err(de)?;
         if !b.label.is_empty() && !band_labels.contains(&b.label.as_str()) {
             band_labels.push(&b.label);
@@ -673,11 +767,17 @@ fn draw_panel<DB: DrawingBackend>(
         };
         let style = c.stroke_width(2);
         let anno = chart
-            .draw_series(DashedLineSeries::new(vec![(xr.0, y), (xr.1, y)], 14, 5, style))
+            .draw_series(DashedLineSeries::new(
+                vec![(xr.0, y), (xr.1, y)],
+                14,
+                5,
+                style,
+            ))
             .map_err(de)?;
         if !hl.label.is_empty() {
-            anno.label(hl.label.as_str())
-                .legend(move |(x, y)| dash_element(vec![(x, y), (x + 24, y)], Dash::LongDash, style));
+            anno.label(hl.label.as_str()).legend(move |(x, y)| {
+                dash_element(vec![(x, y), (x + 24, y)], Dash::LongDash, style)
+            });
         }
     }
 
@@ -692,14 +792,23 @@ fn draw_panel<DB: DrawingBackend>(
             continue;
         }
         chart
-            .draw_series(DashedLineSeries::new(vec![(x, yr.0), (x, yr.1)], 5, 4, marker_style))
+            .draw_series(DashedLineSeries::new(
+                vec![(x, yr.0), (x, yr.1)],
+                5,
+                4,
+                marker_style,
+            ))
             .map_err(de)?;
         if label.is_empty() {
             continue;
         }
         let px = (x - xr.0) / xs * pw;
         let width = 8.0 * label.chars().count() as f64 + 8.0;
-        level = if px - last_px < width { (level + 1) % 3 } else { 0 };
+        level = if px - last_px < width {
+            (level + 1) % 3
+        } else {
+            0
+        };
         last_px = px;
         marker_boxes.push((px, px + width));
         let text = Text::new(
@@ -718,9 +827,9 @@ fn draw_panel<DB: DrawingBackend>(
         let mut labelled = false;
         for piece in &s.pieces {
             let anno = match s.dash {
-                Dash::Auto | Dash::Solid => {
-                    chart.draw_series(LineSeries::new(piece.iter().copied(), style)).map_err(de)?
-                }
+                Dash::Auto | Dash::Solid => chart
+                    .draw_series(LineSeries::new(piece.iter().copied(), style))
+                    .map_err(de)?,
                 d => {
                     let (on, off) = dash_pattern(d);
                     chart
@@ -732,9 +841,14 @@ fn draw_panel<DB: DrawingBackend>(
                 labelled = true;
                 let (dash, markers) = (s.dash, s.markers);
                 anno.label(s.name.as_str()).legend(move |(x, y)| {
-                    let base = EmptyElement::at((x, y)) + dash_element(vec![(0, 0), (24, 0)], dash, style);
+                    let base =
+                        EmptyElement::at((x, y)) + dash_element(vec![(0, 0), (24, 0)], dash, style);
                     // A transparent dot when there are no markers keeps one element type.
-                    let dot = if markers { style.filled() } else { TRANSPARENT.filled() };
+                    let dot = if markers {
+                        style.filled()
+                    } else {
+                        TRANSPARENT.filled()
+                    };
                     base + Circle::new((12, 0), 4, dot)
                 });
             }
@@ -752,7 +866,12 @@ fn draw_panel<DB: DrawingBackend>(
         .iter()
         .filter(|s| s.in_legend)
         .map(|s| s.name.as_str())
-        .chain(fig.hlines.iter().filter(|h| !h.label.is_empty()).map(|h| h.label.as_str()))
+        .chain(
+            fig.hlines
+                .iter()
+                .filter(|h| !h.label.is_empty())
+                .map(|h| h.label.as_str()),
+        )
         .chain(band_labels.iter().copied())
         .collect();
     if entries.is_empty() || fig.legend == LegendPos::Hidden {
@@ -766,12 +885,23 @@ fn draw_panel<DB: DrawingBackend>(
         LegendPos::Auto | LegendPos::Hidden => {
             let longest = entries
                 .iter()
-                .map(|e| inner.estimate_text_size(e, &TextStyle::from((FONT, LEGEND_FONT).into_font())).map_or(200, |d| d.0))
+                .map(|e| {
+                    inner
+                        .estimate_text_size(e, &TextStyle::from((FONT, LEGEND_FONT).into_font()))
+                        .map_or(200, |d| d.0)
+                })
                 .max()
                 .unwrap_or(0) as f64;
             let box_w = longest + 60.0;
             let box_h = 22.0 * entries.len() as f64 + 16.0;
-            auto_legend(prep, &marker_boxes, xr, yr, (pw, ph), (box_w, box_h))
+            // Reference lines count as data: a legend box should not hide a limit line.
+            let hl: Vec<Vec<(f64, f64)>> = fig
+                .hlines
+                .iter()
+                .filter_map(|h| tx(h.y, ysc))
+                .map(|y| vec![(xr.0, y), (xr.1, y)])
+                .collect();
+            auto_legend(prep, &hl, &marker_boxes, xr, yr, (pw, ph), (box_w, box_h))
         }
     };
     chart
@@ -790,6 +920,7 @@ fn draw_panel<DB: DrawingBackend>(
 /// The corner whose legend-sized box covers the fewest data points (and marker labels).
 fn auto_legend(
     prep: &Prepared,
+    extra: &[Vec<(f64, f64)>],
     marker_boxes: &[(f64, f64)],
     xr: (f64, f64),
     yr: (f64, f64),
@@ -800,20 +931,38 @@ fn auto_legend(
     let cands = [
         (SeriesLabelPosition::UpperRight, pw - bw - 10.0, 10.0),
         (SeriesLabelPosition::UpperLeft, 10.0, 10.0),
-        (SeriesLabelPosition::LowerRight, pw - bw - 10.0, ph - bh - 10.0),
+        (
+            SeriesLabelPosition::LowerRight,
+            pw - bw - 10.0,
+            ph - bh - 10.0,
+        ),
         (SeriesLabelPosition::LowerLeft, 10.0, ph - bh - 10.0),
     ];
-    let to_px = |(x, y): (f64, f64)| ((x - xr.0) / (xr.1 - xr.0) * pw, (yr.1 - y) / (yr.1 - yr.0) * ph);
+    let to_px = |(x, y): (f64, f64)| {
+        (
+            (x - xr.0) / (xr.1 - xr.0) * pw,
+            (yr.1 - y) / (yr.1 - yr.0) * ph,
+        )
+    };
     let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
     for (pos, x0, y0) in cands {
-        let inside = |(px, py): (f64, f64)| px >= x0 - 6.0 && px <= x0 + bw + 6.0 && py >= y0 - 6.0 && py <= y0 + bh + 6.0;
+        let inside = |(px, py): (f64, f64)| {
+            px >= x0 - 6.0 && px <= x0 + bw + 6.0 && py >= y0 - 6.0 && py <= y0 + bh + 6.0
+        };
         let mut count = 0usize;
-        for s in &prep.series {
-            for piece in &s.pieces {
+        for piece in prep
+            .series
+            .iter()
+            .flat_map(|s| s.pieces.iter())
+            .chain(extra.iter())
+        {
+            {
                 // Sample densely enough that a line crossing the box is seen even between points.
                 for w in piece.windows(2) {
                     let (a, b) = (to_px(w[0]), to_px(w[1]));
-                    let n = ((b.0 - a.0).hypot(b.1 - a.1) / 4.0).ceil().clamp(1.0, 200.0) as usize;
+                    let n = ((b.0 - a.0).hypot(b.1 - a.1) / 4.0)
+                        .ceil()
+                        .clamp(1.0, 200.0) as usize;
                     count += (0..n)
                         .filter(|&k| {
                             let f = k as f64 / n as f64;
@@ -863,7 +1012,10 @@ mod tests {
     #[test]
     fn nan_splits_series_and_is_counted() {
         let mut f = LineFigure::new("t", "x", "y");
-        f.series.push(Series::new("a", vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 2.0), (3.0, 3.0)]));
+        f.series.push(Series::new(
+            "a",
+            vec![(0.0, 1.0), (1.0, f64::NAN), (2.0, 2.0), (3.0, 3.0)],
+        ));
         let p = prepare(&f).unwrap();
         assert_eq!(p.skipped, 1);
         assert_eq!(p.series[0].pieces.len(), 2);
@@ -874,7 +1026,11 @@ mod tests {
     fn log_axis_rejects_non_positive() {
         let mut f = LineFigure::new("t", "x", "y");
         f.y_scale = Scale::Log10;
-        f.series.push(Series::new("a", vec![(1.0, 0.0), (2.0, -1.0)]));
-        assert!(matches!(prepare(&f), Err(PlotError::NoFinitePoints { skipped: 2, .. })));
+        f.series
+            .push(Series::new("a", vec![(1.0, 0.0), (2.0, -1.0)]));
+        assert!(matches!(
+            prepare(&f),
+            Err(PlotError::NoFinitePoints { skipped: 2, .. })
+        ));
     }
 }

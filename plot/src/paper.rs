@@ -1,1 +1,416 @@
-//! (in progress)
+//! Builders for the time-series figures of Sect. 6 and the speed–accuracy report.
+//!
+//! | builder | paper figure | content |
+//! |---|---|---|
+//! | [`fig_ball_omega`] | Fig. 6, 13 | ball angular velocity ω (world axes) with switching times t_f^(i) |
+//! | [`fig_distance`] | Fig. 7, 14 | minimum distance h (eq. 5) and contact-point distance from the fingertip, |sat(α)| (eq. 3) |
+//! | [`fig_torques`] | Fig. 8, 15 | joint torques τ_1..τ_3 with the limit |τ_i| ≤ τ_max |
+//! | [`fig_contact_forces`] | Fig. 9, 16 | normal force λ_n, tangential ‖λ_∥‖ and the friction-cone bound μ_s λ_n |
+//! | [`fig_open_loop_vs_optimal`] | Fig. 17 | optimal vs open-loop simulated ω, one panel per axis |
+//! | [`fig_work_precision`] | — | log–log error vs computing time, one series per method |
+//!
+//! Inputs are plain [`TimeSeries`] (no dependency on the physics crates) and [`Phases`]
+//! (switching times and the contact intervals, drawn as markers and shaded bands).
+
+use crate::PlotError;
+use crate::figure::{
+    Band, Colour, Dash, HLine, Layout, LineFigure, PanelFigure, Scale, Series, SeriesStyle,
+};
+
+/// Sampled signals on a common time grid: `values[k][i]` is component `k` at `t[i]`.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct TimeSeries {
+    /// Sample times [s].
+    pub t: Vec<f64>,
+    /// One vector per component, each as long as `t`.
+    pub values: Vec<Vec<f64>>,
+    /// One name per component (legend text).
+    pub names: Vec<String>,
+}
+
+impl TimeSeries {
+    /// Checks that every component has one value per time and one name.
+    pub fn validate(&self, what: &str) -> Result<(), PlotError> {
+        if self.names.len() != self.values.len() {
+            return Err(PlotError::Shape {
+                what: what.into(),
+                detail: format!(
+                    "{} names for {} components",
+                    self.names.len(),
+                    self.values.len()
+                ),
+            });
+        }
+        for (k, v) in self.values.iter().enumerate() {
+            if v.len() != self.t.len() {
+                return Err(PlotError::Shape {
+                    what: what.into(),
+                    detail: format!(
+                        "component {k} has {} values for {} times",
+                        v.len(),
+                        self.t.len()
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Component `k` as (t, value) points.
+    pub fn points(&self, k: usize) -> Vec<(f64, f64)> {
+        self.t
+            .iter()
+            .copied()
+            .zip(self.values[k].iter().copied())
+            .collect()
+    }
+
+    fn expect_components(&self, what: &str, n: usize) -> Result<(), PlotError> {
+        self.validate(what)?;
+        if self.values.len() != n {
+            return Err(PlotError::Shape {
+                what: what.into(),
+                detail: format!("expected {n} components, found {}", self.values.len()),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Phase structure of a trajectory (Sect. 4.2): switching times and the contact intervals.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Phases {
+    /// (time [s], short label) of each switch, e.g. (0.8, "impact"), (1.3, "lift-off").
+    pub switches: Vec<(f64, String)>,
+    /// Closed intervals [s] during which the finger touches the ball (shaded).
+    pub contact: Vec<(f64, f64)>,
+}
+
+impl Phases {
+    fn apply(&self, fig: &mut LineFigure) {
+        fig.vertical_markers = self.switches.clone();
+        fig.bands = self
+            .contact
+            .iter()
+            .map(|&(x0, x1)| Band {
+                x0,
+                x1,
+                label: "contact".into(),
+            })
+            .collect();
+    }
+}
+
+fn fixed(c: (u8, u8, u8), dash: Dash) -> SeriesStyle {
+    SeriesStyle {
+        colour: Colour::Rgb(c.0, c.1, c.2),
+        dash,
+        ..SeriesStyle::default()
+    }
+}
+
+const C_BLUE: (u8, u8, u8) = (31, 119, 180);
+const C_ORANGE: (u8, u8, u8) = (255, 127, 14);
+const C_GREEN: (u8, u8, u8) = (44, 160, 44);
+const C_RED: (u8, u8, u8) = (214, 39, 40);
+
+/// Fig. 6 / 13: the three components of the ball angular velocity ω [rad/s] in one axes, with
+/// the switching times and contact intervals. `omega` must have exactly 3 components.
+pub fn fig_ball_omega(
+    title: &str,
+    omega: &TimeSeries,
+    phases: &Phases,
+) -> Result<LineFigure, PlotError> {
+    omega.expect_components("ball angular velocity", 3)?;
+    let mut fig = LineFigure::new(title, "t [s]", "ω [rad/s]");
+    for k in 0..3 {
+        fig.series
+            .push(Series::new(omega.names[k].clone(), omega.points(k)));
+    }
+    phases.apply(&mut fig);
+    Ok(fig)
+}
+
+/// Fig. 7 / 14: two stacked panels over the same time axis: the minimum distance h [m]
+/// (with the h = 0 contact line) and the distance of the contact point from the fingertip,
+/// |sat_{−ℓ}^{0}(α)| [m] (0: tip contact; ℓ: the joint end of the last link).
+pub fn fig_distance(
+    title: &str,
+    t: &[f64],
+    h: &[f64],
+    contact_from_tip: &[f64],
+    phases: &Phases,
+) -> Result<PanelFigure, PlotError> {
+    for (name, v) in [("h", h), ("contact-point distance", contact_from_tip)] {
+        if v.len() != t.len() {
+            return Err(PlotError::Shape {
+                what: name.into(),
+                detail: format!("{} values for {} times", v.len(), t.len()),
+            });
+        }
+    }
+    let pts = |v: &[f64]| t.iter().copied().zip(v.iter().copied()).collect::<Vec<_>>();
+    let mut a = LineFigure::new("minimum distance h", "t [s]", "h [m]");
+    a.series
+        .push(Series::new("h", pts(h)).styled(fixed(C_BLUE, Dash::Solid)));
+    a.hlines.push(HLine {
+        y: 0.0,
+        label: String::new(),
+        colour: Colour::Auto,
+    });
+    phases.apply(&mut a);
+    let mut b = LineFigure::new("contact point to fingertip", "t [s]", "|p_c − p_e| [m]");
+    b.series
+        .push(Series::new("|sat(α)|", pts(contact_from_tip)).styled(fixed(C_ORANGE, Dash::Solid)));
+    phases.apply(&mut b);
+    Ok(PanelFigure {
+        title: title.into(),
+        panels: vec![a, b],
+        layout: Layout::Rows,
+        size: None,
+    })
+}
+
+/// Fig. 8 / 15: joint torques, one panel per joint, with dashed ±`limit` lines when given.
+pub fn fig_torques(
+    title: &str,
+    tau: &TimeSeries,
+    limit: Option<f64>,
+    phases: &Phases,
+) -> Result<PanelFigure, PlotError> {
+    tau.validate("torques")?;
+    if tau.values.is_empty() {
+        return Err(PlotError::NoSeries(title.into()));
+    }
+    let colours = [C_BLUE, C_ORANGE, C_GREEN, C_RED];
+    let panels = (0..tau.values.len())
+        .map(|k| {
+            let mut p = LineFigure::new("", "t [s]", format!("{} [N m]", tau.names[k]));
+            p.series.push(
+                Series::new(tau.names[k].clone(), tau.points(k))
+                    .styled(fixed(colours[k % 4], Dash::Solid)),
+            );
+            if let Some(l) = limit {
+                p.hlines.push(HLine {
+                    y: l,
+                    label: "torque limit".into(),
+                    colour: Colour::Rgb(120, 0, 0),
+                });
+                p.hlines.push(HLine {
+                    y: -l,
+                    label: String::new(),
+                    colour: Colour::Rgb(120, 0, 0),
+                });
+            }
+            phases.apply(&mut p);
+            p
+        })
+        .collect();
+    Ok(PanelFigure {
+        title: title.into(),
+        panels,
+        layout: Layout::Rows,
+        size: None,
+    })
+}
+
+/// Fig. 9 / 16: contact force: λ_n, ‖λ_∥‖ and the friction-cone bound μ_s λ_n [N]. Sticking
+/// requires ‖λ_∥‖ ≤ μ_s λ_n; where the two curves touch the motion is on the verge of slipping
+/// (Fig. 16). Samples outside contact may be NaN (they leave gaps).
+pub fn fig_contact_forces(
+    title: &str,
+    t: &[f64],
+    lambda_n: &[f64],
+    lambda_t_norm: &[f64],
+    mu_s: f64,
+    phases: &Phases,
+) -> Result<LineFigure, PlotError> {
+    for (name, v) in [("λ_n", lambda_n), ("‖λ_∥‖", lambda_t_norm)] {
+        if v.len() != t.len() {
+            return Err(PlotError::Shape {
+                what: name.into(),
+                detail: format!("{} values for {} times", v.len(), t.len()),
+            });
+        }
+    }
+    if !(mu_s.is_finite() && mu_s >= 0.0) {
+        return Err(PlotError::InvalidInput {
+            figure: title.into(),
+            what: "μ_s".into(),
+            detail: format!("{mu_s}"),
+        });
+    }
+    let pts = |f: &dyn Fn(usize) -> f64| (0..t.len()).map(|i| (t[i], f(i))).collect::<Vec<_>>();
+    let mut fig = LineFigure::new(title, "t [s]", "force [N]");
+    fig.series
+        .push(Series::new("normal λ_n", pts(&|i| lambda_n[i])).styled(fixed(C_BLUE, Dash::Solid)));
+    fig.series.push(
+        Series::new("tangential ‖λ_∥‖", pts(&|i| lambda_t_norm[i]))
+            .styled(fixed(C_ORANGE, Dash::Solid)),
+    );
+    fig.series.push(
+        Series::new(
+            format!("cone bound μ_s λ_n (μ_s = {mu_s})"),
+            pts(&|i| mu_s * lambda_n[i]),
+        )
+        .styled(fixed((0, 0, 0), Dash::Dashed)),
+    );
+    phases.apply(&mut fig);
+    Ok(fig)
+}
+
+/// Fig. 17: optimal vs open-loop simulated ball angular velocity, one panel per component
+/// (both series must have 3 components; the time grids may differ).
+pub fn fig_open_loop_vs_optimal(
+    title: &str,
+    optimal: &TimeSeries,
+    open_loop: &TimeSeries,
+    phases: &Phases,
+) -> Result<PanelFigure, PlotError> {
+    optimal.expect_components("optimal ω", 3)?;
+    open_loop.expect_components("open-loop ω", 3)?;
+    let panels = (0..3)
+        .map(|k| {
+            let mut p = LineFigure::new("", "t [s]", format!("{} [rad/s]", optimal.names[k]));
+            p.series
+                .push(Series::new("optimal", optimal.points(k)).styled(fixed(C_BLUE, Dash::Solid)));
+            p.series.push(
+                Series::new("open-loop simulation", open_loop.points(k))
+                    .styled(fixed(C_RED, Dash::Dashed)),
+            );
+            phases.apply(&mut p);
+            p
+        })
+        .collect();
+    Ok(PanelFigure {
+        title: title.into(),
+        panels,
+        layout: Layout::Rows,
+        size: None,
+    })
+}
+
+/// One method of a work–precision diagram: (computing time [s], error) per setting.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct WorkPrecision {
+    /// Method name (legend).
+    pub name: String,
+    /// Computing time per run [s].
+    pub time_s: Vec<f64>,
+    /// Error per run (same length); non-positive errors are skipped on the log axis.
+    pub error: Vec<f64>,
+}
+
+/// Work–precision plot: log–log error vs computing time, one marked line per method, sorted
+/// by time so each line runs from cheap to expensive.
+pub fn fig_work_precision(
+    title: &str,
+    error_label: &str,
+    methods: &[WorkPrecision],
+) -> Result<LineFigure, PlotError> {
+    let mut fig = LineFigure::new(title, "computing time [s]", error_label);
+    fig.x_scale = Scale::Log10;
+    fig.y_scale = Scale::Log10;
+    for m in methods {
+        if m.time_s.len() != m.error.len() {
+            return Err(PlotError::Shape {
+                what: format!("work-precision '{}'", m.name),
+                detail: format!("{} times for {} errors", m.time_s.len(), m.error.len()),
+            });
+        }
+        let mut pts: Vec<(f64, f64)> = m
+            .time_s
+            .iter()
+            .copied()
+            .zip(m.error.iter().copied())
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        fig.series
+            .push(Series::new(m.name.clone(), pts).styled(SeriesStyle {
+                markers: true,
+                ..SeriesStyle::default()
+            }));
+    }
+    Ok(fig)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ts(n: usize, comps: usize) -> TimeSeries {
+        TimeSeries {
+            t: (0..n).map(|i| i as f64).collect(),
+            values: (0..comps)
+                .map(|k| (0..n).map(|i| (i * k) as f64).collect())
+                .collect(),
+            names: (0..comps).map(|k| format!("c{k}")).collect(),
+        }
+    }
+
+    #[test]
+    fn shape_errors_are_reported() {
+        let mut a = ts(5, 3);
+        a.values[1].pop();
+        assert!(matches!(
+            fig_ball_omega("x", &a, &Phases::default()),
+            Err(PlotError::Shape { .. })
+        ));
+        assert!(matches!(
+            fig_ball_omega("x", &ts(5, 2), &Phases::default()),
+            Err(PlotError::Shape { .. })
+        ));
+        assert!(
+            fig_contact_forces(
+                "f",
+                &[0.0, 1.0],
+                &[1.0],
+                &[1.0, 1.0],
+                0.8,
+                &Phases::default()
+            )
+            .is_err()
+        );
+        assert!(
+            fig_contact_forces("f", &[0.0], &[1.0], &[1.0], f64::NAN, &Phases::default()).is_err()
+        );
+    }
+
+    #[test]
+    fn cone_bound_is_mu_times_normal() {
+        let f = fig_contact_forces(
+            "f",
+            &[0.0, 1.0],
+            &[2.0, 3.0],
+            &[1.0, 1.0],
+            0.8,
+            &Phases::default(),
+        )
+        .unwrap();
+        assert_eq!(f.series[2].points, vec![(0.0, 1.6), (1.0, 0.8 * 3.0)]);
+    }
+
+    #[test]
+    fn torque_panels_get_symmetric_limits() {
+        let p = fig_torques("τ", &ts(4, 3), Some(1.0), &Phases::default()).unwrap();
+        assert_eq!(p.panels.len(), 3);
+        for panel in &p.panels {
+            let ys: Vec<f64> = panel.hlines.iter().map(|h| h.y).collect();
+            assert_eq!(ys, vec![1.0, -1.0]);
+        }
+    }
+
+    #[test]
+    fn work_precision_sorts_by_time() {
+        let m = WorkPrecision {
+            name: "rk4".into(),
+            time_s: vec![3.0, 1.0, 2.0],
+            error: vec![1e-9, 1e-3, 1e-6],
+        };
+        let f = fig_work_precision("wp", "error [-]", &[m]).unwrap();
+        assert_eq!(
+            f.series[0].points,
+            vec![(1.0, 1e-3), (2.0, 1e-6), (3.0, 1e-9)]
+        );
+    }
+}

@@ -1,1 +1,255 @@
-//! (in progress)
+//! Orthographic views of finger paths around the ball (Fig. 5, 10, 11, 12).
+//!
+//! The scene of Sect. 2.1: ball of radius r centred at o_b, finger frames from the base o_f through
+//! the DH frames to the fingertip p_e. Each [`View`] is an orthographic projection, so the sphere's
+//! outline is exactly a circle of radius r around the projected centre; a wireframe of three great
+//! circles (equator and two meridians) gives depth cues. Paths: fingertip p_e(t) and contact point
+//! p_c(t) (eq. 3; NaN samples = not in contact leave gaps).
+
+use crate::PlotError;
+use crate::figure::{
+    Colour, Dash, Layout, LegendPos, LineFigure, PanelFigure, Series, SeriesStyle,
+};
+
+/// One projection of 3D world coordinates onto a drawing plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// Horizontal x, vertical z (looking along +y).
+    FrontXZ,
+    /// Horizontal y, vertical z (looking along −x).
+    SideYZ,
+    /// Horizontal x, vertical y (looking down −z).
+    TopXY,
+    /// Isometric view from the (1, 1, 1) direction, z pointing up on screen.
+    Iso,
+}
+
+/// Screen axes (e_u right, e_v up) of the isometric view; the camera looks along −(1,1,1)/√3.
+pub const ISO_EU: [f64; 3] = [
+    -std::f64::consts::FRAC_1_SQRT_2,
+    std::f64::consts::FRAC_1_SQRT_2,
+    0.0,
+];
+/// Screen up axis of the isometric view, (−1, −1, 2)/√6.
+pub const ISO_EV: [f64; 3] = [
+    -0.408_248_290_463_863,
+    -0.408_248_290_463_863,
+    0.816_496_580_927_726,
+];
+/// Direction from the scene towards the isometric camera, (1, 1, 1)/√3.
+pub const ISO_D: [f64; 3] = [
+    0.577_350_269_189_626,
+    0.577_350_269_189_626,
+    0.577_350_269_189_626,
+];
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl View {
+    /// Projects a world point onto (horizontal, vertical) screen coordinates [m].
+    pub fn project(self, p: [f64; 3]) -> (f64, f64) {
+        match self {
+            View::FrontXZ => (p[0], p[2]),
+            View::SideYZ => (p[1], p[2]),
+            View::TopXY => (p[0], p[1]),
+            View::Iso => (dot(p, ISO_EU), dot(p, ISO_EV)),
+        }
+    }
+
+    fn labels(self) -> (&'static str, &'static str, &'static str) {
+        match self {
+            View::FrontXZ => ("front (x–z)", "x [m]", "z [m]"),
+            View::SideYZ => ("side (y–z)", "y [m]", "z [m]"),
+            View::TopXY => ("top (x–y)", "x [m]", "y [m]"),
+            View::Iso => ("isometric", "u [m]", "v [m]"),
+        }
+    }
+}
+
+/// Finger configurations and paths around the ball.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct FingerPaths {
+    /// Ball centre o_b [m].
+    pub ball_center: [f64; 3],
+    /// Ball radius r [m].
+    pub ball_radius: f64,
+    /// Finger snapshots: each the frame origins from the base o_f to the fingertip p_e [m].
+    pub snapshots: Vec<Vec<[f64; 3]>>,
+    /// Fingertip path p_e(t) [m].
+    pub tip_path: Vec<[f64; 3]>,
+    /// Contact-point path p_c(t) [m]; NaN samples (no contact) leave gaps; may be empty.
+    pub contact_path: Vec<[f64; 3]>,
+}
+
+fn style(c: (u8, u8, u8), dash: Dash, width: u32, markers: bool, in_legend: bool) -> SeriesStyle {
+    SeriesStyle {
+        colour: Colour::Rgb(c.0, c.1, c.2),
+        dash,
+        width,
+        markers,
+        in_legend,
+    }
+}
+
+/// Fig. 5 / 10 / 12: one equal-aspect panel per view, side by side.
+pub fn fig_finger_paths(
+    title: &str,
+    data: &FingerPaths,
+    views: &[View],
+) -> Result<PanelFigure, PlotError> {
+    if views.is_empty() {
+        return Err(PlotError::NoSeries(title.into()));
+    }
+    if !(data.ball_radius.is_finite() && data.ball_radius > 0.0)
+        || data.ball_center.iter().any(|v| !v.is_finite())
+    {
+        return Err(PlotError::InvalidInput {
+            figure: title.into(),
+            what: "ball".into(),
+            detail: format!("centre {:?}, radius {}", data.ball_center, data.ball_radius),
+        });
+    }
+    if data.snapshots.is_empty() && data.tip_path.is_empty() {
+        return Err(PlotError::NoSeries(format!(
+            "{title} (no snapshots and no tip path)"
+        )));
+    }
+    let (c, r) = (data.ball_center, data.ball_radius);
+    let circle = |a: [f64; 3], b: [f64; 3]| -> Vec<[f64; 3]> {
+        (0..=120)
+            .map(|i| {
+                let th = i as f64 * std::f64::consts::TAU / 120.0;
+                let (s, co) = th.sin_cos();
+                [0, 1, 2].map(|k| c[k] + r * (co * a[k] + s * b[k]))
+            })
+            .collect()
+    };
+    let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+    let wire = [circle(ex, ey), circle(ex, ez), circle(ey, ez)];
+    let mut panels = Vec::with_capacity(views.len());
+    for &v in views {
+        let (name, xl, yl) = v.labels();
+        let mut p = LineFigure::new(name, xl, yl);
+        p.equal_aspect = true;
+        p.legend = LegendPos::Auto;
+        let proj = |pts: &[[f64; 3]]| pts.iter().map(|&q| v.project(q)).collect::<Vec<_>>();
+        // Orthographic outline of a sphere: a circle of radius r around the projected centre.
+        let (cu, cv) = v.project(c);
+        let outline = (0..=120)
+            .map(|i| {
+                let th = i as f64 * std::f64::consts::TAU / 120.0;
+                (cu + r * th.cos(), cv + r * th.sin())
+            })
+            .collect();
+        p.series.push(Series::new("ball", outline).styled(style(
+            (60, 60, 60),
+            Dash::Solid,
+            2,
+            false,
+            true,
+        )));
+        for w in &wire {
+            p.series.push(Series::new("", proj(w)).styled(style(
+                (190, 190, 190),
+                Dash::Solid,
+                1,
+                false,
+                false,
+            )));
+        }
+        for (k, snap) in data.snapshots.iter().enumerate() {
+            if snap.len() < 2 {
+                return Err(PlotError::Shape {
+                    what: format!("snapshot {k}"),
+                    detail: format!("{} points (need ≥ 2)", snap.len()),
+                });
+            }
+            p.series.push(
+                Series::new(if k == 0 { "finger (snapshots)" } else { "" }, proj(snap))
+                    .styled(style((20, 20, 20), Dash::Solid, 3, true, k == 0)),
+            );
+        }
+        if !data.tip_path.is_empty() {
+            p.series.push(
+                Series::new("fingertip path", proj(&data.tip_path)).styled(style(
+                    (31, 119, 180),
+                    Dash::Solid,
+                    2,
+                    false,
+                    true,
+                )),
+            );
+        }
+        if data
+            .contact_path
+            .iter()
+            .any(|q| q.iter().all(|x| x.is_finite()))
+        {
+            p.series.push(
+                Series::new("contact point path", proj(&data.contact_path)).styled(style(
+                    (214, 39, 40),
+                    Dash::Solid,
+                    3,
+                    false,
+                    true,
+                )),
+            );
+        }
+        panels.push(p);
+    }
+    Ok(PanelFigure {
+        title: title.into(),
+        panels,
+        layout: Layout::Columns,
+        size: None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn iso_axes_are_orthonormal_and_right_handed() {
+        for (a, b, e) in [
+            (ISO_EU, ISO_EU, 1.0),
+            (ISO_EV, ISO_EV, 1.0),
+            (ISO_D, ISO_D, 1.0),
+            (ISO_EU, ISO_EV, 0.0),
+            (ISO_EU, ISO_D, 0.0),
+            (ISO_EV, ISO_D, 0.0),
+        ] {
+            assert!((dot(a, b) - e).abs() < 1e-12);
+        }
+        let cross = [
+            ISO_EU[1] * ISO_EV[2] - ISO_EU[2] * ISO_EV[1],
+            ISO_EU[2] * ISO_EV[0] - ISO_EU[0] * ISO_EV[2],
+            ISO_EU[0] * ISO_EV[1] - ISO_EU[1] * ISO_EV[0],
+        ];
+        for k in 0..3 {
+            assert!((cross[k] - ISO_D[k]).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn projected_wireframe_stays_inside_outline() {
+        // Orthographic projection never moves a sphere point outside the outline circle.
+        let data = FingerPaths {
+            ball_center: [0.5, -0.2, 0.1],
+            ball_radius: 1.0,
+            tip_path: vec![[2.0, 0.0, 0.0]],
+            ..Default::default()
+        };
+        let f = fig_finger_paths("t", &data, &[View::FrontXZ, View::Iso]).unwrap();
+        for (p, v) in f.panels.iter().zip([View::FrontXZ, View::Iso]) {
+            let (cu, cv) = v.project(data.ball_center);
+            for s in &p.series[1..4] {
+                for &(u, w) in &s.points {
+                    assert!((u - cu).hypot(w - cv) <= 1.0 + 1e-12);
+                }
+            }
+        }
+    }
+}

@@ -12,7 +12,8 @@
 //! Resets: Free → impact law of Sect. 2.5 (eq. 39–43, [`ImpactLaw`]); the post-impact ‖Δv⁺‖
 //! picks Stick or Slip (Fig. 3's "In-contact" state). Stick → Slip: velocity kick Δv⁺ =
 //! `slip_kick` along λ_∥ (so the slip guard does not fire back). Slip → Stick: projection onto
-//! Δv = 0 with the sticking impulse (eq. 40–41). Contact → Free: velocities unchanged. When the
+//! Δv = 0 with the sticking impulse (eq. 40–41). Contact → Free: a tiny normal impulse sets
+//! n·v_c⁺ = `lift_off_speed` (1e-8 m/s) so the h guard does not chatter at λ_n = 0. When the
 //! new mode is already invalid (e.g. λ_n < 0 right after a sticking impact) the simulator chains
 //! the next transition at the same instant.
 //!
@@ -44,6 +45,14 @@ pub struct BallFingerOptions {
     pub project: bool,
     /// Gauss–Newton iterations of the position projection (default: 3).
     pub projection_iterations: usize,
+    /// Normal separation speed n·v_c⁺ (m/s) set by the contact → Free reset when the finger
+    /// is not already separating (default: 1e-8). At lift-off λ_n = 0 and ḣ = 0, so the free
+    /// ḧ is itself ≈ 0 and integration noise in ḣ (~1e-12) can turn the h guard around at once
+    /// (lift-off / impact chatter). Like the slip kick of Sect. 3.1 ("update q̇ and ω such that
+    /// the required condition is satisfied"), a tiny normal impulse along n makes the new mode
+    /// valid; it does not act on the ball (r_c ∥ n) and changes the energy by O(1e-18) J.
+    /// 0 disables it.
+    pub lift_off_speed: f64,
 }
 
 impl Default for BallFingerOptions {
@@ -52,6 +61,7 @@ impl Default for BallFingerOptions {
             impact_law: ImpactLaw::Stick,
             project: true,
             projection_iterations: 3,
+            lift_off_speed: 1e-8,
         }
     }
 }
@@ -655,7 +665,22 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                 write_velocities(x, &out.qd, &out.omega);
                 out.mode
             }
-            (Mode::Stick | Mode::Slip, 0) => Mode::Free,
+            (Mode::Stick | Mode::Slip, 0) => {
+                let sep = self.options.lift_off_speed;
+                if sep > 0.0 {
+                    let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+                    let vn = kin.contact.normal_velocity();
+                    if vn < sep {
+                        let mats =
+                            contact_matrices(&kin, self.model.params()).map_err(SimError::system)?;
+                        if mats.n_w_n > 0.0 {
+                            let qd = s.qd + mats.minv_jct * kin.contact.n * ((sep - vn) / mats.n_w_n);
+                            x[3..6].copy_from_slice(qd.as_slice());
+                        }
+                    }
+                }
+                Mode::Free
+            }
             (Mode::Stick, _) => {
                 let tau = self.tau(t, &s)?;
                 let acc = self.model.stick(&s, &tau).map_err(SimError::system)?;

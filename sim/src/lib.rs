@@ -16,7 +16,10 @@
 //! * [`trajectory`] — [`Trajectory`], [`EventRecord`], JSON/CSV writers (atomic).
 //! * [`input`] — [`Input`] torques τ(t, q, q̇): [`TorqueSeries`] (CSV/JSON) and [`PdController`].
 //! * [`toys`] — systems with closed-form event times used by tests and benches.
-//! * [`ball_finger`] — the finger–ball model of bf-model as a [`HybridSystem`].
+//! * [`ball_finger`] — the finger–ball model of bf-model as a [`HybridSystem`], with the derived
+//!   per-sample quantities (τ, λ, h, σ, ‖Δv‖, E), event kinds, run summary and output files.
+//! * [`work_precision`] — error against a tight reference versus CPU time (DOPRI5 rtol and RK4
+//!   step ladders).
 //!
 //! ```
 //! use bf_sim::{simulate, SimSettings, toys::{BouncingBall, BallMode}};
@@ -37,6 +40,7 @@ pub mod simulator;
 pub mod system;
 pub mod toys;
 pub mod trajectory;
+pub mod work_precision;
 
 pub use error::SimError;
 pub use input::{Input, PdController, TorqueSeries};
@@ -44,3 +48,4 @@ pub use settings::{Method, SimSettings};
 pub use simulator::{SimFailure, Simulator, StopReason, simulate};
 pub use system::{Direction, Guard, HybridSystem, Transition};
 pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, Trajectory};
+pub use work_precision::{WorkPrecisionRow, format_table, work_precision};

@@ -4,6 +4,7 @@
 pub mod eval;
 pub mod generate;
 pub mod paper;
+pub mod simulate;
 pub mod verify;
 
 use anyhow::{Result, bail};

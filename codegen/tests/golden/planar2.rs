@@ -95,7 +95,7 @@ pub fn frames(
 /// * `jp`: output (see above), fully overwritten
 /// * `jo`: output (see above), fully overwritten
 ///
-/// Cost: 6 add/sub, 6 mul, 0 div, 0 sqrt, 2 sin/cos, 1 neg, 0 other; 17 temporaries.
+/// Cost: 4 add/sub, 6 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 16 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn tip_jacobian(
@@ -117,12 +117,11 @@ pub fn tip_jacobian(
     let t12 = t1 + t8;
     let t13 = t0 + t11;
     let t14 = -t13;
-    let t15 = t12 - t1;
-    let t16 = t0 - t13;
+    let t15 = -t11;
     jp[0][0] = t14;
-    jp[0][1] = t16;
+    jp[0][1] = t15;
     jp[1][0] = t12;
-    jp[1][1] = t15;
+    jp[1][1] = t8;
     jp[2][0] = 0.0;
     jp[2][1] = 0.0;
     jo[0][0] = 0.0;
@@ -168,47 +167,32 @@ pub fn mass_matrix(q: &[f64; NQ], p: &[f64; NP], m: &mut [[f64; NQ]; NQ]) {
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 11 add/sub, 22 mul, 0 div, 0 sqrt, 1 sin/cos, 1 neg, 0 other; 36 temporaries.
+/// Cost: 3 add/sub, 15 mul, 0 div, 0 sqrt, 1 sin/cos, 1 neg, 0 other; 21 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn coriolis_qd(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
     let (t0, t1) = f64::sin_cos(q[1]);
     let t2 = t1 + 0.30000000000000004;
-    let t3 = t1 * qd[1];
-    let t4 = t0 * qd[1];
-    let t5 = t0 * t3;
-    let t6 = t5 + t5;
-    let t7 = t2 * t4;
-    let t8 = t7 + t7;
-    let t9 = t6 - t8;
+    let t3 = t0 * t1;
+    let t4 = 2.0 * t3;
+    let t5 = t0 * t2;
+    let t6 = 2.0 * t5;
+    let t7 = t4 - t6;
+    let t8 = p[0] * t7;
+    let t9 = 0.30000000000000004 * t0;
     let t10 = p[0] * t9;
-    let t11 = 0.30000000000000004 * t4;
-    let t12 = p[0] * t11;
-    let t13 = qd[0] * t10;
-    let t14 = qd[1] * t12;
-    let t15 = t13 - t14;
-    let t16 = qd[0] * t12;
-    let t17 = 0.5 * qd[1];
-    let t18 = 0.5 * qd[0];
-    let t19 = qd[0] * t17;
-    let t20 = qd[1] * t18;
-    let t21 = t19 + t20;
-    let t22 = qd[0] * t18;
-    let t23 = p[0] * t21;
-    let t24 = 0.30000000000000004 * t23;
-    let t25 = p[0] * t22;
-    let t26 = t2 * t25;
-    let t27 = t24 + t26;
-    let t28 = t26 + t27;
-    let t29 = t0 * t25;
-    let t30 = t29 + t29;
-    let t31 = t0 * t28;
-    let t32 = t1 * t30;
-    let t33 = t32 - t31;
-    let t34 = t16 + t33;
-    let t35 = -t34;
-    out[0] = t15;
-    out[1] = t35;
+    let t11 = 0.5 * t8;
+    let t12 = qd[0] * qd[0];
+    let t13 = qd[0] * qd[1];
+    let t14 = 2.0 * t13;
+    let t15 = qd[1] * qd[1];
+    let t16 = t11 * t14;
+    let t17 = t10 * t15;
+    let t18 = t16 - t17;
+    let t19 = t11 * t12;
+    let t20 = -t19;
+    out[0] = t18;
+    out[1] = t20;
 }
 /// g(q) = ∂U/∂q (N m), eq. 72–73.
 ///
@@ -234,7 +218,7 @@ pub fn gravity(q: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
     let t12 = t0 * t6;
     let t13 = t3 * t7;
     let t14 = t11 - t13;
-    let t15 = 5.2974 + t14;
+    let t15 = 5.297399999999999 + t14;
     let t16 = t0 * t7;
     let t17 = t2 * t7;
     let t18 = t8 - t17;
@@ -259,7 +243,7 @@ pub fn gravity(q: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 6 add/sub, 11 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 21 temporaries.
+/// Cost: 5 add/sub, 10 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 19 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn potential(q: &[f64; NQ], p: &[f64; NP], out: &mut f64) {
@@ -274,15 +258,13 @@ pub fn potential(q: &[f64; NQ], p: &[f64; NP], out: &mut f64) {
     let t10 = t1 * t5;
     let t11 = t9 + t10;
     let t12 = t0 + t11;
-    let t13 = 0.55 * t0;
-    let t14 = t0 - t13;
-    let t15 = 0.5 * t8;
-    let t16 = t12 - t15;
-    let t17 = 11.772 * t14;
-    let t18 = 9.81 * t16;
-    let t19 = p[0] * t18;
-    let t20 = t17 + t19;
-    *out = t20;
+    let t13 = 0.5 * t8;
+    let t14 = t12 - t13;
+    let t15 = 5.297399999999999 * t0;
+    let t16 = 9.81 * t14;
+    let t17 = p[0] * t16;
+    let t18 = t15 + t17;
+    *out = t18;
 }
 /// C q̇ + g (N m), Lagrangian path (Ṁ q̇ − ∂T/∂q + ∂U/∂q).
 ///
@@ -292,7 +274,7 @@ pub fn potential(q: &[f64; NQ], p: &[f64; NP], out: &mut f64) {
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 21 add/sub, 40 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 65 temporaries.
+/// Cost: 13 add/sub, 33 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 50 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
@@ -301,66 +283,51 @@ pub fn cqd_g(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) 
     let t4 = 0.8 * t3;
     let t5 = 0.8 * t2;
     let t6 = t3 + 0.30000000000000004;
-    let t7 = t3 * qd[1];
-    let t8 = t2 * qd[1];
-    let t9 = t2 * t7;
-    let t10 = t9 + t9;
-    let t11 = t6 * t8;
-    let t12 = t11 + t11;
-    let t13 = t10 - t12;
+    let t7 = t2 * t3;
+    let t8 = 2.0 * t7;
+    let t9 = t2 * t6;
+    let t10 = 2.0 * t9;
+    let t11 = t8 - t10;
+    let t12 = p[0] * t11;
+    let t13 = 0.30000000000000004 * t2;
     let t14 = p[0] * t13;
-    let t15 = 0.30000000000000004 * t8;
-    let t16 = p[0] * t15;
-    let t17 = qd[0] * t14;
-    let t18 = qd[1] * t16;
-    let t19 = t17 - t18;
-    let t20 = qd[0] * t16;
-    let t21 = 0.5 * qd[1];
-    let t22 = 0.5 * qd[0];
-    let t23 = qd[0] * t21;
-    let t24 = qd[1] * t22;
-    let t25 = t23 + t24;
-    let t26 = qd[0] * t22;
-    let t27 = p[0] * t25;
-    let t28 = 0.30000000000000004 * t27;
-    let t29 = p[0] * t26;
-    let t30 = t6 * t29;
-    let t31 = t28 + t30;
-    let t32 = t30 + t31;
-    let t33 = t2 * t29;
-    let t34 = t33 + t33;
-    let t35 = t2 * t32;
-    let t36 = t3 * t34;
-    let t37 = t36 - t35;
-    let t38 = t20 + t37;
-    let t39 = 9.81 * p[0];
-    let t40 = 4.905 * p[0];
-    let t41 = t5 * t39;
-    let t42 = t1 * t39;
-    let t43 = t4 * t39;
-    let t44 = t39 + t43;
-    let t45 = t0 * t39;
-    let t46 = t3 * t40;
-    let t47 = t44 - t46;
-    let t48 = 5.2974 + t47;
-    let t49 = t0 * t40;
-    let t50 = t2 * t40;
-    let t51 = t41 - t50;
-    let t52 = t1 * t40;
-    let t53 = 0.8 * t42;
-    let t54 = t53 - t52;
-    let t55 = 0.8 * t45;
-    let t56 = t55 - t49;
-    let t57 = t2 * t56;
-    let t58 = t3 * t54;
-    let t59 = t58 - t57;
-    let t60 = t0 * t51;
-    let t61 = t1 * t48;
-    let t62 = t61 - t60;
-    let t63 = t19 + t62;
-    let t64 = t59 - t38;
-    out[0] = t63;
-    out[1] = t64;
+    let t15 = 0.5 * t12;
+    let t16 = qd[0] * qd[0];
+    let t17 = qd[0] * qd[1];
+    let t18 = 2.0 * t17;
+    let t19 = qd[1] * qd[1];
+    let t20 = t15 * t18;
+    let t21 = t14 * t19;
+    let t22 = t20 - t21;
+    let t23 = t15 * t16;
+    let t24 = 9.81 * p[0];
+    let t25 = 4.905 * p[0];
+    let t26 = t5 * t24;
+    let t27 = t1 * t24;
+    let t28 = t4 * t24;
+    let t29 = t24 + t28;
+    let t30 = t0 * t24;
+    let t31 = t3 * t25;
+    let t32 = t29 - t31;
+    let t33 = 5.297399999999999 + t32;
+    let t34 = t0 * t25;
+    let t35 = t2 * t25;
+    let t36 = t26 - t35;
+    let t37 = t1 * t25;
+    let t38 = 0.8 * t27;
+    let t39 = t38 - t37;
+    let t40 = 0.8 * t30;
+    let t41 = t40 - t34;
+    let t42 = t2 * t41;
+    let t43 = t3 * t39;
+    let t44 = t43 - t42;
+    let t45 = t0 * t36;
+    let t46 = t1 * t33;
+    let t47 = t46 - t45;
+    let t48 = t22 + t47;
+    let t49 = t44 - t23;
+    out[0] = t48;
+    out[1] = t49;
 }
 /// C q̇ + g (N m) by recursive Newton–Euler with q̈ = 0.
 ///
@@ -370,7 +337,7 @@ pub fn cqd_g(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) 
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 14 add/sub, 25 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 43 temporaries.
+/// Cost: 13 add/sub, 24 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 41 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g_rnea(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
@@ -378,47 +345,45 @@ pub fn cqd_g_rnea(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; 
     let (t2, t3) = f64::sin_cos(q[1]);
     let t4 = 0.8 * t3;
     let t5 = 0.8 * t2;
-    let t6 = 9.81 * t0;
-    let t7 = 9.81 * t1;
-    let t8 = qd[0] * qd[0];
-    let t9 = t6 - t8;
-    let t10 = 11.772 * t1;
-    let t11 = qd[0] + qd[1];
-    let t12 = t3 * t9;
-    let t13 = t2 * t7;
-    let t14 = t12 + t13;
-    let t15 = t2 * t9;
-    let t16 = t3 * t7;
-    let t17 = t16 - t15;
-    let t18 = 0.8 * t11;
-    let t19 = t11 * t18;
-    let t20 = t14 - t19;
-    let t21 = 0.5 * t11;
-    let t22 = t11 * t21;
-    let t23 = t20 + t22;
-    let t24 = p[0] * t23;
-    let t25 = p[0] * t17;
-    let t26 = 0.5 * t25;
-    let t27 = 0.8 * t25;
-    let t28 = t27 - t26;
-    let t29 = t3 * t24;
-    let t30 = t2 * t25;
-    let t31 = t29 - t30;
-    let t32 = t2 * t24;
-    let t33 = t3 * t25;
-    let t34 = t32 + t33;
-    let t35 = t4 * t34;
-    let t36 = t5 * t31;
-    let t37 = t35 - t36;
-    let t38 = t37 - t26;
-    let t39 = t10 + t34;
-    let t40 = 6.474600000000001 * t1;
-    let t41 = t38 - t40;
-    let t42 = t39 + t41;
-    out[0] = t42;
-    out[1] = t28;
+    let t6 = qd[0] * qd[0];
+    let t7 = 9.81 * t0;
+    let t8 = 9.81 * t1;
+    let t9 = t7 - t6;
+    let t10 = qd[0] + qd[1];
+    let t11 = t3 * t9;
+    let t12 = t2 * t8;
+    let t13 = t11 + t12;
+    let t14 = t2 * t9;
+    let t15 = t3 * t8;
+    let t16 = t15 - t14;
+    let t17 = 0.8 * t10;
+    let t18 = t10 * t17;
+    let t19 = t13 - t18;
+    let t20 = 0.5 * t10;
+    let t21 = t10 * t20;
+    let t22 = t19 + t21;
+    let t23 = p[0] * t22;
+    let t24 = p[0] * t16;
+    let t25 = 0.5 * t24;
+    let t26 = 0.30000000000000004 * t24;
+    let t27 = t3 * t23;
+    let t28 = t2 * t24;
+    let t29 = t27 - t28;
+    let t30 = t2 * t23;
+    let t31 = t3 * t24;
+    let t32 = t30 + t31;
+    let t33 = t4 * t32;
+    let t34 = t5 * t29;
+    let t35 = 5.2974 * t1;
+    let t36 = t30 + t35;
+    let t37 = t31 + t36;
+    let t38 = t33 + t37;
+    let t39 = t38 - t25;
+    let t40 = t39 - t34;
+    out[0] = t40;
+    out[1] = t26;
 }
-/// M(q) (kg m², eq. 22a) and C q̇ + g (N m, recursive Newton–Euler) in one kernel (shared subexpressions).
+/// M(q) (kg m², eq. 22a) and C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols, whichever is cheaper) in one kernel (shared subexpressions).
 ///
 /// Arguments, in order:
 /// * `q`: joint angles (rad)
@@ -427,7 +392,7 @@ pub fn cqd_g_rnea(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; 
 /// * `m`: output (see above), fully overwritten
 /// * `cqd_g`: output (see above), fully overwritten
 ///
-/// Cost: 19 add/sub, 31 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 54 temporaries.
+/// Cost: 18 add/sub, 30 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 52 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn mass_cqd_g(
@@ -452,49 +417,47 @@ pub fn mass_cqd_g(
     let t14 = 0.05 + t13;
     let t15 = 0.09000000000000002 * p[0];
     let t16 = 0.05 + t15;
-    let t17 = 9.81 * t0;
-    let t18 = 9.81 * t1;
-    let t19 = qd[0] * qd[0];
-    let t20 = t17 - t19;
-    let t21 = 11.772 * t1;
-    let t22 = qd[0] + qd[1];
-    let t23 = t3 * t20;
-    let t24 = t2 * t18;
-    let t25 = t23 + t24;
-    let t26 = t2 * t20;
-    let t27 = t3 * t18;
-    let t28 = t27 - t26;
-    let t29 = 0.8 * t22;
-    let t30 = t22 * t29;
-    let t31 = t25 - t30;
-    let t32 = 0.5 * t22;
-    let t33 = t22 * t32;
-    let t34 = t31 + t33;
-    let t35 = p[0] * t34;
-    let t36 = p[0] * t28;
-    let t37 = 0.5 * t36;
-    let t38 = 0.8 * t36;
-    let t39 = t38 - t37;
-    let t40 = t3 * t35;
-    let t41 = t2 * t36;
-    let t42 = t40 - t41;
-    let t43 = t2 * t35;
-    let t44 = t3 * t36;
-    let t45 = t43 + t44;
-    let t46 = t4 * t45;
-    let t47 = t5 * t42;
-    let t48 = t46 - t47;
-    let t49 = t48 - t37;
-    let t50 = t21 + t45;
-    let t51 = 6.474600000000001 * t1;
-    let t52 = t49 - t51;
-    let t53 = t50 + t52;
+    let t17 = qd[0] * qd[0];
+    let t18 = 9.81 * t0;
+    let t19 = 9.81 * t1;
+    let t20 = t18 - t17;
+    let t21 = qd[0] + qd[1];
+    let t22 = t3 * t20;
+    let t23 = t2 * t19;
+    let t24 = t22 + t23;
+    let t25 = t2 * t20;
+    let t26 = t3 * t19;
+    let t27 = t26 - t25;
+    let t28 = 0.8 * t21;
+    let t29 = t21 * t28;
+    let t30 = t24 - t29;
+    let t31 = 0.5 * t21;
+    let t32 = t21 * t31;
+    let t33 = t30 + t32;
+    let t34 = p[0] * t33;
+    let t35 = p[0] * t27;
+    let t36 = 0.5 * t35;
+    let t37 = 0.30000000000000004 * t35;
+    let t38 = t3 * t34;
+    let t39 = t2 * t35;
+    let t40 = t38 - t39;
+    let t41 = t2 * t34;
+    let t42 = t3 * t35;
+    let t43 = t41 + t42;
+    let t44 = t4 * t43;
+    let t45 = t5 * t40;
+    let t46 = 5.2974 * t1;
+    let t47 = t41 + t46;
+    let t48 = t42 + t47;
+    let t49 = t44 + t48;
+    let t50 = t49 - t36;
+    let t51 = t50 - t45;
     m[0][0] = t11;
     m[0][1] = t14;
     m[1][0] = t14;
     m[1][1] = t16;
-    cqd_g[0] = t53;
-    cqd_g[1] = t39;
+    cqd_g[0] = t51;
+    cqd_g[1] = t37;
 }
 /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
 /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.

@@ -213,7 +213,7 @@ impl<'p> Core<'p> {
             grad_phi: vec![0.0; n],
             jty: vec![0.0; n],
             kkt,
-            solver: start.kkt_solver.take().unwrap_or_else(FaerLdlt::new),
+            solver: start.kkt_solver.take().unwrap_or_default(),
             diag_x: vec![0.0; n],
             delta_w_last: 0.0,
             skip_zero_trial: false,

@@ -95,7 +95,6 @@ pub trait KktSolver {
 
 /// faer 0.24 sparse LDLᵀ behind [`KktSolver`]: symbolic analysis (AMD) once, numeric
 /// refactorization per call, one workspace buffer allocated at analysis time.
-#[derive(Default)]
 pub struct FaerLdlt {
     symbolic: Option<SymbolicCholesky<usize>>,
     l_values: Vec<f64>,
@@ -127,13 +126,25 @@ impl std::fmt::Debug for FaerLdlt {
     }
 }
 
+impl Default for FaerLdlt {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl FaerLdlt {
     /// A solver that picks simplicial/supernodal automatically (faer's flop-ratio rule).
     pub fn new() -> Self {
         Self {
+            symbolic: None,
+            l_values: Vec::new(),
+            mem: None,
+            col_ptr: Vec::new(),
+            row_idx: Vec::new(),
+            factored: false,
+            supernodal: None,
             pivot_epsilon: 1e-14,
             pivot_delta: 1e-4,
-            ..Self::default()
         }
     }
 

@@ -22,7 +22,7 @@ use bf_codegen::{Scene, interp::Tape};
 use crate::ocp::{NodeFunction, OcpError, PointFunction, VarRef};
 
 /// δ of the smooth friction-cone margin σ_δ (N); σ_δ ≥ 0 implies σ ≥ −δ.
-pub const CONE_DELTA: f64 = 1e-3;
+pub const CONE_DELTA: f64 = 1e-4;
 
 /// Contact mode prescribed to a phase (paper Fig. 3, blue part).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -517,6 +517,10 @@ pub fn continuity(nx: usize, from_phase: usize, to_phase: usize, name: &str) -> 
 /// with the impulse ι = params `iota0..iota0+3`: q⁺ = q⁻, M (q̇⁺ − q̇⁻) − J_cᵀ ι = 0,
 /// I_b (ω⁺ − ω⁻) + r_c × ι = 0, ω⁺ × r_c − J_c q̇⁺ = 0, ι_n ≥ 0 and optionally the impulse
 /// cone (eq. 66, squared form).
+///
+/// `delta_v_plus` adds ω⁺ × r_c − J_c q̇⁺ = 0 (eq. 40c); leave it out when the stick phase's
+/// first state point is a collocation node (Radau), where the node's Δv = 0 already imposes
+/// it (a duplicate row would make the constraint Jacobian rank deficient).
 pub fn impact(
     scene: &Scene,
     ph: &Physics,
@@ -524,6 +528,7 @@ pub fn impact(
     free_phase: usize,
     iota0: usize,
     impulse_cone: bool,
+    delta_v_plus: bool,
 ) -> Result<PointFunction, OcpError> {
     let Built {
         mut model,
@@ -590,10 +595,12 @@ pub fn impact(
     let ibdw = g.m3_mul_v(&ib, dw);
     let rci = g.v3_cross(ce.r_c, iota);
     out.extend(g.v3_add(ibdw, rci));
-    let wr = g.v3_cross(wpi, ce.r_c);
-    for r in 0..3 {
-        let jq = g.dot(&ce.j_c[r], &qdpi);
-        out.push(g.sub(wr[r], jq));
+    if delta_v_plus {
+        let wr = g.v3_cross(wpi, ce.r_c);
+        for r in 0..3 {
+            let jq = g.dot(&ce.j_c[r], &qdpi);
+            out.push(g.sub(wr[r], jq));
+        }
     }
     let mut bounds = vec![(0.0, 0.0); out.len()];
     let iota_n = g.v3_dot(iota, ce.n);

@@ -75,7 +75,7 @@ pub enum GuessKind {
 pub struct ProblemSettings {
     /// Collocation points per phase (paper: 30).
     pub points: usize,
-    /// Transcription scheme.
+    /// Transcription scheme (default: Radau with 3 elements; see the module docs for LG).
     pub scheme: Scheme,
     /// ε of the smooth saturation (eq. 59); `None` = the scene's `smooth_eps` (0.01).
     pub epsilon: Option<f64>,
@@ -101,7 +101,7 @@ impl Default for ProblemSettings {
     fn default() -> Self {
         ProblemSettings {
             points: 30,
-            scheme: Scheme::Lg,
+            scheme: Scheme::Radau { elements: 3 },
             epsilon: None,
             warm_start: None,
             impulse_cone: false,
@@ -381,7 +381,21 @@ fn final_zero(phase: usize, idx: &[usize], name: &str) -> PointFunction {
 }
 
 /// Builds the named problem.
+///
+/// Runs on a helper thread with a large stack: building the graphs of a scene with runtime
+/// parameters (`human`) recurses deeper in bf-codegen than a default 2 MiB test thread allows.
 pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, OcpError> {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn_scoped(s, || build_inner(name, settings))
+            .map_err(|e| OcpError::Model(format!("cannot spawn the build thread: {e}")))?
+            .join()
+            .map_err(|_| OcpError::Model("the problem build panicked".into()))?
+    })
+}
+
+fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, OcpError> {
     let scene_name = if name == "periodic-cot-human" {
         "human"
     } else {
@@ -499,7 +513,15 @@ pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, Ocp
                     EndQuantity::H(0.0, tol_h),
                     "0 <= h1(tf) <= 1e-4",
                 )?,
-                bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
+                bf::impact(
+                    &scene,
+                    &ph,
+                    eps,
+                    0,
+                    0,
+                    settings.impulse_cone,
+                    settings.scheme == Scheme::Lg,
+                )?,
                 bf::end_point(
                     &scene,
                     eps,
@@ -569,7 +591,15 @@ pub fn build(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, Ocp
                     EndQuantity::H(0.0, tol_h),
                     "0 <= h1(tf) <= 1e-4",
                 )?,
-                bf::impact(&scene, &ph, eps, 0, 0, settings.impulse_cone)?,
+                bf::impact(
+                    &scene,
+                    &ph,
+                    eps,
+                    0,
+                    0,
+                    settings.impulse_cone,
+                    settings.scheme == Scheme::Lg,
+                )?,
                 bf::end_point(
                     &scene,
                     eps,

@@ -1,0 +1,85 @@
+//! Criterion benchmarks of the hybrid simulator on the compiled paper-scene kernels (issue 5).
+//!
+//! * `paper_10s_contact/dopri5_rtol1e-8`: 10 s of the paper scene with contact — the finger
+//!   dropped from the paper's initial guess q = (0.1, 0.5, 0.5) onto the ball (τ = 0, Newton's
+//!   impact law, friction and damping on), which hits, slips, sticks and lifts off
+//!   (events printed once). Target: < 10 ms (≥ 1000× real time).
+//! * `paper_10s_contact/rk4_h1e-3`: the same with RK4 at h = 1 ms.
+//! * A work-precision table (DOPRI5 rtol 1e-3 … 1e-12, RK4 h = 1e-2 … 1e-4; error of x(T)
+//!   against an rtol = 1e-13 reference vs CPU time), from `bf_sim::work_precision`, printed to
+//!   stderr before timing.
+//!
+//! Quick run: `cargo bench -p ball-finger --bench simulate -- --warm-up-time 1 --measurement-time 2`.
+
+use bf_model::{ImpactLaw, Mode, State, Vec3, fixtures};
+use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::work_precision::{RK4_LADDER, RTOL_LADDER, ladder};
+use bf_sim::{Method, PdController, SimSettings, format_table, simulate, work_precision};
+use criterion::{Criterion, criterion_group, criterion_main};
+use std::hint::black_box;
+
+fn x0() -> [f64; 9] {
+    State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::zeros()).to_array()
+}
+
+fn settings(method: Method, rtol: f64) -> SimSettings {
+    SimSettings {
+        method,
+        rtol,
+        atol: 1e-2 * rtol,
+        h_max: 0.05,
+        record_steps: true,
+        ..SimSettings::default()
+    }
+}
+
+fn bench(c: &mut Criterion) {
+    let sys = BallFinger::new(
+        fixtures::paper_scene().expect("paper scene"),
+        PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3]).expect("zero input"),
+        BallFingerOptions {
+            impact_law: ImpactLaw::Newton,
+            ..BallFingerOptions::default()
+        },
+    )
+    .expect("system");
+    let x0 = x0();
+    let out = simulate(&sys, settings(Method::Dopri5, 1e-8), Mode::Free, 0.0, &x0, 10.0)
+        .expect("10 s run");
+    let kinds: Vec<String> = out
+        .events
+        .iter()
+        .map(|e| format!("{:.4} {:?}->{:?}", e.t, e.mode_before, e.mode_after.unwrap_or(e.mode_before)))
+        .collect();
+    eprintln!("paper 10 s, dopri5 rtol 1e-8: {:?}; events: {}", out.stats, kinds.join(", "));
+
+    let reference = SimSettings {
+        rtol: 1e-13,
+        atol: 1e-15,
+        ..settings(Method::Dopri5, 1e-13)
+    };
+    let cfg = ladder(&settings(Method::Dopri5, 1e-8), &RTOL_LADDER, 1e-2, &RK4_LADDER);
+    match work_precision(&sys, Mode::Free, 0.0, &x0, 10.0, &reference, &cfg, 3) {
+        Ok(rows) => eprintln!("work-precision, paper scene 10 s with contact:\n{}", format_table(&rows)),
+        Err(e) => eprintln!("work-precision reference failed: {e}"),
+    }
+
+    let mut g = c.benchmark_group("paper_10s_contact");
+    g.sample_size(20);
+    g.bench_function("dopri5_rtol1e-8", |b| {
+        b.iter(|| {
+            simulate(&sys, settings(Method::Dopri5, 1e-8), Mode::Free, 0.0, black_box(&x0), 10.0)
+                .expect("runs")
+        })
+    });
+    g.bench_function("rk4_h1e-3", |b| {
+        b.iter(|| {
+            simulate(&sys, settings(Method::Rk4 { h: 1e-3 }, 1e-8), Mode::Free, 0.0, black_box(&x0), 10.0)
+                .expect("runs")
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

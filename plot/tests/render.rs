@@ -1,0 +1,488 @@
+//! End-to-end rendering tests: every figure type is written as SVG + PNG into a temporary
+//! directory, the PNG is decoded and checked for real content (non-background pixels and the
+//! series colours), and the SVG for the legend texts and one stroke colour per series.
+//! Bad input must give a clear error and leave no file behind.
+
+use bf_plot::anim::{AnimFrame, Animation, animation_html, write_animation_html};
+use bf_plot::figure::palette;
+use bf_plot::paper::*;
+use bf_plot::scene3d::{FingerPaths, View, fig_finger_paths};
+use bf_plot::*;
+use std::path::{Path, PathBuf};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bf-plot-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Decoded PNG: (width, height, rgb pixels).
+fn png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
+    let img = image::open(path).expect("PNG decodes").to_rgb8();
+    let (w, h) = img.dimensions();
+    (w, h, img.pixels().map(|p| p.0).collect())
+}
+
+fn count_colour(px: &[[u8; 3]], c: (u8, u8, u8)) -> usize {
+    px.iter().filter(|p| **p == [c.0, c.1, c.2]).count()
+}
+
+fn hex(c: (u8, u8, u8)) -> String {
+    format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+}
+
+/// Checks common to every rendered figure; returns (svg text, png pixels).
+fn check_files(paths: &[PathBuf; 2], size: (u32, u32), legend: &[&str]) -> (String, Vec<[u8; 3]>) {
+    assert_eq!(paths[0].extension().unwrap(), "svg");
+    assert_eq!(paths[1].extension().unwrap(), "png");
+    let svg = std::fs::read_to_string(&paths[0]).unwrap();
+    assert!(svg.starts_with("<svg"), "SVG header");
+    for l in legend {
+        let esc = l.replace('&', "&amp;").replace('<', "&lt;");
+        assert!(svg.contains(&esc), "legend text '{l}' missing from SVG");
+    }
+    let (w, h, px) = png(&paths[1]);
+    assert_eq!((w, h), size);
+    let ink = px.iter().filter(|p| **p != [255, 255, 255]).count();
+    assert!(
+        ink > (w * h / 50) as usize,
+        "only {ink} non-background pixels"
+    );
+    // No temporary files left next to the outputs.
+    let dir = paths[0].parent().unwrap();
+    for e in std::fs::read_dir(dir).unwrap() {
+        let n = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!n.contains(".tmp"), "temporary file {n} left behind");
+    }
+    (svg, px)
+}
+
+fn ts(t: &[f64], f: &[&dyn Fn(f64) -> f64], names: &[&str]) -> TimeSeries {
+    TimeSeries {
+        t: t.to_vec(),
+        values: f
+            .iter()
+            .map(|g| t.iter().map(|&x| g(x)).collect())
+            .collect(),
+        names: names.iter().map(|s| s.to_string()).collect(),
+    }
+}
+
+fn grid(n: usize, t1: f64) -> Vec<f64> {
+    (0..n).map(|i| t1 * i as f64 / (n - 1) as f64).collect()
+}
+
+fn phases() -> Phases {
+    Phases {
+        switches: vec![(1.0, "impact".into()), (1.6, "lift-off".into())],
+        contact: vec![(1.0, 1.6)],
+    }
+}
+
+#[test]
+fn fig4_saturation_renders_all_curves() {
+    let d = tmp("fig4");
+    let fig = sat::fig4_saturation(&[0.01, 0.1], 801);
+    let r = render_report(&fig, d.join("fig4")).unwrap();
+    assert_eq!(r.skipped_points, 0);
+    let names: Vec<&str> = fig.series.iter().map(|s| s.name.as_str()).collect();
+    let (svg, px) = check_files(&r.paths, fig.size, &names);
+    // The exact sat is black, the tanh green: both must be visible in the bitmap and the SVG.
+    for c in [(0, 0, 0), (44, 160, 44), (214, 39, 40)] {
+        assert!(count_colour(&px, c) > 100, "colour {c:?} hardly present");
+        assert!(svg.contains(&hex(c)), "colour {} not in SVG", hex(c));
+    }
+}
+
+#[test]
+fn eight_series_get_distinct_colours_legend_and_paths() {
+    let d = tmp("eight");
+    let mut f = LineFigure::new("Eight series", "t [s]", "y [m]");
+    for k in 0..8 {
+        f.series.push(Series::new(
+            format!("series {k}"),
+            (0..300)
+                .map(|i| {
+                    let t = i as f64 * 0.03;
+                    (t, (t + 0.5 * k as f64).sin() + 0.3 * k as f64)
+                })
+                .collect(),
+        ));
+    }
+    f.vertical_markers = vec![(2.0, "t₁".into()), (6.0, "t₂".into())];
+    f.hlines.push(HLine {
+        y: 3.0,
+        label: "limit".into(),
+        colour: Colour::Auto,
+    });
+    let names: Vec<String> = f.series.iter().map(|s| s.name.clone()).collect();
+    let mut legend: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
+    legend.extend(["limit", "t₁", "t₂", "Eight series", "t [s]", "y [m]"]);
+    let paths = render(&f, d.join("eight")).unwrap();
+    let (svg, px) = check_files(&paths, f.size, &legend);
+    let colours: Vec<(u8, u8, u8)> = (0..8).map(palette).collect();
+    for (i, &c) in colours.iter().enumerate() {
+        assert!(
+            colours[..i].iter().all(|&o| o != c),
+            "palette colour repeats within 8"
+        );
+        assert!(
+            count_colour(&px, c) > 50,
+            "series {i} colour {c:?} missing in PNG"
+        );
+        assert!(svg.contains(&hex(c)), "series {i} colour missing in SVG");
+    }
+    // Solid series are one <polyline> each; dashed ones one per dash: at least one per series.
+    assert!(svg.matches("<polyline").count() >= 8);
+}
+
+#[test]
+fn nan_points_are_skipped_and_counted() {
+    let d = tmp("nan");
+    let mut f = LineFigure::new("gaps", "t [s]", "y [-]");
+    f.series.push(Series::new(
+        "a",
+        (0..100)
+            .map(|i| (i as f64, if i % 10 == 5 { f64::NAN } else { i as f64 }))
+            .collect(),
+    ));
+    f.series.push(Series::new(
+        "b",
+        vec![(0.0, 1.0), (1.0, f64::INFINITY), (2.0, 3.0)],
+    ));
+    let r = render_report(&f, d.join("gaps")).unwrap();
+    assert_eq!(r.skipped_points, 11);
+    check_files(&r.paths, f.size, &["a", "b"]);
+}
+
+#[test]
+fn bad_input_gives_clear_errors_and_no_files() {
+    let d = tmp("bad");
+    let f = LineFigure::new("empty fig", "t [s]", "y [-]");
+    let e = render(&f, d.join("a")).unwrap_err();
+    assert!(matches!(e, PlotError::NoSeries(_)));
+    assert!(e.to_string().contains("empty fig"));
+
+    let mut f2 = f.clone();
+    f2.series.push(Series::new("nothing", vec![]));
+    let e = render(&f2, d.join("b")).unwrap_err();
+    assert!(matches!(e, PlotError::EmptySeries { .. }) && e.to_string().contains("nothing"));
+
+    let mut f3 = f.clone();
+    f3.series.push(Series::new(
+        "nan only",
+        vec![(f64::NAN, 1.0), (1.0, f64::NAN)],
+    ));
+    let e = render(&f3, d.join("c")).unwrap_err();
+    assert!(
+        matches!(e, PlotError::NoFinitePoints { skipped: 2, .. }),
+        "{e}"
+    );
+
+    let mut f4 = f.clone();
+    f4.series.push(Series::new("ok", vec![(0.0, 1.0)]));
+    f4.x_range = Some((1.0, 0.0));
+    assert!(matches!(
+        render(&f4, d.join("d")),
+        Err(PlotError::InvalidInput { .. })
+    ));
+
+    let p = PanelFigure {
+        title: "none".into(),
+        panels: vec![],
+        layout: Layout::Rows,
+        size: None,
+    };
+    assert!(matches!(
+        render_panels(&p, d.join("e")),
+        Err(PlotError::NoSeries(_))
+    ));
+    assert_eq!(
+        std::fs::read_dir(&d).unwrap().count(),
+        0,
+        "files written despite errors"
+    );
+}
+
+#[test]
+fn paper_time_series_figures_render() {
+    let d = tmp("paper");
+    let t = grid(400, 2.5);
+    let omega = ts(
+        &t,
+        &[
+            &|x| 0.5 * (x - 1.0).clamp(0.0, 0.6),
+            &|x| -0.4 * (x - 1.0).clamp(0.0, 0.6),
+            &|x| 0.1 * x.sin(),
+        ],
+        &["ω_x", "ω_y", "ω_z"],
+    );
+    let f6 = fig_ball_omega("Fig. 6: ball angular velocity", &omega, &phases()).unwrap();
+    assert_eq!(f6.series.len(), 3);
+    let p = render(&f6, d.join("fig6")).unwrap();
+    let (_, px) = check_files(
+        &p,
+        f6.size,
+        &["ω_x", "ω_y", "ω_z", "impact", "lift-off", "contact"],
+    );
+    for i in 0..3 {
+        assert!(count_colour(&px, palette(i)) > 50);
+    }
+
+    let h: Vec<f64> = t
+        .iter()
+        .map(|&x| {
+            if (1.0..=1.6).contains(&x) {
+                0.0
+            } else {
+                0.3 * (x - 1.3).abs() - 0.09
+            }
+        })
+        .collect();
+    let off: Vec<f64> = t
+        .iter()
+        .map(|&x| {
+            if (1.0..=1.6).contains(&x) {
+                0.2 + 0.05 * x
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let f7 = fig_distance("Fig. 7: distance", &t, &h, &off, &phases()).unwrap();
+    assert_eq!(f7.panels.len(), 2);
+    let p = render_panels(&f7, d.join("fig7")).unwrap();
+    check_files(&p, (1000, 660), &["h", "|sat(α)|", "h [m]"]);
+
+    let tau = ts(
+        &t,
+        &[&|x| x.sin(), &|x| (2.0 * x).cos() * 1.2, &|x| 0.3 * x],
+        &["τ₁", "τ₂", "τ₃"],
+    );
+    let f8 = fig_torques("Fig. 8: torques", &tau, Some(1.0), &phases()).unwrap();
+    assert_eq!(f8.panels.len(), 3);
+    assert!(
+        f8.panels
+            .iter()
+            .all(|p| p.series.len() == 1 && p.hlines.len() == 2)
+    );
+    let p = render_panels(&f8, d.join("fig8")).unwrap();
+    check_files(
+        &p,
+        (1000, 960),
+        &["τ₁ [N m]", "τ₂ [N m]", "τ₃ [N m]", "torque limit"],
+    );
+
+    let ln: Vec<f64> = t
+        .iter()
+        .map(|&x| {
+            if (1.0..=1.6).contains(&x) {
+                2.0 + x
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
+    let lt: Vec<f64> = ln.iter().map(|v| 0.8 * v * 0.9).collect();
+    let f9 = fig_contact_forces("Fig. 9: contact force", &t, &ln, &lt, 0.8, &phases()).unwrap();
+    assert_eq!(f9.series.len(), 3);
+    let r = render_report(&f9, d.join("fig9")).unwrap();
+    assert!(r.skipped_points > 0);
+    check_files(
+        &r.paths,
+        f9.size,
+        &[
+            "normal λ_n",
+            "tangential ‖λ_∥‖",
+            "cone bound μ_s λ_n (μ_s = 0.8)",
+        ],
+    );
+
+    let ol = ts(
+        &t,
+        &[
+            &|x| 0.5 * (x - 1.0).clamp(0.0, 0.5),
+            &|x| -0.4 * (x - 1.0).clamp(0.0, 0.7),
+            &|x| 0.12 * x.sin(),
+        ],
+        &["ω_x", "ω_y", "ω_z"],
+    );
+    let f17 =
+        fig_open_loop_vs_optimal("Fig. 17: open loop vs optimal", &omega, &ol, &phases()).unwrap();
+    assert!(f17.panels.iter().all(|p| p.series.len() == 2));
+    let p = render_panels(&f17, d.join("fig17")).unwrap();
+    check_files(
+        &p,
+        (1000, 960),
+        &["optimal", "open-loop simulation", "ω_z [rad/s]"],
+    );
+}
+
+#[test]
+fn work_precision_loglog() {
+    let d = tmp("wp");
+    // error = C h^p, time = K / h for orders 1, 2, 4, 5: straight lines of slope −p in log–log.
+    let methods: Vec<WorkPrecision> = [(1, "Euler"), (2, "Heun"), (4, "RK4"), (5, "DOPRI5")]
+        .iter()
+        .map(|&(p, n)| {
+            let hs: Vec<f64> = (0..6).map(|k| 0.1 / 2f64.powi(k)).collect();
+            WorkPrecision {
+                name: n.into(),
+                time_s: hs.iter().map(|h| 1e-4 * p as f64 / h).collect(),
+                error: hs.iter().map(|h| h.powi(p)).collect(),
+            }
+        })
+        .collect();
+    let f = fig_work_precision("Work-precision", "max error [rad/s]", &methods).unwrap();
+    assert_eq!(f.series.len(), 4);
+    let p = render(&f, d.join("wp")).unwrap();
+    let (svg, _) = check_files(
+        &p,
+        f.size,
+        &["Euler", "Heun", "RK4", "DOPRI5", "computing time [s]"],
+    );
+    assert!(svg.contains("1e-"), "decade tick labels expected");
+    assert!(svg.matches("<circle").count() >= 24, "one marker per run");
+}
+
+fn finger(q1: f64, q2: f64, q3: f64) -> Vec<[f64; 3]> {
+    // Planar-ish 3-link chain from the base at (2, 0, 0); plain geometry for the test scene.
+    let base = [2.0, 0.0, 0.0];
+    let mut pts = vec![base];
+    let (mut p, mut a) = (base, std::f64::consts::PI + q1);
+    for q in [0.0, q2, q3] {
+        a += q;
+        p = [
+            p[0] + a.cos() * 0.9,
+            p[1] + 0.2 * q1.sin(),
+            p[2] + a.sin() * 0.9,
+        ];
+        pts.push(p);
+    }
+    pts
+}
+
+#[test]
+fn finger_paths_3d_renders_views() {
+    let d = tmp("paths");
+    let snaps: Vec<Vec<[f64; 3]>> = (0..4)
+        .map(|k| finger(0.3 * k as f64 - 0.4, 0.5, 0.4))
+        .collect();
+    let tip: Vec<[f64; 3]> = (0..100)
+        .map(|k| *finger(0.012 * k as f64 - 0.4, 0.5, 0.4).last().unwrap())
+        .collect();
+    let contact: Vec<[f64; 3]> = tip
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            if (40..60).contains(&k) {
+                *p
+            } else {
+                [f64::NAN; 3]
+            }
+        })
+        .collect();
+    let data = FingerPaths {
+        ball_center: [0.0; 3],
+        ball_radius: 1.0,
+        snapshots: snaps,
+        tip_path: tip,
+        contact_path: contact,
+    };
+    let fig = fig_finger_paths(
+        "Fig. 5: finger path",
+        &data,
+        &[View::FrontXZ, View::TopXY, View::Iso],
+    )
+    .unwrap();
+    assert_eq!(fig.panels.len(), 3);
+    // ball + 3 wireframe circles + 4 snapshots + tip path + contact path.
+    assert!(
+        fig.panels
+            .iter()
+            .all(|p| p.series.len() == 10 && p.equal_aspect)
+    );
+    let r = render_panels_report(&fig, d.join("fig5")).unwrap();
+    assert_eq!(r.skipped_points, 3 * 80);
+    let (_, px) = check_files(
+        &r.paths,
+        (1560, 620),
+        &[
+            "ball",
+            "finger (snapshots)",
+            "fingertip path",
+            "contact point path",
+            "isometric",
+        ],
+    );
+    assert!(count_colour(&px, (214, 39, 40)) > 30 && count_colour(&px, (31, 119, 180)) > 30);
+}
+
+fn rot_z(a: f64) -> [[f64; 3]; 3] {
+    let (s, c) = a.sin_cos();
+    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+}
+
+#[test]
+fn animation_html_is_self_contained_with_all_frames() {
+    let d = tmp("anim");
+    let n = 37;
+    let frames: Vec<AnimFrame> = (0..n)
+        .map(|k| {
+            let t = 0.05 * k as f64;
+            AnimFrame {
+                t,
+                joints: finger(0.3 * t, 0.5, 0.4),
+                ball_rotation: rot_z(2.2 * t),
+                contact: (k > 10 && k < 20).then_some([1.0, 0.0, 0.0]),
+            }
+        })
+        .collect();
+    let a = Animation {
+        title: "Ball & finger <QC>".into(),
+        ball_center: [0.0; 3],
+        ball_radius: 1.0,
+        frames,
+    };
+    let path = write_animation_html(&a, d.join("anim.html")).unwrap();
+    let html = std::fs::read_to_string(path).unwrap();
+    assert_eq!(html.matches("{t:").count(), n);
+    assert!(html.contains(&format!("data-frames=\"{n}\"")));
+    assert!(html.contains(&format!("max=\"{}\"", n - 1)));
+    assert_eq!(html.matches("c:null").count(), n - 9);
+    assert!(html.contains("Ball &amp; finger &lt;QC&gt;"));
+    for bad in ["http:", "https:", "src=", "href=", "@import", "url("] {
+        assert!(
+            !html.contains(bad),
+            "external reference '{bad}' in the page"
+        );
+    }
+    for id in ["id=\"play\"", "id=\"scrub\"", "id=\"time\""] {
+        assert!(html.contains(id));
+    }
+    // Rotation matrices are stored row-major: frame 1 has R = Rz(0.11).
+    assert!(html.contains(&format!("r:[{},", fmt5((0.11f64).cos()))));
+
+    // Bad input.
+    let mut b = a.clone();
+    b.frames[3].ball_rotation[0][0] = 2.0;
+    assert!(matches!(
+        animation_html(&b),
+        Err(PlotError::InvalidInput { .. })
+    ));
+    let mut b = a.clone();
+    b.frames[5].joints.pop();
+    assert!(matches!(animation_html(&b), Err(PlotError::Shape { .. })));
+    let mut b = a.clone();
+    b.frames.clear();
+    assert!(animation_html(&b).is_err());
+    let mut b = a;
+    b.frames[2].joints[1][2] = f64::NAN;
+    assert!(animation_html(&b).is_err());
+}
+
+fn fmt5(v: f64) -> String {
+    let s = format!("{v:.5}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
