@@ -44,23 +44,49 @@ fn bench(c: &mut Criterion) {
     )
     .expect("system");
     let x0 = x0();
-    let out = simulate(&sys, settings(Method::Dopri5, 1e-8), Mode::Free, 0.0, &x0, 10.0)
-        .expect("10 s run");
+    let out = simulate(
+        &sys,
+        settings(Method::Dopri5, 1e-8),
+        Mode::Free,
+        0.0,
+        &x0,
+        10.0,
+    )
+    .expect("10 s run");
     let kinds: Vec<String> = out
         .events
         .iter()
-        .map(|e| format!("{:.4} {:?}->{:?}", e.t, e.mode_before, e.mode_after.unwrap_or(e.mode_before)))
+        .map(|e| {
+            format!(
+                "{:.4} {:?}->{:?}",
+                e.t,
+                e.mode_before,
+                e.mode_after.unwrap_or(e.mode_before)
+            )
+        })
         .collect();
-    eprintln!("paper 10 s, dopri5 rtol 1e-8: {:?}; events: {}", out.stats, kinds.join(", "));
+    eprintln!(
+        "paper 10 s, dopri5 rtol 1e-8: {:?}; events: {}",
+        out.stats,
+        kinds.join(", ")
+    );
 
     let reference = SimSettings {
         rtol: 1e-13,
         atol: 1e-15,
         ..settings(Method::Dopri5, 1e-13)
     };
-    let cfg = ladder(&settings(Method::Dopri5, 1e-8), &RTOL_LADDER, 1e-2, &RK4_LADDER);
+    let cfg = ladder(
+        &settings(Method::Dopri5, 1e-8),
+        &RTOL_LADDER,
+        1e-2,
+        &RK4_LADDER,
+    );
     match work_precision(&sys, Mode::Free, 0.0, &x0, 10.0, &reference, &cfg, 3) {
-        Ok(rows) => eprintln!("work-precision, paper scene 10 s with contact:\n{}", format_table(&rows)),
+        Ok(rows) => eprintln!(
+            "work-precision, paper scene 10 s with contact:\n{}",
+            format_table(&rows)
+        ),
         Err(e) => eprintln!("work-precision reference failed: {e}"),
     }
 
@@ -68,14 +94,28 @@ fn bench(c: &mut Criterion) {
     g.sample_size(20);
     g.bench_function("dopri5_rtol1e-8", |b| {
         b.iter(|| {
-            simulate(&sys, settings(Method::Dopri5, 1e-8), Mode::Free, 0.0, black_box(&x0), 10.0)
-                .expect("runs")
+            simulate(
+                &sys,
+                settings(Method::Dopri5, 1e-8),
+                Mode::Free,
+                0.0,
+                black_box(&x0),
+                10.0,
+            )
+            .expect("runs")
         })
     });
     g.bench_function("rk4_h1e-3", |b| {
         b.iter(|| {
-            simulate(&sys, settings(Method::Rk4 { h: 1e-3 }, 1e-8), Mode::Free, 0.0, black_box(&x0), 10.0)
-                .expect("runs")
+            simulate(
+                &sys,
+                settings(Method::Rk4 { h: 1e-3 }, 1e-8),
+                Mode::Free,
+                0.0,
+                black_box(&x0),
+                10.0,
+            )
+            .expect("runs")
         })
     });
     g.finish();

@@ -1,5 +1,10 @@
 //! Runs bf-codegen for every `scenes/*.toml` (sorted) and writes `$OUT_DIR/<name>.rs` (only
 //! when the text changed) plus `$OUT_DIR/modules.rs`, which declares one module per scene.
+//!
+//! For the `paper` scene it also emits variant modules of the dynamics kernels
+//! ([`VARIANT_KERNELS`]) for the speed–accuracy report (issue 7): `paper_f32` (single
+//! precision), `paper_fma` (fused multiply-add) and `paper_runtime` (every constant a runtime
+//! parameter instead of baked in).
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -11,6 +16,51 @@ fn write_if_changed(path: &Path, text: &str) -> Result<()> {
         return Ok(());
     }
     fs::write(path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Kernels emitted in the variant modules of the paper scene (kept few: build time).
+const VARIANT_KERNELS: [&str; 4] = ["mass_matrix", "cqd_g", "cqd_g_rnea", "mass_cqd_g"];
+
+/// The variant modules of `scene` (the paper scene): (variant scene, emit options, doc).
+fn variants(
+    scene: &bf_codegen::Scene,
+) -> Vec<(bf_codegen::Scene, bf_codegen::EmitOptions, String)> {
+    use bf_codegen::{EmitOptions, FloatTy};
+    let base = bf_codegen::Scene {
+        kernels: VARIANT_KERNELS.iter().map(|k| k.to_string()).collect(),
+        ..scene.clone()
+    };
+    let named = |suffix: &str, s: &bf_codegen::Scene| bf_codegen::Scene {
+        name: format!("{}_{suffix}", scene.name),
+        ..s.clone()
+    };
+    let all_runtime = bf_codegen::Scene {
+        runtime_parameters: scene.constants().into_iter().map(|c| c.0).collect(),
+        ..base.clone()
+    };
+    vec![
+        (
+            named("f32", &base),
+            EmitOptions {
+                float: FloatTy::F32,
+                fma: false,
+            },
+            "single precision (f32 arguments, constants and arithmetic)".into(),
+        ),
+        (
+            named("fma", &base),
+            EmitOptions {
+                float: FloatTy::F64,
+                fma: true,
+            },
+            "f64 with fused multiply-add (`mul_add`) for every a*b ± c".into(),
+        ),
+        (
+            named("runtime", &all_runtime),
+            EmitOptions::default(),
+            "f64, every constant of the scene a runtime parameter (nothing baked)".into(),
+        ),
+    ]
 }
 
 fn main() -> Result<()> {
@@ -64,6 +114,20 @@ fn main() -> Result<()> {
             scene.links.len(),
             scene.kernels.join(", "),
         ));
+        if name == "paper" {
+            for (vscene, opts, what) in variants(&scene) {
+                let vname = vscene.name.clone();
+                let generated = bf_codegen::generate_with(&vscene, &text, &opts)
+                    .map_err(|e| anyhow!("cannot generate variant {vname} of {shown}: {e}"))?;
+                write_if_changed(&out.join(format!("{vname}.rs")), &generated.code)?;
+                modules.push_str(&format!(
+                    "#[doc = \"Variant of `paper` for the speed–accuracy report: {what}.\"]\n#[doc = \"\"]\n#[doc = \"Kernels: {}.\"]\n\
+                     #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens)]\n\
+                     pub mod {vname} {{\n    include!(concat!(env!(\"OUT_DIR\"), \"/{vname}.rs\"));\n}}\n",
+                    VARIANT_KERNELS.join(", "),
+                ));
+            }
+        }
         names.push(name);
     }
     write_if_changed(&out.join("modules.rs"), &modules)

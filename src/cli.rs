@@ -24,7 +24,7 @@ pub enum Command {
     /// Evaluate every kernel of a scene at one state and print one JSON object.
     Eval(EvalArgs),
     /// Simulate the hybrid ball-and-finger model (paper Sect. 3, Fig. 3).
-    Simulate(SimulateArgs),
+    Simulate(Box<SimulateArgs>),
     /// Solve a multiphase optimal-control problem (paper Sect. 4).
     Optimize(OptimizeArgs),
     /// Reproduce the paper's study (Sect. 6) and write a report.
@@ -149,11 +149,17 @@ pub struct OptimizeArgs {
     /// Collocation points per phase.
     #[arg(long, default_value_t = 30)]
     pub points: usize,
-    /// Transcription: lg or radau.
-    #[arg(long, default_value = "lg")]
+    /// Transcription: lg (Legendre–Gauss, as the paper) or radau (hp Legendre–Gauss–Radau).
+    #[arg(long, default_value = "radau")]
     pub scheme: String,
+    /// Elements per phase for `--scheme radau`.
+    #[arg(long, default_value_t = 3)]
+    pub elements: usize,
+    /// Interior-point iteration limit.
+    #[arg(long, default_value_t = 1500)]
+    pub max_iter: usize,
     /// ε of the smooth saturation.
-    #[arg(long, default_value_t = 0.01)]
+    #[arg(long, default_value_t = 0.01, allow_hyphen_values = true)]
     pub epsilon: f64,
     /// Warm start from a previous solution.json.
     #[arg(long)]

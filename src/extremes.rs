@@ -13,6 +13,21 @@
 //! | [`painleve_threshold`] | Sect. 7, eq. 37 | the kinetic friction μ_k above which slip has no consistent normal force (bisection vs closed form) |
 //! | [`long_horizon`] | eq. 26, energy of eq. 22 | free motion without damping or torque for 10 s / 100 s: energy drift vs rtol, CPU time, bounded step count |
 //!
+//! Helpers: [`GraphEval`] (one interpreter tape over M, C q̇, g, C q̇ + g and both contact
+//! variants, f64 or double-double), [`InterpKernels`] (a [`bf_model::Kernels`] on the
+//! interpreter, for scenes without a compiled module, e.g. the ball moved so that α hits a
+//! saturation corner exactly: [`corner_model`], [`corner_stick`]), [`press_torque`] (the finger
+//! held against C q̇ + g and pressed on with a known force, so that a static stick has the exact
+//! answer λ = f n).
+//!
+//! Findings worth knowing (numbers in the report): the f64 `rem_euclid(2π)` reduction of
+//! |q| = 1e6 rad is itself off by ≈ 3e-11 rad (fl(2π) ≠ 2π), so never reduce q before calling the
+//! kernels; the model's stick stops reporting `SingularContact` at q₃ ≈ 4.5e-6 rad from the
+//! aligned configuration; the Painlevé threshold of the paper finger at the probed contact is
+//! μ_k* ≈ 1.37 with λ_n = f/(1 − μ_k/μ_k*) below it; at an exact saturation corner the smooth
+//! kernels give NaN once ε² underflows (ε ≲ 1e-162: √(0 + 0) in the derivative of eq. 59), which
+//! the model reports as `NonFinite` — a clear error, never a NaN result.
+//!
 //! [`run_extremes`] runs all probes and returns an [`ExtremesReport`] whose
 //! [`ExtremesReport::to_markdown`] is the report section. A probe whose result contains NaN, or
 //! that fails with an unexpected error, becomes an [`Outcome::Failed`] row: such rows are listed
@@ -108,7 +123,9 @@ impl ExtremesReport {
         ));
         let fails = self.failures();
         if fails.is_empty() {
-            s.push_str("All probes returned a finite number or a clear error (no NaN, no hang).\n\n");
+            s.push_str(
+                "All probes returned a finite number or a clear error (no NaN, no hang).\n\n",
+            );
         } else {
             s.push_str(&format!("**{} PROBE(S) FAILED:**\n\n", fails.len()));
             for f in fails {
@@ -129,9 +146,10 @@ impl ExtremesReport {
                     value,
                     error_estimate,
                 } => (fmt_num(*value), fmt_num(*error_estimate)),
-                Outcome::ClearError { message } => {
-                    (format!("error: {}", message.replace('|', "\\|")), "—".into())
-                }
+                Outcome::ClearError { message } => (
+                    format!("error: {}", message.replace('|', "\\|")),
+                    "—".into(),
+                ),
                 Outcome::Failed { message } => (
                     format!("**FAILED: {}**", message.replace('|', "\\|")),
                     "—".into(),
@@ -175,7 +193,13 @@ impl Rows {
         }
     }
     /// A number row; NaN/inf in `value` or `err` turns it into a failure.
-    fn num(&mut self, parameter: impl Into<String>, quantity: impl Into<String>, value: f64, err: f64) {
+    fn num(
+        &mut self,
+        parameter: impl Into<String>,
+        quantity: impl Into<String>,
+        value: f64,
+        err: f64,
+    ) {
         let outcome = if value.is_finite() && err.is_finite() {
             Outcome::Number {
                 value,
@@ -188,7 +212,12 @@ impl Rows {
         };
         self.push(parameter, quantity, outcome);
     }
-    fn push(&mut self, parameter: impl Into<String>, quantity: impl Into<String>, outcome: Outcome) {
+    fn push(
+        &mut self,
+        parameter: impl Into<String>,
+        quantity: impl Into<String>,
+        outcome: Outcome,
+    ) {
         self.rows.push(ExtremesRow {
             case: self.case.to_string(),
             parameter: parameter.into(),
@@ -291,9 +320,9 @@ const GROUPS: [(&str, usize); 16] = [
     ("jc_dot_qd_s", 3),
 ];
 
-/// A scene's graph compiled into one [`Tape`] over [`GROUPS`], evaluated in f64 or in
-/// double-double: the "same graph" the generator emits for `mass_matrix`, `coriolis_qd`,
-/// `gravity`, `cqd_g`, `contact` and `contact_smooth`.
+/// A scene's graph compiled into one [`Tape`] over the fixed output groups listed at
+/// [`GraphValues::get`], evaluated in f64 or in double-double: the "same graph" the generator
+/// emits for `mass_matrix`, `coriolis_qd`, `gravity`, `cqd_g`, `contact` and `contact_smooth`.
 pub struct GraphEval {
     tape: Tape,
     nq: usize,
@@ -333,7 +362,11 @@ impl GraphEval {
     pub fn new(scene: &Scene) -> anyhow::Result<Self> {
         let mut m = bf_codegen::Model::new(scene)?;
         if m.nq() != 3 {
-            bail!("scene `{}` has {} joints, the probes need 3", scene.name, m.nq());
+            bail!(
+                "scene `{}` has {} joints, the probes need 3",
+                scene.name,
+                m.nq()
+            );
         }
         let mass = m.mass_matrix();
         let cqd = m.coriolis_qd();
@@ -375,7 +408,14 @@ impl GraphEval {
         (&self.param_names, &self.param_defaults)
     }
 
-    fn vars<S: Scalar>(&self, q: &[f64; 3], qd: &[f64; 3], w: &[f64; 3], eps: f64, p: &[f64]) -> Vec<S> {
+    fn vars<S: Scalar>(
+        &self,
+        q: &[f64; 3],
+        qd: &[f64; 3],
+        w: &[f64; 3],
+        eps: f64,
+        p: &[f64],
+    ) -> Vec<S> {
         let mut v = vec![S::from_f64(0.0); self.n_vars];
         let n = self.nq;
         for i in 0..n {
@@ -393,14 +433,28 @@ impl GraphEval {
     }
 
     /// Evaluate in f64 (`p`: runtime parameters; pass `params().1` for the defaults).
-    pub fn eval_f64(&self, q: &[f64; 3], qd: &[f64; 3], w: &[f64; 3], eps: f64, p: &[f64]) -> GraphValues {
+    pub fn eval_f64(
+        &self,
+        q: &[f64; 3],
+        qd: &[f64; 3],
+        w: &[f64; 3],
+        eps: f64,
+        p: &[f64],
+    ) -> GraphValues {
         GraphValues {
             vals: self.tape.eval::<f64>(&self.vars(q, qd, w, eps, p)),
         }
     }
 
     /// Evaluate in double-double, rounded to f64.
-    pub fn eval_dd(&self, q: &[f64; 3], qd: &[f64; 3], w: &[f64; 3], eps: f64, p: &[f64]) -> GraphValues {
+    pub fn eval_dd(
+        &self,
+        q: &[f64; 3],
+        qd: &[f64; 3],
+        w: &[f64; 3],
+        eps: f64,
+        p: &[f64],
+    ) -> GraphValues {
         GraphValues {
             vals: self
                 .tape
@@ -444,7 +498,11 @@ impl InterpKernels {
         scene.runtime_parameters = runtime.iter().map(|s| s.to_string()).collect();
         let mut m = bf_codegen::Model::new(&scene)?;
         if m.nq() != 3 {
-            bail!("scene `{}` has {} joints, the model needs 3", scene.name, m.nq());
+            bail!(
+                "scene `{}` has {} joints, the model needs 3",
+                scene.name,
+                m.nq()
+            );
         }
         let mass = m.mass_matrix();
         let cg = m.cqd_g();
@@ -521,7 +579,8 @@ impl Kernels for InterpKernels {
         (m, [v[9], v[10], v[11]])
     }
     fn potential(&self, q: &[f64; 3]) -> f64 {
-        self.dynamics.eval::<f64>(&self.vars(q, &[0.0; 3], &[0.0; 3], 0.0))[12]
+        self.dynamics
+            .eval::<f64>(&self.vars(q, &[0.0; 3], &[0.0; 3], 0.0))[12]
     }
     fn contact(
         &self,
@@ -537,7 +596,17 @@ impl Kernels for InterpKernels {
         let a3 = |i: usize| [v[i], v[i + 1], v[i + 2]];
         let jc = [a3(12), a3(15), a3(18)];
         ContactGeometry::from_arrays(
-            v[0], v[1], &a3(2), &a3(5), v[8], &a3(9), &jc, &a3(21), &a3(24), v[27], &a3(28),
+            v[0],
+            v[1],
+            &a3(2),
+            &a3(5),
+            v[8],
+            &a3(9),
+            &jc,
+            &a3(21),
+            &a3(24),
+            v[27],
+            &a3(28),
             &a3(31),
         )
     }
@@ -545,13 +614,25 @@ impl Kernels for InterpKernels {
 
 /// Model of the paper scene on [`InterpKernels`] with the ball centre and radius as runtime
 /// parameters (`ball.center.x/y/z`, `ball.radius`), smooth contact with `eps`.
-pub fn corner_model(centre: [f64; 3], radius: f64, eps: f64) -> anyhow::Result<Model<InterpKernels>> {
+pub fn corner_model(
+    centre: [f64; 3],
+    radius: f64,
+    eps: f64,
+) -> anyhow::Result<Model<InterpKernels>> {
     let scene = paper_scene_spec()?;
     let mut k = InterpKernels::new(
         &scene,
-        &["ball.center.x", "ball.center.y", "ball.center.z", "ball.radius"],
+        &[
+            "ball.center.x",
+            "ball.center.y",
+            "ball.center.z",
+            "ball.radius",
+        ],
     )?;
-    for (n, v) in ["ball.center.x", "ball.center.y", "ball.center.z"].iter().zip(centre) {
+    for (n, v) in ["ball.center.x", "ball.center.y", "ball.center.z"]
+        .iter()
+        .zip(centre)
+    {
         k.set(n, v)?;
     }
     k.set("ball.radius", radius)?;
@@ -564,7 +645,8 @@ pub fn corner_model(centre: [f64; 3], radius: f64, eps: f64) -> anyhow::Result<M
         params.mu_v(),
         params.socket_damping(),
     )?;
-    Ok(Model::new(k, params, TransitionSettings::default())?.with_contact_variant(ContactVariant::Smooth(eps))?)
+    Ok(Model::new(k, params, TransitionSettings::default())?
+        .with_contact_variant(ContactVariant::Smooth(eps))?)
 }
 
 /// Stick at the exact saturation corner α = 0 (q = 0, ball centre (2, 0.5, 3), radius 0.5, so
@@ -746,7 +828,9 @@ pub fn scale_scene(scene: &Scene, k_mass: f64, k_len: f64) -> Scene {
         b.center = b.center.map(|v| v * k_len);
         b.mass *= k_mass;
         b.inertia = b.inertia.as_ref().map(|i| match i {
-            InertiaSpec::Diagonal(d) => InertiaSpec::Diagonal(d.map(|v| v * k_mass * k_len * k_len)),
+            InertiaSpec::Diagonal(d) => {
+                InertiaSpec::Diagonal(d.map(|v| v * k_mass * k_len * k_len))
+            }
             InertiaSpec::Full(m) => {
                 InertiaSpec::Full(m.map(|r| r.map(|v| v * k_mass * k_len * k_len)))
             }
@@ -825,7 +909,10 @@ pub fn length_only_mass_law(k: f64) -> anyhow::Result<(f64, f64)> {
     let q = [0.4, 0.9, 0.6];
     let m_of = |k: f64| -> anyhow::Result<Vec<f64>> {
         let ge = GraphEval::new(&lengths_only(k))?;
-        Ok(ge.eval_dd(&q, &[0.0; 3], &[0.0; 3], 0.01, &[]).get("M").to_vec())
+        Ok(ge
+            .eval_dd(&q, &[0.0; 3], &[0.0; 3], 0.01, &[])
+            .get("M")
+            .to_vec())
     };
     let m1 = m_of(1.0)?;
     let m2 = m_of(2.0)?;
@@ -960,6 +1047,31 @@ pub fn singular_contact(delta: f64) -> anyhow::Result<SingularProbe> {
     })
 }
 
+/// The smallest q₃ = δ at which [`singular_contact`] still returns a force: bisection in log δ
+/// on [1e-9, 1e-1] (60 halvings); error if the bracket ends are not singular / regular.
+pub fn singular_threshold() -> anyhow::Result<f64> {
+    let is_singular = |d: f64| -> anyhow::Result<bool> {
+        match singular_contact(d)?.stick {
+            Ok(_) => Ok(false),
+            Err(ModelError::SingularContact { .. }) => Ok(true),
+            Err(e) => Err(anyhow!("unexpected error at δ = {d:e}: {e}")),
+        }
+    };
+    let (mut lo, mut hi) = (1e-9f64.ln(), 1e-1f64.ln());
+    if !is_singular(lo.exp())? || is_singular(hi.exp())? {
+        bail!("no singular → regular switch of stick on δ ∈ [1e-9, 1e-1]");
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if is_singular(mid.exp())? {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    Ok(hi.exp())
+}
+
 // ---------------------------------------------------------------------------------------------
 // Contact states of the paper scene
 // ---------------------------------------------------------------------------------------------
@@ -982,7 +1094,12 @@ pub fn paper_contact_configuration() -> anyhow::Result<Vec3> {
 
 /// State at contact configuration `q` with q̇ = 0 and ω chosen so that Δv = `s` · `t_hat`
 /// (t_hat unit and tangential: ω = s (r_c × t̂)/|r_c|², so ω × r_c = s t̂).
-fn state_with_slip(model: &Model<PaperKernels>, q: Vec3, t_hat: &Vec3, s: f64) -> anyhow::Result<State> {
+fn state_with_slip(
+    model: &Model<PaperKernels>,
+    q: Vec3,
+    t_hat: &Vec3,
+    s: f64,
+) -> anyhow::Result<State> {
     let kin = model.evaluate(&State::new(q, Vec3::zeros(), Vec3::zeros()))?;
     let rc = kin.contact.r_c;
     let w = rc.cross(t_hat) * (s / rc.norm_squared());
@@ -1011,6 +1128,10 @@ pub struct SlipProbe {
     pub lambda: Result<Vec3, ModelError>,
     /// λ with the direction hint t̂ (always defined).
     pub lambda_hint: Vec3,
+    /// λ_n of `lambda_hint` (N).
+    pub lambda_n: f64,
+    /// |λ_∥| of `lambda_hint` (N); eq. 20: μ_k λ_n.
+    pub lambda_t_norm: f64,
     /// |eq. 38 residual| / (|λ| |Δv|) (division-free slip law; 0 up to rounding).
     pub law_residual: f64,
     /// Angle (rad) between the friction force λ_∥ and Δv (eq. 20: 0).
@@ -1040,6 +1161,8 @@ pub fn slip_small_dv(q: Vec3, s: f64) -> anyhow::Result<SlipProbe> {
         s,
         lambda,
         lambda_hint: lam,
+        lambda_n: acc.force.lambda_n,
+        lambda_t_norm: acc.force.lambda_t.norm(),
         law_residual,
         friction_angle: cosang.acos(),
         slip_to_stick,
@@ -1055,6 +1178,10 @@ pub fn slip_small_dv(q: Vec3, s: f64) -> anyhow::Result<SlipProbe> {
 pub struct SmoothError {
     /// ε (m).
     pub eps: f64,
+    /// α (m) of the exact contact (interior: −l < α < 0).
+    pub alpha: f64,
+    /// |sat_ε(α) − sat(α)| (m).
+    pub sat: f64,
     /// |h_ε − h| (m).
     pub h: f64,
     /// max |p_c,ε − p_c| (m).
@@ -1081,11 +1208,18 @@ pub fn smooth_convergence(q: [f64; 3], eps: f64) -> SmoothError {
     all.extend(s.jc_dot_qd);
     SmoothError {
         eps,
+        alpha: c.alpha,
+        sat: (s.sat_alpha - c.sat_alpha).abs(),
         h: (s.h - c.h).abs(),
         p_c: rel_err(&s.p_c, &c.p_c) * c.p_c.iter().map(|v| v.abs()).fold(0.0, f64_max_nan),
         finite: all_finite(&all),
     }
 }
+
+/// A configuration of the paper finger whose closest point to the ball is inside link 3
+/// (α ≈ −0.40 m, h ≈ 0.43 m): the interior of the saturation, where sat_ε − sat = O(ε²) and,
+/// because r_c ⟂ e_x3 there (eq. 1), h_ε − h = O(ε⁴).
+pub const Q_INTERIOR: [f64; 3] = [0.0, 1.4, 2.2];
 
 /// Observed convergence orders log(e_i/e_{i+1}) / log(ε_i/ε_{i+1}) between consecutive rows
 /// (rows whose error is below `floor` are skipped: rounding, not truncation).
@@ -1155,7 +1289,9 @@ pub fn painleve_threshold(q: Vec3) -> anyhow::Result<PainleveProbe> {
     let kin = base.evaluate(&x)?;
     let tau = press_torque(&kin, 1.0);
     let slip = |mu: f64| -> Result<f64, ModelError> {
-        let p = base.params().with_coulomb(base.params().mu_s().max(mu), mu)?;
+        let p = base
+            .params()
+            .with_coulomb(base.params().mu_s().max(mu), mu)?;
         let m = base.clone().with_params(p);
         m.slip(&x, &tau, None).map(|a| a.force.lambda_n)
     };
@@ -1186,7 +1322,11 @@ pub fn painleve_threshold(q: Vec3) -> anyhow::Result<PainleveProbe> {
             break;
         }
         let mid = 0.5 * (lo + hi);
-        if slip(mid).is_ok() { lo = mid } else { hi = mid }
+        if slip(mid).is_ok() {
+            lo = mid
+        } else {
+            hi = mid
+        }
     }
     let star = 0.5 * (lo + hi);
     let below = [0.0, 0.5, 0.9, 0.99, 0.999]
@@ -1306,13 +1446,38 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
         let a = kernel_accuracy(&paper, qm);
         let par = format!("|q| = {qm:e} rad");
         r.num(&par, "rel. err. M, same q", a.m, f64::EPSILON);
-        r.num(&par, "rel. err. C q̇ + g (cqd_g), same q", a.cqd_g, f64::EPSILON);
-        r.num(&par, "rel. err. C q̇ + g (mass_cqd_g), same q", a.cqd_g_model, f64::EPSILON);
+        r.num(
+            &par,
+            "rel. err. C q̇ + g (cqd_g), same q",
+            a.cqd_g,
+            f64::EPSILON,
+        );
+        r.num(
+            &par,
+            "rel. err. C q̇ + g (mass_cqd_g), same q",
+            a.cqd_g_model,
+            f64::EPSILON,
+        );
         r.num(&par, "err. h / |r_c|, same q", a.h, f64::EPSILON);
         r.num(&par, "rel. err. J_c, same q", a.j_c, f64::EPSILON);
-        r.num(&par, "rel. err. M, q mod 2π", a.reduced[0], a.reduction_error);
-        r.num(&par, "rel. err. C q̇ + g, q mod 2π", a.reduced[1], a.reduction_error);
-        r.num(&par, "err. h / |r_c|, q mod 2π", a.reduced[2], a.reduction_error);
+        r.num(
+            &par,
+            "rel. err. M, q mod 2π",
+            a.reduced[0],
+            a.reduction_error,
+        );
+        r.num(
+            &par,
+            "rel. err. C q̇ + g, q mod 2π",
+            a.reduced[1],
+            a.reduction_error,
+        );
+        r.num(
+            &par,
+            "err. h / |r_c|, q mod 2π",
+            a.reduced[2],
+            a.reduction_error,
+        );
         r.finish(t, &mut rows);
     }
 
@@ -1323,23 +1488,54 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
         let a = velocity_extremes(&paper, v);
         let par = format!("|q̇| ~ {v:e} rad/s");
         r.num(&par, "rel. err. C q̇ vs double-double", a.cqd, f64::EPSILON);
-        r.num(&par, "rel. dev. from k² homogeneity", a.homogeneity, f64::EPSILON);
+        r.num(
+            &par,
+            "rel. dev. from k² homogeneity",
+            a.homogeneity,
+            f64::EPSILON,
+        );
         r.finish(t, &mut rows);
     }
 
     // 3. scaled masses / lengths
-    for &(km, kl) in &[(1e-3, 1.0), (1e3, 1.0), (1.0, 1e-3), (1.0, 1e3), (1e-3, 1e3)] {
+    for &(km, kl) in &[
+        (1e-3, 1.0),
+        (1e3, 1.0),
+        (1.0, 1e-3),
+        (1.0, 1e3),
+        (1e-3, 1e3),
+    ] {
         let t = Instant::now();
         let mut r = Rows::new("scaled scene (interpreter)");
         let par = format!("mass ×{km:e}, length ×{kl:e}");
         match scaled_scene(&paper, km, kl) {
             Ok(s) => {
                 r.num(&par, "rel. err. f64 vs dd: M", s.f64_vs_dd[0], f64::EPSILON);
-                r.num(&par, "rel. err. f64 vs dd: C q̇ + g", s.f64_vs_dd[1], f64::EPSILON);
-                r.num(&par, "err. f64 vs dd: h / |r_c|", s.f64_vs_dd[2], f64::EPSILON);
-                r.num(&par, "λ_min/λ_max of M (SPD if > 0)", s.m_eig_ratio, f64::EPSILON);
+                r.num(
+                    &par,
+                    "rel. err. f64 vs dd: C q̇ + g",
+                    s.f64_vs_dd[1],
+                    f64::EPSILON,
+                );
+                r.num(
+                    &par,
+                    "err. f64 vs dd: h / |r_c|",
+                    s.f64_vs_dd[2],
+                    f64::EPSILON,
+                );
+                r.num(
+                    &par,
+                    "λ_min/λ_max of M (SPD if > 0)",
+                    s.m_eig_ratio,
+                    f64::EPSILON,
+                );
                 let law = s.law_deviation.iter().copied().fold(0.0, f64_max_nan);
-                r.num(&par, "max dev. from similarity laws (M, g, C q̇, h, J_c)", law, f64::EPSILON);
+                r.num(
+                    &par,
+                    "max dev. from similarity laws (M, g, C q̇, h, J_c)",
+                    law,
+                    f64::EPSILON,
+                );
             }
             Err(e) => r.fail(&par, format!("{e:#}")),
         }
@@ -1368,7 +1564,12 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                     Ok(h) => {
                         r.num(&par, "rel. err. M vs dd", h.m_vs_dd, f64::EPSILON);
                         r.num(&par, "rel. err. C q̇ + g vs dd", h.cqd_g_vs_dd, f64::EPSILON);
-                        r.num(&par, "rel. dev. from affine law in m₃", h.affine_deviation, f64::EPSILON);
+                        r.num(
+                            &par,
+                            "rel. dev. from affine law in m₃",
+                            h.affine_deviation,
+                            f64::EPSILON,
+                        );
                         r.num(&par, "λ_min/λ_max of M", h.m_eig_ratio, f64::EPSILON);
                         r.num(&par, "|q̈| free motion (rad/s²)", h.qdd_norm, 0.0);
                     }
@@ -1392,26 +1593,45 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
             let par = format!("q₃ = δ = {d:e}");
             match singular_contact(d) {
                 Ok(s) => {
-                    r.num(&par, "σ_min(J_c) (m)", s.jc_singular_values[0], f64::EPSILON * s.jc_singular_values[2]);
+                    r.num(
+                        &par,
+                        "σ_min(J_c) (m)",
+                        s.jc_singular_values[0],
+                        f64::EPSILON * s.jc_singular_values[2],
+                    );
                     r.num(&par, "nᵀWn/‖W‖", s.normal_mobility, f64::EPSILON);
                     match &s.stick {
                         Ok((l, e)) => r.num(&par, "stick λ_n (N), pressed with 1 N", *l, *e),
                         Err(e) => r.push(
                             &par,
                             "stick",
-                            model_err_outcome(e, |e| matches!(e, ModelError::SingularContact { .. })),
+                            model_err_outcome(e, |e| {
+                                matches!(e, ModelError::SingularContact { .. })
+                            }),
                         ),
                     }
                 }
                 Err(e) => r.fail(&par, format!("{e:#}")),
             }
         }
+        match singular_threshold() {
+            Ok(d) => r.num(
+                "bisection",
+                "δ* where stick stops reporting SingularContact",
+                d,
+                d * 1e-12,
+            ),
+            Err(e) => r.fail("bisection", format!("{e:#}")),
+        }
         // stretched finger far from the ball: rank loss of J_c without contact
         let par = "paper, q = (0.3, 0, 0), no contact";
         match bf_model::fixtures::paper_scene().and_then(|m| {
             let x = State::new(Vec3::new(0.3, 0.0, 0.0), Vec3::zeros(), Vec3::zeros());
             let kin = m.evaluate(&x)?;
-            Ok((singular_values(&kin.contact.j_c), m.stick(&x, &Vec3::zeros())))
+            Ok((
+                singular_values(&kin.contact.j_c),
+                m.stick(&x, &Vec3::zeros()),
+            ))
         }) {
             Ok((sv, st)) => {
                 r.num(par, "σ_min(J_c) (m)", sv[0], f64::EPSILON * sv[2]);
@@ -1442,11 +1662,18 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
             match (slip_small_dv(qc, s), &reference) {
                 (Ok(p), Ok(lref)) => {
                     match &p.lambda {
-                        Ok(l) => r.num(&par, "|λ| (N), no hint", l.norm(), (l - p.lambda_hint).norm()),
+                        Ok(l) => r.num(
+                            &par,
+                            "|λ| (N), no hint",
+                            l.norm(),
+                            (l - p.lambda_hint).norm(),
+                        ),
                         Err(e) => r.push(
                             &par,
                             "λ, no hint",
-                            model_err_outcome(e, |e| matches!(e, ModelError::UndefinedSlipDirection { .. })),
+                            model_err_outcome(e, |e| {
+                                matches!(e, ModelError::UndefinedSlipDirection { .. })
+                            }),
                         ),
                     }
                     r.num(
@@ -1455,9 +1682,24 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                         (p.lambda_hint - lref).norm() / lref.norm(),
                         f64::EPSILON,
                     );
-                    r.num(&par, "eq. 38 residual/(|λ||Δv|)", p.law_residual, f64::EPSILON);
-                    r.num(&par, "angle(λ_∥, Δv) (rad)", p.friction_angle, f64::EPSILON.sqrt());
-                    r.num(&par, "Slip→Stick fires (1/0)", f64::from(u8::from(p.slip_to_stick)), 0.0);
+                    r.num(
+                        &par,
+                        "eq. 38 residual/(|λ||Δv|)",
+                        p.law_residual,
+                        f64::EPSILON,
+                    );
+                    r.num(
+                        &par,
+                        "angle(λ_∥, Δv) (rad)",
+                        p.friction_angle,
+                        f64::EPSILON.sqrt(),
+                    );
+                    r.num(
+                        &par,
+                        "Slip→Stick fires (1/0)",
+                        f64::from(u8::from(p.slip_to_stick)),
+                        0.0,
+                    );
                 }
                 (Err(e), _) => r.fail(&par, format!("{e:#}")),
                 (_, Err(e)) => r.fail(&par, format!("{e:#}")),
@@ -1472,21 +1714,36 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
         let mut r = Rows::new("smooth sat ε → 0 (eq. 58–59)");
         let eps_list = [1e-1, 1e-2, 1e-3, 1e-4, 1e-6, 1e-8, 1e-10, 1e-12];
         let qa: [f64; 3] = qc.into();
-        let errs: Vec<SmoothError> = eps_list.iter().map(|&e| smooth_convergence(qa, e)).collect();
-        for e in &errs {
-            let par = format!("interior α, ε = {:e}", e.eps);
-            if !e.finite {
-                r.fail(&par, "contact_smooth returned NaN/inf");
+        for (label, q) in [
+            ("interior α", Q_INTERIOR),
+            ("saturated α (tip contact)", qa),
+        ] {
+            let errs: Vec<SmoothError> =
+                eps_list.iter().map(|&e| smooth_convergence(q, e)).collect();
+            for e in &errs {
+                let par = format!("{label} (α = {:.3}), ε = {:e}", e.alpha, e.eps);
+                if !e.finite {
+                    r.fail(&par, "contact_smooth returned NaN/inf");
+                }
+                r.num(&par, "|h_ε − h| (m)", e.h, f64::EPSILON);
+                r.num(&par, "|p_c,ε − p_c| (m)", e.p_c, f64::EPSILON);
             }
-            r.num(&par, "|h_ε − h| (m)", e.h, f64::EPSILON);
-            r.num(&par, "|p_c,ε − p_c| (m)", e.p_c, f64::EPSILON);
+            let hs: Vec<(f64, f64)> = errs.iter().map(|e| (e.eps, e.h)).collect();
+            let ps: Vec<(f64, f64)> = errs.iter().map(|e| (e.eps, e.p_c)).collect();
+            let min = |v: Vec<f64>| v.into_iter().fold(f64::INFINITY, f64::min);
+            r.num(
+                label,
+                "observed order of h_ε → h (min)",
+                min(observed_orders(&hs, 1e-13)),
+                0.0,
+            );
+            r.num(
+                label,
+                "observed order of p_c,ε → p_c (min)",
+                min(observed_orders(&ps, 1e-13)),
+                0.0,
+            );
         }
-        let hs: Vec<(f64, f64)> = errs.iter().map(|e| (e.eps, e.h)).collect();
-        let ps: Vec<(f64, f64)> = errs.iter().map(|e| (e.eps, e.p_c)).collect();
-        let oh = observed_orders(&hs, 1e-13);
-        let op = observed_orders(&ps, 1e-13);
-        r.num("interior α", "observed order of h_ε → h (min)", oh.iter().copied().fold(f64::INFINITY, f64::min), 0.0);
-        r.num("interior α", "observed order of p_c,ε → p_c (min)", op.iter().copied().fold(f64::INFINITY, f64::min), 0.0);
         match corner_graph() {
             Ok(g) => {
                 for (tip, name) in [(true, "α = 0"), (false, "α = −l")] {
@@ -1495,7 +1752,10 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                         let (alpha, sat_err, h_err, finite) = smooth_corner(&g, tip, e);
                         let par = format!("{name} (α = {alpha:e} exactly), ε = {e:e}");
                         if !finite {
-                            r.fail(&par, "contact_smooth graph returned NaN/inf at a saturation corner");
+                            r.fail(
+                                &par,
+                                "contact_smooth graph returned NaN/inf at a saturation corner",
+                            );
                         } else {
                             r.num(&par, "|sat_ε − sat| (m)", sat_err, f64::EPSILON);
                             r.num(&par, "|h_ε − h| (m)", h_err, f64::EPSILON);
@@ -1503,7 +1763,12 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                         corner.push((e, sat_err));
                     }
                     let o = observed_orders(&corner, 1e-13);
-                    r.num(name, "observed order of sat_ε → sat (min)", o.iter().copied().fold(f64::INFINITY, f64::min), 0.0);
+                    r.num(
+                        name,
+                        "observed order of sat_ε → sat (min)",
+                        o.iter().copied().fold(f64::INFINITY, f64::min),
+                        0.0,
+                    );
                 }
             }
             Err(e) => r.fail("corners", format!("{e:#}")),
@@ -1548,7 +1813,12 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                     p.threshold_bisection,
                     (p.threshold_bisection - p.threshold_closed_form).abs(),
                 );
-                r.num("closed form", "(1 − margin) nᵀWn / (−nᵀW t̂)", p.threshold_closed_form, 0.0);
+                r.num(
+                    "closed form",
+                    "(1 − margin) nᵀWn / (−nᵀW t̂)",
+                    p.threshold_closed_form,
+                    0.0,
+                );
                 for (f, l) in &p.below {
                     r.num(format!("μ_k = {f} μ_k*"), "slip λ_n (N)", *l, 0.0);
                 }
@@ -1559,7 +1829,9 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                             &par,
                             "slip",
                             Outcome::Failed {
-                                message: format!("no Painlevé error above the threshold (λ_n = {l:e})"),
+                                message: format!(
+                                    "no Painlevé error above the threshold (λ_n = {l:e})"
+                                ),
                             },
                         ),
                         Err(e) => r.push(
@@ -1588,7 +1860,10 @@ pub fn run_extremes(quick: bool) -> anyhow::Result<ExtremesReport> {
                     r.num(&par, "accepted steps", h.steps as f64, 0.0);
                     r.num(&par, "CPU s", h.cpu_seconds, 0.0);
                     if h.events != 0 {
-                        r.fail(&par, format!("{} events: the finger reached the ball", h.events));
+                        r.fail(
+                            &par,
+                            format!("{} events: the finger reached the ball", h.events),
+                        );
                     }
                 }
                 Err(e) => r.fail(&par, format!("{e:#}")),

@@ -12,7 +12,7 @@ fn main() {
         Command::Generate(a) => commands::generate::run(&a),
         Command::Eval(a) => commands::eval::run(&a),
         Command::Simulate(a) => commands::simulate::run(&a),
-        Command::Optimize(_) => commands::not_yet("optimize", 6),
+        Command::Optimize(a) => commands::optimize::run(&a),
         Command::Paper(a) => commands::paper::run(&a),
         Command::Report(_) => commands::not_yet("report", 7),
     };

@@ -216,8 +216,32 @@ fn bad_cli_input_gives_clear_errors() {
     );
     assert!(!out_file.exists(), "no output file on failure");
     assert_clean_failure(
-        &run(&["optimize", "--problem", "periodic-qc"]),
-        &["not implemented"],
+        &run(&["optimize", "--problem", "periodic-nope"]),
+        &["--problem", "periodic-qc"],
+    );
+    assert_clean_failure(
+        &run(&[
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--scheme",
+            "chebyshev",
+        ]),
+        &["--scheme"],
+    );
+    assert_clean_failure(
+        &run(&["optimize", "--problem", "periodic-qc", "--epsilon", "-1"]),
+        &["--epsilon"],
+    );
+    assert_clean_failure(
+        &run(&[
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--warm-start",
+            "/nonexistent.json",
+        ]),
+        &["--warm-start", "/nonexistent.json"],
     );
     std::fs::remove_dir_all(dir).ok();
 }

@@ -11,6 +11,7 @@
 //!   the contact drift stays bounded (and is removed by the projection);
 //! * a scripted push gives Free → Stick → Slip → Free, with h ≈ 0 at the impact, σ ≈ 0 at
 //!   stick → slip and λ_n ≈ 0 at lift-off (the Sect. 3.1 transition conditions).
+//!
 //! Bad inputs end with a clear error and a non-zero exit; a failure mid-run keeps the partial
 //! trajectory.
 
@@ -181,16 +182,17 @@ fn frictionless_energy_check(t_end: f64) -> f64 {
 
 #[test]
 fn frictionless_undamped_energy_conserved_between_events_10s() {
-    // E ~ 0.8 J; rtol 1e-10 over 10 s.
+    // E ~ 0.8 J; rtol 1e-10 over 10 s: measured 2.0e-10 J.
     let worst = frictionless_energy_check(10.0);
-    assert!(worst < 1e-7, "energy drift {worst:e} J");
+    assert!(worst < 2e-9, "energy drift {worst:e} J");
 }
 
+/// 100 s takes ~0.2 s in release, so it is not ignored.
 #[test]
-#[ignore = "slow: 100 s of chaotic finger motion at rtol 1e-10"]
 fn frictionless_undamped_energy_conserved_between_events_100s() {
+    // Measured 4.9e-10 J at rtol 1e-10 (E ~ 0.8 J).
     let worst = frictionless_energy_check(100.0);
-    assert!(worst < 1e-6, "energy drift {worst:e} J");
+    assert!(worst < 5e-9, "energy drift {worst:e} J");
 }
 
 #[test]
@@ -235,15 +237,35 @@ fn scripted_push_free_stick_slip_free_with_transition_conditions() {
     assert!(imp.post.slip_speed < 1e-12 && imp.post.normal_velocity.abs() < 1e-12);
     assert!(imp.post.lambda_n > 0.0 && imp.post.sigma > 0.0);
     // Stick → slip: σ ≈ 0 with λ_n > 0; afterwards ‖Δv‖ = slip_kick.
-    assert!(s2s.pre.sigma.abs() < 1e-8 * lam_scale, "σ = {:e}", s2s.pre.sigma);
+    assert!(
+        s2s.pre.sigma.abs() < 1e-8 * lam_scale,
+        "σ = {:e}",
+        s2s.pre.sigma
+    );
     assert!(s2s.pre.lambda_n > 0.0);
     assert!((s2s.post.slip_speed - 2e-6).abs() < 1e-9);
-    // Lift-off: λ_n ≈ 0; the reset only adds the separation speed n·v_c⁺ = 1e-8 m/s
-    // (q unchanged, ω unchanged since the normal impulse has no moment about the centre).
-    assert!(off.pre.lambda_n.abs() < 1e-8 * lam_scale, "λ_n = {:e}", off.pre.lambda_n);
-    assert_eq!(off.x_pre[0..3], off.x_post[0..3]);
+    // Lift-off: λ_n ≈ 0; the reset only puts q back on h = 0 (a drift-sized move) and adds
+    // the separation speed n·v_c⁺ = 1e-8 m/s (ω unchanged: the normal impulse has no moment
+    // about the centre).
+    assert!(
+        off.pre.lambda_n.abs() < 1e-8 * lam_scale,
+        "λ_n = {:e}",
+        off.pre.lambda_n
+    );
+    for j in 0..3 {
+        assert!((off.x_pre[j] - off.x_post[j]).abs() < 1e-8);
+    }
+    assert!(
+        off.post.h.abs() < 1e-14,
+        "h after lift-off {:e}",
+        off.post.h
+    );
     assert_eq!(off.x_pre[6..9], off.x_post[6..9]);
-    assert!((off.post.normal_velocity - 1e-8).abs() < 1e-12, "{:e}", off.post.normal_velocity);
+    assert!(
+        (off.post.normal_velocity - 1e-8).abs() < 1e-12,
+        "{:e}",
+        off.post.normal_velocity
+    );
     assert!((off.post.energy - off.pre.energy).abs() < 1e-12);
     // λ_n > 0 and (in Stick) σ > 0 at every contact-mode step sample: the modes were valid.
     let tr = &out.trajectory;
@@ -265,7 +287,11 @@ fn scripted_push_free_stick_slip_free_with_transition_conditions() {
 #[test]
 fn with_friction_energy_grows_only_by_torque_work() {
     let (x0, series) = scripted_push();
-    for law in [ImpactLaw::Stick, ImpactLaw::MaxDissipation, ImpactLaw::MinRelativeVelocity] {
+    for law in [
+        ImpactLaw::Stick,
+        ImpactLaw::MaxDissipation,
+        ImpactLaw::MinRelativeVelocity,
+    ] {
         let sys = BallFinger::new(
             fixtures::paper_scene().unwrap(),
             series.clone(),
@@ -280,7 +306,20 @@ fn with_friction_energy_grows_only_by_torque_work() {
             h_max: 1e-3,
             ..tight()
         };
-        let out = simulate(&sys, set, Mode::Free, 0.0, &x0, 2.5).unwrap();
+        let out = match simulate(&sys, set, Mode::Free, 0.0, &x0, 2.5) {
+            Ok(o) => o,
+            Err(f) => {
+                for e in f.partial.events.iter().take(12) {
+                    let pre = sys.sample_info_or_nan(e.mode_before, e.t, &e.x_pre);
+                    let post = sys.sample_info_or_nan(e.mode_after.unwrap(), e.t, &e.x_post);
+                    eprintln!(
+                        "{:.12} {} {:?}->{:?} pre {:?}\n   post {:?}",
+                        e.t, e.guard, e.mode_before, e.mode_after, pre, post
+                    );
+                }
+                panic!("{law:?}: {}", f.error)
+            }
+        };
         let tr = &out.trajectory;
         let info = infos(&sys, &out);
         let power = |i: usize| {
@@ -349,7 +388,10 @@ fn projection_bounds_drift_and_without_it_drift_stays_within_tolerance() {
     assert!(gap_proj < 1e-12, "after projection |h| = {gap_proj:e}");
     assert_eq!(d_none, 0.0, "no projection, no reported removal");
     assert!(gap_none > 100.0 * gap_proj.max(1e-15), "{gap_none:e}");
-    assert!(gap_none < 1e-3, "unprojected drift {gap_none:e} beyond contact tolerance");
+    assert!(
+        gap_none < 1e-3,
+        "unprojected drift {gap_none:e} beyond contact tolerance"
+    );
 }
 
 fn json(path: &Path) -> Value {
@@ -443,20 +485,38 @@ fn cli_scripted_push_writes_consistent_files() {
 fn cli_passive_drop_slip_to_stick_and_rk4_agrees_with_dopri5() {
     let dir = tmpdir("drop");
     let mut first_impact = Vec::new();
+    let mut sequences = Vec::new();
     for (tag, extra) in [
         ("dopri", vec!["--rtol", "1e-10"]),
         ("rk4", vec!["--integrator", "rk4", "--step", "5e-4"]),
+        // Loose tolerance: a step jumps over the ε-ball of ‖Δv‖; the slip_reversal guard must
+        // still catch Slip → Stick, so the Fig. 3 event sequence is the same.
+        ("loose", vec!["--rtol", "1e-4"]),
     ] {
         let out_dir = dir.join(tag);
-        let mut args = vec!["simulate", "--t-end", "3", "--out", out_dir.to_str().unwrap()];
+        let mut args = vec![
+            "simulate",
+            "--t-end",
+            "3",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ];
         args.extend(extra);
         let o = run(&args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let ev = json(&out_dir.join("events.json"));
         let evs = ev["events"].as_array().unwrap();
         first_impact.push(evs[0]["t"].as_f64().unwrap());
+        sequences.push(
+            evs.iter()
+                .map(|e| e["kind"].as_str().unwrap().to_string())
+                .collect::<Vec<_>>(),
+        );
         if tag == "dopri" {
-            let s2s: Vec<&Value> = evs.iter().filter(|e| e["kind"] == "slip_to_stick").collect();
+            let s2s: Vec<&Value> = evs
+                .iter()
+                .filter(|e| e["kind"] == "slip_to_stick")
+                .collect();
             assert!(!s2s.is_empty(), "no slip-to-stick event");
             let tj = json(&out_dir.join("trajectory.json"));
             for e in s2s {
@@ -467,14 +527,15 @@ fn cli_passive_drop_slip_to_stick_and_rk4_agrees_with_dopri5() {
                 // Decreasing: the last step sample before the event had a larger ‖Δv‖.
                 let t = e["t"].as_f64().unwrap();
                 let ts = tj["t"].as_array().unwrap();
-                let k = ts
-                    .iter()
-                    .rposition(|v| v.as_f64().unwrap() < t)
-                    .unwrap();
+                let k = ts.iter().rposition(|v| v.as_f64().unwrap() < t).unwrap();
                 assert!(tj["derived"][k]["slip_speed"].as_f64().unwrap() > pre);
             }
         }
     }
+    assert_eq!(
+        sequences[0], sequences[2],
+        "loose rtol changed the event sequence"
+    );
     assert!(
         (first_impact[0] - first_impact[1]).abs() < 1e-6,
         "first impact dopri5 {} vs rk4 {}",
@@ -497,10 +558,17 @@ fn cli_failure_mid_run_writes_partial_trajectory() {
         "--out",
         out_dir.to_str().unwrap(),
     ]);
-    assert_clean_failure(&o, &["simulation failed at t =", "step limit", "written to"]);
+    assert_clean_failure(
+        &o,
+        &["simulation failed at t =", "step limit", "written to"],
+    );
     let tj = json(&out_dir.join("trajectory.json"));
     let ts = tj["t"].as_array().unwrap();
-    assert!(ts.len() > 100, "partial trajectory has {} samples", ts.len());
+    assert!(
+        ts.len() > 100,
+        "partial trajectory has {} samples",
+        ts.len()
+    );
     let t_last = ts.last().unwrap().as_f64().unwrap();
     assert!(t_last > 0.0 && t_last < 10.0);
     let sm = json(&out_dir.join("summary.json"));
@@ -525,20 +593,41 @@ fn cli_bad_inputs_give_clear_errors() {
     std::fs::write(&edited, text.replace("mass = 0.02", "mass = 0.03")).unwrap();
     let edited = edited.to_str().unwrap();
     let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
-        (vec!["--torques", "no/such/file.csv"], vec!["no/such/file.csv"]),
-        (vec!["--torques", bad_csv], vec!["bad.csv:3", "tau2", "not a number"]),
+        (
+            vec!["--torques", "no/such/file.csv"],
+            vec!["no/such/file.csv"],
+        ),
+        (
+            vec!["--torques", bad_csv],
+            vec!["bad.csv:3", "tau2", "not a number"],
+        ),
         (vec!["--torques", two], vec!["3 joints"]),
         (vec!["--q0", "0.1,NaN,0.5"], vec!["--q0", "finite"]),
         (vec!["--q0", "0.1,0.5"], vec!["--q0", "expected 3"]),
         (vec!["--t-end", "0"], vec!["--t-end", "> 0"]),
         (vec!["--t-end", "-1"], vec!["--t-end"]),
-        (vec!["--integrator", "euler"], vec!["unknown integrator `euler`"]),
-        (vec!["--impact-law", "bounce"], vec!["unknown impact law `bounce`"]),
+        (
+            vec!["--integrator", "euler"],
+            vec!["unknown integrator `euler`"],
+        ),
+        (
+            vec!["--impact-law", "bounce"],
+            vec!["unknown impact law `bounce`"],
+        ),
         (vec!["--rtol", "0"], vec!["--rtol"]),
-        (vec!["--pd", "0,0,0", "--pd-gains", "1,2,3"], vec!["--pd-gains"]),
+        (
+            vec!["--pd", "0,0,0", "--pd-gains", "1,2,3"],
+            vec!["--pd-gains"],
+        ),
         (vec!["--q0", "0.0,1.6,0.5", "--mode0", "stick"], vec!["h"]),
-        (vec!["--scene", "scenes/puma560.toml"], vec!["only the built-in contact scenes"]),
-        (vec!["--scene", edited], vec!["only the built-in contact scenes", "compiled kernels"]),
+        (
+            vec!["--scene", "scenes/puma560.toml"],
+            vec!["only the built-in contact scenes"],
+        ),
+        (
+            vec!["--scene", edited],
+            vec!["only the built-in contact scenes", "compiled kernels"],
+        ),
         (vec!["--init", "missing.json"], vec!["missing.json"]),
     ];
     for (extra, mention) in cases {

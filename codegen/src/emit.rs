@@ -2,6 +2,11 @@
 //! → `prettyplease` (DESIGN.md "Emit"; DEPENDENCIES.md §4: SSA avoids the token-pasting
 //! precedence pitfall). Constants are printed with Rust's shortest round-trip formatting, so
 //! every `f64` survives exactly. sin/cos of one joint variable share a `sin_cos` call.
+//!
+//! [`EmitOptions`] select variants for accuracy/speed studies (issue 7): the float type
+//! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
+//! multiply-add (`a*b ± c` as `mul_add`, one rounding instead of two). The defaults reproduce
+//! the plain f64 output byte for byte.
 
 use std::fmt::Write as _;
 use std::str::FromStr;
@@ -15,16 +20,52 @@ use crate::kernels::{Arg, CONTACT_FIELDS, Dim, KernelDef, OutKind};
 use crate::report::OpCounts;
 use crate::robot::Layout;
 
+/// Floating-point type of the emitted code.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum FloatTy {
+    /// Double precision (the default).
+    #[default]
+    F64,
+    /// Single precision: arguments, outputs, constants and arithmetic in `f32`.
+    F32,
+}
+
+impl FloatTy {
+    /// The type's name as tokens (`f64` / `f32`).
+    pub fn tokens(self) -> TokenStream {
+        match self {
+            FloatTy::F64 => quote!(f64),
+            FloatTy::F32 => quote!(f32),
+        }
+    }
+}
+
+/// Variants of the emitted code; `EmitOptions::default()` is the standard output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct EmitOptions {
+    /// Float type of arguments, outputs and arithmetic.
+    pub float: FloatTy,
+    /// Emit `a*b + c`, `a*b - c` and `c - a*b` as `mul_add` (fused multiply-add) whenever the
+    /// product is a graph node of its own.
+    pub fma: bool,
+}
+
 /// Tokens of an `f64` literal (exact: shortest representation that round-trips).
 pub fn f64_tokens(v: f64) -> TokenStream {
+    float_tokens(v, FloatTy::F64)
+}
+
+/// Tokens of a literal of type `ft` with value `v` (unsuffixed: the compiler rounds it to `ft`).
+fn float_tokens(v: f64, ft: FloatTy) -> TokenStream {
+    let t = ft.tokens();
     if v.is_nan() {
-        return quote!(f64::NAN);
+        return quote!(#t::NAN);
     }
     if v.is_infinite() {
         return if v > 0.0 {
-            quote!(f64::INFINITY)
+            quote!(#t::INFINITY)
         } else {
-            quote!(f64::NEG_INFINITY)
+            quote!(#t::NEG_INFINITY)
         };
     }
     let s = format!("{:?}", v.abs());
@@ -42,8 +83,8 @@ fn dim_tokens(d: Dim) -> TokenStream {
     }
 }
 
-fn array_type(dims: &[Dim]) -> TokenStream {
-    let mut t = quote!(f64);
+fn array_type(dims: &[Dim], ft: FloatTy) -> TokenStream {
+    let mut t = ft.tokens();
     for &d in dims.iter().rev() {
         let dt = dim_tokens(d);
         t = quote!([#t; #dt]);
@@ -75,6 +116,9 @@ fn index_paths(dims: &[Dim], nq: usize) -> Vec<TokenStream> {
     paths
 }
 
+/// Kernels with at most this many temporaries are marked `#[inline]`.
+pub const INLINE_MAX_TEMPORARIES: usize = 1000;
+
 /// Emitted body of one kernel plus its operation counts.
 pub struct EmittedKernel {
     /// The function item tokens.
@@ -104,12 +148,30 @@ fn var_tokens(layout: &Layout, v: u32) -> TokenStream {
     }
 }
 
-/// Emit one kernel as a Rust function.
+/// Emit one kernel as a Rust function (standard options).
 pub fn emit_kernel(
     g: &Graph,
     layout: &Layout,
     k: &KernelDef,
 ) -> Result<EmittedKernel, CodegenError> {
+    emit_kernel_with(g, layout, k, &EmitOptions::default())
+}
+
+/// Emit one kernel as a Rust function with the variant `opts`.
+pub fn emit_kernel_with(
+    g: &Graph,
+    layout: &Layout,
+    k: &KernelDef,
+    opts: &EmitOptions,
+) -> Result<EmittedKernel, CodegenError> {
+    let ft = opts.float.tokens();
+    // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
+    let as_mul = |id: Id| -> Option<(Id, Id)> {
+        match g.node(id) {
+            Node::Mul(a, b) if opts.fma => Some((a, b)),
+            _ => None,
+        }
+    };
     let roots: Vec<Id> = k
         .outputs
         .iter()
@@ -138,7 +200,7 @@ pub fn emit_kernel(
         };
         let expr: TokenStream = match node {
             Node::Const(b) => {
-                refs[i] = Some(f64_tokens(f64::from_bits(b)));
+                refs[i] = Some(float_tokens(f64::from_bits(b), opts.float));
                 continue;
             }
             Node::Var(v) => {
@@ -162,7 +224,7 @@ pub fn emit_kernel(
                     Some(j) => {
                         let s = fresh(&mut counter);
                         let c = fresh(&mut counter);
-                        stmts.push(quote!(let (#s, #c) = f64::sin_cos(#x);));
+                        stmts.push(quote!(let (#s, #c) = #ft::sin_cos(#x);));
                         ops.temporaries += 2;
                         let (si, ci) = if is_sin { (i, j) } else { (j, i) };
                         refs[si] = Some(quote!(#s));
@@ -171,9 +233,9 @@ pub fn emit_kernel(
                     None => {
                         let t = fresh(&mut counter);
                         if is_sin {
-                            stmts.push(quote!(let #t = f64::sin(#x);));
+                            stmts.push(quote!(let #t = #ft::sin(#x);));
                         } else {
-                            stmts.push(quote!(let #t = f64::cos(#x);));
+                            stmts.push(quote!(let #t = #ft::cos(#x);));
                         }
                         ops.temporaries += 1;
                         refs[i] = Some(quote!(#t));
@@ -183,13 +245,29 @@ pub fn emit_kernel(
             }
             Node::Add(a, b) => {
                 ops.add += 1;
-                let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(#x + #y)
+                if let Some((m0, m1)) = as_mul(a) {
+                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(b, &refs));
+                    quote!(#ft::mul_add(#x0, #x1, #y))
+                } else if let Some((m0, m1)) = as_mul(b) {
+                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(a, &refs));
+                    quote!(#ft::mul_add(#x0, #x1, #y))
+                } else {
+                    let (x, y) = (r(a, &refs), r(b, &refs));
+                    quote!(#x + #y)
+                }
             }
             Node::Sub(a, b) => {
                 ops.add += 1;
-                let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(#x - #y)
+                if let Some((m0, m1)) = as_mul(a) {
+                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(b, &refs));
+                    quote!(#ft::mul_add(#x0, #x1, -#y))
+                } else if let Some((m0, m1)) = as_mul(b) {
+                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(a, &refs));
+                    quote!(#ft::mul_add(-#x0, #x1, #y))
+                } else {
+                    let (x, y) = (r(a, &refs), r(b, &refs));
+                    quote!(#x - #y)
+                }
             }
             Node::Mul(a, b) => {
                 ops.mul += 1;
@@ -209,22 +287,22 @@ pub fn emit_kernel(
             Node::Sqrt(a) => {
                 ops.sqrt += 1;
                 let x = r(a, &refs);
-                quote!(f64::sqrt(#x))
+                quote!(#ft::sqrt(#x))
             }
             Node::Abs(a) => {
                 ops.other += 1;
                 let x = r(a, &refs);
-                quote!(f64::abs(#x))
+                quote!(#ft::abs(#x))
             }
             Node::Min(a, b) => {
                 ops.other += 1;
                 let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(f64::min(#x, #y))
+                quote!(#ft::min(#x, #y))
             }
             Node::Max(a, b) => {
                 ops.other += 1;
                 let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(f64::max(#x, #y))
+                quote!(#ft::max(#x, #y))
             }
             Node::IfLt(a, b, t, f) => {
                 ops.other += 1;
@@ -242,11 +320,11 @@ pub fn emit_kernel(
     let mut params: Vec<TokenStream> = Vec::new();
     for a in &k.inputs {
         params.push(match a {
-            Arg::Q => quote!(q: &[f64; NQ]),
-            Arg::Qd => quote!(qd: &[f64; NQ]),
-            Arg::Omega => quote!(omega: &[f64; 3]),
-            Arg::Eps => quote!(eps: f64),
-            Arg::P => quote!(p: &[f64; NP]),
+            Arg::Q => quote!(q: &[#ft; NQ]),
+            Arg::Qd => quote!(qd: &[#ft; NQ]),
+            Arg::Omega => quote!(omega: &[#ft; 3]),
+            Arg::Eps => quote!(eps: #ft),
+            Arg::P => quote!(p: &[#ft; NP]),
         });
     }
     for o in &k.outputs {
@@ -258,12 +336,12 @@ pub fn emit_kernel(
         };
         match &o.kind {
             OutKind::Scalar => {
-                params.push(quote!(#name: &mut f64));
+                params.push(quote!(#name: &mut #ft));
                 let v = val(o.ids[0]);
                 stmts.push(quote!(*#name = #v;));
             }
             OutKind::Array(dims) => {
-                let ty = array_type(dims);
+                let ty = array_type(dims, opts.float);
                 params.push(quote!(#name: &mut #ty));
                 for (path, &id) in index_paths(dims, layout.nq).iter().zip(&o.ids) {
                     let v = val(id);
@@ -316,9 +394,17 @@ pub fn emit_kernel(
         ops.add, ops.mul, ops.div, ops.sqrt, ops.sincos, ops.neg, ops.other, ops.temporaries
     ));
     let docs = doc_lines.iter().map(|l| quote!(#[doc = #l]));
+    // `#[inline]` lets small kernels be inlined across crates; very large kernels (7-DOF
+    // Christoffel symbols: thousands of operations) would only be re-compiled in every
+    // calling crate, so they are left to normal linkage.
+    let inline = if ops.temporaries <= INLINE_MAX_TEMPORARIES {
+        quote!(#[inline])
+    } else {
+        TokenStream::new()
+    };
     let tokens = quote! {
         #(#docs)*
-        #[inline]
+        #inline
         #[allow(unused_variables)]
         pub fn #fname(#(#params),*) {
             #(#stmts)*
@@ -391,7 +477,7 @@ fn eval_flat_arm(k: &KernelDef) -> TokenStream {
     }
 }
 
-/// Emit the whole scene module file.
+/// Emit the whole scene module file (standard options).
 #[allow(clippy::too_many_arguments)]
 pub fn emit_file(
     scene_name: &str,
@@ -402,17 +488,43 @@ pub fn emit_file(
     kernel_tokens: Vec<TokenStream>,
     with_contact: bool,
 ) -> Result<String, CodegenError> {
+    emit_file_with(
+        scene_name,
+        nq,
+        params,
+        defs,
+        source_text,
+        kernel_tokens,
+        with_contact,
+        &EmitOptions::default(),
+    )
+}
+
+/// Emit the whole scene module file; `opts.float` sets the type of `PARAM_DEFAULTS`, of the
+/// `Contact` fields and of `eval_flat` (the kernel tokens must use the same options).
+#[allow(clippy::too_many_arguments)]
+pub fn emit_file_with(
+    scene_name: &str,
+    nq: usize,
+    params: &[(String, f64)],
+    defs: &[KernelDef],
+    source_text: &str,
+    kernel_tokens: Vec<TokenStream>,
+    with_contact: bool,
+    opts: &EmitOptions,
+) -> Result<String, CodegenError> {
+    let ft = opts.float.tokens();
     let kernel_names: Vec<&str> = defs.iter().map(|d| d.name.as_str()).collect();
     let arms = defs.iter().map(eval_flat_arm);
     let nq_l = Literal::usize_unsuffixed(nq);
     let np_l = Literal::usize_unsuffixed(params.len());
     let pnames = params.iter().map(|p| p.0.as_str());
-    let pdefs = params.iter().map(|p| f64_tokens(p.1));
+    let pdefs = params.iter().map(|p| float_tokens(p.1, opts.float));
     let knames = kernel_names.iter();
     let contact = if with_contact {
         let fields = CONTACT_FIELDS.iter().map(|(f, dims, doc)| {
             let id = Ident::new(f, Span::call_site());
-            let ty = array_type(dims);
+            let ty = array_type(dims, opts.float);
             let d = format!(" {doc}");
             quote!(#[doc = #d] pub #id: #ty,)
         });
@@ -435,7 +547,7 @@ pub fn emit_file(
         /// Names of the runtime parameters, in the order of `p`.
         pub const PARAM_NAMES: [&str; NP] = [#(#pnames),*];
         /// Default values of the runtime parameters (the values in the scene file).
-        pub const PARAM_DEFAULTS: [f64; NP] = [#(#pdefs),*];
+        pub const PARAM_DEFAULTS: [#ft; NP] = [#(#pdefs),*];
         /// Names of the kernels emitted for this scene.
         pub const KERNELS: &[&str] = &[#(#knames),*];
         /// Name of the scene.
@@ -450,12 +562,12 @@ pub fn emit_file(
         #[allow(unused_variables)]
         pub fn eval_flat(
             name: &str,
-            q: &[f64; NQ],
-            qd: &[f64; NQ],
-            omega: &[f64; 3],
-            eps: f64,
-            p: &[f64; NP],
-        ) -> Option<Vec<f64>> {
+            q: &[#ft; NQ],
+            qd: &[#ft; NQ],
+            omega: &[#ft; 3],
+            eps: #ft,
+            p: &[#ft; NP],
+        ) -> Option<Vec<#ft>> {
             let mut v = Vec::new();
             match name {
                 #(#arms)*

@@ -463,6 +463,22 @@ impl Graph {
             let c = self.constant(x * x2);
             return self.mul(c, y);
         }
+        // Constant factors float to the top of products: x·(c·y) → c·(x·y), so products
+        // differing only in where a constant sits (product rule) share one node.
+        if self.as_const(a).is_none() {
+            if let Node::Mul(c, y) = self.nodes[b.index()]
+                && self.as_const(c).is_some()
+            {
+                let xy = self.mul(a, y);
+                return self.mul(c, xy);
+            }
+            if let Node::Mul(c, x) = self.nodes[a.index()]
+                && self.as_const(c).is_some()
+            {
+                let xy = self.mul(x, b);
+                return self.mul(c, xy);
+            }
+        }
         let (a, b) = if self.as_const(a).is_some() || a <= b {
             (a, b)
         } else {

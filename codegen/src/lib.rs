@@ -21,6 +21,7 @@ use std::time::Instant;
 
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
+pub use emit::{EmitOptions, FloatTy};
 pub use kernels::ALL_KERNELS;
 pub use report::{KernelReport, OpCounts, Report};
 pub use robot::Model;
@@ -69,6 +70,15 @@ fn check_kernel_list(scene: &Scene) -> Result<(), CodegenError> {
 /// Generate the Rust module of `scene`. `source_text` is the scene file's text, embedded as
 /// `SCENE_TOML`. Output is byte-identical for identical input.
 pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenError> {
+    generate_with(scene, source_text, &emit::EmitOptions::default())
+}
+
+/// As [`generate`], with emission variants (f32, fused multiply-add); see [`emit::EmitOptions`].
+pub fn generate_with(
+    scene: &Scene,
+    source_text: &str,
+    opts: &emit::EmitOptions,
+) -> Result<Generated, CodegenError> {
     let start = Instant::now();
     check_kernel_list(scene)?;
     let mut model = Model::new(scene)?;
@@ -79,7 +89,7 @@ pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenEr
     let mut tokens = Vec::new();
     let mut reports = Vec::new();
     for d in &defs {
-        let e = emit::emit_kernel(&model.g, &model.layout, d)?;
+        let e = emit::emit_kernel_with(&model.g, &model.layout, d, opts)?;
         tokens.push(e.tokens);
         reports.push(KernelReport {
             name: d.name.clone(),
@@ -87,7 +97,7 @@ pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenEr
         });
     }
     let with_contact = scene.kernels.iter().any(|k| k.starts_with("contact"));
-    let code = emit::emit_file(
+    let code = emit::emit_file_with(
         &scene.name,
         model.nq(),
         &model.params,
@@ -95,6 +105,7 @@ pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenEr
         source_text,
         tokens,
         with_contact,
+        opts,
     )?;
     let report = Report {
         scene: scene.name.clone(),

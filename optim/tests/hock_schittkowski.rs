@@ -240,7 +240,10 @@ fn hs_suite_adaptive_mu() {
 #[cfg(feature = "ipopt")]
 fn ipopt_column(p: &hs::Hs) -> (String, usize) {
     match bf_optim::ipm::ipopt_adapter::solve_with_ipopt(p, &Settings::default()) {
-        Ok(sol) => (format!("{} {:?} {:.10e}", sol.iterations, sol.status, sol.objective), sol.iterations),
+        Ok(sol) => (
+            format!("{} {:?} {:.10e}", sol.iterations, sol.status, sol.objective),
+            sol.iterations,
+        ),
         Err(e) => (format!("error {e}"), 0),
     }
 }

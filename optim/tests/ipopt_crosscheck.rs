@@ -15,12 +15,20 @@ fn same_optimum_as_ipopt_on_hs_and_collocation() {
     let mut compared = 0;
     for p in hs::all() {
         let ours = solve(&p, &settings).unwrap();
-        if !(ours.status.is_success() && (ours.objective - p.fstar).abs() <= 1e-6 * p.fstar.abs().max(1.0)) {
+        if !(ours.status.is_success()
+            && (ours.objective - p.fstar).abs() <= 1e-6 * p.fstar.abs().max(1.0))
+        {
             continue;
         }
         let theirs = solve_with_ipopt(&p, &settings).unwrap();
-        if theirs.status.is_success() && (theirs.objective - p.fstar).abs() <= 1e-6 * p.fstar.abs().max(1.0) {
-            assert!((ours.objective - theirs.objective).abs() <= 1e-6 * p.fstar.abs().max(1.0), "{}", p.name);
+        if theirs.status.is_success()
+            && (theirs.objective - p.fstar).abs() <= 1e-6 * p.fstar.abs().max(1.0)
+        {
+            assert!(
+                (ours.objective - theirs.objective).abs() <= 1e-6 * p.fstar.abs().max(1.0),
+                "{}",
+                p.name
+            );
             compared += 1;
         }
     }

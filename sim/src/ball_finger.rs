@@ -7,13 +7,15 @@
 //! |---|---|---|
 //! | Free | eq. 26 | `h` (eq. 50: contact when h crosses 0 or leaves the band h ≥ −tol) |
 //! | Stick | eq. 29, λ from eq. 33 | `lambda_n` (λ_n < 0 → Free, eq. 48), `sigma` (σ ≤ 0 → Slip, eq. 19) |
-//! | Slip | eq. 37, λ from eq. 38 | `lambda_n` (→ Free), `slip_speed` = ‖Δv‖ − ε (→ Stick, Sect. 3.1) |
+//! | Slip | eq. 37, λ from eq. 38 | `lambda_n` (→ Free), `slip_speed` = ‖Δv‖ − ε (→ Stick, Sect. 3.1), `slip_reversal` = Δv·d₀ − ½‖Δv‖ (Δv turned > 60° within a step: it passed ‖Δv‖ ≈ 0, → Stick) |
 //!
 //! Resets: Free → impact law of Sect. 2.5 (eq. 39–43, [`ImpactLaw`]); the post-impact ‖Δv⁺‖
 //! picks Stick or Slip (Fig. 3's "In-contact" state). Stick → Slip: velocity kick Δv⁺ =
 //! `slip_kick` along λ_∥ (so the slip guard does not fire back). Slip → Stick: projection onto
-//! Δv = 0 with the sticking impulse (eq. 40–41). Contact → Free: a tiny normal impulse sets
-//! n·v_c⁺ = `lift_off_speed` (1e-8 m/s) so the h guard does not chatter at λ_n = 0. When the
+//! Δv = 0 with the sticking impulse (eq. 40–41). Contact → Free: q back onto h = 0 and a tiny
+//! normal impulse sets n·v_c⁺ = `lift_off_speed` (1e-8 m/s) so the h guard does not chatter at
+//! λ_n = 0. An h crossing in Free while n·v_c > 0 (interpolation error at a graze) puts q back
+//! on h = 0 and stays Free instead of applying an impact to a separating finger. When the
 //! new mode is already invalid (e.g. λ_n < 0 right after a sticking impact) the simulator chains
 //! the next transition at the same instant.
 //!
@@ -34,7 +36,15 @@ use crate::{Guard, HybridSystem, Input, SimError, Transition};
 use bf_model::dynamics::contact_matrices;
 use bf_model::{ImpactLaw, Kernels, Mode, Model, State, Vec3};
 use serde::Serialize;
+use std::cell::Cell;
 use std::path::Path;
+
+/// The `slip_reversal` guard fires when Δv turns by more than arccos(0.5) = 60° from its
+/// direction at the start of the step: in continuous slip the direction of Δv changes slowly
+/// unless ‖Δv‖ passes (close to) zero, which is the Slip → Stick condition of Sect. 3.1. It
+/// catches the zero passage that the ‖Δv‖ ≤ ε guard misses when a step jumps over the ε-ball
+/// (loose tolerances, fixed-step RK4).
+const REVERSAL_COS: f64 = 0.5;
 
 /// Options of the ball-and-finger hybrid system.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,6 +85,10 @@ pub struct BallFinger<K: Kernels, I: Input> {
     pub input: I,
     /// Options.
     pub options: BallFingerOptions,
+    /// Unit slip direction Δv/‖Δv‖ at the start of the current Slip step (zero: unknown), for
+    /// the `slip_reversal` guard; updated by the resets into Slip and after every accepted
+    /// Slip step (`project`).
+    slip_ref: Cell<[f64; 3]>,
 }
 
 fn state_of(x: &[f64]) -> Result<State, SimError> {
@@ -105,7 +119,35 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
             model,
             input,
             options,
+            slip_ref: Cell::new([0.0; 3]),
         })
+    }
+
+    fn set_slip_ref(&self, dv: &Vec3) {
+        let n = dv.norm();
+        let d = if n > 0.0 && n.is_finite() {
+            dv / n
+        } else {
+            Vec3::zeros()
+        };
+        self.slip_ref.set(d.into());
+    }
+
+    /// Gauss–Newton steps of q along ∇h = J_cᵀ n onto h(q) = 0; returns |h| before.
+    fn project_position(&self, s: &mut State) -> Result<Option<f64>, SimError> {
+        let mut drift = None;
+        for _ in 0..self.options.projection_iterations {
+            let kin = self.model.evaluate(s).map_err(SimError::system)?;
+            let c = &kin.contact;
+            drift.get_or_insert(c.h.abs());
+            let grad = c.j_c.transpose() * c.n;
+            let g2 = grad.norm_squared();
+            if c.h == 0.0 || g2 < 1e-24 {
+                break;
+            }
+            s.q -= grad * (c.h / g2);
+        }
+        Ok(drift)
     }
 
     fn tau(&self, t: f64, s: &State) -> Result<Vec3, SimError> {
@@ -169,7 +211,7 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
             .iter()
             .map(|e| EventInfo {
                 t: e.t,
-                kind: event_kind(e.mode_before, e.guard),
+                kind: event_kind(e.mode_before, e.mode_after, e.guard),
                 guard: e.guard,
                 mode_before: e.mode_before,
                 mode_after: e.mode_after,
@@ -177,7 +219,11 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
                 x_pre: e.x_pre.clone(),
                 x_post: e.x_post.clone(),
                 pre: self.sample_info_or_nan(e.mode_before, e.t, &e.x_pre),
-                post: self.sample_info_or_nan(e.mode_after.unwrap_or(e.mode_before), e.t, &e.x_post),
+                post: self.sample_info_or_nan(
+                    e.mode_after.unwrap_or(e.mode_before),
+                    e.t,
+                    &e.x_post,
+                ),
             })
             .collect();
         let summary = summarize(out, &samples, &events, t0, cpu_seconds);
@@ -190,10 +236,12 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
 }
 
 /// Name of a Fig. 3 transition from the mode it leaves and the guard that fired:
-/// `impact` (Free, h = 0, eq. 50), `lift_off` (λ_n < 0, eq. 48), `stick_to_slip` (σ ≤ 0,
+/// `impact` (Free, h = 0, eq. 50), `graze` (h crossed zero on the interpolant while separating:
+/// q put back on the surface, still Free), `lift_off` (λ_n < 0, eq. 48), `stick_to_slip` (σ ≤ 0,
 /// eq. 19), `slip_to_stick` (‖Δv‖ ≤ ε, Sect. 3.1).
-pub fn event_kind(mode_before: Mode, guard: &str) -> &'static str {
+pub fn event_kind(mode_before: Mode, mode_after: Option<Mode>, guard: &str) -> &'static str {
     match (mode_before, guard) {
+        (Mode::Free, _) if mode_after == Some(Mode::Free) => "graze",
         (Mode::Free, _) => "impact",
         (_, "lambda_n") => "lift_off",
         (Mode::Stick, _) => "stick_to_slip",
@@ -271,7 +319,7 @@ pub struct RunSummary {
     /// Mode at `t_final`.
     pub mode_final: Mode,
     /// Number of events of each kind, in a fixed order (impact, lift_off, stick_to_slip,
-    /// slip_to_stick).
+    /// slip_to_stick, graze).
     pub event_counts: Vec<(&'static str, usize)>,
     /// Share of the simulated time spent in Free, Stick, Slip (sums to 1).
     pub mode_time_share: [(Mode, f64); 3],
@@ -305,7 +353,13 @@ fn summarize(
     cpu_seconds: f64,
 ) -> RunSummary {
     let tr = &out.trajectory;
-    let kinds = ["impact", "lift_off", "stick_to_slip", "slip_to_stick"];
+    let kinds = [
+        "impact",
+        "lift_off",
+        "stick_to_slip",
+        "slip_to_stick",
+        "graze",
+    ];
     let event_counts = kinds
         .iter()
         .map(|&k| (k, events.iter().filter(|e| e.kind == k).count()))
@@ -521,22 +575,13 @@ impl RunReport {
             drift: &tr.drift,
             derived: &self.samples,
         };
-        write_atomic(
-            &dir.join("trajectory.json"),
-            &json("trajectory JSON", &tj)?,
-        )?;
+        write_atomic(&dir.join("trajectory.json"), &json("trajectory JSON", &tj)?)?;
         // Events.
         let mut w = csv::Writer::from_writer(Vec::new());
-        let mut header: Vec<String> = [
-            "t",
-            "kind",
-            "guard",
-            "mode_before",
-            "mode_after",
-            "chained",
-        ]
-        .map(String::from)
-        .to_vec();
+        let mut header: Vec<String> =
+            ["t", "kind", "guard", "mode_before", "mode_after", "chained"]
+                .map(String::from)
+                .to_vec();
         for side in ["pre", "post"] {
             for c in &TRAJ_HEADER[3..24] {
                 header.push(format!("{side}_{c}"));
@@ -621,7 +666,11 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         match mode {
             Mode::Free => vec![Guard::falling("h")],
             Mode::Stick => vec![Guard::falling("lambda_n"), Guard::falling("sigma")],
-            Mode::Slip => vec![Guard::falling("lambda_n"), Guard::falling("slip_speed")],
+            Mode::Slip => vec![
+                Guard::falling("lambda_n"),
+                Guard::falling("slip_speed"),
+                Guard::falling("slip_reversal"),
+            ],
         }
     }
 
@@ -629,7 +678,15 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         let s = state_of(x)?;
         match mode {
             Mode::Free => {
-                out[0] = self.model.evaluate(&s).map_err(SimError::system)?.contact.h;
+                // Only the contact kernel is needed for h (no mass matrix).
+                s.check_finite().map_err(SimError::system)?;
+                let c = self.model.kernels().contact(
+                    &s.q.into(),
+                    &s.qd.into(),
+                    &s.omega.into(),
+                    self.model.contact_variant(),
+                );
+                out[0] = c.h;
             }
             Mode::Stick => {
                 let tau = self.tau(t, &s)?;
@@ -640,9 +697,23 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
             Mode::Slip => {
                 let tau = self.tau(t, &s)?;
                 let kin = self.model.evaluate(&s).map_err(SimError::system)?;
-                let acc = self.model.slip(&s, &tau, None).map_err(SimError::system)?;
+                let acc = bf_model::dynamics::slip(
+                    &kin,
+                    self.model.params(),
+                    &tau,
+                    self.model.settings(),
+                    None,
+                )
+                .map_err(SimError::system)?;
+                let dv = kin.contact.delta_v;
                 out[0] = acc.force.lambda_n;
-                out[1] = kin.contact.delta_v.norm() - self.model.settings().slip_eps;
+                out[1] = dv.norm() - self.model.settings().slip_eps;
+                let d = Vec3::from(self.slip_ref.get());
+                out[2] = if d == Vec3::zeros() {
+                    dv.norm()
+                } else {
+                    dv.dot(&d) - REVERSAL_COS * dv.norm()
+                };
             }
         }
         Ok(())
@@ -658,23 +729,42 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         let s = state_of(x)?;
         let next = match (mode, guard) {
             (Mode::Free, _) => {
+                let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+                if kin.contact.normal_velocity() > self.model.settings().hdot_eps {
+                    // h crossed zero on the interpolant while the finger separates (n·v_c > 0):
+                    // a grazing touch seen through interpolation error, not an impact. Put q
+                    // back on the surface and continue in Free; the guard then sees h rise.
+                    let mut s = s;
+                    self.project_position(&mut s)?;
+                    x[0..3].copy_from_slice(s.q.as_slice());
+                    return Ok(Transition::To(Mode::Free));
+                }
                 let out = self
                     .model
                     .impact(&s, self.options.impact_law)
                     .map_err(SimError::system)?;
                 write_velocities(x, &out.qd, &out.omega);
+                self.set_slip_ref(&out.delta_v);
                 out.mode
             }
             (Mode::Stick | Mode::Slip, 0) => {
+                // Leave the contact from the surface (the contact mode let h drift), so the
+                // Free mode's h guard starts on its surface and sees the departure.
+                let mut s = s;
+                if self.options.project {
+                    self.project_position(&mut s)?;
+                    x[0..3].copy_from_slice(s.q.as_slice());
+                }
                 let sep = self.options.lift_off_speed;
                 if sep > 0.0 {
                     let kin = self.model.evaluate(&s).map_err(SimError::system)?;
                     let vn = kin.contact.normal_velocity();
                     if vn < sep {
-                        let mats =
-                            contact_matrices(&kin, self.model.params()).map_err(SimError::system)?;
+                        let mats = contact_matrices(&kin, self.model.params())
+                            .map_err(SimError::system)?;
                         if mats.n_w_n > 0.0 {
-                            let qd = s.qd + mats.minv_jct * kin.contact.n * ((sep - vn) / mats.n_w_n);
+                            let qd =
+                                s.qd + mats.minv_jct * kin.contact.n * ((sep - vn) / mats.n_w_n);
                             x[3..6].copy_from_slice(qd.as_slice());
                         }
                     }
@@ -689,6 +779,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                     .stick_to_slip_update(&s, &acc.force)
                     .map_err(SimError::system)?;
                 write_velocities(x, &out.qd, &out.omega);
+                self.set_slip_ref(&out.delta_v);
                 Mode::Slip
             }
             (Mode::Slip, _) => {
@@ -704,22 +795,17 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
     }
 
     fn project(&self, mode: Mode, _t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
+        if mode == Mode::Slip {
+            // The slip_reversal guard of the next step compares Δv with its direction now.
+            let s = state_of(x)?;
+            let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+            self.set_slip_ref(&kin.contact.delta_v);
+        }
         if mode == Mode::Free || !self.options.project {
             return Ok(None);
         }
         let mut s = state_of(x)?;
-        let mut drift = None;
-        for _ in 0..self.options.projection_iterations {
-            let kin = self.model.evaluate(&s).map_err(SimError::system)?;
-            let c = &kin.contact;
-            drift.get_or_insert(c.h.abs());
-            let grad = c.j_c.transpose() * c.n;
-            let g2 = grad.norm_squared();
-            if c.h == 0.0 || g2 < 1e-24 {
-                break;
-            }
-            s.q -= grad * (c.h / g2);
-        }
+        let drift = self.project_position(&mut s)?;
         match mode {
             Mode::Stick => {
                 let out = self
@@ -741,6 +827,10 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
             Mode::Free => {}
         }
         x.copy_from_slice(&s.to_array());
+        if mode == Mode::Slip {
+            let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+            self.set_slip_ref(&kin.contact.delta_v);
+        }
         Ok(drift)
     }
 

@@ -31,6 +31,10 @@
 //! fires immediately (handled by the simulator as a chained transition).
 
 use crate::integrator::Dense;
+
+/// Fraction of `guard_zero_tol` below which a departure from a masked guard's start value is
+/// treated as rounding noise (1e-6 · 1e-9 = 1e-15 with the defaults).
+const NOISE_FRACTION: f64 = 1e-6;
 use crate::{Direction, Guard, HybridSystem, SimError};
 
 /// Evaluates the guards of one mode on a dense interpolant, with scratch space.
@@ -241,7 +245,12 @@ fn scan_masked<S: HybridSystem>(
     let name = guard.name;
     let g0 = vals[0];
     let orient = orientation(guard.direction);
-    let thr = orient.map_or(0.0, |s| (s * g0).max(0.0));
+    // A value counts as "clearly departed to the valid side" only above a rounding-noise margin:
+    // guards like h = |r_c| − r carry absolute rounding noise ~1e-16 (scale 1), so right after
+    // a reset that left h = 0 and a tiny departure speed, probes within nanoseconds would
+    // otherwise read noise of either sign as a departure followed by a return (a phantom
+    // event).
+    let thr = orient.map_or(0.0, |s| (s * g0).max(0.0)) + NOISE_FRACTION * zero_tol;
     let classify = |v: f64| match orient {
         Some(s) => {
             if s * v > thr {

@@ -8,12 +8,16 @@
 //! (guard and mode) agree. A run whose event sequence differs from the reference is reported
 //! with `same_events = false` (its error is then that of a different trajectory branch).
 
-use crate::{EventRecord, HybridSystem, Method, SimError, SimSettings, SimStats, Simulator, StopReason};
+use crate::{
+    EventRecord, HybridSystem, Method, SimError, SimSettings, SimStats, Simulator, StopReason,
+};
 use serde::Serialize;
 use std::time::Instant;
 
 /// DOPRI5 relative tolerances of the standard table (1e-3 … 1e-12).
-pub const RTOL_LADDER: [f64; 10] = [1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12];
+pub const RTOL_LADDER: [f64; 10] = [
+    1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12,
+];
 
 /// RK4 step sizes of the standard table (s).
 pub const RK4_LADDER: [f64; 5] = [1e-2, 3e-3, 1e-3, 3e-4, 1e-4];
@@ -43,7 +47,12 @@ pub struct WorkPrecisionRow {
 
 /// The configurations to measure: DOPRI5 at each rtol (atol = `atol_factor`·rtol), RK4 at
 /// each step.
-pub fn ladder(base: &SimSettings, rtols: &[f64], atol_factor: f64, steps: &[f64]) -> Vec<SimSettings> {
+pub fn ladder(
+    base: &SimSettings,
+    rtols: &[f64],
+    atol_factor: f64,
+    steps: &[f64],
+) -> Vec<SimSettings> {
     let mut v: Vec<SimSettings> = rtols
         .iter()
         .map(|&r| SimSettings {
@@ -60,6 +69,9 @@ pub fn ladder(base: &SimSettings, rtols: &[f64], atol_factor: f64, steps: &[f64]
     v
 }
 
+/// Final state, event log and counters of one run (or the error and the counters so far).
+type RunResult<M> = Result<(Vec<f64>, Vec<EventRecord<M>>, SimStats), (SimError, SimStats)>;
+
 /// One run to `t_end` without storing samples; returns the final state, events and counters.
 fn run_to_end<S: HybridSystem>(
     sys: &S,
@@ -68,13 +80,14 @@ fn run_to_end<S: HybridSystem>(
     t0: f64,
     x0: &[f64],
     t_end: f64,
-) -> Result<(Vec<f64>, Vec<EventRecord<S::Mode>>, SimStats), (SimError, SimStats)> {
+) -> RunResult<S::Mode> {
     let set = SimSettings {
         record_steps: false,
         output_dt: None,
         ..set.clone()
     };
-    let mut sim = Simulator::new(sys, set, mode0, t0, x0, t_end).map_err(|e| (e, SimStats::default()))?;
+    let mut sim =
+        Simulator::new(sys, set, mode0, t0, x0, t_end).map_err(|e| (e, SimStats::default()))?;
     loop {
         let r = match sim.step() {
             Ok(StopReason::Step) => Ok(()),
@@ -229,7 +242,12 @@ mod tests {
         assert!(rows.iter().all(|r| r.same_events && r.failure.is_none()));
         assert!(rows[0].error > rows[1].error && rows[1].error > rows[2].error);
         assert!(rows[2].error < 1e-8, "{}", rows[2].error);
-        assert!(rows[3].error > 1e3 * rows[4].error * 0.5, "{} {}", rows[3].error, rows[4].error);
+        assert!(
+            rows[3].error > 1e3 * rows[4].error * 0.5,
+            "{} {}",
+            rows[3].error,
+            rows[4].error
+        );
         // Independent check against the closed form x(10) = cos(20).
         let exact = 20f64.cos();
         let out = simulate(&sys, cfg[2].clone(), (), 0.0, &[1.0, 0.0], 10.0).unwrap();

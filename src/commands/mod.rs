@@ -3,7 +3,9 @@
 
 pub mod eval;
 pub mod generate;
+pub mod optimize;
 pub mod paper;
+pub mod scenarios;
 pub mod simulate;
 pub mod verify;
 

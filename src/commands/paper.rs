@@ -93,7 +93,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     bf_plot::render(&fig4, fig_dir.join("fig4_saturation"))?;
     let worst: f64 = (0..=2000)
         .map(|i| -1.5 + 2.0 * i as f64 / 2000.0)
-        .map(|x| (bf_plot::sat::sat_smooth(x, -1.0, 0.0, 0.01) - bf_plot::sat::sat_exact(x, -1.0, 0.0)).abs())
+        .map(|x| {
+            (bf_plot::sat::sat_smooth(x, -1.0, 0.0, 0.01) - bf_plot::sat::sat_exact(x, -1.0, 0.0))
+                .abs()
+        })
         .fold(0.0, f64::max);
     writeln!(
         report,
@@ -103,29 +106,53 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          hardly distinguishable.\n"
     )?;
 
-    // Stage 4: appendix errata.
-    writeln!(report, "## 4. Paper Appendix A/B: errata\n")?;
+    // Stage 4: the optimal-control scenarios of Sect. 6.1.
+    writeln!(report, "## 4. Optimal periodic rotations (Sect. 6.1)\n")?;
+    let paper_scene =
+        bf_codegen::Scene::from_toml_str(bf_generated::paper::SCENE_TOML, "scenes/paper.toml")?;
+    let mu_s = paper_scene.friction.as_ref().map_or(0.8, |f| f.mu_s);
+    writeln!(
+        report,
+        "Three phases (free, stick, free), periodic, {} collocation points per phase (hp \
+         Legendre–Gauss–Radau, 3 elements), ε = 0.01, |τ| ≤ 1 N m, h(0) ≥ 0.3 r. The COT period \
+         is bounded by {} s (COT lets the finger rest at no cost). Solutions: \
+         `<scenario>/solution.json`, torques: `<scenario>/torques.csv`.\n",
+        if args.quick { 20 } else { 30 },
+        bf_optim::problems::COT_MAX_PERIOD
+    )?;
+    let (results, failures) = super::scenarios::run_all(&args.out, args.quick, mu_s)?;
+    writeln!(report, "{}", super::scenarios::results_markdown(&results)?)?;
+    if !failures.is_empty() {
+        writeln!(report, "Scenarios that failed:\n\n{failures}")?;
+    }
+    for r in &results {
+        writeln!(
+            report,
+            "### {}\n\n{}",
+            r.name,
+            super::scenarios::figures_markdown(&r.name)
+        )?;
+    }
+
+    // Stage 5: appendix errata.
+    writeln!(report, "## 5. Paper Appendix A/B: errata\n")?;
     writeln!(
         report,
         "{}\n",
         ERRATA.trim_start_matches(|c| c != '\n').trim()
     )?;
 
-    writeln!(report, "## 5. Not implemented yet\n")?;
+    writeln!(report, "## 6. Not implemented yet\n")?;
     writeln!(
         report,
-        "- Optimal periodic rotations (Sect. 6.1: `periodic-cot`, `periodic-cot-human`, \
-         `periodic-qc`) — needs the collocation layer (issue 6).\n\
-         - Open-loop simulation with slip (Sect. 6.2) — needs the hybrid simulator's \
+        "- Open-loop simulation with slip (Sect. 6.2) — needs the hybrid simulator's \
          ball-and-finger system (issue 5).\n\
-         - Figures, animation, speed–accuracy report (issue 7)."
+         - Animation, speed–accuracy report (issue 7)."
     )?;
 
     let path = args.out.join("report.md");
     write_atomic(&path, report.as_bytes())?;
     println!("wrote {}", path.display());
-    println!(
-        "not yet implemented: optimal control (issue 6), hybrid simulation (issue 5), figures (issue 7)"
-    );
+    println!("not yet in the report: open-loop simulation (issue 5), speed–accuracy (issue 7)");
     Ok(())
 }

@@ -21,7 +21,9 @@ use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{HumanKernels, ImpactLaw, Kernels, Mode, Model, PaperKernels, State, Vec3};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
-use bf_sim::{Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries};
+use bf_sim::{
+    Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries,
+};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::Path;
 use std::time::{Duration, Instant};

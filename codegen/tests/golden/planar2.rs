@@ -33,7 +33,7 @@ pub const SCENE_TOML: &str = "# Golden test scene: a planar two-link arm (textbo
 /// * `pos`: output (see above), fully overwritten
 /// * `rot`: output (see above), fully overwritten
 ///
-/// Cost: 6 add/sub, 10 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 22 temporaries.
+/// Cost: 6 add/sub, 8 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 20 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn frames(
@@ -45,28 +45,26 @@ pub fn frames(
     let (t0, t1) = f64::sin_cos(q[0]);
     let t2 = -t0;
     let (t3, t4) = f64::sin_cos(q[1]);
-    let t5 = 0.8 * t4;
-    let t6 = 0.8 * t3;
-    let t7 = t1 * t4;
-    let t8 = t0 * t3;
-    let t9 = t7 - t8;
-    let t10 = t1 * t3;
-    let t11 = t0 * t4;
-    let t12 = t10 + t11;
-    let t13 = -t12;
-    let t14 = t1 * t5;
-    let t15 = t0 * t6;
-    let t16 = t14 - t15;
-    let t17 = t0 * t5;
-    let t18 = t1 * t6;
-    let t19 = t17 + t18;
-    let t20 = t1 + t16;
-    let t21 = t0 + t19;
+    let t5 = t1 * t4;
+    let t6 = t0 * t3;
+    let t7 = t5 - t6;
+    let t8 = t1 * t3;
+    let t9 = t0 * t4;
+    let t10 = t8 + t9;
+    let t11 = -t10;
+    let t12 = 0.8 * t5;
+    let t13 = 0.8 * t6;
+    let t14 = t12 - t13;
+    let t15 = 0.8 * t9;
+    let t16 = 0.8 * t8;
+    let t17 = t15 + t16;
+    let t18 = t1 + t14;
+    let t19 = t0 + t17;
     pos[0][0] = t1;
     pos[0][1] = t0;
     pos[0][2] = 0.0;
-    pos[1][0] = t20;
-    pos[1][1] = t21;
+    pos[1][0] = t18;
+    pos[1][1] = t19;
     pos[1][2] = 0.0;
     rot[0][0][0] = t1;
     rot[0][0][1] = t2;
@@ -77,11 +75,11 @@ pub fn frames(
     rot[0][2][0] = 0.0;
     rot[0][2][1] = 0.0;
     rot[0][2][2] = 1.0;
-    rot[1][0][0] = t9;
-    rot[1][0][1] = t13;
+    rot[1][0][0] = t7;
+    rot[1][0][1] = t11;
     rot[1][0][2] = 0.0;
-    rot[1][1][0] = t12;
-    rot[1][1][1] = t9;
+    rot[1][1][0] = t10;
+    rot[1][1][1] = t7;
     rot[1][1][2] = 0.0;
     rot[1][2][0] = 0.0;
     rot[1][2][1] = 0.0;
@@ -95,7 +93,7 @@ pub fn frames(
 /// * `jp`: output (see above), fully overwritten
 /// * `jo`: output (see above), fully overwritten
 ///
-/// Cost: 4 add/sub, 6 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 16 temporaries.
+/// Cost: 4 add/sub, 8 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 18 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn tip_jacobian(
@@ -106,22 +104,24 @@ pub fn tip_jacobian(
 ) {
     let (t0, t1) = f64::sin_cos(q[0]);
     let (t2, t3) = f64::sin_cos(q[1]);
-    let t4 = 0.8 * t3;
-    let t5 = 0.8 * t2;
-    let t6 = t1 * t4;
-    let t7 = t0 * t5;
-    let t8 = t6 - t7;
-    let t9 = t0 * t4;
-    let t10 = t1 * t5;
-    let t11 = t9 + t10;
-    let t12 = t1 + t8;
-    let t13 = t0 + t11;
-    let t14 = -t13;
-    let t15 = -t11;
-    jp[0][0] = t14;
-    jp[0][1] = t15;
-    jp[1][0] = t12;
-    jp[1][1] = t8;
+    let t4 = t1 * t3;
+    let t5 = t0 * t2;
+    let t6 = t1 * t2;
+    let t7 = t0 * t3;
+    let t8 = 0.8 * t4;
+    let t9 = 0.8 * t5;
+    let t10 = t8 - t9;
+    let t11 = 0.8 * t7;
+    let t12 = 0.8 * t6;
+    let t13 = t11 + t12;
+    let t14 = t1 + t10;
+    let t15 = t0 + t13;
+    let t16 = -t15;
+    let t17 = -t13;
+    jp[0][0] = t16;
+    jp[0][1] = t17;
+    jp[1][0] = t14;
+    jp[1][1] = t10;
     jp[2][0] = 0.0;
     jp[2][1] = 0.0;
     jo[0][0] = 0.0;
@@ -149,8 +149,8 @@ pub fn mass_matrix(q: &[f64; NQ], p: &[f64; NP], m: &mut [[f64; NQ]; NQ]) {
     let t5 = t3 + t4;
     let t6 = p[0] * t5;
     let t7 = t6 + 0.39299999999999996;
-    let t8 = 0.30000000000000004 * t2;
-    let t9 = p[0] * t8;
+    let t8 = p[0] * t2;
+    let t9 = 0.30000000000000004 * t8;
     let t10 = 0.05 + t9;
     let t11 = 0.09000000000000002 * p[0];
     let t12 = 0.05 + t11;
@@ -167,32 +167,31 @@ pub fn mass_matrix(q: &[f64; NQ], p: &[f64; NP], m: &mut [[f64; NQ]; NQ]) {
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 3 add/sub, 15 mul, 0 div, 0 sqrt, 1 sin/cos, 1 neg, 0 other; 21 temporaries.
+/// Cost: 3 add/sub, 14 mul, 0 div, 0 sqrt, 1 sin/cos, 1 neg, 0 other; 20 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn coriolis_qd(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
     let (t0, t1) = f64::sin_cos(q[1]);
     let t2 = t1 + 0.30000000000000004;
-    let t3 = t0 * t1;
-    let t4 = 2.0 * t3;
-    let t5 = t0 * t2;
-    let t6 = 2.0 * t5;
-    let t7 = t4 - t6;
-    let t8 = p[0] * t7;
-    let t9 = 0.30000000000000004 * t0;
-    let t10 = p[0] * t9;
-    let t11 = 0.5 * t8;
-    let t12 = qd[0] * qd[0];
-    let t13 = qd[0] * qd[1];
-    let t14 = 2.0 * t13;
-    let t15 = qd[1] * qd[1];
-    let t16 = t11 * t14;
-    let t17 = t10 * t15;
-    let t18 = t16 - t17;
-    let t19 = t11 * t12;
-    let t20 = -t19;
-    out[0] = t18;
-    out[1] = t20;
+    let t3 = qd[1] * qd[1];
+    let t4 = qd[0] * qd[1];
+    let t5 = qd[0] * qd[0];
+    let t6 = t0 * t1;
+    let t7 = 2.0 * t6;
+    let t8 = t0 * t2;
+    let t9 = 2.0 * t8;
+    let t10 = t7 - t9;
+    let t11 = p[0] * t10;
+    let t12 = t0 * p[0];
+    let t13 = t4 * t11;
+    let t14 = t3 * t12;
+    let t15 = 0.30000000000000004 * t14;
+    let t16 = t13 - t15;
+    let t17 = t5 * t11;
+    let t18 = 0.5 * t17;
+    let t19 = -t18;
+    out[0] = t16;
+    out[1] = t19;
 }
 /// g(q) = ∂U/∂q (N m), eq. 72–73.
 ///
@@ -201,40 +200,31 @@ pub fn coriolis_qd(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64;
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 8 add/sub, 18 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 30 temporaries.
+/// Cost: 4 add/sub, 13 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 21 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn gravity(q: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
     let (t0, t1) = f64::sin_cos(q[0]);
     let (t2, t3) = f64::sin_cos(q[1]);
-    let t4 = 0.8 * t3;
-    let t5 = 0.8 * t2;
-    let t6 = 9.81 * p[0];
-    let t7 = 4.905 * p[0];
-    let t8 = t5 * t6;
-    let t9 = t1 * t6;
-    let t10 = t4 * t6;
-    let t11 = t6 + t10;
-    let t12 = t0 * t6;
-    let t13 = t3 * t7;
-    let t14 = t11 - t13;
-    let t15 = 5.297399999999999 + t14;
-    let t16 = t0 * t7;
-    let t17 = t2 * t7;
-    let t18 = t8 - t17;
-    let t19 = t1 * t7;
-    let t20 = 0.8 * t9;
-    let t21 = t20 - t19;
-    let t22 = 0.8 * t12;
-    let t23 = t22 - t16;
-    let t24 = t2 * t23;
-    let t25 = t3 * t21;
-    let t26 = t25 - t24;
-    let t27 = t0 * t18;
-    let t28 = t1 * t15;
-    let t29 = t28 - t27;
-    out[0] = t29;
-    out[1] = t26;
+    let t4 = t2 * p[0];
+    let t5 = 9.81 * p[0];
+    let t6 = t3 * p[0];
+    let t7 = 2.9430000000000005 * t6;
+    let t8 = t5 + t7;
+    let t9 = 5.297399999999999 + t8;
+    let t10 = t0 * p[0];
+    let t11 = t1 * p[0];
+    let t12 = t2 * t10;
+    let t13 = 2.9430000000000005 * t12;
+    let t14 = t3 * t11;
+    let t15 = 2.9430000000000005 * t14;
+    let t16 = t15 - t13;
+    let t17 = t0 * t4;
+    let t18 = 2.9430000000000005 * t17;
+    let t19 = t1 * t9;
+    let t20 = t19 - t18;
+    out[0] = t20;
+    out[1] = t16;
 }
 /// Potential energy U(q) = −Σ m_i g_0ᵀ p_i (J).
 ///
@@ -243,28 +233,26 @@ pub fn gravity(q: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 5 add/sub, 10 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 19 temporaries.
+/// Cost: 5 add/sub, 8 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 17 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn potential(q: &[f64; NQ], p: &[f64; NP], out: &mut f64) {
     let (t0, t1) = f64::sin_cos(q[0]);
     let (t2, t3) = f64::sin_cos(q[1]);
-    let t4 = 0.8 * t3;
-    let t5 = 0.8 * t2;
-    let t6 = t1 * t2;
-    let t7 = t0 * t3;
-    let t8 = t6 + t7;
-    let t9 = t0 * t4;
-    let t10 = t1 * t5;
-    let t11 = t9 + t10;
-    let t12 = t0 + t11;
-    let t13 = 0.5 * t8;
-    let t14 = t12 - t13;
-    let t15 = 5.297399999999999 * t0;
-    let t16 = 9.81 * t14;
-    let t17 = p[0] * t16;
-    let t18 = t15 + t17;
-    *out = t18;
+    let t4 = t1 * t2;
+    let t5 = t0 * t3;
+    let t6 = t4 + t5;
+    let t7 = 0.8 * t5;
+    let t8 = 0.8 * t4;
+    let t9 = t7 + t8;
+    let t10 = t0 + t9;
+    let t11 = 0.5 * t6;
+    let t12 = t10 - t11;
+    let t13 = 5.297399999999999 * t0;
+    let t14 = p[0] * t12;
+    let t15 = 9.81 * t14;
+    let t16 = t13 + t15;
+    *out = t16;
 }
 /// C q̇ + g (N m), Lagrangian path (Ṁ q̇ − ∂T/∂q + ∂U/∂q).
 ///
@@ -274,60 +262,49 @@ pub fn potential(q: &[f64; NQ], p: &[f64; NP], out: &mut f64) {
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 13 add/sub, 33 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 50 temporaries.
+/// Cost: 9 add/sub, 26 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 39 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
     let (t0, t1) = f64::sin_cos(q[0]);
     let (t2, t3) = f64::sin_cos(q[1]);
-    let t4 = 0.8 * t3;
-    let t5 = 0.8 * t2;
-    let t6 = t3 + 0.30000000000000004;
-    let t7 = t2 * t3;
-    let t8 = 2.0 * t7;
-    let t9 = t2 * t6;
-    let t10 = 2.0 * t9;
-    let t11 = t8 - t10;
-    let t12 = p[0] * t11;
-    let t13 = 0.30000000000000004 * t2;
-    let t14 = p[0] * t13;
-    let t15 = 0.5 * t12;
-    let t16 = qd[0] * qd[0];
-    let t17 = qd[0] * qd[1];
-    let t18 = 2.0 * t17;
-    let t19 = qd[1] * qd[1];
-    let t20 = t15 * t18;
-    let t21 = t14 * t19;
-    let t22 = t20 - t21;
-    let t23 = t15 * t16;
-    let t24 = 9.81 * p[0];
-    let t25 = 4.905 * p[0];
-    let t26 = t5 * t24;
-    let t27 = t1 * t24;
-    let t28 = t4 * t24;
-    let t29 = t24 + t28;
-    let t30 = t0 * t24;
-    let t31 = t3 * t25;
-    let t32 = t29 - t31;
-    let t33 = 5.297399999999999 + t32;
-    let t34 = t0 * t25;
-    let t35 = t2 * t25;
-    let t36 = t26 - t35;
-    let t37 = t1 * t25;
-    let t38 = 0.8 * t27;
-    let t39 = t38 - t37;
-    let t40 = 0.8 * t30;
-    let t41 = t40 - t34;
-    let t42 = t2 * t41;
-    let t43 = t3 * t39;
-    let t44 = t43 - t42;
-    let t45 = t0 * t36;
-    let t46 = t1 * t33;
-    let t47 = t46 - t45;
-    let t48 = t22 + t47;
-    let t49 = t44 - t23;
-    out[0] = t48;
-    out[1] = t49;
+    let t4 = t3 + 0.30000000000000004;
+    let t5 = qd[1] * qd[1];
+    let t6 = qd[0] * qd[1];
+    let t7 = qd[0] * qd[0];
+    let t8 = t2 * t3;
+    let t9 = 2.0 * t8;
+    let t10 = t2 * t4;
+    let t11 = 2.0 * t10;
+    let t12 = t9 - t11;
+    let t13 = p[0] * t12;
+    let t14 = t2 * p[0];
+    let t15 = t6 * t13;
+    let t16 = t5 * t14;
+    let t17 = 0.30000000000000004 * t16;
+    let t18 = t15 - t17;
+    let t19 = t7 * t13;
+    let t20 = 0.5 * t19;
+    let t21 = 9.81 * p[0];
+    let t22 = t3 * p[0];
+    let t23 = 2.9430000000000005 * t22;
+    let t24 = t21 + t23;
+    let t25 = 5.297399999999999 + t24;
+    let t26 = t0 * p[0];
+    let t27 = t1 * p[0];
+    let t28 = t2 * t26;
+    let t29 = 2.9430000000000005 * t28;
+    let t30 = t3 * t27;
+    let t31 = 2.9430000000000005 * t30;
+    let t32 = t31 - t29;
+    let t33 = t0 * t14;
+    let t34 = 2.9430000000000005 * t33;
+    let t35 = t1 * t25;
+    let t36 = t35 - t34;
+    let t37 = t18 + t36;
+    let t38 = t32 - t20;
+    out[0] = t37;
+    out[1] = t38;
 }
 /// C q̇ + g (N m) by recursive Newton–Euler with q̈ = 0.
 ///
@@ -337,51 +314,49 @@ pub fn cqd_g(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) 
 /// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
 /// * `out`: output (see above), fully overwritten
 ///
-/// Cost: 13 add/sub, 24 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 41 temporaries.
+/// Cost: 12 add/sub, 23 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 39 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g_rnea(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; NQ]) {
     let (t0, t1) = f64::sin_cos(q[0]);
     let (t2, t3) = f64::sin_cos(q[1]);
-    let t4 = 0.8 * t3;
-    let t5 = 0.8 * t2;
+    let t4 = t1 * t3;
+    let t5 = t1 * t2;
     let t6 = qd[0] * qd[0];
     let t7 = 9.81 * t0;
-    let t8 = 9.81 * t1;
-    let t9 = t7 - t6;
-    let t10 = qd[0] + qd[1];
-    let t11 = t3 * t9;
-    let t12 = t2 * t8;
-    let t13 = t11 + t12;
-    let t14 = t2 * t9;
-    let t15 = t3 * t8;
-    let t16 = t15 - t14;
-    let t17 = 0.8 * t10;
-    let t18 = t10 * t17;
-    let t19 = t13 - t18;
-    let t20 = 0.5 * t10;
-    let t21 = t10 * t20;
-    let t22 = t19 + t21;
-    let t23 = p[0] * t22;
-    let t24 = p[0] * t16;
-    let t25 = 0.5 * t24;
-    let t26 = 0.30000000000000004 * t24;
-    let t27 = t3 * t23;
-    let t28 = t2 * t24;
-    let t29 = t27 - t28;
-    let t30 = t2 * t23;
-    let t31 = t3 * t24;
-    let t32 = t30 + t31;
-    let t33 = t4 * t32;
-    let t34 = t5 * t29;
-    let t35 = 5.2974 * t1;
+    let t8 = t7 - t6;
+    let t9 = qd[0] + qd[1];
+    let t10 = t3 * t8;
+    let t11 = 9.81 * t5;
+    let t12 = t10 + t11;
+    let t13 = t2 * t8;
+    let t14 = 9.81 * t4;
+    let t15 = t14 - t13;
+    let t16 = t9 * t9;
+    let t17 = 0.30000000000000004 * t16;
+    let t18 = t12 - t17;
+    let t19 = p[0] * t18;
+    let t20 = p[0] * t15;
+    let t21 = 0.5 * t20;
+    let t22 = 0.30000000000000004 * t20;
+    let t23 = t3 * t19;
+    let t24 = t2 * t20;
+    let t25 = t23 - t24;
+    let t26 = t2 * t19;
+    let t27 = t3 * t20;
+    let t28 = t26 + t27;
+    let t29 = t3 * t28;
+    let t30 = 0.8 * t29;
+    let t31 = t2 * t25;
+    let t32 = 0.8 * t31;
+    let t33 = 5.2974 * t1;
+    let t34 = t26 + t33;
+    let t35 = t27 + t34;
     let t36 = t30 + t35;
-    let t37 = t31 + t36;
-    let t38 = t33 + t37;
-    let t39 = t38 - t25;
-    let t40 = t39 - t34;
-    out[0] = t40;
-    out[1] = t26;
+    let t37 = t36 - t21;
+    let t38 = t37 - t32;
+    out[0] = t38;
+    out[1] = t22;
 }
 /// M(q) (kg m², eq. 22a) and C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols, whichever is cheaper) in one kernel (shared subexpressions).
 ///
@@ -392,7 +367,7 @@ pub fn cqd_g_rnea(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; 
 /// * `m`: output (see above), fully overwritten
 /// * `cqd_g`: output (see above), fully overwritten
 ///
-/// Cost: 18 add/sub, 30 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 52 temporaries.
+/// Cost: 13 add/sub, 32 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 49 temporaries.
 #[inline]
 #[allow(unused_variables)]
 pub fn mass_cqd_g(
@@ -404,60 +379,57 @@ pub fn mass_cqd_g(
 ) {
     let (t0, t1) = f64::sin_cos(q[0]);
     let (t2, t3) = f64::sin_cos(q[1]);
-    let t4 = 0.8 * t3;
-    let t5 = 0.8 * t2;
-    let t6 = t3 + 0.30000000000000004;
-    let t7 = t2 * t2;
-    let t8 = t6 * t6;
-    let t9 = t7 + t8;
-    let t10 = p[0] * t9;
-    let t11 = t10 + 0.39299999999999996;
-    let t12 = 0.30000000000000004 * t6;
-    let t13 = p[0] * t12;
+    let t4 = t3 + 0.30000000000000004;
+    let t5 = t2 * t2;
+    let t6 = t4 * t4;
+    let t7 = t5 + t6;
+    let t8 = p[0] * t7;
+    let t9 = t8 + 0.39299999999999996;
+    let t10 = p[0] * t4;
+    let t11 = 0.30000000000000004 * t10;
+    let t12 = 0.05 + t11;
+    let t13 = 0.09000000000000002 * p[0];
     let t14 = 0.05 + t13;
-    let t15 = 0.09000000000000002 * p[0];
-    let t16 = 0.05 + t15;
+    let t15 = qd[1] * qd[1];
+    let t16 = qd[0] * qd[1];
     let t17 = qd[0] * qd[0];
-    let t18 = 9.81 * t0;
-    let t19 = 9.81 * t1;
-    let t20 = t18 - t17;
-    let t21 = qd[0] + qd[1];
-    let t22 = t3 * t20;
-    let t23 = t2 * t19;
-    let t24 = t22 + t23;
-    let t25 = t2 * t20;
-    let t26 = t3 * t19;
-    let t27 = t26 - t25;
-    let t28 = 0.8 * t21;
-    let t29 = t21 * t28;
-    let t30 = t24 - t29;
-    let t31 = 0.5 * t21;
-    let t32 = t21 * t31;
-    let t33 = t30 + t32;
-    let t34 = p[0] * t33;
-    let t35 = p[0] * t27;
-    let t36 = 0.5 * t35;
-    let t37 = 0.30000000000000004 * t35;
-    let t38 = t3 * t34;
-    let t39 = t2 * t35;
-    let t40 = t38 - t39;
-    let t41 = t2 * t34;
-    let t42 = t3 * t35;
-    let t43 = t41 + t42;
-    let t44 = t4 * t43;
-    let t45 = t5 * t40;
-    let t46 = 5.2974 * t1;
-    let t47 = t41 + t46;
-    let t48 = t42 + t47;
-    let t49 = t44 + t48;
-    let t50 = t49 - t36;
-    let t51 = t50 - t45;
-    m[0][0] = t11;
-    m[0][1] = t14;
-    m[1][0] = t14;
-    m[1][1] = t16;
-    cqd_g[0] = t51;
-    cqd_g[1] = t37;
+    let t18 = t2 * t3;
+    let t19 = 2.0 * t18;
+    let t20 = t2 * t4;
+    let t21 = 2.0 * t20;
+    let t22 = t19 - t21;
+    let t23 = p[0] * t22;
+    let t24 = t2 * p[0];
+    let t25 = t16 * t23;
+    let t26 = t15 * t24;
+    let t27 = 0.30000000000000004 * t26;
+    let t28 = t25 - t27;
+    let t29 = t17 * t23;
+    let t30 = 0.5 * t29;
+    let t31 = 9.81 * p[0];
+    let t32 = t3 * p[0];
+    let t33 = 2.9430000000000005 * t32;
+    let t34 = t31 + t33;
+    let t35 = 5.297399999999999 + t34;
+    let t36 = t0 * p[0];
+    let t37 = t1 * p[0];
+    let t38 = t2 * t36;
+    let t39 = 2.9430000000000005 * t38;
+    let t40 = t3 * t37;
+    let t41 = 2.9430000000000005 * t40;
+    let t42 = t41 - t39;
+    let t43 = t0 * t24;
+    let t44 = 2.9430000000000005 * t43;
+    let t45 = t1 * t35;
+    let t46 = t45 - t44;
+    let t47 = t28 + t46;
+    let t48 = t42 - t30;
+    m[0][0] = t9;
+    m[0][1] = t12;
+    m[1][0] = t12;
+    m[1][1] = t14;
+    cqd_g[0] = t47;
+    cqd_g[1] = t48;
 }
 /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
 /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.

@@ -1045,6 +1045,7 @@ impl<'p> Core<'p> {
         let mut refs: Vec<f64> = Vec::new();
         let mut force_mu_decrease = false;
         let mut tiny_count = 0usize;
+        let mut soft_count = 0usize;
         let mut lines = 0usize;
         loop {
             self.compute_jty();
@@ -1169,6 +1170,7 @@ impl<'p> Core<'p> {
             self.set_rhs(None);
             let step_ok = matches!(self.compute_step(ctx, settings, true), StepResult::Ok);
             let mut restore = false;
+            let mut alpha_dual: Option<f64> = None;
             let mut accepted_alpha = 0.0;
             let mut trials = 0;
             if step_ok {
@@ -1204,8 +1206,19 @@ impl<'p> Core<'p> {
                         LsOutcome::Accepted { alpha, trials: tr } => {
                             accepted_alpha = alpha;
                             trials = tr;
+                            soft_count = 0;
                         }
-                        LsOutcome::Failed => restore = true,
+                        LsOutcome::Failed => {
+                            let e_mu = err.e(self.compl_mu(self.mu));
+                            match self.soft_restoration_step(ctx, settings, e_mu) {
+                                Some(a) if soft_count < 10 => {
+                                    accepted_alpha = a;
+                                    alpha_dual = Some(a);
+                                    soft_count += 1;
+                                }
+                                _ => restore = true,
+                            }
+                        }
                     }
                 }
             } else {
@@ -1246,7 +1259,7 @@ impl<'p> Core<'p> {
                 continue;
             }
             // accept the step
-            let alpha_z = self.max_step_dual();
+            let alpha_z = alpha_dual.unwrap_or_else(|| self.max_step_dual());
             std::mem::swap(&mut self.x, &mut self.x_t);
             std::mem::swap(&mut self.c, &mut self.c_t);
             self.f = self.f_t;
@@ -1286,6 +1299,79 @@ impl<'p> Core<'p> {
             last.alpha_du = alpha_z;
             last.alpha_pr = accepted_alpha;
             last.ls_trials = trials;
+        }
+    }
+
+    /// Ipopt's "soft restoration" step: when the filter line search fails, try the primal-dual
+    /// step with the common step size `α = min(α_max^pr, α_max^du)` and accept it if it reduces
+    /// the barrier optimality error `E_μ` by the factor 0.9999 (avoids the full restoration
+    /// phase at nearly feasible points of degenerate problems). On success `x_t, c_t, f_t` hold
+    /// the trial point and α is returned.
+    fn soft_restoration_step(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        e_mu_current: f64,
+    ) -> Option<f64> {
+        // Only at nearly feasible points (θ ≤ θ_min), where the full restoration phase cannot
+        // make progress on θ and would move x far from the current iterate.
+        if self.restoration
+            || norm_1(&self.c) > self.theta_min
+            || std::env::var("BF_NO_SOFT").is_ok()
+        {
+            return None;
+        }
+        let a = self.max_step_primal(&self.dx).min(self.max_step_dual());
+        for j in 0..self.n {
+            self.x_t[j] = self.x[j] + a * self.dx[j];
+        }
+        let (f_t, ok) = self.eval_fc(ctx, true);
+        if !ok {
+            return None;
+        }
+        let t = Instant::now();
+        let mut grad = vec![0.0; self.n];
+        let mut jac = vec![0.0; self.jac.len()];
+        self.prob.eval_grad(&self.x_t, &mut grad);
+        self.prob.eval_jac(&self.x_t, &mut jac);
+        ctx.timing.derivative_evals += t.elapsed();
+        let y: Vec<f64> = (0..self.m).map(|i| self.y[i] + a * self.dy[i]).collect();
+        let zl: Vec<f64> = (0..self.zl.len())
+            .map(|k| self.zl[k] + a * self.dzl[k])
+            .collect();
+        let zu: Vec<f64> = (0..self.zu.len())
+            .map(|k| self.zu[k] + a * self.dzu[k])
+            .collect();
+        let mut rd = grad;
+        for (k, &(r, c)) in self.jac_pat.iter().enumerate() {
+            rd[c] += jac[k] * y[r];
+        }
+        let mut compl = 0.0f64;
+        for (k, &j) in self.lo.iter().enumerate() {
+            rd[j] -= zl[k];
+            compl = compl.max(((self.x_t[j] - self.xl[j]) * zl[k] - self.mu).abs());
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            rd[j] += zu[k];
+            compl = compl.max(((self.xu[j] - self.x_t[j]) * zu[k] - self.mu).abs());
+        }
+        let nz = self.lo.len() + self.up.len();
+        let zsum = norm_1(&zl) + norm_1(&zu);
+        let smax = settings.s_max;
+        let s_d = smax.max((norm_1(&y) + zsum) / ((self.m + self.n) as f64).max(1.0)) / smax;
+        let s_c = if nz > 0 {
+            smax.max(zsum / nz as f64) / smax
+        } else {
+            1.0
+        };
+        let e = (norm_inf(&rd) / s_d)
+            .max(norm_inf(&self.c_t))
+            .max(compl / s_c);
+        if e.is_finite() && e <= 0.9999 * e_mu_current && norm_1(&self.c_t) <= self.theta_max {
+            self.f_t = f_t;
+            Some(a)
+        } else {
+            None
         }
     }
 

@@ -76,7 +76,7 @@ impl Mesh {
                     state_tau,
                     colloc,
                     gauss_end: true,
-                    elements: vec![0..points + 1],
+                    elements: std::iter::once(0..points + 1).collect(),
                 })
             }
             Scheme::Radau { elements } => {
