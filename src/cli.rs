@@ -188,4 +188,7 @@ pub struct ReportArgs {
     /// Output directory.
     #[arg(long, default_value = "out/report")]
     pub out: PathBuf,
+    /// Short ladders (seconds instead of minutes; fewer points per table).
+    #[arg(long)]
+    pub quick: bool,
 }

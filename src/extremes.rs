@@ -157,7 +157,7 @@ impl ExtremesReport {
             };
             s.push_str(&format!(
                 "| {} | {} | {} | {} | {} | {:.3} |\n",
-                r.case,
+                r.case.replace('|', "\\|"),
                 r.parameter.replace('|', "\\|"),
                 r.quantity.replace('|', "\\|"),
                 out,

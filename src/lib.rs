@@ -10,3 +10,4 @@ pub mod cli;
 pub mod commands;
 pub mod extremes;
 pub mod io;
+pub mod report;

@@ -14,7 +14,7 @@ fn main() {
         Command::Simulate(a) => commands::simulate::run(&a),
         Command::Optimize(a) => commands::optimize::run(&a),
         Command::Paper(a) => commands::paper::run(&a),
-        Command::Report(_) => commands::not_yet("report", 7),
+        Command::Report(a) => commands::report::run(&a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -424,6 +424,11 @@ fn report_has_no_failures_and_renders() {
     );
     let table = &md[md.find("| case |").expect("table header")..];
     assert!(!table.contains("NaN") && !table.contains("FAILED"), "{md}");
+    // every table row has exactly the 6 columns (all '|' inside cells are escaped)
+    for line in table.lines() {
+        let cells = line.replace("\\|", "").matches('|').count();
+        assert_eq!(cells, 7, "broken row: {line}");
+    }
     for case in [
         "kernel accuracy",
         "joint velocity",

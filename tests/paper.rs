@@ -49,5 +49,51 @@ fn paper_quick_writes_a_consistent_report() {
         assert!((0.0..1e-12).contains(&v), "{row}: {v}");
     }
     assert!(numbers_after(&report, "| smallest leading principal minor") > 0.0);
+
+    // The results table states what the solution files say.
+    for name in ["periodic-cot", "periodic-cot-human", "periodic-qc"] {
+        let text = std::fs::read_to_string(out.join(name).join("solution.json"))
+            .unwrap_or_else(|e| panic!("{name}/solution.json: {e}"));
+        let sol: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let row = report
+            .lines()
+            .find(|l| l.starts_with(&format!("| {name} |")))
+            .unwrap_or_else(|| panic!("no results row for {name}"));
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert_eq!(cells[2], sol["status"].as_str().unwrap(), "{name} status");
+        let objective: f64 = cells[3].parse().unwrap();
+        let period: f64 = cells[4].parse().unwrap();
+        let expect_obj = sol["objective"].as_f64().unwrap();
+        let expect_period = sol["period"].as_f64().unwrap();
+        assert!(
+            (objective - expect_obj).abs() <= 1e-5 * expect_obj.abs(),
+            "{name} objective"
+        );
+        assert!((period - expect_period).abs() <= 1e-4, "{name} period");
+        // Independent check of the period: the phase durations add up to it.
+        let sum: f64 = sol["phase_durations"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.as_f64().unwrap())
+            .sum();
+        assert!(
+            (sum - expect_period).abs() < 1e-9,
+            "{name}: durations sum to the period"
+        );
+        let torques = std::fs::read_to_string(out.join(name).join("torques.csv")).unwrap();
+        assert!(
+            torques.starts_with("t,tau1,tau2,tau3"),
+            "{name} torques.csv header"
+        );
+        assert!(out.join(format!("animation_{name}.html")).exists());
+        for fig in ["paths", "omega", "distance", "torques", "forces"] {
+            for ext in ["svg", "png"] {
+                let f = out.join("figures").join(format!("{name}_{fig}.{ext}"));
+                let len = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
+                assert!(len > 1000, "{} is missing or empty", f.display());
+            }
+        }
+    }
     std::fs::remove_dir_all(out).ok();
 }

@@ -641,3 +641,43 @@ fn cli_bad_inputs_give_clear_errors() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A coarse fixed step (RK4, h = 10 ms) makes the cubic interpolant of h dip below zero right
+/// after a lift-off although the finger separates (n·v_c > 0). Such crossings must be handled
+/// as grazes (q back on h = 0, still Free, velocities untouched), not as impacts on a
+/// separating finger (which bf-model rightly refuses).
+#[test]
+fn cli_coarse_rk4_grazes_instead_of_failing() {
+    let dir = tmpdir("graze");
+    let out_dir = dir.join("out");
+    let o = run(&[
+        "simulate",
+        "--t-end",
+        "2",
+        "--integrator",
+        "rk4",
+        "--step",
+        "1e-2",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ev = json(&out_dir.join("events.json"));
+    let grazes: Vec<&Value> = ev["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == "graze")
+        .collect();
+    assert!(!grazes.is_empty(), "expected grazes with h = 10 ms");
+    for g in grazes {
+        assert!(g["pre"]["normal_velocity"].as_f64().unwrap() > 1e-9);
+        assert!(g["post"]["h"].as_f64().unwrap().abs() < 1e-14);
+        assert_eq!(
+            g["x_pre"].as_array().unwrap()[3..],
+            g["x_post"].as_array().unwrap()[3..]
+        );
+        assert_eq!(g["mode_after"], "free");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

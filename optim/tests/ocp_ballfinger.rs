@@ -423,7 +423,12 @@ fn explore() {
     );
     println!(
         "  nlp {:?}, timing: total {:?} derivatives {:?} functions {:?} factorization {:?}; evals {:?}",
-        sol.nlp_size, sol.timing.total, sol.timing.derivative_evals, sol.timing.function_evals, sol.timing.factorization, sol.counters
+        sol.nlp_size,
+        sol.timing.total,
+        sol.timing.derivative_evals,
+        sol.timing.function_evals,
+        sol.timing.factorization,
+        sol.counters
     );
     let out = std::env::var("BF_OUT").unwrap_or(format!("/tmp/{name}.json"));
     sol.write_json(std::path::Path::new(&out)).unwrap();

@@ -11,6 +11,7 @@
 //! first 20 automatically styled series of a figure are pairwise distinct even in grey-scale print.
 
 use crate::{FONT, PlotError, ensure_font};
+use plotters::chart::SeriesAnno;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -442,7 +443,10 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
             ));
         }
     }
-    let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), 0.0));
+    // Time axes end exactly at the data; geometric (equal-aspect) views get the same 5 % margin
+    // on both axes so points on the extremes are not drawn on top of the frame.
+    let x_pad = if fig.equal_aspect { 0.05 } else { 0.0 };
+    let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), x_pad));
     let yr = yr_fixed.unwrap_or_else(|| {
         let (mut lo, mut hi) = fold(|p| p.1);
         for h in &fig.hlines {
@@ -693,19 +697,11 @@ fn draw_panel<DB: DrawingBackend>(
     let (w, h) = inner.dim_in_pixel();
     let pw = w.saturating_sub(Y_LABEL_AREA + 3 * MARGIN).max(10) as f64;
     let ph = h.saturating_sub(X_LABEL_AREA + 2 * MARGIN).max(10) as f64;
-    let (mut xr, mut yr) = (prep.xr, prep.yr);
-    if fig.equal_aspect {
-        // Grow the range whose data-per-pixel is smaller so both axes share one scale.
-        let sx = (xr.1 - xr.0) / pw;
-        let sy = (yr.1 - yr.0) / ph;
-        if sx > sy {
-            let c = 0.5 * (yr.0 + yr.1);
-            yr = (c - 0.5 * sx * ph, c + 0.5 * sx * ph);
-        } else {
-            let c = 0.5 * (xr.0 + xr.1);
-            xr = (c - 0.5 * sy * pw, c + 0.5 * sy * pw);
-        }
-    }
+    let (xr, yr) = if fig.equal_aspect {
+        equal_aspect_ranges(prep.xr, prep.yr, (pw, ph))
+    } else {
+        (prep.xr, prep.yr)
+    };
     let mut chart = ChartBuilder::on(&inner)
         .margin(MARGIN)
         .margin_right(2 * MARGIN)
@@ -761,6 +757,9 @@ fn draw_panel<DB: DrawingBackend>(
     // Horizontal reference lines.
     for hl in &fig.hlines {
         let Some(y) = tx(hl.y, ysc) else { continue };
+        if y < yr.0 || y > yr.1 {
+            continue;
+        }
         let c = match hl.colour {
             Colour::Auto => RGBColor(70, 70, 70),
             Colour::Rgb(r, g, b) => RGBColor(r, g, b),
@@ -821,42 +820,60 @@ fn draw_panel<DB: DrawingBackend>(
             .map_err(de)?;
     }
 
-    // Data.
+    // Data: clipped to the axes rectangle (plotters does not clip paths), and split at sharp
+    // turns so that the bitmap backend's thick-line polygons grow no miter spikes.
     for s in &prep.series {
         let style = s.colour.stroke_width(s.width);
         let mut labelled = false;
         for piece in &s.pieces {
-            let anno = match s.dash {
-                Dash::Auto | Dash::Solid => chart
-                    .draw_series(LineSeries::new(piece.iter().copied(), style))
-                    .map_err(de)?,
-                d => {
-                    let (on, off) = dash_pattern(d);
-                    chart
-                        .draw_series(DashedLineSeries::new(piece.iter().copied(), on, off, style))
-                        .map_err(de)?
-                }
-            };
-            if s.in_legend && !labelled {
-                labelled = true;
-                let (dash, markers) = (s.dash, s.markers);
-                anno.label(s.name.as_str()).legend(move |(x, y)| {
-                    let base =
-                        EmptyElement::at((x, y)) + dash_element(vec![(0, 0), (24, 0)], dash, style);
-                    // A transparent dot when there are no markers keeps one element type.
-                    let dot = if markers {
-                        style.filled()
-                    } else {
-                        TRANSPARENT.filled()
+            for run in clip_polyline(piece, xr, yr) {
+                let px: Vec<(i32, i32)> = run.iter().map(|p| chart.backend_coord(p)).collect();
+                let (strokes, joins) = split_sharp_turns(&run, &px);
+                for stroke in strokes {
+                    let anno = match s.dash {
+                        Dash::Auto | Dash::Solid => chart
+                            .draw_series(LineSeries::new(stroke, style))
+                            .map_err(de)?,
+                        d => {
+                            let (on, off) = dash_pattern(d);
+                            chart
+                                .draw_series(DashedLineSeries::new(stroke, on, off, style))
+                                .map_err(de)?
+                        }
                     };
-                    base + Circle::new((12, 0), 4, dot)
-                });
+                    if s.in_legend && !labelled {
+                        labelled = true;
+                        label_series(anno, s, style);
+                    }
+                }
+                // Round joins where a solid line was split (dashes simply restart).
+                if matches!(s.dash, Dash::Auto | Dash::Solid) && s.width >= 2 {
+                    let r = (s.width / 2).max(1);
+                    chart
+                        .draw_series(joins.into_iter().map(|p| Circle::new(p, r, style.filled())))
+                        .map_err(de)?;
+                }
             }
             if s.markers {
+                let inside = |&&(x, y): &&(f64, f64)| {
+                    (xr.0..=xr.1).contains(&x) && (yr.0..=yr.1).contains(&y)
+                };
                 chart
-                    .draw_series(piece.iter().map(|&p| Circle::new(p, 4, style.filled())))
+                    .draw_series(
+                        piece
+                            .iter()
+                            .filter(inside)
+                            .map(|&p| Circle::new(p, 4, style.filled())),
+                    )
                     .map_err(de)?;
             }
+        }
+        if s.in_legend && !labelled {
+            // Entirely outside the axes: still listed in the legend.
+            let anno = chart
+                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+                .map_err(de)?;
+            label_series(anno, s, style);
         }
     }
 
@@ -915,6 +932,164 @@ fn draw_panel<DB: DrawingBackend>(
         .draw()
         .map_err(de)?;
     Ok(())
+}
+
+/// Attaches the legend entry (line sample, plus a dot for marker series) of `s` to `anno`.
+fn label_series<'a, DB: DrawingBackend + 'a>(
+    anno: &mut SeriesAnno<'a, DB>,
+    s: &PreparedSeries,
+    style: ShapeStyle,
+) {
+    let (dash, markers) = (s.dash, s.markers);
+    anno.label(s.name.as_str()).legend(move |(x, y)| {
+        let base = EmptyElement::at((x, y)) + dash_element(vec![(0, 0), (24, 0)], dash, style);
+        // A transparent dot when there are no markers keeps one element type.
+        let dot = if markers {
+            style.filled()
+        } else {
+            TRANSPARENT.filled()
+        };
+        base + Circle::new((12, 0), 4, dot)
+    });
+}
+
+/// Grows one of the ranges about its centre so both axes get the same data-per-pixel scale on
+/// a `(pw, ph)` pixel plotting area; the result always contains the input ranges.
+fn equal_aspect_ranges(
+    xr: (f64, f64),
+    yr: (f64, f64),
+    (pw, ph): (f64, f64),
+) -> ((f64, f64), (f64, f64)) {
+    let sx = (xr.1 - xr.0) / pw;
+    let sy = (yr.1 - yr.0) / ph;
+    let (mut x2, mut y2) = (xr, yr);
+    if sx > sy {
+        let c = 0.5 * (yr.0 + yr.1);
+        y2 = (c - 0.5 * sx * ph, c + 0.5 * sx * ph);
+    } else {
+        let c = 0.5 * (xr.0 + xr.1);
+        x2 = (c - 0.5 * sy * pw, c + 0.5 * sy * pw);
+    }
+    // Rounding in the centre/half-width form must not lose a point on the old boundary.
+    (
+        (x2.0.min(xr.0), x2.1.max(xr.1)),
+        (y2.0.min(yr.0), y2.1.max(yr.1)),
+    )
+}
+
+/// Liang–Barsky clipping of the segment a→b to the closed rectangle `xr × yr`: the parameter
+/// interval `(t0, t1)` ⊆ [0, 1] of the part inside (points a + t (b − a)), or `None` if the
+/// segment misses the rectangle. A degenerate segment (a = b) is kept whole iff a is inside.
+fn clip_segment(
+    a: (f64, f64),
+    b: (f64, f64),
+    xr: (f64, f64),
+    yr: (f64, f64),
+) -> Option<(f64, f64)> {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    // Each pair (p, q): the segment is inside this edge's half-plane where t p <= q.
+    for (p, q) in [
+        (-dx, a.0 - xr.0),
+        (dx, xr.1 - a.0),
+        (-dy, a.1 - yr.0),
+        (dy, yr.1 - a.1),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return None;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+        if !(t0 <= t1) {
+            return None;
+        }
+    }
+    Some((t0, t1))
+}
+
+/// Clips a polyline to the rectangle `xr × yr`: the maximal runs of it inside, in order. A
+/// single point is kept iff it is inside. Original vertices are kept exactly; cut points are
+/// interpolated on the rectangle's edges.
+fn clip_polyline(pts: &[(f64, f64)], xr: (f64, f64), yr: (f64, f64)) -> Vec<Vec<(f64, f64)>> {
+    if let [p] = pts {
+        return clip_segment(*p, *p, xr, yr)
+            .map(|_| vec![vec![*p]])
+            .unwrap_or_default();
+    }
+    let lerp =
+        |a: (f64, f64), b: (f64, f64), t: f64| (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1));
+    let mut out = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    for w in pts.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let Some((t0, t1)) = clip_segment(a, b, xr, yr) else {
+            if !cur.is_empty() {
+                out.push(std::mem::take(&mut cur));
+            }
+            continue;
+        };
+        // A run continues only through a vertex that is itself inside (t0 = 0 after a t1 = 1).
+        if t0 > 0.0 || cur.is_empty() {
+            if !cur.is_empty() {
+                out.push(std::mem::take(&mut cur));
+            }
+            cur.push(if t0 > 0.0 { lerp(a, b, t0) } else { a });
+        }
+        cur.push(if t1 < 1.0 { lerp(a, b, t1) } else { b });
+        if t1 < 1.0 {
+            out.push(std::mem::take(&mut cur));
+        }
+    }
+    if !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
+/// Splits a run (data points `pts`, their pixel positions `px`) into strokes that turn by less
+/// than 120° at every interior vertex, dropping points on the same pixel as their predecessor.
+/// Returns the strokes (with at least two distinct pixels each) and the split vertices.
+///
+/// Why: plotters turns a thick path into a polygon through the intersections of the offset
+/// edges; at a hairpin the intersection lies d / sin(φ/2) from the vertex (d = half the width,
+/// φ the angle between the two edges), i.e. thousands of pixels away for φ → 0. Keeping
+/// φ ≥ 60° bounds that overshoot by 2 d, one line width.
+fn split_sharp_turns(
+    pts: &[(f64, f64)],
+    px: &[(i32, i32)],
+) -> (Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>) {
+    let mut keep: Vec<usize> = Vec::with_capacity(pts.len());
+    for (i, p) in px.iter().enumerate() {
+        if keep.last().is_none_or(|&k| px[k] != *p) {
+            keep.push(i);
+        }
+    }
+    let (mut strokes, mut joins) = (Vec::new(), Vec::new());
+    if keep.len() < 2 {
+        return (strokes, joins);
+    }
+    let mut cur = vec![pts[keep[0]]];
+    for w in keep.windows(3) {
+        let (a, v, b) = (px[w[0]], px[w[1]], px[w[2]]);
+        let e1 = ((a.0 - v.0) as f64, (a.1 - v.1) as f64);
+        let e2 = ((b.0 - v.0) as f64, (b.1 - v.1) as f64);
+        cur.push(pts[w[1]]);
+        // cos φ > 1/2 ⇔ φ < 60°.
+        if e1.0 * e2.0 + e1.1 * e2.1 > 0.5 * e1.0.hypot(e1.1) * e2.0.hypot(e2.1) {
+            strokes.push(std::mem::replace(&mut cur, vec![pts[w[1]]]));
+            joins.push(pts[w[1]]);
+        }
+    }
+    cur.push(pts[keep[keep.len() - 1]]);
+    strokes.push(cur);
+    (strokes, joins)
 }
 
 /// The corner whose legend-sized box covers the fewest data points (and marker labels).

@@ -486,3 +486,232 @@ fn fmt5(v: f64) -> String {
     let s = format!("{v:.5}");
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
+
+// ---------------------------------------------------------------------------------------------
+// Clipping: nothing may be drawn outside a panel's axes rectangle.
+
+/// Three side-by-side panels (default size 1560 × 620): the axes rectangle of panel k spans
+/// x ∈ [520 k + 106, 520 (k + 1) − 28] and y ∈ [≈ 80, 548] (margins 14 px, label areas 92/58 px,
+/// titles above). These bands lie outside every axes rectangle, with a few pixels of slack for
+/// line width and marker dots drawn at the axes edge.
+fn outside_all_axes(x: u32, y: u32) -> bool {
+    let in_gap = (0..=3).any(|k| {
+        let (lo, hi) = ((520 * k) as i64 - 22, (520 * k) as i64 + 100);
+        (lo..=hi).contains(&(x as i64))
+    });
+    in_gap || y < 60 || y > 556
+}
+
+/// Pixels of colour `c` (within a small tolerance for anti-aliasing) in the outside bands.
+fn stray_pixels(px: &[[u8; 3]], w: u32, c: (u8, u8, u8)) -> Vec<(u32, u32)> {
+    px.iter()
+        .enumerate()
+        .filter(|(_, p)| {
+            (p[0] as i32 - c.0 as i32).abs() <= 8
+                && (p[1] as i32 - c.1 as i32).abs() <= 8
+                && (p[2] as i32 - c.2 as i32).abs() <= 8
+        })
+        .map(|(i, _)| (i as u32 % w, i as u32 / w))
+        .filter(|&(x, y)| outside_all_axes(x, y))
+        .collect()
+}
+
+/// Every (x, y) point of every SVG polyline drawn in `stroke` (e.g. "#FF00FF").
+fn svg_polyline_points(svg: &str, stroke: &str) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for el in svg.split("<polyline").skip(1) {
+        let el = &el[..el.find("/>").unwrap_or(el.len())];
+        if !el.contains(&format!("stroke=\"{stroke}\"")) {
+            continue;
+        }
+        let pts = el
+            .split("points=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        for xy in pts.split_whitespace() {
+            let mut it = xy.split(',').map(|v| v.parse::<f64>().unwrap());
+            out.push((it.next().unwrap(), it.next().unwrap()));
+        }
+    }
+    out
+}
+
+#[test]
+fn explicit_small_range_clips_segments_to_the_axes() {
+    let d = tmp("clip");
+    let magenta = (255, 0, 255);
+    let thick = |w: u32, dash: Dash| SeriesStyle {
+        colour: Colour::Rgb(255, 0, 255),
+        dash,
+        width: w,
+        markers: false,
+        in_legend: true,
+    };
+    let side = |name: &str| {
+        let mut p = LineFigure::new(name, "x [m]", "y [m]");
+        p.series.push(Series::new(
+            "plain",
+            (0..50)
+                .map(|i| (i as f64, (0.2 * i as f64).sin()))
+                .collect(),
+        ));
+        p
+    };
+    let mut mid = LineFigure::new("clipped", "x [m]", "y [m]");
+    mid.x_range = Some((0.0, 1.0));
+    mid.y_range = Some((0.0, 1.0));
+    mid.equal_aspect = true;
+    // Crosses two edges (in at the left, out at the right), far outside at both ends.
+    mid.series.push(
+        Series::new("crossing", vec![(-50.0, -30.0), (60.0, 40.0)]).styled(thick(3, Dash::Solid)),
+    );
+    // Entirely outside, passing over the title and the neighbouring panels.
+    mid.series.push(
+        Series::new(
+            "outside",
+            vec![(-40.0, 5.0), (40.0, 5.0), (40.0, -9.0), (-40.0, -9.0)],
+        )
+        .styled(thick(3, Dash::Solid)),
+    );
+    // Dashed, leaving through the top edge and coming back in.
+    mid.series.push(
+        Series::new(
+            "dashed",
+            vec![(0.2, 0.2), (0.5, 30.0), (0.8, 0.3), (0.9, -20.0)],
+        )
+        .styled(thick(2, Dash::Dashed)),
+    );
+    let fig = PanelFigure {
+        title: "Clipping test: nothing outside the axes".into(),
+        panels: vec![side("left"), mid, side("right")],
+        layout: Layout::Columns,
+        size: None,
+    };
+    let paths = render_panels(&fig, d.join("clip")).unwrap();
+    let (svg, px) = check_files(&paths, (1560, 620), &["crossing", "outside", "dashed"]);
+    // The clipped lines are visible inside the middle axes...
+    let inside: usize = px
+        .iter()
+        .enumerate()
+        .filter(|&(i, p)| {
+            let (x, y) = (i as u32 % 1560, i as u32 / 1560);
+            *p == [255, 0, 255] && (620..1040).contains(&x) && !outside_all_axes(x, y)
+        })
+        .count();
+    assert!(inside > 300, "clipped segments hardly drawn ({inside} px)");
+    // ... and nowhere outside (legend samples are inside the axes too).
+    let stray = stray_pixels(&px, 1560, magenta);
+    assert!(
+        stray.is_empty(),
+        "{} magenta pixels outside the axes, e.g. {:?}",
+        stray.len(),
+        &stray[..stray.len().min(5)]
+    );
+    let pts = svg_polyline_points(&svg, &hex(magenta));
+    assert!(pts.len() >= 4, "magenta polylines missing from the SVG");
+    for &(x, y) in &pts {
+        assert!(
+            !outside_all_axes(x as u32, y as u32) && (600.0..1040.0).contains(&x),
+            "SVG polyline point ({x}, {y}) outside the middle axes"
+        );
+    }
+}
+
+#[test]
+fn finger_paths_with_hairpin_projections_stay_inside_the_axes() {
+    // In the side view (y–z) the base (2, 0, 0) projects to (0, 0) and the first links of these
+    // snapshots fold back on themselves: a polyline turning by almost 180°. Thick lines must not
+    // grow miter spikes across the figure.
+    let d = tmp("hairpin");
+    let snaps = vec![
+        vec![
+            [2.0, 0.0, 0.0],
+            [2.0, -0.6, 0.66],
+            [1.5, -0.5, 0.55],
+            [0.8, -0.95, 1.05],
+        ],
+        vec![
+            [2.0, 0.0, 0.0],
+            [2.0, 0.0, 1.0],
+            [1.2, 0.6, 0.9],
+            [0.3, 0.9, 1.1],
+        ],
+        vec![
+            [2.0, 0.0, 0.0],
+            [1.9, 0.62, 0.5],
+            [1.4, 0.0, 0.01],
+            [0.9, 0.55, 0.45],
+        ],
+        vec![
+            [2.0, 0.0, 0.0],
+            [2.0, 0.8, 0.55],
+            [1.0, 1.3, 0.85],
+            [1.5, 0.71, 0.49],
+        ],
+    ];
+    let tip: Vec<[f64; 3]> = (0..400)
+        .map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / 399.0;
+            [
+                0.6 + 0.3 * t.cos(),
+                0.9 * t.sin(),
+                0.8 + 0.3 * (2.0 * t).sin(),
+            ]
+        })
+        .collect();
+    let data = FingerPaths {
+        ball_center: [0.0; 3],
+        ball_radius: 1.0,
+        snapshots: snaps,
+        tip_path: tip,
+        contact_path: vec![],
+    };
+    let fig = fig_finger_paths(
+        "hairpin: finger path",
+        &data,
+        &[View::FrontXZ, View::SideYZ, View::Iso],
+    )
+    .unwrap();
+    let r = render_panels_report(&fig, d.join("paths")).unwrap();
+    let (svg, px) = check_files(&r.paths, (1560, 620), &["finger (snapshots)"]);
+    assert!(
+        count_colour(&px, (20, 20, 20)) > 500,
+        "snapshots hardly drawn"
+    );
+    // Reference: the same figure (same ranges, same legend place) with the snapshots in white.
+    // Text is anti-aliased, so rather than matching colours, every pixel that differs must lie
+    // inside an axes rectangle.
+    let mut blank = fig.clone();
+    for p in &mut blank.panels {
+        for s in &mut p.series {
+            if s.style.colour == Colour::Rgb(20, 20, 20) {
+                s.style.colour = Colour::Rgb(255, 255, 255);
+            }
+        }
+    }
+    let rb = render_panels_report(&blank, d.join("blank")).unwrap();
+    let (_, _, px_blank) = png(&rb.paths[1]);
+    let stray: Vec<(u32, u32)> = px
+        .iter()
+        .zip(&px_blank)
+        .enumerate()
+        .filter(|(_, (a, b))| a != b)
+        .map(|(i, _)| (i as u32 % 1560, i as u32 / 1560))
+        .filter(|&(x, y)| outside_all_axes(x, y))
+        .collect();
+    assert!(
+        stray.is_empty(),
+        "{} pixels drawn by the snapshots outside the axes, e.g. {:?}",
+        stray.len(),
+        &stray[..stray.len().min(5)]
+    );
+    for &(x, y) in &svg_polyline_points(&svg, "#141414") {
+        assert!(
+            !outside_all_axes(x as u32, y as u32),
+            "SVG point ({x}, {y})"
+        );
+    }
+}

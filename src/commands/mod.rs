@@ -5,6 +5,7 @@ pub mod eval;
 pub mod generate;
 pub mod optimize;
 pub mod paper;
+pub mod report;
 pub mod scenarios;
 pub mod simulate;
 pub mod verify;

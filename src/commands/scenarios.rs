@@ -253,6 +253,16 @@ pub fn run_scenario(
         )?,
         stem("paths"),
     )?;
+    let frames = animation_frames(&sol, d, &geo);
+    bf_plot::anim::write_animation_html(
+        &bf_plot::anim::Animation {
+            title: format!("{name}: one period"),
+            ball_center: [0.0; 3],
+            ball_radius: 1.0,
+            frames,
+        },
+        dir.join(format!("animation_{name}.html")),
+    )?;
     let mean = if loc.3 > 0 {
         loc.1 / loc.3 as f64
     } else {
@@ -269,6 +279,61 @@ pub fn run_scenario(
         },
         solution: sol,
     })
+}
+
+/// Rotation matrix exp(S(w)) (Rodrigues), for integrating the ball orientation Ṙ = S(ω) R.
+pub fn rodrigues(w: [f64; 3]) -> [[f64; 3]; 3] {
+    let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    let (a, b) = if th < 1e-8 {
+        (1.0 - th * th / 6.0, 0.5 - th * th / 24.0)
+    } else {
+        (th.sin() / th, (1.0 - th.cos()) / (th * th))
+    };
+    let k = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]];
+    let mut r = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            let k2: f64 = (0..3).map(|l| k[i][l] * k[l][j]).sum();
+            r[i][j] = if i == j { 1.0 } else { 0.0 } + a * k[i][j] + b * k2;
+        }
+    }
+    r
+}
+
+fn matmul(a: &[[f64; 3]; 3], b: &[[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut c = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            c[i][j] = (0..3).map(|l| a[i][l] * b[l][j]).sum();
+        }
+    }
+    c
+}
+
+/// Animation frames over one period: finger frame origins, the ball orientation integrated
+/// from ω with the midpoint rule, and the contact point during contact.
+fn animation_frames(
+    sol: &OcpSolution,
+    d: &Samples,
+    geo: &[Geometry],
+) -> Vec<bf_plot::anim::AnimFrame> {
+    let mut rot = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    let mut out = Vec::with_capacity(d.t.len());
+    for i in 0..d.t.len() {
+        if i > 0 {
+            let dt = d.t[i] - d.t[i - 1];
+            let w: [f64; 3] =
+                std::array::from_fn(|k| 0.5 * (d.omega[i][k] + d.omega[i - 1][k]) * dt);
+            rot = matmul(&rodrigues(w), &rot);
+        }
+        out.push(bf_plot::anim::AnimFrame {
+            t: d.t[i],
+            joints: geo[i].frames.clone(),
+            ball_rotation: rot,
+            contact: is_stick(sol, d, i).then_some(geo[i].p_c),
+        });
+    }
+    out
 }
 
 fn verdict(ok: bool) -> &'static str {
@@ -376,11 +441,14 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
 
 /// Figures of one scenario as markdown image links (relative to the report).
 pub fn figures_markdown(name: &str) -> String {
-    ["paths", "omega", "distance", "torques", "forces"]
+    let mut s: String = ["paths", "omega", "distance", "torques", "forces"]
         .iter()
-        .map(|f| format!("![{name} {f}](figures/{name}_{f}.svg)\n"))
-        .collect::<Vec<_>>()
-        .join("\n")
+        .map(|f| format!("![{name} {f}](figures/{name}_{f}.svg)\n\n"))
+        .collect();
+    s.push_str(&format!(
+        "Animation of one period (self-contained HTML): [animation_{name}.html](animation_{name}.html)\n"
+    ));
+    s
 }
 
 /// Run every scenario (errors of one scenario are reported in the table, not fatal).
@@ -398,4 +466,38 @@ pub fn run_all(dir: &Path, quick: bool, mu_s: f64) -> Result<(Vec<ScenarioResult
         }
     }
     Ok((results, failures))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rodrigues_is_a_rotation_about_the_given_axis() {
+        let w = [0.3, -0.4, 1.2];
+        let r = rodrigues(w);
+        // Orthonormal with det +1.
+        for i in 0..3 {
+            for j in 0..3 {
+                let d: f64 = (0..3).map(|k| r[k][i] * r[k][j]).sum();
+                assert!((d - if i == j { 1.0 } else { 0.0 }).abs() < 1e-14);
+            }
+        }
+        let det = r[0][0] * (r[1][1] * r[2][2] - r[1][2] * r[2][1])
+            - r[0][1] * (r[1][0] * r[2][2] - r[1][2] * r[2][0])
+            + r[0][2] * (r[1][0] * r[2][1] - r[1][1] * r[2][0]);
+        assert!((det - 1.0).abs() < 1e-14);
+        // The axis is fixed; the angle is |w| (trace = 1 + 2 cos θ).
+        let rw: Vec<f64> = (0..3)
+            .map(|i| (0..3).map(|k| r[i][k] * w[k]).sum())
+            .collect();
+        for i in 0..3 {
+            assert!((rw[i] - w[i]).abs() < 1e-14);
+        }
+        let th = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+        assert!((r[0][0] + r[1][1] + r[2][2] - (1.0 + 2.0 * th.cos())).abs() < 1e-14);
+        // Small-angle branch agrees with the closed form near the switch.
+        let a = rodrigues([1e-9, 0.0, 0.0]);
+        assert!((a[1][2] + 1e-9).abs() < 1e-20 && (a[2][1] - 1e-9).abs() < 1e-20);
+    }
 }

@@ -1315,10 +1315,7 @@ impl<'p> Core<'p> {
     ) -> Option<f64> {
         // Only at nearly feasible points (θ ≤ θ_min), where the full restoration phase cannot
         // make progress on θ and would move x far from the current iterate.
-        if self.restoration
-            || norm_1(&self.c) > self.theta_min
-            || std::env::var("BF_NO_SOFT").is_ok()
-        {
+        if self.restoration || norm_1(&self.c) > self.theta_min {
             return None;
         }
         let a = self.max_step_primal(&self.dx).min(self.max_step_dual());

@@ -843,7 +843,10 @@ pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSol
         dual_infeasibility: f64::NAN,
         timing: Timing::default(),
         counters: Counters::default(),
-        nlp_size: (crate::ipm::Nlp::num_variables(&p.nlp), crate::ipm::Nlp::num_constraints(&p.nlp)),
+        nlp_size: (
+            crate::ipm::Nlp::num_variables(&p.nlp),
+            crate::ipm::Nlp::num_constraints(&p.nlp),
+        ),
         points: p.settings.points,
         scheme: p.settings.scheme,
         epsilon: p.epsilon,

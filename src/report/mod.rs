@@ -1,0 +1,10 @@
+//! Stand-alone reports of the `ball-finger report` command (issue 7), also embedded in the
+//! `ball-finger paper` report.
+//!
+//! * [`speed_accuracy`]: what users trade speed for accuracy with — integrator tolerances
+//!   (paper Sect. 3, Fig. 3), collocation meshes and the smoothing ε of eq. 58–59 (Sect. 4),
+//!   and the variants of the generated dynamics kernels (eq. 22a, 76–79).
+
+pub mod speed_accuracy;
+
+pub use speed_accuracy::{SpeedAccuracy, speed_accuracy};
