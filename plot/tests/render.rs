@@ -542,13 +542,13 @@ fn svg_polyline_points(svg: &str, stroke: &str) -> Vec<(f64, f64)> {
 #[test]
 fn explicit_small_range_clips_segments_to_the_axes() {
     let d = tmp("clip");
-    let magenta = (255, 0, 255);
-    let thick = |w: u32, dash: Dash| SeriesStyle {
-        colour: Colour::Rgb(255, 0, 255),
+    let (magenta, cyan, orange) = ((255, 0, 255), (0, 200, 200), (255, 128, 0));
+    let st = |c: (u8, u8, u8), w: u32, dash: Dash, in_legend: bool| SeriesStyle {
+        colour: Colour::Rgb(c.0, c.1, c.2),
         dash,
         width: w,
         markers: false,
-        in_legend: true,
+        in_legend,
     };
     let side = |name: &str| {
         let mut p = LineFigure::new(name, "x [m]", "y [m]");
@@ -564,17 +564,30 @@ fn explicit_small_range_clips_segments_to_the_axes() {
     mid.x_range = Some((0.0, 1.0));
     mid.y_range = Some((0.0, 1.0));
     mid.equal_aspect = true;
-    // Crosses two edges (in at the left, out at the right), far outside at both ends.
+    // y = 2 x + 1/2, far outside at both ends: enters through the left (or bottom) edge and
+    // leaves through the top edge; one straight piece of slope 2 must remain.
     mid.series.push(
-        Series::new("crossing", vec![(-50.0, -30.0), (60.0, 40.0)]).styled(thick(3, Dash::Solid)),
+        Series::new("crossing", vec![(-50.0, -99.5), (60.0, 120.5)]).styled(st(
+            magenta,
+            3,
+            Dash::Solid,
+            true,
+        )),
     );
-    // Entirely outside, passing over the title and the neighbouring panels.
+    // Entirely outside, around the axes, over the title and the neighbouring panels: nothing
+    // of it may appear (a clamping implementation would draw it along the frame).
     mid.series.push(
         Series::new(
             "outside",
-            vec![(-40.0, 5.0), (40.0, 5.0), (40.0, -9.0), (-40.0, -9.0)],
+            vec![
+                (-40.0, 5.0),
+                (40.0, 5.0),
+                (40.0, -9.0),
+                (-40.0, -9.0),
+                (-40.0, 5.0),
+            ],
         )
-        .styled(thick(3, Dash::Solid)),
+        .styled(st(cyan, 3, Dash::Solid, false)),
     );
     // Dashed, leaving through the top edge and coming back in.
     mid.series.push(
@@ -582,7 +595,7 @@ fn explicit_small_range_clips_segments_to_the_axes() {
             "dashed",
             vec![(0.2, 0.2), (0.5, 30.0), (0.8, 0.3), (0.9, -20.0)],
         )
-        .styled(thick(2, Dash::Dashed)),
+        .styled(st(orange, 2, Dash::Dashed, true)),
     );
     let fig = PanelFigure {
         title: "Clipping test: nothing outside the axes".into(),
@@ -591,33 +604,66 @@ fn explicit_small_range_clips_segments_to_the_axes() {
         size: None,
     };
     let paths = render_panels(&fig, d.join("clip")).unwrap();
-    let (svg, px) = check_files(&paths, (1560, 620), &["crossing", "outside", "dashed"]);
-    // The clipped lines are visible inside the middle axes...
-    let inside: usize = px
-        .iter()
-        .enumerate()
-        .filter(|&(i, p)| {
-            let (x, y) = (i as u32 % 1560, i as u32 / 1560);
-            *p == [255, 0, 255] && (620..1040).contains(&x) && !outside_all_axes(x, y)
-        })
-        .count();
-    assert!(inside > 300, "clipped segments hardly drawn ({inside} px)");
-    // ... and nowhere outside (legend samples are inside the axes too).
-    let stray = stray_pixels(&px, 1560, magenta);
-    assert!(
-        stray.is_empty(),
-        "{} magenta pixels outside the axes, e.g. {:?}",
-        stray.len(),
-        &stray[..stray.len().min(5)]
-    );
-    let pts = svg_polyline_points(&svg, &hex(magenta));
-    assert!(pts.len() >= 4, "magenta polylines missing from the SVG");
-    for &(x, y) in &pts {
+    let (svg, px) = check_files(&paths, (1560, 620), &["crossing", "dashed"]);
+    assert_eq!(count_colour(&px, cyan), 0, "the outside polyline was drawn");
+    assert!(svg_polyline_points(&svg, &hex(cyan)).is_empty());
+    for c in [magenta, orange] {
+        // The clipped lines are visible inside the middle axes ...
+        let inside = px
+            .iter()
+            .enumerate()
+            .filter(|&(i, p)| {
+                let (x, y) = (i as u32 % 1560, i as u32 / 1560);
+                *p == [c.0, c.1, c.2] && (620..1040).contains(&x) && !outside_all_axes(x, y)
+            })
+            .count();
+        assert!(inside > 100, "clipped {c:?} hardly drawn ({inside} px)");
+        // ... and nowhere outside (legend samples are inside the axes too).
+        let stray = stray_pixels(&px, 1560, c);
         assert!(
-            !outside_all_axes(x as u32, y as u32) && (600.0..1040.0).contains(&x),
-            "SVG polyline point ({x}, {y}) outside the middle axes"
+            stray.is_empty(),
+            "{} {c:?} pixels outside the axes, e.g. {:?}",
+            stray.len(),
+            &stray[..stray.len().min(5)]
         );
+        for (x, y) in svg_polyline_points(&svg, &hex(c)) {
+            assert!(
+                !outside_all_axes(x as u32, y as u32) && (600.0..1040.0).contains(&x),
+                "SVG polyline point ({x}, {y}) outside the middle axes"
+            );
+        }
     }
+    // The crossing line keeps its direction: in equal-aspect pixels |dy/dx| = 2 (a legend
+    // sample is horizontal, so take the longest magenta polyline segment).
+    let svg_segs: Vec<Vec<(f64, f64)>> = svg
+        .split("<polyline")
+        .skip(1)
+        .filter(|e| {
+            e.split("/>")
+                .next()
+                .unwrap()
+                .contains(&format!("stroke=\"{}\"", hex(magenta)))
+        })
+        .map(|e| svg_polyline_points(&format!("<polyline{e}"), &hex(magenta)))
+        .collect();
+    let longest = svg_segs
+        .iter()
+        .filter(|p| p.len() == 2)
+        .max_by(|a, b| {
+            let l = |p: &Vec<(f64, f64)>| (p[1].0 - p[0].0).hypot(p[1].1 - p[0].1);
+            l(a).total_cmp(&l(b))
+        })
+        .expect("clipped crossing segment in the SVG");
+    let (dx, dy) = (longest[1].0 - longest[0].0, longest[1].1 - longest[0].1);
+    assert!(
+        dx.hypot(dy) > 100.0,
+        "crossing segment too short: {longest:?}"
+    );
+    assert!(
+        ((dy / dx).abs() - 2.0).abs() < 0.05,
+        "crossing segment has slope {} in pixels: {longest:?}",
+        dy / dx
+    );
 }
 
 #[test]

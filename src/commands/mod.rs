@@ -3,6 +3,7 @@
 
 pub mod eval;
 pub mod generate;
+pub mod openloop;
 pub mod optimize;
 pub mod paper;
 pub mod report;

@@ -134,25 +134,51 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         )?;
     }
 
-    // Stage 5: appendix errata.
-    writeln!(report, "## 5. Paper Appendix A/B: errata\n")?;
+    // Stage 5: open-loop simulation of the COT torques (Sect. 6.2).
+    writeln!(report, "## 5. Open-loop simulation with slip (Sect. 6.2)\n")?;
+    match results.iter().find(|r| r.name == "periodic-cot") {
+        Some(cot) => {
+            let periods = if args.quick { 1 } else { 3 };
+            let pb = stage(1, "open-loop simulation");
+            let o = super::openloop::run_open_loop(
+                &cot.solution,
+                periods,
+                &args.out.join("open-loop"),
+            )?;
+            pb.finish();
+            writeln!(report, "{}", super::openloop::markdown(&o)?)?;
+        }
+        None => writeln!(
+            report,
+            "Not run: the `periodic-cot` scenario has no solution.\n"
+        )?,
+    }
+
+    // Stage 6: stability at the extremes.
+    writeln!(report, "## 6. Stability at the extremes\n")?;
+    let pb = stage(1, "extremes");
+    let ext = crate::extremes::run_extremes(args.quick)?;
+    pb.finish();
+    writeln!(report, "{}", ext.to_markdown())?;
+
+    // Stage 7: appendix errata.
+    writeln!(report, "## 7. Paper Appendix A/B: errata\n")?;
     writeln!(
         report,
         "{}\n",
         ERRATA.trim_start_matches(|c| c != '\n').trim()
     )?;
 
-    writeln!(report, "## 6. Not implemented yet\n")?;
+    writeln!(report, "## 8. Not implemented yet\n")?;
     writeln!(
         report,
-        "- Open-loop simulation with slip (Sect. 6.2) — needs the hybrid simulator's \
-         ball-and-finger system (issue 5).\n\
-         - Animation, speed–accuracy report (issue 7)."
+        "- Speed–accuracy report (issue 7).\n\
+         - Continuation, multi-start and mesh refinement for better optima (issue 8)."
     )?;
 
     let path = args.out.join("report.md");
     write_atomic(&path, report.as_bytes())?;
     println!("wrote {}", path.display());
-    println!("not yet in the report: open-loop simulation (issue 5), speed–accuracy (issue 7)");
+    println!("not yet in the report: speed–accuracy (issue 7)");
     Ok(())
 }
