@@ -7,6 +7,11 @@
 //!
 //! Non-finite points (and non-positive points on a log axis) split a series into separate line
 //! pieces — a gap, as in other plotting tools — and are counted in [`RenderReport::skipped_points`].
+//! Lines are clipped to the axes rectangle (Liang–Barsky, `clip_segment`) before drawing, so
+//! explicit `x_range`/`y_range` narrower than the data never draw outside the axes, and thick
+//! lines are split at sharp turns (`split_sharp_turns`) because plotters' bitmap stroker
+//! would otherwise extend hairpins into spikes across the whole image. Default ranges cover
+//! every finite point of every series (equal-aspect views: 5 % margin on both axes).
 //! Colours follow a 10-colour qualitative palette and dash patterns cycle with period 4, so the
 //! first 20 automatically styled series of a figure are pairwise distinct even in grey-scale print.
 
@@ -1007,7 +1012,7 @@ fn clip_segment(
                 t1 = t1.min(r);
             }
         }
-        if !(t0 <= t1) {
+        if t0 > t1 {
             return None;
         }
     }
@@ -1053,6 +1058,9 @@ fn clip_polyline(pts: &[(f64, f64)], xr: (f64, f64), yr: (f64, f64)) -> Vec<Vec<
     out
 }
 
+/// Points of one polyline in plotting coordinates.
+type Polyline = Vec<(f64, f64)>;
+
 /// Splits a run (data points `pts`, their pixel positions `px`) into strokes that turn by less
 /// than 120° at every interior vertex, dropping points on the same pixel as their predecessor.
 /// Returns the strokes (with at least two distinct pixels each) and the split vertices.
@@ -1061,10 +1069,7 @@ fn clip_polyline(pts: &[(f64, f64)], xr: (f64, f64), yr: (f64, f64)) -> Vec<Vec<
 /// edges; at a hairpin the intersection lies d / sin(φ/2) from the vertex (d = half the width,
 /// φ the angle between the two edges), i.e. thousands of pixels away for φ → 0. Keeping
 /// φ ≥ 60° bounds that overshoot by 2 d, one line width.
-fn split_sharp_turns(
-    pts: &[(f64, f64)],
-    px: &[(i32, i32)],
-) -> (Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>) {
+fn split_sharp_turns(pts: &[(f64, f64)], px: &[(i32, i32)]) -> (Vec<Polyline>, Polyline) {
     let mut keep: Vec<usize> = Vec::with_capacity(pts.len());
     for (i, p) in px.iter().enumerate() {
         if keep.last().is_none_or(|&k| px[k] != *p) {
@@ -1307,7 +1312,7 @@ mod tests {
     }
 
     /// Data points equal to their pixels, so strokes can be compared with pixel paths.
-    fn split_px(px: &[(i32, i32)]) -> (Vec<Vec<(f64, f64)>>, Vec<(f64, f64)>) {
+    fn split_px(px: &[(i32, i32)]) -> (Vec<Polyline>, Polyline) {
         let pts: Vec<(f64, f64)> = px.iter().map(|&(x, y)| (x as f64, y as f64)).collect();
         split_sharp_turns(&pts, px)
     }

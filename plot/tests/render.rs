@@ -499,7 +499,7 @@ fn outside_all_axes(x: u32, y: u32) -> bool {
         let (lo, hi) = ((520 * k) as i64 - 22, (520 * k) as i64 + 100);
         (lo..=hi).contains(&(x as i64))
     });
-    in_gap || y < 60 || y > 556
+    in_gap || !(60..=556).contains(&y)
 }
 
 /// Pixels of colour `c` (within a small tolerance for anti-aliasing) in the outside bands.
