@@ -7,6 +7,7 @@ pub mod openloop;
 pub mod optimize;
 pub mod paper;
 pub mod report;
+pub mod requires;
 pub mod scenarios;
 pub mod simulate;
 pub mod verify;

@@ -78,6 +78,13 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     pb.finish();
     writeln!(report, "{table}\n{details}")?;
 
+    writeln!(report, "### Model only what a scene requires\n")?;
+    writeln!(
+        report,
+        "{}",
+        super::requires::markdown(&super::requires::variants()?)?
+    )?;
+
     // Stage 2: verification at sample states.
     writeln!(report, "## 2. Kernel verification at sample states\n")?;
     let n_states = if args.quick { 4 } else { 32 };

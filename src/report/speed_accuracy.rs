@@ -400,7 +400,8 @@ impl SpeedAccuracy {
              random states q ∈ [−π, π]³, q̇ ∈ [−3, 3]³. `cqd_g` is the Lagrangian (Christoffel) \
              path, `cqd_g_rnea` symbolic Newton–Euler; `mass_cqd_g` returns M and C q̇ + g. FMA: \
              every a·b ± c as `mul_add` (without `-C target-feature=+fma` this is a libm call). \
-             f32: arguments, constants and arithmetic in single precision.\n\n\
+             f32: arguments, constants and arithmetic in single precision (the error includes \
+             rounding the state to f32).\n\n\
              | kernel | variant | ns/call | max rel. error | median rel. error |\n\
              |---|---|---|---|---|\n",
         );
