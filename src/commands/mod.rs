@@ -12,15 +12,7 @@ pub mod scenarios;
 pub mod simulate;
 pub mod verify;
 
-use anyhow::{Result, bail};
-
-/// The answer of a subcommand that later issues deliver: a clear error, never fake output.
-pub fn not_yet(command: &str, issue: u32) -> Result<()> {
-    bail!(
-        "`{command}` is not implemented yet (tracked in issue {issue}); \
-         see README.md \"Status\" for what works today"
-    )
-}
+use anyhow::Result;
 
 /// Load and validate a scene file; the error names the file, line and field.
 pub fn load_scene(path: &std::path::Path) -> Result<(bf_codegen::Scene, String)> {
