@@ -7,25 +7,9 @@ use crate::CodegenError;
 use crate::graph::Id;
 use crate::robot::Model;
 
-/// Names of all kernels the generator knows, in emission order.
-pub const ALL_KERNELS: &[&str] = &[
-    "frames",
-    "tip_jacobian",
-    "com_jacobians",
-    "tip_jdot_qd",
-    "mass_matrix",
-    "dmass_dq",
-    "christoffel",
-    "coriolis_matrix",
-    "coriolis_qd",
-    "gravity",
-    "potential",
-    "cqd_g",
-    "cqd_g_rnea",
-    "mass_cqd_g",
-    "contact",
-    "contact_smooth",
-];
+/// Names of all kernels the generator knows, in emission order (the spec's list, so the
+/// parser and the generator can never disagree).
+pub const ALL_KERNELS: &[&str] = crate::spec::KNOWN_KERNELS;
 
 /// An input argument of a kernel (emitted in this order; `P` is always last).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
