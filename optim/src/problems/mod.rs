@@ -342,6 +342,46 @@ fn make_phases(
     Ok(out)
 }
 
+/// The point constraints of a free → stick switch at the end of phase 0: touch
+/// (0 ≤ h⁽¹⁾(t_f) ≤ tol_h, Sect. 7), the sticking impact law (eq. 40) with the impulse ι as
+/// parameters, and the stick constraint Δv = 0 at the end of phase 1 (Gauss/Radau points do not
+/// include the endpoint).
+fn contact_sequence(
+    scene: &Scene,
+    ph: &Physics,
+    eps: f64,
+    tol_h: f64,
+    settings: &ProblemSettings,
+) -> Result<Vec<PointFunction>, OcpError> {
+    Ok(vec![
+        bf::end_point(
+            scene,
+            eps,
+            0,
+            true,
+            EndQuantity::H(0.0, tol_h),
+            "0 <= h1(tf) <= 1e-4",
+        )?,
+        bf::impact(
+            scene,
+            ph,
+            eps,
+            0,
+            0,
+            settings.impulse_cone,
+            settings.scheme == Scheme::Lg,
+        )?,
+        bf::end_point(
+            scene,
+            eps,
+            1,
+            true,
+            EndQuantity::DeltaV,
+            "stick end: delta v = 0",
+        )?,
+    ])
+}
+
 fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
     let mut g = bf_codegen::graph::Graph::new();
     let v: Vec<_> = (0..nphases as u32).map(|i| g.var(i)).collect();
@@ -520,34 +560,10 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
                     EndQuantity::HDot(0.0, 0.0),
                     "apex start: hdot(0) = 0",
                 )?,
-                bf::end_point(
-                    &scene,
-                    eps,
-                    0,
-                    true,
-                    EndQuantity::H(0.0, tol_h),
-                    "0 <= h1(tf) <= 1e-4",
-                )?,
-                bf::impact(
-                    &scene,
-                    &ph,
-                    eps,
-                    0,
-                    0,
-                    settings.impulse_cone,
-                    settings.scheme == Scheme::Lg,
-                )?,
-                bf::end_point(
-                    &scene,
-                    eps,
-                    1,
-                    true,
-                    EndQuantity::DeltaV,
-                    "stick end: delta v = 0",
-                )?,
-                bf::continuity(nx, 1, 2, "stick -> free continuity"),
-                bf::continuity(nx, 2, 0, "periodicity"),
             ];
+            points.extend(contact_sequence(&scene, &ph, eps, tol_h, settings)?);
+            points.push(bf::continuity(nx, 1, 2, "stick -> free continuity"));
+            points.push(bf::continuity(nx, 2, 0, "periodicity"));
             if !qc {
                 points.push(duration_sum(3, 0.0, COT_MAX_PERIOD, "period <= 10 s"));
                 // The rotation measure must stay positive for the ratio to be meaningful.
@@ -596,34 +612,8 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
                 },
             ];
             params = iota_params();
-            points = vec![
-                initial_state(&x_rest),
-                bf::end_point(
-                    &scene,
-                    eps,
-                    0,
-                    true,
-                    EndQuantity::H(0.0, tol_h),
-                    "0 <= h1(tf) <= 1e-4",
-                )?,
-                bf::impact(
-                    &scene,
-                    &ph,
-                    eps,
-                    0,
-                    0,
-                    settings.impulse_cone,
-                    settings.scheme == Scheme::Lg,
-                )?,
-                bf::end_point(
-                    &scene,
-                    eps,
-                    1,
-                    true,
-                    EndQuantity::DeltaV,
-                    "stick end: delta v = 0",
-                )?,
-            ];
+            points = vec![initial_state(&x_rest)];
+            points.extend(contact_sequence(&scene, &ph, eps, tol_h, settings)?);
             objective = Objective::Cost(0);
             match name {
                 "reorient" => {
