@@ -95,5 +95,21 @@ fn paper_quick_writes_a_consistent_report() {
             }
         }
     }
+    // Every artefact is written through a temporary file and a rename: none may be left over.
+    let mut stack = vec![out.clone()];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                assert!(
+                    !p.to_string_lossy().ends_with(".tmp"),
+                    "left over: {}",
+                    p.display()
+                );
+            }
+        }
+    }
     std::fs::remove_dir_all(out).ok();
 }

@@ -5,7 +5,6 @@
 //! reads).
 
 use crate::cli::OptimizeArgs;
-use crate::io::write_atomic;
 use anyhow::{Context, Result, bail};
 use bf_optim::ocp::problem::Scheme;
 use bf_optim::problems::{self, OcpSolution, ProblemSettings};
@@ -88,11 +87,11 @@ pub fn solve_with_progress(name: &str, settings: ProblemSettings) -> Result<OcpS
     Ok(sol)
 }
 
-/// Write `solution.json` and `torques.csv` into `dir` (atomically).
+/// Write `solution.json` and `torques.csv` into `dir` (atomically, by the library writers).
 pub fn write_solution(sol: &OcpSolution, dir: &std::path::Path) -> Result<()> {
-    let json = serde_json::to_string_pretty(sol)?;
-    write_atomic(&dir.join("solution.json"), json.as_bytes())?;
-    write_atomic(&dir.join("torques.csv"), sol.torques_csv().as_bytes())?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    sol.write_json(&dir.join("solution.json"))?;
+    sol.write_torques_csv(&dir.join("torques.csv"))?;
     Ok(())
 }
 

@@ -231,11 +231,26 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
     }
 }
 
+/// Write through a sibling temporary file and a rename, so a failed or interrupted write never
+/// leaves a truncated `solution.json` / `torques.csv` behind.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OcpError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(|e| io_err(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_err(path, e)
+    })
+}
+
 impl OcpSolution {
     /// Writes `solution.json`.
     pub fn write_json(&self, path: &Path) -> Result<(), OcpError> {
         let s = serde_json::to_string_pretty(self).map_err(|e| io_err(path, e))?;
-        std::fs::write(path, s).map_err(|e| io_err(path, e))
+        write_atomic(path, s.as_bytes())
     }
 
     /// Reads a solution written by [`OcpSolution::write_json`].
@@ -271,7 +286,7 @@ impl OcpSolution {
 
     /// Writes [`OcpSolution::torques_csv`] to `path`.
     pub fn write_torques_csv(&self, path: &Path) -> Result<(), OcpError> {
-        std::fs::write(path, self.torques_csv()).map_err(|e| io_err(path, e))
+        write_atomic(path, self.torques_csv().as_bytes())
     }
 }
 
