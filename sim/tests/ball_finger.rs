@@ -12,97 +12,20 @@
 //! Kernels come from bf-testkit's independent reference (the generated product kernels are
 //! exercised by bf-model's own tests), so this test does not depend on codegen output.
 
-use bf_model::{ContactGeometry, ContactVariant, ImpactLaw, Kernels, Mode, Model, State, Vec3};
+use bf_model::{ImpactLaw, Mode, Model, State, Vec3};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{PdController, SampleKind, SimSettings, TorqueSeries, simulate};
-use bf_testkit::Reference;
 
 const PAPER_TOML: &str = include_str!("../../scenes/paper.toml");
 
-/// Kernels evaluated by bf-testkit's reference implementation.
-#[derive(Debug, Clone)]
-struct RefKernels {
-    name: String,
-    toml: String,
-    reference: Reference,
-}
-
-impl RefKernels {
-    fn paper() -> Self {
-        let scene = bf_codegen::spec::Scene::from_toml_str(PAPER_TOML, "paper").unwrap();
-        let reference = Reference::new(&scene).unwrap();
-        RefKernels {
-            name: scene.name.clone(),
-            toml: PAPER_TOML.to_string(),
-            reference,
-        }
-    }
-}
-
-impl Kernels for RefKernels {
-    fn scene_name(&self) -> &str {
-        &self.name
-    }
-    fn scene_toml(&self) -> &str {
-        &self.toml
-    }
-    fn param_names(&self) -> &[&str] {
-        &[]
-    }
-    fn param_values(&self) -> &[f64] {
-        &[]
-    }
-    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
-        let m = self.reference.mass_matrix(q);
-        let c = self.reference.cqd_g(q, qd);
-        let mut mm = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                mm[i][j] = m[(i, j)];
-            }
-        }
-        (mm, [c[0], c[1], c[2]])
-    }
-    fn potential(&self, q: &[f64; 3]) -> f64 {
-        self.reference.potential(q)
-    }
-    fn contact(
-        &self,
-        q: &[f64; 3],
-        qd: &[f64; 3],
-        omega: &[f64; 3],
-        variant: ContactVariant,
-    ) -> ContactGeometry {
-        let eps = match variant {
-            ContactVariant::Exact => None,
-            ContactVariant::Smooth(e) => Some(e),
-        };
-        let c = self.reference.contact(q, qd, omega, eps).unwrap();
-        let mut jc = [[0.0; 3]; 3];
-        for i in 0..3 {
-            for j in 0..3 {
-                jc[i][j] = c.j_c[(i, j)];
-            }
-        }
-        ContactGeometry::from_arrays(
-            c.alpha,
-            c.sat_alpha,
-            &c.p_c,
-            &c.r_c,
-            c.h,
-            &c.n,
-            &jc,
-            &c.v_c,
-            &c.delta_v,
-            c.h_dot,
-            &c.rc_dot,
-            &c.jc_dot_qd,
-        )
-    }
-}
+// The adapter that runs bf-model on bf-testkit's reference kernels, shared with bf-model's
+// own tests (one copy, so both crates test against the same oracle wiring).
+#[path = "../../model/tests/common/mod.rs"]
+mod common;
+use common::RefKernels;
 
 fn conservative_model() -> Model<RefKernels> {
-    let m = Model::from_kernels(RefKernels::paper()).unwrap();
+    let m = Model::from_kernels(RefKernels::new(PAPER_TOML)).unwrap();
     let p = m.params().with_viscous(0.0, 0.0).unwrap();
     m.with_params(p)
 }
