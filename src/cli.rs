@@ -165,6 +165,10 @@ pub struct OptimizeArgs {
     /// Warm start from a previous solution.json.
     #[arg(long)]
     pub warm_start: Option<PathBuf>,
+    /// Interior-point log on stderr: 0 none (a progress spinner), 1 one line per iteration,
+    /// 2 and 3 more detail.
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=3))]
+    pub print_level: u8,
     /// Output directory.
     #[arg(long, default_value = "out/optimize")]
     pub out: PathBuf,

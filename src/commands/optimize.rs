@@ -51,6 +51,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         epsilon: Some(args.epsilon),
         warm_start,
         max_iter: args.max_iter,
+        print_level: args.print_level,
         ..ProblemSettings::default()
     })
 }
