@@ -165,6 +165,29 @@ pub struct OptimizeArgs {
     /// Warm start from a previous solution.json.
     #[arg(long)]
     pub warm_start: Option<PathBuf>,
+    /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
+    /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
+    /// `multistart` (`--starts` random guesses around the default, in parallel). Default:
+    /// continuation with `--scheme radau`, direct with `--scheme lg` (LG solves are slower and
+    /// its stages often end Acceptable, so a 18-solve continuation takes minutes).
+    #[arg(long, value_parser = ["direct", "continuation", "multistart"])]
+    pub strategy: Option<String>,
+    /// Number of starts of `--strategy multistart` (start 0 is the default guess).
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    pub starts: u64,
+    /// Seed of the multi-start guesses.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
+    /// error estimate is at most TOL (e.g. 1e-4).
+    #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
+    pub refine: Option<f64>,
+    /// Refinement rounds at most (with `--refine`).
+    #[arg(long, default_value_t = 8)]
+    pub refine_rounds: usize,
+    /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).
+    #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
+    pub verify_rtol: f64,
     /// Interior-point log on stderr: 0 none (a progress spinner), 1 one line per iteration,
     /// 2 and 3 more detail.
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=3))]
@@ -188,7 +211,8 @@ pub struct PaperArgs {
 /// Arguments of `report`.
 #[derive(Debug, Args)]
 pub struct ReportArgs {
-    /// Which report: speed-accuracy.
+    /// Which report: speed-accuracy (integrator tolerances, meshes, ε, kernel variants) or
+    /// strategies (cold start vs continuation vs multi-start on the periodic problems).
     pub which: String,
     /// Output directory.
     #[arg(long, default_value = "out/report")]

@@ -243,5 +243,81 @@ fn bad_cli_input_gives_clear_errors() {
         ]),
         &["--warm-start", "/nonexistent.json"],
     );
+    let opt = |extra: &[&str]| {
+        let mut a = vec!["optimize", "--problem", "periodic-qc"];
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    assert_clean_failure(&opt(&["--strategy", "annealing"]), &["--strategy"]);
+    assert_clean_failure(
+        &opt(&["--strategy", "multistart", "--starts", "0"]),
+        &["--starts"],
+    );
+    assert_clean_failure(&opt(&["--refine", "-1e-4"]), &["--refine"]);
+    assert_clean_failure(&opt(&["--refine", "nan"]), &["--refine"]);
+    assert_clean_failure(
+        &opt(&["--scheme", "lg", "--refine", "1e-4"]),
+        &["--refine", "radau"],
+    );
+    assert_clean_failure(&opt(&["--verify-rtol", "2"]), &["--verify-rtol"]);
+    assert_clean_failure(&opt(&["--print-level", "7"]), &["--print-level"]);
+    std::fs::remove_dir_all(dir).ok();
+}
+
+/// `optimize` end to end on a small problem: the strategy table, the refinement rounds and the
+/// verification are printed and stored in solution.json, and they agree with each other.
+#[test]
+fn optimize_refines_verifies_and_records_it() {
+    let dir = std::env::temp_dir().join(format!("bf-cli-opt-{}", std::process::id()));
+    let out = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "multistart",
+        "--starts",
+        "2",
+        "--refine",
+        "1e-6",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("multistart (2 starts, seed 0)"), "{stdout}");
+    assert!(stdout.contains("mesh refinement to 1e-6"), "{stdout}");
+    assert!(stdout.contains("trajectory verification"), "{stdout}");
+    let text = std::fs::read_to_string(dir.join("solution.json")).unwrap();
+    let sol: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(sol["strategy"]["records"].as_array().unwrap().len(), 2);
+    let r = &sol["refinement"];
+    assert_eq!(r["tol"].as_f64(), Some(1e-6));
+    let last = r["history"].as_array().unwrap().last().unwrap().clone();
+    // Converged means the last round's error estimate is within the tolerance.
+    if r["converged"].as_bool() == Some(true) {
+        assert!(last["max_error"].as_f64().unwrap() <= 1e-6);
+    }
+    assert_eq!(last["objective"].as_f64(), sol["objective"].as_f64());
+    // The refined mesh has at least as many points as the default 30 per phase.
+    let pts: usize = r["mesh"][0]["degrees"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_u64().unwrap() as usize)
+        .sum();
+    assert!(pts >= 30, "{pts}");
+    let v = &sol["verification"];
+    let max_defect = v["max_defect"].as_f64().unwrap();
+    let phase_max = v["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["defect"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert_eq!(max_defect, phase_max);
     std::fs::remove_dir_all(dir).ok();
 }

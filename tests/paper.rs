@@ -70,6 +70,14 @@ fn paper_quick_writes_a_consistent_report() {
             "{name} objective"
         );
         assert!((period - expect_period).abs() <= 1e-4, "{name} period");
+        // The re-integration defect shown is the one stored with the solution.
+        let defect: f64 = cells[10].parse().unwrap();
+        let expect_defect = sol["verification"]["max_defect"].as_f64().unwrap();
+        assert!(
+            (defect - expect_defect).abs() <= 0.06 * expect_defect,
+            "{name} defect {defect} vs {expect_defect}"
+        );
+        assert_eq!(cells[11], "direct", "{name}: --quick solves directly");
         // Independent check of the period: the phase durations add up to it.
         let sum: f64 = sol["phase_durations"]
             .as_array()

@@ -36,8 +36,13 @@ fn quick_report_is_consistent() {
     for m in r.mesh.iter().filter(|m| m.same_branch) {
         assert!(m.rel_error < 0.1, "{m:?}");
     }
+    for m in r.mesh.iter().filter(|m| m.warm_rel_error.is_finite()) {
+        assert!(m.warm_rel_error < 0.1, "{m:?}");
+    }
     assert!(
-        r.mesh.iter().any(|m| m.same_branch),
+        r.mesh
+            .iter()
+            .any(|m| m.same_branch || m.warm_rel_error.is_finite()),
         "no mesh on the reference optimum: {:?}",
         r.mesh
     );

@@ -13,7 +13,9 @@ mod double_integrator;
 use std::hint::black_box;
 use std::time::Duration;
 
-use bf_optim::ipm::{Nlp, Settings, Solution, Workspace, solve, solve_in};
+use bf_optim::ipm::kkt::KktPattern;
+use bf_optim::ipm::{FaerLdlt, KktSolver, Nlp, Settings, Solution, Workspace, solve, solve_in};
+use bf_optim::problems::{ProblemSettings, build};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn per_iter(d: Duration, it: usize) -> f64 {
@@ -80,5 +82,63 @@ fn bench_ipm(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_ipm);
+/// The KKT matrix of `periodic-qc` (hp-Radau 3 × 10 per phase) at the initial guess with unit
+/// multipliers and a barrier diagonal of 1: factorization variants compared on the real pattern
+/// (fill of L, simplicial vs supernodal), factor and solve timed by criterion.
+fn bench_kkt(c: &mut Criterion) {
+    let problem = match build("periodic-qc", &ProblemSettings::default()) {
+        Ok(p) => p,
+        Err(e) => {
+            eprintln!("periodic-qc: cannot build: {e}");
+            return;
+        }
+    };
+    let nlp = &problem.nlp;
+    let (n, m) = (nlp.num_variables(), nlp.num_constraints());
+    let jp = nlp.jacobian_structure();
+    let hp = nlp.hessian_structure();
+    let mut x = vec![0.0; n];
+    nlp.initial_point(&mut x);
+    let mut jv = vec![0.0; jp.len()];
+    nlp.jacobian_values(&x, &mut jv);
+    let mut hv = vec![0.0; hp.len()];
+    nlp.hessian_values(&x, 1.0, &vec![1.0; m], &mut hv);
+    let mut pat = KktPattern::new(n, m, &hp, &jp);
+    pat.assemble(&hv, &jv, &vec![1.0; n], -1e-8);
+    let dim = n + m;
+    let mut g = c.benchmark_group("kkt_periodic_qc");
+    g.sample_size(20);
+    for (label, sup, reuse) in [
+        ("simplicial", Some(false), true),
+        ("simplicial_faer_call", Some(false), false),
+        ("supernodal", Some(true), true),
+    ] {
+        let mut s = FaerLdlt::new();
+        s.supernodal = sup;
+        s.reuse_permutation = reuse;
+        s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
+            .expect("analyse");
+        let inertia = s.factor(&pat.mat.values);
+        println!(
+            "periodic-qc KKT {label}: dim {dim} (n {n}, m {m}), nnz(tril K) {}, nnz(L) {}, flops {:.3e}, inertia {inertia:?}",
+            pat.mat.row_idx.len(),
+            s.factor_nnz(),
+            s.factor_flops()
+        );
+        g.bench_function(format!("factor_{label}"), |b| {
+            b.iter(|| black_box(s.factor(&pat.mat.values)))
+        });
+        let rhs: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin()).collect();
+        g.bench_function(format!("solve_{label}"), |b| {
+            b.iter(|| {
+                let mut r = rhs.clone();
+                s.solve(&mut r);
+                black_box(r)
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench_kkt, bench_ipm);
 criterion_main!(benches);

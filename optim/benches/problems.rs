@@ -1,21 +1,35 @@
 //! The paper's periodic problems (Sect. 6.1) solved end to end by criterion: transcription
 //! build excluded, cold solve from the default guess included; the time split (function
 //! evaluations, derivatives, KKT factorization, ...) of one solve is printed once from the
-//! solver's own `Timing`. Only the hp-Radau transcription is benchmarked: Legendre–Gauss does not
-//! converge on these problems yet (issue 6), and a 3000-iteration failure is not a benchmark.
+//! solver's own `Timing`. Every problem runs with hp-Radau 3 × 10 (`{name}/radau3x10`);
+//! `periodic-qc` also with Legendre–Gauss, 30 points per phase as in the paper (`{name}/lg30`,
+//! stick phases at the acceleration level, issue 6). The COT problems are not benchmarked with
+//! LG: they do not converge with it from the default guess yet, and a failure is not a benchmark.
 //!
 //! Quick run: `cargo bench -p bf-optim --bench problems -- --warm-up-time 1 --measurement-time 5`
 
 use std::hint::black_box;
 
+use bf_optim::ocp::Scheme;
 use bf_optim::problems::{ProblemSettings, build, solve};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("periodic_problems");
     group.sample_size(10);
-    for name in ["periodic-qc", "periodic-cot", "periodic-cot-human"] {
-        let problem = match build(name, &ProblemSettings::default()) {
+    let radau = ProblemSettings::default();
+    let lg = ProblemSettings {
+        scheme: Scheme::Lg,
+        points: 30,
+        ..ProblemSettings::default()
+    };
+    for (name, label, settings) in [
+        ("periodic-qc", "radau3x10", &radau),
+        ("periodic-qc", "lg30", &lg),
+        ("periodic-cot", "radau3x10", &radau),
+        ("periodic-cot-human", "radau3x10", &radau),
+    ] {
+        let problem = match build(name, settings) {
             Ok(p) => p,
             Err(e) => {
                 eprintln!("{name}: cannot build: {e}");
@@ -26,7 +40,7 @@ fn bench(c: &mut Criterion) {
             Ok(sol) => {
                 let t = &sol.timing;
                 println!(
-                    "{name}: {:?}, {} iterations, total {:.1} ms: functions {:.1}, derivatives {:.1}, \
+                    "{name}/{label}: {:?}, {} iterations, total {:.1} ms: functions {:.1}, derivatives {:.1}, \
                      KKT assembly {:.1}, factorization {:.1}, solves {:.1}, line search {:.1} ms",
                     sol.status,
                     sol.iterations,
@@ -39,9 +53,9 @@ fn bench(c: &mut Criterion) {
                     t.line_search.as_secs_f64() * 1e3
                 );
             }
-            Err(e) => eprintln!("{name}: solve failed: {e}"),
+            Err(e) => eprintln!("{name}/{label}: solve failed: {e}"),
         }
-        group.bench_function(format!("{name}/radau3x10"), |b| {
+        group.bench_function(format!("{name}/{label}"), |b| {
             b.iter(|| black_box(solve(&problem, None).map(|s| s.objective).ok()))
         });
     }

@@ -7,7 +7,10 @@
 use crate::cli::OptimizeArgs;
 use anyhow::{Context, Result, bail};
 use bf_optim::ocp::problem::Scheme;
-use bf_optim::problems::{self, OcpSolution, ProblemSettings};
+use bf_optim::problems::refine::{self, RefineOptions, RefineRound};
+use bf_optim::problems::strategy::{self, StageRecord, Strategy};
+use bf_optim::problems::verify::verify;
+use bf_optim::problems::{self, BuiltProblem, OcpSolution, ProblemSettings};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Parse `--scheme`: `lg` or `radau` (hp elements from `elements`).
@@ -67,25 +70,116 @@ pub fn iteration_spinner(label: &str) -> ProgressBar {
     pb
 }
 
-/// Solve with a progress spinner.
-pub fn solve_with_progress(name: &str, settings: ProblemSettings) -> Result<OcpSolution> {
-    let built = problems::build(name, &settings).with_context(|| format!("building {name}"))?;
+/// Parse `--strategy` (with `--starts` and `--seed` for `multistart`).
+pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
+    match text {
+        "direct" => Ok(Strategy::Direct),
+        "continuation" => Ok(Strategy::Continuation),
+        "multistart" => Ok(Strategy::Multistart {
+            starts: usize::try_from(starts).context("--starts is too large")?,
+            seed,
+        }),
+        other => bail!(
+            "--strategy: unknown strategy {other:?}; use `direct`, `continuation` or `multistart`"
+        ),
+    }
+}
+
+/// Solve with `strategy` behind a progress spinner that shows each finished stage.
+pub fn solve_with_progress(
+    name: &str,
+    settings: ProblemSettings,
+    strategy: Strategy,
+) -> Result<(BuiltProblem, OcpSolution)> {
     let pb = iteration_spinner(name);
-    let mut cb = |it: &bf_optim::ipm::IterationInfo| {
+    pb.set_message(format!("{strategy} ..."));
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let show = |r: &StageRecord| {
+        let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         pb.set_message(format!(
-            "iter {:4} obj {:+.6e} inf_pr {:.1e} inf_du {:.1e} lg(mu) {:+.1}",
-            it.iter,
-            it.objective,
-            it.inf_pr,
-            it.inf_du,
-            it.mu.log10()
+            "{strategy}: {k} solves done; last: chain {} {} -> {:?}, J {:.4e}, T {:.3} s",
+            r.chain, r.stage, r.status, r.objective, r.period
         ));
-        pb.tick();
-        true
     };
-    let sol = problems::solve(&built, Some(&mut cb)).with_context(|| format!("solving {name}"))?;
+    let res = strategy::solve_with_strategy(name, &settings, strategy, Some(&show))
+        .with_context(|| format!("solving {name}"));
     pb.finish_and_clear();
-    Ok(sol)
+    res
+}
+
+/// Refine the mesh of `sol` (warm-started from it) until the error estimate is ≤ `tol`; prints
+/// each round. Returns the final mesh's problem and solution, which keeps `sol`'s strategy
+/// record and gains the refinement record.
+pub fn refine_with_progress(
+    name: &str,
+    settings: &ProblemSettings,
+    sol: OcpSolution,
+    tol: f64,
+    rounds: usize,
+) -> Result<(BuiltProblem, OcpSolution)> {
+    let opts = RefineOptions {
+        tol,
+        max_rounds: rounds,
+        ..RefineOptions::default()
+    };
+    let strategy = sol.strategy.clone();
+    let (iters0, secs0) = (sol.iterations, sol.solve_seconds);
+    let start = ProblemSettings {
+        warm_start: Some(sol),
+        ..settings.clone()
+    };
+    println!("mesh refinement to {tol:e}:");
+    println!("  round  points/phase        objective      max error  status        iter  time(s)");
+    let mut show = |r: &RefineRound| {
+        println!(
+            "  {:5}  {:<18}  {:>13.8e}  {:>9.2e}  {:<12}  {:>4}  {:>7.2}",
+            r.round,
+            format!("{:?}", r.points),
+            r.objective,
+            r.max_error,
+            format!("{:?}", r.status),
+            r.iterations,
+            r.seconds
+        );
+    };
+    let res = refine::refine(name, &start, &opts, None, Some(&mut show))
+        .with_context(|| format!("refining the mesh of {name}"))?;
+    println!("  {}", res.stop_reason);
+    let problem = problems::build(
+        name,
+        &ProblemSettings {
+            mesh: Some(res.mesh.clone()),
+            ..settings.clone()
+        },
+    )
+    .with_context(|| format!("building {name} on the refined mesh"))?;
+    let report = res.report();
+    let mut out = res.solution;
+    out.iterations = iters0 + res.history.iter().map(|r| r.iterations).sum::<usize>();
+    out.solve_seconds = secs0 + res.history.iter().map(|r| r.seconds).sum::<f64>();
+    out.strategy = strategy;
+    out.refinement = Some(report);
+    Ok((problem, out))
+}
+
+/// Re-integrate every phase with the optimal torques and store the defects in `sol` (printed);
+/// a failure to verify is reported, not fatal: the solution itself is still written.
+pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: f64) {
+    match verify(problem, sol, rtol) {
+        Ok(v) => {
+            println!("{}", v.summary().trim_end());
+            if !v.passes(1e-3) {
+                println!(
+                    "note: an end-of-phase defect above 1e-3 means the open-loop replay of these \
+                     torques drifts from the collocated trajectory (unstable or long phases, or \
+                     a coarse mesh: try --refine 1e-4)"
+                );
+            }
+            sol.verification = Some(v);
+        }
+        Err(e) => eprintln!("warning: trajectory verification failed: {e}"),
+    }
 }
 
 /// Write `solution.json` and `torques.csv` into `dir` (atomically, by the library writers).
@@ -116,7 +210,36 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             );
         }
     }
-    let sol = solve_with_progress(&args.problem, settings)?;
+    let strategy = match &args.strategy {
+        Some(text) => parse_strategy(text, args.starts, args.seed)?,
+        None if settings.scheme == Scheme::Lg => Strategy::Direct,
+        None => Strategy::default(),
+    };
+    if let Some(tol) = args.refine {
+        if !(tol.is_finite() && tol > 0.0) {
+            bail!("--refine must be a finite positive tolerance (got {tol})");
+        }
+        if settings.scheme == Scheme::Lg {
+            bail!("--refine needs --scheme radau (mesh refinement splits Radau elements)");
+        }
+    }
+    if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
+        bail!(
+            "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
+            args.verify_rtol
+        );
+    }
+    let (mut problem, mut sol) = solve_with_progress(&args.problem, settings.clone(), strategy)?;
+    if let Some(rep) = &sol.strategy {
+        print!("{}", rep.table());
+    }
+    if let Some(tol) = args.refine {
+        (problem, sol) =
+            refine_with_progress(&args.problem, &settings, sol, tol, args.refine_rounds)?;
+    }
+    if args.verify_rtol > 0.0 {
+        attach_verification(&problem, &mut sol, args.verify_rtol);
+    }
     write_solution(&sol, &args.out)?;
     println!(
         "{}: {:?} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",

@@ -9,6 +9,7 @@
 
 use crate::commands::optimize::{solve_with_progress, write_solution};
 use anyhow::{Context, Result};
+use bf_optim::problems::strategy::Strategy;
 use bf_optim::problems::{OcpSolution, ProblemSettings, Samples};
 use bf_plot::paper::{Phases, TimeSeries};
 use bf_plot::scene3d::{FingerPaths, View};
@@ -141,10 +142,14 @@ fn is_stick(sol: &OcpSolution, samples: &Samples, i: usize) -> bool {
 pub fn run_scenario(
     name: &str,
     settings: ProblemSettings,
+    strategy: Strategy,
     dir: &Path,
     mu_s: f64,
 ) -> Result<ScenarioResult> {
-    let sol = solve_with_progress(name, settings)?;
+    let (problem, mut sol) = solve_with_progress(name, settings, strategy)?;
+    // Re-integration of every phase with the optimal torques (issue 8): stored in
+    // solution.json and shown in the results table; a failure to verify is not fatal.
+    sol.verification = bf_optim::problems::verify::verify(&problem, &sol, 1e-10).ok();
     write_solution(&sol, &dir.join(name))?;
     let scene = if name.ends_with("-human") {
         "human"
@@ -345,14 +350,14 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
     let mut s = String::new();
     writeln!(
         s,
-        "| scenario | status | objective φ | period (s) | phase durations (s) | mean ω (rad/s) | max abs τ (N m) | contact distance from tip, min/mean/max (m) | contact on the friction-cone boundary | iterations | solve time (s) |"
+        "| scenario | status | objective φ | period (s) | phase durations (s) | mean ω (rad/s) | max abs τ (N m) | contact distance from tip, min/mean/max (m) | contact on the friction-cone boundary | re-integration defect | strategy | iterations | solve time (s) |"
     )?;
-    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|")?;
+    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
     for r in results {
         let o = &r.solution;
         writeln!(
             s,
-            "| {} | {:?} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {:.2} |",
+            "| {} | {:?} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {:.2} |",
             r.name,
             o.status,
             o.objective,
@@ -370,6 +375,12 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             r.contact_from_tip.1,
             r.contact_from_tip.2,
             100.0 * r.cone_share,
+            o.verification
+                .as_ref()
+                .map_or("not verified".into(), |v| format!("{:.1e}", v.max_defect)),
+            o.strategy
+                .as_ref()
+                .map_or("direct".into(), |st| st.strategy.to_string()),
             o.iterations,
             o.solve_seconds
         )?;
@@ -460,7 +471,15 @@ pub fn run_all(dir: &Path, quick: bool, mu_s: f64) -> Result<(Vec<ScenarioResult
             points: if quick { 20 } else { 30 },
             ..ProblemSettings::default()
         };
-        match run_scenario(name, settings, dir, mu_s).with_context(|| format!("scenario {name}")) {
+        // `--quick` is a smoke run of the pipeline: one cold solve per problem.
+        let strategy = if quick {
+            Strategy::Direct
+        } else {
+            Strategy::default()
+        };
+        match run_scenario(name, settings, strategy, dir, mu_s)
+            .with_context(|| format!("scenario {name}"))
+        {
             Ok(r) => results.push(r),
             Err(e) => writeln!(failures, "- `{name}` failed: {e:#}")?,
         }

@@ -1,18 +1,21 @@
 //! Multiphase optimal control by pseudospectral collocation (paper Sect. 4–5).
 //!
 //! * [`nodes`]: Legendre–Gauss / Gauss–Radau nodes, weights, differentiation matrices;
+//! * [`mesh`]: custom hp-Radau meshes, the collocation error estimate, ph refinement;
 //! * [`block`]: graph functions with exact Jacobians and Hessians (bf-codegen `diff`);
 //! * [`problem`]: the multiphase problem (eq. 57): phases, node functions, point functions;
 //! * [`transcription`]: the sparse NLP handed to the interior-point solver ([`crate::ipm`]);
 //! * [`trajectory`]: extraction and interpolation of the solution.
 
 pub mod block;
+pub mod mesh;
 pub mod nodes;
 pub mod problem;
 pub mod trajectory;
 pub mod transcription;
 
 pub use block::GraphFn;
+pub use mesh::{HpRule, MeshSpec, collocation_errors};
 pub use problem::{
     NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
 };

@@ -207,6 +207,27 @@ fn clean_bound(v: f64, lower: bool) -> f64 {
 impl Transcription {
     /// Transcribes `ocp`.
     pub fn new(ocp: &Ocp) -> Result<Transcription, OcpError> {
+        Self::with_meshes(ocp, &[])
+    }
+
+    /// Transcribes `ocp` with a custom hp-Radau mesh for phase i where `meshes[i]` is given
+    /// (needs the Radau scheme); other phases use `ocp.scheme` and their `points`.
+    pub fn with_meshes(
+        ocp: &Ocp,
+        meshes: &[Option<super::mesh::MeshSpec>],
+    ) -> Result<Transcription, OcpError> {
+        if meshes.len() > ocp.phases.len() {
+            return Err(OcpError::InvalidProblem(format!(
+                "{} meshes for {} phases",
+                meshes.len(),
+                ocp.phases.len()
+            )));
+        }
+        if ocp.scheme == Scheme::Lg && meshes.iter().any(Option::is_some) {
+            return Err(OcpError::InvalidProblem(
+                "custom meshes need the Radau scheme".into(),
+            ));
+        }
         if ocp.phases.is_empty() {
             return Err(OcpError::InvalidProblem("no phases".into()));
         }
@@ -222,7 +243,7 @@ impl Transcription {
         }
         let mut n = 0;
         let mut layouts = Vec::new();
-        for ph in &ocp.phases {
+        for (pi, ph) in ocp.phases.iter().enumerate() {
             let nd = &ph.node;
             let (nx, na, nu) = (nd.x.len(), nd.a.len(), nd.u.len());
             let bad = |w: &str| OcpError::InvalidProblem(format!("phase `{}`: {w}", ph.name));
@@ -238,7 +259,10 @@ impl Transcription {
             if ph.x_bounds.len() != nx || ph.a_bounds.len() != na || ph.u_bounds.len() != nu {
                 return Err(bad("bounds lengths"));
             }
-            let mesh = Mesh::new(ocp.scheme, ph.points)?;
+            let mesh = match meshes.get(pi) {
+                Some(Some(spec)) => Mesh::from_spec(spec)?,
+                _ => Mesh::new(ocp.scheme, ph.points)?,
+            };
             let ns = mesh.n_state_points();
             let ncol = mesh.colloc.len();
             let x0 = n;

@@ -6,7 +6,9 @@
 //!
 //! * free dynamics (eq. 26): M q̈ + C q̇ + μ_v q̇ + g − τ = 0,  I_b ω̇ + ω × I_b ω + D ω = 0;
 //! * stick dynamics (eq. 29): M q̈ + C q̇ + μ_v q̇ + g − τ − J_cᵀ λ = 0,
-//!   I_b ω̇ + ω × I_b ω + D ω + r_c × λ = 0, and the stick constraint Δv = 0 (eq. 14/27);
+//!   I_b ω̇ + ω × I_b ω + D ω + r_c × λ = 0, and the stick constraint Δv = 0 (eq. 14/27), or
+//!   its time derivative d(Δv)/dt = 0 ([`StickLevel::Acceleration`], the index-1 form used with
+//!   Legendre–Gauss, see [`node_function_with`]);
 //! * validity: h (eq. 4), λ_n = λ·n ≥ 0 (eq. 12) and the friction cone (eq. 18–19) as
 //!   σ_δ = μ_s λ_n − (sqrt(‖λ_∥‖² + δ²) − δ) ≥ 0 (the smooth |·| of eq. 59, δ = [`CONE_DELTA`]);
 //! * cost integrands: QC (eq. 64–65) and COT (eq. 61–63), effort and time;
@@ -281,12 +283,44 @@ pub struct NodeOptions {
     pub eps: f64,
 }
 
+/// Level at which a stick phase's nodes impose the no-slip constraint (eq. 14/27).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum StickLevel {
+    /// Δv = 0 at every node (index-2 DAE; right for Radau, whose nodes include one end of
+    /// every element).
+    #[default]
+    Velocity,
+    /// d(Δv)/dt = 0 at every node (the index-1 form that also yields λ in eq. 31–32), with
+    /// Δv = 0 imposed once at the phase start by the impact law (eq. 40c). For Legendre–Gauss:
+    /// see [`node_function_with`].
+    Acceleration,
+}
+
 /// Node function of one phase; returns it with the variable indices. Path rows: finger
 /// dynamics (nq), ball (3), then [stick: Δv (3), λ_n, cone], then [h], then [ḣ].
 pub fn node_function(
     scene: &Scene,
     ph: &Physics,
     opt: &NodeOptions,
+) -> Result<(NodeFunction, NodeVars), OcpError> {
+    node_function_with(scene, ph, opt, StickLevel::Velocity)
+}
+
+/// [`node_function`] with the stick constraint at the given level (only matters for
+/// [`Mode::Stick`]; the path row layout is the same, with d(Δv)/dt in place of Δv).
+///
+/// Why LG needs [`StickLevel::Acceleration`]: with Δv = 0 at the Gauss nodes the stick phase
+/// is collocated as an index-2 DAE, and Gauss collocation is not stiffly accurate
+/// (|R(∞)| = 1): the algebraic λ and the state polynomial keep an undamped alternating mode
+/// between the nodes, whose conditioning worsens with N (LG-30 stalls with δ_w ≈ 1e-3 every
+/// iteration, Δv ≈ 5e-4 between nodes). At the acceleration level the phase is index 1, λ is
+/// fixed node by node (eq. 31–32), and Δv(t) = Δv(t_0) + ∫ dΔv/dt stays 0 up to the Gauss
+/// quadrature error, also at the quadrature end point.
+pub fn node_function_with(
+    scene: &Scene,
+    ph: &Physics,
+    opt: &NodeOptions,
+    level: StickLevel,
 ) -> Result<(NodeFunction, NodeVars), OcpError> {
     let Built {
         mut model,
@@ -353,7 +387,19 @@ pub fn node_function(
     path.extend(br);
     bounds.extend([(0.0, 0.0); 3]);
     if let Some(l) = lam {
-        path.extend(ce.delta_v);
+        match level {
+            StickLevel::Velocity => path.extend(ce.delta_v),
+            StickLevel::Acceleration => {
+                // d/dt Δv(q, q̇, ω) along (q̇, q̈, ω̇), all node variables.
+                let rates: Vec<Id> = qd.iter().chain(&qdd).chain(&wd).copied().collect();
+                path.extend(bf_codegen::diff::time_derivative(
+                    g,
+                    &ce.delta_v,
+                    &xv,
+                    &rates,
+                ));
+            }
+        }
         bounds.extend([(0.0, 0.0); 3]);
         let ln = g.v3_dot(l, ce.n);
         path.push(ln);
@@ -412,6 +458,42 @@ pub fn node_function(
             duration: t_v,
         },
     ))
+}
+
+/// Rebuilds the node function of every [`Mode::Stick`] phase of `phases` (modes in `modes`)
+/// with the no-slip constraint at the acceleration level ([`StickLevel::Acceleration`]), for
+/// the Legendre–Gauss transcription. The stick phases must have been built without h/ḣ path
+/// rows (as every problem of the library does); a mismatch in the path layout is an error.
+pub fn stick_at_acceleration_level(
+    scene: &Scene,
+    ph: &Physics,
+    cost: CostKind,
+    eps: f64,
+    modes: &[Mode],
+    phases: &mut [crate::ocp::Phase],
+) -> Result<(), OcpError> {
+    for (phase, mode) in phases.iter_mut().zip(modes) {
+        if *mode != Mode::Stick {
+            continue;
+        }
+        let opt = NodeOptions {
+            mode: Mode::Stick,
+            cost,
+            h_bounds: None,
+            hdot_bounds: None,
+            eps,
+        };
+        let (node, _) = node_function_with(scene, ph, &opt, StickLevel::Acceleration)?;
+        if node.path_bounds != phase.node.path_bounds || node.a.len() != phase.node.a.len() {
+            return Err(OcpError::InvalidProblem(format!(
+                "phase `{}`: stick phase with h/ḣ path rows cannot be rebuilt at the \
+                 acceleration level",
+                phase.name
+            )));
+        }
+        phase.node = node;
+    }
+    Ok(())
 }
 
 fn state_refs(phase: usize, nx: usize, fin: bool) -> Vec<VarRef> {

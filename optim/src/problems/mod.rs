@@ -13,19 +13,27 @@
 //! | `rotate-fast` | free–stick | ∫(0.01‖τ‖² − ω_z) over a fixed 2 s horizon |
 //!
 //! Transcription: the default is Legendre–Gauss–Radau with 3 elements per phase (30 points
-//! per phase in total). The paper's Legendre–Gauss scheme ([`Scheme::Lg`]) is available; with
-//! it the interior-point iterations on `periodic-qc` stall in a flat, regularised valley
-//! (MaxIterations after 1500 iterations at a point feasible to 1e-8), while Radau converges in
-//! < 100 iterations from the same guess.
+//! per phase in total). The paper's Legendre–Gauss scheme ([`Scheme::Lg`]) is available. With
+//! it the stick phases impose the no-slip constraint at the acceleration level,
+//! d(Δv)/dt = 0 at the Gauss nodes ([`bf::StickLevel::Acceleration`]), with Δv⁺ = 0 from the
+//! impact law and no end-point Δv row: at the velocity level the stick phase is an index-2
+//! DAE, which Gauss collocation (not stiffly accurate) resolves with an undamped alternating
+//! mode, and LG-20/30 stalled with δ_w ≈ 1e-3 in every iteration. With the index-1 form
+//! `periodic-qc` LG-20/30 reaches the Radau optimum (≈ 85 iterations). The COT problems still
+//! do not converge with LG from the default guess (persistent inertia correction, the stick
+//! phase shrinking to its lower duration bound): use Radau for them.
 //!
 //! The periodic problems start the period at the apex of the free arc (ḣ(0) = 0), which
 //! removes the time-shift degeneracy of the free arc without changing the optimum.
 //! Common constraints: |τ_i| ≤ τ_max (1 N m), h ≥ 0 in free approach phases, λ_n ≥ 0 and the
 //! smooth friction cone in stick, the sticking impact law (eq. 40) with ι_n ≥ 0,
 //! 0 ≤ h(t_f⁽¹⁾) ≤ 10⁻⁴ and h⁽³⁾ ≥ −10⁻⁴ (Sect. 7 work-arounds), Δv = 0 at the stick phase's
-//! end point (Gauss points exclude it).
+//! end point with Radau (LG: see above).
 
 pub mod bf;
+pub mod refine;
+pub mod strategy;
+pub mod verify;
 
 use std::path::Path;
 use std::time::Instant;
@@ -33,7 +41,7 @@ use std::time::Instant;
 use bf_codegen::Scene;
 use serde::{Deserialize, Serialize};
 
-use crate::ipm::{Counters, IterationInfo, Settings, Status, Timing, WarmStart};
+use crate::ipm::{Counters, IterationInfo, Settings, Solution, Status, Timing, WarmStart};
 use crate::ocp::{
     Objective, Ocp, OcpError, Param, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme,
     Transcription, VarRef, extract, solve_nlp,
@@ -101,6 +109,29 @@ pub struct ProblemSettings {
     pub max_iter: usize,
     /// Solver log level (0 silent).
     pub print_level: u8,
+    /// Override of the default guess's joint configuration and phase durations (multi-start
+    /// draws these; ignored with a warm start).
+    pub start: Option<StartGuess>,
+    /// Factor on the effort term of the QC cost (eq. 64: w‖τ‖² becomes s·w‖τ‖²); 1 is the
+    /// paper's cost. A continuation stage knob: small s = the simpler "track ω_ref" cost. Must
+    /// be positive, so the sparsity pattern of the Lagrangian Hessian does not change.
+    pub effort_scale: f64,
+    /// Bounds on the period of the periodic problems (intersected with the problem's own:
+    /// 3 × 5 s for QC, [`COT_MAX_PERIOD`] for COT); a continuation stage fixes it.
+    pub period_bounds: Option<(f64, f64)>,
+    /// Custom hp-Radau mesh per phase (overrides `points`; needs the Radau scheme), e.g. from
+    /// [`refine::refine`].
+    pub mesh: Option<Vec<crate::ocp::MeshSpec>>,
+}
+
+/// A guess of constant joint angles `q` and phase durations `durations` (the paper's guess is
+/// q ≡ [`Q_GUESS`], every duration 1 s).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StartGuess {
+    /// Joint angles (rad), one per joint.
+    pub q: Vec<f64>,
+    /// Phase durations (s), one per phase.
+    pub durations: Vec<f64>,
 }
 
 impl Default for ProblemSettings {
@@ -116,6 +147,10 @@ impl Default for ProblemSettings {
             ipm: None,
             max_iter: 1500,
             print_level: 0,
+            start: None,
+            effort_scale: 1.0,
+            period_bounds: None,
+            mesh: None,
         }
     }
 }
@@ -219,9 +254,20 @@ pub struct OcpSolution {
     pub raw: Vec<PhaseTrajectory>,
     /// Static parameters.
     pub params: Vec<f64>,
-    /// Primal-dual point of the final NLP (for an exact warm start on the same mesh).
-    #[serde(skip)]
+    /// Primal-dual point of the final NLP (for an exact warm start on the same mesh; stored
+    /// in solution.json so that `--warm-start` is exact when the mesh is unchanged).
+    #[serde(default)]
     pub nlp_warm: Option<WarmStart>,
+    /// How the solution was found: every stage or start with its status and objective.
+    #[serde(default)]
+    pub strategy: Option<strategy::StrategyReport>,
+    /// Adaptive mesh refinement that produced this solution (`optimize --refine TOL`); its
+    /// `mesh` is the final mesh (`points`/`scheme` above are the starting mesh's).
+    #[serde(default)]
+    pub refinement: Option<refine::RefineReport>,
+    /// Re-integration of each phase with the optimal torques ([`verify::verify`]).
+    #[serde(default)]
+    pub verification: Option<verify::Verification>,
 }
 
 fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
@@ -308,7 +354,7 @@ struct PhaseDef {
     guess_duration: f64,
 }
 
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn make_phases(
     scene: &Scene,
     ph: &Physics,
@@ -317,10 +363,24 @@ fn make_phases(
     eps: f64,
     points: usize,
     q_limits: &[(f64, f64)],
+    start: Option<&StartGuess>,
 ) -> Result<Vec<Phase>, OcpError> {
     let nq = ph.nq;
+    if let Some(sg) = start {
+        let ok = sg.q.len() == nq
+            && sg.durations.len() == defs.len()
+            && sg.q.iter().all(|v| v.is_finite())
+            && sg.durations.iter().all(|v| v.is_finite() && *v > 0.0);
+        if !ok {
+            return Err(OcpError::InvalidProblem(format!(
+                "start guess needs {nq} finite joint angles and {} positive durations, got {:?}",
+                defs.len(),
+                sg
+            )));
+        }
+    }
     let mut out = Vec::new();
-    for d in defs {
+    for (k, d) in defs.iter().enumerate() {
         let (node, _) = bf::node_function(
             scene,
             ph,
@@ -337,7 +397,7 @@ fn make_phases(
         let na = node.a.len();
         let mut xg = vec![0.0; 2 * nq + 3];
         for i in 0..nq {
-            xg[i] = Q_GUESS[i % 3];
+            xg[i] = start.map_or(Q_GUESS[i % 3], |sg| sg.q[i]);
             let (lo, hi) = q_limits[i];
             if lo.is_finite() || hi.is_finite() {
                 xg[i] = xg[i].clamp(lo, hi);
@@ -351,7 +411,14 @@ fn make_phases(
             u_bounds: ph.tau_max.iter().map(|&t| (-t, t)).collect(),
             duration_bounds: d.duration,
             points,
-            guess: PhaseGuess::constant(xg, vec![0.0; na], vec![0.0; nq], d.guess_duration),
+            guess: PhaseGuess::constant(
+                xg,
+                vec![0.0; na],
+                vec![0.0; nq],
+                start.map_or(d.guess_duration, |sg| {
+                    sg.durations[k].clamp(d.duration.0, d.duration.1)
+                }),
+            ),
         });
     }
     Ok(out)
@@ -359,8 +426,14 @@ fn make_phases(
 
 /// The point constraints of a free → stick switch at the end of phase 0: touch
 /// (0 ≤ h⁽¹⁾(t_f) ≤ tol_h, Sect. 7), the sticking impact law (eq. 40) with the impulse ι as
-/// parameters, and the stick constraint Δv = 0 at the end of phase 1 (Gauss/Radau points do not
-/// include the endpoint).
+/// parameters, and (Radau only) the stick constraint Δv = 0 at the end of phase 1, which the
+/// Radau points do not include.
+///
+/// With Legendre–Gauss the stick phases impose d(Δv)/dt = 0 at the Gauss nodes
+/// ([`bf::StickLevel::Acceleration`]) and the impact imposes Δv⁺ = 0 (eq. 40c) at the start, so
+/// Δv = 0 at the quadrature end point holds up to the Gauss quadrature error (exactly when Δv
+/// is linear in the state); imposing it again would make the constraint Jacobian (nearly) rank
+/// deficient.
 fn contact_sequence(
     scene: &Scene,
     ph: &Physics,
@@ -368,7 +441,8 @@ fn contact_sequence(
     tol_h: f64,
     settings: &ProblemSettings,
 ) -> Result<Vec<PointFunction>, OcpError> {
-    Ok(vec![
+    let lg = settings.scheme == Scheme::Lg;
+    let mut points = vec![
         bf::end_point(
             scene,
             eps,
@@ -377,24 +451,19 @@ fn contact_sequence(
             EndQuantity::H(0.0, tol_h),
             "0 <= h1(tf) <= 1e-4",
         )?,
-        bf::impact(
-            scene,
-            ph,
-            eps,
-            0,
-            0,
-            settings.impulse_cone,
-            settings.scheme == Scheme::Lg,
-        )?,
-        bf::end_point(
+        bf::impact(scene, ph, eps, 0, 0, settings.impulse_cone, lg)?,
+    ];
+    if !lg {
+        points.push(bf::end_point(
             scene,
             eps,
             1,
             true,
             EndQuantity::DeltaV,
             "stick end: delta v = 0",
-        )?,
-    ])
+        )?);
+    }
+    Ok(points)
 }
 
 fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
@@ -479,6 +548,12 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
             "epsilon must be positive, got {eps}"
         )));
     }
+    if !(settings.effort_scale.is_finite() && settings.effort_scale > 0.0) {
+        return Err(OcpError::InvalidProblem(format!(
+            "effort_scale must be positive, got {}",
+            settings.effort_scale
+        )));
+    }
     let nq = ph.nq;
     let nx = 2 * nq + 3;
     let r = ph.radius;
@@ -542,7 +617,7 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
             ];
             cost = if qc {
                 CostKind::Qc {
-                    w: 1.0,
+                    w: settings.effort_scale,
                     omega_ref: [0.0, 0.0, 2.2],
                 }
             } else {
@@ -579,8 +654,34 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
             points.extend(contact_sequence(&scene, &ph, eps, tol_h, settings)?);
             points.push(bf::continuity(nx, 1, 2, "stick -> free continuity"));
             points.push(bf::continuity(nx, 2, 0, "periodicity"));
+            // The period row is always there (for QC it is implied by the duration bounds
+            // unless `period_bounds` narrows it), so that every continuation stage has the same
+            // NLP layout and can be warm-started with primal and dual variables.
+            let (plo, phi) = if qc {
+                (0.03, 3.0 * tmax)
+            } else {
+                (0.0, COT_MAX_PERIOD)
+            };
+            let (plo, phi) = match settings.period_bounds {
+                Some((lo, hi)) => (lo.max(plo), hi.min(phi)),
+                None => (plo, phi),
+            };
+            if !(plo <= phi && plo.is_finite() && phi.is_finite()) {
+                return Err(OcpError::InvalidProblem(format!(
+                    "period bounds [{plo}, {phi}] are empty or not finite"
+                )));
+            }
+            points.push(duration_sum(
+                3,
+                plo,
+                phi,
+                if qc {
+                    "period bounds"
+                } else {
+                    "period <= 10 s"
+                },
+            ));
             if !qc {
-                points.push(duration_sum(3, 0.0, COT_MAX_PERIOD, "period <= 10 s"));
                 // The rotation measure must stay positive for the ratio to be meaningful.
                 cost_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)];
             }
@@ -659,7 +760,19 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
         _ => return Err(OcpError::UnknownProblem(name.into(), PROBLEMS.join(", "))),
     }
     let modes: Vec<Mode> = defs.iter().map(|d| d.mode).collect();
-    let mut phases = make_phases(&scene, &ph, &defs, cost, eps, pts, &q_limits)?;
+    let mut phases = make_phases(
+        &scene,
+        &ph,
+        &defs,
+        cost,
+        eps,
+        pts,
+        &q_limits,
+        settings.start.as_ref(),
+    )?;
+    if settings.scheme == Scheme::Lg {
+        bf::stick_at_acceleration_level(&scene, &ph, cost, eps, &modes, &mut phases)?;
+    }
     if let Some(ws) = &settings.warm_start {
         apply_warm_start(&mut phases, ws);
     } else if settings.guess == GuessKind::Contact {
@@ -680,8 +793,9 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
         objective,
         scheme: settings.scheme,
     };
-    let nlp = Transcription::new(&ocp)?;
-    Ok(BuiltProblem {
+    let meshes: Vec<_> = settings.mesh.iter().flatten().cloned().map(Some).collect();
+    let nlp = Transcription::with_meshes(&ocp, &meshes)?;
+    let mut built = BuiltProblem {
         name: name.into(),
         scene,
         physics: ph,
@@ -690,7 +804,13 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
         nlp,
         epsilon: eps,
         settings: settings.clone(),
-    })
+    };
+    if let Some(ws) = &settings.warm_start {
+        // The element polynomials of the previous solution evaluated at the new mesh's points
+        // (exact where the meshes agree), rather than the sampled phase guess above.
+        refine::warm_initial_point(&mut built, ws)?;
+    }
+    Ok(built)
 }
 
 /// The contact configuration q_c on the segment Q_GUESS → Q_DEEP with h(q_c) = 0.
@@ -860,6 +980,9 @@ pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSol
         raw: traj,
         params: x[p.nlp.p0..p.nlp.p0 + np].to_vec(),
         nlp_warm: None,
+        strategy: None,
+        refinement: None,
+        verification: None,
     })
 }
 
@@ -885,30 +1008,55 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
     }
 }
 
-/// Solves `p`. Default strategy ([`GuessKind::Auto`]): solve from the PARAMS.md guess (or
-/// the warm start); if that does not succeed, solve again from the geometric
-/// [`GuessKind::Contact`] guess. `callback` sees every iteration (return
-/// `false` to stop).
+/// Solves `p` directly. Initial point: an exact primal-dual warm start when `p.settings`
+/// carries a warm-start solution of the same problem on the same mesh, else its interpolated
+/// primal point or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
+/// solve from the PARAMS.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
+/// `callback` sees every iteration (return `false` to stop). The library's default
+/// [`strategy::Strategy`] wraps this in a continuation.
 pub fn solve(
     p: &BuiltProblem,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
 ) -> Result<OcpSolution, OcpError> {
     let start = Instant::now();
-    let settings = solver_settings(&p.settings);
     let mut stages = Vec::new();
     let mut iters = 0;
-    let sol = solve_nlp(&p.nlp, &settings, None, reborrow(&mut callback))?;
+    let exact = p
+        .settings
+        .warm_start
+        .as_ref()
+        .and_then(|ws| exact_warm_start(p, ws));
+    let (sol, label) = match exact {
+        Some(w) => (
+            solve_nlp(
+                &p.nlp,
+                &warm_settings(&p.settings),
+                Some(w),
+                reborrow(&mut callback),
+            )?,
+            "exact warm start".to_string(),
+        ),
+        None => (
+            solve_nlp(
+                &p.nlp,
+                &if p.settings.warm_start.is_some() {
+                    warm_settings(&p.settings)
+                } else {
+                    solver_settings(&p.settings)
+                },
+                None,
+                reborrow(&mut callback),
+            )?,
+            if p.settings.warm_start.is_some() {
+                "interpolated warm start".to_string()
+            } else {
+                format!("{:?} guess", p.settings.guess)
+            },
+        ),
+    };
     iters += sol.iterations;
     stages.push((
-        format!(
-            "{:?} guess, eps {}",
-            if p.settings.warm_start.is_some() {
-                GuessKind::Auto
-            } else {
-                p.settings.guess
-            },
-            p.epsilon
-        ),
+        format!("{label}, eps {}", p.epsilon),
         sol.status,
         sol.iterations,
     ));
@@ -923,7 +1071,12 @@ pub fn solve(
             ..p.settings.clone()
         };
         fallback = build(&p.name, &s1)?;
-        let sol1 = solve_nlp(&fallback.nlp, &settings, None, reborrow(&mut callback))?;
+        let sol1 = solve_nlp(
+            &fallback.nlp,
+            &solver_settings(&p.settings),
+            None,
+            reborrow(&mut callback),
+        )?;
         iters += sol1.iterations;
         stages.push((
             format!("Contact guess, eps {}", p.epsilon),
@@ -933,14 +1086,71 @@ pub fn solve(
         best = (sol1, &fallback);
     }
     let (sol, pp) = best;
-    let mut out = solution_at(pp, &sol.x, sol.status)?;
+    let mut out = finish_solution(pp, &sol)?;
     out.iterations = iters;
     out.solve_seconds = start.elapsed().as_secs_f64();
     out.stages = stages;
+    Ok(out)
+}
+
+/// Interior-point settings for a warm-started stage: a small initial μ and bound pushes, so
+/// the iterates stay near the previous solution instead of re-centring (unless the caller set
+/// its own [`ProblemSettings::ipm`]).
+pub fn warm_settings(s: &ProblemSettings) -> Settings {
+    let mut st = solver_settings(s);
+    if s.ipm.is_none() {
+        st.mu_init = 1e-4;
+        st.warm_start_bound_push = 1e-6;
+        st.warm_start_mult_bound_push = 1e-6;
+    }
+    st
+}
+
+/// The primal-dual point of `ws` if it belongs to the same problem on the same mesh (same
+/// NLP layout), so that it can warm-start `p` exactly rather than by interpolation.
+fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a WarmStart> {
+    let w = ws.nlp_warm.as_ref()?;
+    let n = crate::ipm::Nlp::num_variables(&p.nlp);
+    let m = crate::ipm::Nlp::num_constraints(&p.nlp);
+    let same = ws.problem == p.name
+        && ws.scheme == p.settings.scheme
+        && ws.points == p.settings.points
+        && ws.nlp_size == (n, m)
+        && w.x.len() == n
+        && w.lambda.len() == m
+        && w.z_l.len() == n
+        && w.z_u.len() == n
+        && w.x.iter().all(|v| v.is_finite());
+    same.then_some(w)
+}
+
+/// Solves `p` from the primal-dual point `warm` (same NLP layout) with [`warm_settings`].
+pub fn solve_warm(
+    p: &BuiltProblem,
+    warm: &WarmStart,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<OcpSolution, OcpError> {
+    let start = Instant::now();
+    let sol = solve_nlp(&p.nlp, &warm_settings(&p.settings), Some(warm), callback)?;
+    let mut out = finish_solution(p, &sol)?;
+    out.iterations = sol.iterations;
+    out.solve_seconds = start.elapsed().as_secs_f64();
+    out.stages = vec![(
+        format!("warm start, eps {}", p.epsilon),
+        sol.status,
+        sol.iterations,
+    )];
+    Ok(out)
+}
+
+/// The [`OcpSolution`] of an interior-point result, with its statistics and warm-start data.
+fn finish_solution(p: &BuiltProblem, sol: &Solution) -> Result<OcpSolution, OcpError> {
+    let mut out = solution_at(p, &sol.x, sol.status)?;
+    out.iterations = sol.iterations;
     out.constraint_violation = sol.constraint_violation;
     out.dual_infeasibility = sol.dual_infeasibility;
     out.timing = sol.timing;
     out.counters = sol.counters;
-    out.nlp_warm = Some(WarmStart::from(&sol));
+    out.nlp_warm = Some(WarmStart::from(sol));
     Ok(out)
 }

@@ -1,0 +1,350 @@
+//! Adaptive hp mesh refinement of the Radau transcription of the named problems (paper
+//! Sect. 5; the method of Patterson, Hager & Rao 2015, see [`crate::ocp::mesh`]).
+//!
+//! [`refine`]: solve → [`error_estimate`] per element (the collocation defect of eq. 58
+//! between the nodes, with the implicit dynamics eq. 26/29 solved for q̈, ω̇, λ) → raise the
+//! degree of or split the elements above the tolerance → re-solve warm-started from the
+//! previous solution interpolated exactly onto the new mesh → … until the largest element error
+//! is ≤ tol, or the round or size limits stop it (reported as not converged). The result holds
+//! the final solution, its mesh (a [`MeshSpec`] per phase, for
+//! [`ProblemSettings::mesh`]) and the history of objective and error per round.
+
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+
+use super::{BuiltProblem, OcpSolution, ProblemSettings, build, solve};
+use crate::ipm::{IterationInfo, Settings, Status};
+use crate::ocp::mesh::values_at;
+use crate::ocp::{HpRule, MeshSpec, OcpError, collocation_errors};
+
+/// Options of [`refine`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct RefineOptions {
+    /// Tolerance on the largest element error estimate.
+    pub tol: f64,
+    /// Refinement rounds after the first solve.
+    pub max_rounds: usize,
+    /// Limits of the ph rule.
+    pub rule: HpRule,
+    /// Largest number of collocation points per phase; a refinement beyond it stops.
+    pub max_points: usize,
+    /// Initial barrier parameter of the warm-started solves (the previous solution is close
+    /// to the new optimum; a large μ would pull it back towards the analytic centre).
+    pub warm_mu_init: f64,
+}
+
+impl Default for RefineOptions {
+    fn default() -> Self {
+        RefineOptions {
+            tol: 1e-4,
+            max_rounds: 8,
+            rule: HpRule::default(),
+            max_points: 400,
+            warm_mu_init: 1e-5,
+        }
+    }
+}
+
+/// One solve of the refinement.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefineRound {
+    /// Round (0 = the initial mesh).
+    pub round: usize,
+    /// Elements per phase.
+    pub elements: Vec<usize>,
+    /// Collocation points per phase.
+    pub points: Vec<usize>,
+    /// Objective φ.
+    pub objective: f64,
+    /// Largest element error estimate per phase.
+    pub phase_errors: Vec<f64>,
+    /// Largest element error estimate.
+    pub max_error: f64,
+    /// Solver status.
+    pub status: Status,
+    /// Interior-point iterations.
+    pub iterations: usize,
+    /// Wall time of the round: build, solve and estimate (s).
+    pub seconds: f64,
+}
+
+/// Result of [`refine`]; serialisable into `solution.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefineResult {
+    /// Tolerance requested.
+    pub tol: f64,
+    /// True if the largest error estimate of the final solution is ≤ `tol`.
+    pub converged: bool,
+    /// Why the refinement stopped.
+    pub stop_reason: String,
+    /// Mesh of the final solution, per phase.
+    pub mesh: Vec<MeshSpec>,
+    /// Error estimate of the final solution, per phase and element.
+    pub errors: Vec<Vec<f64>>,
+    /// One entry per solve.
+    pub history: Vec<RefineRound>,
+    /// Wall time of all rounds (s).
+    pub total_seconds: f64,
+    /// The final solution (the last successful solve).
+    pub solution: OcpSolution,
+}
+
+/// [`RefineResult`] without its solution: what `solution.json` stores about a refinement.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RefineReport {
+    /// Tolerance requested.
+    pub tol: f64,
+    /// True if the largest error estimate of the final solution is ≤ `tol`.
+    pub converged: bool,
+    /// Why the refinement stopped.
+    pub stop_reason: String,
+    /// Mesh of the final solution, per phase.
+    pub mesh: Vec<MeshSpec>,
+    /// Error estimate of the final solution, per phase and element.
+    pub errors: Vec<Vec<f64>>,
+    /// One entry per solve.
+    pub history: Vec<RefineRound>,
+}
+
+impl RefineResult {
+    /// The refinement record without the solution.
+    pub fn report(&self) -> RefineReport {
+        RefineReport {
+            tol: self.tol,
+            converged: self.converged,
+            stop_reason: self.stop_reason.clone(),
+            mesh: self.mesh.clone(),
+            errors: self.errors.clone(),
+            history: self.history.clone(),
+        }
+    }
+}
+
+/// Collocation error estimate of `sol` (a solution of `p`), per phase and element.
+pub fn error_estimate(p: &BuiltProblem, sol: &OcpSolution) -> Result<Vec<Vec<f64>>, OcpError> {
+    collocation_errors(&p.ocp, &sol.raw)
+}
+
+/// The hp-Radau mesh of every phase of `p`'s transcription.
+pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, OcpError> {
+    p.nlp
+        .phases
+        .iter()
+        .map(|l| {
+            if l.mesh.gauss_end {
+                return Err(OcpError::InvalidProblem(
+                    "mesh refinement needs the Radau scheme".into(),
+                ));
+            }
+            let mut breaks: Vec<f64> = l
+                .mesh
+                .elements
+                .iter()
+                .map(|r| l.mesh.state_tau[r.start])
+                .collect();
+            breaks.push(1.0);
+            let spec = MeshSpec {
+                breaks,
+                degrees: l.mesh.elements.iter().map(|r| r.len() - 1).collect(),
+            };
+            spec.validate()?;
+            Ok(spec)
+        })
+        .collect()
+}
+
+/// Sets the initial point of `p` to `prev` interpolated exactly (element polynomials) onto
+/// `p`'s mesh: states, algebraic variables, controls, durations, parameters and cost states.
+pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<(), OcpError> {
+    if prev.raw.len() != p.nlp.phases.len() {
+        return Err(OcpError::InvalidProblem(format!(
+            "warm start has {} phases, the problem {}",
+            prev.raw.len(),
+            p.nlp.phases.len()
+        )));
+    }
+    let mut x = p.nlp.initial().to_vec();
+    for (l, raw) in p.nlp.phases.iter().zip(&prev.raw) {
+        let put = |x: &mut Vec<f64>, idx: &dyn Fn(usize) -> usize, v: &[f64], n: usize| {
+            for (i, &val) in v.iter().enumerate().take(n) {
+                if val.is_finite() {
+                    x[idx(i)] = val;
+                }
+            }
+        };
+        for (pt, &tau) in l.mesh.state_tau.iter().enumerate() {
+            let [xv, _, _] = values_at(raw, tau);
+            put(&mut x, &|i| l.x(pt, i), &xv, l.nx);
+        }
+        for (k, c) in l.mesh.colloc.iter().enumerate() {
+            let [_, a, u] = values_at(raw, c.tau);
+            put(&mut x, &|i| l.a(k, i), &a, l.na);
+            put(&mut x, &|i| l.u(k, i), &u, l.nu);
+        }
+        if raw.duration.is_finite() {
+            x[l.t] = raw.duration;
+        }
+    }
+    let np = p.ocp.params.len();
+    for (i, &v) in prev.params.iter().enumerate().take(np) {
+        x[p.nlp.p0 + i] = v;
+    }
+    for (j, &v) in [prev.c1, prev.c2].iter().enumerate().take(p.ocp.n_costs) {
+        if v.is_finite() {
+            x[p.nlp.c0 + j] = v;
+        }
+    }
+    p.nlp.set_initial_point(&x)
+}
+
+fn max_nan(v: impl IntoIterator<Item = f64>) -> f64 {
+    v.into_iter().fold(0.0f64, |m, e| {
+        if e.is_nan() || m.is_nan() {
+            f64::NAN
+        } else {
+            m.max(e)
+        }
+    })
+}
+
+type IterCallback<'a> = Option<&'a mut dyn FnMut(&IterationInfo) -> bool>;
+
+fn reborrow<'a>(c: &'a mut IterCallback<'_>) -> IterCallback<'a> {
+    match c {
+        Some(f) => Some(&mut **f),
+        None => None,
+    }
+}
+
+/// Adaptive mesh refinement of the named problem (see the module docs). The first solve uses
+/// `settings` as given (its `mesh`, or `scheme` and `points`, which must be Radau); `callback`
+/// sees every interior-point iteration (return `false` to stop a solve), `on_round` every
+/// finished round.
+pub fn refine(
+    name: &str,
+    settings: &ProblemSettings,
+    opts: &RefineOptions,
+    mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+    mut on_round: Option<&mut dyn FnMut(&RefineRound)>,
+) -> Result<RefineResult, OcpError> {
+    if !(opts.warm_mu_init.is_finite() && opts.warm_mu_init > 0.0) {
+        return Err(OcpError::InvalidProblem(format!(
+            "warm_mu_init must be positive, got {}",
+            opts.warm_mu_init
+        )));
+    }
+    if !(opts.tol.is_finite() && opts.tol > 0.0) {
+        return Err(OcpError::InvalidProblem(format!(
+            "refinement tolerance must be positive, got {}",
+            opts.tol
+        )));
+    }
+    let mut s = settings.clone();
+    let mut history = Vec::new();
+    let mut best: Option<(OcpSolution, Vec<MeshSpec>, Vec<Vec<f64>>)> = None;
+    let mut converged = false;
+    let mut stop_reason = String::new();
+    let mut prev: Option<OcpSolution> = None;
+    for round in 0..=opts.max_rounds {
+        let start = Instant::now();
+        let mut p = build(name, &s)?;
+        let mesh = current_mesh(&p)?;
+        if let Some(pr) = &prev {
+            warm_initial_point(&mut p, pr)?;
+        }
+        let sol = match solve(&p, reborrow(&mut callback)) {
+            Ok(sol) => sol,
+            // A breakdown after the first round ends the refinement with the last solution.
+            Err(e) if best.is_some() => {
+                stop_reason = format!("solver error in round {round}: {e}");
+                break;
+            }
+            Err(e) => return Err(e),
+        };
+        let errors = error_estimate(&p, &sol)?;
+        let phase_errors: Vec<f64> = errors.iter().map(|e| max_nan(e.iter().copied())).collect();
+        let max_error = max_nan(phase_errors.iter().copied());
+        let rec = RefineRound {
+            round,
+            elements: mesh.iter().map(MeshSpec::n_elements).collect(),
+            points: mesh.iter().map(MeshSpec::n_points).collect(),
+            objective: sol.objective,
+            phase_errors,
+            max_error,
+            status: sol.status,
+            iterations: sol.iterations,
+            seconds: start.elapsed().as_secs_f64(),
+        };
+        if let Some(f) = on_round.as_mut() {
+            f(&rec);
+        }
+        history.push(rec);
+        if !sol.status.is_success() {
+            stop_reason = format!("solve failed in round {round}: {:?}", sol.status);
+            if best.is_none() {
+                best = Some((sol, mesh, errors));
+            }
+            break;
+        }
+        if max_error <= opts.tol {
+            converged = true;
+            stop_reason = format!("tolerance met in round {round}");
+            best = Some((sol, mesh, errors));
+            break;
+        }
+        if round == opts.max_rounds {
+            stop_reason = format!("round limit {} reached", opts.max_rounds);
+            best = Some((sol, mesh, errors));
+            break;
+        }
+        let next: Vec<MeshSpec> = mesh
+            .iter()
+            .zip(&errors)
+            .map(|(m, e)| m.refined(e, opts.tol, opts.rule))
+            .collect();
+        if next == mesh {
+            stop_reason = "no element can be refined (non-finite error estimate)".into();
+            best = Some((sol, mesh, errors));
+            break;
+        }
+        if next.iter().any(|m| m.n_points() > opts.max_points) {
+            stop_reason = format!("point limit {} per phase reached", opts.max_points);
+            best = Some((sol, mesh, errors));
+            break;
+        }
+        best = Some((sol.clone(), mesh, errors));
+        s.mesh = Some(next);
+        // Primal interpolation only (`warm_initial_point`): the multipliers of another mesh
+        // do not carry over.
+        s.warm_start = Some(OcpSolution {
+            nlp_warm: None,
+            ..sol.clone()
+        });
+        if round == 0 {
+            let base = settings.ipm.clone().unwrap_or_else(|| Settings {
+                tol: 1e-8,
+                ..Settings::default()
+            });
+            s.ipm = Some(Settings {
+                mu_init: opts.warm_mu_init,
+                ..base
+            });
+        }
+        prev = Some(sol);
+    }
+    let (solution, mesh, errors) = best.ok_or_else(|| {
+        OcpError::InvalidProblem("refinement ran no solve (max_rounds overflow)".into())
+    })?;
+    Ok(RefineResult {
+        total_seconds: history.iter().map(|r| r.seconds).sum(),
+        tol: opts.tol,
+        converged,
+        stop_reason,
+        mesh,
+        errors,
+        history,
+        solution,
+    })
+}

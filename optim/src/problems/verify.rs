@@ -1,0 +1,811 @@
+//! Built-in trajectory verification of optimal-control solutions: every phase of a solved
+//! problem is re-integrated with the optimal torques by the simulator's adaptive DOPRI5
+//! (bf-sim) on the physics of bf-model, and the end-of-phase state defects
+//! x_sim(t_f) − x_colloc(t_f) are reported.
+//!
+//! | item | paper |
+//! |---|---|
+//! | free phases: q̈, ω̇ from `bf_model::Model::free` | eq. 26 |
+//! | stick phases: λ from the index-reduced stick law (`Model::stick`, d/dt Δv = 0) | eq. 29, 33 |
+//! | [`PhaseVerification::max_delta_v`]: drift of the stick constraint Δv = 0 | eq. 13–14 |
+//! | [`PhaseVerification::min_lambda_n`], [`PhaseVerification::min_sigma`] | eq. 12, 18 |
+//! | [`PhaseVerification::min_h`]: penetration check of free phases | eq. 4 |
+//! | [`PhaseVerification::node_residual`]: the OCP's dynamics residual at the collocation nodes, evaluated with bf-model's kernels and parameters | eq. 26, 29 |
+//! | contact geometry with the smooth saturation of the solution's ε | eq. 58–59 |
+//!
+//! Conventions:
+//! * **Torques between collocation nodes** are the solution's own dense output: in each
+//!   collocation element, the Lagrange polynomial through the element's collocation nodes
+//!   (what [`PhaseTrajectory::u_at`] evaluates), clamped to |τ_i| ≤ τ_max,i. This is exactly the
+//!   function that `OcpSolution::dense` and `torques.csv` sample (100 samples per phase).
+//!   The polynomial jumps at element boundaries, so the integrator is restarted at each of them
+//!   (no step straddles a discontinuity of the input). Where the optimal torques saturate,
+//!   the polynomial overshoots τ_max between the nodes and the clamp changes the torque: this is
+//!   then usually the dominant defect (`reach`: ~1e-3–1e-2 clamped vs ~1e-9 with
+//!   [`TorqueInterpolant::Polynomial`]); [`PhaseVerification::max_torque_overshoot`] shows it.
+//! * **Each phase starts from its own collocated initial state**: the Free → Stick switch
+//!   applies the sticking impact law (eq. 40) with the impulse ι from the NLP parameters, and
+//!   phase continuity / periodicity are NLP constraints; they are not re-integrated here.
+//! * **Stick phases** use the physical stick dynamics (λ from eq. 33), not the collocated λ:
+//!   the check is whether the optimal torques *keep* the contact sticking. bf-model refuses
+//!   contact queries beyond |h| ≤ tol·r; the OCP allows h ≤ 10⁻⁴ at the touch-down, so the
+//!   verification uses [`CONTACT_TOLERANCE`] and reports max |h| instead.
+//! * Defects are absolute (rad, rad/s), max over components. A phase whose re-integration
+//!   fails (model error, step-size underflow) is reported with `failure` set and NaN defects
+//!   (written as `null` in JSON); `Verification::max_defect` is then NaN.
+
+use std::fmt;
+use std::time::Instant;
+
+use bf_model::fixtures::{self, DynKernels};
+use bf_model::{ContactVariant, Model, State, TransitionSettings, Vec3};
+use bf_sim::{Guard, HybridSystem, SimError, SimOutput, SimSettings, Transition};
+use serde::{Deserialize, Serialize};
+
+use super::bf::Mode;
+use super::{BuiltProblem, OcpSolution};
+use crate::ocp::nodes::lagrange_basis;
+use crate::ocp::{OcpError, PhaseTrajectory};
+
+/// Contact tolerance (fraction of the ball radius) of the stick dynamics during verification.
+pub const CONTACT_TOLERANCE: f64 = 0.05;
+
+/// atol = rtol · `ATOL_FACTOR` (states are O(0.1–10) rad, rad/s).
+pub const ATOL_FACTOR: f64 = 1e-2;
+
+/// Extra dense-output samples per collocation element for the path checks (h, Δv, λ_n, σ),
+/// in addition to the integrator's accepted steps.
+pub const SAMPLES_PER_ELEMENT: usize = 16;
+
+/// JSON has no NaN/∞: non-finite values are written as `null` and read back as NaN.
+mod nan_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if v.is_finite() {
+            s.serialize_some(v)
+        } else {
+            s.serialize_none()
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+}
+
+/// Torques between the collocation nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub enum TorqueInterpolant {
+    /// The element's collocation polynomial clamped to |τ_i| ≤ τ_max,i: the solution's dense
+    /// output and `torques.csv` (what a simulation of the exported torques applies).
+    #[default]
+    Clamped,
+    /// The element's collocation polynomial, unclamped (may exceed τ_max between nodes where
+    /// the optimal torques saturate; closer to what the collocation equations imply).
+    Polynomial,
+}
+
+/// Options of [`verify_with`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VerifyOptions {
+    /// DOPRI5 relative tolerance, in (0, 0.1].
+    pub rtol: f64,
+    /// Absolute tolerance (state units); `None`: rtol · [`ATOL_FACTOR`].
+    pub atol: Option<f64>,
+    /// Torque interpolant.
+    pub torque: TorqueInterpolant,
+}
+
+impl Default for VerifyOptions {
+    fn default() -> Self {
+        VerifyOptions {
+            rtol: 1e-10,
+            atol: None,
+            torque: TorqueInterpolant::Clamped,
+        }
+    }
+}
+
+/// Verification record of one phase.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PhaseVerification {
+    /// Phase index.
+    pub phase: usize,
+    /// Contact mode.
+    pub mode: Mode,
+    /// Duration T (s).
+    pub duration: f64,
+    /// Phase-local time the re-integration reached (= T unless it failed).
+    pub t_reached: f64,
+    /// Why the re-integration stopped early (`None`: it reached T).
+    pub failure: Option<String>,
+    /// max_i |x_sim,i(T) − x_colloc,i(T)| over all 2 nq + 3 components (NaN on failure).
+    #[serde(with = "nan_null")]
+    pub defect: f64,
+    /// The q part of `defect` (rad).
+    #[serde(with = "nan_null")]
+    pub defect_q: f64,
+    /// The q̇ part of `defect` (rad/s).
+    #[serde(with = "nan_null")]
+    pub defect_qd: f64,
+    /// The ω part of `defect` (rad/s).
+    #[serde(with = "nan_null")]
+    pub defect_omega: f64,
+    /// Local accuracy of the collocation: max over the collocation elements of the end-state
+    /// defect of a re-integration of that element alone, from its collocated start state
+    /// (NaN if one failed). `defect` / `element_defect` ≫ 1 means the phase's open-loop
+    /// dynamics amplify the local errors (unstable open-loop motion).
+    #[serde(with = "nan_null")]
+    pub element_defect: f64,
+    /// Collocated initial state (the re-integration's start).
+    pub x_start: Vec<f64>,
+    /// Re-integrated state at `t_reached`.
+    pub x_end: Vec<f64>,
+    /// Collocated state at the phase end.
+    pub x_colloc_end: Vec<f64>,
+    /// Accepted DOPRI5 steps.
+    pub steps: usize,
+    /// Rejected DOPRI5 steps.
+    pub rejected_steps: usize,
+    /// Vector-field evaluations.
+    pub rhs_evals: usize,
+    /// Relative tolerance used.
+    pub rtol: f64,
+    /// Absolute tolerance used.
+    pub atol: f64,
+    /// Largest residual of the OCP dynamics (eq. 26 / 29, force and torque units) at the
+    /// collocation nodes, evaluated with bf-model's kernels and parameters on the collocated
+    /// (x, q̈, ω̇, λ, τ): near the NLP tolerance iff both sides use the same physics.
+    #[serde(with = "nan_null")]
+    pub node_residual: f64,
+    /// Largest excess of the unclamped torque polynomial over τ_max along the samples (N m; 0
+    /// when the torques stay within their limits between the nodes). With
+    /// [`TorqueInterpolant::Clamped`] this torque error is part of the defects.
+    pub max_torque_overshoot: f64,
+    /// Free phases: min h along the re-integration (m; < 0 is penetration).
+    pub min_h: Option<f64>,
+    /// Stick phases: max ‖Δv‖ along the re-integration (m/s; drift of Δv = 0).
+    pub max_delta_v: Option<f64>,
+    /// Stick phases: min λ_n along the re-integration (N; < 0 means the contact would open).
+    pub min_lambda_n: Option<f64>,
+    /// Stick phases: min σ = μ_s λ_n − ‖λ_∥‖ (N; < 0 means the contact would slip).
+    pub min_sigma: Option<f64>,
+    /// Stick phases: max |h| along the re-integration (m).
+    pub max_abs_h: Option<f64>,
+}
+
+/// Result of [`verify`]; meant for `solution.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Verification {
+    /// Problem name.
+    pub problem: String,
+    /// Scene name.
+    pub scene: String,
+    /// ε of the smooth saturation (eq. 59) used by the re-integration.
+    pub epsilon: f64,
+    /// Torque interpolant between the collocation nodes.
+    pub torque: TorqueInterpolant,
+    /// DOPRI5 relative tolerance.
+    pub rtol: f64,
+    /// DOPRI5 absolute tolerance.
+    pub atol: f64,
+    /// Per-phase records.
+    pub phases: Vec<PhaseVerification>,
+    /// Max end-state defect over all phases (NaN if a phase failed).
+    #[serde(with = "nan_null")]
+    pub max_defect: f64,
+    /// Max node residual over all phases.
+    #[serde(with = "nan_null")]
+    pub max_node_residual: f64,
+    /// Wall time of the verification (s).
+    pub seconds: f64,
+}
+
+impl Verification {
+    /// Whether every phase was re-integrated to its end.
+    pub fn completed(&self) -> bool {
+        self.phases.iter().all(|p| p.failure.is_none())
+    }
+
+    /// Whether every phase completed with an end-state defect ≤ `tol`.
+    pub fn passes(&self, tol: f64) -> bool {
+        self.completed() && self.max_defect <= tol
+    }
+
+    /// A short table for the CLI (same text as `Display`).
+    pub fn summary(&self) -> String {
+        self.to_string()
+    }
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.2e}"))
+}
+
+impl fmt::Display for Verification {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "trajectory verification ({}, scene {}): DOPRI5 rtol {:.0e} atol {:.0e}, eps {}, {:?} torques, {:.3} s",
+            self.problem, self.scene, self.rtol, self.atol, self.epsilon, self.torque, self.seconds
+        )?;
+        writeln!(
+            f,
+            "{:>5} {:>5} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>9} {:>9}  path",
+            "phase",
+            "mode",
+            "T (s)",
+            "defect",
+            "q",
+            "qd",
+            "omega",
+            "element",
+            "steps",
+            "node res",
+            "tau over"
+        )?;
+        for p in &self.phases {
+            let mode = match p.mode {
+                Mode::Free => "free",
+                Mode::Stick => "stick",
+            };
+            let path = match p.mode {
+                Mode::Free => format!("min h {}", fmt_opt(p.min_h)),
+                Mode::Stick => format!(
+                    "max|dv| {}  min lambda_n {}  min sigma {}  max|h| {}",
+                    fmt_opt(p.max_delta_v),
+                    fmt_opt(p.min_lambda_n),
+                    fmt_opt(p.min_sigma),
+                    fmt_opt(p.max_abs_h)
+                ),
+            };
+            writeln!(
+                f,
+                "{:>5} {:>5} {:>9.4} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>6} {:>9.2e} {:>9.2e}  {}",
+                p.phase,
+                mode,
+                p.duration,
+                p.defect,
+                p.defect_q,
+                p.defect_qd,
+                p.defect_omega,
+                p.element_defect,
+                p.steps,
+                p.node_residual,
+                p.max_torque_overshoot,
+                path
+            )?;
+            if let Some(e) = &p.failure {
+                writeln!(f, "      FAILED at t = {:.6} s: {e}", p.t_reached)?;
+            }
+        }
+        writeln!(
+            f,
+            "(defect: max |x_sim - x_colloc| at the phase end; element: worst single-element \
+             defect; node res: OCP dynamics residual with bf-model; tau over: torque polynomial \
+             beyond tau_max)"
+        )?;
+        write!(f, "max end-state defect: {:.3e}", self.max_defect)
+    }
+}
+
+/// One collocation element of one phase as a (single-mode) hybrid system for bf-sim: the
+/// torque is the element's control polynomial, clamped to the torque limits.
+struct ElementSystem<'a> {
+    model: &'a Model<DynKernels>,
+    duration: f64,
+    node_tau: Vec<f64>,
+    node_u: Vec<[f64; 3]>,
+    tau_max: [f64; 3],
+    interp: TorqueInterpolant,
+}
+
+impl ElementSystem<'_> {
+    /// How far the unclamped polynomial exceeds the torque limits at t (0 inside them).
+    fn overshoot(&self, t: f64) -> f64 {
+        let s = 2.0 * t / self.duration - 1.0;
+        let l = lagrange_basis(&self.node_tau, s);
+        (0..3)
+            .map(|i| {
+                let v: f64 = l.iter().zip(&self.node_u).map(|(w, uk)| w * uk[i]).sum();
+                (v.abs() - self.tau_max[i]).max(0.0)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// τ(t) at phase-local time t.
+    fn torque(&self, t: f64) -> Vec3 {
+        let s = 2.0 * t / self.duration - 1.0;
+        let l = lagrange_basis(&self.node_tau, s);
+        let mut u = [0.0; 3];
+        for (i, ui) in u.iter_mut().enumerate() {
+            let v: f64 = l.iter().zip(&self.node_u).map(|(w, uk)| w * uk[i]).sum();
+            let m = self.tau_max[i];
+            // max/min rather than clamp: never panics, whatever the limits are.
+            *ui = match self.interp {
+                TorqueInterpolant::Clamped => v.max(-m).min(m),
+                TorqueInterpolant::Polynomial => v,
+            };
+        }
+        Vec3::new(u[0], u[1], u[2])
+    }
+
+    fn state(x: &[f64]) -> Result<State, SimError> {
+        let a: &[f64; 9] = x.try_into().map_err(|_| SimError::DimensionMismatch {
+            what: "state",
+            expected: 9,
+            found: x.len(),
+        })?;
+        Ok(State::from_array(a))
+    }
+}
+
+impl HybridSystem for ElementSystem<'_> {
+    type Mode = Mode;
+
+    fn dim(&self) -> usize {
+        9
+    }
+
+    fn rhs(&self, mode: Mode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
+        let st = Self::state(x)?;
+        let tau = self.torque(t);
+        let acc = match mode {
+            Mode::Free => self.model.free(&st, &tau),
+            Mode::Stick => self.model.stick(&st, &tau),
+        }
+        .map_err(SimError::system)?;
+        dx.copy_from_slice(&acc.state_derivative(&st.qd));
+        Ok(())
+    }
+
+    fn guards(&self, _mode: Mode) -> Vec<Guard> {
+        Vec::new()
+    }
+
+    fn guard_values(&self, _: Mode, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
+        Ok(())
+    }
+
+    fn reset(
+        &self,
+        mode: Mode,
+        _: usize,
+        _: f64,
+        _: &mut [f64],
+    ) -> Result<Transition<Mode>, SimError> {
+        Ok(Transition::To(mode))
+    }
+}
+
+/// max that propagates NaN (f64::max ignores it).
+fn nan_max(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+fn model_err(e: impl fmt::Display) -> OcpError {
+    OcpError::Model(e.to_string())
+}
+
+/// The bf-model model of `p`'s scene with the smooth contact of ε, after checking that its
+/// physical constants are the ones the OCP was built with.
+fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, OcpError> {
+    let settings = TransitionSettings {
+        contact_tolerance: CONTACT_TOLERANCE,
+        ..TransitionSettings::default()
+    };
+    let model = fixtures::scene_by_name(&p.scene.name)
+        .map_err(model_err)?
+        .with_settings(settings)
+        .map_err(model_err)?
+        .with_contact_variant(ContactVariant::Smooth(eps))
+        .map_err(model_err)?;
+    let pm = model.params();
+    let ph = &p.physics;
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1e-300);
+    let mut same = close(pm.mu_v(), ph.mu_v)
+        && close(pm.socket_damping(), ph.damping)
+        && close(pm.ball_radius(), ph.radius)
+        && close(pm.mu_s(), ph.mu_s);
+    for i in 0..3 {
+        for j in 0..3 {
+            same &= (pm.ball_inertia()[(i, j)] - ph.ib[i][j]).abs()
+                <= 1e-12 * ph.ib[i][i].abs().max(1e-300);
+        }
+    }
+    if !same {
+        return Err(OcpError::Model(format!(
+            "bf-model parameters of scene `{}` differ from the OCP's: {:?} vs {:?}",
+            p.scene.name, pm, ph
+        )));
+    }
+    Ok(model)
+}
+
+fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), OcpError> {
+    let bad = |what: &str| {
+        Err(OcpError::InvalidProblem(format!(
+            "verification: phase {k} has {what}"
+        )))
+    };
+    if !(tr.duration.is_finite() && tr.duration > 0.0) {
+        return bad(&format!("duration {}", tr.duration));
+    }
+    if tr.x.is_empty() || tr.x.iter().any(|x| x.len() != nx) {
+        return bad("states of the wrong dimension");
+    }
+    if tr.state_tau.len() != tr.x.len() || tr.node_state.len() != tr.node_tau.len() {
+        return bad("inconsistent state points / nodes");
+    }
+    if tr.state_tau.first() != Some(&-1.0) || tr.state_tau.last() != Some(&1.0) {
+        return bad("state points not spanning [-1, 1]");
+    }
+    if tr.u.len() != tr.node_tau.len() || tr.u.iter().any(|u| u.len() != 3) {
+        return bad("controls of the wrong dimension");
+    }
+    if tr.a.len() != tr.node_tau.len() {
+        return bad("algebraic variables of the wrong count");
+    }
+    if tr.elements.is_empty()
+        || tr
+            .elements
+            .iter()
+            .any(|&(a, b)| a >= b || b > tr.state_tau.len())
+    {
+        return bad("invalid element ranges");
+    }
+    let finite = |v: &[Vec<f64>]| v.iter().flatten().all(|x| x.is_finite());
+    let times_finite = tr
+        .state_tau
+        .iter()
+        .chain(&tr.node_tau)
+        .all(|t| t.is_finite());
+    if !(finite(&tr.x) && finite(&tr.u) && finite(&tr.a) && times_finite) {
+        return bad("non-finite values");
+    }
+    Ok(())
+}
+
+/// Max |residual| of eq. 26 / 29 at the collocation nodes of `tr`, with bf-model's kernels.
+fn node_residual(
+    model: &Model<DynKernels>,
+    mode: Mode,
+    tr: &PhaseTrajectory,
+) -> Result<f64, OcpError> {
+    let pm = model.params();
+    let mut worst: f64 = 0.0;
+    for k in 0..tr.node_tau.len() {
+        let x = &tr.x[tr.node_state[k]];
+        let a = &tr.a[k];
+        let need = if mode == Mode::Stick { 9 } else { 6 };
+        if a.len() < need {
+            return Err(OcpError::InvalidProblem(format!(
+                "verification: {} algebraic variables at a {mode:?} node, need {need}",
+                a.len()
+            )));
+        }
+        let st = ElementSystem::state(x).map_err(model_err)?;
+        let kin = model.evaluate(&st).map_err(model_err)?;
+        let qdd = Vec3::new(a[0], a[1], a[2]);
+        let wd = Vec3::new(a[3], a[4], a[5]);
+        let lam = if mode == Mode::Stick {
+            Vec3::new(a[6], a[7], a[8])
+        } else {
+            Vec3::zeros()
+        };
+        let tau = Vec3::new(tr.u[k][0], tr.u[k][1], tr.u[k][2]);
+        let c = &kin.contact;
+        let rf = kin.m_f * qdd + kin.cqd_g + st.qd * pm.mu_v() - tau - c.j_c.transpose() * lam;
+        let ib = pm.ball_inertia();
+        let w = &st.omega;
+        let rb = ib * wd + w.cross(&(ib * w)) + w * pm.socket_damping() + c.r_c.cross(&lam);
+        worst = worst.max(rf.amax()).max(rb.amax());
+    }
+    Ok(worst)
+}
+
+/// Running path checks of one phase.
+#[derive(Default)]
+struct PathStats {
+    min_h: f64,
+    max_dv: f64,
+    min_ln: f64,
+    min_sigma: f64,
+    max_abs_h: f64,
+    overshoot: f64,
+}
+
+impl PathStats {
+    fn new() -> Self {
+        PathStats {
+            min_h: f64::INFINITY,
+            max_dv: 0.0,
+            min_ln: f64::INFINITY,
+            min_sigma: f64::INFINITY,
+            max_abs_h: 0.0,
+            overshoot: 0.0,
+        }
+    }
+
+    fn add(&mut self, sys: &ElementSystem, mode: Mode, t: f64, x: &[f64]) -> Result<(), String> {
+        let st = ElementSystem::state(x).map_err(|e| e.to_string())?;
+        let kin = sys.model.evaluate(&st).map_err(|e| e.to_string())?;
+        let h = kin.contact.h;
+        self.overshoot = self.overshoot.max(sys.overshoot(t));
+        match mode {
+            Mode::Free => self.min_h = self.min_h.min(h),
+            Mode::Stick => {
+                let acc = sys
+                    .model
+                    .stick(&st, &sys.torque(t))
+                    .map_err(|e| e.to_string())?;
+                self.max_dv = self.max_dv.max(kin.contact.delta_v.norm());
+                self.min_ln = self.min_ln.min(acc.force.lambda_n);
+                self.min_sigma = self.min_sigma.min(acc.force.sigma);
+                self.max_abs_h = self.max_abs_h.max(h.abs());
+            }
+        }
+        Ok(())
+    }
+
+    fn add_output(
+        &mut self,
+        sys: &ElementSystem,
+        mode: Mode,
+        out: &SimOutput<Mode>,
+    ) -> Result<(), String> {
+        for (t, x) in out.trajectory.t.iter().zip(&out.trajectory.x) {
+            self.add(sys, mode, *t, x)?;
+        }
+        Ok(())
+    }
+}
+
+fn verify_phase(
+    model: &Model<DynKernels>,
+    tau_max: [f64; 3],
+    k: usize,
+    mode: Mode,
+    tr: &PhaseTrajectory,
+    rtol: f64,
+    atol: f64,
+    interp: TorqueInterpolant,
+) -> Result<PhaseVerification, OcpError> {
+    let big_t = tr.duration;
+    // The first and last state points are τ = −1 and +1 in both schemes (LG: the final state
+    // is the quadrature variable, which interpolation of the element would miss).
+    let x_start = tr.x[0].clone();
+    let x_colloc_end = tr.x[tr.x.len() - 1].clone();
+    let node_residual = node_residual(model, mode, tr)?;
+    let mut x = x_start.clone();
+    let mut stats = PathStats::new();
+    let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
+    let mut failure = None;
+    let mut t_reached = 0.0;
+    let mut s_prev = -1.0;
+    let mut element_defect = 0.0;
+    let ne = tr.elements.len();
+    for (e, &(a, b)) in tr.elements.iter().enumerate() {
+        let s_end = if e + 1 == ne {
+            1.0
+        } else {
+            tr.state_tau[b - 1]
+        };
+        let s_start = s_prev;
+        let (ta, tb) = (0.5 * (s_start + 1.0) * big_t, 0.5 * (s_end + 1.0) * big_t);
+        s_prev = s_end;
+        if tb <= ta {
+            continue;
+        }
+        let ks: Vec<usize> = (0..tr.node_tau.len())
+            .filter(|&j| (a..b).contains(&tr.node_state[j]))
+            .collect();
+        if ks.is_empty() {
+            return Err(OcpError::InvalidProblem(format!(
+                "verification: phase {k} element {e} has no collocation nodes"
+            )));
+        }
+        let sys = ElementSystem {
+            model,
+            duration: big_t,
+            node_tau: ks.iter().map(|&j| tr.node_tau[j]).collect(),
+            node_u: ks
+                .iter()
+                .map(|&j| [tr.u[j][0], tr.u[j][1], tr.u[j][2]])
+                .collect(),
+            tau_max,
+            interp,
+        };
+        let settings = SimSettings {
+            rtol,
+            atol,
+            h_max: tb - ta,
+            output_dt: Some((tb - ta) / SAMPLES_PER_ELEMENT as f64),
+            record_steps: true,
+            ..SimSettings::default()
+        };
+        // Steps are recorded: the last sample is then the state at tb.
+        let local = SimSettings {
+            output_dt: None,
+            ..settings.clone()
+        };
+        let xa = if e == 0 {
+            x_start.clone()
+        } else {
+            tr.x_at(s_start)
+        };
+        let xb = if e + 1 == ne {
+            x_colloc_end.clone()
+        } else {
+            tr.x_at(s_end)
+        };
+        element_defect = match bf_sim::simulate(&sys, local, mode, ta, &xa, tb) {
+            Ok(out) if out.trajectory.x.last().is_some() => {
+                let xe = &out.trajectory.x[out.trajectory.x.len() - 1];
+                let d = (0..xb.len())
+                    .map(|i| (xe[i] - xb[i]).abs())
+                    .fold(0.0, nan_max);
+                nan_max(element_defect, d)
+            }
+            _ => f64::NAN,
+        };
+        let (out, err) = match bf_sim::simulate(&sys, settings, mode, ta, &x, tb) {
+            Ok(out) => (out, None),
+            Err(fail) => {
+                let msg = fail.to_string();
+                (fail.partial, Some(msg))
+            }
+        };
+        steps += out.stats.accepted_steps;
+        rejected += out.stats.rejected_steps;
+        rhs += out.stats.rhs_evals;
+        if let Some(xl) = out.trajectory.x.last() {
+            x.clone_from(xl);
+            t_reached = out.t_final;
+        }
+        let path = stats.add_output(&sys, mode, &out);
+        if let Some(msg) = err.or(path.err()) {
+            failure = Some(format!("element {e}: {msg}"));
+            break;
+        }
+    }
+    let nq = 3;
+    let part = |r: std::ops::Range<usize>| -> f64 {
+        if failure.is_some() {
+            return f64::NAN;
+        }
+        r.map(|i| (x[i] - x_colloc_end[i]).abs()).fold(0.0, nan_max)
+    };
+    let (dq, dqd, dw) = (part(0..nq), part(nq..2 * nq), part(2 * nq..2 * nq + 3));
+    let stick = mode == Mode::Stick;
+    let finite_or_none = |v: f64, on: bool| (on && v.is_finite()).then_some(v);
+    Ok(PhaseVerification {
+        phase: k,
+        mode,
+        duration: big_t,
+        t_reached,
+        failure,
+        defect: dq.max(dqd).max(dw),
+        defect_q: dq,
+        defect_qd: dqd,
+        defect_omega: dw,
+        element_defect,
+        x_start,
+        x_end: x,
+        x_colloc_end,
+        steps,
+        rejected_steps: rejected,
+        rhs_evals: rhs,
+        rtol,
+        atol,
+        node_residual,
+        max_torque_overshoot: stats.overshoot,
+        min_h: finite_or_none(stats.min_h, !stick),
+        max_delta_v: finite_or_none(stats.max_dv, stick),
+        min_lambda_n: finite_or_none(stats.min_ln, stick),
+        min_sigma: finite_or_none(stats.min_sigma, stick),
+        max_abs_h: finite_or_none(stats.max_abs_h, stick),
+    })
+}
+
+/// [`verify_with`] at `rtol` with atol = rtol · [`ATOL_FACTOR`] and the clamped torque
+/// interpolant of the dense output / `torques.csv`.
+pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verification, OcpError> {
+    verify_with(
+        p,
+        sol,
+        &VerifyOptions {
+            rtol,
+            ..VerifyOptions::default()
+        },
+    )
+}
+
+/// Re-integrates every phase of `sol` (a solution of `p`) from its collocated initial state
+/// with the solution's torques, by DOPRI5 on bf-model's free / stick dynamics with the smooth
+/// contact of ε = `sol.epsilon`, and reports the end-of-phase state defects and path checks
+/// (see the module docs).
+///
+/// Errors: tolerances out of range (rtol ∉ (0, 0.1], atol ≤ 0); a solution that does not
+/// match `p` (phase count, modes, ε, dimensions); non-finite solution data; a scene without a
+/// bf-model counterpart or whose constants differ from the OCP's. A re-integration that breaks
+/// down part-way is *not* an error: it is reported in that phase's `failure`.
+pub fn verify_with(
+    p: &BuiltProblem,
+    sol: &OcpSolution,
+    opt: &VerifyOptions,
+) -> Result<Verification, OcpError> {
+    let start = Instant::now();
+    let rtol = opt.rtol;
+    if !(rtol.is_finite() && rtol > 0.0 && rtol <= 0.1) {
+        return Err(OcpError::InvalidProblem(format!(
+            "verification rtol must be in (0, 0.1], got {rtol}"
+        )));
+    }
+    let atol = opt.atol.unwrap_or(rtol * ATOL_FACTOR);
+    if !(atol.is_finite() && atol > 0.0) {
+        return Err(OcpError::InvalidProblem(format!(
+            "verification atol must be finite and > 0, got {atol}"
+        )));
+    }
+    if p.physics.nq != 3 {
+        return Err(OcpError::Model(format!(
+            "verification needs a 3-joint contact scene, `{}` has {}",
+            p.scene.name, p.physics.nq
+        )));
+    }
+    if sol.raw.len() != p.modes.len() || sol.modes != p.modes {
+        return Err(OcpError::InvalidProblem(format!(
+            "verification: the solution has modes {:?}, the problem {:?}",
+            sol.modes, p.modes
+        )));
+    }
+    let eps = sol.epsilon;
+    if !(eps.is_finite() && eps > 0.0) || (eps - p.epsilon).abs() > 1e-12 * p.epsilon.abs() {
+        return Err(OcpError::InvalidProblem(format!(
+            "verification: solution eps {eps} does not match the problem's {}",
+            p.epsilon
+        )));
+    }
+    let model = verification_model(p, eps)?;
+    let mut tau_max = [f64::INFINITY; 3];
+    for (t, m) in tau_max.iter_mut().zip(&p.physics.tau_max) {
+        if !m.is_nan() {
+            *t = m.abs();
+        }
+    }
+    let mut phases = Vec::with_capacity(sol.raw.len());
+    for (k, tr) in sol.raw.iter().enumerate() {
+        check_phase_data(k, tr, 9)?;
+        phases.push(verify_phase(
+            &model,
+            tau_max,
+            k,
+            sol.modes[k],
+            tr,
+            rtol,
+            atol,
+            opt.torque,
+        )?);
+    }
+    let fold = |f: &dyn Fn(&PhaseVerification) -> f64| phases.iter().map(f).fold(0.0, nan_max);
+    let max_defect = fold(&|p| p.defect);
+    let max_node_residual = fold(&|p| p.node_residual);
+    Ok(Verification {
+        problem: sol.problem.clone(),
+        scene: p.scene.name.clone(),
+        epsilon: eps,
+        torque: opt.torque,
+        rtol,
+        atol,
+        max_defect,
+        max_node_residual,
+        phases,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}

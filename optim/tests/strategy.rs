@@ -1,0 +1,189 @@
+//! Solve strategies (`bf_optim::problems::strategy`): the default continuation must find a
+//! clearly better optimum of `periodic-qc` than the plain cold start, and one that survives
+//! re-integration; multi-start must be deterministic and never worse than its start 0 (the
+//! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
+
+use bf_optim::ipm::Status;
+use bf_optim::problems::strategy::{Strategy, random_start, solve_with_strategy};
+use bf_optim::problems::verify::verify;
+use bf_optim::problems::{
+    OcpSolution, ProblemSettings, Q_GUESS, StartGuess, build, solve, solve_warm,
+};
+
+#[test]
+fn default_strategy_beats_cold_start_on_periodic_qc_and_verifies() {
+    let s = ProblemSettings::default();
+    let (_, direct) = solve_with_strategy("periodic-qc", &s, Strategy::Direct, None).unwrap();
+    assert!(direct.status.is_success());
+    let (p, cont) = solve_with_strategy("periodic-qc", &s, Strategy::default(), None).unwrap();
+    assert_eq!(Strategy::default(), Strategy::Continuation);
+    assert!(cont.status.is_success(), "{:?}", cont.strategy);
+    let rep = cont.strategy.as_ref().unwrap();
+    println!("{}", rep.table());
+    // "A clear margin": at least 20 % lower cost of quadratic tracking error and effort.
+    assert!(
+        cont.objective < 0.8 * direct.objective,
+        "continuation {} vs cold start {}",
+        cont.objective,
+        direct.objective
+    );
+    // The kept solution is of the target problem: the user's ε and a free period.
+    assert_eq!(cont.epsilon, direct.epsilon);
+    assert!(p.settings.period_bounds.is_none());
+    let k = rep.chosen.unwrap();
+    let last = rep.records.iter().rfind(|r| r.chain == k).unwrap();
+    assert_eq!(last.objective, cont.objective);
+    assert_eq!(
+        rep.iterations,
+        rep.records.iter().map(|r| r.iterations).sum::<usize>()
+    );
+    // The optimum survives re-integration with the optimal torques.
+    let v = verify(&p, &cont, 1e-10).unwrap();
+    println!("{}", v.summary());
+    assert!(v.completed());
+    assert!(v.max_defect < 1e-3, "defect {}", v.max_defect);
+}
+
+#[test]
+fn multistart_is_deterministic_and_never_worse_than_its_default_start() {
+    let s = ProblemSettings::default();
+    let st = Strategy::Multistart {
+        starts: 3,
+        seed: 11,
+    };
+    let (_, a) = solve_with_strategy("periodic-qc", &s, st, None).unwrap();
+    let (_, b) = solve_with_strategy("periodic-qc", &s, st, None).unwrap();
+    // Parallel solves, same answer to the bit (no shared state, ordered reduction).
+    assert_eq!(a.objective.to_bits(), b.objective.to_bits());
+    let ra = a.strategy.as_ref().unwrap();
+    assert_eq!(ra.records.len(), 3);
+    assert_eq!(
+        ra.records.iter().map(|r| r.chain).collect::<Vec<_>>(),
+        [0, 1, 2]
+    );
+    let direct = solve(&build("periodic-qc", &s).unwrap(), None).unwrap();
+    // Start 0 is the cold start itself.
+    assert!((ra.records[0].objective - direct.objective).abs() < 1e-9 * direct.objective);
+    let best_ok = ra
+        .records
+        .iter()
+        .filter(|r| r.status.is_success())
+        .map(|r| r.objective)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(a.objective, best_ok);
+    assert!(a.objective <= direct.objective * (1.0 + 1e-9));
+}
+
+#[test]
+fn random_starts_are_reproducible_and_within_their_ranges() {
+    let d = random_start(0, 5, 3, 3);
+    assert_eq!(d.q, Q_GUESS.to_vec());
+    assert_eq!(d.durations, vec![1.0; 3]);
+    let a = random_start(4, 5, 3, 3);
+    assert_eq!(a, random_start(4, 5, 3, 3));
+    assert_ne!(a, random_start(4, 6, 3, 3));
+    assert_ne!(a, random_start(5, 5, 3, 3));
+    for k in 1..200 {
+        let g = random_start(k, 1, 3, 3);
+        for (q, q0) in g.q.iter().zip(Q_GUESS) {
+            assert!((q - q0).abs() <= 0.6);
+        }
+        for t in &g.durations {
+            assert!((0.05..1.6).contains(t), "{t}");
+        }
+    }
+}
+
+#[test]
+fn exact_warm_start_restarts_at_the_optimum_also_through_json() {
+    let s = ProblemSettings::default();
+    let p = build("periodic-qc", &s).unwrap();
+    let sol = solve(&p, None).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    let dir = std::env::temp_dir().join(format!("bf-strategy-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("solution.json");
+    sol.write_json(&path).unwrap();
+    let back = OcpSolution::read_json(&path).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    // serde_json reads floats to within an ulp or so (no `float_roundtrip` feature).
+    let (a, b) = (
+        back.nlp_warm.as_ref().unwrap(),
+        sol.nlp_warm.as_ref().unwrap(),
+    );
+    assert_eq!(a.x.len(), b.x.len());
+    let close = |u: &[f64], v: &[f64]| {
+        u.iter()
+            .zip(v)
+            .all(|(p, q)| (p - q).abs() <= 1e-14 * p.abs().max(q.abs()).max(1e-300))
+    };
+    assert!(close(&a.x, &b.x) && close(&a.lambda, &b.lambda));
+    assert!(close(&a.z_l, &b.z_l) && close(&a.z_u, &b.z_u));
+    let s2 = ProblemSettings {
+        warm_start: Some(back),
+        ..ProblemSettings::default()
+    };
+    let p2 = build("periodic-qc", &s2).unwrap();
+    let again = solve(&p2, None).unwrap();
+    assert!(again.status.is_success());
+    assert!(again.stages[0].0.starts_with("exact warm start"));
+    assert!(again.iterations <= 15, "{} iterations", again.iterations);
+    assert!((again.objective - sol.objective).abs() < 1e-6 * sol.objective);
+    // The same through the library call.
+    let w = solve_warm(&p, sol.nlp_warm.as_ref().unwrap(), None).unwrap();
+    assert!(w.iterations <= 15 && (w.objective - sol.objective).abs() < 1e-6 * sol.objective);
+}
+
+#[test]
+fn continuation_of_a_problem_without_period_is_an_eps_homotopy() {
+    let s = ProblemSettings::default();
+    let (_, d) = solve_with_strategy("reach", &s, Strategy::Direct, None).unwrap();
+    let (p, c) = solve_with_strategy("reach", &s, Strategy::Continuation, None).unwrap();
+    let rep = c.strategy.as_ref().unwrap();
+    assert_eq!(rep.records.len(), 2);
+    assert!(rep.records[0].stage.starts_with("eps 0.1"));
+    assert_eq!(p.epsilon, d.epsilon);
+    assert!(c.status.is_success() && d.status.is_success());
+    // Reaching the ball is a benign problem: both end at the same optimum.
+    assert!((c.objective - d.objective).abs() < 1e-5 * d.objective.abs());
+}
+
+#[test]
+fn bad_strategy_inputs_are_errors() {
+    let s = ProblemSettings::default();
+    let zero = Strategy::Multistart { starts: 0, seed: 0 };
+    assert!(solve_with_strategy("periodic-qc", &s, zero, None).is_err());
+    for sg in [
+        StartGuess {
+            q: vec![0.1, 0.2],
+            durations: vec![1.0; 3],
+        },
+        StartGuess {
+            q: vec![0.1, f64::NAN, 0.3],
+            durations: vec![1.0; 3],
+        },
+        StartGuess {
+            q: Q_GUESS.to_vec(),
+            durations: vec![1.0, -1.0, 1.0],
+        },
+    ] {
+        let bad = ProblemSettings {
+            start: Some(sg.clone()),
+            ..ProblemSettings::default()
+        };
+        let e = build("periodic-qc", &bad).expect_err("must fail");
+        assert!(e.to_string().contains("start guess"), "{e}");
+    }
+    for es in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let bad = ProblemSettings {
+            effort_scale: es,
+            ..ProblemSettings::default()
+        };
+        assert!(build("periodic-qc", &bad).is_err());
+    }
+    let bad = ProblemSettings {
+        period_bounds: Some((2.0, 1.0)),
+        ..ProblemSettings::default()
+    };
+    assert!(build("periodic-qc", &bad).is_err());
+}
