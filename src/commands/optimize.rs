@@ -154,10 +154,10 @@ pub fn refine_with_progress(
         },
     )
     .with_context(|| format!("building {name} on the refined mesh"))?;
-    let report = res.report();
+    let report = res.report;
     let mut out = res.solution;
-    out.iterations = iters0 + res.history.iter().map(|r| r.iterations).sum::<usize>();
-    out.solve_seconds = secs0 + res.history.iter().map(|r| r.seconds).sum::<f64>();
+    out.iterations = iters0 + report.history.iter().map(|r| r.iterations).sum::<usize>();
+    out.solve_seconds = secs0 + res.total_seconds;
     out.strategy = strategy;
     out.refinement = Some(report);
     Ok((problem, out))

@@ -70,28 +70,20 @@ pub struct RefineRound {
     pub seconds: f64,
 }
 
-/// Result of [`refine`]; serialisable into `solution.json`.
+/// Result of [`refine`]: the record ([`RefineReport`], also reachable through `Deref`), the
+/// total time and the final solution.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RefineResult {
-    /// Tolerance requested.
-    pub tol: f64,
-    /// True if the largest error estimate of the final solution is ≤ `tol`.
-    pub converged: bool,
-    /// Why the refinement stopped.
-    pub stop_reason: String,
-    /// Mesh of the final solution, per phase.
-    pub mesh: Vec<MeshSpec>,
-    /// Error estimate of the final solution, per phase and element.
-    pub errors: Vec<Vec<f64>>,
-    /// One entry per solve.
-    pub history: Vec<RefineRound>,
+    /// What `solution.json` stores about the refinement.
+    #[serde(flatten)]
+    pub report: RefineReport,
     /// Wall time of all rounds (s).
     pub total_seconds: f64,
     /// The final solution (the last successful solve).
     pub solution: OcpSolution,
 }
 
-/// [`RefineResult`] without its solution: what `solution.json` stores about a refinement.
+/// The refinement record without the solution (stored in `solution.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RefineReport {
     /// Tolerance requested.
@@ -108,17 +100,10 @@ pub struct RefineReport {
     pub history: Vec<RefineRound>,
 }
 
-impl RefineResult {
-    /// The refinement record without the solution.
-    pub fn report(&self) -> RefineReport {
-        RefineReport {
-            tol: self.tol,
-            converged: self.converged,
-            stop_reason: self.stop_reason.clone(),
-            mesh: self.mesh.clone(),
-            errors: self.errors.clone(),
-            history: self.history.clone(),
-        }
+impl std::ops::Deref for RefineResult {
+    type Target = RefineReport;
+    fn deref(&self) -> &RefineReport {
+        &self.report
     }
 }
 
@@ -339,12 +324,14 @@ pub fn refine(
     })?;
     Ok(RefineResult {
         total_seconds: history.iter().map(|r| r.seconds).sum(),
-        tol: opts.tol,
-        converged,
-        stop_reason,
-        mesh,
-        errors,
-        history,
+        report: RefineReport {
+            tol: opts.tol,
+            converged,
+            stop_reason,
+            mesh,
+            errors,
+            history,
+        },
         solution,
     })
 }
