@@ -262,13 +262,14 @@ fn periodic_qc_solves_with_paper_results() {
 
 #[test]
 fn periodic_qc_refinement_converges() {
-    // 20, 30, 40 points per phase (Radau, 3 elements), each warm-started from the previous
+    // 30, 45, 60 points per phase (Radau, 3 elements), each warm-started from the previous
     // mesh's solution: the problem has several local optima, and a cold start on each mesh may
-    // land on a different one (J ≈ 0.56 at T ≈ 2.6 s, J ≈ 0.18 at T ≈ 0.95 s), which says
-    // nothing about discretisation error.
+    // land on a different one (J ≈ 0.56 at T ≈ 2.6 s, J ≈ 0.18 at T ≈ 0.95 s; at 20 points a
+    // nearby optimum with other phase durations), which says nothing about discretisation
+    // error.
     let mut res = Vec::new();
     let mut prev: Option<OcpSolution> = None;
-    for n in [20, 30, 40] {
+    for n in [30, 45, 60] {
         let s = ProblemSettings {
             warm_start: prev.take(),
             ..settings(n)
@@ -280,13 +281,13 @@ fn periodic_qc_refinement_converges() {
         prev = Some(sol);
     }
     println!("periodic-qc refinement (J, period): {res:?}");
-    // J30 and J40 agree to 5e-4 (relative), J20 to 1 %. (Monotone convergence is not
+    // J45 and J60 agree to 5e-4 (relative), J30 to 1e-3. (Monotone convergence is not
     // asserted: with equal elements the differences here are ~1e-4 and wobble at the level of
     // the NLP tolerance; the adaptive refinement in tests/refine.rs checks convergence
     // against its error estimate.)
-    let (j20, j30, j40) = (res[0].0, res[1].0, res[2].0);
+    let (j30, j45, j60) = (res[0].0, res[1].0, res[2].0);
     assert!(
-        (j30 - j40).abs() < 5e-4 * j40 && (j20 - j40).abs() < 1e-2 * j40,
+        (j45 - j60).abs() < 5e-4 * j60 && (j30 - j60).abs() < 1e-3 * j60,
         "{res:?}"
     );
     assert!((res[1].1 - res[2].1).abs() < 0.02 * res[2].1, "{res:?}");

@@ -29,7 +29,7 @@ fn default_strategy_beats_cold_start_on_periodic_qc_and_verifies() {
     );
     // The kept solution is of the target problem: the user's ε and a free period.
     assert_eq!(cont.epsilon, direct.epsilon);
-    assert!(p.settings.period_bounds.is_none());
+    assert_eq!(p.settings.period_bounds, Some((0.0, f64::MAX)));
     let k = rep.chosen.unwrap();
     let last = rep.records.iter().rfind(|r| r.chain == k).unwrap();
     assert_eq!(last.objective, cont.objective);

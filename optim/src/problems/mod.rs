@@ -117,7 +117,8 @@ pub struct ProblemSettings {
     /// be positive, so the sparsity pattern of the Lagrangian Hessian does not change.
     pub effort_scale: f64,
     /// Bounds on the period of the periodic problems (intersected with the problem's own:
-    /// 3 × 5 s for QC, [`COT_MAX_PERIOD`] for COT); a continuation stage fixes it.
+    /// 3 × 5 s for QC, [`COT_MAX_PERIOD`] for COT); a continuation stage fixes it. `Some` adds
+    /// a period row to QC (same optimum with `Some((0.0, f64::MAX))`).
     pub period_bounds: Option<(f64, f64)>,
     /// Custom hp-Radau mesh per phase (overrides `points`; needs the Radau scheme), e.g. from
     /// [`refine::refine`].
@@ -654,9 +655,13 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
             points.extend(contact_sequence(&scene, &ph, eps, tol_h, settings)?);
             points.push(bf::continuity(nx, 1, 2, "stick -> free continuity"));
             points.push(bf::continuity(nx, 2, 0, "periodicity"));
-            // The period row is always there (for QC it is implied by the duration bounds
-            // unless `period_bounds` narrows it), so that every continuation stage has the same
-            // NLP layout and can be warm-started with primal and dual variables.
+            // COT bounds the period; for QC the duration bounds imply 0.03 ≤ T ≤ 15 s, and the
+            // row is only added when `period_bounds` is given (a continuation gives it in every
+            // stage, so all stages share one NLP layout for primal-dual warm starts). An
+            // inactive row is not free: it changes the barrier path (Radau: 72 → 82
+            // iterations). With LG it is always added: LG-30 converges with it (Acceptable, 84
+            // iterations) and stalls without it (MaxIterations) — a measure of how marginal
+            // the Gauss transcription of this problem still is (issue 6).
             let (plo, phi) = if qc {
                 (0.03, 3.0 * tmax)
             } else {
@@ -671,16 +676,18 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
                     "period bounds [{plo}, {phi}] are empty or not finite"
                 )));
             }
-            points.push(duration_sum(
-                3,
-                plo,
-                phi,
-                if qc {
-                    "period bounds"
-                } else {
-                    "period <= 10 s"
-                },
-            ));
+            if !qc || settings.period_bounds.is_some() || settings.scheme == Scheme::Lg {
+                points.push(duration_sum(
+                    3,
+                    plo,
+                    phi,
+                    if qc {
+                        "period bounds"
+                    } else {
+                        "period <= 10 s"
+                    },
+                ));
+            }
             if !qc {
                 // The rotation measure must stay positive for the ratio to be meaningful.
                 cost_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)];

@@ -287,9 +287,15 @@ pub fn solve_with_strategy(
             period_grid(name)
                 .into_iter()
                 .map(|t| {
+                    // Every stage carries the period row (its bounds only), so that each
+                    // stage warm-starts the next with primal and dual variables.
+                    let free_period = ProblemSettings {
+                        period_bounds: Some(settings.period_bounds.unwrap_or((0.0, f64::MAX))),
+                        ..settings.clone()
+                    };
                     let smooth = ProblemSettings {
                         epsilon: Some(eps0),
-                        ..settings.clone()
+                        ..free_period.clone()
                     };
                     vec![
                         (
@@ -305,7 +311,7 @@ pub fn solve_with_strategy(
                             },
                         ),
                         (format!("release T, eps {eps0}"), smooth),
-                        (format!("eps {eps}"), settings.clone()),
+                        (format!("eps {eps}"), free_period),
                     ]
                 })
                 .collect()
