@@ -460,42 +460,6 @@ pub fn node_function_with(
     ))
 }
 
-/// Rebuilds the node function of every [`Mode::Stick`] phase of `phases` (modes in `modes`)
-/// with the no-slip constraint at the acceleration level ([`StickLevel::Acceleration`]), for
-/// the Legendre–Gauss transcription. The stick phases must have been built without h/ḣ path
-/// rows (as every problem of the library does); a mismatch in the path layout is an error.
-pub fn stick_at_acceleration_level(
-    scene: &Scene,
-    ph: &Physics,
-    cost: CostKind,
-    eps: f64,
-    modes: &[Mode],
-    phases: &mut [crate::ocp::Phase],
-) -> Result<(), OcpError> {
-    for (phase, mode) in phases.iter_mut().zip(modes) {
-        if *mode != Mode::Stick {
-            continue;
-        }
-        let opt = NodeOptions {
-            mode: Mode::Stick,
-            cost,
-            h_bounds: None,
-            hdot_bounds: None,
-            eps,
-        };
-        let (node, _) = node_function_with(scene, ph, &opt, StickLevel::Acceleration)?;
-        if node.path_bounds != phase.node.path_bounds || node.a.len() != phase.node.a.len() {
-            return Err(OcpError::InvalidProblem(format!(
-                "phase `{}`: stick phase with h/ḣ path rows cannot be rebuilt at the \
-                 acceleration level",
-                phase.name
-            )));
-        }
-        phase.node = node;
-    }
-    Ok(())
-}
-
 fn state_refs(phase: usize, nx: usize, fin: bool) -> Vec<VarRef> {
     (0..nx)
         .map(|i| {

@@ -365,6 +365,7 @@ fn make_phases(
     points: usize,
     q_limits: &[(f64, f64)],
     start: Option<&StartGuess>,
+    stick: bf::StickLevel,
 ) -> Result<Vec<Phase>, OcpError> {
     let nq = ph.nq;
     if let Some(sg) = start {
@@ -382,7 +383,7 @@ fn make_phases(
     }
     let mut out = Vec::new();
     for (k, d) in defs.iter().enumerate() {
-        let (node, _) = bf::node_function(
+        let (node, _) = bf::node_function_with(
             scene,
             ph,
             &NodeOptions {
@@ -392,6 +393,7 @@ fn make_phases(
                 hdot_bounds: d.hdot,
                 eps,
             },
+            stick,
         )?;
         let mut x_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); 2 * nq + 3];
         x_bounds[..nq].copy_from_slice(q_limits);
@@ -776,20 +778,16 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
         pts,
         &q_limits,
         settings.start.as_ref(),
+        // LG: the index-1 stick constraint (see `bf::node_function_with`).
+        if settings.scheme == Scheme::Lg {
+            bf::StickLevel::Acceleration
+        } else {
+            bf::StickLevel::Velocity
+        },
     )?;
-    if settings.scheme == Scheme::Lg {
-        bf::stick_at_acceleration_level(&scene, &ph, cost, eps, &modes, &mut phases)?;
-    }
-    if let Some(ws) = &settings.warm_start {
-        apply_warm_start(&mut phases, ws);
-    } else if settings.guess == GuessKind::Contact {
+    // A warm start replaces the whole initial point after the transcription (below).
+    if settings.warm_start.is_none() && settings.guess == GuessKind::Contact {
         contact_guess(&scene, eps, &mut phases, &modes)?;
-    }
-    let mut params = params;
-    if let Some(ws) = &settings.warm_start {
-        for (p, v) in params.iter_mut().zip(&ws.params) {
-            p.guess = *v;
-        }
     }
     let ocp = Ocp {
         phases,
@@ -874,20 +872,6 @@ fn contact_guess(
         ph.guess.x = vec![xa, xb];
     }
     Ok(())
-}
-
-fn apply_warm_start(phases: &mut [Phase], ws: &OcpSolution) {
-    for (ph, raw) in phases.iter_mut().zip(&ws.raw) {
-        let taus: Vec<f64> = (0..=40).map(|k| -1.0 + 2.0 * k as f64 / 40.0).collect();
-        let s: Vec<f64> = taus.iter().map(|t| 0.5 * (t + 1.0)).collect();
-        ph.guess = PhaseGuess {
-            s,
-            x: taus.iter().map(|&t| raw.x_at(t)).collect(),
-            a: taus.iter().map(|&t| raw.a_at(t)).collect(),
-            u: taus.iter().map(|&t| raw.u_at(t)).collect(),
-            duration: raw.duration,
-        };
-    }
 }
 
 fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense: bool) -> Samples {

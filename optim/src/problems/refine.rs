@@ -231,14 +231,12 @@ pub fn refine(
     let mut best: Option<(OcpSolution, Vec<MeshSpec>, Vec<Vec<f64>>)> = None;
     let mut converged = false;
     let mut stop_reason = String::new();
-    let mut prev: Option<OcpSolution> = None;
     for round in 0..=opts.max_rounds {
         let start = Instant::now();
-        let mut p = build(name, &s)?;
+        // `build` starts from `s.warm_start` interpolated onto the new mesh
+        // (`warm_initial_point`).
+        let p = build(name, &s)?;
         let mesh = current_mesh(&p)?;
-        if let Some(pr) = &prev {
-            warm_initial_point(&mut p, pr)?;
-        }
         let sol = match solve(&p, reborrow(&mut callback)) {
             Ok(sol) => sol,
             // A breakdown after the first round ends the refinement with the last solution.
@@ -317,7 +315,6 @@ pub fn refine(
                 ..base
             });
         }
-        prev = Some(sol);
     }
     let (solution, mesh, errors) = best.ok_or_else(|| {
         OcpError::InvalidProblem("refinement ran no solve (max_rounds overflow)".into())
