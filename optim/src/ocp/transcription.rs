@@ -15,7 +15,8 @@
 
 use super::OcpError;
 use super::block::GraphFn;
-use super::nodes::{differentiation_matrix, legendre_gauss, legendre_gauss_radau};
+use super::mesh::MeshSpec;
+use super::nodes::{differentiation_matrix, legendre_gauss};
 use super::problem::{Objective, Ocp, Scheme, VarRef};
 use crate::ipm::{BOUND_INF, Nlp};
 
@@ -79,44 +80,7 @@ impl Mesh {
                     elements: std::iter::once(0..points + 1).collect(),
                 })
             }
-            Scheme::Radau { elements } => {
-                if elements == 0 {
-                    return Err(OcpError::InvalidProblem(
-                        "Radau needs at least one element".into(),
-                    ));
-                }
-                let n = points.div_ceil(elements).max(2);
-                let (t, w) = legendre_gauss_radau(n);
-                let mut sup = t.clone();
-                sup.push(1.0);
-                let d = differentiation_matrix(&sup);
-                let kf = elements as f64;
-                let mut state_tau = Vec::new();
-                let mut colloc = Vec::new();
-                let mut ranges = Vec::new();
-                for e in 0..elements {
-                    let base = e * n;
-                    for j in 0..n {
-                        let tau = -1.0 + (2.0 * e as f64 + t[j] + 1.0) / kf;
-                        state_tau.push(tau);
-                        colloc.push(Colloc {
-                            state_point: base + j,
-                            tau,
-                            scale: 1.0 / kf,
-                            weight: w[j] / kf,
-                            drow: (0..=n).map(|i| (base + i, d[j][i])).collect(),
-                        });
-                    }
-                    ranges.push(base..base + n + 1);
-                }
-                state_tau.push(1.0);
-                Ok(Mesh {
-                    state_tau,
-                    colloc,
-                    gauss_end: false,
-                    elements: ranges,
-                })
-            }
+            Scheme::Radau { .. } => Mesh::from_spec(&MeshSpec::from_scheme(scheme, points)?),
         }
     }
 
