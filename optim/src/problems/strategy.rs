@@ -180,13 +180,19 @@ fn run_chain(
     name: &str,
     chain: usize,
     stages: Vec<(String, ProblemSettings)>,
+    mut prebuilt: Option<BuiltProblem>,
     progress: Progress<'_>,
 ) -> ChainResult {
     let mut records = Vec::new();
     let mut last: Option<(BuiltProblem, OcpSolution)> = None;
     for (label, settings) in stages {
         let t0 = Instant::now();
-        let res = build(name, &settings).and_then(|p| {
+        // The first stage may come built already (`prebuilt` has that stage's settings).
+        let built = match prebuilt.take() {
+            Some(p) => Ok(p),
+            None => build(name, &settings),
+        };
+        let res = built.and_then(|p| {
             let sol = match last.as_ref().and_then(|(_, s)| s.nlp_warm.as_ref()) {
                 Some(w) => solve_warm(&p, w, None)?,
                 None => solve(&p, None)?,
@@ -354,10 +360,16 @@ pub fn solve_with_strategy(
                 .collect()
         }
     };
+    // `direct` solves the problem built above instead of building it again.
+    let mut prebuilt: Vec<Option<BuiltProblem>> = chains.iter().map(|_| None).collect();
+    if strategy == Strategy::Direct {
+        prebuilt[0] = Some(target);
+    }
     let results: Vec<ChainResult> = chains
         .into_par_iter()
+        .zip(prebuilt)
         .enumerate()
-        .map(|(k, stages)| run_chain(name, k, stages, progress))
+        .map(|(k, (stages, first))| run_chain(name, k, stages, first, progress))
         .collect();
     let best = best_index(&results);
     let records: Vec<StageRecord> = results.iter().flat_map(|(r, _)| r.clone()).collect();
