@@ -165,6 +165,132 @@ pub fn emit_kernel_with(
     opts: &EmitOptions,
 ) -> Result<EmittedKernel, CodegenError> {
     let ft = opts.float.tokens();
+    let roots: Vec<Id> = k
+        .outputs
+        .iter()
+        .flat_map(|o| o.ids.iter().copied())
+        .collect();
+    let Ssa {
+        mut stmts,
+        refs,
+        ops,
+    } = ssa(g, &roots, &|v| var_tokens(layout, v), opts);
+
+    // Output assignments.
+    let mut params: Vec<TokenStream> = Vec::new();
+    for a in &k.inputs {
+        params.push(match a {
+            Arg::Q => quote!(q: &[#ft; NQ]),
+            Arg::Qd => quote!(qd: &[#ft; NQ]),
+            Arg::Omega => quote!(omega: &[#ft; 3]),
+            Arg::Eps => quote!(eps: #ft),
+            Arg::P => quote!(p: &[#ft; NP]),
+        });
+    }
+    for o in &k.outputs {
+        let name = Ident::new(&o.name, Span::call_site());
+        let val = |id: Id| {
+            refs[id.index()]
+                .clone()
+                .expect("internal: output not emitted")
+        };
+        match &o.kind {
+            OutKind::Scalar => {
+                params.push(quote!(#name: &mut #ft));
+                let v = val(o.ids[0]);
+                stmts.push(quote!(*#name = #v;));
+            }
+            OutKind::Array(dims) => {
+                let ty = array_type(dims, opts.float);
+                params.push(quote!(#name: &mut #ty));
+                for (path, &id) in index_paths(dims, layout.nq).iter().zip(&o.ids) {
+                    let v = val(id);
+                    stmts.push(quote!(#name #path = #v;));
+                }
+            }
+            OutKind::Contact => {
+                params.push(quote!(#name: &mut Contact));
+                let mut it = o.ids.iter();
+                for (field, dims, _) in CONTACT_FIELDS {
+                    let f = Ident::new(field, Span::call_site());
+                    for path in index_paths(dims, layout.nq) {
+                        let id = *it.next().ok_or_else(|| {
+                            CodegenError::Internal("contact output size mismatch".into())
+                        })?;
+                        let v = val(id);
+                        stmts.push(quote!(#name.#f #path = #v;));
+                    }
+                }
+            }
+        }
+    }
+    let fname = Ident::new(&k.name, Span::call_site());
+    let mut doc = String::new();
+    let _ = write!(doc, " {}", k.doc);
+    let mut doc_lines = vec![doc, String::new(), " Arguments, in order:".to_string()];
+    for a in &k.inputs {
+        doc_lines.push(
+            match a {
+                Arg::Q => " * `q`: joint angles (rad)",
+                Arg::Qd => " * `qd`: joint velocities (rad/s)",
+                Arg::Omega => " * `omega`: ball angular velocity, world axes (rad/s)",
+                Arg::Eps => " * `eps`: smoothing width ε of |x| ≈ √(x² + ε²) (m)",
+                Arg::P => {
+                    " * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)"
+                }
+            }
+            .to_string(),
+        );
+    }
+    for o in &k.outputs {
+        doc_lines.push(format!(
+            " * `{}`: output (see above), fully overwritten",
+            o.name
+        ));
+    }
+    doc_lines.push(String::new());
+    doc_lines.push(format!(
+        " Cost: {} add/sub, {} mul, {} div, {} sqrt, {} sin/cos, {} neg, {} other; {} temporaries.",
+        ops.add, ops.mul, ops.div, ops.sqrt, ops.sincos, ops.neg, ops.other, ops.temporaries
+    ));
+    let docs = doc_lines.iter().map(|l| quote!(#[doc = #l]));
+    // `#[inline]` lets small kernels be inlined across crates; very large kernels (7-DOF
+    // Christoffel symbols: thousands of operations) would only be re-compiled in every
+    // calling crate, so they are left to normal linkage.
+    let inline = if ops.temporaries <= INLINE_MAX_TEMPORARIES {
+        quote!(#[inline])
+    } else {
+        TokenStream::new()
+    };
+    let tokens = quote! {
+        #(#docs)*
+        #inline
+        #[allow(unused_variables)]
+        pub fn #fname(#(#params),*) {
+            #(#stmts)*
+        }
+    };
+    Ok(EmittedKernel { tokens, ops })
+}
+
+/// SSA statements computing every node of the cone of `roots` (in node order), and the
+/// tokens that name each node's value (`refs[i]`, `None` outside the cone).
+pub(crate) struct Ssa {
+    pub(crate) stmts: Vec<TokenStream>,
+    pub(crate) refs: Vec<Option<TokenStream>>,
+    pub(crate) ops: OpCounts,
+}
+
+/// The `let` bindings of the cone of `roots`; graph variables are printed by `var_tokens`.
+/// Shared by the dynamics kernels and the OCP node kernels (`crate::ocp`), so both compute
+/// every node with the same `f64` operation.
+pub(crate) fn ssa(
+    g: &Graph,
+    roots: &[Id],
+    var_tokens: &dyn Fn(u32) -> TokenStream,
+    opts: &EmitOptions,
+) -> Ssa {
+    let ft = opts.float.tokens();
     // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
     let as_mul = |id: Id| -> Option<(Id, Id)> {
         match g.node(id) {
@@ -172,12 +298,7 @@ pub fn emit_kernel_with(
             _ => None,
         }
     };
-    let roots: Vec<Id> = k
-        .outputs
-        .iter()
-        .flat_map(|o| o.ids.iter().copied())
-        .collect();
-    let mark = g.cone(&roots);
+    let mark = g.cone(roots);
     let max = roots.iter().map(|r| r.index() + 1).max().unwrap_or(0);
     let mut refs: Vec<Option<TokenStream>> = vec![None; max];
     let mut stmts: Vec<TokenStream> = Vec::new();
@@ -204,7 +325,7 @@ pub fn emit_kernel_with(
                 continue;
             }
             Node::Var(v) => {
-                refs[i] = Some(var_tokens(layout, v));
+                refs[i] = Some(var_tokens(v));
                 continue;
             }
             Node::Sin(a) | Node::Cos(a) => {
@@ -316,101 +437,7 @@ pub fn emit_kernel_with(
         refs[i] = Some(quote!(#t));
     }
 
-    // Output assignments.
-    let mut params: Vec<TokenStream> = Vec::new();
-    for a in &k.inputs {
-        params.push(match a {
-            Arg::Q => quote!(q: &[#ft; NQ]),
-            Arg::Qd => quote!(qd: &[#ft; NQ]),
-            Arg::Omega => quote!(omega: &[#ft; 3]),
-            Arg::Eps => quote!(eps: #ft),
-            Arg::P => quote!(p: &[#ft; NP]),
-        });
-    }
-    for o in &k.outputs {
-        let name = Ident::new(&o.name, Span::call_site());
-        let val = |id: Id| {
-            refs[id.index()]
-                .clone()
-                .expect("internal: output not emitted")
-        };
-        match &o.kind {
-            OutKind::Scalar => {
-                params.push(quote!(#name: &mut #ft));
-                let v = val(o.ids[0]);
-                stmts.push(quote!(*#name = #v;));
-            }
-            OutKind::Array(dims) => {
-                let ty = array_type(dims, opts.float);
-                params.push(quote!(#name: &mut #ty));
-                for (path, &id) in index_paths(dims, layout.nq).iter().zip(&o.ids) {
-                    let v = val(id);
-                    stmts.push(quote!(#name #path = #v;));
-                }
-            }
-            OutKind::Contact => {
-                params.push(quote!(#name: &mut Contact));
-                let mut it = o.ids.iter();
-                for (field, dims, _) in CONTACT_FIELDS {
-                    let f = Ident::new(field, Span::call_site());
-                    for path in index_paths(dims, layout.nq) {
-                        let id = *it.next().ok_or_else(|| {
-                            CodegenError::Internal("contact output size mismatch".into())
-                        })?;
-                        let v = val(id);
-                        stmts.push(quote!(#name.#f #path = #v;));
-                    }
-                }
-            }
-        }
-    }
-    let fname = Ident::new(&k.name, Span::call_site());
-    let mut doc = String::new();
-    let _ = write!(doc, " {}", k.doc);
-    let mut doc_lines = vec![doc, String::new(), " Arguments, in order:".to_string()];
-    for a in &k.inputs {
-        doc_lines.push(
-            match a {
-                Arg::Q => " * `q`: joint angles (rad)",
-                Arg::Qd => " * `qd`: joint velocities (rad/s)",
-                Arg::Omega => " * `omega`: ball angular velocity, world axes (rad/s)",
-                Arg::Eps => " * `eps`: smoothing width ε of |x| ≈ √(x² + ε²) (m)",
-                Arg::P => {
-                    " * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)"
-                }
-            }
-            .to_string(),
-        );
-    }
-    for o in &k.outputs {
-        doc_lines.push(format!(
-            " * `{}`: output (see above), fully overwritten",
-            o.name
-        ));
-    }
-    doc_lines.push(String::new());
-    doc_lines.push(format!(
-        " Cost: {} add/sub, {} mul, {} div, {} sqrt, {} sin/cos, {} neg, {} other; {} temporaries.",
-        ops.add, ops.mul, ops.div, ops.sqrt, ops.sincos, ops.neg, ops.other, ops.temporaries
-    ));
-    let docs = doc_lines.iter().map(|l| quote!(#[doc = #l]));
-    // `#[inline]` lets small kernels be inlined across crates; very large kernels (7-DOF
-    // Christoffel symbols: thousands of operations) would only be re-compiled in every
-    // calling crate, so they are left to normal linkage.
-    let inline = if ops.temporaries <= INLINE_MAX_TEMPORARIES {
-        quote!(#[inline])
-    } else {
-        TokenStream::new()
-    };
-    let tokens = quote! {
-        #(#docs)*
-        #inline
-        #[allow(unused_variables)]
-        pub fn #fname(#(#params),*) {
-            #(#stmts)*
-        }
-    };
-    Ok(EmittedKernel { tokens, ops })
+    Ssa { stmts, refs, ops }
 }
 
 /// `v.push(x)` / `v.extend(x.iter().flatten()…copied())` for an array of rank `rank`.

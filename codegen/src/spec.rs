@@ -221,7 +221,15 @@ pub struct Scene {
     /// `"ball.radius"`); every other constant is baked into the code.
     #[serde(default)]
     pub runtime_parameters: Vec<String>,
+    /// Cost kinds whose optimal-control node kernels are emitted ([`OCP_COSTS`]; needs `[ball]`
+    /// and `[contact]`). `None`: all of them when the scene has a ball and a contact; `[]`:
+    /// none (the optimiser then interprets the node graphs).
+    #[serde(default)]
+    pub ocp_kernels: Option<Vec<String>>,
 }
+
+/// Cost kinds of the optimal-control node kernels (`bf_codegen::ocp::CostKind::tag`).
+pub const OCP_COSTS: &[&str] = &["qc", "cot", "time_effort", "track", "reorient", "spin"];
 
 // ---------------------------------------------------------------------------------------------
 // Kernel names
@@ -1320,6 +1328,25 @@ impl Scene {
                 return Err(ix.invalid(
                     &p,
                     format!("kernel {k:?} needs both a [ball] and a [contact] section"),
+                ));
+            }
+        }
+        for (i, c) in self.ocp_kernels.iter().flatten().enumerate() {
+            let p = format!("ocp_kernels[{i}]");
+            if !OCP_COSTS.contains(&c.as_str()) {
+                return Err(ix.invalid(
+                    &p,
+                    format!("unknown cost kind {c:?}; known: {}", OCP_COSTS.join(", ")),
+                ));
+            }
+            if self.ocp_kernels.iter().flatten().take(i).any(|x| x == c) {
+                return Err(ix.invalid(&p, format!("cost kind {c:?} listed twice")));
+            }
+            if self.ball.is_none() || self.contact.is_none() {
+                return Err(ix.invalid(
+                    &p,
+                    "optimal-control node kernels need both a [ball] and a [contact] section"
+                        .to_string(),
                 ));
             }
         }

@@ -545,6 +545,54 @@ fn kernel_list_is_checked() {
 }
 
 #[test]
+fn ocp_kernel_costs_are_checked() {
+    let old = "kernels = [\"mass_matrix\", \"gravity\", \"contact\"]";
+    let with = |list: &str| edit(old, 0, &format!("{old}\nocp_kernels = {list}"));
+    let s = Scene::from_toml_str(&with("[\"qc\", \"cot\"]"), FILE).unwrap();
+    assert_eq!(
+        s.ocp_kernels,
+        Some(vec!["qc".to_string(), "cot".to_string()])
+    );
+    let text = with("[\"qc\", \"fastest\"]");
+    let ocp_line = |t: &str| {
+        t.lines()
+            .position(|l| l.starts_with("ocp_kernels"))
+            .unwrap()
+            + 1
+    };
+    let line = ocp_line(&text);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "ocp_kernels[1]",
+        "unknown cost kind",
+    );
+    let text = with("[\"cot\", \"cot\"]");
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "ocp_kernels[1]",
+        "twice",
+    );
+    // Without a ball the node functions do not exist.
+    let no_ball = {
+        let t = with("[\"qc\"]");
+        let start = t.find("[ball]").unwrap();
+        t[..start].to_string()
+    };
+    let line = ocp_line(&no_ball);
+    expect_err(
+        &no_ball.replace(", \"contact\"", ""),
+        SpecErrorKind::Invalid,
+        line,
+        "ocp_kernels[0]",
+        "[ball] and a [contact]",
+    );
+}
+
+#[test]
 fn contact_kernels_need_ball_and_contact() {
     // Remove [ball] .. end (ball, friction, contact).
     let ball = line_no(BASE, "[ball]", 0);
@@ -1131,7 +1179,7 @@ fn paper_scene_matches_params_md() {
 }
 
 #[test]
-fn human_scene_differs_only_in_limits_and_runtime_parameters() {
+fn human_scene_differs_only_in_limits_runtime_parameters_and_ocp_kernels() {
     let s = scene("human");
     assert_eq!(s.name, "human");
     assert_finger_common(&s);
@@ -1148,11 +1196,14 @@ fn human_scene_differs_only_in_limits_and_runtime_parameters() {
             ("link3.mass".to_string(), 0.02)
         ]
     );
+    // Only the COT objective's optimal-control node kernels (periodic-cot-human).
+    assert_eq!(s.ocp_kernels, Some(vec!["cot".to_string()]));
     // Apart from these, identical to the paper scene.
     let mut p = scene("paper");
     p.name = s.name.clone();
     p.description = s.description.clone();
     p.runtime_parameters = s.runtime_parameters.clone();
+    p.ocp_kernels = s.ocp_kernels.clone();
     for i in 1..3 {
         p.links[i].q_min = s.links[i].q_min;
         p.links[i].q_max = s.links[i].q_max;

@@ -1,5 +1,12 @@
 //! Compiled graph functions with exact first and second derivatives.
 //!
+//! The derivative graphs come from [`bf_codegen::ocp::Derivatives`]. When bf-generated holds
+//! kernels emitted at build time from graphs with the same structural fingerprint
+//! ([`bf_codegen::ocp::fingerprint`]; the ball-and-finger node functions of the scenes with a
+//! ball), a [`GraphFn`] calls those flat Rust functions; otherwise it interprets the graphs with
+//! the programs below. Both compute every node with the same `f64` operation, so they agree
+//! bitwise (tested in `tests/node_kernels.rs`).
+//!
 //! A [`GraphFn`] takes outputs y = f(v) built on a `bf_codegen` expression graph (the paper's
 //! node functions: dynamics eq. 26/29, stick constraint eq. 14/27, validity h and σ eq. 4/18,
 //! cost integrands eq. 61–65, impact law eq. 40) and compiles, once, three interpreter tapes:
@@ -15,8 +22,9 @@
 //! graph, as `bf_codegen::interp::Tape` allocates), computing every node with the same `f64`
 //! operation as `Tape`, so the values are bitwise those of the reference interpreter (tested).
 
-use bf_codegen::diff;
 use bf_codegen::graph::{Graph, Id, Node};
+use bf_codegen::ocp::{Derivatives, VarRole, fingerprint, var_roles};
+use bf_generated::{NodeKernel, NodeKernelFn};
 
 /// Kind of a `Program` operation (also its position in the run order within a level).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -216,7 +224,7 @@ impl Program {
     }
 }
 
-/// What a graph variable is to a [`GraphFn`].
+/// What a graph variable is to a [`Program`].
 #[derive(Debug, Clone, Copy)]
 enum VarKind {
     Local(u32),
@@ -224,92 +232,122 @@ enum VarKind {
     Const(f64),
 }
 
+/// The compiled programs of a graph function's values, Jacobian and Hessian.
+#[derive(Debug, Clone)]
+struct Programs {
+    value: Program,
+    jac: Program,
+    hess: Program,
+}
+
+/// How a [`GraphFn`] evaluates.
+#[derive(Debug, Clone)]
+enum Backend {
+    /// Compiled programs of the graphs (any graph).
+    Programs(Box<Programs>),
+    /// The kernels bf-generated emitted from the same graphs at build time, with the values
+    /// of the fixed inputs.
+    Kernel {
+        kernel: &'static NodeKernel,
+        fixed: Vec<f64>,
+    },
+}
+
+/// Whether [`GraphFn::with_backend`] may use an emitted kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KernelUse {
+    /// Use bf-generated's kernel when one has the graphs' fingerprint (the default).
+    Auto,
+    /// Always interpret the graphs (tests, comparisons).
+    Never,
+}
+
 /// A vector function of `n_local` local variables with exact sparse derivatives.
 #[derive(Debug, Clone)]
 pub struct GraphFn {
     n_out: usize,
     n_local: usize,
-    value: Program,
     jac: Vec<(usize, usize)>,
-    jac_tape: Program,
     hess: Vec<(usize, usize)>,
-    hess_tape: Program,
+    backend: Backend,
 }
 
 impl GraphFn {
     /// Compiles `outputs` of graph `g` as a function of the graph variables `local_vars` (in
-    /// that order); `fixed` gives the values of other graph variables (ε, runtime parameters);
-    /// any other variable reads as 0.
+    /// that order); `fixed` gives the values of other graph variables (ε, runtime parameters,
+    /// cost constants); any other variable reads as 0. Uses an emitted kernel of bf-generated
+    /// when one was emitted from the same graphs ([`KernelUse::Auto`]).
     pub fn new(g: &mut Graph, outputs: &[Id], local_vars: &[u32], fixed: &[(u32, f64)]) -> Self {
-        let mark = g.cone(outputs);
-        let mut max_var = 0usize;
-        for (i, m) in mark.iter().enumerate() {
-            if *m && let Node::Var(v) = g.node(Id(i as u32)) {
-                max_var = max_var.max(v as usize + 1);
-            }
-        }
-        for &v in local_vars.iter().chain(fixed.iter().map(|f| &f.0)) {
-            max_var = max_var.max(v as usize + 1);
-        }
-        let weight_base = max_var;
+        Self::with_backend(g, outputs, local_vars, fixed, KernelUse::Auto)
+    }
+
+    /// [`GraphFn::new`] with the choice of backend.
+    pub fn with_backend(
+        g: &mut Graph,
+        outputs: &[Id],
+        local_vars: &[u32],
+        fixed: &[(u32, f64)],
+        kernels: KernelUse,
+    ) -> Self {
         let n_out = outputs.len();
-        // Resolution of graph variables, with the precedence of the former input vector
-        // (fixed values written first, then overwritten by local variables; weights last).
-        let mut kind = vec![VarKind::Const(0.0); weight_base + n_out];
-        for &(v, x) in fixed {
-            kind[v as usize] = VarKind::Const(x);
-        }
-        for (l, &v) in local_vars.iter().enumerate() {
-            kind[v as usize] = VarKind::Local(l as u32);
-        }
-        for w in 0..n_out {
-            kind[weight_base + w] = VarKind::Weight(w as u32);
-        }
-        let var_kind = |v: u32| kind.get(v as usize).copied().unwrap_or(VarKind::Const(0.0));
-        let value = Program::new(g, outputs, &var_kind);
-        let mut jac = Vec::new();
-        let mut jac_ids = Vec::new();
-        for (l, &v) in local_vars.iter().enumerate() {
-            let col = diff::partial(g, outputs, v);
-            for (o, id) in col.into_iter().enumerate() {
-                if !g.is_zero(id) {
-                    jac.push((o, l));
-                    jac_ids.push(id);
-                }
+        let d = Derivatives::new(g, outputs, local_vars, fixed);
+        let roles = var_roles(local_vars, fixed, d.weight_base, n_out);
+        let kernel = match kernels {
+            KernelUse::Auto => {
+                let fp = fingerprint(g, outputs, &d, &roles);
+                bf_generated::node_kernel(fp).filter(|k| {
+                    // The fingerprint covers all of this; checked again so that a collision
+                    // cannot go unnoticed.
+                    k.n_out == n_out
+                        && k.n_local == local_vars.len()
+                        && k.n_fixed == fixed.len()
+                        && k.jacobian_pattern.len() == d.jac.len()
+                        && k.hessian_pattern.len() == d.hess.len()
+                        && k.jacobian_pattern
+                            .iter()
+                            .zip(&d.jac)
+                            .all(|(a, b)| (a.0 as usize, a.1 as usize) == *b)
+                        && k.hessian_pattern
+                            .iter()
+                            .zip(&d.hess)
+                            .all(|(a, b)| (a.0 as usize, a.1 as usize) == *b)
+                })
             }
-        }
-        // Keep the Jacobian entries row-major for readability of patterns.
-        let mut order: Vec<usize> = (0..jac.len()).collect();
-        order.sort_by_key(|&k| jac[k]);
-        let jac: Vec<(usize, usize)> = order.iter().map(|&k| jac[k]).collect();
-        let jac_ids: Vec<Id> = order.iter().map(|&k| jac_ids[k]).collect();
-        let jac_tape = Program::new(g, &jac_ids, &var_kind);
-        let weighted: Vec<(Id, Id)> = outputs
-            .iter()
-            .enumerate()
-            .map(|(i, &o)| (o, g.var((weight_base + i) as u32)))
-            .collect();
-        let h = diff::hessian(g, &weighted, local_vars);
-        let mut hess = Vec::new();
-        let mut hess_ids = Vec::new();
-        for i in 0..local_vars.len() {
-            for j in 0..=i {
-                let id = h[i][j];
-                if !g.is_zero(id) {
-                    hess.push((i, j));
-                    hess_ids.push(id);
-                }
+            KernelUse::Never => None,
+        };
+        let backend = match kernel {
+            Some(kernel) => Backend::Kernel {
+                kernel,
+                fixed: fixed.iter().map(|f| f.1).collect(),
+            },
+            None => {
+                let var_kind = |v: u32| match roles.get(v as usize) {
+                    Some(VarRole::Local(l)) => VarKind::Local(*l),
+                    Some(VarRole::Weight(w)) => VarKind::Weight(*w),
+                    Some(VarRole::Fixed(_, x)) => VarKind::Const(*x),
+                    Some(VarRole::Zero) | None => VarKind::Const(0.0),
+                };
+                Backend::Programs(Box::new(Programs {
+                    value: Program::new(g, outputs, &var_kind),
+                    jac: Program::new(g, &d.jac_ids, &var_kind),
+                    hess: Program::new(g, &d.hess_ids, &var_kind),
+                }))
             }
-        }
-        let hess_tape = Program::new(g, &hess_ids, &var_kind);
+        };
         GraphFn {
             n_out,
             n_local: local_vars.len(),
-            value,
-            jac,
-            jac_tape,
-            hess,
-            hess_tape,
+            jac: d.jac,
+            hess: d.hess,
+            backend,
+        }
+    }
+
+    /// The emitted kernel's name when this function runs on one (`None`: interpreted).
+    pub fn kernel_name(&self) -> Option<&'static str> {
+        match &self.backend {
+            Backend::Kernel { kernel, .. } => Some(kernel.name),
+            Backend::Programs(_) => None,
         }
     }
 
@@ -333,26 +371,70 @@ impl GraphFn {
         &self.hess
     }
 
+    /// Runs kernel function `f` with `local` and `w` padded with zeros to their full lengths.
+    fn run_kernel(
+        &self,
+        f: NodeKernelFn,
+        fixed: &[f64],
+        local: &[f64],
+        w: &[f64],
+        n: usize,
+    ) -> Vec<f64> {
+        let pad = |v: &[f64], len: usize| -> Option<Vec<f64>> {
+            (v.len() < len).then(|| {
+                let mut p = v.to_vec();
+                p.resize(len, 0.0);
+                p
+            })
+        };
+        let lp = pad(local, self.n_local);
+        let wp = pad(w, self.n_out);
+        let mut out = vec![0.0; n];
+        f(
+            lp.as_deref().unwrap_or(local),
+            fixed,
+            wp.as_deref().unwrap_or(w),
+            &mut out,
+        );
+        out
+    }
+
     /// Output values at `local` (missing trailing locals read as 0).
     pub fn eval(&self, local: &[f64]) -> Vec<f64> {
-        self.value.eval(local, &[])
+        match &self.backend {
+            Backend::Programs(p) => p.value.eval(local, &[]),
+            Backend::Kernel { kernel, fixed } => {
+                self.run_kernel(kernel.value, fixed, local, &[], self.n_out)
+            }
+        }
     }
 
     /// Jacobian values at `local` (pattern order).
     pub fn jacobian(&self, local: &[f64]) -> Vec<f64> {
-        self.jac_tape.eval(local, &[])
+        match &self.backend {
+            Backend::Programs(p) => p.jac.eval(local, &[]),
+            Backend::Kernel { kernel, fixed } => {
+                self.run_kernel(kernel.jacobian, fixed, local, &[], self.jac.len())
+            }
+        }
     }
 
     /// Values of the lower triangle of ∇²(Σ_i w_i y_i) at `local` (pattern order; missing
     /// trailing weights read as 0).
     pub fn hessian(&self, local: &[f64], weights: &[f64]) -> Vec<f64> {
-        self.hess_tape.eval(local, weights)
+        match &self.backend {
+            Backend::Programs(p) => p.hess.eval(local, weights),
+            Backend::Kernel { kernel, fixed } => {
+                self.run_kernel(kernel.hessian, fixed, local, weights, self.hess.len())
+            }
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use bf_codegen::diff;
     use bf_codegen::interp::Tape;
 
     /// The compiled programs agree bitwise with bf-codegen's reference interpreter on a graph

@@ -14,7 +14,7 @@ pub mod problem;
 pub mod trajectory;
 pub mod transcription;
 
-pub use block::GraphFn;
+pub use block::{GraphFn, KernelUse};
 pub use mesh::{HpRule, MeshSpec, collocation_errors};
 pub use problem::{
     NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,

@@ -23,34 +23,7 @@ pub enum Scheme {
     },
 }
 
-/// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
-///
-/// Graph variables `x`, `a`, `u` and `duration` are the node's local variables; `fixed` sets
-/// other graph inputs (ε, runtime parameters). `xdot` must have `x.len()` entries (the
-/// collocation imposes ẋ = xdot); `costs` has one integrand per cost state of the problem.
-#[derive(Debug, Clone)]
-pub struct NodeFunction {
-    /// Expression graph.
-    pub graph: Graph,
-    /// Graph variables of the differential states.
-    pub x: Vec<u32>,
-    /// Graph variables of the algebraic node variables.
-    pub a: Vec<u32>,
-    /// Graph variables of the controls.
-    pub u: Vec<u32>,
-    /// A graph variable (unused by the expressions) for the phase duration.
-    pub duration: u32,
-    /// Values of other graph inputs.
-    pub fixed: Vec<(u32, f64)>,
-    /// State derivatives ẋ.
-    pub xdot: Vec<Id>,
-    /// Path constraints g (equalities have equal bounds).
-    pub path: Vec<Id>,
-    /// Bounds of `path`.
-    pub path_bounds: Vec<(f64, f64)>,
-    /// Cost integrands L_j (one per problem cost state).
-    pub costs: Vec<Id>,
-}
+pub use bf_codegen::ocp::NodeFunction;
 
 /// A variable a [`PointFunction`] reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

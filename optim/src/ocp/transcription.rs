@@ -322,24 +322,11 @@ impl Transcription {
         };
         for (pi, (ph, l)) in ocp.phases.iter().zip(&layouts).enumerate() {
             let nd = &ph.node;
-            let mut graph = nd.graph.clone();
-            let mut scaled = Vec::new();
-            let t_var = graph.var(nd.duration);
-            let half = graph.constant(0.5);
-            let ht = graph.mul(half, t_var);
-            for &e in &nd.xdot {
-                scaled.push(graph.mul(ht, e));
-            }
+            // (T/2) ẋ, path rows, (T/2) L: the same outputs bf-generated's node kernels were
+            // emitted from, so `GraphFn::new` finds them by fingerprint.
+            let mut col = nd.collocation();
             let n_path = nd.path.len();
-            scaled.extend(nd.path.iter().copied());
-            for &e in &nd.costs {
-                scaled.push(graph.mul(ht, e));
-            }
-            let mut locals = nd.x.clone();
-            locals.extend(&nd.a);
-            locals.extend(&nd.u);
-            locals.push(nd.duration);
-            let f = GraphFn::new(&mut graph, &scaled, &locals, &nd.fixed);
+            let f = GraphFn::new(&mut col.graph, &col.outputs, &col.locals, &nd.fixed);
             let fid = fns.len();
             fns.push(f);
             let ncol = l.mesh.colloc.len();
@@ -589,6 +576,14 @@ impl Transcription {
             }
         }
         worst
+    }
+
+    /// The compiled node function of every phase (phase order), e.g. to see whether it runs
+    /// on an emitted kernel ([`GraphFn::kernel_name`]).
+    pub fn phase_functions(&self) -> &[GraphFn] {
+        // The phases' node functions are compiled first, one per phase, before the point
+        // functions.
+        &self.fns[..self.phases.len()]
     }
 
     /// Name of the block that contains `row`.

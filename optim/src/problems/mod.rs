@@ -541,7 +541,7 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
         "paper"
     };
     let scene = scene_by_name(scene_name)?;
-    let ph = Physics::new(&scene)?;
+    let ph = bf::physics(&scene)?;
     let eps = settings
         .epsilon
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
