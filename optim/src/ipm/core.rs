@@ -602,7 +602,9 @@ impl<'p> Core<'p> {
                     * self.mu.powf(settings.jacobian_regularization_exponent);
                 self.delta_c = dc.max(static_c);
                 self.delta_c_target = self.delta_c;
-                if old_w == 0.0 {
+                // δ_c unchanged (μ small enough that δ̄_c μ^κ_c ≤ the static δ_c): the matrix
+                // and the factor are the ones just rejected, so go straight to δ_w.
+                if old_w == 0.0 && self.delta_c != old_c {
                     let t = Instant::now();
                     self.kkt.shift_diagonal(0.0, self.delta_c - old_c);
                     ctx.timing.kkt_assembly += t.elapsed();
