@@ -3,8 +3,9 @@
 //! Per phase with duration T and collocation nodes τ_k (Legendre–Gauss, or Radau per element):
 //!
 //! ```text
-//! defects   Σ_j D_kj X_j − s_k (T/2) f(X_k, A_k, U_k) = 0       (k = 1..N_c)
-//! LG end    X_f − X_0 − Σ_k w_k (T/2) f_k = 0                    (Benson/Garg form)
+//! Radau     Σ_j D_kj X_j − s_k (T/2) f(X_k, A_k, U_k) = 0        (k = 1..N_c, per element)
+//! LG        X_k − X_0 − (T/2) Σ_j A_kj f(X_j, A_j, U_j) = 0       (k = 1..N, A = D₁⁻¹)
+//! LG end    X_f − X_0 − Σ_k w_k (T/2) f_k = 0                     (Benson/Garg form)
 //! path      g_L ≤ g(X_k, A_k, U_k) ≤ g_U
 //! costs     c_j − Σ_phases Σ_k w_k s_k (T/2) L_j(X_k, A_k, U_k) = 0   (eq. 51c, c(0) = 0)
 //! ```
@@ -12,6 +13,20 @@
 //! function of two NLP variables only, so its Hessian stays sparse. Event and linkage
 //! constraints (57c–d) are [`PointFunction`]s. All nonlinear pieces are [`GraphFn`]s with
 //! exact Jacobians and Hessians; the NLP's derivatives are their scattered sums.
+//!
+//! LG defects in integral form ([`integration_matrix`]): they are the differential defects
+//! Σ_j D_kj X_j − (T/2) f_k (D on the support −1, τ_1..τ_N) multiplied by the invertible
+//! A = D₁⁻¹, so the NLP has the same solutions and, in exact arithmetic, the same Newton steps.
+//! Numerically they differ: the differential rows of one phase carry the O(N²) entries of D
+//! (LG-30: row maxima 11 to 322, the largest rows also rescaled by the gradient-based NLP
+//! scaling), the integral rows coefficients ±1 and (T/2)·A_kj with max |A_kj| = 0.11 (rows
+//! summing to 1 + τ_k) — the form the Gauss quadrature end row already had. With the
+//! differential rows the COT problems stalled with LG-30 (δ_w ≈ 1e-2 in every iteration,
+//! MaxIterations) and `periodic-qc` only converged with an extra inactive period row; with the
+//! integral rows both converge (issue 6; numbers in `problems` and optim/tests/ocp_lg.rs).
+//! The sparsity is alike: per state component and phase the differential rows have a dense
+//! N × (N + 1) block in the states and a diagonal in f, the integral rows two state columns and
+//! a dense N × N block in f (plus one duplicate T triplet per node, summed by the solver).
 
 use super::OcpError;
 use super::block::GraphFn;
@@ -27,7 +42,8 @@ pub struct Mesh {
     pub state_tau: Vec<f64>,
     /// Collocation nodes.
     pub colloc: Vec<Colloc>,
-    /// True for LG (final state by quadrature).
+    /// True for LG: final state by quadrature, and the defects in integral form built from the
+    /// `drow`s ([`integration_matrix`]).
     pub gauss_end: bool,
     /// Elements: ranges of state points (for interpolation).
     pub elements: Vec<std::ops::Range<usize>>,
@@ -158,6 +174,48 @@ pub struct Transcription {
     hess_pattern: Vec<(usize, usize)>,
     /// Row names by range, for diagnostics.
     pub row_blocks: Vec<(String, std::ops::Range<usize>)>,
+}
+
+/// The LG integration matrix A = D₁⁻¹, where D₁ = (D_kj), k, j = 1..N, is the Gauss
+/// differentiation matrix without its column of the non-collocated X₀ (`mesh.colloc[k].drow`).
+/// Since Σ_j D_kj = 0, A D₀ = −1, so A applied to the differential defects
+/// Σ_j D_kj X_j − (T/2) f_k gives the integral defects X_k − X₀ − (T/2) Σ_j A_kj f_j (see the
+/// module docs). Gauss–Jordan elimination with partial pivoting (N ≤ a few hundred).
+pub fn integration_matrix(mesh: &Mesh) -> Result<Vec<Vec<f64>>, OcpError> {
+    let n = mesh.colloc.len();
+    // Augmented [D₁ | I].
+    let mut m = vec![vec![0.0; 2 * n]; n];
+    for (k, c) in mesh.colloc.iter().enumerate() {
+        for &(sp, d) in &c.drow {
+            if (1..=n).contains(&sp) {
+                m[k][sp - 1] = d;
+            }
+        }
+        m[k][n + k] = 1.0;
+    }
+    for col in 0..n {
+        let piv = (col..n)
+            .max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))
+            .unwrap_or(col);
+        let p = m[piv][col];
+        if p.abs() <= 1e-300 || !p.is_finite() {
+            return Err(OcpError::InvalidProblem(
+                "singular Gauss differentiation matrix".into(),
+            ));
+        }
+        m.swap(col, piv);
+        m[col].iter_mut().for_each(|v| *v /= p);
+        let pivot_row = m[col].clone();
+        for (r, row) in m.iter_mut().enumerate() {
+            let f = row[col];
+            if r != col && f != 0.0 {
+                for (v, pv) in row.iter_mut().zip(&pivot_row) {
+                    *v -= f * pv;
+                }
+            }
+        }
+    }
+    Ok(m.into_iter().map(|row| row[n..].to_vec()).collect())
 }
 
 fn clean_bound(v: f64, lower: bool) -> f64 {
@@ -358,8 +416,19 @@ impl Transcription {
                 }
             }
             row_blocks.push((format!("phase {pi} ({}) path", ph.name), path0..m));
+            // LG: integral-form defects (module docs); Radau: differential form per element.
+            let integ = if l.mesh.gauss_end {
+                Some(integration_matrix(&l.mesh)?)
+            } else {
+                None
+            };
             for (k, c) in l.mesh.colloc.iter().enumerate() {
                 for i in 0..l.nx {
+                    if integ.is_some() {
+                        linear.push((def0 + k * l.nx + i, l.x(c.state_point, i), 1.0));
+                        linear.push((def0 + k * l.nx + i, l.x(0, i), -1.0));
+                        continue;
+                    }
                     for &(sp, dv) in &c.drow {
                         if dv != 0.0 {
                             linear.push((def0 + k * l.nx + i, l.x(sp, i), dv));
@@ -379,7 +448,13 @@ impl Transcription {
                 map.push(l.t);
                 let mut targets = Vec::new();
                 for i in 0..l.nx {
-                    let mut t = vec![(def0 + k * l.nx + i, -c.scale)];
+                    let mut t = match &integ {
+                        Some(a) => (0..ncol)
+                            .map(|r| (def0 + r * l.nx + i, -c.scale * a[r][k]))
+                            .filter(|e| e.1 != 0.0)
+                            .collect(),
+                        None => vec![(def0 + k * l.nx + i, -c.scale)],
+                    };
                     if l.mesh.gauss_end {
                         t.push((end0 + i, -c.weight));
                     }

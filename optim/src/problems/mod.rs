@@ -18,13 +18,29 @@
 //! d(Δv)/dt = 0 at the Gauss nodes ([`bf::StickLevel::Acceleration`]), with Δv⁺ = 0 from the
 //! impact law and no end-point Δv row: at the velocity level the stick phase is an index-2
 //! DAE, which Gauss collocation (not stiffly accurate) resolves with an undamped alternating
-//! mode, and LG-20/30 stalled with δ_w ≈ 1e-3 in every iteration. With the index-1 form
-//! `periodic-qc` LG-20/30 reaches the Radau optimum (≈ 85 iterations). The COT problems still
-//! do not converge with LG from the default guess (persistent inertia correction, the stick
-//! phase shrinking to its lower duration bound): use Radau for them.
+//! mode, and LG-20/30 stalled with δ_w ≈ 1e-3 in every iteration. The Gauss defects are in
+//! integral form (`ocp::transcription`): with the differential form (rows with the O(N²)
+//! entries of the Gauss differentiation matrix) `periodic-cot`/`-human` LG-30 stalled
+//! (δ_w ≈ 1e-2 in every iteration, MaxIterations) and `periodic-qc` LG-30 needed an extra
+//! inactive period row. Now `periodic-qc` LG-30 is Solved (≈ 90 iterations, the Radau
+//! optimum), and `periodic-cot`/`-human` LG-30 end Acceptable (≈ 150–350 iterations, the count
+//! moves with the rounding of the KKT factorization): their
+//! optimum balances the finger at the upright (unstable) equilibrium with τ ≈ 0 for most of the
+//! 10 s period while the ball coasts, and on that rest arc the apex rule below does not pin
+//! the period start (ḣ ≡ 0 there): moving rest time between phases 3 and 1 at a fixed period
+//! changes the objective only through the discretization error of the one polynomial per
+//! phase, a near-flat direction (slightly negative curvature, δ_w ≈ 3e-5) along which the
+//! iterates creep until the acceptable test stops them at a dual infeasibility ≈ 3e-7. The
+//! LG-30 optimum is ≈ 7 % above Radau 3 × 10's (0.0493 vs 0.0459): one degree-30 polynomial
+//! over the 7–9 s free phase does not resolve the release swing and the rest as well as
+//! three elements (LG warm-started from the Radau optimum moves to 0.0494). Splitting the free
+//! arc in the middle instead (T⁽¹⁾ = T⁽³⁾, tried) pins the start but lands on other local
+//! optima (Radau 0.0335, LG 0.0511), still Acceptable with LG, and `-human` Radau no longer
+//! Solved, so the apex rule stays.
 //!
 //! The periodic problems start the period at the apex of the free arc (ḣ(0) = 0), which
-//! removes the time-shift degeneracy of the free arc without changing the optimum.
+//! removes the time-shift degeneracy of the free arc without changing the optimum (except
+//! along a rest arc, see above).
 //! Common constraints: |τ_i| ≤ τ_max (1 N m), h ≥ 0 in free approach phases, λ_n ≥ 0 and the
 //! smooth friction cone in stick, the sticking impact law (eq. 40) with ι_n ≥ 0,
 //! 0 ≤ h(t_f⁽¹⁾) ≤ 10⁻⁴ and h⁽³⁾ ≥ −10⁻⁴ (Sect. 7 work-arounds), Δv = 0 at the stick phase's
@@ -661,9 +677,8 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
             // row is only added when `period_bounds` is given (a continuation gives it in every
             // stage, so all stages share one NLP layout for primal-dual warm starts). An
             // inactive row is not free: it changes the barrier path (Radau: 72 → 82
-            // iterations). With LG it is always added: LG-30 converges with it (Acceptable, 84
-            // iterations) and stalls without it (MaxIterations) — a measure of how marginal
-            // the Gauss transcription of this problem still is (issue 6).
+            // iterations). LG no longer needs it: with the integral-form Gauss defects
+            // (`ocp::transcription`) LG-30 is Solved without it (issue 6).
             let (plo, phi) = if qc {
                 (0.03, 3.0 * tmax)
             } else {
@@ -678,7 +693,7 @@ fn build_inner(name: &str, settings: &ProblemSettings) -> Result<BuiltProblem, O
                     "period bounds [{plo}, {phi}] are empty or not finite"
                 )));
             }
-            if !qc || settings.period_bounds.is_some() || settings.scheme == Scheme::Lg {
+            if !qc || settings.period_bounds.is_some() {
                 points.push(duration_sum(
                     3,
                     plo,
