@@ -2,6 +2,8 @@
 //! guess, KKT residuals, re-integration with the generated kernels, refinement in N, the
 //! Sect. 6.1 qualitative results, and the output files.
 
+mod common;
+
 use bf_generated::paper as k;
 use bf_optim::ipm::{Nlp, Status, check_derivatives};
 use bf_optim::ocp::Scheme;
@@ -165,23 +167,7 @@ fn reintegration_error(sol: &OcpSolution, steps: usize) -> Vec<f64> {
     per_phase
 }
 
-/// KKT check at the solution with the solver's multipliers (unscaled, Lagrangian f + λᵀg).
-fn kkt_residual(p: &bf_optim::problems::BuiltProblem, sol: &OcpSolution) -> (f64, f64) {
-    let w = sol.nlp_warm.as_ref().unwrap();
-    let n = p.nlp.num_variables();
-    let mut grad = vec![0.0; n];
-    p.nlp.gradient(&w.x, &mut grad);
-    let jp = p.nlp.jacobian_structure();
-    let mut jv = vec![0.0; jp.len()];
-    p.nlp.jacobian_values(&w.x, &mut jv);
-    for (e, &(r, c)) in jp.iter().enumerate() {
-        grad[c] += w.lambda[r] * jv[e];
-    }
-    let stat = (0..n)
-        .map(|j| (grad[j] - w.z_l[j] + w.z_u[j]).abs())
-        .fold(0.0, f64::max);
-    (stat, p.nlp.max_violation(&w.x).0)
-}
+use common::kkt::ocp_kkt_residual as kkt_residual;
 
 fn solve_named(name: &str, s: &ProblemSettings) -> (bf_optim::problems::BuiltProblem, OcpSolution) {
     let p = build(name, s).unwrap();

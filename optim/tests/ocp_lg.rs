@@ -17,6 +17,8 @@
 //!   the differential Gauss defects both ended at MaxIterations), with small KKT residuals,
 //!   rotating the ball the desired way, within 10 % of the Radau 3 × 10 objective.
 
+mod common;
+
 use bf_codegen::Scene;
 use bf_optim::ipm::{Nlp, Status};
 use bf_optim::ocp::nodes::{differentiation_matrix, legendre_gauss};
@@ -121,24 +123,7 @@ fn solve_named(name: &str, scheme: Scheme, points: usize) -> (BuiltProblem, OcpS
     (p, sol)
 }
 
-/// KKT residuals at the returned primal-dual point, recomputed from the NLP's own derivatives:
-/// (max |∇f + Jᵀλ − z_L + z_U|, max constraint violation).
-fn kkt_residual(p: &BuiltProblem, sol: &OcpSolution) -> (f64, f64) {
-    let w = sol.nlp_warm.as_ref().unwrap();
-    let n = p.nlp.num_variables();
-    let mut grad = vec![0.0; n];
-    p.nlp.gradient(&w.x, &mut grad);
-    let jp = p.nlp.jacobian_structure();
-    let mut jv = vec![0.0; jp.len()];
-    p.nlp.jacobian_values(&w.x, &mut jv);
-    for (e, &(r, c)) in jp.iter().enumerate() {
-        grad[c] += w.lambda[r] * jv[e];
-    }
-    let stat = (0..n)
-        .map(|j| (grad[j] - w.z_l[j] + w.z_u[j]).abs())
-        .fold(0.0, f64::max);
-    (stat, p.nlp.max_violation(&w.x).0)
-}
+use common::kkt::ocp_kkt_residual as kkt_residual;
 
 /// |Δv| at the end point of the stick phase (phase 1) of `sol`.
 fn stick_end_delta_v(sol: &OcpSolution, scene: &Scene) -> f64 {

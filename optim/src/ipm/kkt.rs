@@ -1094,6 +1094,27 @@ impl KktPattern {
 mod tests {
     use super::*;
 
+    /// max |K x − b| after solving K x = b with `s` and `steps` refinement steps, for a fixed
+    /// right-hand side.
+    fn refined_residual(s: &mut FaerLdlt, pat: &KktPattern, steps: usize) -> f64 {
+        let dim = pat.mat.dim;
+        let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
+        let mut x = b.clone();
+        s.solve(&mut x);
+        let mut r = vec![0.0; dim];
+        for _ in 0..steps {
+            pat.mat.sym_matvec(&x, &mut r);
+            let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
+            s.solve(&mut c);
+            x.iter_mut().zip(&c).for_each(|(x, c)| *x += c);
+        }
+        pat.mat.sym_matvec(&x, &mut r);
+        r.iter()
+            .zip(&b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+    }
+
     /// Dense inertia by Gaussian elimination with symmetric (diagonal) Bunch–Parlett-free
     /// eigen-free counting: Sylvester on a dense LDLᵀ with full symmetric pivoting by largest
     /// diagonal is not always possible, so use the Jacobi eigenvalue method (independent of faer).
@@ -1176,24 +1197,9 @@ mod tests {
         s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
         let inertia = s.factor(&pat.mat.values).expect("nonsingular");
         assert_eq!(inertia, expect, "supernodal={sup:?}");
-        let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
-        let mut x = b.clone();
-        s.solve(&mut x);
-        let mut r = vec![0.0; dim];
         // Unpivoted LDLᵀ on an indefinite matrix loses a few digits; two refinement steps
         // (as the IPM does) recover them.
-        for _ in 0..2 {
-            pat.mat.sym_matvec(&x, &mut r);
-            let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
-            s.solve(&mut c);
-            x.iter_mut().zip(&c).for_each(|(x, c)| *x += c);
-        }
-        pat.mat.sym_matvec(&x, &mut r);
-        let res = r
-            .iter()
-            .zip(&b)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
+        let res = refined_residual(&mut s, &pat, 2);
         assert!(res < 1e-8, "residual {res}");
     }
 
@@ -1436,22 +1442,7 @@ mod tests {
             if pivots_replaced == 0 {
                 assert_eq!(inertia, expect, "seed {seed}");
             }
-            let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
-            let mut x = b.clone();
-            s.solve(&mut x);
-            let mut r = vec![0.0; dim];
-            for _ in 0..3 {
-                pat.mat.sym_matvec(&x, &mut r);
-                let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
-                s.solve(&mut c);
-                x.iter_mut().zip(&c).for_each(|(x, c)| *x += c);
-            }
-            pat.mat.sym_matvec(&x, &mut r);
-            let res = r
-                .iter()
-                .zip(&b)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
+            let res = refined_residual(&mut s, &pat, 3);
             assert!(res < 1e-8, "seed {seed}: residual {res}");
         }
     }

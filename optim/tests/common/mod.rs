@@ -1,3 +1,4 @@
 //! Shared test problems.
 pub mod cheb;
 pub mod double_integrator;
+pub mod kkt;
