@@ -22,25 +22,24 @@
 //! integral form (`ocp::transcription`): with the differential form (rows with the O(N²)
 //! entries of the Gauss differentiation matrix) `periodic-cot`/`-human` LG-30 stalled
 //! (δ_w ≈ 1e-2 in every iteration, MaxIterations) and `periodic-qc` LG-30 needed an extra
-//! inactive period row. Now `periodic-qc` LG-30 is Solved (≈ 90 iterations, the Radau
-//! optimum), and `periodic-cot`/`-human` LG-30 end Acceptable (≈ 150–350 iterations, the count
-//! moves with the rounding of the KKT factorization): their
-//! optimum balances the finger at the upright (unstable) equilibrium with τ ≈ 0 for most of the
-//! 10 s period while the ball coasts, and on that rest arc the apex rule below does not pin
-//! the period start (ḣ ≡ 0 there): moving rest time between phases 3 and 1 at a fixed period
-//! changes the objective only through the discretization error of the one polynomial per
-//! phase, a near-flat direction (slightly negative curvature, δ_w ≈ 3e-5) along which the
-//! iterates creep until the acceptable test stops them at a dual infeasibility ≈ 3e-7. The
-//! LG-30 optimum is ≈ 7 % above Radau 3 × 10's (0.0493 vs 0.0459): one degree-30 polynomial
-//! over the 7–9 s free phase does not resolve the release swing and the rest as well as
-//! three elements (LG warm-started from the Radau optimum moves to 0.0494). Splitting the free
-//! arc in the middle instead (T⁽¹⁾ = T⁽³⁾, tried) pins the start but lands on other local
-//! optima (Radau 0.0335, LG 0.0511), still Acceptable with LG, and `-human` Radau no longer
-//! Solved, so the apex rule stays.
+//! inactive period row.
+//!
+//! LG solves use a larger static dual regularization ([`LG_STATIC_DUAL_REGULARIZATION`],
+//! 3e-8 instead of the solver's 1e-9). The unpivoted LDLᵀ of the KKT matrix eliminates many
+//! constraint rows of the LG KKTs before any of their primal columns (AMD: ≈ 700 of the 1624
+//! rows of `periodic-cot` LG-30), and such a pivot is exactly −δ_c; at δ_c = 1e-9 the growth
+//! 1/δ_c swamps the reduced-Hessian curvature (smallest eigenvalue ≈ 6e-9, positive), so the
+//! factor reports 1–2 spurious negative pivots for δ_w ≤ 1e-7 and its refined residual
+//! fails the 1e-5 test for δ_w ≲ 1e-5 (checked against dense eigenvalues and a pivoted dense
+//! LU of dumped KKTs). The inertia correction then kept δ_w ≈ 1e-5 in every iteration, which
+//! shrank each step along the weakest direction by λ/(λ + δ_w) ≈ 6e-4: the COT problems crept
+//! to an Acceptable exit (172 and 378 iterations; Solved only after 2440 with the acceptable
+//! test off). With δ_c = 3e-8 they end Solved in 65 and 69 iterations at the same optima, and
+//! `periodic-qc` LG-30 in 79 (was 84). The Radau KKTs keep 1e-9: their default meshes solve
+//! as before, bit for bit (a larger δ_c there moves the 3 × 10 solves to other local optima).
 //!
 //! The periodic problems start the period at the apex of the free arc (ḣ(0) = 0), which
-//! removes the time-shift degeneracy of the free arc without changing the optimum (except
-//! along a rest arc, see above).
+//! removes the time-shift degeneracy of the free arc without changing the optimum.
 //! Common constraints: |τ_i| ≤ τ_max (1 N m), h ≥ 0 in free approach phases, λ_n ≥ 0 and the
 //! smooth friction cone in stick, the sticking impact law (eq. 40) with ι_n ≥ 0,
 //! 0 ≤ h(t_f⁽¹⁾) ≤ 10⁻⁴ and h⁽³⁾ ≥ −10⁻⁴ (Sect. 7 work-arounds), Δv = 0 at the stick phase's
@@ -74,6 +73,12 @@ pub const PROBLEMS: &[&str] = &[
     "rotate-ref",
     "rotate-fast",
 ];
+
+/// Static dual regularization δ_c of the KKT matrix for Legendre–Gauss solves
+/// ([`Settings::static_dual_regularization`]; the solver's default 1e-9 stays for Radau): the
+/// unpivoted LDLᵀ eliminates many LG constraint rows before their primal columns, with pivot
+/// −δ_c, and 1e-9 lets that growth hide the curvature (module docs).
+pub const LG_STATIC_DUAL_REGULARIZATION: f64 = 3e-8;
 
 /// Upper bound of the total period of the COT problems (s): the COT ratio is otherwise free
 /// to trade period length against efficiency without limit.
@@ -996,6 +1001,10 @@ pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSol
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| Settings {
         tol: 1e-8,
+        static_dual_regularization: match s.scheme {
+            Scheme::Lg => LG_STATIC_DUAL_REGULARIZATION,
+            Scheme::Radau { .. } => Settings::default().static_dual_regularization,
+        },
         ..Settings::default()
     });
     Settings {
