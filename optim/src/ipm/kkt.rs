@@ -38,8 +38,6 @@ use faer::sparse::utils::{permute_self_adjoint_scratch, permute_self_adjoint_to_
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
-use std::ops::Range;
-
 use crate::error::OptimError;
 
 /// Inertia of a symmetric matrix: numbers of positive, negative and zero eigenvalues.
@@ -114,19 +112,11 @@ pub trait KktSolver {
 /// pattern and a value map are built at analysis time, so a refactorization is one gather plus
 /// the elimination. The operations and their order are exactly faer's (same elimination-tree
 /// reach order, same rounding), so factors and solutions are bitwise those of faer.
-///
-/// Large factors run on two threads: row k of `L` reads only rows of k's own elimination
-/// subtree (the columns j of its reach are descendants of k, and the entries `L[i, j]`, i < k,
-/// lie on the tree path from j to k), so two sets of whole subtrees ([`split_tree`]) are
-/// independent. The rows are relabelled (a topological order of the same tree, so the same
-/// fill) to make each set a contiguous block of columns that one thread owns; every row keeps
-/// faer's operations in faer's order, and the solves run the columns in faer's order, so the
-/// results stay bitwise faer's.
 #[derive(Debug, Clone, Default)]
 struct SimplicialPlan {
-    /// `perm_fwd[i]`: original index of (relabelled) permuted row i.
+    /// `perm_fwd[i]`: original index of permuted row i.
     perm_fwd: Vec<usize>,
-    /// `perm_inv[i]`: (relabelled) permuted index of original row i.
+    /// `perm_inv[i]`: permuted index of original row i.
     perm_inv: Vec<usize>,
     /// Upper triangle of `P K Pᵀ` (faer's unsorted layout): column pointers, rows, and the
     /// position of each entry in the caller's lower-triangle value array.
@@ -141,181 +131,20 @@ struct SimplicialPlan {
     /// Structure of `L` (diagonal first, rows increasing within a column), 32-bit rows.
     l_col_ptr: Vec<usize>,
     l_row_idx: Vec<u32>,
-    /// Columns in faer's elimination order (the identity without a split): the solves follow
-    /// it so that every entry of the solution sums its terms in faer's order.
-    order: Vec<u32>,
-    /// `faer_pos[p]`: position in this plan's `L` of faer's value `p` (tests compare factors).
-    #[cfg(test)]
-    faer_pos: Vec<usize>,
-    /// Sizes of the two threads' column blocks (rows `0..n0` and `n0..n0 + n1`; the rest after
-    /// both); `None` runs all rows on the calling thread.
-    split: Option<(usize, usize)>,
     // workspaces
     a_val: Vec<f64>,
     x: Vec<f64>,
-    /// The second thread's accumulator (zero between rows, like `x`).
-    x2: Vec<f64>,
     inv_d: Vec<f64>,
     tmp: Vec<f64>,
 }
 
-/// Floating-point work (entries of `A` plus scatter lengths, see [`SimplicialPlan::new`]) from
-/// which [`FaerLdlt`] factors on two threads by default: a rayon join costs microseconds, a
-/// factorization of this size some hundred.
-pub const PARALLEL_FACTOR_MIN_WORK: f64 = 1e5;
-
-/// Splits an elimination forest (`parent[j] > j`, `usize::MAX` for roots) with per-row work
-/// `work` into two balanced sets of whole subtrees, returned as a thread (0 or 1) per row, or
-/// 2 for the rows above them. Starting from the roots, the heaviest subtree of the frontier is
-/// repeatedly replaced by its children; each frontier is packed into two sets heaviest-first,
-/// and the frontier with the smallest `work(rows above) + max(set work)` wins. `None` when that
-/// saves less than 15 % of the serial work.
-fn split_tree(parent: &[usize], work: &[f64]) -> Option<Vec<u8>> {
-    let n = parent.len();
-    let mut sub = work.to_vec();
-    let mut first_child = vec![0usize; n + 1];
-    for j in 0..n {
-        if parent[j] != usize::MAX {
-            sub[parent[j]] += sub[j];
-            first_child[parent[j] + 1] += 1;
-        }
-    }
-    for j in 0..n {
-        first_child[j + 1] += first_child[j];
-    }
-    let mut children = vec![0usize; first_child[n]];
-    let mut fill = first_child.clone();
-    for j in 0..n {
-        if parent[j] != usize::MAX {
-            children[fill[parent[j]]] = j;
-            fill[parent[j]] += 1;
-        }
-    }
-    let total: f64 = work.iter().sum();
-    let mut frontier: Vec<usize> = (0..n).filter(|&j| parent[j] == usize::MAX).collect();
-    let mut top_work = 0.0;
-    let mut best: Option<(f64, Vec<(usize, u8)>)> = None;
-    for _ in 0..n {
-        frontier.sort_by(|&a, &b| sub[b].total_cmp(&sub[a]).then(a.cmp(&b)));
-        let mut load = [0.0f64; 2];
-        let assignment: Vec<(usize, u8)> = frontier
-            .iter()
-            .map(|&f| {
-                let b = usize::from(load[1] < load[0]);
-                load[b] += sub[f];
-                (f, b as u8)
-            })
-            .collect();
-        let cost = top_work + load[0].max(load[1]);
-        if best.as_ref().is_none_or(|(c, _)| cost < *c) {
-            best = Some((cost, assignment));
-        }
-        let Some(&heaviest) = frontier.first() else {
-            break;
-        };
-        if sub[heaviest] < 0.02 * total {
-            break;
-        }
-        frontier.remove(0);
-        top_work += work[heaviest];
-        frontier.extend_from_slice(&children[first_child[heaviest]..first_child[heaviest + 1]]);
-    }
-    let (cost, assignment) = best?;
-    if cost > 0.85 * total {
-        return None;
-    }
-    const UNSET: u8 = u8::MAX;
-    let mut set_of = vec![UNSET; n];
-    for (f, b) in assignment {
-        set_of[f] = b;
-    }
-    // Parents come after their children: a row inherits its parent's set, and rows whose
-    // parent is above the frontier (or roots not in it) are above it themselves.
-    for k in (0..n).rev() {
-        if set_of[k] == UNSET {
-            set_of[k] = match parent[k] {
-                p if p != usize::MAX && set_of[p] != 2 => set_of[p],
-                _ => 2,
-            };
-        }
-    }
-    Some(set_of)
-}
-
-/// The read-only data of the up-looking factorization of a block of rows.
-struct RowKernel<'a> {
-    a_col_ptr: &'a [usize],
-    a_row_idx: &'a [usize],
-    a_val: &'a [f64],
-    reach_ptr: &'a [usize],
-    reach: &'a [(u32, u32)],
-    l_col_ptr: &'a [usize],
-    l_row_idx: &'a [u32],
-    eps: f64,
-    delta: f64,
-}
-
-impl RowKernel<'_> {
-    /// Computes rows `rows` of `L` and their pivots (faer's operations, faer's order). `l`
-    /// holds the values of the columns from `first` on (from position `l_col_ptr[first]`),
-    /// `inv_d` their inverse pivots: every column that a row reads or writes is a descendant
-    /// of it, so `first = rows.start` serves a block of whole subtrees and `first = 0` any
-    /// block whose descendants are final. `x` is zero on entry and on exit. `false` on a zero
-    /// or non-finite pivot.
-    fn rows(
-        &self,
-        rows: Range<usize>,
-        first: usize,
-        x: &mut [f64],
-        l: &mut [f64],
-        inv_d: &mut [f64],
-    ) -> bool {
-        let (l_base, d_base) = (self.l_col_ptr[first], first);
-        for k in rows {
-            let (a0, a1) = (self.a_col_ptr[k], self.a_col_ptr[k + 1]);
-            for (&i, &aik) in self.a_row_idx[a0..a1].iter().zip(&self.a_val[a0..a1]) {
-                x[i] += aik;
-            }
-            let mut d = x[k];
-            x[k] = 0.0;
-            for &(j, row) in &self.reach[self.reach_ptr[k]..self.reach_ptr[k + 1]] {
-                let (j, row) = (j as usize, row as usize);
-                let xj = x[j];
-                x[j] = 0.0;
-                let lkj = xj * inv_d[j - d_base];
-                let range = self.l_col_ptr[j] + 1..row;
-                axpy_scatter(
-                    x,
-                    &self.l_row_idx[range.clone()],
-                    &l[range.start - l_base..range.end - l_base],
-                    xj,
-                );
-                d -= lkj * xj;
-                l[row - l_base] = lkj;
-            }
-            if self.delta > 0.0 && d.abs() <= self.eps {
-                d = if d < 0.0 { -self.delta } else { self.delta };
-            }
-            if d == 0.0 || !d.is_finite() {
-                x.iter_mut().for_each(|v| *v = 0.0);
-                return false;
-            }
-            l[self.l_col_ptr[k] - l_base] = d;
-            inv_d[k - d_base] = d.recip();
-        }
-        true
-    }
-}
-
 impl SimplicialPlan {
-    /// Prepares the plan from faer's symbolic analysis of the lower-triangle pattern; splits
-    /// the rows over two threads when the factorization work is at least `parallel_min_work`.
+    /// Prepares the plan from faer's symbolic analysis of the lower-triangle pattern.
     fn new(
         sym: &SymbolicCholesky<usize>,
         dim: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
-        parallel_min_work: f64,
     ) -> Option<Self> {
         let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
             return None;
@@ -343,10 +172,10 @@ impl SimplicialPlan {
             Side::Upper,
             MemStack::new(&mut mem),
         );
-        let a_col_ptr = permuted.col_ptr();
-        let a_row_idx = permuted.row_idx();
+        let a_col_ptr = permuted.col_ptr().to_vec();
+        let a_row_idx = permuted.row_idx().to_vec();
         let a_src: Vec<usize> = permuted.val().iter().map(|&v| v as usize).collect();
-        let l_col_ptr = s.col_ptr();
+        let l_col_ptr = s.col_ptr().to_vec();
         let l_nnz = *l_col_ptr.last()?;
         if l_nnz > u32::MAX as usize || dim > u32::MAX as usize {
             return None;
@@ -366,7 +195,7 @@ impl SimplicialPlan {
         let mut stack = vec![0usize; dim];
         let mut next: Vec<usize> = l_col_ptr[..dim].to_vec();
         let mut reach_ptr = Vec::with_capacity(dim + 1);
-        let mut reach: Vec<(u32, u32)> = Vec::with_capacity(l_nnz - dim);
+        let mut reach = Vec::with_capacity(l_nnz - dim);
         reach_ptr.push(0);
         for k in 0..dim {
             let mut top = dim;
@@ -395,154 +224,76 @@ impl SimplicialPlan {
             }
             reach_ptr.push(reach.len());
         }
-        // Work of row k: its entries of A plus the scatter lengths of its reach.
-        let work: Vec<f64> = (0..dim)
-            .map(|k| {
-                let scatter: usize = reach[reach_ptr[k]..reach_ptr[k + 1]]
-                    .iter()
-                    .map(|&(j, p)| p as usize - l_col_ptr[j as usize])
-                    .sum();
-                (scatter + a_col_ptr[k + 1] - a_col_ptr[k]) as f64
-            })
-            .collect();
-        let set_of = if work.iter().sum::<f64>() >= parallel_min_work {
-            split_tree(&parent, &work)
-        } else {
-            None
-        };
-        // Relabel: the first thread's rows, the second's, then the rest, each in faer's order
-        // (a topological order of the same tree, so the structure of L is only relabelled).
-        let mut old_of: Vec<usize> = (0..dim).collect();
-        let mut split = None;
-        if let Some(set_of) = &set_of {
-            old_of.sort_by_key(|&k| set_of[k]);
-            let n0 = set_of.iter().filter(|&&b| b == 0).count();
-            let n1 = set_of.iter().filter(|&&b| b == 1).count();
-            split = Some((n0, n1));
-        }
-        let mut new_of = vec![0usize; dim];
-        for (new, &old) in old_of.iter().enumerate() {
-            new_of[old] = new;
-        }
-        // L: columns in the new order, rows relabelled (their order within a column is kept:
-        // the ancestors of a column in its own block come before those above the blocks).
-        let mut new_l_col_ptr = Vec::with_capacity(dim + 1);
-        let mut l_row_idx = Vec::with_capacity(l_nnz);
-        let mut pos_of = vec![0usize; l_nnz];
-        new_l_col_ptr.push(0);
-        for &old in &old_of {
-            for p in l_col_ptr[old]..l_col_ptr[old + 1] {
-                pos_of[p] = l_row_idx.len();
-                l_row_idx.push(new_of[l_rows[p]] as u32);
-            }
-            new_l_col_ptr.push(l_row_idx.len());
-        }
-        let mut new_a_col_ptr = Vec::with_capacity(dim + 1);
-        let mut new_a_row_idx = Vec::with_capacity(a_row_idx.len());
-        let mut new_a_src = Vec::with_capacity(a_row_idx.len());
-        let mut new_reach_ptr = Vec::with_capacity(dim + 1);
-        let mut new_reach = Vec::with_capacity(reach.len());
-        new_a_col_ptr.push(0);
-        new_reach_ptr.push(0);
-        for &old in &old_of {
-            for p in a_col_ptr[old]..a_col_ptr[old + 1] {
-                new_a_row_idx.push(new_of[a_row_idx[p]]);
-                new_a_src.push(a_src[p]);
-            }
-            new_a_col_ptr.push(new_a_row_idx.len());
-            for &(j, p) in &reach[reach_ptr[old]..reach_ptr[old + 1]] {
-                new_reach.push((new_of[j as usize] as u32, pos_of[p as usize] as u32));
-            }
-            new_reach_ptr.push(new_reach.len());
-        }
         Some(Self {
-            perm_fwd: old_of.iter().map(|&old| fwd[old]).collect(),
-            perm_inv: inv.iter().map(|&old| new_of[old]).collect(),
-            a_val: vec![0.0; new_a_row_idx.len()],
-            a_col_ptr: new_a_col_ptr,
-            a_row_idx: new_a_row_idx,
-            a_src: new_a_src,
-            reach_ptr: new_reach_ptr,
-            reach: new_reach,
-            l_row_idx,
-            l_col_ptr: new_l_col_ptr,
-            order: new_of.iter().map(|&k| k as u32).collect(),
-            #[cfg(test)]
-            faer_pos: pos_of,
-            split,
+            perm_fwd: fwd.to_vec(),
+            perm_inv: inv.to_vec(),
+            a_val: vec![0.0; a_row_idx.len()],
+            a_col_ptr,
+            a_row_idx,
+            a_src,
+            reach_ptr,
+            reach,
+            l_row_idx: l_rows.iter().map(|&r| r as u32).collect(),
+            l_col_ptr,
             x: vec![0.0; dim],
-            x2: vec![0.0; dim],
             inv_d: vec![0.0; dim],
             tmp: vec![0.0; dim],
         })
     }
 
     /// Numeric LDLᵀ into `l` (layout of `l_col_ptr`); pivots with |d| ≤ `eps` become ±`delta`
-    /// when `delta > 0`. `false` on a zero or non-finite pivot. With a split, the two blocks
-    /// of subtrees run on two threads (rayon), then the rows above them.
+    /// when `delta > 0`. `false` on a zero or non-finite pivot.
     fn factor(&mut self, values: &[f64], l: &mut [f64], eps: f64, delta: f64) -> bool {
         let n = self.x.len();
         for (dst, &src) in self.a_val.iter_mut().zip(&self.a_src) {
             *dst = values[src];
         }
-        let kernel = RowKernel {
-            a_col_ptr: &self.a_col_ptr,
-            a_row_idx: &self.a_row_idx,
-            a_val: &self.a_val,
-            reach_ptr: &self.reach_ptr,
-            reach: &self.reach,
-            l_col_ptr: &self.l_col_ptr,
-            l_row_idx: &self.l_row_idx,
-            eps: eps.abs(),
-            delta: delta.abs(),
-        };
-        let Some((n0, n1)) = self.split else {
-            return kernel.rows(0..n, 0, &mut self.x, l, &mut self.inv_d);
-        };
-        let (ok0, ok1) = {
-            let (l0, rest) = l.split_at_mut(self.l_col_ptr[n0]);
-            let l1 = &mut rest[..self.l_col_ptr[n0 + n1] - self.l_col_ptr[n0]];
-            let (d0, rest) = self.inv_d.split_at_mut(n0);
-            let d1 = &mut rest[..n1];
-            let (x0, x1) = (&mut self.x, &mut self.x2);
-            rayon::join(
-                || kernel.rows(0..n0, 0, x0, l0, d0),
-                || kernel.rows(n0..n0 + n1, n0, x1, l1, d1),
-            )
-        };
-        ok0 && ok1 && kernel.rows(n0 + n1..n, 0, &mut self.x, l, &mut self.inv_d)
-    }
-
-    /// Counts the signs of the pivots of `l`.
-    fn inertia(&self, l: &[f64]) -> Inertia {
-        let mut inertia = Inertia::default();
-        for &p in &self.l_col_ptr[..self.l_col_ptr.len() - 1] {
-            match l[p] {
-                d if d > 0.0 => inertia.positive += 1,
-                d if d < 0.0 => inertia.negative += 1,
-                _ => inertia.zero += 1,
+        let (eps, delta) = (eps.abs(), delta.abs());
+        let x = &mut self.x;
+        x.iter_mut().for_each(|v| *v = 0.0);
+        for k in 0..n {
+            let (a0, a1) = (self.a_col_ptr[k], self.a_col_ptr[k + 1]);
+            for (&i, &aik) in self.a_row_idx[a0..a1].iter().zip(&self.a_val[a0..a1]) {
+                x[i] += aik;
             }
+            let mut d = x[k];
+            x[k] = 0.0;
+            for &(j, row) in &self.reach[self.reach_ptr[k]..self.reach_ptr[k + 1]] {
+                let (j, row) = (j as usize, row as usize);
+                let xj = x[j];
+                x[j] = 0.0;
+                let lkj = xj * self.inv_d[j];
+                let range = self.l_col_ptr[j] + 1..row;
+                axpy_scatter(x, &self.l_row_idx[range.clone()], &l[range], xj);
+                d -= lkj * xj;
+                l[row] = lkj;
+            }
+            if delta > 0.0 && d.abs() <= eps {
+                d = if d < 0.0 { -delta } else { delta };
+            }
+            if d == 0.0 || !d.is_finite() {
+                return false;
+            }
+            l[self.l_col_ptr[k]] = d;
+            self.inv_d[k] = d.recip();
         }
-        inertia
+        true
     }
 
     /// Solves `K x = rhs` in place with the factor `l` (faer's permuted unit-lower solve, the
-    /// D scaling fused into the transposed solve, and the inverse permutation), column by
-    /// column in faer's order.
+    /// D scaling fused into the transposed solve, and the inverse permutation).
     fn solve(&mut self, l: &[f64], rhs: &mut [f64]) {
         let n = rhs.len();
         let x = &mut self.tmp;
         for i in 0..n {
             x[i] = rhs[self.perm_fwd[i]];
         }
-        for &j in &self.order {
-            let j = j as usize;
+        for j in 0..n {
             let (a, b) = (self.l_col_ptr[j] + 1, self.l_col_ptr[j + 1]);
             let xj = x[j];
             axpy_scatter(x, &self.l_row_idx[a..b], &l[a..b], xj);
         }
-        for &j in self.order.iter().rev() {
-            let j = j as usize;
+        for j in (0..n).rev() {
             let (a, b) = (self.l_col_ptr[j] + 1, self.l_col_ptr[j + 1]);
             let mut acc = 0.0;
             for (&i, &lij) in self.l_row_idx[a..b].iter().zip(&l[a..b]).rev() {
@@ -951,11 +702,6 @@ pub struct FaerLdlt {
     /// Simplicial factorizations run through `SimplicialPlan` (bitwise faer's result, less
     /// per-call work); `false` calls faer's `factorize_numeric_ldlt` directly.
     pub reuse_permutation: bool,
-    /// Simplicial factorizations with at least this much work (entries of `K` plus scatter
-    /// lengths; [`PARALLEL_FACTOR_MIN_WORK`] by default) run two independent sets of
-    /// elimination subtrees on two threads (rayon), with bitwise the same result;
-    /// `f64::INFINITY` keeps them on the calling thread. Read at [`KktSolver::analyse`].
-    pub parallel_min_work: f64,
     plan: Option<SimplicialPlan>,
     /// Factor and solve with the supernodal `BlockPlan` on faer's simplicial structure:
     /// `Some(true)` always (unless `supernodal == Some(true)`), `Some(false)` never, `None`
@@ -996,7 +742,6 @@ impl FaerLdlt {
             pivot_epsilon: 1e-14,
             pivot_delta: 1e-4,
             reuse_permutation: true,
-            parallel_min_work: PARALLEL_FACTOR_MIN_WORK,
             plan: None,
             block_kernel: None,
             block: None,
@@ -1158,13 +903,7 @@ impl KktSolver for FaerLdlt {
             None
         };
         self.plan = if self.block.is_none() {
-            SimplicialPlan::new(
-                &sym,
-                dim,
-                &self.col_ptr,
-                &self.row_idx,
-                self.parallel_min_work,
-            )
+            SimplicialPlan::new(&sym, dim, &self.col_ptr, &self.row_idx)
         } else {
             None
         };
@@ -1191,7 +930,7 @@ impl KktSolver for FaerLdlt {
             ) {
                 return None;
             }
-            let inertia = plan.inertia(&self.l_values);
+            let inertia = self.inertia();
             if inertia.zero > 0 {
                 return None;
             }
@@ -1549,105 +1288,34 @@ mod tests {
             }
             jac.push((r, n - 1, 1.0)); // a dense column (like a phase duration)
         }
-        for shift in [0.0, 0.5, 10.0] {
-            let pat = kkt_of_triplets(n, m, &hess, &jac, shift);
-            assert_plan_is_bitwise_faer(&pat, &format!("unstructured, shift {shift}"));
-        }
-        // A chain of collocation-like elements (dense 8-variable Hessian blocks, 5 constraint
-        // rows inside each element, one continuity row to the next): the elimination tree
-        // branches, and its rows split over two threads.
-        for (seed, shift) in [(3, 0.0), (4, 2.0)] {
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-            let elements = 60;
-            let n = 8 * elements;
-            let mut hess = Vec::new();
-            let mut jac = Vec::new();
-            for e in 0..elements {
-                for i in 8 * e..8 * e + 8 {
-                    for j in 8 * e..=i {
-                        if i == j || rng.random_bool(0.6) {
-                            hess.push((i, j, rng.random_range(-1.0..1.0) + f64::from(i == j)));
-                        }
-                    }
-                }
-                for _ in 0..5 {
-                    let r = jac.len() / 4;
-                    for _ in 0..4 {
-                        jac.push((
-                            r,
-                            8 * e + rng.random_range(0..8),
-                            rng.random_range(-2.0..2.0),
-                        ));
-                    }
-                }
-            }
-            let m0 = jac.len() / 4;
-            for e in 0..elements - 1 {
-                jac.push((m0 + e, 8 * e + 7, 1.0));
-                jac.push((m0 + e, 8 * e + 8, -1.0));
-            }
-            let m = m0 + elements - 1;
-            let pat = kkt_of_triplets(n, m, &hess, &jac, shift);
-            let split = assert_plan_is_bitwise_faer(&pat, &format!("element chain, seed {seed}"));
-            assert!(split, "element chain, seed {seed}: no two-thread split");
-        }
-    }
-
-    /// faer's own simplicial LDLᵀ, the plan on one thread and the plan with its rows split over
-    /// two threads give bitwise the same factor (compared in faer's layout), inertia and
-    /// solution. Returns whether the two-thread plan found a split.
-    fn assert_plan_is_bitwise_faer(pat: &KktPattern, what: &str) -> bool {
-        let dim = pat.mat.col_ptr.len() - 1;
-        let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.71).cos()).collect();
-        let mut out = Vec::new();
-        let mut split = false;
-        for (reuse, min_work) in [(false, f64::INFINITY), (true, f64::INFINITY), (true, 0.0)] {
-            let mut s = FaerLdlt::new();
-            s.supernodal = Some(false);
-            s.block_kernel = Some(false);
-            s.reuse_permutation = reuse;
-            s.parallel_min_work = min_work;
-            s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
-            let plan = s.plan.as_ref().unwrap();
-            split |= plan.split.is_some();
-            let faer_pos = plan.faer_pos.clone();
-            let inertia = s.factor(&pat.mat.values);
-            let mut x = b.clone();
-            if inertia.is_some() {
-                s.solve(&mut x);
-            }
-            let l: Vec<u64> = if reuse {
-                faer_pos.iter().map(|&p| s.l_values[p].to_bits()).collect()
-            } else {
-                s.l_values.iter().map(|v| v.to_bits()).collect()
-            };
-            out.push((
-                inertia,
-                l,
-                x.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
-            ));
-        }
-        assert!(out[0].0.is_some(), "{what}: factor failed");
-        assert_eq!(out[0], out[1], "{what}: plan");
-        assert_eq!(out[0], out[2], "{what}: plan on two threads");
-        split
-    }
-
-    /// `[H + shift I, Jᵀ; J, −1e-9 I]` from `(row, col, value)` triplets of H and J.
-    fn kkt_of_triplets(
-        n: usize,
-        m: usize,
-        hess: &[(usize, usize, f64)],
-        jac: &[(usize, usize, f64)],
-        shift: f64,
-    ) -> KktPattern {
         let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
         let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
         let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
         let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
         let mut pat = KktPattern::new(n, m, &hp, &jp);
-        pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
-        pat
+        let dim = n + m;
+        let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.71).cos()).collect();
+        for shift in [0.0, 0.5, 10.0] {
+            pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
+            let mut out = Vec::new();
+            for reuse in [true, false] {
+                let mut s = FaerLdlt::new();
+                s.supernodal = Some(false);
+                s.block_kernel = Some(false);
+                s.reuse_permutation = reuse;
+                s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+                assert!(s.plan.is_some());
+                let inertia = s.factor(&pat.mat.values);
+                let mut x = b.clone();
+                if inertia.is_some() {
+                    s.solve(&mut x);
+                }
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                out.push((inertia, bits(&s.l_values), bits(&x)));
+            }
+            assert!(out[0].0.is_some(), "shift {shift}: factor failed");
+            assert_eq!(out[0], out[1], "shift {shift}");
+        }
     }
 
     /// Random KKT-like matrix `[H + shift I, Jᵀ; J, −1e-9 I]` with a block-banded Hessian
@@ -1676,7 +1344,12 @@ mod tests {
             }
             jac.push((r, n - 1, 1.0));
         }
-        let pat = kkt_of_triplets(n, m, &hess, &jac, shift);
+        let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
+        let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
+        let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
+        let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
+        let mut pat = KktPattern::new(n, m, &hp, &jp);
+        pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
         let dim = n + m;
         let mut dense = vec![vec![0.0; dim]; dim];
         for j in 0..dim {
