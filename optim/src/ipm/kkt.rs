@@ -659,6 +659,18 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
 /// does not depend on the unrolling.
 #[inline(always)]
 fn axpy_scatter(x: &mut [f64], rows: &[u32], vals: &[f64], s: f64) {
+    // Rows are strictly increasing, so first + len − 1 = last means a contiguous run (the
+    // dense fronts near the root of the elimination tree): the same element-wise operations
+    // on a slice, which the compiler vectorizes.
+    if let (Some(&first), Some(&last)) = (rows.first(), rows.last())
+        && (last - first) as usize + 1 == rows.len()
+    {
+        let first = first as usize;
+        for (xi, &v) in x[first..=last as usize].iter_mut().zip(vals) {
+            *xi -= v * s;
+        }
+        return;
+    }
     let mut r4 = rows.chunks_exact(4);
     let mut v4 = vals.chunks_exact(4);
     for (r, v) in (&mut r4).zip(&mut v4) {
