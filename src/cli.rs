@@ -165,6 +165,11 @@ pub struct OptimizeArgs {
     /// Warm start from a previous solution.json.
     #[arg(long)]
     pub warm_start: Option<PathBuf>,
+    /// Static dual regularization δ_c of the KKT factorization (default: 3e-8 with lg, 1e-9
+    /// with radau). Raise it to 3e-8 when a Radau mesh finer than the default stalls
+    /// (MaxIterations or Acceptable with δ_w > 0 in every iteration; optim/README.md).
+    #[arg(long, value_name = "DELTA_C", allow_hyphen_values = true)]
+    pub dual_regularization: Option<f64>,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` random guesses around the default, in parallel). Default:

@@ -260,6 +260,12 @@ fn bad_cli_input_gives_clear_errors() {
         &["--refine", "radau"],
     );
     assert_clean_failure(&opt(&["--verify-rtol", "2"]), &["--verify-rtol"]);
+    for bad in ["-3e-8", "nan", "0", "0.5"] {
+        assert_clean_failure(
+            &opt(&["--dual-regularization", bad]),
+            &["--dual-regularization"],
+        );
+    }
     assert_clean_failure(&opt(&["--print-level", "7"]), &["--print-level"]);
     std::fs::remove_dir_all(dir).ok();
 }

@@ -41,6 +41,11 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
             args.epsilon
         );
     }
+    if let Some(dc) = args.dual_regularization
+        && !(dc.is_finite() && dc > 0.0 && dc <= 1e-4)
+    {
+        bail!("--dual-regularization must be in (0, 1e-4] (got {dc})");
+    }
     let warm_start = match &args.warm_start {
         Some(path) => Some(
             OcpSolution::read_json(path)
@@ -55,6 +60,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         warm_start,
         max_iter: args.max_iter,
         print_level: args.print_level,
+        dual_regularization: args.dual_regularization,
         ..ProblemSettings::default()
     })
 }

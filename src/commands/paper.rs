@@ -228,7 +228,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          - Finer Radau meshes than the default can stall: the unpivoted KKT factorization \
          eliminates constraint rows before their variables, and the solver's static dual \
          regularization 1e-9 then hides small curvature (optim/README.md; LG solves use 3e-8). \
-         Library users can raise `static_dual_regularization`; the CLI has no switch yet.\n\
+         Raise it with `optimize --dual-regularization 3e-8` (`ProblemSettings::\
+         dual_regularization`).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`)."
     )?;

@@ -144,6 +144,11 @@ pub struct ProblemSettings {
     /// Custom hp-Radau mesh per phase (overrides `points`; needs the Radau scheme), e.g. from
     /// [`refine::refine`].
     pub mesh: Option<Vec<crate::ocp::MeshSpec>>,
+    /// Static dual regularization δ_c of the KKT factorization
+    /// ([`Settings::static_dual_regularization`]); `None`: [`LG_STATIC_DUAL_REGULARIZATION`]
+    /// with LG, the solver's 1e-9 with Radau. Raise it (e.g. to 3e-8) when a Radau mesh finer
+    /// than the default stalls with δ_w > 0 in every iteration (module docs). Overrides `ipm`.
+    pub dual_regularization: Option<f64>,
 }
 
 /// A guess of constant joint angles `q` and phase durations `durations` (the paper's guess is
@@ -173,6 +178,7 @@ impl Default for ProblemSettings {
             effort_scale: 1.0,
             period_bounds: None,
             mesh: None,
+            dual_regularization: None,
         }
     }
 }
@@ -1010,6 +1016,9 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
     Settings {
         max_iter: s.max_iter,
         print_level: s.print_level,
+        static_dual_regularization: s
+            .dual_regularization
+            .unwrap_or(base.static_dual_regularization),
         ..base
     }
 }

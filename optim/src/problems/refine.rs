@@ -306,10 +306,7 @@ pub fn refine(
             ..sol.clone()
         });
         if round == 0 {
-            let base = settings.ipm.clone().unwrap_or_else(|| Settings {
-                tol: 1e-8,
-                ..Settings::default()
-            });
+            let base = super::solver_settings(settings);
             s.ipm = Some(Settings {
                 mu_init: opts.warm_mu_init,
                 ..base
