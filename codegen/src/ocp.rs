@@ -868,7 +868,9 @@ impl CompiledNode {
 /// The node functions emitted as kernels for a scene with a ball and a contact: for every cost
 /// kind of the scene's `ocp_kernels` (default: all), a free phase (h row), a stick phase at
 /// both levels, and, for the periodic costs (QC, COT), the free phase with the Sect. 7 ḣ
-/// margin row too. Names are `<scene>_<cost>_<phase>`. Empty without a ball or a contact.
+/// margin row too; for the other costs (the free–stick archetypes) also the stick phase with
+/// the h row at both levels. Names are `<scene>_<cost>_<phase>`. Empty without a ball or a
+/// contact.
 pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)> {
     let mut out = Vec::new();
     if scene.ball.is_none() || scene.contact.is_none() {
@@ -899,10 +901,19 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
         let stick = NodeOptions {
             mode: Mode::Stick,
             h_bounds: None,
-            ..base
+            ..base.clone()
         };
         out.push((name("stick"), stick.clone(), StickLevel::Velocity));
         out.push((name("stick_acc"), stick, StickLevel::Acceleration));
+        if !matches!(cost, CostKind::Qc { .. } | CostKind::Cot { .. }) {
+            // The free–stick archetypes bound h in the stick phase too.
+            let stick_h = NodeOptions {
+                mode: Mode::Stick,
+                ..base
+            };
+            out.push((name("stick_h"), stick_h.clone(), StickLevel::Velocity));
+            out.push((name("stick_h_acc"), stick_h, StickLevel::Acceleration));
+        }
     }
     out
 }
