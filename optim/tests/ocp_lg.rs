@@ -348,3 +348,34 @@ fn spinning_archetypes_keep_contact_in_the_stick_phase() {
         );
     }
 }
+
+/// `reach` and `reorient` with Legendre–Gauss, 30 points per phase, from the default guess:
+/// Solved, with the KKT conditions met and each problem's defining constraint held (the other
+/// two archetypes: `spinning_archetypes_keep_contact_in_the_stick_phase`).
+#[test]
+fn lg_reach_and_reorient_are_solved() {
+    for name in ["reach", "reorient"] {
+        let (p, sol) = solve_named(name, Scheme::Lg, 30);
+        assert_eq!(sol.status, Status::Solved, "{name}: {:?}", sol.stages);
+        let (stat, viol) = kkt_residual(&p, &sol);
+        assert!(viol < 1e-7 && stat < 1e-5, "{name}: {viol} {stat}");
+        match name {
+            // Touches the ball (0 ≤ h ≤ 1e-4 at the end) at rest.
+            "reach" => {
+                let x = sol.raw[0].x.last().unwrap();
+                let h = Diagnostics::new(&paper_scene(), sol.epsilon)
+                    .unwrap()
+                    .eval(x)
+                    .h;
+                assert!((-1e-8..=1e-4 + 1e-8).contains(&h), "reach: h(tf) = {h}");
+                assert!(x[3..6].iter().all(|v| v.abs() < 1e-7), "reach: {x:?}");
+            }
+            // The ball turned by π/2 about z.
+            _ => assert!(
+                (sol.c2 - std::f64::consts::FRAC_PI_2).abs() < 1e-7,
+                "{}",
+                sol.c2
+            ),
+        }
+    }
+}
