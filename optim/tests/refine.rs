@@ -562,3 +562,49 @@ fn explore() {
         );
     }
 }
+
+/// The "equal accuracy" behind issue 6's speed comparison: on `periodic-qc` (cold solves on
+/// the branch J ≈ 0.5598), Legendre–Gauss with 30 points per phase and Radau 3 × 12 both
+/// reach the objective of an adaptively refined mesh (tolerance 1e-6) to ≈ 5e-6 relative,
+/// while the default Radau 3 × 10 is an order of magnitude further off, so the 3 × 12 mesh is
+/// the Radau mesh that matches LG-30 (BENCHMARKS.md: 265 ms against 637 ms).
+#[test]
+fn radau_3x12_matches_lg30_accuracy_on_periodic_qc() {
+    let opts = RefineOptions {
+        tol: 1e-6,
+        max_rounds: 12,
+        ..RefineOptions::default()
+    };
+    let reference = refine(
+        "periodic-qc",
+        &ProblemSettings::default(),
+        &opts,
+        None,
+        None,
+    )
+    .unwrap();
+    assert!(reference.converged, "{}", reference.stop_reason);
+    let j_ref = reference.solution.objective;
+    let rel_error = |scheme: Scheme, points: usize| {
+        let s = ProblemSettings {
+            scheme,
+            points,
+            ..ProblemSettings::default()
+        };
+        let sol = solve(&build("periodic-qc", &s).unwrap(), None).unwrap();
+        assert_eq!(sol.status, Status::Solved, "{scheme:?} {points}");
+        (sol.objective - j_ref).abs() / j_ref
+    };
+    let lg30 = rel_error(Scheme::Lg, 30);
+    let radau12 = rel_error(Scheme::Radau { elements: 3 }, 36);
+    let radau10 = rel_error(Scheme::Radau { elements: 3 }, 30);
+    println!(
+        "J_ref {j_ref}: relative errors LG-30 {lg30:.2e}, Radau 3x12 {radau12:.2e}, 3x10 {radau10:.2e}"
+    );
+    assert!(lg30 < 1e-5 && radau12 < 1e-5, "{lg30:e} {radau12:e}");
+    assert!(
+        radau12 < 2.0 * lg30,
+        "Radau 3x12 {radau12:e} vs LG-30 {lg30:e}"
+    );
+    assert!(radau10 > 5.0 * lg30.max(radau12), "Radau 3x10 {radau10:e}");
+}
