@@ -330,3 +330,53 @@ fn optimize_refines_verifies_and_records_it() {
     assert_eq!(max_defect, phase_max);
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// `--dual-regularization` reaches the solver: a Radau mesh finer than the default
+/// (`periodic-cot`, 3 × 12) that stalls with the default KKT regularization (the run ends
+/// unconverged, non-zero exit, with a hint naming the option) is Solved with 3e-8.
+#[test]
+fn optimize_dual_regularization_rescues_a_fine_radau_mesh() {
+    let dir = std::env::temp_dir().join(format!("bf-cli-dualreg-{}", std::process::id()));
+    let args = |extra: &[&str]| {
+        let out = dir.to_str().unwrap().to_string();
+        let mut a: Vec<String> = [
+            "optimize",
+            "--problem",
+            "periodic-cot",
+            "--points",
+            "36",
+            "--strategy",
+            "direct",
+            "--max-iter",
+            "300",
+            "--verify-rtol",
+            "0",
+            "--out",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        a.push(out);
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
+    };
+    let stalled = bin().current_dir(root()).args(args(&[])).output().unwrap();
+    let stdout = String::from_utf8_lossy(&stalled.stdout);
+    assert!(!stalled.status.success(), "{stdout}");
+    assert!(stdout.contains("--dual-regularization 3e-8"), "{stdout}");
+    let rescued = bin()
+        .current_dir(root())
+        .args(args(&["--dual-regularization", "3e-8"]))
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&rescued.stdout);
+    assert!(rescued.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("Solved") && !stdout.contains("hint:"),
+        "{stdout}"
+    );
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    assert_eq!(sol["status"], "Solved");
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -6,6 +6,7 @@
 
 use crate::cli::OptimizeArgs;
 use anyhow::{Context, Result, bail};
+use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
 use bf_optim::problems::refine::{self, RefineOptions, RefineRound};
 use bf_optim::problems::strategy::{self, StageRecord, Strategy};
@@ -266,6 +267,13 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         );
     }
     println!("wrote {}/solution.json and torques.csv", args.out.display());
+    if sol.status != Status::Solved && args.scheme == "radau" && args.dual_regularization.is_none()
+    {
+        println!(
+            "hint: Radau meshes finer than the default can stall with the default KKT \
+             regularization; try --dual-regularization 3e-8 (optim/README.md)"
+        );
+    }
     if !sol.status.is_success() {
         bail!("the solver did not converge ({:?})", sol.status);
     }
