@@ -3,7 +3,7 @@
 //! `generate` must be deterministic and produce the code compiled into `bf-generated`, and bad
 //! user input must give a clear error and a non-zero exit code, never a panic.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn bin() -> Command {
@@ -331,14 +331,14 @@ fn optimize_refines_verifies_and_records_it() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// `--dual-regularization` reaches the solver: a Radau mesh finer than the default
-/// (`periodic-cot`, 3 × 12) that stalls with the default KKT regularization (the run ends
-/// unconverged, non-zero exit, with a hint naming the option) is Solved with 3e-8.
+/// `--dual-regularization` reaches the solver, and without it a stall is retried: a Radau
+/// mesh finer than the default (`periodic-cot`, 3 × 12) does not converge in 300 iterations
+/// with the default KKT regularization, `optimize` retries with 3e-8 by itself (a second stage
+/// in solution.json) and ends Solved, at bitwise the optimum of `--dual-regularization 3e-8`.
 #[test]
 fn optimize_dual_regularization_rescues_a_fine_radau_mesh() {
-    let dir = std::env::temp_dir().join(format!("bf-cli-dualreg-{}", std::process::id()));
-    let args = |extra: &[&str]| {
-        let out = dir.to_str().unwrap().to_string();
+    let base = std::env::temp_dir().join(format!("bf-cli-dualreg-{}", std::process::id()));
+    let run_in = |dir: &Path, extra: &[&str]| -> serde_json::Value {
         let mut a: Vec<String> = [
             "optimize",
             "--problem",
@@ -356,27 +356,28 @@ fn optimize_dual_regularization_rescues_a_fine_radau_mesh() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-        a.push(out);
+        a.push(dir.to_str().unwrap().to_string());
         a.extend(extra.iter().map(|s| s.to_string()));
-        a
+        let out = bin().current_dir(root()).args(a).output().unwrap();
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(out.status.success(), "{stdout}");
+        assert!(!stdout.contains("hint:"), "{stdout}");
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap()
     };
-    let stalled = bin().current_dir(root()).args(args(&[])).output().unwrap();
-    let stdout = String::from_utf8_lossy(&stalled.stdout);
-    assert!(!stalled.status.success(), "{stdout}");
-    assert!(stdout.contains("--dual-regularization 3e-8"), "{stdout}");
-    let rescued = bin()
-        .current_dir(root())
-        .args(args(&["--dual-regularization", "3e-8"]))
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&rescued.stdout);
-    assert!(rescued.status.success(), "{stdout}");
+    let retried = run_in(&base.join("default"), &[]);
+    let explicit = run_in(&base.join("explicit"), &["--dual-regularization", "3e-8"]);
+    assert_eq!(retried["status"], "Solved");
+    assert_eq!(explicit["status"], "Solved");
+    let stages = |v: &serde_json::Value| v["stages"].as_array().unwrap().len();
+    assert_eq!(stages(&explicit), 1, "{}", explicit["stages"]);
+    assert_eq!(stages(&retried), 2, "{}", retried["stages"]);
+    assert_ne!(retried["stages"][0][1], "Solved");
     assert!(
-        stdout.contains("Solved") && !stdout.contains("hint:"),
-        "{stdout}"
+        retried["stages"][1][0]
+            .as_str()
+            .unwrap()
+            .contains("dual regularization")
     );
-    let sol: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
-    assert_eq!(sol["status"], "Solved");
-    std::fs::remove_dir_all(dir).ok();
+    assert_eq!(retried["objective"], explicit["objective"]);
+    std::fs::remove_dir_all(base).ok();
 }

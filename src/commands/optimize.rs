@@ -267,7 +267,11 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         );
     }
     println!("wrote {}/solution.json and torques.csv", args.out.display());
-    if sol.status != Status::Solved && args.scheme == "radau" && args.dual_regularization.is_none()
+    // A failed solve was already retried with 3e-8 (`problems::solve`); an Acceptable one was
+    // not.
+    if sol.status == Status::Acceptable
+        && args.scheme == "radau"
+        && args.dual_regularization.is_none()
     {
         println!(
             "hint: Radau meshes finer than the default can stall with the default KKT \

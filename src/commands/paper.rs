@@ -229,8 +229,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          - Finer Radau meshes than the default can stall: the unpivoted KKT factorization \
          eliminates constraint rows before their variables, and the solver's static dual \
          regularization 1e-9 then hides small curvature (optim/README.md; LG solves use 3e-8). \
-         Raise it with `optimize --dual-regularization 3e-8` (`ProblemSettings::\
-         dual_regularization`).\n\
+         A failed solve is retried with 3e-8 automatically, after a wasted first attempt; \
+         an Acceptable one is not (`optimize --dual-regularization 3e-8`).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`)."
     )?;

@@ -153,8 +153,10 @@ pub struct ProblemSettings {
     pub mesh: Option<Vec<crate::ocp::MeshSpec>>,
     /// Static dual regularization δ_c of the KKT factorization
     /// ([`Settings::static_dual_regularization`]); `None`: [`LG_STATIC_DUAL_REGULARIZATION`]
-    /// with LG, the solver's 1e-9 with Radau. Raise it (e.g. to 3e-8) when a Radau mesh finer
-    /// than the default stalls with δ_w > 0 in every iteration (module docs). Overrides `ipm`.
+    /// with LG, the solver's 1e-9 with Radau, and [`solve`] retries a failed solve with
+    /// [`LG_STATIC_DUAL_REGULARIZATION`]. Raise it (e.g. to 3e-8) when a Radau mesh finer than
+    /// the default ends Acceptable with δ_w > 0 in every iteration (module docs); `Some`
+    /// disables the retry. Overrides `ipm`.
     pub dual_regularization: Option<f64>,
 }
 
@@ -1047,7 +1049,10 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 /// carries a warm-start solution of the same problem on the same mesh, else its interpolated
 /// primal point or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
 /// solve from the PARAMS.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
-/// `callback` sees every iteration (return `false` to stop). The library's default
+/// Before that, a failed solve with the default static dual regularization (Radau: 1e-9) is
+/// repeated from the same start with [`LG_STATIC_DUAL_REGULARIZATION`] (unless
+/// [`ProblemSettings::dual_regularization`] is set): on Radau meshes finer than the default
+/// the unpivoted LDLᵀ otherwise stalls (module docs). `callback` sees every iteration (return `false` to stop). The library's default
 /// [`strategy::Strategy`] wraps this in a continuation.
 pub fn solve(
     p: &BuiltProblem,
@@ -1061,40 +1066,47 @@ pub fn solve(
         .warm_start
         .as_ref()
         .and_then(|ws| exact_warm_start(p, ws));
-    let (sol, label) = match exact {
-        Some(w) => (
-            solve_nlp(
-                &p.nlp,
-                &warm_settings(&p.settings),
-                Some(w),
-                reborrow(&mut callback),
-            )?,
-            "exact warm start".to_string(),
-        ),
-        None => (
-            solve_nlp(
-                &p.nlp,
-                &if p.settings.warm_start.is_some() {
-                    warm_settings(&p.settings)
-                } else {
-                    solver_settings(&p.settings)
-                },
-                None,
-                reborrow(&mut callback),
-            )?,
-            if p.settings.warm_start.is_some() {
-                "interpolated warm start".to_string()
-            } else {
-                format!("{:?} guess", p.settings.guess)
-            },
-        ),
+    let settings = if p.settings.warm_start.is_some() {
+        warm_settings(&p.settings)
+    } else {
+        solver_settings(&p.settings)
     };
+    let label = match (exact.is_some(), p.settings.warm_start.is_some()) {
+        (true, _) => "exact warm start".to_string(),
+        (false, true) => "interpolated warm start".to_string(),
+        (false, false) => format!("{:?} guess", p.settings.guess),
+    };
+    let mut sol = solve_nlp(&p.nlp, &settings, exact, reborrow(&mut callback))?;
     iters += sol.iterations;
     stages.push((
         format!("{label}, eps {}", p.epsilon),
         sol.status,
         sol.iterations,
     ));
+    // The stall of an unpivoted LDLᵀ whose δ_c hides the curvature (module docs): one retry
+    // from the same start with the LG value, unless the caller chose δ_c.
+    if !sol.status.is_success()
+        && p.settings.dual_regularization.is_none()
+        && settings.static_dual_regularization < LG_STATIC_DUAL_REGULARIZATION
+    {
+        let raised = Settings {
+            static_dual_regularization: LG_STATIC_DUAL_REGULARIZATION,
+            ..settings
+        };
+        let retry = solve_nlp(&p.nlp, &raised, exact, reborrow(&mut callback))?;
+        iters += retry.iterations;
+        stages.push((
+            format!(
+                "{label}, eps {}, dual regularization {LG_STATIC_DUAL_REGULARIZATION:e}",
+                p.epsilon
+            ),
+            retry.status,
+            retry.iterations,
+        ));
+        if retry.status.is_success() {
+            sol = retry;
+        }
+    }
     let mut best = (sol, p);
     let fallback;
     if !best.0.status.is_success()
