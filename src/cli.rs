@@ -174,8 +174,9 @@ pub struct OptimizeArgs {
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` random guesses around the default, in parallel). Default:
-    /// continuation with `--scheme radau`, direct with `--scheme lg` (an LG solve costs 3–4×
-    /// a Radau one, so an 18-solve continuation takes tens of seconds).
+    /// continuation with `--scheme radau`, direct with `--scheme lg` (an LG-30 solve of
+    /// `periodic-qc`/`-cot` takes about 4× a Radau 3 × 10 one, so an 18-solve continuation
+    /// takes tens of seconds).
     #[arg(long, value_parser = ["direct", "continuation", "multistart"])]
     pub strategy: Option<String>,
     /// Number of starts of `--strategy multistart` (start 0 is the default guess).

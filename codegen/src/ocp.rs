@@ -865,12 +865,13 @@ impl CompiledNode {
     }
 }
 
-/// The node functions emitted as kernels for a scene with a ball and a contact: for every cost
-/// kind of the scene's `ocp_kernels` (default: all), a free phase (h row), a stick phase at
-/// both levels, and, for the periodic costs (QC, COT), the free phase with the Sect. 7 ḣ
-/// margin row too; for the other costs (the free–stick archetypes) also the stick phase with
-/// the h row at both levels. Names are `<scene>_<cost>_<phase>`. Empty without a ball or a
-/// contact.
+/// The node functions emitted as kernels for a scene with a ball and a contact, for every cost
+/// kind of the scene's `ocp_kernels` (default: all), shaped as the problem library uses them:
+/// a free phase (h row) for every kind; for the periodic costs (QC, COT) also the free phase
+/// with the Sect. 7 ḣ margin row and the stick phase at both levels; for the free–stick
+/// archetypes' costs (track, reorient, spin) the stick phase with the |h| row at both levels;
+/// `reach`'s time–effort cost has no stick phase. Other shapes are interpreted. Names are
+/// `<scene>_<cost>_<phase>`. Empty without a ball or a contact.
 pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)> {
     let mut out = Vec::new();
     if scene.ball.is_none() || scene.contact.is_none() {
@@ -891,29 +892,31 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
         };
         let name = |s: &str| format!("{}_{}_{s}", scene.name, cost.tag());
         out.push((name("free"), base.clone(), StickLevel::Velocity));
-        if matches!(cost, CostKind::Qc { .. } | CostKind::Cot { .. }) {
-            let margin = NodeOptions {
-                hdot_bounds: Some((f64::NEG_INFINITY, 0.0)),
-                ..base.clone()
-            };
-            out.push((name("free_hdot"), margin, StickLevel::Velocity));
-        }
-        let stick = NodeOptions {
-            mode: Mode::Stick,
-            h_bounds: None,
-            ..base.clone()
+        let (stick, tag) = match cost {
+            CostKind::Qc { .. } | CostKind::Cot { .. } => {
+                let margin = NodeOptions {
+                    hdot_bounds: Some((f64::NEG_INFINITY, 0.0)),
+                    ..base.clone()
+                };
+                out.push((name("free_hdot"), margin, StickLevel::Velocity));
+                let stick = NodeOptions {
+                    mode: Mode::Stick,
+                    h_bounds: None,
+                    ..base
+                };
+                (stick, "stick")
+            }
+            CostKind::TimeEffort { .. } => continue,
+            _ => {
+                let stick = NodeOptions {
+                    mode: Mode::Stick,
+                    ..base
+                };
+                (stick, "stick_h")
+            }
         };
-        out.push((name("stick"), stick.clone(), StickLevel::Velocity));
-        out.push((name("stick_acc"), stick, StickLevel::Acceleration));
-        if !matches!(cost, CostKind::Qc { .. } | CostKind::Cot { .. }) {
-            // The free–stick archetypes bound h in the stick phase too.
-            let stick_h = NodeOptions {
-                mode: Mode::Stick,
-                ..base
-            };
-            out.push((name("stick_h"), stick_h.clone(), StickLevel::Velocity));
-            out.push((name("stick_h_acc"), stick_h, StickLevel::Acceleration));
-        }
+        out.push((name(tag), stick.clone(), StickLevel::Velocity));
+        out.push((name(&format!("{tag}_acc")), stick, StickLevel::Acceleration));
     }
     out
 }

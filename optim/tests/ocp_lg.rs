@@ -269,7 +269,7 @@ fn lg_periodic_cot_problems_converge_from_the_default_guess() {
         let (p, lg) = solve_named(name, Scheme::Lg, 30);
         // Solved, not just Acceptable: with δ_c = 1e-9 the LDLᵀ growth of the constraint rows
         // eliminated first hid the curvature and the iterates crept to an Acceptable exit
-        // (module docs of `problems`, LG_STATIC_DUAL_REGULARIZATION).
+        // (module docs of `problems`, RAISED_DUAL_REGULARIZATION).
         assert_eq!(lg.status, Status::Solved, "{name} LG-30: {:?}", lg.stages);
         assert!(
             lg.iterations < 150,

@@ -223,9 +223,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         report,
         "- The scenarios above use hp Legendre–Gauss–Radau (3 × 10 points per phase). \
          Legendre–Gauss collocation, the paper's scheme (`optimize --scheme lg`), solves the \
-         three periodic problems too (Solved, 65–79 iterations with 30 points per phase): \
-         3.5–4× the time of a Radau 3 × 10 solve on `periodic-qc`/`-cot`, 3× less on \
-         `-human` (where Radau takes 442 iterations; BENCHMARKS.md).\n\
+         problems too, with other costs in time (criterion figures for both schemes in \
+         BENCHMARKS.md, `cargo bench -p bf-optim --bench problems`).\n\
          - Finer Radau meshes than the default can stall: the unpivoted KKT factorization \
          eliminates constraint rows before their variables, and the solver's static dual \
          regularization 1e-9 then hides small curvature (optim/README.md; LG solves use 3e-8). \

@@ -24,7 +24,7 @@
 //! (δ_w ≈ 1e-2 in every iteration, MaxIterations) and `periodic-qc` LG-30 needed an extra
 //! inactive period row.
 //!
-//! LG solves use a larger static dual regularization ([`LG_STATIC_DUAL_REGULARIZATION`],
+//! LG solves use a larger static dual regularization ([`RAISED_DUAL_REGULARIZATION`],
 //! 3e-8 instead of the solver's 1e-9). The unpivoted LDLᵀ of the KKT matrix eliminates many
 //! constraint rows of the LG KKTs before any of their primal columns (AMD: ≈ 700 of the 1624
 //! rows of `periodic-cot` LG-30), and such a pivot is exactly −δ_c; at δ_c = 1e-9 the growth
@@ -81,11 +81,12 @@ pub const PROBLEMS: &[&str] = &[
     "rotate-fast",
 ];
 
-/// Static dual regularization δ_c of the KKT matrix for Legendre–Gauss solves
-/// ([`Settings::static_dual_regularization`]; the solver's default 1e-9 stays for Radau): the
-/// unpivoted LDLᵀ eliminates many LG constraint rows before their primal columns, with pivot
-/// −δ_c, and 1e-9 lets that growth hide the curvature (module docs).
-pub const LG_STATIC_DUAL_REGULARIZATION: f64 = 3e-8;
+/// Static dual regularization δ_c of the KKT matrix ([`Settings::static_dual_regularization`])
+/// where the solver's default 1e-9 misleads the unpivoted LDLᵀ: the default of Legendre–Gauss
+/// solves, and the retry of a failed Radau solve in [`solve`]. The factorization eliminates
+/// many constraint rows before their primal columns, with pivot −δ_c, and at 1e-9 that growth
+/// hides the curvature (module docs).
+pub const RAISED_DUAL_REGULARIZATION: f64 = 3e-8;
 
 /// Upper bound of the total period of the COT problems (s): the COT ratio is otherwise free
 /// to trade period length against efficiency without limit.
@@ -152,9 +153,9 @@ pub struct ProblemSettings {
     /// [`refine::refine`].
     pub mesh: Option<Vec<crate::ocp::MeshSpec>>,
     /// Static dual regularization δ_c of the KKT factorization
-    /// ([`Settings::static_dual_regularization`]); `None`: [`LG_STATIC_DUAL_REGULARIZATION`]
+    /// ([`Settings::static_dual_regularization`]); `None`: [`RAISED_DUAL_REGULARIZATION`]
     /// with LG, the solver's 1e-9 with Radau, and [`solve`] retries a failed solve with
-    /// [`LG_STATIC_DUAL_REGULARIZATION`]. Raise it (e.g. to 3e-8) when a Radau mesh finer than
+    /// [`RAISED_DUAL_REGULARIZATION`]. Raise it (e.g. to 3e-8) when a Radau mesh finer than
     /// the default ends Acceptable with δ_w > 0 in every iteration (module docs); `Some`
     /// disables the retry. Overrides `ipm`.
     pub dual_regularization: Option<f64>,
@@ -1021,7 +1022,7 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| Settings {
         tol: 1e-8,
         static_dual_regularization: match s.scheme {
-            Scheme::Lg => LG_STATIC_DUAL_REGULARIZATION,
+            Scheme::Lg => RAISED_DUAL_REGULARIZATION,
             Scheme::Radau { .. } => Settings::default().static_dual_regularization,
         },
         ..Settings::default()
@@ -1050,10 +1051,11 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 /// primal point or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
 /// solve from the PARAMS.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
 /// Before that, a failed solve with the default static dual regularization (Radau: 1e-9) is
-/// repeated from the same start with [`LG_STATIC_DUAL_REGULARIZATION`] (unless
+/// repeated from the same start with [`RAISED_DUAL_REGULARIZATION`] (unless
 /// [`ProblemSettings::dual_regularization`] is set): on Radau meshes finer than the default
-/// the unpivoted LDLᵀ otherwise stalls (module docs). `callback` sees every iteration (return `false` to stop). The library's default
-/// [`strategy::Strategy`] wraps this in a continuation.
+/// the unpivoted LDLᵀ otherwise stalls (module docs). `callback` sees every iteration (return
+/// `false` to stop). The library's default [`strategy::Strategy`] wraps this in a
+/// continuation.
 pub fn solve(
     p: &BuiltProblem,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
@@ -1084,20 +1086,20 @@ pub fn solve(
         sol.iterations,
     ));
     // The stall of an unpivoted LDLᵀ whose δ_c hides the curvature (module docs): one retry
-    // from the same start with the LG value, unless the caller chose δ_c.
+    // from the same start with the raised δ_c, unless the caller chose δ_c.
     if !sol.status.is_success()
         && p.settings.dual_regularization.is_none()
-        && settings.static_dual_regularization < LG_STATIC_DUAL_REGULARIZATION
+        && settings.static_dual_regularization < RAISED_DUAL_REGULARIZATION
     {
         let raised = Settings {
-            static_dual_regularization: LG_STATIC_DUAL_REGULARIZATION,
+            static_dual_regularization: RAISED_DUAL_REGULARIZATION,
             ..settings
         };
         let retry = solve_nlp(&p.nlp, &raised, exact, reborrow(&mut callback))?;
         iters += retry.iterations;
         stages.push((
             format!(
-                "{label}, eps {}, dual regularization {LG_STATIC_DUAL_REGULARIZATION:e}",
+                "{label}, eps {}, dual regularization {RAISED_DUAL_REGULARIZATION:e}",
                 p.epsilon
             ),
             retry.status,
