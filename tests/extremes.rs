@@ -14,7 +14,7 @@
 //!   the reduced-angle results can only agree to that level: asserted ≤ 1e-9, and ≤ 100× the
 //!   measured reduction error.
 
-use ball_finger::extremes::*;
+use ball_finger::study::extremes::*;
 use bf_codegen::spec::Scene;
 use bf_model::{ModelError, PainleveKind};
 
