@@ -11,39 +11,23 @@
 //!
 //! Quick run: `cargo bench -p ball-finger --bench simulate -- --warm-up-time 1 --measurement-time 2`.
 
-use bf_model::{ImpactLaw, Mode, State, Vec3, fixtures};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use ball_finger::study::speed_accuracy::integrators::{dropped_finger, sim_settings};
+use bf_model::Mode;
 use bf_sim::work_precision::{RK4_LADDER, RTOL_LADDER, ladder};
-use bf_sim::{Method, PdController, SimSettings, format_table, simulate, work_precision};
+use bf_sim::{Method, SimSettings, format_table, simulate, work_precision};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
-fn x0() -> [f64; 9] {
-    State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::zeros()).to_array()
-}
-
+/// The speed–accuracy study's integrator settings, recording every step as a user would.
 fn settings(method: Method, rtol: f64) -> SimSettings {
     SimSettings {
-        method,
-        rtol,
-        atol: 1e-2 * rtol,
-        h_max: 0.05,
         record_steps: true,
-        ..SimSettings::default()
+        ..sim_settings(method, rtol)
     }
 }
 
 fn bench(c: &mut Criterion) {
-    let sys = BallFinger::new(
-        fixtures::paper_scene().expect("paper scene"),
-        PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3]).expect("zero input"),
-        BallFingerOptions {
-            impact_law: ImpactLaw::Newton,
-            ..BallFingerOptions::default()
-        },
-    )
-    .expect("system");
-    let x0 = x0();
+    let (sys, x0) = dropped_finger().expect("paper scene");
     let out = simulate(
         &sys,
         settings(Method::Dopri5, 1e-8),

@@ -8,6 +8,6 @@
 
 pub mod cli;
 pub mod commands;
-pub mod extremes;
 pub mod io;
 pub mod report;
+pub mod study;

@@ -1,8 +1,8 @@
 //! Stability at the extremes (issue 7, item 5): the assertions behind every row of
-//! `ball_finger::extremes::run_extremes`. Each test compares against something the code under
-//! test does not produce itself: a double-double evaluation (≈ 106 bits) of the same expression
-//! graph, an exact scaling law of eq. 22 (M is linear in the masses and quadratic in the
-//! lengths), an exact static equilibrium (a finger pressed on with force f has λ = f n), a
+//! `ball_finger::study::extremes::run_extremes`. Each test compares against something the code
+//! under test does not produce itself: a double-double evaluation (≈ 106 bits) of the same
+//! expression graph, an exact scaling law of eq. 22 (M is linear in the masses and quadratic in
+//! the lengths), an exact static equilibrium (a finger pressed on with force f has λ = f n), a
 //! closed form (Painlevé threshold from the contact matrices, the blow-up law
 //! λ_n = f / (1 − μ_k/μ_k*)), a known truncation order (eq. 59), or energy conservation.
 //!
@@ -14,7 +14,7 @@
 //!   the reduced-angle results can only agree to that level: asserted ≤ 1e-9, and ≤ 100× the
 //!   measured reduction error.
 
-use ball_finger::extremes::*;
+use ball_finger::study::extremes::*;
 use bf_codegen::spec::Scene;
 use bf_model::{ModelError, PainleveKind};
 

@@ -183,18 +183,18 @@ pub fn work_precision<S: HybridSystem>(
     Ok(rows)
 }
 
-/// Formats rows as a Markdown table (method, rtol / h, error, event-time error, CPU time,
-/// steps, f-evals).
+/// Formats rows as a Markdown table (method, rtol / h, error, largest event-time error, CPU
+/// time, steps, f-evals).
 pub fn format_table(rows: &[WorkPrecisionRow]) -> String {
     let mut s = String::from(
-        "| method | rtol / h | error ‖x(T) − x_ref(T)‖∞ | event-time error (s) | CPU (ms) | steps | f evals |\n\
+        "| method | rtol / h (s) | error ‖x(T) − x_ref(T)‖∞ | max event-time error (s) | CPU (ms) | steps | f evals |\n\
          |---|---|---|---|---|---|---|\n",
     );
     for r in rows {
         let ev = if r.same_events {
             format!("{:.2e}", r.event_time_error)
         } else {
-            "events differ".into()
+            "event sequence differs".into()
         };
         let err = match &r.failure {
             Some(m) => format!("failed: {m}"),

@@ -201,13 +201,13 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     // Stage 6: stability at the extremes.
     writeln!(report, "## 6. Stability at the extremes\n")?;
     let pb = stage(1, "extremes");
-    let ext = crate::extremes::run_extremes(args.quick)?;
+    let ext = crate::study::extremes::run_extremes(args.quick)?;
     pb.finish();
     writeln!(report, "{}", ext.to_markdown())?;
 
     // Stage 7: the speed–accuracy trade, measured in this run.
     writeln!(report, "## 7. Speed versus accuracy\n")?;
-    let sa = crate::report::speed_accuracy::speed_accuracy(&args.out, args.quick)?;
+    let sa = crate::study::speed_accuracy::speed_accuracy(&args.out, args.quick)?;
     writeln!(report, "{}", demote(&sa))?;
 
     // Stage 8: appendix errata.

@@ -11,7 +11,7 @@ pub const REPORTS: &[&str] = &["speed-accuracy", "strategies"];
 /// Runs the report named by `a.which`.
 pub fn run(a: &ReportArgs) -> Result<()> {
     let md = match a.which.as_str() {
-        "speed-accuracy" => crate::report::speed_accuracy(&a.out, a.quick)?,
+        "speed-accuracy" => crate::study::speed_accuracy::speed_accuracy(&a.out, a.quick)?,
         "strategies" => {
             let pb = super::optimize::iteration_spinner("strategies");
             pb.enable_steady_tick(std::time::Duration::from_millis(120));

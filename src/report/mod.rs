@@ -1,14 +1,13 @@
-//! Stand-alone reports of the `ball-finger report` command (issue 7), also embedded in the
+//! Stand-alone reports of the `ball-finger report` command, also embedded in the
 //! `ball-finger paper` report.
 //!
-//! * [`speed_accuracy`]: what users trade speed for accuracy with — integrator tolerances
-//!   (paper Sect. 3, Fig. 3), collocation meshes and the smoothing ε of eq. 58–59 (Sect. 4),
-//!   and the variants of the generated dynamics kernels (eq. 22a, 76–79).
+//! * `speed-accuracy`: [`crate::study::speed_accuracy::speed_accuracy`], what users trade
+//!   speed for accuracy with — integrator tolerances (paper Sect. 3, Fig. 3), collocation
+//!   meshes and the smoothing ε of eq. 58–59 (Sect. 4), and the variants of the generated
+//!   dynamics kernels (eq. 22a, 76–79).
 //! * [`strategies_report`]: cold start vs continuation vs multi-start on the periodic
 //!   problems of Sect. 6.1 (eq. 60–65), with re-integration defects.
 
-pub mod speed_accuracy;
 pub mod strategies;
 
-pub use speed_accuracy::{SpeedAccuracy, speed_accuracy};
 pub use strategies::strategies_report;

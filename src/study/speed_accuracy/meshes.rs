@@ -1,0 +1,273 @@
+//! Study (b1), collocation meshes (paper Sect. 4.3, objective of eq. 60): cold solves of
+//! `periodic-qc` on Legendre–Gauss meshes of increasing point count and on Radau meshes of
+//! increasing element count; error of the objective J against a finer Radau reference mesh,
+//! versus solve time. A cold solve that lands on another local optimum than the reference's is
+//! re-solved on the same mesh warm-started from the reference solution, which gives the mesh's
+//! discretisation error at the reference's optimum.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Result, anyhow};
+use bf_optim::ocp::problem::Scheme;
+use bf_optim::problems::OcpSolution;
+use bf_plot::paper::WorkPrecision;
+use indicatif::ProgressBar;
+
+use super::{Solved, max_iter, solve_qc, wp_figure};
+
+/// One collocation solve of part (b).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MeshRow {
+    /// `LG` or `Radau`.
+    pub scheme: String,
+    /// Collocation points per phase.
+    pub points: usize,
+    /// Radau elements per phase (1 for LG).
+    pub elements: usize,
+    /// Whether the solver converged.
+    pub solved: bool,
+    /// Objective J (eq. 60).
+    pub objective: f64,
+    /// Period of the solution (s).
+    pub period: f64,
+    /// Whether the solution is on the reference's local optimum (period within 10 %).
+    pub same_branch: bool,
+    /// |J − J_ref| / |J_ref| against the reference mesh (NaN if not solved or on another
+    /// local optimum).
+    pub rel_error: f64,
+    /// Wall time of the solve (s).
+    pub seconds: f64,
+    /// Interior-point iterations.
+    pub iterations: usize,
+    /// When the cold solve is not on the reference's optimum: |J − J_ref| / |J_ref| of a solve
+    /// on the same mesh warm-started from the reference solution (NaN otherwise or if it
+    /// failed), i.e. the discretisation error of this mesh at the reference's optimum.
+    pub warm_rel_error: f64,
+    /// Wall time of that warm-started solve (s; NaN if none).
+    pub warm_seconds: f64,
+}
+
+/// The meshes of the study.
+pub(super) struct MeshLadder {
+    /// LG points per phase.
+    lg: &'static [usize],
+    /// Radau elements per phase.
+    radau: &'static [usize],
+    /// Reference mesh: (Radau elements, points per element).
+    reference: (usize, usize),
+}
+
+impl MeshLadder {
+    /// The quick or the full ladder.
+    pub(super) fn new(quick: bool) -> Self {
+        if quick {
+            MeshLadder {
+                lg: &[10, 20],
+                radau: &[2, 3],
+                reference: (6, 5),
+            }
+        } else {
+            MeshLadder {
+                lg: &[10, 20, 30, 40],
+                radau: &[2, 3, 5, 8],
+                reference: (10, 6),
+            }
+        }
+    }
+
+    /// Number of cold solves (reference included).
+    pub(super) fn solves(&self) -> usize {
+        1 + self.lg.len() + self.radau.len()
+    }
+}
+
+/// Points per element of the Radau meshes of the ladder.
+const RADAU_POINTS_PER_ELEMENT: usize = 5;
+
+/// The reference (description, objective, seconds) and the rows of the ladder.
+pub(super) type MeshRows = ((String, f64, f64), Vec<MeshRow>);
+
+/// Solves the reference and every mesh of `ladder` (interior-point cap `iters`).
+pub(super) fn measure(ladder: &MeshLadder, iters: usize, pb: &ProgressBar) -> Result<MeshRows> {
+    let (ref_el, ref_pe) = ladder.reference;
+    pb.set_message("reference mesh");
+    let r = solve_qc(
+        ref_el * ref_pe,
+        Scheme::Radau { elements: ref_el },
+        None,
+        None,
+        1500,
+    )?;
+    let ref_sol = r
+        .sol
+        .ok_or_else(|| anyhow!("the reference mesh of periodic-qc did not solve"))?;
+    let (j_ref, t_ref) = (ref_sol.objective, ref_sol.period);
+    let ref_desc = format!("Radau, {ref_el} elements × {ref_pe} points (period {t_ref:.4} s)");
+    pb.inc(1);
+    let mut mesh = Vec::new();
+    for &n in ladder.lg {
+        pb.set_message(format!("LG {n}"));
+        let s = solve_qc(n, Scheme::Lg, None, None, iters)?;
+        mesh.push(mesh_row("LG", n, 1, s, &ref_sol, iters));
+        pb.inc(1);
+    }
+    for &e in ladder.radau {
+        let n = e * RADAU_POINTS_PER_ELEMENT;
+        pb.set_message(format!("Radau {e} elements"));
+        let s = solve_qc(n, Scheme::Radau { elements: e }, None, None, iters)?;
+        mesh.push(mesh_row("Radau", n, e, s, &ref_sol, iters));
+        pb.inc(1);
+    }
+    Ok(((ref_desc, j_ref, r.seconds), mesh))
+}
+
+/// Whether two periods belong to the same local optimum (the optima found differ by > 2×).
+fn same_branch(period: f64, reference: f64) -> bool {
+    (period - reference).abs() <= 0.1 * reference.abs()
+}
+
+/// The row of cold solve `s` on a mesh, with the warm re-solve from `reference` when the cold
+/// one is on another local optimum.
+fn mesh_row(
+    scheme: &str,
+    points: usize,
+    elements: usize,
+    s: Solved,
+    reference: &OcpSolution,
+    iters: usize,
+) -> MeshRow {
+    let (j_ref, t_ref) = (reference.objective, reference.period);
+    let nlp_scheme = if scheme == "LG" {
+        Scheme::Lg
+    } else {
+        Scheme::Radau { elements }
+    };
+    let (solved, objective, period, iterations) = match &s.sol {
+        Some(sol) => (true, sol.objective, sol.period, sol.iterations),
+        None => (false, f64::NAN, f64::NAN, 0),
+    };
+    let branch = solved && same_branch(period, t_ref);
+    let (warm_rel_error, warm_seconds) = if branch {
+        (f64::NAN, f64::NAN)
+    } else {
+        match solve_qc(points, nlp_scheme, None, Some(reference), iters) {
+            Ok(Solved {
+                sol: Some(w),
+                seconds,
+            }) if same_branch(w.period, t_ref) => {
+                ((w.objective - j_ref).abs() / j_ref.abs(), seconds)
+            }
+            _ => (f64::NAN, f64::NAN),
+        }
+    };
+    MeshRow {
+        scheme: scheme.into(),
+        points,
+        elements,
+        solved,
+        objective,
+        period,
+        same_branch: branch,
+        rel_error: if branch {
+            (objective - j_ref).abs() / j_ref.abs()
+        } else {
+            f64::NAN
+        },
+        seconds: s.seconds,
+        iterations,
+        warm_rel_error,
+        warm_seconds,
+    }
+}
+
+/// The Markdown of study (b1) and its figure `sa_mesh`.
+pub(super) fn section(
+    reference: &(String, f64, f64),
+    rows: &[MeshRow],
+    quick: bool,
+    fig_dir: &Path,
+) -> Result<String> {
+    let mut md = String::new();
+    let (ref_name, ref_j, ref_s) = reference;
+    let _ = writeln!(
+        md,
+        "### (b) Optimisation: mesh and smoothing\n\n\
+         `periodic-qc` (Sect. 6.1), cold solves (default guess strategy, iteration cap {} \
+         per stage). Objective error against the reference mesh {ref_name}: J_ref = \
+         {ref_j:.8}, solved in {ref_s:.2} s. The problem has several local optima (periods \
+         ≈ 2.6 s and ≈ 0.95 s) and a cold start lands on one depending on the mesh; a \
+         cold solution on another optimum than the reference's is re-solved on the same mesh \
+         warm-started from the reference solution, which gives the mesh's discretisation \
+         error at the reference's optimum (column \"warm\").\n",
+        max_iter(quick)
+    );
+    md.push_str(
+        "| scheme | points/phase | elements | status | J | period (s) | rel. error of J | solve (s) | iterations | warm: rel. error of J | warm: solve (s) |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            md,
+            "| {} | {} | {} | {} | {:.8} | {:.4} | {} | {:.2} | {} | {} | {} |",
+            r.scheme,
+            r.points,
+            r.elements,
+            if r.solved { "solved" } else { "not solved" },
+            r.objective,
+            r.period,
+            if r.same_branch {
+                format!("{:.2e}", r.rel_error)
+            } else if r.solved {
+                "other local optimum".into()
+            } else {
+                "—".into()
+            },
+            r.seconds,
+            r.iterations,
+            if r.warm_rel_error.is_finite() {
+                format!("{:.2e}", r.warm_rel_error)
+            } else {
+                "—".into()
+            },
+            if r.warm_seconds.is_finite() {
+                format!("{:.2}", r.warm_seconds)
+            } else {
+                "—".into()
+            }
+        );
+    }
+    let mut methods: Vec<WorkPrecision> = Vec::new();
+    for s in ["LG", "Radau"] {
+        let cold: Vec<&MeshRow> = rows
+            .iter()
+            .filter(|r| r.scheme == s && r.same_branch)
+            .collect();
+        methods.push(WorkPrecision {
+            name: format!("{s}, cold"),
+            time_s: cold.iter().map(|r| r.seconds).collect(),
+            error: cold.iter().map(|r| r.rel_error).collect(),
+        });
+        let warm: Vec<&MeshRow> = rows
+            .iter()
+            .filter(|r| r.scheme == s && r.warm_rel_error.is_finite())
+            .collect();
+        methods.push(WorkPrecision {
+            name: format!("{s}, warm from the reference"),
+            time_s: warm.iter().map(|r| r.warm_seconds).collect(),
+            error: warm.iter().map(|r| r.warm_rel_error).collect(),
+        });
+    }
+    if methods.iter().any(|m| !m.error.is_empty()) {
+        let fig = wp_figure(
+            "periodic-qc: objective error vs solve time",
+            "|J − J_ref| / |J_ref|",
+            &methods,
+        )?;
+        bf_plot::render(&fig, fig_dir.join("sa_mesh"))?;
+        md.push_str("\n![objective error vs solve time](figures/sa_mesh.svg)\n\n");
+    } else {
+        md.push_str("\nNo mesh solved on the reference's optimum: no figure.\n\n");
+    }
+    Ok(md)
+}
