@@ -28,11 +28,13 @@ fn main() -> Result<(), PlotError> {
         y: 1.6,
         label: "limit".into(),
         colour: Colour::Auto,
+        fit: true,
     });
     f.bands.push(Band {
         x0: 2.0,
         x1: 2.3,
         label: "contact".into(),
+        colour: Colour::Auto,
     });
     println!("{:?}", render(&f, dir.join("eight"))?);
     Ok(())

@@ -6,6 +6,7 @@
 //! | module | what | paper |
 //! |---|---|---|
 //! | [`figure`] | [`LineFigure`] / [`PanelFigure`] rendered to SVG + PNG ([`render`], [`render_panels`]) | all 2D figures |
+//! | [`ticks`] | axis ticks whose labels are exactly the value at their position (linear 1-2-5, decadic log) | — |
 //! | [`sat`] | exact and smooth saturation, the scaled tanh, and Fig. 4 ([`sat::fig4_saturation`]) | eq. (3), (58)–(59), Fig. 4 |
 //! | [`paper`] | builders for Fig. 6–9, 13–17 and work–precision plots over [`paper::TimeSeries`] | Sect. 6 |
 //! | [`scene3d`] | orthographic/isometric views of finger paths around the ball | Fig. 5, 10, 11, 12 |
@@ -15,10 +16,12 @@
 //! crashed run never leaves a half-written PNG behind.
 
 pub mod anim;
+mod canvas;
 pub mod figure;
 pub mod paper;
 pub mod sat;
 pub mod scene3d;
+pub mod ticks;
 
 pub use figure::{
     Band, Colour, Dash, HLine, Layout, LegendPos, LineFigure, PanelFigure, RenderReport, Scale,

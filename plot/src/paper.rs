@@ -96,6 +96,7 @@ impl Phases {
                 x0,
                 x1,
                 label: "contact".into(),
+                colour: Colour::Auto,
             })
             .collect();
     }
@@ -157,6 +158,7 @@ pub fn fig_distance(
         y: 0.0,
         label: String::new(),
         colour: Colour::Auto,
+        fit: true,
     });
     phases.apply(&mut a);
     let mut b = LineFigure::new("contact point to fingertip", "t [s]", "|p_c − p_e| [m]");
@@ -171,7 +173,13 @@ pub fn fig_distance(
     })
 }
 
-/// Fig. 8 / 15: joint torques, one panel per joint, with dashed ±`limit` lines when given.
+/// A torque limit is drawn inside the autoscaled axis when it is at most this multiple of the
+/// panel's peak |τ|; beyond that the axis fits the data alone.
+pub const LIMIT_FIT_RATIO: f64 = 2.0;
+
+/// Fig. 8 / 15: joint torques, one panel per joint, autoscaled to the data, with dashed
+/// ±`limit` lines when given (drawn when within [`LIMIT_FIT_RATIO`] × the peak |τ| of the
+/// panel, otherwise listed in the legend as off scale).
 pub fn fig_torques(
     title: &str,
     tau: &TimeSeries,
@@ -191,15 +199,25 @@ pub fn fig_torques(
                     .styled(fixed(colours[k % 4], Dash::Solid)),
             );
             if let Some(l) = limit {
+                // The axis fits the data; the limit joins the range only when it is close to
+                // the data (otherwise small torques would be squashed against zero, and the
+                // legend says the limit is off scale).
+                let peak = tau.values[k]
+                    .iter()
+                    .filter(|v| v.is_finite())
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
+                let fit = l.abs() <= LIMIT_FIT_RATIO * peak;
                 p.hlines.push(HLine {
                     y: l,
-                    label: "torque limit".into(),
+                    label: format!("torque limit ±{l} N m"),
                     colour: Colour::Rgb(120, 0, 0),
+                    fit,
                 });
                 p.hlines.push(HLine {
                     y: -l,
                     label: String::new(),
                     colour: Colour::Rgb(120, 0, 0),
+                    fit,
                 });
             }
             phases.apply(&mut p);

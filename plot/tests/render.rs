@@ -115,6 +115,7 @@ fn eight_series_get_distinct_colours_legend_and_paths() {
         y: 3.0,
         label: "limit".into(),
         colour: Colour::Auto,
+        fit: true,
     });
     let names: Vec<String> = f.series.iter().map(|s| s.name.clone()).collect();
     let mut legend: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
