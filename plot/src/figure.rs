@@ -741,27 +741,49 @@ fn draw_all(
     } else {
         TITLE_FONT
     };
-    for (k, (fig, prep)) in panels.iter().zip(prepared).enumerate() {
-        let k = k as f64;
-        let area = match layout {
-            Layout::Rows => {
-                let ph = (h - top) / n;
-                PxRect {
-                    x0: 0.0,
-                    y0: top + k * ph,
-                    x1: w,
-                    y1: top + (k + 1.0) * ph,
+    let areas: Vec<PxRect> = (0..panels.len())
+        .map(|k| {
+            let k = k as f64;
+            match layout {
+                Layout::Rows => {
+                    let ph = (h - top) / n;
+                    PxRect {
+                        x0: 0.0,
+                        y0: top + k * ph,
+                        x1: w,
+                        y1: top + (k + 1.0) * ph,
+                    }
                 }
+                Layout::Columns => PxRect {
+                    x0: k * w / n,
+                    y0: top,
+                    x1: (k + 1.0) * w / n,
+                    y1: h,
+                },
             }
-            Layout::Columns => PxRect {
-                x0: k * w / n,
-                y0: top,
-                x1: (k + 1.0) * w / n,
-                y1: h,
-            },
-        };
-        let lay = layout_panel(fig, prep, area, title_font);
-        draw_panel(cv, fig, prep, &lay, title_font)?;
+        })
+        .collect();
+    let mut lays: Vec<PanelLayout> = panels
+        .iter()
+        .zip(prepared)
+        .zip(&areas)
+        .map(|((f, p), a)| layout_panel(f, p, *a, title_font, (Y_LABEL_AREA, 0.0)))
+        .collect();
+    if layout == Layout::Rows && panels.len() > 1 {
+        // Stacked panels share their time axis: same left edge and same width.
+        let ya = lays.iter().map(|l| l.y_area).fold(0.0f64, f64::max);
+        let out = lays.iter().map(|l| l.outside).fold(0.0f64, f64::max);
+        if lays.iter().any(|l| l.y_area < ya || l.outside < out) {
+            lays = panels
+                .iter()
+                .zip(prepared)
+                .zip(&areas)
+                .map(|((f, p), a)| layout_panel(f, p, *a, title_font, (ya, out)))
+                .collect();
+        }
+    }
+    for ((fig, prep), lay) in panels.iter().zip(prepared).zip(&lays) {
+        draw_panel(cv, fig, prep, lay, title_font)?;
     }
     Ok(())
 }
@@ -826,6 +848,8 @@ struct PanelLayout {
     x_ticks: Vec<Tick>,
     y_ticks: Vec<Tick>,
     y_area: f64,
+    /// Width reserved right of the axes for the legend (0: legend inside).
+    outside: f64,
     area: PxRect,
     /// Marker label per vertical marker (same order; `None`: unlabelled or outside).
     marker_labels: Vec<Option<Placed>>,
@@ -836,7 +860,9 @@ struct PanelLayout {
 }
 
 fn text_box(text: &str, x: f64, y: f64, size: f64, anchor: Anchor) -> PxRect {
+    // Never narrower than 0.55 em per character: SVG viewers may substitute a wider font.
     let (w, h) = text_size(text, size);
+    let w = w.max(0.55 * size * text.chars().count() as f64);
     let x0 = match anchor {
         Anchor::Start => x,
         Anchor::Middle => x - 0.5 * w,
@@ -950,7 +976,8 @@ fn data_samples(fig: &LineFigure, prep: &Prepared, m: &Mapping) -> Vec<(f64, f64
 }
 
 /// Pixel geometry for given extra room: `y_area` left of the axes, `strip` above them for the
-/// switching-time labels, `headroom` pixels added above the data for the legend.
+/// switching-time labels, `headroom` pixels added above the data for the legend, `outside`
+/// pixels right of the axes for a legend placed there.
 fn mapping(
     fig: &LineFigure,
     prep: &Prepared,
@@ -959,11 +986,12 @@ fn mapping(
     y_area: f64,
     strip: f64,
     headroom: f64,
+    outside: f64,
 ) -> Mapping {
     let plot = PxRect {
         x0: area.x0 + MARGIN + y_area,
         y0: area.y0 + title_h + strip + MARGIN,
-        x1: area.x1 - 2.0 * MARGIN,
+        x1: area.x1 - 2.0 * MARGIN - outside,
         y1: area.y1 - MARGIN - X_LABEL_AREA,
     };
     let plot = PxRect {
@@ -1008,7 +1036,15 @@ fn axis_ticks(scale: Scale, r: (f64, f64), len_px: f64, horizontal: bool) -> Vec
     }
 }
 
-fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64) -> PanelLayout {
+/// Lays out one panel; `min` = (least y label area, least room for a legend right of the
+/// axes), so that stacked panels can be aligned.
+fn layout_panel(
+    fig: &LineFigure,
+    prep: &Prepared,
+    area: PxRect,
+    title_font: f64,
+    min: (f64, f64),
+) -> PanelLayout {
     let (title_h, title_y) = if fig.title.is_empty() {
         (0.0, None)
     } else {
@@ -1021,8 +1057,9 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
         .count();
     let row = MARKER_FONT + 5.0;
     let mut levels = usize::from(labelled_markers > 0);
-    let mut y_area = Y_LABEL_AREA;
+    let mut y_area = min.0.max(Y_LABEL_AREA);
     let mut headroom = 0.0;
+    let mut outside = min.1;
     let mut forced_corner: Option<[LegendPos; 2]> = None;
     for _pass in 0..4 {
         let strip = if levels > 0 {
@@ -1030,7 +1067,7 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
         } else {
             0.0
         };
-        let m = mapping(fig, prep, area, title_h, y_area, strip, headroom);
+        let m = mapping(fig, prep, area, title_h, y_area, strip, headroom, outside);
         let x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true);
         let y_ticks = axis_ticks(fig.y_scale, m.yr, m.plot.h(), false);
         // Room for the widest y tick label and the rotated description.
@@ -1139,6 +1176,19 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
                 }
             };
             let chosen = match fig.legend {
+                LegendPos::Auto if outside > 0.0 => {
+                    let x0 = m.plot.x1 + 10.0;
+                    legend = Some((
+                        PxRect {
+                            x0,
+                            y0: m.plot.y0,
+                            x1: x0 + bw,
+                            y1: m.plot.y0 + bh,
+                        },
+                        entries.clone(),
+                    ));
+                    LegendPos::Hidden
+                }
                 LegendPos::Auto => {
                     let samples = data_samples(fig, prep, &m);
                     let cands: &[LegendPos] = match &forced_corner {
@@ -1158,9 +1208,22 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
                             best = (n, c);
                         }
                     }
+                    // No free corner: beside the axes when head room would take more than
+                    // a third of a short (non-geometric) axes and there is width to spare,
+                    // otherwise room above the data and an upper corner.
+                    let room = bh + 22.0;
+                    let wide = m.plot.w() - bw - 16.0 > 2.0 * m.plot.h().max(200.0);
+                    if best.0 > 0
+                        && forced_corner.is_none()
+                        && !fig.equal_aspect
+                        && wide
+                        && (room > 0.35 * m.plot.h() || fig.y_range.is_some())
+                    {
+                        outside = bw + 16.0;
+                        continue;
+                    }
                     if best.0 > 0 && forced_corner.is_none() && fig.y_range.is_none() {
-                        // No free corner: make room above the data and use an upper corner.
-                        headroom = bh + 22.0;
+                        headroom = room;
                         forced_corner = Some([LegendPos::UpperRight, LegendPos::UpperLeft]);
                         continue;
                     }
@@ -1168,7 +1231,9 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
                 }
                 c => c,
             };
-            legend = Some((corner(chosen), entries));
+            if chosen != LegendPos::Hidden {
+                legend = Some((corner(chosen), entries));
+            }
         }
 
         // Point labels: next to their point, clear of the legend, of each other and of other
@@ -1237,6 +1302,7 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
             x_ticks,
             y_ticks,
             y_area,
+            outside,
             area,
             marker_labels,
             legend,
@@ -1246,13 +1312,14 @@ fn layout_panel(fig: &LineFigure, prep: &Prepared, area: PxRect, title_font: f64
     }
     // Unreachable in practice (each pass only grows a bounded quantity); fall back to a layout
     // without the last adjustment.
-    let m = mapping(fig, prep, area, title_h, y_area, 0.0, headroom);
+    let m = mapping(fig, prep, area, title_h, y_area, 0.0, headroom, outside);
     PanelLayout {
         title_y,
         x_ticks: axis_ticks(fig.x_scale, m.xr, m.plot.w(), true),
         y_ticks: axis_ticks(fig.y_scale, m.yr, m.plot.h(), false),
         map: m,
         y_area,
+        outside,
         area,
         marker_labels: vec![None; fig.vertical_markers.len()],
         legend: None,
@@ -1470,6 +1537,15 @@ fn draw_panel(
         class: "ydesc",
     })?;
     for l in lay.marker_labels.iter().flatten() {
+        // On white, so that the dashed line of a neighbouring marker does not cross the text.
+        let b = l.bbox.inflate(1.0);
+        cv.rect(
+            (b.x0, b.y0),
+            (b.x1, b.y1),
+            Some(((255, 255, 255), 1.0)),
+            None,
+            "label-bg",
+        )?;
         cv.text(&TextSpec {
             text: &l.text,
             x: l.x,
