@@ -2055,4 +2055,20 @@ mod tests {
             Err(PlotError::NoFinitePoints { skipped: 2, .. })
         ));
     }
+
+    #[test]
+    fn point_labels_follow_their_kept_points() {
+        let mut f = LineFigure::new("t", "x", "y");
+        f.y_scale = Scale::Log10;
+        f.series.push(
+            Series::new("a", vec![(0.0, 1.0), (1.0, -1.0), (2.0, 10.0)])
+                .with_labels(vec!["p".into(), "dropped".into(), String::new()])
+                .unjoined(),
+        );
+        let p = prepare(&f).unwrap();
+        assert_eq!(p.series[0].labels, vec![((0.0, 0.0), "p".to_string())]);
+        assert!(!p.series[0].joined);
+        f.series[0].labels.pop();
+        assert!(matches!(prepare(&f), Err(PlotError::InvalidInput { .. })));
+    }
 }

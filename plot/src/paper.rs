@@ -624,4 +624,63 @@ mod tests {
             vec![(1.0, 1e-3), (2.0, 1e-6), (3.0, 1e-9)]
         );
     }
+
+    #[test]
+    fn contact_zoom_only_for_short_contact() {
+        let t: Vec<f64> = (0..=100).map(|i| 0.03 * i as f64).collect();
+        let ph = |c: Vec<(f64, f64)>| Phases {
+            switches: vec![],
+            contact: c,
+        };
+        // 0.12 s of 3 s: zoomed to the window ± 15 %.
+        let z = contact_zoom(&t, &ph(vec![(1.0, 1.12)])).unwrap();
+        assert!(
+            (z.0 - 0.982).abs() < 1e-12 && (z.1 - 1.138).abs() < 1e-12,
+            "{z:?}"
+        );
+        // Two windows: from the first start to the last end.
+        let z = contact_zoom(&t, &ph(vec![(1.0, 1.1), (1.5, 1.6)])).unwrap();
+        assert!(
+            (z.0 - 0.91).abs() < 1e-12 && (z.1 - 1.69).abs() < 1e-12,
+            "{z:?}"
+        );
+        // 1.2 s of 3 s (40 %): no zoom; none without contact; clamped to the samples.
+        assert_eq!(contact_zoom(&t, &ph(vec![(1.0, 2.2)])), None);
+        assert_eq!(contact_zoom(&t, &ph(vec![])), None);
+        let z = contact_zoom(&t, &ph(vec![(0.0, 0.3)])).unwrap();
+        assert_eq!(z.0, 0.0);
+    }
+
+    #[test]
+    fn work_precision_sets_keep_labels_with_their_runs() {
+        let set = |joined| WorkPrecisionSet {
+            name: "m".into(),
+            time_s: vec![3.0, 1.0, 2.0],
+            error: vec![1e-9, 1e-3, 1e-6],
+            labels: vec!["c".into(), "a".into(), "b".into()],
+            joined,
+        };
+        let f = fig_work_precision_sets("wp", "e", &[set(true)]).unwrap();
+        assert_eq!(f.series[0].labels, ["a", "b", "c"]);
+        assert_eq!(f.series[0].points[0], (1.0, 1e-3));
+        assert!(f.series[0].joined);
+        let f = fig_work_precision_sets("wp", "e", &[set(false)]).unwrap();
+        assert_eq!(f.series[0].labels, ["c", "a", "b"]);
+        assert!(!f.series[0].joined);
+        let mut bad = set(true);
+        bad.labels.pop();
+        assert!(matches!(
+            fig_work_precision_sets("wp", "e", &[bad]),
+            Err(PlotError::Shape { .. })
+        ));
+        assert!(
+            fig_ball_omega_ref(
+                "o",
+                &ts(3, 3),
+                &Phases::default(),
+                &[("r".into(), f64::NAN)]
+            )
+            .is_err()
+        );
+    }
 }
