@@ -1061,7 +1061,12 @@ fn layout_panel(
     let mut headroom = 0.0;
     let mut outside = min.1;
     let mut forced_corner: Option<[LegendPos; 2]> = None;
-    for _pass in 0..4 {
+    // Each pass may grow one bounded quantity (label area, label rows, legend room) and start
+    // over; the last pass accepts what it has.
+    let mut pass = 0;
+    loop {
+        pass += 1;
+        let last = pass >= 12;
         let strip = if levels > 0 {
             levels as f64 * row + 4.0
         } else {
@@ -1077,7 +1082,7 @@ fn layout_panel(
             .map(|l| text_size(l, TICK_FONT).0)
             .fold(0.0f64, f64::max);
         let need = (widest + 10.0 + DESC_FONT + 14.0).max(Y_LABEL_AREA);
-        if need > y_area + 0.5 {
+        if need > y_area + 0.5 && !last {
             y_area = need;
             continue;
         }
@@ -1129,7 +1134,7 @@ fn layout_panel(
                 r,
             ));
         }
-        if rows.len() > levels {
+        if rows.len() > levels && !last {
             levels = rows.len();
             continue;
         }
@@ -1214,6 +1219,7 @@ fn layout_panel(
                     let room = bh + 22.0;
                     let wide = m.plot.w() - bw - 16.0 > 2.0 * m.plot.h().max(200.0);
                     if best.0 > 0
+                        && !last
                         && forced_corner.is_none()
                         && !fig.equal_aspect
                         && wide
@@ -1222,7 +1228,7 @@ fn layout_panel(
                         outside = bw + 16.0;
                         continue;
                     }
-                    if best.0 > 0 && forced_corner.is_none() && fig.y_range.is_none() {
+                    if best.0 > 0 && !last && forced_corner.is_none() && fig.y_range.is_none() {
                         headroom = room;
                         forced_corner = Some([LegendPos::UpperRight, LegendPos::UpperLeft]);
                         continue;
@@ -1309,22 +1315,6 @@ fn layout_panel(
             point_labels,
             off_scale,
         };
-    }
-    // Unreachable in practice (each pass only grows a bounded quantity); fall back to a layout
-    // without the last adjustment.
-    let m = mapping(fig, prep, area, title_h, y_area, 0.0, headroom, outside);
-    PanelLayout {
-        title_y,
-        x_ticks: axis_ticks(fig.x_scale, m.xr, m.plot.w(), true),
-        y_ticks: axis_ticks(fig.y_scale, m.yr, m.plot.h(), false),
-        map: m,
-        y_area,
-        outside,
-        area,
-        marker_labels: vec![None; fig.vertical_markers.len()],
-        legend: None,
-        point_labels: Vec::new(),
-        off_scale: vec![false; fig.hlines.len()],
     }
 }
 
