@@ -688,3 +688,77 @@ fn fig11_compares_paths_with_a_legend_entry_each() {
         Err(PlotError::NoSeries(_))
     ));
 }
+
+#[test]
+fn random_figures_keep_texts_apart_and_legends_off_the_data() {
+    use rand::{Rng, SeedableRng};
+    let d = tmp("random");
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    for case in 0..12 {
+        let mut f = LineFigure::new(format!("random figure {case}"), "t [s]", "y [-]");
+        let log = case % 3 == 2;
+        if log {
+            f.x_scale = Scale::Log10;
+            f.y_scale = Scale::Log10;
+        }
+        for k in 0..rng.random_range(1..5) {
+            let n = rng.random_range(3..60);
+            let (a, b, c) = (
+                rng.random_range(0.5..3.0),
+                rng.random_range(-2.0..2.0),
+                rng.random_range(0.1..10.0),
+            );
+            let pts: Vec<(f64, f64)> = (0..n)
+                .map(|i| {
+                    let t = 0.1 + 3.0 * i as f64 / n as f64;
+                    let y = c * (a * t + b).sin();
+                    if log {
+                        (10f64.powf(t - 2.0), 10f64.powf(y.abs().min(8.0) - 6.0))
+                    } else {
+                        (t, y)
+                    }
+                })
+                .collect();
+            let mut s = Series::new(format!("series {k}"), pts);
+            if k % 2 == 1 {
+                let labels = (0..n)
+                    .map(|i| {
+                        if i % (n / 4).max(1) == 0 {
+                            format!("run {i}")
+                        } else {
+                            String::new()
+                        }
+                    })
+                    .collect();
+                s = s.with_labels(labels).unjoined();
+            }
+            f.series.push(s);
+        }
+        if !log {
+            for m in 0..rng.random_range(0..5) {
+                let t = rng.random_range(0.2..3.0);
+                f.vertical_markers.push((
+                    t,
+                    if m % 2 == 0 {
+                        "impact".into()
+                    } else {
+                        "lift-off".into()
+                    },
+                ));
+            }
+        }
+        let p = render(&f, d.join(format!("r{case}"))).unwrap();
+        let els = read(&p[0]);
+        assert_no_text_overlap(&els, &format!("case {case}"));
+        assert_legend_clear_of_data(&els, &format!("case {case}"));
+        let leg = legend_texts(&els);
+        for s in &f.series {
+            assert!(
+                leg.contains(&s.name),
+                "case {case}: {} not in the legend",
+                s.name
+            );
+        }
+        assert_fractional(&els, &format!("case {case}"));
+    }
+}
