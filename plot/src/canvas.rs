@@ -5,7 +5,8 @@
 //! [`PngCanvas`] draws through plotters' bitmap backend (whole pixels are the resolution of a
 //! bitmap anyway) and splits thick polylines at sharp turns (see `figure::split_sharp_turns`).
 //! Text is measured with the embedded font ([`text_size`]) so that layout decisions are the same
-//! for both outputs.
+//! for both outputs; the SVG asks for DejaVu Sans (the embedded font, one of the widest sans
+//! fonts) first, so a viewer's substitute is rarely wider than the layout assumed.
 
 use crate::{FONT, PlotError};
 use plotters::coord::Shift;
@@ -218,7 +219,7 @@ impl Canvas for SvgCanvas {
         };
         let _ = writeln!(
             self.out,
-            "<text class=\"{}\" x=\"{}\" y=\"{}\" font-family=\"{FONT}\" font-size=\"{}\" \
+            "<text class=\"{}\" x=\"{}\" y=\"{}\" font-family=\"DejaVu Sans, {FONT}\" font-size=\"{}\" \
              fill=\"{}\" text-anchor=\"{anchor}\"{rot}>{}</text>",
             t.class,
             f2(bx),

@@ -1182,7 +1182,8 @@ fn layout_panel(
             };
             let chosen = match fig.legend {
                 LegendPos::Auto if outside > 0.0 => {
-                    let x0 = m.plot.x1 + 10.0;
+                    // Clear of the last x tick label, which reaches past the frame.
+                    let x0 = m.plot.x1 + 24.0;
                     legend = Some((
                         PxRect {
                             x0,
@@ -1217,7 +1218,7 @@ fn layout_panel(
                     // a third of a short (non-geometric) axes and there is width to spare,
                     // otherwise room above the data and an upper corner.
                     let room = bh + 22.0;
-                    let wide = m.plot.w() - bw - 16.0 > 2.0 * m.plot.h().max(200.0);
+                    let wide = m.plot.w() - bw - 30.0 > 2.0 * m.plot.h().max(200.0);
                     if best.0 > 0
                         && !last
                         && forced_corner.is_none()
@@ -1225,7 +1226,7 @@ fn layout_panel(
                         && wide
                         && (room > 0.35 * m.plot.h() || fig.y_range.is_some())
                     {
-                        outside = bw + 16.0;
+                        outside = bw + 30.0;
                         continue;
                     }
                     if best.0 > 0 && !last && forced_corner.is_none() && fig.y_range.is_none() {
