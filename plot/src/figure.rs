@@ -1214,17 +1214,17 @@ fn layout_panel(
                             best = (n, c);
                         }
                     }
-                    // No free corner: beside the axes when head room would take more than
-                    // a third of a short (non-geometric) axes and there is width to spare,
-                    // otherwise room above the data and an upper corner.
+                    // No free corner: beside the axes when head room would take more than a
+                    // quarter of a (non-geometric) axes and 60 % of its width remain, otherwise
+                    // room above the data and an upper corner.
                     let room = bh + 22.0;
-                    let wide = m.plot.w() - bw - 30.0 > 2.0 * m.plot.h().max(200.0);
+                    let wide = m.plot.w() - bw - 30.0 >= (0.6 * m.plot.w()).max(300.0);
                     if best.0 > 0
                         && !last
                         && forced_corner.is_none()
                         && !fig.equal_aspect
                         && wide
-                        && (room > 0.35 * m.plot.h() || fig.y_range.is_some())
+                        && (room > 0.25 * m.plot.h() || fig.y_range.is_some())
                     {
                         outside = bw + 30.0;
                         continue;
