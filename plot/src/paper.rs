@@ -361,6 +361,47 @@ pub struct SimModes {
     pub stick: Vec<(f64, f64)>,
 }
 
+/// Contact mode of one sample, for [`SimModes::from_trace`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactMode {
+    /// No contact.
+    Free,
+    /// Sticking contact.
+    Stick,
+    /// Slipping contact.
+    Slip,
+}
+
+impl SimModes {
+    /// Intervals from a sampled mode trace (`modes[i]` holds at `t[i]`): each maximal run of
+    /// equal modes spans from its first sample to the next run's first sample (the last run to
+    /// the last sample), so adjacent intervals meet without gaps.
+    pub fn from_trace(t: &[f64], modes: &[ContactMode]) -> Result<Self, PlotError> {
+        if t.len() != modes.len() {
+            return Err(PlotError::Shape {
+                what: "contact-mode trace".into(),
+                detail: format!("{} times for {} modes", t.len(), modes.len()),
+            });
+        }
+        let mut out = SimModes::default();
+        let mut i = 0;
+        while i < t.len() {
+            let mut j = i + 1;
+            while j < t.len() && modes[j] == modes[i] {
+                j += 1;
+            }
+            let end = t[j.min(t.len() - 1)];
+            match modes[i] {
+                ContactMode::Stick => out.stick.push((t[i], end)),
+                ContactMode::Slip => out.slip.push((t[i], end)),
+                ContactMode::Free => {}
+            }
+            i = j;
+        }
+        Ok(out)
+    }
+}
+
 /// Fig. 17 with the simulation's contact modes: as [`fig_open_loop_vs_optimal`] (whose
 /// markers are the optimum's switching times from `phases`), with the open-loop simulation's
 /// slip intervals shaded orange and its stick intervals shaded green instead of the optimum's
@@ -682,5 +723,16 @@ mod tests {
             )
             .is_err()
         );
+    }
+
+    #[test]
+    fn mode_trace_to_intervals() {
+        use ContactMode::*;
+        let t = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5];
+        let m = SimModes::from_trace(&t, &[Free, Slip, Stick, Stick, Free, Stick]).unwrap();
+        assert_eq!(m.slip, vec![(0.1, 0.2)]);
+        assert_eq!(m.stick, vec![(0.2, 0.4), (0.5, 0.5)]);
+        assert!(SimModes::from_trace(&t, &[Free]).is_err());
+        assert_eq!(SimModes::from_trace(&[], &[]).unwrap(), SimModes::default());
     }
 }
