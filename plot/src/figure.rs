@@ -563,6 +563,8 @@ const TICK_FONT: f64 = 15.0;
 const LEGEND_FONT: f64 = 15.0;
 const MARKER_FONT: f64 = 13.0;
 const POINT_LABEL_FONT: f64 = 12.0;
+/// Rows of switching-time labels above the axes at most.
+const MAX_MARKER_ROWS: usize = 3;
 const LEGEND_ROW: f64 = 22.0;
 const TEXT_COLOUR: Rgb = (40, 40, 40);
 
@@ -1112,13 +1114,14 @@ fn layout_panel(
                 (Anchor::End, px - 3.0)
             };
             let b0 = text_box(label, x0, 0.0, MARKER_FONT, anchor);
-            let r = (0..)
-                .find(|&r| {
-                    rows.get(r).is_none_or(|v: &Vec<PxRect>| {
-                        v.iter().all(|o| !o.inflate(3.0).overlaps(&b0))
-                    })
-                })
-                .unwrap_or(0);
+            // At most MAX_MARKER_ROWS rows: a label that fits in none is left out (its line
+            // is still drawn), so that many switching times do not eat the axes' height.
+            let Some(r) = (0..MAX_MARKER_ROWS).find(|&r| {
+                rows.get(r)
+                    .is_none_or(|v: &Vec<PxRect>| v.iter().all(|o| !o.inflate(3.0).overlaps(&b0)))
+            }) else {
+                continue;
+            };
             if rows.len() <= r {
                 rows.resize(r + 1, Vec::new());
             }

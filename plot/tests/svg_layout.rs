@@ -762,3 +762,32 @@ fn random_figures_keep_texts_apart_and_legends_off_the_data() {
         assert_fractional(&els, &format!("case {case}"));
     }
 }
+
+#[test]
+fn many_switching_times_keep_three_label_rows_and_every_line() {
+    let d = tmp("many");
+    let mut f = LineFigure::new("ten periods", "t [s]", "ω [rad/s]");
+    f.series.push(Series::new(
+        "ω_x",
+        (0..500)
+            .map(|i| (0.02 * i as f64, (0.1 * i as f64).sin()))
+            .collect(),
+    ));
+    for p in 0..10 {
+        for (dt, l) in [(0.0, "impact"), (0.12, "lift-off"), (0.6, "t_f")] {
+            f.vertical_markers
+                .push((p as f64 + dt, format!("optimum: {l}")));
+        }
+    }
+    let p = render(&f, d.join("many")).unwrap();
+    let els = read(&p[0]);
+    assert_eq!(els.iter().filter(|e| e.class() == "vmarker").count(), 30);
+    let rows: std::collections::BTreeSet<i64> = els
+        .iter()
+        .filter(|e| e.class() == "marker-label")
+        .map(|e| e.num("y").round() as i64)
+        .collect();
+    assert!((2..=3).contains(&rows.len()), "{rows:?}");
+    assert!(els.iter().filter(|e| e.class() == "marker-label").count() >= 10);
+    assert_no_text_overlap(&els, "many markers");
+}
