@@ -168,11 +168,6 @@ pub fn log_ticks(lo: f64, hi: f64, fits: &dyn Fn(&[Tick]) -> bool) -> Vec<Tick> 
     Vec::new()
 }
 
-/// Parses a label produced by this module back to its value (for checks and tests).
-pub fn label_value(s: &str) -> Option<f64> {
-    s.parse::<f64>().ok()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
