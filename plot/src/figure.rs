@@ -1,24 +1,32 @@
 //! Line figures over plain data, rendered to SVG and PNG with the same layout.
 //!
-//! [`LineFigure`]: one axes with [`Series`], switching-time markers (the phase boundaries
+//! [`LineFigure`]: one axes with [`Series`] (polylines, or unjoined markers for unordered
+//! points, optionally with per-point labels), switching-time markers (the phase boundaries
 //! t_f^(i) of Sect. 4.2 / Fig. 6), horizontal limit lines ([`HLine`], e.g. the torque limit
 //! |τ_i| ≤ 1 N m) and shaded x-intervals ([`Band`], e.g. the sticking phase).
 //! [`PanelFigure`]: several `LineFigure`s stacked in rows or side by side (e.g. ω_x, ω_y, ω_z).
+//!
+//! Layout is decided in pixels before anything is drawn, identically for both outputs (the SVG
+//! is written with fractional coordinates, the PNG through plotters' bitmap backend, see
+//! `canvas`): ticks come from [`crate::ticks`] (labels equal the value at their position);
+//! switching-time labels sit in rows above the axes, staggered so that none overlap; the
+//! legend goes into the corner with no data under it, and if every corner has data, head room
+//! is added above the data for it; point labels are placed next to their point, clear of the
+//! legend and of each other.
 //!
 //! Non-finite points (and non-positive points on a log axis) split a series into separate line
 //! pieces — a gap, as in other plotting tools — and are counted in [`RenderReport::skipped_points`].
 //! Lines are clipped to the axes rectangle (Liang–Barsky, `clip_segment`) before drawing, so
 //! explicit `x_range`/`y_range` narrower than the data never draw outside the axes, and thick
-//! lines are split at sharp turns (`split_sharp_turns`) because plotters' bitmap stroker
+//! bitmap lines are split at sharp turns (`split_sharp_turns`) because plotters' bitmap stroker
 //! would otherwise extend hairpins into spikes across the whole image. Default ranges cover
 //! every finite point of every series (equal-aspect views: 5 % margin on both axes).
 //! Colours follow a 10-colour qualitative palette and dash patterns cycle with period 4, so the
 //! first 20 automatically styled series of a figure are pairwise distinct even in grey-scale print.
 
-use crate::{FONT, PlotError, ensure_font};
-use plotters::chart::SeriesAnno;
-use plotters::coord::Shift;
-use plotters::element::DashedPathElement;
+use crate::canvas::{Anchor, Canvas, PngCanvas, Rgb, SvgCanvas, TextSpec, text_size};
+use crate::ticks::{self, Tick};
+use crate::{PlotError, ensure_font};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -113,15 +121,23 @@ impl Default for SeriesStyle {
     }
 }
 
-/// One named polyline.
+/// One named data series: a polyline, or (when not [`joined`](Series::joined)) a set of
+/// markers.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Series {
-    /// Legend text.
+    /// Legend text (every series with a non-empty name and `style.in_legend` gets an entry).
     pub name: String,
     /// Points (x, y) in data units, drawn in this order.
     pub points: Vec<(f64, f64)>,
     /// Appearance.
     pub style: SeriesStyle,
+    /// Per-point labels drawn next to the points (e.g. the tolerance, mesh or ε of a run):
+    /// empty, or one per point (empty strings: no label).
+    pub labels: Vec<String>,
+    /// `true` (default): consecutive points are joined by a line. `false`: the points are
+    /// unordered or unrelated (runs on different local optima, settings without a natural
+    /// order), so they are drawn as markers only.
+    pub joined: bool,
 }
 
 impl Series {
@@ -131,12 +147,26 @@ impl Series {
             name: name.into(),
             points,
             style: SeriesStyle::default(),
+            labels: Vec::new(),
+            joined: true,
         }
     }
 
     /// The same series with another style.
     pub fn styled(mut self, style: SeriesStyle) -> Self {
         self.style = style;
+        self
+    }
+
+    /// The same series with one label per point (see [`Series::labels`]).
+    pub fn with_labels(mut self, labels: Vec<String>) -> Self {
+        self.labels = labels;
+        self
+    }
+
+    /// The same series drawn as unjoined markers (see [`Series::joined`]).
+    pub fn unjoined(mut self) -> Self {
+        self.joined = false;
         self
     }
 }
@@ -150,6 +180,10 @@ pub struct HLine {
     pub label: String,
     /// Colour (default grey when [`Colour::Auto`]).
     pub colour: Colour,
+    /// Whether the autoscaled y range must include the line. `false` for a limit far from the
+    /// data (e.g. a torque bound of 1 N m for torques of 0.1 N m): the axis then fits the
+    /// data, and a line outside it is listed in the legend as "(off scale)" instead of drawn.
+    pub fit: bool,
 }
 
 /// A shaded x-interval spanning the full height of the axes (e.g. a contact phase).
@@ -161,6 +195,8 @@ pub struct Band {
     pub x1: f64,
     /// Legend text (shown once per distinct label); empty: not in the legend.
     pub label: String,
+    /// Fill colour (drawn translucent); [`Colour::Auto`]: grey.
+    pub colour: Colour,
 }
 
 /// A single axes with several series.
@@ -325,7 +361,10 @@ fn tx(v: f64, s: Scale) -> Option<f64> {
 struct PreparedSeries {
     name: String,
     pieces: Vec<Vec<(f64, f64)>>,
-    colour: RGBColor,
+    /// Labelled points (plotting coordinates) and their text.
+    labels: Vec<((f64, f64), String)>,
+    joined: bool,
+    colour: Rgb,
     dash: Dash,
     width: u32,
     markers: bool,
@@ -375,6 +414,27 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
             }
         }
         pieces.retain(|p| !p.is_empty());
+        if !s.labels.is_empty() && s.labels.len() != s.points.len() {
+            return Err(invalid(
+                fig,
+                "point labels",
+                format!(
+                    "series '{}' has {} labels for {} points",
+                    s.name,
+                    s.labels.len(),
+                    s.points.len()
+                ),
+            ));
+        }
+        let labels: Vec<((f64, f64), String)> = s
+            .labels
+            .iter()
+            .zip(&s.points)
+            .filter(|(l, _)| !l.is_empty())
+            .filter_map(|(l, &(x, y))| {
+                Some(((tx(x, fig.x_scale)?, tx(y, fig.y_scale)?), l.clone()))
+            })
+            .collect();
         if pieces.is_empty() {
             return Err(PlotError::NoFinitePoints {
                 figure: fig.title.clone(),
@@ -394,7 +454,9 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
         out.push(PreparedSeries {
             name: s.name.clone(),
             pieces,
-            colour: RGBColor(r, g, b),
+            colour: (r, g, b),
+            labels,
+            joined: s.joined,
             dash,
             width: s.style.width.max(1),
             markers: s.style.markers,
@@ -450,23 +512,26 @@ fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
     }
     // Time axes end exactly at the data; geometric (equal-aspect) views get the same 5 % margin
     // on both axes so points on the extremes are not drawn on top of the frame.
-    let x_pad = if fig.equal_aspect { 0.05 } else { 0.0 };
+    // Marker-only and marked series get a small x margin too, so their end markers and labels
+    // are not cut by the frame.
+    let marked = out.iter().any(|s| s.markers || !s.joined);
+    let x_pad = if fig.equal_aspect {
+        0.05
+    } else if marked {
+        0.04
+    } else {
+        0.0
+    };
     let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), x_pad));
     let yr = yr_fixed.unwrap_or_else(|| {
         let (mut lo, mut hi) = fold(|p| p.1);
-        for h in &fig.hlines {
+        for h in fig.hlines.iter().filter(|h| h.fit) {
             if let Some(y) = tx(h.y, fig.y_scale) {
                 lo = lo.min(y);
                 hi = hi.max(y);
             }
         }
-        let (lo, hi) = widen((lo, hi), 0.05);
-        // Head room for the switching-time labels drawn along the top edge.
-        if fig.vertical_markers.iter().any(|(_, l)| !l.is_empty()) {
-            (lo, hi + 0.08 * (hi - lo))
-        } else {
-            (lo, hi)
-        }
+        widen((lo, hi), 0.05)
     });
     Ok(Prepared {
         series: out,
@@ -487,57 +552,21 @@ fn widen((lo, hi): (f64, f64), frac: f64) -> (f64, f64) {
     }
 }
 
-/// Tick label text for plotting coordinate `v` on an axis spanning `span`.
-fn tick_label(v: f64, span: f64, scale: Scale) -> String {
-    match scale {
-        Scale::Log10 => {
-            let k = v.round();
-            if (v - k).abs() < 1e-6 {
-                format!("1e{}", k as i64)
-            } else {
-                format!("{:.0e}", 10f64.powf(v))
-            }
-        }
-        Scale::Linear => {
-            if v.abs() < 1e-9 * span.max(1e-300) {
-                return "0".into();
-            }
-            let step = span / 8.0;
-            let s = if v.abs() >= 1e5 || step < 1e-4 {
-                format!("{v:.2e}")
-            } else {
-                // One digit more than the step needs, then trailing zeros trimmed: 0.25 stays
-                // 0.25, 0.50 becomes 0.5, 1.00 becomes 1.
-                let dec = (1.0 - step.log10().floor()).clamp(0.0, 7.0) as usize;
-                let s = format!("{v:.dec$}");
-                if s.contains('.') {
-                    s.trim_end_matches('0').trim_end_matches('.').to_string()
-                } else {
-                    s
-                }
-            };
-            match s.strip_prefix('-') {
-                Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
-                _ => s,
-            }
-        }
-    }
-}
-
-fn de<E: std::fmt::Display>(e: E) -> PlotError {
-    PlotError::Draw(e.to_string())
-}
-
 // Layout constants (pixels). Shared by SVG and PNG so both look the same.
-const MARGIN: u32 = 14;
-const X_LABEL_AREA: u32 = 58;
-const Y_LABEL_AREA: u32 = 92;
-const TITLE_FONT: u32 = 24;
-const PANEL_TITLE_FONT: u32 = 20;
-const DESC_FONT: u32 = 18;
-const TICK_FONT: u32 = 15;
-const LEGEND_FONT: u32 = 15;
-const MARKER_FONT: u32 = 13;
+const MARGIN: f64 = 14.0;
+const X_LABEL_AREA: f64 = 58.0;
+const Y_LABEL_AREA: f64 = 92.0;
+const TITLE_FONT: f64 = 24.0;
+const PANEL_TITLE_FONT: f64 = 20.0;
+const DESC_FONT: f64 = 18.0;
+const TICK_FONT: f64 = 15.0;
+const LEGEND_FONT: f64 = 15.0;
+const MARKER_FONT: f64 = 13.0;
+const POINT_LABEL_FONT: f64 = 12.0;
+/// Rows of switching-time labels above the axes at most.
+const MAX_MARKER_ROWS: usize = 3;
+const LEGEND_ROW: f64 = 22.0;
+const TEXT_COLOUR: Rgb = (40, 40, 40);
 
 fn render_impl(
     title: &str,
@@ -565,18 +594,22 @@ fn render_impl(
         })?;
     }
 
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw_all(&root, title, panels, &prepared, layout)?;
-        root.present().map_err(de)?;
-    }
-    write_atomic(&svg_path, svg.as_bytes())?;
+    let mut svg = SvgCanvas::new(size);
+    draw_all(&mut svg, size, title, panels, &prepared, layout)?;
+    write_atomic(&svg_path, svg.finish().as_bytes())?;
 
     let tmp = tmp_sibling(&png_path);
     let res = (|| {
         let root = BitMapBackend::new(&tmp, size).into_drawing_area();
-        draw_all(&root, title, panels, &prepared, layout)?;
+        root.fill(&WHITE).map_err(de)?;
+        draw_all(
+            &mut PngCanvas::new(&root),
+            size,
+            title,
+            panels,
+            &prepared,
+            layout,
+        )?;
         root.present().map_err(de)
     })();
     match res {
@@ -593,6 +626,10 @@ fn render_impl(
         paths: [svg_path, png_path],
         skipped_points,
     })
+}
+
+fn de<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
 }
 
 /// `stem` with `.ext` appended (not replacing: stems like `fig6.omega` keep their dot).
@@ -640,322 +677,948 @@ pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
     })
 }
 
-fn draw_all<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
+/// A pixel rectangle (x0, y0) – (x1, y1), y downwards.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct PxRect {
+    x0: f64,
+    y0: f64,
+    x1: f64,
+    y1: f64,
+}
+
+impl PxRect {
+    fn w(&self) -> f64 {
+        self.x1 - self.x0
+    }
+    fn h(&self) -> f64 {
+        self.y1 - self.y0
+    }
+    fn overlaps(&self, o: &PxRect) -> bool {
+        self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
+    }
+    fn overlap_area(&self, o: &PxRect) -> f64 {
+        let w = (self.x1.min(o.x1) - self.x0.max(o.x0)).max(0.0);
+        let h = (self.y1.min(o.y1) - self.y0.max(o.y0)).max(0.0);
+        w * h
+    }
+    fn contains(&self, (x, y): (f64, f64)) -> bool {
+        x >= self.x0 && x <= self.x1 && y >= self.y0 && y <= self.y1
+    }
+    fn inflate(&self, d: f64) -> PxRect {
+        PxRect {
+            x0: self.x0 - d,
+            y0: self.y0 - d,
+            x1: self.x1 + d,
+            y1: self.y1 + d,
+        }
+    }
+}
+
+fn draw_all(
+    cv: &mut dyn Canvas,
+    size: (u32, u32),
     title: &str,
     panels: &[LineFigure],
     prepared: &[Prepared],
     layout: Layout,
 ) -> Result<(), PlotError> {
-    root.fill(&WHITE).map_err(de)?;
-    let body = if title.is_empty() {
-        root.clone()
-    } else {
-        root.titled(title, (FONT, TITLE_FONT)).map_err(de)?
-    };
-    let n = panels.len();
-    let areas = match layout {
-        Layout::Rows => body.split_evenly((n, 1)),
-        Layout::Columns => body.split_evenly((1, n)),
-    };
-    let title_font = if n > 1 || !title.is_empty() {
+    let (w, h) = (size.0 as f64, size.1 as f64);
+    let mut top = 0.0;
+    if !title.is_empty() {
+        cv.text(&TextSpec {
+            text: title,
+            x: 0.5 * w,
+            y: 0.75 * TITLE_FONT,
+            size: TITLE_FONT,
+            colour: (0, 0, 0),
+            anchor: Anchor::Middle,
+            vertical: false,
+            class: "title",
+        })?;
+        top = 1.5 * TITLE_FONT;
+    }
+    let n = panels.len() as f64;
+    let title_font = if panels.len() > 1 || !title.is_empty() {
         PANEL_TITLE_FONT
     } else {
         TITLE_FONT
     };
-    for ((area, fig), prep) in areas.iter().zip(panels).zip(prepared) {
-        draw_panel(area, fig, prep, title_font)?;
+    let areas: Vec<PxRect> = (0..panels.len())
+        .map(|k| {
+            let k = k as f64;
+            match layout {
+                Layout::Rows => {
+                    let ph = (h - top) / n;
+                    PxRect {
+                        x0: 0.0,
+                        y0: top + k * ph,
+                        x1: w,
+                        y1: top + (k + 1.0) * ph,
+                    }
+                }
+                Layout::Columns => PxRect {
+                    x0: k * w / n,
+                    y0: top,
+                    x1: (k + 1.0) * w / n,
+                    y1: h,
+                },
+            }
+        })
+        .collect();
+    let mut lays: Vec<PanelLayout> = panels
+        .iter()
+        .zip(prepared)
+        .zip(&areas)
+        .map(|((f, p), a)| layout_panel(f, p, *a, title_font, (Y_LABEL_AREA, 0.0)))
+        .collect();
+    if layout == Layout::Rows && panels.len() > 1 {
+        // Stacked panels share their time axis: same left edge and same width.
+        let ya = lays.iter().map(|l| l.y_area).fold(0.0f64, f64::max);
+        let out = lays.iter().map(|l| l.outside).fold(0.0f64, f64::max);
+        if lays.iter().any(|l| l.y_area < ya || l.outside < out) {
+            lays = panels
+                .iter()
+                .zip(prepared)
+                .zip(&areas)
+                .map(|((f, p), a)| layout_panel(f, p, *a, title_font, (ya, out)))
+                .collect();
+        }
+    }
+    for ((fig, prep), lay) in panels.iter().zip(prepared).zip(&lays) {
+        draw_panel(cv, fig, prep, lay, title_font)?;
     }
     Ok(())
 }
 
-fn dash_element(
-    pts: Vec<(i32, i32)>,
-    dash: Dash,
-    style: ShapeStyle,
-) -> DashedPathElement<std::vec::IntoIter<(i32, i32)>, i32> {
-    let (on, off) = dash_pattern(dash);
-    DashedPathElement::new(pts, on, off, style)
-}
-
-/// (dash, gap) in pixels; solid lines are one very long dash.
-fn dash_pattern(d: Dash) -> (i32, i32) {
+/// (dash, gap) in pixels; `None` for solid lines.
+fn dash_pattern(d: Dash) -> Option<(f64, f64)> {
     match d {
-        Dash::Auto | Dash::Solid => (1_000_000, 1),
-        Dash::Dashed => (10, 6),
-        Dash::Dotted => (2, 5),
-        Dash::LongDash => (20, 7),
+        Dash::Auto | Dash::Solid => None,
+        Dash::Dashed => Some((10.0, 6.0)),
+        Dash::Dotted => Some((2.0, 5.0)),
+        Dash::LongDash => Some((20.0, 7.0)),
     }
 }
 
-fn draw_panel<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
+/// How a legend entry's sample looks.
+#[derive(Clone, Copy, Debug)]
+enum Sample {
+    Line {
+        colour: Rgb,
+        width: f64,
+        dash: Option<(f64, f64)>,
+        marker: bool,
+    },
+    Marker(Rgb),
+    Fill(Rgb, f64),
+}
+
+/// The pixel mapping of one axes.
+#[derive(Clone, Copy, Debug)]
+struct Mapping {
+    plot: PxRect,
+    xr: (f64, f64),
+    yr: (f64, f64),
+}
+
+impl Mapping {
+    fn x(&self, v: f64) -> f64 {
+        self.plot.x0 + (v - self.xr.0) / (self.xr.1 - self.xr.0) * self.plot.w()
+    }
+    fn y(&self, v: f64) -> f64 {
+        self.plot.y1 - (v - self.yr.0) / (self.yr.1 - self.yr.0) * self.plot.h()
+    }
+    fn px(&self, (x, y): (f64, f64)) -> (f64, f64) {
+        (self.x(x), self.y(y))
+    }
+}
+
+/// A placed text (anchor point and class as for [`TextSpec`]) with its estimated box.
+#[derive(Clone, Debug)]
+struct Placed {
+    text: String,
+    x: f64,
+    y: f64,
+    anchor: Anchor,
+    bbox: PxRect,
+}
+
+/// Everything about a panel that depends on pixel sizes: decided before anything is drawn.
+struct PanelLayout {
+    title_y: Option<f64>,
+    map: Mapping,
+    x_ticks: Vec<Tick>,
+    y_ticks: Vec<Tick>,
+    y_area: f64,
+    /// Width reserved right of the axes for the legend (0: legend inside).
+    outside: f64,
+    area: PxRect,
+    /// Marker label per vertical marker (same order; `None`: unlabelled or outside).
+    marker_labels: Vec<Option<Placed>>,
+    legend: Option<(PxRect, Vec<(String, Sample)>)>,
+    point_labels: Vec<(Placed, Rgb)>,
+    /// Horizontal lines outside the y range (listed in the legend as off scale).
+    off_scale: Vec<bool>,
+}
+
+fn text_box(text: &str, x: f64, y: f64, size: f64, anchor: Anchor) -> PxRect {
+    // Never narrower than 0.55 em per character: SVG viewers may substitute a wider font.
+    let (w, h) = text_size(text, size);
+    let w = w.max(0.55 * size * text.chars().count() as f64);
+    let x0 = match anchor {
+        Anchor::Start => x,
+        Anchor::Middle => x - 0.5 * w,
+        Anchor::End => x - w,
+    };
+    PxRect {
+        x0,
+        y0: y - 0.5 * h,
+        x1: x0 + w,
+        y1: y + 0.5 * h,
+    }
+}
+
+fn legend_entries(fig: &LineFigure, prep: &Prepared, off_scale: &[bool]) -> Vec<(String, Sample)> {
+    let mut out: Vec<(String, Sample)> = Vec::new();
+    for s in prep.series.iter().filter(|s| s.in_legend) {
+        let c = s.colour;
+        let sample = if s.joined {
+            Sample::Line {
+                colour: c,
+                width: s.width as f64,
+                dash: dash_pattern(s.dash),
+                marker: s.markers,
+            }
+        } else {
+            Sample::Marker(c)
+        };
+        out.push((s.name.clone(), sample));
+    }
+    for (h, &off) in fig.hlines.iter().zip(off_scale) {
+        if h.label.is_empty() {
+            continue;
+        }
+        let label = if off {
+            format!("{} (off scale)", h.label)
+        } else {
+            h.label.clone()
+        };
+        out.push((
+            label,
+            Sample::Line {
+                colour: hline_colour(h),
+                width: 2.0,
+                dash: Some((14.0, 5.0)),
+                marker: false,
+            },
+        ));
+    }
+    for b in &fig.bands {
+        if !b.label.is_empty() && !out.iter().any(|(l, _)| *l == b.label) {
+            let (c, o) = band_fill(b);
+            out.push((b.label.clone(), Sample::Fill(c, o)));
+        }
+    }
+    out
+}
+
+fn hline_colour(h: &HLine) -> Rgb {
+    match h.colour {
+        Colour::Auto => (70, 70, 70),
+        Colour::Rgb(r, g, b) => (r, g, b),
+    }
+}
+
+fn band_fill(b: &Band) -> (Rgb, f64) {
+    match b.colour {
+        Colour::Auto => ((110, 110, 110), 0.13),
+        Colour::Rgb(r, g, bl) => ((r, g, bl), 0.2),
+    }
+}
+
+/// Pixel sample points of everything drawn as data (every ≤ 4 px along lines), used to find a
+/// free place for the legend.
+fn data_samples(fig: &LineFigure, prep: &Prepared, m: &Mapping) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    let mut line = |a: (f64, f64), b: (f64, f64)| {
+        let n = ((b.0 - a.0).hypot(b.1 - a.1) / 4.0)
+            .ceil()
+            .clamp(1.0, 2000.0) as usize;
+        for k in 0..=n {
+            let f = k as f64 / n as f64;
+            out.push((a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1)));
+        }
+    };
+    for s in &prep.series {
+        for piece in &s.pieces {
+            if s.joined {
+                for run in clip_polyline(piece, m.xr, m.yr) {
+                    if let [p] = run.as_slice() {
+                        line(m.px(*p), m.px(*p));
+                    }
+                    for w in run.windows(2) {
+                        line(m.px(w[0]), m.px(w[1]));
+                    }
+                }
+            } else {
+                for p in piece {
+                    if m.plot.contains(m.px(*p)) {
+                        line(m.px(*p), m.px(*p));
+                    }
+                }
+            }
+        }
+    }
+    for h in &fig.hlines {
+        if let Some(y) = tx(h.y, fig.y_scale).filter(|y| (m.yr.0..=m.yr.1).contains(y)) {
+            line((m.plot.x0, m.y(y)), (m.plot.x1, m.y(y)));
+        }
+    }
+    out
+}
+
+/// Pixel geometry for given extra room: `y_area` left of the axes, `strip` above them for the
+/// switching-time labels, `headroom` pixels added above the data for the legend, `outside`
+/// pixels right of the axes for a legend placed there.
+fn mapping(
     fig: &LineFigure,
     prep: &Prepared,
-    title_font: u32,
-) -> Result<(), PlotError> {
-    let inner = if fig.title.is_empty() {
-        area.clone()
-    } else {
-        area.titled(&fig.title, (FONT, title_font)).map_err(de)?
+    area: PxRect,
+    title_h: f64,
+    y_area: f64,
+    strip: f64,
+    headroom: f64,
+    outside: f64,
+) -> Mapping {
+    let plot = PxRect {
+        x0: area.x0 + MARGIN + y_area,
+        y0: area.y0 + title_h + strip + MARGIN,
+        x1: area.x1 - 2.0 * MARGIN - outside,
+        y1: area.y1 - MARGIN - X_LABEL_AREA,
     };
-    let (w, h) = inner.dim_in_pixel();
-    let pw = w.saturating_sub(Y_LABEL_AREA + 3 * MARGIN).max(10) as f64;
-    let ph = h.saturating_sub(X_LABEL_AREA + 2 * MARGIN).max(10) as f64;
+    let plot = PxRect {
+        x1: plot.x1.max(plot.x0 + 10.0),
+        y1: plot.y1.max(plot.y0 + 10.0),
+        ..plot
+    };
+    let (xr, mut yr) = (prep.xr, prep.yr);
+    if headroom > 0.0 && fig.y_range.is_none() {
+        let f = (headroom / plot.h()).min(0.6);
+        yr.1 += (yr.1 - yr.0) * f / (1.0 - f);
+    }
     let (xr, yr) = if fig.equal_aspect {
-        equal_aspect_ranges(prep.xr, prep.yr, (pw, ph))
+        equal_aspect_ranges(xr, yr, (plot.w(), plot.h()))
     } else {
-        (prep.xr, prep.yr)
+        (xr, yr)
     };
-    let mut chart = ChartBuilder::on(&inner)
-        .margin(MARGIN)
-        .margin_right(2 * MARGIN)
-        .x_label_area_size(X_LABEL_AREA)
-        .y_label_area_size(Y_LABEL_AREA)
-        .build_cartesian_2d(xr.0..xr.1, yr.0..yr.1)
-        .map_err(de)?;
-    let (xs, ys) = (xr.1 - xr.0, yr.1 - yr.0);
-    let (xsc, ysc) = (fig.x_scale, fig.y_scale);
-    let xfmt = move |v: &f64| tick_label(*v, xs, xsc);
-    let yfmt = move |v: &f64| tick_label(*v, ys, ysc);
-    chart
-        .configure_mesh()
-        .x_desc(fig.x_label.as_str())
-        .y_desc(fig.y_label.as_str())
-        .axis_desc_style((FONT, DESC_FONT))
-        .label_style((FONT, TICK_FONT))
-        .x_labels(9)
-        .y_labels(7)
-        .x_label_formatter(&xfmt)
-        .y_label_formatter(&yfmt)
-        .bold_line_style(RGBColor(215, 215, 215))
-        .light_line_style(RGBColor(242, 242, 242))
-        .axis_style(RGBColor(60, 60, 60))
-        .draw()
-        .map_err(de)?;
+    Mapping { plot, xr, yr }
+}
+
+fn axis_ticks(scale: Scale, r: (f64, f64), len_px: f64, horizontal: bool) -> Vec<Tick> {
+    // Labels of neighbouring ticks must be apart by the text extent plus a gap.
+    let fits = |t: &[Tick]| -> bool {
+        let ext: Vec<(f64, f64)> = t
+            .iter()
+            .map(|t| {
+                let p = (t.pos - r.0) / (r.1 - r.0) * len_px;
+                let (w, h) = text_size(t.label.as_deref().unwrap_or(""), TICK_FONT);
+                let half = if horizontal { 0.5 * w } else { 0.5 * h };
+                (p - half, p + half)
+            })
+            .collect();
+        ext.windows(2)
+            .all(|w| w[1].0 - w[0].1 >= if horizontal { 14.0 } else { 8.0 })
+    };
+    match scale {
+        Scale::Linear => {
+            let max = if horizontal { 10 } else { 8 };
+            ticks::linear_ticks(r.0, r.1, max, &fits)
+        }
+        Scale::Log10 => ticks::log_ticks(r.0, r.1, &fits),
+    }
+}
+
+/// Lays out one panel; `min` = (least y label area, least room for a legend right of the
+/// axes), so that stacked panels can be aligned.
+fn layout_panel(
+    fig: &LineFigure,
+    prep: &Prepared,
+    area: PxRect,
+    title_font: f64,
+    min: (f64, f64),
+) -> PanelLayout {
+    let (title_h, title_y) = if fig.title.is_empty() {
+        (0.0, None)
+    } else {
+        (1.5 * title_font, Some(area.y0 + 0.75 * title_font))
+    };
+    let labelled_markers = fig
+        .vertical_markers
+        .iter()
+        .filter(|(_, l)| !l.is_empty())
+        .count();
+    let row = MARKER_FONT + 5.0;
+    let mut levels = usize::from(labelled_markers > 0);
+    let mut y_area = min.0.max(Y_LABEL_AREA);
+    let mut headroom = 0.0;
+    let mut outside = min.1;
+    let mut forced_corner: Option<[LegendPos; 2]> = None;
+    // Each pass may grow one bounded quantity (label area, label rows, legend room) and start
+    // over; the last pass accepts what it has.
+    let mut pass = 0;
+    loop {
+        pass += 1;
+        let last = pass >= 12;
+        let strip = if levels > 0 {
+            levels as f64 * row + 4.0
+        } else {
+            0.0
+        };
+        let m = mapping(fig, prep, area, title_h, y_area, strip, headroom, outside);
+        let x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true);
+        let y_ticks = axis_ticks(fig.y_scale, m.yr, m.plot.h(), false);
+        // Room for the widest y tick label and the rotated description.
+        let widest = y_ticks
+            .iter()
+            .filter_map(|t| t.label.as_deref())
+            .map(|l| text_size(l, TICK_FONT).0)
+            .fold(0.0f64, f64::max);
+        let need = (widest + 10.0 + DESC_FONT + 14.0).max(Y_LABEL_AREA);
+        if need > y_area + 0.5 && !last {
+            y_area = need;
+            continue;
+        }
+        // Switching-time labels: greedy rows so that no two labels overlap.
+        let mut rows: Vec<Vec<PxRect>> = Vec::new();
+        let mut marker_labels = Vec::with_capacity(fig.vertical_markers.len());
+        let mut order: Vec<usize> = (0..fig.vertical_markers.len()).collect();
+        order.sort_by(|&a, &b| {
+            fig.vertical_markers[a]
+                .0
+                .total_cmp(&fig.vertical_markers[b].0)
+        });
+        let mut placed: Vec<Option<(Placed, usize)>> = vec![None; fig.vertical_markers.len()];
+        for &i in &order {
+            let (t, label) = &fig.vertical_markers[i];
+            let Some(x) = tx(*t, fig.x_scale).filter(|x| (m.xr.0..=m.xr.1).contains(x)) else {
+                continue;
+            };
+            if label.is_empty() {
+                continue;
+            }
+            let px = m.x(x);
+            let (w, _) = text_size(label, MARKER_FONT);
+            let (anchor, x0) = if px + 3.0 + w <= m.plot.x1 + MARGIN {
+                (Anchor::Start, px + 3.0)
+            } else {
+                (Anchor::End, px - 3.0)
+            };
+            let b0 = text_box(label, x0, 0.0, MARKER_FONT, anchor);
+            // At most MAX_MARKER_ROWS rows: a label that fits in none is left out (its line
+            // is still drawn), so that many switching times do not eat the axes' height.
+            let Some(r) = (0..MAX_MARKER_ROWS).find(|&r| {
+                rows.get(r)
+                    .is_none_or(|v: &Vec<PxRect>| v.iter().all(|o| !o.inflate(3.0).overlaps(&b0)))
+            }) else {
+                continue;
+            };
+            if rows.len() <= r {
+                rows.resize(r + 1, Vec::new());
+            }
+            rows[r].push(b0);
+            placed[i] = Some((
+                Placed {
+                    text: label.clone(),
+                    x: x0,
+                    y: 0.0,
+                    anchor,
+                    bbox: b0,
+                },
+                r,
+            ));
+        }
+        if rows.len() > levels && !last {
+            levels = rows.len();
+            continue;
+        }
+        let strip_top = m.plot.y0 - strip;
+        for p in placed.into_iter() {
+            marker_labels.push(p.map(|(mut pl, r)| {
+                // Row 0 nearest to the axes.
+                let yc = m.plot.y0 - 2.0 - (r as f64 + 0.5) * row;
+                pl.y = yc;
+                pl.bbox = text_box(&pl.text, pl.x, yc, MARKER_FONT, pl.anchor);
+                debug_assert!(pl.bbox.y0 >= strip_top - 1.0);
+                pl
+            }));
+        }
+
+        let off_scale: Vec<bool> = fig
+            .hlines
+            .iter()
+            .map(|h| tx(h.y, fig.y_scale).is_none_or(|y| y < m.yr.0 || y > m.yr.1))
+            .collect();
+        let entries = legend_entries(fig, prep, &off_scale);
+        let mut legend = None;
+        if !entries.is_empty() && fig.legend != LegendPos::Hidden {
+            let tw = entries
+                .iter()
+                .map(|(l, _)| text_size(l, LEGEND_FONT).0)
+                .fold(0.0f64, f64::max);
+            let (bw, bh) = (tw + 52.0, LEGEND_ROW * entries.len() as f64 + 10.0);
+            let corner = |c: LegendPos| -> PxRect {
+                let (l, t) = match c {
+                    LegendPos::UpperLeft | LegendPos::LowerLeft => (m.plot.x0 + 8.0, true),
+                    _ => (m.plot.x1 - 8.0 - bw, true),
+                };
+                let _ = t;
+                let top = match c {
+                    LegendPos::LowerLeft | LegendPos::LowerRight => m.plot.y1 - 8.0 - bh,
+                    _ => m.plot.y0 + 8.0,
+                };
+                PxRect {
+                    x0: l,
+                    y0: top,
+                    x1: l + bw,
+                    y1: top + bh,
+                }
+            };
+            let chosen = match fig.legend {
+                LegendPos::Auto if outside > 0.0 => {
+                    // Clear of the last x tick label, which reaches past the frame.
+                    let x0 = m.plot.x1 + 24.0;
+                    legend = Some((
+                        PxRect {
+                            x0,
+                            y0: m.plot.y0,
+                            x1: x0 + bw,
+                            y1: m.plot.y0 + bh,
+                        },
+                        entries.clone(),
+                    ));
+                    LegendPos::Hidden
+                }
+                LegendPos::Auto => {
+                    let samples = data_samples(fig, prep, &m);
+                    let cands: &[LegendPos] = match &forced_corner {
+                        Some(c) => c,
+                        None => &[
+                            LegendPos::UpperRight,
+                            LegendPos::UpperLeft,
+                            LegendPos::LowerRight,
+                            LegendPos::LowerLeft,
+                        ],
+                    };
+                    let mut best = (usize::MAX, LegendPos::UpperRight);
+                    for &c in cands {
+                        let b = corner(c).inflate(6.0);
+                        let n = samples.iter().filter(|p| b.contains(**p)).count();
+                        if n < best.0 {
+                            best = (n, c);
+                        }
+                    }
+                    // No free corner: beside the axes when head room would take more than a
+                    // quarter of a (non-geometric) axes and 60 % of its width remain, otherwise
+                    // room above the data and an upper corner.
+                    let room = bh + 22.0;
+                    let wide = m.plot.w() - bw - 30.0 >= (0.6 * m.plot.w()).max(300.0);
+                    if best.0 > 0
+                        && !last
+                        && forced_corner.is_none()
+                        && !fig.equal_aspect
+                        && wide
+                        && (room > 0.25 * m.plot.h() || fig.y_range.is_some())
+                    {
+                        outside = bw + 30.0;
+                        continue;
+                    }
+                    if best.0 > 0 && !last && forced_corner.is_none() && fig.y_range.is_none() {
+                        headroom = room;
+                        forced_corner = Some([LegendPos::UpperRight, LegendPos::UpperLeft]);
+                        continue;
+                    }
+                    best.1
+                }
+                c => c,
+            };
+            if chosen != LegendPos::Hidden {
+                legend = Some((corner(chosen), entries));
+            }
+        }
+
+        // Point labels: next to their point, clear of the legend, of each other and of other
+        // labelled points.
+        let mut point_labels: Vec<(Placed, Rgb)> = Vec::new();
+        let mut taken: Vec<PxRect> = legend.iter().map(|(r, _)| r.inflate(2.0)).collect();
+        let dots: Vec<(f64, f64)> = prep
+            .series
+            .iter()
+            .flat_map(|s| s.labels.iter().map(|(p, _)| m.px(*p)))
+            .collect();
+        for s in &prep.series {
+            for (p, text) in &s.labels {
+                let (px, py) = m.px(*p);
+                if !m.plot.contains((px, py)) {
+                    continue;
+                }
+                let cands = [
+                    (Anchor::Start, px + 7.0, py - 10.0),
+                    (Anchor::Start, px + 7.0, py + 10.0),
+                    (Anchor::End, px - 7.0, py - 10.0),
+                    (Anchor::End, px - 7.0, py + 10.0),
+                    (Anchor::Middle, px, py - 15.0),
+                    (Anchor::Middle, px, py + 15.0),
+                    (Anchor::Start, px + 9.0, py),
+                    (Anchor::End, px - 9.0, py),
+                ];
+                let mut best: Option<(f64, Placed)> = None;
+                for (anchor, x, y) in cands {
+                    let b = text_box(text, x, y, POINT_LABEL_FONT, anchor);
+                    let mut cost: f64 = taken.iter().map(|o| o.overlap_area(&b.inflate(1.0))).sum();
+                    cost +=
+                        dots.iter().filter(|d| b.inflate(4.0).contains(**d)).count() as f64 * 50.0;
+                    if !(b.x0 >= m.plot.x0
+                        && b.x1 <= m.plot.x1
+                        && b.y0 >= m.plot.y0
+                        && b.y1 <= m.plot.y1)
+                    {
+                        cost += 1e6;
+                    }
+                    if best.as_ref().is_none_or(|(c, _)| cost < *c) {
+                        best = Some((
+                            cost,
+                            Placed {
+                                text: text.clone(),
+                                x,
+                                y,
+                                anchor,
+                                bbox: b,
+                            },
+                        ));
+                    }
+                    if cost == 0.0 {
+                        break;
+                    }
+                }
+                if let Some((_, pl)) = best {
+                    taken.push(pl.bbox);
+                    point_labels.push((pl, s.colour));
+                }
+            }
+        }
+        return PanelLayout {
+            title_y,
+            map: m,
+            x_ticks,
+            y_ticks,
+            y_area,
+            outside,
+            area,
+            marker_labels,
+            legend,
+            point_labels,
+            off_scale,
+        };
+    }
+}
+
+fn draw_panel(
+    cv: &mut dyn Canvas,
+    fig: &LineFigure,
+    prep: &Prepared,
+    lay: &PanelLayout,
+    title_font: f64,
+) -> Result<(), PlotError> {
+    let m = &lay.map;
+    let p = m.plot;
+    let txt = |text: &str, x: f64, y: f64, size: f64, anchor: Anchor, class: &'static str| {
+        (text.to_string(), x, y, size, anchor, class)
+    };
+    let mut texts: Vec<(String, f64, f64, f64, Anchor, &'static str)> = Vec::new();
+    if let Some(y) = lay.title_y {
+        texts.push(txt(
+            &fig.title,
+            0.5 * (lay.area.x0 + lay.area.x1),
+            y,
+            title_font,
+            Anchor::Middle,
+            "panel-title",
+        ));
+    }
 
     // Shaded bands.
-    let band_fill = RGBColor(110, 110, 110).mix(0.13);
-    let mut band_labels: Vec<&str> = Vec::new();
     for b in &fig.bands {
-        let (Some(a), Some(c)) = (tx(b.x0, xsc), tx(b.x1, xsc)) else {
+        let (Some(a), Some(c)) = (tx(b.x0, fig.x_scale), tx(b.x1, fig.x_scale)) else {
             continue;
         };
-        let (a, c) = (a.max(xr.0), c.min(xr.1));
+        let (a, c) = (a.max(m.xr.0), c.min(m.xr.1));
         if a >= c {
             continue;
         }
-        let anno = chart
-            .draw_series(std::iter::once(Rectangle::new(
-                [(a, yr.0), (c, yr.1)],
-                band_fill.filled(),
-            )))
-            .map_err(de)?;
-        if !b.label.is_empty() && !band_labels.contains(&b.label.as_str()) {
-            band_labels.push(&b.label);
-            anno.label(b.label.as_str()).legend(move |(x, y)| {
-                Rectangle::new([(x, y - 6), (x + 24, y + 6)], band_fill.filled())
-            });
-        }
+        cv.rect(
+            (m.x(a), p.y0),
+            (m.x(c), p.y1),
+            Some(band_fill(b)),
+            None,
+            "band",
+        )?;
+    }
+
+    // Grid: major lines at labelled ticks, light lines at the others.
+    for t in &lay.x_ticks {
+        let x = m.x(t.pos);
+        let c = if t.label.is_some() {
+            (218, 218, 218)
+        } else {
+            (238, 238, 238)
+        };
+        cv.polyline(&[(x, p.y0), (x, p.y1)], c, 1.0, None, "grid")?;
+    }
+    for t in &lay.y_ticks {
+        let y = m.y(t.pos);
+        let c = if t.label.is_some() {
+            (218, 218, 218)
+        } else {
+            (238, 238, 238)
+        };
+        cv.polyline(&[(p.x0, y), (p.x1, y)], c, 1.0, None, "grid")?;
     }
 
     // Horizontal reference lines.
-    for hl in &fig.hlines {
-        let Some(y) = tx(hl.y, ysc) else { continue };
-        if y < yr.0 || y > yr.1 {
+    for (h, &off) in fig.hlines.iter().zip(&lay.off_scale) {
+        if off {
             continue;
         }
-        let c = match hl.colour {
-            Colour::Auto => RGBColor(70, 70, 70),
-            Colour::Rgb(r, g, b) => RGBColor(r, g, b),
+        let Some(y) = tx(h.y, fig.y_scale) else {
+            continue;
         };
-        let style = c.stroke_width(2);
-        let anno = chart
-            .draw_series(DashedLineSeries::new(
-                vec![(xr.0, y), (xr.1, y)],
-                14,
-                5,
-                style,
-            ))
-            .map_err(de)?;
-        if !hl.label.is_empty() {
-            anno.label(hl.label.as_str()).legend(move |(x, y)| {
-                dash_element(vec![(x, y), (x + 24, y)], Dash::LongDash, style)
-            });
-        }
+        cv.polyline(
+            &[(p.x0, m.y(y)), (p.x1, m.y(y))],
+            hline_colour(h),
+            2.0,
+            Some((14.0, 5.0)),
+            "hline",
+        )?;
     }
 
-    // Switching-time markers; labels are staggered when they would collide.
-    let marker_style = RGBColor(90, 90, 90).stroke_width(1);
-    let mut last_px = f64::NEG_INFINITY;
-    let mut level = 0;
-    let mut marker_boxes: Vec<(f64, f64)> = Vec::new(); // pixel x of label starts, for the legend
-    for (t, label) in &fig.vertical_markers {
-        let Some(x) = tx(*t, xsc) else { continue };
-        if x < xr.0 || x > xr.1 {
+    // Switching-time markers: dashed lines from the bottom of the axes up to their label row.
+    for ((t, _), lab) in fig.vertical_markers.iter().zip(&lay.marker_labels) {
+        let Some(x) = tx(*t, fig.x_scale).filter(|x| (m.xr.0..=m.xr.1).contains(x)) else {
             continue;
-        }
-        chart
-            .draw_series(DashedLineSeries::new(
-                vec![(x, yr.0), (x, yr.1)],
-                5,
-                4,
-                marker_style,
-            ))
-            .map_err(de)?;
-        if label.is_empty() {
-            continue;
-        }
-        let px = (x - xr.0) / xs * pw;
-        let width = 8.0 * label.chars().count() as f64 + 8.0;
-        level = if px - last_px < width {
-            (level + 1) % 3
-        } else {
-            0
         };
-        last_px = px;
-        marker_boxes.push((px, px + width));
-        let text = Text::new(
-            label.clone(),
-            (4, 4 + 16 * level),
-            (FONT, MARKER_FONT).into_font().color(&RGBColor(60, 60, 60)),
-        );
-        chart
-            .draw_series(std::iter::once(EmptyElement::at((x, yr.1)) + text))
-            .map_err(de)?;
+        let top = lab.as_ref().map_or(p.y0, |l| l.bbox.y1);
+        cv.polyline(
+            &[(m.x(x), p.y1), (m.x(x), top)],
+            (90, 90, 90),
+            1.0,
+            Some((5.0, 4.0)),
+            "vmarker",
+        )?;
     }
 
-    // Data: clipped to the axes rectangle (plotters does not clip paths), and split at sharp
-    // turns so that the bitmap backend's thick-line polygons grow no miter spikes.
+    // Data, in series order (later series above earlier ones): lines clipped to the axes,
+    // then that series' markers.
     for s in &prep.series {
-        let style = s.colour.stroke_width(s.width);
-        let mut labelled = false;
         for piece in &s.pieces {
-            for run in clip_polyline(piece, xr, yr) {
-                let px: Vec<(i32, i32)> = run.iter().map(|p| chart.backend_coord(p)).collect();
-                let (strokes, joins) = split_sharp_turns(&run, &px);
-                for stroke in strokes {
-                    let anno = match s.dash {
-                        Dash::Auto | Dash::Solid => chart
-                            .draw_series(LineSeries::new(stroke, style))
-                            .map_err(de)?,
-                        d => {
-                            let (on, off) = dash_pattern(d);
-                            chart
-                                .draw_series(DashedLineSeries::new(stroke, on, off, style))
-                                .map_err(de)?
-                        }
-                    };
-                    if s.in_legend && !labelled {
-                        labelled = true;
-                        label_series(anno, s, style);
+            if s.joined {
+                for run in clip_polyline(piece, m.xr, m.yr) {
+                    let px: Vec<(f64, f64)> = run.iter().map(|q| m.px(*q)).collect();
+                    cv.polyline(
+                        &px,
+                        s.colour,
+                        s.width as f64,
+                        dash_pattern(s.dash),
+                        "series",
+                    )?;
+                }
+            }
+            if s.markers || !s.joined {
+                for q in piece {
+                    let c = m.px(*q);
+                    if p.contains(c) {
+                        cv.circle(c, 4.0, s.colour, "marker")?;
                     }
                 }
-                // Round joins where a solid line was split (dashes simply restart).
-                if matches!(s.dash, Dash::Auto | Dash::Solid) && s.width >= 2 {
-                    let r = (s.width / 2).max(1);
-                    chart
-                        .draw_series(joins.into_iter().map(|p| Circle::new(p, r, style.filled())))
-                        .map_err(de)?;
-                }
             }
-            if s.markers {
-                let inside = |&&(x, y): &&(f64, f64)| {
-                    (xr.0..=xr.1).contains(&x) && (yr.0..=yr.1).contains(&y)
-                };
-                chart
-                    .draw_series(
-                        piece
-                            .iter()
-                            .filter(inside)
-                            .map(|&p| Circle::new(p, 4, style.filled())),
-                    )
-                    .map_err(de)?;
-            }
-        }
-        if s.in_legend && !labelled {
-            // Entirely outside the axes: still listed in the legend.
-            let anno = chart
-                .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-                .map_err(de)?;
-            label_series(anno, s, style);
         }
     }
 
-    // Legend.
-    let entries: Vec<&str> = prep
-        .series
-        .iter()
-        .filter(|s| s.in_legend)
-        .map(|s| s.name.as_str())
-        .chain(
-            fig.hlines
-                .iter()
-                .filter(|h| !h.label.is_empty())
-                .map(|h| h.label.as_str()),
-        )
-        .chain(band_labels.iter().copied())
-        .collect();
-    if entries.is_empty() || fig.legend == LegendPos::Hidden {
-        return Ok(());
-    }
-    let pos = match fig.legend {
-        LegendPos::UpperLeft => SeriesLabelPosition::UpperLeft,
-        LegendPos::UpperRight => SeriesLabelPosition::UpperRight,
-        LegendPos::LowerLeft => SeriesLabelPosition::LowerLeft,
-        LegendPos::LowerRight => SeriesLabelPosition::LowerRight,
-        LegendPos::Auto | LegendPos::Hidden => {
-            let longest = entries
-                .iter()
-                .map(|e| {
-                    inner
-                        .estimate_text_size(e, &TextStyle::from((FONT, LEGEND_FONT).into_font()))
-                        .map_or(200, |d| d.0)
-                })
-                .max()
-                .unwrap_or(0) as f64;
-            let box_w = longest + 60.0;
-            let box_h = 22.0 * entries.len() as f64 + 16.0;
-            // Reference lines count as data: a legend box should not hide a limit line.
-            let hl: Vec<Vec<(f64, f64)>> = fig
-                .hlines
-                .iter()
-                .filter_map(|h| tx(h.y, ysc))
-                .map(|y| vec![(xr.0, y), (xr.1, y)])
-                .collect();
-            auto_legend(prep, &hl, &marker_boxes, xr, yr, (pw, ph), (box_w, box_h))
+    // Frame, ticks and axis descriptions.
+    cv.rect(
+        (p.x0, p.y0),
+        (p.x1, p.y1),
+        None,
+        Some((60, 60, 60)),
+        "frame",
+    )?;
+    cv.meta(&format!(
+        "<g class=\"axes\" data-plot=\"{} {} {} {}\" data-xr=\"{:e} {:e}\" data-yr=\"{:e} {:e}\" \
+         data-xscale=\"{}\" data-yscale=\"{}\"/>",
+        p.x0,
+        p.y0,
+        p.x1,
+        p.y1,
+        m.xr.0,
+        m.xr.1,
+        m.yr.0,
+        m.yr.1,
+        scale_name(fig.x_scale),
+        scale_name(fig.y_scale)
+    ));
+    for t in &lay.x_ticks {
+        let x = m.x(t.pos);
+        let len = if t.label.is_some() { 6.0 } else { 3.0 };
+        cv.polyline(
+            &[(x, p.y1), (x, p.y1 + len)],
+            (60, 60, 60),
+            1.0,
+            None,
+            "tick",
+        )?;
+        if let Some(l) = &t.label {
+            texts.push(txt(
+                l,
+                x,
+                p.y1 + 8.0 + 0.5 * TICK_FONT,
+                TICK_FONT,
+                Anchor::Middle,
+                "tick-x",
+            ));
         }
-    };
-    chart
-        .configure_series_labels()
-        .position(pos)
-        .margin(10)
-        .legend_area_size(32)
-        .label_font((FONT, LEGEND_FONT))
-        .background_style(WHITE.mix(0.88))
-        .border_style(RGBColor(160, 160, 160))
-        .draw()
-        .map_err(de)?;
+    }
+    for t in &lay.y_ticks {
+        let y = m.y(t.pos);
+        let len = if t.label.is_some() { 6.0 } else { 3.0 };
+        cv.polyline(
+            &[(p.x0 - len, y), (p.x0, y)],
+            (60, 60, 60),
+            1.0,
+            None,
+            "tick",
+        )?;
+        if let Some(l) = &t.label {
+            texts.push(txt(l, p.x0 - 9.0, y, TICK_FONT, Anchor::End, "tick-y"));
+        }
+    }
+    texts.push(txt(
+        &fig.x_label,
+        0.5 * (p.x0 + p.x1),
+        p.y1 + X_LABEL_AREA - 0.5 * DESC_FONT - 4.0,
+        DESC_FONT,
+        Anchor::Middle,
+        "xdesc",
+    ));
+    for (s, x, y, size, anchor, class) in &texts {
+        cv.text(&TextSpec {
+            text: s,
+            x: *x,
+            y: *y,
+            size: *size,
+            colour: TEXT_COLOUR,
+            anchor: *anchor,
+            vertical: false,
+            class,
+        })?;
+    }
+    cv.text(&TextSpec {
+        text: &fig.y_label,
+        x: p.x0 - lay.y_area + 0.5 * DESC_FONT + 2.0,
+        y: 0.5 * (p.y0 + p.y1),
+        size: DESC_FONT,
+        colour: TEXT_COLOUR,
+        anchor: Anchor::Middle,
+        vertical: true,
+        class: "ydesc",
+    })?;
+    for l in lay.marker_labels.iter().flatten() {
+        // On white, so that the dashed line of a neighbouring marker does not cross the text.
+        let b = l.bbox.inflate(1.0);
+        cv.rect(
+            (b.x0, b.y0),
+            (b.x1, b.y1),
+            Some(((255, 255, 255), 1.0)),
+            None,
+            "label-bg",
+        )?;
+        cv.text(&TextSpec {
+            text: &l.text,
+            x: l.x,
+            y: l.y,
+            size: MARKER_FONT,
+            colour: (60, 60, 60),
+            anchor: l.anchor,
+            vertical: false,
+            class: "marker-label",
+        })?;
+    }
+    for (l, c) in &lay.point_labels {
+        // Dark version of the series colour: readable on white, still matched to its points.
+        let dark = (c.0 / 2, c.1 / 2, c.2 / 2);
+        cv.text(&TextSpec {
+            text: &l.text,
+            x: l.x,
+            y: l.y,
+            size: POINT_LABEL_FONT,
+            colour: dark,
+            anchor: l.anchor,
+            vertical: false,
+            class: "point-label",
+        })?;
+    }
+
+    // Legend last, above everything it may touch.
+    if let Some((b, entries)) = &lay.legend {
+        cv.rect(
+            (b.x0, b.y0),
+            (b.x1, b.y1),
+            Some(((255, 255, 255), 0.9)),
+            Some((160, 160, 160)),
+            "legend-box",
+        )?;
+        for (i, (label, sample)) in entries.iter().enumerate() {
+            let y = b.y0 + 5.0 + (i as f64 + 0.5) * LEGEND_ROW;
+            let (x0, x1) = (b.x0 + 8.0, b.x0 + 34.0);
+            match *sample {
+                Sample::Line {
+                    colour,
+                    width,
+                    dash,
+                    marker,
+                } => {
+                    cv.polyline(&[(x0, y), (x1, y)], colour, width, dash, "legend-sample")?;
+                    if marker {
+                        cv.circle((0.5 * (x0 + x1), y), 4.0, colour, "legend-sample")?;
+                    }
+                }
+                Sample::Marker(c) => cv.circle((0.5 * (x0 + x1), y), 4.0, c, "legend-sample")?,
+                Sample::Fill(c, o) => cv.rect(
+                    (x0, y - 6.0),
+                    (x1, y + 6.0),
+                    Some((c, o)),
+                    None,
+                    "legend-sample",
+                )?,
+            }
+            cv.text(&TextSpec {
+                text: label,
+                x: b.x0 + 42.0,
+                y,
+                size: LEGEND_FONT,
+                colour: TEXT_COLOUR,
+                anchor: Anchor::Start,
+                vertical: false,
+                class: "legend",
+            })?;
+        }
+    }
     Ok(())
 }
 
-/// Attaches the legend entry (line sample, plus a dot for marker series) of `s` to `anno`.
-fn label_series<'a, DB: DrawingBackend + 'a>(
-    anno: &mut SeriesAnno<'a, DB>,
-    s: &PreparedSeries,
-    style: ShapeStyle,
-) {
-    let (dash, markers) = (s.dash, s.markers);
-    anno.label(s.name.as_str()).legend(move |(x, y)| {
-        let base = EmptyElement::at((x, y)) + dash_element(vec![(0, 0), (24, 0)], dash, style);
-        // A transparent dot when there are no markers keeps one element type.
-        let dot = if markers {
-            style.filled()
-        } else {
-            TRANSPARENT.filled()
-        };
-        base + Circle::new((12, 0), 4, dot)
-    });
+fn scale_name(s: Scale) -> &'static str {
+    match s {
+        Scale::Linear => "linear",
+        Scale::Log10 => "log10",
+    }
 }
 
 /// Grows one of the ranges about its centre so both axes get the same data-per-pixel scale on
@@ -1069,7 +1732,10 @@ type Polyline = Vec<(f64, f64)>;
 /// edges; at a hairpin the intersection lies d / sin(φ/2) from the vertex (d = half the width,
 /// φ the angle between the two edges), i.e. thousands of pixels away for φ → 0. Keeping
 /// φ ≥ 60° bounds that overshoot by 2 d, one line width.
-fn split_sharp_turns(pts: &[(f64, f64)], px: &[(i32, i32)]) -> (Vec<Polyline>, Polyline) {
+pub(crate) fn split_sharp_turns(
+    pts: &[(f64, f64)],
+    px: &[(i32, i32)],
+) -> (Vec<Polyline>, Polyline) {
     let mut keep: Vec<usize> = Vec::with_capacity(pts.len());
     for (i, p) in px.iter().enumerate() {
         if keep.last().is_none_or(|&k| px[k] != *p) {
@@ -1096,89 +1762,9 @@ fn split_sharp_turns(pts: &[(f64, f64)], px: &[(i32, i32)]) -> (Vec<Polyline>, P
     strokes.push(cur);
     (strokes, joins)
 }
-
-/// The corner whose legend-sized box covers the fewest data points (and marker labels).
-fn auto_legend(
-    prep: &Prepared,
-    extra: &[Vec<(f64, f64)>],
-    marker_boxes: &[(f64, f64)],
-    xr: (f64, f64),
-    yr: (f64, f64),
-    (pw, ph): (f64, f64),
-    (bw, bh): (f64, f64),
-) -> SeriesLabelPosition {
-    // Candidates in preference order; pixel boxes measured from the top-left of the plot.
-    let cands = [
-        (SeriesLabelPosition::UpperRight, pw - bw - 10.0, 10.0),
-        (SeriesLabelPosition::UpperLeft, 10.0, 10.0),
-        (
-            SeriesLabelPosition::LowerRight,
-            pw - bw - 10.0,
-            ph - bh - 10.0,
-        ),
-        (SeriesLabelPosition::LowerLeft, 10.0, ph - bh - 10.0),
-    ];
-    let to_px = |(x, y): (f64, f64)| {
-        (
-            (x - xr.0) / (xr.1 - xr.0) * pw,
-            (yr.1 - y) / (yr.1 - yr.0) * ph,
-        )
-    };
-    let mut best = (usize::MAX, SeriesLabelPosition::UpperRight);
-    for (pos, x0, y0) in cands {
-        let inside = |(px, py): (f64, f64)| {
-            px >= x0 - 6.0 && px <= x0 + bw + 6.0 && py >= y0 - 6.0 && py <= y0 + bh + 6.0
-        };
-        let mut count = 0usize;
-        for piece in prep
-            .series
-            .iter()
-            .flat_map(|s| s.pieces.iter())
-            .chain(extra.iter())
-        {
-            {
-                // Sample densely enough that a line crossing the box is seen even between points.
-                for w in piece.windows(2) {
-                    let (a, b) = (to_px(w[0]), to_px(w[1]));
-                    let n = ((b.0 - a.0).hypot(b.1 - a.1) / 4.0)
-                        .ceil()
-                        .clamp(1.0, 200.0) as usize;
-                    count += (0..n)
-                        .filter(|&k| {
-                            let f = k as f64 / n as f64;
-                            inside((a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1)))
-                        })
-                        .count();
-                }
-                if piece.len() == 1 && inside(to_px(piece[0])) {
-                    count += 1;
-                }
-            }
-        }
-        for &(m0, m1) in marker_boxes {
-            if m1 >= x0 && m0 <= x0 + bw && y0 < 60.0 {
-                count += 50;
-            }
-        }
-        if count < best.0 {
-            best = (count, pos);
-        }
-    }
-    best.1
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tick_labels_are_short_and_signless_zero() {
-        assert_eq!(tick_label(0.0, 2.0, Scale::Linear), "0");
-        assert_eq!(tick_label(-1e-17, 2.0, Scale::Linear), "0");
-        assert_eq!(tick_label(0.25, 2.0, Scale::Linear), "0.25");
-        assert_eq!(tick_label(-3.0, 16.0, Scale::Log10), "1e-3");
-        assert_eq!(tick_label(2.0, 16.0, Scale::Linear), "2");
-    }
 
     #[test]
     fn widen_handles_degenerate_ranges() {
@@ -1462,5 +2048,21 @@ mod tests {
             prepare(&f),
             Err(PlotError::NoFinitePoints { skipped: 2, .. })
         ));
+    }
+
+    #[test]
+    fn point_labels_follow_their_kept_points() {
+        let mut f = LineFigure::new("t", "x", "y");
+        f.y_scale = Scale::Log10;
+        f.series.push(
+            Series::new("a", vec![(0.0, 1.0), (1.0, -1.0), (2.0, 10.0)])
+                .with_labels(vec!["p".into(), "dropped".into(), String::new()])
+                .unjoined(),
+        );
+        let p = prepare(&f).unwrap();
+        assert_eq!(p.series[0].labels, vec![((0.0, 0.0), "p".to_string())]);
+        assert!(!p.series[0].joined);
+        f.series[0].labels.pop();
+        assert!(matches!(prepare(&f), Err(PlotError::InvalidInput { .. })));
     }
 }

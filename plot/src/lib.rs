@@ -1,24 +1,28 @@
 //! `bf-plot`: the figure layer of the ball-and-finger reproduction.
 //!
-//! Pure Rust (plotters without system fonts; DejaVu Sans is embedded, see
+//! Pure Rust (the SVG is written directly with fractional coordinates; the PNG goes through
+//! plotters' bitmap backend without system fonts; DejaVu Sans is embedded, see
 //! `assets/LICENSE-DejaVu.txt`) and independent of the physics crates: every input is plain data.
 //!
 //! | module | what | paper |
 //! |---|---|---|
 //! | [`figure`] | [`LineFigure`] / [`PanelFigure`] rendered to SVG + PNG ([`render`], [`render_panels`]) | all 2D figures |
+//! | [`ticks`] | axis ticks whose labels are exactly the value at their position (linear 1-2-5, decadic log) | — |
 //! | [`sat`] | exact and smooth saturation, the scaled tanh, and Fig. 4 ([`sat::fig4_saturation`]) | eq. (3), (58)–(59), Fig. 4 |
 //! | [`paper`] | builders for Fig. 6–9, 13–17 and work–precision plots over [`paper::TimeSeries`] | Sect. 6 |
-//! | [`scene3d`] | orthographic/isometric views of finger paths around the ball | Fig. 5, 10, 11, 12 |
-//! | [`anim`] | self-contained HTML animation (inline SVG + JS, no network) | Fig. 5/12 in motion |
+//! | [`scene3d`] | orthographic/isometric views of finger paths around the ball; several paths compared ([`scene3d::fig_compare_paths`]) | Fig. 5, 10, 11, 12 |
+//! | [`anim`] | self-contained HTML animation (inline SVG + JS, no network): time-based playback up to 10×, depth-ordered finger and ball, axes triad, ω and phase readout | Fig. 5/12 in motion |
 //!
 //! Figures are written atomically (temporary file in the target directory, then rename), so a
 //! crashed run never leaves a half-written PNG behind.
 
 pub mod anim;
+mod canvas;
 pub mod figure;
 pub mod paper;
 pub mod sat;
 pub mod scene3d;
+pub mod ticks;
 
 pub use figure::{
     Band, Colour, Dash, HLine, Layout, LegendPos, LineFigure, PanelFigure, RenderReport, Scale,

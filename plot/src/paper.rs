@@ -5,9 +5,12 @@
 //! | [`fig_ball_omega`] | Fig. 6, 13 | ball angular velocity ω (world axes) with switching times t_f^(i) |
 //! | [`fig_distance`] | Fig. 7, 14 | minimum distance h (eq. 5) and contact-point distance from the fingertip, |sat(α)| (eq. 3) |
 //! | [`fig_torques`] | Fig. 8, 15 | joint torques τ_1..τ_3 with the limit |τ_i| ≤ τ_max |
-//! | [`fig_contact_forces`] | Fig. 9, 16 | normal force λ_n, tangential ‖λ_∥‖ and the friction-cone bound μ_s λ_n |
+//! | [`fig_contact_forces`] | Fig. 9, 16 | normal force λ_n, tangential ‖λ_∥‖ and the friction-cone bound μ_s λ_n, drawn in contact only, zoomed on short contact windows ([`contact_zoom`]) |
 //! | [`fig_open_loop_vs_optimal`] | Fig. 17 | optimal vs open-loop simulated ω, one panel per axis |
+//! | [`fig_ball_omega_ref`] | Fig. 13 | as Fig. 6, with the reference ω_ref as dashed lines |
+//! | [`fig_open_loop_vs_optimal_modes`] | Fig. 17 | as above, shaded by the simulation's slip/stick modes |
 //! | [`fig_work_precision`] | — | log–log error vs computing time, one series per method |
+//! | [`fig_work_precision_sets`] | — | as above with labelled runs; unordered sets as markers only |
 //!
 //! Inputs are plain [`TimeSeries`] (no dependency on the physics crates) and [`Phases`]
 //! (switching times and the contact intervals, drawn as markers and shaded bands).
@@ -96,6 +99,7 @@ impl Phases {
                 x0,
                 x1,
                 label: "contact".into(),
+                colour: Colour::Auto,
             })
             .collect();
     }
@@ -157,6 +161,7 @@ pub fn fig_distance(
         y: 0.0,
         label: String::new(),
         colour: Colour::Auto,
+        fit: true,
     });
     phases.apply(&mut a);
     let mut b = LineFigure::new("contact point to fingertip", "t [s]", "|p_c − p_e| [m]");
@@ -171,7 +176,13 @@ pub fn fig_distance(
     })
 }
 
-/// Fig. 8 / 15: joint torques, one panel per joint, with dashed ±`limit` lines when given.
+/// A torque limit is drawn inside the autoscaled axis when it is at most this multiple of the
+/// panel's peak |τ|; beyond that the axis fits the data alone.
+pub const LIMIT_FIT_RATIO: f64 = 2.0;
+
+/// Fig. 8 / 15: joint torques, one panel per joint, autoscaled to the data, with dashed
+/// ±`limit` lines when given (drawn when within [`LIMIT_FIT_RATIO`] × the peak |τ| of the
+/// panel, otherwise listed in the legend as off scale).
 pub fn fig_torques(
     title: &str,
     tau: &TimeSeries,
@@ -191,15 +202,25 @@ pub fn fig_torques(
                     .styled(fixed(colours[k % 4], Dash::Solid)),
             );
             if let Some(l) = limit {
+                // The axis fits the data; the limit joins the range only when it is close to
+                // the data (otherwise small torques would be squashed against zero, and the
+                // legend says the limit is off scale).
+                let peak = tau.values[k]
+                    .iter()
+                    .filter(|v| v.is_finite())
+                    .fold(0.0f64, |m, v| m.max(v.abs()));
+                let fit = l.abs() <= LIMIT_FIT_RATIO * peak;
                 p.hlines.push(HLine {
                     y: l,
-                    label: "torque limit".into(),
+                    label: format!("torque limit ±{l} N m"),
                     colour: Colour::Rgb(120, 0, 0),
+                    fit,
                 });
                 p.hlines.push(HLine {
                     y: -l,
                     label: String::new(),
                     colour: Colour::Rgb(120, 0, 0),
+                    fit,
                 });
             }
             phases.apply(&mut p);
@@ -240,7 +261,15 @@ pub fn fig_contact_forces(
             detail: format!("{mu_s}"),
         });
     }
-    let pts = |f: &dyn Fn(usize) -> f64| (0..t.len()).map(|i| (t[i], f(i))).collect::<Vec<_>>();
+    // Forces exist only in contact: outside the contact intervals (when given) nothing is
+    // drawn, so the cone bound is not shown along zero in free flight.
+    let in_contact =
+        |x: f64| phases.contact.is_empty() || phases.contact.iter().any(|&(a, b)| x >= a && x <= b);
+    let pts = |f: &dyn Fn(usize) -> f64| {
+        (0..t.len())
+            .map(|i| (t[i], if in_contact(t[i]) { f(i) } else { f64::NAN }))
+            .collect::<Vec<_>>()
+    };
     let mut fig = LineFigure::new(title, "t [s]", "force [N]");
     fig.series
         .push(Series::new("normal λ_n", pts(&|i| lambda_n[i])).styled(fixed(C_BLUE, Dash::Solid)));
@@ -256,6 +285,159 @@ pub fn fig_contact_forces(
         .styled(fixed((0, 0, 0), Dash::Dashed)),
     );
     phases.apply(&mut fig);
+    fig.x_range = contact_zoom(t, phases);
+    if fig.x_range.is_some() {
+        fig.title = format!("{title} (zoom on the contact window)");
+    }
+    Ok(fig)
+}
+
+/// Contact windows covering less than this share of the time axis are zoomed in on.
+pub const ZOOM_BELOW_SHARE: f64 = 0.3;
+
+/// The x range of a zoom on the contact intervals when they cover less than
+/// [`ZOOM_BELOW_SHARE`] of the sampled time span: from the first contact start to the last
+/// contact end, padded by 15 % of that window on each side and kept within the samples.
+pub fn contact_zoom(t: &[f64], phases: &Phases) -> Option<(f64, f64)> {
+    let (t0, t1) = t
+        .iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+            (a.min(v), b.max(v))
+        });
+    let (c0, c1) = phases
+        .contact
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &(x, y)| {
+            (a.min(x), b.max(y))
+        });
+    let (span, window) = (t1 - t0, c1 - c0);
+    if !(span > 0.0 && window > 0.0) {
+        return None;
+    }
+    let covered: f64 = phases.contact.iter().map(|&(a, b)| (b - a).max(0.0)).sum();
+    if covered >= ZOOM_BELOW_SHARE * span {
+        return None;
+    }
+    let pad = 0.15 * window;
+    let r = ((c0 - pad).max(t0), (c1 + pad).min(t1));
+    (r.0 < r.1).then_some(r)
+}
+
+/// Fig. 6 / 13 with reference lines: as [`fig_ball_omega`], plus a dashed horizontal line
+/// per `(name, value)` in `reference`, e.g. `("ω_ref,z", 2.0)` for the quadratic criterion's
+/// reference angular velocity (Sect. 6.1).
+pub fn fig_ball_omega_ref(
+    title: &str,
+    omega: &TimeSeries,
+    phases: &Phases,
+    reference: &[(String, f64)],
+) -> Result<LineFigure, PlotError> {
+    let mut fig = fig_ball_omega(title, omega, phases)?;
+    for (name, v) in reference {
+        if !v.is_finite() {
+            return Err(PlotError::InvalidInput {
+                figure: title.into(),
+                what: "reference value".into(),
+                detail: format!("'{name}' = {v}"),
+            });
+        }
+        fig.hlines.push(HLine {
+            y: *v,
+            label: format!("{name} = {v} rad/s"),
+            colour: Colour::Rgb(60, 60, 60),
+            fit: true,
+        });
+    }
+    Ok(fig)
+}
+
+/// Contact modes of a simulation over time, for shading (Fig. 17): closed intervals [s].
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SimModes {
+    /// Intervals in which the finger slips on the ball.
+    pub slip: Vec<(f64, f64)>,
+    /// Intervals in which the finger sticks to (rolls without slipping on) the ball.
+    pub stick: Vec<(f64, f64)>,
+}
+
+/// Contact mode of one sample, for [`SimModes::from_trace`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ContactMode {
+    /// No contact.
+    Free,
+    /// Sticking contact.
+    Stick,
+    /// Slipping contact.
+    Slip,
+}
+
+impl SimModes {
+    /// Intervals from a sampled mode trace (`modes[i]` holds at `t[i]`): each maximal run of
+    /// equal modes spans from its first sample to the next run's first sample (the last run to
+    /// the last sample), so adjacent intervals meet without gaps.
+    pub fn from_trace(t: &[f64], modes: &[ContactMode]) -> Result<Self, PlotError> {
+        if t.len() != modes.len() {
+            return Err(PlotError::Shape {
+                what: "contact-mode trace".into(),
+                detail: format!("{} times for {} modes", t.len(), modes.len()),
+            });
+        }
+        let mut out = SimModes::default();
+        let mut i = 0;
+        while i < t.len() {
+            let mut j = i + 1;
+            while j < t.len() && modes[j] == modes[i] {
+                j += 1;
+            }
+            let end = t[j.min(t.len() - 1)];
+            match modes[i] {
+                ContactMode::Stick => out.stick.push((t[i], end)),
+                ContactMode::Slip => out.slip.push((t[i], end)),
+                ContactMode::Free => {}
+            }
+            i = j;
+        }
+        Ok(out)
+    }
+}
+
+/// Fig. 17 with the simulation's contact modes: as [`fig_open_loop_vs_optimal`] (whose
+/// markers are the optimum's switching times from `phases`), with the open-loop simulation's
+/// slip intervals shaded orange and its stick intervals shaded green instead of the optimum's
+/// contact band.
+pub fn fig_open_loop_vs_optimal_modes(
+    title: &str,
+    optimal: &TimeSeries,
+    open_loop: &TimeSeries,
+    phases: &Phases,
+    modes: &SimModes,
+) -> Result<PanelFigure, PlotError> {
+    let mut fig = fig_open_loop_vs_optimal(title, optimal, open_loop, phases)?;
+    let band = |(x0, x1): (f64, f64), label: &str, c: (u8, u8, u8)| Band {
+        x0,
+        x1,
+        label: label.into(),
+        colour: Colour::Rgb(c.0, c.1, c.2),
+    };
+    for p in &mut fig.panels {
+        p.bands = modes
+            .slip
+            .iter()
+            .map(|&i| band(i, "simulation: slip", C_ORANGE))
+            .chain(
+                modes
+                    .stick
+                    .iter()
+                    .map(|&i| band(i, "simulation: stick", C_GREEN)),
+            )
+            .collect();
+        p.vertical_markers = phases
+            .switches
+            .iter()
+            .map(|(t, l)| (*t, format!("optimum: {l}")))
+            .collect();
+    }
     Ok(fig)
 }
 
@@ -330,6 +512,76 @@ pub fn fig_work_precision(
                 markers: true,
                 ..SeriesStyle::default()
             }));
+    }
+    Ok(fig)
+}
+
+/// One set of work–precision runs with per-run labels, for [`fig_work_precision_sets`].
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct WorkPrecisionSet {
+    /// Legend text.
+    pub name: String,
+    /// Computing time per run [s].
+    pub time_s: Vec<f64>,
+    /// Error per run (same length); non-positive errors are skipped on the log axis.
+    pub error: Vec<f64>,
+    /// Label per run drawn next to its point (e.g. "rtol 1e-8", "Radau 3×12", "ε = 1e-4");
+    /// empty: no labels.
+    pub labels: Vec<String>,
+    /// `true`: the runs form a sequence (a tolerance ladder) and are joined in order of
+    /// computing time. `false`: unordered or unrelated runs (an ε ladder whose solve times are
+    /// not monotone, meshes that landed on different local optima, different kernels), drawn
+    /// as markers only.
+    pub joined: bool,
+}
+
+/// Work–precision plot with labelled points: log–log error vs computing time, one series per
+/// set; joined sets are sorted by time (labels follow their runs).
+pub fn fig_work_precision_sets(
+    title: &str,
+    error_label: &str,
+    sets: &[WorkPrecisionSet],
+) -> Result<LineFigure, PlotError> {
+    let mut fig = LineFigure::new(title, "computing time [s]", error_label);
+    fig.x_scale = Scale::Log10;
+    fig.y_scale = Scale::Log10;
+    for m in sets {
+        if m.time_s.len() != m.error.len()
+            || (!m.labels.is_empty() && m.labels.len() != m.time_s.len())
+        {
+            return Err(PlotError::Shape {
+                what: format!("work-precision '{}'", m.name),
+                detail: format!(
+                    "{} times, {} errors, {} labels",
+                    m.time_s.len(),
+                    m.error.len(),
+                    m.labels.len()
+                ),
+            });
+        }
+        let mut runs: Vec<((f64, f64), String)> = (0..m.time_s.len())
+            .map(|i| {
+                (
+                    (m.time_s[i], m.error[i]),
+                    m.labels.get(i).cloned().unwrap_or_default(),
+                )
+            })
+            .collect();
+        if m.joined {
+            runs.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
+        }
+        let (pts, labels): (Vec<(f64, f64)>, Vec<String>) = runs.into_iter().unzip();
+        let mut s = Series::new(m.name.clone(), pts).styled(SeriesStyle {
+            markers: true,
+            ..SeriesStyle::default()
+        });
+        if labels.iter().any(|l| !l.is_empty()) {
+            s = s.with_labels(labels);
+        }
+        if !m.joined {
+            s = s.unjoined();
+        }
+        fig.series.push(s);
     }
     Ok(fig)
 }
@@ -412,5 +664,75 @@ mod tests {
             f.series[0].points,
             vec![(1.0, 1e-3), (2.0, 1e-6), (3.0, 1e-9)]
         );
+    }
+
+    #[test]
+    fn contact_zoom_only_for_short_contact() {
+        let t: Vec<f64> = (0..=100).map(|i| 0.03 * i as f64).collect();
+        let ph = |c: Vec<(f64, f64)>| Phases {
+            switches: vec![],
+            contact: c,
+        };
+        // 0.12 s of 3 s: zoomed to the window ± 15 %.
+        let z = contact_zoom(&t, &ph(vec![(1.0, 1.12)])).unwrap();
+        assert!(
+            (z.0 - 0.982).abs() < 1e-12 && (z.1 - 1.138).abs() < 1e-12,
+            "{z:?}"
+        );
+        // Two windows: from the first start to the last end.
+        let z = contact_zoom(&t, &ph(vec![(1.0, 1.1), (1.5, 1.6)])).unwrap();
+        assert!(
+            (z.0 - 0.91).abs() < 1e-12 && (z.1 - 1.69).abs() < 1e-12,
+            "{z:?}"
+        );
+        // 1.2 s of 3 s (40 %): no zoom; none without contact; clamped to the samples.
+        assert_eq!(contact_zoom(&t, &ph(vec![(1.0, 2.2)])), None);
+        assert_eq!(contact_zoom(&t, &ph(vec![])), None);
+        let z = contact_zoom(&t, &ph(vec![(0.0, 0.3)])).unwrap();
+        assert_eq!(z.0, 0.0);
+    }
+
+    #[test]
+    fn work_precision_sets_keep_labels_with_their_runs() {
+        let set = |joined| WorkPrecisionSet {
+            name: "m".into(),
+            time_s: vec![3.0, 1.0, 2.0],
+            error: vec![1e-9, 1e-3, 1e-6],
+            labels: vec!["c".into(), "a".into(), "b".into()],
+            joined,
+        };
+        let f = fig_work_precision_sets("wp", "e", &[set(true)]).unwrap();
+        assert_eq!(f.series[0].labels, ["a", "b", "c"]);
+        assert_eq!(f.series[0].points[0], (1.0, 1e-3));
+        assert!(f.series[0].joined);
+        let f = fig_work_precision_sets("wp", "e", &[set(false)]).unwrap();
+        assert_eq!(f.series[0].labels, ["c", "a", "b"]);
+        assert!(!f.series[0].joined);
+        let mut bad = set(true);
+        bad.labels.pop();
+        assert!(matches!(
+            fig_work_precision_sets("wp", "e", &[bad]),
+            Err(PlotError::Shape { .. })
+        ));
+        assert!(
+            fig_ball_omega_ref(
+                "o",
+                &ts(3, 3),
+                &Phases::default(),
+                &[("r".into(), f64::NAN)]
+            )
+            .is_err()
+        );
+    }
+
+    #[test]
+    fn mode_trace_to_intervals() {
+        use ContactMode::*;
+        let t = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5];
+        let m = SimModes::from_trace(&t, &[Free, Slip, Stick, Stick, Free, Stick]).unwrap();
+        assert_eq!(m.slip, vec![(0.1, 0.2)]);
+        assert_eq!(m.stick, vec![(0.2, 0.4), (0.5, 0.5)]);
+        assert!(SimModes::from_trace(&t, &[Free]).is_err());
+        assert_eq!(SimModes::from_trace(&[], &[]).unwrap(), SimModes::default());
     }
 }

@@ -4,7 +4,9 @@
 //! the DH frames to the fingertip p_e. Each [`View`] is an orthographic projection, so the sphere's
 //! outline is exactly a circle of radius r around the projected centre; a wireframe of three great
 //! circles (equator and two meridians) gives depth cues. Paths: fingertip p_e(t) and contact point
-//! p_c(t) (eq. 3; NaN samples = not in contact leave gaps).
+//! p_c(t) (eq. 3; NaN samples = not in contact leave gaps). [`fig_finger_paths`] draws one
+//! finger (Fig. 5, 10, 12); [`fig_compare_paths`] overlays several paths (Fig. 11: the closest
+//! points of the human and the robotic finger).
 
 use crate::PlotError;
 use crate::figure::{
@@ -187,14 +189,115 @@ pub fn fig_finger_paths(
             .iter()
             .any(|q| q.iter().all(|x| x.is_finite()))
         {
+            // Last and thick, with a dot per sample: a contact path of a few millimetres must
+            // stay visible above the fingertip path and the snapshots' joint markers.
             p.series.push(
                 Series::new("contact point path", proj(&data.contact_path)).styled(style(
                     (214, 39, 40),
                     Dash::Solid,
-                    3,
-                    false,
+                    4,
+                    true,
                     true,
                 )),
+            );
+        }
+        panels.push(p);
+    }
+    Ok(PanelFigure {
+        title: title.into(),
+        panels,
+        layout: Layout::Columns,
+        size: None,
+    })
+}
+
+/// A named 3D path for [`fig_compare_paths`].
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct NamedPath {
+    /// Legend text, e.g. "human finger: closest point".
+    pub name: String,
+    /// Points [m]; NaN samples leave gaps.
+    pub points: Vec<[f64; 3]>,
+}
+
+fn sphere_series(c: [f64; 3], r: f64, v: View) -> Vec<Series> {
+    let circle = |a: [f64; 3], b: [f64; 3]| -> Vec<(f64, f64)> {
+        (0..=120)
+            .map(|i| {
+                let th = i as f64 * std::f64::consts::TAU / 120.0;
+                let (s, co) = th.sin_cos();
+                v.project([0, 1, 2].map(|k| c[k] + r * (co * a[k] + s * b[k])))
+            })
+            .collect()
+    };
+    let (cu, cv) = v.project(c);
+    let outline = (0..=120)
+        .map(|i| {
+            let th = i as f64 * std::f64::consts::TAU / 120.0;
+            (cu + r * th.cos(), cv + r * th.sin())
+        })
+        .collect();
+    let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+    let mut out =
+        vec![Series::new("ball", outline).styled(style((60, 60, 60), Dash::Solid, 2, false, true))];
+    for (a, b) in [(ex, ey), (ex, ez), (ey, ez)] {
+        out.push(Series::new("", circle(a, b)).styled(style(
+            (190, 190, 190),
+            Dash::Solid,
+            1,
+            false,
+            false,
+        )));
+    }
+    out
+}
+
+/// Fig. 11: several paths around the same ball compared (the closest points of the human and
+/// the robotic finger), one equal-aspect panel per view, one colour per path.
+pub fn fig_compare_paths(
+    title: &str,
+    ball_center: [f64; 3],
+    ball_radius: f64,
+    paths: &[NamedPath],
+    views: &[View],
+) -> Result<PanelFigure, PlotError> {
+    if views.is_empty() || paths.is_empty() {
+        return Err(PlotError::NoSeries(title.into()));
+    }
+    if !(ball_radius.is_finite() && ball_radius > 0.0) || ball_center.iter().any(|v| !v.is_finite())
+    {
+        return Err(PlotError::InvalidInput {
+            figure: title.into(),
+            what: "ball".into(),
+            detail: format!("centre {ball_center:?}, radius {ball_radius}"),
+        });
+    }
+    const COLOURS: [(u8, u8, u8); 4] = [
+        (31, 119, 180),
+        (214, 39, 40),
+        (44, 160, 44),
+        (148, 103, 189),
+    ];
+    const DASHES: [Dash; 4] = [Dash::Solid, Dash::Dashed, Dash::Solid, Dash::Dashed];
+    let mut panels = Vec::with_capacity(views.len());
+    for &v in views {
+        let (name, xl, yl) = v.labels();
+        let mut p = LineFigure::new(name, xl, yl);
+        p.equal_aspect = true;
+        p.series = sphere_series(ball_center, ball_radius, v);
+        for (k, path) in paths.iter().enumerate() {
+            if path.points.is_empty() {
+                return Err(PlotError::EmptySeries {
+                    figure: title.into(),
+                    series: path.name.clone(),
+                });
+            }
+            p.series.push(
+                Series::new(
+                    path.name.clone(),
+                    path.points.iter().map(|&q| v.project(q)).collect(),
+                )
+                .styled(style(COLOURS[k % 4], DASHES[k % 4], 3, false, true)),
             );
         }
         panels.push(p);

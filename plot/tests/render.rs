@@ -115,6 +115,7 @@ fn eight_series_get_distinct_colours_legend_and_paths() {
         y: 3.0,
         label: "limit".into(),
         colour: Colour::Auto,
+        fit: true,
     });
     let names: Vec<String> = f.series.iter().map(|s| s.name.clone()).collect();
     let mut legend: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
@@ -449,7 +450,8 @@ fn animation_html_is_self_contained_with_all_frames() {
     let html = std::fs::read_to_string(path).unwrap();
     assert_eq!(html.matches("{t:").count(), n);
     assert!(html.contains(&format!("data-frames=\"{n}\"")));
-    assert!(html.contains(&format!("max=\"{}\"", n - 1)));
+    // The scrubber runs in time (seconds), from the first to the last frame's time.
+    assert!(html.contains("min=\"0\" max=\"1.8\""));
     assert_eq!(html.matches("c:null").count(), n - 9);
     assert!(html.contains("Ball &amp; finger &lt;QC&gt;"));
     for bad in ["http:", "https:", "src=", "href=", "@import", "url("] {

@@ -1,0 +1,345 @@
+//! Drawing primitives shared by the SVG and PNG outputs, in fractional pixel coordinates.
+//!
+//! [`SvgCanvas`] writes the SVG itself, so coordinates keep two decimals (plotters' SVG backend
+//! rounds every coordinate to a whole pixel, which turns smooth curves into stair steps).
+//! [`PngCanvas`] draws through plotters' bitmap backend (whole pixels are the resolution of a
+//! bitmap anyway) and splits thick polylines at sharp turns (see `figure::split_sharp_turns`).
+//! Text is measured with the embedded font ([`text_size`]) so that layout decisions are the same
+//! for both outputs; the SVG asks for DejaVu Sans (the embedded font, one of the widest sans
+//! fonts) first, so a viewer's substitute is rarely wider than the layout assumed.
+
+use crate::{FONT, PlotError};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use std::fmt::Write as _;
+
+/// An RGB colour.
+pub(crate) type Rgb = (u8, u8, u8);
+
+/// Horizontal anchor of a text.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Anchor {
+    Start,
+    Middle,
+    End,
+}
+
+/// A text to draw: `(x, y)` is the anchor point, vertically the middle of the text.
+pub(crate) struct TextSpec<'a> {
+    pub text: &'a str,
+    pub x: f64,
+    pub y: f64,
+    pub size: f64,
+    pub colour: Rgb,
+    pub anchor: Anchor,
+    /// Rotated by −90° (reading upwards), for the y-axis description.
+    pub vertical: bool,
+    /// Role of the text in the SVG (`class` attribute), e.g. `tick-x`, `legend`.
+    pub class: &'a str,
+}
+
+/// Width and height in pixels of `text` at font size `size` in the embedded font.
+pub(crate) fn text_size(text: &str, size: f64) -> (f64, f64) {
+    let font = (FONT, size).into_font();
+    match font.box_size(text) {
+        Ok((w, _)) => (w as f64, size),
+        Err(_) => (0.6 * size * text.chars().count() as f64, size),
+    }
+}
+
+/// The drawing operations the figure layout needs.
+pub(crate) trait Canvas {
+    /// An open polyline; `dash` = (on, off) in pixels.
+    fn polyline(
+        &mut self,
+        pts: &[(f64, f64)],
+        colour: Rgb,
+        width: f64,
+        dash: Option<(f64, f64)>,
+        class: &str,
+    ) -> Result<(), PlotError>;
+    /// An axis-parallel rectangle, filled (with opacity) and/or stroked.
+    fn rect(
+        &mut self,
+        p0: (f64, f64),
+        p1: (f64, f64),
+        fill: Option<(Rgb, f64)>,
+        stroke: Option<Rgb>,
+        class: &str,
+    ) -> Result<(), PlotError>;
+    /// A filled circle.
+    fn circle(&mut self, c: (f64, f64), r: f64, fill: Rgb, class: &str) -> Result<(), PlotError>;
+    /// A text.
+    fn text(&mut self, t: &TextSpec) -> Result<(), PlotError>;
+    /// Machine-readable metadata (the SVG keeps it as an empty element; bitmaps ignore it).
+    fn meta(&mut self, _element: &str) {}
+}
+
+fn hex(c: Rgb) -> String {
+    format!("#{:02X}{:02X}{:02X}", c.0, c.1, c.2)
+}
+
+fn f2(v: f64) -> String {
+    let s = format!("{v:.2}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.into() }
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// SVG text output with fractional coordinates.
+pub(crate) struct SvgCanvas {
+    out: String,
+}
+
+impl SvgCanvas {
+    /// An empty white page of `size` pixels.
+    pub fn new(size: (u32, u32)) -> Self {
+        let (w, h) = size;
+        let mut out = String::new();
+        let _ = write!(
+            out,
+            "<svg width=\"{w}\" height=\"{h}\" viewBox=\"0 0 {w} {h}\" \
+             xmlns=\"http://www.w3.org/2000/svg\">\n\
+             <rect x=\"0\" y=\"0\" width=\"{w}\" height=\"{h}\" fill=\"#FFFFFF\"/>\n"
+        );
+        Self { out }
+    }
+
+    /// The finished document.
+    pub fn finish(mut self) -> String {
+        self.out.push_str("</svg>\n");
+        self.out
+    }
+}
+
+impl Canvas for SvgCanvas {
+    fn meta(&mut self, element: &str) {
+        self.out.push_str(element);
+        self.out.push('\n');
+    }
+
+    fn polyline(
+        &mut self,
+        pts: &[(f64, f64)],
+        colour: Rgb,
+        width: f64,
+        dash: Option<(f64, f64)>,
+        class: &str,
+    ) -> Result<(), PlotError> {
+        if pts.len() < 2 {
+            return Ok(());
+        }
+        let mut p = String::with_capacity(pts.len() * 14);
+        for (i, &(x, y)) in pts.iter().enumerate() {
+            if i > 0 {
+                p.push(' ');
+            }
+            let _ = write!(p, "{},{}", f2(x), f2(y));
+        }
+        let dash = dash
+            .map(|(a, b)| format!(" stroke-dasharray=\"{} {}\"", f2(a), f2(b)))
+            .unwrap_or_default();
+        let _ = writeln!(
+            self.out,
+            "<polyline class=\"{class}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" \
+             stroke-linejoin=\"round\" stroke-linecap=\"round\"{dash} points=\"{p}\"/>",
+            hex(colour),
+            f2(width)
+        );
+        Ok(())
+    }
+
+    fn rect(
+        &mut self,
+        p0: (f64, f64),
+        p1: (f64, f64),
+        fill: Option<(Rgb, f64)>,
+        stroke: Option<Rgb>,
+        class: &str,
+    ) -> Result<(), PlotError> {
+        let (x, y) = (p0.0.min(p1.0), p0.1.min(p1.1));
+        let (w, h) = ((p1.0 - p0.0).abs(), (p1.1 - p0.1).abs());
+        let fill = match fill {
+            Some((c, o)) => format!("fill=\"{}\" fill-opacity=\"{}\"", hex(c), f2(o)),
+            None => "fill=\"none\"".into(),
+        };
+        let stroke = stroke
+            .map(|c| format!(" stroke=\"{}\" stroke-width=\"1\"", hex(c)))
+            .unwrap_or_default();
+        let _ = writeln!(
+            self.out,
+            "<rect class=\"{class}\" x=\"{}\" y=\"{}\" width=\"{}\" height=\"{}\" {fill}{stroke}/>",
+            f2(x),
+            f2(y),
+            f2(w),
+            f2(h)
+        );
+        Ok(())
+    }
+
+    fn circle(&mut self, c: (f64, f64), r: f64, fill: Rgb, class: &str) -> Result<(), PlotError> {
+        let _ = writeln!(
+            self.out,
+            "<circle class=\"{class}\" cx=\"{}\" cy=\"{}\" r=\"{}\" fill=\"{}\"/>",
+            f2(c.0),
+            f2(c.1),
+            f2(r),
+            hex(fill)
+        );
+        Ok(())
+    }
+
+    fn text(&mut self, t: &TextSpec) -> Result<(), PlotError> {
+        let anchor = match t.anchor {
+            Anchor::Start => "start",
+            Anchor::Middle => "middle",
+            Anchor::End => "end",
+        };
+        // Baseline 0.35 em below the middle: the centre of DejaVu's x-height/cap-height band.
+        let (x, y) = (t.x, t.y);
+        let (bx, by, rot) = if t.vertical {
+            (
+                x + 0.35 * t.size,
+                y,
+                format!(
+                    " transform=\"rotate(-90 {} {})\"",
+                    f2(x + 0.35 * t.size),
+                    f2(y)
+                ),
+            )
+        } else {
+            (x, y + 0.35 * t.size, String::new())
+        };
+        let _ = writeln!(
+            self.out,
+            "<text class=\"{}\" x=\"{}\" y=\"{}\" font-family=\"DejaVu Sans, {FONT}\" font-size=\"{}\" \
+             fill=\"{}\" text-anchor=\"{anchor}\"{rot}>{}</text>",
+            t.class,
+            f2(bx),
+            f2(by),
+            f2(t.size),
+            hex(t.colour),
+            xml_escape(t.text)
+        );
+        Ok(())
+    }
+}
+
+fn de<E: std::fmt::Display>(e: E) -> PlotError {
+    PlotError::Draw(e.to_string())
+}
+
+/// Bitmap output through plotters.
+pub(crate) struct PngCanvas<'a, DB: DrawingBackend> {
+    area: &'a DrawingArea<DB, Shift>,
+}
+
+impl<'a, DB: DrawingBackend> PngCanvas<'a, DB> {
+    /// Draws on `area` (already filled white by the caller).
+    pub fn new(area: &'a DrawingArea<DB, Shift>) -> Self {
+        Self { area }
+    }
+}
+
+fn ipt((x, y): (f64, f64)) -> (i32, i32) {
+    (x.round() as i32, y.round() as i32)
+}
+
+impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
+    fn polyline(
+        &mut self,
+        pts: &[(f64, f64)],
+        colour: Rgb,
+        width: f64,
+        dash: Option<(f64, f64)>,
+        _class: &str,
+    ) -> Result<(), PlotError> {
+        let c = RGBColor(colour.0, colour.1, colour.2);
+        let w = width.round().max(1.0) as u32;
+        let style = c.stroke_width(w);
+        let px: Vec<(i32, i32)> = pts.iter().map(|&p| ipt(p)).collect();
+        let (strokes, joins) = crate::figure::split_sharp_turns(pts, &px);
+        for s in strokes {
+            let sp: Vec<(i32, i32)> = s.iter().map(|&p| ipt(p)).collect();
+            match dash {
+                None => self.area.draw(&PathElement::new(sp, style)).map_err(de)?,
+                Some((on, off)) => self
+                    .area
+                    .draw(&plotters::element::DashedPathElement::new(
+                        sp,
+                        on.round().max(1.0) as i32,
+                        off.round().max(1.0) as i32,
+                        style,
+                    ))
+                    .map_err(de)?,
+            }
+        }
+        // Round joins where a solid line was split (dashes simply restart).
+        if dash.is_none() && w >= 2 {
+            let r = (w / 2).max(1);
+            for j in joins {
+                self.area
+                    .draw(&Circle::new(ipt(j), r, style.filled()))
+                    .map_err(de)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn rect(
+        &mut self,
+        p0: (f64, f64),
+        p1: (f64, f64),
+        fill: Option<(Rgb, f64)>,
+        stroke: Option<Rgb>,
+        _class: &str,
+    ) -> Result<(), PlotError> {
+        if let Some((c, o)) = fill {
+            let s = RGBColor(c.0, c.1, c.2).mix(o).filled();
+            self.area
+                .draw(&Rectangle::new([ipt(p0), ipt(p1)], s))
+                .map_err(de)?;
+        }
+        if let Some(c) = stroke {
+            let s = RGBColor(c.0, c.1, c.2).stroke_width(1);
+            self.area
+                .draw(&Rectangle::new([ipt(p0), ipt(p1)], s))
+                .map_err(de)?;
+        }
+        Ok(())
+    }
+
+    fn circle(&mut self, c: (f64, f64), r: f64, fill: Rgb, _class: &str) -> Result<(), PlotError> {
+        let s = RGBColor(fill.0, fill.1, fill.2).filled();
+        self.area
+            .draw(&Circle::new(ipt(c), r.round().max(1.0) as u32, s))
+            .map_err(de)?;
+        Ok(())
+    }
+
+    fn text(&mut self, t: &TextSpec) -> Result<(), PlotError> {
+        let h = match t.anchor {
+            Anchor::Start => HPos::Left,
+            Anchor::Middle => HPos::Center,
+            Anchor::End => HPos::Right,
+        };
+        let colour = RGBColor(t.colour.0, t.colour.1, t.colour.2);
+        let mut style = TextStyle::from((FONT, t.size).into_font())
+            .color(&colour)
+            .pos(Pos::new(h, VPos::Center));
+        if t.vertical {
+            style = style.transform(FontTransform::Rotate270);
+        }
+        self.area
+            .draw(&Text::new(t.text.to_string(), ipt((t.x, t.y)), style))
+            .map_err(de)?;
+        Ok(())
+    }
+}
