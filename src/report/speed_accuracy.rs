@@ -19,14 +19,15 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
+use crate::study as problems;
 use anyhow::{Context, Result, anyhow};
 use bf_codegen::dd::Dd;
 use bf_codegen::{Model as GraphModel, Scene, interp, kernels};
 use bf_generated::{paper, paper_f32, paper_fma, paper_runtime};
 use bf_model::{ImpactLaw, Mode as SimMode, State, Vec3, fixtures};
 use bf_optim::ocp::problem::Scheme;
-use bf_optim::problems::{self, ProblemSettings};
 use bf_plot::paper::{WorkPrecision, fig_work_precision};
+use bf_problem::{Mode, Problem, ProblemSettings};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::work_precision::{WorkPrecisionRow, ladder, work_precision};
 use bf_sim::{Method, PdController, SimSettings};
@@ -567,7 +568,7 @@ fn solve_qc(
         ..ProblemSettings::default()
     };
     let start = Instant::now();
-    let p = problems::build("periodic-qc", &settings)
+    let p = problems::build(Problem::PeriodicQc, &settings)
         .map_err(|e| anyhow!("building periodic-qc: {e}"))?;
     let sol = problems::solve(&p, None).map_err(|e| anyhow!("solving periodic-qc: {e}"))?;
     let seconds = start.elapsed().as_secs_f64();
@@ -583,7 +584,7 @@ fn contact_point_error(sol: &problems::OcpSolution, eps: f64) -> f64 {
     let mut worst: f64 = 0.0;
     for (i, q) in sol.nodes.q.iter().enumerate() {
         let phase = sol.nodes.phase.get(i).copied().unwrap_or(0);
-        if sol.modes.get(phase) == Some(&problems::bf::Mode::Free) || q.len() != paper::NQ {
+        if sol.modes.get(phase) == Some(&Mode::Free) || q.len() != paper::NQ {
             continue;
         }
         let q = [q[0], q[1], q[2]];
