@@ -1,11 +1,12 @@
 //! Runs bf-codegen for every `scenes/*.toml` (sorted) and writes `$OUT_DIR/<name>.rs` (only
-//! when the text changed) plus `$OUT_DIR/modules.rs`, which declares one module per scene.
+//! when the text changed) plus `$OUT_DIR/modules.rs`, which declares one module per scene and
+//! the registry `SCENES` of every scene's name and TOML text.
 //!
 //! It also writes `$OUT_DIR/ocp_kernels.rs`: the optimal-control node kernels of the scenes
-//! with a ball and a contact (`bf_codegen::ocp::emit_node_kernels`, included as `ocp`).
+//! with a ball and a contact (`bf_problem::kernels::emit_node_kernels`, included as `ocp`).
 //!
 //! For the `paper` scene it also emits variant modules of the dynamics kernels
-//! ([`VARIANT_KERNELS`]) for the speed–accuracy report (issue 7): `paper_f32` (single
+//! ([`VARIANT_KERNELS`]) for the speed–accuracy report: `paper_f32` (single
 //! precision), `paper_fma` (fused multiply-add) and `paper_runtime` (every constant a runtime
 //! parameter instead of baked in).
 
@@ -72,12 +73,15 @@ fn main() -> Result<()> {
     let out = PathBuf::from(std::env::var("OUT_DIR")?);
     println!("cargo::rerun-if-changed=build.rs");
     println!("cargo::rerun-if-changed={}", scenes_dir.display());
-    // The codegen crate is a build-dependency, so its changes rebuild this script anyway;
-    // listing its sources keeps `cargo` honest when it is built from a path override.
-    println!(
-        "cargo::rerun-if-changed={}",
-        manifest.join("..").join("codegen").join("src").display()
-    );
+    // The codegen and problem crates are build-dependencies, so their changes rebuild this
+    // script anyway; listing their sources keeps `cargo` honest when they are built from a path
+    // override.
+    for dep in ["codegen", "problem"] {
+        println!(
+            "cargo::rerun-if-changed={}",
+            manifest.join("..").join(dep).join("src").display()
+        );
+    }
     let mut files: Vec<PathBuf> = fs::read_dir(&scenes_dir)
         .with_context(|| format!("reading scene directory {}", scenes_dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -135,10 +139,18 @@ fn main() -> Result<()> {
         names.push(name);
         scenes.push(scene);
     }
-    // Optimal-control node kernels (issue 6) of the scenes with a ball and a contact.
+    // Optimal-control node kernels of the scenes with a ball and a contact.
     let refs: Vec<&bf_codegen::Scene> = scenes.iter().collect();
-    let ocp = bf_codegen::ocp::emit_node_kernels(&refs)
+    let ocp = bf_problem::kernels::emit_node_kernels(&refs)
         .map_err(|e| anyhow!("cannot generate the optimal-control node kernels: {e}"))?;
     write_if_changed(&out.join("ocp_kernels.rs"), &ocp)?;
+    modules.push_str(
+        "/// Every scene of `scenes/*.toml`, sorted by file name: (name, TOML text).\n\
+         pub static SCENES: &[(&str, &str)] = &[\n",
+    );
+    for name in &names {
+        modules.push_str(&format!("    (\"{name}\", {name}::SCENE_TOML),\n"));
+    }
+    modules.push_str("];\n");
     write_if_changed(&out.join("modules.rs"), &modules)
 }

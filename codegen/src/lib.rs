@@ -4,8 +4,8 @@
 //! dynamics eq. 22a/72–79, contact eq. 2–13/58–59 as [`graph`] expressions, derivatives by
 //! [`diff`]) → [`kernels`] (the catalogue of docs/kernels.md) → [`emit`] (SSA Rust code) with a
 //! [`report`]; [`interp`] evaluates the same graphs in f64 or double-double ([`dd`]);
-//! [`ocp`] builds the optimal-control node functions (eq. 26/29/14/18/60–65), their exact
-//! derivatives, and emits them as kernels.
+//! [`nodefn`] differentiates, fingerprints and emits collocation node functions as kernels
+//! (the ball-and-finger node functions themselves are built in bf-problem).
 //!
 //! Entry points: [`generate`] (code + report) and [`eval_all`] (numbers for one state).
 
@@ -15,7 +15,7 @@ pub mod emit;
 pub mod graph;
 pub mod interp;
 pub mod kernels;
-pub mod ocp;
+pub mod nodefn;
 pub mod report;
 pub mod robot;
 pub mod spec;

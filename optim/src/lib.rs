@@ -2,13 +2,14 @@
 //!
 //! * [`ipm`]: a sparse primal-dual interior-point NLP solver in the style of Wächter & Biegler
 //!   (2006) — Ipopt's algorithm — on faer's sparse LDLᵀ. It solves the collocation NLPs of the
-//!   paper's trajectory optimisation (Sect. 4); the collocation layer (`ocp`) and the concrete
-//!   problems (`problems`) are built on top of it.
+//!   paper's trajectory optimisation (Sect. 4);
+//! * [`ocp`]: multiphase optimal control by pseudospectral collocation on top of it. Generic:
+//!   the ball-and-finger problems live in bf-problem, and emitted node kernels come in through
+//!   a lookup argument ([`ocp::KernelUse`]).
 //! * [`OptimError`]: the crate's error enum.
 
 pub mod error;
 pub mod ipm;
 pub mod ocp;
-pub mod problems;
 
 pub use error::OptimError;

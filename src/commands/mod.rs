@@ -3,12 +3,10 @@
 
 pub mod eval;
 pub mod generate;
-pub mod openloop;
 pub mod optimize;
 pub mod paper;
 pub mod report;
 pub mod requires;
-pub mod scenarios;
 pub mod simulate;
 pub mod verify;
 

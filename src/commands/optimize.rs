@@ -5,13 +5,15 @@
 //! reads).
 
 use crate::cli::OptimizeArgs;
-use anyhow::{Context, Result, bail};
+use crate::study::SolutionIo;
+use crate::study::refine::{self, RefineOptions, RefineRound};
+use crate::study::solution_io::write_solution;
+use crate::study::strategy::{self, StageRecord, Strategy};
+use crate::study::verify::verify;
+use anyhow::{Context, Result, anyhow, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
-use bf_optim::problems::refine::{self, RefineOptions, RefineRound};
-use bf_optim::problems::strategy::{self, StageRecord, Strategy};
-use bf_optim::problems::verify::verify;
-use bf_optim::problems::{self, BuiltProblem, OcpSolution, ProblemSettings};
+use bf_problem::{BuiltProblem, COT_MAX_PERIOD, OcpSolution, Problem, ProblemSettings};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Parse `--scheme`: `lg` or `radau` (hp elements from `elements`).
@@ -24,15 +26,14 @@ pub fn parse_scheme(text: &str, elements: usize) -> Result<Scheme> {
     }
 }
 
+/// Parse `--problem`.
+pub fn parse_problem(text: &str) -> Result<Problem> {
+    text.parse().map_err(|e| anyhow!("--problem: {e}"))
+}
+
 /// Build the problem settings from the command line.
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
-    if !problems::PROBLEMS.contains(&args.problem.as_str()) {
-        bail!(
-            "--problem: unknown problem {:?}; known problems: {}",
-            args.problem,
-            problems::PROBLEMS.join(", ")
-        );
-    }
+    parse_problem(&args.problem)?;
     if args.points < 2 {
         bail!("--points must be at least 2 (got {})", args.points);
     }
@@ -94,11 +95,11 @@ pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
 
 /// Solve with `strategy` behind a progress spinner that shows each finished stage.
 pub fn solve_with_progress(
-    name: &str,
+    problem: Problem,
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    let pb = iteration_spinner(name);
+    let pb = iteration_spinner(problem.name());
     pb.set_message(format!("{strategy} ..."));
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -109,17 +110,16 @@ pub fn solve_with_progress(
             r.chain, r.stage, r.status, r.objective, r.period
         ));
     };
-    let res = strategy::solve_with_strategy(name, &settings, strategy, Some(&show))
-        .with_context(|| format!("solving {name}"));
+    let res = strategy::solve_with_strategy(problem, &settings, strategy, Some(&show))
+        .with_context(|| format!("solving {problem}"));
     pb.finish_and_clear();
     res
 }
 
 /// Refine the mesh of `sol` (warm-started from it) until the error estimate is ≤ `tol`; prints
-/// each round. Returns the final mesh's problem and solution, which keeps `sol`'s strategy
-/// record and gains the refinement record.
+/// each round. Returns the final mesh's problem and solution ([`refine::refine_solution`]).
 pub fn refine_with_progress(
-    name: &str,
+    problem: Problem,
     settings: &ProblemSettings,
     sol: OcpSolution,
     tol: f64,
@@ -129,12 +129,6 @@ pub fn refine_with_progress(
         tol,
         max_rounds: rounds,
         ..RefineOptions::default()
-    };
-    let strategy = sol.strategy.clone();
-    let (iters0, secs0) = (sol.iterations, sol.solve_seconds);
-    let start = ProblemSettings {
-        warm_start: Some(sol),
-        ..settings.clone()
     };
     println!("mesh refinement to {tol:e}:");
     println!("  round  points/phase        objective      max error  status        iter  time(s)");
@@ -150,24 +144,12 @@ pub fn refine_with_progress(
             r.seconds
         );
     };
-    let res = refine::refine(name, &start, &opts, None, Some(&mut show))
-        .with_context(|| format!("refining the mesh of {name}"))?;
-    println!("  {}", res.stop_reason);
-    let problem = problems::build(
-        name,
-        &ProblemSettings {
-            mesh: Some(res.mesh.clone()),
-            ..settings.clone()
-        },
-    )
-    .with_context(|| format!("building {name} on the refined mesh"))?;
-    let report = res.report;
-    let mut out = res.solution;
-    out.iterations = iters0 + report.history.iter().map(|r| r.iterations).sum::<usize>();
-    out.solve_seconds = secs0 + res.total_seconds;
-    out.strategy = strategy;
-    out.refinement = Some(report);
-    Ok((problem, out))
+    let (built, out) = refine::refine_solution(problem, settings, sol, &opts, Some(&mut show))
+        .with_context(|| format!("refining the mesh of {problem}"))?;
+    if let Some(r) = &out.refinement {
+        println!("  {}", r.stop_reason);
+    }
+    Ok((built, out))
 }
 
 /// Re-integrate every phase with the optimal torques and store the defects in `sol` (printed);
@@ -189,24 +171,13 @@ pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: 
     }
 }
 
-/// Write `solution.json` and `torques.csv` into `dir` (atomically, by the library writers).
-pub fn write_solution(sol: &OcpSolution, dir: &std::path::Path) -> Result<()> {
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    sol.write_json(&dir.join("solution.json"))?;
-    sol.write_torques_csv(&dir.join("torques.csv"))?;
-    Ok(())
-}
-
 /// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
+    let name = parse_problem(&args.problem)?;
     let settings = settings_from_args(args)?;
     if let Some(scene) = &args.scene {
         let (s, _) = super::load_scene(scene)?;
-        let expected = if args.problem.ends_with("-human") {
-            "human"
-        } else {
-            "paper"
-        };
+        let expected = name.scene();
         if s.name != expected {
             bail!(
                 "--scene {}: problem {} is defined on the built-in scene `{expected}` \
@@ -236,13 +207,12 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             args.verify_rtol
         );
     }
-    let (mut problem, mut sol) = solve_with_progress(&args.problem, settings.clone(), strategy)?;
+    let (mut problem, mut sol) = solve_with_progress(name, settings.clone(), strategy)?;
     if let Some(rep) = &sol.strategy {
         print!("{}", rep.table());
     }
     if let Some(tol) = args.refine {
-        (problem, sol) =
-            refine_with_progress(&args.problem, &settings, sol, tol, args.refine_rounds)?;
+        (problem, sol) = refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
     }
     if args.verify_rtol > 0.0 {
         attach_verification(&problem, &mut sol, args.verify_rtol);
@@ -263,11 +233,11 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
     if sol.problem.starts_with("periodic-cot") {
         println!(
             "note: the COT period is bounded by {} s (COT lets the finger rest at no cost)",
-            problems::COT_MAX_PERIOD
+            COT_MAX_PERIOD
         );
     }
     println!("wrote {}/solution.json and torques.csv", args.out.display());
-    // A failed solve was already retried with 3e-8 (`problems::solve`); an Acceptable one was
+    // A failed solve was already retried with 3e-8 (`study::solve`); an Acceptable one was
     // not.
     if sol.status == Status::Acceptable
         && args.scheme == "radau"

@@ -144,18 +144,27 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          the \"re-integration defect\"). Solutions: `<scenario>/solution.json`, torques: \
          `<scenario>/torques.csv`.\n",
         if args.quick { 20 } else { 30 },
-        bf_optim::problems::COT_MAX_PERIOD,
+        bf_problem::COT_MAX_PERIOD,
         if args.quick {
             "one cold solve per problem (`--quick`)".to_string()
         } else {
             format!(
-                "{} (period sweep, release, ε-homotopy; see bf_optim::problems::strategy)",
-                bf_optim::problems::strategy::Strategy::default()
+                "{} (period sweep, release, ε-homotopy; see ball_finger::study::strategy)",
+                crate::study::strategy::Strategy::default()
             )
         }
     )?;
-    let (results, failures) = super::scenarios::run_all(&args.out, args.quick, mu_s)?;
-    writeln!(report, "{}", super::scenarios::results_markdown(&results)?)?;
+    let (results, failures) = crate::study::scenarios::run_all(
+        &args.out,
+        args.quick,
+        mu_s,
+        &super::optimize::solve_with_progress,
+    )?;
+    writeln!(
+        report,
+        "{}",
+        crate::study::scenarios::results_markdown(&results)?
+    )?;
     if !failures.is_empty() {
         writeln!(report, "Scenarios that failed:\n\n{failures}")?;
     }
@@ -164,7 +173,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             report,
             "### {}\n\n{}",
             r.name,
-            super::scenarios::figures_markdown(&r.name)
+            crate::study::scenarios::figures_markdown(&r.name)
         )?;
         if let Some(st) = &r.solution.strategy {
             writeln!(report, "Solve stages:\n\n```text\n{}```\n", st.table())?;
@@ -184,13 +193,13 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         Some(cot) => {
             let periods = if args.quick { 1 } else { 3 };
             let pb = stage(1, "open-loop simulation");
-            let o = super::openloop::run_open_loop(
+            let o = crate::study::openloop::run_open_loop(
                 &cot.solution,
                 periods,
                 &args.out.join("open-loop"),
             )?;
             pb.finish();
-            writeln!(report, "{}", super::openloop::markdown(&o)?)?;
+            writeln!(report, "{}", crate::study::openloop::markdown(&o)?)?;
         }
         None => writeln!(
             report,
@@ -224,7 +233,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         "- The scenarios above use hp Legendre–Gauss–Radau (3 × 10 points per phase). \
          Legendre–Gauss collocation, the paper's scheme (`optimize --scheme lg`), solves the \
          problems too, with other costs in time (criterion figures for both schemes in \
-         BENCHMARKS.md, `cargo bench -p bf-optim --bench problems`).\n\
+         BENCHMARKS.md, `cargo bench --bench problems`).\n\
          - Finer Radau meshes than the default can stall: the unpivoted KKT factorization \
          eliminates constraint rows before their variables, and the solver's static dual \
          regularization 1e-9 then hides small curvature (optim/README.md; LG solves use 3e-8). \

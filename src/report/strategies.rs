@@ -1,16 +1,16 @@
-//! The solve-strategy comparison of issue 8 (paper Sect. 4 problems, Sect. 6.1 objectives):
+//! The solve-strategy comparison (paper Sect. 4 problems, Sect. 6.1 objectives):
 //! cold start (`direct`) vs `continuation` vs `multistart` (N = 8, 32) on the periodic
 //! problems, with objective φ (eq. 60), iterations, wall time, the period found and the
-//! re-integration defects of each final solution (`bf_optim::problems::verify`).
+//! re-integration defects of each final solution (`study::verify`).
 //! `--quick` runs `periodic-qc` only, without N = 32.
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
+use crate::study::strategy::{Strategy, solve_with_strategy};
+use crate::study::verify::verify;
 use anyhow::Result;
-use bf_optim::problems::strategy::{Strategy, solve_with_strategy};
-use bf_optim::problems::verify::verify;
-use bf_optim::problems::{OcpSolution, ProblemSettings};
+use bf_problem::{OcpSolution, Problem, ProblemSettings};
 
 /// One (problem, strategy) result.
 #[derive(Debug, Clone)]
@@ -51,7 +51,7 @@ pub fn strategies(quick: bool) -> Vec<Strategy> {
     v
 }
 
-fn row(problem: &str, strategy: Strategy) -> StrategyRow {
+fn row(problem: Problem, strategy: Strategy) -> StrategyRow {
     let t0 = Instant::now();
     let res = solve_with_strategy(problem, &ProblemSettings::default(), strategy, None);
     let seconds = t0.elapsed().as_secs_f64();
@@ -59,7 +59,7 @@ fn row(problem: &str, strategy: Strategy) -> StrategyRow {
         Ok((p, sol)) => {
             let defect = verify(&p, &sol, 1e-10).map_or(f64::NAN, |v| v.max_defect);
             StrategyRow {
-                problem: problem.into(),
+                problem: problem.to_string(),
                 strategy,
                 status: format!("{:?}", sol.status),
                 objective: sol.objective,
@@ -71,7 +71,7 @@ fn row(problem: &str, strategy: Strategy) -> StrategyRow {
             }
         }
         Err(e) => StrategyRow {
-            problem: problem.into(),
+            problem: problem.to_string(),
             strategy,
             status: format!("error: {e}"),
             objective: f64::NAN,
@@ -95,13 +95,17 @@ fn successes(sol: &OcpSolution) -> (usize, usize) {
 
 /// Runs the comparison and returns its markdown section; `progress` is told each finished row.
 pub fn strategies_report(quick: bool, progress: &dyn Fn(&StrategyRow)) -> Result<String> {
-    let problems: &[&str] = if quick {
-        &["periodic-qc"]
+    let problems: &[Problem] = if quick {
+        &[Problem::PeriodicQc]
     } else {
-        &["periodic-qc", "periodic-cot", "periodic-cot-human"]
+        &[
+            Problem::PeriodicQc,
+            Problem::PeriodicCot,
+            Problem::PeriodicCotHuman,
+        ]
     };
     let mut rows = Vec::new();
-    for p in problems {
+    for &p in problems {
         for s in strategies(quick) {
             let r = row(p, s);
             progress(&r);

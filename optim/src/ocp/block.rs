@@ -1,11 +1,13 @@
 //! Compiled graph functions with exact first and second derivatives.
 //!
-//! The derivative graphs come from [`bf_codegen::ocp::Derivatives`]. When bf-generated holds
-//! kernels emitted at build time from graphs with the same structural fingerprint
-//! ([`bf_codegen::ocp::fingerprint`]; the ball-and-finger node functions of the scenes with a
-//! ball), a [`GraphFn`] calls those flat Rust functions; otherwise it interprets the graphs with
-//! the programs below. Both compute every node with the same `f64` operation, so they agree
-//! bitwise (tested in `tests/node_kernels.rs`).
+//! The derivative graphs come from [`bf_codegen::nodefn::Derivatives`]. The caller may hand in
+//! a table of kernels emitted at build time ([`KernelUse`], a [`KernelLookup`] by structural
+//! fingerprint, [`bf_codegen::nodefn::fingerprint`]); when it holds one emitted from graphs
+//! with the same fingerprint, a [`GraphFn`] calls those flat Rust functions, otherwise it
+//! interprets the graphs with the programs below. Both compute every node with the same `f64`
+//! operation, so they agree bitwise. With [`KernelUse::Require`] the caller states that the
+//! kernels must be found: a graph that changed after the kernels were emitted is then an error
+//! of the transcription instead of a silent fall-back to the (slower) interpreter.
 //!
 //! A [`GraphFn`] takes outputs y = f(v) built on a `bf_codegen` expression graph (the paper's
 //! node functions: dynamics eq. 26/29, stick constraint eq. 14/27, validity h and σ eq. 4/18,
@@ -23,8 +25,41 @@
 //! operation as `Tape`, so the values are bitwise those of the reference interpreter (tested).
 
 use bf_codegen::graph::{Graph, Id, Node};
-use bf_codegen::ocp::{Derivatives, VarRole, fingerprint, var_roles};
-use bf_generated::{NodeKernel, NodeKernelFn};
+use bf_codegen::nodefn::{Derivatives, VarRole, fingerprint, var_roles};
+
+/// One kernel function of an emitted node function: `f(local, fixed, w, out)` writes the
+/// outputs (value), the Jacobian values (pattern order) or the lower-triangle Hessian values of
+/// Σ w_i y_i (pattern order) into `out`; `w` is read by the Hessian only.
+pub type NodeKernelFn = fn(local: &[f64], fixed: &[f64], w: &[f64], out: &mut [f64]);
+
+/// The emitted kernels of one node function, as a [`KernelLookup`] hands them over (the
+/// fields of a build-time kernel table such as bf-generated's, which this crate does not
+/// depend on).
+#[derive(Debug, Clone, Copy)]
+pub struct NodeKernel {
+    /// Kernel name.
+    pub name: &'static str,
+    /// Number of outputs.
+    pub n_out: usize,
+    /// Number of local variables.
+    pub n_local: usize,
+    /// Number of fixed inputs, in the node function's order.
+    pub n_fixed: usize,
+    /// Jacobian pattern (output, local).
+    pub jacobian_pattern: &'static [(u32, u32)],
+    /// Lower-triangle Hessian pattern (local i ≥ local j).
+    pub hessian_pattern: &'static [(u32, u32)],
+    /// Output values.
+    pub value: NodeKernelFn,
+    /// Jacobian values.
+    pub jacobian: NodeKernelFn,
+    /// Weighted Hessian values.
+    pub hessian: NodeKernelFn,
+}
+
+/// The emitted node kernel with a structural fingerprint
+/// ([`bf_codegen::nodefn::fingerprint`]), if any.
+pub type KernelLookup = fn(fingerprint: u128) -> Option<NodeKernel>;
 
 /// Kind of a `Program` operation (also its position in the run order within a level).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -245,21 +280,33 @@ struct Programs {
 enum Backend {
     /// Compiled programs of the graphs (any graph).
     Programs(Box<Programs>),
-    /// The kernels bf-generated emitted from the same graphs at build time, with the values
-    /// of the fixed inputs.
-    Kernel {
-        kernel: &'static NodeKernel,
-        fixed: Vec<f64>,
-    },
+    /// The kernels emitted from the same graphs at build time, with the values of the fixed
+    /// inputs.
+    Kernel { kernel: NodeKernel, fixed: Vec<f64> },
 }
 
-/// Whether [`GraphFn::with_backend`] may use an emitted kernel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Whether a [`GraphFn`] (or a transcription's node functions) may or must run on emitted
+/// kernels.
+#[derive(Debug, Clone, Copy, Default)]
 pub enum KernelUse {
-    /// Use bf-generated's kernel when one has the graphs' fingerprint (the default).
-    Auto,
-    /// Always interpret the graphs (tests, comparisons).
+    /// Always interpret the graphs.
+    #[default]
     Never,
+    /// Use the kernel of the lookup when one has the graphs' fingerprint, else interpret.
+    Prefer(KernelLookup),
+    /// As `Prefer`, but the transcription fails for a phase node function without an emitted
+    /// kernel ([`crate::ocp::Transcription::with_kernels`]).
+    Require(KernelLookup),
+}
+
+impl KernelUse {
+    /// The lookup, if kernels may be used.
+    pub fn lookup(self) -> Option<KernelLookup> {
+        match self {
+            KernelUse::Never => None,
+            KernelUse::Prefer(f) | KernelUse::Require(f) => Some(f),
+        }
+    }
 }
 
 /// A vector function of `n_local` local variables with exact sparse derivatives.
@@ -275,13 +322,14 @@ pub struct GraphFn {
 impl GraphFn {
     /// Compiles `outputs` of graph `g` as a function of the graph variables `local_vars` (in
     /// that order); `fixed` gives the values of other graph variables (ε, runtime parameters,
-    /// cost constants); any other variable reads as 0. Uses an emitted kernel of bf-generated
-    /// when one was emitted from the same graphs ([`KernelUse::Auto`]).
+    /// cost constants); any other variable reads as 0. Interprets the graphs
+    /// ([`KernelUse::Never`]).
     pub fn new(g: &mut Graph, outputs: &[Id], local_vars: &[u32], fixed: &[(u32, f64)]) -> Self {
-        Self::with_backend(g, outputs, local_vars, fixed, KernelUse::Auto)
+        Self::with_backend(g, outputs, local_vars, fixed, KernelUse::Never)
     }
 
-    /// [`GraphFn::new`] with the choice of backend.
+    /// [`GraphFn::new`] with the choice of backend: with a lookup, the emitted kernel with the
+    /// graphs' fingerprint when there is one.
     pub fn with_backend(
         g: &mut Graph,
         outputs: &[Id],
@@ -292,10 +340,10 @@ impl GraphFn {
         let n_out = outputs.len();
         let d = Derivatives::new(g, outputs, local_vars, fixed);
         let roles = var_roles(local_vars, fixed, d.weight_base, n_out);
-        let kernel = match kernels {
-            KernelUse::Auto => {
+        let kernel = match kernels.lookup() {
+            Some(lookup) => {
                 let fp = fingerprint(g, outputs, &d, &roles);
-                bf_generated::node_kernel(fp).filter(|k| {
+                lookup(fp).filter(|k| {
                     // The fingerprint covers all of this; checked again so that a collision
                     // cannot go unnoticed.
                     k.n_out == n_out
@@ -313,7 +361,7 @@ impl GraphFn {
                             .all(|(a, b)| (a.0 as usize, a.1 as usize) == *b)
                 })
             }
-            KernelUse::Never => None,
+            None => None,
         };
         let backend = match kernel {
             Some(kernel) => Backend::Kernel {

@@ -2,7 +2,8 @@
 //!
 //! * [`nodes`]: Legendre–Gauss / Gauss–Radau nodes, weights, differentiation matrices;
 //! * [`mesh`]: custom hp-Radau meshes, the collocation error estimate, ph refinement;
-//! * [`block`]: graph functions with exact Jacobians and Hessians (bf-codegen `diff`);
+//! * [`block`]: graph functions with exact Jacobians and Hessians (bf-codegen `diff`), on
+//!   emitted kernels handed in by the caller or interpreted;
 //! * [`problem`]: the multiphase problem (eq. 57): phases, node functions, point functions;
 //! * [`transcription`]: the sparse NLP handed to the interior-point solver ([`crate::ipm`]);
 //! * [`trajectory`]: extraction and interpolation of the solution.
@@ -14,7 +15,7 @@ pub mod problem;
 pub mod trajectory;
 pub mod transcription;
 
-pub use block::{GraphFn, KernelUse};
+pub use block::{GraphFn, KernelLookup, KernelUse, NodeKernel, NodeKernelFn};
 pub use mesh::{HpRule, MeshSpec, collocation_errors};
 pub use problem::{
     NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
@@ -24,15 +25,12 @@ pub use transcription::{Mesh, PhaseLayout, Transcription};
 
 use crate::ipm::{IterationInfo, Settings, Solution, WarmStart, solve_with};
 
-/// Errors of the collocation layer and the problem library.
+/// Errors of the collocation layer and of the problems built on it.
 #[derive(Debug, thiserror::Error)]
 pub enum OcpError {
     /// The problem description is inconsistent.
     #[error("invalid problem: {0}")]
     InvalidProblem(String),
-    /// Unknown problem name.
-    #[error("unknown problem `{0}`; known: {1}")]
-    UnknownProblem(String, String),
     /// The scene or model could not be built.
     #[error("model: {0}")]
     Model(String),

@@ -23,7 +23,7 @@ pub enum Scheme {
     },
 }
 
-pub use bf_codegen::ocp::NodeFunction;
+pub use bf_codegen::nodefn::NodeFunction;
 
 /// A variable a [`PointFunction`] reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -23,13 +23,13 @@
 //! summing to 1 + τ_k) — the form the Gauss quadrature end row already had. With the
 //! differential rows the COT problems stalled with LG-30 (δ_w ≈ 1e-2 in every iteration,
 //! MaxIterations) and `periodic-qc` only converged with an extra inactive period row; with the
-//! integral rows both converge (issue 6; numbers in `problems` and optim/tests/ocp_lg.rs).
+//! integral rows both converge (numbers in BENCHMARKS.md and the root package's tests/ocp_lg.rs).
 //! The sparsity is alike: per state component and phase the differential rows have a dense
 //! N × (N + 1) block in the states and a diagonal in f, the integral rows two state columns and
 //! a dense N × N block in f (plus one duplicate T triplet per node, summed by the solver).
 
 use super::OcpError;
-use super::block::GraphFn;
+use super::block::{GraphFn, KernelUse};
 use super::mesh::MeshSpec;
 use super::nodes::{differentiation_matrix, legendre_gauss};
 use super::problem::{Objective, Ocp, Scheme, VarRef};
@@ -238,6 +238,18 @@ impl Transcription {
         ocp: &Ocp,
         meshes: &[Option<super::mesh::MeshSpec>],
     ) -> Result<Transcription, OcpError> {
+        Self::with_kernels(ocp, meshes, KernelUse::Never)
+    }
+
+    /// [`Transcription::with_meshes`] with the phase node functions on emitted kernels where
+    /// `kernels` has them; with [`KernelUse::Require`] a phase node function without an
+    /// emitted kernel (its graphs changed since the kernels were emitted, or its shape was
+    /// never emitted) is an error.
+    pub fn with_kernels(
+        ocp: &Ocp,
+        meshes: &[Option<super::mesh::MeshSpec>],
+        kernels: KernelUse,
+    ) -> Result<Transcription, OcpError> {
         if meshes.len() > ocp.phases.len() {
             return Err(OcpError::InvalidProblem(format!(
                 "{} meshes for {} phases",
@@ -380,11 +392,25 @@ impl Transcription {
         };
         for (pi, (ph, l)) in ocp.phases.iter().zip(&layouts).enumerate() {
             let nd = &ph.node;
-            // (T/2) ẋ, path rows, (T/2) L: the same outputs bf-generated's node kernels were
-            // emitted from, so `GraphFn::new` finds them by fingerprint.
+            // (T/2) ẋ, path rows, (T/2) L: the outputs node kernels are emitted from, so that
+            // the lookup finds them by fingerprint.
             let mut col = nd.collocation();
             let n_path = nd.path.len();
-            let f = GraphFn::new(&mut col.graph, &col.outputs, &col.locals, &nd.fixed);
+            let f = GraphFn::with_backend(
+                &mut col.graph,
+                &col.outputs,
+                &col.locals,
+                &nd.fixed,
+                kernels,
+            );
+            if matches!(kernels, KernelUse::Require(_)) && f.kernel_name().is_none() {
+                return Err(OcpError::InvalidProblem(format!(
+                    "phase {pi} ({}): no emitted node kernel has the structure of its node \
+                     function (the graphs changed since the kernels were emitted, or this \
+                     phase shape is not emitted)",
+                    ph.name
+                )));
+            }
             let fid = fns.len();
             fns.push(f);
             let ncol = l.mesh.colloc.len();

@@ -1,4 +1,3 @@
 //! Shared test problems.
 pub mod cheb;
 pub mod double_integrator;
-pub mod kkt;

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use bf_optim::ocp::problem::Scheme;
-use bf_optim::problems::OcpSolution;
+use bf_problem::OcpSolution;
 use bf_plot::paper::WorkPrecision;
 use indicatif::ProgressBar;
 

@@ -20,7 +20,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow};
 use bf_optim::ocp::problem::Scheme;
-use bf_optim::problems::{self, ProblemSettings};
+use crate::study as problems;
+use bf_problem::{Problem, ProblemSettings};
 use bf_plot::paper::{WorkPrecision, fig_work_precision};
 use bf_sim::work_precision::WorkPrecisionRow;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -204,7 +205,7 @@ fn solve_qc(
         ..ProblemSettings::default()
     };
     let start = Instant::now();
-    let p = problems::build("periodic-qc", &settings)
+    let p = problems::build(Problem::PeriodicQc, &settings)
         .map_err(|e| anyhow!("building periodic-qc: {e}"))?;
     let sol = problems::solve(&p, None).map_err(|e| anyhow!("solving periodic-qc: {e}"))?;
     let seconds = start.elapsed().as_secs_f64();

@@ -7,7 +7,8 @@ use std::path::Path;
 
 use anyhow::Result;
 use bf_generated::paper;
-use bf_optim::problems::{self, ProblemSettings};
+use crate::study as problems;
+use bf_problem::{Mode, ProblemSettings};
 use bf_plot::paper::WorkPrecision;
 use indicatif::ProgressBar;
 
@@ -46,7 +47,7 @@ fn contact_point_error(sol: &problems::OcpSolution, eps: f64) -> f64 {
     let mut worst: f64 = 0.0;
     for (i, q) in sol.nodes.q.iter().enumerate() {
         let phase = sol.nodes.phase.get(i).copied().unwrap_or(0);
-        if sol.modes.get(phase) == Some(&problems::bf::Mode::Free) || q.len() != paper::NQ {
+        if sol.modes.get(phase) == Some(&Mode::Free) || q.len() != paper::NQ {
             continue;
         }
         let q = [q[0], q[1], q[2]];

@@ -1,22 +1,23 @@
-//! Emitted node kernels (bf-generated, `bf_codegen::ocp`) against the interpreted graph
+//! Emitted node kernels (bf-generated, `bf_problem::kernels`) against the interpreted graph
 //! programs they replace, on the node functions of `periodic-qc` (paper scene, Radau 3 × 10):
 //! one evaluation of the values, the Jacobian and the weighted Hessian at every collocation
 //! node of the three phases (90 nodes), as the interior-point solver does once per iteration.
 //! Both backends give bitwise equal results (`tests/node_kernels.rs`); the ratio of the two
 //! medians measured in the same run is the speed-up of emitting the kernels.
 //!
-//! `cargo bench -p bf-optim --bench node_kernels`
+//! `cargo bench --bench node_kernels`
 
 use std::hint::black_box;
 
+use ball_finger::study::{GENERATED, build};
 use bf_optim::ocp::{GraphFn, KernelUse};
-use bf_optim::problems::{ProblemSettings, build};
+use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 fn bench(c: &mut Criterion) {
-    let p = match build("periodic-qc", &ProblemSettings::default()) {
+    let p = match build(Problem::PeriodicQc, &ProblemSettings::default()) {
         Ok(p) => p,
         Err(e) => {
             eprintln!("periodic-qc: cannot build: {e}");
@@ -30,7 +31,7 @@ fn bench(c: &mut Criterion) {
         let make = |g: &mut bf_codegen::graph::Graph, k| {
             GraphFn::with_backend(g, &col.outputs, &col.locals, &ph.node.fixed, k)
         };
-        let auto = make(&mut col.graph, KernelUse::Auto);
+        let auto = make(&mut col.graph, GENERATED.kernels);
         let interp = make(&mut col.graph, KernelUse::Never);
         assert!(auto.kernel_name().is_some(), "no emitted kernel");
         let nodes: Vec<Vec<f64>> = (0..layout.mesh.colloc.len())

@@ -7,12 +7,12 @@
 //! joint trajectory; the optimiser itself uses the smooth one (eq. 58–59), whose difference is
 //! at most ε/2.
 
-use crate::commands::optimize::{solve_with_progress, write_solution};
-use anyhow::{Context, Result};
-use bf_optim::problems::strategy::Strategy;
-use bf_optim::problems::{OcpSolution, ProblemSettings, Samples};
+use crate::study::solution_io::write_solution;
+use crate::study::strategy::Strategy;
+use anyhow::{Context, Result, anyhow};
 use bf_plot::paper::{Phases, TimeSeries};
 use bf_plot::scene3d::{FingerPaths, View};
+use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings, Samples};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -137,6 +137,11 @@ fn is_stick(sol: &OcpSolution, samples: &Samples, i: usize) -> bool {
         .is_some_and(|m| format!("{m:?}") == "Stick")
 }
 
+/// How a scenario is solved: the problem, its settings and the strategy give the built problem
+/// and its solution (the CLI passes a solve behind a progress spinner).
+pub type Solver<'a> =
+    &'a dyn Fn(Problem, ProblemSettings, Strategy) -> Result<(BuiltProblem, OcpSolution)>;
+
 /// Solve one scenario, write `dir/<name>/{solution.json, torques.csv}` and its figures into
 /// `dir/figures`, and compute the figures of merit.
 pub fn run_scenario(
@@ -145,11 +150,13 @@ pub fn run_scenario(
     strategy: Strategy,
     dir: &Path,
     mu_s: f64,
+    solve: Solver<'_>,
 ) -> Result<ScenarioResult> {
-    let (problem, mut sol) = solve_with_progress(name, settings, strategy)?;
-    // Re-integration of every phase with the optimal torques (issue 8): stored in
-    // solution.json and shown in the results table; a failure to verify is not fatal.
-    sol.verification = bf_optim::problems::verify::verify(&problem, &sol, 1e-10).ok();
+    let problem: Problem = name.parse().map_err(|e| anyhow!("{e}"))?;
+    let (problem, mut sol) = solve(problem, settings, strategy)?;
+    // Re-integration of every phase with the optimal torques: stored in solution.json and
+    // shown in the results table; a failure to verify is not fatal.
+    sol.verification = crate::study::verify::verify(&problem, &sol, 1e-10).ok();
     write_solution(&sol, &dir.join(name))?;
     let scene = if name.ends_with("-human") {
         "human"
@@ -463,7 +470,12 @@ pub fn figures_markdown(name: &str) -> String {
 }
 
 /// Run every scenario (errors of one scenario are reported in the table, not fatal).
-pub fn run_all(dir: &Path, quick: bool, mu_s: f64) -> Result<(Vec<ScenarioResult>, String)> {
+pub fn run_all(
+    dir: &Path,
+    quick: bool,
+    mu_s: f64,
+    solve: Solver<'_>,
+) -> Result<(Vec<ScenarioResult>, String)> {
     let mut results = Vec::new();
     let mut failures = String::new();
     for (name, _) in SCENARIOS {
@@ -477,7 +489,7 @@ pub fn run_all(dir: &Path, quick: bool, mu_s: f64) -> Result<(Vec<ScenarioResult
         } else {
             Strategy::default()
         };
-        match run_scenario(name, settings, strategy, dir, mu_s)
+        match run_scenario(name, settings, strategy, dir, mu_s, solve)
             .with_context(|| format!("scenario {name}"))
         {
             Ok(r) => results.push(r),

@@ -1,5 +1,5 @@
-//! Adaptive hp mesh refinement of the Radau transcription of the named problems (paper
-//! Sect. 5; the method of Patterson, Hager & Rao 2015, see [`crate::ocp::mesh`]).
+//! Adaptive hp mesh refinement of the Radau transcription of the catalogue problems (paper
+//! Sect. 5; the method of Patterson, Hager & Rao 2015, see [`bf_optim::ocp::mesh`]).
 //!
 //! [`refine`]: solve → [`error_estimate`] per element (the collocation defect of eq. 58
 //! between the nodes, with the implicit dynamics eq. 26/29 solved for q̈, ω̇, λ) → raise the
@@ -13,10 +13,14 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use super::{BuiltProblem, OcpSolution, ProblemSettings, build, solve};
-use crate::ipm::{IterationInfo, Settings, Status};
-use crate::ocp::mesh::values_at;
-use crate::ocp::{HpRule, MeshSpec, OcpError, collocation_errors};
+use bf_optim::ipm::{IterationInfo, Settings};
+use bf_optim::ocp::{HpRule, MeshSpec, OcpError, collocation_errors};
+use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
+
+use super::build;
+use super::solve::{solve, solver_settings};
+pub use bf_problem::solution::records::{RefineReport, RefineRound};
+pub use bf_problem::solution::warm_initial_point;
 
 /// Options of [`refine`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -47,29 +51,6 @@ impl Default for RefineOptions {
     }
 }
 
-/// One solve of the refinement.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RefineRound {
-    /// Round (0 = the initial mesh).
-    pub round: usize,
-    /// Elements per phase.
-    pub elements: Vec<usize>,
-    /// Collocation points per phase.
-    pub points: Vec<usize>,
-    /// Objective φ.
-    pub objective: f64,
-    /// Largest element error estimate per phase.
-    pub phase_errors: Vec<f64>,
-    /// Largest element error estimate.
-    pub max_error: f64,
-    /// Solver status.
-    pub status: Status,
-    /// Interior-point iterations.
-    pub iterations: usize,
-    /// Wall time of the round: build, solve and estimate (s).
-    pub seconds: f64,
-}
-
 /// Result of [`refine`]: the record ([`RefineReport`], also reachable through `Deref`), the
 /// total time and the final solution.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -81,23 +62,6 @@ pub struct RefineResult {
     pub total_seconds: f64,
     /// The final solution (the last successful solve).
     pub solution: OcpSolution,
-}
-
-/// The refinement record without the solution (stored in `solution.json`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RefineReport {
-    /// Tolerance requested.
-    pub tol: f64,
-    /// True if the largest error estimate of the final solution is ≤ `tol`.
-    pub converged: bool,
-    /// Why the refinement stopped.
-    pub stop_reason: String,
-    /// Mesh of the final solution, per phase.
-    pub mesh: Vec<MeshSpec>,
-    /// Error estimate of the final solution, per phase and element.
-    pub errors: Vec<Vec<f64>>,
-    /// One entry per solve.
-    pub history: Vec<RefineRound>,
 }
 
 impl std::ops::Deref for RefineResult {
@@ -140,50 +104,6 @@ pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, OcpError> {
         .collect()
 }
 
-/// Sets the initial point of `p` to `prev` interpolated exactly (element polynomials) onto
-/// `p`'s mesh: states, algebraic variables, controls, durations, parameters and cost states.
-pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<(), OcpError> {
-    if prev.raw.len() != p.nlp.phases.len() {
-        return Err(OcpError::InvalidProblem(format!(
-            "warm start has {} phases, the problem {}",
-            prev.raw.len(),
-            p.nlp.phases.len()
-        )));
-    }
-    let mut x = p.nlp.initial().to_vec();
-    for (l, raw) in p.nlp.phases.iter().zip(&prev.raw) {
-        let put = |x: &mut Vec<f64>, idx: &dyn Fn(usize) -> usize, v: &[f64], n: usize| {
-            for (i, &val) in v.iter().enumerate().take(n) {
-                if val.is_finite() {
-                    x[idx(i)] = val;
-                }
-            }
-        };
-        for (pt, &tau) in l.mesh.state_tau.iter().enumerate() {
-            let [xv, _, _] = values_at(raw, tau);
-            put(&mut x, &|i| l.x(pt, i), &xv, l.nx);
-        }
-        for (k, c) in l.mesh.colloc.iter().enumerate() {
-            let [_, a, u] = values_at(raw, c.tau);
-            put(&mut x, &|i| l.a(k, i), &a, l.na);
-            put(&mut x, &|i| l.u(k, i), &u, l.nu);
-        }
-        if raw.duration.is_finite() {
-            x[l.t] = raw.duration;
-        }
-    }
-    let np = p.ocp.params.len();
-    for (i, &v) in prev.params.iter().enumerate().take(np) {
-        x[p.nlp.p0 + i] = v;
-    }
-    for (j, &v) in [prev.c1, prev.c2].iter().enumerate().take(p.ocp.n_costs) {
-        if v.is_finite() {
-            x[p.nlp.c0 + j] = v;
-        }
-    }
-    p.nlp.set_initial_point(&x)
-}
-
 fn max_nan(v: impl IntoIterator<Item = f64>) -> f64 {
     v.into_iter().fold(0.0f64, |m, e| {
         if e.is_nan() || m.is_nan() {
@@ -203,12 +123,12 @@ fn reborrow<'a>(c: &'a mut IterCallback<'_>) -> IterCallback<'a> {
     }
 }
 
-/// Adaptive mesh refinement of the named problem (see the module docs). The first solve uses
+/// Adaptive mesh refinement of `problem` (see the module docs). The first solve uses
 /// `settings` as given (its `mesh`, or `scheme` and `points`, which must be Radau); `callback`
 /// sees every interior-point iteration (return `false` to stop a solve), `on_round` every
 /// finished round.
 pub fn refine(
-    name: &str,
+    problem: Problem,
     settings: &ProblemSettings,
     opts: &RefineOptions,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
@@ -235,7 +155,7 @@ pub fn refine(
         let start = Instant::now();
         // `build` starts from `s.warm_start` interpolated onto the new mesh
         // (`warm_initial_point`).
-        let p = build(name, &s)?;
+        let p = build(problem, &s)?;
         let mesh = current_mesh(&p)?;
         let sol = match solve(&p, reborrow(&mut callback)) {
             Ok(sol) => sol,
@@ -306,7 +226,7 @@ pub fn refine(
             ..sol.clone()
         });
         if round == 0 {
-            let base = super::solver_settings(settings);
+            let base = solver_settings(settings);
             s.ipm = Some(Settings {
                 mu_init: opts.warm_mu_init,
                 ..base
@@ -328,4 +248,37 @@ pub fn refine(
         },
         solution,
     })
+}
+
+/// Refines the mesh of `sol`, a solution of `problem` with `settings`, warm-started from it
+/// ([`refine`]); returns the final mesh's problem and solution, which keeps `sol`'s strategy
+/// record, gains the refinement record, and counts the iterations and time of both.
+pub fn refine_solution(
+    problem: Problem,
+    settings: &ProblemSettings,
+    sol: OcpSolution,
+    opts: &RefineOptions,
+    on_round: Option<&mut dyn FnMut(&RefineRound)>,
+) -> Result<(BuiltProblem, OcpSolution), OcpError> {
+    let strategy = sol.strategy.clone();
+    let (iters0, secs0) = (sol.iterations, sol.solve_seconds);
+    let start = ProblemSettings {
+        warm_start: Some(sol),
+        ..settings.clone()
+    };
+    let res = refine(problem, &start, opts, None, on_round)?;
+    let built = build(
+        problem,
+        &ProblemSettings {
+            mesh: Some(res.mesh.clone()),
+            ..settings.clone()
+        },
+    )?;
+    let report = res.report;
+    let mut out = res.solution;
+    out.iterations = iters0 + report.history.iter().map(|r| r.iterations).sum::<usize>();
+    out.solve_seconds = secs0 + res.total_seconds;
+    out.strategy = strategy;
+    out.refinement = Some(report);
+    Ok((built, out))
 }

@@ -4,7 +4,7 @@
 #![allow(dead_code)]
 
 use bf_optim::ipm::Nlp;
-use bf_optim::problems::{BuiltProblem, OcpSolution};
+use bf_problem::{BuiltProblem, OcpSolution};
 
 /// (max |∇f + Jᵀλ − z_L + z_U|, max constraint violation) at `sol`'s stored point.
 pub fn ocp_kkt_residual(p: &BuiltProblem, sol: &OcpSolution) -> (f64, f64) {

@@ -4,10 +4,11 @@
 
 mod common;
 
+use ball_finger::study::{SolutionIo, build, solve};
 use bf_generated::paper as k;
 use bf_optim::ipm::{Nlp, Status, check_derivatives};
 use bf_optim::ocp::Scheme;
-use bf_optim::problems::{GuessKind, OcpSolution, ProblemSettings, build, solve};
+use bf_problem::{GuessKind, OcpSolution, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -36,7 +37,7 @@ fn nlp_derivatives_match_finite_differences() {
                 hdot_margin: Some(0.01),
                 ..ProblemSettings::default()
             };
-            let p = build(name, &s).unwrap();
+            let p = build(name.parse().unwrap(), &s).unwrap();
             let n = p.nlp.num_variables();
             let m = p.nlp.num_constraints();
             let mut x = p.nlp.initial().to_vec();
@@ -111,7 +112,7 @@ fn reintegration_error(sol: &OcpSolution, steps: usize) -> Vec<f64> {
     let mut per_phase = Vec::new();
     for (pi, ph) in sol.raw.iter().enumerate() {
         let mut worst: f64 = 0.0;
-        let stick = sol.modes[pi] == bf_optim::problems::bf::Mode::Stick;
+        let stick = sol.modes[pi] == bf_problem::Mode::Stick;
         let inputs = |tau_n: f64| -> (Vec<f64>, Vec<f64>) {
             let u = ph.u_at(tau_n);
             let lam = if stick {
@@ -169,8 +170,8 @@ fn reintegration_error(sol: &OcpSolution, steps: usize) -> Vec<f64> {
 
 use common::kkt::ocp_kkt_residual as kkt_residual;
 
-fn solve_named(name: &str, s: &ProblemSettings) -> (bf_optim::problems::BuiltProblem, OcpSolution) {
-    let p = build(name, s).unwrap();
+fn solve_named(name: &str, s: &ProblemSettings) -> (bf_problem::BuiltProblem, OcpSolution) {
+    let p = build(name.parse().unwrap(), s).unwrap();
     let mut iters = 0;
     let mut cb = |_: &bf_optim::ipm::IterationInfo| {
         iters += 1;
@@ -213,7 +214,7 @@ fn periodic_qc_solves_with_paper_results() {
     assert!(stick.iter().all(|&i| sol.nodes.alpha[i] > 0.0));
     // ... valid contact: h ≈ 0, λ_n ≥ 0, σ ≥ −δ; and the friction cone is active at a
     // substantial part of the contact (paper: always active; robust here: ≥ 25 % of nodes).
-    let delta = bf_optim::problems::bf::CONE_DELTA;
+    let delta = bf_problem::node::CONE_DELTA;
     let mut active = 0;
     for &i in &stick {
         assert!(sol.nodes.h[i].abs() < 2e-4, "h = {}", sol.nodes.h[i]);
@@ -260,7 +261,7 @@ fn periodic_qc_refinement_converges() {
             warm_start: prev.take(),
             ..settings(n)
         };
-        let p = build("periodic-qc", &s).unwrap();
+        let p = build(Problem::PeriodicQc, &s).unwrap();
         let sol = solve(&p, None).unwrap();
         assert!(sol.status.is_success(), "N = {n}: {:?}", sol.stages);
         res.push((sol.objective, sol.period));
@@ -322,7 +323,7 @@ fn periodic_cot_problems_converge() {
         assert_eq!(sol.status, Status::Solved, "{name}: {:?}", sol.stages);
         let (stat, viol) = kkt_residual(&p, &sol);
         assert!(viol < 1e-7 && stat < 1e-5, "{name}: {viol} {stat}");
-        assert!(sol.period <= bf_optim::problems::COT_MAX_PERIOD + 1e-6);
+        assert!(sol.period <= bf_problem::COT_MAX_PERIOD + 1e-6);
         // Rotation in the desired direction (1, −1, 0)/√2.
         let along = (sol.mean_omega[0] - sol.mean_omega[1]) / 2f64.sqrt();
         assert!(along > 0.05, "{name}: {:?}", sol.mean_omega);
@@ -372,7 +373,8 @@ fn outputs_round_trip_and_warm_start() {
     assert_eq!(again.status, Status::Solved);
     assert!((again.objective - sol.objective).abs() < 1e-4 * sol.objective.abs());
     std::fs::remove_dir_all(&dir).ok();
-    assert!(build("no-such-problem", &settings(10)).is_err());
+    let unknown = "no-such-problem".parse::<Problem>().unwrap_err();
+    assert!(unknown.to_string().contains("periodic-qc"), "{unknown}");
 }
 
 #[test]
@@ -403,7 +405,7 @@ fn explore() {
     if let Ok(it) = std::env::var("BF_ITER") {
         s.max_iter = it.parse().unwrap();
     }
-    let p = build(&name, &s).unwrap();
+    let p = build(name.parse().unwrap(), &s).unwrap();
     let t = std::time::Instant::now();
     let sol = solve(&p, None).unwrap();
     println!(
@@ -438,12 +440,12 @@ fn solve_cot_3x12(dual_regularization: Option<f64>) -> OcpSolution {
         dual_regularization,
         ..ProblemSettings::default()
     };
-    let p = build("periodic-cot", &s).unwrap();
+    let p = build(Problem::PeriodicCot, &s).unwrap();
     let sol = solve(&p, None).unwrap();
     assert_eq!(sol.status, Status::Solved, "{:?}", sol.stages);
     let (stat, viol) = kkt_residual(&p, &sol);
     assert!(viol < 1e-6 && stat < 1e-5, "KKT residuals {viol} {stat}");
-    assert!(sol.period <= bf_optim::problems::COT_MAX_PERIOD + 1e-6);
+    assert!(sol.period <= bf_problem::COT_MAX_PERIOD + 1e-6);
     sol
 }
 

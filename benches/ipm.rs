@@ -5,20 +5,21 @@
 //! and solved by each `FaerLdlt` variant (block kernel, prepared simplicial, faer supernodal),
 //! compared by thread CPU time round-robin and by criterion (`kkt_periodic_qc_*`).
 //!
-//! Quick run: `cargo bench -p bf-optim --bench ipm -- --warm-up-time 1 --measurement-time 5`
+//! Quick run: `cargo bench --bench ipm -- --warm-up-time 1 --measurement-time 5`
 
-#[path = "../tests/common/cheb.rs"]
+#[path = "../optim/tests/common/cheb.rs"]
 mod cheb;
-#[path = "../tests/common/double_integrator.rs"]
+#[path = "../optim/tests/common/double_integrator.rs"]
 mod double_integrator;
 
 use std::hint::black_box;
 use std::time::Duration;
 
+use ball_finger::study::build;
 use bf_optim::ipm::kkt::KktPattern;
 use bf_optim::ipm::{FaerLdlt, KktSolver, Nlp, Settings, Solution, Workspace, solve, solve_in};
 use bf_optim::ocp::Scheme;
-use bf_optim::problems::{ProblemSettings, build};
+use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn per_iter(d: Duration, it: usize) -> f64 {
@@ -87,7 +88,7 @@ fn bench_ipm(c: &mut Criterion) {
 
 /// The KKT matrix of a paper problem at the initial guess with unit multipliers and a barrier
 /// diagonal of 1, as `(pattern with values, dim)`.
-fn kkt_of(name: &str, settings: &ProblemSettings) -> Option<(KktPattern, usize)> {
+fn kkt_of(name: Problem, settings: &ProblemSettings) -> Option<(KktPattern, usize)> {
     let problem = match build(name, settings) {
         Ok(p) => p,
         Err(e) => {
@@ -145,7 +146,7 @@ fn bench_kkt(c: &mut Criterion) {
         ..ProblemSettings::default()
     };
     for (label, settings) in [("radau3x10", ProblemSettings::default()), ("lg30", lg)] {
-        let Some((pat, dim)) = kkt_of("periodic-qc", &settings) else {
+        let Some((pat, dim)) = kkt_of(Problem::PeriodicQc, &settings) else {
             continue;
         };
         let mut solvers: Vec<FaerLdlt> = VARIANTS

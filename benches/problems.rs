@@ -3,15 +3,16 @@
 //! evaluations, derivatives, KKT factorization, ...) of one solve is printed once from the
 //! solver's own `Timing`. Every problem runs with hp-Radau 3 × 10 (`{name}/radau3x10`) and with
 //! Legendre–Gauss, 30 points per phase as in the paper (`{name}/lg30`: integral-form Gauss
-//! defects, stick phases at the acceleration level, δ_c = 3e-8; issue 6), and `periodic-qc`
+//! defects, stick phases at the acceleration level, δ_c = 3e-8), and `periodic-qc`
 //! also with Radau 3 × 12, the mesh that matches LG-30's objective error.
 //!
-//! Quick run: `cargo bench -p bf-optim --bench problems -- --warm-up-time 1 --measurement-time 5`
+//! Quick run: `cargo bench --bench problems -- --warm-up-time 1 --measurement-time 5`
 
 use std::hint::black_box;
 
+use ball_finger::study::{build, solve};
 use bf_optim::ocp::Scheme;
-use bf_optim::problems::{ProblemSettings, build, solve};
+use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
 
 fn bench(c: &mut Criterion) {
@@ -24,19 +25,19 @@ fn bench(c: &mut Criterion) {
         ..ProblemSettings::default()
     };
     // Radau 3 × 12 reaches LG-30's objective error on periodic-qc (≈ 3e-6 against the refined
-    // optimum, where 3 × 10 is 5e-5): the "equal accuracy" comparison of issue 6.
+    // optimum, where 3 × 10 is 5e-5): the "equal accuracy" comparison.
     let radau36 = ProblemSettings {
         points: 36,
         ..ProblemSettings::default()
     };
     for (name, label, settings) in [
-        ("periodic-qc", "radau3x10", &radau),
-        ("periodic-qc", "radau3x12", &radau36),
-        ("periodic-qc", "lg30", &lg),
-        ("periodic-cot", "radau3x10", &radau),
-        ("periodic-cot", "lg30", &lg),
-        ("periodic-cot-human", "radau3x10", &radau),
-        ("periodic-cot-human", "lg30", &lg),
+        (Problem::PeriodicQc, "radau3x10", &radau),
+        (Problem::PeriodicQc, "radau3x12", &radau36),
+        (Problem::PeriodicQc, "lg30", &lg),
+        (Problem::PeriodicCot, "radau3x10", &radau),
+        (Problem::PeriodicCot, "lg30", &lg),
+        (Problem::PeriodicCotHuman, "radau3x10", &radau),
+        (Problem::PeriodicCotHuman, "lg30", &lg),
     ] {
         let problem = match build(name, settings) {
             Ok(p) => p,

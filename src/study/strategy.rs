@@ -2,7 +2,7 @@
 //! (paper Sect. 7 suggests warm-starting from runs of simplified problems).
 //!
 //! * [`Strategy::Direct`]: one interior-point solve from the PARAMS.md guess (q ≡ q⁰,
-//!   t_f⁽ⁱ⁾ = i), with the geometric guess as fallback ([`super::solve`]).
+//!   t_f⁽ⁱ⁾ = i), with the geometric guess as fallback ([`super::solve::solve`]).
 //! * [`Strategy::Continuation`] (the default): a homotopy in the constraints and the smoothing.
 //!   For the periodic problems (eq. 60 ratio objectives) the period T = Σ t_f⁽ⁱ⁾ is the
 //!   dominant non-convexity — the QC optimum at T ≈ 2.6 s that a cold start finds is 2–5×
@@ -26,121 +26,28 @@
 
 use std::time::Instant;
 
+use bf_optim::ipm::Status;
+use bf_optim::ocp::OcpError;
+use bf_problem::catalogue::Q_GUESS;
+use bf_problem::{BuiltProblem, GuessKind, OcpSolution, Problem, ProblemSettings, StartGuess};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
 
-use super::{BuiltProblem, OcpSolution, ProblemSettings, Q_GUESS, StartGuess, build, solve};
-use super::{GuessKind, solve_warm};
-use crate::ipm::Status;
-use crate::ocp::OcpError;
+use super::build;
+use super::solve::{solve, solve_warm};
+pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
 
 /// ε₀ / ε of the first continuation stage of the periodic problems.
 pub const EPS_FACTOR: f64 = 5.0;
-
-/// How [`solve_with_strategy`] searches for a good local optimum.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub enum Strategy {
-    /// One solve from the default guess (geometric guess as fallback).
-    Direct,
-    /// Period sweep + release + ε-homotopy (module docs); the default.
-    #[default]
-    Continuation,
-    /// `starts` guesses drawn around the default with seed `seed`.
-    Multistart {
-        /// Number of starts (≥ 1; start 0 is the default guess).
-        starts: usize,
-        /// Seed of the ChaCha8 generator.
-        seed: u64,
-    },
-}
-
-impl std::fmt::Display for Strategy {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Strategy::Direct => write!(f, "direct"),
-            Strategy::Continuation => write!(f, "continuation"),
-            Strategy::Multistart { starts, seed } => {
-                write!(f, "multistart ({starts} starts, seed {seed})")
-            }
-        }
-    }
-}
-
-/// One solve of a strategy.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StageRecord {
-    /// Chain or start index.
-    pub chain: usize,
-    /// Stage name, e.g. `sweep T=1`, `release`, `eps 0.01`, `start 3`.
-    pub stage: String,
-    /// Solver status.
-    pub status: Status,
-    /// Objective φ at the end of the stage (of that stage's problem).
-    pub objective: f64,
-    /// Period (total duration) at the end of the stage (s).
-    pub period: f64,
-    /// Interior-point iterations of the stage.
-    pub iterations: usize,
-    /// Wall time of the stage (s, build included).
-    pub seconds: f64,
-}
-
-/// Everything a strategy ran, and which result it kept.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StrategyReport {
-    /// The strategy.
-    pub strategy: Strategy,
-    /// Every stage of every chain/start, in chain order.
-    pub records: Vec<StageRecord>,
-    /// The chain/start whose final stage was kept (`None` if none succeeded: then the best
-    /// failed one is returned).
-    pub chosen: Option<usize>,
-    /// Total interior-point iterations.
-    pub iterations: usize,
-    /// Wall time (s).
-    pub seconds: f64,
-}
-
-impl StrategyReport {
-    /// A plain-text table of the records, one line each, the kept chain marked `*`.
-    pub fn table(&self) -> String {
-        let mut s = format!(
-            "strategy {}: {} solves, {} iterations, {:.2} s\n  chain  stage                 status          objective     period  iter  time(s)\n",
-            self.strategy,
-            self.records.len(),
-            self.iterations,
-            self.seconds
-        );
-        for r in &self.records {
-            s.push_str(&format!(
-                "{} {:5}  {:<20}  {:<14} {:>12.6e} {:>8.4} {:>5} {:>8.2}\n",
-                if Some(r.chain) == self.chosen {
-                    '*'
-                } else {
-                    ' '
-                },
-                r.chain,
-                r.stage,
-                format!("{:?}", r.status),
-                r.objective,
-                r.period,
-                r.iterations,
-                r.seconds
-            ));
-        }
-        s
-    }
-}
 
 /// Progress reporter: called after every stage (from worker threads).
 pub type Progress<'a> = Option<&'a (dyn Fn(&StageRecord) + Sync)>;
 
 /// Fixed-period values of the continuation's first stage (s): around the QC optima for
-/// `periodic-qc`, spread up to [`super::COT_MAX_PERIOD`] for COT.
-pub fn period_grid(name: &str) -> Vec<f64> {
-    if name == "periodic-qc" {
+/// `periodic-qc`, spread up to [`bf_problem::COT_MAX_PERIOD`] for COT.
+pub fn period_grid(problem: Problem) -> Vec<f64> {
+    if problem == Problem::PeriodicQc {
         vec![0.5, 0.75, 1.0, 1.5, 2.0, 3.0]
     } else {
         vec![1.0, 2.0, 3.0, 5.0, 7.5, 10.0]
@@ -177,7 +84,7 @@ type ChainResult = (Vec<StageRecord>, Option<(BuiltProblem, OcpSolution)>);
 /// Runs `stages` (settings of each stage; stage k > 0 warm-starts from stage k − 1, whose NLP
 /// layout must be the same) as chain `chain`; stops at the first stage that errors.
 fn run_chain(
-    name: &str,
+    problem: Problem,
     chain: usize,
     stages: Vec<(String, ProblemSettings)>,
     mut prebuilt: Option<BuiltProblem>,
@@ -190,7 +97,7 @@ fn run_chain(
         // The first stage may come built already (`prebuilt` has that stage's settings).
         let built = match prebuilt.take() {
             Some(p) => Ok(p),
-            None => build(name, &settings),
+            None => build(problem, &settings),
         };
         let res = built.and_then(|p| {
             let sol = match last.as_ref().and_then(|(_, s)| s.nlp_warm.as_ref()) {
@@ -265,12 +172,12 @@ pub fn random_start(k: usize, seed: u64, nq: usize, nphases: usize) -> StartGues
     }
 }
 
-/// Solves problem `name` with `strategy`. `settings` are the target problem's (ε, mesh, ...;
+/// Solves `problem` with `strategy`. `settings` are the target problem's (ε, mesh, ...;
 /// a warm start in them makes every strategy a single warm-started solve). Returns the final
 /// stage's problem (for verification and refinement) and solution, whose
 /// [`OcpSolution::strategy`] lists every stage.
 pub fn solve_with_strategy(
-    name: &str,
+    problem: Problem,
     settings: &ProblemSettings,
     strategy: Strategy,
     progress: Progress<'_>,
@@ -281,16 +188,16 @@ pub fn solve_with_strategy(
     } else {
         strategy
     };
-    let target = build(name, settings)?;
+    let target = build(problem, settings)?;
     let eps = target.epsilon;
     let nq = target.physics.nq;
     let nphases = target.modes.len();
-    let periodic = name.starts_with("periodic");
+    let periodic = problem.is_periodic();
     let chains: Vec<Vec<(String, ProblemSettings)>> = match strategy {
         Strategy::Direct => vec![vec![("direct".into(), settings.clone())]],
         Strategy::Continuation if periodic => {
             let eps0 = EPS_FACTOR * eps;
-            period_grid(name)
+            period_grid(problem)
                 .into_iter()
                 .map(|t| {
                     // Every stage carries the period row (its bounds only), so that each
@@ -369,7 +276,7 @@ pub fn solve_with_strategy(
         .into_par_iter()
         .zip(prebuilt)
         .enumerate()
-        .map(|(k, (stages, first))| run_chain(name, k, stages, first, progress))
+        .map(|(k, (stages, first))| run_chain(problem, k, stages, first, progress))
         .collect();
     let best = best_index(&results);
     let records: Vec<StageRecord> = results.iter().flat_map(|(r, _)| r.clone()).collect();

@@ -1,4 +1,4 @@
-//! Legendre–Gauss (LG) transcription of the ball-and-finger problems (issue 6).
+//! Legendre–Gauss (LG) transcription of the ball-and-finger problems.
 //!
 //! With LG the stick phase imposes d(Δv)/dt = 0 at the Gauss nodes (`StickLevel::Acceleration`)
 //! and Δv⁺ = 0 at the impact (eq. 40c), without an end-point Δv row, and the Gauss defects are
@@ -19,15 +19,17 @@
 
 mod common;
 
+use ball_finger::study::{build, solve};
 use bf_codegen::Scene;
 use bf_optim::ipm::{Nlp, Status};
 use bf_optim::ocp::nodes::{differentiation_matrix, legendre_gauss};
 use bf_optim::ocp::transcription::integration_matrix;
 use bf_optim::ocp::{GraphFn, Scheme};
-use bf_optim::problems::bf::{
-    CostKind, Diagnostics, Mode, NodeOptions, Physics, StickLevel, node_function_with,
+use bf_problem::node::{NodeOptions, node_function as node_function_with};
+use bf_problem::points::Diagnostics;
+use bf_problem::{
+    BuiltProblem, CostKind, Mode, OcpSolution, Physics, Problem, ProblemSettings, StickLevel,
 };
-use bf_optim::problems::{BuiltProblem, OcpSolution, ProblemSettings, build, solve};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -118,7 +120,7 @@ fn solve_named(name: &str, scheme: Scheme, points: usize) -> (BuiltProblem, OcpS
         max_iter: 600,
         ..ProblemSettings::default()
     };
-    let p = build(name, &s).unwrap();
+    let p = build(name.parse().unwrap(), &s).unwrap();
     let sol = solve(&p, None).unwrap();
     (p, sol)
 }
@@ -146,7 +148,7 @@ fn lg_defects_are_the_differential_defects_in_integral_form() {
         ..ProblemSettings::default()
     };
     // A single free phase: x = (q, q̇, ω), algebraic a = (q̈, ω̇), so f = (q̇, q̈, ω̇).
-    let p = build("reach", &s).unwrap();
+    let p = build(Problem::Reach, &s).unwrap();
     let l = &p.nlp.phases[0];
     let (nx, nq) = (l.nx, (l.nx - 3) / 2);
     assert_eq!(l.na, nq + 3);
@@ -283,7 +285,7 @@ fn lg_periodic_cot_problems_converge_from_the_default_guess() {
         );
         let (stat, viol) = kkt_residual(&p, &lg);
         assert!(viol < 1e-6 && stat < 1e-5, "{name} LG-30: {viol} {stat}");
-        assert!(lg.period <= bf_optim::problems::COT_MAX_PERIOD + 1e-6);
+        assert!(lg.period <= bf_problem::COT_MAX_PERIOD + 1e-6);
         // Rotation in the desired direction (1, −1, 0)/√2.
         let along = (lg.mean_omega[0] - lg.mean_omega[1]) / 2f64.sqrt();
         assert!(along > 0.05, "{name}: {:?}", lg.mean_omega);
@@ -322,7 +324,7 @@ fn spinning_archetypes_keep_contact_in_the_stick_phase() {
                 max_iter: 1500,
                 ..ProblemSettings::default()
             };
-            let p = build(name, &s).unwrap();
+            let p = build(name.parse().unwrap(), &s).unwrap();
             let sol = solve(&p, None).unwrap();
             assert_eq!(
                 sol.status,

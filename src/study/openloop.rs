@@ -5,8 +5,8 @@
 
 use anyhow::{Context, Result, anyhow};
 use bf_model::{ImpactLaw, Mode};
-use bf_optim::problems::OcpSolution;
 use bf_plot::paper::TimeSeries;
+use bf_problem::OcpSolution;
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{SimSettings, TorqueSeries};
 use std::fmt::Write as _;

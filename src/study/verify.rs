@@ -39,13 +39,12 @@ use std::time::Instant;
 
 use bf_model::fixtures::{self, DynKernels};
 use bf_model::{ContactVariant, Model, State, TransitionSettings, Vec3};
+use bf_optim::ocp::nodes::lagrange_basis;
+use bf_optim::ocp::{OcpError, PhaseTrajectory};
+use bf_problem::{BuiltProblem, Mode, OcpSolution};
 use bf_sim::{Guard, HybridSystem, SimError, SimOutput, SimSettings, Transition};
-use serde::{Deserialize, Serialize};
 
-use super::bf::Mode;
-use super::{BuiltProblem, OcpSolution};
-use crate::ocp::nodes::lagrange_basis;
-use crate::ocp::{OcpError, PhaseTrajectory};
+pub use bf_problem::solution::records::{PhaseVerification, TorqueInterpolant, Verification};
 
 /// Contact tolerance (fraction of the ball radius) of the stick dynamics during verification.
 pub const CONTACT_TOLERANCE: f64 = 0.05;
@@ -56,35 +55,6 @@ pub const ATOL_FACTOR: f64 = 1e-2;
 /// Extra dense-output samples per collocation element for the path checks (h, Δv, λ_n, σ),
 /// in addition to the integrator's accepted steps.
 pub const SAMPLES_PER_ELEMENT: usize = 16;
-
-/// JSON has no NaN/∞: non-finite values are written as `null` and read back as NaN.
-mod nan_null {
-    use serde::{Deserialize, Deserializer, Serializer};
-
-    pub fn serialize<S: Serializer>(v: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if v.is_finite() {
-            s.serialize_some(v)
-        } else {
-            s.serialize_none()
-        }
-    }
-
-    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
-    }
-}
-
-/// Torques between the collocation nodes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
-pub enum TorqueInterpolant {
-    /// The element's collocation polynomial clamped to |τ_i| ≤ τ_max,i: the solution's dense
-    /// output and `torques.csv` (what a simulation of the exported torques applies).
-    #[default]
-    Clamped,
-    /// The element's collocation polynomial, unclamped (may exceed τ_max between nodes where
-    /// the optimal torques saturate; closer to what the collocation equations imply).
-    Polynomial,
-}
 
 /// Options of [`verify_with`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,189 +74,6 @@ impl Default for VerifyOptions {
             atol: None,
             torque: TorqueInterpolant::Clamped,
         }
-    }
-}
-
-/// Verification record of one phase.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct PhaseVerification {
-    /// Phase index.
-    pub phase: usize,
-    /// Contact mode.
-    pub mode: Mode,
-    /// Duration T (s).
-    pub duration: f64,
-    /// Phase-local time the re-integration reached (= T unless it failed).
-    pub t_reached: f64,
-    /// Why the re-integration stopped early (`None`: it reached T).
-    pub failure: Option<String>,
-    /// max_i |x_sim,i(T) − x_colloc,i(T)| over all 2 nq + 3 components (NaN on failure).
-    #[serde(with = "nan_null")]
-    pub defect: f64,
-    /// The q part of `defect` (rad).
-    #[serde(with = "nan_null")]
-    pub defect_q: f64,
-    /// The q̇ part of `defect` (rad/s).
-    #[serde(with = "nan_null")]
-    pub defect_qd: f64,
-    /// The ω part of `defect` (rad/s).
-    #[serde(with = "nan_null")]
-    pub defect_omega: f64,
-    /// Local accuracy of the collocation: max over the collocation elements of the end-state
-    /// defect of a re-integration of that element alone, from its collocated start state
-    /// (NaN if one failed). `defect` / `element_defect` ≫ 1 means the phase's open-loop
-    /// dynamics amplify the local errors (unstable open-loop motion).
-    #[serde(with = "nan_null")]
-    pub element_defect: f64,
-    /// Collocated initial state (the re-integration's start).
-    pub x_start: Vec<f64>,
-    /// Re-integrated state at `t_reached`.
-    pub x_end: Vec<f64>,
-    /// Collocated state at the phase end.
-    pub x_colloc_end: Vec<f64>,
-    /// Accepted DOPRI5 steps.
-    pub steps: usize,
-    /// Rejected DOPRI5 steps.
-    pub rejected_steps: usize,
-    /// Vector-field evaluations.
-    pub rhs_evals: usize,
-    /// Relative tolerance used.
-    pub rtol: f64,
-    /// Absolute tolerance used.
-    pub atol: f64,
-    /// Largest residual of the OCP dynamics (eq. 26 / 29, force and torque units) at the
-    /// collocation nodes, evaluated with bf-model's kernels and parameters on the collocated
-    /// (x, q̈, ω̇, λ, τ): near the NLP tolerance iff both sides use the same physics.
-    #[serde(with = "nan_null")]
-    pub node_residual: f64,
-    /// Largest excess of the unclamped torque polynomial over τ_max along the samples (N m; 0
-    /// when the torques stay within their limits between the nodes). With
-    /// [`TorqueInterpolant::Clamped`] this torque error is part of the defects.
-    pub max_torque_overshoot: f64,
-    /// Free phases: min h along the re-integration (m; < 0 is penetration).
-    pub min_h: Option<f64>,
-    /// Stick phases: max ‖Δv‖ along the re-integration (m/s; drift of Δv = 0).
-    pub max_delta_v: Option<f64>,
-    /// Stick phases: min λ_n along the re-integration (N; < 0 means the contact would open).
-    pub min_lambda_n: Option<f64>,
-    /// Stick phases: min σ = μ_s λ_n − ‖λ_∥‖ (N; < 0 means the contact would slip).
-    pub min_sigma: Option<f64>,
-    /// Stick phases: max |h| along the re-integration (m).
-    pub max_abs_h: Option<f64>,
-}
-
-/// Result of [`verify`]; meant for `solution.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Verification {
-    /// Problem name.
-    pub problem: String,
-    /// Scene name.
-    pub scene: String,
-    /// ε of the smooth saturation (eq. 59) used by the re-integration.
-    pub epsilon: f64,
-    /// Torque interpolant between the collocation nodes.
-    pub torque: TorqueInterpolant,
-    /// DOPRI5 relative tolerance.
-    pub rtol: f64,
-    /// DOPRI5 absolute tolerance.
-    pub atol: f64,
-    /// Per-phase records.
-    pub phases: Vec<PhaseVerification>,
-    /// Max end-state defect over all phases (NaN if a phase failed).
-    #[serde(with = "nan_null")]
-    pub max_defect: f64,
-    /// Max node residual over all phases.
-    #[serde(with = "nan_null")]
-    pub max_node_residual: f64,
-    /// Wall time of the verification (s).
-    pub seconds: f64,
-}
-
-impl Verification {
-    /// Whether every phase was re-integrated to its end.
-    pub fn completed(&self) -> bool {
-        self.phases.iter().all(|p| p.failure.is_none())
-    }
-
-    /// Whether every phase completed with an end-state defect ≤ `tol`.
-    pub fn passes(&self, tol: f64) -> bool {
-        self.completed() && self.max_defect <= tol
-    }
-
-    /// A short table for the CLI (same text as `Display`).
-    pub fn summary(&self) -> String {
-        self.to_string()
-    }
-}
-
-fn fmt_opt(v: Option<f64>) -> String {
-    v.map_or_else(|| "-".into(), |v| format!("{v:.2e}"))
-}
-
-impl fmt::Display for Verification {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "trajectory verification ({}, scene {}): DOPRI5 rtol {:.0e} atol {:.0e}, eps {}, {:?} torques, {:.3} s",
-            self.problem, self.scene, self.rtol, self.atol, self.epsilon, self.torque, self.seconds
-        )?;
-        writeln!(
-            f,
-            "{:>5} {:>5} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>9} {:>9}  path",
-            "phase",
-            "mode",
-            "T (s)",
-            "defect",
-            "q",
-            "qd",
-            "omega",
-            "element",
-            "steps",
-            "node res",
-            "tau over"
-        )?;
-        for p in &self.phases {
-            let mode = match p.mode {
-                Mode::Free => "free",
-                Mode::Stick => "stick",
-            };
-            let path = match p.mode {
-                Mode::Free => format!("min h {}", fmt_opt(p.min_h)),
-                Mode::Stick => format!(
-                    "max|dv| {}  min lambda_n {}  min sigma {}  max|h| {}",
-                    fmt_opt(p.max_delta_v),
-                    fmt_opt(p.min_lambda_n),
-                    fmt_opt(p.min_sigma),
-                    fmt_opt(p.max_abs_h)
-                ),
-            };
-            writeln!(
-                f,
-                "{:>5} {:>5} {:>9.4} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>6} {:>9.2e} {:>9.2e}  {}",
-                p.phase,
-                mode,
-                p.duration,
-                p.defect,
-                p.defect_q,
-                p.defect_qd,
-                p.defect_omega,
-                p.element_defect,
-                p.steps,
-                p.node_residual,
-                p.max_torque_overshoot,
-                path
-            )?;
-            if let Some(e) = &p.failure {
-                writeln!(f, "      FAILED at t = {:.6} s: {e}", p.t_reached)?;
-            }
-        }
-        writeln!(
-            f,
-            "(defect: max |x_sim - x_colloc| at the phase end; element: worst single-element \
-             defect; node res: OCP dynamics residual with bf-model; tau over: torque polynomial \
-             beyond tau_max)"
-        )?;
-        write!(f, "max end-state defect: {:.3e}", self.max_defect)
     }
 }
 

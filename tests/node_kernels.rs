@@ -1,14 +1,16 @@
-//! The optimal-control node kernels emitted by bf-codegen into bf-generated (issue 6,
-//! deliverable 3): every node function of the problem library runs on an emitted kernel, the
+//! The optimal-control node kernels emitted into bf-generated (by bf-problem on bf-codegen's
+//! node-function engine): every node function of the problem library runs on an emitted kernel, the
 //! kernels agree bitwise with the interpreted graphs they were emitted from, their derivatives
 //! agree with central finite differences of their values, and a node function whose structure
 //! differs from every emitted one (another friction coefficient baked into the graph) is
-//! interpreted instead of being matched to a wrong kernel.
+//! interpreted instead of being matched to a wrong kernel, and that the catalogue, which
+//! requires the kernels, then refuses to build instead of silently interpreting it.
 //!
-//! `cargo test --release -p bf-optim --test node_kernels`
+//! `cargo test --release --test node_kernels`
 
+use ball_finger::study::{GENERATED, build};
 use bf_optim::ocp::{GraphFn, KernelUse, Scheme};
-use bf_optim::problems::{PROBLEMS, ProblemSettings, build};
+use bf_problem::{Generated, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -35,7 +37,7 @@ fn random_locals(rng: &mut ChaCha8Rng, n: usize, nx: usize) -> Vec<f64> {
 /// Both backends of every phase node function of `settings`' problems.
 fn node_pairs(settings: &ProblemSettings) -> Vec<(String, GraphFn, GraphFn, usize)> {
     let mut out = Vec::new();
-    for name in PROBLEMS {
+    for name in Problem::ALL {
         let p = build(name, settings).unwrap_or_else(|e| panic!("{name}: {e}"));
         for (pi, ph) in p.ocp.phases.iter().enumerate() {
             let mut c = ph.node.collocation();
@@ -44,7 +46,7 @@ fn node_pairs(settings: &ProblemSettings) -> Vec<(String, GraphFn, GraphFn, usiz
                 &c.outputs,
                 &c.locals,
                 &ph.node.fixed,
-                KernelUse::Auto,
+                GENERATED.kernels,
             );
             let interp = GraphFn::with_backend(
                 &mut c.graph,
@@ -138,7 +140,7 @@ fn every_library_node_runs_on_an_emitted_kernel_bitwise_equal_to_the_graphs() {
 fn kernel_derivatives_match_finite_differences() {
     let settings = ProblemSettings::default();
     let mut rng = ChaCha8Rng::seed_from_u64(61);
-    for name in ["periodic-qc", "periodic-cot-human"] {
+    for name in [Problem::PeriodicQc, Problem::PeriodicCotHuman] {
         let p = build(name, &settings).unwrap();
         for (pi, f) in p.nlp.phase_functions().iter().enumerate() {
             assert!(f.kernel_name().is_some(), "{name} phase {pi}");
@@ -217,10 +219,10 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         "mu_s = 0.8 not found in the paper scene"
     );
     let scene = bf_codegen::Scene::from_toml_str(&text, "test").unwrap();
-    let ph = bf_optim::problems::bf::physics(&scene).unwrap();
-    let opt = bf_optim::problems::bf::NodeOptions {
-        mode: bf_optim::problems::bf::Mode::Stick,
-        cost: bf_optim::problems::bf::CostKind::Qc {
+    let ph = bf_problem::points::physics(&scene).unwrap();
+    let opt = bf_problem::node::NodeOptions {
+        mode: bf_problem::Mode::Stick,
+        cost: bf_problem::CostKind::Qc {
             w: 1.0,
             omega_ref: [0.0, 0.0, 2.2],
         },
@@ -228,15 +230,69 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         hdot_bounds: None,
         eps: 0.01,
     };
-    let (nd, _) = bf_optim::problems::bf::node_function(&scene, &ph, &opt).unwrap();
+    let (nd, _) =
+        bf_problem::node::node_function(&scene, &ph, &opt, bf_problem::StickLevel::Velocity)
+            .unwrap();
     let mut c = nd.collocation();
-    let f = GraphFn::new(&mut c.graph, &c.outputs, &c.locals, &nd.fixed);
+    let f = GraphFn::with_backend(
+        &mut c.graph,
+        &c.outputs,
+        &c.locals,
+        &nd.fixed,
+        GENERATED.kernels,
+    );
     assert_eq!(f.kernel_name(), None);
     // The same node on the paper scene does find its kernel.
     let paper = bf_codegen::Scene::from_toml_str(bf_generated::paper::SCENE_TOML, "paper").unwrap();
-    let ph = bf_optim::problems::bf::physics(&paper).unwrap();
-    let (nd, _) = bf_optim::problems::bf::node_function(&paper, &ph, &opt).unwrap();
+    let ph = bf_problem::points::physics(&paper).unwrap();
+    let (nd, _) =
+        bf_problem::node::node_function(&paper, &ph, &opt, bf_problem::StickLevel::Velocity)
+            .unwrap();
     let mut c = nd.collocation();
-    let f = GraphFn::new(&mut c.graph, &c.outputs, &c.locals, &nd.fixed);
+    let f = GraphFn::with_backend(
+        &mut c.graph,
+        &c.outputs,
+        &c.locals,
+        &nd.fixed,
+        GENERATED.kernels,
+    );
     assert_eq!(f.kernel_name(), Some("paper_qc_stick"));
+}
+
+/// The paper scene with another μ_s: a graph no emitted kernel was built from.
+fn paper_with_other_mu_s(name: &str) -> Option<&'static str> {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    let text = TEXT.get_or_init(|| {
+        bf_generated::paper::SCENE_TOML.replace("\nmu_s = 0.8\n", "\nmu_s = 0.7\n")
+    });
+    (name == "paper").then_some(text.as_str())
+}
+
+#[test]
+fn a_catalogue_that_requires_kernels_refuses_a_graph_without_one() {
+    let settings = ProblemSettings::default();
+    let required = Generated {
+        scene_toml: paper_with_other_mu_s,
+        ..GENERATED
+    };
+    let e = bf_problem::build(Problem::PeriodicQc, &settings, &required)
+        .expect_err("no kernel has the stick node with mu_s = 0.7");
+    assert!(e.to_string().contains("no emitted node kernel"), "{e}");
+    // Preferring kernels, it builds and interprets exactly the stick phase (μ_s appears only
+    // in the friction-cone row of the stick node function).
+    let Some(lookup) = GENERATED.kernels.lookup() else {
+        panic!("the study layer hands in a kernel lookup")
+    };
+    let preferred = Generated {
+        scene_toml: paper_with_other_mu_s,
+        kernels: KernelUse::Prefer(lookup),
+    };
+    let p = bf_problem::build(Problem::PeriodicQc, &settings, &preferred).unwrap();
+    let names: Vec<Option<&str>> = p
+        .nlp
+        .phase_functions()
+        .iter()
+        .map(|f| f.kernel_name())
+        .collect();
+    assert_eq!(names, [Some("paper_qc_free"), None, Some("paper_qc_free")]);
 }

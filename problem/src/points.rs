@@ -1,34 +1,17 @@
-//! Ball-and-finger node and point functions on the bf-codegen expression graph.
-//!
-//! The node functions themselves are built in bf-codegen ([`bf_codegen::ocp`]), so that the
-//! generator can also emit them as flat Rust kernels (bf-generated's `node_kernel`); this
-//! module re-exports them and builds the point functions. Node variables (graph `Var` indices after the robot layout q, q̇, ω, ε, parameters):
-//! q̈, ω̇ (algebraic, so the dynamics are imposed implicitly), λ (stick only), τ (control),
-//! and the phase duration T. Residuals:
-//!
-//! * free dynamics (eq. 26): M q̈ + C q̇ + μ_v q̇ + g − τ = 0,  I_b ω̇ + ω × I_b ω + D ω = 0;
-//! * stick dynamics (eq. 29): M q̈ + C q̇ + μ_v q̇ + g − τ − J_cᵀ λ = 0,
-//!   I_b ω̇ + ω × I_b ω + D ω + r_c × λ = 0, and the stick constraint Δv = 0 (eq. 14/27), or
-//!   its time derivative d(Δv)/dt = 0 ([`StickLevel::Acceleration`], the index-1 form used with
-//!   Legendre–Gauss, see [`node_function_with`]);
-//! * validity: h (eq. 4), λ_n = λ·n ≥ 0 (eq. 12) and the friction cone (eq. 18–19) as
-//!   σ_δ = μ_s λ_n − (sqrt(‖λ_∥‖² + δ²) − δ) ≥ 0 (the smooth |·| of eq. 59, δ = [`CONE_DELTA`]);
-//! * cost integrands: QC (eq. 64–65) and COT (eq. 61–63), effort and time;
-//! * the sticking impact law (eq. 40a–c) as the Free→Stick reset with the impulse ι as
-//!   decision variables, ι_n ≥ 0, and the optional impulse cone (eq. 66).
-//!
-//! The contact geometry uses the smooth saturation (eq. 58–59) with ε as a fixed input; the
-//! cost constants are fixed inputs too.
+//! Point functions of the ball-and-finger problems on the bf-codegen expression graph: the
+//! sticking impact law (eq. 40a–c) as the Free→Stick reset with the impulse ι as decision
+//! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66); contact quantities (h eq. 4, ḣ,
+//! Δv eq. 13–14) at phase end points; continuity and periodicity; and [`Diagnostics`], an
+//! evaluator of the contact quantities at a state. The contact geometry uses the smooth
+//! saturation (eq. 58–59) with ε as a fixed input.
 
+use bf_codegen::Scene;
 use bf_codegen::graph::{Graph, Id};
+use bf_codegen::interp::Tape;
 use bf_codegen::robot::Model;
-use bf_codegen::{Scene, interp::Tape};
+use bf_optim::ocp::{OcpError, PointFunction, VarRef};
 
-use crate::ocp::{NodeFunction, OcpError, PointFunction, VarRef};
-
-pub use bf_codegen::ocp::{
-    CONE_DELTA, CostKind, Mode, NodeOptions, NodeVars, Physics, StickLevel, m3_const, v3, vars,
-};
+use crate::node::{Physics, m3_const, v3, vars};
 
 fn model_err(e: bf_codegen::CodegenError) -> OcpError {
     OcpError::Model(e.to_string())
@@ -46,36 +29,12 @@ struct Built {
 }
 
 fn build_model(scene: &Scene, eps: f64) -> Result<Built, OcpError> {
-    let b = bf_codegen::ocp::build_model(scene, eps).map_err(model_err)?;
+    let b = crate::node::build_model(scene, eps).map_err(model_err)?;
     Ok(Built {
         model: b.model,
         fixed: b.fixed,
         base: b.base,
     })
-}
-
-/// Node function of one phase (stick constraint at the velocity level); returns it with the
-/// variable indices. Path rows: finger dynamics (nq), ball (3), then [stick: Δv (3), λ_n,
-/// cone], then [h], then [ḣ]. Built by [`bf_codegen::ocp::node_function`], the same code
-/// that emits the node kernels of bf-generated.
-pub fn node_function(
-    scene: &Scene,
-    ph: &Physics,
-    opt: &NodeOptions,
-) -> Result<(NodeFunction, NodeVars), OcpError> {
-    node_function_with(scene, ph, opt, StickLevel::Velocity)
-}
-
-/// [`node_function`] with the stick constraint at the given level (only matters for
-/// [`Mode::Stick`]; the path row layout is the same, with d(Δv)/dt in place of Δv). Why
-/// Legendre–Gauss needs [`StickLevel::Acceleration`]: see [`bf_codegen::ocp::node_function`].
-pub fn node_function_with(
-    scene: &Scene,
-    ph: &Physics,
-    opt: &NodeOptions,
-    level: StickLevel,
-) -> Result<(NodeFunction, NodeVars), OcpError> {
-    bf_codegen::ocp::node_function(scene, ph, opt, level).map_err(model_err)
 }
 
 fn state_refs(phase: usize, nx: usize, fin: bool) -> Vec<VarRef> {

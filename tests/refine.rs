@@ -3,16 +3,17 @@
 //! custom hp-Radau meshes, the ph rule, the exact warm start, and adaptive refinement of the
 //! named problems (`reach`, `periodic-qc`).
 
+use ball_finger::study::refine::{
+    RefineOptions, RefineRound, current_mesh, error_estimate, refine, warm_initial_point,
+};
+use ball_finger::study::{build, solve};
 use bf_codegen::graph::Graph;
 use bf_optim::ipm::{Nlp, Settings, Status};
 use bf_optim::ocp::{
     HpRule, MeshSpec, NodeFunction, Objective, Ocp, Phase, PhaseGuess, PointFunction, Scheme,
     Transcription, VarRef, collocation_errors, extract, solve_nlp,
 };
-use bf_optim::problems::refine::{
-    RefineOptions, RefineRound, current_mesh, error_estimate, refine, warm_initial_point,
-};
-use bf_optim::problems::{ProblemSettings, build, solve};
+use bf_problem::{Problem, ProblemSettings};
 
 const INF: f64 = 1e20;
 
@@ -356,14 +357,14 @@ fn custom_mesh_matches_uniform_scheme_and_rejects_bad_specs() {
 #[test]
 fn warm_start_interpolates_exactly_onto_a_new_mesh() {
     let s = ProblemSettings::default();
-    let p = build("reach", &s).unwrap();
+    let p = build(Problem::Reach, &s).unwrap();
     let sol = solve(&p, None).unwrap();
     assert_eq!(sol.status, Status::Solved);
     let est = max(&error_estimate(&p, &sol).unwrap()[0]);
     // Same mesh: the warm start is the solution itself.
     let mesh = current_mesh(&p).unwrap();
     assert_eq!(mesh[0].degrees, vec![10, 10, 10]);
-    let mut same = build("reach", &s).unwrap();
+    let mut same = build(Problem::Reach, &s).unwrap();
     warm_initial_point(&mut same, &sol).unwrap();
     assert!(same.nlp.max_violation(same.nlp.initial()).0 < 1e-7);
     // A finer mesh (split elements, degrees ≥ 10): the degree-10 element polynomials are
@@ -377,7 +378,7 @@ fn warm_start_interpolates_exactly_onto_a_new_mesh() {
         mesh: Some(vec![finer.clone()]),
         ..s.clone()
     };
-    let mut p2 = build("reach", &s2).unwrap();
+    let mut p2 = build(Problem::Reach, &s2).unwrap();
     assert_eq!(current_mesh(&p2).unwrap()[0], finer);
     let cold = p2.nlp.max_violation(p2.nlp.initial()).0;
     warm_initial_point(&mut p2, &sol).unwrap();
@@ -424,7 +425,7 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
         print_round(r);
     };
     let res = refine(
-        "reach",
+        Problem::Reach,
         &ProblemSettings::default(),
         &opts,
         None,
@@ -458,7 +459,7 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
         points: 96,
         ..ProblemSettings::default()
     };
-    let pf = build("reach", &fine).unwrap();
+    let pf = build(Problem::Reach, &fine).unwrap();
     let jf = solve(&pf, None).unwrap().objective;
     println!(
         "reach: refined {j_final}, fine uniform {jf}, initial {}",
@@ -470,12 +471,19 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
         mesh: Some(res.mesh.clone()),
         ..ProblemSettings::default()
     };
-    let res2 = refine("reach", &again, &opts, None, None).unwrap();
+    let res2 = refine(Problem::Reach, &again, &opts, None, None).unwrap();
     assert!(res2.converged);
     assert_eq!(res2.history.len(), 1);
     assert_eq!(res2.mesh, res.mesh);
     let loose = RefineOptions { tol: 1.0, ..opts };
-    let res3 = refine("reach", &ProblemSettings::default(), &loose, None, None).unwrap();
+    let res3 = refine(
+        Problem::Reach,
+        &ProblemSettings::default(),
+        &loose,
+        None,
+        None,
+    )
+    .unwrap();
     assert!(res3.converged && res3.history.len() == 1);
     assert_eq!(res3.mesh[0], MeshSpec::uniform(3, 10).unwrap());
     // Round limit: reported as not converged, with the last solution.
@@ -483,21 +491,37 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
         max_rounds: 0,
         ..opts
     };
-    let res4 = refine("reach", &ProblemSettings::default(), &capped, None, None).unwrap();
+    let res4 = refine(
+        Problem::Reach,
+        &ProblemSettings::default(),
+        &capped,
+        None,
+        None,
+    )
+    .unwrap();
     assert!(!res4.converged && res4.history.len() == 1);
     // Result round-trips through JSON (solution.json).
     let js = serde_json::to_string(&res).unwrap();
-    let back: bf_optim::problems::refine::RefineResult = serde_json::from_str(&js).unwrap();
+    let back: ball_finger::study::refine::RefineResult = serde_json::from_str(&js).unwrap();
     assert_eq!(back.mesh, res.mesh);
     assert_eq!(back.history.len(), res.history.len());
     // Invalid options are errors.
     let bad = RefineOptions { tol: 0.0, ..opts };
-    assert!(refine("reach", &ProblemSettings::default(), &bad, None, None).is_err());
+    assert!(
+        refine(
+            Problem::Reach,
+            &ProblemSettings::default(),
+            &bad,
+            None,
+            None
+        )
+        .is_err()
+    );
     let lg = ProblemSettings {
         scheme: Scheme::Lg,
         ..ProblemSettings::default()
     };
-    assert!(refine("reach", &lg, &opts, None, None).is_err());
+    assert!(refine(Problem::Reach, &lg, &opts, None, None).is_err());
 }
 
 #[test]
@@ -509,7 +533,7 @@ fn refinement_of_periodic_qc_converges_to_1e_4() {
     };
     let mut cb = |r: &RefineRound| print_round(r);
     let res = refine(
-        "periodic-qc",
+        Problem::PeriodicQc,
         &ProblemSettings::default(),
         &opts,
         None,
@@ -553,7 +577,7 @@ fn explore() {
         ..ProblemSettings::default()
     };
     let mut cb = |r: &RefineRound| print_round(r);
-    let res = refine(&name, &settings, &opts, None, Some(&mut cb)).unwrap();
+    let res = refine(name.parse().unwrap(), &settings, &opts, None, Some(&mut cb)).unwrap();
     println!("{name}: converged {} ({})", res.converged, res.stop_reason);
     for (m, e) in res.mesh.iter().zip(&res.errors) {
         println!(
@@ -563,7 +587,7 @@ fn explore() {
     }
 }
 
-/// The "equal accuracy" behind issue 6's speed comparison: on `periodic-qc` (cold solves on
+/// The "equal accuracy" behind the LG vs Radau speed comparison: on `periodic-qc` (cold solves on
 /// the branch J ≈ 0.5598), Legendre–Gauss with 30 points per phase and Radau 3 × 12 both
 /// reach the objective of an adaptively refined mesh (tolerance 1e-6) to ≈ 5e-6 relative,
 /// while the default Radau 3 × 10 is an order of magnitude further off, so the 3 × 12 mesh is
@@ -576,7 +600,7 @@ fn radau_3x12_matches_lg30_accuracy_on_periodic_qc() {
         ..RefineOptions::default()
     };
     let reference = refine(
-        "periodic-qc",
+        Problem::PeriodicQc,
         &ProblemSettings::default(),
         &opts,
         None,
@@ -591,7 +615,7 @@ fn radau_3x12_matches_lg30_accuracy_on_periodic_qc() {
             points,
             ..ProblemSettings::default()
         };
-        let sol = solve(&build("periodic-qc", &s).unwrap(), None).unwrap();
+        let sol = solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap();
         assert_eq!(sol.status, Status::Solved, "{scheme:?} {points}");
         (sol.objective - j_ref).abs() / j_ref
     };

@@ -1,21 +1,22 @@
-//! Solve strategies (`bf_optim::problems::strategy`): the default continuation must find a
+//! Solve strategies (`ball_finger::study::strategy`): the default continuation must find a
 //! clearly better optimum of `periodic-qc` than the plain cold start, and one that survives
 //! re-integration; multi-start must be deterministic and never worse than its start 0 (the
 //! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
 
+use ball_finger::study::strategy::{Strategy, random_start, solve_with_strategy};
+use ball_finger::study::verify::verify;
+use ball_finger::study::{SolutionIo, build, solve, solve_warm};
 use bf_optim::ipm::Status;
-use bf_optim::problems::strategy::{Strategy, random_start, solve_with_strategy};
-use bf_optim::problems::verify::verify;
-use bf_optim::problems::{
-    OcpSolution, ProblemSettings, Q_GUESS, StartGuess, build, solve, solve_warm,
-};
+use bf_problem::catalogue::Q_GUESS;
+use bf_problem::{OcpSolution, Problem, ProblemSettings, StartGuess};
 
 #[test]
 fn default_strategy_beats_cold_start_on_periodic_qc_and_verifies() {
     let s = ProblemSettings::default();
-    let (_, direct) = solve_with_strategy("periodic-qc", &s, Strategy::Direct, None).unwrap();
+    let (_, direct) = solve_with_strategy(Problem::PeriodicQc, &s, Strategy::Direct, None).unwrap();
     assert!(direct.status.is_success());
-    let (p, cont) = solve_with_strategy("periodic-qc", &s, Strategy::default(), None).unwrap();
+    let (p, cont) =
+        solve_with_strategy(Problem::PeriodicQc, &s, Strategy::default(), None).unwrap();
     assert_eq!(Strategy::default(), Strategy::Continuation);
     assert!(cont.status.is_success(), "{:?}", cont.strategy);
     let rep = cont.strategy.as_ref().unwrap();
@@ -51,8 +52,8 @@ fn multistart_is_deterministic_and_never_worse_than_its_default_start() {
         starts: 3,
         seed: 11,
     };
-    let (_, a) = solve_with_strategy("periodic-qc", &s, st, None).unwrap();
-    let (_, b) = solve_with_strategy("periodic-qc", &s, st, None).unwrap();
+    let (_, a) = solve_with_strategy(Problem::PeriodicQc, &s, st, None).unwrap();
+    let (_, b) = solve_with_strategy(Problem::PeriodicQc, &s, st, None).unwrap();
     // Parallel solves, same answer to the bit (no shared state, ordered reduction).
     assert_eq!(a.objective.to_bits(), b.objective.to_bits());
     let ra = a.strategy.as_ref().unwrap();
@@ -61,7 +62,7 @@ fn multistart_is_deterministic_and_never_worse_than_its_default_start() {
         ra.records.iter().map(|r| r.chain).collect::<Vec<_>>(),
         [0, 1, 2]
     );
-    let direct = solve(&build("periodic-qc", &s).unwrap(), None).unwrap();
+    let direct = solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap();
     // Start 0 is the cold start itself.
     assert!((ra.records[0].objective - direct.objective).abs() < 1e-9 * direct.objective);
     let best_ok = ra
@@ -97,7 +98,7 @@ fn random_starts_are_reproducible_and_within_their_ranges() {
 #[test]
 fn exact_warm_start_restarts_at_the_optimum_also_through_json() {
     let s = ProblemSettings::default();
-    let p = build("periodic-qc", &s).unwrap();
+    let p = build(Problem::PeriodicQc, &s).unwrap();
     let sol = solve(&p, None).unwrap();
     assert_eq!(sol.status, Status::Solved);
     let dir = std::env::temp_dir().join(format!("bf-strategy-{}", std::process::id()));
@@ -123,7 +124,7 @@ fn exact_warm_start_restarts_at_the_optimum_also_through_json() {
         warm_start: Some(back),
         ..ProblemSettings::default()
     };
-    let p2 = build("periodic-qc", &s2).unwrap();
+    let p2 = build(Problem::PeriodicQc, &s2).unwrap();
     let again = solve(&p2, None).unwrap();
     assert!(again.status.is_success());
     assert!(again.stages[0].0.starts_with("exact warm start"));
@@ -137,8 +138,8 @@ fn exact_warm_start_restarts_at_the_optimum_also_through_json() {
 #[test]
 fn continuation_of_a_problem_without_period_is_an_eps_homotopy() {
     let s = ProblemSettings::default();
-    let (_, d) = solve_with_strategy("reach", &s, Strategy::Direct, None).unwrap();
-    let (p, c) = solve_with_strategy("reach", &s, Strategy::Continuation, None).unwrap();
+    let (_, d) = solve_with_strategy(Problem::Reach, &s, Strategy::Direct, None).unwrap();
+    let (p, c) = solve_with_strategy(Problem::Reach, &s, Strategy::Continuation, None).unwrap();
     let rep = c.strategy.as_ref().unwrap();
     assert_eq!(rep.records.len(), 2);
     assert!(rep.records[0].stage.starts_with("eps 0.1"));
@@ -152,7 +153,7 @@ fn continuation_of_a_problem_without_period_is_an_eps_homotopy() {
 fn bad_strategy_inputs_are_errors() {
     let s = ProblemSettings::default();
     let zero = Strategy::Multistart { starts: 0, seed: 0 };
-    assert!(solve_with_strategy("periodic-qc", &s, zero, None).is_err());
+    assert!(solve_with_strategy(Problem::PeriodicQc, &s, zero, None).is_err());
     for sg in [
         StartGuess {
             q: vec![0.1, 0.2],
@@ -171,7 +172,7 @@ fn bad_strategy_inputs_are_errors() {
             start: Some(sg.clone()),
             ..ProblemSettings::default()
         };
-        let e = build("periodic-qc", &bad).expect_err("must fail");
+        let e = build(Problem::PeriodicQc, &bad).expect_err("must fail");
         assert!(e.to_string().contains("start guess"), "{e}");
     }
     for es in [0.0, -1.0, f64::NAN, f64::INFINITY] {
@@ -179,11 +180,11 @@ fn bad_strategy_inputs_are_errors() {
             effort_scale: es,
             ..ProblemSettings::default()
         };
-        assert!(build("periodic-qc", &bad).is_err());
+        assert!(build(Problem::PeriodicQc, &bad).is_err());
     }
     let bad = ProblemSettings {
         period_bounds: Some((2.0, 1.0)),
         ..ProblemSettings::default()
     };
-    assert!(build("periodic-qc", &bad).is_err());
+    assert!(build(Problem::PeriodicQc, &bad).is_err());
 }

@@ -1,4 +1,4 @@
-//! Trajectory verification (`bf_optim::problems::verify`): re-integration of solved periodic
+//! Trajectory verification (`ball_finger::study::verify`): re-integration of solved periodic
 //! problems with the simulator's DOPRI5 on bf-model's physics. The tests check that the defects
 //! are small for converged solutions and shrink under mesh refinement, that corrupting the
 //! solution makes them large (the check is not a no-op), that the re-integrated end state
@@ -6,19 +6,20 @@
 
 use std::sync::OnceLock;
 
+use ball_finger::study::verify::{
+    TorqueInterpolant, Verification, VerifyOptions, verify, verify_with,
+};
+use ball_finger::study::{build, solve};
 use bf_generated::paper as k;
 use bf_optim::ipm::Status;
 use bf_optim::ocp::Scheme;
-use bf_optim::problems::bf::Mode;
-use bf_optim::problems::verify::{
-    TorqueInterpolant, Verification, VerifyOptions, verify, verify_with,
-};
-use bf_optim::problems::{BuiltProblem, OcpSolution, ProblemSettings, build, solve};
+use bf_problem::Mode;
+use bf_problem::{BuiltProblem, OcpSolution, ProblemSettings};
 
 const RTOL: f64 = 1e-10;
 
 fn solved(name: &str, s: &ProblemSettings) -> (BuiltProblem, OcpSolution) {
-    let p = build(name, s).unwrap();
+    let p = build(name.parse().unwrap(), s).unwrap();
     let sol = solve(&p, None).unwrap();
     assert_eq!(sol.status, Status::Solved, "{name}: {:?}", sol.stages);
     (p, sol)

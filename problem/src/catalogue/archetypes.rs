@@ -1,0 +1,390 @@
+//! The archetypes of the catalogue, one function each: the periodic rotation (free–stick–free,
+//! Sect. 6.1, QC eq. 64–65 or COT eq. 61–63 ratio objective eq. 60), reaching the ball (free),
+//! and the free–stick problems (reorient, rotate at a reference velocity, rotate fast;
+//! Sect. 4.1). Each returns a [`Spec`]: its phases, cost integrands, objective, point
+//! functions (impact law eq. 40, Sect. 7 touch-down tolerances, continuity, periodicity,
+//! horizons) and parameters.
+
+use bf_codegen::Scene;
+use bf_codegen::graph::Graph;
+use bf_optim::ocp::{Objective, OcpError, Param, PointFunction, Scheme, VarRef};
+
+use super::guess::{PhaseDef, Q_GUESS};
+use super::{COT_MAX_PERIOD, Problem, ProblemSettings};
+use crate::node::{CostKind, Mode, Physics};
+use crate::points::{EndQuantity, continuity, end_point, impact};
+
+/// Tolerance on h at the touch-down and the release (m; Sect. 7 work-arounds).
+const TOL_H: f64 = 1e-4;
+
+/// The shape of a problem.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Archetype {
+    /// Free–stick–free, periodic.
+    Periodic,
+    /// One free phase from rest to touching the ball.
+    Reach,
+    /// Free then stick, from rest.
+    FreeStick,
+}
+
+/// What an archetype function reads.
+pub(crate) struct Context<'a> {
+    pub(crate) problem: Problem,
+    pub(crate) scene: &'a Scene,
+    pub(crate) physics: &'a Physics,
+    pub(crate) eps: f64,
+    pub(crate) settings: &'a ProblemSettings,
+}
+
+/// What an archetype function builds.
+pub(crate) struct Spec {
+    pub(crate) phases: Vec<PhaseDef>,
+    pub(crate) cost: CostKind,
+    pub(crate) objective: Objective,
+    pub(crate) points: Vec<PointFunction>,
+    pub(crate) params: Vec<Param>,
+    pub(crate) cost_bounds: Vec<(f64, f64)>,
+    /// Joint bounds of the states (the scene's limits on the human scene, none otherwise).
+    pub(crate) q_limits: Vec<(f64, f64)>,
+}
+
+impl Context<'_> {
+    fn nq(&self) -> usize {
+        self.physics.nq
+    }
+
+    fn nx(&self) -> usize {
+        2 * self.physics.nq + 3
+    }
+
+    fn q_limits(&self) -> Vec<(f64, f64)> {
+        if self.problem.scene() == "human" {
+            self.physics.q_limits.clone()
+        } else {
+            vec![(f64::NEG_INFINITY, f64::INFINITY); self.nq()]
+        }
+    }
+
+    /// The state at rest in the default guess's configuration.
+    fn x_rest(&self) -> Vec<f64> {
+        let nq = self.nq();
+        let mut x = vec![0.0; self.nx()];
+        x[..nq].copy_from_slice(&Q_GUESS[..nq.min(3)]);
+        x
+    }
+}
+
+/// The impact impulse ι (eq. 40) as three parameters.
+fn iota_params() -> Vec<Param> {
+    (0..3)
+        .map(|i| Param {
+            name: format!("iota{}", i + 1),
+            lower: -1e3,
+            upper: 1e3,
+            guess: 0.0,
+        })
+        .collect()
+}
+
+/// Free–stick–free periodic rotation with the QC or COT ratio objective (Sect. 6.1).
+pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, OcpError> {
+    let (scene, eps, settings) = (c.scene, c.eps, c.settings);
+    let qc = c.problem == Problem::PeriodicQc;
+    let margin = settings.hdot_margin;
+    // Phase durations: ≤ 5 s for QC (its optimum has a short period); for COT only the
+    // total period is bounded (≤ COT_MAX_PERIOD).
+    let tmax = if qc { 5.0 } else { COT_MAX_PERIOD };
+    let phases = vec![
+        PhaseDef {
+            mode: Mode::Free,
+            h: Some((0.0, f64::INFINITY)),
+            hdot: margin.map(|m| (f64::NEG_INFINITY, -m)),
+            duration: (0.01, tmax),
+            guess_duration: 1.0,
+        },
+        PhaseDef {
+            mode: Mode::Stick,
+            h: None,
+            hdot: None,
+            duration: (0.01, tmax),
+            guess_duration: 1.0,
+        },
+        PhaseDef {
+            mode: Mode::Free,
+            h: Some((-TOL_H, f64::INFINITY)),
+            hdot: margin.map(|m| (m, f64::INFINITY)),
+            duration: (0.01, tmax),
+            guess_duration: 1.0,
+        },
+    ];
+    let cost = if qc {
+        CostKind::Qc {
+            w: settings.effort_scale,
+            omega_ref: [0.0, 0.0, 2.2],
+        }
+    } else {
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        CostKind::Cot {
+            w: 10.0,
+            omega_hat: [s, -s, 0.0],
+        }
+    };
+    let mut points = vec![
+        end_point(
+            scene,
+            eps,
+            0,
+            false,
+            EndQuantity::H(0.3 * c.physics.radius, f64::INFINITY),
+            "h(0) >= 0.3 r",
+        )?,
+        // The period may start anywhere on the free arc with h ≥ 0.3 r: a continuum of
+        // equivalent optima (a flat direction that stalls Newton's method). Starting at the
+        // arc's apex (ḣ(0) = 0) picks one without changing the optimal value, since the apex is
+        // where h is largest.
+        end_point(
+            scene,
+            eps,
+            0,
+            false,
+            EndQuantity::HDot(0.0, 0.0),
+            "apex start: hdot(0) = 0",
+        )?,
+    ];
+    points.extend(contact_sequence(scene, c.physics, eps, TOL_H, settings)?);
+    points.push(continuity(c.nx(), 1, 2, "stick -> free continuity"));
+    points.push(continuity(c.nx(), 2, 0, "periodicity"));
+    // COT bounds the period; for QC the duration bounds imply 0.03 ≤ T ≤ 15 s, and the row is
+    // only added when `period_bounds` is given (a continuation gives it in every stage, so all
+    // stages share one NLP layout for primal-dual warm starts). An inactive row is not free:
+    // it changes the barrier path and with it the iterations.
+    let (plo, phi) = if qc {
+        (0.03, 3.0 * tmax)
+    } else {
+        (0.0, COT_MAX_PERIOD)
+    };
+    let (plo, phi) = match settings.period_bounds {
+        Some((lo, hi)) => (lo.max(plo), hi.min(phi)),
+        None => (plo, phi),
+    };
+    if !(plo <= phi && plo.is_finite() && phi.is_finite()) {
+        return Err(OcpError::InvalidProblem(format!(
+            "period bounds [{plo}, {phi}] are empty or not finite"
+        )));
+    }
+    if !qc || settings.period_bounds.is_some() {
+        points.push(duration_sum(
+            3,
+            plo,
+            phi,
+            if qc {
+                "period bounds"
+            } else {
+                "period <= 10 s"
+            },
+        ));
+    }
+    // COT: the rotation measure must stay positive for the ratio to be meaningful.
+    let cost_bounds = if qc {
+        vec![]
+    } else {
+        vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)]
+    };
+    Ok(Spec {
+        phases,
+        cost,
+        objective: Objective::Ratio(0, 1),
+        points,
+        params: iota_params(),
+        cost_bounds,
+        q_limits: c.q_limits(),
+    })
+}
+
+/// From rest at q⁰ to touching the ball at rest, minimising time plus effort.
+pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, OcpError> {
+    let nq = c.nq();
+    let phases = vec![PhaseDef {
+        mode: Mode::Free,
+        h: Some((0.0, f64::INFINITY)),
+        hdot: None,
+        duration: (0.05, 10.0),
+        guess_duration: 1.0,
+    }];
+    let points = vec![
+        initial_state(&c.x_rest()),
+        end_point(
+            c.scene,
+            c.eps,
+            0,
+            true,
+            EndQuantity::H(0.0, TOL_H),
+            "touch: 0 <= h(tf) <= 1e-4",
+        )?,
+        final_zero(0, &(nq..2 * nq).collect::<Vec<_>>(), "at rest at tf"),
+    ];
+    Ok(Spec {
+        phases,
+        cost: CostKind::TimeEffort { w: 1.0 },
+        objective: Objective::Cost(0),
+        points,
+        params: vec![],
+        cost_bounds: vec![],
+        q_limits: c.q_limits(),
+    })
+}
+
+/// Free approach, impact, stick: reorient the ball by 90° (`reorient`), track ω_ref over 3 s
+/// (`rotate-ref`) or spin it as fast as possible over 2 s (`rotate-fast`).
+pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, OcpError> {
+    let phases = vec![
+        PhaseDef {
+            mode: Mode::Free,
+            h: Some((0.0, f64::INFINITY)),
+            hdot: None,
+            duration: (0.05, 5.0),
+            guess_duration: 1.0,
+        },
+        // |h| ≤ tol_h at the stick nodes: Δv = 0 (or its rate) alone let h drift when the
+        // contact point slides over the smoothed fingertip (sat, eq. 58–59), and the
+        // fixed-horizon spinning problems exploited it (the finger ended inside the ball).
+        PhaseDef {
+            mode: Mode::Stick,
+            h: Some((-TOL_H, TOL_H)),
+            hdot: None,
+            duration: (0.05, 5.0),
+            guess_duration: 1.0,
+        },
+    ];
+    let mut points = vec![initial_state(&c.x_rest())];
+    points.extend(contact_sequence(
+        c.scene, c.physics, c.eps, TOL_H, c.settings,
+    )?);
+    let z = [0.0, 0.0, 1.0];
+    let (cost, cost_bounds) = match c.problem {
+        Problem::Reorient => {
+            let th = std::f64::consts::FRAC_PI_2;
+            points.push(duration_sum(2, 0.1, 10.0, "total time <= 10 s"));
+            (
+                CostKind::Reorient { w: 0.1, axis: z },
+                vec![(f64::NEG_INFINITY, f64::INFINITY), (th, th)],
+            )
+        }
+        Problem::RotateRef => {
+            points.push(duration_sum(2, 3.0, 3.0, "horizon = 3 s"));
+            (
+                CostKind::Track {
+                    w: 0.1,
+                    omega_ref: z,
+                },
+                vec![],
+            )
+        }
+        _ => {
+            points.push(duration_sum(2, 2.0, 2.0, "horizon = 2 s"));
+            (CostKind::Spin { w: 0.01, axis: z }, vec![])
+        }
+    };
+    Ok(Spec {
+        phases,
+        cost,
+        objective: Objective::Cost(0),
+        points,
+        params: iota_params(),
+        cost_bounds,
+        q_limits: c.q_limits(),
+    })
+}
+
+/// The point constraints of a free → stick switch at the end of phase 0: touch
+/// (0 ≤ h⁽¹⁾(t_f) ≤ tol_h, Sect. 7), the sticking impact law (eq. 40) with the impulse ι as
+/// parameters, and (Radau only) the stick constraint Δv = 0 at the end of phase 1, which the
+/// Radau points do not include.
+///
+/// With Legendre–Gauss the stick phases impose d(Δv)/dt = 0 at the Gauss nodes
+/// ([`crate::node::StickLevel::Acceleration`]) and the impact imposes Δv⁺ = 0 (eq. 40c) at the start, so
+/// Δv = 0 at the quadrature end point holds up to the Gauss quadrature error (exactly when Δv
+/// is linear in the state); imposing it again would make the constraint Jacobian (nearly) rank
+/// deficient.
+fn contact_sequence(
+    scene: &Scene,
+    ph: &Physics,
+    eps: f64,
+    tol_h: f64,
+    settings: &ProblemSettings,
+) -> Result<Vec<PointFunction>, OcpError> {
+    let lg = settings.scheme == Scheme::Lg;
+    let mut points = vec![
+        end_point(
+            scene,
+            eps,
+            0,
+            true,
+            EndQuantity::H(0.0, tol_h),
+            "0 <= h1(tf) <= 1e-4",
+        )?,
+        impact(scene, ph, eps, 0, 0, settings.impulse_cone, lg)?,
+    ];
+    if !lg {
+        points.push(end_point(
+            scene,
+            eps,
+            1,
+            true,
+            EndQuantity::DeltaV,
+            "stick end: delta v = 0",
+        )?);
+    }
+    Ok(points)
+}
+
+fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
+    let mut g = Graph::new();
+    let v: Vec<_> = (0..nphases as u32).map(|i| g.var(i)).collect();
+    let s = g.sum(&v);
+    PointFunction {
+        name: name.into(),
+        graph: g,
+        vars: (0..nphases)
+            .map(|i| (i as u32, VarRef::Duration(i)))
+            .collect(),
+        fixed: vec![],
+        outputs: vec![s],
+        bounds: vec![(lo, hi)],
+    }
+}
+
+/// Fixes x(0) of phase 0 to `x0`.
+fn initial_state(x0: &[f64]) -> PointFunction {
+    let mut g = Graph::new();
+    let v: Vec<_> = (0..x0.len() as u32).map(|i| g.var(i)).collect();
+    PointFunction {
+        name: "initial state".into(),
+        graph: g,
+        vars: (0..x0.len())
+            .map(|i| (i as u32, VarRef::Initial { phase: 0, i }))
+            .collect(),
+        fixed: vec![],
+        outputs: v,
+        bounds: x0.iter().map(|&x| (x, x)).collect(),
+    }
+}
+
+/// Fixes components `idx` of the final state of `phase` to 0.
+fn final_zero(phase: usize, idx: &[usize], name: &str) -> PointFunction {
+    let mut g = Graph::new();
+    let v: Vec<_> = (0..idx.len() as u32).map(|i| g.var(i)).collect();
+    PointFunction {
+        name: name.into(),
+        graph: g,
+        vars: idx
+            .iter()
+            .enumerate()
+            .map(|(k, &i)| (k as u32, VarRef::Final { phase, i }))
+            .collect(),
+        fixed: vec![],
+        outputs: v,
+        bounds: vec![(0.0, 0.0); idx.len()],
+    }
+}

@@ -1,0 +1,386 @@
+//! The problem catalogue (paper Sect. 4.1 archetypes, Sect. 6.1 periodic problems): a
+//! [`Problem`] and [`ProblemSettings`] → [`build`] → a [`BuiltProblem`], the multiphase
+//! problem and its transcription, ready for the study layer to solve. One function per
+//! archetype builds the phases, costs and point functions ([`archetypes`]); the initial guesses
+//! are in [`guess`].
+//!
+//! | name | phases | objective |
+//! |---|---|---|
+//! | `periodic-qc` | free–stick–free, periodic | QC ratio (eq. 60, 64–65), w = 1, ω_ref = (0,0,2.2) |
+//! | `periodic-cot` | free–stick–free, periodic | COT ratio (eq. 60–63), w = 10, ω̂ = (1,−1,0)/√2, period ≤ 10 s |
+//! | `periodic-cot-human` | as `periodic-cot` | human scene: 0 ≤ q2 ≤ 90°, 0 ≤ q3 ≤ 100° |
+//! | `reach` | free | ∫(1 + ‖τ‖²): from rest at q⁰ to touching the ball at rest |
+//! | `reorient` | free–stick | ∫(1 + 0.1‖τ‖²) s.t. ∫ω_z dt = π/2 (ball turned by 90° about z) |
+//! | `rotate-ref` | free–stick | ∫‖ω − ω_ref‖² + 0.1‖τ‖² over a fixed 3 s horizon, ω_ref = (0,0,1) |
+//! | `rotate-fast` | free–stick | ∫(0.01‖τ‖² − ω_z) over a fixed 2 s horizon |
+//!
+//! Transcription: the default is Legendre–Gauss–Radau with 3 elements per phase (30 points
+//! per phase in total). The paper's Legendre–Gauss scheme ([`Scheme::Lg`]) is available. With
+//! it the stick phases impose the no-slip constraint at the acceleration level,
+//! d(Δv)/dt = 0 at the Gauss nodes ([`StickLevel::Acceleration`]), with Δv⁺ = 0 from the
+//! impact law and no end-point Δv row: at the velocity level the stick phase is an index-2
+//! DAE, which Gauss collocation (not stiffly accurate) resolves with an undamped alternating
+//! mode, and LG-20/30 stalled with δ_w ≈ 1e-3 in every iteration. The Gauss defects are in
+//! integral form (`ocp::transcription`): with the differential form (rows with the O(N²)
+//! entries of the Gauss differentiation matrix) `periodic-cot`/`-human` LG-30 stalled
+//! (δ_w ≈ 1e-2 in every iteration, MaxIterations) and `periodic-qc` LG-30 needed an extra
+//! inactive period row.
+//!
+//! The solve policy (dual regularization of LG solves, retries) is the study layer's.
+//!
+//! The periodic problems start the period at the apex of the free arc (ḣ(0) = 0), which
+//! removes the time-shift degeneracy of the free arc without changing the optimum.
+//! Common constraints: |τ_i| ≤ τ_max (1 N m), h ≥ 0 in free approach phases, λ_n ≥ 0 and the
+//! smooth friction cone in stick, the sticking impact law (eq. 40) with ι_n ≥ 0,
+//! 0 ≤ h(t_f⁽¹⁾) ≤ 10⁻⁴ and h⁽³⁾ ≥ −10⁻⁴ (Sect. 7 work-arounds), Δv = 0 at the stick phase's
+//! end point with Radau (LG: see above), and |h| ≤ 10⁻⁴ at the stick nodes of the free–stick
+//! archetypes: Δv = 0 (or its rate) alone does not hold h where the contact point slides over
+//! the smoothed fingertip (sat, eq. 58–59), and the fixed-horizon spinning problems exploited
+//! that (the finger ended far inside the ball). The periodic problems' stick phases stay
+//! within about 1e-4 without the row, and the row's narrow barrier band lengthens their solves
+//! considerably, so they go without it.
+
+pub mod archetypes;
+pub mod guess;
+
+use std::fmt;
+use std::str::FromStr;
+
+use bf_codegen::Scene;
+use bf_optim::ipm::Settings;
+use bf_optim::ocp::{KernelUse, MeshSpec, Ocp, OcpError, Scheme, Transcription};
+use serde::{Deserialize, Serialize};
+
+use crate::node::{Mode, Physics, StickLevel};
+use crate::solution::{OcpSolution, warm_initial_point};
+use archetypes::Archetype;
+pub use guess::{Q_DEEP, Q_GUESS, StartGuess};
+
+/// A problem of the catalogue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Problem {
+    /// Free–stick–free periodic rotation, QC ratio (eq. 60, 64–65).
+    PeriodicQc,
+    /// Free–stick–free periodic rotation, COT ratio (eq. 60–63).
+    PeriodicCot,
+    /// `PeriodicCot` on the human scene.
+    PeriodicCotHuman,
+    /// Reach the ball from rest (free phase).
+    Reach,
+    /// Turn the ball by 90° about z (free–stick).
+    Reorient,
+    /// Track ω_ref over a fixed horizon (free–stick).
+    RotateRef,
+    /// Spin the ball as fast as possible over a fixed horizon (free–stick).
+    RotateFast,
+}
+
+/// A name that is not a [`Problem`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown problem `{0}`; known problems: {names}", names = Problem::names())]
+pub struct UnknownProblem(pub String);
+
+impl Problem {
+    /// Every problem, in catalogue order.
+    pub const ALL: [Problem; 7] = [
+        Problem::PeriodicQc,
+        Problem::PeriodicCot,
+        Problem::PeriodicCotHuman,
+        Problem::Reach,
+        Problem::Reorient,
+        Problem::RotateRef,
+        Problem::RotateFast,
+    ];
+
+    /// The name the CLI and `solution.json` use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Problem::PeriodicQc => "periodic-qc",
+            Problem::PeriodicCot => "periodic-cot",
+            Problem::PeriodicCotHuman => "periodic-cot-human",
+            Problem::Reach => "reach",
+            Problem::Reorient => "reorient",
+            Problem::RotateRef => "rotate-ref",
+            Problem::RotateFast => "rotate-fast",
+        }
+    }
+
+    /// Every name, comma-separated (error messages, CLI help).
+    pub fn names() -> String {
+        Problem::ALL.map(Problem::name).join(", ")
+    }
+
+    /// The scene the problem is posed on.
+    pub fn scene(self) -> &'static str {
+        match self {
+            Problem::PeriodicCotHuman => "human",
+            _ => "paper",
+        }
+    }
+
+    /// Whether it is one of the periodic problems (a period to sweep in a continuation).
+    pub fn is_periodic(self) -> bool {
+        self.archetype() == Archetype::Periodic
+    }
+
+    fn archetype(self) -> Archetype {
+        match self {
+            Problem::PeriodicQc | Problem::PeriodicCot | Problem::PeriodicCotHuman => {
+                Archetype::Periodic
+            }
+            Problem::Reach => Archetype::Reach,
+            Problem::Reorient | Problem::RotateRef | Problem::RotateFast => Archetype::FreeStick,
+        }
+    }
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Problem {
+    type Err = UnknownProblem;
+
+    fn from_str(s: &str) -> Result<Problem, UnknownProblem> {
+        Problem::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| UnknownProblem(s.to_string()))
+    }
+}
+
+/// What the catalogue needs from the crate generated at build time (bf-generated), handed in
+/// by the caller: this crate is a build-dependency of that one and cannot depend on it.
+#[derive(Debug, Clone, Copy)]
+pub struct Generated {
+    /// The TOML text of a compiled scene by name.
+    pub scene_toml: fn(name: &str) -> Option<&'static str>,
+    /// Whether the phase node functions may or must run on emitted kernels.
+    pub kernels: KernelUse,
+}
+
+/// Upper bound of the total period of the COT problems (s): the COT ratio is otherwise free
+/// to trade period length against efficiency without limit.
+pub const COT_MAX_PERIOD: f64 = 10.0;
+
+/// Kind of the initial guess.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GuessKind {
+    /// PARAMS.md / Sect. 6.1: q ≡ q⁰ = [`Q_GUESS`], t_f⁽ⁱ⁾ = i, all else 0.
+    Paper,
+    /// Geometric: free phases move linearly between q⁰ and a contact configuration q_c
+    /// (h(q_c) = 0, found by bisection), stick phases hold q_c; velocities consistent.
+    Contact,
+    /// `Paper` first; if the solve fails, `Contact` (the default strategy).
+    Auto,
+}
+
+/// Settings of [`build`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ProblemSettings {
+    /// Collocation points per phase (paper: 30).
+    pub points: usize,
+    /// Transcription scheme (default: Radau with 3 elements; see the module docs for LG).
+    pub scheme: Scheme,
+    /// ε of the smooth saturation (eq. 59); `None` = the scene's `smooth_eps` (0.01).
+    pub epsilon: Option<f64>,
+    /// Warm start from a previous solution (interpolated onto the new mesh).
+    #[serde(skip)]
+    pub warm_start: Option<OcpSolution>,
+    /// Impulse friction cone at the impact (eq. 66).
+    pub impulse_cone: bool,
+    /// ḣ margins of Sect. 7 (ḣ ≤ −m in the approach, ḣ ≥ m in the release phase).
+    pub hdot_margin: Option<f64>,
+    /// Initial guess (ignored with a warm start).
+    pub guess: GuessKind,
+    /// Interior-point settings (`None`: defaults with `tol` = 1e-8); `max_iter` and
+    /// `print_level` below override theirs.
+    pub ipm: Option<Settings>,
+    /// Interior-point iteration limit.
+    pub max_iter: usize,
+    /// Solver log level (0 silent).
+    pub print_level: u8,
+    /// Override of the default guess's joint configuration and phase durations (multi-start
+    /// draws these; ignored with a warm start).
+    pub start: Option<StartGuess>,
+    /// Factor on the effort term of the QC cost (eq. 64: w‖τ‖² becomes s·w‖τ‖²); 1 is the
+    /// paper's cost. A continuation stage knob: small s = the simpler "track ω_ref" cost. Must
+    /// be positive, so the sparsity pattern of the Lagrangian Hessian does not change.
+    pub effort_scale: f64,
+    /// Bounds on the period of the periodic problems (intersected with the problem's own:
+    /// 3 × 5 s for QC, [`COT_MAX_PERIOD`] for COT); a continuation stage fixes it. `Some` adds
+    /// a period row to QC (same optimum with `Some((0.0, f64::MAX))`).
+    pub period_bounds: Option<(f64, f64)>,
+    /// Custom hp-Radau mesh per phase (overrides `points`; needs the Radau scheme), e.g. from
+    /// the study layer's mesh refinement.
+    pub mesh: Option<Vec<MeshSpec>>,
+    /// Static dual regularization δ_c of the KKT factorization
+    /// ([`Settings::static_dual_regularization`]); `None`: the study layer's choice (a raised
+    /// 3e-8 with LG, the solver's 1e-9 with Radau, and a failed solve retried with 3e-8).
+    /// Raise it (e.g. to 3e-8) when a Radau mesh finer than the default ends Acceptable with
+    /// δ_w > 0 in every iteration; `Some` disables the retry. Overrides `ipm`.
+    pub dual_regularization: Option<f64>,
+}
+
+impl Default for ProblemSettings {
+    fn default() -> Self {
+        ProblemSettings {
+            points: 30,
+            scheme: Scheme::Radau { elements: 3 },
+            epsilon: None,
+            warm_start: None,
+            impulse_cone: false,
+            hdot_margin: None,
+            guess: GuessKind::Auto,
+            ipm: None,
+            max_iter: 1500,
+            print_level: 0,
+            start: None,
+            effort_scale: 1.0,
+            period_bounds: None,
+            mesh: None,
+            dual_regularization: None,
+        }
+    }
+}
+
+/// A transcribed problem ready to solve.
+#[derive(Debug, Clone)]
+pub struct BuiltProblem {
+    /// The problem.
+    pub problem: Problem,
+    /// Problem name ([`Problem::name`]).
+    pub name: String,
+    /// Scene.
+    pub scene: Scene,
+    /// Physical constants.
+    pub physics: Physics,
+    /// Mode of every phase.
+    pub modes: Vec<Mode>,
+    /// The multiphase problem.
+    pub ocp: Ocp,
+    /// Its transcription.
+    pub nlp: Transcription,
+    /// ε used.
+    pub epsilon: f64,
+    /// Settings used.
+    pub settings: ProblemSettings,
+    /// The build-time artefacts it was built with (for rebuilds with other settings).
+    pub generated: Generated,
+}
+
+/// The scene `name` from `generated`.
+fn scene(generated: &Generated, name: &str) -> Result<Scene, OcpError> {
+    let text = (generated.scene_toml)(name)
+        .ok_or_else(|| OcpError::Model(format!("unknown scene {name}")))?;
+    Scene::from_toml_str(text, name).map_err(|e| OcpError::Model(e.to_string()))
+}
+
+/// Builds `problem` with `settings`, on the scenes and node kernels of `generated`.
+///
+/// Runs on a helper thread with a large stack: building the graphs of a scene with runtime
+/// parameters (`human`) recurses deeper in bf-codegen than a default 2 MiB test thread allows.
+pub fn build(
+    problem: Problem,
+    settings: &ProblemSettings,
+    generated: &Generated,
+) -> Result<BuiltProblem, OcpError> {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn_scoped(s, || build_inner(problem, settings, generated))
+            .map_err(|e| OcpError::Model(format!("cannot spawn the build thread: {e}")))?
+            .join()
+            .map_err(|_| OcpError::Model("the problem build panicked".into()))?
+    })
+}
+
+fn build_inner(
+    problem: Problem,
+    settings: &ProblemSettings,
+    generated: &Generated,
+) -> Result<BuiltProblem, OcpError> {
+    let scene = scene(generated, problem.scene())?;
+    let ph = crate::points::physics(&scene)?;
+    let eps = settings
+        .epsilon
+        .or(scene.contact.as_ref().map(|c| c.smooth_eps))
+        .unwrap_or(0.01);
+    if !(eps.is_finite() && eps > 0.0) {
+        return Err(OcpError::InvalidProblem(format!(
+            "epsilon must be positive, got {eps}"
+        )));
+    }
+    if !(settings.effort_scale.is_finite() && settings.effort_scale > 0.0) {
+        return Err(OcpError::InvalidProblem(format!(
+            "effort_scale must be positive, got {}",
+            settings.effort_scale
+        )));
+    }
+    let ctx = archetypes::Context {
+        problem,
+        scene: &scene,
+        physics: &ph,
+        eps,
+        settings,
+    };
+    let spec = match problem.archetype() {
+        Archetype::Periodic => archetypes::periodic(&ctx)?,
+        Archetype::Reach => archetypes::reach(&ctx)?,
+        Archetype::FreeStick => archetypes::free_stick(&ctx)?,
+    };
+    let modes: Vec<Mode> = spec.phases.iter().map(|d| d.mode).collect();
+    let mut phases = guess::make_phases(
+        &scene,
+        &ph,
+        &spec.phases,
+        spec.cost,
+        eps,
+        settings.points,
+        &spec.q_limits,
+        settings.start.as_ref(),
+        // LG: the index-1 stick constraint (see `node::node_function`).
+        if settings.scheme == Scheme::Lg {
+            StickLevel::Acceleration
+        } else {
+            StickLevel::Velocity
+        },
+    )?;
+    // A warm start replaces the whole initial point after the transcription (below).
+    if settings.warm_start.is_none() && settings.guess == GuessKind::Contact {
+        guess::contact_guess(&scene, eps, &mut phases, &modes)?;
+    }
+    let ocp = Ocp {
+        phases,
+        n_costs: 2,
+        params: spec.params,
+        points: spec.points,
+        cost_bounds: spec.cost_bounds,
+        objective: spec.objective,
+        scheme: settings.scheme,
+    };
+    let meshes: Vec<_> = settings.mesh.iter().flatten().cloned().map(Some).collect();
+    let nlp = Transcription::with_kernels(&ocp, &meshes, generated.kernels)?;
+    let mut built = BuiltProblem {
+        problem,
+        name: problem.name().to_string(),
+        scene,
+        physics: ph,
+        modes,
+        ocp,
+        nlp,
+        epsilon: eps,
+        settings: settings.clone(),
+        generated: *generated,
+    };
+    if let Some(ws) = &settings.warm_start {
+        // The element polynomials of the previous solution evaluated at the new mesh's points
+        // (exact where the meshes agree), rather than the sampled phase guess above.
+        warm_initial_point(&mut built, ws)?;
+    }
+    Ok(built)
+}

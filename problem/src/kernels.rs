@@ -1,0 +1,193 @@
+//! The node kernels emitted for the scenes with a ball and a contact: which node functions
+//! ([`node_kernel_specs`], the shapes the problem catalogue uses), compiled by
+//! [`compile_node`] and emitted by bf-codegen's [`bf_codegen::nodefn::emit_node_kernels`].
+//! bf-generated's build script calls [`emit_node_kernels`] for every scene; at run time the
+//! collocation finds those kernels by the fingerprint of the node function it builds.
+
+use bf_codegen::nodefn::{CompiledNode, NamedNode};
+use bf_codegen::{CodegenError, Scene};
+
+use crate::node::{CostKind, Mode, NodeOptions, Physics, StickLevel, node_function};
+
+/// The node functions emitted as kernels for a scene with a ball and a contact, for every cost
+/// kind of the scene's `ocp_kernels` (default: all), shaped as the problem library uses them:
+/// a free phase (h row) for every kind; for the periodic costs (QC, COT) also the free phase
+/// with the Sect. 7 ḣ margin row and the stick phase at both levels; for the free–stick
+/// archetypes' costs (track, reorient, spin) the stick phase with the |h| row at both levels;
+/// `reach`'s time–effort cost has no stick phase. Other shapes are interpreted. Names are
+/// `<scene>_<cost>_<phase>`. Empty without a ball or a contact.
+pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)> {
+    let mut out = Vec::new();
+    if scene.ball.is_none() || scene.contact.is_none() {
+        return out;
+    }
+    for cost in CostKind::all_kinds() {
+        if let Some(list) = &scene.ocp_kernels
+            && !list.iter().any(|c| c == cost.tag())
+        {
+            continue;
+        }
+        let base = NodeOptions {
+            mode: Mode::Free,
+            cost,
+            h_bounds: Some((0.0, f64::INFINITY)),
+            hdot_bounds: None,
+            eps: 0.01,
+        };
+        let name = |s: &str| format!("{}_{}_{s}", scene.name, cost.tag());
+        out.push((name("free"), base.clone(), StickLevel::Velocity));
+        let (stick, tag) = match cost {
+            CostKind::Qc { .. } | CostKind::Cot { .. } => {
+                let margin = NodeOptions {
+                    hdot_bounds: Some((f64::NEG_INFINITY, 0.0)),
+                    ..base.clone()
+                };
+                out.push((name("free_hdot"), margin, StickLevel::Velocity));
+                let stick = NodeOptions {
+                    mode: Mode::Stick,
+                    h_bounds: None,
+                    ..base
+                };
+                (stick, "stick")
+            }
+            CostKind::TimeEffort { .. } => continue,
+            _ => {
+                let stick = NodeOptions {
+                    mode: Mode::Stick,
+                    ..base
+                };
+                (stick, "stick_h")
+            }
+        };
+        out.push((name(tag), stick.clone(), StickLevel::Velocity));
+        out.push((name(&format!("{tag}_acc")), stick, StickLevel::Acceleration));
+    }
+    out
+}
+
+/// Compiles the node function `opt` of `scene` at `level` for collocation.
+pub fn compile_node(
+    scene: &Scene,
+    opt: &NodeOptions,
+    level: StickLevel,
+) -> Result<CompiledNode, CodegenError> {
+    let ph = Physics::new(scene)?;
+    let (nf, _) = node_function(scene, &ph, opt, level)?;
+    let c = nf.collocation();
+    Ok(CompiledNode::new(c.graph, c.outputs, c.locals, nf.fixed))
+}
+
+/// The Rust source of the node kernels of `scenes` (those with a ball and a contact; the
+/// others are skipped): one value, Jacobian and Hessian function per [`node_kernel_specs`]
+/// entry, and `pub static NODE_KERNELS: &[NodeKernel]` sorted by fingerprint. Specs with the
+/// structure of an earlier one (QC and tracking share their integrands, the constants being
+/// inputs) share its kernel. The including module must define `NodeKernel`. Deterministic:
+/// the same scenes give the same text.
+pub fn emit_node_kernels(scenes: &[&Scene]) -> Result<String, CodegenError> {
+    let mut nodes = Vec::new();
+    for scene in scenes {
+        for (name, opt, level) in node_kernel_specs(scene) {
+            let node = compile_node(scene, &opt, level)?;
+            let what = format!("`{name}` (scene `{}`, {:?} level)", scene.name, level);
+            nodes.push(NamedNode { name, what, node });
+        }
+    }
+    bf_codegen::nodefn::emit_node_kernels(&nodes)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper() -> Scene {
+        Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/paper.toml")).unwrap()
+    }
+
+    fn opts(mode: Mode, eps: f64, w: f64) -> NodeOptions {
+        NodeOptions {
+            mode,
+            cost: CostKind::Qc {
+                w,
+                omega_ref: [0.0, 0.0, 2.2],
+            },
+            h_bounds: Some((0.0, f64::INFINITY)),
+            hdot_bounds: None,
+            eps,
+        }
+    }
+
+    #[test]
+    fn fingerprint_ignores_input_values_but_not_structure() {
+        let s = paper();
+        let fp = |o: &NodeOptions, l| compile_node(&s, o, l).unwrap().fingerprint;
+        let base = fp(&opts(Mode::Free, 0.01, 1.0), StickLevel::Velocity);
+        // ε and the cost weight are inputs: same kernel.
+        assert_eq!(base, fp(&opts(Mode::Free, 0.05, 3.0), StickLevel::Velocity));
+        // Another mode, stick level, row set or baked constant: another function.
+        let stick = fp(&opts(Mode::Stick, 0.01, 1.0), StickLevel::Velocity);
+        let stick_acc = fp(&opts(Mode::Stick, 0.01, 1.0), StickLevel::Acceleration);
+        let no_h = fp(
+            &NodeOptions {
+                h_bounds: None,
+                ..opts(Mode::Free, 0.01, 1.0)
+            },
+            StickLevel::Velocity,
+        );
+        // A nonzero where the pattern had a zero is another structure.
+        let tilted = fp(
+            &NodeOptions {
+                cost: CostKind::Qc {
+                    w: 1.0,
+                    omega_ref: [0.1, 0.0, 2.2],
+                },
+                ..opts(Mode::Free, 0.01, 1.0)
+            },
+            StickLevel::Velocity,
+        );
+        let mut other = s.clone();
+        if let Some(f) = other.friction.as_mut() {
+            f.mu_v *= 2.0;
+        }
+        let other_mu =
+            compile_node(&other, &opts(Mode::Free, 0.01, 1.0), StickLevel::Velocity).unwrap();
+        let all = [base, stick, stick_acc, no_h, tilted, other_mu.fingerprint];
+        for i in 0..all.len() {
+            for j in 0..i {
+                assert_ne!(all[i], all[j], "{i} vs {j}");
+            }
+        }
+    }
+
+    #[test]
+    fn emission_is_deterministic_and_covers_the_requested_costs() {
+        let mut s = paper();
+        s.ocp_kernels = Some(vec!["cot".into()]);
+        let a = emit_node_kernels(&[&s]).unwrap();
+        let b = emit_node_kernels(&[&s]).unwrap();
+        assert_eq!(a, b);
+        for k in [
+            "paper_cot_free",
+            "paper_cot_free_hdot",
+            "paper_cot_stick",
+            "paper_cot_stick_acc",
+        ] {
+            assert!(a.contains(&format!("name: \"{k}\"")), "{k} missing");
+            assert!(
+                a.contains(&format!("fn {k}_hessian(")),
+                "{k} hessian missing"
+            );
+        }
+        assert!(!a.contains("paper_qc_"));
+        // Entries sorted by fingerprint, as `node_kernel`'s binary search needs.
+        let fps: Vec<u128> = a
+            .lines()
+            .filter_map(|l| l.trim().strip_prefix("fingerprint: "))
+            .map(|v| v.trim_end_matches(',').parse().unwrap())
+            .collect();
+        assert_eq!(fps.len(), 4);
+        assert!(fps.windows(2).all(|w| w[0] < w[1]));
+        // An empty list emits no kernel.
+        s.ocp_kernels = Some(vec![]);
+        assert!(!emit_node_kernels(&[&s]).unwrap().contains("name:"));
+    }
+}

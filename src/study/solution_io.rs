@@ -1,0 +1,66 @@
+//! Reading and writing solutions: `solution.json` ([`SolutionIo::write_json`],
+//! [`SolutionIo::read_json`]) and `torques.csv` ([`SolutionIo::write_torques_csv`], the format
+//! `simulate --torques` reads), each written atomically.
+
+use std::path::Path;
+
+use anyhow::Context;
+
+use bf_optim::ocp::OcpError;
+use bf_problem::OcpSolution;
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
+    OcpError::Io {
+        path: path.display().to_string(),
+        msg: e.to_string(),
+    }
+}
+
+/// Write through a sibling temporary file and a rename, so a failed or interrupted write never
+/// leaves a truncated `solution.json` / `torques.csv` behind.
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OcpError> {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, bytes).map_err(|e| io_err(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_err(path, e)
+    })
+}
+
+/// File input and output of an [`OcpSolution`].
+pub trait SolutionIo: Sized {
+    /// Writes `solution.json`.
+    fn write_json(&self, path: &Path) -> Result<(), OcpError>;
+    /// Reads a solution written by [`SolutionIo::write_json`].
+    fn read_json(path: &Path) -> Result<Self, OcpError>;
+    /// Writes [`OcpSolution::torques_csv`] to `path`.
+    fn write_torques_csv(&self, path: &Path) -> Result<(), OcpError>;
+}
+
+impl SolutionIo for OcpSolution {
+    fn write_json(&self, path: &Path) -> Result<(), OcpError> {
+        let s = serde_json::to_string_pretty(self).map_err(|e| io_err(path, e))?;
+        write_atomic(path, s.as_bytes())
+    }
+
+    fn read_json(path: &Path) -> Result<OcpSolution, OcpError> {
+        let s = std::fs::read_to_string(path).map_err(|e| io_err(path, e))?;
+        serde_json::from_str(&s).map_err(|e| io_err(path, e))
+    }
+
+    fn write_torques_csv(&self, path: &Path) -> Result<(), OcpError> {
+        write_atomic(path, self.torques_csv().as_bytes())
+    }
+}
+
+/// Writes `solution.json` and `torques.csv` into `dir` (created if needed).
+pub fn write_solution(sol: &OcpSolution, dir: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    sol.write_json(&dir.join("solution.json"))?;
+    sol.write_torques_csv(&dir.join("torques.csv"))?;
+    Ok(())
+}

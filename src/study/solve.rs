@@ -1,0 +1,215 @@
+//! The solve-and-retry policy of the study layer: interior-point settings of a problem
+//! ([`solver_settings`], [`warm_settings`]), a solve with its retries ([`solve`]) and a
+//! primal-dual warm-started solve ([`solve_warm`]).
+//!
+//! LG solves use a larger static dual regularization ([`RAISED_DUAL_REGULARIZATION`],
+//! 3e-8 instead of the solver's 1e-9). The unpivoted LDLᵀ of the KKT matrix eliminates many
+//! constraint rows of the LG KKTs before any of their primal columns, and such a pivot is
+//! exactly −δ_c; at δ_c = 1e-9 the growth 1/δ_c swamps the reduced-Hessian curvature, so the
+//! factor reports spurious negative pivots for small δ_w and its refined residual fails the
+//! accuracy test. The inertia correction then keeps a large δ_w in every iteration, which
+//! shrinks each step along the weakest direction, and the COT problems crept to an Acceptable
+//! exit. With δ_c = 3e-8 they end Solved at the same optima (figures in BENCHMARKS.md). The
+//! Radau KKTs keep 1e-9: their default meshes solve as before, bit for bit (a larger δ_c there
+//! moves the 3 × 10 solves to other local optima); a failed Radau solve is retried once with
+//! the raised value.
+
+use std::time::Instant;
+
+use bf_optim::ipm::{IterationInfo, Nlp, Settings, Solution, WarmStart};
+use bf_optim::ocp::{OcpError, Scheme, solve_nlp};
+use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
+
+/// Static dual regularization δ_c of the KKT matrix ([`Settings::static_dual_regularization`])
+/// where the solver's default 1e-9 misleads the unpivoted LDLᵀ: the default of Legendre–Gauss
+/// solves, and the retry of a failed Radau solve in [`solve`]. The factorization eliminates
+/// many constraint rows before their primal columns, with pivot −δ_c, and at 1e-9 that growth
+/// hides the curvature (module docs).
+pub const RAISED_DUAL_REGULARIZATION: f64 = 3e-8;
+
+/// Interior-point settings used by [`solve`].
+pub fn solver_settings(s: &ProblemSettings) -> Settings {
+    let base = s.ipm.clone().unwrap_or_else(|| Settings {
+        tol: 1e-8,
+        static_dual_regularization: match s.scheme {
+            Scheme::Lg => RAISED_DUAL_REGULARIZATION,
+            Scheme::Radau { .. } => Settings::default().static_dual_regularization,
+        },
+        ..Settings::default()
+    });
+    Settings {
+        max_iter: s.max_iter,
+        print_level: s.print_level,
+        static_dual_regularization: s
+            .dual_regularization
+            .unwrap_or(base.static_dual_regularization),
+        ..base
+    }
+}
+
+type Callback<'a> = Option<&'a mut dyn FnMut(&IterationInfo) -> bool>;
+
+fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
+    match c {
+        Some(f) => Some(&mut **f),
+        None => None,
+    }
+}
+
+/// Solves `p` directly. Initial point: an exact primal-dual warm start when `p.settings`
+/// carries a warm-start solution of the same problem on the same mesh, else its interpolated
+/// primal point or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
+/// solve from the PARAMS.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
+/// Before that, a failed solve with the default static dual regularization (Radau: 1e-9) is
+/// repeated from the same start with [`RAISED_DUAL_REGULARIZATION`] (unless
+/// [`ProblemSettings::dual_regularization`] is set): on Radau meshes finer than the default
+/// the unpivoted LDLᵀ otherwise stalls (module docs). `callback` sees every iteration (return
+/// `false` to stop). The library's default [`strategy::Strategy`] wraps this in a
+/// continuation.
+pub fn solve(
+    p: &BuiltProblem,
+    mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<OcpSolution, OcpError> {
+    let start = Instant::now();
+    let mut stages = Vec::new();
+    let mut iters = 0;
+    let exact = p
+        .settings
+        .warm_start
+        .as_ref()
+        .and_then(|ws| exact_warm_start(p, ws));
+    let settings = if p.settings.warm_start.is_some() {
+        warm_settings(&p.settings)
+    } else {
+        solver_settings(&p.settings)
+    };
+    let label = match (exact.is_some(), p.settings.warm_start.is_some()) {
+        (true, _) => "exact warm start".to_string(),
+        (false, true) => "interpolated warm start".to_string(),
+        (false, false) => format!("{:?} guess", p.settings.guess),
+    };
+    let mut sol = solve_nlp(&p.nlp, &settings, exact, reborrow(&mut callback))?;
+    iters += sol.iterations;
+    stages.push((
+        format!("{label}, eps {}", p.epsilon),
+        sol.status,
+        sol.iterations,
+    ));
+    // The stall of an unpivoted LDLᵀ whose δ_c hides the curvature (module docs): one retry
+    // from the same start with the raised δ_c, unless the caller chose δ_c.
+    if !sol.status.is_success()
+        && p.settings.dual_regularization.is_none()
+        && settings.static_dual_regularization < RAISED_DUAL_REGULARIZATION
+    {
+        let raised = Settings {
+            static_dual_regularization: RAISED_DUAL_REGULARIZATION,
+            ..settings
+        };
+        let retry = solve_nlp(&p.nlp, &raised, exact, reborrow(&mut callback))?;
+        iters += retry.iterations;
+        stages.push((
+            format!(
+                "{label}, eps {}, dual regularization {RAISED_DUAL_REGULARIZATION:e}",
+                p.epsilon
+            ),
+            retry.status,
+            retry.iterations,
+        ));
+        if retry.status.is_success() {
+            sol = retry;
+        }
+    }
+    let mut best = (sol, p);
+    let fallback;
+    if !best.0.status.is_success()
+        && p.settings.warm_start.is_none()
+        && p.settings.guess == GuessKind::Auto
+    {
+        let s1 = ProblemSettings {
+            guess: GuessKind::Contact,
+            ..p.settings.clone()
+        };
+        fallback = bf_problem::build(p.problem, &s1, &p.generated)?;
+        let sol1 = solve_nlp(
+            &fallback.nlp,
+            &solver_settings(&p.settings),
+            None,
+            reborrow(&mut callback),
+        )?;
+        iters += sol1.iterations;
+        stages.push((
+            format!("Contact guess, eps {}", p.epsilon),
+            sol1.status,
+            sol1.iterations,
+        ));
+        best = (sol1, &fallback);
+    }
+    let (sol, pp) = best;
+    let mut out = finish_solution(pp, &sol)?;
+    out.iterations = iters;
+    out.solve_seconds = start.elapsed().as_secs_f64();
+    out.stages = stages;
+    Ok(out)
+}
+
+/// Interior-point settings for a warm-started stage: a small initial μ and bound pushes, so
+/// the iterates stay near the previous solution instead of re-centring (unless the caller set
+/// its own [`ProblemSettings::ipm`]).
+pub fn warm_settings(s: &ProblemSettings) -> Settings {
+    let mut st = solver_settings(s);
+    if s.ipm.is_none() {
+        st.mu_init = 1e-4;
+        st.warm_start_bound_push = 1e-6;
+        st.warm_start_mult_bound_push = 1e-6;
+    }
+    st
+}
+
+/// The primal-dual point of `ws` if it belongs to the same problem on the same mesh (same
+/// NLP layout), so that it can warm-start `p` exactly rather than by interpolation.
+fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a WarmStart> {
+    let w = ws.nlp_warm.as_ref()?;
+    let n = Nlp::num_variables(&p.nlp);
+    let m = Nlp::num_constraints(&p.nlp);
+    let same = ws.problem == p.name
+        && ws.scheme == p.settings.scheme
+        && ws.points == p.settings.points
+        && ws.nlp_size == (n, m)
+        && w.x.len() == n
+        && w.lambda.len() == m
+        && w.z_l.len() == n
+        && w.z_u.len() == n
+        && w.x.iter().all(|v| v.is_finite());
+    same.then_some(w)
+}
+
+/// Solves `p` from the primal-dual point `warm` (same NLP layout) with [`warm_settings`].
+pub fn solve_warm(
+    p: &BuiltProblem,
+    warm: &WarmStart,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<OcpSolution, OcpError> {
+    let start = Instant::now();
+    let sol = solve_nlp(&p.nlp, &warm_settings(&p.settings), Some(warm), callback)?;
+    let mut out = finish_solution(p, &sol)?;
+    out.iterations = sol.iterations;
+    out.solve_seconds = start.elapsed().as_secs_f64();
+    out.stages = vec![(
+        format!("warm start, eps {}", p.epsilon),
+        sol.status,
+        sol.iterations,
+    )];
+    Ok(out)
+}
+
+/// The [`OcpSolution`] of an interior-point result, with its statistics and warm-start data.
+fn finish_solution(p: &BuiltProblem, sol: &Solution) -> Result<OcpSolution, OcpError> {
+    let mut out = solution_at(p, &sol.x, sol.status)?;
+    out.iterations = sol.iterations;
+    out.constraint_violation = sol.constraint_violation;
+    out.dual_infeasibility = sol.dual_infeasibility;
+    out.timing = sol.timing;
+    out.counters = sol.counters;
+    out.nlp_warm = Some(WarmStart::from(sol));
+    Ok(out)
+}
