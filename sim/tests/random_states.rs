@@ -81,6 +81,8 @@ struct Tally {
     energy_error_warnings: usize,
     domain_rejections: usize,
     max_impact_gain: f64,
+    /// The Zeno fallbacks used (law, time, message).
+    fallbacks: Vec<String>,
 }
 
 /// Runs one state with one law for `t_end` seconds and checks the invariants.
@@ -131,6 +133,11 @@ fn run_and_check(law: ImpactLaw, x0: &[f64; 9], t_end: f64, tally: &mut Tally) {
     let count = |kind: &str| sum.warnings.iter().filter(|w| w.kind == kind).count();
     tally.energy_raising_impacts += count("energy_raising_impact");
     tally.zeno_fallbacks += count("zeno_fallback");
+    for w in sum.warnings.iter().filter(|w| w.kind == "zeno_fallback") {
+        tally
+            .fallbacks
+            .push(format!("{law:?} t = {}: {}", w.t, w.message));
+    }
     tally.energy_error_warnings += count("energy_error");
     tally.domain_rejections += out.stats.domain_rejections;
     tally.max_impact_gain = tally.max_impact_gain.max(sum.max_impact_energy_gain);
