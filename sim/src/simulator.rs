@@ -391,7 +391,7 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             self.stats.rejected_steps += 1;
             self.last_rejected = true;
             last = false;
-            h = if err.is_finite() {
+            h = if err.is_finite() && cause.is_none() {
                 let fac11 = err.powf(0.2 - PI_BETA * 0.75);
                 h / (fac11 / PI_SAFE).min(1.0 / FAC_MIN)
             } else {

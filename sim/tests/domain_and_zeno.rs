@@ -16,10 +16,22 @@ use bf_sim::toys::{BallMode, BouncingBall};
 use bf_sim::{Guard, HybridSystem, SimError, SimSettings, Transition, simulate};
 
 /// Unit-circle rotation whose field is defined only near the circle (band `band`), and only
-/// for t ≤ `t_wall` (a boundary the trajectory itself crosses).
+/// for t ≤ `t_wall` (a boundary the trajectory itself crosses). With `at_projection` the band
+/// is checked by the projection of each step end instead of by the vector field.
 struct Band {
     band: f64,
     t_wall: f64,
+    at_projection: bool,
+}
+
+impl Band {
+    fn outside(&self, t: f64, r: f64) -> SimError {
+        SimError::OutsideDomain {
+            t,
+            mode: "()".into(),
+            msg: format!("|r - 1| = {:e}", (r - 1.0).abs()),
+        }
+    }
 }
 
 impl HybridSystem for Band {
@@ -29,12 +41,8 @@ impl HybridSystem for Band {
     }
     fn rhs(&self, _: (), t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
         let r = x[0].hypot(x[1]);
-        if (r - 1.0).abs() > self.band || t > self.t_wall {
-            return Err(SimError::OutsideDomain {
-                t,
-                mode: "()".into(),
-                msg: format!("|r - 1| = {:e}", (r - 1.0).abs()),
-            });
+        if (!self.at_projection && (r - 1.0).abs() > self.band) || t > self.t_wall {
+            return Err(self.outside(t, r));
         }
         dx[0] = -x[1];
         dx[1] = x[0];
@@ -49,8 +57,11 @@ impl HybridSystem for Band {
     fn reset(&self, _: (), _: usize, _: f64, _: &mut [f64]) -> Result<Transition<()>, SimError> {
         Ok(Transition::To(()))
     }
-    fn project(&self, _: (), _: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
+    fn project(&self, _: (), t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
         let r = x[0].hypot(x[1]);
+        if self.at_projection && (r - 1.0).abs() > self.band {
+            return Err(self.outside(t, r));
+        }
         x[0] /= r;
         x[1] /= r;
         Ok(Some(r - 1.0))
@@ -65,19 +76,25 @@ fn trial_steps_leaving_the_domain_are_retried_shorter() {
         h_max: 0.5,
         ..SimSettings::default()
     };
-    let sys = Band {
-        band: 1e-4,
-        t_wall: f64::INFINITY,
-    };
-    let out = simulate(&sys, set, (), 0.0, &[1.0, 0.0], 10.0).expect("no abort");
-    assert!(
-        out.stats.domain_rejections > 0,
-        "loose tolerances must push stages out of the band: {:?}",
-        out.stats
-    );
-    let x = out.trajectory.x.last().unwrap();
-    // The projection keeps r = 1; the phase error is the integrator's (rtol 1e-3 over 10 s).
-    assert!((x[0] - 10f64.cos()).abs() < 2e-2 && (x[1] - 10f64.sin()).abs() < 2e-2);
+    // Stages leave the circle by more than the step ends do: a tighter band for the end check.
+    for (at_projection, band) in [(false, 1e-4), (true, 1e-6)] {
+        let sys = Band {
+            band,
+            t_wall: f64::INFINITY,
+            at_projection,
+        };
+        let out = simulate(&sys, set.clone(), (), 0.0, &[1.0, 0.0], 10.0).expect("no abort");
+        assert!(
+            out.stats.domain_rejections > 0,
+            "loose tolerances must push the steps out of the band: {:?}",
+            out.stats
+        );
+        // Every accepted step ended within the band (checked by the projection's drift).
+        assert!(out.stats.max_drift <= band, "{:?}", out.stats);
+        let x = out.trajectory.x.last().unwrap();
+        // The projection keeps r = 1; the phase error is the integrator's (rtol 1e-3, 10 s).
+        assert!((x[0] - 10f64.cos()).abs() < 2e-2 && (x[1] - 10f64.sin()).abs() < 2e-2);
+    }
 }
 
 #[test]
@@ -85,6 +102,7 @@ fn running_into_the_domain_boundary_stops_with_the_domain_error() {
     let sys = Band {
         band: 1.0,
         t_wall: 2.0,
+        at_projection: false,
     };
     let fail = simulate(&sys, SimSettings::default(), (), 0.0, &[1.0, 0.0], 5.0)
         .expect_err("the trajectory crosses t = 2");
