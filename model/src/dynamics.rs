@@ -15,7 +15,7 @@
 //! gyroscopic term uses the full I_b, so it is exact for a non-isotropic ball.
 
 use crate::linalg::{Mat3, Spd3, Vec3, skew};
-use crate::transitions::TransitionSettings;
+use crate::settings::TransitionSettings;
 use crate::{ContactKinematics, Mode, ModelError, PainleveKind, Params, Result};
 
 /// Contact force λ on the finger (world axes) and its decomposition w.r.t. the normal n.

@@ -25,7 +25,7 @@
 
 use crate::dynamics::{ContactMatrices, factor_gamma, matrices_with_mass, require_contact};
 use crate::linalg::{Mat3, Vec3, tangent_basis};
-use crate::transitions::TransitionSettings;
+use crate::settings::TransitionSettings;
 use crate::{ContactKinematics, Mode, ModelError, Params, Result};
 
 /// Which impact law to apply (Sect. 2.5). Serialised / parsed in snake_case

@@ -15,8 +15,10 @@
 //!      (eq. 39, 40–41, 42, 43), each returning (q̇⁺, ω⁺, ι) and whether the contact sticks;
 //!      plus `ImpactLaw::NormalImpulse`, the energy-consistent frictionless reading of eq. 39
 //!      (the literal eq. 39 can increase kinetic energy, see [`impact`]).
-//!    - [`transitions`]: mode-transition predicates of Sect. 3.1 (eq. 48–50) with tolerances in
-//!      [`TransitionSettings`], and the velocity updates at Slip→Stick / Stick→Slip.
+//!    - [`transitions`]: mode-transition predicates of Sect. 3.1 (eq. 48–50) and the velocity
+//!      updates at Slip→Stick / Stick→Slip.
+//!    - [`settings`]: [`TransitionSettings`], the model-wide tolerances (contact band, Sect. 3.1
+//!      equalities, singular Γ, Painlevé margin) used by dynamics, impacts and transitions.
 //!    - [`energy`]: kinetic + potential energy and the power balance.
 //! 3. **[`Model`]**: kernels + [`Params`] + [`TransitionSettings`] with convenience methods
 //!    (`model.stick(&state, &tau)`, `model.impact(&state, law)`, ...). [`fixtures`] builds the
@@ -82,6 +84,7 @@ pub mod kernels;
 mod kinematics;
 mod linalg;
 mod params;
+pub mod settings;
 mod state;
 pub mod transitions;
 
@@ -92,8 +95,9 @@ pub use kernels::{ContactVariant, HumanKernels, Kernels, Model, PaperKernels};
 pub use kinematics::{ContactGeometry, ContactKinematics};
 pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
 pub use params::Params;
+pub use settings::TransitionSettings;
 pub use state::{Mode, State};
-pub use transitions::{Guard, Transition, TransitionSettings};
+pub use transitions::{Guard, Transition};
 
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, ModelError>;

@@ -8,6 +8,7 @@
 //! | Free | eq. 26 | `h` (eq. 50: contact when h crosses 0 or leaves the band h ≥ −tol) |
 //! | Stick | eq. 29, λ from eq. 33 | `lambda_n` (λ_n < 0 → Free, eq. 48), `sigma` (σ ≤ 0 → Slip, eq. 19) |
 //! | Slip | eq. 37, λ from eq. 38 | `lambda_n` (→ Free), `slip_speed` = ‖Δv‖ − ε (→ Stick, Sect. 3.1), `slip_reversal` = Δv·d₀ − ½‖Δv‖ (Δv turned > 60° within a step: it passed ‖Δv‖ ≈ 0, → Stick) |
+//! | Stick, Slip | | `alpha_tip` = α, `alpha_base` = α + ℓ (either direction): the kinks of sat(α), eq. 3 (see below) |
 //!
 //! Resets: Free → impact law of Sect. 2.5 (eq. 39–43, [`ImpactLaw`]); the post-impact ‖Δv⁺‖
 //! picks Stick or Slip (Fig. 3's "In-contact" state). Stick → Slip: velocity kick Δv⁺ =
@@ -18,6 +19,45 @@
 //! on h = 0 and stays Free instead of applying an impact to a separating finger. When the
 //! new mode is already invalid (e.g. λ_n < 0 right after a sticking impact) the simulator chains
 //! the next transition at the same instant.
+//!
+//! # Non-smooth points of the contact geometry
+//! The finger's last link is the segment from joint 3 to the fingertip p_e (Sect. 2.2); the
+//! potential contact point p_c = p_e + sat(α) e_x3 (eq. 3) has two kinks, α = 0 (p_c reaches the
+//! fingertip: the contact passes between the link's side and its end point) and α = −ℓ (p_c
+//! reaches the link's base, joint 3; ℓ = a₃). At both, h (eq. 4, the distance to a convex set,
+//! C¹ away from it), n (eq. 11), J_c (eq. 7) and v_c (eq. 6) are continuous, so at h = 0 the
+//! conditions h = 0 (eq. 8) and n·v_c = 0 (eq. 10) hold on both sides and no impulse is needed.
+//! But d sat(α)/dt jumps between α̇ and 0, so ṙ_c and J̇_c q̇ in the bias of eq. 33 and in the
+//! normal-constraint acceleration of eq. 36–38 jump: λ and the accelerations are discontinuous
+//! there. Hence in Stick and Slip the guards `alpha_tip` and `alpha_base` locate the crossing on
+//! the dense output (event kind `kink`) and the reset keeps state and mode: the contact
+//! persists on the other part of the link (the end point or the side), and whether it persists
+//! beyond that instant is decided by the new geometry's λ_n (eq. 48: λ_n < 0 lifts off at once,
+//! e.g. when the tip's path curves away from the ball) and σ (eq. 19: Stick → Slip), which the
+//! simulator checks right after the reset (chained transitions). Free motion needs no kink
+//! events: its vector field does not involve the contact and its guard h is C¹. The only other
+//! non-smooth point, |r_c| = 0 (n undefined), cannot occur near contact (|r_c| = r + h).
+//! Besides, a trial step whose stage or end state leaves the contact band |h| ≤
+//! `contact_tolerance`·r is rejected and retried shorter ([`SimError::OutsideDomain`]), so a
+//! step cannot jump out of the contact modes' domain.
+//!
+//! # Zeno fallback
+//! More than `SimSettings::zeno_max_events` events within `zeno_window` (an accumulation of
+//! events, e.g. the contact point chattering at a kink, or impact / lift-off or stick / slip
+//! chatter) calls [`HybridSystem::zeno_fallback`], which ends the cascade for
+//! `BallFingerOptions::zeno_hold_time` seconds and is reported as a `zeno_fallback` warning:
+//! * only kink events: the kink guards are suspended (the mode continues; the error control
+//!   shortens the steps across the kink);
+//! * otherwise: the contact is made sticking (q projected onto h = 0, velocities onto Δv = 0 by
+//!   the sticking impulse of eq. 40–41, which never adds energy) and held in Stick regardless of
+//!   λ_n and σ (the lift-off and stick → slip guards are suspended; the sticking force does no
+//!   work). When the hold ends the guards take over again.
+//!
+//! # Energy warnings
+//! The run summary reports each impact that raises the energy (only Newton's law, eq. 39, can:
+//! see bf-model's impact module) and the energy-balance error E(t) − E(t₀) − ∫ P dt of the
+//! integration (P of the power balance, eq. 22/25); above `BallFingerOptions::energy_error_tol`
+//! it is a warning (e.g. fixed-step RK4 with a step too long for the dynamics).
 //!
 //! Drift control (Sect. 3.1 "we also allow h(q) to drift"): after each accepted step in a
 //! contact mode, q is projected back onto h(q) = 0 by Gauss–Newton along ∇h = J_cᵀ n, then the
@@ -32,9 +72,9 @@
 //! are named by their Fig. 3 transition ([`event_kind`]).
 
 use crate::trajectory::{SampleKind, SimOutput, write_atomic};
-use crate::{Guard, HybridSystem, Input, SimError, Transition};
+use crate::{Guard, HybridSystem, Input, SimError, SimWarning, Transition};
 use bf_model::dynamics::contact_matrices;
-use bf_model::{ImpactLaw, Kernels, Mode, Model, State, Vec3};
+use bf_model::{ImpactLaw, Kernels, Mode, Model, ModelError, State, Vec3};
 use serde::Serialize;
 use std::cell::Cell;
 use std::path::Path;
@@ -63,6 +103,17 @@ pub struct BallFingerOptions {
     /// valid; it does not act on the ball (r_c ∥ n) and changes the energy by O(1e-18) J.
     /// 0 disables it.
     pub lift_off_speed: f64,
+    /// How long the Zeno fallback holds its regularisation (s): suspended kink guards, or a
+    /// sticking contact held regardless of λ_n and σ (see the module docs) (default: 1e-2).
+    pub zeno_hold_time: f64,
+    /// An impact that raises the energy E by more than this (J) is reported as an
+    /// `energy_raising_impact` warning; only Newton's law (eq. 39) can do so (default: 1e-9).
+    pub impact_energy_tol: f64,
+    /// A run whose energy-balance error (the largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events|,
+    /// P = dE/dt of the power balance, trapezoidal rule over the samples) exceeds this (J) gets an
+    /// `energy_error` warning: the step is too long for the dynamics (e.g. fixed-step RK4 with a
+    /// large step) (default: 1e-3).
+    pub energy_error_tol: f64,
 }
 
 impl Default for BallFingerOptions {
@@ -72,6 +123,9 @@ impl Default for BallFingerOptions {
             project: true,
             projection_iterations: 3,
             lift_off_speed: 1e-8,
+            zeno_hold_time: 1e-2,
+            impact_energy_tol: 1e-9,
+            energy_error_tol: 1e-3,
         }
     }
 }
@@ -89,7 +143,34 @@ pub struct BallFinger<K: Kernels, I: Input> {
     /// the `slip_reversal` guard; updated by the resets into Slip and after every accepted
     /// Slip step (`project`).
     slip_ref: Cell<[f64; 3]>,
+    /// Length ℓ = a₃ of the contact link (m), the lower limit of sat(α) in eq. 3.
+    link_length: f64,
+    /// Guards suspended by the Zeno fallback, and until when.
+    hold: Cell<Hold>,
 }
+
+/// Guards suspended by the Zeno fallback until `until` (s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Hold {
+    until: f64,
+    /// The kink guards `alpha_tip`, `alpha_base`.
+    kinks: bool,
+    /// The contact-mode guards `lambda_n`, `sigma`, `slip_speed`, `slip_reversal`.
+    contact: bool,
+}
+
+impl Hold {
+    const NONE: Hold = Hold {
+        until: f64::NEG_INFINITY,
+        kinks: false,
+        contact: false,
+    };
+}
+
+/// Value of a guard suspended by the Zeno fallback: constant and on the valid side, so it
+/// neither fires nor masks; when the hold ends the true value takes over (a crossing there is an
+/// ordinary event).
+const HELD_GUARD: f64 = 1.0;
 
 fn state_of(x: &[f64]) -> Result<State, SimError> {
     let a: &[f64; 9] = x.try_into().map_err(|_| SimError::DimensionMismatch {
@@ -105,6 +186,52 @@ fn write_velocities(x: &mut [f64], qd: &Vec3, omega: &Vec3) {
     x[6..9].copy_from_slice(omega.as_slice());
 }
 
+/// Length ℓ of the contact link from the contact kernel. With a revolute last joint, advancing q₃
+/// by π reverses e_x3 about z₂ while p₂ (joint 3) stays, and α = (o_b − p₂ − d₃ z₂)·e_x3 − ℓ
+/// (eq. 2 with p_e = p₂ + d₃ z₂ + ℓ e_x3), so α(q) + α(q + π e₃) = −2ℓ. Checked at two
+/// configurations and, for the exact saturation, against sat(α) = −ℓ where α < −ℓ.
+fn contact_link_length<K: Kernels>(model: &Model<K>) -> Result<f64, SimError> {
+    let alpha = |q: Vec3| -> Result<(f64, f64), SimError> {
+        let c = model
+            .evaluate(&State::new(q, Vec3::zeros(), Vec3::zeros()))
+            .map_err(SimError::system)?
+            .contact;
+        Ok((c.alpha, c.sat_alpha))
+    };
+    let pi = std::f64::consts::PI;
+    let mut lengths = Vec::new();
+    for q in [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, -0.7, 1.1)] {
+        let (a0, s0) = alpha(q)?;
+        let (a1, s1) = alpha(q + Vec3::new(0.0, 0.0, pi))?;
+        let l = -0.5 * (a0 + a1);
+        // The side with α < −ℓ has sat(α) = −ℓ for the exact saturation.
+        let (a_low, s_low) = if a0 < a1 { (a0, s0) } else { (a1, s1) };
+        let exact = model.contact_variant() == bf_model::ContactVariant::Exact;
+        let tol = 1e-9 * (1.0 + l.abs());
+        if exact && a_low < -l - tol && (s_low + l).abs() > tol {
+            return Err(contact_link_error(l, "sat(alpha) does not saturate at -l"));
+        }
+        lengths.push(l);
+    }
+    let l = lengths[0];
+    if !(l.is_finite() && l > 0.0) || (lengths[1] - l).abs() > 1e-9 * (1.0 + l) {
+        return Err(contact_link_error(
+            l,
+            "alpha(q) + alpha(q + pi e3) is not the same -2 l at two configurations",
+        ));
+    }
+    Ok(l)
+}
+
+fn contact_link_error(l: f64, why: &str) -> SimError {
+    SimError::System {
+        msg: format!(
+            "cannot determine the contact link length from the contact kernel (got {l}): {why}; \
+             the ball-finger simulator needs a revolute last joint carrying the contact link"
+        ),
+    }
+}
+
 impl<K: Kernels, I: Input> BallFinger<K, I> {
     /// Builds the system; the input must provide 3 torques.
     pub fn new(model: Model<K>, input: I, options: BallFingerOptions) -> Result<Self, SimError> {
@@ -115,12 +242,33 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
                 found: input.dim(),
             });
         }
+        let link_length = contact_link_length(&model)?;
         Ok(BallFinger {
             model,
             input,
             options,
             slip_ref: Cell::new([0.0; 3]),
+            link_length,
+            hold: Cell::new(Hold::NONE),
         })
+    }
+
+    /// Length ℓ of the contact link (m): the α at which sat(α) of eq. 3 saturates at −ℓ.
+    pub fn link_length(&self) -> f64 {
+        self.link_length
+    }
+
+    /// Maps a model error at a trial state: far from contact is outside the contact modes'
+    /// domain (the step is retried shorter), everything else is a system error.
+    fn model_err(mode: Mode, t: f64) -> impl Fn(ModelError) -> SimError {
+        move |e| match e {
+            ModelError::NotInContact { .. } => SimError::OutsideDomain {
+                t,
+                mode: format!("{mode:?}"),
+                msg: e.to_string(),
+            },
+            e => SimError::system(e),
+        }
     }
 
     fn set_slip_ref(&self, dv: &Vec3) {
@@ -170,7 +318,7 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
     }
 
     /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
-    /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c and the energy.
+    /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
     pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo, SimError> {
         let s = state_of(x)?;
         let tau = self.tau(t, &s)?;
@@ -180,6 +328,7 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
             .accelerations(mode, &s, &tau)
             .map_err(SimError::system)?;
         let e = self.model.energy(&s).map_err(SimError::system)?;
+        let power = bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force);
         let c = &kin.contact;
         Ok(SampleInfo {
             tau: tau.into(),
@@ -190,6 +339,7 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
             slip_speed: c.delta_v.norm(),
             normal_velocity: c.normal_velocity(),
             energy: e.total,
+            power: power.total,
         })
     }
 
@@ -226,7 +376,7 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
                 ),
             })
             .collect();
-        let summary = summarize(out, &samples, &events, t0, cpu_seconds);
+        let summary = summarize(out, &samples, &events, t0, cpu_seconds, &self.options);
         RunReport {
             samples,
             events,
@@ -238,9 +388,11 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
 /// Name of a Fig. 3 transition from the mode it leaves and the guard that fired:
 /// `impact` (Free, h = 0, eq. 50), `graze` (h crossed zero on the interpolant while separating:
 /// q put back on the surface, still Free), `lift_off` (λ_n < 0, eq. 48), `stick_to_slip` (σ ≤ 0,
-/// eq. 19), `slip_to_stick` (‖Δv‖ ≤ ε, Sect. 3.1).
+/// eq. 19), `slip_to_stick` (‖Δv‖ ≤ ε, Sect. 3.1); and `kink` (the contact point passed a kink of
+/// sat(α), eq. 3: same mode before and after).
 pub fn event_kind(mode_before: Mode, mode_after: Option<Mode>, guard: &str) -> &'static str {
     match (mode_before, guard) {
+        (_, "alpha_tip" | "alpha_base") => "kink",
         (Mode::Free, _) if mode_after == Some(Mode::Free) => "graze",
         (Mode::Free, _) => "impact",
         (_, "lambda_n") => "lift_off",
@@ -268,6 +420,8 @@ pub struct SampleInfo {
     pub normal_velocity: f64,
     /// Total energy E = T + U (J, eq. 22).
     pub energy: f64,
+    /// dE/dt = q̇ᵀτ − μ_v‖q̇‖² − D‖ω‖² − λ·Δv of the power balance (W); JSON only.
+    pub power: f64,
 }
 
 impl SampleInfo {
@@ -281,6 +435,7 @@ impl SampleInfo {
         slip_speed: f64::NAN,
         normal_velocity: f64::NAN,
         energy: f64::NAN,
+        power: f64::NAN,
     };
 }
 
@@ -319,7 +474,7 @@ pub struct RunSummary {
     /// Mode at `t_final`.
     pub mode_final: Mode,
     /// Number of events of each kind, in a fixed order (impact, lift_off, stick_to_slip,
-    /// slip_to_stick, graze).
+    /// slip_to_stick, graze, kink).
     pub event_counts: Vec<(&'static str, usize)>,
     /// Share of the simulated time spent in Free, Stick, Slip (sums to 1).
     pub mode_time_share: [(Mode, f64); 3],
@@ -337,6 +492,17 @@ pub struct RunSummary {
     pub energy_initial: f64,
     /// Energy at the last sample (J).
     pub energy_final: f64,
+    /// Largest energy change E⁺ − E⁻ over the impacts (J); > 0 only for Newton's law (eq. 39),
+    /// which does not guarantee dissipation. 0 without impacts.
+    pub max_impact_energy_gain: f64,
+    /// Largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events| over the samples (J): the energy-balance
+    /// error of the integration (P from the power balance, trapezoidal rule between samples;
+    /// jumps at events excluded).
+    pub energy_error: f64,
+    /// Conditions that qualify the result: `energy_raising_impact` (one per impact raising E by
+    /// more than `BallFingerOptions::impact_energy_tol`), `energy_error` (energy-balance error
+    /// above `BallFingerOptions::energy_error_tol`), `zeno_fallback` (see the module docs).
+    pub warnings: Vec<SimWarning>,
     /// Accepted steps, rejected steps, vector-field evaluations.
     pub stats: crate::SimStats,
     /// Wall-clock time of the run (s).
@@ -351,6 +517,7 @@ fn summarize(
     events: &[EventInfo],
     t0: f64,
     cpu_seconds: f64,
+    options: &BallFingerOptions,
 ) -> RunSummary {
     let tr = &out.trajectory;
     let kinds = [
@@ -359,7 +526,40 @@ fn summarize(
         "stick_to_slip",
         "slip_to_stick",
         "graze",
+        "kink",
     ];
+    let mut warnings = Vec::new();
+    let mut max_impact_energy_gain = 0.0f64;
+    for e in events.iter().filter(|e| e.kind == "impact") {
+        let gain = e.post.energy - e.pre.energy;
+        if gain.is_finite() {
+            max_impact_energy_gain = max_impact_energy_gain.max(gain);
+        }
+        if gain > options.impact_energy_tol {
+            warnings.push(SimWarning {
+                t: e.t,
+                kind: "energy_raising_impact",
+                message: format!(
+                    "{} impact raised the energy by {gain:+.3e} J",
+                    options.impact_law.name()
+                ),
+            });
+        }
+    }
+    let (energy_error, t_error) = energy_balance_error(tr, samples);
+    warnings.extend(out.warnings.iter().cloned());
+    if energy_error > options.energy_error_tol {
+        warnings.push(SimWarning {
+            t: t_error,
+            kind: "energy_error",
+            message: format!(
+                "energy-balance error {energy_error:.3e} J exceeds {:e} J: the integration \
+                 step is too long for the dynamics",
+                options.energy_error_tol
+            ),
+        });
+    }
+    warnings.sort_by(|a, b| a.t.total_cmp(&b.t));
     let event_counts = kinds
         .iter()
         .map(|&k| (k, events.iter().filter(|e| e.kind == k).count()))
@@ -415,6 +615,9 @@ fn summarize(
         max_normal_velocity,
         energy_initial: samples.first().map_or(f64::NAN, |s| s.energy),
         energy_final: samples.last().map_or(f64::NAN, |s| s.energy),
+        max_impact_energy_gain,
+        energy_error,
+        warnings,
         stats: out.stats,
         cpu_seconds,
         real_time_factor: if cpu_seconds > 0.0 {
@@ -422,6 +625,58 @@ fn summarize(
         } else {
             f64::INFINITY
         },
+    }
+}
+
+/// Largest |E(t) − E(t₀) − ∫ P dt| over the samples, with the jumps at events (the interval
+/// ending at an `EventPost` sample) left out, and the time where it occurs. Non-finite samples
+/// (a failed run's last state) are skipped.
+fn energy_balance_error(tr: &crate::Trajectory<Mode>, samples: &[SampleInfo]) -> (f64, f64) {
+    let mut residual = 0.0f64;
+    let mut worst = (0.0f64, tr.t.first().copied().unwrap_or(0.0));
+    for i in 1..tr.len() {
+        if tr.kind[i] == SampleKind::EventPost {
+            continue;
+        }
+        let (a, b) = (&samples[i - 1], &samples[i]);
+        let step = (b.energy - a.energy) - 0.5 * (a.power + b.power) * (tr.t[i] - tr.t[i - 1]);
+        if !step.is_finite() {
+            continue;
+        }
+        residual += step;
+        if residual.abs() > worst.0 {
+            worst = (residual.abs(), tr.t[i]);
+        }
+    }
+    worst
+}
+
+impl RunSummary {
+    /// One line per kind of warning (count, worst case, what to do), for the CLI.
+    pub fn warning_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        let of = |kind: &'static str| self.warnings.iter().filter(move |w| w.kind == kind);
+        let n = of("energy_raising_impact").count();
+        if n > 0 {
+            lines.push(format!(
+                "{n} impact(s) raised the energy, largest {:+.3e} J: Newton's law (eq. 39) does \
+                 not guarantee dissipation (stick, max-dissipation and min-slip do)",
+                self.max_impact_energy_gain
+            ));
+        }
+        for w in of("energy_error") {
+            lines.push(format!("t = {} s: {}", w.t, w.message));
+        }
+        let z: Vec<&SimWarning> = of("zeno_fallback").collect();
+        if let Some(w) = z.first() {
+            lines.push(format!(
+                "{} Zeno fallback(s), first at t = {} s: {}",
+                z.len(),
+                w.t,
+                w.message
+            ));
+        }
+        lines
     }
 }
 
@@ -452,10 +707,11 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "energy: {:.9} J -> {:.9} J (change {:+.3e} J)",
+            "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J",
             self.energy_initial,
             self.energy_final,
-            self.energy_final - self.energy_initial
+            self.energy_final - self.energy_initial,
+            self.energy_error
         )?;
         writeln!(
             f,
@@ -644,6 +900,29 @@ fn json<T: Serialize>(what: &'static str, v: &T) -> Result<Vec<u8>, SimError> {
     })
 }
 
+/// Guards of the contact modes besides their transitions: the kinks of sat(α) (eq. 3).
+const KINK_GUARDS: [Guard; 2] = [Guard::either("alpha_tip"), Guard::either("alpha_base")];
+
+impl<K: Kernels, I: Input> BallFinger<K, I> {
+    /// Values of the kink guards at contact geometry `c`: α (m; 0 where p_c reaches the
+    /// fingertip p_e) and α + ℓ (m; 0 where p_c reaches the link's base, joint 3).
+    fn kink_values(&self, c: &bf_model::ContactGeometry, t: f64, out: &mut [f64]) {
+        let hold = self.hold.get();
+        if hold.kinks && t < hold.until {
+            out.fill(HELD_GUARD);
+        } else {
+            out[0] = c.alpha;
+            out[1] = c.alpha + self.link_length;
+        }
+    }
+
+    /// Whether the contact-mode transition guards are held by the Zeno fallback at `t`.
+    fn contact_held(&self, t: f64) -> bool {
+        let hold = self.hold.get();
+        hold.contact && t < hold.until
+    }
+}
+
 impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
     type Mode = Mode;
 
@@ -657,25 +936,28 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         let acc = self
             .model
             .accelerations(mode, &s, &tau)
-            .map_err(SimError::system)?;
+            .map_err(Self::model_err(mode, t))?;
         dx.copy_from_slice(&acc.state_derivative(&s.qd));
         Ok(())
     }
 
     fn guards(&self, mode: Mode) -> Vec<Guard> {
-        match mode {
-            Mode::Free => vec![Guard::falling("h")],
+        let mut g = match mode {
+            Mode::Free => return vec![Guard::falling("h")],
             Mode::Stick => vec![Guard::falling("lambda_n"), Guard::falling("sigma")],
             Mode::Slip => vec![
                 Guard::falling("lambda_n"),
                 Guard::falling("slip_speed"),
                 Guard::falling("slip_reversal"),
             ],
-        }
+        };
+        g.extend(KINK_GUARDS);
+        g
     }
 
     fn guard_values(&self, mode: Mode, t: f64, x: &[f64], out: &mut [f64]) -> Result<(), SimError> {
         let s = state_of(x)?;
+        let err = Self::model_err(mode, t);
         match mode {
             Mode::Free => {
                 // Only the contact kernel is needed for h (no mass matrix).
@@ -690,13 +972,25 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
             }
             Mode::Stick => {
                 let tau = self.tau(t, &s)?;
-                let acc = self.model.stick(&s, &tau).map_err(SimError::system)?;
-                out[0] = acc.force.lambda_n;
-                out[1] = acc.force.sigma;
+                let kin = self.model.evaluate(&s).map_err(&err)?;
+                let acc = bf_model::dynamics::stick(
+                    &kin,
+                    self.model.params(),
+                    &tau,
+                    self.model.settings(),
+                )
+                .map_err(&err)?;
+                if self.contact_held(t) {
+                    out[..2].fill(HELD_GUARD);
+                } else {
+                    out[0] = acc.force.lambda_n;
+                    out[1] = acc.force.sigma;
+                }
+                self.kink_values(&kin.contact, t, &mut out[2..]);
             }
             Mode::Slip => {
                 let tau = self.tau(t, &s)?;
-                let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+                let kin = self.model.evaluate(&s).map_err(&err)?;
                 let acc = bf_model::dynamics::slip(
                     &kin,
                     self.model.params(),
@@ -704,16 +998,21 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                     self.model.settings(),
                     None,
                 )
-                .map_err(SimError::system)?;
+                .map_err(&err)?;
                 let dv = kin.contact.delta_v;
-                out[0] = acc.force.lambda_n;
-                out[1] = dv.norm() - self.model.settings().slip_eps;
-                let d = Vec3::from(self.slip_ref.get());
-                out[2] = if d == Vec3::zeros() {
-                    dv.norm()
+                if self.contact_held(t) {
+                    out[..3].fill(HELD_GUARD);
                 } else {
-                    dv.dot(&d) - REVERSAL_COS * dv.norm()
-                };
+                    out[0] = acc.force.lambda_n;
+                    out[1] = dv.norm() - self.model.settings().slip_eps;
+                    let d = Vec3::from(self.slip_ref.get());
+                    out[2] = if d == Vec3::zeros() {
+                        dv.norm()
+                    } else {
+                        dv.dot(&d) - REVERSAL_COS * dv.norm()
+                    };
+                }
+                self.kink_values(&kin.contact, t, &mut out[3..]);
             }
         }
         Ok(())
@@ -727,6 +1026,13 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         x: &mut [f64],
     ) -> Result<Transition<Mode>, SimError> {
         let s = state_of(x)?;
+        let name = self.guards(mode).get(guard).map_or("", |g| g.name);
+        if KINK_GUARDS.iter().any(|g| g.name == name) {
+            // The contact point passed a kink of sat(α): h, n, J_c and the velocities are
+            // continuous there, so the contact persists in the same mode; the new geometry's
+            // λ_n and σ are checked at once by the mode's guards (chained transition).
+            return Ok(Transition::To(mode));
+        }
         let next = match (mode, guard) {
             (Mode::Free, _) => {
                 let kin = self.model.evaluate(&s).map_err(SimError::system)?;
@@ -738,6 +1044,16 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                     self.project_position(&mut s)?;
                     x[0..3].copy_from_slice(s.q.as_slice());
                     return Ok(Transition::To(Mode::Free));
+                }
+                let mut s = s;
+                let tol =
+                    self.model.settings().contact_tolerance * self.model.params().ball_radius();
+                if kin.contact.h.abs() > tol {
+                    // The located event state lies beyond the contact band (an interpolant far
+                    // from the solution, e.g. a fixed step far too long): apply the impact law
+                    // on the surface h = 0 instead of refusing it.
+                    self.project_position(&mut s)?;
+                    x[0..3].copy_from_slice(s.q.as_slice());
                 }
                 let out = self
                     .model
@@ -794,11 +1110,12 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         Ok(Transition::To(next))
     }
 
-    fn project(&self, mode: Mode, _t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
+    fn project(&self, mode: Mode, t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
+        let err = Self::model_err(mode, t);
         if mode == Mode::Slip {
             // The slip_reversal guard of the next step compares Δv with its direction now.
             let s = state_of(x)?;
-            let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+            let kin = self.model.evaluate(&s).map_err(&err)?;
             self.set_slip_ref(&kin.contact.delta_v);
         }
         if mode == Mode::Free || !self.options.project {
@@ -808,16 +1125,13 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         let drift = self.project_position(&mut s)?;
         match mode {
             Mode::Stick => {
-                let out = self
-                    .model
-                    .slip_to_stick_update(&s)
-                    .map_err(SimError::system)?;
+                let out = self.model.slip_to_stick_update(&s).map_err(&err)?;
                 s.qd = out.qd;
                 s.omega = out.omega;
             }
             Mode::Slip => {
-                let kin = self.model.evaluate(&s).map_err(SimError::system)?;
-                let mats = contact_matrices(&kin, self.model.params()).map_err(SimError::system)?;
+                let kin = self.model.evaluate(&s).map_err(&err)?;
+                let mats = contact_matrices(&kin, self.model.params()).map_err(&err)?;
                 let n = kin.contact.n;
                 let vn = n.dot(&kin.contact.v_c);
                 if mats.n_w_n > 0.0 {
@@ -828,10 +1142,73 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         }
         x.copy_from_slice(&s.to_array());
         if mode == Mode::Slip {
-            let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+            let kin = self.model.evaluate(&s).map_err(&err)?;
             self.set_slip_ref(&kin.contact.delta_v);
         }
         Ok(drift)
+    }
+
+    fn zeno_fallback(
+        &self,
+        mode: Mode,
+        t: f64,
+        x: &mut [f64],
+        recent: &[(&'static str, Mode)],
+    ) -> Result<Option<(Mode, String)>, SimError> {
+        let is_kink = |g: &str| KINK_GUARDS.iter().any(|k| k.name == g);
+        let kinks = recent.iter().any(|(g, _)| is_kink(g));
+        let hold = self.options.zeno_hold_time;
+        let mut names: Vec<(&str, usize)> = Vec::new();
+        for (g, _) in recent {
+            match names.iter_mut().find(|(n, _)| n == g) {
+                Some((_, c)) => *c += 1,
+                None => names.push((g, 1)),
+            }
+        }
+        let names: Vec<String> = names.iter().map(|(n, c)| format!("{n} {c}")).collect();
+        let names = names.join(", ");
+        if mode != Mode::Free && recent.iter().all(|(g, _)| is_kink(g)) {
+            self.hold.set(Hold {
+                until: t + hold,
+                kinks: true,
+                contact: false,
+            });
+            return Ok(Some((
+                mode,
+                format!(
+                    "the contact point chatters across a kink of sat(alpha) (eq. 3; {names}): \
+                     kink events suspended for {hold} s, steps across the kink are shortened \
+                     by the error control"
+                ),
+            )));
+        }
+        // Chatter between contact and free motion or between stick and slip: hold a sticking
+        // contact (Δv = 0 by the dissipative sticking projection, eq. 40–41).
+        let mut s = state_of(x)?;
+        let tol = self.model.settings().contact_tolerance * self.model.params().ball_radius();
+        if self.gap(x)?.abs() > tol {
+            return Ok(None);
+        }
+        self.project_position(&mut s)?;
+        let out = self
+            .model
+            .slip_to_stick_update(&s)
+            .map_err(SimError::system)?;
+        s.qd = out.qd;
+        s.omega = out.omega;
+        x.copy_from_slice(&s.to_array());
+        self.hold.set(Hold {
+            until: t + hold,
+            kinks,
+            contact: true,
+        });
+        Ok(Some((
+            Mode::Stick,
+            format!(
+                "mode chatter ({names}): sticking contact held for {hold} s regardless of \
+                 lambda_n and sigma (eq. 48, 19)"
+            ),
+        )))
     }
 
     fn check_valid(&self, mode: Mode, t: f64, x: &[f64]) -> Result<(), SimError> {
@@ -841,7 +1218,8 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         let h = self.gap(x)?;
         let tol = self.model.settings().contact_tolerance * self.model.params().ball_radius();
         if h.abs() > tol {
-            return Err(SimError::InvalidState {
+            // Outside the contact modes' domain: a trial step ending here is retried shorter.
+            return Err(SimError::OutsideDomain {
                 t,
                 mode: format!("{mode:?}"),
                 msg: format!("contact drift |h| = {:e} m exceeds {tol:e} m", h.abs()),

@@ -92,6 +92,22 @@ pub enum SimError {
         /// System-provided explanation.
         msg: String,
     },
+    /// A trial state lies outside the domain where the current mode's vector field, guards or
+    /// validity check are defined (e.g. a contact mode evaluated with |h| beyond the contact
+    /// band). Raised by systems for states that a shorter step avoids: inside a step the
+    /// simulator rejects the step and retries it shorter, so this ends a run only when raised at
+    /// the initial state or by a reset, when the retried step would fall below `h_min`, or when
+    /// the trajectory itself runs into the boundary (`SimSettings::max_domain_creep`
+    /// consecutive accepted steps each needed a domain rejection).
+    #[error("state outside the domain of mode {mode} at t = {t}: {msg}")]
+    OutsideDomain {
+        /// Time of the evaluation.
+        t: f64,
+        /// Mode being evaluated.
+        mode: String,
+        /// System-provided explanation.
+        msg: String,
+    },
     /// An error raised by the system implementation (vector field, guards, reset, projection),
     /// e.g. a singular contact matrix in the ball–finger model.
     #[error("system error: {msg}")]
@@ -128,6 +144,12 @@ pub enum SimError {
 }
 
 impl SimError {
+    /// Whether a shorter step can avoid this error: [`SimError::OutsideDomain`] raised inside a
+    /// trial step rejects the step instead of ending the run.
+    pub fn is_step_rejectable(&self) -> bool {
+        matches!(self, SimError::OutsideDomain { .. })
+    }
+
     /// Wraps any error of a system implementation as [`SimError::System`]; the intended use is
     /// `model_call().map_err(SimError::system)?` inside a [`crate::HybridSystem`] impl.
     pub fn system<E: std::fmt::Display>(e: E) -> Self {

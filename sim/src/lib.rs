@@ -47,5 +47,5 @@ pub use input::{Input, PdController, TorqueSeries};
 pub use settings::{Method, SimSettings};
 pub use simulator::{SimFailure, Simulator, StopReason, simulate};
 pub use system::{Direction, Guard, HybridSystem, Transition};
-pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, Trajectory};
+pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory};
 pub use work_precision::{WorkPrecisionRow, format_table, work_precision};

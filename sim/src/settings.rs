@@ -2,7 +2,9 @@
 //!
 //! The Zeno guard and the chain limit implement the "allow a small violation, but terminate" stance
 //! of the paper's Sect. 3.1: transition times are approximated to `event_tol`, and accumulating
-//! transitions are stopped with a clear error instead of looping forever.
+//! transitions are either ended by the system's documented fallback
+//! (`HybridSystem::zeno_fallback`, reported as a warning) or stopped with a clear error instead
+//! of looping forever.
 
 use crate::SimError;
 
@@ -51,14 +53,19 @@ pub struct SimSettings {
     /// Guard values with |g| <= this are "on the surface" right after a reset or at the start;
     /// such guards are neither retriggered nor lose their next genuine crossing (default: 1e-9).
     pub guard_zero_tol: f64,
-    /// Zeno guard: more than this many events within `zeno_window` seconds is
-    /// [`SimError::Zeno`] (default: 100).
+    /// Zeno guard: more than this many events within `zeno_window` seconds calls the system's
+    /// `HybridSystem::zeno_fallback`, and without one is [`SimError::Zeno`] (default: 100).
     pub zeno_max_events: usize,
     /// Zeno guard window in seconds (default: 1e-3).
     pub zeno_window: f64,
     /// Maximum number of instantaneous transitions chained at one time instant before
     /// [`SimError::ChainLimit`] (default: 16).
     pub max_chained_events: usize,
+    /// A trial step that leaves the mode's domain ([`SimError::OutsideDomain`]) is rejected and
+    /// retried shorter; when this many consecutive accepted steps each needed such a rejection,
+    /// the trajectory itself runs into the domain boundary (the steps creep towards it), and the
+    /// run stops with that error (default: 32).
+    pub max_domain_creep: usize,
     /// Record a sample at every accepted step (default: true).
     pub record_steps: bool,
     /// Additionally record samples on the uniform grid t0 + k·dt via dense output (default:
@@ -82,6 +89,7 @@ impl Default for SimSettings {
             zeno_max_events: 100,
             zeno_window: 1e-3,
             max_chained_events: 16,
+            max_domain_creep: 32,
             record_steps: true,
             output_dt: None,
         }
@@ -138,6 +146,7 @@ impl SimSettings {
         nonzero("event_subdivisions", self.event_subdivisions)?;
         nonzero("zeno_max_events", self.zeno_max_events)?;
         nonzero("max_chained_events", self.max_chained_events)?;
+        nonzero("max_domain_creep", self.max_domain_creep)?;
         Ok(())
     }
 }

@@ -18,7 +18,10 @@
 //! Each accepted step is followed by guard scanning on its dense output ([`crate::events`]);
 //! if an event is found the state is moved back to the event time (`state_mut_back` in diffsol's
 //! terms), a pre-event sample is recorded, and `step()` returns `RootFound`. `apply_reset` runs
-//! the reset map, logs the event, applies the Zeno guard, and checks whether the new mode has a
+//! the reset map, logs the event, applies the Zeno guard (more than `zeno_max_events` events
+//! within `zeno_window`: the system's [`HybridSystem::zeno_fallback`] may end the cascade, which
+//! is then recorded as a [`SimWarning`]; without a fallback the run stops with
+//! [`SimError::Zeno`]), and checks whether the new mode has a
 //! directional guard already beyond its zero (then the next `step()` reports that event at the
 //! same instant: a chained transition, bounded by `max_chained_events`).
 
@@ -28,7 +31,8 @@ use crate::integrator::{
     rk4_step,
 };
 use crate::trajectory::{
-    EventRecord, SampleKind, SimOutput, SimStats, Trajectory, events_csv, output_json, write_atomic,
+    EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory, events_csv, output_json,
+    write_atomic,
 };
 use crate::{Guard, HybridSystem, Method, SimError, SimSettings, Transition};
 use std::collections::VecDeque;
@@ -54,6 +58,19 @@ pub enum StopReason {
     TEndReached,
     /// A reset returned [`Transition::Terminate`].
     Terminated,
+}
+
+/// Earliest event (guard index, time) of a step, if any, and the guard masks at its end.
+type Located = (Option<(usize, f64)>, Vec<bool>);
+
+/// Outcome of [`Simulator::check_trial`].
+struct Found {
+    /// Earliest event (guard index, time) on the step, if any.
+    event: Option<(usize, f64)>,
+    /// Guard masks at the step end.
+    mask: Vec<bool>,
+    /// Drift removed by the projection of the step end (no event only).
+    drift: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -85,13 +102,15 @@ pub struct Simulator<'s, S: HybridSystem> {
     traj: Trajectory<S::Mode>,
     events: Vec<EventRecord<S::Mode>>,
     stats: SimStats,
-    recent_events: VecDeque<f64>,
+    recent_events: VecDeque<(f64, &'static str, S::Mode)>,
+    warnings: Vec<SimWarning>,
     chain: usize,
     last_event_t: Option<f64>,
     next_grid: u64,
     finished: Option<StopReason>,
     steps_attempted: usize,
     last_drift: Option<f64>,
+    domain_creep: usize,
 }
 
 fn mode_name<M: Debug>(m: &M) -> String {
@@ -153,12 +172,14 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             events: Vec::new(),
             stats: SimStats::default(),
             recent_events: VecDeque::new(),
+            warnings: Vec::new(),
             chain: 0,
             last_event_t: None,
             next_grid: 0,
             finished: None,
             steps_attempted: 0,
             last_drift: None,
+            domain_creep: 0,
             set: settings,
         };
         sim.sys.check_valid(sim.mode, t0, &sim.x)?;
@@ -215,6 +236,11 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
         &self.events
     }
 
+    /// Warnings so far (Zeno fallbacks).
+    pub fn warnings(&self) -> &[SimWarning] {
+        &self.warnings
+    }
+
     /// Counters so far.
     pub fn stats(&self) -> SimStats {
         self.stats
@@ -265,6 +291,13 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
 
     /// Advances the simulation by one accepted step, or up to the next event, or reports the
     /// end. A pending event from the previous call is applied first.
+    ///
+    /// A trial step is rejected and retried shorter when its error test fails, a stage is not
+    /// finite, or the system raises [`SimError::OutsideDomain`] at a stage, at a guard sample of
+    /// the dense output, or at the projected end state (`project` / `check_valid`): the state
+    /// must stay inside the mode's domain over the whole step (e.g. |h| within the contact band
+    /// in a contact mode), and a shorter step keeps it there unless the trajectory itself runs
+    /// into the boundary (see `SimSettings::max_domain_creep`).
     pub fn step(&mut self) -> Result<StopReason, SimError> {
         if let Some(r) = self.finished {
             return Ok(r);
@@ -301,6 +334,7 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             h = remaining;
             last = true;
         }
+        let mut domain_rejected = false;
         loop {
             self.steps_attempted += 1;
             if self.steps_attempted > self.set.max_steps {
@@ -310,88 +344,164 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
                     mode: mode_name(&self.mode),
                 });
             }
-            if fixed {
-                rk4_step(
-                    self.sys,
-                    self.mode,
-                    self.t,
-                    &self.x,
-                    &self.f,
-                    h,
-                    &mut self.buf,
-                )?;
-                self.stats.rhs_evals += 4;
-            } else {
-                dopri5_step(
-                    self.sys,
-                    self.mode,
-                    self.t,
-                    &self.x,
-                    &self.f,
-                    h,
-                    &mut self.buf,
-                )?;
-                self.stats.rhs_evals += 6;
-            }
-            let finite = self
-                .buf
-                .x1
-                .iter()
-                .chain(&self.buf.f1)
-                .all(|v| v.is_finite());
-            let err = if !finite {
-                f64::INFINITY
-            } else if fixed {
-                0.0
-            } else {
-                error_norm(
-                    &self.buf.err,
-                    &self.x,
-                    &self.buf.x1,
-                    self.set.rtol,
-                    self.set.atol,
-                )
+            let (err, mut cause) = match self.trial(h, fixed) {
+                Ok(err) => (err, None),
+                Err(e) if e.is_step_rejectable() => (f64::INFINITY, Some(e)),
+                Err(e) => return Err(e),
             };
             if err <= 1.0 {
-                if !fixed {
-                    let expo1 = 0.2 - PI_BETA * 0.75;
-                    let fac11 = err.max(1e-300).powf(expo1);
-                    let fac = (fac11 / self.err_old.powf(PI_BETA) / PI_SAFE)
-                        .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
-                    let mut h_new = h / fac;
-                    if self.last_rejected {
-                        h_new = h_new.min(h);
+                let t1 = if last { self.t_end } else { self.t + h };
+                match self.check_trial(t1) {
+                    Ok(found) => {
+                        if !fixed {
+                            let expo1 = 0.2 - PI_BETA * 0.75;
+                            let fac11 = err.max(1e-300).powf(expo1);
+                            let fac = (fac11 / self.err_old.powf(PI_BETA) / PI_SAFE)
+                                .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
+                            let mut h_new = h / fac;
+                            if self.last_rejected {
+                                h_new = h_new.min(h);
+                            }
+                            self.err_old = err.max(1e-4);
+                            self.last_rejected = false;
+                            self.h = h_new.min(self.set.h_max);
+                        }
+                        self.stats.accepted_steps += 1;
+                        self.domain_creep = if domain_rejected {
+                            self.domain_creep + 1
+                        } else {
+                            0
+                        };
+                        return self.commit(t1, found);
                     }
-                    self.err_old = err.max(1e-4);
-                    self.last_rejected = false;
-                    self.h = h_new.min(self.set.h_max);
+                    Err((e, _)) if e.is_step_rejectable() => cause = Some(e),
+                    Err((e, at_end)) => {
+                        if at_end {
+                            // The step end itself is invalid: stop there (the trajectory keeps
+                            // the last valid sample), as for any failure after a step.
+                            self.emit_grid(t1);
+                            self.t = t1;
+                            std::mem::swap(&mut self.x, &mut self.buf.x1);
+                            self.f_valid = false;
+                        }
+                        return Err(e);
+                    }
                 }
-                break;
             }
             self.stats.rejected_steps += 1;
             self.last_rejected = true;
             last = false;
-            h = if err.is_finite() {
+            h = if err.is_finite() && cause.is_none() {
                 let fac11 = err.powf(0.2 - PI_BETA * 0.75);
                 h / (fac11 / PI_SAFE).min(1.0 / FAC_MIN)
             } else {
                 0.25 * h
             };
             if h < self.set.h_min {
-                return Err(if finite {
-                    SimError::StepSizeTooSmall {
+                return Err(match cause {
+                    Some(e) => e,
+                    None if err.is_finite() => SimError::StepSizeTooSmall {
                         t: self.t,
                         h,
                         mode: mode_name(&self.mode),
-                    }
-                } else {
-                    self.non_finite("step (stage values)")
+                    },
+                    None => self.non_finite("step (stage values)"),
                 });
             }
+            if let Some(e) = cause {
+                if self.domain_creep >= self.set.max_domain_creep {
+                    return Err(e);
+                }
+                self.stats.domain_rejections += 1;
+                domain_rejected = true;
+            }
         }
-        self.stats.accepted_steps += 1;
-        let t1 = if last { self.t_end } else { self.t + h };
-        match self.locate(t1)? {
+    }
+
+    /// One Runge–Kutta trial of length `h` from the current state into `self.buf`; returns the
+    /// error norm (0 for fixed steps, ∞ when a stage or the end state is not finite).
+    fn trial(&mut self, h: f64, fixed: bool) -> Result<f64, SimError> {
+        if fixed {
+            self.stats.rhs_evals += 4;
+            rk4_step(
+                self.sys,
+                self.mode,
+                self.t,
+                &self.x,
+                &self.f,
+                h,
+                &mut self.buf,
+            )?;
+        } else {
+            self.stats.rhs_evals += 6;
+            dopri5_step(
+                self.sys,
+                self.mode,
+                self.t,
+                &self.x,
+                &self.f,
+                h,
+                &mut self.buf,
+            )?;
+        }
+        let finite = self
+            .buf
+            .x1
+            .iter()
+            .chain(&self.buf.f1)
+            .all(|v| v.is_finite());
+        Ok(if !finite {
+            f64::INFINITY
+        } else if fixed {
+            0.0
+        } else {
+            error_norm(
+                &self.buf.err,
+                &self.x,
+                &self.buf.x1,
+                self.set.rtol,
+                self.set.atol,
+            )
+        })
+    }
+
+    /// Checks a trial step that passed the error test: locates the earliest event on its
+    /// dense output; without an event, projects the end state (`self.buf.x1`, in place) and
+    /// checks its validity. Nothing of the simulator's state is committed here, so an error
+    /// leaves the step retryable.
+    ///
+    /// Errors carry whether they concern the (projected) step end rather than the step itself.
+    fn check_trial(&mut self, t1: f64) -> Result<Found, (SimError, bool)> {
+        let (event, mask) = self.locate(t1).map_err(|e| (e, false))?;
+        if event.is_some() {
+            return Ok(Found {
+                event,
+                mask,
+                drift: None,
+            });
+        }
+        let at_end = |e| (e, true);
+        let drift = self
+            .sys
+            .project(self.mode, t1, &mut self.buf.x1)
+            .map_err(at_end)?;
+        if self.buf.x1.iter().any(|v| !v.is_finite()) {
+            return Err(at_end(SimError::NonFinite {
+                what: "state after projection".to_string(),
+                t: t1,
+                mode: mode_name(&self.mode),
+            }));
+        }
+        self.sys
+            .check_valid(self.mode, t1, &self.buf.x1)
+            .map_err(at_end)?;
+        Ok(Found { event, mask, drift })
+    }
+
+    /// Commits an accepted and checked step ending at `t1`: moves to the event time (and
+    /// reports the root) or to the (projected) step end.
+    fn commit(&mut self, t1: f64, found: Found) -> Result<StopReason, SimError> {
+        match found.event {
             Some((guard, te)) => {
                 let mut xe = vec![0.0; self.x.len()];
                 if te > self.t {
@@ -417,21 +527,18 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
                 })
             }
             None => {
+                self.masked = found.mask;
                 self.emit_grid(t1);
                 self.t = t1;
                 std::mem::swap(&mut self.x, &mut self.buf.x1);
                 std::mem::swap(&mut self.f, &mut self.buf.f1);
                 self.f_valid = true;
-                self.last_drift = self.sys.project(self.mode, self.t, &mut self.x)?;
+                self.last_drift = found.drift;
                 if let Some(d) = self.last_drift {
                     self.stats.max_drift = self.stats.max_drift.max(d.abs());
                     // The projection moved x off the FSAL point.
                     self.f_valid = false;
                 }
-                if self.x.iter().any(|v| !v.is_finite()) {
-                    return Err(self.non_finite("state after projection"));
-                }
-                self.sys.check_valid(self.mode, self.t, &self.x)?;
                 if self.set.record_steps {
                     self.traj.push(
                         self.t,
@@ -455,11 +562,12 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
     }
 
     /// Scans every guard over the step just accepted (dense output in `self.buf.dense`) and
-    /// returns the earliest event (guard index, time).
-    fn locate(&mut self, t1: f64) -> Result<Option<(usize, f64)>, SimError> {
+    /// returns the earliest event (guard index, time) and the guard masks at the step end (to
+    /// be committed when the step is taken without an event).
+    fn locate(&mut self, t1: f64) -> Result<Located, SimError> {
         let m = self.guards.len();
         if m == 0 {
-            return Ok(None);
+            return Ok((None, Vec::new()));
         }
         let kk = self.set.event_subdivisions;
         let t0 = self.t;
@@ -522,10 +630,7 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             }
         }
         self.stats.guard_evals += probe.evals;
-        if best.is_none() {
-            self.masked = new_mask;
-        }
-        Ok(best)
+        Ok((best, new_mask))
     }
 
     /// Records uniform-grid samples in (previous grid time, `t_upto`] from the current dense
@@ -569,18 +674,51 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             _ => 1,
         };
         self.last_event_t = Some(t);
-        self.recent_events.push_back(t);
+        self.recent_events
+            .push_back((t, self.guards[p.guard].name, mode_before));
         while self
             .recent_events
             .front()
-            .is_some_and(|&tf| tf < t - self.set.zeno_window)
+            .is_some_and(|&(tf, _, _)| tf < t - self.set.zeno_window)
         {
             self.recent_events.pop_front();
         }
-        let mode_after = match tr {
+        let mut mode_after = match tr {
             Transition::To(m) => Some(m),
             Transition::Terminate => None,
         };
+        if self.recent_events.len() > self.set.zeno_max_events {
+            let count = self.recent_events.len();
+            let fallback = match mode_after {
+                Some(m) => {
+                    let recent: Vec<(&'static str, S::Mode)> =
+                        self.recent_events.iter().map(|&(_, g, m)| (g, m)).collect();
+                    self.sys.zeno_fallback(m, t, &mut self.x, &recent)?
+                }
+                None => None,
+            };
+            let Some((m, message)) = fallback else {
+                return Err(SimError::Zeno {
+                    t,
+                    mode: mode_name(&mode_before),
+                    count,
+                });
+            };
+            if self.x.iter().any(|v| !v.is_finite()) {
+                return Err(self.non_finite("state after the Zeno fallback"));
+            }
+            mode_after = Some(m);
+            self.stats.zeno_fallbacks += 1;
+            self.warnings.push(SimWarning {
+                t,
+                kind: "zeno_fallback",
+                message: format!(
+                    "{count} events within {} s: {message}",
+                    self.set.zeno_window
+                ),
+            });
+            self.recent_events.clear();
+        }
         self.events.push(EventRecord {
             t,
             guard: self.guards[p.guard].name,
@@ -591,13 +729,6 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             x_post: self.x.clone(),
             chained: p.chained,
         });
-        if self.recent_events.len() > self.set.zeno_max_events {
-            return Err(SimError::Zeno {
-                t,
-                mode: mode_name(&mode_before),
-                count: self.recent_events.len(),
-            });
-        }
         if self.chain > self.set.max_chained_events {
             return Err(SimError::ChainLimit {
                 t,
@@ -632,6 +763,7 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             stats: self.stats,
             t_final: self.t,
             mode_final: self.mode,
+            warnings: self.warnings,
         }
     }
 
@@ -703,6 +835,7 @@ impl<M: Debug> SimFailure<M> {
             p.t_final,
             &p.mode_final,
             p.terminated,
+            &p.warnings,
             Some(self.error.to_string()),
         )?;
         write_atomic(path, &bytes)
@@ -737,6 +870,7 @@ pub fn simulate<S: HybridSystem>(
                 t_final: t0,
                 mode_final: mode0,
                 terminated: false,
+                warnings: Vec::new(),
             },
         })),
     }

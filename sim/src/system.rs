@@ -13,6 +13,11 @@
 //!   time instant: transitions chain, bounded by `SimSettings::max_chained_events`.
 //! * `project` is the constraint-drift hook of DESIGN.md §sim: it may pull the state back onto
 //!   h = 0 / the stick constraint after each accepted step and returns the drift it removed.
+//! * A state outside a mode's domain (e.g. a contact mode far from contact) is reported as
+//!   [`SimError::OutsideDomain`]; inside a trial step it rejects the step, which is retried
+//!   shorter, instead of ending the run.
+//! * `zeno_fallback` lets a system end an accumulation of events (Zeno behaviour, chattering)
+//!   by a documented regularisation instead of the default [`SimError::Zeno`].
 
 use crate::SimError;
 use std::fmt::Debug;
@@ -126,10 +131,29 @@ pub trait HybridSystem {
         Ok(None)
     }
 
-    /// Optional validity check of `x` in `mode`, called after every accepted step and reset; an
-    /// `Err` (typically [`SimError::InvalidState`]) stops the run with the partial trajectory.
-    /// Default: always valid.
+    /// Optional validity check of `x` in `mode`, called on the (projected) end of every trial
+    /// step and after every reset. After a trial step [`SimError::OutsideDomain`] rejects the
+    /// step, which is retried shorter; any other `Err` (typically [`SimError::InvalidState`]),
+    /// or one after a reset, stops the run with the partial trajectory. Default: always valid.
     fn check_valid(&self, _mode: Self::Mode, _t: f64, _x: &[f64]) -> Result<(), SimError> {
         Ok(())
+    }
+
+    /// Zeno fallback, called when more than `SimSettings::zeno_max_events` events fell within
+    /// `SimSettings::zeno_window`, right after the reset of the last one: `mode` and `x` are
+    /// the post-reset mode and state, `recent` the guard name and mode before each event of
+    /// the window, oldest first. A system that can end the cascade (e.g. by suspending a
+    /// chattering guard for a while, or by choosing another mode) may modify `x` and returns the
+    /// mode to continue in with a one-line description of what it did; the simulator records it
+    /// as a `zeno_fallback` [`crate::SimWarning`], clears the window and continues. `Ok(None)`
+    /// (the default) stops the run with [`SimError::Zeno`].
+    fn zeno_fallback(
+        &self,
+        _mode: Self::Mode,
+        _t: f64,
+        _x: &mut [f64],
+        _recent: &[(&'static str, Self::Mode)],
+    ) -> Result<Option<(Self::Mode, String)>, SimError> {
+        Ok(None)
     }
 }

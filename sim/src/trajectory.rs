@@ -5,7 +5,8 @@
 //!
 //! CSV trajectory columns: `t,mode,kind,drift,x0,...,x{n-1}` (drift empty when the mode has no
 //! projection). CSV event log columns: `t,guard,guard_index,mode_before,mode_after,pre0..,post0..`.
-//! JSON: `{ "trajectory": {...}, "events": [...], "stats": {...}, "t_final", "mode_final" }`
+//! JSON: `{ "trajectory": {...}, "events": [...], "stats": {...}, "t_final", "mode_final",
+//! "terminated", "warnings": [...], "error" }`
 //! with modes written by their `Debug` name.
 
 use crate::SimError;
@@ -158,8 +159,12 @@ pub struct EventRecord<M> {
 pub struct SimStats {
     /// Accepted steps.
     pub accepted_steps: usize,
-    /// Rejected steps (error test failed or non-finite stage).
+    /// Rejected steps (error test failed, non-finite stage, or a state outside the mode's
+    /// domain).
     pub rejected_steps: usize,
+    /// Of the rejected steps, those rejected because a stage, a guard sample or the projected
+    /// end state lay outside the mode's domain ([`crate::SimError::is_step_rejectable`]).
+    pub domain_rejections: usize,
     /// Vector-field evaluations.
     pub rhs_evals: usize,
     /// Guard evaluations (each evaluates all guards of the mode).
@@ -168,6 +173,8 @@ pub struct SimStats {
     pub events: usize,
     /// Largest drift reported by `HybridSystem::project` (0 if never).
     pub max_drift: f64,
+    /// Zeno cascades ended by the system's fallback (`HybridSystem::zeno_fallback`).
+    pub zeno_fallbacks: usize,
 }
 
 /// Successful result of a run.
@@ -185,6 +192,20 @@ pub struct SimOutput<M> {
     pub mode_final: M,
     /// Whether a reset terminated the run before `t_end`.
     pub terminated: bool,
+    /// Conditions that did not stop the run but qualify its result (Zeno fallbacks).
+    pub warnings: Vec<SimWarning>,
+}
+
+/// A condition met during a run that did not stop it but qualifies its result (a documented
+/// fallback was used, an invariant was exceeded, ...).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SimWarning {
+    /// Time (s) at which it occurred.
+    pub t: f64,
+    /// Machine-readable kind, e.g. `"zeno_fallback"`.
+    pub kind: &'static str,
+    /// One-line explanation.
+    pub message: String,
 }
 
 #[derive(Serialize)]
@@ -216,6 +237,7 @@ struct OutputJson<'a> {
     t_final: f64,
     mode_final: String,
     terminated: bool,
+    warnings: &'a [SimWarning],
     error: Option<String>,
 }
 
@@ -226,6 +248,7 @@ pub(crate) fn output_json<M: Debug>(
     t_final: f64,
     mode_final: &M,
     terminated: bool,
+    warnings: &[SimWarning],
     error: Option<String>,
 ) -> Result<Vec<u8>, SimError> {
     let j = OutputJson {
@@ -253,6 +276,7 @@ pub(crate) fn output_json<M: Debug>(
         t_final,
         mode_final: format!("{mode_final:?}"),
         terminated,
+        warnings,
         error,
     };
     serde_json::to_vec_pretty(&j).map_err(|e| SimError::Serialize {
@@ -311,6 +335,7 @@ impl<M: Debug> SimOutput<M> {
             self.t_final,
             &self.mode_final,
             self.terminated,
+            &self.warnings,
             None,
         )?;
         write_atomic(path, &bytes)

@@ -71,7 +71,7 @@ pub fn ladder(
 }
 
 /// Final state, event log and counters of one run (or the error and the counters so far).
-type RunResult<M> = Result<(Vec<f64>, Vec<EventRecord<M>>, SimStats), (SimError, SimStats)>;
+type RunResult<M> = Result<(Vec<f64>, Vec<EventRecord<M>>, SimStats), Box<(SimError, SimStats)>>;
 
 /// One run to `t_end` without storing samples; returns the final state, events and counters.
 fn run_to_end<S: HybridSystem>(
@@ -87,8 +87,8 @@ fn run_to_end<S: HybridSystem>(
         output_dt: None,
         ..set.clone()
     };
-    let mut sim =
-        Simulator::new(sys, set, mode0, t0, x0, t_end).map_err(|e| (e, SimStats::default()))?;
+    let mut sim = Simulator::new(sys, set, mode0, t0, x0, t_end)
+        .map_err(|e| Box::new((e, SimStats::default())))?;
     loop {
         let r = match sim.step() {
             Ok(StopReason::Step) => Ok(()),
@@ -97,7 +97,7 @@ fn run_to_end<S: HybridSystem>(
             Err(e) => Err(e),
         };
         if let Err(e) = r {
-            return Err((e, sim.stats()));
+            return Err(Box::new((e, sim.stats())));
         }
     }
     let x = sim.x().to_vec();
@@ -119,7 +119,7 @@ pub fn work_precision<S: HybridSystem>(
     repeats: usize,
 ) -> Result<Vec<WorkPrecisionRow>, SimError> {
     let (xref, ref_events, _) =
-        run_to_end(sys, reference, mode0, t0, x0, t_end).map_err(|(e, _)| e)?;
+        run_to_end(sys, reference, mode0, t0, x0, t_end).map_err(|b| b.0)?;
     let mut rows = Vec::with_capacity(configs.len());
     for set in configs {
         let (method, parameter) = match set.method {
@@ -166,17 +166,20 @@ pub fn work_precision<S: HybridSystem>(
                     failure: None,
                 }
             }
-            Err((e, stats)) => WorkPrecisionRow {
-                method,
-                parameter,
-                error: f64::INFINITY,
-                event_time_error: f64::NAN,
-                same_events: false,
-                cpu_seconds: best,
-                steps: stats.accepted_steps,
-                rhs_evals: stats.rhs_evals,
-                failure: Some(e.to_string()),
-            },
+            Err(b) => {
+                let (e, stats) = *b;
+                WorkPrecisionRow {
+                    method,
+                    parameter,
+                    error: f64::INFINITY,
+                    event_time_error: f64::NAN,
+                    same_events: false,
+                    cpu_seconds: best,
+                    steps: stats.accepted_steps,
+                    rhs_evals: stats.rhs_evals,
+                    failure: Some(e.to_string()),
+                }
+            }
         };
         rows.push(row);
     }

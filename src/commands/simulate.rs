@@ -306,6 +306,9 @@ fn run_model<K: Kernels>(
         describe_method(&args.integrator, args)
     );
     println!("{}", report.summary);
+    for line in report.summary.warning_lines() {
+        eprintln!("warning: {line}");
+    }
     println!("output: {}", args.out.display());
     if let Some(e) = error {
         bail!(
