@@ -8,6 +8,7 @@
 
 pub mod cli;
 pub mod commands;
+pub mod errors;
 pub mod extremes;
 pub mod io;
 pub mod report;
