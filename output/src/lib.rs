@@ -87,47 +87,46 @@ impl std::error::Error for OutputError {}
 /// or other non-regular file (`/dev/null`, `/dev/full`) is written in place instead, so such
 /// targets are never replaced. Errors name the file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let dir = parent_of(path);
+    fs::create_dir_all(&dir).map_err(|e| OutputError::io("cannot create directory", &dir, &e))?;
+    replace_file(path, bytes).map_err(|e| OutputError::io("cannot write", path, &e))
+}
+
+/// [`write_atomic`] for libraries with their own error type: the same steps, except that the
+/// parent directory must exist, with the plain `io::Error` (the caller names `path`).
+pub fn replace_file(path: &Path, bytes: &[u8]) -> io::Result<()> {
     match fs::metadata(path) {
         Ok(m) if m.is_dir() => {
-            return Err(OutputError::invalid(format!(
-                "cannot write {}: it is a directory",
-                path.display()
-            )));
+            return Err(io::Error::new(
+                io::ErrorKind::IsADirectory,
+                "it is a directory",
+            ));
         }
         Ok(m) if !m.is_file() => {
-            let mut f = fs::OpenOptions::new()
-                .write(true)
-                .open(path)
-                .map_err(|e| OutputError::io("cannot open", path, &e))?;
-            return f
-                .write_all(bytes)
-                .and_then(|()| f.flush())
-                .map_err(|e| OutputError::io("cannot write", path, &e));
+            let mut f = fs::OpenOptions::new().write(true).open(path)?;
+            f.write_all(bytes)?;
+            return f.flush();
         }
         _ => {}
     }
     let name = path
         .file_name()
-        .ok_or_else(|| OutputError::invalid(format!("{} does not name a file", path.display())))?;
-    let dir = parent_of(path);
-    fs::create_dir_all(&dir).map_err(|e| OutputError::io("cannot create directory", &dir, &e))?;
-    let tmp = dir.join(format!(
+        .ok_or_else(|| io::Error::new(io::ErrorKind::InvalidInput, "the path names no file"))?;
+    let tmp = parent_of(path).join(format!(
         ".{}.{}-{}.tmp",
         name.to_string_lossy(),
         std::process::id(),
         next_id()
     ));
-    let written = fs::File::create(&tmp)
-        .and_then(|mut f| f.write_all(bytes).and_then(|()| f.sync_all()))
-        .map_err(|e| OutputError::io("cannot write", path, &e));
-    if let Err(e) = written {
+    let written = fs::File::create(&tmp).and_then(|mut f| {
+        f.write_all(bytes)?;
+        f.sync_all()
+    });
+    if let Err(e) = written.and_then(|()| fs::rename(&tmp, path)) {
         let _ = fs::remove_file(&tmp);
         return Err(e);
     }
-    fs::rename(&tmp, path).map_err(|e| {
-        let _ = fs::remove_file(&tmp);
-        OutputError::io("cannot move the new file into place at", path, &e)
-    })
+    Ok(())
 }
 
 /// The directory holding `path` (`.` for a bare name).

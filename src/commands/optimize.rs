@@ -206,12 +206,18 @@ pub fn solve_with_progress(
     pb.set_message(format!("{strategy} ..."));
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     let done = std::sync::atomic::AtomicUsize::new(0);
+    // Without a terminal the spinner is hidden; each finished solve is then one line.
+    let lines = !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let show = |r: &StageRecord| {
         let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        pb.set_message(format!(
+        let msg = format!(
             "{strategy}: {k} solves done; last: chain {} {} -> {:?}, J {:.4e}, T {:.3} s",
             r.chain, r.stage, r.status, r.objective, r.period
-        ));
+        );
+        if lines {
+            eprintln!("{name}: {msg}");
+        }
+        pb.set_message(msg);
     };
     let res = strategy::solve_with_strategy(name, &settings, strategy, Some(&show))
         .with_context(|| format!("solving {name}"));

@@ -481,7 +481,7 @@ pub fn run_all(dir: &Path, quick: bool, mu_s: f64) -> Result<(Vec<ScenarioResult
             .with_context(|| format!("scenario {name}"))
         {
             Ok(r) => results.push(r),
-            Err(e) => writeln!(failures, "- `{name}` failed: {e:#}")?,
+            Err(e) => writeln!(failures, "- `{name}` failed: {}", crate::errors::render(&e))?,
         }
     }
     Ok((results, failures))
