@@ -21,6 +21,14 @@ pub fn positive(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses `--starts`: a whole number from 1 to 10000.
+pub fn starts(text: &str) -> Result<u64, String> {
+    match whole(text)? {
+        n @ 1..=10000 => Ok(n as u64),
+        n => Err(format!("must be from 1 to 10000 (got {n})")),
+    }
+}
+
 /// Parses a whole number ≥ 0, with a message for negative and fractional values.
 pub fn whole(text: &str) -> Result<usize, String> {
     let t = text.trim();
@@ -220,7 +228,7 @@ pub struct OptimizeArgs {
     #[arg(long, value_parser = ["direct", "continuation", "multistart"])]
     pub strategy: Option<String>,
     /// Number of starts of `--strategy multistart` (start 0 is the default guess).
-    #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = starts)]
     pub starts: u64,
     /// Seed of the multi-start guesses.
     #[arg(long, default_value_t = 0, allow_hyphen_values = true)]

@@ -345,7 +345,7 @@ fn errors_name_the_option_file_or_quantity() {
     let dir = tmpdir("names");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    let usage: [(&[&str], &[&str]); 3] = [
+    let usage: [(&[&str], &[&str]); 4] = [
         (
             &["simulate", "--rtol", "-1e-8"],
             &["--rtol", "must be a finite number > 0", "-1e-8"],
@@ -357,6 +357,10 @@ fn errors_name_the_option_file_or_quantity() {
         (
             &["optimize", "--problem", "reach", "--points", "-5"],
             &["--points", "not negative"],
+        ),
+        (
+            &["optimize", "--problem", "reach", "--starts", "-1"],
+            &["--starts", "not negative"],
         ),
     ];
     for (args, mention) in usage {

@@ -6,11 +6,13 @@
 //! replaced as a whole at the end; a solve that does not end Solved or Acceptable still writes
 //! its set, marked by a `FAILED` file, and exits non-zero.
 //!
-//! Sizes are bounded before anything is built: Legendre–Gauss needs the barycentric weights of
-//! all points of a phase, whose products of node distances underflow beyond a few hundred
-//! points, and its dense differentiation blocks grow as N², so `--points` is at most
-//! [`MAX_LG_POINTS`] with `--scheme lg`; with Radau the points of a phase (points per element
-//! times elements) are at most [`MAX_RADAU_POINTS`].
+//! Sizes are bounded before anything is built. Legendre–Gauss interpolates all points of a
+//! phase with one polynomial: the barycentric weights of its nodes (products of node
+//! distances) leave the range of f64 at about 900 points, which ends as a singular
+//! differentiation matrix, and its dense differentiation blocks make the KKT system grow as
+//! N² well before that; so `--points` is at most [`MAX_LG_POINTS`] with `--scheme lg` (and per
+//! Radau element). With Radau the points of a phase (points per element times elements) are
+//! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
 use crate::cli::OptimizeArgs;
 use anyhow::{Context, Result, bail};
@@ -59,8 +61,9 @@ pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
     match scheme {
         Scheme::Lg if points > MAX_LG_POINTS => bail!(
             "--points {points} with --scheme lg: at most {MAX_LG_POINTS} Legendre–Gauss points \
-             per phase are supported (the node weights underflow and the dense differentiation \
-             blocks grow as N²); for a finer mesh use --scheme radau with --elements"
+             per phase are supported (the nodes' interpolation weights overflow at about 900 \
+             points, and the dense differentiation blocks grow as N²); for a finer mesh use \
+             --scheme radau with --elements"
         ),
         Scheme::Radau { elements } => {
             let per_element = points.div_ceil(elements).max(2);
