@@ -182,7 +182,6 @@ impl OutputDir {
         let opt = spec.option;
         let name = target
             .file_name()
-            .filter(|_| !target.ends_with(".."))
             .ok_or_else(|| {
                 OutputError::invalid(format!(
                     "{opt} {}: does not name a directory that could be replaced (give a \
