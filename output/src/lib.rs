@@ -234,6 +234,16 @@ impl OutputDir {
         &self.target
     }
 
+    /// `text` (e.g. a library's error message about a file it wrote into [`OutputDir::path`])
+    /// with the staging directory replaced by the target, so messages name the files the user
+    /// asked for.
+    pub fn rename_in(&self, text: &str) -> String {
+        text.replace(
+            &self.staging.display().to_string(),
+            &self.target.display().to_string(),
+        )
+    }
+
     /// Makes the `n`-th write (1-based, counting [`OutputDir::file`], [`OutputDir::write`] and
     /// the marker and manifest of [`OutputDir::commit`]) fail with an injected error, as if the
     /// process had stopped right before it. For tests.
@@ -593,6 +603,15 @@ mod tests {
         drop(a);
         drop(b);
         assert!(names(&dir).is_empty(), "{:?}", names(&dir));
+        let c = OutputDir::create(&target, &SPEC).unwrap();
+        let msg = format!(
+            "I/O error on {}: disk full",
+            c.path().join("x.csv").display()
+        );
+        assert_eq!(
+            c.rename_in(&msg),
+            format!("I/O error on {}: disk full", target.join("x.csv").display())
+        );
         fs::remove_dir_all(&dir).unwrap();
     }
 

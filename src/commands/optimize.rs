@@ -373,9 +373,11 @@ pub fn write_solution(sol: &OcpSolution, dir: &Path) -> Result<()> {
 /// a solution that did not succeed is marked [`bf_output::FAILED`].
 pub fn commit_solution(sol: &OcpSolution, mut out: OutputDir) -> Result<()> {
     let path = out.file("solution.json")?;
-    sol.write_json(&path)?;
+    sol.write_json(&path)
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&e.to_string())))?;
     let path = out.file("torques.csv")?;
-    sol.write_torques_csv(&path)?;
+    sol.write_torques_csv(&path)
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&e.to_string())))?;
     let failure = format!("the solver did not converge ({:?})", sol.status);
     let outcome = if sol.status.is_success() {
         Outcome::Success

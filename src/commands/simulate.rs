@@ -472,6 +472,7 @@ fn run_model<K: Kernels>(
     out_dir.file("summary.json")?;
     report
         .write_dir(out_dir.path(), &out, error.as_deref())
+        .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
     let failure = error.as_ref().map(|e| {
         format!(
