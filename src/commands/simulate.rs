@@ -458,6 +458,19 @@ fn run_model<K: Kernels>(
     let (t_stop, mode_stop) = (sim.t(), sim.mode());
     let out = sim.finish();
     let report = sys.report(&out, t0, cpu);
+    // A run that ends with a non-finite energy has not produced a result, whatever the
+    // integrator said.
+    let s = &report.summary;
+    let error = error.or_else(|| {
+        [
+            ("initial energy", s.energy_initial),
+            ("final energy", s.energy_final),
+            ("final time", s.t_final),
+        ]
+        .iter()
+        .find(|(_, v)| !v.is_finite())
+        .map(|(name, v)| format!("the {name} of the run is not finite ({v})"))
+    });
     let error = error.map(|e| {
         let non_finite = ["finite", "NaN", "inf"].iter().any(|w| e.contains(w));
         if non_finite {
