@@ -6,6 +6,42 @@
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
+/// Parses a number that must be finite and > 0. Negative values reach this parser (the options
+/// allow leading hyphens), so the message says why `-1e-8` is wrong rather than calling it an
+/// unknown argument.
+pub fn positive(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number"))?;
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number > 0 (got {})", text.trim()))
+    }
+}
+
+/// Parses `--starts`: a whole number from 1 to 10000.
+pub fn starts(text: &str) -> Result<u64, String> {
+    match whole(text)? {
+        n @ 1..=10000 => Ok(n as u64),
+        n => Err(format!("must be from 1 to 10000 (got {n})")),
+    }
+}
+
+/// Parses a whole number ≥ 0, with a message for negative and fractional values.
+pub fn whole(text: &str) -> Result<usize, String> {
+    let t = text.trim();
+    if let Ok(v) = t.parse::<i128>() {
+        return if v < 0 {
+            Err(format!("must be a whole number, not negative (got {v})"))
+        } else {
+            usize::try_from(v).map_err(|_| format!("{v} is too large"))
+        };
+    }
+    Err(format!("must be a whole number (got {text:?})"))
+}
+
 /// ball-finger: DH table → verified flat Rust dynamics kernels; simulate and optimise a finger
 /// rolling a trackball (Ball-and-finger system: modeling and optimal trajectories).
 #[derive(Debug, Parser)]
@@ -108,20 +144,29 @@ pub struct SimulateArgs {
     #[arg(long, default_value = "dopri5")]
     pub integrator: String,
     /// Relative tolerance of the adaptive integrator.
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, allow_hyphen_values = true, value_parser = positive)]
     pub rtol: f64,
     /// Absolute tolerance of the adaptive integrator [default: 1e-2 · rtol].
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub atol: Option<f64>,
     /// Fixed step of rk4 (s).
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true, value_parser = positive)]
     pub step: f64,
     /// Largest step of dopri5 (s).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_hyphen_values = true, value_parser = positive)]
     pub h_max: f64,
-    /// Step limit (accepted + rejected); the run stops with an error when it is reached.
-    #[arg(long, default_value_t = 10_000_000)]
+    /// Step limit (accepted + rejected); the run stops with an error when it is reached, and a
+    /// run that needs more steps (--t-end over --h-max or --step) is refused up front.
+    #[arg(long, default_value_t = 10_000_000, allow_hyphen_values = true, value_parser = whole)]
     pub max_steps: usize,
+    /// Sample limit (every step and event, plus the --output-dt grid; each takes about 1.2 kB
+    /// of memory and 1 kB of output); a run that reaches it stops with an error, and an
+    /// --output-dt grid larger than it is refused up front.
+    #[arg(long, default_value_t = 1_000_000, allow_hyphen_values = true, value_parser = whole)]
+    pub max_samples: usize,
+    /// Wall-clock limit of the integration (s); a run that reaches it stops with an error.
+    #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = positive)]
+    pub max_time: Option<f64>,
     /// Impact law: newton, stick, max-dissipation, min-slip (or normal-impulse).
     #[arg(long, default_value = "newton")]
     pub impact_law: String,
@@ -130,9 +175,11 @@ pub struct SimulateArgs {
     #[arg(long)]
     pub no_projection: bool,
     /// Also store samples on the uniform grid k · dt (s), besides every step and event.
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub output_dt: Option<f64>,
-    /// Output directory (trajectory.{json,csv}, events.{json,csv}, summary.json).
+    /// Output directory (trajectory.{json,csv}, events.{json,csv}, summary.json; a failed run
+    /// adds FAILED). It is replaced as a whole when the run ends, so it must be new, empty or
+    /// an earlier output of `simulate`.
     #[arg(long, default_value = "out/simulate")]
     pub out: PathBuf,
 }
@@ -147,17 +194,18 @@ pub struct OptimizeArgs {
     /// Scene file.
     #[arg(long)]
     pub scene: Option<PathBuf>,
-    /// Collocation points per phase.
-    #[arg(long, default_value_t = 30)]
+    /// Collocation points per phase (at most 200 with `--scheme lg`; with radau, points times
+    /// elements at most 5000).
+    #[arg(long, default_value_t = 30, allow_hyphen_values = true, value_parser = whole)]
     pub points: usize,
     /// Transcription: lg (Legendre–Gauss, as the paper) or radau (hp Legendre–Gauss–Radau).
     #[arg(long, default_value = "radau")]
     pub scheme: String,
     /// Elements per phase for `--scheme radau`.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 3, allow_hyphen_values = true, value_parser = whole)]
     pub elements: usize,
     /// Interior-point iteration limit.
-    #[arg(long, default_value_t = 1500)]
+    #[arg(long, default_value_t = 1500, allow_hyphen_values = true, value_parser = whole)]
     pub max_iter: usize,
     /// ε of the smooth saturation.
     #[arg(long, default_value_t = 0.01, allow_hyphen_values = true)]
@@ -180,26 +228,28 @@ pub struct OptimizeArgs {
     #[arg(long, value_parser = ["direct", "continuation", "multistart"])]
     pub strategy: Option<String>,
     /// Number of starts of `--strategy multistart` (start 0 is the default guess).
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = starts)]
     pub starts: u64,
     /// Seed of the multi-start guesses.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
     pub seed: u64,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub refine: Option<f64>,
     /// Refinement rounds at most (with `--refine`).
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = whole)]
     pub refine_rounds: usize,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     pub verify_rtol: f64,
     /// Interior-point log on stderr: 0 none (a progress spinner), 1 one line per iteration,
     /// 2 and 3 more detail.
-    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=3))]
+    #[arg(long, default_value_t = 0, allow_hyphen_values = true, value_parser = clap::value_parser!(u8).range(0..=3))]
     pub print_level: u8,
-    /// Output directory.
+    /// Output directory (solution.json, torques.csv; a run that does not end Solved or
+    /// Acceptable adds FAILED). It is replaced as a whole when the run ends, so it must be new,
+    /// empty or an earlier output of `optimize`.
     #[arg(long, default_value = "out/optimize")]
     pub out: PathBuf,
 }
@@ -207,7 +257,8 @@ pub struct OptimizeArgs {
 /// Arguments of `paper`.
 #[derive(Debug, Args)]
 pub struct PaperArgs {
-    /// Output directory for report.md and every artefact.
+    /// Output directory for report.md and every artefact, replaced as a whole when the run
+    /// ends (it must be new, empty or an earlier output of `paper`).
     #[arg(long, default_value = "out/paper")]
     pub out: PathBuf,
     /// Shorter run (fewer states, smaller problems) for tests.
@@ -221,9 +272,10 @@ pub struct ReportArgs {
     /// Which report: speed-accuracy (integrator tolerances, meshes, ε, kernel variants) or
     /// strategies (cold start vs continuation vs multi-start on the periodic problems).
     pub which: String,
-    /// Output directory.
-    #[arg(long, default_value = "out/report")]
-    pub out: PathBuf,
+    /// Output directory [default: out/report/WHICH], replaced as a whole when the run ends (it
+    /// must be new, empty or an earlier output of `report`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
     /// Short ladders (seconds instead of minutes; fewer points per table).
     #[arg(long)]
     pub quick: bool,

@@ -1,31 +1,27 @@
-//! Small I/O helpers for the CLI: atomic file writes (so an interrupted or failed run never
-//! leaves a half-written output file) and parsing of numeric command-line lists.
+//! Small I/O helpers for the CLI: output files and directories (re-exported from `bf-output`:
+//! a single file is replaced atomically, a run's output directory as a whole), standard output
+//! that reports write errors instead of panicking, and parsing of numeric command-line lists.
 
 use anyhow::{Context, Result, bail};
-use std::path::Path;
+use std::io::Write as _;
 
-/// Write `contents` to `path` atomically: write a sibling temporary file, then rename it over
-/// the target. Creates the parent directory if needed.
-pub fn write_atomic(path: &Path, contents: &[u8]) -> Result<()> {
-    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
-    if let Some(dir) = dir {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("cannot create directory {}", dir.display()))?;
-    }
-    let file_name = path
-        .file_name()
-        .with_context(|| format!("{} is not a file path", path.display()))?;
-    let tmp = path.with_file_name(format!(
-        ".{}.{}.tmp",
-        file_name.to_string_lossy(),
-        std::process::id()
-    ));
-    std::fs::write(&tmp, contents).with_context(|| format!("cannot write {}", tmp.display()))?;
-    std::fs::rename(&tmp, path).with_context(|| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("cannot move {} to {}", tmp.display(), path.display())
-    })?;
-    Ok(())
+pub use bf_output::{DirSpec, Outcome, OutputDir, write_atomic};
+
+/// Writes `text` to standard output and flushes it. A closed pipe or a full disk is an error
+/// (naming standard output) that `main` turns into an exit status, never a panic.
+pub fn print_out(text: &str) -> Result<()> {
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())
+        .and_then(|()| out.flush())
+        .context("cannot write to standard output")
+}
+
+/// `println!` that returns an error instead of panicking when standard output cannot be
+/// written (see [`print_out`]).
+#[macro_export]
+macro_rules! outln {
+    () => { $crate::io::print_out("\n") };
+    ($($arg:tt)*) => { $crate::io::print_out(&format!("{}\n", format_args!($($arg)*))) };
 }
 
 /// Parse a comma-separated list of finite numbers given for the option `name`
@@ -74,21 +70,5 @@ mod tests {
         assert!(e.contains("expected 3"), "{e}");
         let e = parse_list("--qd", "1,x", None).unwrap_err().to_string();
         assert!(e.contains("--qd") && e.contains("\"x\""), "{e}");
-    }
-
-    #[test]
-    fn write_atomic_replaces_content_and_leaves_no_temp_file() {
-        let dir = std::env::temp_dir().join(format!("bf-io-test-{}", std::process::id()));
-        let path = dir.join("sub/out.txt");
-        write_atomic(&path, b"first").unwrap();
-        write_atomic(&path, b"second").unwrap();
-        assert_eq!(std::fs::read(&path).unwrap(), b"second");
-        let leftovers: Vec<_> = std::fs::read_dir(path.parent().unwrap())
-            .unwrap()
-            .filter_map(|e| e.ok())
-            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
-            .collect();
-        assert!(leftovers.is_empty());
-        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -10,6 +10,7 @@
 
 pub mod cli;
 pub mod commands;
+pub mod errors;
 pub mod io;
 pub mod report;
 pub mod study;

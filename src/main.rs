@@ -1,10 +1,15 @@
 //! `ball-finger` command-line interface: parses arguments, dispatches to
 //! [`ball_finger::commands`], and turns errors into a message on stderr and exit code 1
-//! (2 for usage errors, as clap does).
+//! (2 for usage errors, as clap does). A closed output pipe (`ball-finger eval … | head -c 10`)
+//! ends the program quietly with status 141, the status a shell reports for a Unix tool
+//! stopped by SIGPIPE.
 
 use ball_finger::cli::{Cli, Command};
 use ball_finger::commands;
 use clap::Parser;
+
+/// Exit status of a process stopped by SIGPIPE (128 + 13), as shells report it.
+const EXIT_BROKEN_PIPE: i32 = 141;
 
 fn main() {
     let cli = Cli::parse();
@@ -17,7 +22,14 @@ fn main() {
         Command::Report(a) => commands::report::run(&a),
     };
     if let Err(e) = result {
-        eprintln!("error: {e:#}");
+        if ball_finger::errors::is_broken_pipe(&e) {
+            std::process::exit(EXIT_BROKEN_PIPE);
+        }
+        // A failing stderr leaves nothing else to report to; the exit status still says it.
+        let _ = std::io::Write::write_all(
+            &mut std::io::stderr(),
+            format!("error: {}\n", ball_finger::errors::render(&e)).as_bytes(),
+        );
         std::process::exit(1);
     }
 }

@@ -654,26 +654,12 @@ fn tmp_sibling(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.tmp{}.{ext}", std::process::id()))
 }
 
-/// Writes `bytes` to `path` via a temporary sibling and a rename, so readers never see a
-/// partially written file.
+/// Writes `bytes` to `path` via a uniquely named temporary sibling and a rename, so readers
+/// never see a partially written file (the workspace's one helper, `bf_output::replace_file`).
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io {
-            path: dir.into(),
-            source,
-        })?;
-    }
-    let tmp = tmp_sibling(path);
-    std::fs::write(&tmp, bytes).map_err(|source| PlotError::Io {
-        path: tmp.clone(),
+    bf_output::replace_file(path, bytes).map_err(|source| PlotError::Io {
+        path: path.into(),
         source,
-    })?;
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        PlotError::Io {
-            path: path.into(),
-            source,
-        }
     })
 }
 

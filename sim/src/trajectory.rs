@@ -12,8 +12,7 @@
 use crate::SimError;
 use serde::Serialize;
 use std::fmt::Debug;
-use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Why a sample was recorded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -347,18 +346,11 @@ impl<M: Debug> SimOutput<M> {
     }
 }
 
-/// Writes `bytes` to `<path>.tmp`, flushes it to disk, then renames it onto `path`.
+/// Writes `bytes` to `path` atomically (a uniquely named sibling temporary file, flushed to
+/// disk and renamed onto `path`; the workspace's one helper, `bf_output::replace_file`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    let io = |p: &Path| {
-        let p = p.to_path_buf();
-        move |source| SimError::Io { path: p, source }
-    };
-    let mut f = std::fs::File::create(&tmp).map_err(io(&tmp))?;
-    f.write_all(bytes).map_err(io(&tmp))?;
-    f.sync_all().map_err(io(&tmp))?;
-    drop(f);
-    std::fs::rename(&tmp, path).map_err(io(path))
+    bf_output::replace_file(path, bytes).map_err(|source| SimError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
 }

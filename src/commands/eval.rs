@@ -2,11 +2,13 @@
 //! kinematics (eq. 67–71), dynamics (eq. 72–79, Christoffel C) and contact quantities
 //! (eq. 2–7, smooth variant eq. 58–59) at one state. Built-in scenes (the file's text equals the
 //! one compiled into `bf-generated`) go through the compiled kernels; any other file through
-//! the generator's interpreter. Key order and layout are fixed (matrices row-major).
+//! the generator's interpreter. Key order and layout are fixed (matrices row-major). A
+//! non-finite entry (overflow at an extreme state or ε) is an error naming the quantity and the
+//! entry (indices from 1), never a `null` in the JSON.
 
 use crate::cli::EvalArgs;
 use crate::io::parse_list;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use bf_codegen::{EvalOutput, EvalValue, Scene};
 
 /// Run `eval`.
@@ -35,9 +37,62 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             "interpreter",
         ),
     };
+    if let Some((entry, v)) = first_non_finite(&out) {
+        bail!(
+            "{entry} is not finite ({v}) at the given state (--q {}, --qd {}, --omega {}, \
+             --eps {eps:e}); nothing was printed",
+            args.q,
+            args.qd,
+            args.omega.as_deref().unwrap_or("0,0,0")
+        );
+    }
     eprintln!("evaluated {} through the {source}", scene.name);
-    println!("{}", serde_json::to_string(&out)?);
-    Ok(())
+    crate::outln!("{}", serde_json::to_string(&out)?)
+}
+
+/// What a key of the `eval` output is, for error messages.
+fn describe(key: &str) -> &'static str {
+    match key {
+        "p_e" => "fingertip position",
+        "R3" => "fingertip orientation",
+        "J_p" => "positional Jacobian",
+        "J_o" => "rotational Jacobian",
+        "M" => "mass matrix",
+        "C" => "Coriolis matrix",
+        "Cqd" => "Coriolis torque",
+        "g" => "gravity torque",
+        "alpha" => "contact coordinate",
+        "sat_alpha" | "sat_alpha_smooth" => "saturated contact coordinate",
+        "p_c" | "p_c_smooth" => "contact point",
+        "h" | "h_smooth" => "distance",
+        "J_c" | "J_c_smooth" => "contact Jacobian",
+        _ => "quantity",
+    }
+}
+
+/// The first non-finite entry of `out`, as `"mass matrix M[1][2]"` (indices from 1), with its
+/// value.
+pub fn first_non_finite(out: &EvalOutput) -> Option<(String, f64)> {
+    for (key, value) in &out.entries {
+        let name = format!("{} {key}", describe(key));
+        match value {
+            EvalValue::Scalar(v) if !v.is_finite() => return Some((name, *v)),
+            EvalValue::Vector(xs) => {
+                if let Some(i) = xs.iter().position(|v| !v.is_finite()) {
+                    return Some((format!("{name}[{}]", i + 1), xs[i]));
+                }
+            }
+            EvalValue::Matrix(rows) => {
+                for (i, r) in rows.iter().enumerate() {
+                    if let Some(j) = r.iter().position(|v| !v.is_finite()) {
+                        return Some((format!("{name}[{}][{}]", i + 1, j + 1), r[j]));
+                    }
+                }
+            }
+            EvalValue::Scalar(_) => {}
+        }
+    }
+    None
 }
 
 fn vec3(v: &[f64]) -> EvalValue {

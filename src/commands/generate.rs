@@ -14,12 +14,12 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
         Some(path) => {
             write_atomic(path, generated.code.as_bytes())?;
             if args.report {
-                println!("{}", generated.report);
+                crate::outln!("{}", generated.report)?;
             }
             eprintln!("wrote {} ({} bytes)", path.display(), generated.code.len());
         }
         None => {
-            print!("{}", generated.code);
+            crate::io::print_out(&generated.code)?;
             if args.report {
                 eprintln!("{}", generated.report);
             }

@@ -2,19 +2,50 @@
 //! problem library (paper Sect. 4.1, 6.1) transcribed by collocation (Sect. 4.2) and solved by
 //! the in-house interior-point solver. Writes `solution.json` (status, objective φ = c₁/c₂
 //! (eq. 60), phase durations, trajectories) and `torques.csv` (the format `simulate --torques`
-//! reads).
+//! reads) as one output set (`bf_output::OutputDir`): `--out` is checked before the solve and
+//! replaced as a whole at the end; a solve that does not end Solved or Acceptable still writes
+//! its set, marked by a `FAILED` file, and exits non-zero.
+//!
+//! Sizes are bounded before anything is built. Legendre–Gauss interpolates all points of a
+//! phase with one polynomial: the barycentric weights of its nodes (products of node
+//! distances) leave the range of f64 at about 900 points, which ends as a singular
+//! differentiation matrix, and its dense differentiation blocks make the KKT system grow as
+//! N² well before that; so `--points` is at most [`MAX_LG_POINTS`] with `--scheme lg` (and per
+//! Radau element). With Radau the points of a phase (points per element times elements) are
+//! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
 use crate::cli::OptimizeArgs;
-use crate::study::SolutionIo;
-use crate::study::refine::{self, RefineOptions, RefineRound};
-use crate::study::solution_io::write_solution;
-use crate::study::strategy::{self, StageRecord, Strategy};
-use crate::study::verify::verify;
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
+use crate::study::SolutionIo;
+use crate::study::refine::{self, RefineOptions, RefineRound};
+use crate::study::strategy::{self, StageRecord, Strategy};
+use crate::study::verify::verify;
 use bf_problem::{BuiltProblem, COT_MAX_PERIOD, OcpSolution, Problem, ProblemSettings};
+use bf_output::{DirSpec, Outcome, OutputDir};
 use indicatif::{ProgressBar, ProgressStyle};
+use std::path::Path;
+
+/// Largest `--points` with `--scheme lg` (see the module docs).
+pub const MAX_LG_POINTS: usize = 200;
+
+/// Largest number of collocation points per phase with `--scheme radau`.
+pub const MAX_RADAU_POINTS: usize = 5000;
+
+/// The output directory of `optimize`.
+pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
+    option: "--out",
+    command: "optimize",
+    legacy_files: &["solution.json", "torques.csv"],
+};
+
+/// Options of a run that are not on the command line.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOptions {
+    /// Make the n-th output write fail, as if the process stopped there (tests).
+    pub fail_at_write: Option<usize>,
+}
 
 /// Parse `--scheme`: `lg` or `radau` (hp elements from `elements`).
 pub fn parse_scheme(text: &str, elements: usize) -> Result<Scheme> {
@@ -26,9 +57,80 @@ pub fn parse_scheme(text: &str, elements: usize) -> Result<Scheme> {
     }
 }
 
+/// Checks the size of the transcription before anything is allocated (see the module docs).
+pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
+    match scheme {
+        Scheme::Lg if points > MAX_LG_POINTS => bail!(
+            "--points {points} with --scheme lg: at most {MAX_LG_POINTS} Legendre–Gauss points \
+             per phase are supported (the nodes' interpolation weights overflow at about 900 \
+             points, and the dense differentiation blocks grow as N²); for a finer mesh use \
+             --scheme radau with --elements"
+        ),
+        Scheme::Radau { elements } => {
+            let per_element = points.div_ceil(elements).max(2);
+            let total = per_element.saturating_mul(elements);
+            if per_element > MAX_LG_POINTS || total > MAX_RADAU_POINTS {
+                bail!(
+                    "--points {points} --elements {elements}: {elements} Radau elements of \
+                     {per_element} points are {total} points per phase; at most \
+                     {MAX_RADAU_POINTS} per phase (and {MAX_LG_POINTS} per element) are supported"
+                );
+            }
+            Ok(())
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Largest magnitude accepted in a warm-start file: values beyond it are not a solution of
+/// these problems and overflow the solver's products.
+pub const MAX_WARM_START_VALUE: f64 = 1e12;
+
+/// Checks every number of a warm-start file (read as JSON) against
+/// [`MAX_WARM_START_VALUE`]; the error names the file, the field path and the value.
+pub fn check_warm_start_values(path: &Path) -> Result<()> {
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("--warm-start {}: cannot read", path.display()))?;
+    let value: serde_json::Value = serde_json::from_str(&text)
+        .with_context(|| format!("--warm-start {}: not a solution.json", path.display()))?;
+    fn walk(v: &serde_json::Value, at: &mut String) -> Option<(String, f64)> {
+        match v {
+            serde_json::Value::Number(n) => n
+                .as_f64()
+                .filter(|x| x.is_nan() || x.abs() > MAX_WARM_START_VALUE)
+                .map(|x| (at.clone(), x)),
+            serde_json::Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| {
+                let len = at.len();
+                at.push_str(&format!("[{i}]"));
+                let r = walk(x, at);
+                at.truncate(len);
+                r
+            }),
+            serde_json::Value::Object(o) => o.iter().find_map(|(k, x)| {
+                let len = at.len();
+                if !at.is_empty() {
+                    at.push('.');
+                }
+                at.push_str(k);
+                let r = walk(x, at);
+                at.truncate(len);
+                r
+            }),
+            _ => None,
+        }
+    }
+    if let Some((field, x)) = walk(&value, &mut String::new()) {
+        bail!(
+            "--warm-start {}: `{field}` = {x:e} is out of range (|value| ≤ {MAX_WARM_START_VALUE:e})",
+            path.display()
+        );
+    }
+    Ok(())
+}
+
 /// Parse `--problem`.
 pub fn parse_problem(text: &str) -> Result<Problem> {
-    text.parse().map_err(|e| anyhow!("--problem: {e}"))
+    text.parse().map_err(|e| anyhow::anyhow!("--problem: {e}"))
 }
 
 /// Build the problem settings from the command line.
@@ -48,16 +150,20 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     {
         bail!("--dual-regularization must be in (0, 1e-4] (got {dc})");
     }
+    let scheme = parse_scheme(&args.scheme, args.elements)?;
+    check_size(args.points, scheme)?;
     let warm_start = match &args.warm_start {
-        Some(path) => Some(
-            OcpSolution::read_json(path)
-                .with_context(|| format!("--warm-start {}", path.display()))?,
-        ),
+        Some(path) => {
+            let sol = OcpSolution::read_json(path)
+                .with_context(|| format!("--warm-start {}", path.display()))?;
+            check_warm_start_values(path)?;
+            Some(sol)
+        }
         None => None,
     };
     Ok(ProblemSettings {
         points: args.points,
-        scheme: parse_scheme(&args.scheme, args.elements)?,
+        scheme,
         epsilon: Some(args.epsilon),
         warm_start,
         max_iter: args.max_iter,
@@ -95,31 +201,38 @@ pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
 
 /// Solve with `strategy` behind a progress spinner that shows each finished stage.
 pub fn solve_with_progress(
-    problem: Problem,
+    name: Problem,
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    let pb = iteration_spinner(problem.name());
+    let pb = iteration_spinner(name.name());
     pb.set_message(format!("{strategy} ..."));
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
     let done = std::sync::atomic::AtomicUsize::new(0);
+    // Without a terminal the spinner is hidden; each finished solve is then one line.
+    let lines = !std::io::IsTerminal::is_terminal(&std::io::stderr());
     let show = |r: &StageRecord| {
         let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        pb.set_message(format!(
+        let msg = format!(
             "{strategy}: {k} solves done; last: chain {} {} -> {:?}, J {:.4e}, T {:.3} s",
             r.chain, r.stage, r.status, r.objective, r.period
-        ));
+        );
+        if lines {
+            eprintln!("{name}: {msg}");
+        }
+        pb.set_message(msg);
     };
-    let res = strategy::solve_with_strategy(problem, &settings, strategy, Some(&show))
-        .with_context(|| format!("solving {problem}"));
+    let res = strategy::solve_with_strategy(name, &settings, strategy, Some(&show))
+        .with_context(|| format!("solving {name}"));
     pb.finish_and_clear();
     res
 }
 
 /// Refine the mesh of `sol` (warm-started from it) until the error estimate is ≤ `tol`; prints
-/// each round. Returns the final mesh's problem and solution ([`refine::refine_solution`]).
+/// each round. Returns the final mesh's problem and solution, which keeps `sol`'s strategy
+/// record and gains the refinement record.
 pub fn refine_with_progress(
-    problem: Problem,
+    name: Problem,
     settings: &ProblemSettings,
     sol: OcpSolution,
     tol: f64,
@@ -130,10 +243,14 @@ pub fn refine_with_progress(
         max_rounds: rounds,
         ..RefineOptions::default()
     };
-    println!("mesh refinement to {tol:e}:");
-    println!("  round  points/phase        objective      max error  status        iter  time(s)");
+    crate::outln!("mesh refinement to {tol:e}:")?;
+    crate::outln!(
+        "  round  points/phase        objective      max error  status        iter  time(s)"
+    )?;
+    // The callback cannot return an error: a failed write is kept and reported afterwards.
+    let mut write_error = None;
     let mut show = |r: &RefineRound| {
-        println!(
+        let line = crate::outln!(
             "  {:5}  {:<18}  {:>13.8e}  {:>9.2e}  {:<12}  {:>4}  {:>7.2}",
             r.round,
             format!("{:?}", r.points),
@@ -143,36 +260,114 @@ pub fn refine_with_progress(
             r.iterations,
             r.seconds
         );
+        if let Err(e) = line {
+            write_error.get_or_insert(e);
+        }
     };
-    let (built, out) = refine::refine_solution(problem, settings, sol, &opts, Some(&mut show))
-        .with_context(|| format!("refining the mesh of {problem}"))?;
+    let (built, out) = refine::refine_solution(name, settings, sol, &opts, Some(&mut show))
+        .with_context(|| format!("refining the mesh of {name}"))?;
+    if let Some(e) = write_error {
+        return Err(e);
+    }
     if let Some(r) = &out.refinement {
-        println!("  {}", r.stop_reason);
+        crate::outln!("  {}", r.stop_reason)?;
     }
     Ok((built, out))
 }
 
 /// Re-integrate every phase with the optimal torques and store the defects in `sol` (printed);
-/// a failure to verify is reported, not fatal: the solution itself is still written.
-pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: f64) {
+/// a failure to verify is reported, not fatal: the solution itself is still written. Errors
+/// are failed writes to standard output.
+pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: f64) -> Result<()> {
     match verify(problem, sol, rtol) {
         Ok(v) => {
-            println!("{}", v.summary().trim_end());
+            crate::outln!("{}", v.summary().trim_end())?;
             if !v.passes(1e-3) {
-                println!(
+                crate::outln!(
                     "note: an end-of-phase defect above 1e-3 means the open-loop replay of these \
                      torques drifts from the collocated trajectory (unstable or long phases, or \
                      a coarse mesh: try --refine 1e-4)"
-                );
+                )?;
             }
             sol.verification = Some(v);
         }
         Err(e) => eprintln!("warning: trajectory verification failed: {e}"),
     }
+    Ok(())
+}
+
+/// The first non-finite number among the solution's results (objective, costs, durations,
+/// node and dense trajectories), named like `nodes.tau[3][1]`.
+pub fn first_non_finite(sol: &OcpSolution) -> Option<(String, f64)> {
+    let scalars = [
+        ("objective", sol.objective),
+        ("c1", sol.c1),
+        ("c2", sol.c2),
+        ("period", sol.period),
+    ];
+    if let Some((n, v)) = scalars.iter().find(|(_, v)| !v.is_finite()) {
+        return Some((n.to_string(), *v));
+    }
+    let vectors: [(&str, &[f64]); 3] = [
+        ("phase_durations", &sol.phase_durations),
+        ("mean_omega", &sol.mean_omega),
+        ("impulse", &sol.impulse),
+    ];
+    for (n, xs) in vectors {
+        if let Some(i) = xs.iter().position(|v| !v.is_finite()) {
+            return Some((format!("{n}[{i}]"), xs[i]));
+        }
+    }
+    for (set, s) in [("nodes", &sol.nodes), ("dense", &sol.dense)] {
+        let rows: [(&str, &Vec<Vec<f64>>); 5] = [
+            ("q", &s.q),
+            ("qd", &s.qd),
+            ("omega", &s.omega),
+            ("tau", &s.tau),
+            ("lambda", &s.lambda),
+        ];
+        for (n, m) in rows {
+            for (k, r) in m.iter().enumerate() {
+                if let Some(i) = r.iter().position(|v| !v.is_finite()) {
+                    return Some((format!("{set}.{n}[{k}][{i}]"), r[i]));
+                }
+            }
+        }
+        for (n, xs) in [("t", &s.t), ("h", &s.h), ("sigma", &s.sigma)] {
+            if let Some(i) = xs.iter().position(|v| !v.is_finite()) {
+                return Some((format!("{set}.{n}[{i}]"), xs[i]));
+            }
+        }
+    }
+    None
+}
+
+/// Write `solution.json` and `torques.csv` as the output set `out` and move it into place;
+/// a solution that did not succeed is marked [`bf_output::FAILED`].
+pub fn commit_solution(sol: &OcpSolution, mut out: OutputDir) -> Result<()> {
+    let path = out.file("solution.json")?;
+    sol.write_json(&path)
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&e.to_string())))?;
+    let path = out.file("torques.csv")?;
+    sol.write_torques_csv(&path)
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&e.to_string())))?;
+    let failure = format!("the solver did not converge ({:?})", sol.status);
+    let outcome = if sol.status.is_success() {
+        Outcome::Success
+    } else {
+        Outcome::Failed(&failure)
+    };
+    out.commit(outcome)?;
+    Ok(())
 }
 
 /// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
+    run_with(args, RunOptions::default())
+}
+
+/// Run `optimize` with `opts`.
+pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
     let name = parse_problem(&args.problem)?;
     let settings = settings_from_args(args)?;
     if let Some(scene) = &args.scene {
@@ -207,46 +402,75 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
             args.verify_rtol
         );
     }
+    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    if let Some(n) = opts.fail_at_write {
+        out.inject_fault_at_write(n);
+    }
     let (mut problem, mut sol) = solve_with_progress(name, settings.clone(), strategy)?;
     if let Some(rep) = &sol.strategy {
-        print!("{}", rep.table());
+        crate::io::print_out(&rep.table())?;
     }
     if let Some(tol) = args.refine {
-        (problem, sol) = refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
+        (problem, sol) =
+            refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
     }
     if args.verify_rtol > 0.0 {
-        attach_verification(&problem, &mut sol, args.verify_rtol);
+        attach_verification(&problem, &mut sol, args.verify_rtol)?;
     }
-    write_solution(&sol, &args.out)?;
-    println!(
-        "{}: {:?} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",
-        sol.problem, sol.status, sol.iterations, sol.solve_seconds, sol.objective, sol.c1, sol.c2
-    );
-    println!(
-        "period {:.4} s, phase durations {:?}, mean omega {:?}",
-        sol.period, sol.phase_durations, sol.mean_omega
-    );
-    println!(
-        "constraint violation {:.2e}, dual infeasibility {:.2e}",
-        sol.constraint_violation, sol.dual_infeasibility
-    );
-    if sol.problem.starts_with("periodic-cot") {
-        println!(
-            "note: the COT period is bounded by {} s (COT lets the finger rest at no cost)",
-            COT_MAX_PERIOD
+    if let Some((field, v)) = first_non_finite(&sol) {
+        bail!(
+            "the solution of {} has a non-finite {field} ({v}); nothing was written to {}",
+            args.problem,
+            args.out.display()
         );
     }
-    println!("wrote {}/solution.json and torques.csv", args.out.display());
+    commit_solution(&sol, out)?;
+    crate::outln!(
+        "{}: {:?} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",
+        sol.problem,
+        sol.status,
+        sol.iterations,
+        sol.solve_seconds,
+        sol.objective,
+        sol.c1,
+        sol.c2
+    )?;
+    crate::outln!(
+        "period {:.4} s, phase durations {:?}, mean omega {:?}",
+        sol.period,
+        sol.phase_durations,
+        sol.mean_omega
+    )?;
+    crate::outln!(
+        "constraint violation {:.2e}, dual infeasibility {:.2e}",
+        sol.constraint_violation,
+        sol.dual_infeasibility
+    )?;
+    if sol.problem.starts_with("periodic-cot") {
+        crate::outln!(
+            "note: the COT period is bounded by {} s (COT lets the finger rest at no cost)",
+            COT_MAX_PERIOD
+        )?;
+    }
+    crate::outln!(
+        "wrote {}/solution.json and torques.csv{}",
+        args.out.display(),
+        if sol.status.is_success() {
+            ""
+        } else {
+            " (marked FAILED)"
+        }
+    )?;
     // A failed solve was already retried with 3e-8 (`study::solve`); an Acceptable one was
     // not.
     if sol.status == Status::Acceptable
         && args.scheme == "radau"
         && args.dual_regularization.is_none()
     {
-        println!(
+        crate::outln!(
             "hint: Radau meshes finer than the default can stall with the default KKT \
              regularization; try --dual-regularization 3e-8 (optim/README.md)"
-        );
+        )?;
     }
     if !sol.status.is_success() {
         bail!("the solver did not converge ({:?})", sol.status);

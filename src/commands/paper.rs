@@ -6,10 +6,14 @@
 //! Maple step, Sect. 5); (2) kernel verification at sample states: compiled kernels against the
 //! generator's interpreter, and the invariants M = Mᵀ ≻ 0 (eq. 22a) and Ṁ − 2C skew-symmetric
 //! (eq. 76 with Christoffel symbols); (3) the Appendix A/B errata table (`docs/appendix-errata.md`).
+//!
+//! `--out` is one output set (`bf_output::OutputDir`): every stage writes into a private staging
+//! directory, which replaces `--out` as a whole when the report is complete; a run that fails
+//! leaves the previous report untouched.
 
 use crate::cli::PaperArgs;
-use crate::io::write_atomic;
 use anyhow::{Context, Result};
+use bf_output::{DirSpec, Outcome, OutputDir};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
 
@@ -49,8 +53,17 @@ fn demote(md: &str) -> String {
         .join("\n")
 }
 
+/// The output directory of `paper`.
+pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
+    option: "--out",
+    command: "paper",
+    legacy_files: &["report.md"],
+};
+
 /// Run `paper`.
 pub fn run(args: &PaperArgs) -> Result<()> {
+    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let dir = out.path().to_path_buf();
     let mut report = String::new();
     writeln!(
         report,
@@ -110,7 +123,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
 
     // Stage 3: Fig. 4, the smooth saturation of Sect. 4.3.
     writeln!(report, "## 3. Smooth saturation (Sect. 4.3, Fig. 4)\n")?;
-    let fig_dir = args.out.join("figures");
+    let fig_dir = dir.join("figures");
     let fig4 = bf_plot::sat::fig4_saturation(&[0.01, 0.1], 801);
     bf_plot::render(&fig4, fig_dir.join("fig4_saturation"))?;
     let worst: f64 = (0..=2000)
@@ -155,7 +168,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         }
     )?;
     let (results, failures) = crate::study::scenarios::run_all(
-        &args.out,
+        &dir,
         args.quick,
         mu_s,
         &super::optimize::solve_with_progress,
@@ -196,7 +209,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             let o = crate::study::openloop::run_open_loop(
                 &cot.solution,
                 periods,
-                &args.out.join("open-loop"),
+                &dir.join("open-loop"),
             )?;
             pb.finish();
             writeln!(report, "{}", crate::study::openloop::markdown(&o)?)?;
@@ -216,7 +229,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
 
     // Stage 7: the speed–accuracy trade, measured in this run.
     writeln!(report, "## 7. Speed versus accuracy\n")?;
-    let sa = crate::study::speed_accuracy::speed_accuracy(&args.out, args.quick)?;
+    let sa = crate::study::speed_accuracy::speed_accuracy(&dir, args.quick)?;
     writeln!(report, "{}", demote(&sa))?;
 
     // Stage 8: appendix errata.
@@ -243,8 +256,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          the strategy and on rounding (section 4 and `report strategies`)."
     )?;
 
-    let path = args.out.join("report.md");
-    write_atomic(&path, report.as_bytes())?;
-    println!("wrote {}", path.display());
-    Ok(())
+    out.write("report.md", report.as_bytes())?;
+    out.commit(Outcome::Success)?;
+    crate::outln!("wrote {}", args.out.join("report.md").display())
 }

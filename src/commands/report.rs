@@ -1,7 +1,10 @@
-//! `ball-finger report <which> --out DIR [--quick]`: stand-alone reports (issue 7). Writes
-//! `DIR/<which>.md` and the figures under `DIR/figures/`.
+//! `ball-finger report <which> [--out DIR] [--quick]`: stand-alone reports. Writes
+//! `DIR/<which>.md` and the figures under `DIR/figures/` as one output set (DIR, by default
+//! `out/report/<which>`, is checked before the work and replaced as a whole at the end).
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
+use bf_output::{DirSpec, Outcome, OutputDir};
+use std::path::PathBuf;
 
 use crate::cli::ReportArgs;
 
@@ -10,9 +13,30 @@ pub const REPORTS: &[&str] = &["speed-accuracy", "strategies"];
 
 /// Runs the report named by `a.which`.
 pub fn run(a: &ReportArgs) -> Result<()> {
+    if !REPORTS.contains(&a.which.as_str()) {
+        bail!(
+            "unknown report `{}`; known reports: {}",
+            a.which,
+            REPORTS.join(", ")
+        );
+    }
+    let target = a
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/report").join(&a.which));
+    let md_name = format!("{}.md", a.which);
+    let legacy = [md_name.as_str()];
+    let mut out = OutputDir::create(
+        &target,
+        &DirSpec {
+            option: "--out",
+            command: "report",
+            legacy_files: &legacy,
+        },
+    )?;
     let md = match a.which.as_str() {
-        "speed-accuracy" => crate::study::speed_accuracy::speed_accuracy(&a.out, a.quick)?,
-        "strategies" => {
+        "speed-accuracy" => crate::study::speed_accuracy::speed_accuracy(out.path(), a.quick)?,
+        _ => {
             let pb = super::optimize::iteration_spinner("strategies");
             pb.enable_steady_tick(std::time::Duration::from_millis(120));
             pb.set_message("solving ...");
@@ -25,16 +49,9 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             pb.finish_and_clear();
             md
         }
-        other => bail!(
-            "unknown report `{other}`; known reports: {}",
-            REPORTS.join(", ")
-        ),
     };
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let path = a.out.join(format!("{}.md", a.which));
     let text = format!("# ball-finger: {} report\n\n{md}", a.which);
-    crate::io::write_atomic(&path, text.as_bytes())
-        .with_context(|| format!("writing {}", path.display()))?;
-    println!("wrote {}", path.display());
-    Ok(())
+    out.write(&md_name, text.as_bytes())?;
+    out.commit(Outcome::Success)?;
+    crate::outln!("wrote {}", target.join(&md_name).display())
 }

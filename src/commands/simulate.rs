@@ -13,20 +13,48 @@
 //! Only the built-in contact scenes run (the scene file must be exactly `scenes/paper.toml` or
 //! `scenes/human.toml`), because the simulator evaluates the compiled kernels. Output in DIR:
 //! `trajectory.{json,csv}` (t, mode, q, q̇, ω, τ, λ, λ_n, h, σ, ‖Δv‖, ḣ, E, drift per sample),
-//! `events.{json,csv}` and `summary.json`, all written atomically; a summary goes to stdout.
-//! A run that fails midway still writes everything up to the failure and exits non-zero.
+//! `events.{json,csv}` and `summary.json`; a summary goes to stdout. DIR is one output set
+//! (`bf_output::OutputDir`): it is checked before the run and replaced as a whole at the end,
+//! so it never mixes files of two runs. A run that fails midway still writes everything up to
+//! the failure, marks the set with a `FAILED` file and exits non-zero.
+//!
+//! Resources are bounded: a run whose `--t-end` needs more steps than `--max-steps` (at least
+//! t_end / h_max with DOPRI5, t_end / step with RK4), or whose `--output-dt` grid has more
+//! samples than `--max-samples`, is refused before it starts; a run that reaches
+//! `--max-samples` or `--max-time` stops with an error like a failed one. Runs longer than a
+//! second show their progress on stderr (a bar on a terminal, a line every 10 s otherwise).
 
 use crate::cli::SimulateArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{HumanKernels, ImpactLaw, Kernels, Mode, Model, PaperKernels, State, Vec3};
+use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{
     Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::path::Path;
+use std::io::IsTerminal as _;
 use std::time::{Duration, Instant};
+
+/// The output directory of `simulate`.
+pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
+    option: "--out",
+    command: "simulate",
+    legacy_files: &["summary.json", "trajectory.csv"],
+};
+
+/// Options of a run that are not on the command line.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOptions {
+    /// Make the n-th output write fail, as if the process stopped there (tests). The first
+    /// write is the trajectory, events and summary, the second the set's manifest.
+    pub fail_at_write: Option<usize>,
+}
+
+/// Torques above this (N m) get a warning: the paper's bound is 1 N m, and such torques force
+/// tiny steps (the run is still bounded by `--max-steps`, `--max-samples`, `--max-time`).
+pub const LARGE_TORQUE: f64 = 1e3;
 
 /// Default initial joint angles (rad): the paper's "q constant nonzero" initial guess
 /// (PARAMS.md); for the paper scene the fingertip is then 1.4 m above the ball.
@@ -204,17 +232,82 @@ pub fn input(args: &SimulateArgs) -> Result<CliInput> {
     Ok(CliInput::Zero)
 }
 
+/// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
+/// samples (see the module docs). The error names the options and the limit.
+pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
+    let (h, h_opt) = match set.method {
+        Method::Rk4 { h } => (h, "--step"),
+        Method::Dopri5 => (set.h_max, "--h-max"),
+    };
+    let min_steps = args.t_end / h;
+    if min_steps > args.max_steps as f64 {
+        bail!(
+            "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more \
+             than --max-steps {}; shorten --t-end or raise --max-steps",
+            args.t_end,
+            args.max_steps
+        );
+    }
+    if set.record_steps && min_steps > args.max_samples as f64 {
+        bail!(
+            "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each \
+             stored as a sample, more than --max-samples {}; shorten --t-end or raise \
+             --max-samples",
+            args.t_end,
+            args.max_samples
+        );
+    }
+    if let Some(dt) = args.output_dt {
+        let n = args.t_end / dt;
+        if n > args.max_samples as f64 {
+            bail!(
+                "--output-dt {dt} s over --t-end {} s is {n:.3e} samples, more than \
+                 --max-samples {}; raise --output-dt or --max-samples",
+                args.t_end,
+                args.max_samples
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Largest |τ| of a torque series at its knots (N m).
+fn max_torque(s: &TorqueSeries) -> f64 {
+    let mut tau = vec![0.0; s.dim()];
+    s.times().iter().fold(0.0, |m, &t| {
+        s.eval(t, &mut tau);
+        tau.iter().fold(m, |m, v| m.max(v.abs()))
+    })
+}
+
 /// Run `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<()> {
+    run_with(args, RunOptions::default())
+}
+
+/// Run `simulate` with `opts`.
+pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
     let (scene, text) = super::load_scene(&args.scene)?;
     // Validate every option before the (possibly long) run.
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
         bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
     }
     let set = settings(args)?;
+    check_limits(args, &set)?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state(args)?;
     let inp = input(args)?;
+    if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
+        let m = max_torque(s);
+        if m > LARGE_TORQUE {
+            eprintln!(
+                "warning: --torques {}: |τ| reaches {m:e} N m (the paper's bound is 1 N m); \
+                 expect very small steps",
+                path.display()
+            );
+        }
+    }
+    let run_opts = opts;
     let opts = BallFingerOptions {
         impact_law: law,
         project: !args.no_projection,
@@ -223,11 +316,11 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     match scene.name.as_str() {
         "paper" if text == bf_generated::paper::SCENE_TOML => {
             let model = Model::from_kernels(PaperKernels::new())?;
-            run_model(args, model, inp, opts, set, mode0, x0)
+            run_model(args, run_opts, model, inp, opts, set, mode0, x0)
         }
         "human" if text == bf_generated::human::SCENE_TOML => {
             let model = Model::from_kernels(HumanKernels::new())?;
-            run_model(args, model, inp, opts, set, mode0, x0)
+            run_model(args, run_opts, model, inp, opts, set, mode0, x0)
         }
         name => bail!(
             "{}: scene `{name}` cannot be simulated: only the built-in contact scenes \
@@ -239,8 +332,50 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     }
 }
 
+/// Names the options the initial state came from, for errors about it.
+fn initial_state_options(args: &SimulateArgs) -> String {
+    let mut v: Vec<String> = Vec::new();
+    if let Some(p) = &args.init {
+        v.push(format!("--init {}", p.display()));
+    }
+    for (name, value) in [
+        ("--q0", &args.q0),
+        ("--qd0", &args.qd0),
+        ("--omega0", &args.omega0),
+    ] {
+        if let Some(x) = value {
+            v.push(format!("{name} {x}"));
+        }
+    }
+    if v.is_empty() {
+        "the default initial state".into()
+    } else {
+        v.join(", ")
+    }
+}
+
+/// Names the torque input, for errors about non-finite values.
+fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
+    match (inp, &args.torques) {
+        (CliInput::Series(s), Some(p)) => {
+            format!(
+                "--torques {} (|τ| up to {:e} N m)",
+                p.display(),
+                max_torque(s)
+            )
+        }
+        (CliInput::Pd(_), _) => format!(
+            "--pd {} --pd-gains {}",
+            args.pd.as_deref().unwrap_or(""),
+            args.pd_gains
+        ),
+        _ => "zero torques".into(),
+    }
+}
+
 fn run_model<K: Kernels>(
     args: &SimulateArgs,
+    run_opts: RunOptions,
     model: Model<K>,
     inp: CliInput,
     opts: BallFingerOptions,
@@ -248,24 +383,41 @@ fn run_model<K: Kernels>(
     mode0: Mode,
     x0: State,
 ) -> Result<()> {
+    let inputs = input_options(args, &inp);
     let sys = BallFinger::new(model, inp, opts)?;
     let x0 = x0.to_array();
+    // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
+    // deep in the first step that names neither the option nor the quantity.
+    let info = sys.sample_info_or_nan(mode0, 0.0, &x0);
+    let quantities = [
+        ("energy", info.energy),
+        ("distance h", info.h),
+        ("torque τ1", info.tau[0]),
+        ("torque τ2", info.tau[1]),
+        ("torque τ3", info.tau[2]),
+    ];
+    if let Some((name, v)) = quantities.iter().find(|(_, v)| !v.is_finite()) {
+        bail!(
+            "the {name} at the initial state is not finite ({v}); initial state: {}; \
+             torques: {inputs}",
+            initial_state_options(args)
+        );
+    }
     let h0 = sys.gap(&x0)?;
     let tol = sys.model.settings().contact_tolerance * sys.model.params().ball_radius();
     if mode0 == Mode::Free && h0 < -tol {
         bail!("the initial state penetrates the ball: h(q0) = {h0:e} m");
     }
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    if let Some(n) = run_opts.fail_at_write {
+        out_dir.inject_fault_at_write(n);
+    }
     let t0 = 0.0;
     let t_end = args.t_end;
     let mut sim = Simulator::new(&sys, set, mode0, t0, &x0, t_end)
         .map_err(|e| anyhow!("cannot start the simulation: {e}"))?;
-    let pb = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
-    pb.set_style(
-        ProgressStyle::with_template("simulate {bar:40} t = {msg} s ({elapsed}, eta {eta})")
-            .map_err(|e| anyhow!("progress bar template: {e}"))?,
-    );
+    let mut progress = Progress::new(t0, t_end)?;
     let start = Instant::now();
-    let mut shown = false;
     let mut error = None;
     loop {
         let r = match sim.step() {
@@ -275,51 +427,166 @@ fn run_model<K: Kernels>(
             Err(e) => Err(e),
         };
         if let Err(e) = r {
-            error = Some(e);
+            error = Some(e.to_string());
             break;
         }
-        // Only long runs get a visible bar (checked cheaply every 64 steps).
+        let samples = sim.trajectory().len();
+        if samples >= args.max_samples {
+            error = Some(format!(
+                "sample limit reached: {samples} samples (--max-samples {})",
+                args.max_samples
+            ));
+            break;
+        }
+        // The clock and the progress display are looked at every 64 steps only.
         if sim.stats().accepted_steps % 64 == 0 {
-            if !shown && start.elapsed() > Duration::from_millis(500) {
-                pb.set_draw_target(ProgressDrawTarget::stderr());
-                shown = true;
+            let elapsed = start.elapsed();
+            if let Some(limit) = args.max_time
+                && elapsed.as_secs_f64() > limit
+            {
+                error = Some(format!(
+                    "time limit reached: {:.1} s of computation (--max-time {limit})",
+                    elapsed.as_secs_f64()
+                ));
+                break;
             }
-            if shown {
-                pb.set_position((1000.0 * (sim.t() - t0) / (t_end - t0)) as u64);
-                pb.set_message(format!("{:.3}", sim.t()));
-            }
+            progress.update(elapsed, sim.t(), sim.stats().accepted_steps, samples);
         }
     }
     let cpu = start.elapsed().as_secs_f64();
-    pb.finish_and_clear();
+    progress.finish();
     let (t_stop, mode_stop) = (sim.t(), sim.mode());
     let out = sim.finish();
     let report = sys.report(&out, t0, cpu);
-    let msg = error.as_ref().map(|e| e.to_string());
+    // A run that ends with a non-finite energy has not produced a result, whatever the
+    // integrator said.
+    let s = &report.summary;
+    let error = error.or_else(|| {
+        [
+            ("initial energy", s.energy_initial),
+            ("final energy", s.energy_final),
+            ("final time", s.t_final),
+        ]
+        .iter()
+        .find(|(_, v)| !v.is_finite())
+        .map(|(name, v)| format!("the {name} of the run is not finite ({v})"))
+    });
+    let error = error.map(|e| {
+        let non_finite = ["finite", "NaN", "inf"].iter().any(|w| e.contains(w));
+        if non_finite {
+            format!(
+                "{e} (initial state: {}; torques: {inputs})",
+                initial_state_options(args)
+            )
+        } else {
+            e
+        }
+    });
+    out_dir.file("summary.json")?;
     report
-        .write_dir(&args.out, &out, msg.as_deref())
+        .write_dir(out_dir.path(), &out, error.as_deref())
+        .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
-    println!(
-        "scene {}, impact law {}, {}",
-        sys.model.kernels().scene_name(),
-        opts.impact_law.name(),
-        describe_method(&args.integrator, args)
-    );
-    println!("{}", report.summary);
-    for line in report.summary.warning_lines() {
-        eprintln!("warning: {line}");
-    }
-    println!("output: {}", args.out.display());
-    if let Some(e) = error {
-        bail!(
+    let failure = error.as_ref().map(|e| {
+        format!(
             "simulation failed at t = {t_stop} s in mode {mode_stop:?}: {e}\n\
              the trajectory up to the failure ({} samples, {} events) was written to {}",
             out.trajectory.len(),
             out.events.len(),
-            Path::new(&args.out).display()
-        );
+            args.out.display()
+        )
+    });
+    out_dir.commit(match &failure {
+        Some(f) => Outcome::Failed(f),
+        None => Outcome::Success,
+    })?;
+    crate::outln!(
+        "scene {}, impact law {}, {}",
+        sys.model.kernels().scene_name(),
+        opts.impact_law.name(),
+        describe_method(&args.integrator, args)
+    )?;
+    crate::outln!("{}", report.summary)?;
+    for line in report.summary.warning_lines() {
+        eprintln!("warning: {line}");
     }
-    Ok(())
+    crate::outln!("output: {}", args.out.display())?;
+    match failure {
+        Some(f) => bail!("{f}"),
+        None => Ok(()),
+    }
+}
+
+/// Progress of a long run on stderr: an indicatif bar on a terminal, otherwise a line every
+/// [`Progress::LINE_EVERY`]. Nothing for runs shorter than [`Progress::AFTER`].
+struct Progress {
+    bar: Option<ProgressBar>,
+    t0: f64,
+    t_end: f64,
+    last_line: Option<Duration>,
+}
+
+impl Progress {
+    const AFTER: Duration = Duration::from_secs(1);
+    const LINE_EVERY: Duration = Duration::from_secs(10);
+
+    fn new(t0: f64, t_end: f64) -> Result<Self> {
+        let bar = if std::io::stderr().is_terminal() {
+            let pb = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
+            pb.set_style(
+                ProgressStyle::with_template(
+                    "simulate {bar:40} t = {msg} s ({elapsed}, eta {eta})",
+                )
+                .map_err(|e| anyhow!("progress bar template: {e}"))?,
+            );
+            Some(pb)
+        } else {
+            None
+        };
+        Ok(Progress {
+            bar,
+            t0,
+            t_end,
+            last_line: None,
+        })
+    }
+
+    fn update(&mut self, elapsed: Duration, t: f64, steps: usize, samples: usize) {
+        if elapsed < Self::AFTER {
+            return;
+        }
+        let share = (t - self.t0) / (self.t_end - self.t0);
+        match &self.bar {
+            Some(pb) => {
+                if pb.is_hidden() {
+                    pb.set_draw_target(ProgressDrawTarget::stderr());
+                }
+                pb.set_position((1000.0 * share) as u64);
+                pb.set_message(format!("{t:.3}"));
+            }
+            None => {
+                if self
+                    .last_line
+                    .is_none_or(|last| elapsed >= last + Self::LINE_EVERY)
+                {
+                    self.last_line = Some(elapsed);
+                    eprintln!(
+                        "simulate: t = {t:.4} s of {} s ({:.1} %), {steps} steps, {samples} \
+                         samples, {:.0} s elapsed",
+                        self.t_end,
+                        100.0 * share,
+                        elapsed.as_secs_f64()
+                    );
+                }
+            }
+        }
+    }
+
+    fn finish(&self) {
+        if let Some(pb) = &self.bar {
+            pb.finish_and_clear();
+        }
+    }
 }
 
 fn describe_method(name: &str, args: &SimulateArgs) -> String {

@@ -96,7 +96,7 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
             (f.partial, Some(msg))
         }
     };
-    std::fs::create_dir_all(dir)?;
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     out.write_json(&dir.join("trajectory.json"))?;
     out.write_events_csv(&dir.join("events.csv"))?;
 

@@ -493,7 +493,7 @@ pub fn run_all(
             .with_context(|| format!("scenario {name}"))
         {
             Ok(r) => results.push(r),
-            Err(e) => writeln!(failures, "- `{name}` failed: {e:#}")?,
+            Err(e) => writeln!(failures, "- `{name}` failed: {}", crate::errors::render(&e))?,
         }
     }
     Ok((results, failures))

@@ -16,19 +16,10 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
     }
 }
 
-/// Write through a sibling temporary file and a rename, so a failed or interrupted write never
-/// leaves a truncated `solution.json` / `torques.csv` behind.
+/// Through the workspace's one atomic writer ([`bf_output::replace_file`]), so a failed or
+/// interrupted write never leaves a truncated `solution.json` / `torques.csv` behind.
 fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OcpError> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(|e| io_err(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io_err(path, e)
-    })
+    bf_output::replace_file(path, bytes).map_err(|e| io_err(path, e))
 }
 
 /// File input and output of an [`OcpSolution`].

@@ -1,0 +1,424 @@
+//! Reliability of the `ball-finger` binary: output directories replaced as a whole (never a
+//! mixture of two runs, even when a run stops between two file writes), failed runs marked,
+//! no panic on I/O errors, resource limits checked before the work, errors that name the
+//! option, file or quantity, and non-finite results reported as errors.
+
+use ball_finger::cli::{Cli, Command as Sub};
+use ball_finger::commands::{optimize, simulate};
+use clap::Parser;
+use std::io::Read as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ball-finger"))
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bf-rel-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    bin()
+        .current_dir(root())
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Fails with exit status 1 (2 for clap's usage errors), no panic, and every `mention` in
+/// stderr.
+fn assert_error(out: &Output, code: i32, mention: &[&str]) {
+    let e = stderr(out);
+    assert_eq!(out.status.code(), Some(code), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+    for m in mention {
+        assert!(e.contains(m), "stderr should mention {m:?}: {e}");
+    }
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn parse(args: &[&str]) -> Sub {
+    let mut full = vec!["ball-finger"];
+    full.extend_from_slice(args);
+    Cli::try_parse_from(full).unwrap().command
+}
+
+/// A simulation stopped between two writes (the trajectory files are staged, the manifest
+/// write fails) leaves the previous output set as it was and no temporary directory; a
+/// complete second run replaces every file of the first.
+#[test]
+fn simulate_output_set_is_replaced_as_a_whole() {
+    let dir = tmpdir("simset");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let first = run(&["simulate", "--t-end", "0.5", "--out", out_s]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert_eq!(json(&out.join("summary.json"))["t_final"], 0.5);
+    assert_eq!(json(&out.join(bf_output::MANIFEST))["status"], "success");
+    let before: Vec<Vec<u8>> = names(&out)
+        .iter()
+        .map(|n| std::fs::read(out.join(n)).unwrap())
+        .collect();
+    // Run from inside the scene directory's root, as the binary does.
+    std::env::set_current_dir(root()).unwrap();
+    let Sub::Simulate(args) = parse(&["simulate", "--t-end", "1", "--out", out_s]) else {
+        unreachable!()
+    };
+    for fault in [1, 2] {
+        let e = simulate::run_with(
+            &args,
+            simulate::RunOptions {
+                fail_at_write: Some(fault),
+            },
+        )
+        .unwrap_err();
+        assert!(format!("{e:#}").contains("injected fault"), "{e:#}");
+        let after: Vec<Vec<u8>> = names(&out)
+            .iter()
+            .map(|n| std::fs::read(out.join(n)).unwrap())
+            .collect();
+        assert_eq!(
+            before, after,
+            "fault at write {fault} changed the previous set"
+        );
+        assert_eq!(names(&dir), ["out"], "temporary directories left behind");
+    }
+    let second = run(&["simulate", "--t-end", "1", "--out", out_s]);
+    assert!(second.status.success(), "{}", stderr(&second));
+    assert_eq!(json(&out.join("summary.json"))["t_final"], 1.0);
+    let tj = json(&out.join("trajectory.json"));
+    assert_eq!(tj["t"].as_array().unwrap().last().unwrap(), 1.0);
+    assert_eq!(names(&dir), ["out"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `optimize`: a run stopped between solution.json and torques.csv leaves the previous pair;
+/// a solve that does not converge writes its set with the status and a FAILED marker and
+/// exits non-zero.
+#[test]
+fn optimize_output_set_is_atomic_and_failures_are_marked() {
+    let dir = tmpdir("optset");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    // A set written before manifests existed is recognised by its files.
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join("solution.json"), "old").unwrap();
+    std::fs::write(out.join("torques.csv"), "old").unwrap();
+    std::env::set_current_dir(root()).unwrap();
+    let Sub::Optimize(args) = parse(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "direct",
+        "--verify-rtol",
+        "0",
+        "--out",
+        out_s,
+    ]) else {
+        unreachable!()
+    };
+    let e = optimize::run_with(
+        &args,
+        optimize::RunOptions {
+            fail_at_write: Some(2),
+        },
+    )
+    .unwrap_err();
+    assert!(format!("{e:#}").contains("torques.csv"), "{e:#}");
+    assert_eq!(names(&out), ["solution.json", "torques.csv"]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("solution.json")).unwrap(),
+        "old"
+    );
+    assert_eq!(
+        std::fs::read_to_string(out.join("torques.csv")).unwrap(),
+        "old"
+    );
+    assert_eq!(names(&dir), ["out"]);
+
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--max-iter",
+        "3",
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 1, &["did not converge"]);
+    assert_eq!(
+        names(&out),
+        [
+            bf_output::MANIFEST,
+            bf_output::FAILED,
+            "solution.json",
+            "torques.csv"
+        ]
+    );
+    let sol = json(&out.join("solution.json"));
+    assert_eq!(sol["status"], "MaxIterations");
+    let failed = std::fs::read_to_string(out.join(bf_output::FAILED)).unwrap();
+    assert!(failed.contains("MaxIterations"), "{failed}");
+    assert_eq!(json(&out.join(bf_output::MANIFEST))["status"], "failed");
+    assert!(
+        std::fs::read_to_string(out.join("torques.csv"))
+            .unwrap()
+            .starts_with("t,tau1,tau2,tau3\n")
+    );
+
+    // A warm start with a value no solution has names the file and the field.
+    let mut bad = sol.clone();
+    bad["objective"] = serde_json::json!(1e300);
+    let bad_path = dir.join("bad.json");
+    std::fs::write(&bad_path, bad.to_string()).unwrap();
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--warm-start",
+        bad_path.to_str().unwrap(),
+        "--out",
+        dir.join("never").to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["--warm-start", "bad.json", "`objective`", "1e300"]);
+    assert!(!dir.join("never").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A directory that is not an earlier output (here: a source tree) or a file is refused
+/// before any work, and nothing in it changes.
+#[test]
+fn foreign_or_file_out_is_refused_before_the_work() {
+    let dir = tmpdir("foreign");
+    let src = dir.join("src");
+    std::fs::create_dir_all(&src).unwrap();
+    std::fs::write(src.join("main.rs"), "fn main() {}").unwrap();
+    let file = dir.join("file.txt");
+    std::fs::write(&file, "x").unwrap();
+    for target in [&src, &file] {
+        let t = target.to_str().unwrap();
+        for args in [
+            vec!["simulate", "--t-end", "0.1", "--out", t],
+            vec!["optimize", "--problem", "periodic-cot", "--out", t],
+        ] {
+            let start = std::time::Instant::now();
+            let o = run(&args);
+            assert_error(&o, 1, &["--out", t]);
+            // Refused before the solve (a periodic-cot continuation takes many seconds).
+            assert!(start.elapsed().as_secs_f64() < 5.0, "{:?}", start.elapsed());
+        }
+    }
+    assert_eq!(names(&src), ["main.rs"]);
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    // A path below a file: the reason is printed once, not repeated by the error chain.
+    let o = run(&[
+        "generate",
+        "scenes/paper.toml",
+        "-o",
+        file.join("x.rs").to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["file.txt"]);
+    assert_eq!(stderr(&o).matches("(os error").count(), 1, "{}", stderr(&o));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A closed pipe ends the program quietly with the status of a process stopped by SIGPIPE; a
+/// full device is an error naming it.
+#[test]
+fn io_errors_do_not_panic() {
+    // The iiwa7 module is far larger than a pipe buffer, so the writer sees the closed pipe.
+    let mut child = bin()
+        .current_dir(root())
+        .args(["generate", "scenes/iiwa7.toml"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut head = [0u8; 10];
+    child.stdout.take().unwrap().read_exact(&mut head).unwrap();
+    // The read end is dropped here.
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(&head, b"// @genera");
+    assert_eq!(out.status.code(), Some(141), "{}", stderr(&out));
+    assert!(stderr(&out).is_empty(), "{}", stderr(&out));
+
+    if Path::new("/dev/full").exists() {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let out = bin()
+            .current_dir(root())
+            .args(["eval", "scenes/paper.toml", "--q", "0,0,0", "--qd", "0,0,0"])
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_error(&out, 1, &["standard output", "No space left"]);
+        let out = run(&["generate", "scenes/paper.toml", "-o", "/dev/full"]);
+        assert_error(&out, 1, &["/dev/full", "No space left"]);
+    }
+}
+
+/// Runs that cannot fit their limits are refused up front with the option and the limit; a
+/// run that reaches the sample limit stops, writes what it has and marks it FAILED.
+#[test]
+fn resource_limits_are_checked() {
+    let dir = tmpdir("limits");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let cases: [(&[&str], &[&str]); 4] = [
+        (
+            &["simulate", "--output-dt", "1e-7", "--out", out_s],
+            &["--output-dt", "--max-samples 1000000"],
+        ),
+        (
+            &["simulate", "--t-end", "1e12", "--out", out_s],
+            &["--t-end", "--max-steps 10000000"],
+        ),
+        (
+            &["optimize", "--problem", "reach", "--elements", "100000"],
+            &["--elements 100000", "5000"],
+        ),
+        (
+            &[
+                "optimize",
+                "--problem",
+                "reach",
+                "--points",
+                "3000",
+                "--scheme",
+                "lg",
+            ],
+            &["--points 3000", "200", "--scheme radau"],
+        ),
+    ];
+    for (args, mention) in cases {
+        assert_error(&run(args), 1, mention);
+    }
+    assert!(!out.exists(), "nothing written by refused runs");
+    let o = run(&[
+        "simulate",
+        "--t-end",
+        "1",
+        "--max-samples",
+        "50",
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 1, &["--max-samples 50", "written to"]);
+    let tj = json(&out.join("trajectory.json"));
+    assert_eq!(tj["t"].as_array().unwrap().len(), 50);
+    let sm = json(&out.join("summary.json"));
+    assert!(sm["error"].as_str().unwrap().contains("--max-samples"));
+    assert!(out.join(bf_output::FAILED).exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Negative values reach the option's own check; non-finite failures name the option or file.
+#[test]
+fn errors_name_the_option_file_or_quantity() {
+    let dir = tmpdir("names");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    let usage: [(&[&str], &[&str]); 4] = [
+        (
+            &["simulate", "--rtol", "-1e-8"],
+            &["--rtol", "must be a finite number > 0", "-1e-8"],
+        ),
+        (
+            &["simulate", "--step", "-0.001"],
+            &["--step", "must be a finite number > 0"],
+        ),
+        (
+            &["optimize", "--problem", "reach", "--points", "-5"],
+            &["--points", "not negative"],
+        ),
+        (
+            &["optimize", "--problem", "reach", "--starts", "-1"],
+            &["--starts", "not negative"],
+        ),
+    ];
+    for (args, mention) in usage {
+        let o = run(args);
+        assert_error(&o, 2, mention);
+        assert!(
+            !stderr(&o).contains("unexpected argument"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    let o = run(&["simulate", "--qd0", "1e300,0,0", "--out", out_s]);
+    assert_error(&o, 1, &["--qd0 1e300,0,0", "not finite"]);
+    assert!(!out.exists());
+    let tau = dir.join("huge.csv");
+    std::fs::write(&tau, "t,tau1,tau2,tau3\n0,1e300,0,0\n1,1e300,0,0\n").unwrap();
+    let o = run(&[
+        "simulate",
+        "--torques",
+        tau.to_str().unwrap(),
+        "--t-end",
+        "1",
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 1, &["huge.csv", "1e300"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `eval` at states or ε where a kernel overflows: an error naming the entry, exit 1, and
+/// nothing on stdout (previously `null` in the JSON and exit 0).
+#[test]
+fn non_finite_eval_results_are_errors() {
+    for (extra, mention) in [
+        (["--qd", "1e200,0,0"], ["not finite", "--qd 1e200,0,0"]),
+        (["--eps", "1e308"], ["not finite", "--eps 1e308"]),
+    ] {
+        let mut args = vec!["eval", "scenes/paper.toml", "--q", "0.3,-0.5,0.8"];
+        if extra[0] != "--qd" {
+            args.extend(["--qd", "0,0,0"]);
+        }
+        args.extend(extra);
+        let o = run(&args);
+        assert_error(&o, 1, &mention);
+        assert!(
+            o.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+    }
+    // The same state with ordinary values is finite everywhere.
+    let o = run(&[
+        "eval",
+        "scenes/paper.toml",
+        "--q",
+        "0.3,-0.5,0.8",
+        "--qd",
+        "1,0,0",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
