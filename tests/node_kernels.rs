@@ -219,7 +219,6 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         "mu_s = 0.8 not found in the paper scene"
     );
     let scene = bf_codegen::Scene::from_toml_str(&text, "test").unwrap();
-    let ph = bf_problem::points::physics(&scene).unwrap();
     let opt = bf_problem::node::NodeOptions {
         mode: bf_problem::Mode::Stick,
         cost: bf_problem::CostKind::Qc {
@@ -230,33 +229,26 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         hdot_bounds: None,
         eps: 0.01,
     };
-    let (nd, _) =
-        bf_problem::node::node_function(&scene, &ph, &opt, bf_problem::StickLevel::Velocity)
-            .unwrap();
-    let mut c = nd.collocation();
-    let f = GraphFn::with_backend(
-        &mut c.graph,
-        &c.outputs,
-        &c.locals,
-        &nd.fixed,
-        GENERATED.kernels,
-    );
-    assert_eq!(f.kernel_name(), None);
+    // The name of the kernel the stick node of `scene` runs on, if any.
+    let kernel_of = |scene: &bf_codegen::Scene| {
+        let ph = bf_problem::points::physics(scene).unwrap();
+        let (nd, _) =
+            bf_problem::node::node_function(scene, &ph, &opt, bf_problem::StickLevel::Velocity)
+                .unwrap();
+        let mut c = nd.collocation();
+        GraphFn::with_backend(
+            &mut c.graph,
+            &c.outputs,
+            &c.locals,
+            &nd.fixed,
+            GENERATED.kernels,
+        )
+        .kernel_name()
+    };
+    assert_eq!(kernel_of(&scene), None);
     // The same node on the paper scene does find its kernel.
     let paper = bf_codegen::Scene::from_toml_str(bf_generated::paper::SCENE_TOML, "paper").unwrap();
-    let ph = bf_problem::points::physics(&paper).unwrap();
-    let (nd, _) =
-        bf_problem::node::node_function(&paper, &ph, &opt, bf_problem::StickLevel::Velocity)
-            .unwrap();
-    let mut c = nd.collocation();
-    let f = GraphFn::with_backend(
-        &mut c.graph,
-        &c.outputs,
-        &c.locals,
-        &nd.fixed,
-        GENERATED.kernels,
-    );
-    assert_eq!(f.kernel_name(), Some("paper_qc_stick"));
+    assert_eq!(kernel_of(&paper), Some("paper_qc_stick"));
 }
 
 /// The paper scene with another μ_s: a graph no emitted kernel was built from.

@@ -158,17 +158,8 @@ pub fn run_scenario(
     // shown in the results table; a failure to verify is not fatal.
     sol.verification = crate::study::verify::verify(&problem, &sol, 1e-10).ok();
     write_solution(&sol, &dir.join(name))?;
-    let scene = if name.ends_with("-human") {
-        "human"
-    } else {
-        "paper"
-    };
-    let base_text = if scene == "human" {
-        bf_generated::human::SCENE_TOML
-    } else {
-        bf_generated::paper::SCENE_TOML
-    };
-    let base = bf_codegen::Scene::from_toml_str(base_text, scene)?.base_translation();
+    let scene = problem.problem.scene();
+    let base = problem.scene.base_translation();
     let d = &sol.dense;
     let phases = phases_of(&sol);
     let figs = dir.join("figures");
