@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::Result;
 use bf_generated::paper;
 use bf_optim::problems::{self, ProblemSettings};
-use bf_plot::paper::WorkPrecision;
+use bf_plot::paper::WorkPrecisionSet;
 use indicatif::ProgressBar;
 
 use super::{solve_qc, wp_figure};
@@ -122,10 +122,16 @@ pub(super) fn section(rows: &[EpsRow], fig_dir: &Path) -> Result<String> {
     let fig = wp_figure(
         "periodic-qc: contact-point error vs solve time (ε ladder)",
         "max ‖p_c,smooth − p_c‖∞ [m]",
-        &[WorkPrecision {
+        &[WorkPrecisionSet {
             name: "smooth sat, ε ladder".into(),
             time_s: solved.iter().map(|r| r.seconds).collect(),
             error: solved.iter().map(|r| r.contact_point_error).collect(),
+            labels: solved
+                .iter()
+                .map(|r| format!("ε = {:.0e}", r.eps))
+                .collect(),
+            // Solve times of the ladder are not monotone in ε: no line between the runs.
+            joined: false,
         }],
     )?;
     bf_plot::render(&fig, fig_dir.join("sa_eps"))?;
