@@ -95,13 +95,56 @@ fn paper_quick_writes_a_consistent_report() {
             "{name} torques.csv header"
         );
         assert!(out.join(format!("animation_{name}.html")).exists());
+        // Figures with a counterpart in the paper (Sect. 6.1, Figs. 5–16) carry its number in
+        // the file name and the title.
+        let numbered: &[(&str, u32)] = match name {
+            "periodic-cot" => &[
+                ("paths", 5),
+                ("omega", 6),
+                ("distance", 7),
+                ("torques", 8),
+                ("forces", 9),
+            ],
+            "periodic-cot-human" => &[("paths", 10)],
+            _ => &[
+                ("paths", 12),
+                ("omega", 13),
+                ("distance", 14),
+                ("torques", 15),
+                ("forces", 16),
+            ],
+        };
         for fig in ["paths", "omega", "distance", "torques", "forces"] {
+            let number = numbered.iter().find(|(f, _)| *f == fig).map(|(_, n)| *n);
+            let stem = match number {
+                Some(n) => format!("fig{n}_{name}_{fig}"),
+                None => format!("{name}_{fig}"),
+            };
             for ext in ["svg", "png"] {
-                let f = out.join("figures").join(format!("{name}_{fig}.{ext}"));
+                let f = out.join("figures").join(format!("{stem}.{ext}"));
                 let len = std::fs::metadata(&f).map(|m| m.len()).unwrap_or(0);
                 assert!(len > 1000, "{} is missing or empty", f.display());
             }
+            if let Some(n) = number {
+                let svg = std::fs::read_to_string(out.join("figures").join(format!("{stem}.svg")))
+                    .unwrap();
+                assert!(
+                    svg.contains(&format!("Fig. {n} counterpart")),
+                    "{stem}.svg title names Fig. {n}"
+                );
+            }
         }
+    }
+    // The figures built from several scenarios or the open-loop run.
+    for (stem, n) in [("fig11_compare_paths", 11), ("fig17_open_loop", 17)] {
+        let svg = std::fs::read_to_string(out.join("figures").join(format!("{stem}.svg")))
+            .unwrap_or_else(|e| panic!("{stem}.svg: {e}"));
+        assert!(svg.contains(&format!("Fig. {n} counterpart")), "{stem}");
+        assert!(out.join("figures").join(format!("{stem}.png")).exists());
+        assert!(
+            report.contains(&format!("figures/{stem}.svg")),
+            "{stem} linked"
+        );
     }
     // Every artefact is written through a temporary file and a rename: none may be left over.
     let mut stack = vec![out.clone()];

@@ -39,7 +39,7 @@ pub fn fig4_saturation(eps: &[f64], n: usize) -> LineFigure {
     let n = n.max(2);
     let xs: Vec<f64> = (0..n).map(|i| -0.5 + i as f64 / (n - 1) as f64).collect();
     let mut fig = LineFigure::new(
-        "Fig. 4: saturation sat₋₁⁰(x) and its approximations",
+        "Fig. 4 counterpart: saturation sat₋₁⁰(x) and its approximations",
         "x [-]",
         "sat(x) [-]",
     );

@@ -192,7 +192,7 @@ fn headless_chromium_draws_and_advances() {
         .output()
         .unwrap();
     let dom = String::from_utf8_lossy(&o.stdout);
-    assert!(!dom.contains("data-error"), "script error: {dom}");
+    assert!(!dom.contains("data-error=\""), "script error: {dom}");
     let attr = |k: &str| -> f64 {
         let i = dom
             .find(&format!("{k}=\""))

@@ -135,7 +135,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         .fold(0.0, f64::max);
     writeln!(
         report,
-        "![Fig. 4: exact vs smooth saturation](figures/fig4_saturation.svg)\n\n\
+        "![Fig. 4 counterpart: exact vs smooth saturation](figures/fig4_saturation.svg)\n\n\
          With ε = 0.01 the smooth saturation (eq. 58–59) differs from the exact one by at most \
          {worst:.2e} (at the corners), which agrees with the paper's remark that the two are \
          hardly distinguishable.\n"
@@ -198,6 +198,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 v.summary().trim_end()
             )?;
         }
+    }
+
+    if let Some(md) = crate::study::scenarios::fig11_compare_paths(&dir, &results)? {
+        writeln!(report, "{md}")?;
     }
 
     // Stage 5: open-loop simulation of the COT torques (Sect. 6.2).

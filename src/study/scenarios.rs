@@ -1,7 +1,9 @@
 //! The three optimal-control scenarios of the paper's Sect. 6.1 — `periodic-cot` (robotic
 //! finger, COT objective eq. 61–63), `periodic-cot-human` (q₂, q₃ ≥ 0) and `periodic-qc`
 //! (quadratic objective eq. 64–65) — solved, written to disk, plotted (counterparts of
-//! Fig. 5–16) and checked against the paper's qualitative claims.
+//! Fig. 5–16) and checked against the paper's qualitative claims. A figure with a paper
+//! counterpart says so in its title ("Fig. N counterpart") and its file name (`figN_…`, see
+//! [`figure_stem`]); Fig. 11 compares two scenarios ([`fig11_compare_paths`]).
 //!
 //! Contact location is reported with the exact saturation (eq. 3) evaluated on the optimal
 //! joint trajectory; the optimiser itself uses the smooth one (eq. 58–59), whose difference is
@@ -11,7 +13,7 @@ use crate::study::solution_io::write_solution;
 use crate::study::strategy::Strategy;
 use anyhow::{Context, Result, anyhow};
 use bf_plot::paper::{Phases, TimeSeries};
-use bf_plot::scene3d::{FingerPaths, View};
+use bf_plot::scene3d::{FingerPaths, NamedPath, View};
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings, Samples};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -22,6 +24,47 @@ pub const SCENARIOS: [(&str, &str); 3] = [
     ("periodic-cot-human", "COT, human finger (q2, q3 ≥ 0)"),
     ("periodic-qc", "QC, ω_ref = (0, 0, 2.2) rad/s"),
 ];
+
+/// Reference angular velocity of `periodic-qc` (rad/s), drawn on its ω figure (Fig. 13).
+const QC_OMEGA_REF: [f64; 3] = [0.0, 0.0, 2.2];
+
+/// The per-scenario figures, in report order: (file suffix, caption).
+const SCENARIO_FIGURES: [(&str, &str); 5] = [
+    ("paths", "finger path"),
+    ("omega", "ball angular velocity"),
+    ("distance", "distance h and contact point"),
+    ("torques", "joint torques"),
+    ("forces", "contact force"),
+];
+
+/// The paper figure a scenario figure corresponds to (Sect. 6.1): Fig. 5–9 for the robotic
+/// COT solution, Fig. 10 for the human finger's path, Fig. 12–16 for the QC solution.
+pub fn paper_figure(scenario: &str, fig: &str) -> Option<u32> {
+    let k = SCENARIO_FIGURES.iter().position(|(f, _)| *f == fig)? as u32;
+    match scenario {
+        "periodic-cot" => Some(5 + k),
+        "periodic-cot-human" if fig == "paths" => Some(10),
+        "periodic-qc" => Some(12 + k),
+        _ => None,
+    }
+}
+
+/// File stem (under `figures/`) of a scenario figure: `fig<N>_<scenario>_<fig>` when it has a
+/// paper counterpart, `<scenario>_<fig>` otherwise.
+pub fn figure_stem(scenario: &str, fig: &str) -> String {
+    match paper_figure(scenario, fig) {
+        Some(n) => format!("fig{n}_{scenario}_{fig}"),
+        None => format!("{scenario}_{fig}"),
+    }
+}
+
+/// Title of a scenario figure, starting with "Fig. N counterpart" when it has one.
+fn figure_title(scenario: &str, fig: &str, caption: &str) -> String {
+    match paper_figure(scenario, fig) {
+        Some(n) => format!("Fig. {n} counterpart: {scenario}: {caption}"),
+        None => format!("{scenario}: {caption}"),
+    }
+}
 
 /// Per-scenario figures of merit (the results table of the report).
 #[derive(Debug, Clone)]
@@ -163,7 +206,14 @@ pub fn run_scenario(
     let d = &sol.dense;
     let phases = phases_of(&sol);
     let figs = dir.join("figures");
-    let stem = |s: &str| figs.join(format!("{name}_{s}"));
+    let stem = |s: &str| figs.join(figure_stem(name, s));
+    let title = |s: &str| {
+        let caption = SCENARIO_FIGURES
+            .iter()
+            .find(|(f, _)| *f == s)
+            .map_or(s, |(_, c)| *c);
+        figure_title(name, s, caption)
+    };
 
     // Geometry along the dense samples.
     let geo: Vec<Geometry> = (0..d.t.len())
@@ -194,32 +244,29 @@ pub fn run_scenario(
     let max_tau = d.tau.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
 
     let omega = components(&d.omega, &["ω_x", "ω_y", "ω_z"], &d.t);
-    bf_plot::render(
-        &bf_plot::paper::fig_ball_omega(
-            &format!("{name}: ball angular velocity"),
+    let omega_fig = if name == "periodic-qc" {
+        bf_plot::paper::fig_ball_omega_ref(
+            &title("omega"),
             &omega,
             &phases,
-        )?,
-        stem("omega"),
-    )?;
+            &[("ω_ref,z".into(), QC_OMEGA_REF[2])],
+        )?
+    } else {
+        bf_plot::paper::fig_ball_omega(&title("omega"), &omega, &phases)?
+    };
+    bf_plot::render(&omega_fig, stem("omega"))?;
     bf_plot::render_panels(
-        &bf_plot::paper::fig_distance(
-            &format!("{name}: distance h and contact point"),
-            &d.t,
-            &d.h,
-            &from_tip,
-            &phases,
-        )?,
+        &bf_plot::paper::fig_distance(&title("distance"), &d.t, &d.h, &from_tip, &phases)?,
         stem("distance"),
     )?;
     let tau = components(&d.tau, &["τ1", "τ2", "τ3"], &d.t);
     bf_plot::render_panels(
-        &bf_plot::paper::fig_torques(&format!("{name}: joint torques"), &tau, Some(1.0), &phases)?,
+        &bf_plot::paper::fig_torques(&title("torques"), &tau, Some(1.0), &phases)?,
         stem("torques"),
     )?;
     bf_plot::render(
         &bf_plot::paper::fig_contact_forces(
-            &format!("{name}: contact force"),
+            &title("forces"),
             &d.t,
             &lambda_n,
             &lambda_t,
@@ -250,7 +297,7 @@ pub fn run_scenario(
     };
     bf_plot::render_panels(
         &bf_plot::scene3d::fig_finger_paths(
-            &format!("{name}: finger path"),
+            &title("paths"),
             &paths,
             &[View::FrontXZ, View::SideYZ, View::Iso],
         )?,
@@ -282,6 +329,58 @@ pub fn run_scenario(
         },
         solution: sol,
     })
+}
+
+/// Base translation of a compiled-in scene (from bf-generated's registry).
+fn scene_base(scene: &str) -> Result<[f64; 3]> {
+    let text = bf_generated::scene_toml(scene)
+        .ok_or_else(|| anyhow!("scene `{scene}` is not compiled in"))?;
+    Ok(bf_codegen::Scene::from_toml_str(text, scene)?.base_translation())
+}
+
+/// Path of the finger's closest point to the ball, p_c (eq. 3 with the exact saturation), over
+/// one period of a solution, at its dense samples.
+fn closest_point_path(name: &str, sol: &OcpSolution) -> Result<Vec<[f64; 3]>> {
+    let problem: Problem = name.parse().map_err(|e| anyhow!("{e}"))?;
+    let scene = problem.scene();
+    let base = scene_base(scene)?;
+    let d = &sol.dense;
+    Ok((0..d.t.len())
+        .map(|i| geometry(scene, base, &d.q[i], &d.qd[i], &d.omega[i]).p_c)
+        .collect())
+}
+
+/// Fig. 11 counterpart: the closest-point paths of the robotic (`periodic-cot`) and the human
+/// (`periodic-cot-human`) finger around the ball, written to `dir/figures/fig11_compare_paths`.
+/// Returns the report paragraph, or `None` when either scenario has no solution.
+pub fn fig11_compare_paths(dir: &Path, results: &[ScenarioResult]) -> Result<Option<String>> {
+    let get = |n: &str| results.iter().find(|r| r.name == n);
+    let (Some(robot), Some(human)) = (get("periodic-cot"), get("periodic-cot-human")) else {
+        return Ok(None);
+    };
+    let paths = [
+        NamedPath {
+            name: "robotic finger (periodic-cot): closest point".into(),
+            points: closest_point_path(&robot.name, &robot.solution)?,
+        },
+        NamedPath {
+            name: "human finger (periodic-cot-human): closest point".into(),
+            points: closest_point_path(&human.name, &human.solution)?,
+        },
+    ];
+    let fig = bf_plot::scene3d::fig_compare_paths(
+        "Fig. 11 counterpart: closest-point paths of the robotic and the human finger (COT)",
+        [0.0; 3],
+        1.0,
+        &paths,
+        &[View::FrontXZ, View::SideYZ, View::Iso],
+    )?;
+    bf_plot::render_panels(&fig, dir.join("figures").join("fig11_compare_paths"))?;
+    Ok(Some(
+        "### Robotic vs human finger (Fig. 11)\n\n\
+         ![Fig. 11 counterpart: closest-point paths](figures/fig11_compare_paths.svg)\n"
+            .to_string(),
+    ))
 }
 
 /// Rotation matrix exp(S(w)) (Rodrigues), for integrating the ball orientation Ṙ = S(ω) R.
@@ -450,9 +549,15 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
 
 /// Figures of one scenario as markdown image links (relative to the report).
 pub fn figures_markdown(name: &str) -> String {
-    let mut s: String = ["paths", "omega", "distance", "torques", "forces"]
+    let mut s: String = SCENARIO_FIGURES
         .iter()
-        .map(|f| format!("![{name} {f}](figures/{name}_{f}.svg)\n\n"))
+        .map(|(f, caption)| {
+            let alt = match paper_figure(name, f) {
+                Some(n) => format!("Fig. {n} counterpart: {name} {caption}"),
+                None => format!("{name} {caption}"),
+            };
+            format!("![{alt}](figures/{}.svg)\n\n", figure_stem(name, f))
+        })
         .collect();
     s.push_str(&format!(
         "Animation of one period (self-contained HTML): [animation_{name}.html](animation_{name}.html)\n"

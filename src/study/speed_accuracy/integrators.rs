@@ -9,7 +9,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use bf_model::{ImpactLaw, Mode as SimMode, PaperKernels, State, Vec3, fixtures};
-use bf_plot::paper::WorkPrecision;
+use bf_plot::paper::WorkPrecisionSet;
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::work_precision::{WorkPrecisionRow, format_table, ladder, work_precision};
 use bf_sim::{Method, PdController, SimSettings};
@@ -100,7 +100,7 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
         t_end
     );
     md.push_str(&format_table(rows));
-    let series = |f: &dyn Fn(&WorkPrecisionRow) -> f64| -> Vec<WorkPrecision> {
+    let series = |f: &dyn Fn(&WorkPrecisionRow) -> f64| -> Vec<WorkPrecisionSet> {
         ["dopri5", "rk4"]
             .iter()
             .map(|m| {
@@ -108,10 +108,22 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
                     .iter()
                     .filter(|r| r.method == *m && r.failure.is_none())
                     .collect();
-                WorkPrecision {
+                WorkPrecisionSet {
                     name: m.to_string(),
                     time_s: ok.iter().map(|r| r.cpu_seconds).collect(),
                     error: ok.iter().map(|r| f(r)).collect(),
+                    // The ladder's knob: rtol for DOPRI5, the fixed step for RK4.
+                    labels: ok
+                        .iter()
+                        .map(|r| {
+                            if *m == "rk4" {
+                                format!("h {:.0e} s", r.parameter)
+                            } else {
+                                format!("rtol {:.0e}", r.parameter)
+                            }
+                        })
+                        .collect(),
+                    joined: true,
                 }
             })
             .collect()

@@ -15,7 +15,7 @@ use anyhow::{Result, anyhow};
 use bf_codegen::dd::Dd;
 use bf_codegen::{Model as GraphModel, Scene, interp, kernels};
 use bf_generated::{paper, paper_f32, paper_fma, paper_runtime};
-use bf_plot::paper::WorkPrecision;
+use bf_plot::paper::WorkPrecisionSet;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -317,12 +317,15 @@ pub(super) fn section(rows: &[KernelRow], fig_dir: &Path) -> Result<String> {
             r.kernel, r.variant, r.ns_per_call, r.max_rel_error, r.median_rel_error
         );
     }
-    let methods: Vec<WorkPrecision> = VARIANTS
+    let methods: Vec<WorkPrecisionSet> = VARIANTS
         .iter()
         .map(|v| {
             let of_variant: Vec<&KernelRow> = rows.iter().filter(|r| r.variant == *v).collect();
-            WorkPrecision {
+            WorkPrecisionSet {
                 name: v.to_string(),
+                labels: of_variant.iter().map(|r| r.kernel.to_string()).collect(),
+                // Different kernels of one variant are unrelated runs: markers only.
+                joined: false,
                 time_s: of_variant.iter().map(|r| 1e-9 * r.ns_per_call).collect(),
                 // A result equal to the double-double one to the last bit has error 0,
                 // which a log axis cannot show: clamp to half an ulp.

@@ -10,8 +10,8 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow};
 use bf_optim::ocp::problem::Scheme;
+use bf_plot::paper::WorkPrecisionSet;
 use bf_problem::OcpSolution;
-use bf_plot::paper::WorkPrecision;
 use indicatif::ProgressBar;
 
 use super::{Solved, max_iter, solve_qc, wp_figure};
@@ -237,25 +237,32 @@ pub(super) fn section(
             }
         );
     }
-    let mut methods: Vec<WorkPrecision> = Vec::new();
+    // Meshes of one scheme are separate solves that may land on different local optima:
+    // labelled markers, not a line.
+    let mesh_label = |r: &&MeshRow| format!("{}×{}", r.points, r.elements);
+    let mut methods: Vec<WorkPrecisionSet> = Vec::new();
     for s in ["LG", "Radau"] {
         let cold: Vec<&MeshRow> = rows
             .iter()
             .filter(|r| r.scheme == s && r.same_branch)
             .collect();
-        methods.push(WorkPrecision {
+        methods.push(WorkPrecisionSet {
             name: format!("{s}, cold"),
             time_s: cold.iter().map(|r| r.seconds).collect(),
             error: cold.iter().map(|r| r.rel_error).collect(),
+            labels: cold.iter().map(mesh_label).collect(),
+            joined: false,
         });
         let warm: Vec<&MeshRow> = rows
             .iter()
             .filter(|r| r.scheme == s && r.warm_rel_error.is_finite())
             .collect();
-        methods.push(WorkPrecision {
+        methods.push(WorkPrecisionSet {
             name: format!("{s}, warm from the reference"),
             time_s: warm.iter().map(|r| r.warm_seconds).collect(),
             error: warm.iter().map(|r| r.warm_rel_error).collect(),
+            labels: warm.iter().map(mesh_label).collect(),
+            joined: false,
         });
     }
     if methods.iter().any(|m| !m.error.is_empty()) {

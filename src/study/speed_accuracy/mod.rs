@@ -21,8 +21,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow};
 use bf_optim::ocp::problem::Scheme;
 use crate::study as problems;
+use bf_plot::paper::{WorkPrecisionSet, fig_work_precision_sets};
 use bf_problem::{Problem, ProblemSettings};
-use bf_plot::paper::{WorkPrecision, fig_work_precision};
 use bf_sim::work_precision::WorkPrecisionRow;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -56,32 +56,35 @@ pub struct SpeedAccuracy {
     pub part_seconds: [f64; 3],
 }
 
-/// [`fig_work_precision`] of the points a log–log plot can show: non-finite and non-positive
-/// points are dropped, and so are series left without points (instead of failing the figure).
+/// [`fig_work_precision_sets`] of the points a log–log plot can show: non-finite and
+/// non-positive points are dropped together with their labels, and so are sets left without
+/// points (instead of failing the figure).
 fn wp_figure(
     title: &str,
     error_label: &str,
-    methods: &[WorkPrecision],
+    sets: &[WorkPrecisionSet],
 ) -> Result<bf_plot::figure::LineFigure> {
     let ok = |v: f64| v.is_finite() && v > 0.0;
-    let kept: Vec<WorkPrecision> = methods
+    let kept: Vec<WorkPrecisionSet> = sets
         .iter()
         .filter_map(|m| {
-            let (t, e): (Vec<f64>, Vec<f64>) = m
-                .time_s
-                .iter()
-                .copied()
-                .zip(m.error.iter().copied())
-                .filter(|&(t, e)| ok(t) && ok(e))
-                .unzip();
-            (!t.is_empty()).then(|| WorkPrecision {
+            let keep: Vec<usize> = (0..m.time_s.len().min(m.error.len()))
+                .filter(|&i| ok(m.time_s[i]) && ok(m.error[i]))
+                .collect();
+            (!keep.is_empty()).then(|| WorkPrecisionSet {
                 name: m.name.clone(),
-                time_s: t,
-                error: e,
+                time_s: keep.iter().map(|&i| m.time_s[i]).collect(),
+                error: keep.iter().map(|&i| m.error[i]).collect(),
+                labels: if m.labels.is_empty() {
+                    Vec::new()
+                } else {
+                    keep.iter().map(|&i| m.labels[i].clone()).collect()
+                },
+                joined: m.joined,
             })
         })
         .collect();
-    Ok(fig_work_precision(title, error_label, &kept)?)
+    Ok(fig_work_precision_sets(title, error_label, &kept)?)
 }
 
 /// Runs the whole report: measures, writes `out_dir/figures/*.svg|png`, returns the Markdown

@@ -8,8 +8,8 @@ use std::path::Path;
 use anyhow::Result;
 use bf_generated::paper;
 use crate::study as problems;
+use bf_plot::paper::WorkPrecisionSet;
 use bf_problem::{Mode, ProblemSettings};
-use bf_plot::paper::WorkPrecision;
 use indicatif::ProgressBar;
 
 use super::{solve_qc, wp_figure};
@@ -123,10 +123,16 @@ pub(super) fn section(rows: &[EpsRow], fig_dir: &Path) -> Result<String> {
     let fig = wp_figure(
         "periodic-qc: contact-point error vs solve time (ε ladder)",
         "max ‖p_c,smooth − p_c‖∞ [m]",
-        &[WorkPrecision {
+        &[WorkPrecisionSet {
             name: "smooth sat, ε ladder".into(),
             time_s: solved.iter().map(|r| r.seconds).collect(),
             error: solved.iter().map(|r| r.contact_point_error).collect(),
+            labels: solved
+                .iter()
+                .map(|r| format!("ε = {:.0e}", r.eps))
+                .collect(),
+            // Solve times of the ladder are not monotone in ε: no line between the runs.
+            joined: false,
         }],
     )?;
     bf_plot::render(&fig, fig_dir.join("sa_eps"))?;

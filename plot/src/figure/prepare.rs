@@ -1,0 +1,231 @@
+//! Data preparation: styles resolved to colours and dashes, points mapped to plotting
+//! coordinates (log10 on log axes) and split at non-plottable points, inputs validated, and the
+//! default axis ranges.
+
+use super::{Colour, Dash, LineFigure, Scale};
+use crate::PlotError;
+use crate::canvas::Rgb;
+
+/// Qualitative palette (Tableau 10): distinguishable, and dark enough on white.
+pub(super) const PALETTE: [(u8, u8, u8); 10] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+    (188, 189, 34),
+    (23, 190, 207),
+];
+
+/// The palette colour of automatically styled series number `i` (public so tests and callers can
+/// match colours in the output).
+pub fn palette(i: usize) -> (u8, u8, u8) {
+    PALETTE[i % PALETTE.len()]
+}
+
+pub(super) const DASHES: [Dash; 4] = [Dash::Solid, Dash::Dashed, Dash::Dotted, Dash::LongDash];
+
+/// Maps a data value into plotting coordinates (log10 on log axes); `None` if not plottable.
+pub(super) fn tx(v: f64, s: Scale) -> Option<f64> {
+    match s {
+        Scale::Linear => v.is_finite().then_some(v),
+        Scale::Log10 => (v.is_finite() && v > 0.0).then(|| v.log10()),
+    }
+}
+
+pub(super) struct PreparedSeries {
+    pub(super) name: String,
+    pub(super) pieces: Vec<Vec<(f64, f64)>>,
+    /// Labelled points (plotting coordinates) and their text.
+    pub(super) labels: Vec<((f64, f64), String)>,
+    pub(super) joined: bool,
+    pub(super) colour: Rgb,
+    pub(super) dash: Dash,
+    pub(super) width: u32,
+    pub(super) markers: bool,
+    pub(super) in_legend: bool,
+}
+
+pub(super) struct Prepared {
+    pub(super) series: Vec<PreparedSeries>,
+    pub(super) skipped: usize,
+    /// Ranges in plotting coordinates (before the equal-aspect adjustment).
+    pub(super) xr: (f64, f64),
+    pub(super) yr: (f64, f64),
+}
+
+pub(super) fn invalid(fig: &LineFigure, what: &str, detail: String) -> PlotError {
+    PlotError::InvalidInput {
+        figure: fig.title.clone(),
+        what: what.into(),
+        detail,
+    }
+}
+
+pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
+    if fig.series.is_empty() {
+        return Err(PlotError::NoSeries(fig.title.clone()));
+    }
+    let mut out = Vec::with_capacity(fig.series.len());
+    let mut skipped = 0;
+    for (i, s) in fig.series.iter().enumerate() {
+        if s.points.is_empty() {
+            return Err(PlotError::EmptySeries {
+                figure: fig.title.clone(),
+                series: s.name.clone(),
+            });
+        }
+        let mut pieces: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+        let mut bad = 0;
+        for &(x, y) in &s.points {
+            match (tx(x, fig.x_scale), tx(y, fig.y_scale)) {
+                (Some(a), Some(b)) => pieces.last_mut().map_or((), |p| p.push((a, b))),
+                _ => {
+                    bad += 1;
+                    if pieces.last().is_some_and(|p| !p.is_empty()) {
+                        pieces.push(Vec::new());
+                    }
+                }
+            }
+        }
+        pieces.retain(|p| !p.is_empty());
+        if !s.labels.is_empty() && s.labels.len() != s.points.len() {
+            return Err(invalid(
+                fig,
+                "point labels",
+                format!(
+                    "series '{}' has {} labels for {} points",
+                    s.name,
+                    s.labels.len(),
+                    s.points.len()
+                ),
+            ));
+        }
+        let labels: Vec<((f64, f64), String)> = s
+            .labels
+            .iter()
+            .zip(&s.points)
+            .filter(|(l, _)| !l.is_empty())
+            .filter_map(|(l, &(x, y))| {
+                Some(((tx(x, fig.x_scale)?, tx(y, fig.y_scale)?), l.clone()))
+            })
+            .collect();
+        if pieces.is_empty() {
+            return Err(PlotError::NoFinitePoints {
+                figure: fig.title.clone(),
+                series: s.name.clone(),
+                skipped: bad,
+            });
+        }
+        skipped += bad;
+        let (r, g, b) = match s.style.colour {
+            Colour::Auto => palette(i),
+            Colour::Rgb(r, g, b) => (r, g, b),
+        };
+        let dash = match s.style.dash {
+            Dash::Auto => DASHES[i % DASHES.len()],
+            d => d,
+        };
+        out.push(PreparedSeries {
+            name: s.name.clone(),
+            pieces,
+            colour: (r, g, b),
+            labels,
+            joined: s.joined,
+            dash,
+            width: s.style.width.max(1),
+            markers: s.style.markers,
+            in_legend: s.style.in_legend && !s.name.is_empty(),
+        });
+    }
+    let pts = || out.iter().flat_map(|s| s.pieces.iter().flatten());
+    let fold = |f: fn(&(f64, f64)) -> f64| {
+        pts()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+                (lo.min(v), hi.max(v))
+            })
+    };
+    let check =
+        |r: Option<(f64, f64)>, s: Scale, what: &str| -> Result<Option<(f64, f64)>, PlotError> {
+            match r {
+                None => Ok(None),
+                Some((a, b)) => match (tx(a, s), tx(b, s)) {
+                    (Some(a2), Some(b2)) if a2 < b2 => Ok(Some((a2, b2))),
+                    _ => Err(invalid(
+                        fig,
+                        what,
+                        format!("({a}, {b}) is not an increasing finite range"),
+                    )),
+                },
+            }
+        };
+    let xr_fixed = check(fig.x_range, fig.x_scale, "x_range")?;
+    let yr_fixed = check(fig.y_range, fig.y_scale, "y_range")?;
+    for &(t, ref l) in &fig.vertical_markers {
+        if !t.is_finite() {
+            return Err(invalid(fig, "vertical marker", format!("'{l}' at {t}")));
+        }
+    }
+    for h in &fig.hlines {
+        if tx(h.y, fig.y_scale).is_none() {
+            return Err(invalid(
+                fig,
+                "horizontal line",
+                format!("'{}' at {}", h.label, h.y),
+            ));
+        }
+    }
+    for b in &fig.bands {
+        if !(b.x0.is_finite() && b.x1.is_finite() && b.x0 <= b.x1) {
+            return Err(invalid(
+                fig,
+                "band",
+                format!("'{}' [{}, {}]", b.label, b.x0, b.x1),
+            ));
+        }
+    }
+    // Time axes end exactly at the data; geometric (equal-aspect) views get the same 5 % margin
+    // on both axes so points on the extremes are not drawn on top of the frame.
+    // Marker-only and marked series get a small x margin too, so their end markers and labels
+    // are not cut by the frame.
+    let marked = out.iter().any(|s| s.markers || !s.joined);
+    let x_pad = if fig.equal_aspect {
+        0.05
+    } else if marked {
+        0.04
+    } else {
+        0.0
+    };
+    let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), x_pad));
+    let yr = yr_fixed.unwrap_or_else(|| {
+        let (mut lo, mut hi) = fold(|p| p.1);
+        for h in fig.hlines.iter().filter(|h| h.fit) {
+            if let Some(y) = tx(h.y, fig.y_scale) {
+                lo = lo.min(y);
+                hi = hi.max(y);
+            }
+        }
+        widen((lo, hi), 0.05)
+    });
+    Ok(Prepared {
+        series: out,
+        skipped,
+        xr,
+        yr,
+    })
+}
+
+/// Pads a range by `frac` of its span and makes degenerate ranges non-empty.
+pub(super) fn widen((lo, hi): (f64, f64), frac: f64) -> (f64, f64) {
+    let span = hi - lo;
+    if span > 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        (lo - frac * span, hi + frac * span)
+    } else {
+        let d = if lo.abs() > 0.0 { 0.1 * lo.abs() } else { 1.0 };
+        (lo - d, hi + d)
+    }
+}
