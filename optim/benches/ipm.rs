@@ -2,7 +2,7 @@
 //! whole solves timed by criterion, plus a per-iteration breakdown (function evaluations,
 //! derivative evaluations, KKT assembly, factorization, solves, line search) printed once from
 //! the solver's own `Timing`; and the `periodic-qc` KKT (hp-Radau 3 × 10 and LG 30) factored
-//! and solved by each `FaerLdlt` variant (block kernel, prepared simplicial, faer supernodal),
+//! and solved by the `SparseLdlt` backends (supernodal, simplicial, faer supernodal),
 //! compared by thread CPU time round-robin and by criterion (`kkt_periodic_qc_*`).
 //!
 //! Quick run: `cargo bench -p bf-optim --bench ipm -- --warm-up-time 1 --measurement-time 5`
@@ -16,7 +16,9 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use bf_optim::ipm::kkt::KktPattern;
-use bf_optim::ipm::{FaerLdlt, KktSolver, Nlp, Settings, Solution, Workspace, solve, solve_in};
+use bf_optim::ipm::{
+    KktSolver, LdltBackend, Nlp, Settings, Solution, SparseLdlt, Workspace, solve, solve_in,
+};
 use bf_optim::ocp::Scheme;
 use bf_optim::problems::{ProblemSettings, build};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -125,13 +127,12 @@ fn thread_cpu_seconds() -> f64 {
         })
 }
 
-/// Factorization variants of `FaerLdlt` on one KKT pattern: `(label, supernodal, block kernel)`
-/// (`simplicial` = the prepared faer-identical up-looking path; `faer_auto` = faer's own choice,
-/// supernodal for LG).
-const VARIANTS: [(&str, Option<bool>, Option<bool>); 3] = [
-    ("block", None, Some(true)),
-    ("simplicial", Some(false), Some(false)),
-    ("faer_supernodal", Some(true), Some(false)),
+/// Backends of `SparseLdlt` compared on one KKT pattern: `(label, backend)` (`block` = the
+/// supernodal kernel, `simplicial` = the prepared faer-identical up-looking path).
+const VARIANTS: [(&str, LdltBackend); 3] = [
+    ("block", LdltBackend::Supernodal),
+    ("simplicial", LdltBackend::Simplicial),
+    ("faer_supernodal", LdltBackend::FaerSupernodal),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
@@ -148,12 +149,10 @@ fn bench_kkt(c: &mut Criterion) {
         let Some((pat, dim)) = kkt_of("periodic-qc", &settings) else {
             continue;
         };
-        let mut solvers: Vec<FaerLdlt> = VARIANTS
+        let mut solvers: Vec<SparseLdlt> = VARIANTS
             .iter()
-            .map(|&(_, sup, block)| {
-                let mut s = FaerLdlt::new();
-                s.supernodal = sup;
-                s.block_kernel = block;
+            .map(|&(_, backend)| {
+                let mut s = SparseLdlt::with_backend(backend);
                 s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
                     .expect("analyse");
                 s

@@ -16,7 +16,7 @@
 //! optimality error (eq. (5)).
 //!
 //! Modules: [`nlp`] (problem trait, derivative checker), [`settings`], [`solution`],
-//! [`kkt`] (KKT assembly and the faer LDLᵀ [`KktSolver`]), `stdform` (user problem → standard
+//! [`kkt`] (KKT assembly and its sparse LDLᵀ [`KktSolver`]), `stdform` (user problem → standard
 //! form), `core` (the algorithm), `restoration` (feasibility restoration problem), and with the
 //! `ipopt` feature [`ipopt_adapter`].
 //!
@@ -41,9 +41,9 @@ pub mod ipopt_adapter;
 
 use std::time::Instant;
 
-pub use kkt::{FaerLdlt, Inertia, KktSolver};
+pub use kkt::{Inertia, KktSolver, LdltBackend, SparseLdlt};
 pub use nlp::{BOUND_INF, DerivativeReport, Nlp, NlpScaling, check_derivatives};
-pub use settings::{MuStrategy, ScalingMethod, Settings};
+pub use settings::{KktOrdering, MuStrategy, ScalingMethod, Settings};
 pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};
 
 use self::core::{Core, CoreStart, Ctx};
@@ -61,7 +61,7 @@ pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError>
 /// starts); a different pattern is detected and re-analysed automatically.
 #[derive(Debug, Default)]
 pub struct Workspace {
-    kkt: Option<FaerLdlt>,
+    kkt: Option<SparseLdlt>,
 }
 
 impl Workspace {

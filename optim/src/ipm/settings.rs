@@ -31,6 +31,17 @@ pub enum ScalingMethod {
     User,
 }
 
+/// Elimination order of the KKT matrix's LDLᵀ factorization.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum KktOrdering {
+    /// Approximate minimum degree (faer's AMD) alone.
+    #[default]
+    Amd,
+    /// AMD, then each constraint row moved after the first of its primal variables, so that no
+    /// constraint row is eliminated with the bare pivot −δ_c (see [`crate::ipm::kkt`]).
+    ConstraintsAfterVariables,
+}
+
 /// Settings of the interior-point solver. All fields are public; [`Settings::validate`] checks ranges.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -110,6 +121,8 @@ pub struct Settings {
     /// Static −δ_c always on the constraint block so that the unpivoted LDLᵀ never meets an exact
     /// zero dual pivot; the step is refined against the unregularized matrix (default: 1e-9).
     pub static_dual_regularization: f64,
+    /// Elimination order of the KKT factorization (default: AMD).
+    pub kkt_ordering: KktOrdering,
     /// Maximum iterative-refinement steps per solve (default: 3).
     pub max_refinement_steps: usize,
     /// Relative residual at which refinement stops (default: 1e-10).
@@ -193,6 +206,7 @@ impl Default for Settings {
             jacobian_regularization_value: 1e-8,
             jacobian_regularization_exponent: 0.25,
             static_dual_regularization: 1e-9,
+            kkt_ordering: KktOrdering::Amd,
             max_refinement_steps: 3,
             refinement_tol: 1e-10,
             gamma_theta: 1e-5,
