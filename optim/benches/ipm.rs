@@ -88,8 +88,8 @@ fn bench_ipm(c: &mut Criterion) {
 }
 
 /// The KKT matrix of a paper problem at the initial guess with unit multipliers and a barrier
-/// diagonal of 1, as `(pattern with values, dim)`.
-fn kkt_of(name: &str, settings: &ProblemSettings) -> Option<(KktPattern, usize)> {
+/// diagonal of 1, as `(pattern with values, dim, bounded variables)`.
+fn kkt_of(name: &str, settings: &ProblemSettings) -> Option<(KktPattern, usize, Vec<bool>)> {
     let problem = match build(name, settings) {
         Ok(p) => p,
         Err(e) => {
@@ -109,7 +109,12 @@ fn kkt_of(name: &str, settings: &ProblemSettings) -> Option<(KktPattern, usize)>
     nlp.hessian_values(&x, 1.0, &vec![1.0; m], &mut hv);
     let mut pat = KktPattern::new(n, m, &hp, &jp);
     pat.assemble(&hv, &jv, &vec![1.0; n], -1e-8);
-    Some((pat, n + m))
+    let (mut xl, mut xu) = (vec![0.0; n], vec![0.0; n]);
+    nlp.variable_bounds(&mut xl, &mut xu);
+    let bounded = (0..n)
+        .map(|j| xl[j] > -bf_optim::ipm::BOUND_INF || xu[j] < bf_optim::ipm::BOUND_INF)
+        .collect();
+    Some((pat, n + m, bounded))
 }
 
 /// CPU time of the calling thread in seconds (Linux `schedstat`; wall clock elsewhere).
@@ -127,18 +132,22 @@ fn thread_cpu_seconds() -> f64 {
         })
 }
 
-/// Backends of `SparseLdlt` compared on one KKT pattern: `(label, backend)` (`block` = the
-/// supernodal kernel, `simplicial` = the prepared faer-identical up-looking path).
-const VARIANTS: [(&str, LdltBackend); 3] = [
-    ("block", LdltBackend::Supernodal),
-    ("simplicial", LdltBackend::Simplicial),
-    ("faer_supernodal", LdltBackend::FaerSupernodal),
+/// Backends and orderings of `SparseLdlt` compared on one KKT pattern: `(label, backend,
+/// constraint-aware order)` (`block` = the supernodal kernel, `simplicial` = the prepared
+/// faer-identical up-looking path, `auto` = the default choice; `_amd` = plain AMD, `_cav` =
+/// constraint rows after their first primal variable).
+const VARIANTS: [(&str, LdltBackend, bool); 5] = [
+    ("auto_amd", LdltBackend::Auto, false),
+    ("auto_cav", LdltBackend::Auto, true),
+    ("block", LdltBackend::Supernodal, false),
+    ("simplicial", LdltBackend::Simplicial, false),
+    ("faer_supernodal", LdltBackend::FaerSupernodal, false),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
 /// fill of L and flops per variant, then all variants factored and solved round-robin (each
-/// round runs every variant once, so that the load of a shared machine hits all alike; min and
-/// median printed), then criterion on the default variant and the simplicial one.
+/// round runs every variant once, so that the load of a shared machine hits all alike; the
+/// minimum printed), then criterion on the default backend with both orderings.
 fn bench_kkt(c: &mut Criterion) {
     let lg = ProblemSettings {
         scheme: Scheme::Lg,
@@ -146,13 +155,15 @@ fn bench_kkt(c: &mut Criterion) {
         ..ProblemSettings::default()
     };
     for (label, settings) in [("radau3x10", ProblemSettings::default()), ("lg30", lg)] {
-        let Some((pat, dim)) = kkt_of("periodic-qc", &settings) else {
+        let Some((pat, dim, bounded)) = kkt_of("periodic-qc", &settings) else {
             continue;
         };
         let mut solvers: Vec<SparseLdlt> = VARIANTS
             .iter()
-            .map(|&(_, backend)| {
+            .map(|&(_, backend, cav)| {
                 let mut s = SparseLdlt::with_backend(backend);
+                s.constraint_rows_from = cav.then_some(pat.n);
+                s.preferred_primal = bounded.clone();
                 s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
                     .expect("analyse");
                 s
@@ -195,7 +206,7 @@ fn bench_kkt(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("kkt_periodic_qc_{label}"));
         g.sample_size(20);
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
-            if v.0 != "block" && v.0 != "simplicial" {
+            if !v.0.starts_with("auto") {
                 continue;
             }
             g.bench_function(format!("factor_{}", v.0), |b| {

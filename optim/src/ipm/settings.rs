@@ -37,8 +37,9 @@ pub enum KktOrdering {
     /// Approximate minimum degree (faer's AMD) alone.
     #[default]
     Amd,
-    /// AMD, then each constraint row moved after the first of its primal variables, so that no
-    /// constraint row is eliminated with the bare pivot −δ_c (see [`crate::ipm::kkt`]).
+    /// AMD on the graph of (variable, constraint row) pairs, each row eliminated right after a
+    /// primal variable of its own (bounded ones preferred), so that no constraint row is
+    /// eliminated with the bare pivot −δ_c (see [`crate::ipm::kkt`]). More fill than AMD.
     ConstraintsAfterVariables,
 }
 

@@ -363,6 +363,11 @@ impl<'p> Core<'p> {
                 KktOrdering::Amd => None,
                 KktOrdering::ConstraintsAfterVariables => Some(self.n),
             };
+            let mut bounded = vec![false; self.n];
+            for &j in self.lo.iter().chain(&self.up) {
+                bounded[j] = true;
+            }
+            self.solver.preferred_primal = bounded;
             self.solver.analyse(
                 self.n + self.m,
                 &self.kkt.mat.col_ptr,

@@ -18,7 +18,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
 use super::Inertia;
-use super::ordering::delay_constraint_rows;
+use super::ordering::paired_amd;
 use crate::error::OptimError;
 
 /// faer's symbolic analysis of one lower-triangle pattern, its value storage for `L` (faer's
@@ -29,8 +29,9 @@ pub(super) struct FaerFactor {
     mem: MemBuffer,
     pub(super) col_ptr: Vec<usize>,
     pub(super) row_idx: Vec<usize>,
-    /// The `constraint_rows_from` of the analysis.
+    /// The `constraint_rows_from` and `preferred_primal` of the analysis.
     pub(super) constraint_rows_from: Option<usize>,
+    pub(super) preferred: Vec<bool>,
 }
 
 impl FaerFactor {
@@ -43,6 +44,7 @@ impl FaerFactor {
         row_idx: &[usize],
         threshold: SupernodalThreshold,
         constraint_rows_from: Option<usize>,
+        preferred: &[bool],
     ) -> Result<Self, OptimError> {
         let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, col_ptr, None, row_idx);
         let symbolic_with = |ordering| {
@@ -57,20 +59,22 @@ impl FaerFactor {
             )
             .map_err(|e| OptimError::Factorization(format!("symbolic analysis failed: {e:?}")))
         };
-        let mut symbolic = symbolic_with(SymmetricOrdering::Amd)?;
-        if let Some(n) = constraint_rows_from
-            && let Some(perm) = symbolic.perm()
-        {
-            let fwd = delay_constraint_rows(perm.arrays().0, n, col_ptr, row_idx);
-            if fwd != perm.arrays().0 {
+        let custom = match constraint_rows_from {
+            Some(n) => paired_amd(n, col_ptr, row_idx, preferred),
+            None => None,
+        };
+        let symbolic = match custom {
+            Some(fwd) => {
                 let mut inv = vec![0usize; dim];
                 for (k, &v) in fwd.iter().enumerate() {
                     inv[v] = k;
                 }
-                let custom = PermRef::new_checked(&fwd, &inv, dim);
-                symbolic = symbolic_with(SymmetricOrdering::Custom(custom))?;
+                symbolic_with(SymmetricOrdering::Custom(PermRef::new_checked(
+                    &fwd, &inv, dim,
+                )))?
             }
-        }
+            None => symbolic_with(SymmetricOrdering::Amd)?,
+        };
         let params: Spec<LdltParams, f64> = Default::default();
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, params),
@@ -85,6 +89,7 @@ impl FaerFactor {
             col_ptr: col_ptr.to_vec(),
             row_idx: row_idx.to_vec(),
             constraint_rows_from,
+            preferred: preferred.to_vec(),
         })
     }
 

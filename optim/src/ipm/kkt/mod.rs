@@ -21,8 +21,9 @@
 //!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
 //!     simplicial structure (dense element blocks of Legendre–Gauss KKTs);
 //!   * `faer`: faer's own numeric factorization and solve (reference and fallback).
-//! * `ordering`: the elimination order, AMD optionally post-processed so that no constraint
-//!   row is eliminated before all of its primal neighbours.
+//! * `ordering`: the elimination order: AMD, or (with `constraint_rows_from`) AMD on the graph
+//!   of (variable, constraint row) pairs so that no constraint row is eliminated with the bare
+//!   pivot `−δ_c`.
 
 mod faer;
 mod ordering;
@@ -151,10 +152,12 @@ pub struct SparseLdlt {
     /// Replacement magnitude for tiny pivots (see `pivot_epsilon`).
     pub pivot_delta: f64,
     /// Index of the first constraint row of the KKT matrix (the primal dimension n). When set,
-    /// the AMD order is post-processed so that no constraint row is eliminated before all of
-    /// its primal neighbours (module docs); `None`: plain AMD. Takes effect at
-    /// the next analysis of a new pattern.
+    /// the order pairs each constraint row with a primal neighbour eliminated just before it
+    /// (module docs); `None`: plain AMD. Takes effect at the next analysis of a new pattern.
     pub constraint_rows_from: Option<usize>,
+    /// Primal variables preferred as the variable a constraint row follows (e.g. those with a
+    /// bound, whose pivot carries the barrier term Σ > 0); empty: none preferred.
+    pub preferred_primal: Vec<bool>,
     faer: Option<FaerFactor>,
     kernel: Kernel,
     factored: bool,
@@ -194,6 +197,7 @@ impl SparseLdlt {
             pivot_epsilon: 1e-14,
             pivot_delta: 1e-4,
             constraint_rows_from: None,
+            preferred_primal: Vec::new(),
             faer: None,
             kernel: Kernel::Faer,
             factored: false,
@@ -232,12 +236,15 @@ impl KktSolver for SparseLdlt {
             && a.col_ptr == col_ptr
             && a.row_idx == row_idx
             && a.constraint_rows_from == self.constraint_rows_from
+            && a.preferred == self.preferred_primal
         {
             self.factored = false;
             return Ok(());
         }
         let rows_from = self.constraint_rows_from;
-        let analyse = |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, rows_from);
+        let preferred = &self.preferred_primal;
+        let analyse =
+            |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, rows_from, preferred);
         let mut faer = analyse(match self.backend {
             LdltBackend::Auto => SupernodalThreshold::AUTO,
             LdltBackend::FaerSupernodal => SupernodalThreshold::FORCE_SUPERNODAL,
