@@ -158,6 +158,7 @@ pub struct Settings {
     /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this (default: 1e20).
     pub diverging_iterates_tol: f64,
     /// Stop with `Unbounded` if the unscaled objective drops below −this at a feasible iterate
+    /// while a variable with a free or one-sided bound reaches a new largest magnitude
     /// (default: 1e15; the collocation objectives of this project are O(1)–O(1e4)).
     pub unbounded_objective: f64,
     /// Scaling cap s_max of the optimality error (default: 100).

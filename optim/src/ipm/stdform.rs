@@ -46,6 +46,11 @@ pub(crate) trait StdProblem {
     fn scales(&self) -> (f64, Option<&[f64]>) {
         (1.0, None)
     }
+    /// Number of leading variables that are the problem's own (the rest are slacks of
+    /// inequality rows, bounded whenever those are).
+    fn n_own(&self) -> usize {
+        self.n()
+    }
 }
 
 /// User NLP → standard form (see module docs).
@@ -420,5 +425,8 @@ impl StdProblem for Reformulated<'_> {
     }
     fn scales(&self) -> (f64, Option<&[f64]>) {
         (self.obj_scale, Some(&self.con_scale))
+    }
+    fn n_own(&self) -> usize {
+        self.free.len()
     }
 }

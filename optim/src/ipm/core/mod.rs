@@ -66,6 +66,9 @@ pub(crate) struct CoreOutput {
     pub z_u: Vec<f64>,
     pub mu: f64,
     pub early_stopped: bool,
+    /// Unscaled complementarity `max |s z|` against the relaxed bounds (slacks included), as
+    /// the `Solved` test measures it.
+    pub complementarity: f64,
 }
 
 fn norm_inf(v: &[f64]) -> f64 {
@@ -135,6 +138,9 @@ pub(crate) struct Core<'p> {
     theta_min: f64,
     restoration: bool,
     kappa_d: f64,
+    /// Largest |x_j| over the variables without a finite lower or upper bound, over all
+    /// iterates so far (the unboundedness test).
+    unboxed_max: std::cell::Cell<f64>,
 }
 
 impl<'p> Core<'p> {
@@ -215,6 +221,7 @@ impl<'p> Core<'p> {
             theta_min: 0.0,
             restoration: start.restoration,
             kappa_d: settings.kappa_d,
+            unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
             prob,
             xl,
             xu,
@@ -333,7 +340,15 @@ impl<'p> Core<'p> {
         for (k, &j) in self.up.iter().enumerate() {
             zu[j] = self.zu[k];
         }
+        let (os, _) = self.prob.scales();
+        let compl0 = self
+            .sl
+            .iter()
+            .zip(&self.zl)
+            .chain(self.su.iter().zip(&self.zu))
+            .fold(0.0f64, |a, (s, z)| a.max((s * z).abs()));
         CoreOutput {
+            complementarity: compl0 / os,
             status,
             x: self.x.clone(),
             y: self.y.clone(),

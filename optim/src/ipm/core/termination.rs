@@ -6,8 +6,10 @@
 //! * the unscaled dual infeasibility, constraint violation and complementarity (objective and
 //!   constraint scaling undone) that `Solved` also requires, as Ipopt's `dual_inf_tol`,
 //!   `constr_viol_tol` and `compl_inf_tol`;
-//! * the "acceptable" level (W&B Sect. 3.9) and the stops for unboundedness, diverging
-//!   iterates, the iteration limit and the wall-clock limit.
+//! * the "acceptable" level (W&B Sect. 3.9) and the stops for unboundedness (a very negative
+//!   objective at a feasible point while a variable with a free or one-sided bound grows; never
+//!   for an all-boxed problem), diverging iterates, the iteration limit and the wall-clock
+//!   limit.
 
 use super::{Core, Ctx, norm_1, norm_inf};
 use crate::ipm::settings::Settings;
@@ -150,7 +152,18 @@ impl Core<'_> {
         } else {
             *acceptable_count = 0;
         }
+        // Only a variable of the problem (not an inequality slack, bounded when the variables
+        // are) with a free or one-sided bound can run away: the largest of them must exceed
+        // its largest value at every earlier iterate.
+        let unboxed = (0..self.prob.n_own())
+            .filter(|&j| !(self.xl[j].is_finite() && self.xu[j].is_finite()))
+            .map(|j| self.x[j].abs())
+            .fold(f64::NEG_INFINITY, f64::max);
+        let prev = self.unboxed_max.get();
+        let growing = unboxed.is_finite() && prev.is_finite() && unboxed > prev;
+        self.unboxed_max.set(prev.max(unboxed));
         if !self.restoration
+            && growing
             && pr_u <= settings.constr_viol_tol
             && self.f / os < -settings.unbounded_objective
         {
