@@ -24,7 +24,8 @@ pub enum ScalingMethod {
     /// No scaling.
     None,
     /// Ipopt's gradient-based scaling: each function is scaled so that its gradient at the
-    /// initial point has ∞-norm ≤ `scaling_max_gradient` (factors never exceed 1).
+    /// initial point has ∞-norm ≤ `scaling_max_gradient` (factors never exceed 1; constraint
+    /// factors are at least 1e-8, the objective factor has no lower limit).
     #[default]
     GradientBased,
     /// Use [`Nlp::scaling`](crate::ipm::Nlp::scaling) (falls back to none if it returns `None`).
@@ -69,7 +70,9 @@ pub struct Settings {
     pub mu_strategy: MuStrategy,
     /// Initial barrier parameter (default: 0.1).
     pub mu_init: f64,
-    /// Smallest barrier parameter (default: 1e-11; the monotone rule also stops at tol/10).
+    /// Smallest barrier parameter, multiplied by the objective scaling factor when that is
+    /// below 1 (default: 1e-11). The μ floor of a run is the larger of it and
+    /// `min(tol, σ_f · compl_inf_tol) / (barrier_tol_factor + 1)`.
     pub mu_min: f64,
     /// Linear decrease factor κ_μ (default: 0.2).
     pub mu_linear_decrease: f64,

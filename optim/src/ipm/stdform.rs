@@ -226,7 +226,9 @@ impl<'a> Reformulated<'a> {
                 nlp.gradient(&xs, &mut grad);
                 let gn = grad.iter().fold(0.0f64, |a, v| a.max(v.abs()));
                 if gn.is_finite() && gn > gmax {
-                    obj_scale = (gmax / gn).max(1e-8);
+                    // No floor: the objective is brought to the gradient target however
+                    // large it is, so that its scale does not change the iterates.
+                    obj_scale = gmax / gn;
                 }
                 let mut jv = vec![0.0; user_jac_pat.len()];
                 nlp.jacobian_values(&xs, &mut jv);

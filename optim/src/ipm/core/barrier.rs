@@ -14,7 +14,7 @@ use crate::ipm::settings::{MuStrategy, Settings};
 
 /// State of the barrier-parameter update across iterations of one run.
 pub(super) struct MuRule {
-    /// Smallest μ of this run: `max(mu_min, tol / (κ_ε + 1))`, and no larger than the initial μ.
+    /// Smallest μ of this run (see [`MuRule::new`]), no larger than the initial μ.
     pub(super) floor: f64,
     /// Adaptive μ in its free mode (LOQO rule each iteration).
     pub(super) free_mode: bool,
@@ -26,12 +26,16 @@ pub(super) struct MuRule {
 }
 
 impl MuRule {
-    /// The rule at the start of a run with initial barrier parameter `mu`.
-    pub(super) fn new(settings: &Settings, mu: f64) -> Self {
+    /// The rule at the start of a run with initial barrier parameter `mu` on a problem whose
+    /// objective is scaled by `obj_scale`. The floor comes from the tolerances in scaled
+    /// units: `tol`, and `compl_inf_tol` on the unscaled complementarity, which is
+    /// `obj_scale · compl_inf_tol` in scaled units (so a strongly down-scaled objective can
+    /// still meet it); `mu_min` scales with the objective below 1.
+    pub(super) fn new(settings: &Settings, mu: f64, obj_scale: f64) -> Self {
+        let scaled_tol = settings.tol.min(settings.compl_inf_tol * obj_scale);
         Self {
-            floor: settings
-                .mu_min
-                .max(settings.tol / (settings.barrier_tol_factor + 1.0))
+            floor: (settings.mu_min * obj_scale.min(1.0))
+                .max(scaled_tol / (settings.barrier_tol_factor + 1.0))
                 .min(mu),
             free_mode: settings.mu_strategy == MuStrategy::Adaptive,
             refs: Vec::new(),

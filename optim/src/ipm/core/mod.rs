@@ -426,7 +426,7 @@ impl<'p> Core<'p> {
         let theta0 = norm_1(&self.c);
         self.theta_max = 1e4 * theta0.max(1.0);
         self.theta_min = 1e-4 * theta0.max(1.0);
-        let mut mu_rule = MuRule::new(settings, self.mu);
+        let mut mu_rule = MuRule::new(settings, self.mu, self.prob.scales().0);
         let mut acceptable_count = 0usize;
         let mut last = IterationInfo {
             iter: ctx.iter,
