@@ -2,7 +2,7 @@
 //! whole solves timed by criterion, plus a per-iteration breakdown (function evaluations,
 //! derivative evaluations, KKT assembly, factorization, solves, line search) printed once from
 //! the solver's own `Timing`; and the `periodic-qc` KKT (hp-Radau 3 × 10 and LG 30) factored
-//! and solved by each `FaerLdlt` variant (block kernel, prepared simplicial, faer supernodal),
+//! and solved by the `SparseLdlt` backends (supernodal, simplicial, faer supernodal),
 //! compared by thread CPU time round-robin and by criterion (`kkt_periodic_qc_*`).
 //!
 //! Quick run: `cargo bench --bench ipm -- --warm-up-time 1 --measurement-time 5`
@@ -17,7 +17,9 @@ use std::time::Duration;
 
 use ball_finger::study::build;
 use bf_optim::ipm::kkt::KktPattern;
-use bf_optim::ipm::{FaerLdlt, KktSolver, Nlp, Settings, Solution, Workspace, solve, solve_in};
+use bf_optim::ipm::{
+    KktSolver, LdltBackend, Nlp, Settings, Solution, SparseLdlt, Workspace, solve, solve_in,
+};
 use bf_optim::ocp::Scheme;
 use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -87,8 +89,8 @@ fn bench_ipm(c: &mut Criterion) {
 }
 
 /// The KKT matrix of a paper problem at the initial guess with unit multipliers and a barrier
-/// diagonal of 1, as `(pattern with values, dim)`.
-fn kkt_of(name: Problem, settings: &ProblemSettings) -> Option<(KktPattern, usize)> {
+/// diagonal of 1, as `(pattern with values, dim, bounded variables)`.
+fn kkt_of(name: Problem, settings: &ProblemSettings) -> Option<(KktPattern, usize, Vec<bool>)> {
     let problem = match build(name, settings) {
         Ok(p) => p,
         Err(e) => {
@@ -108,7 +110,12 @@ fn kkt_of(name: Problem, settings: &ProblemSettings) -> Option<(KktPattern, usiz
     nlp.hessian_values(&x, 1.0, &vec![1.0; m], &mut hv);
     let mut pat = KktPattern::new(n, m, &hp, &jp);
     pat.assemble(&hv, &jv, &vec![1.0; n], -1e-8);
-    Some((pat, n + m))
+    let (mut xl, mut xu) = (vec![0.0; n], vec![0.0; n]);
+    nlp.variable_bounds(&mut xl, &mut xu);
+    let bounded = (0..n)
+        .map(|j| xl[j] > -bf_optim::ipm::BOUND_INF || xu[j] < bf_optim::ipm::BOUND_INF)
+        .collect();
+    Some((pat, n + m, bounded))
 }
 
 /// CPU time of the calling thread in seconds (Linux `schedstat`; wall clock elsewhere).
@@ -126,19 +133,22 @@ fn thread_cpu_seconds() -> f64 {
         })
 }
 
-/// Factorization variants of `FaerLdlt` on one KKT pattern: `(label, supernodal, block kernel)`
-/// (`simplicial` = the prepared faer-identical up-looking path; `faer_auto` = faer's own choice,
-/// supernodal for LG).
-const VARIANTS: [(&str, Option<bool>, Option<bool>); 3] = [
-    ("block", None, Some(true)),
-    ("simplicial", Some(false), Some(false)),
-    ("faer_supernodal", Some(true), Some(false)),
+/// Backends and orderings of `SparseLdlt` compared on one KKT pattern: `(label, backend,
+/// constraint-aware order)` (`block` = the supernodal kernel, `simplicial` = the prepared
+/// faer-identical up-looking path, `auto` = the default choice; `_amd` = plain AMD, `_cav` =
+/// constraint rows after their first primal variable).
+const VARIANTS: [(&str, LdltBackend, bool); 5] = [
+    ("auto_amd", LdltBackend::Auto, false),
+    ("auto_cav", LdltBackend::Auto, true),
+    ("block", LdltBackend::Supernodal, false),
+    ("simplicial", LdltBackend::Simplicial, false),
+    ("faer_supernodal", LdltBackend::FaerSupernodal, false),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
 /// fill of L and flops per variant, then all variants factored and solved round-robin (each
-/// round runs every variant once, so that the load of a shared machine hits all alike; min and
-/// median printed), then criterion on the default variant and the simplicial one.
+/// round runs every variant once, so that the load of a shared machine hits all alike; the
+/// minimum printed), then criterion on the default backend with both orderings.
 fn bench_kkt(c: &mut Criterion) {
     let lg = ProblemSettings {
         scheme: Scheme::Lg,
@@ -146,15 +156,15 @@ fn bench_kkt(c: &mut Criterion) {
         ..ProblemSettings::default()
     };
     for (label, settings) in [("radau3x10", ProblemSettings::default()), ("lg30", lg)] {
-        let Some((pat, dim)) = kkt_of(Problem::PeriodicQc, &settings) else {
+        let Some((pat, dim, bounded)) = kkt_of(Problem::PeriodicQc, &settings) else {
             continue;
         };
-        let mut solvers: Vec<FaerLdlt> = VARIANTS
+        let mut solvers: Vec<SparseLdlt> = VARIANTS
             .iter()
-            .map(|&(_, sup, block)| {
-                let mut s = FaerLdlt::new();
-                s.supernodal = sup;
-                s.block_kernel = block;
+            .map(|&(_, backend, cav)| {
+                let mut s = SparseLdlt::with_backend(backend);
+                s.constraint_rows_from = cav.then_some(pat.n);
+                s.preferred_primal = bounded.clone();
                 s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
                     .expect("analyse");
                 s
@@ -197,7 +207,7 @@ fn bench_kkt(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("kkt_periodic_qc_{label}"));
         g.sample_size(20);
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
-            if v.0 != "block" && v.0 != "simplicial" {
+            if !v.0.starts_with("auto") {
                 continue;
             }
             g.bench_function(format!("factor_{}", v.0), |b| {

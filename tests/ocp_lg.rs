@@ -16,6 +16,8 @@
 //! * `periodic-cot` and `periodic-cot-human` with LG-30 converge from the default guess (with
 //!   the differential Gauss defects both ended at MaxIterations), with small KKT residuals,
 //!   rotating the ball the desired way, within 10 % of the Radau 3 × 10 objective.
+//! * an LG-30 optimum re-loaded without its NLP vector is interpolated onto the same mesh
+//!   exactly (every Gauss node, the last included) and re-solved in a few iterations.
 
 mod common;
 
@@ -380,4 +382,49 @@ fn lg_reach_and_reorient_are_solved() {
             ),
         }
     }
+}
+
+/// An LG-30 optimum re-loaded without its exact NLP vector (`nlp_warm` stripped) is
+/// interpolated onto the same mesh from the element polynomials: the states at every support
+/// point and the controls and algebraic variables at every Gauss node, the last one included.
+/// The interpolated start is the optimum's NLP vector, and the warm solve (which has no
+/// multipliers to start from) ends Solved in a few iterations at the same objective.
+#[test]
+fn lg_warm_start_without_the_nlp_vector_restarts_at_the_optimum() {
+    let (_, sol) = solve_named("periodic-qc", Scheme::Lg, 30);
+    assert_eq!(sol.status, Status::Solved, "{:?}", sol.stages);
+    let mut stripped = sol.clone();
+    stripped.nlp_warm = None;
+    let s = ProblemSettings {
+        points: 30,
+        scheme: Scheme::Lg,
+        max_iter: 600,
+        warm_start: Some(stripped),
+        ..ProblemSettings::default()
+    };
+    let p = build(Problem::PeriodicQc, &s).unwrap();
+    let exact = &sol.nlp_warm.as_ref().unwrap().x;
+    let worst = p
+        .nlp
+        .initial()
+        .iter()
+        .zip(exact)
+        .map(|(a, b)| (a - b).abs() / (1.0 + b.abs()))
+        .fold(0.0, f64::max);
+    assert!(worst < 1e-9, "interpolated start off by {worst:e}");
+    let warm = solve(&p, None).unwrap();
+    assert_eq!(warm.status, Status::Solved, "{:?}", warm.stages);
+    assert!(
+        warm.stages[0].0.starts_with("interpolated warm start"),
+        "{:?}",
+        warm.stages
+    );
+    assert!(warm.iterations <= 15, "{:?}", warm.stages);
+    let rel = (warm.objective - sol.objective).abs() / sol.objective.abs();
+    assert!(
+        rel <= 1e-8,
+        "J = {} vs {} (rel {rel:e})",
+        warm.objective,
+        sol.objective
+    );
 }

@@ -16,7 +16,7 @@
 //! optimality error (eq. (5)).
 //!
 //! Modules: [`nlp`] (problem trait, derivative checker), [`settings`], [`solution`],
-//! [`kkt`] (KKT assembly and the faer LDLᵀ [`KktSolver`]), `stdform` (user problem → standard
+//! [`kkt`] (KKT assembly and its sparse LDLᵀ [`KktSolver`]), `stdform` (user problem → standard
 //! form), `core` (the algorithm), `restoration` (feasibility restoration problem), and with the
 //! `ipopt` feature [`ipopt_adapter`].
 //!
@@ -41,9 +41,9 @@ pub mod ipopt_adapter;
 
 use std::time::Instant;
 
-pub use kkt::{FaerLdlt, Inertia, KktSolver};
+pub use kkt::{Inertia, KktSolver, LdltBackend, SparseLdlt};
 pub use nlp::{BOUND_INF, DerivativeReport, Nlp, NlpScaling, check_derivatives};
-pub use settings::{MuStrategy, ScalingMethod, Settings};
+pub use settings::{KktOrdering, MuStrategy, ScalingMethod, Settings};
 pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};
 
 use self::core::{Core, CoreStart, Ctx};
@@ -61,7 +61,7 @@ pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError>
 /// starts); a different pattern is detected and re-analysed automatically.
 #[derive(Debug, Default)]
 pub struct Workspace {
-    kkt: Option<FaerLdlt>,
+    kkt: Option<SparseLdlt>,
 }
 
 impl Workspace {
@@ -240,29 +240,8 @@ pub fn solve_in(
     for i in 0..m {
         viol = viol.max(reform.g_l[i] - g[i]).max(g[i] - reform.g_u[i]);
     }
-    let mut compl = 0.0f64;
-    for j in 0..n {
-        if reform.x_l_user[j].is_finite() {
-            compl = compl.max(((x[j] - reform.x_l_user[j]) * z_l[j]).abs());
-        }
-        if reform.x_u_user[j].is_finite() {
-            compl = compl.max(((reform.x_u_user[j] - x[j]) * z_u[j]).abs());
-        }
-    }
-    for i in 0..m {
-        if reform.slack[i] != usize::MAX {
-            let s = reform.slack[i];
-            let gi = g[i];
-            if reform.g_l[i].is_finite() {
-                compl =
-                    compl.max(((gi - reform.g_l[i]) * out.z_l[s] * reform.con_scale[i] / os).abs());
-            }
-            if reform.g_u[i].is_finite() {
-                compl =
-                    compl.max(((reform.g_u[i] - gi) * out.z_u[s] * reform.con_scale[i] / os).abs());
-            }
-        }
-    }
+    // As the termination test measures it: against the relaxed bounds, in user units.
+    let compl = out.complementarity;
     ctx.timing.total = t_start.elapsed();
     if settings.print_level > 0 {
         println!(

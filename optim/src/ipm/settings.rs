@@ -24,11 +24,24 @@ pub enum ScalingMethod {
     /// No scaling.
     None,
     /// Ipopt's gradient-based scaling: each function is scaled so that its gradient at the
-    /// initial point has ∞-norm ≤ `scaling_max_gradient` (factors never exceed 1).
+    /// initial point has ∞-norm ≤ `scaling_max_gradient` (factors never exceed 1; constraint
+    /// factors are at least 1e-8, the objective factor has no lower limit).
     #[default]
     GradientBased,
     /// Use [`Nlp::scaling`](crate::ipm::Nlp::scaling) (falls back to none if it returns `None`).
     User,
+}
+
+/// Elimination order of the KKT matrix's LDLᵀ factorization.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum KktOrdering {
+    /// Approximate minimum degree (faer's AMD) alone.
+    #[default]
+    Amd,
+    /// AMD on the graph of (variable, constraint row) pairs, each row eliminated right after a
+    /// primal variable of its own (bounded ones preferred), so that no constraint row is
+    /// eliminated with the bare pivot −δ_c (see [`crate::ipm::kkt`]). More fill than AMD.
+    ConstraintsAfterVariables,
 }
 
 /// Settings of the interior-point solver. All fields are public; [`Settings::validate`] checks ranges.
@@ -57,7 +70,9 @@ pub struct Settings {
     pub mu_strategy: MuStrategy,
     /// Initial barrier parameter (default: 0.1).
     pub mu_init: f64,
-    /// Smallest barrier parameter (default: 1e-11; the monotone rule also stops at tol/10).
+    /// Smallest barrier parameter, multiplied by the objective scaling factor when that is
+    /// below 1 (default: 1e-11). The μ floor of a run is the larger of it and
+    /// `min(tol, σ_f · compl_inf_tol) / (barrier_tol_factor + 1)`.
     pub mu_min: f64,
     /// Linear decrease factor κ_μ (default: 0.2).
     pub mu_linear_decrease: f64,
@@ -110,6 +125,8 @@ pub struct Settings {
     /// Static −δ_c always on the constraint block so that the unpivoted LDLᵀ never meets an exact
     /// zero dual pivot; the step is refined against the unregularized matrix (default: 1e-9).
     pub static_dual_regularization: f64,
+    /// Elimination order of the KKT factorization (default: AMD).
+    pub kkt_ordering: KktOrdering,
     /// Maximum iterative-refinement steps per solve (default: 3).
     pub max_refinement_steps: usize,
     /// Relative residual at which refinement stops (default: 1e-10).
@@ -144,6 +161,7 @@ pub struct Settings {
     /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this (default: 1e20).
     pub diverging_iterates_tol: f64,
     /// Stop with `Unbounded` if the unscaled objective drops below −this at a feasible iterate
+    /// while a variable with a free or one-sided bound reaches a new largest magnitude
     /// (default: 1e15; the collocation objectives of this project are O(1)–O(1e4)).
     pub unbounded_objective: f64,
     /// Scaling cap s_max of the optimality error (default: 100).
@@ -193,6 +211,7 @@ impl Default for Settings {
             jacobian_regularization_value: 1e-8,
             jacobian_regularization_exponent: 0.25,
             static_dual_regularization: 1e-9,
+            kkt_ordering: KktOrdering::Amd,
             max_refinement_steps: 3,
             refinement_tol: 1e-10,
             gamma_theta: 1e-5,

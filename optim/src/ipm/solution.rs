@@ -97,7 +97,9 @@ pub struct Solution {
     pub constraint_violation: f64,
     /// ‖∇f + Jᵀλ − z_L + z_U‖_∞, unscaled.
     pub dual_infeasibility: f64,
-    /// Max complementarity |(x − x_L) z_L|, |(x_U − x) z_U| (including constraint slacks), unscaled.
+    /// Max complementarity |(x − x_L) z_L|, |(x_U − x) z_U| (including constraint slacks),
+    /// unscaled, with the bounds relaxed by `bound_relax_factor` as the `Solved` test uses
+    /// them (so a `Solved` run reports at most `compl_inf_tol`).
     pub complementarity: f64,
     /// Final barrier parameter.
     pub mu: f64,

@@ -46,6 +46,11 @@ pub(crate) trait StdProblem {
     fn scales(&self) -> (f64, Option<&[f64]>) {
         (1.0, None)
     }
+    /// Number of leading variables that are the problem's own (the rest are slacks of
+    /// inequality rows, bounded whenever those are).
+    fn n_own(&self) -> usize {
+        self.n()
+    }
 }
 
 /// User NLP → standard form (see module docs).
@@ -221,7 +226,9 @@ impl<'a> Reformulated<'a> {
                 nlp.gradient(&xs, &mut grad);
                 let gn = grad.iter().fold(0.0f64, |a, v| a.max(v.abs()));
                 if gn.is_finite() && gn > gmax {
-                    obj_scale = (gmax / gn).max(1e-8);
+                    // No floor: the objective is brought to the gradient target however
+                    // large it is, so that its scale does not change the iterates.
+                    obj_scale = gmax / gn;
                 }
                 let mut jv = vec![0.0; user_jac_pat.len()];
                 nlp.jacobian_values(&xs, &mut jv);
@@ -420,5 +427,8 @@ impl StdProblem for Reformulated<'_> {
     }
     fn scales(&self) -> (f64, Option<&[f64]>) {
         (self.obj_scale, Some(&self.con_scale))
+    }
+    fn n_own(&self) -> usize {
+        self.free.len()
     }
 }

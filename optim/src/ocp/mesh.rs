@@ -207,18 +207,39 @@ struct ElementView {
     nodes: Vec<usize>,
 }
 
+/// The elements of `tr` with their own nodes. A node belongs to the last element whose state
+/// points contain its state point: a Radau element's last support point is the next element's
+/// first node (hp-Radau) or the phase end (no node), while the support points of a
+/// Legendre–Gauss element are the phase start and all its Gauss nodes, the last of them
+/// included. The element ends at its last support point unless that point is one of its own
+/// nodes (Legendre–Gauss); then it ends at the next state point (the phase end).
 fn element_views(tr: &PhaseTrajectory) -> Vec<ElementView> {
-    tr.elements
+    let elements: Vec<(usize, usize)> = tr
+        .elements
         .iter()
-        .filter(|&&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
-        .map(|&(a, b)| ElementView {
-            ta: tr.state_tau[a],
-            tb: tr.state_tau[b - 1],
-            states: a..b,
-            // The element's last state point is the next element's first node: not its own.
-            nodes: (0..tr.node_tau.len())
-                .filter(|&k| (a..b - 1).contains(&tr.node_state[k]))
-                .collect(),
+        .copied()
+        .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
+        .collect();
+    let owner = |p: usize| elements.iter().rposition(|&(a, b)| (a..b).contains(&p));
+    elements
+        .iter()
+        .enumerate()
+        .map(|(e, &(a, b))| {
+            let nodes: Vec<usize> = (0..tr.node_tau.len())
+                .filter(|&k| owner(tr.node_state[k]) == Some(e))
+                .collect();
+            let last_is_own_node = nodes.iter().any(|&k| tr.node_state[k] == b - 1);
+            let end = if last_is_own_node && b < tr.state_tau.len() {
+                b
+            } else {
+                b - 1
+            };
+            ElementView {
+                ta: tr.state_tau[a],
+                tb: tr.state_tau[end],
+                states: a..b,
+                nodes,
+            }
         })
         .collect()
 }

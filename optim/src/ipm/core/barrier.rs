@@ -1,0 +1,179 @@
+//! Barrier quantities of the primal-dual method (Wächter & Biegler 2006, "W&B"):
+//!
+//! * slacks `s_L = x − x_L`, `s_U = x_U − x` to the (relaxed) bounds;
+//! * the barrier objective `φ_μ(x) = f(x) − μ Σ ln s_L − μ Σ ln s_U + κ_d μ Σ (one-sided
+//!   damping)` (W&B eq. (3), Sect. 3.7) and its gradient `∇φ_μ`;
+//! * `Jᵀy` for the dual residual;
+//! * the barrier-parameter update [`MuRule`]: monotone Fiacco–McCormick (W&B eq. (7):
+//!   `μ ← max(μ_floor, min(κ_μ μ, μ^θ_μ))` once `E_μ ≤ κ_ε μ`) or the adaptive LOQO rule with
+//!   its free/fixed safeguard (Nocedal, Wächter & Waltz 2009).
+
+use super::Core;
+use super::termination::Errors;
+use crate::ipm::settings::{MuStrategy, Settings};
+
+/// State of the barrier-parameter update across iterations of one run.
+pub(super) struct MuRule {
+    /// Smallest μ of this run (see [`MuRule::new`]), no larger than the initial μ.
+    pub(super) floor: f64,
+    /// Adaptive μ in its free mode (LOQO rule each iteration).
+    pub(super) free_mode: bool,
+    /// Recent optimality errors of the free mode's sufficient-progress test.
+    refs: Vec<f64>,
+    /// Decrease μ at the next update even if the barrier problem is not solved (after a tiny
+    /// step, W&B Sect. 3.9).
+    pub(super) force_decrease: bool,
+}
+
+impl MuRule {
+    /// The rule at the start of a run with initial barrier parameter `mu` on a problem whose
+    /// objective is scaled by `obj_scale`. The floor comes from the tolerances in scaled
+    /// units: `tol`, and `compl_inf_tol` on the unscaled complementarity, which is
+    /// `obj_scale · compl_inf_tol` in scaled units (so a strongly down-scaled objective can
+    /// still meet it); `mu_min` scales with the objective below 1.
+    pub(super) fn new(settings: &Settings, mu: f64, obj_scale: f64) -> Self {
+        let scaled_tol = settings.tol.min(settings.compl_inf_tol * obj_scale);
+        Self {
+            floor: (settings.mu_min * obj_scale.min(1.0))
+                .max(scaled_tol / (settings.barrier_tol_factor + 1.0))
+                .min(mu),
+            free_mode: settings.mu_strategy == MuStrategy::Adaptive,
+            refs: Vec::new(),
+            force_decrease: false,
+        }
+    }
+}
+
+impl Core<'_> {
+    pub(super) fn slacks_of(&self, x: &[f64], sl: &mut [f64], su: &mut [f64]) {
+        for (k, &j) in self.lo.iter().enumerate() {
+            sl[k] = x[j] - self.xl[j];
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            su[k] = self.xu[j] - x[j];
+        }
+    }
+
+    pub(super) fn update_slacks(&mut self) {
+        let (mut sl, mut su) = (std::mem::take(&mut self.sl), std::mem::take(&mut self.su));
+        self.slacks_of(&self.x, &mut sl, &mut su);
+        self.sl = sl;
+        self.su = su;
+    }
+
+    /// φ_μ at `x` with objective value `f`; +∞ outside the (relaxed) bounds.
+    pub(super) fn barrier_value(&self, x: &[f64], f: f64) -> f64 {
+        let mu = self.mu;
+        let mut phi = f;
+        for &j in &self.lo {
+            let s = x[j] - self.xl[j];
+            if s <= 0.0 {
+                return f64::INFINITY;
+            }
+            phi -= mu * s.ln();
+        }
+        for &j in &self.up {
+            let s = self.xu[j] - x[j];
+            if s <= 0.0 {
+                return f64::INFINITY;
+            }
+            phi -= mu * s.ln();
+        }
+        let kd = self.kappa_d * mu;
+        if kd > 0.0 {
+            for j in 0..self.n {
+                let d = self.damp[j];
+                if d > 0.0 {
+                    phi += kd * (x[j] - self.xl[j]);
+                } else if d < 0.0 {
+                    phi += kd * (self.xu[j] - x[j]);
+                }
+            }
+        }
+        phi
+    }
+
+    pub(super) fn compute_jty(&mut self) {
+        self.jty.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &(r, c)) in self.jac_pat.iter().enumerate() {
+            self.jty[c] += self.jac[k] * self.y[r];
+        }
+    }
+
+    pub(super) fn compute_grad_phi(&mut self) {
+        let mu = self.mu;
+        let kd = self.kappa_d * mu;
+        for j in 0..self.n {
+            self.grad_phi[j] = self.grad[j] + kd * self.damp[j];
+        }
+        for (k, &j) in self.lo.iter().enumerate() {
+            self.grad_phi[j] -= mu / self.sl[k];
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            self.grad_phi[j] += mu / self.su[k];
+        }
+    }
+
+    /// Barrier-parameter update at an iterate with errors `err` and `E_0 = e0`; resets the
+    /// filter and τ when μ changes.
+    pub(super) fn update_mu(
+        &mut self,
+        settings: &Settings,
+        rule: &mut MuRule,
+        err: &Errors,
+        e0: f64,
+    ) {
+        let old_mu = self.mu;
+        if rule.free_mode {
+            let ref_max = rule.refs.iter().fold(0.0f64, |a, &b| a.max(b));
+            if !rule.refs.is_empty() && e0 > 0.9999 * ref_max {
+                rule.free_mode = false;
+                if let Some((avg, _)) = self.avg_compl() {
+                    self.mu = (0.8 * avg).max(rule.floor);
+                }
+            } else {
+                rule.refs.push(e0);
+                if rule.refs.len() > 4 {
+                    rule.refs.remove(0);
+                }
+                self.mu = match self.avg_compl() {
+                    Some((avg, min)) => {
+                        let xi = (min / avg).clamp(0.0, 1.0);
+                        let sigma = 0.1 * (0.05 * (1.0 - xi) / xi.max(1e-300)).min(2.0).powi(3);
+                        (sigma * avg).clamp(rule.floor, 1e5)
+                    }
+                    None => rule.floor,
+                };
+            }
+        } else {
+            if settings.mu_strategy == MuStrategy::Adaptive {
+                let ref_min = rule.refs.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+                if e0 <= 0.9999 * ref_min {
+                    rule.free_mode = true;
+                    rule.refs.clear();
+                    rule.refs.push(e0);
+                }
+            }
+            loop {
+                let e_mu = err.e(self.compl_mu(self.mu));
+                if (e_mu <= settings.barrier_tol_factor * self.mu || rule.force_decrease)
+                    && self.mu > rule.floor
+                {
+                    rule.force_decrease = false;
+                    let new_mu = (settings.mu_linear_decrease * self.mu)
+                        .min(self.mu.powf(settings.mu_superlinear_power))
+                        .max(rule.floor);
+                    self.mu = new_mu;
+                    self.tau = settings.tau_min.max(1.0 - self.mu);
+                } else {
+                    break;
+                }
+            }
+            rule.force_decrease = false;
+        }
+        if self.mu != old_mu {
+            self.tau = settings.tau_min.max(1.0 - self.mu);
+            self.reset_filter();
+        }
+    }
+}

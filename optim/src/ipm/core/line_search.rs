@@ -1,0 +1,304 @@
+//! Step acceptance (Wächter & Biegler 2006, "W&B"):
+//!
+//! * fraction-to-boundary step sizes with `τ = max(τ_min, 1 − μ)` (W&B eq. (15));
+//! * the filter on `(θ = ‖c‖₁, φ_μ)` with the switching condition and Armijo test
+//!   (W&B eq. (18)–(21)), the minimal step `α_min` (W&B eq. (23)) and backtracking
+//!   (W&B Sect. 2.3);
+//! * second-order corrections (W&B Sect. 2.4);
+//! * Ipopt's "soft restoration" step when the line search fails near feasibility.
+
+use std::time::Instant;
+
+use super::{Core, Ctx, dot, norm_1, norm_inf};
+use crate::ipm::settings::Settings;
+
+/// Result of the backtracking line search.
+pub(super) enum LsOutcome {
+    Accepted { alpha: f64, trials: usize },
+    Failed,
+}
+
+impl Core<'_> {
+    pub(super) fn max_step_primal(&self, dx: &[f64]) -> f64 {
+        let tau = self.tau;
+        let mut a: f64 = 1.0;
+        for (k, &j) in self.lo.iter().enumerate() {
+            if dx[j] < 0.0 {
+                a = a.min(-tau * self.sl[k] / dx[j]);
+            }
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            if dx[j] > 0.0 {
+                a = a.min(tau * self.su[k] / dx[j]);
+            }
+        }
+        a
+    }
+
+    pub(super) fn max_step_dual(&self) -> f64 {
+        let tau = self.tau;
+        let mut a: f64 = 1.0;
+        for (z, dz) in self
+            .zl
+            .iter()
+            .zip(&self.dzl)
+            .chain(self.zu.iter().zip(&self.dzu))
+        {
+            if *dz < 0.0 {
+                a = a.min(-tau * z / dz);
+            }
+        }
+        a
+    }
+
+    pub(super) fn filter_acceptable(&self, theta: f64, phi: f64) -> bool {
+        self.filter.iter().all(|&(ft, fp)| theta < ft || phi < fp)
+    }
+
+    pub(super) fn augment_filter(&mut self, theta: f64, phi: f64, settings: &Settings) {
+        let t = (1.0 - settings.gamma_theta) * theta;
+        let p = phi - settings.gamma_phi * theta;
+        self.filter.retain(|&(ft, fp)| !(ft >= t && fp >= p));
+        self.filter.push((t, p));
+    }
+
+    /// Acceptance test of a trial point (W&B eq. (18)–(21)). Returns (accepted, f-type).
+    pub(super) fn acceptable(
+        &self,
+        settings: &Settings,
+        theta: f64,
+        phi: f64,
+        gphi_dx: f64,
+        alpha: f64,
+        theta_t: f64,
+        phi_t: f64,
+    ) -> (bool, bool) {
+        if !phi_t.is_finite() || !theta_t.is_finite() || theta_t > self.theta_max {
+            return (false, false);
+        }
+        if phi_t > phi {
+            let inc = (phi_t - phi).log10();
+            if inc > settings.obj_max_inc + phi.abs().log10().max(1.0) {
+                return (false, false);
+            }
+        }
+        if !self.filter_acceptable(theta_t, phi_t) {
+            return (false, false);
+        }
+        let switching = gphi_dx < 0.0
+            && alpha * (-gphi_dx).powf(settings.s_phi)
+                > settings.switching_delta * theta.powf(settings.s_theta);
+        let eps = 10.0 * f64::EPSILON * phi.abs().max(1.0);
+        if theta <= self.theta_min && switching {
+            let armijo = phi_t - phi - eps <= settings.eta_phi * alpha * gphi_dx;
+            return (armijo, true);
+        }
+        let ok = theta_t <= (1.0 - settings.gamma_theta) * theta
+            || phi_t - eps <= phi - settings.gamma_phi * theta;
+        (ok, false)
+    }
+
+    pub(super) fn alpha_min(&self, settings: &Settings, theta: f64, gphi_dx: f64) -> f64 {
+        let g = settings.gamma_theta;
+        let a = if gphi_dx < 0.0 {
+            let b = g.min(settings.gamma_phi * theta / (-gphi_dx));
+            if theta <= self.theta_min {
+                b.min(
+                    settings.switching_delta * theta.powf(settings.s_theta)
+                        / (-gphi_dx).powf(settings.s_phi),
+                )
+            } else {
+                b
+            }
+        } else {
+            g
+        };
+        0.05 * a
+    }
+
+    /// Backtracking filter line search with second-order correction (W&B Sect. 2.3, A-5.x).
+    pub(super) fn line_search(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> LsOutcome {
+        let t0 = Instant::now();
+        let fe0 = ctx.timing.function_evals;
+        let theta = norm_1(&self.c);
+        let phi = self.barrier_value(&self.x, self.f);
+        let gphi_dx = dot(&self.grad_phi, &self.dx);
+        let alpha_max = self.max_step_primal(&self.dx);
+        let amin = self.alpha_min(settings, theta, gphi_dx);
+        let mut alpha = alpha_max;
+        let mut trials = 0;
+        let outcome = loop {
+            if alpha < amin || trials > 60 {
+                break LsOutcome::Failed;
+            }
+            trials += 1;
+            for j in 0..self.n {
+                self.x_t[j] = self.x[j] + alpha * self.dx[j];
+            }
+            let (f_t, ok) = self.eval_fc(ctx, true);
+            if ok {
+                let theta_t = norm_1(&self.c_t);
+                let phi_t = self.barrier_value(&self.x_t, f_t);
+                let (acc, ftype) =
+                    self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
+                if acc {
+                    if !ftype {
+                        self.augment_filter(theta, phi, settings);
+                    }
+                    self.f_t = f_t;
+                    break LsOutcome::Accepted { alpha, trials };
+                }
+                if trials == 1
+                    && theta_t >= theta
+                    && settings.max_soc > 0
+                    && self.m > 0
+                    && let Some(a) = self.second_order_correction(ctx, settings, alpha, theta, phi)
+                {
+                    break LsOutcome::Accepted { alpha: a, trials };
+                }
+            }
+            alpha *= settings.alpha_red_factor;
+        };
+        let fe = ctx.timing.function_evals - fe0;
+        ctx.timing.line_search += t0.elapsed().saturating_sub(fe);
+        outcome
+    }
+
+    /// Second-order corrections (W&B Sect. 2.4). On success `x_t, c_t, f_t` hold the accepted
+    /// point and `dx, dy, dz` the corrected step (taken with the returned α).
+    pub(super) fn second_order_correction(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        alpha: f64,
+        theta: f64,
+        phi: f64,
+    ) -> Option<f64> {
+        let mut c_soc: Vec<f64> = self
+            .c
+            .iter()
+            .zip(&self.c_t)
+            .map(|(c, ct)| alpha * c + ct)
+            .collect();
+        let mut theta_old = theta;
+        let saved = (
+            self.dx.clone(),
+            self.dy.clone(),
+            self.dzl.clone(),
+            self.dzu.clone(),
+        );
+        for _ in 0..settings.max_soc {
+            self.set_rhs(Some(&c_soc));
+            self.solve_refined(ctx, settings);
+            self.unpack_step();
+            let a_soc = self.max_step_primal(&self.dx);
+            for j in 0..self.n {
+                self.x_t[j] = self.x[j] + a_soc * self.dx[j];
+            }
+            let (f_t, ok) = self.eval_fc(ctx, true);
+            if !ok {
+                break;
+            }
+            let theta_t = norm_1(&self.c_t);
+            let phi_t = self.barrier_value(&self.x_t, f_t);
+            let gphi_dx = dot(&self.grad_phi, &self.dx);
+            let (acc, ftype) =
+                self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
+            if acc {
+                if !ftype {
+                    self.augment_filter(theta, phi, settings);
+                }
+                self.f_t = f_t;
+                ctx.counters.soc_accepted += 1;
+                return Some(a_soc);
+            }
+            if theta_t > settings.kappa_soc * theta_old {
+                break;
+            }
+            theta_old = theta_t;
+            for i in 0..self.m {
+                c_soc[i] = a_soc * c_soc[i] + self.c_t[i];
+            }
+        }
+        self.dx = saved.0;
+        self.dy = saved.1;
+        self.dzl = saved.2;
+        self.dzu = saved.3;
+        self.set_rhs(None);
+        None
+    }
+
+    pub(super) fn reset_filter(&mut self) {
+        self.filter.clear();
+    }
+
+    /// Ipopt's "soft restoration" step: when the filter line search fails, try the primal-dual
+    /// step with the common step size `α = min(α_max^pr, α_max^du)` and accept it if it reduces
+    /// the barrier optimality error `E_μ` by the factor 0.9999 (avoids the full restoration
+    /// phase at nearly feasible points of degenerate problems). On success `x_t, c_t, f_t` hold
+    /// the trial point and α is returned.
+    pub(super) fn soft_restoration_step(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        e_mu_current: f64,
+    ) -> Option<f64> {
+        // Only at nearly feasible points (θ ≤ θ_min), where the full restoration phase cannot
+        // make progress on θ and would move x far from the current iterate.
+        if self.restoration || norm_1(&self.c) > self.theta_min {
+            return None;
+        }
+        let a = self.max_step_primal(&self.dx).min(self.max_step_dual());
+        for j in 0..self.n {
+            self.x_t[j] = self.x[j] + a * self.dx[j];
+        }
+        let (f_t, ok) = self.eval_fc(ctx, true);
+        if !ok {
+            return None;
+        }
+        let t = Instant::now();
+        let mut grad = vec![0.0; self.n];
+        let mut jac = vec![0.0; self.jac.len()];
+        self.prob.eval_grad(&self.x_t, &mut grad);
+        self.prob.eval_jac(&self.x_t, &mut jac);
+        ctx.timing.derivative_evals += t.elapsed();
+        let y: Vec<f64> = (0..self.m).map(|i| self.y[i] + a * self.dy[i]).collect();
+        let zl: Vec<f64> = (0..self.zl.len())
+            .map(|k| self.zl[k] + a * self.dzl[k])
+            .collect();
+        let zu: Vec<f64> = (0..self.zu.len())
+            .map(|k| self.zu[k] + a * self.dzu[k])
+            .collect();
+        let mut rd = grad;
+        for (k, &(r, c)) in self.jac_pat.iter().enumerate() {
+            rd[c] += jac[k] * y[r];
+        }
+        let mut compl = 0.0f64;
+        for (k, &j) in self.lo.iter().enumerate() {
+            rd[j] -= zl[k];
+            compl = compl.max(((self.x_t[j] - self.xl[j]) * zl[k] - self.mu).abs());
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            rd[j] += zu[k];
+            compl = compl.max(((self.xu[j] - self.x_t[j]) * zu[k] - self.mu).abs());
+        }
+        let nz = self.lo.len() + self.up.len();
+        let zsum = norm_1(&zl) + norm_1(&zu);
+        let smax = settings.s_max;
+        let s_d = smax.max((norm_1(&y) + zsum) / ((self.m + self.n) as f64).max(1.0)) / smax;
+        let s_c = if nz > 0 {
+            smax.max(zsum / nz as f64) / smax
+        } else {
+            1.0
+        };
+        let e = (norm_inf(&rd) / s_d)
+            .max(norm_inf(&self.c_t))
+            .max(compl / s_c);
+        if e.is_finite() && e <= 0.9999 * e_mu_current && norm_1(&self.c_t) <= self.theta_max {
+            self.f_t = f_t;
+            Some(a)
+        } else {
+            None
+        }
+    }
+}

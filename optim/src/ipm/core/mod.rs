@@ -1,0 +1,618 @@
+//! The primal-dual barrier algorithm on the standard form (Wächter & Biegler 2006, "W&B"),
+//! Algorithm A of W&B Sect. 2 with the refinements of Sect. 3:
+//!
+//! * [`Core::run`]: the outer loop: initial point (W&B Sect. 3.6), optimality error and
+//!   termination ([`termination`]), barrier update ([`barrier`]), search direction with
+//!   inertia correction ([`step`]), filter line search ([`line_search`]), multiplier update
+//!   with the κ_Σ safeguard (W&B eq. (16)), and feasibility restoration
+//!   ([`restoration_phase`]);
+//! * [`Ctx`], [`CoreStart`], [`CoreOutput`]: the shared per-solve state, the primal-dual
+//!   starting point and the result, in internal variables.
+
+mod barrier;
+mod line_search;
+mod restoration_phase;
+mod step;
+mod termination;
+
+use std::time::Instant;
+
+use self::barrier::MuRule;
+use self::line_search::LsOutcome;
+use self::step::StepResult;
+use self::termination::Verdict;
+use super::kkt::{KktPattern, KktSolver, SparseLdlt};
+use super::settings::{KktOrdering, Settings};
+use super::solution::{Counters, IterationInfo, Status, Timing};
+use super::stdform::StdProblem;
+use crate::error::OptimError;
+
+/// Shared state of one user-level solve (also seen by the restoration phase's inner solve).
+pub(crate) struct Ctx<'c, 'b> {
+    pub settings: &'c Settings,
+    pub timing: Timing,
+    pub counters: Counters,
+    /// Global iteration counter (restoration iterations included).
+    pub iter: usize,
+    pub start: Instant,
+    pub callback: Option<&'b mut dyn FnMut(&IterationInfo) -> bool>,
+}
+
+/// Primal-dual starting point in internal variables.
+pub(crate) struct CoreStart {
+    pub x: Vec<f64>,
+    pub y: Option<Vec<f64>>,
+    /// Full-length (n) bound multipliers.
+    pub z_l: Option<Vec<f64>>,
+    pub z_u: Option<Vec<f64>>,
+    pub mu: f64,
+    pub bound_push: f64,
+    pub bound_frac: f64,
+    pub mult_floor: f64,
+    /// Relax the bounds by `bound_relax_factor` (false inside restoration: the bounds are already
+    /// the outer problem's relaxed ones).
+    pub relax_bounds: bool,
+    pub restoration: bool,
+    /// A previously analysed KKT solver to reuse (see [`super::Workspace`]).
+    pub kkt_solver: std::cell::Cell<Option<SparseLdlt>>,
+}
+
+/// Result of a core run in internal variables.
+pub(crate) struct CoreOutput {
+    pub status: Status,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+    pub z_l: Vec<f64>,
+    pub z_u: Vec<f64>,
+    pub mu: f64,
+    pub early_stopped: bool,
+    /// Unscaled complementarity `max |s z|` against the relaxed bounds (slacks included), as
+    /// the `Solved` test measures it.
+    pub complementarity: f64,
+}
+
+fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+}
+fn norm_1(v: &[f64]) -> f64 {
+    v.iter().map(|x| x.abs()).sum()
+}
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+pub(crate) struct Core<'p> {
+    prob: &'p mut dyn StdProblem,
+    n: usize,
+    m: usize,
+    xl: Vec<f64>,
+    xu: Vec<f64>,
+    lo: Vec<usize>,
+    up: Vec<usize>,
+    damp: Vec<f64>,
+    // iterate
+    x: Vec<f64>,
+    y: Vec<f64>,
+    zl: Vec<f64>,
+    zu: Vec<f64>,
+    f: f64,
+    grad: Vec<f64>,
+    c: Vec<f64>,
+    jac: Vec<f64>,
+    hess: Vec<f64>,
+    jac_pat: Vec<(usize, usize)>,
+    // derived
+    sl: Vec<f64>,
+    su: Vec<f64>,
+    grad_phi: Vec<f64>,
+    jty: Vec<f64>,
+    // KKT
+    kkt: KktPattern,
+    solver: SparseLdlt,
+    diag_x: Vec<f64>,
+    delta_w_last: f64,
+    /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
+    /// factorization per iteration on collocation KKTs whose states carry no curvature).
+    skip_zero_trial: bool,
+    delta_w: f64,
+    delta_c: f64,
+    delta_c_target: f64,
+    rhs: Vec<f64>,
+    sol: Vec<f64>,
+    resid: Vec<f64>,
+    corr: Vec<f64>,
+    // step
+    dx: Vec<f64>,
+    dy: Vec<f64>,
+    dzl: Vec<f64>,
+    dzu: Vec<f64>,
+    // trial
+    x_t: Vec<f64>,
+    c_t: Vec<f64>,
+    f_t: f64,
+    // barrier & filter
+    mu: f64,
+    tau: f64,
+    filter: Vec<(f64, f64)>,
+    theta_max: f64,
+    theta_min: f64,
+    restoration: bool,
+    kappa_d: f64,
+    /// Largest |x_j| over the variables without a finite lower or upper bound, over all
+    /// iterates so far (the unboundedness test).
+    unboxed_max: std::cell::Cell<f64>,
+}
+
+impl<'p> Core<'p> {
+    pub fn new(
+        prob: &'p mut dyn StdProblem,
+        settings: &Settings,
+        start: &CoreStart,
+    ) -> Result<Self, OptimError> {
+        let n = prob.n();
+        let m = prob.m();
+        let mut xl = prob.x_lower().to_vec();
+        let mut xu = prob.x_upper().to_vec();
+        if start.relax_bounds && settings.bound_relax_factor > 0.0 {
+            let r = settings.bound_relax_factor;
+            for j in 0..n {
+                if xl[j].is_finite() {
+                    xl[j] -= r * xl[j].abs().max(1.0);
+                }
+                if xu[j].is_finite() {
+                    xu[j] += r * xu[j].abs().max(1.0);
+                }
+            }
+        }
+        let lo: Vec<usize> = (0..n).filter(|&j| xl[j].is_finite()).collect();
+        let up: Vec<usize> = (0..n).filter(|&j| xu[j].is_finite()).collect();
+        let damp = (0..n)
+            .map(|j| match (xl[j].is_finite(), xu[j].is_finite()) {
+                (true, false) => 1.0,
+                (false, true) => -1.0,
+                _ => 0.0,
+            })
+            .collect();
+        let jac_pat = prob.jac_pattern().to_vec();
+        let hess_pat = prob.hess_pattern().to_vec();
+        let kkt = KktPattern::new(n, m, &hess_pat, &jac_pat);
+        let nlo = lo.len();
+        let nup = up.len();
+        Ok(Self {
+            n,
+            m,
+            x: start.x.clone(),
+            y: vec![0.0; m],
+            zl: vec![settings.bound_mult_init; nlo],
+            zu: vec![settings.bound_mult_init; nup],
+            f: 0.0,
+            grad: vec![0.0; n],
+            c: vec![0.0; m],
+            jac: vec![0.0; jac_pat.len()],
+            hess: vec![0.0; hess_pat.len()],
+            jac_pat,
+            sl: vec![0.0; nlo],
+            su: vec![0.0; nup],
+            grad_phi: vec![0.0; n],
+            jty: vec![0.0; n],
+            kkt,
+            solver: start.kkt_solver.take().unwrap_or_default(),
+            diag_x: vec![0.0; n],
+            delta_w_last: 0.0,
+            skip_zero_trial: false,
+            delta_w: 0.0,
+            delta_c: 0.0,
+            delta_c_target: 0.0,
+            rhs: vec![0.0; n + m],
+            sol: vec![0.0; n + m],
+            resid: vec![0.0; n + m],
+            corr: vec![0.0; n + m],
+            dx: vec![0.0; n],
+            dy: vec![0.0; m],
+            dzl: vec![0.0; nlo],
+            dzu: vec![0.0; nup],
+            x_t: vec![0.0; n],
+            c_t: vec![0.0; m],
+            f_t: 0.0,
+            mu: start.mu,
+            tau: settings.tau_min.max(1.0 - start.mu),
+            filter: Vec::new(),
+            theta_max: 0.0,
+            theta_min: 0.0,
+            restoration: start.restoration,
+            kappa_d: settings.kappa_d,
+            unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
+            prob,
+            xl,
+            xu,
+            lo,
+            up,
+            damp,
+        })
+    }
+
+    // ---------- evaluations (timed) ----------
+
+    fn eval_fc(&mut self, ctx: &mut Ctx<'_, '_>, trial: bool) -> (f64, bool) {
+        let t = Instant::now();
+        let (x, c) = if trial {
+            (&self.x_t, &mut self.c_t)
+        } else {
+            (&self.x, &mut self.c)
+        };
+        let f = self.prob.eval_f(x);
+        self.prob.eval_c(x, c);
+        ctx.counters.objective_evals += 1;
+        ctx.counters.constraint_evals += 1;
+        ctx.timing.function_evals += t.elapsed();
+        let ok = f.is_finite() && c.iter().all(|v| v.is_finite());
+        (f, ok)
+    }
+
+    fn eval_derivs(&mut self, ctx: &mut Ctx<'_, '_>) -> bool {
+        let t = Instant::now();
+        self.prob.eval_grad(&self.x, &mut self.grad);
+        self.prob.eval_jac(&self.x, &mut self.jac);
+        ctx.timing.derivative_evals += t.elapsed();
+        self.grad.iter().all(|v| v.is_finite()) && self.jac.iter().all(|v| v.is_finite())
+    }
+
+    fn eval_hessian(&mut self, ctx: &mut Ctx<'_, '_>) -> bool {
+        let t = Instant::now();
+        self.prob.eval_hess(&self.x, 1.0, &self.y, &mut self.hess);
+        ctx.counters.hessian_evals += 1;
+        ctx.timing.derivative_evals += t.elapsed();
+        self.hess.iter().all(|v| v.is_finite())
+    }
+
+    // ---------- initialization ----------
+
+    fn push_into_bounds(&self, x: &mut [f64], push: f64, frac: f64) {
+        for j in 0..self.n {
+            let (l, u) = (self.xl[j], self.xu[j]);
+            if l.is_finite() && u.is_finite() {
+                let pl = (push * l.abs().max(1.0)).min(frac * (u - l));
+                let pu = (push * u.abs().max(1.0)).min(frac * (u - l));
+                if x[j] < l + pl || !x[j].is_finite() {
+                    x[j] = l + pl;
+                }
+                if x[j] > u - pu {
+                    x[j] = u - pu;
+                }
+                if x[j] <= l || x[j] >= u {
+                    x[j] = 0.5 * (l + u);
+                }
+            } else if l.is_finite() {
+                let pl = push * l.abs().max(1.0);
+                if x[j] < l + pl || !x[j].is_finite() {
+                    x[j] = l + pl;
+                }
+            } else if u.is_finite() {
+                let pu = push * u.abs().max(1.0);
+                if x[j] > u - pu || !x[j].is_finite() {
+                    x[j] = u - pu;
+                }
+            } else if !x[j].is_finite() {
+                x[j] = 0.0;
+            }
+        }
+    }
+
+    fn log_header(&self, settings: &Settings) {
+        if settings.print_level > 0 {
+            println!(
+                "iter    objective    inf_pr   inf_du lg(mu)  ||d||  lg(rg) alpha_du alpha_pr  ls"
+            );
+        }
+    }
+
+    fn log(&self, settings: &Settings, info: &IterationInfo) {
+        if settings.print_level == 0 {
+            return;
+        }
+        let rg = if info.delta_w > 0.0 {
+            format!("{:5.1}", info.delta_w.log10())
+        } else {
+            "    -".to_string()
+        };
+        println!(
+            "{:4}{} {:14.7e} {:8.2e} {:8.2e} {:5.1} {:8.2e} {} {:8.2e} {:8.2e} {:3}",
+            info.iter,
+            if info.restoration { "r" } else { " " },
+            info.objective,
+            info.inf_pr,
+            info.inf_du,
+            info.mu.log10(),
+            info.step_norm,
+            rg,
+            info.alpha_du,
+            info.alpha_pr,
+            info.ls_trials
+        );
+    }
+
+    fn output(&self, status: Status, early: bool) -> CoreOutput {
+        let mut zl = vec![0.0; self.n];
+        let mut zu = vec![0.0; self.n];
+        for (k, &j) in self.lo.iter().enumerate() {
+            zl[j] = self.zl[k];
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            zu[j] = self.zu[k];
+        }
+        let (os, _) = self.prob.scales();
+        let compl0 = self
+            .sl
+            .iter()
+            .zip(&self.zl)
+            .chain(self.su.iter().zip(&self.zu))
+            .fold(0.0f64, |a, (s, z)| a.max((s * z).abs()));
+        CoreOutput {
+            complementarity: compl0 / os,
+            status,
+            x: self.x.clone(),
+            y: self.y.clone(),
+            z_l: zl,
+            z_u: zu,
+            mu: self.mu,
+            early_stopped: early,
+        }
+    }
+
+    /// Hands the (analysed) KKT solver back for reuse by a later solve.
+    pub fn into_kkt_solver(self) -> SparseLdlt {
+        self.solver
+    }
+
+    /// Runs the algorithm from `start`.
+    pub fn run(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        start: &CoreStart,
+    ) -> Result<CoreOutput, OptimError> {
+        let settings = ctx.settings;
+        // Symbolic analysis once per run.
+        {
+            let t = Instant::now();
+            self.solver.constraint_rows_from = match settings.kkt_ordering {
+                KktOrdering::Amd => None,
+                KktOrdering::ConstraintsAfterVariables => Some(self.n),
+            };
+            let mut bounded = vec![false; self.n];
+            for &j in self.lo.iter().chain(&self.up) {
+                bounded[j] = true;
+            }
+            self.solver.preferred_primal = bounded;
+            self.solver.analyse(
+                self.n + self.m,
+                &self.kkt.mat.col_ptr,
+                &self.kkt.mat.row_idx,
+            )?;
+            ctx.timing.factorization += t.elapsed();
+        }
+        // Initial point (W&B Sect. 3.6).
+        let mut x0 = std::mem::take(&mut self.x);
+        self.push_into_bounds(&mut x0, start.bound_push, start.bound_frac);
+        self.x = x0;
+        self.update_slacks();
+        if let Some(z) = &start.z_l {
+            for (k, &j) in self.lo.iter().enumerate() {
+                self.zl[k] = z[j].max(start.mult_floor);
+            }
+        }
+        if let Some(z) = &start.z_u {
+            for (k, &j) in self.up.iter().enumerate() {
+                self.zu[k] = z[j].max(start.mult_floor);
+            }
+        }
+        let (f, ok) = self.eval_fc(ctx, false);
+        self.f = f;
+        if !ok {
+            return Err(OptimError::NonFinite {
+                iter: ctx.iter,
+                what: "objective or constraints at the initial point",
+            });
+        }
+        if !self.eval_derivs(ctx) {
+            return Err(OptimError::NonFinite {
+                iter: ctx.iter,
+                what: "gradient or Jacobian at the initial point",
+            });
+        }
+        match &start.y {
+            Some(y) => self.y.copy_from_slice(y),
+            None => self.least_squares_y(ctx, settings),
+        }
+        let theta0 = norm_1(&self.c);
+        self.theta_max = 1e4 * theta0.max(1.0);
+        self.theta_min = 1e-4 * theta0.max(1.0);
+        let mut mu_rule = MuRule::new(settings, self.mu, self.prob.scales().0);
+        let mut acceptable_count = 0usize;
+        let mut last = IterationInfo {
+            iter: ctx.iter,
+            restoration: self.restoration,
+            objective: 0.0,
+            inf_pr: 0.0,
+            inf_du: 0.0,
+            mu: self.mu,
+            step_norm: 0.0,
+            delta_w: 0.0,
+            alpha_du: 0.0,
+            alpha_pr: 0.0,
+            ls_trials: 0,
+        };
+        let mut tiny_count = 0usize;
+        let mut soft_count = 0usize;
+        let mut lines = 0usize;
+        loop {
+            self.compute_jty();
+            let err = self.errors(settings);
+            let e0 = err.e(err.compl0);
+            // log + callback
+            let (os, _) = self.prob.scales();
+            last.iter = ctx.iter;
+            last.objective = self.f / os;
+            last.inf_pr = err.primal_inf;
+            last.inf_du = err.dual_inf;
+            last.mu = self.mu;
+            if lines.is_multiple_of(10) {
+                self.log_header(settings);
+            }
+            lines += 1;
+            self.log(settings, &last);
+            if let Some(cb) = ctx.callback.as_mut()
+                && !cb(&last)
+            {
+                return Ok(self.output(Status::UserStop, false));
+            }
+            if self.restoration && self.prob.early_stop(&self.x) {
+                return Ok(self.output(Status::Solved, true));
+            }
+            let pr_u = match self.termination(ctx, &err, e0, &mut acceptable_count) {
+                Verdict::Continue { pr_u } => pr_u,
+                Verdict::Stop(status) => return Ok(self.output(status, false)),
+            };
+            self.update_mu(settings, &mut mu_rule, &err, e0);
+            // search direction
+            if !self.eval_hessian(ctx) {
+                return Err(OptimError::NonFinite {
+                    iter: ctx.iter,
+                    what: "Hessian",
+                });
+            }
+            self.compute_grad_phi();
+            self.set_rhs(None);
+            let step_ok = matches!(self.compute_step(ctx, settings, true), StepResult::Ok);
+            let mut restore = false;
+            let mut alpha_dual: Option<f64> = None;
+            let mut accepted_alpha = 0.0;
+            let mut trials = 0;
+            if step_ok {
+                self.unpack_step();
+                // tiny step (W&B Sect. 3.9)
+                let tiny = self
+                    .dx
+                    .iter()
+                    .zip(&self.x)
+                    .all(|(d, x)| d.abs() / (1.0 + x.abs()) < 10.0 * f64::EPSILON)
+                    && err.primal_inf <= settings.constr_viol_tol;
+                if tiny {
+                    tiny_count += 1;
+                    if tiny_count >= 2 && self.mu <= mu_rule.floor {
+                        return Ok(self.output(Status::SearchDirectionTooSmall, false));
+                    }
+                    mu_rule.force_decrease = true;
+                    let amax = self.max_step_primal(&self.dx);
+                    for j in 0..self.n {
+                        self.x_t[j] = self.x[j] + amax * self.dx[j];
+                    }
+                    let (f_t, ok) = self.eval_fc(ctx, true);
+                    if ok {
+                        self.f_t = f_t;
+                        accepted_alpha = amax;
+                        trials = 1;
+                    } else {
+                        restore = true;
+                    }
+                } else {
+                    tiny_count = 0;
+                    match self.line_search(ctx, settings) {
+                        LsOutcome::Accepted { alpha, trials: tr } => {
+                            accepted_alpha = alpha;
+                            trials = tr;
+                            soft_count = 0;
+                        }
+                        LsOutcome::Failed => {
+                            let e_mu = err.e(self.compl_mu(self.mu));
+                            match self.soft_restoration_step(ctx, settings, e_mu) {
+                                Some(a) if soft_count < 10 => {
+                                    accepted_alpha = a;
+                                    alpha_dual = Some(a);
+                                    soft_count += 1;
+                                }
+                                _ => restore = true,
+                            }
+                        }
+                    }
+                }
+            } else {
+                restore = true;
+            }
+            if restore {
+                if mu_rule.free_mode {
+                    // Adaptive μ: fall back to the monotone (fixed) mode before restoration.
+                    mu_rule.free_mode = false;
+                    if let Some((avg, _)) = self.avg_compl() {
+                        self.mu = (0.8 * avg).max(mu_rule.floor);
+                        self.tau = settings.tau_min.max(1.0 - self.mu);
+                    }
+                    self.reset_filter();
+                    continue;
+                }
+                if self.restoration || !settings.restoration {
+                    let st = if step_ok {
+                        Status::RestorationFailed
+                    } else {
+                        Status::ErrorInStepComputation
+                    };
+                    return Ok(self.output(st, false));
+                }
+                if e0 <= settings.acceptable_tol && pr_u <= settings.acceptable_constr_viol_tol {
+                    return Ok(self.output(Status::Acceptable, false));
+                }
+                match self.restoration_phase(ctx, settings)? {
+                    None => {}
+                    Some(st) => return Ok(self.output(st, false)),
+                }
+                last.restoration = false;
+                last.step_norm = 0.0;
+                last.alpha_du = 0.0;
+                last.alpha_pr = 0.0;
+                last.ls_trials = 0;
+                last.delta_w = 0.0;
+                continue;
+            }
+            // accept the step
+            let alpha_z = alpha_dual.unwrap_or_else(|| self.max_step_dual());
+            std::mem::swap(&mut self.x, &mut self.x_t);
+            std::mem::swap(&mut self.c, &mut self.c_t);
+            self.f = self.f_t;
+            for i in 0..self.m {
+                self.y[i] += accepted_alpha * self.dy[i];
+            }
+            for k in 0..self.zl.len() {
+                self.zl[k] += alpha_z * self.dzl[k];
+            }
+            for k in 0..self.zu.len() {
+                self.zu[k] += alpha_z * self.dzu[k];
+            }
+            self.update_slacks();
+            // κ_Σ safeguard (W&B eq. (16))
+            let ks = settings.kappa_sigma;
+            let mu = self.mu;
+            for k in 0..self.zl.len() {
+                let s = self.sl[k];
+                self.zl[k] = self.zl[k].min(ks * mu / s).max(mu / (ks * s));
+            }
+            for k in 0..self.zu.len() {
+                let s = self.su[k];
+                self.zu[k] = self.zu[k].min(ks * mu / s).max(mu / (ks * s));
+            }
+            if !self.eval_derivs(ctx) {
+                return Err(OptimError::NonFinite {
+                    iter: ctx.iter,
+                    what: "gradient or Jacobian",
+                });
+            }
+            ctx.iter += 1;
+            if self.restoration {
+                ctx.counters.restoration_iterations += 1;
+            }
+            last.step_norm = norm_inf(&self.dx) * accepted_alpha;
+            last.delta_w = self.delta_w;
+            last.alpha_du = alpha_z;
+            last.alpha_pr = accepted_alpha;
+            last.ls_trials = trials;
+        }
+    }
+}

@@ -1,0 +1,157 @@
+//! Feasibility restoration phase (Wächter & Biegler 2006, Sect. 3.3): when no acceptable step
+//! is found, the same algorithm minimises `ρ‖p + n‖₁ + ζ/2 ‖D_R (x − x_R)‖²` s.t.
+//! `c(x) − p + n = 0` (the problem is [`RestorationProblem`]), stopping as soon as the outer
+//! filter accepts the point; the outer multipliers are then re-initialised (least squares for
+//! `y`).
+
+use super::{Core, CoreStart, Ctx, norm_1, norm_inf};
+use crate::error::OptimError;
+use crate::ipm::restoration::{OuterInfo, RestorationProblem};
+use crate::ipm::settings::Settings;
+use crate::ipm::solution::Status;
+
+impl Core<'_> {
+    /// Feasibility restoration (W&B Sect. 3.3): minimise `ρ‖p + n‖₁ + ζ/2 ‖D_R (x − x_R)‖²`
+    /// s.t. `c(x) − p + n = 0` with the same IPM, stopping as soon as the outer filter accepts.
+    /// Returns `Some(status)` when the outer solve must stop.
+    pub(super) fn restoration_phase(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+    ) -> Result<Option<Status>, OptimError> {
+        let theta = norm_1(&self.c);
+        let phi = self.barrier_value(&self.x, self.f);
+        self.augment_filter(theta, phi, settings);
+        let outer = OuterInfo {
+            xl: self.xl.clone(),
+            xu: self.xu.clone(),
+            lo: self.lo.clone(),
+            up: self.up.clone(),
+            damp: self.damp.clone(),
+            kappa_d: self.kappa_d,
+            mu: self.mu,
+            filter: self.filter.clone(),
+            theta_ref: theta,
+            kappa_resto: settings.resto_required_reduction,
+            tol: settings.tol,
+        };
+        let mu_r = self.mu.max(norm_inf(&self.c));
+        let rho = settings.resto_penalty;
+        let n0 = self.n;
+        let m = self.m;
+        let mut w = self.x.clone();
+        let mut p = vec![0.0; m];
+        let mut nn = vec![0.0; m];
+        for i in 0..m {
+            let ci = self.c[i];
+            let a = (mu_r - rho * ci) / (2.0 * rho);
+            nn[i] = a + (a * a + mu_r * ci / (2.0 * rho)).sqrt();
+            p[i] = ci + nn[i];
+        }
+        w.extend_from_slice(&p);
+        w.extend_from_slice(&nn);
+        let mut zl = vec![0.0; n0 + 2 * m];
+        let mut zu = vec![0.0; n0 + 2 * m];
+        for (k, &j) in self.lo.iter().enumerate() {
+            zl[j] = self.zl[k].min(rho);
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            zu[j] = self.zu[k].min(rho);
+        }
+        for i in 0..m {
+            zl[n0 + i] = mu_r / p[i];
+            zl[n0 + m + i] = mu_r / nn[i];
+        }
+        let x_ref = self.x.clone();
+        let start = CoreStart {
+            x: w,
+            y: Some(vec![0.0; m]),
+            z_l: Some(zl),
+            z_u: Some(zu),
+            mu: mu_r,
+            bound_push: 1e-12,
+            bound_frac: 1e-12,
+            mult_floor: 1e-12,
+            relax_bounds: false,
+            restoration: true,
+            kkt_solver: std::cell::Cell::new(None),
+        };
+        if settings.print_level > 1 {
+            println!("  entering restoration phase (theta = {theta:.3e}, mu_R = {mu_r:.3e})");
+        }
+        let out = {
+            let mut rp =
+                RestorationProblem::new(&mut *self.prob, x_ref, rho, self.mu.sqrt(), outer);
+            let mut inner = Core::new(&mut rp, settings, &start)?;
+            inner.delta_w_last = self.delta_w_last;
+            inner.run(ctx, &start)?
+        };
+        let x_new = out.x[..n0].to_vec();
+        let finish = |me: &mut Self, ctx: &mut Ctx<'_, '_>| -> Result<bool, OptimError> {
+            me.x.copy_from_slice(&x_new);
+            me.update_slacks();
+            if me.sl.iter().chain(&me.su).any(|&s| s <= 0.0) {
+                return Ok(false);
+            }
+            let (f, ok) = me.eval_fc(ctx, false);
+            if !ok {
+                return Ok(false);
+            }
+            me.f = f;
+            if !me.eval_derivs(ctx) {
+                return Err(OptimError::NonFinite {
+                    iter: ctx.iter,
+                    what: "gradient or Jacobian after restoration",
+                });
+            }
+            for (k, &j) in me.lo.iter().enumerate() {
+                me.zl[k] = out.z_l[j];
+            }
+            for (k, &j) in me.up.iter().enumerate() {
+                me.zu[k] = out.z_u[j];
+            }
+            let zmax = norm_inf(&me.zl).max(norm_inf(&me.zu));
+            if zmax > 1e3 {
+                me.zl.iter_mut().for_each(|z| *z = 1.0);
+                me.zu.iter_mut().for_each(|z| *z = 1.0);
+            }
+            me.least_squares_y(ctx, settings);
+            Ok(true)
+        };
+        if out.early_stopped {
+            if finish(self, ctx)? {
+                return Ok(None);
+            }
+            return Ok(Some(Status::RestorationFailed));
+        }
+        match out.status {
+            Status::Solved | Status::Acceptable => {
+                // Converged restoration problem without reaching an acceptable outer point.
+                let x_in = out.x[..n0].to_vec();
+                let mut c = vec![0.0; m];
+                self.prob.eval_c(&x_in, &mut c);
+                let (_, cs) = self.prob.scales();
+                let viol = match cs {
+                    Some(cs) => c
+                        .iter()
+                        .zip(cs)
+                        .fold(0.0f64, |a, (c, s)| a.max((c / s).abs())),
+                    None => norm_inf(&c),
+                };
+                if viol > settings.constr_viol_tol {
+                    self.x.copy_from_slice(&x_in);
+                    self.c.copy_from_slice(&c);
+                    self.update_slacks();
+                    return Ok(Some(Status::LocallyInfeasible));
+                }
+                if finish(self, ctx)? {
+                    self.reset_filter();
+                    return Ok(None);
+                }
+                Ok(Some(Status::RestorationFailed))
+            }
+            Status::MaxIterations | Status::MaxTime | Status::UserStop => Ok(Some(out.status)),
+            _ => Ok(Some(Status::RestorationFailed)),
+        }
+    }
+}

@@ -1,0 +1,262 @@
+//! The Newton step of the primal-dual barrier method (Wächter & Biegler 2006, "W&B"):
+//!
+//! * the reduced primal-dual system (W&B eq. (13)) with `z_L, z_U` eliminated, assembled into
+//!   the KKT matrix `K(δ_w, δ_c)` of [`crate::ipm::kkt`] and factored by [`SparseLdlt`](crate::ipm::kkt::SparseLdlt);
+//! * inertia correction (W&B Sect. 3.1, Algorithm IC): the step is accepted when `K` has n
+//!   positive and m negative eigenvalues; otherwise δ_w grows (first `δ_w⁰`, then by κ̄_w⁺ or
+//!   κ_w⁺, starting from κ_w⁻ δ_w_last), and a singular `K` gets `δ_c = δ̄_c μ^κ_c`; a static
+//!   `δ_c` is always on the constraint block and removed again by iterative refinement;
+//! * recovery of `dz_L, dz_U` (W&B eq. (12));
+//! * least-squares constraint multipliers for the initial point (W&B Sect. 3.6).
+
+use std::time::Instant;
+
+use super::{Core, Ctx, norm_inf};
+use crate::ipm::kkt::{Inertia, KktSolver};
+use crate::ipm::settings::Settings;
+
+/// Step-computation result.
+pub(super) enum StepResult {
+    Ok,
+    Failed,
+}
+
+impl Core<'_> {
+    pub(super) fn factor_current(&mut self, ctx: &mut Ctx<'_, '_>) -> Option<Inertia> {
+        let t = Instant::now();
+        let r = self.solver.factor(&self.kkt.mat.values);
+        ctx.counters.factorizations += 1;
+        ctx.timing.factorization += t.elapsed();
+        r
+    }
+
+    /// Solves `K sol = rhs` with refinement against `K(δ_w, δ_c_target)`; returns the final
+    /// relative residual.
+    pub(super) fn solve_refined(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> f64 {
+        let t = Instant::now();
+        let nm = self.n + self.m;
+        self.sol.copy_from_slice(&self.rhs);
+        self.solver.solve(&mut self.sol);
+        let bnorm = norm_inf(&self.rhs).max(1e-300);
+        let mut best = f64::INFINITY;
+        for target in [self.delta_c_target, self.delta_c] {
+            let shift = self.delta_c - target;
+            for step in 0..=settings.max_refinement_steps {
+                self.kkt.mat.sym_matvec(&self.sol, &mut self.resid);
+                for i in 0..nm {
+                    let extra = if i >= self.n {
+                        shift * self.sol[i]
+                    } else {
+                        0.0
+                    };
+                    self.resid[i] = self.rhs[i] - self.resid[i] - extra;
+                }
+                let rn = norm_inf(&self.resid) / bnorm;
+                if !rn.is_finite() {
+                    best = f64::INFINITY;
+                    break;
+                }
+                best = rn;
+                if rn <= settings.refinement_tol || step == settings.max_refinement_steps {
+                    break;
+                }
+                self.corr.copy_from_slice(&self.resid);
+                self.solver.solve(&mut self.corr);
+                for i in 0..nm {
+                    self.sol[i] += self.corr[i];
+                }
+            }
+            if best <= 1e-6 || shift == 0.0 {
+                break;
+            }
+            // Refinement against the unregularized matrix did not converge (rank-deficient J):
+            // accept the step of the regularized system instead.
+            self.sol.copy_from_slice(&self.rhs);
+            self.solver.solve(&mut self.sol);
+        }
+        ctx.timing.solve += t.elapsed();
+        best
+    }
+
+    /// Assembles and factors `K`, correcting the inertia (W&B Algorithm IC), then solves for the
+    /// Newton step of the current right-hand side.
+    pub(super) fn compute_step(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        use_hessian: bool,
+    ) -> StepResult {
+        let t = Instant::now();
+        for j in 0..self.n {
+            self.diag_x[j] = 0.0;
+        }
+        for (k, &j) in self.lo.iter().enumerate() {
+            self.diag_x[j] += self.zl[k] / self.sl[k];
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            self.diag_x[j] += self.zu[k] / self.su[k];
+        }
+        let static_c = if self.m > 0 {
+            settings.static_dual_regularization
+        } else {
+            0.0
+        };
+        self.delta_c = static_c;
+        self.delta_c_target = 0.0;
+        self.delta_w = 0.0;
+        if use_hessian {
+            self.kkt
+                .assemble(&self.hess, &self.jac, &self.diag_x, -self.delta_c);
+        } else {
+            let zeros = vec![0.0; self.hess.len()];
+            self.kkt
+                .assemble(&zeros, &self.jac, &self.diag_x, -self.delta_c);
+        }
+        let first_w = settings.perturb_dec_fact * self.delta_w_last;
+        if use_hessian && self.skip_zero_trial && first_w >= 1e-12 {
+            self.delta_w = first_w.max(settings.min_hessian_perturbation);
+            self.kkt.shift_diagonal(self.delta_w, 0.0);
+        }
+        ctx.timing.kkt_assembly += t.elapsed();
+        let mut singular_handled = false;
+        loop {
+            let mut inertia = self.factor_current(ctx);
+            let good = match inertia {
+                Some(i) => i.positive == self.n && i.negative == self.m,
+                None => false,
+            };
+            if settings.print_level > 2 {
+                println!(
+                    "    KKT: delta_w {:.2e} delta_c {:.2e} inertia {:?} (want {}+, {}-)",
+                    self.delta_w, self.delta_c, inertia, self.n, self.m
+                );
+            }
+            if good {
+                let res = self.solve_refined(ctx, settings);
+                if settings.print_level > 2 {
+                    println!("    KKT: relative residual after refinement {res:.2e}");
+                }
+                if res <= 1e-5 {
+                    if self.delta_w == 0.0 && use_hessian {
+                        self.skip_zero_trial = false;
+                    }
+                    if self.delta_w > 0.0 {
+                        self.delta_w_last = self.delta_w;
+                    }
+                    return StepResult::Ok;
+                }
+                // Right inertia but refinement cannot reach the exact system: the matrix is
+                // (numerically) singular and static pivoting hid it.
+                inertia = None;
+            }
+            // Wrong inertia, singular, or inaccurate: perturb.
+            if self.delta_w == 0.0 && use_hessian {
+                self.skip_zero_trial = true;
+            }
+            let old_w = self.delta_w;
+            let old_c = self.delta_c;
+            if inertia.is_none() && !singular_handled && self.m > 0 {
+                singular_handled = true;
+                let dc = settings.jacobian_regularization_value
+                    * self.mu.powf(settings.jacobian_regularization_exponent);
+                self.delta_c = dc.max(static_c);
+                self.delta_c_target = self.delta_c;
+                // δ_c unchanged (μ small enough that δ̄_c μ^κ_c ≤ the static δ_c): the matrix
+                // and the factor are the ones just rejected, so go straight to δ_w.
+                if old_w == 0.0 && self.delta_c != old_c {
+                    let t = Instant::now();
+                    self.kkt.shift_diagonal(0.0, self.delta_c - old_c);
+                    ctx.timing.kkt_assembly += t.elapsed();
+                    continue;
+                }
+            }
+            if self.delta_w == 0.0 {
+                self.delta_w = if self.delta_w_last == 0.0 {
+                    settings.first_hessian_perturbation
+                } else {
+                    (settings.perturb_dec_fact * self.delta_w_last)
+                        .max(settings.min_hessian_perturbation)
+                };
+            } else if self.delta_w_last == 0.0 {
+                self.delta_w *= settings.perturb_inc_fact_first;
+            } else {
+                self.delta_w *= settings.perturb_inc_fact;
+            }
+            if self.delta_w > settings.max_hessian_perturbation {
+                return StepResult::Failed;
+            }
+            let t = Instant::now();
+            self.kkt
+                .shift_diagonal(self.delta_w - old_w, self.delta_c - old_c);
+            ctx.timing.kkt_assembly += t.elapsed();
+        }
+    }
+
+    /// Fills `rhs` with the Newton right-hand side `−(∇φ + Jᵀy, c_rhs)`.
+    pub(super) fn set_rhs(&mut self, c_rhs: Option<&[f64]>) {
+        for j in 0..self.n {
+            self.rhs[j] = -(self.grad_phi[j] + self.jty[j]);
+        }
+        let c = c_rhs.unwrap_or(&self.c);
+        for i in 0..self.m {
+            self.rhs[self.n + i] = -c[i];
+        }
+    }
+
+    /// Unpacks `sol` into (dx, dy) and recovers (dz_L, dz_U) (W&B eq. (12)).
+    pub(super) fn unpack_step(&mut self) {
+        self.dx.copy_from_slice(&self.sol[..self.n]);
+        self.dy.copy_from_slice(&self.sol[self.n..]);
+        let mu = self.mu;
+        for (k, &j) in self.lo.iter().enumerate() {
+            self.dzl[k] = mu / self.sl[k] - self.zl[k] - self.zl[k] / self.sl[k] * self.dx[j];
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            self.dzu[k] = mu / self.su[k] - self.zu[k] + self.zu[k] / self.su[k] * self.dx[j];
+        }
+    }
+
+    /// Least-squares constraint multipliers: `[I Jᵀ; J 0] [w; y] = −[∇f − z_L + z_U; 0]`.
+    pub(super) fn least_squares_y(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) {
+        if self.m == 0 {
+            return;
+        }
+        let t = Instant::now();
+        let ones = vec![1.0; self.n];
+        let zeros = vec![0.0; self.hess.len()];
+        self.kkt.assemble(
+            &zeros,
+            &self.jac,
+            &ones,
+            -settings.static_dual_regularization,
+        );
+        ctx.timing.kkt_assembly += t.elapsed();
+        self.delta_c = settings.static_dual_regularization;
+        self.delta_c_target = 0.0;
+        let inertia = self.factor_current(ctx);
+        let ok = matches!(inertia, Some(i) if i.positive == self.n && i.negative == self.m);
+        if !ok {
+            self.y.iter_mut().for_each(|v| *v = 0.0);
+            return;
+        }
+        for j in 0..self.n {
+            self.rhs[j] = -self.grad[j];
+        }
+        for (k, &j) in self.lo.iter().enumerate() {
+            self.rhs[j] += self.zl[k];
+        }
+        for (k, &j) in self.up.iter().enumerate() {
+            self.rhs[j] -= self.zu[k];
+        }
+        for i in 0..self.m {
+            self.rhs[self.n + i] = 0.0;
+        }
+        self.solve_refined(ctx, settings);
+        let ys = &self.sol[self.n..];
+        if norm_inf(ys) <= settings.constr_mult_init_max && ys.iter().all(|v| v.is_finite()) {
+            self.y.copy_from_slice(ys);
+        } else {
+            self.y.iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+}

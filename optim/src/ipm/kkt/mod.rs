@@ -1,0 +1,317 @@
+//! KKT system of the interior-point Newton step (Wächter & Biegler 2006, eq. (13)):
+//!
+//! ```text
+//! K(δ_w, δ_c) = [ W + Σ + δ_w I    Jᵀ    ]      W = ∇²ₓₓL (σ_f, y),  Σ = Z_L S_L⁻¹ + Z_U S_U⁻¹
+//!               [ J               −δ_c I ]      J = ∇c(x)ᵀ
+//! ```
+//!
+//! The IPM needs `K`'s inertia (W&B Sect. 3.1, Algorithm IC: the step is a descent direction
+//! when `K` has exactly n positive and m negative eigenvalues) and solves with it.
+//!
+//! * [`pattern`]: [`KktPattern`], the lower-triangle CSC pattern of `K` and its assembly.
+//! * [`KktSolver`]: the factor/solve interface the IPM uses (symbolic analysis once per
+//!   pattern, numeric refactorization per iteration, inertia of the factor).
+//! * [`SparseLdlt`]: the implementation, an LDLᵀ `P K Pᵀ = L D Lᵀ` with a fill-reducing
+//!   symmetric permutation `P` from faer 0.24's symbolic analysis (AMD) and 1 × 1 pivots only,
+//!   so the inertia is the sign count of `D` (Sylvester's law of inertia). Tiny pivots are
+//!   replaced by `±pivot_delta` (static pivoting); the IPM refines each solve against the
+//!   exact matrix. The numeric factorization is one of the [`LdltBackend`]s:
+//!   * `simplicial`: faer's up-looking simplicial algorithm on data prepared once per pattern,
+//!     bitwise faer's factor and solution;
+//!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
+//!     simplicial structure (dense element blocks of Legendre–Gauss KKTs);
+//!   * `faer`: faer's own numeric factorization and solve (reference and fallback).
+//! * `ordering`: the elimination order: AMD, or (with `constraint_rows_from`) AMD on the graph
+//!   of (variable, constraint row) pairs so that no constraint row is eliminated with the bare
+//!   pivot `−δ_c`.
+
+mod faer;
+mod ordering;
+pub mod pattern;
+mod simplicial;
+mod supernodal;
+#[cfg(test)]
+mod tests;
+
+use ::faer::sparse::linalg::SupernodalThreshold;
+
+use self::faer::FaerFactor;
+pub use self::pattern::KktPattern;
+use self::simplicial::SimplicialPlan;
+use self::supernodal::BlockPlan;
+use crate::error::OptimError;
+
+/// Inertia of a symmetric matrix: numbers of positive, negative and zero eigenvalues.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Inertia {
+    /// Number of positive eigenvalues.
+    pub positive: usize,
+    /// Number of negative eigenvalues.
+    pub negative: usize,
+    /// Number of zero eigenvalues (zero or non-finite pivots).
+    pub zero: usize,
+}
+
+/// A symmetric sparse matrix in lower-triangle CSC form (rows sorted within each column).
+#[derive(Debug, Clone)]
+pub struct LowerCsc {
+    /// Dimension.
+    pub dim: usize,
+    /// Column pointers (`dim + 1` entries).
+    pub col_ptr: Vec<usize>,
+    /// Row indices (each ≥ its column index, sorted within a column).
+    pub row_idx: Vec<usize>,
+    /// Values (same length as `row_idx`).
+    pub values: Vec<f64>,
+}
+
+impl LowerCsc {
+    /// `out = K x` for the symmetric matrix whose lower triangle is stored.
+    pub fn sym_matvec(&self, x: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for j in 0..self.dim {
+            let xj = x[j];
+            let mut acc = 0.0;
+            for p in self.col_ptr[j]..self.col_ptr[j + 1] {
+                let i = self.row_idx[p];
+                let v = self.values[p];
+                out[i] += v * xj;
+                if i != j {
+                    acc += v * x[i];
+                }
+            }
+            out[j] += acc;
+        }
+    }
+}
+
+/// Interface of a sparse symmetric indefinite solver for the KKT matrix.
+///
+/// Call order: [`analyse`](KktSolver::analyse) once per sparsity pattern, then any number of
+/// [`factor`](KktSolver::factor) (same pattern, new values) each followed by any number of
+/// [`solve`](KktSolver::solve).
+pub trait KktSolver {
+    /// Symbolic analysis (ordering, elimination tree, storage) of the lower-triangle pattern.
+    fn analyse(
+        &mut self,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+    ) -> Result<(), OptimError>;
+    /// Numeric factorization of the matrix with the analysed pattern and these values.
+    ///
+    /// Returns the inertia of the computed factor, or `None` when a pivot was exactly zero or
+    /// non-finite (the matrix is treated as singular and the factor is unusable).
+    fn factor(&mut self, values: &[f64]) -> Option<Inertia>;
+    /// Solves `K x = rhs` in place with the last successful factorization.
+    fn solve(&mut self, rhs: &mut [f64]);
+}
+
+/// Numeric LDLᵀ algorithm of a [`SparseLdlt`]. All backends use the same ordering, pivot rule
+/// and inertia count; they differ in speed and rounding only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LdltBackend {
+    /// [`Supernodal`](LdltBackend::Supernodal) where faer's flop-ratio rule would choose its
+    /// supernodal factor (dense Legendre–Gauss blocks), [`Simplicial`](LdltBackend::Simplicial)
+    /// elsewhere (the sparser hp-Radau KKTs).
+    #[default]
+    Auto,
+    /// Up-looking simplicial LDLᵀ on data prepared once per pattern; bitwise faer's simplicial
+    /// factor and solution.
+    Simplicial,
+    /// Left-looking supernodal LDLᵀ on the fundamental supernodes of the simplicial structure
+    /// (no relaxation zeros); different rounding from the simplicial backend.
+    Supernodal,
+    /// faer's own simplicial numeric factorization and solve.
+    FaerSimplicial,
+    /// faer's own supernodal numeric factorization and solve.
+    FaerSupernodal,
+}
+
+/// The numeric kernel chosen at analysis time.
+enum Kernel {
+    Faer,
+    Simplicial(SimplicialPlan),
+    Supernodal(BlockPlan),
+}
+
+/// Sparse LDLᵀ of the KKT matrix behind [`KktSolver`] (module docs): symbolic analysis once
+/// per pattern, numeric refactorization per call with the chosen [`LdltBackend`], workspaces
+/// allocated at analysis time.
+pub struct SparseLdlt {
+    /// Numeric algorithm (default: [`LdltBackend::Auto`]); takes effect at the next analysis
+    /// of a new pattern.
+    pub backend: LdltBackend,
+    /// Static pivoting: pivots with |d| ≤ `pivot_epsilon` are replaced by `±pivot_delta`
+    /// (absolute values; sign kept, zero → +; not relative to max|K_ij|, which the barrier
+    /// terms Σ make as large as 1e10). Structurally zero diagonals (states without cost in
+    /// collocation NLPs) otherwise stop the unpivoted LDLᵀ when the ordering eliminates them
+    /// first; the caller refines against the exact matrix. 0 disables (exact zero pivots then
+    /// report a singular matrix).
+    pub pivot_epsilon: f64,
+    /// Replacement magnitude for tiny pivots (see `pivot_epsilon`).
+    pub pivot_delta: f64,
+    /// Index of the first constraint row of the KKT matrix (the primal dimension n). When set,
+    /// the order pairs each constraint row with a primal neighbour eliminated just before it
+    /// (module docs); `None`: plain AMD. Takes effect at the next analysis of a new pattern.
+    pub constraint_rows_from: Option<usize>,
+    /// Primal variables preferred as the variable a constraint row follows (e.g. those with a
+    /// bound, whose pivot carries the barrier term Σ > 0); empty: none preferred.
+    pub preferred_primal: Vec<bool>,
+    faer: Option<FaerFactor>,
+    kernel: Kernel,
+    factored: bool,
+}
+
+impl std::fmt::Debug for SparseLdlt {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SparseLdlt")
+            .field("backend", &self.backend)
+            .field(
+                "dim",
+                &self.faer.as_ref().map_or(0, |a| a.col_ptr.len() - 1),
+            )
+            .field("nnz", &self.faer.as_ref().map_or(0, |a| a.row_idx.len()))
+            .field("factor_nnz", &self.factor_nnz())
+            .field("supernodal", &self.is_supernodal())
+            .finish()
+    }
+}
+
+impl Default for SparseLdlt {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl SparseLdlt {
+    /// A solver with the [`LdltBackend::Auto`] backend.
+    pub fn new() -> Self {
+        Self::with_backend(LdltBackend::Auto)
+    }
+
+    /// A solver with the given backend and the default static pivoting.
+    pub fn with_backend(backend: LdltBackend) -> Self {
+        Self {
+            backend,
+            pivot_epsilon: 1e-14,
+            pivot_delta: 1e-4,
+            constraint_rows_from: None,
+            preferred_primal: Vec::new(),
+            faer: None,
+            kernel: Kernel::Faer,
+            factored: false,
+        }
+    }
+
+    /// Whether faer's symbolic analysis is the supernodal one (only with
+    /// [`LdltBackend::FaerSupernodal`]).
+    pub fn is_supernodal(&self) -> bool {
+        self.faer.as_ref().is_some_and(FaerFactor::is_supernodal)
+    }
+
+    /// Number of stored entries of faer's factor `L` (fill-in measure).
+    pub fn factor_nnz(&self) -> usize {
+        self.faer.as_ref().map_or(0, |a| a.l_values.len())
+    }
+
+    /// Floating-point work of one numeric factorization, `Σ_j (c_j + c_j²/2)` over the column
+    /// counts `c_j` of `L` (0 before the analysis). For faer's supernodal factor the counts
+    /// include the explicit zeros of relaxed supernodes.
+    pub fn factor_flops(&self) -> f64 {
+        self.faer.as_ref().map_or(0.0, FaerFactor::flops)
+    }
+}
+
+impl KktSolver for SparseLdlt {
+    fn analyse(
+        &mut self,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+    ) -> Result<(), OptimError> {
+        // Same pattern as the last analysis (repeated solves of one NLP structure): keep the
+        // symbolic factorization and the workspace.
+        if let Some(a) = &self.faer
+            && a.col_ptr == col_ptr
+            && a.row_idx == row_idx
+            && a.constraint_rows_from == self.constraint_rows_from
+            && a.preferred == self.preferred_primal
+        {
+            self.factored = false;
+            return Ok(());
+        }
+        let rows_from = self.constraint_rows_from;
+        let preferred = &self.preferred_primal;
+        let analyse =
+            |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, rows_from, preferred);
+        let mut faer = analyse(match self.backend {
+            LdltBackend::Auto => SupernodalThreshold::AUTO,
+            LdltBackend::FaerSupernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+            _ => SupernodalThreshold::FORCE_SIMPLICIAL,
+        })?;
+        let supernodal = match self.backend {
+            LdltBackend::Supernodal => true,
+            // Where faer's flop rule picks its supernodal factor (dense LG blocks), the
+            // supernodal kernel on the simplicial structure replaces it (same factor speed
+            // there, no relaxation fill, faster solves).
+            LdltBackend::Auto if faer.is_supernodal() => {
+                faer = analyse(SupernodalThreshold::FORCE_SIMPLICIAL)?;
+                true
+            }
+            _ => false,
+        };
+        let block = if supernodal {
+            BlockPlan::new(&faer.symbolic, dim, col_ptr, row_idx)
+        } else {
+            None
+        };
+        let plan = match (&block, self.backend) {
+            (None, LdltBackend::FaerSimplicial | LdltBackend::FaerSupernodal) => None,
+            (None, _) => SimplicialPlan::new(&faer.symbolic, dim, col_ptr, row_idx),
+            (Some(_), _) => None,
+        };
+        self.kernel = match (block, plan) {
+            (Some(b), _) => Kernel::Supernodal(b),
+            (None, Some(p)) => Kernel::Simplicial(p),
+            (None, None) => Kernel::Faer,
+        };
+        self.faer = Some(faer);
+        self.factored = false;
+        Ok(())
+    }
+
+    fn factor(&mut self, values: &[f64]) -> Option<Inertia> {
+        self.factored = false;
+        let faer = self.faer.as_mut()?;
+        let (eps, delta) = (self.pivot_epsilon, self.pivot_delta);
+        let inertia = match &mut self.kernel {
+            Kernel::Supernodal(block) => block.factor(values, eps, delta)?,
+            Kernel::Simplicial(plan) => {
+                if !plan.factor(values, &mut faer.l_values, eps, delta) {
+                    return None;
+                }
+                let inertia = faer.inertia();
+                if inertia.zero > 0 {
+                    return None;
+                }
+                inertia
+            }
+            Kernel::Faer => faer.factor(values, eps, delta)?,
+        };
+        self.factored = true;
+        Some(inertia)
+    }
+
+    fn solve(&mut self, rhs: &mut [f64]) {
+        let Some(faer) = self.faer.as_mut() else {
+            return;
+        };
+        debug_assert!(self.factored);
+        match &mut self.kernel {
+            Kernel::Supernodal(block) => block.solve(rhs),
+            Kernel::Simplicial(plan) => plan.solve(&faer.l_values, rhs),
+            Kernel::Faer => faer.solve(rhs),
+        }
+    }
+}

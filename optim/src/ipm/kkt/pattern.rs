@@ -1,0 +1,100 @@
+//! The KKT matrix `K(δ_w, δ_c)` of Wächter & Biegler 2006, eq. (13), as a lower-triangle CSC
+//! pattern built once from the Hessian and Jacobian triplet patterns, with scatter maps so
+//! that each iteration's assembly is one pass over the user values (duplicates are summed, as
+//! in Ipopt's triplet convention). Rows/columns `0..n` are the primal variables, `n..n+m` the
+//! equality constraints.
+
+use super::LowerCsc;
+
+/// Lower-triangle pattern of `K` plus scatter maps from the user triplets.
+#[derive(Debug, Clone)]
+pub struct KktPattern {
+    /// Number of primal variables (x block).
+    pub n: usize,
+    /// Number of equality constraints (y block).
+    pub m: usize,
+    /// The matrix storage (`values` is rewritten by [`assemble`](KktPattern::assemble)).
+    pub mat: LowerCsc,
+    hess_dst: Vec<usize>,
+    jac_dst: Vec<usize>,
+    diag_dst: Vec<usize>,
+}
+
+impl KktPattern {
+    /// Builds the pattern from the Hessian lower-triangle triplets `(row ≥ col)` over the `n`
+    /// primal variables and the Jacobian triplets `(constraint row, variable col)`.
+    pub fn new(n: usize, m: usize, hess: &[(usize, usize)], jac: &[(usize, usize)]) -> Self {
+        let dim = n + m;
+        // (row, col) keys of every contribution, diagonal first so it always exists.
+        let mut cols: Vec<Vec<usize>> = vec![Vec::new(); dim];
+        for (j, c) in cols.iter_mut().enumerate() {
+            c.push(j);
+        }
+        for &(r, c) in hess {
+            cols[c].push(r);
+        }
+        for &(r, c) in jac {
+            cols[c].push(n + r);
+        }
+        let mut col_ptr = Vec::with_capacity(dim + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for c in cols.iter_mut() {
+            c.sort_unstable();
+            c.dedup();
+            row_idx.extend_from_slice(c);
+            col_ptr.push(row_idx.len());
+        }
+        let find = |r: usize, c: usize| -> usize {
+            let s = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+            col_ptr[c] + s.binary_search(&r).unwrap_or(0)
+        };
+        let hess_dst = hess.iter().map(|&(r, c)| find(r, c)).collect();
+        let jac_dst = jac.iter().map(|&(r, c)| find(n + r, c)).collect();
+        let diag_dst = (0..dim).map(|j| find(j, j)).collect();
+        let nnz = row_idx.len();
+        Self {
+            n,
+            m,
+            mat: LowerCsc {
+                dim,
+                col_ptr,
+                row_idx,
+                values: vec![0.0; nnz],
+            },
+            hess_dst,
+            jac_dst,
+            diag_dst,
+        }
+    }
+
+    /// Writes `K` for the given Hessian/Jacobian values, primal diagonal `diag_x` (Σ + δ_w) and
+    /// dual diagonal `diag_y` (−δ_c).
+    pub fn assemble(&mut self, hess: &[f64], jac: &[f64], diag_x: &[f64], diag_y: f64) {
+        let v = &mut self.mat.values;
+        v.iter_mut().for_each(|e| *e = 0.0);
+        for (k, &d) in self.hess_dst.iter().enumerate() {
+            v[d] += hess[k];
+        }
+        for (k, &d) in self.jac_dst.iter().enumerate() {
+            v[d] += jac[k];
+        }
+        for j in 0..self.n {
+            v[self.diag_dst[j]] += diag_x[j];
+        }
+        for i in 0..self.m {
+            v[self.diag_dst[self.n + i]] += diag_y;
+        }
+    }
+
+    /// Adds `delta` to every primal diagonal entry and `-delta_c_change` to every dual one
+    /// (used by the inertia-correction loop without a full reassembly).
+    pub fn shift_diagonal(&mut self, delta_w_change: f64, delta_c_change: f64) {
+        for j in 0..self.n {
+            self.mat.values[self.diag_dst[j]] += delta_w_change;
+        }
+        for i in 0..self.m {
+            self.mat.values[self.diag_dst[self.n + i]] -= delta_c_change;
+        }
+    }
+}

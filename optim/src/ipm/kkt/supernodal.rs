@@ -1,0 +1,358 @@
+//! Supernodal left-looking LDLᵀ of the permuted KKT matrix `P K Pᵀ = L D Lᵀ` on the
+//! fundamental supernodes of faer's simplicial structure ([`BlockPlan`]): same ordering, same
+//! `L` pattern (no relaxation zeros) and the same pivot rule as the simplicial backend, with
+//! dense column-major blocks per supernode so that the updates are dense column operations.
+//! Its rounding differs from the simplicial backend's; it is tested by reconstructing
+//! `P K Pᵀ` from `L D Lᵀ` and against dense eigenvalue inertia.
+
+use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
+
+use super::Inertia;
+use super::simplicial::axpy_scatter;
+
+/// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
+/// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
+/// structure (`parent(j) = j + 1`, `|L_j| = |L_{j+1}| + 1`) are stored as dense column-major
+/// blocks, so the updates from a multi-column supernode are dense column operations followed by
+/// one scatter per target column instead of one indirect scatter per entry and source column.
+/// On the hp-Radau collocation KKTs about 80 % of the flops come from such supernodes (element
+/// blocks of 9–18 columns and the final dense block). Pivots (`D`), static pivoting and the
+/// inertia are as in the simplicial backend; only the summation order, hence the rounding, differs.
+#[derive(Debug, Clone, Default)]
+pub(super) struct BlockPlan {
+    /// `perm_fwd[i]`: original index of permuted row i.
+    pub(super) perm_fwd: Vec<usize>,
+    /// `perm_inv[i]`: permuted index of original row i.
+    pub(super) perm_inv: Vec<usize>,
+    /// Columns of supernode s: `sn_begin[s]..sn_begin[s + 1]`.
+    pub(super) sn_begin: Vec<usize>,
+    /// Rows of supernode s (ascending, its own columns first):
+    /// `sn_rows[sn_row_ptr[s]..sn_row_ptr[s + 1]]`.
+    pub(super) sn_row_ptr: Vec<usize>,
+    pub(super) sn_rows: Vec<u32>,
+    /// Start of supernode s's column-major `nrows × ncols` block in `vals`.
+    pub(super) sn_val_ptr: Vec<usize>,
+    /// Updates into supernode s: `(d, p1, p2)` = descendant d whose rows
+    /// `rows_d[p1..p2]` are columns of s (rows `rows_d[p1..]` receive the update).
+    pub(super) upd_ptr: Vec<usize>,
+    pub(super) upd: Vec<(u32, u32, u32)>,
+    /// Position in `vals` of each entry of the caller's lower-triangle value array.
+    pub(super) a_dst: Vec<usize>,
+    /// Block values (`L` below the diagonal, pivots on it, unused upper triangles).
+    pub(super) vals: Vec<f64>,
+    /// Pivots `D` and their reciprocals, permuted order.
+    pub(super) d: Vec<f64>,
+    pub(super) inv_d: Vec<f64>,
+    /// `L` copied into faer's simplicial layout (diagonal slot first, holding `D`) for the
+    /// triangular solves: per column one contiguous run of the block; the column-by-column
+    /// solve measured faster than a per-supernode one on these KKTs.
+    pub(super) l_col_ptr: Vec<usize>,
+    pub(super) l_row_idx: Vec<u32>,
+    pub(super) l: Vec<f64>,
+    // workspaces
+    pub(super) map: Vec<u32>,
+    pub(super) tmp: Vec<f64>,
+    pub(super) coef: Vec<f64>,
+    pub(super) x: Vec<f64>,
+}
+
+impl BlockPlan {
+    /// Builds the supernode partition, block layout, update lists and value map from faer's
+    /// simplicial symbolic analysis (`None` for a supernodal one or oversized indices).
+    pub(super) fn new(
+        sym: &SymbolicCholesky<usize>,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+    ) -> Option<Self> {
+        let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
+            return None;
+        };
+        let perm = sym.perm()?;
+        let (fwd, inv) = perm.arrays();
+        let lp = s.col_ptr();
+        let lr = s.row_idx();
+        if *lp.last()? > u32::MAX as usize || dim >= u32::MAX as usize || dim == 0 {
+            return None;
+        }
+        let cnt = |j: usize| lp[j + 1] - lp[j];
+        // Fundamental supernodes: column j continues j − 1's supernode when parent(j − 1) = j
+        // and |L_{j−1}| = |L_j| + 1; column j − 1's structure is then {j − 1} ∪ struct(j), so
+        // a supernode [f, l) has rows {f, …, l − 1} ∪ struct(l − 1) and no explicit zeros.
+        let mut sn_begin = vec![0usize];
+        for j in 0..dim - 1 {
+            let chained = cnt(j) > 1 && lr[lp[j] + 1] == j + 1 && cnt(j) == cnt(j + 1) + 1;
+            if !chained {
+                sn_begin.push(j + 1);
+            }
+        }
+        sn_begin.push(dim);
+        let ns = sn_begin.len() - 1;
+        let mut col2sn = vec![0u32; dim];
+        let mut sn_row_ptr = Vec::with_capacity(ns + 1);
+        let mut sn_val_ptr = Vec::with_capacity(ns + 1);
+        let mut sn_rows = Vec::new();
+        sn_row_ptr.push(0);
+        sn_val_ptr.push(0);
+        for sn in 0..ns {
+            let (f, l) = (sn_begin[sn], sn_begin[sn + 1]);
+            col2sn[f..l].iter_mut().for_each(|c| *c = sn as u32);
+            sn_rows.extend((f..l).map(|r| r as u32));
+            sn_rows.extend(lr[lp[l - 1] + 1..lp[l]].iter().map(|&r| r as u32));
+            sn_row_ptr.push(sn_rows.len());
+            sn_val_ptr.push(sn_val_ptr[sn] + (sn_row_ptr[sn + 1] - sn_row_ptr[sn]) * (l - f));
+        }
+        // Update lists: descendant d updates every supernode owning one of its off-block rows.
+        let mut pairs: Vec<(u32, u32, u32, u32)> = Vec::new();
+        for d in 0..ns {
+            let w = sn_begin[d + 1] - sn_begin[d];
+            let rows = &sn_rows[sn_row_ptr[d]..sn_row_ptr[d + 1]];
+            let mut p = w;
+            while p < rows.len() {
+                let t = col2sn[rows[p] as usize];
+                let mut q = p + 1;
+                while q < rows.len() && col2sn[rows[q] as usize] == t {
+                    q += 1;
+                }
+                pairs.push((t, d as u32, p as u32, q as u32));
+                p = q;
+            }
+        }
+        pairs.sort_unstable();
+        let mut upd_ptr = vec![0usize; ns + 1];
+        for &(t, ..) in &pairs {
+            upd_ptr[t as usize + 1] += 1;
+        }
+        for sn in 0..ns {
+            upd_ptr[sn + 1] += upd_ptr[sn];
+        }
+        let upd = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        // Value map of the permuted lower triangle.
+        let mut a_dst = Vec::with_capacity(row_idx.len());
+        for j in 0..dim {
+            for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
+                let (pi, pj) = (inv[i], inv[j]);
+                let (r, c) = if pi >= pj { (pi, pj) } else { (pj, pi) };
+                let sn = col2sn[c] as usize;
+                let rows = &sn_rows[sn_row_ptr[sn]..sn_row_ptr[sn + 1]];
+                let pos = rows.binary_search(&(r as u32)).ok()?;
+                a_dst.push(sn_val_ptr[sn] + (c - sn_begin[sn]) * rows.len() + pos);
+            }
+        }
+        let max_rows = (0..ns)
+            .map(|sn| sn_row_ptr[sn + 1] - sn_row_ptr[sn])
+            .max()
+            .unwrap_or(0);
+        Some(Self {
+            perm_fwd: fwd.to_vec(),
+            perm_inv: inv.to_vec(),
+            vals: vec![0.0; sn_val_ptr[ns]],
+            sn_begin,
+            sn_row_ptr,
+            sn_rows,
+            sn_val_ptr,
+            upd_ptr,
+            upd,
+            a_dst,
+            d: vec![0.0; dim],
+            inv_d: vec![0.0; dim],
+            l: vec![0.0; lp[dim]],
+            l_col_ptr: lp.to_vec(),
+            l_row_idx: lr.iter().map(|&r| r as u32).collect(),
+            map: vec![0; dim],
+            tmp: vec![0.0; max_rows],
+            coef: vec![0.0; max_rows],
+            x: vec![0.0; dim],
+        })
+    }
+
+    /// Numeric LDLᵀ; pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
+    /// inertia, or `None` on a zero or non-finite pivot.
+    pub(super) fn factor(&mut self, values: &[f64], eps: f64, delta: f64) -> Option<Inertia> {
+        let (eps, delta) = (eps.abs(), delta.abs());
+        self.vals.iter_mut().for_each(|v| *v = 0.0);
+        for (&dst, &v) in self.a_dst.iter().zip(values) {
+            self.vals[dst] = v;
+        }
+        let ns = self.sn_begin.len() - 1;
+        let mut inertia = Inertia::default();
+        for sn in 0..ns {
+            let (f, l) = (self.sn_begin[sn], self.sn_begin[sn + 1]);
+            let w = l - f;
+            let rows = &self.sn_rows[self.sn_row_ptr[sn]..self.sn_row_ptr[sn + 1]];
+            let nr = rows.len();
+            for (pos, &r) in rows.iter().enumerate() {
+                self.map[r as usize] = pos as u32;
+            }
+            let (done, rest) = self.vals.split_at_mut(self.sn_val_ptr[sn]);
+            let blk = &mut rest[..nr * w];
+            for &(dd, p1, p2) in &self.upd[self.upd_ptr[sn]..self.upd_ptr[sn + 1]] {
+                let dd = dd as usize;
+                let (p1, p2) = (p1 as usize, p2 as usize);
+                let (fd, ld) = (self.sn_begin[dd], self.sn_begin[dd + 1]);
+                let wd = ld - fd;
+                let rd = &self.sn_rows[self.sn_row_ptr[dd]..self.sn_row_ptr[dd + 1]];
+                let nrd = rd.len();
+                let bd = &done[self.sn_val_ptr[dd]..self.sn_val_ptr[dd] + nrd * wd];
+                let dpiv = &self.d[fd..ld];
+                // Rows rd[p1..] land on consecutive rows of the target block: subtract
+                // in place without the row map.
+                let first = self.map[rd[p1] as usize] as usize;
+                let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
+                for q in p1..p2 {
+                    let c = rd[q] as usize - f;
+                    let len = nrd - q;
+                    let bcol = &mut blk[c * nr..(c + 1) * nr];
+                    if wd == 1 {
+                        let sc = bd[q] * dpiv[0];
+                        if contiguous {
+                            let start = first + (q - p1);
+                            for (b, &v) in bcol[start..start + len].iter_mut().zip(&bd[q..]) {
+                                *b -= v * sc;
+                            }
+                        } else {
+                            scatter_mapped(bcol, &self.map, &rd[q..], &bd[q..], sc);
+                        }
+                        continue;
+                    }
+                    let coef = &mut self.coef[..wd];
+                    for (k, cf) in coef.iter_mut().enumerate() {
+                        *cf = bd[k * nrd + q] * dpiv[k];
+                    }
+                    if contiguous {
+                        let start = first + (q - p1);
+                        lincomb_sub(&mut bcol[start..start + len], bd, nrd, q, coef);
+                    } else {
+                        let out = &mut self.tmp[..len];
+                        out.iter_mut().for_each(|o| *o = 0.0);
+                        lincomb_sub(out, bd, nrd, q, coef);
+                        scatter_mapped(bcol, &self.map, &rd[q..], out, -1.0);
+                    }
+                }
+            }
+            // Dense left-looking LDLᵀ of the block's own columns.
+            for c in 0..w {
+                let coef = &mut self.coef[..c];
+                for (k, cf) in coef.iter_mut().enumerate() {
+                    *cf = blk[k * nr + c] * self.d[f + k];
+                }
+                let (left, right) = blk.split_at_mut(c * nr);
+                let col = &mut right[c..nr];
+                lincomb_sub(col, left, nr, c, coef);
+                let mut d = col[0];
+                if delta > 0.0 && d.abs() <= eps {
+                    d = if d < 0.0 { -delta } else { delta };
+                }
+                if d == 0.0 || !d.is_finite() {
+                    return None;
+                }
+                if d > 0.0 {
+                    inertia.positive += 1;
+                } else {
+                    inertia.negative += 1;
+                }
+                col[0] = d;
+                let inv = d.recip();
+                col[1..].iter_mut().for_each(|v| *v *= inv);
+                self.d[f + c] = d;
+                self.inv_d[f + c] = inv;
+                self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
+            }
+        }
+        Some(inertia)
+    }
+
+    /// Solves `K x = rhs` in place with the last factorization (column-oriented forward
+    /// solve, `D⁻¹`, row-oriented backward solve with four partial sums per row).
+    pub(super) fn solve(&mut self, rhs: &mut [f64]) {
+        let n = rhs.len();
+        let x = &mut self.x;
+        for i in 0..n {
+            x[i] = rhs[self.perm_fwd[i]];
+        }
+        let (lp, li, l) = (&self.l_col_ptr, &self.l_row_idx, &self.l);
+        for j in 0..n {
+            let (a, b) = (lp[j] + 1, lp[j + 1]);
+            let xj = x[j];
+            axpy_scatter(x, &li[a..b], &l[a..b], xj);
+        }
+        for j in (0..n).rev() {
+            let (a, b) = (lp[j] + 1, lp[j + 1]);
+            x[j] = x[j] * self.inv_d[j] - dot_gather4(&l[a..b], &li[a..b], x);
+        }
+        for i in 0..n {
+            rhs[i] = x[self.perm_inv[i]];
+        }
+    }
+}
+
+/// `out[i] -= Σ_k coef[k] · blk[k·stride + off + i]`: a dense multi-column update, four source
+/// columns per pass over `out` (one load/store of `out` per four multiply-adds).
+#[inline(always)]
+fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[f64]) {
+    let len = out.len();
+    let col = |k: usize| &blk[k * stride + off..k * stride + off + len];
+    let mut c4 = coef.chunks_exact(4);
+    let mut k = 0;
+    for c in &mut c4 {
+        let (v0, v1, v2, v3) = (col(k), col(k + 1), col(k + 2), col(k + 3));
+        for ((((o, &a), &b), &cc), &d) in out.iter_mut().zip(v0).zip(v1).zip(v2).zip(v3) {
+            *o -= (c[0] * a + c[1] * b) + (c[2] * cc + c[3] * d);
+        }
+        k += 4;
+    }
+    for &c in c4.remainder() {
+        for (o, &a) in out.iter_mut().zip(col(k)) {
+            *o -= c * a;
+        }
+        k += 1;
+    }
+}
+
+/// `dst[map[rows[p]]] -= vals[p] * s` for all p (distinct rows), unrolled by four like
+/// `axpy_scatter`.
+#[inline(always)]
+fn scatter_mapped(dst: &mut [f64], map: &[u32], rows: &[u32], vals: &[f64], s: f64) {
+    let mut r4 = rows.chunks_exact(4);
+    let mut v4 = vals.chunks_exact(4);
+    for (r, v) in (&mut r4).zip(&mut v4) {
+        let (a, b, c, d) = (
+            map[r[0] as usize] as usize,
+            map[r[1] as usize] as usize,
+            map[r[2] as usize] as usize,
+            map[r[3] as usize] as usize,
+        );
+        let (xa, xb, xc, xd) = (
+            dst[a] - v[0] * s,
+            dst[b] - v[1] * s,
+            dst[c] - v[2] * s,
+            dst[d] - v[3] * s,
+        );
+        dst[a] = xa;
+        dst[b] = xb;
+        dst[c] = xc;
+        dst[d] = xd;
+    }
+    for (&r, &v) in r4.remainder().iter().zip(v4.remainder()) {
+        dst[map[r as usize] as usize] -= v * s;
+    }
+}
+
+/// `Σ vals[p] x[rows[p]]` with four partial sums (breaks the add latency chain).
+#[inline(always)]
+fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let (v4, r4) = (vals.chunks_exact(4), rows.chunks_exact(4));
+    let (vr, rr) = (v4.remainder(), r4.remainder());
+    for (v, r) in v4.zip(r4) {
+        s[0] += v[0] * x[r[0] as usize];
+        s[1] += v[1] * x[r[1] as usize];
+        s[2] += v[2] * x[r[2] as usize];
+        s[3] += v[3] * x[r[3] as usize];
+    }
+    let mut tail = 0.0;
+    for (v, &r) in vr.iter().zip(rr) {
+        tail += v * x[r as usize];
+    }
+    (s[0] + s[1]) + (s[2] + s[3]) + tail
+}

@@ -1,0 +1,434 @@
+//! Tests of the KKT backends against independent references: dense Jacobi eigenvalues for the
+//! inertia, `P K Pᵀ = L D Lᵀ` reconstruction, refined residuals, and faer's own factorization
+//! for the bitwise-identical simplicial path.
+
+use super::*;
+
+/// max |K x − b| after solving K x = b with `s` and `steps` refinement steps, for a fixed
+/// right-hand side.
+fn refined_residual(s: &mut SparseLdlt, pat: &KktPattern, steps: usize) -> f64 {
+    let dim = pat.mat.dim;
+    let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
+    let mut x = b.clone();
+    s.solve(&mut x);
+    let mut r = vec![0.0; dim];
+    for _ in 0..steps {
+        pat.mat.sym_matvec(&x, &mut r);
+        let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
+        s.solve(&mut c);
+        x.iter_mut().zip(&c).for_each(|(x, c)| *x += c);
+    }
+    pat.mat.sym_matvec(&x, &mut r);
+    r.iter()
+        .zip(&b)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Dense inertia by Gaussian elimination with symmetric (diagonal) Bunch–Parlett-free
+/// eigen-free counting: Sylvester on a dense LDLᵀ with full symmetric pivoting by largest
+/// diagonal is not always possible, so use the Jacobi eigenvalue method (independent of faer).
+fn dense_eigs(a: &mut [Vec<f64>]) -> Vec<f64> {
+    let n = a.len();
+    for _sweep in 0..100 {
+        let mut off = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                if i != j {
+                    off += a[i][j] * a[i][j];
+                }
+            }
+        }
+        if off < 1e-22 {
+            break;
+        }
+        for p in 0..n {
+            for q in p + 1..n {
+                if a[p][q].abs() < 1e-300 {
+                    continue;
+                }
+                let theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let c = 1.0 / (t * t + 1.0).sqrt();
+                let s = t * c;
+                for k in 0..n {
+                    let akp = a[k][p];
+                    let akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for k in 0..n {
+                    let apk = a[p][k];
+                    let aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+            }
+        }
+    }
+    (0..n).map(|i| a[i][i]).collect()
+}
+
+fn check(
+    n: usize,
+    m: usize,
+    hess: &[(usize, usize, f64)],
+    jac: &[(usize, usize, f64)],
+    backend: LdltBackend,
+) {
+    let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
+    let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
+    let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
+    let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
+    let mut pat = KktPattern::new(n, m, &hp, &jp);
+    pat.assemble(&hv, &jv, &vec![0.0; n], -1e-9);
+    let dim = n + m;
+    let mut dense = vec![vec![0.0; dim]; dim];
+    for j in 0..dim {
+        for p in pat.mat.col_ptr[j]..pat.mat.col_ptr[j + 1] {
+            let i = pat.mat.row_idx[p];
+            dense[i][j] += pat.mat.values[p];
+            if i != j {
+                dense[j][i] += pat.mat.values[p];
+            }
+        }
+    }
+    let eig = dense_eigs(&mut dense.clone());
+    let expect = Inertia {
+        positive: eig.iter().filter(|&&e| e > 0.0).count(),
+        negative: eig.iter().filter(|&&e| e < 0.0).count(),
+        zero: 0,
+    };
+    let mut s = SparseLdlt::with_backend(backend);
+    s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+    let inertia = s.factor(&pat.mat.values).expect("nonsingular");
+    assert_eq!(inertia, expect, "{backend:?}");
+    // Unpivoted LDLᵀ on an indefinite matrix loses a few digits; two refinement steps
+    // (as the IPM does) recover them.
+    let res = refined_residual(&mut s, &pat, 2);
+    assert!(res < 1e-8, "residual {res}");
+}
+
+#[test]
+fn inertia_matches_dense_eigenvalues() {
+    // H indefinite 4x4 (tridiagonal), 2 constraints; both factor variants.
+    let hess = vec![
+        (0, 0, 2.0),
+        (1, 1, -1.0),
+        (2, 2, 3.0),
+        (3, 3, 0.5),
+        (1, 0, 0.3),
+        (2, 1, 0.7),
+        (3, 2, -0.2),
+        (3, 3, 0.1), // duplicate entry: summed
+    ];
+    let jac = vec![
+        (0, 0, 1.0),
+        (0, 1, 2.0),
+        (1, 2, 1.0),
+        (1, 3, -1.0),
+        (1, 1, 0.5),
+    ];
+    for backend in [
+        LdltBackend::Auto,
+        LdltBackend::FaerSupernodal,
+        LdltBackend::Simplicial,
+    ] {
+        check(4, 2, &hess, &jac, backend);
+    }
+    // Larger banded system whose inertia changes with the diagonal shift.
+    let n = 60;
+    let m = 20;
+    let mut hess = Vec::new();
+    for i in 0..n {
+        hess.push((
+            i,
+            i,
+            if i % 7 == 0 {
+                -2.0
+            } else {
+                4.0 + (i as f64).cos()
+            },
+        ));
+        if i + 1 < n {
+            hess.push((i + 1, i, 0.9));
+        }
+        if i + 5 < n {
+            hess.push((i + 5, i, -0.4));
+        }
+    }
+    let mut jac = Vec::new();
+    for r in 0..m {
+        for k in 0..4 {
+            jac.push((
+                r,
+                (3 * r + k * 2) % n,
+                1.0 + 0.1 * k as f64 + 0.01 * r as f64,
+            ));
+        }
+    }
+    for backend in [LdltBackend::FaerSupernodal, LdltBackend::Simplicial] {
+        check(n, m, &hess, &jac, backend);
+    }
+}
+
+/// The prepared simplicial path reproduces faer's own factorization and solve bit for bit
+/// (inertia, every entry of L, the solution), including pivots hit by static pivoting and
+/// indefinite diagonals, on a random sparse KKT of collocation-like size.
+#[test]
+fn prepared_simplicial_path_is_bitwise_faer() {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let (n, m) = (300, 180);
+    let mut hess = Vec::new();
+    for i in 0..n {
+        // every 9th variable has no curvature (zero diagonal → static pivoting)
+        if i % 9 != 0 {
+            hess.push((i, i, rng.random_range(-1.0..3.0)));
+        }
+        for _ in 0..2 {
+            let j = rng.random_range(0..=i);
+            hess.push((i, j, rng.random_range(-0.5..0.5)));
+        }
+    }
+    let mut jac = Vec::new();
+    for r in 0..m {
+        for _ in 0..5 {
+            jac.push((r, rng.random_range(0..n), rng.random_range(-2.0..2.0)));
+        }
+        jac.push((r, n - 1, 1.0)); // a dense column (like a phase duration)
+    }
+    let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
+    let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
+    let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
+    let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
+    let mut pat = KktPattern::new(n, m, &hp, &jp);
+    let dim = n + m;
+    let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.71).cos()).collect();
+    for shift in [0.0, 0.5, 10.0] {
+        pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
+        let mut out = Vec::new();
+        for backend in [LdltBackend::Simplicial, LdltBackend::FaerSimplicial] {
+            let mut s = SparseLdlt::with_backend(backend);
+            s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+            assert_eq!(
+                matches!(s.kernel, Kernel::Simplicial(_)),
+                backend == LdltBackend::Simplicial
+            );
+            let inertia = s.factor(&pat.mat.values);
+            let mut x = b.clone();
+            if inertia.is_some() {
+                s.solve(&mut x);
+            }
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            out.push((inertia, bits(&s.faer.as_ref().unwrap().l_values), bits(&x)));
+        }
+        assert!(out[0].0.is_some(), "shift {shift}: factor failed");
+        assert_eq!(out[0], out[1], "shift {shift}");
+    }
+}
+
+/// Random KKT-like matrix `[H + shift I, Jᵀ; J, −1e-9 I]` with a block-banded Hessian
+/// (dense element blocks, like collocation), some zero primal diagonals, a dense column.
+fn random_kkt(seed: u64, n: usize, m: usize, shift: f64) -> (KktPattern, Vec<Vec<f64>>) {
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let mut hess = Vec::new();
+    for i in 0..n {
+        if i % 7 != 0 {
+            hess.push((i, i, rng.random_range(-1.0..3.0)));
+        }
+        // dense element blocks of 8 variables
+        for j in (i / 8) * 8..i {
+            if rng.random_bool(0.7) {
+                hess.push((i, j, rng.random_range(-0.5..0.5)));
+            }
+        }
+    }
+    let mut jac = Vec::new();
+    for r in 0..m {
+        let base = (r * n) / m;
+        for k in 0..6 {
+            let c = (base + k * 3) % n;
+            jac.push((r, c, rng.random_range(-2.0..2.0)));
+        }
+        jac.push((r, n - 1, 1.0));
+    }
+    let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
+    let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
+    let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
+    let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
+    let mut pat = KktPattern::new(n, m, &hp, &jp);
+    pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
+    let dim = n + m;
+    let mut dense = vec![vec![0.0; dim]; dim];
+    for j in 0..dim {
+        for p in pat.mat.col_ptr[j]..pat.mat.col_ptr[j + 1] {
+            let i = pat.mat.row_idx[p];
+            dense[i][j] += pat.mat.values[p];
+            if i != j {
+                dense[j][i] += pat.mat.values[p];
+            }
+        }
+    }
+    (pat, dense)
+}
+
+/// The supernodal block kernel against independent computations on random indefinite
+/// KKT-like matrices: `P K Pᵀ = L D Lᵀ` entrywise (with the static-pivot replacements
+/// accounted for on the diagonal), inertia against Jacobi eigenvalues, the solution against
+/// the residual, and the same inertia decision as the simplicial path.
+#[test]
+fn block_kernel_reconstructs_and_matches_dense_inertia() {
+    for (seed, n, m, shift) in [
+        (1, 40, 24, 0.0),
+        (2, 40, 24, 1.0),
+        (3, 90, 50, -0.3),
+        (4, 90, 50, 5.0),
+        (5, 120, 100, 0.0),
+    ] {
+        let (pat, dense) = random_kkt(seed, n, m, shift);
+        let dim = n + m;
+        let mut s = SparseLdlt::with_backend(LdltBackend::Supernodal);
+        s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+        let Kernel::Supernodal(blk) = &s.kernel else {
+            panic!("block plan");
+        };
+        assert!(
+            (0..blk.sn_begin.len() - 1).any(|k| blk.sn_begin[k + 1] - blk.sn_begin[k] > 2),
+            "seed {seed}: test matrix has no multi-column supernode"
+        );
+        let inertia = s.factor(&pat.mat.values);
+        let mut simp = SparseLdlt::with_backend(LdltBackend::Simplicial);
+        simp.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
+            .unwrap();
+        assert_eq!(inertia, simp.factor(&pat.mat.values), "seed {seed}");
+        let inertia = inertia.expect("factor");
+        let eig = dense_eigs(&mut dense.clone());
+        let Kernel::Supernodal(blk) = &s.kernel else {
+            unreachable!()
+        };
+        // Dense L (unit diagonal) and D in permuted order.
+        let mut l = vec![vec![0.0; dim]; dim];
+        for k in 0..blk.sn_begin.len() - 1 {
+            let (f, e) = (blk.sn_begin[k], blk.sn_begin[k + 1]);
+            let rows = &blk.sn_rows[blk.sn_row_ptr[k]..blk.sn_row_ptr[k + 1]];
+            let nr = rows.len();
+            for c in 0..e - f {
+                l[f + c][f + c] = 1.0;
+                for (pos, &r) in rows.iter().enumerate().skip(c + 1) {
+                    l[r as usize][f + c] = blk.vals[blk.sn_val_ptr[k] + c * nr + pos];
+                }
+            }
+        }
+        // Componentwise backward error of an LDLᵀ: |P K Pᵀ − L D Lᵀ| ≤ c u (|L| |D| |Lᵀ|).
+        let mut pivots_replaced = 0;
+        let mut max_ratio = 0.0f64;
+        for i in 0..dim {
+            for j in 0..=i {
+                let (mut ldl, mut bound) = (0.0, 0.0);
+                for k in 0..=j {
+                    ldl += l[i][k] * blk.d[k] * l[j][k];
+                    bound += (l[i][k] * blk.d[k] * l[j][k]).abs();
+                }
+                let a = dense[blk.perm_fwd[i]][blk.perm_fwd[j]];
+                let err = (ldl - a).abs();
+                if i == j && err > 1e-9 {
+                    // static pivot: the factor is of K + E with E diagonal, |E| ≤ δ + ε
+                    assert!(err <= s.pivot_delta + s.pivot_epsilon + 1e-12, "{err}");
+                    pivots_replaced += 1;
+                } else if err > 0.0 {
+                    max_ratio = max_ratio.max(err / bound);
+                }
+            }
+        }
+        assert!(max_ratio <= 1e-13, "seed {seed}: {max_ratio}");
+        let expect = Inertia {
+            positive: eig.iter().filter(|&&e| e > 0.0).count(),
+            negative: eig.iter().filter(|&&e| e < 0.0).count(),
+            zero: 0,
+        };
+        if pivots_replaced == 0 {
+            assert_eq!(inertia, expect, "seed {seed}");
+        }
+        let res = refined_residual(&mut s, &pat, 3);
+        assert!(res < 1e-8, "seed {seed}: residual {res}");
+    }
+}
+
+/// A structurally singular KKT (a variable in neither H nor J) is reported by the block
+/// kernel when static pivoting is off, and the IPM-facing inertia has no zero count.
+#[test]
+fn block_kernel_reports_singular() {
+    let mut pat = KktPattern::new(3, 1, &[(0, 0), (2, 0)], &[(0, 0), (0, 2)]);
+    pat.assemble(&[1.0, 0.5], &[1.0, 2.0], &[0.0; 3], 0.0);
+    let mut s = SparseLdlt {
+        pivot_epsilon: 0.0,
+        pivot_delta: 0.0,
+        ..SparseLdlt::with_backend(LdltBackend::Supernodal)
+    };
+    s.analyse(4, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+    assert!(matches!(s.kernel, Kernel::Supernodal(_)));
+    assert!(s.factor(&pat.mat.values).is_none());
+}
+
+#[test]
+fn singular_matrix_is_reported() {
+    // x-block zero and no constraint coupling on variable 1: exact zero pivot.
+    let mut pat = KktPattern::new(2, 1, &[], &[(0, 0)]);
+    pat.assemble(&[], &[1.0], &[0.0, 0.0], 0.0);
+    let mut s = SparseLdlt {
+        pivot_epsilon: 0.0,
+        pivot_delta: 0.0,
+        ..SparseLdlt::new()
+    };
+    s.analyse(3, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+    assert!(s.factor(&pat.mat.values).is_none());
+}
+
+/// Structurally zero primal diagonals (variables without curvature, like collocation states
+/// without cost): static pivoting keeps the factorization alive, the inertia stays (n, m)
+/// and iterative refinement recovers the exact solution.
+#[test]
+fn static_pivoting_with_zero_primal_diagonal() {
+    // chain: x0 -(c0)- x1 -(c1)- x2, cost only on x2; n = 3, m = 2, H = diag(0, 0, 1)
+    let hess = [(2, 2)];
+    let jac = [(0, 0), (0, 1), (1, 1), (1, 2)];
+    let mut pat = KktPattern::new(3, 2, &hess, &jac);
+    pat.assemble(&[1.0], &[1.0, -1.0, 1.0, -1.0], &[0.0; 3], -1e-9);
+    for backend in [LdltBackend::FaerSupernodal, LdltBackend::Simplicial] {
+        let mut s = SparseLdlt::with_backend(backend);
+        s.analyse(5, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+        // With pivoting disabled the zero pivot (if eliminated first) would stop LDLᵀ;
+        // with it the factor exists and has the KKT inertia.
+        let inertia = s.factor(&pat.mat.values).expect("factor");
+        assert_eq!(
+            inertia,
+            Inertia {
+                positive: 3,
+                negative: 2,
+                zero: 0
+            }
+        );
+        let b = [1.0, -2.0, 0.5, 0.3, -0.7];
+        let mut x = b;
+        s.solve(&mut x);
+        let mut r = [0.0; 5];
+        for _ in 0..5 {
+            pat.mat.sym_matvec(&x, &mut r);
+            let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
+            s.solve(&mut c);
+            for i in 0..5 {
+                x[i] += c[i];
+            }
+        }
+        pat.mat.sym_matvec(&x, &mut r);
+        let res = r
+            .iter()
+            .zip(&b)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(res < 1e-12, "refined residual {res}");
+    }
+}

@@ -1,0 +1,125 @@
+//! Termination under objective scaling and the statuses it may produce, on Hock–Schittkowski
+//! problems: objectives multiplied by 1e8 and 1e12 end at the unscaled solution, an all-boxed
+//! problem is never `Unbounded` however large its objective, and a `Solved` run reports a
+//! complementarity within `compl_inf_tol` (measured, as the test is, against the relaxed
+//! bounds).
+
+mod hs;
+
+use bf_optim::ipm::{Nlp, Settings, Status, solve};
+use hs::Hs;
+
+/// An HS problem with its objective multiplied by `c`.
+struct ObjScaled(Hs, f64);
+
+impl Nlp for ObjScaled {
+    fn num_variables(&self) -> usize {
+        self.0.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.0.num_constraints()
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.0.variable_bounds(l, u)
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.0.constraint_bounds(l, u)
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        self.0.initial_point(x)
+    }
+    fn objective(&self, x: &[f64]) -> f64 {
+        self.1 * self.0.objective(x)
+    }
+    fn gradient(&self, x: &[f64], g: &mut [f64]) {
+        self.0.gradient(x, g);
+        g.iter_mut().for_each(|v| *v *= self.1);
+    }
+    fn constraints(&self, x: &[f64], g: &mut [f64]) {
+        self.0.constraints(x, g)
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.0.jacobian_structure()
+    }
+    fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
+        self.0.jacobian_values(x, v)
+    }
+    fn hessian_structure(&self) -> Vec<(usize, usize)> {
+        self.0.hessian_structure()
+    }
+    fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
+        self.0.hessian_values(x, s * self.1, l, v)
+    }
+}
+
+fn by_name(name: &str) -> Hs {
+    hs::all().into_iter().find(|p| p.name == name).unwrap()
+}
+
+/// A problem with every variable boxed cannot be unbounded: each all-boxed HS problem with a
+/// negative optimum, its objective scaled so that f* becomes −1e17 (far below the −1e15 of
+/// the unboundedness test), must not end `Unbounded`.
+#[test]
+fn boxed_problems_with_a_huge_objective_are_not_unbounded() {
+    let mut checked = 0;
+    for p in hs::all() {
+        let boxed = p.xl.iter().chain(&p.xu).all(|v| v.is_finite());
+        if !boxed || p.fstar >= -1e-3 {
+            continue;
+        }
+        let (name, c) = (p.name, 1e17 / p.fstar.abs());
+        let sol = solve(&ObjScaled(p, c), &Settings::default()).unwrap();
+        assert_ne!(sol.status, Status::Unbounded, "{name}: {sol:?}");
+        checked += 1;
+    }
+    assert!(checked >= 2, "{checked} all-boxed problems with f* < 0");
+}
+
+/// Every `Solved` HS run reports a complementarity within the tolerance it was tested
+/// against.
+#[test]
+fn solved_runs_report_complementarity_within_tolerance() {
+    let settings = Settings::default();
+    let mut solved = 0;
+    for p in hs::all() {
+        let sol = solve(&p, &settings).unwrap();
+        if sol.status == Status::Solved {
+            solved += 1;
+            assert!(
+                sol.complementarity <= settings.compl_inf_tol,
+                "{}: complementarity {:e}",
+                p.name,
+                sol.complementarity
+            );
+        }
+    }
+    assert!(solved >= 40, "{solved} Solved");
+}
+
+/// Objective multiplied by 1e8 or 1e12: the gradient-based objective scaling has no floor and
+/// the μ floor follows the scaled complementarity tolerance, so the runs end with the same
+/// solution as unscaled, `Solved` at 1e8 and successful at 1e12.
+#[test]
+fn large_objective_scales_keep_status_and_solution() {
+    for name in ["HS014", "HS043", "HS065", "HS071"] {
+        let base = solve(&by_name(name), &Settings::default()).unwrap();
+        assert_eq!(base.status, Status::Solved, "{name}");
+        for c in [1e8, 1e12] {
+            let sol = solve(&ObjScaled(by_name(name), c), &Settings::default()).unwrap();
+            if c == 1e8 {
+                assert_eq!(sol.status, Status::Solved, "{name} x{c:e}");
+            } else {
+                assert!(sol.status.is_success(), "{name} x{c:e}: {:?}", sol.status);
+            }
+            let dx = sol
+                .x
+                .iter()
+                .zip(&base.x)
+                .map(|(a, b)| (a - b).abs() / (1.0 + b.abs()))
+                .fold(0.0, f64::max);
+            assert!(dx < 1e-6, "{name} x{c:e}: x differs by {dx:e}");
+            let rel = (sol.objective / c - base.objective).abs() / base.objective.abs().max(1.0);
+            assert!(rel < 1e-8, "{name} x{c:e}: f/c = {}", sol.objective / c);
+        }
+    }
+}
