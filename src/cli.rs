@@ -167,7 +167,9 @@ pub struct SimulateArgs {
     /// Wall-clock limit of the integration (s); a run that reaches it stops with an error.
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = positive)]
     pub max_time: Option<f64>,
-    /// Impact law: newton, stick, max-dissipation, min-slip (or normal-impulse).
+    /// Impact law: newton, stick, max-dissipation, min-slip (or normal-impulse). Newton's law
+    /// (eq. 39, the paper's choice and the default) can raise the energy at an impact; each
+    /// such impact is reported as a warning. stick, max-dissipation and min-slip dissipate.
     #[arg(long, default_value = "newton")]
     pub impact_law: String,
     /// Disable the projection of h and of the velocity constraint after contact steps (the
