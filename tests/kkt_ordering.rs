@@ -5,9 +5,9 @@
 //! Legendre–Gauss meshes where plain AMD with δ_c = 1e-9 stalls or ends Acceptable (the factor
 //! reports spurious negative pivots and the inertia correction keeps δ_w > 0).
 
+use ball_finger::study::{build, solve};
 use bf_optim::ipm::{KktOrdering, Settings, Status};
 use bf_optim::ocp::Scheme;
-use ball_finger::study::{build, solve};
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 
 /// Solves `name` on `scheme` with `points` per phase, KKT `ordering` and static dual

@@ -15,15 +15,15 @@
 //! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
 use crate::cli::OptimizeArgs;
-use anyhow::{Context, Result, bail};
-use bf_optim::ipm::Status;
-use bf_optim::ocp::problem::Scheme;
 use crate::study::SolutionIo;
 use crate::study::refine::{self, RefineOptions, RefineRound};
 use crate::study::strategy::{self, StageRecord, Strategy};
 use crate::study::verify::verify;
-use bf_problem::{BuiltProblem, COT_MAX_PERIOD, OcpSolution, Problem, ProblemSettings};
+use anyhow::{Context, Result, bail};
+use bf_optim::ipm::Status;
+use bf_optim::ocp::problem::Scheme;
 use bf_output::{DirSpec, Outcome, OutputDir};
+use bf_problem::{BuiltProblem, COT_MAX_PERIOD, OcpSolution, Problem, ProblemSettings};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 
@@ -411,8 +411,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
         crate::io::print_out(&rep.table())?;
     }
     if let Some(tol) = args.refine {
-        (problem, sol) =
-            refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
+        (problem, sol) = refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
     }
     if args.verify_rtol > 0.0 {
         attach_verification(&problem, &mut sol, args.verify_rtol)?;

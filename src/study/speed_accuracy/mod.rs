@@ -18,9 +18,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
+use crate::study as problems;
 use anyhow::{Context, Result, anyhow};
 use bf_optim::ocp::problem::Scheme;
-use crate::study as problems;
 use bf_plot::paper::{WorkPrecisionSet, fig_work_precision_sets};
 use bf_problem::{Problem, ProblemSettings};
 use bf_sim::work_precision::WorkPrecisionRow;

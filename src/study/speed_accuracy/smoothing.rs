@@ -5,9 +5,9 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
+use crate::study as problems;
 use anyhow::Result;
 use bf_generated::paper;
-use crate::study as problems;
 use bf_plot::paper::WorkPrecisionSet;
 use bf_problem::{Mode, ProblemSettings};
 use indicatif::ProgressBar;
