@@ -1,4 +1,4 @@
-//! `SimError`: the one error enum of bf-sim (STYLE.md §3.5).
+//! `SimError`: the one error enum of bf-sim.
 //!
 //! Variants carry the context needed to act on them (time `t`, mode name, guard name, file and
 //! line). A failed *run* is reported as [`crate::SimFailure`], which wraps a `SimError` together

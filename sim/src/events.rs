@@ -14,7 +14,8 @@
 //! **Guards starting on the surface.** Right after a reset (or at the initial time) a guard with
 //! |g| ≤ `guard_zero_tol` is *masked*: its start value is not used as a bracket end (that would
 //! re-trigger the event just handled, or, if ignored, hide the next genuine crossing — the
-//! diffsol failure recorded in DEPENDENCIES.md §5). Instead:
+//! failure seen with diffsol 0.18's event handling, `docs/decisions/0003-own-integrators.md`).
+//! Instead:
 //! * the samples are scanned for the first one, t_k, that is clearly off the surface
 //!   (directional: on the valid side of the start value, s·g > max(s·g₀, 0), or beyond
 //!   −`guard_zero_tol` on the triggered side; `Either`: |g| > |g₀|); if there is none the guard

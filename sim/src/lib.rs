@@ -7,7 +7,7 @@
 //! * [`HybridSystem`] — modes, vector field, guards with [`Direction`], resets that pick the
 //!   next mode ([`Transition`]), optional projection (drift control) and validity check.
 //! * [`integrator`] — adaptive Dormand–Prince 5(4) with PI control and dense output, fixed-step
-//!   RK4 with Hermite dense output (our own: see DEPENDENCIES.md §5 for why).
+//!   RK4 with Hermite dense output (our own: `docs/decisions/0003-own-integrators.md`).
 //! * [`events`] — guard bracketing on sub-sampled dense output, Illinois root finding, direction
 //!   filters, guards starting on their surface after a reset.
 //! * [`Simulator`] — the step-to-event loop (`step() -> Result<StopReason, SimError>`,

@@ -1,6 +1,6 @@
 //! `Simulator`: the step-to-event loop over a [`HybridSystem`] (paper Sect. 3.2, Fig. 3).
 //!
-//! Detailed API (diffsol style, STYLE.md §0 item 8):
+//! Detailed API (in the style of diffsol's step-by-step solver):
 //! ```text
 //! let mut sim = Simulator::new(&sys, settings, mode0, t0, &x0, t_end)?;
 //! loop {

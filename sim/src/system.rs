@@ -11,7 +11,7 @@
 //! * A reset may land in a state where a directional guard of the new mode is already past its
 //!   zero (e.g. Stick with σ < 0). The simulator then fires that guard immediately at the same
 //!   time instant: transitions chain, bounded by `SimSettings::max_chained_events`.
-//! * `project` is the constraint-drift hook of DESIGN.md §sim: it may pull the state back onto
+//! * `project` is the constraint-drift hook of the simulator (`docs/architecture.md`): it may pull the state back onto
 //!   h = 0 / the stick constraint after each accepted step and returns the drift it removed.
 //! * A state outside a mode's domain (e.g. a contact mode far from contact) is reported as
 //!   [`SimError::OutsideDomain`]; inside a trial step it rejects the step, which is retried

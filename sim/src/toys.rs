@@ -1,5 +1,5 @@
 //! Toy hybrid systems with closed-form solutions, run through the same machinery as the
-//! ball–finger model (the diffsol `test_models` idea applied to events, STYLE.md §3.7).
+//! ball–finger model (the diffsol `test_models` idea applied to events).
 //!
 //! * [`Oscillator`]: x'' = −ω² x, smooth, no guards (order and accuracy checks).
 //! * [`CrossingOscillator`]: the same with an `Either` guard x = 0 and identity reset; crossings

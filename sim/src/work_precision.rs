@@ -1,5 +1,5 @@
 //! Work-precision measurement: error against a tight-tolerance reference run versus CPU time,
-//! for DOPRI5 at a ladder of `rtol` and RK4 at a ladder of step sizes (DESIGN.md §sim; the
+//! for DOPRI5 at a ladder of `rtol` and RK4 at a ladder of step sizes (`docs/architecture.md`; the
 //! paper's Sect. 6.2 open-loop simulation is the use case).
 //!
 //! For a hybrid trajectory the error of a run is measured at the end time, ‖x(t_end) −

@@ -4,7 +4,7 @@
 //! series with a closed form (t_{k+1} = t_k + 2eᵏu₁/g) and an accumulation point t_∞. DOPRI5 is
 //! exact on quadratics, so any error here is an event-location error. The reset leaves the state
 //! exactly on the guard surface (y = 0), the case that made diffsol 0.18 miss the next crossing
-//! (DEPENDENCIES.md §5): a bug there shows up as missing or duplicated impacts. With huge steps
+//! (`docs/decisions/0003-own-integrators.md`): a bug there shows up as missing or duplicated impacts. With huge steps
 //! (h_max = 100) several flights would fit in one step, so the masking/probing logic is what
 //! finds them. e = 0 must go to Resting; e near 1 without a rest threshold must stop with the
 //! Zeno error close to t_∞; with a rest threshold the number of bounces is known in closed form.
