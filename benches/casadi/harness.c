@@ -103,7 +103,7 @@ static int cmp(const void *a, const void *b) {
 int main(void) {
   for (int s = 0; s < NSTATES; s++)
     for (int j = 0; j < NQ; j++) {
-      states_q[s][j] = uniform(-M_PI, M_PI);
+      states_q[s][j] = uniform(-3.14159265358979323846, 3.14159265358979323846);
       states_qd[s][j] = uniform(-2.0, 2.0);
     }
   wf = work(CAT(FUSED, _work));
