@@ -241,7 +241,8 @@ fn check_finite(name: &str, v: &[f64]) -> Result<(), CodegenError> {
 
 /// Evaluate kinematics, dynamics and (if the scene has a ball and contact) contact quantities
 /// of `scene` at one state with the interpreter, using the scene's constant values (runtime
-/// parameters at their defaults). Every quantity is computed regardless of `kernels`.
+/// parameters at their defaults). Every quantity is computed regardless of `kernels`, with the
+/// same f64 operations as the emitted kernels (sine and cosine included).
 pub fn eval_all(
     scene: &Scene,
     q: &[f64],
@@ -311,7 +312,12 @@ pub fn eval_all(
         items.push(("J_c_smooth".into(), Shape::M(n), cs.j_c.concat()));
     }
     let all: Vec<graph::Id> = items.iter().flat_map(|i| i.2.iter().copied()).collect();
-    let vals = interp::eval::<f64>(&model.g, &all, &vars);
+    // In `KernelF64`, so the numbers are those of the emitted f64 kernels bit for bit.
+    let vars: Vec<interp::KernelF64> = vars.into_iter().map(interp::KernelF64).collect();
+    let vals: Vec<f64> = interp::eval(&model.g, &all, &vars)
+        .into_iter()
+        .map(|v| v.0)
+        .collect();
     let mut off = 0;
     let mut out = EvalOutput::default();
     for (name, shape, ids) in items {
