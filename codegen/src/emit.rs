@@ -1,7 +1,9 @@
 //! Rust emitter: graph cone of a kernel → SSA `let` bindings → `quote!` tokens → `syn::File`
 //! → `prettyplease` (DESIGN.md "Emit"; DEPENDENCIES.md §4: SSA avoids the token-pasting
 //! precedence pitfall). Constants are printed with Rust's shortest round-trip formatting, so
-//! every `f64` survives exactly. sin/cos of one joint variable share a `sin_cos` call.
+//! every `f64` survives exactly. In `f64` kernels the sines and cosines of all joint angles come
+//! from one call of the vectorised helper `sin_cos_n` ([`crate::trig`], emitted once per file
+//! by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call.
 //!
 //! [`EmitOptions`] select variants for accuracy/speed studies (issue 7): the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
@@ -125,6 +127,9 @@ pub struct EmittedKernel {
     pub tokens: TokenStream,
     /// Operation counts.
     pub ops: OpCounts,
+    /// Whether the kernel calls the batched sine–cosine helper (`sin_cos_n`, see
+    /// [`trig_items`]), which the file must then define.
+    pub fast_trig: bool,
 }
 
 fn var_tokens(layout: &Layout, v: u32) -> TokenStream {
@@ -170,11 +175,14 @@ pub fn emit_kernel_with(
         .iter()
         .flat_map(|o| o.ids.iter().copied())
         .collect();
-    let Ssa {
-        mut stmts,
-        refs,
-        ops,
-    } = ssa(g, &roots, &|v| var_tokens(layout, v), opts);
+    let (
+        Ssa {
+            mut stmts,
+            refs,
+            ops,
+        },
+        fast_trig,
+    ) = ssa_inner(g, &roots, &|v| var_tokens(layout, v), opts, true);
 
     // Output assignments.
     let mut params: Vec<TokenStream> = Vec::new();
@@ -270,7 +278,11 @@ pub fn emit_kernel_with(
             #(#stmts)*
         }
     };
-    Ok(EmittedKernel { tokens, ops })
+    Ok(EmittedKernel {
+        tokens,
+        ops,
+        fast_trig,
+    })
 }
 
 /// SSA statements computing every node of the cone of `roots` (in node order), and the
@@ -282,14 +294,48 @@ pub(crate) struct Ssa {
 }
 
 /// The `let` bindings of the cone of `roots`; graph variables are printed by `var_tokens`.
-/// Shared by the dynamics kernels and the OCP node kernels (`crate::ocp`), so both compute
-/// every node with the same `f64` operation.
+/// Shared by the dynamics kernels and the OCP node kernels (`crate::nodefn`), so both compute
+/// every node with the same `f64` operation. sin/cos are computed by the standard library
+/// (`sin_cos` per angle); [`ssa_inner`] with `batch_trig` batches them through the emitted
+/// helper instead.
 pub(crate) fn ssa(
     g: &Graph,
     roots: &[Id],
     var_tokens: &dyn Fn(u32) -> TokenStream,
     opts: &EmitOptions,
 ) -> Ssa {
+    ssa_inner(g, roots, var_tokens, opts, false).0
+}
+
+/// The helper items that code from [`ssa_inner`] with `batch_trig` calls (`sin_cos_n` and its exact fallback,
+/// from [`crate::trig`]), as private items for a generated file; emitted once per file.
+pub fn trig_items() -> Result<TokenStream, CodegenError> {
+    let mut file: syn::File = syn::parse_str(include_str!("trig.rs"))
+        .map_err(|e| CodegenError::Internal(format!("trig.rs does not parse: {e}")))?;
+    file.attrs.clear();
+    let mut out = TokenStream::new();
+    for item in &mut file.items {
+        if let syn::Item::Fn(f) = item {
+            f.vis = syn::Visibility::Inherited;
+        }
+        out.extend(quote!(#item));
+    }
+    Ok(out)
+}
+
+/// As [`ssa`]; with `batch_trig` and `f64`, every sine and cosine of a graph variable (the
+/// joint angles) is taken from one call `sin_cos_n([…])` at the top of the body, and the
+/// returned flag says whether that call was emitted (the file must then contain
+/// [`trig_items`]). Other sin/cos arguments and `f32` use the standard library as in [`ssa`].
+pub(crate) fn ssa_inner(
+    g: &Graph,
+    roots: &[Id],
+    var_tokens: &dyn Fn(u32) -> TokenStream,
+    opts: &EmitOptions,
+    batch_trig: bool,
+) -> (Ssa, bool) {
+    let batch_trig = batch_trig && opts.float == FloatTy::F64;
+    let mut batched = false;
     let ft = opts.float.tokens();
     // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
     let as_mul = |id: Id| -> Option<(Id, Id)> {
@@ -309,6 +355,47 @@ pub(crate) fn ssa(
         *counter += 1;
         id
     };
+    if batch_trig {
+        // The angles (graph variables) whose sin or cos is in the cone, in node order.
+        let mut angles: Vec<Id> = Vec::new();
+        let mut args: Vec<TokenStream> = Vec::new();
+        for i in 0..max {
+            if let Node::Sin(a) | Node::Cos(a) = g.node(Id(i as u32))
+                && mark[i]
+                && let Node::Var(v) = g.node(a)
+                && !angles.contains(&a)
+            {
+                angles.push(a);
+                args.push(var_tokens(v));
+            }
+        }
+        if !angles.is_empty() {
+            let mut sins = Vec::new();
+            let mut coss = Vec::new();
+            for _ in &angles {
+                sins.push(fresh(&mut counter));
+                coss.push(fresh(&mut counter));
+            }
+            stmts.push(quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);));
+            batched = true;
+            ops.sincos += angles.len();
+            ops.temporaries += 2 * angles.len();
+            for i in 0..max {
+                let (a, is_sin) = match g.node(Id(i as u32)) {
+                    Node::Sin(a) => (a, true),
+                    Node::Cos(a) => (a, false),
+                    _ => continue,
+                };
+                if !mark[i] {
+                    continue;
+                }
+                if let Some(j) = angles.iter().position(|&b| b == a) {
+                    let name = if is_sin { &sins[j] } else { &coss[j] };
+                    refs[i] = Some(quote!(#name));
+                }
+            }
+        }
+    }
     for i in 0..max {
         if !mark[i] || refs[i].is_some() {
             continue;
@@ -437,7 +524,7 @@ pub(crate) fn ssa(
         refs[i] = Some(quote!(#t));
     }
 
-    Ssa { stmts, refs, ops }
+    (Ssa { stmts, refs, ops }, batched)
 }
 
 /// `v.push(x)` / `v.extend(x.iter().flatten()…copied())` for an array of rank `rank`.
@@ -514,6 +601,7 @@ pub fn emit_file(
     source_text: &str,
     kernel_tokens: Vec<TokenStream>,
     with_contact: bool,
+    trig_helper: bool,
 ) -> Result<String, CodegenError> {
     emit_file_with(
         scene_name,
@@ -523,12 +611,14 @@ pub fn emit_file(
         source_text,
         kernel_tokens,
         with_contact,
+        trig_helper,
         &EmitOptions::default(),
     )
 }
 
 /// Emit the whole scene module file; `opts.float` sets the type of `PARAM_DEFAULTS`, of the
-/// `Contact` fields and of `eval_flat` (the kernel tokens must use the same options).
+/// `Contact` fields and of `eval_flat` (the kernel tokens must use the same options);
+/// `trig_helper` adds [`trig_items`] (needed when a kernel has [`EmittedKernel::fast_trig`]).
 #[allow(clippy::too_many_arguments)]
 pub fn emit_file_with(
     scene_name: &str,
@@ -538,6 +628,7 @@ pub fn emit_file_with(
     source_text: &str,
     kernel_tokens: Vec<TokenStream>,
     with_contact: bool,
+    trig_helper: bool,
     opts: &EmitOptions,
 ) -> Result<String, CodegenError> {
     let ft = opts.float.tokens();
@@ -566,6 +657,11 @@ pub fn emit_file_with(
     } else {
         TokenStream::new()
     };
+    let trig = if trig_helper {
+        trig_items()?
+    } else {
+        TokenStream::new()
+    };
     let tokens = quote! {
         /// Number of joints.
         pub const NQ: usize = #nq_l;
@@ -582,6 +678,7 @@ pub fn emit_file_with(
         /// The scene file's text.
         pub const SCENE_TOML: &str = #source_text;
         #contact
+        #trig
         #(#kernel_tokens)*
         /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
         /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.

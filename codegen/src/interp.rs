@@ -1,4 +1,7 @@
 //! Interpreter: evaluates graph nodes in `f64` or in double-double ([`crate::dd::Dd`]).
+//! [`KernelF64`] is `f64` with the emitted kernels' sine and cosine ([`crate::trig`]), so an
+//! evaluation in it is bit-identical to the emitted f64 kernels; plain `f64` uses the standard
+//! library's, as the emitted optimal-control node kernels do.
 //!
 //! Used by `eval_all` (the CLI `eval` of scene files that are not built in), by the tests
 //! that compare emitted kernels with the graph they came from, and for accuracy measurements
@@ -64,6 +67,65 @@ impl Scalar for Dd {
     }
     fn to_f64(self) -> f64 {
         Dd::to_f64(self)
+    }
+}
+
+/// `f64` whose sine and cosine are those of the emitted kernels ([`crate::trig::sin_cos_n`]);
+/// all other operations are plain `f64` operations.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Default)]
+pub struct KernelF64(pub f64);
+
+impl Add for KernelF64 {
+    type Output = Self;
+    fn add(self, y: Self) -> Self {
+        KernelF64(self.0 + y.0)
+    }
+}
+
+impl Sub for KernelF64 {
+    type Output = Self;
+    fn sub(self, y: Self) -> Self {
+        KernelF64(self.0 - y.0)
+    }
+}
+
+impl Mul for KernelF64 {
+    type Output = Self;
+    fn mul(self, y: Self) -> Self {
+        KernelF64(self.0 * y.0)
+    }
+}
+
+impl Div for KernelF64 {
+    type Output = Self;
+    fn div(self, y: Self) -> Self {
+        KernelF64(self.0 / y.0)
+    }
+}
+
+impl Neg for KernelF64 {
+    type Output = Self;
+    fn neg(self) -> Self {
+        KernelF64(-self.0)
+    }
+}
+
+impl Scalar for KernelF64 {
+    fn from_f64(v: f64) -> Self {
+        KernelF64(v)
+    }
+    fn sin_cos(self) -> (Self, Self) {
+        let ([s], [c]) = crate::trig::sin_cos_n([self.0]);
+        (KernelF64(s), KernelF64(c))
+    }
+    fn sqrt(self) -> Self {
+        KernelF64(self.0.sqrt())
+    }
+    fn abs(self) -> Self {
+        KernelF64(self.0.abs())
+    }
+    fn to_f64(self) -> f64 {
+        self.0
     }
 }
 

@@ -4,6 +4,7 @@
 //! dynamics eq. 22a/72–79, contact eq. 2–13/58–59 as [`graph`] expressions, derivatives by
 //! [`diff`]) → [`kernels`] (the catalogue of docs/kernels.md) → [`emit`] (SSA Rust code) with a
 //! [`report`]; [`interp`] evaluates the same graphs in f64 or double-double ([`dd`]);
+//! [`trig`] is the fast batched sine–cosine that emitted kernels carry;
 //! [`nodefn`] differentiates, fingerprints and emits collocation node functions as kernels
 //! (the ball-and-finger node functions themselves are built in bf-problem).
 //!
@@ -19,6 +20,7 @@ pub mod nodefn;
 pub mod report;
 pub mod robot;
 pub mod spec;
+pub mod trig;
 
 use std::time::Instant;
 
@@ -89,10 +91,20 @@ pub fn generate_with(
     for k in &scene.kernels {
         defs.push(kernels::build_kernel(&mut model, k)?);
     }
+    for d in &defs {
+        let roots: Vec<graph::Id> = d
+            .outputs
+            .iter()
+            .flat_map(|o| o.ids.iter().copied())
+            .collect();
+        check_finite_constants(&model.g, &roots, scene, &format!("kernel `{}`", d.name))?;
+    }
     let mut tokens = Vec::new();
     let mut reports = Vec::new();
+    let mut trig_helper = false;
     for d in &defs {
         let e = emit::emit_kernel_with(&model.g, &model.layout, d, opts)?;
+        trig_helper |= e.fast_trig;
         tokens.push(e.tokens);
         reports.push(KernelReport {
             name: d.name.clone(),
@@ -108,6 +120,7 @@ pub fn generate_with(
         source_text,
         tokens,
         with_contact,
+        trig_helper,
         opts,
     )?;
     let report = Report {
@@ -118,8 +131,57 @@ pub fn generate_with(
         kernels: reports,
         seconds: start.elapsed().as_secs_f64(),
         code_bytes: code.len(),
+        warnings: scene.warnings(),
     };
     Ok(Generated { code, report })
+}
+
+/// The scene constants of largest and smallest nonzero magnitude (at most three of each), as
+/// `key = value`: the likely sources when folding them overflows.
+fn extreme_constants(scene: &Scene) -> String {
+    let mut c: Vec<(String, f64)> = scene
+        .constants()
+        .into_iter()
+        .filter(|c| c.1 != 0.0)
+        .collect();
+    c.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
+    let mut shown: Vec<String> = c
+        .iter()
+        .take(3)
+        .map(|(k, v)| format!("{k} = {v:e}"))
+        .collect();
+    for (k, v) in c.iter().rev().take(3) {
+        let s = format!("{k} = {v:e}");
+        if !shown.contains(&s) {
+            shown.push(s);
+        }
+    }
+    shown.join(", ")
+}
+
+/// Errors if the cone of `roots` holds a non-finite constant (scene values whose products or
+/// quotients overflow `f64` when folded): emitted code would contain `f64::INFINITY`.
+fn check_finite_constants(
+    g: &graph::Graph,
+    roots: &[graph::Id],
+    scene: &Scene,
+    what: &str,
+) -> Result<(), CodegenError> {
+    let mark = g.cone(roots);
+    for (i, &m) in mark.iter().enumerate() {
+        if let graph::Node::Const(b) = g.node(graph::Id(i as u32))
+            && m
+            && !f64::from_bits(b).is_finite()
+        {
+            return Err(CodegenError::Scene(format!(
+                "{what}: folding the scene values gives the non-finite constant {}; \
+                 the values are out of range for f64 arithmetic (extreme values: {})",
+                f64::from_bits(b),
+                extreme_constants(scene)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// A named numeric output of [`eval_all`].
@@ -179,7 +241,8 @@ fn check_finite(name: &str, v: &[f64]) -> Result<(), CodegenError> {
 
 /// Evaluate kinematics, dynamics and (if the scene has a ball and contact) contact quantities
 /// of `scene` at one state with the interpreter, using the scene's constant values (runtime
-/// parameters at their defaults). Every quantity is computed regardless of `kernels`.
+/// parameters at their defaults). Every quantity is computed regardless of `kernels`, with the
+/// same f64 operations as the emitted kernels (sine and cosine included).
 pub fn eval_all(
     scene: &Scene,
     q: &[f64],
@@ -249,12 +312,24 @@ pub fn eval_all(
         items.push(("J_c_smooth".into(), Shape::M(n), cs.j_c.concat()));
     }
     let all: Vec<graph::Id> = items.iter().flat_map(|i| i.2.iter().copied()).collect();
-    let vals = interp::eval::<f64>(&model.g, &all, &vars);
+    // In `KernelF64`, so the numbers are those of the emitted f64 kernels bit for bit.
+    let vars: Vec<interp::KernelF64> = vars.into_iter().map(interp::KernelF64).collect();
+    let vals: Vec<f64> = interp::eval(&model.g, &all, &vars)
+        .into_iter()
+        .map(|v| v.0)
+        .collect();
     let mut off = 0;
     let mut out = EvalOutput::default();
     for (name, shape, ids) in items {
         let v = &vals[off..off + ids.len()];
         off += ids.len();
+        if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+            return Err(CodegenError::Input(format!(
+                "{name} is not finite ({x}) at this state: the state or the scene values \
+                 overflow f64 arithmetic (extreme scene values: {})",
+                extreme_constants(scene)
+            )));
+        }
         let value = match shape {
             Shape::S => EvalValue::Scalar(v[0]),
             Shape::V => EvalValue::Vector(v.to_vec()),

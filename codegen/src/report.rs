@@ -56,6 +56,9 @@ pub struct Report {
     pub seconds: f64,
     /// Size of the generated code (bytes).
     pub code_bytes: usize,
+    /// The scene's warnings ([`crate::spec::Scene::warnings`]: accepted but physically doubtful
+    /// values), printed after the table.
+    pub warnings: Vec<String>,
 }
 
 impl fmt::Display for Report {
@@ -100,6 +103,10 @@ impl fmt::Display for Report {
             self.graph_nodes,
             self.code_bytes,
             self.seconds * 1e3
-        )
+        )?;
+        for w in &self.warnings {
+            write!(f, "\nwarning: {w}")?;
+        }
+        Ok(())
     }
 }

@@ -228,7 +228,7 @@ pub struct Scene {
     pub ocp_kernels: Option<Vec<String>>,
 }
 
-/// Cost kinds of the optimal-control node kernels (`bf_codegen::ocp::CostKind::tag`).
+/// Cost kinds of the optimal-control node kernels (`bf_problem::CostKind::tag`).
 pub const OCP_COSTS: &[&str] = &["qc", "cot", "time_effort", "track", "reorient", "spin"];
 
 // ---------------------------------------------------------------------------------------------
@@ -1108,17 +1108,60 @@ fn check_inertia(ix: &SourceIndex<'_>, path: &str, spec: &InertiaSpec) -> Result
             }
         }
     }
-    // Sylvester's criterion on the leading principal minors of the symmetric tensor.
-    let m1 = m[0][0];
-    let m2 = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-    let m3 = det3(&m);
-    if !(m1 > 0.0 && m2 > 0.0 && m3 > 0.0) {
+    // Sylvester's criterion on the leading principal minors of the symmetric tensor, scaled by
+    // its largest entry first so that tiny (1e-300) or huge inertias neither underflow nor
+    // overflow the minors: definiteness does not depend on the unit.
+    let n = scaled(&m, scale);
+    let m1 = n[0][0];
+    let m2 = n[0][0] * n[1][1] - n[0][1] * n[1][0];
+    let m3 = det3(&n);
+    if !(scale > 0.0 && m1 > 0.0 && m2 > 0.0 && m3 > 0.0) {
         return Err(ix.invalid(
             path,
-            format!("inertia must be positive definite (leading minors {m1:e}, {m2:e}, {m3:e})"),
+            format!(
+                "inertia must be positive definite (leading minors of I / {scale:e}: \
+                 {m1:e}, {m2:e}, {m3:e})"
+            ),
         ));
     }
     Ok(())
+}
+
+/// `m / scale`, entry by entry.
+fn scaled(m: &[[f64; 3]; 3], scale: f64) -> [[f64; 3]; 3] {
+    m.map(|row| row.map(|x| x / scale))
+}
+
+/// Eigenvalues of a symmetric 3×3 matrix, ascending (closed form: Smith 1961).
+pub fn symmetric_eigenvalues(a: &[[f64; 3]; 3]) -> [f64; 3] {
+    let p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let p2 = (a[0][0] - q).powi(2) + (a[1][1] - q).powi(2) + (a[2][2] - q).powi(2) + 2.0 * p1;
+    if p2 == 0.0 {
+        return [q; 3];
+    }
+    let p = (p2 / 6.0).sqrt();
+    let b = std::array::from_fn(|i| {
+        std::array::from_fn(|j| (a[i][j] - if i == j { q } else { 0.0 }) / p)
+    });
+    let r = (det3(&b) / 2.0).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    let hi = q + 2.0 * p * phi.cos();
+    let lo = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    [lo, 3.0 * q - hi - lo, hi]
+}
+
+/// Principal moments (ascending) of a valid inertia and whether they satisfy the triangle
+/// inequality I₃ ≤ I₁ + I₂ (up to [`MATRIX_TOL`] of the trace), which every rigid body's
+/// inertia about its centre of mass does (Iₖ = ∫ (r² − xₖ²) dm, so I₁ + I₂ − I₃ = 2∫ x₃² dm).
+pub fn principal_moments(m: &[[f64; 3]; 3]) -> ([f64; 3], bool) {
+    let scale = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+    if !(scale > 0.0 && scale.is_finite()) {
+        return ([0.0; 3], false);
+    }
+    let e = symmetric_eigenvalues(&scaled(m, scale));
+    let ok = e[2] <= e[0] + e[1] + MATRIX_TOL * (e[0] + e[1] + e[2]).abs();
+    (e.map(|x| x * scale), ok)
 }
 
 fn det3(m: &[[f64; 3]; 3]) -> f64 {
@@ -1217,6 +1260,39 @@ impl Scene {
     /// built in code. Errors carry `origin`, line 1 and the field path.
     pub fn validate(&self, origin: &str) -> Result<(), SpecError> {
         self.validate_with(&SourceIndex::new("", origin, None))
+    }
+
+    /// Accepted but physically doubtful values, one message each naming the field and values:
+    /// kinetic friction above static friction (μ_k > μ_s), and link or ball inertias whose
+    /// principal moments violate the triangle inequality I₃ ≤ I₁ + I₂ (no rigid body has
+    /// them; published data sets do, e.g. link 3 of the PUMA 560 of Armstrong et al.).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut inertia = |path: String, m: [[f64; 3]; 3]| {
+            let (e, ok) = principal_moments(&m);
+            if !ok {
+                out.push(format!(
+                    "{path}: principal moments {:e}, {:e}, {:e} kg m² violate the triangle \
+                     inequality ({:e} > {:e} + {:e}): no rigid body has this inertia",
+                    e[0], e[1], e[2], e[2], e[0], e[1]
+                ));
+            }
+        };
+        for (i, l) in self.links.iter().enumerate() {
+            inertia(format!("links[{i}].inertia"), l.inertia_matrix());
+        }
+        if let Some(b) = &self.ball {
+            inertia("ball.inertia".to_string(), b.inertia_matrix());
+        }
+        if let Some(f) = &self.friction
+            && f.mu_k > f.mu_s
+        {
+            out.push(format!(
+                "friction.mu_k = {} > friction.mu_s = {}: kinetic friction above static friction",
+                f.mu_k, f.mu_s
+            ));
+        }
+        out
     }
 
     fn validate_with(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {

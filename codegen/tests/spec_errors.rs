@@ -1444,3 +1444,124 @@ fn validate_checks_scenes_built_in_code() {
     s.kernels.push("contact".into());
     assert_eq!(s.validate("code").unwrap_err().path(), Some("kernels[3]"));
 }
+
+#[test]
+fn positive_definiteness_does_not_depend_on_the_unit() {
+    // Minors of diag(1e-300, …) underflow to 0 and of diag(1e300, …) overflow; both are valid.
+    for v in ["1.0e-300", "1.0e300", "5.0e-320"] {
+        let new = format!("inertia = [{v}, {v}, {v}]");
+        let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, &new);
+        let s = Scene::from_toml_str(&text, FILE).unwrap_or_else(|e| panic!("{new}: {e}"));
+        assert!(s.warnings().is_empty(), "{new}: {:?}", s.warnings());
+    }
+    // A tiny but indefinite tensor is still rejected, with the unit-free minors in the message.
+    let new =
+        "inertia = [[1.0e-300, 3.0e-300, 0.0], [3.0e-300, 2.0e-300, 0.0], [0.0, 0.0, 2.0e-300]]";
+    let old = "inertia = [[1.0e-3, 0.0, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";
+    let text = edit(old, 0, new);
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[1].inertia",
+        "positive definite",
+    );
+}
+
+#[test]
+fn impossible_inertias_and_friction_are_warned_about() {
+    assert!(
+        Scene::from_toml_str(BASE, FILE)
+            .unwrap()
+            .warnings()
+            .is_empty()
+    );
+    // Izz > Ixx + Iyy: violates the triangle inequality (a diagonal link inertia).
+    let text = edit(
+        "inertia = [1.0e-3, 2.0e-3, 2.0e-3]",
+        0,
+        "inertia = [1.0e-3, 1.0e-3, 2.5e-3]",
+    );
+    let w = Scene::from_toml_str(&text, FILE).unwrap().warnings();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].starts_with("links[0].inertia: ")
+            && w[0].contains("triangle")
+            && w[0].contains("2.5e-3"),
+        "{w:?}"
+    );
+    // The same moments rotated into a full tensor (principal axes not the link axes), and a
+    // thin plate (equality, allowed up to rounding of the decimal input).
+    let (c, s) = (0.6f64, 0.8f64);
+    let (a, b) = (1.0e-3, 2.5e-3);
+    let full = format!(
+        "inertia = [[{}, {}, 0.0], [{}, {}, 0.0], [0.0, 0.0, 1.0e-3]]",
+        a * c * c + b * s * s,
+        (a - b) * c * s,
+        (a - b) * c * s,
+        a * s * s + b * c * c
+    );
+    let old = "inertia = [[1.0e-3, 0.0, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";
+    let w = Scene::from_toml_str(&edit(old, 0, &full), FILE)
+        .unwrap()
+        .warnings();
+    assert!(
+        w.len() == 1 && w[0].starts_with("links[1].inertia: "),
+        "{w:?}"
+    );
+    let plate = "inertia = [[1.0e-3, 0.0, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 3.0e-3]]";
+    let scene = Scene::from_toml_str(&edit(old, 0, plate), FILE).unwrap();
+    assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
+    // Ball inertia.
+    let text = edit("mass = 0.02", 2, "mass = 0.02\ninertia = [1.0, 1.0, 2.5]");
+    let w = Scene::from_toml_str(&text, FILE).unwrap().warnings();
+    assert!(w.len() == 1 && w[0].starts_with("ball.inertia: "), "{w:?}");
+    // Kinetic friction above static friction: a warning naming both values, not an error.
+    let text = edit("mu_k = 0.6", 0, "mu_k = 0.9");
+    let w = Scene::from_toml_str(&text, FILE).unwrap().warnings();
+    assert_eq!(
+        w,
+        ["friction.mu_k = 0.9 > friction.mu_s = 0.8: kinetic friction above static friction"]
+    );
+}
+
+#[test]
+fn shipped_scenes_warn_only_about_published_puma_data() {
+    for name in ["paper", "human", "iiwa7", "puma560"] {
+        let path = format!("{}/../scenes/{name}.toml", env!("CARGO_MANIFEST_DIR"));
+        let w = Scene::load(&path).unwrap().warnings();
+        if name == "puma560" {
+            // Link 1's placeholder moments (only Iyy enters the dynamics) and Armstrong's link 3
+            // (0.086 > 0.066 + 0.0125).
+            assert_eq!(w.len(), 2, "{w:?}");
+            assert!(w[0].starts_with("links[0].inertia") && w[1].starts_with("links[2].inertia"));
+        } else {
+            assert!(w.is_empty(), "{name}: {w:?}");
+        }
+    }
+}
+
+#[test]
+fn overflowing_scene_values_are_refused_by_generate_and_eval() {
+    let text = edit("a = 1.0", 0, "a = 1.0e308");
+    let scene = Scene::from_toml_str(&text, FILE).unwrap();
+    let err = bf_codegen::generate(&scene, &text).unwrap_err().to_string();
+    assert!(
+        err.contains("non-finite") && err.contains("link1.a = 1e308"),
+        "{err}"
+    );
+    let err = bf_codegen::eval_all(&scene, &[0.1, 0.2], &[0.0, 0.0], [0.0; 3], 0.01)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("not finite") && err.contains("link1.a = 1e308"),
+        "{err}"
+    );
+    // A huge velocity: C q̇ overflows; the quantity is named.
+    let scene = Scene::from_toml_str(BASE, FILE).unwrap();
+    let err = bf_codegen::eval_all(&scene, &[0.1, 0.2], &[1e200, 1e200], [0.0; 3], 0.01)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("Cqd is not finite"), "{err}");
+}

@@ -1,58 +1,164 @@
 //! Criterion benches of the generated kernels (every kernel of `paper`; the dynamics kernels
-//! of `puma560` and `iiwa7`). Target: `paper/mass_cqd_g` ≤ 70 ns.
+//! of `puma560` and `iiwa7`). Each call takes the next of 1024 seeded random states (q
+//! uniform in [−π, π], q̇ in [−2, 2] rad/s), so branches inside the kernels (the sine–cosine
+//! helper's) are not trained on one fixed input. Time is wall time minus the time the thread
+//! spent preempted (`/proc/thread-self/schedstat`; plain wall time where that is unavailable),
+//! so waiting for a CPU on a loaded machine does not count.
+//!
+//! `cargo bench -p bf-generated --bench kernels -- --warm-up-time 1 --measurement-time 3`;
+//! a filter such as `mass_cqd_g` selects kernels.
 
 use std::hint::black_box;
+use std::time::{Duration, Instant};
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// Number of states a bench cycles through.
+const STATES: usize = 1024;
+
+/// Time the calling thread has spent waiting for a CPU (runnable but preempted), from the
+/// second field of `/proc/thread-self/schedstat`; `None` where that file does not exist. The
+/// first field (time on the CPU) is only updated at scheduler ticks, but waits are accounted
+/// when the thread is switched back in, so this one is exact whenever the thread reads it.
+fn run_delay() -> Option<Duration> {
+    let s = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = s.split_whitespace().nth(1)?.parse().ok()?;
+    Some(Duration::from_nanos(ns))
+}
+
+/// Runs `f(i)` for `i` in `0..iters` and returns the wall time minus the time the thread was
+/// preempted (plain wall time where that is unavailable).
+fn timed(iters: u64, mut f: impl FnMut(usize)) -> Duration {
+    let d0 = run_delay();
+    let w0 = Instant::now();
+    for i in 0..iters {
+        f(i as usize % STATES);
+    }
+    let wall = w0.elapsed();
+    match (d0, run_delay()) {
+        (Some(a), Some(b)) => wall.saturating_sub(b.saturating_sub(a)),
+        _ => wall,
+    }
+}
+
+/// `STATES` random (q, q̇) pairs with a fixed seed per joint count.
+fn states<const N: usize>() -> Vec<([f64; N], [f64; N])> {
+    let mut rng = ChaCha8Rng::seed_from_u64(1000 + N as u64);
+    (0..STATES)
+        .map(|_| {
+            (
+                std::array::from_fn(|_| {
+                    rng.random_range(-std::f64::consts::PI..std::f64::consts::PI)
+                }),
+                std::array::from_fn(|_| rng.random_range(-2.0..2.0)),
+            )
+        })
+        .collect()
+}
 
 macro_rules! bench_dynamics {
     ($c:expr, $m:ident) => {{
         use bf_generated::$m as s;
         let name = stringify!($m);
-        let q: [f64; s::NQ] = std::array::from_fn(|i| 0.3 + 0.17 * i as f64);
-        let qd: [f64; s::NQ] = std::array::from_fn(|i| -0.5 + 0.23 * i as f64);
+        let st = states::<{ s::NQ }>();
         let p = s::PARAM_DEFAULTS;
         let mut m = [[0.0; s::NQ]; s::NQ];
         let mut v = [0.0; s::NQ];
         let mut t3 = [[[0.0; s::NQ]; s::NQ]; s::NQ];
         let mut u = 0.0;
         $c.bench_function(&format!("{name}/mass_matrix"), |b| {
-            b.iter(|| s::mass_matrix(black_box(&q), black_box(&p), &mut m))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    s::mass_matrix(black_box(&st[i].0), black_box(&p), &mut m);
+                    black_box(&m);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/mass_cqd_g"), |b| {
-            b.iter(|| s::mass_cqd_g(black_box(&q), black_box(&qd), black_box(&p), &mut m, &mut v))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    let (q, qd) = &st[i];
+                    s::mass_cqd_g(black_box(q), black_box(qd), black_box(&p), &mut m, &mut v);
+                    black_box((&m, &v));
+                })
+            })
         });
         $c.bench_function(&format!("{name}/cqd_g"), |b| {
-            b.iter(|| s::cqd_g(black_box(&q), black_box(&qd), black_box(&p), &mut v))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    let (q, qd) = &st[i];
+                    s::cqd_g(black_box(q), black_box(qd), black_box(&p), &mut v);
+                    black_box(&v);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/cqd_g_rnea"), |b| {
-            b.iter(|| s::cqd_g_rnea(black_box(&q), black_box(&qd), black_box(&p), &mut v))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    let (q, qd) = &st[i];
+                    s::cqd_g_rnea(black_box(q), black_box(qd), black_box(&p), &mut v);
+                    black_box(&v);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/coriolis_qd"), |b| {
-            b.iter(|| s::coriolis_qd(black_box(&q), black_box(&qd), black_box(&p), &mut v))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    let (q, qd) = &st[i];
+                    s::coriolis_qd(black_box(q), black_box(qd), black_box(&p), &mut v);
+                    black_box(&v);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/coriolis_matrix"), |b| {
-            b.iter(|| s::coriolis_matrix(black_box(&q), black_box(&qd), black_box(&p), &mut m))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    let (q, qd) = &st[i];
+                    s::coriolis_matrix(black_box(q), black_box(qd), black_box(&p), &mut m);
+                    black_box(&m);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/gravity"), |b| {
-            b.iter(|| s::gravity(black_box(&q), black_box(&p), &mut v))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    s::gravity(black_box(&st[i].0), black_box(&p), &mut v);
+                    black_box(&v);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/potential"), |b| {
-            b.iter(|| s::potential(black_box(&q), black_box(&p), &mut u))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    s::potential(black_box(&st[i].0), black_box(&p), &mut u);
+                    black_box(&u);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/dmass_dq"), |b| {
-            b.iter(|| s::dmass_dq(black_box(&q), black_box(&p), &mut t3))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    s::dmass_dq(black_box(&st[i].0), black_box(&p), &mut t3);
+                    black_box(&t3);
+                })
+            })
         });
         $c.bench_function(&format!("{name}/christoffel"), |b| {
-            b.iter(|| s::christoffel(black_box(&q), black_box(&p), &mut t3))
+            b.iter_custom(|n| {
+                timed(n, |i| {
+                    s::christoffel(black_box(&st[i].0), black_box(&p), &mut t3);
+                    black_box(&t3);
+                })
+            })
         });
     }};
 }
 
 fn paper_kinematics(c: &mut Criterion) {
     use bf_generated::paper as s;
-    let q = [0.3, -0.7, 1.1];
-    let qd = [0.4, 0.2, -0.9];
+    let st = states::<{ s::NQ }>();
     let omega = [0.0, 0.0, 2.2];
     let p = s::PARAM_DEFAULTS;
     let mut pos = [[0.0; 3]; s::NQ];
@@ -64,38 +170,67 @@ fn paper_kinematics(c: &mut Criterion) {
     let mut six = [0.0; 6];
     let mut ct = s::Contact::default();
     c.bench_function("paper/frames", |b| {
-        b.iter(|| s::frames(black_box(&q), black_box(&p), &mut pos, &mut rot))
+        b.iter_custom(|n| {
+            timed(n, |i| {
+                s::frames(black_box(&st[i].0), black_box(&p), &mut pos, &mut rot);
+                black_box((&pos, &rot));
+            })
+        })
     });
     c.bench_function("paper/tip_jacobian", |b| {
-        b.iter(|| s::tip_jacobian(black_box(&q), black_box(&p), &mut jp, &mut jo))
+        b.iter_custom(|n| {
+            timed(n, |i| {
+                s::tip_jacobian(black_box(&st[i].0), black_box(&p), &mut jp, &mut jo);
+                black_box((&jp, &jo));
+            })
+        })
     });
     c.bench_function("paper/com_jacobians", |b| {
-        b.iter(|| s::com_jacobians(black_box(&q), black_box(&p), &mut cjp, &mut cjo))
+        b.iter_custom(|n| {
+            timed(n, |i| {
+                s::com_jacobians(black_box(&st[i].0), black_box(&p), &mut cjp, &mut cjo);
+                black_box((&cjp, &cjo));
+            })
+        })
     });
     c.bench_function("paper/tip_jdot_qd", |b| {
-        b.iter(|| s::tip_jdot_qd(black_box(&q), black_box(&qd), black_box(&p), &mut six))
+        b.iter_custom(|n| {
+            timed(n, |i| {
+                let (q, qd) = &st[i];
+                s::tip_jdot_qd(black_box(q), black_box(qd), black_box(&p), &mut six);
+                black_box(&six);
+            })
+        })
     });
     c.bench_function("paper/contact", |b| {
-        b.iter(|| {
-            s::contact(
-                black_box(&q),
-                black_box(&qd),
-                black_box(&omega),
-                black_box(&p),
-                &mut ct,
-            )
+        b.iter_custom(|n| {
+            timed(n, |i| {
+                let (q, qd) = &st[i];
+                s::contact(
+                    black_box(q),
+                    black_box(qd),
+                    black_box(&omega),
+                    black_box(&p),
+                    &mut ct,
+                );
+                black_box(&ct);
+            })
         })
     });
     c.bench_function("paper/contact_smooth", |b| {
-        b.iter(|| {
-            s::contact_smooth(
-                black_box(&q),
-                black_box(&qd),
-                black_box(&omega),
-                black_box(0.01),
-                black_box(&p),
-                &mut ct,
-            )
+        b.iter_custom(|n| {
+            timed(n, |i| {
+                let (q, qd) = &st[i];
+                s::contact_smooth(
+                    black_box(q),
+                    black_box(qd),
+                    black_box(&omega),
+                    black_box(0.01),
+                    black_box(&p),
+                    &mut ct,
+                );
+                black_box(&ct);
+            })
         })
     });
 }

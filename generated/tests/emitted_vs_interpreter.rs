@@ -1,9 +1,10 @@
 //! The compiled kernels of every scene module against bf-codegen's interpreter evaluating the
 //! same graphs (random states and perturbed runtime parameters). Both perform the same f64
-//! operations in the same order, so the results must be bit-identical.
+//! operations in the same order (sine and cosine by the emitted helper: the interpreter runs in
+//! `KernelF64`), so the results must be bit-identical.
 
 use bf_codegen::Scene;
-use bf_codegen::interp::Tape;
+use bf_codegen::interp::{KernelF64, Tape};
 use bf_codegen::kernels::build_kernel;
 use bf_codegen::robot::Model;
 use rand::{Rng, SeedableRng};
@@ -56,7 +57,12 @@ macro_rules! check_scene {
                 for (i, pi) in p.iter().enumerate() {
                     vars[l.param(i) as usize] = *pi;
                 }
-                let want = tape.eval::<f64>(&vars);
+                let vars: Vec<KernelF64> = vars.into_iter().map(KernelF64).collect();
+                let want: Vec<f64> = tape
+                    .eval::<KernelF64>(&vars)
+                    .into_iter()
+                    .map(|v| v.0)
+                    .collect();
                 let got = s::eval_flat(k, &q, &qd, &omega, eps, &p).unwrap();
                 assert_eq!(
                     got.len(),
