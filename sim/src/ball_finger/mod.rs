@@ -26,7 +26,8 @@ use crate::{Input, SimError};
 use bf_model::{Kernels, Mode, Model, ModelError, State, Vec3};
 use std::cell::Cell;
 
-/// The finger–ball [`HybridSystem`](crate::HybridSystem): a bf-model [`Model`] plus a torque [`Input`].
+/// The finger–ball [`HybridSystem`](crate::HybridSystem): a bf-model [`Model`] plus a torque
+/// [`Input`].
 #[derive(Debug, Clone)]
 pub struct BallFinger<K: Kernels, I: Input> {
     /// Physics (kernels, parameters, transition tolerances).

@@ -1,7 +1,7 @@
 //! Independent reference implementation of the finger kinematics, dynamics and contact
-//! geometry, for ANY [`Scene`] (standard or modified DH, base and tool transforms, full inertia
-//! tensors). Written from the paper and PARAMS.md only, never from `bf-codegen`'s code, so the
-//! generated kernels can be checked against it.
+//! geometry, for ANY [`Scene`](bf_codegen::spec::Scene) (standard or modified DH, base and tool
+//! transforms, full inertia tensors). Written from the paper and PARAMS.md only, never from
+//! `bf-codegen`'s code, so the generated kernels can be checked against it.
 //!
 //! Method: plain 4×4 homogeneous transforms built by multiplying the elementary DH factors, a
 //! geometric Jacobian from the z-axis cross-product construction, and the Lagrangian quantities
