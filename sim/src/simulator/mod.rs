@@ -24,20 +24,24 @@
 //! [`SimError::Zeno`]), and checks whether the new mode has a
 //! directional guard already beyond its zero (then the next `step()` reports that event at the
 //! same instant: a chained transition, bounded by `max_chained_events`).
+//!
+//! Files: the step loop here; the event step [`Simulator::apply_reset`] in `reset.rs`;
+//! [`SimFailure`] and [`simulate`] in `failure.rs`.
+
+mod failure;
+mod reset;
+
+pub use failure::{SimFailure, simulate};
 
 use crate::events::{GuardProbe, beyond_triggered, scan_guard};
 use crate::integrator::{
     FAC_MAX, FAC_MIN, PI_BETA, PI_SAFE, StepBuffers, dopri5_step, error_norm, initial_step,
     rk4_step,
 };
-use crate::trajectory::{
-    EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory, events_csv, output_json,
-    write_atomic,
-};
-use crate::{Guard, HybridSystem, Method, SimError, SimSettings, Transition};
+use crate::trajectory::{EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory};
+use crate::{Guard, HybridSystem, Method, SimError, SimSettings};
 use std::collections::VecDeque;
 use std::fmt::Debug;
-use std::path::Path;
 
 /// What one call of [`Simulator::step`] did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,7 +60,7 @@ pub enum StopReason {
     },
     /// `t_end` was reached.
     TEndReached,
-    /// A reset returned [`Transition::Terminate`].
+    /// A reset returned [`Transition::Terminate`](crate::Transition::Terminate).
     Terminated,
 }
 
@@ -651,109 +655,6 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
         }
     }
 
-    /// Applies the reset of the pending event (the state must be at the event time, which
-    /// `step()` guarantees): runs the reset map, logs the event, enforces the Zeno and chain
-    /// limits, and enters the new mode. No-op if no event is pending.
-    pub fn apply_reset(&mut self) -> Result<(), SimError> {
-        let Some(p) = self.pending.take() else {
-            return Ok(());
-        };
-        let t = self.t;
-        let mode_before = self.mode;
-        let x_pre = self.x.clone();
-        let tr = self.sys.reset(self.mode, p.guard, t, &mut self.x)?;
-        if self.x.iter().any(|v| !v.is_finite()) {
-            return Err(self.non_finite(&format!(
-                "state after reset of guard `{}`",
-                self.guards[p.guard].name
-            )));
-        }
-        self.stats.events += 1;
-        self.chain = match self.last_event_t {
-            Some(tl) if (t - tl).abs() <= 2.0 * self.set.event_tol => self.chain + 1,
-            _ => 1,
-        };
-        self.last_event_t = Some(t);
-        self.recent_events
-            .push_back((t, self.guards[p.guard].name, mode_before));
-        while self
-            .recent_events
-            .front()
-            .is_some_and(|&(tf, _, _)| tf < t - self.set.zeno_window)
-        {
-            self.recent_events.pop_front();
-        }
-        let mut mode_after = match tr {
-            Transition::To(m) => Some(m),
-            Transition::Terminate => None,
-        };
-        if self.recent_events.len() > self.set.zeno_max_events {
-            let count = self.recent_events.len();
-            let fallback = match mode_after {
-                Some(m) => {
-                    let recent: Vec<(&'static str, S::Mode)> =
-                        self.recent_events.iter().map(|&(_, g, m)| (g, m)).collect();
-                    self.sys.zeno_fallback(m, t, &mut self.x, &recent)?
-                }
-                None => None,
-            };
-            let Some((m, message)) = fallback else {
-                return Err(SimError::Zeno {
-                    t,
-                    mode: mode_name(&mode_before),
-                    count,
-                });
-            };
-            if self.x.iter().any(|v| !v.is_finite()) {
-                return Err(self.non_finite("state after the Zeno fallback"));
-            }
-            mode_after = Some(m);
-            self.stats.zeno_fallbacks += 1;
-            self.warnings.push(SimWarning {
-                t,
-                kind: "zeno_fallback",
-                message: format!(
-                    "{count} events within {} s: {message}",
-                    self.set.zeno_window
-                ),
-            });
-            self.recent_events.clear();
-        }
-        self.events.push(EventRecord {
-            t,
-            guard: self.guards[p.guard].name,
-            guard_index: p.guard,
-            mode_before,
-            mode_after,
-            x_pre,
-            x_post: self.x.clone(),
-            chained: p.chained,
-        });
-        if self.chain > self.set.max_chained_events {
-            return Err(SimError::ChainLimit {
-                t,
-                mode: mode_name(&self.mode),
-                count: self.chain,
-            });
-        }
-        self.f_valid = false;
-        match mode_after {
-            None => {
-                self.traj
-                    .push(t, &self.x, self.mode, SampleKind::EventPost, None);
-                self.finished = Some(StopReason::Terminated);
-            }
-            Some(m) => {
-                self.mode = m;
-                self.traj
-                    .push(t, &self.x, self.mode, SampleKind::EventPost, None);
-                self.sys.check_valid(self.mode, t, &self.x)?;
-                self.enter_mode(true)?;
-            }
-        }
-        Ok(())
-    }
-
     /// Consumes the simulator and returns what was computed.
     pub fn finish(self) -> SimOutput<S::Mode> {
         SimOutput {
@@ -788,90 +689,5 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
             }
         }
         Ok(self.finish())
-    }
-}
-
-/// A failed run: the error, where it happened, and everything computed before it.
-#[derive(Debug)]
-pub struct SimFailure<M> {
-    /// The error that stopped the run.
-    pub error: SimError,
-    /// Time at which the run stopped.
-    pub t: f64,
-    /// Mode at that time (`None` if the run could not even start).
-    pub mode: Option<M>,
-    /// Trajectory, events and statistics up to the failure.
-    pub partial: SimOutput<M>,
-}
-
-impl<M: Debug> std::fmt::Display for SimFailure<M> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "simulation failed at t = {} ({} samples, {} events kept): {}",
-            self.t,
-            self.partial.trajectory.len(),
-            self.partial.events.len(),
-            self.error
-        )
-    }
-}
-
-impl<M: Debug> std::error::Error for SimFailure<M> {
-    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        Some(&self.error)
-    }
-}
-
-impl<M: Debug> SimFailure<M> {
-    /// Writes the partial trajectory, events and the error message as JSON (same layout as
-    /// [`SimOutput::write_json`] plus `"error"`).
-    pub fn write_json(&self, path: &Path) -> Result<(), SimError> {
-        let p = &self.partial;
-        let bytes = output_json(
-            &p.trajectory,
-            &p.events,
-            p.stats,
-            p.t_final,
-            &p.mode_final,
-            p.terminated,
-            &p.warnings,
-            Some(self.error.to_string()),
-        )?;
-        write_atomic(path, &bytes)
-    }
-
-    /// Writes the partial event log as CSV.
-    pub fn write_events_csv(&self, path: &Path) -> Result<(), SimError> {
-        write_atomic(path, &events_csv(&self.partial.events)?)
-    }
-}
-
-/// Convenience wrapper: [`Simulator::new`] + [`Simulator::run`]. A setup error (bad settings,
-/// NaN initial state, `t_end <= t0`, ...) is returned as a failure with an empty trajectory.
-pub fn simulate<S: HybridSystem>(
-    sys: &S,
-    settings: SimSettings,
-    mode0: S::Mode,
-    t0: f64,
-    x0: &[f64],
-    t_end: f64,
-) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
-    match Simulator::new(sys, settings, mode0, t0, x0, t_end) {
-        Ok(sim) => sim.run(),
-        Err(error) => Err(Box::new(SimFailure {
-            error,
-            t: t0,
-            mode: Some(mode0),
-            partial: SimOutput {
-                trajectory: Trajectory::default(),
-                events: Vec::new(),
-                stats: SimStats::default(),
-                t_final: t0,
-                mode_final: mode0,
-                terminated: false,
-                warnings: Vec::new(),
-            },
-        })),
     }
 }

@@ -1,0 +1,211 @@
+//! The ball-and-finger hybrid system (paper Sect. 2.6–3, Fig. 2–3) on top of bf-model.
+//!
+//! State x = (q, q̇, ω) ∈ ℝ⁹ (eq. 44, [`bf_model::State::to_array`] layout), modes
+//! [`bf_model::Mode`] = Free / Stick / Slip, joint torques τ(t, q, q̇) from an [`Input`].
+//!
+//! This file holds [`BallFinger`]: construction (with the length ℓ = a₃ of the contact link,
+//! the lower limit of sat(α) in eq. 3), the energy E = T + U (eq. 22), the gap h (eq. 4) and
+//! the Gauss–Newton projection of q onto h(q) = 0 used by the drift control. The other files:
+//! * `options` — [`BallFingerOptions`].
+//! * `hybrid` — the [`HybridSystem`](crate::HybridSystem) implementation: vector fields, guards
+//!   and resets of the modes (eq. 19, 26–43, 48–50), the kinks of sat(α) (eq. 3), the Zeno
+//!   fallback and the drift control (Sect. 3.1).
+//! * `report` — derived per-sample quantities, event kinds, run summary and energy warnings
+//!   ([`BallFinger::report`], [`RunSummary`]).
+//! * `files` — the output files of a run ([`RunReport::write_dir`]).
+
+mod files;
+mod hybrid;
+mod options;
+mod report;
+
+pub use options::BallFingerOptions;
+pub use report::{EventInfo, RunReport, RunSummary, SampleInfo, event_kind};
+
+use crate::{Input, SimError};
+use bf_model::{Kernels, Mode, Model, ModelError, State, Vec3};
+use std::cell::Cell;
+
+/// The finger–ball [`HybridSystem`](crate::HybridSystem): a bf-model [`Model`] plus a torque
+/// [`Input`].
+#[derive(Debug, Clone)]
+pub struct BallFinger<K: Kernels, I: Input> {
+    /// Physics (kernels, parameters, transition tolerances).
+    pub model: Model<K>,
+    /// Joint torques τ(t, q, q̇).
+    pub input: I,
+    /// Options.
+    pub options: BallFingerOptions,
+    /// Unit slip direction Δv/‖Δv‖ at the start of the current Slip step (zero: unknown), for
+    /// the `slip_reversal` guard; updated by the resets into Slip and after every accepted
+    /// Slip step (`project`).
+    slip_ref: Cell<[f64; 3]>,
+    /// Length ℓ = a₃ of the contact link (m), the lower limit of sat(α) in eq. 3.
+    link_length: f64,
+    /// Guards suspended by the Zeno fallback, and until when.
+    hold: Cell<Hold>,
+}
+
+/// Guards suspended by the Zeno fallback until `until` (s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Hold {
+    until: f64,
+    /// The kink guards `alpha_tip`, `alpha_base`.
+    kinks: bool,
+    /// The contact-mode guards `lambda_n`, `sigma`, `slip_speed`, `slip_reversal`.
+    contact: bool,
+}
+
+impl Hold {
+    const NONE: Hold = Hold {
+        until: f64::NEG_INFINITY,
+        kinks: false,
+        contact: false,
+    };
+}
+
+fn state_of(x: &[f64]) -> Result<State, SimError> {
+    let a: &[f64; 9] = x.try_into().map_err(|_| SimError::DimensionMismatch {
+        what: "ball-finger state",
+        expected: 9,
+        found: x.len(),
+    })?;
+    Ok(State::from_array(a))
+}
+
+fn write_velocities(x: &mut [f64], qd: &Vec3, omega: &Vec3) {
+    x[3..6].copy_from_slice(qd.as_slice());
+    x[6..9].copy_from_slice(omega.as_slice());
+}
+
+/// Length ℓ of the contact link from the contact kernel. With a revolute last joint, advancing q₃
+/// by π reverses e_x3 about z₂ while p₂ (joint 3) stays, and α = (o_b − p₂ − d₃ z₂)·e_x3 − ℓ
+/// (eq. 2 with p_e = p₂ + d₃ z₂ + ℓ e_x3), so α(q) + α(q + π e₃) = −2ℓ. Checked at two
+/// configurations and, for the exact saturation, against sat(α) = −ℓ where α < −ℓ.
+fn contact_link_length<K: Kernels>(model: &Model<K>) -> Result<f64, SimError> {
+    let alpha = |q: Vec3| -> Result<(f64, f64), SimError> {
+        let c = model
+            .evaluate(&State::new(q, Vec3::zeros(), Vec3::zeros()))
+            .map_err(SimError::system)?
+            .contact;
+        Ok((c.alpha, c.sat_alpha))
+    };
+    let pi = std::f64::consts::PI;
+    let mut lengths = Vec::new();
+    for q in [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, -0.7, 1.1)] {
+        let (a0, s0) = alpha(q)?;
+        let (a1, s1) = alpha(q + Vec3::new(0.0, 0.0, pi))?;
+        let l = -0.5 * (a0 + a1);
+        // The side with α < −ℓ has sat(α) = −ℓ for the exact saturation.
+        let (a_low, s_low) = if a0 < a1 { (a0, s0) } else { (a1, s1) };
+        let exact = model.contact_variant() == bf_model::ContactVariant::Exact;
+        let tol = 1e-9 * (1.0 + l.abs());
+        if exact && a_low < -l - tol && (s_low + l).abs() > tol {
+            return Err(contact_link_error(l, "sat(alpha) does not saturate at -l"));
+        }
+        lengths.push(l);
+    }
+    let l = lengths[0];
+    if !(l.is_finite() && l > 0.0) || (lengths[1] - l).abs() > 1e-9 * (1.0 + l) {
+        return Err(contact_link_error(
+            l,
+            "alpha(q) + alpha(q + pi e3) is not the same -2 l at two configurations",
+        ));
+    }
+    Ok(l)
+}
+
+fn contact_link_error(l: f64, why: &str) -> SimError {
+    SimError::System {
+        msg: format!(
+            "cannot determine the contact link length from the contact kernel (got {l}): {why}; \
+             the ball-finger simulator needs a revolute last joint carrying the contact link"
+        ),
+    }
+}
+
+impl<K: Kernels, I: Input> BallFinger<K, I> {
+    /// Builds the system; the input must provide 3 torques.
+    pub fn new(model: Model<K>, input: I, options: BallFingerOptions) -> Result<Self, SimError> {
+        if input.dim() != 3 {
+            return Err(SimError::DimensionMismatch {
+                what: "torque input",
+                expected: 3,
+                found: input.dim(),
+            });
+        }
+        let link_length = contact_link_length(&model)?;
+        Ok(BallFinger {
+            model,
+            input,
+            options,
+            slip_ref: Cell::new([0.0; 3]),
+            link_length,
+            hold: Cell::new(Hold::NONE),
+        })
+    }
+
+    /// Length ℓ of the contact link (m): the α at which sat(α) of eq. 3 saturates at −ℓ.
+    pub fn link_length(&self) -> f64 {
+        self.link_length
+    }
+
+    /// Maps a model error at a trial state: far from contact is outside the contact modes'
+    /// domain (the step is retried shorter), everything else is a system error.
+    fn model_err(mode: Mode, t: f64) -> impl Fn(ModelError) -> SimError {
+        move |e| match e {
+            ModelError::NotInContact { .. } => SimError::OutsideDomain {
+                t,
+                mode: format!("{mode:?}"),
+                msg: e.to_string(),
+            },
+            e => SimError::system(e),
+        }
+    }
+
+    fn set_slip_ref(&self, dv: &Vec3) {
+        let n = dv.norm();
+        let d = if n > 0.0 && n.is_finite() {
+            dv / n
+        } else {
+            Vec3::zeros()
+        };
+        self.slip_ref.set(d.into());
+    }
+
+    /// Gauss–Newton steps of q along ∇h = J_cᵀ n onto h(q) = 0; returns |h| before.
+    fn project_position(&self, s: &mut State) -> Result<Option<f64>, SimError> {
+        let mut drift = None;
+        for _ in 0..self.options.projection_iterations {
+            let kin = self.model.evaluate(s).map_err(SimError::system)?;
+            let c = &kin.contact;
+            drift.get_or_insert(c.h.abs());
+            let grad = c.j_c.transpose() * c.n;
+            let g2 = grad.norm_squared();
+            if c.h == 0.0 || g2 < 1e-24 {
+                break;
+            }
+            s.q -= grad * (c.h / g2);
+        }
+        Ok(drift)
+    }
+
+    fn tau(&self, t: f64, s: &State) -> Result<Vec3, SimError> {
+        let mut tau = [0.0; 3];
+        self.input
+            .tau(t, s.q.as_slice(), s.qd.as_slice(), &mut tau)?;
+        Ok(Vec3::from(tau))
+    }
+
+    /// Total energy E = T + U at `x` (J).
+    pub fn energy(&self, x: &[f64]) -> Result<f64, SimError> {
+        let s = state_of(x)?;
+        Ok(self.model.energy(&s).map_err(SimError::system)?.total)
+    }
+
+    /// Gap h(q) at `x` (m).
+    pub fn gap(&self, x: &[f64]) -> Result<f64, SimError> {
+        let s = state_of(x)?;
+        Ok(self.model.evaluate(&s).map_err(SimError::system)?.contact.h)
+    }
+}

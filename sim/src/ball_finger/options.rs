@@ -1,0 +1,49 @@
+//! Options of the ball-and-finger hybrid system ([`BallFingerOptions`]): the impact law of
+//! Free → contact (Sect. 2.5, eq. 39–43), the drift projection (Sect. 3.1), the lift-off
+//! speed, the Zeno hold time and the tolerances of the energy warnings.
+
+use bf_model::ImpactLaw;
+
+/// Options of the ball-and-finger hybrid system.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BallFingerOptions {
+    /// Impact law applied at Free → contact (default: [`ImpactLaw::Stick`]).
+    pub impact_law: ImpactLaw,
+    /// Project h and the velocity constraint after every accepted contact step (default: true).
+    pub project: bool,
+    /// Gauss–Newton iterations of the position projection (default: 3).
+    pub projection_iterations: usize,
+    /// Normal separation speed n·v_c⁺ (m/s) set by the contact → Free reset when the finger
+    /// is not already separating (default: 1e-8). At lift-off λ_n = 0 and ḣ = 0, so the free
+    /// ḧ is itself ≈ 0 and integration noise in ḣ (~1e-12) can turn the h guard around at once
+    /// (lift-off / impact chatter). Like the slip kick of Sect. 3.1 ("update q̇ and ω such that
+    /// the required condition is satisfied"), a tiny normal impulse along n makes the new mode
+    /// valid; it does not act on the ball (r_c ∥ n) and changes the energy by O(1e-18) J.
+    /// 0 disables it.
+    pub lift_off_speed: f64,
+    /// How long the Zeno fallback holds its regularisation (s): suspended kink guards, or a
+    /// sticking contact held regardless of λ_n and σ (see the module docs) (default: 1e-2).
+    pub zeno_hold_time: f64,
+    /// An impact that raises the energy E by more than this (J) is reported as an
+    /// `energy_raising_impact` warning; only Newton's law (eq. 39) can do so (default: 1e-9).
+    pub impact_energy_tol: f64,
+    /// A run whose energy-balance error (the largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events|,
+    /// P = dE/dt of the power balance, trapezoidal rule over the samples) exceeds this (J) gets an
+    /// `energy_error` warning: the step is too long for the dynamics (e.g. fixed-step RK4 with a
+    /// large step) (default: 1e-3).
+    pub energy_error_tol: f64,
+}
+
+impl Default for BallFingerOptions {
+    fn default() -> Self {
+        BallFingerOptions {
+            impact_law: ImpactLaw::Stick,
+            project: true,
+            projection_iterations: 3,
+            lift_off_speed: 1e-8,
+            zeno_hold_time: 1e-2,
+            impact_energy_tol: 1e-9,
+            energy_error_tol: 1e-3,
+        }
+    }
+}

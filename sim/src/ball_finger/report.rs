@@ -1,0 +1,441 @@
+//! Derived quantities and run summary of the ball-and-finger system.
+//!
+//! Output ([`BallFinger::sample_info`], [`BallFinger::report`]): at every stored sample the
+//! derived quantities τ, λ (eq. 33 / 37), λ_n (eq. 12), h (eq. 4), σ (eq. 18), ‖Δv‖ (eq. 13),
+//! n·v_c (eq. 36) and E = T + U (eq. 22) are recomputed from the model, so the files can be
+//! checked against the transition conditions of Sect. 3.1 without re-running the model; events
+//! are named by their Fig. 3 transition ([`event_kind`]).
+//!
+//! # Energy warnings
+//! The run summary reports each impact that raises the energy (only Newton's law, eq. 39, can:
+//! see bf-model's impact module) and the energy-balance error E(t) − E(t₀) − ∫ P dt of the
+//! integration (P of the power balance, eq. 22/25); above `BallFingerOptions::energy_error_tol`
+//! it is a warning (e.g. fixed-step RK4 with a step too long for the dynamics).
+
+use super::{BallFinger, BallFingerOptions, state_of};
+use crate::trajectory::{SampleKind, SimOutput};
+use crate::{Input, SimError, SimWarning};
+use bf_model::{Kernels, Mode};
+use serde::Serialize;
+
+impl<K: Kernels, I: Input> BallFinger<K, I> {
+    /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
+    /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
+    pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo, SimError> {
+        let s = state_of(x)?;
+        let tau = self.tau(t, &s)?;
+        let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+        let acc = self
+            .model
+            .accelerations(mode, &s, &tau)
+            .map_err(SimError::system)?;
+        let e = self.model.energy(&s).map_err(SimError::system)?;
+        let power = bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force);
+        let c = &kin.contact;
+        Ok(SampleInfo {
+            tau: tau.into(),
+            lambda: acc.force.lambda.into(),
+            lambda_n: acc.force.lambda_n,
+            sigma: acc.force.sigma,
+            h: c.h,
+            slip_speed: c.delta_v.norm(),
+            normal_velocity: c.normal_velocity(),
+            energy: e.total,
+            power: power.total,
+        })
+    }
+
+    /// [`BallFinger::sample_info`] that never fails: a sample where the model cannot be
+    /// evaluated (e.g. the state a failed run stopped at) gets NaN fields (`null` in JSON).
+    pub fn sample_info_or_nan(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo {
+        self.sample_info(mode, t, x).unwrap_or(SampleInfo::NAN)
+    }
+
+    /// Derived quantities at every sample and event of a run, plus its summary. `cpu_seconds`
+    /// is the wall time the run took (for the real-time factor).
+    pub fn report(&self, out: &SimOutput<Mode>, t0: f64, cpu_seconds: f64) -> RunReport {
+        let tr = &out.trajectory;
+        let samples: Vec<SampleInfo> = (0..tr.len())
+            .map(|i| self.sample_info_or_nan(tr.mode[i], tr.t[i], &tr.x[i]))
+            .collect();
+        let events: Vec<EventInfo> = out
+            .events
+            .iter()
+            .map(|e| EventInfo {
+                t: e.t,
+                kind: event_kind(e.mode_before, e.mode_after, e.guard),
+                guard: e.guard,
+                mode_before: e.mode_before,
+                mode_after: e.mode_after,
+                chained: e.chained,
+                x_pre: e.x_pre.clone(),
+                x_post: e.x_post.clone(),
+                pre: self.sample_info_or_nan(e.mode_before, e.t, &e.x_pre),
+                post: self.sample_info_or_nan(
+                    e.mode_after.unwrap_or(e.mode_before),
+                    e.t,
+                    &e.x_post,
+                ),
+            })
+            .collect();
+        let summary = summarize(out, &samples, &events, t0, cpu_seconds, &self.options);
+        RunReport {
+            samples,
+            events,
+            summary,
+        }
+    }
+}
+
+/// Name of a Fig. 3 transition from the mode it leaves and the guard that fired:
+/// `impact` (Free, h = 0, eq. 50), `graze` (h crossed zero on the interpolant while separating:
+/// q put back on the surface, still Free), `lift_off` (λ_n < 0, eq. 48), `stick_to_slip` (σ ≤ 0,
+/// eq. 19), `slip_to_stick` (‖Δv‖ ≤ ε, Sect. 3.1); and `kink` (the contact point passed a kink of
+/// sat(α), eq. 3: same mode before and after).
+pub fn event_kind(mode_before: Mode, mode_after: Option<Mode>, guard: &str) -> &'static str {
+    match (mode_before, guard) {
+        (_, "alpha_tip" | "alpha_base") => "kink",
+        (Mode::Free, _) if mode_after == Some(Mode::Free) => "graze",
+        (Mode::Free, _) => "impact",
+        (_, "lambda_n") => "lift_off",
+        (Mode::Stick, _) => "stick_to_slip",
+        (Mode::Slip, _) => "slip_to_stick",
+    }
+}
+
+/// Quantities derived from the model at one stored sample (SI units).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SampleInfo {
+    /// Joint torques τ (N m).
+    pub tau: [f64; 3],
+    /// Contact force on the finger λ, world axes (N); 0 in Free.
+    pub lambda: [f64; 3],
+    /// Normal force λ_n = λ·n (N, eq. 12).
+    pub lambda_n: f64,
+    /// Friction margin σ = μ_s λ_n − ‖λ_∥‖ (N, eq. 18); 0 in Free.
+    pub sigma: f64,
+    /// Gap h (m, eq. 4); negative = penetration.
+    pub h: f64,
+    /// Relative slip speed ‖Δv‖ (m/s, eq. 13).
+    pub slip_speed: f64,
+    /// Normal velocity n·v_c = ḣ (m/s, eq. 36).
+    pub normal_velocity: f64,
+    /// Total energy E = T + U (J, eq. 22).
+    pub energy: f64,
+    /// dE/dt = q̇ᵀτ − μ_v‖q̇‖² − D‖ω‖² − λ·Δv of the power balance (W); JSON only.
+    pub power: f64,
+}
+
+impl SampleInfo {
+    /// All fields NaN (sample that could not be evaluated).
+    pub const NAN: SampleInfo = SampleInfo {
+        tau: [f64::NAN; 3],
+        lambda: [f64::NAN; 3],
+        lambda_n: f64::NAN,
+        sigma: f64::NAN,
+        h: f64::NAN,
+        slip_speed: f64::NAN,
+        normal_velocity: f64::NAN,
+        energy: f64::NAN,
+        power: f64::NAN,
+    };
+}
+
+/// One event of the log with the derived quantities before and after the reset.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EventInfo {
+    /// Event time (s).
+    pub t: f64,
+    /// Fig. 3 transition name ([`event_kind`]).
+    pub kind: &'static str,
+    /// Guard that fired (`h`, `lambda_n`, `sigma`, `slip_speed`).
+    pub guard: &'static str,
+    /// Mode before.
+    pub mode_before: Mode,
+    /// Mode after (`None`: terminated).
+    pub mode_after: Option<Mode>,
+    /// Whether it fired at the same instant as the previous event (chained).
+    pub chained: bool,
+    /// State (q, q̇, ω) before the reset.
+    pub x_pre: Vec<f64>,
+    /// State after the reset.
+    pub x_post: Vec<f64>,
+    /// Derived quantities before the reset (in `mode_before`).
+    pub pre: SampleInfo,
+    /// Derived quantities after the reset (in `mode_after`).
+    pub post: SampleInfo,
+}
+
+/// Summary of a run (printed by the CLI, written as `summary.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunSummary {
+    /// Start time (s).
+    pub t0: f64,
+    /// Time reached (s).
+    pub t_final: f64,
+    /// Mode at `t_final`.
+    pub mode_final: Mode,
+    /// Number of events of each kind, in a fixed order (impact, lift_off, stick_to_slip,
+    /// slip_to_stick, graze, kink).
+    pub event_counts: Vec<(&'static str, usize)>,
+    /// Share of the simulated time spent in Free, Stick, Slip (sums to 1).
+    pub mode_time_share: [(Mode, f64); 3],
+    /// Largest penetration max(−h, 0) over all samples (m).
+    pub max_penetration: f64,
+    /// Largest contact drift |h| removed by the projection (m, before projection).
+    pub max_drift: f64,
+    /// Drift |h| removed at the last projected step (m); 0 if the run never projected.
+    pub final_drift: f64,
+    /// Largest |h| over contact-mode samples as stored (after projection, if any) (m).
+    pub max_contact_gap: f64,
+    /// Largest |n·v_c| over contact-mode samples as stored (m/s): velocity-constraint drift.
+    pub max_normal_velocity: f64,
+    /// Energy at the first and last sample (J).
+    pub energy_initial: f64,
+    /// Energy at the last sample (J).
+    pub energy_final: f64,
+    /// Largest energy change E⁺ − E⁻ over the impacts (J); > 0 only for Newton's law (eq. 39),
+    /// which does not guarantee dissipation. 0 without impacts.
+    pub max_impact_energy_gain: f64,
+    /// Largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events| over the samples (J): the energy-balance
+    /// error of the integration (P from the power balance, trapezoidal rule between samples;
+    /// jumps at events excluded).
+    pub energy_error: f64,
+    /// Conditions that qualify the result: `energy_raising_impact` (one per impact raising E by
+    /// more than `BallFingerOptions::impact_energy_tol`), `energy_error` (energy-balance error
+    /// above `BallFingerOptions::energy_error_tol`), `zeno_fallback` (see the module docs).
+    pub warnings: Vec<SimWarning>,
+    /// Accepted steps, rejected steps, vector-field evaluations.
+    pub stats: crate::SimStats,
+    /// Wall-clock time of the run (s).
+    pub cpu_seconds: f64,
+    /// Simulated time / wall-clock time.
+    pub real_time_factor: f64,
+}
+
+fn summarize(
+    out: &SimOutput<Mode>,
+    samples: &[SampleInfo],
+    events: &[EventInfo],
+    t0: f64,
+    cpu_seconds: f64,
+    options: &BallFingerOptions,
+) -> RunSummary {
+    let tr = &out.trajectory;
+    let kinds = [
+        "impact",
+        "lift_off",
+        "stick_to_slip",
+        "slip_to_stick",
+        "graze",
+        "kink",
+    ];
+    let mut warnings = Vec::new();
+    let mut max_impact_energy_gain = 0.0f64;
+    for e in events.iter().filter(|e| e.kind == "impact") {
+        let gain = e.post.energy - e.pre.energy;
+        if gain.is_finite() {
+            max_impact_energy_gain = max_impact_energy_gain.max(gain);
+        }
+        if gain > options.impact_energy_tol {
+            warnings.push(SimWarning {
+                t: e.t,
+                kind: "energy_raising_impact",
+                message: format!(
+                    "{} impact raised the energy by {gain:+.3e} J",
+                    options.impact_law.name()
+                ),
+            });
+        }
+    }
+    let (energy_error, t_error) = energy_balance_error(tr, samples);
+    warnings.extend(out.warnings.iter().cloned());
+    if energy_error > options.energy_error_tol {
+        warnings.push(SimWarning {
+            t: t_error,
+            kind: "energy_error",
+            message: format!(
+                "energy-balance error {energy_error:.3e} J exceeds {:e} J: the integration \
+                 step is too long for the dynamics",
+                options.energy_error_tol
+            ),
+        });
+    }
+    warnings.sort_by(|a, b| a.t.total_cmp(&b.t));
+    let event_counts = kinds
+        .iter()
+        .map(|&k| (k, events.iter().filter(|e| e.kind == k).count()))
+        .collect();
+    let mut time = [0.0f64; 3];
+    let idx = |m: Mode| match m {
+        Mode::Free => 0,
+        Mode::Stick => 1,
+        Mode::Slip => 2,
+    };
+    for i in 1..tr.len() {
+        // The interval (t[i-1], t[i]] belongs to the mode in which it was integrated.
+        time[idx(tr.mode[i])] += tr.t[i] - tr.t[i - 1];
+    }
+    let total: f64 = time.iter().sum();
+    let share = |k: usize| if total > 0.0 { time[k] / total } else { 0.0 };
+    let contact = |i: &usize| tr.mode[*i] != Mode::Free;
+    let max_penetration = samples
+        .iter()
+        .map(|s| -s.h)
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let max_contact_gap = (0..tr.len())
+        .filter(contact)
+        .map(|i| samples[i].h.abs())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let max_normal_velocity = (0..tr.len())
+        .filter(contact)
+        .map(|i| samples[i].normal_velocity.abs())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let final_drift = (0..tr.len())
+        .rev()
+        .find(|&i| tr.kind[i] == SampleKind::Step && tr.drift[i].is_some())
+        .and_then(|i| tr.drift[i])
+        .unwrap_or(0.0);
+    let elapsed = out.t_final - t0;
+    RunSummary {
+        t0,
+        t_final: out.t_final,
+        mode_final: out.mode_final,
+        event_counts,
+        mode_time_share: [
+            (Mode::Free, share(0)),
+            (Mode::Stick, share(1)),
+            (Mode::Slip, share(2)),
+        ],
+        max_penetration,
+        max_drift: out.stats.max_drift,
+        final_drift,
+        max_contact_gap,
+        max_normal_velocity,
+        energy_initial: samples.first().map_or(f64::NAN, |s| s.energy),
+        energy_final: samples.last().map_or(f64::NAN, |s| s.energy),
+        max_impact_energy_gain,
+        energy_error,
+        warnings,
+        stats: out.stats,
+        cpu_seconds,
+        real_time_factor: if cpu_seconds > 0.0 {
+            elapsed / cpu_seconds
+        } else {
+            f64::INFINITY
+        },
+    }
+}
+
+/// Largest |E(t) − E(t₀) − ∫ P dt| over the samples, with the jumps at events (the interval
+/// ending at an `EventPost` sample) left out, and the time where it occurs. Non-finite samples
+/// (a failed run's last state) are skipped.
+fn energy_balance_error(tr: &crate::Trajectory<Mode>, samples: &[SampleInfo]) -> (f64, f64) {
+    let mut residual = 0.0f64;
+    let mut worst = (0.0f64, tr.t.first().copied().unwrap_or(0.0));
+    for i in 1..tr.len() {
+        if tr.kind[i] == SampleKind::EventPost {
+            continue;
+        }
+        let (a, b) = (&samples[i - 1], &samples[i]);
+        let step = (b.energy - a.energy) - 0.5 * (a.power + b.power) * (tr.t[i] - tr.t[i - 1]);
+        if !step.is_finite() {
+            continue;
+        }
+        residual += step;
+        if residual.abs() > worst.0 {
+            worst = (residual.abs(), tr.t[i]);
+        }
+    }
+    worst
+}
+
+impl RunSummary {
+    /// One line per kind of warning (count, worst case, what to do), for the CLI.
+    pub fn warning_lines(&self) -> Vec<String> {
+        let mut lines = Vec::new();
+        let of = |kind: &'static str| self.warnings.iter().filter(move |w| w.kind == kind);
+        let n = of("energy_raising_impact").count();
+        if n > 0 {
+            lines.push(format!(
+                "{n} impact(s) raised the energy, largest {:+.3e} J: Newton's law (eq. 39) does \
+                 not guarantee dissipation (stick, max-dissipation and min-slip do)",
+                self.max_impact_energy_gain
+            ));
+        }
+        for w in of("energy_error") {
+            lines.push(format!("t = {} s: {}", w.t, w.message));
+        }
+        let z: Vec<&SimWarning> = of("zeno_fallback").collect();
+        if let Some(w) = z.first() {
+            lines.push(format!(
+                "{} Zeno fallback(s), first at t = {} s: {}",
+                z.len(),
+                w.t,
+                w.message
+            ));
+        }
+        lines
+    }
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "simulated t = {} .. {} s, final mode {:?}",
+            self.t0, self.t_final, self.mode_final
+        )?;
+        let ev: Vec<String> = self
+            .event_counts
+            .iter()
+            .map(|(k, n)| format!("{k} {n}"))
+            .collect();
+        writeln!(f, "events: {} ({})", self.stats.events, ev.join(", "))?;
+        let sh: Vec<String> = self
+            .mode_time_share
+            .iter()
+            .map(|(m, s)| format!("{m:?} {:.1}%", 100.0 * s))
+            .collect();
+        writeln!(f, "time in modes: {}", sh.join(", "))?;
+        writeln!(f, "max penetration: {:.3e} m", self.max_penetration)?;
+        writeln!(
+            f,
+            "contact drift |h| before projection: max {:.3e} m, final {:.3e} m; after: max |h| {:.3e} m, max |n.v_c| {:.3e} m/s",
+            self.max_drift, self.final_drift, self.max_contact_gap, self.max_normal_velocity
+        )?;
+        writeln!(
+            f,
+            "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J",
+            self.energy_initial,
+            self.energy_final,
+            self.energy_final - self.energy_initial,
+            self.energy_error
+        )?;
+        writeln!(
+            f,
+            "steps: {} accepted, {} rejected, {} rhs evaluations",
+            self.stats.accepted_steps, self.stats.rejected_steps, self.stats.rhs_evals
+        )?;
+        write!(
+            f,
+            "cpu time: {:.3} ms, real-time factor {:.0}x",
+            1e3 * self.cpu_seconds,
+            self.real_time_factor
+        )
+    }
+}
+
+/// Everything derived from one ball-and-finger run ([`BallFinger::report`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunReport {
+    /// Derived quantities per trajectory sample (same indices as the trajectory).
+    pub samples: Vec<SampleInfo>,
+    /// Event log with derived quantities.
+    pub events: Vec<EventInfo>,
+    /// Summary.
+    pub summary: RunSummary,
+}
