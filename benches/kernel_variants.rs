@@ -1,4 +1,4 @@
-//! Criterion benchmarks of the paper-scene kernel variants (issue 7, speed–accuracy report):
+//! Criterion benchmarks of the paper-scene kernel variants (the speed–accuracy report):
 //! `mass_matrix`, `cqd_g` (Lagrangian), `cqd_g_rnea` (Newton–Euler) and `mass_cqd_g`, each as
 //! `paper` (f64, constants baked), `paper_runtime` (f64, every constant a runtime parameter),
 //! `paper_fma` (f64, `mul_add`) and `paper_f32` (single precision). Accuracy of the same

@@ -1,4 +1,4 @@
-//! Criterion benchmarks of the hybrid simulator on the compiled paper-scene kernels (issue 5).
+//! Criterion benchmarks of the hybrid simulator on the compiled paper-scene kernels.
 //!
 //! * `paper_10s_contact/dopri5_rtol1e-8`: 10 s of the paper scene with contact — the finger
 //!   dropped from the paper's initial guess q = (0.1, 0.5, 0.5) onto the ball (τ = 0, Newton's

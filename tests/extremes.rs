@@ -1,4 +1,4 @@
-//! Stability at the extremes (issue 7, item 5): the assertions behind every row of
+//! Stability at the extremes: the assertions behind every row of
 //! `ball_finger::study::extremes::run_extremes`. Each test compares against something the code
 //! under test does not produce itself: a double-double evaluation (≈ 106 bits) of the same
 //! expression graph, an exact scaling law of eq. 22 (M is linear in the masses and quadratic in

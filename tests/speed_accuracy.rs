@@ -1,4 +1,4 @@
-//! The speed–accuracy report (issue 7 item 4) in quick mode: its numbers must behave as the
+//! The speed–accuracy report in quick mode: its numbers must behave as the
 //! numerics say they must — errors fall as tolerances tighten and ε shrinks, f64 kernels agree
 //! with double-double to a few ulps, f32 ones only to single precision, FMA is no less
 //! accurate — and every linked figure exists.

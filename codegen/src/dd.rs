@@ -1,6 +1,6 @@
 //! Double-double arithmetic (≈ 106-bit significand) for accuracy measurements of the
 //! generated kernels: the interpreter evaluates the same graph in [`Dd`] and the f64 error is
-//! measured against it (accuracy at |q| ~ 1e6 rad, DESIGN.md "Trig").
+//! measured against it (accuracy at |q| ~ 1e6 rad, `docs/architecture.md`, "Trig").
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
 

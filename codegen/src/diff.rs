@@ -1,7 +1,7 @@
 //! Symbolic differentiation on the expression graph (source transformation).
 //!
 //! The results are new nodes of the same [`Graph`], so derivatives share common
-//! subexpressions with the values (DESIGN.md "Differentiation"). Used for ∂M/∂q (Christoffel
+//! subexpressions with the values (`docs/architecture.md`, "Differentiation"). Used for ∂M/∂q (Christoffel
 //! symbols c_ijk of eq. 76–79), g = ∂U/∂q (eq. 72), the time derivatives Ṁ, J̇ q̇, ṙ_c and
 //! J̇_c q̇ (eq. 33) along q̇, and Hessians of weighted sums (the optimiser's Lagrangian, Sect. 4).
 //!

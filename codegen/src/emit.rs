@@ -1,11 +1,11 @@
 //! Rust emitter: graph cone of a kernel → SSA `let` bindings → `quote!` tokens → `syn::File`
-//! → `prettyplease` (DESIGN.md "Emit"; DEPENDENCIES.md §4: SSA avoids the token-pasting
+//! → `prettyplease` (`docs/architecture.md`, "Emit": SSA avoids the token-pasting
 //! precedence pitfall). Constants are printed with Rust's shortest round-trip formatting, so
 //! every `f64` survives exactly. In `f64` kernels the sines and cosines of all joint angles come
 //! from one call of the vectorised helper `sin_cos_n` ([`crate::trig`], emitted once per file
 //! by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call.
 //!
-//! [`EmitOptions`] select variants for accuracy/speed studies (issue 7): the float type
+//! [`EmitOptions`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
 //! multiply-add (`a*b ± c` as `mul_add`, one rounding instead of two). The defaults reproduce
 //! the plain f64 output byte for byte.

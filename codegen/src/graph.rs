@@ -1,4 +1,4 @@
-//! Expression graph: a hash-consed arena of scalar expressions (DESIGN.md "Graph").
+//! Expression graph: a hash-consed arena of scalar expressions (`docs/architecture.md`, "Graph").
 //!
 //! Every symbol of the paper (p_e and ê_x3 of eq. 67–68, the Jacobians of eq. 69–71, M of
 //! eq. 22a/74, C of eq. 76–79, g of eq. 72–73, the contact quantities of eq. 2–13 and 58–59)

@@ -1,6 +1,6 @@
 //! bf-codegen: scene file (DH table, inertias, ball) → verified flat Rust dynamics kernels.
 //!
-//! Pipeline (DESIGN.md "codegen"): [`spec`] (scene types) → [`robot`] (kinematics eq. 67–71,
+//! Pipeline (`docs/architecture.md`, "codegen"): [`spec`] (scene types) → [`robot`] (kinematics eq. 67–71,
 //! dynamics eq. 22a/72–79, contact eq. 2–13/58–59 as [`graph`] expressions, derivatives by
 //! [`diff`]) → [`kernels`] (the catalogue of docs/kernels.md) → [`emit`] (SSA Rust code) with a
 //! [`report`]; [`interp`] evaluates the same graphs in f64 or double-double ([`dd`]);

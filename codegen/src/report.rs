@@ -1,4 +1,4 @@
-//! Generation report: per-kernel operation counts and generation time (DESIGN.md "Report").
+//! Generation report: per-kernel operation counts and generation time (`docs/architecture.md`, "Report").
 
 use std::fmt;
 

@@ -1,6 +1,6 @@
 //! Robot front-end: scene (DH table, inertias, ball) → graph expressions of every kernel.
 //!
-//! Symbols and paper equations (conventions of PARAMS.md):
+//! Symbols and paper equations (conventions of docs/parameters.md):
 //! * DH link transforms A_i (Table 1), world frames T_i = T_base A_1 ⋯ A_i, tip = T_n T_tool:
 //!   p_e and [ê_x3 ê_y3 ê_z3] of eq. 67–68;
 //! * geometric Jacobians of the tip (eq. 69–71) and of every link COG (J_P^i, J_O^i of eq. 22a),
@@ -8,7 +8,7 @@
 //! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
 //!   expressed in the link's own frame so M depends only on relative joint angles;
 //! * ∂M/∂q, Christoffel symbols c_ijk and C (eq. 76–79), C q̇ = Ṁ q̇ − ∂T/∂q;
-//! * U = −Σ m_i g_0ᵀ p_i (sign convention of PARAMS.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
+//! * U = −Σ m_i g_0ᵀ p_i (sign convention of docs/parameters.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
 //! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one;
 //! * contact geometry (Sect. 2.2): α (eq. 2), sat (eq. 3) or smooth sat (eq. 58–59), p_c,
 //!   r_c, h (eq. 4), n (eq. 11), J_c (eq. 7), v_c (eq. 6), Δv (eq. 13), ṙ_c, ḣ, J̇_c q̇ (eq. 33).

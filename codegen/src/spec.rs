@@ -10,7 +10,7 @@
 //! These types are the contract between the spec parser and the robot front-end. Parsing and
 //! validation errors name the file, line and field (see [`SpecError`]).
 //!
-//! Map to the paper / PARAMS.md:
+//! Map to the paper / docs/parameters.md:
 //! - [`LinkSpec`] `a`, `alpha`, `d`, `offset`: one row of Table 1 (standard DH,
 //!   A_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i), θ_i = q_i + offset); [`Angle`] keeps α = π/2 exact.
 //! - [`LinkSpec`] `mass`, `com`, `inertia`: m_i, COG and I_i of eq. 22a (about the COG, link axes).

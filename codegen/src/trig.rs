@@ -1,5 +1,5 @@
 //! Fast sine and cosine of several angles at once, the helper the emitted f64 kernels call for
-//! the joint angles (DESIGN.md "Trig": only sin/cos of single joint coordinates appear).
+//! the joint angles (`docs/architecture.md`, "Trig": only sin/cos of single joint coordinates appear).
 //!
 //! [`sin_cos_n`] is branch-free over its lanes, so the compiler vectorises it across the
 //! angles of a kernel: Cody–Waite reduction x = k·π/2 + r with π/2 split into four parts (the

@@ -1,4 +1,4 @@
-//! Emission variants (issue 7, speed–accuracy report): the default options reproduce
+//! Emission variants (speed–accuracy report): the default options reproduce
 //! `generate` byte for byte, FMA fuses products into `mul_add`, f32 changes every type.
 //! Numerical accuracy of the variants is measured against double-double in the root
 //! package's `tests/speed_accuracy.rs` (compiled variant modules of `bf-generated`).

@@ -1,6 +1,6 @@
 //! Scene-specification tests (`bf_codegen::spec`): every class of bad input must produce an
 //! error naming the file, the right line and the field path; the four shipped scenes must load
-//! with the values of the paper (Sect. 2.1, Table 1, Sect. 6), PARAMS.md and the cited robot
+//! with the values of the paper (Sect. 2.1, Table 1, Sect. 6), docs/parameters.md and the cited robot
 //! data, written here independently of the scene files; exact angle parsing.
 
 use bf_codegen::spec::{Angle, KNOWN_KERNELS, RotationSpec, Scene, SpecError, SpecErrorKind};
@@ -858,7 +858,7 @@ fn base_rotation_matrix_must_be_a_rotation() {
         "base.rotation.axis",
         "axis",
     );
-    // The matrix form of R_y(-pi/2) equals the exact axis form (PARAMS.md).
+    // The matrix form of R_y(-pi/2) equals the exact axis form (docs/parameters.md).
     let text = edit(
         old,
         0,
@@ -1058,7 +1058,7 @@ fn scene(name: &str) -> Scene {
 }
 
 /// Standard DH forward kinematics written here independently of the crate
-/// (A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha), PARAMS.md): world frames 1..n.
+/// (A_i = Rz(theta) Tz(d) Tx(a) Rx(alpha), docs/parameters.md): world frames 1..n.
 fn dh_frames(base: Matrix4<f64>, table: &[(f64, f64, f64)], q: &[f64]) -> Vec<Matrix4<f64>> {
     let mut t = base;
     let mut out = Vec::new();
@@ -1092,7 +1092,7 @@ fn homogeneous(r: [[f64; 3]; 3], p: [f64; 3]) -> Matrix4<f64> {
 }
 
 fn assert_finger_common(s: &Scene) {
-    // PARAMS.md, written out independently of the scene file.
+    // docs/parameters.md, written out independently of the scene file.
     assert_eq!(s.nq(), 3);
     assert_eq!(s.dh, bf_codegen::spec::DhConvention::Standard);
     assert_eq!(s.gravity, [0.0, 0.0, -9.81]);
@@ -1143,7 +1143,7 @@ fn assert_finger_common(s: &Scene) {
     assert_eq!(k, all, "the finger scenes emit every kernel");
 
     // Geometry: at q = 0 the finger stands upright from o_f = (2r, 0, 0): frame i at
-    // (2, 0, i) with e_x3 = +z (PARAMS.md: base R_y(-pi/2), links along x_i).
+    // (2, 0, i) with e_x3 = +z (docs/parameters.md: base R_y(-pi/2), links along x_i).
     let base = homogeneous(s.base_rotation(), s.base_translation());
     let frames = dh_frames(base, &table(s), &[0.0; 3]);
     for (i, f) in frames.iter().enumerate() {

@@ -1,7 +1,7 @@
 //! Every generated kernel of every scene against the independent reference of bf-testkit
 //! (`bf_testkit::Reference`, built from the module's own `SCENE_TOML`): frames and Jacobians
 //! (eq. 67–71), M (eq. 22a), ∂M/∂q, Christoffel symbols and C (eq. 76), g = ∂U/∂q and U
-//! (eq. 22b with the PARAMS.md sign), C q̇ + g by both the Lagrangian and the RNEA path, and
+//! (eq. 22b with the docs/parameters.md sign), C q̇ + g by both the Lagrangian and the RNEA path, and
 //! the contact quantities of eq. 2–13, 33 and 58–59.
 //!
 //! States (seeded): random configurations, the stretched finger (q2 = … = 0), folded ones

@@ -1,5 +1,5 @@
 //! Ready-made models of the project scenes on the generated kernels (used by tests, benches,
-//! the simulator and the CLI): the paper's robotic finger (Sect. 2, 6; PARAMS.md) and the human
+//! the simulator and the CLI): the paper's robotic finger (Sect. 2, 6; docs/parameters.md) and the human
 //! finger variant (Sect. 6).
 
 use crate::kernels::{HumanKernels, Kernels, PaperKernels};

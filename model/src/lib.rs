@@ -43,7 +43,7 @@
 //! orientation): exact for the paper's isotropic ball; for a non-isotropic I_b the equations are
 //! the instantaneous world-frame Euler equations I_b ω̇ + ω × I_b ω = torque.
 //!
-//! # Conventions (PARAMS.md)
+//! # Conventions (docs/parameters.md)
 //! - λ and ι are the force / impulse **exerted on the finger**, world axes. The ball receives
 //!   −λ at r_c, i.e. the torque −r_c × λ (eq. 29b).
 //! - G = [J_c  S(r_c)] (eq. 27), so G [q̇; ω] = J_c q̇ + r_c × ω = −Δv with Δv = ω × r_c − v_c

@@ -1,4 +1,4 @@
-//! Ball and finger through the hybrid machinery: the finger (paper scene, PARAMS.md) is thrown
+//! Ball and finger through the hybrid machinery: the finger (paper scene, docs/parameters.md) is thrown
 //! at the ball with τ = 0 and no viscous friction (μ_v = D = 0), under gravity.
 //!
 //! Physics that must hold (paper Sect. 2.4–3):

@@ -57,7 +57,7 @@ pub struct RunOptions {
 pub const LARGE_TORQUE: f64 = 1e3;
 
 /// Default initial joint angles (rad): the paper's "q constant nonzero" initial guess
-/// (PARAMS.md); for the paper scene the fingertip is then 1.4 m above the ball.
+/// (docs/parameters.md); for the paper scene the fingertip is then 1.4 m above the ball.
 pub const DEFAULT_Q0: [f64; 3] = [0.1, 0.5, 0.5];
 
 /// Joint torques of a CLI run: a time series, a PD controller, or none (τ = 0).

@@ -59,7 +59,7 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 /// Solves `p` directly. Initial point: an exact primal-dual warm start when `p.settings`
 /// carries a warm-start solution of the same problem on the same mesh, else its interpolated
 /// primal point or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
-/// solve from the PARAMS.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
+/// solve from the docs/parameters.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
 /// Before that, a failed solve with the default static dual regularization (Radau: 1e-9) is
 /// repeated from the same start with [`RAISED_DUAL_REGULARIZATION`] (unless
 /// [`ProblemSettings::dual_regularization`] is set): on Radau meshes finer than the default

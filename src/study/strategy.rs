@@ -1,7 +1,7 @@
 //! Solve strategies: good optima of the non-convex periodic problems without hand-holding
 //! (paper Sect. 7 suggests warm-starting from runs of simplified problems).
 //!
-//! * [`Strategy::Direct`]: one interior-point solve from the PARAMS.md guess (q ≡ q⁰,
+//! * [`Strategy::Direct`]: one interior-point solve from the docs/parameters.md guess (q ≡ q⁰,
 //!   t_f⁽ⁱ⁾ = i), with the geometric guess as fallback ([`super::solve::solve`]).
 //! * [`Strategy::Continuation`] (the default): a homotopy in the constraints and the smoothing.
 //!   For the periodic problems (eq. 60 ratio objectives) the period T = Σ t_f⁽ⁱ⁾ is the
@@ -9,7 +9,7 @@
 //!   worse than optima at T ≈ 0.7–1.9 s. Each chain k
 //!   1. solves with the period fixed to T_k (a grid, [`period_grid`]) and the saturation
 //!      smoothed to ε₀ = [`EPS_FACTOR`]·ε (eq. 59: a larger ε rounds the contact geometry),
-//!      from the PARAMS.md joint guess with durations T_k/3;
+//!      from the docs/parameters.md joint guess with durations T_k/3;
 //!   2. frees the period (warm start with primal and dual variables: every stage has the same
 //!      NLP layout, the period row only changes its bounds);
 //!   3. tightens ε₀ → ε, warm-started.

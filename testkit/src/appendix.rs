@@ -44,7 +44,7 @@ pub struct AppendixParams {
 }
 
 impl AppendixParams {
-    /// The project's paper scene (PARAMS.md): ℓ = r = 1, m = 0.02 kg,
+    /// The project's paper scene (docs/parameters.md): ℓ = r = 1, m = 0.02 kg,
     /// I = diag(1.0677, 2.3177, 2.0833)e-3 kg m², g = 9.81.
     pub fn paper() -> Self {
         AppendixParams {
@@ -248,7 +248,7 @@ pub fn potential_printed(p: &AppendixParams, coms: &[[f64; 3]]) -> f64 {
     coms.iter().zip(p.m).map(|(c, m)| m * (-p.g) * c[2]).sum()
 }
 
-/// eq. 22b corrected (PARAMS.md): U_f = −Σ m_i g_0ᵀ p_i = Σ m_i g z_i.
+/// eq. 22b corrected (docs/parameters.md): U_f = −Σ m_i g_0ᵀ p_i = Σ m_i g z_i.
 pub fn potential_corrected(p: &AppendixParams, coms: &[[f64; 3]]) -> f64 {
     -potential_printed(p, coms)
 }

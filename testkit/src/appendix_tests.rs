@@ -253,7 +253,7 @@ fn eq72_g0_is_the_magnitude() {
 }
 
 /// eq. 22b: U_f = Σ m_i g_0ᵀ p_i with g_0 = (0,0,−g) is minus the physical potential; eq. 72
-/// (and PARAMS.md, g = ∂U/∂q) needs U_f = −Σ m_i g_0ᵀ p_i.
+/// (and docs/parameters.md, g = ∂U/∂q) needs U_f = −Σ m_i g_0ᵀ p_i.
 #[test]
 fn eq22b_potential_sign() {
     let h = 1e-6;
@@ -331,7 +331,7 @@ fn eq74_75_mass_matrix_agrees() {
     assert!(printed < TOL, "{printed:e}");
 }
 
-/// eq. 76–79: ψ_ijk are exactly the Christoffel symbols c_ijk of PARAMS.md (including the
+/// eq. 76–79: ψ_ijk are exactly the Christoffel symbols c_ijk of docs/parameters.md (including the
 /// listed zeros), so C of eq. 76 is the Christoffel-form C (Ṁ − 2C skew-symmetric).
 #[test]
 fn eq76_79_psi_are_christoffel_symbols() {

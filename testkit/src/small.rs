@@ -239,7 +239,7 @@ mod tests {
 
     #[test]
     fn axis_rotation_matches_right_hand_rule() {
-        // R_y(-π/2) of PARAMS.md: [[0,0,-1],[0,1,0],[1,0,0]].
+        // R_y(-π/2) of docs/parameters.md: [[0,0,-1],[0,1,0],[1,0,0]].
         let r = axis_rotation(1, -std::f64::consts::FRAC_PI_2);
         assert_eq!(r, [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]);
         // R_z(θ) e_x = (cos θ, sin θ, 0) and cross product e_x × e_y = e_z.

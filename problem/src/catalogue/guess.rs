@@ -1,4 +1,4 @@
-//! Initial guesses of the catalogue's problems: the paper's constant guess (PARAMS.md,
+//! Initial guesses of the catalogue's problems: the paper's constant guess (docs/parameters.md,
 //! Sect. 6.1: q ≡ [`Q_GUESS`], every duration 1 s) or an override ([`StartGuess`]), and the
 //! geometric guess that moves the finger linearly to a contact configuration found by
 //! bisection on h (eq. 4).
@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use crate::node::{CostKind, Mode, NodeOptions, Physics, StickLevel, node_function};
 use crate::points::Diagnostics;
 
-/// The constant joint configuration of the default initial guess (PARAMS.md: "q constant
+/// The constant joint configuration of the default initial guess (docs/parameters.md: "q constant
 /// nonzero"): the finger bent towards the ball, h ≈ 0.95 r.
 pub const Q_GUESS: [f64; 3] = [0.1, 0.6, 0.9];
 

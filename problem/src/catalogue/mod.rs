@@ -169,7 +169,7 @@ pub const COT_MAX_PERIOD: f64 = 10.0;
 /// Kind of the initial guess.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum GuessKind {
-    /// PARAMS.md / Sect. 6.1: q ≡ q⁰ = [`Q_GUESS`], t_f⁽ⁱ⁾ = i, all else 0.
+    /// docs/parameters.md / Sect. 6.1: q ≡ q⁰ = [`Q_GUESS`], t_f⁽ⁱ⁾ = i, all else 0.
     Paper,
     /// Geometric: free phases move linearly between q⁰ and a contact configuration q_c
     /// (h(q_c) = 0, found by bisection), stick phases hold q_c; velocities consistent.

@@ -1,6 +1,6 @@
 //! Independent reference implementation of the finger kinematics, dynamics and contact
 //! geometry, for ANY [`Scene`](bf_codegen::spec::Scene) (standard or modified DH, base and tool
-//! transforms, full inertia tensors). Written from the paper and PARAMS.md only, never from
+//! transforms, full inertia tensors). Written from the paper and docs/parameters.md only, never from
 //! `bf-codegen`'s code, so the generated kernels can be checked against it.
 //!
 //! Method: plain 4×4 homogeneous transforms built by multiplying the elementary DH factors, a
@@ -313,7 +313,7 @@ impl Reference {
         m
     }
 
-    /// U(q) = −Σ m_i g_0ᵀ p_i (PARAMS.md sign), generic.
+    /// U(q) = −Σ m_i g_0ᵀ p_i (docs/parameters.md sign), generic.
     pub fn potential_t<T: Real>(&self, q: &[T]) -> T {
         let kin = self.kinematics(q);
         let g0 = lift3::<T>(self.gravity);
