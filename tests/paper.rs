@@ -77,7 +77,23 @@ fn paper_quick_writes_a_consistent_report() {
             (defect - expect_defect).abs() <= 0.06 * expect_defect,
             "{name} defect {defect} vs {expect_defect}"
         );
-        assert_eq!(cells[11], "direct", "{name}: --quick solves directly");
+        // A solution whose re-integration defect exceeds 1e-4 (state units) is flagged as
+        // unverified in the table, and every claim that rests on it says so.
+        let verified = expect_defect <= 1e-4;
+        assert_eq!(
+            cells[11],
+            if verified { "yes" } else { "**no**" },
+            "{name}: verified flag for defect {expect_defect}"
+        );
+        if !verified {
+            assert!(
+                report
+                    .lines()
+                    .any(|l| l.contains("(**unverified**: ") && l.contains(name)),
+                "{name}: claims on an unverified solution are flagged"
+            );
+        }
+        assert_eq!(cells[12], "direct", "{name}: --quick solves directly");
         // Independent check of the period: the phase durations add up to it.
         let sum: f64 = sol["phase_durations"]
             .as_array()

@@ -154,8 +154,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          have many local optima; `ball-finger report strategies` compares cold start, \
          continuation and multi-start). Every solution is verified by re-integrating each phase \
          with its optimal torques (DOPRI5, rtol 1e-10; the largest end-of-phase state error is \
-         the \"re-integration defect\"). Solutions: `<scenario>/solution.json`, torques: \
-         `<scenario>/torques.csv`.\n",
+         the \"re-integration defect\"); a solution whose defect exceeds {:e} is marked \
+         **unverified**, and so is every claim below that rests on it. Solutions: \
+         `<scenario>/solution.json`, torques: `<scenario>/torques.csv`.\n",
         if args.quick { 20 } else { 30 },
         bf_problem::COT_MAX_PERIOD,
         if args.quick {
@@ -165,7 +166,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 "{} (period sweep, release, ε-homotopy; see ball_finger::study::strategy)",
                 crate::study::strategy::Strategy::default()
             )
-        }
+        },
+        crate::study::verify::VERIFIED_DEFECT
     )?;
     let (results, failures) = crate::study::scenarios::run_all(
         &dir,

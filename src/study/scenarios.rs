@@ -438,8 +438,20 @@ fn animation_frames(
     out
 }
 
-fn verdict(ok: bool) -> &'static str {
-    if ok { "agrees" } else { "differs" }
+/// The verdict of a claim, flagged when it rests on a solution that failed its re-integration
+/// check ([`crate::study::verify::is_verified`]).
+fn verdict_on(ok: bool, on: &[&ScenarioResult]) -> String {
+    let v = if ok { "agrees" } else { "differs" };
+    let unverified: Vec<&str> = on
+        .iter()
+        .filter(|r| !crate::study::verify::is_verified(&r.solution))
+        .map(|r| r.name.as_str())
+        .collect();
+    if unverified.is_empty() {
+        v.to_string()
+    } else {
+        format!("{v} (**unverified**: {})", unverified.join(", "))
+    }
 }
 
 /// The results table and the per-claim comparison with Sect. 6.1, as markdown.
@@ -447,14 +459,17 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
     let mut s = String::new();
     writeln!(
         s,
-        "| scenario | status | objective φ | period (s) | phase durations (s) | mean ω (rad/s) | max abs τ (N m) | contact distance from tip, min/mean/max (m) | contact on the friction-cone boundary | re-integration defect | strategy | iterations | solve time (s) |"
+        "| scenario | status | objective φ | period (s) | phase durations (s) | mean ω (rad/s) | max abs τ (N m) | contact distance from tip, min/mean/max (m) | contact on the friction-cone boundary | re-integration defect | verified | strategy | iterations | solve time (s) |"
     )?;
-    writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+    writeln!(
+        s,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    )?;
     for r in results {
         let o = &r.solution;
         writeln!(
             s,
-            "| {} | {:?} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {:.2} |",
+            "| {} | {:?} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {} | {:.2} |",
             r.name,
             o.status,
             o.objective,
@@ -475,6 +490,11 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             o.verification
                 .as_ref()
                 .map_or("not verified".into(), |v| format!("{:.1e}", v.max_defect)),
+            if crate::study::verify::is_verified(o) {
+                "yes"
+            } else {
+                "**no**"
+            },
             o.strategy
                 .as_ref()
                 .map_or("direct".into(), |st| st.strategy.to_string()),
@@ -494,19 +514,19 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             s,
             "| QC: the average angular velocity matches ω_ref = (0, 0, 2.2) | mean ω_z = {wz:.3} rad/s ({:+.1} %) | {} |",
             100.0 * (wz - 2.2) / 2.2,
-            verdict((wz - 2.2).abs() < 0.1 * 2.2)
+            verdict_on((wz - 2.2).abs() < 0.1 * 2.2, &[qc])
         )?;
         writeln!(
             s,
             "| QC: the friction-cone constraint is always active during contact | {:.0} % of the contact samples on the boundary | {} |",
             100.0 * qc.cone_share,
-            verdict(qc.cone_share > 0.9)
+            verdict_on(qc.cone_share > 0.9, &[qc])
         )?;
         writeln!(
             s,
             "| QC: only the fingertip is used | contact point at most {:.3} m from the tip | {} |",
             qc.contact_from_tip.2,
-            verdict(qc.contact_from_tip.2 < 0.02)
+            verdict_on(qc.contact_from_tip.2 < 0.02, &[qc])
         )?;
         if let Some(cot) = get("periodic-cot") {
             writeln!(
@@ -514,7 +534,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
                 "| QC period shorter than the COT period | {:.3} s vs {:.3} s | {} |",
                 qc.solution.period,
                 cot.solution.period,
-                verdict(qc.solution.period < cot.solution.period)
+                verdict_on(qc.solution.period < cot.solution.period, &[qc, cot])
             )?;
         }
     }
@@ -524,7 +544,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             "| COT, robotic finger: the contact point lies on the side of the link | contact point {:.3}–{:.3} m from the tip | {} |",
             cot.contact_from_tip.0,
             cot.contact_from_tip.2,
-            verdict(cot.contact_from_tip.1 > 0.02)
+            verdict_on(cot.contact_from_tip.1 > 0.02, &[cot])
         )?;
     }
     if let Some(h) = get("periodic-cot-human") {
@@ -532,7 +552,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             s,
             "| COT, human finger: touches with the fingertip only | contact point at most {:.3} m from the tip | {} |",
             h.contact_from_tip.2,
-            verdict(h.contact_from_tip.2 < 0.02)
+            verdict_on(h.contact_from_tip.2 < 0.02, &[h])
         )?;
         if let Some(cot) = get("periodic-cot") {
             writeln!(
@@ -540,7 +560,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
                 "| the robotic finger rotates the ball more efficiently (lower COT) | φ = {:.4e} (robotic) vs {:.4e} (human) | {} |",
                 cot.solution.objective,
                 h.solution.objective,
-                verdict(cot.solution.objective < h.solution.objective)
+                verdict_on(cot.solution.objective < h.solution.objective, &[cot, h])
             )?;
         }
     }

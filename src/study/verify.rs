@@ -500,6 +500,19 @@ fn verify_phase(
     })
 }
 
+/// Largest re-integration defect (end-of-phase state error, state units) at which a solution
+/// counts as verified: above it, the collocation solution does not describe what the hybrid
+/// model does with its torques, and every place that shows the solution flags it.
+pub const VERIFIED_DEFECT: f64 = 1e-4;
+
+/// Whether `sol` carries a re-integration that reached the end of every phase with a defect of
+/// at most [`VERIFIED_DEFECT`].
+pub fn is_verified(sol: &OcpSolution) -> bool {
+    sol.verification.as_ref().is_some_and(|v| {
+        v.completed() && v.max_defect.is_finite() && v.max_defect <= VERIFIED_DEFECT
+    })
+}
+
 /// [`verify_with`] at `rtol` with atol = rtol · [`ATOL_FACTOR`] and the clamped torque
 /// interpolant of the dense output / `torques.csv`.
 pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verification, OcpError> {
