@@ -45,7 +45,7 @@ pub struct ExtremesRow {
     pub seconds: f64,
 }
 
-/// All rows of [`run_extremes`].
+/// All rows of [`run_extremes`](super::run_extremes).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ExtremesReport {
     /// The rows, in probe order.
