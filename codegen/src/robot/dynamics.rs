@@ -1,0 +1,372 @@
+//! Joint-space dynamics of the robot front-end ([`Model`] methods), conventions of
+//! docs/parameters.md:
+//! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
+//!   expressed in the link's own frame so M depends only on relative joint angles;
+//! * ∂M/∂q, Christoffel symbols c_ijk and C (eq. 76–79), C q̇ = Ṁ q̇ − ∂T/∂q;
+//! * U = −Σ m_i g_0ᵀ p_i (sign convention of docs/parameters.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
+//! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one.
+
+use super::{Model, Pose};
+use crate::diff;
+use crate::graph::{Id, M3, V3};
+use crate::spec::DhConvention;
+
+impl Model {
+    /// Mass matrix M(q), eq. 22a, from link-frame Jacobians.
+    pub fn mass_matrix(&mut self) -> Vec<Vec<Id>> {
+        if let Some(m) = &self.cache.mass {
+            return m.clone();
+        }
+        let n = self.nq();
+        let z = self.g.zero();
+        let mut mm = vec![vec![z; n]; n];
+        for i in 0..n {
+            // Walk from frame i+1 (link i) back to the base: inv = T^{i+1}_{f}.
+            let c = self.com_local(i);
+            let mass = self.constant(&format!("link{}.mass", i + 1));
+            let inertia = self.link_inertia(i);
+            let mut cols_p: Vec<V3> = vec![[z; 3]; n];
+            let mut cols_o: Vec<V3> = vec![[z; 3]; n];
+            let mut inv = Pose {
+                r: self.g.m3_identity(),
+                t: [z; 3],
+            };
+            // Frames from i+1 down to 0; record those that are joint-axis frames of joints ≤ i.
+            let mut frame = i + 1;
+            loop {
+                for j in 0..=i {
+                    if self.axis_frame(j) == frame {
+                        let axis = [inv.r[0][2], inv.r[1][2], inv.r[2][2]];
+                        let r = self.g.v3_sub(c, inv.t);
+                        cols_p[j] = self.g.v3_cross(axis, r);
+                        cols_o[j] = axis;
+                    }
+                }
+                if frame == 0 {
+                    break;
+                }
+                let ai = self.a_invs[frame - 1];
+                inv = self.compose(&inv, &ai);
+                frame -= 1;
+            }
+            // I ω products: (I J_O)_k for each column.
+            let i_cols: Vec<V3> = cols_o
+                .iter()
+                .map(|&o| self.g.m3_mul_v(&inertia, o))
+                .collect();
+            for a in 0..=i {
+                for b in a..=i {
+                    let pp = self.g.v3_dot(cols_p[a], cols_p[b]);
+                    let mp = self.g.mul(mass, pp);
+                    let oo = self.g.v3_dot(cols_o[a], i_cols[b]);
+                    let t = self.g.add(mp, oo);
+                    mm[a][b] = self.g.add(mm[a][b], t);
+                }
+            }
+        }
+        for a in 0..n {
+            for b in 0..a {
+                mm[a][b] = mm[b][a];
+            }
+        }
+        self.cache.mass = Some(mm.clone());
+        mm
+    }
+
+    fn link_inertia(&mut self, i: usize) -> M3 {
+        let p = format!("link{}.inertia", i + 1);
+        let xx = self.constant(&format!("{p}.xx"));
+        let yy = self.constant(&format!("{p}.yy"));
+        let zz = self.constant(&format!("{p}.zz"));
+        let xy = self.constant(&format!("{p}.xy"));
+        let xz = self.constant(&format!("{p}.xz"));
+        let yz = self.constant(&format!("{p}.yz"));
+        [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]
+    }
+
+    /// ∂M/∂q: `out[k][i][j]` = ∂M_ij/∂q_k.
+    pub fn dmass_dq(&mut self) -> Vec<Vec<Vec<Id>>> {
+        if let Some(d) = &self.cache.dmass {
+            return d.clone();
+        }
+        let n = self.nq();
+        let m = self.mass_matrix();
+        let flat: Vec<Id> = m.iter().flatten().copied().collect();
+        let mut out = Vec::new();
+        for k in 0..n {
+            let d = diff::partial(&mut self.g, &flat, self.layout.q(k));
+            out.push(d.chunks(n).map(|c| c.to_vec()).collect::<Vec<_>>());
+        }
+        self.cache.dmass = Some(out.clone());
+        out
+    }
+
+    /// Christoffel symbols `c[i][j][k]` = ½(∂M_ij/∂q_k + ∂M_ik/∂q_j − ∂M_jk/∂q_i).
+    pub fn christoffel(&mut self) -> Vec<Vec<Vec<Id>>> {
+        let n = self.nq();
+        let dm = self.dmass_dq();
+        let half = self.g.constant(0.5);
+        let mut c = vec![vec![vec![Id(0); n]; n]; n];
+        for i in 0..n {
+            for j in 0..n {
+                for k in 0..n {
+                    let a = self.g.add(dm[k][i][j], dm[j][i][k]);
+                    let b = self.g.sub(a, dm[i][j][k]);
+                    c[i][j][k] = self.g.mul(half, b);
+                }
+            }
+        }
+        c
+    }
+
+    /// C(q, q̇), C_ij = Σ_k c_ijk q̇_k.
+    pub fn coriolis_matrix(&mut self) -> Vec<Vec<Id>> {
+        let c = self.christoffel();
+        let qd = self.qd_ids();
+        c.iter()
+            .map(|ci| ci.iter().map(|cij| self.g.dot(cij, &qd)).collect())
+            .collect()
+    }
+
+    /// C q̇ + g with the cheaper of the Newton–Euler and Christoffel paths, counting the
+    /// operations shared with `with` (e.g. the entries of M computed in the same kernel).
+    pub fn cqd_g_cheapest(&mut self, with: &[Id]) -> Vec<Id> {
+        let rnea = self.cqd_g_rnea();
+        let c = self.coriolis_qd_christoffel();
+        let g = self.gravity();
+        let chr: Vec<Id> = c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect();
+        let cost = |m: &Model, v: &[Id]| {
+            let mut all = with.to_vec();
+            all.extend_from_slice(v);
+            m.g.cost(&all)
+        };
+        if cost(self, &chr) < cost(self, &rnea) {
+            chr
+        } else {
+            rnea
+        }
+    }
+
+    /// C q̇ (Lagrangian): the cheaper of Ṁ q̇ − ∂T/∂q (T = ½ q̇ᵀ M q̇) and the contraction of
+    /// the Christoffel symbols; both equal Σ_jk c_ijk q̇_j q̇_k.
+    pub fn coriolis_qd(&mut self) -> Vec<Id> {
+        if let Some(c) = &self.cache.cqd {
+            return c.clone();
+        }
+        let a = self.coriolis_qd_energy();
+        let b = self.coriolis_qd_christoffel();
+        let out = if self.g.cost(&b) < self.g.cost(&a) {
+            b
+        } else {
+            a
+        };
+        self.cache.cqd = Some(out.clone());
+        out
+    }
+
+    /// C q̇ = Ṁ q̇ − ∂T/∂q with T = ½ q̇ᵀ M q̇.
+    pub fn coriolis_qd_energy(&mut self) -> Vec<Id> {
+        let n = self.nq();
+        let m = self.mass_matrix();
+        let qd = self.qd_ids();
+        let flat: Vec<Id> = m.iter().flatten().copied().collect();
+        let mdot = self.dt(&flat);
+        let mdot: Vec<Vec<Id>> = mdot.chunks(n).map(|c| c.to_vec()).collect();
+        let mdq = self.matvec(&mdot, &qd);
+        // T = ½ q̇ᵀ M q̇; ∂T/∂q in one reverse sweep.
+        let mq = self.matvec(&m, &qd);
+        let tq = self.g.dot(&qd, &mq);
+        let half = self.g.constant(0.5);
+        let one = self.g.one();
+        let t = self.g.mul(half, tq);
+        let vars = self.q_vars();
+        let dtdq = diff::reverse(&mut self.g, &[(t, one)], &vars);
+        (0..n).map(|i| self.g.sub(mdq[i], dtdq[i])).collect()
+    }
+
+    /// C q̇ from the Christoffel symbols with the symmetric contraction
+    /// (C q̇)_i = Σ_j c_ijj q̇_j² + 2 Σ_{j<k} c_ijk q̇_j q̇_k.
+    pub fn coriolis_qd_christoffel(&mut self) -> Vec<Id> {
+        let n = self.nq();
+        let c = self.christoffel();
+        let qd = self.qd_ids();
+        let two = self.g.constant(2.0);
+        let mut prods = vec![vec![Id(0); n]; n];
+        for j in 0..n {
+            for k in j..n {
+                let p = self.g.mul(qd[j], qd[k]);
+                prods[j][k] = if j == k { p } else { self.g.mul(two, p) };
+            }
+        }
+        (0..n)
+            .map(|i| {
+                let mut acc = self.g.zero();
+                for j in 0..n {
+                    for k in j..n {
+                        let t = self.g.mul(c[i][j][k], prods[j][k]);
+                        acc = self.g.add(acc, t);
+                    }
+                }
+                acc
+            })
+            .collect()
+    }
+
+    /// U(q) = −Σ m_i g_0ᵀ p_i.
+    pub fn potential(&mut self) -> Id {
+        if let Some(u) = self.cache.potential {
+            return u;
+        }
+        let coms = self.com_world();
+        let g0 = self.cvec("gravity");
+        let mut terms = Vec::new();
+        for (i, p) in coms.iter().enumerate() {
+            let m = self.constant(&format!("link{}.mass", i + 1));
+            let gp = self.g.v3_dot(g0, *p);
+            terms.push(self.g.mul(m, gp));
+        }
+        let s = self.g.sum(&terms);
+        let u = self.g.neg(s);
+        self.cache.potential = Some(u);
+        u
+    }
+
+    /// g(q) = ∂U/∂q.
+    pub fn gravity(&mut self) -> Vec<Id> {
+        if let Some(g) = &self.cache.gravity {
+            return g.clone();
+        }
+        let u = self.potential();
+        let one = self.g.one();
+        let vars = self.q_vars();
+        let gr = diff::reverse(&mut self.g, &[(u, one)], &vars);
+        self.cache.gravity = Some(gr.clone());
+        gr
+    }
+
+    /// C q̇ + g (Lagrangian path).
+    pub fn cqd_g(&mut self) -> Vec<Id> {
+        let c = self.coriolis_qd();
+        let g = self.gravity();
+        c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect()
+    }
+
+    /// C q̇ + g by recursive Newton–Euler with q̈ = 0 in link frames.
+    pub fn cqd_g_rnea(&mut self) -> Vec<Id> {
+        if let Some(r) = &self.cache.rnea {
+            return r.clone();
+        }
+        let n = self.nq();
+        let z = self.g.zero();
+        let qd = self.qd_ids();
+        let modified = self.scene.dh == DhConvention::Modified;
+        // Base frame: a_0 = −g_0 in base axes (gravity as a fictitious upward acceleration).
+        let g0 = self.cvec("gravity");
+        let base_r = self.world[0].r;
+        let ng0 = [self.g.neg(g0[0]), self.g.neg(g0[1]), self.g.neg(g0[2])];
+        let mut acc = self.g.m3_tmul_v(&base_r, ng0);
+        let mut w: V3 = [z; 3];
+        let mut wd: V3 = [z; 3];
+        struct LinkState {
+            f: V3,
+            nn: V3,
+        }
+        let mut st: Vec<LinkState> = Vec::new();
+        for i in 0..n {
+            let a = self.a_mats[i];
+            let u = if modified {
+                let o = self.g.one();
+                [z, z, o]
+            } else {
+                // z_{i−1} in frame i: third row of R^{i−1}_i.
+                [a.r[2][0], a.r[2][1], a.r[2][2]]
+            };
+            let uq = self.g.v3_scale(qd[i], u);
+            let w_prev = self.g.m3_tmul_v(&a.r, w);
+            let wd_prev = self.g.m3_tmul_v(&a.r, wd);
+            let wi = self.g.v3_add(w_prev, uq);
+            let cr = self.g.v3_cross(w_prev, uq);
+            let wdi = self.g.v3_add(wd_prev, cr);
+            let ai = if modified {
+                // Frame i origin is fixed in link i−1: a_i = Rᵀ(a + ω̇×t + ω×(ω×t)).
+                let t = a.t;
+                let x = self.g.v3_cross(wd, t);
+                let y0 = self.g.v3_cross(w, t);
+                let y = self.g.v3_cross(w, y0);
+                let s = self.g.v3_add(acc, x);
+                let s = self.g.v3_add(s, y);
+                self.g.m3_tmul_v(&a.r, s)
+            } else {
+                // o_{i−1} lies on joint i's axis: a_i = Rᵀa_{i−1} + ω̇_i×r + ω_i×(ω_i×r),
+                // r = o_i − o_{i−1} in frame i = Rᵀ t (closed form [a, d sα, d cα]).
+                let r = [
+                    self.g.neg(self.a_invs[i].t[0]),
+                    self.g.neg(self.a_invs[i].t[1]),
+                    self.g.neg(self.a_invs[i].t[2]),
+                ];
+                let ap = self.g.m3_tmul_v(&a.r, acc);
+                let x = self.g.v3_cross(wdi, r);
+                let y0 = self.g.v3_cross(wi, r);
+                let y = self.g.v3_cross(wi, y0);
+                let s = self.g.v3_add(ap, x);
+                self.g.v3_add(s, y)
+            };
+            let c = self.com_local(i);
+            let x = self.g.v3_cross(wdi, c);
+            let y0 = self.g.v3_cross(wi, c);
+            let y = self.g.v3_cross(wi, y0);
+            let ac = self.g.v3_add(ai, x);
+            let ac = self.g.v3_add(ac, y);
+            let m = self.constant(&format!("link{}.mass", i + 1));
+            let f = self.g.v3_scale(m, ac);
+            let inertia = self.link_inertia(i);
+            let iw = self.g.m3_mul_v(&inertia, wi);
+            let iwd = self.g.m3_mul_v(&inertia, wdi);
+            let wiw = self.g.v3_cross(wi, iw);
+            let nn = self.g.v3_add(iwd, wiw);
+            st.push(LinkState { f, nn });
+            acc = ai;
+            w = wi;
+            wd = wdi;
+        }
+        // Backward pass: F_i, moment n_i about o_i, in frame i.
+        let mut f_next: V3 = [z; 3];
+        let mut n_next: V3 = [z; 3];
+        let mut tau = vec![z; n];
+        for i in (0..n).rev() {
+            let (ff, nf) = if i + 1 < n {
+                let a = self.a_mats[i + 1];
+                let ff = self.g.m3_mul_v(&a.r, f_next);
+                let nf = self.g.m3_mul_v(&a.r, n_next);
+                let tf = self.g.v3_cross(a.t, ff);
+                (ff, self.g.v3_add(nf, tf))
+            } else {
+                ([z; 3], [z; 3])
+            };
+            let fi = self.g.v3_add(ff, st[i].f);
+            let c = self.com_local(i);
+            let cf = self.g.v3_cross(c, st[i].f);
+            let ni = self.g.v3_add(nf, cf);
+            let ni = self.g.v3_add(ni, st[i].nn);
+            if modified {
+                tau[i] = ni[2];
+            } else {
+                let a = self.a_mats[i];
+                let u = [a.r[2][0], a.r[2][1], a.r[2][2]];
+                let r = [
+                    self.g.neg(self.a_invs[i].t[0]),
+                    self.g.neg(self.a_invs[i].t[1]),
+                    self.g.neg(self.a_invs[i].t[2]),
+                ];
+                // Moment about o_{i−1} (on joint i's axis): n_i + r × F_i.
+                let rf = self.g.v3_cross(r, fi);
+                let m = self.g.v3_add(ni, rf);
+                tau[i] = self.g.v3_dot(u, m);
+            }
+            f_next = fi;
+            n_next = ni;
+        }
+        self.cache.rnea = Some(tau.clone());
+        tau
+    }
+}

@@ -1,0 +1,302 @@
+//! Scene loading errors: [`SpecErrorKind`], [`SpecError`] and the `SourceIndex` that maps
+//! field paths to source positions.
+//!
+//! Every located error is `FILE:LINE:COLUMN: FIELD.PATH: message`, e.g.
+//! `scenes/foo.toml:12:1: links[1].mass: must be > 0 (got -0.02)`; `SourceIndex` is built
+//! from toml's span-preserving `DeTable` and also names the field of TOML syntax and serde
+//! errors.
+
+/// What kind of problem a [`SpecError::At`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SpecErrorKind {
+    /// The text is not valid TOML.
+    Syntax,
+    /// A key the schema does not have (`deny_unknown_fields`).
+    UnknownField,
+    /// A required key is absent.
+    MissingField,
+    /// A value of the wrong type or shape (e.g. a string where a number is expected).
+    WrongType,
+    /// A well-typed value that is physically or logically invalid (NaN, m ≤ 0, ...).
+    Invalid,
+}
+
+/// Error from loading or validating a scene. Display format:
+/// `FILE:LINE:COLUMN: FIELD.PATH: message`, e.g.
+/// `scenes/foo.toml:12:1: links[1].mass: must be > 0 (got -0.02)`.
+/// Lines and columns are 1-based; array indices in the field path are 0-based TOML indices
+/// (`links[1]` is the second `[[links]]` table, i.e. DH link 2).
+#[derive(Debug, thiserror::Error)]
+pub enum SpecError {
+    /// The file could not be read.
+    #[error("{file}: cannot read scene file: {source}")]
+    Io {
+        /// The path as given.
+        file: String,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A located problem in the scene text.
+    #[error("{file}:{line}:{column}: {path}: {message}")]
+    At {
+        /// Problem category.
+        kind: SpecErrorKind,
+        /// The origin (file name) given to the parser.
+        file: String,
+        /// 1-based line.
+        line: usize,
+        /// 1-based column (in characters).
+        column: usize,
+        /// Field path, e.g. `links[1].mass`, `base.rotation[0][2]`; `(document)` if unknown.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl SpecError {
+    /// The field path (`None` for I/O errors).
+    pub fn path(&self) -> Option<&str> {
+        match self {
+            SpecError::At { path, .. } => Some(path),
+            SpecError::Io { .. } => None,
+        }
+    }
+
+    /// The 1-based line (`None` for I/O errors).
+    pub fn line(&self) -> Option<usize> {
+        match self {
+            SpecError::At { line, .. } => Some(*line),
+            SpecError::Io { .. } => None,
+        }
+    }
+
+    /// The problem category (`None` for I/O errors).
+    pub fn kind(&self) -> Option<SpecErrorKind> {
+        match self {
+            SpecError::At { kind, .. } => Some(*kind),
+            SpecError::Io { .. } => None,
+        }
+    }
+}
+
+/// Maps field paths to source positions, built from toml's span-preserving parse tree.
+pub(super) struct SourceIndex<'a> {
+    text: &'a str,
+    origin: &'a str,
+    /// (path, position to report, covered span, value span) for every key and array element.
+    entries: Vec<(
+        String,
+        usize,
+        std::ops::Range<usize>,
+        std::ops::Range<usize>,
+    )>,
+}
+
+impl<'a> SourceIndex<'a> {
+    pub(super) fn new(
+        text: &'a str,
+        origin: &'a str,
+        root: Option<&toml::de::DeTable<'_>>,
+    ) -> Self {
+        let mut idx = SourceIndex {
+            text,
+            origin,
+            entries: Vec::new(),
+        };
+        if let Some(t) = root {
+            idx.walk_table(t, "");
+        }
+        idx
+    }
+
+    fn walk_table(&mut self, t: &toml::de::DeTable<'_>, prefix: &str) {
+        for (k, v) in t.iter() {
+            let path = if prefix.is_empty() {
+                k.get_ref().to_string()
+            } else {
+                format!("{prefix}.{}", k.get_ref())
+            };
+            let ks = k.span();
+            let vs = v.span();
+            let cover = ks.start.min(vs.start)..ks.end.max(vs.end);
+            self.entries.push((path.clone(), ks.start, cover, vs));
+            self.walk_value(v.get_ref(), &path);
+        }
+    }
+
+    fn walk_value(&mut self, v: &toml::de::DeValue<'_>, path: &str) {
+        match v {
+            toml::de::DeValue::Table(t) => self.walk_table(t, path),
+            toml::de::DeValue::Array(a) => {
+                for (i, e) in a.iter().enumerate() {
+                    let p = format!("{path}[{i}]");
+                    let s = e.span();
+                    self.entries.push((p.clone(), s.start, s.clone(), s));
+                    self.walk_value(e.get_ref(), &p);
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The innermost path whose key or value covers byte `offset`.
+    fn path_at(&self, offset: usize) -> Option<&str> {
+        self.entries
+            .iter()
+            .filter(|(_, _, s, _)| s.start <= offset && offset < s.end.max(s.start + 1))
+            .min_by_key(|(p, _, s, _)| (s.end - s.start, usize::MAX - p.len()))
+            .map(|(p, _, _, _)| p.as_str())
+    }
+
+    /// Byte offset to report for `path`, falling back to its parents.
+    fn offset_of(&self, path: &str) -> usize {
+        let mut p = path;
+        loop {
+            if let Some((_, pos, _, _)) = self.entries.iter().find(|(q, _, _, _)| q == p) {
+                return *pos;
+            }
+            match p.rfind(['.', '[']) {
+                Some(i) => p = &p[..i],
+                None => return 0,
+            }
+        }
+    }
+
+    fn line_col(&self, offset: usize) -> (usize, usize) {
+        let mut off = offset.min(self.text.len());
+        while !self.text.is_char_boundary(off) {
+            off -= 1;
+        }
+        let before = &self.text[..off];
+        let line = before.matches('\n').count() + 1;
+        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+        let column = before[line_start..].chars().count() + 1;
+        (line, column)
+    }
+
+    fn error(&self, kind: SpecErrorKind, offset: usize, path: &str, message: String) -> SpecError {
+        let (line, column) = self.line_col(offset);
+        SpecError::At {
+            kind,
+            file: self.origin.to_string(),
+            line,
+            column,
+            path: if path.is_empty() {
+                "(document)".to_string()
+            } else {
+                path.to_string()
+            },
+            message,
+        }
+    }
+
+    /// A semantic error at `path`.
+    pub(super) fn invalid(&self, path: &str, message: String) -> SpecError {
+        self.error(SpecErrorKind::Invalid, self.offset_of(path), path, message)
+    }
+
+    /// Best-effort path for a position in text that may not parse: the last table header before
+    /// the line plus the key on the line (`[[x]]` headers are counted to give `x[i]`).
+    fn textual_path(&self, offset: usize) -> Option<String> {
+        let off = offset.min(self.text.len());
+        let line_start = self.text[..off].rfind('\n').map_or(0, |i| i + 1);
+        let line_end = self.text[off..]
+            .find('\n')
+            .map_or(self.text.len(), |i| off + i);
+        let line = self.text[line_start..line_end].trim();
+        let key = match line.split_once('=') {
+            Some((k, _)) if !line.starts_with('[') && !line.starts_with('#') => {
+                let k = k.trim();
+                let bare = !k.is_empty()
+                    && k.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.');
+                bare.then(|| k.to_string())
+            }
+            _ => None,
+        };
+        let mut header: Option<String> = None;
+        let mut counts: Vec<(String, usize)> = Vec::new();
+        for l in self.text[..line_start]
+            .lines()
+            .chain(line.starts_with('[').then_some(line))
+        {
+            let l = l.trim();
+            if let Some(h) = l.strip_prefix("[[") {
+                let name = h.split("]]").next().unwrap_or("").trim().to_string();
+                let n = match counts.iter_mut().find(|(k, _)| *k == name) {
+                    Some((_, n)) => {
+                        *n += 1;
+                        *n
+                    }
+                    None => {
+                        counts.push((name.clone(), 0));
+                        0
+                    }
+                };
+                header = Some(format!("{name}[{n}]"));
+            } else if let Some(h) = l.strip_prefix('[') {
+                header = Some(h.split(']').next().unwrap_or("").trim().to_string());
+            }
+        }
+        match (header, key) {
+            (Some(h), Some(k)) => Some(format!("{h}.{k}")),
+            (Some(h), None) => Some(h),
+            (None, Some(k)) => Some(k),
+            (None, None) => None,
+        }
+    }
+
+    /// Converts a toml (syntax or serde) error into a located [`SpecError`].
+    pub(super) fn locate_toml_error(&self, e: &toml::de::Error, syntax: bool) -> SpecError {
+        let msg = e.message().trim().to_string();
+        let offset = e.span().map_or(0, |s| s.start);
+        let mut path = if syntax {
+            self.textual_path(offset)
+        } else {
+            None
+        }
+        .or_else(|| {
+            e.span()
+                .and_then(|s| self.path_at(s.start))
+                .map(str::to_string)
+        })
+        .unwrap_or_default();
+        let kind = if syntax {
+            SpecErrorKind::Syntax
+        } else if msg.starts_with("unknown field") {
+            SpecErrorKind::UnknownField
+        } else if msg.starts_with("missing field") {
+            // The span is exactly the enclosing table's (its header or inline braces; the whole
+            // document for the root table); name the missing key in the path.
+            path = e
+                .span()
+                .and_then(|s| self.entries.iter().find(|(_, _, _, v)| *v == s))
+                .map_or_else(String::new, |(p, _, _, _)| p.clone());
+            if let Some(field) = msg.split('`').nth(1) {
+                path = if path.is_empty() {
+                    field.to_string()
+                } else {
+                    format!("{path}.{field}")
+                };
+            }
+            SpecErrorKind::MissingField
+        } else if msg.starts_with("invalid type")
+            || msg.starts_with("invalid length")
+            || msg.starts_with("invalid value")
+            || msg.starts_with("unknown variant")
+            || msg.starts_with("inertia must be")
+        {
+            SpecErrorKind::WrongType
+        } else {
+            SpecErrorKind::Invalid
+        };
+        let msg = if syntax {
+            format!("TOML syntax error: {msg}")
+        } else {
+            msg
+        };
+        self.error(kind, offset, &path, msg)
+    }
+}

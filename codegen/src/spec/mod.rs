@@ -1,0 +1,542 @@
+//! Scene specification: the TOML file a user writes (`scenes/*.toml`).
+//!
+//! A scene is a serial revolute chain given by a Denavit–Hartenberg table (paper Table 1,
+//! standard or modified convention), a base transform (paper Sect. 2.1: translation `o_f`,
+//! rotation R_y(-π/2)), per-link inertia (eq. 22a: m_i, COG, I_i), gravity g_0 (eq. 22b),
+//! optionally a ball (Sect. 2.1–2.2: radius r, centre o_b, mass, I_b of eq. 25) with friction
+//! constants (μ_s, μ_k, μ_v, D of Sect. 2), the list of kernels to emit, and which physical
+//! constants are runtime parameters instead of being baked into the code.
+//!
+//! These types are the contract between the spec parser and the robot front-end. Parsing and
+//! validation errors name the file, line and field (see [`SpecError`]).
+//!
+//! Map to the paper / docs/parameters.md:
+//! - [`LinkSpec`] `a`, `alpha`, `d`, `offset`: one row of Table 1 (standard DH,
+//!   A_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i), θ_i = q_i + offset); [`Angle`] keeps α = π/2 exact.
+//! - [`LinkSpec`] `mass`, `com`, `inertia`: m_i, COG and I_i of eq. 22a (about the COG, link axes).
+//! - [`Scene::gravity`]: g_0 of U = −Σ m_i g_0ᵀ p_i (eq. 22b, g = ∂U/∂q).
+//! - [`Scene::base`]: o_f and R_y(−π/2) of Sect. 2.1; [`BallSpec`]: r, o_b, m_b, I_b (eq. 25).
+//! - [`FrictionSpec`]: μ_s, μ_k (Coulomb), μ_v (joints), D (socket), Sect. 2 assumptions 3–4.
+//! - [`ContactSpec`]: the segment/tip contact of eq. 2–7 and ε of the smooth sat (eq. 58–59).
+//! - [`Scene::constants`]: the registry of every physical constant by name (`link2.mass`,
+//!   `ball.radius`, ...); `runtime_parameters` picks the ones that stay variables.
+//!
+//! Loading: [`Scene::load`] / [`Scene::from_toml_str`] parse with toml's span-preserving
+//! `DeTable`, deserialise with serde (`deny_unknown_fields`), then validate; every error is
+//! `FILE:LINE:COLUMN: FIELD.PATH: message`, e.g.
+//! `scenes/foo.toml:12:1: links[1].mass: must be > 0 (got -0.02)`.
+
+mod angle;
+mod de;
+mod error;
+mod validate;
+
+use serde::Deserialize;
+
+pub use error::{SpecError, SpecErrorKind};
+pub use validate::{principal_moments, symmetric_eigenvalues};
+
+use error::SourceIndex;
+
+/// An angle in a scene file: a number (radians) or a string such as `"pi/2"`, `"-pi/2"`,
+/// `"3*pi/4"`, `"90deg"`. Rational multiples of π are kept exact (`num/den`), so the
+/// generator folds cos(π/2) to exactly 0.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Angle {
+    /// An arbitrary angle in radians.
+    Radians(f64),
+    /// Exactly `num/den · π` radians (`den > 0`).
+    PiMultiple {
+        /// Numerator of the rational multiple of π.
+        num: i64,
+        /// Denominator of the rational multiple of π (positive).
+        den: i64,
+    },
+}
+
+/// Which Denavit–Hartenberg convention the `links` table uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum DhConvention {
+    /// Standard (distal) DH: A_i = Rz(θ_i) Tz(d_i) Tx(a_i) Rx(α_i); joint i rotates about z_{i-1}.
+    #[default]
+    Standard,
+    /// Modified (proximal, Craig) DH: A_i = Rx(α_{i-1}) Tx(a_{i-1}) Rz(θ_i) Tz(d_i); the row of
+    /// link i holds a_{i-1} and α_{i-1}.
+    Modified,
+}
+
+/// A rotation in the scene file (deserialised by hand so that errors are precise: a table
+/// `{ axis, angle }` or a 3×3 array).
+#[derive(Debug, Clone, PartialEq)]
+pub enum RotationSpec {
+    /// A rotation about a principal axis: `{ axis = "y", angle = "-pi/2" }`.
+    Axis {
+        /// `"x"`, `"y"` or `"z"`.
+        axis: String,
+        /// Rotation angle.
+        angle: Angle,
+    },
+    /// A full rotation matrix, row-major.
+    Matrix([[f64; 3]; 3]),
+}
+
+/// A rigid transform (base of the chain, or a tool frame after the last link).
+#[derive(Debug, Clone, PartialEq, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct TransformSpec {
+    /// Translation in metres (default: zero).
+    #[serde(default, deserialize_with = "de::opt_exact3")]
+    pub translation: Option<[f64; 3]>,
+    /// Rotation (default: identity).
+    #[serde(default)]
+    pub rotation: Option<RotationSpec>,
+}
+
+/// Inertia tensor about the link COG, in link-frame axes (kg m²). Deserialised by hand: a
+/// 3-array is the diagonal, a 3×3 array the full tensor.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InertiaSpec {
+    /// Diagonal `[Ixx, Iyy, Izz]`.
+    Diagonal([f64; 3]),
+    /// Full symmetric tensor, row-major.
+    Full([[f64; 3]; 3]),
+}
+
+/// One row of the DH table plus the link's inertial data.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LinkSpec {
+    /// Optional human-readable name.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// DH a (metres).
+    pub a: f64,
+    /// DH α.
+    pub alpha: Angle,
+    /// DH d (metres).
+    #[serde(default)]
+    pub d: f64,
+    /// Constant joint offset added to q_i: θ_i = q_i + offset (default 0).
+    #[serde(default)]
+    pub offset: Option<Angle>,
+    /// Link mass m_i (kg), > 0.
+    pub mass: f64,
+    /// COG in link-frame coordinates (metres).
+    #[serde(deserialize_with = "de::exact3")]
+    pub com: [f64; 3],
+    /// Inertia about the COG in link-frame axes (kg m²), symmetric positive definite.
+    pub inertia: InertiaSpec,
+    /// Lower joint limit (radians), optional; used by the optimiser. In the file it may also be
+    /// written like an angle (`"-160deg"`, `"-pi/2"`), converted to radians.
+    #[serde(default, deserialize_with = "de::opt_angle_radians")]
+    pub q_min: Option<f64>,
+    /// Upper joint limit (radians), optional; used by the optimiser (angle strings accepted as
+    /// for `q_min`).
+    #[serde(default, deserialize_with = "de::opt_angle_radians")]
+    pub q_max: Option<f64>,
+    /// Torque limit |τ_i| (N m), optional; used by the optimiser.
+    #[serde(default)]
+    pub tau_max: Option<f64>,
+}
+
+/// The ball in its socket (paper Sect. 2.1, eq. 25).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BallSpec {
+    /// Radius r (m), > 0.
+    pub radius: f64,
+    /// Centre o_b (m).
+    #[serde(default, deserialize_with = "de::exact3")]
+    pub center: [f64; 3],
+    /// Mass (kg), > 0.
+    pub mass: f64,
+    /// Inertia I_b about the centre (kg m²); default (2/5) m r² · 1.
+    #[serde(default)]
+    pub inertia: Option<InertiaSpec>,
+}
+
+/// Friction constants (paper Sect. 2, assumptions 3–4).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// Static Coulomb coefficient μ_s ≥ 0.
+    pub mu_s: f64,
+    /// Kinetic Coulomb coefficient μ_k ≥ 0.
+    pub mu_k: f64,
+    /// Joint viscous friction μ_v ≥ 0 (N m s/rad).
+    #[serde(default)]
+    pub mu_v: f64,
+    /// Ball–socket viscous friction D ≥ 0 (N m s).
+    #[serde(default)]
+    pub socket_damping: f64,
+}
+
+/// Contact geometry between the ball and the last link (paper Sect. 2.2).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    /// `"segment"`: the last link is the segment from p_e − a_n e_x to p_e (point or line
+    /// contact, eq. 3 with sat); `"tip"`: only the fingertip can touch (α not saturated,
+    /// no line-contact saturation is generated).
+    #[serde(default = "default_contact_kind")]
+    pub kind: String,
+    /// Default ε of the smooth saturation |x| ≈ sqrt(x² + ε²) (eq. 59); kernels take ε at run time.
+    #[serde(default = "default_eps")]
+    pub smooth_eps: f64,
+}
+
+fn default_contact_kind() -> String {
+    "segment".to_string()
+}
+fn default_eps() -> f64 {
+    0.01
+}
+
+/// A whole scene file.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Scene name: a Rust identifier, used as the generated module name.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// DH convention of `links`.
+    #[serde(default)]
+    pub dh: DhConvention,
+    /// Base transform of the chain in world coordinates.
+    #[serde(default)]
+    pub base: TransformSpec,
+    /// Tool transform after the last DH frame (default identity).
+    #[serde(default)]
+    pub tool: Option<TransformSpec>,
+    /// Gravity vector g_0 (m/s²).
+    #[serde(deserialize_with = "de::exact3")]
+    pub gravity: [f64; 3],
+    /// The DH table, one entry per revolute joint (at least one).
+    pub links: Vec<LinkSpec>,
+    /// The ball, if the scene has one.
+    #[serde(default)]
+    pub ball: Option<BallSpec>,
+    /// Friction constants.
+    #[serde(default)]
+    pub friction: Option<FrictionSpec>,
+    /// Contact geometry; requires `ball`.
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+    /// Names of the kernels to emit (see the generator's kernel list).
+    pub kernels: Vec<String>,
+    /// Names of the constants that stay runtime parameters (e.g. `"link2.mass"`,
+    /// `"ball.radius"`); every other constant is baked into the code.
+    #[serde(default)]
+    pub runtime_parameters: Vec<String>,
+    /// Cost kinds whose optimal-control node kernels are emitted ([`OCP_COSTS`]; needs `[ball]`
+    /// and `[contact]`). `None`: all of them when the scene has a ball and a contact; `[]`:
+    /// none (the optimiser then interprets the node graphs).
+    #[serde(default)]
+    pub ocp_kernels: Option<Vec<String>>,
+}
+
+/// Cost kinds of the optimal-control node kernels (`bf_problem::CostKind::tag`).
+pub const OCP_COSTS: &[&str] = &["qc", "cot", "time_effort", "track", "reorient", "spin"];
+
+// ---------------------------------------------------------------------------------------------
+// Kernel names
+// ---------------------------------------------------------------------------------------------
+
+/// Every kernel the generator knows (see `docs/kernels.md`); a scene's `kernels` list must be a
+/// subset. Order: kinematics, dynamics (eq. 22a–22c and Christoffel form), contact (Sect. 2.2).
+pub const KNOWN_KERNELS: &[&str] = &[
+    "frames",
+    "tip_jacobian",
+    "com_jacobians",
+    "tip_jdot_qd",
+    "mass_matrix",
+    "dmass_dq",
+    "christoffel",
+    "coriolis_matrix",
+    "coriolis_qd",
+    "gravity",
+    "potential",
+    "cqd_g",
+    "cqd_g_rnea",
+    "mass_cqd_g",
+    "contact",
+    "contact_smooth",
+];
+
+/// The kernels of [`KNOWN_KERNELS`] that need a `[ball]` and a `[contact]` section.
+pub const CONTACT_KERNELS: &[&str] = &["contact", "contact_smooth"];
+
+/// The contact kinds accepted in `[contact] kind`.
+pub const CONTACT_KINDS: &[&str] = &["segment", "tip"];
+
+impl RotationSpec {
+    /// The rotation matrix (row-major). Exact zeros/ones for axis rotations by multiples of π/2.
+    /// An axis other than x/y/z (rejected by validation) yields the identity.
+    pub fn matrix(&self) -> [[f64; 3]; 3] {
+        match self {
+            RotationSpec::Matrix(m) => *m,
+            RotationSpec::Axis { axis, angle } => {
+                let (c, s) = angle.cos_sin();
+                match axis.as_str() {
+                    "x" => [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]],
+                    "y" => [[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]],
+                    "z" => [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]],
+                    _ => IDENTITY,
+                }
+            }
+        }
+    }
+}
+
+const IDENTITY: [[f64; 3]; 3] = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+impl InertiaSpec {
+    /// The full 3×3 tensor (row-major).
+    pub fn matrix(&self) -> [[f64; 3]; 3] {
+        match self {
+            InertiaSpec::Diagonal([a, b, c]) => [[*a, 0.0, 0.0], [0.0, *b, 0.0], [0.0, 0.0, *c]],
+            InertiaSpec::Full(m) => *m,
+        }
+    }
+}
+
+impl TransformSpec {
+    /// Translation (zero if absent).
+    pub fn translation(&self) -> [f64; 3] {
+        self.translation.unwrap_or([0.0; 3])
+    }
+
+    /// Rotation matrix (identity if absent).
+    pub fn rotation_matrix(&self) -> [[f64; 3]; 3] {
+        self.rotation
+            .as_ref()
+            .map_or(IDENTITY, RotationSpec::matrix)
+    }
+}
+
+impl LinkSpec {
+    /// Inertia tensor about the COG in link-frame axes (kg m²).
+    pub fn inertia_matrix(&self) -> [[f64; 3]; 3] {
+        self.inertia.matrix()
+    }
+}
+
+impl BallSpec {
+    /// Inertia about the centre: the given tensor, or (2/5) m r² · 1 (solid sphere, eq. 25).
+    pub fn inertia_matrix(&self) -> [[f64; 3]; 3] {
+        match &self.inertia {
+            Some(i) => i.matrix(),
+            None => {
+                let j = 0.4 * self.mass * self.radius * self.radius;
+                [[j, 0.0, 0.0], [0.0, j, 0.0], [0.0, 0.0, j]]
+            }
+        }
+    }
+}
+
+impl Scene {
+    /// Parses and validates a scene from TOML text. `origin` (usually the file path) is used in
+    /// error messages only. Every error names the origin, the 1-based line and column, and the
+    /// field path; see [`SpecError`].
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scene, SpecError> {
+        let tree = match toml::de::DeTable::parse(text) {
+            Ok(t) => t,
+            Err(e) => {
+                let (partial, _) = toml::de::DeTable::parse_recoverable(text);
+                let ix = SourceIndex::new(text, origin, Some(partial.get_ref()));
+                return Err(ix.locate_toml_error(&e, true));
+            }
+        };
+        let ix = SourceIndex::new(text, origin, Some(tree.get_ref()));
+        let scene: Scene = toml::from_str(text).map_err(|e| ix.locate_toml_error(&e, false))?;
+        scene.validate_with(&ix)?;
+        Ok(scene)
+    }
+
+    /// Reads and validates a scene file; errors name `path` as given.
+    pub fn load(path: impl AsRef<std::path::Path>) -> Result<Scene, SpecError> {
+        let path = path.as_ref();
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
+            file: file.clone(),
+            source,
+        })?;
+        Scene::from_toml_str(&text, &file)
+    }
+
+    /// Checks every semantic rule (already applied by [`Scene::from_toml_str`]); for scenes
+    /// built in code. Errors carry `origin`, line 1 and the field path.
+    pub fn validate(&self, origin: &str) -> Result<(), SpecError> {
+        self.validate_with(&SourceIndex::new("", origin, None))
+    }
+
+    /// Accepted but physically doubtful values, one message each naming the field and values:
+    /// kinetic friction above static friction (μ_k > μ_s), and link or ball inertias whose
+    /// principal moments violate the triangle inequality I₃ ≤ I₁ + I₂ (no rigid body has
+    /// them; published data sets do, e.g. link 3 of the PUMA 560 of Armstrong et al.).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let mut inertia = |path: String, m: [[f64; 3]; 3]| {
+            let (e, ok) = principal_moments(&m);
+            if !ok {
+                out.push(format!(
+                    "{path}: principal moments {:e}, {:e}, {:e} kg m² violate the triangle \
+                     inequality ({:e} > {:e} + {:e}): no rigid body has this inertia",
+                    e[0], e[1], e[2], e[2], e[0], e[1]
+                ));
+            }
+        };
+        for (i, l) in self.links.iter().enumerate() {
+            inertia(format!("links[{i}].inertia"), l.inertia_matrix());
+        }
+        if let Some(b) = &self.ball {
+            inertia("ball.inertia".to_string(), b.inertia_matrix());
+        }
+        if let Some(f) = &self.friction
+            && f.mu_k > f.mu_s
+        {
+            out.push(format!(
+                "friction.mu_k = {} > friction.mu_s = {}: kinetic friction above static friction",
+                f.mu_k, f.mu_s
+            ));
+        }
+        out
+    }
+
+    /// Number of joints (= DH links).
+    pub fn nq(&self) -> usize {
+        self.links.len()
+    }
+
+    /// Base rotation matrix (identity if absent); exact for axis rotations by multiples of π/2.
+    pub fn base_rotation(&self) -> [[f64; 3]; 3] {
+        self.base.rotation_matrix()
+    }
+
+    /// Base translation (m).
+    pub fn base_translation(&self) -> [f64; 3] {
+        self.base.translation()
+    }
+
+    /// Tool rotation matrix (identity if there is no tool).
+    pub fn tool_rotation(&self) -> [[f64; 3]; 3] {
+        self.tool
+            .as_ref()
+            .map_or(IDENTITY, TransformSpec::rotation_matrix)
+    }
+
+    /// Tool translation (m; zero if there is no tool).
+    pub fn tool_translation(&self) -> [f64; 3] {
+        self.tool
+            .as_ref()
+            .map_or([0.0; 3], TransformSpec::translation)
+    }
+
+    /// Inertia tensor of link `i` (0-based index into `links`) about its COG, in link-frame
+    /// axes (kg m²). Panics if `i >= links.len()`, like slice indexing.
+    pub fn link_inertia(&self, i: usize) -> [[f64; 3]; 3] {
+        self.links[i].inertia_matrix()
+    }
+
+    /// Ball inertia about its centre (default (2/5) m r² · 1); `None` without a ball.
+    pub fn ball_inertia(&self) -> Option<[[f64; 3]; 3]> {
+        self.ball.as_ref().map(BallSpec::inertia_matrix)
+    }
+
+    /// Whether `kernel` is in the scene's kernel list.
+    pub fn wants(&self, kernel: &str) -> bool {
+        self.kernels.iter().any(|k| k == kernel)
+    }
+
+    /// Registry of the scene's physical constants, each of which the generator may bake or turn
+    /// into a runtime parameter. Fixed order (links numbered from 1 like the DH table):
+    ///
+    /// 1. `gravity.x`, `gravity.y`, `gravity.z`
+    /// 2. `base.translation.x|y|z`
+    /// 3. per link `k = 1..=n`: `linkk.a`, `linkk.alpha` (rad), `linkk.d`, `linkk.offset` (rad),
+    ///    `linkk.mass`, `linkk.com.x|y|z`, `linkk.inertia.xx|xy|xz|yy|yz|zz`
+    /// 4. `tool.translation.x|y|z` (only with a `[tool]`)
+    /// 5. `ball.radius`, `ball.center.x|y|z`, `ball.mass`, `ball.inertia.xx|xy|xz|yy|yz|zz`
+    ///    (the effective tensor, default (2/5) m r²; only with a `[ball]`)
+    /// 6. `friction.mu_s`, `friction.mu_k`, `friction.mu_v`, `friction.socket_damping` (only
+    ///    with `[friction]`)
+    ///
+    /// Rotations (base, tool) are always baked and are not in the registry.
+    pub fn constants(&self) -> Vec<(String, f64)> {
+        const XYZ: [&str; 3] = ["x", "y", "z"];
+        const SYM: [(&str, usize, usize); 6] = [
+            ("xx", 0, 0),
+            ("xy", 0, 1),
+            ("xz", 0, 2),
+            ("yy", 1, 1),
+            ("yz", 1, 2),
+            ("zz", 2, 2),
+        ];
+        let mut out = Vec::new();
+        let vec3 = |out: &mut Vec<(String, f64)>, stem: &str, v: [f64; 3]| {
+            for (c, x) in XYZ.iter().zip(v) {
+                out.push((format!("{stem}.{c}"), x));
+            }
+        };
+        let sym = |out: &mut Vec<(String, f64)>, stem: &str, m: [[f64; 3]; 3]| {
+            for (c, i, j) in SYM {
+                out.push((format!("{stem}.{c}"), m[i][j]));
+            }
+        };
+        vec3(&mut out, "gravity", self.gravity);
+        vec3(&mut out, "base.translation", self.base_translation());
+        for (i, l) in self.links.iter().enumerate() {
+            let s = format!("link{}", i + 1);
+            out.push((format!("{s}.a"), l.a));
+            out.push((format!("{s}.alpha"), l.alpha.radians()));
+            out.push((format!("{s}.d"), l.d));
+            out.push((format!("{s}.offset"), l.offset.map_or(0.0, |o| o.radians())));
+            out.push((format!("{s}.mass"), l.mass));
+            vec3(&mut out, &format!("{s}.com"), l.com);
+            sym(&mut out, &format!("{s}.inertia"), l.inertia_matrix());
+        }
+        if self.tool.is_some() {
+            vec3(&mut out, "tool.translation", self.tool_translation());
+        }
+        if let Some(b) = &self.ball {
+            out.push(("ball.radius".to_string(), b.radius));
+            vec3(&mut out, "ball.center", b.center);
+            out.push(("ball.mass".to_string(), b.mass));
+            sym(&mut out, "ball.inertia", b.inertia_matrix());
+        }
+        if let Some(f) = &self.friction {
+            out.push(("friction.mu_s".to_string(), f.mu_s));
+            out.push(("friction.mu_k".to_string(), f.mu_k));
+            out.push(("friction.mu_v".to_string(), f.mu_v));
+            out.push(("friction.socket_damping".to_string(), f.socket_damping));
+        }
+        out
+    }
+
+    /// Value of one registry constant by name (see [`Scene::constants`]).
+    pub fn constant(&self, name: &str) -> Option<f64> {
+        self.constants()
+            .into_iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v)
+    }
+
+    /// Whether the registry constant `name` is a runtime parameter in this scene.
+    pub fn is_runtime(&self, name: &str) -> bool {
+        self.runtime_parameters.iter().any(|r| r == name)
+    }
+
+    /// The runtime parameters with their scene values, in the order of `runtime_parameters`
+    /// (this order defines the layout of `p: &[f64; NP]`). Names are validated on load;
+    /// an unknown name (possible only for scenes built in code) is skipped.
+    pub fn runtime_parameter_values(&self) -> Vec<(String, f64)> {
+        let all = self.constants();
+        self.runtime_parameters
+            .iter()
+            .filter_map(|r| all.iter().find(|(n, _)| n == r).cloned())
+            .collect()
+    }
+}

@@ -1,0 +1,376 @@
+//! Validation of a deserialised [`Scene`]: identifiers, finiteness, m_i > 0 and
+//! symmetric positive inertias (eq. 22a, eq. 25), orthonormal rotations (the base rotation of
+//! paper Sect. 2.1), non-negative friction constants (μ_s, μ_k, μ_v, D of Sect. 2), the contact
+//! kind and ε > 0 (eq. 58–59), known kernels, costs and runtime parameters. Errors are located
+//! via `SourceIndex` (see [`SpecError`]).
+//!
+//! Also [`symmetric_eigenvalues`] and [`principal_moments`] of 3×3 inertia tensors (the
+//! principal moments checked by [`Scene::warnings`]).
+
+use super::{
+    Angle, CONTACT_KERNELS, CONTACT_KINDS, InertiaSpec, KNOWN_KERNELS, OCP_COSTS, RotationSpec,
+    Scene, SourceIndex, SpecError, TransformSpec,
+};
+
+const RUST_KEYWORDS: &[&str] = &[
+    "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for",
+    "if", "impl", "in", "let", "loop", "match", "mod", "move", "mut", "pub", "ref", "return",
+    "self", "Self", "static", "struct", "super", "trait", "true", "type", "unsafe", "use", "where",
+    "while", "async", "await", "dyn", "abstract", "become", "box", "do", "final", "macro",
+    "override", "priv", "typeof", "unsized", "virtual", "yield", "try", "gen", "union", "_",
+];
+
+/// Relative tolerance for symmetry of inertia tensors and orthonormality of rotation matrices.
+const MATRIX_TOL: f64 = 1e-9;
+
+fn check_finite(ix: &SourceIndex<'_>, path: &str, v: f64) -> Result<(), SpecError> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(ix.invalid(path, format!("must be finite (got {v})")))
+    }
+}
+
+fn check_vec(ix: &SourceIndex<'_>, path: &str, v: &[f64]) -> Result<(), SpecError> {
+    for (i, x) in v.iter().enumerate() {
+        check_finite(ix, &format!("{path}[{i}]"), *x)?;
+    }
+    Ok(())
+}
+
+fn check_positive(ix: &SourceIndex<'_>, path: &str, v: f64) -> Result<(), SpecError> {
+    check_finite(ix, path, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(ix.invalid(path, format!("must be > 0 (got {v})")))
+    }
+}
+
+fn check_nonnegative(ix: &SourceIndex<'_>, path: &str, v: f64) -> Result<(), SpecError> {
+    check_finite(ix, path, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(ix.invalid(path, format!("must be >= 0 (got {v})")))
+    }
+}
+
+fn check_angle(ix: &SourceIndex<'_>, path: &str, a: &Angle) -> Result<(), SpecError> {
+    match a {
+        Angle::Radians(x) => check_finite(ix, path, *x),
+        Angle::PiMultiple { den, .. } if *den > 0 => Ok(()),
+        Angle::PiMultiple { num, den } => Err(ix.invalid(
+            path,
+            format!("pi multiple {num}/{den} needs a positive denominator"),
+        )),
+    }
+}
+
+fn check_inertia(ix: &SourceIndex<'_>, path: &str, spec: &InertiaSpec) -> Result<(), SpecError> {
+    match spec {
+        InertiaSpec::Diagonal(d) => check_vec(ix, path, d)?,
+        InertiaSpec::Full(m) => {
+            for (i, row) in m.iter().enumerate() {
+                check_vec(ix, &format!("{path}[{i}]"), row)?;
+            }
+        }
+    }
+    let m = spec.matrix();
+    let scale = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+    for i in 0..3 {
+        for j in (i + 1)..3 {
+            if (m[i][j] - m[j][i]).abs() > MATRIX_TOL * scale {
+                return Err(ix.invalid(
+                    path,
+                    format!(
+                        "inertia must be symmetric (I[{i}][{j}] = {} but I[{j}][{i}] = {})",
+                        m[i][j], m[j][i]
+                    ),
+                ));
+            }
+        }
+    }
+    // Sylvester's criterion on the leading principal minors of the symmetric tensor, scaled by
+    // its largest entry first so that tiny (1e-300) or huge inertias neither underflow nor
+    // overflow the minors: definiteness does not depend on the unit.
+    let n = scaled(&m, scale);
+    let m1 = n[0][0];
+    let m2 = n[0][0] * n[1][1] - n[0][1] * n[1][0];
+    let m3 = det3(&n);
+    if !(scale > 0.0 && m1 > 0.0 && m2 > 0.0 && m3 > 0.0) {
+        return Err(ix.invalid(
+            path,
+            format!(
+                "inertia must be positive definite (leading minors of I / {scale:e}: \
+                 {m1:e}, {m2:e}, {m3:e})"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `m / scale`, entry by entry.
+fn scaled(m: &[[f64; 3]; 3], scale: f64) -> [[f64; 3]; 3] {
+    m.map(|row| row.map(|x| x / scale))
+}
+
+/// Eigenvalues of a symmetric 3×3 matrix, ascending (closed form: Smith 1961).
+pub fn symmetric_eigenvalues(a: &[[f64; 3]; 3]) -> [f64; 3] {
+    let p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    let q = (a[0][0] + a[1][1] + a[2][2]) / 3.0;
+    let p2 = (a[0][0] - q).powi(2) + (a[1][1] - q).powi(2) + (a[2][2] - q).powi(2) + 2.0 * p1;
+    if p2 == 0.0 {
+        return [q; 3];
+    }
+    let p = (p2 / 6.0).sqrt();
+    let b = std::array::from_fn(|i| {
+        std::array::from_fn(|j| (a[i][j] - if i == j { q } else { 0.0 }) / p)
+    });
+    let r = (det3(&b) / 2.0).clamp(-1.0, 1.0);
+    let phi = r.acos() / 3.0;
+    let hi = q + 2.0 * p * phi.cos();
+    let lo = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    [lo, 3.0 * q - hi - lo, hi]
+}
+
+/// Principal moments (ascending) of a valid inertia and whether they satisfy the triangle
+/// inequality I₃ ≤ I₁ + I₂ (up to [`MATRIX_TOL`] of the trace), which every rigid body's
+/// inertia about its centre of mass does (Iₖ = ∫ (r² − xₖ²) dm, so I₁ + I₂ − I₃ = 2∫ x₃² dm).
+pub fn principal_moments(m: &[[f64; 3]; 3]) -> ([f64; 3], bool) {
+    let scale = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+    if !(scale > 0.0 && scale.is_finite()) {
+        return ([0.0; 3], false);
+    }
+    let e = symmetric_eigenvalues(&scaled(m, scale));
+    let ok = e[2] <= e[0] + e[1] + MATRIX_TOL * (e[0] + e[1] + e[2]).abs();
+    (e.map(|x| x * scale), ok)
+}
+
+fn det3(m: &[[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
+fn check_transform(ix: &SourceIndex<'_>, path: &str, t: &TransformSpec) -> Result<(), SpecError> {
+    if let Some(tr) = &t.translation {
+        check_vec(ix, &format!("{path}.translation"), tr)?;
+    }
+    match &t.rotation {
+        None => {}
+        Some(RotationSpec::Axis { axis, angle }) => {
+            if !matches!(axis.as_str(), "x" | "y" | "z") {
+                return Err(ix.invalid(
+                    &format!("{path}.rotation.axis"),
+                    format!("axis must be \"x\", \"y\" or \"z\" (got {axis:?})"),
+                ));
+            }
+            check_angle(ix, &format!("{path}.rotation.angle"), angle)?;
+        }
+        Some(RotationSpec::Matrix(m)) => {
+            let rp = format!("{path}.rotation");
+            for (i, row) in m.iter().enumerate() {
+                check_vec(ix, &format!("{rp}[{i}]"), row)?;
+            }
+            for i in 0..3 {
+                for j in 0..3 {
+                    let dot: f64 = (0..3).map(|k| m[i][k] * m[j][k]).sum();
+                    let want = if i == j { 1.0 } else { 0.0 };
+                    if (dot - want).abs() > MATRIX_TOL {
+                        return Err(ix.invalid(
+                            &rp,
+                            format!(
+                                "rotation matrix must be orthonormal (row {i} . row {j} = {dot}, \
+                                 expected {want})"
+                            ),
+                        ));
+                    }
+                }
+            }
+            let d = det3(m);
+            if d < 0.0 {
+                return Err(ix.invalid(
+                    &rp,
+                    format!("rotation matrix must have determinant +1 (got {d}): a reflection"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn is_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    match chars.next() {
+        Some(c) if c.is_ascii_alphabetic() || c == '_' => {}
+        _ => return false,
+    }
+    chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+impl Scene {
+    pub(super) fn validate_with(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {
+        if !is_identifier(&self.name) || RUST_KEYWORDS.contains(&self.name.as_str()) {
+            return Err(ix.invalid(
+                "name",
+                format!(
+                    "scene name {:?} must be an ASCII Rust identifier ([A-Za-z_][A-Za-z0-9_]*) \
+                     and not a keyword: it becomes the generated module name",
+                    self.name
+                ),
+            ));
+        }
+        check_transform(ix, "base", &self.base)?;
+        if let Some(t) = &self.tool {
+            check_transform(ix, "tool", t)?;
+        }
+        check_vec(ix, "gravity", &self.gravity)?;
+        if self.links.is_empty() {
+            return Err(ix.invalid(
+                "links",
+                "a scene needs at least one link ([[links]] table)".to_string(),
+            ));
+        }
+        for (i, l) in self.links.iter().enumerate() {
+            let p = format!("links[{i}]");
+            check_finite(ix, &format!("{p}.a"), l.a)?;
+            check_angle(ix, &format!("{p}.alpha"), &l.alpha)?;
+            check_finite(ix, &format!("{p}.d"), l.d)?;
+            if let Some(o) = &l.offset {
+                check_angle(ix, &format!("{p}.offset"), o)?;
+            }
+            check_positive(ix, &format!("{p}.mass"), l.mass)?;
+            check_vec(ix, &format!("{p}.com"), &l.com)?;
+            check_inertia(ix, &format!("{p}.inertia"), &l.inertia)?;
+            if let Some(v) = l.q_min {
+                check_finite(ix, &format!("{p}.q_min"), v)?;
+            }
+            if let Some(v) = l.q_max {
+                check_finite(ix, &format!("{p}.q_max"), v)?;
+            }
+            if let (Some(lo), Some(hi)) = (l.q_min, l.q_max)
+                && lo > hi
+            {
+                return Err(ix.invalid(
+                    &format!("{p}.q_min"),
+                    format!("q_min must be <= q_max (got q_min = {lo} > q_max = {hi})"),
+                ));
+            }
+            if let Some(v) = l.tau_max {
+                check_positive(ix, &format!("{p}.tau_max"), v)?;
+            }
+        }
+        if let Some(b) = &self.ball {
+            check_positive(ix, "ball.radius", b.radius)?;
+            check_vec(ix, "ball.center", &b.center)?;
+            check_positive(ix, "ball.mass", b.mass)?;
+            if let Some(i) = &b.inertia {
+                check_inertia(ix, "ball.inertia", i)?;
+            }
+        }
+        if let Some(f) = &self.friction {
+            check_nonnegative(ix, "friction.mu_s", f.mu_s)?;
+            check_nonnegative(ix, "friction.mu_k", f.mu_k)?;
+            check_nonnegative(ix, "friction.mu_v", f.mu_v)?;
+            check_nonnegative(ix, "friction.socket_damping", f.socket_damping)?;
+        }
+        if let Some(c) = &self.contact {
+            if self.ball.is_none() {
+                return Err(ix.invalid(
+                    "contact",
+                    "a [contact] section needs a [ball] section".to_string(),
+                ));
+            }
+            if !CONTACT_KINDS.contains(&c.kind.as_str()) {
+                return Err(ix.invalid(
+                    "contact.kind",
+                    format!(
+                        "contact kind must be \"segment\" or \"tip\" (got {:?})",
+                        c.kind
+                    ),
+                ));
+            }
+            check_positive(ix, "contact.smooth_eps", c.smooth_eps)?;
+        }
+        if self.kernels.is_empty() {
+            return Err(ix.invalid(
+                "kernels",
+                format!(
+                    "list at least one kernel; known: {}",
+                    KNOWN_KERNELS.join(", ")
+                ),
+            ));
+        }
+        for (i, k) in self.kernels.iter().enumerate() {
+            let p = format!("kernels[{i}]");
+            if !KNOWN_KERNELS.contains(&k.as_str()) {
+                return Err(ix.invalid(
+                    &p,
+                    format!("unknown kernel {k:?}; known: {}", KNOWN_KERNELS.join(", ")),
+                ));
+            }
+            if self.kernels[..i].contains(k) {
+                return Err(ix.invalid(&p, format!("kernel {k:?} listed twice")));
+            }
+            if CONTACT_KERNELS.contains(&k.as_str())
+                && (self.ball.is_none() || self.contact.is_none())
+            {
+                return Err(ix.invalid(
+                    &p,
+                    format!("kernel {k:?} needs both a [ball] and a [contact] section"),
+                ));
+            }
+        }
+        for (i, c) in self.ocp_kernels.iter().flatten().enumerate() {
+            let p = format!("ocp_kernels[{i}]");
+            if !OCP_COSTS.contains(&c.as_str()) {
+                return Err(ix.invalid(
+                    &p,
+                    format!("unknown cost kind {c:?}; known: {}", OCP_COSTS.join(", ")),
+                ));
+            }
+            if self.ocp_kernels.iter().flatten().take(i).any(|x| x == c) {
+                return Err(ix.invalid(&p, format!("cost kind {c:?} listed twice")));
+            }
+            if self.ball.is_none() || self.contact.is_none() {
+                return Err(ix.invalid(
+                    &p,
+                    "optimal-control node kernels need both a [ball] and a [contact] section"
+                        .to_string(),
+                ));
+            }
+        }
+        let names = self.constants();
+        for (i, r) in self.runtime_parameters.iter().enumerate() {
+            let p = format!("runtime_parameters[{i}]");
+            if !names.iter().any(|(n, _)| n == r) {
+                let hint = if let Some((stem, _)) = r.rsplit_once('.') {
+                    let similar: Vec<&str> = names
+                        .iter()
+                        .map(|(n, _)| n.as_str())
+                        .filter(|n| n.starts_with(stem))
+                        .collect();
+                    if similar.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; did you mean one of: {}", similar.join(", "))
+                    }
+                } else {
+                    String::new()
+                };
+                return Err(ix.invalid(
+                    &p,
+                    format!(
+                        "unknown runtime parameter {r:?} (names come from Scene::constants(), \
+                         e.g. \"link1.mass\", \"ball.radius\"){hint}"
+                    ),
+                ));
+            }
+            if self.runtime_parameters[..i].contains(r) {
+                return Err(ix.invalid(&p, format!("runtime parameter {r:?} listed twice")));
+            }
+        }
+        Ok(())
+    }
+}
