@@ -3,30 +3,12 @@
 //! `generate` must be deterministic and produce the code compiled into `bf-generated`, and bad
 //! user input must give a clear error and a non-zero exit code, never a panic.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ball-finger"))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmpdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-cli-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> Output {
-    bin()
-        .current_dir(root())
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
+#[path = "common/cli.rs"]
+mod cli_util;
+use cli_util::{bin, root, run, tmpdir};
 
 fn assert_clean_failure(out: &Output, must_mention: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);

@@ -19,35 +19,16 @@ use bf_model::{ImpactLaw, Kernels, Mode, Model, PaperKernels, State, Vec3, fixtu
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions, SampleInfo};
 use bf_sim::{Input, PdController, SampleKind, SimOutput, SimSettings, TorqueSeries, simulate};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
+
+#[path = "common/cli.rs"]
+mod cli_util;
+use cli_util::{root, run, tmpdir};
 
 /// Documented penetration tolerance of the simulator (m): event location to 1e-12 s and
 /// guard_zero_tol = 1e-9 bound how far h can go below zero at a stored sample.
 const PENETRATION_TOL: f64 = 1e-9;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_ball-finger"))
-}
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn tmpdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-simulate-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> Output {
-    bin()
-        .current_dir(root())
-        .args(args)
-        .output()
-        .expect("binary runs")
-}
 
 fn zero() -> PdController {
     PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3]).unwrap()

@@ -1,0 +1,37 @@
+//! Helpers of the tests that run the `ball-finger` binary: the binary, the repository root it
+//! runs in, a fresh per-test temporary directory, and a run with captured output.
+#![allow(dead_code)] // each test file uses its own subset
+
+use std::path::PathBuf;
+use std::process::{Command, Output};
+
+/// The built `ball-finger` binary.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_ball-finger"))
+}
+
+/// The repository root (the binary runs there, so `scenes/…` paths resolve).
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// An empty temporary directory for `tag`, unique per test file and process.
+pub fn tmpdir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!(
+        "bf-{}-{tag}-{}",
+        env!("CARGO_CRATE_NAME"),
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Runs the binary with `args` in the repository root and captures its output.
+pub fn run(args: &[&str]) -> Output {
+    bin()
+        .current_dir(root())
+        .args(args)
+        .output()
+        .expect("binary runs")
+}
