@@ -32,8 +32,8 @@ pub use node::{CostKind, Mode, Physics, StickLevel};
 
 #[cfg(feature = "catalogue")]
 pub use catalogue::{
-    BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, Problem, ProblemSettings, StartGuess,
-    UnknownProblem, build,
+    BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, Problem, ProblemSettings, QC_OMEGA_REF,
+    StartGuess, UnknownProblem, build,
 };
 #[cfg(feature = "catalogue")]
 pub use solution::{OcpSolution, Samples, solution_at};

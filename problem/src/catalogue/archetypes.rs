@@ -121,7 +121,7 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, OcpError> {
     let cost = if qc {
         CostKind::Qc {
             w: settings.effort_scale,
-            omega_ref: [0.0, 0.0, 2.2],
+            omega_ref: super::QC_OMEGA_REF,
         }
     } else {
         let s = std::f64::consts::FRAC_1_SQRT_2;

@@ -166,6 +166,9 @@ pub struct Generated {
 /// to trade period length against efficiency without limit.
 pub const COT_MAX_PERIOD: f64 = 10.0;
 
+/// ω_ref of `periodic-qc` (rad/s; the paper's QC objective, eq. 64–65).
+pub const QC_OMEGA_REF: [f64; 3] = [0.0, 0.0, 2.2];
+
 /// Kind of the initial guess.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum GuessKind {
