@@ -363,3 +363,60 @@ fn optimize_dual_regularization_rescues_a_fine_radau_mesh() {
     assert_eq!(retried["objective"], explicit["objective"]);
     std::fs::remove_dir_all(base).ok();
 }
+
+#[test]
+fn scene_warnings_reach_stderr_and_nonphysical_inertias_are_refused() {
+    fn args(scene: &str) -> [&str; 6] {
+        [
+            "eval",
+            scene,
+            "--q",
+            "0.1,0.2,0.3,0.4,0.5,0.6",
+            "--qd",
+            "0,0,0,0,0,0",
+        ]
+    }
+    // The shipped PUMA 560 keeps Armstrong's link 3 (0.086 > 0.0125 + 0.066) with its source:
+    // accepted, one warning naming the file, the key and the values.
+    let out = run(&args("scenes/puma560.toml"));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning: "))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    assert!(
+        warnings[0].starts_with("warning: scenes/puma560.toml: links[2].inertia: ")
+            && warnings[0].contains("8.6e-2 > 1.25e-2 + 6.6e-2")
+            && warnings[0].contains("Armstrong"),
+        "{stderr}"
+    );
+    // A physical scene prints no warning.
+    let out = run(&["eval", "scenes/paper.toml", "--q", "0,0,0", "--qd", "0,0,0"]);
+    assert!(out.status.success());
+    assert!(
+        !String::from_utf8_lossy(&out.stderr).contains("warning"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Without the source key the same data are refused, naming the file, key and values.
+    let dir = tmpdir("nonphysical");
+    let bad = dir.join("puma.toml");
+    let text = std::fs::read_to_string(root().join("scenes/puma560.toml")).unwrap();
+    let stripped: Vec<&str> = text
+        .lines()
+        .filter(|l| !l.starts_with("nonphysical_inertia"))
+        .collect();
+    std::fs::write(&bad, stripped.join("\n")).unwrap();
+    assert_clean_failure(
+        &run(&args(bad.to_str().unwrap())),
+        &[
+            "puma.toml",
+            "links[2].inertia",
+            "8.6e-2 > 1.25e-2 + 6.6e-2",
+            "triangle inequality",
+        ],
+    );
+    std::fs::remove_dir_all(dir).ok();
+}

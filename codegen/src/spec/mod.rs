@@ -125,8 +125,14 @@ pub struct LinkSpec {
     /// COG in link-frame coordinates (metres).
     #[serde(deserialize_with = "de::exact3")]
     pub com: [f64; 3],
-    /// Inertia about the COG in link-frame axes (kg m²), symmetric positive definite.
+    /// Inertia about the COG in link-frame axes (kg m²), symmetric positive definite, with
+    /// principal moments satisfying the triangle inequality unless `nonphysical_inertia` is set.
     pub inertia: InertiaSpec,
+    /// The source of an inertia whose principal moments violate the triangle inequality
+    /// (published data kept as published): with it the violation is a warning, not an error.
+    /// Must be non-empty, and is refused on an inertia that satisfies the inequality.
+    #[serde(default)]
+    pub nonphysical_inertia: Option<String>,
     /// Lower joint limit (radians), optional; used by the optimiser. In the file it may also be
     /// written like an angle (`"-160deg"`, `"-pi/2"`), converted to radians.
     #[serde(default, deserialize_with = "de::opt_angle_radians")]
@@ -154,6 +160,10 @@ pub struct BallSpec {
     /// Inertia I_b about the centre (kg m²); default (2/5) m r² · 1.
     #[serde(default)]
     pub inertia: Option<InertiaSpec>,
+    /// The source of a ball inertia that violates the triangle inequality, as for
+    /// [`LinkSpec::nonphysical_inertia`].
+    #[serde(default)]
+    pub nonphysical_inertia: Option<String>,
 }
 
 /// Friction constants (paper Sect. 2, assumptions 3–4).
@@ -376,24 +386,30 @@ impl Scene {
     /// Accepted but physically doubtful values, one message each naming the field and values:
     /// kinetic friction above static friction (μ_k > μ_s), and link or ball inertias whose
     /// principal moments violate the triangle inequality I₃ ≤ I₁ + I₂ (no rigid body has
-    /// them; published data sets do, e.g. link 3 of the PUMA 560 of Armstrong et al.).
+    /// them) and that the scene keeps on purpose with a `nonphysical_inertia` source (published
+    /// data sets have them, e.g. link 3 of the PUMA 560 of Armstrong et al. 1986). Without that
+    /// key such an inertia is a validation error.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = Vec::new();
-        let mut inertia = |path: String, m: [[f64; 3]; 3]| {
-            let (e, ok) = principal_moments(&m);
-            if !ok {
-                out.push(format!(
-                    "{path}: principal moments {:e}, {:e}, {:e} kg m² violate the triangle \
-                     inequality ({:e} > {:e} + {:e}): no rigid body has this inertia",
-                    e[0], e[1], e[2], e[2], e[0], e[1]
-                ));
+        let mut inertia = |path: String, m: [[f64; 3]; 3], source: Option<&String>| {
+            if let Some(msg) = validate::triangle_violation(&m) {
+                let source = source.map_or(String::new(), |s| format!(" (kept as published: {s})"));
+                out.push(format!("{path}: {msg}{source}"));
             }
         };
         for (i, l) in self.links.iter().enumerate() {
-            inertia(format!("links[{i}].inertia"), l.inertia_matrix());
+            inertia(
+                format!("links[{i}].inertia"),
+                l.inertia_matrix(),
+                l.nonphysical_inertia.as_ref(),
+            );
         }
         if let Some(b) = &self.ball {
-            inertia("ball.inertia".to_string(), b.inertia_matrix());
+            inertia(
+                "ball.inertia".to_string(),
+                b.inertia_matrix(),
+                b.nonphysical_inertia.as_ref(),
+            );
         }
         if let Some(f) = &self.friction
             && f.mu_k > f.mu_s

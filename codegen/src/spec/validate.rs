@@ -4,8 +4,10 @@
 //! kind and ε > 0 (eq. 58–59), known kernels, costs and runtime parameters. Errors are located
 //! via `SourceIndex` (see [`SpecError`]).
 //!
-//! Also [`symmetric_eigenvalues`] and [`principal_moments`] of 3×3 inertia tensors (the
-//! principal moments checked by [`Scene::warnings`]).
+//! Inertias must also satisfy the triangle inequality of their principal moments (every rigid
+//! body does); published data that violate it are kept only with a `nonphysical_inertia`
+//! source and then reported by [`Scene::warnings`]. Also [`symmetric_eigenvalues`] and
+//! [`principal_moments`] of 3×3 inertia tensors.
 
 use super::{
     Angle, CONTACT_KERNELS, CONTACT_KINDS, InertiaSpec, KNOWN_KERNELS, OCP_COSTS, RotationSpec,
@@ -115,6 +117,54 @@ fn scaled(m: &[[f64; 3]; 3], scale: f64) -> [[f64; 3]; 3] {
     m.map(|row| row.map(|x| x / scale))
 }
 
+/// The message for an inertia whose principal moments violate the triangle inequality
+/// (see [`principal_moments`]), naming the moments; `None` if they satisfy it.
+pub(super) fn triangle_violation(m: &[[f64; 3]; 3]) -> Option<String> {
+    let (e, ok) = principal_moments(m);
+    (!ok).then(|| {
+        format!(
+            "principal moments {:e}, {:e}, {:e} kg m² violate the triangle inequality \
+             ({:e} > {:e} + {:e}): no rigid body has this inertia",
+            e[0], e[1], e[2], e[2], e[0], e[1]
+        )
+    })
+}
+
+/// The triangle inequality of a link or ball inertia (already checked to be symmetric positive
+/// definite): a violation is an error unless `source` names where the published values come
+/// from; a source on a physical inertia is an error too, so the key cannot go stale.
+fn check_triangle(
+    ix: &SourceIndex<'_>,
+    path: &str,
+    table: &str,
+    m: &[[f64; 3]; 3],
+    source: Option<&String>,
+) -> Result<(), SpecError> {
+    let key = format!("{table}.nonphysical_inertia");
+    match (triangle_violation(m), source) {
+        (Some(msg), None) => Err(ix.invalid(
+            path,
+            format!(
+                "{msg}; to keep published values as they are, name their source with \
+                 `nonphysical_inertia = \"...\"` in the same table"
+            ),
+        )),
+        (_, Some(s)) if s.trim().is_empty() => Err(ix.invalid(
+            &key,
+            "nonphysical_inertia must name the source of the published inertia (got an empty \
+             string)"
+                .to_string(),
+        )),
+        (None, Some(_)) => Err(ix.invalid(
+            &key,
+            "the inertia satisfies the triangle inequality of its principal moments; remove \
+             nonphysical_inertia"
+                .to_string(),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Eigenvalues of a symmetric 3×3 matrix, ascending (closed form: Smith 1961).
 pub fn symmetric_eigenvalues(a: &[[f64; 3]; 3]) -> [f64; 3] {
     let p1 = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
@@ -142,9 +192,20 @@ pub fn principal_moments(m: &[[f64; 3]; 3]) -> ([f64; 3], bool) {
     if !(scale > 0.0 && scale.is_finite()) {
         return ([0.0; 3], false);
     }
+    // Compared unit-free (divided by the largest entry), so the tolerance does not depend on the
+    // unit and nothing under- or overflows.
     let e = symmetric_eigenvalues(&scaled(m, scale));
     let ok = e[2] <= e[0] + e[1] + MATRIX_TOL * (e[0] + e[1] + e[2]).abs();
-    (e.map(|x| x * scale), ok)
+    let diagonal = (0..3).all(|i| (0..3).all(|j| i == j || m[i][j] == 0.0));
+    let moments = if diagonal {
+        // The moments exactly as written, for messages.
+        let mut d = [m[0][0], m[1][1], m[2][2]];
+        d.sort_by(f64::total_cmp);
+        d
+    } else {
+        e.map(|x| x * scale)
+    };
+    (moments, ok)
 }
 
 fn det3(m: &[[f64; 3]; 3]) -> f64 {
@@ -243,6 +304,13 @@ impl Scene {
             check_positive(ix, &format!("{p}.mass"), l.mass)?;
             check_vec(ix, &format!("{p}.com"), &l.com)?;
             check_inertia(ix, &format!("{p}.inertia"), &l.inertia)?;
+            check_triangle(
+                ix,
+                &format!("{p}.inertia"),
+                &p,
+                &l.inertia_matrix(),
+                l.nonphysical_inertia.as_ref(),
+            )?;
             if let Some(v) = l.q_min {
                 check_finite(ix, &format!("{p}.q_min"), v)?;
             }
@@ -268,6 +336,13 @@ impl Scene {
             if let Some(i) = &b.inertia {
                 check_inertia(ix, "ball.inertia", i)?;
             }
+            check_triangle(
+                ix,
+                "ball.inertia",
+                "ball",
+                &b.inertia_matrix(),
+                b.nonphysical_inertia.as_ref(),
+            )?;
         }
         if let Some(f) = &self.friction {
             check_nonnegative(ix, "friction.mu_s", f.mu_s)?;
