@@ -29,9 +29,7 @@ use bf_optim::ocp::transcription::integration_matrix;
 use bf_optim::ocp::{GraphFn, Scheme};
 use bf_problem::node::{NodeOptions, node_function as node_function_with};
 use bf_problem::points::Diagnostics;
-use bf_problem::{
-    BuiltProblem, CostKind, Mode, OcpSolution, Physics, Problem, ProblemSettings, StickLevel,
-};
+use bf_problem::{BuiltProblem, CostKind, Mode, OcpSolution, Problem, ProblemSettings, StickLevel};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -42,7 +40,7 @@ fn paper_scene() -> Scene {
 #[test]
 fn acceleration_level_stick_rows_are_the_time_derivative_of_delta_v() {
     let scene = paper_scene();
-    let ph = Physics::new(&scene).unwrap();
+    let ph = bf_problem::node::physics(&scene).unwrap();
     let eps = 0.01;
     let opt = NodeOptions {
         mode: Mode::Stick,

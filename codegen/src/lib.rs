@@ -1,6 +1,6 @@
 //! bf-codegen: scene file (DH table, inertias, ball) → verified flat Rust dynamics kernels.
 //!
-//! Pipeline (`docs/architecture.md`, "codegen"): [`spec`] (scene types) → [`robot`] (kinematics eq. 67–71,
+//! Pipeline (`docs/architecture.md`, "codegen"): [`spec`] (the scene types of bf-scene) → [`robot`] (kinematics eq. 67–71,
 //! dynamics eq. 22a/72–79, contact eq. 2–13/58–59 as [`graph`] expressions, derivatives by
 //! [`diff`]) → [`kernels`] (the catalogue of docs/kernels.md) → [`emit`] (SSA Rust code) with a
 //! [`report`]; [`interp`] evaluates the same graphs in f64 or double-double ([`dd`]);
@@ -19,13 +19,14 @@ pub mod kernels;
 pub mod nodefn;
 pub mod report;
 pub mod robot;
-pub mod spec;
 pub mod trig;
 
 use std::time::Instant;
 
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
+/// The scene file (bf-scene), under its historical path `bf_codegen::spec`.
+pub use bf_scene as spec;
 pub use emit::{EmitOptions, FloatTy};
 pub use kernels::ALL_KERNELS;
 pub use report::{KernelReport, OpCounts, Report};

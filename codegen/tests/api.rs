@@ -213,3 +213,31 @@ fn runtime_parameters_scale_masses_and_lengths() {
         }
     }
 }
+
+#[test]
+fn overflowing_scene_values_are_refused_by_generate_and_eval() {
+    let path = format!("{}/../scenes/paper.toml", env!("CARGO_MANIFEST_DIR"));
+    let paper = std::fs::read_to_string(&path).unwrap();
+    let text = paper.replacen("\na = 1.0\n", "\na = 1.0e308\n", 1);
+    assert_ne!(text, paper);
+    let scene = Scene::from_toml_str(&text, "paper.toml").unwrap();
+    let err = generate(&scene, &text).unwrap_err().to_string();
+    assert!(
+        err.contains("non-finite") && err.contains("link1.a = 1e308"),
+        "{err}"
+    );
+    let q = [0.1, 0.2, 0.3];
+    let err = eval_all(&scene, &q, &[0.0; 3], [0.0; 3], 0.01)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("not finite") && err.contains("link1.a = 1e308"),
+        "{err}"
+    );
+    // A huge velocity: C q̇ overflows; the quantity is named.
+    let scene = Scene::from_toml_str(&paper, "paper.toml").unwrap();
+    let err = eval_all(&scene, &q, &[1e200; 3], [0.0; 3], 0.01)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("Cqd is not finite"), "{err}");
+}

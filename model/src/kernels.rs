@@ -6,7 +6,7 @@
 //! `bf_generated::human` through one macro; every contact quantity therefore comes from the
 //! generated expressions. Test code may implement [`Kernels`] on an independent reference.
 
-use bf_codegen::spec::Scene;
+use bf_scene::{Constants, Scene};
 
 use crate::dynamics::{self, Accelerations, ContactForce};
 use crate::energy::{self, Energy, PowerBalance};
@@ -104,28 +104,15 @@ pub fn params_for<K: Kernels + ?Sized>(kernels: &K) -> Result<Params> {
             message: e.to_string(),
         }
     })?;
-    let base = Params::from_scene(&scene)?;
-    let mut ib = *base.ball_inertia();
-    let mut radius = base.ball_radius();
-    let (mut mu_s, mut mu_k, mut mu_v, mut d) =
-        (base.mu_s(), base.mu_k(), base.mu_v(), base.socket_damping());
-    for (name, &v) in kernels.param_names().iter().zip(kernels.param_values()) {
-        match *name {
-            "ball.radius" => radius = v,
-            "ball.inertia.xx" => ib[(0, 0)] = v,
-            "ball.inertia.yy" => ib[(1, 1)] = v,
-            "ball.inertia.zz" => ib[(2, 2)] = v,
-            "ball.inertia.xy" => (ib[(0, 1)], ib[(1, 0)]) = (v, v),
-            "ball.inertia.xz" => (ib[(0, 2)], ib[(2, 0)]) = (v, v),
-            "ball.inertia.yz" => (ib[(1, 2)], ib[(2, 1)]) = (v, v),
-            "friction.mu_s" => mu_s = v,
-            "friction.mu_k" => mu_k = v,
-            "friction.mu_v" => mu_v = v,
-            "friction.socket_damping" => d = v,
-            _ => {}
-        }
-    }
-    Params::new(ib, radius, mu_s, mu_k, mu_v, d)
+    // The scene's own values must be valid even where a runtime parameter replaces them.
+    Params::from_scene(&scene)?;
+    let constants = Constants::of(&scene)
+        .ok_or_else(|| ModelError::Scene {
+            scene: scene.name.clone(),
+            message: "no [ball] section".to_string(),
+        })?
+        .with_runtime_parameters(kernels.param_names(), kernels.param_values());
+    Params::from_constants(&constants)
 }
 
 /// Kernels + parameters + settings: the typed entry point used by the simulator and the CLI.

@@ -102,31 +102,27 @@ impl Params {
     }
 
     /// Build from a scene's `[ball]` and `[friction]` sections (I_b defaults to (2/5) m r² 1).
-    pub fn from_scene(scene: &bf_codegen::spec::Scene) -> Result<Self> {
+    pub fn from_scene(scene: &bf_scene::Scene) -> Result<Self> {
         let err = |m: &str| ModelError::Scene {
             scene: scene.name.clone(),
             message: m.to_string(),
         };
-        let ball = scene
-            .ball
-            .as_ref()
-            .ok_or_else(|| err("no [ball] section"))?;
-        let fr = scene
-            .friction
-            .as_ref()
-            .ok_or_else(|| err("no [friction] section"))?;
-        let ib = mat_from_rows(
-            &scene
-                .ball_inertia()
-                .ok_or_else(|| err("no [ball] section"))?,
-        );
+        let c = bf_scene::Constants::of(scene).ok_or_else(|| err("no [ball] section"))?;
+        if scene.friction.is_none() {
+            return Err(err("no [friction] section"));
+        }
+        Self::from_constants(&c)
+    }
+
+    /// Build from the scene constants (validated here).
+    pub fn from_constants(c: &bf_scene::Constants) -> Result<Self> {
         Self::new(
-            ib,
-            ball.radius,
-            fr.mu_s,
-            fr.mu_k,
-            fr.mu_v,
-            fr.socket_damping,
+            mat_from_rows(&c.ib),
+            c.radius,
+            c.mu_s,
+            c.mu_k,
+            c.mu_v,
+            c.damping,
         )
     }
 

@@ -7,7 +7,7 @@
 use bf_codegen::nodefn::{CompiledNode, NamedNode};
 use bf_codegen::{CodegenError, Scene};
 
-use crate::node::{CostKind, Mode, NodeOptions, Physics, StickLevel, node_function};
+use crate::node::{CostKind, Mode, NodeOptions, StickLevel, node_function};
 
 /// The node functions emitted as kernels for a scene with a ball and a contact, for every cost
 /// kind of the scene's `ocp_kernels` (default: all), shaped as the problem library uses them:
@@ -71,7 +71,7 @@ pub fn compile_node(
     opt: &NodeOptions,
     level: StickLevel,
 ) -> Result<CompiledNode, CodegenError> {
-    let ph = Physics::new(scene)?;
+    let ph = crate::node::physics(scene)?;
     let (nf, _) = node_function(scene, &ph, opt, level)?;
     let c = nf.collocation();
     Ok(CompiledNode::new(c.graph, c.outputs, c.locals, nf.fixed))

@@ -123,66 +123,17 @@ impl CostKind {
     }
 }
 
-/// Physical constants of a scene with a ball and a contact (the node functions' inputs that
-/// are not on the robot's graph, plus limits the problems use as bounds).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Physics {
-    /// Joints.
-    pub nq: usize,
-    /// Ball inertia I_b.
-    pub ib: [[f64; 3]; 3],
-    /// Ball radius r.
-    pub radius: f64,
-    /// μ_s.
-    pub mu_s: f64,
-    /// μ_v.
-    pub mu_v: f64,
-    /// D.
-    pub damping: f64,
-    /// Joint limits (NaN-free; ±∞ where none).
-    pub q_limits: Vec<(f64, f64)>,
-    /// Torque limits.
-    pub tau_max: Vec<f64>,
-}
+/// The scene constants the node functions read that are not on the robot's graph (I_b, r, μ_s,
+/// μ_v, D), plus the limits the problems use as bounds: the one scene-constants type
+/// [`bf_scene::Constants`], shared with bf-model.
+pub type Physics = bf_scene::Constants;
 
-impl Physics {
-    /// Reads the constants of `scene` (needs `[ball]`, `[contact]`).
-    pub fn new(scene: &Scene) -> Result<Physics, CodegenError> {
-        let ball = scene
-            .ball
-            .as_ref()
-            .ok_or_else(|| CodegenError::Scene("the scene has no [ball]".into()))?;
-        if scene.contact.is_none() {
-            return Err(CodegenError::Scene("the scene has no [contact]".into()));
-        }
-        let (mu_s, mu_v, damping) = scene
-            .friction
-            .as_ref()
-            .map_or((0.0, 0.0, 0.0), |f| (f.mu_s, f.mu_v, f.socket_damping));
-        Ok(Physics {
-            nq: scene.links.len(),
-            ib: scene.ball_inertia().unwrap_or([[0.0; 3]; 3]),
-            radius: ball.radius,
-            mu_s,
-            mu_v,
-            damping,
-            q_limits: scene
-                .links
-                .iter()
-                .map(|l| {
-                    (
-                        l.q_min.unwrap_or(f64::NEG_INFINITY),
-                        l.q_max.unwrap_or(f64::INFINITY),
-                    )
-                })
-                .collect(),
-            tau_max: scene
-                .links
-                .iter()
-                .map(|l| l.tau_max.unwrap_or(f64::INFINITY))
-                .collect(),
-        })
+/// The constants of `scene`, which needs a `[ball]` and a `[contact]` section.
+pub fn physics(scene: &Scene) -> Result<Physics, CodegenError> {
+    if scene.contact.is_none() && scene.ball.is_some() {
+        return Err(CodegenError::Scene("the scene has no [contact]".into()));
     }
+    Physics::of(scene).ok_or_else(|| CodegenError::Scene("the scene has no [ball]".into()))
 }
 
 /// Graph variable indices of one node.

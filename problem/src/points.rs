@@ -19,7 +19,7 @@ fn model_err(e: bf_codegen::CodegenError) -> OcpError {
 
 /// Reads the physical constants of `scene` (needs `[ball]`, `[contact]`).
 pub fn physics(scene: &Scene) -> Result<Physics, OcpError> {
-    Physics::new(scene).map_err(model_err)
+    crate::node::physics(scene).map_err(model_err)
 }
 
 struct Built {

@@ -25,7 +25,7 @@ pub struct RefKernels {
 impl RefKernels {
     /// From scene text.
     pub fn new(toml: &str) -> Self {
-        let scene = bf_codegen::spec::Scene::from_toml_str(toml, "test").expect("scene parses");
+        let scene = bf_scene::Scene::from_toml_str(toml, "test").expect("scene parses");
         let reference = Reference::new(&scene).expect("reference builds");
         Self {
             name: scene.name.clone(),

@@ -1,4 +1,8 @@
-//! Scene specification: the TOML file a user writes (`scenes/*.toml`).
+//! bf-scene: the scene file a user writes (`scenes/*.toml`), its validation, and the physical
+//! constants read from it. A leaf crate (serde, toml, thiserror): everything that reads a scene
+//! — the generator (bf-codegen, which re-exports this crate as `bf_codegen::spec`), the
+//! physics (bf-model), the optimal-control problem (bf-problem) and the CLI — depends on it
+//! without linking the code generator.
 //!
 //! A scene is a serial revolute chain given by a Denavit–Hartenberg table (paper Table 1,
 //! standard or modified convention), a base transform (paper Sect. 2.1: translation `o_f`,
@@ -20,6 +24,11 @@
 //! - [`ContactSpec`]: the segment/tip contact of eq. 2–7 and ε of the smooth sat (eq. 58–59).
 //! - [`Scene::constants`]: the registry of every physical constant by name (`link2.mass`,
 //!   `ball.radius`, ...); `runtime_parameters` picks the ones that stay variables.
+//! - [`Constants`]: I_b (eq. 25), r (eq. 4), μ_s (eq. 18–19), μ_k (eq. 20), μ_v (eq. 24),
+//!   D (eq. 25) and the joint and torque limits, read once for bf-model and bf-problem.
+//! - Validation ([`Scene::validate`]) also refuses inertias whose principal moments violate
+//!   the triangle inequality, unless the table names a published source
+//!   (`nonphysical_inertia`); [`Scene::warnings`] lists what is accepted but doubtful.
 //!
 //! Loading: [`Scene::load`] / [`Scene::from_toml_str`] parse with toml's span-preserving
 //! `DeTable`, deserialise with serde (`deny_unknown_fields`), then validate; every error is
@@ -27,12 +36,14 @@
 //! `scenes/foo.toml:12:1: links[1].mass: must be > 0 (got -0.02)`.
 
 mod angle;
+mod constants;
 mod de;
 mod error;
 mod validate;
 
 use serde::Deserialize;
 
+pub use constants::Constants;
 pub use error::{SpecError, SpecErrorKind};
 pub use validate::{principal_moments, symmetric_eigenvalues};
 
