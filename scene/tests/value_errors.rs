@@ -1,0 +1,542 @@
+//! Scene files that parse but break a semantic rule: masses, inertias (symmetric positive
+//! definite), kernel and cost lists, runtime parameters, names, friction, ball, joint limits,
+//! rotations, contact kinds and angle strings; each error names the line, key path and value.
+
+mod common;
+
+use bf_scene::{Angle, KNOWN_KERNELS, RotationSpec, Scene, SpecErrorKind};
+use common::*;
+use std::f64::consts::PI;
+
+#[test]
+fn masses_must_be_positive() {
+    for (new, nth, path) in [
+        ("mass = -0.02", 1, "links[1].mass"),
+        ("mass = 0.0", 0, "links[0].mass"),
+        ("mass = 0", 2, "ball.mass"),
+    ] {
+        let text = edit("mass = 0.02", nth, new);
+        let line = line_no(&text, new, 0);
+        expect_err(&text, SpecErrorKind::Invalid, line, path, "must be > 0");
+    }
+}
+
+#[test]
+fn inertia_must_be_symmetric_positive_definite() {
+    // Negative principal moment.
+    let new = "inertia = [1.0e-3, -2.0e-3, 2.0e-3]";
+    let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, new);
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[0].inertia",
+        "positive definite",
+    );
+    // Zero moment (semi-definite).
+    let new = "inertia = [1.0e-3, 0.0, 2.0e-3]";
+    let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, new);
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[0].inertia",
+        "positive definite",
+    );
+    // Positive diagonal but indefinite: the product of inertia is too large.
+    let new = "inertia = [[1.0e-3, 3.0e-3, 0.0], [3.0e-3, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";
+    let old = "inertia = [[1.0e-3, 0.0, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";
+    let text = edit(old, 0, new);
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[1].inertia",
+        "positive definite",
+    );
+    // Asymmetric.
+    let new = "inertia = [[1.0e-3, 1.0e-4, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";
+    let text = edit(old, 0, new);
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[1].inertia",
+        "symmetric",
+    );
+    // Ball inertia too.
+    let new = "mass = 0.02\ninertia = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]";
+    let text = edit("mass = 0.02", 2, new);
+    let line = line_no(
+        &text,
+        "inertia = [[1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]]",
+        0,
+    );
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "ball.inertia",
+        "positive definite",
+    );
+    // A valid explicit ball inertia overrides the solid-sphere default.
+    let text = edit("mass = 0.02", 2, "mass = 0.02\ninertia = [1.0, 2.0, 2.5]");
+    let s = Scene::from_toml_str(&text, FILE).unwrap();
+    assert_eq!(s.ball_inertia().unwrap()[2][2], 2.5);
+}
+
+#[test]
+fn zero_links_is_an_error() {
+    let links_start = line_no(BASE, "[[links]]", 0);
+    let ball = line_no(BASE, "[ball]", 0);
+    let text: String = BASE
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| i + 1 < links_start || i + 1 >= ball)
+        .map(|(_, l)| format!("{l}\n"))
+        .collect::<String>()
+        .replace("name = \"test_scene\"", "name = \"test_scene\"\nlinks = []");
+    let line = line_no(&text, "links = []", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links",
+        "at least one link",
+    );
+}
+
+#[test]
+fn kernel_list_is_checked() {
+    let new = "kernels = [\"mass_matrix\", \"gravity\", \"jacobian_of_doom\"]";
+    let text = edit(
+        "kernels = [\"mass_matrix\", \"gravity\", \"contact\"]",
+        0,
+        new,
+    );
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "kernels[2]",
+        "unknown kernel",
+    );
+
+    let new = "kernels = [\"gravity\", \"gravity\"]";
+    let text = edit(
+        "kernels = [\"mass_matrix\", \"gravity\", \"contact\"]",
+        0,
+        new,
+    );
+    expect_err(&text, SpecErrorKind::Invalid, line, "kernels[1]", "twice");
+
+    // Every known kernel is accepted in a scene with ball and contact.
+    let all = KNOWN_KERNELS
+        .iter()
+        .map(|k| format!("\"{k}\""))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let text = edit(
+        "kernels = [\"mass_matrix\", \"gravity\", \"contact\"]",
+        0,
+        &format!("kernels = [{all}]"),
+    );
+    let s = Scene::from_toml_str(&text, FILE).unwrap();
+    assert_eq!(s.kernels.len(), 16);
+}
+
+#[test]
+fn ocp_kernel_costs_are_checked() {
+    let old = "kernels = [\"mass_matrix\", \"gravity\", \"contact\"]";
+    let with = |list: &str| edit(old, 0, &format!("{old}\nocp_kernels = {list}"));
+    let s = Scene::from_toml_str(&with("[\"qc\", \"cot\"]"), FILE).unwrap();
+    assert_eq!(
+        s.ocp_kernels,
+        Some(vec!["qc".to_string(), "cot".to_string()])
+    );
+    let text = with("[\"qc\", \"fastest\"]");
+    let ocp_line = |t: &str| {
+        t.lines()
+            .position(|l| l.starts_with("ocp_kernels"))
+            .unwrap()
+            + 1
+    };
+    let line = ocp_line(&text);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "ocp_kernels[1]",
+        "unknown cost kind",
+    );
+    let text = with("[\"cot\", \"cot\"]");
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "ocp_kernels[1]",
+        "twice",
+    );
+    // Without a ball the node functions do not exist.
+    let no_ball = {
+        let t = with("[\"qc\"]");
+        let start = t.find("[ball]").unwrap();
+        t[..start].to_string()
+    };
+    let line = ocp_line(&no_ball);
+    expect_err(
+        &no_ball.replace(", \"contact\"", ""),
+        SpecErrorKind::Invalid,
+        line,
+        "ocp_kernels[0]",
+        "[ball] and a [contact]",
+    );
+}
+
+#[test]
+fn contact_kernels_need_ball_and_contact() {
+    // Remove [ball] .. end (ball, friction, contact).
+    let ball = line_no(BASE, "[ball]", 0);
+    let text: String = BASE
+        .lines()
+        .take(ball - 1)
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let line = line_no(
+        &text,
+        "kernels = [\"mass_matrix\", \"gravity\", \"contact\"]",
+        0,
+    );
+    expect_err(&text, SpecErrorKind::Invalid, line, "kernels[2]", "[ball]");
+
+    // A ball but no [contact]: contact_smooth still rejected.
+    let contact = line_no(BASE, "[contact]", 0);
+    let text: String = BASE
+        .lines()
+        .take(contact - 1)
+        .map(|l| format!("{l}\n"))
+        .collect::<String>()
+        .replace("\"contact\"]", "\"contact_smooth\"]");
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "kernels[2]",
+        "[contact]",
+    );
+
+    // A [contact] section without a [ball].
+    let text: String = BASE
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| !(ball - 1..ball + 3).contains(i))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect::<String>()
+        .replace("\"contact\"]", "\"gravity\"]");
+    let text = text.replace(
+        "kernels = [\"mass_matrix\", \"gravity\", \"gravity\"]",
+        "kernels = [\"gravity\"]",
+    );
+    let line = line_no(&text, "[contact]", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "contact",
+        "needs a [ball]",
+    );
+}
+
+#[test]
+fn runtime_parameters_must_name_registry_constants() {
+    let new = "runtime_parameters = [\"ball.radius\", \"link3.mass\"]";
+    let text = edit(
+        "name = \"test_scene\"",
+        0,
+        &format!("name = \"test_scene\"\n{new}"),
+    );
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "runtime_parameters[1]",
+        "link3.mass",
+    );
+
+    let new = "runtime_parameters = [\"link2.mass\", \"link2.mass\"]";
+    let text = edit(
+        "name = \"test_scene\"",
+        0,
+        &format!("name = \"test_scene\"\n{new}"),
+    );
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "runtime_parameters[1]",
+        "twice",
+    );
+
+    let new = "runtime_parameters = [\"link1.inertia.yx\"]";
+    let text = edit(
+        "name = \"test_scene\"",
+        0,
+        &format!("name = \"test_scene\"\n{new}"),
+    );
+    let line = line_no(&text, new, 0);
+    let shown = expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "runtime_parameters[0]",
+        "unknown",
+    );
+    assert!(
+        shown.contains("link1.inertia.xy"),
+        "should suggest similar names: {shown}"
+    );
+
+    let new = "runtime_parameters = [\"ball.radius\", \"link2.inertia.xz\", \"gravity.z\"]";
+    let text = edit(
+        "name = \"test_scene\"",
+        0,
+        &format!("name = \"test_scene\"\n{new}"),
+    );
+    let s = Scene::from_toml_str(&text, FILE).unwrap();
+    assert_eq!(
+        s.runtime_parameter_values(),
+        vec![
+            ("ball.radius".to_string(), 1.0),
+            ("link2.inertia.xz".to_string(), 0.0),
+            ("gravity.z".to_string(), -9.81)
+        ]
+    );
+    assert!(s.is_runtime("gravity.z") && !s.is_runtime("gravity.x"));
+}
+
+#[test]
+fn scene_name_must_be_a_rust_identifier() {
+    for bad in ["2fast", "my-scene", "fn", "self", "", "_", "naïve", "a b"] {
+        let new = format!("name = \"{bad}\"");
+        let text = edit("name = \"test_scene\"", 0, &new);
+        expect_err(&text, SpecErrorKind::Invalid, 1, "name", "identifier");
+    }
+    for good in ["paper", "_x", "Scene2", "iiwa7"] {
+        let text = edit("name = \"test_scene\"", 0, &format!("name = \"{good}\""));
+        assert!(Scene::from_toml_str(&text, FILE).is_ok(), "{good}");
+    }
+}
+
+#[test]
+fn friction_coefficients_must_be_finite_and_nonnegative() {
+    for (old, new, path) in [
+        ("mu_s = 0.8", "mu_s = -0.1", "friction.mu_s"),
+        ("mu_k = 0.6", "mu_k = -0.6", "friction.mu_k"),
+        ("mu_v = 0.001", "mu_v = -1e-9", "friction.mu_v"),
+        (
+            "socket_damping = 0.004",
+            "socket_damping = -0.004",
+            "friction.socket_damping",
+        ),
+    ] {
+        let text = edit(old, 0, new);
+        let line = line_no(&text, new, 0);
+        expect_err(&text, SpecErrorKind::Invalid, line, path, ">= 0");
+    }
+    // mu_k > mu_s is physically odd but allowed; zero friction is allowed.
+    let text = edit("mu_k = 0.6", 0, "mu_k = 0.9");
+    assert_eq!(
+        Scene::from_toml_str(&text, FILE)
+            .unwrap()
+            .friction
+            .unwrap()
+            .mu_k,
+        0.9
+    );
+    let text = edit("mu_s = 0.8", 0, "mu_s = 0");
+    assert_eq!(
+        Scene::from_toml_str(&text, FILE)
+            .unwrap()
+            .friction
+            .unwrap()
+            .mu_s,
+        0.0
+    );
+}
+
+#[test]
+fn ball_radius_must_be_positive() {
+    for new in ["radius = 0.0", "radius = -1.0"] {
+        let text = edit("radius = 1.0", 0, new);
+        let line = line_no(&text, new, 0);
+        expect_err(
+            &text,
+            SpecErrorKind::Invalid,
+            line,
+            "ball.radius",
+            "must be > 0",
+        );
+    }
+}
+
+#[test]
+fn joint_limits_must_be_ordered() {
+    let text = edit("q_min = -1.0", 0, "q_min = 1.5");
+    let line = line_no(&text, "q_min = 1.5", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[0].q_min",
+        "q_min must be <= q_max",
+    );
+    // Angle strings are accepted for limits and converted to radians.
+    let text = edit("q_min = -1.0", 0, "q_min = \"-45deg\"");
+    let s = Scene::from_toml_str(&text, FILE).unwrap();
+    assert_eq!(s.links[0].q_min, Some(-PI / 4.0));
+    let text = edit("q_max = 1.0", 0, "q_max = \"-90 deg\"");
+    let line = line_no(&text, "q_min = -1.0", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[0].q_min",
+        "q_max",
+    );
+}
+
+#[test]
+fn base_rotation_matrix_must_be_a_rotation() {
+    let old = "rotation = { axis = \"y\", angle = \"-pi/2\" }";
+    let rot_line = line_no(BASE, old, 0);
+    // Not orthonormal (scaled).
+    let text = edit(
+        old,
+        0,
+        "rotation = [[2.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
+    );
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        rot_line,
+        "base.rotation",
+        "orthonormal",
+    );
+    // Not orthogonal rows.
+    let text = edit(
+        old,
+        0,
+        "rotation = [[1.0, 0.1, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
+    );
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        rot_line,
+        "base.rotation",
+        "orthonormal",
+    );
+    // A reflection.
+    let text = edit(
+        old,
+        0,
+        "rotation = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, -1.0]]",
+    );
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        rot_line,
+        "base.rotation",
+        "determinant",
+    );
+    // Bad axis name.
+    let text = edit(old, 0, "rotation = { axis = \"w\", angle = \"pi\" }");
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        rot_line,
+        "base.rotation.axis",
+        "axis",
+    );
+    // The matrix form of R_y(-pi/2) equals the exact axis form (docs/parameters.md).
+    let text = edit(
+        old,
+        0,
+        "rotation = [[0.0, 0.0, -1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]",
+    );
+    let m = Scene::from_toml_str(&text, FILE).unwrap();
+    let a = Scene::from_toml_str(BASE, FILE).unwrap();
+    assert_eq!(m.base_rotation(), a.base_rotation());
+    assert!(matches!(m.base.rotation, Some(RotationSpec::Matrix(_))));
+}
+
+#[test]
+fn contact_kind_must_be_segment_or_tip() {
+    let text = edit("kind = \"segment\"", 0, "kind = \"edge\"");
+    let line = line_no(&text, "kind = \"edge\"", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "contact.kind",
+        "\"segment\" or \"tip\"",
+    );
+    let text = edit("kind = \"segment\"", 0, "kind = \"tip\"");
+    assert_eq!(
+        Scene::from_toml_str(&text, FILE)
+            .unwrap()
+            .contact
+            .unwrap()
+            .kind,
+        "tip"
+    );
+    // The default kind is "segment" and the default eps 0.01 (eq. 59).
+    let text = edit("kind = \"segment\"", 0, "").replace("smooth_eps = 0.01", "");
+    let c = Scene::from_toml_str(&text, FILE).unwrap().contact.unwrap();
+    assert_eq!((c.kind.as_str(), c.smooth_eps), ("segment", 0.01));
+}
+
+#[test]
+fn bad_angle_strings_name_the_field() {
+    for bad in [
+        "pi/x", "1.5", "pi/0", "2*pie", "", "90 rad", "pi/2.5", "1e3deg",
+    ] {
+        let new = format!("alpha = \"{bad}\"");
+        let text = edit("alpha = \"pi/2\"", 0, &new);
+        let line = line_no(&text, &new, 0);
+        expect_err(
+            &text,
+            SpecErrorKind::Invalid,
+            line,
+            "links[0].alpha",
+            "invalid angle",
+        );
+    }
+}
+
+#[test]
+fn validate_checks_scenes_built_in_code() {
+    let mut s = Scene::from_toml_str(BASE, FILE).unwrap();
+    assert!(s.validate("code").is_ok());
+    s.links[0].mass = -1.0;
+    let e = s.validate("code").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "code:1:1: links[0].mass: must be > 0 (got -1)"
+    );
+    s.links[0].mass = 1.0;
+    s.links[1].alpha = Angle::PiMultiple { num: 1, den: 0 };
+    assert_eq!(
+        s.validate("code").unwrap_err().path(),
+        Some("links[1].alpha")
+    );
+    s.links[1].alpha = "pi/2".parse().unwrap();
+    s.kernels.push("contact".into());
+    assert_eq!(s.validate("code").unwrap_err().path(), Some("kernels[3]"));
+}
