@@ -291,7 +291,10 @@ pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: 
             }
             sol.verification = Some(v);
         }
-        Err(e) => eprintln!("warning: trajectory verification failed: {e}"),
+        Err(e) => eprintln!(
+            "warning: trajectory verification failed: {}",
+            crate::study::error::chain(&e)
+        ),
     }
     Ok(())
 }
