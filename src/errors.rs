@@ -10,6 +10,19 @@ pub fn render(e: &anyhow::Error) -> String {
     format!("{e:#}")
 }
 
+/// [`render`] for any error: `e` and its causes on one line, joined by `": "`, for a message
+/// that is stored or printed as text (a stage record, a warning, a `FAILED` marker).
+pub fn chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        out.push_str(": ");
+        out.push_str(&c.to_string());
+        cause = c.source();
+    }
+    out
+}
+
 /// Whether the error (or one of its causes) is a write to a closed pipe.
 pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
     e.chain().any(|c| {
@@ -55,6 +68,24 @@ mod tests {
             r,
             "cannot build the model of scene `paper`: scene error: no [ball] table"
         );
+    }
+
+    #[test]
+    fn a_failed_run_states_its_error_once() {
+        // x' = x² from x(0) = 2 blows up at t = 1/2.
+        let fail = bf_sim::simulate(
+            &bf_sim::toys::BlowUp,
+            bf_sim::SimSettings::default(),
+            (),
+            0.0,
+            &[2.0],
+            1.0,
+        )
+        .unwrap_err();
+        let inner = fail.error.to_string();
+        let r = chain(&*fail);
+        assert!(r.starts_with("simulation failed at t = "), "{r}");
+        assert_eq!(r.matches(&inner).count(), 1, "{r}");
     }
 
     #[test]

@@ -1,8 +1,8 @@
 //! [`StudyError`]: the one error enum of the study layer. The engines' errors pass through
 //! unchanged ([`ProblemError`], [`OptimError`], [`SimError`]); the study's own variants name
 //! the file, option or solution concerned, and keep an underlying error as the typed
-//! [`source`](std::error::Error::source) instead of repeating its text. Use [`chain`] where the
-//! whole cause chain belongs in one line of text (records, warnings).
+//! [`source`](std::error::Error::source) instead of repeating its text. Where the whole cause
+//! chain belongs in one line of text (records, warnings), use [`crate::errors::chain`].
 
 use std::path::PathBuf;
 
@@ -168,17 +168,4 @@ pub enum PhaseDataDefect {
     /// An element without collocation nodes.
     #[error("element {0} with no collocation nodes")]
     EmptyElement(usize),
-}
-
-/// `e` and its causes on one line, joined by `": "` (each error's message names only its own
-/// context, so nothing repeats).
-pub fn chain(e: &(dyn std::error::Error + 'static)) -> String {
-    let mut out = e.to_string();
-    let mut cause = e.source();
-    while let Some(c) = cause {
-        out.push_str(": ");
-        out.push_str(&c.to_string());
-        cause = c.source();
-    }
-    out
 }

@@ -16,7 +16,8 @@ use serde::{Deserialize, Serialize};
 use bf_optim::ipm::{IterationInfo, Settings};
 use bf_optim::ocp::{HpRule, MeshSpec, collocation_errors};
 
-use super::error::{StudyError, chain};
+use super::error::StudyError;
+use crate::errors::chain;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 
 use super::build;

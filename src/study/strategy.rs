@@ -69,7 +69,7 @@ fn record(chain: usize, stage: String, sol: &OcpSolution, t0: Instant) -> StageR
 fn failed_record(chain: usize, stage: String, e: &StudyError, t0: Instant) -> StageRecord {
     StageRecord {
         chain,
-        stage: format!("{stage} ({})", super::error::chain(e)),
+        stage: format!("{stage} ({})", crate::errors::chain(e)),
         status: Status::ErrorInStepComputation,
         objective: f64::NAN,
         period: f64::NAN,
