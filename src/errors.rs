@@ -1,26 +1,26 @@
-//! Error rendering for the binary: the cause chain on one line without repeated texts, and
-//! recognition of a closed output pipe.
+//! Error rendering for the binary: the cause chain on one line, and recognition of a closed
+//! output pipe.
 //!
-//! Some library errors already include their source's message in their own and also expose
-//! the source (`"I/O error on DIR: File exists (os error 17)"` with the `io::Error` as its
-//! source), which `anyhow`'s `{:#}` would print twice. [`render`] skips a cause whose text
-//! is already part of the message.
+//! Every error of the workspace names only its own context (operation, file, option, value)
+//! and leaves the underlying error to `source()`, so the chain that `anyhow`'s `{:#}` prints
+//! states each reason once.
 
-/// The error and its causes, joined by `": "`, leaving out every cause whose text already
-/// appears in what is printed.
+/// The error and its causes, joined by `": "`.
 pub fn render(e: &anyhow::Error) -> String {
-    let mut msg = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if text.is_empty() || msg.contains(&text) {
-            continue;
-        }
-        if !msg.is_empty() {
-            msg.push_str(": ");
-        }
-        msg.push_str(&text);
+    format!("{e:#}")
+}
+
+/// [`render`] for any error: `e` and its causes on one line, joined by `": "`, for a message
+/// that is stored or printed as text (a stage record, a warning, a `FAILED` marker).
+pub fn chain(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut out = e.to_string();
+    let mut cause = e.source();
+    while let Some(c) = cause {
+        out.push_str(": ");
+        out.push_str(&c.to_string());
+        cause = c.source();
     }
-    msg
+    out
 }
 
 /// Whether the error (or one of its causes) is a write to a closed pipe.
@@ -36,31 +36,61 @@ pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::study::StudyError;
 
-    #[derive(Debug)]
-    struct Embeds(std::io::Error);
-    impl std::fmt::Display for Embeds {
-        fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-            write!(f, "I/O error on out/x: {}", self.0)
-        }
-    }
-    impl std::error::Error for Embeds {
-        fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-            Some(&self.0)
-        }
+    fn io() -> std::io::Error {
+        std::io::Error::from(std::io::ErrorKind::AlreadyExists)
     }
 
     #[test]
-    fn a_source_embedded_in_its_parent_is_printed_once() {
-        let io = std::io::Error::from(std::io::ErrorKind::AlreadyExists);
-        let text = io.to_string();
-        let e = anyhow::Error::new(Embeds(io)).context("cannot write the output");
-        let r = render(&e);
-        assert_eq!(r.matches(&text).count(), 1, "{r}");
-        assert!(
-            r.starts_with("cannot write the output: I/O error on out/x"),
-            "{r}"
+    fn io_errors_name_the_file_and_print_their_reason_once() {
+        let reason = io().to_string();
+        let file = || bf_output::FileError::new("cannot write", "out/run.json", io());
+        let errors: Vec<anyhow::Error> = vec![
+            bf_sim::SimError::from(file()).into(),
+            bf_plot::PlotError::from(file()).into(),
+            StudyError::from(file()).into(),
+        ];
+        for e in errors {
+            let r = render(&e.context("cannot write the output"));
+            assert_eq!(r.matches(&reason).count(), 1, "{r}");
+            assert!(
+                r.starts_with("cannot write the output: cannot write out/run.json: "),
+                "{r}"
+            );
+        }
+        let model = bf_problem::ProblemError::Model {
+            scene: "paper".into(),
+            source: bf_codegen::CodegenError::Scene("no [ball] table".into()),
+        };
+        let r = render(&StudyError::from(model).into());
+        assert_eq!(
+            r,
+            "cannot build the model of scene `paper`: scene error: no [ball] table"
         );
+    }
+
+    #[test]
+    fn a_failed_run_states_its_error_once() {
+        // x' = x² from x(0) = 2 blows up at t = 1/2.
+        let fail = bf_sim::simulate(
+            &bf_sim::toys::BlowUp,
+            bf_sim::SimSettings::default(),
+            (),
+            0.0,
+            &[2.0],
+            1.0,
+        )
+        .unwrap_err();
+        let inner = fail.error.to_string();
+        let r = chain(&*fail);
+        assert!(r.starts_with("simulation failed at t = "), "{r}");
+        assert_eq!(r.matches(&inner).count(), 1, "{r}");
+    }
+
+    #[test]
+    fn a_closed_pipe_is_recognised_through_context() {
+        let e = anyhow::Error::new(io()).context("cannot write the output");
         assert!(!is_broken_pipe(&e));
         let pipe = anyhow::Error::new(std::io::Error::from(std::io::ErrorKind::BrokenPipe))
             .context("cannot write to standard output");

@@ -7,169 +7,18 @@ use ball_finger::study::refine::{
     RefineOptions, RefineRound, current_mesh, error_estimate, refine, warm_initial_point,
 };
 use ball_finger::study::{build, solve};
-use bf_codegen::graph::Graph;
 use bf_optim::ipm::{Nlp, Settings, Status};
+use bf_optim::ocp::toys::{brachistochrone, cycloid_time, double_integrator};
 use bf_optim::ocp::{
-    HpRule, MeshSpec, NodeFunction, Objective, Ocp, Phase, PhaseGuess, PointFunction, Scheme,
-    Transcription, VarRef, collocation_errors, extract, solve_nlp,
+    HpRule, MeshSpec, Ocp, Scheme, Transcription, collocation_errors, extract, solve_nlp,
 };
 use bf_problem::{Problem, ProblemSettings};
-
-const INF: f64 = 1e20;
 
 fn quiet() -> Settings {
     Settings {
         tol: 1e-10,
         ..Settings::default()
     }
-}
-
-/// Rest-to-rest double integrator ṗ = v, v̇ = u on [0, 1], min ∫u²: p* = 3t² − 2t³
-/// (a cubic), u* = 6 − 12t, J* = 12. `implicit`: v̇ = a with the algebraic variable a and the
-/// equality path constraint a − u = 0 (the form of the ball-and-finger node functions).
-fn double_integrator(implicit: bool) -> Ocp {
-    let mut g = Graph::new();
-    let (v, u) = (g.var(1), g.var(2));
-    let u2 = g.square(u);
-    let one = g.one();
-    let (a_vars, xdot, path, duration) = if implicit {
-        let a = g.var(4);
-        let r = g.sub(a, u);
-        (vec![4], vec![v, a], vec![r], 3)
-    } else {
-        (vec![], vec![v, u], vec![], 3)
-    };
-    let na = a_vars.len();
-    let phase = Phase {
-        name: "di".into(),
-        node: NodeFunction {
-            graph: g,
-            x: vec![0, 1],
-            a: a_vars,
-            u: vec![2],
-            duration,
-            fixed: vec![],
-            xdot,
-            path_bounds: vec![(0.0, 0.0); path.len()],
-            path,
-            costs: vec![u2, one],
-        },
-        x_bounds: vec![(-INF, INF); 2],
-        a_bounds: vec![(-INF, INF); na],
-        u_bounds: vec![(-INF, INF)],
-        duration_bounds: (1.0, 1.0),
-        points: 8,
-        guess: PhaseGuess::constant(vec![0.0, 0.0], vec![0.0; na], vec![0.0], 1.0),
-    };
-    let mut pg = Graph::new();
-    let ids: Vec<_> = (0..4).map(|i| pg.var(i)).collect();
-    Ocp {
-        phases: vec![phase],
-        n_costs: 2,
-        params: vec![],
-        points: vec![PointFunction {
-            name: "bc".into(),
-            graph: pg,
-            vars: vec![
-                (0, VarRef::Initial { phase: 0, i: 0 }),
-                (1, VarRef::Initial { phase: 0, i: 1 }),
-                (2, VarRef::Final { phase: 0, i: 0 }),
-                (3, VarRef::Final { phase: 0, i: 1 }),
-            ],
-            fixed: vec![],
-            outputs: ids,
-            bounds: vec![(0.0, 0.0), (0.0, 0.0), (1.0, 1.0), (0.0, 0.0)],
-        }],
-        cost_bounds: vec![],
-        objective: Objective::Cost(0),
-        scheme: Scheme::Radau { elements: 1 },
-    }
-}
-
-/// Minimum-time brachistochrone from rest at the origin to (1, 0.6), g = 9.81 (y down):
-/// ẋ = v sin u, ẏ = v cos u, v̇ = g cos u. `implicit`: v̇ = a with a − g cos u = 0.
-fn brachistochrone(implicit: bool) -> Ocp {
-    let gacc = 9.81;
-    let mut g = Graph::new();
-    let (v, u) = (g.var(2), g.var(3));
-    let (s, c) = (g.sin(u), g.cos(u));
-    let xd = g.mul(v, s);
-    let yd = g.mul(v, c);
-    let gc = g.constant(gacc);
-    let vd = g.mul(gc, c);
-    let one = g.one();
-    let (a_vars, xdot, path) = if implicit {
-        let a = g.var(5);
-        let r = g.sub(a, vd);
-        (vec![5], vec![xd, yd, a], vec![r])
-    } else {
-        (vec![], vec![xd, yd, vd], vec![])
-    };
-    let na = a_vars.len();
-    let phase = Phase {
-        name: "b".into(),
-        node: NodeFunction {
-            graph: g,
-            x: vec![0, 1, 2],
-            a: a_vars,
-            u: vec![3],
-            duration: 4,
-            fixed: vec![],
-            xdot,
-            path_bounds: vec![(0.0, 0.0); path.len()],
-            path,
-            costs: vec![one],
-        },
-        x_bounds: vec![(-10.0, 10.0); 3],
-        a_bounds: vec![(-INF, INF); na],
-        u_bounds: vec![(-0.5, 3.5)],
-        duration_bounds: (0.01, 5.0),
-        points: 8,
-        guess: PhaseGuess {
-            s: vec![0.0, 1.0],
-            x: vec![vec![0.0; 3], vec![1.0, 0.6, 3.0]],
-            a: vec![vec![0.0; na]],
-            u: vec![vec![1.0]],
-            duration: 0.5,
-        },
-    };
-    let mut pg = Graph::new();
-    let ids: Vec<_> = (0..5).map(|i| pg.var(i)).collect();
-    Ocp {
-        phases: vec![phase],
-        n_costs: 1,
-        params: vec![],
-        points: vec![PointFunction {
-            name: "bc".into(),
-            graph: pg,
-            vars: vec![
-                (0, VarRef::Initial { phase: 0, i: 0 }),
-                (1, VarRef::Initial { phase: 0, i: 1 }),
-                (2, VarRef::Initial { phase: 0, i: 2 }),
-                (3, VarRef::Final { phase: 0, i: 0 }),
-                (4, VarRef::Final { phase: 0, i: 1 }),
-            ],
-            fixed: vec![],
-            outputs: ids,
-            bounds: vec![(0.0, 0.0), (0.0, 0.0), (0.0, 0.0), (1.0, 1.0), (0.6, 0.6)],
-        }],
-        cost_bounds: vec![],
-        objective: Objective::Cost(0),
-        scheme: Scheme::Radau { elements: 1 },
-    }
-}
-
-/// Optimal time of the brachistochrone: the cycloid x = R(φ − sin φ), y = R(1 − cos φ)
-/// through (1, 0.6), T = φ_f sqrt(R/g).
-fn cycloid_time() -> f64 {
-    let f = |p: f64| (p - p.sin()) / (1.0 - p.cos()) - 1.0 / 0.6;
-    let (mut lo, mut hi) = (1e-3, 2.0 * std::f64::consts::PI - 1e-3);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if f(mid) > 0.0 { hi = mid } else { lo = mid }
-    }
-    let phi = 0.5 * (lo + hi);
-    phi * (0.6 / (1.0 - phi.cos()) / 9.81).sqrt()
 }
 
 /// Solves `ocp` on `mesh`; returns (objective, per-element error estimates, transcription, x).
@@ -237,8 +86,14 @@ fn estimate_decays_spectrally_and_bounds_the_true_error() {
     let mut rows = Vec::new();
     for n in [4, 6, 8, 10, 12] {
         let mesh = MeshSpec::uniform(1, n).unwrap();
-        let (j, e, _, _) = solve_on(&brachistochrone(false), &mesh);
-        let (ji, ei, _, _) = solve_on(&brachistochrone(true), &mesh);
+        let (j, e, _, _) = solve_on(
+            &brachistochrone(false, Scheme::Radau { elements: 1 }, 8),
+            &mesh,
+        );
+        let (ji, ei, _, _) = solve_on(
+            &brachistochrone(true, Scheme::Radau { elements: 1 }, 8),
+            &mesh,
+        );
         // Same discrete optimum; the implicit form's estimate solves a − g cos u = 0 between
         // the nodes and must agree with the explicit one (the interpolated a alone would give
         // no v̇ defect at all).
@@ -297,7 +152,7 @@ fn hp_rule_raises_degree_or_splits() {
 
 #[test]
 fn custom_mesh_matches_uniform_scheme_and_rejects_bad_specs() {
-    let mut ocp = brachistochrone(false);
+    let mut ocp = brachistochrone(false, Scheme::Radau { elements: 1 }, 8);
     ocp.scheme = Scheme::Radau { elements: 3 };
     ocp.phases[0].points = 12;
     let spec = MeshSpec::from_scheme(ocp.scheme, 12).unwrap();

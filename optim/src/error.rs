@@ -1,8 +1,16 @@
-//! The crate's error type. Non-convergence of a solve is *not* an error (it is a
-//! [`Status`](crate::ipm::Status) in the returned solution); errors are real breakdowns: invalid
-//! problem data, non-finite values where no step can recover, or a failed linear-solver analysis.
+//! The crate's one error type, shared by the interior-point solver ([`crate::ipm`]) and the
+//! collocation layer ([`crate::ocp`]): a collocation error is an NLP that cannot be built, and
+//! a solver error surfaces through the same `solve_nlp` call, so callers match on one enum.
+//! Non-convergence of a solve is *not* an error (it is a [`Status`](crate::ipm::Status) in the
+//! returned solution); errors are real breakdowns: invalid problem data, non-finite values
+//! where no step can recover, or a failed linear-solver analysis.
+//!
+//! Variants carry the data (phase, index, lengths, the offending value) rather than text, so
+//! callers can act on them; their messages name the same things.
 
 use thiserror::Error;
+
+use crate::ocp::{Objective, Scheme, VarRef};
 
 /// Errors of `bf-optim`.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -60,4 +68,167 @@ pub enum OptimError {
         /// Why.
         msg: String,
     },
+    /// Fewer than two collocation points per phase (or per element).
+    #[error("need at least 2 collocation points, got {points}")]
+    TooFewPoints {
+        /// The requested number of points.
+        points: usize,
+    },
+    /// A custom mesh was given for a scheme that has no elements (LG, or Radau with 0).
+    #[error("a custom mesh needs the Radau scheme with ≥ 1 element, got {scheme:?}")]
+    CustomMeshScheme {
+        /// The problem's scheme.
+        scheme: Scheme,
+    },
+    /// A mesh specification violates one of its invariants.
+    #[error("mesh: {0}")]
+    InvalidMesh(MeshDefect),
+    /// More meshes (or trajectories) than the problem has phases, or a trajectory list of the
+    /// wrong length.
+    #[error("{found} {what} for {phases} phases")]
+    PhaseCount {
+        /// `"meshes"` or `"trajectories"`.
+        what: &'static str,
+        /// How many were given.
+        found: usize,
+        /// How many phases the problem has.
+        phases: usize,
+    },
+    /// The problem has no phase.
+    #[error("no phases")]
+    NoPhases,
+    /// The objective refers to a cost state that does not exist (or a ratio of one with itself).
+    #[error("objective {objective:?} with {costs} cost states")]
+    InvalidObjective {
+        /// The objective.
+        objective: Objective,
+        /// Number of cost states.
+        costs: usize,
+    },
+    /// `cost_bounds` is neither empty nor one entry per cost state.
+    #[error("cost_bounds has {found} entries; it needs one per cost state ({costs})")]
+    CostBounds {
+        /// Number of entries given.
+        found: usize,
+        /// Number of cost states.
+        costs: usize,
+    },
+    /// A phase's node function, bounds or trajectory is inconsistent.
+    #[error("phase {index} (`{name}`): {defect}")]
+    Phase {
+        /// Index of the phase.
+        index: usize,
+        /// Name of the phase.
+        name: String,
+        /// What is wrong.
+        defect: PhaseDefect,
+    },
+    /// A point function is inconsistent.
+    #[error("point function `{name}`: {defect}")]
+    PointFunction {
+        /// Name of the point function.
+        name: String,
+        /// What is wrong.
+        defect: PointDefect,
+    },
+    /// The differentiation matrix of a Gauss mesh could not be inverted (too many points).
+    #[error("singular Gauss differentiation matrix ({points} collocation points)")]
+    SingularDifferentiation {
+        /// Number of collocation points of the mesh.
+        points: usize,
+    },
+}
+
+/// What is wrong with a [`MeshSpec`](crate::ocp::MeshSpec).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum MeshDefect {
+    /// `breaks` must have one entry more than `degrees`, and there must be an element.
+    #[error("{breaks} breaks for {elements} elements")]
+    BreakCount {
+        /// Number of breaks.
+        breaks: usize,
+        /// Number of elements (degrees).
+        elements: usize,
+    },
+    /// The breaks do not span [−1, 1].
+    #[error("breaks must start at −1 and end at +1, got {first} … {last}")]
+    Span {
+        /// First break.
+        first: f64,
+        /// Last break.
+        last: f64,
+    },
+    /// The breaks are not strictly increasing (or not finite).
+    #[error("breaks must be strictly increasing (element {element})")]
+    NotIncreasing {
+        /// First element whose end is not above its start.
+        element: usize,
+    },
+    /// An element degree outside 2..=64.
+    #[error("element {element} has degree {degree}, outside 2..=64")]
+    Degree {
+        /// The element.
+        element: usize,
+        /// Its degree.
+        degree: usize,
+    },
+}
+
+/// What is wrong with a [`Phase`](crate::ocp::Phase) (or its trajectory).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum PhaseDefect {
+    /// `xdot` must have one entry per state.
+    #[error("xdot has {found} entries for {states} states")]
+    XdotLength {
+        /// Entries of `xdot`.
+        found: usize,
+        /// Number of states.
+        states: usize,
+    },
+    /// One cost integrand per cost state is required.
+    #[error("{found} cost integrands for {costs} cost states")]
+    CostCount {
+        /// Integrands of the node function.
+        found: usize,
+        /// Cost states of the problem.
+        costs: usize,
+    },
+    /// A bounds vector has the wrong length.
+    #[error("{which} has {found} entries, expected {expected}")]
+    BoundsLength {
+        /// `"path_bounds"`, `"x_bounds"`, `"a_bounds"` or `"u_bounds"`.
+        which: &'static str,
+        /// Its length.
+        found: usize,
+        /// The length the node function needs.
+        expected: usize,
+    },
+    /// Emitted kernels are required but none has the structure of the node function.
+    #[error(
+        "no emitted node kernel has the structure of its node function (the graphs changed \
+         since the kernels were emitted, or this phase shape is not emitted)"
+    )]
+    NoKernel,
+    /// A trajectory does not match the node function's dimensions.
+    #[error("trajectory does not match the node function")]
+    TrajectoryShape,
+}
+
+/// What is wrong with a [`PointFunction`](crate::ocp::PointFunction).
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum PointDefect {
+    /// `bounds` must have one entry per output.
+    #[error("{bounds} bounds for {outputs} outputs")]
+    BoundsLength {
+        /// Number of outputs.
+        outputs: usize,
+        /// Number of bounds.
+        bounds: usize,
+    },
+    /// A variable reference names a phase, state or parameter that does not exist.
+    #[error("bad reference {0:?}")]
+    BadReference(VarRef),
+    /// The same NLP variable is read twice.
+    #[error("reads a variable twice")]
+    ReadsTwice,
 }

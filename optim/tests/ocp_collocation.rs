@@ -3,6 +3,7 @@
 
 use bf_codegen::graph::Graph;
 use bf_optim::ipm::{Settings, Status, check_derivatives};
+use bf_optim::ocp::toys::{self, double_integrator_phase, rest_to_rest};
 use bf_optim::ocp::{
     NodeFunction, Objective, Ocp, Phase, PhaseGuess, PointFunction, Scheme, Transcription, VarRef,
     solve_nlp,
@@ -11,75 +12,6 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 const INF: f64 = 1e20;
-
-/// ẋ = v, v̇ = u; costs: [u², 1].
-fn double_integrator_phase(points: usize, t_bounds: (f64, f64), t_guess: f64) -> Phase {
-    let mut g = Graph::new();
-    let (v, u) = (g.var(1), g.var(2));
-    let one = g.one();
-    let u2 = g.square(u);
-    Phase {
-        name: "di".into(),
-        node: NodeFunction {
-            graph: g,
-            x: vec![0, 1],
-            a: vec![],
-            u: vec![2],
-            duration: 3,
-            fixed: vec![],
-            xdot: vec![v, u],
-            path: vec![],
-            path_bounds: vec![],
-            costs: vec![u2, one],
-        },
-        x_bounds: vec![(-INF, INF); 2],
-        a_bounds: vec![],
-        u_bounds: vec![(-INF, INF)],
-        duration_bounds: t_bounds,
-        points,
-        guess: PhaseGuess::constant(vec![0.0, 0.0], vec![], vec![0.0], t_guess),
-    }
-}
-
-/// Boundary conditions x(0) = (0,0), x(t_f) = (1,0) (plus optional continuity between phases).
-fn boundary(nphases: usize) -> Vec<PointFunction> {
-    let mut g = Graph::new();
-    let vars = [g.var(0), g.var(1), g.var(2), g.var(3)];
-    let last = nphases - 1;
-    let mut pts = vec![PointFunction {
-        name: "boundary".into(),
-        graph: g,
-        vars: vec![
-            (0, VarRef::Initial { phase: 0, i: 0 }),
-            (1, VarRef::Initial { phase: 0, i: 1 }),
-            (2, VarRef::Final { phase: last, i: 0 }),
-            (3, VarRef::Final { phase: last, i: 1 }),
-        ],
-        fixed: vec![],
-        outputs: vars.to_vec(),
-        bounds: vec![(0.0, 0.0), (0.0, 0.0), (1.0, 1.0), (0.0, 0.0)],
-    }];
-    for p in 1..nphases {
-        let mut g = Graph::new();
-        let (a0, a1, b0, b1) = (g.var(0), g.var(1), g.var(2), g.var(3));
-        let d0 = g.sub(a0, b0);
-        let d1 = g.sub(a1, b1);
-        pts.push(PointFunction {
-            name: format!("link {p}"),
-            graph: g,
-            vars: vec![
-                (0, VarRef::Final { phase: p - 1, i: 0 }),
-                (1, VarRef::Final { phase: p - 1, i: 1 }),
-                (2, VarRef::Initial { phase: p, i: 0 }),
-                (3, VarRef::Initial { phase: p, i: 1 }),
-            ],
-            fixed: vec![],
-            outputs: vec![d0, d1],
-            bounds: vec![(0.0, 0.0); 2],
-        });
-    }
-    pts
-}
 
 fn quiet() -> Settings {
     Settings {
@@ -93,10 +25,10 @@ fn rest_to_rest_min_energy_matches_closed_form() {
     // u* = 6 − 12 t on [0, 1], ∫u² = 12; the polynomial optimum is exact for N ≥ 2.
     for scheme in [Scheme::Lg, Scheme::Radau { elements: 3 }] {
         let ocp = Ocp {
-            phases: vec![double_integrator_phase(8, (1.0, 1.0), 1.0)],
+            phases: vec![double_integrator_phase(8, false, (1.0, 1.0), 1.0)],
             n_costs: 2,
             params: vec![],
-            points: boundary(1),
+            points: rest_to_rest(1),
             cost_bounds: vec![],
             objective: Objective::Cost(0),
             scheme,
@@ -133,12 +65,12 @@ fn free_final_time_two_phases() {
     for scheme in [Scheme::Lg, Scheme::Radau { elements: 2 }] {
         let ocp = Ocp {
             phases: vec![
-                double_integrator_phase(6, (0.05, 10.0), 1.0),
-                double_integrator_phase(6, (0.05, 10.0), 1.0),
+                double_integrator_phase(6, false, (0.05, 10.0), 1.0),
+                double_integrator_phase(6, false, (0.05, 10.0), 1.0),
             ],
             n_costs: 2,
             params: vec![],
-            points: boundary(2),
+            points: rest_to_rest(2),
             cost_bounds: vec![],
             objective: Objective::Cost(1),
             scheme,
@@ -169,10 +101,10 @@ fn free_final_time_two_phases() {
 fn ratio_objective_hits_duration_bound() {
     // c0/c1 = 12/T⁴ decreasing in T: optimum at the bound T = 2 with value 0.75.
     let ocp = Ocp {
-        phases: vec![double_integrator_phase(6, (0.5, 2.0), 1.0)],
+        phases: vec![double_integrator_phase(6, false, (0.5, 2.0), 1.0)],
         n_costs: 2,
         params: vec![],
-        points: boundary(1),
+        points: rest_to_rest(1),
         cost_bounds: vec![],
         objective: Objective::Ratio(0, 1),
         scheme: Scheme::Lg,
@@ -294,81 +226,8 @@ fn brachistochrone(scheme: Scheme, meshes: &[usize]) {
 }
 
 fn brachistochrone_error(scheme: Scheme, points: usize) -> f64 {
-    // ẋ = v sin u, ẏ = v cos u, v̇ = g cos u (y pointing down) from rest at the origin to
-    // (x, y) = (1, 0.6) with g = 9.81: the cycloid through that point gives the reference time.
-    let gacc = 9.81;
-    let mut g = Graph::new();
-    let (v, u) = (g.var(2), g.var(3));
-    let (s, c) = (g.sin(u), g.cos(u));
-    let xd = g.mul(v, s);
-    let yd = g.mul(v, c);
-    let gc = g.constant(gacc);
-    let vd = g.mul(gc, c);
-    let one = g.one();
-    let phase = Phase {
-        name: "b".into(),
-        node: NodeFunction {
-            graph: g,
-            x: vec![0, 1, 2],
-            a: vec![],
-            u: vec![3],
-            duration: 4,
-            fixed: vec![],
-            xdot: vec![xd, yd, vd],
-            path: vec![],
-            path_bounds: vec![],
-            costs: vec![one],
-        },
-        x_bounds: vec![(-10.0, 10.0); 3],
-        a_bounds: vec![],
-        u_bounds: vec![(-0.5, 3.5)],
-        duration_bounds: (0.01, 5.0),
-        points,
-        guess: PhaseGuess {
-            s: vec![0.0, 1.0],
-            x: vec![vec![0.0; 3], vec![1.0, 0.6, 3.0]],
-            a: vec![],
-            u: vec![vec![1.0]],
-            duration: 0.5,
-        },
-    };
-    let mut pg = Graph::new();
-    let ids: Vec<_> = (0..5).map(|i| pg.var(i)).collect();
-    let ocp = Ocp {
-        phases: vec![phase],
-        n_costs: 1,
-        params: vec![],
-        points: vec![PointFunction {
-            name: "bc".into(),
-            graph: pg,
-            vars: vec![
-                (0, VarRef::Initial { phase: 0, i: 0 }),
-                (1, VarRef::Initial { phase: 0, i: 1 }),
-                (2, VarRef::Initial { phase: 0, i: 2 }),
-                (3, VarRef::Final { phase: 0, i: 0 }),
-                (4, VarRef::Final { phase: 0, i: 1 }),
-            ],
-            fixed: vec![],
-            outputs: ids,
-            bounds: vec![(0.0, 0.0), (0.0, 0.0), (0.0, 0.0), (1.0, 1.0), (0.6, 0.6)],
-        }],
-        cost_bounds: vec![],
-        objective: Objective::Cost(0),
-        scheme,
-    };
-    // Cycloid x = R(φ − sin φ), y = R(1 − cos φ): solve (φ − sin φ)/(1 − cos φ) = 1/0.6, then
-    // T = φ_f sqrt(R/g).
-    let f = |p: f64| (p - p.sin()) / (1.0 - p.cos()) - 1.0 / 0.6;
-    let (mut lo, mut hi) = (1e-3, 2.0 * std::f64::consts::PI - 1e-3);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if f(mid) > 0.0 { hi = mid } else { lo = mid }
-    }
-    let phi = 0.5 * (lo + hi);
-    let r = 0.6 / (1.0 - phi.cos());
-    let t_ref = phi * (r / gacc).sqrt();
-    let tr = Transcription::new(&ocp).unwrap();
+    let tr = Transcription::new(&toys::brachistochrone(false, scheme, points)).unwrap();
     let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
     assert!(sol.status.is_success(), "{:?}", sol.status);
-    (sol.objective - t_ref).abs()
+    (sol.objective - toys::cycloid_time()).abs()
 }

@@ -14,6 +14,8 @@
 //!   file system without it) the previous directory is renamed to a backup name, the new one
 //!   into place, and the backup removed: in the short window between the two renames a reader
 //!   finds no directory, never a mixture.
+//! * [`FileError`] is the error of one failed file operation, for the error enums of the
+//!   crates that write files themselves.
 //! * A run that dies before its commit leaves its staging directory behind, never a changed
 //!   target. The next [`OutputDir::create`] on the same target removes staging and backup
 //!   directories whose process no longer exists (on systems with `/proc`).
@@ -29,6 +31,9 @@ use std::fs;
 use std::io::{self, Write as _};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+
+mod file_error;
+pub use file_error::FileError;
 
 /// Name of the manifest every committed output directory holds.
 pub const MANIFEST: &str = ".ball-finger.json";

@@ -17,6 +17,9 @@ use std::fmt::Write as _;
 /// An RGB colour.
 pub(crate) type Rgb = (u8, u8, u8);
 
+/// A point in fractional pixels, (x, y) with y downwards.
+pub(crate) type Point = (f64, f64);
+
 /// Horizontal anchor of a text.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Anchor {
@@ -39,6 +42,36 @@ pub(crate) struct TextSpec<'a> {
     pub class: &'a str,
 }
 
+/// How a polyline is stroked: colour, width in pixels and an optional dash pattern
+/// (on, off) in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Stroke {
+    pub colour: Rgb,
+    pub width: f64,
+    pub dash: Option<(f64, f64)>,
+}
+
+impl Stroke {
+    pub fn new(colour: Rgb, width: f64, dash: Option<(f64, f64)>) -> Self {
+        Self {
+            colour,
+            width,
+            dash,
+        }
+    }
+}
+
+/// An axis-parallel rectangle to draw between the corners `p0` and `p1` (any two opposite
+/// corners), filled with `fill` = (colour, opacity) and/or stroked 1 px in `stroke`.
+pub(crate) struct RectSpec<'a> {
+    pub p0: (f64, f64),
+    pub p1: (f64, f64),
+    pub fill: Option<(Rgb, f64)>,
+    pub stroke: Option<Rgb>,
+    /// Role of the rectangle in the SVG (`class` attribute), e.g. `frame`, `legend-box`.
+    pub class: &'a str,
+}
+
 /// Width and height in pixels of `text` at font size `size` in the embedded font.
 pub(crate) fn text_size(text: &str, size: f64) -> (f64, f64) {
     let font = (FONT, size).into_font();
@@ -50,24 +83,10 @@ pub(crate) fn text_size(text: &str, size: f64) -> (f64, f64) {
 
 /// The drawing operations the figure layout needs.
 pub(crate) trait Canvas {
-    /// An open polyline; `dash` = (on, off) in pixels.
-    fn polyline(
-        &mut self,
-        pts: &[(f64, f64)],
-        colour: Rgb,
-        width: f64,
-        dash: Option<(f64, f64)>,
-        class: &str,
-    ) -> Result<(), PlotError>;
+    /// An open polyline.
+    fn polyline(&mut self, pts: &[Point], stroke: Stroke, class: &str) -> Result<(), PlotError>;
     /// An axis-parallel rectangle, filled (with opacity) and/or stroked.
-    fn rect(
-        &mut self,
-        p0: (f64, f64),
-        p1: (f64, f64),
-        fill: Option<(Rgb, f64)>,
-        stroke: Option<Rgb>,
-        class: &str,
-    ) -> Result<(), PlotError>;
+    fn rect(&mut self, r: &RectSpec) -> Result<(), PlotError>;
     /// A filled circle.
     fn circle(&mut self, c: (f64, f64), r: f64, fill: Rgb, class: &str) -> Result<(), PlotError>;
     /// A text.
@@ -125,14 +144,7 @@ impl Canvas for SvgCanvas {
         self.out.push('\n');
     }
 
-    fn polyline(
-        &mut self,
-        pts: &[(f64, f64)],
-        colour: Rgb,
-        width: f64,
-        dash: Option<(f64, f64)>,
-        class: &str,
-    ) -> Result<(), PlotError> {
+    fn polyline(&mut self, pts: &[Point], stroke: Stroke, class: &str) -> Result<(), PlotError> {
         if pts.len() < 2 {
             return Ok(());
         }
@@ -143,34 +155,30 @@ impl Canvas for SvgCanvas {
             }
             let _ = write!(p, "{},{}", f2(x), f2(y));
         }
-        let dash = dash
+        let dash = stroke
+            .dash
             .map(|(a, b)| format!(" stroke-dasharray=\"{} {}\"", f2(a), f2(b)))
             .unwrap_or_default();
         let _ = writeln!(
             self.out,
             "<polyline class=\"{class}\" fill=\"none\" stroke=\"{}\" stroke-width=\"{}\" \
              stroke-linejoin=\"round\" stroke-linecap=\"round\"{dash} points=\"{p}\"/>",
-            hex(colour),
-            f2(width)
+            hex(stroke.colour),
+            f2(stroke.width)
         );
         Ok(())
     }
 
-    fn rect(
-        &mut self,
-        p0: (f64, f64),
-        p1: (f64, f64),
-        fill: Option<(Rgb, f64)>,
-        stroke: Option<Rgb>,
-        class: &str,
-    ) -> Result<(), PlotError> {
+    fn rect(&mut self, r: &RectSpec) -> Result<(), PlotError> {
+        let (p0, p1, class) = (r.p0, r.p1, r.class);
         let (x, y) = (p0.0.min(p1.0), p0.1.min(p1.1));
         let (w, h) = ((p1.0 - p0.0).abs(), (p1.1 - p0.1).abs());
-        let fill = match fill {
+        let fill = match r.fill {
             Some((c, o)) => format!("fill=\"{}\" fill-opacity=\"{}\"", hex(c), f2(o)),
             None => "fill=\"none\"".into(),
         };
-        let stroke = stroke
+        let stroke = r
+            .stroke
             .map(|c| format!(" stroke=\"{}\" stroke-width=\"1\"", hex(c)))
             .unwrap_or_default();
         let _ = writeln!(
@@ -253,22 +261,15 @@ fn ipt((x, y): (f64, f64)) -> (i32, i32) {
 }
 
 impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
-    fn polyline(
-        &mut self,
-        pts: &[(f64, f64)],
-        colour: Rgb,
-        width: f64,
-        dash: Option<(f64, f64)>,
-        _class: &str,
-    ) -> Result<(), PlotError> {
-        let c = RGBColor(colour.0, colour.1, colour.2);
-        let w = width.round().max(1.0) as u32;
+    fn polyline(&mut self, pts: &[Point], stroke: Stroke, _class: &str) -> Result<(), PlotError> {
+        let c = RGBColor(stroke.colour.0, stroke.colour.1, stroke.colour.2);
+        let w = stroke.width.round().max(1.0) as u32;
         let style = c.stroke_width(w);
         let px: Vec<(i32, i32)> = pts.iter().map(|&p| ipt(p)).collect();
         let (strokes, joins) = crate::figure::split_sharp_turns(pts, &px);
         for s in strokes {
             let sp: Vec<(i32, i32)> = s.iter().map(|&p| ipt(p)).collect();
-            match dash {
+            match stroke.dash {
                 None => self.area.draw(&PathElement::new(sp, style)).map_err(de)?,
                 Some((on, off)) => self
                     .area
@@ -282,7 +283,7 @@ impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
             }
         }
         // Round joins where a solid line was split (dashes simply restart).
-        if dash.is_none() && w >= 2 {
+        if stroke.dash.is_none() && w >= 2 {
             let r = (w / 2).max(1);
             for j in joins {
                 self.area
@@ -293,21 +294,15 @@ impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
         Ok(())
     }
 
-    fn rect(
-        &mut self,
-        p0: (f64, f64),
-        p1: (f64, f64),
-        fill: Option<(Rgb, f64)>,
-        stroke: Option<Rgb>,
-        _class: &str,
-    ) -> Result<(), PlotError> {
-        if let Some((c, o)) = fill {
+    fn rect(&mut self, r: &RectSpec) -> Result<(), PlotError> {
+        let (p0, p1) = (r.p0, r.p1);
+        if let Some((c, o)) = r.fill {
             let s = RGBColor(c.0, c.1, c.2).mix(o).filled();
             self.area
                 .draw(&Rectangle::new([ipt(p0), ipt(p1)], s))
                 .map_err(de)?;
         }
-        if let Some(c) = stroke {
+        if let Some(c) = r.stroke {
             let s = RGBColor(c.0, c.1, c.2).stroke_width(1);
             self.area
                 .draw(&Rectangle::new([ipt(p0), ipt(p1)], s))

@@ -29,8 +29,6 @@ pub use figure::{
     Series, SeriesStyle, render, render_panels, render_panels_report, render_report,
 };
 
-use std::path::PathBuf;
-
 /// Everything that can go wrong while building or rendering a figure.
 #[derive(Debug, thiserror::Error)]
 pub enum PlotError {
@@ -82,14 +80,8 @@ pub enum PlotError {
     #[error("drawing failed: {0}")]
     Draw(String),
     /// Writing or renaming an output file failed.
-    #[error("i/o error on {path}: {source}")]
-    Io {
-        /// The file concerned.
-        path: PathBuf,
-        /// The underlying error.
-        #[source]
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Io(#[from] bf_output::FileError),
 }
 
 /// The embedded DejaVu Sans (Bitstream Vera licence, see `assets/LICENSE-DejaVu.txt`).

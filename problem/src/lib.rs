@@ -13,7 +13,8 @@
 //!   diagnostics;
 //! * [`catalogue`]: the problems ([`Problem`]) with one function per archetype, their
 //!   settings and initial guesses, built into a transcribed [`BuiltProblem`];
-//! * [`solution`]: the solution record ([`OcpSolution`], `solution.json`).
+//! * [`solution`]: the solution record ([`OcpSolution`], `solution.json`);
+//! * [`error`]: [`ProblemError`], the crate's error enum.
 //!
 //! bf-generated depends on this crate at build time, so this crate does not depend on it: the
 //! scenes and the emitted node kernels come in through [`Generated`].
@@ -24,6 +25,8 @@ pub mod node;
 #[cfg(feature = "catalogue")]
 pub mod catalogue;
 #[cfg(feature = "catalogue")]
+pub mod error;
+#[cfg(feature = "catalogue")]
 pub mod points;
 #[cfg(feature = "catalogue")]
 pub mod solution;
@@ -33,7 +36,9 @@ pub use node::{CostKind, Mode, Physics, StickLevel};
 #[cfg(feature = "catalogue")]
 pub use catalogue::{
     BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, Problem, ProblemSettings, QC_OMEGA_REF,
-    StartGuess, UnknownProblem, build,
+    StartGuess, build,
 };
+#[cfg(feature = "catalogue")]
+pub use error::ProblemError;
 #[cfg(feature = "catalogue")]
 pub use solution::{OcpSolution, Samples, solution_at};

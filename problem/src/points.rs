@@ -9,17 +9,15 @@ use bf_codegen::Scene;
 use bf_codegen::graph::{Graph, Id};
 use bf_codegen::interp::Tape;
 use bf_codegen::robot::Model;
-use bf_optim::ocp::{OcpError, PointFunction, VarRef};
+use bf_optim::ocp::{PointFunction, VarRef};
+
+use crate::ProblemError;
 
 use crate::node::{Physics, m3_const, v3, vars};
 
-fn model_err(e: bf_codegen::CodegenError) -> OcpError {
-    OcpError::Model(e.to_string())
-}
-
 /// Reads the physical constants of `scene` (needs `[ball]`, `[contact]`).
-pub fn physics(scene: &Scene) -> Result<Physics, OcpError> {
-    crate::node::physics(scene).map_err(model_err)
+pub fn physics(scene: &Scene) -> Result<Physics, ProblemError> {
+    crate::node::physics(scene).map_err(ProblemError::model(&scene.name))
 }
 
 struct Built {
@@ -28,8 +26,8 @@ struct Built {
     base: u32,
 }
 
-fn build_model(scene: &Scene, eps: f64) -> Result<Built, OcpError> {
-    let b = crate::node::build_model(scene, eps).map_err(model_err)?;
+fn build_model(scene: &Scene, eps: f64) -> Result<Built, ProblemError> {
+    let b = crate::node::build_model(scene, eps).map_err(ProblemError::model(&scene.name))?;
     Ok(Built {
         model: b.model,
         fixed: b.fixed,
@@ -68,7 +66,7 @@ pub fn end_point(
     fin: bool,
     what: EndQuantity,
     name: &str,
-) -> Result<PointFunction, OcpError> {
+) -> Result<PointFunction, ProblemError> {
     let Built {
         mut model, fixed, ..
     } = build_model(scene, eps)?;
@@ -76,7 +74,7 @@ pub fn end_point(
     let nx = 2 * nq + 3;
     let ce = model
         .contact(true)
-        .map_err(|e| OcpError::Model(e.to_string()))?;
+        .map_err(ProblemError::model(&scene.name))?;
     let (outputs, bounds) = match what {
         EndQuantity::H(lo, hi) => (vec![ce.h], vec![(lo, hi)]),
         EndQuantity::HDot(lo, hi) => (vec![ce.h_dot], vec![(lo, hi)]),
@@ -152,7 +150,7 @@ pub fn impact(
     iota0: usize,
     impulse_cone: bool,
     delta_v_plus: bool,
-) -> Result<PointFunction, OcpError> {
+) -> Result<PointFunction, ProblemError> {
     let Built {
         mut model,
         fixed,
@@ -163,7 +161,7 @@ pub fn impact(
     let mass = model.mass_matrix();
     let ce = model
         .contact(true)
-        .map_err(|e| OcpError::Model(e.to_string()))?;
+        .map_err(ProblemError::model(&scene.name))?;
     let g = &mut model.g;
     let mut vars_list = Vec::new();
     let qm: Vec<u32> = (0..nq).map(|i| lay.q(i)).collect();
@@ -275,7 +273,7 @@ pub struct ContactValues {
 
 impl Diagnostics {
     /// Compiles the contact quantities of `scene` with smooth-saturation ε.
-    pub fn new(scene: &Scene, eps: f64) -> Result<Self, OcpError> {
+    pub fn new(scene: &Scene, eps: f64) -> Result<Self, ProblemError> {
         let Built {
             mut model,
             fixed,
@@ -283,7 +281,7 @@ impl Diagnostics {
         } = build_model(scene, eps)?;
         let ce = model
             .contact(true)
-            .map_err(|e| OcpError::Model(e.to_string()))?;
+            .map_err(ProblemError::model(&scene.name))?;
         let mut outs = vec![ce.alpha, ce.sat_alpha, ce.h, ce.h_dot];
         outs.extend(ce.n);
         outs.extend(ce.delta_v);

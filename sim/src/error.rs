@@ -115,14 +115,9 @@ pub enum SimError {
         /// System-provided explanation, including the underlying error.
         msg: String,
     },
-    /// An input file could not be read or written.
-    #[error("I/O error on {}: {source}", path.display())]
-    Io {
-        /// File concerned.
-        path: PathBuf,
-        /// Underlying error.
-        source: std::io::Error,
-    },
+    /// An input file could not be read, or an output file not written.
+    #[error(transparent)]
+    Io(#[from] bf_output::FileError),
     /// An input file (torque series, ...) is malformed.
     #[error("{}{}: {msg}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
     Parse {

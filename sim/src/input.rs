@@ -9,6 +9,7 @@
 //! * JSON `{ "t": [t0, t1, ...], "tau": [[tau1, ..., tauN] at t0, [..] at t1, ...] }`.
 
 use crate::SimError;
+use bf_output::FileError;
 use std::path::Path;
 
 /// A source of joint torques.
@@ -106,10 +107,8 @@ impl TorqueSeries {
 
     /// Reads a CSV file with header `t,tau1,...,tauN`.
     pub fn from_csv_path(path: &Path) -> Result<Self, SimError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
         Self::from_csv_str(&text, path)
     }
 
@@ -188,10 +187,8 @@ impl TorqueSeries {
 
     /// Reads a JSON file `{ "t": [...], "tau": [[...], ...] }`.
     pub fn from_json_path(path: &Path) -> Result<Self, SimError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SimError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let text =
+            std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
         Self::from_json_str(&text, path)
     }
 

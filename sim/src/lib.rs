@@ -18,7 +18,7 @@
 //! * [`toys`] — systems with closed-form event times used by tests and benches.
 //! * [`ball_finger`] — the finger–ball model of bf-model as a [`HybridSystem`], with the derived
 //!   per-sample quantities (τ, λ, h, σ, ‖Δv‖, E), event kinds, run summary and output files.
-//! * [`work_precision`] — error against a tight reference versus CPU time (DOPRI5 rtol and RK4
+//! * [`work_precision`](mod@work_precision) — error against a tight reference versus CPU time (DOPRI5 rtol and RK4
 //!   step ladders).
 //!
 //! ```

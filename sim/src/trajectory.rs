@@ -10,6 +10,7 @@
 //! with modes written by their `Debug` name.
 
 use crate::SimError;
+use bf_output::FileError;
 use serde::Serialize;
 use std::fmt::Debug;
 use std::path::Path;
@@ -349,8 +350,5 @@ impl<M: Debug> SimOutput<M> {
 /// Writes `bytes` to `path` atomically (a uniquely named sibling temporary file, flushed to
 /// disk and renamed onto `path`; the workspace's one helper, `bf_output::replace_file`).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
-    bf_output::replace_file(path, bytes).map_err(|source| SimError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
+    bf_output::replace_file(path, bytes).map_err(|e| FileError::new("cannot write", path, e).into())
 }

@@ -291,7 +291,10 @@ pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: 
             }
             sol.verification = Some(v);
         }
-        Err(e) => eprintln!("warning: trajectory verification failed: {e}"),
+        Err(e) => eprintln!(
+            "warning: trajectory verification failed: {}",
+            crate::errors::chain(&e)
+        ),
     }
     Ok(())
 }
@@ -347,10 +350,10 @@ pub fn first_non_finite(sol: &OcpSolution) -> Option<(String, f64)> {
 pub fn commit_solution(sol: &OcpSolution, mut out: OutputDir) -> Result<()> {
     let path = out.file("solution.json")?;
     sol.write_json(&path)
-        .map_err(|e| anyhow::anyhow!(out.rename_in(&e.to_string())))?;
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
     let path = out.file("torques.csv")?;
     sol.write_torques_csv(&path)
-        .map_err(|e| anyhow::anyhow!(out.rename_in(&e.to_string())))?;
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
     let failure = format!("the solver did not converge ({:?})", sol.status);
     let outcome = if sol.status.is_success() {
         Outcome::Success

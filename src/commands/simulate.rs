@@ -427,7 +427,7 @@ fn run_model<K: Kernels>(
             Err(e) => Err(e),
         };
         if let Err(e) = r {
-            error = Some(e.to_string());
+            error = Some(crate::errors::chain(&e));
             break;
         }
         let samples = sim.trajectory().len();
@@ -485,7 +485,7 @@ fn run_model<K: Kernels>(
     out_dir.file("summary.json")?;
     report
         .write_dir(out_dir.path(), &out, error.as_deref())
-        .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
+        .map_err(|e| anyhow!(out_dir.rename_in(&crate::errors::chain(&e))))
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
     let failure = error.as_ref().map(|e| {
         format!(

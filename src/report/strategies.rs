@@ -73,7 +73,7 @@ fn row(problem: Problem, strategy: Strategy) -> StrategyRow {
         Err(e) => StrategyRow {
             problem: problem.to_string(),
             strategy,
-            status: format!("error: {e}"),
+            status: format!("error: {}", crate::errors::chain(&e)),
             objective: f64::NAN,
             period: f64::NAN,
             iterations: 0,

@@ -1,7 +1,7 @@
 //! The study layer: everything that solves, checks and reports the ball-and-finger problems
 //! of bf-problem on the engines below it.
 //!
-//! * [`solve`]: the solve-and-retry policy (interior-point settings, dual-regularization retry,
+//! * [`solve`](mod@solve): the solve-and-retry policy (interior-point settings, dual-regularization retry,
 //!   geometric-guess fallback) and primal-dual warm starts;
 //! * [`strategy`]: continuation and multi-start searches for good local optima (Sect. 7);
 //! * [`refine`]: adaptive hp mesh refinement (Sect. 5);
@@ -17,6 +17,7 @@
 //! ([`GENERATED`]); it requires every phase node function to run on an emitted kernel, so a
 //! graph that changed without its kernels being re-emitted is an error, not a slow solve.
 
+pub mod error;
 pub mod extremes;
 pub mod openloop;
 pub mod refine;
@@ -27,11 +28,12 @@ pub mod speed_accuracy;
 pub mod strategy;
 pub mod verify;
 
-use bf_optim::ocp::{KernelUse, NodeKernel, OcpError};
+use bf_optim::ocp::{KernelUse, NodeKernel};
 use bf_problem::{BuiltProblem, Generated, Problem, ProblemSettings};
 
 pub use bf_problem::OcpSolution;
 
+pub use error::StudyError;
 pub use solution_io::SolutionIo;
 pub use solve::{RAISED_DUAL_REGULARIZATION, solve, solve_warm, solver_settings, warm_settings};
 
@@ -58,6 +60,6 @@ pub const GENERATED: Generated = Generated {
 };
 
 /// Builds `problem` with `settings` on [`GENERATED`].
-pub fn build(problem: Problem, settings: &ProblemSettings) -> Result<BuiltProblem, OcpError> {
-    bf_problem::build(problem, settings, &GENERATED)
+pub fn build(problem: Problem, settings: &ProblemSettings) -> Result<BuiltProblem, StudyError> {
+    Ok(bf_problem::build(problem, settings, &GENERATED)?)
 }

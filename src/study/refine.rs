@@ -14,7 +14,10 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 
 use bf_optim::ipm::{IterationInfo, Settings};
-use bf_optim::ocp::{HpRule, MeshSpec, OcpError, collocation_errors};
+use bf_optim::ocp::{HpRule, MeshSpec, collocation_errors};
+
+use super::error::StudyError;
+use crate::errors::chain;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 
 use super::build;
@@ -72,20 +75,18 @@ impl std::ops::Deref for RefineResult {
 }
 
 /// Collocation error estimate of `sol` (a solution of `p`), per phase and element.
-pub fn error_estimate(p: &BuiltProblem, sol: &OcpSolution) -> Result<Vec<Vec<f64>>, OcpError> {
-    collocation_errors(&p.ocp, &sol.raw)
+pub fn error_estimate(p: &BuiltProblem, sol: &OcpSolution) -> Result<Vec<Vec<f64>>, StudyError> {
+    Ok(collocation_errors(&p.ocp, &sol.raw)?)
 }
 
 /// The hp-Radau mesh of every phase of `p`'s transcription.
-pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, OcpError> {
+pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, StudyError> {
     p.nlp
         .phases
         .iter()
         .map(|l| {
             if l.mesh.gauss_end {
-                return Err(OcpError::InvalidProblem(
-                    "mesh refinement needs the Radau scheme".into(),
-                ));
+                return Err(StudyError::RefineNeedsRadau);
             }
             let mut breaks: Vec<f64> = l
                 .mesh
@@ -133,18 +134,20 @@ pub fn refine(
     opts: &RefineOptions,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
     mut on_round: Option<&mut dyn FnMut(&RefineRound)>,
-) -> Result<RefineResult, OcpError> {
+) -> Result<RefineResult, StudyError> {
     if !(opts.warm_mu_init.is_finite() && opts.warm_mu_init > 0.0) {
-        return Err(OcpError::InvalidProblem(format!(
-            "warm_mu_init must be positive, got {}",
-            opts.warm_mu_init
-        )));
+        return Err(StudyError::InvalidOption {
+            name: "warm_mu_init",
+            value: opts.warm_mu_init,
+            expected: "positive",
+        });
     }
     if !(opts.tol.is_finite() && opts.tol > 0.0) {
-        return Err(OcpError::InvalidProblem(format!(
-            "refinement tolerance must be positive, got {}",
-            opts.tol
-        )));
+        return Err(StudyError::InvalidOption {
+            name: "refinement tolerance",
+            value: opts.tol,
+            expected: "positive",
+        });
     }
     let mut s = settings.clone();
     let mut history = Vec::new();
@@ -161,7 +164,7 @@ pub fn refine(
             Ok(sol) => sol,
             // A breakdown after the first round ends the refinement with the last solution.
             Err(e) if best.is_some() => {
-                stop_reason = format!("solver error in round {round}: {e}");
+                stop_reason = format!("solver error in round {round}: {}", chain(&e));
                 break;
             }
             Err(e) => return Err(e),
@@ -233,9 +236,9 @@ pub fn refine(
             });
         }
     }
-    let (solution, mesh, errors) = best.ok_or_else(|| {
-        OcpError::InvalidProblem("refinement ran no solve (max_rounds overflow)".into())
-    })?;
+    let (solution, mesh, errors) = best.ok_or(StudyError::Internal(
+        "refinement ran no solve (max_rounds overflow)",
+    ))?;
     Ok(RefineResult {
         total_seconds: history.iter().map(|r| r.seconds).sum(),
         report: RefineReport {
@@ -259,7 +262,7 @@ pub fn refine_solution(
     sol: OcpSolution,
     opts: &RefineOptions,
     on_round: Option<&mut dyn FnMut(&RefineRound)>,
-) -> Result<(BuiltProblem, OcpSolution), OcpError> {
+) -> Result<(BuiltProblem, OcpSolution), StudyError> {
     let strategy = sol.strategy.clone();
     let (iters0, secs0) = (sol.iterations, sol.solve_seconds);
     let start = ProblemSettings {

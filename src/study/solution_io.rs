@@ -6,44 +6,48 @@ use std::path::Path;
 
 use anyhow::Context;
 
-use bf_optim::ocp::OcpError;
+use bf_output::FileError;
 use bf_problem::OcpSolution;
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> OcpError {
-    OcpError::Io {
-        path: path.display().to_string(),
-        msg: e.to_string(),
-    }
-}
+use super::error::StudyError;
 
 /// Through the workspace's one atomic writer ([`bf_output::replace_file`]), so a failed or
 /// interrupted write never leaves a truncated `solution.json` / `torques.csv` behind.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OcpError> {
-    bf_output::replace_file(path, bytes).map_err(|e| io_err(path, e))
+fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
+    bf_output::replace_file(path, bytes).map_err(|e| FileError::new("cannot write", path, e).into())
 }
 
 /// File input and output of an [`OcpSolution`].
 pub trait SolutionIo: Sized {
     /// Writes `solution.json`.
-    fn write_json(&self, path: &Path) -> Result<(), OcpError>;
+    fn write_json(&self, path: &Path) -> Result<(), StudyError>;
     /// Reads a solution written by [`SolutionIo::write_json`].
-    fn read_json(path: &Path) -> Result<Self, OcpError>;
+    fn read_json(path: &Path) -> Result<Self, StudyError>;
     /// Writes [`OcpSolution::torques_csv`] to `path`.
-    fn write_torques_csv(&self, path: &Path) -> Result<(), OcpError>;
+    fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError>;
 }
 
 impl SolutionIo for OcpSolution {
-    fn write_json(&self, path: &Path) -> Result<(), OcpError> {
-        let s = serde_json::to_string_pretty(self).map_err(|e| io_err(path, e))?;
+    fn write_json(&self, path: &Path) -> Result<(), StudyError> {
+        let s = serde_json::to_string_pretty(self).map_err(|source| StudyError::Json {
+            op: "cannot serialise the solution for",
+            path: path.into(),
+            source,
+        })?;
         write_atomic(path, s.as_bytes())
     }
 
-    fn read_json(path: &Path) -> Result<OcpSolution, OcpError> {
-        let s = std::fs::read_to_string(path).map_err(|e| io_err(path, e))?;
-        serde_json::from_str(&s).map_err(|e| io_err(path, e))
+    fn read_json(path: &Path) -> Result<OcpSolution, StudyError> {
+        let s =
+            std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
+        serde_json::from_str(&s).map_err(|source| StudyError::Json {
+            op: "cannot parse",
+            path: path.into(),
+            source,
+        })
     }
 
-    fn write_torques_csv(&self, path: &Path) -> Result<(), OcpError> {
+    fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError> {
         write_atomic(path, self.torques_csv().as_bytes())
     }
 }

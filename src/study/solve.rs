@@ -17,8 +17,10 @@
 use std::time::Instant;
 
 use bf_optim::ipm::{IterationInfo, Nlp, Settings, Solution, WarmStart};
-use bf_optim::ocp::{OcpError, Scheme, solve_nlp};
+use bf_optim::ocp::{Scheme, solve_nlp};
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
+
+use super::error::StudyError;
 
 /// Static dual regularization δ_c of the KKT matrix ([`Settings::static_dual_regularization`])
 /// where the solver's default 1e-9 misleads the unpivoted LDLᵀ: the default of Legendre–Gauss
@@ -64,12 +66,12 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 /// repeated from the same start with [`RAISED_DUAL_REGULARIZATION`] (unless
 /// [`ProblemSettings::dual_regularization`] is set): on Radau meshes finer than the default
 /// the unpivoted LDLᵀ otherwise stalls (module docs). `callback` sees every iteration (return
-/// `false` to stop). The library's default [`strategy::Strategy`] wraps this in a
+/// `false` to stop). The library's default [`Strategy`](crate::study::strategy::Strategy) wraps this in a
 /// continuation.
 pub fn solve(
     p: &BuiltProblem,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
-) -> Result<OcpSolution, OcpError> {
+) -> Result<OcpSolution, StudyError> {
     let start = Instant::now();
     let mut stages = Vec::new();
     let mut iters = 0;
@@ -188,7 +190,7 @@ pub fn solve_warm(
     p: &BuiltProblem,
     warm: &WarmStart,
     callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
-) -> Result<OcpSolution, OcpError> {
+) -> Result<OcpSolution, StudyError> {
     let start = Instant::now();
     let sol = solve_nlp(&p.nlp, &warm_settings(&p.settings), Some(warm), callback)?;
     let mut out = finish_solution(p, &sol)?;
@@ -203,7 +205,7 @@ pub fn solve_warm(
 }
 
 /// The [`OcpSolution`] of an interior-point result, with its statistics and warm-start data.
-fn finish_solution(p: &BuiltProblem, sol: &Solution) -> Result<OcpSolution, OcpError> {
+fn finish_solution(p: &BuiltProblem, sol: &Solution) -> Result<OcpSolution, StudyError> {
     let mut out = solution_at(p, &sol.x, sol.status)?;
     out.iterations = sol.iterations;
     out.constraint_violation = sol.constraint_violation;

@@ -27,7 +27,6 @@
 use std::time::Instant;
 
 use bf_optim::ipm::Status;
-use bf_optim::ocp::OcpError;
 use bf_problem::catalogue::Q_GUESS;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, Problem, ProblemSettings, StartGuess};
 use rand::{Rng, SeedableRng};
@@ -35,6 +34,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::build;
+use super::error::StudyError;
 use super::solve::{solve, solve_warm};
 pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
 
@@ -66,10 +66,10 @@ fn record(chain: usize, stage: String, sol: &OcpSolution, t0: Instant) -> StageR
     }
 }
 
-fn failed_record(chain: usize, stage: String, e: &OcpError, t0: Instant) -> StageRecord {
+fn failed_record(chain: usize, stage: String, e: &StudyError, t0: Instant) -> StageRecord {
     StageRecord {
         chain,
-        stage: format!("{stage} ({e})"),
+        stage: format!("{stage} ({})", crate::errors::chain(e)),
         status: Status::ErrorInStepComputation,
         objective: f64::NAN,
         period: f64::NAN,
@@ -181,7 +181,7 @@ pub fn solve_with_strategy(
     settings: &ProblemSettings,
     strategy: Strategy,
     progress: Progress<'_>,
-) -> Result<(BuiltProblem, OcpSolution), OcpError> {
+) -> Result<(BuiltProblem, OcpSolution), StudyError> {
     let t0 = Instant::now();
     let strategy = if settings.warm_start.is_some() {
         Strategy::Direct
@@ -244,9 +244,7 @@ pub fn solve_with_strategy(
         }
         Strategy::Multistart { starts, seed } => {
             if starts == 0 {
-                return Err(OcpError::InvalidProblem(
-                    "multi-start needs at least one start".into(),
-                ));
+                return Err(StudyError::NoStarts);
             }
             (0..starts)
                 .map(|k| {
@@ -282,19 +280,19 @@ pub fn solve_with_strategy(
     let records: Vec<StageRecord> = results.iter().flat_map(|(r, _)| r.clone()).collect();
     let iterations = records.iter().map(|r| r.iterations).sum();
     let Some((k, ok)) = best else {
-        let why = records
-            .iter()
-            .map(|r| format!("{}: {}", r.chain, r.stage))
-            .collect::<Vec<_>>()
-            .join("; ");
-        return Err(OcpError::InvalidProblem(format!(
-            "every {strategy} solve failed: {why}"
-        )));
+        return Err(StudyError::AllChainsFailed {
+            strategy,
+            stages: records
+                .iter()
+                .map(|r| format!("{}: {}", r.chain, r.stage))
+                .collect(),
+        });
     };
     let mut results = results;
-    let (p, mut sol) = results.swap_remove(k).1.ok_or_else(|| {
-        OcpError::InvalidProblem("internal: the chosen chain has no solution".into())
-    })?;
+    let (p, mut sol) = results
+        .swap_remove(k)
+        .1
+        .ok_or(StudyError::Internal("the chosen chain has no solution"))?;
     sol.iterations = iterations;
     sol.solve_seconds = t0.elapsed().as_secs_f64();
     sol.strategy = Some(StrategyReport {

@@ -34,15 +34,16 @@
 //!   fails (model error, step-size underflow) is reported with `failure` set and NaN defects
 //!   (written as `null` in JSON); `Verification::max_defect` is then NaN.
 
-use std::fmt;
 use std::time::Instant;
 
 use bf_model::fixtures::{self, DynKernels};
 use bf_model::{ContactVariant, Model, State, TransitionSettings, Vec3};
+use bf_optim::ocp::PhaseTrajectory;
 use bf_optim::ocp::nodes::lagrange_basis;
-use bf_optim::ocp::{OcpError, PhaseTrajectory};
 use bf_problem::{BuiltProblem, Mode, OcpSolution};
 use bf_sim::{Guard, HybridSystem, SimError, SimOutput, SimSettings, Transition};
+
+use super::error::{PhaseDataDefect, StudyError};
 
 pub use bf_problem::solution::records::{PhaseVerification, TorqueInterpolant, Verification};
 
@@ -175,22 +176,20 @@ fn nan_max(a: f64, b: f64) -> f64 {
     }
 }
 
-fn model_err(e: impl fmt::Display) -> OcpError {
-    OcpError::Model(e.to_string())
-}
-
 /// The bf-model model of `p`'s scene with the smooth contact of ε, after checking that its
 /// physical constants are the ones the OCP was built with.
-fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, OcpError> {
+fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, StudyError> {
     let settings = TransitionSettings {
         contact_tolerance: CONTACT_TOLERANCE,
         ..TransitionSettings::default()
     };
+    let model_err = |source| StudyError::VerifyModel {
+        scene: p.scene.name.clone(),
+        source,
+    };
     let model = fixtures::scene_by_name(&p.scene.name)
-        .map_err(model_err)?
-        .with_settings(settings)
-        .map_err(model_err)?
-        .with_contact_variant(ContactVariant::Smooth(eps))
+        .and_then(|m| m.with_settings(settings))
+        .and_then(|m| m.with_contact_variant(ContactVariant::Smooth(eps)))
         .map_err(model_err)?;
     let pm = model.params();
     let ph = &p.physics;
@@ -206,37 +205,34 @@ fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, O
         }
     }
     if !same {
-        return Err(OcpError::Model(format!(
-            "bf-model parameters of scene `{}` differ from the OCP's: {:?} vs {:?}",
-            p.scene.name, pm, ph
-        )));
+        return Err(StudyError::ParameterMismatch {
+            scene: p.scene.name.clone(),
+            model: format!("{pm:?}"),
+            ocp: format!("{ph:?}"),
+        });
     }
     Ok(model)
 }
 
-fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), OcpError> {
-    let bad = |what: &str| {
-        Err(OcpError::InvalidProblem(format!(
-            "verification: phase {k} has {what}"
-        )))
-    };
+fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), StudyError> {
+    let bad = |defect| Err(StudyError::PhaseData { phase: k, defect });
     if !(tr.duration.is_finite() && tr.duration > 0.0) {
-        return bad(&format!("duration {}", tr.duration));
+        return bad(PhaseDataDefect::Duration(tr.duration));
     }
     if tr.x.is_empty() || tr.x.iter().any(|x| x.len() != nx) {
-        return bad("states of the wrong dimension");
+        return bad(PhaseDataDefect::StateDimension);
     }
     if tr.state_tau.len() != tr.x.len() || tr.node_state.len() != tr.node_tau.len() {
-        return bad("inconsistent state points / nodes");
+        return bad(PhaseDataDefect::Inconsistent);
     }
     if tr.state_tau.first() != Some(&-1.0) || tr.state_tau.last() != Some(&1.0) {
-        return bad("state points not spanning [-1, 1]");
+        return bad(PhaseDataDefect::Span);
     }
     if tr.u.len() != tr.node_tau.len() || tr.u.iter().any(|u| u.len() != 3) {
-        return bad("controls of the wrong dimension");
+        return bad(PhaseDataDefect::ControlDimension);
     }
     if tr.a.len() != tr.node_tau.len() {
-        return bad("algebraic variables of the wrong count");
+        return bad(PhaseDataDefect::AlgebraicCount);
     }
     if tr.elements.is_empty()
         || tr
@@ -244,7 +240,7 @@ fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), Ocp
             .iter()
             .any(|&(a, b)| a >= b || b > tr.state_tau.len())
     {
-        return bad("invalid element ranges");
+        return bad(PhaseDataDefect::ElementRanges);
     }
     let finite = |v: &[Vec<f64>]| v.iter().flatten().all(|x| x.is_finite());
     let times_finite = tr
@@ -253,7 +249,7 @@ fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), Ocp
         .chain(&tr.node_tau)
         .all(|t| t.is_finite());
     if !(finite(&tr.x) && finite(&tr.u) && finite(&tr.a) && times_finite) {
-        return bad("non-finite values");
+        return bad(PhaseDataDefect::NonFinite);
     }
     Ok(())
 }
@@ -261,9 +257,10 @@ fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), Ocp
 /// Max |residual| of eq. 26 / 29 at the collocation nodes of `tr`, with bf-model's kernels.
 fn node_residual(
     model: &Model<DynKernels>,
+    phase: usize,
     mode: Mode,
     tr: &PhaseTrajectory,
-) -> Result<f64, OcpError> {
+) -> Result<f64, StudyError> {
     let pm = model.params();
     let mut worst: f64 = 0.0;
     for k in 0..tr.node_tau.len() {
@@ -271,13 +268,23 @@ fn node_residual(
         let a = &tr.a[k];
         let need = if mode == Mode::Stick { 9 } else { 6 };
         if a.len() < need {
-            return Err(OcpError::InvalidProblem(format!(
-                "verification: {} algebraic variables at a {mode:?} node, need {need}",
-                a.len()
-            )));
+            return Err(StudyError::PhaseData {
+                phase,
+                defect: PhaseDataDefect::AlgebraicDimension {
+                    found: a.len(),
+                    mode,
+                    need,
+                },
+            });
         }
-        let st = ElementSystem::state(x).map_err(model_err)?;
-        let kin = model.evaluate(&st).map_err(model_err)?;
+        let st = ElementSystem::state(x)?;
+        let kin = model
+            .evaluate(&st)
+            .map_err(|source| StudyError::NodeEvaluation {
+                phase,
+                node: k,
+                source,
+            })?;
         let qdd = Vec3::new(a[0], a[1], a[2]);
         let wd = Vec3::new(a[3], a[4], a[5]);
         let lam = if mode == Mode::Stick {
@@ -362,13 +369,13 @@ fn verify_phase(
     rtol: f64,
     atol: f64,
     interp: TorqueInterpolant,
-) -> Result<PhaseVerification, OcpError> {
+) -> Result<PhaseVerification, StudyError> {
     let big_t = tr.duration;
     // The first and last state points are τ = −1 and +1 in both schemes (LG: the final state
     // is the quadrature variable, which interpolation of the element would miss).
     let x_start = tr.x[0].clone();
     let x_colloc_end = tr.x[tr.x.len() - 1].clone();
-    let node_residual = node_residual(model, mode, tr)?;
+    let node_residual = node_residual(model, k, mode, tr)?;
     let mut x = x_start.clone();
     let mut stats = PathStats::new();
     let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
@@ -393,9 +400,10 @@ fn verify_phase(
             .filter(|&j| (a..b).contains(&tr.node_state[j]))
             .collect();
         if ks.is_empty() {
-            return Err(OcpError::InvalidProblem(format!(
-                "verification: phase {k} element {e} has no collocation nodes"
-            )));
+            return Err(StudyError::PhaseData {
+                phase: k,
+                defect: PhaseDataDefect::EmptyElement(e),
+            });
         }
         let sys = ElementSystem {
             model,
@@ -515,7 +523,7 @@ pub fn is_verified(sol: &OcpSolution) -> bool {
 
 /// [`verify_with`] at `rtol` with atol = rtol · [`ATOL_FACTOR`] and the clamped torque
 /// interpolant of the dense output / `torques.csv`.
-pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verification, OcpError> {
+pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verification, StudyError> {
     verify_with(
         p,
         sol,
@@ -539,38 +547,42 @@ pub fn verify_with(
     p: &BuiltProblem,
     sol: &OcpSolution,
     opt: &VerifyOptions,
-) -> Result<Verification, OcpError> {
+) -> Result<Verification, StudyError> {
     let start = Instant::now();
     let rtol = opt.rtol;
     if !(rtol.is_finite() && rtol > 0.0 && rtol <= 0.1) {
-        return Err(OcpError::InvalidProblem(format!(
-            "verification rtol must be in (0, 0.1], got {rtol}"
-        )));
+        return Err(StudyError::InvalidOption {
+            name: "verification rtol",
+            value: rtol,
+            expected: "in (0, 0.1]",
+        });
     }
     let atol = opt.atol.unwrap_or(rtol * ATOL_FACTOR);
     if !(atol.is_finite() && atol > 0.0) {
-        return Err(OcpError::InvalidProblem(format!(
-            "verification atol must be finite and > 0, got {atol}"
-        )));
+        return Err(StudyError::InvalidOption {
+            name: "verification atol",
+            value: atol,
+            expected: "finite and > 0",
+        });
     }
     if p.physics.nq != 3 {
-        return Err(OcpError::Model(format!(
-            "verification needs a 3-joint contact scene, `{}` has {}",
-            p.scene.name, p.physics.nq
-        )));
+        return Err(StudyError::VerifyJoints {
+            scene: p.scene.name.clone(),
+            joints: p.physics.nq,
+        });
     }
     if sol.raw.len() != p.modes.len() || sol.modes != p.modes {
-        return Err(OcpError::InvalidProblem(format!(
-            "verification: the solution has modes {:?}, the problem {:?}",
-            sol.modes, p.modes
-        )));
+        return Err(StudyError::ModeMismatch {
+            solution: sol.modes.clone(),
+            problem: p.modes.clone(),
+        });
     }
     let eps = sol.epsilon;
     if !(eps.is_finite() && eps > 0.0) || (eps - p.epsilon).abs() > 1e-12 * p.epsilon.abs() {
-        return Err(OcpError::InvalidProblem(format!(
-            "verification: solution eps {eps} does not match the problem's {}",
-            p.epsilon
-        )));
+        return Err(StudyError::EpsilonMismatch {
+            solution: eps,
+            problem: p.epsilon,
+        });
     }
     let model = verification_model(p, eps)?;
     let mut tau_max = [f64::INFINITY; 3];

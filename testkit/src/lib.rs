@@ -1,7 +1,7 @@
 //! bf-testkit: independent reference implementations used only by tests (never by product
 //! code).
 //!
-//! * [`reference`]: kinematics, Lagrangian dynamics (eq. 22–24, 76), gravity (eq. 72 with the
+//! * [`reference`](mod@reference): kinematics, Lagrangian dynamics (eq. 22–24, 76), gravity (eq. 72 with the
 //!   docs/parameters.md sign), contact geometry (eq. 2–13, 33, 58–59) for any scene, with exact
 //!   derivatives from dual numbers; and a recursive Newton–Euler inverse dynamics.
 //! * [`appendix`]: the paper's Appendix A (eq. 67–71) and Appendix B (eq. 72–79) transcribed

@@ -22,12 +22,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::OcpError;
 use super::block::GraphFn;
 use super::nodes::{differentiation_matrix, lagrange_basis, legendre_gauss, legendre_gauss_radau};
 use super::problem::{Ocp, Scheme};
 use super::trajectory::PhaseTrajectory;
 use super::transcription::{Colloc, Mesh};
+use crate::OptimError;
+use crate::error::{MeshDefect, PhaseDefect};
 
 /// An hp-Radau mesh of one phase.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -59,7 +60,7 @@ impl Default for HpRule {
 
 impl MeshSpec {
     /// `elements` equal elements of `degree` points each.
-    pub fn uniform(elements: usize, degree: usize) -> Result<MeshSpec, OcpError> {
+    pub fn uniform(elements: usize, degree: usize) -> Result<MeshSpec, OptimError> {
         let k = elements as f64;
         let s = MeshSpec {
             breaks: (0..=elements).map(|e| -1.0 + 2.0 * e as f64 / k).collect(),
@@ -71,35 +72,38 @@ impl MeshSpec {
 
     /// The mesh [`Mesh::new`] builds for a Radau `scheme` with `points` per phase
     /// (`points.div_ceil(elements).max(2)` points in each of the equal elements).
-    pub fn from_scheme(scheme: Scheme, points: usize) -> Result<MeshSpec, OcpError> {
+    pub fn from_scheme(scheme: Scheme, points: usize) -> Result<MeshSpec, OptimError> {
         match scheme {
             Scheme::Radau { elements } if elements > 0 => {
                 Self::uniform(elements, points.div_ceil(elements).max(2))
             }
-            s => Err(OcpError::InvalidProblem(format!(
-                "a custom mesh needs the Radau scheme with ≥ 1 element, got {s:?}"
-            ))),
+            scheme => Err(OptimError::CustomMeshScheme { scheme }),
         }
     }
 
     /// Checks the invariants documented on the fields.
-    pub fn validate(&self) -> Result<(), OcpError> {
-        let bad = |w: String| Err(OcpError::InvalidProblem(format!("mesh: {w}")));
+    pub fn validate(&self) -> Result<(), OptimError> {
+        let bad = |d: MeshDefect| Err(OptimError::InvalidMesh(d));
         if self.degrees.is_empty() || self.breaks.len() != self.degrees.len() + 1 {
-            return bad(format!(
-                "{} breaks for {} elements",
-                self.breaks.len(),
-                self.degrees.len()
-            ));
+            return bad(MeshDefect::BreakCount {
+                breaks: self.breaks.len(),
+                elements: self.degrees.len(),
+            });
         }
-        if self.breaks[0] != -1.0 || self.breaks[self.breaks.len() - 1] != 1.0 {
-            return bad("breaks must start at −1 and end at +1".into());
+        let (first, last) = (self.breaks[0], self.breaks[self.breaks.len() - 1]);
+        if first != -1.0 || last != 1.0 {
+            return bad(MeshDefect::Span { first, last });
         }
-        if !self.breaks.windows(2).all(|w| w[1] > w[0]) {
-            return bad("breaks must be strictly increasing".into());
+        if let Some(element) = self
+            .breaks
+            .windows(2)
+            .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+        {
+            return bad(MeshDefect::NotIncreasing { element });
         }
-        if let Some(d) = self.degrees.iter().find(|&&d| !(2..=64).contains(&d)) {
-            return bad(format!("element degree {d} outside 2..=64"));
+        let mut degrees = self.degrees.iter().enumerate();
+        if let Some((element, &degree)) = degrees.find(|&(_, &d)| !(2..=64).contains(&d)) {
+            return bad(MeshDefect::Degree { element, degree });
         }
         Ok(())
     }
@@ -155,7 +159,7 @@ impl Mesh {
     /// The Radau mesh with element boundaries `breaks` (τ, from −1 to +1) and `degrees[e]` LGR
     /// points in element e (the element's start included, its end excluded; the phase end is
     /// the last state point).
-    pub fn radau_custom(breaks: &[f64], degrees: &[usize]) -> Result<Mesh, OcpError> {
+    pub fn radau_custom(breaks: &[f64], degrees: &[usize]) -> Result<Mesh, OptimError> {
         let spec = MeshSpec {
             breaks: breaks.to_vec(),
             degrees: degrees.to_vec(),
@@ -194,7 +198,7 @@ impl Mesh {
     }
 
     /// [`Mesh::radau_custom`] of a [`MeshSpec`].
-    pub fn from_spec(spec: &MeshSpec) -> Result<Mesh, OcpError> {
+    pub fn from_spec(spec: &MeshSpec) -> Result<Mesh, OptimError> {
         Self::radau_custom(&spec.breaks, &spec.degrees)
     }
 }
@@ -470,16 +474,19 @@ fn integration_matrix(s: &[f64]) -> Vec<Vec<f64>> {
 /// module docs): per phase, per element, the largest over the state components and N_e + 1
 /// fresh LGR points of |X̃ − X̂| / (1 + max_p |X_p|) (max over the phase's state points), or the
 /// residual of a state-only equality path constraint if larger.
-pub fn collocation_errors(ocp: &Ocp, traj: &[PhaseTrajectory]) -> Result<Vec<Vec<f64>>, OcpError> {
+pub fn collocation_errors(
+    ocp: &Ocp,
+    traj: &[PhaseTrajectory],
+) -> Result<Vec<Vec<f64>>, OptimError> {
     if traj.len() != ocp.phases.len() {
-        return Err(OcpError::InvalidProblem(format!(
-            "{} trajectories for {} phases",
-            traj.len(),
-            ocp.phases.len()
-        )));
+        return Err(OptimError::PhaseCount {
+            what: "trajectories",
+            found: traj.len(),
+            phases: ocp.phases.len(),
+        });
     }
     let mut out = Vec::new();
-    for (ph, tr) in ocp.phases.iter().zip(traj) {
+    for (index, (ph, tr)) in ocp.phases.iter().zip(traj).enumerate() {
         let ev = PhaseEval::new(ph);
         let dims_ok = tr.x.iter().all(|v| v.len() == ev.nx)
             && tr.a.iter().all(|v| v.len() == ev.na)
@@ -490,10 +497,11 @@ pub fn collocation_errors(ocp: &Ocp, traj: &[PhaseTrajectory]) -> Result<Vec<Vec
             && tr.x.len() == tr.state_tau.len()
             && tr.node_state.iter().all(|&p| p < tr.x.len());
         if !dims_ok {
-            return Err(OcpError::InvalidProblem(format!(
-                "phase `{}`: trajectory does not match the node function",
-                ph.name
-            )));
+            return Err(OptimError::Phase {
+                index,
+                name: ph.name.clone(),
+                defect: PhaseDefect::TrajectoryShape,
+            });
         }
         let scale: Vec<f64> = (0..ev.nx)
             .map(|i| 1.0 + tr.x.iter().fold(0.0f64, |m, x| m.max(x[i].abs())))

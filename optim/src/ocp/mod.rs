@@ -6,12 +6,14 @@
 //!   emitted kernels handed in by the caller or interpreted;
 //! * [`problem`]: the multiphase problem (eq. 57): phases, node functions, point functions;
 //! * [`transcription`]: the sparse NLP handed to the interior-point solver ([`crate::ipm`]);
-//! * [`trajectory`]: extraction and interpolation of the solution.
+//! * [`trajectory`]: extraction and interpolation of the solution;
+//! * [`toys`]: problems with closed-form optima (double integrator, brachistochrone) for tests.
 
 pub mod block;
 pub mod mesh;
 pub mod nodes;
 pub mod problem;
+pub mod toys;
 pub mod trajectory;
 pub mod transcription;
 
@@ -23,29 +25,8 @@ pub use problem::{
 pub use trajectory::{PhaseTrajectory, extract};
 pub use transcription::{Mesh, PhaseLayout, Transcription};
 
+use crate::OptimError;
 use crate::ipm::{IterationInfo, Settings, Solution, WarmStart, solve_with};
-
-/// Errors of the collocation layer and of the problems built on it.
-#[derive(Debug, thiserror::Error)]
-pub enum OcpError {
-    /// The problem description is inconsistent.
-    #[error("invalid problem: {0}")]
-    InvalidProblem(String),
-    /// The scene or model could not be built.
-    #[error("model: {0}")]
-    Model(String),
-    /// The NLP solver failed (breakdown, not non-convergence).
-    #[error(transparent)]
-    Solver(#[from] crate::OptimError),
-    /// Reading or writing a file.
-    #[error("i/o on {path}: {msg}")]
-    Io {
-        /// The file.
-        path: String,
-        /// What happened.
-        msg: String,
-    },
-}
 
 /// Solves the transcribed problem with the interior-point solver (optional primal-dual warm
 /// start and per-iteration callback; return `false` from it to stop).
@@ -54,6 +35,6 @@ pub fn solve_nlp(
     settings: &Settings,
     warm: Option<&WarmStart>,
     callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
-) -> Result<Solution, OcpError> {
-    Ok(solve_with(tr, settings, warm, callback)?)
+) -> Result<Solution, OptimError> {
+    solve_with(tr, settings, warm, callback)
 }

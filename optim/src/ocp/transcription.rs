@@ -11,7 +11,7 @@
 //! ```
 //! with s_k = 1/K for K Radau elements (1 for LG). The objective is c_j or c_j/c_k (eq. 60), a
 //! function of two NLP variables only, so its Hessian stays sparse. Event and linkage
-//! constraints (57c–d) are [`PointFunction`]s. All nonlinear pieces are [`GraphFn`]s with
+//! constraints (57c–d) are [`PointFunction`](super::PointFunction)s. All nonlinear pieces are [`GraphFn`]s with
 //! exact Jacobians and Hessians; the NLP's derivatives are their scattered sums.
 //!
 //! LG defects in integral form ([`integration_matrix`]): they are the differential defects
@@ -28,11 +28,12 @@
 //! N × (N + 1) block in the states and a diagonal in f, the integral rows two state columns and
 //! a dense N × N block in f (plus one duplicate T triplet per node, summed by the solver).
 
-use super::OcpError;
 use super::block::{GraphFn, KernelUse};
 use super::mesh::MeshSpec;
 use super::nodes::{differentiation_matrix, legendre_gauss};
 use super::problem::{Objective, Ocp, Scheme, VarRef};
+use crate::OptimError;
+use crate::error::{PhaseDefect, PointDefect};
 use crate::ipm::{BOUND_INF, Nlp};
 
 /// Collocation mesh of one phase (normalised time τ ∈ [−1, 1]).
@@ -66,11 +67,9 @@ pub struct Colloc {
 
 impl Mesh {
     /// Builds the mesh for `scheme` with `points` collocation points per phase.
-    pub fn new(scheme: Scheme, points: usize) -> Result<Mesh, OcpError> {
+    pub fn new(scheme: Scheme, points: usize) -> Result<Mesh, OptimError> {
         if points < 2 {
-            return Err(OcpError::InvalidProblem(format!(
-                "need at least 2 collocation points, got {points}"
-            )));
+            return Err(OptimError::TooFewPoints { points });
         }
         match scheme {
             Scheme::Lg => {
@@ -181,7 +180,7 @@ pub struct Transcription {
 /// Since Σ_j D_kj = 0, A D₀ = −1, so A applied to the differential defects
 /// Σ_j D_kj X_j − (T/2) f_k gives the integral defects X_k − X₀ − (T/2) Σ_j A_kj f_j (see the
 /// module docs). Gauss–Jordan elimination with partial pivoting (N ≤ a few hundred).
-pub fn integration_matrix(mesh: &Mesh) -> Result<Vec<Vec<f64>>, OcpError> {
+pub fn integration_matrix(mesh: &Mesh) -> Result<Vec<Vec<f64>>, OptimError> {
     let n = mesh.colloc.len();
     // Augmented [D₁ | I].
     let mut m = vec![vec![0.0; 2 * n]; n];
@@ -199,9 +198,7 @@ pub fn integration_matrix(mesh: &Mesh) -> Result<Vec<Vec<f64>>, OcpError> {
             .unwrap_or(col);
         let p = m[piv][col];
         if p.abs() <= 1e-300 || !p.is_finite() {
-            return Err(OcpError::InvalidProblem(
-                "singular Gauss differentiation matrix".into(),
-            ));
+            return Err(OptimError::SingularDifferentiation { points: n });
         }
         m.swap(col, piv);
         m[col].iter_mut().for_each(|v| *v /= p);
@@ -228,7 +225,7 @@ fn clean_bound(v: f64, lower: bool) -> f64 {
 
 impl Transcription {
     /// Transcribes `ocp`.
-    pub fn new(ocp: &Ocp) -> Result<Transcription, OcpError> {
+    pub fn new(ocp: &Ocp) -> Result<Transcription, OptimError> {
         Self::with_meshes(ocp, &[])
     }
 
@@ -237,7 +234,7 @@ impl Transcription {
     pub fn with_meshes(
         ocp: &Ocp,
         meshes: &[Option<super::mesh::MeshSpec>],
-    ) -> Result<Transcription, OcpError> {
+    ) -> Result<Transcription, OptimError> {
         Self::with_kernels(ocp, meshes, KernelUse::Never)
     }
 
@@ -249,30 +246,29 @@ impl Transcription {
         ocp: &Ocp,
         meshes: &[Option<super::mesh::MeshSpec>],
         kernels: KernelUse,
-    ) -> Result<Transcription, OcpError> {
+    ) -> Result<Transcription, OptimError> {
         if meshes.len() > ocp.phases.len() {
-            return Err(OcpError::InvalidProblem(format!(
-                "{} meshes for {} phases",
-                meshes.len(),
-                ocp.phases.len()
-            )));
+            return Err(OptimError::PhaseCount {
+                what: "meshes",
+                found: meshes.len(),
+                phases: ocp.phases.len(),
+            });
         }
         if ocp.scheme == Scheme::Lg && meshes.iter().any(Option::is_some) {
-            return Err(OcpError::InvalidProblem(
-                "custom meshes need the Radau scheme".into(),
-            ));
+            return Err(OptimError::CustomMeshScheme { scheme: ocp.scheme });
         }
         if ocp.phases.is_empty() {
-            return Err(OcpError::InvalidProblem("no phases".into()));
+            return Err(OptimError::NoPhases);
         }
         let nc = ocp.n_costs;
         match ocp.objective {
             Objective::Cost(j) if j < nc => {}
             Objective::Ratio(j, k) if j < nc && k < nc && j != k => {}
-            o => {
-                return Err(OcpError::InvalidProblem(format!(
-                    "objective {o:?} with {nc} cost states"
-                )));
+            objective => {
+                return Err(OptimError::InvalidObjective {
+                    objective,
+                    costs: nc,
+                });
             }
         }
         let mut n = 0;
@@ -280,18 +276,36 @@ impl Transcription {
         for (pi, ph) in ocp.phases.iter().enumerate() {
             let nd = &ph.node;
             let (nx, na, nu) = (nd.x.len(), nd.a.len(), nd.u.len());
-            let bad = |w: &str| OcpError::InvalidProblem(format!("phase `{}`: {w}", ph.name));
+            let bad = |defect| OptimError::Phase {
+                index: pi,
+                name: ph.name.clone(),
+                defect,
+            };
             if nd.xdot.len() != nx {
-                return Err(bad("xdot must have one entry per state"));
+                return Err(bad(PhaseDefect::XdotLength {
+                    found: nd.xdot.len(),
+                    states: nx,
+                }));
             }
             if nd.costs.len() != nc {
-                return Err(bad("one cost integrand per cost state required"));
+                return Err(bad(PhaseDefect::CostCount {
+                    found: nd.costs.len(),
+                    costs: nc,
+                }));
             }
-            if nd.path.len() != nd.path_bounds.len() {
-                return Err(bad("path bounds length"));
-            }
-            if ph.x_bounds.len() != nx || ph.a_bounds.len() != na || ph.u_bounds.len() != nu {
-                return Err(bad("bounds lengths"));
+            for (which, found, expected) in [
+                ("path_bounds", nd.path_bounds.len(), nd.path.len()),
+                ("x_bounds", ph.x_bounds.len(), nx),
+                ("a_bounds", ph.a_bounds.len(), na),
+                ("u_bounds", ph.u_bounds.len(), nu),
+            ] {
+                if found != expected {
+                    return Err(bad(PhaseDefect::BoundsLength {
+                        which,
+                        found,
+                        expected,
+                    }));
+                }
             }
             let mesh = match meshes.get(pi) {
                 Some(Some(spec)) => Mesh::from_spec(spec)?,
@@ -356,9 +370,10 @@ impl Transcription {
         }
         if !ocp.cost_bounds.is_empty() {
             if ocp.cost_bounds.len() != nc {
-                return Err(OcpError::InvalidProblem(
-                    "cost_bounds needs one entry per cost state".into(),
-                ));
+                return Err(OptimError::CostBounds {
+                    found: ocp.cost_bounds.len(),
+                    costs: nc,
+                });
             }
             for (j, b) in ocp.cost_bounds.iter().enumerate() {
                 xl[c0 + j] = clean_bound(b.0, true);
@@ -404,12 +419,11 @@ impl Transcription {
                 kernels,
             );
             if matches!(kernels, KernelUse::Require(_)) && f.kernel_name().is_none() {
-                return Err(OcpError::InvalidProblem(format!(
-                    "phase {pi} ({}): no emitted node kernel has the structure of its node \
-                     function (the graphs changed since the kernels were emitted, or this \
-                     phase shape is not emitted)",
-                    ph.name
-                )));
+                return Err(OptimError::Phase {
+                    index: pi,
+                    name: ph.name.clone(),
+                    defect: PhaseDefect::NoKernel,
+                });
             }
             let fid = fns.len();
             fns.push(f);
@@ -500,40 +514,37 @@ impl Transcription {
             }
         }
         for pf in &ocp.points {
+            let bad = |defect| OptimError::PointFunction {
+                name: pf.name.clone(),
+                defect,
+            };
             if pf.outputs.len() != pf.bounds.len() {
-                return Err(OcpError::InvalidProblem(format!(
-                    "point function `{}`: bounds length",
-                    pf.name
-                )));
+                return Err(bad(PointDefect::BoundsLength {
+                    outputs: pf.outputs.len(),
+                    bounds: pf.bounds.len(),
+                }));
             }
             let mut map = Vec::new();
             for &(_, r) in &pf.vars {
                 let idx = match r {
                     VarRef::Initial { phase, i } | VarRef::Final { phase, i } => {
-                        let l = layouts.get(phase).filter(|l| i < l.nx).ok_or_else(|| {
-                            OcpError::InvalidProblem(format!(
-                                "point function `{}`: bad reference {r:?}",
-                                pf.name
-                            ))
-                        })?;
+                        let l = layouts
+                            .get(phase)
+                            .filter(|l| i < l.nx)
+                            .ok_or_else(|| bad(PointDefect::BadReference(r)))?;
                         if matches!(r, VarRef::Initial { .. }) {
                             l.x(0, i)
                         } else {
                             l.x(l.mesh.n_state_points() - 1, i)
                         }
                     }
-                    VarRef::Duration(p) => layouts.get(p).map(|l| l.t).ok_or_else(|| {
-                        OcpError::InvalidProblem(format!(
-                            "point function `{}`: bad phase {p}",
-                            pf.name
-                        ))
-                    })?,
+                    VarRef::Duration(p) => layouts
+                        .get(p)
+                        .map(|l| l.t)
+                        .ok_or_else(|| bad(PointDefect::BadReference(r)))?,
                     VarRef::Param(i) => {
                         if i >= ocp.params.len() {
-                            return Err(OcpError::InvalidProblem(format!(
-                                "point function `{}`: bad param {i}",
-                                pf.name
-                            )));
+                            return Err(bad(PointDefect::BadReference(r)));
                         }
                         p0 + i
                     }
@@ -543,10 +554,7 @@ impl Transcription {
             let mut sorted = map.clone();
             sorted.sort_unstable();
             if sorted.windows(2).any(|w| w[0] == w[1]) {
-                return Err(OcpError::InvalidProblem(format!(
-                    "point function `{}` reads a variable twice",
-                    pf.name
-                )));
+                return Err(bad(PointDefect::ReadsTwice));
             }
             let mut graph = pf.graph.clone();
             let locals: Vec<u32> = pf.vars.iter().map(|v| v.0).collect();
@@ -638,13 +646,13 @@ impl Transcription {
     }
 
     /// Replaces the initial point (e.g. for a warm start); length `n`.
-    pub fn set_initial_point(&mut self, x: &[f64]) -> Result<(), OcpError> {
+    pub fn set_initial_point(&mut self, x: &[f64]) -> Result<(), OptimError> {
         if x.len() != self.n {
-            return Err(OcpError::InvalidProblem(format!(
-                "initial point has {} entries, expected {}",
-                x.len(),
-                self.n
-            )));
+            return Err(OptimError::DimensionMismatch {
+                what: "initial point",
+                expected: self.n,
+                found: x.len(),
+            });
         }
         self.x_init.copy_from_slice(x);
         Ok(())

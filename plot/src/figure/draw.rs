@@ -6,7 +6,7 @@ use super::layout::*;
 use super::prepare::{Prepared, tx};
 use super::{Dash, Layout, LineFigure, Scale};
 use crate::PlotError;
-use crate::canvas::{Anchor, Canvas, TextSpec};
+use crate::canvas::{Anchor, Canvas, RectSpec, Stroke, TextSpec};
 
 pub(super) fn draw_all(
     cv: &mut dyn Canvas,
@@ -127,33 +127,27 @@ pub(super) fn draw_panel(
         if a >= c {
             continue;
         }
-        cv.rect(
-            (m.x(a), p.y0),
-            (m.x(c), p.y1),
-            Some(band_fill(b)),
-            None,
-            "band",
-        )?;
+        cv.rect(&RectSpec {
+            p0: (m.x(a), p.y0),
+            p1: (m.x(c), p.y1),
+            fill: Some(band_fill(b)),
+            stroke: None,
+            class: "band",
+        })?;
     }
 
     // Grid: major lines at labelled ticks, light lines at the others.
+    let grid = |labelled: bool| {
+        let c = if labelled { 218 } else { 238 };
+        Stroke::new((c, c, c), 1.0, None)
+    };
     for t in &lay.x_ticks {
         let x = m.x(t.pos);
-        let c = if t.label.is_some() {
-            (218, 218, 218)
-        } else {
-            (238, 238, 238)
-        };
-        cv.polyline(&[(x, p.y0), (x, p.y1)], c, 1.0, None, "grid")?;
+        cv.polyline(&[(x, p.y0), (x, p.y1)], grid(t.label.is_some()), "grid")?;
     }
     for t in &lay.y_ticks {
         let y = m.y(t.pos);
-        let c = if t.label.is_some() {
-            (218, 218, 218)
-        } else {
-            (238, 238, 238)
-        };
-        cv.polyline(&[(p.x0, y), (p.x1, y)], c, 1.0, None, "grid")?;
+        cv.polyline(&[(p.x0, y), (p.x1, y)], grid(t.label.is_some()), "grid")?;
     }
 
     // Horizontal reference lines.
@@ -166,9 +160,7 @@ pub(super) fn draw_panel(
         };
         cv.polyline(
             &[(p.x0, m.y(y)), (p.x1, m.y(y))],
-            hline_colour(h),
-            2.0,
-            Some((14.0, 5.0)),
+            Stroke::new(hline_colour(h), 2.0, Some((14.0, 5.0))),
             "hline",
         )?;
     }
@@ -181,9 +173,7 @@ pub(super) fn draw_panel(
         let top = lab.as_ref().map_or(p.y0, |l| l.bbox.y1);
         cv.polyline(
             &[(m.x(x), p.y1), (m.x(x), top)],
-            (90, 90, 90),
-            1.0,
-            Some((5.0, 4.0)),
+            Stroke::new((90, 90, 90), 1.0, Some((5.0, 4.0))),
             "vmarker",
         )?;
     }
@@ -197,9 +187,7 @@ pub(super) fn draw_panel(
                     let px: Vec<(f64, f64)> = run.iter().map(|q| m.px(*q)).collect();
                     cv.polyline(
                         &px,
-                        s.colour,
-                        s.width as f64,
-                        dash_pattern(s.dash),
+                        Stroke::new(s.colour, s.width as f64, dash_pattern(s.dash)),
                         "series",
                     )?;
                 }
@@ -216,13 +204,13 @@ pub(super) fn draw_panel(
     }
 
     // Frame, ticks and axis descriptions.
-    cv.rect(
-        (p.x0, p.y0),
-        (p.x1, p.y1),
-        None,
-        Some((60, 60, 60)),
-        "frame",
-    )?;
+    cv.rect(&RectSpec {
+        p0: (p.x0, p.y0),
+        p1: (p.x1, p.y1),
+        fill: None,
+        stroke: Some((60, 60, 60)),
+        class: "frame",
+    })?;
     cv.meta(&format!(
         "<g class=\"axes\" data-plot=\"{} {} {} {}\" data-xr=\"{:e} {:e}\" data-yr=\"{:e} {:e}\" \
          data-xscale=\"{}\" data-yscale=\"{}\"/>",
@@ -242,9 +230,7 @@ pub(super) fn draw_panel(
         let len = if t.label.is_some() { 6.0 } else { 3.0 };
         cv.polyline(
             &[(x, p.y1), (x, p.y1 + len)],
-            (60, 60, 60),
-            1.0,
-            None,
+            Stroke::new((60, 60, 60), 1.0, None),
             "tick",
         )?;
         if let Some(l) = &t.label {
@@ -263,9 +249,7 @@ pub(super) fn draw_panel(
         let len = if t.label.is_some() { 6.0 } else { 3.0 };
         cv.polyline(
             &[(p.x0 - len, y), (p.x0, y)],
-            (60, 60, 60),
-            1.0,
-            None,
+            Stroke::new((60, 60, 60), 1.0, None),
             "tick",
         )?;
         if let Some(l) = &t.label {
@@ -305,13 +289,13 @@ pub(super) fn draw_panel(
     for l in lay.marker_labels.iter().flatten() {
         // On white, so that the dashed line of a neighbouring marker does not cross the text.
         let b = l.bbox.inflate(1.0);
-        cv.rect(
-            (b.x0, b.y0),
-            (b.x1, b.y1),
-            Some(((255, 255, 255), 1.0)),
-            None,
-            "label-bg",
-        )?;
+        cv.rect(&RectSpec {
+            p0: (b.x0, b.y0),
+            p1: (b.x1, b.y1),
+            fill: Some(((255, 255, 255), 1.0)),
+            stroke: None,
+            class: "label-bg",
+        })?;
         cv.text(&TextSpec {
             text: &l.text,
             x: l.x,
@@ -340,13 +324,13 @@ pub(super) fn draw_panel(
 
     // Legend last, above everything it may touch.
     if let Some((b, entries)) = &lay.legend {
-        cv.rect(
-            (b.x0, b.y0),
-            (b.x1, b.y1),
-            Some(((255, 255, 255), 0.9)),
-            Some((160, 160, 160)),
-            "legend-box",
-        )?;
+        cv.rect(&RectSpec {
+            p0: (b.x0, b.y0),
+            p1: (b.x1, b.y1),
+            fill: Some(((255, 255, 255), 0.9)),
+            stroke: Some((160, 160, 160)),
+            class: "legend-box",
+        })?;
         for (i, (label, sample)) in entries.iter().enumerate() {
             let y = b.y0 + 5.0 + (i as f64 + 0.5) * LEGEND_ROW;
             let (x0, x1) = (b.x0 + 8.0, b.x0 + 34.0);
@@ -357,19 +341,27 @@ pub(super) fn draw_panel(
                     dash,
                     marker,
                 } => {
-                    cv.polyline(&[(x0, y), (x1, y)], colour, width, dash, "legend-sample")?;
+                    cv.polyline(
+                        &[(x0, y), (x1, y)],
+                        Stroke {
+                            colour,
+                            width,
+                            dash,
+                        },
+                        "legend-sample",
+                    )?;
                     if marker {
                         cv.circle((0.5 * (x0 + x1), y), 4.0, colour, "legend-sample")?;
                     }
                 }
                 Sample::Marker(c) => cv.circle((0.5 * (x0 + x1), y), 4.0, c, "legend-sample")?,
-                Sample::Fill(c, o) => cv.rect(
-                    (x0, y - 6.0),
-                    (x1, y + 6.0),
-                    Some((c, o)),
-                    None,
-                    "legend-sample",
-                )?,
+                Sample::Fill(c, o) => cv.rect(&RectSpec {
+                    p0: (x0, y - 6.0),
+                    p1: (x1, y + 6.0),
+                    fill: Some((c, o)),
+                    stroke: None,
+                    class: "legend-sample",
+                })?,
             }
             cv.text(&TextSpec {
                 text: label,

@@ -36,6 +36,7 @@ mod tests;
 
 use crate::canvas::{PngCanvas, SvgCanvas};
 use crate::{PlotError, ensure_font};
+use bf_output::FileError;
 use draw::draw_all;
 use plotters::prelude::*;
 use prepare::{prepare, tx};
@@ -360,10 +361,8 @@ fn render_impl(
     let svg_path = with_ext(stem, "svg");
     let png_path = with_ext(stem, "png");
     if let Some(dir) = svg_path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|source| PlotError::Io {
-            path: dir.into(),
-            source,
-        })?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| FileError::new("cannot create directory", dir, e))?;
     }
 
     let mut svg = SvgCanvas::new(size);
@@ -385,10 +384,8 @@ fn render_impl(
         root.present().map_err(de)
     })();
     match res {
-        Ok(()) => std::fs::rename(&tmp, &png_path).map_err(|source| PlotError::Io {
-            path: png_path.clone(),
-            source,
-        })?,
+        Ok(()) => std::fs::rename(&tmp, &png_path)
+            .map_err(|e| FileError::new("cannot rename the finished bitmap onto", &png_path, e))?,
         Err(e) => {
             let _ = std::fs::remove_file(&tmp);
             return Err(e);
@@ -429,8 +426,5 @@ fn tmp_sibling(path: &Path) -> PathBuf {
 /// Writes `bytes` to `path` via a uniquely named temporary sibling and a rename, so readers
 /// never see a partially written file (the workspace's one helper, `bf_output::replace_file`).
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), PlotError> {
-    bf_output::replace_file(path, bytes).map_err(|source| PlotError::Io {
-        path: path.into(),
-        source,
-    })
+    bf_output::replace_file(path, bytes).map_err(|e| FileError::new("cannot write", path, e).into())
 }

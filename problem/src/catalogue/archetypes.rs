@@ -7,10 +7,11 @@
 
 use bf_codegen::Scene;
 use bf_codegen::graph::Graph;
-use bf_optim::ocp::{Objective, OcpError, Param, PointFunction, Scheme, VarRef};
+use bf_optim::ocp::{Objective, Param, PointFunction, Scheme, VarRef};
 
 use super::guess::{PhaseDef, Q_GUESS};
 use super::{COT_MAX_PERIOD, Problem, ProblemSettings};
+use crate::ProblemError;
 use crate::node::{CostKind, Mode, Physics};
 use crate::points::{EndQuantity, continuity, end_point, impact};
 
@@ -88,7 +89,7 @@ fn iota_params() -> Vec<Param> {
 }
 
 /// Free–stick–free periodic rotation with the QC or COT ratio objective (Sect. 6.1).
-pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, OcpError> {
+pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
     let (scene, eps, settings) = (c.scene, c.eps, c.settings);
     let qc = c.problem == Problem::PeriodicQc;
     let margin = settings.hdot_margin;
@@ -169,9 +170,10 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, OcpError> {
         None => (plo, phi),
     };
     if !(plo <= phi && plo.is_finite() && phi.is_finite()) {
-        return Err(OcpError::InvalidProblem(format!(
-            "period bounds [{plo}, {phi}] are empty or not finite"
-        )));
+        return Err(ProblemError::PeriodBounds {
+            lower: plo,
+            upper: phi,
+        });
     }
     if !qc || settings.period_bounds.is_some() {
         points.push(duration_sum(
@@ -203,7 +205,7 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, OcpError> {
 }
 
 /// From rest at q⁰ to touching the ball at rest, minimising time plus effort.
-pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, OcpError> {
+pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, ProblemError> {
     let nq = c.nq();
     let phases = vec![PhaseDef {
         mode: Mode::Free,
@@ -237,7 +239,7 @@ pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, OcpError> {
 
 /// Free approach, impact, stick: reorient the ball by 90° (`reorient`), track ω_ref over 3 s
 /// (`rotate-ref`) or spin it as fast as possible over 2 s (`rotate-fast`).
-pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, OcpError> {
+pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
     let phases = vec![
         PhaseDef {
             mode: Mode::Free,
@@ -313,7 +315,7 @@ fn contact_sequence(
     eps: f64,
     tol_h: f64,
     settings: &ProblemSettings,
-) -> Result<Vec<PointFunction>, OcpError> {
+) -> Result<Vec<PointFunction>, ProblemError> {
     let lg = settings.scheme == Scheme::Lg;
     let mut points = vec![
         end_point(

@@ -4,9 +4,10 @@
 //! bisection on h (eq. 4).
 
 use bf_codegen::Scene;
-use bf_optim::ocp::{OcpError, Phase, PhaseGuess};
+use bf_optim::ocp::{Phase, PhaseGuess};
 use serde::{Deserialize, Serialize};
 
+use crate::ProblemError;
 use crate::node::{CostKind, Mode, NodeOptions, Physics, StickLevel, node_function};
 use crate::points::Diagnostics;
 
@@ -50,7 +51,7 @@ pub(crate) fn make_phases(
     q_limits: &[(f64, f64)],
     start: Option<&StartGuess>,
     stick: StickLevel,
-) -> Result<Vec<Phase>, OcpError> {
+) -> Result<Vec<Phase>, ProblemError> {
     let nq = ph.nq;
     if let Some(sg) = start {
         let ok = sg.q.len() == nq
@@ -58,11 +59,11 @@ pub(crate) fn make_phases(
             && sg.q.iter().all(|v| v.is_finite())
             && sg.durations.iter().all(|v| v.is_finite() && *v > 0.0);
         if !ok {
-            return Err(OcpError::InvalidProblem(format!(
-                "start guess needs {nq} finite joint angles and {} positive durations, got {:?}",
-                defs.len(),
-                sg
-            )));
+            return Err(ProblemError::StartGuess {
+                joints: nq,
+                phases: defs.len(),
+                guess: sg.clone(),
+            });
         }
     }
     let mut out = Vec::new();
@@ -79,7 +80,7 @@ pub(crate) fn make_phases(
             },
             stick,
         )
-        .map_err(|e| OcpError::Model(e.to_string()))?;
+        .map_err(ProblemError::model(&scene.name))?;
         let mut x_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); 2 * nq + 3];
         x_bounds[..nq].copy_from_slice(q_limits);
         let na = node.a.len();
@@ -139,7 +140,7 @@ pub(crate) fn contact_guess(
     eps: f64,
     phases: &mut [Phase],
     modes: &[Mode],
-) -> Result<(), OcpError> {
+) -> Result<(), ProblemError> {
     let diag = Diagnostics::new(scene, eps)?;
     let nq = scene.links.len();
     let qc = contact_configuration(&diag, nq);

@@ -48,7 +48,9 @@ use std::str::FromStr;
 
 use bf_codegen::Scene;
 use bf_optim::ipm::Settings;
-use bf_optim::ocp::{KernelUse, MeshSpec, Ocp, OcpError, Scheme, Transcription};
+use bf_optim::ocp::{KernelUse, MeshSpec, Ocp, Scheme, Transcription};
+
+use crate::ProblemError;
 use serde::{Deserialize, Serialize};
 
 use crate::node::{Mode, Physics, StickLevel};
@@ -75,11 +77,6 @@ pub enum Problem {
     /// Spin the ball as fast as possible over a fixed horizon (free–stick).
     RotateFast,
 }
-
-/// A name that is not a [`Problem`].
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown problem `{0}`; known problems: {names}", names = Problem::names())]
-pub struct UnknownProblem(pub String);
 
 impl Problem {
     /// Every problem, in catalogue order.
@@ -142,13 +139,15 @@ impl fmt::Display for Problem {
 }
 
 impl FromStr for Problem {
-    type Err = UnknownProblem;
+    type Err = ProblemError;
 
-    fn from_str(s: &str) -> Result<Problem, UnknownProblem> {
+    fn from_str(s: &str) -> Result<Problem, ProblemError> {
         Problem::ALL
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| UnknownProblem(s.to_string()))
+            .ok_or_else(|| ProblemError::UnknownProblem {
+                name: s.to_string(),
+            })
     }
 }
 
@@ -277,10 +276,14 @@ pub struct BuiltProblem {
 }
 
 /// The scene `name` from `generated`.
-fn scene(generated: &Generated, name: &str) -> Result<Scene, OcpError> {
-    let text = (generated.scene_toml)(name)
-        .ok_or_else(|| OcpError::Model(format!("unknown scene {name}")))?;
-    Scene::from_toml_str(text, name).map_err(|e| OcpError::Model(e.to_string()))
+fn scene(generated: &Generated, name: &str) -> Result<Scene, ProblemError> {
+    let text = (generated.scene_toml)(name).ok_or_else(|| ProblemError::UnknownScene {
+        scene: name.to_string(),
+    })?;
+    Scene::from_toml_str(text, name).map_err(|source| ProblemError::Scene {
+        scene: name.to_string(),
+        source,
+    })
 }
 
 /// Builds `problem` with `settings`, on the scenes and node kernels of `generated`.
@@ -291,14 +294,14 @@ pub fn build(
     problem: Problem,
     settings: &ProblemSettings,
     generated: &Generated,
-) -> Result<BuiltProblem, OcpError> {
+) -> Result<BuiltProblem, ProblemError> {
     std::thread::scope(|s| {
         std::thread::Builder::new()
             .stack_size(256 << 20)
             .spawn_scoped(s, || build_inner(problem, settings, generated))
-            .map_err(|e| OcpError::Model(format!("cannot spawn the build thread: {e}")))?
+            .map_err(ProblemError::BuildThread)?
             .join()
-            .map_err(|_| OcpError::Model("the problem build panicked".into()))?
+            .map_err(|_| ProblemError::BuildPanicked)?
     })
 }
 
@@ -306,7 +309,7 @@ fn build_inner(
     problem: Problem,
     settings: &ProblemSettings,
     generated: &Generated,
-) -> Result<BuiltProblem, OcpError> {
+) -> Result<BuiltProblem, ProblemError> {
     let scene = scene(generated, problem.scene())?;
     let ph = crate::points::physics(&scene)?;
     let eps = settings
@@ -314,15 +317,18 @@ fn build_inner(
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
         .unwrap_or(0.01);
     if !(eps.is_finite() && eps > 0.0) {
-        return Err(OcpError::InvalidProblem(format!(
-            "epsilon must be positive, got {eps}"
-        )));
+        return Err(ProblemError::InvalidSetting {
+            name: "epsilon",
+            value: eps,
+            expected: "positive",
+        });
     }
     if !(settings.effort_scale.is_finite() && settings.effort_scale > 0.0) {
-        return Err(OcpError::InvalidProblem(format!(
-            "effort_scale must be positive, got {}",
-            settings.effort_scale
-        )));
+        return Err(ProblemError::InvalidSetting {
+            name: "effort_scale",
+            value: settings.effort_scale,
+            expected: "positive",
+        });
     }
     let ctx = archetypes::Context {
         problem,

@@ -9,9 +9,10 @@ pub mod records;
 
 use bf_optim::ipm::{Counters, Nlp, Status, Timing, WarmStart};
 use bf_optim::ocp::mesh::values_at;
-use bf_optim::ocp::{OcpError, PhaseTrajectory, Scheme, extract};
+use bf_optim::ocp::{PhaseTrajectory, Scheme, extract};
 use serde::{Deserialize, Serialize};
 
+use crate::ProblemError;
 use crate::catalogue::BuiltProblem;
 use crate::node::Mode;
 use crate::points::Diagnostics;
@@ -186,7 +187,11 @@ fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense
 }
 
 /// Builds the [`OcpSolution`] of `p` at the NLP point `x`.
-pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSolution, OcpError> {
+pub fn solution_at(
+    p: &BuiltProblem,
+    x: &[f64],
+    status: Status,
+) -> Result<OcpSolution, ProblemError> {
     let diag = Diagnostics::new(&p.scene, p.epsilon)?;
     let traj = extract(&p.nlp, x);
     let nq = p.physics.nq;
@@ -240,13 +245,12 @@ pub fn solution_at(p: &BuiltProblem, x: &[f64], status: Status) -> Result<OcpSol
 
 /// Sets the initial point of `p` to `prev` interpolated exactly (element polynomials) onto
 /// `p`'s mesh: states, algebraic variables, controls, durations, parameters and cost states.
-pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<(), OcpError> {
+pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<(), ProblemError> {
     if prev.raw.len() != p.nlp.phases.len() {
-        return Err(OcpError::InvalidProblem(format!(
-            "warm start has {} phases, the problem {}",
-            prev.raw.len(),
-            p.nlp.phases.len()
-        )));
+        return Err(ProblemError::WarmStartPhases {
+            found: prev.raw.len(),
+            expected: p.nlp.phases.len(),
+        });
     }
     let mut x = p.nlp.initial().to_vec();
     for (l, raw) in p.nlp.phases.iter().zip(&prev.raw) {
@@ -279,5 +283,5 @@ pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<()
             x[p.nlp.c0 + j] = v;
         }
     }
-    p.nlp.set_initial_point(&x)
+    Ok(p.nlp.set_initial_point(&x)?)
 }

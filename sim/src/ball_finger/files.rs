@@ -70,10 +70,8 @@ impl RunReport {
         out: &SimOutput<Mode>,
         error: Option<&str>,
     ) -> Result<(), SimError> {
-        std::fs::create_dir_all(dir).map_err(|source| SimError::Io {
-            path: dir.to_path_buf(),
-            source,
-        })?;
+        std::fs::create_dir_all(dir)
+            .map_err(|e| bf_output::FileError::new("cannot create directory", dir, e))?;
         let tr = &out.trajectory;
         // Trajectory CSV.
         let mut w = csv::Writer::from_writer(Vec::new());

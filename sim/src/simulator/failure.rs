@@ -33,9 +33,11 @@ impl<M: Debug> std::fmt::Display for SimFailure<M> {
     }
 }
 
+/// The message already states [`SimFailure::error`], so the chain continues with that error's
+/// own source (an error chain would otherwise print it twice).
 impl<M: Debug> std::error::Error for SimFailure<M> {
     fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
-        Some(&self.error)
+        std::error::Error::source(&self.error)
     }
 }
 

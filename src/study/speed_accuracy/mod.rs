@@ -19,7 +19,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::study as problems;
-use anyhow::{Context, Result, anyhow};
+use anyhow::{Context, Result};
 use bf_optim::ocp::problem::Scheme;
 use bf_plot::paper::{WorkPrecisionSet, fig_work_precision_sets};
 use bf_problem::{Problem, ProblemSettings};
@@ -208,9 +208,8 @@ fn solve_qc(
         ..ProblemSettings::default()
     };
     let start = Instant::now();
-    let p = problems::build(Problem::PeriodicQc, &settings)
-        .map_err(|e| anyhow!("building periodic-qc: {e}"))?;
-    let sol = problems::solve(&p, None).map_err(|e| anyhow!("solving periodic-qc: {e}"))?;
+    let p = problems::build(Problem::PeriodicQc, &settings).context("building periodic-qc")?;
+    let sol = problems::solve(&p, None).context("solving periodic-qc")?;
     let seconds = start.elapsed().as_secs_f64();
     let ok = sol.status.is_success() && sol.objective.is_finite();
     Ok(Solved {

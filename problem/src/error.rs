@@ -1,0 +1,103 @@
+//! [`ProblemError`]: the one error enum of bf-problem. Variants carry the scene, setting or
+//! value concerned; an error of a layer below (a scene file, the symbolic model, the
+//! collocation layer) is the typed [`source`](std::error::Error::source), and a message never
+//! repeats its source's text.
+
+use bf_codegen::CodegenError;
+use bf_codegen::spec::SpecError;
+use bf_optim::OptimError;
+
+use crate::catalogue::{Problem, StartGuess};
+
+/// Everything that can go wrong while building a problem or its solution record.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemError {
+    /// A name that is not a [`Problem`].
+    #[error("unknown problem `{name}`; known problems: {names}", names = Problem::names())]
+    UnknownProblem {
+        /// The name given.
+        name: String,
+    },
+    /// The scene a problem is posed on is not among the generated scenes.
+    #[error("unknown scene `{scene}`")]
+    UnknownScene {
+        /// The scene name.
+        scene: String,
+    },
+    /// The scene's text does not load.
+    #[error("scene `{scene}` does not load")]
+    Scene {
+        /// The scene name.
+        scene: String,
+        /// Why.
+        #[source]
+        source: SpecError,
+    },
+    /// The symbolic model of the scene (physics, node functions, contact) cannot be built.
+    #[error("cannot build the model of scene `{scene}`")]
+    Model {
+        /// The scene name.
+        scene: String,
+        /// Why.
+        #[source]
+        source: CodegenError,
+    },
+    /// A numeric problem setting is outside its valid range.
+    #[error("{name} must be {expected}, got {value}")]
+    InvalidSetting {
+        /// The setting (`epsilon`, `effort_scale`).
+        name: &'static str,
+        /// Its value.
+        value: f64,
+        /// The valid range, as the message says it (`positive`).
+        expected: &'static str,
+    },
+    /// The period bounds (problem defaults intersected with the setting) are empty.
+    #[error("period bounds [{lower}, {upper}] are empty or not finite")]
+    PeriodBounds {
+        /// Lower bound, s.
+        lower: f64,
+        /// Upper bound, s.
+        upper: f64,
+    },
+    /// A start guess does not fit the problem.
+    #[error(
+        "start guess needs {joints} finite joint angles and {phases} positive durations, got \
+         {guess:?}"
+    )]
+    StartGuess {
+        /// Joints of the scene.
+        joints: usize,
+        /// Phases of the problem.
+        phases: usize,
+        /// The guess given.
+        guess: StartGuess,
+    },
+    /// A warm start from a solution with a different number of phases.
+    #[error("warm start has {found} phases, the problem {expected}")]
+    WarmStartPhases {
+        /// Phases of the warm-start solution.
+        found: usize,
+        /// Phases of the problem.
+        expected: usize,
+    },
+    /// The thread that builds a problem could not be started.
+    #[error("cannot spawn the problem build thread")]
+    BuildThread(#[source] std::io::Error),
+    /// Building the problem panicked (a bug, reported instead of aborting the caller).
+    #[error("the problem build panicked")]
+    BuildPanicked,
+    /// The collocation layer rejected the problem (or its solver failed).
+    #[error(transparent)]
+    Optim(#[from] OptimError),
+}
+
+impl ProblemError {
+    /// [`ProblemError::Model`] of the scene `scene`, for `map_err`.
+    pub(crate) fn model(scene: &str) -> impl FnOnce(CodegenError) -> ProblemError + '_ {
+        move |source| ProblemError::Model {
+            scene: scene.to_string(),
+            source,
+        }
+    }
+}
