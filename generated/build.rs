@@ -2,6 +2,9 @@
 //! when the text changed) plus `$OUT_DIR/modules.rs`, which declares one module per scene and
 //! the registry `SCENES` of every scene's name and TOML text.
 //!
+//! Every scene module holds the kernels its `kernels` list names plus the inverse-dynamics
+//! family (`inverse_dynamics`, its derivatives, `forward_dynamics`, `regressor`).
+//!
 //! It also writes `$OUT_DIR/ocp_kernels.rs`: the optimal-control node kernels of the scenes
 //! with a ball and a contact (`bf_problem::kernels::emit_node_kernels`, included as `ocp`).
 //!
@@ -106,7 +109,8 @@ fn main() -> Result<()> {
                 scene.name
             );
         }
-        let generated = bf_codegen::generate(&scene, &text)
+        let full = bf_codegen::kernels::with_robot_kernels(&scene);
+        let generated = bf_codegen::generate(&full, &text)
             .map_err(|e| anyhow!("cannot generate kernels for {shown}: {e}"))?;
         let name = scene.name.clone();
         write_if_changed(&out.join(format!("{name}.rs")), &generated.code)?;
@@ -120,7 +124,7 @@ fn main() -> Result<()> {
              #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens)]\n\
              pub mod {name} {{\n    include!(concat!(env!(\"OUT_DIR\"), \"/{name}.rs\"));\n}}\n",
             scene.links.len(),
-            scene.kernels.join(", "),
+            full.kernels.join(", "),
         ));
         if name == "paper" {
             for (vscene, opts, what) in variants(&scene) {

@@ -59,6 +59,8 @@ pub enum Command {
     Generate(GenerateArgs),
     /// Evaluate every kernel of a scene at one state and print one JSON object.
     Eval(EvalArgs),
+    /// Time every kernel of a scene, compiled and interpreted, over random states.
+    Bench(BenchArgs),
     /// Simulate the hybrid ball-and-finger model (paper Sect. 3, Fig. 3).
     Simulate(Box<SimulateArgs>),
     /// Solve a multiphase optimal-control problem (paper Sect. 4).
@@ -80,6 +82,21 @@ pub struct GenerateArgs {
     /// Print op counts and generation time per kernel (to stderr when the code goes to stdout).
     #[arg(long)]
     pub report: bool,
+    /// Float type of the emitted kernels: arguments, constants and arithmetic.
+    #[arg(long, value_enum, default_value_t = FloatArg::F64)]
+    pub float: FloatArg,
+    /// Emit every `a*b ± c` as a fused multiply-add (`mul_add`, one rounding instead of two).
+    #[arg(long)]
+    pub fma: bool,
+}
+
+/// `--float` of `generate`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FloatArg {
+    /// Double precision (the default; batched fast sine–cosine).
+    F64,
+    /// Single precision (standard-library sine–cosine).
+    F32,
 }
 
 /// Arguments of `eval`.
@@ -100,6 +117,32 @@ pub struct EvalArgs {
     /// ε of the smooth saturation (eq. 59); default: the scene's `contact.smooth_eps`.
     #[arg(long, allow_hyphen_values = true)]
     pub eps: Option<f64>,
+    /// Joint accelerations q̈ for the inverse-dynamics kernels, comma-separated (default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub qdd: Option<String>,
+    /// Joint torques τ for `forward_dynamics`, comma-separated (default 0).
+    #[arg(long, allow_hyphen_values = true)]
+    pub tau: Option<String>,
+}
+
+/// Arguments of `bench`.
+#[derive(Debug, Args)]
+pub struct BenchArgs {
+    /// Scene file (TOML). Built-in scenes are timed compiled and interpreted, any other file
+    /// interpreted.
+    pub scene: PathBuf,
+    /// Total time budget (s), split over the kernels.
+    #[arg(long, default_value_t = 3.0)]
+    pub time: f64,
+    /// Number of random states cycled through.
+    #[arg(long, default_value_t = 256)]
+    pub states: usize,
+    /// Seed of the random states.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `simulate`.

@@ -16,6 +16,7 @@ fn main() {
     let result = match cli.command {
         Command::Generate(a) => commands::generate::run(&a),
         Command::Eval(a) => commands::eval::run(&a),
+        Command::Bench(a) => commands::bench::run(&a),
         Command::Simulate(a) => commands::simulate::run(&a),
         Command::Optimize(a) => commands::optimize::run(&a),
         Command::Paper(a) => commands::paper::run(&a),

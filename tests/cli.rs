@@ -56,6 +56,13 @@ fn flatten(v: &serde_json::Value, out: &mut Vec<f64>) {
     }
 }
 
+/// All numbers of a JSON object of outputs, in key order.
+fn flatten_obj(v: &serde_json::Value, out: &mut Vec<f64>) {
+    for x in v.as_object().unwrap().values() {
+        flatten(x, out);
+    }
+}
+
 #[test]
 fn eval_compiled_and_interpreted_agree_on_every_key() {
     let (compiled, compiled_text) = eval_json("scenes/paper.toml");
@@ -93,7 +100,30 @@ fn eval_compiled_and_interpreted_agree_on_every_key() {
         positions.windows(2).all(|w| w[0] < w[1]),
         "key order {positions:?}"
     );
-    assert_eq!(compiled.as_object().unwrap().len(), keys.len());
+    // …then "kernels": every kernel of the compiled module, in emission order.
+    assert_eq!(compiled.as_object().unwrap().len(), keys.len() + 1);
+    let kc = compiled["kernels"].as_object().unwrap();
+    let ki = interpreted["kernels"].as_object().unwrap();
+    let order: Vec<usize> = bf_generated::paper::KERNELS
+        .iter()
+        .map(|k| compiled_text.find(&format!("\"{k}\":{{")).expect(k))
+        .collect();
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "kernel order");
+    assert_eq!(kc.len(), bf_generated::paper::KERNELS.len());
+    for k in bf_generated::paper::KERNELS {
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        flatten_obj(&kc[*k], &mut a);
+        flatten_obj(&ki[*k], &mut b);
+        assert_eq!(a.len(), b.len(), "{k}");
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() <= 1e-12 * (1.0 + x.abs()), "{k}: {x} vs {y}");
+        }
+    }
+    // The kernel outputs agree with the named quantities (two output paths of one module).
+    let (mut m, mut mk) = (Vec::new(), Vec::new());
+    flatten(&compiled["M"], &mut m);
+    flatten(&compiled["kernels"]["mass_matrix"]["m"], &mut mk);
+    assert_eq!(m, mk);
     for k in keys {
         let (mut a, mut b) = (Vec::new(), Vec::new());
         flatten(&compiled[k], &mut a);
@@ -142,6 +172,45 @@ fn generate_is_deterministic_and_writes_atomically() {
     let leftovers = std::fs::read_dir(&dir).unwrap().count();
     assert_eq!(leftovers, 1, "no temporary files left behind");
     std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn generate_emits_the_robot_kernels_in_every_variant() {
+    use bf_codegen::{EmitOptions, FloatTy, Scene, generate_with, kernels::with_robot_kernels};
+    let text = std::fs::read_to_string(root().join("scenes/puma560.toml")).unwrap();
+    let scene = Scene::from_toml_str(&text, "scenes/puma560.toml").unwrap();
+    let full = with_robot_kernels(&scene);
+    for (flags, float, fma) in [
+        (vec![], FloatTy::F64, false),
+        (vec!["--float", "f32"], FloatTy::F32, false),
+        (vec!["--fma"], FloatTy::F64, true),
+        (vec!["--float", "f32", "--fma"], FloatTy::F32, true),
+    ] {
+        let mut args = vec!["generate", "scenes/puma560.toml"];
+        args.extend(&flags);
+        let out = run(&args);
+        assert!(out.status.success(), "{flags:?}");
+        let want = generate_with(&full, &text, &EmitOptions { float, fma })
+            .unwrap()
+            .code;
+        assert!(
+            out.stdout == want.as_bytes(),
+            "{flags:?}: not the generator's output"
+        );
+        let code = String::from_utf8(out.stdout).unwrap();
+        let ty = if float == FloatTy::F32 { "f32" } else { "f64" };
+        assert!(
+            code.contains(&format!("pub fn inverse_dynamics(\n    q: &[{ty}; NQ]"))
+                || code.contains(&format!("pub fn inverse_dynamics(q: &[{ty}; NQ]")),
+            "{flags:?}"
+        );
+        assert!(code.contains("pub fn regressor("), "{flags:?}");
+        assert_eq!(code.contains(&format!("{ty}::mul_add(")), fma, "{flags:?}");
+    }
+    assert_clean_failure(
+        &run(&["generate", "scenes/puma560.toml", "--float", "f16"]),
+        &["--float", "f16"],
+    );
 }
 
 #[test]

@@ -147,9 +147,15 @@ fn var_tokens(layout: &Layout, v: u32) -> TokenStream {
         quote!(omega[#i])
     } else if v == 2 * nq + 3 {
         quote!(eps)
-    } else {
+    } else if v < layout.n_vars() {
         let i = lit(v - 2 * nq - 4);
         quote!(p[#i])
+    } else if v < layout.n_vars() + nq {
+        let i = lit(v - layout.n_vars());
+        quote!(qdd[#i])
+    } else {
+        let i = lit(v - layout.n_vars() - nq);
+        quote!(tau[#i])
     }
 }
 
@@ -192,6 +198,8 @@ pub fn emit_kernel_with(
             Arg::Qd => quote!(qd: &[#ft; NQ]),
             Arg::Omega => quote!(omega: &[#ft; 3]),
             Arg::Eps => quote!(eps: #ft),
+            Arg::Qdd => quote!(qdd: &[#ft; NQ]),
+            Arg::Tau => quote!(tau: &[#ft; NQ]),
             Arg::P => quote!(p: &[#ft; NP]),
         });
     }
@@ -243,6 +251,8 @@ pub fn emit_kernel_with(
                 Arg::Qd => " * `qd`: joint velocities (rad/s)",
                 Arg::Omega => " * `omega`: ball angular velocity, world axes (rad/s)",
                 Arg::Eps => " * `eps`: smoothing width ε of |x| ≈ √(x² + ε²) (m)",
+                Arg::Qdd => " * `qdd`: joint accelerations (rad/s²; m/s² for prismatic joints)",
+                Arg::Tau => " * `tau`: joint torques (N m; N for prismatic joints)",
                 Arg::P => {
                     " * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)"
                 }
@@ -552,6 +562,7 @@ fn eval_flat_arm(k: &KernelDef) -> TokenStream {
             Arg::Qd => quote!(qd),
             Arg::Omega => quote!(omega),
             Arg::Eps => quote!(eps),
+            Arg::Qdd | Arg::Tau => quote!(u),
             Arg::P => quote!(p),
         })
         .collect();
@@ -587,6 +598,87 @@ fn eval_flat_arm(k: &KernelDef) -> TokenStream {
             #(#decls)*
             #fname(#(#args),*);
             #(#pushes)*
+        }
+    }
+}
+
+/// Tokens of the match arm of kernel `k` (index `idx`) in `eval_index_into`: outputs on the
+/// stack, copied into `out` (no allocation).
+fn eval_into_arm(idx: usize, k: &KernelDef, nq: usize) -> TokenStream {
+    let fname = Ident::new(&k.name, Span::call_site());
+    let idx = Literal::usize_unsuffixed(idx);
+    let total: usize = k.outputs.iter().map(|o| o.ids.len()).sum();
+    let total_l = Literal::usize_unsuffixed(total);
+    let mut decls = Vec::new();
+    let mut copies = Vec::new();
+    let mut args: Vec<TokenStream> = k
+        .inputs
+        .iter()
+        .map(|a| match a {
+            Arg::Q => quote!(q),
+            Arg::Qd => quote!(qd),
+            Arg::Omega => quote!(omega),
+            Arg::Eps => quote!(eps),
+            Arg::Qdd | Arg::Tau => quote!(u),
+            Arg::P => quote!(p),
+        })
+        .collect();
+    let mut off = 0usize;
+    let copy = |x: TokenStream, dims: &[Dim], off: &mut usize| -> TokenStream {
+        let len: usize = dims.iter().map(|&d| dim_value(d, nq)).product();
+        let (a, b) = (
+            Literal::usize_unsuffixed(*off),
+            Literal::usize_unsuffixed(*off + len),
+        );
+        *off += len;
+        match dims.len() {
+            0 => quote!(out[#a] = #x;),
+            1 => quote!(out[#a..#b].copy_from_slice(&#x);),
+            r => {
+                let flats = (1..r).map(|_| quote!(.flatten()));
+                quote! {
+                    for (d, s) in out[#a..#b].iter_mut().zip(#x.iter() #(#flats)*) {
+                        *d = *s;
+                    }
+                }
+            }
+        }
+    };
+    for o in &k.outputs {
+        let id = format_ident!("out_{}", o.name);
+        match &o.kind {
+            OutKind::Scalar => {
+                decls.push(quote!(let mut #id = 0.0;));
+                copies.push(copy(quote!(#id), &[], &mut off));
+            }
+            OutKind::Array(dims) => {
+                let mut init = quote!(0.0);
+                for &d in dims.iter().rev() {
+                    let dt = dim_tokens(d);
+                    init = quote!([#init; #dt]);
+                }
+                decls.push(quote!(let mut #id = #init;));
+                copies.push(copy(quote!(#id), dims, &mut off));
+            }
+            OutKind::Contact => {
+                decls.push(quote!(let mut #id = Contact::default();));
+                for (field, dims, _) in CONTACT_FIELDS {
+                    let f = Ident::new(field, Span::call_site());
+                    copies.push(copy(quote!(#id.#f), dims, &mut off));
+                }
+            }
+        }
+        args.push(quote!(&mut #id));
+    }
+    quote! {
+        #idx => {
+            if out.len() < #total_l {
+                return None;
+            }
+            #(#decls)*
+            #fname(#(#args),*);
+            #(#copies)*
+            Some(#total_l)
         }
     }
 }
@@ -634,6 +726,10 @@ pub fn emit_file_with(
     let ft = opts.float.tokens();
     let kernel_names: Vec<&str> = defs.iter().map(|d| d.name.as_str()).collect();
     let arms = defs.iter().map(eval_flat_arm);
+    let into_arms = defs
+        .iter()
+        .enumerate()
+        .map(|(i, d)| eval_into_arm(i, d, nq));
     let nq_l = Literal::usize_unsuffixed(nq);
     let np_l = Literal::usize_unsuffixed(params.len());
     let pnames = params.iter().map(|p| p.0.as_str());
@@ -682,8 +778,8 @@ pub fn emit_file_with(
         #(#kernel_tokens)*
         /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
         /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.
+        /// Kernels taking `qdd` or `tau` get zeros (see `eval_flat_u`).
         /// For tests and the CLI: unlike the kernels, this allocates.
-        #[allow(unused_variables)]
         pub fn eval_flat(
             name: &str,
             q: &[#ft; NQ],
@@ -692,12 +788,45 @@ pub fn emit_file_with(
             eps: #ft,
             p: &[#ft; NP],
         ) -> Option<Vec<#ft>> {
+            eval_flat_u(name, q, qd, omega, eps, &[0.0; NQ], p)
+        }
+        /// As `eval_flat`, with `u` passed as the `qdd` (inverse dynamics, its derivatives and
+        /// the regressor) or `tau` (forward dynamics) argument of the kernels that take one.
+        #[allow(unused_variables)]
+        pub fn eval_flat_u(
+            name: &str,
+            q: &[#ft; NQ],
+            qd: &[#ft; NQ],
+            omega: &[#ft; 3],
+            eps: #ft,
+            u: &[#ft; NQ],
+            p: &[#ft; NP],
+        ) -> Option<Vec<#ft>> {
             let mut v = Vec::new();
             match name {
                 #(#arms)*
                 _ => return None,
             }
             Some(v)
+        }
+        /// Calls kernel `KERNELS[k]` with outputs on the stack and copies them, flattened as by
+        /// `eval_flat_u`, into the front of `out`; returns their number, or `None` if `k` is out
+        /// of range or `out` too short. Does not allocate (for benchmarks).
+        #[allow(unused_variables, clippy::too_many_arguments)]
+        pub fn eval_index_into(
+            k: usize,
+            q: &[#ft; NQ],
+            qd: &[#ft; NQ],
+            omega: &[#ft; 3],
+            eps: #ft,
+            u: &[#ft; NQ],
+            p: &[#ft; NP],
+            out: &mut [#ft],
+        ) -> Option<usize> {
+            match k {
+                #(#into_arms)*
+                _ => None,
+            }
         }
     };
     let file: syn::File = syn::parse2(tokens)

@@ -196,3 +196,144 @@ impl Tape {
 pub fn eval<S: Scalar>(g: &Graph, outputs: &[Id], vars: &[S]) -> Vec<S> {
     Tape::new(g, outputs).eval(vars)
 }
+
+/// One output array of a kernel in the layout of the emitted `eval_flat`: name and dimensions
+/// (empty for a scalar). A `Contact` output contributes one entry per field.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct OutputShape {
+    /// Output argument (or `Contact` field) name.
+    pub name: String,
+    /// Dimensions, outermost first.
+    pub dims: Vec<usize>,
+}
+
+impl OutputShape {
+    /// Number of elements.
+    pub fn len(&self) -> usize {
+        self.dims.iter().product()
+    }
+
+    /// Whether the output has no elements.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// A kernel of a scene evaluated at run time: its definition's shape and a compiled tape.
+#[derive(Debug, Clone)]
+pub struct RuntimeKernel {
+    /// Kernel name (as emitted).
+    pub name: String,
+    /// Input arguments, in emitted order.
+    pub inputs: Vec<crate::kernels::Arg>,
+    /// Outputs in `eval_flat` order.
+    pub outputs: Vec<OutputShape>,
+    tape: Tape,
+}
+
+impl RuntimeKernel {
+    /// Evaluates the kernel; `vars` from [`SceneKernels::vars`]. Outputs flattened as the
+    /// emitted `eval_flat_u` returns them.
+    pub fn eval(&self, vars: &[KernelF64]) -> Vec<f64> {
+        self.tape.eval(vars).into_iter().map(|v| v.0).collect()
+    }
+}
+
+/// Every kernel a scene's module holds (its `kernels` list plus
+/// [`crate::kernels::ROBOT_KERNELS`]), interpreted: the run-time counterpart of the compiled
+/// module, with the same f64 operations (sine and cosine of [`KernelF64`]).
+#[derive(Debug, Clone)]
+pub struct SceneKernels {
+    /// Input layout of the scene's graph.
+    pub layout: crate::robot::Layout,
+    /// Runtime parameters (name, default value).
+    pub params: Vec<(String, f64)>,
+    /// The kernels, in emission order.
+    pub kernels: Vec<RuntimeKernel>,
+}
+
+impl SceneKernels {
+    /// Builds the graphs of every kernel of `scene` and compiles their tapes.
+    pub fn new(scene: &crate::Scene) -> Result<Self, crate::CodegenError> {
+        use crate::kernels::{CONTACT_FIELDS, Dim, OutKind};
+        let full = crate::kernels::with_robot_kernels(scene);
+        let mut model = crate::Model::new(&full)?;
+        let nq = model.nq();
+        let dim = |d: &Dim| match d {
+            Dim::Nq => nq,
+            Dim::Lit(n) => *n,
+        };
+        let mut kernels = Vec::new();
+        for k in &full.kernels {
+            let def = crate::kernels::build_kernel(&mut model, k)?;
+            let mut outputs = Vec::new();
+            for o in &def.outputs {
+                match &o.kind {
+                    OutKind::Scalar => outputs.push(OutputShape {
+                        name: o.name.clone(),
+                        dims: Vec::new(),
+                    }),
+                    OutKind::Array(dims) => outputs.push(OutputShape {
+                        name: o.name.clone(),
+                        dims: dims.iter().map(dim).collect(),
+                    }),
+                    OutKind::Contact => {
+                        for (f, dims, _) in CONTACT_FIELDS {
+                            outputs.push(OutputShape {
+                                name: f.to_string(),
+                                dims: dims.iter().map(dim).collect(),
+                            });
+                        }
+                    }
+                }
+            }
+            let ids: Vec<Id> = def.outputs.iter().flat_map(|o| o.ids.clone()).collect();
+            kernels.push(RuntimeKernel {
+                name: def.name.clone(),
+                inputs: def.inputs.clone(),
+                outputs,
+                tape: Tape::new(&model.g, &ids),
+            });
+        }
+        Ok(SceneKernels {
+            layout: model.layout,
+            params: model.params.clone(),
+            kernels,
+        })
+    }
+
+    /// The variable vector of one state: `u` is q̈ for the kernels that take `qdd` and τ for
+    /// those that take `tau`; `p` the runtime parameters (their defaults if `None`).
+    ///
+    /// # Panics
+    /// If a slice has the wrong length (a programming error; the CLI checks user input).
+    pub fn vars(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        omega: [f64; 3],
+        eps: f64,
+        u: &[f64],
+        p: Option<&[f64]>,
+    ) -> Vec<KernelF64> {
+        let l = self.layout;
+        let n = l.nq;
+        assert!(
+            q.len() == n && qd.len() == n && u.len() == n,
+            "state length"
+        );
+        let mut v = vec![0.0; l.n_vars_all()];
+        v[..n].copy_from_slice(q);
+        v[n..2 * n].copy_from_slice(qd);
+        v[2 * n..2 * n + 3].copy_from_slice(&omega);
+        v[2 * n + 3] = eps;
+        for (i, d) in self.params.iter().enumerate() {
+            v[l.param(i) as usize] = p.map_or(d.1, |p| p[i]);
+        }
+        for (i, x) in u.iter().enumerate() {
+            v[l.qdd(i) as usize] = *x;
+            v[l.tau(i) as usize] = *x;
+        }
+        v.into_iter().map(KernelF64).collect()
+    }
+}

@@ -11,6 +11,18 @@ use crate::robot::Model;
 /// parser and the generator can never disagree).
 pub const ALL_KERNELS: &[&str] = crate::spec::KNOWN_KERNELS;
 
+/// `scene` with [`ROBOT_KERNELS`] appended to its `kernels` list (those it does not list
+/// already): the kernel list of the module `bf-generated` and `generate` emit.
+pub fn with_robot_kernels(scene: &crate::Scene) -> crate::Scene {
+    let mut s = scene.clone();
+    for k in ROBOT_KERNELS {
+        if !s.kernels.iter().any(|x| x == k) {
+            s.kernels.push(k.to_string());
+        }
+    }
+    s
+}
+
 /// An input argument of a kernel (emitted in this order; `P` is always last).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Arg {
@@ -22,9 +34,15 @@ pub enum Arg {
     Omega,
     /// `eps: f64`, smooth-saturation ε (m).
     Eps,
+    /// `qdd: &[f64; NQ]`, joint accelerations (rad/s², m/s² for prismatic joints).
+    Qdd,
+    /// `tau: &[f64; NQ]`, joint torques (N m, N for prismatic joints).
+    Tau,
     /// `p: &[f64; NP]`, runtime parameters.
     P,
 }
+
+pub use crate::spec::ROBOT_KERNELS;
 
 /// A dimension of an output array.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -274,6 +292,58 @@ pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenE
                     .into(),
             )
         }
+        "inverse_dynamics" => {
+            let t = model.inverse_dynamics();
+            (
+                vec![Q, Qd, Qdd, P],
+                vec![arr("tau", &[Nq], t)],
+                "Inverse dynamics τ = M(q) q̈ + C(q, q̇) q̇ + g(q) (N m; N for prismatic joints) \
+                 by recursive Newton–Euler (eq. 24, no friction)."
+                    .into(),
+            )
+        }
+        "inverse_dynamics_dq" => {
+            let d = model.inverse_dynamics_dq();
+            (
+                vec![Q, Qd, Qdd, P],
+                vec![arr("out", &[Nq, Nq], flat2(&d))],
+                "∂τ/∂q of the inverse dynamics: `out[i][k]` = ∂τ_i/∂q_k (exact, by \
+                 differentiation of the Newton–Euler graph)."
+                    .into(),
+            )
+        }
+        "inverse_dynamics_dqd" => {
+            let d = model.inverse_dynamics_dqd();
+            (
+                vec![Q, Qd, P],
+                vec![arr("out", &[Nq, Nq], flat2(&d))],
+                "∂τ/∂q̇ of the inverse dynamics: `out[i][k]` = ∂τ_i/∂q̇_k (exact; independent of \
+                 q̈)."
+                .into(),
+            )
+        }
+        "forward_dynamics" => {
+            let a = model.forward_dynamics();
+            (
+                vec![Q, Qd, Tau, P],
+                vec![arr("qdd", &[Nq], a)],
+                "Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) (eq. 26a without friction) by an \
+                 unrolled LDLᵀ factorisation of M."
+                    .into(),
+            )
+        }
+        "regressor" => {
+            let y = model.regressor();
+            (
+                vec![Q, Qd, Qdd, P],
+                vec![arr("y", &[Nq, Nq, Lit(10)], flat3(&y))],
+                "Dynamic regressor: `y[i][l][k]` = ∂τ_i/∂π_{l,k}, so τ = Σ y[i][l][k] π_{l,k} \
+                 with π_l = [m, m c_x, m c_y, m c_z, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz] of link \
+                 l + 1 (c the COG and I the inertia about the link frame's origin, link-frame \
+                 axes)."
+                    .into(),
+            )
+        }
         "contact" | "contact_smooth" => {
             let smooth = name == "contact_smooth";
             let c = model.contact(smooth)?;
@@ -318,10 +388,51 @@ pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenE
             )));
         }
     };
+    check_inputs(model, name, &inputs, &outputs)?;
     Ok(KernelDef {
         name: name.to_string(),
         doc,
         inputs,
         outputs,
     })
+}
+
+/// Every graph variable a kernel's outputs read must be one of its arguments (the emitter
+/// names variables by the layout, so a stray one would not compile).
+fn check_inputs(
+    model: &Model,
+    name: &str,
+    inputs: &[Arg],
+    outputs: &[OutArg],
+) -> Result<(), CodegenError> {
+    let l = model.layout;
+    let n = l.nq as u32;
+    let roots: Vec<Id> = outputs.iter().flat_map(|o| o.ids.iter().copied()).collect();
+    for v in model.cone_vars(&roots) {
+        let needs = if v < n {
+            Arg::Q
+        } else if v < 2 * n {
+            Arg::Qd
+        } else if v < 2 * n + 3 {
+            Arg::Omega
+        } else if v == 2 * n + 3 {
+            Arg::Eps
+        } else if (v as usize) < l.n_vars() {
+            Arg::P
+        } else if v < l.qdd(0) + n {
+            Arg::Qdd
+        } else if v < l.tau(0) + n {
+            Arg::Tau
+        } else {
+            return Err(CodegenError::Internal(format!(
+                "kernel `{name}` reads graph variable {v}, which no kernel argument holds"
+            )));
+        };
+        if !inputs.contains(&needs) {
+            return Err(CodegenError::Internal(format!(
+                "kernel `{name}` reads {needs:?} but does not take it as an argument"
+            )));
+        }
+    }
+    Ok(())
 }

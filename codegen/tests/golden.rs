@@ -9,7 +9,18 @@ mod planar2 {
     include!("golden/planar2.rs");
 }
 
-use bf_codegen::{Scene, generate};
+#[allow(clippy::all, clippy::pedantic, missing_docs, dead_code)]
+mod planar2_f32_fma {
+    include!("golden/planar2_f32_fma.rs");
+}
+
+use bf_codegen::{EmitOptions, FloatTy, Scene, generate, generate_with};
+
+/// The options of the single-precision golden variant.
+const F32_FMA: EmitOptions = EmitOptions {
+    float: FloatTy::F32,
+    fma: true,
+};
 
 const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden");
 
@@ -33,6 +44,68 @@ fn golden_file_is_current() {
         golden == code,
         "emitted code differs from {path}; if intended, rerun with BF_OVERWRITE_GOLDEN=1"
     );
+}
+
+#[test]
+fn f32_fma_golden_file_is_current() {
+    let (scene, text) = planar2_scene();
+    let code = generate_with(&scene, &text, &F32_FMA).unwrap().code;
+    let path = format!("{DIR}/planar2_f32_fma.rs");
+    if std::env::var("BF_OVERWRITE_GOLDEN").as_deref() == Ok("1") {
+        std::fs::write(&path, &code).unwrap();
+        return;
+    }
+    let golden = std::fs::read_to_string(&path).unwrap();
+    assert!(
+        golden == code,
+        "emitted code differs from {path}; if intended, rerun with BF_OVERWRITE_GOLDEN=1"
+    );
+}
+
+/// The f32/FMA variant agrees with the f64 kernels to single precision, kernel by kernel
+/// (every output of every kernel through the two modules' `eval_flat_u`), and the
+/// allocation-free `eval_index_into` returns exactly what `eval_flat_u` does.
+#[test]
+fn f32_fma_variant_agrees_with_f64_and_dispatchers_agree() {
+    assert_eq!(planar2::KERNELS, planar2_f32_fma::KERNELS);
+    for j in 0..20 {
+        let t = j as f64;
+        let q = [(1.3 * t).sin() * 3.0, (0.7 * t + 0.2).cos() * 3.0];
+        let qd = [(2.1 * t).cos() * 2.0, (0.3 * t).sin() * 2.0];
+        let u = [(0.9 * t).cos() * 4.0, (1.7 * t).sin() * 4.0];
+        let p = planar2::PARAM_DEFAULTS;
+        let f = |v: [f64; 2]| v.map(|x| x as f32);
+        for (k, name) in planar2::KERNELS.iter().enumerate() {
+            let a = planar2::eval_flat_u(name, &q, &qd, &[0.0; 3], 0.01, &u, &p).unwrap();
+            let b = planar2_f32_fma::eval_flat_u(
+                name,
+                &f(q),
+                &f(qd),
+                &[0.0; 3],
+                0.01,
+                &f(u),
+                &planar2_f32_fma::PARAM_DEFAULTS,
+            )
+            .unwrap();
+            assert_eq!(a.len(), b.len(), "{name}");
+            let scale = a.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+            for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+                assert!(
+                    (x - *y as f64).abs() <= 2e-5 * scale,
+                    "{name}[{i}]: f64 {x} vs f32 {y}"
+                );
+            }
+            let mut out = vec![f64::NAN; a.len() + 3];
+            let n = planar2::eval_index_into(k, &q, &qd, &[0.0; 3], 0.01, &u, &p, &mut out);
+            assert_eq!(n, Some(a.len()), "{name}");
+            assert_eq!(&out[..a.len()], &a[..], "{name}: eval_index_into");
+            let short = &mut out[..a.len() - 1];
+            assert_eq!(
+                planar2::eval_index_into(k, &q, &qd, &[0.0; 3], 0.01, &u, &p, short),
+                None
+            );
+        }
+    }
 }
 
 #[test]
@@ -103,6 +176,45 @@ fn planar_arm_matches_textbook_closed_forms() {
                     (lag[a] - cqd[a] - g[a]).abs() < 1e-12,
                     "Lagrangian C qd + g[{a}]"
                 );
+            }
+            // The emitted inverse dynamics τ = M q̈ + C q̇ + g, its round trip through the
+            // emitted forward dynamics, and Y π = τ with π from the closed-form parameters.
+            let qdd = [(0.9 * t).cos() * 4.0, (1.7 * t).sin() * 4.0];
+            let tau_cf: Vec<f64> = (0..2)
+                .map(|a| mm[a][0] * qdd[0] + mm[a][1] * qdd[1] + cqd[a] + g[a])
+                .collect();
+            let mut tau = [0.0; 2];
+            planar2::inverse_dynamics(&q, &qd, &qdd, &p, &mut tau);
+            let mut back = [0.0; 2];
+            planar2::forward_dynamics(&q, &qd, &tau, &p, &mut back);
+            let mut y = [[[0.0; 10]; 2]; 2];
+            planar2::regressor(&q, &qd, &qdd, &p, &mut y);
+            // π per link: m, m c (c = (lc − l, 0, 0) in the link frame), I_o about the origin.
+            let pis = [(m1, lc1 - l1, i1), (m2, lc2 - l2, i2)].map(|(m, cx, izz)| {
+                [
+                    m,
+                    m * cx,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    0.0,
+                    izz + m * cx * cx,
+                ]
+            });
+            for a in 0..2 {
+                let scale = 1.0 + tau_cf[a].abs();
+                assert!((tau[a] - tau_cf[a]).abs() < 1e-12 * scale, "τ[{a}]");
+                assert!(
+                    (back[a] - qdd[a]).abs() < 1e-12 * (1.0 + qdd[a].abs()),
+                    "q̈[{a}]"
+                );
+                let ypi: f64 = (0..2)
+                    .map(|l| (0..10).map(|c| y[a][l][c] * pis[l][c]).sum::<f64>())
+                    .sum();
+                assert!((ypi - tau_cf[a]).abs() < 1e-12 * scale, "Y π[{a}]");
             }
             // Tip Jacobian of the planar arm.
             let s1 = q[0].sin();

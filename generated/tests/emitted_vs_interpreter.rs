@@ -1,5 +1,5 @@
 //! The compiled kernels of every scene module against bf-codegen's interpreter evaluating the
-//! same graphs (random states and perturbed runtime parameters). Both perform the same f64
+//! same graphs (random states, q̈ or τ, and perturbed runtime parameters). Both perform the same f64
 //! operations in the same order (sine and cosine by the emitted helper: the interpreter runs in
 //! `KernelF64`), so the results must be bit-identical.
 
@@ -24,7 +24,7 @@ macro_rules! check_scene {
         }
         assert_eq!(
             s::KERNELS,
-            scene
+            bf_codegen::kernels::with_robot_kernels(&scene)
                 .kernels
                 .iter()
                 .map(|k| k.as_str())
@@ -48,8 +48,13 @@ macro_rules! check_scene {
                 let eps = rng.random_range(1e-4..0.1);
                 let p: [f64; s::NP] =
                     std::array::from_fn(|i| s::PARAM_DEFAULTS[i] * rng.random_range(0.8..1.25));
+                let u: [f64; s::NQ] = std::array::from_fn(|_| rng.random_range(-5.0..5.0));
                 let l = model.layout;
-                let mut vars = vec![0.0; l.n_vars()];
+                let mut vars = vec![0.0; l.n_vars_all()];
+                for (i, x) in u.iter().enumerate() {
+                    vars[l.qdd(i) as usize] = *x;
+                    vars[l.tau(i) as usize] = *x;
+                }
                 vars[..s::NQ].copy_from_slice(&q);
                 vars[s::NQ..2 * s::NQ].copy_from_slice(&qd);
                 vars[2 * s::NQ..2 * s::NQ + 3].copy_from_slice(&omega);
@@ -63,7 +68,7 @@ macro_rules! check_scene {
                     .into_iter()
                     .map(|v| v.0)
                     .collect();
-                let got = s::eval_flat(k, &q, &qd, &omega, eps, &p).unwrap();
+                let got = s::eval_flat_u(k, &q, &qd, &omega, eps, &u, &p).unwrap();
                 assert_eq!(
                     got.len(),
                     want.len(),

@@ -1,8 +1,10 @@
 //! Every generated kernel of every scene against the independent reference of bf-testkit
 //! (`bf_testkit::Reference`, built from the module's own `SCENE_TOML`): frames and Jacobians
 //! (eq. 67–71), M (eq. 22a), ∂M/∂q, Christoffel symbols and C (eq. 76), g = ∂U/∂q and U
-//! (eq. 22b with the docs/parameters.md sign), C q̇ + g by both the Lagrangian and the RNEA path, and
-//! the contact quantities of eq. 2–13, 33 and 58–59.
+//! (eq. 22b with the docs/parameters.md sign), C q̇ + g by both the Lagrangian and the RNEA path,
+//! the inverse-dynamics family (τ against the reference's Newton–Euler pass, forward dynamics
+//! by its residual with the reference's M and C q̇ + g, Y π = τ, ∂τ/∂q and ∂τ/∂q̇ against central
+//! differences), and the contact quantities of eq. 2–13, 33 and 58–59.
 //!
 //! States (seeded): random configurations, the stretched finger (q2 = … = 0), folded ones
 //! (q_i = ±π), q̇ of size 1e3 and 1e-12, large |q| (~1e4 rad), and — for the scenes with a
@@ -233,6 +235,79 @@ macro_rules! check_dynamics {
         call!(g::mass_cqd_g; &q, &qd, p, &mut m2, &mut cg2);
         cmp(&ctx("mass_cqd_g.m"), &flat2(&m2), &rows(&m_ref));
         cmp_s(&ctx("mass_cqd_g.cqd_g"), &cg2, cg_ref.as_slice(), v * v * ms);
+
+        // Inverse dynamics against the reference's world-axes Newton–Euler pass, at a q̈
+        // derived from the state (|q̈| ≤ 2).
+        let qdd: [f64; N] = std::array::from_fn(|i| 2.0 * (1.7 * q[i] + 0.3 * i as f64).sin());
+        let tau_ref = rf.inverse_dynamics_ne(&q, &qd, &qdd);
+        let s_tau = (v * v + 2.0) * ms;
+        let mut tau = [0.0; N];
+        call!(g::inverse_dynamics; &q, &qd, &qdd, p, &mut tau);
+        cmp_s(&ctx("inverse_dynamics"), &tau, tau_ref.as_slice(), s_tau);
+        // Forward dynamics: the residual M q̈ − (τ − C q̇ − g) with the reference's M, C q̇, g.
+        let mut acc = [0.0; N];
+        call!(g::forward_dynamics; &q, &qd, &tau, p, &mut acc);
+        let res = &m_ref * nalgebra::DVector::from_column_slice(&acc);
+        let rhs = nalgebra::DVector::from_column_slice(&tau) - &cg_ref;
+        cmp_s(&ctx("forward_dynamics"), res.as_slice(), rhs.as_slice(), s_tau);
+        // Regressor: Y π = τ with π from the reference's link data.
+        let mut y = [[[0.0; 10]; N]; N];
+        call!(g::regressor; &q, &qd, &qdd, p, &mut y);
+        let pis: Vec<[f64; 10]> = rf
+            .links
+            .iter()
+            .map(|l| {
+                let (m, c, i) = (l.mass, l.com, l.inertia);
+                let cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+                let io = |a: usize, b: usize| {
+                    i[a][b] + m * (if a == b { cc } else { 0.0 } - c[a] * c[b])
+                };
+                [m, m * c[0], m * c[1], m * c[2], io(0, 0), io(0, 1), io(0, 2), io(1, 1), io(1, 2), io(2, 2)]
+            })
+            .collect();
+        let ypi: Vec<f64> = y
+            .iter()
+            .map(|row| {
+                row.iter()
+                    .zip(&pis)
+                    .map(|(yl, pl)| yl.iter().zip(pl).map(|(a, b)| a * b).sum::<f64>())
+                    .sum()
+            })
+            .collect();
+        cmp_s(&ctx("regressor"), &ypi, tau_ref.as_slice(), s_tau);
+        // ∂τ/∂q and ∂τ/∂q̇ against central differences of the compiled inverse dynamics
+        // (moderate states only: the step must resolve the derivative).
+        if $label.starts_with("random ") {
+            let mut dq = [[0.0; N]; N];
+            let mut dqd = [[0.0; N]; N];
+            call!(g::inverse_dynamics_dq; &q, &qd, &qdd, p, &mut dq);
+            call!(g::inverse_dynamics_dqd; &q, &qd, p, &mut dqd);
+            let h = 1e-6;
+            for k in 0..N {
+                for (which, exact) in [("dq", &dq), ("dqd", &dqd)] {
+                    let (mut qa, mut qda, mut qb, mut qdb) = (q, qd, q, qd);
+                    if which == "dq" {
+                        qa[k] += h;
+                        qb[k] -= h;
+                    } else {
+                        qda[k] += h;
+                        qdb[k] -= h;
+                    }
+                    let (mut ta, mut tb) = ([0.0; N], [0.0; N]);
+                    call!(g::inverse_dynamics; &qa, &qda, &qdd, p, &mut ta);
+                    call!(g::inverse_dynamics; &qb, &qdb, &qdd, p, &mut tb);
+                    for i in 0..N {
+                        let fd = (ta[i] - tb[i]) / (2.0 * h);
+                        assert!(
+                            (exact[i][k] - fd).abs() <= 1e-6 * s_tau,
+                            "{}: ∂τ_{i}/∂{which}_{k} = {} vs central difference {fd}",
+                            ctx("inverse_dynamics_dq"),
+                            exact[i][k]
+                        );
+                    }
+                }
+            }
+        }
     }};
 }
 
@@ -310,6 +385,11 @@ macro_rules! check_contact {
 
 /// The kernels this file checks; a scene emitting anything else fails the coverage test.
 const CHECKED: &[&str] = &[
+    "inverse_dynamics",
+    "inverse_dynamics_dq",
+    "inverse_dynamics_dqd",
+    "forward_dynamics",
+    "regressor",
     "frames",
     "tip_jacobian",
     "com_jacobians",

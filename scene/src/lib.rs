@@ -77,6 +77,17 @@ pub enum DhConvention {
     Modified,
 }
 
+/// The kind of a DH joint: which DH parameter the joint coordinate q_i drives.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum JointType {
+    /// Revolute: θ_i = q_i + offset (rad); d_i is constant.
+    #[default]
+    Revolute,
+    /// Prismatic: d_i = q_i + d (m); θ_i = offset is constant.
+    Prismatic,
+}
+
 /// A rotation in the scene file (deserialised by hand so that errors are precise: a table
 /// `{ axis, angle }` or a 3×3 array).
 #[derive(Debug, Clone, PartialEq)]
@@ -121,6 +132,9 @@ pub struct LinkSpec {
     /// Optional human-readable name.
     #[serde(default)]
     pub name: Option<String>,
+    /// Joint type, `joint = "revolute"` (default) or `"prismatic"`.
+    #[serde(default)]
+    pub joint: JointType,
     /// DH a (metres).
     pub a: f64,
     /// DH α.
@@ -235,7 +249,7 @@ pub struct Scene {
     /// Gravity vector g_0 (m/s²).
     #[serde(deserialize_with = "de::exact3")]
     pub gravity: [f64; 3],
-    /// The DH table, one entry per revolute joint (at least one).
+    /// The DH table, one entry per joint (revolute or prismatic; at least one).
     pub links: Vec<LinkSpec>,
     /// The ball, if the scene has one.
     #[serde(default)]
@@ -283,8 +297,23 @@ pub const KNOWN_KERNELS: &[&str] = &[
     "cqd_g",
     "cqd_g_rnea",
     "mass_cqd_g",
+    "inverse_dynamics",
+    "inverse_dynamics_dq",
+    "inverse_dynamics_dqd",
+    "forward_dynamics",
+    "regressor",
     "contact",
     "contact_smooth",
+];
+
+/// The inverse- and forward-dynamics kernels every scene gets in addition to its `kernels`
+/// list (`bf-generated` emits them for every scene), in emission order.
+pub const ROBOT_KERNELS: &[&str] = &[
+    "inverse_dynamics",
+    "inverse_dynamics_dq",
+    "inverse_dynamics_dqd",
+    "forward_dynamics",
+    "regressor",
 ];
 
 /// The kernels of [`KNOWN_KERNELS`] that need a `[ball]` and a `[contact]` section.

@@ -1,15 +1,22 @@
-//! `ball-finger eval SCENE --q .. --qd .. [--omega ..] [--eps ..]`: one JSON object with the
-//! kinematics (eq. 67–71), dynamics (eq. 72–79, Christoffel C) and contact quantities
-//! (eq. 2–7, smooth variant eq. 58–59) at one state. Built-in scenes (the file's text equals the
-//! one compiled into `bf-generated`) go through the compiled kernels; any other file through
-//! the generator's interpreter. Key order and layout are fixed (matrices row-major). A
-//! non-finite entry (overflow at an extreme state or ε) is an error naming the quantity and the
-//! entry (indices from 1), never a `null` in the JSON.
+//! `ball-finger eval SCENE --q .. --qd .. [--omega ..] [--eps ..] [--qdd ..] [--tau ..]`: one
+//! JSON object with the kinematics (eq. 67–71), dynamics (eq. 72–79, Christoffel C) and
+//! contact quantities (eq. 2–7, smooth variant eq. 58–59) at one state, followed by
+//! `"kernels"`: every kernel the scene's module holds (its `kernels` list and the
+//! inverse-dynamics family), in emission order, each an object of its outputs named as the
+//! kernel's arguments (`Contact` fields for the contact kernels), arrays nested row-major. The
+//! inverse-dynamics kernels take q̈ from `--qdd`, `forward_dynamics` τ from `--tau` (default 0).
+//! Built-in scenes (the file's text equals the one compiled into `bf-generated`) go through the
+//! compiled kernels; any other file through the generator's interpreter. Key order and layout
+//! are fixed. A non-finite entry (overflow at an extreme state or ε) is an error naming the
+//! quantity or the kernel and the entry (indices from 1), never a `null` in the JSON.
 
 use crate::cli::EvalArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, bail};
+use bf_codegen::interp::{OutputShape, SceneKernels};
+use bf_codegen::kernels::Arg;
 use bf_codegen::{EvalOutput, EvalValue, Scene};
+use serde::ser::{Serialize, SerializeMap, Serializer};
 
 /// Run `eval`.
 pub fn run(args: &EvalArgs) -> Result<()> {
@@ -22,6 +29,14 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         None => vec![0.0; 3],
     };
     let omega = [omega[0], omega[1], omega[2]];
+    let qdd = match &args.qdd {
+        Some(s) => parse_list("--qdd", s, Some(n))?,
+        None => vec![0.0; n],
+    };
+    let tau = match &args.tau {
+        Some(s) => parse_list("--tau", s, Some(n))?,
+        None => vec![0.0; n],
+    };
     let eps = args
         .eps
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
@@ -29,11 +44,26 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     if !(eps.is_finite() && eps > 0.0) {
         anyhow::bail!("--eps must be a finite positive number (got {eps})");
     }
-    let (out, source) = match eval_builtin(&scene, &text, &q, &qd, omega, eps) {
-        Some(out) => (out, "compiled kernels"),
+    let state = State {
+        q: &q,
+        qd: &qd,
+        omega,
+        eps,
+        qdd: &qdd,
+        tau: &tau,
+    };
+    let runtime = SceneKernels::new(&scene)
+        .with_context(|| format!("{}: cannot build the kernels", args.scene.display()))?;
+    let (out, kernels, source) = match eval_builtin(&scene, &text, &q, &qd, omega, eps) {
+        Some(out) => {
+            let flat = compiled_kernels(&scene, &text, &runtime, &state)
+                .context("internal: a built-in scene without its compiled kernels")?;
+            (out, flat, "compiled kernels")
+        }
         None => (
             bf_codegen::eval_all(&scene, &q, &qd, omega, eps)
                 .with_context(|| format!("{}: evaluation failed", args.scene.display()))?,
+            interpreted_kernels(&runtime, &state),
             "interpreter",
         ),
     };
@@ -46,8 +76,175 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             args.omega.as_deref().unwrap_or("0,0,0")
         );
     }
+    let kernels = shape_kernels(&scene.name, &runtime, &kernels)?;
     eprintln!("evaluated {} through the {source}", scene.name);
-    crate::outln!("{}", serde_json::to_string(&out)?)
+    let all = Full {
+        quantities: &out,
+        kernels: &kernels,
+    };
+    crate::outln!("{}", serde_json::to_string(&all)?)
+}
+
+/// The state every kernel is evaluated at.
+struct State<'a> {
+    q: &'a [f64],
+    qd: &'a [f64],
+    omega: [f64; 3],
+    eps: f64,
+    qdd: &'a [f64],
+    tau: &'a [f64],
+}
+
+impl State<'_> {
+    /// The `u` argument of `eval_flat_u` for a kernel with `inputs`: τ for forward dynamics,
+    /// q̈ otherwise.
+    fn u(&self, inputs: &[Arg]) -> &[f64] {
+        if inputs.contains(&Arg::Tau) {
+            self.tau
+        } else {
+            self.qdd
+        }
+    }
+}
+
+/// Every kernel's flat outputs through the interpreter.
+fn interpreted_kernels(rt: &SceneKernels, s: &State) -> Vec<Vec<f64>> {
+    rt.kernels
+        .iter()
+        .map(|k| {
+            let vars = rt.vars(s.q, s.qd, s.omega, s.eps, s.u(&k.inputs), None);
+            k.eval(&vars)
+        })
+        .collect()
+}
+
+macro_rules! compiled_flat {
+    ($m:ident, $rt:expr, $s:expr) => {{
+        use bf_generated::$m as k;
+        let q: [f64; k::NQ] = $s.q.try_into().ok()?;
+        let qd: [f64; k::NQ] = $s.qd.try_into().ok()?;
+        let mut out = Vec::new();
+        for kern in &$rt.kernels {
+            let u: [f64; k::NQ] = $s.u(&kern.inputs).try_into().ok()?;
+            out.push(k::eval_flat_u(
+                &kern.name,
+                &q,
+                &qd,
+                &$s.omega,
+                $s.eps,
+                &u,
+                &k::PARAM_DEFAULTS,
+            )?);
+        }
+        Some(out)
+    }};
+}
+
+/// Every kernel's flat outputs through the compiled module of a built-in scene.
+fn compiled_kernels(
+    scene: &Scene,
+    text: &str,
+    rt: &SceneKernels,
+    s: &State,
+) -> Option<Vec<Vec<f64>>> {
+    match scene.name.as_str() {
+        "paper" if text == bf_generated::paper::SCENE_TOML => compiled_flat!(paper, rt, s),
+        "human" if text == bf_generated::human::SCENE_TOML => compiled_flat!(human, rt, s),
+        "puma560" if text == bf_generated::puma560::SCENE_TOML => compiled_flat!(puma560, rt, s),
+        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => compiled_flat!(iiwa7, rt, s),
+        _ => None,
+    }
+}
+
+/// An ordered JSON object.
+struct Ordered<T>(Vec<(String, T)>);
+
+impl<T: Serialize> Serialize for Ordered<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+/// The whole `eval` output: the named quantities, then `"kernels"`.
+struct Full<'a> {
+    quantities: &'a EvalOutput,
+    kernels: &'a Ordered<Ordered<serde_json::Value>>,
+}
+
+impl Serialize for Full<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let e = &self.quantities.entries;
+        let mut m = s.serialize_map(Some(e.len() + 1))?;
+        for (k, v) in e {
+            m.serialize_entry(k, v)?;
+        }
+        m.serialize_entry("kernels", self.kernels)?;
+        m.end()
+    }
+}
+
+/// Nested row-major arrays of `dims` from `flat`.
+fn nest(flat: &[f64], dims: &[usize]) -> serde_json::Value {
+    match dims.split_first() {
+        None => serde_json::json!(flat[0]),
+        Some((_, rest)) => {
+            let step: usize = rest.iter().product();
+            serde_json::Value::Array(flat.chunks(step.max(1)).map(|c| nest(c, rest)).collect())
+        }
+    }
+}
+
+/// Index `i` of a row-major array of `dims`, from 1: `[2][3]`.
+fn index_text(mut i: usize, dims: &[usize]) -> String {
+    let mut idx = vec![0; dims.len()];
+    for (k, d) in dims.iter().enumerate().rev() {
+        idx[k] = i % d + 1;
+        i /= d;
+    }
+    idx.iter().map(|x| format!("[{x}]")).collect()
+}
+
+/// Shapes the flat kernel outputs; a non-finite entry is an error naming the kernel, the
+/// output and the entry.
+fn shape_kernels(
+    scene: &str,
+    rt: &SceneKernels,
+    flat: &[Vec<f64>],
+) -> Result<Ordered<Ordered<serde_json::Value>>> {
+    let mut out = Vec::new();
+    for (k, values) in rt.kernels.iter().zip(flat) {
+        let total: usize = k.outputs.iter().map(OutputShape::len).sum();
+        if values.len() != total {
+            bail!(
+                "internal: kernel `{}` of {scene} returned {} values, expected {total}",
+                k.name,
+                values.len()
+            );
+        }
+        let mut off = 0;
+        let mut outs = Vec::new();
+        for o in &k.outputs {
+            let v = &values[off..off + o.len()];
+            off += o.len();
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                bail!(
+                    "kernel `{}` of {scene}: output {}{} is not finite ({}) at the given state; \
+                     nothing was printed",
+                    k.name,
+                    o.name,
+                    index_text(i, &o.dims),
+                    v[i]
+                );
+            }
+            outs.push((o.name.clone(), nest(v, &o.dims)));
+        }
+        out.push((k.name.clone(), Ordered(outs)));
+    }
+    Ok(Ordered(out))
 }
 
 /// What a key of the `eval` output is, for error messages.

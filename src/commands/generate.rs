@@ -1,14 +1,26 @@
-//! `ball-finger generate SCENE [-o FILE] [--report]`: run the code generator (the paper's Maple
-//! step, Sect. 5) on any scene file and print or write the Rust module.
+//! `ball-finger generate SCENE [-o FILE] [--report] [--float f64|f32] [--fma]`: run the code
+//! generator (the paper's Maple step, Sect. 5) on any scene file and print or write the Rust
+//! module: the kernels of the scene's `kernels` list plus the inverse-dynamics family, the same
+//! module `bf-generated` compiles for a scene of `scenes/` (with the default options).
+//! `--float f32` emits single-precision kernels, `--fma` fused multiply-adds; every combination
+//! is valid.
 
-use crate::cli::GenerateArgs;
+use crate::cli::{FloatArg, GenerateArgs};
 use crate::io::write_atomic;
 use anyhow::{Context, Result};
 
 /// Run `generate`.
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let (scene, text) = super::load_scene(&args.scene)?;
-    let generated = bf_codegen::generate(&scene, &text)
+    let opts = bf_codegen::EmitOptions {
+        float: match args.float {
+            FloatArg::F64 => bf_codegen::FloatTy::F64,
+            FloatArg::F32 => bf_codegen::FloatTy::F32,
+        },
+        fma: args.fma,
+    };
+    let full = bf_codegen::kernels::with_robot_kernels(&scene);
+    let generated = bf_codegen::generate_with(&full, &text, &opts)
         .with_context(|| format!("{}: code generation failed", args.scene.display()))?;
     match &args.output {
         Some(path) => {

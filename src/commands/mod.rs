@@ -1,6 +1,7 @@
 //! Subcommand implementations. Each `run` returns `anyhow::Result`; `main` prints the error
 //! chain and exits non-zero.
 
+pub mod bench;
 pub mod eval;
 pub mod generate;
 pub mod optimize;

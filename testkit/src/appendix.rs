@@ -68,6 +68,7 @@ impl AppendixParams {
                 alpha: if i == 0 { half_pi } else { 0.0 },
                 d: 0.0,
                 offset: 0.0,
+                prismatic: false,
                 mass: self.m[i],
                 com: [-self.l / 2.0, 0.0, 0.0],
                 inertia: [

@@ -58,6 +58,7 @@ fn random_robot(r: &mut ChaCha8Rng, n: usize, conv: DhConvention) -> Reference {
             },
             d: uni(r, -0.5, 0.5),
             offset: uni(r, -1.0, 1.0),
+            prismatic: false,
             mass: uni(r, 0.1, 2.0),
             com: [uni(r, -0.5, 0.5), uni(r, -0.5, 0.5), uni(r, -0.5, 0.5)],
             inertia: random_spd(r),

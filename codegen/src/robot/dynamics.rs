@@ -4,7 +4,8 @@
 //!   expressed in the link's own frame so M depends only on relative joint angles;
 //! * ∂M/∂q, Christoffel symbols c_ijk and C (eq. 76–79), C q̇ = Ṁ q̇ − ∂T/∂q;
 //! * U = −Σ m_i g_0ᵀ p_i (sign convention of docs/parameters.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
-//! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one.
+//! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one (scenes
+//!   with prismatic joints use the general pass of the `inverse` module with q̈ = 0).
 
 use super::{Model, Pose};
 use crate::diff;
@@ -35,7 +36,10 @@ impl Model {
             let mut frame = i + 1;
             loop {
                 for j in 0..=i {
-                    if self.axis_frame(j) == frame {
+                    if self.axis_frame(j) == frame && self.prismatic(j) {
+                        // Translation along the axis, no rotation.
+                        cols_p[j] = [inv.r[0][2], inv.r[1][2], inv.r[2][2]];
+                    } else if self.axis_frame(j) == frame {
                         let axis = [inv.r[0][2], inv.r[1][2], inv.r[2][2]];
                         let r = self.g.v3_sub(c, inv.t);
                         cols_p[j] = self.g.v3_cross(axis, r);
@@ -73,7 +77,7 @@ impl Model {
         mm
     }
 
-    fn link_inertia(&mut self, i: usize) -> M3 {
+    pub(super) fn link_inertia(&mut self, i: usize) -> M3 {
         let p = format!("link{}.inertia", i + 1);
         let xx = self.constant(&format!("{p}.xx"));
         let yy = self.constant(&format!("{p}.yy"));
@@ -257,6 +261,14 @@ impl Model {
             return r.clone();
         }
         let n = self.nq();
+        if (0..n).any(|j| self.prismatic(j)) {
+            // The general Newton–Euler pass (prismatic joints) with q̈ = 0.
+            let pi: Vec<[Id; 10]> = (0..n).map(|i| self.inertial_nodes(i)).collect();
+            let z = self.g.zero();
+            let tau = self.rnea_linear(&pi, &vec![z; n]);
+            self.cache.rnea = Some(tau.clone());
+            return tau;
+        }
         let z = self.g.zero();
         let qd = self.qd_ids();
         let modified = self.scene.dh == DhConvention::Modified;

@@ -17,14 +17,17 @@
 //! folded exactly (angle sums in product form).
 //!
 //! The joint-space dynamics (M, ∂M/∂q, C, g and the Newton–Euler path) live in the `dynamics`
-//! submodule; kinematics, Jacobians and contact geometry are here.
+//! submodule, inverse and forward dynamics, their derivatives and the regressor in `inverse`;
+//! kinematics, Jacobians and contact geometry are here. Joints are revolute (θ_i = q_i +
+//! offset) or prismatic (d_i = q_i + d).
 
 mod dynamics;
+mod inverse;
 
 use crate::CodegenError;
 use crate::diff;
 use crate::graph::{Graph, Id, M3, V3, m3_transpose};
-use crate::spec::{Angle, DhConvention, RotationSpec, Scene, TransformSpec};
+use crate::spec::{Angle, DhConvention, JointType, RotationSpec, Scene, TransformSpec};
 
 /// Layout of the input variables of the graph: q, q̇, ω, ε, then the runtime parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -56,10 +59,64 @@ impl Layout {
     pub fn param(&self, i: usize) -> u32 {
         (2 * self.nq + 4 + i) as u32
     }
-    /// Total number of variables.
+    /// Total number of variables of the kinematic, dynamic and contact kernels (q̈, τ and the
+    /// inertial parameters of the inverse-dynamics family come after these).
     pub fn n_vars(&self) -> usize {
         2 * self.nq + 4 + self.np
     }
+    /// Variable index of q̈_i (input of `inverse_dynamics` and its derivatives).
+    pub fn qdd(&self, i: usize) -> u32 {
+        (self.n_vars() + i) as u32
+    }
+    /// Variable index of τ_i (input of `forward_dynamics`).
+    pub fn tau(&self, i: usize) -> u32 {
+        (self.n_vars() + self.nq + i) as u32
+    }
+    /// Variable index of inertial parameter `k` (0..10, order of
+    /// [`INERTIAL_PARAMETER_NAMES`]) of link `link` (0-based): the variables the regressor
+    /// differentiates by; no emitted kernel reads them.
+    pub fn inertial(&self, link: usize, k: usize) -> u32 {
+        (self.n_vars() + 2 * self.nq + 10 * link + k) as u32
+    }
+    /// Number of variables including q̈, τ and the inertial parameters.
+    pub fn n_vars_all(&self) -> usize {
+        self.n_vars() + 12 * self.nq
+    }
+}
+
+/// The standard inertial parameters π of one link, in the order of the regressor's columns:
+/// m, the first moments m·c (c = COG in link-frame coordinates) and the inertia tensor about
+/// the link frame's origin in link-frame axes, I_o = I_c + m(|c|² 1 − c cᵀ).
+pub const INERTIAL_PARAMETER_NAMES: [&str; 10] = [
+    "m", "mcx", "mcy", "mcz", "ixx", "ixy", "ixz", "iyy", "iyz", "izz",
+];
+
+/// The inertial parameters π (order [`INERTIAL_PARAMETER_NAMES`]) of every link of `scene`,
+/// concatenated link by link: τ = Y(q, q̇, q̈) π with Y the `regressor` kernel.
+pub fn inertial_parameters(scene: &Scene) -> Vec<f64> {
+    let mut out = Vec::with_capacity(10 * scene.links.len());
+    for (i, l) in scene.links.iter().enumerate() {
+        let (m, c) = (l.mass, l.com);
+        let ic = scene.link_inertia(i);
+        let cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
+        let io = |a: usize, b: usize| {
+            let delta = if a == b { cc } else { 0.0 };
+            ic[a][b] + m * (delta - c[a] * c[b])
+        };
+        out.extend([
+            m,
+            m * c[0],
+            m * c[1],
+            m * c[2],
+            io(0, 0),
+            io(0, 1),
+            io(0, 2),
+            io(1, 1),
+            io(1, 2),
+            io(2, 2),
+        ]);
+    }
+    out
 }
 
 /// A rigid transform (R, t) of graph nodes: x ↦ R x + t.
@@ -132,6 +189,7 @@ struct Cache {
     gravity: Option<Vec<Id>>,
     cqd: Option<Vec<Id>>,
     rnea: Option<Vec<Id>>,
+    inverse: Option<Vec<Id>>,
 }
 
 impl Model {
@@ -281,13 +339,21 @@ impl Model {
         let links = self.scene.links.clone();
         for (i, l) in links.iter().enumerate() {
             let qi = self.g.var(self.layout.q(i));
-            let (sq, cq) = (self.g.sin(qi), self.g.cos(qi));
-            // θ = q + offset in product form: only sin/cos of the bare joint variable.
             let offset_name = format!("link{}.offset", i + 1);
             let offset_runtime = self.params.iter().any(|(n, _)| *n == offset_name);
+            let prismatic = l.joint == JointType::Prismatic;
             let (ct, st) = match (l.offset, offset_runtime) {
-                (None, false) => (cq, sq),
+                // Prismatic: θ = offset is constant (exact for multiples of π).
+                _ if prismatic => {
+                    let o = l.offset.unwrap_or(Angle::Radians(0.0));
+                    self.named_angle_cs(&offset_name, o)
+                }
+                (None, false) => {
+                    let (sq, cq) = (self.g.sin(qi), self.g.cos(qi));
+                    (cq, sq)
+                }
                 (o, _) => {
+                    let (sq, cq) = (self.g.sin(qi), self.g.cos(qi));
                     let o = o.unwrap_or(Angle::Radians(0.0));
                     let (co, so) = self.named_angle_cs(&offset_name, o);
                     let a = self.g.mul(cq, co);
@@ -300,7 +366,9 @@ impl Model {
             self.sc.push((st, ct));
             let (ca, sa) = self.named_angle_cs(&format!("link{}.alpha", i + 1), l.alpha);
             let a = self.constant(&format!("link{}.a", i + 1));
-            let d = self.constant(&format!("link{}.d", i + 1));
+            let d0 = self.constant(&format!("link{}.d", i + 1));
+            // Prismatic: d = q + d (the file's d is the offset of the joint coordinate).
+            let d = if prismatic { self.g.add(qi, d0) } else { d0 };
             let g = &mut self.g;
             let z = g.zero();
             let (nst, nsa) = (g.neg(st), g.neg(sa));
@@ -387,6 +455,11 @@ impl Model {
         }
     }
 
+    /// Whether joint `j` (0-based) is prismatic.
+    pub(super) fn prismatic(&self, j: usize) -> bool {
+        self.scene.links[j].joint == JointType::Prismatic
+    }
+
     /// Link i's COG in its own frame (0-based link).
     fn com_local(&mut self, i: usize) -> V3 {
         self.cvec(&format!("link{}.com", i + 1))
@@ -418,6 +491,13 @@ impl Model {
         for j in 0..=link {
             let f = self.world[self.axis_frame(j)];
             let axis = [f.r[0][2], f.r[1][2], f.r[2][2]];
+            if self.prismatic(j) {
+                // A prismatic joint translates along its axis and does not rotate.
+                for k in 0..3 {
+                    jp[k][j] = axis[k];
+                }
+                continue;
+            }
             let d = self.g.v3_sub(p, f.t);
             let c = self.g.v3_cross(axis, d);
             for k in 0..3 {

@@ -20,11 +20,16 @@ pub const KERNELS: &[&str] = &[
     "cqd_g",
     "cqd_g_rnea",
     "mass_cqd_g",
+    "inverse_dynamics",
+    "inverse_dynamics_dq",
+    "inverse_dynamics_dqd",
+    "forward_dynamics",
+    "regressor",
 ];
 /// Name of the scene.
 pub const SCENE_NAME: &str = "planar2";
 /// The scene file's text.
-pub const SCENE_TOML: &str = "# Golden test scene: a planar two-link arm (textbook closed forms for M, C q\u{307}, g).\nname = \"planar2\"\ndh = \"standard\"\nkernels = [\"frames\", \"tip_jacobian\", \"mass_matrix\", \"coriolis_qd\", \"gravity\", \"potential\",\n           \"cqd_g\", \"cqd_g_rnea\", \"mass_cqd_g\"]\ngravity = [0.0, -9.81, 0.0]\nruntime_parameters = [\"link2.mass\"]\n\n[[links]]\na = 1.0\nalpha = \"0\"\nmass = 1.2\ncom = [-0.55, 0.0, 0.0]\ninertia = [0.02, 0.09, 0.1]\n\n[[links]]\na = 0.8\nalpha = \"0\"\nmass = 0.7\ncom = [-0.5, 0.0, 0.0]\ninertia = [0.01, 0.04, 0.05]\n";
+pub const SCENE_TOML: &str = "# Golden test scene: a planar two-link arm (textbook closed forms for M, C q\u{307}, g).\nname = \"planar2\"\ndh = \"standard\"\nkernels = [\"frames\", \"tip_jacobian\", \"mass_matrix\", \"coriolis_qd\", \"gravity\", \"potential\",\n           \"cqd_g\", \"cqd_g_rnea\", \"mass_cqd_g\", \"inverse_dynamics\", \"inverse_dynamics_dq\",\n           \"inverse_dynamics_dqd\", \"forward_dynamics\", \"regressor\"]\ngravity = [0.0, -9.81, 0.0]\nruntime_parameters = [\"link2.mass\"]\n\n[[links]]\na = 1.0\nalpha = \"0\"\nmass = 1.2\ncom = [-0.55, 0.0, 0.0]\ninertia = [0.02, 0.09, 0.1]\n\n[[links]]\na = 0.8\nalpha = \"0\"\nmass = 0.7\ncom = [-0.5, 0.0, 0.0]\ninertia = [0.01, 0.04, 0.05]\n";
 /// `(sin x[i], cos x[i])` for every lane `i`, each within about 1 ulp of the exact value
 /// (measured maximum in BENCHMARKS.md); lanes with |x| > 2²⁰, next to a multiple of π/2 or
 /// not finite use `f64::sin_cos`. Every lane's result depends on that lane's argument only.
@@ -508,16 +513,474 @@ pub fn mass_cqd_g(
     cqd_g[0] = t47;
     cqd_g[1] = t48;
 }
+/// Inverse dynamics τ = M(q) q̈ + C(q, q̇) q̇ + g(q) (N m; N for prismatic joints) by recursive Newton–Euler (eq. 24, no friction).
+///
+/// Arguments, in order:
+/// * `q`: joint angles (rad)
+/// * `qd`: joint velocities (rad/s)
+/// * `qdd`: joint accelerations (rad/s²; m/s² for prismatic joints)
+/// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
+/// * `tau`: output (see above), fully overwritten
+///
+/// Cost: 22 add/sub, 33 mul, 0 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 59 temporaries.
+#[inline]
+#[allow(unused_variables)]
+pub fn inverse_dynamics(
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    qdd: &[f64; NQ],
+    p: &[f64; NP],
+    tau: &mut [f64; NQ],
+) {
+    let ([t0, t2], [t1, t3]) = sin_cos_n([q[0], q[1]]);
+    let t4 = qd[0] * qd[0];
+    let t5 = 9.81 * t0;
+    let t6 = 9.81 * t1;
+    let t7 = t5 - t4;
+    let t8 = qd[0] + qd[1];
+    let t9 = t3 * t7;
+    let t10 = t2 * t7;
+    let t11 = t8 * t8;
+    let t12 = 0.8 * t11;
+    let t13 = 0.25 * p[0];
+    let t14 = 0.05 + t13;
+    let t15 = t6 + qdd[0];
+    let t16 = 1.2 * t15;
+    let t17 = 0.66 * qdd[0];
+    let t18 = t16 - t17;
+    let t19 = 0.4630000000000001 * qdd[0];
+    let t20 = 0.66 * t15;
+    let t21 = t19 - t20;
+    let t22 = qdd[0] + qdd[1];
+    let t23 = t2 * t15;
+    let t24 = t9 + t23;
+    let t25 = t3 * t15;
+    let t26 = t25 - t10;
+    let t27 = 0.8 * t22;
+    let t28 = t26 + t27;
+    let t29 = t24 - t12;
+    let t30 = p[0] * t29;
+    let t31 = p[0] * t28;
+    let t32 = p[0] * t22;
+    let t33 = 0.5 * t32;
+    let t34 = p[0] * t8;
+    let t35 = t8 * t34;
+    let t36 = 0.5 * t35;
+    let t37 = t31 - t33;
+    let t38 = t30 + t36;
+    let t39 = t14 * t22;
+    let t40 = 0.5 * t31;
+    let t41 = t39 - t40;
+    let t42 = 0.8 * t37;
+    let t43 = t41 + t42;
+    let t44 = t3 * t38;
+    let t45 = t2 * t37;
+    let t46 = t44 - t45;
+    let t47 = t2 * t38;
+    let t48 = t3 * t37;
+    let t49 = t47 + t48;
+    let t50 = t3 * t49;
+    let t51 = 0.8 * t50;
+    let t52 = t2 * t46;
+    let t53 = 0.8 * t52;
+    let t54 = t51 - t53;
+    let t55 = t18 + t49;
+    let t56 = t41 + t54;
+    let t57 = t21 + t56;
+    let t58 = t55 + t57;
+    tau[0] = t58;
+    tau[1] = t43;
+}
+/// ∂τ/∂q of the inverse dynamics: `out[i][k]` = ∂τ_i/∂q_k (exact, by differentiation of the Newton–Euler graph).
+///
+/// Arguments, in order:
+/// * `q`: joint angles (rad)
+/// * `qd`: joint velocities (rad/s)
+/// * `qdd`: joint accelerations (rad/s²; m/s² for prismatic joints)
+/// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
+/// * `out`: output (see above), fully overwritten
+///
+/// Cost: 32 add/sub, 56 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 94 temporaries.
+#[inline]
+#[allow(unused_variables)]
+pub fn inverse_dynamics_dq(
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    qdd: &[f64; NQ],
+    p: &[f64; NP],
+    out: &mut [[f64; NQ]; NQ],
+) {
+    let ([t0, t2], [t1, t3]) = sin_cos_n([q[0], q[1]]);
+    let t4 = t1 * t3;
+    let t5 = t0 * t2;
+    let t6 = t1 * t2;
+    let t7 = t0 * t3;
+    let t8 = qd[0] * qd[0];
+    let t9 = 9.81 * t0;
+    let t10 = 9.81 * t1;
+    let t11 = t9 - t8;
+    let t12 = qd[0] + qd[1];
+    let t13 = t3 * t11;
+    let t14 = 9.81 * t6;
+    let t15 = t2 * t11;
+    let t16 = 9.81 * t4;
+    let t17 = t12 * t12;
+    let t18 = 0.8 * t17;
+    let t19 = t10 + qdd[0];
+    let t20 = qdd[0] + qdd[1];
+    let t21 = t2 * t19;
+    let t22 = t13 + t21;
+    let t23 = t3 * t19;
+    let t24 = t23 - t15;
+    let t25 = 0.8 * t20;
+    let t26 = t24 + t25;
+    let t27 = t22 - t18;
+    let t28 = p[0] * t27;
+    let t29 = p[0] * t26;
+    let t30 = p[0] * t20;
+    let t31 = 0.5 * t30;
+    let t32 = p[0] * t12;
+    let t33 = t12 * t32;
+    let t34 = 0.5 * t33;
+    let t35 = t29 - t31;
+    let t36 = t28 + t34;
+    let t37 = t3 * t36;
+    let t38 = t2 * t35;
+    let t39 = t37 - t38;
+    let t40 = t2 * t36;
+    let t41 = t3 * t35;
+    let t42 = t40 + t41;
+    let t43 = 9.81 * t5;
+    let t44 = t16 - t43;
+    let t45 = 9.81 * t7;
+    let t46 = t14 + t45;
+    let t47 = p[0] * t44;
+    let t48 = p[0] * t46;
+    let t49 = 0.5 * t48;
+    let t50 = 0.30000000000000004 * t48;
+    let t51 = -t50;
+    let t52 = t3 * t47;
+    let t53 = t2 * t48;
+    let t54 = t52 + t53;
+    let t55 = t2 * t47;
+    let t56 = t3 * t48;
+    let t57 = t55 - t56;
+    let t58 = t3 * t57;
+    let t59 = 0.8 * t58;
+    let t60 = t2 * t54;
+    let t61 = 0.8 * t60;
+    let t62 = t49 + t55;
+    let t63 = t59 + t62;
+    let t64 = 5.2974 * t0;
+    let t65 = t63 - t64;
+    let t66 = t65 - t56;
+    let t67 = t66 - t61;
+    let t68 = p[0] * t24;
+    let t69 = p[0] * t22;
+    let t70 = 0.5 * t69;
+    let t71 = 0.30000000000000004 * t69;
+    let t72 = -t71;
+    let t73 = t3 * t68;
+    let t74 = t73 - t40;
+    let t75 = t2 * t69;
+    let t76 = t41 - t75;
+    let t77 = t74 - t76;
+    let t78 = t2 * t68;
+    let t79 = t37 + t78;
+    let t80 = t3 * t69;
+    let t81 = t38 + t80;
+    let t82 = t79 - t81;
+    let t83 = t2 * t42;
+    let t84 = t3 * t82;
+    let t85 = t84 - t83;
+    let t86 = 0.8 * t85;
+    let t87 = t3 * t39;
+    let t88 = t2 * t77;
+    let t89 = t87 + t88;
+    let t90 = 0.8 * t89;
+    let t91 = t86 - t90;
+    let t92 = t70 + t91;
+    let t93 = t82 + t92;
+    out[0][0] = t67;
+    out[0][1] = t93;
+    out[1][0] = t51;
+    out[1][1] = t72;
+}
+/// ∂τ/∂q̇ of the inverse dynamics: `out[i][k]` = ∂τ_i/∂q̇_k (exact; independent of q̈).
+///
+/// Arguments, in order:
+/// * `q`: joint angles (rad)
+/// * `qd`: joint velocities (rad/s)
+/// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
+/// * `out`: output (see above), fully overwritten
+///
+/// Cost: 10 add/sub, 25 mul, 0 div, 0 sqrt, 1 sin/cos, 0 neg, 0 other; 37 temporaries.
+#[inline]
+#[allow(unused_variables)]
+pub fn inverse_dynamics_dqd(
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    p: &[f64; NP],
+    out: &mut [[f64; NQ]; NQ],
+) {
+    let ([t0], [t1]) = sin_cos_n([q[1]]);
+    let t2 = qd[0] + qd[1];
+    let t3 = p[0] * t2;
+    let t4 = t1 * qd[0];
+    let t5 = 2.0 * t4;
+    let t6 = t0 * qd[0];
+    let t7 = 1.6 * t2;
+    let t8 = t5 + t7;
+    let t9 = p[0] * t8;
+    let t10 = p[0] * t6;
+    let t11 = t3 - t9;
+    let t12 = 0.6000000000000001 * t10;
+    let t13 = t1 * t11;
+    let t14 = t0 * t10;
+    let t15 = 2.0 * t14;
+    let t16 = t13 - t15;
+    let t17 = t0 * t11;
+    let t18 = t1 * t10;
+    let t19 = 2.0 * t18;
+    let t20 = t17 + t19;
+    let t21 = t1 * t20;
+    let t22 = 0.8 * t21;
+    let t23 = t0 * t16;
+    let t24 = 0.8 * t23;
+    let t25 = t22 - t24;
+    let t26 = t25 - t10;
+    let t27 = t20 + t26;
+    let t28 = t1 * t3;
+    let t29 = t0 * t3;
+    let t30 = 0.6000000000000001 * t29;
+    let t31 = t1 * t29;
+    let t32 = 0.4800000000000001 * t31;
+    let t33 = t0 * t28;
+    let t34 = 0.4800000000000001 * t33;
+    let t35 = t34 - t32;
+    let t36 = t35 - t30;
+    out[0][0] = t27;
+    out[0][1] = t36;
+    out[1][0] = t12;
+    out[1][1] = 0.0;
+}
+/// Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) (eq. 26a without friction) by an unrolled LDLᵀ factorisation of M.
+///
+/// Arguments, in order:
+/// * `q`: joint angles (rad)
+/// * `qd`: joint velocities (rad/s)
+/// * `tau`: joint torques (N m; N for prismatic joints)
+/// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
+/// * `qdd`: output (see above), fully overwritten
+///
+/// Cost: 18 add/sub, 38 mul, 2 div, 0 sqrt, 2 sin/cos, 0 neg, 0 other; 62 temporaries.
+#[inline]
+#[allow(unused_variables)]
+pub fn forward_dynamics(
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    tau: &[f64; NQ],
+    p: &[f64; NP],
+    qdd: &mut [f64; NQ],
+) {
+    let ([t0, t2], [t1, t3]) = sin_cos_n([q[0], q[1]]);
+    let t4 = t3 + 0.30000000000000004;
+    let t5 = t2 * t2;
+    let t6 = t4 * t4;
+    let t7 = t5 + t6;
+    let t8 = p[0] * t7;
+    let t9 = t8 + 0.39299999999999996;
+    let t10 = p[0] * t4;
+    let t11 = 0.30000000000000004 * t10;
+    let t12 = 0.05 + t11;
+    let t13 = 0.09000000000000002 * p[0];
+    let t14 = qd[1] * qd[1];
+    let t15 = qd[0] * qd[1];
+    let t16 = qd[0] * qd[0];
+    let t17 = t2 * t3;
+    let t18 = 2.0 * t17;
+    let t19 = t2 * t4;
+    let t20 = 2.0 * t19;
+    let t21 = t18 - t20;
+    let t22 = p[0] * t21;
+    let t23 = t2 * p[0];
+    let t24 = t15 * t22;
+    let t25 = t14 * t23;
+    let t26 = 0.30000000000000004 * t25;
+    let t27 = t24 - t26;
+    let t28 = t16 * t22;
+    let t29 = 0.5 * t28;
+    let t30 = 9.81 * p[0];
+    let t31 = t3 * p[0];
+    let t32 = 2.9430000000000005 * t31;
+    let t33 = t30 + t32;
+    let t34 = 5.297399999999999 + t33;
+    let t35 = t0 * p[0];
+    let t36 = t1 * p[0];
+    let t37 = t2 * t35;
+    let t38 = 2.9430000000000005 * t37;
+    let t39 = t3 * t36;
+    let t40 = 2.9430000000000005 * t39;
+    let t41 = t40 - t38;
+    let t42 = t0 * t23;
+    let t43 = 2.9430000000000005 * t42;
+    let t44 = t1 * t34;
+    let t45 = t44 - t43;
+    let t46 = t27 + t45;
+    let t47 = t41 - t29;
+    let t48 = tau[0] - t46;
+    let t49 = tau[1] - t47;
+    let t50 = 1.0 / t9;
+    let t51 = t12 * t50;
+    let t52 = t12 * t51;
+    let t53 = t13 - t52;
+    let t54 = 0.05 + t53;
+    let t55 = 1.0 / t54;
+    let t56 = t48 * t51;
+    let t57 = t49 - t56;
+    let t58 = t55 * t57;
+    let t59 = t48 * t50;
+    let t60 = t51 * t58;
+    let t61 = t59 - t60;
+    qdd[0] = t61;
+    qdd[1] = t58;
+}
+/// Dynamic regressor: `y[i][l][k]` = ∂τ_i/∂π_{l,k}, so τ = Σ y[i][l][k] π_{l,k} with π_l = [m, m c_x, m c_y, m c_z, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz] of link l + 1 (c the COG and I the inertia about the link frame's origin, link-frame axes).
+///
+/// Arguments, in order:
+/// * `q`: joint angles (rad)
+/// * `qd`: joint velocities (rad/s)
+/// * `qdd`: joint accelerations (rad/s²; m/s² for prismatic joints)
+/// * `p`: runtime parameters, layout `PARAM_NAMES` (pass `&PARAM_DEFAULTS`)
+/// * `y`: output (see above), fully overwritten
+///
+/// Cost: 21 add/sub, 28 mul, 0 div, 0 sqrt, 2 sin/cos, 2 neg, 0 other; 55 temporaries.
+#[inline]
+#[allow(unused_variables)]
+pub fn regressor(
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    qdd: &[f64; NQ],
+    p: &[f64; NP],
+    y: &mut [[[f64; 10]; NQ]; NQ],
+) {
+    let ([t0, t2], [t1, t3]) = sin_cos_n([q[0], q[1]]);
+    let t4 = 0.8 * t3;
+    let t5 = t2 * t2;
+    let t6 = qd[0] * qd[0];
+    let t7 = t2 * t3;
+    let t8 = 9.81 * t0;
+    let t9 = 9.81 * t1;
+    let t10 = t8 - t6;
+    let t11 = qd[0] + qd[1];
+    let t12 = t3 * t10;
+    let t13 = t2 * t10;
+    let t14 = t11 * t11;
+    let t15 = 0.8 * t14;
+    let t16 = t9 + qdd[0];
+    let t17 = qdd[0] + qdd[1];
+    let t18 = t2 * t16;
+    let t19 = t12 + t18;
+    let t20 = t3 * t16;
+    let t21 = t20 - t13;
+    let t22 = 0.8 * t17;
+    let t23 = t21 + t22;
+    let t24 = t19 - t15;
+    let t25 = -t8;
+    let t26 = -t19;
+    let t27 = 1.0 + t4;
+    let t28 = t3 * t27;
+    let t29 = t2 * t27;
+    let t30 = 0.8 * t5;
+    let t31 = t28 + t30;
+    let t32 = 0.8 * t7;
+    let t33 = t29 - t32;
+    let t34 = t15 - t19;
+    let t35 = t32 - t29;
+    let t36 = t11 * t31;
+    let t37 = t11 * t35;
+    let t38 = t11 * t37;
+    let t39 = t23 + t38;
+    let t40 = t11 * t36;
+    let t41 = t34 - t40;
+    let t42 = t17 * t31;
+    let t43 = t39 + t42;
+    let t44 = t17 * t35;
+    let t45 = t41 + t44;
+    let t46 = t23 * t31;
+    let t47 = t24 * t33;
+    let t48 = t46 + t47;
+    let t49 = 2.0 * qdd[0];
+    let t50 = t9 + t49;
+    let t51 = 1.6 * t17;
+    let t52 = t20 + t51;
+    let t53 = t52 - t13;
+    let t54 = 0.8 * t23;
+    y[0][0][0] = t16;
+    y[0][0][1] = t50;
+    y[0][0][2] = t25;
+    y[0][0][3] = 0.0;
+    y[0][0][4] = 0.0;
+    y[0][0][5] = 0.0;
+    y[0][0][6] = 0.0;
+    y[0][0][7] = 0.0;
+    y[0][0][8] = 0.0;
+    y[0][0][9] = qdd[0];
+    y[0][1][0] = t48;
+    y[0][1][1] = t43;
+    y[0][1][2] = t45;
+    y[0][1][3] = 0.0;
+    y[0][1][4] = 0.0;
+    y[0][1][5] = 0.0;
+    y[0][1][6] = 0.0;
+    y[0][1][7] = 0.0;
+    y[0][1][8] = 0.0;
+    y[0][1][9] = t17;
+    y[1][0][0] = 0.0;
+    y[1][0][1] = 0.0;
+    y[1][0][2] = 0.0;
+    y[1][0][3] = 0.0;
+    y[1][0][4] = 0.0;
+    y[1][0][5] = 0.0;
+    y[1][0][6] = 0.0;
+    y[1][0][7] = 0.0;
+    y[1][0][8] = 0.0;
+    y[1][0][9] = 0.0;
+    y[1][1][0] = t54;
+    y[1][1][1] = t53;
+    y[1][1][2] = t26;
+    y[1][1][3] = 0.0;
+    y[1][1][4] = 0.0;
+    y[1][1][5] = 0.0;
+    y[1][1][6] = 0.0;
+    y[1][1][7] = 0.0;
+    y[1][1][8] = 0.0;
+    y[1][1][9] = t17;
+}
 /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
 /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.
+/// Kernels taking `qdd` or `tau` get zeros (see `eval_flat_u`).
 /// For tests and the CLI: unlike the kernels, this allocates.
-#[allow(unused_variables)]
 pub fn eval_flat(
     name: &str,
     q: &[f64; NQ],
     qd: &[f64; NQ],
     omega: &[f64; 3],
     eps: f64,
+    p: &[f64; NP],
+) -> Option<Vec<f64>> {
+    eval_flat_u(name, q, qd, omega, eps, &[0.0; NQ], p)
+}
+/// As `eval_flat`, with `u` passed as the `qdd` (inverse dynamics, its derivatives and
+/// the regressor) or `tau` (forward dynamics) argument of the kernels that take one.
+#[allow(unused_variables)]
+pub fn eval_flat_u(
+    name: &str,
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    omega: &[f64; 3],
+    eps: f64,
+    u: &[f64; NQ],
     p: &[f64; NP],
 ) -> Option<Vec<f64>> {
     let mut v = Vec::new();
@@ -573,7 +1036,200 @@ pub fn eval_flat(
             v.extend(out_m.iter().flatten().copied());
             v.extend_from_slice(&out_cqd_g);
         }
+        "inverse_dynamics" => {
+            let mut out_tau = [0.0; NQ];
+            inverse_dynamics(q, qd, u, p, &mut out_tau);
+            v.extend_from_slice(&out_tau);
+        }
+        "inverse_dynamics_dq" => {
+            let mut out_out = [[0.0; NQ]; NQ];
+            inverse_dynamics_dq(q, qd, u, p, &mut out_out);
+            v.extend(out_out.iter().flatten().copied());
+        }
+        "inverse_dynamics_dqd" => {
+            let mut out_out = [[0.0; NQ]; NQ];
+            inverse_dynamics_dqd(q, qd, p, &mut out_out);
+            v.extend(out_out.iter().flatten().copied());
+        }
+        "forward_dynamics" => {
+            let mut out_qdd = [0.0; NQ];
+            forward_dynamics(q, qd, u, p, &mut out_qdd);
+            v.extend_from_slice(&out_qdd);
+        }
+        "regressor" => {
+            let mut out_y = [[[0.0; 10]; NQ]; NQ];
+            regressor(q, qd, u, p, &mut out_y);
+            v.extend(out_y.iter().flatten().flatten().copied());
+        }
         _ => return None,
     }
     Some(v)
+}
+/// Calls kernel `KERNELS[k]` with outputs on the stack and copies them, flattened as by
+/// `eval_flat_u`, into the front of `out`; returns their number, or `None` if `k` is out
+/// of range or `out` too short. Does not allocate (for benchmarks).
+#[allow(unused_variables, clippy::too_many_arguments)]
+pub fn eval_index_into(
+    k: usize,
+    q: &[f64; NQ],
+    qd: &[f64; NQ],
+    omega: &[f64; 3],
+    eps: f64,
+    u: &[f64; NQ],
+    p: &[f64; NP],
+    out: &mut [f64],
+) -> Option<usize> {
+    match k {
+        0 => {
+            if out.len() < 24 {
+                return None;
+            }
+            let mut out_pos = [[0.0; 3]; NQ];
+            let mut out_rot = [[[0.0; 3]; 3]; NQ];
+            frames(q, p, &mut out_pos, &mut out_rot);
+            for (d, s) in out[0..6].iter_mut().zip(out_pos.iter().flatten()) {
+                *d = *s;
+            }
+            for (d, s) in out[6..24].iter_mut().zip(out_rot.iter().flatten().flatten()) {
+                *d = *s;
+            }
+            Some(24)
+        }
+        1 => {
+            if out.len() < 12 {
+                return None;
+            }
+            let mut out_jp = [[0.0; NQ]; 3];
+            let mut out_jo = [[0.0; NQ]; 3];
+            tip_jacobian(q, p, &mut out_jp, &mut out_jo);
+            for (d, s) in out[0..6].iter_mut().zip(out_jp.iter().flatten()) {
+                *d = *s;
+            }
+            for (d, s) in out[6..12].iter_mut().zip(out_jo.iter().flatten()) {
+                *d = *s;
+            }
+            Some(12)
+        }
+        2 => {
+            if out.len() < 4 {
+                return None;
+            }
+            let mut out_m = [[0.0; NQ]; NQ];
+            mass_matrix(q, p, &mut out_m);
+            for (d, s) in out[0..4].iter_mut().zip(out_m.iter().flatten()) {
+                *d = *s;
+            }
+            Some(4)
+        }
+        3 => {
+            if out.len() < 2 {
+                return None;
+            }
+            let mut out_out = [0.0; NQ];
+            coriolis_qd(q, qd, p, &mut out_out);
+            out[0..2].copy_from_slice(&out_out);
+            Some(2)
+        }
+        4 => {
+            if out.len() < 2 {
+                return None;
+            }
+            let mut out_out = [0.0; NQ];
+            gravity(q, p, &mut out_out);
+            out[0..2].copy_from_slice(&out_out);
+            Some(2)
+        }
+        5 => {
+            if out.len() < 1 {
+                return None;
+            }
+            let mut out_out = 0.0;
+            potential(q, p, &mut out_out);
+            out[0] = out_out;
+            Some(1)
+        }
+        6 => {
+            if out.len() < 2 {
+                return None;
+            }
+            let mut out_out = [0.0; NQ];
+            cqd_g(q, qd, p, &mut out_out);
+            out[0..2].copy_from_slice(&out_out);
+            Some(2)
+        }
+        7 => {
+            if out.len() < 2 {
+                return None;
+            }
+            let mut out_out = [0.0; NQ];
+            cqd_g_rnea(q, qd, p, &mut out_out);
+            out[0..2].copy_from_slice(&out_out);
+            Some(2)
+        }
+        8 => {
+            if out.len() < 6 {
+                return None;
+            }
+            let mut out_m = [[0.0; NQ]; NQ];
+            let mut out_cqd_g = [0.0; NQ];
+            mass_cqd_g(q, qd, p, &mut out_m, &mut out_cqd_g);
+            for (d, s) in out[0..4].iter_mut().zip(out_m.iter().flatten()) {
+                *d = *s;
+            }
+            out[4..6].copy_from_slice(&out_cqd_g);
+            Some(6)
+        }
+        9 => {
+            if out.len() < 2 {
+                return None;
+            }
+            let mut out_tau = [0.0; NQ];
+            inverse_dynamics(q, qd, u, p, &mut out_tau);
+            out[0..2].copy_from_slice(&out_tau);
+            Some(2)
+        }
+        10 => {
+            if out.len() < 4 {
+                return None;
+            }
+            let mut out_out = [[0.0; NQ]; NQ];
+            inverse_dynamics_dq(q, qd, u, p, &mut out_out);
+            for (d, s) in out[0..4].iter_mut().zip(out_out.iter().flatten()) {
+                *d = *s;
+            }
+            Some(4)
+        }
+        11 => {
+            if out.len() < 4 {
+                return None;
+            }
+            let mut out_out = [[0.0; NQ]; NQ];
+            inverse_dynamics_dqd(q, qd, p, &mut out_out);
+            for (d, s) in out[0..4].iter_mut().zip(out_out.iter().flatten()) {
+                *d = *s;
+            }
+            Some(4)
+        }
+        12 => {
+            if out.len() < 2 {
+                return None;
+            }
+            let mut out_qdd = [0.0; NQ];
+            forward_dynamics(q, qd, u, p, &mut out_qdd);
+            out[0..2].copy_from_slice(&out_qdd);
+            Some(2)
+        }
+        13 => {
+            if out.len() < 40 {
+                return None;
+            }
+            let mut out_y = [[[0.0; 10]; NQ]; NQ];
+            regressor(q, qd, u, p, &mut out_y);
+            for (d, s) in out[0..40].iter_mut().zip(out_y.iter().flatten().flatten()) {
+                *d = *s;
+            }
+            Some(40)
+        }
+        _ => None,
+    }
 }

@@ -3,6 +3,9 @@
 //! transforms, full inertia tensors). Written from the paper and docs/parameters.md only, never from
 //! `bf-codegen`'s code, so the generated kernels can be checked against it.
 //!
+//! Joints are revolute (θ_i = q_i + offset) or prismatic (d_i = q_i + d; Jacobian column
+//! (z_j, 0), the Newton–Euler pass adds the sliding terms 2ω × z ḋ + z d̈).
+//!
 //! Method: plain 4×4 homogeneous transforms built by multiplying the elementary DH factors, a
 //! geometric Jacobian from the z-axis cross-product construction, and the Lagrangian quantities
 //! evaluated generically over [`Real`]; running the same code on `num_dual::Dual64` gives
@@ -63,6 +66,8 @@ pub struct RefLink {
     pub d: f64,
     /// Joint offset: θ = q + offset (rad).
     pub offset: f64,
+    /// Prismatic joint: d_i = q_i + `d` and θ_i = `offset` (otherwise θ_i = q_i + `offset`).
+    pub prismatic: bool,
     /// Mass m_i (kg).
     pub mass: f64,
     /// COG in link-frame coordinates (m).
@@ -218,7 +223,11 @@ impl Reference {
         let mut axis_z = Vec::with_capacity(self.nq());
         let mut axis_o = Vec::with_capacity(self.nq());
         for (i, l) in self.links.iter().enumerate() {
-            let theta = q[i] + k::<T>(l.offset);
+            let (theta, dd) = if l.prismatic {
+                (k::<T>(l.offset), q[i] + k::<T>(l.d))
+            } else {
+                (q[i] + k::<T>(l.offset), k::<T>(l.d))
+            };
             let (st, ct) = theta.sin_cos();
             let (sa, ca) = sin_cos_const(l.alpha);
             let prev = frames[i];
@@ -227,7 +236,7 @@ impl Reference {
                     // Joint i turns about z_{i-1} through o_{i-1} (both fixed in link i-1).
                     axis_z.push(col(&h_rot(&prev), 2));
                     axis_o.push(h_pos(&prev));
-                    let m = mul4(&rot_z(st, ct), &trans_z(k(l.d)));
+                    let m = mul4(&rot_z(st, ct), &trans_z(dd));
                     let m = mul4(&m, &trans_x(k(l.a)));
                     mul4(&m, &rot_x(k(sa), k(ca)))
                 }
@@ -238,7 +247,7 @@ impl Reference {
                     axis_z.push(col(&h_rot(&pre), 2));
                     axis_o.push(h_pos(&pre));
                     let m = mul4(&m, &rot_z(st, ct));
-                    mul4(&m, &trans_z(k(l.d)))
+                    mul4(&m, &trans_z(dd))
                 }
             };
             frames.push(mul4(&prev, &a));
@@ -268,8 +277,12 @@ impl Reference {
         let mut jp = vec![zero3(); n];
         let mut jo = vec![zero3(); n];
         for j in 0..link.min(n) {
-            jp[j] = cross(kin.axis_z[j], sub(p, kin.axis_o[j]));
-            jo[j] = kin.axis_z[j];
+            if self.links[j].prismatic {
+                jp[j] = kin.axis_z[j];
+            } else {
+                jp[j] = cross(kin.axis_z[j], sub(p, kin.axis_o[j]));
+                jo[j] = kin.axis_z[j];
+            }
         }
         (jp, jo)
     }
@@ -546,9 +559,14 @@ impl Reference {
             // x_i is fixed in link i−1: carry the acceleration along link i−1.
             let r = sub(x, x_prev);
             a_x = add(a_x, add(cross(wd, r), cross(w, cross(w, r))));
-            let w_new = add(w, scale(qd[i], z));
-            wd = add(add(wd, scale(qdd[i], z)), scale(qd[i], cross(w, z)));
-            w = w_new;
+            if self.links[i].prismatic {
+                // The point of link i at x_i slides along z relative to link i−1.
+                a_x = add(a_x, add(scale(2.0 * qd[i], cross(w, z)), scale(qdd[i], z)));
+            } else {
+                let w_new = add(w, scale(qd[i], z));
+                wd = add(add(wd, scale(qdd[i], z)), scale(qd[i], cross(w, z)));
+                w = w_new;
+            }
             let rc = sub(coms[i], x);
             a_c.push(add(a_x, add(cross(wd, rc), cross(w, cross(w, rc)))));
             w_l.push(w);
@@ -572,7 +590,8 @@ impl Reference {
                 add(n_i, cross(sub(coms[i], x), f_i)),
                 add(m_next, cross(sub(x_next, x), f_next)),
             );
-            tau[i] = dot(kin.axis_z[i], m);
+            // A prismatic joint carries the force along its axis, a revolute one the moment.
+            tau[i] = dot(kin.axis_z[i], if l.prismatic { f } else { m });
             f_next = f;
             m_next = m;
         }

@@ -76,6 +76,7 @@ impl Reference {
                 alpha: angle_rad(&l.alpha),
                 d: l.d,
                 offset: l.offset.as_ref().map(angle_rad).unwrap_or(0.0),
+                prismatic: l.joint == bf_codegen::spec::JointType::Prismatic,
                 mass: l.mass,
                 com: l.com,
                 inertia: inertia_of(&l.inertia),

@@ -1,0 +1,273 @@
+//! `ball-finger bench SCENE [--time SECS] [--states N] [--seed S] [--json]`: times every
+//! kernel of a scene's module (its `kernels` list and the inverse-dynamics family) over
+//! cycling random states, through the compiled kernels of `bf-generated` when the file is a
+//! built-in scene (its text equals the compiled one) and through the run-time interpreter
+//! (`bf_codegen::interp`, the same graphs and f64 operations) for any scene file.
+//!
+//! Method: a fixed set of random states (seeded; q uniform in the joint limits or [−π, π],
+//! q̇ in [−2, 2], ω in [−2, 2]³, q̈ and τ in [−5, 5]) is cycled through in batches, one call
+//! per state; the reported figure is the median over batches of wall-clock time per call.
+//! The compiled path calls `eval_index_into` (outputs on the stack, copied into a buffer; no
+//! allocation), the interpreted path a compiled tape (allocates its value array per call).
+//! The budget `--time` is split evenly over the kernels and the two paths. Before timing,
+//! both paths are evaluated at every state and their largest relative difference is reported
+//! (the two must agree; a difference above 1e-12 is an error).
+
+use std::hint::black_box;
+use std::time::Instant;
+
+use crate::cli::BenchArgs;
+use anyhow::{Context, Result, bail};
+use bf_codegen::Scene;
+use bf_codegen::interp::{KernelF64, SceneKernels};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+
+/// Largest relative difference tolerated between the compiled and interpreted outputs.
+pub const AGREEMENT_TOL: f64 = 1e-12;
+
+/// One random state.
+struct State {
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    omega: [f64; 3],
+    eps: f64,
+    u: Vec<f64>,
+}
+
+/// `KERNELS[k]` of a compiled module called on one state, outputs into `out`.
+type CompiledFn = fn(usize, &State, &mut [f64]) -> Option<usize>;
+
+macro_rules! compiled {
+    ($m:ident) => {{
+        fn call(k: usize, s: &State, out: &mut [f64]) -> Option<usize> {
+            use bf_generated::$m as m;
+            let q: &[f64; m::NQ] = s.q.as_slice().try_into().ok()?;
+            let qd: &[f64; m::NQ] = s.qd.as_slice().try_into().ok()?;
+            let u: &[f64; m::NQ] = s.u.as_slice().try_into().ok()?;
+            m::eval_index_into(k, q, qd, &s.omega, s.eps, u, &m::PARAM_DEFAULTS, out)
+        }
+        (call as CompiledFn, bf_generated::$m::KERNELS)
+    }};
+}
+
+/// The compiled module of a built-in scene: its call function and kernel names.
+fn compiled_for(scene: &Scene, text: &str) -> Option<(CompiledFn, &'static [&'static str])> {
+    match scene.name.as_str() {
+        "paper" if text == bf_generated::paper::SCENE_TOML => Some(compiled!(paper)),
+        "human" if text == bf_generated::human::SCENE_TOML => Some(compiled!(human)),
+        "puma560" if text == bf_generated::puma560::SCENE_TOML => Some(compiled!(puma560)),
+        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => Some(compiled!(iiwa7)),
+        _ => None,
+    }
+}
+
+/// One row of the table.
+#[derive(Debug, Serialize)]
+pub struct Row {
+    /// Kernel name.
+    pub kernel: String,
+    /// Number of output values.
+    pub outputs: usize,
+    /// Compiled kernel, median ns per call (`None` if the scene is not compiled in).
+    pub compiled_ns: Option<f64>,
+    /// Interpreted kernel, median ns per call.
+    pub interpreted_ns: f64,
+    /// interpreted / compiled.
+    pub ratio: Option<f64>,
+    /// Largest |compiled − interpreted| / max(1, max |interpreted|) over the states.
+    pub max_rel_diff: Option<f64>,
+}
+
+/// The `--json` output.
+#[derive(Debug, Serialize)]
+pub struct Bench {
+    /// Scene name.
+    pub scene: String,
+    /// Whether the compiled kernels of `bf-generated` were timed.
+    pub compiled: bool,
+    /// Number of random states cycled through.
+    pub states: usize,
+    /// Seed of the states.
+    pub seed: u64,
+    /// Time budget (s).
+    pub time_s: f64,
+    /// One row per kernel, in emission order.
+    pub kernels: Vec<Row>,
+}
+
+fn random_states(scene: &Scene, n: usize, seed: u64) -> Vec<State> {
+    let mut r = ChaCha8Rng::seed_from_u64(seed);
+    let eps = scene.contact.as_ref().map_or(0.01, |c| c.smooth_eps);
+    let pi = std::f64::consts::PI;
+    (0..n)
+        .map(|_| {
+            let q = scene
+                .links
+                .iter()
+                .map(|l| {
+                    let (lo, hi) = (l.q_min.unwrap_or(-pi), l.q_max.unwrap_or(pi));
+                    if hi > lo { r.random_range(lo..hi) } else { lo }
+                })
+                .collect();
+            let nq = scene.links.len();
+            State {
+                q,
+                qd: (0..nq).map(|_| r.random_range(-2.0..2.0)).collect(),
+                omega: std::array::from_fn(|_| r.random_range(-2.0..2.0)),
+                eps,
+                u: (0..nq).map(|_| r.random_range(-5.0..5.0)).collect(),
+            }
+        })
+        .collect()
+}
+
+/// Median over batches (one call per state each) of ns per call, within `budget` seconds
+/// (at least three batches).
+fn time_batches(n_states: usize, budget: f64, mut batch: impl FnMut()) -> f64 {
+    let mut per_call = Vec::new();
+    let start = Instant::now();
+    while per_call.len() < 3 || start.elapsed().as_secs_f64() < budget {
+        let t = Instant::now();
+        batch();
+        per_call.push(t.elapsed().as_secs_f64() * 1e9 / n_states as f64);
+        if per_call.len() >= 100_000 {
+            break;
+        }
+    }
+    per_call.sort_by(f64::total_cmp);
+    per_call[per_call.len() / 2]
+}
+
+/// Times every kernel of `scene` (file text `text`).
+pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -> Result<Bench> {
+    let rt = SceneKernels::new(scene).context("cannot build the kernels")?;
+    let compiled = compiled_for(scene, text);
+    if let Some((_, names)) = compiled {
+        let rt_names: Vec<&str> = rt.kernels.iter().map(|k| k.name.as_str()).collect();
+        if rt_names != names {
+            bail!(
+                "internal: the compiled module of {} holds kernels {names:?}, the generator \
+                 builds {rt_names:?}",
+                scene.name
+            );
+        }
+    }
+    let states = random_states(scene, n_states, seed);
+    let vars: Vec<Vec<KernelF64>> = states
+        .iter()
+        .map(|s| rt.vars(&s.q, &s.qd, s.omega, s.eps, &s.u, None))
+        .collect();
+    let paths = if compiled.is_some() { 2.0 } else { 1.0 };
+    let budget = time / (rt.kernels.len() as f64 * paths);
+    let mut rows = Vec::new();
+    for (k, kern) in rt.kernels.iter().enumerate() {
+        let len: usize = kern.outputs.iter().map(|o| o.len()).sum();
+        let mut out = vec![0.0; len];
+        let (mut compiled_ns, mut max_rel) = (None, None);
+        if let Some((call, _)) = compiled {
+            let mut worst: f64 = 0.0;
+            for (s, v) in states.iter().zip(&vars) {
+                let want = kern.eval(v);
+                let got = call(k, s, &mut out)
+                    .with_context(|| format!("internal: compiled kernel `{}` failed", kern.name))?;
+                let scale = want.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+                for (a, b) in out[..got].iter().zip(&want) {
+                    worst = worst.max((a - b).abs() / scale);
+                }
+            }
+            if worst.is_nan() || worst > AGREEMENT_TOL {
+                bail!(
+                    "kernel `{}` of {}: compiled and interpreted outputs differ by {worst:e} \
+                     (relative), more than {AGREEMENT_TOL:e}",
+                    kern.name,
+                    scene.name
+                );
+            }
+            max_rel = Some(worst);
+            compiled_ns = Some(time_batches(states.len(), budget, || {
+                for s in &states {
+                    black_box(call(k, black_box(s), &mut out));
+                }
+            }));
+        }
+        let interpreted_ns = time_batches(states.len(), budget, || {
+            for v in &vars {
+                black_box(kern.eval(black_box(v)));
+            }
+        });
+        rows.push(Row {
+            kernel: kern.name.clone(),
+            outputs: len,
+            compiled_ns,
+            interpreted_ns,
+            ratio: compiled_ns.map(|c| interpreted_ns / c),
+            max_rel_diff: max_rel,
+        });
+    }
+    Ok(Bench {
+        scene: scene.name.clone(),
+        compiled: compiled.is_some(),
+        states: n_states,
+        seed,
+        time_s: time,
+        kernels: rows,
+    })
+}
+
+/// Run `bench`.
+pub fn run(args: &BenchArgs) -> Result<()> {
+    if !(args.time.is_finite() && args.time > 0.0) {
+        bail!(
+            "--time must be a finite positive number of seconds (got {})",
+            args.time
+        );
+    }
+    if args.states == 0 {
+        bail!("--states must be at least 1 (got 0)");
+    }
+    let (scene, text) = super::load_scene(&args.scene)?;
+    let b = bench(&scene, &text, args.time, args.states, args.seed)
+        .with_context(|| format!("{}: bench failed", args.scene.display()))?;
+    if args.json {
+        return crate::outln!("{}", serde_json::to_string_pretty(&b)?);
+    }
+    let source = if b.compiled {
+        "compiled kernels and run-time interpreter"
+    } else {
+        "run-time interpreter only (the file is not a built-in scene)"
+    };
+    crate::outln!(
+        "bench {}: {source}; {} random states (seed {}), median wall-clock ns/call over batches",
+        b.scene,
+        b.states,
+        b.seed
+    )?;
+    crate::outln!(
+        "{:<22} {:>8} {:>14} {:>16} {:>9} {:>13}",
+        "kernel",
+        "outputs",
+        "compiled ns",
+        "interpreted ns",
+        "ratio",
+        "max rel diff"
+    )?;
+    let opt = |v: Option<f64>, digits: usize| match v {
+        Some(x) => format!("{x:.digits$}"),
+        None => "-".to_string(),
+    };
+    for r in &b.kernels {
+        crate::outln!(
+            "{:<22} {:>8} {:>14} {:>16.1} {:>9} {:>13}",
+            r.kernel,
+            r.outputs,
+            opt(r.compiled_ns, 1),
+            r.interpreted_ns,
+            opt(r.ratio, 1),
+            r.max_rel_diff
+                .map_or("-".to_string(), |d| format!("{d:.1e}"))
+        )?;
+    }
+    Ok(())
+}
