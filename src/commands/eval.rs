@@ -1,8 +1,9 @@
 //! `ball-finger eval SCENE --q .. --qd .. [--omega ..] [--eps ..]`: one JSON object with the
 //! kinematics (eq. 67–71), dynamics (eq. 72–79, Christoffel C) and contact quantities
-//! (eq. 2–7, smooth variant eq. 58–59) at one state. Built-in scenes (the file's text equals the
-//! one compiled into `bf-generated`) go through the compiled kernels; any other file through
-//! the generator's interpreter. Key order and layout are fixed (matrices row-major). A
+//! (eq. 2–7, smooth variant eq. 58–59) at one state. Compiled scenes (the parsed file equals a
+//! scene compiled into `bf-generated`, `bf_model::registry::compiled_match`) go through the compiled kernels; any other file
+//! through the generator's interpreter (stderr names which). `--param name=value` sets runtime
+//! parameters. Key order and layout are fixed (matrices row-major). A
 //! non-finite entry (overflow at an extreme state or ε) is an error naming the quantity and the
 //! entry (indices from 1), never a `null` in the JSON.
 
@@ -10,10 +11,11 @@ use crate::cli::EvalArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, bail};
 use bf_codegen::{EvalOutput, EvalValue, Scene};
+use bf_model::KernelSource;
 
 /// Run `eval`.
 pub fn run(args: &EvalArgs) -> Result<()> {
-    let (scene, text) = super::load_scene(&args.scene)?;
+    let (scene, _) = super::load_scene_with_params(&args.scene, &args.param)?;
     let n = scene.links.len();
     let q = parse_list("--q", &args.q, Some(n))?;
     let qd = parse_list("--qd", &args.qd, Some(n))?;
@@ -29,12 +31,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     if !(eps.is_finite() && eps > 0.0) {
         anyhow::bail!("--eps must be a finite positive number (got {eps})");
     }
-    let (out, source) = match eval_builtin(&scene, &text, &q, &qd, omega, eps) {
-        Some(out) => (out, "compiled kernels"),
+    let (out, source) = match eval_builtin(&scene, &q, &qd, omega, eps) {
+        Some(out) => (out, KernelSource::Compiled),
         None => (
             bf_codegen::eval_all(&scene, &q, &qd, omega, eps)
                 .with_context(|| format!("{}: evaluation failed", args.scene.display()))?,
-            "interpreter",
+            KernelSource::Interpreted,
         ),
     };
     if let Some((entry, v)) = first_non_finite(&out) {
@@ -46,7 +48,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             args.omega.as_deref().unwrap_or("0,0,0")
         );
     }
-    eprintln!("evaluated {} through the {source}", scene.name);
+    eprintln!("evaluated {} on the {source} kernels", scene.name);
     crate::outln!("{}", serde_json::to_string(&out)?)
 }
 
@@ -104,9 +106,9 @@ fn mat<const C: usize>(rows: &[[f64; C]]) -> EvalValue {
 }
 
 macro_rules! eval_dynamics {
-    ($m:ident, $q:expr, $qd:expr, $out:expr) => {{
+    ($m:ident, $p:expr, $q:expr, $qd:expr, $out:expr) => {{
         use bf_generated::$m as k;
-        let p = &k::PARAM_DEFAULTS;
+        let p: &[f64; k::NP] = $p.try_into().ok()?;
         let q: [f64; k::NQ] = $q.try_into().ok()?;
         let qd: [f64; k::NQ] = $qd.try_into().ok()?;
         let mut pos = [[0.0; 3]; k::NQ];
@@ -135,9 +137,9 @@ macro_rules! eval_dynamics {
 }
 
 macro_rules! eval_contact {
-    ($m:ident, $q:expr, $qd:expr, $omega:expr, $eps:expr, $out:expr) => {{
+    ($m:ident, $p:expr, $q:expr, $qd:expr, $omega:expr, $eps:expr, $out:expr) => {{
         use bf_generated::$m as k;
-        let p = &k::PARAM_DEFAULTS;
+        let p: &[f64; k::NP] = $p.try_into().ok()?;
         let mut c = k::Contact::default();
         k::contact(&$q, &$qd, &$omega, p, &mut c);
         let mut s = k::Contact::default();
@@ -155,30 +157,33 @@ macro_rules! eval_contact {
     }};
 }
 
-/// Evaluate through the compiled kernels when `text` is exactly a built-in scene's source.
+/// Evaluate through the compiled kernels when `scene` is a compiled scene
+/// (`bf_model::registry::compiled_match`: same kernel-relevant content, runtime parameters at
+/// any value).
 fn eval_builtin(
     scene: &Scene,
-    text: &str,
     q: &[f64],
     qd: &[f64],
     omega: [f64; 3],
     eps: f64,
 ) -> Option<EvalOutput> {
+    let (entry, p) = bf_model::registry::compiled_match(scene)?;
+    let p = p.as_slice();
     let mut out = EvalOutput::default();
-    match scene.name.as_str() {
-        "paper" if text == bf_generated::paper::SCENE_TOML => {
-            let (q, qd) = eval_dynamics!(paper, q, qd, out);
-            eval_contact!(paper, q, qd, omega, eps, out);
+    match entry.name {
+        "paper" => {
+            let (q, qd) = eval_dynamics!(paper, p, q, qd, out);
+            eval_contact!(paper, p, q, qd, omega, eps, out);
         }
-        "human" if text == bf_generated::human::SCENE_TOML => {
-            let (q, qd) = eval_dynamics!(human, q, qd, out);
-            eval_contact!(human, q, qd, omega, eps, out);
+        "human" => {
+            let (q, qd) = eval_dynamics!(human, p, q, qd, out);
+            eval_contact!(human, p, q, qd, omega, eps, out);
         }
-        "puma560" if text == bf_generated::puma560::SCENE_TOML => {
-            eval_dynamics!(puma560, q, qd, out);
+        "puma560" => {
+            eval_dynamics!(puma560, p, q, qd, out);
         }
-        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => {
-            eval_dynamics!(iiwa7, q, qd, out);
+        "iiwa7" => {
+            eval_dynamics!(iiwa7, p, q, qd, out);
         }
         _ => return None,
     }

@@ -186,8 +186,8 @@ fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, O
         contact_tolerance: CONTACT_TOLERANCE,
         ..TransitionSettings::default()
     };
-    let model = fixtures::scene_by_name(&p.scene.name)
-        .map_err(model_err)?
+    let (model, _) = fixtures::model_for_scene(&p.scene).map_err(model_err)?;
+    let model = model
         .with_settings(settings)
         .map_err(model_err)?
         .with_contact_variant(ContactVariant::Smooth(eps))
