@@ -352,3 +352,57 @@ fn simulate_runs_free_motion_of_an_arm_without_a_ball() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn param_reaches_simulate_and_optimize() {
+    let dir = tmpdir("param-run");
+    // simulate: the initial energy at rest is U(q0) of the finger with the heavier distal link
+    let out = dir.join("sim");
+    let (_, err) = ok(&run(&[
+        "simulate",
+        "--scene",
+        "scenes/human.toml",
+        "--param",
+        "link3.mass=0.05",
+        "--t-end",
+        "0.2",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    assert!(err.contains("compiled"), "{err}");
+    let s = json(&out.join("summary.json"));
+    let mut scene = bf_codegen::Scene::load(root().join("scenes/human.toml")).unwrap();
+    scene.links[2].mass = 0.05;
+    let u0 = bf_testkit::Reference::new(&scene)
+        .unwrap()
+        .potential(&[0.1, 0.5, 0.5]);
+    let e0 = s["energy_initial"].as_f64().unwrap();
+    assert!((e0 - u0).abs() < 1e-12 * u0.abs(), "{e0} vs {u0}");
+    // optimize: a smaller ball is another problem
+    let opt = |extra: &[&str], name: &str| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "optimize",
+            "--problem",
+            "reach",
+            "--scene",
+            "scenes/human.toml",
+            "--verify-rtol",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        ok(&run(&args));
+        json(&out.join("solution.json"))
+    };
+    let base = opt(&[], "opt-base");
+    let small = opt(&["--param", "ball.radius=0.9"], "opt-small");
+    assert_eq!(small["scene"], "human");
+    let (jb, js) = (
+        base["objective"].as_f64().unwrap(),
+        small["objective"].as_f64().unwrap(),
+    );
+    assert!((jb - js).abs() > 1e-3 * jb, "{jb} vs {js}");
+    std::fs::remove_dir_all(&dir).ok();
+}
