@@ -123,6 +123,10 @@ pub struct EvalArgs {
     /// Joint torques τ for `forward_dynamics`, comma-separated (default 0).
     #[arg(long, allow_hyphen_values = true)]
     pub tau: Option<String>,
+    /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
+    /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
+    #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    pub param: Vec<String>,
 }
 
 /// Arguments of `bench`.
@@ -148,10 +152,15 @@ pub struct BenchArgs {
 /// Arguments of `simulate`.
 #[derive(Debug, Args)]
 pub struct SimulateArgs {
-    /// Scene file. Only the built-in contact scenes (scenes/paper.toml, scenes/human.toml,
-    /// unmodified) can be simulated: simulation runs on the compiled kernels.
+    /// Scene file. A compiled scene (same content as one of scenes/*.toml at build time) runs
+    /// on the compiled kernels, any other file on kernels interpreted from the same expression
+    /// graphs (slower, same numbers).
     #[arg(long, default_value = "scenes/paper.toml")]
     pub scene: PathBuf,
+    /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
+    /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
+    #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    pub param: Vec<String>,
     /// Joint torque time series (CSV `t,tau1,tau2,tau3` or JSON `{"t":[..],"tau":[[..],..]}`,
     /// as written by `optimize`; see sim/README.md).
     #[arg(long, conflicts_with = "pd")]
@@ -236,9 +245,14 @@ pub struct OptimizeArgs {
     /// periodic-cot-human).
     #[arg(long)]
     pub problem: String,
-    /// Scene file.
+    /// Scene file (default: the problem's built-in scene). Any finger-and-ball scene; its node
+    /// functions run on the emitted kernels when they match, interpreted otherwise.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
+    /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
+    #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
+    pub param: Vec<String>,
     /// Collocation points per phase (at most 200 with `--scheme lg`; with radau, points times
     /// elements at most 5000).
     #[arg(long, default_value_t = 30, allow_hyphen_values = true, value_parser = whole)]

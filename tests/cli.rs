@@ -66,11 +66,13 @@ fn flatten_obj(v: &serde_json::Value, out: &mut Vec<f64>) {
 #[test]
 fn eval_compiled_and_interpreted_agree_on_every_key() {
     let (compiled, compiled_text) = eval_json("scenes/paper.toml");
-    // Same scene, different text (a comment): not the built-in source → interpreter path.
+    // Same numbers under a name that was not compiled: the interpreter path.
     let dir = tmpdir("eval");
     let copy = dir.join("paper_copy.toml");
     let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
-    std::fs::write(&copy, format!("# a user's copy\n{text}")).unwrap();
+    let renamed = text.replacen("name = \"paper\"", "name = \"paper_copy\"", 1);
+    assert_ne!(renamed, text);
+    std::fs::write(&copy, format!("# a user's copy\n{renamed}")).unwrap();
     let (interpreted, _) = eval_json(copy.to_str().unwrap());
     let keys = [
         "p_e",

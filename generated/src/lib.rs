@@ -2,7 +2,10 @@
 //! build time by bf-codegen (`build.rs` → `$OUT_DIR/<scene>.rs` → `include!`).
 //!
 //! One module per scene, named after the scene (`paper`, `human`, `puma560`, `iiwa7`, …), and
-//! the registry [`SCENES`] of every scene's name and TOML text ([`scene_toml`]).
+//! the registry [`SCENES`] of every scene's name and TOML text ([`scene_toml`]), and the
+//! model-kernel registry [`SCENE_KERNELS`] ([`scene`]): every scene's `mass_cqd_g`,
+//! `potential` and (3-joint contact scenes) `contact`/`contact_smooth` behind fn pointers of one
+//! signature, which bf-model wraps into its typed physics for any compiled scene.
 //! The kernel API (docs/kernels.md) maps to the paper as: `frames` eq. 67–68, `tip_jacobian`
 //! eq. 69–71, `mass_matrix` eq. 22a/74–75, `christoffel`/`coriolis_*` eq. 76–79, `gravity`
 //! eq. 72–73, `contact`/`contact_smooth` eq. 2–13 and 58–59.
@@ -13,6 +16,109 @@ include!(concat!(env!("OUT_DIR"), "/modules.rs"));
 /// compiled.
 pub fn scene_toml(name: &str) -> Option<&'static str> {
     SCENES.iter().find(|s| s.0 == name).map(|s| s.1)
+}
+
+/// `mass_cqd_g` of a scene on slices: M(q) row-major (NQ × NQ, eq. 22a) into `m` and
+/// C(q, q̇) q̇ + g(q) (eq. 24) into `cqd_g`. `q`, `qd` have NQ entries and `p` NP (the scene's
+/// runtime parameters); other lengths write NaN.
+pub type MassCqdGFn = fn(q: &[f64], qd: &[f64], p: &[f64], m: &mut [f64], cqd_g: &mut [f64]);
+
+/// `potential` of a scene on slices: U(q) (eq. 22b); NaN if a length is wrong.
+pub type PotentialFn = fn(q: &[f64], p: &[f64]) -> f64;
+
+/// The contact kernels of a 3-joint scene: `eps = None` runs `contact` (exact saturation,
+/// eq. 2–13), `Some(ε)` runs `contact_smooth` (eq. 58–59). A wrong `p` length writes NaN.
+pub type ContactFn = fn(
+    q: &[f64; 3],
+    qd: &[f64; 3],
+    omega: &[f64; 3],
+    eps: Option<f64>,
+    p: &[f64],
+    out: &mut ContactValues,
+);
+
+/// The outputs of a 3-joint scene's contact kernel (the fields of its `Contact` struct; see
+/// the scene module for their meaning and units).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ContactValues {
+    /// α = (o_b − p_e)·ê_x3 (m, eq. 2).
+    pub alpha: f64,
+    /// sat(α) (m, eq. 3 or 58–59).
+    pub sat_alpha: f64,
+    /// Potential contact point p_c (m, eq. 3).
+    pub p_c: [f64; 3],
+    /// r_c = p_c − o_b (m).
+    pub r_c: [f64; 3],
+    /// h = |r_c| − r (m, eq. 4).
+    pub h: f64,
+    /// n = r_c / |r_c| (eq. 11).
+    pub n: [f64; 3],
+    /// J_c, row-major 3 × 3 (m, eq. 7).
+    pub j_c: [[f64; 3]; 3],
+    /// v_c = J_c q̇ (m/s, eq. 6).
+    pub v_c: [f64; 3],
+    /// Δv = ω × r_c − v_c (m/s, eq. 13).
+    pub delta_v: [f64; 3],
+    /// ḣ (m/s).
+    pub h_dot: f64,
+    /// ṙ_c (m/s).
+    pub rc_dot: [f64; 3],
+    /// J̇_c q̇ (m/s², eq. 33).
+    pub jc_dot_qd: [f64; 3],
+}
+
+impl ContactValues {
+    /// Every field NaN (the answer to inputs of the wrong length).
+    pub fn nan() -> Self {
+        let n = f64::NAN;
+        ContactValues {
+            alpha: n,
+            sat_alpha: n,
+            p_c: [n; 3],
+            r_c: [n; 3],
+            h: n,
+            n: [n; 3],
+            j_c: [[n; 3]; 3],
+            v_c: [n; 3],
+            delta_v: [n; 3],
+            h_dot: n,
+            rc_dot: [n; 3],
+            jc_dot_qd: [n; 3],
+        }
+    }
+}
+
+/// The compiled model kernels of one scene (an entry of [`SCENE_KERNELS`]).
+#[derive(Debug, Clone, Copy)]
+pub struct SceneKernels {
+    /// Scene name (the module's `SCENE_NAME`).
+    pub name: &'static str,
+    /// The scene file's text it was generated from (`SCENE_TOML`).
+    pub toml: &'static str,
+    /// Number of joints.
+    pub nq: usize,
+    /// Runtime parameter names (`PARAM_NAMES`).
+    pub param_names: &'static [&'static str],
+    /// Their default values (`PARAM_DEFAULTS`).
+    pub param_defaults: &'static [f64],
+    /// `mass_cqd_g`, if the scene emits it.
+    pub mass_cqd_g: Option<MassCqdGFn>,
+    /// `potential`, if the scene emits it.
+    pub potential: Option<PotentialFn>,
+    /// `contact` / `contact_smooth`, if the scene has 3 joints and emits both.
+    pub contact: Option<ContactFn>,
+}
+
+#[allow(clippy::all, clippy::pedantic)]
+mod registry {
+    use super::*;
+    include!(concat!(env!("OUT_DIR"), "/registry.rs"));
+}
+pub use registry::SCENE_KERNELS;
+
+/// The compiled model kernels of scene `name` (a scene file's `name`), if it was compiled.
+pub fn scene(name: &str) -> Option<&'static SceneKernels> {
+    SCENE_KERNELS.iter().find(|s| s.name == name)
 }
 
 /// One kernel function of an optimal-control node: `f(local, fixed, w, out)` writes the

@@ -30,8 +30,15 @@ pub enum ContactVariant {
 pub trait Kernels: std::fmt::Debug {
     /// Scene name (the generated module's name).
     fn scene_name(&self) -> &str;
-    /// The scene file's text (ball, friction constants, ...).
+    /// The scene file's text (ball, friction constants, ...); may be empty when
+    /// [`Kernels::physical_params`] gives the parameters.
     fn scene_toml(&self) -> &str;
+    /// The physical parameters, when the kernels know them directly (kernels built from a
+    /// parsed scene); `None` (the default): [`params_for`] reads them from
+    /// [`Kernels::scene_toml`] and the runtime parameters.
+    fn physical_params(&self) -> Option<Params> {
+        None
+    }
     /// Names of the runtime parameters (`PARAM_NAMES`), e.g. `"ball.radius"`.
     fn param_names(&self) -> &[&str];
     /// Current runtime parameter values (same order as [`Kernels::param_names`]).
@@ -72,6 +79,9 @@ impl<K: Kernels + ?Sized> Kernels for Box<K> {
     fn scene_toml(&self) -> &str {
         (**self).scene_toml()
     }
+    fn physical_params(&self) -> Option<Params> {
+        (**self).physical_params()
+    }
     fn param_names(&self) -> &[&str] {
         (**self).param_names()
     }
@@ -98,6 +108,9 @@ impl<K: Kernels + ?Sized> Kernels for Box<K> {
 /// Physical parameters of a kernel set: the scene's `[ball]` / `[friction]` values, overridden
 /// by any of `ball.radius`, `ball.inertia.*`, `friction.*` that are runtime parameters.
 pub fn params_for<K: Kernels + ?Sized>(kernels: &K) -> Result<Params> {
+    if let Some(p) = kernels.physical_params() {
+        return Ok(p);
+    }
     let scene = Scene::from_toml_str(kernels.scene_toml(), kernels.scene_name()).map_err(|e| {
         ModelError::Scene {
             scene: kernels.scene_name().to_string(),

@@ -22,7 +22,11 @@
 //!    - [`energy`]: kinetic + potential energy and the power balance.
 //! 3. **[`Model`]**: kernels + [`Params`] + [`TransitionSettings`] with convenience methods
 //!    (`model.stick(&state, &tau)`, `model.impact(&state, law)`, ...). [`fixtures`] builds the
-//!    paper and human scenes from `bf_generated`.
+//!    paper and human scenes from `bf_generated`; [`registry`] gives the kernels of any scene
+//!    file: the compiled ones of the build-time registry `bf_generated::SCENE_KERNELS` when the
+//!    scene is a compiled one, bf-codegen's interpreter on the same graphs otherwise.
+//! 4. **[`arm`]**: free motion of an arm with any number of joints and no ball
+//!    (M q̈ = τ − C q̇ − g − μ_v q̇) on the same compiled-or-interpreted kernels.
 //!
 //! # Simulator recipe (Fig. 2–3)
 //! ```text
@@ -75,6 +79,7 @@
 //! # }
 //! ```
 
+pub mod arm;
 pub mod dynamics;
 pub mod energy;
 mod error;
@@ -84,6 +89,7 @@ pub mod kernels;
 mod kinematics;
 mod linalg;
 mod params;
+pub mod registry;
 pub mod settings;
 mod state;
 pub mod transitions;
@@ -95,6 +101,7 @@ pub use kernels::{ContactVariant, HumanKernels, Kernels, Model, PaperKernels};
 pub use kinematics::{ContactGeometry, ContactKinematics};
 pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
 pub use params::Params;
+pub use registry::{CompiledKernels, DynKernels, InterpretedKernels, KernelSource};
 pub use settings::TransitionSettings;
 pub use state::{Mode, State};
 pub use transitions::{Guard, Transition};

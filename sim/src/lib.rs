@@ -18,6 +18,8 @@
 //! * [`toys`] — systems with closed-form event times used by tests and benches.
 //! * [`ball_finger`] — the finger–ball model of bf-model as a [`HybridSystem`], with the derived
 //!   per-sample quantities (τ, λ, h, σ, ‖Δv‖, E), event kinds, run summary and output files.
+//! * [`arm`] — free motion of an arm with any number of joints and no ball (M q̈ = τ − C q̇ −
+//!   g − μ_v q̇), its energy balance and output files.
 //! * [`work_precision`](mod@work_precision) — error against a tight reference versus CPU time (DOPRI5 rtol and RK4
 //!   step ladders).
 //!
@@ -30,6 +32,7 @@
 //! assert!((out.events[0].t - t1).abs() < 1e-10);
 //! ```
 
+pub mod arm;
 pub mod ball_finger;
 pub mod error;
 pub mod events;

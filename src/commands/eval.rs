@@ -5,8 +5,10 @@
 //! inverse-dynamics family), in emission order, each an object of its outputs named as the
 //! kernel's arguments (`Contact` fields for the contact kernels), arrays nested row-major. The
 //! inverse-dynamics kernels take q̈ from `--qdd`, `forward_dynamics` τ from `--tau` (default 0).
-//! Built-in scenes (the file's text equals the one compiled into `bf-generated`) go through the
-//! compiled kernels; any other file through the generator's interpreter. Key order and layout
+//! Compiled scenes (the parsed file equals a scene compiled into `bf-generated`,
+//! `bf_model::registry::compiled_match`) go through the compiled kernels; any other file through
+//! the generator's interpreter (stderr names which). `--param name=value` sets runtime
+//! parameters. Key order and layout
 //! are fixed. A non-finite entry (overflow at an extreme state or ε) is an error naming the
 //! quantity or the kernel and the entry (indices from 1), never a `null` in the JSON.
 
@@ -16,11 +18,12 @@ use anyhow::{Context, Result, bail};
 use bf_codegen::interp::{OutputShape, SceneKernels};
 use bf_codegen::kernels::Arg;
 use bf_codegen::{EvalOutput, EvalValue, Scene};
+use bf_model::KernelSource;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
 /// Run `eval`.
 pub fn run(args: &EvalArgs) -> Result<()> {
-    let (scene, text) = super::load_scene(&args.scene)?;
+    let (scene, _) = super::load_scene_with_params(&args.scene, &args.param)?;
     let n = scene.links.len();
     let q = parse_list("--q", &args.q, Some(n))?;
     let qd = parse_list("--qd", &args.qd, Some(n))?;
@@ -54,17 +57,17 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     };
     let runtime = SceneKernels::new(&scene)
         .with_context(|| format!("{}: cannot build the kernels", args.scene.display()))?;
-    let (out, kernels, source) = match eval_builtin(&scene, &text, &q, &qd, omega, eps) {
+    let (out, kernels, source) = match eval_builtin(&scene, &q, &qd, omega, eps) {
         Some(out) => {
-            let flat = compiled_kernels(&scene, &text, &runtime, &state)
+            let flat = compiled_kernels(&scene, &runtime, &state)
                 .context("internal: a built-in scene without its compiled kernels")?;
-            (out, flat, "compiled kernels")
+            (out, flat, KernelSource::Compiled)
         }
         None => (
             bf_codegen::eval_all(&scene, &q, &qd, omega, eps)
                 .with_context(|| format!("{}: evaluation failed", args.scene.display()))?,
             interpreted_kernels(&runtime, &state),
-            "interpreter",
+            KernelSource::Interpreted,
         ),
     };
     if let Some((entry, v)) = first_non_finite(&out) {
@@ -77,7 +80,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         );
     }
     let kernels = shape_kernels(&scene.name, &runtime, &kernels)?;
-    eprintln!("evaluated {} through the {source}", scene.name);
+    eprintln!("evaluated {} on the {source} kernels", scene.name);
     let all = Full {
         quantities: &out,
         kernels: &kernels,
@@ -119,8 +122,9 @@ fn interpreted_kernels(rt: &SceneKernels, s: &State) -> Vec<Vec<f64>> {
 }
 
 macro_rules! compiled_flat {
-    ($m:ident, $rt:expr, $s:expr) => {{
+    ($m:ident, $p:expr, $rt:expr, $s:expr) => {{
         use bf_generated::$m as k;
+        let p: &[f64; k::NP] = $p.try_into().ok()?;
         let q: [f64; k::NQ] = $s.q.try_into().ok()?;
         let qd: [f64; k::NQ] = $s.qd.try_into().ok()?;
         let mut out = Vec::new();
@@ -133,7 +137,7 @@ macro_rules! compiled_flat {
                 &$s.omega,
                 $s.eps,
                 &u,
-                &k::PARAM_DEFAULTS,
+                p,
             )?);
         }
         Some(out)
@@ -141,17 +145,14 @@ macro_rules! compiled_flat {
 }
 
 /// Every kernel's flat outputs through the compiled module of a built-in scene.
-fn compiled_kernels(
-    scene: &Scene,
-    text: &str,
-    rt: &SceneKernels,
-    s: &State,
-) -> Option<Vec<Vec<f64>>> {
-    match scene.name.as_str() {
-        "paper" if text == bf_generated::paper::SCENE_TOML => compiled_flat!(paper, rt, s),
-        "human" if text == bf_generated::human::SCENE_TOML => compiled_flat!(human, rt, s),
-        "puma560" if text == bf_generated::puma560::SCENE_TOML => compiled_flat!(puma560, rt, s),
-        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => compiled_flat!(iiwa7, rt, s),
+fn compiled_kernels(scene: &Scene, rt: &SceneKernels, s: &State) -> Option<Vec<Vec<f64>>> {
+    let (entry, p) = bf_model::registry::compiled_match(scene)?;
+    let p = p.as_slice();
+    match entry.name {
+        "paper" => compiled_flat!(paper, p, rt, s),
+        "human" => compiled_flat!(human, p, rt, s),
+        "puma560" => compiled_flat!(puma560, p, rt, s),
+        "iiwa7" => compiled_flat!(iiwa7, p, rt, s),
         _ => None,
     }
 }
@@ -301,9 +302,9 @@ fn mat<const C: usize>(rows: &[[f64; C]]) -> EvalValue {
 }
 
 macro_rules! eval_dynamics {
-    ($m:ident, $q:expr, $qd:expr, $out:expr) => {{
+    ($m:ident, $p:expr, $q:expr, $qd:expr, $out:expr) => {{
         use bf_generated::$m as k;
-        let p = &k::PARAM_DEFAULTS;
+        let p: &[f64; k::NP] = $p.try_into().ok()?;
         let q: [f64; k::NQ] = $q.try_into().ok()?;
         let qd: [f64; k::NQ] = $qd.try_into().ok()?;
         let mut pos = [[0.0; 3]; k::NQ];
@@ -332,9 +333,9 @@ macro_rules! eval_dynamics {
 }
 
 macro_rules! eval_contact {
-    ($m:ident, $q:expr, $qd:expr, $omega:expr, $eps:expr, $out:expr) => {{
+    ($m:ident, $p:expr, $q:expr, $qd:expr, $omega:expr, $eps:expr, $out:expr) => {{
         use bf_generated::$m as k;
-        let p = &k::PARAM_DEFAULTS;
+        let p: &[f64; k::NP] = $p.try_into().ok()?;
         let mut c = k::Contact::default();
         k::contact(&$q, &$qd, &$omega, p, &mut c);
         let mut s = k::Contact::default();
@@ -352,30 +353,33 @@ macro_rules! eval_contact {
     }};
 }
 
-/// Evaluate through the compiled kernels when `text` is exactly a built-in scene's source.
+/// Evaluate through the compiled kernels when `scene` is a compiled scene
+/// (`bf_model::registry::compiled_match`: same kernel-relevant content, runtime parameters at
+/// any value).
 fn eval_builtin(
     scene: &Scene,
-    text: &str,
     q: &[f64],
     qd: &[f64],
     omega: [f64; 3],
     eps: f64,
 ) -> Option<EvalOutput> {
+    let (entry, p) = bf_model::registry::compiled_match(scene)?;
+    let p = p.as_slice();
     let mut out = EvalOutput::default();
-    match scene.name.as_str() {
-        "paper" if text == bf_generated::paper::SCENE_TOML => {
-            let (q, qd) = eval_dynamics!(paper, q, qd, out);
-            eval_contact!(paper, q, qd, omega, eps, out);
+    match entry.name {
+        "paper" => {
+            let (q, qd) = eval_dynamics!(paper, p, q, qd, out);
+            eval_contact!(paper, p, q, qd, omega, eps, out);
         }
-        "human" if text == bf_generated::human::SCENE_TOML => {
-            let (q, qd) = eval_dynamics!(human, q, qd, out);
-            eval_contact!(human, q, qd, omega, eps, out);
+        "human" => {
+            let (q, qd) = eval_dynamics!(human, p, q, qd, out);
+            eval_contact!(human, p, q, qd, omega, eps, out);
         }
-        "puma560" if text == bf_generated::puma560::SCENE_TOML => {
-            eval_dynamics!(puma560, q, qd, out);
+        "puma560" => {
+            eval_dynamics!(puma560, p, q, qd, out);
         }
-        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => {
-            eval_dynamics!(iiwa7, q, qd, out);
+        "iiwa7" => {
+            eval_dynamics!(iiwa7, p, q, qd, out);
         }
         _ => return None,
     }

@@ -25,3 +25,33 @@ pub fn load_scene(path: &std::path::Path) -> Result<(bf_codegen::Scene, String)>
     }
     Ok((scene, text))
 }
+
+/// Load a scene file (as [`load_scene`]) and set its runtime parameters from `--param
+/// name=value` options; the error names the option, the file and the valid names.
+pub fn load_scene_with_params(
+    path: &std::path::Path,
+    params: &[String],
+) -> Result<(bf_codegen::Scene, String)> {
+    let (mut scene, text) = load_scene(path)?;
+    let assignments = parse_params(params)?;
+    bf_model::registry::set_parameters(&mut scene, &assignments)
+        .map_err(|e| anyhow::anyhow!("--param: {}: {e}", path.display()))?;
+    Ok((scene, text))
+}
+
+/// `--param name=value` options as (name, value); the error names the option.
+pub fn parse_params(params: &[String]) -> Result<Vec<(String, f64)>> {
+    params
+        .iter()
+        .map(|p| {
+            let (name, value) = p
+                .split_once('=')
+                .ok_or_else(|| anyhow::anyhow!("--param {p}: expected NAME=VALUE"))?;
+            let value: f64 = value
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--param {p}: `{}` is not a number", value.trim()))?;
+            Ok((name.trim().to_string(), value))
+        })
+        .collect()
+}

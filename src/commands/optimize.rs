@@ -364,6 +364,35 @@ pub fn commit_solution(sol: &OcpSolution, mut out: OutputDir) -> Result<()> {
     Ok(())
 }
 
+/// The scene of `--scene` / `--param` for `problem`, or `None` for the problem's compiled
+/// scene unchanged (no `--scene`, no `--param`). A scene file is used as parsed, whatever its
+/// name: the problem is posed on its numbers (node functions on the emitted kernels when they
+/// match, interpreted otherwise). The error names the file and why the problem cannot use it.
+pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<bf_codegen::Scene>> {
+    let path = match &args.scene {
+        Some(p) => p.clone(),
+        None if args.param.is_empty() => return Ok(None),
+        // `--param` alone: the problem's compiled scene with other runtime parameters.
+        None => {
+            let text = bf_generated::scene_toml(problem.scene())
+                .with_context(|| format!("problem {problem}: no compiled scene"))?;
+            let mut scene = bf_codegen::Scene::from_toml_str(text, problem.scene())?;
+            let assignments = super::parse_params(&args.param)?;
+            bf_model::registry::set_parameters(&mut scene, &assignments)
+                .map_err(|e| anyhow::anyhow!("--param: {e}"))?;
+            return Ok(Some(scene));
+        }
+    };
+    let (scene, _) = super::load_scene_with_params(&path, &args.param)?;
+    bf_model::registry::check_contact_scene(&scene).map_err(|e| {
+        anyhow::anyhow!(
+            "--scene {}: problem {problem} needs a finger-and-ball scene: {e}",
+            path.display()
+        )
+    })?;
+    Ok(Some(scene))
+}
+
 /// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     run_with(args, RunOptions::default())
@@ -372,20 +401,8 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
 /// Run `optimize` with `opts`.
 pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
     let name = parse_problem(&args.problem)?;
-    let settings = settings_from_args(args)?;
-    if let Some(scene) = &args.scene {
-        let (s, _) = super::load_scene(scene)?;
-        let expected = name.scene();
-        if s.name != expected {
-            bail!(
-                "--scene {}: problem {} is defined on the built-in scene `{expected}` \
-                 (got scene `{}`); other scenes are not supported by the problem library yet",
-                scene.display(),
-                args.problem,
-                s.name
-            );
-        }
-    }
+    let mut settings = settings_from_args(args)?;
+    settings.scene = scene_from_args(args, name)?;
     let strategy = match &args.strategy {
         Some(text) => parse_strategy(text, args.starts, args.seed)?,
         None if settings.scheme == Scheme::Lg => Strategy::Direct,
@@ -427,6 +444,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
         );
     }
     commit_solution(&sol, out)?;
+    eprintln!(
+        "optimize: scene `{}`, node functions on the {} kernels",
+        sol.scene, sol.kernels
+    );
     crate::outln!(
         "{}: {:?} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",
         sol.problem,

@@ -10,8 +10,15 @@
 //!     --out DIR
 //! ```
 //!
-//! Only the built-in contact scenes run (the scene file must be exactly `scenes/paper.toml` or
-//! `scenes/human.toml`), because the simulator evaluates the compiled kernels. Output in DIR:
+//! Any finger-and-ball scene file with 3 joints runs: a compiled scene (equal to one of
+//! `scenes/*.toml` at build time, runtime parameters aside) on its compiled kernels, any other
+//! file (a scene outside the repository, or a built-in name with other numbers) on kernels
+//! interpreted from the same expression graphs (`bf_model::registry`); stderr, stdout and
+//! `summary.json` (`kernels`) say which ran. `--param name=value` sets runtime parameters.
+//! A scene without a ball (an arm such as `scenes/puma560.toml`, any number of joints)
+//! simulates the free motion M q̈ = τ − C q̇ − g − μ_v q̇ (`bf_sim::arm`) from `--q0`/`--qd0`
+//! (default 0) under `--torques`, `--pd` or zero torques, and writes `trajectory.csv`
+//! (t, q, q̇, τ, E) and `summary.json` (energy balance). Contact-scene output in DIR:
 //! `trajectory.{json,csv}` (t, mode, q, q̇, ω, τ, λ, λ_n, h, σ, ‖Δv‖, ḣ, E, drift per sample),
 //! `events.{json,csv}` and `summary.json`; a summary goes to stdout. DIR is one output set
 //! (`bf_output::OutputDir`): it is checked before the run and replaced as a whole at the end,
@@ -27,8 +34,9 @@
 use crate::cli::SimulateArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
-use bf_model::{HumanKernels, ImpactLaw, Kernels, Mode, Model, PaperKernels, State, Vec3};
+use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3};
 use bf_output::{DirSpec, Outcome, OutputDir};
+use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{
     Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries,
@@ -67,8 +75,10 @@ pub enum CliInput {
     Series(TorqueSeries),
     /// τ = kp (target − q) − kd q̇ (`--pd`).
     Pd(PdController),
-    /// Unactuated joints.
+    /// Unactuated joints (the contact scenes' 3).
     Zero,
+    /// Unactuated joints of an arm with this many joints.
+    Arm(usize),
 }
 
 impl Input for CliInput {
@@ -77,13 +87,14 @@ impl Input for CliInput {
             CliInput::Series(s) => s.dim(),
             CliInput::Pd(p) => p.dim(),
             CliInput::Zero => 3,
+            CliInput::Arm(n) => *n,
         }
     }
     fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
         match self {
             CliInput::Series(s) => s.tau(t, q, qd, out),
             CliInput::Pd(p) => p.tau(t, q, qd, out),
-            CliInput::Zero => {
+            CliInput::Zero | CliInput::Arm(_) => {
                 out.fill(0.0);
                 Ok(())
             }
@@ -287,7 +298,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 
 /// Run `simulate` with `opts`.
 pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
-    let (scene, text) = super::load_scene(&args.scene)?;
+    let (scene, _) = super::load_scene_with_params(&args.scene, &args.param)?;
+    if scene.ball.is_none() {
+        return run_arm(args, opts, &scene);
+    }
     // Validate every option before the (possibly long) run.
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
         bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
@@ -313,21 +327,127 @@ pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
         project: !args.no_projection,
         ..BallFingerOptions::default()
     };
-    match scene.name.as_str() {
-        "paper" if text == bf_generated::paper::SCENE_TOML => {
-            let model = Model::from_kernels(PaperKernels::new())?;
-            run_model(args, run_opts, model, inp, opts, set, mode0, x0)
+    let setup = Instant::now();
+    let (model, source) = bf_model::fixtures::model_for_scene(&scene)
+        .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
+    eprintln!(
+        "simulate: scene `{}` from {} on the {source} kernels{}",
+        scene.name,
+        args.scene.display(),
+        interpreted_note(source, setup.elapsed())
+    );
+    run_model(args, run_opts, model, source, inp, opts, set, mode0, x0)
+}
+
+/// Free motion of an arm without a ball (any number of joints, `bf_sim::arm`): τ from
+/// `--torques` (one column per joint), `--pd` (one target per joint) or zero; initial state
+/// from `--q0`/`--qd0` (default 0). Writes `trajectory.csv` and `summary.json`.
+fn run_arm(args: &SimulateArgs, run_opts: RunOptions, scene: &bf_codegen::Scene) -> Result<()> {
+    let n = scene.links.len();
+    let name = &scene.name;
+    if !(args.t_end.is_finite() && args.t_end > 0.0) {
+        bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
+    }
+    for (opt, given) in [
+        ("--omega0", args.omega0.is_some()),
+        ("--init", args.init.is_some()),
+        ("--mode0", args.mode0 != "free"),
+    ] {
+        if given {
+            bail!(
+                "{opt}: scene `{name}` ({}) has no ball; only free motion of the arm is simulated (use --q0, --qd0)",
+                args.scene.display()
+            );
         }
-        "human" if text == bf_generated::human::SCENE_TOML => {
-            let model = Model::from_kernels(HumanKernels::new())?;
-            run_model(args, run_opts, model, inp, opts, set, mode0, x0)
+    }
+    let set = settings(args)?;
+    check_limits(args, &set)?;
+    let q0 = match &args.q0 {
+        Some(s) => parse_list("--q0", s, Some(n))?,
+        None => vec![0.0; n],
+    };
+    let qd0 = match &args.qd0 {
+        Some(s) => parse_list("--qd0", s, Some(n))?,
+        None => vec![0.0; n],
+    };
+    let inp = if let Some(path) = &args.torques {
+        let s = TorqueSeries::from_path(path)?;
+        if s.dim() != n {
+            bail!(
+                "{}: scene `{name}` has {n} joints, the torque series has {} columns",
+                path.display(),
+                s.dim()
+            );
         }
-        name => bail!(
-            "{}: scene `{name}` cannot be simulated: only the built-in contact scenes \
-             (scenes/paper.toml and scenes/human.toml, unmodified) can be simulated, because \
-             simulation uses the compiled kernels (edit a scene, then rebuild with it as a \
-             built-in scene to simulate it)",
-            args.scene.display()
+        CliInput::Series(s)
+    } else if let Some(target) = &args.pd {
+        let target = parse_list("--pd", target, Some(n))?;
+        let g = parse_list("--pd-gains", &args.pd_gains, None)?;
+        let (kp, kd) = match g.len() {
+            2 => (vec![g[0]; n], vec![g[1]; n]),
+            k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
+            k => bail!(
+                "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
+                2 * n
+            ),
+        };
+        CliInput::Pd(PdController::new(kp, kd, target)?)
+    } else {
+        CliInput::Arm(n)
+    };
+    let setup = Instant::now();
+    let (model, source) = bf_model::arm::ArmModel::from_scene(scene)
+        .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
+    eprintln!(
+        "simulate: scene `{name}` from {} (no ball: free motion of {n} joints) on the {source} \
+         kernels{}",
+        args.scene.display(),
+        interpreted_note(source, setup.elapsed())
+    );
+    let sys = FreeArm::new(model, inp)?;
+    let x0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    if let Some(k) = run_opts.fail_at_write {
+        out_dir.inject_fault_at_write(k);
+    }
+    let start = Instant::now();
+    let (out, error) = match bf_sim::simulate(&sys, set, ArmMode::Free, 0.0, &x0, args.t_end) {
+        Ok(out) => (out, None),
+        Err(f) => {
+            let f = *f;
+            let e = format!("simulation failed at t = {} s: {}", f.t, f.error);
+            (f.partial, Some(e))
+        }
+    };
+    let mut report = sys
+        .report(&out, start.elapsed().as_secs_f64())
+        .map_err(|e| anyhow!("{e}"))?;
+    report.summary.kernels = Some(source.name().to_string());
+    out_dir.file("summary.json")?;
+    report
+        .write_dir(out_dir.path(), error.as_deref())
+        .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
+        .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
+    out_dir.commit(match &error {
+        Some(e) => Outcome::Failed(e),
+        None => Outcome::Success,
+    })?;
+    crate::outln!("{}", report.summary)?;
+    crate::outln!("output: {}", args.out.display())?;
+    match error {
+        Some(e) => bail!("{e}"),
+        None => Ok(()),
+    }
+}
+
+/// What running on interpreted kernels means, for the stderr line (empty for compiled ones).
+fn interpreted_note(source: KernelSource, setup: Duration) -> String {
+    match source {
+        KernelSource::Compiled => String::new(),
+        KernelSource::Interpreted => format!(
+            " (not a compiled scene: kernels built at run time from its expression graphs in \
+             {:.0} ms, evaluated by the interpreter, slower per call than compiled ones)",
+            1e3 * setup.as_secs_f64()
         ),
     }
 }
@@ -377,6 +497,7 @@ fn run_model<K: Kernels>(
     args: &SimulateArgs,
     run_opts: RunOptions,
     model: Model<K>,
+    source: KernelSource,
     inp: CliInput,
     opts: BallFingerOptions,
     set: SimSettings,
@@ -457,7 +578,8 @@ fn run_model<K: Kernels>(
     progress.finish();
     let (t_stop, mode_stop) = (sim.t(), sim.mode());
     let out = sim.finish();
-    let report = sys.report(&out, t0, cpu);
+    let mut report = sys.report(&out, t0, cpu);
+    report.summary.kernels = Some(source.name().to_string());
     // A run that ends with a non-finite energy has not produced a result, whatever the
     // integrator said.
     let s = &report.summary;
@@ -501,7 +623,7 @@ fn run_model<K: Kernels>(
         None => Outcome::Success,
     })?;
     crate::outln!(
-        "scene {}, impact law {}, {}",
+        "scene {} ({source} kernels), impact law {}, {}",
         sys.model.kernels().scene_name(),
         opts.impact_law.name(),
         describe_method(&args.integrator, args)

@@ -187,9 +187,11 @@ fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, S
         scene: p.scene.name.clone(),
         source,
     };
-    let model = fixtures::scene_by_name(&p.scene.name)
-        .and_then(|m| m.with_settings(settings))
-        .and_then(|m| m.with_contact_variant(ContactVariant::Smooth(eps)))
+    let (model, _) = fixtures::model_for_scene(&p.scene).map_err(model_err)?;
+    let model = model
+        .with_settings(settings)
+        .map_err(model_err)?
+        .with_contact_variant(ContactVariant::Smooth(eps))
         .map_err(model_err)?;
     let pm = model.params();
     let ph = &p.physics;

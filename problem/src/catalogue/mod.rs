@@ -226,6 +226,11 @@ pub struct ProblemSettings {
     /// Raise it (e.g. to 3e-8) when a Radau mesh finer than the default ends Acceptable with
     /// δ_w > 0 in every iteration; `Some` disables the retry. Overrides `ipm`.
     pub dual_regularization: Option<f64>,
+    /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
+    /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where
+    /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
+    #[serde(skip)]
+    pub scene: Option<Scene>,
 }
 
 impl Default for ProblemSettings {
@@ -246,6 +251,7 @@ impl Default for ProblemSettings {
             period_bounds: None,
             mesh: None,
             dual_regularization: None,
+            scene: None,
         }
     }
 }
@@ -310,7 +316,16 @@ fn build_inner(
     settings: &ProblemSettings,
     generated: &Generated,
 ) -> Result<BuiltProblem, ProblemError> {
-    let scene = scene(generated, problem.scene())?;
+    let scene = match &settings.scene {
+        Some(s) => s.clone(),
+        None => scene(generated, problem.scene())?,
+    };
+    // A scene given by the caller may have no emitted node kernels (other numbers): interpret
+    // what has none rather than fail.
+    let kernels = match (&settings.scene, generated.kernels) {
+        (Some(_), KernelUse::Require(f)) => KernelUse::Prefer(f),
+        (_, k) => k,
+    };
     let ph = crate::points::physics(&scene)?;
     let eps = settings
         .epsilon
@@ -373,7 +388,7 @@ fn build_inner(
         scheme: settings.scheme,
     };
     let meshes: Vec<_> = settings.mesh.iter().flatten().cloned().map(Some).collect();
-    let nlp = Transcription::with_kernels(&ocp, &meshes, generated.kernels)?;
+    let nlp = Transcription::with_kernels(&ocp, &meshes, kernels)?;
     let mut built = BuiltProblem {
         problem,
         name: problem.name().to_string(),

@@ -110,6 +110,13 @@ pub struct OcpSolution {
     /// Re-integration of each phase with the optimal torques (the study layer's verification).
     #[serde(default)]
     pub verification: Option<Verification>,
+    /// The scene the problem was posed on (its `name`).
+    #[serde(default)]
+    pub scene: String,
+    /// Which kernels evaluated the phase node functions: `"compiled"` (every phase on an
+    /// emitted node kernel), `"interpreted"` (none) or `"mixed"`.
+    #[serde(default)]
+    pub kernels: String,
 }
 
 impl OcpSolution {
@@ -240,7 +247,23 @@ pub fn solution_at(
         strategy: None,
         refinement: None,
         verification: None,
+        scene: p.scene.name.clone(),
+        kernels: node_kernel_source(p).to_string(),
     })
+}
+
+/// `"compiled"`, `"interpreted"` or `"mixed"`: whether the phase node functions of `p` run on
+/// emitted kernels.
+pub fn node_kernel_source(p: &BuiltProblem) -> &'static str {
+    let fns = p.nlp.phase_functions();
+    let compiled = fns.iter().filter(|f| f.kernel_name().is_some()).count();
+    if compiled == fns.len() {
+        "compiled"
+    } else if compiled == 0 {
+        "interpreted"
+    } else {
+        "mixed"
+    }
 }
 
 /// Sets the initial point of `p` to `prev` interpolated exactly (element polynomials) onto

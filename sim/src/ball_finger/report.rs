@@ -211,6 +211,10 @@ pub struct RunSummary {
     pub cpu_seconds: f64,
     /// Simulated time / wall-clock time.
     pub real_time_factor: f64,
+    /// Which model kernels ran (`"compiled"` or `"interpreted"`), when the caller says so
+    /// (the CLI does); omitted from `summary.json` otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kernels: Option<String>,
 }
 
 fn summarize(
@@ -327,6 +331,7 @@ fn summarize(
         } else {
             f64::INFINITY
         },
+        kernels: None,
     }
 }
 

@@ -1,0 +1,595 @@
+//! Kernels for any scene file: the compiled kernels of `bf_generated::SCENE_KERNELS` when the
+//! scene is one that was compiled in (possibly with other runtime-parameter values), otherwise
+//! kernels evaluated at run time by bf-codegen's interpreter on the same expression graphs
+//! (`mass_cqd_g` eq. 22a/24, `potential` eq. 22b, `contact` eq. 2–13, `contact_smooth`
+//! eq. 58–59). The interpreter runs in [`bf_codegen::interp::KernelF64`], whose arithmetic and
+//! sine–cosine are those of the emitted f64 kernels, so both paths give the same numbers for
+//! the same scene; the interpreted path is only slower.
+//!
+//! - [`compiled_match`]: the compiled entry a parsed scene is equal to, ignoring what does not
+//!   enter the model kernels (description, link names, joint and torque limits, the kernel and
+//!   node-kernel lists) and the values of the compiled scene's runtime parameters, which become
+//!   the parameter vector `p`. A scene named like a compiled one with any other difference
+//!   (a link length, a mass, the ball) does not match.
+//! - [`contact_kernels`]: a boxed [`Kernels`] for a 3-joint scene with a ball and a contact, and
+//!   the [`KernelSource`] it runs on.
+//! - [`set_parameters`]: `name = value` assignments to a scene's runtime parameters (the CLI's
+//!   `--param`), applied to the parsed scene so that every consumer (model, optimiser, `eval`)
+//!   sees the same values.
+
+use std::fmt;
+
+use bf_codegen::interp::{KernelF64, Tape};
+use bf_codegen::kernels::{CONTACT_FIELDS, Dim, build_kernel};
+use bf_codegen::spec::{Angle, InertiaSpec, Scene};
+use bf_generated::{ContactFn, ContactValues, MassCqdGFn, PotentialFn};
+
+use crate::kernels::{ContactVariant, Kernels};
+use crate::{ContactGeometry, ModelError, Params, Result};
+
+/// Which kernels a model runs on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KernelSource {
+    /// The kernels compiled into bf-generated at build time.
+    Compiled,
+    /// bf-codegen's interpreter on the scene's expression graphs, built at run time.
+    Interpreted,
+}
+
+impl KernelSource {
+    /// `"compiled"` or `"interpreted"` (the word the CLI prints and writes).
+    pub fn name(self) -> &'static str {
+        match self {
+            KernelSource::Compiled => "compiled",
+            KernelSource::Interpreted => "interpreted",
+        }
+    }
+}
+
+impl fmt::Display for KernelSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A boxed kernel set of any scene.
+pub type DynKernels = Box<dyn Kernels + Send + Sync>;
+
+fn scene_err(scene: &str, message: impl Into<String>) -> ModelError {
+    ModelError::Scene {
+        scene: scene.to_string(),
+        message: message.into(),
+    }
+}
+
+/// The scene with everything that does not enter the model kernels cleared and inertias as
+/// full tensors (a diagonal or a default inertia equals the same tensor written out).
+fn kernel_relevant(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    if let Some(b) = &mut s.ball {
+        b.inertia = Some(InertiaSpec::Full(b.inertia_matrix()));
+    }
+    s.description = None;
+    s.kernels.clear();
+    s.ocp_kernels = None;
+    for l in &mut s.links {
+        l.name = None;
+        l.q_min = None;
+        l.q_max = None;
+        l.tau_max = None;
+        l.inertia = InertiaSpec::Full(l.inertia_matrix());
+    }
+    s
+}
+
+/// The compiled scene `scene` is equal to (see the module docs) and the parameter vector `p`
+/// (the scene's values of the compiled scene's runtime parameters, in `PARAM_NAMES` order).
+pub fn compiled_match(scene: &Scene) -> Option<(&'static bf_generated::SceneKernels, Vec<f64>)> {
+    let entry = bf_generated::scene(&scene.name)?;
+    let compiled = Scene::from_toml_str(entry.toml, entry.name).ok()?;
+    let mut p = Vec::with_capacity(entry.param_names.len());
+    let mut mine = scene.clone();
+    mine.runtime_parameters = compiled.runtime_parameters.clone();
+    for (name, &default) in entry.param_names.iter().zip(entry.param_defaults) {
+        p.push(scene.constant(name)?);
+        set_constant(&mut mine, name, default).ok()?;
+    }
+    (kernel_relevant(&mine) == kernel_relevant(&compiled)).then_some((entry, p))
+}
+
+/// Sets the runtime parameters `assignments` (name, value) of `scene`. Every name must be one
+/// of the scene's `runtime_parameters` and every value finite; the error names the parameter
+/// and lists the valid names. A ball whose inertia is the default (2/5) m r² keeps the inertia
+/// of the file's radius and mass (the compiled kernels' runtime `ball.radius` changes the
+/// contact geometry only).
+pub fn set_parameters(scene: &mut Scene, assignments: &[(String, f64)]) -> Result<()> {
+    for (name, value) in assignments {
+        if !scene.is_runtime(name) {
+            let valid = if scene.runtime_parameters.is_empty() {
+                "the scene has no runtime parameters (list them in `runtime_parameters`)".into()
+            } else {
+                format!("valid names: {}", scene.runtime_parameters.join(", "))
+            };
+            return Err(scene_err(
+                &scene.name,
+                format!("`{name}` is not a runtime parameter of the scene; {valid}"),
+            ));
+        }
+        if !value.is_finite() {
+            return Err(scene_err(
+                &scene.name,
+                format!("runtime parameter `{name}` must be finite (got {value})"),
+            ));
+        }
+        set_constant(scene, name, *value)?;
+    }
+    Ok(())
+}
+
+/// Sets one registry constant (`Scene::constants` naming) of `scene` to `value`.
+fn set_constant(scene: &mut Scene, name: &str, value: f64) -> Result<()> {
+    let unknown = || scene_err(&scene.name, format!("unknown scene constant `{name}`"));
+    let xyz = |c: &str| match c {
+        "x" => Some(0),
+        "y" => Some(1),
+        "z" => Some(2),
+        _ => None,
+    };
+    let sym = |c: &str| match c {
+        "xx" => Some((0, 0)),
+        "xy" => Some((0, 1)),
+        "xz" => Some((0, 2)),
+        "yy" => Some((1, 1)),
+        "yz" => Some((1, 2)),
+        "zz" => Some((2, 2)),
+        _ => None,
+    };
+    let set_sym = |m: [[f64; 3]; 3], (i, j): (usize, usize)| {
+        let mut m = m;
+        m[i][j] = value;
+        m[j][i] = value;
+        InertiaSpec::Full(m)
+    };
+    let parts: Vec<&str> = name.split('.').collect();
+    match parts.as_slice() {
+        ["gravity", c] => scene.gravity[xyz(c).ok_or_else(unknown)?] = value,
+        ["base", "translation", c] => {
+            let i = xyz(c).ok_or_else(unknown)?;
+            let mut t = scene.base.translation();
+            t[i] = value;
+            scene.base.translation = Some(t);
+        }
+        ["tool", "translation", c] => {
+            let i = xyz(c).ok_or_else(unknown)?;
+            let err = unknown();
+            let tool = scene.tool.as_mut().ok_or(err)?;
+            let mut t = tool.translation();
+            t[i] = value;
+            tool.translation = Some(t);
+        }
+        [link, rest @ ..] if link.starts_with("link") => {
+            let k: usize = link["link".len()..].parse().map_err(|_| unknown())?;
+            let err = unknown();
+            let l = k
+                .checked_sub(1)
+                .and_then(|i| scene.links.get_mut(i))
+                .ok_or(err)?;
+            match rest {
+                ["a"] => l.a = value,
+                ["d"] => l.d = value,
+                ["alpha"] => l.alpha = Angle::Radians(value),
+                ["offset"] => l.offset = Some(Angle::Radians(value)),
+                ["mass"] => l.mass = value,
+                ["com", c] => l.com[xyz(c).ok_or_else(unknown)?] = value,
+                ["inertia", c] => {
+                    let ij = sym(c).ok_or_else(unknown)?;
+                    l.inertia = set_sym(l.inertia_matrix(), ij);
+                }
+                _ => return Err(unknown()),
+            }
+        }
+        ["ball", rest @ ..] => {
+            let err = unknown();
+            let b = scene.ball.as_mut().ok_or(err)?;
+            // Keep the file's inertia when the radius or mass changes (see `set_parameters`).
+            if b.inertia.is_none() {
+                b.inertia = Some(InertiaSpec::Full(b.inertia_matrix()));
+            }
+            match rest {
+                ["radius"] => b.radius = value,
+                ["mass"] => b.mass = value,
+                ["center", c] => b.center[xyz(c).ok_or_else(unknown)?] = value,
+                ["inertia", c] => {
+                    let ij = sym(c).ok_or_else(unknown)?;
+                    b.inertia = Some(set_sym(b.inertia_matrix(), ij));
+                }
+                _ => return Err(unknown()),
+            }
+        }
+        ["friction", c] => {
+            let err = unknown();
+            let f = scene.friction.as_mut().ok_or(err)?;
+            match *c {
+                "mu_s" => f.mu_s = value,
+                "mu_k" => f.mu_k = value,
+                "mu_v" => f.mu_v = value,
+                "socket_damping" => f.socket_damping = value,
+                _ => return Err(unknown()),
+            }
+        }
+        _ => return Err(unknown()),
+    }
+    Ok(())
+}
+
+/// Errors unless `scene` can carry the contact model: 3 joints, a ball, a contact.
+pub fn check_contact_scene(scene: &Scene) -> Result<()> {
+    let mut missing = Vec::new();
+    if scene.ball.is_none() {
+        missing.push("no [ball]");
+    }
+    if scene.contact.is_none() {
+        missing.push("no [contact]");
+    }
+    if scene.friction.is_none() {
+        missing.push("no [friction]");
+    }
+    let joints;
+    if scene.links.len() != 3 {
+        joints = format!(
+            "{} joints (the finger–ball contact model has 3)",
+            scene.links.len()
+        );
+        missing.push(&joints);
+    }
+    if missing.is_empty() {
+        Ok(())
+    } else {
+        Err(scene_err(
+            &scene.name,
+            format!(
+                "not a finger-and-ball contact scene: {}",
+                missing.join(", ")
+            ),
+        ))
+    }
+}
+
+/// The kernels of a 3-joint contact scene: compiled when [`compiled_match`] finds the scene
+/// (with its runtime-parameter values), interpreted otherwise.
+pub fn contact_kernels(scene: &Scene) -> Result<(DynKernels, KernelSource)> {
+    check_contact_scene(scene)?;
+    if let Some((entry, p)) = compiled_match(scene)
+        && let Some(k) = CompiledKernels::from_entry(entry, p)?
+    {
+        return Ok((Box::new(k), KernelSource::Compiled));
+    }
+    Ok((
+        Box::new(InterpretedKernels::new(scene)?),
+        KernelSource::Interpreted,
+    ))
+}
+
+/// A compiled 3-joint contact scene of the registry with a runtime-parameter vector.
+#[derive(Debug, Clone)]
+pub struct CompiledKernels {
+    entry: &'static bf_generated::SceneKernels,
+    mass_cqd_g: MassCqdGFn,
+    potential: PotentialFn,
+    contact: ContactFn,
+    p: Vec<f64>,
+}
+
+impl CompiledKernels {
+    /// The compiled contact scene `name` with its default runtime parameters; an error names
+    /// the compiled contact scenes if there is none of that name.
+    pub fn named(name: &str) -> Result<Self> {
+        let found = bf_generated::scene(name)
+            .map(|e| Self::from_entry(e, e.param_defaults.to_vec()))
+            .transpose()?
+            .flatten();
+        found.ok_or_else(|| {
+            scene_err(
+                name,
+                format!(
+                    "unknown contact scene; available: {}",
+                    compiled_contact_scenes().join(", ")
+                ),
+            )
+        })
+    }
+
+    /// Kernels of `entry` with parameters `p` (length NP, finite); `None` if the entry is not
+    /// a 3-joint contact scene with `mass_cqd_g`, `potential` and the contact kernels.
+    pub fn from_entry(
+        entry: &'static bf_generated::SceneKernels,
+        p: Vec<f64>,
+    ) -> Result<Option<Self>> {
+        if p.len() != entry.param_names.len() {
+            return Err(ModelError::Scene {
+                scene: entry.name.to_string(),
+                message: format!(
+                    "expected {} runtime parameters, got {}",
+                    entry.param_names.len(),
+                    p.len()
+                ),
+            });
+        }
+        if !p.iter().all(|v| v.is_finite()) {
+            return Err(ModelError::NonFinite {
+                what: "kernel parameters",
+            });
+        }
+        let (Some(mass_cqd_g), Some(potential), Some(contact)) =
+            (entry.mass_cqd_g, entry.potential, entry.contact)
+        else {
+            return Ok(None);
+        };
+        if entry.nq != 3 {
+            return Ok(None);
+        }
+        Ok(Some(CompiledKernels {
+            entry,
+            mass_cqd_g,
+            potential,
+            contact,
+            p,
+        }))
+    }
+}
+
+/// Names of the compiled 3-joint contact scenes (registry order).
+pub fn compiled_contact_scenes() -> Vec<&'static str> {
+    bf_generated::SCENE_KERNELS
+        .iter()
+        .filter(|e| {
+            e.nq == 3 && e.contact.is_some() && e.mass_cqd_g.is_some() && e.potential.is_some()
+        })
+        .map(|e| e.name)
+        .collect()
+}
+
+fn geometry(c: &ContactValues) -> ContactGeometry {
+    ContactGeometry::from_arrays(
+        c.alpha,
+        c.sat_alpha,
+        &c.p_c,
+        &c.r_c,
+        c.h,
+        &c.n,
+        &c.j_c,
+        &c.v_c,
+        &c.delta_v,
+        c.h_dot,
+        &c.rc_dot,
+        &c.jc_dot_qd,
+    )
+}
+
+impl Kernels for CompiledKernels {
+    fn scene_name(&self) -> &str {
+        self.entry.name
+    }
+    fn scene_toml(&self) -> &str {
+        self.entry.toml
+    }
+    fn param_names(&self) -> &[&str] {
+        self.entry.param_names
+    }
+    fn param_values(&self) -> &[f64] {
+        &self.p
+    }
+    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+        let mut m = [0.0; 9];
+        let mut c = [0.0; 3];
+        (self.mass_cqd_g)(q, qd, &self.p, &mut m, &mut c);
+        (
+            [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]],
+            c,
+        )
+    }
+    fn potential(&self, q: &[f64; 3]) -> f64 {
+        (self.potential)(q, &self.p)
+    }
+    fn contact(
+        &self,
+        q: &[f64; 3],
+        qd: &[f64; 3],
+        omega: &[f64; 3],
+        variant: ContactVariant,
+    ) -> ContactGeometry {
+        let eps = match variant {
+            ContactVariant::Exact => None,
+            ContactVariant::Smooth(e) => Some(e),
+        };
+        let mut c = ContactValues::default();
+        (self.contact)(q, qd, omega, eps, &self.p, &mut c);
+        geometry(&c)
+    }
+}
+
+/// Offsets of the fields of [`ContactValues`] (in its declaration order) in the flat outputs
+/// of the `contact` kernels, from bf-codegen's `CONTACT_FIELDS` (the emitted struct's layout).
+fn contact_offsets() -> Result<[usize; 12]> {
+    const FIELDS: [(&str, usize); 12] = [
+        ("alpha", 1),
+        ("sat_alpha", 1),
+        ("p_c", 3),
+        ("r_c", 3),
+        ("h", 1),
+        ("n", 3),
+        ("j_c", 9),
+        ("v_c", 3),
+        ("delta_v", 3),
+        ("h_dot", 1),
+        ("rc_dot", 3),
+        ("jc_dot_qd", 3),
+    ];
+    let mut layout = Vec::with_capacity(CONTACT_FIELDS.len());
+    let mut off = 0;
+    for (name, dims, _) in CONTACT_FIELDS {
+        let len: usize = dims
+            .iter()
+            .map(|d| match d {
+                Dim::Nq => 3,
+                Dim::Lit(n) => *n,
+            })
+            .product();
+        layout.push((*name, off, len));
+        off += len;
+    }
+    let mut offsets = [0; 12];
+    for (slot, (name, len)) in offsets.iter_mut().zip(FIELDS) {
+        match layout.iter().find(|f| f.0 == name) {
+            Some(&(_, at, n)) if n == len => *slot = at,
+            _ => {
+                return Err(scene_err(
+                    "-",
+                    format!("bf-codegen's contact layout has no field `{name}` of {len} values"),
+                ));
+            }
+        }
+    }
+    Ok(offsets)
+}
+
+/// Kernels of a 3-joint contact scene evaluated by the interpreter on the tapes of the
+/// generator's kernel definitions (the graphs the compiled kernels are emitted from).
+#[derive(Debug, Clone)]
+pub struct InterpretedKernels {
+    name: String,
+    toml: String,
+    params: Params,
+    mass_cqd_g: Tape,
+    potential: Tape,
+    exact: Tape,
+    smooth: Tape,
+    offsets: [usize; 12],
+    layout: bf_codegen::robot::Layout,
+    /// The variable vector with the runtime parameters filled in (q, q̇, ω, ε are set per call).
+    base_vars: Vec<KernelF64>,
+}
+
+impl InterpretedKernels {
+    /// Builds the tapes of `scene` (3 joints, ball, contact; runtime parameters at the
+    /// scene's values). Runs on a helper thread with a large stack: building the graphs of a
+    /// scene with runtime parameters recurses deeply in bf-codegen.
+    pub fn new(scene: &Scene) -> Result<Self> {
+        check_contact_scene(scene)?;
+        let params = Params::from_scene(scene)?;
+        std::thread::scope(|s| {
+            std::thread::Builder::new()
+                .stack_size(256 << 20)
+                .spawn_scoped(s, || Self::build(scene, params))
+                .map_err(|e| scene_err(&scene.name, format!("cannot spawn a thread: {e}")))?
+                .join()
+                .map_err(|_| scene_err(&scene.name, "building the kernel graphs panicked"))?
+        })
+    }
+
+    fn build(scene: &Scene, params: Params) -> Result<Self> {
+        let codegen = |e: bf_codegen::CodegenError| scene_err(&scene.name, e.to_string());
+        let mut m = bf_codegen::Model::new(scene).map_err(codegen)?;
+        let mut tape = |kernel: &str| -> Result<Tape> {
+            let def = build_kernel(&mut m, kernel).map_err(codegen)?;
+            let ids: Vec<_> = def
+                .outputs
+                .iter()
+                .flat_map(|o| o.ids.iter().copied())
+                .collect();
+            Ok(Tape::new(&m.g, &ids))
+        };
+        let mass_cqd_g = tape("mass_cqd_g")?;
+        let potential = tape("potential")?;
+        let exact = tape("contact")?;
+        let smooth = tape("contact_smooth")?;
+        let mut base_vars = vec![KernelF64(0.0); m.layout.n_vars()];
+        for (i, p) in m.params.iter().enumerate() {
+            base_vars[m.layout.param(i) as usize] = KernelF64(p.1);
+        }
+        Ok(InterpretedKernels {
+            name: scene.name.clone(),
+            toml: String::new(),
+            params,
+            mass_cqd_g,
+            potential,
+            exact,
+            smooth,
+            offsets: contact_offsets()?,
+            layout: m.layout,
+            base_vars,
+        })
+    }
+
+    fn eval(&self, tape: &Tape, q: &[f64; 3], qd: &[f64; 3], w: &[f64; 3], eps: f64) -> Vec<f64> {
+        let mut v = self.base_vars.clone();
+        let l = &self.layout;
+        for i in 0..3 {
+            v[l.q(i) as usize] = KernelF64(q[i]);
+            v[l.qd(i) as usize] = KernelF64(qd[i]);
+            v[l.omega(i) as usize] = KernelF64(w[i]);
+        }
+        v[l.eps() as usize] = KernelF64(eps);
+        tape.eval(&v).into_iter().map(|x| x.0).collect()
+    }
+}
+
+impl Kernels for InterpretedKernels {
+    fn scene_name(&self) -> &str {
+        &self.name
+    }
+    fn scene_toml(&self) -> &str {
+        &self.toml
+    }
+    fn param_names(&self) -> &[&str] {
+        &[]
+    }
+    fn param_values(&self) -> &[f64] {
+        &[]
+    }
+    fn physical_params(&self) -> Option<Params> {
+        Some(self.params)
+    }
+    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+        let v = self.eval(&self.mass_cqd_g, q, qd, &[0.0; 3], 0.0);
+        let m = [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]];
+        (m, [v[9], v[10], v[11]])
+    }
+    fn potential(&self, q: &[f64; 3]) -> f64 {
+        self.eval(&self.potential, q, &[0.0; 3], &[0.0; 3], 0.0)[0]
+    }
+    fn contact(
+        &self,
+        q: &[f64; 3],
+        qd: &[f64; 3],
+        omega: &[f64; 3],
+        variant: ContactVariant,
+    ) -> ContactGeometry {
+        let v = match variant {
+            ContactVariant::Exact => self.eval(&self.exact, q, qd, omega, 0.0),
+            ContactVariant::Smooth(e) => self.eval(&self.smooth, q, qd, omega, e),
+        };
+        let o = &self.offsets;
+        let a3 = |k: usize| [v[o[k]], v[o[k] + 1], v[o[k] + 2]];
+        let j = o[6];
+        let c = ContactValues {
+            alpha: v[o[0]],
+            sat_alpha: v[o[1]],
+            p_c: a3(2),
+            r_c: a3(3),
+            h: v[o[4]],
+            n: a3(5),
+            j_c: [
+                [v[j], v[j + 1], v[j + 2]],
+                [v[j + 3], v[j + 4], v[j + 5]],
+                [v[j + 6], v[j + 7], v[j + 8]],
+            ],
+            v_c: a3(7),
+            delta_v: a3(8),
+            h_dot: v[o[9]],
+            rc_dot: a3(10),
+            jc_dot_qd: a3(11),
+        };
+        geometry(&c)
+    }
+}

@@ -1,0 +1,178 @@
+//! The kernel registry: a parsed scene runs on the compiled kernels exactly when it is a
+//! compiled scene (runtime-parameter values aside), and the interpreted kernels of the same
+//! scene give the same numbers as the compiled ones; a changed scene gives other physics.
+
+mod common;
+
+use bf_codegen::spec::Scene;
+use bf_model::registry::{self, KernelSource, compiled_match, set_parameters};
+use bf_model::{
+    ContactVariant, InterpretedKernels, Kernels, Mode, ModelError, State, Vec3, fixtures,
+};
+use common::{HUMAN_TOML, PAPER_TOML, RefKernels};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn parse(text: &str) -> Scene {
+    Scene::from_toml_str(text, "test").unwrap()
+}
+
+fn random_state(rng: &mut ChaCha8Rng) -> ([f64; 3], [f64; 3], [f64; 3]) {
+    let mut v = || [0; 3].map(|_| rng.random_range(-2.0..2.0));
+    (v(), v(), v())
+}
+
+/// Every output of two kernel sets at random states, bit for bit.
+fn assert_identical(a: &dyn Kernels, b: &dyn Kernels) {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for _ in 0..50 {
+        let (q, qd, w) = random_state(&mut rng);
+        assert_eq!(a.mass_cqd_g(&q, &qd), b.mass_cqd_g(&q, &qd));
+        assert_eq!(a.potential(&q).to_bits(), b.potential(&q).to_bits());
+        for v in [ContactVariant::Exact, ContactVariant::Smooth(0.01)] {
+            assert_eq!(a.contact(&q, &qd, &w, v), b.contact(&q, &qd, &w, v));
+        }
+    }
+}
+
+#[test]
+fn compiled_scenes_match_themselves_and_ignore_limits_and_comments() {
+    let paper = parse(PAPER_TOML);
+    let (entry, p) = compiled_match(&paper).expect("paper.toml is compiled");
+    assert_eq!(entry.name, "paper");
+    assert!(p.is_empty());
+    // limits and descriptions do not enter the model kernels
+    let mut limits = paper.clone();
+    limits.links[0].tau_max = Some(0.4);
+    limits.description = Some("mine".into());
+    assert!(compiled_match(&limits).is_some());
+    let (_, source) = registry::contact_kernels(&limits).unwrap();
+    assert_eq!(source, KernelSource::Compiled);
+}
+
+#[test]
+fn same_name_other_numbers_is_interpreted() {
+    let text = PAPER_TOML.replacen("mass = 0.02", "mass = 2000.0", 1);
+    let scene = parse(&text);
+    assert_eq!(scene.name, "paper");
+    assert!(compiled_match(&scene).is_none());
+    let (model, source) = fixtures::model_for_scene(&scene).unwrap();
+    assert_eq!(source, KernelSource::Interpreted);
+    // the heavy first link changes the mass matrix against the built-in's
+    let x = State::new(Vec3::new(0.1, 0.5, 0.5), Vec3::zeros(), Vec3::zeros());
+    let m_heavy = model.evaluate(&x).unwrap().m_f;
+    let m_paper = fixtures::paper_scene().unwrap().evaluate(&x).unwrap().m_f;
+    assert!((m_heavy - m_paper).norm() > 1.0, "{m_heavy} vs {m_paper}");
+}
+
+#[test]
+fn interpreted_kernels_equal_compiled_kernels_bitwise() {
+    let paper = InterpretedKernels::new(&parse(PAPER_TOML)).unwrap();
+    let compiled = fixtures::scene_by_name("paper").unwrap();
+    assert_identical(&paper, compiled.kernels());
+    let human = InterpretedKernels::new(&parse(HUMAN_TOML)).unwrap();
+    let compiled = fixtures::scene_by_name("human").unwrap();
+    assert_identical(&human, compiled.kernels());
+}
+
+#[test]
+fn interpreted_kernels_of_a_modified_finger_agree_with_the_reference() {
+    // an independent implementation (bf-testkit) of a finger with other links and ball
+    let text = PAPER_TOML
+        .replace("a = 1.0", "a = 0.8")
+        .replace("mass = 0.02", "mass = 0.03")
+        .replace("com = [-0.5, 0.0, 0.0]", "com = [-0.4, 0.0, 0.0]");
+    let k = InterpretedKernels::new(&parse(&text)).unwrap();
+    let r = RefKernels::new(&text);
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    for _ in 0..20 {
+        let (q, qd, w) = random_state(&mut rng);
+        let (m, c) = k.mass_cqd_g(&q, &qd);
+        let (mr, cr) = r.mass_cqd_g(&q, &qd);
+        for i in 0..3 {
+            assert!((c[i] - cr[i]).abs() < 1e-12, "{c:?} vs {cr:?}");
+            for j in 0..3 {
+                assert!((m[i][j] - mr[i][j]).abs() < 1e-12, "{m:?} vs {mr:?}");
+            }
+        }
+        assert!((k.potential(&q) - r.potential(&q)).abs() < 1e-12);
+        let (a, b) = (
+            k.contact(&q, &qd, &w, ContactVariant::Exact),
+            r.contact(&q, &qd, &w, ContactVariant::Exact),
+        );
+        assert!((a.h - b.h).abs() < 1e-12, "{} vs {}", a.h, b.h);
+        assert!((a.j_c - b.j_c).norm() < 1e-12);
+    }
+}
+
+#[test]
+fn runtime_parameters_keep_the_compiled_kernels_and_reach_the_physics() {
+    let mut human = parse(HUMAN_TOML);
+    set_parameters(&mut human, &[("ball.radius".into(), 0.8)]).unwrap();
+    let (entry, p) = compiled_match(&human).expect("still the compiled human scene");
+    let ir = entry
+        .param_names
+        .iter()
+        .position(|n| *n == "ball.radius")
+        .unwrap();
+    assert_eq!(p[ir], 0.8);
+    let (model, source) = fixtures::model_for_scene(&human).unwrap();
+    assert_eq!(source, KernelSource::Compiled);
+    assert_eq!(model.params().ball_radius(), 0.8);
+    // the ball inertia stays the file's (2/5) m r² with r = 1 m
+    let base = fixtures::human_scene().unwrap();
+    assert_eq!(model.params().ball_inertia(), base.params().ball_inertia());
+    // the interpreter on the same modified scene gives the same contact
+    let interp = InterpretedKernels::new(&human).unwrap();
+    assert_identical(&interp, model.kernels());
+    // and the gap grows by the 0.2 m the radius shrank
+    let x = State::new(Vec3::new(0.3, 0.9, 0.7), Vec3::zeros(), Vec3::zeros());
+    let h = model.evaluate(&x).unwrap().contact.h;
+    let h0 = base.evaluate(&x).unwrap().contact.h;
+    assert!((h - h0 - 0.2).abs() < 1e-12, "{h} vs {h0}");
+}
+
+#[test]
+fn bad_parameters_and_scenes_are_errors_naming_them() {
+    let mut human = parse(HUMAN_TOML);
+    let e = set_parameters(&mut human, &[("link1.mass".into(), 1.0)]).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        msg.contains("link1.mass") && msg.contains("ball.radius") && msg.contains("link3.mass"),
+        "{msg}"
+    );
+    let e = set_parameters(&mut human, &[("ball.radius".into(), f64::NAN)]).unwrap_err();
+    assert!(e.to_string().contains("finite"), "{e}");
+    let mut paper = parse(PAPER_TOML);
+    let e = set_parameters(&mut paper, &[("ball.radius".into(), 1.0)]).unwrap_err();
+    assert!(e.to_string().contains("no runtime parameters"), "{e}");
+    let puma = parse(include_str!("../../scenes/puma560.toml"));
+    let e = fixtures::model_for_scene(&puma).unwrap_err();
+    assert!(matches!(e, ModelError::Scene { .. }));
+    let msg = e.to_string();
+    assert!(
+        msg.contains("puma560") && msg.contains("no [ball]") && msg.contains("6 joints"),
+        "{msg}"
+    );
+    let e = fixtures::scene_by_name("puma560").unwrap_err().to_string();
+    assert!(e.contains("paper") && e.contains("human"), "{e}");
+}
+
+#[test]
+fn interpreted_model_runs_the_contact_physics() {
+    // a modified finger: its free motion conserves energy up to the joint and socket damping
+    let text = PAPER_TOML.replace("a = 1.0", "a = 0.8");
+    let (model, _) = fixtures::model_for_scene(&parse(&text)).unwrap();
+    let x = State::new(
+        Vec3::new(0.0, -1.0, 0.0),
+        Vec3::zeros(),
+        Vec3::new(0.0, 0.0, 2.0),
+    );
+    let acc = model
+        .accelerations(Mode::Free, &x, &Vec3::new(0.1, 0.0, 0.0))
+        .unwrap();
+    let power = model
+        .power_balance(&x, &Vec3::new(0.1, 0.0, 0.0), &acc.force)
+        .unwrap();
+    assert!(power.total < 0.0, "{power:?}");
+}

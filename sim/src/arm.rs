@@ -1,0 +1,238 @@
+//! Free motion of a robot arm with any number of joints and no ball (`bf_model::arm`):
+//! M(q) q̈ = τ − C(q, q̇) q̇ − g(q) − μ_v q̇ as a [`HybridSystem`] with one mode and no guards,
+//! state x = [q; q̇] (length 2 NQ), torques from any [`Input`] (time series, PD controller).
+//!
+//! [`FreeArm::report`] derives per-sample torques and energies and the run summary: the energy
+//! balance error max |E(t) − E(t₀) − ∫ P dt| with P = τ·q̇ − μ_v |q̇|² (trapezoidal rule
+//! between samples), which vanishes for the exact solution; [`ArmReport::write_dir`] writes
+//! `trajectory.csv` (t, q, q̇, τ, E) and `summary.json`.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use bf_model::arm::ArmModel;
+use serde::Serialize;
+
+use crate::trajectory::write_atomic;
+use crate::{Guard, HybridSystem, Input, SimError, SimOutput, SimStats, Transition};
+
+/// The single mode of [`FreeArm`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArmMode {
+    /// Unconstrained joint-space motion.
+    Free,
+}
+
+/// An arm driven by joint torques (see the module docs).
+#[derive(Debug, Clone)]
+pub struct FreeArm<I: Input> {
+    /// The arm's dynamics.
+    pub model: ArmModel,
+    /// The joint torques.
+    pub input: I,
+}
+
+fn system_err(e: impl std::fmt::Display) -> SimError {
+    SimError::System { msg: e.to_string() }
+}
+
+impl<I: Input> FreeArm<I> {
+    /// The arm with `input`; the input must have one torque per joint.
+    pub fn new(model: ArmModel, input: I) -> Result<Self, SimError> {
+        if input.dim() != model.nq() {
+            return Err(SimError::DimensionMismatch {
+                what: "torque input",
+                expected: model.nq(),
+                found: input.dim(),
+            });
+        }
+        Ok(FreeArm { model, input })
+    }
+
+    fn tau(&self, t: f64, x: &[f64]) -> Result<Vec<f64>, SimError> {
+        let n = self.model.nq();
+        let mut tau = vec![0.0; n];
+        self.input.tau(t, &x[..n], &x[n..], &mut tau)?;
+        Ok(tau)
+    }
+
+    /// Torques, energy and power at every sample of `out`, and the summary of the run.
+    pub fn report(
+        &self,
+        out: &SimOutput<ArmMode>,
+        cpu_seconds: f64,
+    ) -> Result<ArmReport, SimError> {
+        let n = self.model.nq();
+        let tr = &out.trajectory;
+        let mut samples = Vec::with_capacity(tr.len());
+        for (&t, x) in tr.t.iter().zip(&tr.x) {
+            let tau = self.tau(t, x)?;
+            let energy = self.model.energy(&x[..n], &x[n..]).map_err(system_err)?;
+            let power = self.model.power(&x[n..], &tau);
+            samples.push(ArmSample {
+                t,
+                q: x[..n].to_vec(),
+                qd: x[n..].to_vec(),
+                tau,
+                energy,
+                power,
+            });
+        }
+        let (mut work, mut energy_error) = (0.0, 0.0f64);
+        for w in samples.windows(2) {
+            work += 0.5 * (w[0].power + w[1].power) * (w[1].t - w[0].t);
+            let e0 = samples[0].energy;
+            energy_error = energy_error.max((w[1].energy - e0 - work).abs());
+        }
+        let summary = ArmSummary {
+            scene: self.model.name().to_string(),
+            kernels: None,
+            joints: n,
+            t_final: out.t_final,
+            energy_initial: samples.first().map_or(f64::NAN, |s| s.energy),
+            energy_final: samples.last().map_or(f64::NAN, |s| s.energy),
+            work,
+            energy_error,
+            stats: out.stats,
+            cpu_seconds,
+        };
+        Ok(ArmReport { samples, summary })
+    }
+}
+
+impl<I: Input> HybridSystem for FreeArm<I> {
+    type Mode = ArmMode;
+    fn dim(&self) -> usize {
+        2 * self.model.nq()
+    }
+    fn rhs(&self, _: ArmMode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
+        let n = self.model.nq();
+        let tau = self.tau(t, x)?;
+        let qdd = self
+            .model
+            .accelerations(&x[..n], &x[n..], &tau)
+            .map_err(system_err)?;
+        dx[..n].copy_from_slice(&x[n..]);
+        dx[n..].copy_from_slice(&qdd);
+        Ok(())
+    }
+    fn guards(&self, _: ArmMode) -> Vec<Guard> {
+        Vec::new()
+    }
+    fn guard_values(&self, _: ArmMode, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
+        Ok(())
+    }
+    fn reset(
+        &self,
+        _: ArmMode,
+        _: usize,
+        _: f64,
+        _: &mut [f64],
+    ) -> Result<Transition<ArmMode>, SimError> {
+        Ok(Transition::To(ArmMode::Free))
+    }
+}
+
+/// Derived quantities at one sample.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ArmSample {
+    /// Time (s).
+    pub t: f64,
+    /// Joint angles (rad).
+    pub q: Vec<f64>,
+    /// Joint velocities (rad/s).
+    pub qd: Vec<f64>,
+    /// Joint torques (N m).
+    pub tau: Vec<f64>,
+    /// Energy ½ q̇ᵀ M q̇ + U (J).
+    pub energy: f64,
+    /// Power τ·q̇ − μ_v |q̇|² (W).
+    pub power: f64,
+}
+
+/// Summary of a free-motion run (`summary.json`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ArmSummary {
+    /// Scene name.
+    pub scene: String,
+    /// Which kernels ran (`"compiled"` / `"interpreted"`), when the caller says so.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kernels: Option<String>,
+    /// Number of joints.
+    pub joints: usize,
+    /// Time reached (s).
+    pub t_final: f64,
+    /// Energy at the first sample (J).
+    pub energy_initial: f64,
+    /// Energy at the last sample (J).
+    pub energy_final: f64,
+    /// ∫ P dt over the run (J, trapezoidal).
+    pub work: f64,
+    /// max |E(t) − E(t₀) − ∫ P dt| over the samples (J).
+    pub energy_error: f64,
+    /// Step counters.
+    pub stats: SimStats,
+    /// Wall-clock time (s).
+    pub cpu_seconds: f64,
+}
+
+impl std::fmt::Display for ArmSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "free motion of `{}` ({} joints), t = 0 .. {} s",
+            self.scene, self.joints, self.t_final
+        )?;
+        writeln!(
+            f,
+            "energy: {:.9} J -> {:.9} J, work of torques and friction {:.3e} J; balance error \
+             {:.3e} J",
+            self.energy_initial, self.energy_final, self.work, self.energy_error
+        )?;
+        write!(
+            f,
+            "steps: {} accepted, {} rejected; cpu time {:.3} ms",
+            self.stats.accepted_steps,
+            self.stats.rejected_steps,
+            1e3 * self.cpu_seconds
+        )
+    }
+}
+
+/// Samples and summary of a free-motion run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmReport {
+    /// One entry per trajectory sample.
+    pub samples: Vec<ArmSample>,
+    /// The summary.
+    pub summary: ArmSummary,
+}
+
+impl ArmReport {
+    /// Writes `trajectory.csv` (`t,q1..,qd1..,tau1..,energy`) and `summary.json` (with `error`
+    /// when the run failed) into `dir`.
+    pub fn write_dir(&self, dir: &Path, error: Option<&str>) -> Result<(), SimError> {
+        let n = self.summary.joints;
+        let mut csv = String::from("t");
+        for stem in ["q", "qd", "tau"] {
+            for i in 1..=n {
+                let _ = write!(csv, ",{stem}{i}");
+            }
+        }
+        csv.push_str(",energy\n");
+        for s in &self.samples {
+            let _ = write!(csv, "{:e}", s.t);
+            for v in s.q.iter().chain(&s.qd).chain(&s.tau) {
+                let _ = write!(csv, ",{v:e}");
+            }
+            let _ = writeln!(csv, ",{:e}", s.energy);
+        }
+        write_atomic(&dir.join("trajectory.csv"), csv.as_bytes())?;
+        let mut summary = serde_json::to_value(&self.summary).map_err(system_err)?;
+        if let (Some(e), Some(o)) = (error, summary.as_object_mut()) {
+            o.insert("error".into(), e.into());
+        }
+        let text = serde_json::to_string_pretty(&summary).map_err(system_err)?;
+        write_atomic(&dir.join("summary.json"), text.as_bytes())
+    }
+}

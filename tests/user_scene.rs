@@ -1,0 +1,408 @@
+//! A user's scene file, outside the repository, drives `eval`, `simulate` and `optimize`: the
+//! paper's finger with other link lengths and masses and a torque limit of 0.4 N m, still named
+//! `paper`. It must run on its own numbers (interpreted kernels), never as the built-in scene,
+//! and every output says which kernels ran. `--param` sets runtime parameters.
+
+#[path = "common/cli.rs"]
+mod cli_util;
+use cli_util::{root, run, tmpdir};
+use std::path::{Path, PathBuf};
+
+/// The paper scene with links of 0.8 m (COG at the middle), 0.03 kg, and |τ| ≤ 0.4 N m; the
+/// name stays `paper`.
+fn user_scene(dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
+    let edited = text
+        .replace("\na = 1.0\n", "\na = 0.8\n")
+        .replace(
+            "\nmass = 0.02\ncom = [-0.5, 0.0, 0.0]",
+            "\nmass = 0.03\ncom = [-0.4, 0.0, 0.0]",
+        )
+        .replace("\ntau_max = 1.0\n", "\ntau_max = 0.4\n");
+    assert_eq!(edited.matches("a = 0.8").count(), 3);
+    assert_eq!(edited.matches("mass = 0.03").count(), 3);
+    assert_eq!(edited.matches("tau_max = 0.4").count(), 3);
+    let path = dir.join("myfinger.toml");
+    std::fs::write(&path, edited).unwrap();
+    path
+}
+
+fn ok(o: &std::process::Output) -> (String, String) {
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout).to_string(),
+        String::from_utf8_lossy(&o.stderr).to_string(),
+    );
+    assert!(o.status.success(), "stdout:\n{out}\nstderr:\n{err}");
+    (out, err)
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn eval(scene: &str, extra: &[&str]) -> (serde_json::Value, String) {
+    let mut args = vec!["eval", scene, "--q", "0.1,0.5,0.5", "--qd", "0,0,0"];
+    args.extend_from_slice(extra);
+    let (out, err) = ok(&run(&args));
+    (serde_json::from_str(&out).unwrap(), err)
+}
+
+#[test]
+fn user_scene_runs_on_its_own_numbers_in_eval_simulate_and_optimize() {
+    let dir = tmpdir("user-scene");
+    let scene = user_scene(&dir);
+    let scene = scene.to_str().unwrap();
+    let reference =
+        bf_testkit::Reference::new(&bf_codegen::Scene::load(scene).expect("the user scene parses"))
+            .unwrap();
+    let q0 = [0.1, 0.5, 0.5];
+
+    // eval: the interpreted kernels, with the user's mass matrix (independent reference)
+    let (user, err) = eval(scene, &[]);
+    assert!(err.contains("interpreted"), "{err}");
+    let (builtin, err) = eval("scenes/paper.toml", &[]);
+    assert!(err.contains("compiled"), "{err}");
+    let m_ref = reference.mass_matrix(&q0);
+    for i in 0..3 {
+        for j in 0..3 {
+            let m = user["M"][i][j].as_f64().unwrap();
+            assert!(
+                (m - m_ref[(i, j)]).abs() < 1e-12,
+                "M[{i}][{j}] {m} vs {}",
+                m_ref[(i, j)]
+            );
+        }
+    }
+    assert_ne!(user["M"], builtin["M"]);
+
+    // simulate: the run's initial energy is the user finger's potential at q0 (at rest)
+    let sim = |scene: &str, out: &Path| {
+        let (_, err) = ok(&run(&[
+            "simulate",
+            "--scene",
+            scene,
+            "--t-end",
+            "0.5",
+            "--out",
+            out.to_str().unwrap(),
+        ]));
+        (json(&out.join("summary.json")), err)
+    };
+    let (s_user, err) = sim(scene, &dir.join("sim-user"));
+    assert!(err.contains("interpreted"), "{err}");
+    assert_eq!(s_user["kernels"], "interpreted");
+    let e0 = s_user["energy_initial"].as_f64().unwrap();
+    let u0 = reference.potential(&q0);
+    assert!((e0 - u0).abs() < 1e-12 * u0.abs(), "{e0} vs {u0}");
+    let (s_builtin, _) = sim("scenes/paper.toml", &dir.join("sim-builtin"));
+    assert_eq!(s_builtin["kernels"], "compiled");
+    assert!((s_builtin["energy_initial"].as_f64().unwrap() - e0).abs() > 1e-3);
+
+    // optimize --problem reach: the user's torque limit holds and the optimum differs
+    let opt = |scene: Option<&str>, out: &Path| {
+        let mut args = vec![
+            "optimize",
+            "--problem",
+            "reach",
+            "--verify-rtol",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        if let Some(s) = scene {
+            args.extend(["--scene", s]);
+        }
+        let (_, err) = ok(&run(&args));
+        (json(&out.join("solution.json")), err)
+    };
+    let (o_user, err) = opt(Some(scene), &dir.join("opt-user"));
+    assert!(err.contains("interpreted"), "{err}");
+    assert_eq!(o_user["kernels"], "interpreted");
+    assert_eq!(o_user["scene"], "paper");
+    let tau_max = o_user["nodes"]["tau"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| {
+            r.as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap().abs())
+        })
+        .fold(0.0, f64::max);
+    assert!(tau_max <= 0.4 + 1e-7, "max |tau| {tau_max}");
+    assert!(
+        tau_max > 0.3,
+        "the limit is active in a minimum-time reach: {tau_max}"
+    );
+    let (o_builtin, _) = opt(None, &dir.join("opt-builtin"));
+    assert_eq!(o_builtin["kernels"], "compiled");
+    let (ju, jb) = (
+        o_user["objective"].as_f64().unwrap(),
+        o_builtin["objective"].as_f64().unwrap(),
+    );
+    assert!(
+        (ju - jb).abs() > 1e-3 * jb,
+        "objective {ju} vs built-in {jb}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_built_in_name_with_other_numbers_never_runs_the_built_in() {
+    // tau_max = 1e-6 N m cannot reach the target: the solve must fail, not return the
+    // built-in's 1 N m solution
+    let dir = tmpdir("tiny-tau");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
+    let path = dir.join("paper.toml");
+    std::fs::write(&path, text.replace("tau_max = 1.0", "tau_max = 1e-6")).unwrap();
+    let out = dir.join("opt");
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--verify-rtol",
+        "0",
+        "--scene",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    if o.status.success() {
+        let sol = json(&out.join("solution.json"));
+        let tau_max = sol["nodes"]["tau"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| {
+                r.as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|v| v.as_f64().unwrap().abs())
+            })
+            .fold(0.0, f64::max);
+        assert!(tau_max <= 1e-6 + 1e-9, "{tau_max}");
+    } else {
+        assert!(out.join("FAILED").exists() || !out.exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn param_sets_runtime_parameters_and_rejects_bad_ones() {
+    // the ball radius shrinks by 0.2 m: the gap h grows by exactly 0.2 m at the same q
+    let (base, _) = eval("scenes/human.toml", &[]);
+    let (small, err) = eval("scenes/human.toml", &["--param", "ball.radius=0.8"]);
+    assert!(err.contains("compiled"), "{err}");
+    let (h0, h1) = (base["h"].as_f64().unwrap(), small["h"].as_f64().unwrap());
+    assert!((h1 - h0 - 0.2).abs() < 1e-12, "{h1} vs {h0} + 0.2");
+    for (param, mention) in [
+        (
+            "link1.mass=2",
+            vec!["link1.mass", "ball.radius", "link3.mass"],
+        ),
+        ("ball.radius=NaN", vec!["ball.radius", "finite"]),
+        ("ball.radius", vec!["NAME=VALUE"]),
+        ("ball.radius=big", vec!["not a number"]),
+    ] {
+        for cmd in [
+            vec!["eval", "scenes/human.toml", "--q", "0,0,0", "--qd", "0,0,0"],
+            vec![
+                "simulate",
+                "--scene",
+                "scenes/human.toml",
+                "--out",
+                "unused-out",
+            ],
+            vec![
+                "optimize",
+                "--problem",
+                "periodic-cot-human",
+                "--out",
+                "unused-out",
+            ],
+        ] {
+            let mut args = cmd.clone();
+            args.extend(["--param", param]);
+            let o = run(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success(), "{args:?}");
+            for m in &mention {
+                assert!(err.contains(m), "{args:?}: {err}");
+            }
+        }
+    }
+    assert!(!root().join("unused-out").exists());
+    // a scene without runtime parameters says so
+    let o = run(&[
+        "eval",
+        "scenes/paper.toml",
+        "--q",
+        "0,0,0",
+        "--qd",
+        "0,0,0",
+        "--param",
+        "ball.radius=1",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("no runtime parameters"));
+}
+
+#[test]
+fn contact_options_on_a_scene_without_a_ball_are_errors_naming_it() {
+    let dir = tmpdir("no-ball");
+    let out = dir.join("out");
+    for (args, mention) in [
+        (
+            vec![
+                "optimize",
+                "--problem",
+                "reach",
+                "--scene",
+                "scenes/puma560.toml",
+            ],
+            vec!["puma560", "no [ball]"],
+        ),
+        (
+            vec![
+                "simulate",
+                "--scene",
+                "scenes/iiwa7.toml",
+                "--omega0",
+                "0,0,1",
+            ],
+            vec!["iiwa7", "no ball", "--omega0"],
+        ),
+        (
+            vec!["simulate", "--scene", "scenes/iiwa7.toml", "--q0", "0,0,0"],
+            vec!["--q0", "expected 7"],
+        ),
+    ] {
+        let mut args = args.clone();
+        args.extend(["--out", out.to_str().unwrap()]);
+        let o = run(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?}");
+        for m in mention {
+            assert!(err.contains(m), "{args:?}: {err}");
+        }
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn simulate_runs_free_motion_of_an_arm_without_a_ball() {
+    // PUMA 560 (no friction in the scene) falls from rest under gravity: energy is conserved;
+    // under a PD controller the energy changes by the controller's work
+    let dir = tmpdir("arm");
+    let out = dir.join("puma");
+    let (_, err) = ok(&run(&[
+        "simulate",
+        "--scene",
+        "scenes/puma560.toml",
+        "--q0",
+        "0,0.3,-0.2,0.1,0.4,0",
+        "--t-end",
+        "0.5",
+        "--rtol",
+        "1e-10",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    assert!(
+        err.contains("compiled") && err.contains("6 joints"),
+        "{err}"
+    );
+    let s = json(&out.join("summary.json"));
+    assert_eq!(s["kernels"], "compiled");
+    let (e0, e1) = (
+        s["energy_initial"].as_f64().unwrap(),
+        s["energy_final"].as_f64().unwrap(),
+    );
+    assert!((e1 - e0).abs() < 1e-6 * (1.0 + e0.abs()), "{s}");
+    let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    assert!(
+        csv.starts_with("t,q1,q2,q3,q4,q5,q6,qd1,"),
+        "{}",
+        &csv[..40]
+    );
+    let out = dir.join("iiwa");
+    ok(&run(&[
+        "simulate",
+        "--scene",
+        "scenes/iiwa7.toml",
+        "--pd",
+        "0.5,-0.3,0.2,0.8,0,0.4,0.1",
+        "--pd-gains",
+        "200,20",
+        "--t-end",
+        "0.5",
+        "--rtol",
+        "1e-10",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let s = json(&out.join("summary.json"));
+    let work = s["work"].as_f64().unwrap();
+    assert!(work.abs() > 1e-2, "{s}");
+    assert!(
+        s["energy_error"].as_f64().unwrap() < 1e-4 * work.abs(),
+        "{s}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn param_reaches_simulate_and_optimize() {
+    let dir = tmpdir("param-run");
+    // simulate: the initial energy at rest is U(q0) of the finger with the heavier distal link
+    let out = dir.join("sim");
+    let (_, err) = ok(&run(&[
+        "simulate",
+        "--scene",
+        "scenes/human.toml",
+        "--param",
+        "link3.mass=0.05",
+        "--t-end",
+        "0.2",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    assert!(err.contains("compiled"), "{err}");
+    let s = json(&out.join("summary.json"));
+    let mut scene = bf_codegen::Scene::load(root().join("scenes/human.toml")).unwrap();
+    scene.links[2].mass = 0.05;
+    let u0 = bf_testkit::Reference::new(&scene)
+        .unwrap()
+        .potential(&[0.1, 0.5, 0.5]);
+    let e0 = s["energy_initial"].as_f64().unwrap();
+    assert!((e0 - u0).abs() < 1e-12 * u0.abs(), "{e0} vs {u0}");
+    // optimize: a smaller ball is another problem
+    let opt = |extra: &[&str], name: &str| {
+        let out = dir.join(name);
+        let mut args = vec![
+            "optimize",
+            "--problem",
+            "reach",
+            "--scene",
+            "scenes/human.toml",
+            "--verify-rtol",
+            "0",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        ok(&run(&args));
+        json(&out.join("solution.json"))
+    };
+    let base = opt(&[], "opt-base");
+    let small = opt(&["--param", "ball.radius=0.9"], "opt-small");
+    assert_eq!(small["scene"], "human");
+    let (jb, js) = (
+        base["objective"].as_f64().unwrap(),
+        small["objective"].as_f64().unwrap(),
+    );
+    assert!((jb - js).abs() > 1e-3 * jb, "{jb} vs {js}");
+    std::fs::remove_dir_all(&dir).ok();
+}
