@@ -12,7 +12,7 @@
 //! Both come in an `implicit` form with an algebraic variable a = v̇ and the equality path
 //! constraint a − f = 0, the form of the ball-and-finger node functions (eq. 26, 29).
 
-use bf_codegen::graph::Graph;
+use bf_codegen::graph::{Graph, Id};
 
 use super::problem::{
     NodeFunction, Objective, Ocp, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
@@ -26,6 +26,42 @@ const G: f64 = 9.81;
 
 /// End point of the brachistochrone, (x, y) with y pointing down.
 const TARGET: (f64, f64) = (1.0, 0.6);
+
+/// The node function with states `0..nx`, control `nx`, duration variable `nx + 1` and the
+/// rates `xdot` (in terms of those variables); `implicit`: the last rate f becomes the
+/// algebraic variable a = `nx + 2` with the equality path constraint a − f = 0.
+fn node_function(
+    mut g: Graph,
+    nx: u32,
+    mut xdot: Vec<Id>,
+    implicit: bool,
+    costs: Vec<Id>,
+) -> NodeFunction {
+    let (a, path) = match xdot.pop() {
+        Some(f) if implicit => {
+            let a = g.var(nx + 2);
+            let r = g.sub(a, f);
+            xdot.push(a);
+            (vec![nx + 2], vec![r])
+        }
+        last => {
+            xdot.extend(last);
+            (vec![], vec![])
+        }
+    };
+    NodeFunction {
+        graph: g,
+        x: (0..nx).collect(),
+        a,
+        u: vec![nx],
+        duration: nx + 1,
+        fixed: vec![],
+        xdot,
+        path_bounds: vec![(0.0, 0.0); path.len()],
+        path,
+        costs,
+    }
+}
 
 /// A point function `"boundary"` that fixes state components at the start of phase `first`
 /// (`(i, value)` in `initial`) and at the end of phase `last` (`terminal`).
@@ -71,28 +107,11 @@ pub fn double_integrator_phase(
     let (v, u) = (g.var(1), g.var(2));
     let u2 = g.square(u);
     let one = g.one();
-    let (a, xdot, path) = if implicit {
-        let a = g.var(4);
-        let r = g.sub(a, u);
-        (vec![4], vec![v, a], vec![r])
-    } else {
-        (vec![], vec![v, u], vec![])
-    };
-    let na = a.len();
+    let node = node_function(g, 2, vec![v, u], implicit, vec![u2, one]);
+    let na = node.a.len();
     Phase {
         name: "di".into(),
-        node: NodeFunction {
-            graph: g,
-            x: vec![0, 1],
-            a,
-            u: vec![2],
-            duration: 3,
-            fixed: vec![],
-            xdot,
-            path_bounds: vec![(0.0, 0.0); path.len()],
-            path,
-            costs: vec![u2, one],
-        },
+        node,
         x_bounds: vec![(-INF, INF); 2],
         a_bounds: vec![(-INF, INF); na],
         u_bounds: vec![(-INF, INF)],
@@ -160,28 +179,11 @@ pub fn brachistochrone(implicit: bool, scheme: Scheme, points: usize) -> Ocp {
     let gc = g.constant(G);
     let vd = g.mul(gc, c);
     let one = g.one();
-    let (a, xdot, path) = if implicit {
-        let a = g.var(5);
-        let r = g.sub(a, vd);
-        (vec![5], vec![xd, yd, a], vec![r])
-    } else {
-        (vec![], vec![xd, yd, vd], vec![])
-    };
-    let na = a.len();
+    let node = node_function(g, 3, vec![xd, yd, vd], implicit, vec![one]);
+    let na = node.a.len();
     let phase = Phase {
         name: "b".into(),
-        node: NodeFunction {
-            graph: g,
-            x: vec![0, 1, 2],
-            a,
-            u: vec![3],
-            duration: 4,
-            fixed: vec![],
-            xdot,
-            path_bounds: vec![(0.0, 0.0); path.len()],
-            path,
-            costs: vec![one],
-        },
+        node,
         x_bounds: vec![(-10.0, 10.0); 3],
         a_bounds: vec![(-INF, INF); na],
         u_bounds: vec![(-0.5, 3.5)],
