@@ -67,6 +67,9 @@ pub enum Command {
     Paper(PaperArgs),
     /// Write a stand-alone report.
     Report(ReportArgs),
+    /// Check the paper against derivations (`appendix`: each Appendix A/B formula as printed
+    /// vs derived, and the misprints; exits non-zero if a derivation fails).
+    Verify(VerifyArgs),
 }
 
 /// Arguments of `generate`.
@@ -281,4 +284,12 @@ pub struct ReportArgs {
     /// Short ladders (seconds instead of minutes; fewer points per table).
     #[arg(long)]
     pub quick: bool,
+}
+
+/// Arguments of `verify`.
+#[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// What to verify: `appendix` (the paper's Appendix A/B and eq. 22b, 23).
+    #[arg(value_parser = ["appendix"])]
+    pub what: String,
 }
