@@ -136,7 +136,8 @@ pub struct SimulateArgs {
     #[arg(long, default_value = "free")]
     pub mode0: String,
     /// Initial state file (JSON): `{"q":[..],"qd":[..],"omega":[..],"mode":"free"}`; `qd`,
-    /// `omega` and `mode` are optional. --q0/--qd0/--omega0 override its entries, and so does
+    /// `omega` and `mode` are optional. A `solution.json` of `optimize` gives its own initial
+    /// state and first mode (replay it with `--torques` of its `torques.csv`). --q0/--qd0/--omega0 override its entries, and so does
     /// --mode0 when it is not `free` (the default).
     #[arg(long)]
     pub init: Option<PathBuf>,

@@ -272,8 +272,9 @@ fn node_residual(
         let need = if mode == Mode::Stick { 9 } else { 6 };
         if a.len() < need {
             return Err(OcpError::InvalidProblem(format!(
-                "verification: {} algebraic variables at a {mode:?} node, need {need}",
-                a.len()
+                "verification: {} algebraic variables at a {} node, need {need}",
+                a.len(),
+                crate::names::name(&mode)
             )));
         }
         let st = ElementSystem::state(x).map_err(model_err)?;
@@ -561,8 +562,17 @@ pub fn verify_with(
     }
     if sol.raw.len() != p.modes.len() || sol.modes != p.modes {
         return Err(OcpError::InvalidProblem(format!(
-            "verification: the solution has modes {:?}, the problem {:?}",
-            sol.modes, p.modes
+            "verification: the solution has modes [{}], the problem [{}]",
+            sol.modes
+                .iter()
+                .map(crate::names::name)
+                .collect::<Vec<_>>()
+                .join(", "),
+            p.modes
+                .iter()
+                .map(crate::names::name)
+                .collect::<Vec<_>>()
+                .join(", ")
         )));
     }
     let eps = sol.epsilon;
