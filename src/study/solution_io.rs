@@ -448,9 +448,12 @@ pub fn torques_csv(sol: &OcpSolution) -> String {
     s
 }
 
+/// An initial state read from a solution file: q (rad), q̇ (rad/s), ω (rad/s), mode name.
+pub type InitialState = (Vec<f64>, Vec<f64>, [f64; 3], String);
+
 /// The initial state (q, q̇, ω) and mode of a solution file (`solution.json` of either schema),
 /// for `simulate --init`: the first collocation node, the first phase's mode in lowercase.
-pub fn initial_state_of(v: &Value) -> Option<(Vec<f64>, Vec<f64>, [f64; 3], String)> {
+pub fn initial_state_of(v: &Value) -> Option<InitialState> {
     let nodes = v.get("nodes")?;
     let num = |x: &Value| x.as_f64();
     let first = |k: &str| nodes.get(k)?.as_array()?.first().and_then(num);
