@@ -29,14 +29,14 @@ fn quick_report_is_consistent() {
     assert!(rk4[1].error <= rk4[0].error * 1.5, "{rk4:?}");
 
     // (b) the reference is converged: hp refinement reached its tolerance, and its stated
-    // error of J is the change in the last refinement round.
+    // error of J is the change over the last refinement rounds.
     let (desc, j_ref, _) = &r.mesh_reference;
     assert!(
         desc.contains("refined") && desc.contains("(converged;"),
         "{desc}"
     );
     assert!(
-        desc.contains("relative change of J in the last round"),
+        desc.contains("relative change of J in the last rounds"),
         "{desc}"
     );
     assert!(j_ref.is_finite() && *j_ref > 0.0);
