@@ -69,6 +69,9 @@ pub enum Command {
     Paper(PaperArgs),
     /// Write a stand-alone report.
     Report(ReportArgs),
+    /// Check the paper against derivations (`appendix`: each Appendix A/B formula as printed
+    /// vs derived, and the misprints; exits non-zero if a derivation fails).
+    Verify(VerifyArgs),
 }
 
 /// Arguments of `generate`.
@@ -185,7 +188,8 @@ pub struct SimulateArgs {
     #[arg(long, default_value = "free")]
     pub mode0: String,
     /// Initial state file (JSON): `{"q":[..],"qd":[..],"omega":[..],"mode":"free"}`; `qd`,
-    /// `omega` and `mode` are optional. --q0/--qd0/--omega0 override its entries, and so does
+    /// `omega` and `mode` are optional. A `solution.json` of `optimize` gives its own initial
+    /// state and first mode (replay it with `--torques` of its `torques.csv`). --q0/--qd0/--omega0 override its entries, and so does
     /// --mode0 when it is not `free` (the default).
     #[arg(long)]
     pub init: Option<PathBuf>,
@@ -338,4 +342,12 @@ pub struct ReportArgs {
     /// Short ladders (seconds instead of minutes; fewer points per table).
     #[arg(long)]
     pub quick: bool,
+}
+
+/// Arguments of `verify`.
+#[derive(Debug, Args)]
+pub struct VerifyArgs {
+    /// What to verify: `appendix` (the paper's Appendix A/B and eq. 22b, 23).
+    #[arg(value_parser = ["appendix"])]
+    pub what: String,
 }

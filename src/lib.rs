@@ -12,5 +12,7 @@ pub mod cli;
 pub mod commands;
 pub mod errors;
 pub mod io;
+pub mod names;
+pub mod progress;
 pub mod report;
 pub mod study;

@@ -21,6 +21,7 @@ fn main() {
         Command::Optimize(a) => commands::optimize::run(&a),
         Command::Paper(a) => commands::paper::run(&a),
         Command::Report(a) => commands::report::run(&a),
+        Command::Verify(a) => commands::verify::run(&a),
     };
     if let Err(e) = result {
         if ball_finger::errors::is_broken_pipe(&e) {

@@ -353,7 +353,7 @@ fn outputs_round_trip_and_warm_start() {
     }
     let csv = sol.torques_csv();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("t,tau1,tau2,tau3"));
+    assert_eq!(lines.next(), Some("t [s],tau1 [N m],tau2 [N m],tau3 [N m]"));
     let mut last = f64::NEG_INFINITY;
     for l in lines {
         let v: Vec<f64> = l.split(',').map(|x| x.parse().unwrap()).collect();

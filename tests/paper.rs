@@ -107,7 +107,7 @@ fn paper_quick_writes_a_consistent_report() {
         );
         let torques = std::fs::read_to_string(out.join(name).join("torques.csv")).unwrap();
         assert!(
-            torques.starts_with("t,tau1,tau2,tau3"),
+            torques.starts_with("t [s],tau1 [N m],tau2 [N m],tau3 [N m]"),
             "{name} torques.csv header"
         );
         assert!(out.join(format!("animation_{name}.html")).exists());
@@ -160,6 +160,44 @@ fn paper_quick_writes_a_consistent_report() {
         assert!(
             report.contains(&format!("figures/{stem}.svg")),
             "{stem} linked"
+        );
+    }
+    // §8 is the appendix check computed in the run (printed vs derived, six misprints).
+    let s8 = &report[report.find("## 8.").expect("section 8")..];
+    assert!(s8.contains("| printed | derived |") && s8.contains("Misprints (6;"));
+    // §6 is a summary with the meaning of its "error estimate" column; the rows are in the CSV.
+    let s6 = &report[report.find("## 6.").unwrap()..report.find("## 7.").unwrap()];
+    assert!(
+        s6.contains("\"Error estimate\":") && s6.contains("extremes.csv"),
+        "{s6}"
+    );
+    let csv = std::fs::read_to_string(out.join("extremes.csv")).expect("extremes.csv written");
+    assert!(csv.lines().next().unwrap().contains("time [s]"));
+    let probes = s6
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| case"))
+        .count();
+    assert!(
+        csv.lines().count() > 2 * probes,
+        "the CSV has every row, the report one per probe"
+    );
+    // No Rust Debug text in the report.
+    for pattern in ["Some(", "None", " { ", "Rk4", "Dopri5"] {
+        assert!(
+            !report.contains(pattern),
+            "Debug text `{pattern}` in report.md"
+        );
+    }
+    // Without a terminal (stderr is a pipe here), progress comes as lines, one per stage.
+    let stderr = String::from_utf8_lossy(&status.stderr);
+    for stage in [
+        "paper: 1/8 code generation",
+        "paper: 6/8 extremes",
+        "paper: 8/8 appendix check",
+    ] {
+        assert!(
+            stderr.contains(stage),
+            "no progress line `{stage}`:\n{stderr}"
         );
     }
     // Every artefact is written through a temporary file and a rename: none may be left over.

@@ -157,6 +157,7 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
         [
             bf_output::MANIFEST,
             bf_output::FAILED,
+            "solution-internals.json",
             "solution.json",
             "torques.csv"
         ]
@@ -169,7 +170,7 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     assert!(
         std::fs::read_to_string(out.join("torques.csv"))
             .unwrap()
-            .starts_with("t,tau1,tau2,tau3\n")
+            .starts_with("t [s],tau1 [N m],tau2 [N m],tau3 [N m]\n")
     );
 
     // A warm start with a value no solution has names the file and the field.
@@ -177,6 +178,12 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     bad["objective"] = serde_json::json!(1e300);
     let bad_path = dir.join("bad.json");
     std::fs::write(&bad_path, bad.to_string()).unwrap();
+    // A solution is solution.json with solution-internals.json beside it.
+    std::fs::copy(
+        out.join("solution-internals.json"),
+        dir.join("solution-internals.json"),
+    )
+    .unwrap();
     let o = run(&[
         "optimize",
         "--problem",

@@ -435,8 +435,20 @@ fn cli_scripted_push_writes_consistent_files() {
     // The CSV has the documented columns and the same number of rows as the JSON.
     let csv = std::fs::read_to_string(out_dir.join("trajectory.csv")).unwrap();
     let header = csv.lines().next().unwrap();
-    assert!(header.starts_with("t,mode,kind,q1,q2,q3,qd1,qd2,qd3,omega1,omega2,omega3,tau1"));
-    assert!(header.contains("lambda_n,h,sigma,dv,hdot,energy,drift"));
+    assert!(header.starts_with(
+        "t [s],mode,kind,q1 [rad],q2 [rad],q3 [rad],qd1 [rad/s],qd2 [rad/s],qd3 [rad/s],\
+         omega_x [rad/s],omega_y [rad/s],omega_z [rad/s],tau1 [N m]"
+    ));
+    assert!(
+        header.contains("lambda_n [N],h [m],sigma [N],dv [m/s],hdot [m/s],energy [J],drift [m]")
+    );
+    // One naming of modes: lowercase in the CSV as in the JSON; state components named.
+    let tj0 = json(&out_dir.join("trajectory.json"));
+    assert_eq!(tj0["state_names"][6], "omega_x");
+    let row1 = csv.lines().nth(1).unwrap();
+    assert_eq!(row1.split(',').nth(1), tj0["mode"][0].as_str());
+    let evcsv = std::fs::read_to_string(out_dir.join("events.csv")).unwrap();
+    assert!(evcsv.lines().next().unwrap().contains(",pre_q1 [rad],"));
     let tj = json(&out_dir.join("trajectory.json"));
     let n = tj["t"].as_array().unwrap().len();
     assert_eq!(csv.lines().count(), n + 1);

@@ -28,6 +28,18 @@ fn quick_report_is_consistent() {
     assert!(rk4.len() >= 2);
     assert!(rk4[1].error <= rk4[0].error * 1.5, "{rk4:?}");
 
+    // (b) the reference is converged: hp refinement reached its tolerance, and its stated
+    // error of J is the change over the last refinement rounds.
+    let (desc, j_ref, _) = &r.mesh_reference;
+    assert!(
+        desc.contains("refined") && desc.contains("(converged;"),
+        "{desc}"
+    );
+    assert!(
+        desc.contains("relative change of J in the last rounds"),
+        "{desc}"
+    );
+    assert!(j_ref.is_finite() && *j_ref > 0.0);
     // (b) mesh rows on the reference's optimum agree with it to a few percent; the ε ladder:
     // |sat − sat_smooth| ≤ ε, and p_c moves by sat(α)·ê_x3 with |ê_x3| = 1, so the
     // contact-point error is at most ε, and it falls as ε does.

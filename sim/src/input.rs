@@ -5,7 +5,8 @@
 //! * [`PdController`]: τᵢ = kpᵢ (targetᵢ − qᵢ) − kdᵢ q̇ᵢ.
 //!
 //! File formats (also in sim/README.md):
-//! * CSV with header `t,tau1,...,tauN`, one row per time, strictly increasing t, finite values.
+//! * CSV with header `t,tau1,...,tauN` (each name optionally followed by a unit in brackets,
+//!   `t [s],tau1 [N m]`), one row per time, strictly increasing t, finite values.
 //! * JSON `{ "t": [t0, t1, ...], "tau": [[tau1, ..., tauN] at t0, [..] at t1, ...] }`.
 
 use crate::SimError;
@@ -123,7 +124,14 @@ impl TorqueSeries {
             .headers()
             .map_err(|e| parse_err(path, Some(1), format!("cannot read header: {e}")))?
             .clone();
-        let cols: Vec<&str> = header.iter().collect();
+        // A unit in brackets may follow each name (`t [s]`, `tau1 [N m]`, as `optimize` writes).
+        let cols: Vec<&str> = header
+            .iter()
+            .map(|c| match c.split_once('[') {
+                Some((name, unit)) if unit.ends_with(']') => name.trim_end(),
+                _ => c,
+            })
+            .collect();
         if cols.len() < 2 || cols[0] != "t" {
             return Err(parse_err(
                 path,

@@ -5,7 +5,8 @@
 //! Stages: (1) code generation for every built-in scene with op counts and timing (replaces the
 //! Maple step, Sect. 5); (2) kernel verification at sample states: compiled kernels against the
 //! generator's interpreter, and the invariants M = Mᵀ ≻ 0 (eq. 22a) and Ṁ − 2C skew-symmetric
-//! (eq. 76 with Christoffel symbols); (3) the Appendix A/B errata table (`docs/appendix-errata.md`).
+//! (eq. 76 with Christoffel symbols); ... (8) the Appendix A/B check of `verify appendix`, computed
+//! in the run (docs/appendix-errata.md explains each misprint).
 //!
 //! `--out` is one output set (`bf_output::OutputDir`): every stage writes into a private staging
 //! directory, which replaces `--out` as a whole when the report is complete; a run that fails
@@ -24,8 +25,6 @@ pub const BUILTIN_SCENES: [(&str, &str); 4] = [
     ("puma560", bf_generated::puma560::SCENE_TOML),
     ("iiwa7", bf_generated::iiwa7::SCENE_TOML),
 ];
-
-const ERRATA: &str = include_str!("../../docs/appendix-errata.md");
 
 fn stage(len: u64, msg: &str) -> ProgressBar {
     let pb = ProgressBar::new(len);
@@ -64,6 +63,8 @@ pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
 pub fn run(args: &PaperArgs) -> Result<()> {
     let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
     let dir = out.path().to_path_buf();
+    // CI logs (stderr not a terminal) get a line per stage and one every 5 s.
+    let hb = crate::progress::Heartbeat::start("paper");
     let mut report = String::new();
     writeln!(
         report,
@@ -77,6 +78,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     )?;
 
     // Stage 1: generation.
+    hb.stage("1/8 code generation");
     writeln!(
         report,
         "## 1. Code generation (replaces the Maple step of Sect. 5)\n"
@@ -114,6 +116,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     )?;
 
     // Stage 2: verification at sample states.
+    hb.stage("2/8 kernel verification");
     writeln!(report, "## 2. Kernel verification at sample states\n")?;
     let n_states = if args.quick { 4 } else { 32 };
     let pb = stage(n_states as u64, "verifying kernels");
@@ -122,6 +125,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     writeln!(report, "{v}")?;
 
     // Stage 3: Fig. 4, the smooth saturation of Sect. 4.3.
+    hb.stage("3/8 smooth saturation");
     writeln!(report, "## 3. Smooth saturation (Sect. 4.3, Fig. 4)\n")?;
     let fig_dir = dir.join("figures");
     let fig4 = bf_plot::sat::fig4_saturation(&[0.01, 0.1], 801);
@@ -142,6 +146,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     )?;
 
     // Stage 4: the optimal-control scenarios of Sect. 6.1.
+    hb.stage("4/8 optimal periodic rotations");
     writeln!(report, "## 4. Optimal periodic rotations (Sect. 6.1)\n")?;
     let paper_scene =
         bf_codegen::Scene::from_toml_str(bf_generated::paper::SCENE_TOML, "scenes/paper.toml")?;
@@ -207,6 +212,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     }
 
     // Stage 5: open-loop simulation of the COT torques (Sect. 6.2).
+    hb.stage("5/8 open-loop simulation");
     writeln!(report, "## 5. Open-loop simulation with slip (Sect. 6.2)\n")?;
     match results.iter().find(|r| r.name == "periodic-cot") {
         Some(cot) => {
@@ -227,23 +233,34 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     }
 
     // Stage 6: stability at the extremes.
+    hb.stage("6/8 extremes");
     writeln!(report, "## 6. Stability at the extremes\n")?;
     let pb = stage(1, "extremes");
     let ext = crate::study::extremes::run_extremes(args.quick)?;
     pb.finish();
     writeln!(report, "{}", ext.to_markdown())?;
+    out.write(
+        crate::study::extremes::report::CSV_NAME,
+        ext.to_csv().as_bytes(),
+    )?;
 
     // Stage 7: the speed–accuracy trade, measured in this run.
+    hb.stage("7/8 speed versus accuracy");
     writeln!(report, "## 7. Speed versus accuracy\n")?;
     let sa = crate::study::speed_accuracy::speed_accuracy(&dir, args.quick)?;
     writeln!(report, "{}", demote(&sa))?;
 
-    // Stage 8: appendix errata.
-    writeln!(report, "## 8. Paper Appendix A/B: errata\n")?;
+    // Stage 8: appendix check.
+    hb.stage("8/8 appendix check");
+    writeln!(report, "## 8. Paper Appendix A/B: printed vs derived\n")?;
+    let pb = stage(1, "appendix check");
+    let entries = crate::study::appendix::check_appendix()?;
+    pb.finish();
     writeln!(
         report,
-        "{}\n",
-        demote(ERRATA.trim_start_matches(|c| c != '\n').trim())
+        "Output of `ball-finger verify appendix` in this run; docs/appendix-errata.md explains \
+         each misprint.\n\n{}",
+        crate::study::appendix::markdown(&entries)?
     )?;
 
     writeln!(report, "## 9. Known limitations\n")?;
@@ -264,5 +281,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
 
     out.write("report.md", report.as_bytes())?;
     out.commit(Outcome::Success)?;
+    hb.stage("done");
+    drop(hb);
     crate::outln!("wrote {}", args.out.join("report.md").display())
 }

@@ -34,6 +34,13 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             legacy_files: &legacy,
         },
     )?;
+    // CI logs (stderr not a terminal) get a line every 5 s while the report runs.
+    let hb = crate::progress::Heartbeat::start(&format!("report {}", a.which));
+    hb.stage(if a.quick {
+        "running (--quick)"
+    } else {
+        "running"
+    });
     let md = match a.which.as_str() {
         "speed-accuracy" => crate::study::speed_accuracy::speed_accuracy(out.path(), a.quick)?,
         _ => {
@@ -41,10 +48,12 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             pb.enable_steady_tick(std::time::Duration::from_millis(120));
             pb.set_message("solving ...");
             let md = crate::report::strategies_report(a.quick, &|r| {
-                pb.println(format!(
+                let line = format!(
                     "{} {}: {} phi {:.4e} in {:.1} s",
                     r.problem, r.strategy, r.status, r.objective, r.seconds
-                ));
+                );
+                hb.line(&line);
+                pb.println(line);
             })?;
             pb.finish_and_clear();
             md
@@ -53,5 +62,7 @@ pub fn run(a: &ReportArgs) -> Result<()> {
     let text = format!("# ball-finger: {} report\n\n{md}", a.which);
     out.write(&md_name, text.as_bytes())?;
     out.commit(Outcome::Success)?;
+    hb.stage("done");
+    drop(hb);
     crate::outln!("wrote {}", target.join(&md_name).display())
 }

@@ -180,15 +180,39 @@ pub fn initial_state(args: &SimulateArgs) -> Result<(Mode, State)> {
     if let Some(path) = &args.init {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read initial-state file", path.display()))?;
-        let f: InitFile = serde_json::from_str(&text).with_context(|| {
+        let shape = || {
             format!(
                 "{}: initial-state file must be JSON {{\"q\":[3 numbers], \"qd\":[..], \
-                 \"omega\":[..], \"mode\":\"free|stick|slip\"}}",
+                 \"omega\":[..], \"mode\":\"free|stick|slip\"}} or a solution.json of \
+                 `optimize`",
                 path.display()
             )
-        })?;
-        (q, qd, w) = (f.q, f.qd, f.omega);
-        mode = f.mode;
+        };
+        let v: serde_json::Value = serde_json::from_str(&text).with_context(shape)?;
+        if v.get("nodes").is_some() && v.get("modes").is_some() {
+            // A solution of `optimize`: replay it from its own initial state and mode.
+            let (sq, sqd, sw, smode) = crate::study::solution_io::initial_state_of(&v)
+                .with_context(|| {
+                    format!(
+                        "{}: solution file without a readable first node (nodes, modes, \
+                         state_names)",
+                        path.display()
+                    )
+                })?;
+            if sq.len() != 3 || sqd.len() != 3 {
+                bail!(
+                    "{}: the solution has {} joints, the contact scenes 3",
+                    path.display(),
+                    sq.len()
+                );
+            }
+            (q, qd, w) = ([sq[0], sq[1], sq[2]], [sqd[0], sqd[1], sqd[2]], sw);
+            mode = Some(smode);
+        } else {
+            let f: InitFile = serde_json::from_value(v).with_context(shape)?;
+            (q, qd, w) = (f.q, f.qd, f.omega);
+            mode = f.mode;
+        }
         for (name, v) in [("q", &q), ("qd", &qd), ("omega", &w)] {
             if !v.iter().all(|x| x.is_finite()) {
                 bail!("{}: `{name}` must be finite", path.display());
@@ -611,8 +635,9 @@ fn run_model<K: Kernels>(
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
     let failure = error.as_ref().map(|e| {
         format!(
-            "simulation failed at t = {t_stop} s in mode {mode_stop:?}: {e}\n\
+            "simulation failed at t = {t_stop} s in mode {}: {e}\n\
              the trajectory up to the failure ({} samples, {} events) was written to {}",
+            crate::names::name(&mode_stop),
             out.trajectory.len(),
             out.events.len(),
             args.out.display()

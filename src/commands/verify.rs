@@ -1,12 +1,26 @@
-//! Run-time verification of the compiled `paper` kernels, reported by `ball-finger paper`:
-//! compiled code against the generator's interpreter (same expression graph, independent
-//! evaluation path), M symmetric positive definite (eq. 22a) and Ṁ − 2C skew-symmetric
-//! (Christoffel form of C, eq. 76), at pseudo-random states.
+//! `ball-finger verify appendix`: the paper's Appendix A/B entries as printed vs derived and
+//! the misprints ([`crate::study::appendix`]); the status is non-zero when a derivation fails.
+//!
+//! Also the run-time verification of the compiled `paper` kernels, reported by
+//! `ball-finger paper`: compiled code against the generator's interpreter (same expression
+//! graph, independent evaluation path), M symmetric positive definite (eq. 22a) and Ṁ − 2C
+//! skew-symmetric (Christoffel form of C, eq. 76), at pseudo-random states.
 
 use anyhow::Result;
 use bf_codegen::{EvalValue, Scene};
 use bf_generated::paper as k;
 use std::fmt::Write as _;
+
+/// Runs `verify`: prints the appendix table and the misprints on stdout.
+pub fn run(a: &crate::cli::VerifyArgs) -> Result<()> {
+    match a.what.as_str() {
+        "appendix" => {
+            let entries = crate::study::appendix::check_appendix()?;
+            crate::outln!("{}", crate::study::appendix::markdown(&entries)?)
+        }
+        other => anyhow::bail!("unknown verification `{other}`; known: appendix"),
+    }
+}
 
 /// A tiny deterministic generator (xorshift64*), so the report is reproducible without a
 /// dependency on `rand` in the binary.

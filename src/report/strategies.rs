@@ -61,7 +61,7 @@ fn row(problem: Problem, strategy: Strategy) -> StrategyRow {
             StrategyRow {
                 problem: problem.to_string(),
                 strategy,
-                status: format!("{:?}", sol.status),
+                status: crate::names::name(&sol.status),
                 objective: sol.objective,
                 period: sol.period,
                 iterations: sol.iterations,

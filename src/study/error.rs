@@ -37,6 +37,14 @@ pub enum StudyError {
         #[source]
         source: serde_json::Error,
     },
+    /// A solution file's content is not a solution of a known schema.
+    #[error("{}: {reason}", path.display())]
+    SolutionFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// A numeric option is outside its valid range.
     #[error("{name} must be {expected}, got {value}")]
     InvalidOption {
@@ -103,7 +111,11 @@ pub enum StudyError {
         joints: usize,
     },
     /// The solution to verify has other phase modes than the problem.
-    #[error("verification: the solution has modes {solution:?}, the problem {problem:?}")]
+    #[error(
+        "verification: the solution has modes [{}], the problem [{}]",
+        crate::names::names(solution),
+        crate::names::names(problem)
+    )]
     ModeMismatch {
         /// Modes of the solution.
         solution: Vec<Mode>,
@@ -156,7 +168,10 @@ pub enum PhaseDataDefect {
     #[error("non-finite values")]
     NonFinite,
     /// Too few algebraic variables at a node of `mode`.
-    #[error("{found} algebraic variables at a {mode:?} node, need {need}")]
+    #[error(
+        "{found} algebraic variables at a {} node, need {need}",
+        crate::names::name(mode)
+    )]
     AlgebraicDimension {
         /// Algebraic variables at the node.
         found: usize,

@@ -1,6 +1,7 @@
 //! The study layer: everything that solves, checks and reports the ball-and-finger problems
 //! of bf-problem on the engines below it.
 //!
+//! * [`appendix`]: the paper's Appendix A/B as printed against derivations (the misprints);
 //! * [`solve`](mod@solve): the solve-and-retry policy (interior-point settings, dual-regularization retry,
 //!   geometric-guess fallback) and primal-dual warm starts;
 //! * [`strategy`]: continuation and multi-start searches for good local optima (Sect. 7);
@@ -17,6 +18,7 @@
 //! ([`GENERATED`]); it requires every phase node function to run on an emitted kernel, so a
 //! graph that changed without its kernels being re-emitted is an error, not a slow solve.
 
+pub mod appendix;
 pub mod error;
 pub mod extremes;
 pub mod openloop;

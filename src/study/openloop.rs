@@ -89,6 +89,7 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
         output_dt: Some(sol.period / 400.0),
         ..SimSettings::default()
     };
+    let cpu = std::time::Instant::now();
     let (out, stopped) = match bf_sim::simulate(&sys, settings, Mode::Free, 0.0, &x0, t_end) {
         Ok(out) => (out, None),
         Err(f) => {
@@ -96,9 +97,9 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
             (f.partial, Some(msg))
         }
     };
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    out.write_json(&dir.join("trajectory.json"))?;
-    out.write_events_csv(&dir.join("events.csv"))?;
+    // The files of `simulate` (same columns, units and mode names).
+    sys.report(&out, 0.0, cpu.elapsed().as_secs_f64())
+        .write_dir(dir, &out, stopped.as_deref())?;
 
     let tr = &out.trajectory;
     let mut err = vec![0.0f64; periods];
@@ -122,7 +123,11 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
     }
     let mut events: Vec<(String, usize)> = Vec::new();
     for e in &out.events {
-        let key = format!("{:?} → {:?} ({})", e.mode_before, e.mode_after, e.guard);
+        let key = format!(
+            "{} ({})",
+            crate::names::transition(&e.mode_before, e.mode_after.as_ref()),
+            e.guard
+        );
         match events.iter_mut().find(|(k, _)| *k == key) {
             Some(entry) => entry.1 += 1,
             None => events.push((key, 1)),

@@ -188,7 +188,10 @@ pub fn refine(
         }
         history.push(rec);
         if !sol.status.is_success() {
-            stop_reason = format!("solve failed in round {round}: {:?}", sol.status);
+            stop_reason = format!(
+                "solve failed in round {round}: {}",
+                crate::names::name(&sol.status)
+            );
             if best.is_none() {
                 best = Some((sol, mesh, errors));
             }

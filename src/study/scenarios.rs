@@ -150,10 +150,13 @@ pub fn phases_of(sol: &OcpSolution) -> Phases {
         t += d;
         if i + 1 < sol.phase_durations.len() {
             let label = match (sol.modes.get(i), sol.modes.get(i + 1)) {
-                (Some(a), Some(b)) if format!("{a:?}") == "Free" && format!("{b:?}") == "Stick" => {
+                (Some(a), Some(b))
+                    if *a == bf_problem::node::Mode::Free
+                        && *b == bf_problem::node::Mode::Stick =>
+                {
                     "impact"
                 }
-                (Some(a), _) if format!("{a:?}") == "Stick" => "lift-off",
+                (Some(a), _) if *a == bf_problem::node::Mode::Stick => "lift-off",
                 _ => "switch",
             };
             switches.push((t, label.to_string()));
@@ -161,7 +164,7 @@ pub fn phases_of(sol: &OcpSolution) -> Phases {
         if sol
             .modes
             .get(i)
-            .is_some_and(|m| format!("{m:?}") == "Stick")
+            .is_some_and(|m| *m == bf_problem::node::Mode::Stick)
         {
             contact.push((start, t));
         }
@@ -174,7 +177,7 @@ fn is_stick(sol: &OcpSolution, samples: &Samples, i: usize) -> bool {
         .phase
         .get(i)
         .and_then(|&p| sol.modes.get(p))
-        .is_some_and(|m| format!("{m:?}") == "Stick")
+        .is_some_and(|m| *m == bf_problem::node::Mode::Stick)
 }
 
 /// How a scenario is solved: the problem, its settings and the strategy give the built problem
@@ -466,9 +469,9 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
         let o = &r.solution;
         writeln!(
             s,
-            "| {} | {:?} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {} | {:.2} |",
+            "| {} | {} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {} | {:.2} |",
             r.name,
-            o.status,
+            crate::names::name(&o.status),
             o.objective,
             o.period,
             o.phase_durations

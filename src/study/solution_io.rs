@@ -1,15 +1,44 @@
 //! Reading and writing solutions: `solution.json` ([`SolutionIo::write_json`],
-//! [`SolutionIo::read_json`]) and `torques.csv` ([`SolutionIo::write_torques_csv`], the format
-//! `simulate --torques` reads), each written atomically.
+//! [`SolutionIo::read_json`]), `solution-internals.json` beside it, and `torques.csv`
+//! ([`SolutionIo::write_torques_csv`], the format `simulate --torques` reads), each written
+//! atomically.
+//!
+//! `solution.json` (schema [`SCHEMA_VERSION`]) describes itself: `schema_version`, `units` of
+//! every quantity, `state_names` (q1..qn, qd1..qdn, omega_x, omega_y, omega_z), the solver
+//! `status`, `verified` and, in the re-integration record `verification`, the block
+//! {defect, tolerance, verified} ([`verified_block`]), mode names
+//! in lowercase as in the simulator's files, and the trajectory at the collocation points
+//! (`nodes`) and on a dense grid (`dense`) as one named column per component. What only warm
+//! starts need (the raw collocation data, the primal-dual point, static parameters, solver
+//! timings in seconds and counters) is in `solution-internals.json`, which
+//! [`SolutionIo::read_json`] reads too. Files without `schema_version` (the format before
+//! schema 2: the whole record in one file) are still read.
 
 use std::path::Path;
 
 use anyhow::Context;
+use serde_json::{Map, Value, json};
 
 use bf_output::FileError;
 use bf_problem::OcpSolution;
 
 use super::error::StudyError;
+
+/// Version of the `solution.json` layout written by [`SolutionIo::write_json`].
+pub const SCHEMA_VERSION: u64 = 2;
+
+/// File name of the internals beside `solution.json`.
+pub const INTERNALS_FILE: &str = "solution-internals.json";
+
+/// Fields of [`OcpSolution`] that go to [`INTERNALS_FILE`].
+const INTERNAL_FIELDS: [&str; 5] = ["raw", "nlp_warm", "params", "timing", "counters"];
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> StudyError {
+    StudyError::SolutionFile {
+        path: path.into(),
+        reason: e.to_string(),
+    }
+}
 
 /// Through the workspace's one atomic writer ([`bf_output::replace_file`]), so a failed or
 /// interrupted write never leaves a truncated `solution.json` / `torques.csv` behind.
@@ -19,40 +48,449 @@ fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
 
 /// File input and output of an [`OcpSolution`].
 pub trait SolutionIo: Sized {
-    /// Writes `solution.json`.
+    /// Writes `solution.json` and, beside it, [`INTERNALS_FILE`].
     fn write_json(&self, path: &Path) -> Result<(), StudyError>;
-    /// Reads a solution written by [`SolutionIo::write_json`].
+    /// Reads a solution written by [`SolutionIo::write_json`] (or a file of the format before
+    /// schema 2).
     fn read_json(path: &Path) -> Result<Self, StudyError>;
     /// Writes [`OcpSolution::torques_csv`] to `path`.
     fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError>;
 }
 
+/// The state component names of an `nq`-joint finger: q1..qn, qd1..qdn, omega_x..omega_z.
+pub fn state_names(nq: usize) -> Vec<String> {
+    let mut v: Vec<String> = (1..=nq).map(|i| format!("q{i}")).collect();
+    v.extend((1..=nq).map(|i| format!("qd{i}")));
+    v.extend(["omega_x", "omega_y", "omega_z"].map(String::from));
+    v
+}
+
+/// Component names and units of one trajectory table (`nodes`, `dense`), in column order.
+fn sample_columns(nq: usize) -> Vec<(String, &'static str)> {
+    let mut v = vec![("t".to_string(), "s"), ("phase".to_string(), "1")];
+    v.extend((1..=nq).map(|i| (format!("q{i}"), "rad")));
+    v.extend((1..=nq).map(|i| (format!("qd{i}"), "rad/s")));
+    v.extend(["omega_x", "omega_y", "omega_z"].map(|n| (n.to_string(), "rad/s")));
+    v.extend((1..=nq).map(|i| (format!("tau{i}"), "N m")));
+    v.extend(["lambda_x", "lambda_y", "lambda_z"].map(|n| (n.to_string(), "N")));
+    v.extend([
+        ("h".to_string(), "m"),
+        ("sigma".to_string(), "N"),
+        ("alpha".to_string(), "m"),
+    ]);
+    v
+}
+
+/// Units of every quantity in `solution.json`.
+fn units(nq: usize) -> Value {
+    let mut m = Map::new();
+    for (k, u) in [
+        (
+            "objective",
+            "cost of the problem (c1, or c1/c2 for the periodic problems)",
+        ),
+        ("c1", "cost state c1"),
+        ("c2", "s (cost state c2)"),
+        ("phase_durations", "s"),
+        ("period", "s"),
+        ("mean_omega", "rad/s"),
+        ("impulse", "N s"),
+        ("solve_seconds", "s"),
+        ("constraint_violation", "scaled NLP units"),
+        ("dual_infeasibility", "scaled NLP units"),
+        ("epsilon", "m"),
+        ("verification.defect", "state units (rad, rad/s)"),
+        ("verification.*.seconds", "s"),
+    ] {
+        m.insert(k.into(), Value::from(u));
+    }
+    for (c, u) in sample_columns(nq) {
+        m.insert(format!("nodes.{c}, dense.{c}"), Value::from(u));
+    }
+    Value::Object(m)
+}
+
+fn columns(samples: &Value, nq: usize) -> Value {
+    let mut m = Map::new();
+    let get = |k: &str| {
+        samples
+            .get(k)
+            .and_then(Value::as_array)
+            .cloned()
+            .unwrap_or_default()
+    };
+    m.insert("t".into(), Value::Array(get("t")));
+    m.insert("phase".into(), Value::Array(get("phase")));
+    let split = |key: &str, names: &[String], m: &mut Map<String, Value>| {
+        let rows = get(key);
+        for (j, n) in names.iter().enumerate() {
+            let col: Vec<Value> = rows
+                .iter()
+                .map(|r| r.get(j).cloned().unwrap_or(Value::Null))
+                .collect();
+            m.insert(n.clone(), Value::Array(col));
+        }
+    };
+    let idx = |p: &str| (1..=nq).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
+    let xyz = |p: &str| ["x", "y", "z"].map(|a| format!("{p}_{a}")).to_vec();
+    split("q", &idx("q"), &mut m);
+    split("qd", &idx("qd"), &mut m);
+    split("omega", &xyz("omega"), &mut m);
+    split("tau", &idx("tau"), &mut m);
+    split("lambda", &xyz("lambda"), &mut m);
+    for k in ["h", "sigma", "alpha"] {
+        m.insert(k.into(), Value::Array(get(k)));
+    }
+    Value::Object(m)
+}
+
+fn uncolumns(cols: &Value, nq: usize, path: &Path) -> Result<Value, StudyError> {
+    let get = |k: &str| -> Result<Vec<Value>, StudyError> {
+        cols.get(k)
+            .and_then(Value::as_array)
+            .cloned()
+            .ok_or_else(|| io_err(path, format!("trajectory column `{k}` missing")))
+    };
+    let join = |names: Vec<String>| -> Result<Value, StudyError> {
+        let cs: Vec<Vec<Value>> = names.iter().map(|n| get(n)).collect::<Result<_, _>>()?;
+        let n = cs.first().map_or(0, Vec::len);
+        Ok(Value::Array(
+            (0..n)
+                .map(|i| Value::Array(cs.iter().map(|c| c[i].clone()).collect()))
+                .collect(),
+        ))
+    };
+    let idx = |p: &str| (1..=nq).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
+    let xyz = |p: &str| ["x", "y", "z"].map(|a| format!("{p}_{a}")).to_vec();
+    let mut m = Map::new();
+    m.insert("t".into(), Value::Array(get("t")?));
+    m.insert("phase".into(), Value::Array(get("phase")?));
+    m.insert("q".into(), join(idx("q"))?);
+    m.insert("qd".into(), join(idx("qd"))?);
+    m.insert("omega".into(), join(xyz("omega"))?);
+    m.insert("tau".into(), join(idx("tau"))?);
+    m.insert("lambda".into(), join(xyz("lambda"))?);
+    for k in ["h", "sigma", "alpha"] {
+        m.insert(k.into(), Value::Array(get(k)?));
+    }
+    Ok(Value::Object(m))
+}
+
+/// Durations `{secs, nanos}` → seconds.
+fn timing_seconds(timing: &Value) -> Value {
+    let mut m = Map::new();
+    if let Some(o) = timing.as_object() {
+        for (k, v) in o {
+            let s = v.get("secs").and_then(Value::as_f64).unwrap_or(0.0)
+                + v.get("nanos").and_then(Value::as_f64).unwrap_or(0.0) * 1e-9;
+            m.insert(k.clone(), Value::from(s));
+        }
+    }
+    Value::Object(m)
+}
+
+/// Seconds → durations `{secs, nanos}` (the solver's own record).
+fn timing_durations(seconds: &Value) -> Value {
+    let mut m = Map::new();
+    if let Some(o) = seconds.as_object() {
+        for (k, v) in o {
+            let d = std::time::Duration::from_secs_f64(v.as_f64().unwrap_or(0.0).max(0.0));
+            m.insert(
+                k.clone(),
+                json!({"secs": d.as_secs(), "nanos": d.subsec_nanos()}),
+            );
+        }
+    }
+    Value::Object(m)
+}
+
+/// The verification block {defect, tolerance, verified} of a re-integrated solution: its
+/// largest end-of-phase state error, [`super::verify::VERIFIED_DEFECT`], and whether the
+/// solution is verified ([`super::verify::is_verified`]); None without a re-integration.
+pub fn verified_block(sol: &OcpSolution) -> Option<Value> {
+    sol.verification.as_ref().map(|v| {
+        json!({
+            "defect": v.max_defect,
+            "tolerance": super::verify::VERIFIED_DEFECT,
+            "verified": super::verify::is_verified(sol),
+        })
+    })
+}
+
+/// The two documents written for `sol`: `solution.json` and the internals.
+pub fn documents(sol: &OcpSolution) -> Result<(Value, Value), serde_json::Error> {
+    let Value::Object(mut all) = serde_json::to_value(sol)? else {
+        return Ok((Value::Null, Value::Null));
+    };
+    let nq = sol.nodes.q.first().map_or(3, Vec::len);
+    let mut internals = Map::new();
+    internals.insert("schema_version".into(), Value::from(SCHEMA_VERSION));
+    internals.insert("problem".into(), Value::from(sol.problem.clone()));
+    for k in INTERNAL_FIELDS {
+        let v = all.remove(k).unwrap_or(Value::Null);
+        if k == "timing" {
+            internals.insert("timing_seconds".into(), timing_seconds(&v));
+        } else {
+            internals.insert(k.into(), v);
+        }
+    }
+    let mut public = Map::new();
+    public.insert("schema_version".into(), Value::from(SCHEMA_VERSION));
+    public.insert("internals".into(), Value::from(INTERNALS_FILE));
+    public.insert("problem".into(), Value::from(sol.problem.clone()));
+    public.insert(
+        "status".into(),
+        Value::from(crate::names::name(&sol.status)),
+    );
+    public.insert(
+        "verified".into(),
+        Value::from(super::verify::is_verified(sol)),
+    );
+    public.insert("units".into(), units(nq));
+    public.insert("state_names".into(), json!(state_names(nq)));
+    all.remove("status");
+    all.remove("problem");
+    if let (Some(Value::Object(v)), Some(Value::Object(b))) =
+        (all.get_mut("verification"), verified_block(sol))
+    {
+        v.extend(b);
+    }
+    all.insert(
+        "modes".into(),
+        json!(
+            sol.modes
+                .iter()
+                .map(|m| crate::names::name(m).to_lowercase())
+                .collect::<Vec<_>>()
+        ),
+    );
+    all.insert(
+        "mean_omega".into(),
+        json!({"omega_x": sol.mean_omega[0], "omega_y": sol.mean_omega[1], "omega_z": sol.mean_omega[2]}),
+    );
+    all.insert(
+        "nlp_size".into(),
+        json!({"variables": sol.nlp_size.0, "constraints": sol.nlp_size.1}),
+    );
+    for k in ["nodes", "dense"] {
+        let v = all.remove(k).unwrap_or(Value::Null);
+        all.insert(k.into(), columns(&v, nq));
+    }
+    public.extend(all);
+    Ok((Value::Object(public), Value::Object(internals)))
+}
+
+/// Rebuilds the record from the two documents of schema 2.
+fn from_documents(public: &Value, internals: &Value, path: &Path) -> Result<OcpSolution, StudyError> {
+    let Value::Object(p) = public else {
+        return Err(io_err(path, "not a JSON object"));
+    };
+    let mut all = p.clone();
+    let nq = p
+        .get("state_names")
+        .and_then(Value::as_array)
+        .map_or(3, |v| v.len().saturating_sub(3) / 2);
+    for k in [
+        "schema_version",
+        "internals",
+        "units",
+        "state_names",
+        "verified",
+    ] {
+        all.remove(k);
+    }
+    let modes: Vec<Value> = p
+        .get("modes")
+        .and_then(Value::as_array)
+        .cloned()
+        .unwrap_or_default()
+        .into_iter()
+        .map(|m| match m.as_str() {
+            // The record's mode names are capitalised (Free, Stick).
+            Some(s) => {
+                let mut c = s.chars();
+                Value::from(
+                    c.next()
+                        .map_or(String::new(), |f| f.to_uppercase().chain(c).collect()),
+                )
+            }
+            None => m,
+        })
+        .collect();
+    all.insert("modes".into(), Value::Array(modes));
+    if let Some(w) = p.get("mean_omega") {
+        all.insert(
+            "mean_omega".into(),
+            json!([w.get("omega_x"), w.get("omega_y"), w.get("omega_z")]),
+        );
+    }
+    if let Some(n) = p.get("nlp_size") {
+        all.insert(
+            "nlp_size".into(),
+            json!([n.get("variables"), n.get("constraints")]),
+        );
+    }
+    for k in ["nodes", "dense"] {
+        let cols = p.get(k).cloned().unwrap_or(Value::Null);
+        all.insert(k.into(), uncolumns(&cols, nq, path)?);
+    }
+    for k in INTERNAL_FIELDS {
+        let v = if k == "timing" {
+            timing_durations(internals.get("timing_seconds").unwrap_or(&Value::Null))
+        } else {
+            internals.get(k).cloned().unwrap_or(Value::Null)
+        };
+        all.insert(k.into(), v);
+    }
+    serde_json::from_value(Value::Object(all)).map_err(|e| io_err(path, e))
+}
+
 impl SolutionIo for OcpSolution {
     fn write_json(&self, path: &Path) -> Result<(), StudyError> {
-        let s = serde_json::to_string_pretty(self).map_err(|source| StudyError::Json {
-            op: "cannot serialise the solution for",
-            path: path.into(),
-            source,
-        })?;
+        let (public, internals) = documents(self).map_err(|e| io_err(path, e))?;
+        let ipath = path.with_file_name(INTERNALS_FILE);
+        let s = serde_json::to_string_pretty(&internals).map_err(|e| io_err(&ipath, e))?;
+        write_atomic(&ipath, s.as_bytes())?;
+        let s = serde_json::to_string_pretty(&public).map_err(|e| io_err(path, e))?;
         write_atomic(path, s.as_bytes())
     }
 
     fn read_json(path: &Path) -> Result<OcpSolution, StudyError> {
         let s =
             std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
-        serde_json::from_str(&s).map_err(|source| StudyError::Json {
-            op: "cannot parse",
-            path: path.into(),
-            source,
-        })
+        let v: Value = serde_json::from_str(&s).map_err(|e| io_err(path, e))?;
+        match v.get("schema_version").map(|x| (x, x.as_u64())) {
+            // Before schema 2: the record itself.
+            None => serde_json::from_value(v).map_err(|e| io_err(path, e)),
+            Some((_, Some(SCHEMA_VERSION))) => {
+                let name = v
+                    .get("internals")
+                    .and_then(Value::as_str)
+                    .unwrap_or(INTERNALS_FILE);
+                let ipath = path.with_file_name(name);
+                let text = std::fs::read_to_string(&ipath).map_err(|e| {
+                    io_err(
+                        &ipath,
+                        format!("cannot read the internals of {} ({e})", path.display()),
+                    )
+                })?;
+                let internals: Value =
+                    serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
+                from_documents(&v, &internals, path)
+            }
+            Some((x, _)) => Err(io_err(
+                path,
+                format!(
+                    "schema_version {x} is not one this program reads (it reads {SCHEMA_VERSION} \
+                     and files without schema_version)"
+                ),
+            )),
+        }
     }
 
     fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError> {
-        write_atomic(path, self.torques_csv().as_bytes())
+        write_atomic(path, torques_csv(self).as_bytes())
     }
 }
 
-/// Writes `solution.json` and `torques.csv` into `dir` (created if needed).
+/// Samples per phase of `torques.csv`: with linear interpolation between them (as `simulate
+/// --torques` reads it), the torques of a replay then differ from the collocation polynomials
+/// by far less than the verification tolerance (the 100 dense samples per phase leave
+/// state errors of order 1e-4 in a replay).
+pub const TORQUE_SAMPLES_PER_PHASE: usize = 1000;
+
+/// Torque limits of the scene the solution was computed on (a built-in scene: the one its
+/// verification names, else its problem's), if known.
+fn tau_max_of(sol: &OcpSolution) -> Option<Vec<f64>> {
+    let scene = match &sol.verification {
+        Some(v) => v.scene.clone(),
+        None => sol
+            .problem
+            .parse::<bf_problem::Problem>()
+            .ok()?
+            .scene()
+            .to_string(),
+    };
+    let text = bf_generated::scene_toml(&scene)?;
+    let spec = bf_codegen::Scene::from_toml_str(text, &scene).ok()?;
+    spec.links.iter().map(|l| l.tau_max).collect()
+}
+
+/// `torques.csv`: `t [s],tau1 [N m],…`, [`TORQUE_SAMPLES_PER_PHASE`] samples per phase of the
+/// collocation polynomials clamped to the torque limits (the interpolant the verification
+/// re-integrates), strictly increasing in t; the dense samples
+/// ([`OcpSolution::torques_csv`]) when the raw data or the limits are not available.
+pub fn torques_csv(sol: &OcpSolution) -> String {
+    let nq = sol.dense.tau.first().map_or(0, Vec::len);
+    let tau_max = match tau_max_of(sol) {
+        Some(m) if m.len() == nq && !sol.raw.is_empty() => m,
+        _ => return sol.torques_csv(),
+    };
+    let mut s = String::from("t [s]");
+    for i in 1..=nq {
+        s.push_str(&format!(",tau{i} [N m]"));
+    }
+    s.push('\n');
+    let mut last = f64::NEG_INFINITY;
+    let n = TORQUE_SAMPLES_PER_PHASE;
+    for tr in &sol.raw {
+        for k in 0..=n {
+            let tau = -1.0 + 2.0 * k as f64 / n as f64;
+            let t = tr.time(tau);
+            if t <= last || !t.is_finite() {
+                continue;
+            }
+            last = t;
+            s.push_str(&format!("{t:?}"));
+            for (u, m) in tr.u_at(tau).iter().zip(&tau_max) {
+                s.push_str(&format!(",{:?}", u.clamp(-m, *m)));
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+/// An initial state read from a solution file: q (rad), q̇ (rad/s), ω (rad/s), mode name.
+pub type InitialState = (Vec<f64>, Vec<f64>, [f64; 3], String);
+
+/// The initial state (q, q̇, ω) and mode of a solution file (`solution.json` of either schema),
+/// for `simulate --init`: the first collocation node, the first phase's mode in lowercase.
+pub fn initial_state_of(v: &Value) -> Option<InitialState> {
+    let nodes = v.get("nodes")?;
+    let num = |x: &Value| x.as_f64();
+    let first = |k: &str| nodes.get(k)?.as_array()?.first().and_then(num);
+    let (q, qd, w) = if v.get("schema_version").is_some() {
+        let names = v.get("state_names")?.as_array()?;
+        let nq = names.len().checked_sub(3)? / 2;
+        let q: Option<Vec<f64>> = (1..=nq).map(|i| first(&format!("q{i}"))).collect();
+        let qd: Option<Vec<f64>> = (1..=nq).map(|i| first(&format!("qd{i}"))).collect();
+        let w = [first("omega_x")?, first("omega_y")?, first("omega_z")?];
+        (q?, qd?, w)
+    } else {
+        let row = |k: &str| -> Option<Vec<f64>> {
+            nodes
+                .get(k)?
+                .as_array()?
+                .first()?
+                .as_array()?
+                .iter()
+                .map(num)
+                .collect()
+        };
+        let w = row("omega")?;
+        (row("q")?, row("qd")?, [*w.first()?, *w.get(1)?, *w.get(2)?])
+    };
+    let mode = v
+        .get("modes")?
+        .as_array()?
+        .first()?
+        .as_str()?
+        .to_lowercase();
+    Some((q, qd, w, mode))
+}
+
+/// Writes `solution.json`, its internals and `torques.csv` into `dir` (created if needed).
 pub fn write_solution(sol: &OcpSolution, dir: &Path) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     sol.write_json(&dir.join("solution.json"))?;

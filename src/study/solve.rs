@@ -88,7 +88,7 @@ pub fn solve(
     let label = match (exact.is_some(), p.settings.warm_start.is_some()) {
         (true, _) => "exact warm start".to_string(),
         (false, true) => "interpolated warm start".to_string(),
-        (false, false) => format!("{:?} guess", p.settings.guess),
+        (false, false) => format!("{} guess", crate::names::name(&p.settings.guess)),
     };
     let mut sol = solve_nlp(&p.nlp, &settings, exact, reborrow(&mut callback))?;
     iters += sol.iterations;

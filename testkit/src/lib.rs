@@ -1,5 +1,6 @@
-//! bf-testkit: independent reference implementations used only by tests (never by product
-//! code).
+//! bf-testkit: independent reference implementations, used by tests and by
+//! `ball-finger verify appendix` (the paper's appendix checked against them); never by the
+//! simulation or optimisation code.
 //!
 //! * [`reference`](mod@reference): kinematics, Lagrangian dynamics (eq. 22–24, 76), gravity (eq. 72 with the
 //!   docs/parameters.md sign), contact geometry (eq. 2–13, 33, 58–59) for any scene, with exact

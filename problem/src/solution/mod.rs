@@ -120,14 +120,14 @@ pub struct OcpSolution {
 }
 
 impl OcpSolution {
-    /// The torques as `t,tau1,...,tauN` CSV (sim/README.md): dense samples with strictly
+    /// The torques as `t [s],tau1 [N m],...,tauN [N m]` CSV (sim/README.md): dense samples with strictly
     /// increasing times (a sample equal in time to the previous one, at a phase boundary, is
     /// dropped), full precision.
     pub fn torques_csv(&self) -> String {
         let nq = self.dense.tau.first().map_or(0, |v| v.len());
-        let mut s = String::from("t");
+        let mut s = String::from("t [s]");
         for i in 1..=nq {
-            s.push_str(&format!(",tau{i}"));
+            s.push_str(&format!(",tau{i} [N m]"));
         }
         s.push('\n');
         let mut last = f64::NEG_INFINITY;

@@ -96,7 +96,7 @@ impl StrategyReport {
                 },
                 r.chain,
                 r.stage,
-                format!("{:?}", r.status),
+                status_name(r.status),
                 r.objective,
                 r.period,
                 r.iterations,
@@ -288,6 +288,32 @@ impl Verification {
     }
 }
 
+/// The solver status as user text: its serde name (`Solved`, `MaxIterations`), never Debug.
+fn status_name(s: Status) -> &'static str {
+    match s {
+        Status::Solved => "Solved",
+        Status::Acceptable => "Acceptable",
+        Status::MaxIterations => "MaxIterations",
+        Status::MaxTime => "MaxTime",
+        Status::LocallyInfeasible => "LocallyInfeasible",
+        Status::SearchDirectionTooSmall => "SearchDirectionTooSmall",
+        Status::DivergingIterates => "DivergingIterates",
+        Status::Unbounded => "Unbounded",
+        Status::RestorationFailed => "RestorationFailed",
+        Status::ErrorInStepComputation => "ErrorInStepComputation",
+        Status::UserStop => "UserStop",
+    }
+}
+
+impl fmt::Display for TorqueInterpolant {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            TorqueInterpolant::Clamped => "clamped",
+            TorqueInterpolant::Polynomial => "polynomial",
+        })
+    }
+}
+
 fn fmt_opt(v: Option<f64>) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{v:.2e}"))
 }
@@ -296,7 +322,7 @@ impl fmt::Display for Verification {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         writeln!(
             f,
-            "trajectory verification ({}, scene {}): DOPRI5 rtol {:.0e} atol {:.0e}, eps {}, {:?} torques, {:.3} s",
+            "trajectory verification ({}, scene {}): DOPRI5 rtol {:.0e} atol {:.0e}, eps {}, {} torques, {:.3} s",
             self.problem, self.scene, self.rtol, self.atol, self.epsilon, self.torque, self.seconds
         )?;
         writeln!(

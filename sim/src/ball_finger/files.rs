@@ -10,11 +10,49 @@ use bf_model::Mode;
 use serde::Serialize;
 use std::path::Path;
 
+/// Column names with their units; the state components are named as in `solution.json`
+/// (q1.., qd1.., omega_x..) and by `STATE_NAMES` in `trajectory.json`.
 const TRAJ_HEADER: [&str; 25] = [
-    "t", "mode", "kind", "q1", "q2", "q3", "qd1", "qd2", "qd3", "omega1", "omega2", "omega3",
-    "tau1", "tau2", "tau3", "lambda1", "lambda2", "lambda3", "lambda_n", "h", "sigma", "dv",
-    "hdot", "energy", "drift",
+    "t [s]",
+    "mode",
+    "kind",
+    "q1 [rad]",
+    "q2 [rad]",
+    "q3 [rad]",
+    "qd1 [rad/s]",
+    "qd2 [rad/s]",
+    "qd3 [rad/s]",
+    "omega_x [rad/s]",
+    "omega_y [rad/s]",
+    "omega_z [rad/s]",
+    "tau1 [N m]",
+    "tau2 [N m]",
+    "tau3 [N m]",
+    "lambda_x [N]",
+    "lambda_y [N]",
+    "lambda_z [N]",
+    "lambda_n [N]",
+    "h [m]",
+    "sigma [N]",
+    "dv [m/s]",
+    "hdot [m/s]",
+    "energy [J]",
+    "drift [m]",
 ];
+
+/// Names of the components of the state x in `trajectory.json`.
+const STATE_NAMES: [&str; 9] = [
+    "q1", "q2", "q3", "qd1", "qd2", "qd3", "omega_x", "omega_y", "omega_z",
+];
+
+/// The mode as written in every file: its serde name (lowercase), as in the JSON files.
+pub(super) fn mode_name(m: Mode) -> &'static str {
+    match m {
+        Mode::Free => "free",
+        Mode::Stick => "stick",
+        Mode::Slip => "slip",
+    }
+}
 
 fn csv_err(what: &'static str) -> impl Fn(csv::Error) -> SimError {
     move |e| SimError::Serialize {
@@ -45,6 +83,8 @@ fn info_fields(s: &SampleInfo) -> Vec<String> {
 
 #[derive(Serialize)]
 struct TrajectoryJson<'a> {
+    state_names: [&'static str; 9],
+    units: [(&'static str, &'static str); 4],
     t: &'a [f64],
     mode: &'a [Mode],
     kind: &'a [SampleKind],
@@ -80,8 +120,8 @@ impl RunReport {
         for i in 0..tr.len() {
             let mut rec = vec![
                 f(tr.t[i]),
-                format!("{:?}", tr.mode[i]),
-                format!("{:?}", tr.kind[i]),
+                mode_name(tr.mode[i]).to_string(),
+                kind_name(tr.kind[i]).to_string(),
             ];
             rec.extend(tr.x[i].iter().map(|&v| f(v)));
             rec.extend(info_fields(&self.samples[i]));
@@ -94,6 +134,13 @@ impl RunReport {
         })?;
         write_atomic(&dir.join("trajectory.csv"), &bytes)?;
         let tj = TrajectoryJson {
+            state_names: STATE_NAMES,
+            units: [
+                ("t", "s"),
+                ("x", "rad (q), rad/s (qd, omega)"),
+                ("drift", "m"),
+                ("derived", "as the columns of trajectory.csv"),
+            ],
             t: &tr.t,
             mode: &tr.mode,
             kind: &tr.kind,
@@ -104,10 +151,16 @@ impl RunReport {
         write_atomic(&dir.join("trajectory.json"), &json("trajectory JSON", &tj)?)?;
         // Events.
         let mut w = csv::Writer::from_writer(Vec::new());
-        let mut header: Vec<String> =
-            ["t", "kind", "guard", "mode_before", "mode_after", "chained"]
-                .map(String::from)
-                .to_vec();
+        let mut header: Vec<String> = [
+            "t [s]",
+            "kind",
+            "guard",
+            "mode_before",
+            "mode_after",
+            "chained",
+        ]
+        .map(String::from)
+        .to_vec();
         for side in ["pre", "post"] {
             for c in &TRAJ_HEADER[3..24] {
                 header.push(format!("{side}_{c}"));
@@ -119,9 +172,8 @@ impl RunReport {
                 f(e.t),
                 e.kind.to_string(),
                 e.guard.to_string(),
-                format!("{:?}", e.mode_before),
-                e.mode_after
-                    .map_or_else(|| "Terminate".to_string(), |m| format!("{m:?}")),
+                mode_name(e.mode_before).to_string(),
+                e.mode_after.map_or("terminate", mode_name).to_string(),
                 e.chained.to_string(),
             ];
             rec.extend(e.x_pre.iter().map(|&v| f(v)));
@@ -160,6 +212,17 @@ impl RunReport {
                 },
             )?,
         )
+    }
+}
+
+/// The sample kind as written in every file: its serde name, as in the JSON files.
+fn kind_name(k: SampleKind) -> &'static str {
+    match k {
+        SampleKind::Initial => "Initial",
+        SampleKind::Step => "Step",
+        SampleKind::Grid => "Grid",
+        SampleKind::EventPre => "EventPre",
+        SampleKind::EventPost => "EventPost",
     }
 }
 

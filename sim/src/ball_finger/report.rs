@@ -391,8 +391,10 @@ impl std::fmt::Display for RunSummary {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(
             f,
-            "simulated t = {} .. {} s, final mode {:?}",
-            self.t0, self.t_final, self.mode_final
+            "simulated t = {} .. {} s, final mode {}",
+            self.t0,
+            self.t_final,
+            super::files::mode_name(self.mode_final)
         )?;
         let ev: Vec<String> = self
             .event_counts
@@ -403,7 +405,7 @@ impl std::fmt::Display for RunSummary {
         let sh: Vec<String> = self
             .mode_time_share
             .iter()
-            .map(|(m, s)| format!("{m:?} {:.1}%", 100.0 * s))
+            .map(|(m, s)| format!("{} {:.1}%", super::files::mode_name(*m), 100.0 * s))
             .collect();
         writeln!(f, "time in modes: {}", sh.join(", "))?;
         writeln!(f, "max penetration: {:.3e} m", self.max_penetration)?;

@@ -1,5 +1,6 @@
-//! The rows of the extremes study and their markdown table: every probe reports a number with
-//! an error estimate, a clear (typed) error, or a failure. A number that is NaN or infinite
+//! The rows of the extremes study, their markdown summary (one line per probe: its worst case,
+//! with ⚑ where an error measure exceeds its bound) and the full table as CSV: every probe
+//! reports a number with an error estimate, a clear (typed) error, or a failure. A number that is NaN or infinite
 //! becomes a failure, and so does an error other than the one the probe documents at that
 //! extreme.
 
@@ -65,7 +66,10 @@ impl ExtremesReport {
             .collect()
     }
 
-    /// The report section as a markdown table (failures, if any, announced first).
+    /// The report section: failures (if any) first, then one line per probe with its worst
+    /// case, a flag where an error measure exceeds its bound, and what the "error estimate"
+    /// column means. The full table is [`ExtremesReport::to_csv`] (written beside the report as
+    /// [`CSV_NAME`]).
     pub fn to_markdown(&self) -> String {
         let mut s = String::new();
         s.push_str(&format!(
@@ -90,34 +94,198 @@ impl ExtremesReport {
             }
             s.push('\n');
         }
-        s.push_str("| case | parameter | quantity | outcome | error estimate | time (s) |\n");
+        s.push_str(ESTIMATE_MEANING);
+        s.push_str(&format!(
+            " One line per probe: its worst case (the error measure furthest above its bound, \
+             else the first failure, else the first clear error, else its first row); the \
+             full table of {} rows is `{CSV_NAME}`.\n\n",
+            self.rows.len()
+        ));
+        let measures = self
+            .rows
+            .iter()
+            .filter(|r| is_error_measure(&r.quantity))
+            .count();
+        let exceeded = self.rows.iter().filter(|r| exceeds(r).is_some()).count();
+        s.push_str(&format!(
+            "⚑ {exceeded} of {measures} error measures exceed their bound (⚑ ×k: outcome = k × \
+             bound; per probe in the last column, each row in the CSV's `exceeds_bound_by`).\n\n"
+        ));
+        s.push_str("| case | worst case: parameter | quantity | outcome | error estimate | rows (clear errors, ⚑ over bound) · time (s) |\n");
         s.push_str("|---|---|---|---|---|---|\n");
-        for r in &self.rows {
-            let (out, err) = match &r.outcome {
-                Outcome::Number {
-                    value,
-                    error_estimate,
-                } => (fmt_num(*value), fmt_num(*error_estimate)),
-                Outcome::ClearError { message } => (
-                    format!("error: {}", message.replace('|', "\\|")),
-                    "—".into(),
-                ),
-                Outcome::Failed { message } => (
-                    format!("**FAILED: {}**", message.replace('|', "\\|")),
-                    "—".into(),
-                ),
+        for case in self.cases() {
+            let rows: Vec<&ExtremesRow> = self.rows.iter().filter(|r| r.case == case).collect();
+            let Some(worst) = worst_row(&rows) else {
+                continue;
             };
+            let (out, err) = cells(worst);
+            let clear = rows
+                .iter()
+                .filter(|r| matches!(r.outcome, Outcome::ClearError { .. }))
+                .count();
+            let over = rows.iter().filter(|r| exceeds(r).is_some()).count();
             s.push_str(&format!(
-                "| {} | {} | {} | {} | {} | {:.3} |\n",
-                r.case.replace('|', "\\|"),
-                r.parameter.replace('|', "\\|"),
-                r.quantity.replace('|', "\\|"),
+                "| {} | {} | {} | {} | {} | {} ({clear}, {over}) · {:.3} |\n",
+                esc(&case),
+                esc(&worst.parameter),
+                esc(&worst.quantity),
                 out,
                 err,
-                r.seconds
+                rows.len(),
+                worst.seconds
             ));
         }
         s
+    }
+
+    /// The probe names in order of first appearance.
+    pub fn cases(&self) -> Vec<String> {
+        let mut v: Vec<String> = Vec::new();
+        for r in &self.rows {
+            if !v.contains(&r.case) {
+                v.push(r.case.clone());
+            }
+        }
+        v
+    }
+
+    /// Every row as CSV (RFC 4180 quoting), with units in the header: `value` and
+    /// `error_estimate` carry the unit named in `quantity` (1 for relative measures).
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "case,parameter,quantity,outcome,value [unit of quantity],\
+             error_estimate [unit of quantity],error_measure,exceeds_bound_by [1],message,time [s]\n",
+        );
+        for r in &self.rows {
+            let (kind, value, est, message) = match &r.outcome {
+                Outcome::Number {
+                    value,
+                    error_estimate,
+                } => (
+                    "number",
+                    format!("{value:e}"),
+                    format!("{error_estimate:e}"),
+                    String::new(),
+                ),
+                Outcome::ClearError { message } => {
+                    ("clear error", String::new(), String::new(), message.clone())
+                }
+                Outcome::Failed { message } => {
+                    ("failed", String::new(), String::new(), message.clone())
+                }
+            };
+            let line = [
+                csv_field(&r.case),
+                csv_field(&r.parameter),
+                csv_field(&r.quantity),
+                kind.to_string(),
+                value,
+                est,
+                is_error_measure(&r.quantity).to_string(),
+                exceeds(r).map_or(String::new(), |f| format!("{f:e}")),
+                csv_field(&message),
+                format!("{}", r.seconds),
+            ];
+            s.push_str(&line.join(","));
+            s.push('\n');
+        }
+        s
+    }
+}
+
+/// File name of the full table beside the report.
+pub const CSV_NAME: &str = "extremes.csv";
+
+/// The one-sentence meaning of the "error estimate" column.
+pub const ESTIMATE_MEANING: &str = "\"Error estimate\": for a row that measures an error \
+    (relative error, deviation, residual, energy drift) it is the bound the error is judged \
+    against (f64's unit roundoff 2.2e-16 for arithmetic, the integrator's rtol for the drift), \
+    and ⚑ flags an outcome above it; for any other row it estimates the outcome's own error.";
+
+/// Whether `quantity` names an error measure (compared with a bound) rather than a value.
+pub fn is_error_measure(quantity: &str) -> bool {
+    let q = quantity.trim_start();
+    [
+        "rel. err",
+        "err.",
+        "rel. dev",
+        "max dev",
+        "max |ΔE|",
+        "|λ − λ",
+    ]
+    .iter()
+    .any(|p| q.starts_with(p))
+        || q.contains("residual")
+}
+
+/// outcome / bound when `r` is an error measure above a positive bound.
+pub fn exceeds(r: &ExtremesRow) -> Option<f64> {
+    match r.outcome {
+        Outcome::Number {
+            value,
+            error_estimate,
+        } if is_error_measure(&r.quantity) && error_estimate > 0.0 && value > error_estimate => {
+            Some(value / error_estimate)
+        }
+        _ => None,
+    }
+}
+
+fn worst_row<'a>(rows: &[&'a ExtremesRow]) -> Option<&'a ExtremesRow> {
+    let ratio = |r: &ExtremesRow| match r.outcome {
+        Outcome::Number {
+            value,
+            error_estimate,
+        } if is_error_measure(&r.quantity) && error_estimate > 0.0 => Some(value / error_estimate),
+        _ => None,
+    };
+    rows.iter()
+        .copied()
+        .find(|r| matches!(r.outcome, Outcome::Failed { .. }))
+        .or_else(|| {
+            rows.iter()
+                .copied()
+                .filter_map(|r| ratio(r).map(|x| (r, x)))
+                .fold(None::<(&ExtremesRow, f64)>, |m, (r, x)| match m {
+                    Some((_, y)) if y >= x => m,
+                    _ => Some((r, x)),
+                })
+                .map(|(r, _)| r)
+        })
+        .or_else(|| {
+            rows.iter()
+                .copied()
+                .find(|r| matches!(r.outcome, Outcome::ClearError { .. }))
+        })
+        .or_else(|| rows.first().copied())
+}
+
+fn cells(r: &ExtremesRow) -> (String, String) {
+    match &r.outcome {
+        Outcome::Number {
+            value,
+            error_estimate,
+        } => {
+            let flag = exceeds(r).map_or(String::new(), |f| format!(" ⚑ ×{f:.1e}"));
+            (
+                format!("{}{flag}", fmt_num(*value)),
+                fmt_num(*error_estimate),
+            )
+        }
+        Outcome::ClearError { message } => (format!("error: {}", esc(message)), "—".into()),
+        Outcome::Failed { message } => (format!("**FAILED: {}**", esc(message)), "—".into()),
+    }
+}
+
+fn esc(s: &str) -> String {
+    s.replace('|', "\\|")
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
     }
 }
 
@@ -207,5 +375,80 @@ pub(super) fn model_err_outcome(e: &ModelError, expected: fn(&ModelError) -> boo
         Outcome::Failed {
             message: format!("unexpected error: {e}"),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(case: &str, quantity: &str, value: f64, err: f64) -> ExtremesRow {
+        ExtremesRow {
+            case: case.into(),
+            parameter: format!("|q| = {value}"),
+            quantity: quantity.into(),
+            outcome: Outcome::Number {
+                value,
+                error_estimate: err,
+            },
+            seconds: 0.5,
+        }
+    }
+
+    fn report() -> ExtremesReport {
+        ExtremesReport {
+            rows: vec![
+                row("kernels", "rel. err. M", 1e-16, f64::EPSILON),
+                row("kernels", "rel. err. M", 4e-10, f64::EPSILON),
+                row("kernels", "rel. err. g", 1e-15, f64::EPSILON),
+                row("painlevé", "threshold μ_k*", 0.9, 1e-12),
+                ExtremesRow {
+                    case: "painlevé".into(),
+                    parameter: "μ_k = 2, \"big\"".into(),
+                    quantity: "slip".into(),
+                    outcome: Outcome::ClearError {
+                        message: "no consistent normal force".into(),
+                    },
+                    seconds: 0.5,
+                },
+            ],
+            quick: true,
+            seconds: 1.0,
+        }
+    }
+
+    #[test]
+    fn flags_exactly_the_error_measures_above_their_bound() {
+        let r = report();
+        let flagged: Vec<f64> = r.rows.iter().filter_map(exceeds).collect();
+        // 4e-10 / 2.2e-16 and 1e-15 / 2.2e-16; a value that is not an error measure
+        // (μ_k* = 0.9 with its own error 1e-12) is never flagged.
+        assert_eq!(flagged.len(), 2);
+        assert!((flagged[0] - 4e-10 / f64::EPSILON).abs() < 1.0);
+        let md = r.to_markdown();
+        assert!(md.contains("⚑ 2 of 3 error measures"), "{md}");
+        // The worst case of "kernels" is the 4e-10 row, flagged in the table.
+        let line = md.lines().find(|l| l.starts_with("| kernels")).unwrap();
+        assert!(line.contains("4.000e-10 ⚑ ×1.8e6"), "{line}");
+        assert!(line.contains("3 (0, 2)"), "{line}");
+        let line = md.lines().find(|l| l.starts_with("| painlevé")).unwrap();
+        assert!(line.contains("error: no consistent"), "{line}");
+        assert!(md.contains(ESTIMATE_MEANING));
+    }
+
+    #[test]
+    fn csv_has_every_row_with_units_and_quoting() {
+        let csv = report().to_csv();
+        let lines: Vec<&str> = csv.lines().collect();
+        assert_eq!(lines.len(), 1 + 5);
+        assert!(lines[0].contains("time [s]") && lines[0].contains("value [unit of quantity]"));
+        let cols = lines[0].split(',').count();
+        assert_eq!(lines[1].split(',').count(), cols);
+        assert!(lines[2].contains(",true,1.8"), "{}", lines[2]);
+        assert!(
+            lines[5].contains("\"μ_k = 2, \"\"big\"\"\""),
+            "{}",
+            lines[5]
+        );
     }
 }

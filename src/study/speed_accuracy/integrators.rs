@@ -69,7 +69,7 @@ pub(super) fn measure(quick: bool) -> Result<(f64, Vec<WorkPrecisionRow>)> {
     let mut rows = Vec::with_capacity(configs.len());
     // One configuration at a time so the bar moves; the reference is cheap (< 0.1 s).
     for c in &configs {
-        pb.set_message(format!("{:?}", c.method));
+        pb.set_message(crate::names::method(&c.method));
         let mut r = work_precision(
             &sys,
             SimMode::Free,

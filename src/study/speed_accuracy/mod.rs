@@ -4,7 +4,7 @@
 //! | study | file | knob | error measured against | paper |
 //! |---|---|---|---|---|
 //! | (a) simulation | [`integrators`] | DOPRI5 rtol, RK4 step | DOPRI5 rtol 1e-13 run: ‖x(T) − x_ref(T)‖∞ and event times | Sect. 3, Fig. 3 |
-//! | (b) optimisation | [`meshes`] | LG points, Radau elements | objective J of a finer Radau mesh | Sect. 4.3, eq. 60 |
+//! | (b) optimisation | [`meshes`] | LG points, Radau elements | objective J of an hp-refined Radau reference (element error estimate ≤ 1e-8, its J error stated) | Sect. 4.3, eq. 60 |
 //! | (b) optimisation | [`smoothing`] | smoothing ε | exact p_c (eq. 3) vs smooth p_c (eq. 58–59) along the solution | eq. 58–59 |
 //! | (c) kernels | [`kernel_variants`] | baked/runtime constants, Lagrangian/Newton–Euler, f32/f64, FMA | double-double evaluation of the same graph | eq. 22a, 76–79 |
 //!

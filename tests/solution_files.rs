@@ -1,0 +1,165 @@
+//! The files of `optimize` describe themselves and replay: `solution.json` carries its schema
+//! version, units, named state components and a status/verification block, the internals are
+//! in `solution-internals.json`, and `simulate --init solution.json --torques torques.csv`
+//! reproduces the first phase of the optimum to the verification tolerance (1e-4) — an
+//! independent integration (the simulator's hybrid model, event location and torque
+//! interpolation) of the optimum's own torques from its own initial state.
+
+#[path = "common/cli.rs"]
+mod cli;
+
+use ball_finger::study::OcpSolution;
+use ball_finger::study::solution_io::{INTERNALS_FILE, SCHEMA_VERSION, SolutionIo};
+use serde_json::Value;
+
+fn json(path: &std::path::Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn col(v: &Value, name: &str) -> Vec<f64> {
+    v[name]
+        .as_array()
+        .unwrap_or_else(|| panic!("column {name}"))
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+#[test]
+fn optimize_then_simulate_replays_the_first_phase() {
+    let dir = cli::tmpdir("replay");
+    let opt = dir.join("opt");
+    let out = cli::run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--refine",
+        "1e-7",
+        "--out",
+        opt.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let sol = json(&opt.join("solution.json"));
+    assert_eq!(sol["schema_version"], SCHEMA_VERSION);
+    assert_eq!(sol["units"]["nodes.q1, dense.q1"], "rad");
+    assert_eq!(sol["units"]["nodes.tau3, dense.tau3"], "N m");
+    assert_eq!(sol["state_names"][3], "qd1");
+    assert_eq!(sol["state_names"][8], "omega_z");
+    assert_eq!(sol["modes"][0], "free");
+    assert_eq!(sol["status"], "Solved");
+    let ver = &sol["verification"];
+    assert_eq!(ver["tolerance"], 1e-4);
+    assert_eq!(ver["verified"], sol["verified"]);
+    assert_eq!(ver["verified"], true);
+    assert!(ver["defect"].as_f64().unwrap() <= 1e-4, "{ver}");
+    assert_eq!(ver["defect"], ver["max_defect"]);
+    for internal in ["raw", "nlp_warm", "timing", "counters", "params"] {
+        assert!(sol.get(internal).is_none(), "{internal} in solution.json");
+    }
+    let internals = json(&opt.join(INTERNALS_FILE));
+    assert!(internals["raw"].is_array() && internals["nlp_warm"].is_object());
+    assert!(internals["timing_seconds"]["total"].as_f64().unwrap() > 0.0);
+    // The record reads back whole, internals included.
+    let back = OcpSolution::read_json(&opt.join("solution.json")).unwrap();
+    assert_eq!(back.raw.len(), 1);
+    assert!(back.nlp_warm.is_some() && back.timing.total.as_secs_f64() > 0.0);
+    assert_eq!(back.nodes.q.len(), col(&sol["nodes"], "q1").len());
+    // A file of the format before schema 2 (the record in one file) still reads.
+    let old = dir.join("old.json");
+    std::fs::write(&old, serde_json::to_string(&back).unwrap()).unwrap();
+    let again = OcpSolution::read_json(&old).unwrap();
+    assert_eq!(again.objective, back.objective);
+    assert_eq!(again.raw.len(), 1);
+
+    // Replay phase 1 (free motion up to the contact) from the solution's own initial state.
+    let t1 = sol["phase_durations"][0].as_f64().unwrap();
+    let sim = dir.join("sim");
+    let out = cli::run(&[
+        "simulate",
+        "--init",
+        opt.join("solution.json").to_str().unwrap(),
+        "--torques",
+        opt.join("torques.csv").to_str().unwrap(),
+        "--t-end",
+        &format!("{t1}"),
+        "--rtol",
+        "1e-10",
+        "--output-dt",
+        "1e-4",
+        "--out",
+        sim.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let traj = json(&sim.join("trajectory.json"));
+    let t: Vec<f64> = traj["t"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let x = traj["x"].as_array().unwrap();
+    // The simulator's state at t = 0 is the solution's first node.
+    let nodes = &sol["nodes"];
+    let names = ["q1", "q2", "q3", "qd1", "qd2", "qd3"];
+    for (i, n) in names.iter().enumerate() {
+        assert_eq!(x[0][i].as_f64().unwrap(), col(nodes, n)[0], "{n}(0)");
+    }
+    // At every collocation point of phase 1 (before any event), the replay (linearly
+    // interpolated between its samples, 1e-4 s apart) matches the optimum's state to the
+    // verification tolerance.
+    let first_event = json(&sim.join("events.json"))["events"]
+        .as_array()
+        .and_then(|e| e.first())
+        .and_then(|e| e["t"].as_f64())
+        .unwrap_or(f64::INFINITY);
+    let tn = col(nodes, "t");
+    let phase = col(nodes, "phase");
+    let mut worst = 0.0f64;
+    let mut checked = 0;
+    for (k, &tk) in tn.iter().enumerate() {
+        if phase[k] != 0.0 || tk >= first_event || tk > t[t.len() - 1] {
+            continue;
+        }
+        let j = t.partition_point(|&s| s <= tk).clamp(1, t.len() - 1);
+        let w = if t[j] > t[j - 1] {
+            (tk - t[j - 1]) / (t[j] - t[j - 1])
+        } else {
+            0.0
+        };
+        for (i, n) in names.iter().enumerate() {
+            let (a, b) = (x[j - 1][i].as_f64().unwrap(), x[j][i].as_f64().unwrap());
+            worst = worst.max((a + w * (b - a) - col(nodes, n)[k]).abs());
+        }
+        checked += 1;
+    }
+    assert!(checked > 10, "{checked} collocation points checked");
+    assert!(
+        worst < 1e-4,
+        "the replay differs from the optimum by {worst:e} (rad, rad/s)"
+    );
+}
+
+#[test]
+fn old_and_future_solution_files() {
+    let dir = cli::tmpdir("schema");
+    // A file from a newer program is refused with its version named.
+    let p = dir.join("solution.json");
+    std::fs::write(&p, r#"{"schema_version": 99, "problem": "reach"}"#).unwrap();
+    let e = OcpSolution::read_json(&p).unwrap_err().to_string();
+    assert!(
+        e.contains("schema_version 99") && e.contains("solution.json"),
+        "{e}"
+    );
+    // A schema-2 file without its internals names the missing file.
+    std::fs::write(&p, r#"{"schema_version": 2, "problem": "reach"}"#).unwrap();
+    let e = OcpSolution::read_json(&p).unwrap_err().to_string();
+    assert!(e.contains(INTERNALS_FILE), "{e}");
+}
