@@ -129,7 +129,8 @@ impl Scalar for KernelF64 {
     }
 }
 
-/// A compiled evaluation order for a set of outputs (the cone, children first).
+/// A compiled evaluation order for a set of outputs (the cone, children first), with the
+/// nodes renumbered densely so an evaluation touches only the cone's values.
 #[derive(Debug, Clone)]
 pub struct Tape {
     nodes: Vec<(usize, Node)>,
@@ -141,15 +142,34 @@ impl Tape {
     /// Compile the cone of `outputs`.
     pub fn new(g: &Graph, outputs: &[Id]) -> Self {
         let mark = g.cone(outputs);
-        let size = outputs.iter().map(|o| o.index() + 1).max().unwrap_or(0);
-        let nodes = (0..size)
-            .filter(|&i| mark[i])
-            .map(|i| (i, g.node(Id(i as u32))))
-            .collect();
+        let max = outputs.iter().map(|o| o.index() + 1).max().unwrap_or(0);
+        // slot[i]: the dense index of graph node i (cone nodes only).
+        let mut slot = vec![0u32; max];
+        let mut nodes = Vec::new();
+        for i in (0..max).filter(|&i| mark[i]) {
+            let s = |c: Id| Id(slot[c.index()]);
+            let n = match g.node(Id(i as u32)) {
+                n @ (Node::Const(_) | Node::Var(_)) => n,
+                Node::Add(a, b) => Node::Add(s(a), s(b)),
+                Node::Sub(a, b) => Node::Sub(s(a), s(b)),
+                Node::Mul(a, b) => Node::Mul(s(a), s(b)),
+                Node::Div(a, b) => Node::Div(s(a), s(b)),
+                Node::Neg(a) => Node::Neg(s(a)),
+                Node::Sin(a) => Node::Sin(s(a)),
+                Node::Cos(a) => Node::Cos(s(a)),
+                Node::Sqrt(a) => Node::Sqrt(s(a)),
+                Node::Abs(a) => Node::Abs(s(a)),
+                Node::Min(a, b) => Node::Min(s(a), s(b)),
+                Node::Max(a, b) => Node::Max(s(a), s(b)),
+                Node::IfLt(a, b, t, f) => Node::IfLt(s(a), s(b), s(t), s(f)),
+            };
+            slot[i] = nodes.len() as u32;
+            nodes.push((nodes.len(), n));
+        }
         Tape {
+            outputs: outputs.iter().map(|o| Id(slot[o.index()])).collect(),
+            size: nodes.len(),
             nodes,
-            outputs: outputs.to_vec(),
-            size,
         }
     }
 

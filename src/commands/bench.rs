@@ -5,8 +5,9 @@
 //! (`bf_codegen::interp`, the same graphs and f64 operations) for any scene file.
 //!
 //! Method: a fixed set of random states (seeded; q uniform in the joint limits or [−π, π],
-//! q̇ in [−2, 2], ω in [−2, 2]³, q̈ and τ in [−5, 5]) is cycled through in batches, one call
-//! per state; the reported figure is the median over batches of wall-clock time per call.
+//! q̇ in [−2, 2], ω in [−2, 2]³, q̈ and τ in [−5, 5]) is cycled through in short batches of
+//! consecutive calls (about 50 µs each); the reported figure is the median over batches of
+//! wall-clock time per call, so batches preempted on a loaded machine do not count.
 //! The compiled path calls `eval_index_into` (outputs on the stack, copied into a buffer; no
 //! allocation), the interpreted path a compiled tape (allocates its value array per call).
 //! The budget `--time` is split evenly over the kernels and the two paths. Before timing,
@@ -123,16 +124,33 @@ fn random_states(scene: &Scene, n: usize, seed: u64) -> Vec<State> {
         .collect()
 }
 
-/// Median over batches (one call per state each) of ns per call, within `budget` seconds
-/// (at least three batches).
-fn time_batches(n_states: usize, budget: f64, mut batch: impl FnMut()) -> f64 {
+/// Target length of one timed batch: short against a scheduler time slice, so the median
+/// over batches skips the ones a loaded machine preempted.
+const BATCH_SECONDS: f64 = 50e-6;
+
+/// Median over batches of ns per call of `call(i)`, i cycling through `0..n_states`, within
+/// `budget` seconds (at least three batches). A batch is as many consecutive calls as take
+/// about [`BATCH_SECONDS`] (at least one).
+fn time_batches(n_states: usize, budget: f64, mut call: impl FnMut(usize)) -> f64 {
+    // Calibrate the batch length on one pass over (up to) 16 states.
+    let probe = n_states.min(16);
+    let t = Instant::now();
+    for i in 0..probe {
+        call(i);
+    }
+    let single = t.elapsed().as_secs_f64() / probe as f64;
+    let per_batch = ((BATCH_SECONDS / single.max(1e-12)) as usize).clamp(1, 1 << 16);
     let mut per_call = Vec::new();
+    let mut next = 0usize;
     let start = Instant::now();
     while per_call.len() < 3 || start.elapsed().as_secs_f64() < budget {
         let t = Instant::now();
-        batch();
-        per_call.push(t.elapsed().as_secs_f64() * 1e9 / n_states as f64);
-        if per_call.len() >= 100_000 {
+        for _ in 0..per_batch {
+            call(next);
+            next = (next + 1) % n_states;
+        }
+        per_call.push(t.elapsed().as_secs_f64() * 1e9 / per_batch as f64);
+        if per_call.len() >= 1_000_000 {
             break;
         }
     }
@@ -186,16 +204,12 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
                 );
             }
             max_rel = Some(worst);
-            compiled_ns = Some(time_batches(states.len(), budget, || {
-                for s in &states {
-                    black_box(call(k, black_box(s), &mut out));
-                }
+            compiled_ns = Some(time_batches(states.len(), budget, |i| {
+                black_box(call(k, black_box(&states[i]), &mut out));
             }));
         }
-        let interpreted_ns = time_batches(states.len(), budget, || {
-            for v in &vars {
-                black_box(kern.eval(black_box(v)));
-            }
+        let interpreted_ns = time_batches(states.len(), budget, |i| {
+            black_box(kern.eval(black_box(&vars[i])));
         });
         rows.push(Row {
             kernel: kern.name.clone(),
