@@ -134,15 +134,17 @@ fn thread_cpu_seconds() -> f64 {
 }
 
 /// Backends and orderings of `SparseLdlt` compared on one KKT pattern: `(label, backend,
-/// constraint-aware order)` (`block` = the supernodal kernel, `simplicial` = the prepared
-/// faer-identical up-looking path, `auto` = the default choice; `_amd` = plain AMD, `_cav` =
-/// constraint rows after their first primal variable).
-const VARIANTS: [(&str, LdltBackend, bool); 5] = [
-    ("auto_amd", LdltBackend::Auto, false),
-    ("auto_cav", LdltBackend::Auto, true),
-    ("block", LdltBackend::Supernodal, false),
-    ("simplicial", LdltBackend::Simplicial, false),
-    ("faer_supernodal", LdltBackend::FaerSupernodal, false),
+/// constraint-aware order, 2 × 2 pivot pairs)` (`block` = the supernodal kernel, `simplicial` =
+/// the prepared faer-identical up-looking path, `auto` = the default choice; `_amd` = plain
+/// AMD, `_cav` = AMD on (variable, row) pairs, `_pairs` = AMD with the rows it would eliminate
+/// bare delayed into 2 × 2 (variable, row) pivots).
+const VARIANTS: [(&str, LdltBackend, bool, bool); 6] = [
+    ("auto_amd", LdltBackend::Auto, false, false),
+    ("auto_pairs", LdltBackend::Auto, true, true),
+    ("auto_cav", LdltBackend::Auto, true, false),
+    ("block", LdltBackend::Supernodal, false, false),
+    ("simplicial", LdltBackend::Simplicial, false, false),
+    ("faer_supernodal", LdltBackend::FaerSupernodal, false, false),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
@@ -161,9 +163,10 @@ fn bench_kkt(c: &mut Criterion) {
         };
         let mut solvers: Vec<SparseLdlt> = VARIANTS
             .iter()
-            .map(|&(_, backend, cav)| {
+            .map(|&(_, backend, cav, pairs)| {
                 let mut s = SparseLdlt::with_backend(backend);
                 s.constraint_rows_from = cav.then_some(pat.n);
+                s.pivot_pairs = pairs;
                 s.preferred_primal = bounded.clone();
                 s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
                     .expect("analyse");

@@ -1,5 +1,6 @@
 //! Termination under objective scaling and the statuses it may produce, on Hock–Schittkowski
-//! problems: objectives multiplied by 1e8 and 1e12 end at the unscaled solution, an all-boxed
+//! problems: objectives multiplied by 1e-8, 1e8 and 1e12 end at the unscaled solution (with
+//! the unscaled status at 1e±8), an all-boxed
 //! problem is never `Unbounded` however large its objective, and a `Solved` run reports a
 //! complementarity within `compl_inf_tol` (measured, as the test is, against the relaxed
 //! bounds).
@@ -96,19 +97,24 @@ fn solved_runs_report_complementarity_within_tolerance() {
     assert!(solved >= 40, "{solved} Solved");
 }
 
-/// Objective multiplied by 1e8 or 1e12: the gradient-based objective scaling has no floor and
-/// the μ floor follows the scaled complementarity tolerance, so the runs end with the same
-/// solution as unscaled, `Solved` at 1e8 and successful at 1e12.
+/// Objective multiplied by 1e-8, 1e8 or 1e12: the gradient-based objective scaling brings a
+/// large objective down without a floor and a tiny one up (gradient ∞-norm below
+/// `scaling_min_gradient` → 1), and the μ floor follows the scaled complementarity tolerance,
+/// so every run ends at the unscaled solution, with the unscaled run's status at 1e±8 and
+/// successful at 1e12. HS083 and HS106 are all-boxed, badly scaled problems (objective ≈ 3e4
+/// and 7e3 at the optimum).
 #[test]
-fn large_objective_scales_keep_status_and_solution() {
-    for name in ["HS014", "HS043", "HS065", "HS071"] {
+fn objective_scales_keep_status_and_solution() {
+    for name in ["HS014", "HS043", "HS065", "HS071", "HS083", "HS106"] {
         let base = solve(&by_name(name), &Settings::default()).unwrap();
         assert_eq!(base.status, Status::Solved, "{name}");
-        for c in [1e8, 1e12] {
+        for c in [1e-8, 1e8, 1e12] {
             let sol = solve(&ObjScaled(by_name(name), c), &Settings::default()).unwrap();
-            if c == 1e8 {
-                assert_eq!(sol.status, Status::Solved, "{name} x{c:e}");
+            if c < 1e12 {
+                assert_eq!(sol.status, base.status, "{name} x{c:e}");
             } else {
+                // The unscaled dual-infeasibility test (`dual_inf_tol`, absolute in the user's
+                // units, as Ipopt's) is 1e12 times stricter relative to this objective.
                 assert!(sol.status.is_success(), "{name} x{c:e}: {:?}", sol.status);
             }
             let dx = sol
@@ -119,7 +125,14 @@ fn large_objective_scales_keep_status_and_solution() {
                 .fold(0.0, f64::max);
             assert!(dx < 1e-6, "{name} x{c:e}: x differs by {dx:e}");
             let rel = (sol.objective / c - base.objective).abs() / base.objective.abs().max(1.0);
-            assert!(rel < 1e-8, "{name} x{c:e}: f/c = {}", sol.objective / c);
+            // f is flat to first order at the optimum only along the constraints: an x within
+            // 1e-8 of the unscaled one moves f by up to ~1e-7 on these problems.
+            assert!(
+                rel < 1e-7,
+                "{name} x{c:e}: f/c = {}, unscaled {} (x differs by {dx:e})",
+                sol.objective / c,
+                base.objective
+            );
         }
     }
 }

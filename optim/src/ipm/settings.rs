@@ -24,8 +24,11 @@ pub enum ScalingMethod {
     /// No scaling.
     None,
     /// Ipopt's gradient-based scaling: each function is scaled so that its gradient at the
-    /// initial point has ∞-norm ≤ `scaling_max_gradient` (factors never exceed 1; constraint
-    /// factors are at least 1e-8, the objective factor has no lower limit).
+    /// initial point has ∞-norm ≤ `scaling_max_gradient` (constraint factors never exceed 1
+    /// and are at least 1e-8; the objective factor has no lower limit). Unlike Ipopt, an
+    /// objective whose gradient has ∞-norm below `scaling_min_gradient` (but above zero) is
+    /// scaled up to ∞-norm 1, so that the dual-infeasibility test, absolute in scaled units,
+    /// does not stop a tiny objective before its optimum.
     #[default]
     GradientBased,
     /// Use [`Nlp::scaling`](crate::ipm::Nlp::scaling) (falls back to none if it returns `None`).
@@ -35,9 +38,17 @@ pub enum ScalingMethod {
 /// Elimination order of the KKT matrix's LDLᵀ factorization.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum KktOrdering {
-    /// Approximate minimum degree (faer's AMD) alone.
+    /// Approximate minimum degree (faer's AMD) alone, 1 × 1 pivots: constraint rows that AMD
+    /// eliminates before their variables have the pivot −δ_c, whose 1/δ_c growth can hide the
+    /// reduced Hessian's curvature in rounding.
     #[default]
     Amd,
+    /// AMD, except that each constraint row that AMD eliminates before all of its primal
+    /// variables is delayed to the first of them and eliminated with it as one 2 × 2 block
+    /// pivot, so that no constraint row has the bare pivot −δ_c and each such pair contributes
+    /// (1, 1) to the inertia by construction (see [`crate::ipm::kkt`]). More fill than AMD,
+    /// less than [`ConstraintsAfterVariables`](KktOrdering::ConstraintsAfterVariables).
+    AmdPivotPairs,
     /// AMD on the graph of (variable, constraint row) pairs, each row eliminated right after a
     /// primal variable of its own (bounded ones preferred), so that no constraint row is
     /// eliminated with the bare pivot −δ_c (see [`crate::ipm::kkt`]). More fill than AMD.
@@ -104,6 +115,9 @@ pub struct Settings {
     pub scaling: ScalingMethod,
     /// Target maximal gradient for gradient-based scaling (default: 100).
     pub scaling_max_gradient: f64,
+    /// Objective gradients (∞-norm at the initial point) below this are scaled up to 1 by
+    /// gradient-based scaling (default: 1e-5; 0 disables).
+    pub scaling_min_gradient: f64,
     /// Extra objective factor applied on top of the scaling method (default: 1.0).
     pub obj_scaling_factor: f64,
     /// First trial δ_w of the inertia correction (default: 1e-4).
@@ -201,6 +215,7 @@ impl Default for Settings {
             kappa_d: 1e-5,
             scaling: ScalingMethod::GradientBased,
             scaling_max_gradient: 100.0,
+            scaling_min_gradient: 1e-5,
             obj_scaling_factor: 1.0,
             first_hessian_perturbation: 1e-4,
             min_hessian_perturbation: 1e-20,
@@ -299,6 +314,12 @@ impl Settings {
         )?;
         pos("kappa_sigma", self.kappa_sigma)?;
         pos("scaling_max_gradient", self.scaling_max_gradient)?;
+        if !(self.scaling_min_gradient >= 0.0 && self.scaling_min_gradient.is_finite()) {
+            return Err(OptimError::InvalidSetting {
+                name: "scaling_min_gradient",
+                msg: format!("must be finite and ≥ 0, got {}", self.scaling_min_gradient),
+            });
+        }
         pos("obj_scaling_factor", self.obj_scaling_factor)?;
         pos(
             "first_hessian_perturbation",

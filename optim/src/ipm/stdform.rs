@@ -229,6 +229,10 @@ impl<'a> Reformulated<'a> {
                     // No floor: the objective is brought to the gradient target however
                     // large it is, so that its scale does not change the iterates.
                     obj_scale = gmax / gn;
+                } else if gn > 0.0 && gn < settings.scaling_min_gradient {
+                    // A tiny objective would meet the absolute dual-infeasibility test long
+                    // before its optimum: bring its gradient to ∞-norm 1.
+                    obj_scale = 1.0 / gn;
                 }
                 let mut jv = vec![0.0; user_jac_pat.len()];
                 nlp.jacobian_values(&xs, &mut jv);

@@ -376,8 +376,9 @@ impl<'p> Core<'p> {
             let t = Instant::now();
             self.solver.constraint_rows_from = match settings.kkt_ordering {
                 KktOrdering::Amd => None,
-                KktOrdering::ConstraintsAfterVariables => Some(self.n),
+                KktOrdering::AmdPivotPairs | KktOrdering::ConstraintsAfterVariables => Some(self.n),
             };
+            self.solver.pivot_pairs = settings.kkt_ordering == KktOrdering::AmdPivotPairs;
             let mut bounded = vec![false; self.n];
             for &j in self.lo.iter().chain(&self.up) {
                 bounded[j] = true;

@@ -18,7 +18,6 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
 use super::Inertia;
-use super::ordering::paired_amd;
 use crate::error::OptimError;
 
 /// faer's symbolic analysis of one lower-triangle pattern, its value storage for `L` (faer's
@@ -29,22 +28,21 @@ pub(super) struct FaerFactor {
     mem: MemBuffer,
     pub(super) col_ptr: Vec<usize>,
     pub(super) row_idx: Vec<usize>,
-    /// The `constraint_rows_from` and `preferred_primal` of the analysis.
+    /// The `constraint_rows_from`, `preferred_primal` and `pivot_pairs` of the analysis.
     pub(super) constraint_rows_from: Option<usize>,
     pub(super) preferred: Vec<bool>,
+    pub(super) pivot_pairs: bool,
 }
 
 impl FaerFactor {
-    /// Symbolic analysis of the pattern with faer's simplicial/supernodal `threshold`. The
-    /// ordering is AMD; with `constraint_rows_from = Some(n)` it is post-processed by
-    /// [`delay_constraint_rows`] (rows ≥ n are constraint rows).
+    /// Symbolic analysis of the pattern with faer's simplicial/supernodal `threshold`, in the
+    /// order `custom` (`custom[k]` = index eliminated k-th) or, for `None`, faer's AMD.
     pub(super) fn analyse(
         dim: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
         threshold: SupernodalThreshold,
-        constraint_rows_from: Option<usize>,
-        preferred: &[bool],
+        custom: Option<&[usize]>,
     ) -> Result<Self, OptimError> {
         let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, col_ptr, None, row_idx);
         let symbolic_with = |ordering| {
@@ -59,10 +57,6 @@ impl FaerFactor {
             )
             .map_err(|e| OptimError::Factorization(format!("symbolic analysis failed: {e:?}")))
         };
-        let custom = match constraint_rows_from {
-            Some(n) => paired_amd(n, col_ptr, row_idx, preferred),
-            None => None,
-        };
         let symbolic = match custom {
             Some(fwd) => {
                 let mut inv = vec![0usize; dim];
@@ -70,7 +64,7 @@ impl FaerFactor {
                     inv[v] = k;
                 }
                 symbolic_with(SymmetricOrdering::Custom(PermRef::new_checked(
-                    &fwd, &inv, dim,
+                    fwd, &inv, dim,
                 )))?
             }
             None => symbolic_with(SymmetricOrdering::Amd)?,
@@ -88,8 +82,9 @@ impl FaerFactor {
             mem,
             col_ptr: col_ptr.to_vec(),
             row_idx: row_idx.to_vec(),
-            constraint_rows_from,
-            preferred: preferred.to_vec(),
+            constraint_rows_from: None,
+            preferred: Vec::new(),
+            pivot_pairs: false,
         })
     }
 

@@ -12,18 +12,25 @@
 //! * [`KktSolver`]: the factor/solve interface the IPM uses (symbolic analysis once per
 //!   pattern, numeric refactorization per iteration, inertia of the factor).
 //! * [`SparseLdlt`]: the implementation, an LDLᵀ `P K Pᵀ = L D Lᵀ` with a fill-reducing
-//!   symmetric permutation `P` from faer 0.24's symbolic analysis (AMD) and 1 × 1 pivots only,
-//!   so the inertia is the sign count of `D` (Sylvester's law of inertia). Tiny pivots are
-//!   replaced by `±pivot_delta` (static pivoting); the IPM refines each solve against the
-//!   exact matrix. The numeric factorization is one of the [`LdltBackend`]s:
+//!   symmetric permutation `P` from faer 0.24's AMD, and `D` with 1 × 1 pivots and, where the
+//!   order asks for them, 2 × 2 pivots on (variable, constraint row) pairs; the inertia is
+//!   the sign count of the 1 × 1 pivots plus (1, 1) for each 2 × 2 pivot of negative
+//!   determinant (Sylvester's law of inertia). Tiny 1 × 1 pivots are replaced by
+//!   `±pivot_delta` (static pivoting); the IPM refines each solve against the exact matrix.
+//!   The numeric factorization is one of the [`LdltBackend`]s:
 //!   * `simplicial`: faer's up-looking simplicial algorithm on data prepared once per pattern,
-//!     bitwise faer's factor and solution;
+//!     bitwise faer's factor and solution (1 × 1 pivots only);
 //!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
-//!     simplicial structure (dense element blocks of Legendre–Gauss KKTs);
+//!     simplicial structure (dense element blocks of Legendre–Gauss KKTs), with 2 × 2 pivots;
 //!   * `faer`: faer's own numeric factorization and solve (reference and fallback).
-//! * `ordering`: the elimination order: AMD, or (with `constraint_rows_from`) AMD on the graph
-//!   of (variable, constraint row) pairs so that no constraint row is eliminated with the bare
-//!   pivot `−δ_c`.
+//! * `ordering`: the elimination order. With plain AMD a constraint row eliminated before all
+//!   of its primal variables has the pivot exactly `−δ_c`, and for a small δ_c the update
+//!   `Jᵢᵀ Jᵢ / δ_c` swamps the reduced Hessian's curvature in rounding, so the sign count no
+//!   longer matches the inertia of `K`. With `constraint_rows_from` set, either such a row is
+//!   delayed to the first of its variables in AMD's order and eliminated with it in one 2 × 2
+//!   pivot `[d a; a −δ_c]` (`pivot_pairs`; determinant `−d δ_c − a² < 0` for `d ≥ 0`, inverse
+//!   entries of order `1/|a|`), or AMD orders the graph of (variable, row) pairs and each row
+//!   follows its variable (1 × 1 pivots). Both cost more fill than AMD alone.
 
 mod faer;
 mod ordering;
@@ -131,8 +138,8 @@ pub enum LdltBackend {
 /// The numeric kernel chosen at analysis time.
 enum Kernel {
     Faer,
-    Simplicial(SimplicialPlan),
-    Supernodal(BlockPlan),
+    Simplicial(Box<SimplicialPlan>),
+    Supernodal(Box<BlockPlan>),
 }
 
 /// Sparse LDLᵀ of the KKT matrix behind [`KktSolver`] (module docs): symbolic analysis once
@@ -158,6 +165,11 @@ pub struct SparseLdlt {
     /// Primal variables preferred as the variable a constraint row follows (e.g. those with a
     /// bound, whose pivot carries the barrier term Σ > 0); empty: none preferred.
     pub preferred_primal: Vec<bool>,
+    /// With `constraint_rows_from` set: `true` keeps AMD's order except that each constraint
+    /// row AMD places before all its primal neighbours is delayed to the first of them and
+    /// eliminated with it in a 2 × 2 pivot (supernodal kernel, module docs); `false` orders
+    /// the graph of (variable, row) pairs by AMD instead (1 × 1 pivots).
+    pub pivot_pairs: bool,
     faer: Option<FaerFactor>,
     kernel: Kernel,
     factored: bool,
@@ -198,6 +210,7 @@ impl SparseLdlt {
             pivot_delta: 1e-4,
             constraint_rows_from: None,
             preferred_primal: Vec::new(),
+            pivot_pairs: false,
             faer: None,
             kernel: Kernel::Faer,
             factored: false,
@@ -237,32 +250,54 @@ impl KktSolver for SparseLdlt {
             && a.row_idx == row_idx
             && a.constraint_rows_from == self.constraint_rows_from
             && a.preferred == self.preferred_primal
+            && a.pivot_pairs == self.pivot_pairs
         {
             self.factored = false;
             return Ok(());
         }
-        let rows_from = self.constraint_rows_from;
-        let preferred = &self.preferred_primal;
+        // The elimination order: faer's AMD, AMD with 2 × 2 (variable, row) pivot pairs, or
+        // AMD on the graph of pairs (module docs).
+        let (custom, pair_first) = match self.constraint_rows_from {
+            Some(n) if self.pivot_pairs => match ordering::amd_pivot_pairs(n, col_ptr, row_idx) {
+                Some((fwd, pairs)) => (Some(fwd), pairs),
+                None => (None, Vec::new()),
+            },
+            Some(n) => (
+                ordering::paired_amd(n, col_ptr, row_idx, &self.preferred_primal),
+                Vec::new(),
+            ),
+            None => (None, Vec::new()),
+        };
+        let has_pairs = pair_first.iter().any(|&p| p);
         let analyse =
-            |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, rows_from, preferred);
+            |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, custom.as_deref());
         let mut faer = analyse(match self.backend {
             LdltBackend::Auto => SupernodalThreshold::AUTO,
             LdltBackend::FaerSupernodal => SupernodalThreshold::FORCE_SUPERNODAL,
             _ => SupernodalThreshold::FORCE_SIMPLICIAL,
         })?;
+        faer.constraint_rows_from = self.constraint_rows_from;
+        faer.preferred = self.preferred_primal.clone();
+        faer.pivot_pairs = self.pivot_pairs;
         let supernodal = match self.backend {
             LdltBackend::Supernodal => true,
             // Where faer's flop rule picks its supernodal factor (dense LG blocks), the
             // supernodal kernel on the simplicial structure replaces it (same factor speed
-            // there, no relaxation fill, faster solves).
-            LdltBackend::Auto if faer.is_supernodal() => {
-                faer = analyse(SupernodalThreshold::FORCE_SIMPLICIAL)?;
+            // there, no relaxation fill, faster solves). 2 × 2 pivots exist in the supernodal
+            // kernel only.
+            LdltBackend::Auto if faer.is_supernodal() || has_pairs => {
+                if faer.is_supernodal() {
+                    faer = analyse(SupernodalThreshold::FORCE_SIMPLICIAL)?;
+                    faer.constraint_rows_from = self.constraint_rows_from;
+                    faer.preferred = self.preferred_primal.clone();
+                    faer.pivot_pairs = self.pivot_pairs;
+                }
                 true
             }
             _ => false,
         };
         let block = if supernodal {
-            BlockPlan::new(&faer.symbolic, dim, col_ptr, row_idx)
+            BlockPlan::new(&faer.symbolic, dim, col_ptr, row_idx, &pair_first)
         } else {
             None
         };
@@ -272,8 +307,8 @@ impl KktSolver for SparseLdlt {
             (Some(_), _) => None,
         };
         self.kernel = match (block, plan) {
-            (Some(b), _) => Kernel::Supernodal(b),
-            (None, Some(p)) => Kernel::Simplicial(p),
+            (Some(b), _) => Kernel::Supernodal(Box::new(b)),
+            (None, Some(p)) => Kernel::Simplicial(Box::new(p)),
             (None, None) => Kernel::Faer,
         };
         self.faer = Some(faer);

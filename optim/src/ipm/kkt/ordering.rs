@@ -1,5 +1,5 @@
 //! Fill-reducing elimination order of the KKT matrix `K(δ_w, δ_c)` (Wächter & Biegler 2006,
-//! eq. (13)) for an LDLᵀ with 1 × 1 pivots.
+//! eq. (13)) for an LDLᵀ with 1 × 1 and 2 × 2 pivots.
 //!
 //! AMD alone orders by degree and may eliminate a constraint row (index ≥ n) before every
 //! primal variable it couples to; its pivot is then exactly `−δ_c`, and for the small static
@@ -11,6 +11,9 @@
 //!   graph of pairs, and each pair is eliminated as (variable, row): the row's pivot is then
 //!   the Schur complement `−δ_c − a²/d` of the 2 × 2 block `[d a; a −δ_c]`, which has one
 //!   positive and one negative eigenvalue when d > 0, and no `1/δ_c` growth enters the factor.
+//! * [`amd_pivot_pairs`]: AMD's own order, with each row that would have the bare pivot
+//!   delayed to its parent in the elimination tree, a variable of its own, and eliminated
+//!   with it as one 2 × 2 block pivot.
 //! * [`delay_constraint_rows`]: the fallback for rows left unpaired: each is moved to right
 //!   after the first of its primal neighbours in the order.
 
@@ -164,6 +167,212 @@ pub(super) fn paired_amd(
         .flat_map(|&k| members[k].iter().copied())
         .collect();
     Some(delay_constraint_rows(&order, n, col_ptr, row_idx, &[]))
+}
+
+/// AMD's order of the lower-triangle pattern `col_ptr`/`row_idx` (`fwd[k]` = index eliminated
+/// k-th). `None` if faer's AMD fails.
+pub(super) fn amd_order(col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usize>> {
+    let dim = col_ptr.len() - 1;
+    let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, col_ptr, None, row_idx);
+    let (mut fwd, mut inv) = (vec![0usize; dim], vec![0usize; dim]);
+    let mut mem = MemBuffer::try_new(amd::order_maybe_unsorted_scratch::<usize>(
+        dim,
+        row_idx.len(),
+    ))
+    .ok()?;
+    amd::order_maybe_unsorted(
+        &mut fwd,
+        &mut inv,
+        pattern,
+        amd::Control::default(),
+        MemStack::new(&mut mem),
+    )
+    .ok()?;
+    Some(fwd)
+}
+
+/// AMD's order with 2 × 2 pivot pairs (MA57-style delayed pivots, resolved symbolically).
+/// Walking AMD's order, the elimination is followed symbolically (elimination tree and, per
+/// eliminated subtree, its boundary: the nodes not yet eliminated that are adjacent to it). A
+/// constraint row `r ≥ n` whose row of `L` would contain no primal variable eliminated as a
+/// 1 × 1 pivot would have the bare pivot `−δ_c` (or one of order δ_c where its variables went
+/// into pairs with other rows). Such a row is delayed to the first primal variable `v` adjacent
+/// to it (in the partly eliminated graph) that AMD eliminates later, its parent in the
+/// elimination tree, and the two are eliminated together as one 2 × 2 block pivot
+/// `[d a; a −δ_c]` (`a` the entry coupling them), whose determinant `−d δ_c − a²` is negative
+/// whenever `d ≥ 0`: one positive and one negative eigenvalue whatever the size of `d`, and an
+/// inverse with entries of order `1/|a|` rather than `1/δ_c`. Moving `v` forward to the row
+/// instead eliminates a high-degree variable early and costs far more fill. Delayed rows still
+/// waiting at the end follow as 1 × 1 pivots; a delayed row that meanwhile got a 1 × 1
+/// variable in its row of `L` is placed before the next variable adjacent to it. Returns the
+/// order and, per position `k`, whether positions `k`, `k + 1` form a pair (the row is in the
+/// variable's structure, so `parent(k) = k + 1`). `None` if faer's AMD fails.
+pub(super) fn amd_pivot_pairs(
+    n: usize,
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Option<(Vec<usize>, Vec<bool>)> {
+    let dim = col_ptr.len() - 1;
+    let fwd = amd_order(col_ptr, row_idx)?;
+    let mut pos = vec![0usize; dim];
+    for (k, &v) in fwd.iter().enumerate() {
+        pos[v] = k;
+    }
+    // Full adjacency (both triangles, no diagonal).
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); dim];
+    for c in 0..dim {
+        for &r in &row_idx[col_ptr[c]..col_ptr[c + 1]] {
+            if r != c {
+                adj[c].push(r);
+                adj[r].push(c);
+            }
+        }
+    }
+    let mut elim = Elimination::new(dim);
+    let mut out = Vec::with_capacity(dim);
+    let mut pair_first = Vec::with_capacity(dim);
+    let mut in_pair = vec![false; dim];
+    let mut pending = vec![false; dim];
+    let mut n_pending = 0usize;
+    // Whether row r's pivot would be bare: no 1 × 1 primal pivot in its row of L.
+    let is_early = |elim: &mut Elimination, in_pair: &[bool], r: usize| {
+        let (visited, _) = elim.row_structure(r, &adj);
+        !visited.iter().any(|&j| j < n && !in_pair[j])
+    };
+    for &v in &fwd {
+        if elim.placed[v] {
+            continue;
+        }
+        if v >= n {
+            let has_primal = adj[v].iter().any(|&c| c < n);
+            if has_primal && is_early(&mut elim, &in_pair, v) {
+                pending[v] = true;
+                n_pending += 1;
+            } else {
+                elim.place(v, &adj);
+                out.push(v);
+                pair_first.push(false);
+            }
+            continue;
+        }
+        if n_pending > 0 {
+            // Delayed rows adjacent to v, in AMD's order: the first still early pairs with v;
+            // those no longer early go right before v as 1 × 1 pivots.
+            let (_, roots) = elim.row_structure(v, &adj);
+            let mut rows: Vec<usize> = adj[v]
+                .iter()
+                .chain(roots.iter().flat_map(|&rho| elim.boundary[rho].iter()))
+                .copied()
+                .filter(|&r| r >= n && pending[r])
+                .collect();
+            rows.sort_unstable_by_key(|&r| pos[r]);
+            rows.dedup();
+            let mut partner = None;
+            for r in rows {
+                if is_early(&mut elim, &in_pair, r) {
+                    partner = Some(r);
+                    break;
+                }
+                pending[r] = false;
+                n_pending -= 1;
+                elim.place(r, &adj);
+                out.push(r);
+                pair_first.push(false);
+            }
+            if let Some(r) = partner {
+                pending[r] = false;
+                n_pending -= 1;
+                elim.place(v, &adj);
+                elim.place(r, &adj);
+                out.extend([v, r]);
+                pair_first.extend([true, false]);
+                in_pair[v] = true;
+                in_pair[r] = true;
+                continue;
+            }
+        }
+        elim.place(v, &adj);
+        out.push(v);
+        pair_first.push(false);
+    }
+    for &r in &fwd {
+        if pending[r] {
+            elim.place(r, &adj);
+            out.push(r);
+            pair_first.push(false);
+        }
+    }
+    Some((out, pair_first))
+}
+
+/// Symbolic elimination in a given order, one node at a time: elimination tree so far and the
+/// boundary of each current subtree root (not yet eliminated nodes adjacent to the subtree).
+struct Elimination {
+    placed: Vec<bool>,
+    parent: Vec<usize>,
+    boundary: Vec<Vec<usize>>,
+    mark: Vec<usize>,
+    stamp: usize,
+}
+
+impl Elimination {
+    fn new(dim: usize) -> Self {
+        Self {
+            placed: vec![false; dim],
+            parent: vec![usize::MAX; dim],
+            boundary: vec![Vec::new(); dim],
+            mark: vec![usize::MAX; dim],
+            stamp: 0,
+        }
+    }
+
+    /// Row structure of `x` in `L` if it were eliminated next (eliminated nodes j with
+    /// `L[x, j] ≠ 0`: the elimination-tree paths from its eliminated neighbours) and the
+    /// current subtree roots those paths end in.
+    fn row_structure(&mut self, x: usize, adj: &[Vec<usize>]) -> (Vec<usize>, Vec<usize>) {
+        self.stamp += 1;
+        let (mut visited, mut roots) = (Vec::new(), Vec::new());
+        for &i in &adj[x] {
+            let mut j = i;
+            while self.placed[j] && self.mark[j] != self.stamp {
+                self.mark[j] = self.stamp;
+                visited.push(j);
+                if self.parent[j] == usize::MAX {
+                    roots.push(j);
+                    break;
+                }
+                j = self.parent[j];
+            }
+        }
+        (visited, roots)
+    }
+
+    /// Eliminates `x`: it becomes the parent of the subtree roots it touches, and its boundary
+    /// is its own not yet eliminated neighbours plus theirs.
+    fn place(&mut self, x: usize, adj: &[Vec<usize>]) {
+        let (_, roots) = self.row_structure(x, adj);
+        self.stamp += 1;
+        let stamp = self.stamp;
+        self.mark[x] = stamp;
+        let mut b = Vec::new();
+        for &w in &adj[x] {
+            if !self.placed[w] && self.mark[w] != stamp {
+                self.mark[w] = stamp;
+                b.push(w);
+            }
+        }
+        for rho in roots {
+            self.parent[rho] = x;
+            for w in std::mem::take(&mut self.boundary[rho]) {
+                if !self.placed[w] && self.mark[w] != stamp {
+                    self.mark[w] = stamp;
+                    b.push(w);
+                }
+            }
+        }
+        self.boundary[x] = b;
+        self.placed[x] = true;
+    }
 }
 
 #[cfg(test)]

@@ -228,22 +228,37 @@ pub(super) fn axpy_scatter(x: &mut [f64], rows: &[u32], vals: &[f64], s: f64) {
         }
         return;
     }
+    scatter_sub(x, rows, vals, s, |r| r as usize);
+}
+
+/// `dst[index(rows[p])] -= vals[p] * s` for all p (distinct targets), unrolled by four (four
+/// independent loads before the stores): the scatter of the simplicial factorization and
+/// forward solve (`index` = identity) and of the supernodal kernel's updates through its row
+/// map. Each entry of `dst` is updated once, so the result does not depend on the unrolling.
+#[inline(always)]
+pub(super) fn scatter_sub(
+    dst: &mut [f64],
+    rows: &[u32],
+    vals: &[f64],
+    s: f64,
+    index: impl Fn(u32) -> usize,
+) {
     let mut r4 = rows.chunks_exact(4);
     let mut v4 = vals.chunks_exact(4);
     for (r, v) in (&mut r4).zip(&mut v4) {
-        let (a, b, c, d) = (r[0] as usize, r[1] as usize, r[2] as usize, r[3] as usize);
+        let (a, b, c, d) = (index(r[0]), index(r[1]), index(r[2]), index(r[3]));
         let (xa, xb, xc, xd) = (
-            x[a] - v[0] * s,
-            x[b] - v[1] * s,
-            x[c] - v[2] * s,
-            x[d] - v[3] * s,
+            dst[a] - v[0] * s,
+            dst[b] - v[1] * s,
+            dst[c] - v[2] * s,
+            dst[d] - v[3] * s,
         );
-        x[a] = xa;
-        x[b] = xb;
-        x[c] = xc;
-        x[d] = xd;
+        dst[a] = xa;
+        dst[b] = xb;
+        dst[c] = xc;
+        dst[d] = xd;
     }
-    for (&i, &v) in r4.remainder().iter().zip(v4.remainder()) {
-        x[i as usize] -= v * s;
+    for (&r, &v) in r4.remainder().iter().zip(v4.remainder()) {
+        dst[index(r)] -= v * s;
     }
 }

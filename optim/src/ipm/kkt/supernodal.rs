@@ -8,7 +8,7 @@
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
 use super::Inertia;
-use super::simplicial::axpy_scatter;
+use super::simplicial::{axpy_scatter, scatter_sub};
 
 /// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
 /// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
@@ -40,9 +40,17 @@ pub(super) struct BlockPlan {
     pub(super) a_dst: Vec<usize>,
     /// Block values (`L` below the diagonal, pivots on it, unused upper triangles).
     pub(super) vals: Vec<f64>,
-    /// Pivots `D` and their reciprocals, permuted order.
+    /// Diagonal of `D` and, for 1 × 1 pivots, its reciprocals, permuted order. For a 2 × 2
+    /// pivot on columns (j, j + 1): `d[j]`, `d[j + 1]` its diagonal, `e[j]` its off-diagonal,
+    /// and `inv_d[j]`, `inv_e[j]`, `inv_d[j + 1]` the entries of its inverse.
     pub(super) d: Vec<f64>,
     pub(super) inv_d: Vec<f64>,
+    pub(super) e: Vec<f64>,
+    pub(super) inv_e: Vec<f64>,
+    /// `pair[j]`: columns j and j + 1 are one 2 × 2 pivot (same supernode, parent(j) = j + 1).
+    pub(super) pair: Vec<bool>,
+    /// Whether supernode s holds a 2 × 2 pivot.
+    pub(super) sn_pair: Vec<bool>,
     /// `L` copied into faer's simplicial layout (diagonal slot first, holding `D`) for the
     /// triangular solves: per column one contiguous run of the block; the column-by-column
     /// solve measured faster than a per-supernode one on these KKTs.
@@ -59,11 +67,16 @@ pub(super) struct BlockPlan {
 impl BlockPlan {
     /// Builds the supernode partition, block layout, update lists and value map from faer's
     /// simplicial symbolic analysis (`None` for a supernodal one or oversized indices).
+    /// `pair_first[j]` (permuted index; may be empty) asks for a 2 × 2 pivot on columns j and
+    /// j + 1; it is granted where `L[j + 1, j]` is structurally nonzero (parent(j) = j + 1),
+    /// and the two columns then share one supernode whose rows are the union of theirs
+    /// (explicit zeros in column j where `L_{j+1}` has rows that `L_j` lacks).
     pub(super) fn new(
         sym: &SymbolicCholesky<usize>,
         dim: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
+        pair_first: &[bool],
     ) -> Option<Self> {
         let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
             return None;
@@ -79,10 +92,18 @@ impl BlockPlan {
         // Fundamental supernodes: column j continues j − 1's supernode when parent(j − 1) = j
         // and |L_{j−1}| = |L_j| + 1; column j − 1's structure is then {j − 1} ∪ struct(j), so
         // a supernode [f, l) has rows {f, …, l − 1} ∪ struct(l − 1) and no explicit zeros.
+        // A granted pair [j, j + 1] joins one supernode as well: parent(j) = j + 1 gives
+        // struct(L_j) ⊆ {j} ∪ struct(L_{j+1}), so the supernode's rows still contain every
+        // column's structure.
+        let mut pair = vec![false; dim];
         let mut sn_begin = vec![0usize];
         for j in 0..dim - 1 {
-            let chained = cnt(j) > 1 && lr[lp[j] + 1] == j + 1 && cnt(j) == cnt(j + 1) + 1;
-            if !chained {
+            let parent_next = cnt(j) > 1 && lr[lp[j] + 1] == j + 1;
+            let chained = parent_next && cnt(j) == cnt(j + 1) + 1;
+            pair[j] = parent_next
+                && pair_first.get(j).copied().unwrap_or(false)
+                && (j == 0 || !pair[j - 1]);
+            if !chained && !pair[j] {
                 sn_begin.push(j + 1);
             }
         }
@@ -127,6 +148,21 @@ impl BlockPlan {
             upd_ptr[sn + 1] += upd_ptr[sn];
         }
         let upd = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        let sn_pair = (0..ns)
+            .map(|sn| pair[sn_begin[sn]..sn_begin[sn + 1]].iter().any(|&p| p))
+            .collect();
+        // `L` in column layout for the solves: column j of supernode s holds the block rows
+        // from j down (diagonal slot first).
+        let mut l_col_ptr = Vec::with_capacity(dim + 1);
+        let mut l_row_idx = Vec::new();
+        l_col_ptr.push(0);
+        for sn in 0..ns {
+            let rows = &sn_rows[sn_row_ptr[sn]..sn_row_ptr[sn + 1]];
+            for c in 0..sn_begin[sn + 1] - sn_begin[sn] {
+                l_row_idx.extend_from_slice(&rows[c..]);
+                l_col_ptr.push(l_row_idx.len());
+            }
+        }
         // Value map of the permuted lower triangle.
         let mut a_dst = Vec::with_capacity(row_idx.len());
         for j in 0..dim {
@@ -156,9 +192,13 @@ impl BlockPlan {
             a_dst,
             d: vec![0.0; dim],
             inv_d: vec![0.0; dim],
-            l: vec![0.0; lp[dim]],
-            l_col_ptr: lp.to_vec(),
-            l_row_idx: lr.iter().map(|&r| r as u32).collect(),
+            e: vec![0.0; dim],
+            inv_e: vec![0.0; dim],
+            pair,
+            sn_pair,
+            l: vec![0.0; l_col_ptr[dim]],
+            l_col_ptr,
+            l_row_idx,
             map: vec![0; dim],
             tmp: vec![0.0; max_rows],
             coef: vec![0.0; max_rows],
@@ -211,13 +251,19 @@ impl BlockPlan {
                                 *b -= v * sc;
                             }
                         } else {
-                            scatter_mapped(bcol, &self.map, &rd[q..], &bd[q..], sc);
+                            scatter_sub(bcol, &rd[q..], &bd[q..], sc, |r| {
+                                self.map[r as usize] as usize
+                            });
                         }
                         continue;
                     }
                     let coef = &mut self.coef[..wd];
-                    for (k, cf) in coef.iter_mut().enumerate() {
-                        *cf = bd[k * nrd + q] * dpiv[k];
+                    if self.sn_pair[dd] {
+                        dl_t(coef, bd, nrd, q, dpiv, &self.e[fd..ld], &self.pair[fd..ld]);
+                    } else {
+                        for (k, cf) in coef.iter_mut().enumerate() {
+                            *cf = bd[k * nrd + q] * dpiv[k];
+                        }
                     }
                     if contiguous {
                         let start = first + (q - p1);
@@ -226,37 +272,99 @@ impl BlockPlan {
                         let out = &mut self.tmp[..len];
                         out.iter_mut().for_each(|o| *o = 0.0);
                         lincomb_sub(out, bd, nrd, q, coef);
-                        scatter_mapped(bcol, &self.map, &rd[q..], out, -1.0);
+                        scatter_sub(bcol, &rd[q..], out, -1.0, |r| self.map[r as usize] as usize);
                     }
                 }
             }
             // Dense left-looking LDLᵀ of the block's own columns.
-            for c in 0..w {
-                let coef = &mut self.coef[..c];
-                for (k, cf) in coef.iter_mut().enumerate() {
-                    *cf = blk[k * nr + c] * self.d[f + k];
+            let has_pair = self.sn_pair[sn];
+            let mut c = 0;
+            while c < w {
+                let two = self.pair[f + c];
+                for t in c..c + 1 + usize::from(two) {
+                    let coef = &mut self.coef[..c];
+                    if has_pair {
+                        let (d, e, p) =
+                            (&self.d[f..f + c], &self.e[f..f + c], &self.pair[f..f + c]);
+                        dl_t(coef, blk, nr, t, d, e, p);
+                    } else {
+                        for (k, cf) in coef.iter_mut().enumerate() {
+                            *cf = blk[k * nr + t] * self.d[f + k];
+                        }
+                    }
+                    let (left, right) = blk.split_at_mut(t * nr);
+                    lincomb_sub(&mut right[t..nr], left, nr, t, coef);
                 }
-                let (left, right) = blk.split_at_mut(c * nr);
-                let col = &mut right[c..nr];
-                lincomb_sub(col, left, nr, c, coef);
-                let mut d = col[0];
-                if delta > 0.0 && d.abs() <= eps {
-                    d = if d < 0.0 { -delta } else { delta };
+                if !two {
+                    let col = &mut blk[c * nr + c..(c + 1) * nr];
+                    let mut d = col[0];
+                    if delta > 0.0 && d.abs() <= eps {
+                        d = if d < 0.0 { -delta } else { delta };
+                    }
+                    if d == 0.0 || !d.is_finite() {
+                        return None;
+                    }
+                    if d > 0.0 {
+                        inertia.positive += 1;
+                    } else {
+                        inertia.negative += 1;
+                    }
+                    col[0] = d;
+                    let inv = d.recip();
+                    col[1..].iter_mut().for_each(|v| *v *= inv);
+                    self.d[f + c] = d;
+                    self.inv_d[f + c] = inv;
+                    self.e[f + c] = 0.0;
+                    self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
+                    c += 1;
+                    continue;
                 }
-                if d == 0.0 || !d.is_finite() {
+                // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it
+                // are [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
+                let (cc, c1) = blk.split_at_mut((c + 1) * nr);
+                let (col0, col1) = (&mut cc[c * nr + c..], &mut c1[c + 1..nr]);
+                let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
+                if a.abs() <= eps {
+                    a = 0.0;
+                    // Two 1 × 1 pivots: the static pivoting of each applies.
+                    for d in [&mut d1, &mut d2] {
+                        if delta > 0.0 && d.abs() <= eps {
+                            *d = if *d < 0.0 { -delta } else { delta };
+                        }
+                    }
+                }
+                let det = d1 * d2 - a * a;
+                if det == 0.0 || !det.is_finite() {
                     return None;
                 }
-                if d > 0.0 {
+                if det < 0.0 {
                     inertia.positive += 1;
-                } else {
                     inertia.negative += 1;
+                } else if d1 > 0.0 {
+                    inertia.positive += 2;
+                } else {
+                    inertia.negative += 2;
                 }
-                col[0] = d;
-                let inv = d.recip();
-                col[1..].iter_mut().for_each(|v| *v *= inv);
-                self.d[f + c] = d;
-                self.inv_d[f + c] = inv;
-                self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
+                let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
+                for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
+                    let (u, v) = (*x, *y);
+                    *x = u * i11 + v * i12;
+                    *y = u * i12 + v * i22;
+                }
+                col0[0] = d1;
+                col0[1] = 0.0;
+                col1[0] = d2;
+                let j = f + c;
+                self.d[j] = d1;
+                self.d[j + 1] = d2;
+                self.e[j] = a;
+                self.e[j + 1] = 0.0;
+                self.inv_d[j] = i11;
+                self.inv_d[j + 1] = i22;
+                self.inv_e[j] = i12;
+                self.l[self.l_col_ptr[j]..self.l_col_ptr[j + 1]].copy_from_slice(col0);
+                self.l[self.l_col_ptr[j + 1]..self.l_col_ptr[j + 2]].copy_from_slice(col1);
+                c += 2;
             }
         }
         Some(inertia)
@@ -276,13 +384,58 @@ impl BlockPlan {
             let xj = x[j];
             axpy_scatter(x, &li[a..b], &l[a..b], xj);
         }
-        for j in (0..n).rev() {
-            let (a, b) = (lp[j] + 1, lp[j + 1]);
-            x[j] = x[j] * self.inv_d[j] - dot_gather4(&l[a..b], &li[a..b], x);
+        if self.sn_pair.iter().any(|&p| p) {
+            let mut j = 0;
+            while j < n {
+                if self.pair[j] {
+                    let (u, v) = (x[j], x[j + 1]);
+                    x[j] = u * self.inv_d[j] + v * self.inv_e[j];
+                    x[j + 1] = u * self.inv_e[j] + v * self.inv_d[j + 1];
+                    j += 2;
+                } else {
+                    x[j] *= self.inv_d[j];
+                    j += 1;
+                }
+            }
+            for j in (0..n).rev() {
+                let (a, b) = (lp[j] + 1, lp[j + 1]);
+                x[j] -= dot_gather4(&l[a..b], &li[a..b], x);
+            }
+        } else {
+            for j in (0..n).rev() {
+                let (a, b) = (lp[j] + 1, lp[j + 1]);
+                x[j] = x[j] * self.inv_d[j] - dot_gather4(&l[a..b], &li[a..b], x);
+            }
         }
         for i in 0..n {
             rhs[i] = x[self.perm_inv[i]];
         }
+    }
+}
+
+/// `coef[k] = (D Lᵀ)[k, q]` for the columns k of a block whose `D` has 2 × 2 pivots:
+/// `L[q, k] d[k]`, plus `L[q, k + 1] e[k]` where (k, k + 1) is a pair and `L[q, k − 1] e[k − 1]`
+/// where (k − 1, k) is one (`L[q, k]` = `blk[k·stride + q]`).
+#[inline(always)]
+fn dl_t(
+    coef: &mut [f64],
+    blk: &[f64],
+    stride: usize,
+    q: usize,
+    d: &[f64],
+    e: &[f64],
+    pair: &[bool],
+) {
+    let w = coef.len();
+    for k in 0..w {
+        let mut v = blk[k * stride + q] * d[k];
+        if pair[k] && k + 1 < w {
+            v += blk[(k + 1) * stride + q] * e[k];
+        }
+        if k > 0 && pair[k - 1] {
+            v += blk[(k - 1) * stride + q] * e[k - 1];
+        }
+        coef[k] = v;
     }
 }
 
@@ -306,35 +459,6 @@ fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[
             *o -= c * a;
         }
         k += 1;
-    }
-}
-
-/// `dst[map[rows[p]]] -= vals[p] * s` for all p (distinct rows), unrolled by four like
-/// `axpy_scatter`.
-#[inline(always)]
-fn scatter_mapped(dst: &mut [f64], map: &[u32], rows: &[u32], vals: &[f64], s: f64) {
-    let mut r4 = rows.chunks_exact(4);
-    let mut v4 = vals.chunks_exact(4);
-    for (r, v) in (&mut r4).zip(&mut v4) {
-        let (a, b, c, d) = (
-            map[r[0] as usize] as usize,
-            map[r[1] as usize] as usize,
-            map[r[2] as usize] as usize,
-            map[r[3] as usize] as usize,
-        );
-        let (xa, xb, xc, xd) = (
-            dst[a] - v[0] * s,
-            dst[b] - v[1] * s,
-            dst[c] - v[2] * s,
-            dst[d] - v[3] * s,
-        );
-        dst[a] = xa;
-        dst[b] = xb;
-        dst[c] = xc;
-        dst[d] = xd;
-    }
-    for (&r, &v) in r4.remainder().iter().zip(v4.remainder()) {
-        dst[map[r as usize] as usize] -= v * s;
     }
 }
 

@@ -432,3 +432,125 @@ fn static_pivoting_with_zero_primal_diagonal() {
         assert!(res < 1e-12, "refined residual {res}");
     }
 }
+
+/// AMD's order with 2 × 2 (variable, constraint row) pivots against independent computations
+/// on random indefinite KKT-like matrices: every constraint row is either in a pair with a
+/// primal neighbour of its own or preceded by an unpaired primal neighbour (no bare −δ_c
+/// pivot), `P K Pᵀ = L D Lᵀ` entrywise with `D` block diagonal, the inertia against Jacobi
+/// eigenvalues and the refined solution against the residual.
+#[test]
+fn pivot_pairs_reconstruct_and_match_dense_inertia() {
+    for (seed, n, m, shift) in [
+        (1, 40, 24, 0.0),
+        (2, 40, 24, 1.0),
+        (3, 90, 50, -0.3),
+        (4, 90, 50, 5.0),
+        (5, 120, 100, 0.0),
+        (6, 60, 55, 0.5),
+    ] {
+        let (pat, dense) = random_kkt(seed, n, m, shift);
+        let dim = n + m;
+        let mut s = SparseLdlt {
+            constraint_rows_from: Some(n),
+            pivot_pairs: true,
+            ..SparseLdlt::new()
+        };
+        s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+        let inertia = s.factor(&pat.mat.values).expect("factor");
+        let Kernel::Supernodal(blk) = &s.kernel else {
+            panic!("seed {seed}: pivot pairs need the block kernel");
+        };
+        let npairs = blk.pair.iter().filter(|&&p| p).count();
+        assert!(npairs > 0, "seed {seed}: no pair formed");
+        // Dense L (unit diagonal, L[j + 1, j] = 0 in a pair) and block-diagonal D.
+        let mut l = vec![vec![0.0; dim]; dim];
+        let mut stored = vec![vec![false; dim]; dim];
+        let mut d = vec![vec![0.0; dim]; dim];
+        for k in 0..blk.sn_begin.len() - 1 {
+            let (f, e) = (blk.sn_begin[k], blk.sn_begin[k + 1]);
+            let rows = &blk.sn_rows[blk.sn_row_ptr[k]..blk.sn_row_ptr[k + 1]];
+            let nr = rows.len();
+            for c in 0..e - f {
+                l[f + c][f + c] = 1.0;
+                for (pos, &r) in rows.iter().enumerate().skip(c + 1) {
+                    l[r as usize][f + c] = blk.vals[blk.sn_val_ptr[k] + c * nr + pos];
+                    stored[r as usize][f + c] = true;
+                }
+            }
+        }
+        // Structure: a pair is (variable, row); a row outside a pair has a primal variable
+        // eliminated before it as a 1 × 1 pivot in its row of L (so its pivot is not −δ_c).
+        for k in 0..dim {
+            let r = blk.perm_fwd[k];
+            if blk.pair[k] {
+                assert!(
+                    r < n && blk.perm_fwd[k + 1] >= n,
+                    "seed {seed}: pair at {k}"
+                );
+            }
+            if r < n || (k > 0 && blk.pair[k - 1]) {
+                continue;
+            }
+            let ok = (0..k).any(|j| stored[k][j] && blk.perm_fwd[j] < n && !blk.pair[j]);
+            assert!(ok, "seed {seed}: row {r} has a bare pivot");
+        }
+        for j in 0..dim {
+            d[j][j] = blk.d[j];
+            if blk.pair[j] {
+                assert_eq!(l[j + 1][j], 0.0);
+                d[j][j + 1] = blk.e[j];
+                d[j + 1][j] = blk.e[j];
+            }
+        }
+        // L D and |L| |D| (the componentwise bound |L| |D| |Lᵀ| of the backward error).
+        let mut ld = vec![vec![0.0; dim]; dim];
+        let mut ld_abs = vec![vec![0.0; dim]; dim];
+        for i in 0..dim {
+            for k in 0..dim {
+                if l[i][k] != 0.0 {
+                    for j in k.saturating_sub(1)..(k + 2).min(dim) {
+                        ld[i][j] += l[i][k] * d[k][j];
+                        ld_abs[i][j] += (l[i][k] * d[k][j]).abs();
+                    }
+                }
+            }
+        }
+        let mut pivots_replaced = 0;
+        let mut max_ratio = 0.0f64;
+        for i in 0..dim {
+            for j in 0..=i {
+                let (mut ldl, mut bound) = (0.0, 0.0);
+                for k in 0..dim {
+                    ldl += ld[i][k] * l[j][k];
+                    bound += ld_abs[i][k] * l[j][k].abs();
+                }
+                let a = dense[blk.perm_fwd[i]][blk.perm_fwd[j]];
+                let err = (ldl - a).abs();
+                if i == j && err > 1e-9 {
+                    assert!(err <= s.pivot_delta + s.pivot_epsilon + 1e-12, "{err}");
+                    pivots_replaced += 1;
+                } else if blk.pair[j] && i == j + 1 && blk.e[j] == 0.0 {
+                    // a pair's coupling below `pivot_epsilon` is dropped (two 1 × 1 pivots)
+                    assert!(err <= s.pivot_epsilon, "{err}");
+                } else if err > 0.0 {
+                    max_ratio = max_ratio.max(err / bound);
+                }
+            }
+        }
+        assert!(
+            max_ratio <= 1e-13,
+            "seed {seed}: {npairs} pairs, {max_ratio}"
+        );
+        let eig = dense_eigs(&mut dense.clone());
+        let expect = Inertia {
+            positive: eig.iter().filter(|&&e| e > 0.0).count(),
+            negative: eig.iter().filter(|&&e| e < 0.0).count(),
+            zero: 0,
+        };
+        if pivots_replaced == 0 {
+            assert_eq!(inertia, expect, "seed {seed}");
+        }
+        let res = refined_residual(&mut s, &pat, 3);
+        assert!(res < 1e-8, "seed {seed}: residual {res}");
+    }
+}
