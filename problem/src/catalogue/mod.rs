@@ -227,7 +227,15 @@ pub struct ProblemSettings {
     /// Raise it (e.g. to 3e-8) when a Radau mesh finer than the default ends Acceptable with
     /// δ_w > 0 in every iteration; `Some` disables the retry. Overrides `ipm`.
     pub dual_regularization: Option<f64>,
+    /// Lower bound of the stick phase's duration in the periodic problems (s; default
+    /// [`MIN_STICK`]). The best QC optimum sits on it (a "tap": the ball is spun mostly by
+    /// the impact impulse), so it is a modelling choice, not a numerical one.
+    pub min_stick: f64,
 }
+
+/// Default lower bound of every phase duration of the periodic problems, the stick phase's
+/// included ([`ProblemSettings::min_stick`]), in seconds.
+pub const MIN_STICK: f64 = 0.01;
 
 impl Default for ProblemSettings {
     fn default() -> Self {
@@ -247,6 +255,7 @@ impl Default for ProblemSettings {
             period_bounds: None,
             mesh: None,
             dual_regularization: None,
+            min_stick: MIN_STICK,
         }
     }
 }
