@@ -236,7 +236,8 @@ pub struct OptimizeArgs {
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with
     /// `--scheme radau`: multistart with 32 starts (seed 0) for the periodic problems,
     /// continuation for the others; with `--scheme lg`: direct (an LG-30 solve takes about 4×
-    /// a Radau 3 × 10 one). Every end point is re-integrated; one distinct optimum is kept per
+    /// a Radau 3 × 10 one). `periodic-qc` chains first bound the stick phase to ≥ 0.1 s and
+    /// then relax it to --min-stick (warm-started). Every end point is re-integrated; one distinct optimum is kept per
     /// objective value, unverified optima better than the best verified one are hp-refined
     /// until they verify, and the best verified optimum wins (lowest start index among equal
     /// objectives, so the result does not depend on the number of threads).
@@ -254,10 +255,10 @@ pub struct OptimizeArgs {
     /// found; `optimize merge DIR…` picks the best verified one. See docs/sharding.md.
     #[arg(long, value_name = "K/M")]
     pub shard: Option<String>,
-    /// Lower bound of the stick phase's duration in the periodic problems (s). The best QC
-    /// optimum found with the default sits on it: a short "tap" that spins the ball mostly
-    /// by the impact impulse; a larger value (e.g. 0.1) asks for a stick phase of real
-    /// duration.
+    /// Lower bound of the stick phase's duration in the periodic problems (s). From cold
+    /// starts most QC optima sit on it (short "taps" that spin the ball mostly by the impact
+    /// impulse); the default search's best has an interior stick phase of 26 ms. A larger
+    /// value (e.g. 0.1) asks for a stick phase of real duration.
     #[arg(long, value_name = "SECS", default_value_t = 0.01, allow_hyphen_values = true, value_parser = positive)]
     pub min_stick: f64,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element

@@ -1,7 +1,7 @@
 //! The default search of `optimize` (`ball_finger::study::strategy::search`): on
-//! `periodic-qc` it must reach the best known optimum (J = 0.1065805, confirmed as a KKT point
-//! of the same transcription by an independent CasADi + IPOPT solve) with a re-integration that
-//! verifies it, bit for bit the same with one and two worker threads; shards of a multi-start
+//! `periodic-qc` it must reach at least the best optimum known before it (J = 0.1065805,
+//! confirmed as a KKT point of the same transcription by an independent CasADi + IPOPT solve)
+//! with a re-integration that verifies it, bit for bit the same with one and two worker threads; shards of a multi-start
 //! merged must give the unsharded choice; a solution whose re-integration does not verify it
 //! is marked FAILED with `verification.verified: false` and a non-zero exit; `--min-stick`
 //! bounds the stick phase.
@@ -57,6 +57,8 @@ fn essence(v: &serde_json::Value) -> Vec<serde_json::Value> {
 }
 
 #[test]
+#[ignore = "slow: two full default searches (about 45 s CPU, over 60 s wall on a loaded 2-core \
+            machine); run with `cargo test --release --test search -- --ignored`"]
 fn default_periodic_qc_finds_the_best_known_optimum_verified_and_thread_independent() {
     let dir = tmpdir("qc-default");
     let (one, two) = (dir.join("one"), dir.join("two"));
@@ -78,8 +80,20 @@ fn default_periodic_qc_finds_the_best_known_optimum_verified_and_thread_independ
     );
     assert_eq!(v["verified"], true);
     assert_eq!(v["tolerance"].as_f64(), Some(1e-4));
-    // The multi-start's records name the strategy and every start.
-    assert_eq!(a["strategy"]["records"].as_array().unwrap().len(), 32);
+    // Every start ran the stick continuation: bounded to >= 0.1 s, then relaxed to 0.01 s.
+    let recs = a["strategy"]["records"].as_array().unwrap();
+    assert_eq!(recs.len(), 64);
+    let chosen = a["strategy"]["chosen"].as_u64().unwrap();
+    let last = recs
+        .iter()
+        .rfind(|r| r["chain"].as_u64() == Some(chosen))
+        .unwrap();
+    assert!(
+        last["stage"].as_str().unwrap().starts_with("relax stick"),
+        "{last}"
+    );
+    // The relaxed optimum respects the default bound.
+    assert!(a["phase_durations"][1].as_f64().unwrap() >= 0.01 * (1.0 - 1e-8));
     // Same solution to the bit (JSON writes the shortest round-trip text of each f64).
     assert_eq!(essence(&a), essence(&b));
     std::fs::remove_dir_all(dir).ok();

@@ -24,7 +24,11 @@
 //!   starts with seed [`DEFAULT_SEED`].
 //!
 //! [`solve_with_strategy`] returns the best end point as solved. [`search`] (what `optimize`
-//! and the paper report run) re-integrates every end point ([`verify`]), keeps one candidate
+//! and the paper report run) runs the chains of `periodic-qc` as a continuation in the stick
+//! phase's lower bound (first ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound,
+//! warm-started: from the short default bound most cold starts end in "taps" on it, while the
+//! relaxed optima of a real stick phase are better), re-integrates every end point
+//! ([`verify`]), keeps one candidate
 //! per distinct optimum (objectives within [`CLUSTER_RTOL`]), hp-refines the best unverified
 //! optima that beat the best verified one until their re-integration defect is at most
 //! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]), and [`Search::best`] picks by
@@ -335,10 +339,35 @@ fn run_chains(
     settings: &ProblemSettings,
     strategy: Strategy,
     shard: Shard,
+    stick_continuation: Option<f64>,
     progress: Progress<'_>,
 ) -> Result<Vec<(usize, ChainResult)>, OcpError> {
     let target = build(problem, settings)?;
-    let chains = chains_of(problem, settings, strategy, &target)?;
+    let mut chains = chains_of(problem, settings, strategy, &target)?;
+    if let Some(s0) = stick_continuation
+        && problem == Problem::PeriodicQc
+        && s0 > settings.min_stick
+        && strategy != Strategy::Direct
+    {
+        // Every stage of a chain has the same NLP layout (a duration bound is a bound), so
+        // the relaxation warm-starts exactly from the chain's end point.
+        for chain in &mut chains {
+            for (label, st) in chain.iter_mut() {
+                st.min_stick = s0;
+                label.push_str(&format!(", stick >= {s0}"));
+            }
+            let min = settings.min_stick;
+            // A relaxation from an optimum converges in tens of iterations or not at all.
+            let last = chain.last().map(|(_, st)| ProblemSettings {
+                min_stick: min,
+                max_iter: st.max_iter.min(RELAX_MAX_ITER),
+                ..st.clone()
+            });
+            if let Some(st) = last {
+                chain.push((format!("relax stick >= {min}"), st));
+            }
+        }
+    }
     // `direct` solves the problem built above instead of building it again.
     let mut prebuilt: Vec<Option<BuiltProblem>> = chains.iter().map(|_| None).collect();
     if strategy == Strategy::Direct {
@@ -368,7 +397,7 @@ pub fn solve_with_strategy(
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
     let results: Vec<ChainResult> =
-        run_chains(problem, settings, strategy, Shard::WHOLE, progress)?
+        run_chains(problem, settings, strategy, Shard::WHOLE, None, progress)?
             .into_iter()
             .map(|(_, r)| r)
             .collect();
@@ -428,6 +457,13 @@ pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
 
+/// First stick-phase lower bound (s) of the stick continuation
+/// ([`VerifyPolicy::stick_continuation`]).
+pub const STICK_CONTINUATION: f64 = 0.1;
+
+/// Iteration limit of the relaxation stage of the stick continuation.
+pub const RELAX_MAX_ITER: usize = 200;
+
 /// How a search verifies its candidates ([`search`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VerifyPolicy {
@@ -445,6 +481,13 @@ pub struct VerifyPolicy {
     pub max_points: usize,
     /// Distinct unverified optima (better than the best verified one) refined at most.
     pub clusters: usize,
+    /// Continuation in the stick phase's lower bound (`periodic-qc` only): every chain first
+    /// runs with the stick phase at least this long (s), then one warm-started stage relaxes
+    /// the bound to the problem's ([`ProblemSettings::min_stick`]). With the short default
+    /// bound most cold starts end in "taps" on it; from a stick phase of real duration the
+    /// relaxation reaches better optima with an interior stick duration. `None`: no
+    /// continuation.
+    pub stick_continuation: Option<f64>,
 }
 
 impl Default for VerifyPolicy {
@@ -456,6 +499,7 @@ impl Default for VerifyPolicy {
             refine_rounds: 4,
             max_points: 400,
             clusters: 1,
+            stick_continuation: Some(STICK_CONTINUATION),
         }
     }
 }
@@ -669,7 +713,14 @@ pub fn search(
 ) -> Result<Search, OcpError> {
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
-    let results = run_chains(problem, settings, strategy, shard, progress)?;
+    let results = run_chains(
+        problem,
+        settings,
+        strategy,
+        shard,
+        policy.stick_continuation,
+        progress,
+    )?;
     let records: Vec<StageRecord> = results.iter().flat_map(|(_, (r, _))| r.clone()).collect();
     let mut refinements = Vec::new();
     let mut cands: Vec<Candidate> = results

@@ -228,8 +228,8 @@ pub struct ProblemSettings {
     /// δ_w > 0 in every iteration; `Some` disables the retry. Overrides `ipm`.
     pub dual_regularization: Option<f64>,
     /// Lower bound of the stick phase's duration in the periodic problems (s; default
-    /// [`MIN_STICK`]). The best QC optimum sits on it (a "tap": the ball is spun mostly by
-    /// the impact impulse), so it is a modelling choice, not a numerical one.
+    /// [`MIN_STICK`]). Many QC optima sit on it ("taps": the ball is spun mostly by the
+    /// impact impulse), so it is a modelling choice, not a numerical one.
     pub min_stick: f64,
 }
 
