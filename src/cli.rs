@@ -63,6 +63,12 @@ pub enum Command {
     /// Simulate the hybrid ball-and-finger model (paper Sect. 3, Fig. 3).
     Simulate(Box<SimulateArgs>),
     /// Solve a multiphase optimal-control problem (paper Sect. 4).
+    ///
+    /// Exit status: 0 when the solution is Solved or Acceptable and verified (re-integration
+    /// defect at most 1e-4, after hp refinement if needed) or not re-integrated
+    /// (--verify-rtol 0); 1 when it did not converge or is unverified (the output set is still
+    /// written, marked FAILED; solution.json has `verification.verified: false` and the
+    /// defect) and for other errors; 2 for usage errors.
     Optimize(OptimizeArgs),
     /// Reproduce the paper's study (Sect. 6) and write a report.
     Paper(PaperArgs),
@@ -187,12 +193,7 @@ pub struct SimulateArgs {
     pub out: PathBuf,
 }
 
-/// Arguments of `optimize`.
-///
-/// Exit status: 0 when the solution is Solved or Acceptable and verified (its re-integration
-/// defect is at most 1e-4, after hp refinement if needed) or not re-integrated
-/// (`--verify-rtol 0`); 1 otherwise, with the output set still written and marked FAILED
-/// (solution.json then has `verification.verified: false` and the defect); 2 for usage errors.
+/// Arguments of `optimize` (exit status: see [`Command::Optimize`]).
 #[derive(Debug, Args)]
 #[command(subcommand_negates_reqs = true, args_conflicts_with_subcommands = true)]
 pub struct OptimizeArgs {
