@@ -54,6 +54,7 @@ pub struct Cli {
 
 /// Subcommands.
 #[derive(Debug, Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once per process; boxing buys nothing
 pub enum Command {
     /// Generate Rust kernels for a scene file (stdout or a file).
     Generate(GenerateArgs),
@@ -64,6 +65,12 @@ pub enum Command {
     /// Simulate the hybrid ball-and-finger model (paper Sect. 3, Fig. 3).
     Simulate(Box<SimulateArgs>),
     /// Solve a multiphase optimal-control problem (paper Sect. 4).
+    ///
+    /// Exit status: 0 when the solution is Solved or Acceptable and verified (re-integration
+    /// defect at most 1e-4, after hp refinement if needed) or not re-integrated
+    /// (--verify-rtol 0); 1 when it did not converge or is unverified (the output set is still
+    /// written, marked FAILED; solution.json has `verification.verified: false` and the
+    /// defect) and for other errors; 2 for usage errors.
     Optimize(OptimizeArgs),
     /// Reproduce the paper's study (Sect. 6) and write a report.
     Paper(PaperArgs),
@@ -242,13 +249,17 @@ pub struct SimulateArgs {
     pub out: PathBuf,
 }
 
-/// Arguments of `optimize`.
+/// Arguments of `optimize` (exit status: see [`Command::Optimize`]).
 #[derive(Debug, Args)]
+#[command(subcommand_negates_reqs = true, args_conflicts_with_subcommands = true)]
 pub struct OptimizeArgs {
+    /// `merge DIR…`: combine the candidates of `--shard` runs.
+    #[command(subcommand)]
+    pub command: Option<OptimizeCommand>,
     /// Problem name (reach, reorient, rotate-ref, rotate-fast, periodic-qc, periodic-cot,
     /// periodic-cot-human).
-    #[arg(long)]
-    pub problem: String,
+    #[arg(long, required = true)]
+    pub problem: Option<String>,
     /// Scene file (default: the problem's built-in scene). Any finger-and-ball scene; its node
     /// functions run on the emitted kernels when they match, interpreted otherwise.
     #[arg(long)]
@@ -284,18 +295,34 @@ pub struct OptimizeArgs {
     pub dual_regularization: Option<f64>,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
-    /// `multistart` (`--starts` random guesses around the default, in parallel). Default:
-    /// continuation with `--scheme radau`, direct with `--scheme lg` (an LG-30 solve of
-    /// `periodic-qc`/`-cot` takes about 4× a Radau 3 × 10 one, so an 18-solve continuation
-    /// takes tens of seconds).
+    /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with
+    /// `--scheme radau`: multistart with 32 starts (seed 0) for the periodic problems,
+    /// continuation for the others; with `--scheme lg`: direct (an LG-30 solve takes about 4×
+    /// a Radau 3 × 10 one). `periodic-qc` chains first bound the stick phase to ≥ 0.1 s and
+    /// then relax it to --min-stick (warm-started). Every end point is re-integrated; one distinct optimum is kept per
+    /// objective value, unverified optima better than the best verified one are hp-refined
+    /// until they verify, and the best verified optimum wins (lowest start index among equal
+    /// objectives, so the result does not depend on the number of threads).
     #[arg(long, value_parser = ["direct", "continuation", "multistart"])]
     pub strategy: Option<String>,
-    /// Number of starts of `--strategy multistart` (start 0 is the default guess).
-    #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = starts)]
-    pub starts: u64,
+    /// Number of starts of the multi-start (start 0 is the default guess) [default: 32];
+    /// without --strategy it selects multistart.
+    #[arg(long, allow_hyphen_values = true, value_parser = starts)]
+    pub starts: Option<u64>,
     /// Seed of the multi-start guesses.
     #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
     pub seed: u64,
+    /// Run shard k of m of the multi-start (`k/m`, 1 ≤ k ≤ m): the starts whose index is
+    /// k − 1 modulo m. `--out` then also holds one `candidate-NNNN.json` per distinct optimum
+    /// found; `optimize merge DIR…` picks the best verified one. See docs/sharding.md.
+    #[arg(long, value_name = "K/M")]
+    pub shard: Option<String>,
+    /// Lower bound of the stick phase's duration in the periodic problems (s). From cold
+    /// starts most QC optima sit on it (short "taps" that spin the ball mostly by the impact
+    /// impulse); the default search's best has an interior stick phase of 26 ms. A larger
+    /// value (e.g. 0.1) asks for a stick phase of real duration.
+    #[arg(long, value_name = "SECS", default_value_t = 0.01, allow_hyphen_values = true, value_parser = positive)]
+    pub min_stick: f64,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
@@ -303,6 +330,10 @@ pub struct OptimizeArgs {
     /// Refinement rounds at most (with `--refine`).
     #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = whole)]
     pub refine_rounds: usize,
+    /// hp refinements of an unverified optimum before it is reported unverified (each up to
+    /// 4 rounds, the first to an error estimate of 1e-4, each further one 10× tighter).
+    #[arg(long, default_value_t = 2, allow_hyphen_values = true, value_parser = whole)]
+    pub verify_refinements: usize,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     pub verify_rtol: f64,
@@ -313,6 +344,26 @@ pub struct OptimizeArgs {
     /// Output directory (solution.json, torques.csv; a run that does not end Solved or
     /// Acceptable adds FAILED). It is replaced as a whole when the run ends, so it must be new,
     /// empty or an earlier output of `optimize`.
+    #[arg(long, default_value = "out/optimize")]
+    pub out: PathBuf,
+}
+
+/// Subcommands of `optimize`.
+#[derive(Debug, Subcommand)]
+pub enum OptimizeCommand {
+    /// Merge the candidates of `optimize --shard k/m` runs: the best verified one (lowest
+    /// objective, then lowest start index; the unsharded multi-start's choice) is written to
+    /// --out as solution.json and torques.csv, with the stage records of every shard.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `optimize merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Output directories of the shard runs.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Output directory (as `optimize --out`).
     #[arg(long, default_value = "out/optimize")]
     pub out: PathBuf,
 }

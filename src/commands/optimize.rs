@@ -14,11 +14,13 @@
 //! Radau element). With Radau the points of a phase (points per element times elements) are
 //! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
-use crate::cli::OptimizeArgs;
+use crate::cli::{MergeArgs, OptimizeArgs, OptimizeCommand};
 use crate::study::SolutionIo;
 use crate::study::refine::{self, RefineOptions, RefineRound};
-use crate::study::strategy::{self, StageRecord, Strategy};
-use crate::study::verify::verify;
+use crate::study::strategy::{
+    self, DEFAULT_STARTS, Search, Shard, StageRecord, Strategy, StrategyReport, VerifyPolicy,
+};
+use crate::study::verify::{VERIFIED_DEFECT, is_verified, verify};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
@@ -135,7 +137,7 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
 
 /// Build the problem settings from the command line.
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
-    parse_problem(&args.problem)?;
+    parse_problem(problem_arg(args))?;
     if args.points < 2 {
         bail!("--points must be at least 2 (got {})", args.points);
     }
@@ -169,8 +171,14 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         max_iter: args.max_iter,
         print_level: args.print_level,
         dual_regularization: args.dual_regularization,
+        min_stick: args.min_stick,
         ..ProblemSettings::default()
     })
+}
+
+/// The `--problem` text (empty when absent: only `optimize merge` runs without it).
+pub fn problem_arg(args: &OptimizeArgs) -> &str {
+    args.problem.as_deref().unwrap_or_default()
 }
 
 /// A progress spinner that shows the interior-point iteration log line.
@@ -199,12 +207,32 @@ pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
     }
 }
 
-/// Solve with `strategy` behind a progress spinner that shows each finished stage.
+/// Solve with `strategy` behind a progress spinner that shows each finished stage; every end
+/// point is re-integrated and a verified one is preferred ([`search_with_progress`]), without
+/// hp refinement (the paper report's time budget; its tables flag unverified solutions).
 pub fn solve_with_progress(
     name: Problem,
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
+    let policy = VerifyPolicy {
+        refine_attempts: 0,
+        ..VerifyPolicy::default()
+    };
+    let found = search_with_progress(name, settings, strategy, Shard::WHOLE, &policy)?;
+    let (p, sol) = found.best()?;
+    let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
+    Ok((p, sol))
+}
+
+/// [`strategy::search`] behind a progress spinner that shows each finished stage.
+pub fn search_with_progress(
+    name: Problem,
+    settings: ProblemSettings,
+    strategy: Strategy,
+    shard: Shard,
+    policy: &VerifyPolicy,
+) -> Result<Search> {
     let pb = iteration_spinner(name.name());
     pb.set_message(format!("{strategy} ..."));
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
@@ -222,7 +250,7 @@ pub fn solve_with_progress(
         }
         pb.set_message(msg);
     };
-    let res = strategy::solve_with_strategy(name, &settings, strategy, Some(&show))
+    let res = strategy::search(name, &settings, strategy, shard, policy, Some(&show))
         .with_context(|| format!("solving {name}"));
     pb.finish_and_clear();
     res
@@ -346,19 +374,56 @@ pub fn first_non_finite(sol: &OcpSolution) -> Option<(String, f64)> {
 }
 
 /// Write `solution.json` and `torques.csv` as the output set `out` and move it into place;
-/// a solution that did not succeed is marked [`bf_output::FAILED`].
-pub fn commit_solution(sol: &OcpSolution, mut out: OutputDir) -> Result<()> {
+/// a solution that did not succeed, or whose re-integration does not verify it, is marked
+/// [`bf_output::FAILED`].
+pub fn commit_solution(sol: &OcpSolution, out: OutputDir) -> Result<()> {
+    commit_solution_with(sol, &[], out)
+}
+
+/// Why `sol` counts as failed: not converged, or re-integrated and not verified.
+pub fn failure_of(sol: &OcpSolution) -> Option<String> {
+    if !sol.status.is_success() {
+        return Some(format!(
+            "the solver did not converge ({})",
+            crate::names::name(&sol.status)
+        ));
+    }
+    match &sol.verification {
+        Some(v) if !is_verified(sol) => Some(format!(
+            "the solution is unverified: its re-integration defect {:.3e} exceeds {:e}{}",
+            v.max_defect,
+            VERIFIED_DEFECT,
+            if v.completed() {
+                ""
+            } else {
+                " (a phase could not be re-integrated to its end)"
+            }
+        )),
+        _ => None,
+    }
+}
+
+/// [`commit_solution`] with extra solution files (`--shard` candidates) in the set.
+pub fn commit_solution_with(
+    sol: &OcpSolution,
+    extra: &[(String, &OcpSolution)],
+    mut out: OutputDir,
+) -> Result<()> {
     let path = out.file("solution.json")?;
     sol.write_json(&path)
         .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
     let path = out.file("torques.csv")?;
     sol.write_torques_csv(&path)
         .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
-    let failure = format!("the solver did not converge ({:?})", sol.status);
-    let outcome = if sol.status.is_success() {
-        Outcome::Success
-    } else {
-        Outcome::Failed(&failure)
+    for (name, c) in extra {
+        let path = out.file(name)?;
+        c.write_json(&path)
+            .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
+    }
+    let failure = failure_of(sol);
+    let outcome = match &failure {
+        None => Outcome::Success,
+        Some(f) => Outcome::Failed(f),
     };
     out.commit(outcome)?;
     Ok(())
@@ -393,6 +458,25 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
     Ok(Some(scene))
 }
 
+/// File name of the candidate of start `k` in a `--shard` output set.
+pub fn candidate_file(k: usize) -> String {
+    format!("candidate-{k:04}.json")
+}
+
+/// Prints the verification of `sol` (if any) and whether it passes [`VERIFIED_DEFECT`].
+fn print_verification(sol: &OcpSolution) -> Result<()> {
+    if let Some(v) = &sol.verification {
+        crate::outln!("{}", v.summary().trim_end())?;
+        crate::outln!(
+            "verified: {} (re-integration defect {:.3e}, tolerance {:e})",
+            if is_verified(sol) { "yes" } else { "NO" },
+            v.max_defect,
+            VERIFIED_DEFECT
+        )?;
+    }
+    Ok(())
+}
+
 /// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     run_with(args, RunOptions::default())
@@ -400,13 +484,30 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
 
 /// Run `optimize` with `opts`.
 pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
-    let name = parse_problem(&args.problem)?;
+    if let Some(OptimizeCommand::Merge(m)) = &args.command {
+        return merge(m);
+    }
+    let name = parse_problem(problem_arg(args))?;
     let mut settings = settings_from_args(args)?;
     settings.scene = scene_from_args(args, name)?;
-    let strategy = match &args.strategy {
-        Some(text) => parse_strategy(text, args.starts, args.seed)?,
-        None if settings.scheme == Scheme::Lg => Strategy::Direct,
-        None => Strategy::default(),
+    let starts = args.starts.unwrap_or(DEFAULT_STARTS as u64);
+    let strategy = match (&args.strategy, args.starts) {
+        (Some(text), _) => parse_strategy(text, starts, args.seed)?,
+        (None, Some(_)) => parse_strategy("multistart", starts, args.seed)?,
+        (None, None) => strategy::default_strategy(name, settings.scheme),
+    };
+    let shard = match &args.shard {
+        Some(text) => {
+            let sh = Shard::parse(text).map_err(|e| anyhow::anyhow!(e))?;
+            let Strategy::Multistart { starts, .. } = strategy else {
+                bail!("--shard {text}: sharding needs the multi-start (got --strategy {strategy})");
+            };
+            if sh.index >= starts {
+                bail!("--shard {text}: shard {sh} of {starts} starts has no start");
+            }
+            sh
+        }
+        None => Shard::WHOLE,
     };
     if let Some(tol) = args.refine {
         if !(tol.is_finite() && tol > 0.0) {
@@ -426,24 +527,65 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
     if let Some(n) = opts.fail_at_write {
         out.inject_fault_at_write(n);
     }
-    let (mut problem, mut sol) = solve_with_progress(name, settings.clone(), strategy)?;
+    let policy = VerifyPolicy {
+        rtol: args.verify_rtol,
+        refine_attempts: args.verify_refinements,
+        ..VerifyPolicy::default()
+    };
+    let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
+    // A shard keeps every distinct optimum it found for `optimize merge`.
+    let candidates: Vec<(String, OcpSolution)> = if args.shard.is_some() {
+        found
+            .candidates
+            .iter()
+            .map(|c| (candidate_file(c.index), c.solution.clone()))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let refinements = found.refinements.clone();
+    let (problem, mut sol) = found.best()?;
+    let mut problem = problem
+        .ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
     if let Some(rep) = &sol.strategy {
         crate::io::print_out(&rep.table())?;
     }
+    for r in &refinements {
+        crate::outln!(
+            "verification refinement: {}: {:?}, objective {:.6e}, period {:.4} s, {} iterations",
+            r.stage,
+            r.status,
+            r.objective,
+            r.period,
+            r.iterations
+        )?;
+    }
+    if args.shard.is_some() {
+        crate::outln!("shard {shard}: {} distinct optima kept", candidates.len())?;
+    }
     if let Some(tol) = args.refine {
         (problem, sol) = refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
+        sol.verification = None;
     }
     if args.verify_rtol > 0.0 {
-        attach_verification(&problem, &mut sol, args.verify_rtol)?;
+        if sol.verification.is_none() {
+            match verify(&problem, &sol, args.verify_rtol) {
+                Ok(v) => sol.verification = Some(v),
+                Err(e) => eprintln!("warning: trajectory verification failed: {e}"),
+            }
+        }
+        print_verification(&sol)?;
     }
     if let Some((field, v)) = first_non_finite(&sol) {
         bail!(
             "the solution of {} has a non-finite {field} ({v}); nothing was written to {}",
-            args.problem,
+            name,
             args.out.display()
         );
     }
-    commit_solution(&sol, out)?;
+    let extra: Vec<(String, &OcpSolution)> =
+        candidates.iter().map(|(n, c)| (n.clone(), c)).collect();
+    commit_solution_with(&sol, &extra, out)?;
     eprintln!(
         "optimize: scene `{}`, node functions on the {} kernels",
         sol.scene, sol.kernels
@@ -478,7 +620,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
     crate::outln!(
         "wrote {}/solution.json and torques.csv{}",
         args.out.display(),
-        if sol.status.is_success() {
+        if failure_of(&sol).is_none() {
             ""
         } else {
             " (marked FAILED)"
@@ -495,8 +637,146 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
              regularization; try --dual-regularization 3e-8 (optim/README.md)"
         )?;
     }
-    if !sol.status.is_success() {
-        bail!("the solver did not converge ({:?})", sol.status);
+    if let Some(f) = failure_of(&sol) {
+        bail!("{f}");
+    }
+    Ok(())
+}
+
+/// The candidates of one `--shard` output set: (start index, solution), by file name.
+fn read_candidates(dir: &Path) -> Result<Vec<(usize, OcpSolution)>> {
+    let mut names: Vec<(usize, std::path::PathBuf)> = Vec::new();
+    let entries =
+        std::fs::read_dir(dir).with_context(|| format!("optimize merge: {}", dir.display()))?;
+    for e in entries {
+        let e = e.with_context(|| format!("optimize merge: {}", dir.display()))?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        if let Some(k) = name
+            .strip_prefix("candidate-")
+            .and_then(|r| r.strip_suffix(".json"))
+        {
+            let k: usize = k.parse().with_context(|| {
+                format!(
+                    "optimize merge: {}: not a candidate file name",
+                    e.path().display()
+                )
+            })?;
+            names.push((k, e.path()));
+        }
+    }
+    names.sort();
+    names
+        .into_iter()
+        .map(|(k, path)| {
+            let sol = OcpSolution::read_json(&path)
+                .with_context(|| format!("optimize merge: {}", path.display()))?;
+            Ok((k, sol))
+        })
+        .collect()
+}
+
+/// Run `optimize merge DIR…`: the best verified candidate of the shards ([`strategy::select`],
+/// the unsharded multi-start's rule) with the stage records of every shard.
+pub fn merge(args: &MergeArgs) -> Result<()> {
+    let out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
+    let mut records: Vec<StageRecord> = Vec::new();
+    let mut head: Option<(String, Strategy)> = None;
+    let mut seconds: f64 = 0.0;
+    for dir in &args.dirs {
+        let path = dir.join("solution.json");
+        let sol = OcpSolution::read_json(&path)
+            .with_context(|| format!("optimize merge: {}", path.display()))?;
+        let Some(rep) = &sol.strategy else {
+            bail!(
+                "optimize merge: {} has no strategy record (not written by optimize --shard)",
+                path.display()
+            );
+        };
+        match &head {
+            None => head = Some((sol.problem.clone(), rep.strategy)),
+            Some((p, st)) if *p != sol.problem || *st != rep.strategy => bail!(
+                "optimize merge: {} is {} with {}, the first directory {p} with {st}",
+                path.display(),
+                sol.problem,
+                rep.strategy
+            ),
+            Some(_) => {}
+        }
+        seconds = seconds.max(rep.seconds);
+        for r in &rep.records {
+            if records
+                .iter()
+                .any(|o| o.chain == r.chain && o.stage == r.stage)
+            {
+                bail!(
+                    "optimize merge: start {} ({}) appears in two directories, the last {}",
+                    r.chain,
+                    r.stage,
+                    dir.display()
+                );
+            }
+        }
+        records.extend(rep.records.iter().cloned());
+        let found = read_candidates(dir)?;
+        if found.is_empty() {
+            crate::outln!("note: {} has no candidate files", dir.display())?;
+        }
+        cands.extend(found);
+    }
+    let Some((problem, strategy)) = head else {
+        bail!("optimize merge: no directories given");
+    };
+    // Stable: the stages of a chain keep their order.
+    records.sort_by_key(|r| r.chain);
+    if let Strategy::Multistart { starts, .. } = strategy {
+        let mut seen: Vec<usize> = records.iter().map(|r| r.chain).collect();
+        seen.dedup();
+        if seen.len() != starts {
+            crate::outln!(
+                "note: the shards ran {} of the {starts} starts of {strategy}",
+                seen.len()
+            )?;
+        }
+    }
+    let views: Vec<(usize, &OcpSolution)> = cands.iter().map(|(k, s)| (*k, s)).collect();
+    let Some(i) = strategy::select(&views) else {
+        bail!("optimize merge: the directories hold no candidate of {problem}");
+    };
+    let (k, mut sol) = cands.swap_remove(i);
+    let iterations = records.iter().map(|r| r.iterations).sum();
+    sol.iterations = iterations;
+    sol.solve_seconds = seconds;
+    let rep = StrategyReport {
+        strategy,
+        records,
+        chosen: sol.status.is_success().then_some(k),
+        iterations,
+        seconds,
+    };
+    crate::io::print_out(&rep.table())?;
+    sol.strategy = Some(rep);
+    print_verification(&sol)?;
+    commit_solution(&sol, out)?;
+    crate::outln!(
+        "{}: merged {} candidates; chose start {k}: {:?}, objective {:.6e}, period {:.4} s",
+        problem,
+        cands.len() + 1,
+        sol.status,
+        sol.objective,
+        sol.period
+    )?;
+    crate::outln!(
+        "wrote {}/solution.json and torques.csv{}",
+        args.out.display(),
+        if failure_of(&sol).is_none() {
+            ""
+        } else {
+            " (marked FAILED)"
+        }
+    )?;
+    if let Some(f) = failure_of(&sol) {
+        bail!("{f}");
     }
     Ok(())
 }

@@ -168,7 +168,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             "one cold solve per problem (`--quick`)".to_string()
         } else {
             format!(
-                "{} (period sweep, release, ε-homotopy; see ball_finger::study::strategy)",
+                "{} (period sweep, release, ε-homotopy; for periodic-qc every chain first \
+                 bounds the stick phase to ≥ 0.1 s and ends with one stage that relaxes it to \
+                 0.01 s; the best verified end point is kept; see \
+                 ball_finger::study::strategy)",
                 crate::study::strategy::Strategy::default()
             )
         },

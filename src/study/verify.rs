@@ -610,7 +610,10 @@ pub fn verify_with(
     let fold = |f: &dyn Fn(&PhaseVerification) -> f64| phases.iter().map(f).fold(0.0, nan_max);
     let max_defect = fold(&|p| p.defect);
     let max_node_residual = fold(&|p| p.node_residual);
+    let completed = phases.iter().all(|p| p.failure.is_none());
     Ok(Verification {
+        tolerance: VERIFIED_DEFECT,
+        verified: completed && max_defect.is_finite() && max_defect <= VERIFIED_DEFECT,
         problem: sol.problem.clone(),
         scene: p.scene.name.clone(),
         epsilon: eps,

@@ -96,6 +96,12 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
     // Phase durations: ≤ 5 s for QC (its optimum has a short period); for COT only the
     // total period is bounded (≤ COT_MAX_PERIOD).
     let tmax = if qc { 5.0 } else { COT_MAX_PERIOD };
+    if !(settings.min_stick.is_finite() && settings.min_stick > 0.0 && settings.min_stick < tmax) {
+        return Err(OcpError::InvalidProblem(format!(
+            "minimum stick duration {} s must be in (0, {tmax}) s",
+            settings.min_stick
+        )));
+    }
     let phases = vec![
         PhaseDef {
             mode: Mode::Free,
@@ -108,7 +114,7 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
             mode: Mode::Stick,
             h: None,
             hdot: None,
-            duration: (0.01, tmax),
+            duration: (settings.min_stick, tmax),
             guess_duration: 1.0,
         },
         PhaseDef {

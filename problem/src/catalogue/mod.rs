@@ -231,7 +231,15 @@ pub struct ProblemSettings {
     /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
     #[serde(skip)]
     pub scene: Option<Scene>,
+    /// Lower bound of the stick phase's duration in the periodic problems (s; default
+    /// [`MIN_STICK`]). Many QC optima sit on it ("taps": the ball is spun mostly by the
+    /// impact impulse), so it is a modelling choice, not a numerical one.
+    pub min_stick: f64,
 }
+
+/// Default lower bound of every phase duration of the periodic problems, the stick phase's
+/// included ([`ProblemSettings::min_stick`]), in seconds.
+pub const MIN_STICK: f64 = 0.01;
 
 impl Default for ProblemSettings {
     fn default() -> Self {
@@ -252,6 +260,7 @@ impl Default for ProblemSettings {
             mesh: None,
             dual_regularization: None,
             scene: None,
+            min_stick: MIN_STICK,
         }
     }
 }

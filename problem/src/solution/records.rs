@@ -269,6 +269,14 @@ pub struct Verification {
     pub max_node_residual: f64,
     /// Wall time of the verification (s).
     pub seconds: f64,
+    /// Largest `max_defect` at which the solution counts as verified (the study layer's
+    /// `VERIFIED_DEFECT`).
+    #[serde(default)]
+    pub tolerance: f64,
+    /// Whether every phase completed with `max_defect` ≤ `tolerance`; a solution that is not
+    /// verified is flagged wherever it is shown.
+    #[serde(default)]
+    pub verified: bool,
 }
 
 impl Verification {

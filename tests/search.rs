@@ -1,0 +1,269 @@
+//! The default search of `optimize` (`ball_finger::study::strategy::search`): on
+//! `periodic-qc` it must reach at least the best optimum known before it (J = 0.1065805,
+//! confirmed as a KKT point of the same transcription by an independent CasADi + IPOPT solve)
+//! with a re-integration that verifies it, bit for bit the same with one and two worker threads; shards of a multi-start
+//! merged must give the unsharded choice; a solution whose re-integration does not verify it
+//! is marked FAILED with `verification.verified: false` and a non-zero exit; `--min-stick`
+//! bounds the stick phase.
+
+use std::path::Path;
+
+#[path = "common/cli.rs"]
+mod cli_util;
+use cli_util::{bin, root, run, tmpdir};
+
+fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn optimize_in(dir: &Path, threads: Option<&str>, extra: &[&str]) -> std::process::Output {
+    let mut c = bin();
+    c.current_dir(root())
+        .args(["optimize", "--out", dir.to_str().unwrap()])
+        .args(extra);
+    if let Some(t) = threads {
+        c.env("RAYON_NUM_THREADS", t);
+    }
+    c.output().unwrap()
+}
+
+fn ok(o: &std::process::Output) -> String {
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    stdout
+}
+
+/// The fields that define a solution (not its timings).
+fn essence(v: &serde_json::Value) -> Vec<serde_json::Value> {
+    [
+        "status",
+        "objective",
+        "period",
+        "phase_durations",
+        "impulse",
+        "nodes",
+    ]
+    .iter()
+    .map(|k| v[*k].clone())
+    .chain([
+        v["strategy"]["chosen"].clone(),
+        v["verification"]["max_defect"].clone(),
+    ])
+    .collect()
+}
+
+#[test]
+#[ignore = "slow: two full default searches (about 45 s CPU, over 60 s wall on a loaded 2-core \
+            machine); run with `cargo test --release --test search -- --ignored`"]
+fn default_periodic_qc_finds_the_best_known_optimum_verified_and_thread_independent() {
+    let dir = tmpdir("qc-default");
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    ok(&optimize_in(&one, Some("1"), &["--problem", "periodic-qc"]));
+    let stdout = ok(&optimize_in(&two, Some("2"), &["--problem", "periodic-qc"]));
+    assert!(stdout.contains("verified: yes"), "{stdout}");
+    let (a, b) = (
+        json(&one.join("solution.json")),
+        json(&two.join("solution.json")),
+    );
+    let j = a["objective"].as_f64().unwrap();
+    assert!(j <= 0.1070, "J = {j}");
+    assert_eq!(a["status"], "Solved");
+    let v = &a["verification"];
+    assert!(
+        v["max_defect"].as_f64().unwrap() <= 1e-6,
+        "{}",
+        v["max_defect"]
+    );
+    assert_eq!(v["verified"], true);
+    assert_eq!(v["tolerance"].as_f64(), Some(1e-4));
+    // Every start ran the stick continuation: bounded to >= 0.1 s, then relaxed to 0.01 s.
+    let recs = a["strategy"]["records"].as_array().unwrap();
+    assert_eq!(recs.len(), 64);
+    let chosen = a["strategy"]["chosen"].as_u64().unwrap();
+    let last = recs
+        .iter()
+        .rfind(|r| r["chain"].as_u64() == Some(chosen))
+        .unwrap();
+    assert!(
+        last["stage"].as_str().unwrap().starts_with("relax stick"),
+        "{last}"
+    );
+    // The relaxed optimum respects the default bound.
+    assert!(a["phase_durations"][1].as_f64().unwrap() >= 0.01 * (1.0 - 1e-8));
+    // Same solution to the bit (JSON writes the shortest round-trip text of each f64).
+    assert_eq!(essence(&a), essence(&b));
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn shards_merged_give_the_unsharded_multistart_choice() {
+    let dir = tmpdir("shards");
+    let base = ["--problem", "periodic-qc", "--starts", "12"];
+    let whole = dir.join("whole");
+    ok(&optimize_in(&whole, None, &base));
+    let mut shard_dirs = Vec::new();
+    for k in ["1/2", "2/2"] {
+        let d = dir.join(format!("shard{}", &k[..1]));
+        let mut a = base.to_vec();
+        a.extend(["--shard", k]);
+        let out = ok(&optimize_in(&d, None, &a));
+        assert!(out.contains(&format!("shard {k}")), "{out}");
+        let names: Vec<String> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with("candidate-"))
+            .collect();
+        assert!(!names.is_empty());
+        // Shard k holds the starts ≡ k − 1 (mod 2) only.
+        let parity = usize::from(k == "2/2");
+        for n in &names {
+            let idx: usize = n[10..14].parse().unwrap();
+            assert_eq!(idx % 2, parity, "{n}");
+        }
+        shard_dirs.push(d);
+    }
+    let merged = dir.join("merged");
+    let o = run(&[
+        "optimize",
+        "merge",
+        shard_dirs[0].to_str().unwrap(),
+        shard_dirs[1].to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let (w, m) = (
+        json(&whole.join("solution.json")),
+        json(&merged.join("solution.json")),
+    );
+    assert_eq!(w["strategy"]["chosen"], m["strategy"]["chosen"]);
+    let close = |x: &serde_json::Value, y: &serde_json::Value| {
+        let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+        // One JSON round trip more on the merged side (serde_json parses to within an ulp).
+        (x - y).abs() <= 1e-14 * x.abs().max(y.abs())
+    };
+    for k in ["objective", "period", "c1", "c2"] {
+        assert!(close(&w[k], &m[k]), "{k}: {} vs {}", w[k], m[k]);
+    }
+    // Every start of the unsharded run appears once in the merged record, same outcome.
+    let (rw, rm) = (
+        w["strategy"]["records"].as_array().unwrap(),
+        m["strategy"]["records"].as_array().unwrap(),
+    );
+    assert_eq!(rw.len(), rm.len());
+    for (x, y) in rw.iter().zip(rm) {
+        assert_eq!(x["chain"], y["chain"]);
+        assert_eq!(x["status"], y["status"]);
+        assert!(close(&x["objective"], &y["objective"]), "{x} vs {y}");
+    }
+    // A start in two directories is refused.
+    let o = run(&[
+        "optimize",
+        "merge",
+        shard_dirs[0].to_str().unwrap(),
+        shard_dirs[0].to_str().unwrap(),
+        "--out",
+        dir.join("twice").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("appears in two"));
+    // Bad shard specifications are usage errors naming the option.
+    for bad in ["0/2", "3/2", "x", "1/0"] {
+        let o = optimize_in(
+            &dir.join("bad"),
+            None,
+            &["--problem", "periodic-qc", "--shard", bad],
+        );
+        assert!(!o.status.success());
+        assert!(
+            String::from_utf8_lossy(&o.stderr).contains("--shard"),
+            "{bad}"
+        );
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn unverified_solution_is_marked_failed_with_its_defect() {
+    // periodic-cot on the default 3 × 10 mesh: the 6–9 s free phase is far too coarse, and
+    // without refinement its replay drifts by metres and radians.
+    let dir = tmpdir("unverified");
+    let out = dir.join("out");
+    let o = optimize_in(
+        &out,
+        None,
+        &[
+            "--problem",
+            "periodic-cot",
+            "--strategy",
+            "direct",
+            "--verify-refinements",
+            "0",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("unverified"), "{stderr}");
+    assert!(out.join(bf_output::FAILED).exists());
+    let sol = json(&out.join("solution.json"));
+    assert!(sol["status"] == "Solved" || sol["status"] == "Acceptable");
+    let v = &sol["verification"];
+    assert_eq!(v["verified"], false);
+    assert!(v["max_defect"].as_f64().unwrap() > 1e-4);
+    assert_eq!(v["tolerance"].as_f64(), Some(1e-4));
+    let failed = std::fs::read_to_string(out.join(bf_output::FAILED)).unwrap();
+    assert!(failed.contains("unverified"), "{failed}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn min_stick_bounds_the_stick_phase() {
+    let dir = tmpdir("minstick");
+    for (secs, lo) in [("0.1", 0.1), ("0.25", 0.25)] {
+        let out = dir.join(secs);
+        ok(&optimize_in(
+            &out,
+            None,
+            &[
+                "--problem",
+                "periodic-qc",
+                "--strategy",
+                "direct",
+                "--min-stick",
+                secs,
+                // This test is about the bound; whether the optimum verifies is tested above.
+                "--verify-rtol",
+                "0",
+            ],
+        ));
+        let sol = json(&out.join("solution.json"));
+        let d = sol["phase_durations"][1].as_f64().unwrap();
+        assert!(d >= lo * (1.0 - 1e-8), "stick {d} < {lo}");
+    }
+    for bad in ["0", "-1", "nan", "5"] {
+        let o = optimize_in(
+            &dir.join("bad"),
+            None,
+            &[
+                "--problem",
+                "periodic-qc",
+                "--strategy",
+                "direct",
+                "--min-stick",
+                bad,
+            ],
+        );
+        assert!(!o.status.success(), "{bad}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            e.contains("--min-stick") || e.contains("stick duration"),
+            "{bad}: {e}"
+        );
+        assert!(!e.contains("panicked"), "{e}");
+    }
+    std::fs::remove_dir_all(dir).ok();
+}
