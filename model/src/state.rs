@@ -3,19 +3,8 @@
 use crate::linalg::Vec3;
 use crate::{ModelError, Result};
 
-/// Discrete mode of the hybrid system (Sect. 2.6, Fig. 2–3). Serialised in lowercase.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum Mode {
-    /// No contact, λ = 0 (eq. 26, 45).
-    Free,
-    /// Sticking contact, Δv = 0 (eq. 29, 46).
-    Stick,
-    /// Slipping contact, n·v_c = 0 with kinetic friction (eq. 37, 47).
-    Slip,
-}
+/// Discrete mode of the hybrid system (Sect. 2.6, Fig. 2–3), defined in bf-scene.
+pub use bf_scene::Mode;
 
 /// State x = (q, q̇, ω): joint angles (rad), joint rates (rad/s), ball angular velocity
 /// (rad/s, world axes).

@@ -13,7 +13,8 @@
 //! | [`fig_work_precision_sets`] | — | as above with labelled runs; unordered sets as markers only |
 //!
 //! Inputs are plain [`TimeSeries`] (no dependency on the physics crates) and [`Phases`]
-//! (switching times and the contact intervals, drawn as markers and shaded bands).
+//! (switching times and the contact intervals, drawn as markers and shaded bands); a
+//! simulation's contact modes are bf-scene's [`Mode`].
 
 use crate::PlotError;
 use crate::figure::{
@@ -361,22 +362,15 @@ pub struct SimModes {
     pub stick: Vec<(f64, f64)>,
 }
 
-/// Contact mode of one sample, for [`SimModes::from_trace`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ContactMode {
-    /// No contact.
-    Free,
-    /// Sticking contact.
-    Stick,
-    /// Slipping contact.
-    Slip,
-}
+/// Contact mode of one sample, for [`SimModes::from_trace`] (the one contact-mode type of
+/// the workspace, defined in bf-scene).
+pub use bf_scene::Mode;
 
 impl SimModes {
     /// Intervals from a sampled mode trace (`modes[i]` holds at `t[i]`): each maximal run of
     /// equal modes spans from its first sample to the next run's first sample (the last run to
     /// the last sample), so adjacent intervals meet without gaps.
-    pub fn from_trace(t: &[f64], modes: &[ContactMode]) -> Result<Self, PlotError> {
+    pub fn from_trace(t: &[f64], modes: &[Mode]) -> Result<Self, PlotError> {
         if t.len() != modes.len() {
             return Err(PlotError::Shape {
                 what: "contact-mode trace".into(),
@@ -392,9 +386,9 @@ impl SimModes {
             }
             let end = t[j.min(t.len() - 1)];
             match modes[i] {
-                ContactMode::Stick => out.stick.push((t[i], end)),
-                ContactMode::Slip => out.slip.push((t[i], end)),
-                ContactMode::Free => {}
+                Mode::Stick => out.stick.push((t[i], end)),
+                Mode::Slip => out.slip.push((t[i], end)),
+                Mode::Free => {}
             }
             i = j;
         }
@@ -727,7 +721,7 @@ mod tests {
 
     #[test]
     fn mode_trace_to_intervals() {
-        use ContactMode::*;
+        use Mode::*;
         let t = [0.0, 0.1, 0.2, 0.3, 0.4, 0.5];
         let m = SimModes::from_trace(&t, &[Free, Slip, Stick, Stick, Free, Stick]).unwrap();
         assert_eq!(m.slip, vec![(0.1, 0.2)]);

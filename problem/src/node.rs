@@ -28,7 +28,10 @@ use bf_codegen::{CodegenError, Scene, diff};
 /// δ of the smooth friction-cone margin σ_δ (N); σ_δ ≥ 0 implies σ ≥ −δ.
 pub const CONE_DELTA: f64 = 1e-4;
 
-/// Contact mode prescribed to a phase (paper Fig. 3, blue part).
+/// Contact mode prescribed to a phase (paper Fig. 3, blue part). Not the hybrid system's
+/// [`bf_scene::Mode`]: a phase is free or sticking (the problems of Sect. 4 have no slip
+/// phases, so a slip variant would be a case every match must reject), and `solution.json`
+/// writes it as `"Free"` / `"Stick"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Mode {
     /// No contact (eq. 26).

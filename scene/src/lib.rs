@@ -29,6 +29,7 @@
 //! - Validation ([`Scene::validate`]) also refuses inertias whose principal moments violate
 //!   the triangle inequality, unless the table names a published source
 //!   (`nonphysical_inertia`); [`Scene::warnings`] lists what is accepted but doubtful.
+//! - [`Mode`]: the contact modes free, stick and slip of Sect. 2.6.
 //!
 //! Loading: [`Scene::load`] / [`Scene::from_toml_str`] parse with toml's span-preserving
 //! `DeTable`, deserialise with serde (`deny_unknown_fields`), then validate; every error is
@@ -39,12 +40,14 @@ mod angle;
 mod constants;
 mod de;
 mod error;
+mod mode;
 mod validate;
 
 use serde::Deserialize;
 
 pub use constants::Constants;
 pub use error::{SpecError, SpecErrorKind};
+pub use mode::Mode;
 pub use validate::{principal_moments, symmetric_eigenvalues};
 
 use error::SourceIndex;

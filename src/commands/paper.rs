@@ -90,6 +90,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     let mut details = String::new();
     for (name, text) in BUILTIN_SCENES {
         let scene = bf_codegen::Scene::from_toml_str(text, &format!("scenes/{name}.toml"))?;
+        // As for every scene a command loads (`load_scene`): accepted but doubtful values.
+        for w in scene.warnings() {
+            pb.suspend(|| eprintln!("warning: scenes/{name}.toml: {w}"));
+        }
         let g = bf_codegen::generate(&scene, text)
             .with_context(|| format!("generating scene {name}"))?;
         let r = &g.report;

@@ -5,7 +5,7 @@
 
 use anyhow::{Context, Result, anyhow};
 use bf_model::{ImpactLaw, Mode};
-use bf_plot::paper::{ContactMode, SimModes, TimeSeries};
+use bf_plot::paper::{SimModes, TimeSeries};
 use bf_problem::OcpSolution;
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{SimSettings, TorqueSeries};
@@ -181,16 +181,7 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
             }
         }
     }
-    let modes_mapped: Vec<ContactMode> = tr
-        .mode
-        .iter()
-        .map(|m| match m {
-            Mode::Free => ContactMode::Free,
-            Mode::Stick => ContactMode::Stick,
-            Mode::Slip => ContactMode::Slip,
-        })
-        .collect();
-    let modes = SimModes::from_trace(&tr.t, &modes_mapped)?;
+    let modes = SimModes::from_trace(&tr.t, &tr.mode)?;
     bf_plot::render_panels(
         &bf_plot::paper::fig_open_loop_vs_optimal_modes(
             "Fig. 17 counterpart: open-loop simulation vs optimal ω (COT, robotic finger)",

@@ -97,10 +97,12 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
     // total period is bounded (≤ COT_MAX_PERIOD).
     let tmax = if qc { 5.0 } else { COT_MAX_PERIOD };
     if !(settings.min_stick.is_finite() && settings.min_stick > 0.0 && settings.min_stick < tmax) {
-        return Err(OcpError::InvalidProblem(format!(
-            "minimum stick duration {} s must be in (0, {tmax}) s",
-            settings.min_stick
-        )));
+        return Err(ProblemError::InvalidSetting {
+            name: "minimum stick duration (s)",
+            value: settings.min_stick,
+            expected: "positive and below the phase's maximum duration (5 s for QC, the \
+                       maximum period for COT)",
+        });
     }
     let phases = vec![
         PhaseDef {
