@@ -131,13 +131,7 @@ macro_rules! compiled_flat {
         for kern in &$rt.kernels {
             let u: [f64; k::NQ] = $s.u(&kern.inputs).try_into().ok()?;
             out.push(k::eval_flat_u(
-                &kern.name,
-                &q,
-                &qd,
-                &$s.omega,
-                $s.eps,
-                &u,
-                p,
+                &kern.name, &q, &qd, &$s.omega, $s.eps, &u, p,
             )?);
         }
         Some(out)

@@ -242,8 +242,12 @@ pub fn search_with_progress(
     let show = |r: &StageRecord| {
         let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         let msg = format!(
-            "{strategy}: {k} solves done; last: chain {} {} -> {:?}, J {:.4e}, T {:.3} s",
-            r.chain, r.stage, r.status, r.objective, r.period
+            "{strategy}: {k} solves done; last: chain {} {} -> {}, J {:.4e}, T {:.3} s",
+            r.chain,
+            r.stage,
+            crate::names::name(&r.status),
+            r.objective,
+            r.period
         );
         if lines {
             eprintln!("{name}: {msg}");
@@ -284,7 +288,7 @@ pub fn refine_with_progress(
             format!("{:?}", r.points),
             r.objective,
             r.max_error,
-            format!("{:?}", r.status),
+            crate::names::name(&r.status),
             r.iterations,
             r.seconds
         );
@@ -552,9 +556,9 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
     }
     for r in &refinements {
         crate::outln!(
-            "verification refinement: {}: {:?}, objective {:.6e}, period {:.4} s, {} iterations",
+            "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} iterations",
             r.stage,
-            r.status,
+            crate::names::name(&r.status),
             r.objective,
             r.period,
             r.iterations
@@ -591,9 +595,9 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
         sol.scene, sol.kernels
     );
     crate::outln!(
-        "{}: {:?} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",
+        "{}: {} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",
         sol.problem,
-        sol.status,
+        crate::names::name(&sol.status),
         sol.iterations,
         sol.solve_seconds,
         sol.objective,
@@ -759,10 +763,10 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     print_verification(&sol)?;
     commit_solution(&sol, out)?;
     crate::outln!(
-        "{}: merged {} candidates; chose start {k}: {:?}, objective {:.6e}, period {:.4} s",
+        "{}: merged {} candidates; chose start {k}: {}, objective {:.6e}, period {:.4} s",
         problem,
         cands.len() + 1,
-        sol.status,
+        crate::names::name(&sol.status),
         sol.objective,
         sol.period
     )?;

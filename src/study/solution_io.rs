@@ -281,7 +281,11 @@ pub fn documents(sol: &OcpSolution) -> Result<(Value, Value), serde_json::Error>
 }
 
 /// Rebuilds the record from the two documents of schema 2.
-fn from_documents(public: &Value, internals: &Value, path: &Path) -> Result<OcpSolution, StudyError> {
+fn from_documents(
+    public: &Value,
+    internals: &Value,
+    path: &Path,
+) -> Result<OcpSolution, StudyError> {
     let Value::Object(p) = public else {
         return Err(io_err(path, "not a JSON object"));
     };
