@@ -24,6 +24,7 @@ pub mod extremes;
 pub mod openloop;
 pub mod refine;
 pub mod scenarios;
+pub mod search;
 pub mod solution_io;
 pub mod solve;
 pub mod speed_accuracy;

@@ -52,9 +52,7 @@ use rayon::prelude::*;
 
 use super::build;
 use super::error::StudyError;
-use super::refine::{self, RefineOptions};
 use super::solve::{solve, solve_warm};
-use super::verify::{is_verified, verify};
 use bf_optim::ocp::Scheme;
 pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
 
@@ -74,7 +72,7 @@ pub fn period_grid(problem: Problem) -> Vec<f64> {
     }
 }
 
-fn record(chain: usize, stage: String, sol: &OcpSolution, t0: Instant) -> StageRecord {
+pub(crate) fn record(chain: usize, stage: String, sol: &OcpSolution, t0: Instant) -> StageRecord {
     StageRecord {
         chain,
         stage,
@@ -86,7 +84,12 @@ fn record(chain: usize, stage: String, sol: &OcpSolution, t0: Instant) -> StageR
     }
 }
 
-fn failed_record(chain: usize, stage: String, e: &StudyError, t0: Instant) -> StageRecord {
+pub(crate) fn failed_record(
+    chain: usize,
+    stage: String,
+    e: &StudyError,
+    t0: Instant,
+) -> StageRecord {
     StageRecord {
         chain,
         stage: format!("{stage} ({})", crate::errors::chain(e)),
@@ -321,7 +324,7 @@ fn chains_of(
 }
 
 /// The strategy a warm start leaves: a warm-started solve is one direct solve.
-fn effective(settings: &ProblemSettings, strategy: Strategy) -> Strategy {
+pub(crate) fn effective(settings: &ProblemSettings, strategy: Strategy) -> Strategy {
     if settings.warm_start.is_some() {
         Strategy::Direct
     } else {
@@ -332,7 +335,7 @@ fn effective(settings: &ProblemSettings, strategy: Strategy) -> Strategy {
 /// Runs the chains of `strategy` that belong to `shard` (all of them for [`Shard::WHOLE`]),
 /// in parallel; the results come back in chain order with their global chain indices, so
 /// nothing depends on the scheduling of the threads.
-fn run_chains(
+pub(crate) fn run_chains(
     problem: Problem,
     settings: &ProblemSettings,
     strategy: Strategy,
@@ -452,370 +455,7 @@ pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
     }
 }
 
-/// Relative objective difference within which two end points are one local optimum.
-pub const CLUSTER_RTOL: f64 = 1e-6;
-
-/// First stick-phase lower bound (s) of the stick continuation
-/// ([`VerifyPolicy::stick_continuation`]).
-pub const STICK_CONTINUATION: f64 = 0.1;
-
-/// Iteration limit of the relaxation stage of the stick continuation.
-pub const RELAX_MAX_ITER: usize = 200;
-
-/// How a search verifies its candidates ([`search`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct VerifyPolicy {
-    /// DOPRI5 relative tolerance of the re-integration ([`verify`]); 0 skips verification
-    /// (and with it the refinement).
-    pub rtol: f64,
-    /// Error-estimate tolerance of the first hp refinement of an unverified optimum; each
-    /// further attempt divides it by 10.
-    pub refine_tol: f64,
-    /// hp refinements (each up to `refine_rounds` rounds) of one unverified optimum at most.
-    pub refine_attempts: usize,
-    /// Rounds of one refinement.
-    pub refine_rounds: usize,
-    /// Collocation points per phase at most.
-    pub max_points: usize,
-    /// Distinct unverified optima (better than the best verified one) refined at most.
-    pub clusters: usize,
-    /// Continuation in the stick phase's lower bound (`periodic-qc` only): every chain first
-    /// runs with the stick phase at least this long (s), then one warm-started stage relaxes
-    /// the bound to the problem's ([`ProblemSettings::min_stick`]). With the short default
-    /// bound most cold starts end in "taps" on it; from a stick phase of real duration the
-    /// relaxation reaches better optima with an interior stick duration. `None`: no
-    /// continuation.
-    pub stick_continuation: Option<f64>,
-}
-
-impl Default for VerifyPolicy {
-    fn default() -> Self {
-        VerifyPolicy {
-            rtol: 1e-10,
-            refine_tol: 1e-4,
-            refine_attempts: 2,
-            refine_rounds: 4,
-            max_points: 400,
-            clusters: 1,
-            stick_continuation: Some(STICK_CONTINUATION),
-        }
-    }
-}
-
-/// One end point of a search: the final solution of chain/start `index`.
-#[derive(Debug, Clone)]
-pub struct Candidate {
-    /// Global chain/start index.
-    pub index: usize,
-    /// Its transcribed problem (`None` for a candidate read from a file).
-    pub problem: Option<BuiltProblem>,
-    /// The solution, with its [`OcpSolution::verification`] when verified.
-    pub solution: OcpSolution,
-}
-
-/// The result of [`search`]: one candidate per distinct local optimum (verified, refined
-/// where needed) and the record of every solve.
-#[derive(Debug, Clone)]
-pub struct Search {
-    /// The strategy that ran.
-    pub strategy: Strategy,
-    /// The shard that ran.
-    pub shard: Shard,
-    /// One candidate per distinct optimum (its lowest-index start), in index order.
-    pub candidates: Vec<Candidate>,
-    /// Every stage of every chain/start, in index order.
-    pub records: Vec<StageRecord>,
-    /// The hp refinements of unverified optima (one record per refinement, its chain the
-    /// start index), in index order; their iterations count in the solution's total, not in
-    /// [`StrategyReport::iterations`].
-    pub refinements: Vec<StageRecord>,
-    /// Wall time (s).
-    pub seconds: f64,
-}
-
-/// Rank class of a solution: 0 verified, 1 successful but not verified, 2 failed.
-fn class(sol: &OcpSolution) -> u8 {
-    if !sol.status.is_success() || !sol.objective.is_finite() {
-        2
-    } else if is_verified(sol) {
-        0
-    } else {
-        1
-    }
-}
-
-fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
-    (a.objective - b.objective).abs() <= CLUSTER_RTOL * a.objective.abs().max(b.objective.abs())
-        && (a.period - b.period).abs() <= 1e-3 * a.period.abs().max(b.period.abs())
-}
-
-/// The candidate a search returns (its position in `cands`, given as (start index,
-/// solution)): the best class (verified, then successful, then failed), in it the lowest
-/// objective, and among the end points within [`CLUSTER_RTOL`] of that objective (one optimum,
-/// reached from several starts) the lowest start index. The rule depends on the set only, not
-/// on its order, so shards merged give the unsharded choice.
-pub fn select(cands: &[(usize, &OcpSolution)]) -> Option<usize> {
-    let best_class = cands.iter().map(|(_, s)| class(s)).min()?;
-    let in_class = || {
-        cands
-            .iter()
-            .enumerate()
-            .filter(|(_, (_, s))| class(s) == best_class)
-    };
-    let jmin = in_class()
-        .map(|(_, (_, s))| s.objective)
-        .filter(|j| j.is_finite())
-        .fold(f64::INFINITY, f64::min);
-    in_class()
-        .filter(|(_, (_, s))| !jmin.is_finite() || s.objective <= jmin + CLUSTER_RTOL * jmin.abs())
-        .min_by_key(|(_, (k, _))| *k)
-        .map(|(i, _)| i)
-}
-
-/// One candidate per distinct optimum: candidates sorted by (class, objective, index) are
-/// grouped greedily (a group takes every following end point of its class within
-/// [`same_optimum`] of its first); each group is represented by its lowest start index.
-fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
-    let mut order: Vec<usize> = (0..cands.len()).collect();
-    let key = |c: &Candidate| {
-        let j = c.solution.objective;
-        (
-            class(&c.solution),
-            if j.is_nan() { f64::INFINITY } else { j },
-        )
-    };
-    order.sort_by(|&a, &b| {
-        let (ka, kb) = (key(&cands[a]), key(&cands[b]));
-        ka.0.cmp(&kb.0)
-            .then(ka.1.total_cmp(&kb.1))
-            .then(cands[a].index.cmp(&cands[b].index))
-    });
-    let mut keep = vec![false; cands.len()];
-    let mut i = 0;
-    while i < order.len() {
-        let first = &cands[order[i]];
-        let mut j = i + 1;
-        while j < order.len() {
-            let c = &cands[order[j]];
-            if class(&c.solution) != class(&first.solution)
-                || !same_optimum(&first.solution, &c.solution)
-            {
-                break;
-            }
-            j += 1;
-        }
-        let rep = order[i..j]
-            .iter()
-            .copied()
-            .min_by_key(|&o| cands[o].index)
-            .unwrap_or(order[i]);
-        keep[rep] = true;
-        i = j;
-    }
-    cands
-        .into_iter()
-        .zip(keep)
-        .filter_map(|(c, k)| k.then_some(c))
-        .collect()
-}
-
-/// Re-integrates the candidate's solution ([`verify`]) and stores the result in it.
-fn attach_verification(c: &mut Candidate, rtol: f64) {
-    if let Some(p) = &c.problem {
-        c.solution.verification = verify(p, &c.solution, rtol).ok();
-    }
-}
-
-/// hp-refines an unverified candidate (Radau only) until it is verified or the policy's
-/// attempts are spent: attempt a refines from the previous attempt's mesh to the error
-/// estimate `refine_tol`·10⁻ᵃ and re-integrates. Returns the last successful refinement (or
-/// the candidate unchanged) and a record per attempt.
-fn refine_until_verified(
-    problem: Problem,
-    settings: &ProblemSettings,
-    mut cur: Candidate,
-    policy: &VerifyPolicy,
-) -> (Candidate, Vec<StageRecord>) {
-    let mut records = Vec::new();
-    let mut tol = policy.refine_tol;
-    for _ in 0..policy.refine_attempts {
-        if is_verified(&cur.solution) {
-            break;
-        }
-        let Some(p) = cur.problem.as_ref() else { break };
-        let Ok(mesh) = refine::current_mesh(p) else {
-            break;
-        };
-        let t0 = Instant::now();
-        let s = ProblemSettings {
-            mesh: Some(mesh),
-            ..settings.clone()
-        };
-        let opts = RefineOptions {
-            tol,
-            max_rounds: policy.refine_rounds,
-            max_points: policy.max_points,
-            ..RefineOptions::default()
-        };
-        let label = format!("refine start {} to {tol:e}", cur.index);
-        let iters0 = cur.solution.iterations;
-        match refine::refine_solution(problem, &s, cur.solution.clone(), &opts, None) {
-            Ok((b, sol)) => {
-                let mut next = Candidate {
-                    index: cur.index,
-                    problem: Some(b),
-                    solution: sol,
-                };
-                attach_verification(&mut next, policy.rtol);
-                let defect = next
-                    .solution
-                    .verification
-                    .as_ref()
-                    .map_or(f64::NAN, |v| v.max_defect);
-                let mut r = record(
-                    cur.index,
-                    format!("{label} (defect {defect:.1e})"),
-                    &next.solution,
-                    t0,
-                );
-                r.iterations = next.solution.iterations.saturating_sub(iters0);
-                records.push(r);
-                if !next.solution.status.is_success() {
-                    break;
-                }
-                cur = next;
-            }
-            Err(e) => {
-                records.push(failed_record(cur.index, label, &e, t0));
-                break;
-            }
-        }
-        tol *= 0.1;
-    }
-    (cur, records)
-}
-
-/// A search for the best verified optimum: runs the chains of `strategy` in `shard`
-/// (in parallel, results in index order), re-integrates every end point, keeps one
-/// candidate per distinct optimum, and hp-refines the best `policy.clusters` unverified optima
-/// that beat the best verified one until they verify ([`refine_until_verified`]). Every
-/// decision depends on the computed values only, never on thread scheduling, so the result is
-/// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
-pub fn search(
-    problem: Problem,
-    settings: &ProblemSettings,
-    strategy: Strategy,
-    shard: Shard,
-    policy: &VerifyPolicy,
-    progress: Progress<'_>,
-) -> Result<Search, StudyError> {
-    let t0 = Instant::now();
-    let strategy = effective(settings, strategy);
-    let results = run_chains(
-        problem,
-        settings,
-        strategy,
-        shard,
-        policy.stick_continuation,
-        progress,
-    )?;
-    let records: Vec<StageRecord> = results.iter().flat_map(|(_, (r, _))| r.clone()).collect();
-    let mut refinements = Vec::new();
-    let mut cands: Vec<Candidate> = results
-        .into_iter()
-        .filter_map(|(k, (_, r))| {
-            r.map(|(p, s)| Candidate {
-                index: k,
-                problem: Some(p),
-                solution: s,
-            })
-        })
-        .collect();
-    if policy.rtol > 0.0 {
-        cands
-            .par_iter_mut()
-            .for_each(|c| attach_verification(c, policy.rtol));
-    }
-    let mut cands = representatives(cands);
-    if policy.rtol > 0.0 {
-        let best_verified = cands
-            .iter()
-            .filter(|c| class(&c.solution) == 0)
-            .map(|c| c.solution.objective)
-            .fold(f64::INFINITY, f64::min);
-        let mut todo: Vec<usize> = (0..cands.len())
-            .filter(|&i| {
-                let s = &cands[i].solution;
-                class(s) == 1 && s.objective < best_verified
-            })
-            .collect();
-        todo.sort_by(|&a, &b| {
-            cands[a]
-                .solution
-                .objective
-                .total_cmp(&cands[b].solution.objective)
-                .then(cands[a].index.cmp(&cands[b].index))
-        });
-        todo.truncate(policy.clusters);
-        let refined: Vec<(usize, (Candidate, Vec<StageRecord>))> = todo
-            .into_par_iter()
-            .map(|i| {
-                (
-                    i,
-                    refine_until_verified(problem, settings, cands[i].clone(), policy),
-                )
-            })
-            .collect();
-        for (i, (c, recs)) in refined {
-            cands[i] = c;
-            refinements.extend(recs);
-        }
-    }
-    cands.sort_by_key(|c| c.index);
-    Ok(Search {
-        strategy,
-        shard,
-        candidates: cands,
-        records,
-        refinements,
-        seconds: t0.elapsed().as_secs_f64(),
-    })
-}
-
-impl Search {
-    /// The chosen candidate ([`select`]) with its [`OcpSolution::strategy`] record (every
-    /// stage, total iterations and time; the refinements are not in it, the chosen
-    /// candidate's own is in [`OcpSolution::refinement`]); its problem is `None` only for candidates read
-    /// from files. Errors when no chain produced a solution.
-    pub fn best(mut self) -> Result<(Option<BuiltProblem>, OcpSolution), StudyError> {
-        let views: Vec<(usize, &OcpSolution)> = self
-            .candidates
-            .iter()
-            .map(|c| (c.index, &c.solution))
-            .collect();
-        let Some(i) = select(&views) else {
-            let stages = self
-                .records
-                .iter()
-                .map(|r| format!("{}: {}", r.chain, r.stage))
-                .collect();
-            return Err(StudyError::AllChainsFailed {
-                strategy: self.strategy,
-                stages,
-            });
-        };
-        let c = self.candidates.swap_remove(i);
-        let mut sol = c.solution;
-        let iterations = self.records.iter().map(|r| r.iterations).sum();
-        sol.iterations = iterations + self.refinements.iter().map(|r| r.iterations).sum::<usize>();
-        sol.solve_seconds = self.seconds;
-        sol.strategy = Some(StrategyReport {
-            strategy: self.strategy,
-            records: self.records,
-            chosen: sol.status.is_success().then_some(c.index),
-            iterations,
-            seconds: self.seconds,
-        });
-        Ok((c.problem, sol))
-    }
-}
+pub use super::search::{
+    CLUSTER_RTOL, Candidate, RELAX_MAX_ITER, STICK_CONTINUATION, Search, VerifyPolicy, search,
+    select,
+};
