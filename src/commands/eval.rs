@@ -1,11 +1,11 @@
 //! `ball-finger eval SCENE --q .. --qd .. [--omega ..] [--eps ..]`: one JSON object with the
 //! kinematics (eq. 67–71), dynamics (eq. 72–79, Christoffel C) and contact quantities
 //! (eq. 2–7, smooth variant eq. 58–59) at one state. Compiled scenes (the parsed file equals a
-//! scene compiled into `bf-generated`, `bf_model::registry::compiled_match`) go through the compiled kernels; any other file
-//! through the generator's interpreter (stderr names which). `--param name=value` sets runtime
-//! parameters. Key order and layout are fixed (matrices row-major). A
-//! non-finite entry (overflow at an extreme state or ε) is an error naming the quantity and the
-//! entry (indices from 1), never a `null` in the JSON.
+//! scene compiled into `bf-generated`, `bf_model::registry::compiled_match`) go through the
+//! compiled kernels; any other file through the generator's interpreter (stderr names which).
+//! `--param name=value` sets runtime parameters. Key order and layout are fixed (matrices
+//! row-major). A non-finite entry (overflow at an extreme state or ε) is an error naming the
+//! quantity and the entry (indices from 1), never a `null` in the JSON.
 
 use crate::cli::EvalArgs;
 use crate::io::parse_list;
