@@ -458,7 +458,6 @@ fn contact_offsets() -> Result<[usize; 12]> {
 #[derive(Debug, Clone)]
 pub struct InterpretedKernels {
     name: String,
-    toml: String,
     params: Params,
     mass_cqd_g: Tape,
     potential: Tape,
@@ -509,7 +508,6 @@ impl InterpretedKernels {
         }
         Ok(InterpretedKernels {
             name: scene.name.clone(),
-            toml: String::new(),
             params,
             mass_cqd_g,
             potential,
@@ -538,8 +536,10 @@ impl Kernels for InterpretedKernels {
     fn scene_name(&self) -> &str {
         &self.name
     }
+    /// Empty: the kernels were built from a parsed scene, whose parameters
+    /// [`Kernels::physical_params`] gives.
     fn scene_toml(&self) -> &str {
-        &self.toml
+        ""
     }
     fn param_names(&self) -> &[&str] {
         &[]
