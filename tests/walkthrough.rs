@@ -4,7 +4,8 @@
 //! inverse-dynamics family, and the evaluated `inverse_dynamics` equals M q̈ + C q̇ + g from
 //! the `mass_matrix` and `cqd_g` kernels of the same output, `forward_dynamics` equals
 //! M⁻¹(τ − C q̇ − g) (solved here by Gaussian elimination), and the prismatic joint's gravity
-//! force is the weight of the link it carries.
+//! force is the weight of the link it carries; the simulation balances energy against the
+//! work of its PD torques and settles where the PD law carries the quill's weight.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -67,6 +68,11 @@ fn arg(cmd: &[&str], flag: &str) -> Vec<f64> {
     cmd[i + 1].split(',').map(|x| x.parse().unwrap()).collect()
 }
 
+fn arg_text<'a>(cmd: &[&'a str], flag: &str) -> &'a str {
+    let i = cmd.iter().position(|a| *a == flag).unwrap();
+    cmd[i + 1]
+}
+
 #[test]
 fn the_walkthrough_runs_as_written() {
     let page = std::fs::read_to_string(root().join("docs/your-robot.md")).unwrap();
@@ -84,7 +90,7 @@ fn the_walkthrough_runs_as_written() {
         .filter(|l| l.starts_with("ball-finger "))
         .collect();
     assert!(commands.len() >= 3, "{commands:?}");
-    let mut saw = (false, false, false);
+    let mut saw = (false, false, false, false);
     for line in commands {
         let words: Vec<&str> = line.split_whitespace().collect();
         let out = bin().current_dir(&dir).args(&words[1..]).output().unwrap();
@@ -156,8 +162,45 @@ fn the_walkthrough_runs_as_written() {
                 }
                 saw.2 = true;
             }
+            "simulate" => {
+                let out = dir.join(arg_text(&words, "--out"));
+                let summary: serde_json::Value = serde_json::from_str(
+                    &std::fs::read_to_string(out.join("summary.json")).unwrap(),
+                )
+                .unwrap();
+                let f = |k: &str| summary[k].as_f64().unwrap();
+                // Energy balance: ΔE = work of torques and friction, to the integration error.
+                let scale = f("energy_initial").abs() + f("work").abs();
+                assert!(
+                    (f("energy_final") - f("energy_initial") - f("work")).abs() < 1e-4 * scale,
+                    "{summary}"
+                );
+                // PD equilibrium: revolute joints at the target, the quill (pointing down)
+                // below it by its weight over k_p.
+                let target = arg(&words, "--pd");
+                let kp = arg(&words, "--pd-gains")[0];
+                let csv = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+                let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+                assert_eq!(header[3], "q3 [m]", "{header:?}");
+                let last: Vec<f64> = csv
+                    .lines()
+                    .last()
+                    .unwrap()
+                    .split(',')
+                    .map(|v| v.parse().unwrap())
+                    .collect();
+                let want = [target[0], target[1], target[2] + 0.5 * 9.81 / kp];
+                for i in 0..3 {
+                    assert!((last[1 + i] - want[i]).abs() < 2e-3, "q{}: {last:?}", i + 1);
+                }
+                saw.3 = true;
+            }
             other => panic!("the walk-through runs an unexpected command {other}"),
         }
     }
-    assert_eq!(saw, (true, true, true), "generate, eval and bench all ran");
+    assert_eq!(
+        saw,
+        (true, true, true, true),
+        "generate, eval, bench and simulate all ran"
+    );
 }

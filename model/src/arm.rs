@@ -46,6 +46,7 @@ pub struct ArmModel {
     name: String,
     nq: usize,
     mu_v: f64,
+    prismatic: Vec<bool>,
     backend: Backend,
 }
 
@@ -71,6 +72,7 @@ impl ArmModel {
                     name,
                     nq,
                     mu_v,
+                    prismatic: prismatic_joints(scene),
                     backend,
                 },
                 KernelSource::Compiled,
@@ -90,6 +92,7 @@ impl ArmModel {
                 name: scene.name.clone(),
                 nq,
                 mu_v,
+                prismatic: prismatic_joints(scene),
                 backend,
             },
             KernelSource::Interpreted,
@@ -99,6 +102,12 @@ impl ArmModel {
     /// Scene name.
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Which joints are prismatic (q_i in m, its force in N) rather than revolute (rad, N m),
+    /// in joint order: the units of the arm's trajectory columns.
+    pub fn prismatic(&self) -> &[bool] {
+        &self.prismatic
     }
 
     /// Number of joints.
@@ -243,4 +252,13 @@ fn interpreted(scene: &Scene) -> Result<Backend> {
         layout: m.layout,
         base_vars,
     })
+}
+
+/// `true` for each prismatic joint of `scene`, in joint order.
+fn prismatic_joints(scene: &Scene) -> Vec<bool> {
+    scene
+        .links
+        .iter()
+        .map(|l| l.joint == bf_scene::JointType::Prismatic)
+        .collect()
 }

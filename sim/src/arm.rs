@@ -88,6 +88,7 @@ impl<I: Input> FreeArm<I> {
             scene: self.model.name().to_string(),
             kernels: None,
             joints: n,
+            prismatic: self.model.prismatic().to_vec(),
             t_final: out.t_final,
             energy_initial: samples.first().map_or(f64::NAN, |s| s.energy),
             energy_final: samples.last().map_or(f64::NAN, |s| s.energy),
@@ -160,6 +161,9 @@ pub struct ArmSummary {
     pub kernels: Option<String>,
     /// Number of joints.
     pub joints: usize,
+    /// Which joints are prismatic (q in m, q̇ in m/s, τ a force in N); the others are
+    /// revolute (rad, rad/s, N m).
+    pub prismatic: Vec<bool>,
     /// Time reached (s).
     pub t_final: f64,
     /// Energy at the first sample (J).
@@ -209,17 +213,24 @@ pub struct ArmReport {
 }
 
 impl ArmReport {
-    /// Writes `trajectory.csv` (`t,q1..,qd1..,tau1..,energy`) and `summary.json` (with `error`
-    /// when the run failed) into `dir`.
+    /// Writes `trajectory.csv` (`t [s],q1 [rad]..,qd1 [rad/s]..,tau1 [N m]..,energy [J]`, with
+    /// m, m/s and N for prismatic joints) and `summary.json` (with `error` when the run failed)
+    /// into `dir`.
     pub fn write_dir(&self, dir: &Path, error: Option<&str>) -> Result<(), SimError> {
         let n = self.summary.joints;
-        let mut csv = String::from("t");
-        for stem in ["q", "qd", "tau"] {
-            for i in 1..=n {
-                let _ = write!(csv, ",{stem}{i}");
+        let prismatic = |i: usize| self.summary.prismatic.get(i).copied().unwrap_or(false);
+        let mut csv = String::from("t [s]");
+        for (stem, revolute, linear) in [
+            ("q", "rad", "m"),
+            ("qd", "rad/s", "m/s"),
+            ("tau", "N m", "N"),
+        ] {
+            for i in 0..n {
+                let unit = if prismatic(i) { linear } else { revolute };
+                let _ = write!(csv, ",{stem}{} [{unit}]", i + 1);
             }
         }
-        csv.push_str(",energy\n");
+        csv.push_str(",energy [J]\n");
         for s in &self.samples {
             let _ = write!(csv, "{:e}", s.t);
             for v in s.q.iter().chain(&s.qd).chain(&s.tau) {
