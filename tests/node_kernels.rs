@@ -220,7 +220,7 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
     );
     let scene = bf_codegen::Scene::from_toml_str(&text, "test").unwrap();
     let opt = bf_problem::node::NodeOptions {
-        mode: bf_problem::Mode::Stick,
+        mode: bf_problem::PhaseMode::Stick,
         cost: bf_problem::CostKind::Qc {
             w: 1.0,
             omega_ref: [0.0, 0.0, 2.2],

@@ -112,7 +112,7 @@ fn reintegration_error(sol: &OcpSolution, steps: usize) -> Vec<f64> {
     let mut per_phase = Vec::new();
     for (pi, ph) in sol.raw.iter().enumerate() {
         let mut worst: f64 = 0.0;
-        let stick = sol.modes[pi] == bf_problem::Mode::Stick;
+        let stick = sol.modes[pi] == bf_problem::PhaseMode::Stick;
         let inputs = |tau_n: f64| -> (Vec<f64>, Vec<f64>) {
             let u = ph.u_at(tau_n);
             let lam = if stick {

@@ -29,7 +29,9 @@ use bf_optim::ocp::transcription::integration_matrix;
 use bf_optim::ocp::{GraphFn, Scheme};
 use bf_problem::node::{NodeOptions, node_function as node_function_with};
 use bf_problem::points::Diagnostics;
-use bf_problem::{BuiltProblem, CostKind, Mode, OcpSolution, Problem, ProblemSettings, StickLevel};
+use bf_problem::{
+    BuiltProblem, CostKind, OcpSolution, PhaseMode, Problem, ProblemSettings, StickLevel,
+};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -43,7 +45,7 @@ fn acceleration_level_stick_rows_are_the_time_derivative_of_delta_v() {
     let ph = bf_problem::node::physics(&scene).unwrap();
     let eps = 0.01;
     let opt = NodeOptions {
-        mode: Mode::Stick,
+        mode: PhaseMode::Stick,
         cost: CostKind::Qc {
             w: 1.0,
             omega_ref: [0.0, 0.0, 2.2],

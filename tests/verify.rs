@@ -13,7 +13,7 @@ use ball_finger::study::{build, solve};
 use bf_generated::paper as k;
 use bf_optim::ipm::Status;
 use bf_optim::ocp::Scheme;
-use bf_problem::Mode;
+use bf_problem::PhaseMode;
 use bf_problem::{BuiltProblem, OcpSolution, ProblemSettings};
 
 const RTOL: f64 = 1e-10;
@@ -44,7 +44,7 @@ fn periodic_qc_verifies_and_defect_shrinks_with_refinement() {
     assert_eq!(v.torque, TorqueInterpolant::Clamped);
     assert_eq!(
         v.phases.iter().map(|p| p.mode).collect::<Vec<_>>(),
-        [Mode::Free, Mode::Stick, Mode::Free]
+        [PhaseMode::Free, PhaseMode::Stick, PhaseMode::Free]
     );
     // Same physics on both sides: the OCP's dynamics residual evaluated with bf-model's kernels
     // and parameters vanishes at the nodes to the NLP tolerance (a parameter mismatch, e.g. in
@@ -60,13 +60,13 @@ fn periodic_qc_verifies_and_defect_shrinks_with_refinement() {
             ph.defect_q.max(ph.defect_qd).max(ph.defect_omega)
         );
         match ph.mode {
-            Mode::Free => {
+            PhaseMode::Free => {
                 // No penetration beyond the interpolation error (OCP: h ≥ 0 resp. ≥ −1e-4 at
                 // the nodes).
                 assert!(ph.min_h.unwrap() > -1e-3, "{ph:?}");
                 assert!(ph.max_delta_v.is_none());
             }
-            Mode::Stick => {
+            PhaseMode::Stick => {
                 // The optimal torques keep the contact closed under the true stick dynamics:
                 // Δv stays ≈ 0 (index-reduced drift only), λ_n > 0, h stays at the contact.
                 assert!(ph.max_delta_v.unwrap() < 1e-6, "{ph:?}");

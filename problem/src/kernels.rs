@@ -7,7 +7,7 @@
 use bf_codegen::nodefn::{CompiledNode, NamedNode};
 use bf_codegen::{CodegenError, Scene};
 
-use crate::node::{CostKind, Mode, NodeOptions, StickLevel, node_function};
+use crate::node::{CostKind, NodeOptions, PhaseMode, StickLevel, node_function};
 
 /// The node functions emitted as kernels for a scene with a ball and a contact, for every cost
 /// kind of the scene's `ocp_kernels` (default: all), shaped as the problem library uses them:
@@ -28,7 +28,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
             continue;
         }
         let base = NodeOptions {
-            mode: Mode::Free,
+            mode: PhaseMode::Free,
             cost,
             h_bounds: Some((0.0, f64::INFINITY)),
             hdot_bounds: None,
@@ -44,7 +44,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
                 };
                 out.push((name("free_hdot"), margin, StickLevel::Velocity));
                 let stick = NodeOptions {
-                    mode: Mode::Stick,
+                    mode: PhaseMode::Stick,
                     h_bounds: None,
                     ..base
                 };
@@ -53,7 +53,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
             CostKind::TimeEffort { .. } => continue,
             _ => {
                 let stick = NodeOptions {
-                    mode: Mode::Stick,
+                    mode: PhaseMode::Stick,
                     ..base
                 };
                 (stick, "stick_h")
@@ -103,7 +103,7 @@ mod tests {
         Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/paper.toml")).unwrap()
     }
 
-    fn opts(mode: Mode, eps: f64, w: f64) -> NodeOptions {
+    fn opts(mode: PhaseMode, eps: f64, w: f64) -> NodeOptions {
         NodeOptions {
             mode,
             cost: CostKind::Qc {
@@ -120,16 +120,19 @@ mod tests {
     fn fingerprint_ignores_input_values_but_not_structure() {
         let s = paper();
         let fp = |o: &NodeOptions, l| compile_node(&s, o, l).unwrap().fingerprint;
-        let base = fp(&opts(Mode::Free, 0.01, 1.0), StickLevel::Velocity);
+        let base = fp(&opts(PhaseMode::Free, 0.01, 1.0), StickLevel::Velocity);
         // ε and the cost weight are inputs: same kernel.
-        assert_eq!(base, fp(&opts(Mode::Free, 0.05, 3.0), StickLevel::Velocity));
+        assert_eq!(
+            base,
+            fp(&opts(PhaseMode::Free, 0.05, 3.0), StickLevel::Velocity)
+        );
         // Another mode, stick level, row set or baked constant: another function.
-        let stick = fp(&opts(Mode::Stick, 0.01, 1.0), StickLevel::Velocity);
-        let stick_acc = fp(&opts(Mode::Stick, 0.01, 1.0), StickLevel::Acceleration);
+        let stick = fp(&opts(PhaseMode::Stick, 0.01, 1.0), StickLevel::Velocity);
+        let stick_acc = fp(&opts(PhaseMode::Stick, 0.01, 1.0), StickLevel::Acceleration);
         let no_h = fp(
             &NodeOptions {
                 h_bounds: None,
-                ..opts(Mode::Free, 0.01, 1.0)
+                ..opts(PhaseMode::Free, 0.01, 1.0)
             },
             StickLevel::Velocity,
         );
@@ -140,7 +143,7 @@ mod tests {
                     w: 1.0,
                     omega_ref: [0.1, 0.0, 2.2],
                 },
-                ..opts(Mode::Free, 0.01, 1.0)
+                ..opts(PhaseMode::Free, 0.01, 1.0)
             },
             StickLevel::Velocity,
         );
@@ -148,8 +151,12 @@ mod tests {
         if let Some(f) = other.friction.as_mut() {
             f.mu_v *= 2.0;
         }
-        let other_mu =
-            compile_node(&other, &opts(Mode::Free, 0.01, 1.0), StickLevel::Velocity).unwrap();
+        let other_mu = compile_node(
+            &other,
+            &opts(PhaseMode::Free, 0.01, 1.0),
+            StickLevel::Velocity,
+        )
+        .unwrap();
         let all = [base, stick, stick_acc, no_h, tilted, other_mu.fingerprint];
         for i in 0..all.len() {
             for j in 0..i {

@@ -31,7 +31,7 @@ pub mod points;
 #[cfg(feature = "catalogue")]
 pub mod solution;
 
-pub use node::{CostKind, Mode, Physics, StickLevel};
+pub use node::{CostKind, PhaseMode, Physics, StickLevel};
 
 #[cfg(feature = "catalogue")]
 pub use catalogue::{

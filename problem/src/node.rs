@@ -33,7 +33,7 @@ pub const CONE_DELTA: f64 = 1e-4;
 /// phases, so a slip variant would be a case every match must reject), and `solution.json`
 /// writes it as `"Free"` / `"Stick"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Mode {
+pub enum PhaseMode {
     /// No contact (eq. 26).
     Free,
     /// Sticking contact (eq. 29, 14).
@@ -160,7 +160,7 @@ pub struct NodeVars {
 #[derive(Debug, Clone, PartialEq)]
 pub struct NodeOptions {
     /// Contact mode.
-    pub mode: Mode,
+    pub mode: PhaseMode,
     /// Cost integrands.
     pub cost: CostKind,
     /// Bounds on h at the nodes (None: no h path constraint).
@@ -330,7 +330,7 @@ fn cost_integrands(
 }
 
 /// Node function of one phase with the stick constraint at `level` (only matters for
-/// [`Mode::Stick`]); returns it with the variable indices. Path rows: finger dynamics (nq),
+/// [`PhaseMode::Stick`]); returns it with the variable indices. Path rows: finger dynamics (nq),
 /// ball (3), then [stick: Δv or d(Δv)/dt (3), λ_n, cone], then [h], then [ḣ].
 ///
 /// Why Legendre–Gauss needs [`StickLevel::Acceleration`]: with Δv = 0 at the Gauss nodes the
@@ -366,7 +366,7 @@ pub fn node_function(
     };
     let qdd_v = take(nq);
     let wd_v = take(3);
-    let lam_v = if opt.mode == Mode::Stick {
+    let lam_v = if opt.mode == PhaseMode::Stick {
         take(3)
     } else {
         vec![]
@@ -384,7 +384,7 @@ pub fn node_function(
     let qdd = vars(g, &qdd_v);
     let wd = v3(&vars(g, &wd_v));
     let tau = vars(g, &tau_v);
-    let lam = if opt.mode == Mode::Stick {
+    let lam = if opt.mode == PhaseMode::Stick {
         Some(v3(&vars(g, &lam_v)))
     } else {
         None

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use bf_optim::OptimError;
 use bf_problem::solution::records::Strategy;
-use bf_problem::{Mode, ProblemError};
+use bf_problem::{PhaseMode, ProblemError};
 use bf_sim::SimError;
 
 /// Everything that can go wrong in the study layer.
@@ -118,9 +118,9 @@ pub enum StudyError {
     )]
     ModeMismatch {
         /// Modes of the solution.
-        solution: Vec<Mode>,
+        solution: Vec<PhaseMode>,
         /// Modes of the problem.
-        problem: Vec<Mode>,
+        problem: Vec<PhaseMode>,
     },
     /// The solution to verify was computed with another smoothing ε.
     #[error("verification: solution eps {solution} does not match the problem's {problem}")]
@@ -176,7 +176,7 @@ pub enum PhaseDataDefect {
         /// Algebraic variables at the node.
         found: usize,
         /// The phase's mode.
-        mode: Mode,
+        mode: PhaseMode,
         /// How many the mode needs.
         need: usize,
     },

@@ -151,12 +151,12 @@ pub fn phases_of(sol: &OcpSolution) -> Phases {
         if i + 1 < sol.phase_durations.len() {
             let label = match (sol.modes.get(i), sol.modes.get(i + 1)) {
                 (Some(a), Some(b))
-                    if *a == bf_problem::node::Mode::Free
-                        && *b == bf_problem::node::Mode::Stick =>
+                    if *a == bf_problem::node::PhaseMode::Free
+                        && *b == bf_problem::node::PhaseMode::Stick =>
                 {
                     "impact"
                 }
-                (Some(a), _) if *a == bf_problem::node::Mode::Stick => "lift-off",
+                (Some(a), _) if *a == bf_problem::node::PhaseMode::Stick => "lift-off",
                 _ => "switch",
             };
             switches.push((t, label.to_string()));
@@ -164,7 +164,7 @@ pub fn phases_of(sol: &OcpSolution) -> Phases {
         if sol
             .modes
             .get(i)
-            .is_some_and(|m| *m == bf_problem::node::Mode::Stick)
+            .is_some_and(|m| *m == bf_problem::node::PhaseMode::Stick)
         {
             contact.push((start, t));
         }
@@ -177,7 +177,7 @@ fn is_stick(sol: &OcpSolution, samples: &Samples, i: usize) -> bool {
         .phase
         .get(i)
         .and_then(|&p| sol.modes.get(p))
-        .is_some_and(|m| *m == bf_problem::node::Mode::Stick)
+        .is_some_and(|m| *m == bf_problem::node::PhaseMode::Stick)
 }
 
 /// How a scenario is solved: the problem, its settings and the strategy give the built problem
@@ -600,11 +600,12 @@ pub fn run_all(
             points: if quick { 20 } else { 30 },
             ..ProblemSettings::default()
         };
-        // `--quick` is a smoke run of the pipeline: one cold solve per problem.
-        let strategy = if quick {
-            Strategy::Direct
-        } else {
-            Strategy::default()
+        // `--quick` is a smoke run of the pipeline: one cold solve per problem. Otherwise the
+        // default search of `optimize`, so the report shows the optima a user gets.
+        let strategy = match name.parse::<Problem>() {
+            _ if quick => Strategy::Direct,
+            Ok(p) => crate::study::strategy::default_strategy(p, settings.scheme),
+            Err(_) => Strategy::default(),
         };
         match run_scenario(name, settings, strategy, dir, mu_s, solve)
             .with_context(|| format!("scenario {name}"))

@@ -40,7 +40,7 @@ use bf_model::fixtures::{self, DynKernels};
 use bf_model::{ContactVariant, Model, State, TransitionSettings, Vec3};
 use bf_optim::ocp::PhaseTrajectory;
 use bf_optim::ocp::nodes::lagrange_basis;
-use bf_problem::{BuiltProblem, Mode, OcpSolution};
+use bf_problem::{BuiltProblem, OcpSolution, PhaseMode};
 use bf_sim::{Guard, HybridSystem, SimError, SimOutput, SimSettings, Transition};
 
 use super::error::{PhaseDataDefect, StudyError};
@@ -130,39 +130,39 @@ impl ElementSystem<'_> {
 }
 
 impl HybridSystem for ElementSystem<'_> {
-    type Mode = Mode;
+    type Mode = PhaseMode;
 
     fn dim(&self) -> usize {
         9
     }
 
-    fn rhs(&self, mode: Mode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
+    fn rhs(&self, mode: PhaseMode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
         let st = Self::state(x)?;
         let tau = self.torque(t);
         let acc = match mode {
-            Mode::Free => self.model.free(&st, &tau),
-            Mode::Stick => self.model.stick(&st, &tau),
+            PhaseMode::Free => self.model.free(&st, &tau),
+            PhaseMode::Stick => self.model.stick(&st, &tau),
         }
         .map_err(SimError::system)?;
         dx.copy_from_slice(&acc.state_derivative(&st.qd));
         Ok(())
     }
 
-    fn guards(&self, _mode: Mode) -> Vec<Guard> {
+    fn guards(&self, _mode: PhaseMode) -> Vec<Guard> {
         Vec::new()
     }
 
-    fn guard_values(&self, _: Mode, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
+    fn guard_values(&self, _: PhaseMode, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
         Ok(())
     }
 
     fn reset(
         &self,
-        mode: Mode,
+        mode: PhaseMode,
         _: usize,
         _: f64,
         _: &mut [f64],
-    ) -> Result<Transition<Mode>, SimError> {
+    ) -> Result<Transition<PhaseMode>, SimError> {
         Ok(Transition::To(mode))
     }
 }
@@ -260,7 +260,7 @@ fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), Stu
 fn node_residual(
     model: &Model<DynKernels>,
     phase: usize,
-    mode: Mode,
+    mode: PhaseMode,
     tr: &PhaseTrajectory,
 ) -> Result<f64, StudyError> {
     let pm = model.params();
@@ -268,7 +268,7 @@ fn node_residual(
     for k in 0..tr.node_tau.len() {
         let x = &tr.x[tr.node_state[k]];
         let a = &tr.a[k];
-        let need = if mode == Mode::Stick { 9 } else { 6 };
+        let need = if mode == PhaseMode::Stick { 9 } else { 6 };
         if a.len() < need {
             return Err(StudyError::PhaseData {
                 phase,
@@ -289,7 +289,7 @@ fn node_residual(
             })?;
         let qdd = Vec3::new(a[0], a[1], a[2]);
         let wd = Vec3::new(a[3], a[4], a[5]);
-        let lam = if mode == Mode::Stick {
+        let lam = if mode == PhaseMode::Stick {
             Vec3::new(a[6], a[7], a[8])
         } else {
             Vec3::zeros()
@@ -328,14 +328,20 @@ impl PathStats {
         }
     }
 
-    fn add(&mut self, sys: &ElementSystem, mode: Mode, t: f64, x: &[f64]) -> Result<(), String> {
+    fn add(
+        &mut self,
+        sys: &ElementSystem,
+        mode: PhaseMode,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(), String> {
         let st = ElementSystem::state(x).map_err(|e| e.to_string())?;
         let kin = sys.model.evaluate(&st).map_err(|e| e.to_string())?;
         let h = kin.contact.h;
         self.overshoot = self.overshoot.max(sys.overshoot(t));
         match mode {
-            Mode::Free => self.min_h = self.min_h.min(h),
-            Mode::Stick => {
+            PhaseMode::Free => self.min_h = self.min_h.min(h),
+            PhaseMode::Stick => {
                 let acc = sys
                     .model
                     .stick(&st, &sys.torque(t))
@@ -352,8 +358,8 @@ impl PathStats {
     fn add_output(
         &mut self,
         sys: &ElementSystem,
-        mode: Mode,
-        out: &SimOutput<Mode>,
+        mode: PhaseMode,
+        out: &SimOutput<PhaseMode>,
     ) -> Result<(), String> {
         for (t, x) in out.trajectory.t.iter().zip(&out.trajectory.x) {
             self.add(sys, mode, *t, x)?;
@@ -366,7 +372,7 @@ fn verify_phase(
     model: &Model<DynKernels>,
     tau_max: [f64; 3],
     k: usize,
-    mode: Mode,
+    mode: PhaseMode,
     tr: &PhaseTrajectory,
     rtol: f64,
     atol: f64,
@@ -479,7 +485,7 @@ fn verify_phase(
         r.map(|i| (x[i] - x_colloc_end[i]).abs()).fold(0.0, nan_max)
     };
     let (dq, dqd, dw) = (part(0..nq), part(nq..2 * nq), part(2 * nq..2 * nq + 3));
-    let stick = mode == Mode::Stick;
+    let stick = mode == PhaseMode::Stick;
     let finite_or_none = |v: f64, on: bool| (on && v.is_finite()).then_some(v);
     Ok(PhaseVerification {
         phase: k,

@@ -12,7 +12,7 @@ use bf_optim::ocp::{Objective, Param, PointFunction, Scheme, VarRef};
 use super::guess::{PhaseDef, Q_GUESS};
 use super::{COT_MAX_PERIOD, Problem, ProblemSettings};
 use crate::ProblemError;
-use crate::node::{CostKind, Mode, Physics};
+use crate::node::{CostKind, PhaseMode, Physics};
 use crate::points::{EndQuantity, continuity, end_point, impact};
 
 /// Tolerance on h at the touch-down and the release (m; Sect. 7 work-arounds).
@@ -106,21 +106,21 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
     }
     let phases = vec![
         PhaseDef {
-            mode: Mode::Free,
+            mode: PhaseMode::Free,
             h: Some((0.0, f64::INFINITY)),
             hdot: margin.map(|m| (f64::NEG_INFINITY, -m)),
             duration: (0.01, tmax),
             guess_duration: 1.0,
         },
         PhaseDef {
-            mode: Mode::Stick,
+            mode: PhaseMode::Stick,
             h: None,
             hdot: None,
             duration: (settings.min_stick, tmax),
             guess_duration: 1.0,
         },
         PhaseDef {
-            mode: Mode::Free,
+            mode: PhaseMode::Free,
             h: Some((-TOL_H, f64::INFINITY)),
             hdot: margin.map(|m| (m, f64::INFINITY)),
             duration: (0.01, tmax),
@@ -216,7 +216,7 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
 pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, ProblemError> {
     let nq = c.nq();
     let phases = vec![PhaseDef {
-        mode: Mode::Free,
+        mode: PhaseMode::Free,
         h: Some((0.0, f64::INFINITY)),
         hdot: None,
         duration: (0.05, 10.0),
@@ -250,7 +250,7 @@ pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, ProblemError> {
 pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
     let phases = vec![
         PhaseDef {
-            mode: Mode::Free,
+            mode: PhaseMode::Free,
             h: Some((0.0, f64::INFINITY)),
             hdot: None,
             duration: (0.05, 5.0),
@@ -260,7 +260,7 @@ pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
         // contact point slides over the smoothed fingertip (sat, eq. 58–59), and the
         // fixed-horizon spinning problems exploited it (the finger ended inside the ball).
         PhaseDef {
-            mode: Mode::Stick,
+            mode: PhaseMode::Stick,
             h: Some((-TOL_H, TOL_H)),
             hdot: None,
             duration: (0.05, 5.0),

@@ -8,7 +8,7 @@ use bf_optim::ocp::{Phase, PhaseGuess};
 use serde::{Deserialize, Serialize};
 
 use crate::ProblemError;
-use crate::node::{CostKind, Mode, NodeOptions, Physics, StickLevel, node_function};
+use crate::node::{CostKind, NodeOptions, PhaseMode, Physics, StickLevel, node_function};
 use crate::points::Diagnostics;
 
 /// The constant joint configuration of the default initial guess (docs/parameters.md: "q constant
@@ -32,7 +32,7 @@ pub struct StartGuess {
 /// One phase of an archetype: its mode, the bounds of its h and ḣ path rows (`None`: no
 /// row), its duration bounds and the duration of the default guess.
 pub(crate) struct PhaseDef {
-    pub(crate) mode: Mode,
+    pub(crate) mode: PhaseMode,
     pub(crate) h: Option<(f64, f64)>,
     pub(crate) hdot: Option<(f64, f64)>,
     pub(crate) duration: (f64, f64),
@@ -139,7 +139,7 @@ pub(crate) fn contact_guess(
     scene: &Scene,
     eps: f64,
     phases: &mut [Phase],
-    modes: &[Mode],
+    modes: &[PhaseMode],
 ) -> Result<(), ProblemError> {
     let diag = Diagnostics::new(scene, eps)?;
     let nq = scene.links.len();
@@ -148,11 +148,13 @@ pub(crate) fn contact_guess(
     let n = phases.len();
     for (k, ph) in phases.iter_mut().enumerate() {
         let (qa, qb) = match modes[k] {
-            Mode::Stick => (qc.clone(), qc.clone()),
-            Mode::Free if k + 1 < n && modes[k + 1] == Mode::Stick => (qf.clone(), qc.clone()),
-            Mode::Free if k > 0 => (qc.clone(), qf.clone()),
+            PhaseMode::Stick => (qc.clone(), qc.clone()),
+            PhaseMode::Free if k + 1 < n && modes[k + 1] == PhaseMode::Stick => {
+                (qf.clone(), qc.clone())
+            }
+            PhaseMode::Free if k > 0 => (qc.clone(), qf.clone()),
             // A lone free phase (reach) approaches the ball.
-            Mode::Free => (qf.clone(), qc.clone()),
+            PhaseMode::Free => (qf.clone(), qc.clone()),
         };
         let t = ph.guess.duration;
         let mut xa = ph.guess.x[0].clone();

@@ -53,7 +53,7 @@ use bf_optim::ocp::{KernelUse, MeshSpec, Ocp, Scheme, Transcription};
 use crate::ProblemError;
 use serde::{Deserialize, Serialize};
 
-use crate::node::{Mode, Physics, StickLevel};
+use crate::node::{PhaseMode, Physics, StickLevel};
 use crate::solution::{OcpSolution, warm_initial_point};
 use archetypes::Archetype;
 pub use guess::{Q_DEEP, Q_GUESS, StartGuess};
@@ -276,8 +276,8 @@ pub struct BuiltProblem {
     pub scene: Scene,
     /// Physical constants.
     pub physics: Physics,
-    /// Mode of every phase.
-    pub modes: Vec<Mode>,
+    /// PhaseMode of every phase.
+    pub modes: Vec<PhaseMode>,
     /// The multiphase problem.
     pub ocp: Ocp,
     /// Its transcription.
@@ -366,7 +366,7 @@ fn build_inner(
         Archetype::Reach => archetypes::reach(&ctx)?,
         Archetype::FreeStick => archetypes::free_stick(&ctx)?,
     };
-    let modes: Vec<Mode> = spec.phases.iter().map(|d| d.mode).collect();
+    let modes: Vec<PhaseMode> = spec.phases.iter().map(|d| d.mode).collect();
     let mut phases = guess::make_phases(
         &scene,
         &ph,

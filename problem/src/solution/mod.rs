@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::ProblemError;
 use crate::catalogue::BuiltProblem;
-use crate::node::Mode;
+use crate::node::PhaseMode;
 use crate::points::Diagnostics;
 use records::{RefineReport, StrategyReport, Verification};
 
@@ -57,7 +57,7 @@ pub struct OcpSolution {
     /// Second cost state.
     pub c2: f64,
     /// Phase modes.
-    pub modes: Vec<Mode>,
+    pub modes: Vec<PhaseMode>,
     /// Phase durations (s).
     pub phase_durations: Vec<f64>,
     /// Total duration (period for the periodic problems).
@@ -165,7 +165,7 @@ fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense
                 .map(|(u, m)| u.clamp(-m, *m))
                 .collect();
             let a = tr.a_at(tau);
-            let lam = if p.modes[pi] == Mode::Stick && a.len() >= nq + 6 {
+            let lam = if p.modes[pi] == PhaseMode::Stick && a.len() >= nq + 6 {
                 a[nq + 3..nq + 6].to_vec()
             } else {
                 vec![0.0; 3]
@@ -173,7 +173,7 @@ fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense
             let c = diag.eval(&x);
             let ln: f64 = lam.iter().zip(&c.n).map(|(a, b)| a * b).sum();
             let par: Vec<f64> = (0..3).map(|i| lam[i] - ln * c.n[i]).collect();
-            let sigma = if p.modes[pi] == Mode::Stick {
+            let sigma = if p.modes[pi] == PhaseMode::Stick {
                 p.physics.mu_s * ln - par.iter().map(|v| v * v).sum::<f64>().sqrt()
             } else {
                 0.0

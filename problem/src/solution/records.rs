@@ -10,7 +10,7 @@ use bf_optim::ipm::Status;
 use bf_optim::ocp::MeshSpec;
 use serde::{Deserialize, Serialize};
 
-use crate::node::Mode;
+use crate::node::PhaseMode;
 
 /// How the study layer searches for a good local optimum.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -182,7 +182,7 @@ pub struct PhaseVerification {
     /// Phase index.
     pub phase: usize,
     /// Contact mode.
-    pub mode: Mode,
+    pub mode: PhaseMode,
     /// Duration T (s).
     pub duration: f64,
     /// Phase-local time the re-integration reached (= T unless it failed).
@@ -350,12 +350,12 @@ impl fmt::Display for Verification {
         )?;
         for p in &self.phases {
             let mode = match p.mode {
-                Mode::Free => "free",
-                Mode::Stick => "stick",
+                PhaseMode::Free => "free",
+                PhaseMode::Stick => "stick",
             };
             let path = match p.mode {
-                Mode::Free => format!("min h {}", fmt_opt(p.min_h)),
-                Mode::Stick => format!(
+                PhaseMode::Free => format!("min h {}", fmt_opt(p.min_h)),
+                PhaseMode::Stick => format!(
                     "max|dv| {}  min lambda_n {}  min sigma {}  max|h| {}",
                     fmt_opt(p.max_delta_v),
                     fmt_opt(p.min_lambda_n),

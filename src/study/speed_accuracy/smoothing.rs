@@ -9,7 +9,7 @@ use crate::study as problems;
 use anyhow::Result;
 use bf_generated::paper;
 use bf_plot::paper::WorkPrecisionSet;
-use bf_problem::{Mode, ProblemSettings};
+use bf_problem::{PhaseMode, ProblemSettings};
 use indicatif::ProgressBar;
 
 use super::{solve_qc, wp_figure};
@@ -47,7 +47,7 @@ fn contact_point_error(sol: &problems::OcpSolution, eps: f64) -> f64 {
     let mut worst: f64 = 0.0;
     for (i, q) in sol.nodes.q.iter().enumerate() {
         let phase = sol.nodes.phase.get(i).copied().unwrap_or(0);
-        if sol.modes.get(phase) == Some(&Mode::Free) || q.len() != paper::NQ {
+        if sol.modes.get(phase) == Some(&PhaseMode::Free) || q.len() != paper::NQ {
             continue;
         }
         let q = [q[0], q[1], q[2]];
