@@ -15,9 +15,8 @@
 //! | 8 [`long_horizon`] | [`horizon`] | eq. 26, energy of eq. 22 | free motion without damping or torque for 10 s / 100 s: energy drift vs rtol, CPU time, bounded step count |
 //!
 //! Shared pieces: [`GraphEval`] ([`graph_eval`]: one interpreter tape over M, C q̇, g,
-//! C q̇ + g and both contact variants, f64 or double-double), [`InterpKernels`]
-//! ([`interp_kernels`]: a [`bf_model::Kernels`] on the interpreter's evaluation of the emitted
-//! kernel definitions, for scenes without a compiled module), the probe states and
+//! C q̇ + g and both contact variants, f64 or double-double; scenes without a compiled
+//! module, such as a moved ball, run on [`bf_model::InterpretedKernels`]), the probe states and
 //! [`press_torque`] ([`states`]: the finger held against C q̇ + g and pressed on with a known
 //! force, so that a static stick has the exact answer λ = f n), and the rows
 //! ([`report`]).
@@ -37,7 +36,6 @@ use std::time::Instant;
 
 pub mod graph_eval;
 pub mod horizon;
-pub mod interp_kernels;
 pub mod large_angles;
 pub mod numerics;
 pub mod painleve;
@@ -51,7 +49,6 @@ pub mod velocities;
 
 pub use graph_eval::{GraphEval, GraphValues};
 pub use horizon::{HORIZON_X0, HorizonRun, long_horizon};
-pub use interp_kernels::InterpKernels;
 pub use large_angles::{KernelAccuracy, kernel_accuracy};
 pub use numerics::rel_err;
 pub use painleve::{PainleveProbe, painleve_threshold};

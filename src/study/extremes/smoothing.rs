@@ -1,15 +1,14 @@
 //! Probe 6, the smooth saturation as ε → 0 (eq. 58–59 vs eq. 3–4): h_ε → h and p_c,ε → p_c
 //! with their observed orders inside the saturation and at a tip contact; the exact saturation
-//! corners α = 0 and α = −l (first-order error there); the model on [`InterpKernels`] at the
+//! corners α = 0 and α = −l (first-order error there); the model on bf-model's [`InterpretedKernels`] at the
 //! exact corner down to ε whose square underflows (a number or the typed `NonFinite`); and
 //! ε = 0, outside the model's domain (`InvalidParameter`).
 
 use std::time::Instant;
 
-use bf_model::{ContactVariant, Model, ModelError, State, Vec3};
+use bf_model::{ContactVariant, InterpretedKernels, Model, ModelError, State, Vec3};
 
 use super::graph_eval::{GraphEval, paper_scene_spec};
-use super::interp_kernels::InterpKernels;
 use super::numerics::{all_finite, f64_max_nan, rel_err};
 use super::report::{ExtremesRow, Rows, model_err_outcome};
 use super::states::{OMEGA_PROBE, QD_PROBE, press_torque};
@@ -101,31 +100,22 @@ pub fn smooth_corner(g: &GraphEval, at_tip: bool, eps: f64) -> (f64, f64, f64, b
     )
 }
 
-/// Model of the paper scene on [`InterpKernels`] with the ball centre and radius as runtime
-/// parameters (`ball.center.x/y/z`, `ball.radius`), smooth contact with `eps`.
+/// Model of the paper scene with the ball moved to `centre` and its radius set to `radius`,
+/// on bf-model's [`InterpretedKernels`] (a moved ball has no compiled kernels), smooth contact
+/// with `eps`.
 pub fn corner_model(
     centre: [f64; 3],
     radius: f64,
     eps: f64,
-) -> anyhow::Result<Model<InterpKernels>> {
-    let mut k = InterpKernels::new(
-        bf_generated::paper::SCENE_TOML,
-        "paper",
-        &[
-            "ball.center.x",
-            "ball.center.y",
-            "ball.center.z",
-            "ball.radius",
-        ],
-    )?;
-    for (n, v) in ["ball.center.x", "ball.center.y", "ball.center.z"]
-        .iter()
-        .zip(centre)
-    {
-        k.set(n, v)?;
-    }
-    k.set("ball.radius", radius)?;
-    // the ball radius of the model's parameters follows the runtime parameter (params_for)
+) -> anyhow::Result<Model<InterpretedKernels>> {
+    let mut scene = bf_codegen::Scene::from_toml_str(bf_generated::paper::SCENE_TOML, "paper")?;
+    let ball = scene
+        .ball
+        .as_mut()
+        .ok_or_else(|| anyhow::anyhow!("the paper scene has no ball"))?;
+    ball.center = centre;
+    ball.radius = radius;
+    let k = InterpretedKernels::new(&scene)?;
     Ok(Model::from_kernels(k)?.with_contact_variant(ContactVariant::Smooth(eps))?)
 }
 
