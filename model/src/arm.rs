@@ -10,12 +10,11 @@
 //!   balance the simulator's energy check integrates).
 
 use bf_codegen::interp::{KernelF64, Tape};
-use bf_codegen::kernels::build_kernel;
 use bf_codegen::spec::Scene;
 use bf_generated::{MassCqdGFn, PotentialFn};
 use nalgebra::{DMatrix, DVector};
 
-use crate::registry::{KernelSource, compiled_match};
+use crate::registry::{InterpretedTapes, KernelSource, compiled_match, interpreted_tapes};
 use crate::{ModelError, Result};
 
 fn scene_err(scene: &str, message: impl Into<String>) -> ModelError {
@@ -229,27 +228,15 @@ impl ArmModel {
 }
 
 fn interpreted(scene: &Scene) -> Result<Backend> {
-    let codegen = |e: bf_codegen::CodegenError| scene_err(&scene.name, e.to_string());
-    let mut m = bf_codegen::Model::new(scene).map_err(codegen)?;
-    let mut tape = |kernel: &str| -> Result<Tape> {
-        let def = build_kernel(&mut m, kernel).map_err(codegen)?;
-        let ids: Vec<_> = def
-            .outputs
-            .iter()
-            .flat_map(|o| o.ids.iter().copied())
-            .collect();
-        Ok(Tape::new(&m.g, &ids))
-    };
-    let mass_cqd_g = tape("mass_cqd_g")?;
-    let potential = tape("potential")?;
-    let mut base_vars = vec![KernelF64(0.0); m.layout.n_vars()];
-    for (i, p) in m.params.iter().enumerate() {
-        base_vars[m.layout.param(i) as usize] = KernelF64(p.1);
-    }
+    let InterpretedTapes {
+        tapes: [mass_cqd_g, potential],
+        layout,
+        base_vars,
+    } = interpreted_tapes(scene, ["mass_cqd_g", "potential"])?;
     Ok(Backend::Interpreted {
         mass_cqd_g,
         potential,
-        layout: m.layout,
+        layout,
         base_vars,
     })
 }

@@ -349,6 +349,7 @@ pub fn compiled_contact_scenes() -> Vec<&'static str> {
         .collect()
 }
 
+/// The model's contact geometry from the emitted kernels' contact struct.
 fn geometry(c: &ContactValues) -> ContactGeometry {
     ContactGeometry::from_arrays(
         c.alpha,
@@ -453,6 +454,49 @@ fn contact_offsets() -> Result<[usize; 12]> {
     Ok(offsets)
 }
 
+/// Interpreter tapes of some of a scene's kernels, built from the generator's kernel
+/// definitions (the graphs the compiled kernels are emitted from).
+pub(crate) struct InterpretedTapes<const N: usize> {
+    /// One tape per requested kernel, in the requested order.
+    pub tapes: [Tape; N],
+    /// Where q, q̇, ω, ε and the runtime parameters sit in a tape's variable vector.
+    pub layout: bf_codegen::robot::Layout,
+    /// The variable vector with the runtime parameters at the scene's values (q, q̇, ω, ε are
+    /// set per call).
+    pub base_vars: Vec<KernelF64>,
+}
+
+/// The tapes of `kernels` of `scene` (see [`InterpretedTapes`]).
+pub(crate) fn interpreted_tapes<const N: usize>(
+    scene: &Scene,
+    kernels: [&str; N],
+) -> Result<InterpretedTapes<N>> {
+    let codegen = |e: bf_codegen::CodegenError| scene_err(&scene.name, e.to_string());
+    let mut m = bf_codegen::Model::new(scene).map_err(codegen)?;
+    let mut tapes = Vec::with_capacity(N);
+    for kernel in kernels {
+        let def = build_kernel(&mut m, kernel).map_err(codegen)?;
+        let ids: Vec<_> = def
+            .outputs
+            .iter()
+            .flat_map(|o| o.ids.iter().copied())
+            .collect();
+        tapes.push(Tape::new(&m.g, &ids));
+    }
+    let tapes: [Tape; N] = tapes
+        .try_into()
+        .map_err(|_| scene_err(&scene.name, "internal: one tape per kernel"))?;
+    let mut base_vars = vec![KernelF64(0.0); m.layout.n_vars()];
+    for (i, p) in m.params.iter().enumerate() {
+        base_vars[m.layout.param(i) as usize] = KernelF64(p.1);
+    }
+    Ok(InterpretedTapes {
+        tapes,
+        layout: m.layout,
+        base_vars,
+    })
+}
+
 /// Kernels of a 3-joint contact scene evaluated by the interpreter on the tapes of the
 /// generator's kernel definitions (the graphs the compiled kernels are emitted from).
 #[derive(Debug, Clone)]
@@ -487,25 +531,14 @@ impl InterpretedKernels {
     }
 
     fn build(scene: &Scene, params: Params) -> Result<Self> {
-        let codegen = |e: bf_codegen::CodegenError| scene_err(&scene.name, e.to_string());
-        let mut m = bf_codegen::Model::new(scene).map_err(codegen)?;
-        let mut tape = |kernel: &str| -> Result<Tape> {
-            let def = build_kernel(&mut m, kernel).map_err(codegen)?;
-            let ids: Vec<_> = def
-                .outputs
-                .iter()
-                .flat_map(|o| o.ids.iter().copied())
-                .collect();
-            Ok(Tape::new(&m.g, &ids))
-        };
-        let mass_cqd_g = tape("mass_cqd_g")?;
-        let potential = tape("potential")?;
-        let exact = tape("contact")?;
-        let smooth = tape("contact_smooth")?;
-        let mut base_vars = vec![KernelF64(0.0); m.layout.n_vars()];
-        for (i, p) in m.params.iter().enumerate() {
-            base_vars[m.layout.param(i) as usize] = KernelF64(p.1);
-        }
+        let InterpretedTapes {
+            tapes: [mass_cqd_g, potential, exact, smooth],
+            layout,
+            base_vars,
+        } = interpreted_tapes(
+            scene,
+            ["mass_cqd_g", "potential", "contact", "contact_smooth"],
+        )?;
         Ok(InterpretedKernels {
             name: scene.name.clone(),
             params,
@@ -514,7 +547,7 @@ impl InterpretedKernels {
             exact,
             smooth,
             offsets: contact_offsets()?,
-            layout: m.layout,
+            layout,
             base_vars,
         })
     }
