@@ -99,47 +99,10 @@ fn uni(r: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
     r.random_range(lo..hi)
 }
 
-/// The parameter sets: the paper's (ℓ = r = 1), r = ℓ = 0.7 with unequal masses and
-/// inertias, and [`RANDOM_SETS`] random ones (ℓ ∈ [0.4, 1.6], r ∈ [0.5, 2], unequal masses,
-/// inertias, g ∈ [5, 12]).
+/// The parameter sets: bf-testkit's [`param_sets`](bf_testkit::appendix::param_sets) with
+/// [`RANDOM_SETS`] random ones (the sets its own appendix tests use).
 pub fn param_sets() -> Vec<AppendixParams> {
-    let mut r = ChaCha8Rng::seed_from_u64(67);
-    let mut v = vec![
-        AppendixParams::paper(),
-        AppendixParams {
-            l: 0.7,
-            r: 0.7,
-            m: [0.03, 0.05, 0.011],
-            ixx: [1e-3, 2e-3, 3e-3],
-            iyy: [4e-3, 1.5e-3, 2.5e-3],
-            izz: [3e-3, 5e-3, 1e-3],
-            g: 9.81,
-        },
-    ];
-    for _ in 0..RANDOM_SETS {
-        let mut t = || {
-            [
-                uni(&mut r, 1e-3, 5e-3),
-                uni(&mut r, 1e-3, 5e-3),
-                uni(&mut r, 1e-3, 5e-3),
-            ]
-        };
-        let (ixx, iyy, izz) = (t(), t(), t());
-        v.push(AppendixParams {
-            l: uni(&mut r, 0.4, 1.6),
-            r: uni(&mut r, 0.5, 2.0),
-            m: [
-                uni(&mut r, 0.01, 0.1),
-                uni(&mut r, 0.01, 0.1),
-                uni(&mut r, 0.01, 0.1),
-            ],
-            ixx,
-            iyy,
-            izz,
-            g: uni(&mut r, 5.0, 12.0),
-        });
-    }
-    v
+    bf_testkit::appendix::param_sets(RANDOM_SETS)
 }
 
 fn states(seed: u64, n: usize) -> Vec<([f64; 3], [f64; 3])> {

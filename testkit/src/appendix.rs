@@ -23,6 +23,8 @@
 use crate::reference::{ContactKind, Pose, RefBall, RefLink, Reference};
 use crate::small::axis_rotation;
 use bf_codegen::spec::DhConvention;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
 /// Parameters of the appendix formulas (the paper's numbers use ℓ = r = 1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -327,4 +329,54 @@ pub fn coriolis_printed(q: &[f64; 3], qd: &[f64; 3], p: &AppendixParams) -> [[f6
         }
     }
     c
+}
+
+fn uniform(r: &mut ChaCha8Rng, lo: f64, hi: f64) -> f64 {
+    r.random_range(lo..hi)
+}
+
+/// Distinct, non-unit parameters (ℓ ≠ 1, r ≠ ℓ, unequal masses and inertias).
+fn random_params(r: &mut ChaCha8Rng) -> AppendixParams {
+    let mut t = || {
+        [
+            uniform(r, 1e-3, 5e-3),
+            uniform(r, 1e-3, 5e-3),
+            uniform(r, 1e-3, 5e-3),
+        ]
+    };
+    let (ixx, iyy, izz) = (t(), t(), t());
+    AppendixParams {
+        l: uniform(r, 0.4, 1.6),
+        r: uniform(r, 0.5, 2.0),
+        m: [
+            uniform(r, 0.01, 0.1),
+            uniform(r, 0.01, 0.1),
+            uniform(r, 0.01, 0.1),
+        ],
+        ixx,
+        iyy,
+        izz,
+        g: uniform(r, 5.0, 12.0),
+    }
+}
+
+/// The parameter sets the appendix is checked on: the paper's (ℓ = r = 1), ℓ = r = 0.7 with
+/// unequal masses and inertias, and `n_random` seeded random ones (ℓ ∈ [0.4, 1.6],
+/// r ∈ [0.5, 2], unequal masses and inertias, g ∈ [5, 12]); the same sets on every machine.
+pub fn param_sets(n_random: usize) -> Vec<AppendixParams> {
+    let mut r = ChaCha8Rng::seed_from_u64(67);
+    let mut v = vec![
+        AppendixParams::paper(),
+        AppendixParams {
+            l: 0.7,
+            r: 0.7,
+            m: [0.03, 0.05, 0.011],
+            ixx: [1e-3, 2e-3, 3e-3],
+            iyy: [4e-3, 1.5e-3, 2.5e-3],
+            izz: [3e-3, 5e-3, 1e-3],
+            g: 9.81,
+        },
+    ];
+    v.extend((0..n_random).map(|_| random_params(&mut r)));
+    v
 }

@@ -18,39 +18,8 @@ fn rq(r: &mut ChaCha8Rng) -> [f64; 3] {
     [uni(r, -4.0, 4.0), uni(r, -4.0, 4.0), uni(r, -4.0, 4.0)]
 }
 
-/// Distinct, non-unit parameters (ℓ ≠ 1, r ≠ ℓ, unequal masses and inertias).
-fn random_params(r: &mut ChaCha8Rng) -> AppendixParams {
-    let mut t = || [uni(r, 1e-3, 5e-3), uni(r, 1e-3, 5e-3), uni(r, 1e-3, 5e-3)];
-    let (ixx, iyy, izz) = (t(), t(), t());
-    AppendixParams {
-        l: uni(r, 0.4, 1.6),
-        r: uni(r, 0.5, 2.0),
-        m: [uni(r, 0.01, 0.1), uni(r, 0.01, 0.1), uni(r, 0.01, 0.1)],
-        ixx,
-        iyy,
-        izz,
-        g: uni(r, 5.0, 12.0),
-    }
-}
-
-/// The parameter sets of every test: the paper's (ℓ = r = 1) and 20 random ones.
 fn param_sets() -> Vec<AppendixParams> {
-    let mut r = ChaCha8Rng::seed_from_u64(67);
-    let mut v = vec![
-        AppendixParams::paper(),
-        // r = ℓ ≠ 1 with unequal masses and inertias.
-        AppendixParams {
-            l: 0.7,
-            r: 0.7,
-            m: [0.03, 0.05, 0.011],
-            ixx: [1e-3, 2e-3, 3e-3],
-            iyy: [4e-3, 1.5e-3, 2.5e-3],
-            izz: [3e-3, 5e-3, 1e-3],
-            g: 9.81,
-        },
-    ];
-    v.extend((0..20).map(|_| random_params(&mut r)));
-    v
+    crate::appendix::param_sets(20)
 }
 
 /// max |a − b| / (1 + max |b|) over the entries.
