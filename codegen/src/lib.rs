@@ -9,9 +9,15 @@
 //! (the ball-and-finger node functions themselves are built in bf-problem).
 //!
 //! Entry points: [`generate`] (code + report) and [`eval_all`] (numbers for one state).
+//!
+//! Cargo feature `emit` (default): the emitter ([`emit`], [`generate`],
+//! [`nodefn::emit_node_kernels`]) and its syn/quote/prettyplease dependencies. Without it the
+//! crate builds, differentiates and interprets the graphs, which is all a run-time user
+//! (bf-model's interpreted kernels, bf-optim's node functions) needs.
 
 pub mod dd;
 pub mod diff;
+#[cfg(feature = "emit")]
 pub mod emit;
 pub mod graph;
 pub mod interp;
@@ -21,12 +27,14 @@ pub mod report;
 pub mod robot;
 pub mod trig;
 
+#[cfg(feature = "emit")]
 use std::time::Instant;
 
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
 /// The scene file (bf-scene), under its historical path `bf_codegen::spec`.
 pub use bf_scene as spec;
+#[cfg(feature = "emit")]
 pub use emit::{EmitOptions, FloatTy};
 pub use kernels::ALL_KERNELS;
 pub use report::{KernelReport, OpCounts, Report};
@@ -47,6 +55,7 @@ pub enum CodegenError {
     Internal(String),
 }
 
+#[cfg(feature = "emit")]
 /// Result of [`generate`].
 #[derive(Debug, Clone)]
 pub struct Generated {
@@ -56,6 +65,7 @@ pub struct Generated {
     pub report: Report,
 }
 
+#[cfg(feature = "emit")]
 fn check_kernel_list(scene: &Scene) -> Result<(), CodegenError> {
     for (i, k) in scene.kernels.iter().enumerate() {
         if !ALL_KERNELS.contains(&k.as_str()) {
@@ -73,12 +83,14 @@ fn check_kernel_list(scene: &Scene) -> Result<(), CodegenError> {
     Ok(())
 }
 
+#[cfg(feature = "emit")]
 /// Generate the Rust module of `scene`. `source_text` is the scene file's text, embedded as
 /// `SCENE_TOML`. Output is byte-identical for identical input.
 pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenError> {
     generate_with(scene, source_text, &emit::EmitOptions::default())
 }
 
+#[cfg(feature = "emit")]
 /// As [`generate`], with emission variants (f32, fused multiply-add); see [`emit::EmitOptions`].
 pub fn generate_with(
     scene: &Scene,
@@ -160,6 +172,7 @@ fn extreme_constants(scene: &Scene) -> String {
     shown.join(", ")
 }
 
+#[cfg(feature = "emit")]
 /// Errors if the cone of `roots` holds a non-finite constant (scene values whose products or
 /// quotients overflow `f64` when folded): emitted code would contain `f64::INFINITY`.
 fn check_finite_constants(

@@ -16,12 +16,17 @@
 //! whose kernels were emitted at build time and fall back to interpreting the graphs
 //! otherwise.
 
+#[cfg(feature = "emit")]
 use proc_macro2::{Ident, Literal, Span, TokenStream};
+#[cfg(feature = "emit")]
 use quote::quote;
 
+#[cfg(feature = "emit")]
+use crate::CodegenError;
+use crate::diff;
+#[cfg(feature = "emit")]
 use crate::emit::{EmitOptions, Ssa, f64_tokens, ssa};
 use crate::graph::{Graph, Id, Node};
-use crate::{CodegenError, diff};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
 ///
@@ -351,6 +356,7 @@ impl CompiledNode {
     }
 }
 
+#[cfg(feature = "emit")]
 /// Tokens of one kernel function `fn name(local, fixed, w, out)` computing `roots` into
 /// `out[0..roots.len()]`.
 fn kernel_fn(name: &Ident, doc: &str, node: &CompiledNode, roots: &[Id]) -> TokenStream {
@@ -404,6 +410,7 @@ fn kernel_fn(name: &Ident, doc: &str, node: &CompiledNode, roots: &[Id]) -> Toke
     }
 }
 
+#[cfg(feature = "emit")]
 /// Tokens of the three kernels of `node` and of its `NodeKernel` table entry.
 fn node_tokens(name: &str, what: &str, node: &CompiledNode) -> (TokenStream, TokenStream) {
     let id = |s: &str| Ident::new(&format!("{name}_{s}"), Span::call_site());
@@ -471,6 +478,7 @@ pub struct NamedNode {
     pub node: CompiledNode,
 }
 
+#[cfg(feature = "emit")]
 /// The Rust source of the node kernels of `nodes`: one value, Jacobian and Hessian function
 /// per node, and `pub static NODE_KERNELS: &[NodeKernel]` sorted by fingerprint. A node with
 /// the fingerprint of an earlier one is skipped (that kernel serves both). The including
