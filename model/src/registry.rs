@@ -13,6 +13,8 @@
 //!   (a link length, a mass, the ball) does not match.
 //! - [`contact_kernels`]: a boxed [`Kernels`] for a 3-joint scene with a ball and a contact, and
 //!   the [`KernelSource`] it runs on.
+//! - [`CompiledKernels::named`], [`compiled_contact_scenes`], [`contact_scene_id`]: the
+//!   compiled contact scenes by [`SceneId`], the one lookup by name.
 //! - [`set_parameters`]: `name = value` assignments to a scene's runtime parameters (the CLI's
 //!   `--param`), applied to the parsed scene so that every consumer (model, optimiser, `eval`)
 //!   sees the same values.
@@ -21,7 +23,7 @@ use std::fmt;
 
 use bf_codegen::interp::{KernelF64, Tape};
 use bf_codegen::kernels::{CONTACT_FIELDS, Dim, build_kernel};
-use bf_codegen::spec::{Angle, InertiaSpec, Scene};
+use bf_codegen::spec::{Angle, InertiaSpec, Scene, SceneId};
 use bf_generated::{ContactFn, ContactValues, MassCqdGFn, PotentialFn};
 
 use crate::kernels::{ContactVariant, Kernels};
@@ -281,20 +283,22 @@ pub struct CompiledKernels {
 }
 
 impl CompiledKernels {
-    /// The compiled contact scene `name` with its default runtime parameters; an error names
-    /// the compiled contact scenes if there is none of that name.
-    pub fn named(name: &str) -> Result<Self> {
-        let found = bf_generated::scene(name)
+    /// The compiled contact scene `id` with its default runtime parameters (the one lookup
+    /// of a compiled scene's kernels by name); an error names the compiled contact scenes if
+    /// there is none of that name.
+    pub fn named(id: &SceneId) -> Result<Self> {
+        let found = bf_generated::scene(id.as_str())
             .map(|e| Self::from_entry(e, e.param_defaults.to_vec()))
             .transpose()?
             .flatten();
         found.ok_or_else(|| {
+            let available: Vec<String> = compiled_contact_scenes()
+                .iter()
+                .map(SceneId::to_string)
+                .collect();
             scene_err(
-                name,
-                format!(
-                    "unknown contact scene; available: {}",
-                    compiled_contact_scenes().join(", ")
-                ),
+                id.as_str(),
+                format!("unknown contact scene; available: {}", available.join(", ")),
             )
         })
     }
@@ -338,15 +342,22 @@ impl CompiledKernels {
     }
 }
 
-/// Names of the compiled 3-joint contact scenes (registry order).
-pub fn compiled_contact_scenes() -> Vec<&'static str> {
+/// The compiled 3-joint contact scenes (registry order: `scenes/*.toml` order).
+pub fn compiled_contact_scenes() -> Vec<SceneId> {
     bf_generated::SCENE_KERNELS
         .iter()
         .filter(|e| {
             e.nq == 3 && e.contact.is_some() && e.mass_cqd_g.is_some() && e.potential.is_some()
         })
-        .map(|e| e.name)
+        .map(|e| SceneId::from_static(e.name))
         .collect()
+}
+
+/// The compiled contact scene named `text` (user input, e.g. a command-line value); the error
+/// names `text` and lists the compiled contact scenes.
+pub fn contact_scene_id(text: &str) -> Result<SceneId> {
+    SceneId::parse_among(text, &compiled_contact_scenes())
+        .map_err(|e| scene_err(text, format!("not a compiled contact scene: {e}")))
 }
 
 /// The model's contact geometry from the emitted kernels' contact struct.

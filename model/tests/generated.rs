@@ -6,6 +6,8 @@
 
 mod common;
 
+use bf_codegen::spec::SceneId;
+use bf_model::registry::{self, CompiledKernels};
 use bf_model::{
     ContactKinematics, ContactVariant, HumanKernels, ImpactLaw, Kernels, Mode, ModelError,
     PaperKernels, State, Vec3, fixtures,
@@ -187,8 +189,11 @@ fn human_runtime_parameters_reach_kernels_and_physics() {
         Err(ModelError::NonFinite { .. })
     ));
     assert!(PaperKernels::with_params(&[]).is_ok());
-    assert!(fixtures::scene_by_name("paper").is_ok());
-    let e = fixtures::scene_by_name("nope").unwrap_err();
+    assert!(CompiledKernels::named(&SceneId::PAPER).is_ok());
+    let e = CompiledKernels::named(&SceneId::from_static("nope")).unwrap_err();
     // the compiled contact scenes of the registry, in scenes/*.toml order
     assert!(e.to_string().contains("available: human, paper"), "{e}");
+    let e = registry::contact_scene_id("nope").unwrap_err();
+    assert!(e.to_string().contains("available: human, paper"), "{e}");
+    assert_eq!(registry::contact_scene_id("human").unwrap(), SceneId::HUMAN);
 }

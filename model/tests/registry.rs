@@ -4,10 +4,11 @@
 
 mod common;
 
-use bf_codegen::spec::Scene;
+use bf_codegen::spec::{Scene, SceneId};
 use bf_model::registry::{self, KernelSource, compiled_match, set_parameters};
 use bf_model::{
-    ContactVariant, InterpretedKernels, Kernels, Mode, ModelError, State, Vec3, fixtures,
+    CompiledKernels, ContactVariant, InterpretedKernels, Kernels, Mode, ModelError, State, Vec3,
+    fixtures,
 };
 use common::{HUMAN_TOML, PAPER_TOML, RefKernels};
 use rand::{Rng, SeedableRng};
@@ -68,11 +69,11 @@ fn same_name_other_numbers_is_interpreted() {
 #[test]
 fn interpreted_kernels_equal_compiled_kernels_bitwise() {
     let paper = InterpretedKernels::new(&parse(PAPER_TOML)).unwrap();
-    let compiled = fixtures::scene_by_name("paper").unwrap();
-    assert_identical(&paper, compiled.kernels());
+    let compiled = CompiledKernels::named(&SceneId::PAPER).unwrap();
+    assert_identical(&paper, &compiled);
     let human = InterpretedKernels::new(&parse(HUMAN_TOML)).unwrap();
-    let compiled = fixtures::scene_by_name("human").unwrap();
-    assert_identical(&human, compiled.kernels());
+    let compiled = CompiledKernels::named(&SceneId::HUMAN).unwrap();
+    assert_identical(&human, &compiled);
 }
 
 #[test]
@@ -154,7 +155,7 @@ fn bad_parameters_and_scenes_are_errors_naming_them() {
         msg.contains("puma560") && msg.contains("no [ball]") && msg.contains("6 joints"),
         "{msg}"
     );
-    let e = fixtures::scene_by_name("puma560").unwrap_err().to_string();
+    let e = CompiledKernels::named(&puma.id()).unwrap_err().to_string();
     assert!(e.contains("paper") && e.contains("human"), "{e}");
 }
 

@@ -30,6 +30,7 @@
 //!   the triangle inequality, unless the table names a published source
 //!   (`nonphysical_inertia`); [`Scene::warnings`] lists what is accepted but doubtful.
 //! - [`Mode`]: the contact modes free, stick and slip of Sect. 2.6.
+//! - [`SceneId`]: the typed scene name the registries and the problem catalogue key scenes by.
 //!
 //! Loading: [`Scene::load`] / [`Scene::from_toml_str`] parse with toml's span-preserving
 //! `DeTable`, deserialise with serde (`deny_unknown_fields`), then validate; every error is
@@ -40,6 +41,7 @@ mod angle;
 mod constants;
 mod de;
 mod error;
+mod id;
 mod mode;
 mod validate;
 
@@ -47,6 +49,7 @@ use serde::Deserialize;
 
 pub use constants::Constants;
 pub use error::{SpecError, SpecErrorKind};
+pub use id::{SceneId, UnknownScene};
 pub use mode::Mode;
 pub use validate::{principal_moments, symmetric_eigenvalues};
 

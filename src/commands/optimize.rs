@@ -443,9 +443,10 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
         None if args.param.is_empty() => return Ok(None),
         // `--param` alone: the problem's compiled scene with other runtime parameters.
         None => {
-            let text = bf_generated::scene_toml(problem.scene())
+            let id = problem.scene();
+            let text = bf_generated::scene_toml(id.as_str())
                 .with_context(|| format!("problem {problem}: no compiled scene"))?;
-            let mut scene = bf_codegen::Scene::from_toml_str(text, problem.scene())?;
+            let mut scene = bf_codegen::Scene::from_toml_str(text, id.as_str())?;
             let assignments = super::parse_params(&args.param)?;
             bf_model::registry::set_parameters(&mut scene, &assignments)
                 .map_err(|e| anyhow::anyhow!("--param: {e}"))?;

@@ -12,6 +12,7 @@
 use crate::study::solution_io::write_solution;
 use crate::study::strategy::Strategy;
 use anyhow::{Context, Result, anyhow};
+use bf_codegen::spec::SceneId;
 use bf_plot::paper::{Phases, TimeSeries};
 use bf_plot::scene3d::{FingerPaths, NamedPath, View};
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings, QC_OMEGA_REF, Samples};
@@ -105,8 +106,8 @@ macro_rules! geometry_of {
     }};
 }
 
-fn geometry(scene: &str, base: [f64; 3], q: &[f64], qd: &[f64], omega: &[f64]) -> Geometry {
-    let (pos, p_c, n, h, sat_alpha) = if scene == "human" {
+fn geometry(scene: &SceneId, base: [f64; 3], q: &[f64], qd: &[f64], omega: &[f64]) -> Geometry {
+    let (pos, p_c, n, h, sat_alpha) = if *scene == SceneId::HUMAN {
         geometry_of!(human, q, qd, omega)
     } else {
         geometry_of!(paper, q, qd, omega)
@@ -217,7 +218,7 @@ pub fn run_scenario(
 
     // Geometry along the dense samples.
     let geo: Vec<Geometry> = (0..d.t.len())
-        .map(|i| geometry(scene, base, &d.q[i], &d.qd[i], &d.omega[i]))
+        .map(|i| geometry(&scene, base, &d.q[i], &d.qd[i], &d.omega[i]))
         .collect();
     let mut lambda_n = Vec::new();
     let mut lambda_t = Vec::new();
@@ -332,10 +333,10 @@ pub fn run_scenario(
 }
 
 /// Base translation of a compiled-in scene (from bf-generated's registry).
-fn scene_base(scene: &str) -> Result<[f64; 3]> {
-    let text = bf_generated::scene_toml(scene)
+fn scene_base(scene: &SceneId) -> Result<[f64; 3]> {
+    let text = bf_generated::scene_toml(scene.as_str())
         .ok_or_else(|| anyhow!("scene `{scene}` is not compiled in"))?;
-    Ok(bf_codegen::Scene::from_toml_str(text, scene)?.base_translation())
+    Ok(bf_codegen::Scene::from_toml_str(text, scene.as_str())?.base_translation())
 }
 
 /// Path of the finger's closest point to the ball, p_c (eq. 3 with the exact saturation), over
@@ -343,10 +344,10 @@ fn scene_base(scene: &str) -> Result<[f64; 3]> {
 fn closest_point_path(name: &str, sol: &OcpSolution) -> Result<Vec<[f64; 3]>> {
     let problem: Problem = name.parse().map_err(|e| anyhow!("{e}"))?;
     let scene = problem.scene();
-    let base = scene_base(scene)?;
+    let base = scene_base(&scene)?;
     let d = &sol.dense;
     Ok((0..d.t.len())
-        .map(|i| geometry(scene, base, &d.q[i], &d.qd[i], &d.omega[i]).p_c)
+        .map(|i| geometry(&scene, base, &d.q[i], &d.qd[i], &d.omega[i]).p_c)
         .collect())
 }
 

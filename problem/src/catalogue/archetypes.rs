@@ -7,6 +7,7 @@
 
 use bf_codegen::Scene;
 use bf_codegen::graph::Graph;
+use bf_codegen::spec::SceneId;
 use bf_optim::ocp::{Objective, Param, PointFunction, Scheme, VarRef};
 
 use super::guess::{PhaseDef, Q_GUESS};
@@ -60,7 +61,7 @@ impl Context<'_> {
     }
 
     fn q_limits(&self) -> Vec<(f64, f64)> {
-        if self.problem.scene() == "human" {
+        if self.problem.scene() == SceneId::HUMAN {
             self.physics.q_limits.clone()
         } else {
             vec![(f64::NEG_INFINITY, f64::INFINITY); self.nq()]

@@ -47,6 +47,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use bf_codegen::Scene;
+use bf_codegen::spec::SceneId;
 use bf_optim::ipm::Settings;
 use bf_optim::ocp::{KernelUse, MeshSpec, Ocp, Scheme, Transcription};
 
@@ -108,11 +109,11 @@ impl Problem {
         Problem::ALL.map(Problem::name).join(", ")
     }
 
-    /// The scene the problem is posed on.
-    pub fn scene(self) -> &'static str {
+    /// The compiled scene the problem is posed on.
+    pub fn scene(self) -> SceneId {
         match self {
-            Problem::PeriodicCotHuman => "human",
-            _ => "paper",
+            Problem::PeriodicCotHuman => SceneId::HUMAN,
+            _ => SceneId::PAPER,
         }
     }
 
@@ -290,8 +291,9 @@ pub struct BuiltProblem {
     pub generated: Generated,
 }
 
-/// The scene `name` from `generated`.
-fn scene(generated: &Generated, name: &str) -> Result<Scene, ProblemError> {
+/// The scene `id` from `generated`.
+fn scene(generated: &Generated, id: &SceneId) -> Result<Scene, ProblemError> {
+    let name = id.as_str();
     let text = (generated.scene_toml)(name).ok_or_else(|| ProblemError::UnknownScene {
         scene: name.to_string(),
     })?;
@@ -327,7 +329,7 @@ fn build_inner(
 ) -> Result<BuiltProblem, ProblemError> {
     let scene = match &settings.scene {
         Some(s) => s.clone(),
-        None => scene(generated, problem.scene())?,
+        None => scene(generated, &problem.scene())?,
     };
     // A scene given by the caller may have no emitted node kernels (other numbers): interpret
     // what has none rather than fail.
