@@ -10,9 +10,8 @@
 //! accuracy test. The inertia correction then keeps a large δ_w in every iteration, which
 //! shrinks each step along the weakest direction, and the COT problems crept to an Acceptable
 //! exit. With δ_c = 3e-8 they end Solved at the same optima (figures in BENCHMARKS.md). The
-//! Radau KKTs keep 1e-9: their default meshes solve as before, bit for bit (a larger δ_c there
-//! moves the 3 × 10 solves to other local optima); a failed Radau solve is retried once with
-//! the raised value.
+//! Radau KKTs keep 1e-9 (a larger δ_c there moves the 3 × 10 solves to other local optima); a
+//! failed Radau solve is retried once with the raised value.
 
 use std::time::Instant;
 
