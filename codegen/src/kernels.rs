@@ -88,6 +88,17 @@ pub struct KernelDef {
     pub outputs: Vec<OutArg>,
 }
 
+impl KernelDef {
+    /// The graph nodes of every output, in argument order and each argument's layout (the
+    /// flat output vector of the kernel, e.g. the roots of an interpreter tape).
+    pub fn output_ids(&self) -> Vec<Id> {
+        self.outputs
+            .iter()
+            .flat_map(|o| o.ids.iter().copied())
+            .collect()
+    }
+}
+
 /// Fields of the emitted `Contact` struct: name, dims, doc.
 pub const CONTACT_FIELDS: &[(&str, &[Dim], &str)] = &[
     ("alpha", &[], "eq. 2: α = (o_b − p_e)·ê_x3 (m)"),

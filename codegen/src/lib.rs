@@ -105,11 +105,7 @@ pub fn generate_with(
         defs.push(kernels::build_kernel(&mut model, k)?);
     }
     for d in &defs {
-        let roots: Vec<graph::Id> = d
-            .outputs
-            .iter()
-            .flat_map(|o| o.ids.iter().copied())
-            .collect();
+        let roots: Vec<graph::Id> = d.output_ids();
         check_finite_constants(&model.g, &roots, scene, &format!("kernel `{}`", d.name))?;
     }
     let mut tokens = Vec::new();

@@ -30,11 +30,7 @@ macro_rules! accuracy {
                 continue;
             }
             let def = build_kernel(&mut model, k).unwrap();
-            let ids: Vec<_> = def
-                .outputs
-                .iter()
-                .flat_map(|o| o.ids.iter().copied())
-                .collect();
+            let ids: Vec<_> = def.output_ids();
             let tape = Tape::new(&model.g, &ids);
             for &(q, qd) in &$states {
                 let q: [f64; s::NQ] = q;
@@ -199,11 +195,7 @@ fn human_runtime_parameters_scaled() {
     let mut rng = ChaCha8Rng::seed_from_u64(54);
     for &k in &["mass_cqd_g", "contact", "contact_smooth", "cqd_g"] {
         let def = build_kernel(&mut model, k).unwrap();
-        let ids: Vec<_> = def
-            .outputs
-            .iter()
-            .flat_map(|o| o.ids.iter().copied())
-            .collect();
+        let ids: Vec<_> = def.output_ids();
         let tape = Tape::new(&model.g, &ids);
         for _ in 0..20 {
             let q: [f64; 3] = std::array::from_fn(|_| rng.random_range(-3.2..3.2));

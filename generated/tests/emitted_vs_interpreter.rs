@@ -35,11 +35,7 @@ macro_rules! check_scene {
         let mut compared = 0usize;
         for &k in s::KERNELS {
             let def = build_kernel(&mut model, k).unwrap();
-            let ids: Vec<_> = def
-                .outputs
-                .iter()
-                .flat_map(|o| o.ids.iter().copied())
-                .collect();
+            let ids: Vec<_> = def.output_ids();
             let tape = Tape::new(&model.g, &ids);
             for _ in 0..25 {
                 let q: [f64; s::NQ] = std::array::from_fn(|_| rng.random_range(-4.0..4.0));

@@ -487,11 +487,7 @@ pub(crate) fn interpreted_tapes<const N: usize>(
     let mut tapes = Vec::with_capacity(N);
     for kernel in kernels {
         let def = build_kernel(&mut m, kernel).map_err(codegen)?;
-        let ids: Vec<_> = def
-            .outputs
-            .iter()
-            .flat_map(|o| o.ids.iter().copied())
-            .collect();
+        let ids: Vec<_> = def.output_ids();
         tapes.push(Tape::new(&m.g, &ids));
     }
     let tapes: [Tape; N] = tapes

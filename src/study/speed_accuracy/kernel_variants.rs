@@ -60,11 +60,7 @@ fn states(n: usize) -> Vec<(Q, Q)> {
 /// Double-double values of kernel `name` of `model` at every state.
 fn dd_reference(model: &mut GraphModel, name: &str, states: &[(Q, Q)]) -> Result<Vec<Vec<Dd>>> {
     let def = kernels::build_kernel(model, name).map_err(|e| anyhow!("kernel {name}: {e}"))?;
-    let ids: Vec<_> = def
-        .outputs
-        .iter()
-        .flat_map(|o| o.ids.iter().copied())
-        .collect();
+    let ids: Vec<_> = def.output_ids();
     let layout = model.layout;
     let n = layout.nq;
     let mut vars = vec![Dd::new(0.0); layout.n_vars()];
