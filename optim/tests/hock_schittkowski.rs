@@ -73,49 +73,12 @@ fn derivatives_match_finite_differences() {
 /// A deliberately wrong gradient must be caught by the checker.
 #[test]
 fn derivative_checker_detects_errors() {
-    struct Wrong(hs::Hs);
-    impl bf_optim::ipm::Nlp for Wrong {
-        fn num_variables(&self) -> usize {
-            self.0.num_variables()
-        }
-        fn num_constraints(&self) -> usize {
-            self.0.num_constraints()
-        }
-        fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-            self.0.variable_bounds(l, u)
-        }
-        fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-            self.0.constraint_bounds(l, u)
-        }
-        fn initial_point(&self, x: &mut [f64]) {
-            self.0.initial_point(x)
-        }
-        fn objective(&self, x: &[f64]) -> f64 {
-            self.0.objective(x)
-        }
-        fn gradient(&self, x: &[f64], g: &mut [f64]) {
-            self.0.gradient(x, g);
-            g[0] *= 1.01;
-        }
-        fn constraints(&self, x: &[f64], g: &mut [f64]) {
-            self.0.constraints(x, g)
-        }
-        fn jacobian_structure(&self) -> Vec<(usize, usize)> {
-            self.0.jacobian_structure()
-        }
-        fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
-            self.0.jacobian_values(x, v)
-        }
-        fn hessian_structure(&self) -> Vec<(usize, usize)> {
-            self.0.hessian_structure()
-        }
-        fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
-            self.0.hessian_values(x, s, l, v)
-        }
-    }
     let p = hs::all().into_iter().find(|p| p.name == "HS071").unwrap();
     let x = p.x0.clone();
-    let w = Wrong(p);
+    let w = hs::Transformed {
+        grad0: 1.01,
+        ..hs::Transformed::new(p)
+    };
     let rep = check_derivatives(&w, &x, 1.0, &[0.5, -0.5], 1e-6);
     assert!(rep.gradient.0 > 1e-3 && rep.gradient.1 == 0, "{rep:?}");
 }

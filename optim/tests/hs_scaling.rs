@@ -7,49 +7,14 @@
 
 mod hs;
 
-use bf_optim::ipm::{Nlp, Settings, Status, solve};
-use hs::Hs;
+use bf_optim::ipm::{Settings, Status, solve};
+use hs::{Hs, Transformed};
 
 /// An HS problem with its objective multiplied by `c`.
-struct ObjScaled(Hs, f64);
-
-impl Nlp for ObjScaled {
-    fn num_variables(&self) -> usize {
-        self.0.num_variables()
-    }
-    fn num_constraints(&self) -> usize {
-        self.0.num_constraints()
-    }
-    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-        self.0.variable_bounds(l, u)
-    }
-    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-        self.0.constraint_bounds(l, u)
-    }
-    fn initial_point(&self, x: &mut [f64]) {
-        self.0.initial_point(x)
-    }
-    fn objective(&self, x: &[f64]) -> f64 {
-        self.1 * self.0.objective(x)
-    }
-    fn gradient(&self, x: &[f64], g: &mut [f64]) {
-        self.0.gradient(x, g);
-        g.iter_mut().for_each(|v| *v *= self.1);
-    }
-    fn constraints(&self, x: &[f64], g: &mut [f64]) {
-        self.0.constraints(x, g)
-    }
-    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
-        self.0.jacobian_structure()
-    }
-    fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
-        self.0.jacobian_values(x, v)
-    }
-    fn hessian_structure(&self) -> Vec<(usize, usize)> {
-        self.0.hessian_structure()
-    }
-    fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
-        self.0.hessian_values(x, s * self.1, l, v)
+fn obj_scaled(hs: Hs, c: f64) -> Transformed {
+    Transformed {
+        obj: c,
+        ..Transformed::new(hs)
     }
 }
 
@@ -69,7 +34,7 @@ fn boxed_problems_with_a_huge_objective_are_not_unbounded() {
             continue;
         }
         let (name, c) = (p.name, 1e17 / p.fstar.abs());
-        let sol = solve(&ObjScaled(p, c), &Settings::default()).unwrap();
+        let sol = solve(&obj_scaled(p, c), &Settings::default()).unwrap();
         assert_ne!(sol.status, Status::Unbounded, "{name}: {sol:?}");
         checked += 1;
     }
@@ -109,7 +74,7 @@ fn objective_scales_keep_status_and_solution() {
         let base = solve(&by_name(name), &Settings::default()).unwrap();
         assert_eq!(base.status, Status::Solved, "{name}");
         for c in [1e-8, 1e8, 1e12] {
-            let sol = solve(&ObjScaled(by_name(name), c), &Settings::default()).unwrap();
+            let sol = solve(&obj_scaled(by_name(name), c), &Settings::default()).unwrap();
             if c < 1e12 {
                 assert_eq!(sol.status, base.status, "{name} x{c:e}");
             } else {

@@ -323,47 +323,11 @@ fn two_sided_range_constraint_and_infinite_bounds() {
 }
 
 /// HS071 with the objective multiplied by 1e4 and constraints by 1e3 (same minimiser).
-struct Scaled(Hs);
-impl Nlp for Scaled {
-    fn num_variables(&self) -> usize {
-        4
-    }
-    fn num_constraints(&self) -> usize {
-        2
-    }
-    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-        self.0.variable_bounds(l, u)
-    }
-    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-        self.0.constraint_bounds(l, u)
-    }
-    fn initial_point(&self, x: &mut [f64]) {
-        self.0.initial_point(x)
-    }
-    fn objective(&self, x: &[f64]) -> f64 {
-        1e4 * self.0.objective(x)
-    }
-    fn gradient(&self, x: &[f64], g: &mut [f64]) {
-        self.0.gradient(x, g);
-        g.iter_mut().for_each(|v| *v *= 1e4);
-    }
-    fn constraints(&self, x: &[f64], g: &mut [f64]) {
-        self.0.constraints(x, g);
-        g.iter_mut().for_each(|v| *v *= 1e3);
-    }
-    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
-        self.0.jacobian_structure()
-    }
-    fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
-        self.0.jacobian_values(x, v);
-        v.iter_mut().for_each(|e| *e *= 1e3);
-    }
-    fn hessian_structure(&self) -> Vec<(usize, usize)> {
-        self.0.hessian_structure()
-    }
-    fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
-        let l2: Vec<f64> = l.iter().map(|v| v * 1e3).collect();
-        self.0.hessian_values(x, s * 1e4, &l2, v)
+fn scaled(hs: Hs) -> hs::Transformed {
+    hs::Transformed {
+        obj: 1e4,
+        con: 1e3,
+        ..hs::Transformed::new(hs)
     }
 }
 
@@ -372,7 +336,7 @@ fn gradient_scaling_handles_badly_scaled_functions() {
     let base = solve(&hs071(), &Settings::default()).unwrap();
     for scaling in [ScalingMethod::GradientBased, ScalingMethod::None] {
         let sol = solve(
-            &Scaled(hs071()),
+            &scaled(hs071()),
             &Settings {
                 scaling,
                 ..Settings::default()

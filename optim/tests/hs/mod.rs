@@ -147,6 +147,72 @@ impl Nlp for Hs {
     }
 }
 
+/// An HS problem with its objective multiplied by `obj` and its constraints by `con` (neither
+/// moves the minimiser), and the first gradient entry then multiplied by `grad0` (1: exact
+/// derivatives; any other value: a deliberately wrong gradient for the derivative checker).
+pub struct Transformed {
+    pub hs: Hs,
+    pub obj: f64,
+    pub con: f64,
+    pub grad0: f64,
+}
+
+impl Transformed {
+    /// `hs` unchanged (every factor 1); set the fields to transform it.
+    pub fn new(hs: Hs) -> Self {
+        Transformed {
+            hs,
+            obj: 1.0,
+            con: 1.0,
+            grad0: 1.0,
+        }
+    }
+}
+
+impl Nlp for Transformed {
+    fn num_variables(&self) -> usize {
+        self.hs.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.hs.num_constraints()
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.hs.variable_bounds(l, u)
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.hs.constraint_bounds(l, u)
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        self.hs.initial_point(x)
+    }
+    fn objective(&self, x: &[f64]) -> f64 {
+        self.obj * self.hs.objective(x)
+    }
+    fn gradient(&self, x: &[f64], g: &mut [f64]) {
+        self.hs.gradient(x, g);
+        g.iter_mut().for_each(|v| *v *= self.obj);
+        g[0] *= self.grad0;
+    }
+    fn constraints(&self, x: &[f64], g: &mut [f64]) {
+        self.hs.constraints(x, g);
+        g.iter_mut().for_each(|v| *v *= self.con);
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.hs.jacobian_structure()
+    }
+    fn jacobian_values(&self, x: &[f64], v: &mut [f64]) {
+        self.hs.jacobian_values(x, v);
+        v.iter_mut().for_each(|e| *e *= self.con);
+    }
+    fn hessian_structure(&self) -> Vec<(usize, usize)> {
+        self.hs.hessian_structure()
+    }
+    fn hessian_values(&self, x: &[f64], s: f64, l: &[f64], v: &mut [f64]) {
+        let l: Vec<f64> = l.iter().map(|v| v * self.con).collect();
+        self.hs.hessian_values(x, s * self.obj, &l, v)
+    }
+}
+
 fn none(_: &[D]) -> Vec<D> {
     Vec::new()
 }
