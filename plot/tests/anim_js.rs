@@ -4,21 +4,12 @@
 //! reports no script error). Each check prints a notice and passes when its program is not
 //! installed.
 
+mod common;
+
 use bf_plot::anim::{AnimFrame, Animation, angular_velocities, write_animation_html};
-use std::path::{Path, PathBuf};
+use common::{rot_z, tmp};
+use std::path::Path;
 use std::process::Command;
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-plot-anim-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn rot_z(a: f64) -> [[f64; 3]; 3] {
-    let (s, c) = a.sin_cos();
-    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
-}
 
 /// 2 s at 1.5 rad/s about z, frames unevenly spaced (dense in the first 0.2 s, as around an
 /// impact); the finger sweeps from in front of the ball (camera side, +(1,1,1)) to behind it,

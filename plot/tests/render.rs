@@ -3,19 +3,15 @@
 //! series colours), and the SVG for the legend texts and one stroke colour per series.
 //! Bad input must give a clear error and leave no file behind.
 
+mod common;
+
 use bf_plot::anim::{AnimFrame, Animation, animation_html, write_animation_html};
 use bf_plot::figure::palette;
 use bf_plot::paper::*;
 use bf_plot::scene3d::{FingerPaths, View, fig_finger_paths};
 use bf_plot::*;
+use common::{grid, rot_z, tmp, ts};
 use std::path::{Path, PathBuf};
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-plot-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// Decoded PNG: (width, height, rgb pixels).
 fn png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
@@ -56,21 +52,6 @@ fn check_files(paths: &[PathBuf; 2], size: (u32, u32), legend: &[&str]) -> (Stri
         assert!(!n.contains(".tmp"), "temporary file {n} left behind");
     }
     (svg, px)
-}
-
-fn ts(t: &[f64], f: &[&dyn Fn(f64) -> f64], names: &[&str]) -> TimeSeries {
-    TimeSeries {
-        t: t.to_vec(),
-        values: f
-            .iter()
-            .map(|g| t.iter().map(|&x| g(x)).collect())
-            .collect(),
-        names: names.iter().map(|s| s.to_string()).collect(),
-    }
-}
-
-fn grid(n: usize, t1: f64) -> Vec<f64> {
-    (0..n).map(|i| t1 * i as f64 / (n - 1) as f64).collect()
 }
 
 fn phases() -> Phases {
@@ -418,11 +399,6 @@ fn finger_paths_3d_renders_views() {
         ],
     );
     assert!(count_colour(&px, (214, 39, 40)) > 30 && count_colour(&px, (31, 119, 180)) > 30);
-}
-
-fn rot_z(a: f64) -> [[f64; 3]; 3] {
-    let (s, c) = a.sin_cos();
-    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 }
 
 #[test]

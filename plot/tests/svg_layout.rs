@@ -4,17 +4,12 @@
 //! size and length), the legend covers no data, unordered series are not joined, and
 //! coordinates are fractional (no whole-pixel stair steps).
 
+mod common;
+
 use bf_plot::paper::*;
 use bf_plot::scene3d::{NamedPath, View, fig_compare_paths};
 use bf_plot::*;
-use std::path::PathBuf;
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-plot-svg-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::{grid, tmp, ts};
 
 /// One SVG element: tag, attributes, text content.
 #[derive(Debug, Clone)]
@@ -415,21 +410,6 @@ fn assert_fractional(els: &[El], what: &str) {
         frac * 2 > all,
         "{what}: only {frac} of {all} coordinates fractional"
     );
-}
-
-fn grid(n: usize, t1: f64) -> Vec<f64> {
-    (0..n).map(|i| t1 * i as f64 / (n - 1) as f64).collect()
-}
-
-fn ts(t: &[f64], f: &[&dyn Fn(f64) -> f64], names: &[&str]) -> TimeSeries {
-    TimeSeries {
-        t: t.to_vec(),
-        values: f
-            .iter()
-            .map(|g| t.iter().map(|&x| g(x)).collect())
-            .collect(),
-        names: names.iter().map(|s| s.to_string()).collect(),
-    }
 }
 
 #[test]
