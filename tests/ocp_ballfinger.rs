@@ -9,6 +9,7 @@ use bf_generated::paper as k;
 use bf_optim::ipm::{Nlp, Status, check_derivatives};
 use bf_optim::ocp::Scheme;
 use bf_problem::{GuessKind, OcpSolution, Problem, ProblemSettings};
+use bf_testkit::small::solve3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -53,25 +54,6 @@ fn nlp_derivatives_match_finite_differences() {
             assert!(rep.max_error() < 1e-5, "{name} {scheme:?} n={n}: {rep:?}");
         }
     }
-}
-
-/// 3×3 solve by Cramer's rule (M is SPD and well conditioned here).
-fn solve3(m: &[[f64; 3]; 3], b: &[f64; 3]) -> [f64; 3] {
-    let det = |a: &[[f64; 3]; 3]| {
-        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
-    };
-    let d = det(m);
-    let mut x = [0.0; 3];
-    for c in 0..3 {
-        let mut a = *m;
-        for r in 0..3 {
-            a[r][c] = b[r];
-        }
-        x[c] = det(&a) / d;
-    }
-    x
 }
 
 /// ẋ of eq. 26/29 with the generated kernels (independent of the optimiser's graph functions),

@@ -15,6 +15,7 @@ use bf_optim::ipm::Status;
 use bf_optim::ocp::Scheme;
 use bf_problem::PhaseMode;
 use bf_problem::{BuiltProblem, OcpSolution, ProblemSettings};
+use bf_testkit::small::solve3;
 
 const RTOL: f64 = 1e-10;
 
@@ -229,25 +230,6 @@ fn invalid_inputs_are_errors_not_panics() {
     let mut bad = poly();
     bad.atol = Some(0.0);
     assert!(verify_with(p, sol, &bad).is_err());
-}
-
-/// 3×3 solve by Cramer's rule (M is SPD and well conditioned here).
-fn solve3(m: &[[f64; 3]; 3], b: &[f64; 3]) -> [f64; 3] {
-    let det = |a: &[[f64; 3]; 3]| {
-        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
-            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
-            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
-    };
-    let d = det(m);
-    let mut x = [0.0; 3];
-    for c in 0..3 {
-        let mut a = *m;
-        for r in 0..3 {
-            a[r][c] = b[r];
-        }
-        x[c] = det(&a) / d;
-    }
-    x
 }
 
 /// Free dynamics (eq. 26) written out with the generated mass/bias kernel and the paper

@@ -12,7 +12,7 @@
 
 use anyhow::{Result, bail};
 use bf_testkit::Reference;
-use bf_testkit::appendix::{self as app, AppendixParams};
+use bf_testkit::appendix::{self as app, AppendixParams, flat3, rel_err};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::fmt::Write as _;
@@ -109,19 +109,6 @@ fn states(seed: u64, n: usize) -> Vec<([f64; 3], [f64; 3])> {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     let mut q = || [0; 3].map(|_| uni(&mut r, -4.0, 4.0));
     (0..n).map(|_| (q(), q())).collect()
-}
-
-/// max |a − b| / (1 + max |b|).
-fn rel_err(a: &[f64], b: &[f64]) -> f64 {
-    let scale = 1.0 + b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-        / scale
-}
-
-fn flat3(m: &[[f64; 3]; 3]) -> Vec<f64> {
-    m.iter().flatten().copied().collect()
 }
 
 /// Evaluates `f` over the parameter sets (those passing `filter`) and states, and returns the

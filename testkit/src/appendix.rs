@@ -360,6 +360,21 @@ fn random_params(r: &mut ChaCha8Rng) -> AppendixParams {
     }
 }
 
+/// The error measure of the appendix comparisons, max |a − b| / (1 + max |b|): absolute for
+/// entries of order one or below, relative for large ones.
+pub fn rel_err(a: &[f64], b: &[f64]) -> f64 {
+    let scale = 1.0 + b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    a.iter()
+        .zip(b)
+        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+        / scale
+}
+
+/// A row-major 3×3 matrix as a flat vector of its rows.
+pub fn flat3(m: &[[f64; 3]; 3]) -> Vec<f64> {
+    m.iter().flatten().copied().collect()
+}
+
 /// The parameter sets the appendix is checked on: the paper's (ℓ = r = 1), ℓ = r = 0.7 with
 /// unequal masses and inertias, and `n_random` seeded random ones (ℓ ∈ [0.4, 1.6],
 /// r ∈ [0.5, 2], unequal masses and inertias, g ∈ [5, 12]); the same sets on every machine.

@@ -22,19 +22,6 @@ fn param_sets() -> Vec<AppendixParams> {
     crate::appendix::param_sets(20)
 }
 
-/// max |a − b| / (1 + max |b|) over the entries.
-fn rel_err(a: &[f64], b: &[f64]) -> f64 {
-    let scale = 1.0 + b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-    a.iter()
-        .zip(b)
-        .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
-        / scale
-}
-
-fn flat(m: &[[f64; 3]; 3]) -> Vec<f64> {
-    m.iter().flatten().copied().collect()
-}
-
 fn states(seed: u64, n: usize) -> Vec<([f64; 3], [f64; 3])> {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     (0..n).map(|_| (rq(&mut r), rq(&mut r))).collect()
@@ -91,7 +78,7 @@ fn eq68_frame3_axes_agree() {
         |_| true,
         |_, rf, q, _| {
             let rot = rf.frames(q).1[2];
-            (rel_err(&flat(&frame3_axes_printed(q)), &flat(&rot)), 0.0)
+            (rel_err(&flat3(&frame3_axes_printed(q)), &flat3(&rot)), 0.0)
         },
     );
     assert!(printed < TOL, "{printed:e}");
@@ -107,8 +94,8 @@ fn eq70_jp_entry_33_sign() {
             let (jp, _) = rf.tip_jacobian(q);
             let want: Vec<f64> = jp.transpose().iter().copied().collect();
             (
-                rel_err(&flat(&jp_printed(q, p.l)), &want),
-                rel_err(&flat(&jp_corrected(q, p.l)), &want),
+                rel_err(&flat3(&jp_printed(q, p.l)), &want),
+                rel_err(&flat3(&jp_corrected(q, p.l)), &want),
             )
         },
     );
@@ -159,7 +146,7 @@ fn eq71_jo_agrees() {
         |_, rf, q, _| {
             let (_, jo) = rf.tip_jacobian(q);
             let want: Vec<f64> = jo.transpose().iter().copied().collect();
-            (rel_err(&flat(&jo_printed(q)), &want), 0.0)
+            (rel_err(&flat3(&jo_printed(q)), &want), 0.0)
         },
     );
     assert!(printed < TOL, "{printed:e}");
@@ -294,7 +281,7 @@ fn eq74_75_mass_matrix_agrees() {
         |p, rf, q, _| {
             let m = rf.mass_matrix(q);
             let want: Vec<f64> = m.transpose().iter().copied().collect();
-            (rel_err(&flat(&mass_matrix_printed(q, p)), &want), 0.0)
+            (rel_err(&flat3(&mass_matrix_printed(q, p)), &want), 0.0)
         },
     );
     assert!(printed < TOL, "{printed:e}");
@@ -316,7 +303,7 @@ fn eq76_79_psi_are_christoffel_symbols() {
             let cw: Vec<f64> = cm.transpose().iter().copied().collect();
             (
                 rel_err(&got, &want),
-                rel_err(&flat(&coriolis_printed(q, qd, p)), &cw),
+                rel_err(&flat3(&coriolis_printed(q, qd, p)), &cw),
             )
         },
     );

@@ -223,6 +223,26 @@ pub fn axis_rotation(axis: usize, angle: f64) -> [[f64; 3]; 3] {
     }
 }
 
+/// Solves the 3×3 system m x = b by Cramer's rule (for the small, well-conditioned mass
+/// matrices of the tests; no pivoting).
+pub fn solve3<T: Real>(m: &M3<T>, b: &V3<T>) -> V3<T> {
+    let det = |a: &M3<T>| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let d = det(m);
+    let mut x = zero3();
+    for c in 0..3 {
+        let mut a = *m;
+        for r in 0..3 {
+            a[r][c] = b[r];
+        }
+        x[c] = det(&a) / d;
+    }
+    x
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -247,5 +267,15 @@ mod tests {
         let v = matvec(&rz, [1.0, 0.0, 0.0]);
         assert!((v[0] - 0.7f64.cos()).abs() < 1e-15 && (v[1] - 0.7f64.sin()).abs() < 1e-15);
         assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn solve3_recovers_the_solution_of_a_symmetric_positive_definite_system() {
+        let m: M3<f64> = [[2.0, 0.3, -0.1], [0.3, 1.5, 0.2], [-0.1, 0.2, 0.8]];
+        let want: V3<f64> = [0.4, -1.2, 2.5];
+        let x = solve3(&m, &matvec(&m, want));
+        for i in 0..3 {
+            assert!((x[i] - want[i]).abs() < 1e-14, "{x:?} vs {want:?}");
+        }
     }
 }
