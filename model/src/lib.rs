@@ -99,7 +99,9 @@ pub use error::{ModelError, PainleveKind};
 pub use impact::{ImpactLaw, ImpactOutcome};
 pub use kernels::{ContactVariant, HumanKernels, Kernels, Model, PaperKernels};
 pub use kinematics::{ContactGeometry, ContactKinematics};
-pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
+pub use linalg::{
+    Mat3, Mat3xN, MatN, MatNx3, Vec3, VecN, normal_projector, skew, tangent_projector,
+};
 pub use params::Params;
 pub use registry::{CompiledKernels, DynKernels, InterpretedKernels, KernelSource};
 pub use settings::TransitionSettings;
