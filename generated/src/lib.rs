@@ -4,7 +4,7 @@
 //! One module per scene, named after the scene (`paper`, `human`, `puma560`, `iiwa7`, …), and
 //! the registry [`SCENES`] of every scene's name and TOML text ([`scene_toml`]), and the
 //! model-kernel registry [`SCENE_KERNELS`] ([`scene`]): every scene's `mass_cqd_g`,
-//! `potential` and (3-joint contact scenes) `contact`/`contact_smooth` behind fn pointers of one
+//! `potential` and (contact scenes) `contact`/`contact_smooth` behind fn pointers of one
 //! signature, which bf-model wraps into its typed physics for any compiled scene.
 //! The kernel API (docs/kernels.md) maps to the paper as: `frames` eq. 67–68, `tip_jacobian`
 //! eq. 69–71, `mass_matrix` eq. 22a/74–75, `christoffel`/`coriolis_*` eq. 76–79, `gravity`
@@ -26,67 +26,13 @@ pub type MassCqdGFn = fn(q: &[f64], qd: &[f64], p: &[f64], m: &mut [f64], cqd_g:
 /// `potential` of a scene on slices: U(q) (eq. 22b); NaN if a length is wrong.
 pub type PotentialFn = fn(q: &[f64], p: &[f64]) -> f64;
 
-/// The contact kernels of a 3-joint scene: `eps = None` runs `contact` (exact saturation,
-/// eq. 2–13), `Some(ε)` runs `contact_smooth` (eq. 58–59). A wrong `p` length writes NaN.
-pub type ContactFn = fn(
-    q: &[f64; 3],
-    qd: &[f64; 3],
-    omega: &[f64; 3],
-    eps: Option<f64>,
-    p: &[f64],
-    out: &mut ContactValues,
-);
-
-/// The outputs of a 3-joint scene's contact kernel (the fields of its `Contact` struct; see
-/// the scene module for their meaning and units).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ContactValues {
-    /// α = (o_b − p_e)·ê_x3 (m, eq. 2).
-    pub alpha: f64,
-    /// sat(α) (m, eq. 3 or 58–59).
-    pub sat_alpha: f64,
-    /// Potential contact point p_c (m, eq. 3).
-    pub p_c: [f64; 3],
-    /// r_c = p_c − o_b (m).
-    pub r_c: [f64; 3],
-    /// h = |r_c| − r (m, eq. 4).
-    pub h: f64,
-    /// n = r_c / |r_c| (eq. 11).
-    pub n: [f64; 3],
-    /// J_c, row-major 3 × 3 (m, eq. 7).
-    pub j_c: [[f64; 3]; 3],
-    /// v_c = J_c q̇ (m/s, eq. 6).
-    pub v_c: [f64; 3],
-    /// Δv = ω × r_c − v_c (m/s, eq. 13).
-    pub delta_v: [f64; 3],
-    /// ḣ (m/s).
-    pub h_dot: f64,
-    /// ṙ_c (m/s).
-    pub rc_dot: [f64; 3],
-    /// J̇_c q̇ (m/s², eq. 33).
-    pub jc_dot_qd: [f64; 3],
-}
-
-impl ContactValues {
-    /// Every field NaN (the answer to inputs of the wrong length).
-    pub fn nan() -> Self {
-        let n = f64::NAN;
-        ContactValues {
-            alpha: n,
-            sat_alpha: n,
-            p_c: [n; 3],
-            r_c: [n; 3],
-            h: n,
-            n: [n; 3],
-            j_c: [[n; 3]; 3],
-            v_c: [n; 3],
-            delta_v: [n; 3],
-            h_dot: n,
-            rc_dot: [n; 3],
-            jc_dot_qd: [n; 3],
-        }
-    }
-}
+/// The contact kernels of a scene with a ball (any number of joints NQ): `eps = None` runs
+/// `contact` (exact saturation, eq. 2–13), `Some(ε)` runs `contact_smooth` (eq. 58–59). Writes
+/// the fields of the scene's `Contact` struct flat into `out`, in bf-codegen's
+/// `CONTACT_FIELDS` order (J_c row-major 3 × NQ): 22 + 3 NQ values. Wrong lengths of `q`,
+/// `qd`, `p` or `out` write NaN.
+pub type ContactFn =
+    fn(q: &[f64], qd: &[f64], omega: &[f64; 3], eps: Option<f64>, p: &[f64], out: &mut [f64]);
 
 /// The compiled model kernels of one scene (an entry of [`SCENE_KERNELS`]).
 #[derive(Debug, Clone, Copy)]
@@ -105,7 +51,7 @@ pub struct SceneKernels {
     pub mass_cqd_g: Option<MassCqdGFn>,
     /// `potential`, if the scene emits it.
     pub potential: Option<PotentialFn>,
-    /// `contact` / `contact_smooth`, if the scene has 3 joints and emits both.
+    /// `contact` / `contact_smooth`, if the scene emits both.
     pub contact: Option<ContactFn>,
 }
 

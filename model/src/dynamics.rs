@@ -13,8 +13,15 @@
 //!
 //! The generalised force vector of eq. 32 is f = [C q̇ + μ_v q̇ + g − τ; ω × I_b ω + D ω]; the
 //! gyroscopic term uses the full I_b, so it is exact for a non-isotropic ball.
+//!
+//! Any number of joints N (const parameter, default 3): M_f is N×N (Cholesky [`Spd`]), J_c 3×N,
+//! M_f⁻¹ J_cᵀ N×3; the contact-space matrices W and Γ stay 3×3 whatever N is, so the stick and
+//! slip laws solve the same 3×3 (or scalar) problems. Γ = W + S(r_c) I_b⁻¹ S(r_c)ᵀ stays
+//! invertible for N < 3 as long as the finger can move along the normal (nᵀ W n > 0): the
+//! ball's rotation supplies the tangential directions. For N = 3 the generic code is the same
+//! arithmetic in the same order as a 3×3-only implementation (the types are identical).
 
-use crate::linalg::{Mat3, Spd3, Vec3, skew};
+use crate::linalg::{Mat3, MatNx3, Spd, Vec3, VecN, skew};
 use crate::settings::TransitionSettings;
 use crate::{ContactKinematics, Mode, ModelError, PainleveKind, Params, Result};
 
@@ -47,18 +54,28 @@ impl ContactForce {
 
 /// Accelerations and contact force in one mode.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Accelerations {
+pub struct Accelerations<const N: usize = 3> {
     /// The mode these were computed for.
     pub mode: Mode,
     /// q̈ (rad/s²).
-    pub qdd: Vec3,
+    pub qdd: VecN<N>,
     /// ω̇ (rad/s²).
     pub omega_dot: Vec3,
     /// Contact force (zero in free motion).
     pub force: ContactForce,
 }
 
-impl Accelerations {
+impl<const N: usize> Accelerations<N> {
+    /// Writes ẋ = (q̇, q̈, ω̇) in the flat layout of [`crate::State::write_slice`] into `dx`
+    /// (length 2N + 3).
+    pub fn write_state_derivative(&self, qd: &VecN<N>, dx: &mut [f64]) {
+        dx[..N].copy_from_slice(qd.as_slice());
+        dx[N..2 * N].copy_from_slice(self.qdd.as_slice());
+        dx[2 * N..2 * N + 3].copy_from_slice(self.omega_dot.as_slice());
+    }
+}
+
+impl Accelerations<3> {
     /// ẋ = (q̇, q̈, ω̇) in the flat layout of [`crate::State::to_array`].
     pub fn state_derivative(&self, qd: &Vec3) -> [f64; 9] {
         let mut d = [0.0; 9];
@@ -71,9 +88,9 @@ impl Accelerations {
 
 /// Matrices of the contact problem at one configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactMatrices {
-    /// M_f⁻¹ J_cᵀ.
-    pub minv_jct: Mat3,
+pub struct ContactMatrices<const N: usize = 3> {
+    /// M_f⁻¹ J_cᵀ (N×3).
+    pub minv_jct: MatNx3<N>,
     /// W = J_c M_f⁻¹ J_cᵀ (finger part of Γ; the inverse mass seen at the contact point).
     pub w: Mat3,
     /// Γ = G M⁻¹ Gᵀ = W + S(r_c) I_b⁻¹ S(r_c)ᵀ (eq. 33; the matrix of eq. 41).
@@ -83,21 +100,21 @@ pub struct ContactMatrices {
 }
 
 /// Cholesky of M_f, with typed errors.
-pub(crate) fn factor_mass(kin: &ContactKinematics) -> Result<Spd3> {
+pub(crate) fn factor_mass<const N: usize>(kin: &ContactKinematics<N>) -> Result<Spd<N>> {
     kin.check_finite()?;
     let m = &kin.m_f;
     let asym = (m - m.transpose()).amax();
     if asym > 1e-9 * m.amax() {
         return Err(ModelError::MassMatrixNotPositiveDefinite);
     }
-    Spd3::factor(m)
+    Spd::factor(m)
         .filter(|c| c.rcond > 1e-14)
         .ok_or(ModelError::MassMatrixNotPositiveDefinite)
 }
 
 /// Error unless |h| ≤ contact tolerance.
-pub(crate) fn require_contact(
-    kin: &ContactKinematics,
+pub(crate) fn require_contact<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
 ) -> Result<()> {
@@ -113,10 +130,10 @@ pub(crate) fn require_contact(
 }
 
 /// Compute W, Γ and M_f⁻¹ J_cᵀ; also returns the M_f factorisation.
-pub(crate) fn matrices_with_mass(
-    kin: &ContactKinematics,
+pub(crate) fn matrices_with_mass<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-) -> Result<(ContactMatrices, Spd3)> {
+) -> Result<(ContactMatrices<N>, Spd<N>)> {
     let chol = factor_mass(kin)?;
     let jc = &kin.contact.j_c;
     let minv_jct = chol.solve_mat(&jc.transpose());
@@ -139,13 +156,19 @@ pub(crate) fn matrices_with_mass(
 }
 
 /// Contact matrices (W, Γ, M_f⁻¹ J_cᵀ) at the configuration of `kin`.
-pub fn contact_matrices(kin: &ContactKinematics, params: &Params) -> Result<ContactMatrices> {
+pub fn contact_matrices<const N: usize>(
+    kin: &ContactKinematics<N>,
+    params: &Params,
+) -> Result<ContactMatrices<N>> {
     matrices_with_mass(kin, params).map(|(m, _)| m)
 }
 
 /// Factor Γ, or `SingularContact` when its reciprocal condition is below the threshold.
-pub(crate) fn factor_gamma(mats: &ContactMatrices, settings: &TransitionSettings) -> Result<Spd3> {
-    match Spd3::factor(&mats.gamma) {
+pub(crate) fn factor_gamma<const N: usize>(
+    mats: &ContactMatrices<N>,
+    settings: &TransitionSettings,
+) -> Result<Spd<3>> {
+    match Spd::factor(&mats.gamma) {
         Some(c) if c.rcond > settings.singular_rcond => Ok(c),
         Some(c) => Err(ModelError::SingularContact { rcond: c.rcond }),
         None => Err(ModelError::SingularContact { rcond: 0.0 }),
@@ -153,8 +176,8 @@ pub(crate) fn factor_gamma(mats: &ContactMatrices, settings: &TransitionSettings
 }
 
 /// Error unless nᵀ W n is a safe fraction of ‖W‖ (the normal direction is controllable).
-pub(crate) fn require_normal_mobility(
-    mats: &ContactMatrices,
+pub(crate) fn require_normal_mobility<const N: usize>(
+    mats: &ContactMatrices<N>,
     settings: &TransitionSettings,
 ) -> Result<()> {
     let scale = mats.w.norm();
@@ -167,17 +190,17 @@ pub(crate) fn require_normal_mobility(
 }
 
 /// Joint-space generalised force without contact, f_q = C q̇ + μ_v q̇ + g − τ (eq. 32, top).
-fn f_finger(kin: &ContactKinematics, params: &Params, tau: &Vec3) -> Vec3 {
+fn f_finger<const N: usize>(kin: &ContactKinematics<N>, params: &Params, tau: &VecN<N>) -> VecN<N> {
     kin.cqd_g + kin.state.qd * params.mu_v() - tau
 }
 
 /// Ball generalised force f_b = ω × I_b ω + D ω (eq. 32, bottom).
-fn f_ball(kin: &ContactKinematics, params: &Params) -> Vec3 {
+fn f_ball<const N: usize>(kin: &ContactKinematics<N>, params: &Params) -> Vec3 {
     let w = &kin.state.omega;
     w.cross(&(params.ball_inertia() * w)) + w * params.socket_damping()
 }
 
-fn check_tau(tau: &Vec3) -> Result<()> {
+fn check_tau<const N: usize>(tau: &VecN<N>) -> Result<()> {
     if tau.iter().all(|v| v.is_finite()) {
         Ok(())
     } else {
@@ -187,24 +210,24 @@ fn check_tau(tau: &Vec3) -> Result<()> {
 
 /// Accelerations for a given contact force λ on the finger (eq. 29 / 31 / 44):
 /// q̈ = M_f⁻¹(τ − C q̇ − μ_v q̇ − g + J_cᵀ λ), ω̇ = I_b⁻¹(−ω × I_b ω − D ω − r_c × λ).
-pub fn accelerations_with_force(
-    kin: &ContactKinematics,
+pub fn accelerations_with_force<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    tau: &Vec3,
+    tau: &VecN<N>,
     lambda: &Vec3,
-) -> Result<(Vec3, Vec3)> {
+) -> Result<(VecN<N>, Vec3)> {
     check_tau(tau)?;
     let chol = factor_mass(kin)?;
     Ok(accel_from_force(kin, params, tau, lambda, &chol))
 }
 
-fn accel_from_force(
-    kin: &ContactKinematics,
+fn accel_from_force<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    tau: &Vec3,
+    tau: &VecN<N>,
     lambda: &Vec3,
-    chol: &Spd3,
-) -> (Vec3, Vec3) {
+    chol: &Spd<N>,
+) -> (VecN<N>, Vec3) {
     let qdd = chol.solve(&(kin.contact.j_c.transpose() * lambda - f_finger(kin, params, tau)));
     let omega_dot =
         params.ball_inertia_inv() * (-f_ball(kin, params) - kin.contact.r_c.cross(lambda));
@@ -212,7 +235,11 @@ fn accel_from_force(
 }
 
 /// Free motion (eq. 26): λ = 0. Needs no contact (h is ignored).
-pub fn free(kin: &ContactKinematics, params: &Params, tau: &Vec3) -> Result<Accelerations> {
+pub fn free<const N: usize>(
+    kin: &ContactKinematics<N>,
+    params: &Params,
+    tau: &VecN<N>,
+) -> Result<Accelerations<N>> {
     let (qdd, omega_dot) = accelerations_with_force(kin, params, tau, &Vec3::zeros())?;
     Ok(Accelerations {
         mode: Mode::Free,
@@ -228,12 +255,12 @@ pub fn free(kin: &ContactKinematics, params: &Params, tau: &Vec3) -> Result<Acce
 /// Errors: `NotInContact` if |h| is beyond the tolerance, `SingularContact` if Γ is singular.
 /// The sign of λ_n and σ are reported, not enforced (validity is the caller's business,
 /// see [`crate::transitions`]).
-pub fn stick(
-    kin: &ContactKinematics,
+pub fn stick<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    tau: &Vec3,
+    tau: &VecN<N>,
     settings: &TransitionSettings,
-) -> Result<Accelerations> {
+) -> Result<Accelerations<N>> {
     check_tau(tau)?;
     require_contact(kin, params, settings)?;
     let (mats, chol) = matrices_with_mass(kin, params)?;
@@ -257,8 +284,8 @@ pub fn stick(
 /// Unit slip direction t̂ = T_n Δv / |T_n Δv|, or the normalised tangential part of `hint` when
 /// |T_n Δv| ≤ `settings.slip_direction_tol` (eq. 20 is undefined at Δv = 0; at the onset of
 /// slip the direction of the sticking friction force λ_∥ is the natural hint, Sect. 2.4.2).
-pub fn slip_direction(
-    kin: &ContactKinematics,
+pub fn slip_direction<const N: usize>(
+    kin: &ContactKinematics<N>,
     settings: &TransitionSettings,
     hint: Option<&Vec3>,
 ) -> Result<Vec3> {
@@ -286,13 +313,13 @@ pub fn slip_direction(
 ///
 /// Errors: `NotInContact`, `SingularContact` (nᵀ W n ≈ 0), `UndefinedSlipDirection`, and
 /// `Painleve` when k ≤ `painleve_margin`·nᵀ W n (Sect. 7: no or several solutions).
-pub fn slip(
-    kin: &ContactKinematics,
+pub fn slip<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    tau: &Vec3,
+    tau: &VecN<N>,
     settings: &TransitionSettings,
     direction_hint: Option<&Vec3>,
-) -> Result<Accelerations> {
+) -> Result<Accelerations<N>> {
     check_tau(tau)?;
     require_contact(kin, params, settings)?;
     let (mats, chol) = matrices_with_mass(kin, params)?;
@@ -338,13 +365,13 @@ pub fn slip_law_residual(lambda: &Vec3, n: &Vec3, delta_v: &Vec3, mu_k: f64) -> 
 }
 
 /// Dispatch on the mode: [`free`], [`stick`] or [`slip`] (slip without a direction hint).
-pub fn accelerations(
+pub fn accelerations<const N: usize>(
     mode: Mode,
-    kin: &ContactKinematics,
+    kin: &ContactKinematics<N>,
     params: &Params,
-    tau: &Vec3,
+    tau: &VecN<N>,
     settings: &TransitionSettings,
-) -> Result<Accelerations> {
+) -> Result<Accelerations<N>> {
     match mode {
         Mode::Free => free(kin, params, tau),
         Mode::Stick => stick(kin, params, tau, settings),
@@ -356,13 +383,17 @@ pub fn accelerations(
 ///
 /// With the exact saturation n·ṙ_c ≡ n·v_c (eq. 1: n ⟂ e_x3 inside the segment, ṡat = 0 at its
 /// ends), so this is ḧ, the quantity of eq. 50; it vanishes in stick and slip.
-pub fn normal_acceleration(kin: &ContactKinematics, qdd: &Vec3) -> f64 {
+pub fn normal_acceleration<const N: usize>(kin: &ContactKinematics<N>, qdd: &VecN<N>) -> f64 {
     let c = &kin.contact;
     c.n_dot().dot(&c.v_c) + c.n.dot(&(c.jc_dot_qd + c.j_c * qdd))
 }
 
 /// d/dt Δv = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ − J_c q̈ (time derivative of eq. 13).
-pub fn relative_acceleration(kin: &ContactKinematics, qdd: &Vec3, omega_dot: &Vec3) -> Vec3 {
+pub fn relative_acceleration<const N: usize>(
+    kin: &ContactKinematics<N>,
+    qdd: &VecN<N>,
+    omega_dot: &Vec3,
+) -> Vec3 {
     let c = &kin.contact;
     omega_dot.cross(&c.r_c) + kin.state.omega.cross(&c.rc_dot) - c.jc_dot_qd - c.j_c * qdd
 }

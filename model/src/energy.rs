@@ -5,10 +5,10 @@
 //! dE/dt = q̇ᵀτ − μ_v ‖q̇‖² − D ‖ω‖² − λ·Δv,
 //! where −λ·Δv = q̇ᵀ J_cᵀ λ − ωᵀ (r_c × λ) is the power of the contact force: 0 when sticking
 //! (Δv = 0), −μ_k λ_n ‖Δv‖ ≤ 0 when slipping (eq. 20), 0 in free motion. The gyroscopic term
-//! does no work (ω·(ω × I_b ω) = 0) for any I_b.
+//! does no work (ω·(ω × I_b ω) = 0) for any I_b. Generic over the number of joints N.
 
 use crate::dynamics::ContactForce;
-use crate::{ContactKinematics, Params, Vec3};
+use crate::{ContactKinematics, Params, VecN};
 
 /// Energy of the system at one state (J).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -24,7 +24,7 @@ pub struct Energy {
 }
 
 /// E at the state of `kin`.
-pub fn energy(kin: &ContactKinematics, params: &Params) -> Energy {
+pub fn energy<const N: usize>(kin: &ContactKinematics<N>, params: &Params) -> Energy {
     let qd = &kin.state.qd;
     let w = &kin.state.omega;
     let kinetic_finger = 0.5 * qd.dot(&(kin.m_f * qd));
@@ -53,10 +53,10 @@ pub struct PowerBalance {
 }
 
 /// Power balance at `kin` with torque `tau` and contact force `force` (zero in free motion).
-pub fn power_balance(
-    kin: &ContactKinematics,
+pub fn power_balance<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    tau: &Vec3,
+    tau: &VecN<N>,
     force: &ContactForce,
 ) -> PowerBalance {
     let qd = &kin.state.qd;

@@ -22,9 +22,17 @@
 //! consistent reading of the sentence after eq. 39 (impulse perpendicular to the ball, so ω is
 //! unchanged because r_c ∥ n): it always dissipates, but changes the tangential velocity by
 //! T_n W n ι_n. It is not in [`ImpactLaw::ALL`] (the paper's four laws).
+//!
+//! Any number of joints N (default 3): every law works on the 3×3 contact-space matrices W and
+//! Γ, so only Newton's law depends on N. Eq. 39 fixes all three components of J_c q̇⁺: for
+//! N = 3 it is solved with J_c⁻¹ as above; for N > 3 the solution set is an affine subspace
+//! and we take the q̇⁺ closest to q̇⁻ in the kinetic-energy (M_f) norm, q̇⁺ = q̇⁻ + M_f⁻¹ J_cᵀ ι
+//! with W ι = −n (n·v_c⁻) (needs W = J_c M_f⁻¹ J_cᵀ nonsingular, i.e. J_c of rank 3); for
+//! N < 3, J_c has rank < 3 and eq. 39 has in general no solution
+//! (`SingularContactJacobian`).
 
 use crate::dynamics::{ContactMatrices, factor_gamma, matrices_with_mass, require_contact};
-use crate::linalg::{Mat3, Vec3, tangent_basis};
+use crate::linalg::{Mat3, MatN, Spd, Vec3, VecN, tangent_basis};
 use crate::settings::TransitionSettings;
 use crate::{ContactKinematics, Mode, ModelError, Params, Result};
 
@@ -90,11 +98,11 @@ impl std::str::FromStr for ImpactLaw {
 
 /// Result of an impact.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ImpactOutcome {
+pub struct ImpactOutcome<const N: usize = 3> {
     /// The law that produced it.
     pub law: ImpactLaw,
     /// q̇⁺.
-    pub qd: Vec3,
+    pub qd: VecN<N>,
     /// ω⁺.
     pub omega: Vec3,
     /// ι (N s), impulse on the finger.
@@ -114,19 +122,19 @@ pub struct ImpactOutcome {
 }
 
 /// Kinetic energy ½ q̇ᵀ M_f q̇ + ½ ωᵀ I_b ω.
-fn kinetic(m_f: &Mat3, ib: &Mat3, qd: &Vec3, w: &Vec3) -> f64 {
+fn kinetic<const N: usize>(m_f: &MatN<N>, ib: &Mat3, qd: &VecN<N>, w: &Vec3) -> f64 {
     0.5 * qd.dot(&(m_f * qd)) + 0.5 * w.dot(&(ib * w))
 }
 
-fn outcome(
+fn outcome<const N: usize>(
     law: ImpactLaw,
-    kin: &ContactKinematics,
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
-    qd: Vec3,
+    qd: VecN<N>,
     omega: Vec3,
     impulse: Vec3,
-) -> ImpactOutcome {
+) -> ImpactOutcome<N> {
     let c = &kin.contact;
     let n = &c.n;
     let delta_v = omega.cross(&c.r_c) - c.j_c * qd;
@@ -158,12 +166,12 @@ fn outcome(
 }
 
 /// Apply the impulse ι: q̇⁺ = q̇⁻ + M_f⁻¹ J_cᵀ ι, ω⁺ = ω⁻ − I_b⁻¹ (r_c × ι).
-fn apply_impulse(
-    kin: &ContactKinematics,
+fn apply_impulse<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    mats: &ContactMatrices,
+    mats: &ContactMatrices<N>,
     iota: &Vec3,
-) -> (Vec3, Vec3) {
+) -> (VecN<N>, Vec3) {
     let qd = kin.state.qd + mats.minv_jct * iota;
     let omega = kin.state.omega - params.ball_inertia_inv() * kin.contact.r_c.cross(iota);
     (qd, omega)
@@ -173,12 +181,12 @@ fn apply_impulse(
 ///
 /// Errors: `NotInContact`, `Separating`, `SingularContact` (Γ singular / nᵀ W n ≈ 0),
 /// `SingularContactJacobian` (Newton only), `NoConvergence` (max dissipation, not expected).
-pub fn impact(
-    kin: &ContactKinematics,
+pub fn impact<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     law: ImpactLaw,
     settings: &TransitionSettings,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     require_contact(kin, params, settings)?;
     let vn = kin.contact.normal_velocity();
     if vn > settings.hdot_eps {
@@ -188,7 +196,7 @@ pub fn impact(
     }
     let (mats, _) = matrices_with_mass(kin, params)?;
     match law {
-        ImpactLaw::Newton => newton(kin, params, settings),
+        ImpactLaw::Newton => newton(kin, params, &mats, settings),
         ImpactLaw::Stick => {
             let iota = stick_impulse(kin, &mats, settings)?;
             let (qd, w) = apply_impulse(kin, params, &mats, &iota);
@@ -217,9 +225,9 @@ pub fn impact(
 }
 
 /// Sticking impulse ι = Γ⁻¹ Δv⁻ (eq. 41).
-fn stick_impulse(
-    kin: &ContactKinematics,
-    mats: &ContactMatrices,
+fn stick_impulse<const N: usize>(
+    kin: &ContactKinematics<N>,
+    mats: &ContactMatrices<N>,
     settings: &TransitionSettings,
 ) -> Result<Vec3> {
     let g = factor_gamma(mats, settings)?;
@@ -228,11 +236,11 @@ fn stick_impulse(
 
 /// Velocity projection onto Δv = 0 with the sticking impulse (eq. 40–41), without the
 /// approach / separation check (used at Slip→Stick, where n·v_c ≈ 0).
-pub(crate) fn project_stick(
-    kin: &ContactKinematics,
+pub(crate) fn project_stick<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     require_contact(kin, params, settings)?;
     let (mats, _) = matrices_with_mass(kin, params)?;
     let iota = stick_impulse(kin, &mats, settings)?;
@@ -249,12 +257,12 @@ pub(crate) fn project_stick(
 }
 
 /// Apply a given impulse ι at a contact state (used for the Stick→Slip velocity update).
-pub(crate) fn apply_given_impulse(
-    kin: &ContactKinematics,
+pub(crate) fn apply_given_impulse<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
     iota: &Vec3,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     let (mats, _) = matrices_with_mass(kin, params)?;
     let (qd, w) = apply_impulse(kin, params, &mats, iota);
     Ok(outcome(
@@ -268,14 +276,39 @@ pub(crate) fn apply_given_impulse(
     ))
 }
 
-/// Newton (eq. 39): J_c q̇⁺ = T_n J_c q̇⁻, ω⁺ = ω⁻.
-fn newton(
-    kin: &ContactKinematics,
+/// Newton (eq. 39): J_c q̇⁺ = T_n J_c q̇⁻, ω⁺ = ω⁻ (see the module docs for N ≠ 3).
+fn newton<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
+    mats: &ContactMatrices<N>,
     settings: &TransitionSettings,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     let c = &kin.contact;
-    let jc = c.j_c;
+    if N != 3 {
+        if N < 3 {
+            return Err(ModelError::SingularContactJacobian { rcond: 0.0 });
+        }
+        let w = Spd::factor(&mats.w)
+            .filter(|f| f.rcond > settings.singular_rcond)
+            .ok_or_else(|| ModelError::SingularContactJacobian {
+                rcond: Spd::factor(&mats.w).map_or(0.0, |f| f.rcond),
+            })?;
+        let iota = w.solve(&(c.n * -c.n.dot(&c.v_c)));
+        let qd = kin.state.qd + mats.minv_jct * iota;
+        return Ok(outcome(
+            ImpactLaw::Newton,
+            kin,
+            params,
+            settings,
+            qd,
+            kin.state.omega,
+            iota,
+        ));
+    }
+    // N = 3: J_c is square; the copies below are exact (same numbers, 3×3 types).
+    let jc = Mat3::from_column_slice(c.j_c.as_slice());
+    let m_f = Mat3::from_column_slice(kin.m_f.as_slice());
+    let qd_minus = Vec3::from_column_slice(kin.state.qd.as_slice());
     let inv = jc
         .try_inverse()
         .ok_or(ModelError::SingularContactJacobian { rcond: 0.0 })?;
@@ -289,14 +322,14 @@ fn newton(
     // One step of iterative refinement keeps n·J_c q̇⁺ at round-off level for moderate κ(J_c).
     let mut qd = inv * target;
     qd += inv * (target - jc * qd);
-    let dq = qd - kin.state.qd;
-    let iota = inv.transpose() * (kin.m_f * dq);
+    let dq = qd - qd_minus;
+    let iota = inv.transpose() * (m_f * dq);
     Ok(outcome(
         ImpactLaw::Newton,
         kin,
         params,
         settings,
-        qd,
+        VecN::<N>::from_column_slice(qd.as_slice()),
         kin.state.omega,
         iota,
     ))
@@ -317,10 +350,10 @@ fn contact_frame(n: &Vec3) -> Mat3 {
 /// φ(γ) = |x(γ)| + k·x(γ) − c is non-increasing in the multiplier γ ≥ 0 and is bracketed and
 /// solved to round-off; x(γ) itself solves the secular equation s |(A + sI)⁻¹ w| = γ
 /// (w = b − γ k), monotone in s.
-fn max_dissipation_impulse(
-    kin: &ContactKinematics,
+fn max_dissipation_impulse<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    mats: &ContactMatrices,
+    mats: &ContactMatrices<N>,
 ) -> Result<Vec3> {
     let n = kin.contact.n;
     let r = contact_frame(&n);
@@ -497,10 +530,10 @@ fn solve_cone_qp(
 /// |Δv⁺|², so the minimum is at μ = 0, μ_k or that point. When |Δv_∥⁻| ≈ 0 the direction of
 /// the sticking impulse's tangential part is used (documented fallback; then Δv⁺ = 0 if
 /// reachable within μ_k).
-fn min_relative_velocity_impulse(
-    kin: &ContactKinematics,
+fn min_relative_velocity_impulse<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    mats: &ContactMatrices,
+    mats: &ContactMatrices<N>,
     settings: &TransitionSettings,
 ) -> Result<Vec3> {
     let n = kin.contact.n;

@@ -5,13 +5,24 @@
 //! The product implementations (`PaperKernels`, `HumanKernels`) wrap `bf_generated::paper` and
 //! `bf_generated::human` through one macro; every contact quantity therefore comes from the
 //! generated expressions. Test code may implement [`Kernels`] on an independent reference.
+//!
+//! # Any number of joints
+//! [`Kernels`], [`Model`] and everything below them (state, kinematics, dynamics, impacts,
+//! transitions) take the number of joints as a const parameter `N` with default 3, the
+//! paper's finger: `Model<PaperKernels>` is `Model<PaperKernels, 3>`, and q, q̇, τ are
+//! nalgebra `SVector<f64, N>` (= `Vec3` for N = 3). Const generics rather than slices keep the
+//! joint-space vectors and M_f on the stack and let the 3-joint code be the very same
+//! arithmetic as before (the types are identical), so the paper's results are bitwise
+//! unchanged; the price is one instantiation per N, which is why run-time dispatch (the CLI)
+//! covers a fixed range of N. The contact-space algebra (W, Γ, the impact laws) is 3×3 for every
+//! N. A generated scene module implements `Kernels<NQ>` for its own `NQ`.
 
 use bf_scene::{Constants, Scene};
 
 use crate::dynamics::{self, Accelerations, ContactForce};
 use crate::energy::{self, Energy, PowerBalance};
 use crate::impact::{self, ImpactLaw, ImpactOutcome};
-use crate::linalg::{Vec3, mat_from_rows};
+use crate::linalg::{VecN, mat_from_rows};
 use crate::transitions::{self, Transition, TransitionSettings};
 use crate::{ContactGeometry, ContactKinematics, Mode, ModelError, Params, Result, State};
 
@@ -25,9 +36,9 @@ pub enum ContactVariant {
     Smooth(f64),
 }
 
-/// Evaluation of one 3-DOF contact scene's kernels. Implementations hold their runtime
-/// parameter vector; they must not panic for finite inputs.
-pub trait Kernels: std::fmt::Debug {
+/// Evaluation of the kernels of one contact scene with `N` joints (default 3). Implementations
+/// hold their runtime parameter vector; they must not panic for finite inputs.
+pub trait Kernels<const N: usize = 3>: std::fmt::Debug {
     /// Scene name (the generated module's name).
     fn scene_name(&self) -> &str;
     /// The scene file's text (ball, friction constants, ...); may be empty when
@@ -44,35 +55,35 @@ pub trait Kernels: std::fmt::Debug {
     /// Current runtime parameter values (same order as [`Kernels::param_names`]).
     fn param_values(&self) -> &[f64];
     /// M_f(q) and C(q, q̇) q̇ + g(q).
-    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]);
+    fn mass_cqd_g(&self, q: &[f64; N], qd: &[f64; N]) -> ([[f64; N]; N], [f64; N]);
     /// U_f(q) (eq. 22b).
-    fn potential(&self, q: &[f64; 3]) -> f64;
+    fn potential(&self, q: &[f64; N]) -> f64;
     /// Contact geometry (eq. 2–13, 33) at (q, q̇, ω).
     fn contact(
         &self,
-        q: &[f64; 3],
-        qd: &[f64; 3],
+        q: &[f64; N],
+        qd: &[f64; N],
         omega: &[f64; 3],
         variant: ContactVariant,
-    ) -> ContactGeometry;
+    ) -> ContactGeometry<N>;
 
     /// Evaluate everything at `x`.
-    fn evaluate(&self, x: &State, variant: ContactVariant) -> ContactKinematics {
-        let q: [f64; 3] = x.q.into();
-        let qd: [f64; 3] = x.qd.into();
+    fn evaluate(&self, x: &State<N>, variant: ContactVariant) -> ContactKinematics<N> {
+        let q: [f64; N] = x.q.into();
+        let qd: [f64; N] = x.qd.into();
         let w: [f64; 3] = x.omega.into();
         let (m, cg) = self.mass_cqd_g(&q, &qd);
         ContactKinematics {
             state: *x,
             m_f: mat_from_rows(&m),
-            cqd_g: Vec3::from(cg),
+            cqd_g: VecN::<N>::from(cg),
             potential: self.potential(&q),
             contact: self.contact(&q, &qd, &w, variant),
         }
     }
 }
 
-impl<K: Kernels + ?Sized> Kernels for Box<K> {
+impl<K: Kernels<N> + ?Sized, const N: usize> Kernels<N> for Box<K> {
     fn scene_name(&self) -> &str {
         (**self).scene_name()
     }
@@ -88,26 +99,26 @@ impl<K: Kernels + ?Sized> Kernels for Box<K> {
     fn param_values(&self) -> &[f64] {
         (**self).param_values()
     }
-    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+    fn mass_cqd_g(&self, q: &[f64; N], qd: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
         (**self).mass_cqd_g(q, qd)
     }
-    fn potential(&self, q: &[f64; 3]) -> f64 {
+    fn potential(&self, q: &[f64; N]) -> f64 {
         (**self).potential(q)
     }
     fn contact(
         &self,
-        q: &[f64; 3],
-        qd: &[f64; 3],
+        q: &[f64; N],
+        qd: &[f64; N],
         omega: &[f64; 3],
         variant: ContactVariant,
-    ) -> ContactGeometry {
+    ) -> ContactGeometry<N> {
         (**self).contact(q, qd, omega, variant)
     }
 }
 
 /// Physical parameters of a kernel set: the scene's `[ball]` / `[friction]` values, overridden
 /// by any of `ball.radius`, `ball.inertia.*`, `friction.*` that are runtime parameters.
-pub fn params_for<K: Kernels + ?Sized>(kernels: &K) -> Result<Params> {
+pub fn params_for<K: Kernels<N> + ?Sized, const N: usize>(kernels: &K) -> Result<Params> {
     if let Some(p) = kernels.physical_params() {
         return Ok(p);
     }
@@ -128,16 +139,17 @@ pub fn params_for<K: Kernels + ?Sized>(kernels: &K) -> Result<Params> {
     Params::from_constants(&constants)
 }
 
-/// Kernels + parameters + settings: the typed entry point used by the simulator and the CLI.
+/// Kernels + parameters + settings: the typed entry point used by the simulator and the CLI,
+/// for a finger with `N` joints (default 3).
 #[derive(Debug, Clone)]
-pub struct Model<K: Kernels> {
+pub struct Model<K: Kernels<N>, const N: usize = 3> {
     kernels: K,
     params: Params,
     settings: TransitionSettings,
     variant: ContactVariant,
 }
 
-impl<K: Kernels> Model<K> {
+impl<K: Kernels<N>, const N: usize> Model<K, N> {
     /// Model with parameters from the scene (see [`params_for`]) and default settings.
     pub fn from_kernels(kernels: K) -> Result<Self> {
         let params = params_for(&kernels)?;
@@ -206,7 +218,7 @@ impl<K: Kernels> Model<K> {
     }
 
     /// Evaluate the kernels at `x` (errors on a non-finite state or non-finite kernel output).
-    pub fn evaluate(&self, x: &State) -> Result<ContactKinematics> {
+    pub fn evaluate(&self, x: &State<N>) -> Result<ContactKinematics<N>> {
         x.check_finite()?;
         let kin = self.kernels.evaluate(x, self.variant);
         kin.check_finite()?;
@@ -214,27 +226,37 @@ impl<K: Kernels> Model<K> {
     }
 
     /// Free-motion accelerations (eq. 26).
-    pub fn free(&self, x: &State, tau: &Vec3) -> Result<Accelerations> {
+    pub fn free(&self, x: &State<N>, tau: &VecN<N>) -> Result<Accelerations<N>> {
         dynamics::free(&self.evaluate(x)?, &self.params, tau)
     }
 
     /// Sticking accelerations and λ (eq. 29, 33).
-    pub fn stick(&self, x: &State, tau: &Vec3) -> Result<Accelerations> {
+    pub fn stick(&self, x: &State<N>, tau: &VecN<N>) -> Result<Accelerations<N>> {
         dynamics::stick(&self.evaluate(x)?, &self.params, tau, &self.settings)
     }
 
     /// Slipping accelerations and λ (eq. 37); `hint` gives the slip direction when Δv ≈ 0.
-    pub fn slip(&self, x: &State, tau: &Vec3, hint: Option<&Vec3>) -> Result<Accelerations> {
+    pub fn slip(
+        &self,
+        x: &State<N>,
+        tau: &VecN<N>,
+        hint: Option<&crate::Vec3>,
+    ) -> Result<Accelerations<N>> {
         dynamics::slip(&self.evaluate(x)?, &self.params, tau, &self.settings, hint)
     }
 
     /// Accelerations in `mode` (slip without a direction hint).
-    pub fn accelerations(&self, mode: Mode, x: &State, tau: &Vec3) -> Result<Accelerations> {
+    pub fn accelerations(
+        &self,
+        mode: Mode,
+        x: &State<N>,
+        tau: &VecN<N>,
+    ) -> Result<Accelerations<N>> {
         dynamics::accelerations(mode, &self.evaluate(x)?, &self.params, tau, &self.settings)
     }
 
     /// Apply an impact law (Sect. 2.5) at a contact state.
-    pub fn impact(&self, x: &State, law: ImpactLaw) -> Result<ImpactOutcome> {
+    pub fn impact(&self, x: &State<N>, law: ImpactLaw) -> Result<ImpactOutcome<N>> {
         impact::impact(&self.evaluate(x)?, &self.params, law, &self.settings)
     }
 
@@ -242,8 +264,8 @@ impl<K: Kernels> Model<K> {
     pub fn transition(
         &self,
         mode: Mode,
-        x: &State,
-        acc: &Accelerations,
+        x: &State<N>,
+        acc: &Accelerations<N>,
     ) -> Result<Option<Transition>> {
         let kin = self.evaluate(x)?;
         Ok(transitions::check(
@@ -256,16 +278,16 @@ impl<K: Kernels> Model<K> {
     }
 
     /// Slip → Stick velocity update (projection onto Δv = 0).
-    pub fn slip_to_stick_update(&self, x: &State) -> Result<ImpactOutcome> {
+    pub fn slip_to_stick_update(&self, x: &State<N>) -> Result<ImpactOutcome<N>> {
         transitions::slip_to_stick_update(&self.evaluate(x)?, &self.params, &self.settings)
     }
 
     /// Stick → Slip velocity update (Δv⁺ = slip_kick along λ_∥).
     pub fn stick_to_slip_update(
         &self,
-        x: &State,
+        x: &State<N>,
         stick_force: &ContactForce,
-    ) -> Result<ImpactOutcome> {
+    ) -> Result<ImpactOutcome<N>> {
         transitions::stick_to_slip_update(
             &self.evaluate(x)?,
             &self.params,
@@ -275,25 +297,25 @@ impl<K: Kernels> Model<K> {
     }
 
     /// Configuration correction Δq towards h = 0 (see [`transitions::project_configuration`]).
-    pub fn project_configuration(&self, x: &State) -> Result<Vec3> {
+    pub fn project_configuration(&self, x: &State<N>) -> Result<VecN<N>> {
         transitions::project_configuration(&self.evaluate(x)?, &self.params, &self.settings)
     }
 
     /// Velocities made consistent with `mode` (see [`transitions::project_velocity`]).
-    pub fn project_velocity(&self, mode: Mode, x: &State) -> Result<ImpactOutcome> {
+    pub fn project_velocity(&self, mode: Mode, x: &State<N>) -> Result<ImpactOutcome<N>> {
         transitions::project_velocity(mode, &self.evaluate(x)?, &self.params, &self.settings)
     }
 
     /// Energy at `x`.
-    pub fn energy(&self, x: &State) -> Result<Energy> {
+    pub fn energy(&self, x: &State<N>) -> Result<Energy> {
         Ok(energy::energy(&self.evaluate(x)?, &self.params))
     }
 
     /// Power balance at `x` for torque `tau` and contact force `force`.
     pub fn power_balance(
         &self,
-        x: &State,
-        tau: &Vec3,
+        x: &State<N>,
+        tau: &VecN<N>,
         force: &ContactForce,
     ) -> Result<PowerBalance> {
         Ok(energy::power_balance(
@@ -305,7 +327,8 @@ impl<K: Kernels> Model<K> {
     }
 }
 
-/// Implements [`Kernels`] for a generated 3-DOF contact scene module `bf_generated::$module`.
+/// Implements [`Kernels`] (with `N` = the module's `NQ`) for a generated contact scene module
+/// `bf_generated::$module`.
 macro_rules! generated_kernels {
     ($(#[$meta:meta])* $ty:ident, $module:ident) => {
         $(#[$meta])*
@@ -313,8 +336,6 @@ macro_rules! generated_kernels {
         pub struct $ty {
             p: [f64; bf_generated::$module::NP],
         }
-
-        const _: () = assert!(bf_generated::$module::NQ == 3, "contact scenes have 3 joints");
 
         impl $ty {
             /// Kernels with the scene's default runtime parameters (`PARAM_DEFAULTS`).
@@ -344,7 +365,7 @@ macro_rules! generated_kernels {
             }
         }
 
-        impl Kernels for $ty {
+        impl Kernels<{ bf_generated::$module::NQ }> for $ty {
             fn scene_name(&self) -> &str {
                 bf_generated::$module::SCENE_NAME
             }
@@ -357,24 +378,31 @@ macro_rules! generated_kernels {
             fn param_values(&self) -> &[f64] {
                 &self.p
             }
-            fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
-                let mut m = [[0.0; 3]; 3];
-                let mut c = [0.0; 3];
+            fn mass_cqd_g(
+                &self,
+                q: &[f64; bf_generated::$module::NQ],
+                qd: &[f64; bf_generated::$module::NQ],
+            ) -> (
+                [[f64; bf_generated::$module::NQ]; bf_generated::$module::NQ],
+                [f64; bf_generated::$module::NQ],
+            ) {
+                let mut m = [[0.0; bf_generated::$module::NQ]; bf_generated::$module::NQ];
+                let mut c = [0.0; bf_generated::$module::NQ];
                 bf_generated::$module::mass_cqd_g(q, qd, &self.p, &mut m, &mut c);
                 (m, c)
             }
-            fn potential(&self, q: &[f64; 3]) -> f64 {
+            fn potential(&self, q: &[f64; bf_generated::$module::NQ]) -> f64 {
                 let mut u = 0.0;
                 bf_generated::$module::potential(q, &self.p, &mut u);
                 u
             }
             fn contact(
                 &self,
-                q: &[f64; 3],
-                qd: &[f64; 3],
+                q: &[f64; bf_generated::$module::NQ],
+                qd: &[f64; bf_generated::$module::NQ],
                 omega: &[f64; 3],
                 variant: ContactVariant,
-            ) -> ContactGeometry {
+            ) -> ContactGeometry<{ bf_generated::$module::NQ }> {
                 let mut c = bf_generated::$module::Contact::default();
                 match variant {
                     ContactVariant::Exact => {

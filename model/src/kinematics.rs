@@ -11,14 +11,17 @@
 //! | `contact.j_c`, `v_c` | eq. 6–7 |
 //! | `contact.delta_v` | eq. 13 |
 //! | `contact.rc_dot`, `jc_dot_qd` | ṙ_c and J̇_c q̇ in the bias of eq. 33 |
+//!
+//! Both structs are generic over the number of joints `N` (default 3): M_f is N×N, C q̇ + g an
+//! N-vector and J_c 3×N; every other contact quantity lives in world space (3-D).
 
-use crate::linalg::{Mat3, Vec3, mat_from_rows};
+use crate::linalg::{Mat3xN, MatN, Vec3, VecN, mat_from_rows};
 use crate::{ModelError, Result, State};
 
 /// Contact geometry of eq. 2–13 at one state (a copy of the generated `Contact` struct with
 /// nalgebra types). λ-free: it depends on (q, q̇, ω) only.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ContactGeometry {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactGeometry<const N: usize = 3> {
     /// α = (o_b − p_e)·e_x3 (eq. 2).
     pub alpha: f64,
     /// sat(α) (exact or smooth, eq. 3 / 58–59).
@@ -32,7 +35,7 @@ pub struct ContactGeometry {
     /// Outward normal n = r_c/|r_c| (eq. 11).
     pub n: Vec3,
     /// Contact Jacobian J_c (eq. 7), 3×NQ.
-    pub j_c: Mat3,
+    pub j_c: Mat3xN<N>,
     /// v_c = J_c q̇ (eq. 6).
     pub v_c: Vec3,
     /// Δv = ω × r_c − v_c (eq. 13).
@@ -45,7 +48,26 @@ pub struct ContactGeometry {
     pub jc_dot_qd: Vec3,
 }
 
-impl ContactGeometry {
+impl<const N: usize> Default for ContactGeometry<N> {
+    fn default() -> Self {
+        Self {
+            alpha: 0.0,
+            sat_alpha: 0.0,
+            p_c: Vec3::zeros(),
+            r_c: Vec3::zeros(),
+            h: 0.0,
+            n: Vec3::zeros(),
+            j_c: Mat3xN::<N>::zeros(),
+            v_c: Vec3::zeros(),
+            delta_v: Vec3::zeros(),
+            h_dot: 0.0,
+            rc_dot: Vec3::zeros(),
+            jc_dot_qd: Vec3::zeros(),
+        }
+    }
+}
+
+impl<const N: usize> ContactGeometry<N> {
     /// Fill from the row-major arrays of a generated `Contact` struct.
     pub fn from_arrays(
         alpha: f64,
@@ -54,7 +76,7 @@ impl ContactGeometry {
         r_c: &[f64; 3],
         h: f64,
         n: &[f64; 3],
-        j_c: &[[f64; 3]; 3],
+        j_c: &[[f64; N]; 3],
         v_c: &[f64; 3],
         delta_v: &[f64; 3],
         h_dot: f64,
@@ -111,20 +133,20 @@ impl ContactGeometry {
 
 /// Everything the physics needs at one state x = (q, q̇, ω).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ContactKinematics {
+pub struct ContactKinematics<const N: usize = 3> {
     /// The state at which the kernels were evaluated.
-    pub state: State,
+    pub state: State<N>,
     /// Finger mass matrix M_f(q).
-    pub m_f: Mat3,
+    pub m_f: MatN<N>,
     /// C(q, q̇) q̇ + g(q) (without μ_v q̇).
-    pub cqd_g: Vec3,
+    pub cqd_g: VecN<N>,
     /// Finger potential energy U_f(q) (J).
     pub potential: f64,
     /// Contact geometry.
-    pub contact: ContactGeometry,
+    pub contact: ContactGeometry<N>,
 }
 
-impl ContactKinematics {
+impl<const N: usize> ContactKinematics<N> {
     /// Error if any kernel output is NaN/inf (a non-finite state gives NonFinite "state").
     pub fn check_finite(&self) -> Result<()> {
         self.state.check_finite()?;

@@ -23,7 +23,7 @@
 //! 3. **[`Model`]**: kernels + [`Params`] + [`TransitionSettings`] with convenience methods
 //!    (`model.stick(&state, &tau)`, `model.impact(&state, law)`, ...). [`fixtures`] builds the
 //!    paper and human scenes from `bf_generated`; [`registry`] gives the kernels of any scene
-//!    file: the compiled ones of the build-time registry `bf_generated::SCENE_KERNELS` when the
+//!    file (any number of joints): the compiled ones of the build-time registry `bf_generated::SCENE_KERNELS` when the
 //!    scene is a compiled one, bf-codegen's interpreter on the same graphs otherwise.
 //! 4. **[`arm`]**: free motion of an arm with any number of joints and no ball
 //!    (M q̈ = τ − C q̇ − g − μ_v q̇) on the same compiled-or-interpreted kernels.
@@ -55,7 +55,16 @@
 //!   on the finger points along Δv (eq. 20).
 //! - Generalised contact force G^T λ = [J_cᵀ λ; −r_c × λ] (eq. 28, 44).
 //! - M_f q̈ + C q̇ + μ_v q̇ + g = τ + J_cᵀ λ;  I_b ω̇ + ω × I_b ω + D ω = −r_c × λ (eq. 29).
-//! - SI units throughout. Vectors are `nalgebra` [`Vec3`] / [`Mat3`].
+//! - SI units throughout. Vectors are `nalgebra` [`Vec3`] / [`Mat3`] in world space and
+//!   [`VecN`] / [`MatN`] / [`Mat3xN`] in joint space.
+//!
+//! # Any number of joints
+//! The finger may have any number of joints N: [`State`], [`ContactKinematics`], [`Kernels`],
+//! [`Model`] and the physics functions take N as a const parameter with default 3 (the paper's
+//! finger), so `Model<PaperKernels>` and `State` mean N = 3 and run exactly the 3-joint
+//! arithmetic (see [`kernels`] for the choice of const generics).
+//! [`registry::contact_kernels_n`] gives the kernels of a scene with N joints (compiled or
+//! interpreted); the contact-space matrices (W, Γ) and the impact laws stay 3×3 for every N.
 //!
 //! # Failure modes
 //! Every failure is a typed [`ModelError`], never a NaN: invalid parameters, non-finite states,
@@ -99,7 +108,9 @@ pub use error::{ModelError, PainleveKind};
 pub use impact::{ImpactLaw, ImpactOutcome};
 pub use kernels::{ContactVariant, HumanKernels, Kernels, Model, PaperKernels};
 pub use kinematics::{ContactGeometry, ContactKinematics};
-pub use linalg::{Mat3, Vec3, normal_projector, skew, tangent_projector};
+pub use linalg::{
+    Mat3, Mat3xN, MatN, MatNx3, Vec3, VecN, normal_projector, skew, tangent_projector,
+};
 pub use params::Params;
 pub use registry::{CompiledKernels, DynKernels, InterpretedKernels, KernelSource};
 pub use settings::TransitionSettings;

@@ -1,12 +1,21 @@
-//! Small 3-D helpers: skew matrix S(·) (eq. 6), projectors P_n and T_n (eq. 15–17), a symmetric
-//! positive definite 3×3 solve with a conditioning estimate, and array conversions.
+//! Small helpers: skew matrix S(·) (eq. 6), projectors P_n and T_n (eq. 15–17), a symmetric
+//! positive definite N×N solve with a conditioning estimate ([`Spd`]: the finger's M_f with N
+//! joints, Γ and I_b with N = 3), and array conversions.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// 3-vector of f64 (world axes unless stated otherwise).
 pub type Vec3 = Vector3<f64>;
 /// 3×3 matrix of f64.
 pub type Mat3 = Matrix3<f64>;
+/// Joint-space vector of a finger with `N` joints (q, q̇, τ); [`Vec3`] for N = 3.
+pub type VecN<const N: usize> = SVector<f64, N>;
+/// N×N joint-space matrix (M_f); [`Mat3`] for N = 3.
+pub type MatN<const N: usize> = SMatrix<f64, N, N>;
+/// 3×N matrix (the contact Jacobian J_c of eq. 7).
+pub type Mat3xN<const N: usize> = SMatrix<f64, 3, N>;
+/// N×3 matrix (M_f⁻¹ J_cᵀ).
+pub type MatNx3<const N: usize> = SMatrix<f64, N, 3>;
 
 /// Skew-symmetric matrix S(a) with S(a) b = a × b (paper eq. 6).
 pub fn skew(a: &Vec3) -> Mat3 {
@@ -23,28 +32,31 @@ pub fn tangent_projector(n: &Vec3) -> Mat3 {
     Mat3::identity() - normal_projector(n)
 }
 
-/// Row-major nested array → matrix.
-pub(crate) fn mat_from_rows(a: &[[f64; 3]; 3]) -> Mat3 {
-    Mat3::new(
-        a[0][0], a[0][1], a[0][2], a[1][0], a[1][1], a[1][2], a[2][0], a[2][1], a[2][2],
-    )
+/// Row-major nested array → matrix (R rows of C entries).
+pub(crate) fn mat_from_rows<const R: usize, const C: usize>(
+    a: &[[f64; C]; R],
+) -> SMatrix<f64, R, C> {
+    SMatrix::from_fn(|i, j| a[i][j])
 }
 
-/// Cholesky factor of a symmetric positive definite 3×3 matrix with a cheap reciprocal
-/// condition estimate (min pivot² / max pivot²). `None` if not positive definite.
+/// Cholesky factor of a symmetric positive definite N×N matrix with a cheap reciprocal
+/// condition estimate. `None` if not positive definite.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Spd3 {
-    l: Mat3,
-    /// Reciprocal condition estimate 3 / (‖A‖_F ‖A⁻¹‖_F) ∈ (0, 1] (1 for a multiple of the
-    /// identity; within a factor 3 of the 2-norm reciprocal condition number).
+pub(crate) struct Spd<const N: usize> {
+    l: MatN<N>,
+    /// Reciprocal condition estimate N / (‖A‖_F ‖A⁻¹‖_F) ∈ (0, 1] (1 for a multiple of the
+    /// identity; within a factor N of the 2-norm reciprocal condition number).
     pub rcond: f64,
 }
 
-impl Spd3 {
+/// The 3×3 factorisation (Γ, I_b, and M_f of a 3-joint finger).
+pub(crate) type Spd3 = Spd<3>;
+
+impl<const N: usize> Spd<N> {
     /// Factor `a` (only the lower triangle is read).
-    pub fn factor(a: &Mat3) -> Option<Self> {
-        let mut l = Mat3::zeros();
-        for j in 0..3 {
+    pub fn factor(a: &MatN<N>) -> Option<Self> {
+        let mut l = MatN::<N>::zeros();
+        for j in 0..N {
             let mut d = a[(j, j)];
             for k in 0..j {
                 d -= l[(j, k)] * l[(j, k)];
@@ -54,7 +66,7 @@ impl Spd3 {
             }
             let djj = d.sqrt();
             l[(j, j)] = djj;
-            for i in (j + 1)..3 {
+            for i in (j + 1)..N {
                 let mut s = a[(i, j)];
                 for k in 0..j {
                     s -= l[(i, k)] * l[(j, k)];
@@ -63,19 +75,19 @@ impl Spd3 {
             }
         }
         let mut out = Self { l, rcond: 0.0 };
-        let inv = out.solve_mat(&Mat3::identity());
+        let inv = out.solve_mat(&MatN::<N>::identity());
         let lower_norm = {
             // ‖A‖_F from the lower triangle only (A is symmetric by contract).
             let mut s = 0.0;
-            for i in 0..3 {
-                for j in 0..3 {
+            for i in 0..N {
+                for j in 0..N {
                     let v = if j <= i { a[(i, j)] } else { a[(j, i)] };
                     s += v * v;
                 }
             }
             s.sqrt()
         };
-        out.rcond = 3.0 / (lower_norm * inv.norm());
+        out.rcond = N as f64 / (lower_norm * inv.norm());
         if !out.rcond.is_finite() {
             return None;
         }
@@ -83,20 +95,20 @@ impl Spd3 {
     }
 
     /// Solve A x = b.
-    pub fn solve(&self, b: &Vec3) -> Vec3 {
+    pub fn solve(&self, b: &VecN<N>) -> VecN<N> {
         let l = &self.l;
-        let mut y = Vec3::zeros();
-        for i in 0..3 {
+        let mut y = VecN::<N>::zeros();
+        for i in 0..N {
             let mut s = b[i];
             for k in 0..i {
                 s -= l[(i, k)] * y[k];
             }
             y[i] = s / l[(i, i)];
         }
-        let mut x = Vec3::zeros();
-        for i in (0..3).rev() {
+        let mut x = VecN::<N>::zeros();
+        for i in (0..N).rev() {
             let mut s = y[i];
-            for k in (i + 1)..3 {
+            for k in (i + 1)..N {
                 s -= l[(k, i)] * x[k];
             }
             x[i] = s / l[(i, i)];
@@ -105,9 +117,9 @@ impl Spd3 {
     }
 
     /// A⁻¹ B column by column.
-    pub fn solve_mat(&self, b: &Mat3) -> Mat3 {
-        let mut out = Mat3::zeros();
-        for c in 0..3 {
+    pub fn solve_mat<const C: usize>(&self, b: &SMatrix<f64, N, C>) -> SMatrix<f64, N, C> {
+        let mut out = SMatrix::<f64, N, C>::zeros();
+        for c in 0..C {
             let col = self.solve(&b.column(c).into_owned());
             out.set_column(c, &col);
         }

@@ -11,10 +11,13 @@
 //!   node-kernel lists) and the values of the compiled scene's runtime parameters, which become
 //!   the parameter vector `p`. A scene named like a compiled one with any other difference
 //!   (a link length, a mass, the ball) does not match.
-//! - [`contact_kernels`]: a boxed [`Kernels`] for a 3-joint scene with a ball and a contact, and
-//!   the [`KernelSource`] it runs on.
+//! - [`contact_kernels_n`]: a boxed [`Kernels<N>`] for a scene with `N` joints, a ball and a
+//!   contact (any N: the compiled registry emits the contact kernels of every scene with a
+//!   ball, and the interpreter needs no build), and the [`KernelSource`] it runs on;
+//!   [`contact_kernels`] is the 3-joint case. Both paths write the contact outputs in
+//!   bf-codegen's `CONTACT_FIELDS` order (J_c row-major 3 × N), decoded by one layout.
 //! - [`CompiledKernels::named`], [`compiled_contact_scenes`], [`contact_scene_id`]: the
-//!   compiled contact scenes by [`SceneId`], the one lookup by name.
+//!   compiled 3-joint contact scenes by [`SceneId`], the one lookup by name.
 //! - [`set_parameters`]: `name = value` assignments to a scene's runtime parameters (the CLI's
 //!   `--param`), applied to the parsed scene so that every consumer (model, optimiser, `eval`)
 //!   sees the same values.
@@ -24,7 +27,7 @@ use std::fmt;
 use bf_codegen::interp::{KernelF64, Tape};
 use bf_codegen::kernels::{CONTACT_FIELDS, Dim, build_kernel};
 use bf_codegen::spec::{Angle, InertiaSpec, Scene, SceneId};
-use bf_generated::{ContactFn, ContactValues, MassCqdGFn, PotentialFn};
+use bf_generated::{ContactFn, MassCqdGFn, PotentialFn};
 
 use crate::kernels::{ContactVariant, Kernels};
 use crate::{ContactGeometry, ModelError, Params, Result};
@@ -54,8 +57,8 @@ impl fmt::Display for KernelSource {
     }
 }
 
-/// A boxed kernel set of any scene.
-pub type DynKernels = Box<dyn Kernels + Send + Sync>;
+/// A boxed kernel set of any contact scene with `N` joints (default 3).
+pub type DynKernels<const N: usize = 3> = Box<dyn Kernels<N> + Send + Sync>;
 
 fn scene_err(scene: &str, message: impl Into<String>) -> ModelError {
     ModelError::Scene {
@@ -224,7 +227,8 @@ fn set_constant(scene: &mut Scene, name: &str, value: f64) -> Result<()> {
     Ok(())
 }
 
-/// Errors unless `scene` can carry the contact model: 3 joints, a ball, a contact.
+/// Errors unless `scene` can carry the contact model: a ball, a contact and friction (any
+/// number of joints; the error names the joints for orientation).
 pub fn check_contact_scene(scene: &Scene) -> Result<()> {
     let mut missing = Vec::new();
     if scene.ball.is_none() {
@@ -236,56 +240,73 @@ pub fn check_contact_scene(scene: &Scene) -> Result<()> {
     if scene.friction.is_none() {
         missing.push("no [friction]");
     }
-    let joints;
-    if scene.links.len() != 3 {
-        joints = format!(
-            "{} joints (the finger–ball contact model has 3)",
-            scene.links.len()
-        );
-        missing.push(&joints);
-    }
     if missing.is_empty() {
         Ok(())
     } else {
         Err(scene_err(
             &scene.name,
             format!(
-                "not a finger-and-ball contact scene: {}",
+                "not a finger-and-ball contact scene ({} joints): {}",
+                scene.links.len(),
                 missing.join(", ")
             ),
         ))
     }
 }
 
-/// The kernels of a 3-joint contact scene: compiled when [`compiled_match`] finds the scene
-/// (with its runtime-parameter values), interpreted otherwise.
+/// Error unless `scene` has `N` joints (the caller's model type is for N joints).
+fn check_joints<const N: usize>(scene: &Scene) -> Result<()> {
+    if scene.links.len() == N {
+        Ok(())
+    } else {
+        Err(scene_err(
+            &scene.name,
+            format!(
+                "the scene has {} joints, these contact kernels are for {N}",
+                scene.links.len()
+            ),
+        ))
+    }
+}
+
+/// The kernels of a 3-joint contact scene ([`contact_kernels_n`] with N = 3).
 pub fn contact_kernels(scene: &Scene) -> Result<(DynKernels, KernelSource)> {
+    contact_kernels_n::<3>(scene)
+}
+
+/// The kernels of a contact scene with `N` joints: compiled when [`compiled_match`] finds the
+/// scene (with its runtime-parameter values), interpreted otherwise. Errors unless the scene
+/// has a ball, a contact, friction and `N` joints.
+pub fn contact_kernels_n<const N: usize>(scene: &Scene) -> Result<(DynKernels<N>, KernelSource)> {
     check_contact_scene(scene)?;
+    check_joints::<N>(scene)?;
     if let Some((entry, p)) = compiled_match(scene)
-        && let Some(k) = CompiledKernels::from_entry(entry, p)?
+        && let Some(k) = CompiledKernels::<N>::from_entry(entry, p)?
     {
         return Ok((Box::new(k), KernelSource::Compiled));
     }
     Ok((
-        Box::new(InterpretedKernels::new(scene)?),
+        Box::new(InterpretedKernels::<N>::for_scene(scene)?),
         KernelSource::Interpreted,
     ))
 }
 
-/// A compiled 3-joint contact scene of the registry with a runtime-parameter vector.
+/// A compiled contact scene of the registry with `N` joints (default 3) and a
+/// runtime-parameter vector.
 #[derive(Debug, Clone)]
-pub struct CompiledKernels {
+pub struct CompiledKernels<const N: usize = 3> {
     entry: &'static bf_generated::SceneKernels,
     mass_cqd_g: MassCqdGFn,
     potential: PotentialFn,
     contact: ContactFn,
     p: Vec<f64>,
+    layout: ContactLayout,
 }
 
-impl CompiledKernels {
-    /// The compiled contact scene `id` with its default runtime parameters (the one lookup
-    /// of a compiled scene's kernels by name); an error names the compiled contact scenes if
-    /// there is none of that name.
+impl CompiledKernels<3> {
+    /// The compiled 3-joint contact scene `id` with its default runtime parameters (the one
+    /// lookup of a compiled scene's kernels by name); an error names the compiled contact
+    /// scenes if there is none of that name.
     pub fn named(id: &SceneId) -> Result<Self> {
         let found = bf_generated::scene(id.as_str())
             .map(|e| Self::from_entry(e, e.param_defaults.to_vec()))
@@ -302,9 +323,11 @@ impl CompiledKernels {
             )
         })
     }
+}
 
+impl<const N: usize> CompiledKernels<N> {
     /// Kernels of `entry` with parameters `p` (length NP, finite); `None` if the entry is not
-    /// a 3-joint contact scene with `mass_cqd_g`, `potential` and the contact kernels.
+    /// a contact scene with `N` joints, `mass_cqd_g`, `potential` and the contact kernels.
     pub fn from_entry(
         entry: &'static bf_generated::SceneKernels,
         p: Vec<f64>,
@@ -329,7 +352,7 @@ impl CompiledKernels {
         else {
             return Ok(None);
         };
-        if entry.nq != 3 {
+        if entry.nq != N {
             return Ok(None);
         }
         Ok(Some(CompiledKernels {
@@ -338,11 +361,13 @@ impl CompiledKernels {
             potential,
             contact,
             p,
+            layout: ContactLayout::new(N)?,
         }))
     }
 }
 
-/// The compiled 3-joint contact scenes (registry order: `scenes/*.toml` order).
+/// The compiled 3-joint contact scenes (registry order: `scenes/*.toml` order): those
+/// [`CompiledKernels::named`] finds.
 pub fn compiled_contact_scenes() -> Vec<SceneId> {
     bf_generated::SCENE_KERNELS
         .iter()
@@ -360,25 +385,10 @@ pub fn contact_scene_id(text: &str) -> Result<SceneId> {
         .map_err(|e| scene_err(text, format!("not a compiled contact scene: {e}")))
 }
 
-/// The model's contact geometry from the emitted kernels' contact struct.
-fn geometry(c: &ContactValues) -> ContactGeometry {
-    ContactGeometry::from_arrays(
-        c.alpha,
-        c.sat_alpha,
-        &c.p_c,
-        &c.r_c,
-        c.h,
-        &c.n,
-        &c.j_c,
-        &c.v_c,
-        &c.delta_v,
-        c.h_dot,
-        &c.rc_dot,
-        &c.jc_dot_qd,
-    )
-}
+/// Flat outputs longer than this go through a heap buffer (N > 35 joints).
+const STACK_OUTPUTS: usize = 128;
 
-impl Kernels for CompiledKernels {
+impl<const N: usize> Kernels<N> for CompiledKernels<N> {
     fn scene_name(&self) -> &str {
         self.entry.name
     }
@@ -391,78 +401,119 @@ impl Kernels for CompiledKernels {
     fn param_values(&self) -> &[f64] {
         &self.p
     }
-    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
-        let mut m = [0.0; 9];
-        let mut c = [0.0; 3];
-        (self.mass_cqd_g)(q, qd, &self.p, &mut m, &mut c);
-        (
-            [[m[0], m[1], m[2]], [m[3], m[4], m[5]], [m[6], m[7], m[8]]],
-            c,
-        )
+    fn mass_cqd_g(&self, q: &[f64; N], qd: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
+        let mut m = [[0.0; N]; N];
+        let mut c = [0.0; N];
+        (self.mass_cqd_g)(q, qd, &self.p, m.as_flattened_mut(), &mut c);
+        (m, c)
     }
-    fn potential(&self, q: &[f64; 3]) -> f64 {
+    fn potential(&self, q: &[f64; N]) -> f64 {
         (self.potential)(q, &self.p)
     }
     fn contact(
         &self,
-        q: &[f64; 3],
-        qd: &[f64; 3],
+        q: &[f64; N],
+        qd: &[f64; N],
         omega: &[f64; 3],
         variant: ContactVariant,
-    ) -> ContactGeometry {
+    ) -> ContactGeometry<N> {
         let eps = match variant {
             ContactVariant::Exact => None,
             ContactVariant::Smooth(e) => Some(e),
         };
-        let mut c = ContactValues::default();
-        (self.contact)(q, qd, omega, eps, &self.p, &mut c);
-        geometry(&c)
+        let len = self.layout.len;
+        if len <= STACK_OUTPUTS {
+            let mut v = [0.0; STACK_OUTPUTS];
+            (self.contact)(q, qd, omega, eps, &self.p, &mut v[..len]);
+            self.layout.geometry(&v[..len])
+        } else {
+            let mut v = vec![0.0; len];
+            (self.contact)(q, qd, omega, eps, &self.p, &mut v);
+            self.layout.geometry(&v)
+        }
     }
 }
 
-/// Offsets of the fields of [`ContactValues`] (in its declaration order) in the flat outputs
-/// of the `contact` kernels, from bf-codegen's `CONTACT_FIELDS` (the emitted struct's layout).
-fn contact_offsets() -> Result<[usize; 12]> {
-    const FIELDS: [(&str, usize); 12] = [
-        ("alpha", 1),
-        ("sat_alpha", 1),
-        ("p_c", 3),
-        ("r_c", 3),
-        ("h", 1),
-        ("n", 3),
-        ("j_c", 9),
-        ("v_c", 3),
-        ("delta_v", 3),
-        ("h_dot", 1),
-        ("rc_dot", 3),
-        ("jc_dot_qd", 3),
-    ];
-    let mut layout = Vec::with_capacity(CONTACT_FIELDS.len());
-    let mut off = 0;
-    for (name, dims, _) in CONTACT_FIELDS {
-        let len: usize = dims
-            .iter()
-            .map(|d| match d {
-                Dim::Nq => 3,
-                Dim::Lit(n) => *n,
-            })
-            .product();
-        layout.push((*name, off, len));
-        off += len;
-    }
-    let mut offsets = [0; 12];
-    for (slot, (name, len)) in offsets.iter_mut().zip(FIELDS) {
-        match layout.iter().find(|f| f.0 == name) {
-            Some(&(_, at, n)) if n == len => *slot = at,
-            _ => {
-                return Err(scene_err(
-                    "-",
-                    format!("bf-codegen's contact layout has no field `{name}` of {len} values"),
-                ));
+/// Where the fields of the model's [`ContactGeometry`] sit in the flat outputs of the contact
+/// kernels of a scene with `nq` joints: bf-codegen's `CONTACT_FIELDS` order (the emitted
+/// `Contact` struct's layout), which both the compiled registry wrappers and the interpreter
+/// tapes write.
+#[derive(Debug, Clone, Copy)]
+struct ContactLayout {
+    /// Offsets of alpha, sat_alpha, p_c, r_c, h, n, j_c, v_c, delta_v, h_dot, rc_dot,
+    /// jc_dot_qd.
+    offsets: [usize; 12],
+    /// Number of outputs (22 + 3 nq).
+    len: usize,
+}
+
+impl ContactLayout {
+    fn new(nq: usize) -> Result<Self> {
+        let fields: [(&str, usize); 12] = [
+            ("alpha", 1),
+            ("sat_alpha", 1),
+            ("p_c", 3),
+            ("r_c", 3),
+            ("h", 1),
+            ("n", 3),
+            ("j_c", 3 * nq),
+            ("v_c", 3),
+            ("delta_v", 3),
+            ("h_dot", 1),
+            ("rc_dot", 3),
+            ("jc_dot_qd", 3),
+        ];
+        let mut layout = Vec::with_capacity(CONTACT_FIELDS.len());
+        let mut off = 0;
+        for (name, dims, _) in CONTACT_FIELDS {
+            let len: usize = dims
+                .iter()
+                .map(|d| match d {
+                    Dim::Nq => nq,
+                    Dim::Lit(n) => *n,
+                })
+                .product();
+            layout.push((*name, off, len));
+            off += len;
+        }
+        let mut offsets = [0; 12];
+        for (slot, (name, len)) in offsets.iter_mut().zip(fields) {
+            match layout.iter().find(|f| f.0 == name) {
+                Some(&(_, at, n)) if n == len => *slot = at,
+                _ => {
+                    return Err(scene_err(
+                        "-",
+                        format!(
+                            "bf-codegen's contact layout has no field `{name}` of {len} values"
+                        ),
+                    ));
+                }
             }
         }
+        Ok(ContactLayout { offsets, len: off })
     }
-    Ok(offsets)
+
+    /// The geometry from flat outputs `v` (J_c row-major 3 × N).
+    fn geometry<const N: usize>(&self, v: &[f64]) -> ContactGeometry<N> {
+        let o = &self.offsets;
+        let a3 = |k: usize| [v[o[k]], v[o[k] + 1], v[o[k] + 2]];
+        let j = o[6];
+        let j_c: [[f64; N]; 3] = std::array::from_fn(|r| std::array::from_fn(|c| v[j + r * N + c]));
+        ContactGeometry::from_arrays(
+            v[o[0]],
+            v[o[1]],
+            &a3(2),
+            &a3(3),
+            v[o[4]],
+            &a3(5),
+            &j_c,
+            &a3(7),
+            &a3(8),
+            v[o[9]],
+            &a3(10),
+            &a3(11),
+        )
+    }
 }
 
 /// Interpreter tapes of some of a scene's kernels, built from the generator's kernel
@@ -504,28 +555,37 @@ pub(crate) fn interpreted_tapes<const N: usize>(
     })
 }
 
-/// Kernels of a 3-joint contact scene evaluated by the interpreter on the tapes of the
-/// generator's kernel definitions (the graphs the compiled kernels are emitted from).
+/// Kernels of a contact scene with `N` joints (default 3) evaluated by the interpreter on the
+/// tapes of the generator's kernel definitions (the graphs the compiled kernels are emitted
+/// from).
 #[derive(Debug, Clone)]
-pub struct InterpretedKernels {
+pub struct InterpretedKernels<const N: usize = 3> {
     name: String,
     params: Params,
     mass_cqd_g: Tape,
     potential: Tape,
     exact: Tape,
     smooth: Tape,
-    offsets: [usize; 12],
-    layout: bf_codegen::robot::Layout,
+    layout: ContactLayout,
+    tape_layout: bf_codegen::robot::Layout,
     /// The variable vector with the runtime parameters filled in (q, q̇, ω, ε are set per call).
     base_vars: Vec<KernelF64>,
 }
 
-impl InterpretedKernels {
-    /// Builds the tapes of `scene` (3 joints, ball, contact; runtime parameters at the
+impl InterpretedKernels<3> {
+    /// The kernels of a 3-joint contact scene ([`InterpretedKernels::for_scene`]).
+    pub fn new(scene: &Scene) -> Result<Self> {
+        Self::for_scene(scene)
+    }
+}
+
+impl<const N: usize> InterpretedKernels<N> {
+    /// Builds the tapes of `scene` (`N` joints, ball, contact; runtime parameters at the
     /// scene's values). Runs on a helper thread with a large stack: building the graphs of a
     /// scene with runtime parameters recurses deeply in bf-codegen.
-    pub fn new(scene: &Scene) -> Result<Self> {
+    pub fn for_scene(scene: &Scene) -> Result<Self> {
         check_contact_scene(scene)?;
+        check_joints::<N>(scene)?;
         let params = Params::from_scene(scene)?;
         std::thread::scope(|s| {
             std::thread::Builder::new()
@@ -553,18 +613,20 @@ impl InterpretedKernels {
             potential,
             exact,
             smooth,
-            offsets: contact_offsets()?,
-            layout,
+            layout: ContactLayout::new(N)?,
+            tape_layout: layout,
             base_vars,
         })
     }
 
-    fn eval(&self, tape: &Tape, q: &[f64; 3], qd: &[f64; 3], w: &[f64; 3], eps: f64) -> Vec<f64> {
+    fn eval(&self, tape: &Tape, q: &[f64; N], qd: &[f64; N], w: &[f64; 3], eps: f64) -> Vec<f64> {
         let mut v = self.base_vars.clone();
-        let l = &self.layout;
-        for i in 0..3 {
+        let l = &self.tape_layout;
+        for i in 0..N {
             v[l.q(i) as usize] = KernelF64(q[i]);
             v[l.qd(i) as usize] = KernelF64(qd[i]);
+        }
+        for i in 0..3 {
             v[l.omega(i) as usize] = KernelF64(w[i]);
         }
         v[l.eps() as usize] = KernelF64(eps);
@@ -572,7 +634,7 @@ impl InterpretedKernels {
     }
 }
 
-impl Kernels for InterpretedKernels {
+impl<const N: usize> Kernels<N> for InterpretedKernels<N> {
     fn scene_name(&self) -> &str {
         &self.name
     }
@@ -590,46 +652,25 @@ impl Kernels for InterpretedKernels {
     fn physical_params(&self) -> Option<Params> {
         Some(self.params)
     }
-    fn mass_cqd_g(&self, q: &[f64; 3], qd: &[f64; 3]) -> ([[f64; 3]; 3], [f64; 3]) {
+    fn mass_cqd_g(&self, q: &[f64; N], qd: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
         let v = self.eval(&self.mass_cqd_g, q, qd, &[0.0; 3], 0.0);
-        let m = [[v[0], v[1], v[2]], [v[3], v[4], v[5]], [v[6], v[7], v[8]]];
-        (m, [v[9], v[10], v[11]])
+        let m = std::array::from_fn(|i| std::array::from_fn(|j| v[i * N + j]));
+        (m, std::array::from_fn(|i| v[N * N + i]))
     }
-    fn potential(&self, q: &[f64; 3]) -> f64 {
-        self.eval(&self.potential, q, &[0.0; 3], &[0.0; 3], 0.0)[0]
+    fn potential(&self, q: &[f64; N]) -> f64 {
+        self.eval(&self.potential, q, &[0.0; N], &[0.0; 3], 0.0)[0]
     }
     fn contact(
         &self,
-        q: &[f64; 3],
-        qd: &[f64; 3],
+        q: &[f64; N],
+        qd: &[f64; N],
         omega: &[f64; 3],
         variant: ContactVariant,
-    ) -> ContactGeometry {
+    ) -> ContactGeometry<N> {
         let v = match variant {
             ContactVariant::Exact => self.eval(&self.exact, q, qd, omega, 0.0),
             ContactVariant::Smooth(e) => self.eval(&self.smooth, q, qd, omega, e),
         };
-        let o = &self.offsets;
-        let a3 = |k: usize| [v[o[k]], v[o[k] + 1], v[o[k] + 2]];
-        let j = o[6];
-        let c = ContactValues {
-            alpha: v[o[0]],
-            sat_alpha: v[o[1]],
-            p_c: a3(2),
-            r_c: a3(3),
-            h: v[o[4]],
-            n: a3(5),
-            j_c: [
-                [v[j], v[j + 1], v[j + 2]],
-                [v[j + 3], v[j + 4], v[j + 5]],
-                [v[j + 6], v[j + 7], v[j + 8]],
-            ],
-            v_c: a3(7),
-            delta_v: a3(8),
-            h_dot: v[o[9]],
-            rc_dot: a3(10),
-            jc_dot_qd: a3(11),
-        };
-        geometry(&c)
+        self.layout.geometry(&v)
     }
 }

@@ -13,6 +13,8 @@
 //! | [`project_configuration`] | drift control of h (eq. 8): M_f-metric Newton step Δq = −h M_f⁻¹ J_cᵀ n / nᵀ W n |
 //! | [`project_velocity`] | drift control of eq. 46 (Stick: Δv = 0) or eq. 36 (Slip: n·v_c = 0) by the M-norm-closest velocities |
 //!
+//! Every function is generic over the number of joints N (default 3).
+//!
 //! Equalities are replaced by tolerances ([`TransitionSettings`], defined in
 //! [`crate::settings`]) as Sect. 3.1 prescribes.
 
@@ -41,10 +43,10 @@ pub enum Transition {
 }
 
 /// Eq. 50 with tolerances. `free` must be the free-mode accelerations at `kin` (ḧ needs q̈).
-pub fn free_to_contact(
-    kin: &ContactKinematics,
+pub fn free_to_contact<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
-    free: &Accelerations,
+    free: &Accelerations<N>,
     settings: &TransitionSettings,
 ) -> bool {
     let c = &kin.contact;
@@ -68,9 +70,9 @@ pub fn stick_to_slip(force: &ContactForce) -> bool {
 }
 
 /// Slip → Stick: ‖Δv‖ ≤ ε and d‖Δv‖/dt < 0 (Δv·Δv̇ < 0), or Δv = 0 exactly.
-pub fn slip_to_stick(
-    kin: &ContactKinematics,
-    slip: &Accelerations,
+pub fn slip_to_stick<const N: usize>(
+    kin: &ContactKinematics<N>,
+    slip: &Accelerations<N>,
     settings: &TransitionSettings,
 ) -> bool {
     let dv = kin.contact.delta_v;
@@ -88,11 +90,11 @@ pub fn contact_to_free(force: &ContactForce) -> bool {
 
 /// The first transition that fires from `mode` given the accelerations computed in that mode
 /// (priority: ContactToFree before StickToSlip / SlipToStick).
-pub fn check(
+pub fn check<const N: usize>(
     mode: Mode,
-    kin: &ContactKinematics,
+    kin: &ContactKinematics<N>,
     params: &Params,
-    acc: &Accelerations,
+    acc: &Accelerations<N>,
     settings: &TransitionSettings,
 ) -> Option<Transition> {
     match mode {
@@ -132,11 +134,11 @@ pub struct Guard {
 /// Free: h / r (Impact; the ḣ, ḧ parts of eq. 50 matter only at h = 0, see
 /// [`free_to_contact`]); Stick: λ_n (ContactToFree), σ (StickToSlip); Slip: λ_n
 /// (ContactToFree), ‖Δv‖ − ε (SlipToStick; crossing downwards implies d‖Δv‖/dt < 0).
-pub fn guards(
+pub fn guards<const N: usize>(
     mode: Mode,
-    kin: &ContactKinematics,
+    kin: &ContactKinematics<N>,
     params: &Params,
-    acc: &Accelerations,
+    acc: &Accelerations<N>,
     settings: &TransitionSettings,
 ) -> [Option<Guard>; 2] {
     let g = |transition, value| Some(Guard { transition, value });
@@ -161,23 +163,23 @@ pub fn guards(
 
 /// Slip → Stick reset: project (q̇, ω) onto Δv = 0 with the sticking impulse ι = Γ⁻¹ Δv
 /// (eq. 40–41); the M-norm-closest consistent velocities. Also removes a drifted n·v_c.
-pub fn slip_to_stick_update(
-    kin: &ContactKinematics,
+pub fn slip_to_stick_update<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     project_stick(kin, params, settings)
 }
 
 /// Stick → Slip reset: at the end of sticking Δv ≈ 0 and eq. 20 is undefined, so set
 /// Δv⁺ = `slip_kick` · t̂ with t̂ = λ_∥/‖λ_∥‖ (the friction direction continues), by the
 /// impulse ι = Γ⁻¹(Δv⁻ − Δv⁺) (minimal change in the kinetic-energy norm). n·v_c⁺ = 0.
-pub fn stick_to_slip_update(
-    kin: &ContactKinematics,
+pub fn stick_to_slip_update<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     stick_force: &ContactForce,
     settings: &TransitionSettings,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     require_contact(kin, params, settings)?;
     let n = kin.contact.n;
     let lt = stick_force.lambda_t - n * n.dot(&stick_force.lambda_t);
@@ -199,11 +201,11 @@ pub fn stick_to_slip_update(
 /// One Newton step of h(q) = 0 that is smallest in the M_f metric:
 /// Δq = −h M_f⁻¹ J_cᵀ n / (nᵀ J_c M_f⁻¹ J_cᵀ n) (∇h = J_cᵀ n with the exact sat). Returns Δq;
 /// h(q + Δq) = O(h²). Use to control the drift of h in contact modes (Sect. 3.1).
-pub fn project_configuration(
-    kin: &ContactKinematics,
+pub fn project_configuration<const N: usize>(
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
-) -> Result<crate::Vec3> {
+) -> Result<crate::VecN<N>> {
     let (mats, _) = matrices_with_mass(kin, params)?;
     crate::dynamics::require_normal_mobility(&mats, settings)?;
     Ok(mats.minv_jct * kin.contact.n * (-kin.contact.h / mats.n_w_n))
@@ -212,12 +214,12 @@ pub fn project_configuration(
 /// Velocities made consistent with `mode` by the M-norm-closest change: Stick → Δv = 0
 /// (sticking impulse, eq. 41); Slip → n·v_c = 0 (normal impulse ι = −n (n·v_c)/nᵀ W n, ω
 /// unchanged); Free → unchanged (zero impulse).
-pub fn project_velocity(
+pub fn project_velocity<const N: usize>(
     mode: Mode,
-    kin: &ContactKinematics,
+    kin: &ContactKinematics<N>,
     params: &Params,
     settings: &TransitionSettings,
-) -> Result<ImpactOutcome> {
+) -> Result<ImpactOutcome<N>> {
     match mode {
         Mode::Free => apply_given_impulse(kin, params, settings, &crate::Vec3::zeros()),
         Mode::Stick => project_stick(kin, params, settings),

@@ -460,6 +460,15 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
             path.display()
         )
     })?;
+    // The contact model takes any number of joints; the problems are posed for 3.
+    if scene.links.len() != 3 {
+        anyhow::bail!(
+            "--scene {}: problem {problem} needs a finger with 3 joints; scene `{}` has {}",
+            path.display(),
+            scene.name,
+            scene.links.len()
+        );
+    }
     Ok(Some(scene))
 }
 

@@ -10,11 +10,14 @@
 //!     --out DIR
 //! ```
 //!
-//! Any finger-and-ball scene file with 3 joints runs: a compiled scene (equal to one of
+//! Any finger-and-ball scene file with 1 to [`MAX_CONTACT_JOINTS`] joints runs (the model and
+//! simulator are generic over the number of joints N; the command dispatches at run time on
+//! the scene's N to one instantiation per N): a compiled scene (equal to one of
 //! `scenes/*.toml` at build time, runtime parameters aside) on its compiled kernels, any other
 //! file (a scene outside the repository, or a built-in name with other numbers) on kernels
 //! interpreted from the same expression graphs (`bf_model::registry`); stderr, stdout and
-//! `summary.json` (`kernels`) say which ran. `--param name=value` sets runtime parameters.
+//! `summary.json` (`kernels`) say which ran. `--q0`, `--qd0`, `--pd`, `--torques` and
+//! `--init` take N joint values (default q0: [`DEFAULT_Q0`] for N = 3, zeros otherwise). `--param name=value` sets runtime parameters.
 //! A scene without a ball (an arm such as `scenes/puma560.toml`, any number of joints)
 //! simulates the free motion M q̈ = τ − C q̇ − g − μ_v q̇ (`bf_sim::arm`) from `--q0`/`--qd0`
 //! (default 0) under `--torques`, `--pd` or zero torques, and writes `trajectory.csv`
@@ -34,7 +37,7 @@
 use crate::cli::SimulateArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
-use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3};
+use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3, VecN};
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
@@ -64,9 +67,14 @@ pub struct RunOptions {
 /// tiny steps (the run is still bounded by `--max-steps`, `--max-samples`, `--max-time`).
 pub const LARGE_TORQUE: f64 = 1e3;
 
-/// Default initial joint angles (rad): the paper's "q constant nonzero" initial guess
-/// (docs/parameters.md); for the paper scene the fingertip is then 1.4 m above the ball.
+/// Default initial joint angles (rad) of a 3-joint finger: the paper's "q constant nonzero"
+/// initial guess (docs/parameters.md); for the paper scene the fingertip is then 1.4 m above
+/// the ball. Fingers with other numbers of joints start at q = 0 unless `--q0` says otherwise.
 pub const DEFAULT_Q0: [f64; 3] = [0.1, 0.5, 0.5];
+
+/// Largest number of joints of a finger-and-ball scene `simulate` runs (one instantiation of
+/// the generic model and simulator per N = 1..=this).
+pub const MAX_CONTACT_JOINTS: usize = 7;
 
 /// Joint torques of a CLI run: a time series, a PD controller, or none (τ = 0).
 #[derive(Debug, Clone)]
@@ -75,8 +83,8 @@ pub enum CliInput {
     Series(TorqueSeries),
     /// τ = kp (target − q) − kd q̇ (`--pd`).
     Pd(PdController),
-    /// Unactuated joints (the contact scenes' 3).
-    Zero,
+    /// Unactuated joints of a finger with this many joints.
+    Zero(usize),
     /// Unactuated joints of an arm with this many joints.
     Arm(usize),
 }
@@ -86,7 +94,7 @@ impl Input for CliInput {
         match self {
             CliInput::Series(s) => s.dim(),
             CliInput::Pd(p) => p.dim(),
-            CliInput::Zero => 3,
+            CliInput::Zero(n) => *n,
             CliInput::Arm(n) => *n,
         }
     }
@@ -94,7 +102,7 @@ impl Input for CliInput {
         match self {
             CliInput::Series(s) => s.tau(t, q, qd, out),
             CliInput::Pd(p) => p.tau(t, q, qd, out),
-            CliInput::Zero | CliInput::Arm(_) => {
+            CliInput::Zero(_) | CliInput::Arm(_) => {
                 out.fill(0.0);
                 Ok(())
             }
@@ -165,26 +173,31 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct InitFile {
-    q: [f64; 3],
+    q: Vec<f64>,
     #[serde(default)]
-    qd: [f64; 3],
+    qd: Option<Vec<f64>>,
     #[serde(default)]
     omega: [f64; 3],
     #[serde(default)]
     mode: Option<String>,
 }
 
-/// Initial mode and state from `--init` and the `--q0/--qd0/--omega0/--mode0` overrides.
-pub fn initial_state(args: &SimulateArgs) -> Result<(Mode, State)> {
-    let (mut q, mut qd, mut w, mut mode) = (DEFAULT_Q0, [0.0; 3], [0.0; 3], None);
+/// Initial mode and state of a finger with `N` joints from `--init` and the
+/// `--q0/--qd0/--omega0/--mode0` overrides.
+pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State<N>)> {
+    let mut q = [0.0; N];
+    if N == 3 {
+        q.copy_from_slice(&DEFAULT_Q0);
+    }
+    let (mut qd, mut w, mut mode) = ([0.0; N], [0.0; 3], None);
     if let Some(path) = &args.init {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read initial-state file", path.display()))?;
         let shape = || {
             format!(
-                "{}: initial-state file must be JSON {{\"q\":[3 numbers], \"qd\":[..], \
-                 \"omega\":[..], \"mode\":\"free|stick|slip\"}} or a solution.json of \
-                 `optimize`",
+                "{}: initial-state file must be JSON {{\"q\":[{N} numbers], \"qd\":[..], \
+                 \"omega\":[3 numbers], \"mode\":\"free|stick|slip\"}} or a solution.json \
+                 of `optimize`",
                 path.display()
             )
         };
@@ -199,35 +212,42 @@ pub fn initial_state(args: &SimulateArgs) -> Result<(Mode, State)> {
                         path.display()
                     )
                 })?;
-            if sq.len() != 3 || sqd.len() != 3 {
+            if sq.len() != N || sqd.len() != N {
                 bail!(
-                    "{}: the solution has {} joints, the contact scenes 3",
+                    "{}: the solution has {} joints, the scene {N}",
                     path.display(),
                     sq.len()
                 );
             }
-            (q, qd, w) = ([sq[0], sq[1], sq[2]], [sqd[0], sqd[1], sqd[2]], sw);
+            q.copy_from_slice(&sq);
+            qd.copy_from_slice(&sqd);
+            w = sw;
             mode = Some(smode);
         } else {
             let f: InitFile = serde_json::from_value(v).with_context(shape)?;
-            (q, qd, w) = (f.q, f.qd, f.omega);
+            let fqd = f.qd.unwrap_or_else(|| vec![0.0; N]);
+            if f.q.len() != N || fqd.len() != N {
+                bail!("{}", shape());
+            }
+            q.copy_from_slice(&f.q);
+            qd.copy_from_slice(&fqd);
+            w = f.omega;
             mode = f.mode;
         }
-        for (name, v) in [("q", &q), ("qd", &qd), ("omega", &w)] {
+        for (name, v) in [("q", &q[..]), ("qd", &qd[..]), ("omega", &w[..])] {
             if !v.iter().all(|x| x.is_finite()) {
                 bail!("{}: `{name}` must be finite", path.display());
             }
         }
     }
-    let arr = |v: Vec<f64>| [v[0], v[1], v[2]];
     if let Some(s) = &args.q0 {
-        q = arr(parse_list("--q0", s, Some(3))?);
+        q.copy_from_slice(&parse_list("--q0", s, Some(N))?);
     }
     if let Some(s) = &args.qd0 {
-        qd = arr(parse_list("--qd0", s, Some(3))?);
+        qd.copy_from_slice(&parse_list("--qd0", s, Some(N))?);
     }
     if let Some(s) = &args.omega0 {
-        w = arr(parse_list("--omega0", s, Some(3))?);
+        w.copy_from_slice(&parse_list("--omega0", s, Some(3))?);
     }
     // --mode0 has a default, so the file's mode wins unless --mode0 is given explicitly as
     // something other than the default.
@@ -237,17 +257,17 @@ pub fn initial_state(args: &SimulateArgs) -> Result<(Mode, State)> {
     };
     Ok((
         mode,
-        State::new(Vec3::from(q), Vec3::from(qd), Vec3::from(w)),
+        State::new(VecN::<N>::from(q), VecN::<N>::from(qd), Vec3::from(w)),
     ))
 }
 
-/// The joint torques of the run.
-pub fn input(args: &SimulateArgs) -> Result<CliInput> {
+/// The joint torques of a run of a finger with `n` joints.
+pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
     if let Some(path) = &args.torques {
         let s = TorqueSeries::from_path(path)?;
-        if s.dim() != 3 {
+        if s.dim() != n {
             bail!(
-                "{}: the contact scenes have 3 joints, the torque series has {} columns",
+                "{}: the scene has {n} joints, the torque series has {} columns",
                 path.display(),
                 s.dim()
             );
@@ -255,16 +275,19 @@ pub fn input(args: &SimulateArgs) -> Result<CliInput> {
         return Ok(CliInput::Series(s));
     }
     if let Some(target) = &args.pd {
-        let target = parse_list("--pd", target, Some(3))?;
+        let target = parse_list("--pd", target, Some(n))?;
         let g = parse_list("--pd-gains", &args.pd_gains, None)?;
         let (kp, kd) = match g.len() {
-            2 => (vec![g[0]; 3], vec![g[1]; 3]),
-            6 => (g[..3].to_vec(), g[3..].to_vec()),
-            n => bail!("--pd-gains: expected 2 values (kp,kd) or 6 (kp1..3,kd1..3), got {n}"),
+            2 => (vec![g[0]; n], vec![g[1]; n]),
+            k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
+            k => bail!(
+                "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
+                2 * n
+            ),
         };
         return Ok(CliInput::Pd(PdController::new(kp, kd, target)?));
     }
-    Ok(CliInput::Zero)
+    Ok(CliInput::Zero(n))
 }
 
 /// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
@@ -330,11 +353,35 @@ pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
         bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
     }
+    let nq = scene.links.len();
+    match nq {
+        1 => run_contact::<1>(args, opts, &scene),
+        2 => run_contact::<2>(args, opts, &scene),
+        3 => run_contact::<3>(args, opts, &scene),
+        4 => run_contact::<4>(args, opts, &scene),
+        5 => run_contact::<5>(args, opts, &scene),
+        6 => run_contact::<6>(args, opts, &scene),
+        7 => run_contact::<7>(args, opts, &scene),
+        n => bail!(
+            "{}: scene `{}` has {n} joints; the ball-and-finger simulator runs fingers with 1 to \
+             {MAX_CONTACT_JOINTS} joints",
+            args.scene.display(),
+            scene.name
+        ),
+    }
+}
+
+/// The contact run of a finger with `N` joints (options validated before the run).
+fn run_contact<const N: usize>(
+    args: &SimulateArgs,
+    opts: RunOptions,
+    scene: &bf_codegen::Scene,
+) -> Result<()> {
     let set = settings(args)?;
     check_limits(args, &set)?;
     let law = parse_impact_law(&args.impact_law)?;
-    let (mode0, x0) = initial_state(args)?;
-    let inp = input(args)?;
+    let (mode0, x0) = initial_state::<N>(args)?;
+    let inp = input(args, N)?;
     if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
         let m = max_torque(s);
         if m > LARGE_TORQUE {
@@ -352,7 +399,9 @@ pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
         ..BallFingerOptions::default()
     };
     let setup = Instant::now();
-    let (model, source) = bf_model::fixtures::model_for_scene(&scene)
+    let (kernels, source) = bf_model::registry::contact_kernels_n::<N>(scene)
+        .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
+    let model = Model::from_kernels(kernels)
         .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
     eprintln!(
         "simulate: scene `{}` from {} on the {source} kernels{}",
@@ -517,30 +566,33 @@ fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
     }
 }
 
-fn run_model<K: Kernels>(
+fn run_model<K: Kernels<N>, const N: usize>(
     args: &SimulateArgs,
     run_opts: RunOptions,
-    model: Model<K>,
+    model: Model<K, N>,
     source: KernelSource,
     inp: CliInput,
     opts: BallFingerOptions,
     set: SimSettings,
     mode0: Mode,
-    x0: State,
+    x0: State<N>,
 ) -> Result<()> {
     let inputs = input_options(args, &inp);
     let sys = BallFinger::new(model, inp, opts)?;
-    let x0 = x0.to_array();
+    let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
     // deep in the first step that names neither the option nor the quantity.
     let info = sys.sample_info_or_nan(mode0, 0.0, &x0);
-    let quantities = [
-        ("energy", info.energy),
-        ("distance h", info.h),
-        ("torque τ1", info.tau[0]),
-        ("torque τ2", info.tau[1]),
-        ("torque τ3", info.tau[2]),
+    let mut quantities = vec![
+        ("energy".to_string(), info.energy),
+        ("distance h".to_string(), info.h),
     ];
+    quantities.extend(
+        info.tau
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| (format!("torque τ{}", i + 1), t)),
+    );
     if let Some((name, v)) = quantities.iter().find(|(_, v)| !v.is_finite()) {
         bail!(
             "the {name} at the initial state is not finite ({v}); initial state: {}; \

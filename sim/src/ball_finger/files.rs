@@ -10,40 +10,39 @@ use bf_model::Mode;
 use serde::Serialize;
 use std::path::Path;
 
-/// Column names with their units; the state components are named as in `solution.json`
-/// (q1.., qd1.., omega_x..) and by `STATE_NAMES` in `trajectory.json`.
-const TRAJ_HEADER: [&str; 25] = [
-    "t [s]",
-    "mode",
-    "kind",
-    "q1 [rad]",
-    "q2 [rad]",
-    "q3 [rad]",
-    "qd1 [rad/s]",
-    "qd2 [rad/s]",
-    "qd3 [rad/s]",
-    "omega_x [rad/s]",
-    "omega_y [rad/s]",
-    "omega_z [rad/s]",
-    "tau1 [N m]",
-    "tau2 [N m]",
-    "tau3 [N m]",
-    "lambda_x [N]",
-    "lambda_y [N]",
-    "lambda_z [N]",
-    "lambda_n [N]",
-    "h [m]",
-    "sigma [N]",
-    "dv [m/s]",
-    "hdot [m/s]",
-    "energy [J]",
-    "drift [m]",
-];
+/// Column names with their units for a finger with `n` joints; the state components are named
+/// as in `solution.json` (q1.., qd1.., omega_x..) and by [`state_names`] in `trajectory.json`.
+fn traj_header(n: usize) -> Vec<String> {
+    let mut h: Vec<String> = ["t [s]", "mode", "kind"].map(String::from).to_vec();
+    h.extend((1..=n).map(|i| format!("q{i} [rad]")));
+    h.extend((1..=n).map(|i| format!("qd{i} [rad/s]")));
+    h.extend(["omega_x [rad/s]", "omega_y [rad/s]", "omega_z [rad/s]"].map(String::from));
+    h.extend((1..=n).map(|i| format!("tau{i} [N m]")));
+    h.extend(
+        [
+            "lambda_x [N]",
+            "lambda_y [N]",
+            "lambda_z [N]",
+            "lambda_n [N]",
+            "h [m]",
+            "sigma [N]",
+            "dv [m/s]",
+            "hdot [m/s]",
+            "energy [J]",
+            "drift [m]",
+        ]
+        .map(String::from),
+    );
+    h
+}
 
-/// Names of the components of the state x in `trajectory.json`.
-const STATE_NAMES: [&str; 9] = [
-    "q1", "q2", "q3", "qd1", "qd2", "qd3", "omega_x", "omega_y", "omega_z",
-];
+/// Names of the components of the state x in `trajectory.json` (q1.., qd1.., omega_x..).
+fn state_names(n: usize) -> Vec<String> {
+    let mut v: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
+    v.extend((1..=n).map(|i| format!("qd{i}")));
+    v.extend(["omega_x", "omega_y", "omega_z"].map(String::from));
+    v
+}
 
 /// The mode as written in every file: its serde name (lowercase), as in the JSON files.
 pub(super) fn mode_name(m: Mode) -> &'static str {
@@ -65,7 +64,7 @@ fn f(v: f64) -> String {
     format!("{v:?}")
 }
 
-fn info_fields(s: &SampleInfo) -> Vec<String> {
+fn info_fields<const N: usize>(s: &SampleInfo<N>) -> Vec<String> {
     let mut r: Vec<String> = s.tau.iter().chain(&s.lambda).map(|&v| f(v)).collect();
     r.extend(
         [
@@ -82,23 +81,23 @@ fn info_fields(s: &SampleInfo) -> Vec<String> {
 }
 
 #[derive(Serialize)]
-struct TrajectoryJson<'a> {
-    state_names: [&'static str; 9],
+struct TrajectoryJson<'a, const N: usize> {
+    state_names: Vec<String>,
     units: [(&'static str, &'static str); 4],
     t: &'a [f64],
     mode: &'a [Mode],
     kind: &'a [SampleKind],
     x: &'a [Vec<f64>],
     drift: &'a [Option<f64>],
-    derived: &'a [SampleInfo],
+    derived: &'a [SampleInfo<N>],
 }
 
 #[derive(Serialize)]
-struct EventsJson<'a> {
-    events: &'a [EventInfo],
+struct EventsJson<'a, const N: usize> {
+    events: &'a [EventInfo<N>],
 }
 
-impl RunReport {
+impl<const N: usize> RunReport<N> {
     /// Writes `trajectory.csv` / `trajectory.json` (t, mode, kind, q, q̇, ω, τ, λ, λ_n, h, σ,
     /// ‖Δv‖ (`dv`), n·v_c (`hdot`), E, drift per sample), `events.csv` / `events.json`
     /// (time, kind, guard, modes, pre/post state and derived quantities) and `summary.json`
@@ -113,9 +112,10 @@ impl RunReport {
         std::fs::create_dir_all(dir)
             .map_err(|e| bf_output::FileError::new("cannot create directory", dir, e))?;
         let tr = &out.trajectory;
+        let traj_header = traj_header(N);
         // Trajectory CSV.
         let mut w = csv::Writer::from_writer(Vec::new());
-        w.write_record(TRAJ_HEADER)
+        w.write_record(&traj_header)
             .map_err(csv_err("trajectory CSV"))?;
         for i in 0..tr.len() {
             let mut rec = vec![
@@ -134,7 +134,7 @@ impl RunReport {
         })?;
         write_atomic(&dir.join("trajectory.csv"), &bytes)?;
         let tj = TrajectoryJson {
-            state_names: STATE_NAMES,
+            state_names: state_names(N),
             units: [
                 ("t", "s"),
                 ("x", "rad (q), rad/s (qd, omega)"),
@@ -162,7 +162,8 @@ impl RunReport {
         .map(String::from)
         .to_vec();
         for side in ["pre", "post"] {
-            for c in &TRAJ_HEADER[3..24] {
+            // The state and the derived quantities: every column but t, mode, kind and drift.
+            for c in &traj_header[3..traj_header.len() - 1] {
                 header.push(format!("{side}_{c}"));
             }
         }

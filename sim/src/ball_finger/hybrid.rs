@@ -18,10 +18,10 @@
 //! the next transition at the same instant.
 //!
 //! # Non-smooth points of the contact geometry
-//! The finger's last link is the segment from joint 3 to the fingertip p_e (Sect. 2.2); the
+//! The finger's last link is the segment from joint N to the fingertip p_e (Sect. 2.2); the
 //! potential contact point p_c = p_e + sat(α) e_x3 (eq. 3) has two kinks, α = 0 (p_c reaches the
 //! fingertip: the contact passes between the link's side and its end point) and α = −ℓ (p_c
-//! reaches the link's base, joint 3; ℓ = a₃). At both, h (eq. 4, the distance to a convex set,
+//! reaches the link's base, joint N; ℓ = a_N). At both, h (eq. 4, the distance to a convex set,
 //! C¹ away from it), n (eq. 11), J_c (eq. 7) and v_c (eq. 6) are continuous, so at h = 0 the
 //! conditions h = 0 (eq. 8) and n·v_c = 0 (eq. 10) hold on both sides and no impulse is needed.
 //! But d sat(α)/dt jumps between α̇ and 0, so ṙ_c and J̇_c q̇ in the bias of eq. 33 and in the
@@ -59,7 +59,7 @@
 use super::{BallFinger, Hold, state_of, write_velocities};
 use crate::{Guard, HybridSystem, Input, SimError, Transition};
 use bf_model::dynamics::contact_matrices;
-use bf_model::{Kernels, Mode, Vec3};
+use bf_model::{Kernels, Mode, State, Vec3};
 
 /// The `slip_reversal` guard fires when Δv turns by more than arccos(0.5) = 60° from its
 /// direction at the start of the step: in continuous slip the direction of Δv changes slowly
@@ -76,10 +76,10 @@ const HELD_GUARD: f64 = 1.0;
 /// Guards of the contact modes besides their transitions: the kinks of sat(α) (eq. 3).
 const KINK_GUARDS: [Guard; 2] = [Guard::either("alpha_tip"), Guard::either("alpha_base")];
 
-impl<K: Kernels, I: Input> BallFinger<K, I> {
+impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Values of the kink guards at contact geometry `c`: α (m; 0 where p_c reaches the
-    /// fingertip p_e) and α + ℓ (m; 0 where p_c reaches the link's base, joint 3).
-    fn kink_values(&self, c: &bf_model::ContactGeometry, t: f64, out: &mut [f64]) {
+    /// fingertip p_e) and α + ℓ (m; 0 where p_c reaches the link's base, joint N).
+    fn kink_values(&self, c: &bf_model::ContactGeometry<N>, t: f64, out: &mut [f64]) {
         let hold = self.hold.get();
         if hold.kinks && t < hold.until {
             out.fill(HELD_GUARD);
@@ -96,21 +96,21 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
     }
 }
 
-impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
+impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, N> {
     type Mode = Mode;
 
     fn dim(&self) -> usize {
-        9
+        State::<N>::DIM
     }
 
     fn rhs(&self, mode: Mode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
-        let s = state_of(x)?;
+        let s = state_of::<N>(x)?;
         let tau = self.tau(t, &s)?;
         let acc = self
             .model
             .accelerations(mode, &s, &tau)
             .map_err(Self::model_err(mode, t))?;
-        dx.copy_from_slice(&acc.state_derivative(&s.qd));
+        acc.write_state_derivative(&s.qd, dx);
         Ok(())
     }
 
@@ -129,7 +129,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
     }
 
     fn guard_values(&self, mode: Mode, t: f64, x: &[f64], out: &mut [f64]) -> Result<(), SimError> {
-        let s = state_of(x)?;
+        let s = state_of::<N>(x)?;
         let err = Self::model_err(mode, t);
         match mode {
             Mode::Free => {
@@ -198,7 +198,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         t: f64,
         x: &mut [f64],
     ) -> Result<Transition<Mode>, SimError> {
-        let s = state_of(x)?;
+        let s = state_of::<N>(x)?;
         let name = self.guards(mode).get(guard).map_or("", |g| g.name);
         if KINK_GUARDS.iter().any(|g| g.name == name) {
             // The contact point passed a kink of sat(α): h, n, J_c and the velocities are
@@ -215,7 +215,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                     // back on the surface and continue in Free; the guard then sees h rise.
                     let mut s = s;
                     self.project_position(&mut s)?;
-                    x[0..3].copy_from_slice(s.q.as_slice());
+                    x[..N].copy_from_slice(s.q.as_slice());
                     return Ok(Transition::To(Mode::Free));
                 }
                 let mut s = s;
@@ -226,7 +226,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                     // from the solution, e.g. a fixed step far too long): apply the impact law
                     // on the surface h = 0 instead of refusing it.
                     self.project_position(&mut s)?;
-                    x[0..3].copy_from_slice(s.q.as_slice());
+                    x[..N].copy_from_slice(s.q.as_slice());
                 }
                 let out = self
                     .model
@@ -242,7 +242,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                 let mut s = s;
                 if self.options.project {
                     self.project_position(&mut s)?;
-                    x[0..3].copy_from_slice(s.q.as_slice());
+                    x[..N].copy_from_slice(s.q.as_slice());
                 }
                 let sep = self.options.lift_off_speed;
                 if sep > 0.0 {
@@ -254,7 +254,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
                         if mats.n_w_n > 0.0 {
                             let qd =
                                 s.qd + mats.minv_jct * kin.contact.n * ((sep - vn) / mats.n_w_n);
-                            x[3..6].copy_from_slice(qd.as_slice());
+                            x[N..2 * N].copy_from_slice(qd.as_slice());
                         }
                     }
                 }
@@ -287,14 +287,14 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         let err = Self::model_err(mode, t);
         if mode == Mode::Slip {
             // The slip_reversal guard of the next step compares Δv with its direction now.
-            let s = state_of(x)?;
+            let s = state_of::<N>(x)?;
             let kin = self.model.evaluate(&s).map_err(&err)?;
             self.set_slip_ref(&kin.contact.delta_v);
         }
         if mode == Mode::Free || !self.options.project {
             return Ok(None);
         }
-        let mut s = state_of(x)?;
+        let mut s = state_of::<N>(x)?;
         let drift = self.project_position(&mut s)?;
         match mode {
             Mode::Stick => {
@@ -313,7 +313,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
             }
             Mode::Free => {}
         }
-        x.copy_from_slice(&s.to_array());
+        s.write_slice(x);
         if mode == Mode::Slip {
             let kin = self.model.evaluate(&s).map_err(&err)?;
             self.set_slip_ref(&kin.contact.delta_v);
@@ -357,7 +357,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
         }
         // Chatter between contact and free motion or between stick and slip: hold a sticking
         // contact (Δv = 0 by the dissipative sticking projection, eq. 40–41).
-        let mut s = state_of(x)?;
+        let mut s = state_of::<N>(x)?;
         let tol = self.model.settings().contact_tolerance * self.model.params().ball_radius();
         if self.gap(x)?.abs() > tol {
             return Ok(None);
@@ -369,7 +369,7 @@ impl<K: Kernels, I: Input> HybridSystem for BallFinger<K, I> {
             .map_err(SimError::system)?;
         s.qd = out.qd;
         s.omega = out.omega;
-        x.copy_from_slice(&s.to_array());
+        s.write_slice(x);
         self.hold.set(Hold {
             until: t + hold,
             kinks,

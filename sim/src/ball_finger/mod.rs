@@ -1,9 +1,14 @@
 //! The ball-and-finger hybrid system (paper Sect. 2.6–3, Fig. 2–3) on top of bf-model.
 //!
-//! State x = (q, q̇, ω) ∈ ℝ⁹ (eq. 44, [`bf_model::State::to_array`] layout), modes
-//! [`bf_model::Mode`] = Free / Stick / Slip, joint torques τ(t, q, q̇) from an [`Input`].
+//! State x = (q, q̇, ω) ∈ ℝ^(2N+3) for a finger with N joints (eq. 44,
+//! [`bf_model::State::write_slice`] layout; ℝ⁹ for the paper's N = 3), modes
+//! [`bf_model::Mode`] = Free / Stick / Slip, joint torques τ(t, q, q̇) from an [`Input`] with N
+//! components. [`BallFinger`] takes N as a const parameter with default 3, like bf-model's
+//! [`Model`]: `BallFinger<PaperKernels, I>` is the paper's system, and for N = 3 the generic
+//! code runs exactly the arithmetic of a 3-joint-only implementation. The step-to-event
+//! machinery ([`crate::Simulator`]) works on slices and needs no change for other N.
 //!
-//! This file holds [`BallFinger`]: construction (with the length ℓ = a₃ of the contact link,
+//! This file holds [`BallFinger`]: construction (with the length ℓ = a_N of the contact link,
 //! the lower limit of sat(α) in eq. 3), the energy E = T + U (eq. 22), the gap h (eq. 4) and
 //! the Gauss–Newton projection of q onto h(q) = 0 used by the drift control. The other files:
 //! * `options` — [`BallFingerOptions`].
@@ -23,15 +28,15 @@ pub use options::BallFingerOptions;
 pub use report::{EventInfo, RunReport, RunSummary, SampleInfo, event_kind};
 
 use crate::{Input, SimError};
-use bf_model::{Kernels, Mode, Model, ModelError, State, Vec3};
+use bf_model::{Kernels, Mode, Model, ModelError, State, Vec3, VecN};
 use std::cell::Cell;
 
-/// The finger–ball [`HybridSystem`](crate::HybridSystem): a bf-model [`Model`] plus a torque
-/// [`Input`].
+/// The finger–ball [`HybridSystem`](crate::HybridSystem) of a finger with `N` joints (default
+/// 3): a bf-model [`Model`] plus a torque [`Input`].
 #[derive(Debug, Clone)]
-pub struct BallFinger<K: Kernels, I: Input> {
+pub struct BallFinger<K: Kernels<N>, I: Input, const N: usize = 3> {
     /// Physics (kernels, parameters, transition tolerances).
-    pub model: Model<K>,
+    pub model: Model<K, N>,
     /// Joint torques τ(t, q, q̇).
     pub input: I,
     /// Options.
@@ -40,7 +45,7 @@ pub struct BallFinger<K: Kernels, I: Input> {
     /// the `slip_reversal` guard; updated by the resets into Slip and after every accepted
     /// Slip step (`project`).
     slip_ref: Cell<[f64; 3]>,
-    /// Length ℓ = a₃ of the contact link (m), the lower limit of sat(α) in eq. 3.
+    /// Length ℓ = a_N of the contact link (m), the lower limit of sat(α) in eq. 3.
     link_length: f64,
     /// Guards suspended by the Zeno fallback, and until when.
     hold: Cell<Hold>,
@@ -64,37 +69,46 @@ impl Hold {
     };
 }
 
-fn state_of(x: &[f64]) -> Result<State, SimError> {
-    let a: &[f64; 9] = x.try_into().map_err(|_| SimError::DimensionMismatch {
+fn state_of<const N: usize>(x: &[f64]) -> Result<State<N>, SimError> {
+    State::from_slice(x).ok_or(SimError::DimensionMismatch {
         what: "ball-finger state",
-        expected: 9,
+        expected: State::<N>::DIM,
         found: x.len(),
-    })?;
-    Ok(State::from_array(a))
+    })
 }
 
-fn write_velocities(x: &mut [f64], qd: &Vec3, omega: &Vec3) {
-    x[3..6].copy_from_slice(qd.as_slice());
-    x[6..9].copy_from_slice(omega.as_slice());
+fn write_velocities<const N: usize>(x: &mut [f64], qd: &VecN<N>, omega: &Vec3) {
+    x[N..2 * N].copy_from_slice(qd.as_slice());
+    x[2 * N..2 * N + 3].copy_from_slice(omega.as_slice());
 }
 
-/// Length ℓ of the contact link from the contact kernel. With a revolute last joint, advancing q₃
-/// by π reverses e_x3 about z₂ while p₂ (joint 3) stays, and α = (o_b − p₂ − d₃ z₂)·e_x3 − ℓ
-/// (eq. 2 with p_e = p₂ + d₃ z₂ + ℓ e_x3), so α(q) + α(q + π e₃) = −2ℓ. Checked at two
-/// configurations and, for the exact saturation, against sat(α) = −ℓ where α < −ℓ.
-fn contact_link_length<K: Kernels>(model: &Model<K>) -> Result<f64, SimError> {
-    let alpha = |q: Vec3| -> Result<(f64, f64), SimError> {
+/// Joint angles of the second configuration at which the contact link length is measured
+/// (the first is q = 0); entries beyond the list are 0.
+const PROBE_Q: [f64; 7] = [0.3, -0.7, 1.1, 0.5, -0.4, 0.9, 0.2];
+
+/// Length ℓ of the contact link from the contact kernel. With a revolute last joint, advancing
+/// q_N by π reverses e_xN about z_{N−1} while p_{N−1} (joint N) stays, and
+/// α = (o_b − p_{N−1} − d_N z_{N−1})·e_xN − ℓ (eq. 2 with p_e = p_{N−1} + d_N z_{N−1} + ℓ e_xN),
+/// so α(q) + α(q + π e_N) = −2ℓ. Checked at two configurations and, for the exact saturation,
+/// against sat(α) = −ℓ where α < −ℓ.
+fn contact_link_length<K: Kernels<N>, const N: usize>(
+    model: &Model<K, N>,
+) -> Result<f64, SimError> {
+    let alpha = |q: VecN<N>| -> Result<(f64, f64), SimError> {
         let c = model
-            .evaluate(&State::new(q, Vec3::zeros(), Vec3::zeros()))
+            .evaluate(&State::new(q, VecN::<N>::zeros(), Vec3::zeros()))
             .map_err(SimError::system)?
             .contact;
         Ok((c.alpha, c.sat_alpha))
     };
     let pi = std::f64::consts::PI;
+    let mut turn = VecN::<N>::zeros();
+    turn[N - 1] = pi;
+    let probe = VecN::<N>::from_fn(|i, _| PROBE_Q.get(i).copied().unwrap_or(0.0));
     let mut lengths = Vec::new();
-    for q in [Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.3, -0.7, 1.1)] {
+    for q in [VecN::<N>::zeros(), probe] {
         let (a0, s0) = alpha(q)?;
-        let (a1, s1) = alpha(q + Vec3::new(0.0, 0.0, pi))?;
+        let (a1, s1) = alpha(q + turn)?;
         let l = -0.5 * (a0 + a1);
         // The side with α < −ℓ has sat(α) = −ℓ for the exact saturation.
         let (a_low, s_low) = if a0 < a1 { (a0, s0) } else { (a1, s1) };
@@ -124,13 +138,13 @@ fn contact_link_error(l: f64, why: &str) -> SimError {
     }
 }
 
-impl<K: Kernels, I: Input> BallFinger<K, I> {
-    /// Builds the system; the input must provide 3 torques.
-    pub fn new(model: Model<K>, input: I, options: BallFingerOptions) -> Result<Self, SimError> {
-        if input.dim() != 3 {
+impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
+    /// Builds the system; the input must provide N torques.
+    pub fn new(model: Model<K, N>, input: I, options: BallFingerOptions) -> Result<Self, SimError> {
+        if input.dim() != N {
             return Err(SimError::DimensionMismatch {
                 what: "torque input",
-                expected: 3,
+                expected: N,
                 found: input.dim(),
             });
         }
@@ -174,7 +188,7 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
     }
 
     /// Gauss–Newton steps of q along ∇h = J_cᵀ n onto h(q) = 0; returns |h| before.
-    fn project_position(&self, s: &mut State) -> Result<Option<f64>, SimError> {
+    fn project_position(&self, s: &mut State<N>) -> Result<Option<f64>, SimError> {
         let mut drift = None;
         for _ in 0..self.options.projection_iterations {
             let kin = self.model.evaluate(s).map_err(SimError::system)?;
@@ -190,22 +204,22 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
         Ok(drift)
     }
 
-    fn tau(&self, t: f64, s: &State) -> Result<Vec3, SimError> {
-        let mut tau = [0.0; 3];
+    fn tau(&self, t: f64, s: &State<N>) -> Result<VecN<N>, SimError> {
+        let mut tau = [0.0; N];
         self.input
             .tau(t, s.q.as_slice(), s.qd.as_slice(), &mut tau)?;
-        Ok(Vec3::from(tau))
+        Ok(VecN::<N>::from(tau))
     }
 
     /// Total energy E = T + U at `x` (J).
     pub fn energy(&self, x: &[f64]) -> Result<f64, SimError> {
-        let s = state_of(x)?;
+        let s = state_of::<N>(x)?;
         Ok(self.model.energy(&s).map_err(SimError::system)?.total)
     }
 
     /// Gap h(q) at `x` (m).
     pub fn gap(&self, x: &[f64]) -> Result<f64, SimError> {
-        let s = state_of(x)?;
+        let s = state_of::<N>(x)?;
         Ok(self.model.evaluate(&s).map_err(SimError::system)?.contact.h)
     }
 }

@@ -11,6 +11,9 @@
 //! see bf-model's impact module) and the energy-balance error E(t) − E(t₀) − ∫ P dt of the
 //! integration (P of the power balance, eq. 22/25); above `BallFingerOptions::energy_error_tol`
 //! it is a warning (e.g. fixed-step RK4 with a step too long for the dynamics).
+//!
+//! [`SampleInfo`], [`EventInfo`] and [`RunReport`] carry the number of joints N (default 3)
+//! for the torque vector τ ∈ ℝᴺ; [`RunSummary`] does not depend on N.
 
 use super::{BallFinger, BallFingerOptions, state_of};
 use crate::trajectory::{SampleKind, SimOutput};
@@ -18,11 +21,11 @@ use crate::{Input, SimError, SimWarning};
 use bf_model::{Kernels, Mode};
 use serde::Serialize;
 
-impl<K: Kernels, I: Input> BallFinger<K, I> {
+impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
     /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
-    pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo, SimError> {
-        let s = state_of(x)?;
+    pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo<N>, SimError> {
+        let s = state_of::<N>(x)?;
         let tau = self.tau(t, &s)?;
         let kin = self.model.evaluate(&s).map_err(SimError::system)?;
         let acc = self
@@ -47,18 +50,18 @@ impl<K: Kernels, I: Input> BallFinger<K, I> {
 
     /// [`BallFinger::sample_info`] that never fails: a sample where the model cannot be
     /// evaluated (e.g. the state a failed run stopped at) gets NaN fields (`null` in JSON).
-    pub fn sample_info_or_nan(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo {
+    pub fn sample_info_or_nan(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
         self.sample_info(mode, t, x).unwrap_or(SampleInfo::NAN)
     }
 
     /// Derived quantities at every sample and event of a run, plus its summary. `cpu_seconds`
     /// is the wall time the run took (for the real-time factor).
-    pub fn report(&self, out: &SimOutput<Mode>, t0: f64, cpu_seconds: f64) -> RunReport {
+    pub fn report(&self, out: &SimOutput<Mode>, t0: f64, cpu_seconds: f64) -> RunReport<N> {
         let tr = &out.trajectory;
-        let samples: Vec<SampleInfo> = (0..tr.len())
+        let samples: Vec<SampleInfo<N>> = (0..tr.len())
             .map(|i| self.sample_info_or_nan(tr.mode[i], tr.t[i], &tr.x[i]))
             .collect();
-        let events: Vec<EventInfo> = out
+        let events: Vec<EventInfo<N>> = out
             .events
             .iter()
             .map(|e| EventInfo {
@@ -103,11 +106,13 @@ pub fn event_kind(mode_before: Mode, mode_after: Option<Mode>, guard: &str) -> &
     }
 }
 
-/// Quantities derived from the model at one stored sample (SI units).
+/// Quantities derived from the model at one stored sample (SI units) of a finger with `N`
+/// joints (default 3).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SampleInfo {
+pub struct SampleInfo<const N: usize = 3> {
     /// Joint torques τ (N m).
-    pub tau: [f64; 3],
+    #[serde(serialize_with = "serialize_array")]
+    pub tau: [f64; N],
     /// Contact force on the finger λ, world axes (N); 0 in Free.
     pub lambda: [f64; 3],
     /// Normal force λ_n = λ·n (N, eq. 12).
@@ -126,10 +131,19 @@ pub struct SampleInfo {
     pub power: f64,
 }
 
-impl SampleInfo {
+/// Serialises a fixed-size array as a sequence (serde's own array impls stop at 32 and are
+/// not generic over the length).
+fn serialize_array<S: serde::Serializer, const N: usize>(
+    a: &[f64; N],
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    s.collect_seq(a)
+}
+
+impl<const N: usize> SampleInfo<N> {
     /// All fields NaN (sample that could not be evaluated).
-    pub const NAN: SampleInfo = SampleInfo {
-        tau: [f64::NAN; 3],
+    pub const NAN: SampleInfo<N> = SampleInfo {
+        tau: [f64::NAN; N],
         lambda: [f64::NAN; 3],
         lambda_n: f64::NAN,
         sigma: f64::NAN,
@@ -143,7 +157,7 @@ impl SampleInfo {
 
 /// One event of the log with the derived quantities before and after the reset.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct EventInfo {
+pub struct EventInfo<const N: usize = 3> {
     /// Event time (s).
     pub t: f64,
     /// Fig. 3 transition name ([`event_kind`]).
@@ -161,9 +175,9 @@ pub struct EventInfo {
     /// State after the reset.
     pub x_post: Vec<f64>,
     /// Derived quantities before the reset (in `mode_before`).
-    pub pre: SampleInfo,
+    pub pre: SampleInfo<N>,
     /// Derived quantities after the reset (in `mode_after`).
-    pub post: SampleInfo,
+    pub post: SampleInfo<N>,
 }
 
 /// Summary of a run (printed by the CLI, written as `summary.json`).
@@ -217,10 +231,10 @@ pub struct RunSummary {
     pub kernels: Option<String>,
 }
 
-fn summarize(
+fn summarize<const N: usize>(
     out: &SimOutput<Mode>,
-    samples: &[SampleInfo],
-    events: &[EventInfo],
+    samples: &[SampleInfo<N>],
+    events: &[EventInfo<N>],
     t0: f64,
     cpu_seconds: f64,
     options: &BallFingerOptions,
@@ -338,7 +352,10 @@ fn summarize(
 /// Largest |E(t) − E(t₀) − ∫ P dt| over the samples, with the jumps at events (the interval
 /// ending at an `EventPost` sample) left out, and the time where it occurs. Non-finite samples
 /// (a failed run's last state) are skipped.
-fn energy_balance_error(tr: &crate::Trajectory<Mode>, samples: &[SampleInfo]) -> (f64, f64) {
+fn energy_balance_error<const N: usize>(
+    tr: &crate::Trajectory<Mode>,
+    samples: &[SampleInfo<N>],
+) -> (f64, f64) {
     let mut residual = 0.0f64;
     let mut worst = (0.0f64, tr.t.first().copied().unwrap_or(0.0));
     for i in 1..tr.len() {
@@ -438,11 +455,11 @@ impl std::fmt::Display for RunSummary {
 
 /// Everything derived from one ball-and-finger run ([`BallFinger::report`]).
 #[derive(Debug, Clone, PartialEq)]
-pub struct RunReport {
+pub struct RunReport<const N: usize = 3> {
     /// Derived quantities per trajectory sample (same indices as the trajectory).
-    pub samples: Vec<SampleInfo>,
+    pub samples: Vec<SampleInfo<N>>,
     /// Event log with derived quantities.
-    pub events: Vec<EventInfo>,
+    pub events: Vec<EventInfo<N>>,
     /// Summary.
     pub summary: RunSummary,
 }
