@@ -257,13 +257,23 @@ pub struct OptimizeArgs {
     #[command(subcommand)]
     pub command: Option<OptimizeCommand>,
     /// Problem name (reach, reorient, rotate-ref, rotate-fast, periodic-qc, periodic-cot,
-    /// periodic-cot-human).
+    /// periodic-cot-human; reach-arm for an arm without a ball, with --scene).
     #[arg(long, required = true)]
     pub problem: Option<String>,
     /// Scene file (default: the problem's built-in scene). Any finger-and-ball scene; its node
-    /// functions run on the emitted kernels when they match, interpreted otherwise.
+    /// functions run on the emitted kernels when they match, interpreted otherwise. With
+    /// `--problem reach-arm`: any arm (required).
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// `reach-arm`: start configuration q1,q2,… (rad; m for prismatic joints) [default: q = 0
+    /// moved into the joint limits].
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// `reach-arm`: target configuration q1,q2,… (rad; m for prismatic joints) [default: the
+    /// start + 0.5 rad on every revolute joint, + 0.05 m on every prismatic one, moved into
+    /// the joint limits].
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub target: Option<String>,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
