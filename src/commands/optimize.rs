@@ -823,7 +823,7 @@ fn first_non_finite_arm(sol: &ArmSolution) -> Option<(String, f64)> {
 /// re-integration element by element (`study::arm`). Writes `solution.json`, `torques.csv`
 /// and `trajectory.csv`; a solve that does not converge or verify is marked FAILED.
 fn run_reach_arm(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
-    use crate::study::arm::{failure_of, solve_reach_arm, verify_arm, write_arm_solution};
+    use crate::study::arm::{failure_of, solve_verified, write_arm_solution};
     let Some(path) = &args.scene else {
         bail!(
             "--problem {REACH_ARM} needs --scene FILE (an arm, e.g. scenes/puma560.toml): it has \
@@ -894,17 +894,30 @@ fn run_reach_arm(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
         scene.name,
         path.display()
     );
-    let mut sol = solve_reach_arm(&scene, &settings, &text, &params)
-        .with_context(|| format!("--scene {}", path.display()))?;
-    if args.verify_rtol > 0.0 {
-        match verify_arm(&sol, args.verify_rtol) {
-            Ok(v) => sol.verification = Some(v),
-            Err(e) => eprintln!(
-                "warning: trajectory verification failed: {}",
-                crate::errors::chain(&e)
-            ),
-        }
+    let mut attempts = solve_verified(
+        &scene,
+        &settings,
+        args.verify_rtol,
+        args.verify_refinements,
+        &text,
+        &params,
+    )
+    .with_context(|| format!("--scene {}", path.display()))?;
+    for a in &attempts {
+        let v = a.solution.verification.as_ref();
+        crate::outln!(
+            "mesh {} elements, {} points: {}, objective {:.6e}, re-integration defect {}",
+            a.elements,
+            a.points,
+            crate::names::name(&a.solution.status),
+            a.solution.objective,
+            v.map_or("not checked".into(), |v| format!("{:.3e}", v.max_defect))
+        )?;
     }
+    let sol = attempts
+        .pop()
+        .map(|a| a.solution)
+        .ok_or_else(|| anyhow::anyhow!("internal: no {REACH_ARM} solve"))?;
     if let Some((field, v)) = first_non_finite_arm(&sol) {
         bail!(
             "the solution of {REACH_ARM} has a non-finite {field} ({v}); nothing was written to {}",

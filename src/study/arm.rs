@@ -54,6 +54,51 @@ pub fn solve_reach_arm(
     ))
 }
 
+/// One solve of [`solve_verified`]: its mesh, status, objective and re-integration defect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmAttempt {
+    /// Collocation points.
+    pub points: usize,
+    /// Radau elements.
+    pub elements: usize,
+    /// The solution (with its verification when `rtol` > 0).
+    pub solution: ArmSolution,
+}
+
+/// [`solve_reach_arm`] then [`verify_arm`] at `rtol` (0: no verification, one solve); an
+/// unverified solution is solved again on a mesh with twice the elements and points (the
+/// same points per element), up to `refinements` times: where the torque bounds are active
+/// the optimal torques have corners, which the element polynomials resolve only on short
+/// elements. Returns every attempt, the last one being the answer.
+pub fn solve_verified(
+    scene: &Scene,
+    settings: &ArmSettings,
+    rtol: f64,
+    refinements: usize,
+    scene_toml: &str,
+    scene_params: &[(String, f64)],
+) -> Result<Vec<ArmAttempt>, StudyError> {
+    let mut attempts = Vec::new();
+    let mut s = settings.clone();
+    loop {
+        let mut sol = solve_reach_arm(scene, &s, scene_toml, scene_params)?;
+        if rtol > 0.0 {
+            sol.verification = Some(verify_arm(&sol, rtol)?);
+        }
+        let done = rtol == 0.0 || is_verified(&sol) || attempts.len() >= refinements;
+        attempts.push(ArmAttempt {
+            points: s.points,
+            elements: s.elements,
+            solution: sol,
+        });
+        if done {
+            return Ok(attempts);
+        }
+        s.points *= 2;
+        s.elements *= 2;
+    }
+}
+
 /// The scene an arm solution was posed on, parsed from its stored text with its runtime
 /// parameters.
 pub fn scene_of(sol: &ArmSolution) -> Result<Scene, StudyError> {
