@@ -164,9 +164,11 @@ pub struct BenchArgs {
 pub struct SimulateArgs {
     /// Scene file. A compiled scene (same content as one of scenes/*.toml at build time) runs
     /// on the compiled kernels, any other file on kernels interpreted from the same expression
-    /// graphs (slower, same numbers).
-    #[arg(long, default_value = "scenes/paper.toml")]
-    pub scene: PathBuf,
+    /// graphs (slower, same numbers). Default: with `--init` a solution.json, the scene the
+    /// solution records (an arm solution stores its scene file's text; a ball problem's
+    /// solution names a compiled scene); otherwise scenes/paper.toml.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
