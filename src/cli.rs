@@ -164,9 +164,11 @@ pub struct BenchArgs {
 pub struct SimulateArgs {
     /// Scene file. A compiled scene (same content as one of scenes/*.toml at build time) runs
     /// on the compiled kernels, any other file on kernels interpreted from the same expression
-    /// graphs (slower, same numbers).
-    #[arg(long, default_value = "scenes/paper.toml")]
-    pub scene: PathBuf,
+    /// graphs (slower, same numbers). Default: with `--init` a solution.json, the scene the
+    /// solution records (an arm solution stores its scene file's text; a ball problem's
+    /// solution names a compiled scene); otherwise scenes/paper.toml.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
@@ -257,13 +259,23 @@ pub struct OptimizeArgs {
     #[command(subcommand)]
     pub command: Option<OptimizeCommand>,
     /// Problem name (reach, reorient, rotate-ref, rotate-fast, periodic-qc, periodic-cot,
-    /// periodic-cot-human).
+    /// periodic-cot-human; reach-arm for an arm without a ball, with --scene).
     #[arg(long, required = true)]
     pub problem: Option<String>,
     /// Scene file (default: the problem's built-in scene). Any finger-and-ball scene; its node
-    /// functions run on the emitted kernels when they match, interpreted otherwise.
+    /// functions run on the emitted kernels when they match, interpreted otherwise. With
+    /// `--problem reach-arm`: any arm (required).
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// `reach-arm`: start configuration q1,q2,… (rad; m for prismatic joints) [default: q = 0
+    /// moved into the joint limits].
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub start: Option<String>,
+    /// `reach-arm`: target configuration q1,q2,… (rad; m for prismatic joints) [default: the
+    /// start + 0.5 rad on every revolute joint, + 0.05 m on every prismatic one, moved into
+    /// the joint limits].
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub target: Option<String>,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
@@ -331,7 +343,8 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = whole)]
     pub refine_rounds: usize,
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
-    /// 4 rounds, the first to an error estimate of 1e-4, each further one 10× tighter).
+    /// 4 rounds, the first to an error estimate of 1e-4, each further one 10× tighter). With
+    /// `reach-arm`: re-solves on a mesh with twice the elements.
     #[arg(long, default_value_t = 2, allow_hyphen_values = true, value_parser = whole)]
     pub verify_refinements: usize,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).

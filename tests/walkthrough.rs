@@ -6,6 +6,8 @@
 //! M⁻¹(τ − C q̇ − g) (solved here by Gaussian elimination), and the prismatic joint's gravity
 //! force is the weight of the link it carries; the simulation balances energy against the
 //! work of its PD torques and settles where the PD law carries the quill's weight.
+//! The optimal reach ends at rest on its target within the shoulder's torque bound, verified by
+//! re-integration.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -91,6 +93,7 @@ fn the_walkthrough_runs_as_written() {
         .collect();
     assert!(commands.len() >= 3, "{commands:?}");
     let mut saw = (false, false, false, false);
+    let mut saw_optimize = false;
     for line in commands {
         let words: Vec<&str> = line.split_whitespace().collect();
         let out = bin().current_dir(&dir).args(&words[1..]).output().unwrap();
@@ -195,6 +198,34 @@ fn the_walkthrough_runs_as_written() {
                 }
                 saw.3 = true;
             }
+            "optimize" => {
+                let out = dir.join(arg_text(&words, "--out"));
+                assert!(!out.join("FAILED").exists());
+                let sol: serde_json::Value = serde_json::from_str(
+                    &std::fs::read_to_string(out.join("solution.json")).unwrap(),
+                )
+                .unwrap();
+                assert_eq!(sol["status"], "Solved", "{}", sol["status"]);
+                // Rest at the start and at the target given on the command line.
+                let target = arg(&words, "--target");
+                let x = &sol["raw"]["x"];
+                let (first, last) = (nums(&x[0]), nums(&x[x.as_array().unwrap().len() - 1]));
+                for i in 0..3 {
+                    assert!(
+                        first[i].abs() < 1e-8 && first[3 + i].abs() < 1e-8,
+                        "{first:?}"
+                    );
+                    assert!((last[i] - target[i]).abs() < 1e-8, "{last:?}");
+                    assert!(last[3 + i].abs() < 1e-8, "{last:?}");
+                }
+                // The shoulder's torque bound (20 N m) holds at every node, and the simulator
+                // reproduces the motion element by element.
+                for u in sol["raw"]["u"].as_array().unwrap() {
+                    assert!(nums(u)[0].abs() <= 20.0 * (1.0 + 1e-7), "{u}");
+                }
+                assert!(sol["verification"]["max_defect"].as_f64().unwrap() <= 1e-4);
+                saw_optimize = true;
+            }
             other => panic!("the walk-through runs an unexpected command {other}"),
         }
     }
@@ -203,4 +234,5 @@ fn the_walkthrough_runs_as_written() {
         (true, true, true, true),
         "generate, eval, bench and simulate all ran"
     );
+    assert!(saw_optimize, "optimize ran");
 }

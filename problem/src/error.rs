@@ -81,6 +81,14 @@ pub enum ProblemError {
         /// Phases of the problem.
         expected: usize,
     },
+    /// An arm problem (`reach-arm`) cannot be posed on the scene as configured.
+    #[error("scene `{scene}`: {message}")]
+    Arm {
+        /// The scene name.
+        scene: String,
+        /// What is wrong (the value and the bound it breaks).
+        message: String,
+    },
     /// The thread that builds a problem could not be started.
     #[error("cannot spawn the problem build thread")]
     BuildThread(#[source] std::io::Error),

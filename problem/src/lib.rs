@@ -14,6 +14,7 @@
 //! * [`catalogue`]: the problems ([`Problem`]) with one function per archetype, their
 //!   settings and initial guesses, built into a transcribed [`BuiltProblem`];
 //! * [`solution`]: the solution record ([`OcpSolution`], `solution.json`);
+//! * [`arm`]: point-to-point optimal control of an arm without a ball (`reach-arm`);
 //! * [`error`]: [`ProblemError`], the crate's error enum.
 //!
 //! bf-generated depends on this crate at build time, so this crate does not depend on it: the
@@ -22,6 +23,8 @@
 pub mod kernels;
 pub mod node;
 
+#[cfg(feature = "catalogue")]
+pub mod arm;
 #[cfg(feature = "catalogue")]
 pub mod catalogue;
 #[cfg(feature = "catalogue")]

@@ -345,9 +345,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 
 /// Run `simulate` with `opts`.
 pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
-    let (scene, _) = super::load_scene_with_params(&args.scene, &args.param)?;
+    let (scene, scene_label) = scene_of_args(args)?;
     if scene.ball.is_none() {
-        return run_arm(args, opts, &scene);
+        return run_arm(args, opts, &scene, &scene_label);
     }
     // Validate every option before the (possibly long) run.
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
@@ -355,17 +355,16 @@ pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
     }
     let nq = scene.links.len();
     match nq {
-        1 => run_contact::<1>(args, opts, &scene),
-        2 => run_contact::<2>(args, opts, &scene),
-        3 => run_contact::<3>(args, opts, &scene),
-        4 => run_contact::<4>(args, opts, &scene),
-        5 => run_contact::<5>(args, opts, &scene),
-        6 => run_contact::<6>(args, opts, &scene),
-        7 => run_contact::<7>(args, opts, &scene),
+        1 => run_contact::<1>(args, opts, &scene, &scene_label),
+        2 => run_contact::<2>(args, opts, &scene, &scene_label),
+        3 => run_contact::<3>(args, opts, &scene, &scene_label),
+        4 => run_contact::<4>(args, opts, &scene, &scene_label),
+        5 => run_contact::<5>(args, opts, &scene, &scene_label),
+        6 => run_contact::<6>(args, opts, &scene, &scene_label),
+        7 => run_contact::<7>(args, opts, &scene, &scene_label),
         n => bail!(
-            "{}: scene `{}` has {n} joints; the ball-and-finger simulator runs fingers with 1 to \
-             {MAX_CONTACT_JOINTS} joints",
-            args.scene.display(),
+            "{scene_label}: scene `{}` has {n} joints; the ball-and-finger simulator runs fingers \
+             with 1 to {MAX_CONTACT_JOINTS} joints",
             scene.name
         ),
     }
@@ -376,6 +375,7 @@ fn run_contact<const N: usize>(
     args: &SimulateArgs,
     opts: RunOptions,
     scene: &bf_codegen::Scene,
+    scene_label: &str,
 ) -> Result<()> {
     let set = settings(args)?;
     check_limits(args, &set)?;
@@ -400,13 +400,12 @@ fn run_contact<const N: usize>(
     };
     let setup = Instant::now();
     let (kernels, source) = bf_model::registry::contact_kernels_n::<N>(scene)
-        .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
+        .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
     let model = Model::from_kernels(kernels)
-        .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
+        .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
     eprintln!(
-        "simulate: scene `{}` from {} on the {source} kernels{}",
+        "simulate: scene `{}` from {scene_label} on the {source} kernels{}",
         scene.name,
-        args.scene.display(),
         interpreted_note(source, setup.elapsed())
     );
     run_model(args, run_opts, model, source, inp, opts, set, mode0, x0)
@@ -415,29 +414,39 @@ fn run_contact<const N: usize>(
 /// Free motion of an arm without a ball (any number of joints, `bf_sim::arm`): τ from
 /// `--torques` (one column per joint), `--pd` (one target per joint) or zero; initial state
 /// from `--q0`/`--qd0` (default 0). Writes `trajectory.csv` and `summary.json`.
-fn run_arm(args: &SimulateArgs, run_opts: RunOptions, scene: &bf_codegen::Scene) -> Result<()> {
+fn run_arm(
+    args: &SimulateArgs,
+    run_opts: RunOptions,
+    scene: &bf_codegen::Scene,
+    scene_label: &str,
+) -> Result<()> {
     let n = scene.links.len();
     let name = &scene.name;
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
         bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
     }
+    // `--init` an arm solution.json (`optimize --problem reach-arm`): replay its optimal
+    // torques from its start at rest, over its duration.
+    let replay = match &args.init {
+        Some(p) => Some(arm_replay(p, n)?),
+        None => None,
+    };
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
-        ("--init", args.init.is_some()),
         ("--mode0", args.mode0 != "free"),
     ] {
         if given {
             bail!(
-                "{opt}: scene `{name}` ({}) has no ball; only free motion of the arm is simulated (use --q0, --qd0)",
-                args.scene.display()
+                "{opt}: scene `{name}` ({scene_label}) has no ball; only free motion of the arm is simulated (use --q0, --qd0)"
             );
         }
     }
     let set = settings(args)?;
     check_limits(args, &set)?;
-    let q0 = match &args.q0 {
-        Some(s) => parse_list("--q0", s, Some(n))?,
-        None => vec![0.0; n],
+    let q0 = match (&args.q0, &replay) {
+        (Some(s), _) => parse_list("--q0", s, Some(n))?,
+        (None, Some((q, _, _))) => q.clone(),
+        (None, None) => vec![0.0; n],
     };
     let qd0 = match &args.qd0 {
         Some(s) => parse_list("--qd0", s, Some(n))?,
@@ -465,16 +474,18 @@ fn run_arm(args: &SimulateArgs, run_opts: RunOptions, scene: &bf_codegen::Scene)
             ),
         };
         CliInput::Pd(PdController::new(kp, kd, target)?)
+    } else if let Some((_, series, _)) = &replay {
+        CliInput::Series(series.clone())
     } else {
         CliInput::Arm(n)
     };
+    let t_end = replay.as_ref().map_or(args.t_end, |r| r.2);
     let setup = Instant::now();
     let (model, source) = bf_model::arm::ArmModel::from_scene(scene)
-        .with_context(|| format!("{}: scene cannot be simulated", args.scene.display()))?;
+        .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
     eprintln!(
-        "simulate: scene `{name}` from {} (no ball: free motion of {n} joints) on the {source} \
-         kernels{}",
-        args.scene.display(),
+        "simulate: scene `{name}` from {scene_label} (no ball: free motion of {n} joints) on the \
+         {source} kernels{}",
         interpreted_note(source, setup.elapsed())
     );
     let sys = FreeArm::new(model, inp)?;
@@ -484,7 +495,7 @@ fn run_arm(args: &SimulateArgs, run_opts: RunOptions, scene: &bf_codegen::Scene)
         out_dir.inject_fault_at_write(k);
     }
     let start = Instant::now();
-    let (out, error) = match bf_sim::simulate(&sys, set, ArmMode::Free, 0.0, &x0, args.t_end) {
+    let (out, error) = match bf_sim::simulate(&sys, set, ArmMode::Free, 0.0, &x0, t_end) {
         Ok(out) => (out, None),
         Err(f) => {
             let f = *f;
@@ -511,6 +522,98 @@ fn run_arm(args: &SimulateArgs, run_opts: RunOptions, scene: &bf_codegen::Scene)
         Some(e) => bail!("{e}"),
         None => Ok(()),
     }
+}
+
+/// The scene of the run and how to name it in messages: `--scene` (with `--param`); without
+/// it, the scene recorded in the `--init` solution (an arm solution's stored scene text, or the
+/// compiled scene a ball problem's solution names), else scenes/paper.toml.
+pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
+    if let Some(path) = &args.scene {
+        let (scene, _) = super::load_scene_with_params(path, &args.param)?;
+        return Ok((scene, path.display().to_string()));
+    }
+    if let Some(init) = &args.init {
+        let text = std::fs::read_to_string(init)
+            .with_context(|| format!("{}: cannot read initial-state file", init.display()))?;
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("{}: initial-state file is not JSON", init.display()))?;
+        let label = format!("the scene recorded in {}", init.display());
+        let mut scene = if let Some(toml) = v.get("scene_toml").and_then(|t| t.as_str()) {
+            let name = v.get("scene").and_then(|n| n.as_str()).unwrap_or("scene");
+            let mut scene = bf_codegen::Scene::from_toml_str(toml, &label)?;
+            let stored: Vec<(String, f64)> = v
+                .get("scene_params")
+                .cloned()
+                .map(serde_json::from_value)
+                .transpose()
+                .with_context(|| format!("{}: `scene_params`", init.display()))?
+                .unwrap_or_default();
+            bf_model::registry::set_parameters(&mut scene, &stored)
+                .map_err(|e| anyhow!("{label} (`{name}`): {e}"))?;
+            scene
+        } else if let Some(name) = v.get("scene").and_then(|n| n.as_str()) {
+            if v.get("kernels").and_then(|k| k.as_str()) == Some("interpreted") {
+                bail!(
+                    "{}: the solution was posed on a scene file of its own (`{name}`, \
+                     interpreted kernels) that it does not store; give it with --scene",
+                    init.display()
+                );
+            }
+            let toml = bf_generated::scene_toml(name).ok_or_else(|| {
+                anyhow!(
+                    "{}: the solution's scene `{name}` is not a compiled scene; give it with \
+                     --scene",
+                    init.display()
+                )
+            })?;
+            bf_codegen::Scene::from_toml_str(toml, name)?
+        } else {
+            return default_scene(args);
+        };
+        let assignments = super::parse_params(&args.param)?;
+        bf_model::registry::set_parameters(&mut scene, &assignments)
+            .map_err(|e| anyhow!("--param: {label}: {e}"))?;
+        return Ok((scene, label));
+    }
+    default_scene(args)
+}
+
+fn default_scene(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
+    let path = std::path::Path::new("scenes/paper.toml");
+    if path.exists() {
+        let (scene, _) = super::load_scene_with_params(path, &args.param)?;
+        return Ok((scene, path.display().to_string()));
+    }
+    // Outside the repository: the compiled paper scene.
+    let toml = bf_generated::scene_toml("paper")
+        .ok_or_else(|| anyhow!("no --scene given and no compiled `paper` scene"))?;
+    let mut scene = bf_codegen::Scene::from_toml_str(toml, "paper")?;
+    let assignments = super::parse_params(&args.param)?;
+    bf_model::registry::set_parameters(&mut scene, &assignments)
+        .map_err(|e| anyhow!("--param: the compiled paper scene: {e}"))?;
+    Ok((scene, "the compiled paper scene".into()))
+}
+
+/// The replay of an arm solution (`optimize --problem reach-arm`) given as `--init`: its start
+/// configuration, its dense optimal torques and its duration.
+fn arm_replay(path: &std::path::Path, n: usize) -> Result<(Vec<f64>, TorqueSeries, f64)> {
+    let sol = crate::study::arm::read_arm_solution(path).with_context(|| {
+        format!(
+            "--init {}: an arm (no ball) replays only a solution of `optimize --problem \
+             reach-arm`",
+            path.display()
+        )
+    })?;
+    if sol.start.len() != n {
+        bail!(
+            "--init {}: the solution has {} joints, the scene {n}",
+            path.display(),
+            sol.start.len()
+        );
+    }
+    let series = TorqueSeries::new(sol.dense.t.clone(), sol.dense.tau.clone())
+        .with_context(|| format!("--init {}: torques", path.display()))?;
+    Ok((sol.start.clone(), series, sol.duration))
 }
 
 /// What running on interpreted kernels means, for the stderr line (empty for compiled ones).

@@ -45,6 +45,12 @@ pub enum StudyError {
         /// What is wrong with it.
         reason: String,
     },
+    /// An arm solution (`reach-arm`) cannot be verified, read or written.
+    #[error("{message}")]
+    Arm {
+        /// What failed, naming the scene or file.
+        message: String,
+    },
     /// A numeric option is outside its valid range.
     #[error("{name} must be {expected}, got {value}")]
     InvalidOption {

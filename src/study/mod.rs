@@ -1,6 +1,7 @@
 //! The study layer: everything that solves, checks and reports the ball-and-finger problems
 //! of bf-problem on the engines below it.
 //!
+//! * [`arm`]: `reach-arm` on arms without a ball: solve, per-element re-integration, files;
 //! * [`appendix`]: the paper's Appendix A/B as printed against derivations (the misprints);
 //! * [`solve`](mod@solve): the solve-and-retry policy (interior-point settings, dual-regularization retry,
 //!   geometric-guess fallback) and primal-dual warm starts;
@@ -19,6 +20,7 @@
 //! graph that changed without its kernels being re-emitted is an error, not a slow solve.
 
 pub mod appendix;
+pub mod arm;
 pub mod error;
 pub mod extremes;
 pub mod openloop;

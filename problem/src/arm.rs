@@ -1,0 +1,690 @@
+//! Point-to-point optimal control of an arm without a ball (`reach-arm`): any scene's serial
+//! chain, any number of joints, moved from rest at a start configuration to rest at a target
+//! configuration, minimising time plus effort like the catalogue's `reach` (Sect. 4.1):
+//!
+//! min ∫₀^T (1 + w‖τ‖² + w_a‖q̈‖²) dt  s.t.  M(q) q̈ + C(q, q̇) q̇ + g(q) + μ_v q̇ = τ (eq. 22–24, 26 without
+//! the ball), |τ_i| ≤ τ_max,i (the scene's `tau_max`, unbounded where absent),
+//! q_min ≤ q ≤ q_max (the scene's joint limits, where given), (q, q̇)(0) = (q⁰, 0),
+//! (q, q̇)(T) = (q^f, 0), 0.01 s ≤ T ≤ [`MAX_DURATION`].
+//!
+//! The small acceleration term (w_a = [`DEFAULT_ACCELERATION_WEIGHT`]) is a regularisation:
+//! with time and torque effort alone, a joint of tiny inertia (a wrist: M_ii ≈ 4e-5 kg m² on
+//! the PUMA 560) moves at almost no cost, the objective's curvature along its trajectory is
+//! about 2w M_ii² ≈ 1e-9, and the interior-point iterates let the wrist flail between its
+//! limits (no convergence, re-integration defects of hundreds of rad/s). With w_a the motion
+//! is unique; it changes the optimum by a few percent (2-link test arm without torque bounds: J from
+//! 141.0 to 144.7).
+//!
+//! * [`arm_node_function`]: the node function on the bf-codegen graph of the scene — state
+//!   x = (q, q̇), algebraic q̈, control τ — with M from `mass_matrix` and C q̇ + g from
+//!   `cqd_g_rnea`, the same graphs the emitted `mass_cqd_g` kernel and the ball-and-finger node
+//!   functions ([`crate::node`]) are built from; the effort weight w and the runtime parameters
+//!   are graph inputs.
+//! * [`build_reach_arm`]: the problem ([`ArmBuilt`]) on one Legendre–Gauss–Radau phase.
+//!   No node kernels are emitted for arms: the transcription interprets the graphs.
+//! * [`ArmSolution`]: the solution record (`solution.json` of `optimize --problem reach-arm`),
+//!   with [`arm_solution_at`] building it at an NLP point and [`ArmVerification`] the
+//!   re-integration the study layer attaches.
+//!
+//! Start and target: [`default_start`] is the DH zero configuration (q = 0, the "home" pose of
+//! a DH table) moved into the joint limits; [`default_target`] is the start plus
+//! [`TARGET_OFFSET_REVOLUTE`] rad on every revolute joint and [`TARGET_OFFSET_PRISMATIC`] m on
+//! every prismatic one, moved into the limits.
+
+use bf_codegen::graph::{Graph, Id};
+use bf_codegen::nodefn::NodeFunction;
+use bf_codegen::robot::Model;
+use bf_codegen::{CodegenError, Scene};
+use bf_optim::ipm::{Nlp, Settings, Solution, Status};
+use bf_optim::ocp::{
+    KernelUse, Objective, Ocp, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme,
+    Transcription, VarRef, extract,
+};
+use bf_scene::JointType;
+use serde::{Deserialize, Serialize};
+
+use crate::ProblemError;
+
+/// The CLI and `solution.json` name of the problem.
+pub const REACH_ARM: &str = "reach-arm";
+
+/// Offset of the default target from the start on a revolute joint (rad).
+pub const TARGET_OFFSET_REVOLUTE: f64 = 0.5;
+
+/// Offset of the default target from the start on a prismatic joint (m).
+pub const TARGET_OFFSET_PRISMATIC: f64 = 0.05;
+
+/// Upper bound of the motion's duration T (s).
+pub const MAX_DURATION: f64 = 20.0;
+
+/// Lower bound of the motion's duration T (s).
+pub const MIN_DURATION: f64 = 0.01;
+
+/// Default acceleration weight w_a (s⁴ N⁻² m⁻²-free: per (rad/s²)²).
+pub const DEFAULT_ACCELERATION_WEIGHT: f64 = 1e-3;
+
+/// Samples of the dense output ([`ArmSolution::dense`]).
+pub const DENSE_SAMPLES: usize = 201;
+
+/// Settings of [`build_reach_arm`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ArmSettings {
+    /// Collocation points of the phase (split over `elements` Radau elements).
+    pub points: usize,
+    /// Radau elements.
+    pub elements: usize,
+    /// Start configuration q⁰ (`None`: [`default_start`]).
+    pub start: Option<Vec<f64>>,
+    /// Target configuration q^f (`None`: [`default_target`]).
+    pub target: Option<Vec<f64>>,
+    /// Effort weight w of the cost ∫(1 + w‖τ‖² + w_a‖q̈‖²) dt.
+    pub effort_weight: f64,
+    /// Acceleration weight w_a (see the module docs: it makes the motion of light joints
+    /// unique).
+    pub acceleration_weight: f64,
+    /// Interior-point iteration limit.
+    pub max_iter: usize,
+    /// Interior-point convergence tolerance.
+    pub tol: f64,
+    /// Solver log level (0 silent).
+    pub print_level: u8,
+}
+
+impl Default for ArmSettings {
+    fn default() -> Self {
+        ArmSettings {
+            points: 30,
+            elements: 3,
+            start: None,
+            target: None,
+            effort_weight: 1.0,
+            acceleration_weight: DEFAULT_ACCELERATION_WEIGHT,
+            max_iter: 1500,
+            tol: 1e-8,
+            print_level: 0,
+        }
+    }
+}
+
+/// Joint limits of `scene` as (q_min, q_max), ±∞ where absent.
+pub fn joint_limits(scene: &Scene) -> Vec<(f64, f64)> {
+    scene
+        .links
+        .iter()
+        .map(|l| {
+            (
+                l.q_min.unwrap_or(f64::NEG_INFINITY),
+                l.q_max.unwrap_or(f64::INFINITY),
+            )
+        })
+        .collect()
+}
+
+/// Torque limits τ_max,i of `scene` (∞ where absent).
+pub fn torque_limits(scene: &Scene) -> Vec<f64> {
+    scene
+        .links
+        .iter()
+        .map(|l| l.tau_max.unwrap_or(f64::INFINITY))
+        .collect()
+}
+
+/// The default start q⁰: q = 0 moved into the joint limits.
+pub fn default_start(scene: &Scene) -> Vec<f64> {
+    joint_limits(scene)
+        .iter()
+        .map(|&(lo, hi)| 0.0f64.clamp(lo, hi))
+        .collect()
+}
+
+/// The default target: `start` plus the fixed offsets of the module docs, moved into the joint
+/// limits (downwards where the upper limit leaves no room).
+pub fn default_target(scene: &Scene, start: &[f64]) -> Vec<f64> {
+    scene
+        .links
+        .iter()
+        .zip(joint_limits(scene))
+        .zip(start)
+        .map(|((l, (lo, hi)), &s)| {
+            let d = if l.joint == JointType::Prismatic {
+                TARGET_OFFSET_PRISMATIC
+            } else {
+                TARGET_OFFSET_REVOLUTE
+            };
+            if s + d <= hi { s + d } else { (s - d).max(lo) }
+        })
+        .collect()
+}
+
+/// Graph variables of the arm's node function.
+#[derive(Debug, Clone)]
+pub struct ArmNodeVars {
+    /// q then q̇.
+    pub x: Vec<u32>,
+    /// q̈.
+    pub qdd: Vec<u32>,
+    /// τ.
+    pub tau: Vec<u32>,
+    /// T.
+    pub duration: u32,
+}
+
+/// The node function of the arm: ẋ = (q̇, q̈), path rows (M q̈ + C q̇ + g + μ_v q̇ − τ)_i / M_ii(q_ref)
+/// = 0 (one per joint), cost integrands (1 + w‖τ‖² + w_a‖q̈‖², 1). The constant row scale 1/M_ii at the
+/// reference configuration `q_ref` changes no solution; it balances the rows of joints whose
+/// inertias differ by orders of magnitude (PUMA 560: 3 kg m² at the shoulder, 4e-5 kg m² at
+/// the flange), without which the interior-point iterates of the light joints wander. Builds
+/// deep graphs: call it on a thread with a large stack for long chains (as
+/// [`build_reach_arm`] does).
+pub fn arm_node_function(
+    scene: &Scene,
+    effort_weight: f64,
+    acceleration_weight: f64,
+    q_ref: &[f64],
+) -> Result<(NodeFunction, ArmNodeVars), CodegenError> {
+    let mut model = Model::new(scene)?;
+    let nq = model.nq();
+    let lay = model.layout;
+    let mut fixed: Vec<(u32, f64)> = model
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (lay.param(i), p.1))
+        .collect();
+    let xv: Vec<u32> = (0..nq)
+        .map(|i| lay.q(i))
+        .chain((0..nq).map(|i| lay.qd(i)))
+        .collect();
+    let base = lay.n_vars() as u32;
+    let qdd_v: Vec<u32> = (base..base + nq as u32).collect();
+    let tau_v: Vec<u32> = (base + nq as u32..base + 2 * nq as u32).collect();
+    let t_v = base + 2 * nq as u32;
+    let w_v = t_v + 1;
+    let wa_v = t_v + 2;
+    fixed.push((w_v, effort_weight));
+    fixed.push((wa_v, acceleration_weight));
+    let mu_v = scene.friction.as_ref().map_or(0.0, |f| f.mu_v);
+    let mass = model.mass_matrix();
+    let bias = model.cqd_g_rnea();
+    let mut at_ref = vec![0.0; lay.n_vars()];
+    for (i, &q) in q_ref.iter().enumerate().take(nq) {
+        at_ref[lay.q(i) as usize] = q;
+    }
+    for &(v, x) in &fixed {
+        if let Some(slot) = at_ref.get_mut(v as usize) {
+            *slot = x;
+        }
+    }
+    let diag: Vec<Id> = (0..nq).map(|i| mass[i][i]).collect();
+    let m_ref = bf_codegen::interp::eval::<f64>(&model.g, &diag, &at_ref);
+    let g: &mut Graph = &mut model.g;
+    let qd: Vec<Id> = xv[nq..].iter().map(|&v| g.var(v)).collect();
+    let qdd: Vec<Id> = qdd_v.iter().map(|&v| g.var(v)).collect();
+    let tau: Vec<Id> = tau_v.iter().map(|&v| g.var(v)).collect();
+    let muv = g.constant(mu_v);
+    let mut path = Vec::with_capacity(nq);
+    for i in 0..nq {
+        let mq = g.dot(&mass[i], &qdd);
+        let mut r = g.add(mq, bias[i]);
+        if mu_v != 0.0 {
+            let fr = g.mul(muv, qd[i]);
+            r = g.add(r, fr);
+        }
+        let r = g.sub(r, tau[i]);
+        let m = m_ref[i];
+        path.push(if m.is_finite() && m > 0.0 {
+            let k = g.constant(1.0 / m);
+            g.mul(k, r)
+        } else {
+            r
+        });
+    }
+    let sq: Vec<Id> = tau.iter().map(|&t| g.square(t)).collect();
+    let tt = g.sum(&sq);
+    let w = g.var(w_v);
+    let wt = g.mul(w, tt);
+    let one = g.one();
+    let aa: Vec<Id> = qdd.iter().map(|&a| g.square(a)).collect();
+    let aa = g.sum(&aa);
+    let wa = g.var(wa_v);
+    let waa = g.mul(wa, aa);
+    let c1 = g.add(one, wt);
+    let c1 = g.add(c1, waa);
+    let mut xdot = qd.clone();
+    xdot.extend(&qdd);
+    let nf = NodeFunction {
+        graph: std::mem::take(&mut model.g),
+        x: xv.clone(),
+        a: qdd_v.clone(),
+        u: tau_v.clone(),
+        duration: t_v,
+        fixed,
+        xdot,
+        path_bounds: vec![(0.0, 0.0); nq],
+        path,
+        costs: vec![c1, one],
+    };
+    Ok((
+        nf,
+        ArmNodeVars {
+            x: xv,
+            qdd: qdd_v,
+            tau: tau_v,
+            duration: t_v,
+        },
+    ))
+}
+
+/// A transcribed `reach-arm` problem.
+#[derive(Debug, Clone)]
+pub struct ArmBuilt {
+    /// The scene.
+    pub scene: Scene,
+    /// Start configuration q⁰.
+    pub start: Vec<f64>,
+    /// Target configuration q^f.
+    pub target: Vec<f64>,
+    /// Torque limits used (∞ = none).
+    pub tau_max: Vec<f64>,
+    /// The problem.
+    pub ocp: Ocp,
+    /// Its transcription (interpreted node functions).
+    pub nlp: Transcription,
+    /// Settings used.
+    pub settings: ArmSettings,
+}
+
+impl ArmBuilt {
+    /// Number of joints.
+    pub fn nq(&self) -> usize {
+        self.start.len()
+    }
+
+    /// Interior-point settings of the solve.
+    pub fn solver_settings(&self) -> Settings {
+        Settings {
+            tol: self.settings.tol,
+            max_iter: self.settings.max_iter,
+            print_level: self.settings.print_level,
+            ..Settings::default()
+        }
+    }
+}
+
+fn arm_err(scene: &Scene, message: String) -> ProblemError {
+    ProblemError::Arm {
+        scene: scene.name.clone(),
+        message,
+    }
+}
+
+/// Checks a configuration given in the settings: one finite value per joint, inside the limits.
+fn check_configuration(scene: &Scene, what: &str, q: &[f64]) -> Result<(), ProblemError> {
+    let nq = scene.links.len();
+    if q.len() != nq {
+        return Err(arm_err(
+            scene,
+            format!("the {what} has {} values, the arm {nq} joints", q.len()),
+        ));
+    }
+    for (i, (&v, (lo, hi))) in q.iter().zip(joint_limits(scene)).enumerate() {
+        if !v.is_finite() {
+            return Err(arm_err(
+                scene,
+                format!("the {what}'s joint {} is not finite ({v})", i + 1),
+            ));
+        }
+        if v < lo || v > hi {
+            return Err(arm_err(
+                scene,
+                format!(
+                    "the {what}'s joint {} = {v} is outside the joint limits [{lo}, {hi}]",
+                    i + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Fixes (q, q̇) at the start (`initial`) or end of the phase.
+fn fixed_state(x: &[f64], initial: bool, name: &str) -> PointFunction {
+    let mut graph = Graph::new();
+    let outputs = (0..x.len() as u32).map(|i| graph.var(i)).collect();
+    PointFunction {
+        name: name.into(),
+        graph,
+        vars: (0..x.len())
+            .map(|i| {
+                let r = if initial {
+                    VarRef::Initial { phase: 0, i }
+                } else {
+                    VarRef::Final { phase: 0, i }
+                };
+                (i as u32, r)
+            })
+            .collect(),
+        fixed: vec![],
+        outputs,
+        bounds: x.iter().map(|&v| (v, v)).collect(),
+    }
+}
+
+/// Duration of the initial guess (s).
+pub const GUESS_DURATION: f64 = 1.0;
+
+/// Samples of the initial guess.
+const GUESS_SAMPLES: usize = 21;
+
+/// The initial guess: the cubic rest-to-rest motion q(s) = q⁰ + (q^f − q⁰)(3s² − 2s³),
+/// s = t/T, with the torques of inverse dynamics along it (τ = M q̈ + C q̇ + g + μ_v q̇ on the
+/// scene's graphs), so that the guess satisfies the dynamics and the boundary conditions.
+pub fn rest_to_rest_guess(
+    scene: &Scene,
+    start: &[f64],
+    target: &[f64],
+    duration: f64,
+) -> Result<PhaseGuess, CodegenError> {
+    let mut model = Model::new(scene)?;
+    let nq = model.nq();
+    let lay = model.layout;
+    let mass = model.mass_matrix();
+    let bias = model.cqd_g_rnea();
+    let outs: Vec<Id> = mass.iter().flatten().chain(&bias).copied().collect();
+    let tape = bf_codegen::interp::Tape::new(&model.g, &outs);
+    let mu_v = scene.friction.as_ref().map_or(0.0, |f| f.mu_v);
+    let mut vars = vec![0.0; lay.n_vars()];
+    for (i, p) in model.params.iter().enumerate() {
+        vars[lay.param(i) as usize] = p.1;
+    }
+    let mut guess = PhaseGuess {
+        duration,
+        ..PhaseGuess::default()
+    };
+    for k in 0..GUESS_SAMPLES {
+        let s = k as f64 / (GUESS_SAMPLES - 1) as f64;
+        let (p, dp, ddp) = (
+            3.0 * s * s - 2.0 * s * s * s,
+            (6.0 * s - 6.0 * s * s) / duration,
+            (6.0 - 12.0 * s) / (duration * duration),
+        );
+        let d: Vec<f64> = start.iter().zip(target).map(|(a, b)| b - a).collect();
+        let q: Vec<f64> = start.iter().zip(&d).map(|(a, d)| a + d * p).collect();
+        let qd: Vec<f64> = d.iter().map(|d| d * dp).collect();
+        let qdd: Vec<f64> = d.iter().map(|d| d * ddp).collect();
+        for i in 0..nq {
+            vars[lay.q(i) as usize] = q[i];
+            vars[lay.qd(i) as usize] = qd[i];
+        }
+        let out: Vec<f64> = tape.eval(&vars);
+        let tau: Vec<f64> = (0..nq)
+            .map(|i| {
+                let mq: f64 = (0..nq).map(|j| out[i * nq + j] * qdd[j]).sum();
+                mq + out[nq * nq + i] + mu_v * qd[i]
+            })
+            .collect();
+        guess.s.push(s);
+        guess.x.push(q.into_iter().chain(qd).collect());
+        guess.a.push(qdd);
+        guess.u.push(tau);
+    }
+    Ok(guess)
+}
+
+/// Builds `reach-arm` on `scene` (any serial chain; a ball, if any, is ignored) from the
+/// guess of [`rest_to_rest_guess`]. Runs on a helper thread with a large
+/// stack (deep graphs of long chains).
+pub fn build_reach_arm(scene: &Scene, settings: &ArmSettings) -> Result<ArmBuilt, ProblemError> {
+    std::thread::scope(|s| {
+        std::thread::Builder::new()
+            .stack_size(256 << 20)
+            .spawn_scoped(s, || build_inner(scene, settings))
+            .map_err(ProblemError::BuildThread)?
+            .join()
+            .map_err(|_| ProblemError::BuildPanicked)?
+    })
+}
+
+fn build_inner(scene: &Scene, settings: &ArmSettings) -> Result<ArmBuilt, ProblemError> {
+    let nq = scene.links.len();
+    for (name, value) in [
+        ("effort weight", settings.effort_weight),
+        ("acceleration weight", settings.acceleration_weight),
+    ] {
+        if !(value.is_finite() && value >= 0.0) {
+            return Err(ProblemError::InvalidSetting {
+                name,
+                value,
+                expected: "finite and non-negative",
+            });
+        }
+    }
+    if settings.elements == 0 || settings.points < 2 * settings.elements {
+        return Err(arm_err(
+            scene,
+            format!(
+                "{} points on {} elements: need at least 1 element and 2 points per element",
+                settings.points, settings.elements
+            ),
+        ));
+    }
+    let start = settings
+        .start
+        .clone()
+        .unwrap_or_else(|| default_start(scene));
+    check_configuration(scene, "start", &start)?;
+    let target = settings
+        .target
+        .clone()
+        .unwrap_or_else(|| default_target(scene, &start));
+    check_configuration(scene, "target", &target)?;
+    let (node, _) = arm_node_function(
+        scene,
+        settings.effort_weight,
+        settings.acceleration_weight,
+        &start,
+    )
+    .map_err(ProblemError::model(&scene.name))?;
+    let tau_max = torque_limits(scene);
+    let mut x_bounds = joint_limits(scene);
+    x_bounds.extend(vec![(f64::NEG_INFINITY, f64::INFINITY); nq]);
+    let guess = rest_to_rest_guess(scene, &start, &target, GUESS_DURATION)
+        .map_err(ProblemError::model(&scene.name))?;
+    let phase = Phase {
+        name: "free".into(),
+        node,
+        x_bounds,
+        a_bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); nq],
+        u_bounds: tau_max.iter().map(|&t| (-t, t)).collect(),
+        duration_bounds: (MIN_DURATION, MAX_DURATION),
+        points: settings.points,
+        guess,
+    };
+    let x0: Vec<f64> = start.iter().copied().chain(vec![0.0; nq]).collect();
+    let xf: Vec<f64> = target.iter().copied().chain(vec![0.0; nq]).collect();
+    let ocp = Ocp {
+        phases: vec![phase],
+        n_costs: 2,
+        params: vec![],
+        points: vec![
+            fixed_state(&x0, true, "rest at the start"),
+            fixed_state(&xf, false, "rest at the target"),
+        ],
+        cost_bounds: vec![],
+        objective: Objective::Cost(0),
+        scheme: Scheme::Radau {
+            elements: settings.elements,
+        },
+    };
+    let nlp = Transcription::with_kernels(&ocp, &[], KernelUse::Never)?;
+    Ok(ArmBuilt {
+        scene: scene.clone(),
+        start,
+        target,
+        tau_max,
+        ocp,
+        nlp,
+        settings: settings.clone(),
+    })
+}
+
+/// Arm trajectory samples.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct ArmSamples {
+    /// Time (s).
+    pub t: Vec<f64>,
+    /// Joint positions (rad; m for prismatic joints).
+    pub q: Vec<Vec<f64>>,
+    /// Joint velocities.
+    pub qd: Vec<Vec<f64>>,
+    /// Joint torques (N m; N for prismatic joints).
+    pub tau: Vec<Vec<f64>>,
+}
+
+/// Re-integration of an arm solution (the study layer's verification).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ArmVerification {
+    /// Relative tolerance of the integrator.
+    pub rtol: f64,
+    /// Per collocation element, max over the state components of |x_sim − x_colloc| at the
+    /// element's end, each element started from its collocated initial state.
+    pub element_defects: Vec<f64>,
+    /// Max of `element_defects` (NaN if an element could not be integrated).
+    pub max_defect: f64,
+    /// The open-loop replay from the start over the whole motion (no restarts): max over the
+    /// components of |x_sim(T) − (q^f, 0)|. Informational: an unstable arm amplifies the
+    /// discretisation error, so this is not the verdict.
+    pub open_loop_end_error: f64,
+    /// Largest excess of the interpolated torque polynomial over τ_max between the nodes.
+    pub max_torque_overshoot: f64,
+    /// max over the collocation nodes of |q̈_colloc − q̈(q, q̇, τ)|, q̈ from the simulator's
+    /// model (M q̈ = τ − C q̇ − g − μ_v q̇): the node function and the simulator agree when it
+    /// is at the solver's tolerance.
+    pub node_residual: f64,
+    /// Why an integration failed, if one did.
+    pub failure: Option<String>,
+}
+
+/// The solution of `reach-arm`; serialises to `solution.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ArmSolution {
+    /// Problem name ([`REACH_ARM`]).
+    pub problem: String,
+    /// The scene's `name`.
+    pub scene: String,
+    /// The scene file's text as read (so the solution replays without the file).
+    pub scene_toml: String,
+    /// Runtime parameters set on the command line (name, value).
+    pub scene_params: Vec<(String, f64)>,
+    /// Which kernels evaluated the node function (always `"interpreted"`: no node kernels are
+    /// emitted for arms).
+    pub kernels: String,
+    /// Solver status.
+    pub status: Status,
+    /// Objective ∫(1 + w‖τ‖² + w_a‖q̈‖²) dt.
+    pub objective: f64,
+    /// Effort weight w.
+    pub effort_weight: f64,
+    /// Acceleration weight w_a.
+    pub acceleration_weight: f64,
+    /// Duration T (s).
+    pub duration: f64,
+    /// Start configuration.
+    pub start: Vec<f64>,
+    /// Target configuration.
+    pub target: Vec<f64>,
+    /// Torque limits (`null` = none).
+    pub tau_max: Vec<Option<f64>>,
+    /// Interior-point iterations.
+    pub iterations: usize,
+    /// Wall time of the solve (s).
+    pub solve_seconds: f64,
+    /// Final constraint violation.
+    pub constraint_violation: f64,
+    /// Final dual infeasibility.
+    pub dual_infeasibility: f64,
+    /// NLP size: variables, constraints.
+    pub nlp_size: (usize, usize),
+    /// Collocation points and Radau elements.
+    pub points: usize,
+    /// Radau elements.
+    pub elements: usize,
+    /// Values at the collocation state points (τ: the element's control polynomial there).
+    pub nodes: ArmSamples,
+    /// [`DENSE_SAMPLES`] equally spaced samples of the collocation polynomials.
+    pub dense: ArmSamples,
+    /// Raw collocation data.
+    pub raw: PhaseTrajectory,
+    /// Re-integration with the optimal torques.
+    #[serde(default)]
+    pub verification: Option<ArmVerification>,
+}
+
+impl ArmSolution {
+    /// Whether the solver converged (Solved or Acceptable).
+    pub fn converged(&self) -> bool {
+        self.status.is_success()
+    }
+}
+
+fn samples_at(tr: &PhaseTrajectory, taus: &[f64], nq: usize) -> ArmSamples {
+    let mut s = ArmSamples::default();
+    for &tau in taus {
+        let x = tr.x_at(tau);
+        s.t.push(tr.time(tau));
+        s.q.push(x[..nq].to_vec());
+        s.qd.push(x[nq..].to_vec());
+        s.tau.push(tr.u_at(tau));
+    }
+    s
+}
+
+/// The solution record of `p` at the solver result `sol` (`seconds`: wall time of the solve;
+/// `scene_toml`, `scene_params`: the scene as given, for replays).
+pub fn arm_solution_at(
+    p: &ArmBuilt,
+    sol: &Solution,
+    seconds: f64,
+    scene_toml: &str,
+    scene_params: &[(String, f64)],
+) -> ArmSolution {
+    let nq = p.nq();
+    let raw = extract(&p.nlp, &sol.x).remove(0);
+    let nodes = samples_at(&raw, &raw.state_tau, nq);
+    let dense_tau: Vec<f64> = (0..DENSE_SAMPLES)
+        .map(|k| -1.0 + 2.0 * k as f64 / (DENSE_SAMPLES - 1) as f64)
+        .collect();
+    let dense = samples_at(&raw, &dense_tau, nq);
+    let size = (Nlp::num_variables(&p.nlp), Nlp::num_constraints(&p.nlp));
+    ArmSolution {
+        problem: REACH_ARM.into(),
+        scene: p.scene.name.clone(),
+        scene_toml: scene_toml.into(),
+        scene_params: scene_params.to_vec(),
+        kernels: "interpreted".into(),
+        status: sol.status,
+        objective: sol.objective,
+        effort_weight: p.settings.effort_weight,
+        acceleration_weight: p.settings.acceleration_weight,
+        duration: raw.duration,
+        start: p.start.clone(),
+        target: p.target.clone(),
+        tau_max: p
+            .tau_max
+            .iter()
+            .map(|&t| t.is_finite().then_some(t))
+            .collect(),
+        iterations: sol.iterations,
+        solve_seconds: seconds,
+        constraint_violation: sol.constraint_violation,
+        dual_infeasibility: sol.dual_infeasibility,
+        nlp_size: size,
+        points: p.settings.points,
+        elements: p.settings.elements,
+        nodes,
+        dense,
+        raw,
+        verification: None,
+    }
+}

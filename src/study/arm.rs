@@ -1,0 +1,406 @@
+//! Arms without a ball: `reach-arm` (bf-problem's [`bf_problem::arm`]) solved, verified and
+//! written.
+//!
+//! * [`solve_reach_arm`]: build and solve the problem with the interior-point solver
+//!   (interpreted node functions: no node kernels are emitted for arms).
+//! * [`verify_arm`]: re-integration with bf-sim's arm simulator ([`bf_sim::arm::FreeArm`] on
+//!   [`bf_model::arm::ArmModel`], compiled kernels when the scene is a compiled one) under the
+//!   optimal torques. Like the ball problems' verification, the torques between the nodes are
+//!   the solution's own control polynomial on each collocation element (not clamped), and
+//!   **every element restarts from its collocated initial state**: the element defects
+//!   |x_sim − x_colloc| at the element ends measure the discretisation error of the
+//!   collocation, also for an arm whose open-loop motion is unstable (a hanging arm swung up
+//!   amplifies any error exponentially). The open-loop replay from the start over the whole
+//!   motion is reported beside it ([`ArmVerification::open_loop_end_error`]), not judged.
+//!   A solution is verified when the largest element defect is at most
+//!   [`VERIFIED_DEFECT`](super::verify::VERIFIED_DEFECT) (rad, rad/s).
+//! * [`write_arm_solution`]: `solution.json`, `torques.csv` (the format `simulate --torques`
+//!   reads) and `trajectory.csv` (t, q, q̇, τ on the dense grid).
+
+use std::fmt::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+use bf_codegen::Scene;
+use bf_model::arm::ArmModel;
+use bf_optim::ocp::nodes::lagrange_basis;
+use bf_optim::ocp::{PhaseTrajectory, solve_nlp};
+use bf_problem::arm::{
+    ArmSettings, ArmSolution, ArmVerification, arm_solution_at, build_reach_arm,
+};
+use bf_sim::arm::{ArmMode, FreeArm};
+use bf_sim::{Input, SimError, SimSettings};
+
+use super::error::StudyError;
+use super::verify::{ATOL_FACTOR, VERIFIED_DEFECT};
+
+/// Builds and solves `reach-arm` on `scene`; `scene_toml` and `scene_params` (the scene file's
+/// text and the runtime parameters set on it) are stored for replays.
+pub fn solve_reach_arm(
+    scene: &Scene,
+    settings: &ArmSettings,
+    scene_toml: &str,
+    scene_params: &[(String, f64)],
+) -> Result<ArmSolution, StudyError> {
+    let start = Instant::now();
+    let built = build_reach_arm(scene, settings)?;
+    let sol = solve_nlp(&built.nlp, &built.solver_settings(), None, None)?;
+    Ok(arm_solution_at(
+        &built,
+        &sol,
+        start.elapsed().as_secs_f64(),
+        scene_toml,
+        scene_params,
+    ))
+}
+
+/// One solve of [`solve_verified`]: its mesh, status, objective and re-integration defect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmAttempt {
+    /// Collocation points.
+    pub points: usize,
+    /// Radau elements.
+    pub elements: usize,
+    /// The solution (with its verification when `rtol` > 0).
+    pub solution: ArmSolution,
+}
+
+/// [`solve_reach_arm`] then [`verify_arm`] at `rtol` (0: no verification, one solve); an
+/// unverified solution is solved again on a mesh with twice the elements and points (the
+/// same points per element), up to `refinements` times: where the torque bounds are active
+/// the optimal torques have corners, which the element polynomials resolve only on short
+/// elements. Returns every attempt, the last one being the answer.
+pub fn solve_verified(
+    scene: &Scene,
+    settings: &ArmSettings,
+    rtol: f64,
+    refinements: usize,
+    scene_toml: &str,
+    scene_params: &[(String, f64)],
+) -> Result<Vec<ArmAttempt>, StudyError> {
+    let mut attempts = Vec::new();
+    let mut s = settings.clone();
+    loop {
+        let mut sol = solve_reach_arm(scene, &s, scene_toml, scene_params)?;
+        if rtol > 0.0 {
+            sol.verification = Some(verify_arm(&sol, rtol)?);
+        }
+        let done = rtol == 0.0 || is_verified(&sol) || attempts.len() >= refinements;
+        attempts.push(ArmAttempt {
+            points: s.points,
+            elements: s.elements,
+            solution: sol,
+        });
+        if done {
+            return Ok(attempts);
+        }
+        s.points *= 2;
+        s.elements *= 2;
+    }
+}
+
+/// The scene an arm solution was posed on, parsed from its stored text with its runtime
+/// parameters.
+pub fn scene_of(sol: &ArmSolution) -> Result<Scene, StudyError> {
+    let mut scene = Scene::from_toml_str(&sol.scene_toml, &sol.scene).map_err(|source| {
+        bf_problem::ProblemError::Scene {
+            scene: sol.scene.clone(),
+            source,
+        }
+    })?;
+    bf_model::registry::set_parameters(&mut scene, &sol.scene_params).map_err(|e| {
+        StudyError::Arm {
+            message: format!("scene `{}`: {e}", sol.scene),
+        }
+    })?;
+    Ok(scene)
+}
+
+/// The control polynomial of one collocation element: Lagrange interpolation through the
+/// element's own collocation nodes, in time.
+#[derive(Debug, Clone)]
+pub struct ElementTorque {
+    t0: f64,
+    duration: f64,
+    taus: Vec<f64>,
+    values: Vec<Vec<f64>>,
+}
+
+impl ElementTorque {
+    /// The polynomial of element `e` of `tr`.
+    pub fn new(tr: &PhaseTrajectory, e: usize) -> Self {
+        let (a, b) = tr.elements[e];
+        // The nodes of element e have their state point in [a, b − 1): the end point b − 1 is
+        // the next element's first point (and its first Radau node).
+        let ks: Vec<usize> = (0..tr.node_tau.len())
+            .filter(|&k| (a..b - 1).contains(&tr.node_state[k]))
+            .collect();
+        ElementTorque {
+            t0: tr.t0,
+            duration: tr.duration,
+            taus: ks.iter().map(|&k| tr.node_tau[k]).collect(),
+            values: ks.iter().map(|&k| tr.u[k].clone()).collect(),
+        }
+    }
+
+    /// τ at time `t`.
+    pub fn at(&self, t: f64, out: &mut [f64]) {
+        let s = 2.0 * (t - self.t0) / self.duration - 1.0;
+        let l = lagrange_basis(&self.taus, s);
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = self.values.iter().zip(&l).map(|(v, w)| w * v[i]).sum();
+        }
+    }
+}
+
+/// Torques of the open-loop replay: the control polynomial of the element containing t.
+#[derive(Debug, Clone)]
+struct PhaseTorque {
+    /// (end time, polynomial) per element.
+    elements: Vec<(f64, ElementTorque)>,
+    n: usize,
+}
+
+impl PhaseTorque {
+    fn new(tr: &PhaseTrajectory) -> Self {
+        let elements = (0..tr.elements.len())
+            .map(|e| {
+                let end = tr.time(tr.state_tau[tr.elements[e].1 - 1]);
+                (end, ElementTorque::new(tr, e))
+            })
+            .collect();
+        PhaseTorque {
+            elements,
+            n: tr.u.first().map_or(0, Vec::len),
+        }
+    }
+}
+
+impl Input for PhaseTorque {
+    fn dim(&self) -> usize {
+        self.n
+    }
+    fn tau(&self, t: f64, _: &[f64], _: &[f64], out: &mut [f64]) -> Result<(), SimError> {
+        let k = self
+            .elements
+            .iter()
+            .position(|(end, _)| t <= *end)
+            .unwrap_or(self.elements.len().saturating_sub(1));
+        if let Some((_, p)) = self.elements.get(k) {
+            p.at(t, out);
+        }
+        Ok(())
+    }
+}
+
+/// One element's polynomial as an [`Input`].
+struct OneElement(ElementTorque, usize);
+
+impl Input for OneElement {
+    fn dim(&self) -> usize {
+        self.1
+    }
+    fn tau(&self, t: f64, _: &[f64], _: &[f64], out: &mut [f64]) -> Result<(), SimError> {
+        self.0.at(t, out);
+        Ok(())
+    }
+}
+
+fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+}
+
+/// Re-integrates `sol` on its scene (see the module docs) with DOPRI5 at `rtol`
+/// (atol = rtol · [`ATOL_FACTOR`]).
+pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, StudyError> {
+    let scene = scene_of(sol)?;
+    let (model, _) = ArmModel::from_scene(&scene).map_err(|e| StudyError::Arm {
+        message: format!("scene `{}`: {e}", scene.name),
+    })?;
+    let tr = &sol.raw;
+    let n = model.nq();
+    let settings = SimSettings {
+        rtol,
+        atol: rtol * ATOL_FACTOR,
+        h_max: (tr.duration / 10.0).max(1e-6),
+        ..SimSettings::default()
+    };
+    let mut node_residual: f64 = 0.0;
+    for k in 0..tr.node_tau.len() {
+        let x = &tr.x[tr.node_state[k]];
+        match model.accelerations(&x[..n], &x[n..], &tr.u[k]) {
+            Ok(qdd) => node_residual = node_residual.max(max_abs_diff(&qdd, &tr.a[k])),
+            Err(_) => node_residual = f64::NAN,
+        }
+    }
+    let mut element_defects = Vec::new();
+    let mut failure = None;
+    let mut overshoot: f64 = 0.0;
+    for (e, &(a, b)) in tr.elements.iter().enumerate() {
+        let poly = ElementTorque::new(tr, e);
+        let (t0, t1) = (tr.time(tr.state_tau[a]), tr.time(tr.state_tau[b - 1]));
+        let mut tau = vec![0.0; n];
+        for k in 0..=32 {
+            poly.at(t0 + (t1 - t0) * k as f64 / 32.0, &mut tau);
+            for (v, m) in tau.iter().zip(&sol.tau_max) {
+                if let Some(m) = m {
+                    overshoot = overshoot.max(v.abs() - m);
+                }
+            }
+        }
+        let sys = FreeArm::new(model.clone(), OneElement(poly, n))?;
+        match bf_sim::simulate(&sys, settings.clone(), ArmMode::Free, t0, &tr.x[a], t1) {
+            Ok(out) => {
+                let end = out.trajectory.x.last().map_or(&tr.x[a], |x| x);
+                element_defects.push(max_abs_diff(end, &tr.x[b - 1]));
+            }
+            Err(f) => {
+                failure.get_or_insert(format!("element {e}: at t = {} s: {}", f.t, f.error));
+                element_defects.push(f64::NAN);
+            }
+        }
+    }
+    let max_defect = if element_defects.iter().any(|d| d.is_nan()) {
+        f64::NAN
+    } else {
+        element_defects.iter().copied().fold(0.0, f64::max)
+    };
+    let x_final: Vec<f64> = sol
+        .target
+        .iter()
+        .copied()
+        .chain(std::iter::repeat_n(0.0, n))
+        .collect();
+    let x0 = tr.x.first().cloned().unwrap_or_default();
+    let sys = FreeArm::new(model, PhaseTorque::new(tr))?;
+    let t_end = tr.t0 + tr.duration;
+    let open_loop_end_error =
+        match bf_sim::simulate(&sys, settings, ArmMode::Free, tr.t0, &x0, t_end) {
+            Ok(out) => out
+                .trajectory
+                .x
+                .last()
+                .map_or(f64::NAN, |x| max_abs_diff(x, &x_final)),
+            Err(_) => f64::NAN,
+        };
+    Ok(ArmVerification {
+        rtol,
+        element_defects,
+        max_defect,
+        open_loop_end_error,
+        max_torque_overshoot: overshoot.max(0.0),
+        node_residual,
+        failure,
+    })
+}
+
+/// Whether `sol` converged and its verification passes [`VERIFIED_DEFECT`].
+pub fn is_verified(sol: &ArmSolution) -> bool {
+    sol.converged()
+        && sol
+            .verification
+            .as_ref()
+            .is_some_and(|v| v.max_defect <= VERIFIED_DEFECT)
+}
+
+/// Why `sol` counts as failed (not converged, not verified), if it does.
+pub fn failure_of(sol: &ArmSolution) -> Option<String> {
+    if !sol.converged() {
+        return Some(format!(
+            "the solver did not converge ({})",
+            crate::names::name(&sol.status)
+        ));
+    }
+    match &sol.verification {
+        None => Some("the solution was not verified (--verify-rtol 0)".into()),
+        Some(v) if !is_verified(sol) => Some(format!(
+            "the solution is unverified: its re-integration defect {:.3e} exceeds {:e}{}",
+            v.max_defect,
+            VERIFIED_DEFECT,
+            v.failure
+                .as_ref()
+                .map(|f| format!(" ({f})"))
+                .unwrap_or_default()
+        )),
+        Some(_) => None,
+    }
+}
+
+fn units(scene: &Scene, i: usize) -> (&'static str, &'static str, &'static str) {
+    if scene
+        .links
+        .get(i)
+        .is_some_and(|l| l.joint == bf_codegen::spec::JointType::Prismatic)
+    {
+        ("m", "m/s", "N")
+    } else {
+        ("rad", "rad/s", "N m")
+    }
+}
+
+/// `torques.csv` (`t,tau1,..`, the format `simulate --torques` reads) and `trajectory.csv`
+/// (`t [s],q1 [rad],..,qd1 [rad/s],..,tau1 [N m],..`) of the dense samples.
+pub fn arm_csvs(sol: &ArmSolution, scene: &Scene) -> (String, String) {
+    let n = sol.start.len();
+    let d = &sol.dense;
+    let mut torques = String::from("t");
+    for i in 0..n {
+        let _ = write!(torques, ",tau{}", i + 1);
+    }
+    torques.push('\n');
+    let mut traj = String::from("t [s]");
+    for (k, stem) in ["q", "qd", "tau"].iter().enumerate() {
+        for i in 0..n {
+            let u = units(scene, i);
+            let unit = [u.0, u.1, u.2][k];
+            let _ = write!(traj, ",{stem}{} [{unit}]", i + 1);
+        }
+    }
+    traj.push('\n');
+    for k in 0..d.t.len() {
+        let _ = write!(torques, "{:e}", d.t[k]);
+        for v in &d.tau[k] {
+            let _ = write!(torques, ",{v:e}");
+        }
+        torques.push('\n');
+        let _ = write!(traj, "{:e}", d.t[k]);
+        for v in d.q[k].iter().chain(&d.qd[k]).chain(&d.tau[k]) {
+            let _ = write!(traj, ",{v:e}");
+        }
+        traj.push('\n');
+    }
+    (torques, traj)
+}
+
+/// Writes `solution.json`, `torques.csv` and `trajectory.csv` of `sol` into `dir`.
+pub fn write_arm_solution(sol: &ArmSolution, dir: &Path) -> Result<(), StudyError> {
+    let scene = scene_of(sol)?;
+    let (torques, traj) = arm_csvs(sol, &scene);
+    let json = serde_json::to_string_pretty(sol).map_err(|e| StudyError::Arm {
+        message: format!("cannot serialise the solution: {e}"),
+    })?;
+    for (name, text) in [
+        ("solution.json", json.as_str()),
+        ("torques.csv", &torques),
+        ("trajectory.csv", &traj),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, text).map_err(|e| StudyError::Arm {
+            message: format!("cannot write {}: {e}", path.display()),
+        })?;
+    }
+    Ok(())
+}
+
+/// Reads an arm `solution.json`.
+pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, StudyError> {
+    let text = std::fs::read_to_string(path).map_err(|e| StudyError::Arm {
+        message: format!("{}: cannot read: {e}", path.display()),
+    })?;
+    serde_json::from_str(&text).map_err(|e| StudyError::Arm {
+        message: format!("{}: not an arm solution: {e}", path.display()),
+    })
+}
