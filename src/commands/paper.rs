@@ -229,13 +229,25 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         Some(cot) => {
             let periods = if args.quick { 1 } else { 3 };
             let pb = stage(1, "open-loop simulation");
-            let o = crate::study::openloop::run_open_loop(
+            let (o, tracked) = crate::study::openloop::run_open_loop_study(
                 &cot.solution,
                 periods,
-                &dir.join("open-loop"),
+                &[
+                    crate::study::openloop::DEFAULT_PD_TRACK,
+                    crate::study::openloop::PdTrack {
+                        during_contact: true,
+                        ..crate::study::openloop::DEFAULT_PD_TRACK
+                    },
+                ],
+                &dir,
             )?;
             pb.finish();
-            writeln!(report, "{}", crate::study::openloop::markdown(&o)?)?;
+            writeln!(
+                report,
+                "{}{}",
+                crate::study::openloop::markdown(&o)?,
+                crate::study::openloop::pd_markdown(&o, &tracked)?
+            )?;
         }
         None => writeln!(
             report,
