@@ -65,7 +65,7 @@ pub fn markdown(
     let mut s = String::new();
     writeln!(
         s,
-        "### QC with a short and a longer minimum stick duration (the tap optimum)\n\n\
+        "### QC with a short and a longer minimum stick duration (tap or stick phase)\n\n\
          The stick phase's duration is bounded below by `--min-stick` (default 0.01 s). Both \
          runs below use the same strategy as the table above (same starts, same \
          verification); \"spin-up\" \
