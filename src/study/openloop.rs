@@ -67,11 +67,12 @@ impl OpenLoop {
 /// Sect. 7: τ = τ*(t) + K_p (q*(t) − q) + K_d (q̇*(t) − q̇), the same gains on every joint.
 ///
 /// Default gains [`DEFAULT_PD_TRACK`]: K_p = 1 N m/rad, K_d = 0.2 N m s/rad (the defaults of
-/// `simulate --pd-gains`). The paper finger's mass matrix has entries of order 1e-2 kg m²
-/// (links of 0.02 kg and 1e-3 kg m², scenes/paper.toml), so these gains give a closed loop
-/// of natural frequency √(K_p/M) ≈ 10 rad/s, damped (ζ = K_d / (2 √(K_p M)) ≈ 1), fast
-/// against the free phases of the optima (0.1–9 s) and within the paper's torque bound of
-/// 1 N m for angle errors up to about 1 rad.
+/// `simulate --pd-gains`). The paper finger (links of 1 m and 0.02 kg, scenes/paper.toml) has
+/// mass-matrix diagonal entries from about 7e-3 kg m² (distal joint) to 0.18 kg m² (proximal
+/// joint, finger stretched), so per joint these gains give natural frequencies √(K_p/M) of
+/// about 2.4–12 rad/s and damping ratios K_d / (2 √(K_p M)) of about 0.24–1.2: fast against
+/// the free phases of the optima (0.1–9 s), and within the paper's torque bound of 1 N m for
+/// angle errors up to about 1 rad.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PdTrack {
     /// Proportional gain K_p (N m/rad), non-negative.
