@@ -184,6 +184,21 @@ pub struct SimulateArgs {
     /// PD gains `kp,kd` (all joints) or `kp1,kp2,kp3,kd1,kd2,kd3` (N m/rad, N m s/rad).
     #[arg(long, allow_hyphen_values = true, default_value = "1.0,0.2")]
     pub pd_gains: String,
+    /// Replay the solution of `--init` (a solution.json of `optimize`), periodically, with
+    /// joint-space PD tracking of its trajectory: τ = τ*(t) + KP (q*(t) − q) + KD (q̇*(t) − q̇),
+    /// gains `KP,KD` (N m/rad, N m s/rad; the paper study uses 1,0.2); the feedback acts in
+    /// the solution's free phases (and in contact with --pd-track-contact). `0,0` is the pure
+    /// open loop of the solution's torques.
+    #[arg(
+        long,
+        value_name = "KP,KD",
+        requires = "init",
+        conflicts_with_all = ["torques", "pd"]
+    )]
+    pub pd_track: Option<String>,
+    /// With --pd-track: the feedback acts during contact too.
+    #[arg(long, requires = "pd_track")]
+    pub pd_track_contact: bool,
     /// Initial joint angles q(0) (rad, comma-separated) [default: 0.1,0.5,0.5].
     #[arg(long, allow_hyphen_values = true)]
     pub q0: Option<String>,

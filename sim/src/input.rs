@@ -3,6 +3,9 @@
 //! * [`TorqueSeries`]: open-loop torques from a time series (e.g. the optimiser's solution,
 //!   Sect. 6.2 "open-loop simulation"), piecewise linear in t, held constant outside the data.
 //! * [`PdController`]: τᵢ = kpᵢ (targetᵢ − qᵢ) − kdᵢ q̇ᵢ.
+//! * [`TrackingPd`]: feed-forward torques plus joint-space PD tracking of a reference
+//!   trajectory, τ = τ*(t) + K_p (q*(t) − q) + K_d (q̇*(t) − q̇), inside given time windows
+//!   (the stabilised open loop the paper's Sect. 7 points to).
 //!
 //! File formats (also in sim/README.md):
 //! * CSV with header `t,tau1,...,tauN` (each name optionally followed by a unit in brackets,
@@ -345,6 +348,117 @@ impl Input for PdController {
     }
 }
 
+/// Feed-forward torques with joint-space PD tracking of a reference trajectory:
+/// τᵢ = τ*ᵢ(t) + kpᵢ (q*ᵢ(t) − qᵢ) + kdᵢ (q̇*ᵢ(t) − q̇ᵢ) (N m, rad, rad/s) while t lies in one
+/// of the feedback windows, τ*(t) outside them. τ*, q* and q̇* are piecewise-linear series
+/// ([`TorqueSeries`] used as a generic series: one column per joint). With all gains zero the
+/// torques are τ*(t) exactly, the pure open loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackingPd {
+    feedforward: TorqueSeries,
+    q_ref: TorqueSeries,
+    qd_ref: TorqueSeries,
+    kp: Vec<f64>,
+    kd: Vec<f64>,
+    windows: Vec<(f64, f64)>,
+    feedback: bool,
+}
+
+impl TrackingPd {
+    /// Builds the input: feed-forward torques τ*(t), reference angles q*(t) and rates q̇*(t)
+    /// (same number of columns N), gains kp (N m/rad) and kd (N m s/rad) of length N (finite,
+    /// non-negative), and the windows [t_a, t_b) in which the feedback acts (t_a ≤ t_b).
+    pub fn new(
+        feedforward: TorqueSeries,
+        q_ref: TorqueSeries,
+        qd_ref: TorqueSeries,
+        kp: Vec<f64>,
+        kd: Vec<f64>,
+        windows: Vec<(f64, f64)>,
+    ) -> Result<Self, SimError> {
+        let n = feedforward.dim();
+        for (name, len) in [
+            ("q_ref", q_ref.dim()),
+            ("qd_ref", qd_ref.dim()),
+            ("kp", kp.len()),
+            ("kd", kd.len()),
+        ] {
+            if len != n {
+                return Err(SimError::InvalidSetting {
+                    name,
+                    msg: format!("length {len} differs from the {n} feed-forward torques"),
+                });
+            }
+        }
+        if let Some(g) = kp
+            .iter()
+            .chain(&kd)
+            .find(|g| !(g.is_finite() && **g >= 0.0))
+        {
+            return Err(SimError::InvalidSetting {
+                name: "TrackingPd gains",
+                msg: format!("{g} is not a finite non-negative gain"),
+            });
+        }
+        if let Some(w) = windows
+            .iter()
+            .find(|(a, b)| !(a.is_finite() && b.is_finite() && a <= b))
+        {
+            return Err(SimError::InvalidSetting {
+                name: "TrackingPd windows",
+                msg: format!("[{}, {}) is not a finite interval", w.0, w.1),
+            });
+        }
+        let feedback = kp.iter().chain(&kd).any(|&g| g != 0.0);
+        Ok(TrackingPd {
+            feedforward,
+            q_ref,
+            qd_ref,
+            kp,
+            kd,
+            windows,
+            feedback,
+        })
+    }
+
+    /// Whether the feedback acts at time `t` (some gain non-zero and `t` in a window).
+    pub fn feedback_at(&self, t: f64) -> bool {
+        self.feedback && self.windows.iter().any(|&(a, b)| a <= t && t < b)
+    }
+}
+
+impl Input for TrackingPd {
+    fn dim(&self) -> usize {
+        self.kp.len()
+    }
+    fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
+        let n = self.kp.len();
+        for (what, len) in [
+            ("q", q.len()),
+            ("qd", qd.len()),
+            ("torque output", out.len()),
+        ] {
+            if len != n {
+                return Err(SimError::DimensionMismatch {
+                    what,
+                    expected: n,
+                    found: len,
+                });
+            }
+        }
+        self.feedforward.eval(t, out);
+        if self.feedback_at(t) {
+            let (mut qr, mut qdr) = (vec![0.0; n], vec![0.0; n]);
+            self.q_ref.eval(t, &mut qr);
+            self.qd_ref.eval(t, &mut qdr);
+            for i in 0..n {
+                out[i] += self.kp[i] * (qr[i] - q[i]) + self.kd[i] * (qdr[i] - qd[i]);
+            }
+        }
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -461,5 +575,57 @@ mod tests {
         assert!(pd.tau(0.0, &[0.0], &[0.0, 0.0], &mut o).is_err());
         assert!(PdController::new(vec![1.0], vec![1.0, 2.0], vec![0.0]).is_err());
         assert!(PdController::new(vec![f64::NAN], vec![1.0], vec![0.0]).is_err());
+    }
+
+    #[test]
+    fn tracking_pd_law_windows_and_errors() {
+        let series =
+            |v: [f64; 2]| TorqueSeries::new(vec![0.0, 2.0], vec![vec![v[0]], vec![v[1]]]).unwrap();
+        // τ* = t, q* = 1 + t, q̇* = 1 on [0, 2]; feedback on [0.5, 1).
+        let pd = TrackingPd::new(
+            series([0.0, 2.0]),
+            series([1.0, 3.0]),
+            series([1.0, 1.0]),
+            vec![4.0],
+            vec![0.5],
+            vec![(0.5, 1.0)],
+        )
+        .unwrap();
+        let mut o = [0.0];
+        pd.tau(0.75, &[1.0], &[3.0], &mut o).unwrap();
+        // 0.75 + 4 (1.75 − 1) + 0.5 (1 − 3) = 0.75 + 3 − 1.
+        assert_eq!(o, [2.75]);
+        pd.tau(1.0, &[1.0], &[3.0], &mut o).unwrap();
+        assert_eq!(o, [1.0], "window end is open");
+        pd.tau(0.25, &[1.0], &[3.0], &mut o).unwrap();
+        assert_eq!(o, [0.25]);
+        // Zero gains: the feed-forward series exactly, inside the window too.
+        let zero = TrackingPd::new(
+            series([0.0, 2.0]),
+            series([1.0, 3.0]),
+            series([1.0, 1.0]),
+            vec![0.0],
+            vec![0.0],
+            vec![(0.0, 2.0)],
+        )
+        .unwrap();
+        assert!(!zero.feedback_at(0.75));
+        zero.tau(0.75, &[-7.0], &[9.0], &mut o).unwrap();
+        assert_eq!(o, [0.75]);
+        assert!(pd.tau(0.75, &[1.0, 2.0], &[3.0], &mut o).is_err());
+        let bad = |kp: f64, w: (f64, f64)| {
+            TrackingPd::new(
+                series([0.0, 2.0]),
+                series([1.0, 3.0]),
+                series([1.0, 1.0]),
+                vec![kp],
+                vec![0.0],
+                vec![w],
+            )
+        };
+        assert!(bad(-1.0, (0.0, 1.0)).is_err());
+        assert!(bad(f64::NAN, (0.0, 1.0)).is_err());
+        assert!(bad(1.0, (1.0, 0.0)).is_err());
+        assert!(bad(1.0, (0.0, 1.0)).is_ok());
     }
 }

@@ -218,6 +218,61 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         }
     }
 
+    // QC again with the longer minimum stick duration, by the same strategy as above.
+    if let Some(short) = results.iter().find(|r| r.name == "periodic-qc") {
+        use crate::report::min_stick::{LONG_DIR, LONG_MIN_STICK, StickRun};
+        let settings = bf_problem::ProblemSettings {
+            points: if args.quick { 20 } else { 30 },
+            min_stick: LONG_MIN_STICK,
+            ..bf_problem::ProblemSettings::default()
+        };
+        let strategy = if args.quick {
+            crate::study::strategy::Strategy::Direct
+        } else {
+            crate::study::strategy::default_strategy(
+                bf_problem::Problem::PeriodicQc,
+                settings.scheme,
+            )
+        };
+        let long = crate::study::scenarios::run_scenario(
+            "periodic-qc",
+            settings,
+            strategy,
+            &dir.join(LONG_DIR),
+            mu_s,
+            &super::optimize::solve_with_progress,
+        );
+        match long {
+            Ok(long) => {
+                let runs = [
+                    StickRun {
+                        min_stick: bf_problem::ProblemSettings::default().min_stick,
+                        result: short.clone(),
+                        prefix: String::new(),
+                    },
+                    StickRun {
+                        min_stick: LONG_MIN_STICK,
+                        result: long,
+                        prefix: LONG_DIR.to_string(),
+                    },
+                ];
+                writeln!(
+                    report,
+                    "{}",
+                    crate::report::min_stick::markdown(&runs, &|r| {
+                        crate::study::scenarios::results_markdown(r)
+                    })?
+                )?;
+            }
+            // Like a failed scenario of the main table: reported, not fatal.
+            Err(e) => writeln!(
+                report,
+                "QC with `--min-stick {LONG_MIN_STICK}` failed: {}\n",
+                crate::errors::render(&e)
+            )?,
+        }
+    }
+
     if let Some(md) = crate::study::scenarios::fig11_compare_paths(&dir, &results)? {
         writeln!(report, "{md}")?;
     }
@@ -229,13 +284,25 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         Some(cot) => {
             let periods = if args.quick { 1 } else { 3 };
             let pb = stage(1, "open-loop simulation");
-            let o = crate::study::openloop::run_open_loop(
+            let (o, tracked) = crate::study::openloop::run_open_loop_study(
                 &cot.solution,
                 periods,
-                &dir.join("open-loop"),
+                &[
+                    crate::study::openloop::DEFAULT_PD_TRACK,
+                    crate::study::openloop::PdTrack {
+                        during_contact: true,
+                        ..crate::study::openloop::DEFAULT_PD_TRACK
+                    },
+                ],
+                &dir,
             )?;
             pb.finish();
-            writeln!(report, "{}", crate::study::openloop::markdown(&o)?)?;
+            writeln!(
+                report,
+                "{}{}",
+                crate::study::openloop::markdown(&o)?,
+                crate::study::openloop::pd_markdown(&o, &tracked)?
+            )?;
         }
         None => writeln!(
             report,

@@ -1,9 +1,12 @@
 //! `ball-finger simulate`: the hybrid ball-and-finger model of the paper's Sect. 3 / Fig. 3
 //! (modes Free / Stick / Slip, eq. 44–47; transitions eq. 48–50, σ ≤ 0, ‖Δv‖ ≤ ε; impact laws
-//! eq. 39–43) driven by an open-loop torque series (Sect. 6.2) or a joint-space PD controller.
+//! eq. 39–43) driven by an open-loop torque series (Sect. 6.2), a joint-space PD controller,
+//! or (`--pd-track`) the torques of a solution with PD tracking of its trajectory (Sect. 7,
+//! `ball_finger::study::openloop::tracking_input`).
 //!
 //! ```text
-//! ball-finger simulate --scene scenes/paper.toml [--torques FILE | --pd TARGET [--pd-gains KP,KD]]
+//! ball-finger simulate --scene scenes/paper.toml [--torques FILE | --pd TARGET [--pd-gains KP,KD]
+//!     | --init SOLUTION --pd-track KP,KD [--pd-track-contact]]
 //!     [--q0 Q --qd0 QD --omega0 W --mode0 free|stick|slip | --init FILE]
 //!     [--t-end S] [--integrator dopri5|rk4] [--rtol X] [--atol X] [--step H]
 //!     [--impact-law newton|stick|max-dissipation|min-slip] [--no-projection] [--output-dt DT]
@@ -43,6 +46,7 @@ use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{
     Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries,
+    TrackingPd,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal as _;
@@ -83,6 +87,8 @@ pub enum CliInput {
     Series(TorqueSeries),
     /// τ = kp (target − q) − kd q̇ (`--pd`).
     Pd(PdController),
+    /// A solution's torques with PD tracking of its trajectory (`--init` with `--pd-track`).
+    Tracking(TrackingPd),
     /// Unactuated joints of a finger with this many joints.
     Zero(usize),
     /// Unactuated joints of an arm with this many joints.
@@ -94,6 +100,7 @@ impl Input for CliInput {
         match self {
             CliInput::Series(s) => s.dim(),
             CliInput::Pd(p) => p.dim(),
+            CliInput::Tracking(p) => p.dim(),
             CliInput::Zero(n) => *n,
             CliInput::Arm(n) => *n,
         }
@@ -102,6 +109,7 @@ impl Input for CliInput {
         match self {
             CliInput::Series(s) => s.tau(t, q, qd, out),
             CliInput::Pd(p) => p.tau(t, q, qd, out),
+            CliInput::Tracking(p) => p.tau(t, q, qd, out),
             CliInput::Zero(_) | CliInput::Arm(_) => {
                 out.fill(0.0);
                 Ok(())
@@ -274,6 +282,9 @@ pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
         }
         return Ok(CliInput::Series(s));
     }
+    if let Some(gains) = &args.pd_track {
+        return tracking(args, gains).map(CliInput::Tracking);
+    }
     if let Some(target) = &args.pd {
         let target = parse_list("--pd", target, Some(n))?;
         let g = parse_list("--pd-gains", &args.pd_gains, None)?;
@@ -288,6 +299,46 @@ pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
         return Ok(CliInput::Pd(PdController::new(kp, kd, target)?));
     }
     Ok(CliInput::Zero(n))
+}
+
+/// Most periods of a solution `--pd-track` repeats (its series hold every dense sample of
+/// every period).
+pub const MAX_TRACKED_PERIODS: f64 = 10_000.0;
+
+/// `--pd-track KP,KD`: the solution of `--init` repeated over `--t-end` with PD tracking.
+fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
+    use crate::study::SolutionIo as _;
+    let g = parse_list("--pd-track", gains, Some(2))?;
+    let Some(path) = &args.init else {
+        bail!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
+    };
+    let sol = bf_problem::OcpSolution::read_json(path)
+        .with_context(|| format!("--pd-track: reading the solution {}", path.display()))?;
+    if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
+        bail!(
+            "--pd-track: {} has no trajectory to track (period {} s, {} dense samples)",
+            path.display(),
+            sol.period,
+            sol.dense.t.len()
+        );
+    }
+    let periods = (args.t_end / sol.period).ceil().max(1.0);
+    if periods.is_nan() || periods > MAX_TRACKED_PERIODS {
+        bail!(
+            "--pd-track: --t-end {} s is {periods} periods of {} s of {}, more than {}",
+            args.t_end,
+            sol.period,
+            path.display(),
+            MAX_TRACKED_PERIODS
+        );
+    }
+    let pd = crate::study::openloop::PdTrack {
+        kp: g[0],
+        kd: g[1],
+        during_contact: args.pd_track_contact,
+    };
+    crate::study::openloop::tracking_input(&sol, periods as usize, &pd)
+        .with_context(|| format!("--pd-track {gains}"))
 }
 
 /// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
@@ -660,6 +711,10 @@ fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
                 max_torque(s)
             )
         }
+        (CliInput::Tracking(_), _) => format!(
+            "--pd-track {} on the solution of --init",
+            args.pd_track.as_deref().unwrap_or("")
+        ),
         (CliInput::Pd(_), _) => format!(
             "--pd {} --pd-gains {}",
             args.pd.as_deref().unwrap_or(""),

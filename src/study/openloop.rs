@@ -2,13 +2,20 @@
 //! finger (no joint limits) replayed, periodically, in the full hybrid model of Fig. 3 —
 //! free, stick and slip modes, Newton's impact law (eq. 39) — starting from the optimal initial
 //! state x⁽¹⁾(0), and compared with the optimal trajectory (the counterpart of Fig. 17).
+//!
+//! The paper's Sect. 7 names the remedy for the drift of that open loop: feedback around the
+//! optimal trajectory. [`run_open_loop_study`] replays the same torques twice, once purely
+//! open loop ([`run_open_loop`]) and once with a joint-space PD ([`PdTrack`], bf-sim's
+//! [`TrackingPd`]) τ = τ*(t) + K_p (q*(t) − q) + K_d (q̇*(t) − q̇) added during the optimum's
+//! free phases (optionally in contact too), and compares both with the optimum period by
+//! period (ω and q errors) in one figure.
 
 use anyhow::{Context, Result, anyhow};
 use bf_model::{ImpactLaw, Mode};
 use bf_plot::paper::{SimModes, TimeSeries};
 use bf_problem::OcpSolution;
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
-use bf_sim::{SimSettings, TorqueSeries};
+use bf_sim::{Input, SimOutput, SimSettings, TorqueSeries, TrackingPd};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -23,6 +30,15 @@ pub struct OpenLoop {
     pub stopped: Option<String>,
     /// max |ω_sim − ω_opt| over each period (rad/s).
     pub omega_error_per_period: Vec<f64>,
+    /// max |q_sim − q_opt| over each period (rad).
+    pub q_error_per_period: Vec<f64>,
+    /// The largest |ω| component of the optimum over a period (rad/s), the scale of
+    /// [`OpenLoop::first_period_matches`].
+    pub omega_scale: f64,
+    /// The PD tracking of the run (`None`: pure open loop).
+    pub feedback: Option<PdTrack>,
+    /// The simulated trajectory (states q, q̇, ω at the output grid and the events).
+    pub trajectory: bf_sim::Trajectory<Mode>,
     /// Time spent in each mode (s): free, stick, slip.
     pub mode_time: [f64; 3],
     /// Events by guard name, with counts.
@@ -33,8 +49,72 @@ pub struct OpenLoop {
     pub first_impact: Option<(f64, f64, f64, f64)>,
 }
 
-/// Interpolate the optimal ω at time `t` (periodic) from the dense samples.
-fn omega_opt(sol: &OcpSolution, t: f64) -> [f64; 3] {
+/// The share of [`OpenLoop::omega_scale`] up to which a replay's ω error counts as a match
+/// ([`OpenLoop::first_period_matches`]).
+pub const MATCH_SHARE: f64 = 0.1;
+
+impl OpenLoop {
+    /// Whether the replay matches the optimum in its first period: the largest ω error there
+    /// is at most [`MATCH_SHARE`] of the optimum's largest |ω| component.
+    pub fn first_period_matches(&self) -> bool {
+        self.omega_error_per_period
+            .first()
+            .is_some_and(|&e| e <= MATCH_SHARE * self.omega_scale)
+    }
+}
+
+/// Joint-space PD tracking of the optimal trajectory, the stabilising feedback of the paper's
+/// Sect. 7: τ = τ*(t) + K_p (q*(t) − q) + K_d (q̇*(t) − q̇), the same gains on every joint.
+///
+/// Default gains [`DEFAULT_PD_TRACK`]: K_p = 1 N m/rad, K_d = 0.2 N m s/rad (the defaults of
+/// `simulate --pd-gains`). The paper finger (links of 1 m and 0.02 kg, scenes/paper.toml) has
+/// mass-matrix diagonal entries from about 7e-3 kg m² (distal joint) to 0.18 kg m² (proximal
+/// joint, finger stretched), so per joint these gains give natural frequencies √(K_p/M) of
+/// about 2.4–12 rad/s and damping ratios K_d / (2 √(K_p M)) of about 0.24–1.2: fast against
+/// the free phases of the optima (0.1–9 s), and within the paper's torque bound of 1 N m for
+/// angle errors up to about 1 rad.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PdTrack {
+    /// Proportional gain K_p (N m/rad), non-negative.
+    pub kp: f64,
+    /// Derivative gain K_d (N m s/rad), non-negative.
+    pub kd: f64,
+    /// Also while the optimum is in contact (default: free phases only, where the finger
+    /// alone moves and the feedback cannot fight the contact constraint).
+    pub during_contact: bool,
+}
+
+/// The default PD tracking ([`PdTrack`]).
+pub const DEFAULT_PD_TRACK: PdTrack = PdTrack {
+    kp: 1.0,
+    kd: 0.2,
+    during_contact: false,
+};
+
+impl PdTrack {
+    /// A short description for legends and tables, e.g. "PD 1/0.2, free phases".
+    pub fn label(&self) -> String {
+        format!(
+            "PD {}/{}, {}",
+            self.kp,
+            self.kd,
+            if self.during_contact {
+                "always"
+            } else {
+                "free phases"
+            }
+        )
+    }
+}
+
+impl Default for PdTrack {
+    fn default() -> Self {
+        DEFAULT_PD_TRACK
+    }
+}
+
+/// The optimal (q, q̇, ω) at time `t` (periodic), interpolated linearly in the dense samples.
+fn reference_at(sol: &OcpSolution, t: f64) -> [Vec<f64>; 3] {
     let d = &sol.dense;
     let tm = t.rem_euclid(sol.period);
     let i = d.t.partition_point(|&s| s <= tm).clamp(1, d.t.len() - 1);
@@ -44,13 +124,21 @@ fn omega_opt(sol: &OcpSolution, t: f64) -> [f64; 3] {
     } else {
         0.0
     };
-    std::array::from_fn(|k| d.omega[i - 1][k] * (1.0 - w) + d.omega[i][k] * w)
+    let lerp = |v: &[Vec<f64>]| -> Vec<f64> {
+        v[i - 1]
+            .iter()
+            .zip(&v[i])
+            .map(|(a, b)| a * (1.0 - w) + b * w)
+            .collect()
+    };
+    [lerp(&d.q), lerp(&d.qd), lerp(&d.omega)]
 }
 
-/// The optimal torques repeated `periods` times, as a torque series (strictly increasing times).
-pub fn periodic_torques(sol: &OcpSolution, periods: usize) -> Result<TorqueSeries> {
+/// The dense samples `rows` of the optimum repeated `periods` times, as a piecewise-linear
+/// series (strictly increasing times: of two samples at one time, the first is kept).
+fn periodic_series(sol: &OcpSolution, periods: usize, rows: &[Vec<f64>]) -> Result<TorqueSeries> {
     let d = &sol.dense;
-    let (mut t, mut tau) = (Vec::new(), Vec::new());
+    let (mut t, mut v) = (Vec::new(), Vec::new());
     for p in 0..periods {
         for (i, &ti) in d.t.iter().enumerate() {
             let tt = ti + p as f64 * sol.period;
@@ -58,16 +146,61 @@ pub fn periodic_torques(sol: &OcpSolution, periods: usize) -> Result<TorqueSerie
                 continue;
             }
             t.push(tt);
-            tau.push(d.tau[i].clone());
+            v.push(rows[i].clone());
         }
     }
-    TorqueSeries::new(t, tau).map_err(|e| anyhow!("optimal torques as a series: {e}"))
+    TorqueSeries::new(t, v).map_err(|e| anyhow!("optimal trajectory as a series: {e}"))
 }
 
-/// Run the open-loop simulation and write its trajectory, events and Fig. 17 into `dir`.
-pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<OpenLoop> {
+/// The optimal torques repeated `periods` times, as a torque series (strictly increasing times).
+pub fn periodic_torques(sol: &OcpSolution, periods: usize) -> Result<TorqueSeries> {
+    periodic_series(sol, periods, &sol.dense.tau)
+}
+
+/// The time windows [t_a, t_b) of the optimum's free phases over `periods` periods.
+fn free_windows(sol: &OcpSolution, periods: usize) -> Vec<(f64, f64)> {
+    let mut w = Vec::new();
+    for p in 0..periods {
+        let mut t = p as f64 * sol.period;
+        for (mode, &d) in sol.modes.iter().zip(&sol.phase_durations) {
+            if *mode == bf_problem::node::PhaseMode::Free {
+                w.push((t, t + d));
+            }
+            t += d;
+        }
+    }
+    w
+}
+
+/// The optimal torques with the PD tracking `pd` around the optimal trajectory (feedback in
+/// the free phases, or over the whole horizon with [`PdTrack::during_contact`]).
+pub fn tracking_input(sol: &OcpSolution, periods: usize, pd: &PdTrack) -> Result<TrackingPd> {
+    let n = sol.dense.tau.first().map_or(0, Vec::len);
+    let windows = if pd.during_contact {
+        vec![(f64::MIN, f64::MAX)]
+    } else {
+        free_windows(sol, periods)
+    };
+    TrackingPd::new(
+        periodic_torques(sol, periods)?,
+        periodic_series(sol, periods, &sol.dense.q)?,
+        periodic_series(sol, periods, &sol.dense.qd)?,
+        vec![pd.kp; n],
+        vec![pd.kd; n],
+        windows,
+    )
+    .map_err(|e| anyhow!("PD tracking (K_p {}, K_d {}): {e}", pd.kp, pd.kd))
+}
+
+/// Simulates `periods` periods under `input` from the optimal initial state and writes the
+/// files of `simulate` into `dir`; a failed run returns its partial output and the reason.
+fn replay<I: Input>(
+    sol: &OcpSolution,
+    periods: usize,
+    input: I,
+    dir: &Path,
+) -> Result<(SimOutput<Mode>, Option<String>)> {
     let model = bf_model::fixtures::paper_scene().context("paper scene")?;
-    let input = periodic_torques(sol, periods)?;
     let sys = BallFinger::new(
         model,
         input,
@@ -100,17 +233,33 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
     // The files of `simulate` (same columns, units and mode names).
     sys.report(&out, 0.0, cpu.elapsed().as_secs_f64())
         .write_dir(dir, &out, stopped.as_deref())?;
+    Ok((out, stopped))
+}
 
+/// The figures of merit of a replay `out` of `sol` over `periods` periods.
+fn analyse(
+    sol: &OcpSolution,
+    periods: usize,
+    out: SimOutput<Mode>,
+    stopped: Option<String>,
+    feedback: Option<PdTrack>,
+) -> OpenLoop {
     let tr = &out.trajectory;
+    let nq = sol.dense.q.first().map_or(0, Vec::len);
     let mut err = vec![0.0f64; periods];
+    let mut q_err = vec![0.0f64; periods];
     let mut mode_time = [0.0; 3];
     for i in 0..tr.t.len() {
-        let w = omega_opt(sol, tr.t[i]);
+        let [q, _, w] = reference_at(sol, tr.t[i]);
         let p = ((tr.t[i] / sol.period) as usize).min(periods - 1);
         let e = (0..3)
-            .map(|k| (tr.x[i][6 + k] - w[k]).abs())
+            .map(|k| (tr.x[i][2 * nq + k] - w[k]).abs())
             .fold(0.0, f64::max);
         err[p] = err[p].max(e);
+        let eq = (0..nq)
+            .map(|k| (tr.x[i][k] - q[k]).abs())
+            .fold(0.0, f64::max);
+        q_err[p] = q_err[p].max(eq);
         if i > 0 {
             let dt = tr.t[i] - tr.t[i - 1];
             let m = match tr.mode[i - 1] {
@@ -143,64 +292,148 @@ pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<Op
             // The optimal state at the end of phase 1: the last dense sample of phase 0.
             let d = &sol.dense;
             let i = d.phase.iter().rposition(|&p| p == 0)?;
-            let dq = (0..3)
+            let dq = (0..nq)
                 .map(|k| (e.x_pre[k] - d.q[i][k]).abs())
                 .fold(0.0, f64::max);
-            let dqd = (0..3)
-                .map(|k| (e.x_pre[3 + k] - d.qd[i][k]).abs())
+            let dqd = (0..nq)
+                .map(|k| (e.x_pre[nq + k] - d.qd[i][k]).abs())
                 .fold(0.0, f64::max);
             Some((e.t, t1, dq, dqd))
         });
+    OpenLoop {
+        periods,
+        t_reached: out.t_final,
+        stopped,
+        omega_error_per_period: err,
+        q_error_per_period: q_err,
+        omega_scale: sol
+            .dense
+            .omega
+            .iter()
+            .flatten()
+            .fold(0.0, |m: f64, v| m.max(v.abs())),
+        feedback,
+        trajectory: out.trajectory,
+        mode_time,
+        events,
+        first_impact,
+    }
+}
 
-    // Fig. 17: open-loop vs optimal ω.
-    let names = ["ω_x", "ω_y", "ω_z"].map(String::from).to_vec();
-    let open = TimeSeries {
+/// ω of a replay as a figure series.
+fn omega_series(tr: &bf_sim::Trajectory<Mode>, nq: usize) -> TimeSeries {
+    TimeSeries {
         t: tr.t.clone(),
         values: (0..3)
-            .map(|k| tr.x.iter().map(|x| x[6 + k]).collect())
+            .map(|k| tr.x.iter().map(|x| x[2 * nq + k]).collect())
             .collect(),
-        names: names.clone(),
-    };
-    let opt_t: Vec<f64> = tr.t.clone();
+        names: ["ω_x", "ω_y", "ω_z"].map(String::from).to_vec(),
+    }
+}
+
+/// Writes Fig. 17 into `dir/../figures/fig17_open_loop`: the optimal ω, the pure open loop
+/// and the PD-tracked replays `tracked`; the pure open loop's contact modes are shaded.
+fn write_figure(
+    sol: &OcpSolution,
+    open: &OpenLoop,
+    tracked: &[OpenLoop],
+    dir: &Path,
+) -> Result<()> {
+    let nq = sol.dense.q.first().map_or(0, Vec::len);
+    let tr = &open.trajectory;
+    let open_w = omega_series(tr, nq);
     let optimal = TimeSeries {
         values: (0..3)
-            .map(|k| opt_t.iter().map(|&t| omega_opt(sol, t)[k]).collect())
+            .map(|k| tr.t.iter().map(|&t| reference_at(sol, t)[2][k]).collect())
             .collect(),
-        t: opt_t,
-        names,
+        t: tr.t.clone(),
+        names: open_w.names.clone(),
     };
     // The optimum's switching times (impact, lift-off) repeated every period, over the
     // simulated horizon; the simulation's own contact modes are shaded.
     let one_period = super::scenarios::phases_of(sol);
     let mut phases = bf_plot::paper::Phases::default();
-    for p in 0..periods {
+    for p in 0..open.periods {
         let offset = p as f64 * sol.period;
         for (t, label) in &one_period.switches {
-            if offset + t <= out.t_final {
+            if offset + t <= open.t_reached {
                 phases.switches.push((offset + t, label.clone()));
             }
         }
     }
     let modes = SimModes::from_trace(&tr.t, &tr.mode)?;
-    bf_plot::render_panels(
-        &bf_plot::paper::fig_open_loop_vs_optimal_modes(
-            "Fig. 17 counterpart: open-loop simulation vs optimal ω (COT, robotic finger)",
-            &optimal,
-            &open,
-            &phases,
-            &modes,
-        )?,
-        dir.join("..").join("figures").join("fig17_open_loop"),
-    )?;
-    Ok(OpenLoop {
-        periods,
-        t_reached: out.t_final,
-        stopped,
-        omega_error_per_period: err,
-        mode_time,
-        events,
-        first_impact,
-    })
+    let title = if tracked.is_empty() {
+        "Fig. 17 counterpart: open-loop simulation vs optimal ω (COT, robotic finger)"
+    } else {
+        "Fig. 17 counterpart: open loop and PD-tracked replays vs optimal ω (COT, robotic finger)"
+    };
+    let mut fig =
+        bf_plot::paper::fig_open_loop_vs_optimal_modes(title, &optimal, &open_w, &phases, &modes)?;
+    let styles = [
+        ((44, 160, 44), bf_plot::Dash::Dotted),
+        ((148, 103, 189), bf_plot::Dash::LongDash),
+    ];
+    for (j, o) in tracked.iter().enumerate() {
+        let w = omega_series(&o.trajectory, nq);
+        let ((r, g, b), dash) = styles[j % styles.len()];
+        let style = bf_plot::SeriesStyle {
+            colour: bf_plot::Colour::Rgb(r, g, b),
+            dash,
+            ..bf_plot::SeriesStyle::default()
+        };
+        let name = o.feedback.map_or("replay".to_string(), |pd| pd.label());
+        for (k, panel) in fig.panels.iter_mut().enumerate() {
+            panel
+                .series
+                .push(bf_plot::Series::new(name.clone(), w.points(k)).styled(style));
+        }
+    }
+    bf_plot::render_panels(&fig, dir.join("..").join("figures").join("fig17_open_loop"))?;
+    Ok(())
+}
+
+/// Run the open-loop simulation and write its trajectory, events and Fig. 17 into `dir`.
+pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<OpenLoop> {
+    let (out, stopped) = replay(sol, periods, periodic_torques(sol, periods)?, dir)?;
+    let o = analyse(sol, periods, out, stopped, None);
+    write_figure(sol, &o, &[], dir)?;
+    Ok(o)
+}
+
+/// Replays the optimal torques with the PD tracking `pd` ([`tracking_input`]) and writes its
+/// trajectory and events into `dir` (no figure).
+pub fn run_pd_tracked(
+    sol: &OcpSolution,
+    periods: usize,
+    pd: &PdTrack,
+    dir: &Path,
+) -> Result<OpenLoop> {
+    let (out, stopped) = replay(sol, periods, tracking_input(sol, periods, pd)?, dir)?;
+    Ok(analyse(sol, periods, out, stopped, Some(*pd)))
+}
+
+/// The pure open loop (files in `dir/open-loop`) and a PD-tracked replay of the same torques
+/// for every entry of `variants` (`dir/open-loop-pd`, `dir/open-loop-pd-2`, …), side by side in
+/// Fig. 17 (`dir/figures/fig17_open_loop`).
+pub fn run_open_loop_study(
+    sol: &OcpSolution,
+    periods: usize,
+    variants: &[PdTrack],
+    dir: &Path,
+) -> Result<(OpenLoop, Vec<OpenLoop>)> {
+    let open_dir = dir.join("open-loop");
+    let (out, stopped) = replay(sol, periods, periodic_torques(sol, periods)?, &open_dir)?;
+    let open = analyse(sol, periods, out, stopped, None);
+    let mut tracked = Vec::new();
+    for (j, pd) in variants.iter().enumerate() {
+        let name = match j {
+            0 => "open-loop-pd".to_string(),
+            _ => format!("open-loop-pd-{}", j + 1),
+        };
+        tracked.push(run_pd_tracked(sol, periods, pd, &dir.join(name))?);
+    }
+    write_figure(sol, &open, &tracked, &open_dir)?;
+    Ok((open, tracked))
 }
 
 /// The report section.
@@ -260,5 +493,81 @@ pub fn markdown(o: &OpenLoop) -> Result<String> {
         o.omega_error_per_period.last().copied().unwrap_or(f64::NAN),
         o.mode_time[2]
     )?;
+    Ok(s)
+}
+
+/// The report section comparing the pure open loop `open` with the PD-tracked replays
+/// `tracked` of the same torques (after [`markdown`] of the pure open loop).
+pub fn pd_markdown(open: &OpenLoop, tracked: &[OpenLoop]) -> Result<String> {
+    let mut s = String::new();
+    writeln!(
+        s,
+        "\n\n### Stabilised by joint-space PD tracking (Sect. 7)\n\n\
+         The same torques with τ = τ*(t) + K_p (q*(t) − q) + K_d (q̇*(t) − q̇) added (q*, q̇*: \
+         the optimal trajectory, repeated every period; gains in N m/rad and N m s/rad), either \
+         only while the optimum is in a free phase (\"free phases\", the paper's suggestion) or \
+         over the whole horizon (\"always\"). Trajectories: `open-loop-pd*/trajectory.json`; \
+         the dotted and long-dashed curves of the figure above.\n"
+    )?;
+    for o in tracked {
+        if let Some(msg) = &o.stopped {
+            let label = o.feedback.map_or(String::new(), |pd| pd.label());
+            writeln!(
+                s,
+                "**The run {label} stopped early** ({msg}); the partial trajectory is reported.\n"
+            )?;
+        }
+    }
+    let runs: Vec<(String, &OpenLoop)> = std::iter::once(("open loop".to_string(), open))
+        .chain(
+            tracked
+                .iter()
+                .map(|o| (o.feedback.map_or(String::new(), |pd| pd.label()), o)),
+        )
+        .collect();
+    let mut head = String::from("| period |");
+    let mut rule = String::from("|---|");
+    for (name, _) in &runs {
+        write!(head, " ω error, {name} (rad/s) |")?;
+        rule.push_str("---|");
+    }
+    for (name, _) in &runs {
+        write!(head, " q error, {name} (rad) |")?;
+        rule.push_str("---|");
+    }
+    writeln!(s, "{head}\n{rule}")?;
+    for i in 0..open.periods {
+        let at = |v: &[f64]| v.get(i).map_or("—".to_string(), |e| format!("{e:.4}"));
+        write!(s, "| {} |", i + 1)?;
+        for (_, o) in &runs {
+            write!(s, " {} |", at(&o.omega_error_per_period))?;
+        }
+        for (_, o) in &runs {
+            write!(s, " {} |", at(&o.q_error_per_period))?;
+        }
+        writeln!(s)?;
+    }
+    writeln!(
+        s,
+        "\nErrors: the largest absolute component error against the optimum over each period. \
+         First period (match: ω error ≤ {:.0} % of the optimum's largest |ω| component, \
+         {:.3} rad/s):",
+        100.0 * MATCH_SHARE,
+        MATCH_SHARE * open.omega_scale
+    )?;
+    for (name, o) in &runs {
+        writeln!(
+            s,
+            "- {name}: {} (time in free / stick / slip: {:.3} / {:.3} / {:.3} s)",
+            if o.first_period_matches() {
+                "matches"
+            } else {
+                "does not match"
+            },
+            o.mode_time[0],
+            o.mode_time[1],
+            o.mode_time[2]
+        )?;
+    }
     Ok(s)
 }

@@ -1,5 +1,5 @@
 //! The solve-and-retry policy of the study layer: interior-point settings of a problem
-//! ([`solver_settings`], [`warm_settings`]), a solve with its retries ([`solve`]) and a
+//! ([`solver_settings`], [`warm_settings`], [`interpolated_warm_settings`]), a solve with its retries ([`solve`]) and a
 //! primal-dual warm-started solve ([`solve_warm`]).
 //!
 //! LG solves use a larger static dual regularization ([`RAISED_DUAL_REGULARIZATION`],
@@ -59,7 +59,7 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 
 /// Solves `p` directly. Initial point: an exact primal-dual warm start when `p.settings`
 /// carries a warm-start solution of the same problem on the same mesh, else its interpolated
-/// primal point or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
+/// primal point (with [`interpolated_warm_settings`]) or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
 /// solve from the docs/parameters.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
 /// Before that, a failed solve with the default static dual regularization (Radau: 1e-9) is
 /// repeated from the same start with [`RAISED_DUAL_REGULARIZATION`] (unless
@@ -79,10 +79,10 @@ pub fn solve(
         .warm_start
         .as_ref()
         .and_then(|ws| exact_warm_start(p, ws));
-    let settings = if p.settings.warm_start.is_some() {
-        warm_settings(&p.settings)
-    } else {
-        solver_settings(&p.settings)
+    let settings = match (&p.settings.warm_start, exact) {
+        (Some(_), Some(_)) => warm_settings(&p.settings),
+        (Some(_), None) => interpolated_warm_settings(&p.settings, start_violation(p)),
+        (None, _) => solver_settings(&p.settings),
     };
     let label = match (exact.is_some(), p.settings.warm_start.is_some()) {
         (true, _) => "exact warm start".to_string(),
@@ -164,6 +164,57 @@ pub fn warm_settings(s: &ProblemSettings) -> Settings {
         st.warm_start_mult_bound_push = 1e-6;
     }
     st
+}
+
+/// Largest initial barrier parameter μ₀ of an interpolated (primal-only) warm start, the μ₀
+/// of [`warm_settings`].
+pub const INTERPOLATED_MU_INIT_MAX: f64 = 1e-4;
+
+/// Interior-point settings for a warm start from an interpolated primal point only (no
+/// multipliers: [`ProblemSettings::warm_start`] without a matching NLP vector, e.g. a
+/// `solution.json` without its internal fields, or another mesh), given the largest
+/// constraint violation `violation` of that point. Unless the caller set its own
+/// [`ProblemSettings::ipm`]:
+/// * μ₀ = clamp(`violation`, tol / 10, [`INTERPOLATED_MU_INIT_MAX`]): along the central path
+///   the primal infeasibility and the barrier parameter fall together, so a start as feasible
+///   as the end of a converged solve (the optimum itself re-loaded on its own mesh) begins
+///   where that solve ended, instead of climbing back to μ = 1e-4 and descending again; a
+///   start off by the change of mesh keeps the larger μ₀, which lets the iterates re-centre
+///   (a small μ₀ there costs iterations);
+/// * the primal point is pushed into its bounds by the warm-start push of [`warm_settings`]
+///   rather than the cold 1e-2, which would move every active bound (a stick phase at its
+///   minimum duration, a torque at its limit) off the optimum.
+pub fn interpolated_warm_settings(s: &ProblemSettings, violation: f64) -> Settings {
+    let mut st = warm_settings(s);
+    if s.ipm.is_none() {
+        let floor = 0.1 * st.tol;
+        st.mu_init = if violation.is_finite() {
+            violation.clamp(floor, INTERPOLATED_MU_INIT_MAX)
+        } else {
+            INTERPOLATED_MU_INIT_MAX
+        };
+        st.bound_push = st.warm_start_bound_push;
+        st.bound_frac = st.warm_start_bound_push;
+    }
+    st
+}
+
+/// The largest violation of the constraint bounds at the initial point of `p` (user units).
+fn start_violation(p: &BuiltProblem) -> f64 {
+    let n = Nlp::num_variables(&p.nlp);
+    let m = Nlp::num_constraints(&p.nlp);
+    let mut x = vec![0.0; n];
+    Nlp::initial_point(&p.nlp, &mut x);
+    let mut g = vec![0.0; m];
+    Nlp::constraints(&p.nlp, &x, &mut g);
+    let (mut lo, mut up) = (vec![0.0; m], vec![0.0; m]);
+    Nlp::constraint_bounds(&p.nlp, &mut lo, &mut up);
+    (0..m)
+        .map(|i| (lo[i] - g[i]).max(g[i] - up[i]))
+        .fold(
+            0.0,
+            |a: f64, v| if v.is_nan() { f64::NAN } else { a.max(v) },
+        )
 }
 
 /// The primal-dual point of `ws` if it belongs to the same problem on the same mesh (same
