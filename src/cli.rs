@@ -358,8 +358,8 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = whole)]
     pub refine_rounds: usize,
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
-    /// 4 rounds, the first to an error estimate of 1e-4, each further one 10× tighter). With
-    /// `reach-arm`: re-solves on a mesh with twice the elements.
+    /// 4 rounds driven by the element-wise re-integration defects, the first to 1e-4, each
+    /// further one 10× tighter). With `reach-arm`: re-solves on a mesh with twice the elements.
     #[arg(long, default_value_t = 2, allow_hyphen_values = true, value_parser = whole)]
     pub verify_refinements: usize,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).

@@ -1,9 +1,11 @@
 //! Adaptive hp mesh refinement of the Radau transcription of the catalogue problems (paper
 //! Sect. 5; the method of Patterson, Hager & Rao 2015, see [`bf_optim::ocp::mesh`]).
 //!
-//! [`refine`]: solve → [`error_estimate`] per element (the collocation defect of eq. 58
-//! between the nodes, with the implicit dynamics eq. 26/29 solved for q̈, ω̇, λ) → raise the
-//! degree of or split the elements above the tolerance → re-solve warm-started from the
+//! [`refine`]: solve → an error per element, by default [`error_estimate`] (the collocation
+//! defect of eq. 58 between the nodes, with the implicit dynamics eq. 26/29 solved for q̈, ω̇,
+//! λ), or with [`RefineCriterion::Reintegration`] the element-wise defect of the trajectory
+//! verification ([`super::verify::element_errors`]) → raise the degree of or split the
+//! elements above the tolerance → re-solve warm-started from the
 //! previous solution interpolated exactly onto the new mesh → … until the largest element error
 //! is ≤ tol, or the round or size limits stop it (reported as not converged). The result holds
 //! the final solution, its mesh (a [`MeshSpec`] per phase, for
@@ -22,15 +24,18 @@ use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 
 use super::build;
 use super::solve::{solve, solver_settings};
-pub use bf_problem::solution::records::{RefineReport, RefineRound};
+use super::verify::element_errors;
+pub use bf_problem::solution::records::{RefineCriterion, RefineReport, RefineRound};
 pub use bf_problem::solution::warm_initial_point;
 
 /// Options of [`refine`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct RefineOptions {
-    /// Tolerance on the largest element error estimate.
+    /// Tolerance on the largest element error.
     pub tol: f64,
+    /// What the element errors measure.
+    pub criterion: RefineCriterion,
     /// Refinement rounds after the first solve.
     pub max_rounds: usize,
     /// Limits of the ph rule.
@@ -46,6 +51,7 @@ impl Default for RefineOptions {
     fn default() -> Self {
         RefineOptions {
             tol: 1e-4,
+            criterion: RefineCriterion::Estimate,
             max_rounds: 8,
             rule: HpRule::default(),
             max_points: 400,
@@ -169,7 +175,10 @@ pub fn refine(
             }
             Err(e) => return Err(e),
         };
-        let errors = error_estimate(&p, &sol)?;
+        let errors = match opts.criterion {
+            RefineCriterion::Estimate => error_estimate(&p, &sol)?,
+            RefineCriterion::Reintegration { rtol } => element_errors(&p, &sol, rtol)?,
+        };
         let phase_errors: Vec<f64> = errors.iter().map(|e| max_nan(e.iter().copied())).collect();
         let max_error = max_nan(phase_errors.iter().copied());
         let rec = RefineRound {
@@ -246,6 +255,7 @@ pub fn refine(
         total_seconds: history.iter().map(|r| r.seconds).sum(),
         report: RefineReport {
             tol: opts.tol,
+            criterion: opts.criterion,
             converged,
             stop_reason,
             mesh,

@@ -2,8 +2,11 @@
 //! [`Strategy`] (for `periodic-qc` a continuation in the stick phase's lower bound, first
 //! ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound), every end point re-integrated
 //! ([`verify`]), one [`Candidate`] per distinct optimum (objectives within [`CLUSTER_RTOL`]),
-//! hp refinement of the best unverified optima that beat the best verified one until their
-//! re-integration defect is at most [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]), and
+//! hp refinement of the best unverified optima that beat the best verified one, driven by
+//! their element-wise re-integration defects, until these are at most
+//! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]; a refined optimum that ends
+//! Acceptable is then re-solved from its own primal-dual point with the raised KKT dual
+//! regularization), and
 //! the choice [`select`]: verified first, then the lowest objective, then the lowest start
 //! index. Results are collected in index order and every choice depends on values only, so the
 //! result is bitwise the same with any number of threads; a [`Shard`] runs every m-th start
@@ -15,12 +18,15 @@ use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rayon::prelude::*;
 
 use super::error::StudyError;
-use super::refine::{self, RefineOptions};
+use super::refine::{self, RefineCriterion, RefineOptions};
+use super::solve::RAISED_DUAL_REGULARIZATION;
 use super::strategy::{
     Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record, record,
     run_chains,
 };
-use super::verify::{is_verified, verify};
+use super::verify::{VERIFIED_DEFECT, is_verified, verify};
+use super::{build, solve};
+use bf_optim::ipm::Status;
 
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
@@ -38,8 +44,9 @@ pub struct VerifyPolicy {
     /// DOPRI5 relative tolerance of the re-integration ([`verify`]); 0 skips verification
     /// (and with it the refinement).
     pub rtol: f64,
-    /// Error-estimate tolerance of the first hp refinement of an unverified optimum; each
-    /// further attempt divides it by 10.
+    /// Tolerance on the element-wise re-integration defects (state units) of the first hp
+    /// refinement of an unverified optimum ([`RefineCriterion::Reintegration`]); each further
+    /// attempt divides it by 10.
     pub refine_tol: f64,
     /// hp refinements (each up to `refine_rounds` rounds) of one unverified optimum at most.
     pub refine_attempts: usize,
@@ -62,7 +69,7 @@ impl Default for VerifyPolicy {
     fn default() -> Self {
         VerifyPolicy {
             rtol: 1e-10,
-            refine_tol: 1e-4,
+            refine_tol: VERIFIED_DEFECT,
             refine_attempts: 2,
             refine_rounds: 4,
             max_points: 400,
@@ -196,9 +203,61 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
     }
 }
 
+/// Re-solves a refined candidate that ended Acceptable on its own mesh, from its own
+/// primal-dual point, with the raised KKT dual regularization ([`RAISED_DUAL_REGULARIZATION`]):
+/// warm-started refinement rounds on fine Radau meshes often stall at the acceptable level with
+/// the default one, and from the stalled point the raised one converges in a few iterations.
+/// Returns the polished candidate when it ends Solved and verified, with its record.
+fn polish(
+    problem: Problem,
+    settings: &ProblemSettings,
+    cur: &Candidate,
+    rtol: f64,
+) -> Option<(Candidate, StageRecord)> {
+    let p = cur.problem.as_ref()?;
+    let t0 = Instant::now();
+    let s = ProblemSettings {
+        mesh: Some(refine::current_mesh(p).ok()?),
+        warm_start: Some(cur.solution.clone()),
+        dual_regularization: Some(RAISED_DUAL_REGULARIZATION),
+        ..settings.clone()
+    };
+    let b = build(problem, &s).ok()?;
+    let mut sol = solve(&b, None).ok()?;
+    if sol.status != Status::Solved {
+        return None;
+    }
+    let polish_iters = sol.iterations;
+    sol.iterations += cur.solution.iterations;
+    sol.solve_seconds += cur.solution.solve_seconds;
+    sol.strategy = cur.solution.strategy.clone();
+    sol.refinement = cur.solution.refinement.clone();
+    let mut next = Candidate {
+        index: cur.index,
+        problem: Some(b),
+        solution: sol,
+    };
+    attach_verification(&mut next, rtol);
+    if !is_verified(&next.solution) {
+        return None;
+    }
+    let mut r = record(
+        cur.index,
+        format!(
+            "polish start {} (dual regularization {RAISED_DUAL_REGULARIZATION:e})",
+            cur.index
+        ),
+        &next.solution,
+        t0,
+    );
+    r.iterations = polish_iters;
+    Some((next, r))
+}
+
 /// hp-refines an unverified candidate (Radau only) until it is verified or the policy's
-/// attempts are spent: attempt a refines from the previous attempt's mesh to the error
-/// estimate `refine_tol`·10⁻ᵃ and re-integrates. Returns the last successful refinement (or
+/// attempts are spent: attempt a refines from the previous attempt's mesh, each round
+/// splitting or raising the degree of the elements whose element-wise re-integration defect
+/// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. Returns the last successful refinement (or
 /// the candidate unchanged) and a record per attempt.
 fn refine_until_verified(
     problem: Problem,
@@ -223,6 +282,7 @@ fn refine_until_verified(
         };
         let opts = RefineOptions {
             tol,
+            criterion: RefineCriterion::Reintegration { rtol: policy.rtol },
             max_rounds: policy.refine_rounds,
             max_points: policy.max_points,
             ..RefineOptions::default()
@@ -261,6 +321,13 @@ fn refine_until_verified(
             }
         }
         tol *= 0.1;
+    }
+    if is_verified(&cur.solution)
+        && cur.solution.status == Status::Acceptable
+        && let Some((next, r)) = polish(problem, settings, &cur, policy.rtol)
+    {
+        records.push(r);
+        cur = next;
     }
     (cur, records)
 }

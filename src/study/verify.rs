@@ -1,7 +1,7 @@
-//! Built-in trajectory verification of optimal-control solutions: every phase of a solved
-//! problem is re-integrated with the optimal torques by the simulator's adaptive DOPRI5
-//! (bf-sim) on the physics of bf-model, and the end-of-phase state defects
-//! x_sim(t_f) − x_colloc(t_f) are reported.
+//! Built-in trajectory verification of optimal-control solutions: the optimal torques are
+//! re-integrated by the simulator's adaptive DOPRI5 (bf-sim) on the physics of bf-model, and
+//! the re-integrated states are compared with the collocated ones. Decision record:
+//! docs/decisions/0005-elementwise-verification.md.
 //!
 //! | item | paper |
 //! |---|---|
@@ -13,6 +13,29 @@
 //! | [`PhaseVerification::node_residual`]: the OCP's dynamics residual at the collocation nodes, evaluated with bf-model's kernels and parameters | eq. 26, 29 |
 //! | contact geometry with the smooth saturation of the solution's ε | eq. 58–59 |
 //!
+//! Three figures per phase, one of them the criterion:
+//! * **Element-wise defect** ([`PhaseVerification::defect`], the criterion): every collocation
+//!   element is re-integrated alone, from the collocated state at its start, and its end is
+//!   compared with the collocated state there (the next element's start, or the phase end) —
+//!   multiple shooting with the element boundaries as shooting nodes. A solution is verified
+//!   when every element reaches its end and the largest defect is ≤ [`VERIFIED_DEFECT`]: then
+//!   the collocated trajectory is a chain of true trajectories of the model under its own
+//!   torques with jumps ≤ [`VERIFIED_DEFECT`] at the element boundaries, and the path checks
+//!   below hold along these true trajectories. The figure does not grow with the phase
+//!   length; a long element on an unstable motion can still amplify its local error, and the
+//!   refinement that a failed verification triggers splits such elements
+//!   ([`element_errors`], [`super::refine::RefineCriterion::Reintegration`]).
+//! * **Collocation-interval defect** ([`PhaseVerification::interval_defect`], informative):
+//!   the same from every collocation point to the next. Radau collocation is more accurate
+//!   at the element ends than at the interior nodes, so this figure is larger; it bounds the
+//!   error of the interior node values that `solution.json` tabulates.
+//! * **Open-loop drift** ([`PhaseVerification::open_loop_defect`], informative): one
+//!   integration through the whole phase from its collocated initial state, compared at the
+//!   phase end. It measures how the phase's motion amplifies small errors (the free flight
+//!   of the COT optima balances the finger near an unstable equilibrium for seconds and
+//!   drifts by radians), i.e. whether the torques could be played back without feedback; it
+//!   says nothing about whether the collocated trajectory solves the dynamics.
+//!
 //! Conventions:
 //! * **Torques between collocation nodes** are the solution's own dense output: in each
 //!   collocation element, the Lagrange polynomial through the element's collocation nodes
@@ -20,9 +43,9 @@
 //!   function that `OcpSolution::dense` and `torques.csv` sample (100 samples per phase).
 //!   The polynomial jumps at element boundaries, so the integrator is restarted at each of them
 //!   (no step straddles a discontinuity of the input). Where the optimal torques saturate,
-//!   the polynomial overshoots τ_max between the nodes and the clamp changes the torque: this is
-//!   then usually the dominant defect (`reach`: ~1e-3–1e-2 clamped vs ~1e-9 with
-//!   [`TorqueInterpolant::Polynomial`]); [`PhaseVerification::max_torque_overshoot`] shows it.
+//!   the polynomial overshoots τ_max between the nodes and the clamp changes the torque;
+//!   [`PhaseVerification::max_torque_overshoot`] shows it, and
+//!   [`TorqueInterpolant::Polynomial`] integrates the unclamped polynomial instead.
 //! * **Each phase starts from its own collocated initial state**: the Free → Stick switch
 //!   applies the sticking impact law (eq. 40) with the impulse ι from the NLP parameters, and
 //!   phase continuity / periodicity are NLP constraints; they are not re-integrated here.
@@ -30,9 +53,11 @@
 //!   the check is whether the optimal torques *keep* the contact sticking. bf-model refuses
 //!   contact queries beyond |h| ≤ tol·r; the OCP allows h ≤ 10⁻⁴ at the touch-down, so the
 //!   verification uses [`CONTACT_TOLERANCE`] and reports max |h| instead.
-//! * Defects are absolute (rad, rad/s), max over components. A phase whose re-integration
-//!   fails (model error, step-size underflow) is reported with `failure` set and NaN defects
-//!   (written as `null` in JSON); `Verification::max_defect` is then NaN.
+//! * Defects are absolute (rad, rad/s), max over components: the states are O(0.01–10) rad
+//!   and rad/s, so [`VERIFIED_DEFECT`] = 10⁻⁴ is a relative accuracy of about 10⁻⁵–10⁻⁴ on the
+//!   largest components, far above the DOPRI5 tolerance (rtol 10⁻¹⁰). An element whose
+//!   re-integration fails (model error, step-size underflow) is reported in `failure`, with
+//!   NaN defects (written as `null` in JSON); `Verification::max_defect` is then NaN.
 
 use std::time::Instant;
 
@@ -368,6 +393,73 @@ impl PathStats {
     }
 }
 
+/// The collocation intervals of element `e` of `tr` on [s_start, s_end] (τ): consecutive
+/// state points with their collocated states. Radau elements contain both their boundaries
+/// as state points; the last Legendre–Gauss element ends at the phase end, the final state
+/// point, which is not in its support range.
+fn element_points(
+    tr: &PhaseTrajectory,
+    (a, b): (usize, usize),
+    s_start: f64,
+    s_end: f64,
+    last: bool,
+) -> Vec<(f64, Vec<f64>)> {
+    let mut pts: Vec<(f64, Vec<f64>)> = (a..b)
+        .filter(|&p| tr.state_tau[p] >= s_start && tr.state_tau[p] <= s_end)
+        .map(|p| (tr.state_tau[p], tr.x[p].clone()))
+        .collect();
+    if pts.first().is_none_or(|(t, _)| *t > s_start) {
+        pts.insert(0, (s_start, tr.x_at(s_start)));
+    }
+    if pts.last().is_some_and(|(t, _)| *t < s_end) {
+        let x = if last {
+            tr.x[tr.x.len() - 1].clone()
+        } else {
+            tr.x_at(s_end)
+        };
+        pts.push((s_end, x));
+    }
+    pts
+}
+
+/// Componentwise |x − y| as the max over the q, q̇ and ω parts (NaN propagates).
+fn part_defects(x: &[f64], y: &[f64]) -> [f64; 3] {
+    let mut d = [0.0f64; 3];
+    for (i, (xi, yi)) in x.iter().zip(y).enumerate() {
+        let part = (i / 3).min(2);
+        d[part] = nan_max(d[part], (xi - yi).abs());
+    }
+    d
+}
+
+/// One DOPRI5 run of `sys` from (t0, x0) to t1: the output (the partial one if it failed)
+/// and why it failed.
+fn integrate(
+    sys: &ElementSystem,
+    settings: SimSettings,
+    mode: PhaseMode,
+    t0: f64,
+    x0: &[f64],
+    t1: f64,
+) -> (SimOutput<PhaseMode>, Option<String>) {
+    match bf_sim::simulate(sys, settings, mode, t0, x0, t1) {
+        Ok(out) => (out, None),
+        Err(fail) => {
+            let msg = fail.to_string();
+            (fail.partial, Some(msg))
+        }
+    }
+}
+
+/// max_i |x_end,i − x_i| of a run that reached its end (steps are recorded, so its last
+/// sample is the end state); NaN if it failed.
+fn end_defect(out: &SimOutput<PhaseMode>, err: &Option<String>, x: &[f64]) -> [f64; 3] {
+    match (err, out.trajectory.x.last()) {
+        (None, Some(xe)) => part_defects(xe, x),
+        _ => [f64::NAN; 3],
+    }
+}
+
 fn verify_phase(
     model: &Model<DynKernels>,
     tau_max: [f64; 3],
@@ -384,24 +476,25 @@ fn verify_phase(
     let x_start = tr.x[0].clone();
     let x_colloc_end = tr.x[tr.x.len() - 1].clone();
     let node_residual = node_residual(model, k, mode, tr)?;
-    let mut x = x_start.clone();
+    let time = |s: f64| 0.5 * (s + 1.0) * big_t;
     let mut stats = PathStats::new();
     let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
-    let mut failure = None;
-    let mut t_reached = 0.0;
+    let mut failure: Option<(f64, String)> = None;
+    let mut parts = [0.0f64; 3];
+    let mut element_defects = Vec::with_capacity(tr.elements.len());
+    let mut interval_defect = 0.0f64;
+    let mut x_open = x_start.clone();
+    let mut open_loop_failure = None;
     let mut s_prev = -1.0;
-    let mut element_defect = 0.0;
     let ne = tr.elements.len();
     for (e, &(a, b)) in tr.elements.iter().enumerate() {
-        let s_end = if e + 1 == ne {
-            1.0
-        } else {
-            tr.state_tau[b - 1]
-        };
+        let last = e + 1 == ne;
+        let s_end = if last { 1.0 } else { tr.state_tau[b - 1] };
         let s_start = s_prev;
-        let (ta, tb) = (0.5 * (s_start + 1.0) * big_t, 0.5 * (s_end + 1.0) * big_t);
+        let (ta, tb) = (time(s_start), time(s_end));
         s_prev = s_end;
         if tb <= ta {
+            element_defects.push(0.0);
             continue;
         }
         let ks: Vec<usize> = (0..tr.node_tau.len())
@@ -432,59 +525,69 @@ fn verify_phase(
             record_steps: true,
             ..SimSettings::default()
         };
-        // Steps are recorded: the last sample is then the state at tb.
-        let local = SimSettings {
-            output_dt: None,
-            ..settings.clone()
-        };
-        let xa = if e == 0 {
-            x_start.clone()
-        } else {
-            tr.x_at(s_start)
-        };
-        let xb = if e + 1 == ne {
-            x_colloc_end.clone()
-        } else {
-            tr.x_at(s_end)
-        };
-        element_defect = match bf_sim::simulate(&sys, local, mode, ta, &xa, tb) {
-            Ok(out) if out.trajectory.x.last().is_some() => {
-                let xe = &out.trajectory.x[out.trajectory.x.len() - 1];
-                let d = (0..xb.len())
-                    .map(|i| (xe[i] - xb[i]).abs())
-                    .fold(0.0, nan_max);
-                nan_max(element_defect, d)
-            }
-            _ => f64::NAN,
-        };
-        let (out, err) = match bf_sim::simulate(&sys, settings, mode, ta, &x, tb) {
-            Ok(out) => (out, None),
-            Err(fail) => {
-                let msg = fail.to_string();
-                (fail.partial, Some(msg))
-            }
-        };
+        let pts = element_points(tr, (a, b), s_start, s_end, last);
+        let (x_a, x_b) = (&pts[0].1, &pts[pts.len() - 1].1);
+        // The verification: the element alone, from its collocated start state, with the path
+        // checks along it.
+        let (out, err) = integrate(&sys, settings.clone(), mode, ta, x_a, tb);
         steps += out.stats.accepted_steps;
         rejected += out.stats.rejected_steps;
         rhs += out.stats.rhs_evals;
-        if let Some(xl) = out.trajectory.x.last() {
-            x.clone_from(xl);
-            t_reached = out.t_final;
-        }
         let path = stats.add_output(&sys, mode, &out);
-        if let Some(msg) = err.or(path.err()) {
-            failure = Some(format!("element {e}: {msg}"));
-            break;
+        let d = end_defect(&out, &err, x_b);
+        match err.or(path.err()) {
+            Some(msg) => {
+                failure.get_or_insert((out.t_final, format!("element {e}: {msg}")));
+                element_defects.push(f64::NAN);
+            }
+            None => {
+                for (p, di) in parts.iter_mut().zip(d) {
+                    *p = nan_max(*p, di);
+                }
+                element_defects.push(d.into_iter().fold(0.0, nan_max));
+            }
+        }
+        let plain = SimSettings {
+            output_dt: None,
+            ..settings
+        };
+        // Informative: every collocation interval from its collocated start state ...
+        for w in pts.windows(2) {
+            let ((s0, x0), (s1, x1)) = (&w[0], &w[1]);
+            let (t0, t1) = (time(*s0), time(*s1));
+            if t1 > t0 {
+                let (out, err) = integrate(&sys, plain.clone(), mode, t0, x0, t1);
+                let d = end_defect(&out, &err, x1);
+                interval_defect = d.into_iter().fold(interval_defect, nan_max);
+            }
+        }
+        // ... and the open-loop replay, one integration through the whole phase.
+        if open_loop_failure.is_none() {
+            let (out, err) = integrate(&sys, plain, mode, ta, &x_open, tb);
+            match (err, out.trajectory.x.last()) {
+                (None, Some(xl)) => x_open.clone_from(xl),
+                (err, _) => {
+                    open_loop_failure = Some(format!(
+                        "element {e}: {}",
+                        err.unwrap_or_else(|| "no state".into())
+                    ));
+                }
+            }
         }
     }
-    let nq = 3;
-    let part = |r: std::ops::Range<usize>| -> f64 {
-        if failure.is_some() {
-            return f64::NAN;
-        }
-        r.map(|i| (x[i] - x_colloc_end[i]).abs()).fold(0.0, nan_max)
+    let failed = failure.is_some();
+    let [dq, dqd, dw] = parts.map(|v| if failed { f64::NAN } else { v });
+    let open_loop_defect = if open_loop_failure.is_some() {
+        f64::NAN
+    } else {
+        part_defects(&x_open, &x_colloc_end)
+            .into_iter()
+            .fold(0.0, nan_max)
     };
-    let (dq, dqd, dw) = (part(0..nq), part(nq..2 * nq), part(2 * nq..2 * nq + 3));
+    let (t_reached, failure) = match failure {
+        Some((t, msg)) => (t, Some(msg)),
+        None => (big_t, None),
+    };
     let stick = mode == PhaseMode::Stick;
     let finite_or_none = |v: f64, on: bool| (on && v.is_finite()).then_some(v);
     Ok(PhaseVerification {
@@ -493,13 +596,16 @@ fn verify_phase(
         duration: big_t,
         t_reached,
         failure,
-        defect: dq.max(dqd).max(dw),
+        defect: nan_max(nan_max(dq, dqd), dw),
         defect_q: dq,
         defect_qd: dqd,
         defect_omega: dw,
-        element_defect,
+        element_defects,
+        interval_defect,
+        open_loop_defect,
+        open_loop_failure,
         x_start,
-        x_end: x,
+        x_end: x_open,
         x_colloc_end,
         steps,
         rejected_steps: rejected,
@@ -516,17 +622,41 @@ fn verify_phase(
     })
 }
 
-/// Largest re-integration defect (end-of-phase state error, state units) at which a solution
-/// counts as verified: above it, the collocation solution does not describe what the hybrid
-/// model does with its torques, and every place that shows the solution flags it.
+/// Largest element-wise re-integration defect (state units) at which a solution counts as
+/// verified: above it, the collocation solution does not describe what the hybrid model does
+/// with its torques, and every place that shows the solution flags it.
 pub const VERIFIED_DEFECT: f64 = 1e-4;
 
-/// Whether `sol` carries a re-integration that reached the end of every phase with a defect of
-/// at most [`VERIFIED_DEFECT`].
+/// Whether `sol` carries a re-integration that reached the end of every element with an
+/// element-wise defect of at most [`VERIFIED_DEFECT`].
 pub fn is_verified(sol: &OcpSolution) -> bool {
     sol.verification.as_ref().is_some_and(|v| {
         v.completed() && v.max_defect.is_finite() && v.max_defect <= VERIFIED_DEFECT
     })
+}
+
+/// Element error of the refinement for an element whose re-integration failed (state
+/// units): large enough that the ph rule splits the element, finite so that it does.
+pub const FAILED_ELEMENT_ERROR: f64 = 1.0;
+
+/// The element-wise defects of `sol` ([`verify`] at `rtol`) per phase and element, as the
+/// element errors of a mesh refinement ([`super::refine::RefineCriterion::Reintegration`]);
+/// an element whose re-integration failed counts as [`FAILED_ELEMENT_ERROR`].
+pub fn element_errors(
+    p: &BuiltProblem,
+    sol: &OcpSolution,
+    rtol: f64,
+) -> Result<Vec<Vec<f64>>, StudyError> {
+    let v = verify(p, sol, rtol)?;
+    Ok(v.phases
+        .into_iter()
+        .map(|ph| {
+            ph.element_defects
+                .into_iter()
+                .map(|d| if d.is_nan() { FAILED_ELEMENT_ERROR } else { d })
+                .collect()
+        })
+        .collect())
 }
 
 /// [`verify_with`] at `rtol` with atol = rtol · [`ATOL_FACTOR`] and the clamped torque
@@ -542,15 +672,16 @@ pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verifica
     )
 }
 
-/// Re-integrates every phase of `sol` (a solution of `p`) from its collocated initial state
-/// with the solution's torques, by DOPRI5 on bf-model's free / stick dynamics with the smooth
-/// contact of ε = `sol.epsilon`, and reports the end-of-phase state defects and path checks
-/// (see the module docs).
+/// Re-integrates every collocation element of `sol` (a solution of `p`) from its collocated
+/// start state with the solution's torques, by DOPRI5 on bf-model's free / stick dynamics
+/// with the smooth contact of ε = `sol.epsilon`, and reports the element-wise defects and
+/// path checks, and the collocation-interval and open-loop figures (see the module docs).
 ///
 /// Errors: tolerances out of range (rtol ∉ (0, 0.1], atol ≤ 0); a solution that does not
 /// match `p` (phase count, modes, ε, dimensions); non-finite solution data; a scene without a
 /// bf-model counterpart or whose constants differ from the OCP's. A re-integration that breaks
-/// down part-way is *not* an error: it is reported in that phase's `failure`.
+/// down part-way is *not* an error: it is reported in that phase's `failure` (an element) or
+/// `open_loop_failure`.
 pub fn verify_with(
     p: &BuiltProblem,
     sol: &OcpSolution,
@@ -615,6 +746,8 @@ pub fn verify_with(
     }
     let fold = |f: &dyn Fn(&PhaseVerification) -> f64| phases.iter().map(f).fold(0.0, nan_max);
     let max_defect = fold(&|p| p.defect);
+    let max_interval_defect = fold(&|p| p.interval_defect);
+    let max_open_loop_defect = fold(&|p| p.open_loop_defect);
     let max_node_residual = fold(&|p| p.node_residual);
     let completed = phases.iter().all(|p| p.failure.is_none());
     Ok(Verification {
@@ -627,6 +760,8 @@ pub fn verify_with(
         rtol,
         atol,
         max_defect,
+        max_interval_defect,
+        max_open_loop_defect,
         max_node_residual,
         phases,
         seconds: start.elapsed().as_secs_f64(),

@@ -118,9 +118,9 @@ pub struct RefineRound {
     pub points: Vec<usize>,
     /// Objective φ.
     pub objective: f64,
-    /// Largest element error estimate per phase.
+    /// Largest element error per phase (of the report's criterion).
     pub phase_errors: Vec<f64>,
-    /// Largest element error estimate.
+    /// Largest element error.
     pub max_error: f64,
     /// Solver status.
     pub status: Status,
@@ -130,18 +130,35 @@ pub struct RefineRound {
     pub seconds: f64,
 }
 
+/// What the mesh refinement measures in each element.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub enum RefineCriterion {
+    /// The collocation error estimate between the nodes (relative; `bf_optim::ocp::mesh`).
+    #[default]
+    Estimate,
+    /// The element-wise re-integration defect of the trajectory verification (state units;
+    /// [`PhaseVerification::element_defects`]) with the DOPRI5 relative tolerance `rtol`.
+    Reintegration {
+        /// DOPRI5 relative tolerance of the re-integration.
+        rtol: f64,
+    },
+}
+
 /// The refinement record without the solution (stored in `solution.json`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct RefineReport {
     /// Tolerance requested.
     pub tol: f64,
-    /// True if the largest error estimate of the final solution is ≤ `tol`.
+    /// What the element errors measure.
+    #[serde(default)]
+    pub criterion: RefineCriterion,
+    /// True if the largest element error of the final solution is ≤ `tol`.
     pub converged: bool,
     /// Why the refinement stopped.
     pub stop_reason: String,
     /// Mesh of the final solution, per phase.
     pub mesh: Vec<MeshSpec>,
-    /// Error estimate of the final solution, per phase and element.
+    /// Element errors (of `criterion`) of the final solution, per phase and element.
     pub errors: Vec<Vec<f64>>,
     /// One entry per solve.
     pub history: Vec<RefineRound>,
@@ -164,6 +181,27 @@ pub(crate) mod nan_null {
     }
 }
 
+/// [`nan_null`] for vectors: non-finite entries are written as `null` and read back as NaN.
+pub(crate) mod nan_null_vec {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(v: &[f64], s: S) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v.iter().map(|x| x.is_finite().then_some(*x)))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<f64>, D::Error> {
+        Ok(Vec::<Option<f64>>::deserialize(d)?
+            .into_iter()
+            .map(|x| x.unwrap_or(f64::NAN))
+            .collect())
+    }
+}
+
+/// The value of a figure missing from an older file.
+fn nan() -> f64 {
+    f64::NAN
+}
+
 /// Torques between the collocation nodes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum TorqueInterpolant {
@@ -176,7 +214,13 @@ pub enum TorqueInterpolant {
     Polynomial,
 }
 
-/// Verification record of one phase.
+/// Verification record of one phase. The verification re-integrates every collocation
+/// element alone, from its collocated start state, and compares its end with the collocated
+/// state there (the element-wise defect, the criterion): the error of the transcription,
+/// independent of how the phase's motion amplifies errors over longer spans. Beside it, for
+/// information only: the same from every collocation point to the next
+/// (`interval_defect`, the accuracy of the interior nodes) and the open-loop replay of the
+/// whole phase from its collocated initial state (`open_loop_*`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PhaseVerification {
     /// Phase index.
@@ -185,11 +229,14 @@ pub struct PhaseVerification {
     pub mode: PhaseMode,
     /// Duration T (s).
     pub duration: f64,
-    /// Phase-local time the re-integration reached (= T unless it failed).
+    /// Phase-local time the element re-integrations reached (= T unless one failed: then
+    /// where the first failed one stopped).
     pub t_reached: f64,
-    /// Why the re-integration stopped early (`None`: it reached T).
+    /// Why an element re-integration stopped early (`None`: all reached their end).
     pub failure: Option<String>,
-    /// max_i |x_sim,i(T) − x_colloc,i(T)| over all 2 nq + 3 components (NaN on failure).
+    /// Element-wise defect: max over the elements and the 2 nq + 3 components of
+    /// |x_sim,i − x_colloc,i| at the element's end (NaN if an element failed); the
+    /// verification's criterion.
     #[serde(with = "nan_null")]
     pub defect: f64,
     /// The q part of `defect` (rad).
@@ -201,23 +248,36 @@ pub struct PhaseVerification {
     /// The ω part of `defect` (rad/s).
     #[serde(with = "nan_null")]
     pub defect_omega: f64,
-    /// Local accuracy of the collocation: max over the collocation elements of the end-state
-    /// defect of a re-integration of that element alone, from its collocated start state
-    /// (NaN if one failed). `defect` / `element_defect` ≫ 1 means the phase's open-loop
-    /// dynamics amplify the local errors (unstable open-loop motion).
-    #[serde(with = "nan_null")]
-    pub element_defect: f64,
+    /// The defect of each collocation element (NaN where it failed): the per-element error of
+    /// the refinement that a failed verification triggers.
+    #[serde(default, with = "nan_null_vec")]
+    pub element_defects: Vec<f64>,
+    /// max_i |x_sim,i − x_colloc,i| over the collocation intervals (from each collocation
+    /// point to the next, inside an element), each re-integrated from its collocated start
+    /// (NaN if one failed or not recorded): how well the interior nodes, which Radau
+    /// collocation approximates to a lower order than the element ends, follow the
+    /// dynamics. Informative, not a verification criterion.
+    #[serde(default = "nan", with = "nan_null")]
+    pub interval_defect: f64,
+    /// Open-loop drift: max_i |x_sim,i(T) − x_colloc,i(T)| of one re-integration of the whole
+    /// phase from its collocated initial state (NaN if it failed or was not recorded). ≫
+    /// `defect` when the phase's motion is open-loop unstable; not a verification criterion.
+    #[serde(default = "nan", with = "nan_null")]
+    pub open_loop_defect: f64,
+    /// Why the open-loop replay stopped early (`None`: it reached T).
+    #[serde(default)]
+    pub open_loop_failure: Option<String>,
     /// Collocated initial state (the re-integration's start).
     pub x_start: Vec<f64>,
-    /// Re-integrated state at `t_reached`.
+    /// State of the open-loop replay at T (at the start of the element where it failed).
     pub x_end: Vec<f64>,
     /// Collocated state at the phase end.
     pub x_colloc_end: Vec<f64>,
-    /// Accepted DOPRI5 steps.
+    /// Accepted DOPRI5 steps of the element re-integrations.
     pub steps: usize,
-    /// Rejected DOPRI5 steps.
+    /// Rejected DOPRI5 steps of the element re-integrations.
     pub rejected_steps: usize,
-    /// Vector-field evaluations.
+    /// Vector-field evaluations of the element re-integrations.
     pub rhs_evals: usize,
     /// Relative tolerance used.
     pub rtol: f64,
@@ -232,15 +292,16 @@ pub struct PhaseVerification {
     /// when the torques stay within their limits between the nodes). With
     /// [`TorqueInterpolant::Clamped`] this torque error is part of the defects.
     pub max_torque_overshoot: f64,
-    /// Free phases: min h along the re-integration (m; < 0 is penetration).
+    /// Free phases: min h along the element re-integrations (m; < 0 is penetration).
     pub min_h: Option<f64>,
-    /// Stick phases: max ‖Δv‖ along the re-integration (m/s; drift of Δv = 0).
+    /// Stick phases: max ‖Δv‖ along the element re-integrations (m/s; drift of Δv = 0).
     pub max_delta_v: Option<f64>,
-    /// Stick phases: min λ_n along the re-integration (N; < 0 means the contact would open).
+    /// Stick phases: min λ_n along the element re-integrations (N; < 0 means the contact
+    /// would open).
     pub min_lambda_n: Option<f64>,
     /// Stick phases: min σ = μ_s λ_n − ‖λ_∥‖ (N; < 0 means the contact would slip).
     pub min_sigma: Option<f64>,
-    /// Stick phases: max |h| along the re-integration (m).
+    /// Stick phases: max |h| along the element re-integrations (m).
     pub max_abs_h: Option<f64>,
 }
 
@@ -261,9 +322,18 @@ pub struct Verification {
     pub atol: f64,
     /// Per-phase records.
     pub phases: Vec<PhaseVerification>,
-    /// Max end-state defect over all phases (NaN if a phase failed).
+    /// Max element-wise defect over all phases, the verification's criterion (NaN if an
+    /// element failed).
     #[serde(with = "nan_null")]
     pub max_defect: f64,
+    /// Max collocation-interval defect over all phases
+    /// (`PhaseVerification::interval_defect`; informative, NaN if not recorded).
+    #[serde(default = "nan", with = "nan_null")]
+    pub max_interval_defect: f64,
+    /// Max open-loop drift over all phases (`PhaseVerification::open_loop_defect`;
+    /// informative, NaN if a replay failed or was not recorded).
+    #[serde(default = "nan", with = "nan_null")]
+    pub max_open_loop_defect: f64,
     /// Max node residual over all phases.
     #[serde(with = "nan_null")]
     pub max_node_residual: f64,
@@ -280,12 +350,12 @@ pub struct Verification {
 }
 
 impl Verification {
-    /// Whether every phase was re-integrated to its end.
+    /// Whether every collocation element of every phase was re-integrated to its end.
     pub fn completed(&self) -> bool {
         self.phases.iter().all(|p| p.failure.is_none())
     }
 
-    /// Whether every phase completed with an end-state defect ≤ `tol`.
+    /// Whether every phase completed with an element-wise defect ≤ `tol`.
     pub fn passes(&self, tol: f64) -> bool {
         self.completed() && self.max_defect <= tol
     }
@@ -335,7 +405,7 @@ impl fmt::Display for Verification {
         )?;
         writeln!(
             f,
-            "{:>5} {:>5} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>9} {:>9}  path",
+            "{:>5} {:>5} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>6} {:>9} {:>9}  path",
             "phase",
             "mode",
             "T (s)",
@@ -343,7 +413,8 @@ impl fmt::Display for Verification {
             "q",
             "qd",
             "omega",
-            "element",
+            "interval",
+            "open loop",
             "steps",
             "node res",
             "tau over"
@@ -365,7 +436,7 @@ impl fmt::Display for Verification {
             };
             writeln!(
                 f,
-                "{:>5} {:>5} {:>9.4} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>6} {:>9.2e} {:>9.2e}  {}",
+                "{:>5} {:>5} {:>9.4} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>6} {:>9.2e} {:>9.2e}  {}",
                 p.phase,
                 mode,
                 p.duration,
@@ -373,7 +444,8 @@ impl fmt::Display for Verification {
                 p.defect_q,
                 p.defect_qd,
                 p.defect_omega,
-                p.element_defect,
+                p.interval_defect,
+                p.open_loop_defect,
                 p.steps,
                 p.node_residual,
                 p.max_torque_overshoot,
@@ -382,13 +454,23 @@ impl fmt::Display for Verification {
             if let Some(e) = &p.failure {
                 writeln!(f, "      FAILED at t = {:.6} s: {e}", p.t_reached)?;
             }
+            if let Some(e) = &p.open_loop_failure {
+                writeln!(f, "      open-loop replay stopped: {e}")?;
+            }
         }
         writeln!(
             f,
-            "(defect: max |x_sim - x_colloc| at the phase end; element: worst single-element \
-             defect; node res: OCP dynamics residual with bf-model; tau over: torque polynomial \
-             beyond tau_max)"
+            "(defect: max |x_sim - x_colloc| at the element ends, each element re-integrated \
+             from its collocated start; interval: the same from every collocation point to the \
+             next; open loop: end-of-phase drift of one re-integration of the whole phase; \
+             node res: OCP dynamics residual with bf-model; tau over: torque polynomial beyond \
+             tau_max)"
         )?;
-        write!(f, "max end-state defect: {:.3e}", self.max_defect)
+        write!(
+            f,
+            "max element-wise defect: {:.3e} (informative: collocation intervals {:.3e}, \
+             open-loop drift {:.3e})",
+            self.max_defect, self.max_interval_defect, self.max_open_loop_defect
+        )
     }
 }
