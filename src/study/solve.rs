@@ -2,23 +2,33 @@
 //! ([`solver_settings`], [`warm_settings`]), a solve with its guess fallback ([`solve`]) and a
 //! primal-dual warm-started solve ([`solve_warm`]).
 //!
-//! Both schemes use the solver's KKT settings (static dual regularization δ_c = 1e-9, and the
-//! solver's default elimination order, which moves to 2 × 2 (variable, constraint row) pivots
-//! when plain AMD's bare −δ_c pivots mislead the inertia test); a failed solve is not
-//! repeated with other KKT settings.
+//! Radau solves use the solver's KKT settings: static dual regularization δ_c = 1e-9, which
+//! the solver raises to 3e-8 within a solve where 2 × 2 (variable, constraint row) pivots show
+//! plain AMD's bare −δ_c pivots to mislead the inertia test or a factor is inaccurate. LG
+//! solves start at δ_c = [`LG_DUAL_REGULARIZATION`] = 3e-8: with the in-solve growth from
+//! 1e-9, `periodic-cot` LG-30 needs 492 iterations instead of 65 (BENCHMARKS.md). A failed
+//! solve is not repeated with other KKT settings.
 
 use std::time::Instant;
 
 use bf_optim::ipm::{IterationInfo, Nlp, Settings, Solution, WarmStart};
-use bf_optim::ocp::solve_nlp;
+use bf_optim::ocp::{Scheme, solve_nlp};
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
 
 use super::error::StudyError;
+
+/// Static dual regularization δ_c ([`Settings::static_dual_regularization`]) at the start of
+/// a Legendre–Gauss solve (module docs).
+pub const LG_DUAL_REGULARIZATION: f64 = 3e-8;
 
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| Settings {
         tol: 1e-8,
+        static_dual_regularization: match s.scheme {
+            Scheme::Lg => LG_DUAL_REGULARIZATION,
+            Scheme::Radau { .. } => Settings::default().static_dual_regularization,
+        },
         ..Settings::default()
     });
     Settings {

@@ -6,6 +6,12 @@
 //!   positive and m negative eigenvalues; otherwise δ_w grows (first `δ_w⁰`, then by κ̄_w⁺ or
 //!   κ_w⁺, starting from κ_w⁻ δ_w_last), and a singular `K` gets `δ_c = δ̄_c μ^κ_c`; a static
 //!   `δ_c` is always on the constraint block and removed again by iterative refinement;
+//! * the checks of a rejected AMD factor ([`KktOrdering`]): the same matrix re-factored once
+//!   per step with 2 × 2 (variable, constraint row) pivots tells an artefact of AMD's bare
+//!   −δ_c pivots from a genuine need for δ_w; an artefact, or a factor with the right inertia
+//!   that does not solve its own matrix after refinement (growth ∝ 1/δ_c), raises the static
+//!   δ_c of the solve (up to `static_dual_regularization_max`) instead of δ_w, or, with
+//!   `AmdThenPivotPairs`, moves the solve to the pairs' order;
 //! * recovery of `dz_L, dz_U` (W&B eq. (12));
 //! * least-squares constraint multipliers for the initial point (W&B Sect. 3.6).
 
