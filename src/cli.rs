@@ -314,10 +314,10 @@ pub struct OptimizeArgs {
     /// Warm start from a previous solution.json.
     #[arg(long)]
     pub warm_start: Option<PathBuf>,
-    /// Static dual regularization δ_c of the KKT factorization (default: 3e-8 with lg, 1e-9
-    /// with radau, and a failed radau solve is retried with 3e-8). Set 3e-8 when a Radau mesh
-    /// finer than the default ends Acceptable with δ_w > 0 in every iteration
-    /// (optim/README.md).
+    /// Static dual regularization δ_c of the KKT factorization at the start of a solve
+    /// (default: 3e-8 with lg, 1e-9 with radau, which the solver raises to 3e-8 within a solve
+    /// whose factor turns out misleading or inaccurate, optim/README.md). Set 3e-8 when a mesh
+    /// ends Acceptable with δ_w > 0 in every iteration.
     #[arg(long, value_name = "DELTA_C", allow_hyphen_values = true)]
     pub dual_regularization: Option<f64>,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),

@@ -3,7 +3,6 @@
 //! `generate` must be deterministic and produce the code compiled into `bf-generated`, and bad
 //! user input must give a clear error and a non-zero exit code, never a panic.
 
-use std::path::Path;
 use std::process::Output;
 
 #[path = "common/cli.rs"]
@@ -384,15 +383,16 @@ fn optimize_refines_verifies_and_records_it() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// `--dual-regularization` reaches the solver, and without it a stall is retried: a Radau
-/// mesh finer than the default (`periodic-cot`, 3 × 12) does not converge in 300 iterations
-/// with the default KKT regularization, `optimize` retries with 3e-8 by itself (a second stage
-/// in solution.json) and ends Solved, at bitwise the optimum of `--dual-regularization 3e-8`.
+/// `--dual-regularization` reaches the solver: on a Radau mesh finer than the default
+/// (`periodic-cot`, 3 × 12), where the solver's default start δ_c = 1e-9 needs more than 300
+/// iterations (it raises δ_c within the solve, BENCHMARKS.md), `--dual-regularization 3e-8`
+/// ends Solved in one stage within 300 and solution.json records that single stage.
 #[test]
-fn optimize_dual_regularization_rescues_a_fine_radau_mesh() {
-    let base = std::env::temp_dir().join(format!("bf-cli-dualreg-{}", std::process::id()));
-    let run_in = |dir: &Path, extra: &[&str]| -> serde_json::Value {
-        let mut a: Vec<String> = [
+fn optimize_dual_regularization_reaches_the_solver() {
+    let dir = std::env::temp_dir().join(format!("bf-cli-dualreg-{}", std::process::id()));
+    let out = bin()
+        .current_dir(root())
+        .args([
             "optimize",
             "--problem",
             "periodic-cot",
@@ -404,35 +404,22 @@ fn optimize_dual_regularization_rescues_a_fine_radau_mesh() {
             "300",
             "--verify-rtol",
             "0",
+            "--dual-regularization",
+            "3e-8",
             "--out",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-        a.push(dir.to_str().unwrap().to_string());
-        a.extend(extra.iter().map(|s| s.to_string()));
-        let out = bin().current_dir(root()).args(a).output().unwrap();
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(out.status.success(), "{stdout}");
-        assert!(!stdout.contains("hint:"), "{stdout}");
-        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap()
-    };
-    let retried = run_in(&base.join("default"), &[]);
-    let explicit = run_in(&base.join("explicit"), &["--dual-regularization", "3e-8"]);
-    assert_eq!(retried["status"], "Solved");
-    assert_eq!(explicit["status"], "Solved");
-    let stages = |v: &serde_json::Value| v["stages"].as_array().unwrap().len();
-    assert_eq!(stages(&explicit), 1, "{}", explicit["stages"]);
-    assert_eq!(stages(&retried), 2, "{}", retried["stages"]);
-    assert_ne!(retried["stages"][0][1], "Solved");
-    assert!(
-        retried["stages"][1][0]
-            .as_str()
-            .unwrap()
-            .contains("dual regularization")
-    );
-    assert_eq!(retried["objective"], explicit["objective"]);
-    std::fs::remove_dir_all(base).ok();
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    assert_eq!(sol["status"], "Solved");
+    let stages = sol["stages"].as_array().unwrap();
+    assert_eq!(stages.len(), 1, "{}", sol["stages"]);
+    assert!(stages[0][2].as_u64().unwrap() < 300, "{}", sol["stages"]);
+    std::fs::remove_dir_all(dir).ok();
 }
 
 #[test]

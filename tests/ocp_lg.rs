@@ -271,9 +271,9 @@ fn lg_periodic_cot_problems_converge_from_the_default_guess() {
         let (_, radau) = solve_named(name, Scheme::Radau { elements: 3 }, 30);
         assert!(radau.status.is_success(), "{name}: {:?}", radau.stages);
         let (p, lg) = solve_named(name, Scheme::Lg, 30);
-        // Solved, not just Acceptable: with δ_c = 1e-9 the LDLᵀ growth of the constraint rows
-        // eliminated first hid the curvature and the iterates crept to an Acceptable exit
-        // (module docs of `problems`, RAISED_DUAL_REGULARIZATION).
+        // Solved, not just Acceptable: with plain AMD and δ_c = 1e-9 the LDLᵀ growth of the
+        // constraint rows eliminated first hid the curvature and the iterates crept to an
+        // Acceptable exit (optim/README.md, KKT factorization).
         assert_eq!(lg.status, Status::Solved, "{name} LG-30: {:?}", lg.stages);
         assert!(
             lg.iterations < 150,

@@ -655,8 +655,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
             " (marked FAILED)"
         }
     )?;
-    // A failed solve was already retried with 3e-8 (`study::solve`); an Acceptable one was
-    // not.
+    // An Acceptable end with the default δ_c may still finish with a larger one.
     if sol.status == Status::Acceptable
         && args.scheme == "radau"
         && args.dual_regularization.is_none()

@@ -348,11 +348,11 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          Legendre–Gauss collocation, the paper's scheme (`optimize --scheme lg`), solves the \
          problems too, with other costs in time (criterion figures for both schemes in \
          BENCHMARKS.md, `cargo bench --bench problems`).\n\
-         - Finer Radau meshes than the default can stall: the unpivoted KKT factorization \
-         eliminates constraint rows before their variables, and the solver's static dual \
-         regularization 1e-9 then hides small curvature (optim/README.md; LG solves use 3e-8). \
-         A failed solve is retried with 3e-8 automatically, after a wasted first attempt; \
-         an Acceptable one is not (`optimize --dual-regularization 3e-8`).\n\
+         - The unpivoted KKT factorization eliminates constraint rows before their variables; \
+         where that misleads the inertia test the solver switches to 2 × 2 (variable, row) \
+         pivots within the solve, and where the factor grows unstable it raises its static \
+         dual regularization from 1e-9 to 3e-8 (LG solves start at 3e-8; optim/README.md, \
+         BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`); periodic-qc's \
          default search takes the best verified end point of 32 seeded starts.\n\

@@ -1,17 +1,13 @@
-//! The solve-and-retry policy of the study layer: interior-point settings of a problem
-//! ([`solver_settings`], [`warm_settings`], [`interpolated_warm_settings`]), a solve with its retries ([`solve`]) and a
+//! The solve policy of the study layer: interior-point settings of a problem
+//! ([`solver_settings`], [`warm_settings`], [`interpolated_warm_settings`]), a solve with its guess fallback ([`solve`]) and a
 //! primal-dual warm-started solve ([`solve_warm`]).
 //!
-//! LG solves use a larger static dual regularization ([`RAISED_DUAL_REGULARIZATION`],
-//! 3e-8 instead of the solver's 1e-9). The unpivoted LDLᵀ of the KKT matrix eliminates many
-//! constraint rows of the LG KKTs before any of their primal columns, and such a pivot is
-//! exactly −δ_c; at δ_c = 1e-9 the growth 1/δ_c swamps the reduced-Hessian curvature, so the
-//! factor reports spurious negative pivots for small δ_w and its refined residual fails the
-//! accuracy test. The inertia correction then keeps a large δ_w in every iteration, which
-//! shrinks each step along the weakest direction, and the COT problems crept to an Acceptable
-//! exit. With δ_c = 3e-8 they end Solved at the same optima (figures in BENCHMARKS.md). The
-//! Radau KKTs keep 1e-9 (a larger δ_c there moves the 3 × 10 solves to other local optima); a
-//! failed Radau solve is retried once with the raised value.
+//! Radau solves use the solver's KKT settings: static dual regularization δ_c = 1e-9, which
+//! the solver raises to 3e-8 within a solve where 2 × 2 (variable, constraint row) pivots show
+//! plain AMD's bare −δ_c pivots to mislead the inertia test or a factor is inaccurate. LG
+//! solves start at δ_c = [`LG_DUAL_REGULARIZATION`] = 3e-8: with the in-solve growth from
+//! 1e-9, `periodic-cot` LG-30 needs 492 iterations instead of 65 (BENCHMARKS.md). A failed
+//! solve is not repeated with other KKT settings.
 
 use std::time::Instant;
 
@@ -21,19 +17,16 @@ use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution
 
 use super::error::StudyError;
 
-/// Static dual regularization δ_c of the KKT matrix ([`Settings::static_dual_regularization`])
-/// where the solver's default 1e-9 misleads the unpivoted LDLᵀ: the default of Legendre–Gauss
-/// solves, and the retry of a failed Radau solve in [`solve`]. The factorization eliminates
-/// many constraint rows before their primal columns, with pivot −δ_c, and at 1e-9 that growth
-/// hides the curvature (module docs).
-pub const RAISED_DUAL_REGULARIZATION: f64 = 3e-8;
+/// Static dual regularization δ_c ([`Settings::static_dual_regularization`]) at the start of
+/// a Legendre–Gauss solve (module docs).
+pub const LG_DUAL_REGULARIZATION: f64 = 3e-8;
 
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| Settings {
         tol: 1e-8,
         static_dual_regularization: match s.scheme {
-            Scheme::Lg => RAISED_DUAL_REGULARIZATION,
+            Scheme::Lg => LG_DUAL_REGULARIZATION,
             Scheme::Radau { .. } => Settings::default().static_dual_regularization,
         },
         ..Settings::default()
@@ -59,14 +52,11 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 
 /// Solves `p` directly. Initial point: an exact primal-dual warm start when `p.settings`
 /// carries a warm-start solution of the same problem on the same mesh, else its interpolated
-/// primal point (with [`interpolated_warm_settings`]) or the guess of [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed
-/// solve from the docs/parameters.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
-/// Before that, a failed solve with the default static dual regularization (Radau: 1e-9) is
-/// repeated from the same start with [`RAISED_DUAL_REGULARIZATION`] (unless
-/// [`ProblemSettings::dual_regularization`] is set): on Radau meshes finer than the default
-/// the unpivoted LDLᵀ otherwise stalls (module docs). `callback` sees every iteration (return
-/// `false` to stop). The library's default [`Strategy`](crate::study::strategy::Strategy) wraps this in a
-/// continuation.
+/// primal point (with [`interpolated_warm_settings`]) or the guess of
+/// [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed solve from the
+/// docs/parameters.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
+/// `callback` sees every iteration (return `false` to stop). The library's default
+/// [`Strategy`](crate::study::strategy::Strategy) wraps this in a continuation.
 pub fn solve(
     p: &BuiltProblem,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
@@ -89,37 +79,13 @@ pub fn solve(
         (false, true) => "interpolated warm start".to_string(),
         (false, false) => format!("{} guess", crate::names::name(&p.settings.guess)),
     };
-    let mut sol = solve_nlp(&p.nlp, &settings, exact, reborrow(&mut callback))?;
+    let sol = solve_nlp(&p.nlp, &settings, exact, reborrow(&mut callback))?;
     iters += sol.iterations;
     stages.push((
         format!("{label}, eps {}", p.epsilon),
         sol.status,
         sol.iterations,
     ));
-    // The stall of an unpivoted LDLᵀ whose δ_c hides the curvature (module docs): one retry
-    // from the same start with the raised δ_c, unless the caller chose δ_c.
-    if !sol.status.is_success()
-        && p.settings.dual_regularization.is_none()
-        && settings.static_dual_regularization < RAISED_DUAL_REGULARIZATION
-    {
-        let raised = Settings {
-            static_dual_regularization: RAISED_DUAL_REGULARIZATION,
-            ..settings
-        };
-        let retry = solve_nlp(&p.nlp, &raised, exact, reborrow(&mut callback))?;
-        iters += retry.iterations;
-        stages.push((
-            format!(
-                "{label}, eps {}, dual regularization {RAISED_DUAL_REGULARIZATION:e}",
-                p.epsilon
-            ),
-            retry.status,
-            retry.iterations,
-        ));
-        if retry.status.is_success() {
-            sol = retry;
-        }
-    }
     let mut best = (sol, p);
     let fallback;
     if !best.0.status.is_success()

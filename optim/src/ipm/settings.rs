@@ -41,8 +41,25 @@ pub enum KktOrdering {
     /// Approximate minimum degree (faer's AMD) alone, 1 × 1 pivots: constraint rows that AMD
     /// eliminates before their variables have the pivot −δ_c, whose 1/δ_c growth can hide the
     /// reduced Hessian's curvature in rounding.
-    #[default]
     Amd,
+    /// [`Amd`](KktOrdering::Amd) until an inertia correction: the first factorization of a
+    /// Newton step that is rejected (wrong inertia, singular or inaccurate) is repeated with
+    /// [`AmdPivotPairs`](KktOrdering::AmdPivotPairs) on the same matrix; if that one is
+    /// accepted, the rejection was an artefact of the bare −δ_c pivots and the solve keeps the
+    /// pivot pairs from then on; if not, the need for δ_w (or δ_c) is genuine and AMD stays.
+    /// Solves whose AMD factorizations are never rejected cost what AMD costs; KKT matrices
+    /// where AMD eliminates no constraint row bare never try the pairs.
+    AmdThenPivotPairs,
+    /// [`Amd`](KktOrdering::Amd), with the first rejected factorization of each Newton step
+    /// checked by [`AmdPivotPairs`](KktOrdering::AmdPivotPairs) on the same matrix: where the
+    /// pairs accept what AMD rejected, the rejection is an artefact of the bare −δ_c pivots,
+    /// and the static δ_c of the solve grows (`static_dual_regularization_growth`, up to
+    /// `static_dual_regularization_max`), which shrinks their 1/δ_c growth; the order stays
+    /// AMD. Once δ_c is at its maximum, no more checks. Solves whose AMD factorizations are
+    /// never rejected cost what AMD costs and run bit for bit as with
+    /// [`Amd`](KktOrdering::Amd).
+    #[default]
+    AmdCheckedByPivotPairs,
     /// AMD, except that each constraint row that AMD eliminates before all of its primal
     /// variables is delayed to the first of them and eliminated with it as one 2 × 2 block
     /// pivot, so that no constraint row has the bare pivot −δ_c and each such pair contributes
@@ -139,7 +156,16 @@ pub struct Settings {
     /// Static −δ_c always on the constraint block so that the unpivoted LDLᵀ never meets an exact
     /// zero dual pivot; the step is refined against the unregularized matrix (default: 1e-9).
     pub static_dual_regularization: f64,
-    /// Elimination order of the KKT factorization (default: AMD).
+    /// Factor by which the static δ_c of a solve grows when a factor with the right inertia
+    /// does not solve its own matrix accurately after refinement (growth of the unpivoted
+    /// LDLᵀ ∝ 1/δ_c), in place of a larger δ_w; once per Newton step, kept for the rest of the
+    /// solve (default: 30).
+    pub static_dual_regularization_growth: f64,
+    /// Largest static δ_c that this growth may reach (default: 3e-8; a value at most
+    /// `static_dual_regularization` disables the growth).
+    pub static_dual_regularization_max: f64,
+    /// Elimination order of the KKT factorization (default: AMD, its rejected factors checked
+    /// by 2 × 2 pivot pairs, [`KktOrdering::AmdCheckedByPivotPairs`]).
     pub kkt_ordering: KktOrdering,
     /// Maximum iterative-refinement steps per solve (default: 3).
     pub max_refinement_steps: usize,
@@ -226,7 +252,9 @@ impl Default for Settings {
             jacobian_regularization_value: 1e-8,
             jacobian_regularization_exponent: 0.25,
             static_dual_regularization: 1e-9,
-            kkt_ordering: KktOrdering::Amd,
+            static_dual_regularization_growth: 30.0,
+            static_dual_regularization_max: 3e-8,
+            kkt_ordering: KktOrdering::AmdCheckedByPivotPairs,
             max_refinement_steps: 3,
             refinement_tol: 1e-10,
             gamma_theta: 1e-5,
@@ -321,6 +349,28 @@ impl Settings {
             });
         }
         pos("obj_scaling_factor", self.obj_scaling_factor)?;
+        if !(self.static_dual_regularization_growth >= 1.0
+            && self.static_dual_regularization_growth.is_finite())
+        {
+            return Err(OptimError::InvalidSetting {
+                name: "static_dual_regularization_growth",
+                msg: format!(
+                    "must be finite and ≥ 1, got {}",
+                    self.static_dual_regularization_growth
+                ),
+            });
+        }
+        if !(self.static_dual_regularization_max >= 0.0
+            && self.static_dual_regularization_max.is_finite())
+        {
+            return Err(OptimError::InvalidSetting {
+                name: "static_dual_regularization_max",
+                msg: format!(
+                    "must be finite and ≥ 0, got {}",
+                    self.static_dual_regularization_max
+                ),
+            });
+        }
         pos(
             "first_hessian_perturbation",
             self.first_hessian_perturbation,

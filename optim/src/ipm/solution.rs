@@ -74,6 +74,16 @@ pub struct Counters {
     pub restoration_iterations: usize,
     /// Second-order corrections that were accepted.
     pub soc_accepted: usize,
+    /// Iteration at which the KKT factorization switched from AMD to AMD with 2 × 2 pivot
+    /// pairs ([`KktOrdering::AmdThenPivotPairs`](crate::ipm::KktOrdering::AmdThenPivotPairs));
+    /// `None`: no switch.
+    #[serde(default)]
+    pub pivot_pairs_from: Option<usize>,
+    /// Iteration at which the static dual regularization δ_c of the solve last grew (a factor
+    /// with the right inertia was inaccurate, or the pivot pairs showed an AMD rejection to be
+    /// spurious); `None`: it kept `Settings::static_dual_regularization`.
+    #[serde(default)]
+    pub dual_regularization_raised_at: Option<usize>,
 }
 
 /// Result of a solve (unscaled, in the user's variables).

@@ -222,10 +222,10 @@ pub struct ProblemSettings {
     /// the study layer's mesh refinement.
     pub mesh: Option<Vec<MeshSpec>>,
     /// Static dual regularization δ_c of the KKT factorization
-    /// ([`Settings::static_dual_regularization`]); `None`: the study layer's choice (a raised
-    /// 3e-8 with LG, the solver's 1e-9 with Radau, and a failed solve retried with 3e-8).
-    /// Raise it (e.g. to 3e-8) when a Radau mesh finer than the default ends Acceptable with
-    /// δ_w > 0 in every iteration; `Some` disables the retry. Overrides `ipm`.
+    /// ([`Settings::static_dual_regularization`]) at the start of a solve; `None`: the study
+    /// layer's choice (3e-8 with LG; the solver's 1e-9 with Radau, which the solver itself
+    /// raises to 3e-8 within a solve whose factor turns out misleading or inaccurate).
+    /// Overrides `ipm`.
     pub dual_regularization: Option<f64>,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where

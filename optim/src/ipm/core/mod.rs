@@ -109,6 +109,18 @@ pub(crate) struct Core<'p> {
     // KKT
     kkt: KktPattern,
     solver: SparseLdlt,
+    /// With [`KktOrdering::AmdThenPivotPairs`] before the switch: the solver with AMD and
+    /// 2 × 2 pivot pairs, analysed when first needed, that re-factors a rejected AMD factor's
+    /// matrix; after the switch: the AMD solver (handed back by [`Core::into_kkt_solver`]).
+    other_solver: Option<SparseLdlt>,
+    /// Rejected AMD factorizations are still to be checked with the pivot pairs (the switch
+    /// has not happened and the pair order differs from AMD's).
+    check_pairs: bool,
+    /// The solve switched to the pivot pairs.
+    switched_to_pairs: bool,
+    /// Static dual regularization of this solve: `static_dual_regularization`, raised when a
+    /// factor turns out unstable (see `step`).
+    static_dc: f64,
     diag_x: Vec<f64>,
     delta_w_last: f64,
     /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
@@ -197,6 +209,10 @@ impl<'p> Core<'p> {
             jty: vec![0.0; n],
             kkt,
             solver: start.kkt_solver.take().unwrap_or_default(),
+            other_solver: None,
+            check_pairs: false,
+            switched_to_pairs: false,
+            static_dc: settings.static_dual_regularization,
             diag_x: vec![0.0; n],
             delta_w_last: 0.0,
             skip_zero_trial: false,
@@ -361,7 +377,12 @@ impl<'p> Core<'p> {
 
     /// Hands the (analysed) KKT solver back for reuse by a later solve.
     pub fn into_kkt_solver(self) -> SparseLdlt {
-        self.solver
+        // After a switch to the pivot pairs, the AMD solver is the one whose analysis the next
+        // run (which starts with AMD again) can reuse.
+        match (self.switched_to_pairs, self.other_solver) {
+            (true, Some(amd)) => amd,
+            _ => self.solver,
+        }
     }
 
     /// Runs the algorithm from `start`.
@@ -375,9 +396,17 @@ impl<'p> Core<'p> {
         {
             let t = Instant::now();
             self.solver.constraint_rows_from = match settings.kkt_ordering {
-                KktOrdering::Amd => None,
+                KktOrdering::Amd
+                | KktOrdering::AmdThenPivotPairs
+                | KktOrdering::AmdCheckedByPivotPairs => None,
                 KktOrdering::AmdPivotPairs | KktOrdering::ConstraintsAfterVariables => Some(self.n),
             };
+            self.check_pairs = matches!(
+                settings.kkt_ordering,
+                KktOrdering::AmdThenPivotPairs | KktOrdering::AmdCheckedByPivotPairs
+            ) && self.m > 0;
+            self.switched_to_pairs = false;
+            self.other_solver = None;
             self.solver.pivot_pairs = settings.kkt_ordering == KktOrdering::AmdPivotPairs;
             let mut bounded = vec![false; self.n];
             for &j in self.lo.iter().chain(&self.up) {

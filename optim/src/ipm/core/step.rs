@@ -6,14 +6,20 @@
 //!   positive and m negative eigenvalues; otherwise δ_w grows (first `δ_w⁰`, then by κ̄_w⁺ or
 //!   κ_w⁺, starting from κ_w⁻ δ_w_last), and a singular `K` gets `δ_c = δ̄_c μ^κ_c`; a static
 //!   `δ_c` is always on the constraint block and removed again by iterative refinement;
+//! * the checks of a rejected AMD factor ([`KktOrdering`]): the same matrix re-factored once
+//!   per step with 2 × 2 (variable, constraint row) pivots tells an artefact of AMD's bare
+//!   −δ_c pivots from a genuine need for δ_w; an artefact, or a factor with the right inertia
+//!   that does not solve its own matrix after refinement (growth ∝ 1/δ_c), raises the static
+//!   δ_c of the solve (up to `static_dual_regularization_max`) instead of δ_w, or, with
+//!   `AmdThenPivotPairs`, moves the solve to the pairs' order;
 //! * recovery of `dz_L, dz_U` (W&B eq. (12));
 //! * least-squares constraint multipliers for the initial point (W&B Sect. 3.6).
 
 use std::time::Instant;
 
 use super::{Core, Ctx, norm_inf};
-use crate::ipm::kkt::{Inertia, KktSolver};
-use crate::ipm::settings::Settings;
+use crate::ipm::kkt::{Inertia, KktSolver, SparseLdlt};
+use crate::ipm::settings::{KktOrdering, Settings};
 
 /// Step-computation result.
 pub(super) enum StepResult {
@@ -97,7 +103,7 @@ impl Core<'_> {
             self.diag_x[j] += self.zu[k] / self.su[k];
         }
         let static_c = if self.m > 0 {
-            settings.static_dual_regularization
+            self.static_dc.max(settings.static_dual_regularization)
         } else {
             0.0
         };
@@ -119,6 +125,9 @@ impl Core<'_> {
         }
         ctx.timing.kkt_assembly += t.elapsed();
         let mut singular_handled = false;
+        let mut pairs_checked = false;
+        let mut inaccurate = false;
+        let mut raised_c = false;
         loop {
             let mut inertia = self.factor_current(ctx);
             let good = match inertia {
@@ -137,18 +146,70 @@ impl Core<'_> {
                     println!("    KKT: relative residual after refinement {res:.2e}");
                 }
                 if res <= 1e-5 {
-                    if self.delta_w == 0.0 && use_hessian {
-                        self.skip_zero_trial = false;
-                    }
-                    if self.delta_w > 0.0 {
-                        self.delta_w_last = self.delta_w;
-                    }
+                    self.accept_perturbation(use_hessian);
                     return StepResult::Ok;
                 }
                 // Right inertia but refinement cannot reach the exact system: the matrix is
-                // (numerically) singular and static pivoting hid it.
+                // (numerically) singular and static pivoting hid it, or the unpivoted factor
+                // is unstable.
                 inertia = None;
+                inaccurate = true;
             }
+            // A rejected AMD factor may be an artefact of its bare −δ_c pivots rather than a
+            // genuine need for δ_w or δ_c: the same matrix with the pivot pairs decides, once
+            // per step. `AmdThenPivotPairs` keeps the pairs' factor and order from then on,
+            // `AmdCheckedByPivotPairs` takes it as evidence for a larger δ_c below.
+            let mut artefact = false;
+            if self.check_pairs && !pairs_checked {
+                pairs_checked = true;
+                let switch = settings.kkt_ordering == KktOrdering::AmdThenPivotPairs;
+                if self.try_pivot_pairs(ctx, settings, switch) {
+                    if switch {
+                        self.accept_perturbation(use_hessian);
+                        return StepResult::Ok;
+                    }
+                    artefact = true;
+                }
+            }
+            // A factor with the right inertia that does not solve its own matrix to 1e-5 after
+            // refinement has grown like 1/δ_c, and so have the bare pivots of an AMD factor
+            // that the pairs showed to be spurious: a larger static δ_c for the rest of the
+            // solve (refinement still targets the unregularized system) rather than a larger
+            // δ_w, which would damp every later step.
+            if (inaccurate || artefact) && self.m > 0 && !raised_c {
+                let raised = (self.delta_c * settings.static_dual_regularization_growth)
+                    .min(settings.static_dual_regularization_max);
+                if raised > self.delta_c {
+                    raised_c = true;
+                    inaccurate = false;
+                    ctx.counters.dual_regularization_raised_at = Some(ctx.iter);
+                    if settings.print_level > 0 {
+                        println!(
+                            "KKT: {}: static δ_c {:.1e} → {raised:.1e} from iteration {}",
+                            if artefact {
+                                "AMD's factor rejected where the pivot pairs' is right"
+                            } else {
+                                "factor with the right inertia but inaccurate"
+                            },
+                            self.delta_c,
+                            ctx.iter
+                        );
+                    }
+                    let old_c = self.delta_c;
+                    self.static_dc = self.static_dc.max(raised);
+                    self.delta_c = raised;
+                    self.delta_c_target = self.delta_c_target.min(raised);
+                    let t = Instant::now();
+                    self.kkt.shift_diagonal(0.0, raised - old_c);
+                    ctx.timing.kkt_assembly += t.elapsed();
+                    continue;
+                }
+                if settings.kkt_ordering == KktOrdering::AmdCheckedByPivotPairs {
+                    // δ_c at its largest: the checks have nothing more to decide.
+                    self.check_pairs = false;
+                }
+            }
+            inaccurate = false;
             // Wrong inertia, singular, or inaccurate: perturb.
             if self.delta_w == 0.0 && use_hessian {
                 self.skip_zero_trial = true;
@@ -159,7 +220,7 @@ impl Core<'_> {
                 singular_handled = true;
                 let dc = settings.jacobian_regularization_value
                     * self.mu.powf(settings.jacobian_regularization_exponent);
-                self.delta_c = dc.max(static_c);
+                self.delta_c = dc.max(self.static_dc);
                 self.delta_c_target = self.delta_c;
                 // δ_c unchanged (μ small enough that δ̄_c μ^κ_c ≤ the static δ_c): the matrix
                 // and the factor are the ones just rejected, so go straight to δ_w.
@@ -190,6 +251,81 @@ impl Core<'_> {
                 .shift_diagonal(self.delta_w - old_w, self.delta_c - old_c);
             ctx.timing.kkt_assembly += t.elapsed();
         }
+    }
+
+    /// Bookkeeping of an accepted factorization with the current δ_w.
+    fn accept_perturbation(&mut self, use_hessian: bool) {
+        if self.delta_w == 0.0 && use_hessian {
+            self.skip_zero_trial = false;
+        }
+        if self.delta_w > 0.0 {
+            self.delta_w_last = self.delta_w;
+        }
+    }
+
+    /// Re-factors the current matrix, which the AMD factor rejected, with AMD and 2 × 2 pivot
+    /// pairs (analysed on first use) and solves with it; returns whether that factor has the
+    /// right inertia and an accurate refined solution. If so and `switch`, its step stands
+    /// and the solve keeps the pairs from now on; otherwise the AMD factor stays current. A
+    /// pattern where AMD eliminates no constraint row bare has nothing to check.
+    fn try_pivot_pairs(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        switch: bool,
+    ) -> bool {
+        if self.other_solver.is_none() {
+            let t = Instant::now();
+            let mut pairs = SparseLdlt::with_backend(self.solver.backend);
+            pairs.pivot_epsilon = self.solver.pivot_epsilon;
+            pairs.pivot_delta = self.solver.pivot_delta;
+            pairs.constraint_rows_from = Some(self.n);
+            pairs.pivot_pairs = true;
+            let analysed = pairs
+                .analyse(
+                    self.n + self.m,
+                    &self.kkt.mat.col_ptr,
+                    &self.kkt.mat.row_idx,
+                )
+                .is_ok();
+            ctx.timing.factorization += t.elapsed();
+            if !analysed || !pairs.has_pivot_pairs() {
+                self.check_pairs = false;
+                return false;
+            }
+            self.other_solver = Some(pairs);
+        }
+        let Some(pairs) = self.other_solver.as_mut() else {
+            return false;
+        };
+        std::mem::swap(&mut self.solver, pairs);
+        let inertia = self.factor_current(ctx);
+        let good = matches!(inertia, Some(i) if i.positive == self.n && i.negative == self.m);
+        let res = if good {
+            self.solve_refined(ctx, settings)
+        } else {
+            f64::INFINITY
+        };
+        if settings.print_level > 2 {
+            println!("    KKT with pivot pairs: inertia {inertia:?}, relative residual {res:.2e}");
+        }
+        let accepted = res <= 1e-5;
+        if accepted && switch {
+            self.check_pairs = false;
+            self.switched_to_pairs = true;
+            ctx.counters.pivot_pairs_from = Some(ctx.iter);
+            if settings.print_level > 0 {
+                println!(
+                    "KKT: AMD's factor rejected where the pivot pairs' is right: pivot pairs from iteration {}",
+                    ctx.iter
+                );
+            }
+            return true;
+        }
+        if let Some(pairs) = self.other_solver.as_mut() {
+            std::mem::swap(&mut self.solver, pairs);
+        }
+        accepted
     }
 
     /// Fills `rhs` with the Newton right-hand side `−(∇φ + Jᵀy, c_rhs)`.

@@ -170,6 +170,7 @@ pub struct SparseLdlt {
     /// eliminated with it in a 2 × 2 pivot (supernodal kernel, module docs); `false` orders
     /// the graph of (variable, row) pairs by AMD instead (1 × 1 pivots).
     pub pivot_pairs: bool,
+    has_pairs: bool,
     faer: Option<FaerFactor>,
     kernel: Kernel,
     factored: bool,
@@ -211,6 +212,7 @@ impl SparseLdlt {
             constraint_rows_from: None,
             preferred_primal: Vec::new(),
             pivot_pairs: false,
+            has_pairs: false,
             faer: None,
             kernel: Kernel::Faer,
             factored: false,
@@ -221,6 +223,12 @@ impl SparseLdlt {
     /// [`LdltBackend::FaerSupernodal`]).
     pub fn is_supernodal(&self) -> bool {
         self.faer.as_ref().is_some_and(FaerFactor::is_supernodal)
+    }
+
+    /// Whether the analysed order has at least one 2 × 2 (variable, constraint row) pivot,
+    /// i.e. plain AMD would eliminate some constraint row with the bare pivot −δ_c.
+    pub fn has_pivot_pairs(&self) -> bool {
+        self.has_pairs
     }
 
     /// Number of stored entries of faer's factor `L` (fill-in measure).
@@ -269,6 +277,7 @@ impl KktSolver for SparseLdlt {
             None => (None, Vec::new()),
         };
         let has_pairs = pair_first.iter().any(|&p| p);
+        self.has_pairs = has_pairs;
         let analyse =
             |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, custom.as_deref());
         let mut faer = analyse(match self.backend {
