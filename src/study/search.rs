@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::error::StudyError;
 use super::refine::{self, RefineCriterion, RefineOptions};
-use super::solve::RAISED_DUAL_REGULARIZATION;
+use super::solve::LG_DUAL_REGULARIZATION as RAISED_DUAL_REGULARIZATION;
 use super::strategy::{
     Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record, record,
     run_chains,
