@@ -25,7 +25,7 @@ use quote::quote;
 use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
-use crate::emit::{EmitOptions, Ssa, f64_tokens, ssa};
+use crate::emit::{EmitOptions, Ssa, f64_tokens, lanes_items, ssa_inner};
 use crate::graph::{Graph, Id, Node};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
@@ -358,11 +358,26 @@ impl CompiledNode {
 
 #[cfg(feature = "emit")]
 /// Tokens of one kernel function `fn name(local, fixed, w, out)` computing `roots` into
-/// `out[0..roots.len()]`.
-fn kernel_fn(name: &Ident, doc: &str, node: &CompiledNode, roots: &[Id]) -> TokenStream {
+/// `out[0..roots.len()]`; with `x4`, the batched variant computing four nodes at once: `local`,
+/// `w` and `out` then hold the four nodes' entries interleaved (node `l`'s entry `k` at
+/// `4·k + l`), `fixed` is shared, and the body is the scalar body in a loop over the lanes `l`
+/// ([`crate::emit::lanes`]). `uses_w`: whether `roots` read the weights (only then the
+/// batched kernel checks their length).
+fn kernel_fn(
+    name: &Ident,
+    doc: &str,
+    node: &CompiledNode,
+    roots: &[Id],
+    x4: bool,
+    uses_w: bool,
+) -> TokenStream {
     let lit = |i: u32| Literal::u32_unsuffixed(i);
     let var_tokens = |v: u32| -> TokenStream {
         match node.roles.get(v as usize).copied().unwrap_or(VarRole::Zero) {
+            VarRole::Local(l) if x4 => {
+                let i = lit(l);
+                quote!(local[#i][l])
+            }
             VarRole::Local(l) => {
                 let i = lit(l);
                 quote!(local[#i])
@@ -370,6 +385,10 @@ fn kernel_fn(name: &Ident, doc: &str, node: &CompiledNode, roots: &[Id]) -> Toke
             VarRole::Fixed(k, _) => {
                 let i = lit(k);
                 quote!(fixed[#i])
+            }
+            VarRole::Weight(w) if x4 => {
+                let i = lit(w);
+                quote!(w[#i][l])
             }
             VarRole::Weight(w) => {
                 let i = lit(w);
@@ -379,61 +398,115 @@ fn kernel_fn(name: &Ident, doc: &str, node: &CompiledNode, roots: &[Id]) -> Toke
         }
     };
     let Ssa {
+        pre,
         mut stmts,
         refs,
         ops,
-    } = ssa(&node.graph, roots, &var_tokens, &EmitOptions::default());
-    for (k, id) in roots.iter().enumerate() {
-        let v = refs[id.index()].clone().unwrap_or_else(|| f64_tokens(0.0));
-        let i = Literal::usize_unsuffixed(k);
-        stmts.push(quote!(out[#i] = #v;));
-    }
+    } = ssa_inner(
+        &node.graph,
+        roots,
+        &var_tokens,
+        &EmitOptions::default(),
+        false,
+        x4,
+    )
+    .0;
     let nl = Literal::usize_unsuffixed(node.locals.len());
     let nf = Literal::usize_unsuffixed(node.fixed.len());
     let no = Literal::usize_unsuffixed(roots.len());
-    let doc = format!(
-        " {doc} Cost: {} operations, {} temporaries.",
-        ops.total(),
-        ops.temporaries
-    );
-    quote! {
-        #[doc = #doc]
-        #[allow(unused_variables, clippy::all)]
-        fn #name(local: &[f64], fixed: &[f64], w: &[f64], out: &mut [f64]) {
-            // Lengths are checked once so that every constant index below is in bounds
-            // without a per-access check.
+    for (k, id) in roots.iter().enumerate() {
+        let v = refs[id.index()].clone().unwrap_or_else(|| f64_tokens(0.0));
+        let i = Literal::usize_unsuffixed(k);
+        stmts.push(if x4 {
+            quote!(out[#i][l] = #v;)
+        } else {
+            quote!(out[#i] = #v;)
+        });
+    }
+    let body = if x4 {
+        // Arrays of `[f64; 4]` (one per entry, its four lanes) make every index below
+        // provably in bounds, so the loop has no exit but its end and vectorises.
+        let nw = Literal::usize_unsuffixed(node.outputs.len());
+        let load_w = if uses_w {
+            quote!(let w: &[[f64; 4]; #nw] = w.as_chunks::<4>().0[..#nw].try_into().unwrap();)
+        } else {
+            TokenStream::new()
+        };
+        quote! {
+            let local: &[[f64; 4]; #nl] = local.as_chunks::<4>().0[..#nl].try_into().unwrap();
+            let fixed = &fixed[..#nf];
+            #load_w
+            let out: &mut [[f64; 4]; #no] =
+                (&mut out.as_chunks_mut::<4>().0[..#no]).try_into().unwrap();
+            #(#pre)*
+            for l in 0..4 {
+                #(#stmts)*
+            }
+        }
+    } else {
+        // Lengths are checked once so that every constant index below is in bounds without a
+        // per-access check.
+        quote! {
             let local = &local[..#nl];
             let fixed = &fixed[..#nf];
             let out = &mut out[..#no];
             #(#stmts)*
         }
+    };
+    let doc = if x4 {
+        format!(
+            " {doc} Four nodes at once (`local`, `w` and `out` interleaved: node `l`'s entry \
+             `k` at `4·k + l`), each bitwise as the scalar kernel. Cost: 4 × {} operations.",
+            ops.total()
+        )
+    } else {
+        format!(
+            " {doc} Cost: {} operations, {} temporaries.",
+            ops.total(),
+            ops.temporaries
+        )
+    };
+    quote! {
+        #[doc = #doc]
+        #[allow(unused_variables, clippy::all)]
+        fn #name(local: &[f64], fixed: &[f64], w: &[f64], out: &mut [f64]) {
+            #body
+        }
     }
 }
 
 #[cfg(feature = "emit")]
-/// Tokens of the three kernels of `node` and of its `NodeKernel` table entry.
-fn node_tokens(name: &str, what: &str, node: &CompiledNode) -> (TokenStream, TokenStream) {
+/// Tokens of the three kernels of `node` (and, with `x4`, of their batched variants) and of
+/// its `NodeKernel` table entry.
+fn node_tokens(
+    name: &str,
+    what: &str,
+    node: &CompiledNode,
+    x4: bool,
+) -> (TokenStream, TokenStream) {
     let id = |s: &str| Ident::new(&format!("{name}_{s}"), Span::call_site());
     let (fv, fj, fh) = (id("value"), id("jacobian"), id("hessian"));
     let d = &node.derivs;
-    let value = kernel_fn(
-        &fv,
-        &format!("Outputs of the {what} node function (T/2·ẋ, path rows, T/2·L)."),
-        node,
-        &node.outputs,
-    );
-    let jac = kernel_fn(
-        &fj,
-        &format!("Jacobian values of the {what} node function, pattern order."),
-        node,
-        &d.jac_ids,
-    );
-    let hess = kernel_fn(
-        &fh,
-        &format!("Lower-triangle Lagrangian Hessian values of the {what} node function."),
-        node,
-        &d.hess_ids,
-    );
+    let docs = [
+        format!("Outputs of the {what} node function (T/2·ẋ, path rows, T/2·L)."),
+        format!("Jacobian values of the {what} node function, pattern order."),
+        format!("Lower-triangle Lagrangian Hessian values of the {what} node function."),
+    ];
+    let value = kernel_fn(&fv, &docs[0], node, &node.outputs, false, false);
+    let jac = kernel_fn(&fj, &docs[1], node, &d.jac_ids, false, false);
+    let hess = kernel_fn(&fh, &docs[2], node, &d.hess_ids, false, true);
+    let (batched, batched_entry) = if x4 {
+        let (bv, bj, bh) = (id("value_x4"), id("jacobian_x4"), id("hessian_x4"));
+        let value = kernel_fn(&bv, &docs[0], node, &node.outputs, true, false);
+        let jac = kernel_fn(&bj, &docs[1], node, &d.jac_ids, true, false);
+        let hess = kernel_fn(&bh, &docs[2], node, &d.hess_ids, true, true);
+        (
+            quote!(#value #jac #hess),
+            quote!(Some(NodeKernelX4 { value: #bv, jacobian: #bj, hessian: #bh })),
+        )
+    } else {
+        (TokenStream::new(), quote!(None))
+    };
     let pairs = |p: &[(usize, usize)]| {
         let items = p.iter().map(|&(a, b)| {
             let (a, b) = (
@@ -461,9 +534,10 @@ fn node_tokens(name: &str, what: &str, node: &CompiledNode) -> (TokenStream, Tok
             value: #fv,
             jacobian: #fj,
             hessian: #fh,
+            x4: #batched_entry,
         },
     };
-    (quote!(#value #jac #hess), entry)
+    (quote!(#value #jac #hess #batched), entry)
 }
 
 /// One node function to emit: its kernel name prefix, a phrase for the docs, and the compiled
@@ -476,13 +550,17 @@ pub struct NamedNode {
     pub what: String,
     /// The compiled node function.
     pub node: CompiledNode,
+    /// Whether to emit the batched (four nodes at once) variants of its kernels as well.
+    pub x4: bool,
 }
 
 #[cfg(feature = "emit")]
 /// The Rust source of the node kernels of `nodes`: one value, Jacobian and Hessian function
-/// per node, and `pub static NODE_KERNELS: &[NodeKernel]` sorted by fingerprint. A node with
-/// the fingerprint of an earlier one is skipped (that kernel serves both). The including
-/// module must define `NodeKernel`. Deterministic: the same nodes give the same text.
+/// per node (plus their batched `_x4` variants for the nodes with [`NamedNode::x4`], and the
+/// sine–cosine helper they call), and `pub static NODE_KERNELS:
+/// &[NodeKernel]` sorted by fingerprint. A node with the fingerprint of an earlier one is
+/// skipped (that kernel serves both). The including module must define `NodeKernel` and
+/// `NodeKernelX4`. Deterministic: the same nodes give the same text.
 pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
     let mut fns = Vec::new();
     let mut entries: Vec<(u128, TokenStream)> = Vec::new();
@@ -490,15 +568,21 @@ pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
         if entries.iter().any(|e| e.0 == n.node.fingerprint) {
             continue;
         }
-        let (f, e) = node_tokens(&n.name, &n.what, &n.node);
+        let (f, e) = node_tokens(&n.name, &n.what, &n.node, n.x4);
         fns.push(f);
         entries.push((n.node.fingerprint, e));
     }
     entries.sort_by_key(|e| e.0);
     let items = entries.iter().map(|e| &e.1);
+    let helpers = if nodes.iter().any(|n| n.x4) {
+        lanes_items()?
+    } else {
+        TokenStream::new()
+    };
     let tokens = quote! {
         /// Every emitted node kernel, sorted by fingerprint (binary search).
         pub static NODE_KERNELS: &[NodeKernel] = &[#(#items)*];
+        #helpers
         #(#fns)*
     };
     let file: syn::File = syn::parse2(tokens)

@@ -5,8 +5,12 @@
 //! spent preempted (`/proc/thread-self/schedstat`; plain wall time where that is unavailable),
 //! so waiting for a CPU on a loaded machine does not count.
 //!
+//! The optimal-control node kernels of the periodic problems (`paper_qc_*`) are timed per
+//! group of four nodes, as four calls of the scalar kernel (`node/<kernel>/scalar`) and as
+//! one call of its batched variant (`node/<kernel>/x4`), on the same random nodes.
+//!
 //! `cargo bench -p bf-generated --bench kernels -- --warm-up-time 1 --measurement-time 3`;
-//! a filter such as `mass_cqd_g` selects kernels.
+//! a filter such as `mass_cqd_g` or `node/` selects kernels.
 
 use std::hint::black_box;
 use std::time::{Duration, Instant};
@@ -241,5 +245,79 @@ fn dynamics(c: &mut Criterion) {
     bench_dynamics!(c, iiwa7);
 }
 
-criterion_group!(benches, paper_kinematics, dynamics);
+/// Scalar and batched node kernels of the `paper_qc_*` node functions on `STATES / 4` groups
+/// of four random nodes (angles in [−π, π], other locals in [−2, 2], duration in [0.1, 2]).
+fn node_kernels(c: &mut Criterion) {
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    for k in bf_generated::ocp::NODE_KERNELS
+        .iter()
+        .filter(|k| k.name.starts_with("paper_qc_"))
+    {
+        let Some(x4) = k.x4 else { continue };
+        let (nl, no) = (k.n_local, k.n_out);
+        let groups = STATES / 4;
+        let local: Vec<f64> = (0..groups * 4 * nl)
+            .map(|i| match i % nl {
+                j if j + 1 == nl => rng.random_range(0.1..2.0),
+                j if j < 3 => rng.random_range(-std::f64::consts::PI..std::f64::consts::PI),
+                _ => rng.random_range(-2.0..2.0),
+            })
+            .collect();
+        let fixed: Vec<f64> = (0..k.n_fixed)
+            .map(|_| rng.random_range(0.01..1.0))
+            .collect();
+        let w: Vec<f64> = (0..groups * 4 * no)
+            .map(|_| rng.random_range(-1.0..1.0))
+            .collect();
+        let parts = [
+            ("value", k.value, x4.value, no),
+            (
+                "jacobian",
+                k.jacobian,
+                x4.jacobian,
+                k.jacobian_pattern.len(),
+            ),
+            ("hessian", k.hessian, x4.hessian, k.hessian_pattern.len()),
+        ];
+        for (part, scalar, batched, n) in parts {
+            let mut out = vec![0.0; 4 * n];
+            c.bench_function(&format!("node/{}_{part}/scalar", k.name), |b| {
+                b.iter_custom(|iters| {
+                    timed(iters, |i| {
+                        // The scalar kernels read the nodes one after another (rows), the
+                        // batched one the same memory as four interleaved nodes: equal data
+                        // volume, and the values do not matter for the timing.
+                        let g = i % groups;
+                        for l in 0..4 {
+                            let node = 4 * g + l;
+                            scalar(
+                                black_box(&local[node * nl..(node + 1) * nl]),
+                                black_box(&fixed),
+                                black_box(&w[node * no..(node + 1) * no]),
+                                &mut out[l * n..(l + 1) * n],
+                            );
+                        }
+                        black_box(&out);
+                    })
+                })
+            });
+            c.bench_function(&format!("node/{}_{part}/x4", k.name), |b| {
+                b.iter_custom(|iters| {
+                    timed(iters, |i| {
+                        let g = i % groups;
+                        batched(
+                            black_box(&local[4 * g * nl..4 * (g + 1) * nl]),
+                            black_box(&fixed),
+                            black_box(&w[4 * g * no..4 * (g + 1) * no]),
+                            &mut out,
+                        );
+                        black_box(&out);
+                    })
+                })
+            });
+        }
+    }
+}
+
+criterion_group!(benches, paper_kinematics, dynamics, node_kernels);
 criterion_main!(benches);

@@ -99,12 +99,28 @@ pub struct NodeKernel {
     pub jacobian: NodeKernelFn,
     /// Weighted Hessian values.
     pub hessian: NodeKernelFn,
+    /// The same three kernels on four nodes at once, if emitted.
+    pub x4: Option<NodeKernelX4>,
+}
+
+/// The batched variants of a [`NodeKernel`]'s kernels: four nodes per call, `local`, `w` and
+/// `out` holding the four nodes' entries interleaved (node `l`'s entry `k` at `4·k + l`),
+/// `fixed` shared;
+/// each node's results are bitwise those of the scalar kernel.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeKernelX4 {
+    /// Output values.
+    pub value: NodeKernelFn,
+    /// Jacobian values.
+    pub jacobian: NodeKernelFn,
+    /// Weighted Hessian values.
+    pub hessian: NodeKernelFn,
 }
 
 /// The emitted optimal-control node kernels (`NODE_KERNELS`, sorted by fingerprint).
 #[allow(clippy::all, clippy::pedantic, unused_variables, unused_parens)]
 pub mod ocp {
-    use super::NodeKernel;
+    use super::{NodeKernel, NodeKernelX4};
     include!(concat!(env!("OUT_DIR"), "/ocp_kernels.rs"));
 }
 

@@ -79,9 +79,11 @@ pub fn compile_node(
 
 /// The Rust source of the node kernels of `scenes` (those with a ball and a contact; the
 /// others are skipped): one value, Jacobian and Hessian function per [`node_kernel_specs`]
-/// entry, and `pub static NODE_KERNELS: &[NodeKernel]` sorted by fingerprint. Specs with the
+/// entry (and their batched `_x4` variants, four collocation nodes at once), and
+/// `pub static NODE_KERNELS: &[NodeKernel]` sorted by fingerprint. Specs with the
 /// structure of an earlier one (QC and tracking share their integrands, the constants being
-/// inputs) share its kernel. The including module must define `NodeKernel`. Deterministic:
+/// inputs) share its kernel. The including module must define `NodeKernel` and
+/// `NodeKernelX4`. Deterministic:
 /// the same scenes give the same text.
 pub fn emit_node_kernels(scenes: &[&Scene]) -> Result<String, CodegenError> {
     let mut nodes = Vec::new();
@@ -89,7 +91,12 @@ pub fn emit_node_kernels(scenes: &[&Scene]) -> Result<String, CodegenError> {
         for (name, opt, level) in node_kernel_specs(scene) {
             let node = compile_node(scene, &opt, level)?;
             let what = format!("`{name}` (scene `{}`, {:?} level)", scene.name, level);
-            nodes.push(NamedNode { name, what, node });
+            nodes.push(NamedNode {
+                name,
+                what,
+                node,
+                x4: true,
+            });
         }
     }
     bf_codegen::nodefn::emit_node_kernels(&nodes)

@@ -55,6 +55,11 @@ pub fn node_kernel(fingerprint: u128) -> Option<NodeKernel> {
         value: k.value,
         jacobian: k.jacobian,
         hessian: k.hessian,
+        x4: k.x4.map(|b| bf_optim::ocp::NodeKernelX4 {
+            value: b.value,
+            jacobian: b.jacobian,
+            hessian: b.hessian,
+        }),
     })
 }
 

@@ -3,7 +3,8 @@
 //! precedence pitfall). Constants are printed with Rust's shortest round-trip formatting, so
 //! every `f64` survives exactly. In `f64` kernels the sines and cosines of all joint angles come
 //! from one call of the vectorised helper `sin_cos_n` ([`crate::trig`], emitted once per file
-//! by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call.
+//! by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call. The batched
+//! node kernels put the scalar body in a loop over four lanes ([`lanes`]).
 //!
 //! [`EmitOptions`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
@@ -23,6 +24,7 @@ use crate::report::OpCounts;
 use crate::robot::Layout;
 
 mod dispatch;
+pub mod lanes;
 use dispatch::{eval_flat_arm, eval_into_arm};
 
 /// Floating-point type of the emitted code.
@@ -189,9 +191,10 @@ pub fn emit_kernel_with(
             mut stmts,
             refs,
             ops,
+            ..
         },
         fast_trig,
-    ) = ssa_inner(g, &roots, &|v| var_tokens(layout, v), opts, true);
+    ) = ssa_inner(g, &roots, &|v| var_tokens(layout, v), opts, true, false);
 
     // Output assignments.
     let mut params: Vec<TokenStream> = Vec::new();
@@ -301,23 +304,11 @@ pub fn emit_kernel_with(
 /// SSA statements computing every node of the cone of `roots` (in node order), and the
 /// tokens that name each node's value (`refs[i]`, `None` outside the cone).
 pub(crate) struct Ssa {
+    /// Statements before the lane loop (only with `lanes`).
+    pub(crate) pre: Vec<TokenStream>,
     pub(crate) stmts: Vec<TokenStream>,
     pub(crate) refs: Vec<Option<TokenStream>>,
     pub(crate) ops: OpCounts,
-}
-
-/// The `let` bindings of the cone of `roots`; graph variables are printed by `var_tokens`.
-/// Shared by the dynamics kernels and the OCP node kernels (`crate::nodefn`), so both compute
-/// every node with the same `f64` operation. sin/cos are computed by the standard library
-/// (`sin_cos` per angle); [`ssa_inner`] with `batch_trig` batches them through the emitted
-/// helper instead.
-pub(crate) fn ssa(
-    g: &Graph,
-    roots: &[Id],
-    var_tokens: &dyn Fn(u32) -> TokenStream,
-    opts: &EmitOptions,
-) -> Ssa {
-    ssa_inner(g, roots, var_tokens, opts, false).0
 }
 
 /// The helper items that code from [`ssa_inner`] with `batch_trig` calls (`sin_cos_n` and its exact fallback,
@@ -336,18 +327,44 @@ pub fn trig_items() -> Result<TokenStream, CodegenError> {
     Ok(out)
 }
 
-/// As [`ssa`]; with `batch_trig` and `f64`, every sine and cosine of a graph variable (the
-/// joint angles) is taken from one call `sin_cos_n([…])` at the top of the body, and the
-/// returned flag says whether that call was emitted (the file must then contain
-/// [`trig_items`]). Other sin/cos arguments and `f32` use the standard library as in [`ssa`].
+/// The items of [`lanes`] (`sin_cos_lanes`, which the batched node kernels call) for a
+/// generated file, without the module's tests; emitted once per file.
+pub fn lanes_items() -> Result<TokenStream, CodegenError> {
+    let file: syn::File = syn::parse_str(include_str!("lanes.rs"))
+        .map_err(|e| CodegenError::Internal(format!("lanes.rs does not parse: {e}")))?;
+    let mut out = TokenStream::new();
+    for item in &file.items {
+        if let syn::Item::Fn(f) = item {
+            let mut f = f.clone();
+            f.vis = syn::Visibility::Inherited;
+            out.extend(quote!(#f));
+        }
+    }
+    Ok(out)
+}
+
+/// The `let` bindings of the cone of `roots`; graph variables are printed by `var_tokens`.
+/// Shared by the dynamics kernels and the OCP node kernels (`crate::nodefn`), so both compute
+/// every node with the same `f64` operation. Without `batch_trig`, sin/cos are computed by the
+/// standard library (`sin_cos` per angle); with `batch_trig` and `f64`, every sine and cosine
+/// of a graph variable (the joint angles) is taken from one call `sin_cos_n([…])` at the top
+/// of the body, and the returned flag says whether that call was emitted (the file must then
+/// contain [`trig_items`]). Other sin/cos arguments and `f32` use the standard library.
+///
+/// With `lanes` (f64 only), the statements are the body of a loop over four lanes `l`
+/// ([`lanes`]; `var_tokens` must then name lane `l`'s value): every sine and cosine of a graph
+/// variable is instead computed before the loop, four lanes at once (`sin_cos_n` with
+/// `batch_trig`, else `sin_cos_lanes`), in [`Ssa::pre`], and read as `name[l]` in the loop.
 pub(crate) fn ssa_inner(
     g: &Graph,
     roots: &[Id],
     var_tokens: &dyn Fn(u32) -> TokenStream,
     opts: &EmitOptions,
     batch_trig: bool,
+    lanes: bool,
 ) -> (Ssa, bool) {
     let batch_trig = batch_trig && opts.float == FloatTy::F64;
+    let lanes = lanes && opts.float == FloatTy::F64;
     let mut batched = false;
     let ft = opts.float.tokens();
     // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
@@ -361,6 +378,7 @@ pub(crate) fn ssa_inner(
     let max = roots.iter().map(|r| r.index() + 1).max().unwrap_or(0);
     let mut refs: Vec<Option<TokenStream>> = vec![None; max];
     let mut stmts: Vec<TokenStream> = Vec::new();
+    let mut pre: Vec<TokenStream> = Vec::new();
     let mut ops = OpCounts::default();
     let mut counter = 0usize;
     let fresh = |counter: &mut usize| {
@@ -368,7 +386,7 @@ pub(crate) fn ssa_inner(
         *counter += 1;
         id
     };
-    if batch_trig {
+    if batch_trig || lanes {
         // The angles (graph variables) whose sin or cos is in the cone, in node order.
         let mut angles: Vec<Id> = Vec::new();
         let mut args: Vec<TokenStream> = Vec::new();
@@ -389,8 +407,19 @@ pub(crate) fn ssa_inner(
                 sins.push(fresh(&mut counter));
                 coss.push(fresh(&mut counter));
             }
-            stmts.push(quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);));
-            batched = true;
+            if lanes {
+                let helper = if batch_trig {
+                    quote!(sin_cos_n)
+                } else {
+                    quote!(sin_cos_lanes)
+                };
+                for ((s, c), x) in sins.iter().zip(&coss).zip(&args) {
+                    pre.push(quote!(let (#s, #c) = #helper(std::array::from_fn(|l| #x));));
+                }
+            } else {
+                stmts.push(quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);));
+            }
+            batched = batch_trig;
             ops.sincos += angles.len();
             ops.temporaries += 2 * angles.len();
             for i in 0..max {
@@ -404,7 +433,11 @@ pub(crate) fn ssa_inner(
                 }
                 if let Some(j) = angles.iter().position(|&b| b == a) {
                     let name = if is_sin { &sins[j] } else { &coss[j] };
-                    refs[i] = Some(quote!(#name));
+                    refs[i] = Some(if lanes {
+                        quote!(#name[l])
+                    } else {
+                        quote!(#name)
+                    });
                 }
             }
         }
@@ -537,7 +570,15 @@ pub(crate) fn ssa_inner(
         refs[i] = Some(quote!(#t));
     }
 
-    (Ssa { stmts, refs, ops }, batched)
+    (
+        Ssa {
+            pre,
+            stmts,
+            refs,
+            ops,
+        },
+        batched,
+    )
 }
 
 /// Emit the whole scene module file (standard options).

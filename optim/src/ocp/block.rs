@@ -7,7 +7,9 @@
 //! interprets the graphs with the programs below. Both compute every node with the same `f64`
 //! operation, so they agree bitwise. With [`KernelUse::Require`] the caller states that the
 //! kernels must be found: a graph that changed after the kernels were emitted is then an error
-//! of the transcription instead of a silent fall-back to the (slower) interpreter.
+//! of the transcription instead of a silent fall-back to the (slower) interpreter. A kernel
+//! may come with batched variants ([`NodeKernelX4`]) that evaluate four nodes per call
+//! ([`GraphFn::eval_x4`]), bitwise as four calls of the scalar kernel.
 //!
 //! A [`GraphFn`] takes outputs y = f(v) built on a `bf_codegen` expression graph (the paper's
 //! node functions: dynamics eq. 26/29, stick constraint eq. 14/27, validity h and σ eq. 4/18,
@@ -55,6 +57,32 @@ pub struct NodeKernel {
     pub jacobian: NodeKernelFn,
     /// Weighted Hessian values.
     pub hessian: NodeKernelFn,
+    /// The same kernels on four nodes per call, if emitted.
+    pub x4: Option<NodeKernelX4>,
+}
+
+/// The batched variants of a [`NodeKernel`]: each call evaluates four nodes, with `local`, `w`
+/// and `out` holding the four nodes' entries interleaved (node `l`'s entry `k` at `4·k + l`)
+/// and `fixed` shared; every node's results are bitwise those of the scalar kernel.
+#[derive(Debug, Clone, Copy)]
+pub struct NodeKernelX4 {
+    /// Output values.
+    pub value: NodeKernelFn,
+    /// Jacobian values.
+    pub jacobian: NodeKernelFn,
+    /// Weighted Hessian values.
+    pub hessian: NodeKernelFn,
+}
+
+/// Which evaluation of a [`GraphFn`] a batched call makes ([`GraphFn::eval_x4`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Part {
+    /// Output values ([`GraphFn::eval`]).
+    Value,
+    /// Jacobian values ([`GraphFn::jacobian`]).
+    Jacobian,
+    /// Weighted Hessian values ([`GraphFn::hessian`]).
+    Hessian,
 }
 
 /// The emitted node kernel with a structural fingerprint
@@ -465,6 +493,50 @@ impl GraphFn {
                 self.run_kernel(kernel.jacobian, fixed, local, &[], self.jac.len())
             }
         }
+    }
+
+    /// Whether [`GraphFn::eval_x4`] evaluates four points per call (an emitted kernel with
+    /// batched variants).
+    pub fn has_x4(&self) -> bool {
+        matches!(&self.backend, Backend::Kernel { kernel, .. } if kernel.x4.is_some())
+    }
+
+    /// Number of values `part` yields per point.
+    pub fn part_len(&self, part: Part) -> usize {
+        match part {
+            Part::Value => self.n_out,
+            Part::Jacobian => self.jac.len(),
+            Part::Hessian => self.hess.len(),
+        }
+    }
+
+    /// Evaluates `part` at four points at once on the batched kernels: `local` holds the four
+    /// points' locals interleaved (point `l`'s local `k` at `4·k + l`; 4 × `n_local`), `w`
+    /// their weights likewise (4 × `n_out`, read for [`Part::Hessian`] only), and `out`
+    /// receives 4 × [`GraphFn::part_len`] values, interleaved likewise, each bitwise what the
+    /// one-point method gives for that point. Returns `false`,
+    /// leaving `out` untouched, when there is no batched kernel ([`GraphFn::has_x4`]) or a
+    /// length differs from those.
+    pub fn eval_x4(&self, part: Part, local: &[f64], w: &[f64], out: &mut [f64]) -> bool {
+        let Backend::Kernel {
+            kernel: NodeKernel { x4: Some(k4), .. },
+            fixed,
+        } = &self.backend
+        else {
+            return false;
+        };
+        let n = self.part_len(part);
+        let w_ok = part != Part::Hessian || w.len() == 4 * self.n_out;
+        if local.len() != 4 * self.n_local || !w_ok || out.len() != 4 * n {
+            return false;
+        }
+        let f = match part {
+            Part::Value => k4.value,
+            Part::Jacobian => k4.jacobian,
+            Part::Hessian => k4.hessian,
+        };
+        f(local, fixed, w, out);
+        true
     }
 
     /// Values of the lower triangle of ∇²(Σ_i w_i y_i) at `local` (pattern order; missing

@@ -17,7 +17,7 @@ pub mod toys;
 pub mod trajectory;
 pub mod transcription;
 
-pub use block::{GraphFn, KernelLookup, KernelUse, NodeKernel, NodeKernelFn};
+pub use block::{GraphFn, KernelLookup, KernelUse, NodeKernel, NodeKernelFn, NodeKernelX4, Part};
 pub use mesh::{HpRule, MeshSpec, collocation_errors};
 pub use problem::{
     NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
