@@ -176,7 +176,7 @@ fn headless_chromium_draws_and_advances() {
             "--headless",
             "--disable-gpu",
             "--no-sandbox",
-            "--virtual-time-budget=1500",
+            "--virtual-time-budget=5000",
             "--dump-dom",
         ])
         .arg(format!("file://{}", p.display()))
