@@ -326,26 +326,35 @@ impl Input for PdController {
     }
     fn tau(&self, _t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
         let n = self.kp.len();
-        for (what, len) in [
-            ("q", q.len()),
-            ("qd", qd.len()),
-            ("torque output", out.len()),
-            ("kd", self.kd.len()),
-            ("target", self.target.len()),
-        ] {
-            if len != n {
-                return Err(SimError::DimensionMismatch {
-                    what,
-                    expected: n,
-                    found: len,
-                });
-            }
-        }
+        check_lengths(
+            n,
+            &[
+                ("q", q.len()),
+                ("qd", qd.len()),
+                ("torque output", out.len()),
+                ("kd", self.kd.len()),
+                ("target", self.target.len()),
+            ],
+        )?;
         for i in 0..n {
             out[i] = self.kp[i] * (self.target[i] - q[i]) - self.kd[i] * qd[i];
         }
         Ok(())
     }
+}
+
+/// Errors unless every `(what, len)` has length `n` (the joint count of an input law).
+fn check_lengths(n: usize, lens: &[(&'static str, usize)]) -> Result<(), SimError> {
+    for &(what, len) in lens {
+        if len != n {
+            return Err(SimError::DimensionMismatch {
+                what,
+                expected: n,
+                found: len,
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Feed-forward torques with joint-space PD tracking of a reference trajectory:
@@ -433,19 +442,14 @@ impl Input for TrackingPd {
     }
     fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
         let n = self.kp.len();
-        for (what, len) in [
-            ("q", q.len()),
-            ("qd", qd.len()),
-            ("torque output", out.len()),
-        ] {
-            if len != n {
-                return Err(SimError::DimensionMismatch {
-                    what,
-                    expected: n,
-                    found: len,
-                });
-            }
-        }
+        check_lengths(
+            n,
+            &[
+                ("q", q.len()),
+                ("qd", qd.len()),
+                ("torque output", out.len()),
+            ],
+        )?;
         self.feedforward.eval(t, out);
         if self.feedback_at(t) {
             let (mut qr, mut qdr) = (vec![0.0; n], vec![0.0; n]);
