@@ -248,15 +248,21 @@ impl TorqueSeries {
 
     /// Interpolated torques at `t` (clamped outside [t₀, t_last]).
     pub fn eval(&self, t: f64, out: &mut [f64]) {
+        self.eval_each(t, |i, v| out[i] = v);
+    }
+
+    /// Calls `f(i, τᵢ(t))` for every column `i` of the interpolated value at `t` (clamped
+    /// outside [t₀, t_last]), so that callers combining several series need no buffer.
+    pub fn eval_each(&self, t: f64, mut f: impl FnMut(usize, f64)) {
         let n = self.n;
         let last = self.t.len() - 1;
         let row = |k: usize| &self.tau[k * n..(k + 1) * n];
         if t.is_nan() || t <= self.t[0] {
-            out[..n].copy_from_slice(row(0));
+            row(0).iter().enumerate().for_each(|(i, &v)| f(i, v));
             return;
         }
         if t >= self.t[last] {
-            out[..n].copy_from_slice(row(last));
+            row(last).iter().enumerate().for_each(|(i, &v)| f(i, v));
             return;
         }
         // First index with t_k > t; t lies in [t_{k-1}, t_k).
@@ -265,7 +271,7 @@ impl TorqueSeries {
         let w = (t - ta) / (tb - ta);
         let (ra, rb) = (row(k - 1), row(k));
         for i in 0..n {
-            out[i] = ra[i] + w * (rb[i] - ra[i]);
+            f(i, ra[i] + w * (rb[i] - ra[i]));
         }
     }
 }
@@ -452,12 +458,11 @@ impl Input for TrackingPd {
         )?;
         self.feedforward.eval(t, out);
         if self.feedback_at(t) {
-            let (mut qr, mut qdr) = (vec![0.0; n], vec![0.0; n]);
-            self.q_ref.eval(t, &mut qr);
-            self.qd_ref.eval(t, &mut qdr);
-            for i in 0..n {
-                out[i] += self.kp[i] * (qr[i] - q[i]) + self.kd[i] * (qdr[i] - qd[i]);
-            }
+            // Two passes without a buffer: this runs in every right-hand side of the integrator.
+            self.q_ref
+                .eval_each(t, |i, qr| out[i] += self.kp[i] * (qr - q[i]));
+            self.qd_ref
+                .eval_each(t, |i, qdr| out[i] += self.kd[i] * (qdr - qd[i]));
         }
         Ok(())
     }
