@@ -5,7 +5,9 @@
 //! the registry [`SCENES`] of every scene's name and TOML text ([`scene_toml`]), and the
 //! model-kernel registry [`SCENE_KERNELS`] ([`scene`]): every scene's `mass_cqd_g`,
 //! `potential` and (contact scenes) `contact`/`contact_smooth` behind fn pointers of one
-//! signature, which bf-model wraps into its typed physics for any compiled scene.
+//! signature, which bf-model wraps into its typed physics for any compiled scene, and every
+//! kernel of the scene's module by name behind one slice-signature dispatcher
+//! ([`SceneKernels::eval_into`]), which `eval` and `bench` call for any compiled scene.
 //! The kernel API (docs/kernels.md) maps to the paper as: `frames` eq. 67–68, `tip_jacobian`
 //! eq. 69–71, `mass_matrix` eq. 22a/74–75, `christoffel`/`coriolis_*` eq. 76–79, `gravity`
 //! eq. 72–73, `contact`/`contact_smooth` eq. 2–13 and 58–59.
@@ -34,6 +36,24 @@ pub type PotentialFn = fn(q: &[f64], p: &[f64]) -> f64;
 pub type ContactFn =
     fn(q: &[f64], qd: &[f64], omega: &[f64; 3], eps: Option<f64>, p: &[f64], out: &mut [f64]);
 
+/// Every kernel of a scene's module on slices: runs kernel `KERNELS[k]` (see
+/// [`SceneKernels::kernels`]) on q, q̇ (NQ each), ω, ε, `u` (NQ: q̈ for the inverse-dynamics
+/// kernels and the regressor, τ for `forward_dynamics`, ignored by the others) and the runtime
+/// parameters `p` (NP), and writes its outputs into the front of `out`, each output flattened
+/// row-major in argument order (`Contact` fields in bf-codegen's `CONTACT_FIELDS` order).
+/// Returns the number of values written; `None` if a length is wrong, `k` is out of range or
+/// `out` is too short. Does not allocate.
+pub type EvalIntoFn = fn(
+    k: usize,
+    q: &[f64],
+    qd: &[f64],
+    omega: &[f64; 3],
+    eps: f64,
+    u: &[f64],
+    p: &[f64],
+    out: &mut [f64],
+) -> Option<usize>;
+
 /// The compiled model kernels of one scene (an entry of [`SCENE_KERNELS`]).
 #[derive(Debug, Clone, Copy)]
 pub struct SceneKernels {
@@ -53,6 +73,18 @@ pub struct SceneKernels {
     pub potential: Option<PotentialFn>,
     /// `contact` / `contact_smooth`, if the scene emits both.
     pub contact: Option<ContactFn>,
+    /// Names of every kernel of the scene's module, in emission order (its `kernels` list,
+    /// then the inverse-dynamics family): the index [`SceneKernels::eval_into`] takes.
+    pub kernels: &'static [&'static str],
+    /// Every kernel of the scene's module on slices ([`EvalIntoFn`]).
+    pub eval_into: EvalIntoFn,
+}
+
+impl SceneKernels {
+    /// The index of kernel `name` in [`SceneKernels::kernels`], if the scene emits it.
+    pub fn kernel_index(&self, name: &str) -> Option<usize> {
+        self.kernels.iter().position(|k| *k == name)
+    }
 }
 
 #[allow(clippy::all, clippy::pedantic)]

@@ -1,14 +1,15 @@
 //! `ball-finger bench SCENE [--time SECS] [--states N] [--seed S] [--json]`: times every
 //! kernel of a scene's module (its `kernels` list and the inverse-dynamics family) over
-//! cycling random states, through the compiled kernels of `bf-generated` when the file is a
-//! built-in scene (its text equals the compiled one) and through the run-time interpreter
+//! cycling random states, through the compiled kernels of `bf-generated`'s registry when the
+//! file is a compiled scene of `scenes/` (its text equals the compiled one) and through the run-time interpreter
 //! (`bf_codegen::interp`, the same graphs and f64 operations) for any scene file.
 //!
 //! Method: a fixed set of random states (seeded; q uniform in the joint limits or [−π, π],
 //! q̇ in [−2, 2], ω in [−2, 2]³, q̈ and τ in [−5, 5]) is cycled through in short batches of
 //! consecutive calls (about 50 µs each); the reported figure is the median over batches of
 //! wall-clock time per call, so batches preempted on a loaded machine do not count.
-//! The compiled path calls `eval_index_into` (outputs on the stack, copied into a buffer; no
+//! The compiled path calls the registry's `bf_generated::SceneKernels::eval_into` (the scene
+//! module's `eval_index_into` behind slices: outputs on the stack, copied into a buffer; no
 //! allocation), the interpreted path a compiled tape (allocates its value array per call).
 //! The budget `--time` is split evenly over the kernels and the two paths. Before timing,
 //! both paths are evaluated at every state and their largest relative difference is reported
@@ -37,31 +38,30 @@ struct State {
     u: Vec<f64>,
 }
 
-/// `KERNELS[k]` of a compiled module called on one state, outputs into `out`.
-type CompiledFn = fn(usize, &State, &mut [f64]) -> Option<usize>;
-
-macro_rules! compiled {
-    ($m:ident) => {{
-        fn call(k: usize, s: &State, out: &mut [f64]) -> Option<usize> {
-            use bf_generated::$m as m;
-            let q: &[f64; m::NQ] = s.q.as_slice().try_into().ok()?;
-            let qd: &[f64; m::NQ] = s.qd.as_slice().try_into().ok()?;
-            let u: &[f64; m::NQ] = s.u.as_slice().try_into().ok()?;
-            m::eval_index_into(k, q, qd, &s.omega, s.eps, u, &m::PARAM_DEFAULTS, out)
-        }
-        (call as CompiledFn, bf_generated::$m::KERNELS)
-    }};
+/// The registry entry of `scene` (file text `text`) when the file is a compiled scene: its
+/// text equals the compiled one, so the compiled kernels run at the scene's default runtime
+/// parameters, the values the interpreter uses.
+fn compiled_for(scene: &Scene, text: &str) -> Option<&'static bf_generated::SceneKernels> {
+    bf_generated::scene(&scene.name).filter(|e| e.toml == text)
 }
 
-/// The compiled module of a built-in scene: its call function and kernel names.
-fn compiled_for(scene: &Scene, text: &str) -> Option<(CompiledFn, &'static [&'static str])> {
-    match scene.name.as_str() {
-        "paper" if text == bf_generated::paper::SCENE_TOML => Some(compiled!(paper)),
-        "human" if text == bf_generated::human::SCENE_TOML => Some(compiled!(human)),
-        "puma560" if text == bf_generated::puma560::SCENE_TOML => Some(compiled!(puma560)),
-        "iiwa7" if text == bf_generated::iiwa7::SCENE_TOML => Some(compiled!(iiwa7)),
-        _ => None,
-    }
+/// Kernel `k` of the compiled `entry` on one state, outputs into `out`.
+fn call_compiled(
+    entry: &bf_generated::SceneKernels,
+    k: usize,
+    s: &State,
+    out: &mut [f64],
+) -> Option<usize> {
+    (entry.eval_into)(
+        k,
+        &s.q,
+        &s.qd,
+        &s.omega,
+        s.eps,
+        &s.u,
+        entry.param_defaults,
+        out,
+    )
 }
 
 /// One row of the table.
@@ -162,7 +162,8 @@ fn time_batches(n_states: usize, budget: f64, mut call: impl FnMut(usize)) -> f6
 pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -> Result<Bench> {
     let rt = SceneKernels::new(scene).context("cannot build the kernels")?;
     let compiled = compiled_for(scene, text);
-    if let Some((_, names)) = compiled {
+    if let Some(entry) = compiled {
+        let names = entry.kernels;
         let rt_names: Vec<&str> = rt.kernels.iter().map(|k| k.name.as_str()).collect();
         if rt_names != names {
             bail!(
@@ -184,7 +185,8 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
         let len: usize = kern.outputs.iter().map(|o| o.len()).sum();
         let mut out = vec![0.0; len];
         let (mut compiled_ns, mut max_rel) = (None, None);
-        if let Some((call, _)) = compiled {
+        if let Some(entry) = compiled {
+            let call = |k: usize, s: &State, out: &mut [f64]| call_compiled(entry, k, s, out);
             let mut worst: f64 = 0.0;
             for (s, v) in states.iter().zip(&vars) {
                 let want = kern.eval(v);

@@ -6,9 +6,10 @@
 //! kernel's arguments (`Contact` fields for the contact kernels), arrays nested row-major. The
 //! inverse-dynamics kernels take q̈ from `--qdd`, `forward_dynamics` τ from `--tau` (default 0).
 //! Compiled scenes (the parsed file equals a scene compiled into `bf-generated`,
-//! `bf_model::registry::compiled_match`) go through the compiled kernels; any other file through
-//! the generator's interpreter (stderr names which). `--param name=value` sets runtime
-//! parameters. Key order and layout
+//! `bf_model::registry::compiled_match`) go through the compiled kernels of the generated
+//! registry (`bf_generated::SceneKernels::eval_into`, every kernel by name, so no scene module
+//! is named here); any other file through the generator's interpreter. stderr names which ran
+//! and lists the scene's kernels. `--param name=value` sets runtime parameters. Key order and layout
 //! are fixed. A non-finite entry (overflow at an extreme state or ε) is an error naming the
 //! quantity or the kernel and the entry (indices from 1), never a `null` in the JSON.
 
@@ -16,8 +17,9 @@ use crate::cli::EvalArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, bail};
 use bf_codegen::interp::{OutputShape, SceneKernels};
-use bf_codegen::kernels::Arg;
+use bf_codegen::kernels::{Arg, CONTACT_FIELDS, Dim};
 use bf_codegen::{EvalOutput, EvalValue, Scene};
+use bf_generated::SceneKernels as CompiledScene;
 use bf_model::KernelSource;
 use serde::ser::{Serialize, SerializeMap, Serializer};
 
@@ -57,16 +59,26 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     };
     let runtime = SceneKernels::new(&scene)
         .with_context(|| format!("{}: cannot build the kernels", args.scene.display()))?;
-    let (out, kernels, source) = match eval_builtin(&scene, &q, &qd, omega, eps) {
-        Some(out) => {
-            let flat = compiled_kernels(&scene, &runtime, &state)
-                .context("internal: a built-in scene without its compiled kernels")?;
-            (out, flat, KernelSource::Compiled)
-        }
+    let compiled = bf_model::registry::compiled_match(&scene);
+    let compiled_flat = match &compiled {
+        Some((entry, p)) => compiled_kernels(entry, p, &runtime, &state)?,
+        None => None,
+    };
+    let (kernels, kernels_source) = match compiled_flat {
+        Some(flat) => (flat, KernelSource::Compiled),
+        None => (
+            interpreted_kernels(&runtime, &state),
+            KernelSource::Interpreted,
+        ),
+    };
+    let compiled_out = compiled
+        .as_ref()
+        .and_then(|(entry, p)| compiled_quantities(&scene, entry, p, &state));
+    let (out, source) = match compiled_out {
+        Some(out) => (out, KernelSource::Compiled),
         None => (
             bf_codegen::eval_all(&scene, &q, &qd, omega, eps)
                 .with_context(|| format!("{}: evaluation failed", args.scene.display()))?,
-            interpreted_kernels(&runtime, &state),
             KernelSource::Interpreted,
         ),
     };
@@ -80,7 +92,23 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         );
     }
     let kernels = shape_kernels(&scene.name, &runtime, &kernels)?;
-    eprintln!("evaluated {} on the {source} kernels", scene.name);
+    let names: Vec<&str> = runtime.kernels.iter().map(|k| k.name.as_str()).collect();
+    if source == kernels_source {
+        eprintln!(
+            "evaluated {} on the {source} kernels of `{}`: {}",
+            scene.name,
+            scene.name,
+            names.join(", ")
+        );
+    } else {
+        eprintln!(
+            "evaluated {}: the named quantities on the {source} kernels, the kernels on the \
+             {kernels_source} kernels of `{}` (the compiled scene does not emit all of them): {}",
+            scene.name,
+            scene.name,
+            names.join(", ")
+        );
+    }
     let all = Full {
         quantities: &out,
         kernels: &kernels,
@@ -99,7 +127,7 @@ struct State<'a> {
 }
 
 impl State<'_> {
-    /// The `u` argument of `eval_flat_u` for a kernel with `inputs`: τ for forward dynamics,
+    /// The `u` argument of `SceneKernels::eval_into` for a kernel with `inputs`: τ for forward dynamics,
     /// q̈ otherwise.
     fn u(&self, inputs: &[Arg]) -> &[f64] {
         if inputs.contains(&Arg::Tau) {
@@ -121,34 +149,34 @@ fn interpreted_kernels(rt: &SceneKernels, s: &State) -> Vec<Vec<f64>> {
         .collect()
 }
 
-macro_rules! compiled_flat {
-    ($m:ident, $p:expr, $rt:expr, $s:expr) => {{
-        use bf_generated::$m as k;
-        let p: &[f64; k::NP] = $p.try_into().ok()?;
-        let q: [f64; k::NQ] = $s.q.try_into().ok()?;
-        let qd: [f64; k::NQ] = $s.qd.try_into().ok()?;
-        let mut out = Vec::new();
-        for kern in &$rt.kernels {
-            let u: [f64; k::NQ] = $s.u(&kern.inputs).try_into().ok()?;
-            out.push(k::eval_flat_u(
-                &kern.name, &q, &qd, &$s.omega, $s.eps, &u, p,
-            )?);
+/// Every kernel's flat outputs (the kernels of the file's spec, `rt`) through the compiled
+/// kernels of `entry` (the registry entry the file matches, parameters `p`), looked up by
+/// name; `None` if the compiled scene does not emit one of them (the file lists a kernel the
+/// compiled file does not).
+fn compiled_kernels(
+    entry: &CompiledScene,
+    p: &[f64],
+    rt: &SceneKernels,
+    s: &State,
+) -> Result<Option<Vec<Vec<f64>>>> {
+    let mut out = Vec::with_capacity(rt.kernels.len());
+    for kern in &rt.kernels {
+        let Some(k) = entry.kernel_index(&kern.name) else {
+            return Ok(None);
+        };
+        let len: usize = kern.outputs.iter().map(OutputShape::len).sum();
+        let mut v = vec![0.0; len];
+        let got = (entry.eval_into)(k, s.q, s.qd, &s.omega, s.eps, s.u(&kern.inputs), p, &mut v);
+        if got != Some(len) {
+            bail!(
+                "internal: compiled kernel `{}` of {} wrote {got:?} values, expected {len}",
+                kern.name,
+                entry.name
+            );
         }
-        Some(out)
-    }};
-}
-
-/// Every kernel's flat outputs through the compiled module of a built-in scene.
-fn compiled_kernels(scene: &Scene, rt: &SceneKernels, s: &State) -> Option<Vec<Vec<f64>>> {
-    let (entry, p) = bf_model::registry::compiled_match(scene)?;
-    let p = p.as_slice();
-    match entry.name {
-        "paper" => compiled_flat!(paper, p, rt, s),
-        "human" => compiled_flat!(human, p, rt, s),
-        "puma560" => compiled_flat!(puma560, p, rt, s),
-        "iiwa7" => compiled_flat!(iiwa7, p, rt, s),
-        _ => None,
+        out.push(v);
     }
+    Ok(Some(out))
 }
 
 /// An ordered JSON object.
@@ -287,95 +315,89 @@ pub fn first_non_finite(out: &EvalOutput) -> Option<(String, f64)> {
     None
 }
 
-fn vec3(v: &[f64]) -> EvalValue {
-    EvalValue::Vector(v.to_vec())
+/// A matrix of `cols` columns from row-major `v`.
+fn rows(v: &[f64], cols: usize) -> EvalValue {
+    EvalValue::Matrix(v.chunks(cols.max(1)).map(<[f64]>::to_vec).collect())
 }
 
-fn mat<const C: usize>(rows: &[[f64; C]]) -> EvalValue {
-    EvalValue::Matrix(rows.iter().map(|r| r.to_vec()).collect())
-}
-
-macro_rules! eval_dynamics {
-    ($m:ident, $p:expr, $q:expr, $qd:expr, $out:expr) => {{
-        use bf_generated::$m as k;
-        let p: &[f64; k::NP] = $p.try_into().ok()?;
-        let q: [f64; k::NQ] = $q.try_into().ok()?;
-        let qd: [f64; k::NQ] = $qd.try_into().ok()?;
-        let mut pos = [[0.0; 3]; k::NQ];
-        let mut rot = [[[0.0; 3]; 3]; k::NQ];
-        k::frames(&q, p, &mut pos, &mut rot);
-        let (mut jp, mut jo) = ([[0.0; k::NQ]; 3], [[0.0; k::NQ]; 3]);
-        k::tip_jacobian(&q, p, &mut jp, &mut jo);
-        let mut m = [[0.0; k::NQ]; k::NQ];
-        k::mass_matrix(&q, p, &mut m);
-        let mut c = [[0.0; k::NQ]; k::NQ];
-        k::coriolis_matrix(&q, &qd, p, &mut c);
-        let (mut cqd, mut g) = ([0.0; k::NQ], [0.0; k::NQ]);
-        k::coriolis_qd(&q, &qd, p, &mut cqd);
-        k::gravity(&q, p, &mut g);
-        let e = &mut $out.entries;
-        e.push(("p_e".into(), vec3(&pos[k::NQ - 1])));
-        e.push(("R3".into(), mat(&rot[k::NQ - 1])));
-        e.push(("J_p".into(), mat(&jp)));
-        e.push(("J_o".into(), mat(&jo)));
-        e.push(("M".into(), mat(&m)));
-        e.push(("C".into(), mat(&c)));
-        e.push(("Cqd".into(), EvalValue::Vector(cqd.to_vec())));
-        e.push(("g".into(), EvalValue::Vector(g.to_vec())));
-        (q, qd)
-    }};
-}
-
-macro_rules! eval_contact {
-    ($m:ident, $p:expr, $q:expr, $qd:expr, $omega:expr, $eps:expr, $out:expr) => {{
-        use bf_generated::$m as k;
-        let p: &[f64; k::NP] = $p.try_into().ok()?;
-        let mut c = k::Contact::default();
-        k::contact(&$q, &$qd, &$omega, p, &mut c);
-        let mut s = k::Contact::default();
-        k::contact_smooth(&$q, &$qd, &$omega, $eps, p, &mut s);
-        let e = &mut $out.entries;
-        e.push(("alpha".into(), EvalValue::Scalar(c.alpha)));
-        e.push(("sat_alpha".into(), EvalValue::Scalar(c.sat_alpha)));
-        e.push(("p_c".into(), vec3(&c.p_c)));
-        e.push(("h".into(), EvalValue::Scalar(c.h)));
-        e.push(("J_c".into(), mat(&c.j_c)));
-        e.push(("sat_alpha_smooth".into(), EvalValue::Scalar(s.sat_alpha)));
-        e.push(("p_c_smooth".into(), vec3(&s.p_c)));
-        e.push(("h_smooth".into(), EvalValue::Scalar(s.h)));
-        e.push(("J_c_smooth".into(), mat(&s.j_c)));
-    }};
-}
-
-/// Evaluate through the compiled kernels when `scene` is a compiled scene
-/// (`bf_model::registry::compiled_match`: same kernel-relevant content, runtime parameters at
-/// any value).
-fn eval_builtin(
+/// The named quantities (the keys of [`bf_codegen::eval_all`], in its order) through the
+/// compiled kernels of `entry` with parameters `p`; `None` if the compiled scene does not emit
+/// one of the kernels they come from (`frames`, `tip_jacobian`, `mass_matrix`,
+/// `coriolis_matrix`, `coriolis_qd`, `gravity`, and for a scene with a ball and a contact
+/// `contact` and `contact_smooth`).
+fn compiled_quantities(
     scene: &Scene,
-    q: &[f64],
-    qd: &[f64],
-    omega: [f64; 3],
-    eps: f64,
+    entry: &CompiledScene,
+    p: &[f64],
+    s: &State,
 ) -> Option<EvalOutput> {
-    let (entry, p) = bf_model::registry::compiled_match(scene)?;
-    let p = p.as_slice();
+    let n = s.q.len();
+    let run = |name: &str, len: usize| -> Option<Vec<f64>> {
+        let k = entry.kernel_index(name)?;
+        let mut v = vec![0.0; len];
+        let got = (entry.eval_into)(k, s.q, s.qd, &s.omega, s.eps, s.qdd, p, &mut v)?;
+        (got == len).then_some(v)
+    };
+    let frames = run("frames", 12 * n)?;
+    let jac = run("tip_jacobian", 6 * n)?;
+    let m = run("mass_matrix", n * n)?;
+    let c = run("coriolis_matrix", n * n)?;
+    let cqd = run("coriolis_qd", n)?;
+    let g = run("gravity", n)?;
     let mut out = EvalOutput::default();
-    match entry.name {
-        "paper" => {
-            let (q, qd) = eval_dynamics!(paper, p, q, qd, out);
-            eval_contact!(paper, p, q, qd, omega, eps, out);
+    let e = &mut out.entries;
+    // `frames`: pos (NQ × 3), then rot (NQ × 3 × 3); the tip is frame NQ.
+    let last = n.checked_sub(1)?;
+    e.push((
+        "p_e".into(),
+        EvalValue::Vector(frames[3 * last..3 * n].to_vec()),
+    ));
+    let rot = &frames[3 * n + 9 * last..12 * n];
+    e.push(("R3".into(), rows(rot, 3)));
+    e.push(("J_p".into(), rows(&jac[..3 * n], n)));
+    e.push(("J_o".into(), rows(&jac[3 * n..], n)));
+    e.push(("M".into(), rows(&m, n)));
+    e.push(("C".into(), rows(&c, n)));
+    e.push(("Cqd".into(), EvalValue::Vector(cqd)));
+    e.push(("g".into(), EvalValue::Vector(g)));
+    if scene.ball.is_some() && scene.contact.is_some() {
+        let mut at = std::collections::BTreeMap::new();
+        let mut len = 0;
+        for (name, dims, _) in CONTACT_FIELDS {
+            let size: usize = dims
+                .iter()
+                .map(|d| match d {
+                    Dim::Nq => n,
+                    Dim::Lit(k) => *k,
+                })
+                .product();
+            at.insert(*name, (len, size));
+            len += size;
         }
-        "human" => {
-            let (q, qd) = eval_dynamics!(human, p, q, qd, out);
-            eval_contact!(human, p, q, qd, omega, eps, out);
-        }
-        "puma560" => {
-            eval_dynamics!(puma560, p, q, qd, out);
-        }
-        "iiwa7" => {
-            eval_dynamics!(iiwa7, p, q, qd, out);
-        }
-        _ => return None,
+        let field = |v: &[f64], name: &str| -> Option<Vec<f64>> {
+            let &(o, size) = at.get(name)?;
+            Some(v[o..o + size].to_vec())
+        };
+        let exact = run("contact", len)?;
+        let smooth = run("contact_smooth", len)?;
+        let alpha = field(&exact, "alpha")?[0];
+        let sat_alpha = field(&exact, "sat_alpha")?[0];
+        e.push(("alpha".into(), EvalValue::Scalar(alpha)));
+        e.push(("sat_alpha".into(), EvalValue::Scalar(sat_alpha)));
+        e.push(("p_c".into(), EvalValue::Vector(field(&exact, "p_c")?)));
+        e.push(("h".into(), EvalValue::Scalar(field(&exact, "h")?[0])));
+        e.push(("J_c".into(), rows(&field(&exact, "j_c")?, n)));
+        let sat_smooth = field(&smooth, "sat_alpha")?[0];
+        e.push(("sat_alpha_smooth".into(), EvalValue::Scalar(sat_smooth)));
+        e.push((
+            "p_c_smooth".into(),
+            EvalValue::Vector(field(&smooth, "p_c")?),
+        ));
+        e.push((
+            "h_smooth".into(),
+            EvalValue::Scalar(field(&smooth, "h")?[0]),
+        ));
+        e.push(("J_c_smooth".into(), rows(&field(&smooth, "j_c")?, n)));
     }
     Some(out)
 }
