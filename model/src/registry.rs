@@ -417,10 +417,7 @@ impl<const N: usize> Kernels<N> for CompiledKernels<N> {
         omega: &[f64; 3],
         variant: ContactVariant,
     ) -> ContactGeometry<N> {
-        let eps = match variant {
-            ContactVariant::Exact => None,
-            ContactVariant::Smooth(e) => Some(e),
-        };
+        let eps = variant.eps();
         let len = self.layout.len;
         if len <= STACK_OUTPUTS {
             let mut v = [0.0; STACK_OUTPUTS];
