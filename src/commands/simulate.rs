@@ -45,8 +45,7 @@ use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{
-    Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries,
-    TrackingPd,
+    Input, Method, PdController, SimError, SimSettings, Simulator, TorqueSeries, TrackingPd,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal as _;
@@ -775,15 +774,13 @@ fn run_model<K: Kernels<N>, const N: usize>(
     let start = Instant::now();
     let mut error = None;
     loop {
-        let r = match sim.step() {
-            Ok(StopReason::Step) => Ok(()),
-            Ok(StopReason::RootFound { .. }) => sim.apply_reset(),
-            Ok(StopReason::TEndReached | StopReason::Terminated) => break,
-            Err(e) => Err(e),
-        };
-        if let Err(e) = r {
-            error = Some(crate::errors::chain(&e));
-            break;
+        match sim.advance() {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => {
+                error = Some(crate::errors::chain(&e));
+                break;
+            }
         }
         let samples = sim.trajectory().len();
         if samples >= args.max_samples {
