@@ -587,16 +587,18 @@ mod tests {
     fn tracking_pd_law_windows_and_errors() {
         let series =
             |v: [f64; 2]| TorqueSeries::new(vec![0.0, 2.0], vec![vec![v[0]], vec![v[1]]]).unwrap();
-        // τ* = t, q* = 1 + t, q̇* = 1 on [0, 2]; feedback on [0.5, 1).
-        let pd = TrackingPd::new(
-            series([0.0, 2.0]),
-            series([1.0, 3.0]),
-            series([1.0, 1.0]),
-            vec![4.0],
-            vec![0.5],
-            vec![(0.5, 1.0)],
-        )
-        .unwrap();
+        // τ* = t, q* = 1 + t, q̇* = 1 on [0, 2], gains kp, kd, feedback window w.
+        let tracking = |kp: f64, kd: f64, w: (f64, f64)| {
+            TrackingPd::new(
+                series([0.0, 2.0]),
+                series([1.0, 3.0]),
+                series([1.0, 1.0]),
+                vec![kp],
+                vec![kd],
+                vec![w],
+            )
+        };
+        let pd = tracking(4.0, 0.5, (0.5, 1.0)).unwrap();
         let mut o = [0.0];
         pd.tau(0.75, &[1.0], &[3.0], &mut o).unwrap();
         // 0.75 + 4 (1.75 − 1) + 0.5 (1 − 3) = 0.75 + 3 − 1.
@@ -606,29 +608,12 @@ mod tests {
         pd.tau(0.25, &[1.0], &[3.0], &mut o).unwrap();
         assert_eq!(o, [0.25]);
         // Zero gains: the feed-forward series exactly, inside the window too.
-        let zero = TrackingPd::new(
-            series([0.0, 2.0]),
-            series([1.0, 3.0]),
-            series([1.0, 1.0]),
-            vec![0.0],
-            vec![0.0],
-            vec![(0.0, 2.0)],
-        )
-        .unwrap();
+        let zero = tracking(0.0, 0.0, (0.0, 2.0)).unwrap();
         assert!(!zero.feedback_at(0.75));
         zero.tau(0.75, &[-7.0], &[9.0], &mut o).unwrap();
         assert_eq!(o, [0.75]);
         assert!(pd.tau(0.75, &[1.0, 2.0], &[3.0], &mut o).is_err());
-        let bad = |kp: f64, w: (f64, f64)| {
-            TrackingPd::new(
-                series([0.0, 2.0]),
-                series([1.0, 3.0]),
-                series([1.0, 1.0]),
-                vec![kp],
-                vec![0.0],
-                vec![w],
-            )
-        };
+        let bad = |kp: f64, w: (f64, f64)| tracking(kp, 0.0, w);
         assert!(bad(-1.0, (0.0, 1.0)).is_err());
         assert!(bad(f64::NAN, (0.0, 1.0)).is_err());
         assert!(bad(1.0, (1.0, 0.0)).is_err());
