@@ -15,7 +15,7 @@
 //! Bad inputs end with a clear error and a non-zero exit; a failure mid-run keeps the partial
 //! trajectory.
 
-use bf_model::{ImpactLaw, Kernels, Mode, Model, PaperKernels, State, Vec3, fixtures};
+use bf_model::{ImpactLaw, Mode, Model, PaperKernels, State, Vec3, fixtures};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions, SampleInfo};
 use bf_sim::{Input, PdController, SampleKind, SimOutput, SimSettings, TorqueSeries, simulate};
 use serde_json::Value;
@@ -43,30 +43,15 @@ fn tight() -> SimSettings {
     }
 }
 
-/// A configuration with h(q) = 0 near `guess` (Gauss–Newton along ∇h = J_cᵀ n), and ∇h there.
-fn contact_configuration<K: Kernels>(model: &Model<K>, guess: Vec3) -> (Vec3, Vec3) {
-    let mut q = guess;
-    for _ in 0..100 {
-        let c = model
-            .evaluate(&State::new(q, Vec3::zeros(), Vec3::zeros()))
-            .unwrap()
-            .contact;
-        let grad = c.j_c.transpose() * c.n;
-        if c.h.abs() < 1e-14 {
-            return (q, grad);
-        }
-        q -= grad * (c.h / grad.norm_squared());
-    }
-    panic!("no contact configuration near {guess:?}");
-}
-
 /// The scripted push: start 0.05 rad (along ∇h) off the ball at rest; hold the gravity torque
 /// g(q_c) of the contact configuration plus a push −0.05 ∇ĥ into the ball; from 0.5 s to 1 s
 /// ramp in a tangential torque J_cᵀ t (t ⟂ n) of size 0.2 until static friction gives way;
 /// from 1.5 s pull back. Returns (x0, torque series).
 fn scripted_push() -> ([f64; 9], TorqueSeries) {
     let model = fixtures::paper_scene().unwrap();
-    let (qc, grad) = contact_configuration(&model, Vec3::new(0.1, 0.5, 0.5));
+    let (qc, grad) = model
+        .contact_configuration_near(Vec3::new(0.1, 0.5, 0.5), 1e-14, 100)
+        .unwrap();
     let kin = model
         .evaluate(&State::new(qc, Vec3::zeros(), Vec3::zeros()))
         .unwrap();

@@ -7,6 +7,23 @@ use crate::CodegenError;
 use crate::graph::Id;
 use crate::robot::Model;
 
+/// The graph nodes of the contact quantities in [`CONTACT_FIELDS`] order, row-major: the
+/// outputs of the `contact` and `contact_smooth` kernels.
+pub fn contact_ids(c: &crate::robot::ContactExprs) -> Vec<Id> {
+    let mut ids = vec![c.alpha, c.sat_alpha];
+    ids.extend(c.p_c);
+    ids.extend(c.r_c);
+    ids.push(c.h);
+    ids.extend(c.n);
+    ids.extend(flat2(&c.j_c));
+    ids.extend(c.v_c);
+    ids.extend(c.delta_v);
+    ids.push(c.h_dot);
+    ids.extend(c.rc_dot);
+    ids.extend(c.jc_dot_qd);
+    ids
+}
+
 /// Names of all kernels the generator knows, in emission order (the spec's list, so the
 /// parser and the generator can never disagree).
 pub const ALL_KERNELS: &[&str] = crate::spec::KNOWN_KERNELS;
@@ -357,18 +374,7 @@ pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenE
         }
         "contact" | "contact_smooth" => {
             let smooth = name == "contact_smooth";
-            let c = model.contact(smooth)?;
-            let mut ids = vec![c.alpha, c.sat_alpha];
-            ids.extend(c.p_c);
-            ids.extend(c.r_c);
-            ids.push(c.h);
-            ids.extend(c.n);
-            ids.extend(flat2(&c.j_c));
-            ids.extend(c.v_c);
-            ids.extend(c.delta_v);
-            ids.push(c.h_dot);
-            ids.extend(c.rc_dot);
-            ids.extend(c.jc_dot_qd);
+            let ids = contact_ids(&model.contact(smooth)?);
             let inputs = if smooth {
                 vec![Q, Qd, Omega, Eps, P]
             } else {

@@ -4,23 +4,9 @@
 
 mod common;
 
-use bf_codegen::robot::{ContactExprs, Model};
+use bf_codegen::kernels::contact_ids;
+use bf_codegen::robot::Model;
 use common::*;
-
-fn ids(c: &ContactExprs) -> Vec<bf_codegen::graph::Id> {
-    let mut v = vec![c.alpha, c.sat_alpha];
-    v.extend(c.p_c);
-    v.extend(c.r_c);
-    v.push(c.h);
-    v.extend(c.n);
-    v.extend(flat2(&c.j_c));
-    v.extend(c.v_c);
-    v.extend(c.delta_v);
-    v.push(c.h_dot);
-    v.extend(c.rc_dot);
-    v.extend(c.jc_dot_qd);
-    v
-}
 
 struct Cv {
     alpha: f64,
@@ -67,7 +53,7 @@ fn finger_scenes() -> Vec<(String, Model)> {
 fn closest_point_and_distance() {
     for (name, mut m) in finger_scenes() {
         let c = m.contact(false).unwrap();
-        let all = ids(&c);
+        let all = contact_ids(&c);
         let tip = m.tip_pose();
         let mut pe_ex: Vec<_> = tip.t.to_vec();
         pe_ex.extend([tip.r[0][0], tip.r[1][0], tip.r[2][0]]);
@@ -115,7 +101,7 @@ fn velocities_and_time_derivatives() {
     for (name, mut m) in finger_scenes() {
         let nq = m.nq();
         let c = m.contact(false).unwrap();
-        let all = ids(&c);
+        let all = contact_ids(&c);
         let tip = m.tip_pose();
         let mut pe_ex: Vec<_> = tip.t.to_vec();
         pe_ex.extend([tip.r[0][0], tip.r[1][0], tip.r[2][0]]);
@@ -177,8 +163,8 @@ fn velocities_and_time_derivatives() {
 fn smooth_saturation_tends_to_exact_and_is_bounded() {
     for (name, mut m) in finger_scenes() {
         let nq = m.nq();
-        let exact = ids(&m.contact(false).unwrap());
-        let smooth = ids(&m.contact(true).unwrap());
+        let exact = contact_ids(&m.contact(false).unwrap());
+        let smooth = contact_ids(&m.contact(true).unwrap());
         let len = m.scene().links.last().unwrap().a;
         let mut rng = rng(33);
         for _ in 0..100 {
@@ -216,7 +202,7 @@ fn tip_contact_has_no_saturation() {
     let tip = m.tip_pose();
     let mut rng = rng(34);
     let s = State::random(&m, &mut rng);
-    let v = unpack(&ev(&m, &ids(&c), &s), nq);
+    let v = unpack(&ev(&m, &contact_ids(&c), &s), nq);
     let pe = ev(&m, &tip.t, &s);
     let jpv = ev(&m, &flat2(&jp), &s);
     assert!(rel_err(&v.p_c, &pe, 1.0) < 1e-15);

@@ -13,6 +13,7 @@ use bf_codegen::robot::{Model, inertial_parameters};
 use bf_codegen::spec::InertiaSpec;
 use common::{all_scenes, rand_vec, rng, test_scene};
 use rand::Rng;
+use rand_chacha::ChaCha8Rng;
 
 /// Every scene, including the prismatic test scenes.
 fn scenes() -> Vec<(String, Scene)> {
@@ -49,6 +50,50 @@ fn kernel(model: &mut Model, name: &str, x: &Input) -> Vec<f64> {
         v[l.tau(i) as usize] = x.u[i];
     }
     Tape::new(&model.g, &ids).eval::<f64>(&v)
+}
+
+/// A random state and joint acceleration: q ∈ [−3, 3]ⁿ, q̇ ∈ [−2, 2]ⁿ, q̈ ∈ [−4, 4]ⁿ (drawn in
+/// that order).
+struct Sample {
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+}
+
+impl Sample {
+    fn random(r: &mut ChaCha8Rng, n: usize) -> Self {
+        let q = rand_vec(r, n, -3.0, 3.0);
+        let qd = rand_vec(r, n, -2.0, 2.0);
+        let qdd = rand_vec(r, n, -4.0, 4.0);
+        Sample { q, qd, qdd }
+    }
+
+    /// The kernel input with u = q̈.
+    fn input(&self) -> Input<'_> {
+        Input {
+            q: &self.q,
+            qd: &self.qd,
+            u: &self.qdd,
+        }
+    }
+}
+
+/// Calls `check(scene name, model, sample)` for `per_scene` random samples of every scene
+/// (rng seeded with `seed`).
+fn for_random_samples(
+    seed: u64,
+    per_scene: usize,
+    mut check: impl FnMut(&str, &mut Model, &Sample),
+) {
+    let mut r = rng(seed);
+    for (name, scene) in scenes() {
+        let mut model = Model::new(&scene).unwrap();
+        let n = model.nq();
+        for _ in 0..per_scene {
+            let s = Sample::random(&mut r, n);
+            check(&name, &mut model, &s);
+        }
+    }
 }
 
 fn close(a: &[f64], b: &[f64], rel: f64, what: &str) {
@@ -122,93 +167,76 @@ fn polar_arm_matches_closed_form() {
 
 #[test]
 fn inverse_dynamics_is_m_qdd_plus_cqd_g_and_round_trips() {
-    let mut r = rng(12);
-    for (name, scene) in scenes() {
-        let mut model = Model::new(&scene).unwrap();
+    for_random_samples(12, 10, |name, model, s| {
         let n = model.nq();
-        for _ in 0..10 {
-            let q = rand_vec(&mut r, n, -3.0, 3.0);
-            let qd = rand_vec(&mut r, n, -2.0, 2.0);
-            let qdd = rand_vec(&mut r, n, -4.0, 4.0);
-            let x = Input {
-                q: &q,
-                qd: &qd,
-                u: &qdd,
-            };
-            let tau = kernel(&mut model, "inverse_dynamics", &x);
-            let m = kernel(&mut model, "mass_matrix", &x);
-            let h = kernel(&mut model, "cqd_g", &x);
-            let want: Vec<f64> = (0..n)
-                .map(|i| h[i] + (0..n).map(|j| m[i * n + j] * qdd[j]).sum::<f64>())
-                .collect();
-            close(&tau, &want, 1e-11, &format!("{name}: τ vs M q̈ + C q̇ + g"));
-            let xf = Input {
-                q: &q,
-                qd: &qd,
-                u: &tau,
-            };
-            let back = kernel(&mut model, "forward_dynamics", &xf);
-            close(&back, &qdd, 1e-12, &format!("{name}: forward(inverse(q̈))"));
-        }
-    }
+        let x = s.input();
+        let tau = kernel(model, "inverse_dynamics", &x);
+        let m = kernel(model, "mass_matrix", &x);
+        let h = kernel(model, "cqd_g", &x);
+        let want: Vec<f64> = (0..n)
+            .map(|i| h[i] + (0..n).map(|j| m[i * n + j] * s.qdd[j]).sum::<f64>())
+            .collect();
+        close(&tau, &want, 1e-11, &format!("{name}: τ vs M q̈ + C q̇ + g"));
+        let xf = Input {
+            q: &s.q,
+            qd: &s.qd,
+            u: &tau,
+        };
+        let back = kernel(model, "forward_dynamics", &xf);
+        close(
+            &back,
+            &s.qdd,
+            1e-12,
+            &format!("{name}: forward(inverse(q̈))"),
+        );
+    });
 }
 
 #[test]
 fn derivatives_match_central_differences() {
-    let mut r = rng(13);
-    for (name, scene) in scenes() {
-        let mut model = Model::new(&scene).unwrap();
+    for_random_samples(13, 3, |name, model, s| {
         let n = model.nq();
-        for _ in 0..3 {
-            let q = rand_vec(&mut r, n, -3.0, 3.0);
-            let qd = rand_vec(&mut r, n, -2.0, 2.0);
-            let qdd = rand_vec(&mut r, n, -4.0, 4.0);
-            let x = Input {
-                q: &q,
-                qd: &qd,
-                u: &qdd,
-            };
-            let dq = kernel(&mut model, "inverse_dynamics_dq", &x);
-            let dqd = kernel(&mut model, "inverse_dynamics_dqd", &x);
-            let h = 1e-5;
-            for k in 0..n {
-                for (which, exact) in [("q", &dq), ("q̇", &dqd)] {
-                    let shifted = |s: f64| {
-                        let (mut q2, mut qd2) = (q.clone(), qd.clone());
-                        if which == "q" {
-                            q2[k] += s;
-                        } else {
-                            qd2[k] += s;
-                        }
-                        (q2, qd2)
-                    };
-                    let (qa, qda) = shifted(h);
-                    let (qb, qdb) = shifted(-h);
-                    let fa = kernel(
-                        &mut model,
-                        "inverse_dynamics",
-                        &Input {
-                            q: &qa,
-                            qd: &qda,
-                            u: &qdd,
-                        },
-                    );
-                    let fb = kernel(
-                        &mut model,
-                        "inverse_dynamics",
-                        &Input {
-                            q: &qb,
-                            qd: &qdb,
-                            u: &qdd,
-                        },
-                    );
-                    let fdv: Vec<f64> = (0..n).map(|i| (fa[i] - fb[i]) / (2.0 * h)).collect();
-                    let col: Vec<f64> = (0..n).map(|i| exact[i * n + k]).collect();
-                    close(&col, &fdv, 1e-7, &format!("{name}: ∂τ/∂{which}_{k}"));
-                }
+        let x = s.input();
+        let dq = kernel(model, "inverse_dynamics_dq", &x);
+        let dqd = kernel(model, "inverse_dynamics_dqd", &x);
+        let h = 1e-5;
+        for k in 0..n {
+            for (which, exact) in [("q", &dq), ("q̇", &dqd)] {
+                let shifted = |d: f64| {
+                    let (mut q2, mut qd2) = (s.q.clone(), s.qd.clone());
+                    if which == "q" {
+                        q2[k] += d;
+                    } else {
+                        qd2[k] += d;
+                    }
+                    (q2, qd2)
+                };
+                let (qa, qda) = shifted(h);
+                let (qb, qdb) = shifted(-h);
+                let fa = kernel(
+                    model,
+                    "inverse_dynamics",
+                    &Input {
+                        q: &qa,
+                        qd: &qda,
+                        u: &s.qdd,
+                    },
+                );
+                let fb = kernel(
+                    model,
+                    "inverse_dynamics",
+                    &Input {
+                        q: &qb,
+                        qd: &qdb,
+                        u: &s.qdd,
+                    },
+                );
+                let fdv: Vec<f64> = (0..n).map(|i| (fa[i] - fb[i]) / (2.0 * h)).collect();
+                let col: Vec<f64> = (0..n).map(|i| exact[i * n + k]).collect();
+                close(&col, &fdv, 1e-7, &format!("{name}: ∂τ/∂{which}_{k}"));
             }
         }
-    }
+    });
 }
 
 /// A copy of `scene` with random masses, COGs and (positive definite, full) inertia tensors.
@@ -241,14 +269,8 @@ fn regressor_times_parameters_is_tau() {
             let pi = inertial_parameters(&s);
             let mut model = Model::new(&s).unwrap();
             let n = model.nq();
-            let q = rand_vec(&mut r, n, -3.0, 3.0);
-            let qd = rand_vec(&mut r, n, -2.0, 2.0);
-            let qdd = rand_vec(&mut r, n, -4.0, 4.0);
-            let x = Input {
-                q: &q,
-                qd: &qd,
-                u: &qdd,
-            };
+            let sample = Sample::random(&mut r, n);
+            let x = sample.input();
             let y = kernel(&mut model, "regressor", &x);
             assert_eq!(y.len(), n * 10 * n);
             let tau = kernel(&mut model, "inverse_dynamics", &x);

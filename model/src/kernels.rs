@@ -6,6 +6,9 @@
 //! `bf_generated::human` through one macro; every contact quantity therefore comes from the
 //! generated expressions. Test code may implement [`Kernels`] on an independent reference.
 //!
+//! [`Model::contact_configuration_near`] and [`Model::line_contact_configuration`] find
+//! configurations on the ball (h(q) = 0, eq. 4), e.g. to start a simulation just off contact.
+//!
 //! # Any number of joints
 //! [`Kernels`], [`Model`] and everything below them (state, kinematics, dynamics, impacts,
 //! transitions) take the number of joints as a const parameter `N` with default 3, the
@@ -35,6 +38,22 @@ pub enum ContactVariant {
     /// Smooth sat with |x| ≈ sqrt(x² + ε²) (the `contact_smooth` kernel, Sect. 4.3), ε > 0.
     Smooth(f64),
 }
+
+impl ContactVariant {
+    /// The smoothing ε of eq. 58–59, `None` for the exact sat.
+    pub fn eps(self) -> Option<f64> {
+        match self {
+            ContactVariant::Exact => None,
+            ContactVariant::Smooth(e) => Some(e),
+        }
+    }
+}
+
+/// Newton steps [`Model::line_contact_configuration`] takes from each guess.
+pub const LINE_CONTACT_STEPS: usize = 30;
+
+/// |h| (m) below which [`Model::line_contact_configuration`] counts a configuration as touching.
+pub const LINE_CONTACT_TOL: f64 = 1e-12;
 
 /// Evaluation of the kernels of one contact scene with `N` joints (default 3). Implementations
 /// hold their runtime parameter vector; they must not panic for finite inputs.
@@ -299,6 +318,61 @@ impl<K: Kernels<N>, const N: usize> Model<K, N> {
     /// Configuration correction Δq towards h = 0 (see [`transitions::project_configuration`]).
     pub fn project_configuration(&self, x: &State<N>) -> Result<VecN<N>> {
         transitions::project_configuration(&self.evaluate(x)?, &self.params, &self.settings)
+    }
+
+    /// A configuration with h(q) = 0 (eq. 4) near `guess`: Gauss–Newton steps
+    /// q ← q − ∇h h/‖∇h‖² along ∇h = J_cᵀ n (eq. 7), at most `max_steps`, until |h| < `tol`.
+    /// Returns q and ∇h there; [`ModelError::NoConvergence`] when |h| stays ≥ `tol`.
+    pub fn contact_configuration_near(
+        &self,
+        guess: VecN<N>,
+        tol: f64,
+        max_steps: usize,
+    ) -> Result<(VecN<N>, VecN<N>)> {
+        let mut q = guess;
+        for _ in 0..max_steps {
+            let c = self
+                .evaluate(&State::new(q, VecN::zeros(), crate::Vec3::zeros()))?
+                .contact;
+            let grad = c.j_c.transpose() * c.n;
+            if c.h.abs() < tol {
+                return Ok((q, grad));
+            }
+            q -= grad * (c.h / grad.norm_squared());
+        }
+        Err(ModelError::NoConvergence {
+            what: "Gauss–Newton on h(q) = 0",
+        })
+    }
+
+    /// The first of `guesses` from which [`LINE_CONTACT_STEPS`] M_f-metric Newton steps on h
+    /// ([`Model::project_configuration`], stopping at a failing step) end on the ball
+    /// (|h| < [`LINE_CONTACT_TOL`]) with line contact on the last link (of length `link`) at
+    /// least `margin` from both its ends (−`link` + `margin` < sat(α) < −`margin`, eq. 3), away
+    /// from the kinks of sat(α). Returns the state there (q̇ = 0, ω = 0) and its kinematics;
+    /// `None` when no guess gets there.
+    pub fn line_contact_configuration(
+        &self,
+        guesses: impl IntoIterator<Item = VecN<N>>,
+        link: f64,
+        margin: f64,
+    ) -> Option<(State<N>, ContactKinematics<N>)> {
+        for q in guesses {
+            let mut x = State::new(q, VecN::zeros(), crate::Vec3::zeros());
+            for _ in 0..LINE_CONTACT_STEPS {
+                let Ok(dq) = self.project_configuration(&x) else {
+                    break;
+                };
+                x.q += dq;
+            }
+            let Ok(kin) = self.evaluate(&x) else { continue };
+            let c = &kin.contact;
+            if c.h.abs() < LINE_CONTACT_TOL && c.sat_alpha < -margin && c.sat_alpha > -link + margin
+            {
+                return Some((x, kin));
+            }
+        }
+        None
     }
 
     /// Velocities made consistent with `mode` (see [`transitions::project_velocity`]).

@@ -134,21 +134,7 @@ pub fn set_parameters(scene: &mut Scene, assignments: &[(String, f64)]) -> Resul
 /// Sets one registry constant (`Scene::constants` naming) of `scene` to `value`.
 fn set_constant(scene: &mut Scene, name: &str, value: f64) -> Result<()> {
     let unknown = || scene_err(&scene.name, format!("unknown scene constant `{name}`"));
-    let xyz = |c: &str| match c {
-        "x" => Some(0),
-        "y" => Some(1),
-        "z" => Some(2),
-        _ => None,
-    };
-    let sym = |c: &str| match c {
-        "xx" => Some((0, 0)),
-        "xy" => Some((0, 1)),
-        "xz" => Some((0, 2)),
-        "yy" => Some((1, 1)),
-        "yz" => Some((1, 2)),
-        "zz" => Some((2, 2)),
-        _ => None,
-    };
+    let (xyz, sym) = (bf_scene::axis_index, bf_scene::inertia_index);
     let set_sym = |m: [[f64; 3]; 3], (i, j): (usize, usize)| {
         let mut m = m;
         m[i][j] = value;
@@ -417,10 +403,7 @@ impl<const N: usize> Kernels<N> for CompiledKernels<N> {
         omega: &[f64; 3],
         variant: ContactVariant,
     ) -> ContactGeometry<N> {
-        let eps = match variant {
-            ContactVariant::Exact => None,
-            ContactVariant::Smooth(e) => Some(e),
-        };
+        let eps = variant.eps();
         let len = self.layout.len;
         if len <= STACK_OUTPUTS {
             let mut v = [0.0; STACK_OUTPUTS];

@@ -39,21 +39,10 @@ fn random_vec<const N: usize>(rng: &mut ChaCha8Rng, s: f64) -> VecN<N> {
 /// A configuration touching the ball on the side of the last link (away from the kinks of
 /// sat(α)), by Newton steps on h from seeded random guesses.
 fn touching<const N: usize>(m: &M<N>, link: f64, rng: &mut ChaCha8Rng) -> State<N> {
-    for _ in 0..500 {
-        let mut x = State::new(random_vec::<N>(rng, 1.6), VecN::zeros(), Vec3::zeros());
-        for _ in 0..30 {
-            let Ok(dq) = m.project_configuration(&x) else {
-                break;
-            };
-            x.q += dq;
-        }
-        let Ok(kin) = m.evaluate(&x) else { continue };
-        let c = kin.contact;
-        if c.h.abs() < 1e-12 && c.sat_alpha < -0.1 && c.sat_alpha > -link + 0.1 {
-            return x;
-        }
-    }
-    panic!("no contact configuration found");
+    let guesses = (0..500).map(|_| random_vec::<N>(rng, 1.6));
+    m.line_contact_configuration(guesses, link, 0.1)
+        .expect("no contact configuration found")
+        .0
 }
 
 /// Reference M(q), C q̇ + g, J_c and r_c.

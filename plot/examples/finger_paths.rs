@@ -4,6 +4,11 @@
 use bf_plot::scene3d::{FingerPaths, View, fig_finger_paths};
 use bf_plot::{PlotError, render_panels};
 
+// The hairpin snapshots are the ones bf-plot's rendering test checks.
+#[path = "../tests/common/mod.rs"]
+mod common;
+use common::{hairpin_snapshots, hairpin_tip_path};
+
 fn main() -> Result<(), PlotError> {
     let dir = std::env::args()
         .nth(1)
@@ -11,48 +16,14 @@ fn main() -> Result<(), PlotError> {
     let dir = std::path::Path::new(&dir);
     // Base (2, 0, 0) projects to (0, 0) in the y–z view; several first links there point
     // almost exactly back along the second one.
-    let snapshots = vec![
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, -0.6, 0.66],
-            [1.5, -0.5, 0.55],
-            [0.8, -0.95, 1.05],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, 0.0, 1.0],
-            [1.2, 0.6, 0.9],
-            [0.3, 0.9, 1.1],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [1.9, 0.62, 0.5],
-            [1.4, 0.0, 0.01],
-            [0.9, 0.55, 0.45],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, 0.8, 0.55],
-            [1.0, 1.3, 0.85],
-            [1.5, 0.71, 0.49],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, 0.7, 0.6],
-            [2.0, 0.71, 0.61],
-            [1.2, -0.3, 1.2],
-        ],
-    ];
-    let tip_path: Vec<[f64; 3]> = (0..600)
-        .map(|k| {
-            let t = k as f64 * std::f64::consts::TAU / 599.0;
-            [
-                0.6 + 0.3 * t.cos(),
-                0.9 * t.sin(),
-                0.8 + 0.3 * (2.0 * t).sin(),
-            ]
-        })
-        .collect();
+    let mut snapshots = hairpin_snapshots();
+    snapshots.push(vec![
+        [2.0, 0.0, 0.0],
+        [2.0, 0.7, 0.6],
+        [2.0, 0.71, 0.61],
+        [1.2, -0.3, 1.2],
+    ]);
+    let tip_path = hairpin_tip_path(600);
     // In contact (on the unit sphere) for the middle third of the path.
     let contact_path = tip_path
         .iter()

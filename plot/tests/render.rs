@@ -10,7 +10,7 @@ use bf_plot::figure::palette;
 use bf_plot::paper::*;
 use bf_plot::scene3d::{FingerPaths, View, fig_finger_paths};
 use bf_plot::*;
-use common::{grid, rot_z, tmp, ts};
+use common::{grid, hairpin_snapshots, hairpin_tip_path, rot_z, tmp, ts};
 use std::path::{Path, PathBuf};
 
 /// Decoded PNG: (width, height, rgb pixels).
@@ -650,47 +650,11 @@ fn finger_paths_with_hairpin_projections_stay_inside_the_axes() {
     // snapshots fold back on themselves: a polyline turning by almost 180°. Thick lines must not
     // grow miter spikes across the figure.
     let d = tmp("hairpin");
-    let snaps = vec![
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, -0.6, 0.66],
-            [1.5, -0.5, 0.55],
-            [0.8, -0.95, 1.05],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, 0.0, 1.0],
-            [1.2, 0.6, 0.9],
-            [0.3, 0.9, 1.1],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [1.9, 0.62, 0.5],
-            [1.4, 0.0, 0.01],
-            [0.9, 0.55, 0.45],
-        ],
-        vec![
-            [2.0, 0.0, 0.0],
-            [2.0, 0.8, 0.55],
-            [1.0, 1.3, 0.85],
-            [1.5, 0.71, 0.49],
-        ],
-    ];
-    let tip: Vec<[f64; 3]> = (0..400)
-        .map(|k| {
-            let t = k as f64 * std::f64::consts::TAU / 399.0;
-            [
-                0.6 + 0.3 * t.cos(),
-                0.9 * t.sin(),
-                0.8 + 0.3 * (2.0 * t).sin(),
-            ]
-        })
-        .collect();
     let data = FingerPaths {
         ball_center: [0.0; 3],
         ball_radius: 1.0,
-        snapshots: snaps,
-        tip_path: tip,
+        snapshots: hairpin_snapshots(),
+        tip_path: hairpin_tip_path(400),
         contact_path: vec![],
     };
     let fig = fig_finger_paths(

@@ -328,6 +328,34 @@ pub const CONTACT_KERNELS: &[&str] = &["contact", "contact_smooth"];
 /// The contact kinds accepted in `[contact] kind`.
 pub const CONTACT_KINDS: &[&str] = &["segment", "tip"];
 
+/// Component names of a vector in the constant registry ([`Scene::constants`]), e.g.
+/// `gravity.z`.
+pub const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
+
+/// Component names of a symmetric inertia tensor in the constant registry, with the
+/// (row, column) each names (and its mirror), e.g. `link2.inertia.xy`.
+pub const INERTIA_NAMES: [(&str, usize, usize); 6] = [
+    ("xx", 0, 0),
+    ("xy", 0, 1),
+    ("xz", 0, 2),
+    ("yy", 1, 1),
+    ("yz", 1, 2),
+    ("zz", 2, 2),
+];
+
+/// The index of a vector component name of [`AXIS_NAMES`] (`"y"` → 1).
+pub fn axis_index(name: &str) -> Option<usize> {
+    AXIS_NAMES.iter().position(|&c| c == name)
+}
+
+/// The (row, column) of an inertia component name of [`INERTIA_NAMES`] (`"xz"` → (0, 2)).
+pub fn inertia_index(name: &str) -> Option<(usize, usize)> {
+    INERTIA_NAMES
+        .iter()
+        .find(|(c, ..)| *c == name)
+        .map(|&(_, i, j)| (i, j))
+}
+
 impl RotationSpec {
     /// The rotation matrix (row-major). Exact zeros/ones for axis rotations by multiples of π/2.
     /// An axis other than x/y/z (rejected by validation) yields the identity.
@@ -528,23 +556,14 @@ impl Scene {
     ///
     /// Rotations (base, tool) are always baked and are not in the registry.
     pub fn constants(&self) -> Vec<(String, f64)> {
-        const XYZ: [&str; 3] = ["x", "y", "z"];
-        const SYM: [(&str, usize, usize); 6] = [
-            ("xx", 0, 0),
-            ("xy", 0, 1),
-            ("xz", 0, 2),
-            ("yy", 1, 1),
-            ("yz", 1, 2),
-            ("zz", 2, 2),
-        ];
         let mut out = Vec::new();
         let vec3 = |out: &mut Vec<(String, f64)>, stem: &str, v: [f64; 3]| {
-            for (c, x) in XYZ.iter().zip(v) {
+            for (c, x) in AXIS_NAMES.iter().zip(v) {
                 out.push((format!("{stem}.{c}"), x));
             }
         };
         let sym = |out: &mut Vec<(String, f64)>, stem: &str, m: [[f64; 3]; 3]| {
-            for (c, i, j) in SYM {
+            for (c, i, j) in INERTIA_NAMES {
                 out.push((format!("{stem}.{c}"), m[i][j]));
             }
         };

@@ -334,13 +334,10 @@ impl Input for PdController {
         let n = self.kp.len();
         check_lengths(
             n,
-            &[
-                ("q", q.len()),
-                ("qd", qd.len()),
-                ("torque output", out.len()),
-                ("kd", self.kd.len()),
-                ("target", self.target.len()),
-            ],
+            q,
+            qd,
+            out,
+            &[("kd", self.kd.len()), ("target", self.target.len())],
         )?;
         for i in 0..n {
             out[i] = self.kp[i] * (self.target[i] - q[i]) - self.kd[i] * qd[i];
@@ -349,9 +346,21 @@ impl Input for PdController {
     }
 }
 
-/// Errors unless every `(what, len)` has length `n` (the joint count of an input law).
-fn check_lengths(n: usize, lens: &[(&'static str, usize)]) -> Result<(), SimError> {
-    for &(what, len) in lens {
+/// Errors unless q, q̇, the torque output and then every `(what, len)` of `extra` have length
+/// `n` (the joint count of an input law); the first mismatch is named.
+fn check_lengths(
+    n: usize,
+    q: &[f64],
+    qd: &[f64],
+    out: &[f64],
+    extra: &[(&'static str, usize)],
+) -> Result<(), SimError> {
+    let io = [
+        ("q", q.len()),
+        ("qd", qd.len()),
+        ("torque output", out.len()),
+    ];
+    for &(what, len) in io.iter().chain(extra) {
         if len != n {
             return Err(SimError::DimensionMismatch {
                 what,
@@ -447,15 +456,7 @@ impl Input for TrackingPd {
         self.kp.len()
     }
     fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
-        let n = self.kp.len();
-        check_lengths(
-            n,
-            &[
-                ("q", q.len()),
-                ("qd", qd.len()),
-                ("torque output", out.len()),
-            ],
-        )?;
+        check_lengths(self.kp.len(), q, qd, out, &[])?;
         self.feedforward.eval(t, out);
         if self.feedback_at(t) {
             // Two passes without a buffer: this runs in every right-hand side of the integrator.
@@ -514,21 +515,17 @@ mod tests {
 
     #[test]
     fn malformed_csv_errors_name_the_line() {
-        let (l, m) = csv_error("t,tau1\n0,1\n1,2\n0.5,3\n");
-        assert_eq!(l, Some(4));
-        assert!(m.contains("not strictly increasing"), "{m}");
-        let (l, m) = csv_error("t,tau1,tau2\n0,1,2\n1,2\n");
-        assert_eq!(l, Some(3));
-        assert!(m.contains("columns"), "{m}");
-        let (l, m) = csv_error("t,tau1\n0,1\n1,NaN\n");
-        assert_eq!(l, Some(3));
-        assert!(m.contains("not finite"), "{m}");
-        let (l, m) = csv_error("t,tau1\n0,abc\n");
-        assert_eq!(l, Some(2));
-        assert!(m.contains("not a number"), "{m}");
-        let (l, m) = csv_error("time,tau1\n0,1\n");
-        assert_eq!(l, Some(1));
-        assert!(m.contains("header"), "{m}");
+        for (text, line, needle) in [
+            ("t,tau1\n0,1\n1,2\n0.5,3\n", 4, "not strictly increasing"),
+            ("t,tau1,tau2\n0,1,2\n1,2\n", 3, "columns"),
+            ("t,tau1\n0,1\n1,NaN\n", 3, "not finite"),
+            ("t,tau1\n0,abc\n", 2, "not a number"),
+            ("time,tau1\n0,1\n", 1, "header"),
+        ] {
+            let (l, m) = csv_error(text);
+            assert_eq!(l, Some(line), "{text:?}");
+            assert!(m.contains(needle), "{m}");
+        }
         let (_, m) = csv_error("t,tau1\n");
         assert!(m.contains("no samples"), "{m}");
     }
@@ -590,16 +587,18 @@ mod tests {
     fn tracking_pd_law_windows_and_errors() {
         let series =
             |v: [f64; 2]| TorqueSeries::new(vec![0.0, 2.0], vec![vec![v[0]], vec![v[1]]]).unwrap();
-        // τ* = t, q* = 1 + t, q̇* = 1 on [0, 2]; feedback on [0.5, 1).
-        let pd = TrackingPd::new(
-            series([0.0, 2.0]),
-            series([1.0, 3.0]),
-            series([1.0, 1.0]),
-            vec![4.0],
-            vec![0.5],
-            vec![(0.5, 1.0)],
-        )
-        .unwrap();
+        // τ* = t, q* = 1 + t, q̇* = 1 on [0, 2], gains kp, kd, feedback window w.
+        let tracking = |kp: f64, kd: f64, w: (f64, f64)| {
+            TrackingPd::new(
+                series([0.0, 2.0]),
+                series([1.0, 3.0]),
+                series([1.0, 1.0]),
+                vec![kp],
+                vec![kd],
+                vec![w],
+            )
+        };
+        let pd = tracking(4.0, 0.5, (0.5, 1.0)).unwrap();
         let mut o = [0.0];
         pd.tau(0.75, &[1.0], &[3.0], &mut o).unwrap();
         // 0.75 + 4 (1.75 − 1) + 0.5 (1 − 3) = 0.75 + 3 − 1.
@@ -609,29 +608,12 @@ mod tests {
         pd.tau(0.25, &[1.0], &[3.0], &mut o).unwrap();
         assert_eq!(o, [0.25]);
         // Zero gains: the feed-forward series exactly, inside the window too.
-        let zero = TrackingPd::new(
-            series([0.0, 2.0]),
-            series([1.0, 3.0]),
-            series([1.0, 1.0]),
-            vec![0.0],
-            vec![0.0],
-            vec![(0.0, 2.0)],
-        )
-        .unwrap();
+        let zero = tracking(0.0, 0.0, (0.0, 2.0)).unwrap();
         assert!(!zero.feedback_at(0.75));
         zero.tau(0.75, &[-7.0], &[9.0], &mut o).unwrap();
         assert_eq!(o, [0.75]);
         assert!(pd.tau(0.75, &[1.0, 2.0], &[3.0], &mut o).is_err());
-        let bad = |kp: f64, w: (f64, f64)| {
-            TrackingPd::new(
-                series([0.0, 2.0]),
-                series([1.0, 3.0]),
-                series([1.0, 1.0]),
-                vec![kp],
-                vec![0.0],
-                vec![w],
-            )
-        };
+        let bad = |kp: f64, w: (f64, f64)| tracking(kp, 0.0, w);
         assert!(bad(-1.0, (0.0, 1.0)).is_err());
         assert!(bad(f64::NAN, (0.0, 1.0)).is_err());
         assert!(bad(1.0, (1.0, 0.0)).is_err());

@@ -434,27 +434,6 @@ mod tests {
                 dx[0] = 3.0 * t * t;
                 Ok(())
             }
-            fn guards(&self, _: ()) -> Vec<crate::Guard> {
-                vec![]
-            }
-            fn guard_values(
-                &self,
-                _: (),
-                _: f64,
-                _: &[f64],
-                _: &mut [f64],
-            ) -> Result<(), SimError> {
-                Ok(())
-            }
-            fn reset(
-                &self,
-                _: (),
-                _: usize,
-                _: f64,
-                _: &mut [f64],
-            ) -> Result<crate::Transition<()>, SimError> {
-                Ok(crate::Transition::To(()))
-            }
         }
         let mut buf = StepBuffers::new(1);
         rk4_step(&Cubic, (), 1.0, &[1.0], &[3.0], 0.5, &mut buf).unwrap();

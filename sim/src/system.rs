@@ -101,28 +101,37 @@ pub trait HybridSystem {
     fn rhs(&self, mode: Self::Mode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError>;
 
     /// The guards active in `mode`, in a fixed order (the index is the guard id passed to
-    /// [`HybridSystem::guard_values`] and [`HybridSystem::reset`]).
-    fn guards(&self, mode: Self::Mode) -> Vec<Guard>;
+    /// [`HybridSystem::guard_values`] and [`HybridSystem::reset`]). Default: none (a plain
+    /// ODE; then the defaults of `guard_values` and `reset` are never called).
+    fn guards(&self, _mode: Self::Mode) -> Vec<Guard> {
+        Vec::new()
+    }
 
     /// Writes g_i(mode, t, x) for every guard of `mode` into `out` (length = `guards(mode).len()`).
     /// Evaluated together because guards usually share work (contact forces λ, eq. 33).
+    /// Default: writes nothing (for systems without guards).
     fn guard_values(
         &self,
-        mode: Self::Mode,
-        t: f64,
-        x: &[f64],
-        out: &mut [f64],
-    ) -> Result<(), SimError>;
+        _mode: Self::Mode,
+        _t: f64,
+        _x: &[f64],
+        _out: &mut [f64],
+    ) -> Result<(), SimError> {
+        Ok(())
+    }
 
     /// Reset map of guard `guard` of `mode` at the event time `t`: modifies `x` in place
-    /// (length n) and returns the next mode (or termination).
+    /// (length n) and returns the next mode (or termination). Default: the identity (same
+    /// mode, `x` unchanged), e.g. for pure crossing detectors.
     fn reset(
         &self,
         mode: Self::Mode,
-        guard: usize,
-        t: f64,
-        x: &mut [f64],
-    ) -> Result<Transition<Self::Mode>, SimError>;
+        _guard: usize,
+        _t: f64,
+        _x: &mut [f64],
+    ) -> Result<Transition<Self::Mode>, SimError> {
+        Ok(Transition::To(mode))
+    }
 
     /// Optional drift control after every accepted step and before every reset: may project `x`
     /// back onto the mode's constraint manifold. Returns the drift measured *before* projection

@@ -40,15 +40,6 @@ impl HybridSystem for Oscillator {
         dx[1] = -self.omega * self.omega * x[0];
         Ok(())
     }
-    fn guards(&self, _: ()) -> Vec<Guard> {
-        Vec::new()
-    }
-    fn guard_values(&self, _: (), _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
-        Ok(())
-    }
-    fn reset(&self, _: (), _: usize, _: f64, _: &mut [f64]) -> Result<Transition<()>, SimError> {
-        Ok(Transition::To(()))
-    }
 }
 
 /// Harmonic oscillator with an `Either` guard on x = 0 and an identity reset: from x(0) = 1,
@@ -73,9 +64,6 @@ impl HybridSystem for CrossingOscillator {
     fn guard_values(&self, _: (), _: f64, x: &[f64], out: &mut [f64]) -> Result<(), SimError> {
         out[0] = x[0];
         Ok(())
-    }
-    fn reset(&self, _: (), _: usize, _: f64, _: &mut [f64]) -> Result<Transition<()>, SimError> {
-        Ok(Transition::To(()))
     }
 }
 
@@ -105,15 +93,6 @@ impl HybridSystem for Pendulum {
         dx[1] = -self.g / self.l * x[0].sin();
         Ok(())
     }
-    fn guards(&self, _: ()) -> Vec<Guard> {
-        Vec::new()
-    }
-    fn guard_values(&self, _: (), _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
-        Ok(())
-    }
-    fn reset(&self, _: (), _: usize, _: f64, _: &mut [f64]) -> Result<Transition<()>, SimError> {
-        Ok(Transition::To(()))
-    }
 }
 
 /// x' = x² (state `[x]`); finite-time blow-up at t = 1/x₀ for x₀ > 0.
@@ -128,15 +107,6 @@ impl HybridSystem for BlowUp {
     fn rhs(&self, _: (), _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
         dx[0] = x[0] * x[0];
         Ok(())
-    }
-    fn guards(&self, _: ()) -> Vec<Guard> {
-        Vec::new()
-    }
-    fn guard_values(&self, _: (), _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
-        Ok(())
-    }
-    fn reset(&self, _: (), _: usize, _: f64, _: &mut [f64]) -> Result<Transition<()>, SimError> {
-        Ok(Transition::To(()))
     }
 }
 

@@ -8,9 +8,7 @@
 //! (mode before → mode after) agree. A run whose event sequence differs from the reference is reported
 //! with `same_events = false` (its error is then that of a different trajectory branch).
 
-use crate::{
-    EventRecord, HybridSystem, Method, SimError, SimSettings, SimStats, Simulator, StopReason,
-};
+use crate::{EventRecord, HybridSystem, Method, SimError, SimSettings, SimStats, Simulator};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -90,14 +88,10 @@ fn run_to_end<S: HybridSystem>(
     let mut sim = Simulator::new(sys, set, mode0, t0, x0, t_end)
         .map_err(|e| Box::new((e, SimStats::default())))?;
     loop {
-        let r = match sim.step() {
-            Ok(StopReason::Step) => Ok(()),
-            Ok(StopReason::RootFound { .. }) => sim.apply_reset(),
-            Ok(StopReason::TEndReached | StopReason::Terminated) => break,
-            Err(e) => Err(e),
-        };
-        if let Err(e) = r {
-            return Err(Box::new((e, sim.stats())));
+        match sim.advance() {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => return Err(Box::new((e, sim.stats()))),
         }
     }
     let x = sim.x().to_vec();

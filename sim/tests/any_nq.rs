@@ -28,22 +28,11 @@ fn contact_configuration<const N: usize>(
     link: f64,
 ) -> (VecN<N>, VecN<N>) {
     let mut rng = ChaCha8Rng::seed_from_u64(N as u64);
-    for _ in 0..500 {
-        let q = VecN::<N>::from_fn(|_, _| rng.random_range(-1.6..1.6));
-        let mut x = State::new(q, VecN::zeros(), Vec3::zeros());
-        for _ in 0..30 {
-            let Ok(dq) = m.project_configuration(&x) else {
-                break;
-            };
-            x.q += dq;
-        }
-        let Ok(kin) = m.evaluate(&x) else { continue };
-        let c = kin.contact;
-        if c.h.abs() < 1e-12 && c.sat_alpha < -0.2 && c.sat_alpha > -link + 0.2 {
-            return (x.q, c.j_c.transpose() * c.n);
-        }
-    }
-    panic!("no contact configuration");
+    let guesses = (0..500).map(|_| VecN::<N>::from_fn(|_, _| rng.random_range(-1.6..1.6)));
+    let (x, kin) = m
+        .line_contact_configuration(guesses, link, 0.2)
+        .expect("no contact configuration");
+    (x.q, kin.contact.j_c.transpose() * kin.contact.n)
 }
 
 fn throw_at_the_ball<const N: usize>(text: &str, law: ImpactLaw) {

@@ -34,26 +34,12 @@ fn zero_torque() -> PdController {
     PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3]).unwrap()
 }
 
-/// A configuration with h(q) = 0 near `q_guess` (Gauss–Newton along ∇h = J_cᵀ n), and ∇h.
-fn contact_configuration(model: &Model<RefKernels>, q_guess: Vec3) -> (Vec3, Vec3) {
-    let mut q = q_guess;
-    for _ in 0..100 {
-        let c = model
-            .evaluate(&State::new(q, Vec3::zeros(), Vec3::zeros()))
-            .unwrap()
-            .contact;
-        let grad = c.j_c.transpose() * c.n;
-        if c.h.abs() < 1e-14 {
-            return (q, grad);
-        }
-        q -= grad * (c.h / grad.norm_squared());
-    }
-    panic!("no contact configuration near {q_guess:?}");
-}
-
-/// Finger 0.05 rad (along ∇h) away from contact, moving towards the ball.
+/// Finger 0.05 rad (along ∇h) away from contact (h(q) = 0 near (0.1, 0.5, 0.5)), moving
+/// towards the ball.
 fn approach(model: &Model<RefKernels>, speed: f64) -> [f64; 9] {
-    let (qc, grad) = contact_configuration(model, Vec3::new(0.1, 0.5, 0.5));
+    let (qc, grad) = model
+        .contact_configuration_near(Vec3::new(0.1, 0.5, 0.5), 1e-14, 100)
+        .unwrap();
     let dir = grad / grad.norm();
     State::new(qc + dir * 0.05, -dir * speed, Vec3::new(0.0, 0.0, 0.3)).to_array()
 }

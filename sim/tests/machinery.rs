@@ -284,15 +284,6 @@ impl HybridSystem for Circle {
         dx[1] = x[0];
         Ok(())
     }
-    fn guards(&self, _: ()) -> Vec<Guard> {
-        Vec::new()
-    }
-    fn guard_values(&self, _: (), _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
-        Ok(())
-    }
-    fn reset(&self, _: (), _: usize, _: f64, _: &mut [f64]) -> Result<Transition<()>, SimError> {
-        Ok(Transition::To(()))
-    }
     fn project(&self, _: (), _: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
         let r = x[0].hypot(x[1]);
         x[0] /= r;

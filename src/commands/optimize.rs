@@ -391,6 +391,20 @@ pub fn commit_solution(sol: &OcpSolution, out: OutputDir) -> Result<()> {
     commit_solution_with(sol, &[], out)
 }
 
+/// The line naming the files of `sol` written to `dir`, and whether they are marked failed.
+fn print_wrote(dir: &Path, sol: &OcpSolution) -> Result<()> {
+    crate::outln!(
+        "wrote {}/solution.json and torques.csv{}",
+        dir.display(),
+        if failure_of(sol).is_none() {
+            ""
+        } else {
+            " (marked FAILED)"
+        }
+    )?;
+    Ok(())
+}
+
 /// Why `sol` counts as failed: not converged, or re-integrated and not verified.
 pub fn failure_of(sol: &OcpSolution) -> Option<String> {
     if !sol.status.is_success() {
@@ -649,15 +663,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
             COT_MAX_PERIOD
         )?;
     }
-    crate::outln!(
-        "wrote {}/solution.json and torques.csv{}",
-        args.out.display(),
-        if failure_of(&sol).is_none() {
-            ""
-        } else {
-            " (marked FAILED)"
-        }
-    )?;
+    print_wrote(&args.out, &sol)?;
     // An Acceptable end with the default δ_c may still finish with a larger one.
     if sol.status == Status::Acceptable
         && args.scheme == "radau"
@@ -797,15 +803,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         sol.objective,
         sol.period
     )?;
-    crate::outln!(
-        "wrote {}/solution.json and torques.csv{}",
-        args.out.display(),
-        if failure_of(&sol).is_none() {
-            ""
-        } else {
-            " (marked FAILED)"
-        }
-    )?;
+    print_wrote(&args.out, &sol)?;
     if let Some(f) = failure_of(&sol) {
         bail!("{f}");
     }

@@ -45,8 +45,7 @@ use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{
-    Input, Method, PdController, SimError, SimSettings, Simulator, StopReason, TorqueSeries,
-    TrackingPd,
+    Input, Method, PdController, SimError, SimSettings, Simulator, TorqueSeries, TrackingPd,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal as _;
@@ -269,6 +268,22 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
     ))
 }
 
+/// The `--pd` controller of `n` joints: target angles `target` (the `--pd` text) and
+/// `--pd-gains`, one (kp, kd) pair for all joints or kp₁..kpₙ, kd₁..kdₙ.
+fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Result<PdController> {
+    let target = parse_list("--pd", target, Some(n))?;
+    let g = parse_list("--pd-gains", &args.pd_gains, None)?;
+    let (kp, kd) = match g.len() {
+        2 => (vec![g[0]; n], vec![g[1]; n]),
+        k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
+        k => bail!(
+            "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
+            2 * n
+        ),
+    };
+    Ok(PdController::new(kp, kd, target)?)
+}
+
 /// The joint torques of a run of a finger with `n` joints.
 pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
     if let Some(path) = &args.torques {
@@ -286,17 +301,7 @@ pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
         return tracking(args, gains).map(CliInput::Tracking);
     }
     if let Some(target) = &args.pd {
-        let target = parse_list("--pd", target, Some(n))?;
-        let g = parse_list("--pd-gains", &args.pd_gains, None)?;
-        let (kp, kd) = match g.len() {
-            2 => (vec![g[0]; n], vec![g[1]; n]),
-            k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
-            k => bail!(
-                "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
-                2 * n
-            ),
-        };
-        return Ok(CliInput::Pd(PdController::new(kp, kd, target)?));
+        return pd_controller(args, target, n).map(CliInput::Pd);
     }
     Ok(CliInput::Zero(n))
 }
@@ -514,17 +519,7 @@ fn run_arm(
         }
         CliInput::Series(s)
     } else if let Some(target) = &args.pd {
-        let target = parse_list("--pd", target, Some(n))?;
-        let g = parse_list("--pd-gains", &args.pd_gains, None)?;
-        let (kp, kd) = match g.len() {
-            2 => (vec![g[0]; n], vec![g[1]; n]),
-            k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
-            k => bail!(
-                "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
-                2 * n
-            ),
-        };
-        CliInput::Pd(PdController::new(kp, kd, target)?)
+        CliInput::Pd(pd_controller(args, target, n)?)
     } else if let Some((_, series, _)) = &replay {
         CliInput::Series(series.clone())
     } else {
@@ -775,15 +770,13 @@ fn run_model<K: Kernels<N>, const N: usize>(
     let start = Instant::now();
     let mut error = None;
     loop {
-        let r = match sim.step() {
-            Ok(StopReason::Step) => Ok(()),
-            Ok(StopReason::RootFound { .. }) => sim.apply_reset(),
-            Ok(StopReason::TEndReached | StopReason::Terminated) => break,
-            Err(e) => Err(e),
-        };
-        if let Err(e) = r {
-            error = Some(crate::errors::chain(&e));
-            break;
+        match sim.advance() {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => {
+                error = Some(crate::errors::chain(&e));
+                break;
+            }
         }
         let samples = sim.trajectory().len();
         if samples >= args.max_samples {

@@ -60,6 +60,21 @@ impl AppendixParams {
         }
     }
 
+    /// A finger of link length `l` on a ball of radius `r` with unequal masses
+    /// (0.03, 0.05, 0.011 kg) and unequal, non-isotropic inertias, g = 9.81: no symmetry of the
+    /// paper's parameters can hide a wrong index.
+    pub fn unequal(l: f64, r: f64) -> Self {
+        AppendixParams {
+            l,
+            r,
+            m: [0.03, 0.05, 0.011],
+            ixx: [1e-3, 2e-3, 3e-3],
+            iyy: [4e-3, 1.5e-3, 2.5e-3],
+            izz: [3e-3, 5e-3, 1e-3],
+            g: 9.81,
+        }
+    }
+
     /// The reference model of the same finger (Table 1 DH, base at (2r,0,0) rotated −90° about
     /// y, COG at the link middle (−ℓ/2, 0, 0), ball of radius r at the origin).
     pub fn reference(&self) -> Reference {
@@ -209,26 +224,18 @@ pub fn jo_printed(q: &[f64; 3]) -> [[f64; 3]; 3] {
 
 /// eq. 72–73 as printed, with `g0` the number substituted for the printed symbol g_0.
 pub fn gravity_printed(q: &[f64; 3], p: &AppendixParams, g0: f64) -> [f64; 3] {
-    let [m1, m2, m3] = p.m;
-    let g11 = 2.0 * m1 * sb(q, &[1])
-        + (sb(q, &[1, 1]) + sb(q, &[1, -1]) + 4.0 * sb(q, &[1])) * m2
-        + (sb(q, &[1, 1, 1])
-            + sb(q, &[1, -1, -1])
-            + 2.0 * sb(q, &[1, 1])
-            + 2.0 * sb(q, &[1, -1])
-            + 4.0 * sb(q, &[1]))
-            * m3;
-    let g2 = m2 * (sb(q, &[1, 1]) - sb(q, &[1, -1]))
-        + (sb(q, &[1, 1, -1]) - sb(q, &[1, -1, -1]) + 2.0 * sb(q, &[1, 1]) - 2.0 * sb(q, &[1, -1]))
-            * m3;
-    let g3 = m3 * (sb(q, &[1, 1, -1]) - sb(q, &[1, -1, -1]));
-    let f = -p.l / 4.0 * g0;
-    [f * g11, f * g2, f * g3]
+    gravity_eq72(q, p, g0, -1)
 }
 
 /// eq. 72 corrected: `s_{11\bar1}` → `s_{111}` in rows 2 and 3, and g_0 is the magnitude g
 /// (g_0 = (0,0,−g) of eq. 22b would flip the sign).
 pub fn gravity_corrected(q: &[f64; 3], p: &AppendixParams) -> [f64; 3] {
+    gravity_eq72(q, p, p.g, 1)
+}
+
+/// eq. 72–73 with `g0` for g_0 and the term of rows 2 and 3 that the paper prints as
+/// `s_{11\bar1}` read as `s_{11c}`: c = −1 as printed, c = +1 corrected.
+fn gravity_eq72(q: &[f64; 3], p: &AppendixParams, g0: f64, c: i32) -> [f64; 3] {
     let [m1, m2, m3] = p.m;
     let g11 = 2.0 * m1 * sb(q, &[1])
         + (sb(q, &[1, 1]) + sb(q, &[1, -1]) + 4.0 * sb(q, &[1])) * m2
@@ -239,10 +246,10 @@ pub fn gravity_corrected(q: &[f64; 3], p: &AppendixParams) -> [f64; 3] {
             + 4.0 * sb(q, &[1]))
             * m3;
     let g2 = m2 * (sb(q, &[1, 1]) - sb(q, &[1, -1]))
-        + (sb(q, &[1, 1, 1]) - sb(q, &[1, -1, -1]) + 2.0 * sb(q, &[1, 1]) - 2.0 * sb(q, &[1, -1]))
+        + (sb(q, &[1, 1, c]) - sb(q, &[1, -1, -1]) + 2.0 * sb(q, &[1, 1]) - 2.0 * sb(q, &[1, -1]))
             * m3;
-    let g3 = m3 * (sb(q, &[1, 1, 1]) - sb(q, &[1, -1, -1]));
-    let f = -p.l / 4.0 * p.g;
+    let g3 = m3 * (sb(q, &[1, 1, c]) - sb(q, &[1, -1, -1]));
+    let f = -p.l / 4.0 * g0;
     [f * g11, f * g2, f * g3]
 }
 
@@ -380,18 +387,7 @@ pub fn flat3(m: &[[f64; 3]; 3]) -> Vec<f64> {
 /// r ∈ [0.5, 2], unequal masses and inertias, g ∈ [5, 12]); the same sets on every machine.
 pub fn param_sets(n_random: usize) -> Vec<AppendixParams> {
     let mut r = ChaCha8Rng::seed_from_u64(67);
-    let mut v = vec![
-        AppendixParams::paper(),
-        AppendixParams {
-            l: 0.7,
-            r: 0.7,
-            m: [0.03, 0.05, 0.011],
-            ixx: [1e-3, 2e-3, 3e-3],
-            iyy: [4e-3, 1.5e-3, 2.5e-3],
-            izz: [3e-3, 5e-3, 1e-3],
-            g: 9.81,
-        },
-    ];
+    let mut v = vec![AppendixParams::paper(), AppendixParams::unequal(0.7, 0.7)];
     v.extend((0..n_random).map(|_| random_params(&mut r)));
     v
 }

@@ -91,16 +91,7 @@ fn robots() -> Vec<Reference> {
     let mut r = rng(11);
     let mut out = vec![
         AppendixParams::paper().reference(),
-        AppendixParams {
-            l: 0.7,
-            r: 1.3,
-            m: [0.03, 0.05, 0.011],
-            ixx: [1e-3, 2e-3, 3e-3],
-            iyy: [4e-3, 1.5e-3, 2.5e-3],
-            izz: [3e-3, 5e-3, 1e-3],
-            g: 9.81,
-        }
-        .reference(),
+        AppendixParams::unequal(0.7, 1.3).reference(),
     ];
     for n in [1usize, 2, 3, 6, 7] {
         out.push(random_robot(&mut r, n, DhConvention::Standard));

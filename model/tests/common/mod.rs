@@ -69,10 +69,7 @@ impl Kernels for RefKernels {
         omega: &[f64; 3],
         variant: ContactVariant,
     ) -> ContactGeometry {
-        let eps = match variant {
-            ContactVariant::Exact => None,
-            ContactVariant::Smooth(e) => Some(e),
-        };
+        let eps = variant.eps();
         let c = self
             .reference
             .contact(q, qd, omega, eps)

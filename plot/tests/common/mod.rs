@@ -1,5 +1,6 @@
-//! Helpers shared by bf-plot's integration tests: a fresh temporary directory, a time grid,
-//! time series from closures, and a rotation about z.
+//! Helpers shared by bf-plot's integration tests (and the `finger_paths` example): a fresh
+//! temporary directory, a time grid, time series from closures, a rotation about z, and finger
+//! snapshots whose links fold back on themselves in the side view.
 
 #![allow(dead_code)]
 
@@ -36,4 +37,50 @@ pub fn ts(t: &[f64], f: &[&dyn Fn(f64) -> f64], names: &[&str]) -> TimeSeries {
 pub fn rot_z(a: f64) -> [[f64; 3]; 3] {
     let (s, c) = a.sin_cos();
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+}
+
+/// Finger snapshots (base, joints, tip) with the base (2, 0, 0), which projects to (0, 0) in the
+/// y–z view, and first links that point almost exactly back along the second one: polylines
+/// turning by almost 180° (hairpins) in the side view.
+pub fn hairpin_snapshots() -> Vec<Vec<[f64; 3]>> {
+    vec![
+        vec![
+            [2.0, 0.0, 0.0],
+            [2.0, -0.6, 0.66],
+            [1.5, -0.5, 0.55],
+            [0.8, -0.95, 1.05],
+        ],
+        vec![
+            [2.0, 0.0, 0.0],
+            [2.0, 0.0, 1.0],
+            [1.2, 0.6, 0.9],
+            [0.3, 0.9, 1.1],
+        ],
+        vec![
+            [2.0, 0.0, 0.0],
+            [1.9, 0.62, 0.5],
+            [1.4, 0.0, 0.01],
+            [0.9, 0.55, 0.45],
+        ],
+        vec![
+            [2.0, 0.0, 0.0],
+            [2.0, 0.8, 0.55],
+            [1.0, 1.3, 0.85],
+            [1.5, 0.71, 0.49],
+        ],
+    ]
+}
+
+/// `n` points of a closed fingertip path around the hairpin snapshots.
+pub fn hairpin_tip_path(n: usize) -> Vec<[f64; 3]> {
+    (0..n)
+        .map(|k| {
+            let t = k as f64 * std::f64::consts::TAU / (n - 1) as f64;
+            [
+                0.6 + 0.3 * t.cos(),
+                0.9 * t.sin(),
+                0.8 + 0.3 * (2.0 * t).sin(),
+            ]
+        })
+        .collect()
 }

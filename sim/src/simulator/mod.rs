@@ -12,7 +12,8 @@
 //! }
 //! let out = sim.finish();
 //! ```
-//! or simply [`simulate`] / [`Simulator::run`], which return the partial trajectory inside a
+//! ([`Simulator::advance`] is one turn of that loop) or simply [`simulate`] /
+//! [`Simulator::run`], which return the partial trajectory inside a
 //! [`SimFailure`] when the run fails.
 //!
 //! Each accepted step is followed by guard scanning on its dense output ([`crate::events`]);
@@ -668,24 +669,33 @@ impl<'s, S: HybridSystem> Simulator<'s, S> {
         }
     }
 
+    /// One turn of the run loop: [`Simulator::step`], then [`Simulator::apply_reset`] when the
+    /// step ended at an event. `Ok(true)` while the run goes on, `Ok(false)` once it has ended
+    /// (`t_end` reached or the system terminated it).
+    pub fn advance(&mut self) -> Result<bool, SimError> {
+        match self.step()? {
+            StopReason::Step => Ok(true),
+            StopReason::RootFound { .. } => self.apply_reset().map(|()| true),
+            StopReason::TEndReached | StopReason::Terminated => Ok(false),
+        }
+    }
+
     /// Runs to `t_end` (or termination). On failure, returns the error together with the
     /// partial trajectory and event log up to the last accepted point.
     pub fn run(mut self) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
         loop {
-            let r = match self.step() {
-                Ok(StopReason::Step) => Ok(()),
-                Ok(StopReason::RootFound { .. }) => self.apply_reset(),
-                Ok(StopReason::TEndReached | StopReason::Terminated) => break,
-                Err(e) => Err(e),
-            };
-            if let Err(error) = r {
-                let (t, mode) = (self.t, self.mode);
-                return Err(Box::new(SimFailure {
-                    error,
-                    t,
-                    mode: Some(mode),
-                    partial: self.finish(),
-                }));
+            match self.advance() {
+                Ok(true) => {}
+                Ok(false) => break,
+                Err(error) => {
+                    let (t, mode) = (self.t, self.mode);
+                    return Err(Box::new(SimFailure {
+                        error,
+                        t,
+                        mode: Some(mode),
+                        partial: self.finish(),
+                    }));
+                }
             }
         }
         Ok(self.finish())

@@ -119,21 +119,10 @@ impl Reference {
     /// μ_s, μ_k, D) are accepted and ignored.
     pub fn set_param(&mut self, name: &str, value: f64) -> Result<(), TestkitError> {
         let unknown = || TestkitError::UnknownParameter(name.to_string());
-        let xyz = |c: &str| match c {
-            "x" => Some(0),
-            "y" => Some(1),
-            "z" => Some(2),
-            _ => None,
-        };
-        let sym = |c: &str| match c {
-            "xx" => Some((0, 0)),
-            "xy" => Some((0, 1)),
-            "xz" => Some((0, 2)),
-            "yy" => Some((1, 1)),
-            "yz" => Some((1, 2)),
-            "zz" => Some((2, 2)),
-            _ => None,
-        };
+        let (xyz, sym) = (
+            bf_codegen::spec::axis_index,
+            bf_codegen::spec::inertia_index,
+        );
         let parts: Vec<&str> = name.split('.').collect();
         match parts.as_slice() {
             ["gravity", c] => self.gravity[xyz(c).ok_or_else(unknown)?] = value,
