@@ -151,6 +151,29 @@ impl Model {
         }
     }
 
+    /// M and C q̇ + g for one kernel: of the mass matrix from link Jacobians
+    /// ([`Model::mass_matrix`]) and by the composite-rigid-body algorithm
+    /// ([`Model::mass_matrix_crba`]), each with its cheapest C q̇ + g
+    /// ([`Model::cqd_g_cheapest`]), the pair with fewer operations in total (the Jacobian form
+    /// on a tie). The candidates are costed on a copy of the graph, so the losing one leaves
+    /// no nodes behind (the node order, hence the emitted text, of other kernels is unchanged).
+    pub fn mass_cqd_g(&mut self) -> (Vec<Vec<Id>>, Vec<Id>) {
+        let cost = |m: &mut Model, crba: bool| {
+            let mm = if crba {
+                m.mass_matrix_crba()
+            } else {
+                m.mass_matrix()
+            };
+            let mut all: Vec<Id> = mm.iter().flatten().copied().collect();
+            let v = m.cqd_g_cheapest(&all);
+            all.extend_from_slice(&v);
+            (m.g.cost(&all), mm, v)
+        };
+        let use_crba = cost(&mut self.clone(), true).0 < cost(&mut self.clone(), false).0;
+        let (_, mm, v) = cost(self, use_crba);
+        (mm, v)
+    }
+
     /// C q̇ (Lagrangian): the cheaper of Ṁ q̇ − ∂T/∂q (T = ½ q̇ᵀ M q̇) and the contraction of
     /// the Christoffel symbols; both equal Σ_jk c_ijk q̇_j q̇_k.
     pub fn coriolis_qd(&mut self) -> Vec<Id> {
