@@ -1,7 +1,9 @@
 //! The composite-rigid-body mass matrix against the Jacobian form of eq. 22a (an independent
 //! construction: world-frame-free link Jacobians, no composite inertias) for every scene,
 //! including prismatic joints of both DH conventions and the golden planar arm; symmetric
-//! positive definite; and the fused `mass_cqd_g` pair against M and the Lagrangian C q̇ + g.
+//! positive definite; Ṁ − 2C skew-symmetric; the fused `mass_cqd_g` pair against M and the
+//! Lagrangian C q̇ + g; and both link wrenches of the Newton–Euler pass against the Lagrangian
+//! C q̇ + g.
 
 mod common;
 
@@ -119,6 +121,30 @@ fn crba_mdot_minus_2c_is_skew_symmetric() {
                     );
                 }
             }
+        }
+    }
+}
+
+#[test]
+fn centroidal_newton_euler_matches_lagrangian_and_pi_form() {
+    // Every scene, prismatic joints included: C q̇ + g of the centroidal Newton–Euler pass
+    // against the Lagrangian path and against the π-linear pass (inverse dynamics at q̈ = 0).
+    for (name, s) in scenes() {
+        let mut m = Model::new(&s).unwrap();
+        let rnea = m.cqd_g_rnea();
+        let lag = m.cqd_g();
+        let inv = m.inverse_dynamics();
+        let mut rng = rng(35);
+        for _ in 0..100 {
+            let st = State::random(&m, &mut rng);
+            let want = ev(&m, &lag, &st);
+            let e = rel_err(&ev(&m, &rnea, &st), &want, 1e-3);
+            assert!(e < 1e-12, "{name}: Newton–Euler vs Lagrangian: {e:e}");
+            let mut vars = st.vars(&m);
+            vars.resize(m.layout.n_vars_all(), 0.0);
+            let pi_form = bf_codegen::interp::eval::<f64>(&m.g, &inv, &vars);
+            let e = rel_err(&pi_form, &want, 1e-3);
+            assert!(e < 1e-12, "{name}: π-form at q̈ = 0 vs Lagrangian: {e:e}");
         }
     }
 }

@@ -26,7 +26,7 @@ struct Inertia {
 impl Model {
     /// Standard DH: o_i − o_{i−1} in frame i (closed form of `build_kinematics`); modified DH:
     /// the zero vector (joint i's axis passes through o_i).
-    fn joint_offset(&mut self, i: usize) -> V3 {
+    pub(super) fn joint_offset(&mut self, i: usize) -> V3 {
         if self.scene.dh == DhConvention::Modified {
             let z = self.g.zero();
             return [z; 3];
@@ -36,7 +36,7 @@ impl Model {
     }
 
     /// Joint i's axis u_i in frame i.
-    fn joint_axis(&mut self, i: usize) -> V3 {
+    pub(super) fn joint_axis(&mut self, i: usize) -> V3 {
         if self.scene.dh == DhConvention::Modified {
             let (z, o) = (self.g.zero(), self.g.one());
             return [z, z, o];
@@ -46,7 +46,7 @@ impl Model {
     }
 
     /// The joint-i component of a spatial force (f, n about o_i) in frame i.
-    fn joint_component(&mut self, i: usize, f: V3, n: V3) -> Id {
+    pub(super) fn joint_component(&mut self, i: usize, f: V3, n: V3) -> Id {
         let u = self.joint_axis(i);
         if self.prismatic(i) {
             return self.g.v3_dot(u, f);
