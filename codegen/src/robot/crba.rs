@@ -60,6 +60,13 @@ impl Model {
         self.g.v3_dot(u, m)
     }
 
+    /// Sᵀ F = ω · n + v · f for a motion (ω, v) and a force (f, n about the same origin).
+    fn motion_dot_force(&mut self, s: (V3, V3), f: V3, n: V3) -> Id {
+        let a = self.g.v3_dot(s.0, n);
+        let b = self.g.v3_dot(s.1, f);
+        self.g.add(a, b)
+    }
+
     /// C ⊕ A C' with A = a_mats[k] (frame k+1 → frame k).
     fn add_moved_inertia(&mut self, c: Inertia, child: Inertia, k: usize) -> Inertia {
         let a = self.a_mats[k];
@@ -121,24 +128,30 @@ impl Model {
         for i in (0..n.saturating_sub(1)).rev() {
             comp[i] = self.add_moved_inertia(own[i], comp[i + 1], i + 1);
         }
+        // Motion subspace S_i = (ω, v) of every joint in its link frame, for q̇_i = 1:
+        // (u, u × r) revolute, (0, u) prismatic; M_ji = S_jᵀ F with F in frame j.
+        let motion: Vec<(V3, V3)> = (0..n)
+            .map(|i| {
+                let u = self.joint_axis(i);
+                if self.prismatic(i) {
+                    ([z; 3], u)
+                } else {
+                    let r = self.joint_offset(i);
+                    (u, self.g.v3_cross(u, r))
+                }
+            })
+            .collect();
         let mut mm = vec![vec![z; n]; n];
         for i in 0..n {
             let c = comp[i];
-            let u = self.joint_axis(i);
-            // Motion of frame i for q̇_i = 1: (ω, v) = (u, u × r) revolute, (0, u) prismatic.
-            let (w, v) = if self.prismatic(i) {
-                ([z; 3], u)
-            } else {
-                let r = self.joint_offset(i);
-                (u, self.g.v3_cross(u, r))
-            };
+            let (w, v) = motion[i];
             let mv = self.g.v3_scale(c.m, v);
             let wh = self.g.v3_cross(w, c.h);
             let mut f = self.g.v3_add(mv, wh);
             let iw = self.g.m3_mul_v(&c.io, w);
             let hv = self.g.v3_cross(c.h, v);
             let mut nn = self.g.v3_add(iw, hv);
-            mm[i][i] = self.joint_component(i, f, nn);
+            mm[i][i] = self.motion_dot_force(motion[i], f, nn);
             for j in (0..i).rev() {
                 let a = self.a_mats[j + 1];
                 let rf = self.g.m3_mul_v(&a.r, f);
@@ -146,7 +159,7 @@ impl Model {
                 let tf = self.g.v3_cross(a.t, rf);
                 f = rf;
                 nn = self.g.v3_add(rn, tf);
-                mm[j][i] = self.joint_component(j, f, nn);
+                mm[j][i] = self.motion_dot_force(motion[j], f, nn);
                 mm[i][j] = mm[j][i];
             }
         }
