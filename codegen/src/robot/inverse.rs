@@ -260,9 +260,8 @@ impl Model {
     /// M = L D Lᵀ unrolled, then L y = b, D z = y, Lᵀ q̈ = z.
     pub fn forward_dynamics(&mut self) -> Vec<Id> {
         let n = self.nq();
-        let m = self.mass_matrix();
-        let flat: Vec<Id> = m.iter().flatten().copied().collect();
-        let h = self.cqd_g_cheapest(&flat);
+        // The cheapest M and C q̇ + g together, as in the `mass_cqd_g` kernel.
+        let (m, h) = self.mass_cqd_g();
         let b: Vec<Id> = (0..n)
             .map(|i| {
                 let t = self.g.var(self.layout.tau(i));
