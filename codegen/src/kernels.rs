@@ -307,16 +307,17 @@ pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenE
             )
         }
         "mass_cqd_g" => {
-            // C q̇ + g by Newton–Euler or by the Christoffel symbols, whichever needs fewer
-            // operations together with M (Newton–Euler for arms: O(n) expressions; the
-            // Christoffel form for the finger). Both agree to rounding (tested).
-            let m = model.mass_matrix();
-            let v = model.cqd_g_cheapest(&flat2(&m));
+            // M from link Jacobians or by the composite-rigid-body algorithm, C q̇ + g by
+            // Newton–Euler or by the Christoffel symbols: the combination with the fewest
+            // operations (arms: CRBA + Newton–Euler, sharing the link transforms; the finger:
+            // Jacobians + Christoffel). All agree to rounding (tested).
+            let (m, v) = model.mass_cqd_g();
             (
                 vec![Q, Qd, P],
                 vec![arr("m", &[Nq, Nq], flat2(&m)), arr("cqd_g", &[Nq], v)],
-                "M(q) (kg m², eq. 22a) and C q̇ + g (N m; recursive Newton–Euler or Christoffel \
-                 symbols, whichever is cheaper) in one kernel (shared subexpressions)."
+                "M(q) (kg m², eq. 22a; link Jacobians or composite-rigid-body algorithm) and \
+                 C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols), the cheapest \
+                 combination, in one kernel (shared subexpressions)."
                     .into(),
             )
         }

@@ -4,13 +4,13 @@
 //!   expressed in the link's own frame so M depends only on relative joint angles;
 //! * ∂M/∂q, Christoffel symbols c_ijk and C (eq. 76–79), C q̇ = Ṁ q̇ − ∂T/∂q;
 //! * U = −Σ m_i g_0ᵀ p_i (sign convention of docs/parameters.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
-//! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one (scenes
-//!   with prismatic joints use the general pass of the `inverse` module with q̈ = 0).
+//! * C q̇ + g by the recursive Newton–Euler pass of the `inverse` module with q̈ = 0 and the
+//!   centroidal link wrench, independent of the Lagrangian path.
 
+use super::inverse::Wrench;
 use super::{Model, Pose};
 use crate::diff;
 use crate::graph::{Id, M3, V3};
-use crate::spec::DhConvention;
 
 impl Model {
     /// Mass matrix M(q), eq. 22a, from link-frame Jacobians.
@@ -151,6 +151,29 @@ impl Model {
         }
     }
 
+    /// M and C q̇ + g for one kernel: of the mass matrix from link Jacobians
+    /// ([`Model::mass_matrix`]) and by the composite-rigid-body algorithm
+    /// ([`Model::mass_matrix_crba`]), each with its cheapest C q̇ + g
+    /// ([`Model::cqd_g_cheapest`]), the pair with fewer operations in total (the Jacobian form
+    /// on a tie). The candidates are costed on a copy of the graph, so the losing one leaves
+    /// no nodes behind (the node order, hence the emitted text, of other kernels is unchanged).
+    pub fn mass_cqd_g(&mut self) -> (Vec<Vec<Id>>, Vec<Id>) {
+        let cost = |m: &mut Model, crba: bool| {
+            let mm = if crba {
+                m.mass_matrix_crba()
+            } else {
+                m.mass_matrix()
+            };
+            let mut all: Vec<Id> = mm.iter().flatten().copied().collect();
+            let v = m.cqd_g_cheapest(&all);
+            all.extend_from_slice(&v);
+            (m.g.cost(&all), mm, v)
+        };
+        let use_crba = cost(&mut self.clone(), true).0 < cost(&mut self.clone(), false).0;
+        let (_, mm, v) = cost(self, use_crba);
+        (mm, v)
+    }
+
     /// C q̇ (Lagrangian): the cheaper of Ṁ q̇ − ∂T/∂q (T = ½ q̇ᵀ M q̇) and the contraction of
     /// the Christoffel symbols; both equal Σ_jk c_ijk q̇_j q̇_k.
     pub fn coriolis_qd(&mut self) -> Vec<Id> {
@@ -255,129 +278,14 @@ impl Model {
         c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect()
     }
 
-    /// C q̇ + g by recursive Newton–Euler with q̈ = 0 in link frames.
+    /// C q̇ + g by recursive Newton–Euler with q̈ = 0 in link frames (the pass of the
+    /// inverse-dynamics family with the centroidal link wrench).
     pub fn cqd_g_rnea(&mut self) -> Vec<Id> {
         if let Some(r) = &self.cache.rnea {
             return r.clone();
         }
-        let n = self.nq();
-        if (0..n).any(|j| self.prismatic(j)) {
-            // The general Newton–Euler pass (prismatic joints) with q̈ = 0.
-            let pi: Vec<[Id; 10]> = (0..n).map(|i| self.inertial_nodes(i)).collect();
-            let z = self.g.zero();
-            let tau = self.rnea_linear(&pi, &vec![z; n]);
-            self.cache.rnea = Some(tau.clone());
-            return tau;
-        }
         let z = self.g.zero();
-        let qd = self.qd_ids();
-        let modified = self.scene.dh == DhConvention::Modified;
-        // Base frame: a_0 = −g_0 in base axes (gravity as a fictitious upward acceleration).
-        let g0 = self.cvec("gravity");
-        let base_r = self.world[0].r;
-        let ng0 = [self.g.neg(g0[0]), self.g.neg(g0[1]), self.g.neg(g0[2])];
-        let mut acc = self.g.m3_tmul_v(&base_r, ng0);
-        let mut w: V3 = [z; 3];
-        let mut wd: V3 = [z; 3];
-        struct LinkState {
-            f: V3,
-            nn: V3,
-        }
-        let mut st: Vec<LinkState> = Vec::new();
-        for i in 0..n {
-            let a = self.a_mats[i];
-            let u = if modified {
-                let o = self.g.one();
-                [z, z, o]
-            } else {
-                // z_{i−1} in frame i: third row of R^{i−1}_i.
-                [a.r[2][0], a.r[2][1], a.r[2][2]]
-            };
-            let uq = self.g.v3_scale(qd[i], u);
-            let w_prev = self.g.m3_tmul_v(&a.r, w);
-            let wd_prev = self.g.m3_tmul_v(&a.r, wd);
-            let wi = self.g.v3_add(w_prev, uq);
-            let cr = self.g.v3_cross(w_prev, uq);
-            let wdi = self.g.v3_add(wd_prev, cr);
-            let ai = if modified {
-                // Frame i origin is fixed in link i−1: a_i = Rᵀ(a + ω̇×t + ω×(ω×t)).
-                let t = a.t;
-                let x = self.g.v3_cross(wd, t);
-                let y0 = self.g.v3_cross(w, t);
-                let y = self.g.v3_cross(w, y0);
-                let s = self.g.v3_add(acc, x);
-                let s = self.g.v3_add(s, y);
-                self.g.m3_tmul_v(&a.r, s)
-            } else {
-                // o_{i−1} lies on joint i's axis: a_i = Rᵀa_{i−1} + ω̇_i×r + ω_i×(ω_i×r),
-                // r = o_i − o_{i−1} in frame i = Rᵀ t (closed form [a, d sα, d cα]).
-                let r = [
-                    self.g.neg(self.a_invs[i].t[0]),
-                    self.g.neg(self.a_invs[i].t[1]),
-                    self.g.neg(self.a_invs[i].t[2]),
-                ];
-                let ap = self.g.m3_tmul_v(&a.r, acc);
-                let x = self.g.v3_cross(wdi, r);
-                let y0 = self.g.v3_cross(wi, r);
-                let y = self.g.v3_cross(wi, y0);
-                let s = self.g.v3_add(ap, x);
-                self.g.v3_add(s, y)
-            };
-            let c = self.com_local(i);
-            let x = self.g.v3_cross(wdi, c);
-            let y0 = self.g.v3_cross(wi, c);
-            let y = self.g.v3_cross(wi, y0);
-            let ac = self.g.v3_add(ai, x);
-            let ac = self.g.v3_add(ac, y);
-            let m = self.constant(&format!("link{}.mass", i + 1));
-            let f = self.g.v3_scale(m, ac);
-            let inertia = self.link_inertia(i);
-            let iw = self.g.m3_mul_v(&inertia, wi);
-            let iwd = self.g.m3_mul_v(&inertia, wdi);
-            let wiw = self.g.v3_cross(wi, iw);
-            let nn = self.g.v3_add(iwd, wiw);
-            st.push(LinkState { f, nn });
-            acc = ai;
-            w = wi;
-            wd = wdi;
-        }
-        // Backward pass: F_i, moment n_i about o_i, in frame i.
-        let mut f_next: V3 = [z; 3];
-        let mut n_next: V3 = [z; 3];
-        let mut tau = vec![z; n];
-        for i in (0..n).rev() {
-            let (ff, nf) = if i + 1 < n {
-                let a = self.a_mats[i + 1];
-                let ff = self.g.m3_mul_v(&a.r, f_next);
-                let nf = self.g.m3_mul_v(&a.r, n_next);
-                let tf = self.g.v3_cross(a.t, ff);
-                (ff, self.g.v3_add(nf, tf))
-            } else {
-                ([z; 3], [z; 3])
-            };
-            let fi = self.g.v3_add(ff, st[i].f);
-            let c = self.com_local(i);
-            let cf = self.g.v3_cross(c, st[i].f);
-            let ni = self.g.v3_add(nf, cf);
-            let ni = self.g.v3_add(ni, st[i].nn);
-            if modified {
-                tau[i] = ni[2];
-            } else {
-                let a = self.a_mats[i];
-                let u = [a.r[2][0], a.r[2][1], a.r[2][2]];
-                let r = [
-                    self.g.neg(self.a_invs[i].t[0]),
-                    self.g.neg(self.a_invs[i].t[1]),
-                    self.g.neg(self.a_invs[i].t[2]),
-                ];
-                // Moment about o_{i−1} (on joint i's axis): n_i + r × F_i.
-                let rf = self.g.v3_cross(r, fi);
-                let m = self.g.v3_add(ni, rf);
-                tau[i] = self.g.v3_dot(u, m);
-            }
-            f_next = fi;
-            n_next = ni;
-        }
+        let tau = self.rnea(Wrench::Centroidal, &vec![z; self.nq()]);
         self.cache.rnea = Some(tau.clone());
         tau
     }

@@ -4,7 +4,8 @@
 //!   inertia I_o about the link frame's origin, [`super::INERTIAL_PARAMETER_NAMES`]):
 //!   F_i = m a_i + ω̇_i × h + ω_i × (ω_i × h), N_i = I_o ω̇_i + ω_i × I_o ω_i + h × a_i
 //!   (h = m c, a_i the acceleration of frame i's origin), revolute and prismatic joints, both
-//!   DH conventions;
+//!   DH conventions; the same pass with the centroidal wrench F_i = m a_{c,i},
+//!   N_i = I_c ω̇_i + ω_i × I_c ω_i + c × F_i and q̈ = 0 gives C q̇ + g (`cqd_g_rnea`);
 //! * ∂τ/∂q and ∂τ/∂q̇ by forward-mode differentiation of that graph;
 //! * the dynamic regressor Y = ∂τ/∂π, exact because τ is linear in π (τ = Y π), by reverse
 //!   mode with π as graph variables (π does not survive in Y);
@@ -14,6 +15,17 @@
 
 use super::Model;
 use crate::diff;
+
+/// How the Newton–Euler pass forms each link's force F and moment N about o_i.
+#[derive(Clone, Copy)]
+pub(super) enum Wrench<'a> {
+    /// Linear in the standard inertial parameters π of every link (module doc), for the
+    /// regressor and the inverse-dynamics family.
+    Linear(&'a [[Id; 10]]),
+    /// From the scene's mass m, COG c and inertia I_c about the COG: F = m a_c,
+    /// N = I_c ω̇ + ω × I_c ω + c × F (fewer operations than the π form when I_c is diagonal).
+    Centroidal,
+}
 use crate::graph::{Id, Node, V3};
 use crate::spec::DhConvention;
 
@@ -51,12 +63,11 @@ impl Model {
             .collect()
     }
 
-    /// Recursive Newton–Euler inverse dynamics, linear in `pi` (one π per link), with joint
-    /// accelerations `qdd`; link-frame axes throughout.
-    pub(super) fn rnea_linear(&mut self, pi: &[[Id; 10]], qdd: &[Id]) -> Vec<Id> {
+    /// Recursive Newton–Euler inverse dynamics with joint accelerations `qdd`, link-frame axes
+    /// throughout, each link's wrench formed as `wrench` says.
+    pub(super) fn rnea(&mut self, wrench: Wrench<'_>, qdd: &[Id]) -> Vec<Id> {
         let n = self.nq();
         let z = self.g.zero();
-        let one = self.g.one();
         let qd = self.qd_ids();
         let modified = self.scene.dh == DhConvention::Modified;
         let g0 = self.cvec("gravity");
@@ -66,20 +77,11 @@ impl Model {
         let mut acc = self.g.m3_tmul_v(&base_r, ng0);
         let mut w: V3 = [z; 3];
         let mut wd: V3 = [z; 3];
+        // Per link: the force and the moment about o_i formed in the forward pass.
         let mut forces: Vec<(V3, V3)> = Vec::with_capacity(n);
-        // Standard DH: r = o_i − o_{i−1} in frame i (closed form, see `build_kinematics`).
-        let r_std = |m: &mut Model, i: usize| -> V3 {
-            let t = m.a_invs[i].t;
-            [m.g.neg(t[0]), m.g.neg(t[1]), m.g.neg(t[2])]
-        };
         for i in 0..n {
             let a = self.a_mats[i];
-            // Joint i's axis in frame i.
-            let u = if modified {
-                [z, z, one]
-            } else {
-                [a.r[2][0], a.r[2][1], a.r[2][2]]
-            };
+            let u = self.joint_axis(i);
             let prismatic = self.prismatic(i);
             let w_prev = self.g.m3_tmul_v(&a.r, w);
             let wd_prev = self.g.m3_tmul_v(&a.r, wd);
@@ -103,7 +105,8 @@ impl Model {
                 let s = self.g.v3_add(s, y);
                 self.g.m3_tmul_v(&a.r, s)
             } else {
-                let r = r_std(self, i);
+                // o_{i−1} lies on joint i's axis: a_i = Rᵀa_{i−1} + ω̇_i×r + ω_i×(ω_i×r).
+                let r = self.joint_offset(i);
                 let ap = self.g.m3_tmul_v(&a.r, acc);
                 let x = self.g.v3_cross(wdi, r);
                 let y0 = self.g.v3_cross(wi, r);
@@ -121,22 +124,41 @@ impl Model {
                 ai = self.g.v3_add(ai, c2);
                 ai = self.g.v3_add(ai, uqq);
             }
-            let p = pi[i];
-            let (m, h) = (p[0], [p[1], p[2], p[3]]);
-            let io = [[p[4], p[5], p[6]], [p[5], p[7], p[8]], [p[6], p[8], p[9]]];
-            let ma = self.g.v3_scale(m, ai);
-            let x = self.g.v3_cross(wdi, h);
-            let y0 = self.g.v3_cross(wi, h);
-            let y = self.g.v3_cross(wi, y0);
-            let f = self.g.v3_add(ma, x);
-            let f = self.g.v3_add(f, y);
-            let iwd = self.g.m3_mul_v(&io, wdi);
-            let iw = self.g.m3_mul_v(&io, wi);
-            let wiw = self.g.v3_cross(wi, iw);
-            let ha = self.g.v3_cross(h, ai);
-            let nn = self.g.v3_add(iwd, wiw);
-            let nn = self.g.v3_add(nn, ha);
-            forces.push((f, nn));
+            forces.push(match wrench {
+                Wrench::Linear(pi) => {
+                    let p = pi[i];
+                    let (m, h) = (p[0], [p[1], p[2], p[3]]);
+                    let io = [[p[4], p[5], p[6]], [p[5], p[7], p[8]], [p[6], p[8], p[9]]];
+                    let ma = self.g.v3_scale(m, ai);
+                    let x = self.g.v3_cross(wdi, h);
+                    let y0 = self.g.v3_cross(wi, h);
+                    let y = self.g.v3_cross(wi, y0);
+                    let f = self.g.v3_add(ma, x);
+                    let f = self.g.v3_add(f, y);
+                    let iwd = self.g.m3_mul_v(&io, wdi);
+                    let iw = self.g.m3_mul_v(&io, wi);
+                    let wiw = self.g.v3_cross(wi, iw);
+                    let ha = self.g.v3_cross(h, ai);
+                    let nn = self.g.v3_add(iwd, wiw);
+                    (f, self.g.v3_add(nn, ha))
+                }
+                Wrench::Centroidal => {
+                    let c = self.com_local(i);
+                    let x = self.g.v3_cross(wdi, c);
+                    let y0 = self.g.v3_cross(wi, c);
+                    let y = self.g.v3_cross(wi, y0);
+                    let ac = self.g.v3_add(ai, x);
+                    let ac = self.g.v3_add(ac, y);
+                    let m = self.constant(&format!("link{}.mass", i + 1));
+                    let f = self.g.v3_scale(m, ac);
+                    let inertia = self.link_inertia(i);
+                    let iw = self.g.m3_mul_v(&inertia, wi);
+                    let iwd = self.g.m3_mul_v(&inertia, wdi);
+                    let wiw = self.g.v3_cross(wi, iw);
+                    // Moment about the COG; c × F is added in the backward pass.
+                    (f, self.g.v3_add(iwd, wiw))
+                }
+            });
             acc = ai;
             w = wi;
             wd = wdi;
@@ -145,33 +167,33 @@ impl Model {
         let mut n_next: V3 = [z; 3];
         let mut tau = vec![z; n];
         for i in (0..n).rev() {
-            let (fi, ni) = if i + 1 < n {
+            // The child's wrench moved to frame i: R f, R n and t × R f (zero at the last link).
+            let (ff, nf, tf) = if i + 1 < n {
                 let a = self.a_mats[i + 1];
                 let ff = self.g.m3_mul_v(&a.r, f_next);
                 let nf = self.g.m3_mul_v(&a.r, n_next);
                 let tf = self.g.v3_cross(a.t, ff);
-                let fi = self.g.v3_add(ff, forces[i].0);
-                let ni = self.g.v3_add(nf, tf);
-                (fi, self.g.v3_add(ni, forces[i].1))
+                (ff, nf, tf)
             } else {
-                forces[i]
+                ([z; 3], [z; 3], [z; 3])
             };
-            let prismatic = self.prismatic(i);
-            tau[i] = if modified {
-                if prismatic { fi[2] } else { ni[2] }
-            } else {
-                let a = self.a_mats[i];
-                let u = [a.r[2][0], a.r[2][1], a.r[2][2]];
-                if prismatic {
-                    self.g.v3_dot(u, fi)
-                } else {
-                    // Moment about o_{i−1}, a point of joint i's axis.
-                    let r = r_std(self, i);
-                    let rf = self.g.v3_cross(r, fi);
-                    let m = self.g.v3_add(ni, rf);
-                    self.g.v3_dot(u, m)
+            let (f_own, n_own) = forces[i];
+            let (fi, ni) = match wrench {
+                Wrench::Linear(_) => {
+                    let fi = self.g.v3_add(ff, f_own);
+                    let ni = self.g.v3_add(nf, tf);
+                    (fi, self.g.v3_add(ni, n_own))
+                }
+                Wrench::Centroidal => {
+                    let nt = self.g.v3_add(nf, tf);
+                    let fi = self.g.v3_add(ff, f_own);
+                    let c = self.com_local(i);
+                    let cf = self.g.v3_cross(c, f_own);
+                    let ni = self.g.v3_add(nt, cf);
+                    (fi, self.g.v3_add(ni, n_own))
                 }
             };
+            tau[i] = self.joint_component(i, fi, ni);
             f_next = fi;
             n_next = ni;
         }
@@ -186,7 +208,7 @@ impl Model {
         }
         let pi: Vec<[Id; 10]> = (0..self.nq()).map(|i| self.inertial_nodes(i)).collect();
         let qdd = self.qdd_ids();
-        let tau = self.rnea_linear(&pi, &qdd);
+        let tau = self.rnea(Wrench::Linear(&pi), &qdd);
         self.cache.inverse = Some(tau.clone());
         tau
     }
@@ -220,7 +242,7 @@ impl Model {
         let n = self.nq();
         let pi: Vec<[Id; 10]> = (0..n).map(|i| self.inertial_vars(i)).collect();
         let qdd = self.qdd_ids();
-        let tau = self.rnea_linear(&pi, &qdd);
+        let tau = self.rnea(Wrench::Linear(&pi), &qdd);
         let vars: Vec<u32> = (0..n)
             .flat_map(|l| (0..10).map(move |k| (l, k)))
             .map(|(l, k)| self.layout.inertial(l, k))
@@ -238,9 +260,8 @@ impl Model {
     /// M = L D Lᵀ unrolled, then L y = b, D z = y, Lᵀ q̈ = z.
     pub fn forward_dynamics(&mut self) -> Vec<Id> {
         let n = self.nq();
-        let m = self.mass_matrix();
-        let flat: Vec<Id> = m.iter().flatten().copied().collect();
-        let h = self.cqd_g_cheapest(&flat);
+        // The cheapest M and C q̇ + g together, as in the `mass_cqd_g` kernel.
+        let (m, h) = self.mass_cqd_g();
         let b: Vec<Id> = (0..n)
             .map(|i| {
                 let t = self.g.var(self.layout.tau(i));

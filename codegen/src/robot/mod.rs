@@ -7,6 +7,8 @@
 //!   J̇ q̇ of the tip;
 //! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
 //!   expressed in the link's own frame so M depends only on relative joint angles;
+//! * the same M by the composite-rigid-body algorithm on the Newton–Euler pass's link
+//!   transforms (`crba` submodule), for kernels that hold both;
 //! * ∂M/∂q, Christoffel symbols c_ijk and C (eq. 76–79), C q̇ = Ṁ q̇ − ∂T/∂q;
 //! * U = −Σ m_i g_0ᵀ p_i (sign convention of docs/parameters.md; eq. 22b) and g = ∂U/∂q (eq. 72–73);
 //! * a recursive Newton–Euler path for C q̇ + g, independent of the Lagrangian one;
@@ -21,6 +23,7 @@
 //! kinematics, Jacobians and contact geometry are here. Joints are revolute (θ_i = q_i +
 //! offset) or prismatic (d_i = q_i + d).
 
+mod crba;
 mod dynamics;
 mod inverse;
 
@@ -161,7 +164,7 @@ pub struct ContactExprs {
 }
 
 /// The scene's symbolic model: one graph holding every requested quantity.
-#[derive(Debug)]
+#[derive(Debug, Clone)]
 pub struct Model {
     /// The expression graph.
     pub g: Graph,
@@ -179,11 +182,12 @@ pub struct Model {
     cache: Cache,
 }
 
-#[derive(Debug, Default)]
+#[derive(Debug, Clone, Default)]
 struct Cache {
     com_world: Option<Vec<V3>>,
     tip_jac: Option<JacPair>,
     mass: Option<Vec<Vec<Id>>>,
+    mass_crba: Option<Vec<Vec<Id>>>,
     dmass: Option<Vec<Vec<Vec<Id>>>>,
     potential: Option<Id>,
     gravity: Option<Vec<Id>>,

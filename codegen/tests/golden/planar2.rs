@@ -441,7 +441,7 @@ pub fn cqd_g_rnea(q: &[f64; NQ], qd: &[f64; NQ], p: &[f64; NP], out: &mut [f64; 
     out[0] = t38;
     out[1] = t22;
 }
-/// M(q) (kg m², eq. 22a) and C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols, whichever is cheaper) in one kernel (shared subexpressions).
+/// M(q) (kg m², eq. 22a; link Jacobians or composite-rigid-body algorithm) and C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols), the cheapest combination, in one kernel (shared subexpressions).
 ///
 /// Arguments, in order:
 /// * `q`: joint angles (rad)

@@ -363,7 +363,7 @@ pub fn cqd_g_rnea(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; 
     out[0] = t38;
     out[1] = t22;
 }
-/// M(q) (kg m², eq. 22a) and C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols, whichever is cheaper) in one kernel (shared subexpressions).
+/// M(q) (kg m², eq. 22a; link Jacobians or composite-rigid-body algorithm) and C q̇ + g (N m; recursive Newton–Euler or Christoffel symbols), the cheapest combination, in one kernel (shared subexpressions).
 ///
 /// Arguments, in order:
 /// * `q`: joint angles (rad)
