@@ -8,7 +8,7 @@
 pub mod records;
 
 use bf_optim::ipm::{Counters, Nlp, Status, Timing, WarmStart};
-use bf_optim::ocp::mesh::values_at;
+use bf_optim::ocp::trajectory::values_at;
 use bf_optim::ocp::{PhaseTrajectory, Scheme, extract};
 use serde::{Deserialize, Serialize};
 
