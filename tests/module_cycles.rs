@@ -549,7 +549,6 @@ fn read_file(p: &Path) -> Option<String> {
 }
 
 #[test]
-#[ignore = "enabled once the cycles it finds are broken"]
 fn no_module_cycle_in_any_crate() {
     let mut report = Vec::new();
     let mut modules = 0;
