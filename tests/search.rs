@@ -1,4 +1,4 @@
-//! The default search of `optimize` (`ball_finger::study::strategy::search`): on
+//! The default search of `optimize` (`ball_finger::study::search::search`): on
 //! `periodic-qc` it must reach at least the best optimum known before it (J = 0.1065805,
 //! confirmed as a KKT point of the same transcription by an independent CasADi + IPOPT solve)
 //! with a re-integration that verifies it, bit for bit the same with one and two worker threads; shards of a multi-start

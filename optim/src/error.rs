@@ -10,7 +10,7 @@
 
 use thiserror::Error;
 
-use crate::ocp::{Objective, Scheme, VarRef};
+use crate::terms::{Objective, Scheme, VarRef};
 
 /// Errors of `bf-optim`.
 #[derive(Debug, Error, Clone, PartialEq)]

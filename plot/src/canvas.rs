@@ -3,7 +3,7 @@
 //! [`SvgCanvas`] writes the SVG itself, so coordinates keep two decimals (plotters' SVG backend
 //! rounds every coordinate to a whole pixel, which turns smooth curves into stair steps).
 //! [`PngCanvas`] draws through plotters' bitmap backend (whole pixels are the resolution of a
-//! bitmap anyway) and splits thick polylines at sharp turns (see `figure::split_sharp_turns`).
+//! bitmap anyway) and splits thick polylines at sharp turns ([`split_sharp_turns`]).
 //! Text is measured with the embedded font ([`text_size`]) so that layout decisions are the same
 //! for both outputs; the SVG asks for DejaVu Sans (the embedded font, one of the widest sans
 //! fonts) first, so a viewer's substitute is rarely wider than the layout assumed.
@@ -266,7 +266,7 @@ impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
         let w = stroke.width.round().max(1.0) as u32;
         let style = c.stroke_width(w);
         let px: Vec<(i32, i32)> = pts.iter().map(|&p| ipt(p)).collect();
-        let (strokes, joins) = crate::figure::split_sharp_turns(pts, &px);
+        let (strokes, joins) = split_sharp_turns(pts, &px);
         for s in strokes {
             let sp: Vec<(i32, i32)> = s.iter().map(|&p| ipt(p)).collect();
             match stroke.dash {
@@ -337,4 +337,46 @@ impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
             .map_err(de)?;
         Ok(())
     }
+}
+
+/// Points of one polyline in plotting coordinates.
+pub(crate) type Polyline = Vec<(f64, f64)>;
+
+/// Splits a run (data points `pts`, their pixel positions `px`) into strokes that turn by less
+/// than 120° at every interior vertex, dropping points on the same pixel as their predecessor.
+/// Returns the strokes (with at least two distinct pixels each) and the split vertices.
+///
+/// Why: plotters turns a thick path into a polygon through the intersections of the offset
+/// edges; at a hairpin the intersection lies d / sin(φ/2) from the vertex (d = half the width,
+/// φ the angle between the two edges), i.e. thousands of pixels away for φ → 0. Keeping
+/// φ ≥ 60° bounds that overshoot by 2 d, one line width.
+pub(crate) fn split_sharp_turns(
+    pts: &[(f64, f64)],
+    px: &[(i32, i32)],
+) -> (Vec<Polyline>, Polyline) {
+    let mut keep: Vec<usize> = Vec::with_capacity(pts.len());
+    for (i, p) in px.iter().enumerate() {
+        if keep.last().is_none_or(|&k| px[k] != *p) {
+            keep.push(i);
+        }
+    }
+    let (mut strokes, mut joins) = (Vec::new(), Vec::new());
+    if keep.len() < 2 {
+        return (strokes, joins);
+    }
+    let mut cur = vec![pts[keep[0]]];
+    for w in keep.windows(3) {
+        let (a, v, b) = (px[w[0]], px[w[1]], px[w[2]]);
+        let e1 = ((a.0 - v.0) as f64, (a.1 - v.1) as f64);
+        let e2 = ((b.0 - v.0) as f64, (b.1 - v.1) as f64);
+        cur.push(pts[w[1]]);
+        // cos φ > 1/2 ⇔ φ < 60°.
+        if e1.0 * e2.0 + e1.1 * e2.1 > 0.5 * e1.0.hypot(e1.1) * e2.0.hypot(e2.1) {
+            strokes.push(std::mem::replace(&mut cur, vec![pts[w[1]]]));
+            joins.push(pts[w[1]]);
+        }
+    }
+    cur.push(pts[keep[keep.len() - 1]]);
+    strokes.push(cur);
+    (strokes, joins)
 }

@@ -7,7 +7,8 @@ use bf_codegen::CodegenError;
 use bf_codegen::spec::SpecError;
 use bf_optim::OptimError;
 
-use crate::catalogue::{Problem, StartGuess};
+use crate::id::Problem;
+use crate::start::StartGuess;
 
 /// Everything that can go wrong while building a problem or its solution record.
 #[derive(Debug, thiserror::Error)]

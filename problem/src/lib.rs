@@ -12,10 +12,12 @@
 //! * [`points`]: the sticking impact law (eq. 40, 66) and the other point functions, contact
 //!   diagnostics;
 //! * [`catalogue`]: the problems ([`Problem`]) with one function per archetype, their
-//!   settings and initial guesses, built into a transcribed [`BuiltProblem`];
-//! * [`solution`]: the solution record ([`OcpSolution`], `solution.json`);
+//!   settings and initial guesses, built into a transcribed [`BuiltProblem`], whose solution
+//!   record it builds at an NLP point ([`solution_at`]);
+//! * [`solution`]: the solution record ([`OcpSolution`], `solution.json`), data only;
 //! * [`arm`]: point-to-point optimal control of an arm without a ball (`reach-arm`);
-//! * [`error`]: [`ProblemError`], the crate's error enum.
+//! * [`error`]: [`ProblemError`], the crate's error enum, and below it the two types it names:
+//!   [`id`] ([`Problem`]) and [`start`] ([`StartGuess`]).
 //!
 //! bf-generated depends on this crate at build time, so this crate does not depend on it: the
 //! scenes and the emitted node kernels come in through [`Generated`].
@@ -30,18 +32,22 @@ pub mod catalogue;
 #[cfg(feature = "catalogue")]
 pub mod error;
 #[cfg(feature = "catalogue")]
+pub mod id;
+#[cfg(feature = "catalogue")]
 pub mod points;
 #[cfg(feature = "catalogue")]
 pub mod solution;
+#[cfg(feature = "catalogue")]
+pub mod start;
 
 pub use node::{CostKind, PhaseMode, Physics, StickLevel};
 
 #[cfg(feature = "catalogue")]
 pub use catalogue::{
     BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, Problem, ProblemSettings, QC_OMEGA_REF,
-    StartGuess, build,
+    StartGuess, build, solution_at, warm_initial_point,
 };
 #[cfg(feature = "catalogue")]
 pub use error::ProblemError;
 #[cfg(feature = "catalogue")]
-pub use solution::{OcpSolution, Samples, solution_at};
+pub use solution::{OcpSolution, Samples};

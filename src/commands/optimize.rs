@@ -18,9 +18,8 @@ use crate::cli::{MergeArgs, OptimizeArgs, OptimizeCommand};
 use crate::io::parse_list;
 use crate::study::SolutionIo;
 use crate::study::refine::{self, RefineOptions, RefineRound};
-use crate::study::strategy::{
-    self, DEFAULT_STARTS, Search, Shard, StageRecord, Strategy, StrategyReport, VerifyPolicy,
-};
+use crate::study::search::{self, Search, VerifyPolicy};
+use crate::study::strategy::{self, DEFAULT_STARTS, Shard, StageRecord, Strategy, StrategyReport};
 use crate::study::verify::{VERIFIED_DEFECT, is_verified, verify};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
@@ -232,7 +231,7 @@ pub fn solve_with_progress(
     Ok((p, sol))
 }
 
-/// [`strategy::search`] behind a progress spinner that shows each finished stage.
+/// [`search::search`] behind a progress spinner that shows each finished stage.
 pub fn search_with_progress(
     name: Problem,
     settings: ProblemSettings,
@@ -261,7 +260,7 @@ pub fn search_with_progress(
         }
         pb.set_message(msg);
     };
-    let res = strategy::search(name, &settings, strategy, shard, policy, Some(&show))
+    let res = search::search(name, &settings, strategy, shard, policy, Some(&show))
         .with_context(|| format!("solving {name}"));
     pb.finish_and_clear();
     res
@@ -712,7 +711,7 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, OcpSolution)>> {
         .collect()
 }
 
-/// Run `optimize merge DIR…`: the best verified candidate of the shards ([`strategy::select`],
+/// Run `optimize merge DIR…`: the best verified candidate of the shards ([`search::select`],
 /// the unsharded multi-start's rule) with the stage records of every shard.
 pub fn merge(args: &MergeArgs) -> Result<()> {
     let out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
@@ -777,7 +776,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         }
     }
     let views: Vec<(usize, &OcpSolution)> = cands.iter().map(|(k, s)| (*k, s)).collect();
-    let Some(i) = strategy::select(&views) else {
+    let Some(i) = search::select(&views) else {
         bail!("optimize merge: the directories hold no candidate of {problem}");
     };
     let (k, mut sol) = cands.swap_remove(i);

@@ -25,8 +25,8 @@ use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use super::build;
 use super::solve::{solve, solver_settings};
 use super::verify::element_errors;
+pub use bf_problem::catalogue::warm_initial_point;
 pub use bf_problem::solution::records::{RefineCriterion, RefineReport, RefineRound};
-pub use bf_problem::solution::warm_initial_point;
 
 /// Options of [`refine`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

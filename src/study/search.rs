@@ -35,9 +35,6 @@ pub const CLUSTER_RTOL: f64 = 1e-6;
 /// ([`VerifyPolicy::stick_continuation`]).
 pub const STICK_CONTINUATION: f64 = 0.1;
 
-/// Iteration limit of the relaxation stage of the stick continuation.
-pub const RELAX_MAX_ITER: usize = 200;
-
 /// How a search verifies its candidates ([`search`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct VerifyPolicy {

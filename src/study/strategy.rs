@@ -23,20 +23,13 @@
 //!   successful solution wins. [`default_strategy`] of `periodic-qc`: [`DEFAULT_STARTS`]
 //!   starts with seed [`DEFAULT_SEED`].
 //!
-//! [`solve_with_strategy`] returns the best end point as solved. [`search`] (what `optimize`
-//! and the paper report run) runs the chains of `periodic-qc` as a continuation in the stick
-//! phase's lower bound (first ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound,
-//! warm-started: from the short default bound most cold starts end in "taps" on it, while the
-//! relaxed optima of a real stick phase are better), re-integrates every end point
-//! ([`verify`]), keeps one candidate
-//! per distinct optimum (objectives within [`CLUSTER_RTOL`]), hp-refines the best unverified
-//! optima that beat the best verified one until their re-integration defect is at most
-//! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]), and [`Search::best`] picks by
-//! [`select`]: verified first, then the lowest objective, then the lowest start index. The
-//! chains run in parallel, but their results are collected in index order and every choice
-//! depends on values only, so the result is bitwise the same with any number of threads. A
-//! [`Shard`] runs every m-th start, and [`select`] over the shards' candidates gives the
-//! unsharded choice (`optimize --shard k/m`, `optimize merge`).
+//! [`solve_with_strategy`] returns the best end point as solved. For `periodic-qc` the chains
+//! can run as a continuation in the stick phase's lower bound (a stage relaxing it to the
+//! problem's bound, at most [`RELAX_MAX_ITER`] iterations, warm-started: from the short default
+//! bound most cold starts end in "taps" on it, while the relaxed optima of a real stick phase
+//! are better). The search that `optimize` and the paper report run on these chains —
+//! re-integration, candidates, hp refinement, the choice of the best verified optimum — is
+//! [`super::search`]. A [`Shard`] runs every m-th start (`optimize --shard k/m`).
 //!
 //! Every stage/start (and refinement) is recorded ([`StageRecord`]: status, objective, period,
 //! iterations, seconds) in [`StrategyReport`], stored in `solution.json`.
@@ -58,6 +51,9 @@ pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
 
 /// ε₀ / ε of the first continuation stage of the periodic problems.
 pub const EPS_FACTOR: f64 = 5.0;
+
+/// Iteration limit of the relaxation stage of the stick continuation.
+pub const RELAX_MAX_ITER: usize = 200;
 
 /// Progress reporter: called after every stage (from worker threads).
 pub type Progress<'a> = Option<&'a (dyn Fn(&StageRecord) + Sync)>;
@@ -454,8 +450,3 @@ pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
         Scheme::Radau { .. } => Strategy::Continuation,
     }
 }
-
-pub use super::search::{
-    CLUSTER_RTOL, Candidate, RELAX_MAX_ITER, STICK_CONTINUATION, Search, VerifyPolicy, search,
-    select,
-};

@@ -1,34 +1,24 @@
-//! Custom hp-Radau meshes and the collocation error estimate used for mesh refinement
-//! (paper Sect. 5: the transcription of eq. 57; the estimate follows Patterson, Hager & Rao,
-//! "A ph mesh refinement method for optimal control", OCAM 36 (2015), and Darby, Hager & Rao,
-//! OCAM 32 (2011)).
+//! Collocation meshes of one phase in normalised time τ ∈ [−1, 1] (paper Sect. 5: the
+//! transcription of eq. 57), built from the nodes of [`super::nodes`].
 //!
-//! * [`MeshSpec`]: element boundaries in τ ∈ [−1, 1] and the number N_e of Legendre–Gauss–Radau
-//!   points per element (the state polynomial of element e has degree N_e); serialisable so a
-//!   refined mesh can be stored with a solution.
-//! * [`Mesh::radau_custom`]: the collocation mesh of a [`MeshSpec`] (defects of eq. 58 with the
-//!   element scale s_e = h_e / 2).
-//! * [`collocation_errors`]: per element, the relative difference between the state polynomial
-//!   X̂ and its re-integration X̃(s_j) = X̂(s_0) + (h_e/2)(T/2) ∫ f(X̂, A*, Û) at N_e + 1 fresh
-//!   LGR points (PHR 2015 eq. 25–27). The dynamics is implicit here (ẋ = f(x, a) with
-//!   r(x, a, u) = 0, e.g. eq. 26 and 29 with q̈, ω̇, λ as algebraic variables a): at each
-//!   extra point the interpolated Â is corrected to the minimum-norm A* with r(X̂, A*, Û) = 0
-//!   (Gauss–Newton), so that the estimate measures the dynamics defect between the nodes. The
-//!   residuals of equality path constraints that depend on the states only (e.g. the stick
-//!   constraint Δv = 0, eq. 14) are added as absolute errors.
-//! * [`MeshSpec::refined`]: the ph rule of PHR 2015: an element with error e > tol gets
+//! * [`Mesh`]: state points and collocation nodes ([`Colloc`]: τ, defect scale s_k, quadrature
+//!   weight, differentiation row); [`Mesh::new`] for a [`Scheme`] with N points per phase
+//!   (Legendre–Gauss, or equal Radau elements).
+//! * [`MeshSpec`]: element boundaries in τ and the number N_e of Legendre–Gauss–Radau points per
+//!   element (the state polynomial of element e has degree N_e); serialisable so a refined mesh
+//!   can be stored with a solution. [`Mesh::radau_custom`] builds its mesh (defects of eq. 58
+//!   with the element scale s_e = h_e / 2).
+//! * [`MeshSpec::refined`]: the ph rule of Patterson, Hager & Rao (OCAM 36, 2015) applied to
+//!   the element errors of [`super::estimate`]: an element with error e > tol gets
 //!   P = ⌈log_N(e / tol)⌉ more points if N + P ≤ N_max, else it is split into
 //!   max(2, ⌈(N + P) / N_min⌉) equal elements of N_min points.
 
 use serde::{Deserialize, Serialize};
 
-use super::block::GraphFn;
-use super::nodes::{differentiation_matrix, lagrange_basis, legendre_gauss, legendre_gauss_radau};
-use super::problem::{Ocp, Scheme};
-use super::trajectory::PhaseTrajectory;
-use super::transcription::{Colloc, Mesh};
+use super::nodes::{differentiation_matrix, legendre_gauss, legendre_gauss_radau};
+use super::problem::Scheme;
 use crate::OptimError;
-use crate::error::{MeshDefect, PhaseDefect};
+use crate::error::MeshDefect;
 
 /// An hp-Radau mesh of one phase.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -155,6 +145,75 @@ impl MeshSpec {
     }
 }
 
+/// Collocation mesh of one phase (normalised time τ ∈ [−1, 1]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Mesh {
+    /// τ of the state points (first = −1, last = +1).
+    pub state_tau: Vec<f64>,
+    /// Collocation nodes.
+    pub colloc: Vec<Colloc>,
+    /// True for LG: final state by quadrature, and the defects in integral form built from the
+    /// `drow`s ([`integration_matrix`](super::transcription::integration_matrix)).
+    pub gauss_end: bool,
+    /// Elements: ranges of state points (for interpolation).
+    pub elements: Vec<std::ops::Range<usize>>,
+}
+
+/// One collocation node.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Colloc {
+    /// Index of the node's state point.
+    pub state_point: usize,
+    /// τ of the node.
+    pub tau: f64,
+    /// Defect scale s_k.
+    pub scale: f64,
+    /// Quadrature weight on [−1, 1] for the phase (includes s_k).
+    pub weight: f64,
+    /// Defect row: (state point, D coefficient).
+    pub drow: Vec<(usize, f64)>,
+}
+
+impl Mesh {
+    /// Builds the mesh for `scheme` with `points` collocation points per phase.
+    pub fn new(scheme: Scheme, points: usize) -> Result<Mesh, OptimError> {
+        if points < 2 {
+            return Err(OptimError::TooFewPoints { points });
+        }
+        match scheme {
+            Scheme::Lg => {
+                let (t, w) = legendre_gauss(points);
+                let mut sup = vec![-1.0];
+                sup.extend(&t);
+                let d = differentiation_matrix(&sup);
+                let colloc = (0..points)
+                    .map(|k| Colloc {
+                        state_point: k + 1,
+                        tau: t[k],
+                        scale: 1.0,
+                        weight: w[k],
+                        drow: (0..=points).map(|j| (j, d[k + 1][j])).collect(),
+                    })
+                    .collect();
+                let mut state_tau = sup;
+                state_tau.push(1.0);
+                Ok(Mesh {
+                    state_tau,
+                    colloc,
+                    gauss_end: true,
+                    elements: std::iter::once(0..points + 1).collect(),
+                })
+            }
+            Scheme::Radau { .. } => Mesh::from_spec(&MeshSpec::from_scheme(scheme, points)?),
+        }
+    }
+
+    /// Number of state points.
+    pub fn n_state_points(&self) -> usize {
+        self.state_tau.len()
+    }
+}
+
 impl Mesh {
     /// The Radau mesh with element boundaries `breaks` (τ, from −1 to +1) and `degrees[e]` LGR
     /// points in element e (the element's start included, its end excluded; the phase end is
@@ -201,348 +260,4 @@ impl Mesh {
     pub fn from_spec(spec: &MeshSpec) -> Result<Mesh, OptimError> {
         Self::radau_custom(&spec.breaks, &spec.degrees)
     }
-}
-
-/// One element of a solved phase: its τ interval, state support points and own nodes.
-struct ElementView {
-    ta: f64,
-    tb: f64,
-    states: std::ops::Range<usize>,
-    nodes: Vec<usize>,
-}
-
-/// The elements of `tr` with their own nodes. A node belongs to the last element whose state
-/// points contain its state point: a Radau element's last support point is the next element's
-/// first node (hp-Radau) or the phase end (no node), while the support points of a
-/// Legendre–Gauss element are the phase start and all its Gauss nodes, the last of them
-/// included. The element ends at its last support point unless that point is one of its own
-/// nodes (Legendre–Gauss); then it ends at the next state point (the phase end).
-fn element_views(tr: &PhaseTrajectory) -> Vec<ElementView> {
-    let elements: Vec<(usize, usize)> = tr
-        .elements
-        .iter()
-        .copied()
-        .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
-        .collect();
-    let owner = |p: usize| elements.iter().rposition(|&(a, b)| (a..b).contains(&p));
-    elements
-        .iter()
-        .enumerate()
-        .map(|(e, &(a, b))| {
-            let nodes: Vec<usize> = (0..tr.node_tau.len())
-                .filter(|&k| owner(tr.node_state[k]) == Some(e))
-                .collect();
-            let last_is_own_node = nodes.iter().any(|&k| tr.node_state[k] == b - 1);
-            let end = if last_is_own_node && b < tr.state_tau.len() {
-                b
-            } else {
-                b - 1
-            };
-            ElementView {
-                ta: tr.state_tau[a],
-                tb: tr.state_tau[end],
-                states: a..b,
-                nodes,
-            }
-        })
-        .collect()
-}
-
-/// Evaluates a phase's state polynomial, algebraic variables and controls inside one element.
-fn interp_rows(tau_sup: &[f64], rows: &[&[f64]], t: f64) -> Vec<f64> {
-    let n = rows.first().map_or(0, |r| r.len());
-    if tau_sup.is_empty() {
-        return vec![0.0; n];
-    }
-    let l = lagrange_basis(tau_sup, t);
-    (0..n)
-        .map(|i| rows.iter().zip(&l).map(|(r, w)| w * r[i]).sum())
-        .collect()
-}
-
-/// State, algebraic variables and controls of `tr` at τ ∈ element `ev` (the element's own
-/// polynomials, also at its end points).
-fn element_values(tr: &PhaseTrajectory, ev: &ElementView, t: f64) -> [Vec<f64>; 3] {
-    let xs: Vec<&[f64]> = ev.states.clone().map(|p| tr.x[p].as_slice()).collect();
-    let x = interp_rows(&tr.state_tau[ev.states.clone()], &xs, t);
-    let nt: Vec<f64> = ev.nodes.iter().map(|&k| tr.node_tau[k]).collect();
-    let a_rows: Vec<&[f64]> = ev.nodes.iter().map(|&k| tr.a[k].as_slice()).collect();
-    let u_rows: Vec<&[f64]> = ev.nodes.iter().map(|&k| tr.u[k].as_slice()).collect();
-    [
-        x,
-        interp_rows(&nt, &a_rows, t),
-        interp_rows(&nt, &u_rows, t),
-    ]
-}
-
-/// The values of `tr` at τ, each quantity from the element that contains τ in the half-open
-/// sense [start, end) (the last element also owns τ = 1). Used to interpolate a solution onto
-/// another mesh exactly (a warm start).
-pub fn values_at(tr: &PhaseTrajectory, tau: f64) -> [Vec<f64>; 3] {
-    let ev = element_views(tr);
-    let idx = ev
-        .iter()
-        .position(|e| tau < e.tb)
-        .unwrap_or(ev.len().saturating_sub(1));
-    match ev.get(idx) {
-        Some(e) => element_values(tr, e, tau),
-        None => [vec![], vec![], vec![]],
-    }
-}
-
-/// Solves the small dense symmetric positive definite system `a y = b` by Cholesky; `false` if
-/// `a` is not numerically positive definite.
-fn cholesky_solve(a: &mut [Vec<f64>], b: &mut [f64]) -> bool {
-    let n = b.len();
-    for j in 0..n {
-        let mut d = a[j][j];
-        for k in 0..j {
-            d -= a[j][k] * a[j][k];
-        }
-        if d.is_nan() || d <= 0.0 {
-            return false;
-        }
-        let d = d.sqrt();
-        a[j][j] = d;
-        for i in j + 1..n {
-            let mut s = a[i][j];
-            for k in 0..j {
-                s -= a[i][k] * a[j][k];
-            }
-            a[i][j] = s / d;
-        }
-    }
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= a[i][k] * b[k];
-        }
-        b[i] = s / a[i][i];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= a[k][i] * b[k];
-        }
-        b[i] = s / a[i][i];
-    }
-    b.iter().all(|v| v.is_finite())
-}
-
-/// The node function of one phase compiled for the estimate: outputs ẋ and the equality path
-/// constraints; rows that depend on a (solved for A*) and rows of the states only.
-struct PhaseEval {
-    f: GraphFn,
-    nx: usize,
-    na: usize,
-    nu: usize,
-    /// Output index of each a-dependent equality row, with its value.
-    alg_rows: Vec<(usize, f64)>,
-    /// Output index of each state-only equality row, with its value.
-    state_rows: Vec<(usize, f64)>,
-}
-
-impl PhaseEval {
-    fn new(ph: &super::problem::Phase) -> PhaseEval {
-        let nd = &ph.node;
-        let mut graph = nd.graph.clone();
-        let mut outputs = nd.xdot.clone();
-        let mut eq = Vec::new();
-        for (i, (&id, &(lo, hi))) in nd.path.iter().zip(&nd.path_bounds).enumerate() {
-            if lo == hi && lo.is_finite() {
-                eq.push((i, lo));
-                outputs.push(id);
-            }
-        }
-        let mut locals = nd.x.clone();
-        locals.extend(&nd.a);
-        locals.extend(&nd.u);
-        locals.push(nd.duration);
-        let f = GraphFn::new(&mut graph, &outputs, &locals, &nd.fixed);
-        let (nx, na, nu) = (nd.x.len(), nd.a.len(), nd.u.len());
-        let mut depends_on_a = vec![false; outputs.len()];
-        for &(o, l) in f.jacobian_pattern() {
-            if (nx..nx + na).contains(&l) {
-                depends_on_a[o] = true;
-            }
-        }
-        let (mut alg_rows, mut state_rows) = (Vec::new(), Vec::new());
-        for (k, &(_, v)) in eq.iter().enumerate() {
-            let o = nx + k;
-            if depends_on_a[o] {
-                alg_rows.push((o, v));
-            } else {
-                state_rows.push((o, v));
-            }
-        }
-        PhaseEval {
-            f,
-            nx,
-            na,
-            nu,
-            alg_rows,
-            state_rows,
-        }
-    }
-
-    /// ẋ at (x, a, u) after correcting a to the minimum-norm solution of the a-dependent
-    /// equality rows (Gauss–Newton from the interpolated a); also the largest state-only
-    /// equality residual.
-    fn xdot(&self, x: &[f64], a: &[f64], u: &[f64], duration: f64) -> (Vec<f64>, f64) {
-        let mut loc: Vec<f64> = x.iter().chain(a).chain(u).copied().collect();
-        loc.push(duration);
-        let m = self.alg_rows.len();
-        if m > 0 && self.na > 0 {
-            let row_of: std::collections::BTreeMap<usize, usize> = self
-                .alg_rows
-                .iter()
-                .enumerate()
-                .map(|(r, &(o, _))| (o, r))
-                .collect();
-            for _ in 0..8 {
-                let y = self.f.eval(&loc);
-                let r: Vec<f64> = self.alg_rows.iter().map(|&(o, v)| y[o] - v).collect();
-                let rn = r.iter().fold(0.0f64, |s, v| s.max(v.abs()));
-                if !rn.is_finite() || rn < 1e-13 {
-                    break;
-                }
-                let mut j = vec![vec![0.0; self.na]; m];
-                for (&(o, l), v) in self.f.jacobian_pattern().iter().zip(self.f.jacobian(&loc)) {
-                    if let Some(&ri) = row_of.get(&o)
-                        && (self.nx..self.nx + self.na).contains(&l)
-                    {
-                        j[ri][l - self.nx] = v;
-                    }
-                }
-                let mut jj = vec![vec![0.0; m]; m];
-                let mut diag_max = 0.0f64;
-                for p in 0..m {
-                    for q in 0..=p {
-                        let s: f64 = (0..self.na).map(|c| j[p][c] * j[q][c]).sum();
-                        jj[p][q] = s;
-                        jj[q][p] = s;
-                    }
-                    diag_max = diag_max.max(jj[p][p]);
-                }
-                // A tiny Levenberg term keeps rank-deficient rows (more rows than unknowns)
-                // solvable in the least-squares sense.
-                for (p, row) in jj.iter_mut().enumerate() {
-                    row[p] += 1e-12 * diag_max + 1e-300;
-                }
-                let mut yv = r.clone();
-                if !cholesky_solve(&mut jj, &mut yv) {
-                    break;
-                }
-                for c in 0..self.na {
-                    let d: f64 = (0..m).map(|p| j[p][c] * yv[p]).sum();
-                    loc[self.nx + c] -= d;
-                }
-            }
-        }
-        let y = self.f.eval(&loc);
-        let sres = self
-            .state_rows
-            .iter()
-            .fold(0.0f64, |s, &(o, v)| s.max((y[o] - v).abs()));
-        (y[..self.nx].to_vec(), sres)
-    }
-}
-
-/// Integration matrix of the LGR points `s` (plus the end point +1): row j holds
-/// ∫_{−1}^{σ_j} ℓ_l(σ) dσ for σ_j = s_1, …, s_{M−1}, +1 (the integral to s_0 = −1 is 0).
-fn integration_matrix(s: &[f64]) -> Vec<Vec<f64>> {
-    let m = s.len();
-    let (g, gw) = legendre_gauss(m + 1);
-    let mut ends: Vec<f64> = s[1..].to_vec();
-    ends.push(1.0);
-    ends.iter()
-        .map(|&b| {
-            let half = 0.5 * (b + 1.0);
-            let mut row = vec![0.0; m];
-            for (gk, wk) in g.iter().zip(&gw) {
-                let l = lagrange_basis(s, -1.0 + (gk + 1.0) * half);
-                for (r, v) in row.iter_mut().zip(l) {
-                    *r += wk * half * v;
-                }
-            }
-            row
-        })
-        .collect()
-}
-
-/// Collocation error estimate of every element of every phase of a solved `ocp` (see the
-/// module docs): per phase, per element, the largest over the state components and N_e + 1
-/// fresh LGR points of |X̃ − X̂| / (1 + max_p |X_p|) (max over the phase's state points), or the
-/// residual of a state-only equality path constraint if larger.
-pub fn collocation_errors(
-    ocp: &Ocp,
-    traj: &[PhaseTrajectory],
-) -> Result<Vec<Vec<f64>>, OptimError> {
-    if traj.len() != ocp.phases.len() {
-        return Err(OptimError::PhaseCount {
-            what: "trajectories",
-            found: traj.len(),
-            phases: ocp.phases.len(),
-        });
-    }
-    let mut out = Vec::new();
-    for (index, (ph, tr)) in ocp.phases.iter().zip(traj).enumerate() {
-        let ev = PhaseEval::new(ph);
-        let dims_ok = tr.x.iter().all(|v| v.len() == ev.nx)
-            && tr.a.iter().all(|v| v.len() == ev.na)
-            && tr.u.iter().all(|v| v.len() == ev.nu)
-            && tr.node_state.len() == tr.node_tau.len()
-            && tr.a.len() == tr.node_tau.len()
-            && tr.u.len() == tr.node_tau.len()
-            && tr.x.len() == tr.state_tau.len()
-            && tr.node_state.iter().all(|&p| p < tr.x.len());
-        if !dims_ok {
-            return Err(OptimError::Phase {
-                index,
-                name: ph.name.clone(),
-                defect: PhaseDefect::TrajectoryShape,
-            });
-        }
-        let scale: Vec<f64> = (0..ev.nx)
-            .map(|i| 1.0 + tr.x.iter().fold(0.0f64, |m, x| m.max(x[i].abs())))
-            .collect();
-        let mut errs = Vec::new();
-        for e in element_views(tr) {
-            let n = e.states.len() - 1;
-            let (s, _) = legendre_gauss_radau(n + 1);
-            let im = integration_matrix(&s);
-            let half = 0.5 * (e.tb - e.ta);
-            let tau_of = |sv: f64| e.ta + (sv + 1.0) * half;
-            let mut fs = Vec::new();
-            let mut xs = Vec::new();
-            let mut worst = 0.0f64;
-            for &sv in &s {
-                let [x, a, u] = element_values(tr, &e, tau_of(sv));
-                let (f, sres) = ev.xdot(&x, &a, &u, tr.duration);
-                let r = sres / (1.0 + x.iter().fold(0.0f64, |m, v| m.max(v.abs())));
-                worst = if r.is_nan() { f64::NAN } else { worst.max(r) };
-                fs.push(f);
-                xs.push(x);
-            }
-            let [x_end, _, _] = element_values(tr, &e, e.tb);
-            let c = half * 0.5 * tr.duration;
-            for (j, row) in im.iter().enumerate() {
-                let xhat = if j + 1 < s.len() { &xs[j + 1] } else { &x_end };
-                for i in 0..ev.nx {
-                    let integ: f64 = row.iter().zip(&fs).map(|(w, f)| w * f[i]).sum();
-                    let xt = xs[0][i] + c * integ;
-                    let d = (xt - xhat[i]).abs() / scale[i];
-                    // NaN marks a broken solution: keep it visible.
-                    worst = if d.is_nan() || worst.is_nan() {
-                        f64::NAN
-                    } else {
-                        worst.max(d)
-                    };
-                }
-            }
-            errs.push(worst);
-        }
-        out.push(errs);
-    }
-    Ok(out)
 }

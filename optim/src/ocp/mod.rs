@@ -1,15 +1,21 @@
 //! Multiphase optimal control by pseudospectral collocation (paper Sect. 4–5).
 //!
+//! The collocation modules form one chain, each using only those before it:
+//!
 //! * [`nodes`]: Legendre–Gauss / Gauss–Radau nodes, weights, differentiation matrices;
-//! * [`mesh`]: custom hp-Radau meshes, the collocation error estimate, ph refinement;
-//! * [`block`]: graph functions with exact Jacobians and Hessians (bf-codegen `diff`), on
-//!   emitted kernels handed in by the caller or interpreted;
-//! * [`problem`]: the multiphase problem (eq. 57): phases, node functions, point functions;
+//! * [`mesh`]: the collocation mesh of a phase (LG, uniform or custom hp-Radau) and the ph
+//!   refinement rule;
 //! * [`transcription`]: the sparse NLP handed to the interior-point solver ([`crate::ipm`]);
 //! * [`trajectory`]: extraction and interpolation of the solution;
-//! * [`toys`]: problems with closed-form optima (double integrator, brachistochrone) for tests.
+//! * [`estimate`]: the collocation error estimate of a solution, per element.
+//!
+//! Beside the chain, used by it: [`problem`], the multiphase problem (eq. 57): phases, node
+//! functions, point functions; [`block`], graph functions with exact Jacobians and Hessians
+//! (bf-codegen `diff`), on emitted kernels handed in by the caller or interpreted. [`toys`]:
+//! problems with closed-form optima (double integrator, brachistochrone) for tests.
 
 pub mod block;
+pub mod estimate;
 pub mod mesh;
 pub mod nodes;
 pub mod problem;
@@ -18,12 +24,13 @@ pub mod trajectory;
 pub mod transcription;
 
 pub use block::{GraphFn, KernelLookup, KernelUse, NodeKernel, NodeKernelFn, NodeKernelX4, Part};
-pub use mesh::{HpRule, MeshSpec, collocation_errors};
+pub use estimate::collocation_errors;
+pub use mesh::{HpRule, Mesh, MeshSpec};
 pub use problem::{
     NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
 };
 pub use trajectory::{PhaseTrajectory, extract};
-pub use transcription::{Mesh, PhaseLayout, Transcription};
+pub use transcription::{PhaseLayout, Transcription};
 
 use crate::OptimError;
 use crate::ipm::{IterationInfo, Settings, Solution, WarmStart, solve_with};

@@ -5,48 +5,14 @@
 //! ω̇, λ so that the dynamics is imposed in implicit form), controls u; cost integrands L_j
 //! (eq. 51c) accumulated into global cost states c_j(t_f) (eq. 60); static parameters (e.g.
 //! the impact impulse ι of eq. 40); and [`PointFunction`]s over phase end points, durations
-//! and parameters for the event (57c) and linkage (57d) constraints.
+//! and parameters for the event (57c) and linkage (57d) constraints. [`Scheme`], [`Objective`]
+//! and [`VarRef`] are defined in [`crate::terms`], below the errors that name them.
 
 use bf_codegen::graph::{Graph, Id};
 
-/// Transcription scheme.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Scheme {
-    /// Legendre–Gauss collocation (Benson/Garg form): N Gauss points plus the initial point,
-    /// final state by Gauss quadrature. `points` = N per phase.
-    Lg,
-    /// Legendre–Gauss–Radau collocation with `elements` equal elements per phase (hp), each
-    /// with `points / elements` (rounded up) Radau points.
-    Radau {
-        /// Number of elements per phase (≥ 1).
-        elements: usize,
-    },
-}
+pub use crate::terms::{Objective, Scheme, VarRef};
 
 pub use bf_codegen::nodefn::NodeFunction;
-
-/// A variable a [`PointFunction`] reads.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum VarRef {
-    /// State component `i` at the start of phase `phase`.
-    Initial {
-        /// Phase index.
-        phase: usize,
-        /// State component.
-        i: usize,
-    },
-    /// State component `i` at the end of phase `phase`.
-    Final {
-        /// Phase index.
-        phase: usize,
-        /// State component.
-        i: usize,
-    },
-    /// Duration of phase `phase`.
-    Duration(usize),
-    /// Static parameter `i`.
-    Param(usize),
-}
 
 /// Event/linkage constraints `lo ≤ e(…) ≤ hi` over end points, durations and parameters.
 #[derive(Debug, Clone)]
@@ -152,15 +118,6 @@ pub struct Phase {
     pub points: usize,
     /// Initial guess.
     pub guess: PhaseGuess,
-}
-
-/// The objective φ(c(t_f)) (eq. 60).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub enum Objective {
-    /// c_j(t_f).
-    Cost(usize),
-    /// c_j(t_f) / c_k(t_f) (eq. 60).
-    Ratio(usize, usize),
 }
 
 /// A static decision parameter.

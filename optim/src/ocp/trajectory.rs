@@ -1,5 +1,7 @@
 //! Solution extraction: per-phase times, states at the state points, algebraic variables and
-//! controls at the collocation nodes, and Lagrange interpolation (dense output).
+//! controls at the collocation nodes ([`extract`]), and Lagrange interpolation (dense output);
+//! [`values_at`] evaluates each element's own polynomials (exact interpolation onto another
+//! mesh), also used by the error estimate ([`super::estimate`]).
 
 use super::nodes::lagrange_basis;
 use super::transcription::Transcription;
@@ -110,4 +112,91 @@ pub fn extract(tr: &Transcription, x: &[f64]) -> Vec<PhaseTrajectory> {
         t0 += duration;
     }
     out
+}
+
+/// One element of a solved phase: its τ interval, state support points and own nodes.
+pub(super) struct ElementView {
+    pub(super) ta: f64,
+    pub(super) tb: f64,
+    pub(super) states: std::ops::Range<usize>,
+    pub(super) nodes: Vec<usize>,
+}
+
+/// The elements of `tr` with their own nodes. A node belongs to the last element whose state
+/// points contain its state point: a Radau element's last support point is the next element's
+/// first node (hp-Radau) or the phase end (no node), while the support points of a
+/// Legendre–Gauss element are the phase start and all its Gauss nodes, the last of them
+/// included. The element ends at its last support point unless that point is one of its own
+/// nodes (Legendre–Gauss); then it ends at the next state point (the phase end).
+pub(super) fn element_views(tr: &PhaseTrajectory) -> Vec<ElementView> {
+    let elements: Vec<(usize, usize)> = tr
+        .elements
+        .iter()
+        .copied()
+        .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
+        .collect();
+    let owner = |p: usize| elements.iter().rposition(|&(a, b)| (a..b).contains(&p));
+    elements
+        .iter()
+        .enumerate()
+        .map(|(e, &(a, b))| {
+            let nodes: Vec<usize> = (0..tr.node_tau.len())
+                .filter(|&k| owner(tr.node_state[k]) == Some(e))
+                .collect();
+            let last_is_own_node = nodes.iter().any(|&k| tr.node_state[k] == b - 1);
+            let end = if last_is_own_node && b < tr.state_tau.len() {
+                b
+            } else {
+                b - 1
+            };
+            ElementView {
+                ta: tr.state_tau[a],
+                tb: tr.state_tau[end],
+                states: a..b,
+                nodes,
+            }
+        })
+        .collect()
+}
+
+/// Evaluates a phase's state polynomial, algebraic variables and controls inside one element.
+fn interp_rows(tau_sup: &[f64], rows: &[&[f64]], t: f64) -> Vec<f64> {
+    let n = rows.first().map_or(0, |r| r.len());
+    if tau_sup.is_empty() {
+        return vec![0.0; n];
+    }
+    let l = lagrange_basis(tau_sup, t);
+    (0..n)
+        .map(|i| rows.iter().zip(&l).map(|(r, w)| w * r[i]).sum())
+        .collect()
+}
+
+/// State, algebraic variables and controls of `tr` at τ ∈ element `ev` (the element's own
+/// polynomials, also at its end points).
+pub(super) fn element_values(tr: &PhaseTrajectory, ev: &ElementView, t: f64) -> [Vec<f64>; 3] {
+    let xs: Vec<&[f64]> = ev.states.clone().map(|p| tr.x[p].as_slice()).collect();
+    let x = interp_rows(&tr.state_tau[ev.states.clone()], &xs, t);
+    let nt: Vec<f64> = ev.nodes.iter().map(|&k| tr.node_tau[k]).collect();
+    let a_rows: Vec<&[f64]> = ev.nodes.iter().map(|&k| tr.a[k].as_slice()).collect();
+    let u_rows: Vec<&[f64]> = ev.nodes.iter().map(|&k| tr.u[k].as_slice()).collect();
+    [
+        x,
+        interp_rows(&nt, &a_rows, t),
+        interp_rows(&nt, &u_rows, t),
+    ]
+}
+
+/// The values of `tr` at τ, each quantity from the element that contains τ in the half-open
+/// sense [start, end) (the last element also owns τ = 1). Used to interpolate a solution onto
+/// another mesh exactly (a warm start).
+pub fn values_at(tr: &PhaseTrajectory, tau: f64) -> [Vec<f64>; 3] {
+    let ev = element_views(tr);
+    let idx = ev
+        .iter()
+        .position(|e| tau < e.tb)
+        .unwrap_or(ev.len().saturating_sub(1));
+    match ev.get(idx) {
+        Some(e) => element_values(tr, e, tau),
+        None => [vec![], vec![], vec![]],
+    }
 }

@@ -3,8 +3,8 @@
 
 use super::clip::clip_polyline;
 use super::layout::*;
-use super::prepare::{Prepared, tx};
-use super::{Dash, Layout, LineFigure, Scale};
+use super::prepare::{Prepared, dash_pattern, tx};
+use super::{Layout, LineFigure, Scale};
 use crate::PlotError;
 use crate::canvas::{Anchor, Canvas, RectSpec, Stroke, TextSpec};
 
@@ -82,16 +82,6 @@ pub(super) fn draw_all(
         draw_panel(cv, fig, prep, lay, title_font)?;
     }
     Ok(())
-}
-
-/// (dash, gap) in pixels; `None` for solid lines.
-pub(super) fn dash_pattern(d: Dash) -> Option<(f64, f64)> {
-    match d {
-        Dash::Auto | Dash::Solid => None,
-        Dash::Dashed => Some((10.0, 6.0)),
-        Dash::Dotted => Some((2.0, 5.0)),
-        Dash::LongDash => Some((20.0, 7.0)),
-    }
 }
 
 pub(super) fn draw_panel(

@@ -3,8 +3,7 @@
 //! axes) and point-label placement.
 
 use super::clip::clip_polyline;
-use super::draw::dash_pattern;
-use super::prepare::{Prepared, tx};
+use super::prepare::{Prepared, dash_pattern, tx};
 use super::{Band, Colour, HLine, LegendPos, LineFigure, Scale};
 use crate::canvas::{Anchor, Rgb, text_size};
 use crate::ticks::{self, Tick};

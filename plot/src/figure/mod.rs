@@ -18,14 +18,14 @@
 //! pieces — a gap, as in other plotting tools — and are counted in [`RenderReport::skipped_points`].
 //! Lines are clipped to the axes rectangle (Liang–Barsky, `clip_segment`) before drawing, so
 //! explicit `x_range`/`y_range` narrower than the data never draw outside the axes, and thick
-//! bitmap lines are split at sharp turns (`split_sharp_turns`) because plotters' bitmap stroker
+//! bitmap lines are split at sharp turns (`canvas::split_sharp_turns`) because plotters' bitmap stroker
 //! would otherwise extend hairpins into spikes across the whole image. Default ranges cover
 //! every finite point of every series (equal-aspect views: 5 % margin on both axes).
 //! Colours follow a 10-colour qualitative palette and dash patterns cycle with period 4, so the
 //! first 20 automatically styled series of a figure are pairwise distinct even in grey-scale print.
 //!
 //! Internals: `prepare` (styles, plotting coordinates, ranges), `layout` (pixel layout of a
-//! panel), `draw` (drawing a laid-out panel on a canvas), `clip` (clipping, stroke splitting).
+//! panel), `draw` (drawing a laid-out panel on a canvas), `clip` (clipping).
 
 mod clip;
 mod draw;
@@ -42,7 +42,6 @@ use plotters::prelude::*;
 use prepare::{prepare, tx};
 use std::path::{Path, PathBuf};
 
-pub(crate) use clip::split_sharp_turns;
 pub use prepare::palette;
 
 /// Colour of a series.

@@ -1,6 +1,6 @@
-//! Data preparation: styles resolved to colours and dashes, points mapped to plotting
-//! coordinates (log10 on log axes) and split at non-plottable points, inputs validated, and the
-//! default axis ranges.
+//! Data preparation: styles resolved to colours and dashes (and the pixel pattern of a dash,
+//! `dash_pattern`), points mapped to plotting coordinates (log10 on log axes) and split at
+//! non-plottable points, inputs validated, and the default axis ranges.
 
 use super::{Colour, Dash, LineFigure, Scale};
 use crate::PlotError;
@@ -227,5 +227,15 @@ pub(super) fn widen((lo, hi): (f64, f64), frac: f64) -> (f64, f64) {
     } else {
         let d = if lo.abs() > 0.0 { 0.1 * lo.abs() } else { 1.0 };
         (lo - d, hi + d)
+    }
+}
+
+/// (dash, gap) in pixels; `None` for solid lines.
+pub(super) fn dash_pattern(d: Dash) -> Option<(f64, f64)> {
+    match d {
+        Dash::Auto | Dash::Solid => None,
+        Dash::Dashed => Some((10.0, 6.0)),
+        Dash::Dotted => Some((2.0, 5.0)),
+        Dash::LongDash => Some((20.0, 7.0)),
     }
 }

@@ -4,6 +4,7 @@ use super::clip::*;
 use super::layout::*;
 use super::prepare::*;
 use super::*;
+use crate::canvas::{Polyline, split_sharp_turns};
 
 #[test]
 fn widen_handles_degenerate_ranges() {

@@ -5,11 +5,11 @@
 
 use bf_codegen::Scene;
 use bf_optim::ocp::{Phase, PhaseGuess};
-use serde::{Deserialize, Serialize};
 
 use crate::ProblemError;
 use crate::node::{CostKind, NodeOptions, PhaseMode, Physics, StickLevel, node_function};
 use crate::points::Diagnostics;
+pub use crate::start::StartGuess;
 
 /// The constant joint configuration of the default initial guess (docs/parameters.md: "q constant
 /// nonzero"): the finger bent towards the ball, h ≈ 0.95 r.
@@ -18,16 +18,6 @@ pub const Q_GUESS: [f64; 3] = [0.1, 0.6, 0.9];
 /// A configuration pressed into the ball (h < 0) used to find the contact configuration of
 /// the geometric guess by bisection on the segment [`Q_GUESS`] → `Q_DEEP`.
 pub const Q_DEEP: [f64; 3] = [0.1, 1.0, 1.6];
-
-/// A guess of constant joint angles `q` and phase durations `durations` (the paper's guess is
-/// q ≡ [`Q_GUESS`], every duration 1 s).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct StartGuess {
-    /// Joint angles (rad), one per joint.
-    pub q: Vec<f64>,
-    /// Phase durations (s), one per phase.
-    pub durations: Vec<f64>,
-}
 
 /// One phase of an archetype: its mode, the bounds of its h and ḣ path rows (`None`: no
 /// row), its duration bounds and the duration of the default guess.

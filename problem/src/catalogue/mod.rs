@@ -2,7 +2,9 @@
 //! [`Problem`] and [`ProblemSettings`] → [`build`] → a [`BuiltProblem`], the multiphase
 //! problem and its transcription, ready for the study layer to solve. One function per
 //! archetype builds the phases, costs and point functions ([`archetypes`]); the initial guesses
-//! are in [`guess`].
+//! are in [`guess`]; [`extract`] turns an NLP point of a built problem into its solution record
+//! ([`crate::solution`]) and a record into a warm start. The problems themselves are named by
+//! [`Problem`] ([`crate::id`]).
 //!
 //! | name | phases | objective |
 //! |---|---|---|
@@ -41,6 +43,7 @@
 //! considerably, so they go without it.
 
 pub mod archetypes;
+pub mod extract;
 pub mod guess;
 
 use std::fmt;
@@ -54,61 +57,14 @@ use bf_optim::ocp::{KernelUse, MeshSpec, Ocp, Scheme, Transcription};
 use crate::ProblemError;
 use serde::{Deserialize, Serialize};
 
+pub use crate::id::Problem;
 use crate::node::{PhaseMode, Physics, StickLevel};
-use crate::solution::{OcpSolution, warm_initial_point};
+use crate::solution::OcpSolution;
 use archetypes::Archetype;
+pub use extract::{node_kernel_source, solution_at, warm_initial_point};
 pub use guess::{Q_DEEP, Q_GUESS, StartGuess};
 
-/// A problem of the catalogue.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum Problem {
-    /// Free–stick–free periodic rotation, QC ratio (eq. 60, 64–65).
-    PeriodicQc,
-    /// Free–stick–free periodic rotation, COT ratio (eq. 60–63).
-    PeriodicCot,
-    /// `PeriodicCot` on the human scene.
-    PeriodicCotHuman,
-    /// Reach the ball from rest (free phase).
-    Reach,
-    /// Turn the ball by 90° about z (free–stick).
-    Reorient,
-    /// Track ω_ref over a fixed horizon (free–stick).
-    RotateRef,
-    /// Spin the ball as fast as possible over a fixed horizon (free–stick).
-    RotateFast,
-}
-
 impl Problem {
-    /// Every problem, in catalogue order.
-    pub const ALL: [Problem; 7] = [
-        Problem::PeriodicQc,
-        Problem::PeriodicCot,
-        Problem::PeriodicCotHuman,
-        Problem::Reach,
-        Problem::Reorient,
-        Problem::RotateRef,
-        Problem::RotateFast,
-    ];
-
-    /// The name the CLI and `solution.json` use.
-    pub fn name(self) -> &'static str {
-        match self {
-            Problem::PeriodicQc => "periodic-qc",
-            Problem::PeriodicCot => "periodic-cot",
-            Problem::PeriodicCotHuman => "periodic-cot-human",
-            Problem::Reach => "reach",
-            Problem::Reorient => "reorient",
-            Problem::RotateRef => "rotate-ref",
-            Problem::RotateFast => "rotate-fast",
-        }
-    }
-
-    /// Every name, comma-separated (error messages, CLI help).
-    pub fn names() -> String {
-        Problem::ALL.map(Problem::name).join(", ")
-    }
-
     /// The compiled scene the problem is posed on.
     pub fn scene(self) -> SceneId {
         match self {

@@ -3,6 +3,7 @@
 //! n·v_c (eq. 36), E (eq. 22), drift per sample), `events.csv` / `events.json` and
 //! `summary.json`, each written atomically.
 
+use super::report::mode_name;
 use super::{EventInfo, RunReport, RunSummary, SampleInfo};
 use crate::SimError;
 use crate::trajectory::{SampleKind, SimOutput, write_atomic};
@@ -42,15 +43,6 @@ fn state_names(n: usize) -> Vec<String> {
     v.extend((1..=n).map(|i| format!("qd{i}")));
     v.extend(["omega_x", "omega_y", "omega_z"].map(String::from));
     v
-}
-
-/// The mode as written in every file: its serde name (lowercase), as in the JSON files.
-pub(super) fn mode_name(m: Mode) -> &'static str {
-    match m {
-        Mode::Free => "free",
-        Mode::Stick => "stick",
-        Mode::Slip => "slip",
-    }
 }
 
 fn csv_err(what: &'static str) -> impl Fn(csv::Error) -> SimError {

@@ -411,7 +411,7 @@ impl std::fmt::Display for RunSummary {
             "simulated t = {} .. {} s, final mode {}",
             self.t0,
             self.t_final,
-            super::files::mode_name(self.mode_final)
+            mode_name(self.mode_final)
         )?;
         let ev: Vec<String> = self
             .event_counts
@@ -422,7 +422,7 @@ impl std::fmt::Display for RunSummary {
         let sh: Vec<String> = self
             .mode_time_share
             .iter()
-            .map(|(m, s)| format!("{} {:.1}%", super::files::mode_name(*m), 100.0 * s))
+            .map(|(m, s)| format!("{} {:.1}%", mode_name(*m), 100.0 * s))
             .collect();
         writeln!(f, "time in modes: {}", sh.join(", "))?;
         writeln!(f, "max penetration: {:.3e} m", self.max_penetration)?;
@@ -462,4 +462,13 @@ pub struct RunReport<const N: usize = 3> {
     pub events: Vec<EventInfo<N>>,
     /// Summary.
     pub summary: RunSummary,
+}
+
+/// The mode as written in every file: its serde name (lowercase), as in the JSON files.
+pub(super) fn mode_name(m: Mode) -> &'static str {
+    match m {
+        Mode::Free => "free",
+        Mode::Stick => "stick",
+        Mode::Slip => "slip",
+    }
 }

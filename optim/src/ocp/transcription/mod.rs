@@ -29,83 +29,13 @@
 //! a dense N × N block in f (plus one duplicate T triplet per node, summed by the solver).
 
 use super::block::{GraphFn, KernelUse};
-use super::mesh::MeshSpec;
-use super::nodes::{differentiation_matrix, legendre_gauss};
+pub use super::mesh::{Colloc, Mesh};
 use super::problem::{Objective, Ocp, Scheme, VarRef};
 use crate::OptimError;
 use crate::error::{PhaseDefect, PointDefect};
 use crate::ipm::{BOUND_INF, Nlp};
 
 mod nlp;
-
-/// Collocation mesh of one phase (normalised time τ ∈ [−1, 1]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Mesh {
-    /// τ of the state points (first = −1, last = +1).
-    pub state_tau: Vec<f64>,
-    /// Collocation nodes.
-    pub colloc: Vec<Colloc>,
-    /// True for LG: final state by quadrature, and the defects in integral form built from the
-    /// `drow`s ([`integration_matrix`]).
-    pub gauss_end: bool,
-    /// Elements: ranges of state points (for interpolation).
-    pub elements: Vec<std::ops::Range<usize>>,
-}
-
-/// One collocation node.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Colloc {
-    /// Index of the node's state point.
-    pub state_point: usize,
-    /// τ of the node.
-    pub tau: f64,
-    /// Defect scale s_k.
-    pub scale: f64,
-    /// Quadrature weight on [−1, 1] for the phase (includes s_k).
-    pub weight: f64,
-    /// Defect row: (state point, D coefficient).
-    pub drow: Vec<(usize, f64)>,
-}
-
-impl Mesh {
-    /// Builds the mesh for `scheme` with `points` collocation points per phase.
-    pub fn new(scheme: Scheme, points: usize) -> Result<Mesh, OptimError> {
-        if points < 2 {
-            return Err(OptimError::TooFewPoints { points });
-        }
-        match scheme {
-            Scheme::Lg => {
-                let (t, w) = legendre_gauss(points);
-                let mut sup = vec![-1.0];
-                sup.extend(&t);
-                let d = differentiation_matrix(&sup);
-                let colloc = (0..points)
-                    .map(|k| Colloc {
-                        state_point: k + 1,
-                        tau: t[k],
-                        scale: 1.0,
-                        weight: w[k],
-                        drow: (0..=points).map(|j| (j, d[k + 1][j])).collect(),
-                    })
-                    .collect();
-                let mut state_tau = sup;
-                state_tau.push(1.0);
-                Ok(Mesh {
-                    state_tau,
-                    colloc,
-                    gauss_end: true,
-                    elements: std::iter::once(0..points + 1).collect(),
-                })
-            }
-            Scheme::Radau { .. } => Mesh::from_spec(&MeshSpec::from_scheme(scheme, points)?),
-        }
-    }
-
-    /// Number of state points.
-    pub fn n_state_points(&self) -> usize {
-        self.state_tau.len()
-    }
-}
 
 #[derive(Debug, Clone)]
 struct Instance {
