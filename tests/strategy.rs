@@ -77,15 +77,15 @@ fn multistart_is_deterministic_and_never_worse_than_its_default_start() {
 
 #[test]
 fn random_starts_are_reproducible_and_within_their_ranges() {
-    let d = random_start(0, 5, 3, 3);
+    let d = random_start(0, 5, &Q_GUESS, 3);
     assert_eq!(d.q, Q_GUESS.to_vec());
     assert_eq!(d.durations, vec![1.0; 3]);
-    let a = random_start(4, 5, 3, 3);
-    assert_eq!(a, random_start(4, 5, 3, 3));
-    assert_ne!(a, random_start(4, 6, 3, 3));
-    assert_ne!(a, random_start(5, 5, 3, 3));
+    let a = random_start(4, 5, &Q_GUESS, 3);
+    assert_eq!(a, random_start(4, 5, &Q_GUESS, 3));
+    assert_ne!(a, random_start(4, 6, &Q_GUESS, 3));
+    assert_ne!(a, random_start(5, 5, &Q_GUESS, 3));
     for k in 1..200 {
-        let g = random_start(k, 1, 3, 3);
+        let g = random_start(k, 1, &Q_GUESS, 3);
         for (q, q0) in g.q.iter().zip(Q_GUESS) {
             assert!((q - q0).abs() <= 0.6);
         }

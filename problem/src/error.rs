@@ -74,6 +74,20 @@ pub enum ProblemError {
         /// The guess given.
         guess: StartGuess,
     },
+    /// The scene's finger has no contact configuration on the family of configurations the
+    /// initial guesses of a finger other than the paper's 3-joint one are derived from.
+    #[error(
+        "scene `{scene}` ({joints} joints): no contact configuration for the initial guess: \
+         {reason}"
+    )]
+    NoContactConfiguration {
+        /// The scene name.
+        scene: String,
+        /// Its joints.
+        joints: usize,
+        /// What the search found (values of h and the configurations tried).
+        reason: String,
+    },
     /// A warm start from a solution with a different number of phases.
     #[error("warm start has {found} phases, the problem {expected}")]
     WarmStartPhases {

@@ -20,7 +20,7 @@ use crate::study::SolutionIo;
 use crate::study::refine::{self, RefineOptions, RefineRound};
 use crate::study::search::{self, Search, VerifyPolicy};
 use crate::study::strategy::{self, DEFAULT_STARTS, Shard, StageRecord, Strategy, StrategyReport};
-use crate::study::verify::{VERIFIED_DEFECT, is_verified, verify};
+use crate::study::verify::{MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verify};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
@@ -480,13 +480,15 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
             path.display()
         )
     })?;
-    // The contact model takes any number of joints; the problems are posed for 3.
-    if scene.links.len() != 3 {
+    // The problems are posed for any number of joints; the verification, which every solve
+    // ends with, re-integrates up to MAX_VERIFY_JOINTS.
+    let nq = scene.links.len();
+    if nq > MAX_VERIFY_JOINTS {
         anyhow::bail!(
-            "--scene {}: problem {problem} needs a finger with 3 joints; scene `{}` has {}",
+            "--scene {}: problem {problem} runs fingers with 1 to {MAX_VERIFY_JOINTS} joints; \
+             scene `{}` has {nq}",
             path.display(),
             scene.name,
-            scene.links.len()
         );
     }
     Ok(Some(scene))

@@ -108,8 +108,12 @@ pub enum StudyError {
         /// The OCP's physics (`Debug` form).
         ocp: String,
     },
-    /// Verification of a scene whose finger does not have three joints.
-    #[error("verification needs a 3-joint contact scene, `{scene}` has {joints}")]
+    /// Verification of a scene whose finger has more joints than the verification runs
+    /// ([`super::verify::MAX_VERIFY_JOINTS`]).
+    #[error(
+        "verification re-integrates fingers with 1 to {max} joints, `{scene}` has {joints}",
+        max = super::verify::MAX_VERIFY_JOINTS
+    )]
     VerifyJoints {
         /// The scene.
         scene: String,

@@ -37,7 +37,6 @@
 use std::time::Instant;
 
 use bf_optim::ipm::Status;
-use bf_problem::catalogue::Q_GUESS;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, Problem, ProblemSettings, StartGuess};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -170,11 +169,12 @@ fn best_index(results: &[ChainResult]) -> Option<(usize, bool)> {
     best.map(|(k, ok, _)| (k, ok))
 }
 
-/// Random start `k` of a multi-start (k = 0: the default guess).
-pub fn random_start(k: usize, seed: u64, nq: usize, nphases: usize) -> StartGuess {
+/// Random start `k` of a multi-start around the default guess's configuration `q0` (the
+/// problem's [`BuiltProblem::guess`]`.free`; k = 0: the default guess itself).
+pub fn random_start(k: usize, seed: u64, q0: &[f64], nphases: usize) -> StartGuess {
     if k == 0 {
         return StartGuess {
-            q: (0..nq).map(|i| Q_GUESS[i % 3]).collect(),
+            q: q0.to_vec(),
             durations: vec![1.0; nphases],
         };
     }
@@ -182,9 +182,7 @@ pub fn random_start(k: usize, seed: u64, nq: usize, nphases: usize) -> StartGues
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(k as u64);
     StartGuess {
-        q: (0..nq)
-            .map(|i| Q_GUESS[i % 3] + rng.random_range(-0.6..0.6))
-            .collect(),
+        q: q0.iter().map(|q| q + rng.random_range(-0.6..0.6)).collect(),
         durations: (0..nphases)
             .map(|_| 10f64.powf(rng.random_range(-1.3..0.2)))
             .collect(),
@@ -242,7 +240,7 @@ fn chains_of(
     target: &BuiltProblem,
 ) -> Result<Vec<Vec<(String, ProblemSettings)>>, StudyError> {
     let eps = target.epsilon;
-    let nq = target.physics.nq;
+    let q0 = &target.guess.free;
     let nphases = target.modes.len();
     let periodic = problem.is_periodic();
     Ok(match strategy {
@@ -268,7 +266,7 @@ fn chains_of(
                             ProblemSettings {
                                 period_bounds: Some((t, t)),
                                 start: Some(StartGuess {
-                                    q: (0..nq).map(|i| Q_GUESS[i % 3]).collect(),
+                                    q: q0.clone(),
                                     durations: vec![t / nphases as f64; nphases],
                                 }),
                                 guess: GuessKind::Paper,
@@ -300,7 +298,7 @@ fn chains_of(
             }
             (0..starts)
                 .map(|k| {
-                    let sg = random_start(k, seed, nq, nphases);
+                    let sg = random_start(k, seed, q0, nphases);
                     vec![(
                         format!("start {k}"),
                         ProblemSettings {

@@ -61,8 +61,8 @@
 
 use std::time::Instant;
 
-use bf_model::fixtures::{self, DynKernels};
-use bf_model::{ContactVariant, Model, State, TransitionSettings, Vec3};
+use bf_model::registry;
+use bf_model::{ContactVariant, DynKernels, Model, State, TransitionSettings, Vec3, VecN};
 use bf_optim::ocp::PhaseTrajectory;
 use bf_optim::ocp::nodes::lagrange_basis;
 use bf_problem::{BuiltProblem, OcpSolution, PhaseMode};
@@ -103,23 +103,28 @@ impl Default for VerifyOptions {
     }
 }
 
-/// One collocation element of one phase as a (single-mode) hybrid system for bf-sim: the
-/// torque is the element's control polynomial, clamped to the torque limits.
-struct ElementSystem<'a> {
-    model: &'a Model<DynKernels>,
+/// Largest number of joints of a finger the verification re-integrates (one instantiation of
+/// the generic model per N = 1..=this, as `simulate` has).
+pub const MAX_VERIFY_JOINTS: usize = 7;
+
+/// One collocation element of one phase of an `N`-joint finger as a (single-mode) hybrid
+/// system for bf-sim: the torque is the element's control polynomial, clamped to the torque
+/// limits.
+struct ElementSystem<'a, const N: usize> {
+    model: &'a Model<DynKernels<N>, N>,
     duration: f64,
     node_tau: Vec<f64>,
-    node_u: Vec<[f64; 3]>,
-    tau_max: [f64; 3],
+    node_u: Vec<[f64; N]>,
+    tau_max: [f64; N],
     interp: TorqueInterpolant,
 }
 
-impl ElementSystem<'_> {
+impl<const N: usize> ElementSystem<'_, N> {
     /// How far the unclamped polynomial exceeds the torque limits at t (0 inside them).
     fn overshoot(&self, t: f64) -> f64 {
         let s = 2.0 * t / self.duration - 1.0;
         let l = lagrange_basis(&self.node_tau, s);
-        (0..3)
+        (0..N)
             .map(|i| {
                 let v: f64 = l.iter().zip(&self.node_u).map(|(w, uk)| w * uk[i]).sum();
                 (v.abs() - self.tau_max[i]).max(0.0)
@@ -128,10 +133,10 @@ impl ElementSystem<'_> {
     }
 
     /// τ(t) at phase-local time t.
-    fn torque(&self, t: f64) -> Vec3 {
+    fn torque(&self, t: f64) -> VecN<N> {
         let s = 2.0 * t / self.duration - 1.0;
         let l = lagrange_basis(&self.node_tau, s);
-        let mut u = [0.0; 3];
+        let mut u = [0.0; N];
         for (i, ui) in u.iter_mut().enumerate() {
             let v: f64 = l.iter().zip(&self.node_u).map(|(w, uk)| w * uk[i]).sum();
             let m = self.tau_max[i];
@@ -141,24 +146,23 @@ impl ElementSystem<'_> {
                 TorqueInterpolant::Polynomial => v,
             };
         }
-        Vec3::new(u[0], u[1], u[2])
+        VecN::<N>::from(u)
     }
 
-    fn state(x: &[f64]) -> Result<State, SimError> {
-        let a: &[f64; 9] = x.try_into().map_err(|_| SimError::DimensionMismatch {
+    fn state(x: &[f64]) -> Result<State<N>, SimError> {
+        State::<N>::from_slice(x).ok_or(SimError::DimensionMismatch {
             what: "state",
-            expected: 9,
+            expected: State::<N>::DIM,
             found: x.len(),
-        })?;
-        Ok(State::from_array(a))
+        })
     }
 }
 
-impl HybridSystem for ElementSystem<'_> {
+impl<const N: usize> HybridSystem for ElementSystem<'_, N> {
     type Mode = PhaseMode;
 
     fn dim(&self) -> usize {
-        9
+        State::<N>::DIM
     }
 
     fn rhs(&self, mode: PhaseMode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
@@ -169,7 +173,7 @@ impl HybridSystem for ElementSystem<'_> {
             PhaseMode::Stick => self.model.stick(&st, &tau),
         }
         .map_err(SimError::system)?;
-        dx.copy_from_slice(&acc.state_derivative(&st.qd));
+        acc.write_state_derivative(&st.qd, dx);
         Ok(())
     }
 
@@ -201,9 +205,12 @@ fn nan_max(a: f64, b: f64) -> f64 {
     }
 }
 
-/// The bf-model model of `p`'s scene with the smooth contact of ε, after checking that its
-/// physical constants are the ones the OCP was built with.
-fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, StudyError> {
+/// The bf-model model of `p`'s scene (`N` joints) with the smooth contact of ε, after checking
+/// that its physical constants are the ones the OCP was built with.
+fn verification_model<const N: usize>(
+    p: &BuiltProblem,
+    eps: f64,
+) -> Result<Model<DynKernels<N>, N>, StudyError> {
     let settings = TransitionSettings {
         contact_tolerance: CONTACT_TOLERANCE,
         ..TransitionSettings::default()
@@ -212,8 +219,9 @@ fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, S
         scene: p.scene.name.clone(),
         source,
     };
-    let (model, _) = fixtures::model_for_scene(&p.scene).map_err(model_err)?;
-    let model = model
+    let (kernels, _) = registry::contact_kernels_n::<N>(&p.scene).map_err(model_err)?;
+    let model = Model::from_kernels(kernels)
+        .map_err(model_err)?
         .with_settings(settings)
         .map_err(model_err)?
         .with_contact_variant(ContactVariant::Smooth(eps))
@@ -241,7 +249,12 @@ fn verification_model(p: &BuiltProblem, eps: f64) -> Result<Model<DynKernels>, S
     Ok(model)
 }
 
-fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), StudyError> {
+fn check_phase_data(
+    k: usize,
+    tr: &PhaseTrajectory,
+    nq: usize,
+    nx: usize,
+) -> Result<(), StudyError> {
     let bad = |defect| Err(StudyError::PhaseData { phase: k, defect });
     if !(tr.duration.is_finite() && tr.duration > 0.0) {
         return bad(PhaseDataDefect::Duration(tr.duration));
@@ -255,7 +268,7 @@ fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), Stu
     if tr.state_tau.first() != Some(&-1.0) || tr.state_tau.last() != Some(&1.0) {
         return bad(PhaseDataDefect::Span);
     }
-    if tr.u.len() != tr.node_tau.len() || tr.u.iter().any(|u| u.len() != 3) {
+    if tr.u.len() != tr.node_tau.len() || tr.u.iter().any(|u| u.len() != nq) {
         return bad(PhaseDataDefect::ControlDimension);
     }
     if tr.a.len() != tr.node_tau.len() {
@@ -282,8 +295,9 @@ fn check_phase_data(k: usize, tr: &PhaseTrajectory, nx: usize) -> Result<(), Stu
 }
 
 /// Max |residual| of eq. 26 / 29 at the collocation nodes of `tr`, with bf-model's kernels.
-fn node_residual(
-    model: &Model<DynKernels>,
+/// The node's algebraic variables are (q̈, ω̇, λ) with λ in stick phases only.
+fn node_residual<const N: usize>(
+    model: &Model<DynKernels<N>, N>,
     phase: usize,
     mode: PhaseMode,
     tr: &PhaseTrajectory,
@@ -293,7 +307,11 @@ fn node_residual(
     for k in 0..tr.node_tau.len() {
         let x = &tr.x[tr.node_state[k]];
         let a = &tr.a[k];
-        let need = if mode == PhaseMode::Stick { 9 } else { 6 };
+        let need = if mode == PhaseMode::Stick {
+            N + 6
+        } else {
+            N + 3
+        };
         if a.len() < need {
             return Err(StudyError::PhaseData {
                 phase,
@@ -304,7 +322,7 @@ fn node_residual(
                 },
             });
         }
-        let st = ElementSystem::state(x)?;
+        let st = ElementSystem::<N>::state(x)?;
         let kin = model
             .evaluate(&st)
             .map_err(|source| StudyError::NodeEvaluation {
@@ -312,14 +330,14 @@ fn node_residual(
                 node: k,
                 source,
             })?;
-        let qdd = Vec3::new(a[0], a[1], a[2]);
-        let wd = Vec3::new(a[3], a[4], a[5]);
+        let qdd = VecN::<N>::from_column_slice(&a[..N]);
+        let wd = Vec3::new(a[N], a[N + 1], a[N + 2]);
         let lam = if mode == PhaseMode::Stick {
-            Vec3::new(a[6], a[7], a[8])
+            Vec3::new(a[N + 3], a[N + 4], a[N + 5])
         } else {
             Vec3::zeros()
         };
-        let tau = Vec3::new(tr.u[k][0], tr.u[k][1], tr.u[k][2]);
+        let tau = VecN::<N>::from_column_slice(&tr.u[k][..N]);
         let c = &kin.contact;
         let rf = kin.m_f * qdd + kin.cqd_g + st.qd * pm.mu_v() - tau - c.j_c.transpose() * lam;
         let ib = pm.ball_inertia();
@@ -353,14 +371,14 @@ impl PathStats {
         }
     }
 
-    fn add(
+    fn add<const N: usize>(
         &mut self,
-        sys: &ElementSystem,
+        sys: &ElementSystem<'_, N>,
         mode: PhaseMode,
         t: f64,
         x: &[f64],
     ) -> Result<(), String> {
-        let st = ElementSystem::state(x).map_err(|e| e.to_string())?;
+        let st = ElementSystem::<N>::state(x).map_err(|e| e.to_string())?;
         let kin = sys.model.evaluate(&st).map_err(|e| e.to_string())?;
         let h = kin.contact.h;
         self.overshoot = self.overshoot.max(sys.overshoot(t));
@@ -380,9 +398,9 @@ impl PathStats {
         Ok(())
     }
 
-    fn add_output(
+    fn add_output<const N: usize>(
         &mut self,
-        sys: &ElementSystem,
+        sys: &ElementSystem<'_, N>,
         mode: PhaseMode,
         out: &SimOutput<PhaseMode>,
     ) -> Result<(), String> {
@@ -422,11 +440,12 @@ fn element_points(
     pts
 }
 
-/// Componentwise |x − y| as the max over the q, q̇ and ω parts (NaN propagates).
-fn part_defects(x: &[f64], y: &[f64]) -> [f64; 3] {
+/// Componentwise |x − y| as the max over the q, q̇ and ω parts of the state of an
+/// `nq`-joint finger (NaN propagates).
+fn part_defects(nq: usize, x: &[f64], y: &[f64]) -> [f64; 3] {
     let mut d = [0.0f64; 3];
     for (i, (xi, yi)) in x.iter().zip(y).enumerate() {
-        let part = (i / 3).min(2);
+        let part = (i / nq).min(2);
         d[part] = nan_max(d[part], (xi - yi).abs());
     }
     d
@@ -434,8 +453,8 @@ fn part_defects(x: &[f64], y: &[f64]) -> [f64; 3] {
 
 /// One DOPRI5 run of `sys` from (t0, x0) to t1: the output (the partial one if it failed)
 /// and why it failed.
-fn integrate(
-    sys: &ElementSystem,
+fn integrate<const N: usize>(
+    sys: &ElementSystem<'_, N>,
     settings: SimSettings,
     mode: PhaseMode,
     t0: f64,
@@ -453,16 +472,16 @@ fn integrate(
 
 /// max_i |x_end,i − x_i| of a run that reached its end (steps are recorded, so its last
 /// sample is the end state); NaN if it failed.
-fn end_defect(out: &SimOutput<PhaseMode>, err: &Option<String>, x: &[f64]) -> [f64; 3] {
+fn end_defect(nq: usize, out: &SimOutput<PhaseMode>, err: &Option<String>, x: &[f64]) -> [f64; 3] {
     match (err, out.trajectory.x.last()) {
-        (None, Some(xe)) => part_defects(xe, x),
+        (None, Some(xe)) => part_defects(nq, xe, x),
         _ => [f64::NAN; 3],
     }
 }
 
-fn verify_phase(
-    model: &Model<DynKernels>,
-    tau_max: [f64; 3],
+fn verify_phase<const N: usize>(
+    model: &Model<DynKernels<N>, N>,
+    tau_max: [f64; N],
     k: usize,
     mode: PhaseMode,
     tr: &PhaseTrajectory,
@@ -512,7 +531,7 @@ fn verify_phase(
             node_tau: ks.iter().map(|&j| tr.node_tau[j]).collect(),
             node_u: ks
                 .iter()
-                .map(|&j| [tr.u[j][0], tr.u[j][1], tr.u[j][2]])
+                .map(|&j| std::array::from_fn(|i| tr.u[j][i]))
                 .collect(),
             tau_max,
             interp,
@@ -534,7 +553,7 @@ fn verify_phase(
         rejected += out.stats.rejected_steps;
         rhs += out.stats.rhs_evals;
         let path = stats.add_output(&sys, mode, &out);
-        let d = end_defect(&out, &err, x_b);
+        let d = end_defect(N, &out, &err, x_b);
         match err.or(path.err()) {
             Some(msg) => {
                 failure.get_or_insert((out.t_final, format!("element {e}: {msg}")));
@@ -557,7 +576,7 @@ fn verify_phase(
             let (t0, t1) = (time(*s0), time(*s1));
             if t1 > t0 {
                 let (out, err) = integrate(&sys, plain.clone(), mode, t0, x0, t1);
-                let d = end_defect(&out, &err, x1);
+                let d = end_defect(N, &out, &err, x1);
                 interval_defect = d.into_iter().fold(interval_defect, nan_max);
             }
         }
@@ -580,7 +599,7 @@ fn verify_phase(
     let open_loop_defect = if open_loop_failure.is_some() {
         f64::NAN
     } else {
-        part_defects(&x_open, &x_colloc_end)
+        part_defects(N, &x_open, &x_colloc_end)
             .into_iter()
             .fold(0.0, nan_max)
     };
@@ -704,12 +723,6 @@ pub fn verify_with(
             expected: "finite and > 0",
         });
     }
-    if p.physics.nq != 3 {
-        return Err(StudyError::VerifyJoints {
-            scene: p.scene.name.clone(),
-            joints: p.physics.nq,
-        });
-    }
     if sol.raw.len() != p.modes.len() || sol.modes != p.modes {
         return Err(StudyError::ModeMismatch {
             solution: sol.modes.clone(),
@@ -723,27 +736,21 @@ pub fn verify_with(
             problem: p.epsilon,
         });
     }
-    let model = verification_model(p, eps)?;
-    let mut tau_max = [f64::INFINITY; 3];
-    for (t, m) in tau_max.iter_mut().zip(&p.physics.tau_max) {
-        if !m.is_nan() {
-            *t = m.abs();
+    let phases = match p.physics.nq {
+        1 => verify_phases::<1>(p, sol, opt, atol)?,
+        2 => verify_phases::<2>(p, sol, opt, atol)?,
+        3 => verify_phases::<3>(p, sol, opt, atol)?,
+        4 => verify_phases::<4>(p, sol, opt, atol)?,
+        5 => verify_phases::<5>(p, sol, opt, atol)?,
+        6 => verify_phases::<6>(p, sol, opt, atol)?,
+        7 => verify_phases::<7>(p, sol, opt, atol)?,
+        joints => {
+            return Err(StudyError::VerifyJoints {
+                scene: p.scene.name.clone(),
+                joints,
+            });
         }
-    }
-    let mut phases = Vec::with_capacity(sol.raw.len());
-    for (k, tr) in sol.raw.iter().enumerate() {
-        check_phase_data(k, tr, 9)?;
-        phases.push(verify_phase(
-            &model,
-            tau_max,
-            k,
-            sol.modes[k],
-            tr,
-            rtol,
-            atol,
-            opt.torque,
-        )?);
-    }
+    };
     let fold = |f: &dyn Fn(&PhaseVerification) -> f64| phases.iter().map(f).fold(0.0, nan_max);
     let max_defect = fold(&|p| p.defect);
     let max_interval_defect = fold(&|p| p.interval_defect);
@@ -766,4 +773,37 @@ pub fn verify_with(
         phases,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The phase verifications of [`verify_with`] for a finger of `N` joints (tolerances, modes
+/// and ε checked by the caller).
+fn verify_phases<const N: usize>(
+    p: &BuiltProblem,
+    sol: &OcpSolution,
+    opt: &VerifyOptions,
+    atol: f64,
+) -> Result<Vec<PhaseVerification>, StudyError> {
+    let eps = sol.epsilon;
+    let model = verification_model::<N>(p, eps)?;
+    let mut tau_max = [f64::INFINITY; N];
+    for (t, m) in tau_max.iter_mut().zip(&p.physics.tau_max) {
+        if !m.is_nan() {
+            *t = m.abs();
+        }
+    }
+    let mut phases = Vec::with_capacity(sol.raw.len());
+    for (k, tr) in sol.raw.iter().enumerate() {
+        check_phase_data(k, tr, N, State::<N>::DIM)?;
+        phases.push(verify_phase(
+            &model,
+            tau_max,
+            k,
+            sol.modes[k],
+            tr,
+            opt.rtol,
+            atol,
+            opt.torque,
+        )?);
+    }
+    Ok(phases)
 }

@@ -10,7 +10,7 @@ use bf_codegen::graph::Graph;
 use bf_codegen::spec::SceneId;
 use bf_optim::ocp::{Objective, Param, PointFunction, Scheme, VarRef};
 
-use super::guess::{PhaseDef, Q_GUESS};
+use super::guess::PhaseDef;
 use super::{COT_MAX_PERIOD, Problem, ProblemSettings};
 use crate::ProblemError;
 use crate::node::{CostKind, PhaseMode, Physics};
@@ -37,6 +37,8 @@ pub(crate) struct Context<'a> {
     pub(crate) physics: &'a Physics,
     pub(crate) eps: f64,
     pub(crate) settings: &'a ProblemSettings,
+    /// q⁰, the configuration of the default guess ([`super::guess::GuessConfigurations::free`]).
+    pub(crate) q_guess: &'a [f64],
 }
 
 /// What an archetype function builds.
@@ -72,7 +74,7 @@ impl Context<'_> {
     fn x_rest(&self) -> Vec<f64> {
         let nq = self.nq();
         let mut x = vec![0.0; self.nx()];
-        x[..nq].copy_from_slice(&Q_GUESS[..nq.min(3)]);
+        x[..nq].copy_from_slice(self.q_guess);
         x
     }
 }

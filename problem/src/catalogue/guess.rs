@@ -1,7 +1,16 @@
 //! Initial guesses of the catalogue's problems: the paper's constant guess (docs/parameters.md,
-//! Sect. 6.1: q ≡ [`Q_GUESS`], every duration 1 s) or an override ([`StartGuess`]), and the
-//! geometric guess that moves the finger linearly to a contact configuration found by
-//! bisection on h (eq. 4).
+//! Sect. 6.1: q ≡ q⁰, every duration 1 s) or an override ([`StartGuess`]), and the geometric
+//! guess that moves the finger linearly to a contact configuration found by bisection on h
+//! (eq. 4).
+//!
+//! The guess configurations of a scene ([`GuessConfigurations`], [`guess_configurations`]):
+//! a 3-joint finger starts from the paper's q⁰ = [`Q_GUESS`] and the pressed-in [`Q_DEEP`]; a
+//! finger with any other number of joints N from configurations solved for on its own
+//! geometry. They lie on the curl family q(c) = (q⁰₁, c, …, c) (N = 1: q(c) = (c)): the
+//! first joint at the paper's q⁰₁ and the others bent alike, as the paper's q⁰ bends joints 2
+//! and 3 towards the ball. The first c (scanned in steps of [`CURL_STEP`], either sign) with
+//! h(q(c)) < 0 is the pressed-in configuration, the root c_c of h(q(c)) = 0 before it
+//! (bisection) the contact configuration, and q(c_c / 2) the free configuration q⁰.
 
 use bf_codegen::Scene;
 use bf_optim::ocp::{Phase, PhaseGuess};
@@ -11,13 +20,105 @@ use crate::node::{CostKind, NodeOptions, PhaseMode, Physics, StickLevel, node_fu
 use crate::points::Diagnostics;
 pub use crate::start::StartGuess;
 
-/// The constant joint configuration of the default initial guess (docs/parameters.md: "q constant
-/// nonzero"): the finger bent towards the ball, h ≈ 0.95 r.
+/// The constant joint configuration of the default initial guess of a 3-joint finger
+/// (docs/parameters.md: "q constant nonzero"): the finger bent towards the ball, h ≈ 0.95 r.
 pub const Q_GUESS: [f64; 3] = [0.1, 0.6, 0.9];
 
-/// A configuration pressed into the ball (h < 0) used to find the contact configuration of
-/// the geometric guess by bisection on the segment [`Q_GUESS`] → `Q_DEEP`.
+/// A configuration of a 3-joint finger pressed into the ball (h < 0) used to find the contact
+/// configuration of the geometric guess by bisection on the segment [`Q_GUESS`] → `Q_DEEP`.
 pub const Q_DEEP: [f64; 3] = [0.1, 1.0, 1.6];
+
+/// Step of the scan of the curl family for fingers other than 3-joint ones (rad).
+pub const CURL_STEP: f64 = std::f64::consts::PI / 64.0;
+
+/// Bisection steps on h (eq. 4) for a contact configuration.
+const BISECTIONS: usize = 60;
+
+/// The joint configurations the guesses of a scene are made of (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GuessConfigurations {
+    /// q⁰: the constant configuration of the default guess and the rest configuration the
+    /// `reach` and free–stick problems start from (h > 0).
+    pub free: Vec<f64>,
+    /// A configuration pressed into the ball (h < 0); the contact configuration of the
+    /// geometric guess lies on the segment `free` → `deep`.
+    pub deep: Vec<f64>,
+}
+
+/// The curl family q(c) of an `nq`-joint finger (module docs).
+fn curl(nq: usize, c: f64) -> Vec<f64> {
+    if nq == 1 {
+        return vec![c];
+    }
+    std::iter::once(Q_GUESS[0])
+        .chain(std::iter::repeat_n(c, nq - 1))
+        .collect()
+}
+
+/// h(q) at rest.
+fn h_at(diag: &Diagnostics, q: &[f64]) -> f64 {
+    let mut x = vec![0.0; 2 * q.len() + 3];
+    x[..q.len()].copy_from_slice(q);
+    diag.eval(&x).h
+}
+
+/// The guess configurations of `scene` (module docs), with the smooth saturation of ε = `eps`
+/// in h (the catalogue passes the scene's `smooth_eps`). Errors when the finger of a scene without 3 joints touches the ball straight or never
+/// reaches it on its curl family.
+pub fn guess_configurations(scene: &Scene, eps: f64) -> Result<GuessConfigurations, ProblemError> {
+    let nq = scene.links.len();
+    if nq == 3 {
+        return Ok(GuessConfigurations {
+            free: Q_GUESS.to_vec(),
+            deep: Q_DEEP.to_vec(),
+        });
+    }
+    let diag = Diagnostics::new(scene, eps)?;
+    let fail = |reason: String| ProblemError::NoContactConfiguration {
+        scene: scene.name.clone(),
+        joints: nq,
+        reason,
+    };
+    let h0 = h_at(&diag, &curl(nq, 0.0));
+    if h0.is_nan() || h0 <= 0.0 {
+        return Err(fail(format!(
+            "h = {h0:e} m at q = {:?}, the finger touches the ball unbent",
+            curl(nq, 0.0)
+        )));
+    }
+    let steps = (std::f64::consts::PI / CURL_STEP).round() as usize;
+    // The smallest |c| at which the curled finger presses into the ball, either sign.
+    let deep = (1..=steps).find_map(|k| {
+        [1.0, -1.0].into_iter().find_map(|sign| {
+            let c = sign * k as f64 * CURL_STEP;
+            (h_at(&diag, &curl(nq, c)) < 0.0).then_some((c, sign))
+        })
+    });
+    let Some((c_deep, sign)) = deep else {
+        let family = if nq == 1 {
+            "(c)".to_string()
+        } else {
+            format!("({}, c, ..., c)", Q_GUESS[0])
+        };
+        return Err(fail(format!(
+            "h > 0 at every q(c) = {family} with |c| <= pi, the curled finger never reaches \
+             the ball"
+        )));
+    };
+    let (mut lo, mut hi) = (c_deep - sign * CURL_STEP, c_deep);
+    for _ in 0..BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        if h_at(&diag, &curl(nq, mid)) > 0.0 {
+            lo = mid
+        } else {
+            hi = mid
+        }
+    }
+    Ok(GuessConfigurations {
+        free: curl(nq, 0.5 * lo),
+        deep: curl(nq, c_deep),
+    })
+}
 
 /// One phase of an archetype: its mode, the bounds of its h and ḣ path rows (`None`: no
 /// row), its duration bounds and the duration of the default guess.
@@ -29,8 +130,8 @@ pub(crate) struct PhaseDef {
     pub(crate) guess_duration: f64,
 }
 
-/// The phases of `defs` with their node functions, bounds and the default (or `start`)
-/// constant guess.
+/// The phases of `defs` with their node functions, bounds and the default (q ≡ `q_guess`) or
+/// `start` constant guess.
 pub(crate) fn make_phases(
     scene: &Scene,
     ph: &Physics,
@@ -39,6 +140,7 @@ pub(crate) fn make_phases(
     eps: f64,
     points: usize,
     q_limits: &[(f64, f64)],
+    q_guess: &[f64],
     start: Option<&StartGuess>,
     stick: StickLevel,
 ) -> Result<Vec<Phase>, ProblemError> {
@@ -76,7 +178,7 @@ pub(crate) fn make_phases(
         let na = node.a.len();
         let mut xg = vec![0.0; 2 * nq + 3];
         for i in 0..nq {
-            xg[i] = start.map_or(Q_GUESS[i % 3], |sg| sg.q[i]);
+            xg[i] = start.map_or(q_guess[i], |sg| sg.q[i]);
             let (lo, hi) = q_limits[i];
             if lo.is_finite() || hi.is_finite() {
                 xg[i] = xg[i].clamp(lo, hi);
@@ -103,17 +205,17 @@ pub(crate) fn make_phases(
     Ok(out)
 }
 
-/// The contact configuration q_c on the segment Q_GUESS → Q_DEEP with h(q_c) = 0.
-fn contact_configuration(diag: &Diagnostics, nq: usize) -> Vec<f64> {
+/// The contact configuration q_c on the segment `conf.free` → `conf.deep` with h(q_c) = 0.
+fn contact_configuration(diag: &Diagnostics, nq: usize, conf: &GuessConfigurations) -> Vec<f64> {
     let at = |s: f64| -> Vec<f64> {
         let mut x = vec![0.0; 2 * nq + 3];
-        for i in 0..nq.min(3) {
-            x[i] = Q_GUESS[i] + s * (Q_DEEP[i] - Q_GUESS[i]);
+        for i in 0..nq {
+            x[i] = conf.free[i] + s * (conf.deep[i] - conf.free[i]);
         }
         x
     };
     let (mut lo, mut hi) = (0.0, 1.0);
-    for _ in 0..60 {
+    for _ in 0..BISECTIONS {
         let mid = 0.5 * (lo + hi);
         if diag.eval(&at(mid)).h > 0.0 {
             lo = mid
@@ -130,10 +232,11 @@ pub(crate) fn contact_guess(
     eps: f64,
     phases: &mut [Phase],
     modes: &[PhaseMode],
+    conf: &GuessConfigurations,
 ) -> Result<(), ProblemError> {
     let diag = Diagnostics::new(scene, eps)?;
     let nq = scene.links.len();
-    let qc = contact_configuration(&diag, nq);
+    let qc = contact_configuration(&diag, nq, conf);
     let qf: Vec<f64> = phases[0].guess.x[0][..nq].to_vec();
     let n = phases.len();
     for (k, ph) in phases.iter_mut().enumerate() {

@@ -62,7 +62,7 @@ use crate::node::{PhaseMode, Physics, StickLevel};
 use crate::solution::OcpSolution;
 use archetypes::Archetype;
 pub use extract::{node_kernel_source, solution_at, warm_initial_point};
-pub use guess::{Q_DEEP, Q_GUESS, StartGuess};
+pub use guess::{GuessConfigurations, Q_DEEP, Q_GUESS, StartGuess, guess_configurations};
 
 impl Problem {
     /// The compiled scene the problem is posed on.
@@ -128,10 +128,12 @@ pub const QC_OMEGA_REF: [f64; 3] = [0.0, 0.0, 2.2];
 /// Kind of the initial guess.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub enum GuessKind {
-    /// docs/parameters.md / Sect. 6.1: q ≡ q⁰ = [`Q_GUESS`], t_f⁽ⁱ⁾ = i, all else 0.
+    /// docs/parameters.md / Sect. 6.1: q ≡ q⁰ ([`BuiltProblem::guess`]`.free`, [`Q_GUESS`] for
+    /// a 3-joint finger), t_f⁽ⁱ⁾ = i, all else 0.
     Paper,
     /// Geometric: free phases move linearly between q⁰ and a contact configuration q_c
-    /// (h(q_c) = 0, found by bisection), stick phases hold q_c; velocities consistent.
+    /// (h(q_c) = 0, found by bisection between q⁰ and [`GuessConfigurations::deep`]), stick
+    /// phases hold q_c; velocities consistent.
     Contact,
     /// `Paper` first; if the solve fails, `Contact` (the default strategy).
     Auto,
@@ -245,6 +247,9 @@ pub struct BuiltProblem {
     pub settings: ProblemSettings,
     /// The build-time artefacts it was built with (for rebuilds with other settings).
     pub generated: Generated,
+    /// The joint configurations of its guesses (the scene's, see [`guess_configurations`]):
+    /// `free` is q⁰ of the default guess, where `reach` and the free–stick problems start.
+    pub guess: GuessConfigurations,
 }
 
 /// The scene `id` from `generated`.
@@ -312,12 +317,19 @@ fn build_inner(
             expected: "positive",
         });
     }
+    // The scene's ε, not the solve's: q⁰ is where `reach` starts, so it must not move with
+    // the ε of a continuation stage.
+    let conf = guess::guess_configurations(
+        &scene,
+        scene.contact.as_ref().map_or(0.01, |c| c.smooth_eps),
+    )?;
     let ctx = archetypes::Context {
         problem,
         scene: &scene,
         physics: &ph,
         eps,
         settings,
+        q_guess: &conf.free,
     };
     let spec = match problem.archetype() {
         Archetype::Periodic => archetypes::periodic(&ctx)?,
@@ -333,6 +345,7 @@ fn build_inner(
         eps,
         settings.points,
         &spec.q_limits,
+        &conf.free,
         settings.start.as_ref(),
         // LG: the index-1 stick constraint (see `node::node_function`).
         if settings.scheme == Scheme::Lg {
@@ -343,7 +356,7 @@ fn build_inner(
     )?;
     // A warm start replaces the whole initial point after the transcription (below).
     if settings.warm_start.is_none() && settings.guess == GuessKind::Contact {
-        guess::contact_guess(&scene, eps, &mut phases, &modes)?;
+        guess::contact_guess(&scene, eps, &mut phases, &modes, &conf)?;
     }
     let ocp = Ocp {
         phases,
@@ -367,6 +380,7 @@ fn build_inner(
         epsilon: eps,
         settings: settings.clone(),
         generated: *generated,
+        guess: conf,
     };
     if let Some(ws) = &settings.warm_start {
         // The element polynomials of the previous solution evaluated at the new mesh's points
