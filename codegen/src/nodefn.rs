@@ -6,8 +6,7 @@
 //! Nothing here is specific to a system: the ball-and-finger node functions (paper eq. 26/29,
 //! 14/27, 4/12/18, 60–65) are built by bf-problem on top of this module, and bf-optim
 //! evaluates any [`NodeFunction`] either through the kernels emitted here or by interpreting
-//! its graphs. Both compute every node with the same `f64` operation, so they agree bitwise
-//! (the sine and cosine of a graph variable are [`crate::trig::sin_cos_n`]'s in both).
+//! its graphs. Both compute every node with the same `f64` operation, so they agree bitwise.
 //!
 //! [`NodeFunction::collocation`] forms the outputs a collocation node evaluates (ẋ and the cost
 //! integrands scaled by T/2, eq. 51 mapped to τ ∈ [−1, 1]); [`Derivatives`] builds their exact
@@ -26,7 +25,7 @@ use quote::quote;
 use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
-use crate::emit::{EmitOptions, Ssa, f64_tokens, ssa_inner, trig_items};
+use crate::emit::{EmitOptions, Ssa, f64_tokens, lanes_items, ssa_inner};
 use crate::graph::{Graph, Id, Node};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
@@ -363,9 +362,7 @@ impl CompiledNode {
 /// `w` and `out` then hold the four nodes' entries interleaved (node `l`'s entry `k` at
 /// `4·k + l`), `fixed` is shared, and the body is the scalar body in a loop over the lanes `l`
 /// ([`crate::emit::lanes`]). `uses_w`: whether `roots` read the weights (only then the
-/// batched kernel checks their length). The sines and cosines of graph variables come from
-/// [`crate::trig::sin_cos_n`] (as in the dynamics kernels); the flag says whether the kernel
-/// calls it.
+/// batched kernel checks their length).
 fn kernel_fn(
     name: &Ident,
     doc: &str,
@@ -373,7 +370,7 @@ fn kernel_fn(
     roots: &[Id],
     x4: bool,
     uses_w: bool,
-) -> (TokenStream, bool) {
+) -> TokenStream {
     let lit = |i: u32| Literal::u32_unsuffixed(i);
     let var_tokens = |v: u32| -> TokenStream {
         match node.roles.get(v as usize).copied().unwrap_or(VarRole::Zero) {
@@ -400,22 +397,20 @@ fn kernel_fn(
             VarRole::Zero => f64_tokens(0.0),
         }
     };
-    let (
-        Ssa {
-            pre,
-            mut stmts,
-            refs,
-            ops,
-        },
-        fast_trig,
-    ) = ssa_inner(
+    let Ssa {
+        pre,
+        mut stmts,
+        refs,
+        ops,
+    } = ssa_inner(
         &node.graph,
         roots,
         &var_tokens,
         &EmitOptions::default(),
-        true,
+        false,
         x4,
-    );
+    )
+    .0;
     let nl = Literal::usize_unsuffixed(node.locals.len());
     let nf = Literal::usize_unsuffixed(node.fixed.len());
     let no = Literal::usize_unsuffixed(roots.len());
@@ -471,25 +466,24 @@ fn kernel_fn(
             ops.temporaries
         )
     };
-    let tokens = quote! {
+    quote! {
         #[doc = #doc]
         #[allow(unused_variables, clippy::all)]
         fn #name(local: &[f64], fixed: &[f64], w: &[f64], out: &mut [f64]) {
             #body
         }
-    };
-    (tokens, fast_trig)
+    }
 }
 
 #[cfg(feature = "emit")]
-/// Tokens of the three kernels of `node` (and, with `x4`, of their batched variants), of
-/// its `NodeKernel` table entry, and whether any of them calls `sin_cos_n`.
+/// Tokens of the three kernels of `node` (and, with `x4`, of their batched variants) and of
+/// its `NodeKernel` table entry.
 fn node_tokens(
     name: &str,
     what: &str,
     node: &CompiledNode,
     x4: bool,
-) -> (TokenStream, TokenStream, bool) {
+) -> (TokenStream, TokenStream) {
     let id = |s: &str| Ident::new(&format!("{name}_{s}"), Span::call_site());
     let (fv, fj, fh) = (id("value"), id("jacobian"), id("hessian"));
     let d = &node.derivs;
@@ -498,20 +492,14 @@ fn node_tokens(
         format!("Jacobian values of the {what} node function, pattern order."),
         format!("Lower-triangle Lagrangian Hessian values of the {what} node function."),
     ];
-    let mut trig = false;
-    let mut kernel = |name: &Ident, doc: &str, roots: &[Id], x4: bool, uses_w: bool| {
-        let (tokens, fast) = kernel_fn(name, doc, node, roots, x4, uses_w);
-        trig |= fast;
-        tokens
-    };
-    let value = kernel(&fv, &docs[0], &node.outputs, false, false);
-    let jac = kernel(&fj, &docs[1], &d.jac_ids, false, false);
-    let hess = kernel(&fh, &docs[2], &d.hess_ids, false, true);
+    let value = kernel_fn(&fv, &docs[0], node, &node.outputs, false, false);
+    let jac = kernel_fn(&fj, &docs[1], node, &d.jac_ids, false, false);
+    let hess = kernel_fn(&fh, &docs[2], node, &d.hess_ids, false, true);
     let (batched, batched_entry) = if x4 {
         let (bv, bj, bh) = (id("value_x4"), id("jacobian_x4"), id("hessian_x4"));
-        let value = kernel(&bv, &docs[0], &node.outputs, true, false);
-        let jac = kernel(&bj, &docs[1], &d.jac_ids, true, false);
-        let hess = kernel(&bh, &docs[2], &d.hess_ids, true, true);
+        let value = kernel_fn(&bv, &docs[0], node, &node.outputs, true, false);
+        let jac = kernel_fn(&bj, &docs[1], node, &d.jac_ids, true, false);
+        let hess = kernel_fn(&bh, &docs[2], node, &d.hess_ids, true, true);
         (
             quote!(#value #jac #hess),
             quote!(Some(NodeKernelX4 { value: #bv, jacobian: #bj, hessian: #bh })),
@@ -549,7 +537,7 @@ fn node_tokens(
             x4: #batched_entry,
         },
     };
-    (quote!(#value #jac #hess #batched), entry, trig)
+    (quote!(#value #jac #hess #batched), entry)
 }
 
 /// One node function to emit: its kernel name prefix, a phrase for the docs, and the compiled
@@ -569,27 +557,25 @@ pub struct NamedNode {
 #[cfg(feature = "emit")]
 /// The Rust source of the node kernels of `nodes`: one value, Jacobian and Hessian function
 /// per node (plus their batched `_x4` variants for the nodes with [`NamedNode::x4`], and the
-/// sine–cosine helper of [`crate::trig`] they call), and `pub static NODE_KERNELS:
+/// sine–cosine helper they call), and `pub static NODE_KERNELS:
 /// &[NodeKernel]` sorted by fingerprint. A node with the fingerprint of an earlier one is
 /// skipped (that kernel serves both). The including module must define `NodeKernel` and
 /// `NodeKernelX4`. Deterministic: the same nodes give the same text.
 pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
     let mut fns = Vec::new();
     let mut entries: Vec<(u128, TokenStream)> = Vec::new();
-    let mut trig = false;
     for n in nodes {
         if entries.iter().any(|e| e.0 == n.node.fingerprint) {
             continue;
         }
-        let (f, e, t) = node_tokens(&n.name, &n.what, &n.node, n.x4);
+        let (f, e) = node_tokens(&n.name, &n.what, &n.node, n.x4);
         fns.push(f);
         entries.push((n.node.fingerprint, e));
-        trig |= t;
     }
     entries.sort_by_key(|e| e.0);
     let items = entries.iter().map(|e| &e.1);
-    let helpers = if trig {
-        trig_items()?
+    let helpers = if nodes.iter().any(|n| n.x4) {
+        lanes_items()?
     } else {
         TokenStream::new()
     };

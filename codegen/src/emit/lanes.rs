@@ -1,5 +1,5 @@
-//! The lane scheme of the batched (`_x4`) node kernels, and a four-lane sine–cosine on the
-//! standard library's functions for batched code emitted without the fast trigonometry.
+//! The helper of the batched (`_x4`) node kernels: the standard library's sine and cosine of
+//! four lanes.
 //!
 //! A batched kernel evaluates four collocation nodes: its body is the scalar kernel's body
 //! inside `for l in 0..4`, every value an `f64` of lane `l`, so each lane computes exactly the
@@ -8,12 +8,12 @@
 //! vectoriser turns the loop into SIMD code (two lanes per SSE2 register on the baseline
 //! x86-64 target) — stable Rust without `unsafe`. Calls inside the loop would keep it scalar,
 //! so the sines and cosines of graph variables (the joint angles) are computed before the loop,
-//! four lanes per angle, by `sin_cos_n` itself ([`crate::trig`], whose lanes are independent;
-//! the node kernels of [`crate::nodefn::emit_node_kernels`]) or by [`sin_cos_lanes`] (code
-//! emitted without `batch_trig`).
+//! four lanes per angle, by [`sin_cos_lanes`] (kernels on the standard library's sin/cos) or
+//! by `sin_cos_n` itself ([`crate::trig`], whose lanes are independent).
 //!
-//! [`sin_cos_lanes`] is emitted verbatim ([`super::lanes_items`]) into a generated file that
-//! calls it; this module is the one source, compiled and tested here.
+//! The function below is emitted verbatim into the generated file of the node kernels
+//! ([`crate::nodefn::emit_node_kernels`]); this module is the one source, compiled and tested
+//! here.
 
 /// `f64::sin_cos` of each of four lanes, as arrays of sines and cosines.
 #[inline(always)]

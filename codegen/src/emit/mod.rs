@@ -327,8 +327,8 @@ pub fn trig_items() -> Result<TokenStream, CodegenError> {
     Ok(out)
 }
 
-/// The items of [`lanes`] (`sin_cos_lanes`, which lane code emitted without `batch_trig`
-/// calls) for a generated file, without the module's tests; emitted once per file.
+/// The items of [`lanes`] (`sin_cos_lanes`, which the batched node kernels call) for a
+/// generated file, without the module's tests; emitted once per file.
 pub fn lanes_items() -> Result<TokenStream, CodegenError> {
     let file: syn::File = syn::parse_str(include_str!("lanes.rs"))
         .map_err(|e| CodegenError::Internal(format!("lanes.rs does not parse: {e}")))?;
@@ -409,7 +409,7 @@ pub(crate) fn ssa_inner(
             }
             if lanes {
                 let helper = if batch_trig {
-                    quote!(sin_cos_n::<4>)
+                    quote!(sin_cos_n)
                 } else {
                     quote!(sin_cos_lanes)
                 };

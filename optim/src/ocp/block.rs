@@ -5,9 +5,7 @@
 //! fingerprint, [`bf_codegen::nodefn::fingerprint`]); when it holds one emitted from graphs
 //! with the same fingerprint, a [`GraphFn`] calls those flat Rust functions, otherwise it
 //! interprets the graphs with the programs below. Both compute every node with the same `f64`
-//! operation, so they agree bitwise: in particular the sine and cosine of a graph variable (the
-//! joint angles) are bf-codegen's fast ones ([`bf_codegen::trig::sin_cos_n`]), as in the
-//! emitted kernels, and those of any other argument the standard library's. With [`KernelUse::Require`] the caller states that the
+//! operation, so they agree bitwise. With [`KernelUse::Require`] the caller states that the
 //! kernels must be found: a graph that changed after the kernels were emitted is then an error
 //! of the transcription instead of a silent fall-back to the (slower) interpreter. A kernel
 //! may come with batched variants ([`NodeKernelX4`]) that evaluate four nodes per call
@@ -26,8 +24,7 @@
 //! weight or a constant, and the operations grouped into runs of one kind (level scheduling).
 //! One evaluation is one pass over the runs on a buffer the size of the cone (not of the whole
 //! graph, as `bf_codegen::interp::Tape` allocates), computing every node with the same `f64`
-//! operation as `Tape` on [`bf_codegen::interp::KernelF64`] (the emitted kernels' sine and
-//! cosine), so the values are bitwise those of the reference interpreter (tested).
+//! operation as `Tape`, so the values are bitwise those of the reference interpreter (tested).
 
 use bf_codegen::graph::{Graph, Id, Node};
 use bf_codegen::nodefn::{Derivatives, VarRole, fingerprint, var_roles};
@@ -102,13 +99,7 @@ enum Kind {
     Mul,
     Div,
     Neg,
-    /// Sine of a graph variable ([`bf_codegen::trig::sin_cos_n`]).
-    SinVar,
-    /// Cosine of a graph variable ([`bf_codegen::trig::sin_cos_n`]).
-    CosVar,
-    /// Sine of any other argument (standard library).
     Sin,
-    /// Cosine of any other argument (standard library).
     Cos,
     Sqrt,
     Abs,
@@ -183,14 +174,6 @@ impl Program {
                 Node::Mul(a, b) => (Kind::Mul, [a.index(), b.index(), 0, 0], 2),
                 Node::Div(a, b) => (Kind::Div, [a.index(), b.index(), 0, 0], 2),
                 Node::Neg(a) => (Kind::Neg, [a.index(), 0, 0, 0], 1),
-                // As the emitted kernels (`bf_codegen::emit`): the fast sine and cosine for
-                // graph variables, the standard library's for other arguments.
-                Node::Sin(a) if matches!(g.node(a), Node::Var(_)) => {
-                    (Kind::SinVar, [a.index(), 0, 0, 0], 1)
-                }
-                Node::Cos(a) if matches!(g.node(a), Node::Var(_)) => {
-                    (Kind::CosVar, [a.index(), 0, 0, 0], 1)
-                }
                 Node::Sin(a) => (Kind::Sin, [a.index(), 0, 0, 0], 1),
                 Node::Cos(a) => (Kind::Cos, [a.index(), 0, 0, 0], 1),
                 Node::Sqrt(a) => (Kind::Sqrt, [a.index(), 0, 0, 0], 1),
@@ -278,8 +261,6 @@ impl Program {
                 Kind::Mul => run!(|a| a(0) * a(1)),
                 Kind::Div => run!(|a| a(0) / a(1)),
                 Kind::Neg => run!(|a| -a(0)),
-                Kind::SinVar => run!(|a| bf_codegen::trig::sin_cos_n([a(0)]).0[0]),
-                Kind::CosVar => run!(|a| bf_codegen::trig::sin_cos_n([a(0)]).1[0]),
                 Kind::Sin => run!(|a| a(0).sin()),
                 Kind::Cos => run!(|a| a(0).cos()),
                 Kind::Sqrt => run!(|a| a(0).sqrt()),
@@ -574,12 +555,11 @@ impl GraphFn {
 mod tests {
     use super::*;
     use bf_codegen::diff;
-    use bf_codegen::interp::{KernelF64, Tape};
+    use bf_codegen::interp::Tape;
 
-    /// The compiled programs agree bitwise with bf-codegen's reference interpreter (on
-    /// [`KernelF64`], the emitted kernels' sine and cosine) on a graph that uses every node
-    /// kind, with fixed variables, a variable that is neither local nor fixed (reads 0), both
-    /// branches of min/max/if_lt, and the weighted Hessian.
+    /// The compiled programs agree bitwise with bf-codegen's reference interpreter on a graph
+    /// that uses every node kind, with fixed variables, a variable that is neither local nor
+    /// fixed (reads 0), both branches of min/max/if_lt, and the weighted Hessian.
     #[test]
     fn programs_match_reference_interpreter_bitwise() {
         let mut g = Graph::new();
@@ -630,44 +610,17 @@ mod tests {
             inp[..3].copy_from_slice(&pt);
             inp[7] = 1.75;
             inp[8..12].copy_from_slice(&weights);
-            let inp: Vec<KernelF64> = inp.into_iter().map(KernelF64).collect();
             let bits = |v: Vec<f64>| v.into_iter().map(f64::to_bits).collect::<Vec<_>>();
-            let reference = |ids: &[Id]| {
-                let v = Tape::new(&g, ids).eval(&inp);
-                v.into_iter().map(|x| x.0.to_bits()).collect::<Vec<_>>()
-            };
-            assert_eq!(bits(f.eval(&pt)), reference(&outs));
-            assert_eq!(bits(f.jacobian(&pt)), reference(&jac_ids));
-            assert_eq!(bits(f.hessian(&pt, &weights)), reference(&hess_ids));
+            assert_eq!(bits(f.eval(&pt)), bits(Tape::new(&g, &outs).eval(&inp)));
+            assert_eq!(
+                bits(f.jacobian(&pt)),
+                bits(Tape::new(&g, &jac_ids).eval(&inp))
+            );
+            assert_eq!(
+                bits(f.hessian(&pt, &weights)),
+                bits(Tape::new(&g, &hess_ids).eval(&inp))
+            );
         }
-    }
-
-    /// The sine and cosine of a graph variable are bf-codegen's fast ones (as in the emitted
-    /// kernels), those of another argument the standard library's: checked at an angle where
-    /// the two differ in the last bit (the sine or the cosine).
-    #[test]
-    fn trig_of_variables_is_the_emitted_kernels_trig() {
-        use bf_codegen::trig::sin_cos_n;
-        let x = (1..10_000)
-            .map(|i| 0.37 * i as f64)
-            .find(|&x| {
-                let ([s], [c]) = sin_cos_n([x]);
-                s != x.sin() || c != x.cos()
-            })
-            .expect("an angle where the fast sin or cos differs from libm");
-        let mut g = Graph::new();
-        let x0 = g.var(0);
-        let ax = g.abs(x0);
-        let outs = [g.sin(x0), g.cos(x0), g.sin(ax), g.cos(ax)];
-        let f = GraphFn::new(&mut g, &outs, &[0], &[]);
-        let ([s], [c]) = sin_cos_n([x]);
-        let v = f.eval(&[x]);
-        let bits: Vec<u64> = v.iter().map(|y| y.to_bits()).collect();
-        assert_eq!(
-            bits,
-            [s, c, x.sin(), x.cos()].map(f64::to_bits).to_vec(),
-            "x = {x}"
-        );
     }
 
     #[test]
