@@ -5,11 +5,18 @@
 //! Both backends give bitwise equal results (`tests/node_kernels.rs`); the ratio of the two
 //! medians measured in the same run is the speed-up of emitting the kernels.
 //!
+//! A second group evaluates the whole NLP (constraints, Jacobian and Hessian values, at the
+//! initial point with random multipliers) with the collocation nodes in batches of four
+//! ([`Transcription::batch_nodes`](bf_optim::ocp::Transcription::batch_nodes) on, the default)
+//! and node by node (off): bitwise the same values, so the ratio is what the batched kernels
+//! save per solver iteration.
+//!
 //! `cargo bench --bench node_kernels`
 
 use std::hint::black_box;
 
 use ball_finger::study::{GENERATED, build};
+use bf_optim::ipm::Nlp;
 use bf_optim::ocp::{GraphFn, KernelUse};
 use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -58,6 +65,28 @@ fn bench(c: &mut Criterion) {
                     }
                 }
                 black_box(s)
+            })
+        });
+    }
+    group.finish();
+
+    let x = p.nlp.initial().to_vec();
+    let lambda: Vec<f64> = (0..p.nlp.num_constraints())
+        .map(|_| rng.random_range(-1.0..1.0))
+        .collect();
+    let mut g = vec![0.0; p.nlp.num_constraints()];
+    let mut jac = vec![0.0; p.nlp.jacobian_structure().len()];
+    let mut hess = vec![0.0; p.nlp.hessian_structure().len()];
+    let mut group = c.benchmark_group("nlp_periodic_qc_radau3x10");
+    for (label, batch) in [("batched", true), ("node_by_node", false)] {
+        let mut nlp = p.nlp.clone();
+        nlp.batch_nodes = batch;
+        group.bench_function(label, |b| {
+            b.iter(|| {
+                nlp.constraints(&x, &mut g);
+                nlp.jacobian_values(&x, &mut jac);
+                nlp.hessian_values(&x, 1.0, &lambda, &mut hess);
+                black_box(g[0] + jac[0] + hess[0])
             })
         });
     }

@@ -1,7 +1,10 @@
 //! The batched (`_x4`) node kernels against the scalar ones: on four random nodes per call,
 //! every lane of the value, Jacobian and Hessian kernels is bitwise the scalar kernel's result
-//! for that node, for every emitted node kernel, with joint angles both small and large (the
-//! sine–cosine path) and the weights of the Hessian differing per node.
+//! for that node, for every node kernel emitted with batched variants, with joint angles both
+//! small and large (the sine–cosine path, including lanes beyond its fast range next to lanes
+//! within it) and the weights of the Hessian differing per node. The batched variants exist
+//! for the shapes of the catalogue's default settings (no ḣ margin row, velocity-level stick
+//! constraint) and only for those.
 //!
 //! `cargo test --release -p bf-generated --test node_kernels_x4`
 
@@ -19,12 +22,21 @@ fn every_lane_of_a_batched_node_kernel_is_the_scalar_kernel_bitwise() {
     let mut rng = ChaCha8Rng::seed_from_u64(44);
     let mut checked = 0;
     for k in NODE_KERNELS {
-        let x4 =
-            k.x4.unwrap_or_else(|| panic!("{}: no batched kernels", k.name));
+        let option_shape = k.name.contains("_hdot") || k.name.ends_with("_acc");
+        let Some(x4) = k.x4 else {
+            assert!(option_shape, "{}: no batched kernels", k.name);
+            continue;
+        };
+        assert!(!option_shape, "{}: batched kernels for an option", k.name);
         for round in 0..20 {
             // Angles up to 1e3 rad in some rounds: far from the first period, as after a
-            // few spins of a joint in a bad iterate.
-            let scale = if round % 4 == 3 { 1e3 } else { 3.0 };
+            // few spins of a joint in a bad iterate; in the last round up to 2e6 rad, so that
+            // lanes beyond the fast sine–cosine range (2²⁰) sit next to lanes within it.
+            let scale = match round {
+                19 => 2e6,
+                r if r % 4 == 3 => 1e3,
+                _ => 3.0,
+            };
             // Interleaved: node l's entry j at 4j + l.
             let local: Vec<f64> = (0..4 * k.n_local)
                 .map(|i| {
@@ -67,5 +79,5 @@ fn every_lane_of_a_batched_node_kernel_is_the_scalar_kernel_bitwise() {
             }
         }
     }
-    assert!(checked > 100_000, "only {checked} values compared");
+    assert!(checked > 50_000, "only {checked} values compared");
 }

@@ -3,11 +3,30 @@
 //! [`compile_node`] and emitted by bf-codegen's [`bf_codegen::nodefn::emit_node_kernels`].
 //! bf-generated's build script calls [`emit_node_kernels`] for every scene; at run time the
 //! collocation finds those kernels by the fingerprint of the node function it builds.
+//!
+//! Batched variants (four collocation nodes per call) are emitted only for the shapes that the
+//! catalogue's default settings build ([`NodeKernelSpec::x4`]): they double a kernel's code,
+//! and the other shapes (Legendre–Gauss stick phases, the ḣ margin row) are options.
 
 use bf_codegen::nodefn::{CompiledNode, NamedNode};
 use bf_codegen::{CodegenError, Scene};
 
 use crate::node::{CostKind, NodeOptions, PhaseMode, StickLevel, node_function};
+
+/// One node function emitted as kernels ([`node_kernel_specs`]).
+#[derive(Debug, Clone)]
+pub struct NodeKernelSpec {
+    /// Kernel name prefix, `<scene>_<cost>_<phase>`.
+    pub name: String,
+    /// The node function's options.
+    pub options: NodeOptions,
+    /// Stick-constraint level (acceleration only for Legendre–Gauss).
+    pub level: StickLevel,
+    /// Whether the batched (`_x4`) variants are emitted too: for the shapes of the
+    /// catalogue's default settings (Radau collocation, so the velocity-level stick
+    /// constraint, and no ḣ margin row).
+    pub x4: bool,
+}
 
 /// The node functions emitted as kernels for a scene with a ball and a contact, for every cost
 /// kind of the scene's `ocp_kernels` (default: all), shaped as the problem library uses them:
@@ -16,8 +35,18 @@ use crate::node::{CostKind, NodeOptions, PhaseMode, StickLevel, node_function};
 /// archetypes' costs (track, reorient, spin) the stick phase with the |h| row at both levels;
 /// `reach`'s time–effort cost has no stick phase. Other shapes are interpreted. Names are
 /// `<scene>_<cost>_<phase>`. Empty without a ball or a contact.
-pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)> {
+pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
     let mut out = Vec::new();
+    // Default settings: no ḣ margin row, velocity-level stick constraint (Radau).
+    let mut push = |name: String, options: NodeOptions, level: StickLevel| {
+        let x4 = options.hdot_bounds.is_none() && level == StickLevel::Velocity;
+        out.push(NodeKernelSpec {
+            name,
+            options,
+            level,
+            x4,
+        });
+    };
     if scene.ball.is_none() || scene.contact.is_none() {
         return out;
     }
@@ -35,14 +64,14 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
             eps: 0.01,
         };
         let name = |s: &str| format!("{}_{}_{s}", scene.name, cost.tag());
-        out.push((name("free"), base.clone(), StickLevel::Velocity));
+        push(name("free"), base.clone(), StickLevel::Velocity);
         let (stick, tag) = match cost {
             CostKind::Qc { .. } | CostKind::Cot { .. } => {
                 let margin = NodeOptions {
                     hdot_bounds: Some((f64::NEG_INFINITY, 0.0)),
                     ..base.clone()
                 };
-                out.push((name("free_hdot"), margin, StickLevel::Velocity));
+                push(name("free_hdot"), margin, StickLevel::Velocity);
                 let stick = NodeOptions {
                     mode: PhaseMode::Stick,
                     h_bounds: None,
@@ -59,8 +88,8 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<(String, NodeOptions, StickLevel)
                 (stick, "stick_h")
             }
         };
-        out.push((name(tag), stick.clone(), StickLevel::Velocity));
-        out.push((name(&format!("{tag}_acc")), stick, StickLevel::Acceleration));
+        push(name(tag), stick.clone(), StickLevel::Velocity);
+        push(name(&format!("{tag}_acc")), stick, StickLevel::Acceleration);
     }
     out
 }
@@ -79,7 +108,8 @@ pub fn compile_node(
 
 /// The Rust source of the node kernels of `scenes` (those with a ball and a contact; the
 /// others are skipped): one value, Jacobian and Hessian function per [`node_kernel_specs`]
-/// entry (and their batched `_x4` variants, four collocation nodes at once), and
+/// entry (and, for the entries with [`NodeKernelSpec::x4`], their batched `_x4` variants,
+/// four collocation nodes at once), and
 /// `pub static NODE_KERNELS: &[NodeKernel]` sorted by fingerprint. Specs with the
 /// structure of an earlier one (QC and tracking share their integrands, the constants being
 /// inputs) share its kernel. The including module must define `NodeKernel` and
@@ -88,16 +118,27 @@ pub fn compile_node(
 pub fn emit_node_kernels(scenes: &[&Scene]) -> Result<String, CodegenError> {
     let mut nodes = Vec::new();
     for scene in scenes {
-        for (name, opt, level) in node_kernel_specs(scene) {
-            let node = compile_node(scene, &opt, level)?;
-            let what = format!("`{name}` (scene `{}`, {:?} level)", scene.name, level);
+        for spec in node_kernel_specs(scene) {
+            let node = compile_node(scene, &spec.options, spec.level)?;
+            let what = format!(
+                "`{}` (scene `{}`, {:?} level)",
+                spec.name, scene.name, spec.level
+            );
             nodes.push(NamedNode {
-                name,
+                name: spec.name,
                 what,
                 node,
-                x4: true,
+                x4: spec.x4,
             });
         }
+    }
+    // A kernel serves every spec with its fingerprint (the first one names it): batched if
+    // any of them asks for it.
+    for i in 0..nodes.len() {
+        let fp = nodes[i].node.fingerprint;
+        nodes[i].x4 |= nodes[i + 1..]
+            .iter()
+            .any(|n| n.x4 && n.node.fingerprint == fp);
     }
     bf_codegen::nodefn::emit_node_kernels(&nodes)
 }
@@ -169,6 +210,59 @@ mod tests {
             for j in 0..i {
                 assert_ne!(all[i], all[j], "{i} vs {j}");
             }
+        }
+    }
+
+    #[cfg(feature = "catalogue")]
+    fn scene_toml(name: &str) -> Option<&'static str> {
+        match name {
+            "paper" => Some(include_str!("../../scenes/paper.toml")),
+            "human" => Some(include_str!("../../scenes/human.toml")),
+            _ => None,
+        }
+    }
+
+    /// The batched variants are emitted for exactly the node functions that the catalogue's
+    /// problems build with default settings (so none is missing where the transcription would
+    /// batch, and none is emitted for nothing).
+    #[cfg(feature = "catalogue")]
+    #[test]
+    fn batched_kernels_are_those_of_the_default_settings() {
+        let generated = crate::Generated {
+            scene_toml,
+            kernels: bf_optim::ocp::KernelUse::Never,
+        };
+        let mut used = std::collections::BTreeSet::new();
+        for problem in crate::Problem::ALL {
+            let p = crate::build(problem, &crate::ProblemSettings::default(), &generated)
+                .unwrap_or_else(|e| panic!("{}: {e}", problem.name()));
+            for ph in &p.ocp.phases {
+                let c = ph.node.collocation();
+                let node = CompiledNode::new(c.graph, c.outputs, c.locals, ph.node.fixed.clone());
+                used.insert(node.fingerprint);
+            }
+        }
+        let mut batched = std::collections::BTreeSet::new();
+        let mut scalar_only = Vec::new();
+        for name in ["paper", "human"] {
+            let scene = Scene::from_toml_str(scene_toml(name).unwrap(), name).unwrap();
+            for spec in node_kernel_specs(&scene) {
+                let fp = compile_node(&scene, &spec.options, spec.level)
+                    .unwrap()
+                    .fingerprint;
+                if spec.x4 {
+                    batched.insert(fp);
+                } else {
+                    scalar_only.push((spec.name, fp));
+                }
+            }
+        }
+        assert_eq!(used, batched);
+        for (name, fp) in scalar_only {
+            assert!(
+                !used.contains(&fp),
+                "{name} is used by default but not batched"
+            );
         }
     }
 

@@ -105,6 +105,10 @@ pub struct Transcription {
     hess_pattern: Vec<(usize, usize)>,
     /// Row names by range, for diagnostics.
     pub row_blocks: Vec<(String, std::ops::Range<usize>)>,
+    /// Whether runs of four consecutive collocation nodes of a node function with batched
+    /// kernels are evaluated in one batched call (default: on). The values are bitwise the
+    /// same either way; off evaluates every node by itself (to time both).
+    pub batch_nodes: bool,
 }
 
 /// The LG integration matrix A = D₁⁻¹, where D₁ = (D_kj), k, j = 1..N, is the Gauss
@@ -547,6 +551,7 @@ impl Transcription {
             jac_pattern,
             hess_pattern,
             row_blocks,
+            batch_nodes: true,
         };
         tr.init_cost_states();
         Ok(tr)

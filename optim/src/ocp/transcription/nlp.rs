@@ -5,25 +5,16 @@
 //! Instances are evaluated in order; four consecutive instances of one node function with
 //! batched kernels (the collocation nodes of a phase) are evaluated in one batched call
 //! ([`GraphFn::eval_x4`]), the rest one by one, with bitwise the same values either way.
-//! Setting the environment variable `BF_NODE_X4=0` evaluates every node one by one (for
-//! timing whole solves both ways; BENCHMARKS.md).
-
-use std::sync::OnceLock;
+//! [`Transcription::batch_nodes`] off evaluates every node one by one.
 
 use super::super::block::Part;
 use super::*;
-
-/// Whether nodes are evaluated in batches of four: yes unless `BF_NODE_X4` is `0`.
-fn batching() -> bool {
-    static ON: OnceLock<bool> = OnceLock::new();
-    *ON.get_or_init(|| std::env::var("BF_NODE_X4").map_or(true, |v| v != "0"))
-}
 
 impl Transcription {
     /// Evaluates `part` of every instance at `x` and hands each instance's values to `sink`, in
     /// instance order. For [`Part::Hessian`], the weights of an instance are its targets'
     /// multipliers Σ c·λ_r. Runs of four consecutive instances of one function with batched
-    /// kernels take one batched call.
+    /// kernels take one batched call ([`Transcription::batch_nodes`]).
     fn eval_instances(
         &self,
         x: &[f64],
@@ -43,8 +34,8 @@ impl Transcription {
         while i < self.inst.len() {
             let it = &self.inst[i];
             let f = &self.fns[it.f];
-            if f.has_x4()
-                && batching()
+            if self.batch_nodes
+                && f.has_x4()
                 && let Some(group) = self.inst.get(i..i + 4)
                 && group
                     .iter()
@@ -182,6 +173,7 @@ impl Nlp for Transcription {
 
 #[cfg(test)]
 mod tests {
+    use std::sync::OnceLock;
     use std::sync::atomic::{AtomicUsize, Ordering};
 
     use super::*;
@@ -292,5 +284,16 @@ mod tests {
         assert_eq!(BATCHED_CALLS.load(Ordering::Relaxed) - before, 6);
         // The values are not all zero (the comparison compares something).
         assert!(h0.iter().any(|&v| v != 0.0) && g0.iter().any(|&v| v != 0.0));
+        // With `batch_nodes` off the same kernels run node by node: no batched call, the
+        // same values.
+        let mut single = batched.clone();
+        single.batch_nodes = false;
+        let before = BATCHED_CALLS.load(Ordering::Relaxed);
+        let (mut g2, mut h2) = (vec![0.0; m], vec![0.0; nh]);
+        single.constraints(&x, &mut g2);
+        single.hessian_values(&x, 0.7, &lambda, &mut h2);
+        assert_eq!(bits(&g0), bits(&g2));
+        assert_eq!(bits(&h0), bits(&h2));
+        assert_eq!(BATCHED_CALLS.load(Ordering::Relaxed), before);
     }
 }
