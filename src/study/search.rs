@@ -202,8 +202,11 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
 
 /// Re-solves a refined candidate that ended Acceptable on its own mesh, from its own
 /// primal-dual point, with the raised KKT dual regularization ([`RAISED_DUAL_REGULARIZATION`]):
-/// warm-started refinement rounds on fine Radau meshes often stall at the acceptable level with
-/// the default one, and from the stalled point the raised one converges in a few iterations.
+/// warm-started refinement rounds on fine Radau meshes often stall at the acceptable level,
+/// and a new warm-started solve from the stalled point ([`super::warm_settings`]: μ₀ = 1e-4,
+/// small bound pushes) converges in a few iterations. The stalled round has usually raised its
+/// δ_c to the same value within the solve already, so it is the restart that helps
+/// (decision record 0002).
 /// Returns the polished candidate when it ends Solved and verified, with its record.
 fn polish(
     problem: Problem,

@@ -6,8 +6,10 @@
 //! the solver raises to 3e-8 within a solve where 2 × 2 (variable, constraint row) pivots show
 //! plain AMD's bare −δ_c pivots to mislead the inertia test or a factor is inaccurate. LG
 //! solves start at δ_c = [`LG_DUAL_REGULARIZATION`] = 3e-8: with the in-solve growth from
-//! 1e-9, `periodic-cot` LG-30 needs 492 iterations instead of 65 (BENCHMARKS.md). A failed
-//! solve is not repeated with other KKT settings.
+//! 1e-9, `periodic-cot` LG-30 needs 492 iterations instead of 65 (BENCHMARKS.md). That is a
+//! choice of path, not a correction of the factorization: the runs take the same, genuine
+//! inertia corrections until rounding-level differences separate them, and neighbouring starts
+//! scatter (decision record 0002). A failed solve is not repeated with other KKT settings.
 
 use std::time::Instant;
 
