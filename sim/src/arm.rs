@@ -14,7 +14,7 @@ use bf_model::arm::ArmModel;
 use serde::Serialize;
 
 use crate::trajectory::write_atomic;
-use crate::{Guard, HybridSystem, Input, SimError, SimOutput, SimStats, Transition};
+use crate::{HybridSystem, Input, SimError, SimOutput, SimStats};
 
 /// The single mode of [`FreeArm`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -116,21 +116,6 @@ impl<I: Input> HybridSystem for FreeArm<I> {
         dx[..n].copy_from_slice(&x[n..]);
         dx[n..].copy_from_slice(&qdd);
         Ok(())
-    }
-    fn guards(&self, _: ArmMode) -> Vec<Guard> {
-        Vec::new()
-    }
-    fn guard_values(&self, _: ArmMode, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
-        Ok(())
-    }
-    fn reset(
-        &self,
-        _: ArmMode,
-        _: usize,
-        _: f64,
-        _: &mut [f64],
-    ) -> Result<Transition<ArmMode>, SimError> {
-        Ok(Transition::To(ArmMode::Free))
     }
 }
 

@@ -108,17 +108,15 @@ pub enum StudyError {
         /// The OCP's physics (`Debug` form).
         ocp: String,
     },
-    /// Verification of a scene whose finger has more joints than the verification runs
-    /// ([`super::verify::MAX_VERIFY_JOINTS`]).
-    #[error(
-        "verification re-integrates fingers with 1 to {max} joints, `{scene}` has {joints}",
-        max = super::verify::MAX_VERIFY_JOINTS
-    )]
+    /// Verification of a scene whose finger has more joints than the verification runs.
+    #[error("verification re-integrates fingers with 1 to {max} joints, `{scene}` has {joints}")]
     VerifyJoints {
         /// The scene.
         scene: String,
         /// Its joints.
         joints: usize,
+        /// The most joints the verification runs (`verify::MAX_VERIFY_JOINTS`).
+        max: usize,
     },
     /// The solution to verify has other phase modes than the problem.
     #[error(

@@ -66,7 +66,7 @@ use bf_model::{ContactVariant, DynKernels, Model, State, TransitionSettings, Vec
 use bf_optim::ocp::PhaseTrajectory;
 use bf_optim::ocp::nodes::lagrange_basis;
 use bf_problem::{BuiltProblem, OcpSolution, PhaseMode};
-use bf_sim::{Guard, HybridSystem, SimError, SimOutput, SimSettings, Transition};
+use bf_sim::{HybridSystem, SimError, SimOutput, SimSettings};
 
 use super::error::{PhaseDataDefect, StudyError};
 
@@ -175,24 +175,6 @@ impl<const N: usize> HybridSystem for ElementSystem<'_, N> {
         .map_err(SimError::system)?;
         acc.write_state_derivative(&st.qd, dx);
         Ok(())
-    }
-
-    fn guards(&self, _mode: PhaseMode) -> Vec<Guard> {
-        Vec::new()
-    }
-
-    fn guard_values(&self, _: PhaseMode, _: f64, _: &[f64], _: &mut [f64]) -> Result<(), SimError> {
-        Ok(())
-    }
-
-    fn reset(
-        &self,
-        mode: PhaseMode,
-        _: usize,
-        _: f64,
-        _: &mut [f64],
-    ) -> Result<Transition<PhaseMode>, SimError> {
-        Ok(Transition::To(mode))
     }
 }
 
@@ -748,6 +730,7 @@ pub fn verify_with(
             return Err(StudyError::VerifyJoints {
                 scene: p.scene.name.clone(),
                 joints,
+                max: MAX_VERIFY_JOINTS,
             });
         }
     };

@@ -409,7 +409,7 @@ pub(crate) fn ssa_inner(
             }
             if lanes {
                 let helper = if batch_trig {
-                    quote!(sin_cos_n)
+                    quote!(sin_cos_n::<4>)
                 } else {
                     quote!(sin_cos_lanes)
                 };
