@@ -42,14 +42,19 @@ use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3, VecN};
 use bf_output::{DirSpec, Outcome, OutputDir};
-use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
 use bf_sim::{
     Input, Method, PdController, SimError, SimSettings, Simulator, TorqueSeries, TrackingPd,
 };
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal as _;
 use std::time::{Duration, Instant};
+
+mod arm;
+mod progress;
+mod scene;
+
+use arm::run_arm;
+use progress::Progress;
+pub use scene::scene_of_args;
 
 /// The output directory of `simulate`.
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
@@ -467,201 +472,6 @@ fn run_contact<const N: usize>(
     run_model(args, run_opts, model, source, inp, opts, set, mode0, x0)
 }
 
-/// Free motion of an arm without a ball (any number of joints, `bf_sim::arm`): τ from
-/// `--torques` (one column per joint), `--pd` (one target per joint) or zero; initial state
-/// from `--q0`/`--qd0` (default 0). Writes `trajectory.csv` and `summary.json`.
-fn run_arm(
-    args: &SimulateArgs,
-    run_opts: RunOptions,
-    scene: &bf_codegen::Scene,
-    scene_label: &str,
-) -> Result<()> {
-    let n = scene.links.len();
-    let name = &scene.name;
-    if !(args.t_end.is_finite() && args.t_end > 0.0) {
-        bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
-    }
-    // `--init` an arm solution.json (`optimize --problem reach-arm`): replay its optimal
-    // torques from its start at rest, over its duration.
-    let replay = match &args.init {
-        Some(p) => Some(arm_replay(p, n)?),
-        None => None,
-    };
-    for (opt, given) in [
-        ("--omega0", args.omega0.is_some()),
-        ("--mode0", args.mode0 != "free"),
-    ] {
-        if given {
-            bail!(
-                "{opt}: scene `{name}` ({scene_label}) has no ball; only free motion of the arm is simulated (use --q0, --qd0)"
-            );
-        }
-    }
-    let set = settings(args)?;
-    check_limits(args, &set)?;
-    let q0 = match (&args.q0, &replay) {
-        (Some(s), _) => parse_list("--q0", s, Some(n))?,
-        (None, Some((q, _, _))) => q.clone(),
-        (None, None) => vec![0.0; n],
-    };
-    let qd0 = match &args.qd0 {
-        Some(s) => parse_list("--qd0", s, Some(n))?,
-        None => vec![0.0; n],
-    };
-    let inp = if let Some(path) = &args.torques {
-        let s = TorqueSeries::from_path(path)?;
-        if s.dim() != n {
-            bail!(
-                "{}: scene `{name}` has {n} joints, the torque series has {} columns",
-                path.display(),
-                s.dim()
-            );
-        }
-        CliInput::Series(s)
-    } else if let Some(target) = &args.pd {
-        CliInput::Pd(pd_controller(args, target, n)?)
-    } else if let Some((_, series, _)) = &replay {
-        CliInput::Series(series.clone())
-    } else {
-        CliInput::Arm(n)
-    };
-    let t_end = replay.as_ref().map_or(args.t_end, |r| r.2);
-    let setup = Instant::now();
-    let (model, source) = bf_model::arm::ArmModel::from_scene(scene)
-        .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
-    eprintln!(
-        "simulate: scene `{name}` from {scene_label} (no ball: free motion of {n} joints) on the \
-         {source} kernels{}",
-        interpreted_note(source, setup.elapsed())
-    );
-    let sys = FreeArm::new(model, inp)?;
-    let x0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
-    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
-    if let Some(k) = run_opts.fail_at_write {
-        out_dir.inject_fault_at_write(k);
-    }
-    let start = Instant::now();
-    let (out, error) = match bf_sim::simulate(&sys, set, ArmMode::Free, 0.0, &x0, t_end) {
-        Ok(out) => (out, None),
-        Err(f) => {
-            let f = *f;
-            let e = format!("simulation failed at t = {} s: {}", f.t, f.error);
-            (f.partial, Some(e))
-        }
-    };
-    let mut report = sys
-        .report(&out, start.elapsed().as_secs_f64())
-        .map_err(|e| anyhow!("{e}"))?;
-    report.summary.kernels = Some(source.name().to_string());
-    out_dir.file("summary.json")?;
-    report
-        .write_dir(out_dir.path(), error.as_deref())
-        .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
-        .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
-    out_dir.commit(match &error {
-        Some(e) => Outcome::Failed(e),
-        None => Outcome::Success,
-    })?;
-    crate::outln!("{}", report.summary)?;
-    crate::outln!("output: {}", args.out.display())?;
-    match error {
-        Some(e) => bail!("{e}"),
-        None => Ok(()),
-    }
-}
-
-/// The scene of the run and how to name it in messages: `--scene` (with `--param`); without
-/// it, the scene recorded in the `--init` solution (an arm solution's stored scene text, or the
-/// compiled scene a ball problem's solution names), else scenes/paper.toml.
-pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
-    if let Some(path) = &args.scene {
-        let (scene, _) = super::load_scene_with_params(path, &args.param)?;
-        return Ok((scene, path.display().to_string()));
-    }
-    if let Some(init) = &args.init {
-        let text = std::fs::read_to_string(init)
-            .with_context(|| format!("{}: cannot read initial-state file", init.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{}: initial-state file is not JSON", init.display()))?;
-        let label = format!("the scene recorded in {}", init.display());
-        let mut scene = if let Some(toml) = v.get("scene_toml").and_then(|t| t.as_str()) {
-            let name = v.get("scene").and_then(|n| n.as_str()).unwrap_or("scene");
-            let mut scene = bf_codegen::Scene::from_toml_str(toml, &label)?;
-            let stored: Vec<(String, f64)> = v
-                .get("scene_params")
-                .cloned()
-                .map(serde_json::from_value)
-                .transpose()
-                .with_context(|| format!("{}: `scene_params`", init.display()))?
-                .unwrap_or_default();
-            bf_model::registry::set_parameters(&mut scene, &stored)
-                .map_err(|e| anyhow!("{label} (`{name}`): {e}"))?;
-            scene
-        } else if let Some(name) = v.get("scene").and_then(|n| n.as_str()) {
-            if v.get("kernels").and_then(|k| k.as_str()) == Some("interpreted") {
-                bail!(
-                    "{}: the solution was posed on a scene file of its own (`{name}`, \
-                     interpreted kernels) that it does not store; give it with --scene",
-                    init.display()
-                );
-            }
-            let toml = bf_generated::scene_toml(name).ok_or_else(|| {
-                anyhow!(
-                    "{}: the solution's scene `{name}` is not a compiled scene; give it with \
-                     --scene",
-                    init.display()
-                )
-            })?;
-            bf_codegen::Scene::from_toml_str(toml, name)?
-        } else {
-            return default_scene(args);
-        };
-        let assignments = super::parse_params(&args.param)?;
-        bf_model::registry::set_parameters(&mut scene, &assignments)
-            .map_err(|e| anyhow!("--param: {label}: {e}"))?;
-        return Ok((scene, label));
-    }
-    default_scene(args)
-}
-
-fn default_scene(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
-    let path = std::path::Path::new("scenes/paper.toml");
-    if path.exists() {
-        let (scene, _) = super::load_scene_with_params(path, &args.param)?;
-        return Ok((scene, path.display().to_string()));
-    }
-    // Outside the repository: the compiled paper scene.
-    let toml = bf_generated::scene_toml("paper")
-        .ok_or_else(|| anyhow!("no --scene given and no compiled `paper` scene"))?;
-    let mut scene = bf_codegen::Scene::from_toml_str(toml, "paper")?;
-    let assignments = super::parse_params(&args.param)?;
-    bf_model::registry::set_parameters(&mut scene, &assignments)
-        .map_err(|e| anyhow!("--param: the compiled paper scene: {e}"))?;
-    Ok((scene, "the compiled paper scene".into()))
-}
-
-/// The replay of an arm solution (`optimize --problem reach-arm`) given as `--init`: its start
-/// configuration, its dense optimal torques and its duration.
-fn arm_replay(path: &std::path::Path, n: usize) -> Result<(Vec<f64>, TorqueSeries, f64)> {
-    let sol = crate::study::arm::read_arm_solution(path).with_context(|| {
-        format!(
-            "--init {}: an arm (no ball) replays only a solution of `optimize --problem \
-             reach-arm`",
-            path.display()
-        )
-    })?;
-    if sol.start.len() != n {
-        bail!(
-            "--init {}: the solution has {} joints, the scene {n}",
-            path.display(),
-            sol.start.len()
-        );
-    }
-    let series = TorqueSeries::new(sol.dense.t.clone(), sol.dense.tau.clone())
-        .with_context(|| format!("--init {}: torques", path.display()))?;
-    Ok((sol.start.clone(), series, sol.duration))
-}
-
 /// What running on interpreted kernels means, for the stderr line (empty for compiled ones).
 fn interpreted_note(source: KernelSource, setup: Duration) -> String {
     match source {
@@ -864,78 +674,6 @@ fn run_model<K: Kernels<N>, const N: usize>(
     match failure {
         Some(f) => bail!("{f}"),
         None => Ok(()),
-    }
-}
-
-/// Progress of a long run on stderr: an indicatif bar on a terminal, otherwise a line every
-/// [`Progress::LINE_EVERY`]. Nothing for runs shorter than [`Progress::AFTER`].
-struct Progress {
-    bar: Option<ProgressBar>,
-    t0: f64,
-    t_end: f64,
-    last_line: Option<Duration>,
-}
-
-impl Progress {
-    const AFTER: Duration = Duration::from_secs(1);
-    const LINE_EVERY: Duration = Duration::from_secs(10);
-
-    fn new(t0: f64, t_end: f64) -> Result<Self> {
-        let bar = if std::io::stderr().is_terminal() {
-            let pb = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
-            pb.set_style(
-                ProgressStyle::with_template(
-                    "simulate {bar:40} t = {msg} s ({elapsed}, eta {eta})",
-                )
-                .map_err(|e| anyhow!("progress bar template: {e}"))?,
-            );
-            Some(pb)
-        } else {
-            None
-        };
-        Ok(Progress {
-            bar,
-            t0,
-            t_end,
-            last_line: None,
-        })
-    }
-
-    fn update(&mut self, elapsed: Duration, t: f64, steps: usize, samples: usize) {
-        if elapsed < Self::AFTER {
-            return;
-        }
-        let share = (t - self.t0) / (self.t_end - self.t0);
-        match &self.bar {
-            Some(pb) => {
-                if pb.is_hidden() {
-                    pb.set_draw_target(ProgressDrawTarget::stderr());
-                }
-                pb.set_position((1000.0 * share) as u64);
-                pb.set_message(format!("{t:.3}"));
-            }
-            None => {
-                if self
-                    .last_line
-                    .is_none_or(|last| elapsed >= last + Self::LINE_EVERY)
-                {
-                    self.last_line = Some(elapsed);
-                    eprintln!(
-                        "simulate: t = {t:.4} s of {} s ({:.1} %), {steps} steps, {samples} \
-                         samples, {:.0} s elapsed",
-                        self.t_end,
-                        100.0 * share,
-                        elapsed.as_secs_f64()
-                    );
-                }
-            }
-        }
-    }
-
-    fn finish(&self) {
-        if let Some(pb) = &self.bar {
-            pb.finish_and_clear();
-        }
     }
 }
 

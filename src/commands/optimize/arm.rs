@@ -1,0 +1,193 @@
+//! `ball-finger optimize --problem reach-arm --scene FILE`: an arm without a ball moved from
+//! rest to rest in minimum time plus effort (`bf_problem::arm`, Radau collocation of paper
+//! Sect. 4.2), verified by re-integration element by element (`study::arm`), written as one
+//! output set (`solution.json`, `torques.csv`, `trajectory.csv`).
+
+use super::{OUTPUT_DIR, RunOptions, check_size, parse_scheme};
+use crate::cli::OptimizeArgs;
+use crate::io::parse_list;
+use crate::study::verify::VERIFIED_DEFECT;
+use anyhow::{Context, Result, bail};
+use bf_output::{Outcome, OutputDir};
+use bf_problem::arm::{ArmSettings, ArmSolution, REACH_ARM};
+
+/// The first non-finite number of an arm solution (objective, duration, dense samples).
+fn first_non_finite_arm(sol: &ArmSolution) -> Option<(String, f64)> {
+    for (n, v) in [("objective", sol.objective), ("duration", sol.duration)] {
+        if !v.is_finite() {
+            return Some((n.into(), v));
+        }
+    }
+    let d = &sol.dense;
+    for (n, m) in [("q", &d.q), ("qd", &d.qd), ("tau", &d.tau)] {
+        for (k, r) in m.iter().enumerate() {
+            if let Some(i) = r.iter().position(|v| !v.is_finite()) {
+                return Some((format!("dense.{n}[{k}][{i}]"), r[i]));
+            }
+        }
+    }
+    None
+}
+
+/// `optimize --problem reach-arm --scene FILE`: an arm without a ball from rest at `--start`
+/// to rest at `--target` in minimum time plus effort (`bf_problem::arm`), verified by
+/// re-integration element by element (`study::arm`). Writes `solution.json`, `torques.csv`
+/// and `trajectory.csv`; a solve that does not converge or verify is marked FAILED.
+pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
+    use crate::study::arm::{failure_of, solve_verified, write_arm_solution};
+    let Some(path) = &args.scene else {
+        bail!(
+            "--problem {REACH_ARM} needs --scene FILE (an arm, e.g. scenes/puma560.toml): it has \
+             no built-in scene"
+        );
+    };
+    for (opt, given) in [
+        ("--strategy", args.strategy.is_some()),
+        ("--starts", args.starts.is_some()),
+        ("--shard", args.shard.is_some()),
+        ("--refine", args.refine.is_some()),
+        ("--warm-start", args.warm_start.is_some()),
+        ("--dual-regularization", args.dual_regularization.is_some()),
+    ] {
+        if given {
+            bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
+        }
+    }
+    if args.scheme != "radau" {
+        bail!(
+            "--scheme {}: --problem {REACH_ARM} is transcribed with radau only",
+            args.scheme
+        );
+    }
+    if args.points < 2 {
+        bail!("--points must be at least 2 (got {})", args.points);
+    }
+    let scheme = parse_scheme(&args.scheme, args.elements)?;
+    check_size(args.points, scheme)?;
+    if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
+        bail!(
+            "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
+            args.verify_rtol
+        );
+    }
+    let (scene, text) = crate::commands::load_scene_with_params(path, &args.param)?;
+    let params = crate::commands::parse_params(&args.param)?;
+    let nq = scene.links.len();
+    let config = |opt: &str, v: &Option<String>| -> Result<Option<Vec<f64>>> {
+        v.as_deref()
+            .map(|s| parse_list(opt, s, Some(nq)))
+            .transpose()
+            .with_context(|| format!("scene {} has {nq} joints", path.display()))
+    };
+    let settings = ArmSettings {
+        points: args.points.max(2 * args.elements),
+        elements: args.elements,
+        start: config("--start", &args.start)?,
+        target: config("--target", &args.target)?,
+        max_iter: args.max_iter,
+        print_level: args.print_level,
+        ..ArmSettings::default()
+    };
+    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    if let Some(n) = opts.fail_at_write {
+        out.inject_fault_at_write(n);
+    }
+    if scene.ball.is_some() {
+        eprintln!(
+            "note: {}: the ball of scene `{}` is ignored by {REACH_ARM} (the arm moves freely)",
+            path.display(),
+            scene.name
+        );
+    }
+    eprintln!(
+        "optimize: {REACH_ARM} on scene `{}` from {} ({nq} joints), node functions on \
+         interpreted graphs (no node kernels are emitted for arms)",
+        scene.name,
+        path.display()
+    );
+    let mut attempts = solve_verified(
+        &scene,
+        &settings,
+        args.verify_rtol,
+        args.verify_refinements,
+        &text,
+        &params,
+    )
+    .with_context(|| format!("--scene {}", path.display()))?;
+    for a in &attempts {
+        let v = a.solution.verification.as_ref();
+        crate::outln!(
+            "mesh {} elements, {} points: {}, objective {:.6e}, re-integration defect {}",
+            a.elements,
+            a.points,
+            crate::names::name(&a.solution.status),
+            a.solution.objective,
+            v.map_or("not checked".into(), |v| format!("{:.3e}", v.max_defect))
+        )?;
+    }
+    let sol = attempts
+        .pop()
+        .map(|a| a.solution)
+        .ok_or_else(|| anyhow::anyhow!("internal: no {REACH_ARM} solve"))?;
+    if let Some((field, v)) = first_non_finite_arm(&sol) {
+        bail!(
+            "the solution of {REACH_ARM} has a non-finite {field} ({v}); nothing was written to {}",
+            args.out.display()
+        );
+    }
+    for f in ["solution.json", "torques.csv", "trajectory.csv"] {
+        out.file(f)?;
+    }
+    write_arm_solution(&sol, out.path())
+        .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
+    let failure = failure_of(&sol);
+    out.commit(match &failure {
+        None => Outcome::Success,
+        Some(f) => Outcome::Failed(f),
+    })?;
+    crate::outln!(
+        "{REACH_ARM}: {} after {} iterations in {:.2} s; objective {:.6e}, duration {:.4} s",
+        crate::names::name(&sol.status),
+        sol.iterations,
+        sol.solve_seconds,
+        sol.objective,
+        sol.duration
+    )?;
+    crate::outln!("start  {:?}\ntarget {:?}", sol.start, sol.target)?;
+    let peak: Vec<f64> = (0..nq)
+        .map(|i| sol.dense.tau.iter().map(|t| t[i].abs()).fold(0.0, f64::max))
+        .collect();
+    crate::outln!("max |tau| per joint {peak:?}, tau_max {:?}", sol.tau_max)?;
+    crate::outln!(
+        "constraint violation {:.2e}, dual infeasibility {:.2e}",
+        sol.constraint_violation,
+        sol.dual_infeasibility
+    )?;
+    if let Some(v) = &sol.verification {
+        crate::outln!(
+            "verified: {} (element re-integration defect {:.3e}, tolerance {:e}; open-loop \
+             replay from the start ends {:.3e} from the target)",
+            if crate::study::arm::is_verified(&sol) {
+                "yes"
+            } else {
+                "NO"
+            },
+            v.max_defect,
+            VERIFIED_DEFECT,
+            v.open_loop_end_error
+        )?;
+    }
+    crate::outln!(
+        "wrote {}/solution.json, torques.csv and trajectory.csv{}",
+        args.out.display(),
+        if failure.is_none() {
+            ""
+        } else {
+            " (marked FAILED)"
+        }
+    )?;
+    if let Some(f) = failure {
+        bail!("{f}");
+    }
+    Ok(())
+}

@@ -1,0 +1,140 @@
+//! `ball-finger simulate` on a scene without a ball: the free motion of an arm with any number
+//! of joints, M q̈ = τ − C q̇ − g − μ_v q̇ (`bf_sim::arm`), under `--torques`, `--pd`, zero
+//! torques or the replay of an arm solution given as `--init`; writes `trajectory.csv` and
+//! `summary.json` (energy balance) as one output set.
+
+use super::{
+    CliInput, OUTPUT_DIR, RunOptions, check_limits, interpreted_note, pd_controller, settings,
+};
+use crate::cli::SimulateArgs;
+use crate::io::parse_list;
+use anyhow::{Context, Result, anyhow, bail};
+use bf_output::{Outcome, OutputDir};
+use bf_sim::arm::{ArmMode, FreeArm};
+use bf_sim::{Input as _, TorqueSeries};
+use std::time::Instant;
+
+/// Free motion of an arm without a ball (any number of joints, `bf_sim::arm`): τ from
+/// `--torques` (one column per joint), `--pd` (one target per joint) or zero; initial state
+/// from `--q0`/`--qd0` (default 0). Writes `trajectory.csv` and `summary.json`.
+pub(super) fn run_arm(
+    args: &SimulateArgs,
+    run_opts: RunOptions,
+    scene: &bf_codegen::Scene,
+    scene_label: &str,
+) -> Result<()> {
+    let n = scene.links.len();
+    let name = &scene.name;
+    if !(args.t_end.is_finite() && args.t_end > 0.0) {
+        bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
+    }
+    // `--init` an arm solution.json (`optimize --problem reach-arm`): replay its optimal
+    // torques from its start at rest, over its duration.
+    let replay = match &args.init {
+        Some(p) => Some(arm_replay(p, n)?),
+        None => None,
+    };
+    for (opt, given) in [
+        ("--omega0", args.omega0.is_some()),
+        ("--mode0", args.mode0 != "free"),
+    ] {
+        if given {
+            bail!(
+                "{opt}: scene `{name}` ({scene_label}) has no ball; only free motion of the arm is simulated (use --q0, --qd0)"
+            );
+        }
+    }
+    let set = settings(args)?;
+    check_limits(args, &set)?;
+    let q0 = match (&args.q0, &replay) {
+        (Some(s), _) => parse_list("--q0", s, Some(n))?,
+        (None, Some((q, _, _))) => q.clone(),
+        (None, None) => vec![0.0; n],
+    };
+    let qd0 = match &args.qd0 {
+        Some(s) => parse_list("--qd0", s, Some(n))?,
+        None => vec![0.0; n],
+    };
+    let inp = if let Some(path) = &args.torques {
+        let s = TorqueSeries::from_path(path)?;
+        if s.dim() != n {
+            bail!(
+                "{}: scene `{name}` has {n} joints, the torque series has {} columns",
+                path.display(),
+                s.dim()
+            );
+        }
+        CliInput::Series(s)
+    } else if let Some(target) = &args.pd {
+        CliInput::Pd(pd_controller(args, target, n)?)
+    } else if let Some((_, series, _)) = &replay {
+        CliInput::Series(series.clone())
+    } else {
+        CliInput::Arm(n)
+    };
+    let t_end = replay.as_ref().map_or(args.t_end, |r| r.2);
+    let setup = Instant::now();
+    let (model, source) = bf_model::arm::ArmModel::from_scene(scene)
+        .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
+    eprintln!(
+        "simulate: scene `{name}` from {scene_label} (no ball: free motion of {n} joints) on the \
+         {source} kernels{}",
+        interpreted_note(source, setup.elapsed())
+    );
+    let sys = FreeArm::new(model, inp)?;
+    let x0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    if let Some(k) = run_opts.fail_at_write {
+        out_dir.inject_fault_at_write(k);
+    }
+    let start = Instant::now();
+    let (out, error) = match bf_sim::simulate(&sys, set, ArmMode::Free, 0.0, &x0, t_end) {
+        Ok(out) => (out, None),
+        Err(f) => {
+            let f = *f;
+            let e = format!("simulation failed at t = {} s: {}", f.t, f.error);
+            (f.partial, Some(e))
+        }
+    };
+    let mut report = sys
+        .report(&out, start.elapsed().as_secs_f64())
+        .map_err(|e| anyhow!("{e}"))?;
+    report.summary.kernels = Some(source.name().to_string());
+    out_dir.file("summary.json")?;
+    report
+        .write_dir(out_dir.path(), error.as_deref())
+        .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
+        .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
+    out_dir.commit(match &error {
+        Some(e) => Outcome::Failed(e),
+        None => Outcome::Success,
+    })?;
+    crate::outln!("{}", report.summary)?;
+    crate::outln!("output: {}", args.out.display())?;
+    match error {
+        Some(e) => bail!("{e}"),
+        None => Ok(()),
+    }
+}
+
+/// The replay of an arm solution (`optimize --problem reach-arm`) given as `--init`: its start
+/// configuration, its dense optimal torques and its duration.
+fn arm_replay(path: &std::path::Path, n: usize) -> Result<(Vec<f64>, TorqueSeries, f64)> {
+    let sol = crate::study::arm::read_arm_solution(path).with_context(|| {
+        format!(
+            "--init {}: an arm (no ball) replays only a solution of `optimize --problem \
+             reach-arm`",
+            path.display()
+        )
+    })?;
+    if sol.start.len() != n {
+        bail!(
+            "--init {}: the solution has {} joints, the scene {n}",
+            path.display(),
+            sol.start.len()
+        );
+    }
+    let series = TorqueSeries::new(sol.dense.t.clone(), sol.dense.tau.clone())
+        .with_context(|| format!("--init {}: torques", path.display()))?;
+    Ok((sol.start.clone(), series, sol.duration))
+}

@@ -1,0 +1,459 @@
+//! `ball-finger simulate` end to end on the hybrid ball-and-finger simulator (paper Sect. 2.4–3,
+//! Fig. 3): the files of a scripted push and a passive drop agree with each other and with the
+//! physics (h ≥ −tol at every sample, the Sect. 3.1 transitions, a closing energy balance),
+//! RK4 agrees with DOPRI5, a 4-joint scene runs on interpreted kernels, joint counts are
+//! checked. Bad inputs end with a clear error and a non-zero exit; a failure mid-run keeps the
+//! partial trajectory.
+
+use bf_model::{Model, State, Vec3};
+use serde_json::Value;
+use std::path::Path;
+use std::process::Output;
+
+#[path = "common/cli.rs"]
+mod cli_util;
+use cli_util::{run, tmpdir};
+
+#[path = "common/sim.rs"]
+mod sim_util;
+use sim_util::{PENETRATION_TOL, scripted_push};
+
+fn json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+fn assert_clean_failure(out: &Output, must_mention: &[&str]) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "expected failure; stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    for m in must_mention {
+        assert!(stderr.contains(m), "stderr should mention {m:?}: {stderr}");
+    }
+}
+
+#[test]
+fn cli_scripted_push_writes_consistent_files() {
+    let dir = tmpdir("push");
+    let (x0, series) = scripted_push();
+    let tau = dir.join("tau.csv");
+    series.write_csv(&tau).unwrap();
+    let init = dir.join("init.json");
+    std::fs::write(
+        &init,
+        serde_json::json!({"q": &x0[0..3], "qd": &x0[3..6], "omega": &x0[6..9]}).to_string(),
+    )
+    .unwrap();
+    let out_dir = dir.join("out");
+    let o = run(&[
+        "simulate",
+        "--scene",
+        "scenes/paper.toml",
+        "--torques",
+        tau.to_str().unwrap(),
+        "--init",
+        init.to_str().unwrap(),
+        "--t-end",
+        "2.5",
+        "--rtol",
+        "1e-10",
+        "--impact-law",
+        "stick",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for key in ["events: 3", "max penetration", "real-time factor", "energy"] {
+        assert!(stdout.contains(key), "summary lacks {key:?}: {stdout}");
+    }
+    let ev = json(&out_dir.join("events.json"));
+    let kinds: Vec<&str> = ev["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(kinds, ["impact", "stick_to_slip", "lift_off"]);
+    assert!(ev["events"][0]["pre"]["h"].as_f64().unwrap().abs() < 1e-9);
+    // The CSV has the documented columns and the same number of rows as the JSON.
+    let csv = std::fs::read_to_string(out_dir.join("trajectory.csv")).unwrap();
+    let header = csv.lines().next().unwrap();
+    assert!(header.starts_with(
+        "t [s],mode,kind,q1 [rad],q2 [rad],q3 [rad],qd1 [rad/s],qd2 [rad/s],qd3 [rad/s],\
+         omega_x [rad/s],omega_y [rad/s],omega_z [rad/s],tau1 [N m]"
+    ));
+    assert!(
+        header.contains("lambda_n [N],h [m],sigma [N],dv [m/s],hdot [m/s],energy [J],drift [m]")
+    );
+    // One naming of modes: lowercase in the CSV as in the JSON; state components named.
+    let tj0 = json(&out_dir.join("trajectory.json"));
+    assert_eq!(tj0["state_names"][6], "omega_x");
+    let row1 = csv.lines().nth(1).unwrap();
+    assert_eq!(row1.split(',').nth(1), tj0["mode"][0].as_str());
+    let evcsv = std::fs::read_to_string(out_dir.join("events.csv")).unwrap();
+    assert!(evcsv.lines().next().unwrap().contains(",pre_q1 [rad],"));
+    let tj = json(&out_dir.join("trajectory.json"));
+    let n = tj["t"].as_array().unwrap().len();
+    assert_eq!(csv.lines().count(), n + 1);
+    // τ column = the series at the sample time (the file round-trips exactly).
+    let t5 = tj["t"][5].as_f64().unwrap();
+    let mut tau5 = [0.0; 3];
+    series.eval(t5, &mut tau5);
+    for j in 0..3 {
+        assert_eq!(tj["derived"][5]["tau"][j].as_f64().unwrap(), tau5[j]);
+    }
+    let sm = json(&out_dir.join("summary.json"));
+    assert_eq!(sm["t_final"].as_f64().unwrap(), 2.5);
+    assert!(sm["error"].is_null());
+    let shares: f64 = sm["mode_time_share"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p[1].as_f64().unwrap())
+        .sum();
+    assert!((shares - 1.0).abs() < 1e-12);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Passive drop (default initial state, τ = 0, Newton's law): the Slip → Stick events happen at
+/// ‖Δv‖ = ε with ‖Δv‖ decreasing, and the velocities are updated to Δv = 0.
+#[test]
+fn cli_passive_drop_slip_to_stick_and_rk4_agrees_with_dopri5() {
+    let dir = tmpdir("drop");
+    let mut first_impact = Vec::new();
+    let mut sequences = Vec::new();
+    for (tag, extra) in [
+        ("dopri", vec!["--rtol", "1e-10"]),
+        ("rk4", vec!["--integrator", "rk4", "--step", "5e-4"]),
+        // Loose tolerance: a step jumps over the ε-ball of ‖Δv‖; the slip_reversal guard must
+        // still catch Slip → Stick, so the Fig. 3 event sequence is the same.
+        ("loose", vec!["--rtol", "1e-4"]),
+    ] {
+        let out_dir = dir.join(tag);
+        let mut args = vec![
+            "simulate",
+            "--t-end",
+            "3",
+            "--out",
+            out_dir.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let ev = json(&out_dir.join("events.json"));
+        let evs = ev["events"].as_array().unwrap();
+        first_impact.push(evs[0]["t"].as_f64().unwrap());
+        sequences.push(
+            evs.iter()
+                .map(|e| e["kind"].as_str().unwrap().to_string())
+                .collect::<Vec<_>>(),
+        );
+        if tag == "dopri" {
+            let s2s: Vec<&Value> = evs
+                .iter()
+                .filter(|e| e["kind"] == "slip_to_stick")
+                .collect();
+            assert!(!s2s.is_empty(), "no slip-to-stick event");
+            let tj = json(&out_dir.join("trajectory.json"));
+            for e in s2s {
+                let pre = e["pre"]["slip_speed"].as_f64().unwrap();
+                assert!((pre - 1e-6).abs() < 1e-9, "‖Δv‖ at slip→stick {pre:e}");
+                assert!(e["post"]["slip_speed"].as_f64().unwrap() < 1e-12);
+                assert_ne!(e["x_pre"], e["x_post"], "velocities must be updated");
+                // Decreasing: the last step sample before the event had a larger ‖Δv‖.
+                let t = e["t"].as_f64().unwrap();
+                let ts = tj["t"].as_array().unwrap();
+                let k = ts.iter().rposition(|v| v.as_f64().unwrap() < t).unwrap();
+                assert!(tj["derived"][k]["slip_speed"].as_f64().unwrap() > pre);
+            }
+        }
+    }
+    assert_eq!(
+        sequences[0], sequences[2],
+        "loose rtol changed the event sequence"
+    );
+    assert!(
+        (first_impact[0] - first_impact[1]).abs() < 1e-6,
+        "first impact dopri5 {} vs rk4 {}",
+        first_impact[0],
+        first_impact[1]
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn cli_failure_mid_run_writes_partial_trajectory() {
+    let dir = tmpdir("fail");
+    let out_dir = dir.join("out");
+    let o = run(&[
+        "simulate",
+        "--t-end",
+        "10",
+        "--max-steps",
+        "300",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert_clean_failure(
+        &o,
+        &["simulation failed at t =", "step limit", "written to"],
+    );
+    let tj = json(&out_dir.join("trajectory.json"));
+    let ts = tj["t"].as_array().unwrap();
+    assert!(
+        ts.len() > 100,
+        "partial trajectory has {} samples",
+        ts.len()
+    );
+    let t_last = ts.last().unwrap().as_f64().unwrap();
+    assert!(t_last > 0.0 && t_last < 10.0);
+    let sm = json(&out_dir.join("summary.json"));
+    assert!(sm["error"].as_str().unwrap().contains("step limit"));
+    assert_eq!(sm["t_final"].as_f64().unwrap(), t_last);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn cli_bad_inputs_give_clear_errors() {
+    let dir = tmpdir("bad");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let bad_csv = dir.join("bad.csv");
+    std::fs::write(&bad_csv, "t,tau1,tau2,tau3\n0,0,0,0\n0.5,1,x,0\n").unwrap();
+    let bad_csv = bad_csv.to_str().unwrap();
+    let two = dir.join("two.csv");
+    std::fs::write(&two, "t,tau1,tau2\n0,0,0\n").unwrap();
+    let two = two.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec!["--torques", "no/such/file.csv"],
+            vec!["no/such/file.csv"],
+        ),
+        (
+            vec!["--torques", bad_csv],
+            vec!["bad.csv:3", "tau2", "not a number"],
+        ),
+        (vec!["--torques", two], vec!["3 joints"]),
+        (vec!["--q0", "0.1,NaN,0.5"], vec!["--q0", "finite"]),
+        (vec!["--q0", "0.1,0.5"], vec!["--q0", "expected 3"]),
+        (vec!["--t-end", "0"], vec!["--t-end", "> 0"]),
+        (vec!["--t-end", "-1"], vec!["--t-end"]),
+        (
+            vec!["--integrator", "euler"],
+            vec!["unknown integrator `euler`"],
+        ),
+        (
+            vec!["--impact-law", "bounce"],
+            vec!["unknown impact law `bounce`"],
+        ),
+        (vec!["--rtol", "0"], vec!["--rtol"]),
+        (
+            vec!["--pd", "0,0,0", "--pd-gains", "1,2,3"],
+            vec!["--pd-gains"],
+        ),
+        (vec!["--q0", "0.0,1.6,0.5", "--mode0", "stick"], vec!["h"]),
+        (
+            vec!["--scene", "scenes/puma560.toml", "--omega0", "0,0,1"],
+            vec!["puma560", "no ball", "--omega0"],
+        ),
+        (vec!["--init", "missing.json"], vec!["missing.json"]),
+    ];
+    for (extra, mention) in cases {
+        let mut args = vec!["simulate", "--out", out];
+        if !extra.contains(&"--t-end") {
+            args.extend(["--t-end", "0.1"]);
+        }
+        args.extend(extra.iter().copied());
+        let o = run(&args);
+        assert_clean_failure(&o, &mention);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A coarse fixed step (RK4, h = 10 ms) makes the cubic interpolant of h dip below zero right
+/// after a lift-off although the finger separates (n·v_c > 0). Such crossings must be handled
+/// as grazes (q back on h = 0, still Free, velocities untouched), not as impacts on a
+/// separating finger (which bf-model rightly refuses).
+#[test]
+fn cli_coarse_rk4_grazes_instead_of_failing() {
+    let dir = tmpdir("graze");
+    let out_dir = dir.join("out");
+    let o = run(&[
+        "simulate",
+        "--t-end",
+        "2",
+        "--integrator",
+        "rk4",
+        "--step",
+        "1e-2",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let ev = json(&out_dir.join("events.json"));
+    let grazes: Vec<&Value> = ev["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == "graze")
+        .collect();
+    assert!(!grazes.is_empty(), "expected grazes with h = 10 ms");
+    for g in grazes {
+        assert!(g["pre"]["normal_velocity"].as_f64().unwrap() > 1e-9);
+        assert!(g["post"]["h"].as_f64().unwrap().abs() < 1e-14);
+        assert_eq!(
+            g["x_pre"].as_array().unwrap()[3..],
+            g["x_post"].as_array().unwrap()[3..]
+        );
+        assert_eq!(g["mode_after"], "free");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A 4-joint finger-and-ball scene outside `scenes/` (interpreted kernels), driven by a PD
+/// controller whose target lies inside the ball: `simulate` touches down, stays in contact
+/// (stick or slip), and its files say so consistently: h ≥ −tol at every sample, the energy
+/// balance E(t) − E(0) − ∫ (q̇ᵀτ − losses) dt closes, and the trajectory has one column per
+/// joint.
+#[test]
+fn cli_simulates_a_4_joint_finger_on_the_ball() {
+    let path = "tests/fixtures/finger4.toml";
+    let text = std::fs::read_to_string(cli_util::root().join(path)).unwrap();
+    let scene = bf_codegen::Scene::from_toml_str(&text, path).unwrap();
+    let (k, _) = bf_model::registry::contact_kernels_n::<4>(&scene).unwrap();
+    let model = Model::from_kernels(k).unwrap();
+    // A side contact of the last link, by Newton steps on h from a fixed guess.
+    let mut x = State::new(
+        bf_model::VecN::<4>::new(0.3, 0.6, 0.6, 0.6),
+        bf_model::VecN::zeros(),
+        Vec3::zeros(),
+    );
+    for _ in 0..50 {
+        x.q += model.project_configuration(&x).unwrap();
+    }
+    let kin = model.evaluate(&x).unwrap();
+    assert!(kin.contact.h.abs() < 1e-12, "h = {}", kin.contact.h);
+    let grad = kin.contact.j_c.transpose() * kin.contact.n;
+    let dir = grad / grad.norm();
+    let q0 = x.q + dir * 0.05;
+    let target = x.q - dir * 0.3;
+    let list = |v: &bf_model::VecN<4>| {
+        v.iter()
+            .map(|x| format!("{x:.17}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let dir = tmpdir("finger4");
+    let out_dir = dir.join("out");
+    let o = run(&[
+        "simulate",
+        "--scene",
+        path,
+        "--q0",
+        &list(&q0),
+        "--pd",
+        &list(&target),
+        "--pd-gains",
+        "0.5,0.05",
+        "--rtol",
+        "1e-9",
+        "--h-max",
+        "0.002",
+        "--t-end",
+        "1.0",
+        "--out",
+        out_dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("interpreted"), "{stderr}");
+    let sm = json(&out_dir.join("summary.json"));
+    assert_eq!(sm["kernels"], "interpreted");
+    let count = |k: &str| {
+        sm["event_counts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e[0] == k)
+            .unwrap()[1]
+            .as_u64()
+            .unwrap()
+    };
+    assert!(count("impact") >= 1, "{sm}");
+    let share = |m: &str| {
+        sm["mode_time_share"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e[0] == m)
+            .unwrap()[1]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(share("stick") + share("slip") > 0.5, "{sm}");
+    // The balance closes to 1e-5 of the energy (short steps: the trapezoidal ∫ P dt over the
+    // samples converges like h², 5e-5 J with the default steps and 3e-6 J with these).
+    assert!(sm["energy_error"].as_f64().unwrap() < 1e-5, "{sm}");
+    assert!(
+        sm["max_penetration"].as_f64().unwrap() < PENETRATION_TOL,
+        "{sm}"
+    );
+    assert!(sm["error"].is_null(), "{sm}");
+    // One column per joint, and h ≥ −tol at every stored sample.
+    let csv = std::fs::read_to_string(out_dir.join("trajectory.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    for c in ["q4 [rad]", "qd4 [rad/s]", "tau4 [N m]"] {
+        assert!(header.contains(&c), "{header:?}");
+    }
+    assert!(!header.contains(&"q5 [rad]"));
+    let h_col = header.iter().position(|c| *c == "h [m]").unwrap();
+    for line in lines {
+        let h: f64 = line.split(',').nth(h_col).unwrap().parse().unwrap();
+        assert!(h > -PENETRATION_TOL, "h = {h}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Finger-and-ball scenes of another number of joints: the options take that many values, and a
+/// scene beyond the supported range is refused with the range.
+#[test]
+fn cli_joint_counts_are_checked() {
+    let dir = tmpdir("joints");
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    let text =
+        std::fs::read_to_string(cli_util::root().join("tests/fixtures/finger4.toml")).unwrap();
+    let (a, b) = (
+        text.find("[[links]]").unwrap(),
+        text.find("[ball]").unwrap(),
+    );
+    let eight = format!("{}{}{}{}", &text[..a], &text[a..b], &text[a..b], &text[b..]);
+    let eight_path = dir.join("finger8.toml");
+    std::fs::write(&eight_path, eight).unwrap();
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (
+            vec![
+                "--scene",
+                "tests/fixtures/finger2.toml",
+                "--q0",
+                "0.1,0.2,0.3",
+            ],
+            vec!["--q0", "expected 2"],
+        ),
+        (
+            vec!["--scene", "tests/fixtures/finger4.toml", "--pd", "0,0,0"],
+            vec!["--pd", "expected 4"],
+        ),
+        (
+            vec!["--scene", eight_path.to_str().unwrap()],
+            vec!["finger8.toml", "8 joints", "1 to 7"],
+        ),
+    ];
+    for (extra, mention) in cases {
+        let mut args = vec!["simulate", "--out", out, "--t-end", "0.1"];
+        args.extend(extra.iter().copied());
+        assert_clean_failure(&run(&args), &mention);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
