@@ -16,9 +16,8 @@
 
 use crate::cli::{OptimizeArgs, OptimizeCommand};
 use crate::study::SolutionIo;
-use crate::study::refine::{self, RefineOptions, RefineRound};
-use crate::study::search::{self, Search, VerifyPolicy};
-use crate::study::strategy::{self, DEFAULT_STARTS, Shard, StageRecord, Strategy};
+use crate::study::search::VerifyPolicy;
+use crate::study::strategy::{self, DEFAULT_STARTS, Shard, Strategy};
 use crate::study::verify::{MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verify};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
@@ -26,13 +25,16 @@ use bf_optim::ocp::problem::Scheme;
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_problem::arm::REACH_ARM;
 use bf_problem::{BuiltProblem, COT_MAX_PERIOD, OcpSolution, Problem, ProblemSettings};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 
 mod arm;
+mod progress;
 mod shards;
 
 use arm::run_reach_arm;
+pub use progress::{
+    iteration_spinner, refine_with_progress, search_with_progress, solve_with_progress,
+};
 pub use shards::merge;
 
 /// Largest `--points` with `--scheme lg` (see the module docs).
@@ -189,17 +191,6 @@ pub fn problem_arg(args: &OptimizeArgs) -> &str {
     args.problem.as_deref().unwrap_or_default()
 }
 
-/// A progress spinner that shows the interior-point iteration log line.
-pub fn iteration_spinner(label: &str) -> ProgressBar {
-    let pb = ProgressBar::new_spinner();
-    pb.set_style(
-        ProgressStyle::with_template("{spinner} {prefix} {elapsed:>4} {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
-    );
-    pb.set_prefix(label.to_string());
-    pb
-}
-
 /// Parse `--strategy` (with `--starts` and `--seed` for `multistart`).
 pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
     match text {
@@ -213,109 +204,6 @@ pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
             "--strategy: unknown strategy {other:?}; use `direct`, `continuation` or `multistart`"
         ),
     }
-}
-
-/// Solve with `strategy` behind a progress spinner that shows each finished stage; every end
-/// point is re-integrated, a verified one is preferred and an unverified optimum that beats
-/// the best verified one is hp-refined until it verifies ([`search_with_progress`] with the
-/// default [`VerifyPolicy`], as `optimize`); what still fails is flagged in the tables.
-pub fn solve_with_progress(
-    name: Problem,
-    settings: ProblemSettings,
-    strategy: Strategy,
-) -> Result<(BuiltProblem, OcpSolution)> {
-    let found = search_with_progress(
-        name,
-        settings,
-        strategy,
-        Shard::WHOLE,
-        &VerifyPolicy::default(),
-    )?;
-    let (p, sol) = found.best()?;
-    let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
-    Ok((p, sol))
-}
-
-/// [`search::search`] behind a progress spinner that shows each finished stage.
-pub fn search_with_progress(
-    name: Problem,
-    settings: ProblemSettings,
-    strategy: Strategy,
-    shard: Shard,
-    policy: &VerifyPolicy,
-) -> Result<Search> {
-    let pb = iteration_spinner(name.name());
-    pb.set_message(format!("{strategy} ..."));
-    pb.enable_steady_tick(std::time::Duration::from_millis(120));
-    let done = std::sync::atomic::AtomicUsize::new(0);
-    // Without a terminal the spinner is hidden; each finished solve is then one line.
-    let lines = !std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let show = |r: &StageRecord| {
-        let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-        let msg = format!(
-            "{strategy}: {k} solves done; last: chain {} {} -> {}, J {:.4e}, T {:.3} s",
-            r.chain,
-            r.stage,
-            crate::names::name(&r.status),
-            r.objective,
-            r.period
-        );
-        if lines {
-            eprintln!("{name}: {msg}");
-        }
-        pb.set_message(msg);
-    };
-    let res = search::search(name, &settings, strategy, shard, policy, Some(&show))
-        .with_context(|| format!("solving {name}"));
-    pb.finish_and_clear();
-    res
-}
-
-/// Refine the mesh of `sol` (warm-started from it) until the error estimate is ≤ `tol`; prints
-/// each round. Returns the final mesh's problem and solution, which keeps `sol`'s strategy
-/// record and gains the refinement record.
-pub fn refine_with_progress(
-    name: Problem,
-    settings: &ProblemSettings,
-    sol: OcpSolution,
-    tol: f64,
-    rounds: usize,
-) -> Result<(BuiltProblem, OcpSolution)> {
-    let opts = RefineOptions {
-        tol,
-        max_rounds: rounds,
-        ..RefineOptions::default()
-    };
-    crate::outln!("mesh refinement to {tol:e}:")?;
-    crate::outln!(
-        "  round  points/phase        objective      max error  status        iter  time(s)"
-    )?;
-    // The callback cannot return an error: a failed write is kept and reported afterwards.
-    let mut write_error = None;
-    let mut show = |r: &RefineRound| {
-        let line = crate::outln!(
-            "  {:5}  {:<18}  {:>13.8e}  {:>9.2e}  {:<12}  {:>4}  {:>7.2}",
-            r.round,
-            format!("{:?}", r.points),
-            r.objective,
-            r.max_error,
-            crate::names::name(&r.status),
-            r.iterations,
-            r.seconds
-        );
-        if let Err(e) = line {
-            write_error.get_or_insert(e);
-        }
-    };
-    let (built, out) = refine::refine_solution(name, settings, sol, &opts, Some(&mut show))
-        .with_context(|| format!("refining the mesh of {name}"))?;
-    if let Some(e) = write_error {
-        return Err(e);
-    }
-    if let Some(r) = &out.refinement {
-        crate::outln!("  {}", r.stop_reason)?;
-    }
-    Ok((built, out))
 }
 
 /// Re-integrate every phase with the optimal torques and store the defects in `sol` (printed);

@@ -3,9 +3,8 @@
 //! torques or the replay of an arm solution given as `--init`; writes `trajectory.csv` and
 //! `summary.json` (energy balance) as one output set.
 
-use super::{
-    CliInput, OUTPUT_DIR, RunOptions, check_limits, interpreted_note, pd_controller, settings,
-};
+use super::torques::{CliInput, pd_controller};
+use super::{OUTPUT_DIR, RunOptions, check_limits, interpreted_note, settings};
 use crate::cli::SimulateArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};

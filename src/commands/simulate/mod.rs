@@ -43,18 +43,19 @@ use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3, VecN};
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
-use bf_sim::{
-    Input, Method, PdController, SimError, SimSettings, Simulator, TorqueSeries, TrackingPd,
-};
+use bf_sim::{Method, SimSettings, Simulator};
 use std::time::{Duration, Instant};
 
 mod arm;
 mod progress;
 mod scene;
+mod torques;
 
 use arm::run_arm;
 use progress::Progress;
 pub use scene::scene_of_args;
+use torques::max_torque;
+pub use torques::{CliInput, MAX_TRACKED_PERIODS, input};
 
 /// The output directory of `simulate`.
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
@@ -83,44 +84,6 @@ pub const DEFAULT_Q0: [f64; 3] = [0.1, 0.5, 0.5];
 /// Largest number of joints of a finger-and-ball scene `simulate` runs (one instantiation of
 /// the generic model and simulator per N = 1..=this).
 pub const MAX_CONTACT_JOINTS: usize = 7;
-
-/// Joint torques of a CLI run: a time series, a PD controller, or none (τ = 0).
-#[derive(Debug, Clone)]
-pub enum CliInput {
-    /// Open-loop torques τ(t) (`--torques`).
-    Series(TorqueSeries),
-    /// τ = kp (target − q) − kd q̇ (`--pd`).
-    Pd(PdController),
-    /// A solution's torques with PD tracking of its trajectory (`--init` with `--pd-track`).
-    Tracking(TrackingPd),
-    /// Unactuated joints of a finger with this many joints.
-    Zero(usize),
-    /// Unactuated joints of an arm with this many joints.
-    Arm(usize),
-}
-
-impl Input for CliInput {
-    fn dim(&self) -> usize {
-        match self {
-            CliInput::Series(s) => s.dim(),
-            CliInput::Pd(p) => p.dim(),
-            CliInput::Tracking(p) => p.dim(),
-            CliInput::Zero(n) => *n,
-            CliInput::Arm(n) => *n,
-        }
-    }
-    fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
-        match self {
-            CliInput::Series(s) => s.tau(t, q, qd, out),
-            CliInput::Pd(p) => p.tau(t, q, qd, out),
-            CliInput::Tracking(p) => p.tau(t, q, qd, out),
-            CliInput::Zero(_) | CliInput::Arm(_) => {
-                out.fill(0.0);
-                Ok(())
-            }
-        }
-    }
-}
 
 /// Parses an impact-law name of the CLI (`newton`, `stick`, `max-dissipation`, `min-slip`,
 /// `normal-impulse`; underscores are accepted too).
@@ -273,84 +236,6 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
     ))
 }
 
-/// The `--pd` controller of `n` joints: target angles `target` (the `--pd` text) and
-/// `--pd-gains`, one (kp, kd) pair for all joints or kp₁..kpₙ, kd₁..kdₙ.
-fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Result<PdController> {
-    let target = parse_list("--pd", target, Some(n))?;
-    let g = parse_list("--pd-gains", &args.pd_gains, None)?;
-    let (kp, kd) = match g.len() {
-        2 => (vec![g[0]; n], vec![g[1]; n]),
-        k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
-        k => bail!(
-            "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
-            2 * n
-        ),
-    };
-    Ok(PdController::new(kp, kd, target)?)
-}
-
-/// The joint torques of a run of a finger with `n` joints.
-pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
-    if let Some(path) = &args.torques {
-        let s = TorqueSeries::from_path(path)?;
-        if s.dim() != n {
-            bail!(
-                "{}: the scene has {n} joints, the torque series has {} columns",
-                path.display(),
-                s.dim()
-            );
-        }
-        return Ok(CliInput::Series(s));
-    }
-    if let Some(gains) = &args.pd_track {
-        return tracking(args, gains).map(CliInput::Tracking);
-    }
-    if let Some(target) = &args.pd {
-        return pd_controller(args, target, n).map(CliInput::Pd);
-    }
-    Ok(CliInput::Zero(n))
-}
-
-/// Most periods of a solution `--pd-track` repeats (its series hold every dense sample of
-/// every period).
-pub const MAX_TRACKED_PERIODS: f64 = 10_000.0;
-
-/// `--pd-track KP,KD`: the solution of `--init` repeated over `--t-end` with PD tracking.
-fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
-    use crate::study::SolutionIo as _;
-    let g = parse_list("--pd-track", gains, Some(2))?;
-    let Some(path) = &args.init else {
-        bail!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
-    };
-    let sol = bf_problem::OcpSolution::read_json(path)
-        .with_context(|| format!("--pd-track: reading the solution {}", path.display()))?;
-    if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
-        bail!(
-            "--pd-track: {} has no trajectory to track (period {} s, {} dense samples)",
-            path.display(),
-            sol.period,
-            sol.dense.t.len()
-        );
-    }
-    let periods = (args.t_end / sol.period).ceil().max(1.0);
-    if periods.is_nan() || periods > MAX_TRACKED_PERIODS {
-        bail!(
-            "--pd-track: --t-end {} s is {periods} periods of {} s of {}, more than {}",
-            args.t_end,
-            sol.period,
-            path.display(),
-            MAX_TRACKED_PERIODS
-        );
-    }
-    let pd = crate::study::openloop::PdTrack {
-        kp: g[0],
-        kd: g[1],
-        during_contact: args.pd_track_contact,
-    };
-    crate::study::openloop::tracking_input(&sol, periods as usize, &pd)
-        .with_context(|| format!("--pd-track {gains}"))
-}
-
 /// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
 /// samples (see the module docs). The error names the options and the limit.
 pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
@@ -388,15 +273,6 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// Largest |τ| of a torque series at its knots (N m).
-fn max_torque(s: &TorqueSeries) -> f64 {
-    let mut tau = vec![0.0; s.dim()];
-    s.times().iter().fold(0.0, |m, &t| {
-        s.eval(t, &mut tau);
-        tau.iter().fold(m, |m, v| m.max(v.abs()))
-    })
 }
 
 /// Run `simulate`.
