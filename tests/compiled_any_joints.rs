@@ -120,7 +120,7 @@ fn simulate_and_optimize_run_the_compiled_4_joint_scene() {
 /// `periodic-qc` on the 4-joint finger: Solved and verified (about a minute of CPU on
 /// interpreted node kernels, several on a loaded machine).
 #[test]
-#[ignore]
+#[ignore = "slow: about a minute of CPU on interpreted node kernels"]
 fn cli_periodic_qc_on_the_4_joint_finger() {
     let dir = tmpdir("qc4");
     let out = dir.join("out");

@@ -24,26 +24,7 @@ fn mass_matrix_is_symmetric_positive_definite() {
         for _ in 0..30 {
             let s = State::random(&m, &mut rng);
             let v = ev(&m, &ids, &s);
-            let a = |i: usize, j: usize| v[i * n + j];
-            // Cholesky succeeds with positive pivots.
-            let mut l = vec![vec![0.0; n]; n];
-            for i in 0..n {
-                for j in 0..n {
-                    assert_eq!(a(i, j), a(j, i), "{name}: M not symmetric");
-                }
-                for j in 0..=i {
-                    let mut sum = a(i, j);
-                    for k in 0..j {
-                        sum -= l[i][k] * l[j][k];
-                    }
-                    if i == j {
-                        assert!(sum > 0.0, "{name}: M not positive definite at {:?}", s.q);
-                        l[i][i] = sum.sqrt();
-                    } else {
-                        l[i][j] = sum / l[j][j];
-                    }
-                }
-            }
+            assert_symmetric_positive_definite(&name, &v, n, &s.q);
         }
     }
 }

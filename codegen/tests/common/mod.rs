@@ -137,3 +137,28 @@ pub fn flat2(m: &[Vec<Id>]) -> Vec<Id> {
 pub fn flat3(m: &[Vec<Vec<Id>>]) -> Vec<Id> {
     m.iter().flatten().flatten().copied().collect()
 }
+
+/// Asserts that the row-major n × n matrix `v` (a mass matrix evaluated at joint angles `q`) is
+/// exactly symmetric and positive definite: a Cholesky factorization succeeds with positive
+/// pivots.
+pub fn assert_symmetric_positive_definite(name: &str, v: &[f64], n: usize, q: &[f64]) {
+    let a = |i: usize, j: usize| v[i * n + j];
+    let mut l = vec![vec![0.0; n]; n];
+    for i in 0..n {
+        for j in 0..n {
+            assert_eq!(a(i, j), a(j, i), "{name}: M not symmetric");
+        }
+        for j in 0..=i {
+            let mut sum = a(i, j);
+            for k in 0..j {
+                sum -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                assert!(sum > 0.0, "{name}: M not positive definite at {q:?}");
+                l[i][i] = sum.sqrt();
+            } else {
+                l[i][j] = sum / l[j][j];
+            }
+        }
+    }
+}
