@@ -277,7 +277,7 @@ impl SceneKernels {
     pub fn new(scene: &crate::Scene) -> Result<Self, crate::CodegenError> {
         use crate::kernels::{CONTACT_FIELDS, Dim, OutKind};
         let full = crate::kernels::with_robot_kernels(scene);
-        let mut model = crate::Model::new(&full)?;
+        let mut model = crate::SymbolicRobot::new(&full)?;
         let nq = model.nq();
         let dim = |d: &Dim| match d {
             Dim::Nq => nq,

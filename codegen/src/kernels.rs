@@ -5,7 +5,7 @@
 
 use crate::CodegenError;
 use crate::graph::Id;
-use crate::robot::Model;
+use crate::robot::SymbolicRobot;
 
 /// The graph nodes of the contact quantities in [`CONTACT_FIELDS`] order, row-major: the
 /// outputs of the `contact` and `contact_smooth` kernels.
@@ -169,7 +169,7 @@ fn flat3(m: &[Vec<Vec<Id>>]) -> Vec<Id> {
 }
 
 /// Build the definition of kernel `name` on `model`.
-pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenError> {
+pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, CodegenError> {
     use Arg::*;
     use Dim::*;
     let (inputs, outputs, doc): (Vec<Arg>, Vec<OutArg>, String) = match name {
@@ -418,7 +418,7 @@ pub fn build_kernel(model: &mut Model, name: &str) -> Result<KernelDef, CodegenE
 /// Every graph variable a kernel's outputs read must be one of its arguments (the emitter
 /// names variables by the layout, so a stray one would not compile).
 fn check_inputs(
-    model: &Model,
+    model: &SymbolicRobot,
     name: &str,
     inputs: &[Arg],
     outputs: &[OutArg],

@@ -38,7 +38,7 @@ pub use bf_scene as spec;
 pub use emit::{EmitOptions, FloatTy};
 pub use kernels::ALL_KERNELS;
 pub use report::{KernelReport, OpCounts, Report};
-pub use robot::Model;
+pub use robot::SymbolicRobot;
 pub use spec::Scene;
 
 /// Errors of the generator.
@@ -99,7 +99,7 @@ pub fn generate_with(
 ) -> Result<Generated, CodegenError> {
     let start = Instant::now();
     check_kernel_list(scene)?;
-    let mut model = Model::new(scene)?;
+    let mut model = SymbolicRobot::new(scene)?;
     let mut defs = Vec::new();
     for k in &scene.kernels {
         defs.push(kernels::build_kernel(&mut model, k)?);
@@ -260,7 +260,7 @@ pub fn eval_all(
     omega: [f64; 3],
     eps: f64,
 ) -> Result<EvalOutput, CodegenError> {
-    let mut model = Model::new(scene)?;
+    let mut model = SymbolicRobot::new(scene)?;
     let n = model.nq();
     if q.len() != n || qd.len() != n {
         return Err(CodegenError::Input(format!(

@@ -4,7 +4,7 @@
 mod common;
 
 use bf_codegen::dd::Dd;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use bf_codegen::{CodegenError, EvalValue, Scene, eval_all, generate};
 use common::*;
 
@@ -138,7 +138,7 @@ fn runtime_parameters_scale_masses_and_lengths() {
     }
     names.push("base.translation.x".into());
     sc.runtime_parameters = names.clone();
-    let mut m = Model::new(&sc).unwrap();
+    let mut m = SymbolicRobot::new(&sc).unwrap();
     let mm = flat2(&m.mass_matrix());
     let cqdg = m.cqd_g();
     let rnea = m.cqd_g_rnea();

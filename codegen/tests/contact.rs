@@ -5,7 +5,7 @@
 mod common;
 
 use bf_codegen::kernels::contact_ids;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use common::*;
 
 struct Cv {
@@ -42,10 +42,10 @@ fn unpack(v: &[f64], nq: usize) -> Cv {
     }
 }
 
-fn finger_scenes() -> Vec<(String, Model)> {
+fn finger_scenes() -> Vec<(String, SymbolicRobot)> {
     ["paper", "human"]
         .iter()
-        .map(|n| (n.to_string(), Model::new(&scene(n)).unwrap()))
+        .map(|n| (n.to_string(), SymbolicRobot::new(&scene(n)).unwrap()))
         .collect()
 }
 
@@ -189,7 +189,7 @@ fn smooth_saturation_tends_to_exact_and_is_bounded() {
 
 #[test]
 fn tip_contact_has_no_saturation() {
-    let mut m = Model::new(&test_scene("modified4")).unwrap();
+    let mut m = SymbolicRobot::new(&test_scene("modified4")).unwrap();
     let nq = m.nq();
     let c = m.contact(false).unwrap();
     assert!(

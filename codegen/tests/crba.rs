@@ -8,7 +8,7 @@
 mod common;
 
 use bf_codegen::Scene;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use common::*;
 
 fn scenes() -> Vec<(String, Scene)> {
@@ -28,7 +28,7 @@ fn scenes() -> Vec<(String, Scene)> {
 #[test]
 fn crba_equals_jacobian_mass_matrix() {
     for (name, s) in scenes() {
-        let mut m = Model::new(&s).unwrap();
+        let mut m = SymbolicRobot::new(&s).unwrap();
         let jac = flat2(&m.mass_matrix());
         let crba = flat2(&m.mass_matrix_crba());
         let mut rng = rng(31);
@@ -46,7 +46,7 @@ fn crba_equals_jacobian_mass_matrix() {
 #[test]
 fn crba_mass_matrix_is_symmetric_positive_definite() {
     for (name, s) in scenes() {
-        let mut m = Model::new(&s).unwrap();
+        let mut m = SymbolicRobot::new(&s).unwrap();
         let n = m.nq();
         let ids = flat2(&m.mass_matrix_crba());
         let mut rng = rng(32);
@@ -61,7 +61,7 @@ fn crba_mass_matrix_is_symmetric_positive_definite() {
 #[test]
 fn fused_pair_matches_mass_matrix_and_lagrangian_cqd_g() {
     for (name, s) in scenes() {
-        let mut m = Model::new(&s).unwrap();
+        let mut m = SymbolicRobot::new(&s).unwrap();
         let (mm, v) = m.mass_cqd_g();
         let (mm, v) = (flat2(&mm), v);
         let jac = flat2(&m.mass_matrix());
@@ -80,7 +80,7 @@ fn fused_pair_matches_mass_matrix_and_lagrangian_cqd_g() {
 #[test]
 fn crba_mdot_minus_2c_is_skew_symmetric() {
     for (name, s) in scenes() {
-        let mut m = Model::new(&s).unwrap();
+        let mut m = SymbolicRobot::new(&s).unwrap();
         let n = m.nq();
         let crba = flat2(&m.mass_matrix_crba());
         let c = flat2(&m.coriolis_matrix());
@@ -112,7 +112,7 @@ fn centroidal_newton_euler_matches_lagrangian_and_pi_form() {
     // Every scene, prismatic joints included: C q̇ + g of the centroidal Newton–Euler pass
     // against the Lagrangian path and against the π-linear pass (inverse dynamics at q̈ = 0).
     for (name, s) in scenes() {
-        let mut m = Model::new(&s).unwrap();
+        let mut m = SymbolicRobot::new(&s).unwrap();
         let rnea = m.cqd_g_rnea();
         let lag = m.cqd_g();
         let inv = m.inverse_dynamics();

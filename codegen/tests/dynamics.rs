@@ -5,13 +5,13 @@
 
 mod common;
 
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use common::*;
 
-fn models() -> Vec<(String, Model)> {
+fn models() -> Vec<(String, SymbolicRobot)> {
     all_scenes()
         .into_iter()
-        .map(|(n, s)| (n, Model::new(&s).unwrap()))
+        .map(|(n, s)| (n, SymbolicRobot::new(&s).unwrap()))
         .collect()
 }
 

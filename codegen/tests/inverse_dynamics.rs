@@ -9,7 +9,7 @@ mod common;
 use bf_codegen::Scene;
 use bf_codegen::interp::Tape;
 use bf_codegen::kernels::build_kernel;
-use bf_codegen::robot::{Model, inertial_parameters};
+use bf_codegen::robot::{SymbolicRobot, inertial_parameters};
 use bf_codegen::spec::InertiaSpec;
 use common::{all_scenes, rand_vec, rng, test_scene};
 use rand::Rng;
@@ -33,7 +33,7 @@ struct Input<'a> {
 
 /// Evaluates kernel `name` of `model` (all outputs, row-major) with the parameters at their
 /// defaults.
-fn kernel(model: &mut Model, name: &str, x: &Input) -> Vec<f64> {
+fn kernel(model: &mut SymbolicRobot, name: &str, x: &Input) -> Vec<f64> {
     let def = build_kernel(model, name).unwrap();
     let ids: Vec<_> = def.outputs.iter().flat_map(|o| o.ids.clone()).collect();
     let l = model.layout;
@@ -83,11 +83,11 @@ impl Sample {
 fn for_random_samples(
     seed: u64,
     per_scene: usize,
-    mut check: impl FnMut(&str, &mut Model, &Sample),
+    mut check: impl FnMut(&str, &mut SymbolicRobot, &Sample),
 ) {
     let mut r = rng(seed);
     for (name, scene) in scenes() {
-        let mut model = Model::new(&scene).unwrap();
+        let mut model = SymbolicRobot::new(&scene).unwrap();
         let n = model.nq();
         for _ in 0..per_scene {
             let s = Sample::random(&mut r, n);
@@ -109,7 +109,7 @@ fn close(a: &[f64], b: &[f64], rel: f64, what: &str) {
 
 #[test]
 fn polar_arm_matches_closed_form() {
-    let mut model = Model::new(&test_scene("polar_rp")).unwrap();
+    let mut model = SymbolicRobot::new(&test_scene("polar_rp")).unwrap();
     let (m2, lc, i1, i2, g) = (0.8, 0.1, 0.3, 0.05, 9.81);
     let mut r = rng(11);
     for _ in 0..30 {
@@ -267,7 +267,7 @@ fn regressor_times_parameters_is_tau() {
         for _ in 0..3 {
             let s = randomised(&scene, &mut r);
             let pi = inertial_parameters(&s);
-            let mut model = Model::new(&s).unwrap();
+            let mut model = SymbolicRobot::new(&s).unwrap();
             let n = model.nq();
             let sample = Sample::random(&mut r, n);
             let x = sample.input();
@@ -280,7 +280,7 @@ fn regressor_times_parameters_is_tau() {
             close(&ypi, &tau, 1e-11, &format!("{name}: Y π"));
             // Y holds no inertial parameter: the same Y serves every π.
             let s2 = randomised(&scene, &mut r);
-            let mut m2 = Model::new(&s2).unwrap();
+            let mut m2 = SymbolicRobot::new(&s2).unwrap();
             close(
                 &kernel(&mut m2, "regressor", &x),
                 &y,

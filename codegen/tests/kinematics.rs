@@ -4,7 +4,7 @@
 
 mod common;
 
-use bf_codegen::robot::{Model, Pose};
+use bf_codegen::robot::{Pose, SymbolicRobot};
 use bf_codegen::spec::{DhConvention, Scene};
 use common::*;
 
@@ -93,7 +93,7 @@ fn m4_flat(m: &M4) -> Vec<f64> {
 #[test]
 fn frames_match_numeric_dh_chain() {
     for (name, sc) in all_scenes() {
-        let mut m = Model::new(&sc).unwrap();
+        let mut m = SymbolicRobot::new(&sc).unwrap();
         let n = m.nq();
         let frames = m.frames();
         let mut rng = rng(21);
@@ -124,7 +124,7 @@ fn frames_match_numeric_dh_chain() {
 #[test]
 fn tip_jacobian_matches_finite_differences() {
     for (name, sc) in all_scenes() {
-        let mut m = Model::new(&sc).unwrap();
+        let mut m = SymbolicRobot::new(&sc).unwrap();
         let n = m.nq();
         let (jp, jo) = m.tip_jacobian();
         let tip = m.tip_pose();
@@ -155,7 +155,7 @@ fn tip_jacobian_matches_finite_differences() {
 #[test]
 fn com_jacobians_match_finite_differences() {
     for (name, sc) in all_scenes() {
-        let mut m = Model::new(&sc).unwrap();
+        let mut m = SymbolicRobot::new(&sc).unwrap();
         let n = m.nq();
         let coms = m.com_world();
         let js = m.com_jacobians();
@@ -175,7 +175,7 @@ fn com_jacobians_match_finite_differences() {
 #[test]
 fn tip_jdot_qd_matches_finite_differences() {
     for (name, sc) in all_scenes() {
-        let mut m = Model::new(&sc).unwrap();
+        let mut m = SymbolicRobot::new(&sc).unwrap();
         let n = m.nq();
         let (jp, jo) = m.tip_jacobian();
         let jdq = m.tip_jdot_qd();
@@ -202,7 +202,7 @@ fn tip_jdot_qd_matches_finite_differences() {
 #[test]
 fn mass_matrix_gives_kinetic_energy_of_link_motion() {
     for (name, sc) in all_scenes() {
-        let mut m = Model::new(&sc).unwrap();
+        let mut m = SymbolicRobot::new(&sc).unwrap();
         let n = m.nq();
         let mm = flat2(&m.mass_matrix());
         let coms = m.com_world();

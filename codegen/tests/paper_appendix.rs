@@ -154,9 +154,9 @@ fn appendix_b_dynamics() {
 /// eq. 76–79: the Christoffel symbols ψ_ijk of the paper finger (all others zero).
 #[test]
 fn appendix_b_christoffel_symbols() {
-    use bf_codegen::robot::Model;
+    use bf_codegen::robot::SymbolicRobot;
     let scene = paper();
-    let mut model = Model::new(&scene).unwrap();
+    let mut model = SymbolicRobot::new(&scene).unwrap();
     let ch: Vec<_> = model
         .christoffel()
         .into_iter()

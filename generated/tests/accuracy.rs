@@ -6,7 +6,7 @@ use bf_codegen::Scene;
 use bf_codegen::dd::Dd;
 use bf_codegen::interp::Tape;
 use bf_codegen::kernels::build_kernel;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -23,7 +23,7 @@ macro_rules! accuracy {
     ($m:ident, $kernels:expr, $states:expr, $tol:expr) => {{
         use bf_generated::$m as s;
         let scene = Scene::from_toml_str(s::SCENE_TOML, stringify!($m)).unwrap();
-        let mut model = Model::new(&scene).unwrap();
+        let mut model = SymbolicRobot::new(&scene).unwrap();
         let mut worst = 0.0f64;
         for &k in $kernels {
             if !s::KERNELS.contains(&k) {
@@ -187,7 +187,7 @@ fn periodic_in_joint_angles() {
 fn human_runtime_parameters_scaled() {
     use bf_generated::human as s;
     let scene = Scene::from_toml_str(s::SCENE_TOML, "human").unwrap();
-    let mut model = Model::new(&scene).unwrap();
+    let mut model = SymbolicRobot::new(&scene).unwrap();
     let im = s::PARAM_NAMES
         .iter()
         .position(|n| *n == "link3.mass")

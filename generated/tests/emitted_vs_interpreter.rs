@@ -6,7 +6,7 @@
 use bf_codegen::Scene;
 use bf_codegen::interp::{KernelF64, Tape};
 use bf_codegen::kernels::build_kernel;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -15,7 +15,7 @@ macro_rules! check_scene {
         use bf_generated::$m as s;
         let scene = Scene::from_toml_str(s::SCENE_TOML, stringify!($m)).unwrap();
         assert_eq!(scene.name, s::SCENE_NAME);
-        let mut model = Model::new(&scene).unwrap();
+        let mut model = SymbolicRobot::new(&scene).unwrap();
         assert_eq!(model.nq(), s::NQ);
         assert_eq!(model.params.len(), s::NP);
         for (i, (n, v)) in model.params.iter().enumerate() {

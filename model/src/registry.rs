@@ -517,7 +517,7 @@ pub(crate) fn interpreted_tapes<const N: usize>(
     kernels: [&str; N],
 ) -> Result<InterpretedTapes<N>> {
     let codegen = |e: bf_codegen::CodegenError| scene_err(&scene.name, e.to_string());
-    let mut m = bf_codegen::Model::new(scene).map_err(codegen)?;
+    let mut m = bf_codegen::SymbolicRobot::new(scene).map_err(codegen)?;
     let mut tapes = Vec::with_capacity(N);
     for kernel in kernels {
         let def = build_kernel(&mut m, kernel).map_err(codegen)?;

@@ -33,7 +33,7 @@
 
 use bf_codegen::graph::{Graph, Id};
 use bf_codegen::nodefn::NodeFunction;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use bf_codegen::{CodegenError, Scene};
 use bf_optim::ipm::{Nlp, Settings, Solution, Status};
 use bf_optim::ocp::{
@@ -183,7 +183,7 @@ pub fn arm_node_function(
     acceleration_weight: f64,
     q_ref: &[f64],
 ) -> Result<(NodeFunction, ArmNodeVars), CodegenError> {
-    let mut model = Model::new(scene)?;
+    let mut model = SymbolicRobot::new(scene)?;
     let nq = model.nq();
     let lay = model.layout;
     let mut fixed: Vec<(u32, f64)> = model
@@ -386,7 +386,7 @@ pub fn rest_to_rest_guess(
     target: &[f64],
     duration: f64,
 ) -> Result<PhaseGuess, CodegenError> {
-    let mut model = Model::new(scene)?;
+    let mut model = SymbolicRobot::new(scene)?;
     let nq = model.nq();
     let lay = model.layout;
     let mass = model.mass_matrix();

@@ -22,7 +22,7 @@
 
 use bf_codegen::graph::{Graph, Id, V3};
 use bf_codegen::nodefn::NodeFunction;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use bf_codegen::{CodegenError, Scene, diff};
 
 /// δ of the smooth friction-cone margin σ_δ (N); σ_δ ≥ 0 implies σ ≥ −δ.
@@ -189,7 +189,7 @@ pub enum StickLevel {
 #[derive(Debug)]
 pub struct BuiltModel {
     /// The symbolic model.
-    pub model: Model,
+    pub model: SymbolicRobot,
     /// (graph variable, value) of ε and of the runtime parameters.
     pub fixed: Vec<(u32, f64)>,
     /// First graph variable index after the robot layout.
@@ -198,7 +198,7 @@ pub struct BuiltModel {
 
 /// Builds the symbolic model of `scene` with ε = `eps`.
 pub fn build_model(scene: &Scene, eps: f64) -> Result<BuiltModel, CodegenError> {
-    let model = Model::new(scene)?;
+    let model = SymbolicRobot::new(scene)?;
     let lay = model.layout;
     let mut fixed = vec![(lay.eps(), eps)];
     for (i, p) in model.params.iter().enumerate() {

@@ -8,7 +8,7 @@
 use bf_codegen::Scene;
 use bf_codegen::graph::{Graph, Id};
 use bf_codegen::interp::Tape;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use bf_optim::ocp::{PointFunction, VarRef};
 
 use crate::ProblemError;
@@ -21,7 +21,7 @@ pub fn physics(scene: &Scene) -> Result<Physics, ProblemError> {
 }
 
 struct Built {
-    model: Model,
+    model: SymbolicRobot,
     fixed: Vec<(u32, f64)>,
     base: u32,
 }

@@ -7,7 +7,7 @@
 use bf_codegen::Scene;
 use bf_codegen::interp::Tape;
 use bf_codegen::kernels::build_kernel;
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use bf_testkit::reference::Reference;
 use nalgebra::DVector;
 use rand::{Rng, SeedableRng};
@@ -28,7 +28,7 @@ fn scenes() -> Vec<(String, Scene)> {
 }
 
 /// Kernel `name` of `model` at (q, q̇, u), u the q̈ or τ argument; parameters at defaults.
-fn kernel(model: &mut Model, name: &str, q: &[f64], qd: &[f64], u: &[f64]) -> Vec<f64> {
+fn kernel(model: &mut SymbolicRobot, name: &str, q: &[f64], qd: &[f64], u: &[f64]) -> Vec<f64> {
     let def = build_kernel(model, name).unwrap();
     let ids: Vec<_> = def.outputs.iter().flat_map(|o| o.ids.clone()).collect();
     let l = model.layout;
@@ -62,7 +62,7 @@ fn inverse_and_forward_dynamics_match_the_reference() {
     let mut r = ChaCha8Rng::seed_from_u64(21);
     for (path, scene) in scenes() {
         let rf = Reference::new(&scene).unwrap();
-        let mut model = Model::new(&scene).unwrap();
+        let mut model = SymbolicRobot::new(&scene).unwrap();
         let n = model.nq();
         for _ in 0..10 {
             let mut rv = |s: f64| -> Vec<f64> { (0..n).map(|_| r.random_range(-s..s)).collect() };
@@ -87,7 +87,7 @@ fn prismatic_kinematics_and_mass_matrix_match_the_reference() {
         .filter(|(p, _)| p.contains("prismatic") || p.contains("polar"))
     {
         let rf = Reference::new(&scene).unwrap();
-        let mut model = Model::new(&scene).unwrap();
+        let mut model = SymbolicRobot::new(&scene).unwrap();
         let n = model.nq();
         for _ in 0..10 {
             let q: Vec<f64> = (0..n).map(|_| r.random_range(-2.0..2.0)).collect();

@@ -1,4 +1,4 @@
-//! The mass matrix by the composite-rigid-body algorithm ([`Model`] methods), in the link
+//! The mass matrix by the composite-rigid-body algorithm ([`SymbolicRobot`] methods), in the link
 //! frames and with the link transforms A_i of the recursive Newton–Euler pass, so a kernel
 //! holding both shares the rotations R_i, the offsets t_i and the joint axes u_i:
 //! * composite inertia of the subtree of link i about o_i in frame i, as the standard inertial
@@ -11,7 +11,7 @@
 //! * M_ji = M_ij = the joint-j component of that force (moment about joint j's axis for a
 //!   revolute joint, force along it for a prismatic one) — eq. 22a without Jacobians.
 
-use super::Model;
+use super::SymbolicRobot;
 use crate::graph::{Id, M3, V3};
 use crate::spec::DhConvention;
 
@@ -23,7 +23,7 @@ struct Inertia {
     io: M3,
 }
 
-impl Model {
+impl SymbolicRobot {
     /// Standard DH: o_i − o_{i−1} in frame i (closed form of `build_kinematics`); modified DH:
     /// the zero vector (joint i's axis passes through o_i).
     pub(super) fn joint_offset(&mut self, i: usize) -> V3 {

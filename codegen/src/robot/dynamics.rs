@@ -1,4 +1,4 @@
-//! Joint-space dynamics of the robot front-end ([`Model`] methods), conventions of
+//! Joint-space dynamics of the robot front-end ([`SymbolicRobot`] methods), conventions of
 //! docs/parameters.md:
 //! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
 //!   expressed in the link's own frame so M depends only on relative joint angles;
@@ -8,11 +8,11 @@
 //!   centroidal link wrench, independent of the Lagrangian path.
 
 use super::inverse::Wrench;
-use super::{Model, Pose};
+use super::{Pose, SymbolicRobot};
 use crate::diff;
 use crate::graph::{Id, M3, V3};
 
-impl Model {
+impl SymbolicRobot {
     /// Mass matrix M(q), eq. 22a, from link-frame Jacobians.
     pub fn mass_matrix(&mut self) -> Vec<Vec<Id>> {
         if let Some(m) = &self.cache.mass {
@@ -139,7 +139,7 @@ impl Model {
         let c = self.coriolis_qd_christoffel();
         let g = self.gravity();
         let chr: Vec<Id> = c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect();
-        let cost = |m: &Model, v: &[Id]| {
+        let cost = |m: &SymbolicRobot, v: &[Id]| {
             let mut all = with.to_vec();
             all.extend_from_slice(v);
             m.g.cost(&all)
@@ -152,13 +152,13 @@ impl Model {
     }
 
     /// M and C q̇ + g for one kernel: of the mass matrix from link Jacobians
-    /// ([`Model::mass_matrix`]) and by the composite-rigid-body algorithm
-    /// ([`Model::mass_matrix_crba`]), each with its cheapest C q̇ + g
-    /// ([`Model::cqd_g_cheapest`]), the pair with fewer operations in total (the Jacobian form
+    /// ([`SymbolicRobot::mass_matrix`]) and by the composite-rigid-body algorithm
+    /// ([`SymbolicRobot::mass_matrix_crba`]), each with its cheapest C q̇ + g
+    /// ([`SymbolicRobot::cqd_g_cheapest`]), the pair with fewer operations in total (the Jacobian form
     /// on a tie). The candidates are costed on a copy of the graph, so the losing one leaves
     /// no nodes behind (the node order, hence the emitted text, of other kernels is unchanged).
     pub fn mass_cqd_g(&mut self) -> (Vec<Vec<Id>>, Vec<Id>) {
-        let cost = |m: &mut Model, crba: bool| {
+        let cost = |m: &mut SymbolicRobot, crba: bool| {
             let mm = if crba {
                 m.mass_matrix_crba()
             } else {

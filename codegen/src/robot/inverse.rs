@@ -1,4 +1,4 @@
-//! The inverse-dynamics family of the robot front-end ([`Model`] methods):
+//! The inverse-dynamics family of the robot front-end ([`SymbolicRobot`] methods):
 //! * inverse dynamics τ(q, q̇, q̈) = M q̈ + C q̇ + g (eq. 24) by a recursive Newton–Euler pass
 //!   written *linearly* in the standard inertial parameters π of every link (m, m·c and the
 //!   inertia I_o about the link frame's origin, [`super::INERTIAL_PARAMETER_NAMES`]):
@@ -13,7 +13,7 @@
 //!   factorisation of M unrolled into the graph (no loops, no pivoting: M is positive
 //!   definite).
 
-use super::Model;
+use super::SymbolicRobot;
 use crate::diff;
 
 /// How the Newton–Euler pass forms each link's force F and moment N about o_i.
@@ -29,7 +29,7 @@ pub(super) enum Wrench<'a> {
 use crate::graph::{Id, Node, V3};
 use crate::spec::DhConvention;
 
-impl Model {
+impl SymbolicRobot {
     /// π of link `i` as graph nodes from the scene's values (runtime parameters stay
     /// variables): [m, m c, I_o upper triangle], I_o = I_c + m(|c|² 1 − c cᵀ).
     pub(super) fn inertial_nodes(&mut self, i: usize) -> [Id; 10] {

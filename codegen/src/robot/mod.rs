@@ -163,9 +163,10 @@ pub struct ContactExprs {
     pub jc_dot_qd: V3,
 }
 
-/// The scene's symbolic model: one graph holding every requested quantity.
+/// The scene's symbolic robot model (the graph counterpart of bf-model's numeric `Model`): one
+/// graph holding every requested quantity.
 #[derive(Debug, Clone)]
-pub struct Model {
+pub struct SymbolicRobot {
     /// The expression graph.
     pub g: Graph,
     /// Input layout.
@@ -196,7 +197,7 @@ struct Cache {
     inverse: Option<Vec<Id>>,
 }
 
-impl Model {
+impl SymbolicRobot {
     /// Build the kinematic skeleton of `scene` (world frames of every link, tip frame).
     pub fn new(scene: &Scene) -> Result<Self, CodegenError> {
         let nq = scene.links.len();
@@ -224,7 +225,7 @@ impl Model {
             nq,
             np: params.len(),
         };
-        let mut m = Model {
+        let mut m = SymbolicRobot {
             g: Graph::new(),
             layout,
             params,

@@ -4,7 +4,7 @@
 use bf_codegen::Scene;
 use bf_codegen::graph::Id;
 use bf_codegen::interp::{Scalar, Tape};
-use bf_codegen::robot::Model;
+use bf_codegen::robot::SymbolicRobot;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -57,7 +57,7 @@ pub struct State {
 }
 
 impl State {
-    pub fn random(model: &Model, rng: &mut ChaCha8Rng) -> State {
+    pub fn random(model: &SymbolicRobot, rng: &mut ChaCha8Rng) -> State {
         let n = model.nq();
         State {
             q: rand_vec(rng, n, -3.2, 3.2),
@@ -72,7 +72,7 @@ impl State {
         }
     }
 
-    pub fn vars(&self, model: &Model) -> Vec<f64> {
+    pub fn vars(&self, model: &SymbolicRobot) -> Vec<f64> {
         let l = model.layout;
         let n = l.nq;
         let mut v = vec![0.0; l.n_vars()];
@@ -97,18 +97,18 @@ impl State {
 }
 
 /// Evaluate nodes at a state in f64.
-pub fn ev(model: &Model, ids: &[Id], s: &State) -> Vec<f64> {
+pub fn ev(model: &SymbolicRobot, ids: &[Id], s: &State) -> Vec<f64> {
     Tape::new(&model.g, ids).eval::<f64>(&s.vars(model))
 }
 
 /// Evaluate nodes at a state in any scalar type.
-pub fn ev_as<S: Scalar>(model: &Model, ids: &[Id], s: &State) -> Vec<S> {
+pub fn ev_as<S: Scalar>(model: &SymbolicRobot, ids: &[Id], s: &State) -> Vec<S> {
     let v: Vec<S> = s.vars(model).into_iter().map(S::from_f64).collect();
     Tape::new(&model.g, ids).eval::<S>(&v)
 }
 
 /// Central finite difference of `f` along `dir` at `s` (step h).
-pub fn fd(model: &Model, ids: &[Id], s: &State, dir: &[f64], h: f64) -> Vec<f64> {
+pub fn fd(model: &SymbolicRobot, ids: &[Id], s: &State, dir: &[f64], h: f64) -> Vec<f64> {
     let a = ev(model, ids, &s.moved(dir, h));
     let b = ev(model, ids, &s.moved(dir, -h));
     a.iter().zip(&b).map(|(x, y)| (x - y) / (2.0 * h)).collect()

@@ -168,8 +168,8 @@ impl GraphEval {
 }
 
 /// The expression graph of `scene`, which must have the 3 joints of the contact model.
-pub(super) fn three_joint_model(scene: &Scene) -> anyhow::Result<bf_codegen::Model> {
-    let m = bf_codegen::Model::new(scene)?;
+pub(super) fn three_joint_model(scene: &Scene) -> anyhow::Result<bf_codegen::SymbolicRobot> {
+    let m = bf_codegen::SymbolicRobot::new(scene)?;
     if m.nq() != 3 {
         bail!(
             "scene `{}` has {} joints, the probes need 3",

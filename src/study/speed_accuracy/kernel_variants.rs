@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use anyhow::{Result, anyhow};
 use bf_codegen::dd::Dd;
-use bf_codegen::{Model as GraphModel, Scene, interp, kernels};
+use bf_codegen::{Scene, SymbolicRobot, interp, kernels};
 use bf_generated::{paper, paper_f32, paper_fma, paper_runtime};
 use bf_plot::paper::WorkPrecisionSet;
 use rand::{Rng, SeedableRng};
@@ -58,7 +58,7 @@ fn states(n: usize) -> Vec<(Q, Q)> {
 }
 
 /// Double-double values of kernel `name` of `model` at every state.
-fn dd_reference(model: &mut GraphModel, name: &str, states: &[(Q, Q)]) -> Result<Vec<Vec<Dd>>> {
+fn dd_reference(model: &mut SymbolicRobot, name: &str, states: &[(Q, Q)]) -> Result<Vec<Vec<Dd>>> {
     let def = kernels::build_kernel(model, name).map_err(|e| anyhow!("kernel {name}: {e}"))?;
     let ids: Vec<_> = def.output_ids();
     let layout = model.layout;
@@ -237,13 +237,13 @@ pub(super) fn measure(quick: bool) -> Result<Vec<KernelRow>> {
     };
     let scene = Scene::from_toml_str(paper::SCENE_TOML, "scenes/paper.toml")
         .map_err(|e| anyhow!("paper scene: {e}"))?;
-    let mut baked = GraphModel::new(&scene).map_err(|e| anyhow!("paper graph: {e}"))?;
+    let mut baked = SymbolicRobot::new(&scene).map_err(|e| anyhow!("paper graph: {e}"))?;
     let all_runtime = Scene {
         runtime_parameters: scene.constants().into_iter().map(|c| c.0).collect(),
         ..scene.clone()
     };
     let mut runtime =
-        GraphModel::new(&all_runtime).map_err(|e| anyhow!("runtime-parameter graph: {e}"))?;
+        SymbolicRobot::new(&all_runtime).map_err(|e| anyhow!("runtime-parameter graph: {e}"))?;
     let same_params = runtime.params.len() == paper_runtime::NP
         && runtime
             .params
