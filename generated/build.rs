@@ -37,8 +37,8 @@ const VARIANT_KERNELS: [&str; 4] = ["mass_matrix", "cqd_g", "cqd_g_rnea", "mass_
 /// The variant modules of `scene` (the paper scene): (variant scene, emit options, doc).
 fn variants(
     scene: &bf_codegen::Scene,
-) -> Vec<(bf_codegen::Scene, bf_codegen::EmitOptions, String)> {
-    use bf_codegen::{EmitOptions, FloatTy};
+) -> Vec<(bf_codegen::Scene, bf_codegen::EmitSettings, String)> {
+    use bf_codegen::{EmitSettings, FloatTy};
     let base = bf_codegen::Scene {
         kernels: VARIANT_KERNELS.iter().map(|k| k.to_string()).collect(),
         ..scene.clone()
@@ -54,7 +54,7 @@ fn variants(
     vec![
         (
             named("f32", &base),
-            EmitOptions {
+            EmitSettings {
                 float: FloatTy::F32,
                 fma: false,
             },
@@ -62,7 +62,7 @@ fn variants(
         ),
         (
             named("fma", &base),
-            EmitOptions {
+            EmitSettings {
                 float: FloatTy::F64,
                 fma: true,
             },
@@ -70,7 +70,7 @@ fn variants(
         ),
         (
             named("runtime", &all_runtime),
-            EmitOptions::default(),
+            EmitSettings::default(),
             "f64, every constant of the scene a runtime parameter (nothing baked)".into(),
         ),
     ]

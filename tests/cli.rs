@@ -177,7 +177,7 @@ fn generate_is_deterministic_and_writes_atomically() {
 
 #[test]
 fn generate_emits_the_robot_kernels_in_every_variant() {
-    use bf_codegen::{EmitOptions, FloatTy, Scene, generate_with, kernels::with_robot_kernels};
+    use bf_codegen::{EmitSettings, FloatTy, Scene, generate_with, kernels::with_robot_kernels};
     let text = std::fs::read_to_string(root().join("scenes/puma560.toml")).unwrap();
     let scene = Scene::from_toml_str(&text, "scenes/puma560.toml").unwrap();
     let full = with_robot_kernels(&scene);
@@ -191,7 +191,7 @@ fn generate_emits_the_robot_kernels_in_every_variant() {
         args.extend(&flags);
         let out = run(&args);
         assert!(out.status.success(), "{flags:?}");
-        let want = generate_with(&full, &text, &EmitOptions { float, fma })
+        let want = generate_with(&full, &text, &EmitSettings { float, fma })
             .unwrap()
             .code;
         assert!(

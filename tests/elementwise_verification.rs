@@ -7,7 +7,7 @@
 //! `periodic-cot` search ends Solved and verified.
 
 use ball_finger::study::verify::{
-    TorqueInterpolant, VERIFIED_DEFECT, Verification, VerifyOptions, verify_with,
+    TorqueInterpolant, VERIFIED_DEFECT, Verification, VerifySettings, verify_with,
 };
 use ball_finger::study::{build, solve};
 use bf_optim::ipm::Status;
@@ -26,10 +26,10 @@ fn verify(
     sol: &OcpSolution,
     rtol: f64,
 ) -> Result<Verification, impl std::fmt::Debug> {
-    let opt = VerifyOptions {
+    let opt = VerifySettings {
         rtol,
         torque: TorqueInterpolant::Polynomial,
-        ..VerifyOptions::default()
+        ..VerifySettings::default()
     };
     verify_with(p, sol, &opt)
 }

@@ -219,7 +219,7 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         "mu_s = 0.8 not found in the paper scene"
     );
     let scene = bf_codegen::Scene::from_toml_str(&text, "test").unwrap();
-    let opt = bf_problem::node::NodeOptions {
+    let opt = bf_problem::node::NodeSettings {
         mode: bf_problem::PhaseMode::Stick,
         cost: bf_problem::CostKind::Qc {
             w: 1.0,

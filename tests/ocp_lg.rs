@@ -27,7 +27,7 @@ use bf_optim::ipm::{Nlp, Status};
 use bf_optim::ocp::nodes::{differentiation_matrix, legendre_gauss};
 use bf_optim::ocp::transcription::integration_matrix;
 use bf_optim::ocp::{GraphFn, Scheme};
-use bf_problem::node::{NodeOptions, node_function as node_function_with};
+use bf_problem::node::{NodeSettings, node_function as node_function_with};
 use bf_problem::points::Diagnostics;
 use bf_problem::{
     BuiltProblem, CostKind, OcpSolution, PhaseMode, Problem, ProblemSettings, StickLevel,
@@ -44,7 +44,7 @@ fn acceleration_level_stick_rows_are_the_time_derivative_of_delta_v() {
     let scene = paper_scene();
     let ph = bf_problem::node::physics(&scene).unwrap();
     let eps = 0.01;
-    let opt = NodeOptions {
+    let opt = NodeSettings {
         mode: PhaseMode::Stick,
         cost: CostKind::Qc {
             w: 1.0,

@@ -4,7 +4,7 @@
 //! named problems (`reach`, `periodic-qc`).
 
 use ball_finger::study::refine::{
-    RefineOptions, RefineRound, current_mesh, error_estimate, refine, warm_initial_point,
+    RefineRound, RefineSettings, current_mesh, error_estimate, refine, warm_initial_point,
 };
 use ball_finger::study::{build, solve};
 use bf_optim::ipm::{Nlp, Settings, Status};
@@ -270,9 +270,9 @@ fn print_round(r: &RefineRound) {
 #[test]
 fn refinement_of_reach_meets_the_tolerance_and_stops() {
     let tol = 2e-6;
-    let opts = RefineOptions {
+    let opts = RefineSettings {
         tol,
-        ..RefineOptions::default()
+        ..RefineSettings::default()
     };
     let mut rounds = 0;
     let mut cb = |r: &RefineRound| {
@@ -330,7 +330,7 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
     assert!(res2.converged);
     assert_eq!(res2.history.len(), 1);
     assert_eq!(res2.mesh, res.mesh);
-    let loose = RefineOptions { tol: 1.0, ..opts };
+    let loose = RefineSettings { tol: 1.0, ..opts };
     let res3 = refine(
         Problem::Reach,
         &ProblemSettings::default(),
@@ -342,7 +342,7 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
     assert!(res3.converged && res3.history.len() == 1);
     assert_eq!(res3.mesh[0], MeshSpec::uniform(3, 10).unwrap());
     // Round limit: reported as not converged, with the last solution.
-    let capped = RefineOptions {
+    let capped = RefineSettings {
         max_rounds: 0,
         ..opts
     };
@@ -361,7 +361,7 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
     assert_eq!(back.mesh, res.mesh);
     assert_eq!(back.history.len(), res.history.len());
     // Invalid options are errors.
-    let bad = RefineOptions { tol: 0.0, ..opts };
+    let bad = RefineSettings { tol: 0.0, ..opts };
     assert!(
         refine(
             Problem::Reach,
@@ -381,10 +381,10 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
 
 #[test]
 fn refinement_of_periodic_qc_converges_to_1e_4() {
-    let opts = RefineOptions {
+    let opts = RefineSettings {
         tol: 1e-4,
         max_rounds: 10,
-        ..RefineOptions::default()
+        ..RefineSettings::default()
     };
     let mut cb = |r: &RefineRound| print_round(r);
     let res = refine(
@@ -422,10 +422,10 @@ fn refinement_of_periodic_qc_converges_to_1e_4() {
 fn explore() {
     let env = |k: &str| std::env::var(k).ok();
     let name = env("BF_PROBLEM").unwrap_or_else(|| "periodic-qc".into());
-    let opts = RefineOptions {
+    let opts = RefineSettings {
         tol: env("BF_TOL").and_then(|v| v.parse().ok()).unwrap_or(1e-4),
         max_rounds: env("BF_ROUNDS").and_then(|v| v.parse().ok()).unwrap_or(12),
-        ..RefineOptions::default()
+        ..RefineSettings::default()
     };
     let settings = ProblemSettings {
         points: env("BF_POINTS").and_then(|v| v.parse().ok()).unwrap_or(30),
@@ -449,10 +449,10 @@ fn explore() {
 /// the Radau mesh that matches LG-30 (BENCHMARKS.md: 265 ms against 637 ms).
 #[test]
 fn radau_3x12_matches_lg30_accuracy_on_periodic_qc() {
-    let opts = RefineOptions {
+    let opts = RefineSettings {
         tol: 1e-6,
         max_rounds: 12,
-        ..RefineOptions::default()
+        ..RefineSettings::default()
     };
     let reference = refine(
         Problem::PeriodicQc,

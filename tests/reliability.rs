@@ -72,7 +72,7 @@ fn simulate_output_set_is_replaced_as_a_whole() {
     for fault in [1, 2] {
         let e = simulate::run_with(
             &args,
-            simulate::RunOptions {
+            simulate::RunSettings {
                 fail_at_write: Some(fault),
             },
         )
@@ -125,7 +125,7 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     };
     let e = optimize::run_with(
         &args,
-        optimize::RunOptions {
+        optimize::RunSettings {
             fail_at_write: Some(2),
         },
     )

@@ -13,7 +13,7 @@
 //!   stick → slip and λ_n ≈ 0 at lift-off (the Sect. 3.1 transition conditions).
 
 use bf_model::{ImpactLaw, Mode, PaperKernels, State, Vec3, fixtures};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions, SampleInfo};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings, SampleInfo};
 use bf_sim::{Input, PdController, SampleKind, SimOutput, SimSettings, simulate};
 
 #[path = "common/sim.rs"]
@@ -54,9 +54,9 @@ fn frictionless_energy_check(t_end: f64) -> f64 {
     let sys = BallFinger::new(
         m,
         zero(),
-        BallFingerOptions {
+        BallFingerSettings {
             impact_law: ImpactLaw::NormalImpulse,
-            ..BallFingerOptions::default()
+            ..BallFingerSettings::default()
         },
     )
     .unwrap();
@@ -121,9 +121,9 @@ fn scripted_push_free_stick_slip_free_with_transition_conditions() {
     let sys = BallFinger::new(
         fixtures::paper_scene().unwrap(),
         series,
-        BallFingerOptions {
+        BallFingerSettings {
             impact_law: ImpactLaw::Stick,
-            ..BallFingerOptions::default()
+            ..BallFingerSettings::default()
         },
     )
     .unwrap();
@@ -215,9 +215,9 @@ fn with_friction_energy_grows_only_by_torque_work() {
         let sys = BallFinger::new(
             fixtures::paper_scene().unwrap(),
             series.clone(),
-            BallFingerOptions {
+            BallFingerSettings {
                 impact_law: law,
-                ..BallFingerOptions::default()
+                ..BallFingerSettings::default()
             },
         )
         .unwrap();
@@ -282,10 +282,10 @@ fn projection_bounds_drift_and_without_it_drift_stays_within_tolerance() {
         let sys = BallFinger::new(
             fixtures::paper_scene().unwrap(),
             series.clone(),
-            BallFingerOptions {
+            BallFingerSettings {
                 impact_law: ImpactLaw::Stick,
                 project,
-                ..BallFingerOptions::default()
+                ..BallFingerSettings::default()
             },
         )
         .unwrap();

@@ -7,7 +7,7 @@
 use std::sync::OnceLock;
 
 use ball_finger::study::verify::{
-    TorqueInterpolant, Verification, VerifyOptions, verify, verify_with,
+    TorqueInterpolant, Verification, VerifySettings, verify, verify_with,
 };
 use ball_finger::study::{build, solve};
 use bf_generated::paper as k;
@@ -134,11 +134,11 @@ fn periodic_qc_verifies_and_defect_shrinks_with_refinement() {
     }
 }
 
-fn poly() -> VerifyOptions {
-    VerifyOptions {
+fn poly() -> VerifySettings {
+    VerifySettings {
         rtol: RTOL,
         torque: TorqueInterpolant::Polynomial,
-        ..VerifyOptions::default()
+        ..VerifySettings::default()
     }
 }
 

@@ -35,7 +35,7 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 /// The scene file (bf-scene), under its historical path `bf_codegen::spec`.
 pub use bf_scene as spec;
 #[cfg(feature = "emit")]
-pub use emit::{EmitOptions, FloatTy};
+pub use emit::{EmitSettings, FloatTy};
 pub use kernels::ALL_KERNELS;
 pub use report::{KernelReport, OpCounts, Report};
 pub use robot::SymbolicRobot;
@@ -87,15 +87,15 @@ fn check_kernel_list(scene: &Scene) -> Result<(), CodegenError> {
 /// Generate the Rust module of `scene`. `source_text` is the scene file's text, embedded as
 /// `SCENE_TOML`. Output is byte-identical for identical input.
 pub fn generate(scene: &Scene, source_text: &str) -> Result<Generated, CodegenError> {
-    generate_with(scene, source_text, &emit::EmitOptions::default())
+    generate_with(scene, source_text, &emit::EmitSettings::default())
 }
 
 #[cfg(feature = "emit")]
-/// As [`generate`], with emission variants (f32, fused multiply-add); see [`emit::EmitOptions`].
+/// As [`generate`], with emission variants (f32, fused multiply-add); see [`emit::EmitSettings`].
 pub fn generate_with(
     scene: &Scene,
     source_text: &str,
-    opts: &emit::EmitOptions,
+    opts: &emit::EmitSettings,
 ) -> Result<Generated, CodegenError> {
     let start = Instant::now();
     check_kernel_list(scene)?;

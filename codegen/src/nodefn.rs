@@ -25,7 +25,7 @@ use quote::quote;
 use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
-use crate::emit::{EmitOptions, Ssa, f64_tokens, lanes_items, ssa_inner};
+use crate::emit::{EmitSettings, Ssa, f64_tokens, lanes_items, ssa_inner};
 use crate::graph::{Graph, Id, Node};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
@@ -406,7 +406,7 @@ fn kernel_fn(
         &node.graph,
         roots,
         &var_tokens,
-        &EmitOptions::default(),
+        &EmitSettings::default(),
         false,
         x4,
     )

@@ -14,10 +14,10 @@ mod planar2_f32_fma {
     include!("golden/planar2_f32_fma.rs");
 }
 
-use bf_codegen::{EmitOptions, FloatTy, Scene, generate, generate_with};
+use bf_codegen::{EmitSettings, FloatTy, Scene, generate, generate_with};
 
 /// The options of the single-precision golden variant.
-const F32_FMA: EmitOptions = EmitOptions {
+const F32_FMA: EmitSettings = EmitSettings {
     float: FloatTy::F32,
     fma: true,
 };

@@ -11,15 +11,15 @@
 use bf_codegen::nodefn::{CompiledNode, NamedNode};
 use bf_codegen::{CodegenError, Scene};
 
-use crate::node::{CostKind, NodeOptions, PhaseMode, StickLevel, node_function};
+use crate::node::{CostKind, NodeSettings, PhaseMode, StickLevel, node_function};
 
 /// One node function emitted as kernels ([`node_kernel_specs`]).
 #[derive(Debug, Clone)]
 pub struct NodeKernelSpec {
     /// Kernel name prefix, `<scene>_<cost>_<phase>`.
     pub name: String,
-    /// The node function's options.
-    pub options: NodeOptions,
+    /// The node function's settings.
+    pub settings: NodeSettings,
     /// Stick-constraint level (acceleration only for Legendre–Gauss).
     pub level: StickLevel,
     /// Whether the batched (`_x4`) variants are emitted too: for the shapes of the
@@ -38,11 +38,11 @@ pub struct NodeKernelSpec {
 pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
     let mut out = Vec::new();
     // Default settings: no ḣ margin row, velocity-level stick constraint (Radau).
-    let mut push = |name: String, options: NodeOptions, level: StickLevel| {
-        let x4 = options.hdot_bounds.is_none() && level == StickLevel::Velocity;
+    let mut push = |name: String, settings: NodeSettings, level: StickLevel| {
+        let x4 = settings.hdot_bounds.is_none() && level == StickLevel::Velocity;
         out.push(NodeKernelSpec {
             name,
-            options,
+            settings,
             level,
             x4,
         });
@@ -56,7 +56,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
         {
             continue;
         }
-        let base = NodeOptions {
+        let base = NodeSettings {
             mode: PhaseMode::Free,
             cost,
             h_bounds: Some((0.0, f64::INFINITY)),
@@ -67,12 +67,12 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
         push(name("free"), base.clone(), StickLevel::Velocity);
         let (stick, tag) = match cost {
             CostKind::Qc { .. } | CostKind::Cot { .. } => {
-                let margin = NodeOptions {
+                let margin = NodeSettings {
                     hdot_bounds: Some((f64::NEG_INFINITY, 0.0)),
                     ..base.clone()
                 };
                 push(name("free_hdot"), margin, StickLevel::Velocity);
-                let stick = NodeOptions {
+                let stick = NodeSettings {
                     mode: PhaseMode::Stick,
                     h_bounds: None,
                     ..base
@@ -81,7 +81,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
             }
             CostKind::TimeEffort { .. } => continue,
             _ => {
-                let stick = NodeOptions {
+                let stick = NodeSettings {
                     mode: PhaseMode::Stick,
                     ..base
                 };
@@ -97,7 +97,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
 /// Compiles the node function `opt` of `scene` at `level` for collocation.
 pub fn compile_node(
     scene: &Scene,
-    opt: &NodeOptions,
+    opt: &NodeSettings,
     level: StickLevel,
 ) -> Result<CompiledNode, CodegenError> {
     let ph = crate::node::physics(scene)?;
@@ -119,7 +119,7 @@ pub fn emit_node_kernels(scenes: &[&Scene]) -> Result<String, CodegenError> {
     let mut nodes = Vec::new();
     for scene in scenes {
         for spec in node_kernel_specs(scene) {
-            let node = compile_node(scene, &spec.options, spec.level)?;
+            let node = compile_node(scene, &spec.settings, spec.level)?;
             let what = format!(
                 "`{}` (scene `{}`, {:?} level)",
                 spec.name, scene.name, spec.level
@@ -151,8 +151,8 @@ mod tests {
         Scene::load(concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes/paper.toml")).unwrap()
     }
 
-    fn opts(mode: PhaseMode, eps: f64, w: f64) -> NodeOptions {
-        NodeOptions {
+    fn opts(mode: PhaseMode, eps: f64, w: f64) -> NodeSettings {
+        NodeSettings {
             mode,
             cost: CostKind::Qc {
                 w,
@@ -167,7 +167,7 @@ mod tests {
     #[test]
     fn fingerprint_ignores_input_values_but_not_structure() {
         let s = paper();
-        let fp = |o: &NodeOptions, l| compile_node(&s, o, l).unwrap().fingerprint;
+        let fp = |o: &NodeSettings, l| compile_node(&s, o, l).unwrap().fingerprint;
         let base = fp(&opts(PhaseMode::Free, 0.01, 1.0), StickLevel::Velocity);
         // ε and the cost weight are inputs: same kernel.
         assert_eq!(
@@ -178,7 +178,7 @@ mod tests {
         let stick = fp(&opts(PhaseMode::Stick, 0.01, 1.0), StickLevel::Velocity);
         let stick_acc = fp(&opts(PhaseMode::Stick, 0.01, 1.0), StickLevel::Acceleration);
         let no_h = fp(
-            &NodeOptions {
+            &NodeSettings {
                 h_bounds: None,
                 ..opts(PhaseMode::Free, 0.01, 1.0)
             },
@@ -186,7 +186,7 @@ mod tests {
         );
         // A nonzero where the pattern had a zero is another structure.
         let tilted = fp(
-            &NodeOptions {
+            &NodeSettings {
                 cost: CostKind::Qc {
                     w: 1.0,
                     omega_ref: [0.1, 0.0, 2.2],
@@ -247,7 +247,7 @@ mod tests {
         for name in ["paper", "human"] {
             let scene = Scene::from_toml_str(scene_toml(name).unwrap(), name).unwrap();
             for spec in node_kernel_specs(&scene) {
-                let fp = compile_node(&scene, &spec.options, spec.level)
+                let fp = compile_node(&scene, &spec.settings, spec.level)
                     .unwrap()
                     .fingerprint;
                 if spec.x4 {

@@ -156,9 +156,9 @@ pub struct NodeVars {
     pub duration: u32,
 }
 
-/// Options of a phase's node function.
+/// Settings of a phase's node function.
 #[derive(Debug, Clone, PartialEq)]
-pub struct NodeOptions {
+pub struct NodeSettings {
     /// Contact mode.
     pub mode: PhaseMode,
     /// Cost integrands.
@@ -343,7 +343,7 @@ fn cost_integrands(
 pub fn node_function(
     scene: &Scene,
     ph: &Physics,
-    opt: &NodeOptions,
+    opt: &NodeSettings,
     level: StickLevel,
 ) -> Result<(NodeFunction, NodeVars), CodegenError> {
     let BuiltModel {

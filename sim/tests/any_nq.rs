@@ -8,7 +8,7 @@
 //!   friction cone (λ_n ≥ 0, σ ≥ 0, eq. 18–19).
 
 use bf_model::{DynKernels, ImpactLaw, Mode, Model, State, Vec3, VecN, registry};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{PdController, SampleKind, SimSettings, simulate};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -41,9 +41,9 @@ fn throw_at_the_ball<const N: usize>(text: &str, law: ImpactLaw) {
     let dir = grad / grad.norm();
     let x0 = State::new(qc + dir * 0.05, -dir * 1.0, Vec3::new(0.0, 0.0, 0.3)).to_vec();
     let zero = PdController::new(vec![0.0; N], vec![0.0; N], vec![0.0; N]).unwrap();
-    let opts = BallFingerOptions {
+    let opts = BallFingerSettings {
         impact_law: law,
-        ..BallFingerOptions::default()
+        ..BallFingerSettings::default()
     };
     let sys = BallFinger::new(model, zero, opts).unwrap();
     assert!(sys.gap(&x0).unwrap() > 0.01);
@@ -133,6 +133,6 @@ fn a_4_joint_finger_hits_touches_and_conserves() {
 fn the_input_must_have_one_torque_per_joint() {
     let (model, _) = model::<4>(FINGER4);
     let three = PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3]).unwrap();
-    let e = BallFinger::new(model, three, BallFingerOptions::default()).unwrap_err();
+    let e = BallFinger::new(model, three, BallFingerSettings::default()).unwrap_err();
     assert!(e.to_string().contains('4'), "{e}");
 }

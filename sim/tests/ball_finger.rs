@@ -13,7 +13,7 @@
 //! exercised by bf-model's own tests), so this test does not depend on codegen output.
 
 use bf_model::{ImpactLaw, Mode, Model, State, Vec3};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{PdController, SampleKind, SimSettings, TorqueSeries, simulate};
 
 const PAPER_TOML: &str = include_str!("../../scenes/paper.toml");
@@ -59,9 +59,9 @@ fn run_and_check(law: ImpactLaw) -> usize {
     let sys = BallFinger::new(
         model,
         zero_torque(),
-        BallFingerOptions {
+        BallFingerSettings {
             impact_law: law,
-            ..BallFingerOptions::default()
+            ..BallFingerSettings::default()
         },
     )
     .unwrap();
@@ -161,9 +161,9 @@ fn other_impact_laws_keep_invariants() {
 fn contact_drift(project: bool) -> f64 {
     let model = conservative_model();
     let x0 = approach(&model, 1.0);
-    let opts = BallFingerOptions {
+    let opts = BallFingerSettings {
         project,
-        ..BallFingerOptions::default()
+        ..BallFingerSettings::default()
     };
     let sys = BallFinger::new(model, zero_torque(), opts).unwrap();
     let set = SimSettings {
@@ -201,8 +201,8 @@ fn torque_series_from_csv_drives_the_same_run() {
     std::fs::remove_dir_all(&dir).unwrap();
     let model = conservative_model();
     let x0 = approach(&model, 1.0);
-    let a = BallFinger::new(model.clone(), series, BallFingerOptions::default()).unwrap();
-    let b = BallFinger::new(model, zero_torque(), BallFingerOptions::default()).unwrap();
+    let a = BallFinger::new(model.clone(), series, BallFingerSettings::default()).unwrap();
+    let b = BallFinger::new(model, zero_torque(), BallFingerSettings::default()).unwrap();
     let ra = simulate(&a, settings(), Mode::Free, 0.0, &x0, 0.1).unwrap();
     let rb = simulate(&b, settings(), Mode::Free, 0.0, &x0, 0.1).unwrap();
     assert_eq!(ra.trajectory.x, rb.trajectory.x);
@@ -211,7 +211,7 @@ fn torque_series_from_csv_drives_the_same_run() {
         BallFinger::new(
             conservative_model(),
             TorqueSeries::new(vec![0.0], vec![vec![0.0; 2]]).unwrap(),
-            BallFingerOptions::default()
+            BallFingerSettings::default()
         )
         .is_err()
     );

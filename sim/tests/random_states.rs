@@ -14,7 +14,7 @@
 //! 200 seeded states × 5 laws × 3 s take a few seconds in release.
 
 use bf_model::{ImpactLaw, Mode, Model, PaperKernels, State, Vec3};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{PdController, SampleKind, SimSettings, simulate};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -42,9 +42,9 @@ fn zero_torque() -> PdController {
 
 fn system(law: ImpactLaw) -> BallFinger<PaperKernels, PdController> {
     let model = Model::from_kernels(PaperKernels::new()).expect("paper model");
-    let opts = BallFingerOptions {
+    let opts = BallFingerSettings {
         impact_law: law,
-        ..BallFingerOptions::default()
+        ..BallFingerSettings::default()
     };
     BallFinger::new(model, zero_torque(), opts).expect("system")
 }

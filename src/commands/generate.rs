@@ -12,7 +12,7 @@ use anyhow::{Context, Result};
 /// Run `generate`.
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let (scene, text) = super::load_scene(&args.scene)?;
-    let opts = bf_codegen::EmitOptions {
+    let opts = bf_codegen::EmitSettings {
         float: match args.float {
             FloatArg::F64 => bf_codegen::FloatTy::F64,
             FloatArg::F32 => bf_codegen::FloatTy::F32,

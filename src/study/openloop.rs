@@ -14,7 +14,7 @@ use anyhow::{Context, Result, anyhow};
 use bf_model::{ImpactLaw, Mode};
 use bf_plot::paper::{SimModes, TimeSeries};
 use bf_problem::OcpSolution;
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{Input, SimOutput, SimSettings, TorqueSeries, TrackingPd};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -204,9 +204,9 @@ fn replay<I: Input>(
     let sys = BallFinger::new(
         model,
         input,
-        BallFingerOptions {
+        BallFingerSettings {
             impact_law: ImpactLaw::Newton,
-            ..BallFingerOptions::default()
+            ..BallFingerSettings::default()
         },
     )?;
     let d = &sol.nodes;

@@ -28,10 +28,10 @@ use super::verify::element_errors;
 pub use bf_problem::catalogue::warm_initial_point;
 pub use bf_problem::solution::records::{RefineCriterion, RefineReport, RefineRound};
 
-/// Options of [`refine`].
+/// Settings of [`refine`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
-pub struct RefineOptions {
+pub struct RefineSettings {
     /// Tolerance on the largest element error.
     pub tol: f64,
     /// What the element errors measure.
@@ -47,9 +47,9 @@ pub struct RefineOptions {
     pub warm_mu_init: f64,
 }
 
-impl Default for RefineOptions {
+impl Default for RefineSettings {
     fn default() -> Self {
-        RefineOptions {
+        RefineSettings {
             tol: 1e-4,
             criterion: RefineCriterion::Estimate,
             max_rounds: 8,
@@ -137,7 +137,7 @@ fn reborrow<'a>(c: &'a mut IterCallback<'_>) -> IterCallback<'a> {
 pub fn refine(
     problem: Problem,
     settings: &ProblemSettings,
-    opts: &RefineOptions,
+    opts: &RefineSettings,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
     mut on_round: Option<&mut dyn FnMut(&RefineRound)>,
 ) -> Result<RefineResult, StudyError> {
@@ -273,7 +273,7 @@ pub fn refine_solution(
     problem: Problem,
     settings: &ProblemSettings,
     sol: OcpSolution,
-    opts: &RefineOptions,
+    opts: &RefineSettings,
     on_round: Option<&mut dyn FnMut(&RefineRound)>,
 ) -> Result<(BuiltProblem, OcpSolution), StudyError> {
     let strategy = sol.strategy.clone();

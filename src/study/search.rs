@@ -18,7 +18,7 @@ use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rayon::prelude::*;
 
 use super::error::StudyError;
-use super::refine::{self, RefineCriterion, RefineOptions};
+use super::refine::{self, RefineCriterion, RefineSettings};
 use super::solve::LG_DUAL_REGULARIZATION as RAISED_DUAL_REGULARIZATION;
 use super::strategy::{
     Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record, record,
@@ -280,12 +280,12 @@ fn refine_until_verified(
             mesh: Some(mesh),
             ..settings.clone()
         };
-        let opts = RefineOptions {
+        let opts = RefineSettings {
             tol,
             criterion: RefineCriterion::Reintegration { rtol: policy.rtol },
             max_rounds: policy.refine_rounds,
             max_points: policy.max_points,
-            ..RefineOptions::default()
+            ..RefineSettings::default()
         };
         let label = format!("refine start {} to {tol:e}", cur.index);
         let iters0 = cur.solution.iterations;

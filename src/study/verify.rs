@@ -82,9 +82,9 @@ pub const ATOL_FACTOR: f64 = 1e-2;
 /// in addition to the integrator's accepted steps.
 pub const SAMPLES_PER_ELEMENT: usize = 16;
 
-/// Options of [`verify_with`].
+/// Settings of [`verify_with`].
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct VerifyOptions {
+pub struct VerifySettings {
     /// DOPRI5 relative tolerance, in (0, 0.1].
     pub rtol: f64,
     /// Absolute tolerance (state units); `None`: rtol · [`ATOL_FACTOR`].
@@ -93,9 +93,9 @@ pub struct VerifyOptions {
     pub torque: TorqueInterpolant,
 }
 
-impl Default for VerifyOptions {
+impl Default for VerifySettings {
     fn default() -> Self {
-        VerifyOptions {
+        VerifySettings {
             rtol: 1e-10,
             atol: None,
             torque: TorqueInterpolant::Clamped,
@@ -666,9 +666,9 @@ pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verifica
     verify_with(
         p,
         sol,
-        &VerifyOptions {
+        &VerifySettings {
             rtol,
-            ..VerifyOptions::default()
+            ..VerifySettings::default()
         },
     )
 }
@@ -686,7 +686,7 @@ pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verifica
 pub fn verify_with(
     p: &BuiltProblem,
     sol: &OcpSolution,
-    opt: &VerifyOptions,
+    opt: &VerifySettings,
 ) -> Result<Verification, StudyError> {
     let start = Instant::now();
     let rtol = opt.rtol;
@@ -763,7 +763,7 @@ pub fn verify_with(
 fn verify_phases<const N: usize>(
     p: &BuiltProblem,
     sol: &OcpSolution,
-    opt: &VerifyOptions,
+    opt: &VerifySettings,
     atol: f64,
 ) -> Result<Vec<PhaseVerification>, StudyError> {
     let eps = sol.epsilon;

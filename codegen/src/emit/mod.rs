@@ -6,7 +6,7 @@
 //! by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call. The batched
 //! node kernels put the scalar body in a loop over four lanes ([`lanes`]).
 //!
-//! [`EmitOptions`] select variants for accuracy/speed studies: the float type
+//! [`EmitSettings`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
 //! multiply-add (`a*b ± c` as `mul_add`, one rounding instead of two). The defaults reproduce
 //! the plain f64 output byte for byte.
@@ -47,9 +47,9 @@ impl FloatTy {
     }
 }
 
-/// Variants of the emitted code; `EmitOptions::default()` is the standard output.
+/// Variants of the emitted code; `EmitSettings::default()` is the standard output.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct EmitOptions {
+pub struct EmitSettings {
     /// Float type of arguments, outputs and arithmetic.
     pub float: FloatTy,
     /// Emit `a*b + c`, `a*b - c` and `c - a*b` as `mul_add` (fused multiply-add) whenever the
@@ -170,7 +170,7 @@ pub fn emit_kernel(
     layout: &Layout,
     k: &KernelDef,
 ) -> Result<EmittedKernel, CodegenError> {
-    emit_kernel_with(g, layout, k, &EmitOptions::default())
+    emit_kernel_with(g, layout, k, &EmitSettings::default())
 }
 
 /// Emit one kernel as a Rust function with the variant `opts`.
@@ -178,7 +178,7 @@ pub fn emit_kernel_with(
     g: &Graph,
     layout: &Layout,
     k: &KernelDef,
-    opts: &EmitOptions,
+    opts: &EmitSettings,
 ) -> Result<EmittedKernel, CodegenError> {
     let ft = opts.float.tokens();
     let roots: Vec<Id> = k
@@ -359,7 +359,7 @@ pub(crate) fn ssa_inner(
     g: &Graph,
     roots: &[Id],
     var_tokens: &dyn Fn(u32) -> TokenStream,
-    opts: &EmitOptions,
+    opts: &EmitSettings,
     batch_trig: bool,
     lanes: bool,
 ) -> (Ssa, bool) {
@@ -602,7 +602,7 @@ pub fn emit_file(
         kernel_tokens,
         with_contact,
         trig_helper,
-        &EmitOptions::default(),
+        &EmitSettings::default(),
     )
 }
 
@@ -619,7 +619,7 @@ pub fn emit_file_with(
     kernel_tokens: Vec<TokenStream>,
     with_contact: bool,
     trig_helper: bool,
-    opts: &EmitOptions,
+    opts: &EmitSettings,
 ) -> Result<String, CodegenError> {
     let ft = opts.float.tokens();
     let kernel_names: Vec<&str> = defs.iter().map(|d| d.name.as_str()).collect();

@@ -16,7 +16,7 @@ use bf_codegen::Scene;
 use bf_optim::ocp::{Phase, PhaseGuess};
 
 use crate::ProblemError;
-use crate::node::{CostKind, NodeOptions, PhaseMode, Physics, StickLevel, node_function};
+use crate::node::{CostKind, NodeSettings, PhaseMode, Physics, StickLevel, node_function};
 use crate::points::Diagnostics;
 pub use crate::start::StartGuess;
 
@@ -163,7 +163,7 @@ pub(crate) fn make_phases(
         let (node, _) = node_function(
             scene,
             ph,
-            &NodeOptions {
+            &NodeSettings {
                 mode: d.mode,
                 cost,
                 h_bounds: d.h,

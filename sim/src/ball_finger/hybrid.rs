@@ -42,7 +42,7 @@
 //! More than `SimSettings::zeno_max_events` events within `zeno_window` (an accumulation of
 //! events, e.g. the contact point chattering at a kink, or impact / lift-off or stick / slip
 //! chatter) calls [`HybridSystem::zeno_fallback`], which ends the cascade for
-//! `BallFingerOptions::zeno_hold_time` seconds and is reported as a `zeno_fallback` warning:
+//! `BallFingerSettings::zeno_hold_time` seconds and is reported as a `zeno_fallback` warning:
 //! * only kink events: the kink guards are suspended (the mode continues; the error control
 //!   shortens the steps across the kink);
 //! * otherwise: the contact is made sticking (q projected onto h = 0, velocities onto Δv = 0 by
@@ -230,7 +230,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 }
                 let out = self
                     .model
-                    .impact(&s, self.options.impact_law)
+                    .impact(&s, self.settings.impact_law)
                     .map_err(SimError::system)?;
                 write_velocities(x, &out.qd, &out.omega);
                 self.set_slip_ref(&out.delta_v);
@@ -240,11 +240,11 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 // Leave the contact from the surface (the contact mode let h drift), so the
                 // Free mode's h guard starts on its surface and sees the departure.
                 let mut s = s;
-                if self.options.project {
+                if self.settings.project {
                     self.project_position(&mut s)?;
                     x[..N].copy_from_slice(s.q.as_slice());
                 }
-                let sep = self.options.lift_off_speed;
+                let sep = self.settings.lift_off_speed;
                 if sep > 0.0 {
                     let kin = self.model.evaluate(&s).map_err(SimError::system)?;
                     let vn = kin.contact.normal_velocity();
@@ -291,7 +291,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
             let kin = self.model.evaluate(&s).map_err(&err)?;
             self.set_slip_ref(&kin.contact.delta_v);
         }
-        if mode == Mode::Free || !self.options.project {
+        if mode == Mode::Free || !self.settings.project {
             return Ok(None);
         }
         let mut s = state_of::<N>(x)?;
@@ -330,7 +330,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
     ) -> Result<Option<(Mode, String)>, SimError> {
         let is_kink = |g: &str| KINK_GUARDS.iter().any(|k| k.name == g);
         let kinks = recent.iter().any(|(g, _)| is_kink(g));
-        let hold = self.options.zeno_hold_time;
+        let hold = self.settings.zeno_hold_time;
         let mut names: Vec<(&str, usize)> = Vec::new();
         for (g, _) in recent {
             match names.iter_mut().find(|(n, _)| n == g) {

@@ -11,7 +11,7 @@
 //! This file holds [`BallFinger`]: construction (with the length ℓ = a_N of the contact link,
 //! the lower limit of sat(α) in eq. 3), the energy E = T + U (eq. 22), the gap h (eq. 4) and
 //! the Gauss–Newton projection of q onto h(q) = 0 used by the drift control. The other files:
-//! * `options` — [`BallFingerOptions`].
+//! * `settings` — [`BallFingerSettings`].
 //! * `hybrid` — the [`HybridSystem`](crate::HybridSystem) implementation: vector fields, guards
 //!   and resets of the modes (eq. 19, 26–43, 48–50), the kinks of sat(α) (eq. 3), the Zeno
 //!   fallback and the drift control (Sect. 3.1).
@@ -21,11 +21,11 @@
 
 mod files;
 mod hybrid;
-mod options;
 mod report;
+mod settings;
 
-pub use options::BallFingerOptions;
 pub use report::{EventInfo, RunReport, RunSummary, SampleInfo, event_kind};
+pub use settings::BallFingerSettings;
 
 use crate::{Input, SimError};
 use bf_model::{Kernels, Mode, Model, ModelError, State, Vec3, VecN};
@@ -39,8 +39,8 @@ pub struct BallFinger<K: Kernels<N>, I: Input, const N: usize = 3> {
     pub model: Model<K, N>,
     /// Joint torques τ(t, q, q̇).
     pub input: I,
-    /// Options.
-    pub options: BallFingerOptions,
+    /// Settings.
+    pub settings: BallFingerSettings,
     /// Unit slip direction Δv/‖Δv‖ at the start of the current Slip step (zero: unknown), for
     /// the `slip_reversal` guard; updated by the resets into Slip and after every accepted
     /// Slip step (`project`).
@@ -140,7 +140,11 @@ fn contact_link_error(l: f64, why: &str) -> SimError {
 
 impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Builds the system; the input must provide N torques.
-    pub fn new(model: Model<K, N>, input: I, options: BallFingerOptions) -> Result<Self, SimError> {
+    pub fn new(
+        model: Model<K, N>,
+        input: I,
+        settings: BallFingerSettings,
+    ) -> Result<Self, SimError> {
         if input.dim() != N {
             return Err(SimError::DimensionMismatch {
                 what: "torque input",
@@ -152,7 +156,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         Ok(BallFinger {
             model,
             input,
-            options,
+            settings,
             slip_ref: Cell::new([0.0; 3]),
             link_length,
             hold: Cell::new(Hold::NONE),
@@ -190,7 +194,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Gauss–Newton steps of q along ∇h = J_cᵀ n onto h(q) = 0; returns |h| before.
     fn project_position(&self, s: &mut State<N>) -> Result<Option<f64>, SimError> {
         let mut drift = None;
-        for _ in 0..self.options.projection_iterations {
+        for _ in 0..self.settings.projection_iterations {
             let kin = self.model.evaluate(s).map_err(SimError::system)?;
             let c = &kin.contact;
             drift.get_or_insert(c.h.abs());

@@ -9,13 +9,13 @@
 //! # Energy warnings
 //! The run summary reports each impact that raises the energy (only Newton's law, eq. 39, can:
 //! see bf-model's impact module) and the energy-balance error E(t) − E(t₀) − ∫ P dt of the
-//! integration (P of the power balance, eq. 22/25); above `BallFingerOptions::energy_error_tol`
+//! integration (P of the power balance, eq. 22/25); above `BallFingerSettings::energy_error_tol`
 //! it is a warning (e.g. fixed-step RK4 with a step too long for the dynamics).
 //!
 //! [`SampleInfo`], [`EventInfo`] and [`RunReport`] carry the number of joints N (default 3)
 //! for the torque vector τ ∈ ℝᴺ; [`RunSummary`] does not depend on N.
 
-use super::{BallFinger, BallFingerOptions, state_of};
+use super::{BallFinger, BallFingerSettings, state_of};
 use crate::trajectory::{SampleKind, SimOutput};
 use crate::{Input, SimError, SimWarning};
 use bf_model::{Kernels, Mode};
@@ -81,7 +81,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
                 ),
             })
             .collect();
-        let summary = summarize(out, &samples, &events, t0, cpu_seconds, &self.options);
+        let summary = summarize(out, &samples, &events, t0, cpu_seconds, &self.settings);
         RunReport {
             samples,
             events,
@@ -216,8 +216,8 @@ pub struct RunSummary {
     /// jumps at events excluded).
     pub energy_error: f64,
     /// Conditions that qualify the result: `energy_raising_impact` (one per impact raising E by
-    /// more than `BallFingerOptions::impact_energy_tol`), `energy_error` (energy-balance error
-    /// above `BallFingerOptions::energy_error_tol`), `zeno_fallback` (see the module docs).
+    /// more than `BallFingerSettings::impact_energy_tol`), `energy_error` (energy-balance error
+    /// above `BallFingerSettings::energy_error_tol`), `zeno_fallback` (see the module docs).
     pub warnings: Vec<SimWarning>,
     /// Accepted steps, rejected steps, vector-field evaluations.
     pub stats: crate::SimStats,
@@ -237,7 +237,7 @@ fn summarize<const N: usize>(
     events: &[EventInfo<N>],
     t0: f64,
     cpu_seconds: f64,
-    options: &BallFingerOptions,
+    settings: &BallFingerSettings,
 ) -> RunSummary {
     let tr = &out.trajectory;
     let kinds = [
@@ -255,27 +255,27 @@ fn summarize<const N: usize>(
         if gain.is_finite() {
             max_impact_energy_gain = max_impact_energy_gain.max(gain);
         }
-        if gain > options.impact_energy_tol {
+        if gain > settings.impact_energy_tol {
             warnings.push(SimWarning {
                 t: e.t,
                 kind: "energy_raising_impact",
                 message: format!(
                     "{} impact raised the energy by {gain:+.3e} J",
-                    options.impact_law.name()
+                    settings.impact_law.name()
                 ),
             });
         }
     }
     let (energy_error, t_error) = energy_balance_error(tr, samples);
     warnings.extend(out.warnings.iter().cloned());
-    if energy_error > options.energy_error_tol {
+    if energy_error > settings.energy_error_tol {
         warnings.push(SimWarning {
             t: t_error,
             kind: "energy_error",
             message: format!(
                 "energy-balance error {energy_error:.3e} J exceeds {:e} J: the integration \
                  step is too long for the dynamics",
-                options.energy_error_tol
+                settings.energy_error_tol
             ),
         });
     }

@@ -3,7 +3,7 @@
 //! Sect. 4.2), verified by re-integration element by element (`study::arm`), written as one
 //! output set (`solution.json`, `torques.csv`, `trajectory.csv`).
 
-use super::{OUTPUT_DIR, RunOptions, check_size, parse_scheme};
+use super::{OUTPUT_DIR, RunSettings, check_size, parse_scheme};
 use crate::cli::OptimizeArgs;
 use crate::io::parse_list;
 use crate::study::verify::VERIFIED_DEFECT;
@@ -33,7 +33,7 @@ fn first_non_finite_arm(sol: &ArmSolution) -> Option<(String, f64)> {
 /// to rest at `--target` in minimum time plus effort (`bf_problem::arm`), verified by
 /// re-integration element by element (`study::arm`). Writes `solution.json`, `torques.csv`
 /// and `trajectory.csv`; a solve that does not converge or verify is marked FAILED.
-pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
+pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     use crate::study::arm::{failure_of, solve_verified, write_arm_solution};
     let Some(path) = &args.scene else {
         bail!(

@@ -50,9 +50,9 @@ pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     legacy_files: &["solution.json", "torques.csv"],
 };
 
-/// Options of a run that are not on the command line.
+/// Settings of a run that are not on the command line.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct RunOptions {
+pub struct RunSettings {
     /// Make the n-th output write fail, as if the process stopped there (tests).
     pub fail_at_write: Option<usize>,
 }
@@ -408,11 +408,11 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
 
 /// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
-    run_with(args, RunOptions::default())
+    run_with(args, RunSettings::default())
 }
 
 /// Run `optimize` with `opts`.
-pub fn run_with(args: &OptimizeArgs, opts: RunOptions) -> Result<()> {
+pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     if let Some(OptimizeCommand::Merge(m)) = &args.command {
         return merge(m);
     }

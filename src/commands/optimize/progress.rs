@@ -2,7 +2,7 @@
 //! (`study::search`: every end point re-integrated, verified optima preferred) and the mesh
 //! refinement (`study::refine`), each finished stage or round shown as it ends.
 
-use crate::study::refine::{self, RefineOptions, RefineRound};
+use crate::study::refine::{self, RefineRound, RefineSettings};
 use crate::study::search::{self, Search, VerifyPolicy};
 use crate::study::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result};
@@ -86,10 +86,10 @@ pub fn refine_with_progress(
     tol: f64,
     rounds: usize,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    let opts = RefineOptions {
+    let opts = RefineSettings {
         tol,
         max_rounds: rounds,
-        ..RefineOptions::default()
+        ..RefineSettings::default()
     };
     crate::outln!("mesh refinement to {tol:e}:")?;
     crate::outln!(

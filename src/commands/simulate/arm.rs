@@ -4,7 +4,7 @@
 //! `summary.json` (energy balance) as one output set.
 
 use super::torques::{CliInput, pd_controller};
-use super::{OUTPUT_DIR, RunOptions, check_limits, interpreted_note, settings};
+use super::{OUTPUT_DIR, RunSettings, check_limits, interpreted_note, settings};
 use crate::cli::SimulateArgs;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
@@ -18,7 +18,7 @@ use std::time::Instant;
 /// from `--q0`/`--qd0` (default 0). Writes `trajectory.csv` and `summary.json`.
 pub(super) fn run_arm(
     args: &SimulateArgs,
-    run_opts: RunOptions,
+    run_opts: RunSettings,
     scene: &bf_codegen::Scene,
     scene_label: &str,
 ) -> Result<()> {

@@ -42,7 +42,7 @@ use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3, VecN};
 use bf_output::{DirSpec, Outcome, OutputDir};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{Method, SimSettings, Simulator};
 use std::time::{Duration, Instant};
 
@@ -64,9 +64,9 @@ pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     legacy_files: &["summary.json", "trajectory.csv"],
 };
 
-/// Options of a run that are not on the command line.
+/// Settings of a run that are not on the command line.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct RunOptions {
+pub struct RunSettings {
     /// Make the n-th output write fail, as if the process stopped there (tests). The first
     /// write is the trajectory, events and summary, the second the set's manifest.
     pub fail_at_write: Option<usize>,
@@ -277,11 +277,11 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
 
 /// Run `simulate`.
 pub fn run(args: &SimulateArgs) -> Result<()> {
-    run_with(args, RunOptions::default())
+    run_with(args, RunSettings::default())
 }
 
 /// Run `simulate` with `opts`.
-pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
+pub fn run_with(args: &SimulateArgs, opts: RunSettings) -> Result<()> {
     let (scene, scene_label) = scene_of_args(args)?;
     if scene.ball.is_none() {
         return run_arm(args, opts, &scene, &scene_label);
@@ -310,7 +310,7 @@ pub fn run_with(args: &SimulateArgs, opts: RunOptions) -> Result<()> {
 /// The contact run of a finger with `N` joints (options validated before the run).
 fn run_contact<const N: usize>(
     args: &SimulateArgs,
-    opts: RunOptions,
+    opts: RunSettings,
     scene: &bf_codegen::Scene,
     scene_label: &str,
 ) -> Result<()> {
@@ -330,10 +330,10 @@ fn run_contact<const N: usize>(
         }
     }
     let run_opts = opts;
-    let opts = BallFingerOptions {
+    let opts = BallFingerSettings {
         impact_law: law,
         project: !args.no_projection,
-        ..BallFingerOptions::default()
+        ..BallFingerSettings::default()
     };
     let setup = Instant::now();
     let (kernels, source) = bf_model::registry::contact_kernels_n::<N>(scene)
@@ -407,11 +407,11 @@ fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
 
 fn run_model<K: Kernels<N>, const N: usize>(
     args: &SimulateArgs,
-    run_opts: RunOptions,
+    run_opts: RunSettings,
     model: Model<K, N>,
     source: KernelSource,
     inp: CliInput,
-    opts: BallFingerOptions,
+    opts: BallFingerSettings,
     set: SimSettings,
     mode0: Mode,
     x0: State<N>,

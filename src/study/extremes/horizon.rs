@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use anyhow::{anyhow, bail};
 use bf_model::{Mode, State};
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{PdController, SimSettings, simulate};
 
 use super::report::{ExtremesRow, Rows};
@@ -42,7 +42,7 @@ pub fn long_horizon(t_end: f64, rtol: f64) -> anyhow::Result<HorizonRun> {
     let params = base.params().with_viscous(0.0, 0.0)?;
     let model = base.with_params(params);
     let input = PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3])?;
-    let sys = BallFinger::new(model, input, BallFingerOptions::default())?;
+    let sys = BallFinger::new(model, input, BallFingerSettings::default())?;
     let settings = SimSettings {
         rtol,
         atol: rtol * 1e-2,

@@ -10,7 +10,7 @@ use std::path::Path;
 use anyhow::{Result, anyhow};
 use bf_model::{ImpactLaw, Mode as SimMode, PaperKernels, State, Vec3, fixtures};
 use bf_plot::paper::WorkPrecisionSet;
-use bf_sim::ball_finger::{BallFinger, BallFingerOptions};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::work_precision::{WorkPrecisionRow, format_table, ladder, work_precision};
 use bf_sim::{Method, PdController, SimSettings};
 
@@ -34,9 +34,9 @@ pub fn dropped_finger() -> Result<(BallFinger<PaperKernels, PdController>, [f64;
         fixtures::paper_scene().map_err(|e| anyhow!("paper scene: {e}"))?,
         PdController::new(vec![0.0; 3], vec![0.0; 3], vec![0.0; 3])
             .map_err(|e| anyhow!("zero input: {e}"))?,
-        BallFingerOptions {
+        BallFingerSettings {
             impact_law: ImpactLaw::Newton,
-            ..BallFingerOptions::default()
+            ..BallFingerSettings::default()
         },
     )
     .map_err(|e| anyhow!("ball-finger system: {e}"))?;

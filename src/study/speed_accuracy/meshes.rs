@@ -19,7 +19,7 @@ use bf_problem::{Problem, ProblemSettings};
 use indicatif::ProgressBar;
 
 use super::{Solved, max_iter, solve_qc, wp_figure};
-use crate::study::refine::{RefineOptions, refine_solution};
+use crate::study::refine::{RefineSettings, refine_solution};
 
 /// One collocation solve of part (b).
 #[derive(Debug, Clone, PartialEq)]
@@ -147,10 +147,10 @@ fn converged_reference(ladder: &MeshLadder, start: OcpSolution) -> Result<(OcpSo
         ..ProblemSettings::default()
     };
     // From Radau 10 × 6, periodic-qc needs about 14 rounds to reach 1e-8.
-    let opts = RefineOptions {
+    let opts = RefineSettings {
         tol: ladder.reference_tol,
         max_rounds: 16,
-        ..RefineOptions::default()
+        ..RefineSettings::default()
     };
     let (sol, desc) =
         match refine_solution(Problem::PeriodicQc, &settings, start.clone(), &opts, None) {

@@ -1,9 +1,9 @@
-//! Emission variants (speed–accuracy report): the default options reproduce
+//! Emission variants (speed–accuracy report): the default settings reproduce
 //! `generate` byte for byte, FMA fuses products into `mul_add`, f32 changes every type.
 //! Numerical accuracy of the variants is measured against double-double in the root
 //! package's `tests/speed_accuracy.rs` (compiled variant modules of `bf-generated`).
 
-use bf_codegen::{EmitOptions, FloatTy, Scene, generate, generate_with};
+use bf_codegen::{EmitSettings, FloatTy, Scene, generate, generate_with};
 
 fn paper() -> (Scene, String) {
     let path = format!("{}/../scenes/paper.toml", env!("CARGO_MANIFEST_DIR"));
@@ -14,10 +14,10 @@ fn paper() -> (Scene, String) {
 }
 
 #[test]
-fn default_options_are_the_standard_output() {
+fn default_settings_are_the_standard_output() {
     let (scene, text) = paper();
     let a = generate(&scene, &text).unwrap().code;
-    let b = generate_with(&scene, &text, &EmitOptions::default())
+    let b = generate_with(&scene, &text, &EmitSettings::default())
         .unwrap()
         .code;
     assert_eq!(a, b);
@@ -28,7 +28,7 @@ fn default_options_are_the_standard_output() {
 fn fma_fuses_products_and_keeps_the_operation_count() {
     let (scene, text) = paper();
     let plain = generate(&scene, &text).unwrap();
-    let opts = EmitOptions {
+    let opts = EmitSettings {
         float: FloatTy::F64,
         fma: true,
     };
@@ -46,7 +46,7 @@ fn fma_fuses_products_and_keeps_the_operation_count() {
 #[test]
 fn f32_changes_every_float_type() {
     let (scene, text) = paper();
-    let opts = EmitOptions {
+    let opts = EmitSettings {
         float: FloatTy::F32,
         fma: false,
     };

@@ -1,12 +1,12 @@
-//! Options of the ball-and-finger hybrid system ([`BallFingerOptions`]): the impact law of
+//! Settings of the ball-and-finger hybrid system ([`BallFingerSettings`]): the impact law of
 //! Free → contact (Sect. 2.5, eq. 39–43), the drift projection (Sect. 3.1), the lift-off
 //! speed, the Zeno hold time and the tolerances of the energy warnings.
 
 use bf_model::ImpactLaw;
 
-/// Options of the ball-and-finger hybrid system.
+/// Settings of the ball-and-finger hybrid system.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BallFingerOptions {
+pub struct BallFingerSettings {
     /// Impact law applied at Free → contact (default: [`ImpactLaw::Stick`]).
     pub impact_law: ImpactLaw,
     /// Project h and the velocity constraint after every accepted contact step (default: true).
@@ -34,9 +34,9 @@ pub struct BallFingerOptions {
     pub energy_error_tol: f64,
 }
 
-impl Default for BallFingerOptions {
+impl Default for BallFingerSettings {
     fn default() -> Self {
-        BallFingerOptions {
+        BallFingerSettings {
             impact_law: ImpactLaw::Stick,
             project: true,
             projection_iterations: 3,
