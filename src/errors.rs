@@ -61,12 +61,12 @@ mod tests {
         }
         let model = bf_problem::ProblemError::Model {
             scene: "paper".into(),
-            source: bf_codegen::CodegenError::Scene("no [ball] table".into()),
+            source: bf_codegen::SceneDefect::NoBall.into(),
         };
         let r = render(&StudyError::from(model).into());
         assert_eq!(
             r,
-            "cannot build the model of scene `paper`: scene error: no [ball] table"
+            "cannot build the model of scene `paper`: scene error: the scene has no [ball]"
         );
     }
 

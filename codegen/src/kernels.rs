@@ -3,9 +3,9 @@
 //! `mass_matrix` eq. 22a/74–75, `christoffel`/`coriolis_*` eq. 76–79, `gravity` eq. 72–73,
 //! `potential` eq. 22b, `contact*` eq. 2–13 and 58–59.
 
-use crate::CodegenError;
 use crate::graph::Id;
 use crate::robot::SymbolicRobot;
+use crate::{CodegenError, InternalDefect, SceneDefect};
 
 /// The graph nodes of the contact quantities in [`CONTACT_FIELDS`] order, row-major: the
 /// outputs of the `contact` and `contact_smooth` kernels.
@@ -400,10 +400,12 @@ pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, 
             )
         }
         other => {
-            return Err(CodegenError::Scene(format!(
-                "unknown kernel `{other}`; known kernels: {}",
-                ALL_KERNELS.join(", ")
-            )));
+            return Err(SceneDefect::UnknownKernel {
+                name: other.to_string(),
+                in_list: false,
+                known: ALL_KERNELS,
+            }
+            .into());
         }
     };
     check_inputs(model, name, &inputs, &outputs)?;
@@ -442,14 +444,18 @@ fn check_inputs(
         } else if v < l.tau(0) + n {
             Arg::Tau
         } else {
-            return Err(CodegenError::Internal(format!(
-                "kernel `{name}` reads graph variable {v}, which no kernel argument holds"
-            )));
+            return Err(InternalDefect::UnboundVariable {
+                kernel: name.to_string(),
+                variable: v,
+            }
+            .into());
         };
         if !inputs.contains(&needs) {
-            return Err(CodegenError::Internal(format!(
-                "kernel `{name}` reads {needs:?} but does not take it as an argument"
-            )));
+            return Err(InternalDefect::MissingArgument {
+                kernel: name.to_string(),
+                argument: needs,
+            }
+            .into());
         }
     }
     Ok(())

@@ -19,6 +19,7 @@ pub mod dd;
 pub mod diff;
 #[cfg(feature = "emit")]
 pub mod emit;
+mod error;
 pub mod graph;
 pub mod interp;
 pub mod kernels;
@@ -41,19 +42,7 @@ pub use report::{KernelReport, OpCounts, Report};
 pub use robot::SymbolicRobot;
 pub use spec::Scene;
 
-/// Errors of the generator.
-#[derive(Debug, thiserror::Error)]
-pub enum CodegenError {
-    /// The scene cannot be turned into kernels (unknown kernel or parameter, missing ball, …).
-    #[error("scene error: {0}")]
-    Scene(String),
-    /// Bad numeric input to [`eval_all`] (wrong length, non-finite value).
-    #[error("input error: {0}")]
-    Input(String),
-    /// A bug in the generator.
-    #[error("internal generator error: {0}")]
-    Internal(String),
-}
+pub use error::{CodegenError, ExtremeValues, InputDefect, InternalDefect, SceneDefect};
 
 #[cfg(feature = "emit")]
 /// Result of [`generate`].
@@ -69,15 +58,15 @@ pub struct Generated {
 fn check_kernel_list(scene: &Scene) -> Result<(), CodegenError> {
     for (i, k) in scene.kernels.iter().enumerate() {
         if !ALL_KERNELS.contains(&k.as_str()) {
-            return Err(CodegenError::Scene(format!(
-                "unknown kernel `{k}` in `kernels`; known kernels: {}",
-                ALL_KERNELS.join(", ")
-            )));
+            return Err(SceneDefect::UnknownKernel {
+                name: k.clone(),
+                in_list: true,
+                known: ALL_KERNELS,
+            }
+            .into());
         }
         if scene.kernels[..i].contains(k) {
-            return Err(CodegenError::Scene(format!(
-                "kernel `{k}` listed twice in `kernels`"
-            )));
+            return Err(SceneDefect::KernelTwice { name: k.clone() }.into());
         }
     }
     Ok(())
@@ -147,25 +136,23 @@ pub fn generate_with(
 
 /// The scene constants of largest and smallest nonzero magnitude (at most three of each), as
 /// `key = value`: the likely sources when folding them overflows.
-fn extreme_constants(scene: &Scene) -> String {
+fn extreme_constants(scene: &Scene) -> ExtremeValues {
     let mut c: Vec<(String, f64)> = scene
         .constants()
         .into_iter()
         .filter(|c| c.1 != 0.0)
         .collect();
     c.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
-    let mut shown: Vec<String> = c
-        .iter()
-        .take(3)
-        .map(|(k, v)| format!("{k} = {v:e}"))
-        .collect();
+    let mut shown: Vec<(String, f64)> = c.iter().take(3).cloned().collect();
     for (k, v) in c.iter().rev().take(3) {
-        let s = format!("{k} = {v:e}");
-        if !shown.contains(&s) {
-            shown.push(s);
+        if !shown
+            .iter()
+            .any(|(k2, v2)| k2 == k && v2.to_bits() == v.to_bits())
+        {
+            shown.push((k.clone(), *v));
         }
     }
-    shown.join(", ")
+    ExtremeValues(shown)
 }
 
 #[cfg(feature = "emit")]
@@ -183,12 +170,12 @@ fn check_finite_constants(
             && m
             && !f64::from_bits(b).is_finite()
         {
-            return Err(CodegenError::Scene(format!(
-                "{what}: folding the scene values gives the non-finite constant {}; \
-                 the values are out of range for f64 arithmetic (extreme values: {})",
-                f64::from_bits(b),
-                extreme_constants(scene)
-            )));
+            return Err(SceneDefect::NonFiniteConstant {
+                what: what.to_string(),
+                value: f64::from_bits(b),
+                extremes: extreme_constants(scene),
+            }
+            .into());
         }
     }
     Ok(())
@@ -240,11 +227,14 @@ impl Serialize for EvalOutput {
     }
 }
 
-fn check_finite(name: &str, v: &[f64]) -> Result<(), CodegenError> {
-    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
-        return Err(CodegenError::Input(format!(
-            "{name} contains a non-finite value {x}"
-        )));
+fn check_finite(name: &'static str, v: &[f64]) -> Result<(), CodegenError> {
+    if let Some((index, value)) = v.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+        return Err(InputDefect::NonFinite {
+            what: name,
+            index,
+            value: *value,
+        }
+        .into());
     }
     Ok(())
 }
@@ -263,11 +253,12 @@ pub fn eval_all(
     let mut model = SymbolicRobot::new(scene)?;
     let n = model.nq();
     if q.len() != n || qd.len() != n {
-        return Err(CodegenError::Input(format!(
-            "the scene has {n} joints but q has {} and qd has {} entries",
-            q.len(),
-            qd.len()
-        )));
+        return Err(InputDefect::JointCount {
+            joints: n,
+            q: q.len(),
+            qd: qd.len(),
+        }
+        .into());
     }
     check_finite("q", q)?;
     check_finite("qd", qd)?;
@@ -334,11 +325,12 @@ pub fn eval_all(
         let v = &vals[off..off + ids.len()];
         off += ids.len();
         if let Some(x) = v.iter().find(|x| !x.is_finite()) {
-            return Err(CodegenError::Input(format!(
-                "{name} is not finite ({x}) at this state: the state or the scene values \
-                 overflow f64 arithmetic (extreme scene values: {})",
-                extreme_constants(scene)
-            )));
+            return Err(InputDefect::NonFiniteResult {
+                what: name.to_string(),
+                value: *x,
+                extremes: extreme_constants(scene),
+            }
+            .into());
         }
         let value = match shape {
             Shape::S => EvalValue::Scalar(v[0]),

@@ -6,7 +6,8 @@
 //! where no step can recover, or a failed linear-solver analysis.
 //!
 //! Variants carry the data (phase, index, lengths, the offending value) rather than text, so
-//! callers can act on them; their messages name the same things.
+//! callers can act on them; their messages name the same things. A failed factorization is a
+//! [`FactorizationError`], with faer's error as its `source()`.
 
 use thiserror::Error;
 
@@ -58,8 +59,8 @@ pub enum OptimError {
         what: &'static str,
     },
     /// The sparse factorization could not be set up.
-    #[error("KKT factorization: {0}")]
-    Factorization(String),
+    #[error(transparent)]
+    Factorization(#[from] FactorizationError),
     /// A setting is out of its valid range.
     #[error("invalid setting {name}: {msg}")]
     InvalidSetting {
@@ -137,6 +138,21 @@ pub enum OptimError {
         /// Number of collocation points of the mesh.
         points: usize,
     },
+}
+
+/// Why the KKT factorization (or the external solver) could not be set up.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum FactorizationError {
+    /// faer's symbolic analysis of the KKT pattern failed (index overflow, allocation).
+    #[error("KKT factorization: symbolic analysis failed")]
+    SymbolicAnalysis(#[source] faer::sparse::FaerError),
+    /// The workspace of the numeric factorization and solve could not be allocated.
+    #[error("KKT factorization: out of memory for the KKT workspace")]
+    OutOfMemory,
+    /// Ipopt rejected the problem at creation; the `Debug` text of its `CreateError`, kept as
+    /// text so the enum does not depend on the optional `ipopt` feature.
+    #[error("KKT factorization: ipopt: {0}")]
+    Ipopt(String),
 }
 
 /// What is wrong with a [`MeshSpec`](crate::ocp::MeshSpec).

@@ -14,4 +14,4 @@ pub mod ipm;
 pub mod ocp;
 pub mod terms;
 
-pub use error::OptimError;
+pub use error::{FactorizationError, OptimError};

@@ -23,7 +23,7 @@
 use bf_codegen::graph::{Graph, Id, V3};
 use bf_codegen::nodefn::NodeFunction;
 use bf_codegen::robot::SymbolicRobot;
-use bf_codegen::{CodegenError, Scene, diff};
+use bf_codegen::{CodegenError, Scene, SceneDefect, diff};
 
 /// δ of the smooth friction-cone margin σ_δ (N); σ_δ ≥ 0 implies σ ≥ −δ.
 pub const CONE_DELTA: f64 = 1e-4;
@@ -134,9 +134,9 @@ pub type Physics = bf_scene::Constants;
 /// The constants of `scene`, which needs a `[ball]` and a `[contact]` section.
 pub fn physics(scene: &Scene) -> Result<Physics, CodegenError> {
     if scene.contact.is_none() && scene.ball.is_some() {
-        return Err(CodegenError::Scene("the scene has no [contact]".into()));
+        return Err(SceneDefect::NoContact.into());
     }
-    Physics::of(scene).ok_or_else(|| CodegenError::Scene("the scene has no [ball]".into()))
+    Physics::of(scene).ok_or_else(|| SceneDefect::NoBall.into())
 }
 
 /// Graph variable indices of one node.

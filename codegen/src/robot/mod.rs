@@ -27,10 +27,10 @@ mod crba;
 mod dynamics;
 mod inverse;
 
-use crate::CodegenError;
 use crate::diff;
 use crate::graph::{Graph, Id, M3, V3, m3_transpose};
 use crate::spec::{Angle, DhConvention, JointType, RotationSpec, Scene, TransformSpec};
+use crate::{CodegenError, SceneDefect};
 
 /// Layout of the input variables of the graph: q, q̇, ω, ε, then the runtime parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -202,22 +202,20 @@ impl SymbolicRobot {
     pub fn new(scene: &Scene) -> Result<Self, CodegenError> {
         let nq = scene.links.len();
         if nq == 0 {
-            return Err(CodegenError::Scene("the scene has no links".into()));
+            return Err(SceneDefect::NoLinks.into());
         }
         let consts = scene.constants();
         let mut params = Vec::new();
         for name in &scene.runtime_parameters {
             let Some((_, v)) = consts.iter().find(|(n, _)| n == name) else {
-                let known: Vec<&str> = consts.iter().map(|c| c.0.as_str()).collect();
-                return Err(CodegenError::Scene(format!(
-                    "unknown runtime parameter `{name}`; known constants: {}",
-                    known.join(", ")
-                )));
+                return Err(SceneDefect::UnknownRuntimeParameter {
+                    name: name.clone(),
+                    known: consts.iter().map(|c| c.0.clone()).collect(),
+                }
+                .into());
             };
             if params.iter().any(|(n, _): &(String, f64)| n == name) {
-                return Err(CodegenError::Scene(format!(
-                    "runtime parameter `{name}` listed twice"
-                )));
+                return Err(SceneDefect::RuntimeParameterTwice { name: name.clone() }.into());
             }
             params.push((name.clone(), *v));
         }
@@ -317,9 +315,10 @@ impl SymbolicRobot {
                     "y" => [[c, z, s], [z, o, z], [ns, z, c]],
                     "z" => [[c, ns, z], [s, c, z], [z, z, o]],
                     other => {
-                        return Err(CodegenError::Scene(format!(
-                            "rotation axis must be \"x\", \"y\" or \"z\", got {other:?}"
-                        )));
+                        return Err(SceneDefect::RotationAxis {
+                            axis: other.to_string(),
+                        }
+                        .into());
                     }
                 })
             }
@@ -566,23 +565,17 @@ impl SymbolicRobot {
     /// Contact quantities (Sect. 2.2); `smooth` selects the smooth saturation (eq. 58–59).
     pub fn contact(&mut self, smooth: bool) -> Result<ContactExprs, CodegenError> {
         let (Some(_), Some(cs)) = (&self.scene.ball, &self.scene.contact) else {
-            return Err(CodegenError::Scene(
-                "contact kernels need both [ball] and [contact] in the scene".into(),
-            ));
+            return Err(SceneDefect::NoBallOrContact.into());
         };
         let tip_only = cs.kind == "tip";
         if !tip_only && cs.kind != "segment" {
-            return Err(CodegenError::Scene(format!(
-                "contact.kind must be \"segment\" or \"tip\", got {:?}",
-                cs.kind
-            )));
+            return Err(SceneDefect::ContactKind {
+                kind: cs.kind.clone(),
+            }
+            .into());
         }
         if !tip_only && self.scene.dh == DhConvention::Modified {
-            return Err(CodegenError::Scene(
-                "contact.kind = \"segment\" needs the last link's length a_n, which a modified \
-                 DH table does not hold; use kind = \"tip\""
-                    .into(),
-            ));
+            return Err(SceneDefect::SegmentContactModifiedDh.into());
         }
         let n = self.nq();
         let tip = self.tip;

@@ -12,7 +12,7 @@ use ipopt::{
 use super::nlp::{BOUND_INF, Nlp};
 use super::settings::Settings;
 use super::solution::{Counters, Solution, Status, Timing};
-use crate::error::OptimError;
+use crate::error::{FactorizationError, OptimError};
 
 /// Wraps `&dyn Nlp` as an Ipopt problem.
 struct Adapter<'a> {
@@ -139,7 +139,7 @@ pub fn solve_with_ipopt(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, 
         iterations: 0,
     };
     let mut solver =
-        Ipopt::new(adapter).map_err(|e| OptimError::Factorization(format!("ipopt: {e:?}")))?;
+        Ipopt::new(adapter).map_err(|e| FactorizationError::Ipopt(format!("{e:?}")))?;
     let print_level = if settings.print_level > 0 { 5 } else { 0 };
     let mu_strategy = match settings.mu_strategy {
         super::settings::MuStrategy::Monotone => "monotone",

@@ -18,7 +18,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
 use super::Inertia;
-use crate::error::OptimError;
+use crate::error::{FactorizationError, OptimError};
 
 /// faer's symbolic analysis of one lower-triangle pattern, its value storage for `L` (faer's
 /// layout) and the workspace of its numeric factorization and solve.
@@ -55,7 +55,7 @@ impl FaerFactor {
                     ..Default::default()
                 },
             )
-            .map_err(|e| OptimError::Factorization(format!("symbolic analysis failed: {e:?}")))
+            .map_err(|e| OptimError::from(FactorizationError::SymbolicAnalysis(e)))
         };
         let symbolic = match custom {
             Some(fwd) => {
@@ -75,7 +75,7 @@ impl FaerFactor {
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]);
         let mem = MemBuffer::try_new(req)
-            .map_err(|_| OptimError::Factorization("out of memory for the KKT workspace".into()))?;
+            .map_err(|_| OptimError::from(FactorizationError::OutOfMemory))?;
         Ok(Self {
             l_values: vec![0.0; symbolic.len_val()],
             symbolic,
