@@ -58,7 +58,7 @@ fn acceleration_level_stick_rows_are_the_time_derivative_of_delta_v() {
     let (nv, _) = node_function_with(&scene, &ph, &opt, StickLevel::Velocity).unwrap();
     assert_eq!(nf.path_bounds, nv.path_bounds);
     let nq = ph.nq;
-    let nx = 2 * nq + 3;
+    let nx = bf_codegen::spec::state_len(nq);
     let diag = Diagnostics::new(&scene, eps).unwrap();
     let build_fn = |n: &bf_optim::ocp::NodeFunction| {
         let mut g = n.graph.clone();

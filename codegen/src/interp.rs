@@ -346,7 +346,7 @@ impl SceneKernels {
         v[..n].copy_from_slice(q);
         v[n..2 * n].copy_from_slice(qd);
         v[2 * n..2 * n + 3].copy_from_slice(&omega);
-        v[2 * n + 3] = eps;
+        v[l.eps() as usize] = eps;
         for (i, d) in self.params.iter().enumerate() {
             v[l.param(i) as usize] = p.map_or(d.1, |p| p[i]);
         }

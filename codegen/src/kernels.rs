@@ -433,9 +433,9 @@ fn check_inputs(
             Arg::Q
         } else if v < 2 * n {
             Arg::Qd
-        } else if v < 2 * n + 3 {
+        } else if v < l.eps() {
             Arg::Omega
-        } else if v == 2 * n + 3 {
+        } else if v == l.eps() {
             Arg::Eps
         } else if (v as usize) < l.n_vars() {
             Arg::P

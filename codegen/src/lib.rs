@@ -269,7 +269,7 @@ pub fn eval_all(
     vars[..n].copy_from_slice(q);
     vars[n..2 * n].copy_from_slice(qd);
     vars[2 * n..2 * n + 3].copy_from_slice(&omega);
-    vars[2 * n + 3] = eps;
+    vars[layout.eps() as usize] = eps;
     for (i, p) in model.params.iter().enumerate() {
         vars[layout.param(i) as usize] = p.1;
     }

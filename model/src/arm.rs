@@ -82,7 +82,7 @@ impl ArmModel {
             std::thread::Builder::new()
                 .stack_size(256 << 20)
                 .spawn_scoped(s, || interpreted(scene))
-                .map_err(|e| scene_err(&scene.name, format!("cannot spawn a thread: {e}")))?
+                .map_err(|e| crate::registry::thread_err(&scene.name, e))?
                 .join()
                 .map_err(|_| scene_err(&scene.name, "building the kernel graphs panicked"))?
         })?;

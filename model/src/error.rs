@@ -2,6 +2,9 @@
 //! variant (singular Γ of eq. 33, Painlevé for the slip normal force of eq. 37, no contact for
 //! queries that need h = 0, eq. 8), so callers never see NaN.
 
+use std::fmt;
+use std::sync::Arc;
+
 use thiserror::Error;
 
 /// Which kind of Painlevé failure (paper Sect. 7) the slip normal force exhibits.
@@ -47,7 +50,7 @@ pub enum ModelError {
         /// Supplied length.
         got: usize,
     },
-    /// The scene text could not be used (missing ball / friction section, parse error, ...).
+    /// The scene cannot be used as a model (missing ball / friction section, unknown constant, ...).
     #[error("scene `{scene}`: {message}")]
     Scene {
         /// Scene name.
@@ -55,6 +58,36 @@ pub enum ModelError {
         /// Explanation.
         message: String,
     },
+    /// The scene text a kernel set carries is not a valid scene file.
+    #[error("scene `{scene}`: its text is not a valid scene file")]
+    SceneText {
+        /// Scene name.
+        scene: String,
+        /// The scene file's error.
+        #[source]
+        source: Shared<bf_scene::SpecError>,
+    },
+    /// bf-codegen cannot build the kernel graphs of a scene (interpreted kernels).
+    #[error("scene `{scene}`: cannot build its kernel graphs")]
+    Graphs {
+        /// Scene name.
+        scene: String,
+        /// The generator's error.
+        #[source]
+        source: Shared<bf_codegen::CodegenError>,
+    },
+    /// The helper thread that builds a scene's kernel graphs could not be started.
+    #[error("scene `{scene}`: cannot spawn a thread to build its kernel graphs")]
+    Thread {
+        /// Scene name.
+        scene: String,
+        /// The operating system's error.
+        #[source]
+        source: Shared<std::io::Error>,
+    },
+    /// A name given as a compiled contact scene is none of them.
+    #[error("not a compiled contact scene: {0}")]
+    NotCompiled(bf_scene::UnknownScene),
     /// A contact-mode quantity was requested at a state that is not in contact.
     #[error("not in contact: h = {h:e} m, |h| must be <= {tolerance:e} m")]
     NotInContact {
@@ -125,4 +158,41 @@ pub enum ModelError {
         /// Which solve.
         what: &'static str,
     },
+}
+
+/// An error of another library held by a [`ModelError`] variant as its `source()`, behind an
+/// `Arc` so that `ModelError` stays `Clone`; two are equal when their messages are (the wrapped
+/// errors are not comparable). Displays as the wrapped error and forwards its `source()`.
+#[derive(Debug)]
+pub struct Shared<E>(pub Arc<E>);
+
+impl<E> Shared<E> {
+    /// Wraps `e`.
+    pub fn new(e: E) -> Self {
+        Shared(Arc::new(e))
+    }
+}
+
+impl<E> Clone for Shared<E> {
+    fn clone(&self) -> Self {
+        Shared(Arc::clone(&self.0))
+    }
+}
+
+impl<E: fmt::Display> PartialEq for Shared<E> {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0) || self.0.to_string() == other.0.to_string()
+    }
+}
+
+impl<E: fmt::Display> fmt::Display for Shared<E> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
+impl<E: std::error::Error> std::error::Error for Shared<E> {
+    fn source(&self) -> Option<&(dyn std::error::Error + 'static)> {
+        self.0.source()
+    }
 }

@@ -27,7 +27,7 @@ use crate::energy::{self, Energy, PowerBalance};
 use crate::impact::{self, ImpactLaw, ImpactOutcome};
 use crate::linalg::{VecN, mat_from_rows};
 use crate::transitions::{self, Transition, TransitionSettings};
-use crate::{ContactGeometry, ContactKinematics, Mode, ModelError, Params, Result, State};
+use crate::{ContactGeometry, ContactKinematics, Mode, ModelError, Params, Result, Shared, State};
 
 /// Which saturation the contact kernel uses (eq. 3 vs. eq. 58–59).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -142,9 +142,9 @@ pub fn params_for<K: Kernels<N> + ?Sized, const N: usize>(kernels: &K) -> Result
         return Ok(p);
     }
     let scene = Scene::from_toml_str(kernels.scene_toml(), kernels.scene_name()).map_err(|e| {
-        ModelError::Scene {
+        ModelError::SceneText {
             scene: kernels.scene_name().to_string(),
-            message: e.to_string(),
+            source: Shared::new(e),
         }
     })?;
     // The scene's own values must be valid even where a runtime parameter replaces them.

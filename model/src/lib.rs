@@ -104,7 +104,7 @@ mod state;
 pub mod transitions;
 
 pub use dynamics::{Accelerations, ContactForce, ContactMatrices};
-pub use error::{ModelError, PainleveKind};
+pub use error::{ModelError, PainleveKind, Shared};
 pub use impact::{ImpactLaw, ImpactOutcome};
 pub use kernels::{ContactVariant, HumanKernels, Kernels, Model, PaperKernels};
 pub use kinematics::{ContactGeometry, ContactKinematics};

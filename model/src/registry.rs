@@ -30,7 +30,7 @@ use bf_codegen::spec::{Angle, InertiaSpec, Scene, SceneId};
 use bf_generated::{ContactFn, MassCqdGFn, PotentialFn};
 
 use crate::kernels::{ContactVariant, Kernels};
-use crate::{ContactGeometry, ModelError, Params, Result};
+use crate::{ContactGeometry, ModelError, Params, Result, Shared};
 
 /// Which kernels a model runs on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -59,6 +59,14 @@ impl fmt::Display for KernelSource {
 
 /// A boxed kernel set of any contact scene with `N` joints (default 3).
 pub type DynKernels<const N: usize = 3> = Box<dyn Kernels<N> + Send + Sync>;
+
+/// [`ModelError::Thread`] of the scene `scene`.
+pub(crate) fn thread_err(scene: &str, e: std::io::Error) -> ModelError {
+    ModelError::Thread {
+        scene: scene.to_string(),
+        source: Shared::new(e),
+    }
+}
 
 fn scene_err(scene: &str, message: impl Into<String>) -> ModelError {
     ModelError::Scene {
@@ -367,8 +375,7 @@ pub fn compiled_contact_scenes() -> Vec<SceneId> {
 /// The compiled contact scene named `text` (user input, e.g. a command-line value); the error
 /// names `text` and lists the compiled contact scenes.
 pub fn contact_scene_id(text: &str) -> Result<SceneId> {
-    SceneId::parse_among(text, &compiled_contact_scenes())
-        .map_err(|e| scene_err(text, format!("not a compiled contact scene: {e}")))
+    SceneId::parse_among(text, &compiled_contact_scenes()).map_err(ModelError::NotCompiled)
 }
 
 /// Flat outputs longer than this go through a heap buffer (N > 35 joints).
@@ -516,7 +523,10 @@ pub(crate) fn interpreted_tapes<const N: usize>(
     scene: &Scene,
     kernels: [&str; N],
 ) -> Result<InterpretedTapes<N>> {
-    let codegen = |e: bf_codegen::CodegenError| scene_err(&scene.name, e.to_string());
+    let codegen = |e: bf_codegen::CodegenError| ModelError::Graphs {
+        scene: scene.name.clone(),
+        source: Shared::new(e),
+    };
     let mut m = bf_codegen::SymbolicRobot::new(scene).map_err(codegen)?;
     let mut tapes = Vec::with_capacity(N);
     for kernel in kernels {
@@ -574,7 +584,7 @@ impl<const N: usize> InterpretedKernels<N> {
             std::thread::Builder::new()
                 .stack_size(256 << 20)
                 .spawn_scoped(s, || Self::build(scene, params))
-                .map_err(|e| scene_err(&scene.name, format!("cannot spawn a thread: {e}")))?
+                .map_err(|e| thread_err(&scene.name, e))?
                 .join()
                 .map_err(|_| scene_err(&scene.name, "building the kernel graphs panicked"))?
         })

@@ -30,7 +30,7 @@ impl<const N: usize> State<N> {
     }
 
     /// Length 2N + 3 of the flat layout (q, q̇, ω).
-    pub const DIM: usize = 2 * N + 3;
+    pub const DIM: usize = bf_scene::state_len(N);
 
     /// Writes the flat layout (q, q̇, ω) into `x` (length [`State::DIM`]).
     pub fn write_slice(&self, x: &mut [f64]) {

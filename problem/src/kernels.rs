@@ -236,9 +236,10 @@ mod tests {
         for problem in crate::Problem::ALL {
             let p = crate::build(problem, &crate::ProblemSettings::default(), &generated)
                 .unwrap_or_else(|e| panic!("{}: {e}", problem.name()));
-            for ph in &p.ocp.phases {
-                let c = ph.node.collocation();
-                let node = CompiledNode::new(c.graph, c.outputs, c.locals, ph.node.fixed.clone());
+            for phase in &p.ocp.phases {
+                let c = phase.node.collocation();
+                let node =
+                    CompiledNode::new(c.graph, c.outputs, c.locals, phase.node.fixed.clone());
                 used.insert(node.fingerprint);
             }
         }

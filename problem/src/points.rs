@@ -10,6 +10,7 @@ use bf_codegen::graph::{Graph, Id};
 use bf_codegen::interp::Tape;
 use bf_codegen::robot::SymbolicRobot;
 use bf_optim::ocp::{PointFunction, VarRef};
+use bf_scene::state_len;
 
 use crate::ProblemError;
 
@@ -71,7 +72,7 @@ pub fn end_point(
         mut model, fixed, ..
     } = build_model(scene, eps)?;
     let nq = model.nq();
-    let nx = 2 * nq + 3;
+    let nx = state_len(nq);
     let ce = model
         .contact(true)
         .map_err(ProblemError::model(&scene.name))?;
@@ -171,7 +172,7 @@ pub fn impact(
     let qdp: Vec<u32> = (0..nq as u32).map(|i| base + nq as u32 + i).collect();
     let wp: Vec<u32> = (0..3u32).map(|i| base + 2 * nq as u32 + i).collect();
     let io: Vec<u32> = (0..3u32).map(|i| base + 2 * nq as u32 + 3 + i).collect();
-    let nx = 2 * nq + 3;
+    let nx = state_len(nq);
     let pre: Vec<u32> = qm.iter().chain(&qdm).chain(&wm).copied().collect();
     let post: Vec<u32> = qp.iter().chain(&qdp).chain(&wp).copied().collect();
     for i in 0..nx {
@@ -296,7 +297,7 @@ impl Diagnostics {
     /// Evaluates at x = (q, q̇, ω).
     pub fn eval(&self, x: &[f64]) -> ContactValues {
         let mut v = vec![0.0; self.n_vars];
-        let nx = 2 * self.nq + 3;
+        let nx = state_len(self.nq);
         v[..nx].copy_from_slice(&x[..nx]);
         for &(i, val) in &self.fixed {
             v[i as usize] = val;

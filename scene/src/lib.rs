@@ -29,7 +29,8 @@
 //! - Validation ([`Scene::validate`]) also refuses inertias whose principal moments violate
 //!   the triangle inequality, unless the table names a published source
 //!   (`nonphysical_inertia`); [`Scene::warnings`] lists what is accepted but doubtful.
-//! - [`Mode`]: the contact modes free, stick and slip of Sect. 2.6.
+//! - [`Mode`]: the contact modes free, stick and slip of Sect. 2.6; [`state_len`]: the length
+//!   of the state x = (q, q̇, ω) of eq. 44.
 //! - [`SceneId`]: the typed scene name the registries and the problem catalogue key scenes by.
 //!
 //! Loading: [`Scene::load`] / [`Scene::from_toml_str`] parse with toml's span-preserving
@@ -43,6 +44,7 @@ mod de;
 mod error;
 mod id;
 mod mode;
+mod state;
 mod validate;
 
 use serde::Deserialize;
@@ -51,6 +53,7 @@ pub use constants::Constants;
 pub use error::{SpecError, SpecErrorKind};
 pub use id::{SceneId, UnknownScene};
 pub use mode::Mode;
+pub use state::state_len;
 pub use validate::{principal_moments, symmetric_eigenvalues};
 
 use error::SourceIndex;

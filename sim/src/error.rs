@@ -129,12 +129,13 @@ pub enum SimError {
         msg: String,
     },
     /// Serialising an output failed.
-    #[error("cannot serialise {what}: {msg}")]
+    #[error("cannot serialise {what}")]
     Serialize {
         /// What was being written.
         what: &'static str,
-        /// Underlying error.
-        msg: String,
+        /// The serialiser's error (csv or serde_json).
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync>,
     },
 }
 

@@ -106,7 +106,7 @@ impl<M: Debug> Trajectory<M> {
         header.extend((0..n).map(|i| format!("x{i}")));
         let ser = |e: csv::Error| SimError::Serialize {
             what: "trajectory CSV",
-            msg: e.to_string(),
+            source: e.into(),
         };
         w.write_record(&header).map_err(ser)?;
         for i in 0..self.len() {
@@ -121,7 +121,7 @@ impl<M: Debug> Trajectory<M> {
         }
         let bytes = w.into_inner().map_err(|e| SimError::Serialize {
             what: "trajectory CSV",
-            msg: e.to_string(),
+            source: e.into(),
         })?;
         write_atomic(path, &bytes)
     }
@@ -281,7 +281,7 @@ pub(crate) fn output_json<M: Debug>(
     };
     serde_json::to_vec_pretty(&j).map_err(|e| SimError::Serialize {
         what: "simulation JSON",
-        msg: e.to_string(),
+        source: e.into(),
     })
 }
 
@@ -289,7 +289,7 @@ pub(crate) fn events_csv<M: Debug>(events: &[EventRecord<M>]) -> Result<Vec<u8>,
     let n = events.first().map_or(0, |e| e.x_pre.len());
     let ser = |e: csv::Error| SimError::Serialize {
         what: "event CSV",
-        msg: e.to_string(),
+        source: e.into(),
     };
     let mut w = csv::Writer::from_writer(Vec::new());
     let mut header = vec![
@@ -321,7 +321,7 @@ pub(crate) fn events_csv<M: Debug>(events: &[EventRecord<M>]) -> Result<Vec<u8>,
     }
     w.into_inner().map_err(|e| SimError::Serialize {
         what: "event CSV",
-        msg: e.to_string(),
+        source: e.into(),
     })
 }
 

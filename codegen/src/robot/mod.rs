@@ -54,9 +54,9 @@ impl Layout {
     pub fn omega(&self, i: usize) -> u32 {
         (2 * self.nq + i) as u32
     }
-    /// Variable index of ε (smooth saturation).
+    /// Variable index of ε (smooth saturation): right after the state x = (q, q̇, ω).
     pub fn eps(&self) -> u32 {
-        (2 * self.nq + 3) as u32
+        crate::spec::state_len(self.nq) as u32
     }
     /// Variable index of runtime parameter `i`.
     pub fn param(&self, i: usize) -> u32 {

@@ -14,6 +14,7 @@
 
 use bf_codegen::Scene;
 use bf_optim::ocp::{Phase, PhaseGuess};
+use bf_scene::state_len;
 
 use crate::ProblemError;
 use crate::node::{CostKind, NodeSettings, PhaseMode, Physics, StickLevel, node_function};
@@ -173,10 +174,10 @@ pub(crate) fn make_phases(
             stick,
         )
         .map_err(ProblemError::model(&scene.name))?;
-        let mut x_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); 2 * nq + 3];
+        let mut x_bounds = vec![(f64::NEG_INFINITY, f64::INFINITY); state_len(nq)];
         x_bounds[..nq].copy_from_slice(q_limits);
         let na = node.a.len();
-        let mut xg = vec![0.0; 2 * nq + 3];
+        let mut xg = vec![0.0; state_len(nq)];
         for i in 0..nq {
             xg[i] = start.map_or(q_guess[i], |sg| sg.q[i]);
             let (lo, hi) = q_limits[i];
@@ -208,7 +209,7 @@ pub(crate) fn make_phases(
 /// The contact configuration q_c on the segment `conf.free` → `conf.deep` with h(q_c) = 0.
 fn contact_configuration(diag: &Diagnostics, nq: usize, conf: &GuessConfigurations) -> Vec<f64> {
     let at = |s: f64| -> Vec<f64> {
-        let mut x = vec![0.0; 2 * nq + 3];
+        let mut x = vec![0.0; state_len(nq)];
         for i in 0..nq {
             x[i] = conf.free[i] + s * (conf.deep[i] - conf.free[i]);
         }
@@ -239,7 +240,7 @@ pub(crate) fn contact_guess(
     let qc = contact_configuration(&diag, nq, conf);
     let qf: Vec<f64> = phases[0].guess.x[0][..nq].to_vec();
     let n = phases.len();
-    for (k, ph) in phases.iter_mut().enumerate() {
+    for (k, phase) in phases.iter_mut().enumerate() {
         let (qa, qb) = match modes[k] {
             PhaseMode::Stick => (qc.clone(), qc.clone()),
             PhaseMode::Free if k + 1 < n && modes[k + 1] == PhaseMode::Stick => {
@@ -249,8 +250,8 @@ pub(crate) fn contact_guess(
             // A lone free phase (reach) approaches the ball.
             PhaseMode::Free => (qf.clone(), qc.clone()),
         };
-        let t = ph.guess.duration;
-        let mut xa = ph.guess.x[0].clone();
+        let t = phase.guess.duration;
+        let mut xa = phase.guess.x[0].clone();
         let mut xb = xa.clone();
         for i in 0..nq {
             xa[i] = qa[i];
@@ -259,8 +260,8 @@ pub(crate) fn contact_guess(
             xa[nq + i] = v;
             xb[nq + i] = v;
         }
-        ph.guess.s = vec![0.0, 1.0];
-        ph.guess.x = vec![xa, xb];
+        phase.guess.s = vec![0.0, 1.0];
+        phase.guess.x = vec![xa, xb];
     }
     Ok(())
 }

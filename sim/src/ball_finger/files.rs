@@ -48,7 +48,7 @@ fn state_names(n: usize) -> Vec<String> {
 fn csv_err(what: &'static str) -> impl Fn(csv::Error) -> SimError {
     move |e| SimError::Serialize {
         what,
-        msg: e.to_string(),
+        source: e.into(),
     }
 }
 
@@ -122,7 +122,7 @@ impl<const N: usize> RunReport<N> {
         }
         let bytes = w.into_inner().map_err(|e| SimError::Serialize {
             what: "trajectory CSV",
-            msg: e.to_string(),
+            source: e.into(),
         })?;
         write_atomic(&dir.join("trajectory.csv"), &bytes)?;
         let tj = TrajectoryJson {
@@ -177,7 +177,7 @@ impl<const N: usize> RunReport<N> {
         }
         let bytes = w.into_inner().map_err(|e| SimError::Serialize {
             what: "event CSV",
-            msg: e.to_string(),
+            source: e.into(),
         })?;
         write_atomic(&dir.join("events.csv"), &bytes)?;
         write_atomic(
@@ -222,6 +222,6 @@ fn kind_name(k: SampleKind) -> &'static str {
 fn json<T: Serialize>(what: &'static str, v: &T) -> Result<Vec<u8>, SimError> {
     serde_json::to_vec_pretty(v).map_err(|e| SimError::Serialize {
         what,
-        msg: e.to_string(),
+        source: e.into(),
     })
 }
