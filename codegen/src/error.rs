@@ -7,8 +7,6 @@
 
 use std::fmt;
 
-use crate::kernels::Arg;
-
 /// Errors of the generator.
 #[derive(Debug, thiserror::Error)]
 pub enum CodegenError {
@@ -188,12 +186,13 @@ pub enum InternalDefect {
         variable: u32,
     },
     /// A kernel's output reads an argument the kernel does not take.
-    #[error("kernel `{kernel}` reads {argument:?} but does not take it as an argument")]
+    #[error("kernel `{kernel}` reads {argument} but does not take it as an argument")]
     MissingArgument {
         /// The kernel.
         kernel: String,
-        /// The argument it reads.
-        argument: Arg,
+        /// The argument it reads (the `Debug` name of its `kernels::Arg`; this module sits
+        /// below `kernels`).
+        argument: String,
     },
     /// Any other inconsistency, named by a fixed description.
     #[error("{0}")]

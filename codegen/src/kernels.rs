@@ -453,7 +453,7 @@ fn check_inputs(
         if !inputs.contains(&needs) {
             return Err(InternalDefect::MissingArgument {
                 kernel: name.to_string(),
-                argument: needs,
+                argument: format!("{needs:?}"),
             }
             .into());
         }
