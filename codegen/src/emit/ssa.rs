@@ -322,6 +322,24 @@ pub(crate) fn write_float(out: &mut String, v: f64, ft: FloatTy) {
     }
 }
 
+/// Appends the decimal digits of `n` (as `{n}` formats it, without the formatting machinery:
+/// the bodies print hundreds of thousands of temporaries' numbers).
+pub(crate) fn push_u32(out: &mut String, mut n: u32) {
+    let mut digits = [0u8; 10];
+    let mut i = digits.len();
+    loop {
+        i -= 1;
+        digits[i] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    for &d in &digits[i..] {
+        out.push(d as char);
+    }
+}
+
 /// Prints operands; `var` prints graph variables.
 pub(crate) struct TextPrinter<'a> {
     pub(crate) ft: FloatTy,
@@ -333,10 +351,13 @@ impl TextPrinter<'_> {
     pub(crate) fn operand(&self, out: &mut String, o: Operand) {
         match o {
             Operand::Temp(n) => {
-                let _ = write!(out, "t{n}");
+                out.push('t');
+                push_u32(out, n);
             }
             Operand::LaneTemp(n) => {
-                let _ = write!(out, "t{n}[l]");
+                out.push('t');
+                push_u32(out, n);
+                out.push_str("[l]");
             }
             Operand::Var(v) => (self.var)(out, v),
             Operand::Const(c) => write_float(out, c, self.ft),
@@ -344,7 +365,10 @@ impl TextPrinter<'_> {
     }
 
     fn call(&self, out: &mut String, f: &str, args: &[Operand]) {
-        let _ = write!(out, "{}::{f}(", float_name(self.ft));
+        out.push_str(float_name(self.ft));
+        out.push_str("::");
+        out.push_str(f);
+        out.push('(');
         for (k, &a) in args.iter().enumerate() {
             if k > 0 {
                 out.push_str(", ");
@@ -413,7 +437,9 @@ impl TextPrinter<'_> {
     fn stmt_line(&self, out: &mut String, s: &Stmt) {
         match s {
             Stmt::Let(t, e) => {
-                let _ = write!(out, "let t{t} = ");
+                out.push_str("let t");
+                push_u32(out, *t);
+                out.push_str(" = ");
                 self.expr(out, e);
                 out.push(';');
             }
@@ -456,7 +482,9 @@ impl TextPrinter<'_> {
 /// newline, as `prettyplease` prints it.
 pub(crate) fn write_stmt(out: &mut String, p: &TextPrinter, s: &Stmt, indent: usize) {
     let start = out.len();
-    out.extend(std::iter::repeat_n(' ', indent));
+    for _ in 0..indent {
+        out.push(' ');
+    }
     p.stmt_line(out, s);
     if out.len() - start > ONE_LINE_MAX {
         let line = out.split_off(start + indent);
