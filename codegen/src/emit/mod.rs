@@ -170,7 +170,7 @@ fn index_texts(dims: &[Dim], nq: usize) -> Vec<String> {
 }
 
 /// The placeholder statement of a kernel's body while its signature is formatted.
-const BODY_MARKER: &str = "__bf_codegen_body__";
+pub(crate) const BODY_MARKER: &str = "__bf_codegen_body__";
 
 /// Emit one kernel as a Rust function (standard options).
 pub fn emit_kernel(
@@ -222,19 +222,14 @@ pub fn emit_kernel_with(
             Arg::P => quote!(p: &[#ft; NP]),
         });
     }
-    let assign = |body: &mut String, lhs: std::fmt::Arguments, id: Id| {
+    let mut line = String::new();
+    let mut assign = |body: &mut String, lhs: std::fmt::Arguments, id: Id| {
         let v = ir.refs[id.index()].expect("internal: output not emitted");
-        let start = body.len();
-        let _ = write!(body, "    {lhs} = ");
-        printer.operand(body, v);
-        body.push(';');
-        if body.len() - start > ssa::ONE_LINE_MAX {
-            let line = body.split_off(start + 4);
-            body.truncate(start);
-            ssa::push_formatted_stmt(body, &line, 4);
-        } else {
-            body.push('\n');
-        }
+        line.clear();
+        let _ = write!(line, "{lhs} = ");
+        printer.operand(&mut line, v);
+        line.push(';');
+        ssa::push_line(body, &line, 4);
     };
     for o in &k.outputs {
         let name = Ident::new(&o.name, Span::call_site());
@@ -313,15 +308,7 @@ pub fn emit_kernel_with(
             #marker;
         }
     };
-    let item = unparse(tokens, "emitted kernel signature")?;
-    let marker_line = format!("    {BODY_MARKER};\n");
-    let at = item
-        .find(&marker_line)
-        .ok_or_else(|| CodegenError::Internal("kernel body placeholder not found".into()))?;
-    let mut code = String::with_capacity(item.len() + body.len());
-    code.push_str(&item[..at]);
-    code.push_str(&body);
-    code.push_str(&item[at + marker_line.len()..]);
+    let code = splice_bodies(tokens, "emitted kernel", &[(BODY_MARKER, 4, &body)])?;
     Ok(EmittedKernel {
         code,
         ops,
@@ -337,17 +324,7 @@ fn unparse(tokens: TokenStream, what: &str) -> Result<String, CodegenError> {
     Ok(prettyplease::unparse(&file))
 }
 
-/// SSA statements computing every node of the cone of `roots` (in node order), and the
-/// tokens that name each node's value (`refs[i]`, `None` outside the cone).
-pub(crate) struct Ssa {
-    /// Statements before the lane loop (only with `lanes`).
-    pub(crate) pre: Vec<TokenStream>,
-    pub(crate) stmts: Vec<TokenStream>,
-    pub(crate) refs: Vec<Option<TokenStream>>,
-    pub(crate) ops: OpCounts,
-}
-
-/// The helper items that code from [`ssa_inner`] with `batch_trig` calls (`sin_cos_n` and its exact fallback,
+/// The helper items that kernels with [`EmittedKernel::fast_trig`] call (`sin_cos_n` and its exact fallback,
 /// from [`crate::trig`]), as private items for a generated file; emitted once per file.
 pub fn trig_items() -> Result<TokenStream, CodegenError> {
     let mut file: syn::File = syn::parse_str(include_str!("../trig.rs"))
@@ -392,42 +369,87 @@ pub fn lanes_items() -> Result<TokenStream, CodegenError> {
     Ok(out)
 }
 
-/// The `let` bindings of the cone of `roots` as tokens; graph variables are printed by
-/// `var_tokens`. Shared by the dynamics kernels (which print the same statements as text,
-/// [`ssa`]) and the OCP node kernels (`crate::nodefn`), so both compute every node with the
-/// same `f64` operation. Without `batch_trig`, sin/cos are computed by the standard library
-/// (`sin_cos` per angle); with `batch_trig` and `f64`, every sine and cosine of a graph
-/// variable (the joint angles) is taken from one call `sin_cos_n([…])` at the top of the body,
-/// and the returned flag says whether that call was emitted (the file must then contain
-/// [`trig_items`]). Other sin/cos arguments and `f32` use the standard library.
+/// A kernel body as text: statements before the lane loop (only with `lanes`), the
+/// statements and output assignments, and the operation counts.
+pub(crate) struct BodyText {
+    /// Statements before the lane loop, indented for the function body.
+    pub(crate) pre: String,
+    /// Statements and output assignments, indented for the function body (or, with
+    /// `lanes`, for the loop's body).
+    pub(crate) body: String,
+    /// Operation counts.
+    pub(crate) ops: OpCounts,
+}
+
+/// The `let` bindings of the cone of `roots` and the assignment of every root, as text;
+/// graph variables are printed by `var`, and `lhs(out, k)` writes the place root `k` is
+/// assigned to. For the OCP node kernels (`crate::nodefn`): every node is computed with the
+/// same `f64` operation as in the dynamics kernels and the interpreter, sin/cos by the
+/// standard library (`sin_cos` per angle).
 ///
 /// With `lanes` (f64 only), the statements are the body of a loop over four lanes `l`
-/// ([`lanes`]; `var_tokens` must then name lane `l`'s value): every sine and cosine of a graph
+/// ([`lanes`]; `var` must then name lane `l`'s value): every sine and cosine of a graph
 /// variable is instead computed before the loop, four lanes at once by `sin_cos_lanes`, in
-/// [`Ssa::pre`], and read as `name[l]` in the loop; `batch_trig` is then ignored (the node
-/// kernels must match the interpreter's standard-library sine and cosine bitwise).
-pub(crate) fn ssa_inner(
+/// [`BodyText::pre`], and read as `name[l]` in the loop.
+pub(crate) fn body_text(
     g: &Graph,
     roots: &[Id],
-    var_tokens: &dyn Fn(u32) -> TokenStream,
+    var: &dyn Fn(&mut String, u32),
+    lhs: &dyn Fn(&mut String, usize),
     opts: &EmitOptions,
-    batch_trig: bool,
     lanes: bool,
-) -> (Ssa, bool) {
-    let ir = ssa::build(g, roots, opts, batch_trig, lanes);
-    let p = ssa::TokenPrinter {
+) -> BodyText {
+    let ir = ssa::build(g, roots, opts, false, lanes);
+    let printer = ssa::TextPrinter {
         ft: opts.float,
-        var: var_tokens,
+        var,
     };
-    (
-        Ssa {
-            pre: ir.pre.iter().map(|s| p.stmt(s)).collect(),
-            stmts: ir.stmts.iter().map(|s| p.stmt(s)).collect(),
-            refs: ir.refs.iter().map(|r| r.map(|o| p.operand(o))).collect(),
-            ops: ir.ops,
-        },
-        ir.batched,
-    )
+    let lanes = lanes && opts.float == FloatTy::F64;
+    let indent = if lanes { 8 } else { 4 };
+    let mut pre = String::new();
+    for s in &ir.pre {
+        ssa::write_stmt(&mut pre, &printer, s, 4);
+    }
+    let mut body = String::with_capacity(32 * (ir.stmts.len() + roots.len()));
+    for s in &ir.stmts {
+        ssa::write_stmt(&mut body, &printer, s, indent);
+    }
+    let mut line = String::new();
+    for (k, id) in roots.iter().enumerate() {
+        line.clear();
+        lhs(&mut line, k);
+        line.push_str(" = ");
+        match ir.refs[id.index()] {
+            Some(v) => printer.operand(&mut line, v),
+            None => ssa::write_float(&mut line, 0.0, opts.float),
+        }
+        line.push(';');
+        ssa::push_line(&mut body, &line, indent);
+    }
+    BodyText {
+        pre,
+        body,
+        ops: ir.ops,
+    }
+}
+
+/// Formats the item `tokens` with `prettyplease` and replaces each placeholder statement
+/// `marker;` of its body (a path expression statement, at the given indentation) by the text
+/// that goes with it: so that large bodies printed as text need no round trip through `syn`.
+pub(crate) fn splice_bodies(
+    tokens: TokenStream,
+    what: &str,
+    bodies: &[(&str, usize, &str)],
+) -> Result<String, CodegenError> {
+    let mut item = unparse(tokens, what)?;
+    for &(marker, indent, text) in bodies {
+        let line = format!("{:indent$}{marker};\n", "");
+        let at = item.find(&line).ok_or_else(|| {
+            CodegenError::Internal(format!("{what}: placeholder `{marker}` not found"))
+        })?;
+        item.replace_range(at..at + line.len(), text);
+    }
+    Ok(item)
 }
 
 /// Emit the whole scene module file (standard options).

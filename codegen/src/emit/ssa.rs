@@ -1,9 +1,8 @@
 //! The SSA form of a kernel body, independent of how it is printed: [`build`] walks the cone
 //! of the kernel's outputs in node order and decides every statement (which sines and cosines
 //! share a call, which products fuse into `mul_add`, the temporaries' numbers);
-//! [`write_stmt`] prints a statement as the text `prettyplease` would print for it, and
-//! [`stmt_tokens`] as tokens. Both printers print the same operations in the same order, so
-//! kernels printed either way compute the same `f64` results bit for bit.
+//! [`write_stmt`] prints a statement as the text `prettyplease` would print for it (the test
+//! below prints every statement form as tokens too, and compares).
 //!
 //! Printing kernel bodies as text directly is what keeps generation fast: a body has thousands
 //! of `let` statements, and building their tokens, parsing them with `syn` and formatting
@@ -14,10 +13,7 @@
 
 use std::fmt::Write as _;
 
-use proc_macro2::{Ident, Span, TokenStream};
-use quote::quote;
-
-use super::{EmitOptions, FloatTy, float_tokens};
+use super::{EmitOptions, FloatTy};
 use crate::graph::{Graph, Id, Node};
 use crate::report::OpCounts;
 
@@ -303,7 +299,7 @@ fn float_name(ft: FloatTy) -> &'static str {
     }
 }
 
-/// Writes the literal of `v` as [`float_tokens`] prints it.
+/// Writes the literal of `v` as `float_tokens` prints it.
 pub(crate) fn write_float(out: &mut String, v: f64, ft: FloatTy) {
     let t = float_name(ft);
     if v.is_nan() {
@@ -495,6 +491,19 @@ pub(crate) fn write_stmt(out: &mut String, p: &TextPrinter, s: &Stmt, indent: us
     }
 }
 
+/// Appends the statement `line` (one line) at indentation `indent`, as [`write_stmt`] does.
+pub(crate) fn push_line(out: &mut String, line: &str, indent: usize) {
+    if line.len() + indent > ONE_LINE_MAX {
+        push_formatted_stmt(out, line, indent);
+    } else {
+        for _ in 0..indent {
+            out.push(' ');
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+}
+
 /// Appends the statement `line` (one line, valid Rust) formatted by `prettyplease` inside a
 /// function body at indentation `indent`.
 pub(crate) fn push_formatted_stmt(out: &mut String, line: &str, indent: usize) {
@@ -519,130 +528,134 @@ pub(crate) fn push_formatted_stmt(out: &mut String, line: &str, indent: usize) {
     }
 }
 
-/// Prints statements as tokens; `var` gives the tokens of graph variables.
-pub(crate) struct TokenPrinter<'a> {
-    pub(crate) ft: FloatTy,
-    pub(crate) var: &'a dyn Fn(u32) -> TokenStream,
-}
-
-fn temp_ident(n: u32) -> Ident {
-    Ident::new(&format!("t{n}"), Span::call_site())
-}
-
-impl TokenPrinter<'_> {
-    /// Tokens of operand `o`.
-    pub(crate) fn operand(&self, o: Operand) -> TokenStream {
-        match o {
-            Operand::Temp(n) => {
-                let t = temp_ident(n);
-                quote!(#t)
-            }
-            Operand::LaneTemp(n) => {
-                let t = temp_ident(n);
-                quote!(#t[l])
-            }
-            Operand::Var(v) => (self.var)(v),
-            Operand::Const(c) => float_tokens(c, self.ft),
-        }
-    }
-
-    fn expr(&self, e: &Expr) -> TokenStream {
-        let ft = self.ft.tokens();
-        let o = |a: Operand| self.operand(a);
-        match *e {
-            Expr::Add(a, b) => {
-                let (x, y) = (o(a), o(b));
-                quote!(#x + #y)
-            }
-            Expr::Sub(a, b) => {
-                let (x, y) = (o(a), o(b));
-                quote!(#x - #y)
-            }
-            Expr::Mul(a, b) => {
-                let (x, y) = (o(a), o(b));
-                quote!(#x * #y)
-            }
-            Expr::Div(a, b) => {
-                let (x, y) = (o(a), o(b));
-                quote!(#x / #y)
-            }
-            Expr::Neg(a) => {
-                let x = o(a);
-                quote!(-#x)
-            }
-            Expr::Sqrt(a) => {
-                let x = o(a);
-                quote!(#ft::sqrt(#x))
-            }
-            Expr::Abs(a) => {
-                let x = o(a);
-                quote!(#ft::abs(#x))
-            }
-            Expr::Min(a, b) => {
-                let (x, y) = (o(a), o(b));
-                quote!(#ft::min(#x, #y))
-            }
-            Expr::Max(a, b) => {
-                let (x, y) = (o(a), o(b));
-                quote!(#ft::max(#x, #y))
-            }
-            Expr::Sin(a) => {
-                let x = o(a);
-                quote!(#ft::sin(#x))
-            }
-            Expr::Cos(a) => {
-                let x = o(a);
-                quote!(#ft::cos(#x))
-            }
-            Expr::IfLt(a, b, t, f) => {
-                let (x, y, tt, ff) = (o(a), o(b), o(t), o(f));
-                quote!(if #x < #y { #tt } else { #ff })
-            }
-            Expr::MulAdd {
-                x0,
-                x1,
-                y,
-                neg_x0,
-                neg_y,
-            } => {
-                let (x0, x1, y) = (o(x0), o(x1), o(y));
-                let x0 = if neg_x0 { quote!(-#x0) } else { x0 };
-                let y = if neg_y { quote!(-#y) } else { y };
-                quote!(#ft::mul_add(#x0, #x1, #y))
-            }
-        }
-    }
-
-    /// Tokens of statement `s`.
-    pub(crate) fn stmt(&self, s: &Stmt) -> TokenStream {
-        let ft = self.ft.tokens();
-        match s {
-            Stmt::Let(t, e) => {
-                let t = temp_ident(*t);
-                let e = self.expr(e);
-                quote!(let #t = #e;)
-            }
-            Stmt::SinCos { s, c, x } => {
-                let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));
-                quote!(let (#s, #c) = #ft::sin_cos(#x);)
-            }
-            Stmt::SinCosN { sc, args } => {
-                let sins = sc.iter().map(|p| temp_ident(p.0));
-                let coss = sc.iter().map(|p| temp_ident(p.1));
-                let args = args.iter().map(|&a| self.operand(a));
-                quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);)
-            }
-            Stmt::SinCosLanes { s, c, x } => {
-                let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));
-                quote!(let (#s, #c) = sin_cos_lanes(std::array::from_fn(|l| #x));)
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
+    use proc_macro2::{Ident, Span, TokenStream};
+    use quote::quote;
+
     use super::*;
+    use crate::emit::float_tokens;
+
+    /// Prints statements as tokens; `var` gives the tokens of graph variables.
+    struct TokenPrinter<'a> {
+        ft: FloatTy,
+        var: &'a dyn Fn(u32) -> TokenStream,
+    }
+
+    fn temp_ident(n: u32) -> Ident {
+        Ident::new(&format!("t{n}"), Span::call_site())
+    }
+
+    impl TokenPrinter<'_> {
+        /// Tokens of operand `o`.
+        fn operand(&self, o: Operand) -> TokenStream {
+            match o {
+                Operand::Temp(n) => {
+                    let t = temp_ident(n);
+                    quote!(#t)
+                }
+                Operand::LaneTemp(n) => {
+                    let t = temp_ident(n);
+                    quote!(#t[l])
+                }
+                Operand::Var(v) => (self.var)(v),
+                Operand::Const(c) => float_tokens(c, self.ft),
+            }
+        }
+
+        fn expr(&self, e: &Expr) -> TokenStream {
+            let ft = self.ft.tokens();
+            let o = |a: Operand| self.operand(a);
+            match *e {
+                Expr::Add(a, b) => {
+                    let (x, y) = (o(a), o(b));
+                    quote!(#x + #y)
+                }
+                Expr::Sub(a, b) => {
+                    let (x, y) = (o(a), o(b));
+                    quote!(#x - #y)
+                }
+                Expr::Mul(a, b) => {
+                    let (x, y) = (o(a), o(b));
+                    quote!(#x * #y)
+                }
+                Expr::Div(a, b) => {
+                    let (x, y) = (o(a), o(b));
+                    quote!(#x / #y)
+                }
+                Expr::Neg(a) => {
+                    let x = o(a);
+                    quote!(-#x)
+                }
+                Expr::Sqrt(a) => {
+                    let x = o(a);
+                    quote!(#ft::sqrt(#x))
+                }
+                Expr::Abs(a) => {
+                    let x = o(a);
+                    quote!(#ft::abs(#x))
+                }
+                Expr::Min(a, b) => {
+                    let (x, y) = (o(a), o(b));
+                    quote!(#ft::min(#x, #y))
+                }
+                Expr::Max(a, b) => {
+                    let (x, y) = (o(a), o(b));
+                    quote!(#ft::max(#x, #y))
+                }
+                Expr::Sin(a) => {
+                    let x = o(a);
+                    quote!(#ft::sin(#x))
+                }
+                Expr::Cos(a) => {
+                    let x = o(a);
+                    quote!(#ft::cos(#x))
+                }
+                Expr::IfLt(a, b, t, f) => {
+                    let (x, y, tt, ff) = (o(a), o(b), o(t), o(f));
+                    quote!(if #x < #y { #tt } else { #ff })
+                }
+                Expr::MulAdd {
+                    x0,
+                    x1,
+                    y,
+                    neg_x0,
+                    neg_y,
+                } => {
+                    let (x0, x1, y) = (o(x0), o(x1), o(y));
+                    let x0 = if neg_x0 { quote!(-#x0) } else { x0 };
+                    let y = if neg_y { quote!(-#y) } else { y };
+                    quote!(#ft::mul_add(#x0, #x1, #y))
+                }
+            }
+        }
+
+        /// Tokens of statement `s`.
+        fn stmt(&self, s: &Stmt) -> TokenStream {
+            let ft = self.ft.tokens();
+            match s {
+                Stmt::Let(t, e) => {
+                    let t = temp_ident(*t);
+                    let e = self.expr(e);
+                    quote!(let #t = #e;)
+                }
+                Stmt::SinCos { s, c, x } => {
+                    let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));
+                    quote!(let (#s, #c) = #ft::sin_cos(#x);)
+                }
+                Stmt::SinCosN { sc, args } => {
+                    let sins = sc.iter().map(|p| temp_ident(p.0));
+                    let coss = sc.iter().map(|p| temp_ident(p.1));
+                    let args = args.iter().map(|&a| self.operand(a));
+                    quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);)
+                }
+                Stmt::SinCosLanes { s, c, x } => {
+                    let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));
+                    quote!(let (#s, #c) = sin_cos_lanes(std::array::from_fn(|l| #x));)
+                }
+            }
+        }
+    }
 
     /// Every statement form, with the operands that print differently (negative and
     /// non-finite constants, lanes, variables with indices), printed as text equals the
