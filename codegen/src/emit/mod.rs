@@ -2,12 +2,13 @@
 //! binding, which avoids the token-pasting precedence pitfall, `docs/architecture.md`,
 //! "Emit"). The bindings of the dynamics kernels are printed as text in the layout
 //! `prettyplease` gives them; the signatures, docs and the file's other items go through
-//! `quote!` tokens → `syn::File` → `prettyplease`. The node kernels (`crate::nodefn`) take the
-//! bindings as tokens (`ssa_inner`). Constants are printed with Rust's shortest round-trip
-//! formatting, so every `f64` survives exactly. In `f64` kernels the sines and cosines of all
-//! joint angles come from one call of the vectorised helper `sin_cos_n` ([`crate::trig`],
-//! emitted once per file by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call. The batched
-//! node kernels put the scalar body in a loop over four lanes ([`lanes`]).
+//! `quote!` tokens → `syn::File` → `prettyplease`. The node kernels (`crate::nodefn`) print
+//! their bindings the same way (`body_text`). Constants are printed with Rust's shortest
+//! round-trip formatting, so every `f64` survives exactly. In `f64` kernels the sines and
+//! cosines of all joint angles come from one call of the vectorised helper `sin_cos_n`
+//! ([`crate::trig`], emitted once per file by [`trig_items`]); elsewhere sin/cos of one
+//! argument share a `sin_cos` call. The batched node kernels put the scalar body in a loop
+//! over four lanes ([`lanes`]).
 //!
 //! [`EmitOptions`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
@@ -324,8 +325,9 @@ fn unparse(tokens: TokenStream, what: &str) -> Result<String, CodegenError> {
     Ok(prettyplease::unparse(&file))
 }
 
-/// The helper items that kernels with [`EmittedKernel::fast_trig`] call (`sin_cos_n` and its exact fallback,
-/// from [`crate::trig`]), as private items for a generated file; emitted once per file.
+/// The helper items that kernels with [`EmittedKernel::fast_trig`] call (`sin_cos_n` and its
+/// exact fallback, from [`crate::trig`]), as private items for a generated file; emitted once
+/// per file.
 pub fn trig_items() -> Result<TokenStream, CodegenError> {
     let mut file: syn::File = syn::parse_str(include_str!("../trig.rs"))
         .map_err(|e| CodegenError::Internal(format!("trig.rs does not parse: {e}")))?;

@@ -85,9 +85,13 @@ pub(crate) struct SsaIr {
     pub(crate) batched: bool,
 }
 
-/// The SSA statements of the cone of `roots` (see `super::ssa_inner` for `batch_trig` and
-/// `lanes`; with `lanes` the sines and cosines of graph variables are computed before the
-/// loop by `sin_cos_lanes`, and `batch_trig` applies only without `lanes`).
+/// The SSA statements of the cone of `roots`, in node order. With `batch_trig` and `f64`,
+/// every sine and cosine of a graph variable (the joint angles) comes from one `sin_cos_n`
+/// call at the top ([`SsaIr::batched`] says whether it was emitted); other sin/cos and `f32`
+/// use the standard library, sin and cos of one argument sharing a `sin_cos` call. With
+/// `lanes` (f64 only; `batch_trig` then does not apply), the statements are the body of a
+/// loop over four lanes and the sines and cosines of graph variables are computed before it
+/// by `sin_cos_lanes` ([`SsaIr::pre`]), read as `t{n}[l]`.
 pub(crate) fn build(
     g: &Graph,
     roots: &[Id],
