@@ -194,6 +194,14 @@ pub enum InternalDefect {
         /// below `kernels`).
         argument: String,
     },
+    /// A placeholder the emitter put into formatted code is not found in it again.
+    #[error("{what}: placeholder `{marker}` not found")]
+    MissingPlaceholder {
+        /// Which text (`node kernels`, …).
+        what: &'static str,
+        /// The placeholder.
+        marker: String,
+    },
     /// Any other inconsistency, named by a fixed description.
     #[error("{0}")]
     Other(&'static str),

@@ -97,13 +97,13 @@ pub fn generate_with(
         let roots: Vec<graph::Id> = d.output_ids();
         check_finite_constants(&model.g, &roots, scene, &format!("kernel `{}`", d.name))?;
     }
-    let mut tokens = Vec::new();
+    let mut kernel_code = Vec::new();
     let mut reports = Vec::new();
     let mut trig_helper = false;
     for d in &defs {
         let e = emit::emit_kernel_with(&model.g, &model.layout, d, opts)?;
         trig_helper |= e.fast_trig;
-        tokens.push(e.tokens);
+        kernel_code.push(e.code);
         reports.push(KernelReport {
             name: d.name.clone(),
             ops: e.ops,
@@ -116,7 +116,7 @@ pub fn generate_with(
         &model.params,
         &defs,
         source_text,
-        tokens,
+        &kernel_code,
         with_contact,
         trig_helper,
         opts,

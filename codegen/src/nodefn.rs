@@ -25,7 +25,7 @@ use quote::quote;
 use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
-use crate::emit::{EmitSettings, Ssa, f64_tokens, lanes_items, ssa_inner};
+use crate::emit::{BODY_MARKER, BodyText, EmitSettings, body_text, lanes_items, splice_bodies};
 use crate::graph::{Graph, Id, Node};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
@@ -357,12 +357,13 @@ impl CompiledNode {
 }
 
 #[cfg(feature = "emit")]
-/// Tokens of one kernel function `fn name(local, fixed, w, out)` computing `roots` into
-/// `out[0..roots.len()]`; with `x4`, the batched variant computing four nodes at once: `local`,
-/// `w` and `out` then hold the four nodes' entries interleaved (node `l`'s entry `k` at
-/// `4·k + l`), `fixed` is shared, and the body is the scalar body in a loop over the lanes `l`
-/// ([`crate::emit::lanes`]). `uses_w`: whether `roots` read the weights (only then the
-/// batched kernel checks their length).
+/// The formatted text of one kernel function `fn name(local, fixed, w, out)` computing `roots`
+/// into `out[0..roots.len()]`; with `x4`, the batched variant computing four nodes at once:
+/// `local`, `w` and `out` then hold the four nodes' entries interleaved (node `l`'s entry `k`
+/// at `4·k + l`), `fixed` is shared, and the body is the scalar body in a loop over the lanes
+/// `l` ([`crate::emit::lanes`]). `uses_w`: whether `roots` read the weights (only then the
+/// batched kernel checks their length). The body is printed as text
+/// ([`crate::emit::body_text`]), the rest formatted by `prettyplease`.
 fn kernel_fn(
     name: &Ident,
     doc: &str,
@@ -370,60 +371,28 @@ fn kernel_fn(
     roots: &[Id],
     x4: bool,
     uses_w: bool,
-) -> TokenStream {
-    let lit = |i: u32| Literal::u32_unsuffixed(i);
-    let var_tokens = |v: u32| -> TokenStream {
-        match node.roles.get(v as usize).copied().unwrap_or(VarRole::Zero) {
-            VarRole::Local(l) if x4 => {
-                let i = lit(l);
-                quote!(local[#i][l])
-            }
-            VarRole::Local(l) => {
-                let i = lit(l);
-                quote!(local[#i])
-            }
-            VarRole::Fixed(k, _) => {
-                let i = lit(k);
-                quote!(fixed[#i])
-            }
-            VarRole::Weight(w) if x4 => {
-                let i = lit(w);
-                quote!(w[#i][l])
-            }
-            VarRole::Weight(w) => {
-                let i = lit(w);
-                quote!(w[#i])
-            }
-            VarRole::Zero => f64_tokens(0.0),
-        }
+) -> Result<String, CodegenError> {
+    use std::fmt::Write as _;
+    let var = |out: &mut String, v: u32| {
+        let lane = if x4 { "[l]" } else { "" };
+        let _ = match node.roles.get(v as usize).copied().unwrap_or(VarRole::Zero) {
+            VarRole::Local(l) => write!(out, "local[{l}]{lane}"),
+            VarRole::Fixed(k, _) => write!(out, "fixed[{k}]"),
+            VarRole::Weight(w) => write!(out, "w[{w}]{lane}"),
+            VarRole::Zero => write!(out, "0.0"),
+        };
     };
-    let Ssa {
-        pre,
-        mut stmts,
-        refs,
-        ops,
-    } = ssa_inner(
-        &node.graph,
-        roots,
-        &var_tokens,
-        &EmitSettings::default(),
-        false,
-        x4,
-    )
-    .0;
+    let lhs = |out: &mut String, k: usize| {
+        let _ = write!(out, "out[{k}]{}", if x4 { "[l]" } else { "" });
+    };
+    let BodyText { pre, body, ops } =
+        body_text(&node.graph, roots, &var, &lhs, &EmitSettings::default(), x4);
     let nl = Literal::usize_unsuffixed(node.locals.len());
     let nf = Literal::usize_unsuffixed(node.fixed.len());
     let no = Literal::usize_unsuffixed(roots.len());
-    for (k, id) in roots.iter().enumerate() {
-        let v = refs[id.index()].clone().unwrap_or_else(|| f64_tokens(0.0));
-        let i = Literal::usize_unsuffixed(k);
-        stmts.push(if x4 {
-            quote!(out[#i][l] = #v;)
-        } else {
-            quote!(out[#i] = #v;)
-        });
-    }
-    let body = if x4 {
+    let marker = Ident::new(BODY_MARKER, Span::call_site());
+    let pre_marker = Ident::new(PRE_MARKER, Span::call_site());
+    let tokens_body = if x4 {
         // Arrays of `[f64; 4]` (one per entry, its four lanes) make every index below
         // provably in bounds, so the loop has no exit but its end and vectorises.
         let nw = Literal::usize_unsuffixed(node.outputs.len());
@@ -438,9 +407,9 @@ fn kernel_fn(
             #load_w
             let out: &mut [[f64; 4]; #no] =
                 (&mut out.as_chunks_mut::<4>().0[..#no]).try_into().unwrap();
-            #(#pre)*
+            #pre_marker;
             for l in 0..4 {
-                #(#stmts)*
+                #marker;
             }
         }
     } else {
@@ -450,7 +419,7 @@ fn kernel_fn(
             let local = &local[..#nl];
             let fixed = &fixed[..#nf];
             let out = &mut out[..#no];
-            #(#stmts)*
+            #marker;
         }
     };
     let doc = if x4 {
@@ -466,24 +435,37 @@ fn kernel_fn(
             ops.temporaries
         )
     };
-    quote! {
+    let tokens = quote! {
         #[doc = #doc]
         #[allow(unused_variables, clippy::all)]
         fn #name(local: &[f64], fixed: &[f64], w: &[f64], out: &mut [f64]) {
-            #body
+            #tokens_body
         }
-    }
+    };
+    let bodies = if x4 {
+        vec![
+            (PRE_MARKER, 4, pre.as_str()),
+            (BODY_MARKER, 8, body.as_str()),
+        ]
+    } else {
+        vec![(BODY_MARKER, 4, body.as_str())]
+    };
+    splice_bodies(tokens, "emitted node kernel", &bodies)
 }
 
 #[cfg(feature = "emit")]
-/// Tokens of the three kernels of `node` (and, with `x4`, of their batched variants) and of
-/// its `NodeKernel` table entry.
+/// The placeholder statement of a batched kernel's statements before its lane loop.
+const PRE_MARKER: &str = "__bf_codegen_pre__";
+
+#[cfg(feature = "emit")]
+/// The text of the three kernels of `node` (and, with `x4`, of their batched variants) and
+/// the tokens of its `NodeKernel` table entry.
 fn node_tokens(
     name: &str,
     what: &str,
     node: &CompiledNode,
     x4: bool,
-) -> (TokenStream, TokenStream) {
+) -> Result<(String, TokenStream), CodegenError> {
     let id = |s: &str| Ident::new(&format!("{name}_{s}"), Span::call_site());
     let (fv, fj, fh) = (id("value"), id("jacobian"), id("hessian"));
     let d = &node.derivs;
@@ -492,20 +474,17 @@ fn node_tokens(
         format!("Jacobian values of the {what} node function, pattern order."),
         format!("Lower-triangle Lagrangian Hessian values of the {what} node function."),
     ];
-    let value = kernel_fn(&fv, &docs[0], node, &node.outputs, false, false);
-    let jac = kernel_fn(&fj, &docs[1], node, &d.jac_ids, false, false);
-    let hess = kernel_fn(&fh, &docs[2], node, &d.hess_ids, false, true);
-    let (batched, batched_entry) = if x4 {
+    let mut code = kernel_fn(&fv, &docs[0], node, &node.outputs, false, false)?;
+    code += &kernel_fn(&fj, &docs[1], node, &d.jac_ids, false, false)?;
+    code += &kernel_fn(&fh, &docs[2], node, &d.hess_ids, false, true)?;
+    let batched_entry = if x4 {
         let (bv, bj, bh) = (id("value_x4"), id("jacobian_x4"), id("hessian_x4"));
-        let value = kernel_fn(&bv, &docs[0], node, &node.outputs, true, false);
-        let jac = kernel_fn(&bj, &docs[1], node, &d.jac_ids, true, false);
-        let hess = kernel_fn(&bh, &docs[2], node, &d.hess_ids, true, true);
-        (
-            quote!(#value #jac #hess),
-            quote!(Some(NodeKernelX4 { value: #bv, jacobian: #bj, hessian: #bh })),
-        )
+        code += &kernel_fn(&bv, &docs[0], node, &node.outputs, true, false)?;
+        code += &kernel_fn(&bj, &docs[1], node, &d.jac_ids, true, false)?;
+        code += &kernel_fn(&bh, &docs[2], node, &d.hess_ids, true, true)?;
+        quote!(Some(NodeKernelX4 { value: #bv, jacobian: #bj, hessian: #bh }))
     } else {
-        (TokenStream::new(), quote!(None))
+        quote!(None)
     };
     let pairs = |p: &[(usize, usize)]| {
         let items = p.iter().map(|&(a, b)| {
@@ -537,7 +516,7 @@ fn node_tokens(
             x4: #batched_entry,
         },
     };
-    (quote!(#value #jac #hess #batched), entry)
+    Ok((code, entry))
 }
 
 /// One node function to emit: its kernel name prefix, a phrase for the docs, and the compiled
@@ -568,7 +547,7 @@ pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
         if entries.iter().any(|e| e.0 == n.node.fingerprint) {
             continue;
         }
-        let (f, e) = node_tokens(&n.name, &n.what, &n.node, n.x4);
+        let (f, e) = node_tokens(&n.name, &n.what, &n.node, n.x4)?;
         fns.push(f);
         entries.push((n.node.fingerprint, e));
     }
@@ -583,12 +562,16 @@ pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
         /// Every emitted node kernel, sorted by fingerprint (binary search).
         pub static NODE_KERNELS: &[NodeKernel] = &[#(#items)*];
         #helpers
-        #(#fns)*
     };
     let file: syn::File =
         syn::parse2(tokens).map_err(CodegenError::unparsable("emitted node kernels"))?;
     let mut out =
         String::from("// @generated by bf-codegen (nodefn::emit_node_kernels). Do not edit.\n");
     out.push_str(&prettyplease::unparse(&file));
+    // The kernels are formatted items already; `prettyplease` prints a file's items one after
+    // the other, so they follow the table as they would in one formatted file.
+    for f in &fns {
+        out.push_str(f);
+    }
     Ok(out)
 }

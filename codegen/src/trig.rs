@@ -40,7 +40,7 @@ pub fn sin_cos_n<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
 /// One lane of [`sin_cos_n`]: `(sin x, cos x, fast)`, where `fast` is false if `x` is outside
 /// the range in which the reduction below is accurate (the values are then meaningless).
 #[inline(always)]
-pub fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
+fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
     // 2/π and π/2 = PIO2_1 + PIO2_1T + O(2⁻⁸⁷) (fdlibm `__ieee754_rem_pio2`: pio2_1, pio2_1t).
     const FRAC_2_PI: f64 = std::f64::consts::FRAC_2_PI;
     const PIO2_1: f64 = 1.57079632673412561417e+00;
@@ -105,7 +105,7 @@ pub fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
 /// or not finite), recomputed by `f64::sin_cos`.
 #[cold]
 #[inline(never)]
-pub fn sin_cos_n_exact<const N: usize>(x: &[f64; N], sin: &mut [f64; N], cos: &mut [f64; N]) {
+fn sin_cos_n_exact<const N: usize>(x: &[f64; N], sin: &mut [f64; N], cos: &mut [f64; N]) {
     for i in 0..N {
         if !sin_cos_lane(x[i]).2 {
             (sin[i], cos[i]) = x[i].sin_cos();

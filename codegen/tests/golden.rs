@@ -239,3 +239,41 @@ fn planar_arm_matches_textbook_closed_forms() {
     assert_eq!(planar2::PARAM_NAMES, ["link2.mass"]);
     assert_eq!(planar2::PARAM_DEFAULTS, [0.7]);
 }
+
+/// The kernels' bodies are printed as text, not formatted: the code of every scene (and of
+/// the f32 and fused multiply-add variants) must still be exactly what `prettyplease` prints
+/// for it, so that the emitted text reads as formatted Rust and stays deterministic.
+#[test]
+fn every_scene_is_formatted_as_prettyplease_formats_it() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/../scenes");
+    let mut paths: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    paths.push(format!("{DIR}/planar2.toml").into());
+    assert!(paths.len() > 3, "scenes found: {paths:?}");
+    for path in paths {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let scene = Scene::from_toml_str(&text, path.to_str().unwrap()).unwrap();
+        for opts in [
+            EmitSettings::default(),
+            F32_FMA,
+            EmitSettings {
+                float: FloatTy::F64,
+                fma: true,
+            },
+        ] {
+            let code = generate_with(&scene, &text, &opts).unwrap().code;
+            // The header comments (which syn drops) end at the first item.
+            let at = code.find("\n/// Number of joints.").unwrap() + 1;
+            let file = syn::parse_file(&code).unwrap();
+            let formatted = prettyplease::unparse(&file);
+            assert!(
+                formatted == code[at..],
+                "{}, {opts:?}: emitted code is not what prettyplease prints",
+                path.display()
+            );
+        }
+    }
+}

@@ -8,8 +8,8 @@
 //! vectoriser turns the loop into SIMD code (two lanes per SSE2 register on the baseline
 //! x86-64 target) — stable Rust without `unsafe`. Calls inside the loop would keep it scalar,
 //! so the sines and cosines of graph variables (the joint angles) are computed before the loop,
-//! four lanes per angle, by [`sin_cos_lanes`] (kernels on the standard library's sin/cos) or
-//! by `sin_cos_n` itself ([`crate::trig`], whose lanes are independent).
+//! four lanes per angle, by [`sin_cos_lanes`]: the standard library's, as in the interpreter
+//! that the node kernels must match bitwise.
 //!
 //! The function below is emitted verbatim into the generated file of the node kernels
 //! ([`crate::nodefn::emit_node_kernels`]); this module is the one source, compiled and tested

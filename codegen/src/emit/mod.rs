@@ -1,10 +1,14 @@
-//! Rust emitter: graph cone of a kernel → SSA `let` bindings → `quote!` tokens → `syn::File`
-//! → `prettyplease` (`docs/architecture.md`, "Emit": SSA avoids the token-pasting
-//! precedence pitfall). Constants are printed with Rust's shortest round-trip formatting, so
-//! every `f64` survives exactly. In `f64` kernels the sines and cosines of all joint angles come
-//! from one call of the vectorised helper `sin_cos_n` ([`crate::trig`], emitted once per file
-//! by [`trig_items`]); elsewhere sin/cos of one argument share a `sin_cos` call. The batched
-//! node kernels put the scalar body in a loop over four lanes ([`lanes`]).
+//! Rust emitter: graph cone of a kernel → SSA `let` bindings (module `ssa`; one operation per
+//! binding, which avoids the token-pasting precedence pitfall, `docs/architecture.md`,
+//! "Emit"). The bindings of the dynamics kernels are printed as text in the layout
+//! `prettyplease` gives them; the signatures, docs and the file's other items go through
+//! `quote!` tokens → `syn::File` → `prettyplease`. The node kernels (`crate::nodefn`) print
+//! their bindings the same way (`body_text`). Constants are printed with Rust's shortest
+//! round-trip formatting, so every `f64` survives exactly. In `f64` kernels the sines and
+//! cosines of all joint angles come from one call of the vectorised helper `sin_cos_n`
+//! ([`crate::trig`], emitted once per file by [`trig_items`]); elsewhere sin/cos of one
+//! argument share a `sin_cos` call. The batched node kernels put the scalar body in a loop
+//! over four lanes ([`lanes`]).
 //!
 //! [`EmitSettings`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
@@ -13,18 +17,20 @@
 
 use std::fmt::Write as _;
 use std::str::FromStr;
+use std::sync::OnceLock;
 
 use proc_macro2::{Ident, Literal, Span, TokenStream};
-use quote::{format_ident, quote};
+use quote::quote;
 
-use crate::CodegenError;
-use crate::graph::{Graph, Id, Node};
+use crate::graph::{Graph, Id};
 use crate::kernels::{Arg, CONTACT_FIELDS, Dim, KernelDef, OutKind};
 use crate::report::OpCounts;
 use crate::robot::Layout;
+use crate::{CodegenError, InternalDefect};
 
 mod dispatch;
 pub mod lanes;
+mod ssa;
 use dispatch::{eval_flat_arm, eval_into_arm};
 
 /// Floating-point type of the emitted code.
@@ -106,30 +112,14 @@ fn dim_value(d: Dim, nq: usize) -> usize {
     }
 }
 
-/// Element access paths (`[i][j]` suffixes) of an array with `dims`, row-major.
-fn index_paths(dims: &[Dim], nq: usize) -> Vec<TokenStream> {
-    let mut paths = vec![TokenStream::new()];
-    for &d in dims {
-        let n = dim_value(d, nq);
-        let mut next = Vec::with_capacity(paths.len() * n);
-        for p in &paths {
-            for i in 0..n {
-                let l = Literal::usize_unsuffixed(i);
-                next.push(quote!(#p[#l]));
-            }
-        }
-        paths = next;
-    }
-    paths
-}
-
 /// Kernels with at most this many temporaries are marked `#[inline]`.
 pub const INLINE_MAX_TEMPORARIES: usize = 1000;
 
-/// Emitted body of one kernel plus its operation counts.
+/// One emitted kernel: its function item as formatted text, plus its operation counts.
 pub struct EmittedKernel {
-    /// The function item tokens.
-    pub tokens: TokenStream,
+    /// The function item (doc comment, attributes, signature, body), formatted as
+    /// `prettyplease` formats it, ending in a newline.
+    pub code: String,
     /// Operation counts.
     pub ops: OpCounts,
     /// Whether the kernel calls the batched sine–cosine helper (`sin_cos_n`, see
@@ -137,32 +127,51 @@ pub struct EmittedKernel {
     pub fast_trig: bool,
 }
 
-fn var_tokens(layout: &Layout, v: u32) -> TokenStream {
+/// Writes the text of graph variable `v` of a dynamics kernel (`q[i]`, `qd[i]`, `omega[i]`,
+/// `eps`, `p[i]`, `qdd[i]`, `tau[i]`).
+fn write_var(out: &mut String, layout: &Layout, v: u32) {
     let v = v as usize;
     let nq = layout.nq;
-    let lit = |i: usize| Literal::usize_unsuffixed(i);
-    if v < nq {
-        let i = lit(v);
-        quote!(q[#i])
+    let (name, i) = if v < nq {
+        ("q", v)
     } else if v < 2 * nq {
-        let i = lit(v - nq);
-        quote!(qd[#i])
+        ("qd", v - nq)
     } else if v < 2 * nq + 3 {
-        let i = lit(v - 2 * nq);
-        quote!(omega[#i])
+        ("omega", v - 2 * nq)
     } else if v == 2 * nq + 3 {
-        quote!(eps)
+        out.push_str("eps");
+        return;
     } else if v < layout.n_vars() {
-        let i = lit(v - 2 * nq - 4);
-        quote!(p[#i])
+        ("p", v - 2 * nq - 4)
     } else if v < layout.n_vars() + nq {
-        let i = lit(v - layout.n_vars());
-        quote!(qdd[#i])
+        ("qdd", v - layout.n_vars())
     } else {
-        let i = lit(v - layout.n_vars() - nq);
-        quote!(tau[#i])
-    }
+        ("tau", v - layout.n_vars() - nq)
+    };
+    out.push_str(name);
+    out.push('[');
+    ssa::push_u32(out, i as u32);
+    out.push(']');
 }
+
+/// Element access paths (`[i][j]` suffixes) of an array with `dims`, row-major, as text.
+fn index_texts(dims: &[Dim], nq: usize) -> Vec<String> {
+    let mut paths = vec![String::new()];
+    for &d in dims {
+        let n = dim_value(d, nq);
+        let mut next = Vec::with_capacity(paths.len() * n);
+        for p in &paths {
+            for i in 0..n {
+                next.push(format!("{p}[{i}]"));
+            }
+        }
+        paths = next;
+    }
+    paths
+}
+
+/// The placeholder statement of a kernel's body while its signature is formatted.
+pub(crate) const BODY_MARKER: &str = "__bf_codegen_body__";
 
 /// Emit one kernel as a Rust function (standard options).
 pub fn emit_kernel(
@@ -174,6 +183,9 @@ pub fn emit_kernel(
 }
 
 /// Emit one kernel as a Rust function with the variant `opts`.
+///
+/// The body is printed as text (module `ssa`); the doc comment, attributes and signature are
+/// formatted by `prettyplease` around a placeholder statement that the body then replaces.
 pub fn emit_kernel_with(
     g: &Graph,
     layout: &Layout,
@@ -186,15 +198,17 @@ pub fn emit_kernel_with(
         .iter()
         .flat_map(|o| o.ids.iter().copied())
         .collect();
-    let (
-        Ssa {
-            mut stmts,
-            refs,
-            ops,
-            ..
-        },
-        fast_trig,
-    ) = ssa_inner(g, &roots, &|v| var_tokens(layout, v), opts, true, false);
+    let ir = ssa::build(g, &roots, opts, true, false);
+    let ops = ir.ops;
+    let var = |out: &mut String, v: u32| write_var(out, layout, v);
+    let printer = ssa::TextPrinter {
+        ft: opts.float,
+        var: &var,
+    };
+    let mut body = String::with_capacity(32 * (ir.stmts.len() + roots.len()));
+    for s in &ir.stmts {
+        ssa::write_stmt(&mut body, &printer, s, 4);
+    }
 
     // Output assignments.
     let mut params: Vec<TokenStream> = Vec::new();
@@ -209,38 +223,40 @@ pub fn emit_kernel_with(
             Arg::P => quote!(p: &[#ft; NP]),
         });
     }
+    let mut line = String::new();
+    let mut assign = |body: &mut String, lhs: std::fmt::Arguments, id: Id| {
+        let v = ir.refs[id.index()].expect("internal: output not emitted");
+        line.clear();
+        let _ = write!(line, "{lhs} = ");
+        printer.operand(&mut line, v);
+        line.push(';');
+        ssa::push_line(body, &line, 4);
+    };
     for o in &k.outputs {
         let name = Ident::new(&o.name, Span::call_site());
-        let val = |id: Id| {
-            refs[id.index()]
-                .clone()
-                .expect("internal: output not emitted")
-        };
         match &o.kind {
             OutKind::Scalar => {
                 params.push(quote!(#name: &mut #ft));
-                let v = val(o.ids[0]);
-                stmts.push(quote!(*#name = #v;));
+                assign(&mut body, format_args!("*{}", o.name), o.ids[0]);
             }
             OutKind::Array(dims) => {
                 let ty = array_type(dims, opts.float);
                 params.push(quote!(#name: &mut #ty));
-                for (path, &id) in index_paths(dims, layout.nq).iter().zip(&o.ids) {
-                    let v = val(id);
-                    stmts.push(quote!(#name #path = #v;));
+                for (path, &id) in index_texts(dims, layout.nq).iter().zip(&o.ids) {
+                    assign(&mut body, format_args!("{}{path}", o.name), id);
                 }
             }
             OutKind::Contact => {
                 params.push(quote!(#name: &mut Contact));
                 let mut it = o.ids.iter();
                 for (field, dims, _) in CONTACT_FIELDS {
-                    let f = Ident::new(field, Span::call_site());
-                    for path in index_paths(dims, layout.nq) {
+                    for path in index_texts(dims, layout.nq) {
                         let id = *it.next().ok_or_else(|| {
-                            CodegenError::Internal("contact output size mismatch".into())
+                            CodegenError::Internal(InternalDefect::Other(
+                                "contact output size mismatch",
+                            ))
                         })?;
-                        let v = val(id);
-                        stmts.push(quote!(#name.#f #path = #v;));
+                        assign(&mut body, format_args!("{}.{field}{path}", o.name), id);
                     }
                 }
             }
@@ -286,33 +302,33 @@ pub fn emit_kernel_with(
     } else {
         TokenStream::new()
     };
+    let marker = Ident::new(BODY_MARKER, Span::call_site());
     let tokens = quote! {
         #(#docs)*
         #inline
         #[allow(unused_variables)]
         pub fn #fname(#(#params),*) {
-            #(#stmts)*
+            #marker;
         }
     };
+    let code = splice_bodies(tokens, "emitted kernel", &[(BODY_MARKER, 4, &body)])?;
     Ok(EmittedKernel {
-        tokens,
+        code,
         ops,
-        fast_trig,
+        fast_trig: ir.batched,
     })
 }
 
-/// SSA statements computing every node of the cone of `roots` (in node order), and the
-/// tokens that name each node's value (`refs[i]`, `None` outside the cone).
-pub(crate) struct Ssa {
-    /// Statements before the lane loop (only with `lanes`).
-    pub(crate) pre: Vec<TokenStream>,
-    pub(crate) stmts: Vec<TokenStream>,
-    pub(crate) refs: Vec<Option<TokenStream>>,
-    pub(crate) ops: OpCounts,
+/// Parses `tokens` as items and formats them with `prettyplease`; `what` names them in the
+/// error.
+fn unparse(tokens: TokenStream, what: &'static str) -> Result<String, CodegenError> {
+    let file: syn::File = syn::parse2(tokens).map_err(CodegenError::unparsable(what))?;
+    Ok(prettyplease::unparse(&file))
 }
 
-/// The helper items that code from [`ssa_inner`] with `batch_trig` calls (`sin_cos_n` and its exact fallback,
-/// from [`crate::trig`]), as private items for a generated file; emitted once per file.
+/// The helper items that kernels with [`EmittedKernel::fast_trig`] call (`sin_cos_n` and its
+/// exact fallback, from [`crate::trig`]), as private items for a generated file; emitted once
+/// per file.
 pub fn trig_items() -> Result<TokenStream, CodegenError> {
     let mut file: syn::File =
         syn::parse_str(include_str!("../trig.rs")).map_err(CodegenError::unparsable("trig.rs"))?;
@@ -325,6 +341,19 @@ pub fn trig_items() -> Result<TokenStream, CodegenError> {
         out.extend(quote!(#item));
     }
     Ok(out)
+}
+
+/// [`trig_items`] formatted by `prettyplease`; the same text for every file, so formatted
+/// once per process.
+fn trig_text() -> Result<&'static str, CodegenError> {
+    static TEXT: OnceLock<Result<String, String>> = OnceLock::new();
+    TEXT.get_or_init(|| {
+        trig_items()
+            .and_then(|t| unparse(t, "trig.rs"))
+            .map_err(|e| e.to_string())
+    })
+    .as_deref()
+    .map_err(|_| CodegenError::Internal(InternalDefect::Other("trig.rs does not format")))
 }
 
 /// The items of [`lanes`] (`sin_cos_lanes`, which the batched node kernels call) for a
@@ -343,242 +372,90 @@ pub fn lanes_items() -> Result<TokenStream, CodegenError> {
     Ok(out)
 }
 
-/// The `let` bindings of the cone of `roots`; graph variables are printed by `var_tokens`.
-/// Shared by the dynamics kernels and the OCP node kernels (`crate::nodefn`), so both compute
-/// every node with the same `f64` operation. Without `batch_trig`, sin/cos are computed by the
-/// standard library (`sin_cos` per angle); with `batch_trig` and `f64`, every sine and cosine
-/// of a graph variable (the joint angles) is taken from one call `sin_cos_n([…])` at the top
-/// of the body, and the returned flag says whether that call was emitted (the file must then
-/// contain [`trig_items`]). Other sin/cos arguments and `f32` use the standard library.
+/// A kernel body as text: statements before the lane loop (only with `lanes`), the
+/// statements and output assignments, and the operation counts.
+pub(crate) struct BodyText {
+    /// Statements before the lane loop, indented for the function body.
+    pub(crate) pre: String,
+    /// Statements and output assignments, indented for the function body (or, with
+    /// `lanes`, for the loop's body).
+    pub(crate) body: String,
+    /// Operation counts.
+    pub(crate) ops: OpCounts,
+}
+
+/// The `let` bindings of the cone of `roots` and the assignment of every root, as text;
+/// graph variables are printed by `var`, and `lhs(out, k)` writes the place root `k` is
+/// assigned to. For the OCP node kernels (`crate::nodefn`): every node is computed with the
+/// same `f64` operation as in the dynamics kernels and the interpreter, sin/cos by the
+/// standard library (`sin_cos` per angle).
 ///
 /// With `lanes` (f64 only), the statements are the body of a loop over four lanes `l`
-/// ([`lanes`]; `var_tokens` must then name lane `l`'s value): every sine and cosine of a graph
-/// variable is instead computed before the loop, four lanes at once (`sin_cos_n` with
-/// `batch_trig`, else `sin_cos_lanes`), in [`Ssa::pre`], and read as `name[l]` in the loop.
-pub(crate) fn ssa_inner(
+/// ([`lanes`]; `var` must then name lane `l`'s value): every sine and cosine of a graph
+/// variable is instead computed before the loop, four lanes at once by `sin_cos_lanes`, in
+/// [`BodyText::pre`], and read as `name[l]` in the loop.
+pub(crate) fn body_text(
     g: &Graph,
     roots: &[Id],
-    var_tokens: &dyn Fn(u32) -> TokenStream,
+    var: &dyn Fn(&mut String, u32),
+    lhs: &dyn Fn(&mut String, usize),
     opts: &EmitSettings,
-    batch_trig: bool,
     lanes: bool,
-) -> (Ssa, bool) {
-    let batch_trig = batch_trig && opts.float == FloatTy::F64;
+) -> BodyText {
+    let ir = ssa::build(g, roots, opts, false, lanes);
+    let printer = ssa::TextPrinter {
+        ft: opts.float,
+        var,
+    };
     let lanes = lanes && opts.float == FloatTy::F64;
-    let mut batched = false;
-    let ft = opts.float.tokens();
-    // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
-    let as_mul = |id: Id| -> Option<(Id, Id)> {
-        match g.node(id) {
-            Node::Mul(a, b) if opts.fma => Some((a, b)),
-            _ => None,
-        }
-    };
-    let mark = g.cone(roots);
-    let max = roots.iter().map(|r| r.index() + 1).max().unwrap_or(0);
-    let mut refs: Vec<Option<TokenStream>> = vec![None; max];
-    let mut stmts: Vec<TokenStream> = Vec::new();
-    let mut pre: Vec<TokenStream> = Vec::new();
-    let mut ops = OpCounts::default();
-    let mut counter = 0usize;
-    let fresh = |counter: &mut usize| {
-        let id = format_ident!("t{}", *counter);
-        *counter += 1;
-        id
-    };
-    if batch_trig || lanes {
-        // The angles (graph variables) whose sin or cos is in the cone, in node order.
-        let mut angles: Vec<Id> = Vec::new();
-        let mut args: Vec<TokenStream> = Vec::new();
-        for i in 0..max {
-            if let Node::Sin(a) | Node::Cos(a) = g.node(Id(i as u32))
-                && mark[i]
-                && let Node::Var(v) = g.node(a)
-                && !angles.contains(&a)
-            {
-                angles.push(a);
-                args.push(var_tokens(v));
-            }
-        }
-        if !angles.is_empty() {
-            let mut sins = Vec::new();
-            let mut coss = Vec::new();
-            for _ in &angles {
-                sins.push(fresh(&mut counter));
-                coss.push(fresh(&mut counter));
-            }
-            if lanes {
-                let helper = if batch_trig {
-                    quote!(sin_cos_n::<4>)
-                } else {
-                    quote!(sin_cos_lanes)
-                };
-                for ((s, c), x) in sins.iter().zip(&coss).zip(&args) {
-                    pre.push(quote!(let (#s, #c) = #helper(std::array::from_fn(|l| #x));));
-                }
-            } else {
-                stmts.push(quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);));
-            }
-            batched = batch_trig;
-            ops.sincos += angles.len();
-            ops.temporaries += 2 * angles.len();
-            for i in 0..max {
-                let (a, is_sin) = match g.node(Id(i as u32)) {
-                    Node::Sin(a) => (a, true),
-                    Node::Cos(a) => (a, false),
-                    _ => continue,
-                };
-                if !mark[i] {
-                    continue;
-                }
-                if let Some(j) = angles.iter().position(|&b| b == a) {
-                    let name = if is_sin { &sins[j] } else { &coss[j] };
-                    refs[i] = Some(if lanes {
-                        quote!(#name[l])
-                    } else {
-                        quote!(#name)
-                    });
-                }
-            }
-        }
+    let indent = if lanes { 8 } else { 4 };
+    let mut pre = String::new();
+    for s in &ir.pre {
+        ssa::write_stmt(&mut pre, &printer, s, 4);
     }
-    for i in 0..max {
-        if !mark[i] || refs[i].is_some() {
-            continue;
-        }
-        let node = g.node(Id(i as u32));
-        let r = |id: Id, refs: &Vec<Option<TokenStream>>| -> TokenStream {
-            refs[id.index()]
-                .clone()
-                .expect("internal: child emitted before parent")
-        };
-        let expr: TokenStream = match node {
-            Node::Const(b) => {
-                refs[i] = Some(float_tokens(f64::from_bits(b), opts.float));
-                continue;
-            }
-            Node::Var(v) => {
-                refs[i] = Some(var_tokens(v));
-                continue;
-            }
-            Node::Sin(a) | Node::Cos(a) => {
-                let x = r(a, &refs);
-                let is_sin = matches!(node, Node::Sin(_));
-                // The partner node (cos for sin and vice versa), if it is in the cone.
-                let partner = (i + 1..max).find(|&j| {
-                    mark[j]
-                        && match g.node(Id(j as u32)) {
-                            Node::Cos(b) if is_sin => b == a,
-                            Node::Sin(b) if !is_sin => b == a,
-                            _ => false,
-                        }
-                });
-                ops.sincos += 1;
-                match partner {
-                    Some(j) => {
-                        let s = fresh(&mut counter);
-                        let c = fresh(&mut counter);
-                        stmts.push(quote!(let (#s, #c) = #ft::sin_cos(#x);));
-                        ops.temporaries += 2;
-                        let (si, ci) = if is_sin { (i, j) } else { (j, i) };
-                        refs[si] = Some(quote!(#s));
-                        refs[ci] = Some(quote!(#c));
-                    }
-                    None => {
-                        let t = fresh(&mut counter);
-                        if is_sin {
-                            stmts.push(quote!(let #t = #ft::sin(#x);));
-                        } else {
-                            stmts.push(quote!(let #t = #ft::cos(#x);));
-                        }
-                        ops.temporaries += 1;
-                        refs[i] = Some(quote!(#t));
-                    }
-                }
-                continue;
-            }
-            Node::Add(a, b) => {
-                ops.add += 1;
-                if let Some((m0, m1)) = as_mul(a) {
-                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(b, &refs));
-                    quote!(#ft::mul_add(#x0, #x1, #y))
-                } else if let Some((m0, m1)) = as_mul(b) {
-                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(a, &refs));
-                    quote!(#ft::mul_add(#x0, #x1, #y))
-                } else {
-                    let (x, y) = (r(a, &refs), r(b, &refs));
-                    quote!(#x + #y)
-                }
-            }
-            Node::Sub(a, b) => {
-                ops.add += 1;
-                if let Some((m0, m1)) = as_mul(a) {
-                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(b, &refs));
-                    quote!(#ft::mul_add(#x0, #x1, -#y))
-                } else if let Some((m0, m1)) = as_mul(b) {
-                    let (x0, x1, y) = (r(m0, &refs), r(m1, &refs), r(a, &refs));
-                    quote!(#ft::mul_add(-#x0, #x1, #y))
-                } else {
-                    let (x, y) = (r(a, &refs), r(b, &refs));
-                    quote!(#x - #y)
-                }
-            }
-            Node::Mul(a, b) => {
-                ops.mul += 1;
-                let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(#x * #y)
-            }
-            Node::Div(a, b) => {
-                ops.div += 1;
-                let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(#x / #y)
-            }
-            Node::Neg(a) => {
-                ops.neg += 1;
-                let x = r(a, &refs);
-                quote!(-#x)
-            }
-            Node::Sqrt(a) => {
-                ops.sqrt += 1;
-                let x = r(a, &refs);
-                quote!(#ft::sqrt(#x))
-            }
-            Node::Abs(a) => {
-                ops.other += 1;
-                let x = r(a, &refs);
-                quote!(#ft::abs(#x))
-            }
-            Node::Min(a, b) => {
-                ops.other += 1;
-                let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(#ft::min(#x, #y))
-            }
-            Node::Max(a, b) => {
-                ops.other += 1;
-                let (x, y) = (r(a, &refs), r(b, &refs));
-                quote!(#ft::max(#x, #y))
-            }
-            Node::IfLt(a, b, t, f) => {
-                ops.other += 1;
-                let (x, y, tt, ff) = (r(a, &refs), r(b, &refs), r(t, &refs), r(f, &refs));
-                quote!(if #x < #y { #tt } else { #ff })
-            }
-        };
-        let t = fresh(&mut counter);
-        stmts.push(quote!(let #t = #expr;));
-        ops.temporaries += 1;
-        refs[i] = Some(quote!(#t));
+    let mut body = String::with_capacity(32 * (ir.stmts.len() + roots.len()));
+    for s in &ir.stmts {
+        ssa::write_stmt(&mut body, &printer, s, indent);
     }
+    let mut line = String::new();
+    for (k, id) in roots.iter().enumerate() {
+        line.clear();
+        lhs(&mut line, k);
+        line.push_str(" = ");
+        match ir.refs[id.index()] {
+            Some(v) => printer.operand(&mut line, v),
+            None => ssa::write_float(&mut line, 0.0, opts.float),
+        }
+        line.push(';');
+        ssa::push_line(&mut body, &line, indent);
+    }
+    BodyText {
+        pre,
+        body,
+        ops: ir.ops,
+    }
+}
 
-    (
-        Ssa {
-            pre,
-            stmts,
-            refs,
-            ops,
-        },
-        batched,
-    )
+/// Formats the item `tokens` with `prettyplease` and replaces each placeholder statement
+/// `marker;` of its body (a path expression statement, at the given indentation) by the text
+/// that goes with it: so that large bodies printed as text need no round trip through `syn`.
+pub(crate) fn splice_bodies(
+    tokens: TokenStream,
+    what: &'static str,
+    bodies: &[(&str, usize, &str)],
+) -> Result<String, CodegenError> {
+    let mut item = unparse(tokens, what)?;
+    for &(marker, indent, text) in bodies {
+        let line = format!("{:indent$}{marker};\n", "");
+        let at = item.find(&line).ok_or_else(|| {
+            CodegenError::Internal(InternalDefect::MissingPlaceholder {
+                what,
+                marker: marker.to_string(),
+            })
+        })?;
+        item.replace_range(at..at + line.len(), text);
+    }
+    Ok(item)
 }
 
 /// Emit the whole scene module file (standard options).
@@ -589,7 +466,7 @@ pub fn emit_file(
     params: &[(String, f64)],
     defs: &[KernelDef],
     source_text: &str,
-    kernel_tokens: Vec<TokenStream>,
+    kernel_code: &[String],
     with_contact: bool,
     trig_helper: bool,
 ) -> Result<String, CodegenError> {
@@ -599,15 +476,16 @@ pub fn emit_file(
         params,
         defs,
         source_text,
-        kernel_tokens,
+        kernel_code,
         with_contact,
         trig_helper,
         &EmitSettings::default(),
     )
 }
 
-/// Emit the whole scene module file; `opts.float` sets the type of `PARAM_DEFAULTS`, of the
-/// `Contact` fields and of `eval_flat` (the kernel tokens must use the same options);
+/// Emit the whole scene module file around the kernels' items `kernel_code`
+/// ([`EmittedKernel::code`]); `opts.float` sets the type of `PARAM_DEFAULTS`, of the
+/// `Contact` fields and of `eval_flat` (the kernels must use the same options);
 /// `trig_helper` adds [`trig_items`] (needed when a kernel has [`EmittedKernel::fast_trig`]).
 #[allow(clippy::too_many_arguments)]
 pub fn emit_file_with(
@@ -616,7 +494,7 @@ pub fn emit_file_with(
     params: &[(String, f64)],
     defs: &[KernelDef],
     source_text: &str,
-    kernel_tokens: Vec<TokenStream>,
+    kernel_code: &[String],
     with_contact: bool,
     trig_helper: bool,
     opts: &EmitSettings,
@@ -651,12 +529,10 @@ pub fn emit_file_with(
     } else {
         TokenStream::new()
     };
-    let trig = if trig_helper {
-        trig_items()?
-    } else {
-        TokenStream::new()
-    };
-    let tokens = quote! {
+    let trig = if trig_helper { trig_text()? } else { "" };
+    // The items before and after the kernels are formatted separately: `prettyplease` prints
+    // the items of a file one after the other, so the kernels' text fits between them.
+    let head = quote! {
         /// Number of joints.
         pub const NQ: usize = #nq_l;
         /// Number of runtime parameters.
@@ -672,8 +548,8 @@ pub fn emit_file_with(
         /// The scene file's text.
         pub const SCENE_TOML: &str = #source_text;
         #contact
-        #trig
-        #(#kernel_tokens)*
+    };
+    let tail = quote! {
         /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
         /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.
         /// Kernels taking `qdd` or `tau` get zeros (see `eval_flat_u`).
@@ -727,9 +603,10 @@ pub fn emit_file_with(
             }
         }
     };
-    let file: syn::File = syn::parse2(tokens).map_err(CodegenError::unparsable("emitted code"))?;
-    let body = prettyplease::unparse(&file);
-    let mut out = String::new();
+    let head = unparse(head, "emitted code")?;
+    let tail = unparse(tail, "emitted code")?;
+    let kernels_len: usize = kernel_code.iter().map(String::len).sum();
+    let mut out = String::with_capacity(head.len() + trig.len() + kernels_len + tail.len() + 256);
     out.push_str("// @generated by bf-codegen from scene `");
     out.push_str(scene_name);
     out.push_str("`. Do not edit: regenerate with `ball-finger generate`.\n");
@@ -737,6 +614,11 @@ pub fn emit_file_with(
         "// Conventions: standard DH unless the scene says otherwise, world axes, SI units,\n\
          // matrices row-major (see docs/kernels.md).\n",
     );
-    out.push_str(&body);
+    out.push_str(&head);
+    out.push_str(trig);
+    for k in kernel_code {
+        out.push_str(k);
+    }
+    out.push_str(&tail);
     Ok(out)
 }
