@@ -2,7 +2,7 @@
 //! whole solves timed by criterion, plus a per-iteration breakdown (function evaluations,
 //! derivative evaluations, KKT assembly, factorization, solves, line search) printed once from
 //! the solver's own `Timing`; and the `periodic-qc` KKT (hp-Radau 3 × 10 and LG 30) factored
-//! and solved by the `SparseLdlt` backends (supernodal, simplicial, faer supernodal),
+//! and solved by the `SparseLdlt` backends (supernodal, simplicial, faer supernodal, multifrontal),
 //! compared by thread CPU time round-robin and by criterion (`kkt_periodic_qc_*`).
 //!
 //! Quick run: `cargo bench --bench ipm -- --warm-up-time 1 --measurement-time 5`
@@ -137,14 +137,16 @@ fn thread_cpu_seconds() -> f64 {
 /// constraint-aware order, 2 × 2 pivot pairs)` (`block` = the supernodal kernel, `simplicial` =
 /// the prepared faer-identical up-looking path, `auto` = the default choice; `_amd` = plain
 /// AMD, `_cav` = AMD on (variable, row) pairs, `_pairs` = AMD with the rows it would eliminate
-/// bare delayed into 2 × 2 (variable, row) pivots).
-const VARIANTS: [(&str, LdltBackend, bool, bool); 6] = [
+/// bare delayed into 2 × 2 (variable, row) pivots; `multifrontal` = threshold Bunch–Kaufman
+/// pivoting with delayed pivots on AMD's order).
+const VARIANTS: [(&str, LdltBackend, bool, bool); 7] = [
     ("auto_amd", LdltBackend::Auto, false, false),
     ("auto_pairs", LdltBackend::Auto, true, true),
     ("auto_cav", LdltBackend::Auto, true, false),
     ("block", LdltBackend::Supernodal, false, false),
     ("simplicial", LdltBackend::Simplicial, false, false),
     ("faer_supernodal", LdltBackend::FaerSupernodal, false, false),
+    ("multifrontal", LdltBackend::Multifrontal, false, false),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
@@ -195,14 +197,16 @@ fn bench_kkt(c: &mut Criterion) {
             }
         }
         for ((v, s), b) in VARIANTS.iter().zip(&mut solvers).zip(&best) {
+            let inertia = s.factor(&pat.mat.values);
+            let (delayed, two, stat) = s.pivot_statistics();
             println!(
                 "periodic-qc/{label} KKT {}: dim {dim}, nnz(tril K) {}, nnz(L) {}, flops {:.3e}, inertia {:?}; \
-                 CPU time per factor {:.0} us, per solve {:.1} us",
+                 CPU time per factor {:.0} us, per solve {:.1} us; delayed {delayed}, 2x2 {two}, static {stat}",
                 v.0,
                 pat.mat.row_idx.len(),
                 s.factor_nnz(),
                 s.factor_flops(),
-                s.factor(&pat.mat.values),
+                inertia,
                 b.0,
                 b.1
             );
@@ -210,7 +214,7 @@ fn bench_kkt(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("kkt_periodic_qc_{label}"));
         g.sample_size(20);
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
-            if !v.0.starts_with("auto") {
+            if !v.0.starts_with("auto") && v.0 != "multifrontal" {
                 continue;
             }
             g.bench_function(format!("factor_{}", v.0), |b| {
