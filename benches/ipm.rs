@@ -134,19 +134,46 @@ fn thread_cpu_seconds() -> f64 {
 }
 
 /// Backends and orderings of `SparseLdlt` compared on one KKT pattern: `(label, backend,
-/// constraint-aware order, 2 × 2 pivot pairs)` (`block` = the supernodal kernel, `simplicial` =
-/// the prepared faer-identical up-looking path, `auto` = the default choice; `_amd` = plain
-/// AMD, `_cav` = AMD on (variable, row) pairs, `_pairs` = AMD with the rows it would eliminate
-/// bare delayed into 2 × 2 (variable, row) pivots; `multifrontal` = threshold Bunch–Kaufman
-/// pivoting with delayed pivots on AMD's order).
-const VARIANTS: [(&str, LdltBackend, bool, bool); 7] = [
-    ("auto_amd", LdltBackend::Auto, false, false),
-    ("auto_pairs", LdltBackend::Auto, true, true),
-    ("auto_cav", LdltBackend::Auto, true, false),
-    ("block", LdltBackend::Supernodal, false, false),
-    ("simplicial", LdltBackend::Simplicial, false, false),
-    ("faer_supernodal", LdltBackend::FaerSupernodal, false, false),
-    ("multifrontal", LdltBackend::Multifrontal, false, false),
+/// constraint-aware order, 2 × 2 pivot pairs, pivot threshold)` (`block` = the supernodal
+/// kernel, `simplicial` = the prepared faer-identical up-looking path, `auto` = the default
+/// choice; `_amd` = plain AMD, `_cav` = AMD on (variable, row) pairs, `_pairs` = AMD with the
+/// rows it would eliminate bare delayed into 2 × 2 (variable, row) pivots; `multifrontal_u*` =
+/// threshold Bunch–Kaufman pivoting with delayed pivots on AMD's order with threshold u, the
+/// threshold used by the other backends is irrelevant).
+const VARIANTS: [(&str, LdltBackend, bool, bool, f64); 9] = [
+    ("auto_amd", LdltBackend::Auto, false, false, 0.0),
+    ("auto_pairs", LdltBackend::Auto, true, true, 0.0),
+    ("auto_cav", LdltBackend::Auto, true, false, 0.0),
+    ("block", LdltBackend::Supernodal, false, false, 0.0),
+    ("simplicial", LdltBackend::Simplicial, false, false, 0.0),
+    (
+        "faer_supernodal",
+        LdltBackend::FaerSupernodal,
+        false,
+        false,
+        0.0,
+    ),
+    (
+        "multifrontal_u1e-2",
+        LdltBackend::Multifrontal,
+        false,
+        false,
+        1e-2,
+    ),
+    (
+        "multifrontal_u1e-4",
+        LdltBackend::Multifrontal,
+        false,
+        false,
+        1e-4,
+    ),
+    (
+        "multifrontal_u1e-8",
+        LdltBackend::Multifrontal,
+        false,
+        false,
+        1e-8,
+    ),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
@@ -165,8 +192,11 @@ fn bench_kkt(c: &mut Criterion) {
         };
         let mut solvers: Vec<SparseLdlt> = VARIANTS
             .iter()
-            .map(|&(_, backend, cav, pairs)| {
+            .map(|&(_, backend, cav, pairs, u)| {
                 let mut s = SparseLdlt::with_backend(backend);
+                if u > 0.0 {
+                    s.pivot_threshold = u;
+                }
                 s.constraint_rows_from = cav.then_some(pat.n);
                 s.pivot_pairs = pairs;
                 s.preferred_primal = bounded.clone();
@@ -214,7 +244,7 @@ fn bench_kkt(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("kkt_periodic_qc_{label}"));
         g.sample_size(20);
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
-            if !v.0.starts_with("auto") && v.0 != "multifrontal" {
+            if !v.0.starts_with("auto") && !v.0.starts_with("multifrontal") {
                 continue;
             }
             g.bench_function(format!("factor_{}", v.0), |b| {

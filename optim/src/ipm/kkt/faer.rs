@@ -32,8 +32,9 @@ pub(super) struct FaerFactor {
     pub(super) constraint_rows_from: Option<usize>,
     pub(super) preferred: Vec<bool>,
     pub(super) pivot_pairs: bool,
-    /// The backend of the analysis.
+    /// The backend and the multifrontal amalgamation of the analysis.
     pub(super) backend: LdltBackend,
+    pub(super) amalgamation: usize,
 }
 
 impl FaerFactor {
@@ -88,6 +89,7 @@ impl FaerFactor {
             preferred: Vec::new(),
             pivot_pairs: false,
             backend: LdltBackend::Auto,
+            amalgamation: 0,
         })
     }
 

@@ -22,7 +22,14 @@
 //!     bitwise faer's factor and solution (1 × 1 pivots only);
 //!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
 //!     simplicial structure (dense element blocks of Legendre–Gauss KKTs), with 2 × 2 pivots;
-//!   * `faer`: faer's own numeric factorization and solve (reference and fallback).
+//!   * `faer`: faer's own numeric factorization and solve (reference and fallback);
+//!   * `multifrontal`: a multifrontal LDLᵀ with threshold Bunch–Kaufman pivoting (1 × 1 and
+//!     2 × 2 pivots among each front's fully summed columns, MA57's test with threshold
+//!     `pivot_threshold`) and delayed pivots: a pivot that fails the test is passed to the
+//!     parent front, so the order is AMD's (or the pairs' order below) modified numerically,
+//!     every entry of `L` is bounded by `1/u` outside the root front, and the sign count is
+//!     the inertia of `K` for any δ_c ≥ 0 (no bare −δ_c pivot and no pair with
+//!     `det ≈ −Σ δ_c` can pass the test). Supernodes are amalgamated (`amalgamation`).
 //! * `ordering`: the elimination order. With plain AMD a constraint row eliminated before all
 //!   of its primal variables has the pivot exactly `−δ_c`, and for a small δ_c the update
 //!   `Jᵢᵀ Jᵢ / δ_c` swamps the reduced Hessian's curvature in rounding, so the sign count no
@@ -139,8 +146,9 @@ pub enum LdltBackend {
     /// threshold Bunch–Kaufman 1 × 1 / 2 × 2 pivoting among each front's fully summed columns
     /// and delayed pivots (`multifrontal`): the order is AMD's, modified at factorization time
     /// wherever a pivot fails the test [`SparseLdlt::pivot_threshold`]; bounded growth and the
-    /// inertia of the matrix for any δ_c ≥ 0. The orders of `constraint_rows_from` and
-    /// `pivot_pairs` do not apply (pivots are chosen numerically).
+    /// inertia of the matrix for any δ_c ≥ 0. With `constraint_rows_from` set it starts from
+    /// the order of `pivot_pairs` (AMD with each row AMD would eliminate bare delayed to a
+    /// variable of its own), which leaves far fewer pivots to delay numerically.
     Multifrontal,
 }
 
@@ -182,8 +190,17 @@ pub struct SparseLdlt {
     pub pivot_pairs: bool,
     /// Threshold `u` of the pivot test of [`LdltBackend::Multifrontal`] (a 1 × 1 pivot must be
     /// at least `u` times the largest other entry of its column; 2 × 2 pivots alike); in
-    /// (0, 0.5], default 0.01 (MA57's). Takes effect at the next factorization.
+    /// (0, 0.5], default 1e-8 (IPOPT's `ma57_pivtol`; MA57's own 0.01 and 1e-4 delay so many
+    /// pivots of the collocation KKTs that the fill triples, BENCHMARKS.md). With it a −δ_c
+    /// pivot of δ_c = 1e-9 fails beside entries above 0.1, and a (variable, row) pair with
+    /// `|B⁻¹| ≈ Σ/(Σ δ_c + a²)` fails for Σ = 1e10 beside entries above 0.1 as well; larger
+    /// growth than that is left to iterative refinement. Takes effect at the next
+    /// factorization.
     pub pivot_threshold: f64,
+    /// Amalgamation of [`LdltBackend::Multifrontal`]: a supernode and its parent are merged
+    /// into one front while both have fewer than this many columns (MA57's `nemin`; 1: the
+    /// fundamental supernodes only). Default 16. Takes effect at the next analysis.
+    pub amalgamation: usize,
     has_pairs: bool,
     faer: Option<FaerFactor>,
     kernel: Kernel,
@@ -226,7 +243,8 @@ impl SparseLdlt {
             constraint_rows_from: None,
             preferred_primal: Vec::new(),
             pivot_pairs: false,
-            pivot_threshold: 0.01,
+            pivot_threshold: 1e-8,
+            amalgamation: 16,
             has_pairs: false,
             faer: None,
             kernel: Kernel::Faer,
@@ -293,6 +311,7 @@ impl KktSolver for SparseLdlt {
             && a.preferred == self.preferred_primal
             && a.pivot_pairs == self.pivot_pairs
             && a.backend == self.backend
+            && a.amalgamation == self.amalgamation
         {
             self.factored = false;
             return Ok(());
@@ -301,7 +320,13 @@ impl KktSolver for SparseLdlt {
         // AMD on the graph of pairs (module docs).
         let multifrontal = self.backend == LdltBackend::Multifrontal;
         let (custom, pair_first) = match self.constraint_rows_from {
-            _ if multifrontal => (None, Vec::new()),
+            // The multifrontal kernel starts from the pairs' order (rows AMD would eliminate
+            // bare already follow a variable of their own, so few pivots need delaying) and
+            // chooses its pivots numerically; the pair marks are not used.
+            Some(n) if multifrontal => (
+                ordering::amd_pivot_pairs(n, col_ptr, row_idx).map(|(fwd, _)| fwd),
+                Vec::new(),
+            ),
             Some(n) if self.pivot_pairs => match ordering::amd_pivot_pairs(n, col_ptr, row_idx) {
                 Some((fwd, pairs)) => (Some(fwd), pairs),
                 None => (None, Vec::new()),
@@ -325,12 +350,19 @@ impl KktSolver for SparseLdlt {
         faer.preferred = self.preferred_primal.clone();
         faer.pivot_pairs = self.pivot_pairs;
         faer.backend = self.backend;
+        faer.amalgamation = self.amalgamation;
         if multifrontal {
-            let plan =
-                MultifrontalPlan::new(&faer.symbolic, dim, col_ptr, row_idx, self.pivot_threshold)
-                    .ok_or_else(|| {
-                        OptimError::Factorization("multifrontal analysis: KKT too large".into())
-                    })?;
+            let plan = MultifrontalPlan::new(
+                &faer.symbolic,
+                dim,
+                col_ptr,
+                row_idx,
+                self.pivot_threshold,
+                self.amalgamation.max(1),
+            )
+            .ok_or_else(|| {
+                OptimError::Factorization("multifrontal analysis: KKT too large".into())
+            })?;
             self.kernel = Kernel::Multifrontal(Box::new(plan));
             self.faer = Some(faer);
             self.factored = false;

@@ -42,8 +42,10 @@ const BK_ALPHA: f64 = 0.640_388_203_202_208_4;
 pub(super) struct MultifrontalPlan {
     /// `perm_fwd[i]`: original index of permuted index i (AMD order).
     perm_fwd: Vec<usize>,
-    /// Columns of supernode s: `sn_begin[s]..sn_begin[s + 1]` (permuted indices).
-    sn_begin: Vec<usize>,
+    /// Columns of (amalgamated) supernode s, ascending permuted indices:
+    /// `sn_cols[sn_col_ptr[s]..sn_col_ptr[s + 1]]`.
+    sn_col_ptr: Vec<usize>,
+    sn_cols: Vec<u32>,
     /// Rows of supernode s below its own columns (permuted indices, ascending):
     /// `sn_rows[sn_row_ptr[s]..sn_row_ptr[s + 1]]`.
     sn_row_ptr: Vec<usize>,
@@ -137,6 +139,7 @@ impl MultifrontalPlan {
         col_ptr: &[usize],
         row_idx: &[usize],
         threshold: f64,
+        nemin: usize,
     ) -> Option<Self> {
         let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
             return None;
@@ -159,21 +162,76 @@ impl MultifrontalPlan {
             }
         }
         sn_begin.push(dim);
-        let ns = sn_begin.len() - 1;
+        let nfund = sn_begin.len() - 1;
+        let mut fund_of = vec![0usize; dim];
+        let mut fund_parent = vec![NONE; nfund];
+        for sn in 0..nfund {
+            let (f, l) = (sn_begin[sn], sn_begin[sn + 1]);
+            fund_of[f..l].iter_mut().for_each(|c| *c = sn);
+        }
+        for sn in 0..nfund {
+            let l = sn_begin[sn + 1];
+            if cnt(l - 1) > 1 {
+                fund_parent[sn] = fund_of[lr[lp[l - 1] + 1]];
+            }
+        }
+        // Amalgamation (MA57's rule): a supernode and its parent are merged while both have
+        // fewer than `nemin` columns. The merged front is the parent's (a child's rows lie in
+        // its parent's columns and rows), with the child's columns as further fully summed
+        // ones: explicit zeros, but larger dense blocks and more candidates for 2 × 2 pivots.
+        let mut rep: Vec<usize> = (0..nfund).collect();
+        let mut ncols: Vec<usize> = (0..nfund).map(|s| sn_begin[s + 1] - sn_begin[s]).collect();
+        for sn in 0..nfund {
+            let p = fund_parent[sn];
+            if p != NONE && ncols[sn] < nemin && ncols[p] < nemin {
+                ncols[p] += ncols[sn];
+                rep[sn] = p;
+            }
+        }
+        // Representatives: follow merges upwards (parents have larger indices).
+        for sn in (0..nfund).rev() {
+            let p = rep[sn];
+            if p != sn {
+                rep[sn] = rep[p];
+            }
+        }
+        let mut new_id = vec![NONE; nfund];
+        let mut ns = 0;
+        for sn in 0..nfund {
+            if rep[sn] == sn {
+                new_id[sn] = ns;
+                ns += 1;
+            }
+        }
         let mut col2sn = vec![0usize; dim];
+        for (j, c) in col2sn.iter_mut().enumerate() {
+            *c = new_id[rep[fund_of[j]]];
+        }
+        let mut sn_col_ptr = vec![0usize; ns + 1];
+        for &c in &col2sn {
+            sn_col_ptr[c + 1] += 1;
+        }
+        for sn in 0..ns {
+            sn_col_ptr[sn + 1] += sn_col_ptr[sn];
+        }
+        let mut sn_cols = vec![0u32; dim];
+        let mut next = sn_col_ptr.clone();
+        for (j, &c) in col2sn.iter().enumerate() {
+            sn_cols[next[c]] = j as u32;
+            next[c] += 1;
+        }
         let mut sn_row_ptr = vec![0usize];
         let mut sn_rows = Vec::new();
         let mut sn_parent = vec![NONE; ns];
-        for sn in 0..ns {
-            let (f, l) = (sn_begin[sn], sn_begin[sn + 1]);
-            col2sn[f..l].iter_mut().for_each(|c| *c = sn);
+        for sn in 0..nfund {
+            if rep[sn] != sn {
+                continue;
+            }
+            let l = sn_begin[sn + 1];
             sn_rows.extend(lr[lp[l - 1] + 1..lp[l]].iter().map(|&r| r as u32));
             sn_row_ptr.push(sn_rows.len());
-        }
-        for sn in 0..ns {
-            let (a, b) = (sn_row_ptr[sn], sn_row_ptr[sn + 1]);
-            if b > a {
-                sn_parent[sn] = col2sn[sn_rows[a] as usize];
+            if fund_parent[sn] != NONE {
+                sn_parent[new_id[sn]] = new_id[rep[fund_parent[sn]]];
             }
         }
         let mut child_ptr = vec![0usize; ns + 1];
@@ -221,7 +279,8 @@ impl MultifrontalPlan {
         }
         Some(Self {
             perm_fwd: fwd.to_vec(),
-            sn_begin,
+            sn_col_ptr,
+            sn_cols,
             sn_row_ptr,
             sn_rows,
             sn_parent,
@@ -250,7 +309,7 @@ impl MultifrontalPlan {
 
     /// Number of supernodes (fronts).
     pub(super) fn n_fronts(&self) -> usize {
-        self.sn_begin.len() - 1
+        self.sn_col_ptr.len() - 1
     }
 
     /// Stored entries of `L` below the diagonal in the last factorization.
@@ -337,16 +396,22 @@ impl MultifrontalPlan {
                 let c = c as usize;
                 frows.extend_from_slice(&self.cb_rows[c][..self.cb_ndelay[c]]);
             }
-            frows.extend((self.sn_begin[s]..self.sn_begin[s + 1]).map(|j| j as u32));
+            frows.extend_from_slice(&self.sn_cols[self.sn_col_ptr[s]..self.sn_col_ptr[s + 1]]);
             let nfs = frows.len();
             frows.extend_from_slice(&self.sn_rows[self.sn_row_ptr[s]..self.sn_row_ptr[s + 1]]);
             let nf = frows.len();
             for (p, &r) in frows.iter().enumerate() {
                 self.map[r as usize] = p as u32;
             }
+            // Only the lower triangle is ever read (the strict upper one of the stored panel
+            // columns included in the solve's slices is skipped).
             let mut front = std::mem::take(&mut self.front);
-            front.clear();
-            front.resize(nf * nf, 0.0);
+            if front.len() < nf * nf {
+                front.resize(nf * nf, 0.0);
+            }
+            for j in 0..nf {
+                front[j * nf + j..(j + 1) * nf].fill(0.0);
+            }
             for &(r, c, src) in &self.a_ent[self.a_ptr[s]..self.a_ptr[s + 1]] {
                 let (pr, pc) = (self.map[r as usize] as usize, self.map[c as usize] as usize);
                 let (i, j) = if pr >= pc { (pr, pc) } else { (pc, pr) };
@@ -372,11 +437,13 @@ impl MultifrontalPlan {
                 self.cb_rows[c].clear();
             }
             let root = self.sn_parent[s] == NONE;
-            self.w.clear();
-            self.w.resize(nf * nfs, 0.0);
+            // Every entry of `w` that is read was written by its pivot first.
+            if self.w.len() < nf * nfs {
+                self.w.resize(nf * nfs, 0.0);
+            }
             let k = eliminate(
-                &mut front,
-                &mut self.w,
+                &mut front[..nf * nf],
+                &mut self.w[..nf * nfs],
                 nf,
                 nfs,
                 &mut frows,
@@ -701,10 +768,27 @@ fn eliminate(
         let (head, tail) = f.split_at_mut(nfs * nf);
         for j in nfs..nf {
             let col = &mut tail[(j - nfs) * nf + j..(j - nfs + 1) * nf];
-            for c in 0..k {
+            let lcol = |c: usize| &head[c * nf + j..(c + 1) * nf];
+            // Four pivots per pass over the target column (one load and store of it per four
+            // multiply-adds).
+            let mut c = 0;
+            while c + 4 <= k {
+                let wv = [
+                    w[c * nf + j],
+                    w[(c + 1) * nf + j],
+                    w[(c + 2) * nf + j],
+                    w[(c + 3) * nf + j],
+                ];
+                let (l0, l1, l2, l3) = (lcol(c), lcol(c + 1), lcol(c + 2), lcol(c + 3));
+                for (i, x) in col.iter_mut().enumerate() {
+                    *x -= (l0[i] * wv[0] + l1[i] * wv[1]) + (l2[i] * wv[2] + l3[i] * wv[3]);
+                }
+                c += 4;
+            }
+            for c in c..k {
                 let wj = w[c * nf + j];
                 if wj != 0.0 {
-                    for (x, &l) in col.iter_mut().zip(&head[c * nf + j..(c + 1) * nf]) {
+                    for (x, &l) in col.iter_mut().zip(lcol(c)) {
                         *x -= l * wj;
                     }
                 }

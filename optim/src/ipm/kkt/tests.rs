@@ -648,9 +648,18 @@ fn dense_inertia(a: &[Vec<f64>]) -> (Inertia, f64) {
 /// bounded by the pivot test, `D` block diagonal with 1 × 1 / 2 × 2 blocks, the inertia against
 /// dense eigenvalues, and the unrefined solution against the residual. Returns the pivot
 /// statistics.
-fn check_multifrontal(pat: &KktPattern, dense: &[Vec<f64>], label: &str) -> (usize, usize, usize) {
+fn check_multifrontal(
+    pat: &KktPattern,
+    dense: &[Vec<f64>],
+    label: &str,
+    amalgamation: usize,
+) -> (usize, usize, usize) {
     let dim = pat.mat.dim;
-    let mut s = SparseLdlt::with_backend(LdltBackend::Multifrontal);
+    let mut s = SparseLdlt {
+        amalgamation,
+        pivot_threshold: 0.01,
+        ..SparseLdlt::with_backend(LdltBackend::Multifrontal)
+    };
     s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
     let inertia = s.factor(&pat.mat.values).expect("factor");
     let stats = s.pivot_statistics();
@@ -749,10 +758,14 @@ fn multifrontal_threshold_pivoting_reconstructs_with_the_right_inertia() {
     ] {
         let (pat, dense) = pivoting_kkt(seed, n, m, shift, sigma, every, dc);
         let label = format!("seed {seed} (Σ {sigma:e} every {every}, δ_c {dc:e})");
-        let (delayed, two, stat) = check_multifrontal(&pat, &dense, &label);
-        assert_eq!(stat, 0, "{label}: static pivots on a nonsingular KKT");
-        delayed_total += delayed;
-        two_total += two;
+        // Fundamental supernodes (small fronts: many delays) and amalgamated ones.
+        for nemin in [1, 16] {
+            let label = format!("{label}, nemin {nemin}");
+            let (delayed, two, stat) = check_multifrontal(&pat, &dense, &label, nemin);
+            assert_eq!(stat, 0, "{label}: static pivots on a nonsingular KKT");
+            delayed_total += delayed;
+            two_total += two;
+        }
     }
     assert!(delayed_total > 0, "no delayed pivot exercised");
     assert!(two_total > 0, "no 2 × 2 pivot exercised");
@@ -786,12 +799,12 @@ fn multifrontal_delays_a_bare_constraint_row() {
                 }
             }
         }
-        check_multifrontal(&pat, &dense, &format!("δ_c {dc:e}"));
+        check_multifrontal(&pat, &dense, &format!("δ_c {dc:e}"), 1);
     }
     // Random collocation-like KKTs with δ_c = 0: every constraint row that AMD eliminates
     // before its variables is delayed (a pivot 0 never passes the test).
     let (pat, dense) = pivoting_kkt(11, 60, 40, 1.0, 0.0, 0, 0.0);
-    let (delayed, ..) = check_multifrontal(&pat, &dense, "δ_c 0");
+    let (delayed, ..) = check_multifrontal(&pat, &dense, "δ_c 0", 1);
     assert!(delayed > 0, "no delay with zero constraint pivots");
 }
 
