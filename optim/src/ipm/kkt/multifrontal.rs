@@ -4,7 +4,8 @@
 //! at factorization time.
 //!
 //! * Symbolic ([`MultifrontalPlan::new`]): faer's AMD order and simplicial structure of `L`,
-//!   the fundamental supernodes of that structure (as in the supernodal kernel) and their
+//!   the fundamental supernodes of that structure (as in the supernodal kernel), amalgamated
+//!   with their parents while both have fewer than `nemin` columns (MA57's rule), and their
 //!   assembly tree; each supernode's front holds its own columns and the rows of its
 //!   structure.
 //! * Numeric ([`MultifrontalPlan::factor`]): per supernode, children before parents, a dense
