@@ -2,7 +2,7 @@
 //! whole solves timed by criterion, plus a per-iteration breakdown (function evaluations,
 //! derivative evaluations, KKT assembly, factorization, solves, line search) printed once from
 //! the solver's own `Timing`; and the `periodic-qc` KKT (hp-Radau 3 × 10 and LG 30) factored
-//! and solved by the `SparseLdlt` backends (supernodal, simplicial, faer supernodal),
+//! and solved by the `SparseLdlt` backends (supernodal, simplicial, faer supernodal, multifrontal),
 //! compared by thread CPU time round-robin and by criterion (`kkt_periodic_qc_*`).
 //!
 //! Quick run: `cargo bench --bench ipm -- --warm-up-time 1 --measurement-time 5`
@@ -134,17 +134,46 @@ fn thread_cpu_seconds() -> f64 {
 }
 
 /// Backends and orderings of `SparseLdlt` compared on one KKT pattern: `(label, backend,
-/// constraint-aware order, 2 × 2 pivot pairs)` (`block` = the supernodal kernel, `simplicial` =
-/// the prepared faer-identical up-looking path, `auto` = the default choice; `_amd` = plain
-/// AMD, `_cav` = AMD on (variable, row) pairs, `_pairs` = AMD with the rows it would eliminate
-/// bare delayed into 2 × 2 (variable, row) pivots).
-const VARIANTS: [(&str, LdltBackend, bool, bool); 6] = [
-    ("auto_amd", LdltBackend::Auto, false, false),
-    ("auto_pairs", LdltBackend::Auto, true, true),
-    ("auto_cav", LdltBackend::Auto, true, false),
-    ("block", LdltBackend::Supernodal, false, false),
-    ("simplicial", LdltBackend::Simplicial, false, false),
-    ("faer_supernodal", LdltBackend::FaerSupernodal, false, false),
+/// constraint-aware order, 2 × 2 pivot pairs, pivot threshold)` (`block` = the supernodal
+/// kernel, `simplicial` = the prepared faer-identical up-looking path, `auto` = the default
+/// choice; `_amd` = plain AMD, `_cav` = AMD on (variable, row) pairs, `_pairs` = AMD with the
+/// rows it would eliminate bare delayed into 2 × 2 (variable, row) pivots; `multifrontal_u*` =
+/// threshold Bunch–Kaufman pivoting with delayed pivots on AMD's order with threshold u, the
+/// threshold used by the other backends is irrelevant).
+const VARIANTS: [(&str, LdltBackend, bool, bool, f64); 9] = [
+    ("auto_amd", LdltBackend::Auto, false, false, 0.0),
+    ("auto_pairs", LdltBackend::Auto, true, true, 0.0),
+    ("auto_cav", LdltBackend::Auto, true, false, 0.0),
+    ("block", LdltBackend::Supernodal, false, false, 0.0),
+    ("simplicial", LdltBackend::Simplicial, false, false, 0.0),
+    (
+        "faer_supernodal",
+        LdltBackend::FaerSupernodal,
+        false,
+        false,
+        0.0,
+    ),
+    (
+        "multifrontal_u1e-2",
+        LdltBackend::Multifrontal,
+        false,
+        false,
+        1e-2,
+    ),
+    (
+        "multifrontal_u1e-4",
+        LdltBackend::Multifrontal,
+        false,
+        false,
+        1e-4,
+    ),
+    (
+        "multifrontal_u1e-8",
+        LdltBackend::Multifrontal,
+        false,
+        false,
+        1e-8,
+    ),
 ];
 
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
@@ -163,8 +192,11 @@ fn bench_kkt(c: &mut Criterion) {
         };
         let mut solvers: Vec<SparseLdlt> = VARIANTS
             .iter()
-            .map(|&(_, backend, cav, pairs)| {
+            .map(|&(_, backend, cav, pairs, u)| {
                 let mut s = SparseLdlt::with_backend(backend);
+                if u > 0.0 {
+                    s.pivot_threshold = u;
+                }
                 s.constraint_rows_from = cav.then_some(pat.n);
                 s.pivot_pairs = pairs;
                 s.preferred_primal = bounded.clone();
@@ -195,14 +227,16 @@ fn bench_kkt(c: &mut Criterion) {
             }
         }
         for ((v, s), b) in VARIANTS.iter().zip(&mut solvers).zip(&best) {
+            let inertia = s.factor(&pat.mat.values);
+            let (delayed, two, stat) = s.pivot_statistics();
             println!(
                 "periodic-qc/{label} KKT {}: dim {dim}, nnz(tril K) {}, nnz(L) {}, flops {:.3e}, inertia {:?}; \
-                 CPU time per factor {:.0} us, per solve {:.1} us",
+                 CPU time per factor {:.0} us, per solve {:.1} us; delayed {delayed}, 2x2 {two}, static {stat}",
                 v.0,
                 pat.mat.row_idx.len(),
                 s.factor_nnz(),
                 s.factor_flops(),
-                s.factor(&pat.mat.values),
+                inertia,
                 b.0,
                 b.1
             );
@@ -210,7 +244,7 @@ fn bench_kkt(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("kkt_periodic_qc_{label}"));
         g.sample_size(20);
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
-            if !v.0.starts_with("auto") {
+            if !v.0.starts_with("auto") && !v.0.starts_with("multifrontal") {
                 continue;
             }
             g.bench_function(format!("factor_{}", v.0), |b| {

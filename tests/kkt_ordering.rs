@@ -143,3 +143,76 @@ fn mesh_sweep() {
     }
     assert!(failed.is_empty(), "not Solved in one stage: {failed:?}");
 }
+
+/// Parses `SWEEP_MESHES` (comma-separated `r<N>` for Radau 3 × N, `lg<N>` for LG-N).
+fn sweep_meshes(default: &str) -> Vec<(Scheme, usize)> {
+    std::env::var("SWEEP_MESHES")
+        .unwrap_or_else(|_| default.into())
+        .split(',')
+        .map(|m| {
+            if let Some(n) = m.strip_prefix("lg") {
+                (Scheme::Lg, n.parse().expect("SWEEP_MESHES: lg<N>"))
+            } else {
+                let n: usize = m
+                    .strip_prefix('r')
+                    .and_then(|n| n.parse().ok())
+                    .expect("SWEEP_MESHES: r<N> or lg<N>");
+                (Scheme::Radau { elements: 3 }, 3 * n)
+            }
+        })
+        .collect()
+}
+
+/// The multifrontal LDLᵀ with threshold pivoting ([`KktOrdering::ThresholdPivoting`]) with
+/// one static δ_c for both schemes (`SWEEP_DELTA_C`, default 1e-9) against the library's
+/// default handling, on `SWEEP_PROBLEMS` × `SWEEP_MESHES` (default: the meshes where the
+/// default needs its δ_c growth or the LG start at 3e-8). Prints a table; asserts nothing
+/// beyond completing (a measurement, see BENCHMARKS.md).
+#[test]
+#[ignore = "slow: mesh sweep of the threshold-pivoting factorization"]
+fn threshold_pivoting_sweep() {
+    let problems =
+        std::env::var("SWEEP_PROBLEMS").unwrap_or_else(|_| "periodic-cot,periodic-qc".into());
+    let delta_c: f64 = std::env::var("SWEEP_DELTA_C")
+        .ok()
+        .map_or(1e-9, |v| v.parse().expect("SWEEP_DELTA_C"));
+    let with_default = std::env::var("SWEEP_BEFORE").map_or(true, |v| v != "0");
+    println!(
+        "| problem | mesh | default: status, iterations, J (s) | threshold pivoting, δ_c {delta_c:e}: status, iterations, J (s) | δ_c raised at |"
+    );
+    println!("|---|---|---|---|---|");
+    for name in problems.split(',') {
+        for (scheme, points) in sweep_meshes("r24,r32,lg30") {
+            let default = with_default.then(|| run(name, scheme, points, None, None));
+            let t = run(
+                name,
+                scheme,
+                points,
+                Some(KktOrdering::ThresholdPivoting),
+                Some(delta_c),
+            );
+            let d = default.as_ref().map_or("–".to_string(), |b| {
+                format!(
+                    "{:?}, {}, {:.6} ({:.1})",
+                    b.status, b.iterations, b.objective, b.solve_seconds
+                )
+            });
+            println!(
+                "| {name} | {} | {d} | {:?}, {}, {:.6} ({:.1}){} | {} |",
+                label(scheme, points),
+                t.status,
+                t.iterations,
+                t.objective,
+                t.solve_seconds,
+                if t.stages.len() > 1 {
+                    format!(", {} stages", t.stages.len())
+                } else {
+                    String::new()
+                },
+                t.counters
+                    .dual_regularization_raised_at
+                    .map_or("–".to_string(), |k| k.to_string()),
+            );
+        }
+    }
+}

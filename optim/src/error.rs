@@ -146,6 +146,10 @@ pub enum FactorizationError {
     /// faer's symbolic analysis of the KKT pattern failed (index overflow, allocation).
     #[error("KKT factorization: symbolic analysis failed")]
     SymbolicAnalysis(#[source] faer::sparse::FaerError),
+    /// The multifrontal analysis cannot index the KKT's fronts (the matrix is too large for
+    /// its index types).
+    #[error("KKT factorization: multifrontal analysis: KKT too large")]
+    TooLarge,
     /// The workspace of the numeric factorization and solve could not be allocated.
     #[error("KKT factorization: out of memory for the KKT workspace")]
     OutOfMemory,

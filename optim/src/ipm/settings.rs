@@ -70,6 +70,13 @@ pub enum KktOrdering {
     /// primal variable of its own (bounded ones preferred), so that no constraint row is
     /// eliminated with the bare pivot −δ_c (see [`crate::ipm::kkt`]). More fill than AMD.
     ConstraintsAfterVariables,
+    /// AMD's order modified at factorization time: a multifrontal LDLᵀ with threshold
+    /// Bunch–Kaufman 1 × 1 / 2 × 2 pivoting and delayed pivots
+    /// ([`LdltBackend::Multifrontal`](crate::ipm::LdltBackend::Multifrontal)), so that the
+    /// factor's growth is bounded and its inertia is the matrix's for any δ_c ≥ 0; no checks
+    /// by pivot pairs (the static δ_c still grows on a factor that does not solve its own
+    /// matrix after refinement).
+    ThresholdPivoting,
 }
 
 /// Settings of the interior-point solver. All fields are public; [`Settings::validate`] checks ranges.

@@ -21,7 +21,7 @@ use self::barrier::MuRule;
 use self::line_search::LsOutcome;
 use self::step::StepResult;
 use self::termination::Verdict;
-use super::kkt::{KktPattern, KktSolver, SparseLdlt};
+use super::kkt::{KktPattern, KktSolver, LdltBackend, SparseLdlt};
 use super::settings::{KktOrdering, Settings};
 use super::solution::{Counters, IterationInfo, Status, Timing};
 use super::stdform::StdProblem;
@@ -400,6 +400,12 @@ impl<'p> Core<'p> {
                 | KktOrdering::AmdThenPivotPairs
                 | KktOrdering::AmdCheckedByPivotPairs => None,
                 KktOrdering::AmdPivotPairs | KktOrdering::ConstraintsAfterVariables => Some(self.n),
+                KktOrdering::ThresholdPivoting => None,
+            };
+            self.solver.backend = match (settings.kkt_ordering, self.solver.backend) {
+                (KktOrdering::ThresholdPivoting, _) => LdltBackend::Multifrontal,
+                (_, LdltBackend::Multifrontal) => LdltBackend::Auto,
+                (_, backend) => backend,
             };
             self.check_pairs = matches!(
                 settings.kkt_ordering,

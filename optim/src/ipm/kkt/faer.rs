@@ -17,7 +17,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
-use super::Inertia;
+use super::{Inertia, LdltBackend};
 use crate::error::{FactorizationError, OptimError};
 
 /// faer's symbolic analysis of one lower-triangle pattern, its value storage for `L` (faer's
@@ -32,6 +32,9 @@ pub(super) struct FaerFactor {
     pub(super) constraint_rows_from: Option<usize>,
     pub(super) preferred: Vec<bool>,
     pub(super) pivot_pairs: bool,
+    /// The backend and the multifrontal amalgamation of the analysis.
+    pub(super) backend: LdltBackend,
+    pub(super) amalgamation: usize,
 }
 
 impl FaerFactor {
@@ -85,6 +88,8 @@ impl FaerFactor {
             constraint_rows_from: None,
             preferred: Vec::new(),
             pivot_pairs: false,
+            backend: LdltBackend::Auto,
+            amalgamation: 0,
         })
     }
 

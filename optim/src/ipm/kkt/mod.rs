@@ -22,7 +22,14 @@
 //!     bitwise faer's factor and solution (1 × 1 pivots only);
 //!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
 //!     simplicial structure (dense element blocks of Legendre–Gauss KKTs), with 2 × 2 pivots;
-//!   * `faer`: faer's own numeric factorization and solve (reference and fallback).
+//!   * `faer`: faer's own numeric factorization and solve (reference and fallback);
+//!   * `multifrontal`: a multifrontal LDLᵀ with threshold Bunch–Kaufman pivoting (1 × 1 and
+//!     2 × 2 pivots among each front's fully summed columns, MA57's test with threshold
+//!     `pivot_threshold`) and delayed pivots: a pivot that fails the test is passed to the
+//!     parent front, so the order is AMD's (or the pairs' order below) modified numerically,
+//!     every entry of `L` is bounded by `1/u` outside the root front, and the sign count is
+//!     the inertia of `K` for any δ_c ≥ 0 (no bare −δ_c pivot and no pair with
+//!     `det ≈ −Σ δ_c` can pass the test). Supernodes are amalgamated (`amalgamation`).
 //! * `ordering`: the elimination order. With plain AMD a constraint row eliminated before all
 //!   of its primal variables has the pivot exactly `−δ_c`, and for a small δ_c the update
 //!   `Jᵢᵀ Jᵢ / δ_c` swamps the reduced Hessian's curvature in rounding, so the sign count no
@@ -33,6 +40,7 @@
 //!   follows its variable (1 × 1 pivots). Both cost more fill than AMD alone.
 
 mod faer;
+mod multifrontal;
 mod ordering;
 pub mod pattern;
 mod simplicial;
@@ -43,10 +51,11 @@ mod tests;
 use ::faer::sparse::linalg::SupernodalThreshold;
 
 use self::faer::FaerFactor;
+use self::multifrontal::MultifrontalPlan;
 pub use self::pattern::KktPattern;
 use self::simplicial::SimplicialPlan;
 use self::supernodal::BlockPlan;
-use crate::error::OptimError;
+use crate::error::{FactorizationError, OptimError};
 
 /// Inertia of a symmetric matrix: numbers of positive, negative and zero eigenvalues.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -133,6 +142,14 @@ pub enum LdltBackend {
     FaerSimplicial,
     /// faer's own supernodal numeric factorization and solve.
     FaerSupernodal,
+    /// Multifrontal LDLᵀ on the fundamental supernodes of the simplicial structure with
+    /// threshold Bunch–Kaufman 1 × 1 / 2 × 2 pivoting among each front's fully summed columns
+    /// and delayed pivots (`multifrontal`): the order is AMD's, modified at factorization time
+    /// wherever a pivot fails the test [`SparseLdlt::pivot_threshold`]; bounded growth and the
+    /// inertia of the matrix for any δ_c ≥ 0. With `constraint_rows_from` set it starts from
+    /// the order of `pivot_pairs` (AMD with each row AMD would eliminate bare delayed to a
+    /// variable of its own), which leaves far fewer pivots to delay numerically.
+    Multifrontal,
 }
 
 /// The numeric kernel chosen at analysis time.
@@ -140,6 +157,7 @@ enum Kernel {
     Faer,
     Simplicial(Box<SimplicialPlan>),
     Supernodal(Box<BlockPlan>),
+    Multifrontal(Box<MultifrontalPlan>),
 }
 
 /// Sparse LDLᵀ of the KKT matrix behind [`KktSolver`] (module docs): symbolic analysis once
@@ -170,6 +188,19 @@ pub struct SparseLdlt {
     /// eliminated with it in a 2 × 2 pivot (supernodal kernel, module docs); `false` orders
     /// the graph of (variable, row) pairs by AMD instead (1 × 1 pivots).
     pub pivot_pairs: bool,
+    /// Threshold `u` of the pivot test of [`LdltBackend::Multifrontal`] (a 1 × 1 pivot must be
+    /// at least `u` times the largest other entry of its column; 2 × 2 pivots alike); in
+    /// (0, 0.5], default 1e-8 (IPOPT's `ma57_pivtol`; MA57's own 0.01 and 1e-4 delay so many
+    /// pivots of the collocation KKTs that the fill triples, BENCHMARKS.md). With it a −δ_c
+    /// pivot of δ_c = 1e-9 fails beside entries above 0.1, and a (variable, row) pair with
+    /// `|B⁻¹| ≈ Σ/(Σ δ_c + a²)` fails for Σ = 1e10 beside entries above 0.1 as well; larger
+    /// growth than that is left to iterative refinement. Takes effect at the next
+    /// factorization.
+    pub pivot_threshold: f64,
+    /// Amalgamation of [`LdltBackend::Multifrontal`]: a supernode and its parent are merged
+    /// into one front while both have fewer than this many columns (MA57's `nemin`; 1: the
+    /// fundamental supernodes only). Default 16. Takes effect at the next analysis.
+    pub amalgamation: usize,
     has_pairs: bool,
     faer: Option<FaerFactor>,
     kernel: Kernel,
@@ -212,6 +243,8 @@ impl SparseLdlt {
             constraint_rows_from: None,
             preferred_primal: Vec::new(),
             pivot_pairs: false,
+            pivot_threshold: 1e-8,
+            amalgamation: 16,
             has_pairs: false,
             faer: None,
             kernel: Kernel::Faer,
@@ -231,15 +264,33 @@ impl SparseLdlt {
         self.has_pairs
     }
 
-    /// Number of stored entries of faer's factor `L` (fill-in measure).
+    /// Number of stored entries of faer's factor `L` (fill-in measure); for
+    /// [`LdltBackend::Multifrontal`] the entries below the diagonal of the last factorization
+    /// (delayed pivots included).
     pub fn factor_nnz(&self) -> usize {
+        if let Kernel::Multifrontal(mf) = &self.kernel {
+            return mf.factor_nnz();
+        }
         self.faer.as_ref().map_or(0, |a| a.l_values.len())
+    }
+
+    /// With [`LdltBackend::Multifrontal`]: the pivots of the last factorization passed from a
+    /// front to its parent (counted per front passed), its 2 × 2 pivot blocks and the pivots
+    /// replaced by `±pivot_delta`; zeros for the other backends.
+    pub fn pivot_statistics(&self) -> (usize, usize, usize) {
+        match &self.kernel {
+            Kernel::Multifrontal(mf) => (mf.delayed, mf.piv.two_by_two, mf.piv.static_pivots),
+            _ => (0, 0, 0),
+        }
     }
 
     /// Floating-point work of one numeric factorization, `Σ_j (c_j + c_j²/2)` over the column
     /// counts `c_j` of `L` (0 before the analysis). For faer's supernodal factor the counts
     /// include the explicit zeros of relaxed supernodes.
     pub fn factor_flops(&self) -> f64 {
+        if let Kernel::Multifrontal(mf) = &self.kernel {
+            return mf.factor_flops();
+        }
         self.faer.as_ref().map_or(0.0, FaerFactor::flops)
     }
 }
@@ -259,13 +310,23 @@ impl KktSolver for SparseLdlt {
             && a.constraint_rows_from == self.constraint_rows_from
             && a.preferred == self.preferred_primal
             && a.pivot_pairs == self.pivot_pairs
+            && a.backend == self.backend
+            && a.amalgamation == self.amalgamation
         {
             self.factored = false;
             return Ok(());
         }
         // The elimination order: faer's AMD, AMD with 2 × 2 (variable, row) pivot pairs, or
         // AMD on the graph of pairs (module docs).
+        let multifrontal = self.backend == LdltBackend::Multifrontal;
         let (custom, pair_first) = match self.constraint_rows_from {
+            // The multifrontal kernel starts from the pairs' order (rows AMD would eliminate
+            // bare already follow a variable of their own, so few pivots need delaying) and
+            // chooses its pivots numerically; the pair marks are not used.
+            Some(n) if multifrontal => (
+                ordering::amd_pivot_pairs(n, col_ptr, row_idx).map(|(fwd, _)| fwd),
+                Vec::new(),
+            ),
             Some(n) if self.pivot_pairs => match ordering::amd_pivot_pairs(n, col_ptr, row_idx) {
                 Some((fwd, pairs)) => (Some(fwd), pairs),
                 None => (None, Vec::new()),
@@ -288,6 +349,25 @@ impl KktSolver for SparseLdlt {
         faer.constraint_rows_from = self.constraint_rows_from;
         faer.preferred = self.preferred_primal.clone();
         faer.pivot_pairs = self.pivot_pairs;
+        faer.backend = self.backend;
+        faer.amalgamation = self.amalgamation;
+        if multifrontal {
+            let plan = MultifrontalPlan::new(
+                &faer.symbolic,
+                dim,
+                col_ptr,
+                row_idx,
+                self.pivot_threshold,
+                self.amalgamation.max(1),
+            )
+            .ok_or_else(|| {
+                OptimError::Factorization(FactorizationError::TooLarge)
+            })?;
+            self.kernel = Kernel::Multifrontal(Box::new(plan));
+            self.faer = Some(faer);
+            self.factored = false;
+            return Ok(());
+        }
         let supernodal = match self.backend {
             LdltBackend::Supernodal => true,
             // Where faer's flop rule picks its supernodal factor (dense LG blocks), the
@@ -300,6 +380,7 @@ impl KktSolver for SparseLdlt {
                     faer.constraint_rows_from = self.constraint_rows_from;
                     faer.preferred = self.preferred_primal.clone();
                     faer.pivot_pairs = self.pivot_pairs;
+                    faer.backend = self.backend;
                 }
                 true
             }
@@ -331,6 +412,10 @@ impl KktSolver for SparseLdlt {
         let (eps, delta) = (self.pivot_epsilon, self.pivot_delta);
         let inertia = match &mut self.kernel {
             Kernel::Supernodal(block) => block.factor(values, eps, delta)?,
+            Kernel::Multifrontal(mf) => {
+                mf.threshold = self.pivot_threshold.clamp(f64::MIN_POSITIVE, 0.5);
+                mf.factor(values, eps, delta)?
+            }
             Kernel::Simplicial(plan) => {
                 if !plan.factor(values, &mut faer.l_values, eps, delta) {
                     return None;
@@ -354,6 +439,7 @@ impl KktSolver for SparseLdlt {
         debug_assert!(self.factored);
         match &mut self.kernel {
             Kernel::Supernodal(block) => block.solve(rhs),
+            Kernel::Multifrontal(mf) => mf.solve(rhs),
             Kernel::Simplicial(plan) => plan.solve(&faer.l_values, rhs),
             Kernel::Faer => faer.solve(rhs),
         }
