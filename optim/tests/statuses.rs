@@ -7,7 +7,7 @@ mod hs;
 
 use bf_optim::OptimError;
 use bf_optim::ipm::{
-    IterationInfo, Nlp, ScalingMethod, Settings, Status, WarmStart, solve, solve_with,
+    IterationInfo, Nlp, ScalingMethod, Settings, Solution, Status, WarmStart, solve, solve_with,
 };
 use hs::Hs;
 use hs::dual::D;
@@ -16,6 +16,25 @@ const INF: f64 = f64::INFINITY;
 
 fn none(_: &[D]) -> Vec<D> {
     Vec::new()
+}
+
+/// Every number of a `Solution` is finite, whatever its status.
+fn assert_finite(sol: &Solution) {
+    let finite = sol
+        .x
+        .iter()
+        .chain(&sol.lambda)
+        .chain(&sol.z_l)
+        .chain(&sol.z_u)
+        .chain(&[
+            sol.objective,
+            sol.constraint_violation,
+            sol.dual_infeasibility,
+            sol.complementarity,
+            sol.mu,
+        ])
+        .all(|v| v.is_finite());
+    assert!(finite, "non-finite value in {sol:?}");
 }
 
 fn problem(
@@ -56,6 +75,7 @@ fn infeasible_inequalities_are_detected() {
     );
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
+    assert_finite(&sol);
     assert!(sol.iterations < 200);
     // The infeasibility minimiser lies on the diagonal between the disc and the half-plane.
     assert!((sol.x[0] - sol.x[1]).abs() < 1e-3, "{:?}", sol.x);
@@ -75,6 +95,7 @@ fn infeasible_equality_is_detected() {
     );
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
+    assert_finite(&sol);
     assert!(sol.x[0].abs() < 1e-3);
     assert!(sol.iterations < 200);
 }
@@ -93,6 +114,7 @@ fn infeasible_bounds_and_linear_constraint() {
     );
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
+    assert_finite(&sol);
     assert!(sol.iterations < 200);
 }
 
@@ -115,6 +137,7 @@ fn unbounded_problems_report_divergence() {
         sol.status
     );
     assert!(sol.iterations < 200);
+    assert_finite(&sol);
     // Unconstrained cubic, unbounded below.
     let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0].powi(3) + x[0], none);
     let sol = solve(&p, &Settings::default()).unwrap();
@@ -124,6 +147,34 @@ fn unbounded_problems_report_divergence() {
         sol.status
     );
     assert!(sol.iterations < 200);
+    assert_finite(&sol);
+}
+
+/// The problem unbounded below along x₁ = x₂ → ∞ (free of any upper bound) is `Unbounded`
+/// with its objective multiplied by 1, 1e-8, 1e8 or 1e12: the test is on the scaled objective,
+/// which gradient-based scaling makes the same for the three scaled variants; every number
+/// of the `Solution` is finite.
+#[test]
+fn unbounded_problems_stay_unbounded_under_objective_scaling() {
+    for c in [1.0, 1e-8, 1e8, 1e12] {
+        let p = problem(
+            &[1.0, 2.0],
+            &[0.0; 2],
+            &[INF; 2],
+            1,
+            1,
+            |x| -x[0] - x[1],
+            |x| vec![x[0] - x[1]],
+        );
+        let t = hs::Transformed {
+            obj: c,
+            ..hs::Transformed::new(p)
+        };
+        let sol = solve(&t, &Settings::default()).unwrap();
+        assert_eq!(sol.status, Status::Unbounded, "objective × {c:e}: {sol:?}");
+        assert!(sol.x[0] > 1e10 && sol.x[1] > 1e10, "{:?}", sol.x);
+        assert_finite(&sol);
+    }
 }
 
 #[test]
@@ -132,6 +183,7 @@ fn non_finite_trial_points_are_cut() {
     let p = problem(&[3.0], &[-INF], &[INF], 0, 0, |x| x[0] * x[0].ln(), none);
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::Solved);
+    assert_finite(&sol);
     let e = std::f64::consts::E;
     assert!((sol.x[0] - 1.0 / e).abs() < 1e-7);
     assert!((sol.objective + 1.0 / e).abs() < 1e-12);

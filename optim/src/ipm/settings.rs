@@ -27,8 +27,10 @@ pub enum ScalingMethod {
     /// initial point has ∞-norm ≤ `scaling_max_gradient` (constraint factors never exceed 1
     /// and are at least 1e-8; the objective factor has no lower limit). Unlike Ipopt, an
     /// objective whose gradient has ∞-norm below `scaling_min_gradient` (but above zero) is
-    /// scaled up to ∞-norm 1, so that the dual-infeasibility test, absolute in scaled units,
-    /// does not stop a tiny objective before its optimum.
+    /// scaled up to ∞-norm `scaling_max_gradient`, so that the dual-infeasibility test,
+    /// absolute in scaled units, does not stop a tiny objective before its optimum, and an
+    /// objective `c · f` is scaled to the same internal objective for every factor `c` that
+    /// puts its gradient outside `[scaling_min_gradient, scaling_max_gradient]`.
     #[default]
     GradientBased,
     /// Use [`Nlp::scaling`](crate::ipm::Nlp::scaling) (falls back to none if it returns `None`).
@@ -135,12 +137,20 @@ pub struct Settings {
     pub kappa_sigma: f64,
     /// Damping of one-sided bounded variables κ_d (default: 1e-5).
     pub kappa_d: f64,
+    /// Ipopt's `slack_move` (W&B end of Sect. 3.5): a slack to a bound that falls below
+    /// `ε_mach · min(1, μ)` (it has underflowed in the rounding of `x − x_L`) is replaced by
+    /// `min(max(μ / z, ε_mach · min(1, μ)), s + slack_move · max(1, |x_L|))` and the bound moved
+    /// to `x − s`, so that every slack stays positive and representable (default:
+    /// `ε_mach^{3/4}` ≈ 1.8e-12; must be positive).
+    pub slack_move: f64,
     /// Scaling method (default: gradient based).
     pub scaling: ScalingMethod,
     /// Target maximal gradient for gradient-based scaling (default: 100).
     pub scaling_max_gradient: f64,
-    /// Objective gradients (∞-norm at the initial point) below this are scaled up to 1 by
-    /// gradient-based scaling (default: 1e-5; 0 disables).
+    /// Objective gradients (∞-norm at the initial point) below this are scaled up to
+    /// `scaling_max_gradient` by gradient-based scaling: from a smaller gradient, the
+    /// absolute `tol` would leave fewer than five orders of magnitude of decrease of the dual
+    /// infeasibility (default: 1e-3; 0 disables).
     pub scaling_min_gradient: f64,
     /// Extra objective factor applied on top of the scaling method (default: 1.0).
     pub obj_scaling_factor: f64,
@@ -207,8 +217,9 @@ pub struct Settings {
     pub resto_required_reduction: f64,
     /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this (default: 1e20).
     pub diverging_iterates_tol: f64,
-    /// Stop with `Unbounded` if the unscaled objective drops below −this at a feasible iterate
-    /// while a variable with a free or one-sided bound reaches a new largest magnitude
+    /// Stop with `Unbounded` if the scaled objective (after the objective scaling of
+    /// `scaling`, so independent of the objective's units) drops below −this at a feasible
+    /// iterate while a variable with a free or one-sided bound reaches a new largest magnitude
     /// (default: 1e15; the collocation objectives of this project are O(1)–O(1e4)).
     pub unbounded_objective: f64,
     /// Scaling cap s_max of the optimality error (default: 100).
@@ -246,9 +257,10 @@ impl Default for Settings {
             warm_start_mult_bound_push: 1e-3,
             kappa_sigma: 1e10,
             kappa_d: 1e-5,
+            slack_move: f64::EPSILON.powf(0.75),
             scaling: ScalingMethod::GradientBased,
             scaling_max_gradient: 100.0,
-            scaling_min_gradient: 1e-5,
+            scaling_min_gradient: 1e-3,
             obj_scaling_factor: 1.0,
             first_hessian_perturbation: 1e-4,
             min_hessian_perturbation: 1e-20,
@@ -348,6 +360,7 @@ impl Settings {
             self.warm_start_mult_bound_push,
         )?;
         pos("kappa_sigma", self.kappa_sigma)?;
+        pos("slack_move", self.slack_move)?;
         pos("scaling_max_gradient", self.scaling_max_gradient)?;
         if !(self.scaling_min_gradient >= 0.0 && self.scaling_min_gradient.is_finite()) {
             return Err(OptimError::InvalidSetting {

@@ -23,7 +23,8 @@ pub enum Status {
     SearchDirectionTooSmall,
     /// ‖x‖_∞ exceeded `diverging_iterates_tol` (typically an unbounded problem).
     DivergingIterates,
-    /// The objective dropped below −`unbounded_objective` at a feasible point.
+    /// The scaled objective dropped below −`unbounded_objective` at a feasible point while a
+    /// variable without a finite lower or upper bound grew.
     Unbounded,
     /// The line search failed and the restoration phase could not find an acceptable point.
     RestorationFailed,
@@ -105,11 +106,15 @@ pub struct Solution {
     pub iterations: usize,
     /// Max violation of the variable and constraint bounds, unscaled.
     pub constraint_violation: f64,
-    /// ‖∇f + Jᵀλ − z_L + z_U‖_∞, unscaled.
+    /// ‖∇f + Jᵀλ − z_L + z_U‖_∞ at the final iterate (the rows of the inequality slacks
+    /// included), unscaled: exactly the value the termination test compares with
+    /// `dual_inf_tol` (so a `Solved` run reports at most `dual_inf_tol`).
     pub dual_infeasibility: f64,
-    /// Max complementarity |(x − x_L) z_L|, |(x_U − x) z_U| (including constraint slacks),
-    /// unscaled, with the bounds relaxed by `bound_relax_factor` as the `Solved` test uses
-    /// them (so a `Solved` run reports at most `compl_inf_tol`).
+    /// Max complementarity |(x − x_L) z_L|, |(x_U − x) z_U| at the final iterate (including
+    /// constraint slacks), unscaled, with the bounds relaxed by `bound_relax_factor` (and
+    /// moved by the `slack_move` safeguard) as the termination test uses them: exactly the
+    /// value it compares with `compl_inf_tol` (so a `Solved` run reports at most
+    /// `compl_inf_tol`).
     pub complementarity: f64,
     /// Final barrier parameter.
     pub mu: f64,
@@ -132,6 +137,14 @@ pub struct IterationInfo {
     pub inf_pr: f64,
     /// Scaled dual infeasibility ‖∇L‖_∞.
     pub inf_du: f64,
+    /// Unscaled dual infeasibility, as the termination test compares it with `dual_inf_tol`
+    /// (see [`Solution::dual_infeasibility`]).
+    #[serde(default)]
+    pub dual_infeasibility: f64,
+    /// Unscaled complementarity, as the termination test compares it with `compl_inf_tol`
+    /// (see [`Solution::complementarity`]).
+    #[serde(default)]
+    pub complementarity: f64,
     /// Barrier parameter μ.
     pub mu: f64,
     /// ‖Δx‖_∞ of the step taken to reach this iterate.

@@ -225,14 +225,14 @@ impl<'a> Reformulated<'a> {
                 let mut grad = vec![0.0; n];
                 nlp.gradient(&xs, &mut grad);
                 let gn = grad.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-                if gn.is_finite() && gn > gmax {
-                    // No floor: the objective is brought to the gradient target however
-                    // large it is, so that its scale does not change the iterates.
+                // Outside [scaling_min_gradient, scaling_max_gradient] the objective is
+                // brought to the gradient target `scaling_max_gradient`, from above (Ipopt,
+                // but without its floor) or from below, so that an objective c·f with such a
+                // gradient is scaled to the same internal objective whatever c: its iterates
+                // and the meaning of the absolute tolerances do not depend on c.
+                if gn.is_finite() && (gn > gmax || (gn > 0.0 && gn < settings.scaling_min_gradient))
+                {
                     obj_scale = gmax / gn;
-                } else if gn > 0.0 && gn < settings.scaling_min_gradient {
-                    // A tiny objective would meet the absolute dual-infeasibility test long
-                    // before its optimum: bring its gradient to ∞-norm 1.
-                    obj_scale = 1.0 / gn;
                 }
                 let mut jv = vec![0.0; user_jac_pat.len()];
                 nlp.jacobian_values(&xs, &mut jv);

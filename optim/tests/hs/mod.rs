@@ -10,7 +10,7 @@
 
 pub mod dual;
 
-use bf_optim::ipm::Nlp;
+use bf_optim::ipm::{Nlp, NlpScaling};
 use dual::D;
 
 const INF: f64 = f64::INFINITY;
@@ -149,22 +149,25 @@ impl Nlp for Hs {
 
 /// An HS problem with its objective multiplied by `obj` and its constraints by `con` (neither
 /// moves the minimiser), and the first gradient entry then multiplied by `grad0` (1: exact
-/// derivatives; any other value: a deliberately wrong gradient for the derivative checker).
+/// derivatives; any other value: a deliberately wrong gradient for the derivative checker);
+/// `scaling` is what [`Nlp::scaling`] returns (used with `ScalingMethod::User`).
 pub struct Transformed {
     pub hs: Hs,
     pub obj: f64,
     pub con: f64,
     pub grad0: f64,
+    pub scaling: Option<NlpScaling>,
 }
 
 impl Transformed {
-    /// `hs` unchanged (every factor 1); set the fields to transform it.
+    /// `hs` unchanged (every factor 1, no user scaling); set the fields to transform it.
     pub fn new(hs: Hs) -> Self {
         Transformed {
             hs,
             obj: 1.0,
             con: 1.0,
             grad0: 1.0,
+            scaling: None,
         }
     }
 }
@@ -211,6 +214,9 @@ impl Nlp for Transformed {
         let l: Vec<f64> = l.iter().map(|v| v * self.con).collect();
         self.hs.hessian_values(x, s * self.obj, &l, v)
     }
+    fn scaling(&self) -> Option<NlpScaling> {
+        self.scaling.clone()
+    }
 }
 
 fn none(_: &[D]) -> Vec<D> {
@@ -249,4 +255,31 @@ pub fn all() -> Vec<Hs> {
     let mut v = set_a::list();
     v.extend(set_b::list());
     v
+}
+
+/// Heading of the section of `optim/HS_RESULTS.md` written by the `hs_scaling` test.
+pub const SCALING_HEADING: &str = "## Scale invariance";
+
+fn results_path() -> &'static str {
+    concat!(env!("CARGO_MANIFEST_DIR"), "/HS_RESULTS.md")
+}
+
+/// Replaces the part of `optim/HS_RESULTS.md` from `heading` on (appended if absent) by
+/// `text`, keeping what precedes it.
+pub fn write_results_section(heading: &str, text: &str) {
+    let old = std::fs::read_to_string(results_path()).unwrap_or_default();
+    let head = match old.find(heading) {
+        Some(i) => &old[..i],
+        None => &old,
+    };
+    std::fs::write(results_path(), format!("{}\n\n{text}", head.trim_end())).unwrap();
+}
+
+/// Replaces the part of `optim/HS_RESULTS.md` before [`SCALING_HEADING`] (the whole file if
+/// that section is absent) by `text`.
+pub fn write_results_head(text: &str) {
+    let old = std::fs::read_to_string(results_path()).unwrap_or_default();
+    let tail = old.find(SCALING_HEADING).map_or("", |i| &old[i..]);
+    let sep = if tail.is_empty() { "" } else { "\n" };
+    std::fs::write(results_path(), format!("{text}{sep}{tail}")).unwrap();
 }

@@ -1,6 +1,8 @@
 //! Barrier quantities of the primal-dual method (Wächter & Biegler 2006, "W&B"):
 //!
-//! * slacks `s_L = x − x_L`, `s_U = x_U − x` to the (relaxed) bounds;
+//! * slacks `s_L = x − x_L`, `s_U = x_U − x` to the (relaxed) bounds, with Ipopt's safeguard
+//!   for slacks that underflow (W&B end of Sect. 3.5, option `slack_move`): the slack becomes
+//!   `μ / z` (within `slack_move` of the bound) and the bound moves to `x ∓ s`;
 //! * the barrier objective `φ_μ(x) = f(x) − μ Σ ln s_L − μ Σ ln s_U + κ_d μ Σ (one-sided
 //!   damping)` (W&B eq. (3), Sect. 3.7) and its gradient `∇φ_μ`;
 //! * `Jᵀy` for the dual residual;
@@ -45,35 +47,71 @@ impl MuRule {
 }
 
 impl Core<'_> {
-    pub(super) fn slacks_of(&self, x: &[f64], sl: &mut [f64], su: &mut [f64]) {
+    /// Slacks below this have underflowed in the rounding of `x − x_L` (Ipopt:
+    /// `ε_mach · min(1, μ)`, at least the smallest positive double).
+    fn slack_floor(&self) -> f64 {
+        let s = f64::EPSILON * self.mu.min(1.0);
+        if s > 0.0 { s } else { f64::MIN_POSITIVE }
+    }
+
+    /// The slack used for the raw slack `raw` to a bound `bound` with multiplier `z`, given the
+    /// floor `s_min` of [`Core::slack_floor`]: `raw` itself when it is at least `s_min`,
+    /// otherwise Ipopt's safe slack `min(max(μ / z, s_min), max(raw, 0) + slack_move ·
+    /// max(1, |bound|))` (W&B end of Sect. 3.5): the value the barrier problem asks for
+    /// (`s z = μ`), moved by no more than `slack_move` relative to the bound.
+    fn safe_slack(&self, raw: f64, bound: f64, z: f64, s_min: f64) -> f64 {
+        if raw >= s_min {
+            return raw;
+        }
+        (self.mu / z)
+            .max(s_min)
+            .min(raw.max(0.0) + self.slack_move * bound.abs().max(1.0))
+    }
+
+    /// Slacks `s_L = x − x_L`, `s_U = x_U − x` at the current iterate. A slack that has
+    /// underflowed is replaced by its safe value ([`Core::safe_slack`], with the multipliers
+    /// of the current iterate) and its bound moved to `x ∓ s`, as Ipopt does, so that the
+    /// slack stays positive and `z = μ / s` finite however close x gets to its bound. Returns
+    /// the number of bounds moved.
+    pub(super) fn update_slacks(&mut self) -> usize {
+        let s_min = self.slack_floor();
+        let mut moved = 0;
         for (k, &j) in self.lo.iter().enumerate() {
-            sl[k] = x[j] - self.xl[j];
+            let raw = self.x[j] - self.xl[j];
+            let s = self.safe_slack(raw, self.xl[j], self.zl[k], s_min);
+            if s != raw {
+                self.xl[j] = self.x[j] - s;
+                moved += 1;
+            }
+            self.sl[k] = s;
         }
         for (k, &j) in self.up.iter().enumerate() {
-            su[k] = self.xu[j] - x[j];
+            let raw = self.xu[j] - self.x[j];
+            let s = self.safe_slack(raw, self.xu[j], self.zu[k], s_min);
+            if s != raw {
+                self.xu[j] = self.x[j] + s;
+                moved += 1;
+            }
+            self.su[k] = s;
         }
+        moved
     }
 
-    pub(super) fn update_slacks(&mut self) {
-        let (mut sl, mut su) = (std::mem::take(&mut self.sl), std::mem::take(&mut self.su));
-        self.slacks_of(&self.x, &mut sl, &mut su);
-        self.sl = sl;
-        self.su = su;
-    }
-
-    /// φ_μ at `x` with objective value `f`; +∞ outside the (relaxed) bounds.
+    /// φ_μ at `x` with objective value `f`, with the safe slacks of [`Core::safe_slack`] (the
+    /// current multipliers); +∞ outside the (relaxed) bounds.
     pub(super) fn barrier_value(&self, x: &[f64], f: f64) -> f64 {
         let mu = self.mu;
+        let s_min = self.slack_floor();
         let mut phi = f;
-        for &j in &self.lo {
-            let s = x[j] - self.xl[j];
+        for (k, &j) in self.lo.iter().enumerate() {
+            let s = self.safe_slack(x[j] - self.xl[j], self.xl[j], self.zl[k], s_min);
             if s <= 0.0 {
                 return f64::INFINITY;
             }
             phi -= mu * s.ln();
         }
-        for &j in &self.up {
-            let s = self.xu[j] - x[j];
+        for (k, &j) in self.up.iter().enumerate() {
+            let s = self.safe_slack(self.xu[j] - x[j], self.xu[j], self.zu[k], s_min);
             if s <= 0.0 {
                 return f64::INFINITY;
             }

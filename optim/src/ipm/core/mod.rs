@@ -3,11 +3,12 @@
 //!
 //! * [`Core::run`]: the outer loop: initial point (W&B Sect. 3.6), optimality error and
 //!   termination ([`termination`]), barrier update ([`barrier`]), search direction with
-//!   inertia correction ([`step`]), filter line search ([`line_search`]), multiplier update
-//!   with the κ_Σ safeguard (W&B eq. (16)), and feasibility restoration
-//!   ([`restoration_phase`]);
+//!   inertia correction ([`step`]), filter line search ([`line_search`]), slack safeguard for
+//!   slacks that underflow (W&B end of Sect. 3.5, [`barrier`]), multiplier update with the
+//!   κ_Σ safeguard (W&B eq. (16)), and feasibility restoration ([`restoration_phase`]);
 //! * [`Ctx`], [`CoreStart`], [`CoreOutput`]: the shared per-solve state, the primal-dual
-//!   starting point and the result, in internal variables.
+//!   starting point and the result, in internal variables (with the unscaled dual
+//!   infeasibility and complementarity of the termination test at the final iterate).
 
 mod barrier;
 mod line_search;
@@ -66,9 +67,12 @@ pub(crate) struct CoreOutput {
     pub z_u: Vec<f64>,
     pub mu: f64,
     pub early_stopped: bool,
-    /// Unscaled complementarity `max |s z|` against the relaxed bounds (slacks included), as
-    /// the `Solved` test measures it.
+    /// Unscaled complementarity `max |s z|` against the relaxed bounds (inequality slacks
+    /// included), as the termination test measures it.
     pub complementarity: f64,
+    /// Unscaled dual infeasibility `‖∇f + Jᵀy − z_L + z_U‖_∞ / σ_f` over the internal variables
+    /// (inequality slacks included), as the termination test measures it.
+    pub dual_infeasibility: f64,
 }
 
 fn norm_inf(v: &[f64]) -> f64 {
@@ -97,6 +101,8 @@ pub(crate) struct Core<'p> {
     zu: Vec<f64>,
     f: f64,
     grad: Vec<f64>,
+    /// The x at which `grad` and `jac` were last evaluated.
+    derivs_x: Vec<f64>,
     c: Vec<f64>,
     jac: Vec<f64>,
     hess: Vec<f64>,
@@ -150,6 +156,8 @@ pub(crate) struct Core<'p> {
     theta_min: f64,
     restoration: bool,
     kappa_d: f64,
+    /// Ipopt's `slack_move` (see [`barrier`]).
+    slack_move: f64,
     /// Largest |x_j| over the variables without a finite lower or upper bound, over all
     /// iterates so far (the unboundedness test).
     unboxed_max: std::cell::Cell<f64>,
@@ -199,6 +207,7 @@ impl<'p> Core<'p> {
             zu: vec![settings.bound_mult_init; nup],
             f: 0.0,
             grad: vec![0.0; n],
+            derivs_x: Vec::new(),
             c: vec![0.0; m],
             jac: vec![0.0; jac_pat.len()],
             hess: vec![0.0; hess_pat.len()],
@@ -237,6 +246,7 @@ impl<'p> Core<'p> {
             theta_min: 0.0,
             restoration: start.restoration,
             kappa_d: settings.kappa_d,
+            slack_move: settings.slack_move,
             unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
             prob,
             xl,
@@ -270,6 +280,7 @@ impl<'p> Core<'p> {
         self.prob.eval_grad(&self.x, &mut self.grad);
         self.prob.eval_jac(&self.x, &mut self.jac);
         ctx.timing.derivative_evals += t.elapsed();
+        self.derivs_x.clone_from(&self.x);
         self.grad.iter().all(|v| v.is_finite()) && self.jac.iter().all(|v| v.is_finite())
     }
 
@@ -347,7 +358,28 @@ impl<'p> Core<'p> {
         );
     }
 
-    fn output(&self, status: Status, early: bool) -> CoreOutput {
+    /// The result at the current iterate. Its dual infeasibility and complementarity are the
+    /// unscaled ones of the termination test ([`Core::unscaled`]) at this iterate, with the
+    /// derivatives re-evaluated first if x moved since they were last evaluated (a restoration
+    /// point); where they are not finite there, the last finite ones stand.
+    fn output(&mut self, ctx: &mut Ctx<'_, '_>, status: Status, early: bool) -> CoreOutput {
+        if self.derivs_x != self.x {
+            let saved = (
+                self.c.clone(),
+                self.grad.clone(),
+                self.jac.clone(),
+                self.derivs_x.clone(),
+            );
+            let (f, ok) = self.eval_fc(ctx, false);
+            if ok && self.eval_derivs(ctx) {
+                self.f = f;
+            } else {
+                (self.c, self.grad, self.jac, self.derivs_x) = saved;
+            }
+        }
+        self.compute_jty();
+        let err = self.errors(ctx.settings);
+        let (dual_infeasibility, _, complementarity) = self.unscaled(&err);
         let mut zl = vec![0.0; self.n];
         let mut zu = vec![0.0; self.n];
         for (k, &j) in self.lo.iter().enumerate() {
@@ -356,15 +388,9 @@ impl<'p> Core<'p> {
         for (k, &j) in self.up.iter().enumerate() {
             zu[j] = self.zu[k];
         }
-        let (os, _) = self.prob.scales();
-        let compl0 = self
-            .sl
-            .iter()
-            .zip(&self.zl)
-            .chain(self.su.iter().zip(&self.zu))
-            .fold(0.0f64, |a, (s, z)| a.max((s * z).abs()));
         CoreOutput {
-            complementarity: compl0 / os,
+            dual_infeasibility,
+            complementarity,
             status,
             x: self.x.clone(),
             y: self.y.clone(),
@@ -470,6 +496,8 @@ impl<'p> Core<'p> {
             objective: 0.0,
             inf_pr: 0.0,
             inf_du: 0.0,
+            dual_infeasibility: 0.0,
+            complementarity: 0.0,
             mu: self.mu,
             step_norm: 0.0,
             delta_w: 0.0,
@@ -490,6 +518,7 @@ impl<'p> Core<'p> {
             last.objective = self.f / os;
             last.inf_pr = err.primal_inf;
             last.inf_du = err.dual_inf;
+            (last.dual_infeasibility, _, last.complementarity) = self.unscaled(&err);
             last.mu = self.mu;
             if lines.is_multiple_of(10) {
                 self.log_header(settings);
@@ -499,14 +528,14 @@ impl<'p> Core<'p> {
             if let Some(cb) = ctx.callback.as_mut()
                 && !cb(&last)
             {
-                return Ok(self.output(Status::UserStop, false));
+                return Ok(self.output(ctx, Status::UserStop, false));
             }
             if self.restoration && self.prob.early_stop(&self.x) {
-                return Ok(self.output(Status::Solved, true));
+                return Ok(self.output(ctx, Status::Solved, true));
             }
             let pr_u = match self.termination(ctx, &err, e0, &mut acceptable_count) {
                 Verdict::Continue { pr_u } => pr_u,
-                Verdict::Stop(status) => return Ok(self.output(status, false)),
+                Verdict::Stop(status) => return Ok(self.output(ctx, status, false)),
             };
             self.update_mu(settings, &mut mu_rule, &err, e0);
             // search direction
@@ -535,7 +564,7 @@ impl<'p> Core<'p> {
                 if tiny {
                     tiny_count += 1;
                     if tiny_count >= 2 && self.mu <= mu_rule.floor {
-                        return Ok(self.output(Status::SearchDirectionTooSmall, false));
+                        return Ok(self.output(ctx, Status::SearchDirectionTooSmall, false));
                     }
                     mu_rule.force_decrease = true;
                     let amax = self.max_step_primal(&self.dx);
@@ -591,14 +620,14 @@ impl<'p> Core<'p> {
                     } else {
                         Status::ErrorInStepComputation
                     };
-                    return Ok(self.output(st, false));
+                    return Ok(self.output(ctx, st, false));
                 }
                 if e0 <= settings.acceptable_tol && pr_u <= settings.acceptable_constr_viol_tol {
-                    return Ok(self.output(Status::Acceptable, false));
+                    return Ok(self.output(ctx, Status::Acceptable, false));
                 }
                 match self.restoration_phase(ctx, settings)? {
                     None => {}
-                    Some(st) => return Ok(self.output(st, false)),
+                    Some(st) => return Ok(self.output(ctx, st, false)),
                 }
                 last.restoration = false;
                 last.step_norm = 0.0;
@@ -613,6 +642,9 @@ impl<'p> Core<'p> {
             std::mem::swap(&mut self.x, &mut self.x_t);
             std::mem::swap(&mut self.c, &mut self.c_t);
             self.f = self.f_t;
+            // Slacks before the multipliers move: an underflowed slack takes μ / z with the z
+            // the trial point was judged with (as Ipopt's trial slacks).
+            self.update_slacks();
             for i in 0..self.m {
                 self.y[i] += accepted_alpha * self.dy[i];
             }
@@ -622,7 +654,6 @@ impl<'p> Core<'p> {
             for k in 0..self.zu.len() {
                 self.zu[k] += alpha_z * self.dzu[k];
             }
-            self.update_slacks();
             // κ_Σ safeguard (W&B eq. (16))
             let ks = settings.kappa_sigma;
             let mu = self.mu;

@@ -7,9 +7,9 @@
 //!   constraint scaling undone) that `Solved` also requires, as Ipopt's `dual_inf_tol`,
 //!   `constr_viol_tol` and `compl_inf_tol`;
 //! * the "acceptable" level (W&B Sect. 3.9) and the stops for unboundedness (a very negative
-//!   objective at a feasible point while a variable with a free or one-sided bound grows; never
-//!   for an all-boxed problem), diverging iterates, the iteration limit and the wall-clock
-//!   limit.
+//!   scaled objective, so that the verdict does not depend on the objective's units, at a
+//!   feasible point while a variable with a free or one-sided bound grows; never for an
+//!   all-boxed problem), diverging iterates, the iteration limit and the wall-clock limit.
 
 use super::{Core, Ctx, norm_1, norm_inf};
 use crate::ipm::settings::Settings;
@@ -132,7 +132,6 @@ impl Core<'_> {
         acceptable_count: &mut usize,
     ) -> Verdict {
         let settings = ctx.settings;
-        let (os, _) = self.prob.scales();
         let (du_u, pr_u, co_u) = self.unscaled(err);
         if e0 <= settings.tol
             && du_u <= settings.dual_inf_tol
@@ -165,7 +164,7 @@ impl Core<'_> {
         if !self.restoration
             && growing
             && pr_u <= settings.constr_viol_tol
-            && self.f / os < -settings.unbounded_objective
+            && self.f < -settings.unbounded_objective
         {
             return Verdict::Stop(Status::Unbounded);
         }
