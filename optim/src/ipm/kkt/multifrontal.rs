@@ -29,9 +29,10 @@
 //!   panels of `L`, the block-diagonal `D⁻¹`, backward substitution in reverse, all in the
 //!   original indexing (each front stores the original indices of its rows).
 
-use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
+use faer::sparse::linalg::cholesky::SymbolicCholesky;
 
 use super::Inertia;
+use super::supernodal::simplicial_structure;
 
 const NONE: usize = usize::MAX;
 
@@ -142,13 +143,7 @@ impl MultifrontalPlan {
         threshold: f64,
         nemin: usize,
     ) -> Option<Self> {
-        let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
-            return None;
-        };
-        let perm = sym.perm()?;
-        let (fwd, inv) = perm.arrays();
-        let lp = s.col_ptr();
-        let lr = s.row_idx();
+        let (fwd, inv, lp, lr) = simplicial_structure(sym)?;
         if dim == 0 || dim >= u32::MAX as usize || row_idx.len() >= u32::MAX as usize {
             return None;
         }

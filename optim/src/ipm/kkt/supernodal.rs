@@ -10,6 +10,20 @@ use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 use super::Inertia;
 use super::simplicial::{axpy_scatter, scatter_sub};
 
+/// The AMD permutation (`fwd`, `inv`) and the simplicial `L` structure (column pointers, row
+/// indices) of faer's symbolic analysis, which the supernodal and multifrontal plans are built
+/// on; `None` if faer chose a supernodal analysis or no permutation.
+#[allow(clippy::type_complexity)]
+pub(super) fn simplicial_structure(
+    sym: &SymbolicCholesky<usize>,
+) -> Option<(&[usize], &[usize], &[usize], &[usize])> {
+    let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
+        return None;
+    };
+    let (fwd, inv) = sym.perm()?.arrays();
+    Some((fwd, inv, s.col_ptr(), s.row_idx()))
+}
+
 /// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
 /// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
 /// structure (`parent(j) = j + 1`, `|L_j| = |L_{j+1}| + 1`) are stored as dense column-major
@@ -78,13 +92,7 @@ impl BlockPlan {
         row_idx: &[usize],
         pair_first: &[bool],
     ) -> Option<Self> {
-        let SymbolicCholeskyRaw::Simplicial(s) = sym.raw() else {
-            return None;
-        };
-        let perm = sym.perm()?;
-        let (fwd, inv) = perm.arrays();
-        let lp = s.col_ptr();
-        let lr = s.row_idx();
+        let (fwd, inv, lp, lr) = simplicial_structure(sym)?;
         if *lp.last()? > u32::MAX as usize || dim >= u32::MAX as usize || dim == 0 {
             return None;
         }

@@ -231,19 +231,40 @@ fn prepared_simplicial_path_is_bitwise_faer() {
     }
 }
 
-/// Random KKT-like matrix `[H + shift I, Jᵀ; J, −1e-9 I]` with a block-banded Hessian
-/// (dense element blocks, like collocation), some zero primal diagonals, a dense column.
-fn random_kkt(seed: u64, n: usize, m: usize, shift: f64) -> (KktPattern, Vec<Vec<f64>>) {
+/// Shape of a random block-banded KKT from [`banded_kkt`].
+struct KktShape {
+    /// Every `zero_diag_every`-th variable has no Hessian diagonal.
+    zero_diag_every: usize,
+    /// Size of the dense element blocks of `H`.
+    block: usize,
+    /// Probability of each off-diagonal entry inside a block.
+    density: f64,
+    /// Variables per constraint row (besides the dense last column).
+    row_vars: usize,
+    /// Spacing of a row's variables.
+    stride: usize,
+}
+
+/// Random KKT-like matrix `[H + diag(diag_x), Jᵀ; J, −δ_c I]` with a block-banded indefinite
+/// Hessian (dense element blocks, like collocation), some zero primal diagonals, constraint
+/// rows of `shape.row_vars` variables each and a dense last column. Returns the pattern (values
+/// assembled) and the dense matrix.
+fn banded_kkt(
+    seed: u64,
+    (n, m): (usize, usize),
+    shape: &KktShape,
+    diag_x: &[f64],
+    delta_c: f64,
+) -> (KktPattern, Vec<Vec<f64>>) {
     use rand::{Rng, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut hess = Vec::new();
     for i in 0..n {
-        if i % 7 != 0 {
+        if i % shape.zero_diag_every != 0 {
             hess.push((i, i, rng.random_range(-1.0..3.0)));
         }
-        // dense element blocks of 8 variables
-        for j in (i / 8) * 8..i {
-            if rng.random_bool(0.7) {
+        for j in (i / shape.block) * shape.block..i {
+            if rng.random_bool(shape.density) {
                 hess.push((i, j, rng.random_range(-0.5..0.5)));
             }
         }
@@ -251,9 +272,12 @@ fn random_kkt(seed: u64, n: usize, m: usize, shift: f64) -> (KktPattern, Vec<Vec
     let mut jac = Vec::new();
     for r in 0..m {
         let base = (r * n) / m;
-        for k in 0..6 {
-            let c = (base + k * 3) % n;
-            jac.push((r, c, rng.random_range(-2.0..2.0)));
+        for k in 0..shape.row_vars {
+            jac.push((
+                r,
+                (base + k * shape.stride) % n,
+                rng.random_range(-2.0..2.0),
+            ));
         }
         jac.push((r, n - 1, 1.0));
     }
@@ -262,7 +286,7 @@ fn random_kkt(seed: u64, n: usize, m: usize, shift: f64) -> (KktPattern, Vec<Vec
     let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
     let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
     let mut pat = KktPattern::new(n, m, &hp, &jp);
-    pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
+    pat.assemble(&hv, &jv, diag_x, -delta_c);
     let dim = n + m;
     let mut dense = vec![vec![0.0; dim]; dim];
     for j in 0..dim {
@@ -275,6 +299,19 @@ fn random_kkt(seed: u64, n: usize, m: usize, shift: f64) -> (KktPattern, Vec<Vec
         }
     }
     (pat, dense)
+}
+
+/// Random KKT-like matrix `[H + shift I, Jᵀ; J, −1e-9 I]` ([`banded_kkt`] with element blocks of
+/// 8 variables and rows of 6).
+fn random_kkt(seed: u64, n: usize, m: usize, shift: f64) -> (KktPattern, Vec<Vec<f64>>) {
+    let shape = KktShape {
+        zero_diag_every: 7,
+        block: 8,
+        density: 0.7,
+        row_vars: 6,
+        stride: 3,
+    };
+    banded_kkt(seed, (n, m), &shape, &vec![shift; n], 1e-9)
 }
 
 /// The supernodal block kernel against independent computations on random indefinite

@@ -18,32 +18,13 @@ fn pivoting_kkt(
     big_every: usize,
     delta_c: f64,
 ) -> (KktPattern, Vec<Vec<f64>>) {
-    use rand::{Rng, SeedableRng};
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let mut hess = Vec::new();
-    for i in 0..n {
-        if i % 5 != 0 {
-            hess.push((i, i, rng.random_range(-1.0..3.0)));
-        }
-        for j in (i / 6) * 6..i {
-            if rng.random_bool(0.6) {
-                hess.push((i, j, rng.random_range(-0.5..0.5)));
-            }
-        }
-    }
-    let mut jac = Vec::new();
-    for r in 0..m {
-        let base = (r * n) / m;
-        for k in 0..5 {
-            jac.push((r, (base + 2 * k) % n, rng.random_range(-2.0..2.0)));
-        }
-        jac.push((r, n - 1, 1.0));
-    }
-    let hp: Vec<_> = hess.iter().map(|&(r, c, _)| (r, c)).collect();
-    let jp: Vec<_> = jac.iter().map(|&(r, c, _)| (r, c)).collect();
-    let hv: Vec<_> = hess.iter().map(|&(_, _, v)| v).collect();
-    let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
-    let mut pat = KktPattern::new(n, m, &hp, &jp);
+    let shape = KktShape {
+        zero_diag_every: 5,
+        block: 6,
+        density: 0.6,
+        row_vars: 5,
+        stride: 2,
+    };
     let diag_x: Vec<f64> = (0..n)
         .map(|i| {
             if big_every > 0 && i % big_every == 1 {
@@ -53,19 +34,7 @@ fn pivoting_kkt(
             }
         })
         .collect();
-    pat.assemble(&hv, &jv, &diag_x, -delta_c);
-    let dim = n + m;
-    let mut dense = vec![vec![0.0; dim]; dim];
-    for j in 0..dim {
-        for p in pat.mat.col_ptr[j]..pat.mat.col_ptr[j + 1] {
-            let i = pat.mat.row_idx[p];
-            dense[i][j] += pat.mat.values[p];
-            if i != j {
-                dense[j][i] += pat.mat.values[p];
-            }
-        }
-    }
-    (pat, dense)
+    banded_kkt(seed, (n, m), &shape, &diag_x, delta_c)
 }
 
 /// Inertia of a dense symmetric matrix from Jacobi eigenvalues of its diagonally equilibrated
