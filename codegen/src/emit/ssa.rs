@@ -369,13 +369,18 @@ impl TextPrinter<'_> {
         out.push_str("::");
         out.push_str(f);
         out.push('(');
+        self.operands(out, args);
+        out.push(')');
+    }
+
+    /// `args` separated by `, `.
+    fn operands(&self, out: &mut String, args: &[Operand]) {
         for (k, &a) in args.iter().enumerate() {
             if k > 0 {
                 out.push_str(", ");
             }
             self.operand(out, a);
         }
-        out.push(')');
     }
 
     fn binary(&self, out: &mut String, a: Operand, op: &str, b: Operand) {
@@ -458,12 +463,7 @@ impl TextPrinter<'_> {
                     let _ = write!(out, "{}t{c}", if k > 0 { ", " } else { "" });
                 }
                 out.push_str("]) = sin_cos_n([");
-                for (k, &a) in args.iter().enumerate() {
-                    if k > 0 {
-                        out.push_str(", ");
-                    }
-                    self.operand(out, a);
-                }
+                self.operands(out, args);
                 out.push_str("]);");
             }
             Stmt::SinCosLanes { s, c, x } => {
