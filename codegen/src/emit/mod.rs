@@ -251,11 +251,11 @@ pub fn emit_kernel_with(
                 let mut it = o.ids.iter();
                 for (field, dims, _) in CONTACT_FIELDS {
                     for path in index_texts(dims, layout.nq) {
-                        let id = *it.next().ok_or_else(|| {
-                            CodegenError::Internal(InternalDefect::Other(
-                                "contact output size mismatch",
-                            ))
-                        })?;
+                        let id =
+                            *it.next()
+                                .ok_or(CodegenError::Internal(InternalDefect::Other(
+                                    "contact output size mismatch",
+                                )))?;
                         assign(&mut body, format_args!("{}.{field}{path}", o.name), id);
                     }
                 }

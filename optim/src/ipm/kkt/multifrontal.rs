@@ -32,7 +32,7 @@
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 
 use super::Inertia;
-use super::supernodal::simplicial_structure;
+use super::supernodal::{counted_pivot, simplicial_structure};
 
 const NONE: usize = usize::MAX;
 
@@ -680,19 +680,8 @@ fn eliminate(
         match choice {
             Choice::One(j) => {
                 swap_sym(f, nf, rows, k, j);
-                let mut d = f[k * nf + k];
-                if delta > 0.0 && d.abs() <= eps {
-                    d = if d < 0.0 { -delta } else { delta };
-                    piv.static_pivots += 1;
-                }
-                if d == 0.0 || !d.is_finite() {
-                    return None;
-                }
-                if d > 0.0 {
-                    inertia.positive += 1;
-                } else {
-                    inertia.negative += 1;
-                }
+                let (d, replaced) = counted_pivot(f[k * nf + k], delta, eps, inertia)?;
+                piv.static_pivots += usize::from(replaced);
                 f[k * nf + k] = d;
                 let inv = d.recip();
                 let (head, tail) = f.split_at_mut((k + 1) * nf);

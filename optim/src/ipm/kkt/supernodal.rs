@@ -24,6 +24,31 @@ pub(super) fn simplicial_structure(
     Some((fwd, inv, s.col_ptr(), s.row_idx()))
 }
 
+/// A 1 × 1 pivot `d` after static pivoting (`|d| ≤ eps` replaced by `±delta` when `delta > 0`;
+/// whether it was replaced), counted into `inertia`; `None` for a zero or non-finite pivot.
+pub(super) fn counted_pivot(
+    d: f64,
+    delta: f64,
+    eps: f64,
+    inertia: &mut Inertia,
+) -> Option<(f64, bool)> {
+    let replaced = delta > 0.0 && d.abs() <= eps;
+    let d = if replaced {
+        if d < 0.0 { -delta } else { delta }
+    } else {
+        d
+    };
+    if d == 0.0 || !d.is_finite() {
+        return None;
+    }
+    if d > 0.0 {
+        inertia.positive += 1;
+    } else {
+        inertia.negative += 1;
+    }
+    Some((d, replaced))
+}
+
 /// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
 /// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
 /// structure (`parent(j) = j + 1`, `|L_j| = |L_{j+1}| + 1`) are stored as dense column-major
@@ -305,18 +330,7 @@ impl BlockPlan {
                 }
                 if !two {
                     let col = &mut blk[c * nr + c..(c + 1) * nr];
-                    let mut d = col[0];
-                    if delta > 0.0 && d.abs() <= eps {
-                        d = if d < 0.0 { -delta } else { delta };
-                    }
-                    if d == 0.0 || !d.is_finite() {
-                        return None;
-                    }
-                    if d > 0.0 {
-                        inertia.positive += 1;
-                    } else {
-                        inertia.negative += 1;
-                    }
+                    let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;
                     col[0] = d;
                     let inv = d.recip();
                     col[1..].iter_mut().for_each(|v| *v *= inv);
