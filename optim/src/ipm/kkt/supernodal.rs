@@ -330,7 +330,7 @@ impl BlockPlan {
                 }
                 if !two {
                     let col = &mut blk[c * nr + c..(c + 1) * nr];
-                    let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;
+                    let (d, _) = counted_pivot(col[0], delta, eps, &mut inertia)?;
                     col[0] = d;
                     let inv = d.recip();
                     col[1..].iter_mut().for_each(|v| *v *= inv);
