@@ -360,7 +360,7 @@ impl KktSolver for SparseLdlt {
                 self.pivot_threshold,
                 self.amalgamation.max(1),
             )
-            .ok_or_else(|| OptimError::Factorization(FactorizationError::TooLarge))?;
+            .ok_or(OptimError::Factorization(FactorizationError::TooLarge))?;
             self.kernel = Kernel::Multifrontal(Box::new(plan));
             self.faer = Some(faer);
             self.factored = false;
