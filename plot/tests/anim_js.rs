@@ -171,27 +171,42 @@ fn headless_chromium_draws_and_advances() {
     };
     let d = tmp("chromium");
     let p = write_animation_html(&animation(), d.join("a.html")).unwrap();
-    let o = Command::new(browser)
-        .args([
-            "--headless",
-            "--disable-gpu",
-            "--no-sandbox",
-            "--virtual-time-budget=5000",
-            "--dump-dom",
-        ])
-        .arg(format!("file://{}", p.display()))
-        .output()
-        .unwrap();
-    let dom = String::from_utf8_lossy(&o.stdout);
-    assert!(!dom.contains("data-error=\""), "script error: {dom}");
-    let attr = |k: &str| -> f64 {
-        let i = dom
-            .find(&format!("{k}=\""))
-            .unwrap_or_else(|| panic!("{k} not set"));
-        let v = &dom[i + k.len() + 2..];
-        v[..v.find('"').unwrap()].parse().unwrap()
-    };
-    assert!(attr("data-drawn") > 2.0, "did not advance");
-    assert!(attr("data-time") > 0.0, "time did not advance");
+    // Headless Chromium produces animation frames within its virtual-time budget only when the
+    // renderer gets scheduled; on a loaded machine a run can end before the second frame. The
+    // script's timing is checked deterministically by the Node test above; here each of up to
+    // three runs must be free of script errors, and one of them must draw and advance.
+    let mut advanced = None;
+    for _ in 0..3 {
+        let o = Command::new(browser)
+            .args([
+                "--headless",
+                "--disable-gpu",
+                "--no-sandbox",
+                "--virtual-time-budget=5000",
+                "--dump-dom",
+            ])
+            .arg(format!("file://{}", p.display()))
+            .output()
+            .unwrap();
+        let dom = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(!dom.contains("data-error=\""), "script error: {dom}");
+        // A run the browser ended before the script set its attributes (empty DOM dump) counts
+        // as one that did not advance.
+        let attr = |k: &str| -> Option<f64> {
+            let i = dom.find(&format!("{k}=\""))?;
+            let v = &dom[i + k.len() + 2..];
+            v[..v.find('"')?].parse().ok()
+        };
+        let (drawn, time) = (attr("data-drawn"), attr("data-time"));
+        if drawn.is_some_and(|d| d > 2.0) && time.is_some_and(|t| t > 0.0) {
+            advanced = Some(dom);
+            break;
+        }
+        println!(
+            "headless run drew {drawn:?} frames up to t = {time:?} (status {}); retrying",
+            o.status
+        );
+    }
+    let dom = advanced.expect("did not draw and advance in three headless runs");
     assert!(dom.contains("class=\"ball\""));
 }
