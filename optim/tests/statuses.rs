@@ -118,10 +118,9 @@ fn infeasible_bounds_and_linear_constraint() {
     assert!(sol.iterations < 200);
 }
 
-#[test]
-fn unbounded_problems_report_divergence() {
-    // min −x₁ − x₂ s.t. x₁ − x₂ = 0, x ≥ 0: unbounded below along x₁ = x₂ → ∞.
-    let p = problem(
+/// min −x₁ − x₂ s.t. x₁ − x₂ = 0, x ≥ 0: unbounded below along x₁ = x₂ → ∞.
+fn diagonal_unbounded() -> Hs {
+    problem(
         &[1.0, 2.0],
         &[0.0; 2],
         &[INF; 2],
@@ -129,7 +128,12 @@ fn unbounded_problems_report_divergence() {
         1,
         |x| -x[0] - x[1],
         |x| vec![x[0] - x[1]],
-    );
+    )
+}
+
+#[test]
+fn unbounded_problems_report_divergence() {
+    let p = diagonal_unbounded();
     let sol = solve(&p, &Settings::default()).unwrap();
     assert!(
         matches!(sol.status, Status::DivergingIterates | Status::Unbounded),
@@ -157,15 +161,7 @@ fn unbounded_problems_report_divergence() {
 #[test]
 fn unbounded_problems_stay_unbounded_under_objective_scaling() {
     for c in [1.0, 1e-8, 1e8, 1e12] {
-        let p = problem(
-            &[1.0, 2.0],
-            &[0.0; 2],
-            &[INF; 2],
-            1,
-            1,
-            |x| -x[0] - x[1],
-            |x| vec![x[0] - x[1]],
-        );
+        let p = diagonal_unbounded();
         let t = hs::Transformed {
             obj: c,
             ..hs::Transformed::new(p)
