@@ -68,6 +68,12 @@ impl Core<'_> {
             .min(raw.max(0.0) + self.slack_move * bound.abs().max(1.0))
     }
 
+    /// Whether the raw slack `raw` to `bound` lies outside the bound by more than the safeguard
+    /// may move it (or is NaN): a trial point there is infeasible, not a rounded slack.
+    fn violates(&self, raw: f64, bound: f64) -> bool {
+        raw.is_nan() || raw <= -self.slack_move * bound.abs().max(1.0)
+    }
+
     /// Slacks `s_L = x − x_L`, `s_U = x_U − x` at the current iterate. A slack that has
     /// underflowed is replaced by its safe value ([`Core::safe_slack`], with the multipliers
     /// of the current iterate) and its bound moved to `x ∓ s`, as Ipopt does, so that the
@@ -98,24 +104,25 @@ impl Core<'_> {
     }
 
     /// φ_μ at `x` with objective value `f`, with the safe slacks of [`Core::safe_slack`] (the
-    /// current multipliers); +∞ outside the (relaxed) bounds.
+    /// current multipliers); +∞ where a slack is beyond its bound by more than the safeguard's
+    /// move ([`Core::violates`]).
     pub(super) fn barrier_value(&self, x: &[f64], f: f64) -> f64 {
         let mu = self.mu;
         let s_min = self.slack_floor();
         let mut phi = f;
         for (k, &j) in self.lo.iter().enumerate() {
-            let s = self.safe_slack(x[j] - self.xl[j], self.xl[j], self.zl[k], s_min);
-            if s <= 0.0 {
+            let raw = x[j] - self.xl[j];
+            if self.violates(raw, self.xl[j]) {
                 return f64::INFINITY;
             }
-            phi -= mu * s.ln();
+            phi -= mu * self.safe_slack(raw, self.xl[j], self.zl[k], s_min).ln();
         }
         for (k, &j) in self.up.iter().enumerate() {
-            let s = self.safe_slack(self.xu[j] - x[j], self.xu[j], self.zu[k], s_min);
-            if s <= 0.0 {
+            let raw = self.xu[j] - x[j];
+            if self.violates(raw, self.xu[j]) {
                 return f64::INFINITY;
             }
-            phi -= mu * s.ln();
+            phi -= mu * self.safe_slack(raw, self.xu[j], self.zu[k], s_min).ln();
         }
         let kd = self.kappa_d * mu;
         if kd > 0.0 {
