@@ -15,9 +15,22 @@ use std::path::{Path, PathBuf};
 
 /// Decoded PNG: (width, height, rgb pixels).
 fn png(path: &Path) -> (u32, u32, Vec<[u8; 3]>) {
-    let img = image::open(path).expect("PNG decodes").to_rgb8();
-    let (w, h) = img.dimensions();
-    (w, h, img.pixels().map(|p| p.0).collect())
+    let file = std::fs::File::open(path).expect("PNG opens");
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .expect("PNG header decodes");
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).expect("PNG decodes");
+    assert_eq!(
+        (info.color_type, info.bit_depth),
+        (png::ColorType::Rgb, png::BitDepth::Eight),
+        "8-bit RGB"
+    );
+    let px = buf[..info.buffer_size()]
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    (info.width, info.height, px)
 }
 
 fn count_colour(px: &[[u8; 3]], c: (u8, u8, u8)) -> usize {

@@ -7,7 +7,7 @@
 //! [`PanelFigure`]: several `LineFigure`s stacked in rows or side by side (e.g. ω_x, ω_y, ω_z).
 //!
 //! Layout is decided in pixels before anything is drawn, identically for both outputs (the SVG
-//! is written with fractional coordinates, the PNG through plotters' bitmap backend, see
+//! is written with fractional coordinates, the PNG through plotters' bitmap backend into memory, encoded by the `png` crate, see
 //! `canvas`): ticks come from [`crate::ticks`] (labels equal the value at their position);
 //! switching-time labels sit in rows above the axes, staggered so that none overlap; the
 //! legend goes into the corner with no data under it, and if every corner has data, head room
@@ -368,9 +368,11 @@ fn render_impl(
     draw_all(&mut svg, size, title, panels, &prepared, layout)?;
     write_atomic(&svg_path, svg.finish().as_bytes())?;
 
-    let tmp = tmp_sibling(&png_path);
-    let res = (|| {
-        let root = BitMapBackend::new(&tmp, size).into_drawing_area();
+    // Drawn into memory and encoded here, so that a failed draw leaves no file behind and the
+    // PNG is replaced atomically like the SVG.
+    let mut rgb = vec![0u8; 3 * size.0 as usize * size.1 as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
         root.fill(&WHITE).map_err(de)?;
         draw_all(
             &mut PngCanvas::new(&root),
@@ -380,16 +382,9 @@ fn render_impl(
             &prepared,
             layout,
         )?;
-        root.present().map_err(de)
-    })();
-    match res {
-        Ok(()) => std::fs::rename(&tmp, &png_path)
-            .map_err(|e| FileError::new("cannot rename the finished bitmap onto", &png_path, e))?,
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            return Err(e);
-        }
+        root.present().map_err(de)?;
     }
+    write_atomic(&png_path, &encode_png(&rgb, size)?)?;
     Ok(RenderReport {
         paths: [svg_path, png_path],
         skipped_points,
@@ -408,18 +403,17 @@ fn with_ext(stem: &Path, ext: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-/// A temporary name next to `path`, keeping its extension (the bitmap encoder picks the
-/// format from it).
-fn tmp_sibling(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp{}.{ext}", std::process::id()))
+/// Encodes 8-bit RGB pixels (row-major, `3 · width · height` bytes) as a PNG file's bytes.
+pub(crate) fn encode_png(rgb: &[u8], (width, height): (u32, u32)) -> Result<Vec<u8>, PlotError> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder
+        .write_header()
+        .and_then(|mut w| w.write_image_data(rgb))
+        .map_err(|e| PlotError::Draw(format!("PNG encoding failed: {e}")))?;
+    Ok(out)
 }
 
 /// Writes `bytes` to `path` via a uniquely named temporary sibling and a rename, so readers
