@@ -4,6 +4,9 @@
 //!   dropped from the paper's initial guess q = (0.1, 0.5, 0.5) onto the ball (τ = 0, Newton's
 //!   impact law, friction and damping on), which hits, slips, sticks and lifts off
 //!   (events printed once). Target: < 10 ms (≥ 1000× real time).
+//! * `paper_10s_contact/dopri5_rtol1e-8_dyn`: the same run with the system passed as a trait
+//!   object (`&dyn HybridSystem`), as the CLI and the study layer pass it: the cost of the
+//!   virtual calls, compared in the same run.
 //! * `paper_10s_contact/rk4_h1e-3`: the same with RK4 at h = 1 ms.
 //! * A work-precision table (DOPRI5 rtol 1e-3 … 1e-12, RK4 h = 1e-2 … 1e-4; error of x(T)
 //!   against an rtol = 1e-13 reference vs CPU time), from `bf_sim::work_precision`, printed to
@@ -14,7 +17,7 @@
 use ball_finger::study::speed_accuracy::integrators::{dropped_finger, sim_settings};
 use bf_model::Mode;
 use bf_sim::work_precision::{RK4_LADDER, RTOL_LADDER, ladder};
-use bf_sim::{Method, SimSettings, format_table, simulate, work_precision};
+use bf_sim::{HybridSystem, Method, SimSettings, format_table, simulate, work_precision};
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
 
@@ -80,6 +83,20 @@ fn bench(c: &mut Criterion) {
         b.iter(|| {
             simulate(
                 &sys,
+                settings(Method::Dopri5, 1e-8),
+                Mode::Free,
+                0.0,
+                black_box(&x0),
+                10.0,
+            )
+            .expect("runs")
+        })
+    });
+    let dyn_sys: &dyn HybridSystem<Mode = Mode> = &sys;
+    g.bench_function("dopri5_rtol1e-8_dyn", |b| {
+        b.iter(|| {
+            simulate(
+                dyn_sys,
                 settings(Method::Dopri5, 1e-8),
                 Mode::Free,
                 0.0,

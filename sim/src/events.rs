@@ -39,7 +39,7 @@ const NOISE_FRACTION: f64 = 1e-6;
 use crate::{Direction, Guard, HybridSystem, SimError};
 
 /// Evaluates the guards of one mode on a dense interpolant, with scratch space.
-pub(crate) struct GuardProbe<'a, S: HybridSystem> {
+pub(crate) struct GuardProbe<'a, S: HybridSystem + ?Sized> {
     pub sys: &'a S,
     pub mode: S::Mode,
     pub dense: &'a Dense,
@@ -48,7 +48,7 @@ pub(crate) struct GuardProbe<'a, S: HybridSystem> {
     pub evals: usize,
 }
 
-impl<S: HybridSystem> GuardProbe<'_, S> {
+impl<S: HybridSystem + ?Sized> GuardProbe<'_, S> {
     /// Evaluates all guards at `t`, then returns guard `j`.
     fn value(&mut self, t: f64, j: usize, name: &str) -> Result<f64, SimError> {
         self.dense.eval(t, &mut self.x);
@@ -87,7 +87,7 @@ pub(crate) fn beyond_triggered(dir: Direction, v: f64, tol: f64) -> bool {
 
 /// Illinois false position on the oriented function φ(t) = s·g(t), φ(a) > 0 ≥ φ(b), until
 /// b − a ≤ tol. Returns the crossed-side end b.
-fn illinois<S: HybridSystem>(
+fn illinois<S: HybridSystem + ?Sized>(
     probe: &mut GuardProbe<'_, S>,
     j: usize,
     name: &str,
@@ -147,7 +147,7 @@ pub(crate) struct GuardScan {
 
 /// Scans guard `j` over the step described by `ts` (sample times, ts[0] = t₀) and `vals`
 /// (vals[k] = gⱼ(ts[k])), locating the earliest event in its direction.
-pub(crate) fn scan_guard<S: HybridSystem>(
+pub(crate) fn scan_guard<S: HybridSystem + ?Sized>(
     probe: &mut GuardProbe<'_, S>,
     j: usize,
     guard: &Guard,
@@ -234,7 +234,7 @@ enum Class {
 /// Handles a guard that started on its surface (see the module docs). The samples up to the
 /// first clear one, ts[k], are refined by probes t₀ + (ts[k] − t₀)/2ⁱ down to `event_tol`, so
 /// the side to which the state departs from the surface is seen however short the excursion.
-fn scan_masked<S: HybridSystem>(
+fn scan_masked<S: HybridSystem + ?Sized>(
     probe: &mut GuardProbe<'_, S>,
     j: usize,
     guard: &Guard,

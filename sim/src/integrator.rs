@@ -169,7 +169,7 @@ impl StepBuffers {
 
 /// One DOPRI5 step of size `h` from (t₀, x₀) with f₀ = f(t₀, x₀) in mode `mode`. Fills
 /// `buf.x1`, `buf.f1`, `buf.err` and `buf.dense`; errors only if the system returns one.
-pub fn dopri5_step<S: HybridSystem>(
+pub fn dopri5_step<S: HybridSystem + ?Sized>(
     sys: &S,
     mode: S::Mode,
     t0: f64,
@@ -238,7 +238,7 @@ pub fn dopri5_step<S: HybridSystem>(
 
 /// One classic RK4 step of size `h` from (t₀, x₀) with f₀ = f(t₀, x₀). Fills `buf.x1`,
 /// `buf.f1` = f(t₁, x₁), `buf.err` = 0 and a cubic Hermite `buf.dense`.
-pub fn rk4_step<S: HybridSystem>(
+pub fn rk4_step<S: HybridSystem + ?Sized>(
     sys: &S,
     mode: S::Mode,
     t0: f64,
@@ -307,7 +307,7 @@ pub fn error_norm(err: &[f64], x0: &[f64], x1: &[f64], rtol: f64, atol: f64) -> 
 
 /// Starting step size (Hairer, Nørsett & Wanner, Sect. II.4): h₀ from ‖x₀‖/‖f₀‖, refined by an
 /// estimate of the second derivative from one explicit Euler step, for a method of order 5.
-pub(crate) fn initial_step<S: HybridSystem>(
+pub(crate) fn initial_step<S: HybridSystem + ?Sized>(
     sys: &S,
     mode: S::Mode,
     t0: f64,

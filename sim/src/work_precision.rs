@@ -72,7 +72,7 @@ pub fn ladder(
 type RunResult<M> = Result<(Vec<f64>, Vec<EventRecord<M>>, SimStats), Box<(SimError, SimStats)>>;
 
 /// One run to `t_end` without storing samples; returns the final state, events and counters.
-fn run_to_end<S: HybridSystem>(
+fn run_to_end<S: HybridSystem + ?Sized>(
     sys: &S,
     set: &SimSettings,
     mode0: S::Mode,
@@ -102,7 +102,7 @@ fn run_to_end<S: HybridSystem>(
 /// Runs `sys` from (`mode0`, `t0`, `x0`) to `t_end` once with `reference` settings and then with
 /// every entry of `configs` (`repeats` ≥ 1 times each, best time kept), and returns one row per
 /// configuration. Fails only if the reference run fails.
-pub fn work_precision<S: HybridSystem>(
+pub fn work_precision<S: HybridSystem + ?Sized>(
     sys: &S,
     mode0: S::Mode,
     t0: f64,

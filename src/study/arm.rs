@@ -29,7 +29,7 @@ use bf_problem::arm::{
     ArmSettings, ArmSolution, ArmVerification, arm_solution_at, build_reach_arm,
 };
 use bf_sim::arm::{ArmMode, FreeArm};
-use bf_sim::{Input, SimError, SimSettings};
+use bf_sim::{HybridSystem, Input, SimError, SimSettings};
 
 use super::error::StudyError;
 use super::verify::{ATOL_FACTOR, VERIFIED_DEFECT};
@@ -252,7 +252,14 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Study
             }
         }
         let sys = FreeArm::new(model.clone(), OneElement(poly, n))?;
-        match bf_sim::simulate(&sys, settings.clone(), ArmMode::Free, t0, &tr.x[a], t1) {
+        match bf_sim::simulate(
+            &sys as &dyn HybridSystem<Mode = ArmMode>,
+            settings.clone(),
+            ArmMode::Free,
+            t0,
+            &tr.x[a],
+            t1,
+        ) {
             Ok(out) => {
                 let end = out.trajectory.x.last().map_or(&tr.x[a], |x| x);
                 element_defects.push(max_abs_diff(end, &tr.x[b - 1]));
@@ -277,15 +284,21 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Study
     let x0 = tr.x.first().cloned().unwrap_or_default();
     let sys = FreeArm::new(model, PhaseTorque::new(tr))?;
     let t_end = tr.t0 + tr.duration;
-    let open_loop_end_error =
-        match bf_sim::simulate(&sys, settings, ArmMode::Free, tr.t0, &x0, t_end) {
-            Ok(out) => out
-                .trajectory
-                .x
-                .last()
-                .map_or(f64::NAN, |x| max_abs_diff(x, &x_final)),
-            Err(_) => f64::NAN,
-        };
+    let open_loop_end_error = match bf_sim::simulate(
+        &sys as &dyn HybridSystem<Mode = ArmMode>,
+        settings,
+        ArmMode::Free,
+        tr.t0,
+        &x0,
+        t_end,
+    ) {
+        Ok(out) => out
+            .trajectory
+            .x
+            .last()
+            .map_or(f64::NAN, |x| max_abs_diff(x, &x_final)),
+        Err(_) => f64::NAN,
+    };
     Ok(ArmVerification {
         rtol,
         element_defects,

@@ -15,7 +15,7 @@ use bf_model::{ImpactLaw, Mode};
 use bf_plot::paper::{SimModes, TimeSeries};
 use bf_problem::OcpSolution;
 use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
-use bf_sim::{Input, SimOutput, SimSettings, TorqueSeries, TrackingPd};
+use bf_sim::{HybridSystem, Input, SimOutput, SimSettings, TorqueSeries, TrackingPd};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -223,7 +223,14 @@ fn replay<I: Input>(
         ..SimSettings::default()
     };
     let cpu = std::time::Instant::now();
-    let (out, stopped) = match bf_sim::simulate(&sys, settings, Mode::Free, 0.0, &x0, t_end) {
+    let (out, stopped) = match bf_sim::simulate(
+        &sys as &dyn HybridSystem<Mode = Mode>,
+        settings,
+        Mode::Free,
+        0.0,
+        &x0,
+        t_end,
+    ) {
         Ok(out) => (out, None),
         Err(f) => {
             let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);

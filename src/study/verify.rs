@@ -443,6 +443,9 @@ fn integrate<const N: usize>(
     x0: &[f64],
     t1: f64,
 ) -> (SimOutput<PhaseMode>, Option<String>) {
+    // The system goes to the simulator as a trait object, so one compiled copy of the simulator
+    // serves every joint count (the virtual calls cost nothing beside the kernels they make).
+    let sys: &dyn HybridSystem<Mode = PhaseMode> = sys;
     match bf_sim::simulate(sys, settings, mode, t0, x0, t1) {
         Ok(out) => (out, None),
         Err(fail) => {

@@ -67,7 +67,7 @@ impl<M: Debug> SimFailure<M> {
 
 /// Convenience wrapper: [`Simulator::new`] + [`Simulator::run`]. A setup error (bad settings,
 /// NaN initial state, `t_end <= t0`, ...) is returned as a failure with an empty trajectory.
-pub fn simulate<S: HybridSystem>(
+pub fn simulate<S: HybridSystem + ?Sized>(
     sys: &S,
     settings: SimSettings,
     mode0: S::Mode,

@@ -86,7 +86,11 @@ struct Pending {
 }
 
 /// The hybrid simulator state machine. See the module docs for the loop.
-pub struct Simulator<'s, S: HybridSystem> {
+///
+/// `S` may be a trait object (`dyn HybridSystem<Mode = M>`): callers that run many system
+/// types (every joint count of a finger) pass them that way, so one compiled copy of the
+/// simulator serves them all.
+pub struct Simulator<'s, S: HybridSystem + ?Sized> {
     sys: &'s S,
     set: SimSettings,
     t_start: f64,
@@ -122,7 +126,7 @@ fn mode_name<M: Debug>(m: &M) -> String {
     format!("{m:?}")
 }
 
-impl<'s, S: HybridSystem> Simulator<'s, S> {
+impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
     /// Sets up a run of `sys` from (`t0`, `x0`) in `mode0` until `t_end`. Validates the
     /// settings, the dimensions, finiteness of `x0` and `t_end > t0`, evaluates the guards of
     /// `mode0` (a directional guard already beyond its zero fires at the first `step()`).

@@ -11,7 +11,7 @@ use super::{Simulator, StopReason, mode_name};
 use crate::trajectory::{EventRecord, SampleKind, SimWarning};
 use crate::{HybridSystem, SimError, Transition};
 
-impl<S: HybridSystem> Simulator<'_, S> {
+impl<S: HybridSystem + ?Sized> Simulator<'_, S> {
     /// Applies the reset of the pending event (the state must be at the event time, which
     /// `step()` guarantees): runs the reset map, logs the event, enforces the Zeno and chain
     /// limits, and enters the new mode. No-op if no event is pending.

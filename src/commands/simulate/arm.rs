@@ -87,7 +87,14 @@ pub(super) fn run_arm(
         out_dir.inject_fault_at_write(k);
     }
     let start = Instant::now();
-    let (out, error) = match bf_sim::simulate(&sys, set, ArmMode::Free, 0.0, &x0, t_end) {
+    let (out, error) = match bf_sim::simulate(
+        &sys as &dyn bf_sim::HybridSystem<Mode = ArmMode>,
+        set,
+        ArmMode::Free,
+        0.0,
+        &x0,
+        t_end,
+    ) {
         Ok(out) => (out, None),
         Err(f) => {
             let f = *f;

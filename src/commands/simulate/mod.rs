@@ -43,7 +43,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3, VecN};
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
-use bf_sim::{Method, SimSettings, Simulator};
+use bf_sim::{HybridSystem, Method, SimSettings, Simulator};
 use std::time::{Duration, Instant};
 
 mod arm;
@@ -450,7 +450,10 @@ fn run_model<K: Kernels<N>, const N: usize>(
     }
     let t0 = 0.0;
     let t_end = args.t_end;
-    let mut sim = Simulator::new(&sys, set, mode0, t0, &x0, t_end)
+    // A trait object: one compiled copy of the simulator serves every joint count (the virtual
+    // calls cost nothing beside the kernels they make).
+    let dyn_sys: &dyn HybridSystem<Mode = Mode> = &sys;
+    let mut sim = Simulator::new(dyn_sys, set, mode0, t0, &x0, t_end)
         .map_err(|e| anyhow!("cannot start the simulation: {e}"))?;
     let mut progress = Progress::new(t0, t_end)?;
     let start = Instant::now();

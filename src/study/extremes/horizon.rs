@@ -51,8 +51,15 @@ pub fn long_horizon(t_end: f64, rtol: f64) -> anyhow::Result<HorizonRun> {
         ..SimSettings::default()
     };
     let start = Instant::now();
-    let out = simulate(&sys, settings, Mode::Free, 0.0, &HORIZON_X0, t_end)
-        .map_err(|f| anyhow!("simulation failed at t = {}: {}", f.t, f.error))?;
+    let out = simulate(
+        &sys as &dyn bf_sim::HybridSystem<Mode = Mode>,
+        settings,
+        Mode::Free,
+        0.0,
+        &HORIZON_X0,
+        t_end,
+    )
+    .map_err(|f| anyhow!("simulation failed at t = {}: {}", f.t, f.error))?;
     let cpu_seconds = start.elapsed().as_secs_f64();
     let e0 = sys.energy(&HORIZON_X0)?;
     let mut max_dev: f64 = 0.0;
