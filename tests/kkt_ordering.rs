@@ -94,35 +94,45 @@ fn run_before(name: &str, scheme: Scheme, points: usize) -> OcpSolution {
 /// The mesh sweep of BENCHMARKS.md: every periodic problem on hp-Radau 3 × 8 … 3 × 48 and
 /// LG 10 … 60, the settings before the adaptive default ([`run_before`]) against the
 /// library's default (AMD, a rejected factor checked by 2 × 2 pivot pairs, the static δ_c
-/// raised from 1e-9 to 3e-8 within the solve on evidence; LG solves start at 3e-8; no
-/// retry); the latter must end Solved in one stage everywhere. `SWEEP_PROBLEMS` (comma-separated names) and
-/// `SWEEP_BEFORE=0` (skip the "before" column) narrow a run.
+/// raised from its start to 3e-8 within the solve on evidence; no retry) or, with
+/// `SWEEP_DELTA_C`, against one static δ_c at the start of every solve of both schemes; the
+/// latter must end Solved in one stage everywhere. `SWEEP_PROBLEMS` (comma-separated names),
+/// `SWEEP_MESHES` (comma-separated `r<N>` for Radau 3 × N, `lg<N>` for LG-N) and
+/// `SWEEP_BEFORE=0` (skip the "before" column) narrow a run, so that one sweep can be split
+/// over several processes.
 #[test]
 #[ignore = "slow: mesh sweep"]
 fn mesh_sweep() {
     let problems = std::env::var("SWEEP_PROBLEMS")
         .unwrap_or_else(|_| "periodic-qc,periodic-cot,periodic-cot-human".into());
+    let delta_c: Option<f64> = std::env::var("SWEEP_DELTA_C")
+        .ok()
+        .map(|v| v.parse().expect("SWEEP_DELTA_C"));
     let with_before = std::env::var("SWEEP_BEFORE").map_or(true, |v| v != "0");
     let mut failed = Vec::new();
+    let column = delta_c.map_or("default".to_string(), |d| format!("δ_c {d:e}"));
     println!(
-        "| problem | mesh | before: status, iterations, J | default: status, iterations, J | δ_c raised at iteration | seconds (before, default) |"
+        "| problem | mesh | before: status, iterations, J | {column}: status, iterations, J | δ_c raised at iteration | seconds (before, {column}) |"
     );
     println!("|---|---|---|---|---|---|");
     for name in problems.split(',') {
-        let radau = [8, 12, 16, 24, 32, 48].map(|n| (Scheme::Radau { elements: 3 }, 3 * n));
-        let lg = [10, 20, 30, 40, 60].map(|n| (Scheme::Lg, n));
-        for (scheme, points) in radau.into_iter().chain(lg) {
+        for (scheme, points) in sweep_meshes("r8,r12,r16,r24,r32,r48,lg10,lg20,lg30,lg40,lg60") {
             let before = with_before.then(|| run_before(name, scheme, points));
-            let after = run(name, scheme, points, None, None);
+            let after = run(name, scheme, points, None, delta_c);
             let b = before.as_ref().map_or("–".to_string(), |b| {
                 format!("{:?}, {}, {:.6}", b.status, b.iterations, b.objective)
             });
             println!(
-                "| {name} | {} | {b} | {:?}, {}, {:.6} | {} | {}, {:.1} |",
+                "| {name} | {} | {b} | {:?}, {}, {:.8}{} | {} | {}, {:.1} |",
                 label(scheme, points),
                 after.status,
                 after.iterations,
                 after.objective,
+                if after.stages.len() > 1 {
+                    format!(", {} stages", after.stages.len())
+                } else {
+                    String::new()
+                },
                 after
                     .counters
                     .dual_regularization_raised_at
