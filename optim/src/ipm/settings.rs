@@ -186,8 +186,19 @@ pub struct Settings {
     pub kkt_ordering: KktOrdering,
     /// Maximum iterative-refinement steps per solve (default: 3).
     pub max_refinement_steps: usize,
-    /// Relative residual at which refinement stops (default: 1e-10).
+    /// Relative residual `‖K sol − rhs‖_∞ / ‖rhs‖_∞` at which refinement stops (default: 1e-10).
     pub refinement_tol: f64,
+    /// Judge the accuracy of a refined KKT solution (accepted at 1e-5; below 1e-6 against the
+    /// unregularized matrix, else the step of the regularized system) on Ipopt's residual
+    /// ratio `‖K sol − rhs‖_∞ / (‖rhs‖_∞ + ‖sol‖_∞)` instead of `‖K sol − rhs‖_∞ / ‖rhs‖_∞`
+    /// (default: false). Near a flat valley of the barrier problem (a tiny reduced-Hessian
+    /// eigenvalue) the Newton step is orders of magnitude longer than the right-hand side, and
+    /// a backward-stable solve leaves a residual of order `ε ‖K‖ ‖sol‖`: measured against
+    /// `‖rhs‖` alone, the exact step is rejected as inaccurate and damped by δ_w, which limits
+    /// every step to about `‖rhs‖ / δ_w`, and the solve creeps along the valley. Not the default
+    /// because the undamped steps change the paths of the collocation solves, not always for
+    /// the better (BENCHMARKS.md).
+    pub residual_ratio_with_solution: bool,
     /// Filter margin γ_θ (default: 1e-5).
     pub gamma_theta: f64,
     /// Filter margin γ_φ (default: 1e-8).
@@ -276,6 +287,7 @@ impl Default for Settings {
             kkt_ordering: KktOrdering::AmdCheckedByPivotPairs,
             max_refinement_steps: 3,
             refinement_tol: 1e-10,
+            residual_ratio_with_solution: false,
             gamma_theta: 1e-5,
             gamma_phi: 1e-8,
             switching_delta: 1.0,

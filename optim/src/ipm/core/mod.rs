@@ -533,6 +533,17 @@ impl<'p> Core<'p> {
             if self.restoration && self.prob.early_stop(&self.x) {
                 return Ok(self.output(ctx, Status::Solved, true));
             }
+            if settings.print_level > 2 {
+                let (du_u, pr_u, co_u) = self.unscaled(&err);
+                println!(
+                    "    E0 {e0:.2e}: dual {:.2e} (s_d {:.2e}), primal {:.2e}, compl {:.2e} (s_c {:.2e}); unscaled dual {du_u:.2e}, primal {pr_u:.2e}, compl {co_u:.2e}; acceptable {acceptable_count}",
+                    err.dual_inf / err.s_d,
+                    err.s_d,
+                    err.primal_inf,
+                    err.compl0 / err.s_c,
+                    err.s_c,
+                );
+            }
             let pr_u = match self.termination(ctx, &err, e0, &mut acceptable_count) {
                 Verdict::Continue { pr_u } => pr_u,
                 Verdict::Stop(status) => return Ok(self.output(ctx, status, false)),

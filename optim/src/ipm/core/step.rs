@@ -37,13 +37,16 @@ impl Core<'_> {
     }
 
     /// Solves `K sol = rhs` with refinement against `K(δ_w, δ_c_target)`; returns the final
-    /// relative residual.
+    /// residual `‖K sol − rhs‖_∞` relative to `‖rhs‖_∞`, or with
+    /// `Settings::residual_ratio_with_solution` relative to `‖rhs‖_∞ + ‖sol‖_∞` (Ipopt's
+    /// residual ratio), on which the caller judges the solution's accuracy. Refinement stops
+    /// on the residual relative to `‖rhs‖_∞` either way.
     pub(super) fn solve_refined(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> f64 {
         let t = Instant::now();
         let nm = self.n + self.m;
         self.sol.copy_from_slice(&self.rhs);
         self.solver.solve(&mut self.sol);
-        let bnorm = norm_inf(&self.rhs).max(1e-300);
+        let bnorm = norm_inf(&self.rhs);
         let mut best = f64::INFINITY;
         for target in [self.delta_c_target, self.delta_c] {
             let shift = self.delta_c - target;
@@ -57,13 +60,19 @@ impl Core<'_> {
                     };
                     self.resid[i] = self.rhs[i] - self.resid[i] - extra;
                 }
-                let rn = norm_inf(&self.resid) / bnorm;
+                let rnorm = norm_inf(&self.resid);
+                let rel = rnorm / bnorm.max(1e-300);
+                let rn = if settings.residual_ratio_with_solution {
+                    rnorm / (bnorm + norm_inf(&self.sol)).max(1e-300)
+                } else {
+                    rel
+                };
                 if !rn.is_finite() {
                     best = f64::INFINITY;
                     break;
                 }
                 best = rn;
-                if rn <= settings.refinement_tol || step == settings.max_refinement_steps {
+                if rel <= settings.refinement_tol || step == settings.max_refinement_steps {
                     break;
                 }
                 self.corr.copy_from_slice(&self.resid);
@@ -74,6 +83,11 @@ impl Core<'_> {
             }
             if best <= 1e-6 || shift == 0.0 {
                 break;
+            }
+            if settings.print_level > 2 {
+                println!(
+                    "    KKT: refinement against δ_c = {target:.1e} stalls at {best:.2e}: step of the regularized system"
+                );
             }
             // Refinement against the unregularized matrix did not converge (rank-deficient J):
             // accept the step of the regularized system instead.
