@@ -320,6 +320,14 @@ pub struct OptimizeArgs {
     /// ends Acceptable with δ_w > 0 in every iteration.
     #[arg(long, value_name = "DELTA_C", allow_hyphen_values = true)]
     pub dual_regularization: Option<f64>,
+    /// Judge the accuracy of each KKT solve by Ipopt's residual ratio ‖K s − r‖ / (‖r‖ + ‖s‖)
+    /// instead of ‖K s − r‖ / ‖r‖, so that long exact Newton steps along a flat valley of the
+    /// barrier problem are taken instead of damped (docs/decisions/0002-kkt-ordering.md). Fine
+    /// `periodic-cot` meshes that end Acceptable after a long crawl (Radau 3 × 24 … 3 × 48)
+    /// end Solved with it. Off by default: it changes the paths of other solves, and the
+    /// default `periodic-cot` search then ends on an optimum that does not verify.
+    #[arg(long)]
+    pub kkt_residual_ratio: bool,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with

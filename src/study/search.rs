@@ -2,8 +2,9 @@
 //! [`Strategy`] (for `periodic-qc` a continuation in the stick phase's lower bound, first
 //! ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound), every end point re-integrated
 //! ([`verify`]), one [`Candidate`] per distinct optimum (objectives within [`CLUSTER_RTOL`]),
-//! hp refinement of the best unverified optima that beat the best verified one, driven by
-//! their element-wise re-integration defects, until these are at most
+//! hp refinement of the unverified optima that beat the best verified one (lowest objective
+//! first, one after the other until one verifies), driven by their element-wise
+//! re-integration defects, until these are at most
 //! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]; a refined optimum that ends
 //! Acceptable is then re-solved from its own primal-dual point with the raised KKT dual
 //! regularization), and
@@ -51,7 +52,9 @@ pub struct VerifyPolicy {
     pub refine_rounds: usize,
     /// Collocation points per phase at most.
     pub max_points: usize,
-    /// Distinct unverified optima (better than the best verified one) refined at most.
+    /// Distinct unverified optima (better than the best verified one) refined at most: they are
+    /// refined one after the other, lowest objective first, until one verifies, so a spurious
+    /// optimum that cannot be verified (e.g. a collapsed phase) does not hide the next one.
     pub clusters: usize,
     /// Continuation in the stick phase's lower bound (`periodic-qc` only): every chain first
     /// runs with the stick phase at least this long (s), then one warm-started stage relaxes
@@ -70,7 +73,7 @@ impl Default for VerifyPolicy {
             refine_attempts: 2,
             refine_rounds: 4,
             max_points: 400,
-            clusters: 1,
+            clusters: 3,
             stick_continuation: Some(STICK_CONTINUATION),
         }
     }
@@ -332,10 +335,33 @@ fn refine_until_verified(
     (cur, records)
 }
 
+/// Applies `refine` to the items of `order` one after the other until `verified` holds for a
+/// result, at most `max` of them; returns each item refined with its result. Sequential on
+/// purpose: the next candidate is refined only if the previous one did not verify, which
+/// depends on values only, so the outcome does not depend on the number of threads.
+fn refine_in_order<I: Copy, T>(
+    order: &[I],
+    max: usize,
+    mut refine: impl FnMut(&I) -> T,
+    verified: impl Fn(&T) -> bool,
+) -> Vec<(I, T)> {
+    let mut out = Vec::new();
+    for i in order.iter().take(max) {
+        let r = refine(i);
+        let done = verified(&r);
+        out.push((*i, r));
+        if done {
+            break;
+        }
+    }
+    out
+}
+
 /// A search for the best verified optimum: runs the chains of `strategy` in `shard`
 /// (in parallel, results in index order), re-integrates every end point, keeps one
-/// candidate per distinct optimum, and hp-refines the best `policy.clusters` unverified optima
-/// that beat the best verified one until they verify ([`refine_until_verified`]). Every
+/// candidate per distinct optimum, and hp-refines the unverified optima that beat the best
+/// verified one, lowest objective first, until one verifies ([`refine_until_verified`], at
+/// most `policy.clusters` of them). Every
 /// decision depends on the computed values only, never on thread scheduling, so the result is
 /// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
 pub fn search(
@@ -393,16 +419,12 @@ pub fn search(
                 .total_cmp(&cands[b].solution.objective)
                 .then(cands[a].index.cmp(&cands[b].index))
         });
-        todo.truncate(policy.clusters);
-        let refined: Vec<(usize, (Candidate, Vec<StageRecord>))> = todo
-            .into_par_iter()
-            .map(|i| {
-                (
-                    i,
-                    refine_until_verified(problem, settings, cands[i].clone(), policy),
-                )
-            })
-            .collect();
+        let refined = refine_in_order(
+            &todo,
+            policy.clusters,
+            |&i| refine_until_verified(problem, settings, cands[i].clone(), policy),
+            |(c, _)| is_verified(&c.solution),
+        );
         for (i, (c, recs)) in refined {
             cands[i] = c;
             refinements.extend(recs);
@@ -454,5 +476,37 @@ impl Search {
             seconds: self.seconds,
         });
         Ok((c.problem, sol))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::refine_in_order;
+
+    /// The first candidate that verifies ends the refinements; a failed one passes on to the
+    /// next; at most `max` are refined.
+    #[test]
+    fn refinement_moves_on_until_a_candidate_verifies() {
+        let verifies = [false, false, true, true];
+        let run = |max: usize| {
+            let mut calls = Vec::new();
+            let out = refine_in_order(
+                &[0usize, 1, 2, 3],
+                max,
+                |&i| {
+                    calls.push(i);
+                    verifies[i]
+                },
+                |&v| v,
+            );
+            (calls, out)
+        };
+        let (calls, out) = run(10);
+        assert_eq!(calls, [0, 1, 2]);
+        assert_eq!(out, [(0, false), (1, false), (2, true)]);
+        let (calls, _) = run(2);
+        assert_eq!(calls, [0, 1]);
+        let (calls, out) = run(0);
+        assert!(calls.is_empty() && out.is_empty());
     }
 }

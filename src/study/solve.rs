@@ -39,6 +39,7 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
         static_dual_regularization: s
             .dual_regularization
             .unwrap_or(base.static_dual_regularization),
+        residual_ratio_with_solution: s.kkt_residual_ratio || base.residual_ratio_with_solution,
         ..base
     }
 }

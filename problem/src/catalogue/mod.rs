@@ -185,6 +185,10 @@ pub struct ProblemSettings {
     /// raises to 3e-8 within a solve whose factor turns out misleading or inaccurate).
     /// Overrides `ipm`.
     pub dual_regularization: Option<f64>,
+    /// Judge each KKT solve by the residual ratio `‖K s − r‖ / (‖r‖ + ‖s‖)`
+    /// ([`Settings::residual_ratio_with_solution`]) in every solve of the problem; overrides
+    /// `ipm`.
+    pub kkt_residual_ratio: bool,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where
     /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
@@ -218,6 +222,7 @@ impl Default for ProblemSettings {
             period_bounds: None,
             mesh: None,
             dual_regularization: None,
+            kkt_residual_ratio: false,
             scene: None,
             min_stick: MIN_STICK,
         }

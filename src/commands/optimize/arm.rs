@@ -48,6 +48,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--refine", args.refine.is_some()),
         ("--warm-start", args.warm_start.is_some()),
         ("--dual-regularization", args.dual_regularization.is_some()),
+        ("--kkt-residual-ratio", args.kkt_residual_ratio),
     ] {
         if given {
             bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");

@@ -182,6 +182,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         print_level: args.print_level,
         dual_regularization: args.dual_regularization,
         min_stick: args.min_stick,
+        kkt_residual_ratio: args.kkt_residual_ratio,
         ..ProblemSettings::default()
     })
 }
