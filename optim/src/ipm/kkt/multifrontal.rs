@@ -32,7 +32,7 @@
 use faer::sparse::linalg::cholesky::SymbolicCholesky;
 
 use super::Inertia;
-use super::supernodal::{counted_pivot, simplicial_structure};
+use super::supernodal::{counted_pair, counted_pivot, simplicial_structure};
 
 const NONE: usize = usize::MAX;
 
@@ -708,18 +708,7 @@ fn eliminate(
                 let r = if r == k { j } else { r };
                 swap_sym(f, nf, rows, k + 1, r);
                 let (a, b, c) = (f[k * nf + k], f[k * nf + k + 1], f[(k + 1) * nf + k + 1]);
-                let det = a * c - b * b;
-                if det == 0.0 || !det.is_finite() {
-                    return None;
-                }
-                if det < 0.0 {
-                    inertia.positive += 1;
-                    inertia.negative += 1;
-                } else if a + c > 0.0 {
-                    inertia.positive += 2;
-                } else {
-                    inertia.negative += 2;
-                }
+                let det = counted_pair(a, b, c, inertia)?;
                 let (i11, i12, i22) = (c / det, -b / det, a / det);
                 let (head, tail) = f.split_at_mut((k + 2) * nf);
                 let (c0, c1) = head[k * nf..].split_at_mut(nf);

@@ -49,6 +49,25 @@ pub(super) fn counted_pivot(
     Some((d, replaced))
 }
 
+/// A 2 × 2 pivot `[a b; b c]` counted into `inertia` by its determinant (one eigenvalue of
+/// each sign when negative, else both of the sign of its trace); its determinant, or `None`
+/// for a singular or non-finite one.
+pub(super) fn counted_pair(a: f64, b: f64, c: f64, inertia: &mut Inertia) -> Option<f64> {
+    let det = a * c - b * b;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    if det < 0.0 {
+        inertia.positive += 1;
+        inertia.negative += 1;
+    } else if a + c > 0.0 {
+        inertia.positive += 2;
+    } else {
+        inertia.negative += 2;
+    }
+    Some(det)
+}
+
 /// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
 /// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
 /// structure (`parent(j) = j + 1`, `|L_j| = |L_{j+1}| + 1`) are stored as dense column-major
@@ -355,18 +374,7 @@ impl BlockPlan {
                         }
                     }
                 }
-                let det = d1 * d2 - a * a;
-                if det == 0.0 || !det.is_finite() {
-                    return None;
-                }
-                if det < 0.0 {
-                    inertia.positive += 1;
-                    inertia.negative += 1;
-                } else if d1 > 0.0 {
-                    inertia.positive += 2;
-                } else {
-                    inertia.negative += 2;
-                }
+                let det = counted_pair(d1, a, d2, &mut inertia)?;
                 let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
                 for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
                     let (u, v) = (*x, *y);

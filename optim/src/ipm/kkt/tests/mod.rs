@@ -30,6 +30,16 @@ fn refined_residual(s: &mut SparseLdlt, pat: &KktPattern, steps: usize) -> f64 {
 /// Dense inertia by Gaussian elimination with symmetric (diagonal) Bunch–Parlett-free
 /// eigen-free counting: Sylvester on a dense LDLᵀ with full symmetric pivoting by largest
 /// diagonal is not always possible, so use the Jacobi eigenvalue method (independent of faer).
+/// Inertia from eigenvalues (a zero eigenvalue counts in neither class: the test matrices are
+/// nonsingular).
+fn eig_inertia(eig: &[f64]) -> Inertia {
+    Inertia {
+        positive: eig.iter().filter(|&&e| e > 0.0).count(),
+        negative: eig.iter().filter(|&&e| e < 0.0).count(),
+        zero: 0,
+    }
+}
+
 fn dense_eigs(a: &mut [Vec<f64>]) -> Vec<f64> {
     let n = a.len();
     for _sweep in 0..100 {
@@ -97,11 +107,7 @@ fn check(
         }
     }
     let eig = dense_eigs(&mut dense.clone());
-    let expect = Inertia {
-        positive: eig.iter().filter(|&&e| e > 0.0).count(),
-        negative: eig.iter().filter(|&&e| e < 0.0).count(),
-        zero: 0,
-    };
+    let expect = eig_inertia(&eig);
     let mut s = SparseLdlt::with_backend(backend);
     s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
     let inertia = s.factor(&pat.mat.values).expect("nonsingular");
@@ -383,11 +389,7 @@ fn block_kernel_reconstructs_and_matches_dense_inertia() {
             }
         }
         assert!(max_ratio <= 1e-13, "seed {seed}: {max_ratio}");
-        let expect = Inertia {
-            positive: eig.iter().filter(|&&e| e > 0.0).count(),
-            negative: eig.iter().filter(|&&e| e < 0.0).count(),
-            zero: 0,
-        };
+        let expect = eig_inertia(&eig);
         if pivots_replaced == 0 {
             assert_eq!(inertia, expect, "seed {seed}");
         }
@@ -400,16 +402,23 @@ fn block_kernel_reconstructs_and_matches_dense_inertia() {
 /// kernel when static pivoting is off, and the IPM-facing inertia has no zero count.
 #[test]
 fn block_kernel_reports_singular() {
+    let (_, s) = singular_without_static_pivoting(LdltBackend::Supernodal);
+    assert!(matches!(s.kernel, Kernel::Supernodal(_)));
+}
+
+/// The structurally singular KKT of the `…_reports_singular` tests (x1 is in neither H nor J),
+/// analysed by `backend` with static pivoting off; asserts that the factorization reports it.
+fn singular_without_static_pivoting(backend: LdltBackend) -> (KktPattern, SparseLdlt) {
     let mut pat = KktPattern::new(3, 1, &[(0, 0), (2, 0)], &[(0, 0), (0, 2)]);
     pat.assemble(&[1.0, 0.5], &[1.0, 2.0], &[0.0; 3], 0.0);
     let mut s = SparseLdlt {
         pivot_epsilon: 0.0,
         pivot_delta: 0.0,
-        ..SparseLdlt::with_backend(LdltBackend::Supernodal)
+        ..SparseLdlt::with_backend(backend)
     };
     s.analyse(4, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
-    assert!(matches!(s.kernel, Kernel::Supernodal(_)));
-    assert!(s.factor(&pat.mat.values).is_none());
+    assert!(s.factor(&pat.mat.values).is_none(), "{backend:?}");
+    (pat, s)
 }
 
 #[test]
@@ -581,11 +590,7 @@ fn pivot_pairs_reconstruct_and_match_dense_inertia() {
             "seed {seed}: {npairs} pairs, {max_ratio}"
         );
         let eig = dense_eigs(&mut dense.clone());
-        let expect = Inertia {
-            positive: eig.iter().filter(|&&e| e > 0.0).count(),
-            negative: eig.iter().filter(|&&e| e < 0.0).count(),
-            zero: 0,
-        };
+        let expect = eig_inertia(&eig);
         if pivots_replaced == 0 {
             assert_eq!(inertia, expect, "seed {seed}");
         }
