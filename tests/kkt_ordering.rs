@@ -42,6 +42,22 @@ fn label(scheme: Scheme, points: usize) -> String {
     }
 }
 
+/// ", N stages" for a solve that needed the guess fallback, else nothing (a sweep cell).
+fn stages_note(sol: &OcpSolution) -> String {
+    if sol.stages.len() > 1 {
+        format!(", {} stages", sol.stages.len())
+    } else {
+        String::new()
+    }
+}
+
+/// The iteration at which the solve raised its static δ_c, or "–" (a sweep cell).
+fn raised_at(sol: &OcpSolution) -> String {
+    sol.counters
+        .dual_regularization_raised_at
+        .map_or("–".to_string(), |k| k.to_string())
+}
+
 /// Meshes where plain AMD with δ_c = 1e-9 does not end Solved (`periodic-cot` 3 × 12 stalls,
 /// `periodic-qc` 3 × 16 ends Acceptable, LG-30 needed δ_c = 3e-8): with 2 × 2 pivots on the
 /// rows AMD would eliminate bare each ends Solved in one stage with δ_c = 1e-9.
@@ -128,15 +144,8 @@ fn mesh_sweep() {
                 after.status,
                 after.iterations,
                 after.objective,
-                if after.stages.len() > 1 {
-                    format!(", {} stages", after.stages.len())
-                } else {
-                    String::new()
-                },
-                after
-                    .counters
-                    .dual_regularization_raised_at
-                    .map_or("–".to_string(), |k| k.to_string()),
+                stages_note(&after),
+                raised_at(&after),
                 before
                     .as_ref()
                     .map_or("–".to_string(), |b| format!("{:.1}", b.solve_seconds)),
@@ -214,14 +223,8 @@ fn threshold_pivoting_sweep() {
                 t.iterations,
                 t.objective,
                 t.solve_seconds,
-                if t.stages.len() > 1 {
-                    format!(", {} stages", t.stages.len())
-                } else {
-                    String::new()
-                },
-                t.counters
-                    .dual_regularization_raised_at
-                    .map_or("–".to_string(), |k| k.to_string()),
+                stages_note(&t),
+                raised_at(&t),
             );
         }
     }
