@@ -422,6 +422,57 @@ fn optimize_dual_regularization_reaches_the_solver() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// `--kkt-residual-ratio` reaches the solver: `periodic-cot` on Radau 3 × 16 from the default
+/// guess runs into the iteration limit with the default accuracy test of the KKT solves (the
+/// flat-valley crawl of docs/decisions/0002-kkt-ordering.md; the guess fallback then needs a
+/// second stage), and ends Solved in one stage well within it with the residual ratio
+/// (BENCHMARKS.md, "KKT: the full mesh sweep with the residual ratio"). With `reach-arm` the
+/// option is refused by name.
+#[test]
+fn optimize_kkt_residual_ratio_reaches_the_solver() {
+    let dir = std::env::temp_dir().join(format!("bf-cli-ratio-{}", std::process::id()));
+    let out = bin()
+        .current_dir(root())
+        .args([
+            "optimize",
+            "--problem",
+            "periodic-cot",
+            "--points",
+            "48",
+            "--strategy",
+            "direct",
+            "--max-iter",
+            "400",
+            "--verify-rtol",
+            "0",
+            "--kkt-residual-ratio",
+            "--out",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    assert_eq!(sol["status"], "Solved");
+    let stages = sol["stages"].as_array().unwrap();
+    assert_eq!(stages.len(), 1, "{}", sol["stages"]);
+    std::fs::remove_dir_all(dir).ok();
+
+    let out = run(&[
+        "optimize",
+        "--problem",
+        "reach-arm",
+        "--scene",
+        "scenes/puma560.toml",
+        "--kkt-residual-ratio",
+    ]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("--kkt-residual-ratio"), "{stderr}");
+}
+
 #[test]
 fn scene_warnings_reach_stderr_and_nonphysical_inertias_are_refused() {
     fn args(scene: &str) -> [&str; 6] {
