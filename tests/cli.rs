@@ -389,25 +389,35 @@ fn optimize_refines_verifies_and_records_it() {
 /// ends Solved in one stage within 300 and solution.json records that single stage.
 #[test]
 fn optimize_dual_regularization_reaches_the_solver() {
-    let dir = std::env::temp_dir().join(format!("bf-cli-dualreg-{}", std::process::id()));
+    let stages = direct_cot_stages("dualreg", 36, 300, &["--dual-regularization", "3e-8"]);
+    assert_eq!(stages.len(), 1, "{stages:?}");
+    assert!(stages[0][2].as_u64().unwrap() < 300, "{stages:?}");
+}
+
+/// Runs `optimize --problem periodic-cot --strategy direct` on `points` Radau points with
+/// `--max-iter max_iter`, no re-integration and the `extra` options; asserts success and a
+/// Solved solution.json and returns its stages ([guess, status, iterations] each).
+fn direct_cot_stages(
+    tag: &str,
+    points: usize,
+    max_iter: usize,
+    extra: &[&str],
+) -> Vec<serde_json::Value> {
+    let dir = std::env::temp_dir().join(format!("bf-cli-{tag}-{}", std::process::id()));
+    let (points, max_iter) = (points.to_string(), max_iter.to_string());
     let out = bin()
         .current_dir(root())
+        .args(["optimize", "--problem", "periodic-cot", "--points", &points])
         .args([
-            "optimize",
-            "--problem",
-            "periodic-cot",
-            "--points",
-            "36",
             "--strategy",
             "direct",
             "--max-iter",
-            "300",
+            &max_iter,
             "--verify-rtol",
             "0",
-            "--dual-regularization",
-            "3e-8",
-            "--out",
         ])
+        .args(extra)
+        .arg("--out")
         .arg(&dir)
         .output()
         .unwrap();
@@ -415,11 +425,9 @@ fn optimize_dual_regularization_reaches_the_solver() {
     assert!(out.status.success(), "{stdout}");
     let sol: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
-    assert_eq!(sol["status"], "Solved");
-    let stages = sol["stages"].as_array().unwrap();
-    assert_eq!(stages.len(), 1, "{}", sol["stages"]);
-    assert!(stages[0][2].as_u64().unwrap() < 300, "{}", sol["stages"]);
+    assert_eq!(sol["status"], "Solved", "{}", sol["stages"]);
     std::fs::remove_dir_all(dir).ok();
+    sol["stages"].as_array().unwrap().clone()
 }
 
 /// `--kkt-residual-ratio` reaches the solver: `periodic-cot` on Radau 3 × 16 from the default
@@ -430,35 +438,8 @@ fn optimize_dual_regularization_reaches_the_solver() {
 /// option is refused by name.
 #[test]
 fn optimize_kkt_residual_ratio_reaches_the_solver() {
-    let dir = std::env::temp_dir().join(format!("bf-cli-ratio-{}", std::process::id()));
-    let out = bin()
-        .current_dir(root())
-        .args([
-            "optimize",
-            "--problem",
-            "periodic-cot",
-            "--points",
-            "48",
-            "--strategy",
-            "direct",
-            "--max-iter",
-            "400",
-            "--verify-rtol",
-            "0",
-            "--kkt-residual-ratio",
-            "--out",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{stdout}");
-    let sol: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
-    assert_eq!(sol["status"], "Solved");
-    let stages = sol["stages"].as_array().unwrap();
-    assert_eq!(stages.len(), 1, "{}", sol["stages"]);
-    std::fs::remove_dir_all(dir).ok();
+    let stages = direct_cot_stages("ratio", 48, 400, &["--kkt-residual-ratio"]);
+    assert_eq!(stages.len(), 1, "{stages:?}");
 
     let out = run(&[
         "optimize",
