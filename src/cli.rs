@@ -328,6 +328,14 @@ pub struct OptimizeArgs {
     /// default `periodic-cot` search then ends on an optimum that does not verify.
     #[arg(long)]
     pub kkt_residual_ratio: bool,
+    /// Ipopt's watchdog in the line search: after 10 consecutive iterations whose step the
+    /// filter shortened, up to 3 full steps judged against the point where the run of full
+    /// steps began, else back to that point. Direct solves that crawl with steps cut a
+    /// thousandfold until the iteration limit (`periodic-cot` Radau 3 × 16, LG-40) end Solved
+    /// with it. Off by default: it changes the paths of other solves, and the default
+    /// `periodic-cot` search then ends on an optimum that does not verify
+    #[arg(long)]
+    pub watchdog: bool,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with

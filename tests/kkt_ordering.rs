@@ -261,3 +261,35 @@ fn the_residual_ratio_solves_the_fine_cot_meshes() {
         assert_eq!(sol.stages.len(), 1, "3 x {per_element}: {:?}", sol.stages);
     }
 }
+
+/// `periodic-cot` Radau 3 × 16 and LG-40 reach the iteration limit from the default guess (the
+/// Contact-guess fallback then solves them): late in the solve the filter shortens every step
+/// about a thousandfold in a curved valley. Ipopt's watchdog ([`ProblemSettings::watchdog`],
+/// `optimize --watchdog`), full steps judged against the point where a run of shortened steps
+/// began, lets the same direct solves end Solved in one stage.
+#[test]
+#[ignore = "slow: two periodic-cot solves with the watchdog (about a minute)"]
+fn the_watchdog_solves_the_crawling_cot_meshes() {
+    for (scheme, points) in [(Scheme::Radau { elements: 3 }, 48), (Scheme::Lg, 40)] {
+        let s = ProblemSettings {
+            points,
+            scheme,
+            watchdog: true,
+            ..ProblemSettings::default()
+        };
+        let problem: Problem = "periodic-cot".parse().unwrap();
+        let sol = solve(&build(problem, &s).unwrap(), None).unwrap();
+        println!(
+            "periodic-cot {scheme:?} {points}: {:?} in {} iterations, J = {:.8}, {} watchdogs",
+            sol.status, sol.iterations, sol.objective, sol.counters.watchdogs
+        );
+        assert_eq!(
+            sol.status,
+            Status::Solved,
+            "{scheme:?} {points}: {:?}",
+            sol.stages
+        );
+        assert_eq!(sol.stages.len(), 1, "{scheme:?} {points}: {:?}", sol.stages);
+        assert!(sol.counters.watchdogs > 0);
+    }
+}

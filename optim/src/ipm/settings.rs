@@ -217,6 +217,17 @@ pub struct Settings {
     pub kappa_soc: f64,
     /// Backtracking factor (default: 0.5).
     pub alpha_red_factor: f64,
+    /// Ipopt's watchdog procedure: after this many consecutive iterations whose line search
+    /// shortened the step, full steps are taken for up to [`Settings::watchdog_trial_iter_max`]
+    /// iterations, judged against the iterate where the watchdog started; if none of them is
+    /// acceptable there, the solve returns to that iterate and backtracks along its direction
+    /// (0 disables it; default: 0, Ipopt's is 10). It lets the iterates leave a curved valley
+    /// in which the filter admits only steps shortened a thousandfold. Not the default because
+    /// it changes the paths of the collocation solves that shorten steps (BENCHMARKS.md,
+    /// "Line search: the watchdog").
+    pub watchdog_shortened_iter_trigger: usize,
+    /// Unchecked full steps of one watchdog (default: 3).
+    pub watchdog_trial_iter_max: usize,
     /// Reject trial points whose barrier objective rises by more than this many orders of
     /// magnitude (default: 5).
     pub obj_max_inc: f64,
@@ -297,6 +308,8 @@ impl Default for Settings {
             max_soc: 4,
             kappa_soc: 0.99,
             alpha_red_factor: 0.5,
+            watchdog_shortened_iter_trigger: 0,
+            watchdog_trial_iter_max: 3,
             obj_max_inc: 5.0,
             restoration: true,
             resto_penalty: 1000.0,

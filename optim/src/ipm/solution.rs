@@ -85,6 +85,13 @@ pub struct Counters {
     /// spurious); `None`: it kept `Settings::static_dual_regularization`.
     #[serde(default)]
     pub dual_regularization_raised_at: Option<usize>,
+    /// Watchdogs started (`Settings::watchdog_shortened_iter_trigger`).
+    #[serde(default)]
+    pub watchdogs: usize,
+    /// Watchdogs whose full steps were not acceptable, so that the solve returned to the
+    /// iterate where they started.
+    #[serde(default)]
+    pub watchdog_returns: usize,
 }
 
 /// Result of a solve (unscaled, in the user's variables).

@@ -1,0 +1,88 @@
+//! Ipopt's watchdog procedure (`Settings::watchdog_shortened_iter_trigger`) on the
+//! Hock–Schittkowski suite, each problem with its objective as given and multiplied by 1e8 and
+//! 1e12:
+//!
+//! * without unchecked steps (`watchdog_trial_iter_max` = 0) and without second-order
+//!   corrections, a watchdog only re-tests the full step against the iterate it was started at
+//!   and returns there to backtrack from half the step: exactly the regular line search, so
+//!   every iterate must agree bit for bit with the run without the watchdog;
+//! * under stress (a watchdog after every shortened step, up to 3 unchecked full steps each,
+//!   returns to iterates several steps back), every problem must still end with the status
+//!   and objective of the run without it: a return that restored a multiplier, slack or
+//!   derivative of another iterate, or a full step judged against the wrong reference, would
+//!   show as another status or optimum.
+
+mod hs;
+
+use bf_optim::ipm::{Settings, Solution, solve};
+use hs::Transformed;
+
+/// Runs of `settings` on every problem and objective factor: (name, factor, solution).
+fn sweep(settings: &Settings) -> Vec<(&'static str, f64, Solution)> {
+    let mut out = Vec::new();
+    for (i, name) in hs::all().iter().map(|p| p.name).enumerate() {
+        for obj in [1.0, 1e8, 1e12] {
+            let p = hs::all().into_iter().nth(i).unwrap();
+            let t = Transformed {
+                obj,
+                con: 1.0,
+                scaling: None,
+                ..Transformed::new(p)
+            };
+            out.push((name, obj, solve(&t, settings).unwrap()));
+        }
+    }
+    out
+}
+
+#[test]
+fn a_watchdog_without_unchecked_steps_is_the_regular_line_search() {
+    let plain = Settings {
+        max_soc: 0,
+        ..Settings::default()
+    };
+    let watched = Settings {
+        watchdog_shortened_iter_trigger: 1,
+        watchdog_trial_iter_max: 0,
+        ..plain.clone()
+    };
+    let (a, b) = (sweep(&plain), sweep(&watched));
+    let mut returns = 0;
+    for ((name, obj, p), (_, _, w)) in a.iter().zip(&b) {
+        assert_eq!(p.counters.watchdogs, 0);
+        assert_eq!(
+            (w.status, w.iterations, &w.x),
+            (p.status, p.iterations, &p.x),
+            "{name} × {obj:e}"
+        );
+        returns += w.counters.watchdog_returns;
+    }
+    assert!(returns > 0, "no watchdog returned");
+}
+
+#[test]
+fn watchdogs_after_every_shortened_step_keep_every_result() {
+    let plain = sweep(&Settings::default());
+    let stressed = sweep(&Settings {
+        watchdog_shortened_iter_trigger: 1,
+        ..Settings::default()
+    });
+    let (mut watchdogs, mut returns) = (0, 0);
+    for ((name, obj, p), (_, _, w)) in plain.iter().zip(&stressed) {
+        assert_eq!(w.status, p.status, "{name} × {obj:e}: {w:?}");
+        let scale = p.objective.abs().max(*obj);
+        assert!(
+            (w.objective - p.objective).abs() <= 1e-6 * scale,
+            "{name} × {obj:e}: objective {} with watchdogs, {} without",
+            w.objective,
+            p.objective
+        );
+        watchdogs += w.counters.watchdogs;
+        returns += w.counters.watchdog_returns;
+    }
+    // The stress reaches both outcomes: watchdogs whose full steps succeed and returns.
+    assert!(
+        returns > 0 && watchdogs > returns,
+        "{watchdogs} watchdogs, {returns} returns"
+    );
+}
