@@ -441,17 +441,24 @@ fn optimize_kkt_residual_ratio_reaches_the_solver() {
     let stages = direct_cot_stages("ratio", 48, 400, &["--kkt-residual-ratio"]);
     assert_eq!(stages.len(), 1, "{stages:?}");
 
-    let out = run(&[
+    reach_arm_refuses("--kkt-residual-ratio");
+}
+
+/// `optimize --problem reach-arm` (one direct Radau solve) refuses the solver option `flag` by
+/// name.
+fn reach_arm_refuses(flag: &str) {
+    let args = [
         "optimize",
         "--problem",
         "reach-arm",
         "--scene",
         "scenes/puma560.toml",
-        "--kkt-residual-ratio",
-    ]);
+        flag,
+    ];
+    let out = run(&args);
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("--kkt-residual-ratio"), "{stderr}");
+    assert!(stderr.contains(flag), "{stderr}");
 }
 
 /// `--watchdog` reaches the solver: the direct `periodic-cot` solve on Radau 3 × 12 shortens
@@ -483,17 +490,7 @@ fn optimize_watchdog_reaches_the_solver() {
     assert!(watchdogs.as_u64().unwrap() > 0, "{watchdogs}");
     std::fs::remove_dir_all(&dir).ok();
 
-    let out = run(&[
-        "optimize",
-        "--problem",
-        "reach-arm",
-        "--scene",
-        "scenes/puma560.toml",
-        "--watchdog",
-    ]);
-    assert!(!out.status.success());
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("--watchdog"), "{stderr}");
+    reach_arm_refuses("--watchdog");
 }
 
 #[test]
