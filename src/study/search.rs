@@ -290,7 +290,9 @@ fn refine_until_verified(
             max_points: policy.max_points,
             ..RefineSettings::default()
         };
-        let label = format!("refine start {} to {tol:e}", cur.index);
+        // One significant digit: the tolerance is divided by 10 per attempt, which leaves
+        // rounding digits (1.0000000000000002e-6) that say nothing.
+        let label = format!("refine start {} to {tol:.0e}", cur.index);
         let iters0 = cur.solution.iterations;
         match refine::refine_solution(problem, &s, cur.solution.clone(), &opts, None) {
             Ok((b, sol)) => {
