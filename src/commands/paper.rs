@@ -357,7 +357,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`); periodic-qc's \
-         default search takes the best verified end point of 32 seeded starts.\n\
+         default search takes the best verified end point of 32 seeded starts. The results \
+         are the best the default searches verify, not the best optima there are: for \
+         periodic-cot a verified optimum with a several times lower cost of transport is \
+         known (docs/optima.md: how it is reached and how to search further).\n\
          - The COT optima have free phases of 1–9 s whose motion is not open-loop stable: \
          replaying a whole phase from its initial state drifts away from the collocated \
          trajectory (the \"open-loop drift\" in each verification summary, O(10) rad), even \
