@@ -328,14 +328,6 @@ pub struct OptimizeArgs {
     /// default `periodic-cot` search then ends on an optimum that does not verify.
     #[arg(long)]
     pub kkt_residual_ratio: bool,
-    /// Ipopt's watchdog in the line search: after 10 consecutive iterations whose step the
-    /// filter shortened, up to 3 full steps judged against the point where the run of full
-    /// steps began, else back to that point. Direct solves that crawl with steps cut a
-    /// thousandfold until the iteration limit (`periodic-cot` Radau 3 × 16, LG-40) end Solved
-    /// with it. Off by default: it changes the paths of other solves, and the default
-    /// `periodic-cot` search then ends on an optimum that does not verify
-    #[arg(long)]
-    pub watchdog: bool,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with
@@ -377,7 +369,7 @@ pub struct OptimizeArgs {
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
     /// 4 rounds driven by the element-wise re-integration defects, the first to 1e-4, each
     /// further one 10× tighter). With `reach-arm`: re-solves on a mesh with twice the elements.
-    #[arg(long, default_value_t = 2, allow_hyphen_values = true, value_parser = whole)]
+    #[arg(long, default_value_t = crate::study::search::VERIFY_REFINEMENTS, allow_hyphen_values = true, value_parser = whole)]
     pub verify_refinements: usize,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]

@@ -461,38 +461,6 @@ fn reach_arm_refuses(flag: &str) {
     assert!(stderr.contains(flag), "{stderr}");
 }
 
-/// `--watchdog` reaches the solver: the direct `periodic-cot` solve on Radau 3 × 12 shortens
-/// its line-search steps ten times in a row, so with the option it starts watchdogs (counted
-/// in `solution-internals.json`; the default settings never start one) and still ends Solved
-/// (BENCHMARKS.md, "Line search: the watchdog"). With `reach-arm` the option is refused by
-/// name.
-#[test]
-fn optimize_watchdog_reaches_the_solver() {
-    let dir = std::env::temp_dir().join(format!("bf-cli-watchdog-{}", std::process::id()));
-    let out = bin()
-        .current_dir(root())
-        .args(["optimize", "--problem", "periodic-cot", "--points", "36"])
-        .args(["--strategy", "direct", "--verify-rtol", "0", "--watchdog"])
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    let read = |name: &str| -> serde_json::Value {
-        serde_json::from_str(&std::fs::read_to_string(dir.join(name)).unwrap()).unwrap()
-    };
-    assert_eq!(read("solution.json")["status"], "Solved");
-    let watchdogs = read("solution-internals.json")["counters"]["watchdogs"].clone();
-    assert!(watchdogs.as_u64().unwrap() > 0, "{watchdogs}");
-    std::fs::remove_dir_all(&dir).ok();
-
-    reach_arm_refuses("--watchdog");
-}
-
 #[test]
 fn scene_warnings_reach_stderr_and_nonphysical_inertias_are_refused() {
     fn args(scene: &str) -> [&str; 6] {

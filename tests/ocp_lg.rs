@@ -311,44 +311,56 @@ fn lg_periodic_cot_problems_converge_from_the_default_guess() {
 /// The fixed-horizon spinning archetypes keep contact through the stick phase: |h| stays at
 /// the contact tolerance at the collocation points with both schemes (without the stick-phase
 /// h row, Δv = 0 alone let the contact point slide over the smoothed fingertip: rotate-fast
-/// LG-30 reached J = −28 with h = −0.76 m, Radau −3.8 with h = −0.05 m), and the two schemes
-/// then agree on the optimum.
+/// LG-30 reached J = −28 with h = −0.76 m, Radau −3.8 with h = −0.05 m). Two checks on the
+/// objective: from the default guess LG ends no more than 10 % below the Radau optimum (a
+/// sliding contact shows as a far lower J; the two cold solves may end on different local
+/// optima), and LG warm-started from the Radau optimum reaches the same optimum to 1 %.
 #[test]
 fn spinning_archetypes_keep_contact_in_the_stick_phase() {
     let scene = paper_scene();
     let diag = Diagnostics::new(&scene, 0.01).unwrap();
-    for name in ["rotate-fast", "rotate-ref"] {
-        let mut objective = Vec::new();
-        for scheme in [Scheme::Radau { elements: 3 }, Scheme::Lg] {
-            let s = ProblemSettings {
-                points: 30,
-                scheme,
-                max_iter: 1500,
-                ..ProblemSettings::default()
-            };
-            let p = build(name.parse().unwrap(), &s).unwrap();
-            let sol = solve(&p, None).unwrap();
-            assert_eq!(
-                sol.status,
-                Status::Solved,
-                "{name} {scheme:?}: {:?}",
-                sol.stages
-            );
-            // The state at every collocation node of the stick phase.
-            let stick = &sol.raw[1];
-            assert_eq!(stick.node_state.len(), 30);
-            for &k in &stick.node_state {
-                let h = diag.eval(&stick.x[k]).h;
-                assert!(h.abs() <= 1e-4 + 1e-8, "{name} {scheme:?}: h = {h}");
-            }
-            objective.push(sol.objective);
+    let solved = |name: &str, scheme: Scheme, warm: Option<OcpSolution>| {
+        let s = ProblemSettings {
+            points: 30,
+            scheme,
+            max_iter: 1500,
+            warm_start: warm,
+            ..ProblemSettings::default()
+        };
+        let p = build(name.parse().unwrap(), &s).unwrap();
+        let sol = solve(&p, None).unwrap();
+        assert_eq!(
+            sol.status,
+            Status::Solved,
+            "{name} {scheme:?}: {:?}",
+            sol.stages
+        );
+        // The state at every collocation node of the stick phase: |h| within the path bound
+        // 1e-4, relaxed by the solver's bound relaxation (1e-8) and the reported violation.
+        let stick = &sol.raw[1];
+        assert_eq!(stick.node_state.len(), 30);
+        let tol = 1e-4 + 1e-8 + sol.constraint_violation;
+        for &k in &stick.node_state {
+            let h = diag.eval(&stick.x[k]).h;
+            assert!(h.abs() <= tol, "{name} {scheme:?}: h = {h}");
         }
-        let rel = (objective[0] - objective[1]).abs() / objective[0].abs();
+        sol
+    };
+    for name in ["rotate-fast", "rotate-ref"] {
+        let radau = solved(name, Scheme::Radau { elements: 3 }, None);
+        let lg = solved(name, Scheme::Lg, None);
+        let jr = radau.objective;
         assert!(
-            rel < 0.1,
-            "{name}: Radau J = {} vs LG J = {}",
-            objective[0],
-            objective[1]
+            lg.objective >= jr - 0.1 * jr.abs(),
+            "{name}: LG J = {} far below Radau J = {jr}",
+            lg.objective
+        );
+        let lg_warm = solved(name, Scheme::Lg, Some(radau));
+        let rel = (lg_warm.objective - jr).abs() / jr.abs();
+        assert!(
+            rel < 0.01,
+            "{name}: Radau J = {jr} vs LG J = {} from the Radau optimum",
+            lg_warm.objective
         );
     }
 }

@@ -65,12 +65,18 @@ pub struct VerifyPolicy {
     pub stick_continuation: Option<f64>,
 }
 
+/// hp refinements of one unverified optimum by default ([`VerifyPolicy::refine_attempts`],
+/// `optimize --verify-refinements`): to element defects of 1e-4, 1e-5 and 1e-6. The third
+/// verifies the default `periodic-cot` search's best candidate, whose second refinement ends
+/// at a defect of 6.6e-3 (BENCHMARKS.md, "Line search: Ipopt's filter reset").
+pub const VERIFY_REFINEMENTS: usize = 3;
+
 impl Default for VerifyPolicy {
     fn default() -> Self {
         VerifyPolicy {
             rtol: 1e-10,
             refine_tol: VERIFIED_DEFECT,
-            refine_attempts: 2,
+            refine_attempts: VERIFY_REFINEMENTS,
             refine_rounds: 4,
             max_points: 400,
             clusters: 3,

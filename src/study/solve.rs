@@ -40,11 +40,6 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
             .dual_regularization
             .unwrap_or(base.static_dual_regularization),
         residual_ratio_with_solution: s.kkt_residual_ratio || base.residual_ratio_with_solution,
-        watchdog_shortened_iter_trigger: if s.watchdog {
-            bf_problem::catalogue::WATCHDOG_TRIGGER
-        } else {
-            base.watchdog_shortened_iter_trigger
-        },
         ..base
     }
 }

@@ -221,13 +221,19 @@ pub struct Settings {
     /// shortened the step, full steps are taken for up to [`Settings::watchdog_trial_iter_max`]
     /// iterations, judged against the iterate where the watchdog started; if none of them is
     /// acceptable there, the solve returns to that iterate and backtracks along its direction
-    /// (0 disables it; default: 0, Ipopt's is 10). It lets the iterates leave a curved valley
-    /// in which the filter admits only steps shortened a thousandfold. Not the default because
-    /// it changes the paths of the collocation solves that shorten steps (BENCHMARKS.md,
-    /// "Line search: the watchdog").
+    /// (0 disables it; default: 0, Ipopt's is 10). Off because, with the filter reset
+    /// heuristic ([`Settings::filter_reset_trigger`]), the collocation solves measured no longer
+    /// take runs of shortened steps, while the watchdog changed the paths of others
+    /// (docs/decisions/0006-line-search-watchdog.md).
     pub watchdog_shortened_iter_trigger: usize,
     /// Unchecked full steps of one watchdog (default: 3).
     pub watchdog_trial_iter_max: usize,
+    /// Ipopt's filter reset heuristic: the filter is cleared when, in this many consecutive
+    /// iterations, the last trial point rejected before the accepted one had made sufficient
+    /// progress over the current iterate and was dominated only by a filter entry (default: 5).
+    pub filter_reset_trigger: usize,
+    /// Filter resets per solve at most (default: 5; 0 disables the heuristic).
+    pub max_filter_resets: usize,
     /// Reject trial points whose barrier objective rises by more than this many orders of
     /// magnitude (default: 5).
     pub obj_max_inc: f64,
@@ -310,6 +316,8 @@ impl Default for Settings {
             alpha_red_factor: 0.5,
             watchdog_shortened_iter_trigger: 0,
             watchdog_trial_iter_max: 3,
+            filter_reset_trigger: 5,
+            max_filter_resets: 5,
             obj_max_inc: 5.0,
             restoration: true,
             resto_penalty: 1000.0,

@@ -92,6 +92,9 @@ pub struct Counters {
     /// iterate where they started.
     #[serde(default)]
     pub watchdog_returns: usize,
+    /// Filter resets of the filter reset heuristic (`Settings::filter_reset_trigger`).
+    #[serde(default)]
+    pub filter_resets: usize,
 }
 
 /// Result of a solve (unscaled, in the user's variables).

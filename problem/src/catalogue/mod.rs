@@ -189,10 +189,6 @@ pub struct ProblemSettings {
     /// ([`Settings::residual_ratio_with_solution`]) in every solve of the problem; overrides
     /// `ipm`.
     pub kkt_residual_ratio: bool,
-    /// Ipopt's watchdog procedure in every solve of the problem, with Ipopt's trigger of
-    /// [`WATCHDOG_TRIGGER`] shortened steps ([`Settings::watchdog_shortened_iter_trigger`]);
-    /// overrides `ipm`.
-    pub watchdog: bool,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where
     /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
@@ -203,10 +199,6 @@ pub struct ProblemSettings {
     /// impact impulse), so it is a modelling choice, not a numerical one.
     pub min_stick: f64,
 }
-
-/// Consecutive shortened line-search steps after which [`ProblemSettings::watchdog`] starts a
-/// watchdog (Ipopt's `watchdog_shortened_iter_trigger`).
-pub const WATCHDOG_TRIGGER: usize = 10;
 
 /// Default lower bound of every phase duration of the periodic problems, the stick phase's
 /// included ([`ProblemSettings::min_stick`]), in seconds.
@@ -231,7 +223,6 @@ impl Default for ProblemSettings {
             mesh: None,
             dual_regularization: None,
             kkt_residual_ratio: false,
-            watchdog: false,
             scene: None,
             min_stick: MIN_STICK,
         }

@@ -49,7 +49,6 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--warm-start", args.warm_start.is_some()),
         ("--dual-regularization", args.dual_regularization.is_some()),
         ("--kkt-residual-ratio", args.kkt_residual_ratio),
-        ("--watchdog", args.watchdog),
     ] {
         if given {
             bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");

@@ -183,7 +183,6 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         dual_regularization: args.dual_regularization,
         min_stick: args.min_stick,
         kkt_residual_ratio: args.kkt_residual_ratio,
-        watchdog: args.watchdog,
         ..ProblemSettings::default()
     })
 }

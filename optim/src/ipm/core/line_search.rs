@@ -5,6 +5,7 @@
 //!   (W&B eq. (18)–(21)), the minimal step `α_min` (W&B eq. (23)) and backtracking
 //!   (W&B Sect. 2.3);
 //! * second-order corrections (W&B Sect. 2.4);
+//! * Ipopt's filter reset heuristic ([`Core::note_accept`]);
 //! * Ipopt's watchdog procedure ([`Watchdog`]): after a run of shortened steps, a few full
 //!   steps judged against the iterate where it started, else back to that iterate;
 //! * Ipopt's "soft restoration" step when the line search fails near feasibility.
@@ -120,7 +121,9 @@ impl Core<'_> {
         self.filter.push((t, p));
     }
 
-    /// Acceptance test of a trial point (W&B eq. (18)–(21)). Returns (accepted, f-type).
+    /// Acceptance test of a trial point (W&B eq. (18)–(21)). Returns (accepted, f-type,
+    /// blocked by the filter: sufficient progress over the current iterate, but dominated by a
+    /// filter entry — Ipopt's `last_rejection_due_to_filter_`).
     pub(super) fn acceptable(
         &self,
         settings: &Settings,
@@ -130,30 +133,61 @@ impl Core<'_> {
         alpha: f64,
         theta_t: f64,
         phi_t: f64,
-    ) -> (bool, bool) {
+    ) -> (bool, bool, bool) {
         if !phi_t.is_finite() || !theta_t.is_finite() || theta_t > self.theta_max {
-            return (false, false);
+            return (false, false, false);
         }
         if phi_t > phi {
             let inc = (phi_t - phi).log10();
             if inc > settings.obj_max_inc + phi.abs().log10().max(1.0) {
-                return (false, false);
+                return (false, false, false);
             }
-        }
-        if !self.filter_acceptable(theta_t, phi_t) {
-            return (false, false);
         }
         let switching = gphi_dx < 0.0
             && alpha * (-gphi_dx).powf(settings.s_phi)
                 > settings.switching_delta * theta.powf(settings.s_theta);
         let eps = 10.0 * f64::EPSILON * phi.abs().max(1.0);
-        if theta <= self.theta_min && switching {
-            let armijo = phi_t - phi - eps <= settings.eta_phi * alpha * gphi_dx;
-            return (armijo, true);
+        let (progress, ftype) = if theta <= self.theta_min && switching {
+            (
+                phi_t - phi - eps <= settings.eta_phi * alpha * gphi_dx,
+                true,
+            )
+        } else {
+            let ok = theta_t <= (1.0 - settings.gamma_theta) * theta
+                || phi_t - eps <= phi - settings.gamma_phi * theta;
+            (ok, false)
+        };
+        if !progress {
+            return (false, false, false);
         }
-        let ok = theta_t <= (1.0 - settings.gamma_theta) * theta
-            || phi_t - eps <= phi - settings.gamma_phi * theta;
-        (ok, false)
+        if !self.filter_acceptable(theta_t, phi_t) {
+            return (false, false, true);
+        }
+        (true, ftype, false)
+    }
+
+    /// Ipopt's filter reset heuristic, run on every accepted trial point before the filter is
+    /// augmented: when the trial before it was blocked by the filter alone in
+    /// `filter_reset_trigger` consecutive line searches, the filter is cleared (at most
+    /// `max_filter_resets` times per solve). Entries from a distant part of the path (e.g. the
+    /// first iterates of a warm start far from feasibility) can otherwise admit only steps
+    /// that do not raise θ above them, which on curved constraints are ~1e-4 of the Newton
+    /// step.
+    pub(super) fn note_accept(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) {
+        if self.filter_resets < settings.max_filter_resets {
+            if self.filter_blocked_last {
+                self.filter_blocked_run += 1;
+                if self.filter_blocked_run >= settings.filter_reset_trigger {
+                    self.filter.clear();
+                    self.filter_resets += 1;
+                    self.filter_blocked_run = 0;
+                    ctx.counters.filter_resets += 1;
+                }
+            } else {
+                self.filter_blocked_run = 0;
+            }
+        }
+        self.filter_blocked_last = false;
     }
 
     pub(super) fn alpha_min(&self, settings: &Settings, theta: f64, gphi_dx: f64) -> f64 {
@@ -206,15 +240,17 @@ impl Core<'_> {
             if ok {
                 let theta_t = norm_1(&self.c_t);
                 let phi_t = self.barrier_value(&self.x_t, f_t);
-                let (acc, ftype) =
+                let (acc, ftype, blocked) =
                     self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
                 if acc {
+                    self.note_accept(ctx, settings);
                     if !ftype {
                         self.augment_filter(theta, phi, settings);
                     }
                     self.f_t = f_t;
                     break LsOutcome::Accepted { alpha, trials };
                 }
+                self.filter_blocked_last = blocked;
                 if trials == 1
                     && start == LsStart::Regular
                     && theta_t >= theta
@@ -270,9 +306,10 @@ impl Core<'_> {
             let theta_t = norm_1(&self.c_t);
             let phi_t = self.barrier_value(&self.x_t, f_t);
             let gphi_dx = dot(&self.grad_phi, &self.dx);
-            let (acc, ftype) =
+            let (acc, ftype, blocked) =
                 self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
             if acc {
+                self.note_accept(ctx, settings);
                 if !ftype {
                     self.augment_filter(theta, phi, settings);
                 }
@@ -280,6 +317,7 @@ impl Core<'_> {
                 ctx.counters.soc_accepted += 1;
                 return Some(a_soc);
             }
+            self.filter_blocked_last = blocked;
             if theta_t > settings.kappa_soc * theta_old {
                 break;
             }
@@ -347,14 +385,16 @@ impl Core<'_> {
             self.f_t = f_t;
             let theta_t = norm_1(&self.c_t);
             let phi_t = self.barrier_value(&self.x_t, f_t);
-            let (acc, ftype) =
+            let (acc, ftype, blocked) =
                 self.acceptable(settings, w.theta, w.phi, w.gphi_dx, w.alpha, theta_t, phi_t);
             if acc {
+                self.note_accept(ctx, settings);
                 if !ftype {
                     self.augment_filter(w.theta, w.phi, settings);
                 }
                 WatchdogTrial::Accepted(alpha)
             } else {
+                self.filter_blocked_last = blocked;
                 WatchdogTrial::Rejected(alpha)
             }
         } else {

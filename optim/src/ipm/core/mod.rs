@@ -161,6 +161,13 @@ pub(crate) struct Core<'p> {
     /// Largest |x_j| over the variables without a finite lower or upper bound, over all
     /// iterates so far (the unboundedness test).
     unboxed_max: std::cell::Cell<f64>,
+    /// The last rejected trial point was blocked by the filter alone (filter reset heuristic,
+    /// [`line_search`]).
+    filter_blocked_last: bool,
+    /// Consecutive accepted steps that followed such a rejection.
+    filter_blocked_run: usize,
+    /// Filter resets so far in this solve.
+    filter_resets: usize,
 }
 
 impl<'p> Core<'p> {
@@ -248,6 +255,9 @@ impl<'p> Core<'p> {
             kappa_d: settings.kappa_d,
             slack_move: settings.slack_move,
             unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
+            filter_blocked_last: false,
+            filter_blocked_run: 0,
+            filter_resets: 0,
             prob,
             xl,
             xu,
