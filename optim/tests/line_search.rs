@@ -1,16 +1,18 @@
-//! Ipopt's watchdog procedure (`Settings::watchdog_shortened_iter_trigger`) on the
-//! Hock–Schittkowski suite, each problem with its objective as given and multiplied by 1e8 and
-//! 1e12:
+//! The line-search heuristics of Ipopt on the Hock–Schittkowski suite, each problem with its
+//! objective as given and multiplied by 1e8 and 1e12:
 //!
-//! * without unchecked steps (`watchdog_trial_iter_max` = 0) and without second-order
-//!   corrections, a watchdog only re-tests the full step against the iterate it was started at
-//!   and returns there to backtrack from half the step: exactly the regular line search, so
-//!   every iterate must agree bit for bit with the run without the watchdog;
-//! * under stress (a watchdog after every shortened step, up to 3 unchecked full steps each,
-//!   returns to iterates several steps back), every problem must still end with the status
-//!   and objective of the run without it: a return that restored a multiplier, slack or
-//!   derivative of another iterate, or a full step judged against the wrong reference, would
-//!   show as another status or optimum.
+//! * the watchdog (`Settings::watchdog_shortened_iter_trigger`): without unchecked steps
+//!   (`watchdog_trial_iter_max` = 0) and without second-order corrections, a watchdog only
+//!   re-tests the full step against the iterate it was started at and returns there to
+//!   backtrack from half the step: exactly the regular line search, so every iterate must agree
+//!   bit for bit with the run without the watchdog; under stress (a watchdog after every
+//!   shortened step, up to 3 unchecked full steps each, returns to iterates several steps back),
+//!   every problem must still end with the status and objective of the run without it: a
+//!   return that restored a multiplier, slack or derivative of another iterate, or a full step
+//!   judged against the wrong reference, would show as another status or optimum;
+//! * the filter reset (`Settings::filter_reset_trigger`, `max_filter_resets`): with and without
+//!   it every run ends with the same status and optimum, and with a trigger of one blocked line
+//!   search (instead of Ipopt's five) the resets happen often, so the comparison exercises them.
 
 mod hs;
 
@@ -85,4 +87,30 @@ fn watchdogs_after_every_shortened_step_keep_every_result() {
         returns > 0 && watchdogs > returns,
         "{watchdogs} watchdogs, {returns} returns"
     );
+}
+
+#[test]
+fn filter_resets_keep_every_result() {
+    let without = sweep(&Settings {
+        max_filter_resets: 0,
+        ..Settings::default()
+    });
+    let eager = sweep(&Settings {
+        filter_reset_trigger: 1,
+        ..Settings::default()
+    });
+    let mut resets = 0;
+    for ((name, obj, a), (_, _, b)) in without.iter().zip(&eager) {
+        assert_eq!(a.counters.filter_resets, 0, "{name} × {obj:e}");
+        assert_eq!(b.status, a.status, "{name} × {obj:e}: {b:?}");
+        let scale = a.objective.abs().max(*obj);
+        assert!(
+            (b.objective - a.objective).abs() <= 1e-6 * scale,
+            "{name} × {obj:e}: objective {} with resets, {} without",
+            b.objective,
+            a.objective
+        );
+        resets += b.counters.filter_resets;
+    }
+    assert!(resets > 0, "no filter reset happened");
 }
