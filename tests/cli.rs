@@ -384,25 +384,30 @@ fn optimize_refines_verifies_and_records_it() {
 }
 
 /// `--dual-regularization` reaches the solver: on a Radau mesh finer than the default
-/// (`periodic-cot`, 3 × 12), where the solver's default start δ_c = 1e-9 needs more than 300
-/// iterations (it raises δ_c within the solve, BENCHMARKS.md), `--dual-regularization 3e-8`
-/// ends Solved in one stage within 300 and solution.json records that single stage.
+/// (`periodic-cot`, 3 × 12) the solver, starting from its default δ_c = 1e-9, raises δ_c
+/// within the solve (at iteration 42, BENCHMARKS.md); started at `--dual-regularization 3e-8`,
+/// the largest value it grows to, it never raises it, so `solution-internals.json` records no
+/// raise, and the solve ends Solved in one stage.
 #[test]
 fn optimize_dual_regularization_reaches_the_solver() {
-    let stages = direct_cot_stages("dualreg", 36, 300, &["--dual-regularization", "3e-8"]);
+    let (stages, counters) = direct_cot_run("dualreg", 36, 300, &["--dual-regularization", "3e-8"]);
     assert_eq!(stages.len(), 1, "{stages:?}");
-    assert!(stages[0][2].as_u64().unwrap() < 300, "{stages:?}");
+    assert!(
+        counters["dual_regularization_raised_at"].is_null(),
+        "{counters}"
+    );
 }
 
 /// Runs `optimize --problem periodic-cot --strategy direct` on `points` Radau points with
 /// `--max-iter max_iter`, no re-integration and the `extra` options; asserts success and a
-/// Solved solution.json and returns its stages ([guess, status, iterations] each).
-fn direct_cot_stages(
+/// Solved solution.json and returns its stages ([guess, status, iterations] each) and the
+/// solver's counters (`solution-internals.json`).
+fn direct_cot_run(
     tag: &str,
     points: usize,
     max_iter: usize,
     extra: &[&str],
-) -> Vec<serde_json::Value> {
+) -> (Vec<serde_json::Value>, serde_json::Value) {
     let dir = std::env::temp_dir().join(format!("bf-cli-{tag}-{}", std::process::id()));
     let (points, max_iter) = (points.to_string(), max_iter.to_string());
     let out = bin()
@@ -423,22 +428,24 @@ fn direct_cot_stages(
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");
-    let sol: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(dir.join(name)).unwrap()).unwrap()
+    };
+    let sol = read("solution.json");
     assert_eq!(sol["status"], "Solved", "{}", sol["stages"]);
+    let counters = read("solution-internals.json")["counters"].clone();
     std::fs::remove_dir_all(dir).ok();
-    sol["stages"].as_array().unwrap().clone()
+    (sol["stages"].as_array().unwrap().clone(), counters)
 }
 
 /// `--kkt-residual-ratio` reaches the solver: `periodic-cot` on Radau 3 × 16 from the default
-/// guess runs into the iteration limit with the default accuracy test of the KKT solves (the
-/// flat-valley crawl of docs/decisions/0002-kkt-ordering.md; the guess fallback then needs a
-/// second stage), and ends Solved in one stage well within it with the residual ratio
-/// (BENCHMARKS.md, "KKT: the full mesh sweep with the residual ratio"). With `reach-arm` the
-/// option is refused by name.
+/// guess needs 317 iterations with the default accuracy test of the KKT solves (with the
+/// filter reset; before it the iteration limit), so with `--max-iter 200` it cannot end Solved
+/// in one stage; with the residual ratio it does, in 114 (BENCHMARKS.md, "Line search: Ipopt's
+/// filter reset heuristic"). With `reach-arm` the option is refused by name.
 #[test]
 fn optimize_kkt_residual_ratio_reaches_the_solver() {
-    let stages = direct_cot_stages("ratio", 48, 400, &["--kkt-residual-ratio"]);
+    let (stages, _) = direct_cot_run("ratio", 48, 200, &["--kkt-residual-ratio"]);
     assert_eq!(stages.len(), 1, "{stages:?}");
 
     reach_arm_refuses("--kkt-residual-ratio");

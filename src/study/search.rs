@@ -68,7 +68,7 @@ pub struct VerifyPolicy {
 /// hp refinements of one unverified optimum by default ([`VerifyPolicy::refine_attempts`],
 /// `optimize --verify-refinements`): to element defects of 1e-4, 1e-5 and 1e-6. The third
 /// verifies the default `periodic-cot` search's best candidate, whose second refinement ends
-/// at a defect of 6.6e-3 (BENCHMARKS.md, "Line search: Ipopt's filter reset").
+/// at a defect of 6.6e-3 (BENCHMARKS.md, "Line search: Ipopt's filter reset heuristic").
 pub const VERIFY_REFINEMENTS: usize = 3;
 
 impl Default for VerifyPolicy {
