@@ -315,17 +315,16 @@ pub struct OptimizeArgs {
     #[arg(long)]
     pub warm_start: Option<PathBuf>,
     /// Static dual regularization δ_c of the KKT factorization at the start of a solve
-    /// (default: 3e-8 with lg, 1e-9 with radau, which the solver raises to 3e-8 within a solve
-    /// whose factor turns out misleading or inaccurate, optim/README.md). Set 3e-8 when a mesh
-    /// ends Acceptable with δ_w > 0 in every iteration.
+    /// (default: 1e-9 with either scheme, which the solver raises to 3e-8 within a solve whose
+    /// factor turns out misleading or inaccurate, optim/README.md). Another start value selects
+    /// another path of the solve, sometimes to another local optimum.
     #[arg(long, value_name = "DELTA_C", allow_hyphen_values = true)]
     pub dual_regularization: Option<f64>,
     /// Judge the accuracy of each KKT solve by Ipopt's residual ratio ‖K s − r‖ / (‖r‖ + ‖s‖)
-    /// instead of ‖K s − r‖ / ‖r‖, so that long exact Newton steps along a flat valley of the
-    /// barrier problem are taken instead of damped (docs/decisions/0002-kkt-ordering.md). Fine
-    /// `periodic-cot` meshes that end Acceptable after a long crawl (Radau 3 × 24 … 3 × 48)
-    /// end Solved with it. Off by default: it changes the paths of other solves, and the
-    /// default `periodic-cot` search then ends on an optimum that does not verify.
+    /// instead of ‖K s − r‖ / ‖r‖, so that long exact Newton steps along a nearly flat
+    /// direction of the barrier problem are taken instead of damped
+    /// (docs/decisions/0002-kkt-ordering.md, 0008). It selects other paths and often other
+    /// local optima (docs/optima.md); off by default.
     #[arg(long)]
     pub kkt_residual_ratio: bool,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),

@@ -275,8 +275,10 @@ fn lg_periodic_cot_problems_converge_from_the_default_guess() {
         // constraint rows eliminated first hid the curvature and the iterates crept to an
         // Acceptable exit (optim/README.md, KKT factorization).
         assert_eq!(lg.status, Status::Solved, "{name} LG-30: {:?}", lg.stages);
+        // From the solver's δ_c = 1e-9, as Radau (no LG-only start value): 202 and 69
+        // iterations measured (BENCHMARKS.md, mesh sweep); a crawl would take thousands.
         assert!(
-            lg.iterations < 150,
+            lg.iterations < 400,
             "{name} LG-30: {} iterations",
             lg.iterations
         );
@@ -402,7 +404,8 @@ fn lg_reach_and_reorient_are_solved() {
 /// the last one included. The interpolated start is the optimum's NLP vector; the warm solve
 /// (which has no multipliers to start from) begins at the barrier level its constraint
 /// violation implies, not at the default 1e-4, and ends Solved in at most 10 iterations at
-/// the same objective.
+/// the same objective (to 1e-7 relative: two points that pass the tolerance 1e-8 of the KKT
+/// error each, measured 5e-8 apart).
 #[test]
 fn lg_warm_start_without_the_nlp_vector_restarts_at_the_optimum() {
     let (_, sol) = solve_named("periodic-qc", Scheme::Lg, 30);
@@ -446,7 +449,7 @@ fn lg_warm_start_without_the_nlp_vector_restarts_at_the_optimum() {
     assert!(warm.iterations <= 10, "{:?}", warm.stages);
     let rel = (warm.objective - sol.objective).abs() / sol.objective.abs();
     assert!(
-        rel <= 1e-8,
+        rel <= 1e-7,
         "J = {} vs {} (rel {rel:e})",
         warm.objective,
         sol.objective

@@ -1,11 +1,13 @@
 //! Newton steps along a flat valley: a problem whose Hessian has a stiff and a nearly flat
 //! eigendirection (condition number 1e12) needs a step far longer than its right-hand side.
-//! A backward-stable solve of such a step leaves a residual of order `ε ‖K‖ ‖step‖`, so the
-//! accuracy test of the KKT solve must measure the residual against `‖rhs‖ + ‖step‖`
-//! (`Settings::residual_ratio_with_solution`, Ipopt's residual ratio); measured against
-//! `‖rhs‖` alone, the exact Newton step is rejected as inaccurate, the inertia correction
-//! damps it with δ_w, and the solve creeps along the valley and can stop `Acceptable` short
-//! of the optimum.
+//! A backward-stable solve of such a step leaves a residual of order `ε ‖K‖ ‖step‖`, so
+//! measured against `‖rhs‖` alone the exact Newton step looks inaccurate; the inertia
+//! correction then damps it with δ_w, and the solve creeps along the valley and stops
+//! `Acceptable` short of the optimum (the default). Judging such a solve again by its normwise
+//! backward error (`Settings::backward_error_tol`), or measuring the residual against
+//! `‖rhs‖ + ‖step‖` (Ipopt's residual ratio, `Settings::residual_ratio_with_solution`), takes
+//! the steps undamped. The second test checks that the backward-error test changes no result
+//! of the Hock–Schittkowski suite (objective as given and × 1e8, × 1e12).
 
 mod hs;
 
@@ -48,32 +50,91 @@ fn valley(constrained: bool) -> Hs {
     }
 }
 
+/// The default with the backward-error test at its measured tolerance (decision record 0008).
+fn backward() -> Settings {
+    Settings {
+        backward_error_tol: 1e-14,
+        ..Settings::default()
+    }
+}
+
 #[test]
 fn newton_steps_along_a_flat_valley_are_taken_undamped() {
+    let ratio = Settings {
+        residual_ratio_with_solution: true,
+        ..Settings::default()
+    };
     for constrained in [false, true] {
-        let settings = Settings {
-            residual_ratio_with_solution: true,
-            ..Settings::default()
-        };
-        let sol = solve(&valley(constrained), &settings).unwrap();
-        assert_eq!(
-            sol.status,
-            Status::Solved,
-            "constrained {constrained}: {sol:?}"
-        );
-        // The quadratic model is exact: Newton needs a handful of steps, the barrier updates
-        // of the bounded variant a few dozen, not hundreds of damped steps along the valley.
-        assert!(
-            sol.iterations <= 40,
-            "constrained {constrained}: {} iterations",
-            sol.iterations
-        );
-        for (x, want) in sol.x.iter().zip([1.0, 1.0, 0.0]) {
+        for (label, settings) in [("backward error", backward()), ("ratio", ratio.clone())] {
+            let sol = solve(&valley(constrained), &settings).unwrap();
+            assert_eq!(
+                sol.status,
+                Status::Solved,
+                "{label}, constrained {constrained}: {sol:?}"
+            );
+            // The quadratic model is exact: Newton needs a handful of steps, the barrier
+            // updates of the bounded variant a few dozen, not hundreds of damped steps along
+            // the valley.
             assert!(
-                (x - want).abs() < 1e-4,
-                "constrained {constrained}: x = {:?}",
-                sol.x
+                sol.iterations <= 40,
+                "{label}, constrained {constrained}: {} iterations",
+                sol.iterations
+            );
+            for (x, want) in sol.x.iter().zip([1.0, 1.0, 0.0]) {
+                assert!(
+                    (x - want).abs() < 1e-4,
+                    "{label}, constrained {constrained}: x = {:?}",
+                    sol.x
+                );
+            }
+        }
+    }
+    // Without either, the relative test damps the exact steps of the constrained valley and
+    // the default stops short of the optimum; the backward-error run rests on the solves
+    // only its test accepts.
+    let sol = solve(&valley(true), &backward()).unwrap();
+    assert!(
+        sol.counters.backward_error_accepts > 0,
+        "{:?}",
+        sol.counters
+    );
+    let plain = solve(&valley(true), &Settings::default()).unwrap();
+    assert!(
+        plain.status != Status::Solved || (plain.x[0] - 1.0).abs() > 1e-4,
+        "{plain:?}"
+    );
+}
+
+/// Every Hock–Schittkowski problem, with its objective as given and multiplied by 1e8 and
+/// 1e12, ends with the same status and optimum with and without the backward-error test.
+#[test]
+fn the_backward_error_test_keeps_every_hock_schittkowski_result() {
+    let off = Settings::default();
+    let mut accepts = 0;
+    for (i, name) in hs::all().iter().map(|p| p.name).enumerate() {
+        for obj in [1.0, 1e8, 1e12] {
+            let run = |s: &Settings| {
+                let t = hs::Transformed {
+                    obj,
+                    con: 1.0,
+                    scaling: None,
+                    ..hs::Transformed::new(hs::all().into_iter().nth(i).unwrap())
+                };
+                solve(&t, s).unwrap()
+            };
+            let (a, b) = (run(&off), run(&backward()));
+            assert_eq!(a.counters.backward_error_accepts, 0, "{name} × {obj:e}");
+            accepts += b.counters.backward_error_accepts;
+            assert_eq!(b.status, a.status, "{name} × {obj:e}: {b:?}");
+            let scale = a.objective.abs().max(obj);
+            assert!(
+                (b.objective - a.objective).abs() <= 1e-6 * scale,
+                "{name} × {obj:e}: objective {} with the test, {} without",
+                b.objective,
+                a.objective
             );
         }
     }
+    // The comparison covers solves the test changes (2 measured).
+    assert!(accepts > 0, "no KKT solve accepted on its backward error");
 }

@@ -353,7 +353,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          - The unpivoted KKT factorization eliminates constraint rows before their variables; \
          where that misleads the inertia test the solver switches to 2 × 2 (variable, row) \
          pivots within the solve, and where the factor grows unstable it raises its static \
-         dual regularization from 1e-9 to 3e-8 (LG solves start at 3e-8; optim/README.md, \
+         dual regularization from 1e-9 to 3e-8 (optim/README.md, \
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`); periodic-qc's \

@@ -40,7 +40,7 @@ pub use bf_problem::OcpSolution;
 
 pub use error::StudyError;
 pub use solution_io::SolutionIo;
-pub use solve::{LG_DUAL_REGULARIZATION, solve, solve_warm, solver_settings, warm_settings};
+pub use solve::{solve, solve_warm, solver_settings, warm_settings};
 
 /// The emitted node kernel of bf-generated with this structural fingerprint, as bf-optim's
 /// collocation takes it.

@@ -5,10 +5,7 @@
 //! hp refinement of the unverified optima that beat the best verified one (lowest objective
 //! first, one after the other until one verifies), driven by their element-wise
 //! re-integration defects, until these are at most
-//! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]; a refined optimum that ends
-//! Acceptable is then re-solved from its own primal-dual point with the raised KKT dual
-//! regularization), and
-//! the choice [`select`]: verified first, then the lowest objective, then the lowest start
+//! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]), and the choice [`select`]: verified first, then the lowest objective, then the lowest start
 //! index. Results are collected in index order and every choice depends on values only, so the
 //! result is bitwise the same with any number of threads; a [`Shard`] runs every m-th start
 //! and [`select`] over the shards' candidates gives the unsharded choice.
@@ -20,14 +17,11 @@ use rayon::prelude::*;
 
 use super::error::StudyError;
 use super::refine::{self, RefineCriterion, RefineSettings};
-use super::solve::LG_DUAL_REGULARIZATION as RAISED_DUAL_REGULARIZATION;
 use super::strategy::{
     Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record, record,
     run_chains,
 };
 use super::verify::{VERIFIED_DEFECT, is_verified, verify};
-use super::{build, solve};
-use bf_optim::ipm::Status;
 
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
@@ -209,60 +203,6 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
     }
 }
 
-/// Re-solves a refined candidate that ended Acceptable on its own mesh, from its own
-/// primal-dual point, with the raised KKT dual regularization ([`RAISED_DUAL_REGULARIZATION`]):
-/// warm-started refinement rounds on fine Radau meshes often stall at the acceptable level,
-/// and a new warm-started solve from the stalled point ([`super::warm_settings`]: μ₀ = 1e-4,
-/// small bound pushes) converges in a few iterations. The stalled round has usually raised its
-/// δ_c to the same value within the solve already, so it is the restart that helps
-/// (decision record 0002).
-/// Returns the polished candidate when it ends Solved and verified, with its record.
-fn polish(
-    problem: Problem,
-    settings: &ProblemSettings,
-    cur: &Candidate,
-    rtol: f64,
-) -> Option<(Candidate, StageRecord)> {
-    let p = cur.problem.as_ref()?;
-    let t0 = Instant::now();
-    let s = ProblemSettings {
-        mesh: Some(refine::current_mesh(p).ok()?),
-        warm_start: Some(cur.solution.clone()),
-        dual_regularization: Some(RAISED_DUAL_REGULARIZATION),
-        ..settings.clone()
-    };
-    let b = build(problem, &s).ok()?;
-    let mut sol = solve(&b, None).ok()?;
-    if sol.status != Status::Solved {
-        return None;
-    }
-    let polish_iters = sol.iterations;
-    sol.iterations += cur.solution.iterations;
-    sol.solve_seconds += cur.solution.solve_seconds;
-    sol.strategy = cur.solution.strategy.clone();
-    sol.refinement = cur.solution.refinement.clone();
-    let mut next = Candidate {
-        index: cur.index,
-        problem: Some(b),
-        solution: sol,
-    };
-    attach_verification(&mut next, rtol);
-    if !is_verified(&next.solution) {
-        return None;
-    }
-    let mut r = record(
-        cur.index,
-        format!(
-            "polish start {} (dual regularization {RAISED_DUAL_REGULARIZATION:e})",
-            cur.index
-        ),
-        &next.solution,
-        t0,
-    );
-    r.iterations = polish_iters;
-    Some((next, r))
-}
-
 /// hp-refines an unverified candidate (Radau only) until it is verified or the policy's
 /// attempts are spent: attempt a refines from the previous attempt's mesh, each round
 /// splitting or raising the degree of the elements whose element-wise re-integration defect
@@ -332,13 +272,6 @@ fn refine_until_verified(
             }
         }
         tol *= 0.1;
-    }
-    if is_verified(&cur.solution)
-        && cur.solution.status == Status::Acceptable
-        && let Some((next, r)) = polish(problem, settings, &cur, policy.rtol)
-    {
-        records.push(r);
-        cur = next;
     }
     (cur, records)
 }

@@ -2,35 +2,24 @@
 //! ([`solver_settings`], [`warm_settings`], [`interpolated_warm_settings`]), a solve with its guess fallback ([`solve`]) and a
 //! primal-dual warm-started solve ([`solve_warm`]).
 //!
-//! Radau solves use the solver's KKT settings: static dual regularization δ_c = 1e-9, which
+//! Both schemes use the solver's KKT settings: static dual regularization δ_c = 1e-9, which
 //! the solver raises to 3e-8 within a solve where 2 × 2 (variable, constraint row) pivots show
-//! plain AMD's bare −δ_c pivots to mislead the inertia test or a factor is inaccurate. LG
-//! solves start at δ_c = [`LG_DUAL_REGULARIZATION`] = 3e-8: with the in-solve growth from
-//! 1e-9, `periodic-cot` LG-30 needs 492 iterations instead of 65 (BENCHMARKS.md). That is a
-//! choice of path, not a correction of the factorization: the runs take the same, genuine
-//! inertia corrections until rounding-level differences separate them, and neighbouring starts
-//! scatter (decision record 0002). A failed solve is not repeated with other KKT settings.
+//! plain AMD's bare −δ_c pivots to mislead the inertia test or a factor is inaccurate
+//! (decision record 0002; the mesh sweep of every periodic problem in BENCHMARKS.md). A
+//! failed solve is not repeated with other KKT settings.
 
 use std::time::Instant;
 
 use bf_optim::ipm::{IterationInfo, Nlp, Settings, Solution, WarmStart};
-use bf_optim::ocp::{Scheme, solve_nlp};
+use bf_optim::ocp::solve_nlp;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
 
 use super::error::StudyError;
-
-/// Static dual regularization δ_c ([`Settings::static_dual_regularization`]) at the start of
-/// a Legendre–Gauss solve (module docs).
-pub const LG_DUAL_REGULARIZATION: f64 = 3e-8;
 
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| Settings {
         tol: 1e-8,
-        static_dual_regularization: match s.scheme {
-            Scheme::Lg => LG_DUAL_REGULARIZATION,
-            Scheme::Radau { .. } => Settings::default().static_dual_regularization,
-        },
         ..Settings::default()
     });
     Settings {

@@ -199,6 +199,27 @@ pub struct Settings {
     /// because the undamped steps change the paths of the collocation solves, not always for
     /// the better (BENCHMARKS.md).
     pub residual_ratio_with_solution: bool,
+    /// Normwise backward error `η = ‖K sol − rhs‖_∞ / (max|K_ij| ‖sol‖_∞ + ‖rhs‖_∞)` up to
+    /// which a refined KKT solution that fails the relative-residual test above is still
+    /// accepted, if its relative residual is at most [`Settings::backward_error_forcing`]
+    /// (default: 0, off; 1e-14 ≈ 45 ε is the measured value). Such a solution solves exactly
+    /// a matrix within η relative of `K`, as exactly as `K`'s own rounding allows: its large
+    /// residual relative to `rhs` is the conditioning of a nearly flat direction of the
+    /// barrier problem, where the exact Newton step is far longer than the right-hand side,
+    /// not an inaccurate factor, and damping it by δ_w makes the solve creep along the valley.
+    /// It solves fine `periodic-cot` meshes that otherwise end `Acceptable`, but where `K` is
+    /// nearly singular far from the solution the undamped steps wander (`periodic-cot-human`
+    /// Radau 3 × 10 reaches the iteration limit), so it is not the default
+    /// (docs/decisions/0008-one-kkt-regularization.md). It leaves every solve the relative
+    /// test accepts unchanged.
+    pub backward_error_tol: f64,
+    /// Largest relative residual `‖K sol − rhs‖_∞ / ‖rhs‖_∞` of a solution accepted on its
+    /// backward error (default: 0.1, the forcing term of an inexact Newton method, Dembo,
+    /// Eisenstat & Steihaug 1982): a step that leaves most of the linearized residual is
+    /// dominated by its component along a nearly singular direction of `K`, however exact
+    /// the solve, and makes little progress (`rotate-fast` Radau 30 crawled at 4 % per
+    /// iteration on steps with 0.3–0.5).
+    pub backward_error_forcing: f64,
     /// Filter margin γ_θ (default: 1e-5).
     pub gamma_theta: f64,
     /// Filter margin γ_φ (default: 1e-8).
@@ -305,6 +326,8 @@ impl Default for Settings {
             max_refinement_steps: 3,
             refinement_tol: 1e-10,
             residual_ratio_with_solution: false,
+            backward_error_tol: 0.0,
+            backward_error_forcing: 0.1,
             gamma_theta: 1e-5,
             gamma_phi: 1e-8,
             switching_delta: 1.0,

@@ -95,6 +95,10 @@ pub struct Counters {
     /// Filter resets of the filter reset heuristic (`Settings::filter_reset_trigger`).
     #[serde(default)]
     pub filter_resets: usize,
+    /// KKT solutions that failed the relative-residual test and were accepted on their normwise
+    /// backward error (`Settings::backward_error_tol`).
+    #[serde(default)]
+    pub backward_error_accepts: usize,
 }
 
 /// Result of a solve (unscaled, in the user's variables).

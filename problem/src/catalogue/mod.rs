@@ -180,9 +180,9 @@ pub struct ProblemSettings {
     /// the study layer's mesh refinement.
     pub mesh: Option<Vec<MeshSpec>>,
     /// Static dual regularization δ_c of the KKT factorization
-    /// ([`Settings::static_dual_regularization`]) at the start of a solve; `None`: the study
-    /// layer's choice (3e-8 with LG; the solver's 1e-9 with Radau, which the solver itself
-    /// raises to 3e-8 within a solve whose factor turns out misleading or inaccurate).
+    /// ([`Settings::static_dual_regularization`]) at the start of a solve; `None`: the
+    /// solver's 1e-9 with either scheme, which the solver itself raises to 3e-8 within a solve
+    /// whose factor turns out misleading or inaccurate.
     /// Overrides `ipm`.
     pub dual_regularization: Option<f64>,
     /// Judge each KKT solve by the residual ratio `‖K s − r‖ / (‖r‖ + ‖s‖)`

@@ -559,14 +559,15 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         )?;
     }
     print_wrote(&args.out, &sol)?;
-    // An Acceptable end with the default δ_c may still finish with a larger one.
+    // An Acceptable end of the default KKT settings may end Solved on another path.
     if sol.status == Status::Acceptable
-        && args.scheme == "radau"
+        && !args.kkt_residual_ratio
         && args.dual_regularization.is_none()
     {
         crate::outln!(
-            "hint: Radau meshes finer than the default can stall with the default KKT \
-             regularization; try --dual-regularization 3e-8 (optim/README.md)"
+            "hint: the solve met only the acceptable tolerances; fine meshes can stall where \
+             the KKT factor is inaccurate, and another path may end Solved: try \
+             --kkt-residual-ratio or --dual-regularization 3e-8 (optim/README.md)"
         )?;
     }
     if let Some(f) = failure_of(&sol) {

@@ -31,6 +31,17 @@ fn residual_ratio(resid: f64, rhs: f64, sol: f64) -> f64 {
     resid / (sol + rhs).max(1e-300)
 }
 
+/// Largest accuracy measure of [`Core::solve_refined`] at which a KKT solution is accepted.
+const ACCURATE_SOLVE: f64 = 1e-5;
+
+/// Normwise backward error of a solution of `K sol = rhs` with residual norm `resid`
+/// (Rigal–Gaches, Higham 2002 Thm. 7.1; `max|K_ij| ≤ ‖K‖_∞` stands for the norm, so the
+/// value bounds the true one from above): the smallest relative
+/// perturbation of `K` and `rhs` that `sol` solves exactly. ∞-norms throughout.
+fn backward_error(resid: f64, rhs: f64, kmax: f64, sol: f64) -> f64 {
+    resid / (kmax * sol + rhs).max(1e-300)
+}
+
 /// Step-computation result.
 pub(super) enum StepResult {
     Ok,
@@ -49,8 +60,10 @@ impl Core<'_> {
     /// Solves `K sol = rhs` with refinement against `K(δ_w, δ_c_target)`; returns the final
     /// residual `‖K sol − rhs‖_∞` relative to `‖rhs‖_∞`, or with
     /// `Settings::residual_ratio_with_solution` Ipopt's residual ratio ([`residual_ratio`]),
-    /// on which the caller judges the solution's accuracy. Refinement stops on the residual
-    /// relative to `‖rhs‖_∞` either way.
+    /// on which the caller judges the solution's accuracy (accepted at [`ACCURATE_SOLVE`]);
+    /// where that measure rejects the solution but its normwise backward error
+    /// ([`backward_error`]) is at most `Settings::backward_error_tol`, that backward error
+    /// instead. Refinement stops on the residual relative to `‖rhs‖_∞` either way.
     pub(super) fn solve_refined(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> f64 {
         let t = Instant::now();
         let nm = self.n + self.m;
@@ -58,6 +71,7 @@ impl Core<'_> {
         self.solver.solve(&mut self.sol);
         let bnorm = norm_inf(&self.rhs);
         let mut best = f64::INFINITY;
+        let mut by_backward_error = false;
         for target in [self.delta_c_target, self.delta_c] {
             let shift = self.delta_c - target;
             for step in 0..=settings.max_refinement_steps {
@@ -76,6 +90,28 @@ impl Core<'_> {
                     residual_ratio(rnorm, bnorm, norm_inf(&self.sol))
                 } else {
                     rel
+                };
+                // Only a solve that the test above rejects is judged again, so every solve it
+                // accepts keeps its path bit for bit.
+                by_backward_error = false;
+                let rn = if rn > ACCURATE_SOLVE && settings.backward_error_tol > 0.0 {
+                    let kmax = self
+                        .kkt
+                        .mat
+                        .values
+                        .iter()
+                        .fold(0.0f64, |a, v| a.max(v.abs()));
+                    let eta = backward_error(rnorm, bnorm, kmax, norm_inf(&self.sol));
+                    by_backward_error = eta <= settings.backward_error_tol
+                        && rel <= settings.backward_error_forcing;
+                    if settings.print_level > 2 {
+                        println!(
+                            "    KKT: refinement step {step}: residual {rn:.2e} relative, backward error {eta:.2e}"
+                        );
+                    }
+                    if by_backward_error { eta } else { rn }
+                } else {
+                    rn
                 };
                 if !rn.is_finite() {
                     best = f64::INFINITY;
@@ -103,6 +139,9 @@ impl Core<'_> {
             // accept the step of the regularized system instead.
             self.sol.copy_from_slice(&self.rhs);
             self.solver.solve(&mut self.sol);
+        }
+        if by_backward_error && best <= ACCURATE_SOLVE {
+            ctx.counters.backward_error_accepts += 1;
         }
         ctx.timing.solve += t.elapsed();
         best
@@ -169,7 +208,7 @@ impl Core<'_> {
                 if settings.print_level > 2 {
                     println!("    KKT: relative residual after refinement {res:.2e}");
                 }
-                if res <= 1e-5 {
+                if res <= ACCURATE_SOLVE {
                     self.accept_perturbation(use_hessian);
                     return StepResult::Ok;
                 }
@@ -333,7 +372,7 @@ impl Core<'_> {
         if settings.print_level > 2 {
             println!("    KKT with pivot pairs: inertia {inertia:?}, relative residual {res:.2e}");
         }
-        let accepted = res <= 1e-5;
+        let accepted = res <= ACCURATE_SOLVE;
         if accepted && switch {
             self.check_pairs = false;
             self.switched_to_pairs = true;
@@ -423,7 +462,7 @@ impl Core<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::residual_ratio;
+    use super::{backward_error, residual_ratio};
 
     /// The accuracy threshold of `compute_step`.
     const ACCEPT: f64 = 1e-5;
@@ -436,5 +475,33 @@ mod tests {
         let resid = 2e-5 * rhs;
         assert!(resid / rhs > ACCEPT);
         assert!(residual_ratio(resid, rhs, sol) < 1e-9);
+    }
+
+    #[test]
+    fn a_rounding_level_solve_of_a_flat_valley_passes_the_backward_error_test() {
+        // K = [[1, 1], [1, 1 + 1e-13]] (one eigenvalue ≈ 5e-14), a right-hand side of 1e-6:
+        // the exact step is 1e7 long. LDLᵀ in f64 rounds d₂ = 1e-13 by ≈ 1e-16 relative to
+        // K, which leaves a residual far above 1e-5 ‖rhs‖ however exact the arithmetic.
+        let k: [[f64; 2]; 2] = [[1.0, 1.0], [1.0, 1.0 + 1e-13]];
+        let rhs: [f64; 2] = [1e-6, 2e-6];
+        let d2 = k[1][1] - k[0][1] * k[0][1] / k[0][0];
+        let x2 = (rhs[1] - rhs[0]) / d2;
+        let x1 = rhs[0] - x2;
+        let r = [
+            rhs[0] - (k[0][0] * x1 + k[0][1] * x2),
+            rhs[1] - (k[1][0] * x1 + k[1][1] * x2),
+        ];
+        let (rn, bn, xn) = (
+            r[0].abs().max(r[1].abs()),
+            rhs[0].abs().max(rhs[1].abs()),
+            x1.abs().max(x2.abs()),
+        );
+        assert!(rn / bn > ACCEPT, "relative residual {:e}", rn / bn);
+        let eta = backward_error(rn, bn, 1.0 + 1e-13, xn);
+        assert!(eta <= 1e-14, "η = {eta:e}");
+        // A solution 1 % off on a well-conditioned system (K = I) is rejected by both tests.
+        let (rhs, x) = (1.0f64, 1.01f64);
+        let rn = (rhs - x).abs();
+        assert!(rn / rhs > ACCEPT && backward_error(rn, rhs, 1.0, x) > 1e-3);
     }
 }
