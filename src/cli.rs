@@ -330,8 +330,8 @@ pub struct OptimizeArgs {
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with
-    /// `--scheme radau`: multistart with 32 starts (seed 0) for `periodic-qc`, continuation
-    /// for the others; with `--scheme lg`: direct (an LG-30 solve takes about 4× a Radau
+    /// `--scheme radau`: multistart with 32 starts (seed 0) for the periodic problems,
+    /// continuation for the others; with `--scheme lg`: direct (an LG-30 solve takes about 4× a Radau
     /// 3 × 10 one). `periodic-qc` chains first bound the stick phase to ≥ 0.1 s and then relax
     /// it to --min-stick (warm-started). Every end point is re-integrated; one distinct optimum
     /// is kept per objective value, unverified optima better than the best verified one are

@@ -174,15 +174,14 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             "one cold solve per problem (`--quick`)".to_string()
         } else {
             format!(
-                "the default search of `optimize`: {} for periodic-qc (every start first \
-                 bounds the stick phase to ≥ 0.1 s, then relaxes it to 0.01 s), {} (period \
-                 sweep, release, ε-homotopy) for the COT problems; every end point is \
-                 re-integrated and the best verified one kept (see ball_finger::study::search)",
+                "the default search of `optimize`: {} for every periodic problem (for \
+                 periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
+                 relaxes it to 0.01 s); every end point is re-integrated and the best \
+                 verified one kept (see ball_finger::study::search)",
                 crate::study::strategy::default_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme
-                ),
-                crate::study::strategy::Strategy::Continuation
+                )
             )
         },
         crate::study::verify::VERIFIED_DEFECT
@@ -356,11 +355,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          dual regularization from 1e-9 to 3e-8 (optim/README.md, \
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
-         the strategy and on rounding (section 4 and `report strategies`); periodic-qc's \
-         default search takes the best verified end point of 32 seeded starts. The results \
-         are the best the default searches verify, not the best optima there are: for \
-         periodic-cot a verified optimum with a several times lower cost of transport is \
-         known (docs/optima.md: how it is reached and how to search further).\n\
+         the strategy and on rounding (section 4 and `report strategies`); the default \
+         search of each periodic problem takes the best verified end point of 32 seeded \
+         starts. The results are the best the default searches verify, not the best optima \
+         there are (docs/optima.md: how to search further).\n\
          - The COT optima have free phases of 1–9 s whose motion is not open-loop stable: \
          replaying a whole phase from its initial state drifts away from the collocated \
          trajectory (the \"open-loop drift\" in each verification summary, O(10) rad), even \

@@ -4,7 +4,7 @@
 //! * [`Strategy::Direct`]: one interior-point solve from the docs/parameters.md guess (q ≡ q⁰,
 //!   t_f⁽ⁱ⁾ = i), with the geometric guess as fallback ([`super::solve::solve`]).
 //! * [`Strategy::Continuation`] ([`Strategy::default`]; what [`default_strategy`] runs for
-//!   every Radau problem except `periodic-qc`): a homotopy in the constraints and the smoothing.
+//!   the Radau problems without a period): a homotopy in the constraints and the smoothing.
 //!   For the periodic problems (eq. 60 ratio objectives) the period T = Σ t_f⁽ⁱ⁾ is the
 //!   dominant non-convexity — the QC optimum at T ≈ 2.6 s that a cold start finds is 2–5×
 //!   worse than optima at T ≈ 0.7–1.9 s. Each chain k
@@ -20,8 +20,8 @@
 //! * [`Strategy::Multistart`]: N guesses around the default (joint angles q⁰ ± 0.6 rad
 //!   uniform, phase durations log-uniform in [0.05, 1.6] s; start 0 is the default guess
 //!   itself, so the result is never worse than `Direct`), solved in parallel; the best
-//!   successful solution wins. [`default_strategy`] of `periodic-qc`: [`DEFAULT_STARTS`]
-//!   starts with seed [`DEFAULT_SEED`].
+//!   successful solution wins. [`default_strategy`] of the periodic problems:
+//!   [`DEFAULT_STARTS`] starts with seed [`DEFAULT_SEED`].
 //!
 //! [`solve_with_strategy`] returns the best end point as solved. For `periodic-qc` the chains
 //! can run as a continuation in the stick phase's lower bound (a stage relaxing it to the
@@ -433,15 +433,16 @@ pub const DEFAULT_STARTS: usize = 32;
 pub const DEFAULT_SEED: u64 = 0;
 
 /// The default strategy of `problem` on `scheme`: a seeded multi-start of
-/// [`DEFAULT_STARTS`] starts for `periodic-qc` (whose landscape has many local optima: the
-/// continuation's best end point is 66 % above the best known optimum, which one start in 32
-/// reaches), the continuation for the others (a COT start takes up to 30× a QC one, so 32
-/// of them leave any time budget), and one direct solve with Legendre–Gauss (an LG solve
+/// [`DEFAULT_STARTS`] starts for the periodic problems (their landscapes have many local
+/// optima: for `periodic-qc` the continuation's best end point is 66 % above the best known
+/// optimum, which one start in 32 reaches; for `periodic-cot` it is 26× above the
+/// multi-start's verified optimum, at about the same wall time, BENCHMARKS.md), the
+/// continuation in ε for the others, and one direct solve with Legendre–Gauss (an LG solve
 /// takes about 4× a Radau one).
 pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
     match scheme {
         Scheme::Lg => Strategy::Direct,
-        Scheme::Radau { .. } if problem == Problem::PeriodicQc => Strategy::Multistart {
+        Scheme::Radau { .. } if problem.is_periodic() => Strategy::Multistart {
             starts: DEFAULT_STARTS,
             seed: DEFAULT_SEED,
         },

@@ -207,9 +207,9 @@ pub struct Settings {
     /// residual relative to `rhs` is the conditioning of a nearly flat direction of the
     /// barrier problem, where the exact Newton step is far longer than the right-hand side,
     /// not an inaccurate factor, and damping it by δ_w makes the solve creep along the valley.
-    /// It solves fine `periodic-cot` meshes that otherwise end `Acceptable`, but where `K` is
-    /// nearly singular far from the solution the undamped steps wander (`periodic-cot-human`
-    /// Radau 3 × 10 reaches the iteration limit), so it is not the default
+    /// It solves fine `periodic-cot` meshes that otherwise end `Acceptable`, but its few
+    /// accepted steps on the default mesh of `periodic-cot-human` (Radau 3 × 10) move that
+    /// direct solve to another path, which reaches the iteration limit, so it is not the default
     /// (docs/decisions/0008-one-kkt-regularization.md). It leaves every solve the relative
     /// test accepts unchanged.
     pub backward_error_tol: f64,
