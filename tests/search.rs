@@ -99,6 +99,51 @@ fn default_periodic_qc_finds_the_best_known_optimum_verified_and_thread_independ
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// The default search of `periodic-cot` (the 32-start multi-start) verifies an optimum below
+/// the continuation's (0.011405, BENCHMARKS.md "Default search: multi-start for every
+/// periodic problem"), the same on one and on two threads.
+#[test]
+#[ignore = "slow: two full default searches of periodic-cot and one continuation (about 90 s \
+            CPU); run with `cargo test --release --test search -- --ignored`"]
+fn default_periodic_cot_search_beats_the_continuation_verified_and_thread_independent() {
+    let dir = tmpdir("cot-default");
+    let (one, two, cont) = (dir.join("one"), dir.join("two"), dir.join("cont"));
+    ok(&optimize_in(
+        &one,
+        Some("1"),
+        &["--problem", "periodic-cot"],
+    ));
+    ok(&optimize_in(
+        &two,
+        Some("2"),
+        &["--problem", "periodic-cot"],
+    ));
+    ok(&optimize_in(
+        &cont,
+        None,
+        &["--problem", "periodic-cot", "--strategy", "continuation"],
+    ));
+    let (a, b, c) = (
+        json(&one.join("solution.json")),
+        json(&two.join("solution.json")),
+        json(&cont.join("solution.json")),
+    );
+    for s in [&a, &c] {
+        assert_eq!(s["status"], "Solved");
+        assert_eq!(s["verification"]["verified"], true);
+    }
+    let (ja, jc) = (
+        a["objective"].as_f64().unwrap(),
+        c["objective"].as_f64().unwrap(),
+    );
+    assert!(
+        ja < jc,
+        "multi-start J {ja} against the continuation's {jc}"
+    );
+    assert_eq!(essence(&a), essence(&b));
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn shards_merged_give_the_unsharded_multistart_choice() {
     let dir = tmpdir("shards");
