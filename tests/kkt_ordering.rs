@@ -233,11 +233,12 @@ fn threshold_pivoting_sweep() {
     }
 }
 
-/// `periodic-cot` Radau 3 × 24 ends Acceptable by default: late in the solve the iterates
+/// `periodic-cot` Radau 3 × 24 ends Acceptable with the relative-residual test alone: late in
+/// the solve the iterates
 /// follow a flat valley, where the exact Newton step is far longer than its right-hand side,
 /// and a solve exact to rounding leaves a residual above 1e-5 ‖rhs‖, so the step is rejected
 /// as inaccurate and damped by δ_w until the acceptable test stops the crawl. With the
-/// normwise backward-error test (`Settings::backward_error_tol` = 1e-14, opt-in; decision
+/// normwise backward-error test (`Settings::backward_error_tol` = 1e-14, the default; decision
 /// record 0008) the direct solve ends Solved in one stage, and solves accepted on their
 /// backward error are part of its path.
 #[test]

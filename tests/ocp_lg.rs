@@ -268,7 +268,22 @@ fn lg_periodic_qc_is_solved_at_the_radau_optimum() {
 #[test]
 fn lg_periodic_cot_problems_converge_from_the_default_guess() {
     for name in ["periodic-cot", "periodic-cot-human"] {
-        let (_, radau) = solve_named(name, Scheme::Radau { elements: 3 }, 30);
+        // The Radau reference of the objective check below: a cold direct solve with the
+        // relative-residual accuracy test alone. With the default backward-error test its
+        // path on the human scene diverges after a few changed steps and reaches the
+        // iteration limit; over 32 starts the two tests solve as many (decision record 0008),
+        // so this pairing of two single cold solves is a property of their paths.
+        let reference = ProblemSettings {
+            points: 30,
+            scheme: Scheme::Radau { elements: 3 },
+            max_iter: 600,
+            ipm: Some(bf_optim::ipm::Settings {
+                backward_error_tol: 0.0,
+                ..bf_optim::ipm::Settings::default()
+            }),
+            ..ProblemSettings::default()
+        };
+        let radau = solve(&build(name.parse().unwrap(), &reference).unwrap(), None).unwrap();
         assert!(radau.status.is_success(), "{name}: {:?}", radau.stages);
         let (p, lg) = solve_named(name, Scheme::Lg, 30);
         // Solved, not just Acceptable: with plain AMD and δ_c = 1e-9 the LDLᵀ growth of the

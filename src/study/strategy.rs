@@ -435,8 +435,8 @@ pub const DEFAULT_SEED: u64 = 0;
 /// The default strategy of `problem` on `scheme`: a seeded multi-start of
 /// [`DEFAULT_STARTS`] starts for the periodic problems (their landscapes have many local
 /// optima: for `periodic-qc` the continuation's best end point is 66 % above the best known
-/// optimum, which one start in 32 reaches; for `periodic-cot` it is 26× above the
-/// multi-start's verified optimum, at about the same wall time, BENCHMARKS.md), the
+/// optimum, which one start in 32 reaches; for `periodic-cot` it is 35× above the
+/// multi-start's verified optimum, BENCHMARKS.md), the
 /// continuation in ε for the others, and one direct solve with Legendre–Gauss (an LG solve
 /// takes about 4× a Radau one).
 pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
