@@ -16,26 +16,8 @@
 
 mod hs;
 
-use bf_optim::ipm::{Settings, Solution, solve};
-use hs::Transformed;
-
-/// Runs of `settings` on every problem and objective factor: (name, factor, solution).
-fn sweep(settings: &Settings) -> Vec<(&'static str, f64, Solution)> {
-    let mut out = Vec::new();
-    for (i, name) in hs::all().iter().map(|p| p.name).enumerate() {
-        for obj in [1.0, 1e8, 1e12] {
-            let p = hs::all().into_iter().nth(i).unwrap();
-            let t = Transformed {
-                obj,
-                con: 1.0,
-                scaling: None,
-                ..Transformed::new(p)
-            };
-            out.push((name, obj, solve(&t, settings).unwrap()));
-        }
-    }
-    out
-}
+use bf_optim::ipm::Settings;
+use hs::{assert_same_results, sweep_scaled_objectives as sweep};
 
 #[test]
 fn a_watchdog_without_unchecked_steps_is_the_regular_line_search() {
@@ -69,19 +51,12 @@ fn watchdogs_after_every_shortened_step_keep_every_result() {
         watchdog_shortened_iter_trigger: 1,
         ..Settings::default()
     });
-    let (mut watchdogs, mut returns) = (0, 0);
-    for ((name, obj, p), (_, _, w)) in plain.iter().zip(&stressed) {
-        assert_eq!(w.status, p.status, "{name} × {obj:e}: {w:?}");
-        let scale = p.objective.abs().max(*obj);
-        assert!(
-            (w.objective - p.objective).abs() <= 1e-6 * scale,
-            "{name} × {obj:e}: objective {} with watchdogs, {} without",
-            w.objective,
-            p.objective
-        );
-        watchdogs += w.counters.watchdogs;
-        returns += w.counters.watchdog_returns;
-    }
+    assert_same_results(&plain, &stressed, "with watchdogs");
+    let watchdogs: usize = stressed.iter().map(|(_, _, w)| w.counters.watchdogs).sum();
+    let returns: usize = stressed
+        .iter()
+        .map(|(_, _, w)| w.counters.watchdog_returns)
+        .sum();
     // The stress reaches both outcomes: watchdogs whose full steps succeed and returns.
     assert!(
         returns > 0 && watchdogs > returns,
@@ -99,18 +74,12 @@ fn filter_resets_keep_every_result() {
         filter_reset_trigger: 1,
         ..Settings::default()
     });
-    let mut resets = 0;
-    for ((name, obj, a), (_, _, b)) in without.iter().zip(&eager) {
-        assert_eq!(a.counters.filter_resets, 0, "{name} × {obj:e}");
-        assert_eq!(b.status, a.status, "{name} × {obj:e}: {b:?}");
-        let scale = a.objective.abs().max(*obj);
-        assert!(
-            (b.objective - a.objective).abs() <= 1e-6 * scale,
-            "{name} × {obj:e}: objective {} with resets, {} without",
-            b.objective,
-            a.objective
-        );
-        resets += b.counters.filter_resets;
-    }
+    assert!(
+        without
+            .iter()
+            .all(|(_, _, a)| a.counters.filter_resets == 0)
+    );
+    assert_same_results(&without, &eager, "with resets");
+    let resets: usize = eager.iter().map(|(_, _, b)| b.counters.filter_resets).sum();
     assert!(resets > 0, "no filter reset happened");
 }

@@ -10,7 +10,7 @@
 
 pub mod dual;
 
-use bf_optim::ipm::{Nlp, NlpScaling};
+use bf_optim::ipm::{Nlp, NlpScaling, Settings, Solution};
 use dual::D;
 
 const INF: f64 = f64::INFINITY;
@@ -255,6 +255,42 @@ pub fn all() -> Vec<Hs> {
     let mut v = set_a::list();
     v.extend(set_b::list());
     v
+}
+
+/// One solve of `settings` per problem and objective factor (1, 1e8, 1e12, the scalings of
+/// the scale-invariance tests): (name, factor, solution).
+pub fn sweep_scaled_objectives(settings: &Settings) -> Vec<(&'static str, f64, Solution)> {
+    let mut out = Vec::new();
+    for (i, name) in all().iter().map(|p| p.name).enumerate() {
+        for obj in [1.0, 1e8, 1e12] {
+            let t = Transformed {
+                obj,
+                ..Transformed::new(all().into_iter().nth(i).unwrap())
+            };
+            out.push((name, obj, bf_optim::ipm::solve(&t, settings).unwrap()));
+        }
+    }
+    out
+}
+
+/// Asserts that two [`sweep_scaled_objectives`] runs end every problem with the same status
+/// and the same objective (to 1e-6 of `max(|f|, factor)`); `what` names the difference of
+/// `b`'s settings in the messages.
+pub fn assert_same_results(
+    a: &[(&'static str, f64, Solution)],
+    b: &[(&'static str, f64, Solution)],
+    what: &str,
+) {
+    for ((name, obj, x), (_, _, y)) in a.iter().zip(b) {
+        assert_eq!(y.status, x.status, "{name} × {obj:e} {what}: {y:?}");
+        let scale = x.objective.abs().max(*obj);
+        assert!(
+            (y.objective - x.objective).abs() <= 1e-6 * scale,
+            "{name} × {obj:e}: objective {} {what}, {} without",
+            y.objective,
+            x.objective
+        );
+    }
 }
 
 /// Heading of the section of `optim/HS_RESULTS.md` written by the `hs_scaling` test.

@@ -72,6 +72,9 @@ impl Core<'_> {
         let bnorm = norm_inf(&self.rhs);
         let mut best = f64::INFINITY;
         let mut by_backward_error = false;
+        // max|K_ij| of the factored matrix, the same for every refinement step: computed once,
+        // and only when a solve needs the backward-error test.
+        let mut kmax: Option<f64> = None;
         for target in [self.delta_c_target, self.delta_c] {
             let shift = self.delta_c - target;
             for step in 0..=settings.max_refinement_steps {
@@ -95,12 +98,7 @@ impl Core<'_> {
                 // accepts keeps its path bit for bit.
                 by_backward_error = false;
                 let rn = if rn > ACCURATE_SOLVE && settings.backward_error_tol > 0.0 {
-                    let kmax = self
-                        .kkt
-                        .mat
-                        .values
-                        .iter()
-                        .fold(0.0f64, |a, v| a.max(v.abs()));
+                    let kmax = *kmax.get_or_insert_with(|| norm_inf(&self.kkt.mat.values));
                     let eta = backward_error(rnorm, bnorm, kmax, norm_inf(&self.sol));
                     by_backward_error = eta <= settings.backward_error_tol
                         && rel <= settings.backward_error_forcing;
