@@ -99,6 +99,10 @@ pub struct Counters {
     /// backward error (`Settings::backward_error_tol`).
     #[serde(default)]
     pub backward_error_accepts: usize,
+    /// Iterative-refinement corrections applied to KKT solutions, over all solves
+    /// (`Settings::max_refinement_steps` bounds them per solve).
+    #[serde(default)]
+    pub refinement_steps: usize,
 }
 
 /// Result of a solve (unscaled, in the user's variables).

@@ -31,6 +31,19 @@ pub(super) enum LsStart {
     Restored { skip_full: bool },
 }
 
+/// The verdict of the acceptance test on a trial point ([`Core::acceptable`]).
+#[derive(Clone, Copy, PartialEq, Debug)]
+pub(super) enum Trial {
+    /// Sufficient progress and not dominated by the filter; `f_type` when the switching
+    /// condition held and the Armijo condition decided (no filter augmentation, W&B ).
+    Accepted { f_type: bool },
+    /// Sufficient progress over the current iterate, but dominated by a filter entry (Ipopt's
+    /// `last_rejection_due_to_filter_`, counted by the filter reset).
+    BlockedByFilter,
+    /// Not enough progress, or not evaluable.
+    Rejected,
+}
+
 /// The outcome of a watchdog trial ([`Core::watchdog_trial`]).
 pub(super) enum WatchdogTrial {
     /// The full step is acceptable against the watchdog's reference: the watchdog succeeded.
@@ -121,9 +134,7 @@ impl Core<'_> {
         self.filter.push((t, p));
     }
 
-    /// Acceptance test of a trial point (W&B eq. (18)–(21)). Returns (accepted, f-type,
-    /// blocked by the filter: sufficient progress over the current iterate, but dominated by a
-    /// filter entry — Ipopt's `last_rejection_due_to_filter_`).
+    /// Acceptance test of a trial point (W&B eq. (18)–(21)).
     pub(super) fn acceptable(
         &self,
         settings: &Settings,
@@ -133,14 +144,14 @@ impl Core<'_> {
         alpha: f64,
         theta_t: f64,
         phi_t: f64,
-    ) -> (bool, bool, bool) {
+    ) -> Trial {
         if !phi_t.is_finite() || !theta_t.is_finite() || theta_t > self.theta_max {
-            return (false, false, false);
+            return Trial::Rejected;
         }
         if phi_t > phi {
             let inc = (phi_t - phi).log10();
             if inc > settings.obj_max_inc + phi.abs().log10().max(1.0) {
-                return (false, false, false);
+                return Trial::Rejected;
             }
         }
         let switching = gphi_dx < 0.0
@@ -158,12 +169,39 @@ impl Core<'_> {
             (ok, false)
         };
         if !progress {
-            return (false, false, false);
+            return Trial::Rejected;
         }
         if !self.filter_acceptable(theta_t, phi_t) {
-            return (false, false, true);
+            return Trial::BlockedByFilter;
         }
-        (true, ftype, false)
+        Trial::Accepted { f_type: ftype }
+    }
+
+    /// Acts on the verdict of [`Core::acceptable`] for a trial point judged against the
+    /// iterate with filter measures `(theta, phi)`: an accepted point counts for the filter
+    /// reset and augments the filter unless f-type; a rejected one records whether the filter
+    /// alone blocked it. Returns whether the point was accepted.
+    fn take_verdict(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        verdict: Trial,
+        theta: f64,
+        phi: f64,
+    ) -> bool {
+        match verdict {
+            Trial::Accepted { f_type } => {
+                self.note_accept(ctx, settings);
+                if !f_type {
+                    self.augment_filter(theta, phi, settings);
+                }
+                true
+            }
+            Trial::BlockedByFilter | Trial::Rejected => {
+                self.filter_blocked_last = verdict == Trial::BlockedByFilter;
+                false
+            }
+        }
     }
 
     /// Ipopt's filter reset heuristic, run on every accepted trial point before the filter is
@@ -240,17 +278,11 @@ impl Core<'_> {
             if ok {
                 let theta_t = norm_1(&self.c_t);
                 let phi_t = self.barrier_value(&self.x_t, f_t);
-                let (acc, ftype, blocked) =
-                    self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
-                if acc {
-                    self.note_accept(ctx, settings);
-                    if !ftype {
-                        self.augment_filter(theta, phi, settings);
-                    }
+                let verdict = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
+                if self.take_verdict(ctx, settings, verdict, theta, phi) {
                     self.f_t = f_t;
                     break LsOutcome::Accepted { alpha, trials };
                 }
-                self.filter_blocked_last = blocked;
                 if trials == 1
                     && start == LsStart::Regular
                     && theta_t >= theta
@@ -306,18 +338,12 @@ impl Core<'_> {
             let theta_t = norm_1(&self.c_t);
             let phi_t = self.barrier_value(&self.x_t, f_t);
             let gphi_dx = dot(&self.grad_phi, &self.dx);
-            let (acc, ftype, blocked) =
-                self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
-            if acc {
-                self.note_accept(ctx, settings);
-                if !ftype {
-                    self.augment_filter(theta, phi, settings);
-                }
+            let verdict = self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
+            if self.take_verdict(ctx, settings, verdict, theta, phi) {
                 self.f_t = f_t;
                 ctx.counters.soc_accepted += 1;
                 return Some(a_soc);
             }
-            self.filter_blocked_last = blocked;
             if theta_t > settings.kappa_soc * theta_old {
                 break;
             }
@@ -385,16 +411,11 @@ impl Core<'_> {
             self.f_t = f_t;
             let theta_t = norm_1(&self.c_t);
             let phi_t = self.barrier_value(&self.x_t, f_t);
-            let (acc, ftype, blocked) =
+            let verdict =
                 self.acceptable(settings, w.theta, w.phi, w.gphi_dx, w.alpha, theta_t, phi_t);
-            if acc {
-                self.note_accept(ctx, settings);
-                if !ftype {
-                    self.augment_filter(w.theta, w.phi, settings);
-                }
+            if self.take_verdict(ctx, settings, verdict, w.theta, w.phi) {
                 WatchdogTrial::Accepted(alpha)
             } else {
-                self.filter_blocked_last = blocked;
                 WatchdogTrial::Rejected(alpha)
             }
         } else {

@@ -139,6 +139,8 @@ pub(crate) struct Core<'p> {
     sol: Vec<f64>,
     resid: Vec<f64>,
     corr: Vec<f64>,
+    /// The KKT solution before the last refinement correction, which may be undone.
+    sol_before: Vec<f64>,
     // step
     dx: Vec<f64>,
     dy: Vec<f64>,
@@ -239,6 +241,7 @@ impl<'p> Core<'p> {
             sol: vec![0.0; n + m],
             resid: vec![0.0; n + m],
             corr: vec![0.0; n + m],
+            sol_before: vec![0.0; n + m],
             dx: vec![0.0; n],
             dy: vec![0.0; m],
             dzl: vec![0.0; nlo],

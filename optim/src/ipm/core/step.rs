@@ -77,6 +77,9 @@ impl Core<'_> {
         let mut kmax: Option<f64> = None;
         for target in [self.delta_c_target, self.delta_c] {
             let shift = self.delta_c - target;
+            // (relative residual, accuracy measure, accepted on its backward error) before the
+            // last correction.
+            let mut previous: Option<(f64, f64, bool)> = None;
             for step in 0..=settings.max_refinement_steps {
                 self.kkt.mat.sym_matvec(&self.sol, &mut self.resid);
                 for i in 0..nm {
@@ -111,16 +114,43 @@ impl Core<'_> {
                 } else {
                     rn
                 };
+                // NaN-safe: a non-finite residual has not contracted.
+                let contracted = previous.is_some_and(|(prev_rel, _, _)| {
+                    rel <= settings.refinement_contraction * prev_rel
+                });
+                if step > settings.min_refinement_steps
+                    && !contracted
+                    && let Some((_, prev_rn, prev_by_backward_error)) = previous
+                {
+                    // Beyond the minimum, a correction that did not reduce the residual by the
+                    // contraction factor shows refinement converging too slowly to be worth
+                    // more solves (LAPACK's xGERFS stops likewise): undo it, so the solution
+                    // is the one the minimum steps produced or a better one.
+                    self.sol.copy_from_slice(&self.sol_before);
+                    best = prev_rn;
+                    by_backward_error = prev_by_backward_error;
+                    break;
+                }
                 if !rn.is_finite() {
                     best = f64::INFINITY;
                     break;
                 }
                 best = rn;
-                if rel <= settings.refinement_tol || step == settings.max_refinement_steps {
+                // Steps beyond the minimum are for solves the accuracy test still rejects.
+                if rel <= settings.refinement_tol
+                    || step == settings.max_refinement_steps
+                    || (step >= settings.min_refinement_steps && rn <= ACCURATE_SOLVE)
+                {
                     break;
                 }
+                previous = Some((rel, rn, by_backward_error));
+                ctx.counters.refinement_steps += 1;
                 self.corr.copy_from_slice(&self.resid);
                 self.solver.solve(&mut self.corr);
+                if step >= settings.min_refinement_steps {
+                    // This correction may be undone (above): keep the solution bit for bit.
+                    self.sol_before.copy_from_slice(&self.sol);
+                }
                 for i in 0..nm {
                     self.sol[i] += self.corr[i];
                 }
