@@ -251,17 +251,6 @@ pub struct Settings {
     pub kappa_soc: f64,
     /// Backtracking factor (default: 0.5).
     pub alpha_red_factor: f64,
-    /// Ipopt's watchdog procedure: after this many consecutive iterations whose line search
-    /// shortened the step, full steps are taken for up to [`Settings::watchdog_trial_iter_max`]
-    /// iterations, judged against the iterate where the watchdog started; if none of them is
-    /// acceptable there, the solve returns to that iterate and backtracks along its direction
-    /// (0 disables it; default: 0, Ipopt's is 10). Off because, with the filter reset
-    /// heuristic ([`Settings::filter_reset_trigger`]), the collocation solves measured no longer
-    /// take runs of shortened steps, while the watchdog changed the paths of others
-    /// (docs/decisions/0006-line-search-watchdog.md).
-    pub watchdog_shortened_iter_trigger: usize,
-    /// Unchecked full steps of one watchdog (default: 3).
-    pub watchdog_trial_iter_max: usize,
     /// Ipopt's filter reset heuristic: the filter is cleared when, in this many consecutive
     /// iterations, the last trial point rejected before the accepted one had made sufficient
     /// progress over the current iterate and was dominated only by a filter entry (default: 5).
@@ -352,8 +341,6 @@ impl Default for Settings {
             max_soc: 4,
             kappa_soc: 0.99,
             alpha_red_factor: 0.5,
-            watchdog_shortened_iter_trigger: 0,
-            watchdog_trial_iter_max: 3,
             filter_reset_trigger: 5,
             max_filter_resets: 5,
             obj_max_inc: 5.0,

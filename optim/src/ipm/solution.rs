@@ -85,13 +85,6 @@ pub struct Counters {
     /// spurious); `None`: it kept `Settings::static_dual_regularization`.
     #[serde(default)]
     pub dual_regularization_raised_at: Option<usize>,
-    /// Watchdogs started (`Settings::watchdog_shortened_iter_trigger`).
-    #[serde(default)]
-    pub watchdogs: usize,
-    /// Watchdogs whose full steps were not acceptable, so that the solve returned to the
-    /// iterate where they started.
-    #[serde(default)]
-    pub watchdog_returns: usize,
     /// Filter resets of the filter reset heuristic (`Settings::filter_reset_trigger`).
     #[serde(default)]
     pub filter_resets: usize,

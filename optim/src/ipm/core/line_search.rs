@@ -6,8 +6,6 @@
 //!   (W&B Sect. 2.3);
 //! * second-order corrections (W&B Sect. 2.4);
 //! * Ipopt's filter reset heuristic ([`Core::note_accept`]);
-//! * Ipopt's watchdog procedure ([`Watchdog`]): after a run of shortened steps, a few full
-//!   steps judged against the iterate where it started, else back to that iterate;
 //! * Ipopt's "soft restoration" step when the line search fails near feasibility.
 
 use std::time::Instant;
@@ -21,16 +19,6 @@ pub(super) enum LsOutcome {
     Failed,
 }
 
-/// How a line search starts ([`Core::line_search`]).
-#[derive(Clone, Copy, PartialEq)]
-pub(super) enum LsStart {
-    /// At the largest step, with second-order corrections.
-    Regular,
-    /// From an iterate restored by the watchdog: the factorization belongs to another point,
-    /// so no second-order correction; `skip_full` skips the full step (already rejected).
-    Restored { skip_full: bool },
-}
-
 /// The verdict of the acceptance test on a trial point ([`Core::acceptable`]).
 #[derive(Clone, Copy, PartialEq, Debug)]
 pub(super) enum Trial {
@@ -42,52 +30,6 @@ pub(super) enum Trial {
     BlockedByFilter,
     /// Not enough progress, or not evaluable.
     Rejected,
-}
-
-/// The outcome of a watchdog trial ([`Core::watchdog_trial`]).
-pub(super) enum WatchdogTrial {
-    /// The full step is acceptable against the watchdog's reference: the watchdog succeeded.
-    Accepted(f64),
-    /// The full step (its length) is not acceptable against the reference.
-    Rejected(f64),
-    /// The functions could not be evaluated at the full step.
-    EvaluationFailed,
-}
-
-/// Ipopt's watchdog procedure (`BacktrackingLineSearch::StartWatchDog`): the iterate and
-/// search direction where it started, and the filter measures at that iterate against which
-/// the next full steps are judged. A valley whose floor curves faster than the filter's
-/// margins admits only steps shortened ~1e4-fold (each iteration then moves the point by
-/// ~1e-4 of the Newton step and the solve runs into its iteration limit); a few unchecked full
-/// steps can cross it, and if they do not end somewhere acceptable relative to the start,
-/// nothing is lost but the watchdog's iterations.
-pub(super) struct Watchdog {
-    x: Vec<f64>,
-    y: Vec<f64>,
-    zl: Vec<f64>,
-    zu: Vec<f64>,
-    f: f64,
-    grad: Vec<f64>,
-    derivs_x: Vec<f64>,
-    c: Vec<f64>,
-    jac: Vec<f64>,
-    jty: Vec<f64>,
-    sl: Vec<f64>,
-    su: Vec<f64>,
-    grad_phi: Vec<f64>,
-    dx: Vec<f64>,
-    dy: Vec<f64>,
-    dzl: Vec<f64>,
-    dzu: Vec<f64>,
-    /// Barrier parameter at the start: the reference values hold only for this μ.
-    pub mu: f64,
-    tau: f64,
-    theta: f64,
-    phi: f64,
-    gphi_dx: f64,
-    alpha: f64,
-    /// Full steps rejected so far.
-    pub rejected: usize,
 }
 
 impl Core<'_> {
@@ -247,12 +189,7 @@ impl Core<'_> {
     }
 
     /// Backtracking filter line search with second-order correction (W&B Sect. 2.3, A-5.x).
-    pub(super) fn line_search(
-        &mut self,
-        ctx: &mut Ctx<'_, '_>,
-        settings: &Settings,
-        start: LsStart,
-    ) -> LsOutcome {
+    pub(super) fn line_search(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> LsOutcome {
         let t0 = Instant::now();
         let fe0 = ctx.timing.function_evals;
         let theta = norm_1(&self.c);
@@ -262,10 +199,6 @@ impl Core<'_> {
         let amin = self.alpha_min(settings, theta, gphi_dx);
         let mut alpha = alpha_max;
         let mut trials = 0;
-        if start == (LsStart::Restored { skip_full: true }) {
-            alpha *= settings.alpha_red_factor;
-            trials = 1;
-        }
         let outcome = loop {
             if alpha < amin || trials > 60 {
                 break LsOutcome::Failed;
@@ -284,7 +217,6 @@ impl Core<'_> {
                     break LsOutcome::Accepted { alpha, trials };
                 }
                 if trials == 1
-                    && start == LsStart::Regular
                     && theta_t >= theta
                     && settings.max_soc > 0
                     && self.m > 0
@@ -358,96 +290,6 @@ impl Core<'_> {
         self.dzu = saved.3;
         self.set_rhs(None);
         None
-    }
-
-    /// Starts a watchdog at the current iterate and search direction.
-    pub(super) fn start_watchdog(&self) -> Watchdog {
-        Watchdog {
-            x: self.x.clone(),
-            y: self.y.clone(),
-            zl: self.zl.clone(),
-            zu: self.zu.clone(),
-            f: self.f,
-            grad: self.grad.clone(),
-            derivs_x: self.derivs_x.clone(),
-            c: self.c.clone(),
-            jac: self.jac.clone(),
-            jty: self.jty.clone(),
-            sl: self.sl.clone(),
-            su: self.su.clone(),
-            grad_phi: self.grad_phi.clone(),
-            dx: self.dx.clone(),
-            dy: self.dy.clone(),
-            dzl: self.dzl.clone(),
-            dzu: self.dzu.clone(),
-            mu: self.mu,
-            tau: self.tau,
-            theta: norm_1(&self.c),
-            phi: self.barrier_value(&self.x, self.f),
-            gphi_dx: dot(&self.grad_phi, &self.dx),
-            alpha: self.max_step_primal(&self.dx),
-            rejected: 0,
-        }
-    }
-
-    /// The full step along the current direction, judged against the watchdog's reference
-    /// (Ipopt: `alpha_min = alpha_primal_max`, the reference's θ, φ, ∇φᵀd and step length in
-    /// the switching and Armijo tests). On acceptance the filter is augmented as after a
-    /// regular h-type step; `x_t, c_t, f_t` hold the trial point in both outcomes.
-    pub(super) fn watchdog_trial(
-        &mut self,
-        ctx: &mut Ctx<'_, '_>,
-        settings: &Settings,
-        w: &Watchdog,
-    ) -> WatchdogTrial {
-        let t0 = Instant::now();
-        let fe0 = ctx.timing.function_evals;
-        let alpha = self.max_step_primal(&self.dx);
-        for j in 0..self.n {
-            self.x_t[j] = self.x[j] + alpha * self.dx[j];
-        }
-        let (f_t, ok) = self.eval_fc(ctx, true);
-        let out = if ok {
-            self.f_t = f_t;
-            let theta_t = norm_1(&self.c_t);
-            let phi_t = self.barrier_value(&self.x_t, f_t);
-            let verdict =
-                self.acceptable(settings, w.theta, w.phi, w.gphi_dx, w.alpha, theta_t, phi_t);
-            if self.take_verdict(ctx, settings, verdict, w.theta, w.phi) {
-                WatchdogTrial::Accepted(alpha)
-            } else {
-                WatchdogTrial::Rejected(alpha)
-            }
-        } else {
-            WatchdogTrial::EvaluationFailed
-        };
-        let fe = ctx.timing.function_evals - fe0;
-        ctx.timing.line_search += t0.elapsed().saturating_sub(fe);
-        out
-    }
-
-    /// Returns to the iterate and search direction where `w` started (Ipopt's
-    /// `StopWatchDog`); the KKT factor still belongs to the abandoned point.
-    pub(super) fn restore_watchdog(&mut self, w: Watchdog) {
-        self.x = w.x;
-        self.y = w.y;
-        self.zl = w.zl;
-        self.zu = w.zu;
-        self.f = w.f;
-        self.grad = w.grad;
-        self.derivs_x = w.derivs_x;
-        self.c = w.c;
-        self.jac = w.jac;
-        self.jty = w.jty;
-        self.sl = w.sl;
-        self.su = w.su;
-        self.grad_phi = w.grad_phi;
-        self.dx = w.dx;
-        self.dy = w.dy;
-        self.dzl = w.dzl;
-        self.dzu = w.dzu;
-        self.mu = w.mu;
-        self.tau = w.tau;
     }
 
     pub(super) fn reset_filter(&mut self) {

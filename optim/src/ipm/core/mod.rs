@@ -19,7 +19,7 @@ mod termination;
 use std::time::Instant;
 
 use self::barrier::MuRule;
-use self::line_search::{LsOutcome, LsStart, Watchdog, WatchdogTrial};
+use self::line_search::LsOutcome;
 use self::step::StepResult;
 use self::termination::Verdict;
 use super::kkt::{KktPattern, KktSolver, LdltBackend, SparseLdlt};
@@ -520,9 +520,6 @@ impl<'p> Core<'p> {
         };
         let mut tiny_count = 0usize;
         let mut soft_count = 0usize;
-        // Consecutive iterations with a shortened step, and the active watchdog.
-        let mut shortened = 0usize;
-        let mut watchdog: Option<Watchdog> = None;
         let mut lines = 0usize;
         loop {
             self.compute_jty();
@@ -574,28 +571,13 @@ impl<'p> Core<'p> {
             }
             self.compute_grad_phi();
             self.set_rhs(None);
-            let mut step_ok = matches!(self.compute_step(ctx, settings, true), StepResult::Ok);
+            let step_ok = matches!(self.compute_step(ctx, settings, true), StepResult::Ok);
             let mut restore = false;
             let mut alpha_dual: Option<f64> = None;
             let mut accepted_alpha = 0.0;
             let mut trials = 0;
-            // The watchdog's reference holds for its barrier problem only.
-            if watchdog.as_ref().is_some_and(|w| w.mu != self.mu) {
-                watchdog = None;
-                shortened = 0;
-            }
-            let mut resumed = None;
             if step_ok {
                 self.unpack_step();
-            } else if let Some(w) = watchdog.take() {
-                // No step at a watchdog iterate: back to where it started (Ipopt).
-                self.restore_watchdog(w);
-                ctx.counters.watchdog_returns += 1;
-                shortened = 0;
-                step_ok = true;
-                resumed = Some(LsStart::Restored { skip_full: false });
-            }
-            if step_ok {
                 // tiny step (W&B Sect. 3.9)
                 let tiny = self
                     .dx
@@ -603,8 +585,7 @@ impl<'p> Core<'p> {
                     .zip(&self.x)
                     .all(|(d, x)| d.abs() / (1.0 + x.abs()) < 10.0 * f64::EPSILON)
                     && err.primal_inf <= settings.constr_viol_tol;
-                if tiny && resumed.is_none() {
-                    watchdog = None;
+                if tiny {
                     tiny_count += 1;
                     if tiny_count >= 2 && self.mu <= mu_rule.floor {
                         return Ok(self.output(ctx, Status::SearchDirectionTooSmall, false));
@@ -624,55 +605,13 @@ impl<'p> Core<'p> {
                     }
                 } else {
                     tiny_count = 0;
-                    let trigger = settings.watchdog_shortened_iter_trigger;
-                    if watchdog.is_none()
-                        && resumed.is_none()
-                        && trigger > 0
-                        && shortened >= trigger
-                        && !self.restoration
-                    {
-                        watchdog = Some(self.start_watchdog());
-                        ctx.counters.watchdogs += 1;
-                    }
-                    let outcome = match (watchdog.take(), resumed) {
-                        (Some(mut w), None) => match self.watchdog_trial(ctx, settings, &w) {
-                            WatchdogTrial::Accepted(alpha) => {
-                                LsOutcome::Accepted { alpha, trials: 1 }
-                            }
-                            WatchdogTrial::Rejected(alpha)
-                                if w.rejected < settings.watchdog_trial_iter_max =>
-                            {
-                                w.rejected += 1;
-                                watchdog = Some(w);
-                                LsOutcome::Accepted { alpha, trials: 1 }
-                            }
-                            _ => {
-                                self.restore_watchdog(w);
-                                ctx.counters.watchdog_returns += 1;
-                                shortened = 0;
-                                let start = LsStart::Restored { skip_full: true };
-                                resumed = Some(start);
-                                self.line_search(ctx, settings, start)
-                            }
-                        },
-                        (_, start) => {
-                            self.line_search(ctx, settings, start.unwrap_or(LsStart::Regular))
-                        }
-                    };
+                    let outcome = self.line_search(ctx, settings);
                     match outcome {
                         LsOutcome::Accepted { alpha, trials: tr } => {
                             accepted_alpha = alpha;
                             trials = tr;
                             soft_count = 0;
-                            if watchdog.is_some() || tr == 1 {
-                                shortened = 0;
-                            } else {
-                                shortened += 1;
-                            }
                         }
-                        // The soft restoration step needs the factor of this iterate, which
-                        // a restored one does not have.
-                        LsOutcome::Failed if resumed.is_some() => restore = true,
                         LsOutcome::Failed => {
                             let e_mu = err.e(self.compl_mu(self.mu));
                             match self.soft_restoration_step(ctx, settings, e_mu) {
@@ -715,8 +654,6 @@ impl<'p> Core<'p> {
                     None => {}
                     Some(st) => return Ok(self.output(ctx, st, false)),
                 }
-                watchdog = None;
-                shortened = 0;
                 last.restoration = false;
                 last.step_norm = 0.0;
                 last.alpha_du = 0.0;
