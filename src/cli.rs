@@ -344,9 +344,10 @@ pub struct OptimizeArgs {
     /// without --strategy it selects multistart.
     #[arg(long, allow_hyphen_values = true, value_parser = starts)]
     pub starts: Option<u64>,
-    /// Seed of the multi-start guesses.
-    #[arg(long, default_value_t = 0, allow_hyphen_values = true)]
-    pub seed: u64,
+    /// Seed of the multi-start guesses [default: 0]; without --strategy it selects
+    /// multistart, like --starts.
+    #[arg(long, allow_hyphen_values = true)]
+    pub seed: Option<u64>,
     /// Run shard k of m of the multi-start (`k/m`, 1 ≤ k ≤ m): the starts whose index is
     /// k − 1 modulo m. `--out` then also holds one `candidate-NNNN.json` per distinct optimum
     /// found; `optimize merge DIR…` picks the best verified one. See docs/sharding.md.

@@ -305,6 +305,16 @@ fn bad_cli_input_gives_clear_errors() {
         &opt(&["--strategy", "multistart", "--starts", "0"]),
         &["--starts"],
     );
+    // A multi-start option with another strategy would be ignored: refused instead.
+    assert_clean_failure(
+        &opt(&["--strategy", "direct", "--seed", "3"]),
+        &["--seed", "multi-start"],
+    );
+    assert_clean_failure(
+        &opt(&["--strategy", "continuation", "--starts", "8"]),
+        &["--starts", "multi-start"],
+    );
+    assert_clean_failure(&opt(&["--seed", "-1"]), &["--seed"]);
     assert_clean_failure(&opt(&["--refine", "-1e-4"]), &["--refine"]);
     assert_clean_failure(&opt(&["--refine", "nan"]), &["--refine"]);
     assert_clean_failure(

@@ -92,8 +92,9 @@ pub struct Counters {
     /// backward error (`Settings::backward_error_tol`).
     #[serde(default)]
     pub backward_error_accepts: usize,
-    /// Iterative-refinement corrections applied to KKT solutions, over all solves
-    /// (`Settings::max_refinement_steps` bounds them per solve).
+    /// Iterative-refinement corrections computed for KKT solutions, over all solves, the ones
+    /// undone for too slow a contraction included (`Settings::max_refinement_steps` bounds them
+    /// per solve).
     #[serde(default)]
     pub refinement_steps: usize,
 }

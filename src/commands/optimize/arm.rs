@@ -44,6 +44,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     for (opt, given) in [
         ("--strategy", args.strategy.is_some()),
         ("--starts", args.starts.is_some()),
+        ("--seed", args.seed.is_some()),
         ("--shard", args.shard.is_some()),
         ("--refine", args.refine.is_some()),
         ("--warm-start", args.warm_start.is_some()),

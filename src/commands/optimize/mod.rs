@@ -17,7 +17,7 @@
 use crate::cli::{OptimizeArgs, OptimizeCommand};
 use crate::study::SolutionIo;
 use crate::study::search::VerifyPolicy;
-use crate::study::strategy::{self, DEFAULT_STARTS, Shard, Strategy};
+use crate::study::strategy::{self, DEFAULT_SEED, DEFAULT_STARTS, Shard, Strategy};
 use crate::study::verify::{MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verify};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
@@ -432,11 +432,23 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     let mut settings = settings_from_args(args)?;
     settings.scene = scene_from_args(args, name)?;
     let starts = args.starts.unwrap_or(DEFAULT_STARTS as u64);
-    let strategy = match (&args.strategy, args.starts) {
-        (Some(text), _) => parse_strategy(text, starts, args.seed)?,
-        (None, Some(_)) => parse_strategy("multistart", starts, args.seed)?,
-        (None, None) => strategy::default_strategy(name, settings.scheme),
+    let seed = args.seed.unwrap_or(DEFAULT_SEED);
+    let strategy = match (&args.strategy, args.starts.is_some() || args.seed.is_some()) {
+        (Some(text), _) => parse_strategy(text, starts, seed)?,
+        (None, true) => parse_strategy("multistart", starts, seed)?,
+        (None, false) => strategy::default_strategy(name, settings.scheme),
     };
+    // The multi-start's options must not be dropped silently by another strategy.
+    if !matches!(strategy, Strategy::Multistart { .. }) {
+        for (opt, given) in [
+            ("--starts", args.starts.is_some()),
+            ("--seed", args.seed.is_some()),
+        ] {
+            if given {
+                bail!("{opt}: only the multi-start takes it (got --strategy {strategy})");
+            }
+        }
+    }
     let shard = match &args.shard {
         Some(text) => {
             let sh = Shard::parse(text).map_err(|e| anyhow::anyhow!(e))?;

@@ -12,6 +12,9 @@
 //!   that does not solve its own matrix after refinement (growth ∝ 1/δ_c), raises the static
 //!   δ_c of the solve (up to `static_dual_regularization_max`) instead of δ_w, or, with
 //!   `AmdThenPivotPairs`, moves the solve to the pairs' order;
+//! * iterative refinement of each KKT solution against the unregularized matrix, judged by
+//!   its residual relative to the right-hand side or, failing that, its normwise backward
+//!   error ([`Core::solve_refined`]; decision records 0008 and 0009);
 //! * recovery of `dz_L, dz_U` (W&B eq. (12));
 //! * least-squares constraint multipliers for the initial point (W&B Sect. 3.6).
 
@@ -63,7 +66,11 @@ impl Core<'_> {
     /// on which the caller judges the solution's accuracy (accepted at [`ACCURATE_SOLVE`]);
     /// where that measure rejects the solution but its normwise backward error
     /// ([`backward_error`]) is at most `Settings::backward_error_tol`, that backward error
-    /// instead. Refinement stops on the residual relative to `‖rhs‖_∞` either way.
+    /// instead. Refinement takes `Settings::min_refinement_steps` steps unless the residual
+    /// relative to `‖rhs‖_∞` reaches `refinement_tol`, then continues (up to
+    /// `max_refinement_steps`) only while the solution fails that accuracy test and each step
+    /// reduces the relative residual by `refinement_contraction`; a step that does not is
+    /// undone (decision record 0009).
     pub(super) fn solve_refined(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> f64 {
         let t = Instant::now();
         let nm = self.n + self.m;
