@@ -233,6 +233,18 @@ fn threshold_pivoting_sweep() {
     }
 }
 
+/// Solves `problem` on hp-Radau with 3 elements and `points` per phase, with solver
+/// settings `ipm` (the tests below that change one solver option).
+fn solve_radau3(problem: Problem, points: usize, ipm: Settings) -> OcpSolution {
+    let s = ProblemSettings {
+        points,
+        scheme: Scheme::Radau { elements: 3 },
+        ipm: Some(ipm),
+        ..ProblemSettings::default()
+    };
+    solve(&build(problem, &s).unwrap(), None).unwrap()
+}
+
 /// `periodic-cot` Radau 3 × 24 ends Acceptable with the relative-residual test alone: late in
 /// the solve the iterates
 /// follow a flat valley, where the exact Newton step is far longer than its right-hand side,
@@ -244,20 +256,15 @@ fn threshold_pivoting_sweep() {
 #[test]
 #[ignore = "slow: two fine-mesh solves of periodic-cot (≈ 30 s)"]
 fn the_backward_error_test_solves_a_fine_cot_mesh() {
+    // Three refinement steps, as when the test was introduced: with ten (the default now)
+    // the accuracy test matters less often, see the next test.
     let solve_with = |backward_error_tol: f64| {
-        let s = ProblemSettings {
-            points: 72,
-            scheme: Scheme::Radau { elements: 3 },
-            // Three refinement steps, as when the test was introduced: with ten (the default
-            // now) the accuracy test matters less often, see the next test.
-            ipm: Some(Settings {
-                backward_error_tol,
-                max_refinement_steps: 3,
-                ..Settings::default()
-            }),
-            ..ProblemSettings::default()
+        let ipm = Settings {
+            backward_error_tol,
+            max_refinement_steps: 3,
+            ..Settings::default()
         };
-        solve(&build(Problem::PeriodicCot, &s).unwrap(), None).unwrap()
+        solve_radau3(Problem::PeriodicCot, 72, ipm)
     };
     let plain = solve_with(0.0);
     assert_eq!(plain.status, Status::Acceptable, "{:?}", plain.stages);
@@ -282,16 +289,11 @@ fn the_backward_error_test_solves_a_fine_cot_mesh() {
 #[ignore = "slow: two solves of the finest periodic-cot-human mesh (≈ 40 s)"]
 fn ten_refinement_steps_solve_the_finest_human_mesh() {
     let solve_with = |max_refinement_steps: usize| {
-        let s = ProblemSettings {
-            points: 144,
-            scheme: Scheme::Radau { elements: 3 },
-            ipm: Some(Settings {
-                max_refinement_steps,
-                ..Settings::default()
-            }),
-            ..ProblemSettings::default()
+        let ipm = Settings {
+            max_refinement_steps,
+            ..Settings::default()
         };
-        solve(&build(Problem::PeriodicCotHuman, &s).unwrap(), None).unwrap()
+        solve_radau3(Problem::PeriodicCotHuman, 144, ipm)
     };
     let three = solve_with(3);
     assert_eq!(three.status, Status::Acceptable, "{:?}", three.stages);

@@ -210,6 +210,42 @@ fn invalid_input_is_rejected() {
         solve(&p, &bad),
         Err(OptimError::InvalidSetting { .. })
     ));
+    // The KKT accuracy settings: each out-of-range value is named.
+    for (name, bad) in [
+        (
+            "refinement_contraction",
+            Settings {
+                refinement_contraction: 1.0,
+                ..Settings::default()
+            },
+        ),
+        (
+            "refinement_tol",
+            Settings {
+                refinement_tol: f64::NAN,
+                ..Settings::default()
+            },
+        ),
+        (
+            "backward_error_tol",
+            Settings {
+                backward_error_tol: -1e-14,
+                ..Settings::default()
+            },
+        ),
+        (
+            "backward_error_forcing",
+            Settings {
+                backward_error_forcing: 0.0,
+                ..Settings::default()
+            },
+        ),
+    ] {
+        match solve(&p, &bad) {
+            Err(OptimError::InvalidSetting { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{name}: {other:?}"),
+        }
+    }
     let ws = WarmStart {
         x: vec![0.0; 2],
         lambda: vec![],

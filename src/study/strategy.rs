@@ -435,7 +435,7 @@ pub const DEFAULT_SEED: u64 = 0;
 /// The default strategy of `problem` on `scheme`: a seeded multi-start of
 /// [`DEFAULT_STARTS`] starts for the periodic problems (their landscapes have many local
 /// optima: for `periodic-qc` the continuation's best end point is 66 % above the best known
-/// optimum, which one start in 32 reaches; for `periodic-cot` it is 35× above the
+/// optimum, which one start in 32 reaches; for `periodic-cot` it is 25× above the
 /// multi-start's verified optimum, BENCHMARKS.md), the
 /// continuation in ε for the others, and one direct solve with Legendre–Gauss (an LG solve
 /// takes about 4× a Radau one).

@@ -428,6 +428,19 @@ impl Settings {
         }
         pos("obj_scaling_factor", self.obj_scaling_factor)?;
         unit("refinement_contraction", self.refinement_contraction)?;
+        pos("refinement_tol", self.refinement_tol)?;
+        if !(self.backward_error_tol >= 0.0 && self.backward_error_tol.is_finite()) {
+            return Err(OptimError::InvalidSetting {
+                name: "backward_error_tol",
+                msg: format!("must be finite and ≥ 0, got {}", self.backward_error_tol),
+            });
+        }
+        if !(self.backward_error_forcing > 0.0 && self.backward_error_forcing <= 1.0) {
+            return Err(OptimError::InvalidSetting {
+                name: "backward_error_forcing",
+                msg: format!("must be in (0, 1], got {}", self.backward_error_forcing),
+            });
+        }
         if !(self.static_dual_regularization_growth >= 1.0
             && self.static_dual_regularization_growth.is_finite())
         {
