@@ -368,6 +368,16 @@ impl Settings {
                 })
             }
         };
+        let nonneg = |name: &'static str, v: f64| {
+            if v >= 0.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(OptimError::InvalidSetting {
+                    name,
+                    msg: format!("must be finite and ≥ 0, got {v}"),
+                })
+            }
+        };
         let unit = |name: &'static str, v: f64| {
             if v > 0.0 && v < 1.0 {
                 Ok(())
@@ -420,21 +430,11 @@ impl Settings {
         pos("kappa_sigma", self.kappa_sigma)?;
         pos("slack_move", self.slack_move)?;
         pos("scaling_max_gradient", self.scaling_max_gradient)?;
-        if !(self.scaling_min_gradient >= 0.0 && self.scaling_min_gradient.is_finite()) {
-            return Err(OptimError::InvalidSetting {
-                name: "scaling_min_gradient",
-                msg: format!("must be finite and ≥ 0, got {}", self.scaling_min_gradient),
-            });
-        }
+        nonneg("scaling_min_gradient", self.scaling_min_gradient)?;
         pos("obj_scaling_factor", self.obj_scaling_factor)?;
         unit("refinement_contraction", self.refinement_contraction)?;
         pos("refinement_tol", self.refinement_tol)?;
-        if !(self.backward_error_tol >= 0.0 && self.backward_error_tol.is_finite()) {
-            return Err(OptimError::InvalidSetting {
-                name: "backward_error_tol",
-                msg: format!("must be finite and ≥ 0, got {}", self.backward_error_tol),
-            });
-        }
+        nonneg("backward_error_tol", self.backward_error_tol)?;
         if !(self.backward_error_forcing > 0.0 && self.backward_error_forcing <= 1.0) {
             return Err(OptimError::InvalidSetting {
                 name: "backward_error_forcing",
