@@ -312,3 +312,44 @@ fn min_stick_bounds_the_stick_phase() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// An hp refinement that cannot change the mesh (here the point limit is the mesh's own
+/// size) ends the attempts: each further attempt's tighter tolerance would mark a superset of
+/// the elements, stop on the same limit and only solve the same mesh again.
+#[test]
+fn a_refinement_stopped_by_the_point_limit_is_not_repeated() {
+    use ball_finger::study::search::{VerifyPolicy, search};
+    use ball_finger::study::strategy::{Shard, Strategy};
+    use bf_problem::{Problem, ProblemSettings};
+
+    let settings = ProblemSettings::default();
+    let policy = VerifyPolicy {
+        refine_attempts: 3,
+        max_points: settings.points,
+        clusters: 1,
+        ..VerifyPolicy::default()
+    };
+    let problem: Problem = "periodic-cot".parse().unwrap();
+    let found = search(
+        problem,
+        &settings,
+        Strategy::Direct,
+        Shard::WHOLE,
+        &policy,
+        None,
+    )
+    .unwrap();
+    // periodic-cot's direct solve on the default mesh does not verify (see above), so it is
+    // refined once; the limit stops that refinement on its starting mesh.
+    assert_eq!(found.refinements.len(), 1, "{:?}", found.refinements);
+    let (_, sol) = found.best().unwrap();
+    let report = sol.refinement.as_ref().expect("refined once");
+    assert!(!report.converged, "{}", report.stop_reason);
+    assert!(
+        report.stop_reason.contains("point limit"),
+        "{}",
+        report.stop_reason
+    );
+    assert!(report.mesh.iter().all(|m| m.n_points() == settings.points));
+    assert_eq!(sol.verification.as_ref().map(|v| v.verified), Some(false));
+}

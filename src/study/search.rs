@@ -206,8 +206,9 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
 /// hp-refines an unverified candidate (Radau only) until it is verified or the policy's
 /// attempts are spent: attempt a refines from the previous attempt's mesh, each round
 /// splitting or raising the degree of the elements whose element-wise re-integration defect
-/// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. Returns the last successful refinement (or
-/// the candidate unchanged) and a record per attempt.
+/// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. An attempt that could not change the mesh
+/// (point limit, non-finite defects) ends the attempts. Returns the last successful
+/// refinement (or the candidate unchanged) and a record per attempt.
 fn refine_until_verified(
     problem: Problem,
     settings: &ProblemSettings,
@@ -226,7 +227,7 @@ fn refine_until_verified(
         };
         let t0 = Instant::now();
         let s = ProblemSettings {
-            mesh: Some(mesh),
+            mesh: Some(mesh.clone()),
             ..settings.clone()
         };
         let opts = RefineSettings {
@@ -264,7 +265,19 @@ fn refine_until_verified(
                 if !next.solution.status.is_success() {
                     break;
                 }
+                // A refinement that ended on its starting mesh without meeting its tolerance
+                // was stopped by the point limit or by non-finite defects; a tighter tolerance
+                // marks a superset of the elements and stops on the same limit, so a further
+                // attempt would only solve the same mesh again.
+                let stuck = next
+                    .solution
+                    .refinement
+                    .as_ref()
+                    .is_some_and(|r| !r.converged && r.mesh == mesh);
                 cur = next;
+                if stuck {
+                    break;
+                }
             }
             Err(e) => {
                 records.push(failed_record(cur.index, label, &e, t0));
