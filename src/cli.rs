@@ -21,6 +21,19 @@ pub fn positive(text: &str) -> Result<f64, String> {
     }
 }
 
+/// Parses a number that must be finite and ≥ 1 (a step-size cap).
+pub fn at_least_one(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("{text:?} is not a number"))?;
+    if v.is_finite() && v >= 1.0 {
+        Ok(v)
+    } else {
+        Err(format!("must be a finite number ≥ 1 (got {})", text.trim()))
+    }
+}
+
 /// Parses `--starts`: a whole number from 1 to 10000.
 pub fn starts(text: &str) -> Result<u64, String> {
     match whole(text)? {
@@ -327,6 +340,13 @@ pub struct OptimizeArgs {
     /// often other local optima (docs/optima.md); off by default.
     #[arg(long)]
     pub kkt_residual_ratio: bool,
+    /// Extrapolate a full Newton step along negative curvature up to this step size (α ≥ 1,
+    /// doubled while the line search accepts and the barrier objective decreases; e.g. 16).
+    /// Ends the crawls in descending valleys that leave some fine meshes at the iteration
+    /// limit, but selects other local optima; off by default
+    /// (docs/decisions/0010-curvature-extrapolation.md).
+    #[arg(long, value_name = "ALPHA", allow_hyphen_values = true, value_parser = at_least_one)]
+    pub curvature_extrapolation: Option<f64>,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with

@@ -461,6 +461,34 @@ fn optimize_kkt_residual_ratio_reaches_the_solver() {
     reach_arm_refuses("--kkt-residual-ratio");
 }
 
+/// `--curvature-extrapolation` reaches the solver: on `periodic-cot` Radau 3 × 16 from the
+/// default guess the solve meets negative curvature, and with the option some full steps are
+/// extrapolated (`counters.extrapolations`), without it none; values below 1 are refused by
+/// name, and so is the option with `reach-arm`.
+#[test]
+fn optimize_curvature_extrapolation_reaches_the_solver() {
+    let (_, on) = direct_cot_run("extrap", 48, 600, &["--curvature-extrapolation", "16"]);
+    assert!(on["extrapolations"].as_u64().unwrap() > 0, "{on}");
+    let (_, off) = direct_cot_run("noextrap", 48, 600, &[]);
+    assert_eq!(off["extrapolations"].as_u64(), Some(0), "{off}");
+    for bad in ["0.5", "-2", "nan", "inf"] {
+        let out = run(&[
+            "optimize",
+            "--problem",
+            "periodic-cot",
+            "--curvature-extrapolation",
+            bad,
+        ]);
+        assert!(!out.status.success(), "{bad}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            stderr.contains("--curvature-extrapolation"),
+            "{bad}: {stderr}"
+        );
+    }
+    reach_arm_refuses("--curvature-extrapolation");
+}
+
 /// `optimize --problem reach-arm` (one direct Radau solve) refuses the solver option `flag` by
 /// name.
 fn reach_arm_refuses(flag: &str) {

@@ -49,6 +49,9 @@ pub struct VerifyPolicy {
     /// Distinct unverified optima (better than the best verified one) refined at most: they are
     /// refined one after the other, lowest objective first, until one verifies, so a spurious
     /// optimum that cannot be verified (e.g. a collapsed phase) does not hide the next one.
+    /// Default 6: the budget costs refinements only when the better candidates fail, and with
+    /// 3 the `periodic-cot` search of seed 8 ended unverified (its fifth candidate verifies;
+    /// BENCHMARKS.md, session 14).
     pub clusters: usize,
     /// Continuation in the stick phase's lower bound (`periodic-qc` only): every chain first
     /// runs with the stick phase at least this long (s), then one warm-started stage relaxes
@@ -73,7 +76,7 @@ impl Default for VerifyPolicy {
             refine_attempts: VERIFY_REFINEMENTS,
             refine_rounds: 4,
             max_points: 400,
-            clusters: 3,
+            clusters: 6,
             stick_continuation: Some(STICK_CONTINUATION),
         }
     }

@@ -29,6 +29,9 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
             .dual_regularization
             .unwrap_or(base.static_dual_regularization),
         residual_ratio_with_solution: s.kkt_residual_ratio || base.residual_ratio_with_solution,
+        max_curvature_extrapolation: s
+            .curvature_extrapolation
+            .unwrap_or(base.max_curvature_extrapolation),
         ..base
     }
 }

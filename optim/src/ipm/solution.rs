@@ -75,6 +75,10 @@ pub struct Counters {
     pub restoration_iterations: usize,
     /// Second-order corrections that were accepted.
     pub soc_accepted: usize,
+    /// Full steps along negative curvature extended beyond α = 1
+    /// (`Settings::max_curvature_extrapolation`).
+    #[serde(default)]
+    pub extrapolations: usize,
     /// Iteration at which the KKT factorization switched from AMD to AMD with 2 × 2 pivot
     /// pairs ([`KktOrdering::AmdThenPivotPairs`](crate::ipm::KktOrdering::AmdThenPivotPairs));
     /// `None`: no switch.

@@ -189,6 +189,10 @@ pub struct ProblemSettings {
     /// ([`Settings::residual_ratio_with_solution`]) in every solve of the problem; overrides
     /// `ipm`.
     pub kkt_residual_ratio: bool,
+    /// Largest step size of the solver's extrapolation along negative curvature
+    /// ([`Settings::max_curvature_extrapolation`]) in every solve of the problem; `None`: the
+    /// solver's default (off). Overrides `ipm`.
+    pub curvature_extrapolation: Option<f64>,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where
     /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
@@ -223,6 +227,7 @@ impl Default for ProblemSettings {
             mesh: None,
             dual_regularization: None,
             kkt_residual_ratio: false,
+            curvature_extrapolation: None,
             scene: None,
             min_stick: MIN_STICK,
         }

@@ -50,6 +50,10 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--warm-start", args.warm_start.is_some()),
         ("--dual-regularization", args.dual_regularization.is_some()),
         ("--kkt-residual-ratio", args.kkt_residual_ratio),
+        (
+            "--curvature-extrapolation",
+            args.curvature_extrapolation.is_some(),
+        ),
     ] {
         if given {
             bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");

@@ -183,6 +183,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         dual_regularization: args.dual_regularization,
         min_stick: args.min_stick,
         kkt_residual_ratio: args.kkt_residual_ratio,
+        curvature_extrapolation: args.curvature_extrapolation,
         ..ProblemSettings::default()
     })
 }

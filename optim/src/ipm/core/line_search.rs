@@ -5,6 +5,8 @@
 //!   (W&B eq. (18)–(21)), the minimal step `α_min` (W&B eq. (23)) and backtracking
 //!   (W&B Sect. 2.3);
 //! * second-order corrections (W&B Sect. 2.4);
+//! * extrapolation of a full step along negative curvature (α doubled while the acceptance
+//!   test holds and φ_μ decreases; [`Core::extrapolate`], decision record 0010);
 //! * Ipopt's filter reset heuristic ([`Core::note_accept`]);
 //! * Ipopt's "soft restoration" step when the line search fails near feasibility.
 
@@ -34,8 +36,13 @@ pub(super) enum Trial {
 
 impl Core<'_> {
     pub(super) fn max_step_primal(&self, dx: &[f64]) -> f64 {
+        self.max_step_primal_upto(dx, 1.0)
+    }
+
+    /// The fraction-to-boundary step size (W&B eq. (15)) capped at `cap` instead of 1.
+    pub(super) fn max_step_primal_upto(&self, dx: &[f64], cap: f64) -> f64 {
         let tau = self.tau;
-        let mut a: f64 = 1.0;
+        let mut a: f64 = cap;
         for (k, &j) in self.lo.iter().enumerate() {
             if dx[j] < 0.0 {
                 a = a.min(-tau * self.sl[k] / dx[j]);
@@ -214,6 +221,11 @@ impl Core<'_> {
                 let verdict = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
                 if self.take_verdict(ctx, settings, verdict, theta, phi) {
                     self.f_t = f_t;
+                    if trials == 1 && alpha == 1.0 && settings.max_curvature_extrapolation > 1.0 {
+                        let a =
+                            self.extrapolate(ctx, settings, verdict, theta, phi, gphi_dx, phi_t);
+                        break LsOutcome::Accepted { alpha: a, trials };
+                    }
                     break LsOutcome::Accepted { alpha, trials };
                 }
                 if trials == 1
@@ -230,6 +242,67 @@ impl Core<'_> {
         let fe = ctx.timing.function_evals - fe0;
         ctx.timing.line_search += t0.elapsed().saturating_sub(fe);
         outcome
+    }
+
+    /// Curvature `dxᵀ (W + Σ) dx` of the barrier problem's Lagrangian along the primal step,
+    /// from the factored KKT matrix (whose (1,1) block is `W + Σ + δ_w I`).
+    fn step_curvature(&self) -> f64 {
+        let nm = self.n + self.m;
+        let mut v = vec![0.0; nm];
+        v[..self.n].copy_from_slice(&self.dx);
+        let mut kv = vec![0.0; nm];
+        self.kkt.mat.sym_matvec(&v, &mut kv);
+        dot(&self.dx, &kv[..self.n]) - self.delta_w * dot(&self.dx, &self.dx)
+    }
+
+    /// Extrapolation along negative curvature (`Settings::max_curvature_extrapolation`):
+    /// after the full step (α = 1) was accepted with `verdict` in an iteration whose inertia
+    /// needed δ_w > 0, and the curvature along it is negative, doubles α up to the
+    /// fraction-to-boundary step capped at the setting while the acceptance test gives the same
+    /// verdict and φ_μ decreases. The verdict's bookkeeping (filter, reset counter) was done
+    /// for α = 1 and depends on the current iterate only, so a longer step changes none of it.
+    /// Returns the chosen α (1 if no longer step is better); `x_t, c_t, f_t` hold its point.
+    fn extrapolate(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        verdict: Trial,
+        theta: f64,
+        phi: f64,
+        gphi_dx: f64,
+        phi_1: f64,
+    ) -> f64 {
+        if self.delta_w <= 0.0 || self.step_curvature() >= 0.0 {
+            return 1.0;
+        }
+        let cap = self.max_step_primal_upto(&self.dx, settings.max_curvature_extrapolation);
+        let mut best = (1.0, phi_1, self.x_t.clone(), self.c_t.clone(), self.f_t);
+        let mut alpha = 2.0;
+        while alpha <= cap {
+            for j in 0..self.n {
+                self.x_t[j] = self.x[j] + alpha * self.dx[j];
+            }
+            let (f_t, ok) = self.eval_fc(ctx, true);
+            if !ok {
+                break;
+            }
+            let theta_t = norm_1(&self.c_t);
+            let phi_t = self.barrier_value(&self.x_t, f_t);
+            let v = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
+            if v != verdict || phi_t >= best.1 {
+                break;
+            }
+            best = (alpha, phi_t, self.x_t.clone(), self.c_t.clone(), f_t);
+            alpha *= 2.0;
+        }
+        let (a, _, x, c, f) = best;
+        self.x_t = x;
+        self.c_t = c;
+        self.f_t = f;
+        if a > 1.0 {
+            ctx.counters.extrapolations += 1;
+        }
+        a
     }
 
     /// Second-order corrections (W&B Sect. 2.4). On success `x_t, c_t, f_t` hold the accepted

@@ -670,8 +670,10 @@ impl<'p> Core<'p> {
             // Slacks before the multipliers move: an underflowed slack takes μ / z with the z
             // the trial point was judged with (as Ipopt's trial slacks).
             self.update_slacks();
+            // `y + dy` is the Newton estimate of the multipliers: a primal step extrapolated
+            // beyond α = 1 along negative curvature does not extend it.
             for i in 0..self.m {
-                self.y[i] += accepted_alpha * self.dy[i];
+                self.y[i] += accepted_alpha.min(1.0) * self.dy[i];
             }
             for k in 0..self.zl.len() {
                 self.zl[k] += alpha_z * self.dzl[k];
