@@ -92,30 +92,9 @@ fn a_saddle_is_left_in_fewer_iterations_for_the_same_minimum() {
 fn extrapolation_keeps_every_hock_schittkowski_result() {
     let off = hs::sweep_scaled_objectives(&without());
     let on = hs::sweep_scaled_objectives(&with());
-    let fstar: Vec<f64> = hs::all().iter().map(|p| p.fstar).collect();
-    for (i, ((name, obj, a), (_, _, b))) in off.iter().zip(&on).enumerate() {
-        assert_eq!(b.status, a.status, "{name} × {obj:e}: {b:?}");
-        let scale = a.objective.abs().max(*obj);
-        if a.status == Status::Solved {
-            assert!(
-                (b.objective - a.objective).abs() <= 1e-6 * scale,
-                "{name} × {obj:e}: objective {} with extrapolation, {} without",
-                b.objective,
-                a.objective
-            );
-        } else {
-            // An Acceptable end (HS013, whose optimum is not a KKT point) is only as exact
-            // as the acceptable tolerances (HS013: about 1 % from f* = 1): with extrapolation
-            // it must not end materially farther from the published optimum.
-            let f = obj * fstar[i / 3];
-            assert!(
-                (b.objective - f).abs() <= 1.01 * (a.objective - f).abs(),
-                "{name} × {obj:e}: {} with extrapolation, {} without, f* {f}",
-                b.objective,
-                a.objective
-            );
-        }
-    }
+    // HS013's Acceptable ends (about 1 % from f* = 1) may move by a hair: with extrapolation
+    // at most 1 % farther from the published optimum.
+    hs::assert_same_optima(&off, &on, "with extrapolation", 1.01);
     let n: usize = on.iter().map(|(_, _, s)| s.counters.extrapolations).sum();
     let changed = off
         .iter()

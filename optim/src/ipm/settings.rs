@@ -390,6 +390,16 @@ impl Settings {
                 })
             }
         };
+        let at_least_one = |name: &'static str, v: f64, note: &str| {
+            if v >= 1.0 && v.is_finite() {
+                Ok(())
+            } else {
+                Err(OptimError::InvalidSetting {
+                    name,
+                    msg: format!("must be finite and ≥ 1{note}, got {v}"),
+                })
+            }
+        };
         let unit = |name: &'static str, v: f64| {
             if v > 0.0 && v < 1.0 {
                 Ok(())
@@ -453,28 +463,15 @@ impl Settings {
                 msg: format!("must be in (0, 1], got {}", self.backward_error_forcing),
             });
         }
-        if !(self.static_dual_regularization_growth >= 1.0
-            && self.static_dual_regularization_growth.is_finite())
-        {
-            return Err(OptimError::InvalidSetting {
-                name: "static_dual_regularization_growth",
-                msg: format!(
-                    "must be finite and ≥ 1, got {}",
-                    self.static_dual_regularization_growth
-                ),
-            });
-        }
-        if !(self.static_dual_regularization_max >= 0.0
-            && self.static_dual_regularization_max.is_finite())
-        {
-            return Err(OptimError::InvalidSetting {
-                name: "static_dual_regularization_max",
-                msg: format!(
-                    "must be finite and ≥ 0, got {}",
-                    self.static_dual_regularization_max
-                ),
-            });
-        }
+        at_least_one(
+            "static_dual_regularization_growth",
+            self.static_dual_regularization_growth,
+            "",
+        )?;
+        nonneg(
+            "static_dual_regularization_max",
+            self.static_dual_regularization_max,
+        )?;
         pos(
             "first_hessian_perturbation",
             self.first_hessian_perturbation,
@@ -488,17 +485,11 @@ impl Settings {
         unit("eta_phi", self.eta_phi)?;
         unit("alpha_red_factor", self.alpha_red_factor)?;
         unit("kappa_soc", self.kappa_soc)?;
-        if !(self.max_curvature_extrapolation >= 1.0
-            && self.max_curvature_extrapolation.is_finite())
-        {
-            return Err(OptimError::InvalidSetting {
-                name: "max_curvature_extrapolation",
-                msg: format!(
-                    "must be finite and ≥ 1 (1 turns the extrapolation off), got {}",
-                    self.max_curvature_extrapolation
-                ),
-            });
-        }
+        at_least_one(
+            "max_curvature_extrapolation",
+            self.max_curvature_extrapolation,
+            " (1 turns the extrapolation off)",
+        )?;
         unit("resto_required_reduction", self.resto_required_reduction)?;
         pos("resto_penalty", self.resto_penalty)?;
         pos("s_max", self.s_max)?;

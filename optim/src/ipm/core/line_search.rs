@@ -177,6 +177,16 @@ impl Core<'_> {
         self.filter_blocked_last = false;
     }
 
+    /// Sets the trial point `x_t = x + α dx` and evaluates it: `(f, θ, φ_μ)` at `x_t` (with
+    /// `c_t` filled), or `None` where the functions are not finite there.
+    fn trial_point(&mut self, ctx: &mut Ctx<'_, '_>, alpha: f64) -> Option<(f64, f64, f64)> {
+        for j in 0..self.n {
+            self.x_t[j] = self.x[j] + alpha * self.dx[j];
+        }
+        let (f_t, ok) = self.eval_fc(ctx, true);
+        ok.then(|| (f_t, norm_1(&self.c_t), self.barrier_value(&self.x_t, f_t)))
+    }
+
     pub(super) fn alpha_min(&self, settings: &Settings, theta: f64, gphi_dx: f64) -> f64 {
         let g = settings.gamma_theta;
         let a = if gphi_dx < 0.0 {
@@ -211,13 +221,7 @@ impl Core<'_> {
                 break LsOutcome::Failed;
             }
             trials += 1;
-            for j in 0..self.n {
-                self.x_t[j] = self.x[j] + alpha * self.dx[j];
-            }
-            let (f_t, ok) = self.eval_fc(ctx, true);
-            if ok {
-                let theta_t = norm_1(&self.c_t);
-                let phi_t = self.barrier_value(&self.x_t, f_t);
+            if let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, alpha) {
                 let verdict = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
                 if self.take_verdict(ctx, settings, verdict, theta, phi) {
                     self.f_t = f_t;
@@ -279,15 +283,9 @@ impl Core<'_> {
         let mut best = (1.0, phi_1, self.x_t.clone(), self.c_t.clone(), self.f_t);
         let mut alpha = 2.0;
         while alpha <= cap {
-            for j in 0..self.n {
-                self.x_t[j] = self.x[j] + alpha * self.dx[j];
-            }
-            let (f_t, ok) = self.eval_fc(ctx, true);
-            if !ok {
+            let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, alpha) else {
                 break;
-            }
-            let theta_t = norm_1(&self.c_t);
-            let phi_t = self.barrier_value(&self.x_t, f_t);
+            };
             let v = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
             if v != verdict || phi_t >= best.1 {
                 break;
@@ -333,15 +331,9 @@ impl Core<'_> {
             self.solve_refined(ctx, settings);
             self.unpack_step();
             let a_soc = self.max_step_primal(&self.dx);
-            for j in 0..self.n {
-                self.x_t[j] = self.x[j] + a_soc * self.dx[j];
-            }
-            let (f_t, ok) = self.eval_fc(ctx, true);
-            if !ok {
+            let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, a_soc) else {
                 break;
-            }
-            let theta_t = norm_1(&self.c_t);
-            let phi_t = self.barrier_value(&self.x_t, f_t);
+            };
             let gphi_dx = dot(&self.grad_phi, &self.dx);
             let verdict = self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
             if self.take_verdict(ctx, settings, verdict, theta, phi) {
