@@ -209,8 +209,8 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
 /// hp-refines an unverified candidate (Radau only) until it is verified or the policy's
 /// attempts are spent: attempt a refines from the previous attempt's mesh, each round
 /// splitting or raising the degree of the elements whose element-wise re-integration defect
-/// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. An attempt that could not change the mesh
-/// (point limit, non-finite defects) ends the attempts. Returns the last successful
+/// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. An attempt that could not refine its mesh
+/// at all (point limit, non-finite defects) ends the attempts. Returns the last successful
 /// refinement (or the candidate unchanged) and a record per attempt.
 fn refine_until_verified(
     problem: Problem,
@@ -230,7 +230,7 @@ fn refine_until_verified(
         };
         let t0 = Instant::now();
         let s = ProblemSettings {
-            mesh: Some(mesh.clone()),
+            mesh: Some(mesh),
             ..settings.clone()
         };
         let opts = RefineSettings {
@@ -268,15 +268,17 @@ fn refine_until_verified(
                 if !next.solution.status.is_success() {
                     break;
                 }
-                // A refinement that ended on its starting mesh without meeting its tolerance
-                // was stopped by the point limit or by non-finite defects; a tighter tolerance
-                // marks a superset of the elements and stops on the same limit, so a further
-                // attempt would only solve the same mesh again.
+                // A refinement that stopped after solving its starting mesh only, without
+                // meeting its tolerance, was stopped by the point limit or by non-finite
+                // defects: a tighter tolerance marks a superset of the elements and stops on the
+                // same limit, so a further attempt would only solve the same mesh again. (One
+                // whose refined mesh failed to solve also returns its starting mesh, but a
+                // tighter tolerance refines differently and may succeed: that one goes on.)
                 let stuck = next
                     .solution
                     .refinement
                     .as_ref()
-                    .is_some_and(|r| !r.converged && r.mesh == mesh);
+                    .is_some_and(|r| !r.converged && r.history.len() == 1);
                 cur = next;
                 if stuck {
                     break;
