@@ -7,6 +7,7 @@
 //! Acceptable (the factor reports spurious negative pivots and the inertia correction keeps
 //! δ_w > 0).
 
+use ball_finger::study::verify::verify;
 use ball_finger::study::{build, solve};
 use bf_optim::ipm::{KktOrdering, Settings, Status};
 use bf_optim::ocp::Scheme;
@@ -123,7 +124,8 @@ fn run_before(name: &str, scheme: Scheme, points: usize) -> OcpSolution {
 /// `SWEEP_BEFORE=0` (skip the "before" column) narrow a run, so that one sweep can be split
 /// over several processes; `SWEEP_RATIO=1` judges the KKT solves by the residual ratio
 /// ([`ProblemSettings::kkt_residual_ratio`]) and `SWEEP_EXTRAPOLATION=16` extrapolates along
-/// negative curvature ([`ProblemSettings::curvature_extrapolation`]).
+/// negative curvature ([`ProblemSettings::curvature_extrapolation`]). The last column is each
+/// solution's re-integration defect ([`defect`]; verified at ≤ 1e-4).
 #[test]
 #[ignore = "slow: mesh sweep"]
 fn mesh_sweep() {
@@ -136,9 +138,9 @@ fn mesh_sweep() {
     let mut failed = Vec::new();
     let column = delta_c.map_or("default".to_string(), |d| format!("δ_c {d:e}"));
     println!(
-        "| problem | mesh | before: status, iterations, J | {column}: status, iterations, J | δ_c raised at iteration | seconds (before, {column}) |"
+        "| problem | mesh | before: status, iterations, J | {column}: status, iterations, J | δ_c raised at iteration | seconds (before, {column}) | re-integration defect ({column}) |"
     );
-    println!("|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|");
     for name in problems.split(',') {
         for (scheme, points) in sweep_meshes("r8,r12,r16,r24,r32,r48,lg10,lg20,lg30,lg40,lg60") {
             let before = with_before.then(|| run_before(name, scheme, points));
@@ -147,7 +149,7 @@ fn mesh_sweep() {
                 format!("{:?}, {}, {:.6}", b.status, b.iterations, b.objective)
             });
             println!(
-                "| {name} | {} | {b} | {:?}, {}, {:.8}{} | {} | {}, {:.1} |",
+                "| {name} | {} | {b} | {:?}, {}, {:.8}{} | {} | {}, {:.1} | {:.1e} |",
                 label(scheme, points),
                 after.status,
                 after.iterations,
@@ -157,7 +159,8 @@ fn mesh_sweep() {
                 before
                     .as_ref()
                     .map_or("–".to_string(), |b| format!("{:.1}", b.solve_seconds)),
-                after.solve_seconds
+                after.solve_seconds,
+                defect(name, scheme, points, &after)
             );
             if after.status != Status::Solved || after.stages.len() != 1 {
                 failed.push(format!(
@@ -169,6 +172,20 @@ fn mesh_sweep() {
         }
     }
     assert!(failed.is_empty(), "not Solved in one stage: {failed:?}");
+}
+
+/// The re-integration defect of a sweep cell's solution (`study::verify`, rtol 1e-10; NaN
+/// where the re-integration fails): the sweep judges statuses, and a Solved end on a mesh too
+/// coarse for its phases (e.g. one Gauss polynomial for an 8 s free phase) does not verify.
+fn defect(name: &str, scheme: Scheme, points: usize, sol: &OcpSolution) -> f64 {
+    let s = ProblemSettings {
+        points,
+        scheme,
+        ..ProblemSettings::default()
+    };
+    let problem: Problem = name.parse().unwrap();
+    let p = build(problem, &s).unwrap();
+    verify(&p, sol, 1e-10).map_or(f64::NAN, |v| v.max_defect)
 }
 
 /// Parses `SWEEP_MESHES` (comma-separated `r<N>` for Radau 3 × N, `lg<N>` for LG-N).
