@@ -354,6 +354,18 @@ fn a_refinement_stopped_by_the_point_limit_is_not_repeated() {
     assert_eq!(sol.verification.as_ref().map(|v| v.verified), Some(false));
 }
 
+/// Runs the default search of `optimize` with `args`, asserts that its solution verifies, and
+/// returns its stdout (with the refinement records) and solution.json.
+fn verified_default_search(tag: &str, args: &[&str]) -> (String, serde_json::Value) {
+    let dir = tmpdir(tag);
+    let out = dir.join("out");
+    let stdout = ok(&optimize_in(&out, None, args));
+    let sol = json(&out.join("solution.json"));
+    assert_eq!(sol["verification"]["verified"], true, "{stdout}");
+    std::fs::remove_dir_all(dir).ok();
+    (stdout, sol)
+}
+
 /// The default `periodic-cot` search of seed 8: its three best coarse candidates do not verify
 /// after their refinements; the search goes on to the next distinct optima
 /// (`VerifyPolicy::clusters` = 6) and the fifth verifies, so the default does not end
@@ -361,22 +373,14 @@ fn a_refinement_stopped_by_the_point_limit_is_not_repeated() {
 #[test]
 #[ignore = "about 90 s: five candidates hp-refined"]
 fn the_default_search_refines_past_three_unverifiable_candidates() {
-    let dir = tmpdir("seed8");
-    let out = dir.join("out");
-    let stdout = ok(&optimize_in(
-        &out,
-        None,
-        &["--problem", "periodic-cot", "--seed", "8"],
-    ));
-    let sol = json(&out.join("solution.json"));
-    assert_eq!(sol["verification"]["verified"], true, "{stdout}");
+    let (stdout, _) =
+        verified_default_search("seed8", &["--problem", "periodic-cot", "--seed", "8"]);
     let refined: std::collections::BTreeSet<&str> = stdout
         .lines()
         .filter_map(|l| l.strip_prefix("verification refinement: refine start "))
         .filter_map(|l| l.split_whitespace().next())
         .collect();
     assert!(refined.len() > 3, "{refined:?}");
-    std::fs::remove_dir_all(dir).ok();
 }
 
 /// The default `periodic-cot-human` search: the first refinement of its best coarse candidate
@@ -387,15 +391,7 @@ fn the_default_search_refines_past_three_unverifiable_candidates() {
 #[test]
 #[ignore = "about 60 s: the default periodic-cot-human search"]
 fn a_refinement_whose_refined_mesh_failed_is_retried() {
-    let dir = tmpdir("human");
-    let out = dir.join("out");
-    let stdout = ok(&optimize_in(
-        &out,
-        None,
-        &["--problem", "periodic-cot-human"],
-    ));
-    let sol = json(&out.join("solution.json"));
-    assert_eq!(sol["verification"]["verified"], true, "{stdout}");
+    let (stdout, sol) = verified_default_search("human", &["--problem", "periodic-cot-human"]);
     let attempts = stdout
         .lines()
         .filter(|l| l.starts_with("verification refinement: refine start 1 "))
@@ -403,5 +399,4 @@ fn a_refinement_whose_refined_mesh_failed_is_retried() {
     assert!(attempts >= 2, "{stdout}");
     let j = sol["objective"].as_f64().unwrap();
     assert!(j < 0.066534, "J = {j}");
-    std::fs::remove_dir_all(dir).ok();
 }
