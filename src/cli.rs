@@ -10,27 +10,27 @@ use std::path::PathBuf;
 /// allow leading hyphens), so the message says why `-1e-8` is wrong rather than calling it an
 /// unknown argument.
 pub fn positive(text: &str) -> Result<f64, String> {
-    let v: f64 = text
-        .trim()
-        .parse()
-        .map_err(|_| format!("{text:?} is not a number"))?;
-    if v.is_finite() && v > 0.0 {
-        Ok(v)
-    } else {
-        Err(format!("must be a finite number > 0 (got {})", text.trim()))
-    }
+    finite_number(text, |v| v > 0.0, "> 0")
 }
 
 /// Parses a number that must be finite and ≥ 1 (a step-size cap).
 pub fn at_least_one(text: &str) -> Result<f64, String> {
+    finite_number(text, |v| v >= 1.0, "≥ 1")
+}
+
+/// Parses a finite number for which `ok` holds; the message says it must be `bound`.
+fn finite_number(text: &str, ok: impl Fn(f64) -> bool, bound: &str) -> Result<f64, String> {
     let v: f64 = text
         .trim()
         .parse()
         .map_err(|_| format!("{text:?} is not a number"))?;
-    if v.is_finite() && v >= 1.0 {
+    if v.is_finite() && ok(v) {
         Ok(v)
     } else {
-        Err(format!("must be a finite number ≥ 1 (got {})", text.trim()))
+        Err(format!(
+            "must be a finite number {bound} (got {})",
+            text.trim()
+        ))
     }
 }
 

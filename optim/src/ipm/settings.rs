@@ -370,46 +370,22 @@ impl Default for Settings {
 impl Settings {
     /// Checks that every parameter is in its valid range.
     pub fn validate(&self) -> Result<(), OptimError> {
-        let pos = |name: &'static str, v: f64| {
-            if v > 0.0 && v.is_finite() {
+        // Every range check names the setting and says what it must be.
+        let check = |name: &'static str, v: f64, ok: bool, expected: &str| {
+            if ok {
                 Ok(())
             } else {
                 Err(OptimError::InvalidSetting {
                     name,
-                    msg: format!("must be positive and finite, got {v}"),
+                    msg: format!("must be {expected}, got {v}"),
                 })
             }
         };
-        let nonneg = |name: &'static str, v: f64| {
-            if v >= 0.0 && v.is_finite() {
-                Ok(())
-            } else {
-                Err(OptimError::InvalidSetting {
-                    name,
-                    msg: format!("must be finite and ≥ 0, got {v}"),
-                })
-            }
-        };
-        let at_least_one = |name: &'static str, v: f64, note: &str| {
-            if v >= 1.0 && v.is_finite() {
-                Ok(())
-            } else {
-                Err(OptimError::InvalidSetting {
-                    name,
-                    msg: format!("must be finite and ≥ 1{note}, got {v}"),
-                })
-            }
-        };
-        let unit = |name: &'static str, v: f64| {
-            if v > 0.0 && v < 1.0 {
-                Ok(())
-            } else {
-                Err(OptimError::InvalidSetting {
-                    name,
-                    msg: format!("must be in (0, 1), got {v}"),
-                })
-            }
-        };
+        let pos = |name, v: f64| check(name, v, v > 0.0 && v.is_finite(), "positive and finite");
+        let nonneg = |name, v: f64| check(name, v, v >= 0.0 && v.is_finite(), "finite and ≥ 0");
+        let at_least_one =
+            |name, v: f64, expected| check(name, v, v >= 1.0 && v.is_finite(), expected);
+        let unit = |name, v: f64| check(name, v, v > 0.0 && v < 1.0, "in (0, 1)");
         pos("tol", self.tol)?;
         pos("constr_viol_tol", self.constr_viol_tol)?;
         pos("dual_inf_tol", self.dual_inf_tol)?;
@@ -466,7 +442,7 @@ impl Settings {
         at_least_one(
             "static_dual_regularization_growth",
             self.static_dual_regularization_growth,
-            "",
+            "finite and ≥ 1",
         )?;
         nonneg(
             "static_dual_regularization_max",
@@ -488,7 +464,7 @@ impl Settings {
         at_least_one(
             "max_curvature_extrapolation",
             self.max_curvature_extrapolation,
-            " (1 turns the extrapolation off)",
+            "finite and ≥ 1 (1 turns the extrapolation off)",
         )?;
         unit("resto_required_reduction", self.resto_required_reduction)?;
         pos("resto_penalty", self.resto_penalty)?;

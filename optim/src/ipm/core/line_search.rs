@@ -249,14 +249,14 @@ impl Core<'_> {
     }
 
     /// Curvature `dxᵀ (W + Σ) dx` of the barrier problem's Lagrangian along the primal step,
-    /// from the factored KKT matrix (whose (1,1) block is `W + Σ + δ_w I`).
-    fn step_curvature(&self) -> f64 {
-        let nm = self.n + self.m;
-        let mut v = vec![0.0; nm];
-        v[..self.n].copy_from_slice(&self.dx);
-        let mut kv = vec![0.0; nm];
-        self.kkt.mat.sym_matvec(&v, &mut kv);
-        dot(&self.dx, &kv[..self.n]) - self.delta_w * dot(&self.dx, &self.dx)
+    /// from the factored KKT matrix (whose (1,1) block is `W + Σ + δ_w I`). Uses the
+    /// refinement buffers `corr`, `resid`, free once the step is computed.
+    fn step_curvature(&mut self) -> f64 {
+        let n = self.n;
+        self.corr[..n].copy_from_slice(&self.dx);
+        self.corr[n..].fill(0.0);
+        self.kkt.mat.sym_matvec(&self.corr, &mut self.resid);
+        dot(&self.dx, &self.resid[..n]) - self.delta_w * dot(&self.dx, &self.dx)
     }
 
     /// Extrapolation along negative curvature (`Settings::max_curvature_extrapolation`):
