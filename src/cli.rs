@@ -341,12 +341,18 @@ pub struct OptimizeArgs {
     #[arg(long)]
     pub kkt_residual_ratio: bool,
     /// Extrapolate a full Newton step along negative curvature up to this step size (α ≥ 1,
-    /// doubled while the line search accepts and the barrier objective decreases; e.g. 16).
-    /// Ends the crawls in descending valleys that leave some fine meshes at the iteration
-    /// limit, but selects other local optima; off by default
-    /// (docs/decisions/0010-curvature-extrapolation.md).
+    /// doubled while the line search accepts and the barrier objective decreases; 1 turns it
+    /// off), on the final barrier problem only unless --extrapolate-every-barrier. Ends the
+    /// crawls in descending valleys that leave some fine meshes at the iteration limit, but
+    /// the searches' refinements then reach other points and verify other optima; off by
+    /// default (docs/decisions/0010-curvature-extrapolation.md).
     #[arg(long, value_name = "ALPHA", allow_hyphen_values = true, value_parser = at_least_one)]
     pub curvature_extrapolation: Option<f64>,
+    /// Extrapolate along negative curvature on every barrier problem, not only the final one:
+    /// solves some meshes whose early barrier problems wander, but moves most solves to other
+    /// local optima (docs/decisions/0010-curvature-extrapolation.md).
+    #[arg(long)]
+    pub extrapolate_every_barrier: bool,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with
@@ -388,9 +394,10 @@ pub struct OptimizeArgs {
     pub refine_rounds: usize,
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
     /// 4 rounds driven by the element-wise re-integration defects, the first to 1e-4, each
-    /// further one 10× tighter). With `reach-arm`: re-solves on a mesh with twice the elements.
-    #[arg(long, default_value_t = crate::study::search::VERIFY_REFINEMENTS, allow_hyphen_values = true, value_parser = whole)]
-    pub verify_refinements: usize,
+    /// further one 10× tighter; default 5). With `reach-arm`: re-solves on a mesh with twice
+    /// the elements (default 3).
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
+    pub verify_refinements: Option<usize>,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).
     #[arg(long, default_value_t = 1e-10, allow_hyphen_values = true)]
     pub verify_rtol: f64,

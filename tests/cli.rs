@@ -409,9 +409,28 @@ fn optimize_dual_regularization_reaches_the_solver() {
 }
 
 /// Runs `optimize --problem periodic-cot --strategy direct` on `points` Radau points with
-/// `--max-iter max_iter`, no re-integration and the `extra` options; asserts success and a
-/// Solved solution.json and returns its stages ([guess, status, iterations] each) and the
-/// solver's counters (`solution-internals.json`).
+/// `--max-iter max_iter`, no re-integration and the `extra` options, writing to `dir`.
+fn direct_cot_output(
+    dir: &std::path::Path,
+    points: usize,
+    max_iter: usize,
+    extra: &[&str],
+) -> std::process::Output {
+    let (points, max_iter) = (points.to_string(), max_iter.to_string());
+    bin()
+        .current_dir(root())
+        .args(["optimize", "--problem", "periodic-cot", "--points", &points])
+        .args(["--strategy", "direct", "--max-iter", &max_iter])
+        .args(["--verify-rtol", "0"])
+        .args(extra)
+        .arg("--out")
+        .arg(dir)
+        .output()
+        .unwrap()
+}
+
+/// [`direct_cot_output`]; asserts success and a Solved solution.json and returns its stages
+/// ([guess, status, iterations] each) and the solver's counters (`solution-internals.json`).
 fn direct_cot_run(
     tag: &str,
     points: usize,
@@ -419,23 +438,7 @@ fn direct_cot_run(
     extra: &[&str],
 ) -> (Vec<serde_json::Value>, serde_json::Value) {
     let dir = std::env::temp_dir().join(format!("bf-cli-{tag}-{}", std::process::id()));
-    let (points, max_iter) = (points.to_string(), max_iter.to_string());
-    let out = bin()
-        .current_dir(root())
-        .args(["optimize", "--problem", "periodic-cot", "--points", &points])
-        .args([
-            "--strategy",
-            "direct",
-            "--max-iter",
-            &max_iter,
-            "--verify-rtol",
-            "0",
-        ])
-        .args(extra)
-        .arg("--out")
-        .arg(&dir)
-        .output()
-        .unwrap();
+    let out = direct_cot_output(&dir, points, max_iter, extra);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");
     let read = |name: &str| -> serde_json::Value {
@@ -461,16 +464,30 @@ fn optimize_kkt_residual_ratio_reaches_the_solver() {
     reach_arm_refuses("--kkt-residual-ratio");
 }
 
-/// `--curvature-extrapolation` reaches the solver: on `periodic-cot` Radau 3 × 16 from the
-/// default guess the solve meets negative curvature, and with the option some full steps are
-/// extrapolated (`counters.extrapolations`), without it none; values below 1 are refused by
-/// name, and so is the option with `reach-arm`.
+/// `--curvature-extrapolation` and `--extrapolate-every-barrier` reach the solver: on
+/// `periodic-cot` Radau 3 × 16 from the default guess the early barrier problems meet negative
+/// curvature, so with both options some full steps are extrapolated
+/// (`counters.extrapolations`), with the cap alone (the final barrier problem, where this solve
+/// has positive curvature) fewer, and with the scope alone (cap 1, off) or neither none;
+/// values below 1 are refused by name, and so are both options with `reach-arm`.
 #[test]
 fn optimize_curvature_extrapolation_reaches_the_solver() {
-    let (_, on) = direct_cot_run("extrap", 48, 600, &["--curvature-extrapolation", "16"]);
-    assert!(on["extrapolations"].as_u64().unwrap() > 0, "{on}");
-    let (_, off) = direct_cot_run("noextrap", 48, 600, &[]);
-    assert_eq!(off["extrapolations"].as_u64(), Some(0), "{off}");
+    let count = |tag: &str, args: &[&str]| -> u64 {
+        let (_, c) = direct_cot_run(tag, 48, 600, args);
+        c["extrapolations"].as_u64().unwrap()
+    };
+    let every = count(
+        "extrap-every",
+        &[
+            "--curvature-extrapolation",
+            "16",
+            "--extrapolate-every-barrier",
+        ],
+    );
+    let last = count("extrap-final", &["--curvature-extrapolation", "16"]);
+    assert!(every > 0 && last < every, "every {every}, final {last}");
+    assert_eq!(count("extrap-scope", &["--extrapolate-every-barrier"]), 0);
+    assert_eq!(count("noextrap", &[]), 0);
     for bad in ["0.5", "-2", "nan", "inf"] {
         let out = run(&[
             "optimize",
@@ -487,6 +504,27 @@ fn optimize_curvature_extrapolation_reaches_the_solver() {
         );
     }
     reach_arm_refuses("--curvature-extrapolation");
+    reach_arm_refuses("--extrapolate-every-barrier");
+}
+
+/// A direct solve stopped by the iteration limit fails (exit status 1) and points to the
+/// extrapolation along negative curvature, unless it was already on.
+#[test]
+fn an_iteration_limit_hints_at_the_curvature_extrapolation() {
+    let dir = std::env::temp_dir().join(format!("bf-cli-maxiter-{}", std::process::id()));
+    let hint = "--curvature-extrapolation 16 ends";
+    for (extra, hinted) in [
+        (&[][..], true),
+        (&["--curvature-extrapolation", "16"][..], false),
+    ] {
+        let out = direct_cot_output(&dir, 30, 5, extra);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
+        assert!(stderr.contains("MaxIterations"), "{stderr}");
+        assert_eq!(stdout.contains(hint), hinted, "{extra:?}: {stdout}");
+    }
+    std::fs::remove_dir_all(dir).ok();
 }
 
 /// `optimize --problem reach-arm` (one direct Radau solve) refuses the solver option `flag` by

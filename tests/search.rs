@@ -366,21 +366,40 @@ fn verified_default_search(tag: &str, args: &[&str]) -> (String, serde_json::Val
     (stdout, sol)
 }
 
-/// The default `periodic-cot` search of seed 8: its three best coarse candidates do not verify
-/// after their refinements; the search goes on to the next distinct optima
-/// (`VerifyPolicy::clusters` = 6) and the fifth verifies, so the default does not end
-/// unverified (it did with a budget of three).
+/// The default `periodic-cot` search of seed 8. With three refinements per candidate its
+/// three best coarse candidates do not verify; the search goes on to the next distinct optima
+/// (`VerifyPolicy::clusters` = 6) and the fifth verifies, so it does not end unverified (it did
+/// with a budget of three candidates). With the default five refinements the best candidate
+/// (start 25) verifies at its fourth, at a lower objective than the fifth candidate's.
 #[test]
-#[ignore = "about 90 s: five candidates hp-refined"]
+#[ignore = "about 150 s: two searches, one with five candidates hp-refined"]
 fn the_default_search_refines_past_three_unverifiable_candidates() {
-    let (stdout, _) =
-        verified_default_search("seed8", &["--problem", "periodic-cot", "--seed", "8"]);
-    let refined: std::collections::BTreeSet<&str> = stdout
-        .lines()
-        .filter_map(|l| l.strip_prefix("verification refinement: refine start "))
-        .filter_map(|l| l.split_whitespace().next())
-        .collect();
-    assert!(refined.len() > 3, "{refined:?}");
+    let refined_starts = |stdout: &str| -> Vec<String> {
+        stdout
+            .lines()
+            .filter_map(|l| l.strip_prefix("verification refinement: refine start "))
+            .filter_map(|l| l.split_whitespace().next())
+            .map(str::to_owned)
+            .collect()
+    };
+    let args = ["--problem", "periodic-cot", "--seed", "8"];
+    let (three, sol3) = verified_default_search(
+        "seed8-3",
+        &[&args[..], &["--verify-refinements", "3"]].concat(),
+    );
+    let distinct: std::collections::BTreeSet<String> = refined_starts(&three).into_iter().collect();
+    assert!(distinct.len() > 3, "{distinct:?}");
+    let (five, sol5) = verified_default_search("seed8-5", &args);
+    let attempts = refined_starts(&five);
+    assert!(
+        attempts.len() > 3 && attempts.iter().all(|s| s == &attempts[0]),
+        "{five}"
+    );
+    let (j3, j5) = (sol3["objective"].as_f64(), sol5["objective"].as_f64());
+    assert!(
+        j5.unwrap() < j3.unwrap(),
+        "J {j5:?} with five, {j3:?} with three"
+    );
 }
 
 /// The default `periodic-cot-human` search: the first refinement of its best coarse candidate

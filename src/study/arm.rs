@@ -65,11 +65,18 @@ pub struct ArmAttempt {
     pub solution: ArmSolution,
 }
 
+/// Re-solves of `reach-arm` on a mesh with twice the elements by default
+/// (`optimize --verify-refinements`): each doubles the problem, so three (8× the elements)
+/// rather than the periodic searches' [`super::search::VERIFY_REFINEMENTS`].
+pub const ARM_MESH_DOUBLINGS: usize = 3;
+
 /// [`solve_reach_arm`] then [`verify_arm`] at `rtol` (0: no verification, one solve); an
 /// unverified solution is solved again on a mesh with twice the elements and points (the
 /// same points per element), up to `refinements` times: where the torque bounds are active
 /// the optimal torques have corners, which the element polynomials resolve only on short
 /// elements. Returns every attempt, the last one being the answer.
+///
+/// `optimize --problem reach-arm` uses [`ARM_MESH_DOUBLINGS`] unless told otherwise.
 pub fn solve_verified(
     scene: &Scene,
     settings: &ArmSettings,

@@ -10,7 +10,7 @@
 
 use std::time::Instant;
 
-use bf_optim::ipm::{IterationInfo, Nlp, Settings, Solution, WarmStart};
+use bf_optim::ipm::{ExtrapolationScope, IterationInfo, Nlp, Settings, Solution, WarmStart};
 use bf_optim::ocp::solve_nlp;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
 
@@ -32,6 +32,11 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
         max_curvature_extrapolation: s
             .curvature_extrapolation
             .unwrap_or(base.max_curvature_extrapolation),
+        extrapolation_scope: if s.extrapolate_every_barrier {
+            ExtrapolationScope::EveryBarrier
+        } else {
+            base.extrapolation_scope
+        },
         ..base
     }
 }

@@ -43,7 +43,7 @@ use std::time::Instant;
 
 pub use kkt::{Inertia, KktSolver, LdltBackend, SparseLdlt};
 pub use nlp::{BOUND_INF, DerivativeReport, Nlp, NlpScaling, check_derivatives};
-pub use settings::{KktOrdering, MuStrategy, ScalingMethod, Settings};
+pub use settings::{ExtrapolationScope, KktOrdering, MuStrategy, ScalingMethod, Settings};
 pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};
 
 use self::core::{Core, CoreStart, Ctx};

@@ -37,6 +37,19 @@ pub enum ScalingMethod {
     User,
 }
 
+/// On which barrier problems the line search may extrapolate a full step along negative
+/// curvature ([`Settings::max_curvature_extrapolation`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum ExtrapolationScope {
+    /// Only once μ has reached its smallest value, i.e. on the problem the solve is meant to
+    /// answer. Earlier barrier problems are approximate stations on the way, and longer steps
+    /// there move the solve across basins to other local optima (decision record 0010).
+    #[default]
+    FinalBarrier,
+    /// On every barrier problem (the first version of 0010).
+    EveryBarrier,
+}
+
 /// Elimination order of the KKT matrix's LDLᵀ factorization.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum KktOrdering {
@@ -251,17 +264,21 @@ pub struct Settings {
     pub kappa_soc: f64,
     /// Backtracking factor (default: 0.5).
     pub alpha_red_factor: f64,
-    /// Largest step size α of the extrapolation along negative curvature (default: 1, off;
-    /// 16 is the measured choice): when the full step of an iteration whose inertia needed δ_w > 0 is
-    /// accepted at the first trial and the Lagrangian's curvature `dxᵀ(W + Σ)dx` along it is
-    /// negative, the quadratic model decreases without bound along the step, so α is doubled
-    /// (2, 4, …, within the fraction-to-boundary rule) while the acceptance test gives the same
-    /// verdict and φ_μ keeps decreasing (Moré & Sorensen 1979; Gould, Lucidi, Roma & Toint
-    /// 2000). Without it, a solve in a descending valley of negative curvature crawls with
-    /// steps of length ‖∇L‖/δ_w. With 16 every mesh of the periodic sweep ends Solved in one
-    /// stage, but the solves land on other local optima than the default's, so it is not
-    /// the default yet (decision record 0010).
+    /// Largest step size α of the extrapolation along negative curvature (default: 1, off; 16
+    /// is the measured choice): when the full step of an iteration whose inertia needed δ_w > 0 is accepted at
+    /// the first trial and the Lagrangian's curvature `dxᵀ(W + Σ)dx` along it is negative, the
+    /// quadratic model decreases without bound along the step, so α is doubled (2, 4, …,
+    /// within the fraction-to-boundary rule) while the acceptance test gives the same verdict
+    /// and φ_μ keeps decreasing (Moré & Sorensen 1979; Gould, Lucidi, Roma & Toint 2000).
+    /// Without it, a solve in a descending valley of negative curvature crawls with steps of
+    /// length ‖∇L‖/δ_w. Applies on the barrier problems chosen by
+    /// [`extrapolation_scope`](Settings::extrapolation_scope). Not the default: the
+    /// warm-started solves of the hp refinement then reach other points, and the default
+    /// searches verify other optima (decision record 0010).
     pub max_curvature_extrapolation: f64,
+    /// Where the extrapolation along negative curvature acts (default: only on the final
+    /// barrier problem, [`ExtrapolationScope::FinalBarrier`]).
+    pub extrapolation_scope: ExtrapolationScope,
     /// Ipopt's filter reset heuristic: the filter is cleared when, in this many consecutive
     /// iterations, the last trial point rejected before the accepted one had made sufficient
     /// progress over the current iterate and was dominated only by a filter entry (default: 5).
@@ -352,6 +369,7 @@ impl Default for Settings {
             max_soc: 4,
             kappa_soc: 0.99,
             max_curvature_extrapolation: 1.0,
+            extrapolation_scope: ExtrapolationScope::FinalBarrier,
             alpha_red_factor: 0.5,
             filter_reset_trigger: 5,
             max_filter_resets: 5,

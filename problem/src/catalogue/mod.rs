@@ -193,6 +193,9 @@ pub struct ProblemSettings {
     /// ([`Settings::max_curvature_extrapolation`]) in every solve of the problem; `None`: the
     /// solver's default (off). Overrides `ipm`.
     pub curvature_extrapolation: Option<f64>,
+    /// Extrapolate along negative curvature on every barrier problem, not only the final one
+    /// ([`bf_optim::ipm::ExtrapolationScope::EveryBarrier`]); overrides `ipm`.
+    pub extrapolate_every_barrier: bool,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where
     /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
@@ -228,6 +231,7 @@ impl Default for ProblemSettings {
             dual_regularization: None,
             kkt_residual_ratio: false,
             curvature_extrapolation: None,
+            extrapolate_every_barrier: false,
             scene: None,
             min_stick: MIN_STICK,
         }

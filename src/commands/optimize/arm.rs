@@ -54,6 +54,10 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             "--curvature-extrapolation",
             args.curvature_extrapolation.is_some(),
         ),
+        (
+            "--extrapolate-every-barrier",
+            args.extrapolate_every_barrier,
+        ),
     ] {
         if given {
             bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
@@ -115,7 +119,8 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         &scene,
         &settings,
         args.verify_rtol,
-        args.verify_refinements,
+        args.verify_refinements
+            .unwrap_or(crate::study::arm::ARM_MESH_DOUBLINGS),
         &text,
         &params,
     )

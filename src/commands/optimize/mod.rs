@@ -184,6 +184,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         min_stick: args.min_stick,
         kkt_residual_ratio: args.kkt_residual_ratio,
         curvature_extrapolation: args.curvature_extrapolation,
+        extrapolate_every_barrier: args.extrapolate_every_barrier,
         ..ProblemSettings::default()
     })
 }
@@ -483,7 +484,9 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     let policy = VerifyPolicy {
         rtol: args.verify_rtol,
-        refine_attempts: args.verify_refinements,
+        refine_attempts: args
+            .verify_refinements
+            .unwrap_or(crate::study::search::VERIFY_REFINEMENTS),
         ..VerifyPolicy::default()
     };
     let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
@@ -581,6 +584,15 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             "hint: the solve met only the acceptable tolerances; fine meshes can stall where \
              the KKT factor is inaccurate, and another path may end Solved: try \
              --kkt-residual-ratio or --dual-regularization 3e-8 (optim/README.md)"
+        )?;
+    }
+    // An iteration limit on a fine mesh is often a crawl along a descending valley of
+    // negative curvature, which the extrapolation ends (decision record 0010).
+    if sol.status == Status::MaxIterations && args.curvature_extrapolation.is_none() {
+        crate::outln!(
+            "hint: the iteration limit stopped the solve; on fine meshes a solve can crawl \
+             along a valley of negative curvature, which --curvature-extrapolation 16 ends \
+             (docs/decisions/0010-curvature-extrapolation.md); --max-iter raises the limit"
         )?;
     }
     if let Some(f) = failure_of(&sol) {

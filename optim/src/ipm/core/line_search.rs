@@ -6,14 +6,15 @@
 //!   (W&B Sect. 2.3);
 //! * second-order corrections (W&B Sect. 2.4);
 //! * extrapolation of a full step along negative curvature (α doubled while the acceptance
-//!   test holds and φ_μ decreases; [`Core::extrapolate`], decision record 0010);
+//!   test holds and φ_μ decreases; [`Core::extrapolate`], by default only once μ has reached
+//!   its floor; decision record 0010);
 //! * Ipopt's filter reset heuristic ([`Core::note_accept`]);
 //! * Ipopt's "soft restoration" step when the line search fails near feasibility.
 
 use std::time::Instant;
 
 use super::{Core, Ctx, dot, norm_1, norm_inf};
-use crate::ipm::settings::Settings;
+use crate::ipm::settings::{ExtrapolationScope, Settings};
 
 /// Result of the backtracking line search.
 pub(super) enum LsOutcome {
@@ -206,7 +207,13 @@ impl Core<'_> {
     }
 
     /// Backtracking filter line search with second-order correction (W&B Sect. 2.3, A-5.x).
-    pub(super) fn line_search(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) -> LsOutcome {
+    /// `final_barrier`: μ is at its floor (the extrapolation's default scope).
+    pub(super) fn line_search(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+        final_barrier: bool,
+    ) -> LsOutcome {
         let t0 = Instant::now();
         let fe0 = ctx.timing.function_evals;
         let theta = norm_1(&self.c);
@@ -225,7 +232,12 @@ impl Core<'_> {
                 let verdict = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
                 if self.take_verdict(ctx, settings, verdict, theta, phi) {
                     self.f_t = f_t;
-                    if trials == 1 && alpha == 1.0 && settings.max_curvature_extrapolation > 1.0 {
+                    if trials == 1
+                        && alpha == 1.0
+                        && settings.max_curvature_extrapolation > 1.0
+                        && (final_barrier
+                            || settings.extrapolation_scope == ExtrapolationScope::EveryBarrier)
+                    {
                         let a =
                             self.extrapolate(ctx, settings, verdict, theta, phi, gphi_dx, phi_t);
                         break LsOutcome::Accepted { alpha: a, trials };

@@ -605,7 +605,7 @@ impl<'p> Core<'p> {
                     }
                 } else {
                     tiny_count = 0;
-                    let outcome = self.line_search(ctx, settings);
+                    let outcome = self.line_search(ctx, settings, self.mu <= mu_rule.floor);
                     match outcome {
                         LsOutcome::Accepted { alpha, trials: tr } => {
                             accepted_alpha = alpha;
