@@ -44,7 +44,7 @@ pub struct VerifyPolicy {
     pub refine_attempts: usize,
     /// Rounds of one refinement.
     pub refine_rounds: usize,
-    /// Collocation points per phase at most.
+    /// Collocation points per phase at most ([`VERIFY_MAX_POINTS`] by default).
     pub max_points: usize,
     /// Distinct unverified optima (better than the best verified one) refined at most: they are
     /// refined one after the other, lowest objective first, until one verifies, so a spurious
@@ -72,6 +72,15 @@ pub struct VerifyPolicy {
 /// third verifies.
 pub const VERIFY_REFINEMENTS: usize = 5;
 
+/// Collocation points per phase that the refinements of an unverified optimum may reach by
+/// default ([`VerifyPolicy::max_points`]). The `periodic-cot` optima have long free phases
+/// whose element-wise defects need many short elements: with 400, three
+/// of the default searches over seeds 0–19 stopped the refinement of their best candidate
+/// on the limit (defects 5.1e-2, 6.2e-3, 2.1e-4) and reported a candidate 3–4× worse; with
+/// 800 those candidates verify, and each of those searches takes less time, not more
+/// (BENCHMARKS.md, "A point limit of 800 (session 15)").
+pub const VERIFY_MAX_POINTS: usize = 800;
+
 impl Default for VerifyPolicy {
     fn default() -> Self {
         VerifyPolicy {
@@ -79,7 +88,7 @@ impl Default for VerifyPolicy {
             refine_tol: VERIFIED_DEFECT,
             refine_attempts: VERIFY_REFINEMENTS,
             refine_rounds: 4,
-            max_points: 400,
+            max_points: VERIFY_MAX_POINTS,
             clusters: 6,
             stick_continuation: Some(STICK_CONTINUATION),
         }
