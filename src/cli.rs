@@ -342,10 +342,9 @@ pub struct OptimizeArgs {
     pub kkt_residual_ratio: bool,
     /// Extrapolate a full Newton step along negative curvature up to this step size (α ≥ 1,
     /// doubled while the line search accepts and the barrier objective decreases; 1 turns it
-    /// off), on the final barrier problem only unless --extrapolate-every-barrier. Ends the
-    /// crawls in descending valleys that leave some fine meshes at the iteration limit, but
-    /// the searches' refinements then reach other points and verify other optima; off by
-    /// default (docs/decisions/0010-curvature-extrapolation.md).
+    /// off; default 16), on the final barrier problem only unless --extrapolate-every-barrier.
+    /// Ends the crawls in descending valleys that leave some fine meshes at the iteration
+    /// limit (docs/decisions/0010-curvature-extrapolation.md).
     #[arg(long, value_name = "ALPHA", allow_hyphen_values = true, value_parser = at_least_one)]
     pub curvature_extrapolation: Option<f64>,
     /// Extrapolate along negative curvature on every barrier problem, not only the final one:

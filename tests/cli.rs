@@ -466,28 +466,24 @@ fn optimize_kkt_residual_ratio_reaches_the_solver() {
 
 /// `--curvature-extrapolation` and `--extrapolate-every-barrier` reach the solver: on
 /// `periodic-cot` Radau 3 × 16 from the default guess the early barrier problems meet negative
-/// curvature, so with both options some full steps are extrapolated
-/// (`counters.extrapolations`), with the cap alone (the final barrier problem, where this solve
-/// has positive curvature) fewer, and with the scope alone (cap 1, off) or neither none;
-/// values below 1 are refused by name, and so are both options with `reach-arm`.
+/// curvature, so with every barrier problem in scope some full steps are extrapolated
+/// (`counters.extrapolations`), with the default scope (the final barrier problem, where this
+/// solve has positive curvature) fewer, and with `--curvature-extrapolation 1` (off) none
+/// whatever the scope; values below 1 are refused by name, and so are both options with
+/// `reach-arm`.
 #[test]
 fn optimize_curvature_extrapolation_reaches_the_solver() {
     let count = |tag: &str, args: &[&str]| -> u64 {
         let (_, c) = direct_cot_run(tag, 48, 600, args);
         c["extrapolations"].as_u64().unwrap()
     };
-    let every = count(
-        "extrap-every",
-        &[
-            "--curvature-extrapolation",
-            "16",
-            "--extrapolate-every-barrier",
-        ],
-    );
-    let last = count("extrap-final", &["--curvature-extrapolation", "16"]);
+    let every = count("extrap-every", &["--extrapolate-every-barrier"]);
+    let last = count("extrap-final", &[]);
     assert!(every > 0 && last < every, "every {every}, final {last}");
-    assert_eq!(count("extrap-scope", &["--extrapolate-every-barrier"]), 0);
-    assert_eq!(count("noextrap", &[]), 0);
+    let off = ["--curvature-extrapolation", "1"];
+    assert_eq!(count("extrap-off", &off), 0);
+    let off_every = [&off[..], &["--extrapolate-every-barrier"]].concat();
+    assert_eq!(count("extrap-off-every", &off_every), 0);
     for bad in ["0.5", "-2", "nan", "inf"] {
         let out = run(&[
             "optimize",
@@ -508,14 +504,14 @@ fn optimize_curvature_extrapolation_reaches_the_solver() {
 }
 
 /// A direct solve stopped by the iteration limit fails (exit status 1) and points to the
-/// extrapolation along negative curvature, unless it was already on.
+/// extrapolation along negative curvature on every barrier problem, unless it was already on.
 #[test]
 fn an_iteration_limit_hints_at_the_curvature_extrapolation() {
     let dir = std::env::temp_dir().join(format!("bf-cli-maxiter-{}", std::process::id()));
-    let hint = "--curvature-extrapolation 16 ends";
+    let hint = "--extrapolate-every-barrier (steps";
     for (extra, hinted) in [
         (&[][..], true),
-        (&["--curvature-extrapolation", "16"][..], false),
+        (&["--extrapolate-every-barrier"][..], false),
     ] {
         let out = direct_cot_output(&dir, 30, 5, extra);
         let stdout = String::from_utf8_lossy(&out.stdout);

@@ -126,8 +126,8 @@ fn run_before(name: &str, scheme: Scheme, points: usize) -> OcpSolution {
 /// `SWEEP_BEFORE=0` (skip the "before" column) narrow a run, so that one sweep can be split
 /// over several processes; `SWEEP_RATIO=1` judges the KKT solves by the residual ratio
 /// ([`ProblemSettings::kkt_residual_ratio`]) and `SWEEP_EXTRAPOLATION=16` extrapolates along
-/// negative curvature ([`ProblemSettings::curvature_extrapolation`]) on the final barrier
-/// problem, with `SWEEP_EVERY_BARRIER=1` on every one. The last column is each
+/// negative curvature ([`ProblemSettings::curvature_extrapolation`]; the default, 1 turns it
+/// off) on the final barrier problem, with `SWEEP_EVERY_BARRIER=1` on every one. The last column is each
 /// solution's re-integration defect ([`defect`]; verified at ≤ 1e-4).
 #[test]
 #[ignore = "slow: mesh sweep"]
@@ -364,12 +364,13 @@ fn the_filter_reset_solves_the_crawling_cot_meshes() {
     }
 }
 
-/// The two sweep cells that the default does not solve in one stage end Solved in one stage
-/// with the extrapolation along negative curvature up to α = 16 (decision record 0010), and it
-/// acts in both: `periodic-cot` Radau 3 × 48 (a crawl along a descending valley of negative
-/// curvature at the final μ, MaxIterations in both stages by default) with the default scope,
-/// the final barrier problem; LG-40 (a wander at μ = 1.6e-4 that ends in a restoration phase and
-/// a damped crawl; the fallback stage solves it) only with every barrier problem in scope.
+/// The two sweep cells that the solver without extrapolation does not solve in one stage end
+/// Solved in one stage with the extrapolation along negative curvature up to α = 16 (decision
+/// record 0010), and it acts in both: `periodic-cot` Radau 3 × 48 (a crawl along a descending
+/// valley of negative curvature at the final μ, MaxIterations in both stages without it) with
+/// the default scope, the final barrier problem; LG-40 (a wander at μ = 1.6e-4 that ends in a
+/// restoration phase and a damped crawl; the fallback stage solves it) only with every barrier
+/// problem in scope.
 #[test]
 #[ignore = "about 140 s: the 3 × 48 solve takes some 1300 iterations"]
 fn curvature_extrapolation_solves_the_two_remaining_cells() {

@@ -366,14 +366,15 @@ fn verified_default_search(tag: &str, args: &[&str]) -> (String, serde_json::Val
     (stdout, sol)
 }
 
-/// The default `periodic-cot` search of seed 8. With three refinements per candidate its
-/// three best coarse candidates do not verify; the search goes on to the next distinct optima
-/// (`VerifyPolicy::clusters` = 6) and the fifth verifies, so it does not end unverified (it did
-/// with a budget of three candidates). With the default five refinements the best candidate
-/// (start 25) verifies at its fourth, at a lower objective than the fifth candidate's.
+/// The default `periodic-cot` search of seed 8, without the extrapolation along negative
+/// curvature (the path these numbers were measured on; with it, start 25 verifies at its
+/// third refinement). With three refinements per candidate its best coarse candidate (start
+/// 25) does not verify (defects 6.2e-2, 3.1e-1, 1.5e-2) and the search goes on to the next
+/// one (start 30, J ≈ 6.15e-3); with the default five, start 25 verifies at its fourth
+/// (J ≈ 4.55e-3): a chain of refinements does not converge monotonically.
 #[test]
-#[ignore = "about 150 s: two searches, one with five candidates hp-refined"]
-fn the_default_search_refines_past_three_unverifiable_candidates() {
+#[ignore = "about 120 s: two searches"]
+fn five_refinements_verify_the_best_candidate_of_seed_8() {
     let refined_starts = |stdout: &str| -> Vec<String> {
         stdout
             .lines()
@@ -382,13 +383,20 @@ fn the_default_search_refines_past_three_unverifiable_candidates() {
             .map(str::to_owned)
             .collect()
     };
-    let args = ["--problem", "periodic-cot", "--seed", "8"];
+    let args = [
+        "--problem",
+        "periodic-cot",
+        "--seed",
+        "8",
+        "--curvature-extrapolation",
+        "1",
+    ];
     let (three, sol3) = verified_default_search(
         "seed8-3",
         &[&args[..], &["--verify-refinements", "3"]].concat(),
     );
     let distinct: std::collections::BTreeSet<String> = refined_starts(&three).into_iter().collect();
-    assert!(distinct.len() > 3, "{distinct:?}");
+    assert!(distinct.len() > 1, "{distinct:?}");
     let (five, sol5) = verified_default_search("seed8-5", &args);
     let attempts = refined_starts(&five);
     assert!(

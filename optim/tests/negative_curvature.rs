@@ -1,5 +1,5 @@
 //! Extrapolation of a full step along negative curvature
-//! (`Settings::max_curvature_extrapolation`, off by default; decision record 0010). At a saddle
+//! (`Settings::max_curvature_extrapolation`; decision record 0010). At a saddle
 //! the inertia correction keeps δ_w just above the most negative curvature, so the step along
 //! that direction is ‖∇L‖ / (δ_w − |λ|) and grows by a bounded factor per iteration; doubling α
 //! while the acceptance test holds and φ_μ decreases leaves the saddle in fewer iterations and
@@ -46,20 +46,26 @@ fn saddle() -> Hs {
 const FSTAR: f64 = -EPS * EPS / (4.0 * QUARTIC);
 const XSTAR: f64 = 7.0710678118654755;
 
-/// The default: no extrapolation (and, when switched on, only on the final barrier problem).
+/// No extrapolation (cap 1).
 fn without() -> Settings {
-    let s = Settings::default();
-    assert_eq!(s.max_curvature_extrapolation, 1.0);
-    assert_eq!(s.extrapolation_scope, ExtrapolationScope::FinalBarrier);
-    s
+    Settings {
+        max_curvature_extrapolation: 1.0,
+        ..Settings::default()
+    }
 }
 
-/// Extrapolation up to α = 16, the measured choice, on the barrier problems of `scope`.
+/// Extrapolation up to α = 16 on the barrier problems of `scope`; with the final barrier
+/// problem, the default.
 fn with(scope: ExtrapolationScope) -> Settings {
+    let default = Settings::default();
+    assert_eq!(default.max_curvature_extrapolation, 16.0);
+    assert_eq!(
+        default.extrapolation_scope,
+        ExtrapolationScope::FinalBarrier
+    );
     Settings {
-        max_curvature_extrapolation: 16.0,
         extrapolation_scope: scope,
-        ..Settings::default()
+        ..default
     }
 }
 

@@ -264,17 +264,16 @@ pub struct Settings {
     pub kappa_soc: f64,
     /// Backtracking factor (default: 0.5).
     pub alpha_red_factor: f64,
-    /// Largest step size α of the extrapolation along negative curvature (default: 1, off; 16
-    /// is the measured choice): when the full step of an iteration whose inertia needed δ_w > 0 is accepted at
+    /// Largest step size α of the extrapolation along negative curvature (default: 16; 1 turns
+    /// it off): when the full step of an iteration whose inertia needed δ_w > 0 is accepted at
     /// the first trial and the Lagrangian's curvature `dxᵀ(W + Σ)dx` along it is negative, the
     /// quadratic model decreases without bound along the step, so α is doubled (2, 4, …,
     /// within the fraction-to-boundary rule) while the acceptance test gives the same verdict
     /// and φ_μ keeps decreasing (Moré & Sorensen 1979; Gould, Lucidi, Roma & Toint 2000).
     /// Without it, a solve in a descending valley of negative curvature crawls with steps of
     /// length ‖∇L‖/δ_w. Applies on the barrier problems chosen by
-    /// [`extrapolation_scope`](Settings::extrapolation_scope). Not the default: the
-    /// warm-started solves of the hp refinement then reach other points, and the default
-    /// searches verify other optima (decision record 0010).
+    /// [`extrapolation_scope`](Settings::extrapolation_scope), by default the final barrier
+    /// problem only (decision record 0010).
     pub max_curvature_extrapolation: f64,
     /// Where the extrapolation along negative curvature acts (default: only on the final
     /// barrier problem, [`ExtrapolationScope::FinalBarrier`]).
@@ -368,7 +367,7 @@ impl Default for Settings {
             eta_phi: 1e-8,
             max_soc: 4,
             kappa_soc: 0.99,
-            max_curvature_extrapolation: 1.0,
+            max_curvature_extrapolation: 16.0,
             extrapolation_scope: ExtrapolationScope::FinalBarrier,
             alpha_red_factor: 0.5,
             filter_reset_trigger: 5,

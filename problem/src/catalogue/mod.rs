@@ -191,7 +191,7 @@ pub struct ProblemSettings {
     pub kkt_residual_ratio: bool,
     /// Largest step size of the solver's extrapolation along negative curvature
     /// ([`Settings::max_curvature_extrapolation`]) in every solve of the problem; `None`: the
-    /// solver's default (off). Overrides `ipm`.
+    /// solver's default (16, on the final barrier problem; 1 turns it off). Overrides `ipm`.
     pub curvature_extrapolation: Option<f64>,
     /// Extrapolate along negative curvature on every barrier problem, not only the final one
     /// ([`bf_optim::ipm::ExtrapolationScope::EveryBarrier`]); overrides `ipm`.

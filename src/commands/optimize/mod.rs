@@ -586,13 +586,14 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
              --kkt-residual-ratio or --dual-regularization 3e-8 (optim/README.md)"
         )?;
     }
-    // An iteration limit on a fine mesh is often a crawl along a descending valley of
-    // negative curvature, which the extrapolation ends (decision record 0010).
-    if sol.status == Status::MaxIterations && args.curvature_extrapolation.is_none() {
+    // An iteration limit on a fine mesh can be a wander of an early barrier problem, which the
+    // extrapolation on every barrier problem ends (decision record 0010).
+    if sol.status == Status::MaxIterations && !args.extrapolate_every_barrier {
         crate::outln!(
-            "hint: the iteration limit stopped the solve; on fine meshes a solve can crawl \
-             along a valley of negative curvature, which --curvature-extrapolation 16 ends \
-             (docs/decisions/0010-curvature-extrapolation.md); --max-iter raises the limit"
+            "hint: the iteration limit stopped the solve; --max-iter raises it, and \
+             --extrapolate-every-barrier (steps along negative curvature from the first barrier \
+             problem on, not only on the final one) ends some wanders on fine meshes \
+             (docs/decisions/0010-curvature-extrapolation.md)"
         )?;
     }
     if let Some(f) = failure_of(&sol) {
