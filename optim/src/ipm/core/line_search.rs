@@ -14,7 +14,16 @@
 use std::time::Instant;
 
 use super::{Core, Ctx, dot, norm_1, norm_inf};
-use crate::ipm::settings::{ExtrapolationScope, Settings};
+use crate::ipm::settings::Settings;
+
+/// What a trial point is judged against (W&B eq. (18)–(21)): the current iterate's filter
+/// measures θ = ‖c‖₁ and φ_μ, and the slope ∇φ_μᵀdx of the barrier objective along the step.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Base {
+    pub(super) theta: f64,
+    pub(super) phi: f64,
+    pub(super) gphi_dx: f64,
+}
 
 /// Result of the backtracking line search.
 pub(super) enum LsOutcome {
@@ -88,13 +97,16 @@ impl Core<'_> {
     pub(super) fn acceptable(
         &self,
         settings: &Settings,
-        theta: f64,
-        phi: f64,
-        gphi_dx: f64,
+        base: Base,
         alpha: f64,
         theta_t: f64,
         phi_t: f64,
     ) -> Trial {
+        let Base {
+            theta,
+            phi,
+            gphi_dx,
+        } = base;
         if !phi_t.is_finite() || !theta_t.is_finite() || theta_t > self.theta_max {
             return Trial::Rejected;
         }
@@ -127,23 +139,22 @@ impl Core<'_> {
         Trial::Accepted { f_type: ftype }
     }
 
-    /// Acts on the verdict of [`Core::acceptable`] for a trial point judged against the
-    /// iterate with filter measures `(theta, phi)`: an accepted point counts for the filter
-    /// reset and augments the filter unless f-type; a rejected one records whether the filter
-    /// alone blocked it. Returns whether the point was accepted.
+    /// Acts on the verdict of [`Core::acceptable`] for a trial point judged against `base`:
+    /// an accepted point counts for the filter reset and augments the filter with the
+    /// iterate's measures unless f-type; a rejected one records whether the filter alone
+    /// blocked it. Returns whether the point was accepted.
     fn take_verdict(
         &mut self,
         ctx: &mut Ctx<'_, '_>,
         settings: &Settings,
         verdict: Trial,
-        theta: f64,
-        phi: f64,
+        base: Base,
     ) -> bool {
         match verdict {
             Trial::Accepted { f_type } => {
                 self.note_accept(ctx, settings);
                 if !f_type {
-                    self.augment_filter(theta, phi, settings);
+                    self.augment_filter(base.theta, base.phi, settings);
                 }
                 true
             }
@@ -207,20 +218,23 @@ impl Core<'_> {
     }
 
     /// Backtracking filter line search with second-order correction (W&B Sect. 2.3, A-5.x).
-    /// `final_barrier`: μ is at its floor (the extrapolation's default scope).
+    /// `extrapolate`: a full step accepted at the first trial may be extended along negative
+    /// curvature ([`Core::extrapolate`]; the caller applies the setting and its scope).
     pub(super) fn line_search(
         &mut self,
         ctx: &mut Ctx<'_, '_>,
         settings: &Settings,
-        final_barrier: bool,
+        extrapolate: bool,
     ) -> LsOutcome {
         let t0 = Instant::now();
         let fe0 = ctx.timing.function_evals;
-        let theta = norm_1(&self.c);
-        let phi = self.barrier_value(&self.x, self.f);
-        let gphi_dx = dot(&self.grad_phi, &self.dx);
+        let base = Base {
+            theta: norm_1(&self.c),
+            phi: self.barrier_value(&self.x, self.f),
+            gphi_dx: dot(&self.grad_phi, &self.dx),
+        };
         let alpha_max = self.max_step_primal(&self.dx);
-        let amin = self.alpha_min(settings, theta, gphi_dx);
+        let amin = self.alpha_min(settings, base.theta, base.gphi_dx);
         let mut alpha = alpha_max;
         let mut trials = 0;
         let outcome = loop {
@@ -229,26 +243,20 @@ impl Core<'_> {
             }
             trials += 1;
             if let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, alpha) {
-                let verdict = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
-                if self.take_verdict(ctx, settings, verdict, theta, phi) {
+                let verdict = self.acceptable(settings, base, alpha, theta_t, phi_t);
+                if self.take_verdict(ctx, settings, verdict, base) {
                     self.f_t = f_t;
-                    if trials == 1
-                        && alpha == 1.0
-                        && settings.max_curvature_extrapolation > 1.0
-                        && (final_barrier
-                            || settings.extrapolation_scope == ExtrapolationScope::EveryBarrier)
-                    {
-                        let a =
-                            self.extrapolate(ctx, settings, verdict, theta, phi, gphi_dx, phi_t);
+                    if extrapolate && trials == 1 && alpha == 1.0 {
+                        let a = self.extrapolate(ctx, settings, verdict, base, phi_t);
                         break LsOutcome::Accepted { alpha: a, trials };
                     }
                     break LsOutcome::Accepted { alpha, trials };
                 }
                 if trials == 1
-                    && theta_t >= theta
+                    && theta_t >= base.theta
                     && settings.max_soc > 0
                     && self.m > 0
-                    && let Some(a) = self.second_order_correction(ctx, settings, alpha, theta, phi)
+                    && let Some(a) = self.second_order_correction(ctx, settings, alpha, base)
                 {
                     break LsOutcome::Accepted { alpha: a, trials };
                 }
@@ -283,36 +291,41 @@ impl Core<'_> {
         ctx: &mut Ctx<'_, '_>,
         settings: &Settings,
         verdict: Trial,
-        theta: f64,
-        phi: f64,
-        gphi_dx: f64,
+        base: Base,
         phi_1: f64,
     ) -> f64 {
         if self.delta_w <= 0.0 || self.step_curvature() >= 0.0 {
             return 1.0;
         }
         let cap = self.max_step_primal_upto(&self.dx, settings.max_curvature_extrapolation);
-        let mut best = (1.0, phi_1, self.x_t.clone(), self.c_t.clone(), self.f_t);
+        if cap < 2.0 {
+            return 1.0;
+        }
+        // The best point so far lives in `best_x, best_c`; each better trial is swapped in, and
+        // the buffer it leaves in `x_t, c_t` is overwritten by the next trial.
+        let (mut best_x, mut best_c) = (self.x_t.clone(), self.c_t.clone());
+        let (mut best_alpha, mut best_phi, mut best_f) = (1.0, phi_1, self.f_t);
         let mut alpha = 2.0;
         while alpha <= cap {
             let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, alpha) else {
                 break;
             };
-            let v = self.acceptable(settings, theta, phi, gphi_dx, alpha, theta_t, phi_t);
-            if v != verdict || phi_t >= best.1 {
+            let v = self.acceptable(settings, base, alpha, theta_t, phi_t);
+            if v != verdict || phi_t >= best_phi {
                 break;
             }
-            best = (alpha, phi_t, self.x_t.clone(), self.c_t.clone(), f_t);
+            std::mem::swap(&mut self.x_t, &mut best_x);
+            std::mem::swap(&mut self.c_t, &mut best_c);
+            (best_alpha, best_phi, best_f) = (alpha, phi_t, f_t);
             alpha *= 2.0;
         }
-        let (a, _, x, c, f) = best;
-        self.x_t = x;
-        self.c_t = c;
-        self.f_t = f;
-        if a > 1.0 {
+        self.x_t = best_x;
+        self.c_t = best_c;
+        self.f_t = best_f;
+        if best_alpha > 1.0 {
             ctx.counters.extrapolations += 1;
         }
-        a
+        best_alpha
     }
 
     /// Second-order corrections (W&B Sect. 2.4). On success `x_t, c_t, f_t` hold the accepted
@@ -322,8 +335,7 @@ impl Core<'_> {
         ctx: &mut Ctx<'_, '_>,
         settings: &Settings,
         alpha: f64,
-        theta: f64,
-        phi: f64,
+        base: Base,
     ) -> Option<f64> {
         let mut c_soc: Vec<f64> = self
             .c
@@ -331,7 +343,7 @@ impl Core<'_> {
             .zip(&self.c_t)
             .map(|(c, ct)| alpha * c + ct)
             .collect();
-        let mut theta_old = theta;
+        let mut theta_old = base.theta;
         let saved = (
             self.dx.clone(),
             self.dy.clone(),
@@ -346,9 +358,13 @@ impl Core<'_> {
             let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, a_soc) else {
                 break;
             };
-            let gphi_dx = dot(&self.grad_phi, &self.dx);
-            let verdict = self.acceptable(settings, theta, phi, gphi_dx, a_soc, theta_t, phi_t);
-            if self.take_verdict(ctx, settings, verdict, theta, phi) {
+            // Judged against the same iterate, with the slope of the corrected step.
+            let corrected = Base {
+                gphi_dx: dot(&self.grad_phi, &self.dx),
+                ..base
+            };
+            let verdict = self.acceptable(settings, corrected, a_soc, theta_t, phi_t);
+            if self.take_verdict(ctx, settings, verdict, corrected) {
                 self.f_t = f_t;
                 ctx.counters.soc_accepted += 1;
                 return Some(a_soc);

@@ -23,7 +23,7 @@ use self::line_search::LsOutcome;
 use self::step::StepResult;
 use self::termination::Verdict;
 use super::kkt::{KktPattern, KktSolver, LdltBackend, SparseLdlt};
-use super::settings::{KktOrdering, Settings};
+use super::settings::{ExtrapolationScope, KktOrdering, Settings};
 use super::solution::{Counters, IterationInfo, Status, Timing};
 use super::stdform::StdProblem;
 use crate::error::OptimError;
@@ -605,7 +605,12 @@ impl<'p> Core<'p> {
                     }
                 } else {
                     tiny_count = 0;
-                    let outcome = self.line_search(ctx, settings, self.mu <= mu_rule.floor);
+                    // Extrapolation along negative curvature, by default on the final barrier
+                    // problem only (decision record 0010).
+                    let extrapolate = settings.max_curvature_extrapolation > 1.0
+                        && (self.mu <= mu_rule.floor
+                            || settings.extrapolation_scope == ExtrapolationScope::EveryBarrier);
+                    let outcome = self.line_search(ctx, settings, extrapolate);
                     match outcome {
                         LsOutcome::Accepted { alpha, trials: tr } => {
                             accepted_alpha = alpha;
