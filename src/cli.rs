@@ -18,6 +18,11 @@ pub fn at_least_one(text: &str) -> Result<f64, String> {
     finite_number(text, |v| v >= 1.0, "≥ 1")
 }
 
+/// Parses a finite number ≥ 0 (a weight that 0 turns off).
+pub fn nonnegative(text: &str) -> Result<f64, String> {
+    finite_number(text, |v| v >= 0.0, "≥ 0")
+}
+
 /// Parses a finite number for which `ok` holds; the message says it must be `bound`.
 fn finite_number(text: &str, ok: impl Fn(f64) -> bool, bound: &str) -> Result<f64, String> {
     let v: f64 = text
@@ -342,16 +347,23 @@ pub struct OptimizeArgs {
     pub kkt_residual_ratio: bool,
     /// Extrapolate a full Newton step along negative curvature up to this step size (α ≥ 1,
     /// doubled while the line search accepts and the barrier objective decreases; 1 turns it
-    /// off; default 16), on the final barrier problem only unless --extrapolate-every-barrier.
+    /// off; default 16), on the barrier problems whose μ is at most the tolerance unless
+    /// --extrapolate-every-barrier.
     /// Ends the crawls in descending valleys that leave some fine meshes at the iteration
     /// limit (docs/decisions/0010-curvature-extrapolation.md).
     #[arg(long, value_name = "ALPHA", allow_hyphen_values = true, value_parser = at_least_one)]
     pub curvature_extrapolation: Option<f64>,
-    /// Extrapolate along negative curvature on every barrier problem, not only the final one:
-    /// solves some meshes whose early barrier problems wander, but moves most solves to other
-    /// local optima (docs/decisions/0010-curvature-extrapolation.md).
+    /// Extrapolate along negative curvature on every barrier problem, not only on those whose
+    /// μ is at most the tolerance: moves most solves to other local optima
+    /// (docs/decisions/0010-curvature-extrapolation.md).
     #[arg(long)]
     pub extrapolate_every_barrier: bool,
+    /// Weight κ of the proximal term δ_w ≥ κ μ that a barrier problem above the tolerance
+    /// carries once it has taken 60 iterations (0 turns it off; default 0.1). Ends the wander
+    /// of a solve along a flat direction, where Newton steps are long and break the
+    /// constraints' linearization (docs/decisions/0011-proximal-stalled-barrier.md).
+    #[arg(long, value_name = "KAPPA", allow_hyphen_values = true, value_parser = nonnegative)]
+    pub proximal_weight: Option<f64>,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with

@@ -467,8 +467,8 @@ fn optimize_kkt_residual_ratio_reaches_the_solver() {
 /// `--curvature-extrapolation` and `--extrapolate-every-barrier` reach the solver: on
 /// `periodic-cot` Radau 3 × 16 from the default guess the early barrier problems meet negative
 /// curvature, so with every barrier problem in scope some full steps are extrapolated
-/// (`counters.extrapolations`), with the default scope (the final barrier problem, where this
-/// solve has positive curvature) fewer, and with `--curvature-extrapolation 1` (off) none
+/// (`counters.extrapolations`), with the default scope (the barrier problems with μ ≤ tol,
+/// where this solve has positive curvature) fewer, and with `--curvature-extrapolation 1` (off) none
 /// whatever the scope; values below 1 are refused by name, and so are both options with
 /// `reach-arm`.
 #[test]
@@ -484,23 +484,31 @@ fn optimize_curvature_extrapolation_reaches_the_solver() {
     assert_eq!(count("extrap-off", &off), 0);
     let off_every = [&off[..], &["--extrapolate-every-barrier"]].concat();
     assert_eq!(count("extrap-off-every", &off_every), 0);
-    for bad in ["0.5", "-2", "nan", "inf"] {
-        let out = run(&[
-            "optimize",
-            "--problem",
-            "periodic-cot",
-            "--curvature-extrapolation",
-            bad,
-        ]);
-        assert!(!out.status.success(), "{bad}");
-        let stderr = String::from_utf8_lossy(&out.stderr);
-        assert!(
-            stderr.contains("--curvature-extrapolation"),
-            "{bad}: {stderr}"
-        );
-    }
+    optimize_refuses_values("--curvature-extrapolation", &["0.5", "-2", "nan", "inf"]);
     reach_arm_refuses("--curvature-extrapolation");
     reach_arm_refuses("--extrapolate-every-barrier");
+}
+
+/// `--proximal-weight` reaches the solver: the direct `periodic-cot` LG-30 solve from the
+/// default guess stalls on a barrier problem above the tolerance for more than 60 iterations,
+/// so by default some iterations carry the proximal term (`counters.proximal_iterations`),
+/// with `--proximal-weight 0` none and the path differs (other iteration counts), both
+/// Solved; negative and non-finite weights are refused by name, and so is the option with
+/// `reach-arm`.
+#[test]
+fn optimize_proximal_weight_reaches_the_solver() {
+    let lg = |tag: &str, extra: &[&str]| {
+        let args = [&["--scheme", "lg"][..], extra].concat();
+        let (stages, c) = direct_cot_run(tag, 30, 600, &args);
+        (stages, c["proximal_iterations"].as_u64().unwrap())
+    };
+    let (on_stages, on) = lg("prox-on", &[]);
+    let (off_stages, off) = lg("prox-off", &["--proximal-weight", "0"]);
+    assert!(on > 0, "{on_stages:?}");
+    assert_eq!(off, 0);
+    assert_ne!(on_stages, off_stages);
+    optimize_refuses_values("--proximal-weight", &["-0.1", "nan", "inf"]);
+    reach_arm_refuses("--proximal-weight");
 }
 
 /// A direct solve stopped by the iteration limit fails (exit status 1) and points to the
@@ -521,6 +529,16 @@ fn an_iteration_limit_hints_at_the_curvature_extrapolation() {
         assert_eq!(stdout.contains(hint), hinted, "{extra:?}: {stdout}");
     }
     std::fs::remove_dir_all(dir).ok();
+}
+
+/// `optimize --problem periodic-cot FLAG VALUE` fails for every value of `bad`, naming `flag`.
+fn optimize_refuses_values(flag: &str, bad: &[&str]) {
+    for value in bad {
+        let out = run(&["optimize", "--problem", "periodic-cot", flag, value]);
+        assert!(!out.status.success(), "{flag} {value}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(flag), "{flag} {value}: {stderr}");
+    }
 }
 
 /// `optimize --problem reach-arm` (one direct Radau solve) refuses the solver option `flag` by

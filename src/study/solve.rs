@@ -32,6 +32,7 @@ pub fn solver_settings(s: &ProblemSettings) -> Settings {
         max_curvature_extrapolation: s
             .curvature_extrapolation
             .unwrap_or(base.max_curvature_extrapolation),
+        proximal_weight: s.proximal_weight.unwrap_or(base.proximal_weight),
         extrapolation_scope: if s.extrapolate_every_barrier {
             ExtrapolationScope::EveryBarrier
         } else {

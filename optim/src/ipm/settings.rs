@@ -41,11 +41,14 @@ pub enum ScalingMethod {
 /// curvature ([`Settings::max_curvature_extrapolation`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 pub enum ExtrapolationScope {
-    /// Only once μ has reached its smallest value, i.e. on the problem the solve is meant to
-    /// answer. Earlier barrier problems are approximate stations on the way, and longer steps
-    /// there move the solve across basins to other local optima (decision record 0010).
+    /// Only on the barrier problems whose solutions are answers: μ at most the optimality
+    /// tolerance (in the scaled units of the barrier rule's floor), so that complementarity
+    /// no longer exceeds it. Earlier barrier problems are approximate stations on the way, and
+    /// longer steps there move the solve across basins to other local optima (decision
+    /// records 0010, 0011).
     #[default]
-    FinalBarrier,
+    #[serde(alias = "FinalBarrier")]
+    Answers,
     /// On every barrier problem (the first version of 0010).
     EveryBarrier,
 }
@@ -197,6 +200,23 @@ pub struct Settings {
     /// Elimination order of the KKT factorization (default: AMD, its rejected factors checked
     /// by 2 × 2 pivot pairs, [`KktOrdering::AmdCheckedByPivotPairs`]).
     pub kkt_ordering: KktOrdering,
+    /// Weight κ_p of the primal proximal regularization δ_w ≥ κ_p μ on a stalled barrier
+    /// problem that is not an answer (default: 0.1; 0 turns it off): one whose μ exceeds the
+    /// optimality tolerance (its complementarity alone exceeds `tol`, in the scaled units of
+    /// the barrier rule's floor) and that has taken [`proximal_after`](Settings::proximal_after)
+    /// iterations without meeting its tolerance κ_ε μ. Along a flat direction of the reduced
+    /// Hessian the Newton step is long (‖∇φ_μ‖ / λ_min), the constraints' linearization fails
+    /// over it, and the solve wanders at one μ for hundreds of iterations (`periodic-cot`
+    /// LG-40); a proximal term that vanishes with μ (regularized interior-point methods:
+    /// Friedlander & Orban 2012; Armand, Benoist & Orban 2013) bounds that step by
+    /// ‖∇φ_μ‖ / (κ_p μ). The barrier problems that decide the answer (μ ≤ tol) never carry
+    /// it, so they keep Newton's fast local convergence (decision record 0011).
+    pub proximal_weight: f64,
+    /// Iterations on one barrier problem after which it counts as stalled and carries the
+    /// proximal term of [`proximal_weight`](Settings::proximal_weight) (default: 60; a barrier
+    /// problem that Newton's method solves takes a few iterations; 0 puts the term on every
+    /// barrier problem above the tolerance).
+    pub proximal_after: usize,
     /// Maximum iterative-refinement steps per solve (default: 10, Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for
     /// when refinement stops earlier. An unpivoted factor with pivot growth refines, but
@@ -272,11 +292,11 @@ pub struct Settings {
     /// and φ_μ keeps decreasing (Moré & Sorensen 1979; Gould, Lucidi, Roma & Toint 2000).
     /// Without it, a solve in a descending valley of negative curvature crawls with steps of
     /// length ‖∇L‖/δ_w. Applies on the barrier problems chosen by
-    /// [`extrapolation_scope`](Settings::extrapolation_scope), by default the final barrier
-    /// problem only (decision record 0010).
+    /// [`extrapolation_scope`](Settings::extrapolation_scope), by default those whose μ is at
+    /// most the tolerance (decision records 0010, 0011).
     pub max_curvature_extrapolation: f64,
-    /// Where the extrapolation along negative curvature acts (default: only on the final
-    /// barrier problem, [`ExtrapolationScope::FinalBarrier`]).
+    /// Where the extrapolation along negative curvature acts (default: on the barrier problems
+    /// whose μ is at most the tolerance, [`ExtrapolationScope::Answers`]).
     pub extrapolation_scope: ExtrapolationScope,
     /// Ipopt's filter reset heuristic: the filter is cleared when, in this many consecutive
     /// iterations, the last trial point rejected before the accepted one had made sufficient
@@ -352,6 +372,8 @@ impl Default for Settings {
             static_dual_regularization_growth: 30.0,
             static_dual_regularization_max: 3e-8,
             kkt_ordering: KktOrdering::AmdCheckedByPivotPairs,
+            proximal_weight: 0.1,
+            proximal_after: 60,
             max_refinement_steps: 10,
             min_refinement_steps: 3,
             refinement_contraction: 0.5,
@@ -368,7 +390,7 @@ impl Default for Settings {
             max_soc: 4,
             kappa_soc: 0.99,
             max_curvature_extrapolation: 16.0,
-            extrapolation_scope: ExtrapolationScope::FinalBarrier,
+            extrapolation_scope: ExtrapolationScope::Answers,
             alpha_red_factor: 0.5,
             filter_reset_trigger: 5,
             max_filter_resets: 5,
@@ -470,6 +492,7 @@ impl Settings {
             self.first_hessian_perturbation,
         )?;
         pos("max_hessian_perturbation", self.max_hessian_perturbation)?;
+        nonneg("proximal_weight", self.proximal_weight)?;
         unit("perturb_dec_fact", self.perturb_dec_fact)?;
         pos("perturb_inc_fact", self.perturb_inc_fact)?;
         pos("perturb_inc_fact_first", self.perturb_inc_fact_first)?;

@@ -79,6 +79,10 @@ pub struct Counters {
     /// (`Settings::max_curvature_extrapolation`).
     #[serde(default)]
     pub extrapolations: usize,
+    /// Iterations whose KKT matrix carried the proximal term of a stalled barrier problem
+    /// (`Settings::proximal_weight`).
+    #[serde(default)]
+    pub proximal_iterations: usize,
     /// Iteration at which the KKT factorization switched from AMD to AMD with 2 × 2 pivot
     /// pairs ([`KktOrdering::AmdThenPivotPairs`](crate::ipm::KktOrdering::AmdThenPivotPairs));
     /// `None`: no switch.

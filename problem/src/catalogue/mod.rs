@@ -191,11 +191,16 @@ pub struct ProblemSettings {
     pub kkt_residual_ratio: bool,
     /// Largest step size of the solver's extrapolation along negative curvature
     /// ([`Settings::max_curvature_extrapolation`]) in every solve of the problem; `None`: the
-    /// solver's default (16, on the final barrier problem; 1 turns it off). Overrides `ipm`.
+    /// solver's default (16, on the barrier problems whose μ is at most the tolerance; 1 turns
+    /// it off). Overrides `ipm`.
     pub curvature_extrapolation: Option<f64>,
-    /// Extrapolate along negative curvature on every barrier problem, not only the final one
+    /// Extrapolate along negative curvature on every barrier problem
     /// ([`bf_optim::ipm::ExtrapolationScope::EveryBarrier`]); overrides `ipm`.
     pub extrapolate_every_barrier: bool,
+    /// Weight of the proximal term on stalled barrier problems above the tolerance
+    /// ([`Settings::proximal_weight`]) in every solve of the problem; `None`: the solver's
+    /// default (0.1; 0 turns it off). Overrides `ipm`.
+    pub proximal_weight: Option<f64>,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where
     /// their fingerprint matches one and are interpreted otherwise (`KernelUse::Prefer`).
@@ -232,6 +237,7 @@ impl Default for ProblemSettings {
             kkt_residual_ratio: false,
             curvature_extrapolation: None,
             extrapolate_every_barrier: false,
+            proximal_weight: None,
             scene: None,
             min_stick: MIN_STICK,
         }

@@ -58,6 +58,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             "--extrapolate-every-barrier",
             args.extrapolate_every_barrier,
         ),
+        ("--proximal-weight", args.proximal_weight.is_some()),
     ] {
         if given {
             bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");

@@ -185,6 +185,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         kkt_residual_ratio: args.kkt_residual_ratio,
         curvature_extrapolation: args.curvature_extrapolation,
         extrapolate_every_barrier: args.extrapolate_every_barrier,
+        proximal_weight: args.proximal_weight,
         ..ProblemSettings::default()
     })
 }

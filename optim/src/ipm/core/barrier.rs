@@ -18,6 +18,12 @@ use crate::ipm::settings::{MuStrategy, Settings};
 pub(super) struct MuRule {
     /// Smallest μ of this run (see [`MuRule::new`]), no larger than the initial μ.
     pub(super) floor: f64,
+    /// The optimality tolerance in scaled units: barrier problems with a larger μ are not
+    /// answers (their complementarity alone exceeds it) and carry the proximal term of
+    /// `Settings::proximal_weight`.
+    pub(super) answer_mu: f64,
+    /// μ of the current barrier problem, and the iteration at which it was set.
+    stage: (f64, usize),
     /// Adaptive μ in its free mode (LOQO rule each iteration).
     pub(super) free_mode: bool,
     /// Recent optimality errors of the free mode's sufficient-progress test.
@@ -39,10 +45,22 @@ impl MuRule {
             floor: (settings.mu_min * obj_scale.min(1.0))
                 .max(scaled_tol / (settings.barrier_tol_factor + 1.0))
                 .min(mu),
+            answer_mu: scaled_tol,
+            stage: (f64::NAN, 0),
             free_mode: settings.mu_strategy == MuStrategy::Adaptive,
             refs: Vec::new(),
             force_decrease: false,
         }
+    }
+
+    /// Iterations spent on the barrier problem of `mu` up to iteration `iter` (0 at the
+    /// iteration where μ took this value; restoration iterations count too, being a sign of
+    /// the same trouble).
+    pub(super) fn stage_iterations(&mut self, mu: f64, iter: usize) -> usize {
+        if mu != self.stage.0 {
+            self.stage = (mu, iter);
+        }
+        iter.saturating_sub(self.stage.1)
     }
 }
 

@@ -3,7 +3,10 @@
 //!
 //! * [`Core::run`]: the outer loop: initial point (W&B Sect. 3.6), optimality error and
 //!   termination ([`termination`]), barrier update ([`barrier`]), search direction with
-//!   inertia correction ([`step`]), filter line search ([`line_search`]), slack safeguard for
+//!   inertia correction ([`step`]; with the proximal term on a barrier problem above the
+//!   tolerance that has stalled, decision record 0011), filter line search ([`line_search`];
+//!   extrapolation along negative curvature on the barrier problems with μ ≤ tol, decision
+//!   record 0010), slack safeguard for
 //!   slacks that underflow (W&B end of Sect. 3.5, [`barrier`]), multiplier update with the
 //!   κ_Σ safeguard (W&B eq. (16)), and feasibility restoration ([`restoration_phase`]);
 //! * [`Ctx`], [`CoreStart`], [`CoreOutput`]: the shared per-solve state, the primal-dual
@@ -129,6 +132,10 @@ pub(crate) struct Core<'p> {
     static_dc: f64,
     diag_x: Vec<f64>,
     delta_w_last: f64,
+    /// Smallest δ_w of this iteration's KKT matrix: the proximal term κ_p μ of
+    /// `Settings::proximal_weight` on a stalled barrier problem whose μ is above the
+    /// tolerance, else 0.
+    proximal: f64,
     /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
     /// factorization per iteration on collocation KKTs whose states carry no curvature).
     skip_zero_trial: bool,
@@ -234,6 +241,7 @@ impl<'p> Core<'p> {
             diag_x: vec![0.0; n],
             delta_w_last: 0.0,
             skip_zero_trial: false,
+            proximal: 0.0,
             delta_w: 0.0,
             delta_c: 0.0,
             delta_c_target: 0.0,
@@ -562,6 +570,7 @@ impl<'p> Core<'p> {
                 Verdict::Stop(status) => return Ok(self.output(ctx, status, false)),
             };
             self.update_mu(settings, &mut mu_rule, &err, e0);
+            let stage_iterations = mu_rule.stage_iterations(self.mu, ctx.iter);
             // search direction
             if !self.eval_hessian(ctx) {
                 return Err(OptimError::NonFinite {
@@ -571,6 +580,19 @@ impl<'p> Core<'p> {
             }
             self.compute_grad_phi();
             self.set_rhs(None);
+            // The proximal term on a stalled barrier problem that is not an answer (decision
+            // record 0011).
+            self.proximal = if self.mu > mu_rule.answer_mu
+                && stage_iterations >= settings.proximal_after
+                && !self.restoration
+            {
+                if settings.proximal_weight > 0.0 {
+                    ctx.counters.proximal_iterations += 1;
+                }
+                settings.proximal_weight * self.mu
+            } else {
+                0.0
+            };
             let step_ok = matches!(self.compute_step(ctx, settings, true), StepResult::Ok);
             let mut restore = false;
             let mut alpha_dual: Option<f64> = None;
@@ -605,10 +627,10 @@ impl<'p> Core<'p> {
                     }
                 } else {
                     tiny_count = 0;
-                    // Extrapolation along negative curvature, by default on the final barrier
-                    // problem only (decision record 0010).
+                    // Extrapolation along negative curvature, by default on the barrier
+                    // problems whose solutions are answers (decision records 0010, 0011).
                     let extrapolate = settings.max_curvature_extrapolation > 1.0
-                        && (self.mu <= mu_rule.floor
+                        && (self.mu <= mu_rule.answer_mu
                             || settings.extrapolation_scope == ExtrapolationScope::EveryBarrier);
                     let outcome = self.line_search(ctx, settings, extrapolate);
                     match outcome {

@@ -5,7 +5,9 @@
 //! * inertia correction (W&B Sect. 3.1, Algorithm IC): the step is accepted when `K` has n
 //!   positive and m negative eigenvalues; otherwise δ_w grows (first `δ_w⁰`, then by κ̄_w⁺ or
 //!   κ_w⁺, starting from κ_w⁻ δ_w_last), and a singular `K` gets `δ_c = δ̄_c μ^κ_c`; a static
-//!   `δ_c` is always on the constraint block and removed again by iterative refinement;
+//!   `δ_c` is always on the constraint block and removed again by iterative refinement; on a
+//!   stalled barrier problem above the tolerance the correction starts from the proximal
+//!   floor `δ_w = κ_p μ` (`Settings::proximal_weight`, decision record 0011);
 //! * the checks of a rejected AMD factor ([`KktOrdering`]): the same matrix re-factored once
 //!   per step with 2 × 2 (variable, constraint row) pivots tells an artefact of AMD's bare
 //!   −δ_c pivots from a genuine need for δ_w; an artefact, or a factor with the right inertia
@@ -220,6 +222,12 @@ impl Core<'_> {
         if use_hessian && self.skip_zero_trial && first_w >= 1e-12 {
             self.delta_w = first_w.max(settings.min_hessian_perturbation);
             self.kkt.shift_diagonal(self.delta_w, 0.0);
+        }
+        // The proximal floor (`Settings::proximal_weight`); the inertia correction below
+        // grows δ_w from it.
+        if use_hessian && self.proximal > self.delta_w {
+            self.kkt.shift_diagonal(self.proximal - self.delta_w, 0.0);
+            self.delta_w = self.proximal;
         }
         ctx.timing.kkt_assembly += t.elapsed();
         let mut singular_handled = false;
