@@ -587,13 +587,14 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
              --kkt-residual-ratio or --dual-regularization 3e-8 (optim/README.md)"
         )?;
     }
-    // An iteration limit on a fine mesh can be a wander of an early barrier problem, which the
-    // extrapolation on every barrier problem ends (decision record 0010).
+    // An iteration limit on a fine mesh can be a wander of an early barrier problem that the
+    // proximal term did not end (decision record 0011); the extrapolation on every barrier
+    // problem takes another path (decision record 0010).
     if sol.status == Status::MaxIterations && !args.extrapolate_every_barrier {
         crate::outln!(
             "hint: the iteration limit stopped the solve; --max-iter raises it, and \
              --extrapolate-every-barrier (steps along negative curvature from the first barrier \
-             problem on, not only on the final one) ends some wanders on fine meshes \
+             problem on, not only once μ ≤ tol) ends some wanders on fine meshes \
              (docs/decisions/0010-curvature-extrapolation.md)"
         )?;
     }
