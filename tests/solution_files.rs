@@ -193,3 +193,23 @@ fn json_floats_read_back_bit_for_bit() {
         assert_eq!(x.to_bits(), y.to_bits(), "{x:e} read back as {y:e}");
     }
 }
+
+/// Solver settings written before session 16 still read: the extrapolation scope that began
+/// at the floor of μ (`FinalBarrier`) reads as today's default scope, and settings without
+/// the proximal term's fields take its defaults, which are what `ProblemSettings` JSON without
+/// `proximal_weight` gives too.
+#[test]
+fn older_solver_settings_still_read() {
+    use bf_optim::ipm::{ExtrapolationScope, Settings};
+    let old: Settings =
+        serde_json::from_str(r#"{"extrapolation_scope": "FinalBarrier", "tol": 1e-7}"#).unwrap();
+    let default = Settings::default();
+    assert_eq!(old.extrapolation_scope, ExtrapolationScope::Answers);
+    assert_eq!(old.tol, 1e-7);
+    assert_eq!(
+        (old.proximal_weight, old.proximal_after),
+        (default.proximal_weight, default.proximal_after)
+    );
+    let ps: bf_problem::ProblemSettings = serde_json::from_str("{}").unwrap();
+    assert_eq!(ps.proximal_weight, None);
+}
