@@ -6,8 +6,8 @@
 //!   inertia correction ([`step`]; with the proximal term on a barrier problem above the
 //!   tolerance that has stalled, decision record 0011), filter line search ([`line_search`];
 //!   extrapolation along negative curvature on the barrier problems with μ ≤ tol, decision
-//!   record 0010), slack safeguard for
-//!   slacks that underflow (W&B end of Sect. 3.5, [`barrier`]), multiplier update with the
+//!   record 0010), slack safeguard for slacks that underflow (W&B end of Sect. 3.5,
+//!   [`barrier`]), multiplier update with the
 //!   κ_Σ safeguard (W&B eq. (16)), and feasibility restoration ([`restoration_phase`]);
 //! * [`Ctx`], [`CoreStart`], [`CoreOutput`]: the shared per-solve state, the primal-dual
 //!   starting point and the result, in internal variables (with the unscaled dual
