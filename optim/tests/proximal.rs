@@ -90,6 +90,6 @@ fn invalid_proximal_weights_are_rejected() {
         let err = solve(&p, &s).unwrap_err().to_string();
         assert!(err.contains("proximal_weight"), "{bad}: {err}");
     }
-    let p = hs::all().into_iter().next().unwrap();
+    // 0 is the documented way to turn the term off, not an invalid weight.
     assert_eq!(solve(&p, &off()).unwrap().status, Status::Solved);
 }

@@ -285,7 +285,8 @@ pub struct Settings {
     /// Backtracking factor (default: 0.5).
     pub alpha_red_factor: f64,
     /// Largest step size α of the extrapolation along negative curvature (default: 16; 1 turns
-    /// it off): when the full step of an iteration whose inertia needed δ_w > 0 is accepted at
+    /// it off): when the full step of an iteration whose inertia needed δ_w > 0 (above the floor
+    /// of [`proximal_weight`](Settings::proximal_weight), where that acts) is accepted at
     /// the first trial and the Lagrangian's curvature `dxᵀ(W + Σ)dx` along it is negative, the
     /// quadratic model decreases without bound along the step, so α is doubled (2, 4, …,
     /// within the fraction-to-boundary rule) while the acceptance test gives the same verdict

@@ -6,8 +6,8 @@
 //!   (W&B Sect. 2.3);
 //! * second-order corrections (W&B Sect. 2.4);
 //! * extrapolation of a full step along negative curvature (α doubled while the acceptance
-//!   test holds and φ_μ decreases; [`Core::extrapolate`], by default only once μ has reached
-//!   its floor; decision record 0010);
+//!   test holds and φ_μ decreases; [`Core::extrapolate`], by default only on the barrier
+//!   problems with μ ≤ tol; decision records 0010, 0011);
 //! * Ipopt's filter reset heuristic ([`Core::note_accept`]);
 //! * Ipopt's "soft restoration" step when the line search fails near feasibility.
 
@@ -281,7 +281,8 @@ impl Core<'_> {
 
     /// Extrapolation along negative curvature (`Settings::max_curvature_extrapolation`):
     /// after the full step (α = 1) was accepted with `verdict` in an iteration whose inertia
-    /// needed δ_w > 0, and the curvature along it is negative, doubles α up to the
+    /// needed δ_w above the proximal floor (a step the proximal term shortened on purpose is
+    /// not extended), and the curvature along it is negative, doubles α up to the
     /// fraction-to-boundary step capped at the setting while the acceptance test gives the same
     /// verdict and φ_μ decreases. The verdict's bookkeeping (filter, reset counter) was done
     /// for α = 1 and depends on the current iterate only, so a longer step changes none of it.
@@ -294,7 +295,7 @@ impl Core<'_> {
         base: Base,
         phi_1: f64,
     ) -> f64 {
-        if self.delta_w <= 0.0 || self.step_curvature() >= 0.0 {
+        if self.delta_w <= self.proximal || self.step_curvature() >= 0.0 {
             return 1.0;
         }
         let cap = self.max_step_primal_upto(&self.dx, settings.max_curvature_extrapolation);

@@ -134,7 +134,8 @@ pub(crate) struct Core<'p> {
     delta_w_last: f64,
     /// Smallest δ_w of this iteration's KKT matrix: the proximal term κ_p μ of
     /// `Settings::proximal_weight` on a stalled barrier problem whose μ is above the
-    /// tolerance, else 0.
+    /// tolerance, else 0. Read by the inertia correction (its starting δ_w) and by the
+    /// extrapolation (which extends only steps whose inertia needed more than this floor).
     proximal: f64,
     /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
     /// factorization per iteration on collocation KKTs whose states carry no curvature).
