@@ -23,6 +23,9 @@ pub mod toys;
 pub mod trajectory;
 pub mod transcription;
 
+/// The expression graph in which node and point functions are written (bf-codegen's), so a
+/// user of this crate builds problems without naming the generator crate.
+pub use bf_codegen::graph::{Graph, Id};
 pub use block::{GraphFn, KernelLookup, KernelUse, NodeKernel, NodeKernelFn, NodeKernelX4, Part};
 pub use estimate::collocation_errors;
 pub use mesh::{HpRule, Mesh, MeshSpec};
