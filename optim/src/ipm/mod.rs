@@ -41,7 +41,9 @@ pub mod ipopt_adapter;
 
 use std::time::Instant;
 
-pub use kkt::{Inertia, KktSolver, LdltBackend, SparseLdlt};
+pub use kkt::{
+    FactorizationFailure, Inertia, KktSolver, LdltBackend, LdltOptions, LdltOrdering, SparseLdlt,
+};
 pub use nlp::{BOUND_INF, DerivativeReport, Nlp, NlpScaling, check_derivatives};
 pub use settings::{ExtrapolationScope, KktOrdering, MuStrategy, ScalingMethod, Settings};
 pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};

@@ -14,6 +14,7 @@
 //!   infeasibility and complementarity of the termination test at the final iterate).
 
 mod barrier;
+mod iteration;
 mod line_search;
 mod restoration_phase;
 mod step;
@@ -22,11 +23,10 @@ mod termination;
 use std::time::Instant;
 
 use self::barrier::MuRule;
-use self::line_search::LsOutcome;
-use self::step::StepResult;
+use self::iteration::{RunState, StepChoice};
 use self::termination::Verdict;
-use super::kkt::{KktPattern, KktSolver, LdltBackend, SparseLdlt};
-use super::settings::{ExtrapolationScope, KktOrdering, Settings};
+use super::kkt::{KktPattern, SparseLdlt};
+use super::settings::Settings;
 use super::solution::{Counters, IterationInfo, Status, Timing};
 use super::stdform::StdProblem;
 use crate::error::OptimError;
@@ -118,7 +118,7 @@ pub(crate) struct Core<'p> {
     // KKT
     kkt: KktPattern,
     solver: SparseLdlt,
-    /// With [`KktOrdering::AmdThenPivotPairs`] before the switch: the solver with AMD and
+    /// With [`KktOrdering::AmdThenPivotPairs`](super::settings::KktOrdering::AmdThenPivotPairs) before the switch: the solver with AMD and
     /// 2 × 2 pivot pairs, analysed when first needed, that re-factors a rejected AMD factor's
     /// matrix; after the switch: the AMD solver (handed back by [`Core::into_kkt_solver`]).
     other_solver: Option<SparseLdlt>,
@@ -433,308 +433,53 @@ impl<'p> Core<'p> {
         }
     }
 
-    /// Runs the algorithm from `start`.
+    /// Runs the algorithm from `start`: W&B's Algorithm A, one outer iteration per pass of
+    /// the loop. Each phase is a method of its own (`iteration.rs`, `step.rs`,
+    /// `line_search.rs`, `barrier.rs`, `termination.rs`, `restoration_phase.rs`).
     pub fn run(
         &mut self,
         ctx: &mut Ctx<'_, '_>,
         start: &CoreStart,
     ) -> Result<CoreOutput, OptimError> {
         let settings = ctx.settings;
-        // Symbolic analysis once per run.
-        {
-            let t = Instant::now();
-            self.solver.constraint_rows_from = match settings.kkt_ordering {
-                KktOrdering::Amd
-                | KktOrdering::AmdThenPivotPairs
-                | KktOrdering::AmdCheckedByPivotPairs => None,
-                KktOrdering::AmdPivotPairs | KktOrdering::ConstraintsAfterVariables => Some(self.n),
-                KktOrdering::ThresholdPivoting => None,
-            };
-            self.solver.backend = match (settings.kkt_ordering, self.solver.backend) {
-                (KktOrdering::ThresholdPivoting, _) => LdltBackend::Multifrontal,
-                (_, LdltBackend::Multifrontal) => LdltBackend::Auto,
-                (_, backend) => backend,
-            };
-            self.check_pairs = matches!(
-                settings.kkt_ordering,
-                KktOrdering::AmdThenPivotPairs | KktOrdering::AmdCheckedByPivotPairs
-            ) && self.m > 0;
-            self.switched_to_pairs = false;
-            self.other_solver = None;
-            self.solver.pivot_pairs = settings.kkt_ordering == KktOrdering::AmdPivotPairs;
-            let mut bounded = vec![false; self.n];
-            for &j in self.lo.iter().chain(&self.up) {
-                bounded[j] = true;
-            }
-            self.solver.preferred_primal = bounded;
-            self.solver.analyse(
-                self.n + self.m,
-                &self.kkt.mat.col_ptr,
-                &self.kkt.mat.row_idx,
-            )?;
-            ctx.timing.factorization += t.elapsed();
-        }
-        // Initial point (W&B Sect. 3.6).
-        let mut x0 = std::mem::take(&mut self.x);
-        self.push_into_bounds(&mut x0, start.bound_push, start.bound_frac);
-        self.x = x0;
-        self.update_slacks();
-        if let Some(z) = &start.z_l {
-            for (k, &j) in self.lo.iter().enumerate() {
-                self.zl[k] = z[j].max(start.mult_floor);
-            }
-        }
-        if let Some(z) = &start.z_u {
-            for (k, &j) in self.up.iter().enumerate() {
-                self.zu[k] = z[j].max(start.mult_floor);
-            }
-        }
-        let (f, ok) = self.eval_fc(ctx, false);
-        self.f = f;
-        if !ok {
-            return Err(OptimError::NonFinite {
-                iter: ctx.iter,
-                what: "objective or constraints at the initial point",
-            });
-        }
-        if !self.eval_derivs(ctx) {
-            return Err(OptimError::NonFinite {
-                iter: ctx.iter,
-                what: "gradient or Jacobian at the initial point",
-            });
-        }
-        match &start.y {
-            Some(y) => self.y.copy_from_slice(y),
-            None => self.least_squares_y(ctx, settings),
-        }
-        let theta0 = norm_1(&self.c);
-        self.theta_max = 1e4 * theta0.max(1.0);
-        self.theta_min = 1e-4 * theta0.max(1.0);
+        self.analyse_kkt(ctx)?;
+        self.initialize(ctx, start)?;
         let mut mu_rule = MuRule::new(settings, self.mu, self.prob.scales().0);
-        let mut acceptable_count = 0usize;
-        let mut last = IterationInfo {
-            iter: ctx.iter,
-            restoration: self.restoration,
-            objective: 0.0,
-            inf_pr: 0.0,
-            inf_du: 0.0,
-            dual_infeasibility: 0.0,
-            complementarity: 0.0,
-            mu: self.mu,
-            step_norm: 0.0,
-            delta_w: 0.0,
-            alpha_du: 0.0,
-            alpha_pr: 0.0,
-            ls_trials: 0,
-        };
-        let mut tiny_count = 0usize;
-        let mut soft_count = 0usize;
-        let mut lines = 0usize;
+        let mut run = RunState::new(ctx.iter, self.restoration, self.mu);
         loop {
+            // Optimality error E_0 (W&B eq. (5)), log and callback, termination tests.
             self.compute_jty();
             let err = self.errors(settings);
             let e0 = err.e(err.compl0);
-            // log + callback
-            let (os, _) = self.prob.scales();
-            last.iter = ctx.iter;
-            last.objective = self.f / os;
-            last.inf_pr = err.primal_inf;
-            last.inf_du = err.dual_inf;
-            (last.dual_infeasibility, _, last.complementarity) = self.unscaled(&err);
-            last.mu = self.mu;
-            if lines.is_multiple_of(10) {
-                self.log_header(settings);
+            if let Some((status, early)) = self.report(ctx, &err, e0, &mut run) {
+                return Ok(self.output(ctx, status, early));
             }
-            lines += 1;
-            self.log(settings, &last);
-            if let Some(cb) = ctx.callback.as_mut()
-                && !cb(&last)
-            {
-                return Ok(self.output(ctx, Status::UserStop, false));
-            }
-            if self.restoration && self.prob.early_stop(&self.x) {
-                return Ok(self.output(ctx, Status::Solved, true));
-            }
-            if settings.print_level > 2 {
-                let (du_u, pr_u, co_u) = self.unscaled(&err);
-                println!(
-                    "    E0 {e0:.2e}: dual {:.2e} (s_d {:.2e}), primal {:.2e}, compl {:.2e} (s_c {:.2e}); unscaled dual {du_u:.2e}, primal {pr_u:.2e}, compl {co_u:.2e}; acceptable {acceptable_count}",
-                    err.dual_inf / err.s_d,
-                    err.s_d,
-                    err.primal_inf,
-                    err.compl0 / err.s_c,
-                    err.s_c,
-                );
-            }
-            let pr_u = match self.termination(ctx, &err, e0, &mut acceptable_count) {
+            let pr_u = match self.termination(ctx, &err, e0, &mut run.acceptable_count) {
                 Verdict::Continue { pr_u } => pr_u,
                 Verdict::Stop(status) => return Ok(self.output(ctx, status, false)),
             };
+            // Barrier parameter (W&B eq. (7), or the adaptive rule).
             self.update_mu(settings, &mut mu_rule, &err, e0);
-            let stage_iterations = mu_rule.stage_iterations(self.mu, ctx.iter);
-            // search direction
-            if !self.eval_hessian(ctx) {
-                return Err(OptimError::NonFinite {
-                    iter: ctx.iter,
-                    what: "Hessian",
-                });
-            }
-            self.compute_grad_phi();
-            self.set_rhs(None);
-            // The proximal term on a stalled barrier problem that is not an answer (decision
-            // record 0011).
-            self.proximal = if self.mu > mu_rule.answer_mu
-                && stage_iterations >= settings.proximal_after
-                && !self.restoration
-            {
-                if settings.proximal_weight > 0.0 {
-                    ctx.counters.proximal_iterations += 1;
-                }
-                settings.proximal_weight * self.mu
+            // Search direction: the KKT system with inertia correction (Algorithm IC).
+            let step_ok = self.search_direction(ctx, &mut mu_rule)?;
+            // Step size: tiny steps, filter line search, soft restoration (W&B Sect. 3.3–3.9).
+            let step = if step_ok {
+                self.find_step(ctx, &err, &mut mu_rule, &mut run)
             } else {
-                0.0
+                StepChoice::Recover
             };
-            let step_ok = matches!(self.compute_step(ctx, settings, true), StepResult::Ok);
-            let mut restore = false;
-            let mut alpha_dual: Option<f64> = None;
-            let mut accepted_alpha = 0.0;
-            let mut trials = 0;
-            if step_ok {
-                self.unpack_step();
-                // tiny step (W&B Sect. 3.9)
-                let tiny = self
-                    .dx
-                    .iter()
-                    .zip(&self.x)
-                    .all(|(d, x)| d.abs() / (1.0 + x.abs()) < 10.0 * f64::EPSILON)
-                    && err.primal_inf <= settings.constr_viol_tol;
-                if tiny {
-                    tiny_count += 1;
-                    if tiny_count >= 2 && self.mu <= mu_rule.floor {
-                        return Ok(self.output(ctx, Status::SearchDirectionTooSmall, false));
-                    }
-                    mu_rule.force_decrease = true;
-                    let amax = self.max_step_primal(&self.dx);
-                    for j in 0..self.n {
-                        self.x_t[j] = self.x[j] + amax * self.dx[j];
-                    }
-                    let (f_t, ok) = self.eval_fc(ctx, true);
-                    if ok {
-                        self.f_t = f_t;
-                        accepted_alpha = amax;
-                        trials = 1;
-                    } else {
-                        restore = true;
-                    }
-                } else {
-                    tiny_count = 0;
-                    // Extrapolation along negative curvature, by default on the barrier
-                    // problems whose solutions are answers (decision records 0010, 0011).
-                    let extrapolate = settings.max_curvature_extrapolation > 1.0
-                        && (self.mu <= mu_rule.answer_mu
-                            || settings.extrapolation_scope == ExtrapolationScope::EveryBarrier);
-                    let outcome = self.line_search(ctx, settings, extrapolate);
-                    match outcome {
-                        LsOutcome::Accepted { alpha, trials: tr } => {
-                            accepted_alpha = alpha;
-                            trials = tr;
-                            soft_count = 0;
-                        }
-                        LsOutcome::Failed => {
-                            let e_mu = err.e(self.compl_mu(self.mu));
-                            match self.soft_restoration_step(ctx, settings, e_mu) {
-                                Some(a) if soft_count < 10 => {
-                                    accepted_alpha = a;
-                                    alpha_dual = Some(a);
-                                    soft_count += 1;
-                                }
-                                _ => restore = true,
-                            }
-                        }
+            match step {
+                StepChoice::Take(taken) => self.accept_step(ctx, taken, &mut run)?,
+                StepChoice::Stop(status) => return Ok(self.output(ctx, status, false)),
+                // No acceptable step: the monotone fallback or the restoration phase.
+                StepChoice::Recover => {
+                    if let Some(status) =
+                        self.recover(ctx, step_ok, e0, pr_u, &mut mu_rule, &mut run)?
+                    {
+                        return Ok(self.output(ctx, status, false));
                     }
                 }
-            } else {
-                restore = true;
             }
-            if restore {
-                if mu_rule.free_mode {
-                    // Adaptive μ: fall back to the monotone (fixed) mode before restoration.
-                    mu_rule.free_mode = false;
-                    if let Some((avg, _)) = self.avg_compl() {
-                        self.mu = (0.8 * avg).max(mu_rule.floor);
-                        self.tau = settings.tau_min.max(1.0 - self.mu);
-                    }
-                    self.reset_filter();
-                    continue;
-                }
-                if self.restoration || !settings.restoration {
-                    let st = if step_ok {
-                        Status::RestorationFailed
-                    } else {
-                        Status::ErrorInStepComputation
-                    };
-                    return Ok(self.output(ctx, st, false));
-                }
-                if e0 <= settings.acceptable_tol && pr_u <= settings.acceptable_constr_viol_tol {
-                    return Ok(self.output(ctx, Status::Acceptable, false));
-                }
-                match self.restoration_phase(ctx, settings)? {
-                    None => {}
-                    Some(st) => return Ok(self.output(ctx, st, false)),
-                }
-                last.restoration = false;
-                last.step_norm = 0.0;
-                last.alpha_du = 0.0;
-                last.alpha_pr = 0.0;
-                last.ls_trials = 0;
-                last.delta_w = 0.0;
-                continue;
-            }
-            // accept the step
-            let alpha_z = alpha_dual.unwrap_or_else(|| self.max_step_dual());
-            std::mem::swap(&mut self.x, &mut self.x_t);
-            std::mem::swap(&mut self.c, &mut self.c_t);
-            self.f = self.f_t;
-            // Slacks before the multipliers move: an underflowed slack takes μ / z with the z
-            // the trial point was judged with (as Ipopt's trial slacks).
-            self.update_slacks();
-            // `y + dy` is the Newton estimate of the multipliers: a primal step extrapolated
-            // beyond α = 1 along negative curvature does not extend it.
-            for i in 0..self.m {
-                self.y[i] += accepted_alpha.min(1.0) * self.dy[i];
-            }
-            for k in 0..self.zl.len() {
-                self.zl[k] += alpha_z * self.dzl[k];
-            }
-            for k in 0..self.zu.len() {
-                self.zu[k] += alpha_z * self.dzu[k];
-            }
-            // κ_Σ safeguard (W&B eq. (16))
-            let ks = settings.kappa_sigma;
-            let mu = self.mu;
-            for k in 0..self.zl.len() {
-                let s = self.sl[k];
-                self.zl[k] = self.zl[k].min(ks * mu / s).max(mu / (ks * s));
-            }
-            for k in 0..self.zu.len() {
-                let s = self.su[k];
-                self.zu[k] = self.zu[k].min(ks * mu / s).max(mu / (ks * s));
-            }
-            if !self.eval_derivs(ctx) {
-                return Err(OptimError::NonFinite {
-                    iter: ctx.iter,
-                    what: "gradient or Jacobian",
-                });
-            }
-            ctx.iter += 1;
-            if self.restoration {
-                ctx.counters.restoration_iterations += 1;
-            }
-            last.step_norm = norm_inf(&self.dx) * accepted_alpha;
-            last.delta_w = self.delta_w;
-            last.alpha_du = alpha_z;
-            last.alpha_pr = accepted_alpha;
-            last.ls_trials = trials;
         }
     }
 }

@@ -23,7 +23,9 @@
 use std::time::Instant;
 
 use super::{Core, Ctx, norm_inf};
-use crate::ipm::kkt::{Inertia, KktSolver, SparseLdlt};
+use crate::ipm::kkt::{
+    FactorizationFailure, Inertia, KktSolver, LdltOptions, LdltOrdering, SparseLdlt,
+};
 use crate::ipm::settings::{KktOrdering, Settings};
 
 /// The residual ratio of a KKT solve, `‖K sol − rhs‖ / (‖sol‖ + ‖rhs‖)` (∞-norms): a
@@ -54,7 +56,10 @@ pub(super) enum StepResult {
 }
 
 impl Core<'_> {
-    pub(super) fn factor_current(&mut self, ctx: &mut Ctx<'_, '_>) -> Option<Inertia> {
+    pub(super) fn factor_current(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+    ) -> Result<Inertia, FactorizationFailure> {
         let t = Instant::now();
         let r = self.solver.factor(&self.kkt.mat.values);
         ctx.counters.factorizations += 1;
@@ -77,7 +82,10 @@ impl Core<'_> {
         let t = Instant::now();
         let nm = self.n + self.m;
         self.sol.copy_from_slice(&self.rhs);
-        self.solver.solve(&mut self.sol);
+        if self.solver.solve(&mut self.sol).is_err() {
+            ctx.timing.solve += t.elapsed();
+            return f64::INFINITY;
+        }
         let bnorm = norm_inf(&self.rhs);
         let mut best = f64::INFINITY;
         let mut by_backward_error = false;
@@ -155,7 +163,8 @@ impl Core<'_> {
                 previous = Some((rel, rn, by_backward_error));
                 ctx.counters.refinement_steps += 1;
                 self.corr.copy_from_slice(&self.resid);
-                self.solver.solve(&mut self.corr);
+                // The factor that solved `sol` above solves the correction too.
+                let _ = self.solver.solve(&mut self.corr);
                 if step >= settings.min_refinement_steps {
                     // This correction may be undone (above): keep the solution bit for bit.
                     self.sol_before.copy_from_slice(&self.sol);
@@ -175,7 +184,7 @@ impl Core<'_> {
             // Refinement against the unregularized matrix did not converge (rank-deficient J):
             // accept the step of the regularized system instead.
             self.sol.copy_from_slice(&self.rhs);
-            self.solver.solve(&mut self.sol);
+            let _ = self.solver.solve(&mut self.sol);
         }
         if by_backward_error && best <= ACCURATE_SOLVE {
             ctx.counters.backward_error_accepts += 1;
@@ -235,11 +244,10 @@ impl Core<'_> {
         let mut inaccurate = false;
         let mut raised_c = false;
         loop {
-            let mut inertia = self.factor_current(ctx);
-            let good = match inertia {
-                Some(i) => i.positive == self.n && i.negative == self.m,
-                None => false,
-            };
+            let inertia = self.factor_current(ctx);
+            let good = matches!(inertia, Ok(i) if i.positive == self.n && i.negative == self.m);
+            // No usable factor, or (below) one that cannot solve its own matrix.
+            let mut singular = inertia.is_err();
             if settings.print_level > 2 {
                 println!(
                     "    KKT: delta_w {:.2e} delta_c {:.2e} inertia {:?} (want {}+, {}-)",
@@ -258,7 +266,7 @@ impl Core<'_> {
                 // Right inertia but refinement cannot reach the exact system: the matrix is
                 // (numerically) singular and static pivoting hid it, or the unpivoted factor
                 // is unstable.
-                inertia = None;
+                singular = true;
                 inaccurate = true;
             }
             // A rejected AMD factor may be an artefact of its bare −δ_c pivots rather than a
@@ -322,7 +330,7 @@ impl Core<'_> {
             }
             let old_w = self.delta_w;
             let old_c = self.delta_c;
-            if inertia.is_none() && !singular_handled && self.m > 0 {
+            if singular && !singular_handled && self.m > 0 {
                 singular_handled = true;
                 let dc = settings.jacobian_regularization_value
                     * self.mu.powf(settings.jacobian_regularization_exponent);
@@ -382,11 +390,12 @@ impl Core<'_> {
     ) -> bool {
         if self.other_solver.is_none() {
             let t = Instant::now();
-            let mut pairs = SparseLdlt::with_backend(self.solver.backend);
-            pairs.pivot_epsilon = self.solver.pivot_epsilon;
-            pairs.pivot_delta = self.solver.pivot_delta;
-            pairs.constraint_rows_from = Some(self.n);
-            pairs.pivot_pairs = true;
+            let mut pairs = SparseLdlt::with_options(LdltOptions {
+                ordering: LdltOrdering::AmdPivotPairs {
+                    constraint_rows_from: self.n,
+                },
+                ..self.solver.options().clone()
+            });
             let analysed = pairs
                 .analyse(
                     self.n + self.m,
@@ -406,7 +415,7 @@ impl Core<'_> {
         };
         std::mem::swap(&mut self.solver, pairs);
         let inertia = self.factor_current(ctx);
-        let good = matches!(inertia, Some(i) if i.positive == self.n && i.negative == self.m);
+        let good = matches!(inertia, Ok(i) if i.positive == self.n && i.negative == self.m);
         let res = if good {
             self.solve_refined(ctx, settings)
         } else {
@@ -476,7 +485,7 @@ impl Core<'_> {
         self.delta_c = settings.static_dual_regularization;
         self.delta_c_target = 0.0;
         let inertia = self.factor_current(ctx);
-        let ok = matches!(inertia, Some(i) if i.positive == self.n && i.negative == self.m);
+        let ok = matches!(inertia, Ok(i) if i.positive == self.n && i.negative == self.m);
         if !ok {
             self.y.iter_mut().for_each(|v| *v = 0.0);
             return;

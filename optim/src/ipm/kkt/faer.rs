@@ -17,7 +17,7 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side, Spec};
 
-use super::{Inertia, LdltBackend};
+use super::Inertia;
 use crate::error::{FactorizationError, OptimError};
 
 /// faer's symbolic analysis of one lower-triangle pattern, its value storage for `L` (faer's
@@ -28,13 +28,6 @@ pub(super) struct FaerFactor {
     mem: MemBuffer,
     pub(super) col_ptr: Vec<usize>,
     pub(super) row_idx: Vec<usize>,
-    /// The `constraint_rows_from`, `preferred_primal` and `pivot_pairs` of the analysis.
-    pub(super) constraint_rows_from: Option<usize>,
-    pub(super) preferred: Vec<bool>,
-    pub(super) pivot_pairs: bool,
-    /// The backend and the multifrontal amalgamation of the analysis.
-    pub(super) backend: LdltBackend,
-    pub(super) amalgamation: usize,
 }
 
 impl FaerFactor {
@@ -85,11 +78,6 @@ impl FaerFactor {
             mem,
             col_ptr: col_ptr.to_vec(),
             row_idx: row_idx.to_vec(),
-            constraint_rows_from: None,
-            preferred: Vec::new(),
-            pivot_pairs: false,
-            backend: LdltBackend::Auto,
-            amalgamation: 0,
         })
     }
 
@@ -193,11 +181,9 @@ impl FaerFactor {
         if res.is_err() {
             return None;
         }
-        let inertia = self.inertia();
-        if inertia.zero > 0 {
-            return None;
-        }
-        Some(inertia)
+        // Zero pivots are judged by the caller (`SparseLdlt::factor_numeric`), as for the
+        // other kernels.
+        Some(self.inertia())
     }
 
     /// faer's triangular solves with the last factor in `l_values`.

@@ -9,8 +9,13 @@
 //! when `K` has exactly n positive and m negative eigenvalues) and solves with it.
 //!
 //! * [`pattern`]: [`KktPattern`], the lower-triangle CSC pattern of `K` and its assembly.
-//! * [`KktSolver`]: the factor/solve interface the IPM uses (symbolic analysis once per
-//!   pattern, numeric refactorization per iteration, inertia of the factor).
+//! * [`KktSolver`]: the factor/solve interface the IPM uses, in typed phases: symbolic
+//!   analysis once per pattern, numeric refactorization per iteration returning the inertia
+//!   of the factor or a [`FactorizationFailure`] that says why there is none, solves that
+//!   refuse without a current factor.
+//! * [`LdltOptions`]: what a [`SparseLdlt`] is (backend, [`LdltOrdering`], static pivoting,
+//!   pivot threshold, amalgamation), fixed at construction, so an analysis can never belong
+//!   to other options than the solver's; defaults as constants (`DEFAULT_*`).
 //! * [`SparseLdlt`]: the implementation, an LDLᵀ `P K Pᵀ = L D Lᵀ` with a fill-reducing
 //!   symmetric permutation `P` from faer 0.24's AMD, and `D` with 1 × 1 pivots and, where the
 //!   order asks for them, 2 × 2 pivots on (variable, constraint row) pairs; the inertia is
@@ -101,11 +106,45 @@ impl LowerCsc {
     }
 }
 
-/// Interface of a sparse symmetric indefinite solver for the KKT matrix.
+/// Why a numeric factorization produced no usable factor (data, so a caller can tell a
+/// singular matrix from a misuse).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FactorizationFailure {
+    /// No symbolic analysis yet: [`KktSolver::analyse`] must come first.
+    NotAnalysed,
+    /// The values hold a non-finite entry (at this index of the pattern's values).
+    NonFiniteValue {
+        /// Index into the values array.
+        index: usize,
+    },
+    /// A pivot was exactly zero or non-finite and could not be replaced (static pivoting off,
+    /// or a 2 × 2 pivot block that is singular): the matrix is singular to working precision.
+    SingularPivot,
+    /// The factor exists but has this many zero pivots, so its inertia has zero eigenvalues
+    /// and it cannot be solved with.
+    ZeroPivots {
+        /// Number of zero pivots.
+        count: usize,
+    },
+}
+
+impl std::fmt::Display for FactorizationFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::NotAnalysed => write!(f, "no symbolic analysis before the factorization"),
+            Self::NonFiniteValue { index } => write!(f, "non-finite matrix entry at value {index}"),
+            Self::SingularPivot => write!(f, "a zero or non-finite pivot (singular matrix)"),
+            Self::ZeroPivots { count } => write!(f, "{count} zero pivots"),
+        }
+    }
+}
+
+/// Interface of a sparse symmetric indefinite solver for the KKT matrix, in three typed phases.
 ///
-/// Call order: [`analyse`](KktSolver::analyse) once per sparsity pattern, then any number of
-/// [`factor`](KktSolver::factor) (same pattern, new values) each followed by any number of
-/// [`solve`](KktSolver::solve).
+/// Call order: [`analyse`](KktSolver::analyse) once per sparsity pattern (the symbolic
+/// phase: ordering, elimination tree, storage), then any number of
+/// [`factor`](KktSolver::factor) (same pattern, new values: the numeric phase), each
+/// followed by any number of [`solve`](KktSolver::solve).
 pub trait KktSolver {
     /// Symbolic analysis (ordering, elimination tree, storage) of the lower-triangle pattern.
     fn analyse(
@@ -114,13 +153,108 @@ pub trait KktSolver {
         col_ptr: &[usize],
         row_idx: &[usize],
     ) -> Result<(), OptimError>;
-    /// Numeric factorization of the matrix with the analysed pattern and these values.
-    ///
-    /// Returns the inertia of the computed factor, or `None` when a pivot was exactly zero or
-    /// non-finite (the matrix is treated as singular and the factor is unusable).
-    fn factor(&mut self, values: &[f64]) -> Option<Inertia>;
-    /// Solves `K x = rhs` in place with the last successful factorization.
-    fn solve(&mut self, rhs: &mut [f64]);
+    /// Numeric factorization of the matrix with the analysed pattern and these values: the
+    /// inertia of the computed factor, or why there is no usable factor.
+    fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure>;
+    /// Solves `K x = rhs` in place with the last factorization; fails (leaving `rhs` as it
+    /// was) when that factorization failed or none was made.
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), FactorizationFailure>;
+}
+
+/// The elimination order of a [`SparseLdlt`] (module docs, "ordering").
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum LdltOrdering {
+    /// faer's AMD on the whole KKT pattern.
+    #[default]
+    Amd,
+    /// AMD on the graph of (variable, constraint row) pairs, each constraint row eliminated
+    /// right after a primal neighbour (1 × 1 pivots). With
+    /// [`LdltBackend::Multifrontal`] the kernel starts from the order of
+    /// [`AmdPivotPairs`](LdltOrdering::AmdPivotPairs) instead and pivots numerically.
+    PairedAmd {
+        /// Index of the first constraint row (the primal dimension n).
+        constraint_rows_from: usize,
+        /// Primal variables preferred as the variable a row follows (e.g. those with a bound,
+        /// whose pivot carries the barrier term Σ > 0); empty: none preferred.
+        preferred_primal: Vec<bool>,
+    },
+    /// AMD's order, except that each constraint row AMD places before all its primal
+    /// neighbours is delayed to the first of them and eliminated with it in a 2 × 2 pivot
+    /// (supernodal kernel).
+    AmdPivotPairs {
+        /// Index of the first constraint row (the primal dimension n).
+        constraint_rows_from: usize,
+    },
+}
+
+impl LdltOrdering {
+    /// The first constraint row, for the orders that pair rows with variables.
+    pub fn constraint_rows_from(&self) -> Option<usize> {
+        match self {
+            Self::Amd => None,
+            Self::PairedAmd {
+                constraint_rows_from,
+                ..
+            }
+            | Self::AmdPivotPairs {
+                constraint_rows_from,
+            } => Some(*constraint_rows_from),
+        }
+    }
+}
+
+/// Default of [`LdltOptions::pivot_epsilon`].
+pub const DEFAULT_PIVOT_EPSILON: f64 = 1e-14;
+/// Default of [`LdltOptions::pivot_delta`].
+pub const DEFAULT_PIVOT_DELTA: f64 = 1e-4;
+/// Default of [`LdltOptions::pivot_threshold`] (IPOPT's `ma57_pivtol`).
+pub const DEFAULT_PIVOT_THRESHOLD: f64 = 1e-8;
+/// Default of [`LdltOptions::amalgamation`].
+pub const DEFAULT_AMALGAMATION: usize = 16;
+
+/// What a [`SparseLdlt`] is: fixed when it is made ([`SparseLdlt::with_options`]), so a
+/// symbolic analysis always belongs to the options it was made with.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LdltOptions {
+    /// Numeric algorithm (default: [`LdltBackend::Auto`]).
+    pub backend: LdltBackend,
+    /// Elimination order (default: [`LdltOrdering::Amd`]).
+    pub ordering: LdltOrdering,
+    /// Static pivoting: pivots with |d| ≤ `pivot_epsilon` are replaced by `±pivot_delta`
+    /// (absolute values; sign kept, zero → +; not relative to max|K_ij|, which the barrier
+    /// terms Σ make as large as 1e10). Structurally zero diagonals (states without cost in
+    /// collocation NLPs) otherwise stop the unpivoted LDLᵀ when the ordering eliminates them
+    /// first; the caller refines against the exact matrix. 0 disables (exact zero pivots then
+    /// report a singular matrix). Default [`DEFAULT_PIVOT_EPSILON`].
+    pub pivot_epsilon: f64,
+    /// Replacement magnitude for tiny pivots (see `pivot_epsilon`). Default
+    /// [`DEFAULT_PIVOT_DELTA`].
+    pub pivot_delta: f64,
+    /// Threshold `u` of the pivot test of [`LdltBackend::Multifrontal`] (a 1 × 1 pivot must be
+    /// at least `u` times the largest other entry of its column; 2 × 2 pivots alike), clamped
+    /// to (0, 0.5]; default [`DEFAULT_PIVOT_THRESHOLD`] (MA57's own 0.01 and 1e-4 delay so many
+    /// pivots of the collocation KKTs that the fill triples, BENCHMARKS.md). With it a −δ_c
+    /// pivot of δ_c = 1e-9 fails beside entries above 0.1, and a (variable, row) pair with
+    /// `|B⁻¹| ≈ Σ/(Σ δ_c + a²)` fails for Σ = 1e10 beside entries above 0.1 as well; larger
+    /// growth than that is left to iterative refinement.
+    pub pivot_threshold: f64,
+    /// Amalgamation of [`LdltBackend::Multifrontal`]: a supernode and its parent are merged
+    /// into one front while both have fewer than this many columns (MA57's `nemin`; 1: the
+    /// fundamental supernodes only). Default [`DEFAULT_AMALGAMATION`].
+    pub amalgamation: usize,
+}
+
+impl Default for LdltOptions {
+    fn default() -> Self {
+        Self {
+            backend: LdltBackend::Auto,
+            ordering: LdltOrdering::Amd,
+            pivot_epsilon: DEFAULT_PIVOT_EPSILON,
+            pivot_delta: DEFAULT_PIVOT_DELTA,
+            pivot_threshold: DEFAULT_PIVOT_THRESHOLD,
+            amalgamation: DEFAULT_AMALGAMATION,
+        }
+    }
 }
 
 /// Numeric LDLᵀ algorithm of a [`SparseLdlt`]. All backends use the same ordering, pivot rule
@@ -160,57 +294,22 @@ enum Kernel {
     Multifrontal(Box<MultifrontalPlan>),
 }
 
-/// Sparse LDLᵀ of the KKT matrix behind [`KktSolver`] (module docs): symbolic analysis once
-/// per pattern, numeric refactorization per call with the chosen [`LdltBackend`], workspaces
-/// allocated at analysis time.
+/// Sparse LDLᵀ of the KKT matrix behind [`KktSolver`] (module docs): its [`LdltOptions`]
+/// fixed at construction, the symbolic analysis once per pattern, a numeric refactorization
+/// per call with the chosen [`LdltBackend`], workspaces allocated at analysis time.
 pub struct SparseLdlt {
-    /// Numeric algorithm (default: [`LdltBackend::Auto`]); takes effect at the next analysis
-    /// of a new pattern.
-    pub backend: LdltBackend,
-    /// Static pivoting: pivots with |d| ≤ `pivot_epsilon` are replaced by `±pivot_delta`
-    /// (absolute values; sign kept, zero → +; not relative to max|K_ij|, which the barrier
-    /// terms Σ make as large as 1e10). Structurally zero diagonals (states without cost in
-    /// collocation NLPs) otherwise stop the unpivoted LDLᵀ when the ordering eliminates them
-    /// first; the caller refines against the exact matrix. 0 disables (exact zero pivots then
-    /// report a singular matrix).
-    pub pivot_epsilon: f64,
-    /// Replacement magnitude for tiny pivots (see `pivot_epsilon`).
-    pub pivot_delta: f64,
-    /// Index of the first constraint row of the KKT matrix (the primal dimension n). When set,
-    /// the order pairs each constraint row with a primal neighbour eliminated just before it
-    /// (module docs); `None`: plain AMD. Takes effect at the next analysis of a new pattern.
-    pub constraint_rows_from: Option<usize>,
-    /// Primal variables preferred as the variable a constraint row follows (e.g. those with a
-    /// bound, whose pivot carries the barrier term Σ > 0); empty: none preferred.
-    pub preferred_primal: Vec<bool>,
-    /// With `constraint_rows_from` set: `true` keeps AMD's order except that each constraint
-    /// row AMD places before all its primal neighbours is delayed to the first of them and
-    /// eliminated with it in a 2 × 2 pivot (supernodal kernel, module docs); `false` orders
-    /// the graph of (variable, row) pairs by AMD instead (1 × 1 pivots).
-    pub pivot_pairs: bool,
-    /// Threshold `u` of the pivot test of [`LdltBackend::Multifrontal`] (a 1 × 1 pivot must be
-    /// at least `u` times the largest other entry of its column; 2 × 2 pivots alike); in
-    /// (0, 0.5], default 1e-8 (IPOPT's `ma57_pivtol`; MA57's own 0.01 and 1e-4 delay so many
-    /// pivots of the collocation KKTs that the fill triples, BENCHMARKS.md). With it a −δ_c
-    /// pivot of δ_c = 1e-9 fails beside entries above 0.1, and a (variable, row) pair with
-    /// `|B⁻¹| ≈ Σ/(Σ δ_c + a²)` fails for Σ = 1e10 beside entries above 0.1 as well; larger
-    /// growth than that is left to iterative refinement. Takes effect at the next
-    /// factorization.
-    pub pivot_threshold: f64,
-    /// Amalgamation of [`LdltBackend::Multifrontal`]: a supernode and its parent are merged
-    /// into one front while both have fewer than this many columns (MA57's `nemin`; 1: the
-    /// fundamental supernodes only). Default 16. Takes effect at the next analysis.
-    pub amalgamation: usize,
+    options: LdltOptions,
     has_pairs: bool,
     faer: Option<FaerFactor>,
     kernel: Kernel,
-    factored: bool,
+    /// The last numeric factorization's outcome: a solve needs `Ok`.
+    last: Result<Inertia, FactorizationFailure>,
 }
 
 impl std::fmt::Debug for SparseLdlt {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("SparseLdlt")
-            .field("backend", &self.backend)
+            .field("options", &self.options)
             .field(
                 "dim",
                 &self.faer.as_ref().map_or(0, |a| a.col_ptr.len() - 1),
@@ -229,27 +328,33 @@ impl Default for SparseLdlt {
 }
 
 impl SparseLdlt {
-    /// A solver with the [`LdltBackend::Auto`] backend.
+    /// A solver with the default [`LdltOptions`].
     pub fn new() -> Self {
-        Self::with_backend(LdltBackend::Auto)
+        Self::with_options(LdltOptions::default())
     }
 
-    /// A solver with the given backend and the default static pivoting.
+    /// A solver with the given backend and the other options at their defaults.
     pub fn with_backend(backend: LdltBackend) -> Self {
-        Self {
+        Self::with_options(LdltOptions {
             backend,
-            pivot_epsilon: 1e-14,
-            pivot_delta: 1e-4,
-            constraint_rows_from: None,
-            preferred_primal: Vec::new(),
-            pivot_pairs: false,
-            pivot_threshold: 1e-8,
-            amalgamation: 16,
+            ..LdltOptions::default()
+        })
+    }
+
+    /// A solver with these options (fixed for its life).
+    pub fn with_options(options: LdltOptions) -> Self {
+        Self {
+            options,
             has_pairs: false,
             faer: None,
             kernel: Kernel::Faer,
-            factored: false,
+            last: Err(FactorizationFailure::NotAnalysed),
         }
+    }
+
+    /// The options the solver was made with.
+    pub fn options(&self) -> &LdltOptions {
+        &self.options
     }
 
     /// Whether faer's symbolic analysis is the supernodal one (only with
@@ -302,71 +407,70 @@ impl KktSolver for SparseLdlt {
         col_ptr: &[usize],
         row_idx: &[usize],
     ) -> Result<(), OptimError> {
+        self.last = Err(FactorizationFailure::NotAnalysed);
         // Same pattern as the last analysis (repeated solves of one NLP structure): keep the
-        // symbolic factorization and the workspace.
+        // symbolic factorization and the workspace (the options cannot have changed).
         if let Some(a) = &self.faer
             && a.col_ptr == col_ptr
             && a.row_idx == row_idx
-            && a.constraint_rows_from == self.constraint_rows_from
-            && a.preferred == self.preferred_primal
-            && a.pivot_pairs == self.pivot_pairs
-            && a.backend == self.backend
-            && a.amalgamation == self.amalgamation
         {
-            self.factored = false;
+            self.last = Err(FactorizationFailure::NotAnalysed);
             return Ok(());
         }
+        let opts = &self.options;
         // The elimination order: faer's AMD, AMD with 2 × 2 (variable, row) pivot pairs, or
         // AMD on the graph of pairs (module docs).
-        let multifrontal = self.backend == LdltBackend::Multifrontal;
-        let (custom, pair_first) = match self.constraint_rows_from {
+        let multifrontal = opts.backend == LdltBackend::Multifrontal;
+        let (custom, pair_first) = match &opts.ordering {
             // The multifrontal kernel starts from the pairs' order (rows AMD would eliminate
             // bare already follow a variable of their own, so few pivots need delaying) and
             // chooses its pivots numerically; the pair marks are not used.
-            Some(n) if multifrontal => (
-                ordering::amd_pivot_pairs(n, col_ptr, row_idx).map(|(fwd, _)| fwd),
+            order if multifrontal && order.constraint_rows_from().is_some() => (
+                order
+                    .constraint_rows_from()
+                    .and_then(|n| ordering::amd_pivot_pairs(n, col_ptr, row_idx))
+                    .map(|(fwd, _)| fwd),
                 Vec::new(),
             ),
-            Some(n) if self.pivot_pairs => match ordering::amd_pivot_pairs(n, col_ptr, row_idx) {
+            LdltOrdering::AmdPivotPairs {
+                constraint_rows_from: n,
+            } => match ordering::amd_pivot_pairs(*n, col_ptr, row_idx) {
                 Some((fwd, pairs)) => (Some(fwd), pairs),
                 None => (None, Vec::new()),
             },
-            Some(n) => (
-                ordering::paired_amd(n, col_ptr, row_idx, &self.preferred_primal),
+            LdltOrdering::PairedAmd {
+                constraint_rows_from: n,
+                preferred_primal,
+            } => (
+                ordering::paired_amd(*n, col_ptr, row_idx, preferred_primal),
                 Vec::new(),
             ),
-            None => (None, Vec::new()),
+            LdltOrdering::Amd => (None, Vec::new()),
         };
         let has_pairs = pair_first.iter().any(|&p| p);
         self.has_pairs = has_pairs;
         let analyse =
             |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, custom.as_deref());
-        let mut faer = analyse(match self.backend {
+        let mut faer = analyse(match opts.backend {
             LdltBackend::Auto => SupernodalThreshold::AUTO,
             LdltBackend::FaerSupernodal => SupernodalThreshold::FORCE_SUPERNODAL,
             _ => SupernodalThreshold::FORCE_SIMPLICIAL,
         })?;
-        faer.constraint_rows_from = self.constraint_rows_from;
-        faer.preferred = self.preferred_primal.clone();
-        faer.pivot_pairs = self.pivot_pairs;
-        faer.backend = self.backend;
-        faer.amalgamation = self.amalgamation;
         if multifrontal {
             let plan = MultifrontalPlan::new(
                 &faer.symbolic,
                 dim,
                 col_ptr,
                 row_idx,
-                self.pivot_threshold,
-                self.amalgamation.max(1),
+                opts.pivot_threshold.clamp(f64::MIN_POSITIVE, 0.5),
+                opts.amalgamation.max(1),
             )
             .ok_or(OptimError::Factorization(FactorizationError::TooLarge))?;
             self.kernel = Kernel::Multifrontal(Box::new(plan));
             self.faer = Some(faer);
-            self.factored = false;
             return Ok(());
         }
-        let supernodal = match self.backend {
+        let supernodal = match opts.backend {
             LdltBackend::Supernodal => true,
             // Where faer's flop rule picks its supernodal factor (dense LG blocks), the
             // supernodal kernel on the simplicial structure replaces it (same factor speed
@@ -375,10 +479,6 @@ impl KktSolver for SparseLdlt {
             LdltBackend::Auto if faer.is_supernodal() || has_pairs => {
                 if faer.is_supernodal() {
                     faer = analyse(SupernodalThreshold::FORCE_SIMPLICIAL)?;
-                    faer.constraint_rows_from = self.constraint_rows_from;
-                    faer.preferred = self.preferred_primal.clone();
-                    faer.pivot_pairs = self.pivot_pairs;
-                    faer.backend = self.backend;
                 }
                 true
             }
@@ -389,7 +489,7 @@ impl KktSolver for SparseLdlt {
         } else {
             None
         };
-        let plan = match (&block, self.backend) {
+        let plan = match (&block, opts.backend) {
             (None, LdltBackend::FaerSimplicial | LdltBackend::FaerSupernodal) => None,
             (None, _) => SimplicialPlan::new(&faer.symbolic, dim, col_ptr, row_idx),
             (Some(_), _) => None,
@@ -400,46 +500,58 @@ impl KktSolver for SparseLdlt {
             (None, None) => Kernel::Faer,
         };
         self.faer = Some(faer);
-        self.factored = false;
         Ok(())
     }
 
-    fn factor(&mut self, values: &[f64]) -> Option<Inertia> {
-        self.factored = false;
-        let faer = self.faer.as_mut()?;
-        let (eps, delta) = (self.pivot_epsilon, self.pivot_delta);
-        let inertia = match &mut self.kernel {
-            Kernel::Supernodal(block) => block.factor(values, eps, delta)?,
-            Kernel::Multifrontal(mf) => {
-                mf.threshold = self.pivot_threshold.clamp(f64::MIN_POSITIVE, 0.5);
-                mf.factor(values, eps, delta)?
-            }
-            Kernel::Simplicial(plan) => {
-                if !plan.factor(values, &mut faer.l_values, eps, delta) {
-                    return None;
-                }
-                let inertia = faer.inertia();
-                if inertia.zero > 0 {
-                    return None;
-                }
-                inertia
-            }
-            Kernel::Faer => faer.factor(values, eps, delta)?,
-        };
-        self.factored = true;
-        Some(inertia)
+    fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
+        self.last = self.factor_numeric(values);
+        self.last
     }
 
-    fn solve(&mut self, rhs: &mut [f64]) {
-        let Some(faer) = self.faer.as_mut() else {
-            return;
-        };
-        debug_assert!(self.factored);
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), FactorizationFailure> {
+        self.last?;
+        let faer = self
+            .faer
+            .as_mut()
+            .ok_or(FactorizationFailure::NotAnalysed)?;
         match &mut self.kernel {
             Kernel::Supernodal(block) => block.solve(rhs),
             Kernel::Multifrontal(mf) => mf.solve(rhs),
             Kernel::Simplicial(plan) => plan.solve(&faer.l_values, rhs),
             Kernel::Faer => faer.solve(rhs),
         }
+        Ok(())
+    }
+}
+
+impl SparseLdlt {
+    /// The numeric phase behind [`KktSolver::factor`].
+    fn factor_numeric(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
+        let faer = self
+            .faer
+            .as_mut()
+            .ok_or(FactorizationFailure::NotAnalysed)?;
+        if let Some(index) = values.iter().position(|v| !v.is_finite()) {
+            return Err(FactorizationFailure::NonFiniteValue { index });
+        }
+        let (eps, delta) = (self.options.pivot_epsilon, self.options.pivot_delta);
+        let singular = FactorizationFailure::SingularPivot;
+        let inertia = match &mut self.kernel {
+            Kernel::Supernodal(block) => block.factor(values, eps, delta).ok_or(singular)?,
+            Kernel::Multifrontal(mf) => mf.factor(values, eps, delta).ok_or(singular)?,
+            Kernel::Simplicial(plan) => {
+                if !plan.factor(values, &mut faer.l_values, eps, delta) {
+                    return Err(singular);
+                }
+                faer.inertia()
+            }
+            Kernel::Faer => faer.factor(values, eps, delta).ok_or(singular)?,
+        };
+        if inertia.zero > 0 {
+            return Err(FactorizationFailure::ZeroPivots {
+                count: inertia.zero,
+            });
+        }
+        Ok(inertia)
     }
 }

@@ -12,12 +12,12 @@ fn refined_residual(s: &mut SparseLdlt, pat: &KktPattern, steps: usize) -> f64 {
     let dim = pat.mat.dim;
     let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
     let mut x = b.clone();
-    s.solve(&mut x);
+    s.solve(&mut x).unwrap();
     let mut r = vec![0.0; dim];
     for _ in 0..steps {
         pat.mat.sym_matvec(&x, &mut r);
         let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
-        s.solve(&mut c);
+        s.solve(&mut c).unwrap();
         x.iter_mut().zip(&c).for_each(|(x, c)| *x += c);
     }
     pat.mat.sym_matvec(&x, &mut r);
@@ -226,13 +226,13 @@ fn prepared_simplicial_path_is_bitwise_faer() {
             );
             let inertia = s.factor(&pat.mat.values);
             let mut x = b.clone();
-            if inertia.is_some() {
-                s.solve(&mut x);
+            if inertia.is_ok() {
+                s.solve(&mut x).unwrap();
             }
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
             out.push((inertia, bits(&s.faer.as_ref().unwrap().l_values), bits(&x)));
         }
-        assert!(out[0].0.is_some(), "shift {shift}: factor failed");
+        assert!(out[0].0.is_ok(), "shift {shift}: factor failed");
         assert_eq!(out[0], out[1], "shift {shift}");
     }
 }
@@ -381,7 +381,10 @@ fn block_kernel_reconstructs_and_matches_dense_inertia() {
                 let err = (ldl - a).abs();
                 if i == j && err > 1e-9 {
                     // static pivot: the factor is of K + E with E diagonal, |E| ≤ δ + ε
-                    assert!(err <= s.pivot_delta + s.pivot_epsilon + 1e-12, "{err}");
+                    assert!(
+                        err <= s.options().pivot_delta + s.options().pivot_epsilon + 1e-12,
+                        "{err}"
+                    );
                     pivots_replaced += 1;
                 } else if err > 0.0 {
                     max_ratio = max_ratio.max(err / bound);
@@ -411,13 +414,14 @@ fn block_kernel_reports_singular() {
 fn singular_without_static_pivoting(backend: LdltBackend) -> (KktPattern, SparseLdlt) {
     let mut pat = KktPattern::new(3, 1, &[(0, 0), (2, 0)], &[(0, 0), (0, 2)]);
     pat.assemble(&[1.0, 0.5], &[1.0, 2.0], &[0.0; 3], 0.0);
-    let mut s = SparseLdlt {
+    let mut s = SparseLdlt::with_options(LdltOptions {
+        backend,
         pivot_epsilon: 0.0,
         pivot_delta: 0.0,
-        ..SparseLdlt::with_backend(backend)
-    };
+        ..LdltOptions::default()
+    });
     s.analyse(4, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
-    assert!(s.factor(&pat.mat.values).is_none(), "{backend:?}");
+    assert!(s.factor(&pat.mat.values).is_err(), "{backend:?}");
     (pat, s)
 }
 
@@ -426,13 +430,13 @@ fn singular_matrix_is_reported() {
     // x-block zero and no constraint coupling on variable 1: exact zero pivot.
     let mut pat = KktPattern::new(2, 1, &[], &[(0, 0)]);
     pat.assemble(&[], &[1.0], &[0.0, 0.0], 0.0);
-    let mut s = SparseLdlt {
+    let mut s = SparseLdlt::with_options(LdltOptions {
         pivot_epsilon: 0.0,
         pivot_delta: 0.0,
-        ..SparseLdlt::new()
-    };
+        ..LdltOptions::default()
+    });
     s.analyse(3, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
-    assert!(s.factor(&pat.mat.values).is_none());
+    assert!(s.factor(&pat.mat.values).is_err());
 }
 
 /// Structurally zero primal diagonals (variables without curvature, like collocation states
@@ -461,12 +465,12 @@ fn static_pivoting_with_zero_primal_diagonal() {
         );
         let b = [1.0, -2.0, 0.5, 0.3, -0.7];
         let mut x = b;
-        s.solve(&mut x);
+        s.solve(&mut x).unwrap();
         let mut r = [0.0; 5];
         for _ in 0..5 {
             pat.mat.sym_matvec(&x, &mut r);
             let mut c: Vec<f64> = b.iter().zip(&r).map(|(b, r)| b - r).collect();
-            s.solve(&mut c);
+            s.solve(&mut c).unwrap();
             for i in 0..5 {
                 x[i] += c[i];
             }
@@ -498,11 +502,12 @@ fn pivot_pairs_reconstruct_and_match_dense_inertia() {
     ] {
         let (pat, dense) = random_kkt(seed, n, m, shift);
         let dim = n + m;
-        let mut s = SparseLdlt {
-            constraint_rows_from: Some(n),
-            pivot_pairs: true,
-            ..SparseLdlt::new()
-        };
+        let mut s = SparseLdlt::with_options(LdltOptions {
+            ordering: LdltOrdering::AmdPivotPairs {
+                constraint_rows_from: n,
+            },
+            ..LdltOptions::default()
+        });
         s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
         let inertia = s.factor(&pat.mat.values).expect("factor");
         let Kernel::Supernodal(blk) = &s.kernel else {
@@ -575,11 +580,14 @@ fn pivot_pairs_reconstruct_and_match_dense_inertia() {
                 let a = dense[blk.perm_fwd[i]][blk.perm_fwd[j]];
                 let err = (ldl - a).abs();
                 if i == j && err > 1e-9 {
-                    assert!(err <= s.pivot_delta + s.pivot_epsilon + 1e-12, "{err}");
+                    assert!(
+                        err <= s.options().pivot_delta + s.options().pivot_epsilon + 1e-12,
+                        "{err}"
+                    );
                     pivots_replaced += 1;
                 } else if blk.pair[j] && i == j + 1 && blk.e[j] == 0.0 {
                     // a pair's coupling below `pivot_epsilon` is dropped (two 1 × 1 pivots)
-                    assert!(err <= s.pivot_epsilon, "{err}");
+                    assert!(err <= s.options().pivot_epsilon, "{err}");
                 } else if err > 0.0 {
                     max_ratio = max_ratio.max(err / bound);
                 }
@@ -597,4 +605,37 @@ fn pivot_pairs_reconstruct_and_match_dense_inertia() {
         let res = refined_residual(&mut s, &pat, 3);
         assert!(res < 1e-8, "seed {seed}: residual {res}");
     }
+}
+
+/// The numeric phase reports why it has no factor, as data, and a solve after a failed
+/// factorization refuses instead of using a stale factor.
+#[test]
+fn factorization_failures_are_typed() {
+    let mut pat = KktPattern::new(2, 1, &[(0, 0), (1, 1)], &[(0, 0)]);
+    pat.assemble(&[2.0, 3.0], &[1.0], &[0.0, 0.0], -1e-9);
+    let mut s = SparseLdlt::new();
+    assert_eq!(
+        s.factor(&pat.mat.values),
+        Err(FactorizationFailure::NotAnalysed)
+    );
+    let mut rhs = vec![1.0, 2.0, 3.0];
+    assert_eq!(s.solve(&mut rhs), Err(FactorizationFailure::NotAnalysed));
+    s.analyse(3, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+    let good = s.factor(&pat.mat.values).unwrap();
+    assert_eq!((good.positive, good.negative, good.zero), (2, 1, 0));
+    // K x = b for K = [2 0 1; 0 3 0; 1 0 −1e-9]: x₂ = 2/3 and 2x₁ + x₃ = 1, x₁ ≈ 3.
+    s.solve(&mut rhs).unwrap();
+    assert!((rhs[1] - 2.0 / 3.0).abs() < 1e-12);
+    assert!((2.0 * rhs[0] + rhs[2] - 1.0).abs() < 1e-9);
+    let mut bad = pat.mat.values.clone();
+    bad[1] = f64::NAN;
+    assert_eq!(
+        s.factor(&bad),
+        Err(FactorizationFailure::NonFiniteValue { index: 1 })
+    );
+    let mut rhs = vec![1.0, 2.0, 3.0];
+    assert!(s.solve(&mut rhs).is_err());
+    assert_eq!(rhs, [1.0, 2.0, 3.0], "a refused solve leaves rhs as it was");
+    // The same solver factors again after the failure.
+    assert_eq!(s.factor(&pat.mat.values), Ok(good));
 }

@@ -69,11 +69,12 @@ fn check_multifrontal(
     amalgamation: usize,
 ) -> (usize, usize, usize) {
     let dim = pat.mat.dim;
-    let mut s = SparseLdlt {
+    let mut s = SparseLdlt::with_options(LdltOptions {
+        backend: LdltBackend::Multifrontal,
         amalgamation,
         pivot_threshold: 0.01,
-        ..SparseLdlt::with_backend(LdltBackend::Multifrontal)
-    };
+        ..LdltOptions::default()
+    });
     s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
     let inertia = s.factor(&pat.mat.values).expect("factor");
     let stats = s.pivot_statistics();
@@ -99,7 +100,10 @@ fn check_multifrontal(
     }
     // The threshold test bounds |L| by 1/u (u = 0.01) in the non-root fronts; the root's
     // Bunch–Kaufman pivots stay far below that on these matrices.
-    assert!(lmax <= 1.0 / s.pivot_threshold, "{label}: max |L| {lmax}");
+    assert!(
+        lmax <= 1.0 / s.options().pivot_threshold,
+        "{label}: max |L| {lmax}"
+    );
     let mut ld = vec![vec![0.0; dim]; dim];
     let mut ld_abs = vec![vec![0.0; dim]; dim];
     for i in 0..dim {
@@ -133,7 +137,7 @@ fn check_multifrontal(
     // Bounded growth: the direct solve is accurate without refinement.
     let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
     let mut x = b.clone();
-    s.solve(&mut x);
+    s.solve(&mut x).unwrap();
     let mut r = vec![0.0; dim];
     pat.mat.sym_matvec(&x, &mut r);
     let kmax = pat.mat.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
