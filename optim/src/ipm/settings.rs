@@ -97,111 +97,152 @@ pub enum KktOrdering {
     ThresholdPivoting,
 }
 
-/// Settings of the interior-point solver. All fields are public; [`Settings::validate`] checks ranges.
+/// Declares [`Settings`] with each field's default written once, beside the field: the
+/// macro emits the field (its doc ending in "Default: `…`." generated from the same
+/// expression) and the `Default` impl, so the docs and `Default` cannot disagree.
+macro_rules! settings {
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            $(
+                $(#[doc = $doc:literal])*
+                $field:ident : $ty:ty = $default:expr
+            ),* $(,)?
+        }
+    ) => {
+        $(#[$meta])*
+        pub struct $name {
+            $(
+                $(#[doc = $doc])*
+                #[doc = ""]
+                #[doc = concat!("Default: `", stringify!($default), "`.")]
+                pub $field: $ty,
+            )*
+        }
+
+        impl Default for $name {
+            fn default() -> Self {
+                Self {
+                    $($field: $default,)*
+                }
+            }
+        }
+
+        impl $name {
+            /// Each field's name and its default as written in the source (the text the
+            /// field's documentation shows), in declaration order.
+            pub const DEFAULTS: &'static [(&'static str, &'static str)] =
+                &[$((stringify!($field), stringify!($default)),)*];
+        }
+    };
+}
+
+settings! {
+/// Settings of the interior-point solver. All fields are public; [`Settings::validate`] checks
+/// ranges. Each field's documentation ends with its default.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Settings {
-    /// Desired scaled optimality error `E_0` (default: 1e-8).
-    pub tol: f64,
-    /// Unscaled constraint violation required for `Solved` (default: 1e-4).
-    pub constr_viol_tol: f64,
-    /// Unscaled dual infeasibility required for `Solved` (default: 1.0).
-    pub dual_inf_tol: f64,
-    /// Unscaled complementarity required for `Solved` (default: 1e-4).
-    pub compl_inf_tol: f64,
-    /// "Acceptable" scaled optimality error (default: 1e-6).
-    pub acceptable_tol: f64,
-    /// Consecutive acceptable iterations before stopping with `Acceptable` (default: 15; 0 disables).
-    pub acceptable_iter: usize,
-    /// Unscaled constraint violation for the acceptable level (default: 1e-2).
-    pub acceptable_constr_viol_tol: f64,
-    /// Maximum number of iterations, restoration iterations included (default: 3000).
-    pub max_iter: usize,
-    /// Wall-clock limit in seconds (default: 1e20, i.e. none).
-    pub max_wall_time: f64,
-    /// Barrier-parameter strategy (default: monotone).
-    pub mu_strategy: MuStrategy,
-    /// Initial barrier parameter (default: 0.1).
-    pub mu_init: f64,
+    /// Desired scaled optimality error `E_0`.
+    tol: f64 = 1e-8,
+    /// Unscaled constraint violation required for `Solved`.
+    constr_viol_tol: f64 = 1e-4,
+    /// Unscaled dual infeasibility required for `Solved`.
+    dual_inf_tol: f64 = 1.0,
+    /// Unscaled complementarity required for `Solved`.
+    compl_inf_tol: f64 = 1e-4,
+    /// "Acceptable" scaled optimality error.
+    acceptable_tol: f64 = 1e-6,
+    /// Consecutive acceptable iterations before stopping with `Acceptable` (0 disables).
+    acceptable_iter: usize = 15,
+    /// Unscaled constraint violation for the acceptable level.
+    acceptable_constr_viol_tol: f64 = 1e-2,
+    /// Maximum number of iterations, restoration iterations included.
+    max_iter: usize = 3000,
+    /// Wall-clock limit in seconds.
+    max_wall_time: f64 = 1e20,
+    /// Barrier-parameter strategy.
+    mu_strategy: MuStrategy = MuStrategy::Monotone,
+    /// Initial barrier parameter.
+    mu_init: f64 = 0.1,
     /// Smallest barrier parameter, multiplied by the objective scaling factor when that is
-    /// below 1 (default: 1e-11). The μ floor of a run is the larger of it and
+    /// below 1. The μ floor of a run is the larger of it and
     /// `min(tol, σ_f · compl_inf_tol) / (barrier_tol_factor + 1)`.
-    pub mu_min: f64,
-    /// Linear decrease factor κ_μ (default: 0.2).
-    pub mu_linear_decrease: f64,
-    /// Superlinear decrease power θ_μ (default: 1.5).
-    pub mu_superlinear_power: f64,
-    /// Barrier subproblem tolerance factor κ_ε (default: 10).
-    pub barrier_tol_factor: f64,
-    /// Minimum fraction-to-boundary parameter τ_min (default: 0.99).
-    pub tau_min: f64,
-    /// Absolute push of the initial point into the bounds κ_1 (default: 1e-2).
-    pub bound_push: f64,
-    /// Relative push κ_2 (fraction of the bound interval) (default: 1e-2).
-    pub bound_frac: f64,
-    /// Initial value of the bound multipliers (default: 1.0).
-    pub bound_mult_init: f64,
-    /// Relative relaxation of all bounds, `x_L ← x_L − r max(1, |x_L|)` (default: 1e-8).
-    pub bound_relax_factor: f64,
-    /// Least-squares initial λ is discarded if its ∞-norm exceeds this (default: 1e3).
-    pub constr_mult_init_max: f64,
-    /// Push of the primal point into the bounds for a warm start (default: 1e-3).
-    pub warm_start_bound_push: f64,
-    /// Minimum value of warm-start bound multipliers (default: 1e-3).
-    pub warm_start_mult_bound_push: f64,
-    /// Bound-multiplier safeguard κ_Σ (default: 1e10).
-    pub kappa_sigma: f64,
-    /// Damping of one-sided bounded variables κ_d (default: 1e-5).
-    pub kappa_d: f64,
-    /// Ipopt's `slack_move` (W&B end of Sect. 3.5): a slack to a bound that falls below
-    /// `ε_mach · min(1, μ)` (it has underflowed in the rounding of `x − x_L`) is replaced by
-    /// `min(max(μ / z, ε_mach · min(1, μ)), s + slack_move · max(1, |x_L|))` and the bound moved
-    /// to `x − s`, so that every slack stays positive and representable (default:
-    /// `ε_mach^{3/4}` ≈ 1.8e-12; must be positive).
-    pub slack_move: f64,
-    /// Scaling method (default: gradient based).
-    pub scaling: ScalingMethod,
-    /// Target maximal gradient for gradient-based scaling (default: 100).
-    pub scaling_max_gradient: f64,
+    mu_min: f64 = 1e-11,
+    /// Linear decrease factor κ_μ.
+    mu_linear_decrease: f64 = 0.2,
+    /// Superlinear decrease power θ_μ.
+    mu_superlinear_power: f64 = 1.5,
+    /// Barrier subproblem tolerance factor κ_ε.
+    barrier_tol_factor: f64 = 10.0,
+    /// Minimum fraction-to-boundary parameter τ_min.
+    tau_min: f64 = 0.99,
+    /// Absolute push of the initial point into the bounds κ_1.
+    bound_push: f64 = 1e-2,
+    /// Relative push κ_2 (fraction of the bound interval).
+    bound_frac: f64 = 1e-2,
+    /// Initial value of the bound multipliers.
+    bound_mult_init: f64 = 1.0,
+    /// Relative relaxation of all bounds, `x_L ← x_L − r max(1, |x_L|)`.
+    bound_relax_factor: f64 = 1e-8,
+    /// Least-squares initial λ is discarded if its ∞-norm exceeds this.
+    constr_mult_init_max: f64 = 1e3,
+    /// Push of the primal point into the bounds for a warm start.
+    warm_start_bound_push: f64 = 1e-3,
+    /// Minimum value of warm-start bound multipliers.
+    warm_start_mult_bound_push: f64 = 1e-3,
+    /// Bound-multiplier safeguard κ_Σ.
+    kappa_sigma: f64 = 1e10,
+    /// Damping of one-sided bounded variables κ_d.
+    kappa_d: f64 = 1e-5,
+    /// Ipopt's `slack_move` (W&B end of Sect. 3.5): a slack to a bound that falls below `ε_mach ·
+    /// min(1, μ)` (it has underflowed in the rounding of `x − x_L`) is replaced by `min(max(μ / z,
+    /// ε_mach · min(1, μ)), s + slack_move · max(1, |x_L|))` and the bound moved to `x − s`, so
+    /// that every slack stays positive and representable (the default, `ε_mach^{3/4}`, is about
+    /// 1.8e-12; must be positive).
+    slack_move: f64 = f64::EPSILON.powf(0.75),
+    /// Scaling method.
+    scaling: ScalingMethod = ScalingMethod::GradientBased,
+    /// Target maximal gradient for gradient-based scaling.
+    scaling_max_gradient: f64 = 100.0,
     /// Objective gradients (∞-norm at the initial point) below this are scaled up to
     /// `scaling_max_gradient` by gradient-based scaling: from a smaller gradient, the
     /// absolute `tol` would leave fewer than five orders of magnitude of decrease of the dual
-    /// infeasibility (default: 1e-3; 0 disables).
-    pub scaling_min_gradient: f64,
-    /// Extra objective factor applied on top of the scaling method (default: 1.0).
-    pub obj_scaling_factor: f64,
-    /// First trial δ_w of the inertia correction (default: 1e-4).
-    pub first_hessian_perturbation: f64,
-    /// Smallest δ_w (default: 1e-20).
-    pub min_hessian_perturbation: f64,
-    /// Largest δ_w before giving up on the step (default: 1e40).
-    pub max_hessian_perturbation: f64,
-    /// δ_w decrease factor κ_w⁻ (default: 1/3).
-    pub perturb_dec_fact: f64,
-    /// δ_w increase factor κ_w⁺ (default: 8).
-    pub perturb_inc_fact: f64,
-    /// δ_w first increase factor κ̄_w⁺ (default: 100).
-    pub perturb_inc_fact_first: f64,
-    /// δ_c = δ̄_c μ^κ_c used for a singular Jacobian: δ̄_c (default: 1e-8).
-    pub jacobian_regularization_value: f64,
-    /// κ_c (default: 0.25).
-    pub jacobian_regularization_exponent: f64,
+    /// infeasibility (0 disables).
+    scaling_min_gradient: f64 = 1e-3,
+    /// Extra objective factor applied on top of the scaling method.
+    obj_scaling_factor: f64 = 1.0,
+    /// First trial δ_w of the inertia correction.
+    first_hessian_perturbation: f64 = 1e-4,
+    /// Smallest δ_w.
+    min_hessian_perturbation: f64 = 1e-20,
+    /// Largest δ_w before giving up on the step.
+    max_hessian_perturbation: f64 = 1e40,
+    /// δ_w decrease factor κ_w⁻.
+    perturb_dec_fact: f64 = 1.0 / 3.0,
+    /// δ_w increase factor κ_w⁺.
+    perturb_inc_fact: f64 = 8.0,
+    /// δ_w first increase factor κ̄_w⁺.
+    perturb_inc_fact_first: f64 = 100.0,
+    /// δ_c = δ̄_c μ^κ_c used for a singular Jacobian: δ̄_c.
+    jacobian_regularization_value: f64 = 1e-8,
+    /// κ_c.
+    jacobian_regularization_exponent: f64 = 0.25,
     /// Static −δ_c always on the constraint block so that the unpivoted LDLᵀ never meets an exact
-    /// zero dual pivot; the step is refined against the unregularized matrix (default: 1e-9).
-    pub static_dual_regularization: f64,
+    /// zero dual pivot; the step is refined against the unregularized matrix.
+    static_dual_regularization: f64 = 1e-9,
     /// Factor by which the static δ_c of a solve grows when a factor with the right inertia
     /// does not solve its own matrix accurately after refinement (growth of the unpivoted
     /// LDLᵀ ∝ 1/δ_c), in place of a larger δ_w; once per Newton step, kept for the rest of the
-    /// solve (default: 30).
-    pub static_dual_regularization_growth: f64,
-    /// Largest static δ_c that this growth may reach (default: 3e-8; a value at most
+    /// solve.
+    static_dual_regularization_growth: f64 = 30.0,
+    /// Largest static δ_c that this growth may reach (a value at most
     /// `static_dual_regularization` disables the growth).
-    pub static_dual_regularization_max: f64,
-    /// Elimination order of the KKT factorization (default: AMD, its rejected factors checked
-    /// by 2 × 2 pivot pairs, [`KktOrdering::AmdCheckedByPivotPairs`]).
-    pub kkt_ordering: KktOrdering,
+    static_dual_regularization_max: f64 = 3e-8,
+    /// Elimination order of the KKT factorization ([`KktOrdering`]).
+    kkt_ordering: KktOrdering = KktOrdering::AmdCheckedByPivotPairs,
     /// Weight κ_p of the primal proximal regularization δ_w ≥ κ_p μ on a stalled barrier
-    /// problem that is not an answer (default: 0.1; 0 turns it off): one whose μ exceeds the
+    /// problem that is not an answer (0 turns it off): one whose μ exceeds the
     /// optimality tolerance (its complementarity alone exceeds `tol`, in the scaled units of
     /// the barrier rule's floor) and that has taken [`proximal_after`](Settings::proximal_after)
     /// iterations without meeting its tolerance κ_ε μ. Along a flat direction of the reduced
@@ -211,46 +252,45 @@ pub struct Settings {
     /// Friedlander & Orban 2012; Armand, Benoist & Orban 2013) bounds that step by
     /// ‖∇φ_μ‖ / (κ_p μ). The barrier problems that decide the answer (μ ≤ tol) never carry
     /// it, so they keep Newton's fast local convergence (decision record 0011).
-    pub proximal_weight: f64,
+    proximal_weight: f64 = 0.1,
     /// Iterations on one barrier problem after which it counts as stalled and carries the
-    /// proximal term of [`proximal_weight`](Settings::proximal_weight) (default: 60; a barrier
+    /// proximal term of [`proximal_weight`](Settings::proximal_weight) (a barrier
     /// problem that Newton's method solves takes a few iterations; 0 puts the term on every
     /// barrier problem above the tolerance).
-    pub proximal_after: usize,
-    /// Maximum iterative-refinement steps per solve (default: 10, Ipopt's
+    proximal_after: usize = 60,
+    /// Maximum iterative-refinement steps per solve (the default is Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for
     /// when refinement stops earlier. An unpivoted factor with pivot growth refines, but
     /// slowly: on the finest `periodic-cot-human` mesh the residual falls by 0.1–0.3 per step,
     /// and three steps left every step "inaccurate" (docs/decisions/0009-refinement-steps.md).
-    pub max_refinement_steps: usize,
-    /// Refinement steps taken whatever their progress, unless `refinement_tol` is met
-    /// (default: 3, the solver's former maximum). Further steps are taken only while the
-    /// solution fails the accuracy test (1e-5), so every solve that three steps made accurate
-    /// keeps its path bit for bit.
-    pub min_refinement_steps: usize,
-    /// Beyond `min_refinement_steps`, a correction is kept only if it reduces the residual
-    /// relative to ‖rhs‖ by at least this factor; otherwise it is undone and refinement stops
-    /// (default: 0.5, LAPACK xGERFS's test). A contraction slower than that will not reach
-    /// the accuracy test's 1e-5 within `max_refinement_steps` from where it stalled (e.g. the
-    /// near-singular solves of `rotate-fast`, 0.99 per step).
-    pub refinement_contraction: f64,
-    /// Relative residual `‖K sol − rhs‖_∞ / ‖rhs‖_∞` at which refinement stops (default: 1e-10).
-    pub refinement_tol: f64,
+    max_refinement_steps: usize = 10,
+    /// Refinement steps taken whatever their progress, unless `refinement_tol` is met (the default
+    /// is the solver's former maximum). Further steps are taken only while the solution fails the
+    /// accuracy test (1e-5), so every solve that three steps made accurate keeps its path bit for
+    /// bit.
+    min_refinement_steps: usize = 3,
+    /// Beyond `min_refinement_steps`, a correction is kept only if it reduces the residual relative
+    /// to ‖rhs‖ by at least this factor; otherwise it is undone and refinement stops (the default
+    /// is LAPACK xGERFS's test). A contraction slower than that will not reach the accuracy test's
+    /// 1e-5 within `max_refinement_steps` from where it stalled (e.g. the near-singular solves of
+    /// `rotate-fast`, 0.99 per step).
+    refinement_contraction: f64 = 0.5,
+    /// Relative residual `‖K sol − rhs‖_∞ / ‖rhs‖_∞` at which refinement stops.
+    refinement_tol: f64 = 1e-10,
     /// Judge the accuracy of a refined KKT solution (accepted at 1e-5; below 1e-6 against the
-    /// unregularized matrix, else the step of the regularized system) on Ipopt's residual
-    /// ratio `‖K sol − rhs‖_∞ / (‖rhs‖_∞ + ‖sol‖_∞)` instead of `‖K sol − rhs‖_∞ / ‖rhs‖_∞`
-    /// (default: false). Near a flat valley of the barrier problem (a tiny reduced-Hessian
-    /// eigenvalue) the Newton step is orders of magnitude longer than the right-hand side, and
-    /// a backward-stable solve leaves a residual of order `ε ‖K‖ ‖sol‖`: measured against
-    /// `‖rhs‖` alone, the exact step is rejected as inaccurate and damped by δ_w, which limits
-    /// every step to about `‖rhs‖ / δ_w`, and the solve creeps along the valley. Not the default
-    /// because the undamped steps change the paths of the collocation solves, not always for
-    /// the better (BENCHMARKS.md).
-    pub residual_ratio_with_solution: bool,
+    /// unregularized matrix, else the step of the regularized system) on Ipopt's residual ratio `‖K
+    /// sol − rhs‖_∞ / (‖rhs‖_∞ + ‖sol‖_∞)` instead of `‖K sol − rhs‖_∞ / ‖rhs‖_∞`. Near a flat
+    /// valley of the barrier problem (a tiny reduced-Hessian eigenvalue) the Newton step is orders
+    /// of magnitude longer than the right-hand side, and a backward-stable solve leaves a residual
+    /// of order `ε ‖K‖ ‖sol‖`: measured against `‖rhs‖` alone, the exact step is rejected as
+    /// inaccurate and damped by δ_w, which limits every step to about `‖rhs‖ / δ_w`, and the solve
+    /// creeps along the valley. Not the default because the undamped steps change the paths of the
+    /// collocation solves, not always for the better (BENCHMARKS.md).
+    residual_ratio_with_solution: bool = false,
     /// Normwise backward error `η = ‖K sol − rhs‖_∞ / (max|K_ij| ‖sol‖_∞ + ‖rhs‖_∞)` up to
     /// which a refined KKT solution that fails the relative-residual test above is still
     /// accepted, if its relative residual is at most [`Settings::backward_error_forcing`]
-    /// (default: 1e-14 ≈ 45 ε; 0 disables). Such a solution solves exactly a matrix within η
+    /// (the default is about 45 ε; 0 disables). Such a solution solves exactly a matrix within η
     /// relative of `K`, as exactly as `K`'s own rounding allows: its large residual relative
     /// to `rhs` is the conditioning of a nearly flat direction of the barrier problem, where
     /// the exact Newton step is far longer than the right-hand side, not an inaccurate factor,
@@ -258,33 +298,33 @@ pub struct Settings {
     /// `Acceptable` (fine `periodic-cot` meshes: 8 of 8 starts Solved with it on Radau 3 × 24,
     /// 1 of 8 without; docs/decisions/0008-one-kkt-regularization.md). It leaves every solve
     /// the relative test accepts unchanged.
-    pub backward_error_tol: f64,
+    backward_error_tol: f64 = 1e-14,
     /// Largest relative residual `‖K sol − rhs‖_∞ / ‖rhs‖_∞` of a solution accepted on its
-    /// backward error (default: 0.1, the forcing term of an inexact Newton method, Dembo,
+    /// backward error (the default is the forcing term of an inexact Newton method, Dembo,
     /// Eisenstat & Steihaug 1982): a step that leaves most of the linearized residual is
     /// dominated by its component along a nearly singular direction of `K`, however exact
     /// the solve, and makes little progress (`rotate-fast` Radau 30 crawled at 4 % per
     /// iteration on steps with 0.3–0.5).
-    pub backward_error_forcing: f64,
-    /// Filter margin γ_θ (default: 1e-5).
-    pub gamma_theta: f64,
-    /// Filter margin γ_φ (default: 1e-8).
-    pub gamma_phi: f64,
-    /// Switching-rule constant δ (default: 1).
-    pub switching_delta: f64,
-    /// Switching exponent s_θ (default: 1.1).
-    pub s_theta: f64,
-    /// Switching exponent s_φ (default: 2.3).
-    pub s_phi: f64,
-    /// Armijo constant η_φ (default: 1e-8).
-    pub eta_phi: f64,
-    /// Maximum second-order corrections per line search (default: 4).
-    pub max_soc: usize,
-    /// Required θ reduction between consecutive corrections κ_soc (default: 0.99).
-    pub kappa_soc: f64,
-    /// Backtracking factor (default: 0.5).
-    pub alpha_red_factor: f64,
-    /// Largest step size α of the extrapolation along negative curvature (default: 16; 1 turns
+    backward_error_forcing: f64 = 0.1,
+    /// Filter margin γ_θ.
+    gamma_theta: f64 = 1e-5,
+    /// Filter margin γ_φ.
+    gamma_phi: f64 = 1e-8,
+    /// Switching-rule constant δ.
+    switching_delta: f64 = 1.0,
+    /// Switching exponent s_θ.
+    s_theta: f64 = 1.1,
+    /// Switching exponent s_φ.
+    s_phi: f64 = 2.3,
+    /// Armijo constant η_φ.
+    eta_phi: f64 = 1e-8,
+    /// Maximum second-order corrections per line search.
+    max_soc: usize = 4,
+    /// Required θ reduction between consecutive corrections κ_soc.
+    kappa_soc: f64 = 0.99,
+    /// Backtracking factor.
+    alpha_red_factor: f64 = 0.5,
+    /// Largest step size α of the extrapolation along negative curvature (1 turns
     /// it off): when the full step of an iteration whose inertia needed δ_w > 0 (above the floor
     /// of [`proximal_weight`](Settings::proximal_weight), where that acts) is accepted at
     /// the first trial and the Lagrangian's curvature `dxᵀ(W + Σ)dx` along it is negative, the
@@ -295,116 +335,36 @@ pub struct Settings {
     /// length ‖∇L‖/δ_w. Applies on the barrier problems chosen by
     /// [`extrapolation_scope`](Settings::extrapolation_scope), by default those whose μ is at
     /// most the tolerance (decision records 0010, 0011).
-    pub max_curvature_extrapolation: f64,
-    /// Where the extrapolation along negative curvature acts (default: on the barrier problems
-    /// whose μ is at most the tolerance, [`ExtrapolationScope::Answers`]).
-    pub extrapolation_scope: ExtrapolationScope,
+    max_curvature_extrapolation: f64 = 16.0,
+    /// Where the extrapolation along negative curvature acts ([`ExtrapolationScope`]).
+    extrapolation_scope: ExtrapolationScope = ExtrapolationScope::Answers,
     /// Ipopt's filter reset heuristic: the filter is cleared when, in this many consecutive
     /// iterations, the last trial point rejected before the accepted one had made sufficient
-    /// progress over the current iterate and was dominated only by a filter entry (default: 5).
-    pub filter_reset_trigger: usize,
-    /// Filter resets per solve at most (default: 5; 0 disables the heuristic).
-    pub max_filter_resets: usize,
+    /// progress over the current iterate and was dominated only by a filter entry.
+    filter_reset_trigger: usize = 5,
+    /// Filter resets per solve at most (0 disables the heuristic).
+    max_filter_resets: usize = 5,
     /// Reject trial points whose barrier objective rises by more than this many orders of
-    /// magnitude (default: 5).
-    pub obj_max_inc: f64,
-    /// Enable the feasibility restoration phase (default: true).
-    pub restoration: bool,
-    /// Penalty ρ of the restoration problem (default: 1000).
-    pub resto_penalty: f64,
-    /// Required infeasibility reduction κ_resto to leave restoration (default: 0.9).
-    pub resto_required_reduction: f64,
-    /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this (default: 1e20).
-    pub diverging_iterates_tol: f64,
+    /// magnitude.
+    obj_max_inc: f64 = 5.0,
+    /// Enable the feasibility restoration phase.
+    restoration: bool = true,
+    /// Penalty ρ of the restoration problem.
+    resto_penalty: f64 = 1000.0,
+    /// Required infeasibility reduction κ_resto to leave restoration.
+    resto_required_reduction: f64 = 0.9,
+    /// Stop with `DivergingIterates` if ‖x‖_∞ exceeds this.
+    diverging_iterates_tol: f64 = 1e20,
     /// Stop with `Unbounded` if the scaled objective (after the objective scaling of
     /// `scaling`, so independent of the objective's units) drops below −this at a feasible
     /// iterate while a variable with a free or one-sided bound reaches a new largest magnitude
-    /// (default: 1e15; the collocation objectives of this project are O(1)–O(1e4)).
-    pub unbounded_objective: f64,
-    /// Scaling cap s_max of the optimality error (default: 100).
-    pub s_max: f64,
-    /// 0 = silent, 1 = Ipopt-style iteration log on stdout, 2 = also restoration details
-    /// (default: 0).
-    pub print_level: u8,
+    /// (the collocation objectives of this project are O(1)–O(1e4)).
+    unbounded_objective: f64 = 1e15,
+    /// Scaling cap s_max of the optimality error.
+    s_max: f64 = 100.0,
+    /// 0 = silent, 1 = Ipopt-style iteration log on stdout, 2 = also restoration details.
+    print_level: u8 = 0,
 }
-
-impl Default for Settings {
-    fn default() -> Self {
-        Self {
-            tol: 1e-8,
-            constr_viol_tol: 1e-4,
-            dual_inf_tol: 1.0,
-            compl_inf_tol: 1e-4,
-            acceptable_tol: 1e-6,
-            acceptable_iter: 15,
-            acceptable_constr_viol_tol: 1e-2,
-            max_iter: 3000,
-            max_wall_time: 1e20,
-            mu_strategy: MuStrategy::Monotone,
-            mu_init: 0.1,
-            mu_min: 1e-11,
-            mu_linear_decrease: 0.2,
-            mu_superlinear_power: 1.5,
-            barrier_tol_factor: 10.0,
-            tau_min: 0.99,
-            bound_push: 1e-2,
-            bound_frac: 1e-2,
-            bound_mult_init: 1.0,
-            bound_relax_factor: 1e-8,
-            constr_mult_init_max: 1e3,
-            warm_start_bound_push: 1e-3,
-            warm_start_mult_bound_push: 1e-3,
-            kappa_sigma: 1e10,
-            kappa_d: 1e-5,
-            slack_move: f64::EPSILON.powf(0.75),
-            scaling: ScalingMethod::GradientBased,
-            scaling_max_gradient: 100.0,
-            scaling_min_gradient: 1e-3,
-            obj_scaling_factor: 1.0,
-            first_hessian_perturbation: 1e-4,
-            min_hessian_perturbation: 1e-20,
-            max_hessian_perturbation: 1e40,
-            perturb_dec_fact: 1.0 / 3.0,
-            perturb_inc_fact: 8.0,
-            perturb_inc_fact_first: 100.0,
-            jacobian_regularization_value: 1e-8,
-            jacobian_regularization_exponent: 0.25,
-            static_dual_regularization: 1e-9,
-            static_dual_regularization_growth: 30.0,
-            static_dual_regularization_max: 3e-8,
-            kkt_ordering: KktOrdering::AmdCheckedByPivotPairs,
-            proximal_weight: 0.1,
-            proximal_after: 60,
-            max_refinement_steps: 10,
-            min_refinement_steps: 3,
-            refinement_contraction: 0.5,
-            refinement_tol: 1e-10,
-            residual_ratio_with_solution: false,
-            backward_error_tol: 1e-14,
-            backward_error_forcing: 0.1,
-            gamma_theta: 1e-5,
-            gamma_phi: 1e-8,
-            switching_delta: 1.0,
-            s_theta: 1.1,
-            s_phi: 2.3,
-            eta_phi: 1e-8,
-            max_soc: 4,
-            kappa_soc: 0.99,
-            max_curvature_extrapolation: 16.0,
-            extrapolation_scope: ExtrapolationScope::Answers,
-            alpha_red_factor: 0.5,
-            filter_reset_trigger: 5,
-            max_filter_resets: 5,
-            obj_max_inc: 5.0,
-            restoration: true,
-            resto_penalty: 1000.0,
-            resto_required_reduction: 0.9,
-            diverging_iterates_tol: 1e20,
-            unbounded_objective: 1e15,
-            s_max: 100.0,
-            print_level: 0,
-        }
-    }
 }
 
 impl Settings {
