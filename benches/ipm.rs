@@ -254,6 +254,16 @@ fn bench_kkt(c: &mut Criterion) {
         }
         let mut g = c.benchmark_group(format!("kkt_periodic_qc_{label}"));
         g.sample_size(20);
+        // The symbolic phase alone (ordering, elimination tree, plan), as each cold solve runs
+        // it once: against `factor_auto`, what sharing it between solves could save.
+        g.bench_function("analyse_auto", |b| {
+            b.iter(|| {
+                let mut s = SparseLdlt::new();
+                s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
+                    .expect("analyse");
+                black_box(s)
+            })
+        });
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
             if !v.0.starts_with("auto") && !v.0.starts_with("multifrontal") {
                 continue;
