@@ -236,7 +236,7 @@ impl Core<'_> {
         }
         if self.mu != old_mu {
             self.tau = settings.tau_min.max(1.0 - self.mu);
-            self.reset_filter();
+            self.filter.clear();
         }
     }
 }

@@ -189,8 +189,7 @@ impl Core<'_> {
             None => self.least_squares_y(ctx, settings),
         }
         let theta0 = norm_1(&self.c);
-        self.theta_max = 1e4 * theta0.max(1.0);
-        self.theta_min = 1e-4 * theta0.max(1.0);
+        self.filter.set_bounds(theta0);
         Ok(())
     }
 
@@ -423,7 +422,7 @@ impl Core<'_> {
                 self.mu = (0.8 * avg).max(mu_rule.floor);
                 self.tau = settings.tau_min.max(1.0 - self.mu);
             }
-            self.reset_filter();
+            self.filter.clear();
             return Ok(None);
         }
         if self.restoration || !settings.restoration {

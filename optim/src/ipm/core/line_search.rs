@@ -8,7 +8,7 @@
 //! * extrapolation of a full step along negative curvature (α doubled while the acceptance
 //!   test holds and φ_μ decreases; [`Core::extrapolate`], by default only on the barrier
 //!   problems with μ ≤ tol; decision records 0010, 0011);
-//! * Ipopt's filter reset heuristic ([`Core::note_accept`]);
+//! * Ipopt's filter reset heuristic (`Filter::note_accept`, in `filter`);
 //! * Ipopt's "soft restoration" step when the line search fails near feasibility.
 
 use std::time::Instant;
@@ -82,17 +82,6 @@ impl Core<'_> {
         a
     }
 
-    pub(super) fn filter_acceptable(&self, theta: f64, phi: f64) -> bool {
-        self.filter.iter().all(|&(ft, fp)| theta < ft || phi < fp)
-    }
-
-    pub(super) fn augment_filter(&mut self, theta: f64, phi: f64, settings: &Settings) {
-        let t = (1.0 - settings.gamma_theta) * theta;
-        let p = phi - settings.gamma_phi * theta;
-        self.filter.retain(|&(ft, fp)| !(ft >= t && fp >= p));
-        self.filter.push((t, p));
-    }
-
     /// Acceptance test of a trial point (W&B eq. (18)–(21)).
     pub(super) fn acceptable(
         &self,
@@ -107,7 +96,7 @@ impl Core<'_> {
             phi,
             gphi_dx,
         } = base;
-        if !phi_t.is_finite() || !theta_t.is_finite() || theta_t > self.theta_max {
+        if !phi_t.is_finite() || !theta_t.is_finite() || theta_t > self.filter.theta_max {
             return Trial::Rejected;
         }
         if phi_t > phi {
@@ -120,7 +109,7 @@ impl Core<'_> {
             && alpha * (-gphi_dx).powf(settings.s_phi)
                 > settings.switching_delta * theta.powf(settings.s_theta);
         let eps = 10.0 * f64::EPSILON * phi.abs().max(1.0);
-        let (progress, ftype) = if theta <= self.theta_min && switching {
+        let (progress, ftype) = if theta <= self.filter.theta_min && switching {
             (
                 phi_t - phi - eps <= settings.eta_phi * alpha * gphi_dx,
                 true,
@@ -133,7 +122,7 @@ impl Core<'_> {
         if !progress {
             return Trial::Rejected;
         }
-        if !self.filter_acceptable(theta_t, phi_t) {
+        if !self.filter.acceptable(theta_t, phi_t) {
             return Trial::BlockedByFilter;
         }
         Trial::Accepted { f_type: ftype }
@@ -152,41 +141,20 @@ impl Core<'_> {
     ) -> bool {
         match verdict {
             Trial::Accepted { f_type } => {
-                self.note_accept(ctx, settings);
+                if self.filter.note_accept(settings) {
+                    ctx.counters.filter_resets += 1;
+                }
                 if !f_type {
-                    self.augment_filter(base.theta, base.phi, settings);
+                    self.filter.augment(base.theta, base.phi, settings);
                 }
                 true
             }
             Trial::BlockedByFilter | Trial::Rejected => {
-                self.filter_blocked_last = verdict == Trial::BlockedByFilter;
+                self.filter
+                    .note_rejection(verdict == Trial::BlockedByFilter);
                 false
             }
         }
-    }
-
-    /// Ipopt's filter reset heuristic, run on every accepted trial point before the filter is
-    /// augmented: when the trial before it was blocked by the filter alone in
-    /// `filter_reset_trigger` consecutive line searches, the filter is cleared (at most
-    /// `max_filter_resets` times per solve). Entries from a distant part of the path (e.g. the
-    /// first iterates of a warm start far from feasibility) can otherwise admit only steps
-    /// that do not raise θ above them, which on curved constraints are ~1e-4 of the Newton
-    /// step.
-    pub(super) fn note_accept(&mut self, ctx: &mut Ctx<'_, '_>, settings: &Settings) {
-        if self.filter_resets < settings.max_filter_resets {
-            if self.filter_blocked_last {
-                self.filter_blocked_run += 1;
-                if self.filter_blocked_run >= settings.filter_reset_trigger {
-                    self.filter.clear();
-                    self.filter_resets += 1;
-                    self.filter_blocked_run = 0;
-                    ctx.counters.filter_resets += 1;
-                }
-            } else {
-                self.filter_blocked_run = 0;
-            }
-        }
-        self.filter_blocked_last = false;
     }
 
     /// Sets the trial point `x_t = x + α dx` and evaluates it: `(f, θ, φ_μ)` at `x_t` (with
@@ -203,7 +171,7 @@ impl Core<'_> {
         let g = settings.gamma_theta;
         let a = if gphi_dx < 0.0 {
             let b = g.min(settings.gamma_phi * theta / (-gphi_dx));
-            if theta <= self.theta_min {
+            if theta <= self.filter.theta_min {
                 b.min(
                     settings.switching_delta * theta.powf(settings.s_theta)
                         / (-gphi_dx).powf(settings.s_phi),
@@ -386,10 +354,6 @@ impl Core<'_> {
         None
     }
 
-    pub(super) fn reset_filter(&mut self) {
-        self.filter.clear();
-    }
-
     /// Ipopt's "soft restoration" step: when the filter line search fails, try the primal-dual
     /// step with the common step size `α = min(α_max^pr, α_max^du)` and accept it if it reduces
     /// the barrier optimality error `E_μ` by the factor 0.9999 (avoids the full restoration
@@ -403,7 +367,7 @@ impl Core<'_> {
     ) -> Option<f64> {
         // Only at nearly feasible points (θ ≤ θ_min), where the full restoration phase cannot
         // make progress on θ and would move x far from the current iterate.
-        if self.restoration || norm_1(&self.c) > self.theta_min {
+        if self.restoration || norm_1(&self.c) > self.filter.theta_min {
             return None;
         }
         let a = self.max_step_primal(&self.dx).min(self.max_step_dual());
@@ -452,7 +416,8 @@ impl Core<'_> {
         let e = (norm_inf(&rd) / s_d)
             .max(norm_inf(&self.c_t))
             .max(compl / s_c);
-        if e.is_finite() && e <= 0.9999 * e_mu_current && norm_1(&self.c_t) <= self.theta_max {
+        if e.is_finite() && e <= 0.9999 * e_mu_current && norm_1(&self.c_t) <= self.filter.theta_max
+        {
             self.f_t = f_t;
             Some(a)
         } else {

@@ -14,6 +14,7 @@
 //!   infeasibility and complementarity of the termination test at the final iterate).
 
 mod barrier;
+mod filter;
 mod iteration;
 mod line_search;
 mod restoration_phase;
@@ -23,6 +24,7 @@ mod termination;
 use std::time::Instant;
 
 use self::barrier::MuRule;
+use self::filter::Filter;
 use self::iteration::{RunState, StepChoice};
 use self::termination::Verdict;
 use super::kkt::{KktPattern, SparseLdlt};
@@ -161,9 +163,8 @@ pub(crate) struct Core<'p> {
     // barrier & filter
     mu: f64,
     tau: f64,
-    filter: Vec<(f64, f64)>,
-    theta_max: f64,
-    theta_min: f64,
+    /// The line search's filter, θ bounds and reset bookkeeping.
+    filter: Filter,
     restoration: bool,
     kappa_d: f64,
     /// Ipopt's `slack_move` (see [`barrier`]).
@@ -171,13 +172,6 @@ pub(crate) struct Core<'p> {
     /// Largest |x_j| over the variables without a finite lower or upper bound, over all
     /// iterates so far (the unboundedness test).
     unboxed_max: std::cell::Cell<f64>,
-    /// The last rejected trial point was blocked by the filter alone (filter reset heuristic,
-    /// [`line_search`]).
-    filter_blocked_last: bool,
-    /// Consecutive accepted steps that followed such a rejection.
-    filter_blocked_run: usize,
-    /// Filter resets so far in this solve.
-    filter_resets: usize,
 }
 
 impl<'p> Core<'p> {
@@ -260,16 +254,11 @@ impl<'p> Core<'p> {
             f_t: 0.0,
             mu: start.mu,
             tau: settings.tau_min.max(1.0 - start.mu),
-            filter: Vec::new(),
-            theta_max: 0.0,
-            theta_min: 0.0,
+            filter: Filter::default(),
             restoration: start.restoration,
             kappa_d: settings.kappa_d,
             slack_move: settings.slack_move,
             unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
-            filter_blocked_last: false,
-            filter_blocked_run: 0,
-            filter_resets: 0,
             prob,
             xl,
             xu,

@@ -21,7 +21,7 @@ impl Core<'_> {
     ) -> Result<Option<Status>, OptimError> {
         let theta = norm_1(&self.c);
         let phi = self.barrier_value(&self.x, self.f);
-        self.augment_filter(theta, phi, settings);
+        self.filter.augment(theta, phi, settings);
         let outer = OuterInfo {
             xl: self.xl.clone(),
             xu: self.xu.clone(),
@@ -30,7 +30,7 @@ impl Core<'_> {
             damp: self.damp.clone(),
             kappa_d: self.kappa_d,
             mu: self.mu,
-            filter: self.filter.clone(),
+            filter: self.filter.entries().to_vec(),
             theta_ref: theta,
             kappa_resto: settings.resto_required_reduction,
             tol: settings.tol,
@@ -145,7 +145,7 @@ impl Core<'_> {
                     return Ok(Some(Status::LocallyInfeasible));
                 }
                 if finish(self, ctx)? {
-                    self.reset_filter();
+                    self.filter.clear();
                     return Ok(None);
                 }
                 Ok(Some(Status::RestorationFailed))
