@@ -198,6 +198,7 @@ pub fn fig_torques(
     let panels = (0..tau.values.len())
         .map(|k| {
             let mut p = LineFigure::new("", "t [s]", format!("{} [N m]", tau.names[k]));
+            p.y_includes_zero = true;
             p.series.push(
                 Series::new(tau.names[k].clone(), tau.points(k))
                     .styled(fixed(colours[k % 4], Dash::Solid)),
@@ -272,6 +273,7 @@ pub fn fig_contact_forces(
             .collect::<Vec<_>>()
     };
     let mut fig = LineFigure::new(title, "t [s]", "force [N]");
+    fig.y_includes_zero = true;
     fig.series
         .push(Series::new("normal λ_n", pts(&|i| lambda_n[i])).styled(fixed(C_BLUE, Dash::Solid)));
     fig.series.push(

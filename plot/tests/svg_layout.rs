@@ -168,8 +168,9 @@ fn check_ticks(els: &[El], ax: &Axes, known: &[(f64, f64)], fill: &str) -> usize
             }
             "tick-y" if inside_y && e.num("x") < ax.x0 && e.num("x") > ax.x0 - 20.0 => {
                 let v: f64 = e.text.parse().unwrap();
-                // Baseline 0.35 em below the label's middle.
-                let mid = e.num("y") - 0.35 * e.num("font-size");
+                // Baseline half a capital height below the label's middle (DejaVu Sans:
+                // capitals 1493/2048 em high).
+                let mid = e.num("y") - CAP_HALF * e.num("font-size");
                 assert!(
                     (ax.py(v) - mid).abs() < 0.02,
                     "y label {} at {mid} but value maps to {}",
@@ -284,6 +285,10 @@ fn linear_tick_labels_match_positions() {
     }
 }
 
+/// Half the capital height of DejaVu Sans in em (1493 of 2048 units): the layout centres texts
+/// on their capitals.
+const CAP_HALF: f64 = 0.5 * 1493.0 / 2048.0;
+
 /// Estimated text box: 0.55 em per character, 1 em high, from the anchor and baseline.
 fn text_box(e: &El) -> (f64, f64, f64, f64) {
     let size = e.num("font-size");
@@ -298,7 +303,7 @@ fn text_box(e: &El) -> (f64, f64, f64, f64) {
         Some("end") => x - w,
         _ => x,
     };
-    let mid = base - 0.35 * size;
+    let mid = base - CAP_HALF * size;
     (x0, mid - 0.5 * size, x0 + w, mid + 0.5 * size)
 }
 
