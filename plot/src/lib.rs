@@ -29,8 +29,9 @@ pub mod ticks;
 pub use font::text_width;
 
 pub use figure::{
-    Band, Colour, Dash, HLine, Layout, LegendPos, LineFigure, PanelFigure, RenderReport, Scale,
-    Series, SeriesStyle, render, render_panels, render_panels_report, render_report,
+    Band, Colour, Dash, HLine, Layout, LegendPos, LineFigure, MIN_BAND_PX, PanelFigure,
+    RenderReport, Scale, Series, SeriesStyle, render, render_panels, render_panels_report,
+    render_report,
 };
 
 /// Everything that can go wrong while building or rendering a figure.

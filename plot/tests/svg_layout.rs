@@ -776,3 +776,82 @@ fn many_switching_times_keep_three_label_rows_and_every_line() {
     assert!(els.iter().filter(|e| e.class() == "marker-label").count() >= 10);
     assert_no_text_overlap(&els, "many markers");
 }
+
+#[test]
+fn torque_and_force_axes_include_zero_in_every_panel() {
+    let d = tmp("zero");
+    let t = grid(300, 9.6);
+    // τ1 varies by ±3 % about 0.3 N m: without zero on the axis it would fill the panel.
+    let tau = ts(
+        &t,
+        &[&|x| 0.3 + 0.01 * x.sin(), &|x| -0.5 - 0.1 * x.cos(), &|x| {
+            0.2 * x.sin()
+        }],
+        &["τ1", "τ2", "τ3"],
+    );
+    let ph = Phases::default();
+    let f = fig_torques("torques", &tau, Some(1.0), &ph).unwrap();
+    let p = render_panels(&f, d.join("tau")).unwrap();
+    let ax = axes(&read(&p[0]));
+    assert_eq!(ax.len(), 3);
+    for a in &ax {
+        assert!(a.yr.0 <= 0.0 && a.yr.1 >= 0.0, "{:?}", a.yr);
+    }
+    // τ1's ±0.01 N m variation takes under a tenth of its axis: shown against its value.
+    assert!(0.02 / (ax[0].yr.1 - ax[0].yr.0) < 0.1);
+    let ln: Vec<f64> = t.iter().map(|&x| 5.0 + 0.1 * x).collect();
+    let lt: Vec<f64> = ln.iter().map(|v| 0.5 * v).collect();
+    let f = fig_contact_forces("forces", &t, &ln, &lt, 0.8, &ph).unwrap();
+    let p = render(&f, d.join("forces")).unwrap();
+    let a = axes(&read(&p[0]))[0];
+    assert!(a.yr.0 <= 0.0 && a.yr.1 >= 5.96, "{:?}", a.yr);
+    // Other figures still fit their data (ω about 2.2 rad/s keeps its own range).
+    let omega = ts(
+        &t,
+        &[&|x| 2.2 + 0.01 * x, &|_| 2.1, &|_| 2.3],
+        &["ω_x", "ω_y", "ω_z"],
+    );
+    let p = render(&fig_ball_omega("ω", &omega, &ph).unwrap(), d.join("omega")).unwrap();
+    let a = axes(&read(&p[0]))[0];
+    assert!(a.yr.0 > 2.0, "{:?}", a.yr);
+}
+
+#[test]
+fn contact_bands_are_visible_or_not_listed() {
+    let d = tmp("bands");
+    let t = grid(1000, 10.0);
+    let omega = ts(&t, &[&|x| x, &|x| -x, &|x| 0.5 * x], &["ω_x", "ω_y", "ω_z"]);
+    // A 0.01 s stick phase in a 10 s period: 0.8 px of axis, drawn at least MIN_BAND_PX wide.
+    let short = Phases {
+        switches: vec![(4.0, "impact".into()), (4.01, "lift-off".into())],
+        contact: vec![(4.0, 4.01)],
+    };
+    let p = render(
+        &fig_ball_omega("ω", &omega, &short).unwrap(),
+        d.join("short"),
+    )
+    .unwrap();
+    let els = read(&p[0]);
+    let bands: Vec<&El> = els.iter().filter(|e| e.class() == "band").collect();
+    assert_eq!(bands.len(), 1);
+    assert!(
+        bands[0].num("width") >= MIN_BAND_PX - 1e-9,
+        "{:?}",
+        bands[0]
+    );
+    let ax = axes(&els)[0];
+    let mid = bands[0].num("x") + 0.5 * bands[0].num("width");
+    assert!(
+        (mid - ax.px(4.005)).abs() < 0.02,
+        "{mid} vs {}",
+        ax.px(4.005)
+    );
+    assert!(legend_texts(&els).iter().any(|l| l == "contact"));
+    // A contact interval outside the x range is not drawn and not listed.
+    let mut f = fig_ball_omega("ω", &omega, &short).unwrap();
+    f.x_range = Some((5.0, 10.0));
+    let p = render(&f, d.join("outside")).unwrap();
+    let els = read(&p[0]);
+    assert!(els.iter().all(|e| e.class() != "band"));
+    assert!(!legend_texts(&els).iter().any(|l| l == "contact"));
+}
