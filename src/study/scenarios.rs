@@ -352,6 +352,18 @@ pub fn run_scenario(
         stem("distance"),
     )?;
     let tau = components(&d.tau, &["τ1", "τ2", "τ3"], &d.t);
+    // Forces only where the samples are in a stick phase: the free phase's sample at the
+    // impact or lift-off time has λ = 0 and would draw a drop to zero at the window's edges.
+    let any_stick = (0..d.t.len()).any(|i| is_stick(&sol, d, i));
+    let in_stick = |v: &[f64]| -> Vec<f64> {
+        if !any_stick {
+            return v.to_vec();
+        }
+        v.iter()
+            .enumerate()
+            .map(|(i, x)| if is_stick(&sol, d, i) { *x } else { f64::NAN })
+            .collect()
+    };
     bf_plot::render_panels(
         &bf_plot::paper::fig_torques(&title("torques"), &tau, Some(1.0), &phases)?,
         stem("torques"),
@@ -360,8 +372,8 @@ pub fn run_scenario(
         &bf_plot::paper::fig_contact_forces(
             &title("forces"),
             &d.t,
-            &lambda_n,
-            &lambda_t,
+            &in_stick(&lambda_n),
+            &in_stick(&lambda_t),
             mu_s,
             &phases,
         )?,
