@@ -151,6 +151,34 @@ fn paper_quick_writes_a_consistent_report() {
             }
         }
     }
+    // Every claim has a verdict, and every "differs" its paragraph (also in the min-stick
+    // comparison, which repeats the claims per run).
+    let rows: Vec<&str> = report
+        .lines()
+        .filter(|l| l.ends_with("| agrees |") || l.contains("| differs"))
+        .collect();
+    assert!(rows.len() >= 7, "{rows:?}");
+    let mut paragraphs = report.lines().filter(|l| l.starts_with("- **Claim "));
+    for row in rows.iter().filter(|r| r.contains("| differs")) {
+        let n = row.split('|').nth(1).unwrap().trim();
+        let para = paragraphs
+            .find(|p| p.starts_with(&format!("- **Claim {n}**")))
+            .unwrap_or_else(|| panic!("no paragraph for the differing claim {row}"));
+        assert!(para.contains("sits on"), "{para}");
+    }
+    // The active bounds are those of the solutions: the COT period on its 10 s maximum.
+    let cot: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("periodic-cot").join("solution.json")).unwrap(),
+    )
+    .unwrap();
+    let line = report
+        .lines()
+        .find(|l| l.starts_with("- `periodic-cot`: "))
+        .expect("active bounds of periodic-cot");
+    let on_max = (cot["period"].as_f64().unwrap() - 10.0).abs() <= 1e-5 + 1e-3;
+    assert_eq!(line.contains("period (s) = "), on_max, "{line}");
+    // Penetration and cone margins are stated with their tolerances.
+    assert!(report.contains("| scenario | min h (m) | within | min σ (N) |"));
     // The figures built from several scenarios or the open-loop run.
     for (stem, n) in [("fig11_compare_paths", 11), ("fig17_open_loop", 17)] {
         let svg = std::fs::read_to_string(out.join("figures").join(format!("{stem}.svg")))

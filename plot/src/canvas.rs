@@ -4,10 +4,12 @@
 //! rounds every coordinate to a whole pixel, which turns smooth curves into stair steps).
 //! [`PngCanvas`] draws through plotters' bitmap backend (whole pixels are the resolution of a
 //! bitmap anyway) and splits thick polylines at sharp turns ([`split_sharp_turns`]).
-//! Text is measured with the embedded font ([`text_size`]) so that layout decisions are the same
-//! for both outputs; the SVG asks for DejaVu Sans (the embedded font, one of the widest sans
-//! fonts) first, so a viewer's substitute is rarely wider than the layout assumed.
+//! Text is measured with the embedded font's own metrics ([`text_size`], `crate::font`) at the
+//! em size both outputs draw it at: the SVG names DejaVu Sans with that `font-size`, the PNG
+//! draws the embedded file at the same em size. A viewer without DejaVu Sans substitutes its
+//! `sans-serif`, which is narrower for the common ones (Arial, Helvetica, Liberation Sans).
 
+use crate::font;
 use crate::{FONT, PlotError};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -28,7 +30,8 @@ pub(crate) enum Anchor {
     End,
 }
 
-/// A text to draw: `(x, y)` is the anchor point, vertically the middle of the text.
+/// A text to draw: `(x, y)` is the anchor point, vertically the middle of the text's capitals;
+/// `size` is the em size in pixels.
 pub(crate) struct TextSpec<'a> {
     pub text: &'a str,
     pub x: f64,
@@ -72,13 +75,10 @@ pub(crate) struct RectSpec<'a> {
     pub class: &'a str,
 }
 
-/// Width and height in pixels of `text` at font size `size` in the embedded font.
+/// Advance width and line height (ascent + descent) in pixels of `text` at em size `size` in
+/// the embedded font.
 pub(crate) fn text_size(text: &str, size: f64) -> (f64, f64) {
-    let font = (FONT, size).into_font();
-    match font.box_size(text) {
-        Ok((w, _)) => (w as f64, size),
-        Err(_) => (0.6 * size * text.chars().count() as f64, size),
-    }
+    (font::text_width(text, size), font::line_height(size))
 }
 
 /// The drawing operations the figure layout needs.
@@ -210,28 +210,27 @@ impl Canvas for SvgCanvas {
             Anchor::Middle => "middle",
             Anchor::End => "end",
         };
-        // Baseline 0.35 em below the middle: the centre of DejaVu's x-height/cap-height band.
+        // The anchor is the middle of the capitals: the baseline is half a capital height lower
+        // (to the right, for text rotated to read upwards).
+        let b = font::baseline_below_middle(t.size);
         let (x, y) = (t.x, t.y);
         let (bx, by, rot) = if t.vertical {
             (
-                x + 0.35 * t.size,
+                x + b,
                 y,
-                format!(
-                    " transform=\"rotate(-90 {} {})\"",
-                    f2(x + 0.35 * t.size),
-                    f2(y)
-                ),
+                format!(" transform=\"rotate(-90 {} {})\"", f2(x + b), f2(y)),
             )
         } else {
-            (x, y + 0.35 * t.size, String::new())
+            (x, y + b, String::new())
         };
         let _ = writeln!(
             self.out,
-            "<text class=\"{}\" x=\"{}\" y=\"{}\" font-family=\"DejaVu Sans, {FONT}\" font-size=\"{}\" \
+            "<text class=\"{}\" x=\"{}\" y=\"{}\" font-family=\"{}, {FONT}\" font-size=\"{}\" \
              fill=\"{}\" text-anchor=\"{anchor}\"{rot}>{}</text>",
             t.class,
             f2(bx),
             f2(by),
+            font::FAMILY,
             f2(t.size),
             hex(t.colour),
             xml_escape(t.text)
@@ -320,20 +319,31 @@ impl<DB: DrawingBackend> Canvas for PngCanvas<'_, DB> {
     }
 
     fn text(&mut self, t: &TextSpec) -> Result<(), PlotError> {
-        let h = match t.anchor {
-            Anchor::Start => HPos::Left,
-            Anchor::Middle => HPos::Center,
-            Anchor::End => HPos::Right,
+        // Placed from its top-left corner with our own width, so that both outputs put the
+        // text where the layout measured it: plotters' ab_glyph backend puts the baseline half
+        // its size below the top-left anchor, and scales to ascent − descent (see
+        // `font::plotters_size`).
+        let size = font::plotters_size(t.size);
+        let w = font::text_width(t.text, t.size);
+        let before = match t.anchor {
+            Anchor::Start => 0.0,
+            Anchor::Middle => 0.5 * w,
+            Anchor::End => w,
         };
+        let b = font::baseline_below_middle(t.size);
         let colour = RGBColor(t.colour.0, t.colour.1, t.colour.2);
-        let mut style = TextStyle::from((FONT, t.size).into_font())
+        let mut style = TextStyle::from((FONT, size).into_font())
             .color(&colour)
-            .pos(Pos::new(h, VPos::Center));
-        if t.vertical {
+            .pos(Pos::new(HPos::Left, VPos::Top));
+        let pos = if t.vertical {
+            // Rotated by 270°: the text runs upwards from the anchor, the glyphs' "down" is +x.
             style = style.transform(FontTransform::Rotate270);
-        }
+            (t.x + b - 0.5 * size, t.y + before)
+        } else {
+            (t.x - before, t.y + b - 0.5 * size)
+        };
         self.area
-            .draw(&Text::new(t.text.to_string(), ipt((t.x, t.y)), style))
+            .draw(&Text::new(t.text.to_string(), ipt(pos), style))
             .map_err(de)?;
         Ok(())
     }

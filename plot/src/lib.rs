@@ -7,6 +7,7 @@
 //! | module | what | paper |
 //! |---|---|---|
 //! | [`figure`] | [`LineFigure`] / [`PanelFigure`] rendered to SVG + PNG ([`render`], [`render_panels`]) | all 2D figures |
+//! | `font` | metrics of the embedded DejaVu Sans ([`text_width`]): the layout measures with them, the SVG names that font at the same em size | — |
 //! | [`ticks`] | axis ticks whose labels are exactly the value at their position (linear 1-2-5, decadic log) | — |
 //! | [`sat`] | exact and smooth saturation, the scaled tanh, and Fig. 4 ([`sat::fig4_saturation`]) | eq. (3), (58)–(59), Fig. 4 |
 //! | [`paper`] | builders for Fig. 6–9, 13–17 and work–precision plots over [`paper::TimeSeries`] | Sect. 6 |
@@ -19,14 +20,18 @@
 pub mod anim;
 mod canvas;
 pub mod figure;
+mod font;
 pub mod paper;
 pub mod sat;
 pub mod scene3d;
 pub mod ticks;
 
+pub use font::text_width;
+
 pub use figure::{
-    Band, Colour, Dash, HLine, Layout, LegendPos, LineFigure, PanelFigure, RenderReport, Scale,
-    Series, SeriesStyle, render, render_panels, render_panels_report, render_report,
+    Band, Colour, Dash, HLine, Layout, LegendPos, LineFigure, MIN_BAND_PX, PanelFigure,
+    RenderReport, Scale, Series, SeriesStyle, render, render_panels, render_panels_report,
+    render_report,
 };
 
 /// Everything that can go wrong while building or rendering a figure.
@@ -84,9 +89,6 @@ pub enum PlotError {
     Io(#[from] bf_output::FileError),
 }
 
-/// The embedded DejaVu Sans (Bitstream Vera licence, see `assets/LICENSE-DejaVu.txt`).
-static DEJAVU_SANS: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
-
 /// Font family name under which the embedded font is registered with plotters.
 pub const FONT: &str = "sans-serif";
 
@@ -96,7 +98,7 @@ pub fn ensure_font() -> Result<(), PlotError> {
     use std::sync::OnceLock;
     static DONE: OnceLock<bool> = OnceLock::new();
     let ok = *DONE.get_or_init(|| {
-        plotters::style::register_font(FONT, plotters::style::FontStyle::Normal, DEJAVU_SANS)
+        plotters::style::register_font(FONT, plotters::style::FontStyle::Normal, font::DEJAVU_SANS)
             .is_ok()
     });
     if ok { Ok(()) } else { Err(PlotError::Font) }

@@ -181,7 +181,8 @@ pub fn fig_distance(
 /// panel's peak |τ|; beyond that the axis fits the data alone.
 pub const LIMIT_FIT_RATIO: f64 = 2.0;
 
-/// Fig. 8 / 15: joint torques, one panel per joint, autoscaled to the data, with dashed
+/// Fig. 8 / 15: joint torques, one panel per joint, autoscaled to the data and zero (the sign
+/// of a torque matters, and every panel reads the same way), with dashed
 /// ±`limit` lines when given (drawn when within [`LIMIT_FIT_RATIO`] × the peak |τ| of the
 /// panel, otherwise listed in the legend as off scale).
 pub fn fig_torques(
@@ -198,6 +199,7 @@ pub fn fig_torques(
     let panels = (0..tau.values.len())
         .map(|k| {
             let mut p = LineFigure::new("", "t [s]", format!("{} [N m]", tau.names[k]));
+            p.y_includes_zero = true;
             p.series.push(
                 Series::new(tau.names[k].clone(), tau.points(k))
                     .styled(fixed(colours[k % 4], Dash::Solid)),
@@ -236,7 +238,8 @@ pub fn fig_torques(
     })
 }
 
-/// Fig. 9 / 16: contact force: λ_n, ‖λ_∥‖ and the friction-cone bound μ_s λ_n [N]. Sticking
+/// Fig. 9 / 16: contact force: λ_n, ‖λ_∥‖ and the friction-cone bound μ_s λ_n [N], on an axis
+/// that includes zero. Sticking
 /// requires ‖λ_∥‖ ≤ μ_s λ_n; where the two curves touch the motion is on the verge of slipping
 /// (Fig. 16). Samples outside contact may be NaN (they leave gaps).
 pub fn fig_contact_forces(
@@ -272,6 +275,7 @@ pub fn fig_contact_forces(
             .collect::<Vec<_>>()
     };
     let mut fig = LineFigure::new(title, "t [s]", "force [N]");
+    fig.y_includes_zero = true;
     fig.series
         .push(Series::new("normal λ_n", pts(&|i| lambda_n[i])).styled(fixed(C_BLUE, Dash::Solid)));
     fig.series.push(

@@ -168,8 +168,9 @@ fn check_ticks(els: &[El], ax: &Axes, known: &[(f64, f64)], fill: &str) -> usize
             }
             "tick-y" if inside_y && e.num("x") < ax.x0 && e.num("x") > ax.x0 - 20.0 => {
                 let v: f64 = e.text.parse().unwrap();
-                // Baseline 0.35 em below the label's middle.
-                let mid = e.num("y") - 0.35 * e.num("font-size");
+                // Baseline half a capital height below the label's middle (DejaVu Sans:
+                // capitals 1493/2048 em high).
+                let mid = e.num("y") - CAP_HALF * e.num("font-size");
                 assert!(
                     (ax.py(v) - mid).abs() < 0.02,
                     "y label {} at {mid} but value maps to {}",
@@ -284,6 +285,10 @@ fn linear_tick_labels_match_positions() {
     }
 }
 
+/// Half the capital height of DejaVu Sans in em (1493 of 2048 units): the layout centres texts
+/// on their capitals.
+const CAP_HALF: f64 = 0.5 * 1493.0 / 2048.0;
+
 /// Estimated text box: 0.55 em per character, 1 em high, from the anchor and baseline.
 fn text_box(e: &El) -> (f64, f64, f64, f64) {
     let size = e.num("font-size");
@@ -298,7 +303,7 @@ fn text_box(e: &El) -> (f64, f64, f64, f64) {
         Some("end") => x - w,
         _ => x,
     };
-    let mid = base - 0.35 * size;
+    let mid = base - CAP_HALF * size;
     (x0, mid - 0.5 * size, x0 + w, mid + 0.5 * size)
 }
 
@@ -770,4 +775,83 @@ fn many_switching_times_keep_three_label_rows_and_every_line() {
     assert!((2..=3).contains(&rows.len()), "{rows:?}");
     assert!(els.iter().filter(|e| e.class() == "marker-label").count() >= 10);
     assert_no_text_overlap(&els, "many markers");
+}
+
+#[test]
+fn torque_and_force_axes_include_zero_in_every_panel() {
+    let d = tmp("zero");
+    let t = grid(300, 9.6);
+    // τ1 varies by ±3 % about 0.3 N m: without zero on the axis it would fill the panel.
+    let tau = ts(
+        &t,
+        &[&|x| 0.3 + 0.01 * x.sin(), &|x| -0.5 - 0.1 * x.cos(), &|x| {
+            0.2 * x.sin()
+        }],
+        &["τ1", "τ2", "τ3"],
+    );
+    let ph = Phases::default();
+    let f = fig_torques("torques", &tau, Some(1.0), &ph).unwrap();
+    let p = render_panels(&f, d.join("tau")).unwrap();
+    let ax = axes(&read(&p[0]));
+    assert_eq!(ax.len(), 3);
+    for a in &ax {
+        assert!(a.yr.0 <= 0.0 && a.yr.1 >= 0.0, "{:?}", a.yr);
+    }
+    // τ1's ±0.01 N m variation takes under a tenth of its axis: shown against its value.
+    assert!(0.02 / (ax[0].yr.1 - ax[0].yr.0) < 0.1);
+    let ln: Vec<f64> = t.iter().map(|&x| 5.0 + 0.1 * x).collect();
+    let lt: Vec<f64> = ln.iter().map(|v| 0.5 * v).collect();
+    let f = fig_contact_forces("forces", &t, &ln, &lt, 0.8, &ph).unwrap();
+    let p = render(&f, d.join("forces")).unwrap();
+    let a = axes(&read(&p[0]))[0];
+    assert!(a.yr.0 <= 0.0 && a.yr.1 >= 5.96, "{:?}", a.yr);
+    // Other figures still fit their data (ω about 2.2 rad/s keeps its own range).
+    let omega = ts(
+        &t,
+        &[&|x| 2.2 + 0.01 * x, &|_| 2.1, &|_| 2.3],
+        &["ω_x", "ω_y", "ω_z"],
+    );
+    let p = render(&fig_ball_omega("ω", &omega, &ph).unwrap(), d.join("omega")).unwrap();
+    let a = axes(&read(&p[0]))[0];
+    assert!(a.yr.0 > 2.0, "{:?}", a.yr);
+}
+
+#[test]
+fn contact_bands_are_visible_or_not_listed() {
+    let d = tmp("bands");
+    let t = grid(1000, 10.0);
+    let omega = ts(&t, &[&|x| x, &|x| -x, &|x| 0.5 * x], &["ω_x", "ω_y", "ω_z"]);
+    // A 0.01 s stick phase in a 10 s period: 0.8 px of axis, drawn at least MIN_BAND_PX wide.
+    let short = Phases {
+        switches: vec![(4.0, "impact".into()), (4.01, "lift-off".into())],
+        contact: vec![(4.0, 4.01)],
+    };
+    let p = render(
+        &fig_ball_omega("ω", &omega, &short).unwrap(),
+        d.join("short"),
+    )
+    .unwrap();
+    let els = read(&p[0]);
+    let bands: Vec<&El> = els.iter().filter(|e| e.class() == "band").collect();
+    assert_eq!(bands.len(), 1);
+    assert!(
+        bands[0].num("width") >= MIN_BAND_PX - 1e-9,
+        "{:?}",
+        bands[0]
+    );
+    let ax = axes(&els)[0];
+    let mid = bands[0].num("x") + 0.5 * bands[0].num("width");
+    assert!(
+        (mid - ax.px(4.005)).abs() < 0.02,
+        "{mid} vs {}",
+        ax.px(4.005)
+    );
+    assert!(legend_texts(&els).iter().any(|l| l == "contact"));
+    // A contact interval outside the x range is not drawn and not listed.
+    let mut f = fig_ball_omega("ω", &omega, &short).unwrap();
+    f.x_range = Some((5.0, 10.0));
+    let p = render(&f, d.join("outside")).unwrap();
+    let els = read(&p[0]);
+    assert!(els.iter().all(|e| e.class() != "band"));
+    assert!(!legend_texts(&els).iter().any(|l| l == "contact"));
 }

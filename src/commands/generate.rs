@@ -9,6 +9,17 @@ use crate::cli::{FloatArg, GenerateArgs};
 use crate::io::write_atomic;
 use anyhow::{Context, Result};
 
+/// The module `generate` emits for `scene` (source `text`): the scene's `kernels` list plus the
+/// inverse-dynamics family ([`bf_codegen::kernels::with_robot_kernels`]). The `paper` report's
+/// code-generation table calls this too, so the two list the same kernels.
+pub fn generate_module(
+    scene: &bf_codegen::Scene,
+    text: &str,
+    opts: &bf_codegen::EmitSettings,
+) -> Result<bf_codegen::Generated, bf_codegen::CodegenError> {
+    bf_codegen::generate_with(&bf_codegen::kernels::with_robot_kernels(scene), text, opts)
+}
+
 /// Run `generate`.
 pub fn run(args: &GenerateArgs) -> Result<()> {
     let (scene, text) = super::load_scene(&args.scene)?;
@@ -19,8 +30,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
         },
         fma: args.fma,
     };
-    let full = bf_codegen::kernels::with_robot_kernels(&scene);
-    let generated = bf_codegen::generate_with(&full, &text, &opts)
+    let generated = generate_module(&scene, &text, &opts)
         .with_context(|| format!("{}: code generation failed", args.scene.display()))?;
     match &args.output {
         Some(path) => {

@@ -10,6 +10,8 @@
 //! * [`verify`]: re-integration of the optimal torques with the simulator (bf-sim);
 //! * [`solution_io`]: `solution.json` and `torques.csv`;
 //! * [`scenarios`]: the three scenarios of Sect. 6.1 solved, verified, plotted and checked;
+//! * [`claims`]: the paper's claims of Sect. 6.1 with verdicts and, where they differ, why; the
+//!   bounds an optimum sits on;
 //! * [`openloop`]: the optimal torques replayed open loop in the full hybrid model (Sect. 6.2);
 //! * [`extremes`]: numerical stability at the edges of the domain (one file per probe);
 //! * [`speed_accuracy`]: error versus computing time for integrators, collocation meshes, the
@@ -21,6 +23,7 @@
 
 pub mod appendix;
 pub mod arm;
+pub mod claims;
 pub mod error;
 pub mod extremes;
 pub mod openloop;

@@ -9,6 +9,7 @@
 //! joint trajectory; the optimiser itself uses the smooth one (eq. 58–59), whose difference is
 //! at most ε/2.
 
+use crate::study::claims::Facts;
 use crate::study::solution_io::write_solution;
 use crate::study::strategy::Strategy;
 use anyhow::{Context, Result, anyhow};
@@ -79,6 +80,96 @@ pub struct ScenarioResult {
     /// Share of the contact (stick) samples with ‖λ_∥‖ ≥ 0.99 μ_s λ_n (on the friction-cone
     /// boundary).
     pub cone_share: f64,
+    /// Largest normal force λ_n over the contact samples (N): the scale of the friction-cone
+    /// margins σ = μ_s λ_n − ‖λ_∥‖ (eq. 18).
+    pub max_lambda_n: f64,
+    /// The static friction coefficient μ_s the cone margins were measured with.
+    pub mu_s: f64,
+    /// The bounds of the problem the solution sits on ([`crate::study::claims::active_bounds`]).
+    pub active: Vec<crate::study::claims::ActiveBound>,
+}
+
+/// Samples of the collocation polynomials per period for the path figures (Fig. 5, 10, 11, 12):
+/// with the 100 dense samples per phase of [`Samples`], a 9.6 s COT period was drawn from
+/// samples 0.1 s apart in its long free phases, visibly jagged.
+pub const PATH_SAMPLES_PER_PERIOD: usize = 1200;
+
+/// Least samples of one phase in the path figures (a 0.01 s stick phase still gets a smooth
+/// contact path).
+pub const PATH_SAMPLES_PER_PHASE: usize = 60;
+
+/// Normalised times τ ∈ [−1, 1] at which to evaluate each phase's collocation polynomials for
+/// the path figures: equally spaced, [`PATH_SAMPLES_PER_PERIOD`] over the period shared out by
+/// duration, at least [`PATH_SAMPLES_PER_PHASE`] per phase, both ends included.
+pub fn path_taus(durations: &[f64]) -> Vec<Vec<f64>> {
+    let period: f64 = durations.iter().filter(|d| d.is_finite()).sum();
+    durations
+        .iter()
+        .map(|&d| {
+            let share = if period > 0.0 && d.is_finite() {
+                // Intervals, not samples: steps of at most period / PATH_SAMPLES_PER_PERIOD.
+                (PATH_SAMPLES_PER_PERIOD as f64 * d / period).ceil() as usize + 1
+            } else {
+                0
+            };
+            let n = share.max(PATH_SAMPLES_PER_PHASE);
+            (0..n)
+                .map(|k| -1.0 + 2.0 * k as f64 / (n - 1) as f64)
+                .collect()
+        })
+        .collect()
+}
+
+/// One state on the collocation polynomials: (phase, q, q̇, ω).
+type PathState = (usize, Vec<f64>, Vec<f64>, Vec<f64>);
+
+/// The states of `sol` at [`path_taus`], from its per-phase collocation data (`raw`); empty
+/// when the solution carries none (then the callers fall back to the dense samples).
+fn path_states(sol: &OcpSolution) -> Vec<PathState> {
+    let nq = sol.dense.q.first().map_or(0, |q| q.len());
+    let durations: Vec<f64> = sol.raw.iter().map(|tr| tr.duration).collect();
+    let mut out = Vec::new();
+    for ((pi, tr), taus) in sol.raw.iter().enumerate().zip(path_taus(&durations)) {
+        for tau in taus {
+            let x = tr.x_at(tau);
+            if x.len() < 2 * nq + 3 {
+                return Vec::new();
+            }
+            out.push((
+                pi,
+                x[..nq].to_vec(),
+                x[nq..2 * nq].to_vec(),
+                x[2 * nq..2 * nq + 3].to_vec(),
+            ));
+        }
+    }
+    out
+}
+
+/// The path-figure states of `sol`: [`path_states`], or its dense samples when it has no
+/// collocation data.
+fn path_states_or_dense(sol: &OcpSolution) -> Vec<PathState> {
+    let s = path_states(sol);
+    if !s.is_empty() {
+        return s;
+    }
+    let d = &sol.dense;
+    (0..d.t.len())
+        .map(|i| {
+            (
+                d.phase.get(i).copied().unwrap_or(0),
+                d.q[i].clone(),
+                d.qd[i].clone(),
+                d.omega[i].clone(),
+            )
+        })
+        .collect()
+}
+
+fn phase_is_stick(sol: &OcpSolution, phase: usize) -> bool {
+    sol.modes
+        .get(phase)
+        .is_some_and(|m| *m == bf_problem::node::PhaseMode::Stick)
 }
 
 /// Geometry evaluated by the compiled kernels of the problem's scene at one sample.
@@ -261,6 +352,18 @@ pub fn run_scenario(
         stem("distance"),
     )?;
     let tau = components(&d.tau, &["τ1", "τ2", "τ3"], &d.t);
+    // Forces only where the samples are in a stick phase: the free phase's sample at the
+    // impact or lift-off time has λ = 0 and would draw a drop to zero at the window's edges.
+    let any_stick = (0..d.t.len()).any(|i| is_stick(&sol, d, i));
+    let in_stick = |v: &[f64]| -> Vec<f64> {
+        if !any_stick {
+            return v.to_vec();
+        }
+        v.iter()
+            .enumerate()
+            .map(|(i, x)| if is_stick(&sol, d, i) { *x } else { f64::NAN })
+            .collect()
+    };
     bf_plot::render_panels(
         &bf_plot::paper::fig_torques(&title("torques"), &tau, Some(1.0), &phases)?,
         stem("torques"),
@@ -269,31 +372,29 @@ pub fn run_scenario(
         &bf_plot::paper::fig_contact_forces(
             &title("forces"),
             &d.t,
-            &lambda_n,
-            &lambda_t,
+            &in_stick(&lambda_n),
+            &in_stick(&lambda_t),
             mu_s,
             &phases,
         )?,
         stem("forces"),
     )?;
     let snaps = 6usize;
+    // The paths from the collocation polynomials, finely sampled (PATH_SAMPLES_PER_PERIOD).
+    let path: Vec<(bool, Geometry)> = path_states_or_dense(&sol)
+        .iter()
+        .map(|(p, q, qd, w)| (phase_is_stick(&sol, *p), geometry(&scene, base, q, qd, w)))
+        .collect();
     let paths = FingerPaths {
         ball_center: [0.0; 3],
         ball_radius: 1.0,
         snapshots: (0..snaps)
             .map(|k| geo[k * (geo.len() - 1) / (snaps - 1)].frames.clone())
             .collect(),
-        tip_path: geo.iter().map(|g| g.frames[3]).collect(),
-        contact_path: geo
+        tip_path: path.iter().map(|(_, g)| g.frames[3]).collect(),
+        contact_path: path
             .iter()
-            .enumerate()
-            .map(|(i, g)| {
-                if is_stick(&sol, d, i) {
-                    g.p_c
-                } else {
-                    [f64::NAN; 3]
-                }
-            })
+            .map(|(stick, g)| if *stick { g.p_c } else { [f64::NAN; 3] })
             .collect(),
     };
     bf_plot::render_panels(
@@ -319,8 +420,16 @@ pub fn run_scenario(
     } else {
         f64::NAN
     };
+    let max_lambda_n = lambda_n
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| is_stick(&sol, d, *i))
+        .fold(0.0f64, |m, (_, v)| m.max(*v));
     Ok(ScenarioResult {
         name: name.to_string(),
+        max_lambda_n,
+        mu_s,
+        active: crate::study::claims::active_bounds(&problem.ocp, &sol),
         max_tau,
         contact_from_tip: (loc.0, mean, loc.2),
         cone_share: if cone.1 > 0 {
@@ -340,14 +449,14 @@ fn scene_base(scene: &SceneId) -> Result<[f64; 3]> {
 }
 
 /// Path of the finger's closest point to the ball, p_c (eq. 3 with the exact saturation), over
-/// one period of a solution, at its dense samples.
+/// one period of a solution, on its collocation polynomials ([`path_taus`]).
 fn closest_point_path(name: &str, sol: &OcpSolution) -> Result<Vec<[f64; 3]>> {
     let problem: Problem = name.parse().map_err(|e| anyhow!("{e}"))?;
     let scene = problem.scene();
     let base = scene_base(&scene)?;
-    let d = &sol.dense;
-    Ok((0..d.t.len())
-        .map(|i| geometry(&scene, base, &d.q[i], &d.qd[i], &d.omega[i]).p_c)
+    Ok(path_states_or_dense(sol)
+        .iter()
+        .map(|(_, q, qd, w)| geometry(&scene, base, q, qd, w).p_c)
         .collect())
 }
 
@@ -439,22 +548,6 @@ fn animation_frames(
     out
 }
 
-/// The verdict of a claim, flagged when it rests on a solution that failed its re-integration
-/// check ([`crate::study::verify::is_verified`]).
-fn verdict_on(ok: bool, on: &[&ScenarioResult]) -> String {
-    let v = if ok { "agrees" } else { "differs" };
-    let unverified: Vec<&str> = on
-        .iter()
-        .filter(|r| !crate::study::verify::is_verified(&r.solution))
-        .map(|r| r.name.as_str())
-        .collect();
-    if unverified.is_empty() {
-        v.to_string()
-    } else {
-        format!("{v} (**unverified**: {})", unverified.join(", "))
-    }
-}
-
 /// The results table and the per-claim comparison with Sect. 6.1, as markdown.
 pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
     let mut s = String::new();
@@ -503,70 +596,108 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             o.solve_seconds
         )?;
     }
-    let get = |n: &str| results.iter().find(|r| r.name == n);
-    writeln!(s, "\n### Claims of Sect. 6.1\n")?;
+    writeln!(s, "\n{}", active_bounds_markdown(results))?;
+    writeln!(s, "{}", tolerances_markdown(results))?;
+    let facts: Vec<Facts> = results.iter().map(facts_of).collect();
+    writeln!(s, "### Claims of Sect. 6.1\n")?;
     writeln!(
         s,
-        "| claim (paper) | this reproduction | verdict |\n|---|---|---|"
+        "{}",
+        crate::study::claims::markdown(&crate::study::claims::claims(&facts, QC_OMEGA_REF[2]))
     )?;
-    if let Some(qc) = get("periodic-qc") {
-        let wz = qc.solution.mean_omega[2];
-        let wref = QC_OMEGA_REF[2];
-        writeln!(
-            s,
-            "| QC: the average angular velocity matches ω_ref = (0, 0, {wref}) | mean ω_z = {wz:.3} rad/s ({:+.1} %) | {} |",
-            100.0 * (wz - wref) / wref,
-            verdict_on((wz - wref).abs() < 0.1 * wref, &[qc])
-        )?;
-        writeln!(
-            s,
-            "| QC: the friction-cone constraint is always active during contact | {:.0} % of the contact samples on the boundary | {} |",
-            100.0 * qc.cone_share,
-            verdict_on(qc.cone_share > 0.9, &[qc])
-        )?;
-        writeln!(
-            s,
-            "| QC: only the fingertip is used | contact point at most {:.3} m from the tip | {} |",
-            qc.contact_from_tip.2,
-            verdict_on(qc.contact_from_tip.2 < 0.02, &[qc])
-        )?;
-        if let Some(cot) = get("periodic-cot") {
-            writeln!(
-                s,
-                "| QC period shorter than the COT period | {:.3} s vs {:.3} s | {} |",
-                qc.solution.period,
-                cot.solution.period,
-                verdict_on(qc.solution.period < cot.solution.period, &[qc, cot])
-            )?;
-        }
-    }
-    if let Some(cot) = get("periodic-cot") {
-        writeln!(
-            s,
-            "| COT, robotic finger: the contact point lies on the side of the link | contact point {:.3}–{:.3} m from the tip | {} |",
-            cot.contact_from_tip.0,
-            cot.contact_from_tip.2,
-            verdict_on(cot.contact_from_tip.1 > 0.02, &[cot])
-        )?;
-    }
-    if let Some(h) = get("periodic-cot-human") {
-        writeln!(
-            s,
-            "| COT, human finger: touches with the fingertip only | contact point at most {:.3} m from the tip | {} |",
-            h.contact_from_tip.2,
-            verdict_on(h.contact_from_tip.2 < 0.02, &[h])
-        )?;
-        if let Some(cot) = get("periodic-cot") {
-            writeln!(
-                s,
-                "| the robotic finger rotates the ball more efficiently (lower COT) | φ = {:.4e} (robotic) vs {:.4e} (human) | {} |",
-                cot.solution.objective,
-                h.solution.objective,
-                verdict_on(cot.solution.objective < h.solution.objective, &[cot, h])
-            )?;
-        }
-    }
     Ok(s)
+}
+
+/// What the claims need of a scenario result.
+fn facts_of(r: &ScenarioResult) -> Facts {
+    Facts {
+        name: r.name.clone(),
+        verified: crate::study::verify::is_verified(&r.solution),
+        objective: r.solution.objective,
+        period: r.solution.period,
+        mean_omega_z: r.solution.mean_omega[2],
+        cone_share: r.cone_share,
+        from_tip: r.contact_from_tip,
+        active: r.active.clone(),
+    }
+}
+
+/// The bounds each reported optimum sits on, one list per scenario.
+pub fn active_bounds_markdown(results: &[ScenarioResult]) -> String {
+    let mut s = String::from(
+        "Active bounds (phase durations, the period, torque and joint limits at the collocation \
+         nodes; a value within 1e-5 + 1e-4·|bound| of its bound):\n\n",
+    );
+    for r in results {
+        let list = if r.active.is_empty() {
+            "none".to_string()
+        } else {
+            r.active
+                .iter()
+                .map(|a| a.describe())
+                .collect::<Vec<_>>()
+                .join("; ")
+        };
+        s.push_str(&format!("- `{}`: {list}\n", r.name));
+    }
+    s
+}
+
+/// Penetration and friction-cone margins of each verified re-integration against their
+/// tolerances ([`crate::study::verify::PENETRATION_TOLERANCE`],
+/// [`crate::study::verify::CONE_TOLERANCE`]), with the verdict.
+pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
+    use crate::study::verify::{CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT};
+    let mut s = format!(
+        "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e} (the \
+         criterion); along the re-integrated path, penetration min h ≥ −{PENETRATION_TOLERANCE:e} m \
+         (the problem's own allowance at touch-down and release) and friction-cone margin \
+         min σ ≥ −{CONE_TOLERANCE} · μ_s max λ_n (σ = μ_s λ_n − ‖λ_∥‖, eq. 18; the optimum \
+         satisfies σ ≥ 0 at its collocation nodes only). A **no** flags a path that leaves its \
+         tolerance although the defect criterion passes: the contact then penetrates or slips \
+         more than the problem allows between the nodes.\n\n\
+         | scenario | min h (m) | within | min σ (N) | −{CONE_TOLERANCE} · μ_s max λ_n (N) | within |\n\
+         |---|---|---|---|---|---|\n"
+    );
+    for r in results {
+        let Some(v) = &r.solution.verification else {
+            s.push_str(&format!("| {} | not verified | | | | |\n", r.name));
+            continue;
+        };
+        let min = |f: &dyn Fn(&crate::study::verify::PhaseVerification) -> Option<f64>| {
+            v.phases.iter().filter_map(f).fold(f64::INFINITY, f64::min)
+        };
+        let h = min(&|p| p.min_h);
+        let sigma = min(&|p| p.min_sigma);
+        let mu = r.mu_s;
+        let cone = CONE_TOLERANCE * mu * r.max_lambda_n;
+        let yes = |ok: bool| if ok { "yes" } else { "**no**" };
+        let cell = |v: f64| {
+            if v.is_finite() {
+                format!("{v:.2e}")
+            } else {
+                "—".to_string()
+            }
+        };
+        s.push_str(&format!(
+            "| {} | {} | {} | {} | {:.2e} | {} |\n",
+            r.name,
+            cell(h),
+            if h.is_finite() {
+                yes(h >= -PENETRATION_TOLERANCE)
+            } else {
+                "—"
+            },
+            cell(sigma),
+            -cone,
+            if sigma.is_finite() {
+                yes(sigma >= -cone)
+            } else {
+                "—"
+            }
+        ));
+    }
+    s
 }
 
 /// Figures of one scenario as markdown image links (relative to the report).
@@ -621,6 +752,29 @@ pub fn run_all(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn path_taus_sample_every_period_finely_and_every_phase() {
+        // A COT-like period: 9.59 s free, 0.01 s stick, 0.4 s free.
+        let d = [9.59, 0.01, 0.4];
+        let taus = path_taus(&d);
+        let total: usize = taus.iter().map(|t| t.len()).sum();
+        assert!(total >= PATH_SAMPLES_PER_PERIOD, "{total}");
+        for (p, t) in taus.iter().enumerate() {
+            assert!(t.len() >= PATH_SAMPLES_PER_PHASE);
+            assert_eq!((t[0], *t.last().unwrap()), (-1.0, 1.0));
+            // Time steps at most period / PATH_SAMPLES_PER_PERIOD (up to rounding the share up).
+            let dt = 0.5 * (t[1] - t[0]) * d[p];
+            assert!(
+                dt <= 10.0 / PATH_SAMPLES_PER_PERIOD as f64 + 1e-12,
+                "phase {p}: {dt}"
+            );
+            assert!(t.windows(2).all(|w| w[1] > w[0]));
+        }
+        // Degenerate durations still give the minimum per phase, no panic.
+        let t = path_taus(&[0.0, f64::NAN]);
+        assert!(t.iter().all(|t| t.len() == PATH_SAMPLES_PER_PHASE));
+    }
 
     #[test]
     fn rodrigues_is_a_rotation_about_the_given_axis() {

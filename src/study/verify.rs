@@ -631,6 +631,20 @@ fn verify_phase<const N: usize>(
 /// with its torques, and every place that shows the solution flags it.
 pub const VERIFIED_DEFECT: f64 = 1e-4;
 
+/// Penetration the re-integrated path may show (m): the problem's own allowance h ≥ −10⁻⁴ m at
+/// the touch-down and release (the tolerance on h of the periodic problems in bf-problem's
+/// catalogue). The optimum satisfies its distance bounds at the collocation nodes only, and
+/// the re-integration follows the model within [`VERIFIED_DEFECT`], so min h is reported
+/// against this, not against 0.
+pub const PENETRATION_TOLERANCE: f64 = 1e-4;
+
+/// Friction-cone margin the re-integrated stick phases may show, as a fraction of the cone's
+/// size μ_s max λ_n: the optimum satisfies σ = μ_s λ_n − ‖λ_∥‖ ≥ 0 (eq. 18) at its collocation
+/// nodes only; between them the torques are interpolated and the re-integration computes λ
+/// from the stick law (eq. 33) on a state that is off the collocated one by up to
+/// [`VERIFIED_DEFECT`]. The report accepts margins down to −1 % of the cone and flags any below.
+pub const CONE_TOLERANCE: f64 = 0.01;
+
 /// Whether `sol` carries a re-integration that reached the end of every element with an
 /// element-wise defect of at most [`VERIFIED_DEFECT`].
 pub fn is_verified(sol: &OcpSolution) -> bool {

@@ -19,11 +19,12 @@ pub(super) fn draw_all(
     let (w, h) = (size.0 as f64, size.1 as f64);
     let mut top = 0.0;
     if !title.is_empty() {
+        let (title, size) = fit_text(title, TITLE_FONT, w - 2.0 * MARGIN);
         cv.text(&TextSpec {
-            text: title,
+            text: &title,
             x: 0.5 * w,
             y: 0.75 * TITLE_FONT,
-            size: TITLE_FONT,
+            size,
             colour: (0, 0, 0),
             anchor: Anchor::Middle,
             vertical: false,
@@ -66,10 +67,15 @@ pub(super) fn draw_all(
         .map(|((f, p), a)| layout_panel(f, p, *a, title_font, (Y_LABEL_AREA, 0.0)))
         .collect();
     if layout == Layout::Rows && panels.len() > 1 {
-        // Stacked panels share their time axis: same left edge and same width.
-        let ya = lays.iter().map(|l| l.y_area).fold(0.0f64, f64::max);
-        let out = lays.iter().map(|l| l.outside).fold(0.0f64, f64::max);
-        if lays.iter().any(|l| l.y_area < ya || l.outside < out) {
+        // Stacked panels share their time axis: same left edge and same width. A panel laid
+        // out again may need more room than the others got (a wider legend beside the axes),
+        // so repeat until they agree; the room only grows, and is bounded by the widest need.
+        for _ in 0..4 {
+            let ya = lays.iter().map(|l| l.y_area).fold(0.0f64, f64::max);
+            let out = lays.iter().map(|l| l.outside).fold(0.0f64, f64::max);
+            if lays.iter().all(|l| l.y_area >= ya && l.outside >= out) {
+                break;
+            }
             lays = panels
                 .iter()
                 .zip(prepared)
@@ -98,11 +104,12 @@ pub(super) fn draw_panel(
     };
     let mut texts: Vec<(String, f64, f64, f64, Anchor, &'static str)> = Vec::new();
     if let Some(y) = lay.title_y {
+        let (title, size) = fit_text(&fig.title, title_font, lay.area.w() - 2.0 * MARGIN);
         texts.push(txt(
-            &fig.title,
+            &title,
             0.5 * (lay.area.x0 + lay.area.x1),
             y,
-            title_font,
+            size,
             Anchor::Middle,
             "panel-title",
         ));
@@ -114,12 +121,17 @@ pub(super) fn draw_panel(
             continue;
         };
         let (a, c) = (a.max(m.xr.0), c.min(m.xr.1));
-        if a >= c {
+        if a > c {
             continue;
         }
+        // At least MIN_BAND_PX wide about its middle, kept inside the axes.
+        let (mut xa, mut xc) = (m.x(a), m.x(c));
+        let grow = 0.5 * (super::MIN_BAND_PX - (xc - xa)).max(0.0);
+        xa = (xa - grow).max(p.x0);
+        xc = (xc + grow).min(p.x1);
         cv.rect(&RectSpec {
-            p0: (m.x(a), p.y0),
-            p1: (m.x(c), p.y1),
+            p0: (xa, p.y0),
+            p1: (xc, p.y1),
             fill: Some(band_fill(b)),
             stroke: None,
             class: "band",
@@ -246,11 +258,12 @@ pub(super) fn draw_panel(
             texts.push(txt(l, p.x0 - 9.0, y, TICK_FONT, Anchor::End, "tick-y"));
         }
     }
+    let (x_label, x_size) = fit_text(&fig.x_label, DESC_FONT, p.w());
     texts.push(txt(
-        &fig.x_label,
+        &x_label,
         0.5 * (p.x0 + p.x1),
         p.y1 + X_LABEL_AREA - 0.5 * DESC_FONT - 4.0,
-        DESC_FONT,
+        x_size,
         Anchor::Middle,
         "xdesc",
     ));
@@ -266,11 +279,12 @@ pub(super) fn draw_panel(
             class,
         })?;
     }
+    let (y_label, y_size) = fit_text(&fig.y_label, DESC_FONT, p.h());
     cv.text(&TextSpec {
-        text: &fig.y_label,
+        text: &y_label,
         x: p.x0 - lay.y_area + 0.5 * DESC_FONT + 2.0,
         y: 0.5 * (p.y0 + p.y1),
-        size: DESC_FONT,
+        size: y_size,
         colour: TEXT_COLOUR,
         anchor: Anchor::Middle,
         vertical: true,

@@ -12,13 +12,17 @@ use crate::ticks::{self, Tick};
 pub(super) const MARGIN: f64 = 14.0;
 pub(super) const X_LABEL_AREA: f64 = 58.0;
 pub(super) const Y_LABEL_AREA: f64 = 92.0;
-pub(super) const TITLE_FONT: f64 = 24.0;
-pub(super) const PANEL_TITLE_FONT: f64 = 20.0;
-pub(super) const DESC_FONT: f64 = 18.0;
-pub(super) const TICK_FONT: f64 = 15.0;
-pub(super) const LEGEND_FONT: f64 = 15.0;
-pub(super) const MARKER_FONT: f64 = 13.0;
-pub(super) const POINT_LABEL_FONT: f64 = 12.0;
+// Font sizes are em sizes (SVG `font-size`).
+pub(super) const TITLE_FONT: f64 = 20.5;
+pub(super) const PANEL_TITLE_FONT: f64 = 17.0;
+pub(super) const DESC_FONT: f64 = 15.5;
+pub(super) const TICK_FONT: f64 = 13.0;
+pub(super) const LEGEND_FONT: f64 = 13.0;
+pub(super) const MARKER_FONT: f64 = 11.0;
+pub(super) const POINT_LABEL_FONT: f64 = 10.5;
+/// Titles and axis descriptions are never drawn smaller than this fraction of their size; a
+/// longer one is cut to fit (with an ellipsis) rather than drawn unreadably small.
+const MIN_FIT_SCALE: f64 = 0.7;
 /// Rows of switching-time labels above the axes at most.
 pub(super) const MAX_MARKER_ROWS: usize = 3;
 pub(super) const LEGEND_ROW: f64 = 22.0;
@@ -139,10 +143,43 @@ pub(super) fn text_box(text: &str, x: f64, y: f64, size: f64, anchor: Anchor) ->
     }
 }
 
+/// A text and the em size that make it at most `avail` pixels wide: `size` if it fits, else a
+/// smaller size down to `MIN_FIT_SCALE` of it, else the text cut short with an ellipsis.
+pub(super) fn fit_text(text: &str, size: f64, avail: f64) -> (String, f64) {
+    let w = text_size(text, size).0;
+    if w <= avail {
+        return (text.to_string(), size);
+    }
+    let s = size * (avail / w).max(MIN_FIT_SCALE);
+    if text_size(text, s).0 <= avail {
+        return (text.to_string(), s);
+    }
+    let chars: Vec<char> = text.chars().collect();
+    let mut n = chars.len();
+    while n > 0 {
+        n -= 1;
+        let cut: String = chars[..n].iter().collect::<String>().trim_end().to_string() + "…";
+        if text_size(&cut, s).0 <= avail {
+            return (cut, s);
+        }
+    }
+    ("…".into(), s)
+}
+
+/// Whether any part of band `b` lies in the x range `xr` (plotting coordinates): only then is
+/// it drawn, and only then is it listed in the legend.
+pub(super) fn band_visible(b: &Band, scale: Scale, xr: (f64, f64)) -> bool {
+    match (tx(b.x0, scale), tx(b.x1, scale)) {
+        (Some(a), Some(c)) => a.max(xr.0) <= c.min(xr.1),
+        _ => false,
+    }
+}
+
 pub(super) fn legend_entries(
     fig: &LineFigure,
     prep: &Prepared,
     off_scale: &[bool],
+    xr: (f64, f64),
 ) -> Vec<(String, Sample)> {
     let mut out: Vec<(String, Sample)> = Vec::new();
     for s in prep.series.iter().filter(|s| s.in_legend) {
@@ -178,7 +215,11 @@ pub(super) fn legend_entries(
             },
         ));
     }
-    for b in &fig.bands {
+    for b in fig
+        .bands
+        .iter()
+        .filter(|b| band_visible(b, fig.x_scale, xr))
+    {
         if !b.label.is_empty() && !out.iter().any(|(l, _)| *l == b.label) {
             let (c, o) = band_fill(b);
             out.push((b.label.clone(), Sample::Fill(c, o)));
@@ -423,7 +464,7 @@ pub(super) fn layout_panel(
             .iter()
             .map(|h| tx(h.y, fig.y_scale).is_none_or(|y| y < m.yr.0 || y > m.yr.1))
             .collect();
-        let entries = legend_entries(fig, prep, &off_scale);
+        let entries = legend_entries(fig, prep, &off_scale, m.xr);
         let mut legend = None;
         if !entries.is_empty() && fig.legend != LegendPos::Hidden {
             let tw = entries
@@ -449,6 +490,12 @@ pub(super) fn layout_panel(
                 }
             };
             let chosen = match fig.legend {
+                LegendPos::Auto if outside > 0.0 && outside < bw + 30.0 && !last => {
+                    // Room beside the axes set by a neighbouring panel, too narrow for this
+                    // legend.
+                    outside = bw + 30.0;
+                    continue;
+                }
                 LegendPos::Auto if outside > 0.0 => {
                     // Clear of the last x tick label, which reaches past the frame.
                     let x0 = m.plot.x1 + 24.0;

@@ -44,6 +44,9 @@ use std::path::{Path, PathBuf};
 
 pub use prepare::palette;
 
+/// Least drawn width of a [`Band`] in pixels.
+pub const MIN_BAND_PX: f64 = 3.0;
+
 /// Colour of a series.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Colour {
@@ -200,7 +203,10 @@ pub struct HLine {
     pub fit: bool,
 }
 
-/// A shaded x-interval spanning the full height of the axes (e.g. a contact phase).
+/// A shaded x-interval spanning the full height of the axes (e.g. a contact phase). It is
+/// drawn at least [`MIN_BAND_PX`] wide, so that a short interval (a 0.01 s stick phase in a
+/// 10 s period) stays visible; its label is listed in the legend only when some band with
+/// that label lies in the x range.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Band {
     /// Left end in data units.
@@ -238,6 +244,10 @@ pub struct LineFigure {
     pub x_range: Option<(f64, f64)>,
     /// Fixed y range in data units; `None`: fitted to the data (+5 % padding).
     pub y_range: Option<(f64, f64)>,
+    /// The fitted y range includes 0 (linear axes; default false): for quantities whose sign
+    /// matters (torques, forces), so that a small variation about a non-zero value is not
+    /// blown up to the full height, and all panels of a figure read the same way.
+    pub y_includes_zero: bool,
     /// Same data-to-pixel scale on both axes (for geometric views; linear axes only).
     pub equal_aspect: bool,
     /// Legend placement (default [`LegendPos::Auto`]).
@@ -265,6 +275,7 @@ impl LineFigure {
             y_scale: Scale::Linear,
             x_range: None,
             y_range: None,
+            y_includes_zero: false,
             equal_aspect: false,
             legend: LegendPos::Auto,
             size: (1000, 600),

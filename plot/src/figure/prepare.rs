@@ -209,6 +209,10 @@ pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
                 hi = hi.max(y);
             }
         }
+        if fig.y_includes_zero && fig.y_scale == Scale::Linear {
+            lo = lo.min(0.0);
+            hi = hi.max(0.0);
+        }
         widen((lo, hi), 0.05)
     });
     Ok(Prepared {

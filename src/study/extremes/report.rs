@@ -1,5 +1,6 @@
 //! The rows of the extremes study, their markdown summary (one line per probe: its worst case,
-//! with ⚑ where an error measure exceeds its bound) and the full table as CSV: every probe
+//! arithmetic errors also in units of roundoff u, with ⚑ where an error measure exceeds its flag
+//! bound: [`ROUNDOFF_FLAG`] u for arithmetic, the stated tolerance otherwise) and the full table as CSV: every probe
 //! reports a number with an error estimate, a clear (typed) error, or a failure. A number that is NaN or infinite
 //! becomes a failure, and so does an error other than the one the probe documents at that
 //! extreme.
@@ -108,8 +109,9 @@ impl ExtremesReport {
             .count();
         let exceeded = self.rows.iter().filter(|r| exceeds(r).is_some()).count();
         s.push_str(&format!(
-            "⚑ {exceeded} of {measures} error measures exceed their bound (⚑ ×k: outcome = k × \
-             bound; per probe in the last column, each row in the CSV's `exceeds_bound_by`).\n\n"
+            "⚑ {exceeded} of {measures} error measures exceed their flag bound ({ROUNDOFF_FLAG} u \
+             for arithmetic, the stated tolerance otherwise; ⚑ ×k: outcome = k × flag bound; \
+             per probe in the last column, each row in the CSV's `exceeds_bound_by`).\n\n"
         ));
         s.push_str("| case | worst case: parameter | quantity | outcome | error estimate | rows (clear errors, ⚑ over bound) · time (s) |\n");
         s.push_str("|---|---|---|---|---|---|\n");
@@ -198,9 +200,42 @@ pub const CSV_NAME: &str = "extremes.csv";
 
 /// The one-sentence meaning of the "error estimate" column.
 pub const ESTIMATE_MEANING: &str = "\"Error estimate\": for a row that measures an error \
-    (relative error, deviation, residual, energy drift) it is the bound the error is judged \
-    against (f64's unit roundoff 2.2e-16 for arithmetic, the integrator's rtol for the drift), \
-    and ⚑ flags an outcome above it; for any other row it estimates the outcome's own error.";
+    (relative error, deviation, residual, energy drift) it is the scale the error is judged \
+    on: for floating-point arithmetic the f64 machine epsilon 2.2e-16 = 2 u, with the outcome \
+    also given in units of the unit roundoff u = 2⁻⁵³ ≈ 1.1e-16 and ⚑ only above 64 u (a few \
+    roundings in each of the dozens of operations of a kernel stay below it); for a simulation \
+    the integrator's rtol, with ⚑ above it. For any other row it estimates the outcome's own \
+    error.";
+
+/// The unit roundoff of f64, u = 2⁻⁵³ (half the machine epsilon).
+pub const UNIT_ROUNDOFF: f64 = f64::EPSILON / 2.0;
+
+/// An arithmetic error measure is flagged above this many units of roundoff: errors of a few
+/// u are what rounding in a kernel of dozens of operations gives, not a defect.
+pub const ROUNDOFF_FLAG: f64 = 64.0;
+
+/// Whether row `r` is judged on the floating-point scale (its bound is the machine epsilon),
+/// rather than on a tolerance such as an integrator's rtol.
+fn on_roundoff_scale(r: &ExtremesRow) -> bool {
+    matches!(r.outcome, Outcome::Number { error_estimate, .. } if error_estimate == f64::EPSILON)
+}
+
+/// The bound above which an error measure is flagged: [`ROUNDOFF_FLAG`] u on the roundoff
+/// scale, the stated bound otherwise.
+fn flag_bound(r: &ExtremesRow) -> Option<f64> {
+    match r.outcome {
+        Outcome::Number { error_estimate, .. }
+            if is_error_measure(&r.quantity) && error_estimate > 0.0 =>
+        {
+            Some(if on_roundoff_scale(r) {
+                ROUNDOFF_FLAG * UNIT_ROUNDOFF
+            } else {
+                error_estimate
+            })
+        }
+        _ => None,
+    }
+}
 
 /// Whether `quantity` names an error measure (compared with a bound) rather than a value.
 pub fn is_error_measure(quantity: &str) -> bool {
@@ -218,25 +253,18 @@ pub fn is_error_measure(quantity: &str) -> bool {
         || q.contains("residual")
 }
 
-/// outcome / bound when `r` is an error measure above a positive bound.
+/// outcome / flag bound when `r` is an error measure above its flag bound ([`ROUNDOFF_FLAG`] u
+/// for arithmetic errors, the stated bound otherwise).
 pub fn exceeds(r: &ExtremesRow) -> Option<f64> {
-    match r.outcome {
-        Outcome::Number {
-            value,
-            error_estimate,
-        } if is_error_measure(&r.quantity) && error_estimate > 0.0 && value > error_estimate => {
-            Some(value / error_estimate)
-        }
+    match (r.outcome.clone(), flag_bound(r)) {
+        (Outcome::Number { value, .. }, Some(b)) if value > b => Some(value / b),
         _ => None,
     }
 }
 
 fn worst_row<'a>(rows: &[&'a ExtremesRow]) -> Option<&'a ExtremesRow> {
-    let ratio = |r: &ExtremesRow| match r.outcome {
-        Outcome::Number {
-            value,
-            error_estimate,
-        } if is_error_measure(&r.quantity) && error_estimate > 0.0 => Some(value / error_estimate),
+    let ratio = |r: &ExtremesRow| match (&r.outcome, flag_bound(r)) {
+        (Outcome::Number { value, .. }, Some(b)) => Some(value / b),
         _ => None,
     };
     rows.iter()
@@ -267,13 +295,27 @@ fn cells(r: &ExtremesRow) -> (String, String) {
             error_estimate,
         } => {
             let flag = exceeds(r).map_or(String::new(), |f| format!(" ⚑ ×{f:.1e}"));
+            let units = if on_roundoff_scale(r) && is_error_measure(&r.quantity) {
+                format!(" ({} u)", fmt_units(value / UNIT_ROUNDOFF))
+            } else {
+                String::new()
+            };
             (
-                format!("{}{flag}", fmt_num(*value)),
+                format!("{}{units}{flag}", fmt_num(*value)),
                 fmt_num(*error_estimate),
             )
         }
         Outcome::ClearError { message } => (format!("error: {}", esc(message)), "—".into()),
         Outcome::Failed { message } => (format!("**FAILED: {}**", esc(message)), "—".into()),
+    }
+}
+
+/// A multiple of u: one decimal below 100, else two significant digits in scientific form.
+fn fmt_units(k: f64) -> String {
+    if k < 100.0 {
+        format!("{k:.1}")
+    } else {
+        format!("{k:.1e}")
     }
 }
 
@@ -421,16 +463,28 @@ mod tests {
     fn flags_exactly_the_error_measures_above_their_bound() {
         let r = report();
         let flagged: Vec<f64> = r.rows.iter().filter_map(exceeds).collect();
-        // 4e-10 / 2.2e-16 and 1e-15 / 2.2e-16; a value that is not an error measure
-        // (μ_k* = 0.9 with its own error 1e-12) is never flagged.
-        assert_eq!(flagged.len(), 2);
-        assert!((flagged[0] - 4e-10 / f64::EPSILON).abs() < 1.0);
+        // Only 4e-10 (3.6e6 u) exceeds 64 u; 1e-15 is 9 u of roundoff, not a defect; a value
+        // that is not an error measure (μ_k* = 0.9 with its own error 1e-12) is never flagged.
+        assert_eq!(flagged.len(), 1);
+        let u = f64::EPSILON / 2.0;
+        assert!((flagged[0] - 4e-10 / (64.0 * u)).abs() < 1.0);
         let md = r.to_markdown();
-        assert!(md.contains("⚑ 2 of 3 error measures"), "{md}");
-        // The worst case of "kernels" is the 4e-10 row, flagged in the table.
+        assert!(md.contains("⚑ 1 of 3 error measures"), "{md}");
+        // The worst case of "kernels" is the 4e-10 row, in units of u and flagged.
         let line = md.lines().find(|l| l.starts_with("| kernels")).unwrap();
-        assert!(line.contains("4.000e-10 ⚑ ×1.8e6"), "{line}");
-        assert!(line.contains("3 (0, 2)"), "{line}");
+        assert!(line.contains("4.000e-10 (3.6e6 u) ⚑ ×5.6e4"), "{line}");
+        assert!(line.contains("3 (0, 1)"), "{line}");
+        // Just above and below the flag bound.
+        let mut r2 = report();
+        r2.rows = vec![
+            row("k", "rel. err. M", 63.0 * u, f64::EPSILON),
+            row("k", "rel. err. M", 65.0 * u, f64::EPSILON),
+            // On a tolerance scale (rtol 1e-8) the bound itself is the flag bound.
+            row("k", "max |ΔE| (J)", 2e-8, 1e-8),
+        ];
+        let f: Vec<f64> = r2.rows.iter().filter_map(exceeds).collect();
+        assert_eq!(f.len(), 2, "{f:?}");
+        assert!((f[0] - 65.0 / 64.0).abs() < 1e-12 && (f[1] - 2.0).abs() < 1e-12);
         let line = md.lines().find(|l| l.starts_with("| painlevé")).unwrap();
         assert!(line.contains("error: no consistent"), "{line}");
         assert!(md.contains(ESTIMATE_MEANING));
@@ -444,7 +498,7 @@ mod tests {
         assert!(lines[0].contains("time [s]") && lines[0].contains("value [unit of quantity]"));
         let cols = lines[0].split(',').count();
         assert_eq!(lines[1].split(',').count(), cols);
-        assert!(lines[2].contains(",true,1.8"), "{}", lines[2]);
+        assert!(lines[2].contains(",true,5.6"), "{}", lines[2]);
         assert!(
             lines[5].contains("\"μ_k = 2, \"\"big\"\"\""),
             "{}",
