@@ -11,7 +11,7 @@ use anyhow::{Context, Result};
 
 /// Run `generate`.
 pub fn run(args: &GenerateArgs) -> Result<()> {
-    let (scene, text) = super::load_scene(&args.scene)?;
+    let (scene, text) = super::load_scene(&args.scene, &args.chain)?;
     let opts = bf_codegen::EmitSettings {
         float: match args.float {
             FloatArg::F64 => bf_codegen::FloatTy::F64,

@@ -696,9 +696,14 @@ impl SymbolicRobot {
             }
             .into());
         }
-        if !tip_only && self.frames != FrameKind::DhStandard {
+        if !tip_only && self.frames == FrameKind::DhModified {
             return Err(SceneDefect::SegmentContactModifiedDh.into());
         }
+        let segment = if tip_only || self.frames == FrameKind::DhStandard {
+            None
+        } else {
+            Some(placement_segment_length(&self.scene)?)
+        };
         let n = self.nq();
         let tip = self.tip;
         let pe = tip.t;
@@ -710,7 +715,10 @@ impl SymbolicRobot {
         let sat = if tip_only {
             self.g.zero()
         } else {
-            let an = self.constant(&format!("link{n}.a"));
+            let an = match segment {
+                Some(l) => self.g.constant(l),
+                None => self.constant(&format!("link{n}.a")),
+            };
             let lo = self.g.neg(an);
             let hi = self.g.zero();
             if smooth {
@@ -812,4 +820,18 @@ pub fn joint_placements(scene: &Scene) -> Vec<JointPlacement> {
             }
         })
         .collect()
+}
+
+/// ℓ of segment contact on placement links: the last joint's origin in tip-frame coordinates,
+/// −R_toolᵀ t_tool, must be (−ℓ, 0, 0) with ℓ > 0 (the standard-DH geometry, where the segment
+/// p_e − a_n e_x … p_e ends at the last joint's axis).
+fn placement_segment_length(scene: &Scene) -> Result<f64, CodegenError> {
+    let (r, t) = (scene.tool_rotation(), scene.tool_translation());
+    let joint = [0, 1, 2].map(|i| -(0..3).map(|k| r[k][i] * t[k]).sum::<f64>());
+    let l = -joint[0];
+    let tol = 1e-9 * l.abs().max(1e-3);
+    if !(l > 0.0) || joint[1].abs() > tol || joint[2].abs() > tol {
+        return Err(SceneDefect::SegmentContactGeometry { joint }.into());
+    }
+    Ok(l)
 }
