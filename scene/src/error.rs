@@ -173,7 +173,12 @@ impl<'a> SourceIndex<'a> {
 
     /// A required key that is absent, reported at its table.
     pub(super) fn missing(&self, path: &str, message: String) -> SpecError {
-        self.error(SpecErrorKind::MissingField, self.offset_of(path), path, message)
+        self.error(
+            SpecErrorKind::MissingField,
+            self.offset_of(path),
+            path,
+            message,
+        )
     }
 
     /// The innermost path whose key or value covers byte `offset`.

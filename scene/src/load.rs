@@ -100,7 +100,11 @@ pub fn chain_toml(chain: &UrdfChain) -> String {
         if let Some(src) = &l.nonphysical_inertia {
             let _ = writeln!(out, "nonphysical_inertia = {src:?}");
         }
-        for (key, v) in [("q_min", l.q_min), ("q_max", l.q_max), ("tau_max", l.tau_max)] {
+        for (key, v) in [
+            ("q_min", l.q_min),
+            ("q_max", l.q_max),
+            ("tau_max", l.tau_max),
+        ] {
             if let Some(v) = v {
                 let _ = writeln!(out, "{key} = {}", num(v));
             }
@@ -174,7 +178,13 @@ pub fn expand_toml(
             ));
         };
         keys.push((
-            if name == "urdf" { "urdf" } else if name == "base_link" { "base_link" } else { "tip_link" },
+            if name == "urdf" {
+                "urdf"
+            } else if name == "base_link" {
+                "base_link"
+            } else {
+                "tip_link"
+            },
             s.to_string(),
             k.span().start..v.span().end,
         ));
@@ -182,7 +192,10 @@ pub fn expand_toml(
     let get = |n: &str| keys.iter().find(|k| k.0 == n).map(|k| k.1.clone());
     let Some(urdf) = get("urdf") else {
         if let Some((n, ..)) = keys.first() {
-            return Err(ix.invalid(n, format!("`{n}` needs `urdf` (the URDF file it names a link of)")));
+            return Err(ix.invalid(
+                n,
+                format!("`{n}` needs `urdf` (the URDF file it names a link of)"),
+            ));
         }
         if choice.base.is_some() || choice.tip.is_some() {
             return Err(SpecError::At {
@@ -223,7 +236,9 @@ pub fn expand_toml(
     keys.sort_by_key(|k| k.2.start);
     for (n, _, span) in &keys {
         let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
-        let end = text[span.end..].find('\n').map_or(text.len(), |i| span.end + i);
+        let end = text[span.end..]
+            .find('\n')
+            .map_or(text.len(), |i| span.end + i);
         out.push_str(&text[last..start]);
         if *n == "urdf" && !has_gravity {
             out.push_str(&format!("gravity = {} ", vec3(URDF_GRAVITY)));
@@ -332,7 +347,10 @@ impl Scene {
         for l in &mut out.links {
             let offset = l.offset.map_or(0.0, |o| o.radians());
             let head = compose((rot_z(offset), [0.0; 3]), (IDENTITY, [0.0, 0.0, l.d]));
-            let own = compose((IDENTITY, [l.a, 0.0, 0.0]), (rot_x(l.alpha.radians()), [0.0; 3]));
+            let own = compose(
+                (IDENTITY, [l.a, 0.0, 0.0]),
+                (rot_x(l.alpha.radians()), [0.0; 3]),
+            );
             let origin = match self.dh {
                 crate::DhConvention::Standard => {
                     let o = compose(tail, head);

@@ -124,11 +124,7 @@ impl Reader<'_> {
         };
         let parts: Vec<&str> = text.split_whitespace().collect();
         if parts.len() != K {
-            return Err(self.node_err(
-                n,
-                name,
-                format!("expected {K} number(s), got {:?}", text),
-            ));
+            return Err(self.node_err(n, name, format!("expected {K} number(s), got {:?}", text)));
         }
         let mut out = [0.0; K];
         for (o, p) in out.iter_mut().zip(&parts) {
@@ -147,7 +143,8 @@ impl Reader<'_> {
     }
 
     fn child<'n>(&self, n: roxmltree::Node<'n, 'n>, tag: &str) -> Option<roxmltree::Node<'n, 'n>> {
-        n.children().find(|c| c.is_element() && c.tag_name().name() == tag)
+        n.children()
+            .find(|c| c.is_element() && c.tag_name().name() == tag)
     }
 
     /// `<origin xyz rpy>` of `n` (identity when absent).
@@ -171,13 +168,24 @@ impl Reader<'_> {
                 })?;
                 let [mass] = self.numbers::<1>(m, "value", None)?;
                 if mass <= 0.0 {
-                    return Err(self.node_err(m, "value", format!("mass must be > 0 (got {mass})")));
+                    return Err(self.node_err(
+                        m,
+                        "value",
+                        format!("mass must be > 0 (got {mass})"),
+                    ));
                 }
                 let t = self.child(i, "inertia").ok_or_else(|| {
-                    self.node_err(i, "inertia", "<inertial> has no <inertia> element".to_string())
+                    self.node_err(
+                        i,
+                        "inertia",
+                        "<inertial> has no <inertia> element".to_string(),
+                    )
                 })?;
                 let mut v = [0.0; 6];
-                for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"].iter().enumerate() {
+                for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
+                    .iter()
+                    .enumerate()
+                {
                     [v[k]] = self.numbers::<1>(t, a, None)?;
                 }
                 let local = [[v[0], v[1], v[2]], [v[1], v[3], v[4]], [v[2], v[4], v[5]]];
@@ -398,7 +406,12 @@ pub fn read_chain(
         links.push(l);
     }
     if links.is_empty() {
-        return Err(rd.err(root.range().start, "robot", "", "no <link> elements".to_string()));
+        return Err(rd.err(
+            root.range().start,
+            "robot",
+            "",
+            "no <link> elements".to_string(),
+        ));
     }
     let mut joints: Vec<Joint> = Vec::new();
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
@@ -440,7 +453,9 @@ pub fn read_chain(
             }
         }
     }
-    let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+    let roots: Vec<usize> = (0..links.len())
+        .filter(|&l| parent_joint[l].is_none())
+        .collect();
     if roots.len() > 1 {
         let names: Vec<&str> = roots.iter().map(|&l| links[l].name.as_str()).collect();
         return Err(rd.err(
@@ -454,7 +469,9 @@ pub fn read_chain(
         ));
     }
     let children = |l: usize| -> Vec<usize> {
-        (0..joints.len()).filter(|&j| joints[j].parent == l).collect()
+        (0..joints.len())
+            .filter(|&j| joints[j].parent == l)
+            .collect()
     };
     let find = |name: &str, what: &str| -> Result<usize, SpecError> {
         links.iter().position(|k| k.name == name).ok_or_else(|| {
@@ -481,8 +498,10 @@ pub fn read_chain(
                     0 => break l,
                     1 => l = joints[c[0]].child,
                     _ => {
-                        let names: Vec<&str> =
-                            c.iter().map(|&j| links[joints[j].child].name.as_str()).collect();
+                        let names: Vec<&str> = c
+                            .iter()
+                            .map(|&j| links[joints[j].child].name.as_str())
+                            .collect();
                         return Err(rd.err(
                             links[l].pos,
                             "link",

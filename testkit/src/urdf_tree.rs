@@ -121,7 +121,11 @@ impl UrdfTree {
                     .children()
                     .find(|c| c.has_tag_name("inertia"))
                     .ok_or("inertial without inertia")?;
-                let g = |a: &str| t.attribute(a).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+                let g = |a: &str| {
+                    t.attribute(a)
+                        .and_then(|v| v.parse::<f64>().ok())
+                        .unwrap_or(0.0)
+                };
                 let ic = Matrix3::new(
                     g("ixx"),
                     g("ixy"),
@@ -138,7 +142,8 @@ impl UrdfTree {
                 let top = ic + cx * cx.transpose() * m;
                 i6.fixed_view_mut::<3, 3>(0, 0).copy_from(&top);
                 i6.fixed_view_mut::<3, 3>(0, 3).copy_from(&(cx * m));
-                i6.fixed_view_mut::<3, 3>(3, 0).copy_from(&(cx.transpose() * m));
+                i6.fixed_view_mut::<3, 3>(3, 0)
+                    .copy_from(&(cx.transpose() * m));
                 i6.fixed_view_mut::<3, 3>(3, 3)
                     .copy_from(&(Matrix3::identity() * m));
             }
@@ -159,9 +164,15 @@ impl UrdfTree {
             let a = j
                 .children()
                 .find(|c| c.has_tag_name("axis"))
-                .map_or(vec![1.0, 0.0, 0.0], |a| numbers(a.attribute("xyz"), &[1.0, 0.0, 0.0]));
+                .map_or(vec![1.0, 0.0, 0.0], |a| {
+                    numbers(a.attribute("xyz"), &[1.0, 0.0, 0.0])
+                });
             let axis = Vector3::new(a[0], a[1], a[2]);
-            let axis = if axis.norm() > 0.0 { axis.normalize() } else { axis };
+            let axis = if axis.norm() > 0.0 {
+                axis.normalize()
+            } else {
+                axis
+            };
             let child = link("child")?;
             parent_joint[child] = Some(joints.len());
             joints.push(RefJoint {
@@ -242,8 +253,7 @@ impl UrdfTree {
         let mut x = Matrix6::zeros();
         x.fixed_view_mut::<3, 3>(0, 0).copy_from(&et);
         x.fixed_view_mut::<3, 3>(3, 3).copy_from(&et);
-        x.fixed_view_mut::<3, 3>(3, 0)
-            .copy_from(&(-et * skew(&p)));
+        x.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-et * skew(&p)));
         let moving = chain.contains(&j.name);
         let u = j.axis;
         let s = match j.kind.as_str() {
@@ -327,8 +337,7 @@ impl UrdfTree {
         let nq = chain.len();
         let mut m = vec![vec![0.0; nq]; nq];
         let index = |l: usize| {
-            self.parent_joint[l]
-                .and_then(|j| chain.iter().position(|c| *c == self.joints[j].name))
+            self.parent_joint[l].and_then(|j| chain.iter().position(|c| *c == self.joints[j].name))
         };
         for &l in &self.order {
             let Some(i) = index(l) else { continue };

@@ -99,9 +99,7 @@ fn close(what: &str, a: &[f64], b: &[f64]) {
 fn states(nq: usize, count: usize, seed: u64) -> Vec<[Vec<f64>; 3]> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..count)
-        .map(|_| {
-            [2.0, 2.0, 3.0].map(|s| (0..nq).map(|_| rng.random_range(-s..s)).collect())
-        })
+        .map(|_| [2.0, 2.0, 3.0].map(|s| (0..nq).map(|_| rng.random_range(-s..s)).collect()))
         .collect()
 }
 
@@ -145,7 +143,13 @@ fn check_file(file: &str, base: &str, tip: Option<&str>, nq: usize) -> Scene {
     let text = read(file);
     let scene = scene_of(&text, file, None, tip);
     assert_eq!(scene.nq(), nq, "{file}");
-    check_against_tree(file, &scene, &text, base, tip.unwrap_or_else(|| last_link(&text)));
+    check_against_tree(
+        file,
+        &scene,
+        &text,
+        base,
+        tip.unwrap_or_else(|| last_link(&text)),
+    );
     scene
 }
 
@@ -169,7 +173,11 @@ fn planar_two_link_arm_matches_the_tree_reference_and_the_closed_form() {
             m * (lc * lc + l * lc * c2) + i,
             m * lc * lc + i,
         ];
-        close("planar M closed form", &generated(&scene, &q, &qd, &qdd).m, &want);
+        close(
+            "planar M closed form",
+            &generated(&scene, &q, &qd, &qdd).m,
+            &want,
+        );
     }
     // The limits and efforts of the URDF became the scene's.
     assert_eq!(scene.links[0].q_min, Some(-3.0));
@@ -188,7 +196,10 @@ fn seven_joint_arm_with_a_locked_two_finger_hand() {
     let text = read("panda_like.urdf");
     // The tree branches at the hand: no default tip.
     let err = read_urdf_chain(&text, "panda_like.urdf", None, None).unwrap_err();
-    assert!(err.to_string().contains("branches at link \"panda_hand\""), "{err}");
+    assert!(
+        err.to_string().contains("branches at link \"panda_hand\""),
+        "{err}"
+    );
     let scene = check_file("panda_like.urdf", "panda_link0", Some("panda_hand"), 7);
     // Link 7 carries itself, the hand and both (locked) fingers.
     let m7 = scene.links[6].mass;
@@ -219,7 +230,11 @@ fn chain_with_prismatic_and_continuous_joints() {
 /// rpy (URDF: R = R_z(y) R_y(p) R_x(r)) of a rotation matrix, exact in the gimbal-lock case.
 fn rpy(r: &[[f64; 3]; 3]) -> [f64; 3] {
     if r[2][0].abs() > 1.0 - 1e-12 {
-        let p = if r[2][0] < 0.0 { std::f64::consts::FRAC_PI_2 } else { -std::f64::consts::FRAC_PI_2 };
+        let p = if r[2][0] < 0.0 {
+            std::f64::consts::FRAC_PI_2
+        } else {
+            -std::f64::consts::FRAC_PI_2
+        };
         return [0.0, p, (-r[0][1]).atan2(r[1][1])];
     }
     [
@@ -241,7 +256,8 @@ fn origin(t: [f64; 3], r: &[[f64; 3]; 3]) -> String {
 /// joint from a `world` link, the tool as a fixed joint to a `tip` link.
 fn urdf_of(scene: &Scene) -> String {
     let p = scene.placement_form();
-    let mut s = String::from("<robot name=\"dh\">\n<link name=\"world\"/>\n<link name=\"link0\"/>\n");
+    let mut s =
+        String::from("<robot name=\"dh\">\n<link name=\"world\"/>\n<link name=\"link0\"/>\n");
     s += &format!(
         "<joint name=\"base\" type=\"fixed\"><parent link=\"world\"/><child link=\"link0\"/>{}</joint>\n",
         origin(p.base_translation(), &p.base_rotation())
@@ -266,7 +282,11 @@ fn urdf_of(scene: &Scene) -> String {
         );
         let o = l.origin.clone().unwrap_or_default();
         let a = l.axis.unwrap();
-        let ty = if l.joint == bf_codegen::spec::JointType::Prismatic { "prismatic" } else { "revolute" };
+        let ty = if l.joint == bf_codegen::spec::JointType::Prismatic {
+            "prismatic"
+        } else {
+            "revolute"
+        };
         s += &format!(
             "<joint name=\"j{}\" type=\"{ty}\"><parent link=\"link{k}\"/><child link=\"link{}\"/>{}\
              <axis xyz=\"{:?} {:?} {:?}\"/></joint>\n",
@@ -305,7 +325,10 @@ fn dh_equivalent(path: &str) {
     assert_eq!(urdf.nq(), dh.nq());
     check_against_tree(path, &urdf, &text, "world", "tip");
     for (k, [q, qd, qdd]) in states(dh.nq(), 4, 11).into_iter().enumerate() {
-        let (a, b) = (generated(&dh, &q, &qd, &qdd), generated(&urdf, &q, &qd, &qdd));
+        let (a, b) = (
+            generated(&dh, &q, &qd, &qdd),
+            generated(&urdf, &q, &qd, &qdd),
+        );
         let ctx = |w: &str| format!("{path} state {k}: DH vs URDF {w}");
         close(&ctx("M"), &a.m, &b.m);
         close(&ctx("C qd + g"), &a.cqd_g, &b.cqd_g);

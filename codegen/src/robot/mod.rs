@@ -413,11 +413,7 @@ impl SymbolicRobot {
         } else {
             let (s, c) = (self.g.sin(qi), self.g.cos(qi));
             self.sc.push((s, c));
-            let skew = [
-                [0.0, -u[2], u[1]],
-                [u[2], 0.0, -u[0]],
-                [-u[1], u[0], 0.0],
-            ];
+            let skew = [[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]];
             let mut rm = [[Id(0); 3]; 3];
             for (a, row) in rm.iter_mut().enumerate() {
                 for (b, x) in row.iter_mut().enumerate() {
