@@ -53,22 +53,28 @@ pub enum SpecError {
         /// What is wrong.
         message: String,
     },
-    /// A located problem in a URDF file.
-    #[error("{file}:{line}:{column}: <{element}> {attribute}: {message}")]
-    Urdf {
-        /// The URDF file as named by the user or the scene.
-        file: String,
-        /// 1-based line.
-        line: usize,
-        /// 1-based column.
-        column: usize,
-        /// The element (`joint`, `link`, `inertial`, `origin`, ...).
-        element: String,
-        /// The attribute or child element at fault (empty when the element as a whole is).
-        attribute: String,
-        /// What is wrong.
-        message: String,
-    },
+    /// A located problem in a URDF file (boxed: it keeps the error small for the enums that
+    /// carry a `SpecError`).
+    #[error(transparent)]
+    Urdf(Box<UrdfError>),
+}
+
+/// A problem in a URDF file: `FILE:LINE:COLUMN: <ELEMENT> ATTRIBUTE: message`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}:{line}:{column}: <{element}> {attribute}: {message}")]
+pub struct UrdfError {
+    /// The URDF file as named by the user or the scene.
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// The element (`joint`, `link`, `inertial`, `origin`, ...).
+    pub element: String,
+    /// The attribute or child element at fault (empty when the element as a whole is).
+    pub attribute: String,
+    /// What is wrong.
+    pub message: String,
 }
 
 impl SpecError {
@@ -76,14 +82,15 @@ impl SpecError {
     pub fn path(&self) -> Option<&str> {
         match self {
             SpecError::At { path, .. } => Some(path),
-            SpecError::Io { .. } | SpecError::Urdf { .. } => None,
+            SpecError::Io { .. } | SpecError::Urdf(_) => None,
         }
     }
 
     /// The 1-based line (`None` for I/O errors).
     pub fn line(&self) -> Option<usize> {
         match self {
-            SpecError::At { line, .. } | SpecError::Urdf { line, .. } => Some(*line),
+            SpecError::At { line, .. } => Some(*line),
+            SpecError::Urdf(e) => Some(e.line),
             SpecError::Io { .. } => None,
         }
     }
@@ -92,7 +99,7 @@ impl SpecError {
     pub fn kind(&self) -> Option<SpecErrorKind> {
         match self {
             SpecError::At { kind, .. } => Some(*kind),
-            SpecError::Io { .. } | SpecError::Urdf { .. } => None,
+            SpecError::Io { .. } | SpecError::Urdf(_) => None,
         }
     }
 }

@@ -52,7 +52,7 @@ mod validate;
 use serde::Deserialize;
 
 pub use constants::Constants;
-pub use error::{SpecError, SpecErrorKind};
+pub use error::{SpecError, SpecErrorKind, UrdfError};
 pub use id::{SceneId, UnknownScene};
 pub use load::{ChainChoice, URDF_GRAVITY, URDF_KERNELS, chain_toml, expand_toml, urdf_scene_text};
 pub use mode::Mode;

@@ -17,12 +17,15 @@
 //! * bodies fixed to the base (before the first moving joint) do not move and are dropped;
 //! * `<visual>`, `<collision>`, meshes, `<transmission>` and `<gazebo>` are ignored.
 //!
-//! Errors ([`SpecError::Urdf`]) name the file, line and column, the element and the attribute.
+//! Errors ([`SpecError::Urdf`], a [`UrdfError`]) name the file, line and column, the element and the attribute.
 
+use crate::error::UrdfError;
 use crate::{InertiaSpec, JointType, LinkSpec, RotationSpec, SpecError, TransformSpec};
 
 type M3 = [[f64; 3]; 3];
 type V3 = [f64; 3];
+/// A rigid transform x ↦ R x + t.
+type Pose = (M3, V3);
 
 const I3: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
@@ -89,14 +92,14 @@ struct Reader<'a> {
 impl Reader<'_> {
     fn err(&self, pos: usize, element: &str, attribute: &str, message: String) -> SpecError {
         let p = self.doc.text_pos_at(pos);
-        SpecError::Urdf {
+        SpecError::Urdf(Box::new(UrdfError {
             file: self.file.to_string(),
             line: p.row as usize,
             column: p.col as usize,
             element: element.to_string(),
             attribute: attribute.to_string(),
             message,
-        }
+        }))
     }
 
     fn node_err(&self, n: roxmltree::Node, attribute: &str, message: String) -> SpecError {
@@ -373,14 +376,14 @@ pub fn read_chain(
 ) -> Result<UrdfChain, SpecError> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
         let p = e.pos();
-        SpecError::Urdf {
+        SpecError::Urdf(Box::new(UrdfError {
             file: file.to_string(),
             line: p.row as usize,
             column: p.col as usize,
             element: "(document)".to_string(),
             attribute: String::new(),
             message: format!("not well-formed XML: {e}"),
-        }
+        }))
     })?;
     let rd = Reader { file, doc: &doc };
     let root = doc.root_element();
@@ -554,7 +557,7 @@ pub fn read_chain(
     }
     // Owner (model link, or None for the base side) and pose in the owner's frame of every
     // link below the base, walking the tree from the base.
-    let mut owner: Vec<Option<(Option<usize>, (M3, V3))>> = vec![None; links.len()];
+    let mut owner: Vec<Option<(Option<usize>, Pose)>> = vec![None; links.len()];
     owner[base_ix] = Some((None, (I3, [0.0; 3])));
     let mut stack = vec![base_ix];
     while let Some(p) = stack.pop() {
@@ -644,7 +647,7 @@ pub fn read_chain(
         pose = (I3, [0.0; 3]);
         k += 1;
     }
-    let tool = (pose != (I3, [0.0; 3])).then(|| TransformSpec {
+    let tool = (pose != (I3, [0.0; 3])).then_some(TransformSpec {
         translation: Some(pose.1),
         rotation: Some(RotationSpec::Matrix(pose.0)),
     });

@@ -39,14 +39,8 @@ fn expect(
     let err = read_urdf_chain(text, FILE, None, tip).unwrap_err();
     let shown = err.to_string();
     match &err {
-        SpecError::Urdf {
-            file,
-            line: l,
-            element: e,
-            attribute: a,
-            message,
-            ..
-        } => {
+        SpecError::Urdf(u) => {
+            let (file, l, e, a, message) = (&u.file, &u.line, &u.element, &u.attribute, &u.message);
             assert_eq!(file, FILE, "{shown}");
             assert_eq!(*l, line, "{shown}");
             assert_eq!((e.as_str(), a.as_str()), (element, attribute), "{shown}");

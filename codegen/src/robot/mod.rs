@@ -826,7 +826,7 @@ fn placement_segment_length(scene: &Scene) -> Result<f64, CodegenError> {
     let joint = [0, 1, 2].map(|i| -(0..3).map(|k| r[k][i] * t[k]).sum::<f64>());
     let l = -joint[0];
     let tol = 1e-9 * l.abs().max(1e-3);
-    if !(l > 0.0) || joint[1].abs() > tol || joint[2].abs() > tol {
+    if l.is_nan() || l <= 0.0 || joint[1].abs() > tol || joint[2].abs() > tol {
         return Err(SceneDefect::SegmentContactGeometry { joint }.into());
     }
     Ok(l)
