@@ -17,6 +17,13 @@ fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// The last row of a CSV file of numbers.
+fn last_row(path: &Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let line = text.lines().last().unwrap();
+    line.split(',').map(|x| x.parse().unwrap()).collect()
+}
+
 fn ok(o: &std::process::Output) -> String {
     let (out, err) = (
         String::from_utf8_lossy(&o.stdout),
@@ -54,14 +61,7 @@ fn simulate_a_urdf_arm_conserves_its_energy() {
     assert_eq!(s["work"].as_f64(), Some(0.0), "unactuated, no friction");
     assert!((e1 - e0).abs() < 1e-7 * e0.abs(), "{e0} -> {e1}");
     // The arm moved (the quill fell: gravity along −z drives the prismatic joint).
-    let traj = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
-    let last: Vec<f64> = traj
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let last = last_row(&out.join("trajectory.csv"));
     assert!((last[3] - 0.05).abs() > 0.1, "quill at {}", last[3]);
 }
 
@@ -94,14 +94,7 @@ fn optimize_reach_arm_on_a_urdf_reaches_the_target_within_its_effort_limits() {
     let scene = bf_codegen::Scene::from_toml_str(text, "solution").unwrap();
     assert_eq!(scene.nq(), 2);
     // The last state of the trajectory: at the target, at rest.
-    let traj = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
-    let last: Vec<f64> = traj
-        .lines()
-        .last()
-        .unwrap()
-        .split(',')
-        .map(|x| x.parse().unwrap())
-        .collect();
+    let last = last_row(&out.join("trajectory.csv"));
     let (q, qd) = (&last[1..3], &last[3..5]);
     assert!(
         (q[0] - 0.3).abs() < 1e-6 && (q[1] - 0.2).abs() < 1e-6,

@@ -284,26 +284,7 @@ impl Scene {
     }
 }
 
-type M3 = [[f64; 3]; 3];
-
-fn mul(a: M3, b: M3) -> M3 {
-    let mut o = [[0.0; 3]; 3];
-    for (i, row) in o.iter_mut().enumerate() {
-        for (j, x) in row.iter_mut().enumerate() {
-            *x = (0..3).map(|k| a[i][k] * b[k][j]).sum();
-        }
-    }
-    o
-}
-
-fn apply(a: M3, v: [f64; 3]) -> [f64; 3] {
-    [0, 1, 2].map(|i| (0..3).map(|k| a[i][k] * v[k]).sum())
-}
-
-fn compose(a: (M3, [f64; 3]), b: (M3, [f64; 3])) -> (M3, [f64; 3]) {
-    let v = apply(a.0, b.1);
-    (mul(a.0, b.0), [0, 1, 2].map(|k| v[k] + a.1[k]))
-}
+use crate::urdf::{M3, compose, mat_mul as mul, mat_vec as apply};
 
 fn transpose(a: M3) -> M3 {
     [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
@@ -346,23 +327,23 @@ impl Scene {
         let mut tail = id;
         for l in &mut out.links {
             let offset = l.offset.map_or(0.0, |o| o.radians());
-            let head = compose((rot_z(offset), [0.0; 3]), (IDENTITY, [0.0, 0.0, l.d]));
+            let head = compose(&(rot_z(offset), [0.0; 3]), &(IDENTITY, [0.0, 0.0, l.d]));
             let own = compose(
-                (IDENTITY, [l.a, 0.0, 0.0]),
-                (rot_x(l.alpha.radians()), [0.0; 3]),
+                &(IDENTITY, [l.a, 0.0, 0.0]),
+                &(rot_x(l.alpha.radians()), [0.0; 3]),
             );
             let origin = match self.dh {
                 crate::DhConvention::Standard => {
-                    let o = compose(tail, head);
+                    let o = compose(&tail, &head);
                     tail = own;
                     // COG and inertia from DH frame i into joint frame i.
-                    let c = apply(own.0, l.com);
+                    let c = apply(&own.0, l.com);
                     l.com = [0, 1, 2].map(|k| c[k] + own.1[k]);
-                    let i = mul(mul(own.0, l.inertia_matrix()), transpose(own.0));
+                    let i = mul(&mul(&own.0, &l.inertia_matrix()), &transpose(own.0));
                     l.inertia = crate::InertiaSpec::Full(i);
                     o
                 }
-                crate::DhConvention::Modified => compose(own, head),
+                crate::DhConvention::Modified => compose(&own, &head),
             };
             l.origin = Some(spec(origin));
             l.axis = Some([0.0, 0.0, 1.0]);
@@ -370,7 +351,7 @@ impl Scene {
             l.alpha = crate::Angle::Radians(0.0);
         }
         let tool = (self.tool_rotation(), self.tool_translation());
-        let tool = compose(tail, tool);
+        let tool = compose(&tail, &tool);
         out.tool = (tool != id).then(|| spec(tool));
         let known = out.constants();
         out.runtime_parameters

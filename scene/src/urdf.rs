@@ -22,7 +22,8 @@
 use crate::error::UrdfError;
 use crate::{InertiaSpec, JointType, LinkSpec, RotationSpec, SpecError, TransformSpec};
 
-type M3 = [[f64; 3]; 3];
+/// A 3 × 3 matrix, row-major.
+pub(crate) type M3 = [[f64; 3]; 3];
 type V3 = [f64; 3];
 /// A rigid transform x ↦ R x + t.
 type Pose = (M3, V3);
@@ -303,7 +304,7 @@ pub fn rpy_matrix([r, p, y]: V3) -> M3 {
     ]
 }
 
-fn mat_mul(a: &M3, b: &M3) -> M3 {
+pub(crate) fn mat_mul(a: &M3, b: &M3) -> M3 {
     let mut out = [[0.0; 3]; 3];
     for (i, row) in out.iter_mut().enumerate() {
         for (j, x) in row.iter_mut().enumerate() {
@@ -313,7 +314,7 @@ fn mat_mul(a: &M3, b: &M3) -> M3 {
     out
 }
 
-fn mat_vec(a: &M3, v: V3) -> V3 {
+pub(crate) fn mat_vec(a: &M3, v: V3) -> V3 {
     [0, 1, 2].map(|i| a[i][0] * v[0] + a[i][1] * v[1] + a[i][2] * v[2])
 }
 
@@ -330,7 +331,7 @@ fn rotate_tensor(r: &M3, i: &M3) -> M3 {
 }
 
 /// a ∘ b for poses x ↦ R x + t.
-fn compose(a: &(M3, V3), b: &(M3, V3)) -> (M3, V3) {
+pub(crate) fn compose(a: &Pose, b: &Pose) -> Pose {
     let rt = mat_vec(&a.0, b.1);
     (mat_mul(&a.0, &b.0), [0, 1, 2].map(|k| rt[k] + a.1[k]))
 }

@@ -3,6 +3,9 @@
 //! Symbols and paper equations (conventions of docs/parameters.md):
 //! * DH link transforms A_i (Table 1), world frames T_i = T_base A_1 ⋯ A_i, tip = T_n T_tool:
 //!   p_e and [ê_x3 ê_y3 ê_z3] of eq. 67–68;
+//! * or, for links in placement form (a URDF import; [`FrameKind::Placement`],
+//!   [`JointPlacement`]), A_i = (R₀, t₀) ∘ motion with the Rodrigues rotation R(u_i, q_i) or the
+//!   translation q_i u_i, the joint axis u_i through o_i (as in modified DH, u_i for z);
 //! * geometric Jacobians of the tip (eq. 69–71) and of every link COG (J_P^i, J_O^i of eq. 22a),
 //!   J̇ q̇ of the tip;
 //! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
