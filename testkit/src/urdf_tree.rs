@@ -211,6 +211,10 @@ impl UrdfTree {
     }
 
     /// The moving joints on the path base → tip, in order.
+    ///
+    /// # Panics
+    /// If a link is unknown or `tip` is not below `base` (a reference for tests: its input is
+    /// the tests' own files).
     pub fn chain(&self, base: &str, tip: &str) -> Vec<String> {
         let (b, mut l) = (self.link(base), self.link(tip));
         let mut out = Vec::new();
@@ -246,6 +250,7 @@ impl UrdfTree {
     }
 
     /// Plücker motion transform parent → child and the motion subspace S (zero if locked).
+    /// Called only for links with a parent joint (every caller checks `parent_joint` first).
     fn x_and_s(&self, l: usize, chain: &[String], q: &[f64]) -> (Matrix6<f64>, Vector6<f64>) {
         let j = &self.joints[self.parent_joint[l].expect("not the root")];
         let (e, p) = self.local(j, q[l]);
@@ -356,7 +361,10 @@ impl UrdfTree {
         m
     }
 
-    /// World pose (rotation, position) of link `name` in the base link's frame.
+    /// World pose (rotation, position) of link `name` in the root link's frame.
+    ///
+    /// # Panics
+    /// If `name` is not a link.
     pub fn pose(&self, chain: &[String], q: &[f64], name: &str) -> (Matrix3<f64>, Vector3<f64>) {
         let qq = self.coords(chain, q);
         let mut l = self.link(name);
