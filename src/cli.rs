@@ -102,8 +102,11 @@ pub enum Command {
 /// Arguments of `generate`.
 #[derive(Debug, Args)]
 pub struct GenerateArgs {
-    /// Scene file (TOML), e.g. scenes/paper.toml.
+    /// Scene file (TOML, or a URDF), e.g. scenes/paper.toml.
     pub scene: PathBuf,
+    /// URDF scene file: the serial chain (`--base LINK --tip LINK`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// Write the generated Rust source to this file instead of stdout.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
@@ -116,6 +119,27 @@ pub struct GenerateArgs {
     /// Emit every `a*b ± c` as a fused multiply-add (`mul_add`, one rounding instead of two).
     #[arg(long)]
     pub fma: bool,
+}
+
+/// `--base`/`--tip`: which serial chain of a URDF scene file is the model (docs/scene-format.md).
+#[derive(Debug, Clone, Default, Args)]
+pub struct ChainArgs {
+    /// URDF: the chain's base link, fixed to the world [default: the root link].
+    #[arg(long = "base", value_name = "LINK")]
+    pub base: Option<String>,
+    /// URDF: the chain's tip link [default: the leaf of a tree that does not branch].
+    #[arg(long = "tip", value_name = "LINK")]
+    pub tip: Option<String>,
+}
+
+impl ChainArgs {
+    /// As the scene loader's chain choice.
+    pub fn choice(&self) -> bf_codegen::spec::ChainChoice {
+        bf_codegen::spec::ChainChoice {
+            base: self.base.clone(),
+            tip: self.tip.clone(),
+        }
+    }
 }
 
 /// `--float` of `generate`.
@@ -131,8 +155,11 @@ pub enum FloatArg {
 #[derive(Debug, Args)]
 pub struct EvalArgs {
     /// Scene file (TOML). Built-in scenes are evaluated through the compiled kernels, any other
-    /// file through the expression-graph interpreter.
+    /// file (or URDF) through the expression-graph interpreter.
     pub scene: PathBuf,
+    /// URDF scene file: the serial chain (`--base LINK --tip LINK`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// Joint angles q (rad), comma-separated.
     #[arg(long, allow_hyphen_values = true)]
     pub q: String,
@@ -161,8 +188,11 @@ pub struct EvalArgs {
 #[derive(Debug, Args)]
 pub struct BenchArgs {
     /// Scene file (TOML). Built-in scenes are timed compiled and interpreted, any other file
-    /// interpreted.
+    /// (or URDF) interpreted.
     pub scene: PathBuf,
+    /// URDF scene file: the serial chain (`--base LINK --tip LINK`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// Total time budget (s), split over the kernels.
     #[arg(long, default_value_t = 3.0)]
     pub time: f64,
@@ -184,9 +214,13 @@ pub struct SimulateArgs {
     /// on the compiled kernels, any other file on kernels interpreted from the same expression
     /// graphs (slower, same numbers). Default: with `--init` a solution.json, the scene the
     /// solution records (an arm solution stores its scene file's text; a ball problem's
-    /// solution names a compiled scene); otherwise scenes/paper.toml.
+    /// solution names a compiled scene); otherwise scenes/paper.toml. A `.urdf` file is an arm
+    /// (its chain chosen by `--base`/`--tip`).
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// URDF scene file: the serial chain (`--base LINK --tip LINK`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
@@ -297,9 +331,12 @@ pub struct OptimizeArgs {
     pub problem: Option<String>,
     /// Scene file (default: the problem's built-in scene). Any finger-and-ball scene; its node
     /// functions run on the emitted kernels when they match, interpreted otherwise. With
-    /// `--problem reach-arm`: any arm (required).
+    /// `--problem reach-arm`: any arm (required), also a `.urdf` file.
     #[arg(long)]
     pub scene: Option<PathBuf>,
+    /// URDF scene file: the serial chain (`--base LINK --tip LINK`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// `reach-arm`: start configuration q1,q2,… (rad; m for prismatic joints) [default: q = 0
     /// moved into the joint limits].
     #[arg(long, value_name = "Q", allow_hyphen_values = true)]

@@ -120,6 +120,18 @@ pub enum SceneDefect {
          does not hold; use kind = \"tip\""
     )]
     SegmentContactModifiedDh,
+    /// Segment contact on placement links whose last joint does not lie on the tip frame's
+    /// x axis behind the tip (the segment p_e − ℓ e_x … p_e must end at the last joint).
+    #[error(
+        "contact.kind = \"segment\" on a URDF/placement chain needs the last joint on the tip \
+         frame's x axis, behind the tip (the contact segment runs from the joint to the tip \
+         along e_x); the joint sits at {joint:?} in tip-frame coordinates; turn the tip link \
+         so that its x axis points along the last link, or use kind = \"tip\""
+    )]
+    SegmentContactGeometry {
+        /// The last joint's origin in tip-frame coordinates.
+        joint: [f64; 3],
+    },
     /// Folding the scene's values gives a non-finite constant in a kernel (it would be emitted
     /// as `f64::INFINITY`).
     #[error(

@@ -183,6 +183,13 @@ fn parse_decimal(s: &str) -> Result<(i128, i128), String> {
     Ok((num, den))
 }
 
+impl Default for Angle {
+    /// Zero radians (the DH `alpha` of a link in placement form, where it is not used).
+    fn default() -> Self {
+        Angle::Radians(0.0)
+    }
+}
+
 impl std::str::FromStr for Angle {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, Self::Err> {

@@ -53,6 +53,28 @@ pub enum SpecError {
         /// What is wrong.
         message: String,
     },
+    /// A located problem in a URDF file (boxed: it keeps the error small for the enums that
+    /// carry a `SpecError`).
+    #[error(transparent)]
+    Urdf(Box<UrdfError>),
+}
+
+/// A problem in a URDF file: `FILE:LINE:COLUMN: <ELEMENT> ATTRIBUTE: message`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}:{line}:{column}: <{element}> {attribute}: {message}")]
+pub struct UrdfError {
+    /// The URDF file as named by the user or the scene.
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+    /// The element (`joint`, `link`, `inertial`, `origin`, ...).
+    pub element: String,
+    /// The attribute or child element at fault (empty when the element as a whole is).
+    pub attribute: String,
+    /// What is wrong.
+    pub message: String,
 }
 
 impl SpecError {
@@ -60,7 +82,7 @@ impl SpecError {
     pub fn path(&self) -> Option<&str> {
         match self {
             SpecError::At { path, .. } => Some(path),
-            SpecError::Io { .. } => None,
+            SpecError::Io { .. } | SpecError::Urdf(_) => None,
         }
     }
 
@@ -68,6 +90,7 @@ impl SpecError {
     pub fn line(&self) -> Option<usize> {
         match self {
             SpecError::At { line, .. } => Some(*line),
+            SpecError::Urdf(e) => Some(e.line),
             SpecError::Io { .. } => None,
         }
     }
@@ -76,13 +99,15 @@ impl SpecError {
     pub fn kind(&self) -> Option<SpecErrorKind> {
         match self {
             SpecError::At { kind, .. } => Some(*kind),
-            SpecError::Io { .. } => None,
+            SpecError::Io { .. } | SpecError::Urdf(_) => None,
         }
     }
 }
 
 /// Maps field paths to source positions, built from toml's span-preserving parse tree.
 pub(super) struct SourceIndex<'a> {
+    /// Whether a parse tree was given (scenes built in code have none).
+    tree: bool,
     text: &'a str,
     origin: &'a str,
     /// (path, position to report, covered span, value span) for every key and array element.
@@ -101,6 +126,7 @@ impl<'a> SourceIndex<'a> {
         root: Option<&toml::de::DeTable<'_>>,
     ) -> Self {
         let mut idx = SourceIndex {
+            tree: root.is_some(),
             text,
             origin,
             entries: Vec::new(),
@@ -139,6 +165,27 @@ impl<'a> SourceIndex<'a> {
             }
             _ => {}
         }
+    }
+
+    /// Whether the text gives `path`; `None` for a scene built in code (no text).
+    pub(super) fn has(&self, path: &str) -> Option<bool> {
+        self.tree
+            .then(|| self.entries.iter().any(|(p, ..)| p == path))
+    }
+
+    /// A problem of `kind` at `path`.
+    pub(super) fn at(&self, kind: SpecErrorKind, path: &str, message: String) -> SpecError {
+        self.error(kind, self.offset_of(path), path, message)
+    }
+
+    /// A required key that is absent, reported at its table.
+    pub(super) fn missing(&self, path: &str, message: String) -> SpecError {
+        self.error(
+            SpecErrorKind::MissingField,
+            self.offset_of(path),
+            path,
+            message,
+        )
     }
 
     /// The innermost path whose key or value covers byte `offset`.

@@ -43,17 +43,21 @@ mod constants;
 mod de;
 mod error;
 mod id;
+mod load;
 mod mode;
 mod state;
+mod urdf;
 mod validate;
 
 use serde::Deserialize;
 
 pub use constants::Constants;
-pub use error::{SpecError, SpecErrorKind};
+pub use error::{SpecError, SpecErrorKind, UrdfError};
 pub use id::{SceneId, UnknownScene};
+pub use load::{ChainChoice, URDF_GRAVITY, URDF_KERNELS, chain_toml, expand_toml, urdf_scene_text};
 pub use mode::Mode;
 pub use state::state_len;
+pub use urdf::{UrdfChain, read_chain as read_urdf_chain, rpy_matrix};
 pub use validate::{principal_moments, symmetric_eigenvalues};
 
 use error::SourceIndex;
@@ -134,7 +138,14 @@ pub enum InertiaSpec {
     Full([[f64; 3]; 3]),
 }
 
-/// One row of the DH table plus the link's inertial data.
+/// One joint and its link: a row of the DH table, or a joint placement (`origin` + `axis`, the
+/// form a URDF joint has), plus the link's inertial data.
+///
+/// Placement form: the link frame of joint i is the previous link's frame (the base frame for
+/// i = 1) moved by the fixed transform `origin`, then by the joint motion: a rotation by q_i
+/// about `axis` (revolute) or a translation by q_i along it (prismatic); the axis passes
+/// through the frame's origin. A scene uses one form for all its links; in placement form `a`,
+/// `alpha`, `d` and `offset` are not given.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinkSpec {
@@ -144,9 +155,11 @@ pub struct LinkSpec {
     /// Joint type, `joint = "revolute"` (default) or `"prismatic"`.
     #[serde(default)]
     pub joint: JointType,
-    /// DH a (metres).
+    /// DH a (metres); required in DH form.
+    #[serde(default)]
     pub a: f64,
-    /// DH α.
+    /// DH α; required in DH form.
+    #[serde(default)]
     pub alpha: Angle,
     /// DH d (metres).
     #[serde(default)]
@@ -154,6 +167,14 @@ pub struct LinkSpec {
     /// Constant joint offset added to q_i: θ_i = q_i + offset (default 0).
     #[serde(default)]
     pub offset: Option<Angle>,
+    /// Placement form: the fixed transform from the previous link's frame to this joint's
+    /// frame at q_i = 0 (default identity).
+    #[serde(default)]
+    pub origin: Option<TransformSpec>,
+    /// Placement form: the joint axis, a unit vector in the joint's frame; giving it selects
+    /// the placement form.
+    #[serde(default, deserialize_with = "de::opt_exact3")]
+    pub axis: Option<[f64; 3]>,
     /// Link mass m_i (kg), > 0.
     pub mass: f64,
     /// COG in link-frame coordinates (metres).
@@ -405,6 +426,11 @@ impl TransformSpec {
 }
 
 impl LinkSpec {
+    /// Whether the link is given in placement form (`axis`), not as a DH row.
+    pub fn is_placement(&self) -> bool {
+        self.axis.is_some()
+    }
+
     /// Inertia tensor about the COG in link-frame axes (kg m²).
     pub fn inertia_matrix(&self) -> [[f64; 3]; 3] {
         self.inertia.matrix()
@@ -443,15 +469,10 @@ impl Scene {
         Ok(scene)
     }
 
-    /// Reads and validates a scene file; errors name `path` as given.
+    /// Reads and validates a scene file (TOML, or a `.urdf` with its default chain); errors
+    /// name `path` as given. [`Scene::load_with_text`] also returns the self-contained text.
     pub fn load(path: impl AsRef<std::path::Path>) -> Result<Scene, SpecError> {
-        let path = path.as_ref();
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| SpecError::Io {
-            file: file.clone(),
-            source,
-        })?;
-        Scene::from_toml_str(&text, &file)
+        Scene::load_with_text(path, &ChainChoice::default()).map(|(s, _)| s)
     }
 
     /// Checks every semantic rule (already applied by [`Scene::from_toml_str`]); for scenes
@@ -504,6 +525,11 @@ impl Scene {
         self.links.len()
     }
 
+    /// Whether the links are in placement form (a URDF import or `origin`/`axis` links).
+    pub fn is_placement(&self) -> bool {
+        self.links.first().is_some_and(LinkSpec::is_placement)
+    }
+
     /// Base rotation matrix (identity if absent); exact for axis rotations by multiples of π/2.
     pub fn base_rotation(&self) -> [[f64; 3]; 3] {
         self.base.rotation_matrix()
@@ -549,8 +575,8 @@ impl Scene {
     ///
     /// 1. `gravity.x`, `gravity.y`, `gravity.z`
     /// 2. `base.translation.x|y|z`
-    /// 3. per link `k = 1..=n`: `linkk.a`, `linkk.alpha` (rad), `linkk.d`, `linkk.offset` (rad),
-    ///    `linkk.mass`, `linkk.com.x|y|z`, `linkk.inertia.xx|xy|xz|yy|yz|zz`
+    /// 3. per link `k = 1..=n`: `linkk.a`, `linkk.alpha` (rad), `linkk.d`, `linkk.offset` (rad)
+    ///    (DH form only), `linkk.mass`, `linkk.com.x|y|z`, `linkk.inertia.xx|xy|xz|yy|yz|zz`
     /// 4. `tool.translation.x|y|z` (only with a `[tool]`)
     /// 5. `ball.radius`, `ball.center.x|y|z`, `ball.mass`, `ball.inertia.xx|xy|xz|yy|yz|zz`
     ///    (the effective tensor, default (2/5) m r²; only with a `[ball]`)
@@ -574,10 +600,13 @@ impl Scene {
         vec3(&mut out, "base.translation", self.base_translation());
         for (i, l) in self.links.iter().enumerate() {
             let s = format!("link{}", i + 1);
-            out.push((format!("{s}.a"), l.a));
-            out.push((format!("{s}.alpha"), l.alpha.radians()));
-            out.push((format!("{s}.d"), l.d));
-            out.push((format!("{s}.offset"), l.offset.map_or(0.0, |o| o.radians())));
+            // Placement origins are baked like the base rotation: no DH names for them.
+            if !l.is_placement() {
+                out.push((format!("{s}.a"), l.a));
+                out.push((format!("{s}.alpha"), l.alpha.radians()));
+                out.push((format!("{s}.d"), l.d));
+                out.push((format!("{s}.offset"), l.offset.map_or(0.0, |o| o.radians())));
+            }
             out.push((format!("{s}.mass"), l.mass));
             vec3(&mut out, &format!("{s}.com"), l.com);
             sym(&mut out, &format!("{s}.inertia"), l.inertia_matrix());

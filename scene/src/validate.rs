@@ -214,6 +214,65 @@ fn det3(m: &[[f64; 3]; 3]) -> f64 {
         + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
 }
 
+/// A link in the scene's form: placement (`axis`, optional `origin`, no DH keys) or DH (`a`
+/// and `alpha` given, no `origin`); the unit axis of a placement.
+fn check_link_form(
+    ix: &SourceIndex<'_>,
+    p: &str,
+    l: &crate::LinkSpec,
+    placement: bool,
+) -> Result<(), SpecError> {
+    if l.is_placement() != placement {
+        let (this, first) = if placement {
+            ("a DH row", "placement form (axis)")
+        } else {
+            ("in placement form (axis)", "a DH row")
+        };
+        return Err(ix.invalid(
+            p,
+            format!("link is {this} but the first link is {first}: one form for all links"),
+        ));
+    }
+    if let Some(axis) = &l.axis {
+        for key in ["a", "alpha", "d", "offset"] {
+            if ix.has(&format!("{p}.{key}")) == Some(true) {
+                return Err(ix.invalid(
+                    &format!("{p}.{key}"),
+                    format!("a link in placement form (axis) takes no DH `{key}`"),
+                ));
+            }
+        }
+        let ap = format!("{p}.axis");
+        check_vec(ix, &ap, axis)?;
+        let norm = axis.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if (norm - 1.0).abs() > MATRIX_TOL {
+            return Err(ix.invalid(
+                &ap,
+                format!("the joint axis must be a unit vector (got {axis:?}, norm {norm})"),
+            ));
+        }
+        if let Some(o) = &l.origin {
+            check_transform(ix, &format!("{p}.origin"), o)?;
+        }
+        return Ok(());
+    }
+    if l.origin.is_some() {
+        return Err(ix.invalid(
+            &format!("{p}.origin"),
+            "`origin` needs `axis` (placement form); a DH row has none".to_string(),
+        ));
+    }
+    for key in ["a", "alpha"] {
+        if ix.has(&format!("{p}.{key}")) == Some(false) {
+            return Err(ix.missing(
+                &format!("{p}.{key}"),
+                format!("missing field `{key}` (a DH row needs a and alpha; or give `axis`)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 fn check_transform(ix: &SourceIndex<'_>, path: &str, t: &TransformSpec) -> Result<(), SpecError> {
     if let Some(tr) = &t.translation {
         check_vec(ix, &format!("{path}.translation"), tr)?;
@@ -270,6 +329,11 @@ fn is_identifier(s: &str) -> bool {
     chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
+/// Whether `s` is a Rust keyword (not usable as a scene name).
+pub(super) fn is_keyword(s: &str) -> bool {
+    RUST_KEYWORDS.contains(&s)
+}
+
 impl Scene {
     pub(super) fn validate_with(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {
         if !is_identifier(&self.name) || RUST_KEYWORDS.contains(&self.name.as_str()) {
@@ -293,8 +357,10 @@ impl Scene {
                 "a scene needs at least one link ([[links]] table)".to_string(),
             ));
         }
+        let placement = self.is_placement();
         for (i, l) in self.links.iter().enumerate() {
             let p = format!("links[{i}]");
+            check_link_form(ix, &p, l, placement)?;
             check_finite(ix, &format!("{p}.a"), l.a)?;
             check_angle(ix, &format!("{p}.alpha"), &l.alpha)?;
             check_finite(ix, &format!("{p}.d"), l.d)?;

@@ -25,7 +25,7 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 
 /// Run `eval`.
 pub fn run(args: &EvalArgs) -> Result<()> {
-    let (scene, _) = super::load_scene_with_params(&args.scene, &args.param)?;
+    let (scene, _) = super::load_scene_with_params(&args.scene, &args.chain, &args.param)?;
     let n = scene.links.len();
     let q = parse_list("--q", &args.q, Some(n))?;
     let qd = parse_list("--qd", &args.qd, Some(n))?;

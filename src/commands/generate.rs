@@ -22,7 +22,7 @@ pub fn generate_module(
 
 /// Run `generate`.
 pub fn run(args: &GenerateArgs) -> Result<()> {
-    let (scene, text) = super::load_scene(&args.scene)?;
+    let (scene, text) = super::load_scene(&args.scene, &args.chain)?;
     let opts = bf_codegen::EmitSettings {
         float: match args.float {
             FloatArg::F64 => bf_codegen::FloatTy::F64,

@@ -13,13 +13,17 @@ pub mod verify;
 
 use anyhow::Result;
 
-/// Load and validate a scene file; the error names the file, line and field. Every command
-/// that reads a scene file goes through here, so each of the scene's accepted-but-doubtful
-/// values ([`bf_codegen::Scene::warnings`]) is printed once to stderr, naming the file.
-pub fn load_scene(path: &std::path::Path) -> Result<(bf_codegen::Scene, String)> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| anyhow::anyhow!("{}: cannot read scene file: {e}", path.display()))?;
-    let scene = bf_codegen::Scene::from_toml_str(&text, &path.display().to_string())?;
+/// Load and validate a scene file (TOML, or a `.urdf` with the chain `chain` chooses); the
+/// error names the file, line and field (or URDF element and attribute). The text returned is
+/// self-contained (a URDF's chain written out as scene links), so what a command records parses
+/// again without the URDF. Every command that reads a scene file goes through here, so each of
+/// the scene's accepted-but-doubtful values ([`bf_codegen::Scene::warnings`]) is printed once
+/// to stderr, naming the file.
+pub fn load_scene(
+    path: &std::path::Path,
+    chain: &crate::cli::ChainArgs,
+) -> Result<(bf_codegen::Scene, String)> {
+    let (scene, text) = bf_codegen::Scene::load_with_text(path, &chain.choice())?;
     for w in scene.warnings() {
         eprintln!("warning: {}: {w}", path.display());
     }
@@ -30,9 +34,10 @@ pub fn load_scene(path: &std::path::Path) -> Result<(bf_codegen::Scene, String)>
 /// name=value` options; the error names the option, the file and the valid names.
 pub fn load_scene_with_params(
     path: &std::path::Path,
+    chain: &crate::cli::ChainArgs,
     params: &[String],
 ) -> Result<(bf_codegen::Scene, String)> {
-    let (mut scene, text) = load_scene(path)?;
+    let (mut scene, text) = load_scene(path, chain)?;
     let assignments = parse_params(params)?;
     bf_model::registry::set_parameters(&mut scene, &assignments)
         .map_err(|e| anyhow::anyhow!("--param: {}: {e}", path.display()))?;

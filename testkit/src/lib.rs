@@ -8,11 +8,14 @@
 //! * [`appendix`]: the paper's Appendix A (eq. 67–71) and Appendix B (eq. 72–79) transcribed
 //!   literally, plus the corrected forms (see docs/appendix-errata.md).
 //! * [`small`]: generic fixed-size linear algebra used by both.
+//! * [`urdf_tree`]: spatial-algebra RNEA, CRBA and forward kinematics on a URDF's whole tree,
+//!   read by its own XML reader (the check of the URDF import, eq. 22).
 
 pub mod appendix;
 pub mod error;
 pub mod reference;
 pub mod small;
+pub mod urdf_tree;
 
 pub use error::TestkitError;
 pub use reference::{ContactKind, Pose, RefBall, RefContact, RefLink, Reference};

@@ -11,9 +11,8 @@
 //! * M_ji = M_ij = the joint-j component of that force (moment about joint j's axis for a
 //!   revolute joint, force along it for a prismatic one) — eq. 22a without Jacobians.
 
-use super::SymbolicRobot;
+use super::{FrameKind, SymbolicRobot};
 use crate::graph::{Id, M3, V3};
-use crate::spec::DhConvention;
 
 /// Composite inertia (m, h = m c, I_o about the frame origin), link-frame axes.
 #[derive(Clone, Copy)]
@@ -24,10 +23,10 @@ struct Inertia {
 }
 
 impl SymbolicRobot {
-    /// Standard DH: o_i − o_{i−1} in frame i (closed form of `build_kinematics`); modified DH:
-    /// the zero vector (joint i's axis passes through o_i).
+    /// Standard DH: o_i − o_{i−1} in frame i (closed form of `build_kinematics`); modified DH
+    /// and general placements: the zero vector (joint i's axis passes through o_i).
     pub(super) fn joint_offset(&mut self, i: usize) -> V3 {
-        if self.scene.dh == DhConvention::Modified {
+        if self.frames.axis_at_own_origin() {
             let z = self.g.zero();
             return [z; 3];
         }
@@ -37,7 +36,10 @@ impl SymbolicRobot {
 
     /// Joint i's axis u_i in frame i.
     pub(super) fn joint_axis(&mut self, i: usize) -> V3 {
-        if self.scene.dh == DhConvention::Modified {
+        if let Some(u) = self.scene.links[i].axis {
+            return u.map(|x| self.g.constant(x));
+        }
+        if self.frames == FrameKind::DhModified {
             let (z, o) = (self.g.zero(), self.g.one());
             return [z, z, o];
         }
@@ -51,7 +53,7 @@ impl SymbolicRobot {
         if self.prismatic(i) {
             return self.g.v3_dot(u, f);
         }
-        if self.scene.dh == DhConvention::Modified {
+        if self.frames.axis_at_own_origin() {
             return self.g.v3_dot(u, n);
         }
         let r = self.joint_offset(i);

@@ -38,9 +38,9 @@ impl SymbolicRobot {
                 for j in 0..=i {
                     if self.axis_frame(j) == frame && self.prismatic(j) {
                         // Translation along the axis, no rotation.
-                        cols_p[j] = [inv.r[0][2], inv.r[1][2], inv.r[2][2]];
+                        cols_p[j] = self.axis_through(&inv.r, j);
                     } else if self.axis_frame(j) == frame {
-                        let axis = [inv.r[0][2], inv.r[1][2], inv.r[2][2]];
+                        let axis = self.axis_through(&inv.r, j);
                         let r = self.g.v3_sub(c, inv.t);
                         cols_p[j] = self.g.v3_cross(axis, r);
                         cols_o[j] = axis;

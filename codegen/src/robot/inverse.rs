@@ -27,7 +27,6 @@ pub(super) enum Wrench<'a> {
     Centroidal,
 }
 use crate::graph::{Id, Node, V3};
-use crate::spec::DhConvention;
 
 impl SymbolicRobot {
     /// π of link `i` as graph nodes from the scene's values (runtime parameters stay
@@ -69,7 +68,7 @@ impl SymbolicRobot {
         let n = self.nq();
         let z = self.g.zero();
         let qd = self.qd_ids();
-        let modified = self.scene.dh == DhConvention::Modified;
+        let modified = self.frames.axis_at_own_origin();
         let g0 = self.cvec("gravity");
         let base_r = self.world[0].r;
         let ng0 = [self.g.neg(g0[0]), self.g.neg(g0[1]), self.g.neg(g0[2])];

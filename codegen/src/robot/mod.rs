@@ -3,6 +3,9 @@
 //! Symbols and paper equations (conventions of docs/parameters.md):
 //! * DH link transforms A_i (Table 1), world frames T_i = T_base A_1 ⋯ A_i, tip = T_n T_tool:
 //!   p_e and [ê_x3 ê_y3 ê_z3] of eq. 67–68;
+//! * or, for links in placement form (a URDF import; [`FrameKind::Placement`],
+//!   [`JointPlacement`]), A_i = (R₀, t₀) ∘ motion with the Rodrigues rotation R(u_i, q_i) or the
+//!   translation q_i u_i, the joint axis u_i through o_i (as in modified DH, u_i for z);
 //! * geometric Jacobians of the tip (eq. 69–71) and of every link COG (J_P^i, J_O^i of eq. 22a),
 //!   J̇ q̇ of the tip;
 //! * M = Σ m_i J_Pᵢᵀ J_Pᵢ + J_Oᵢᵀ R_i I_i R_iᵀ J_Oᵢ (eq. 22a, 74–75), built from Jacobians
@@ -174,6 +177,7 @@ pub struct SymbolicRobot {
     /// Runtime parameter names and default values (in `runtime_parameters` order).
     pub params: Vec<(String, f64)>,
     scene: Scene,
+    frames: FrameKind,
     consts: Vec<(String, f64)>,
     sc: Vec<(Id, Id)>,
     a_mats: Vec<Pose>,
@@ -181,6 +185,54 @@ pub struct SymbolicRobot {
     world: Vec<Pose>,
     tip: Pose,
     cache: Cache,
+}
+
+/// How the link frames of a scene are placed (the kinematics front end; see [`JointPlacement`]):
+/// the DH readers keep their closed-form link transforms (exact angle folding, DH runtime
+/// parameters, and the generated code of DH scenes unchanged); the general form composes a
+/// fixed transform with the joint motion.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrameKind {
+    /// Standard DH: joint i turns about z of frame i − 1; o_{i−1} is on its axis.
+    DhStandard,
+    /// Modified DH: joint i turns about z of frame i through o_i.
+    DhModified,
+    /// General placements: joint i moves about/along a unit axis u_i of frame i through o_i.
+    Placement,
+}
+
+impl FrameKind {
+    /// The front end a scene's links select.
+    pub fn of(scene: &Scene) -> FrameKind {
+        if scene.is_placement() {
+            FrameKind::Placement
+        } else if scene.dh == DhConvention::Modified {
+            FrameKind::DhModified
+        } else {
+            FrameKind::DhStandard
+        }
+    }
+
+    /// Whether joint i's axis passes through o_i and is fixed in frame i (modified DH and
+    /// general placements), rather than through o_{i−1} (standard DH).
+    pub fn axis_at_own_origin(self) -> bool {
+        self != FrameKind::DhStandard
+    }
+}
+
+/// One joint of the chain in the general form: a fixed transform x ↦ R x + t from the previous
+/// link's frame to the joint's frame at q = 0, then the joint motion about/along the unit
+/// `axis` (joint-frame coordinates); [`joint_placements`] gives any scene in this form.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointPlacement {
+    /// Fixed rotation (row-major).
+    pub rotation: [[f64; 3]; 3],
+    /// Fixed translation (m).
+    pub translation: [f64; 3],
+    /// Unit joint axis in the joint frame.
+    pub axis: [f64; 3],
+    /// Revolute or prismatic.
+    pub joint: JointType,
 }
 
 #[derive(Debug, Clone, Default)]
@@ -228,6 +280,7 @@ impl SymbolicRobot {
             layout,
             params,
             scene: scene.clone(),
+            frames: FrameKind::of(scene),
             consts,
             sc: Vec::new(),
             a_mats: Vec::new(),
@@ -338,10 +391,67 @@ impl SymbolicRobot {
         Pose { r, t }
     }
 
+    /// Link transform and inverse of a joint in general placement form: A = (R₀, t₀) ∘ motion,
+    /// the motion a Rodrigues rotation R(u, q) = cos q (1 − u uᵀ) + u uᵀ + sin q [u]ₓ or a
+    /// translation q u.
+    fn placement_pose(&mut self, i: usize, p: &JointPlacement) -> (Pose, Pose) {
+        let qi = self.g.var(self.layout.q(i));
+        let mut r0 = [[Id(0); 3]; 3];
+        for (a, row) in r0.iter_mut().enumerate() {
+            for (b, x) in row.iter_mut().enumerate() {
+                *x = self.g.constant(p.rotation[a][b]);
+            }
+        }
+        let t0 = p.translation.map(|x| self.g.constant(x));
+        let u = p.axis;
+        let (r, t) = if p.joint == JointType::Prismatic {
+            let z = self.g.zero();
+            self.sc.push((z, self.g.one()));
+            let uq = u.map(|x| {
+                let k = self.g.constant(x);
+                self.g.mul(k, qi)
+            });
+            let ruq = self.g.m3_mul_v(&r0, uq);
+            (r0, self.g.v3_add(t0, ruq))
+        } else {
+            let (s, c) = (self.g.sin(qi), self.g.cos(qi));
+            self.sc.push((s, c));
+            let skew = [[0.0, -u[2], u[1]], [u[2], 0.0, -u[0]], [-u[1], u[0], 0.0]];
+            let mut rm = [[Id(0); 3]; 3];
+            for (a, row) in rm.iter_mut().enumerate() {
+                for (b, x) in row.iter_mut().enumerate() {
+                    let delta = if a == b { 1.0 } else { 0.0 };
+                    let k1 = self.g.constant(delta - u[a] * u[b]);
+                    let k2 = self.g.constant(u[a] * u[b]);
+                    let k3 = self.g.constant(skew[a][b]);
+                    let kc = self.g.mul(k1, c);
+                    let ks = self.g.mul(k3, s);
+                    let sum = self.g.add(kc, ks);
+                    *x = self.g.add(sum, k2);
+                }
+            }
+            (self.g.m3_mul(&r0, &rm), t0)
+        };
+        let ri = m3_transpose(&r);
+        let rit = self.g.m3_tmul_v(&r, t);
+        let ti = [self.g.neg(rit[0]), self.g.neg(rit[1]), self.g.neg(rit[2])];
+        (Pose { r, t }, Pose { r: ri, t: ti })
+    }
+
     fn build_kinematics(&mut self) -> Result<(), CodegenError> {
         let n = self.nq();
         let links = self.scene.links.clone();
+        if self.frames == FrameKind::Placement {
+            for (i, p) in joint_placements(&self.scene).iter().enumerate() {
+                let (a_pose, inv_pose) = self.placement_pose(i, p);
+                self.a_mats.push(a_pose);
+                self.a_invs.push(inv_pose);
+            }
+        }
         for (i, l) in links.iter().enumerate() {
+            if self.frames == FrameKind::Placement {
+                break;
+            }
             let qi = self.g.var(self.layout.q(i));
             let offset_name = format!("link{}.offset", i + 1);
             let offset_runtime = self.params.iter().any(|(n, _)| *n == offset_name);
@@ -453,10 +563,21 @@ impl SymbolicRobot {
     /// Index of the frame whose z axis is joint j's axis (0-based joint): z_{j−1} for
     /// standard DH (frame j in 1-based numbering of `world`), z_j for modified DH.
     fn axis_frame(&self, j: usize) -> usize {
-        match self.scene.dh {
-            DhConvention::Standard => j,
-            DhConvention::Modified => j + 1,
+        if self.frames.axis_at_own_origin() {
+            j + 1
+        } else {
+            j
         }
+    }
+
+    /// Joint j's axis in the coordinates of a frame whose rotation to the axis frame is `r`:
+    /// the z column of `r` for DH, `r u_j` for general placements.
+    fn axis_through(&mut self, r: &M3, j: usize) -> V3 {
+        if self.frames == FrameKind::Placement {
+            let u = self.joint_axis(j);
+            return self.g.m3_mul_v(r, u);
+        }
+        [r[0][2], r[1][2], r[2][2]]
     }
 
     /// Whether joint `j` (0-based) is prismatic.
@@ -494,7 +615,7 @@ impl SymbolicRobot {
         let mut jo = vec![vec![z; n]; 3];
         for j in 0..=link {
             let f = self.world[self.axis_frame(j)];
-            let axis = [f.r[0][2], f.r[1][2], f.r[2][2]];
+            let axis = self.axis_through(&f.r, j);
             if self.prismatic(j) {
                 // A prismatic joint translates along its axis and does not rotate.
                 for k in 0..3 {
@@ -574,9 +695,14 @@ impl SymbolicRobot {
             }
             .into());
         }
-        if !tip_only && self.scene.dh == DhConvention::Modified {
+        if !tip_only && self.frames == FrameKind::DhModified {
             return Err(SceneDefect::SegmentContactModifiedDh.into());
         }
+        let segment = if tip_only || self.frames == FrameKind::DhStandard {
+            None
+        } else {
+            Some(placement_segment_length(&self.scene)?)
+        };
         let n = self.nq();
         let tip = self.tip;
         let pe = tip.t;
@@ -588,7 +714,10 @@ impl SymbolicRobot {
         let sat = if tip_only {
             self.g.zero()
         } else {
-            let an = self.constant(&format!("link{n}.a"));
+            let an = match segment {
+                Some(l) => self.g.constant(l),
+                None => self.constant(&format!("link{n}.a")),
+            };
             let lo = self.g.neg(an);
             let hi = self.g.zero();
             if smooth {
@@ -664,4 +793,44 @@ impl SymbolicRobot {
             jc_dot_qd,
         })
     }
+}
+
+/// The chain of `scene` in general placement form: its placement links as they are, a DH
+/// scene through its reader [`Scene::placement_form`] (which also moves the inertias into
+/// the joint frames).
+pub fn joint_placements(scene: &Scene) -> Vec<JointPlacement> {
+    let converted;
+    let scene = if scene.is_placement() {
+        scene
+    } else {
+        converted = scene.placement_form();
+        &converted
+    };
+    scene
+        .links
+        .iter()
+        .map(|l| {
+            let o = l.origin.clone().unwrap_or_default();
+            JointPlacement {
+                rotation: o.rotation_matrix(),
+                translation: o.translation(),
+                axis: l.axis.unwrap_or([0.0, 0.0, 1.0]),
+                joint: l.joint,
+            }
+        })
+        .collect()
+}
+
+/// ℓ of segment contact on placement links: the last joint's origin in tip-frame coordinates,
+/// −R_toolᵀ t_tool, must be (−ℓ, 0, 0) with ℓ > 0 (the standard-DH geometry, where the segment
+/// p_e − a_n e_x … p_e ends at the last joint's axis).
+fn placement_segment_length(scene: &Scene) -> Result<f64, CodegenError> {
+    let (r, t) = (scene.tool_rotation(), scene.tool_translation());
+    let joint = [0, 1, 2].map(|i| -(0..3).map(|k| r[k][i] * t[k]).sum::<f64>());
+    let l = -joint[0];
+    let tol = 1e-9 * l.abs().max(1e-3);
+    if l.is_nan() || l <= 0.0 || joint[1].abs() > tol || joint[2].abs() > tol {
+        return Err(SceneDefect::SegmentContactGeometry { joint }.into());
+    }
+    Ok(l)
 }

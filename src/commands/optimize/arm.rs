@@ -81,7 +81,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             args.verify_rtol
         );
     }
-    let (scene, text) = crate::commands::load_scene_with_params(path, &args.param)?;
+    let (scene, text) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
     let params = crate::commands::parse_params(&args.param)?;
     let nq = scene.links.len();
     let config = |opt: &str, v: &Option<String>| -> Result<Option<Vec<f64>>> {

@@ -370,7 +370,7 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
             return Ok(Some(scene));
         }
     };
-    let (scene, _) = super::load_scene_with_params(&path, &args.param)?;
+    let (scene, _) = super::load_scene_with_params(&path, &args.chain, &args.param)?;
     bf_model::registry::check_contact_scene(&scene).map_err(|e| {
         anyhow::anyhow!(
             "--scene {}: problem {problem} needs a finger-and-ball scene: {e}",

@@ -10,7 +10,7 @@ use anyhow::{Context, Result, anyhow, bail};
 /// compiled scene a ball problem's solution names), else scenes/paper.toml.
 pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
     if let Some(path) = &args.scene {
-        let (scene, _) = crate::commands::load_scene_with_params(path, &args.param)?;
+        let (scene, _) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
         return Ok((scene, path.display().to_string()));
     }
     if let Some(init) = &args.init {
@@ -62,7 +62,7 @@ pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)>
 fn default_scene(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
     let path = std::path::Path::new("scenes/paper.toml");
     if path.exists() {
-        let (scene, _) = crate::commands::load_scene_with_params(path, &args.param)?;
+        let (scene, _) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
         return Ok((scene, path.display().to_string()));
     }
     // Outside the repository: the compiled paper scene.

@@ -1,0 +1,361 @@
+//! Loading a scene from a file: a TOML scene (whose robot may come from a URDF named by its
+//! `urdf` key) or a URDF file directly. Either way the result is a self-contained scene text
+//! — the URDF chain written out as `[[links]]` in placement form and a `[tool]` — so what a
+//! command records (solution files, the generated module's scene text) parses again without
+//! the URDF.
+
+use crate::urdf::{UrdfChain, read_chain};
+use crate::{Scene, SpecError, SpecErrorKind, TransformSpec};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// Gravity of a scene made from a URDF when it does not give one (m/s², world z up).
+pub const URDF_GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
+/// The kernels of a scene made from a URDF file alone (no TOML around it).
+pub const URDF_KERNELS: &[&str] = &[
+    "frames",
+    "tip_jacobian",
+    "mass_matrix",
+    "gravity",
+    "cqd_g",
+    "mass_cqd_g",
+    "potential",
+];
+
+/// Which serial chain of a URDF tree to take (`--base LINK --tip LINK`): `None` takes the
+/// root, respectively the only leaf of a tree that does not branch.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct ChainChoice {
+    /// The base link.
+    pub base: Option<String>,
+    /// The tip link.
+    pub tip: Option<String>,
+}
+
+fn is_urdf(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+}
+
+fn read(path: &Path) -> Result<String, SpecError> {
+    std::fs::read_to_string(path).map_err(|source| SpecError::Io {
+        file: path.display().to_string(),
+        source,
+    })
+}
+
+/// `x` as a TOML float that parses back to the same f64 (Rust's shortest round-trip form).
+fn num(x: f64) -> String {
+    let s = format!("{x:?}");
+    if s.contains(['.', 'e', 'n', 'i']) {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+fn vec3(v: [f64; 3]) -> String {
+    format!("[{}, {}, {}]", num(v[0]), num(v[1]), num(v[2]))
+}
+
+fn mat3(m: [[f64; 3]; 3]) -> String {
+    format!("[{}, {}, {}]", vec3(m[0]), vec3(m[1]), vec3(m[2]))
+}
+
+fn transform(out: &mut String, t: &TransformSpec) {
+    let _ = writeln!(out, "translation = {}", vec3(t.translation()));
+    let _ = writeln!(out, "rotation = {}", mat3(t.rotation_matrix()));
+}
+
+/// The `[tool]` and `[[links]]` tables of a URDF chain, in placement form.
+pub fn chain_toml(chain: &UrdfChain) -> String {
+    let mut out = String::new();
+    if let Some(t) = &chain.tool {
+        let _ = writeln!(out, "\n[tool]");
+        transform(&mut out, t);
+    }
+    for l in &chain.links {
+        let _ = writeln!(out, "\n[[links]]");
+        if let Some(n) = &l.name {
+            let _ = writeln!(out, "name = {n:?}");
+        }
+        if l.joint == crate::JointType::Prismatic {
+            let _ = writeln!(out, "joint = \"prismatic\"");
+        }
+        if let Some(o) = &l.origin {
+            let _ = writeln!(
+                out,
+                "origin = {{ translation = {}, rotation = {} }}",
+                vec3(o.translation()),
+                mat3(o.rotation_matrix())
+            );
+        }
+        if let Some(a) = l.axis {
+            let _ = writeln!(out, "axis = {}", vec3(a));
+        }
+        let _ = writeln!(out, "mass = {}", num(l.mass));
+        let _ = writeln!(out, "com = {}", vec3(l.com));
+        let _ = writeln!(out, "inertia = {}", mat3(l.inertia_matrix()));
+        if let Some(src) = &l.nonphysical_inertia {
+            let _ = writeln!(out, "nonphysical_inertia = {src:?}");
+        }
+        for (key, v) in [
+            ("q_min", l.q_min),
+            ("q_max", l.q_max),
+            ("tau_max", l.tau_max),
+        ] {
+            if let Some(v) = v {
+                let _ = writeln!(out, "{key} = {}", num(v));
+            }
+        }
+    }
+    out
+}
+
+/// A Rust identifier from a URDF robot name (`ur5-arm` → `ur5_arm`).
+fn identifier(name: &str) -> String {
+    let mut s: String = name
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
+        s.insert_str(0, "robot_");
+    }
+    if crate::validate::is_keyword(&s) {
+        s.push_str("_robot");
+    }
+    s
+}
+
+/// The scene text of a URDF file alone: its chain, gravity [`URDF_GRAVITY`], the kernels
+/// [`URDF_KERNELS`], no ball.
+pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<String, SpecError> {
+    let chain = read_chain(urdf, file, choice.base.as_deref(), choice.tip.as_deref())?;
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Made from the URDF file {file:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
+        chain.robot, chain.base_link, chain.tip_link, chain.joint_names
+    );
+    let _ = writeln!(out, "name = {:?}", identifier(&chain.robot));
+    let _ = writeln!(out, "gravity = {}", vec3(URDF_GRAVITY));
+    let kernels: Vec<String> = URDF_KERNELS.iter().map(|k| format!("{k:?}")).collect();
+    let _ = writeln!(out, "kernels = [{}]", kernels.join(", "));
+    out.push_str(&chain_toml(&chain));
+    Ok(out)
+}
+
+/// A TOML scene text with its `urdf`, `base_link` and `tip_link` keys resolved: the keys become
+/// comments (lines keep their numbers, so errors in the user's part point at the user's
+/// lines), gravity defaults to [`URDF_GRAVITY`], and the chain is appended. `dir` is the scene
+/// file's directory (the URDF path is relative to it); `choice` (command-line `--base`/`--tip`)
+/// overrides the scene's links. A text without `urdf` is returned unchanged, and then
+/// `choice` must be empty.
+pub fn expand_toml(
+    text: &str,
+    origin: &str,
+    dir: &Path,
+    choice: &ChainChoice,
+) -> Result<String, SpecError> {
+    let Ok(tree) = toml::de::DeTable::parse(text) else {
+        // Syntax errors are reported, located, by the scene parser.
+        return Ok(text.to_string());
+    };
+    let ix = crate::error::SourceIndex::new(text, origin, Some(tree.get_ref()));
+    let table = tree.get_ref();
+    let mut keys: Vec<(&str, String, std::ops::Range<usize>)> = Vec::new();
+    for (k, v) in table.iter() {
+        let name = k.get_ref().as_ref();
+        if !matches!(name, "urdf" | "base_link" | "tip_link") {
+            continue;
+        }
+        let toml::de::DeValue::String(s) = v.get_ref() else {
+            return Err(ix.at(
+                SpecErrorKind::WrongType,
+                name,
+                format!("`{name}` must be a string"),
+            ));
+        };
+        keys.push((
+            if name == "urdf" {
+                "urdf"
+            } else if name == "base_link" {
+                "base_link"
+            } else {
+                "tip_link"
+            },
+            s.to_string(),
+            k.span().start..v.span().end,
+        ));
+    }
+    let get = |n: &str| keys.iter().find(|k| k.0 == n).map(|k| k.1.clone());
+    let Some(urdf) = get("urdf") else {
+        if let Some((n, ..)) = keys.first() {
+            return Err(ix.invalid(
+                n,
+                format!("`{n}` needs `urdf` (the URDF file it names a link of)"),
+            ));
+        }
+        if choice.base.is_some() || choice.tip.is_some() {
+            return Err(SpecError::At {
+                kind: SpecErrorKind::Invalid,
+                file: origin.to_string(),
+                line: 1,
+                column: 1,
+                path: "urdf".to_string(),
+                message: "--base/--tip choose a chain of a URDF; this scene has no `urdf`"
+                    .to_string(),
+            });
+        }
+        return Ok(text.to_string());
+    };
+    for (key, what) in [("links", "its links"), ("tool", "its tool (the tip link)")] {
+        if table.iter().any(|(k, _)| k.get_ref().as_ref() == key) {
+            return Err(ix.invalid(
+                key,
+                format!("a scene with `urdf` takes {what} from the URDF; remove `{key}`"),
+            ));
+        }
+    }
+    let chain_choice = ChainChoice {
+        base: choice.base.clone().or(get("base_link")),
+        tip: choice.tip.clone().or(get("tip_link")),
+    };
+    let path = dir.join(&urdf);
+    let file = path.display().to_string();
+    let chain = read_chain(
+        &read(&path)?,
+        &file,
+        chain_choice.base.as_deref(),
+        chain_choice.tip.as_deref(),
+    )?;
+    let has_gravity = table.iter().any(|(k, _)| k.get_ref().as_ref() == "gravity");
+    let mut out = String::with_capacity(text.len() + 4096);
+    let mut last = 0;
+    keys.sort_by_key(|k| k.2.start);
+    for (n, _, span) in &keys {
+        let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
+        let end = text[span.end..]
+            .find('\n')
+            .map_or(text.len(), |i| span.end + i);
+        out.push_str(&text[last..start]);
+        if *n == "urdf" && !has_gravity {
+            out.push_str(&format!("gravity = {} ", vec3(URDF_GRAVITY)));
+        }
+        for (i, line) in text[start..end].split('\n').enumerate() {
+            if i > 0 {
+                out.push('\n');
+            }
+            out.push_str("# ");
+            out.push_str(line);
+        }
+        last = end;
+    }
+    out.push_str(&text[last..]);
+    let _ = writeln!(
+        out,
+        "\n# Imported from {file:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
+        chain.robot, chain.base_link, chain.tip_link, chain.joint_names
+    );
+    out.push_str(&chain_toml(&chain));
+    Ok(out)
+}
+
+impl Scene {
+    /// Reads a scene file — TOML (its `urdf`, if any, resolved next to it) or `.urdf` — and
+    /// returns the scene with its self-contained text (see [`expand_toml`]). Errors name the
+    /// file as given (or the URDF file), the line and the field or element.
+    pub fn load_with_text(
+        path: impl AsRef<Path>,
+        choice: &ChainChoice,
+    ) -> Result<(Scene, String), SpecError> {
+        let path = path.as_ref();
+        let file = path.display().to_string();
+        let raw = read(path)?;
+        let text = if is_urdf(path) {
+            urdf_scene_text(&raw, &file, choice)?
+        } else {
+            let dir = path.parent().unwrap_or(Path::new(""));
+            expand_toml(&raw, &file, dir, choice)?
+        };
+        let scene = Scene::from_toml_str(&text, &file)?;
+        Ok((scene, text))
+    }
+}
+
+use crate::urdf::{M3, compose, mat_mul as mul, mat_vec as apply};
+
+fn transpose(a: M3) -> M3 {
+    [0, 1, 2].map(|i| [0, 1, 2].map(|j| a[j][i]))
+}
+
+const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+
+fn rot_x(a: f64) -> M3 {
+    let (s, c) = a.sin_cos();
+    [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
+}
+
+fn rot_z(a: f64) -> M3 {
+    let (s, c) = a.sin_cos();
+    [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
+}
+
+fn spec(p: (M3, [f64; 3])) -> TransformSpec {
+    TransformSpec {
+        translation: Some(p.1),
+        rotation: Some(crate::RotationSpec::Matrix(p.0)),
+    }
+}
+
+impl Scene {
+    /// The DH readers of the kinematics front end: the same robot with every link in
+    /// placement form (`origin` + `axis` = z). Modified DH, A_i = R_x(α) T_x(a) R_z(θ) T_z(d):
+    /// origin R_x(α) T_x(a) R_z(offset) T_z(d), link frames unchanged. Standard DH,
+    /// A_i = R_z(θ) T_z(d) T_x(a) R_x(α): the joint motion comes first, so joint i's origin is
+    /// row i − 1's tail T_x(a) R_x(α) then R_z(offset_i) T_z(d_i); link i's frame becomes joint
+    /// i's frame, so its COG and inertia are moved by T_x(a_i) R_x(α_i), and the last tail goes
+    /// into the tool. A scene already in placement form is returned as it is. Runtime
+    /// parameters naming DH constants are dropped (placement origins are baked).
+    pub fn placement_form(&self) -> Scene {
+        let mut out = self.clone();
+        if self.is_placement() {
+            return out;
+        }
+        let id = (IDENTITY, [0.0; 3]);
+        let mut tail = id;
+        for l in &mut out.links {
+            let offset = l.offset.map_or(0.0, |o| o.radians());
+            let head = compose(&(rot_z(offset), [0.0; 3]), &(IDENTITY, [0.0, 0.0, l.d]));
+            let own = compose(
+                &(IDENTITY, [l.a, 0.0, 0.0]),
+                &(rot_x(l.alpha.radians()), [0.0; 3]),
+            );
+            let origin = match self.dh {
+                crate::DhConvention::Standard => {
+                    let o = compose(&tail, &head);
+                    tail = own;
+                    // COG and inertia from DH frame i into joint frame i.
+                    let c = apply(&own.0, l.com);
+                    l.com = [0, 1, 2].map(|k| c[k] + own.1[k]);
+                    let i = mul(&mul(&own.0, &l.inertia_matrix()), &transpose(own.0));
+                    l.inertia = crate::InertiaSpec::Full(i);
+                    o
+                }
+                crate::DhConvention::Modified => compose(&own, &head),
+            };
+            l.origin = Some(spec(origin));
+            l.axis = Some([0.0, 0.0, 1.0]);
+            (l.a, l.d, l.offset) = (0.0, 0.0, None);
+            l.alpha = crate::Angle::Radians(0.0);
+        }
+        let tool = (self.tool_rotation(), self.tool_translation());
+        let tool = compose(&tail, &tool);
+        out.tool = (tool != id).then(|| spec(tool));
+        let known = out.constants();
+        out.runtime_parameters
+            .retain(|p| known.iter().any(|(n, _)| n == p));
+        out
+    }
+}

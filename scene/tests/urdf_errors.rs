@@ -1,0 +1,293 @@
+//! URDF import errors: each names the file, the line (and column) of the offending element, the
+//! element and the attribute; and the TOML side of `urdf = ...` scenes (placement-form links,
+//! the keys that conflict with an imported chain, line numbers kept for the user's part).
+
+use bf_scene::{ChainChoice, Scene, SpecError, read_urdf_chain};
+
+const FILE: &str = "robot.urdf";
+
+/// A two-joint arm; `{J2}` is replaced by the second joint's element.
+const ARM: &str = r#"<robot name="arm">
+  <link name="base"/>
+  <link name="l1">
+    <inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+  </link>
+  <link name="l2">
+    <inertial><origin xyz="0.5 0 0"/><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+  </link>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/></joint>
+  {J2}
+</robot>
+"#;
+
+const J2: &str = r#"<joint name="j2" type="revolute"><parent link="l1"/><child link="l2"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/></joint>"#;
+
+fn arm(j2: &str) -> String {
+    ARM.replace("{J2}", j2)
+}
+
+/// The error of reading `text`, checked to be a URDF error at `line` on `element`/`attribute`
+/// whose message contains `needle`.
+fn expect(
+    text: &str,
+    tip: Option<&str>,
+    line: usize,
+    element: &str,
+    attribute: &str,
+    needle: &str,
+) {
+    let err = read_urdf_chain(text, FILE, None, tip).unwrap_err();
+    let shown = err.to_string();
+    match &err {
+        SpecError::Urdf(u) => {
+            let (file, l, e, a, message) = (&u.file, &u.line, &u.element, &u.attribute, &u.message);
+            assert_eq!(file, FILE, "{shown}");
+            assert_eq!(*l, line, "{shown}");
+            assert_eq!((e.as_str(), a.as_str()), (element, attribute), "{shown}");
+            assert!(message.contains(needle), "{shown} lacks {needle:?}");
+            assert!(shown.starts_with(&format!("{FILE}:{line}:")), "{shown}");
+        }
+        other => panic!("not a URDF error: {other}"),
+    }
+}
+
+#[test]
+fn the_valid_arm_reads() {
+    let c = read_urdf_chain(&arm(J2), FILE, None, None).unwrap();
+    assert_eq!(c.joint_names, ["j1", "j2"]);
+    assert_eq!(
+        c.links[1].origin.as_ref().unwrap().translation,
+        Some([1.0, 0.0, 0.0])
+    );
+    assert_eq!(c.links[1].com, [0.5, 0.0, 0.0]);
+}
+
+#[test]
+fn a_moving_link_without_inertial() {
+    let text = arm(J2).replace(
+        r#"<inertial><origin xyz="0.5 0 0"/><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>"#,
+        "",
+    );
+    expect(
+        &text,
+        None,
+        6,
+        "link",
+        "inertial",
+        "link \"l2\" (moved by joint \"j2\") has no <inertial>",
+    );
+}
+
+#[test]
+fn an_inertial_without_mass_and_a_bad_mass() {
+    let text = arm(J2).replacen(r#"<mass value="1"/>"#, "", 1);
+    expect(&text, None, 4, "inertial", "mass", "no <mass>");
+    let text = arm(J2).replacen(r#"<mass value="1"/>"#, r#"<mass value="-2"/>"#, 1);
+    expect(&text, None, 4, "mass", "value", "mass must be > 0 (got -2)");
+}
+
+#[test]
+fn unknown_and_unsupported_joint_types() {
+    expect(
+        &arm(&J2.replace("revolute", "hinge")),
+        None,
+        10,
+        "joint",
+        "type",
+        "unknown joint type \"hinge\"",
+    );
+    expect(
+        &arm(&J2.replace("revolute", "floating")),
+        None,
+        10,
+        "joint",
+        "type",
+        "not supported",
+    );
+}
+
+#[test]
+fn bad_numbers_name_the_attribute_and_the_value() {
+    expect(
+        &arm(&J2.replace("xyz=\"1 0 0\"", "xyz=\"1 zero 0\"")),
+        None,
+        10,
+        "origin",
+        "xyz",
+        "\"zero\" is not a finite number",
+    );
+    expect(
+        &arm(&J2.replace("xyz=\"1 0 0\"", "xyz=\"1 0\"")),
+        None,
+        10,
+        "origin",
+        "xyz",
+        "expected 3 number(s)",
+    );
+    expect(
+        &arm(&J2.replace("xyz=\"1 0 0\"", "xyz=\"1 0 nan\"")),
+        None,
+        10,
+        "origin",
+        "xyz",
+        "not a finite number",
+    );
+    expect(
+        &arm(&J2.replace("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 0 0\"/>")),
+        None,
+        10,
+        "axis",
+        "xyz",
+        "must not be zero",
+    );
+}
+
+#[test]
+fn a_link_not_on_any_chain() {
+    // A second tree under `base`'s sibling root is refused as a second root; a tip that is
+    // not below the base is not on any chain.
+    let text = arm(J2).replace(
+        "<link name=\"base\"/>",
+        "<link name=\"base\"/>\n  <link name=\"stray\"/>",
+    );
+    expect(&text, None, 3, "link", "name", "form 2 trees");
+    let err = read_urdf_chain(&arm(J2), FILE, Some("l2"), Some("l1")).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("link \"l1\" is not on any chain from base link \"l2\""),
+        "{err}"
+    );
+    let err = read_urdf_chain(&arm(J2), FILE, None, Some("nope")).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("tip link \"nope\" is not a link of the robot"),
+        "{err}"
+    );
+}
+
+#[test]
+fn loops_are_refused() {
+    // l2 → l1 closes the loop l1 → l2 → l1 (l1 then has two parents).
+    let closing = format!(
+        "{J2}\n  <joint name=\"back\" type=\"fixed\"><parent link=\"l2\"/><child link=\"l1\"/></joint>"
+    );
+    expect(&arm(&closing), None, 11, "joint", "child", "closed loop");
+    // A cycle with one parent each: base is then no root, and the cycle is found.
+    let text = arm(J2).replace(
+        "<joint name=\"j1\" type=\"revolute\"><parent link=\"base\"/>",
+        "<joint name=\"j1\" type=\"revolute\"><parent link=\"l2\"/>",
+    );
+    let err = read_urdf_chain(&text, FILE, None, None).unwrap_err();
+    assert!(err.to_string().contains("the joints form a loop"), "{err}");
+}
+
+#[test]
+fn malformed_xml_and_a_wrong_root() {
+    let err = read_urdf_chain(
+        "<robot name=\"x\">\n<link name=\"a\">\n</robot>",
+        FILE,
+        None,
+        None,
+    )
+    .unwrap_err();
+    assert!(err.to_string().starts_with("robot.urdf:3:"), "{err}");
+    assert!(err.to_string().contains("not well-formed XML"), "{err}");
+    let err = read_urdf_chain("<sdf/>", FILE, None, None).unwrap_err();
+    assert!(
+        err.to_string().contains("the root element must be <robot>"),
+        "{err}"
+    );
+}
+
+#[test]
+fn fixed_only_chains_have_no_joint() {
+    let text = arm(&J2.replace("revolute", "fixed")).replace(
+        "<joint name=\"j1\" type=\"revolute\"",
+        "<joint name=\"j1\" type=\"fixed\"",
+    );
+    expect(
+        &text,
+        None,
+        6,
+        "link",
+        "name",
+        "has no revolute, continuous or prismatic joint",
+    );
+}
+
+fn tmpdir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("bf-scene-urdf-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn a_toml_scene_takes_its_robot_from_a_urdf_next_to_it() {
+    let dir = tmpdir("toml");
+    std::fs::write(dir.join("arm.urdf"), arm(J2)).unwrap();
+    let scene_text = "name = \"arm2\"\nurdf = \"arm.urdf\"\ntip_link = \"l2\"\nkernels = [\"mass_matrix\"]\n\n[friction]\nmu_s = -1.0\nmu_k = 0.5\n";
+    let path = dir.join("arm.toml");
+    // An error in the user's part keeps its own line (7), although keys became comments.
+    std::fs::write(&path, scene_text).unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert_eq!(err.line(), Some(7), "{err}");
+    assert_eq!(err.path(), Some("friction.mu_s"), "{err}");
+    std::fs::write(&path, scene_text.replace("-1.0", "0.6")).unwrap();
+    let (scene, text) = Scene::load_with_text(&path, &ChainChoice::default()).unwrap();
+    assert_eq!(scene.nq(), 2);
+    assert_eq!(scene.gravity, [0.0, 0.0, -9.81], "default gravity");
+    // The text is self-contained: it parses again without the URDF.
+    assert_eq!(Scene::from_toml_str(&text, "again").unwrap(), scene);
+    // Keys an imported chain cannot share.
+    std::fs::write(
+        &path,
+        format!("{scene_text}\n[tool]\ntranslation = [0.0, 0.0, 1.0]\n"),
+    )
+    .unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("takes its tool (the tip link) from the URDF"),
+        "{err}"
+    );
+    std::fs::write(
+        &path,
+        "name = \"x\"\nbase_link = \"l1\"\ngravity = [0.0, 0.0, -9.81]\nkernels = []\n",
+    )
+    .unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert!(
+        err.to_string().contains("`base_link` needs `urdf`"),
+        "{err}"
+    );
+    // A URDF that is not there is an I/O error naming it.
+    std::fs::write(&path, scene_text.replace("arm.urdf", "missing.urdf")).unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert!(err.to_string().contains("missing.urdf"), "{err}");
+}
+
+#[test]
+fn placement_links_in_toml_are_checked() {
+    let base = "name = \"p\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\naxis = [0.0, 0.0, 1.0]\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
+    assert!(Scene::from_toml_str(base, "p.toml").unwrap().is_placement());
+    let err = Scene::from_toml_str(
+        &base.replace("[0.0, 0.0, 1.0]", "[0.0, 0.0, 2.0]"),
+        "p.toml",
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("unit vector"), "{err}");
+    assert_eq!(err.line(), Some(6));
+    let err = Scene::from_toml_str(&base.replace("mass = 1.0", "mass = 1.0\na = 0.3"), "p.toml")
+        .unwrap_err();
+    assert_eq!(err.path(), Some("links[0].a"), "{err}");
+    let mixed = format!(
+        "{base}\n[[links]]\na = 1.0\nalpha = 0.0\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n"
+    );
+    let err = Scene::from_toml_str(&mixed, "p.toml").unwrap_err();
+    assert!(err.to_string().contains("one form for all links"), "{err}");
+    // A DH row still needs a and alpha.
+    let dh = "name = \"d\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\nalpha = 0.0\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
+    let err = Scene::from_toml_str(dh, "d.toml").unwrap_err();
+    assert_eq!(err.path(), Some("links[0].a"), "{err}");
+    assert!(err.to_string().contains("missing field `a`"), "{err}");
+}
