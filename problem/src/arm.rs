@@ -14,7 +14,9 @@
 //! is a state (its rate τ̇ the control, determined by the collocation of τ) and both end
 //! points fix q, q̇ and τ − g(q) = 0 (g from the scene's `cqd_g_rnea` graph at q̇ = 0), which
 //! holds at the end time exactly, not only at the last collocation node (Radau nodes do not
-//! include the end of a phase).
+//! include the end of a phase). The torque bounds are state bounds, met at the state points;
+//! between them the torque polynomial can overshoot where the optimum is bang-bang (small
+//! effort weights), which the study layer's verification reports (decision record 0014).
 //!
 //! The small acceleration term (w_a = [`DEFAULT_ACCELERATION_WEIGHT`]) is a regularisation:
 //! with time and torque effort alone, a joint of tiny inertia (a wrist: M_ii ≈ 4e-5 kg m² on
