@@ -193,7 +193,7 @@ pub struct BenchArgs {
     /// URDF scene file: the serial chain (`--base LINK --tip LINK`).
     #[command(flatten)]
     pub chain: ChainArgs,
-    /// Total time budget (s), split over the kernels.
+    /// Total time budget (s), split over the kernels; at most 3600.
     #[arg(long, default_value_t = 3.0)]
     pub time: f64,
     /// Number of random states cycled through.
@@ -251,7 +251,8 @@ pub struct SimulateArgs {
     /// With --pd-track: the feedback acts during contact too.
     #[arg(long, requires = "pd_track")]
     pub pd_track_contact: bool,
-    /// Initial joint angles q(0) (rad, comma-separated) [default: 0.1,0.5,0.5].
+    /// Initial joint angles q(0) (rad, comma-separated, one per joint) [default: 0.1,0.5,0.5
+    /// for a 3-joint finger, zeros for any other number of joints; the --init file's q].
     #[arg(long, allow_hyphen_values = true)]
     pub q0: Option<String>,
     /// Initial joint velocities q̇(0) (rad/s) [default: 0,0,0].
@@ -346,6 +347,15 @@ pub struct OptimizeArgs {
     /// the joint limits].
     #[arg(long, value_name = "Q", allow_hyphen_values = true)]
     pub target: Option<String>,
+    /// `reach-arm`: effort weight w of the cost ∫(1 + w‖τ‖² + w_a‖q̈‖²) dt [default: 1].
+    #[arg(long, value_name = "W", allow_hyphen_values = true)]
+    pub effort_weight: Option<f64>,
+    /// `reach-arm`: acceleration weight w_a of that cost [default: 1e-3].
+    #[arg(long, value_name = "W", allow_hyphen_values = true)]
+    pub acceleration_weight: Option<f64>,
+    /// `reach-arm`: a fixed duration T (s, in [0.01, 20]) instead of the optimal one.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub duration: Option<f64>,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
@@ -425,7 +435,7 @@ pub struct OptimizeArgs {
     /// Run shard k of m of the multi-start (`k/m`, 1 ≤ k ≤ m): the starts whose index is
     /// k − 1 modulo m. `--out` then also holds one `candidate-NNNN.json` per distinct optimum
     /// found; `optimize merge DIR…` picks the best verified one. See docs/sharding.md.
-    #[arg(long, value_name = "K/M")]
+    #[arg(long, value_name = "K/M", allow_hyphen_values = true)]
     pub shard: Option<String>,
     /// Lower bound of the stick phase's duration in the periodic problems (s). From cold
     /// starts most QC optima sit on it (short "taps" that spin the ball mostly by the impact

@@ -195,7 +195,61 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     ]);
     assert_error(&o, 1, &["--warm-start", "bad.json", "`objective`", "1e300"]);
     assert!(!dir.join("never").exists());
+
+    // The internals pass the same range check (the raw collocation data the warm start is
+    // built from), and internals of another shape are refused naming the file.
+    let good_path = dir.join("good.json");
+    std::fs::write(&good_path, sol.to_string()).unwrap();
+    let internals = json(&out.join("solution-internals.json"));
+    let warm = |internals: &serde_json::Value| {
+        std::fs::write(dir.join("solution-internals.json"), internals.to_string()).unwrap();
+        run(&[
+            "optimize",
+            "--problem",
+            "reach",
+            "--warm-start",
+            good_path.to_str().unwrap(),
+            "--out",
+            dir.join("never").to_str().unwrap(),
+        ])
+    };
+    let mut huge = internals.clone();
+    assert!(set_first_number(&mut huge["raw"], 1e308));
+    assert_error(
+        &warm(&huge),
+        1,
+        &["--warm-start", "solution-internals.json", "raw[0]", "1e308"],
+    );
+    let mut fewer = internals.clone();
+    let phases = fewer["raw"].as_array().unwrap().len();
+    fewer["raw"].as_array_mut().unwrap().pop();
+    assert_error(
+        &warm(&fewer),
+        1,
+        &[
+            "solution-internals.json",
+            &format!("{} phases of raw collocation data", phases - 1),
+            "good.json has",
+        ],
+    );
+    let mut other = internals;
+    other["problem"] = serde_json::json!("roll");
+    assert_error(&warm(&other), 1, &["solution-internals.json", "\"roll\""]);
+    assert!(!dir.join("never").exists());
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Sets the first number (depth first) of `v` to `x`; whether there was one.
+fn set_first_number(v: &mut serde_json::Value, x: f64) -> bool {
+    match v {
+        serde_json::Value::Number(_) => {
+            *v = serde_json::json!(x);
+            true
+        }
+        serde_json::Value::Array(a) => a.iter_mut().any(|e| set_first_number(e, x)),
+        serde_json::Value::Object(o) => o.values_mut().any(|e| set_first_number(e, x)),
+        _ => false,
+    }
 }
 
 /// A directory that is not an earlier output (here: a source tree) or a file is refused
@@ -409,4 +463,136 @@ fn non_finite_eval_results_are_errors() {
         "1,0,0",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `--param` values pass the scene file's checks: a negative ball radius or a zero link mass is
+/// an error naming the parameter, its value and the rule, before anything is computed
+/// (previously both ran and printed numbers).
+#[test]
+fn param_values_are_validated_as_the_scene_file_is() {
+    let o = run(&[
+        "eval",
+        "scenes/human.toml",
+        "--q",
+        "0.3,-0.5,0.8",
+        "--qd",
+        "0,0,0",
+        "--param",
+        "ball.radius=-1",
+    ]);
+    assert_error(&o, 1, &["ball.radius", "-1", "must be > 0"]);
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let dir = tmpdir("param");
+    let out = dir.join("out");
+    let o = run(&[
+        "simulate",
+        "--scene",
+        "scenes/human.toml",
+        "--param",
+        "link3.mass=0",
+        "--t-end",
+        "0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_error(
+        &o,
+        1,
+        &["link3.mass", "= 0", "links[2].mass", "must be > 0"],
+    );
+    assert!(!out.exists());
+    // A mass negligible next to the others' (the scale floor) is refused the same way.
+    let o = run(&[
+        "simulate",
+        "--scene",
+        "scenes/human.toml",
+        "--param",
+        "link3.mass=1e-300",
+        "--t-end",
+        "0.1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["link3.mass", "1e-300"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Unclear messages and unbounded runs: each error names the option or file, the quantity and
+/// the value, and exits 1 before any work.
+#[test]
+fn errors_name_the_cause_and_runs_are_bounded() {
+    let dir = tmpdir("cause");
+    let out = dir.join("out");
+    let out_s = out.to_str().unwrap();
+    // bench: a budget beyond the documented maximum.
+    let o = run(&["bench", "scenes/paper.toml", "--time", "1e300"]);
+    assert_error(&o, 1, &["--time", "at most 3600", "1e300"]);
+    // simulate: a contact mode away from the ball names h(q0) and its value.
+    let o = run(&[
+        "simulate", "--mode0", "stick", "--t-end", "0.1", "--out", out_s,
+    ]);
+    assert_error(&o, 1, &["stick", "h(q0) = ", "contact tolerance"]);
+    // --init with the wrong number of joint angles names the option, the count and the scene's.
+    let init = dir.join("init.json");
+    std::fs::write(&init, r#"{"q": [0.1, 0.2]}"#).unwrap();
+    let init_s = init.to_str().unwrap();
+    let o = run(&[
+        "simulate", "--init", init_s, "--t-end", "0.1", "--out", out_s,
+    ]);
+    assert_error(
+        &o,
+        1,
+        &["--init", "init.json", "`q` has 2 values", "3 joints"],
+    );
+    // An arm solution given to a ball scene says what it is.
+    std::fs::write(
+        &init,
+        r#"{"problem": "reach-arm", "scene": "planar2_arm", "start": [0.0, 0.0]}"#,
+    )
+    .unwrap();
+    let o = run(&[
+        "simulate",
+        "--scene",
+        "scenes/paper.toml",
+        "--init",
+        init_s,
+        "--t-end",
+        "0.1",
+        "--out",
+        out_s,
+    ]);
+    assert_error(
+        &o,
+        1,
+        &["--init", "an arm solution", "reach-arm", "planar2_arm"],
+    );
+    // Destabilising PD gains are refused before the run.
+    let o = run(&[
+        "simulate",
+        "--pd",
+        "0.5,0.5,0.5",
+        "--pd-gains=-100,0",
+        "--t-end",
+        "0.1",
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 1, &["--pd-gains", "kp of joint 1 is -100", ">= 0"]);
+    // A negative shard index is --shard's error, not clap's "unexpected argument".
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--shard",
+        "-1/2",
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 1, &["--shard", "-1/2", "1 <= k <= m"]);
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
 }

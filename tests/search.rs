@@ -163,11 +163,18 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
             .filter(|n| n.starts_with("candidate-"))
             .collect();
         assert!(!names.is_empty());
-        // Shard k holds the starts ≡ k − 1 (mod 2) only.
+        // Shard k holds the starts ≡ k − 1 (mod 2) only; every candidate has its own
+        // internals file (no candidate's warm-start data replaces another's).
         let parity = usize::from(k == "2/2");
-        for n in &names {
+        for n in names.iter().filter(|n| !n.ends_with("-internals.json")) {
             let idx: usize = n[10..14].parse().unwrap();
             assert_eq!(idx % 2, parity, "{n}");
+            let internals = n.replace(".json", "-internals.json");
+            assert_eq!(json(&d.join(n))["internals"], internals.as_str());
+            assert_eq!(
+                json(&d.join(&internals))["problem"],
+                json(&d.join(n))["problem"]
+            );
         }
         shard_dirs.push(d);
     }
@@ -205,6 +212,60 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         assert_eq!(x["status"], y["status"]);
         assert!(close(&x["objective"], &y["objective"]), "{x} vs {y}");
     }
+    // A candidate edited to claim a lower objective than its own trajectory gives is refused,
+    // as is a shard solved on another scene file.
+    let copy = |tag: &str| {
+        let to = dir.join(tag);
+        std::fs::create_dir_all(&to).unwrap();
+        for e in std::fs::read_dir(&shard_dirs[1]).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+        to
+    };
+    let merge_with = |other: &Path| {
+        run(&[
+            "optimize",
+            "merge",
+            shard_dirs[0].to_str().unwrap(),
+            other.to_str().unwrap(),
+            "--out",
+            dir.join("refused").to_str().unwrap(),
+        ])
+    };
+    let tampered = copy("tampered");
+    let cand = std::fs::read_dir(&tampered)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .find(|n| n.starts_with("candidate-") && !n.ends_with("-internals.json"))
+        .unwrap();
+    let mut c = json(&tampered.join(&cand));
+    c["objective"] = serde_json::json!(c["objective"].as_f64().unwrap() * 0.5);
+    std::fs::write(tampered.join(&cand), c.to_string()).unwrap();
+    let o = merge_with(&tampered);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        e.contains(&cand) && e.contains("objective") && e.contains("own trajectory"),
+        "{e}"
+    );
+    let other_scene = copy("other-scene");
+    let mut sol = json(&other_scene.join("solution.json"));
+    let text = sol["scene_toml"]
+        .as_str()
+        .unwrap()
+        .replace("radius = 1.0", "radius = 1.1");
+    assert_ne!(text, sol["scene_toml"].as_str().unwrap());
+    sol["scene_toml"] = serde_json::json!(text);
+    std::fs::write(other_scene.join("solution.json"), sol.to_string()).unwrap();
+    let o = merge_with(&other_scene);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        e.contains("another scene file text") && e.contains("line"),
+        "{e}"
+    );
+    assert!(!dir.join("refused").exists());
     // A start in two directories is refused.
     let o = run(&[
         "optimize",

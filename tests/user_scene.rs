@@ -125,6 +125,54 @@ fn user_scene_runs_on_its_own_numbers_in_eval_simulate_and_optimize() {
         tau_max > 0.3,
         "the limit is active in a minimum-time reach: {tau_max}"
     );
+    // The solution stores its scene (file text and parameters): `simulate --init` replays it
+    // outside the repository with nothing else, on the user's numbers (its initial energy at
+    // the first node is the user finger's energy there, from the independent reference).
+    assert_eq!(
+        o_user["scene_toml"].as_str().unwrap(),
+        std::fs::read_to_string(scene).unwrap()
+    );
+    let replay = dir.join("replay");
+    let o = cli_util::bin()
+        .current_dir(&dir)
+        .args([
+            "simulate",
+            "--init",
+            dir.join("opt-user/solution.json").to_str().unwrap(),
+            "--t-end",
+            "0.01",
+            "--out",
+            replay.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let (_, err) = ok(&o);
+    assert!(err.contains("the scene recorded in"), "{err}");
+    let summary = json(&replay.join("summary.json"));
+    let q: Vec<f64> = (1..=3)
+        .map(|i| o_user["nodes"][format!("q{i}")][0].as_f64().unwrap())
+        .collect();
+    let qd: Vec<f64> = (1..=3)
+        .map(|i| o_user["nodes"][format!("qd{i}")][0].as_f64().unwrap())
+        .collect();
+    let m = reference.mass_matrix(&q);
+    let kinetic: f64 = (0..3)
+        .map(|i| (0..3).map(|j| 0.5 * qd[i] * m[(i, j)] * qd[j]).sum::<f64>())
+        .sum();
+    let omega: Vec<f64> = ["omega_x", "omega_y", "omega_z"]
+        .iter()
+        .map(|c| o_user["nodes"][*c][0].as_f64().unwrap())
+        .collect();
+    assert!(
+        omega.iter().all(|w| *w == 0.0),
+        "reach starts with the ball at rest"
+    );
+    let e0 = summary["energy_initial"].as_f64().unwrap();
+    let expected = kinetic + reference.potential(&q);
+    assert!(
+        (e0 - expected).abs() < 1e-9 * (1.0 + expected.abs()),
+        "{e0} vs {expected}"
+    );
     let (o_builtin, _) = opt(None, &dir.join("opt-builtin"));
     assert_eq!(o_builtin["kernels"], "compiled");
     let (ju, jb) = (

@@ -205,7 +205,14 @@ fn the_walkthrough_runs_as_written() {
                     &std::fs::read_to_string(out.join("solution.json")).unwrap(),
                 )
                 .unwrap();
-                assert_eq!(sol["status"], "Solved", "{}", sol["status"]);
+                // Solved, or Acceptable on the finest mesh of the verification's doublings
+                // (the rest conditions on τ leave its constraint violation near 1e-7 there);
+                // either way verified below.
+                assert!(
+                    sol["status"] == "Solved" || sol["status"] == "Acceptable",
+                    "{}",
+                    sol["status"]
+                );
                 // Rest at the start and at the target given on the command line.
                 let target = arg(&words, "--target");
                 let x = &sol["raw"]["x"];
@@ -218,10 +225,16 @@ fn the_walkthrough_runs_as_written() {
                     assert!((last[i] - target[i]).abs() < 1e-8, "{last:?}");
                     assert!(last[3 + i].abs() < 1e-8, "{last:?}");
                 }
-                // The shoulder's torque bound (20 N m) holds at every node, and the simulator
-                // reproduces the motion element by element.
-                for u in sol["raw"]["u"].as_array().unwrap() {
-                    assert!(nums(u)[0].abs() <= 20.0 * (1.0 + 1e-7), "{u}");
+                // Held at rest at both ends: τ = g(q), zero about the vertical axes of the
+                // shoulder and elbow, the quill's weight 0.5 kg × 9.81 m/s² on the slide.
+                for x in [&first, &last] {
+                    assert!(x[6].abs() < 1e-6 && x[7].abs() < 1e-6, "{x:?}");
+                    assert!((x[8].abs() - 0.5 * 9.81).abs() < 1e-6, "{x:?}");
+                }
+                // The shoulder's torque bound (20 N m) holds at every state point (τ is a
+                // state), and the simulator reproduces the motion element by element.
+                for x in x.as_array().unwrap() {
+                    assert!(nums(x)[6].abs() <= 20.0 * (1.0 + 1e-7), "{x}");
                 }
                 assert!(sol["verification"]["max_defect"].as_f64().unwrap() <= 1e-4);
                 saw_optimize = true;

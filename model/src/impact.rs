@@ -27,9 +27,18 @@
 //! Γ, so only Newton's law depends on N. Eq. 39 fixes all three components of J_c q̇⁺: for
 //! N = 3 it is solved with J_c⁻¹ as above; for N > 3 the solution set is an affine subspace
 //! and we take the q̇⁺ closest to q̇⁻ in the kinetic-energy (M_f) norm, q̇⁺ = q̇⁻ + M_f⁻¹ J_cᵀ ι
-//! with W ι = −n (n·v_c⁻) (needs W = J_c M_f⁻¹ J_cᵀ nonsingular, i.e. J_c of rank 3); for
-//! N < 3, J_c has rank < 3 and eq. 39 has in general no solution
-//! (`SingularContactJacobian`).
+//! with W ι = −n (n·v_c⁻) (needs W = J_c M_f⁻¹ J_cᵀ nonsingular, i.e. J_c of rank 3).
+//!
+//! Rank-deficient J_c (N < 3, or a singular posture of any N: W or J_c below
+//! `singular_rcond`): the contact point cannot move in every direction, so eq. 39 (normal
+//! velocity zero *and* tangential velocity kept) has in general no solution. Restitution 0,
+//! n·J_c q̇⁺ = 0, is what the impact must achieve; of the finger velocities that achieve it we
+//! take the one closest to q̇⁻ in the kinetic-energy norm (Gauss's least constraint):
+//! q̇⁺ = q̇⁻ + M_f⁻¹ J_cᵀ n ι_n, ι_n = −n·v_c⁻ / nᵀ W n, the impulse along n that
+//! [`ImpactLaw::NormalImpulse`] applies, ω unchanged as eq. 39 says. It loses
+//! ½ (n·v_c⁻)² / nᵀ W n of kinetic energy, never gains. Only a finger that cannot move its
+//! contact point along n at all (nᵀ W n ≈ 0) is refused (`SingularContact`); the other laws
+//! work on Γ, which the ball's rotation keeps regular for N < 3.
 
 use crate::dynamics::{ContactMatrices, factor_gamma, matrices_with_mass, require_contact};
 use crate::linalg::{Mat3, MatN, Spd, Vec3, VecN, tangent_basis};
@@ -285,14 +294,10 @@ fn newton<const N: usize>(
 ) -> Result<ImpactOutcome<N>> {
     let c = &kin.contact;
     if N != 3 {
-        if N < 3 {
-            return Err(ModelError::SingularContactJacobian { rcond: 0.0 });
-        }
-        let w = Spd::factor(&mats.w)
-            .filter(|f| f.rcond > settings.singular_rcond)
-            .ok_or_else(|| ModelError::SingularContactJacobian {
-                rcond: Spd::factor(&mats.w).map_or(0.0, |f| f.rcond),
-            })?;
+        let Some(w) = Spd::factor(&mats.w).filter(|f| N > 3 && f.rcond > settings.singular_rcond)
+        else {
+            return newton_rank_deficient(kin, params, mats, settings);
+        };
         let iota = w.solve(&(c.n * -c.n.dot(&c.v_c)));
         let qd = kin.state.qd + mats.minv_jct * iota;
         return Ok(outcome(
@@ -309,14 +314,12 @@ fn newton<const N: usize>(
     let jc = Mat3::from_column_slice(c.j_c.as_slice());
     let m_f = Mat3::from_column_slice(kin.m_f.as_slice());
     let qd_minus = Vec3::from_column_slice(kin.state.qd.as_slice());
-    let inv = jc
-        .try_inverse()
-        .ok_or(ModelError::SingularContactJacobian { rcond: 0.0 })?;
+    let Some(inv) = jc.try_inverse() else {
+        return newton_rank_deficient(kin, params, mats, settings);
+    };
     let rcond = 1.0 / (jc.norm() * inv.norm());
     if rcond.is_nan() || rcond <= settings.singular_rcond {
-        return Err(ModelError::SingularContactJacobian {
-            rcond: rcond.max(0.0),
-        });
+        return newton_rank_deficient(kin, params, mats, settings);
     }
     let target = c.v_c - c.n * c.n.dot(&c.v_c);
     // One step of iterative refinement keeps n·J_c q̇⁺ at round-off level for moderate κ(J_c).
@@ -330,6 +333,29 @@ fn newton<const N: usize>(
         params,
         settings,
         VecN::<N>::from_column_slice(qd.as_slice()),
+        kin.state.omega,
+        iota,
+    ))
+}
+
+/// Newton's law where J_c is rank-deficient (see the module docs): the normal velocity is
+/// removed by the impulse along n with the least change of kinetic energy, ω unchanged.
+fn newton_rank_deficient<const N: usize>(
+    kin: &ContactKinematics<N>,
+    params: &Params,
+    mats: &ContactMatrices<N>,
+    settings: &TransitionSettings,
+) -> Result<ImpactOutcome<N>> {
+    crate::dynamics::require_normal_mobility(mats, settings)?;
+    let n = kin.contact.n;
+    let iota = n * (-kin.contact.normal_velocity() / mats.n_w_n);
+    let qd = kin.state.qd + mats.minv_jct * iota;
+    Ok(outcome(
+        ImpactLaw::Newton,
+        kin,
+        params,
+        settings,
+        qd,
         kin.state.omega,
         iota,
     ))

@@ -110,12 +110,18 @@ pub fn compiled_match(scene: &Scene) -> Option<(&'static bf_generated::SceneKern
     (kernel_relevant(&mine) == kernel_relevant(&compiled)).then_some((entry, p))
 }
 
-/// Sets the runtime parameters `assignments` (name, value) of `scene`. Every name must be one
-/// of the scene's `runtime_parameters` and every value finite; the error names the parameter
-/// and lists the valid names. A ball whose inertia is the default (2/5) m r² keeps the inertia
-/// of the file's radius and mass (the compiled kernels' runtime `ball.radius` changes the
+/// Sets the runtime parameters `assignments` (name, value) of the scene `out`. Every name must
+/// be one of the scene's `runtime_parameters` and every value finite; the error names the
+/// parameter and lists the valid names. The scene with each value set passes the scene file's
+/// validation (`Scene::validate`: masses and radii > 0, inertias positive definite, the scale
+/// floor), the error naming the parameter, its value and the failed rule; on any error `out`
+/// is unchanged. A ball whose inertia is the default (2/5) m r² keeps the inertia of the
+/// file's radius and mass (the compiled kernels' runtime `ball.radius` changes the
 /// contact geometry only).
-pub fn set_parameters(scene: &mut Scene, assignments: &[(String, f64)]) -> Result<()> {
+pub fn set_parameters(out: &mut Scene, assignments: &[(String, f64)]) -> Result<()> {
+    // Applied to a copy, so a refused value leaves `out` as it was.
+    let mut next = out.clone();
+    let scene = &mut next;
     for (name, value) in assignments {
         if !scene.is_runtime(name) {
             let valid = if scene.runtime_parameters.is_empty() {
@@ -135,7 +141,18 @@ pub fn set_parameters(scene: &mut Scene, assignments: &[(String, f64)]) -> Resul
             ));
         }
         set_constant(scene, name, *value)?;
+        scene.validate(&scene.name).map_err(|e| {
+            let rule = match &e {
+                bf_scene::SpecError::At { path, message, .. } => format!("{path}: {message}"),
+                other => other.to_string(),
+            };
+            scene_err(
+                &scene.name,
+                format!("runtime parameter `{name}` = {value:?} is invalid: {rule}"),
+            )
+        })?;
     }
+    *out = next;
     Ok(())
 }
 

@@ -177,3 +177,28 @@ fn interpreted_model_runs_the_contact_physics() {
         .unwrap();
     assert!(power.total < 0.0, "{power:?}");
 }
+
+#[test]
+fn parameter_values_pass_the_scene_files_checks() {
+    let mut human = parse(HUMAN_TOML);
+    for (name, value, rule) in [
+        ("ball.radius", -1.0, "ball.radius: must be > 0"),
+        ("link3.mass", 0.0, "links[2].mass: must be > 0"),
+        (
+            "link3.mass",
+            1e-300,
+            "links[2].mass: mass 1e-300 kg is below",
+        ),
+    ] {
+        let msg = set_parameters(&mut human, &[(name.into(), value)])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            msg.contains(&format!("`{name}` = {value:?}")) && msg.contains(rule),
+            "{msg}"
+        );
+    }
+    // A valid value still passes, and the scene carries it.
+    set_parameters(&mut human, &[("link3.mass".into(), 0.03)]).unwrap();
+    assert_eq!(human.links[2].mass, 0.03);
+}

@@ -4,8 +4,19 @@
 //!
 //! min ∫₀^T (1 + w‖τ‖² + w_a‖q̈‖²) dt  s.t.  M(q) q̈ + C(q, q̇) q̇ + g(q) + μ_v q̇ = τ (eq. 22–24, 26 without
 //! the ball), |τ_i| ≤ τ_max,i (the scene's `tau_max`, unbounded where absent),
-//! q_min ≤ q ≤ q_max (the scene's joint limits, where given), (q, q̇)(0) = (q⁰, 0),
-//! (q, q̇)(T) = (q^f, 0), 0.01 s ≤ T ≤ [`MAX_DURATION`].
+//! q_min ≤ q ≤ q_max (the scene's joint limits, where given), at rest at both ends:
+//! (q, q̇)(0) = (q⁰, 0), τ(0) = g(q⁰), (q, q̇)(T) = (q^f, 0), τ(T) = g(q^f),
+//! 0.01 s ≤ T ≤ [`MAX_DURATION`] (or T fixed, [`ArmSettings::duration`]).
+//!
+//! Rest means q̇ = 0 and q̈ = 0. With q̇ = 0 alone the arm passes through the target with a
+//! non-zero acceleration: τ(T) does not hold it there (on the 2-link test arm it was a
+//! fraction of g(q^f)), and it swings on. With q̇ = 0, q̈ = 0 is τ = g(q) by the dynamics; so τ
+//! is a state (its rate τ̇ the control, determined by the collocation of τ) and both end
+//! points fix q, q̇ and τ − g(q) = 0 (g from the scene's `cqd_g_rnea` graph at q̇ = 0), which
+//! holds at the end time exactly, not only at the last collocation node (Radau nodes do not
+//! include the end of a phase). The torque bounds are state bounds, met at the state points;
+//! between them the torque polynomial can overshoot where the optimum is bang-bang (small
+//! effort weights), which the study layer's verification reports (decision record 0014).
 //!
 //! The small acceleration term (w_a = [`DEFAULT_ACCELERATION_WEIGHT`]) is a regularisation:
 //! with time and torque effort alone, a joint of tiny inertia (a wrist: M_ii ≈ 4e-5 kg m² on
@@ -83,6 +94,8 @@ pub struct ArmSettings {
     /// Acceleration weight w_a (see the module docs: it makes the motion of light joints
     /// unique).
     pub acceleration_weight: f64,
+    /// A fixed duration T (s) instead of the free one in [[`MIN_DURATION`], [`MAX_DURATION`]].
+    pub duration: Option<f64>,
     /// Interior-point iteration limit.
     pub max_iter: usize,
     /// Interior-point convergence tolerance.
@@ -100,6 +113,7 @@ impl Default for ArmSettings {
             target: None,
             effort_weight: 1.0,
             acceleration_weight: DEFAULT_ACCELERATION_WEIGHT,
+            duration: None,
             max_iter: 1500,
             tol: 1e-8,
             print_level: 0,
@@ -160,17 +174,20 @@ pub fn default_target(scene: &Scene, start: &[f64]) -> Vec<f64> {
 /// Graph variables of the arm's node function.
 #[derive(Debug, Clone)]
 pub struct ArmNodeVars {
-    /// q then q̇.
+    /// The state: q, q̇, then τ.
     pub x: Vec<u32>,
-    /// q̈.
+    /// q̈ (the algebraic variables).
     pub qdd: Vec<u32>,
-    /// τ.
+    /// τ (the last third of the state).
     pub tau: Vec<u32>,
+    /// τ̇ (the controls).
+    pub tau_rate: Vec<u32>,
     /// T.
     pub duration: u32,
 }
 
-/// The node function of the arm: ẋ = (q̇, q̈), path rows (M q̈ + C q̇ + g + μ_v q̇ − τ)_i / M_ii(q_ref)
+/// The node function of the arm: state x = (q, q̇, τ), algebraic q̈, control τ̇,
+/// ẋ = (q̇, q̈, τ̇), path rows (M q̈ + C q̇ + g + μ_v q̇ − τ)_i / M_ii(q_ref)
 /// = 0 (one per joint), cost integrands (1 + w‖τ‖² + w_a‖q̈‖², 1). The constant row scale 1/M_ii at the
 /// reference configuration `q_ref` changes no solution; it balances the rows of joints whose
 /// inertias differ by orders of magnitude (PUMA 560: 3 kg m² at the shoulder, 4e-5 kg m² at
@@ -192,14 +209,17 @@ pub fn arm_node_function(
         .enumerate()
         .map(|(i, p)| (lay.param(i), p.1))
         .collect();
+    let base = lay.n_vars() as u32;
+    let n = nq as u32;
+    let qdd_v: Vec<u32> = (base..base + n).collect();
+    let tau_v: Vec<u32> = (base + n..base + 2 * n).collect();
+    let rate_v: Vec<u32> = (base + 2 * n..base + 3 * n).collect();
     let xv: Vec<u32> = (0..nq)
         .map(|i| lay.q(i))
         .chain((0..nq).map(|i| lay.qd(i)))
+        .chain(tau_v.iter().copied())
         .collect();
-    let base = lay.n_vars() as u32;
-    let qdd_v: Vec<u32> = (base..base + nq as u32).collect();
-    let tau_v: Vec<u32> = (base + nq as u32..base + 2 * nq as u32).collect();
-    let t_v = base + 2 * nq as u32;
+    let t_v = base + 3 * n;
     let w_v = t_v + 1;
     let wa_v = t_v + 2;
     fixed.push((w_v, effort_weight));
@@ -219,9 +239,10 @@ pub fn arm_node_function(
     let diag: Vec<Id> = (0..nq).map(|i| mass[i][i]).collect();
     let m_ref = bf_codegen::interp::eval::<f64>(&model.g, &diag, &at_ref);
     let g: &mut Graph = &mut model.g;
-    let qd: Vec<Id> = xv[nq..].iter().map(|&v| g.var(v)).collect();
+    let qd: Vec<Id> = xv[nq..2 * nq].iter().map(|&v| g.var(v)).collect();
     let qdd: Vec<Id> = qdd_v.iter().map(|&v| g.var(v)).collect();
     let tau: Vec<Id> = tau_v.iter().map(|&v| g.var(v)).collect();
+    let rate: Vec<Id> = rate_v.iter().map(|&v| g.var(v)).collect();
     let muv = g.constant(mu_v);
     let mut path = Vec::with_capacity(nq);
     for i in 0..nq {
@@ -253,11 +274,12 @@ pub fn arm_node_function(
     let c1 = g.add(c1, waa);
     let mut xdot = qd.clone();
     xdot.extend(&qdd);
+    xdot.extend(&rate);
     let nf = NodeFunction {
         graph: std::mem::take(&mut model.g),
         x: xv.clone(),
         a: qdd_v.clone(),
-        u: tau_v.clone(),
+        u: rate_v.clone(),
         duration: t_v,
         fixed,
         xdot,
@@ -271,6 +293,7 @@ pub fn arm_node_function(
             x: xv,
             qdd: qdd_v,
             tau: tau_v,
+            tau_rate: rate_v,
             duration: t_v,
         },
     ))
@@ -348,27 +371,61 @@ fn check_configuration(scene: &Scene, what: &str, q: &[f64]) -> Result<(), Probl
     Ok(())
 }
 
-/// Fixes (q, q̇) at the start (`initial`) or end of the phase.
-fn fixed_state(x: &[f64], initial: bool, name: &str) -> PointFunction {
-    let mut graph = Graph::new();
-    let outputs = (0..x.len() as u32).map(|i| graph.var(i)).collect();
-    PointFunction {
-        name: name.into(),
-        graph,
-        vars: (0..x.len())
-            .map(|i| {
-                let r = if initial {
-                    VarRef::Initial { phase: 0, i }
-                } else {
-                    VarRef::Final { phase: 0, i }
-                };
-                (i as u32, r)
-            })
-            .collect(),
-        fixed: vec![],
-        outputs,
-        bounds: x.iter().map(|&v| (v, v)).collect(),
+/// Rest at `q` at the start (`initial`) or end of the phase: q fixed, q̇ = 0 and
+/// τ − (C q̇ + g)(q, q̇) = 0, i.e. τ = g(q) where q̇ = 0 (so q̈ = 0 by the dynamics).
+fn rest_at(
+    scene: &Scene,
+    q: &[f64],
+    initial: bool,
+    name: &str,
+) -> Result<PointFunction, CodegenError> {
+    let mut model = SymbolicRobot::new(scene)?;
+    let nq = model.nq();
+    let lay = model.layout;
+    let bias = model.cqd_g_rnea();
+    let fixed: Vec<(u32, f64)> = model
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (lay.param(i), p.1))
+        .collect();
+    let base = lay.n_vars() as u32;
+    let g = &mut model.g;
+    let at = |i: usize| {
+        if initial {
+            VarRef::Initial { phase: 0, i }
+        } else {
+            VarRef::Final { phase: 0, i }
+        }
+    };
+    let mut vars = Vec::with_capacity(3 * nq);
+    let mut outputs = Vec::with_capacity(3 * nq);
+    let mut bounds = Vec::with_capacity(3 * nq);
+    for (i, &qi) in q.iter().enumerate().take(nq) {
+        vars.push((lay.q(i), at(i)));
+        outputs.push(g.var(lay.q(i)));
+        bounds.push((qi, qi));
     }
+    for i in 0..nq {
+        vars.push((lay.qd(i), at(nq + i)));
+        outputs.push(g.var(lay.qd(i)));
+        bounds.push((0.0, 0.0));
+    }
+    for (i, &b) in bias.iter().enumerate() {
+        let v = base + i as u32;
+        vars.push((v, at(2 * nq + i)));
+        let tau = g.var(v);
+        outputs.push(g.sub(tau, b));
+        bounds.push((0.0, 0.0));
+    }
+    Ok(PointFunction {
+        name: name.into(),
+        graph: std::mem::take(&mut model.g),
+        vars,
+        fixed,
+        outputs,
+        bounds,
+    })
 }
 
 /// Duration of the initial guess (s).
@@ -377,9 +434,10 @@ pub const GUESS_DURATION: f64 = 1.0;
 /// Samples of the initial guess.
 const GUESS_SAMPLES: usize = 21;
 
-/// The initial guess: the cubic rest-to-rest motion q(s) = q⁰ + (q^f − q⁰)(3s² − 2s³),
-/// s = t/T, with the torques of inverse dynamics along it (τ = M q̈ + C q̇ + g + μ_v q̇ on the
-/// scene's graphs), so that the guess satisfies the dynamics and the boundary conditions.
+/// The initial guess: the quintic rest-to-rest motion q(s) = q⁰ + (q^f − q⁰)(10s³ − 15s⁴ +
+/// 6s⁵), s = t/T (q̇ = q̈ = 0 at both ends), with the torques of inverse dynamics along it
+/// (τ = M q̈ + C q̇ + g + μ_v q̇ on the scene's graphs; τ = g at both ends) and τ̇ by central
+/// differences, so that the guess satisfies the dynamics and the boundary conditions.
 pub fn rest_to_rest_guess(
     scene: &Scene,
     start: &[f64],
@@ -404,10 +462,11 @@ pub fn rest_to_rest_guess(
     };
     for k in 0..GUESS_SAMPLES {
         let s = k as f64 / (GUESS_SAMPLES - 1) as f64;
+        let (s2, s3) = (s * s, s * s * s);
         let (p, dp, ddp) = (
-            3.0 * s * s - 2.0 * s * s * s,
-            (6.0 * s - 6.0 * s * s) / duration,
-            (6.0 - 12.0 * s) / (duration * duration),
+            s3 * (10.0 - 15.0 * s + 6.0 * s2),
+            30.0 * s2 * (1.0 - s) * (1.0 - s) / duration,
+            60.0 * s * (1.0 - 3.0 * s + 2.0 * s2) / duration.powi(2),
         );
         let d: Vec<f64> = start.iter().zip(target).map(|(a, b)| b - a).collect();
         let q: Vec<f64> = start.iter().zip(&d).map(|(a, d)| a + d * p).collect();
@@ -425,9 +484,17 @@ pub fn rest_to_rest_guess(
             })
             .collect();
         guess.s.push(s);
-        guess.x.push(q.into_iter().chain(qd).collect());
+        guess.x.push(q.into_iter().chain(qd).chain(tau).collect());
         guess.a.push(qdd);
-        guess.u.push(tau);
+    }
+    let taus: Vec<&[f64]> = guess.x.iter().map(|x| &x[2 * nq..]).collect();
+    let h = duration / (GUESS_SAMPLES - 1) as f64;
+    for k in 0..GUESS_SAMPLES {
+        let (lo, hi) = (k.saturating_sub(1), (k + 1).min(GUESS_SAMPLES - 1));
+        let dt = (hi - lo) as f64 * h;
+        guess
+            .u
+            .push((0..nq).map(|i| (taus[hi][i] - taus[lo][i]) / dt).collect());
     }
     Ok(guess)
 }
@@ -489,27 +556,44 @@ fn build_inner(scene: &Scene, settings: &ArmSettings) -> Result<ArmBuilt, Proble
     let tau_max = torque_limits(scene);
     let mut x_bounds = joint_limits(scene);
     x_bounds.extend(vec![(f64::NEG_INFINITY, f64::INFINITY); nq]);
-    let guess = rest_to_rest_guess(scene, &start, &target, GUESS_DURATION)
-        .map_err(ProblemError::model(&scene.name))?;
+    x_bounds.extend(tau_max.iter().map(|&t| (-t, t)));
+    let duration_bounds = match settings.duration {
+        Some(t) if (MIN_DURATION..=MAX_DURATION).contains(&t) => (t, t),
+        Some(t) => {
+            return Err(ProblemError::InvalidSetting {
+                name: "duration",
+                value: t,
+                expected: "in [0.01, 20] s",
+            });
+        }
+        None => (MIN_DURATION, MAX_DURATION),
+    };
+    let guess = rest_to_rest_guess(
+        scene,
+        &start,
+        &target,
+        settings.duration.unwrap_or(GUESS_DURATION),
+    )
+    .map_err(ProblemError::model(&scene.name))?;
     let phase = Phase {
         name: "free".into(),
         node,
         x_bounds,
         a_bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); nq],
-        u_bounds: tau_max.iter().map(|&t| (-t, t)).collect(),
-        duration_bounds: (MIN_DURATION, MAX_DURATION),
+        u_bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); nq],
+        duration_bounds,
         points: settings.points,
         guess,
     };
-    let x0: Vec<f64> = start.iter().copied().chain(vec![0.0; nq]).collect();
-    let xf: Vec<f64> = target.iter().copied().chain(vec![0.0; nq]).collect();
     let ocp = Ocp {
         phases: vec![phase],
         n_costs: 2,
         params: vec![],
         points: vec![
-            fixed_state(&x0, true, "rest at the start"),
-            fixed_state(&xf, false, "rest at the target"),
+            rest_at(scene, &start, true, "rest at the start")
+                .map_err(ProblemError::model(&scene.name))?,
+            rest_at(scene, &target, false, "rest at the target")
+                .map_err(ProblemError::model(&scene.name))?,
         ],
         cost_bounds: vec![],
         objective: Objective::Cost(0),
@@ -610,7 +694,7 @@ pub struct ArmSolution {
     pub points: usize,
     /// Radau elements.
     pub elements: usize,
-    /// Values at the collocation state points (τ: the element's control polynomial there).
+    /// Values at the collocation state points.
     pub nodes: ArmSamples,
     /// [`DENSE_SAMPLES`] equally spaced samples of the collocation polynomials.
     pub dense: ArmSamples,
@@ -634,8 +718,8 @@ fn samples_at(tr: &PhaseTrajectory, taus: &[f64], nq: usize) -> ArmSamples {
         let x = tr.x_at(tau);
         s.t.push(tr.time(tau));
         s.q.push(x[..nq].to_vec());
-        s.qd.push(x[nq..].to_vec());
-        s.tau.push(tr.u_at(tau));
+        s.qd.push(x[nq..2 * nq].to_vec());
+        s.tau.push(x[2 * nq..3 * nq].to_vec());
     }
     s
 }

@@ -1,8 +1,9 @@
 //! Validation of a deserialised [`Scene`]: identifiers, finiteness, m_i > 0 and
 //! symmetric positive inertias (eq. 22a, eq. 25), orthonormal rotations (the base rotation of
 //! paper Sect. 2.1), non-negative friction constants (μ_s, μ_k, μ_v, D of Sect. 2), the contact
-//! kind and ε > 0 (eq. 58–59), known kernels, costs and runtime parameters. Errors are located
-//! via `SourceIndex` (see [`SpecError`]).
+//! kind and ε > 0 (eq. 58–59), known kernels, costs and runtime parameters, and no body whose
+//! mass or inertia is negligible next to the scene's largest (a unit-free floor, so M(q) of
+//! eq. 22a stays meaningful in f64). Errors are located via `SourceIndex` (see [`SpecError`]).
 //!
 //! Inertias must also satisfy the triangle inequality of their principal moments (every rigid
 //! body does); published data that violate it are kept only with a `nonphysical_inertia`
@@ -24,6 +25,12 @@ const RUST_KEYWORDS: &[&str] = &[
 
 /// Relative tolerance for symmetry of inertia tensors and orthonormality of rotation matrices.
 const MATRIX_TOL: f64 = 1e-9;
+
+/// Smallest mass (inertia trace) of a body relative to the scene's largest one. Below it the
+/// body's rows of M(q) (eq. 22a) vanish next to the others' in f64 (relative 1e-16 rounding,
+/// 1e-12 leaves four digits), so accelerations of its joints are rounding noise: the
+/// scene describes no physical system at the working precision.
+const SCALE_FLOOR: f64 = 1e-12;
 
 fn check_finite(ix: &SourceIndex<'_>, path: &str, v: f64) -> Result<(), SpecError> {
     if v.is_finite() {
@@ -335,6 +342,47 @@ pub(super) fn is_keyword(s: &str) -> bool {
 }
 
 impl Scene {
+    /// Masses and inertia traces of every body (links, then the ball) at or above
+    /// [`SCALE_FLOOR`] times the scene's largest: a unit-free floor, so any consistent unit
+    /// system passes and only bodies negligible next to the others are refused.
+    fn check_scale_floor(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {
+        let trace = |m: [[f64; 3]; 3]| m[0][0] + m[1][1] + m[2][2];
+        let mut bodies: Vec<(String, f64, f64)> = self
+            .links
+            .iter()
+            .enumerate()
+            .map(|(i, l)| (format!("links[{i}]"), l.mass, trace(l.inertia_matrix())))
+            .collect();
+        if let Some(b) = &self.ball {
+            bodies.push(("ball".into(), b.mass, trace(b.inertia_matrix())));
+        }
+        let m_max = bodies.iter().fold(0.0f64, |a, b| a.max(b.1));
+        let i_max = bodies.iter().fold(0.0f64, |a, b| a.max(b.2));
+        for (p, m, i) in &bodies {
+            if *m < SCALE_FLOOR * m_max {
+                return Err(ix.invalid(
+                    &format!("{p}.mass"),
+                    format!(
+                        "mass {m:e} kg is below {SCALE_FLOOR:e} × the scene's largest mass \
+                         ({m_max:e} kg): negligible at f64 precision, the body's joint \
+                         accelerations would be rounding noise"
+                    ),
+                ));
+            }
+            if *i < SCALE_FLOOR * i_max {
+                return Err(ix.invalid(
+                    &format!("{p}.inertia"),
+                    format!(
+                        "inertia trace {i:e} kg m² is below {SCALE_FLOOR:e} × the scene's \
+                         largest ({i_max:e} kg m²): negligible at f64 precision, the body's \
+                         joint accelerations would be rounding noise"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     pub(super) fn validate_with(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {
         if !is_identifier(&self.name) || RUST_KEYWORDS.contains(&self.name.as_str()) {
             return Err(ix.invalid(
@@ -410,6 +458,7 @@ impl Scene {
                 b.nonphysical_inertia.as_ref(),
             )?;
         }
+        self.check_scale_floor(ix)?;
         if let Some(f) = &self.friction {
             check_nonnegative(ix, "friction.mu_s", f.mu_s)?;
             check_nonnegative(ix, "friction.mu_k", f.mu_k)?;

@@ -7,12 +7,54 @@ mod common;
 use bf_scene::{Scene, SpecErrorKind};
 use common::*;
 
+/// `text` with the inertias of [`BASE`]'s other bodies (the links' tensors as written there, and
+/// the ball's default) replaced by `v` times unit tensors: all bodies at one scale, as a
+/// consistent unit system has them (a lone 1e-300 body is refused by the scale floor).
+fn bodies_at(text: &str, v: &str) -> String {
+    let diag = format!("inertia = [{v}, {v}, {v}]");
+    text.replace("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", &diag)
+        .replace(
+            "inertia = [[1.0e-3, 0.0, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]",
+            &diag,
+        )
+        .replace(
+            "[ball]\nradius = 1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 0.02",
+            &format!("[ball]\nradius = 1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 0.02\n{diag}"),
+        )
+}
+
+#[test]
+fn a_body_negligible_next_to_the_others_is_refused_naming_the_value() {
+    // A link of 1e-300 kg (or 1e-300 kg m²) beside 0.02 kg links: the error names the value.
+    let text = edit("mass = 0.02", 1, "mass = 1.0e-300");
+    let shown = expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line_no(&text, "mass = 1.0e-300", 0),
+        "links[1].mass",
+        "1e-300",
+    );
+    assert!(shown.contains("2e-2"), "{shown}");
+    let tiny = "inertia = [1.0e-300, 1.0e-300, 1.0e-300]";
+    let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, tiny);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line_no(&text, tiny, 0),
+        "links[0].inertia",
+        "3e-300",
+    );
+    // Every body at 1e-300 (one consistent, if odd, unit) is accepted: the floor is relative.
+    let text = bodies_at(BASE, "1.0e-300").replace("mass = 0.02", "mass = 1.0e-300");
+    Scene::from_toml_str(&text, FILE).unwrap_or_else(|e| panic!("{e}"));
+}
+
 #[test]
 fn positive_definiteness_does_not_depend_on_the_unit() {
     // Minors of diag(1e-300, …) underflow to 0 and of diag(1e300, …) overflow; both are valid.
     for v in ["1.0e-300", "1.0e300", "5.0e-320"] {
         let new = format!("inertia = [{v}, {v}, {v}]");
-        let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, &new);
+        let text = bodies_at(&edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, &new), v);
         let s = Scene::from_toml_str(&text, FILE).unwrap_or_else(|e| panic!("{new}: {e}"));
         assert!(s.warnings().is_empty(), "{new}: {:?}", s.warnings());
     }
@@ -74,8 +116,9 @@ fn impossible_inertias_are_rejected_naming_key_and_values() {
             2.0 * k,
             3.0 * k
         );
-        let scene = Scene::from_toml_str(&edit(old, 0, &plate), FILE)
-            .unwrap_or_else(|e| panic!("{plate}: {e}"));
+        let scene =
+            Scene::from_toml_str(&bodies_at(&edit(old, 0, &plate), &format!("{k:e}")), FILE)
+                .unwrap_or_else(|e| panic!("{plate}: {e}"));
         assert!(scene.warnings().is_empty(), "{:?}", scene.warnings());
     }
     // A violation by a relative 1e-6 is refused at every scale: the tolerance is scale-free.
@@ -86,7 +129,10 @@ fn impossible_inertias_are_rejected_naming_key_and_values() {
             2.0 * k,
             3.0 * k * (1.0 + 1e-6)
         );
-        let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, &bad);
+        let text = bodies_at(
+            &edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, &bad),
+            &format!("{k:e}"),
+        );
         expect_err(
             &text,
             SpecErrorKind::Invalid,

@@ -232,11 +232,15 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
     })
 }
 
+/// Largest `--time` budget (s): one hour. The medians settle within seconds; a longer
+/// budget only keeps the machine busy (and 1e300 would never end).
+pub const MAX_TIME: f64 = 3600.0;
+
 /// Run `bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
-    if !(args.time.is_finite() && args.time > 0.0) {
+    if !(args.time.is_finite() && args.time > 0.0 && args.time <= MAX_TIME) {
         bail!(
-            "--time must be a finite positive number of seconds (got {})",
+            "--time must be a positive number of seconds, at most {MAX_TIME} (got {:?})",
             args.time
         );
     }

@@ -123,8 +123,9 @@ pub fn scene_of(sol: &ArmSolution) -> Result<Scene, StudyError> {
     Ok(scene)
 }
 
-/// The control polynomial of one collocation element: Lagrange interpolation through the
-/// element's own collocation nodes, in time.
+/// The torque polynomial of one collocation element: τ is a state of `reach-arm`
+/// (bf_problem::arm), so this is the element's state polynomial of τ, the Lagrange
+/// interpolation through its state points (both ends included), in time.
 #[derive(Debug, Clone)]
 pub struct ElementTorque {
     t0: f64,
@@ -134,19 +135,17 @@ pub struct ElementTorque {
 }
 
 impl ElementTorque {
-    /// The polynomial of element `e` of `tr`.
-    pub fn new(tr: &PhaseTrajectory, e: usize) -> Self {
+    /// The polynomial of element `e` of `tr`, an arm of `n` joints (state (q, q̇, τ)).
+    pub fn new(tr: &PhaseTrajectory, e: usize, n: usize) -> Self {
         let (a, b) = tr.elements[e];
-        // The nodes of element e have their state point in [a, b − 1): the end point b − 1 is
-        // the next element's first point (and its first Radau node).
-        let ks: Vec<usize> = (0..tr.node_tau.len())
-            .filter(|&k| (a..b - 1).contains(&tr.node_state[k]))
-            .collect();
         ElementTorque {
             t0: tr.t0,
             duration: tr.duration,
-            taus: ks.iter().map(|&k| tr.node_tau[k]).collect(),
-            values: ks.iter().map(|&k| tr.u[k].clone()).collect(),
+            taus: tr.state_tau[a..b].to_vec(),
+            values: tr.x[a..b]
+                .iter()
+                .map(|x| x[2 * n..3 * n].to_vec())
+                .collect(),
         }
     }
 
@@ -160,26 +159,25 @@ impl ElementTorque {
     }
 }
 
-/// Torques of the open-loop replay: the control polynomial of the element containing t.
+/// Torques of the open-loop replay: the control polynomial of the element containing t (the
+/// interpolant the collocation solved for; `simulate --init` replays with it too).
 #[derive(Debug, Clone)]
-struct PhaseTorque {
+pub struct PhaseTorque {
     /// (end time, polynomial) per element.
     elements: Vec<(f64, ElementTorque)>,
     n: usize,
 }
 
 impl PhaseTorque {
-    fn new(tr: &PhaseTrajectory) -> Self {
+    /// The torques of `tr`, an arm of `n` joints.
+    pub fn new(tr: &PhaseTrajectory, n: usize) -> Self {
         let elements = (0..tr.elements.len())
             .map(|e| {
                 let end = tr.time(tr.state_tau[tr.elements[e].1 - 1]);
-                (end, ElementTorque::new(tr, e))
+                (end, ElementTorque::new(tr, e, n))
             })
             .collect();
-        PhaseTorque {
-            elements,
-            n: tr.u.first().map_or(0, Vec::len),
-        }
+        PhaseTorque { elements, n }
     }
 }
 
@@ -237,8 +235,9 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Study
     };
     let mut node_residual: f64 = 0.0;
     for k in 0..tr.node_tau.len() {
+        // The state is (q, q̇, τ), the algebraic variables q̈ (bf_problem::arm).
         let x = &tr.x[tr.node_state[k]];
-        match model.accelerations(&x[..n], &x[n..], &tr.u[k]) {
+        match model.accelerations(&x[..n], &x[n..2 * n], &x[2 * n..3 * n]) {
             Ok(qdd) => node_residual = node_residual.max(max_abs_diff(&qdd, &tr.a[k])),
             Err(_) => node_residual = f64::NAN,
         }
@@ -247,7 +246,7 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Study
     let mut failure = None;
     let mut overshoot: f64 = 0.0;
     for (e, &(a, b)) in tr.elements.iter().enumerate() {
-        let poly = ElementTorque::new(tr, e);
+        let poly = ElementTorque::new(tr, e, n);
         let (t0, t1) = (tr.time(tr.state_tau[a]), tr.time(tr.state_tau[b - 1]));
         let mut tau = vec![0.0; n];
         for k in 0..=32 {
@@ -264,12 +263,12 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Study
             settings.clone(),
             ArmMode::Free,
             t0,
-            &tr.x[a],
+            &tr.x[a][..2 * n],
             t1,
         ) {
             Ok(out) => {
                 let end = out.trajectory.x.last().map_or(&tr.x[a], |x| x);
-                element_defects.push(max_abs_diff(end, &tr.x[b - 1]));
+                element_defects.push(max_abs_diff(end, &tr.x[b - 1][..2 * n]));
             }
             Err(f) => {
                 failure.get_or_insert(format!("element {e}: at t = {} s: {}", f.t, f.error));
@@ -288,8 +287,8 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Study
         .copied()
         .chain(std::iter::repeat_n(0.0, n))
         .collect();
-    let x0 = tr.x.first().cloned().unwrap_or_default();
-    let sys = FreeArm::new(model, PhaseTorque::new(tr))?;
+    let x0: Vec<f64> = tr.x.first().map_or(vec![], |x| x[..2 * n].to_vec());
+    let sys = FreeArm::new(model, PhaseTorque::new(tr, n))?;
     let t_end = tr.t0 + tr.duration;
     let open_loop_end_error = match bf_sim::simulate(
         &sys as &dyn HybridSystem<Mode = ArmMode>,
@@ -361,14 +360,15 @@ fn units(scene: &Scene, i: usize) -> (&'static str, &'static str, &'static str) 
     }
 }
 
-/// `torques.csv` (`t,tau1,..`, the format `simulate --torques` reads) and `trajectory.csv`
+/// `torques.csv` (`t [s],tau1 [N m],..`, N for a prismatic joint: the header of the ball
+/// problems' file, the format `simulate --torques` reads) and `trajectory.csv`
 /// (`t [s],q1 [rad],..,qd1 [rad/s],..,tau1 [N m],..`) of the dense samples.
 pub fn arm_csvs(sol: &ArmSolution, scene: &Scene) -> (String, String) {
     let n = sol.start.len();
     let d = &sol.dense;
-    let mut torques = String::from("t");
+    let mut torques = String::from("t [s]");
     for i in 0..n {
-        let _ = write!(torques, ",tau{}", i + 1);
+        let _ = write!(torques, ",tau{} [{}]", i + 1, units(scene, i).2);
     }
     torques.push('\n');
     let mut traj = String::from("t [s]");
@@ -395,22 +395,31 @@ pub fn arm_csvs(sol: &ArmSolution, scene: &Scene) -> (String, String) {
     (torques, traj)
 }
 
-/// Writes `solution.json`, `torques.csv` and `trajectory.csv` of `sol` into `dir`.
+/// Writes `solution.json`, `torques.csv` and `trajectory.csv` of `sol` into `dir`, through
+/// the solution files' one writer ([`super::solution_io::write_file`]). `solution.json`
+/// carries the schema of the ball problems' files: `schema_version` and a top-level
+/// `verified` (docs/files.md).
 pub fn write_arm_solution(sol: &ArmSolution, dir: &Path) -> Result<(), StudyError> {
     let scene = scene_of(sol)?;
     let (torques, traj) = arm_csvs(sol, &scene);
-    let json = serde_json::to_string_pretty(sol).map_err(|e| StudyError::Arm {
+    let serial = |e: serde_json::Error| StudyError::Arm {
         message: format!("cannot serialise the solution: {e}"),
-    })?;
+    };
+    let mut doc = serde_json::to_value(sol).map_err(serial)?;
+    if let serde_json::Value::Object(m) = &mut doc {
+        m.insert(
+            "schema_version".into(),
+            super::solution_io::SCHEMA_VERSION.into(),
+        );
+        m.insert("verified".into(), is_verified(sol).into());
+    }
+    let json = serde_json::to_string_pretty(&doc).map_err(serial)?;
     for (name, text) in [
         ("solution.json", json.as_str()),
         ("torques.csv", &torques),
         ("trajectory.csv", &traj),
     ] {
-        let path = dir.join(name);
-        std::fs::write(&path, text).map_err(|e| StudyError::Arm {
-            message: format!("cannot write {}: {e}", path.display()),
-        })?;
+        super::solution_io::write_file(&dir.join(name), text.as_bytes())?;
     }
     Ok(())
 }
@@ -420,7 +429,24 @@ pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, StudyError> {
     let text = std::fs::read_to_string(path).map_err(|e| StudyError::Arm {
         message: format!("{}: cannot read: {e}", path.display()),
     })?;
-    serde_json::from_str(&text).map_err(|e| StudyError::Arm {
+    let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| StudyError::Arm {
+        message: format!("{}: not JSON: {e}", path.display()),
+    })?;
+    let version = super::solution_io::SCHEMA_VERSION;
+    match doc.get("schema_version") {
+        // Files written before arm solutions had a schema version have the same fields.
+        None => {}
+        Some(v) if v.as_u64() == Some(version) => {}
+        Some(v) => {
+            return Err(StudyError::Arm {
+                message: format!(
+                    "{}: schema_version {v} is not one this program reads (it reads {version})",
+                    path.display()
+                ),
+            });
+        }
+    }
+    serde_json::from_value(doc).map_err(|e| StudyError::Arm {
         message: format!("{}: not an arm solution: {e}", path.display()),
     })
 }

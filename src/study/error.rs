@@ -45,6 +45,10 @@ pub enum StudyError {
         /// What is wrong with it.
         reason: String,
     },
+    /// A solution cannot be recomputed from its own data (no scene text or primal point, or
+    /// a point that does not fit the problem it names).
+    #[error("{0}")]
+    Unrecomputable(String),
     /// An arm solution (`reach-arm`) cannot be verified, read or written.
     #[error("{message}")]
     Arm {

@@ -27,8 +27,19 @@ use super::error::StudyError;
 /// Version of the `solution.json` layout written by [`SolutionIo::write_json`].
 pub const SCHEMA_VERSION: u64 = 2;
 
-/// File name of the internals beside `solution.json`.
+/// File name of the internals beside `solution.json` ([`internals_file`] of it).
 pub const INTERNALS_FILE: &str = "solution-internals.json";
+
+/// File name of the internals of the solution file `path`: its stem with `-internals.json`
+/// (`solution.json` → [`INTERNALS_FILE`], `candidate-0003.json` →
+/// `candidate-0003-internals.json`), so every solution file in a directory has its own and no
+/// write of one solution replaces another's warm-start data.
+pub fn internals_file(path: &Path) -> String {
+    let stem = path
+        .file_stem()
+        .map_or_else(|| "solution".into(), |s| s.to_string_lossy().into_owned());
+    format!("{stem}-internals.json")
+}
 
 /// Fields of [`OcpSolution`] that go to [`INTERNALS_FILE`].
 const INTERNAL_FIELDS: [&str; 5] = ["raw", "nlp_warm", "params", "timing", "counters"];
@@ -40,9 +51,10 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> StudyError {
     }
 }
 
-/// Through the workspace's one atomic writer ([`bf_output::replace_file`]), so a failed or
-/// interrupted write never leaves a truncated `solution.json` / `torques.csv` behind.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
+/// Writes one solution file (ball or arm) through the workspace's one atomic writer
+/// ([`bf_output::replace_file`]), so a failed or interrupted write never leaves a truncated
+/// `solution.json` / `torques.csv` behind.
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
     bf_output::replace_file(path, bytes).map_err(|e| FileError::new("cannot write", path, e).into())
 }
 
@@ -218,7 +230,10 @@ pub fn verified_block(sol: &OcpSolution) -> Option<Value> {
 }
 
 /// The two documents written for `sol`: `solution.json` and the internals.
-pub fn documents(sol: &OcpSolution) -> Result<(Value, Value), serde_json::Error> {
+pub fn documents(
+    sol: &OcpSolution,
+    internals_name: &str,
+) -> Result<(Value, Value), serde_json::Error> {
     let Value::Object(mut all) = serde_json::to_value(sol)? else {
         return Ok((Value::Null, Value::Null));
     };
@@ -236,7 +251,7 @@ pub fn documents(sol: &OcpSolution) -> Result<(Value, Value), serde_json::Error>
     }
     let mut public = Map::new();
     public.insert("schema_version".into(), Value::from(SCHEMA_VERSION));
-    public.insert("internals".into(), Value::from(INTERNALS_FILE));
+    public.insert("internals".into(), Value::from(internals_name));
     public.insert("problem".into(), Value::from(sol.problem.clone()));
     public.insert(
         "status".into(),
@@ -349,14 +364,60 @@ fn from_documents(
     serde_json::from_value(Value::Object(all)).map_err(|e| io_err(path, e))
 }
 
+/// Errors naming both files unless the internals `internals` (read from `ipath`) belong to
+/// the solution `sol` read from `path`: the same problem and one phase of raw collocation
+/// data per phase of the solution (a warm start interpolates phase by phase).
+fn check_internals_belong(
+    sol: &OcpSolution,
+    internals: &Value,
+    path: &Path,
+    ipath: &Path,
+) -> Result<(), StudyError> {
+    let theirs = internals.get("problem").and_then(Value::as_str);
+    if theirs != Some(sol.problem.as_str()) {
+        return Err(io_err(
+            ipath,
+            format!(
+                "its `problem` is {theirs:?}, {} is {:?}: the internals belong to another \
+                 solution",
+                path.display(),
+                sol.problem
+            ),
+        ));
+    }
+    if sol.raw.len() != sol.modes.len() {
+        return Err(io_err(
+            ipath,
+            format!(
+                "it has {} phases of raw collocation data, {} has {} phases: the internals \
+                 belong to another solution",
+                sol.raw.len(),
+                path.display(),
+                sol.modes.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The internals file of the solution file `path` with document `v`: the name its
+/// `internals` field gives, beside it ([`internals_file`] of `path` if the field is absent).
+pub fn internals_path(path: &Path, v: &Value) -> std::path::PathBuf {
+    match v.get("internals").and_then(Value::as_str) {
+        Some(name) => path.with_file_name(name),
+        None => path.with_file_name(internals_file(path)),
+    }
+}
+
 impl SolutionIo for OcpSolution {
     fn write_json(&self, path: &Path) -> Result<(), StudyError> {
-        let (public, internals) = documents(self).map_err(|e| io_err(path, e))?;
-        let ipath = path.with_file_name(INTERNALS_FILE);
+        let name = internals_file(path);
+        let (public, internals) = documents(self, &name).map_err(|e| io_err(path, e))?;
+        let ipath = path.with_file_name(&name);
         let s = serde_json::to_string_pretty(&internals).map_err(|e| io_err(&ipath, e))?;
-        write_atomic(&ipath, s.as_bytes())?;
+        write_file(&ipath, s.as_bytes())?;
         let s = serde_json::to_string_pretty(&public).map_err(|e| io_err(path, e))?;
-        write_atomic(path, s.as_bytes())
+        write_file(path, s.as_bytes())
     }
 
     fn read_json(path: &Path) -> Result<OcpSolution, StudyError> {
@@ -367,11 +428,7 @@ impl SolutionIo for OcpSolution {
             // Before schema 2: the record itself.
             None => serde_json::from_value(v).map_err(|e| io_err(path, e)),
             Some((_, Some(SCHEMA_VERSION))) => {
-                let name = v
-                    .get("internals")
-                    .and_then(Value::as_str)
-                    .unwrap_or(INTERNALS_FILE);
-                let ipath = path.with_file_name(name);
+                let ipath = internals_path(path, &v);
                 let text = std::fs::read_to_string(&ipath).map_err(|e| {
                     io_err(
                         &ipath,
@@ -380,7 +437,9 @@ impl SolutionIo for OcpSolution {
                 })?;
                 let internals: Value =
                     serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
-                from_documents(&v, &internals, path)
+                let sol = from_documents(&v, &internals, path)?;
+                check_internals_belong(&sol, &internals, path, &ipath)?;
+                Ok(sol)
             }
             Some((x, _)) => Err(io_err(
                 path,
@@ -393,7 +452,7 @@ impl SolutionIo for OcpSolution {
     }
 
     fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError> {
-        write_atomic(path, torques_csv(self).as_bytes())
+        write_file(path, torques_csv(self).as_bytes())
     }
 }
 

@@ -202,6 +202,44 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
     same.then_some(w)
 }
 
+/// `sol` recomputed at its own primal point ([`OcpSolution::nlp_warm`]) on its own problem,
+/// rebuilt from what the solution records (problem, scene text and runtime parameters, mesh,
+/// ε): objective, cost states and durations as that NLP gives them, whatever numbers the
+/// file states. Errors when the solution does not record enough to rebuild its NLP or its
+/// point does not fit the rebuilt NLP.
+pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, StudyError> {
+    let fail = |why: String| StudyError::Unrecomputable(why);
+    let problem: bf_problem::Problem = sol
+        .problem
+        .parse()
+        .map_err(|e| fail(format!("problem {:?}: {e}", sol.problem)))?;
+    if sol.scene_toml.is_empty() {
+        return Err(fail("it records no scene text (`scene_toml`)".into()));
+    }
+    let mut scene = bf_codegen::Scene::from_toml_str(&sol.scene_toml, &sol.scene)
+        .map_err(|e| fail(format!("its `scene_toml`: {e}")))?;
+    bf_model::registry::set_parameters(&mut scene, &sol.scene_params)
+        .map_err(|e| fail(format!("its `scene_params`: {e}")))?;
+    let settings = ProblemSettings {
+        points: sol.points,
+        scheme: sol.scheme,
+        epsilon: Some(sol.epsilon),
+        mesh: sol.refinement.as_ref().map(|r| r.mesh.clone()),
+        scene: Some(scene),
+        ..ProblemSettings::default()
+    };
+    let p = super::build(problem, &settings)?;
+    let w = exact_warm_start(&p, sol).ok_or_else(|| {
+        fail(format!(
+            "its primal point (`nlp_warm` of the internals, {} variables) does not fit its \
+             problem rebuilt on its mesh ({} variables)",
+            sol.nlp_warm.as_ref().map_or(0, |w| w.x.len()),
+            Nlp::num_variables(&p.nlp)
+        ))
+    })?;
+    Ok(solution_at(&p, &w.x, sol.status)?)
+}
+
 /// Solves `p` from the primal-dual point `warm` (same NLP layout) with [`warm_settings`].
 pub fn solve_warm(
     p: &BuiltProblem,

@@ -117,6 +117,9 @@ pub fn solution_at(
         verification: None,
         scene: p.scene.name.clone(),
         kernels: node_kernel_source(p).to_string(),
+        // The caller knows the file text (`bf_scene::Scene` keeps no source text).
+        scene_toml: String::new(),
+        scene_params: Vec::new(),
     })
 }
 

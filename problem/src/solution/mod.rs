@@ -114,6 +114,14 @@ pub struct OcpSolution {
     /// emitted node kernel), `"interpreted"` (none) or `"mixed"`.
     #[serde(default)]
     pub kernels: String,
+    /// The text of the scene file the problem was posed on (empty when not recorded, as in
+    /// files written before it was): with [`OcpSolution::scene_params`] a solution names its
+    /// scene completely, so a replay or a merge needs nothing else.
+    #[serde(default)]
+    pub scene_toml: String,
+    /// The runtime-parameter values set on that scene text (`--param`).
+    #[serde(default)]
+    pub scene_params: Vec<(String, f64)>,
 }
 
 impl OcpSolution {

@@ -9,7 +9,7 @@ use crate::io::parse_list;
 use crate::study::verify::VERIFIED_DEFECT;
 use anyhow::{Context, Result, bail};
 use bf_output::{Outcome, OutputDir};
-use bf_problem::arm::{ArmSettings, ArmSolution, REACH_ARM};
+use bf_problem::arm::{ArmSettings, ArmSolution, MAX_DURATION, MIN_DURATION, REACH_ARM};
 
 /// The first non-finite number of an arm solution (objective, duration, dense samples).
 fn first_non_finite_arm(sol: &ArmSolution) -> Option<(String, f64)> {
@@ -90,11 +90,29 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             .transpose()
             .with_context(|| format!("scene {} has {nq} joints", path.display()))
     };
+    let weight = |opt: &str, v: Option<f64>, default: f64| -> Result<f64> {
+        match v {
+            Some(w) if w.is_finite() && w >= 0.0 => Ok(w),
+            Some(w) => bail!("{opt} must be a finite number >= 0 (got {w})"),
+            None => Ok(default),
+        }
+    };
     let settings = ArmSettings {
         points: args.points.max(2 * args.elements),
         elements: args.elements,
         start: config("--start", &args.start)?,
         target: config("--target", &args.target)?,
+        effort_weight: weight("--effort-weight", args.effort_weight, 1.0)?,
+        acceleration_weight: weight(
+            "--acceleration-weight",
+            args.acceleration_weight,
+            bf_problem::arm::DEFAULT_ACCELERATION_WEIGHT,
+        )?,
+        duration: match args.duration {
+            Some(t) if (MIN_DURATION..=MAX_DURATION).contains(&t) => Some(t),
+            Some(t) => bail!("--duration must be in [{MIN_DURATION}, {MAX_DURATION}] s (got {t})"),
+            None => None,
+        },
         max_iter: args.max_iter,
         print_level: args.print_level,
         ..ArmSettings::default()
@@ -198,6 +216,12 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             " (marked FAILED)"
         }
     )?;
+    if !sol.status.is_success()
+        && let Some(h) =
+            super::gravity_hint(&scene, &[("start", &sol.start), ("target", &sol.target)])
+    {
+        crate::outln!("{h}")?;
+    }
     if let Some(f) = failure {
         bail!("{f}");
     }

@@ -96,13 +96,30 @@ pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
 /// these problems and overflow the solver's products.
 pub const MAX_WARM_START_VALUE: f64 = 1e12;
 
-/// Checks every number of a warm-start file (read as JSON) against
+/// Checks every number of a warm-start file (read as JSON) and of the internals file it names
+/// (`solution-internals.json`: the raw collocation data the warm start is built from) against
 /// [`MAX_WARM_START_VALUE`]; the error names the file, the field path and the value.
 pub fn check_warm_start_values(path: &Path) -> Result<()> {
+    let value = read_json_value(path)?;
+    check_json_values(path, &value)?;
+    if value.get("schema_version").is_some() {
+        let ipath = crate::study::solution_io::internals_path(path, &value);
+        check_json_values(&ipath, &read_json_value(&ipath)?)?;
+    }
+    Ok(())
+}
+
+/// The JSON document of the warm-start file `path`; the error names it.
+fn read_json_value(path: &Path) -> Result<serde_json::Value> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("--warm-start {}: cannot read", path.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text)
-        .with_context(|| format!("--warm-start {}: not a solution.json", path.display()))?;
+    serde_json::from_str(&text)
+        .with_context(|| format!("--warm-start {}: not a JSON document", path.display()))
+}
+
+/// Errors naming `path`, the field path and the value if a number of `value` is NaN or beyond
+/// [`MAX_WARM_START_VALUE`].
+fn check_json_values(path: &Path, value: &serde_json::Value) -> Result<()> {
     fn walk(v: &serde_json::Value, at: &mut String) -> Option<(String, f64)> {
         match v {
             serde_json::Value::Number(n) => n
@@ -129,7 +146,7 @@ pub fn check_warm_start_values(path: &Path) -> Result<()> {
             _ => None,
         }
     }
-    if let Some((field, x)) = walk(&value, &mut String::new()) {
+    if let Some((field, x)) = walk(value, &mut String::new()) {
         bail!(
             "--warm-start {}: `{field}` = {x:e} is out of range (|value| ≤ {MAX_WARM_START_VALUE:e})",
             path.display()
@@ -166,9 +183,9 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     check_size(args.points, scheme)?;
     let warm_start = match &args.warm_start {
         Some(path) => {
+            check_warm_start_values(path)?;
             let sol = OcpSolution::read_json(path)
                 .with_context(|| format!("--warm-start {}", path.display()))?;
-            check_warm_start_values(path)?;
             Some(sol)
         }
         None => None,
@@ -391,6 +408,48 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
     Ok(Some(scene))
 }
 
+/// The scene text and `--param` values the run poses `problem` on, as its solution files
+/// record them ([`OcpSolution::scene_toml`], [`OcpSolution::scene_params`]): the `--scene`
+/// file's text, else the problem's compiled scene's.
+pub fn scene_record(args: &OptimizeArgs, problem: Problem) -> Result<(String, Vec<(String, f64)>)> {
+    let text = match &args.scene {
+        Some(p) => std::fs::read_to_string(p)
+            .with_context(|| format!("--scene {}: cannot read", p.display()))?,
+        None => bf_generated::scene_toml(problem.scene().as_str())
+            .with_context(|| format!("problem {problem}: no compiled scene"))?
+            .to_string(),
+    };
+    Ok((text, super::parse_params(&args.param)?))
+}
+
+/// The hint for a failed solve whose configurations `at` (label, q) need more torque than
+/// the scene's limits against gravity alone: the joints i with |g_i(q)| > τ_max,i (at rest no
+/// other torque acts, so no admissible torque holds the arm there), or `None`.
+pub fn gravity_hint(scene: &bf_codegen::Scene, at: &[(&str, &[f64])]) -> Option<String> {
+    let (model, _) = bf_model::arm::ArmModel::from_scene(scene).ok()?;
+    let limits = bf_problem::arm::torque_limits(scene);
+    let mut over = Vec::new();
+    for (label, q) in at {
+        let (_, g) = model.mass_cqd_g(q, &vec![0.0; q.len()]).ok()?;
+        for (i, (g, t)) in g.iter().zip(&limits).enumerate() {
+            if g.abs() > *t {
+                over.push(format!(
+                    "at the {label} joint {} needs |g| = {:.3e} > tau_max {t:e}",
+                    i + 1,
+                    g.abs()
+                ));
+            }
+        }
+    }
+    (!over.is_empty()).then(|| {
+        format!(
+            "hint: gravity alone exceeds the torque limits ({}): raise `tau_max` in the scene \
+             or lighten the links",
+            over.join("; ")
+        )
+    })
+}
+
 /// File name of the candidate of start `k` in a `--shard` output set.
 pub fn candidate_file(k: usize) -> String {
     format!("candidate-{k:04}.json")
@@ -426,9 +485,12 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     for (opt, given) in [
         ("--start", args.start.is_some()),
         ("--target", args.target.is_some()),
+        ("--effort-weight", args.effort_weight.is_some()),
+        ("--acceleration-weight", args.acceleration_weight.is_some()),
+        ("--duration", args.duration.is_some()),
     ] {
         if given {
-            bail!("{opt}: only `--problem {REACH_ARM}` takes a start or target configuration");
+            bail!("{opt}: only `--problem {REACH_ARM}` takes it");
         }
     }
     let name = parse_problem(problem_arg(args))?;
@@ -492,7 +554,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     };
     let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
     // A shard keeps every distinct optimum it found for `optimize merge`.
-    let candidates: Vec<(String, OcpSolution)> = if args.shard.is_some() {
+    let mut candidates: Vec<(String, OcpSolution)> = if args.shard.is_some() {
         found
             .candidates
             .iter()
@@ -533,6 +595,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             }
         }
         print_verification(&sol)?;
+    }
+    let (scene_toml, scene_params) = scene_record(args, name)?;
+    for s in std::iter::once(&mut sol).chain(candidates.iter_mut().map(|(_, c)| c)) {
+        s.scene_toml.clone_from(&scene_toml);
+        s.scene_params.clone_from(&scene_params);
     }
     if let Some((field, v)) = first_non_finite(&sol) {
         bail!(
@@ -597,6 +664,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
              problem on, not only once μ ≤ tol) ends some wanders on fine meshes \
              (docs/decisions/0010-curvature-extrapolation.md)"
         )?;
+    }
+    if !sol.status.is_success()
+        && let Some(h) = gravity_hint(&problem.scene, &[("start", &problem.guess.free)])
+    {
+        crate::outln!("{h}")?;
     }
     if let Some(f) = failure_of(&sol) {
         bail!("{f}");

@@ -7,6 +7,7 @@ use super::{OUTPUT_DIR, commit_solution, failure_of, print_verification, print_w
 use crate::cli::MergeArgs;
 use crate::study::SolutionIo;
 use crate::study::search;
+use crate::study::solve::recompute_at_own_point;
 use crate::study::strategy::{StageRecord, Strategy, StrategyReport};
 use anyhow::{Context, Result, bail};
 use bf_output::OutputDir;
@@ -14,13 +15,19 @@ use bf_problem::OcpSolution;
 use std::path::Path;
 
 /// The candidates of one `--shard` output set: (start index, solution), by file name.
-fn read_candidates(dir: &Path) -> Result<Vec<(usize, OcpSolution)>> {
+/// Each candidate's stated objective is checked against its own trajectory
+/// ([`check_own_objective`]).
+fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolution)>> {
     let mut names: Vec<(usize, std::path::PathBuf)> = Vec::new();
     let entries =
         std::fs::read_dir(dir).with_context(|| format!("optimize merge: {}", dir.display()))?;
     for e in entries {
         let e = e.with_context(|| format!("optimize merge: {}", dir.display()))?;
         let name = e.file_name().to_string_lossy().into_owned();
+        // Each candidate's internals file sits beside it (read with it).
+        if name.ends_with("-internals.json") {
+            continue;
+        }
         if let Some(k) = name
             .strip_prefix("candidate-")
             .and_then(|r| r.strip_suffix(".json"))
@@ -40,9 +47,94 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, OcpSolution)>> {
         .map(|(k, path)| {
             let sol = OcpSolution::read_json(&path)
                 .with_context(|| format!("optimize merge: {}", path.display()))?;
-            Ok((k, sol))
+            check_own_objective(&path, &sol)?;
+            Ok((k, path, sol))
         })
         .collect()
+}
+
+/// What every file of one multi-start shares (the shards' `solution.json` and candidates):
+/// (quantity, value as shown). The scene text is compared apart ([`check_same_run`]).
+fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 5] {
+    [
+        ("problem", sol.problem.clone()),
+        ("scene", sol.scene.clone()),
+        ("runtime parameters", format!("{:?}", sol.scene_params)),
+        ("mesh", format!("{} points, {:?}", sol.points, sol.scheme)),
+        ("epsilon", format!("{:e}", sol.epsilon)),
+    ]
+}
+
+/// Errors naming both files and the quantity unless `sol` (read from `path`) was solved on the
+/// problem, scene (its file text), runtime parameters, mesh and ε of `first`.
+fn check_same_run(
+    first: &(std::path::PathBuf, OcpSolution),
+    path: &Path,
+    sol: &OcpSolution,
+) -> Result<()> {
+    let (fpath, fsol) = first;
+    for ((what, a), (_, b)) in run_identity(fsol).into_iter().zip(run_identity(sol)) {
+        if a != b {
+            bail!(
+                "optimize merge: {} has {what} {b}, {} has {a}: merge only the shards of one run",
+                path.display(),
+                fpath.display()
+            );
+        }
+    }
+    if fsol.scene_toml != sol.scene_toml {
+        let line = fsol
+            .scene_toml
+            .lines()
+            .zip(sol.scene_toml.lines())
+            .position(|(a, b)| a != b)
+            .unwrap_or_else(|| {
+                fsol.scene_toml
+                    .lines()
+                    .count()
+                    .min(sol.scene_toml.lines().count())
+            })
+            + 1;
+        bail!(
+            "optimize merge: {} was solved on another scene file text than {} (first \
+             difference at line {line}): merge only the shards of one run",
+            path.display(),
+            fpath.display()
+        );
+    }
+    Ok(())
+}
+
+/// Errors naming the file unless the objective, cost states and period that `sol` (read
+/// from `path`) states are those of its own trajectory: recomputed at its primal point on its
+/// problem rebuilt from the file ([`recompute_at_own_point`]). A file edited to claim a
+/// better objective is refused before the choice trusts it.
+fn check_own_objective(path: &Path, sol: &OcpSolution) -> Result<()> {
+    let own = recompute_at_own_point(sol).with_context(|| {
+        format!(
+            "optimize merge: {}: cannot recompute its objective from its own trajectory",
+            path.display()
+        )
+    })?;
+    let same = |a: f64, b: f64| {
+        a == b || (a.is_nan() && b.is_nan()) || (a - b).abs() <= 1e-12 * a.abs().max(b.abs())
+    };
+    for (what, stated, computed) in [
+        ("objective", sol.objective, own.objective),
+        ("c1", sol.c1, own.c1),
+        ("c2", sol.c2, own.c2),
+        ("period", sol.period, own.period),
+    ] {
+        if !same(stated, computed) {
+            bail!(
+                "optimize merge: {}: its {what} {stated:e} is not its own trajectory's \
+                 ({computed:e}, recomputed at its primal point): the file was altered or \
+                 belongs to another run",
+                path.display()
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Run `optimize merge DIR…`: the best verified candidate of the shards ([`search::select`],
@@ -52,6 +144,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
     let mut records: Vec<StageRecord> = Vec::new();
     let mut head: Option<(String, Strategy)> = None;
+    let mut first: Option<(std::path::PathBuf, OcpSolution)> = None;
     let mut seconds: f64 = 0.0;
     for dir in &args.dirs {
         let path = dir.join("solution.json");
@@ -73,6 +166,10 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             ),
             Some(_) => {}
         }
+        match &first {
+            None => first = Some((path.clone(), sol.clone())),
+            Some(f) => check_same_run(f, &path, &sol)?,
+        }
         seconds = seconds.max(rep.seconds);
         for r in &rep.records {
             if records
@@ -92,7 +189,12 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         if found.is_empty() {
             crate::outln!("note: {} has no candidate files", dir.display())?;
         }
-        cands.extend(found);
+        for (k, cpath, c) in found {
+            if let Some(f) = &first {
+                check_same_run(f, &cpath, &c)?;
+            }
+            cands.push((k, c));
+        }
     }
     let Some((problem, strategy)) = head else {
         bail!("optimize merge: no directories given");

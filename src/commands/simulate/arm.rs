@@ -66,8 +66,8 @@ pub(super) fn run_arm(
         CliInput::Series(s)
     } else if let Some(target) = &args.pd {
         CliInput::Pd(pd_controller(args, target, n)?)
-    } else if let Some((_, series, _)) = &replay {
-        CliInput::Series(series.clone())
+    } else if let Some((_, torque, _)) = &replay {
+        CliInput::Replay(torque.clone())
     } else {
         CliInput::Arm(n)
     };
@@ -124,8 +124,12 @@ pub(super) fn run_arm(
 }
 
 /// The replay of an arm solution (`optimize --problem reach-arm`) given as `--init`: its start
-/// configuration, its dense optimal torques and its duration.
-fn arm_replay(path: &std::path::Path, n: usize) -> Result<(Vec<f64>, TorqueSeries, f64)> {
+/// configuration, its optimal torques (the control polynomials of its collocation elements)
+/// and its duration.
+fn arm_replay(
+    path: &std::path::Path,
+    n: usize,
+) -> Result<(Vec<f64>, crate::study::arm::PhaseTorque, f64)> {
     let sol = crate::study::arm::read_arm_solution(path).with_context(|| {
         format!(
             "--init {}: an arm (no ball) replays only a solution of `optimize --problem \
@@ -140,7 +144,22 @@ fn arm_replay(path: &std::path::Path, n: usize) -> Result<(Vec<f64>, TorqueSerie
             sol.start.len()
         );
     }
-    let series = TorqueSeries::new(sol.dense.t.clone(), sol.dense.tau.clone())
-        .with_context(|| format!("--init {}: torques", path.display()))?;
-    Ok((sol.start.clone(), series, sol.duration))
+    let r = &sol.raw;
+    let shaped = !r.elements.is_empty()
+        && r.elements
+            .iter()
+            .all(|&(a, b)| a < b && b <= r.state_tau.len())
+        && r.x.len() == r.state_tau.len()
+        && r.x.iter().all(|x| x.len() == 3 * n)
+        && r.duration.is_finite()
+        && r.duration > 0.0;
+    if !shaped {
+        bail!(
+            "--init {}: the solution's raw collocation data (`raw`: elements, states (q, q̇, τ) \
+             of {n} joints) is missing or inconsistent",
+            path.display()
+        );
+    }
+    let torque = crate::study::arm::PhaseTorque::new(&sol.raw, n);
+    Ok((sol.start.clone(), torque, sol.duration))
 }

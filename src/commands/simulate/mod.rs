@@ -177,6 +177,16 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
             )
         };
         let v: serde_json::Value = serde_json::from_str(&text).with_context(shape)?;
+        if v.get("problem").and_then(|p| p.as_str()) == Some(bf_problem::arm::REACH_ARM) {
+            bail!(
+                "--init {}: an arm solution of `optimize --problem {}` (scene `{}`, without \
+                 a ball), the scene of this run has a ball: replay it without --scene (the \
+                 solution stores its arm scene)",
+                path.display(),
+                bf_problem::arm::REACH_ARM,
+                v.get("scene").and_then(|s| s.as_str()).unwrap_or("?")
+            );
+        }
         if v.get("nodes").is_some() && v.get("modes").is_some() {
             // A solution of `optimize`: replay it from its own initial state and mode.
             let (sq, sqd, sw, smode) = crate::study::solution_io::initial_state_of(&v)
@@ -201,8 +211,15 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
         } else {
             let f: InitFile = serde_json::from_value(v).with_context(shape)?;
             let fqd = f.qd.unwrap_or_else(|| vec![0.0; N]);
-            if f.q.len() != N || fqd.len() != N {
-                bail!("{}", shape());
+            for (name, v) in [("q", &f.q), ("qd", &fqd)] {
+                if v.len() != N {
+                    bail!(
+                        "--init {}: `{name}` has {} values, the scene has {N} joints (one \
+                         value per joint expected)",
+                        path.display(),
+                        v.len()
+                    );
+                }
             }
             q.copy_from_slice(&f.q);
             qd.copy_from_slice(&fqd);
@@ -421,6 +438,24 @@ fn run_model<K: Kernels<N>, const N: usize>(
     let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
     // deep in the first step that names neither the option nor the quantity.
+    // The contact modes hold the finger on the ball (h = 0): started away from it, their
+    // forces are not defined and every quantity below would only say "not finite".
+    // h depends on q only: evaluated at rest, so that an overflowing --qd0 is named below.
+    let mut at_rest = x0.clone();
+    at_rest[N..].iter_mut().for_each(|v| *v = 0.0);
+    let h0 = sys.gap(&at_rest)?;
+    let tol = sys.model.settings().contact_tolerance * sys.model.params().ball_radius();
+    if mode0 == Mode::Free && h0 < -tol {
+        bail!("the initial state penetrates the ball: h(q0) = {h0:e} m");
+    }
+    if mode0 != Mode::Free && h0.abs() > tol {
+        bail!(
+            "initial mode {} (--mode0 or --init): a contact mode needs the finger on the \
+             ball, but the distance h(q0) = {h0:e} m exceeds the contact tolerance {tol:e} m; \
+             start with --mode0 free, or with --q0 on the ball",
+            crate::names::name(&mode0)
+        );
+    }
     let info = sys.sample_info_or_nan(mode0, 0.0, &x0);
     let mut quantities = vec![
         ("energy".to_string(), info.energy),
@@ -438,11 +473,6 @@ fn run_model<K: Kernels<N>, const N: usize>(
              torques: {inputs}",
             initial_state_options(args)
         );
-    }
-    let h0 = sys.gap(&x0)?;
-    let tol = sys.model.settings().contact_tolerance * sys.model.params().ball_radius();
-    if mode0 == Mode::Free && h0 < -tol {
-        bail!("the initial state penetrates the ball: h(q0) = {h0:e} m");
     }
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
     if let Some(n) = run_opts.fail_at_write {

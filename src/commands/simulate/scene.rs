@@ -6,8 +6,9 @@ use crate::cli::SimulateArgs;
 use anyhow::{Context, Result, anyhow, bail};
 
 /// The scene of the run and how to name it in messages: `--scene` (with `--param`); without
-/// it, the scene recorded in the `--init` solution (an arm solution's stored scene text, or the
-/// compiled scene a ball problem's solution names), else scenes/paper.toml.
+/// it, the scene recorded in the `--init` solution (its stored scene text with its runtime
+/// parameters, or, in files that store none, the compiled scene it names), else
+/// scenes/paper.toml.
 pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
     if let Some(path) = &args.scene {
         let (scene, _) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
@@ -19,7 +20,11 @@ pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)>
         let v: serde_json::Value = serde_json::from_str(&text)
             .with_context(|| format!("{}: initial-state file is not JSON", init.display()))?;
         let label = format!("the scene recorded in {}", init.display());
-        let mut scene = if let Some(toml) = v.get("scene_toml").and_then(|t| t.as_str()) {
+        let mut scene = if let Some(toml) = v
+            .get("scene_toml")
+            .and_then(|t| t.as_str())
+            .filter(|t| !t.is_empty())
+        {
             let name = v.get("scene").and_then(|n| n.as_str()).unwrap_or("scene");
             let mut scene = bf_codegen::Scene::from_toml_str(toml, &label)?;
             let stored: Vec<(String, f64)> = v

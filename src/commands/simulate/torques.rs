@@ -21,6 +21,10 @@ pub enum CliInput {
     Zero(usize),
     /// Unactuated joints of an arm with this many joints.
     Arm(usize),
+    /// An arm solution's torques replayed with its own control polynomials (`--init`), the
+    /// interpolant its collocation and verification use: a linear interpolation of its dense
+    /// samples ends measurably off the target (1.7e-4 rad on the 2-link test arm).
+    Replay(crate::study::arm::PhaseTorque),
 }
 
 impl Input for CliInput {
@@ -31,6 +35,7 @@ impl Input for CliInput {
             CliInput::Tracking(p) => p.dim(),
             CliInput::Zero(n) => *n,
             CliInput::Arm(n) => *n,
+            CliInput::Replay(p) => p.dim(),
         }
     }
     fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
@@ -38,6 +43,7 @@ impl Input for CliInput {
             CliInput::Series(s) => s.tau(t, q, qd, out),
             CliInput::Pd(p) => p.tau(t, q, qd, out),
             CliInput::Tracking(p) => p.tau(t, q, qd, out),
+            CliInput::Replay(p) => p.tau(t, q, qd, out),
             CliInput::Zero(_) | CliInput::Arm(_) => {
                 out.fill(0.0);
                 Ok(())
@@ -59,6 +65,19 @@ pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Resu
             2 * n
         ),
     };
+    // A negative gain feeds the error back with the wrong sign: the joint runs away from the
+    // target (exponentially for kp < 0, with growing oscillation for kd < 0) until the run
+    // hits its sample limit. Refused before the run.
+    for (name, gains) in [("kp", &kp), ("kd", &kd)] {
+        if let Some((i, v)) = gains.iter().enumerate().find(|(_, v)| **v < 0.0) {
+            bail!(
+                "--pd-gains {}: {name} of joint {} is {v}; gains must be >= 0 (a negative gain \
+                 destabilises the joint)",
+                args.pd_gains,
+                i + 1
+            );
+        }
+    }
     Ok(PdController::new(kp, kd, target)?)
 }
 
