@@ -46,7 +46,7 @@ pub mod trajectory;
 pub mod work_precision;
 
 pub use error::SimError;
-pub use input::{Input, PdController, TorqueSeries, TrackingPd};
+pub use input::{Input, Measurement, PdController, TorqueSeries, TrackingPd};
 pub use settings::{Method, SimSettings};
 pub use simulator::{SimFailure, Simulator, StopReason, simulate};
 pub use system::{Direction, Guard, HybridSystem, Transition};

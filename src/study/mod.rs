@@ -20,7 +20,9 @@
 //! graph that changed without its kernels being re-emitted is an error, not a slow solve.
 
 pub mod appendix;
+
 pub mod arm;
+pub mod closed_loop;
 pub mod error;
 pub mod extremes;
 pub mod openloop;
