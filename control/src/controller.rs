@@ -29,9 +29,14 @@
 //!
 //! **Outer loop:** at the end of each period (when the reference wraps to its first phase) the
 //! measured mean ω̄ of that period moves the ω offset of the contact phases,
-//! δ ← δ + γ (ω̄* − ω̄).
+//! δ ← δ + γ (ω̄* − ω̄), with ‖δ‖ ≤ 0.25 ‖ω̄*‖ (anti-windup).
 //!
-//! The discrete state (phase, its start, the force integral, δ, the ω integral) is recorded
+//! **Friction measured:** in Slip the measured force gives the plant's μ_k = ‖λ_∥‖ / λ_n; the
+//! controller predicts the kinetic friction with it and scales its μ_s (the friction cone of
+//! the margin) by the ratio to the model's μ_k, so a plant with less friction than the model
+//! is found out at its first slip.
+//!
+//! The discrete state (phase, its start, the force integral, δ, the ω integral, μ_k) is recorded
 //! with its time at every observation, so τ at an earlier time (the per-sample report written
 //! after the run) is recomputed with the state that held then. The controller is for fingers
 //! with 3 joints (the paper's and the human finger).
@@ -139,7 +144,7 @@ impl Default for HybridGains {
                 force_boost: 3.0,
                 force_integral: 20.0,
                 slip_rate: 100.0,
-                slip_decel: 5.0,
+                slip_decel: 20.0,
                 friction_margin: 0.2,
                 lift_off_share: 0.05,
             },
@@ -187,6 +192,9 @@ impl HybridGains {
     }
 }
 
+/// Largest ‖δ‖ of the outer loop, as a share of ‖ω̄*‖.
+const OFFSET_LIMIT: f64 = 0.25;
+
 /// The discrete state of the controller from time `t` on.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Discrete {
@@ -201,6 +209,8 @@ struct Discrete {
     period_start: f64,
     periods: usize,
     slips: usize,
+    /// μ_k measured in the last slip (|λ_∥| / λ_n); the model's μ_k before any slip.
+    mu_k: f64,
 }
 
 /// A phase switch of the controller: plant time, reference phase entered, and the mode
@@ -285,6 +295,7 @@ impl<K: Kernels<3>> HybridController<K> {
             period_start: t0,
             periods: 0,
             slips: 0,
+            mu_k: model.params().mu_k(),
         };
         Ok(HybridController {
             model,
@@ -385,7 +396,14 @@ impl<K: Kernels<3>> HybridController<K> {
         let rc = c.r_c;
         let perp = m.cross(&rc) / rc.norm_squared();
         let mut lambda_t = perp - n * n.dot(&perp);
-        let grip = (1.0 - g.friction_margin) * p.mu_s();
+        // The friction measured in a slip scales the static coefficient the margin is taken
+        // from (a plant with less friction than the model is found out at its first slip).
+        let mu_s = if p.mu_k() > 0.0 {
+            p.mu_s() * (d.mu_k / p.mu_k()).min(1.0)
+        } else {
+            p.mu_s()
+        };
+        let grip = (1.0 - g.friction_margin) * mu_s;
         if !planned_end {
             // Press harder when the tangential force ω needs exceeds the friction cone with
             // its margin, up to `force_boost` times the phase's largest planned force.
@@ -407,7 +425,7 @@ impl<K: Kernels<3>> HybridController<K> {
             _ => None,
         };
         let lambda = match slip_dir {
-            Some(t_hat) => (n + t_hat * p.mu_k()) * lambda_n,
+            Some(t_hat) => (n + t_hat * d.mu_k) * lambda_n,
             None => n * lambda_n + lambda_t,
         };
         let omega_dot = p.ball_inertia_inv() * (-f_b - rc.cross(&lambda));
@@ -492,6 +510,13 @@ impl<K: Kernels<3>> HybridController<K> {
                 let mean = d.omega_int[i] / len;
                 d.omega_offset[i] += self.gains.outer * (self.reference.mean_omega[i] - mean);
             }
+            // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
+            // (and with it the contact forces) without bound.
+            let limit = OFFSET_LIMIT * Vec3::from(self.reference.mean_omega).norm();
+            let norm = Vec3::from(d.omega_offset).norm();
+            if norm > limit {
+                d.omega_offset = d.omega_offset.map(|v| v * limit / norm);
+            }
         }
         d.omega_int = [0.0; 3];
         d.period_start = t;
@@ -563,14 +588,22 @@ impl<K: Kernels<3>> Input for HybridController<K> {
         match m.from {
             None => {
                 let ph = &self.reference.phases[d.phase];
-                if let (Some(lambda), true, true) = (m.lambda, ph.contact, m.mode != Mode::Free)
+                if let (Some(lambda), true) = (m.lambda, m.mode != Mode::Free)
                     && let Some(s) = State::<3>::from_slice(m.x)
                     && let Ok(kin) = self.model.evaluate(&s)
                 {
                     let n = kin.contact.n;
-                    let err = ph.lambda_n(m.t - d.start, &n) - Vec3::from(lambda).dot(&n);
+                    let lambda = Vec3::from(lambda);
+                    let lambda_n = lambda.dot(&n);
+                    if m.mode == Mode::Slip && lambda_n > 0.0 {
+                        let mu = (lambda - n * lambda_n).norm() / lambda_n;
+                        if mu.is_finite() && mu > 0.0 {
+                            d.mu_k = mu;
+                        }
+                    }
+                    let err = ph.lambda_n(m.t - d.start, &n) - lambda_n;
                     let kf = self.gains.contact.force_integral;
-                    if err.is_finite() && dt > 0.0 && m.t - d.start <= ph.duration {
+                    if ph.contact && err.is_finite() && dt > 0.0 && m.t - d.start <= ph.duration {
                         d.force_int += err * dt / (1.0 + kf * dt);
                     }
                 }
