@@ -131,7 +131,7 @@ pub struct HybridGains {
 
 impl Default for HybridGains {
     /// ω_n = 20 rad/s, ζ = 1 (the free phases of the optima last 0.1–9 s, so errors decay in
-    /// a fraction of a phase); k_ω = 100/s (the contact phases of the optima last 26 ms and more), λ_n boost up to 3 × max λ_n*, k_f = 20/s, k_s = 100/s, a_s = 5 m/s²; a friction margin of 20 %
+    /// a fraction of a phase); k_ω = 100/s (the contact phases of the optima last 26 ms and more), λ_n boost up to 3 × max λ_n*, k_f = 300/s (the loop must settle within a 26 ms stick phase), k_s = 100/s, a_s = 5 m/s²; a friction margin of 20 %
     /// (a plant with μ 20 % below the model still sticks); lift-off share 5 %; γ = 0.5.
     fn default() -> Self {
         HybridGains {
@@ -142,7 +142,7 @@ impl Default for HybridGains {
             contact: ContactGains {
                 omega_rate: 100.0,
                 force_boost: 3.0,
-                force_integral: 20.0,
+                force_integral: 300.0,
                 slip_rate: 100.0,
                 slip_decel: 20.0,
                 friction_margin: 0.2,
