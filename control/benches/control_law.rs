@@ -5,7 +5,7 @@
 //! `cargo bench -p bf-control --bench control_law -- --warm-up-time 1 --measurement-time 3`.
 
 use bf_control::{HybridController, HybridGains, InverseDynamics, Reference, ReferencePhase};
-use bf_model::{Kernels, Mode, VecN};
+use bf_model::{Mode, VecN};
 use bf_sim::Input;
 use criterion::{Criterion, criterion_group, criterion_main};
 use std::hint::black_box;
