@@ -9,7 +9,7 @@
 //!   τ = M q̈ + C q̇ + g (eq. 24, Newton–Euler), plus the joints' viscous friction μ_v q̇ of
 //!   eq. 26a, so that ID inverts the free-motion dynamics the simulator integrates.
 
-use crate::ControlError;
+use crate::error::ControlError;
 use bf_generated::EvalIntoFn;
 
 /// Gains of [`ComputedTorque`]: natural frequency ω_n (rad/s) and damping ratio ζ.

@@ -12,7 +12,7 @@
 //! plant that reaches the ball late keeps approaching it as planned; past the end of a contact
 //! phase its last values are held.
 
-use crate::ControlError;
+use crate::error::ControlError;
 use bf_model::{Kernels, Model, State, Vec3};
 
 /// One phase of the reference (3 joints).

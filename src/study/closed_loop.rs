@@ -6,7 +6,9 @@
 //! period ([`bf_control::period_metrics`]: the mean ω̄_k of eq. 61 per period and its error
 //! ‖ω̄_k − ω̄*‖ / ‖ω̄*‖).
 
-use super::openloop::{DEFAULT_PD_TRACK, periodic_torques, tracking_input};
+use super::openloop::{
+    DEFAULT_PD_TRACK, initial_state, periodic_torques, simulate_optimum, tracking_input,
+};
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::{
     HybridController, HybridGains, InverseDynamics, PeriodMetrics, Reference, period_metrics,
@@ -15,8 +17,8 @@ use bf_control::{
 use bf_model::{DynKernels, ImpactLaw, Kernels, Mode, Model};
 use bf_problem::OcpSolution;
 use bf_problem::node::PhaseMode;
-use bf_sim::ball_finger::{BallFinger, BallFingerSettings, RunReport};
-use bf_sim::{HybridSystem, Input, SimOutput, SimSettings};
+use bf_sim::SimOutput;
+use bf_sim::ball_finger::{BallFingerSettings, RunReport};
 
 /// The controller executing the optimum.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -144,9 +146,9 @@ pub fn run_tracking(
     };
     let (output, report, stopped) = match controller {
         ControllerKind::OpenLoop => {
-            simulate(sol, plant, periodic_torques(sol, copies)?, settings, t_end)?
+            simulate_optimum(sol, plant, periodic_torques(sol, copies)?, settings, t_end)?
         }
-        ControllerKind::Pd => simulate(
+        ControllerKind::Pd => simulate_optimum(
             sol,
             plant,
             tracking_input(sol, copies, &DEFAULT_PD_TRACK)?,
@@ -164,7 +166,7 @@ pub fn run_tracking(
             let x0 = initial_state(sol)?;
             let law =
                 HybridController::new(model, id, reference, HybridGains::default(), 0.0, &x0)?;
-            simulate(sol, plant, law, settings, t_end)?
+            simulate_optimum(sol, plant, law, settings, t_end)?
         }
     };
     let tr = &output.trajectory;
@@ -193,58 +195,4 @@ pub fn run_tracking(
         periods: metrics,
         lost,
     })
-}
-
-/// The optimum's initial state x(0) = (q, q̇, ω) at its first collocation point.
-fn initial_state(sol: &OcpSolution) -> Result<Vec<f64>> {
-    let d = &sol.nodes;
-    let x0: Vec<f64> = [&d.q, &d.qd, &d.omega]
-        .iter()
-        .filter_map(|v| v.first())
-        .flatten()
-        .copied()
-        .collect();
-    if x0.len() != 9 || x0.iter().any(|v| !v.is_finite()) {
-        bail!("the solution's initial state is not 9 finite values (q, qd, omega of 3 joints)");
-    }
-    Ok(x0)
-}
-
-/// Simulates the plant under `input` from the optimum's initial state until `t_end`.
-fn simulate<I: Input>(
-    sol: &OcpSolution,
-    plant: Model<DynKernels>,
-    input: I,
-    settings: BallFingerSettings,
-    t_end: f64,
-) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
-    let sys = BallFinger::new(plant, input, settings)?;
-    let x0 = initial_state(sol)?;
-    let mode0 = if sol.modes.first() == Some(&PhaseMode::Free) {
-        Mode::Free
-    } else {
-        Mode::Stick
-    };
-    let sim = SimSettings {
-        rtol: 1e-8,
-        output_dt: Some(sol.period / 400.0),
-        ..SimSettings::default()
-    };
-    let cpu = std::time::Instant::now();
-    let (out, stopped) = match bf_sim::simulate(
-        &sys as &dyn HybridSystem<Mode = Mode>,
-        sim,
-        mode0,
-        0.0,
-        &x0,
-        t_end,
-    ) {
-        Ok(out) => (out, None),
-        Err(f) => {
-            let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);
-            (f.partial, Some(msg))
-        }
-    };
-    let report = sys.report(&out, 0.0, cpu.elapsed().as_secs_f64());
-    Ok((out, report, stopped))
 }
