@@ -94,6 +94,14 @@ pub enum Command {
     Paper(PaperArgs),
     /// Write a stand-alone report.
     Report(ReportArgs),
+    /// Execute an optimum in closed loop on the hybrid model (paper Sect. 6.2, 7): open loop,
+    /// joint PD, or the hybrid controller (computed torque in free phases, event-timed
+    /// force/velocity control in contact). Writes the files of `simulate` plus tracking.json.
+    ///
+    /// Exit status: 0 when every period made contact and all periods completed; 1 when the run
+    /// lost the ball (the output set is still written, marked FAILED, and tracking.json says
+    /// why) and for other errors; 2 for usage errors.
+    Track(TrackArgs),
     /// Check the paper against derivations (`appendix`: each Appendix A/B formula as printed
     /// vs derived, and the misprints; exits non-zero if a derivation fails).
     Verify(VerifyArgs),
@@ -316,6 +324,30 @@ pub struct SimulateArgs {
     /// adds FAILED). It is replaced as a whole when the run ends, so it must be new, empty or
     /// an earlier output of `simulate`.
     #[arg(long, default_value = "out/simulate")]
+    pub out: PathBuf,
+}
+
+/// Arguments of `track` (exit status: see [`Command::Track`]).
+#[derive(Debug, Args)]
+pub struct TrackArgs {
+    /// The optimum to execute: a solution.json of `optimize` on a periodic problem.
+    pub solution: PathBuf,
+    /// open-loop (the optimal torques τ*(t)), pd (τ*(t) plus joint PD 1 N m/rad, 0.2 N m s/rad
+    /// in the free phases), or hybrid (bf-control's controller; docs/decisions/0012-control-layer.md).
+    #[arg(long, default_value = "hybrid")]
+    pub controller: String,
+    /// Periods to run (a period ends when the plant starts the optimum's first phase again).
+    #[arg(long, default_value_t = 10, value_parser = whole)]
+    pub periods: usize,
+    /// Scene file of the plant [default: the solution's own scene]; the controller always uses
+    /// the solution's scene, so a second file tests model error.
+    #[arg(long)]
+    pub plant_scene: Option<PathBuf>,
+    /// Impact law of the plant: newton, stick, max-dissipation, min-slip, normal-impulse.
+    #[arg(long, default_value = "newton")]
+    pub impact_law: String,
+    /// Output directory (the files of `simulate` and tracking.json); replaced as a whole.
+    #[arg(long, default_value = "out/track")]
     pub out: PathBuf,
 }
 

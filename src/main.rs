@@ -22,6 +22,7 @@ fn main() {
         Command::Paper(a) => commands::paper::run(&a),
         Command::Report(a) => commands::report::run(&a),
         Command::Verify(a) => commands::verify::run(&a),
+        Command::Track(a) => commands::track::run(&a),
     };
     if let Err(e) = result {
         if ball_finger::errors::is_broken_pipe(&e) {

@@ -13,15 +13,65 @@
 //! * JSON `{ "t": [t0, t1, ...], "tau": [[tau1, ..., tauN] at t0, [..] at t1, ...] }`.
 
 use crate::SimError;
+use bf_model::Mode;
 use bf_output::FileError;
 use std::path::Path;
 
 /// A source of joint torques.
+///
+/// The ball-and-finger system ([`crate::ball_finger::BallFinger`]) calls [`Input::tau_in_mode`]
+/// and reports what a real controller measures through [`Input::observe`]; both default to the
+/// plain law τ(t, q, q̇) and to ignoring the measurements, so an input that only implements
+/// [`Input::tau`] runs exactly as before (bit for bit). Feedback laws that switch with the
+/// contact (bf-control's hybrid controller) override them.
 pub trait Input {
     /// Number of torques N (= number of joints).
     fn dim(&self) -> usize;
     /// Writes τ(t, q, q̇) into `out` (length N).
     fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError>;
+    /// Writes τ into `out` knowing the plant's contact mode and the ball's ω (what a controller
+    /// with contact sensing and a ball encoder measures). Called in every right-hand side and
+    /// guard evaluation, and for the per-sample report after the run, so it must be a function
+    /// of its arguments and of what [`Input::observe`] recorded up to time `t`. Default:
+    /// [`Input::tau`].
+    fn tau_in_mode(
+        &self,
+        mode: Mode,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        omega: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), SimError> {
+        let _ = (mode, omega);
+        self.tau(t, q, qd, out)
+    }
+    /// Whether [`Input::observe`] wants the measured contact force after every accepted step
+    /// (it costs one contact-force evaluation per step). Default: no.
+    fn wants_force(&self) -> bool {
+        false
+    }
+    /// A measurement of the plant: an accepted step's end or a mode transition. Called in time
+    /// order, never for rejected trial steps. Default: ignored.
+    fn observe(&self, m: &Measurement<'_>) {
+        let _ = m;
+    }
+}
+
+/// What the plant reports to an [`Input`] ([`Input::observe`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Measurement<'a> {
+    /// Time (s).
+    pub t: f64,
+    /// The mode after the step or transition.
+    pub mode: Mode,
+    /// The mode before a transition; `None` for the end of an accepted step.
+    pub from: Option<Mode>,
+    /// The state x = (q, q̇, ω) (after the reset, for a transition).
+    pub x: &'a [f64],
+    /// The contact force λ on the finger (N, world axes) at the end of an accepted contact
+    /// step, when [`Input::wants_force`]; `None` otherwise.
+    pub lambda: Option<[f64; 3]>,
 }
 
 /// Piecewise-linear torque time series with clamped ends.

@@ -14,7 +14,9 @@
 //!   `apply_reset()`), Zeno and chain limits; [`simulate`] runs it and returns either a
 //!   [`SimOutput`] or a [`SimFailure`] that keeps the partial trajectory.
 //! * [`trajectory`] — [`Trajectory`], [`EventRecord`], JSON/CSV writers (atomic).
-//! * [`input`] — [`Input`] torques τ(t, q, q̇): [`TorqueSeries`] (CSV/JSON) and [`PdController`].
+//! * [`input`] — [`Input`] torques τ(t, q, q̇): [`TorqueSeries`] (CSV/JSON) and [`PdController`];
+//!   feedback laws that need the contact mode, ω and the measured contact force override
+//!   [`Input::tau_in_mode`] and [`Input::observe`] ([`Measurement`]), as bf-control does.
 //! * [`toys`] — systems with closed-form event times used by tests and benches.
 //! * [`ball_finger`] — the finger–ball model of bf-model as a [`HybridSystem`], with the derived
 //!   per-sample quantities (τ, λ, h, σ, ‖Δv‖, E), event kinds, run summary and output files.
@@ -46,7 +48,7 @@ pub mod trajectory;
 pub mod work_precision;
 
 pub use error::SimError;
-pub use input::{Input, PdController, TorqueSeries, TrackingPd};
+pub use input::{Input, Measurement, PdController, TorqueSeries, TrackingPd};
 pub use settings::{Method, SimSettings};
 pub use simulator::{SimFailure, Simulator, StopReason, simulate};
 pub use system::{Direction, Guard, HybridSystem, Transition};

@@ -9,6 +9,7 @@ pub mod paper;
 pub mod report;
 pub mod requires;
 pub mod simulate;
+pub mod track;
 pub mod verify;
 
 use anyhow::Result;

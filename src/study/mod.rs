@@ -24,6 +24,7 @@
 pub mod appendix;
 pub mod arm;
 pub mod claims;
+pub mod closed_loop;
 pub mod error;
 pub mod extremes;
 pub mod openloop;

@@ -10,11 +10,11 @@
 //! free phases (optionally in contact too), and compares both with the optimum period by
 //! period (ω and q errors) in one figure.
 
-use anyhow::{Context, Result, anyhow};
-use bf_model::{ImpactLaw, Mode};
+use anyhow::{Context, Result, anyhow, bail};
+use bf_model::{ImpactLaw, Kernels, Mode, Model};
 use bf_plot::paper::{SimModes, TimeSeries};
 use bf_problem::OcpSolution;
-use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings, RunReport};
 use bf_sim::{HybridSystem, Input, SimOutput, SimSettings, TorqueSeries, TrackingPd};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -201,23 +201,36 @@ fn replay<I: Input>(
     dir: &Path,
 ) -> Result<(SimOutput<Mode>, Option<String>)> {
     let model = bf_model::fixtures::paper_scene().context("paper scene")?;
-    let sys = BallFinger::new(
-        model,
-        input,
-        BallFingerSettings {
-            impact_law: ImpactLaw::Newton,
-            ..BallFingerSettings::default()
-        },
-    )?;
-    let d = &sol.nodes;
-    let x0: Vec<f64> = d.q[0]
-        .iter()
-        .chain(&d.qd[0])
-        .chain(&d.omega[0])
-        .copied()
-        .collect();
+    let settings = BallFingerSettings {
+        impact_law: ImpactLaw::Newton,
+        ..BallFingerSettings::default()
+    };
     let t_end = periods as f64 * sol.period;
-    let settings = SimSettings {
+    let (out, report, stopped) = simulate_optimum(sol, model, input, settings, t_end)?;
+    // The files of `simulate` (same columns, units and mode names).
+    report.write_dir(dir, &out, stopped.as_deref())?;
+    Ok((out, stopped))
+}
+
+/// Simulates `plant` under `input` with `settings` from the optimum's initial state x(0) (its
+/// first collocation point) and first mode until `t_end` (DOPRI5, rtol 1e-8, 400 output
+/// samples per period besides steps and events); returns the output, its per-sample report
+/// and, for a run that stopped early, why (the output is then the partial trajectory).
+pub fn simulate_optimum<K: Kernels<3>, I: Input>(
+    sol: &OcpSolution,
+    plant: Model<K>,
+    input: I,
+    settings: BallFingerSettings,
+    t_end: f64,
+) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
+    let sys = BallFinger::new(plant, input, settings)?;
+    let x0 = initial_state(sol)?;
+    let mode0 = if sol.modes.first() == Some(&bf_problem::node::PhaseMode::Stick) {
+        Mode::Stick
+    } else {
+        Mode::Free
+    };
+    let sim = SimSettings {
         rtol: 1e-8,
         output_dt: Some(sol.period / 400.0),
         ..SimSettings::default()
@@ -225,8 +238,8 @@ fn replay<I: Input>(
     let cpu = std::time::Instant::now();
     let (out, stopped) = match bf_sim::simulate(
         &sys as &dyn HybridSystem<Mode = Mode>,
-        settings,
-        Mode::Free,
+        sim,
+        mode0,
         0.0,
         &x0,
         t_end,
@@ -237,10 +250,23 @@ fn replay<I: Input>(
             (f.partial, Some(msg))
         }
     };
-    // The files of `simulate` (same columns, units and mode names).
-    sys.report(&out, 0.0, cpu.elapsed().as_secs_f64())
-        .write_dir(dir, &out, stopped.as_deref())?;
-    Ok((out, stopped))
+    let report = sys.report(&out, 0.0, cpu.elapsed().as_secs_f64());
+    Ok((out, report, stopped))
+}
+
+/// The optimum's initial state x(0) = (q, q̇, ω) at its first collocation point (3 joints).
+pub fn initial_state(sol: &OcpSolution) -> Result<Vec<f64>> {
+    let d = &sol.nodes;
+    let x0: Vec<f64> = [&d.q, &d.qd, &d.omega]
+        .iter()
+        .filter_map(|v| v.first())
+        .flatten()
+        .copied()
+        .collect();
+    if x0.len() != 9 || x0.iter().any(|v| !v.is_finite()) {
+        bail!("the solution's initial state is not 9 finite values (q, qd, omega of 3 joints)");
+    }
+    Ok(x0)
 }
 
 /// The figures of merit of a replay `out` of `sol` over `periods` periods.

@@ -57,7 +57,7 @@
 //! (m).
 
 use super::{BallFinger, Hold, state_of, write_velocities};
-use crate::{Guard, HybridSystem, Input, SimError, Transition};
+use crate::{Guard, HybridSystem, Input, Measurement, SimError, Transition};
 use bf_model::dynamics::contact_matrices;
 use bf_model::{Kernels, Mode, State, Vec3};
 
@@ -94,6 +94,109 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         let hold = self.hold.get();
         hold.contact && t < hold.until
     }
+
+    /// The drift control of [`HybridSystem::project`] (module doc), without the measurement.
+    fn project_state(&self, mode: Mode, t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
+        let err = Self::model_err(mode, t);
+        if mode == Mode::Slip {
+            // The slip_reversal guard of the next step compares Δv with its direction now.
+            let s = state_of::<N>(x)?;
+            let kin = self.model.evaluate(&s).map_err(&err)?;
+            self.set_slip_ref(&kin.contact.delta_v);
+        }
+        if mode == Mode::Free || !self.settings.project {
+            return Ok(None);
+        }
+        let mut s = state_of::<N>(x)?;
+        let drift = self.project_position(&mut s)?;
+        match mode {
+            Mode::Stick => {
+                let out = self.model.slip_to_stick_update(&s).map_err(&err)?;
+                s.qd = out.qd;
+                s.omega = out.omega;
+            }
+            Mode::Slip => {
+                let kin = self.model.evaluate(&s).map_err(&err)?;
+                let mats = contact_matrices(&kin, self.model.params()).map_err(&err)?;
+                let n = kin.contact.n;
+                let vn = n.dot(&kin.contact.v_c);
+                if mats.n_w_n > 0.0 {
+                    s.qd -= mats.minv_jct * n * (vn / mats.n_w_n);
+                }
+            }
+            Mode::Free => {}
+        }
+        s.write_slice(x);
+        if mode == Mode::Slip {
+            let kin = self.model.evaluate(&s).map_err(&err)?;
+            self.set_slip_ref(&kin.contact.delta_v);
+        }
+        Ok(drift)
+    }
+
+    /// The Zeno fallback of [`HybridSystem::zeno_fallback`] (module doc), without the measurement.
+    fn zeno_fallback_state(
+        &self,
+        mode: Mode,
+        t: f64,
+        x: &mut [f64],
+        recent: &[(&'static str, Mode)],
+    ) -> Result<Option<(Mode, String)>, SimError> {
+        let is_kink = |g: &str| KINK_GUARDS.iter().any(|k| k.name == g);
+        let kinks = recent.iter().any(|(g, _)| is_kink(g));
+        let hold = self.settings.zeno_hold_time;
+        let mut names: Vec<(&str, usize)> = Vec::new();
+        for (g, _) in recent {
+            match names.iter_mut().find(|(n, _)| n == g) {
+                Some((_, c)) => *c += 1,
+                None => names.push((g, 1)),
+            }
+        }
+        let names: Vec<String> = names.iter().map(|(n, c)| format!("{n} {c}")).collect();
+        let names = names.join(", ");
+        if mode != Mode::Free && recent.iter().all(|(g, _)| is_kink(g)) {
+            self.hold.set(Hold {
+                until: t + hold,
+                kinks: true,
+                contact: false,
+            });
+            return Ok(Some((
+                mode,
+                format!(
+                    "the contact point chatters across a kink of sat(alpha) (eq. 3; {names}): \
+                     kink events suspended for {hold} s, steps across the kink are shortened \
+                     by the error control"
+                ),
+            )));
+        }
+        // Chatter between contact and free motion or between stick and slip: hold a sticking
+        // contact (Δv = 0 by the dissipative sticking projection, eq. 40–41).
+        let mut s = state_of::<N>(x)?;
+        let tol = self.model.settings().contact_tolerance * self.model.params().ball_radius();
+        if self.gap(x)?.abs() > tol {
+            return Ok(None);
+        }
+        self.project_position(&mut s)?;
+        let out = self
+            .model
+            .slip_to_stick_update(&s)
+            .map_err(SimError::system)?;
+        s.qd = out.qd;
+        s.omega = out.omega;
+        s.write_slice(x);
+        self.hold.set(Hold {
+            until: t + hold,
+            kinks,
+            contact: true,
+        });
+        Ok(Some((
+            Mode::Stick,
+            format!(
+                "mode chatter ({names}): sticking contact held for {hold} s regardless of \
+                 lambda_n and sigma (eq. 48, 19)"
+            ),
+        )))
+    }
 }
 
 impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, N> {
@@ -105,7 +208,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
 
     fn rhs(&self, mode: Mode, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
         let s = state_of::<N>(x)?;
-        let tau = self.tau(t, &s)?;
+        let tau = self.tau(mode, t, &s)?;
         let acc = self
             .model
             .accelerations(mode, &s, &tau)
@@ -144,7 +247,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 out[0] = c.h;
             }
             Mode::Stick => {
-                let tau = self.tau(t, &s)?;
+                let tau = self.tau(Mode::Stick, t, &s)?;
                 let kin = self.model.evaluate(&s).map_err(&err)?;
                 let acc = bf_model::dynamics::stick(
                     &kin,
@@ -162,7 +265,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 self.kink_values(&kin.contact, t, &mut out[2..]);
             }
             Mode::Slip => {
-                let tau = self.tau(t, &s)?;
+                let tau = self.tau(Mode::Slip, t, &s)?;
                 let kin = self.model.evaluate(&s).map_err(&err)?;
                 let acc = bf_model::dynamics::slip(
                     &kin,
@@ -261,7 +364,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 Mode::Free
             }
             (Mode::Stick, _) => {
-                let tau = self.tau(t, &s)?;
+                let tau = self.tau(Mode::Stick, t, &s)?;
                 let acc = self.model.stick(&s, &tau).map_err(SimError::system)?;
                 let out = self
                     .model
@@ -280,44 +383,38 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 Mode::Stick
             }
         };
+        self.input.observe(&Measurement {
+            t,
+            mode: next,
+            from: Some(mode),
+            x,
+            lambda: None,
+        });
         Ok(Transition::To(next))
     }
 
     fn project(&self, mode: Mode, t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {
-        let err = Self::model_err(mode, t);
-        if mode == Mode::Slip {
-            // The slip_reversal guard of the next step compares Δv with its direction now.
+        let drift = self.project_state(mode, t, x)?;
+        let lambda = if self.input.wants_force() && mode != Mode::Free {
+            // What a force sensor at the contact reads at the step's end: the mode's λ under
+            // the input's own torques.
             let s = state_of::<N>(x)?;
-            let kin = self.model.evaluate(&s).map_err(&err)?;
-            self.set_slip_ref(&kin.contact.delta_v);
-        }
-        if mode == Mode::Free || !self.settings.project {
-            return Ok(None);
-        }
-        let mut s = state_of::<N>(x)?;
-        let drift = self.project_position(&mut s)?;
-        match mode {
-            Mode::Stick => {
-                let out = self.model.slip_to_stick_update(&s).map_err(&err)?;
-                s.qd = out.qd;
-                s.omega = out.omega;
-            }
-            Mode::Slip => {
-                let kin = self.model.evaluate(&s).map_err(&err)?;
-                let mats = contact_matrices(&kin, self.model.params()).map_err(&err)?;
-                let n = kin.contact.n;
-                let vn = n.dot(&kin.contact.v_c);
-                if mats.n_w_n > 0.0 {
-                    s.qd -= mats.minv_jct * n * (vn / mats.n_w_n);
-                }
-            }
-            Mode::Free => {}
-        }
-        s.write_slice(x);
-        if mode == Mode::Slip {
-            let kin = self.model.evaluate(&s).map_err(&err)?;
-            self.set_slip_ref(&kin.contact.delta_v);
-        }
+            let tau = self.tau(mode, t, &s)?;
+            let acc = self
+                .model
+                .accelerations(mode, &s, &tau)
+                .map_err(Self::model_err(mode, t))?;
+            Some(acc.force.lambda.into())
+        } else {
+            None
+        };
+        self.input.observe(&Measurement {
+            t,
+            mode,
+            from: None,
+            x,
+            lambda,
+        });
         Ok(drift)
     }
 
@@ -328,60 +425,17 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
         x: &mut [f64],
         recent: &[(&'static str, Mode)],
     ) -> Result<Option<(Mode, String)>, SimError> {
-        let is_kink = |g: &str| KINK_GUARDS.iter().any(|k| k.name == g);
-        let kinks = recent.iter().any(|(g, _)| is_kink(g));
-        let hold = self.settings.zeno_hold_time;
-        let mut names: Vec<(&str, usize)> = Vec::new();
-        for (g, _) in recent {
-            match names.iter_mut().find(|(n, _)| n == g) {
-                Some((_, c)) => *c += 1,
-                None => names.push((g, 1)),
-            }
-        }
-        let names: Vec<String> = names.iter().map(|(n, c)| format!("{n} {c}")).collect();
-        let names = names.join(", ");
-        if mode != Mode::Free && recent.iter().all(|(g, _)| is_kink(g)) {
-            self.hold.set(Hold {
-                until: t + hold,
-                kinks: true,
-                contact: false,
+        let out = self.zeno_fallback_state(mode, t, x, recent)?;
+        if let Some((next, _)) = &out {
+            self.input.observe(&Measurement {
+                t,
+                mode: *next,
+                from: Some(mode),
+                x,
+                lambda: None,
             });
-            return Ok(Some((
-                mode,
-                format!(
-                    "the contact point chatters across a kink of sat(alpha) (eq. 3; {names}): \
-                     kink events suspended for {hold} s, steps across the kink are shortened \
-                     by the error control"
-                ),
-            )));
         }
-        // Chatter between contact and free motion or between stick and slip: hold a sticking
-        // contact (Δv = 0 by the dissipative sticking projection, eq. 40–41).
-        let mut s = state_of::<N>(x)?;
-        let tol = self.model.settings().contact_tolerance * self.model.params().ball_radius();
-        if self.gap(x)?.abs() > tol {
-            return Ok(None);
-        }
-        self.project_position(&mut s)?;
-        let out = self
-            .model
-            .slip_to_stick_update(&s)
-            .map_err(SimError::system)?;
-        s.qd = out.qd;
-        s.omega = out.omega;
-        s.write_slice(x);
-        self.hold.set(Hold {
-            until: t + hold,
-            kinks,
-            contact: true,
-        });
-        Ok(Some((
-            Mode::Stick,
-            format!(
-                "mode chatter ({names}): sticking contact held for {hold} s regardless of \
-                 lambda_n and sigma (eq. 48, 19)"
-            ),
-        )))
+        Ok(out)
     }
 
     fn check_valid(&self, mode: Mode, t: f64, x: &[f64]) -> Result<(), SimError> {

@@ -208,10 +208,16 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         Ok(drift)
     }
 
-    fn tau(&self, t: f64, s: &State<N>) -> Result<VecN<N>, SimError> {
+    fn tau(&self, mode: Mode, t: f64, s: &State<N>) -> Result<VecN<N>, SimError> {
         let mut tau = [0.0; N];
-        self.input
-            .tau(t, s.q.as_slice(), s.qd.as_slice(), &mut tau)?;
+        self.input.tau_in_mode(
+            mode,
+            t,
+            s.q.as_slice(),
+            s.qd.as_slice(),
+            s.omega.as_slice(),
+            &mut tau,
+        )?;
         Ok(VecN::<N>::from(tau))
     }
 

@@ -26,7 +26,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
     pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo<N>, SimError> {
         let s = state_of::<N>(x)?;
-        let tau = self.tau(t, &s)?;
+        let tau = self.tau(mode, t, &s)?;
         let kin = self.model.evaluate(&s).map_err(SimError::system)?;
         let acc = self
             .model

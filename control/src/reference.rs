@@ -1,0 +1,260 @@
+//! The optimum as a reference, phase by phase, indexed by the time s since the phase began
+//! (not by the clock: [`crate::HybridController`] starts each phase at the plant's event).
+//!
+//! Per phase the dense samples of the optimum (q*, q̇*, ω*, τ*, λ*) plus the accelerations the
+//! controller's model gives them: q̈* from free motion (eq. 26) in free phases, ω̇* (and q̈*)
+//! from sticking (eq. 29, 33) in contact phases, so the reference is consistent with the model
+//! the feedback inverts. Between samples q* and q̇* (free phases) and ω* (contact phases) are
+//! cubic Hermite interpolants of their values and derivatives (third-order accurate, where a
+//! linear interpolation of 100 samples per phase would leave errors of order 10⁻⁴ of the
+//! accelerations); q̈*, ω̇* and λ* are linear. Past the end of a free phase the reference
+//! continues at the planned pre-impact velocity (q* = q*_T + q̇*_T (s − T), q̈* = 0), so a
+//! plant that reaches the ball late keeps approaching it as planned; past the end of a contact
+//! phase its last values are held.
+
+use crate::error::ControlError;
+use bf_model::{Kernels, Model, State, Vec3};
+
+/// One phase of the reference (3 joints).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReferencePhase {
+    /// Whether the phase is a contact (stick) phase.
+    pub contact: bool,
+    /// Planned duration T (s).
+    pub duration: f64,
+    /// Sample times since the phase began (s), strictly increasing, from 0 to T.
+    pub s: Vec<f64>,
+    /// q* (rad).
+    pub q: Vec<[f64; 3]>,
+    /// q̇* (rad/s).
+    pub qd: Vec<[f64; 3]>,
+    /// q̈* (rad/s²).
+    pub qdd: Vec<[f64; 3]>,
+    /// ω* (rad/s).
+    pub omega: Vec<[f64; 3]>,
+    /// ω̇* (rad/s²).
+    pub omega_dot: Vec<[f64; 3]>,
+    /// λ* on the finger (N, world axes; zero in free phases).
+    pub lambda: Vec<[f64; 3]>,
+}
+
+/// The reference at one instant of a phase.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Point {
+    /// q*.
+    pub q: [f64; 3],
+    /// q̇*.
+    pub qd: [f64; 3],
+    /// q̈*.
+    pub qdd: [f64; 3],
+    /// ω*.
+    pub omega: [f64; 3],
+    /// ω̇*.
+    pub omega_dot: [f64; 3],
+    /// λ*.
+    pub lambda: [f64; 3],
+}
+
+/// The optimum's phases of one period, in order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reference {
+    /// The phases.
+    pub phases: Vec<ReferencePhase>,
+    /// Mean ω over one period of the optimum (rad/s).
+    pub mean_omega: [f64; 3],
+}
+
+/// Samples of an optimum over one period, as `solution.json`'s `dense` stores them.
+#[derive(Debug, Clone, Copy)]
+pub struct Samples<'a> {
+    /// Times (s).
+    pub t: &'a [f64],
+    /// Phase index of each sample.
+    pub phase: &'a [usize],
+    /// q.
+    pub q: &'a [Vec<f64>],
+    /// q̇.
+    pub qd: &'a [Vec<f64>],
+    /// ω.
+    pub omega: &'a [Vec<f64>],
+    /// τ.
+    pub tau: &'a [Vec<f64>],
+    /// λ.
+    pub lambda: &'a [Vec<f64>],
+}
+
+fn arr(v: &[f64], what: &'static str, k: usize) -> Result<[f64; 3], ControlError> {
+    let a: [f64; 3] = v.try_into().map_err(|_| ControlError::Reference {
+        msg: format!("sample {k}: {what} has {} components, expected 3", v.len()),
+    })?;
+    if a.iter().any(|x| !x.is_finite()) {
+        return Err(ControlError::Reference {
+            msg: format!("sample {k}: {what} is not finite"),
+        });
+    }
+    Ok(a)
+}
+
+impl Reference {
+    /// Builds the reference from the samples of one period, the contact flag and duration of
+    /// every phase, and the period's mean ω; q̈* and ω̇* come from `model` (module doc).
+    /// Errors name the sample or phase: missing or non-finite values, fewer than two samples
+    /// in a phase, times not increasing within a phase, a model error at a sample.
+    pub fn from_samples<K: Kernels<3>>(
+        model: &Model<K, 3>,
+        contact: &[bool],
+        durations: &[f64],
+        samples: Samples<'_>,
+        mean_omega: [f64; 3],
+    ) -> Result<Self, ControlError> {
+        if contact.len() != durations.len() || contact.is_empty() {
+            return Err(ControlError::Reference {
+                msg: format!(
+                    "{} phase modes but {} durations",
+                    contact.len(),
+                    durations.len()
+                ),
+            });
+        }
+        let n = samples.t.len();
+        for (what, len) in [
+            ("phase", samples.phase.len()),
+            ("q", samples.q.len()),
+            ("qd", samples.qd.len()),
+            ("omega", samples.omega.len()),
+            ("tau", samples.tau.len()),
+            ("lambda", samples.lambda.len()),
+        ] {
+            if len != n {
+                return Err(ControlError::Reference {
+                    msg: format!("{n} sample times but {len} values of {what}"),
+                });
+            }
+        }
+        let mut t0 = 0.0;
+        let mut phases = Vec::with_capacity(contact.len());
+        for (p, (&c, &d)) in contact.iter().zip(durations).enumerate() {
+            if !(d.is_finite() && d > 0.0) {
+                return Err(ControlError::Reference {
+                    msg: format!("phase {p}: duration {d} is not positive"),
+                });
+            }
+            let mut ph = ReferencePhase {
+                contact: c,
+                duration: d,
+                s: Vec::new(),
+                q: Vec::new(),
+                qd: Vec::new(),
+                qdd: Vec::new(),
+                omega: Vec::new(),
+                omega_dot: Vec::new(),
+                lambda: Vec::new(),
+            };
+            for k in (0..n).filter(|&k| samples.phase[k] == p) {
+                let s = samples.t[k] - t0;
+                if ph.s.last().is_some_and(|&l| s <= l) {
+                    continue;
+                }
+                let q = arr(&samples.q[k], "q", k)?;
+                let qd = arr(&samples.qd[k], "qd", k)?;
+                let omega = arr(&samples.omega[k], "omega", k)?;
+                let tau = arr(&samples.tau[k], "tau", k)?;
+                let lambda = arr(&samples.lambda[k], "lambda", k)?;
+                let state = State::new(q.into(), qd.into(), omega.into());
+                let model_err = |e| ControlError::Reference {
+                    msg: format!("sample {k} (phase {p}): {e}"),
+                };
+                let acc = if c {
+                    model.stick(&state, &tau.into()).map_err(model_err)?
+                } else {
+                    model.free(&state, &tau.into()).map_err(model_err)?
+                };
+                ph.s.push(s);
+                ph.q.push(q);
+                ph.qd.push(qd);
+                ph.qdd.push(acc.qdd.into());
+                ph.omega.push(omega);
+                ph.omega_dot.push(acc.omega_dot.into());
+                ph.lambda.push(if c { lambda } else { [0.0; 3] });
+            }
+            if ph.s.len() < 2 {
+                return Err(ControlError::Reference {
+                    msg: format!("phase {p} has {} samples, at least 2 needed", ph.s.len()),
+                });
+            }
+            phases.push(ph);
+            t0 += d;
+        }
+        Ok(Reference { phases, mean_omega })
+    }
+
+    /// The period T = Σ durations (s).
+    pub fn period(&self) -> f64 {
+        self.phases.iter().map(|p| p.duration).sum()
+    }
+}
+
+/// Cubic Hermite interpolation on [0, h] of values a, b with slopes da, db at w = s/h.
+fn hermite(a: f64, b: f64, da: f64, db: f64, h: f64, w: f64) -> f64 {
+    let w2 = w * w;
+    let w3 = w2 * w;
+    (2.0 * w3 - 3.0 * w2 + 1.0) * a
+        + (w3 - 2.0 * w2 + w) * h * da
+        + (-2.0 * w3 + 3.0 * w2) * b
+        + (w3 - w2) * h * db
+}
+
+impl ReferencePhase {
+    /// The reference at time `s` since the phase began (module doc for s outside [0, T]).
+    pub fn at(&self, s: f64) -> Point {
+        let last = self.s.len() - 1;
+        if s >= self.s[last] {
+            let mut p = self.point(last);
+            if !self.contact {
+                let ds = s - self.s[last];
+                for i in 0..3 {
+                    p.q[i] += p.qd[i] * ds;
+                }
+                p.qdd = [0.0; 3];
+            }
+            return p;
+        }
+        if s.is_nan() || s <= self.s[0] {
+            return self.point(0);
+        }
+        let k = self.s.partition_point(|&x| x <= s);
+        let (a, b) = (k - 1, k);
+        let h = self.s[b] - self.s[a];
+        let w = (s - self.s[a]) / h;
+        let lin = |v: &[[f64; 3]]| -> [f64; 3] {
+            std::array::from_fn(|i| v[a][i] + w * (v[b][i] - v[a][i]))
+        };
+        let herm = |v: &[[f64; 3]], d: &[[f64; 3]]| -> [f64; 3] {
+            std::array::from_fn(|i| hermite(v[a][i], v[b][i], d[a][i], d[b][i], h, w))
+        };
+        Point {
+            q: herm(&self.q, &self.qd),
+            qd: herm(&self.qd, &self.qdd),
+            qdd: lin(&self.qdd),
+            omega: herm(&self.omega, &self.omega_dot),
+            omega_dot: lin(&self.omega_dot),
+            lambda: lin(&self.lambda),
+        }
+    }
+
+    fn point(&self, k: usize) -> Point {
+        Point {
+            q: self.q[k],
+            qd: self.qd[k],
+            qdd: self.qdd[k],
+            omega: self.omega[k],
+            omega_dot: self.omega_dot[k],
+            lambda: self.lambda[k],
+        }
+    }
+
+    /// The reference λ_n* = λ*·n along the unit normal `n` at time `s`.
+    pub fn lambda_n(&self, s: f64, n: &Vec3) -> f64 {
+        Vec3::from(self.at(s).lambda).dot(n)
+    }
+}

@@ -1,0 +1,127 @@
+//! `track`: executes an optimum in closed loop ([`crate::study::closed_loop`]) and writes the
+//! files of `simulate` (trajectory, events, summary) plus `tracking.json` (docs/files.md) into
+//! an output directory replaced as a whole (`bf_output::OutputDir`); a run that lost the ball
+//! is marked FAILED and exits non-zero.
+
+use crate::cli::TrackArgs;
+use crate::study::SolutionIo as _;
+use crate::study::closed_loop::{ControllerKind, Tracking, run_tracking, solution_model};
+use anyhow::{Context, Result, anyhow, bail};
+use bf_control::PeriodMetrics;
+use bf_output::{DirSpec, Outcome, OutputDir};
+use serde::Serialize;
+
+/// The output directory of `track`.
+pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
+    option: "--out",
+    command: "track",
+    legacy_files: &[],
+};
+
+/// The contents of `tracking.json`.
+#[derive(Debug, Serialize)]
+pub struct TrackingJson<'a> {
+    /// `open-loop`, `pd` or `hybrid`.
+    pub controller: &'static str,
+    /// The plant's scene name and the impact law.
+    pub plant_scene: &'a str,
+    /// The plant's impact law.
+    pub impact_law: &'a str,
+    /// The optimum's mean ω (rad/s).
+    pub optimum_mean_omega: [f64; 3],
+    /// Periods asked for.
+    pub requested_periods: usize,
+    /// Periods completed (at most the requested ones).
+    pub completed_periods: usize,
+    /// Whether the run lost the ball.
+    pub lost_ball: bool,
+    /// Why, if it did.
+    pub lost_reason: Option<&'a str>,
+    /// Largest `omega_error` over the completed periods.
+    pub max_omega_error: f64,
+    /// The periods.
+    pub periods: &'a [PeriodMetrics],
+}
+
+impl<'a> TrackingJson<'a> {
+    /// The record of run `r` on plant `plant_scene` with impact law `impact_law`.
+    pub fn of(
+        r: &'a Tracking,
+        plant_scene: &'a str,
+        impact_law: &'a str,
+        optimum: [f64; 3],
+    ) -> Self {
+        TrackingJson {
+            controller: r.controller.name(),
+            plant_scene,
+            impact_law,
+            optimum_mean_omega: optimum,
+            requested_periods: r.requested_periods,
+            completed_periods: r.periods.len(),
+            lost_ball: r.lost.is_some(),
+            lost_reason: r.lost.as_deref(),
+            max_omega_error: r.periods.iter().map(|p| p.omega_error).fold(0.0, f64::max),
+            periods: &r.periods,
+        }
+    }
+}
+
+/// Runs `track`.
+pub fn run(args: &TrackArgs) -> Result<()> {
+    let controller = ControllerKind::parse(&args.controller).context("--controller")?;
+    let law = super::simulate::parse_impact_law(&args.impact_law).context("--impact-law")?;
+    let sol = bf_problem::OcpSolution::read_json(&args.solution)
+        .with_context(|| format!("reading the solution {}", args.solution.display()))?;
+    let (plant, plant_name) = match &args.plant_scene {
+        Some(path) => {
+            let (scene, _) = super::load_scene(path)?;
+            let (model, _) = bf_model::fixtures::model_for_scene(&scene)
+                .with_context(|| format!("--plant-scene {}", path.display()))?;
+            (model, path.display().to_string())
+        }
+        None => solution_model(&sol).with_context(|| args.solution.display().to_string())?,
+    };
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let run = run_tracking(&sol, controller, args.periods, plant, law)
+        .with_context(|| format!("tracking {}", args.solution.display()))?;
+    out_dir.file("summary.json")?;
+    run.report
+        .write_dir(out_dir.path(), &run.output, run.stopped.as_deref())
+        .map_err(|e| anyhow!(out_dir.rename_in(&crate::errors::chain(&e))))
+        .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
+    let record = TrackingJson::of(&run, &plant_name, law.name(), sol.mean_omega);
+    let bytes = serde_json::to_vec_pretty(&record)?;
+    out_dir.write("tracking.json", &bytes)?;
+    let failure = run
+        .lost
+        .as_ref()
+        .map(|l| format!("the {} controller lost the ball: {l}", controller.name()));
+    out_dir.commit(match &failure {
+        Some(f) => Outcome::Failed(f),
+        None => Outcome::Success,
+    })?;
+    crate::outln!(
+        "controller {}, plant {plant_name}, impact law {}: {} of {} periods, max omega error {:.3} %",
+        controller.name(),
+        law.name(),
+        record.completed_periods,
+        args.periods,
+        100.0 * record.max_omega_error
+    )?;
+    crate::outln!("period  omega error [%]  stick [s]  slip [s]  max |tau| [N m]")?;
+    for (k, p) in run.periods.iter().enumerate() {
+        crate::outln!(
+            "{:>6}  {:>15.3}  {:>9.4}  {:>8.4}  {:>15.4}",
+            k + 1,
+            100.0 * p.omega_error,
+            p.stick_time,
+            p.slip_time,
+            p.max_abs_tau
+        )?;
+    }
+    crate::outln!("output: {}", args.out.display())?;
+    match failure {
+        Some(f) => bail!("{f}"),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,198 @@
+//! Closed-loop execution of an optimum (paper Sect. 6.2 and 7): the optimum's torques replayed
+//! open loop, with the joint-space PD of [`super::openloop`], or with bf-control's
+//! [`HybridController`] (computed torque in free phases, event-timed hybrid force/velocity
+//! control in contact, outer loop on the mean ω), on a plant that may differ from the
+//! controller's model (another scene file, another impact law), and its figures period by
+//! period ([`bf_control::period_metrics`]: the mean ω̄_k of eq. 61 per period and its error
+//! ‖ω̄_k − ω̄*‖ / ‖ω̄*‖).
+
+use super::openloop::{
+    DEFAULT_PD_TRACK, initial_state, periodic_torques, simulate_optimum, tracking_input,
+};
+use anyhow::{Context, Result, anyhow, bail};
+use bf_control::{
+    HybridController, HybridGains, InverseDynamics, PeriodMetrics, Reference, period_metrics,
+    reference::Samples,
+};
+use bf_model::{DynKernels, ImpactLaw, Kernels, Mode, Model};
+use bf_problem::OcpSolution;
+use bf_problem::node::PhaseMode;
+use bf_sim::SimOutput;
+use bf_sim::ball_finger::{BallFingerSettings, RunReport};
+
+/// The controller executing the optimum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ControllerKind {
+    /// The optimal torques τ*(t), periodically (Sect. 6.2).
+    OpenLoop,
+    /// τ*(t) plus joint-space PD on (q*(t), q̇*(t)) in the free phases ([`DEFAULT_PD_TRACK`]).
+    Pd,
+    /// bf-control's [`HybridController`] with [`HybridGains::default`].
+    Hybrid,
+}
+
+impl ControllerKind {
+    /// The name used on the command line and in `tracking.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ControllerKind::OpenLoop => "open-loop",
+            ControllerKind::Pd => "pd",
+            ControllerKind::Hybrid => "hybrid",
+        }
+    }
+
+    /// Parses `open-loop`, `pd` or `hybrid`; the error lists them.
+    pub fn parse(text: &str) -> Result<Self> {
+        Ok(match text {
+            "open-loop" => ControllerKind::OpenLoop,
+            "pd" => ControllerKind::Pd,
+            "hybrid" => ControllerKind::Hybrid,
+            _ => bail!("unknown controller `{text}`; expected one of: open-loop, pd, hybrid"),
+        })
+    }
+}
+
+/// A closed-loop run.
+pub struct Tracking {
+    /// The controller.
+    pub controller: ControllerKind,
+    /// Periods asked for.
+    pub requested_periods: usize,
+    /// The simulation's output.
+    pub output: SimOutput<Mode>,
+    /// Its derived per-sample quantities (τ, λ, …) and summary.
+    pub report: RunReport<3>,
+    /// Why the simulation stopped early, if it did.
+    pub stopped: Option<String>,
+    /// The completed periods, at most `requested_periods`.
+    pub periods: Vec<PeriodMetrics>,
+    /// Why the run counts as having lost the ball, if it does: fewer periods completed than
+    /// asked for, a period without contact, or a failed simulation.
+    pub lost: Option<String>,
+}
+
+/// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none) as a
+/// model on the compiled kernels, with its name.
+pub fn solution_model(sol: &OcpSolution) -> Result<(Model<DynKernels>, String)> {
+    let name = if sol.scene.is_empty() {
+        "paper"
+    } else {
+        &sol.scene
+    };
+    let text = bf_generated::scene_toml(name)
+        .ok_or_else(|| anyhow!("the solution's scene `{name}` is not a compiled scene"))?;
+    let scene = bf_codegen::Scene::from_toml_str(text, name)?;
+    let (model, _) = bf_model::fixtures::model_for_scene(&scene)
+        .with_context(|| format!("the solution's scene `{name}`"))?;
+    Ok((model, name.to_string()))
+}
+
+/// The optimum as a [`Reference`] of the controller's model `model`.
+pub fn reference_of(sol: &OcpSolution, model: &Model<DynKernels>) -> Result<Reference> {
+    let d = &sol.dense;
+    let contact: Vec<bool> = sol.modes.iter().map(|m| *m != PhaseMode::Free).collect();
+    Reference::from_samples(
+        model,
+        &contact,
+        &sol.phase_durations,
+        Samples {
+            t: &d.t,
+            phase: &d.phase,
+            q: &d.q,
+            qd: &d.qd,
+            omega: &d.omega,
+            tau: &d.tau,
+            lambda: &d.lambda,
+        },
+        sol.mean_omega,
+    )
+    .context("the solution's trajectory as a reference")
+}
+
+/// Simulation time allowed for `periods` periods of `period` s after a lead-in of at most one
+/// period (the flight to the first impact): a quarter more, so a plant that runs late still
+/// completes them.
+fn horizon(periods: usize, period: f64) -> f64 {
+    1.25 * (periods + 1) as f64 * period
+}
+
+/// Runs `controller` on the optimum `sol` for `periods` periods on `plant` with `impact_law`,
+/// from the optimum's initial state.
+pub fn run_tracking(
+    sol: &OcpSolution,
+    controller: ControllerKind,
+    periods: usize,
+    plant: Model<DynKernels>,
+    impact_law: ImpactLaw,
+) -> Result<Tracking> {
+    if periods == 0 {
+        bail!("--periods must be at least 1");
+    }
+    if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
+        bail!(
+            "the solution has no periodic trajectory to track (period {} s, {} dense samples)",
+            sol.period,
+            sol.dense.t.len()
+        );
+    }
+    if plant.kernels().param_values().len() != plant.kernels().param_names().len() {
+        bail!("the plant scene's runtime parameters are incomplete");
+    }
+    let t_end = horizon(periods, sol.period);
+    let copies = (t_end / sol.period).ceil() as usize + 1;
+    let settings = BallFingerSettings {
+        impact_law,
+        ..BallFingerSettings::default()
+    };
+    let (output, report, stopped) = match controller {
+        ControllerKind::OpenLoop => {
+            simulate_optimum(sol, plant, periodic_torques(sol, copies)?, settings, t_end)?
+        }
+        ControllerKind::Pd => simulate_optimum(
+            sol,
+            plant,
+            tracking_input(sol, copies, &DEFAULT_PD_TRACK)?,
+            settings,
+            t_end,
+        )?,
+        ControllerKind::Hybrid => {
+            let (model, scene) = solution_model(sol)?;
+            let reference = reference_of(sol, &model)?;
+            let id = InverseDynamics::compiled(
+                &scene,
+                model.kernels().param_values(),
+                model.params().mu_v(),
+            )?;
+            let x0 = initial_state(sol)?;
+            let law =
+                HybridController::new(model, id, reference, HybridGains::default(), 0.0, &x0)?;
+            simulate_optimum(sol, plant, law, settings, t_end)?
+        }
+    };
+    let tr = &output.trajectory;
+    let omega: Vec<[f64; 3]> = tr.x.iter().map(|x| [x[6], x[7], x[8]]).collect();
+    let tau: Vec<Vec<f64>> = report.samples.iter().map(|s| s.tau.to_vec()).collect();
+    let mut metrics = period_metrics(&tr.t, &tr.mode, &omega, &tau, sol.mean_omega);
+    metrics.truncate(periods);
+    let lost = if let Some(s) = &stopped {
+        Some(format!("the simulation stopped: {s}"))
+    } else if let Some(k) = metrics.iter().position(|p| !p.contact) {
+        Some(format!("no contact in period {}", k + 1))
+    } else if metrics.len() < periods {
+        Some(format!(
+            "{} of {periods} periods completed in {t_end:.3} s (1.25 times the planned time with the lead-in)",
+            metrics.len()
+        ))
+    } else {
+        None
+    };
+    Ok(Tracking {
+        controller,
+        requested_periods: periods,
+        output,
+        report,
+        stopped,
+        periods: metrics,
+        lost,
+    })
+}

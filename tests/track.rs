@@ -1,0 +1,397 @@
+//! Closed-loop execution of the `periodic-qc` optimum (one direct solve on the default mesh,
+//! shared by the tests of this file) with bf-control's hybrid controller:
+//! * nominal plant, Newton's and the max-dissipation impact law: every one of 10 periods has
+//!   contact and a mean-ω error ≤ 2 % (the target);
+//! * the normal-force loop holds λ_n at the optimum's λ_n*(s) over the stick phase on a plant
+//!   with a 10 % heavier ball (the controller's inversion is then wrong);
+//! * event timing: a plant that starts 20 ms behind the controller's clock still meets the
+//!   planned impact state, and the contact phase starts at the plant's impact event;
+//! * `track` writes tracking.json whose per-period figures a recomputation from
+//!   trajectory.json (an independent loop over its samples) reproduces, and refuses bad
+//!   arguments with a message naming the option.
+
+#[path = "common/cli.rs"]
+mod cli;
+
+use ball_finger::study::closed_loop::{
+    ControllerKind, Tracking, reference_of, run_tracking, solution_model,
+};
+use ball_finger::study::{OcpSolution, SolutionIo, build, solve};
+use bf_control::{HybridController, HybridGains, InverseDynamics};
+use bf_model::{ImpactLaw, Kernels, Mode, State, Vec3};
+use bf_problem::{Problem, ProblemSettings};
+use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
+use bf_sim::{HybridSystem, SimSettings};
+use std::sync::OnceLock;
+
+fn qc() -> &'static OcpSolution {
+    static SOL: OnceLock<OcpSolution> = OnceLock::new();
+    SOL.get_or_init(|| {
+        let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
+        let sol = solve(&p, None).unwrap();
+        assert!(sol.status.is_success(), "{:?}", sol.stages);
+        sol
+    })
+}
+
+fn hybrid(plant_toml: Option<&str>, law: ImpactLaw, periods: usize) -> Tracking {
+    let sol = qc();
+    let plant = match plant_toml {
+        None => solution_model(sol).unwrap().0,
+        Some(text) => {
+            let scene = bf_codegen::Scene::from_toml_str(text, "perturbed").unwrap();
+            bf_model::fixtures::model_for_scene(&scene).unwrap().0
+        }
+    };
+    run_tracking(sol, ControllerKind::Hybrid, periods, plant, law).unwrap()
+}
+
+#[test]
+fn hybrid_control_meets_the_omega_target_for_ten_periods() {
+    for law in [ImpactLaw::Newton, ImpactLaw::MaxDissipation] {
+        let run = hybrid(None, law, 10);
+        let errors: Vec<f64> = run.periods.iter().map(|p| p.omega_error).collect();
+        eprintln!("{law:?}: {errors:?}");
+        assert!(run.lost.is_none(), "{law:?}: {:?}", run.lost);
+        assert_eq!(run.periods.len(), 10);
+        for (k, p) in run.periods.iter().enumerate() {
+            assert!(p.contact && p.stick_time > 0.0, "{law:?} period {k}: {p:?}");
+            assert!(p.omega_error <= 0.02, "{law:?} period {k}: {p:?}");
+            // One period of the optimum's length, re-timed by the plant's events.
+            assert!(
+                (p.end - p.start - qc().period).abs() < 0.02 * qc().period,
+                "{p:?}"
+            );
+        }
+    }
+}
+
+/// Simulates the plant `plant_toml` (default: the solution's scene) with `law` under the
+/// hybrid controller with `gains`, whose first phase began at `t0`, from the optimum's initial
+/// state until `t_end`.
+fn closed_loop(
+    plant_toml: Option<&str>,
+    law: ImpactLaw,
+    gains: HybridGains,
+    t0: f64,
+    t_end: f64,
+) -> (
+    BallFinger<bf_model::DynKernels, HybridController<bf_model::DynKernels>>,
+    bf_sim::SimOutput<Mode>,
+) {
+    let sol = qc();
+    let (model, scene) = solution_model(sol).unwrap();
+    let reference = reference_of(sol, &model).unwrap();
+    let id = InverseDynamics::compiled(
+        &scene,
+        model.kernels().param_values(),
+        model.params().mu_v(),
+    )
+    .unwrap();
+    let d = &sol.nodes;
+    let x0: Vec<f64> = [&d.q[0], &d.qd[0], &d.omega[0]]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+    let controller = HybridController::new(model, id, reference, gains, t0, &x0).unwrap();
+    let plant = match plant_toml {
+        None => solution_model(sol).unwrap().0,
+        Some(text) => {
+            let scene = bf_codegen::Scene::from_toml_str(text, "perturbed").unwrap();
+            bf_model::fixtures::model_for_scene(&scene).unwrap().0
+        }
+    };
+    let settings = BallFingerSettings {
+        impact_law: law,
+        ..BallFingerSettings::default()
+    };
+    let sys = BallFinger::new(plant, controller, settings).unwrap();
+    let sim = SimSettings {
+        rtol: 1e-8,
+        ..SimSettings::default()
+    };
+    let out = bf_sim::simulate(
+        &sys as &dyn HybridSystem<Mode = Mode>,
+        sim,
+        Mode::Free,
+        0.0,
+        &x0,
+        t_end,
+    )
+    .unwrap();
+    (sys, out)
+}
+
+/// RMS of λ_n − λ_n*(s) over the Stick samples of the first contact phase, relative to the
+/// phase's largest |λ*|.
+fn lambda_n_rms(plant_toml: &str, gains: HybridGains) -> f64 {
+    let sol = qc();
+    let (model, _) = solution_model(sol).unwrap();
+    let reference = reference_of(sol, &model).unwrap();
+    let contact = reference.phases.iter().position(|p| p.contact).unwrap();
+    let phase = &reference.phases[contact];
+    let scale = phase
+        .lambda
+        .iter()
+        .map(|l| Vec3::from(*l).norm())
+        .fold(0.0, f64::max);
+    let t_end = reference.phases[..=contact]
+        .iter()
+        .map(|p| p.duration)
+        .sum::<f64>();
+    let (sys, out) = closed_loop(
+        Some(plant_toml),
+        ImpactLaw::MaxDissipation,
+        gains,
+        0.0,
+        t_end,
+    );
+    let report = sys.report(&out, 0.0, 0.0);
+    let tr = &out.trajectory;
+    let impact = out
+        .events
+        .iter()
+        .find(|e| e.mode_before == Mode::Free)
+        .unwrap()
+        .t;
+    let (mut sum, mut count) = (0.0, 0);
+    for i in 1..tr.t.len() {
+        if tr.mode[i] != Mode::Stick {
+            continue;
+        }
+        let x = State::from_slice(&tr.x[i]).unwrap();
+        let n = model.evaluate(&x).unwrap().contact.n;
+        let e = (report.samples[i].lambda_n - phase.lambda_n(tr.t[i] - impact, &n)) / scale;
+        sum += e * e * (tr.t[i] - tr.t[i - 1]);
+        count += 1;
+    }
+    assert!(count > 20, "{count} stick samples");
+    (sum / (tr.t[tr.t.len() - 1] - impact)).sqrt()
+}
+
+#[test]
+fn force_loop_holds_lambda_n_over_the_stick_phase() {
+    // Links 20 % heavier (mass and inertia): the controller's inversion of eq. 33 is off.
+    let text = bf_generated::scene_toml("paper")
+        .unwrap()
+        .replace("mass = 0.02\ncom", "mass = 0.024\ncom")
+        .replace(
+            "inertia = [1.0677e-3, 2.3177e-3, 2.0833e-3]",
+            "inertia = [1.28124e-3, 2.78124e-3, 2.49996e-3]",
+        );
+    assert_eq!(text.matches("mass = 0.024").count(), 3);
+    // The max-dissipation impact ends sticking, and no friction margin (so no force boost)
+    // leaves λ_n to the loop.
+    let mut gains = HybridGains::default();
+    gains.contact.friction_margin = 0.0;
+    let with_loop = lambda_n_rms(&text, gains);
+    gains.contact.force_integral = 0.0;
+    let without = lambda_n_rms(&text, gains);
+    eprintln!("RMS of λ_n − λ_n*: {with_loop} with the force loop, {without} without");
+    // Measured: 3.0 % with the loop, 4.0 % without. What the loop leaves is mostly lag behind
+    // the fast swings of λ_n* of this coarse-mesh optimum (the integral is updated once per
+    // accepted step, a few ms apart).
+    assert!(with_loop < 0.035, "{with_loop}");
+    assert!(with_loop < 0.85 * without, "{with_loop} vs {without}");
+}
+
+#[test]
+fn a_late_lift_off_still_meets_the_planned_impact_state() {
+    let sol = qc();
+    let (model, _) = solution_model(sol).unwrap();
+    let reference = reference_of(sol, &model).unwrap();
+    // The optimum: free, stick, free; its impact state is the end of phase 0.
+    assert_eq!(
+        reference
+            .phases
+            .iter()
+            .map(|p| p.contact)
+            .collect::<Vec<_>>(),
+        [false, true, false]
+    );
+    let plan = reference.phases[0].at(reference.phases[0].duration);
+    let flight = reference.phases[2].duration + reference.phases[0].duration;
+    let delay = 0.05;
+    // The controller's clock runs `delay` ahead of the plant: the first approach is late and
+    // off the plan, and so is the first lift-off. The second approach is timed from the
+    // plant's lift-off event and must meet the planned impact state after the planned flight.
+    let (sys, out) = closed_loop(
+        None,
+        ImpactLaw::MaxDissipation,
+        HybridGains::default(),
+        -delay,
+        1.2 * sol.period + reference.phases[0].duration,
+    );
+    let impacts: Vec<_> = out
+        .events
+        .iter()
+        .filter(|e| e.mode_before == Mode::Free)
+        .collect();
+    let lift_off = out
+        .events
+        .iter()
+        .find(|e| e.mode_before != Mode::Free && e.mode_after == Some(Mode::Free))
+        .expect("a lift-off");
+    assert!(impacts.len() >= 2, "{} impacts", impacts.len());
+    let second = impacts[1];
+    eprintln!(
+        "first impact {} (plan {}), lift-off {}, second impact {} (lift-off + {flight})",
+        impacts[0].t,
+        reference.phases[0].duration - delay,
+        lift_off.t,
+        second.t
+    );
+    assert!(
+        (second.t - lift_off.t - flight).abs() < 0.01 * flight,
+        "flight {} vs planned {flight}",
+        second.t - lift_off.t
+    );
+    let qd_scale = plan.qd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for i in 0..3 {
+        let (dq, dqd) = (
+            second.x_pre[i] - plan.q[i],
+            second.x_pre[3 + i] - plan.qd[i],
+        );
+        assert!(dq.abs() < 1e-3, "q{i}: off by {dq}");
+        assert!(
+            dqd.abs() < 1e-2 * qd_scale,
+            "qd{i}: off by {dqd} of {qd_scale}"
+        );
+    }
+    // Each contact phase starts at the plant's impact event.
+    let switches = sys.input.switches();
+    let starts: Vec<f64> = switches
+        .iter()
+        .filter(|s| s.phase == 1)
+        .map(|s| s.t)
+        .collect();
+    assert_eq!(starts[..2], [impacts[0].t, second.t]);
+}
+
+/// Per-period figures recomputed from trajectory.json with their own loop.
+fn recompute(traj: &serde_json::Value, optimum: [f64; 3]) -> Vec<[f64; 7]> {
+    let t: Vec<f64> = serde_json::from_value(traj["t"].clone()).unwrap();
+    let mode: Vec<String> = serde_json::from_value(traj["mode"].clone()).unwrap();
+    let x: Vec<Vec<f64>> = serde_json::from_value(traj["x"].clone()).unwrap();
+    let tau: Vec<Vec<f64>> = traj["derived"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| serde_json::from_value(d["tau"].clone()).unwrap())
+        .collect();
+    let free = |m: &str| m.eq_ignore_ascii_case("free");
+    let starts: Vec<usize> = (1..t.len())
+        .filter(|&i| free(&mode[i - 1]) && !free(&mode[i]))
+        .collect();
+    let on = (optimum[0].powi(2) + optimum[1].powi(2) + optimum[2].powi(2)).sqrt();
+    starts
+        .windows(2)
+        .map(|w| {
+            let (a, b) = (w[0], w[1]);
+            let (mut int, mut stick, mut slip, mut tmax) = ([0.0; 3], 0.0, 0.0, 0.0f64);
+            for k in a..b {
+                let dt = t[k + 1] - t[k];
+                for j in 0..3 {
+                    int[j] += 0.5 * (x[k][6 + j] + x[k + 1][6 + j]) * dt;
+                }
+                match mode[k].to_ascii_lowercase().as_str() {
+                    "stick" => stick += dt,
+                    "slip" => slip += dt,
+                    _ => {}
+                }
+            }
+            for v in &tau[a..=b] {
+                tmax = v.iter().fold(tmax, |m, x| m.max(x.abs()));
+            }
+            let len = t[b] - t[a];
+            let mean = int.map(|v| v / len);
+            let err = ((mean[0] - optimum[0]).powi(2)
+                + (mean[1] - optimum[1]).powi(2)
+                + (mean[2] - optimum[2]).powi(2))
+            .sqrt()
+                / on;
+            [mean[0], mean[1], mean[2], err, stick, slip, tmax]
+        })
+        .collect()
+}
+
+#[test]
+fn track_writes_tracking_json_that_trajectory_json_reproduces() {
+    let dir = cli::tmpdir("track");
+    let sol_path = dir.join("solution.json");
+    qc().write_json(&sol_path).unwrap();
+    let out = dir.join("out");
+    let r = cli::run(&[
+        "track",
+        sol_path.to_str().unwrap(),
+        "--controller",
+        "hybrid",
+        "--periods",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
+    };
+    let tracking = read("tracking.json");
+    let traj = read("trajectory.json");
+    assert_eq!(tracking["controller"], "hybrid");
+    assert_eq!(tracking["completed_periods"], 3);
+    assert_eq!(tracking["lost_ball"], false);
+    let optimum: [f64; 3] = serde_json::from_value(tracking["optimum_mean_omega"].clone()).unwrap();
+    let m = qc().mean_omega;
+    assert_eq!(optimum, m);
+    let expect = recompute(&traj, optimum);
+    let periods = tracking["periods"].as_array().unwrap();
+    assert_eq!(periods.len(), 3);
+    assert!(expect.len() >= 3);
+    for (p, e) in periods.iter().zip(&expect) {
+        let mean: [f64; 3] = serde_json::from_value(p["mean_omega"].clone()).unwrap();
+        let got = [
+            mean[0],
+            mean[1],
+            mean[2],
+            p["omega_error"].as_f64().unwrap(),
+            p["stick_time"].as_f64().unwrap(),
+            p["slip_time"].as_f64().unwrap(),
+            p["max_abs_tau"].as_f64().unwrap(),
+        ];
+        for k in 0..7 {
+            assert!(
+                (got[k] - e[k]).abs() <= 1e-12 * (1.0 + e[k].abs()),
+                "field {k}: {got:?} vs {e:?}"
+            );
+        }
+        assert_eq!(p["contact"], true);
+    }
+    // Bad arguments: named in the message, non-zero exit, nothing written.
+    for (args, needle) in [
+        (vec!["--controller", "pid"], "--controller"),
+        (vec!["--impact-law", "elastic"], "--impact-law"),
+        (vec!["--periods", "0"], "--periods"),
+    ] {
+        let bad = dir.join("bad");
+        let mut a = vec![
+            "track",
+            sol_path.to_str().unwrap(),
+            "--out",
+            bad.to_str().unwrap(),
+        ];
+        a.extend(args);
+        let r = cli::run(&a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success() && err.contains(needle), "{a:?}: {err}");
+        assert!(!bad.join("tracking.json").exists());
+    }
+    let r = cli::run(&[
+        "track",
+        dir.join("missing.json").to_str().unwrap(),
+        "--out",
+        dir.join("m").to_str().unwrap(),
+    ]);
+    assert!(!r.status.success() && String::from_utf8_lossy(&r.stderr).contains("missing.json"));
+    std::fs::remove_dir_all(&dir).ok();
+}
