@@ -343,6 +343,9 @@ pub struct TrackArgs {
     /// the solution's scene, so a second file tests model error.
     #[arg(long)]
     pub plant_scene: Option<PathBuf>,
+    /// A URDF plant scene's serial chain (`--base LINK --tip LINK`).
+    #[command(flatten)]
+    pub chain: ChainArgs,
     /// Impact law of the plant: newton, stick, max-dissipation, min-slip, normal-impulse.
     #[arg(long, default_value = "newton")]
     pub impact_law: String,

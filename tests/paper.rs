@@ -190,6 +190,26 @@ fn paper_quick_writes_a_consistent_report() {
             "{stem} linked"
         );
     }
+    // Sect. 6.2: every optimum executed by the three controllers, with a verdict each; the
+    // hybrid controller keeps the QC optimum's ω within the 2 % target in its first period
+    // (the open loop's error is whatever it is).
+    let s5 = &report[report.find("## 5.").unwrap()..report.find("## 6.").unwrap()];
+    assert!(s5.contains("### Open loop, PD and hybrid control side by side"));
+    for name in ["periodic-cot", "periodic-cot-human", "periodic-qc"] {
+        assert!(
+            s5.contains(&format!(
+                "Verdict on \"the open loop matches well at the beginning\" for `{name}`: "
+            )),
+            "{name}: no verdict"
+        );
+    }
+    let qc = &s5[s5.find("**`periodic-qc`**").expect("the QC table")..];
+    let hybrid = qc
+        .lines()
+        .find(|l| l.starts_with("| hybrid |"))
+        .expect("hybrid row");
+    let first: f64 = hybrid.split('|').nth(3).unwrap().trim().parse().unwrap();
+    assert!(first <= 2.0, "{hybrid}");
     // §8 is the appendix check computed in the run (printed vs derived, six misprints).
     let s8 = &report[report.find("## 8.").expect("section 8")..];
     assert!(s8.contains("| printed | derived |") && s8.contains("Misprints (6;"));

@@ -74,7 +74,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         .with_context(|| format!("reading the solution {}", args.solution.display()))?;
     let (plant, plant_name) = match &args.plant_scene {
         Some(path) => {
-            let (scene, _) = super::load_scene(path)?;
+            let (scene, _) = super::load_scene(path, &args.chain)?;
             let (model, _) = bf_model::fixtures::model_for_scene(&scene)
                 .with_context(|| format!("--plant-scene {}", path.display()))?;
             (model, path.display().to_string())

@@ -196,3 +196,146 @@ pub fn run_tracking(
         lost,
     })
 }
+
+/// The share of the optimum's ‖ω̄*‖ up to which a period's mean ω counts as matching it, for
+/// the verdict on the paper's "match well at the beginning" (Sect. 6.2).
+pub const MATCH_ERROR: f64 = 0.05;
+
+/// One controller's line of [`comparison_markdown`].
+struct Row {
+    controller: ControllerKind,
+    tracking: Result<Tracking>,
+}
+
+/// The report section that executes the optimum `sol` (scenario `name`) with the three
+/// controllers for `periods` periods on its own scene (Newton's impact law, slip allowed):
+/// completed periods, the ω error of the first period, the largest from the 4th on, stick and
+/// slip time, the largest |τ|; and a one-line verdict on the paper's claim that the open loop
+/// "matches well at the beginning".
+pub fn comparison_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Result<String> {
+    use std::fmt::Write as _;
+    let law = BallFingerSettings::default().impact_law;
+    let mut rows = Vec::new();
+    for controller in [
+        ControllerKind::OpenLoop,
+        ControllerKind::Pd,
+        ControllerKind::Hybrid,
+    ] {
+        let (plant, _) = solution_model(sol)?;
+        rows.push(Row {
+            controller,
+            tracking: run_tracking(sol, controller, periods, plant, law),
+        });
+    }
+    // The optimisation's torque bound, which the controllers do not enforce: a run above it
+    // is marked.
+    let tau_bound = {
+        let name = if sol.scene.is_empty() {
+            "paper"
+        } else {
+            &sol.scene
+        };
+        bf_generated::scene_toml(name)
+            .and_then(|text| bf_codegen::Scene::from_toml_str(text, name).ok())
+            .and_then(|scene| bf_codegen::spec::Constants::of(&scene))
+            .map_or(f64::INFINITY, |c| {
+                c.tau_max.iter().copied().fold(f64::INFINITY, f64::min)
+            })
+    };
+    let pct = |e: f64| format!("{:.2}", 100.0 * e);
+    let mut s = String::new();
+    writeln!(
+        s,
+        "**`{name}`** (period {:.3} s, ω̄* = ({:.3}, {:.3}, {:.3}) rad/s), {periods} periods, \
+         Newton's impact law, slip allowed:\n",
+        sol.period, sol.mean_omega[0], sol.mean_omega[1], sol.mean_omega[2]
+    )?;
+    writeln!(
+        s,
+        "| controller | periods completed | ω error, 1st period (%) | max ω error from the 4th period (%) | stick / slip in the last period (ms) | max \\|τ\\| (N m) | ball |"
+    )?;
+    writeln!(s, "|---|---|---|---|---|---|---|")?;
+    for row in &rows {
+        match &row.tracking {
+            Ok(t) => {
+                let first = t.periods.first().map_or("—".into(), |p| pct(p.omega_error));
+                let later = t
+                    .periods
+                    .iter()
+                    .skip(3)
+                    .map(|p| p.omega_error)
+                    .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))))
+                    .map_or("—".into(), pct);
+                let last = t.periods.last().map_or("—".into(), |p| {
+                    format!("{:.1} / {:.1}", 1e3 * p.stick_time, 1e3 * p.slip_time)
+                });
+                let tau = t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max);
+                let tau = if tau > tau_bound * (1.0 + 1e-9) {
+                    format!("{tau:.3} ⚑ (bound {tau_bound})")
+                } else {
+                    format!("{tau:.3}")
+                };
+                let ball = match &t.lost {
+                    Some(why) => format!("**lost**: {why}"),
+                    None => "kept".into(),
+                };
+                writeln!(
+                    s,
+                    "| {} | {} of {periods} | {first} | {later} | {last} | {tau} | {ball} |",
+                    row.controller.name(),
+                    t.periods.len()
+                )?;
+            }
+            Err(e) => writeln!(
+                s,
+                "| {} | **failed**: {} | | | | | |",
+                row.controller.name(),
+                crate::errors::render(e)
+            )?,
+        }
+    }
+    let first_error = |row: &Row| {
+        row.tracking
+            .as_ref()
+            .ok()
+            .and_then(|t| t.periods.first().map(|p| p.omega_error))
+    };
+    let hybrid = first_error(&rows[2]).map_or("no period".into(), |e| format!("{} %", pct(e)));
+    let verdict = match first_error(&rows[0]) {
+        Some(e) if e <= MATCH_ERROR => format!(
+            "holds: the open loop's first period is within {} % of ω̄* ({} %)",
+            100.0 * MATCH_ERROR,
+            pct(e)
+        ),
+        Some(e) => format!(
+            "differs: the open loop's first period is {} % off ω̄* (a match is ≤ {} %); the \
+             hybrid controller, which starts each contact phase at the plant's impact and \
+             regulates the contact force, is {hybrid} off in its first period",
+            pct(e),
+            100.0 * MATCH_ERROR
+        ),
+        None => format!(
+            "differs: the open loop completes no period (no impact); the hybrid controller's \
+             first period is {hybrid} off"
+        ),
+    };
+    let marked = rows.iter().any(|r| {
+        r.tracking.as_ref().is_ok_and(|t| {
+            t.periods
+                .iter()
+                .any(|p| p.max_abs_tau > tau_bound * (1.0 + 1e-9))
+        })
+    });
+    if marked {
+        writeln!(
+            s,
+            "\n⚑ The controllers do not enforce the optimisation's torque bound \
+             |τ| ≤ {tau_bound} N m; a run marked ⚑ exceeded it."
+        )?;
+    }
+    writeln!(
+        s,
+        "\nVerdict on \"the open loop matches well at the beginning\" for `{name}`: {verdict}.\n"
+    )?;
+    Ok(s)
+}
