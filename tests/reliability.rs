@@ -195,6 +195,18 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     ]);
     assert_error(&o, 1, &["--warm-start", "bad.json", "`objective`", "1e300"]);
     assert!(!dir.join("never").exists());
+    // A replay (`simulate --init`) reads solution files through the same range check.
+    let o = run(&[
+        "simulate",
+        "--init",
+        bad_path.to_str().unwrap(),
+        "--t-end",
+        "0.1",
+        "--out",
+        dir.join("never").to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["--init", "bad.json", "`objective`", "1e300"]);
+    assert!(!dir.join("never").exists());
 
     // The internals pass the same range check (the raw collocation data the warm start is
     // built from), and internals of another shape are refused naming the file.

@@ -100,26 +100,39 @@ pub const MAX_WARM_START_VALUE: f64 = 1e12;
 /// (`solution-internals.json`: the raw collocation data the warm start is built from) against
 /// [`MAX_WARM_START_VALUE`]; the error names the file, the field path and the value.
 pub fn check_warm_start_values(path: &Path) -> Result<()> {
-    let value = read_json_value(path)?;
-    check_json_values(path, &value)?;
+    check_solution_values("--warm-start", path)
+}
+
+/// [`check_warm_start_values`] for the file given to `option` (`--warm-start`, `simulate
+/// --init`): the same range check wherever a solution file comes back in, the error naming
+/// the option, the file, the field path and the value. The internals file is checked where the
+/// file names one (a `solution.json` with `schema_version`); a plain initial-state file has
+/// none.
+pub fn check_solution_values(option: &str, path: &Path) -> Result<()> {
+    let value = read_json_value(option, path)?;
+    check_json_values(option, path, &value)?;
     if value.get("schema_version").is_some() {
         let ipath = crate::study::solution_io::internals_path(path, &value);
-        check_json_values(&ipath, &read_json_value(&ipath)?)?;
+        if option != "--warm-start" && !ipath.exists() {
+            // A replay reads only the solution itself; its internals may be left behind.
+            return Ok(());
+        }
+        check_json_values(option, &ipath, &read_json_value(option, &ipath)?)?;
     }
     Ok(())
 }
 
-/// The JSON document of the warm-start file `path`; the error names it.
-fn read_json_value(path: &Path) -> Result<serde_json::Value> {
+/// The JSON document of the file `path` given to `option`; the error names both.
+fn read_json_value(option: &str, path: &Path) -> Result<serde_json::Value> {
     let text = std::fs::read_to_string(path)
-        .with_context(|| format!("--warm-start {}: cannot read", path.display()))?;
+        .with_context(|| format!("{option} {}: cannot read", path.display()))?;
     serde_json::from_str(&text)
-        .with_context(|| format!("--warm-start {}: not a JSON document", path.display()))
+        .with_context(|| format!("{option} {}: not a JSON document", path.display()))
 }
 
-/// Errors naming `path`, the field path and the value if a number of `value` is NaN or beyond
+/// Errors naming `option`, `path`, the field path and the value if a number of `value` is NaN or beyond
 /// [`MAX_WARM_START_VALUE`].
-fn check_json_values(path: &Path, value: &serde_json::Value) -> Result<()> {
+fn check_json_values(option: &str, path: &Path, value: &serde_json::Value) -> Result<()> {
     fn walk(v: &serde_json::Value, at: &mut String) -> Option<(String, f64)> {
         match v {
             serde_json::Value::Number(n) => n
@@ -148,7 +161,7 @@ fn check_json_values(path: &Path, value: &serde_json::Value) -> Result<()> {
     }
     if let Some((field, x)) = walk(value, &mut String::new()) {
         bail!(
-            "--warm-start {}: `{field}` = {x:e} is out of range (|value| ≤ {MAX_WARM_START_VALUE:e})",
+            "{option} {}: `{field}` = {x:e} is out of range (|value| ≤ {MAX_WARM_START_VALUE:e})",
             path.display()
         );
     }

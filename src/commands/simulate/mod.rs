@@ -299,6 +299,9 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 
 /// Run `simulate` with `opts`.
 pub fn run_with(args: &SimulateArgs, opts: RunSettings) -> Result<()> {
+    if let Some(path) = &args.init {
+        crate::commands::optimize::check_solution_values("--init", path)?;
+    }
     let (scene, scene_label) = scene_of_args(args)?;
     if scene.ball.is_none() {
         return run_arm(args, opts, &scene, &scene_label);
