@@ -265,6 +265,21 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         e.contains("another scene file text") && e.contains("line"),
         "{e}"
     );
+    // Shards verified with other tolerances are refused, naming the option.
+    let other_rtol = copy("other-rtol");
+    let mut sol = json(&other_rtol.join("solution.json"));
+    let rtol = sol["verification"]["rtol"]
+        .as_f64()
+        .expect("a verified shard");
+    sol["verification"]["rtol"] = serde_json::json!(10.0 * rtol);
+    std::fs::write(other_rtol.join("solution.json"), sol.to_string()).unwrap();
+    let o = merge_with(&other_rtol);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        e.contains("verified with rtol") && e.contains("--verify-rtol"),
+        "{e}"
+    );
     assert!(!dir.join("refused").exists());
     // A start in two directories is refused.
     let o = run(&[

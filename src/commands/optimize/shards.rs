@@ -66,7 +66,8 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 5] {
 }
 
 /// Errors naming both files and the quantity unless `sol` (read from `path`) was solved on the
-/// problem, scene (its file text), runtime parameters, mesh and ε of `first`.
+/// problem, scene (its file text), runtime parameters, mesh and ε of `first`, and (where both
+/// were verified) verified with the same tolerances.
 fn check_same_run(
     first: &(std::path::PathBuf, OcpSolution),
     path: &Path,
@@ -81,6 +82,22 @@ fn check_same_run(
                 fpath.display()
             );
         }
+    }
+    // The verification settings, where both files were verified: shards re-integrated with
+    // other tolerances do not compete on one scale.
+    if let (Some(a), Some(b)) = (&fsol.verification, &sol.verification)
+        && (a.rtol != b.rtol || a.atol != b.atol)
+    {
+        bail!(
+            "optimize merge: {} was verified with rtol {:e}, atol {:e}, {} with rtol {:e}, \
+             atol {:e} (--verify-rtol): merge only the shards of one run",
+            path.display(),
+            b.rtol,
+            b.atol,
+            fpath.display(),
+            a.rtol,
+            a.atol
+        );
     }
     if fsol.scene_toml != sol.scene_toml {
         let line = fsol
