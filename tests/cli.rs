@@ -614,3 +614,38 @@ fn scene_warnings_reach_stderr_and_nonphysical_inertias_are_refused() {
     );
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// `optimize` lists the bounds its optimum sits on, as its own solution.json shows them: the
+/// default-mesh COT optimum sits on the 10 s period bound (each line names the quantity and
+/// the bound), and no stick phase is listed on its minimum unless its duration is there.
+#[test]
+fn optimize_lists_the_active_bounds_of_its_optimum() {
+    let dir = std::env::temp_dir().join(format!("bf-cli-active-{}", std::process::id()));
+    let out = direct_cot_output(&dir, 30, 3000, &[]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    let section = &stdout[stdout.find("active bounds").expect("active bounds listed")..];
+    let on = |v: f64, b: f64| (v - b).abs() <= 1e-5 + 1e-4 * b.abs();
+    let period = sol["period"].as_f64().unwrap();
+    assert_eq!(
+        section.contains("period (s) = ") && section.contains("on its maximum 10"),
+        on(period, 10.0),
+        "period {period}: {section}"
+    );
+    for (p, d) in sol["phase_durations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let listed = section.contains(&format!("phase {} (", p + 1));
+        let d = d.as_f64().unwrap();
+        // The phase bounds of the COT problems: a stick phase of at least 0.01 s, every phase
+        // at most the period's 10 s (docs/optima.md).
+        let expect = on(d, 0.01) || on(d, 10.0);
+        assert_eq!(listed, expect, "phase {}: {d} s: {section}", p + 1);
+    }
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -649,6 +649,17 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         sol.constraint_violation,
         sol.dual_infeasibility
     )?;
+    // The bounds the optimum sits on (phase durations, period, torque and joint limits): an
+    // optimum on a bound is the bound's as much as the problem's.
+    let active = crate::study::claims::active_bounds(&problem.ocp, &sol);
+    if active.is_empty() {
+        crate::outln!("active bounds: none")?;
+    } else {
+        crate::outln!("active bounds:")?;
+        for b in &active {
+            crate::outln!("  {}", b.describe())?;
+        }
+    }
     if sol.problem.starts_with("periodic-cot") {
         crate::outln!(
             "note: the COT period is bounded by {} s (COT lets the finger rest at no cost)",
