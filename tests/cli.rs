@@ -647,5 +647,22 @@ fn optimize_lists_the_active_bounds_of_its_optimum() {
         let expect = on(d, 0.01) || on(d, 10.0);
         assert_eq!(listed, expect, "phase {}: {d} s: {section}", p + 1);
     }
+    // solution.json records the same bounds, one entry per line printed.
+    let recorded = sol["active_bounds"]
+        .as_array()
+        .expect("active_bounds recorded");
+    assert_eq!(
+        recorded.len(),
+        section
+            .lines()
+            .skip(1)
+            .take_while(|l| l.starts_with("  "))
+            .count()
+    );
+    for b in recorded {
+        let (value, bound) = (b["value"].as_f64().unwrap(), b["bound"].as_f64().unwrap());
+        assert!(on(value, bound), "{b}");
+        assert!(section.contains(b["what"].as_str().unwrap()), "{b}");
+    }
     std::fs::remove_dir_all(dir).ok();
 }

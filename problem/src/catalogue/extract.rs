@@ -120,6 +120,7 @@ pub fn solution_at(
         // The caller knows the file text (`bf_scene::Scene` keeps no source text).
         scene_toml: String::new(),
         scene_params: Vec::new(),
+        active_bounds: None,
     })
 }
 

@@ -122,6 +122,10 @@ pub struct OcpSolution {
     /// The runtime-parameter values set on that scene text (`--param`).
     #[serde(default)]
     pub scene_params: Vec<(String, f64)>,
+    /// The bounds the solution sits on, as `optimize` computed them against its problem's
+    /// bounds; `None` where they were not computed (files of other commands, older files).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub active_bounds: Option<Vec<records::ActiveBound>>,
 }
 
 impl OcpSolution {

@@ -474,3 +474,51 @@ impl fmt::Display for Verification {
         )
     }
 }
+
+/// A bound a solution sits on (`solution.json`'s `active_bounds`): a phase duration, the
+/// period, a torque or a joint limit, with its value and on how many samples.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ActiveBound {
+    /// What is bounded, e.g. "phase 2 (stick) duration (s)".
+    pub what: String,
+    /// Its value at the solution (the sample nearest to the bound).
+    pub value: f64,
+    /// The bound.
+    pub bound: f64,
+    /// `true`: the lower bound, `false`: the upper.
+    pub lower: bool,
+    /// At how many of the quantity's samples it is on the bound (1 for a scalar).
+    pub hits: usize,
+    /// Of how many samples.
+    pub of: usize,
+}
+
+/// A bound as text: up to six decimals, trailing zeros dropped.
+fn fmt_bound(b: f64) -> String {
+    let s = format!("{b:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    s.to_string()
+}
+
+impl ActiveBound {
+    /// "phase 2 (stick) duration (s) = 0.010000 on its minimum 0.01".
+    pub fn describe(&self) -> String {
+        let side = if self.lower { "minimum" } else { "maximum" };
+        if self.of > 1 {
+            format!(
+                "{} on its {side} {} at {} of {} nodes",
+                self.what,
+                fmt_bound(self.bound),
+                self.hits,
+                self.of
+            )
+        } else {
+            format!(
+                "{} = {:.6} on its {side} {}",
+                self.what,
+                self.value,
+                fmt_bound(self.bound)
+            )
+        }
+    }
+}

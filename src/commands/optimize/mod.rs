@@ -621,6 +621,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             args.out.display()
         );
     }
+    // The bounds of the problem definition do not depend on the mesh, so the chosen
+    // problem's serve every candidate (each may sit on a refined mesh of it).
+    for s in std::iter::once(&mut sol).chain(candidates.iter_mut().map(|(_, c)| c)) {
+        s.active_bounds = Some(crate::study::claims::active_bounds(&problem.ocp, s));
+    }
     let extra: Vec<(String, &OcpSolution)> =
         candidates.iter().map(|(n, c)| (n.clone(), c)).collect();
     commit_solution_with(&sol, &extra, out)?;
@@ -651,7 +656,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     )?;
     // The bounds the optimum sits on (phase durations, period, torque and joint limits): an
     // optimum on a bound is the bound's as much as the problem's.
-    let active = crate::study::claims::active_bounds(&problem.ocp, &sol);
+    let active = sol.active_bounds.clone().unwrap_or_default();
     if active.is_empty() {
         crate::outln!("active bounds: none")?;
     } else {
