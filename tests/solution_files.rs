@@ -194,7 +194,7 @@ fn json_floats_read_back_bit_for_bit() {
     }
 }
 
-/// Solver settings written before session 16 still read: the extrapolation scope that began
+/// Solver settings written before the 2026-11-26 changes still read: the extrapolation scope that began
 /// at the floor of μ (`FinalBarrier`) reads as today's default scope, and settings without
 /// the proximal term's fields take its defaults, which are what `ProblemSettings` JSON without
 /// `proximal_weight` gives too.

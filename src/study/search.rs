@@ -51,7 +51,7 @@ pub struct VerifyPolicy {
     /// optimum that cannot be verified (e.g. a collapsed phase) does not hide the next one.
     /// Default 6: the budget costs refinements only when the better candidates fail, and with
     /// 3 the `periodic-cot` search of seed 8 ended unverified (its fifth candidate verifies;
-    /// BENCHMARKS.md, session 14).
+    /// BENCHMARKS.md, 2026-11-26).
     pub clusters: usize,
     /// Continuation in the stick phase's lower bound (`periodic-qc` only): every chain first
     /// runs with the stick phase at least this long (s), then one warm-started stage relaxes
@@ -68,7 +68,7 @@ pub struct VerifyPolicy {
 /// within or out of the basin): the best candidate of seed 8 of the `periodic-cot` search
 /// verifies at its fourth (defects 6.2e-2, 3.1e-1, 1.5e-2, 9.3e-8), where three sent the
 /// search on to its fifth-best candidate, at a higher objective and more cost
-/// (BENCHMARKS.md, "Five refinements per candidate (session 15)"). Costs nothing where the
+/// (BENCHMARKS.md, "Five refinements per candidate (2026-11-26)"). Costs nothing where the
 /// third verifies.
 pub const VERIFY_REFINEMENTS: usize = 5;
 
@@ -78,7 +78,7 @@ pub const VERIFY_REFINEMENTS: usize = 5;
 /// of the default searches over seeds 0–19 stopped the refinement of their best candidate
 /// on the limit (defects 5.1e-2, 6.2e-3, 2.1e-4) and reported a candidate 3–4× worse; with
 /// 800 those candidates verify, and each of those searches takes less time, not more
-/// (BENCHMARKS.md, "A point limit of 800 (session 15)").
+/// (BENCHMARKS.md, "A point limit of 800 (2026-11-26)").
 pub const VERIFY_MAX_POINTS: usize = 800;
 
 impl Default for VerifyPolicy {
