@@ -531,26 +531,31 @@ impl SparseLdlt {
             .faer
             .as_mut()
             .ok_or(FactorizationFailure::NotAnalysed)?;
-        if let Some(index) = values.iter().position(|v| !v.is_finite()) {
-            return Err(FactorizationFailure::NonFiniteValue { index });
-        }
         let (eps, delta) = (self.options.pivot_epsilon, self.options.pivot_delta);
-        let singular = FactorizationFailure::SingularPivot;
+        // A non-finite entry makes a non-finite pivot, which every kernel reports (as a failure
+        // or a zero pivot); only then are the values searched for it, off the per-iteration
+        // path, so that the failure names the entry rather than a pivot.
+        let failure =
+            |otherwise: FactorizationFailure| match values.iter().position(|v| !v.is_finite()) {
+                Some(index) => FactorizationFailure::NonFiniteValue { index },
+                None => otherwise,
+            };
+        let singular = || failure(FactorizationFailure::SingularPivot);
         let inertia = match &mut self.kernel {
-            Kernel::Supernodal(block) => block.factor(values, eps, delta).ok_or(singular)?,
-            Kernel::Multifrontal(mf) => mf.factor(values, eps, delta).ok_or(singular)?,
+            Kernel::Supernodal(block) => block.factor(values, eps, delta).ok_or_else(singular)?,
+            Kernel::Multifrontal(mf) => mf.factor(values, eps, delta).ok_or_else(singular)?,
             Kernel::Simplicial(plan) => {
                 if !plan.factor(values, &mut faer.l_values, eps, delta) {
-                    return Err(singular);
+                    return Err(singular());
                 }
                 faer.inertia()
             }
-            Kernel::Faer => faer.factor(values, eps, delta).ok_or(singular)?,
+            Kernel::Faer => faer.factor(values, eps, delta).ok_or_else(singular)?,
         };
         if inertia.zero > 0 {
-            return Err(FactorizationFailure::ZeroPivots {
+            return Err(failure(FactorizationFailure::ZeroPivots {
                 count: inertia.zero,
-            });
+            }));
         }
         Ok(inertia)
     }
