@@ -15,7 +15,7 @@ mod double_integrator;
 use std::hint::black_box;
 use std::time::Duration;
 
-use ball_finger::study::build;
+use ball_finger::pipeline::build;
 use bf_optim::ipm::kkt::KktPattern;
 use bf_optim::ipm::{
     KktSolver, LdltBackend, LdltOptions, LdltOrdering, Nlp, Settings, Solution, SparseLdlt,

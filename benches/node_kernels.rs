@@ -15,7 +15,7 @@
 
 use std::hint::black_box;
 
-use ball_finger::study::{GENERATED, build};
+use ball_finger::pipeline::{GENERATED, build};
 use bf_optim::ipm::Nlp;
 use bf_optim::ocp::{GraphFn, KernelUse};
 use bf_problem::{Problem, ProblemSettings};

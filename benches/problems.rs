@@ -10,7 +10,7 @@
 
 use std::hint::black_box;
 
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::{build, solve};
 use bf_optim::ocp::Scheme;
 use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};

@@ -5,7 +5,7 @@
 //!   impact law, friction and damping on), which hits, slips, sticks and lifts off
 //!   (events printed once). Target: < 10 ms (≥ 1000× real time).
 //! * `paper_10s_contact/dopri5_rtol1e-8_dyn`: the same run with the system passed as a trait
-//!   object (`&dyn HybridSystem`), as the CLI and the study layer pass it: the cost of the
+//!   object (`&dyn HybridSystem`), as the CLI and the solve pipeline pass it: the cost of the
 //!   virtual calls, compared in the same run.
 //! * `paper_10s_contact/rk4_h1e-3`: the same with RK4 at h = 1 ms.
 //! * A work-precision table (DOPRI5 rtol 1e-3 … 1e-12, RK4 h = 1e-2 … 1e-4; error of x(T)
@@ -14,7 +14,7 @@
 //!
 //! Quick run: `cargo bench -p ball-finger --bench simulate -- --warm-up-time 1 --measurement-time 2`.
 
-use ball_finger::study::speed_accuracy::integrators::{dropped_finger, sim_settings};
+use ball_finger::paper::speed_accuracy::integrators::{dropped_finger, sim_settings};
 use bf_model::Mode;
 use bf_sim::work_precision::{RK4_LADDER, RTOL_LADDER, ladder};
 use bf_sim::{

@@ -36,7 +36,7 @@ pub fn is_broken_pipe(e: &anyhow::Error) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::study::StudyError;
+    use crate::pipeline::PipelineError;
 
     fn io() -> std::io::Error {
         std::io::Error::from(std::io::ErrorKind::AlreadyExists)
@@ -49,7 +49,7 @@ mod tests {
         let errors: Vec<anyhow::Error> = vec![
             bf_sim::SimError::from(file()).into(),
             bf_plot::PlotError::from(file()).into(),
-            StudyError::from(file()).into(),
+            PipelineError::from(file()).into(),
         ];
         for e in errors {
             let r = render(&e.context("cannot write the output"));
@@ -63,7 +63,7 @@ mod tests {
             scene: "paper".into(),
             source: bf_codegen::SceneDefect::NoBall.into(),
         };
-        let r = render(&StudyError::from(model).into());
+        let r = render(&PipelineError::from(model).into());
         assert_eq!(
             r,
             "cannot build the model of scene `paper`: scene error: the scene has no [ball]"

@@ -1,5 +1,5 @@
 //! `ball-finger verify appendix` and its library function
-//! (`ball_finger::study::appendix::check_appendix`): the verdicts are those of
+//! (`ball_finger::paper::appendix::check_appendix`): the verdicts are those of
 //! docs/appendix-errata.md (each worked out by hand there), and each verdict on a kinematic or
 //! dynamic entry is confirmed by a second derivation independent of the one the check uses:
 //! the generator's expression graph of the paper scene, evaluated by its interpreter.
@@ -7,11 +7,11 @@
 #[path = "common/cli.rs"]
 mod cli;
 
-use ball_finger::study::appendix::{Verdict, check_appendix, check_appendix_scaled};
+use ball_finger::paper::appendix::{Verdict, check_appendix, check_appendix_scaled};
 use bf_codegen::{EvalValue, Scene, eval_all};
 use bf_testkit::appendix as app;
 
-fn verdict(entries: &[ball_finger::study::appendix::Entry], eq: &str, what: &str) -> Verdict {
+fn verdict(entries: &[ball_finger::paper::appendix::Entry], eq: &str, what: &str) -> Verdict {
     entries
         .iter()
         .find(|e| e.eq == eq && e.what.contains(what))

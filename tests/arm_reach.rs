@@ -8,7 +8,7 @@
 
 #[path = "common/cli.rs"]
 mod cli_util;
-use ball_finger::study::arm::{is_verified, solve_verified, verify_arm};
+use ball_finger::pipeline::arm::{is_verified, solve_verified, verify_arm};
 use bf_problem::arm::{ArmSettings, ArmSolution};
 use cli_util::{root, run, tmpdir};
 use std::path::{Path, PathBuf};
@@ -231,7 +231,7 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
     // One schema with the ball problems' files (docs/files.md).
     assert_eq!(
         sol["schema_version"],
-        ball_finger::study::solution_io::SCHEMA_VERSION
+        ball_finger::pipeline::solution_io::SCHEMA_VERSION
     );
     assert_eq!(sol["verified"], true);
     assert_eq!(sol["tau_max"], serde_json::json!([4.0, 2.0]));
@@ -290,7 +290,7 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
         .iter()
         .fold(0.0f64, |a, e| a.max(e.abs()));
     assert!(
-        end_error <= 10.0 * ball_finger::study::verify::VERIFIED_DEFECT,
+        end_error <= 10.0 * ball_finger::pipeline::verify::VERIFIED_DEFECT,
         "replay ends {end_error:e} from (q^f, 0): {last:?}"
     );
     assert_eq!(

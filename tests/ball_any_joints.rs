@@ -9,8 +9,8 @@
 #[path = "common/cli.rs"]
 mod cli_util;
 
-use ball_finger::study::verify::{VERIFIED_DEFECT, verify};
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::verify::{VERIFIED_DEFECT, verify};
+use ball_finger::pipeline::{build, solve};
 use bf_codegen::Scene;
 use bf_model::{Model, State, Vec3, VecN, registry};
 use bf_optim::ipm::Status;

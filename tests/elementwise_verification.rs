@@ -1,4 +1,4 @@
-//! The element-wise verification criterion (`ball_finger::study::verify`, decision record
+//! The element-wise verification criterion (`ball_finger::pipeline::verify`, decision record
 //! docs/decisions/0005-elementwise-verification.md): a converged collocation verifies; moving
 //! one collocated state at an element boundary by δ raises the element-wise defect to about
 //! δ and the check fails (it is not a no-op); moving a state inside an element leaves the
@@ -6,10 +6,10 @@
 //! records written before the new figures existed still read; and (slow, ignored) the default
 //! `periodic-cot` search ends Solved and verified.
 
-use ball_finger::study::verify::{
+use ball_finger::pipeline::verify::{
     TorqueInterpolant, VERIFIED_DEFECT, Verification, VerifySettings, verify_with,
 };
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::{build, solve};
 use bf_optim::ipm::Status;
 use bf_problem::{BuiltProblem, OcpSolution, ProblemSettings};
 

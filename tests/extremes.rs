@@ -1,5 +1,5 @@
 //! Stability at the extremes: the assertions behind every row of
-//! `ball_finger::study::extremes::run_extremes`. Each test compares against something the code
+//! `ball_finger::paper::extremes::run_extremes`. Each test compares against something the code
 //! under test does not produce itself: a double-double evaluation (≈ 106 bits) of the same
 //! expression graph, an exact scaling law of eq. 22 (M is linear in the masses and quadratic in
 //! the lengths), an exact static equilibrium (a finger pressed on with force f has λ = f n), a
@@ -14,7 +14,7 @@
 //!   the reduced-angle results can only agree to that level: asserted ≤ 1e-9, and ≤ 100× the
 //!   measured reduction error.
 
-use ball_finger::study::extremes::*;
+use ball_finger::paper::extremes::*;
 use bf_codegen::spec::Scene;
 use bf_model::{ModelError, PainleveKind};
 

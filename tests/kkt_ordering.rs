@@ -7,8 +7,8 @@
 //! Acceptable (the factor reports spurious negative pivots and the inertia correction keeps
 //! δ_w > 0).
 
-use ball_finger::study::verify::verify;
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::verify::verify;
+use ball_finger::pipeline::{build, solve};
 use bf_optim::ipm::{KktOrdering, Settings, Status};
 use bf_optim::ocp::Scheme;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
@@ -182,7 +182,7 @@ fn mesh_sweep() {
     assert!(failed.is_empty(), "not Solved in one stage: {failed:?}");
 }
 
-/// The re-integration defect of a sweep cell's solution (`study::verify`, rtol 1e-10; NaN
+/// The re-integration defect of a sweep cell's solution (`pipeline::verify`, rtol 1e-10; NaN
 /// where the re-integration fails): the sweep judges statuses, and a Solved end on a mesh too
 /// coarse for its phases (e.g. one Gauss polynomial for an 8 s free phase) does not verify.
 fn defect(name: &str, scheme: Scheme, points: usize, sol: &OcpSolution) -> f64 {

@@ -8,7 +8,7 @@
 //!
 //! `cargo test --release --test node_kernels`
 
-use ball_finger::study::{GENERATED, build};
+use ball_finger::pipeline::{GENERATED, build};
 use bf_optim::ocp::{GraphFn, KernelUse, Scheme};
 use bf_problem::{Generated, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
@@ -273,7 +273,7 @@ fn a_catalogue_that_requires_kernels_refuses_a_graph_without_one() {
     // Preferring kernels, it builds and interprets exactly the stick phase (μ_s appears only
     // in the friction-cone row of the stick node function).
     let Some(lookup) = GENERATED.kernels.lookup() else {
-        panic!("the study layer hands in a kernel lookup")
+        panic!("the solve pipeline hands in a kernel lookup")
     };
     let preferred = Generated {
         scene_toml: paper_with_other_mu_s,

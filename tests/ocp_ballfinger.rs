@@ -4,7 +4,7 @@
 
 mod common;
 
-use ball_finger::study::{SolutionIo, build, solve};
+use ball_finger::pipeline::{SolutionIo, build, solve};
 use bf_generated::paper as k;
 use bf_optim::ipm::{Nlp, Status, check_derivatives};
 use bf_optim::ocp::Scheme;

@@ -21,7 +21,7 @@
 
 mod common;
 
-use ball_finger::study::{SolutionIo, build, solve};
+use ball_finger::pipeline::{SolutionIo, build, solve};
 use bf_codegen::Scene;
 use bf_optim::ipm::{Nlp, Status};
 use bf_optim::ocp::nodes::{differentiation_matrix, legendre_gauss};
@@ -432,7 +432,7 @@ fn lg_warm_start_without_the_nlp_vector_restarts_at_the_optimum() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("solution.json");
     sol.write_json(&path).unwrap();
-    let internals = dir.join(ball_finger::study::solution_io::INTERNALS_FILE);
+    let internals = dir.join(ball_finger::pipeline::solution_io::INTERNALS_FILE);
     let mut v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&internals).unwrap()).unwrap();
     assert!(v.as_object_mut().unwrap().remove("nlp_warm").is_some());

@@ -11,10 +11,10 @@
 #[path = "common/cli.rs"]
 mod cli;
 
-use ball_finger::study::openloop::{
+use ball_finger::paper::openloop::{
     DEFAULT_PD_TRACK, OpenLoop, PdTrack, run_open_loop, run_pd_tracked, tracking_input,
 };
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::{build, solve};
 use bf_problem::{Problem, ProblemSettings};
 use bf_sim::Input;
 
@@ -86,7 +86,7 @@ fn tracking_input_acts_in_free_phases_only() {
     let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
     let sol = solve(&p, None).unwrap();
     let input = tracking_input(&sol, 2, &DEFAULT_PD_TRACK).unwrap();
-    let plain = ball_finger::study::openloop::periodic_torques(&sol, 2).unwrap();
+    let plain = ball_finger::paper::openloop::periodic_torques(&sol, 2).unwrap();
     let d = &sol.phase_durations;
     let (q, qd) = ([0.3, 0.2, 0.1], [0.0; 3]);
     let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
@@ -119,7 +119,7 @@ fn simulate_pd_track_replays_a_solution_file() {
     let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
     let sol = solve(&p, None).unwrap();
     let dir = cli::tmpdir("pd-track");
-    ball_finger::study::solution_io::write_solution(&sol, &dir.join("sol")).unwrap();
+    ball_finger::pipeline::solution_io::write_solution(&sol, &dir.join("sol")).unwrap();
     let init = dir.join("sol").join("solution.json");
     let t_end = format!("{}", sol.period);
     let sim = |gains: &str, contact: bool, out: &str| {

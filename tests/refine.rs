@@ -3,10 +3,10 @@
 //! custom hp-Radau meshes, the ph rule, the exact warm start, and adaptive refinement of the
 //! named problems (`reach`, `periodic-qc`).
 
-use ball_finger::study::refine::{
+use ball_finger::pipeline::refine::{
     RefineRound, RefineSettings, current_mesh, error_estimate, refine, warm_initial_point,
 };
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::{build, solve};
 use bf_optim::ipm::{Nlp, Settings, Status};
 use bf_optim::ocp::toys::{brachistochrone, cycloid_time, double_integrator};
 use bf_optim::ocp::{
@@ -357,7 +357,7 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
     assert!(!res4.converged && res4.history.len() == 1);
     // Result round-trips through JSON (solution.json).
     let js = serde_json::to_string(&res).unwrap();
-    let back: ball_finger::study::refine::RefineResult = serde_json::from_str(&js).unwrap();
+    let back: ball_finger::pipeline::refine::RefineResult = serde_json::from_str(&js).unwrap();
     assert_eq!(back.mesh, res.mesh);
     assert_eq!(back.history.len(), res.history.len());
     // Invalid options are errors.

@@ -1,4 +1,4 @@
-//! The default search of `optimize` (`ball_finger::study::search::search`): on
+//! The default search of `optimize` (`ball_finger::pipeline::search::search`): on
 //! `periodic-qc` it must reach at least the best optimum known before it (J = 0.1065805,
 //! confirmed as a KKT point of the same transcription by an independent CasADi + IPOPT solve)
 //! with a re-integration that verifies it, bit for bit the same with one and two worker threads; shards of a multi-start
@@ -394,8 +394,8 @@ fn min_stick_bounds_the_stick_phase() {
 /// the elements, stop on the same limit and only solve the same mesh again.
 #[test]
 fn a_refinement_stopped_by_the_point_limit_is_not_repeated() {
-    use ball_finger::study::search::{VerifyPolicy, search};
-    use ball_finger::study::strategy::{Shard, Strategy};
+    use ball_finger::pipeline::search::{VerifyPolicy, search};
+    use ball_finger::pipeline::strategy::{Shard, Strategy};
     use bf_problem::{Problem, ProblemSettings};
 
     let settings = ProblemSettings::default();
@@ -511,13 +511,13 @@ fn a_refinement_whose_refined_mesh_failed_is_retried() {
 /// (start 21) need more than 400 collocation points per phase before its element-wise
 /// defects fall below 1e-4. With the old limit of 400 they stopped on it (defect 6.2e-3) and
 /// the search reported a worse candidate; with the default limit
-/// ([`VERIFY_MAX_POINTS`](ball_finger::study::search::VERIFY_MAX_POINTS)) the best candidate
+/// ([`VERIFY_MAX_POINTS`](ball_finger::pipeline::search::VERIFY_MAX_POINTS)) the best candidate
 /// verifies at a lower objective.
 #[test]
 #[ignore = "about 120 s: two multistart searches"]
 fn the_default_point_limit_lets_the_best_candidate_verify() {
-    use ball_finger::study::search::{VERIFY_MAX_POINTS, VerifyPolicy, search};
-    use ball_finger::study::strategy::{DEFAULT_STARTS, Shard, Strategy};
+    use ball_finger::pipeline::search::{VERIFY_MAX_POINTS, VerifyPolicy, search};
+    use ball_finger::pipeline::strategy::{DEFAULT_STARTS, Shard, Strategy};
     use bf_problem::{Problem, ProblemSettings};
 
     let problem: Problem = "periodic-cot".parse().unwrap();

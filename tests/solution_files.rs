@@ -8,8 +8,8 @@
 #[path = "common/cli.rs"]
 mod cli;
 
-use ball_finger::study::OcpSolution;
-use ball_finger::study::solution_io::{INTERNALS_FILE, SCHEMA_VERSION, SolutionIo};
+use ball_finger::pipeline::OcpSolution;
+use ball_finger::pipeline::solution_io::{INTERNALS_FILE, SCHEMA_VERSION, SolutionIo};
 use serde_json::Value;
 
 fn json(path: &std::path::Path) -> Value {

@@ -3,7 +3,7 @@
 //! with double-double to a few ulps, f32 ones only to single precision, FMA is no less
 //! accurate — and every linked figure exists.
 
-use ball_finger::study::speed_accuracy::{SpeedAccuracy, VARIANT_KERNELS, VARIANTS};
+use ball_finger::paper::speed_accuracy::{SpeedAccuracy, VARIANT_KERNELS, VARIANTS};
 
 #[test]
 fn quick_report_is_consistent() {

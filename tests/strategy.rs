@@ -1,11 +1,11 @@
-//! Solve strategies (`ball_finger::study::strategy`): the default continuation must find a
+//! Solve strategies (`ball_finger::pipeline::strategy`): the default continuation must find a
 //! clearly better optimum of `periodic-qc` than the plain cold start, and one that survives
 //! re-integration; multi-start must be deterministic and never worse than its start 0 (the
 //! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
 
-use ball_finger::study::strategy::{Strategy, random_start, solve_with_strategy};
-use ball_finger::study::verify::verify;
-use ball_finger::study::{SolutionIo, build, solve, solve_warm};
+use ball_finger::pipeline::strategy::{Strategy, random_start, solve_with_strategy};
+use ball_finger::pipeline::verify::verify;
+use ball_finger::pipeline::{SolutionIo, build, solve, solve_warm};
 use bf_optim::ipm::Status;
 use bf_problem::catalogue::Q_GUESS;
 use bf_problem::{OcpSolution, Problem, ProblemSettings, StartGuess};

@@ -13,10 +13,10 @@
 #[path = "common/cli.rs"]
 mod cli;
 
-use ball_finger::study::closed_loop::{
+use ball_finger::paper::closed_loop::{
     ControllerKind, Tracking, reference_of, run_tracking, solution_model,
 };
-use ball_finger::study::{OcpSolution, SolutionIo, build, solve};
+use ball_finger::pipeline::{OcpSolution, SolutionIo, build, solve};
 use bf_control::{HybridController, HybridGains, InverseDynamics};
 use bf_model::{ImpactLaw, Kernels, Mode, State, Vec3};
 use bf_problem::{Problem, ProblemSettings};

@@ -1,4 +1,4 @@
-//! Trajectory verification (`ball_finger::study::verify`): re-integration of solved periodic
+//! Trajectory verification (`ball_finger::pipeline::verify`): re-integration of solved periodic
 //! problems with the simulator's DOPRI5 on bf-model's physics. The tests check that the defects
 //! are small for converged solutions and shrink under mesh refinement, that corrupting the
 //! solution makes them large (the check is not a no-op), that the re-integrated end state
@@ -6,10 +6,10 @@
 
 use std::sync::OnceLock;
 
-use ball_finger::study::verify::{
+use ball_finger::pipeline::verify::{
     TorqueInterpolant, Verification, VerifySettings, verify, verify_with,
 };
-use ball_finger::study::{build, solve};
+use ball_finger::pipeline::{build, solve};
 use bf_generated::paper as k;
 use bf_optim::ipm::Status;
 use bf_optim::ocp::Scheme;

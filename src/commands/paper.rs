@@ -199,16 +199,16 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 "the default search of `optimize`: {} for every periodic problem (for \
                  periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
                  relaxes it to 0.01 s); every end point is re-integrated and the best \
-                 verified one kept (see ball_finger::study::search)",
-                crate::study::strategy::default_strategy(
+                 verified one kept (see ball_finger::pipeline::search)",
+                crate::pipeline::strategy::default_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme
                 )
             )
         },
-        crate::study::verify::VERIFIED_DEFECT
+        crate::pipeline::verify::VERIFIED_DEFECT
     )?;
-    let (results, failures) = crate::study::scenarios::run_all(
+    let (results, failures) = crate::paper::scenarios::run_all(
         &dir,
         args.quick,
         mu_s,
@@ -217,7 +217,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     writeln!(
         report,
         "{}",
-        crate::study::scenarios::results_markdown(&results)?
+        crate::paper::scenarios::results_markdown(&results)?
     )?;
     if !failures.is_empty() {
         writeln!(report, "Scenarios that failed:\n\n{failures}")?;
@@ -227,7 +227,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             report,
             "### {}\n\n{}",
             r.name,
-            crate::study::scenarios::figures_markdown(&r.name)
+            crate::paper::scenarios::figures_markdown(&r.name)
         )?;
         if let Some(st) = &r.solution.strategy {
             writeln!(report, "Solve stages:\n\n```text\n{}```\n", st.table())?;
@@ -243,21 +243,21 @@ pub fn run(args: &PaperArgs) -> Result<()> {
 
     // QC again with the longer minimum stick duration, by the same strategy as above.
     if let Some(short) = results.iter().find(|r| r.name == "periodic-qc") {
-        use crate::report::min_stick::{LONG_DIR, LONG_MIN_STICK, StickRun};
+        use crate::paper::report::min_stick::{LONG_DIR, LONG_MIN_STICK, StickRun};
         let settings = bf_problem::ProblemSettings {
             points: if args.quick { 20 } else { 30 },
             min_stick: LONG_MIN_STICK,
             ..bf_problem::ProblemSettings::default()
         };
         let strategy = if args.quick {
-            crate::study::strategy::Strategy::Direct
+            crate::pipeline::strategy::Strategy::Direct
         } else {
-            crate::study::strategy::default_strategy(
+            crate::pipeline::strategy::default_strategy(
                 bf_problem::Problem::PeriodicQc,
                 settings.scheme,
             )
         };
-        let long = crate::study::scenarios::run_scenario(
+        let long = crate::paper::scenarios::run_scenario(
             "periodic-qc",
             settings,
             strategy,
@@ -282,8 +282,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 writeln!(
                     report,
                     "{}",
-                    crate::report::min_stick::markdown(&runs, &|r| {
-                        crate::study::scenarios::results_markdown(r)
+                    crate::paper::report::min_stick::markdown(&runs, &|r| {
+                        crate::paper::scenarios::results_markdown(r)
                     })?
                 )?;
             }
@@ -296,7 +296,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         }
     }
 
-    if let Some(md) = crate::study::scenarios::fig11_compare_paths(&dir, &results)? {
+    if let Some(md) = crate::paper::scenarios::fig11_compare_paths(&dir, &results)? {
         writeln!(report, "{md}")?;
     }
 
@@ -307,14 +307,14 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         Some(cot) => {
             let periods = if args.quick { 1 } else { 3 };
             let pb = stage(1, "open-loop simulation");
-            let (o, tracked) = crate::study::openloop::run_open_loop_study(
+            let (o, tracked) = crate::paper::openloop::run_open_loop_study(
                 &cot.solution,
                 periods,
                 &[
-                    crate::study::openloop::DEFAULT_PD_TRACK,
-                    crate::study::openloop::PdTrack {
+                    crate::paper::openloop::DEFAULT_PD_TRACK,
+                    crate::paper::openloop::PdTrack {
                         during_contact: true,
-                        ..crate::study::openloop::DEFAULT_PD_TRACK
+                        ..crate::paper::openloop::DEFAULT_PD_TRACK
                     },
                 ],
                 &dir,
@@ -323,8 +323,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             writeln!(
                 report,
                 "{}{}",
-                crate::study::openloop::markdown(&o)?,
-                crate::study::openloop::pd_markdown(&o, &tracked)?
+                crate::paper::openloop::markdown(&o)?,
+                crate::paper::openloop::pd_markdown(&o, &tracked)?
             )?;
         }
         None => writeln!(
@@ -349,7 +349,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             (false, _) => CLOSED_LOOP_COT_PERIODS,
         };
         let pb = stage(1, "closed loop");
-        let md = crate::study::closed_loop::comparison_markdown(&r.name, &r.solution, periods);
+        let md = crate::paper::closed_loop::comparison_markdown(&r.name, &r.solution, periods);
         pb.finish();
         match md {
             Ok(md) => writeln!(report, "{md}")?,
@@ -366,31 +366,31 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     hb.stage("6/8 extremes");
     writeln!(report, "## 6. Stability at the extremes\n")?;
     let pb = stage(1, "extremes");
-    let ext = crate::study::extremes::run_extremes(args.quick)?;
+    let ext = crate::paper::extremes::run_extremes(args.quick)?;
     pb.finish();
     writeln!(report, "{}", ext.to_markdown())?;
     out.write(
-        crate::study::extremes::report::CSV_NAME,
+        crate::paper::extremes::report::CSV_NAME,
         ext.to_csv().as_bytes(),
     )?;
 
     // Stage 7: the speed–accuracy trade, measured in this run.
     hb.stage("7/8 speed versus accuracy");
     writeln!(report, "## 7. Speed versus accuracy\n")?;
-    let sa = crate::study::speed_accuracy::speed_accuracy(&dir, args.quick)?;
+    let sa = crate::paper::speed_accuracy::speed_accuracy(&dir, args.quick)?;
     writeln!(report, "{}", demote(&sa))?;
 
     // Stage 8: appendix check.
     hb.stage("8/8 appendix check");
     writeln!(report, "## 8. Paper Appendix A/B: printed vs derived\n")?;
     let pb = stage(1, "appendix check");
-    let entries = crate::study::appendix::check_appendix()?;
+    let entries = crate::paper::appendix::check_appendix()?;
     pb.finish();
     writeln!(
         report,
         "Output of `ball-finger verify appendix` in this run; docs/appendix-errata.md explains \
          each misprint.\n\n{}",
-        crate::study::appendix::markdown(&entries)?
+        crate::paper::appendix::markdown(&entries)?
     )?;
 
     writeln!(report, "## 9. Known limitations\n")?;

@@ -42,12 +42,12 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         "running"
     });
     let md = match a.which.as_str() {
-        "speed-accuracy" => crate::study::speed_accuracy::speed_accuracy(out.path(), a.quick)?,
+        "speed-accuracy" => crate::paper::speed_accuracy::speed_accuracy(out.path(), a.quick)?,
         _ => {
             let pb = super::optimize::iteration_spinner("strategies");
             pb.enable_steady_tick(std::time::Duration::from_millis(120));
             pb.set_message("solving ...");
-            let md = crate::report::strategies_report(a.quick, &|r| {
+            let md = crate::paper::report::strategies_report(a.quick, &|r| {
                 let line = format!(
                     "{} {}: {} phi {:.4e} in {:.1} s",
                     r.problem, r.strategy, r.status, r.objective, r.seconds

@@ -1,11 +1,11 @@
-//! `track`: executes an optimum in closed loop ([`crate::study::closed_loop`]) and writes the
+//! `track`: executes an optimum in closed loop ([`crate::paper::closed_loop`]) and writes the
 //! files of `simulate` (trajectory, events, summary) plus `tracking.json` (docs/files.md) into
 //! an output directory replaced as a whole (`bf_output::OutputDir`); a run that lost the ball
 //! is marked FAILED and exits non-zero.
 
 use crate::cli::TrackArgs;
-use crate::study::SolutionIo as _;
-use crate::study::closed_loop::{ControllerKind, Tracking, run_tracking, solution_model};
+use crate::paper::closed_loop::{ControllerKind, Tracking, run_tracking, solution_model};
+use crate::pipeline::SolutionIo as _;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::PeriodMetrics;
 use bf_output::{DirSpec, Outcome, OutputDir};

@@ -1,5 +1,5 @@
 //! `ball-finger verify appendix`: the paper's Appendix A/B entries as printed vs derived and
-//! the misprints ([`crate::study::appendix`]); the status is non-zero when a derivation fails.
+//! the misprints ([`crate::paper::appendix`]); the status is non-zero when a derivation fails.
 //!
 //! Also the run-time verification of the compiled `paper` kernels, reported by
 //! `ball-finger paper`: compiled code against the generator's interpreter (same expression
@@ -15,8 +15,8 @@ use std::fmt::Write as _;
 pub fn run(a: &crate::cli::VerifyArgs) -> Result<()> {
     match a.what.as_str() {
         "appendix" => {
-            let entries = crate::study::appendix::check_appendix()?;
-            crate::outln!("{}", crate::study::appendix::markdown(&entries)?)
+            let entries = crate::paper::appendix::check_appendix()?;
+            crate::outln!("{}", crate::paper::appendix::markdown(&entries)?)
         }
         other => anyhow::bail!("unknown verification `{other}`; known: appendix"),
     }

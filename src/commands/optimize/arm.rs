@@ -1,12 +1,12 @@
 //! `ball-finger optimize --problem reach-arm --scene FILE`: an arm without a ball moved from
 //! rest to rest in minimum time plus effort (`bf_problem::arm`, Radau collocation of paper
-//! Sect. 4.2), verified by re-integration element by element (`study::arm`), written as one
+//! Sect. 4.2), verified by re-integration element by element (`pipeline::arm`), written as one
 //! output set (`solution.json`, `torques.csv`, `trajectory.csv`).
 
 use super::{OUTPUT_DIR, RunSettings, check_size, parse_scheme};
 use crate::cli::OptimizeArgs;
 use crate::io::parse_list;
-use crate::study::verify::VERIFIED_DEFECT;
+use crate::pipeline::verify::VERIFIED_DEFECT;
 use anyhow::{Context, Result, bail};
 use bf_output::{Outcome, OutputDir};
 use bf_problem::arm::{ArmSettings, ArmSolution, MAX_DURATION, MIN_DURATION, REACH_ARM};
@@ -31,10 +31,10 @@ fn first_non_finite_arm(sol: &ArmSolution) -> Option<(String, f64)> {
 
 /// `optimize --problem reach-arm --scene FILE`: an arm without a ball from rest at `--start`
 /// to rest at `--target` in minimum time plus effort (`bf_problem::arm`), verified by
-/// re-integration element by element (`study::arm`). Writes `solution.json`, `torques.csv`
+/// re-integration element by element (`pipeline::arm`). Writes `solution.json`, `torques.csv`
 /// and `trajectory.csv`; a solve that does not converge or verify is marked FAILED.
 pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
-    use crate::study::arm::{failure_of, solve_verified, write_arm_solution};
+    use crate::pipeline::arm::{failure_of, solve_verified, write_arm_solution};
     let Some(path) = &args.scene else {
         bail!(
             "--problem {REACH_ARM} needs --scene FILE (an arm, e.g. scenes/puma560.toml): it has \
@@ -139,7 +139,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         &settings,
         args.verify_rtol,
         args.verify_refinements
-            .unwrap_or(crate::study::arm::ARM_MESH_DOUBLINGS),
+            .unwrap_or(crate::pipeline::arm::ARM_MESH_DOUBLINGS),
         &text,
         &params,
     )
@@ -197,7 +197,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         crate::outln!(
             "verified: {} (element re-integration defect {:.3e}, tolerance {:e}; open-loop \
              replay from the start ends {:.3e} from the target)",
-            if crate::study::arm::is_verified(&sol) {
+            if crate::pipeline::arm::is_verified(&sol) {
                 "yes"
             } else {
                 "NO"

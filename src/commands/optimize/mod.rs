@@ -15,10 +15,10 @@
 //! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
 use crate::cli::{OptimizeArgs, OptimizeCommand};
-use crate::study::SolutionIo;
-use crate::study::search::VerifyPolicy;
-use crate::study::strategy::{self, DEFAULT_SEED, DEFAULT_STARTS, Shard, Strategy};
-use crate::study::verify::{MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verify};
+use crate::pipeline::SolutionIo;
+use crate::pipeline::search::VerifyPolicy;
+use crate::pipeline::strategy::{self, DEFAULT_SEED, DEFAULT_STARTS, Shard, Strategy};
+use crate::pipeline::verify::{MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verify};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
@@ -112,7 +112,7 @@ pub fn check_solution_values(option: &str, path: &Path) -> Result<()> {
     let value = read_json_value(option, path)?;
     check_json_values(option, path, &value)?;
     if value.get("schema_version").is_some() {
-        let ipath = crate::study::solution_io::internals_path(path, &value);
+        let ipath = crate::pipeline::solution_io::internals_path(path, &value);
         if option != "--warm-start" && !ipath.exists() {
             // A replay reads only the solution itself; its internals may be left behind.
             return Ok(());
@@ -562,7 +562,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         rtol: args.verify_rtol,
         refine_attempts: args
             .verify_refinements
-            .unwrap_or(crate::study::search::VERIFY_REFINEMENTS),
+            .unwrap_or(crate::pipeline::search::VERIFY_REFINEMENTS),
         ..VerifyPolicy::default()
     };
     let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
@@ -624,7 +624,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     // The bounds of the problem definition do not depend on the mesh, so the chosen
     // problem's serve every candidate (each may sit on a refined mesh of it).
     for s in std::iter::once(&mut sol).chain(candidates.iter_mut().map(|(_, c)| c)) {
-        s.active_bounds = Some(crate::study::claims::active_bounds(&problem.ocp, s));
+        s.active_bounds = Some(crate::pipeline::bounds::active_bounds(&problem.ocp, s));
     }
     let extra: Vec<(String, &OcpSolution)> =
         candidates.iter().map(|(n, c)| (n.clone(), c)).collect();

@@ -1,10 +1,10 @@
 //! Solves of the problem library behind a progress display on stderr: the strategy search
-//! (`study::search`: every end point re-integrated, verified optima preferred) and the mesh
-//! refinement (`study::refine`), each finished stage or round shown as it ends.
+//! (`pipeline::search`: every end point re-integrated, verified optima preferred) and the mesh
+//! refinement (`pipeline::refine`), each finished stage or round shown as it ends.
 
-use crate::study::refine::{self, RefineRound, RefineSettings};
-use crate::study::search::{self, Search, VerifyPolicy};
-use crate::study::strategy::{Shard, StageRecord, Strategy};
+use crate::pipeline::refine::{self, RefineRound, RefineSettings};
+use crate::pipeline::search::{self, Search, VerifyPolicy};
+use crate::pipeline::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result};
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use indicatif::{ProgressBar, ProgressStyle};

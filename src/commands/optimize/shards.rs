@@ -5,10 +5,10 @@
 
 use super::{OUTPUT_DIR, commit_solution, failure_of, print_verification, print_wrote};
 use crate::cli::MergeArgs;
-use crate::study::SolutionIo;
-use crate::study::search;
-use crate::study::solve::recompute_at_own_point;
-use crate::study::strategy::{StageRecord, Strategy, StrategyReport};
+use crate::pipeline::SolutionIo;
+use crate::pipeline::search;
+use crate::pipeline::solve::recompute_at_own_point;
+use crate::pipeline::strategy::{StageRecord, Strategy, StrategyReport};
 use anyhow::{Context, Result, bail};
 use bf_output::OutputDir;
 use bf_problem::OcpSolution;

@@ -129,8 +129,8 @@ pub(super) fn run_arm(
 fn arm_replay(
     path: &std::path::Path,
     n: usize,
-) -> Result<(Vec<f64>, crate::study::arm::PhaseTorque, f64)> {
-    let sol = crate::study::arm::read_arm_solution(path).with_context(|| {
+) -> Result<(Vec<f64>, crate::pipeline::arm::PhaseTorque, f64)> {
+    let sol = crate::pipeline::arm::read_arm_solution(path).with_context(|| {
         format!(
             "--init {}: an arm (no ball) replays only a solution of `optimize --problem \
              reach-arm`",
@@ -160,6 +160,6 @@ fn arm_replay(
             path.display()
         );
     }
-    let torque = crate::study::arm::PhaseTorque::new(&sol.raw, n);
+    let torque = crate::pipeline::arm::PhaseTorque::new(&sol.raw, n);
     Ok((sol.start.clone(), torque, sol.duration))
 }

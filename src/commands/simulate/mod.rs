@@ -2,7 +2,7 @@
 //! (modes Free / Stick / Slip, eq. 44–47; transitions eq. 48–50, σ ≤ 0, ‖Δv‖ ≤ ε; impact laws
 //! eq. 39–43) driven by an open-loop torque series (Sect. 6.2), a joint-space PD controller,
 //! or (`--pd-track`) the torques of a solution with PD tracking of its trajectory (Sect. 7,
-//! `ball_finger::study::openloop::tracking_input`).
+//! `ball_finger::paper::openloop::tracking_input`).
 //!
 //! ```text
 //! ball-finger simulate --scene scenes/paper.toml [--torques FILE | --pd TARGET [--pd-gains KP,KD]
@@ -189,7 +189,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
         }
         if v.get("nodes").is_some() && v.get("modes").is_some() {
             // A solution of `optimize`: replay it from its own initial state and mode.
-            let (sq, sqd, sw, smode) = crate::study::solution_io::initial_state_of(&v)
+            let (sq, sqd, sw, smode) = crate::pipeline::solution_io::initial_state_of(&v)
                 .with_context(|| {
                     format!(
                         "{}: solution file without a readable first node (nodes, modes, \

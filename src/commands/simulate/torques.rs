@@ -1,6 +1,6 @@
 //! The joint torques of a `ball-finger simulate` run ([`CliInput`]): an open-loop series
 //! (`--torques`, Sect. 6.2), a joint-space PD controller (`--pd`), a solution's torques with PD
-//! tracking of its trajectory (`--pd-track`, Sect. 7, `study::openloop::tracking_input`), or
+//! tracking of its trajectory (`--pd-track`, Sect. 7, `paper::openloop::tracking_input`), or
 //! none.
 
 use crate::cli::SimulateArgs;
@@ -24,7 +24,7 @@ pub enum CliInput {
     /// An arm solution's torques replayed with its own control polynomials (`--init`), the
     /// interpolant its collocation and verification use: a linear interpolation of its dense
     /// samples ends measurably off the target (1.7e-4 rad on the 2-link test arm).
-    Replay(crate::study::arm::PhaseTorque),
+    Replay(crate::pipeline::arm::PhaseTorque),
 }
 
 impl Input for CliInput {
@@ -109,7 +109,7 @@ pub const MAX_TRACKED_PERIODS: f64 = 10_000.0;
 
 /// `--pd-track KP,KD`: the solution of `--init` repeated over `--t-end` with PD tracking.
 fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
-    use crate::study::SolutionIo as _;
+    use crate::pipeline::SolutionIo as _;
     let g = parse_list("--pd-track", gains, Some(2))?;
     let Some(path) = &args.init else {
         bail!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
@@ -134,12 +134,12 @@ fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
             MAX_TRACKED_PERIODS
         );
     }
-    let pd = crate::study::openloop::PdTrack {
+    let pd = crate::paper::openloop::PdTrack {
         kp: g[0],
         kd: g[1],
         during_contact: args.pd_track_contact,
     };
-    crate::study::openloop::tracking_input(&sol, periods as usize, &pd)
+    crate::paper::openloop::tracking_input(&sol, periods as usize, &pd)
         .with_context(|| format!("--pd-track {gains}"))
 }
 

@@ -2,7 +2,7 @@
 //! `periodic-qc` on Legendre–Gauss meshes of increasing point count and on Radau meshes of
 //! increasing element count; error of the objective J against a converged reference, versus
 //! solve time. The reference is a cold Radau solve refined by the hp rule of
-//! [`crate::study::refine`] until the largest element error estimate is below
+//! [`crate::pipeline::refine`] until the largest element error estimate is below
 //! [`MeshLadder`]'s tolerance (1e-8; 1e-6 quick); its own error is estimated by the largest
 //! change of J over the last three refinement rounds and stated with it. A cold solve that lands on another local optimum than the reference's is
 //! re-solved on the same mesh warm-started from the reference solution, which gives the mesh's
@@ -19,7 +19,7 @@ use bf_problem::{Problem, ProblemSettings};
 use indicatif::ProgressBar;
 
 use super::{Solved, max_iter, solve_qc, wp_figure};
-use crate::study::refine::{RefineSettings, refine_solution};
+use crate::pipeline::refine::{RefineSettings, refine_solution};
 
 /// One collocation solve of part (b).
 #[derive(Debug, Clone, PartialEq)]

@@ -9,9 +9,9 @@
 //! joint trajectory; the optimiser itself uses the smooth one (eq. 58–59), whose difference is
 //! at most ε/2.
 
-use crate::study::claims::Facts;
-use crate::study::solution_io::write_solution;
-use crate::study::strategy::Strategy;
+use crate::paper::claims::Facts;
+use crate::pipeline::solution_io::write_solution;
+use crate::pipeline::strategy::Strategy;
 use anyhow::{Context, Result, anyhow};
 use bf_codegen::spec::SceneId;
 use bf_plot::paper::{Phases, TimeSeries};
@@ -85,8 +85,8 @@ pub struct ScenarioResult {
     pub max_lambda_n: f64,
     /// The static friction coefficient μ_s the cone margins were measured with.
     pub mu_s: f64,
-    /// The bounds of the problem the solution sits on ([`crate::study::claims::active_bounds`]).
-    pub active: Vec<crate::study::claims::ActiveBound>,
+    /// The bounds of the problem the solution sits on ([`crate::pipeline::bounds::active_bounds`]).
+    pub active: Vec<crate::pipeline::bounds::ActiveBound>,
 }
 
 /// Samples of the collocation polynomials per period for the path figures (Fig. 5, 10, 11, 12):
@@ -291,7 +291,7 @@ pub fn run_scenario(
     let (problem, mut sol) = solve(problem, settings, strategy)?;
     // Re-integration of every phase with the optimal torques: stored in solution.json and
     // shown in the results table; a failure to verify is not fatal.
-    sol.verification = crate::study::verify::verify(&problem, &sol, 1e-10).ok();
+    sol.verification = crate::pipeline::verify::verify(&problem, &sol, 1e-10).ok();
     write_solution(&sol, &dir.join(name))?;
     let scene = problem.problem.scene();
     let base = problem.scene.base_translation();
@@ -429,7 +429,7 @@ pub fn run_scenario(
         name: name.to_string(),
         max_lambda_n,
         mu_s,
-        active: crate::study::claims::active_bounds(&problem.ocp, &sol),
+        active: crate::pipeline::bounds::active_bounds(&problem.ocp, &sol),
         max_tau,
         contact_from_tip: (loc.0, mean, loc.2),
         cone_share: if cone.1 > 0 {
@@ -584,7 +584,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             o.verification
                 .as_ref()
                 .map_or("not verified".into(), |v| format!("{:.1e}", v.max_defect)),
-            if crate::study::verify::is_verified(o) {
+            if crate::pipeline::verify::is_verified(o) {
                 "yes"
             } else {
                 "**no**"
@@ -603,7 +603,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
     writeln!(
         s,
         "{}",
-        crate::study::claims::markdown(&crate::study::claims::claims(&facts, QC_OMEGA_REF[2]))
+        crate::paper::claims::markdown(&crate::paper::claims::claims(&facts, QC_OMEGA_REF[2]))
     )?;
     Ok(s)
 }
@@ -612,7 +612,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
 fn facts_of(r: &ScenarioResult) -> Facts {
     Facts {
         name: r.name.clone(),
-        verified: crate::study::verify::is_verified(&r.solution),
+        verified: crate::pipeline::verify::is_verified(&r.solution),
         objective: r.solution.objective,
         period: r.solution.period,
         mean_omega_z: r.solution.mean_omega[2],
@@ -644,10 +644,10 @@ pub fn active_bounds_markdown(results: &[ScenarioResult]) -> String {
 }
 
 /// Penetration and friction-cone margins of each verified re-integration against their
-/// tolerances ([`crate::study::verify::PENETRATION_TOLERANCE`],
-/// [`crate::study::verify::CONE_TOLERANCE`]), with the verdict.
+/// tolerances ([`crate::pipeline::verify::PENETRATION_TOLERANCE`],
+/// [`crate::pipeline::verify::CONE_TOLERANCE`]), with the verdict.
 pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
-    use crate::study::verify::{CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT};
+    use crate::pipeline::verify::{CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT};
     let mut s = format!(
         "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e} (the \
          criterion); along the re-integrated path, penetration min h ≥ −{PENETRATION_TOLERANCE:e} m \
@@ -664,7 +664,7 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
             s.push_str(&format!("| {} | not verified | | | | |\n", r.name));
             continue;
         };
-        let min = |f: &dyn Fn(&crate::study::verify::PhaseVerification) -> Option<f64>| {
+        let min = |f: &dyn Fn(&crate::pipeline::verify::PhaseVerification) -> Option<f64>| {
             v.phases.iter().filter_map(f).fold(f64::INFINITY, f64::min)
         };
         let h = min(&|p| p.min_h);
@@ -736,7 +736,7 @@ pub fn run_all(
         // default search of `optimize`, so the report shows the optima a user gets.
         let strategy = match name.parse::<Problem>() {
             _ if quick => Strategy::Direct,
-            Ok(p) => crate::study::strategy::default_strategy(p, settings.scheme),
+            Ok(p) => crate::pipeline::strategy::default_strategy(p, settings.scheme),
             Err(_) => Strategy::default(),
         };
         match run_scenario(name, settings, strategy, dir, mu_s, solve)

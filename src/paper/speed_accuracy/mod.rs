@@ -18,7 +18,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-use crate::study as problems;
+use crate::pipeline as problems;
 use anyhow::{Context, Result};
 use bf_optim::ocp::problem::Scheme;
 use bf_plot::paper::{WorkPrecisionSet, fig_work_precision_sets};

@@ -31,7 +31,7 @@ use bf_problem::arm::{
 use bf_sim::arm::{ArmMode, FreeArm};
 use bf_sim::{HybridSystem, Input, SimError, SimSettings};
 
-use super::error::StudyError;
+use super::error::PipelineError;
 use super::verify::{ATOL_FACTOR, VERIFIED_DEFECT};
 
 /// Builds and solves `reach-arm` on `scene`; `scene_toml` and `scene_params` (the scene file's
@@ -41,7 +41,7 @@ pub fn solve_reach_arm(
     settings: &ArmSettings,
     scene_toml: &str,
     scene_params: &[(String, f64)],
-) -> Result<ArmSolution, StudyError> {
+) -> Result<ArmSolution, PipelineError> {
     let start = Instant::now();
     let built = build_reach_arm(scene, settings)?;
     let sol = solve_nlp(&built.nlp, &built.solver_settings(), None, None)?;
@@ -84,7 +84,7 @@ pub fn solve_verified(
     refinements: usize,
     scene_toml: &str,
     scene_params: &[(String, f64)],
-) -> Result<Vec<ArmAttempt>, StudyError> {
+) -> Result<Vec<ArmAttempt>, PipelineError> {
     let mut attempts = Vec::new();
     let mut s = settings.clone();
     loop {
@@ -108,7 +108,7 @@ pub fn solve_verified(
 
 /// The scene an arm solution was posed on, parsed from its stored text with its runtime
 /// parameters.
-pub fn scene_of(sol: &ArmSolution) -> Result<Scene, StudyError> {
+pub fn scene_of(sol: &ArmSolution) -> Result<Scene, PipelineError> {
     let mut scene = Scene::from_toml_str(&sol.scene_toml, &sol.scene).map_err(|source| {
         bf_problem::ProblemError::Scene {
             scene: sol.scene.clone(),
@@ -116,7 +116,7 @@ pub fn scene_of(sol: &ArmSolution) -> Result<Scene, StudyError> {
         }
     })?;
     bf_model::registry::set_parameters(&mut scene, &sol.scene_params).map_err(|e| {
-        StudyError::Arm {
+        PipelineError::Arm {
             message: format!("scene `{}`: {e}", sol.scene),
         }
     })?;
@@ -220,9 +220,9 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 
 /// Re-integrates `sol` on its scene (see the module docs) with DOPRI5 at `rtol`
 /// (atol = rtol · [`ATOL_FACTOR`]).
-pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, StudyError> {
+pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, PipelineError> {
     let scene = scene_of(sol)?;
-    let (model, _) = ArmModel::from_scene(&scene).map_err(|e| StudyError::Arm {
+    let (model, _) = ArmModel::from_scene(&scene).map_err(|e| PipelineError::Arm {
         message: format!("scene `{}`: {e}", scene.name),
     })?;
     let tr = &sol.raw;
@@ -399,10 +399,10 @@ pub fn arm_csvs(sol: &ArmSolution, scene: &Scene) -> (String, String) {
 /// the solution files' one writer ([`super::solution_io::write_file`]). `solution.json`
 /// carries the schema of the ball problems' files: `schema_version` and a top-level
 /// `verified` (docs/files.md).
-pub fn write_arm_solution(sol: &ArmSolution, dir: &Path) -> Result<(), StudyError> {
+pub fn write_arm_solution(sol: &ArmSolution, dir: &Path) -> Result<(), PipelineError> {
     let scene = scene_of(sol)?;
     let (torques, traj) = arm_csvs(sol, &scene);
-    let serial = |e: serde_json::Error| StudyError::Arm {
+    let serial = |e: serde_json::Error| PipelineError::Arm {
         message: format!("cannot serialise the solution: {e}"),
     };
     let mut doc = serde_json::to_value(sol).map_err(serial)?;
@@ -425,11 +425,11 @@ pub fn write_arm_solution(sol: &ArmSolution, dir: &Path) -> Result<(), StudyErro
 }
 
 /// Reads an arm `solution.json`.
-pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, StudyError> {
-    let text = std::fs::read_to_string(path).map_err(|e| StudyError::Arm {
+pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, PipelineError> {
+    let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Arm {
         message: format!("{}: cannot read: {e}", path.display()),
     })?;
-    let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| StudyError::Arm {
+    let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| PipelineError::Arm {
         message: format!("{}: not JSON: {e}", path.display()),
     })?;
     let version = super::solution_io::SCHEMA_VERSION;
@@ -438,7 +438,7 @@ pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, StudyError> {
         None => {}
         Some(v) if v.as_u64() == Some(version) => {}
         Some(v) => {
-            return Err(StudyError::Arm {
+            return Err(PipelineError::Arm {
                 message: format!(
                     "{}: schema_version {v} is not one this program reads (it reads {version})",
                     path.display()
@@ -446,7 +446,7 @@ pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, StudyError> {
             });
         }
     }
-    serde_json::from_value(doc).map_err(|e| StudyError::Arm {
+    serde_json::from_value(doc).map_err(|e| PipelineError::Arm {
         message: format!("{}: not an arm solution: {e}", path.display()),
     })
 }

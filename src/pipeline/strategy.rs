@@ -43,7 +43,7 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::build;
-use super::error::StudyError;
+use super::error::PipelineError;
 use super::solve::{solve, solve_warm};
 use bf_optim::ocp::Scheme;
 pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
@@ -82,7 +82,7 @@ pub(crate) fn record(chain: usize, stage: String, sol: &OcpSolution, t0: Instant
 pub(crate) fn failed_record(
     chain: usize,
     stage: String,
-    e: &StudyError,
+    e: &PipelineError,
     t0: Instant,
 ) -> StageRecord {
     StageRecord {
@@ -238,7 +238,7 @@ fn chains_of(
     settings: &ProblemSettings,
     strategy: Strategy,
     target: &BuiltProblem,
-) -> Result<Vec<Vec<(String, ProblemSettings)>>, StudyError> {
+) -> Result<Vec<Vec<(String, ProblemSettings)>>, PipelineError> {
     let eps = target.epsilon;
     let q0 = &target.guess.free;
     let nphases = target.modes.len();
@@ -294,7 +294,7 @@ fn chains_of(
         }
         Strategy::Multistart { starts, seed } => {
             if starts == 0 {
-                return Err(StudyError::NoStarts);
+                return Err(PipelineError::NoStarts);
             }
             (0..starts)
                 .map(|k| {
@@ -336,7 +336,7 @@ pub(crate) fn run_chains(
     shard: Shard,
     stick_continuation: Option<f64>,
     progress: Progress<'_>,
-) -> Result<Vec<(usize, ChainResult)>, StudyError> {
+) -> Result<Vec<(usize, ChainResult)>, PipelineError> {
     let target = build(problem, settings)?;
     let mut chains = chains_of(problem, settings, strategy, &target)?;
     if let Some(s0) = stick_continuation
@@ -388,7 +388,7 @@ pub fn solve_with_strategy(
     settings: &ProblemSettings,
     strategy: Strategy,
     progress: Progress<'_>,
-) -> Result<(BuiltProblem, OcpSolution), StudyError> {
+) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
     let results: Vec<ChainResult> =
@@ -400,7 +400,7 @@ pub fn solve_with_strategy(
     let records: Vec<StageRecord> = results.iter().flat_map(|(r, _)| r.clone()).collect();
     let iterations = records.iter().map(|r| r.iterations).sum();
     let Some((k, ok)) = best else {
-        return Err(StudyError::AllChainsFailed {
+        return Err(PipelineError::AllChainsFailed {
             strategy,
             stages: records
                 .iter()
@@ -412,7 +412,7 @@ pub fn solve_with_strategy(
     let (p, mut sol) = results
         .swap_remove(k)
         .1
-        .ok_or(StudyError::Internal("the chosen chain has no solution"))?;
+        .ok_or(PipelineError::Internal("the chosen chain has no solution"))?;
     sol.iterations = iterations;
     sol.solve_seconds = t0.elapsed().as_secs_f64();
     sol.strategy = Some(StrategyReport {

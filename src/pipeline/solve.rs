@@ -1,4 +1,4 @@
-//! The solve policy of the study layer: interior-point settings of a problem
+//! The solve policy of the solve pipeline: interior-point settings of a problem
 //! ([`solver_settings`], [`warm_settings`], [`interpolated_warm_settings`]), a solve with its guess fallback ([`solve`]) and a
 //! primal-dual warm-started solve ([`solve_warm`]).
 //!
@@ -14,7 +14,7 @@ use bf_optim::ipm::{ExtrapolationScope, IterationInfo, Nlp, Settings, Solution, 
 use bf_optim::ocp::solve_nlp;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
 
-use super::error::StudyError;
+use super::error::PipelineError;
 
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
@@ -57,11 +57,11 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 /// [`ProblemSettings::guess`]; with [`GuessKind::Auto`], a failed solve from the
 /// docs/parameters.md guess is repeated from the geometric [`GuessKind::Contact`] guess.
 /// `callback` sees every iteration (return `false` to stop). The library's default
-/// [`Strategy`](crate::study::strategy::Strategy) wraps this in a continuation.
+/// [`Strategy`](crate::pipeline::strategy::Strategy) wraps this in a continuation.
 pub fn solve(
     p: &BuiltProblem,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
-) -> Result<OcpSolution, StudyError> {
+) -> Result<OcpSolution, PipelineError> {
     let start = Instant::now();
     let mut stages = Vec::new();
     let mut iters = 0;
@@ -207,8 +207,8 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
 /// ε): objective, cost states and durations as that NLP gives them, whatever numbers the
 /// file states. Errors when the solution does not record enough to rebuild its NLP or its
 /// point does not fit the rebuilt NLP.
-pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, StudyError> {
-    let fail = |why: String| StudyError::Unrecomputable(why);
+pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, PipelineError> {
+    let fail = |why: String| PipelineError::Unrecomputable(why);
     let problem: bf_problem::Problem = sol
         .problem
         .parse()
@@ -245,7 +245,7 @@ pub fn solve_warm(
     p: &BuiltProblem,
     warm: &WarmStart,
     callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
-) -> Result<OcpSolution, StudyError> {
+) -> Result<OcpSolution, PipelineError> {
     let start = Instant::now();
     let sol = solve_nlp(&p.nlp, &warm_settings(&p.settings), Some(warm), callback)?;
     let mut out = finish_solution(p, &sol)?;
@@ -260,7 +260,7 @@ pub fn solve_warm(
 }
 
 /// The [`OcpSolution`] of an interior-point result, with its statistics and warm-start data.
-fn finish_solution(p: &BuiltProblem, sol: &Solution) -> Result<OcpSolution, StudyError> {
+fn finish_solution(p: &BuiltProblem, sol: &Solution) -> Result<OcpSolution, PipelineError> {
     let mut out = solution_at(p, &sol.x, sol.status)?;
     out.iterations = sol.iterations;
     out.constraint_violation = sol.constraint_violation;

@@ -15,7 +15,7 @@ use anyhow::Result;
 use bf_problem::OcpSolution;
 use bf_problem::solution::Samples;
 
-use crate::study::scenarios::ScenarioResult;
+use crate::paper::scenarios::ScenarioResult;
 
 /// The longer minimum stick duration of the comparison (s).
 pub const LONG_MIN_STICK: f64 = 0.1;
@@ -57,7 +57,7 @@ fn stick_duration(sol: &OcpSolution) -> Option<f64> {
 
 /// The report section: the comparison table, the discussion of the tap, and per run the
 /// results row and the claims of Sect. 6.1 (`claims` renders them, e.g.
-/// [`crate::study::scenarios::results_markdown`]) and links to its figures.
+/// [`crate::paper::scenarios::results_markdown`]) and links to its figures.
 pub fn markdown(
     runs: &[StickRun],
     claims: &dyn Fn(&[ScenarioResult]) -> Result<String>,
@@ -85,7 +85,7 @@ pub fn markdown(
             "| {} | {} | {} | {:.6e} | {:.4} | {} | {} | {jump:.3} | {roll:.3} | {:.0} % | {:.3} | {:.1} |",
             r.min_stick,
             crate::names::name(&o.status),
-            if crate::study::verify::is_verified(o) {
+            if crate::pipeline::verify::is_verified(o) {
                 "yes"
             } else {
                 "**no**"
@@ -148,7 +148,7 @@ pub fn markdown(
         );
         writeln!(s, "#### QC, min stick {} s\n\n{body}", r.min_stick)?;
         if !r.prefix.is_empty() {
-            let figs = crate::study::scenarios::figures_markdown(&r.result.name)
+            let figs = crate::paper::scenarios::figures_markdown(&r.result.name)
                 .replace("](figures/", &format!("]({}/figures/", r.prefix))
                 .replace("](animation_", &format!("]({}/animation_", r.prefix))
                 .replace("[animation_", &format!("[{}/animation_", r.prefix));

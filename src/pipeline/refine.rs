@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use bf_optim::ipm::{IterationInfo, Settings};
 use bf_optim::ocp::{HpRule, MeshSpec, collocation_errors};
 
-use super::error::StudyError;
+use super::error::PipelineError;
 use crate::errors::chain;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 
@@ -81,18 +81,18 @@ impl std::ops::Deref for RefineResult {
 }
 
 /// Collocation error estimate of `sol` (a solution of `p`), per phase and element.
-pub fn error_estimate(p: &BuiltProblem, sol: &OcpSolution) -> Result<Vec<Vec<f64>>, StudyError> {
+pub fn error_estimate(p: &BuiltProblem, sol: &OcpSolution) -> Result<Vec<Vec<f64>>, PipelineError> {
     Ok(collocation_errors(&p.ocp, &sol.raw)?)
 }
 
 /// The hp-Radau mesh of every phase of `p`'s transcription.
-pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, StudyError> {
+pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, PipelineError> {
     p.nlp
         .phases
         .iter()
         .map(|l| {
             if l.mesh.gauss_end {
-                return Err(StudyError::RefineNeedsRadau);
+                return Err(PipelineError::RefineNeedsRadau);
             }
             let mut breaks: Vec<f64> = l
                 .mesh
@@ -140,16 +140,16 @@ pub fn refine(
     opts: &RefineSettings,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
     mut on_round: Option<&mut dyn FnMut(&RefineRound)>,
-) -> Result<RefineResult, StudyError> {
+) -> Result<RefineResult, PipelineError> {
     if !(opts.warm_mu_init.is_finite() && opts.warm_mu_init > 0.0) {
-        return Err(StudyError::InvalidOption {
+        return Err(PipelineError::InvalidOption {
             name: "warm_mu_init",
             value: opts.warm_mu_init,
             expected: "positive",
         });
     }
     if !(opts.tol.is_finite() && opts.tol > 0.0) {
-        return Err(StudyError::InvalidOption {
+        return Err(PipelineError::InvalidOption {
             name: "refinement tolerance",
             value: opts.tol,
             expected: "positive",
@@ -248,7 +248,7 @@ pub fn refine(
             });
         }
     }
-    let (solution, mesh, errors) = best.ok_or(StudyError::Internal(
+    let (solution, mesh, errors) = best.ok_or(PipelineError::Internal(
         "refinement ran no solve (max_rounds overflow)",
     ))?;
     Ok(RefineResult {
@@ -275,7 +275,7 @@ pub fn refine_solution(
     sol: OcpSolution,
     opts: &RefineSettings,
     on_round: Option<&mut dyn FnMut(&RefineRound)>,
-) -> Result<(BuiltProblem, OcpSolution), StudyError> {
+) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
     let strategy = sol.strategy.clone();
     let (iters0, secs0) = (sol.iterations, sol.solve_seconds);
     let start = ProblemSettings {

@@ -68,7 +68,7 @@ use bf_optim::ocp::nodes::lagrange_basis;
 use bf_problem::{BuiltProblem, OcpSolution, PhaseMode};
 use bf_sim::{HybridSystem, SimError, SimOutput, SimSettings};
 
-use super::error::{PhaseDataDefect, StudyError};
+use super::error::{PhaseDataDefect, PipelineError};
 
 pub use bf_problem::solution::records::{PhaseVerification, TorqueInterpolant, Verification};
 
@@ -192,12 +192,12 @@ fn nan_max(a: f64, b: f64) -> f64 {
 fn verification_model<const N: usize>(
     p: &BuiltProblem,
     eps: f64,
-) -> Result<Model<DynKernels<N>, N>, StudyError> {
+) -> Result<Model<DynKernels<N>, N>, PipelineError> {
     let settings = TransitionSettings {
         contact_tolerance: CONTACT_TOLERANCE,
         ..TransitionSettings::default()
     };
-    let model_err = |source| StudyError::VerifyModel {
+    let model_err = |source| PipelineError::VerifyModel {
         scene: p.scene.name.clone(),
         source,
     };
@@ -222,7 +222,7 @@ fn verification_model<const N: usize>(
         }
     }
     if !same {
-        return Err(StudyError::ParameterMismatch {
+        return Err(PipelineError::ParameterMismatch {
             scene: p.scene.name.clone(),
             model: format!("{pm:?}"),
             ocp: format!("{ph:?}"),
@@ -236,8 +236,8 @@ fn check_phase_data(
     tr: &PhaseTrajectory,
     nq: usize,
     nx: usize,
-) -> Result<(), StudyError> {
-    let bad = |defect| Err(StudyError::PhaseData { phase: k, defect });
+) -> Result<(), PipelineError> {
+    let bad = |defect| Err(PipelineError::PhaseData { phase: k, defect });
     if !(tr.duration.is_finite() && tr.duration > 0.0) {
         return bad(PhaseDataDefect::Duration(tr.duration));
     }
@@ -283,7 +283,7 @@ fn node_residual<const N: usize>(
     phase: usize,
     mode: PhaseMode,
     tr: &PhaseTrajectory,
-) -> Result<f64, StudyError> {
+) -> Result<f64, PipelineError> {
     let pm = model.params();
     let mut worst: f64 = 0.0;
     for k in 0..tr.node_tau.len() {
@@ -295,7 +295,7 @@ fn node_residual<const N: usize>(
             N + 3
         };
         if a.len() < need {
-            return Err(StudyError::PhaseData {
+            return Err(PipelineError::PhaseData {
                 phase,
                 defect: PhaseDataDefect::AlgebraicDimension {
                     found: a.len(),
@@ -307,7 +307,7 @@ fn node_residual<const N: usize>(
         let st = ElementSystem::<N>::state(x)?;
         let kin = model
             .evaluate(&st)
-            .map_err(|source| StudyError::NodeEvaluation {
+            .map_err(|source| PipelineError::NodeEvaluation {
                 phase,
                 node: k,
                 source,
@@ -473,7 +473,7 @@ fn verify_phase<const N: usize>(
     rtol: f64,
     atol: f64,
     interp: TorqueInterpolant,
-) -> Result<PhaseVerification, StudyError> {
+) -> Result<PhaseVerification, PipelineError> {
     let big_t = tr.duration;
     // The first and last state points are τ = −1 and +1 in both schemes (LG: the final state
     // is the quadrature variable, which interpolation of the element would miss).
@@ -505,7 +505,7 @@ fn verify_phase<const N: usize>(
             .filter(|&j| (a..b).contains(&tr.node_state[j]))
             .collect();
         if ks.is_empty() {
-            return Err(StudyError::PhaseData {
+            return Err(PipelineError::PhaseData {
                 phase: k,
                 defect: PhaseDataDefect::EmptyElement(e),
             });
@@ -664,7 +664,7 @@ pub fn element_errors(
     p: &BuiltProblem,
     sol: &OcpSolution,
     rtol: f64,
-) -> Result<Vec<Vec<f64>>, StudyError> {
+) -> Result<Vec<Vec<f64>>, PipelineError> {
     let v = verify(p, sol, rtol)?;
     Ok(v.phases
         .into_iter()
@@ -679,7 +679,11 @@ pub fn element_errors(
 
 /// [`verify_with`] at `rtol` with atol = rtol · [`ATOL_FACTOR`] and the clamped torque
 /// interpolant of the dense output / `torques.csv`.
-pub fn verify(p: &BuiltProblem, sol: &OcpSolution, rtol: f64) -> Result<Verification, StudyError> {
+pub fn verify(
+    p: &BuiltProblem,
+    sol: &OcpSolution,
+    rtol: f64,
+) -> Result<Verification, PipelineError> {
     verify_with(
         p,
         sol,
@@ -704,11 +708,11 @@ pub fn verify_with(
     p: &BuiltProblem,
     sol: &OcpSolution,
     opt: &VerifySettings,
-) -> Result<Verification, StudyError> {
+) -> Result<Verification, PipelineError> {
     let start = Instant::now();
     let rtol = opt.rtol;
     if !(rtol.is_finite() && rtol > 0.0 && rtol <= 0.1) {
-        return Err(StudyError::InvalidOption {
+        return Err(PipelineError::InvalidOption {
             name: "verification rtol",
             value: rtol,
             expected: "in (0, 0.1]",
@@ -716,21 +720,21 @@ pub fn verify_with(
     }
     let atol = opt.atol.unwrap_or(rtol * ATOL_FACTOR);
     if !(atol.is_finite() && atol > 0.0) {
-        return Err(StudyError::InvalidOption {
+        return Err(PipelineError::InvalidOption {
             name: "verification atol",
             value: atol,
             expected: "finite and > 0",
         });
     }
     if sol.raw.len() != p.modes.len() || sol.modes != p.modes {
-        return Err(StudyError::ModeMismatch {
+        return Err(PipelineError::ModeMismatch {
             solution: sol.modes.clone(),
             problem: p.modes.clone(),
         });
     }
     let eps = sol.epsilon;
     if !(eps.is_finite() && eps > 0.0) || (eps - p.epsilon).abs() > 1e-12 * p.epsilon.abs() {
-        return Err(StudyError::EpsilonMismatch {
+        return Err(PipelineError::EpsilonMismatch {
             solution: eps,
             problem: p.epsilon,
         });
@@ -744,7 +748,7 @@ pub fn verify_with(
         6 => verify_phases::<6>(p, sol, opt, atol)?,
         7 => verify_phases::<7>(p, sol, opt, atol)?,
         joints => {
-            return Err(StudyError::VerifyJoints {
+            return Err(PipelineError::VerifyJoints {
                 scene: p.scene.name.clone(),
                 joints,
                 max: MAX_VERIFY_JOINTS,
@@ -782,7 +786,7 @@ fn verify_phases<const N: usize>(
     sol: &OcpSolution,
     opt: &VerifySettings,
     atol: f64,
-) -> Result<Vec<PhaseVerification>, StudyError> {
+) -> Result<Vec<PhaseVerification>, PipelineError> {
     let eps = sol.epsilon;
     let model = verification_model::<N>(p, eps)?;
     let mut tau_max = [f64::INFINITY; N];

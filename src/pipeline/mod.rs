@@ -1,39 +1,31 @@
-//! The study layer: everything that solves, checks and reports the ball-and-finger problems
-//! of bf-problem on the engines below it.
+//! The solve pipeline: everything that builds, solves, searches, refines, verifies and files an
+//! optimal-control problem of bf-problem on the engines below it. It knows nothing of the
+//! paper's experiments ([`crate::paper`] builds on it), so another problem of the catalogue, or
+//! a new one, reuses it whole.
 //!
-//! * [`arm`]: `reach-arm` on arms without a ball: solve, per-element re-integration, files;
-//! * [`appendix`]: the paper's Appendix A/B as printed against derivations (the misprints);
-//! * [`solve`](mod@solve): the solve-and-retry policy (interior-point settings, dual-regularization retry,
-//!   geometric-guess fallback) and primal-dual warm starts;
+//! * [`solve`](mod@solve): the solve-and-retry policy (interior-point settings, dual-regularization
+//!   retry, geometric-guess fallback) and primal-dual warm starts;
 //! * [`strategy`]: continuation and multi-start searches for good local optima (Sect. 7);
+//! * [`search`]: the seeded multi-start search with re-integration and refinement of each end
+//!   point;
 //! * [`refine`]: adaptive hp mesh refinement (Sect. 5);
 //! * [`verify`]: re-integration of the optimal torques with the simulator (bf-sim);
+//! * [`bounds`]: the bounds an optimum sits on (eq. 60–65);
 //! * [`solution_io`]: `solution.json` and `torques.csv`;
-//! * [`scenarios`]: the three scenarios of Sect. 6.1 solved, verified, plotted and checked;
-//! * [`claims`]: the paper's claims of Sect. 6.1 with verdicts and, where they differ, why; the
-//!   bounds an optimum sits on;
-//! * [`openloop`]: the optimal torques replayed open loop in the full hybrid model (Sect. 6.2);
-//! * [`extremes`]: numerical stability at the edges of the domain (one file per probe);
-//! * [`speed_accuracy`]: error versus computing time for integrators, collocation meshes, the
-//!   smoothing ε and the generated-kernel variants (one file per study).
+//! * [`arm`]: `reach-arm` on arms without a ball: solve, per-element re-integration, files;
+//! * [`error`]: [`PipelineError`], the one error type of the layer.
 //!
 //! [`build`] builds a catalogue problem on the scenes and node kernels of bf-generated
 //! ([`GENERATED`]); it requires every phase node function to run on an emitted kernel, so a
 //! graph that changed without its kernels being re-emitted is an error, not a slow solve.
 
-pub mod appendix;
 pub mod arm;
-pub mod claims;
-pub mod closed_loop;
+pub mod bounds;
 pub mod error;
-pub mod extremes;
-pub mod openloop;
 pub mod refine;
-pub mod scenarios;
 pub mod search;
 pub mod solution_io;
 pub mod solve;
-pub mod speed_accuracy;
 pub mod strategy;
 pub mod verify;
 
@@ -42,7 +34,7 @@ use bf_problem::{BuiltProblem, Generated, Problem, ProblemSettings};
 
 pub use bf_problem::OcpSolution;
 
-pub use error::StudyError;
+pub use error::PipelineError;
 pub use solution_io::SolutionIo;
 pub use solve::{solve, solve_warm, solver_settings, warm_settings};
 
@@ -74,6 +66,6 @@ pub const GENERATED: Generated = Generated {
 };
 
 /// Builds `problem` with `settings` on [`GENERATED`].
-pub fn build(problem: Problem, settings: &ProblemSettings) -> Result<BuiltProblem, StudyError> {
+pub fn build(problem: Problem, settings: &ProblemSettings) -> Result<BuiltProblem, PipelineError> {
     Ok(bf_problem::build(problem, settings, &GENERATED)?)
 }

@@ -1,7 +1,7 @@
 //! Stand-alone reports of the `ball-finger report` command, also embedded in the
 //! `ball-finger paper` report.
 //!
-//! * `speed-accuracy`: [`crate::study::speed_accuracy::speed_accuracy`], what users trade
+//! * `speed-accuracy`: [`crate::paper::speed_accuracy::speed_accuracy`], what users trade
 //!   speed for accuracy with — integrator tolerances (paper Sect. 3, Fig. 3), collocation
 //!   meshes and the smoothing ε of eq. 58–59 (Sect. 4), and the variants of the generated
 //!   dynamics kernels (eq. 22a, 76–79).

@@ -1,14 +1,14 @@
 //! The solve-strategy comparison (paper Sect. 4 problems, Sect. 6.1 objectives):
 //! cold start (`direct`) vs `continuation` vs `multistart` (N = 8, 32) on the periodic
 //! problems, with objective φ (eq. 60), iterations, wall time, the period found and the
-//! re-integration defects of each final solution (`study::verify`).
+//! re-integration defects of each final solution (`pipeline::verify`).
 //! `--quick` runs `periodic-qc` only, without N = 32.
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use crate::study::strategy::{Strategy, solve_with_strategy};
-use crate::study::verify::verify;
+use crate::pipeline::strategy::{Strategy, solve_with_strategy};
+use crate::pipeline::verify::verify;
 use anyhow::Result;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::study as problems;
+use crate::pipeline as problems;
 use anyhow::Result;
 use bf_generated::paper;
 use bf_plot::paper::WorkPrecisionSet;

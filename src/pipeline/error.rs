@@ -1,4 +1,4 @@
-//! [`StudyError`]: the one error enum of the study layer. The engines' errors pass through
+//! [`PipelineError`]: the one error enum of the solve pipeline. The engines' errors pass through
 //! unchanged ([`ProblemError`], [`OptimError`], [`SimError`]); the study's own variants name
 //! the file, option or solution concerned, and keep an underlying error as the typed
 //! [`source`](std::error::Error::source) instead of repeating its text. Where the whole cause
@@ -11,9 +11,9 @@ use bf_problem::solution::records::Strategy;
 use bf_problem::{PhaseMode, ProblemError};
 use bf_sim::SimError;
 
-/// Everything that can go wrong in the study layer.
+/// Everything that can go wrong in the solve pipeline.
 #[derive(Debug, thiserror::Error)]
-pub enum StudyError {
+pub enum PipelineError {
     /// Building the problem failed.
     #[error(transparent)]
     Problem(#[from] ProblemError),

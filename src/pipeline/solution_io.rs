@@ -22,7 +22,7 @@ use serde_json::{Map, Value, json};
 use bf_output::FileError;
 use bf_problem::OcpSolution;
 
-use super::error::StudyError;
+use super::error::PipelineError;
 
 /// Version of the `solution.json` layout written by [`SolutionIo::write_json`].
 pub const SCHEMA_VERSION: u64 = 2;
@@ -44,8 +44,8 @@ pub fn internals_file(path: &Path) -> String {
 /// Fields of [`OcpSolution`] that go to [`INTERNALS_FILE`].
 const INTERNAL_FIELDS: [&str; 5] = ["raw", "nlp_warm", "params", "timing", "counters"];
 
-fn io_err(path: &Path, e: impl std::fmt::Display) -> StudyError {
-    StudyError::SolutionFile {
+fn io_err(path: &Path, e: impl std::fmt::Display) -> PipelineError {
+    PipelineError::SolutionFile {
         path: path.into(),
         reason: e.to_string(),
     }
@@ -54,19 +54,19 @@ fn io_err(path: &Path, e: impl std::fmt::Display) -> StudyError {
 /// Writes one solution file (ball or arm) through the workspace's one atomic writer
 /// ([`bf_output::replace_file`]), so a failed or interrupted write never leaves a truncated
 /// `solution.json` / `torques.csv` behind.
-pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), StudyError> {
+pub fn write_file(path: &Path, bytes: &[u8]) -> Result<(), PipelineError> {
     bf_output::replace_file(path, bytes).map_err(|e| FileError::new("cannot write", path, e).into())
 }
 
 /// File input and output of an [`OcpSolution`].
 pub trait SolutionIo: Sized {
     /// Writes `solution.json` and, beside it, [`INTERNALS_FILE`].
-    fn write_json(&self, path: &Path) -> Result<(), StudyError>;
+    fn write_json(&self, path: &Path) -> Result<(), PipelineError>;
     /// Reads a solution written by [`SolutionIo::write_json`] (or a file of the format before
     /// schema 2).
-    fn read_json(path: &Path) -> Result<Self, StudyError>;
+    fn read_json(path: &Path) -> Result<Self, PipelineError>;
     /// Writes [`OcpSolution::torques_csv`] to `path`.
-    fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError>;
+    fn write_torques_csv(&self, path: &Path) -> Result<(), PipelineError>;
 }
 
 /// The state component names of an `nq`-joint finger: q1..qn, qd1..qdn, omega_x..omega_z.
@@ -156,14 +156,14 @@ fn columns(samples: &Value, nq: usize) -> Value {
     Value::Object(m)
 }
 
-fn uncolumns(cols: &Value, nq: usize, path: &Path) -> Result<Value, StudyError> {
-    let get = |k: &str| -> Result<Vec<Value>, StudyError> {
+fn uncolumns(cols: &Value, nq: usize, path: &Path) -> Result<Value, PipelineError> {
+    let get = |k: &str| -> Result<Vec<Value>, PipelineError> {
         cols.get(k)
             .and_then(Value::as_array)
             .cloned()
             .ok_or_else(|| io_err(path, format!("trajectory column `{k}` missing")))
     };
-    let join = |names: Vec<String>| -> Result<Value, StudyError> {
+    let join = |names: Vec<String>| -> Result<Value, PipelineError> {
         let cs: Vec<Vec<Value>> = names.iter().map(|n| get(n)).collect::<Result<_, _>>()?;
         let n = cs.first().map_or(0, Vec::len);
         Ok(Value::Array(
@@ -300,7 +300,7 @@ fn from_documents(
     public: &Value,
     internals: &Value,
     path: &Path,
-) -> Result<OcpSolution, StudyError> {
+) -> Result<OcpSolution, PipelineError> {
     let Value::Object(p) = public else {
         return Err(io_err(path, "not a JSON object"));
     };
@@ -372,7 +372,7 @@ fn check_internals_belong(
     internals: &Value,
     path: &Path,
     ipath: &Path,
-) -> Result<(), StudyError> {
+) -> Result<(), PipelineError> {
     let theirs = internals.get("problem").and_then(Value::as_str);
     if theirs != Some(sol.problem.as_str()) {
         return Err(io_err(
@@ -410,7 +410,7 @@ pub fn internals_path(path: &Path, v: &Value) -> std::path::PathBuf {
 }
 
 impl SolutionIo for OcpSolution {
-    fn write_json(&self, path: &Path) -> Result<(), StudyError> {
+    fn write_json(&self, path: &Path) -> Result<(), PipelineError> {
         let name = internals_file(path);
         let (public, internals) = documents(self, &name).map_err(|e| io_err(path, e))?;
         let ipath = path.with_file_name(&name);
@@ -420,7 +420,7 @@ impl SolutionIo for OcpSolution {
         write_file(path, s.as_bytes())
     }
 
-    fn read_json(path: &Path) -> Result<OcpSolution, StudyError> {
+    fn read_json(path: &Path) -> Result<OcpSolution, PipelineError> {
         let s =
             std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
         let v: Value = serde_json::from_str(&s).map_err(|e| io_err(path, e))?;
@@ -451,7 +451,7 @@ impl SolutionIo for OcpSolution {
         }
     }
 
-    fn write_torques_csv(&self, path: &Path) -> Result<(), StudyError> {
+    fn write_torques_csv(&self, path: &Path) -> Result<(), PipelineError> {
         write_file(path, torques_csv(self).as_bytes())
     }
 }

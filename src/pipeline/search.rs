@@ -15,7 +15,7 @@ use std::time::Instant;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rayon::prelude::*;
 
-use super::error::StudyError;
+use super::error::PipelineError;
 use super::refine::{self, RefineCriterion, RefineSettings};
 use super::strategy::{
     Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record, record,
@@ -343,7 +343,7 @@ pub fn search(
     shard: Shard,
     policy: &VerifyPolicy,
     progress: Progress<'_>,
-) -> Result<Search, StudyError> {
+) -> Result<Search, PipelineError> {
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
     let results = run_chains(
@@ -418,7 +418,7 @@ impl Search {
     /// stage, total iterations and time; the refinements are not in it, the chosen
     /// candidate's own is in [`OcpSolution::refinement`]); its problem is `None` only for candidates read
     /// from files. Errors when no chain produced a solution.
-    pub fn best(mut self) -> Result<(Option<BuiltProblem>, OcpSolution), StudyError> {
+    pub fn best(mut self) -> Result<(Option<BuiltProblem>, OcpSolution), PipelineError> {
         let views: Vec<(usize, &OcpSolution)> = self
             .candidates
             .iter()
@@ -430,7 +430,7 @@ impl Search {
                 .iter()
                 .map(|r| format!("{}: {}", r.chain, r.stage))
                 .collect();
-            return Err(StudyError::AllChainsFailed {
+            return Err(PipelineError::AllChainsFailed {
                 strategy: self.strategy,
                 stages,
             });

@@ -1,0 +1,22 @@
+//! The paper's experiments (Sect. 6 and the appendices), built on the solve pipeline
+//! ([`crate::pipeline`]) and written into `ball-finger paper`'s report and the `report`
+//! command's comparisons.
+//!
+//! * [`scenarios`]: the three scenarios of Sect. 6.1 solved, verified, plotted and checked;
+//! * [`claims`]: the paper's claims of Sect. 6.1 with verdicts and, where they differ, why;
+//! * [`openloop`]: the optimal torques replayed open loop in the full hybrid model (Sect. 6.2);
+//! * [`closed_loop`]: the same optima executed with feedback (bf-control; Sect. 6.2 and 7);
+//! * [`appendix`]: the paper's Appendix A/B as printed against derivations (the misprints);
+//! * [`extremes`]: numerical stability at the edges of the domain (one file per probe);
+//! * [`speed_accuracy`]: error versus computing time for integrators, collocation meshes, the
+//!   smoothing ε and the generated-kernel variants (one file per study);
+//! * [`report`]: the `report` command's studies (search strategies, the stick-phase minimum).
+
+pub mod appendix;
+pub mod claims;
+pub mod closed_loop;
+pub mod extremes;
+pub mod openloop;
+pub mod report;
+pub mod scenarios;
+pub mod speed_accuracy;

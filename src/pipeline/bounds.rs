@@ -1,0 +1,138 @@
+//! The bounds an optimum sits on, as `optimize` prints them and `solution.json` records them
+//! (`active_bounds`): phase durations, the period row, torque limits |τ_i| ≤ τ_max and joint
+//! limits (eq. 60–65 of the paper's Sect. 4).
+
+use bf_optim::ocp::Ocp;
+use bf_optim::terms::VarRef;
+use bf_problem::OcpSolution;
+
+pub use bf_problem::solution::records::ActiveBound;
+
+/// Whether `v` is on bound `b`: within 1e-5 + 1e-4·|b|. An interior-point optimum approaches an
+/// active bound to within about its tolerance (1e-8) over the multiplier, an inactive one stays
+/// farther off; 1e-4 relative also covers the clamp of interpolated torques.
+pub fn on_bound(v: f64, b: f64) -> bool {
+    b.is_finite() && v.is_finite() && (v - b).abs() <= 1e-5 + 1e-4 * b.abs()
+}
+
+/// The bounds among `quantities` = (what, samples, (lower, upper)) that some sample sits on,
+/// one entry per side (value: the sample nearest to the bound).
+pub fn bound_hits(quantities: &[(String, Vec<f64>, (f64, f64))]) -> Vec<ActiveBound> {
+    let mut out = Vec::new();
+    for (what, values, (lo, hi)) in quantities {
+        for (bound, lower) in [(*lo, true), (*hi, false)] {
+            let hits: Vec<f64> = values
+                .iter()
+                .copied()
+                .filter(|&v| on_bound(v, bound))
+                .collect();
+            if let Some(&value) = hits
+                .iter()
+                .min_by(|a, b| (*a - bound).abs().total_cmp(&(*b - bound).abs()))
+            {
+                out.push(ActiveBound {
+                    what: what.clone(),
+                    value,
+                    bound,
+                    lower,
+                    hits: hits.len(),
+                    of: values.len(),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The bounds of `ocp` that `sol` sits on: each phase's duration bounds, every constraint row
+/// on phase durations alone (the period), the control bounds (torque limits, at the
+/// collocation nodes) and the state bounds (joint limits, at the state points). Constraints
+/// on other functions of the state (h(0) ≥ 0.3 r, contact conditions) are not listed: they
+/// are equalities or hold by construction of the phase sequence.
+pub fn active_bounds(ocp: &Ocp, sol: &OcpSolution) -> Vec<ActiveBound> {
+    let nq = sol.dense.q.first().map_or(0, |q| q.len());
+    let mode = |p: usize| {
+        sol.modes
+            .get(p)
+            .map_or("?".to_string(), |m| crate::names::name(m).to_lowercase())
+    };
+    let mut q: Vec<(String, Vec<f64>, (f64, f64))> = Vec::new();
+    for (p, (ph, d)) in ocp.phases.iter().zip(&sol.phase_durations).enumerate() {
+        q.push((
+            format!("phase {} ({}) duration (s)", p + 1, mode(p)),
+            vec![*d],
+            ph.duration_bounds,
+        ));
+    }
+    for pf in &ocp.points {
+        let phases: Option<Vec<usize>> = pf
+            .vars
+            .iter()
+            .map(|(_, v)| match v {
+                VarRef::Duration(i) => Some(*i),
+                _ => None,
+            })
+            .collect();
+        if let (Some(ph), [b]) = (phases, pf.bounds.as_slice()) {
+            let sum = ph
+                .iter()
+                .map(|&i| sol.phase_durations.get(i).copied().unwrap_or(f64::NAN))
+                .sum::<f64>();
+            let what = if ph.len() == sol.phase_durations.len() {
+                "period (s)".to_string()
+            } else {
+                format!("sum of the durations of phases {ph:?} (s)")
+            };
+            q.push((what, vec![sum], *b));
+        }
+    }
+    for (p, (ph, tr)) in ocp.phases.iter().zip(&sol.raw).enumerate() {
+        for (i, b) in ph.u_bounds.iter().enumerate() {
+            let v: Vec<f64> = tr.u.iter().filter_map(|u| u.get(i).copied()).collect();
+            q.push((format!("τ{} in phase {} (N m)", i + 1, p + 1), v, *b));
+        }
+        for (i, b) in ph.x_bounds.iter().enumerate().take(nq) {
+            let v: Vec<f64> = tr.x.iter().filter_map(|x| x.get(i).copied()).collect();
+            q.push((format!("q{} in phase {} (rad)", i + 1, p + 1), v, *b));
+        }
+    }
+    bound_hits(&q)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bound_hits_find_the_sides_a_solution_sits_on() {
+        let q = vec![
+            ("stick".to_string(), vec![0.010_000_1], (0.01, 5.0)),
+            ("free".to_string(), vec![1.3], (0.01, 5.0)),
+            ("period".to_string(), vec![9.9999], (0.0, 10.0)),
+            (
+                "τ1".to_string(),
+                vec![-1.0, 0.2, 0.99999, 1.0, 0.5],
+                (-1.0, 1.0),
+            ),
+            ("q2".to_string(), vec![0.0, 0.3], (0.0, f64::INFINITY)),
+        ];
+        let a = bound_hits(&q);
+        let d: Vec<(&str, bool, usize)> = a
+            .iter()
+            .map(|a| (a.what.as_str(), a.lower, a.hits))
+            .collect();
+        assert_eq!(
+            d,
+            vec![
+                ("stick", true, 1),
+                ("period", false, 1),
+                ("τ1", true, 1),
+                ("τ1", false, 2),
+                ("q2", true, 1)
+            ]
+        );
+        assert!(a[3].describe().contains("at 2 of 5 nodes"));
+        // 1e-3 from a 10 s bound is off it; NaN is never on a bound.
+        assert!(!on_bound(9.998, 10.0) && !on_bound(f64::NAN, 1.0));
+    }
+}
