@@ -57,6 +57,7 @@ fn variants(
             EmitSettings {
                 float: FloatTy::F32,
                 fma: false,
+                no_std: false,
             },
             "single precision (f32 arguments, constants and arithmetic)".into(),
         ),
@@ -65,6 +66,7 @@ fn variants(
             EmitSettings {
                 float: FloatTy::F64,
                 fma: true,
+                no_std: false,
             },
             "f64 with fused multiply-add (`mul_add`) for every a*b ± c".into(),
         ),

@@ -191,9 +191,17 @@ fn generate_emits_the_robot_kernels_in_every_variant() {
         args.extend(&flags);
         let out = run(&args);
         assert!(out.status.success(), "{flags:?}");
-        let want = generate_with(&full, &text, &EmitSettings { float, fma })
-            .unwrap()
-            .code;
+        let want = generate_with(
+            &full,
+            &text,
+            &EmitSettings {
+                float,
+                fma,
+                no_std: false,
+            },
+        )
+        .unwrap()
+        .code;
         assert!(
             out.stdout == want.as_bytes(),
             "{flags:?}: not the generator's output"
