@@ -49,8 +49,7 @@ pub fn sin_cos_medium(x: f64) -> (f64, f64) {
     const PIO2_3: f64 = 2.02226624871116645580e-21;
     const PIO2_3T: f64 = 8.47842766036889956997e-32;
     const LIMIT: f64 = 1048576.0;
-    // NaN compares false.
-    if !(x.abs() <= LIMIT) {
+    if x.is_nan() || x.abs() > LIMIT {
         return (f64::NAN, f64::NAN);
     }
     // k = x·2/π rounded to an integer; |k| < 2²⁰, so k times a 33-bit part is exact.
