@@ -375,90 +375,40 @@ impl Tape {
             let len = len as usize;
             let (done, rest) = v.split_at_mut(dst);
             let out = &mut rest[..len];
-            let d = |i: &u32| done[*i as usize];
+            // One loop per kind over the run's operands, `f` applied to each operation's.
+            macro_rules! each {
+                ($arity:literal, $f:expr) => {{
+                    let args = &self.args[p..p + $arity * len];
+                    for (o, a) in out.iter_mut().zip(args.chunks_exact($arity)) {
+                        *o = $f(a);
+                    }
+                    p += $arity * len;
+                }};
+            }
+            let d = |i: u32| done[i as usize];
             match kind {
-                Kind::Add => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 2 * len].chunks_exact(2))
-                    {
-                        *o = d(&a[0]) + d(&a[1]);
-                    }
-                    p += 2 * len;
-                }
-                Kind::Sub => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 2 * len].chunks_exact(2))
-                    {
-                        *o = d(&a[0]) - d(&a[1]);
-                    }
-                    p += 2 * len;
-                }
-                Kind::Mul => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 2 * len].chunks_exact(2))
-                    {
-                        *o = d(&a[0]) * d(&a[1]);
-                    }
-                    p += 2 * len;
-                }
-                Kind::Div => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 2 * len].chunks_exact(2))
-                    {
-                        *o = d(&a[0]) / d(&a[1]);
-                    }
-                    p += 2 * len;
-                }
-                Kind::Min => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 2 * len].chunks_exact(2))
-                    {
-                        let (x, y) = (d(&a[0]), d(&a[1]));
-                        *o = if y < x { y } else { x };
-                    }
-                    p += 2 * len;
-                }
-                Kind::Max => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 2 * len].chunks_exact(2))
-                    {
-                        let (x, y) = (d(&a[0]), d(&a[1]));
-                        *o = if y > x { y } else { x };
-                    }
-                    p += 2 * len;
-                }
-                Kind::IfLt => {
-                    for (o, a) in out
-                        .iter_mut()
-                        .zip(self.args[p..p + 4 * len].chunks_exact(4))
-                    {
-                        *o = if d(&a[0]) < d(&a[1]) {
-                            d(&a[2])
-                        } else {
-                            d(&a[3])
-                        };
-                    }
-                    p += 4 * len;
-                }
-                Kind::Neg | Kind::Sqrt | Kind::Abs | Kind::Sin | Kind::Cos => {
-                    for (o, a) in out.iter_mut().zip(&self.args[p..p + len]) {
-                        let x = d(a);
-                        *o = match kind {
-                            Kind::Neg => -x,
-                            Kind::Sqrt => x.sqrt(),
-                            Kind::Abs => x.abs(),
-                            Kind::Sin => x.sin_cos().0,
-                            _ => x.sin_cos().1,
-                        };
-                    }
-                    p += len;
-                }
+                Kind::Add => each!(2, |a: &[u32]| d(a[0]) + d(a[1])),
+                Kind::Sub => each!(2, |a: &[u32]| d(a[0]) - d(a[1])),
+                Kind::Mul => each!(2, |a: &[u32]| d(a[0]) * d(a[1])),
+                Kind::Div => each!(2, |a: &[u32]| d(a[0]) / d(a[1])),
+                Kind::Min => each!(2, |a: &[u32]| {
+                    let (x, y) = (d(a[0]), d(a[1]));
+                    if y < x { y } else { x }
+                }),
+                Kind::Max => each!(2, |a: &[u32]| {
+                    let (x, y) = (d(a[0]), d(a[1]));
+                    if y > x { y } else { x }
+                }),
+                Kind::IfLt => each!(4, |a: &[u32]| if d(a[0]) < d(a[1]) {
+                    d(a[2])
+                } else {
+                    d(a[3])
+                }),
+                Kind::Neg => each!(1, |a: &[u32]| -d(a[0])),
+                Kind::Sqrt => each!(1, |a: &[u32]| d(a[0]).sqrt()),
+                Kind::Abs => each!(1, |a: &[u32]| d(a[0]).abs()),
+                Kind::Sin => each!(1, |a: &[u32]| d(a[0]).sin_cos().0),
+                Kind::Cos => each!(1, |a: &[u32]| d(a[0]).sin_cos().1),
             }
             dst += len;
         }

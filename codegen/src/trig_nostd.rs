@@ -62,19 +62,18 @@ pub fn sin_cos_medium(x: f64) -> (f64, f64) {
     let mut r = x - k * PIO2_1;
     let mut w = k * PIO2_1T;
     let mut y0 = r - w;
+    // One more part of π/2: r − k·part exactly, w the error of the tail and of that step.
+    let step = |t: f64, part: f64, tail: f64| {
+        let w = k * part;
+        let r = t - w;
+        let w = k * tail - ((t - r) - w);
+        (r, w, r - w)
+    };
     // Each step is needed when the previous one cancelled more than its spare bits.
     if e - exponent(y0) > 16 {
-        let t = r;
-        w = k * PIO2_2;
-        r = t - w;
-        w = k * PIO2_2T - ((t - r) - w);
-        y0 = r - w;
+        (r, w, y0) = step(r, PIO2_2, PIO2_2T);
         if e - exponent(y0) > 49 {
-            let t = r;
-            w = k * PIO2_3;
-            r = t - w;
-            w = k * PIO2_3T - ((t - r) - w);
-            y0 = r - w;
+            (r, w, y0) = step(r, PIO2_3, PIO2_3T);
         }
     }
     let y1 = (r - y0) - w;
