@@ -1,5 +1,5 @@
-//! Runs bf-codegen for every `scenes/*.toml` (sorted) and writes `$OUT_DIR/<name>.rs` (only
-//! when the text changed) plus `$OUT_DIR/modules.rs`, which declares one module per scene and
+//! Runs bf-codegen for every `scenes/*.toml` (sorted; a scene may take its robot from a URDF
+//! next to it by `urdf = "…"`) and writes `$OUT_DIR/<name>.rs` (only when the text changed) plus `$OUT_DIR/modules.rs`, which declares one module per scene and
 //! the registry `SCENES` of every scene's name and TOML text.
 //!
 //! Every scene module holds the kernels its `kernels` list names plus the inverse-dynamics
@@ -57,6 +57,7 @@ fn variants(
             EmitSettings {
                 float: FloatTy::F32,
                 fma: false,
+                no_std: false,
             },
             "single precision (f32 arguments, constants and arithmetic)".into(),
         ),
@@ -65,6 +66,7 @@ fn variants(
             EmitSettings {
                 float: FloatTy::F64,
                 fma: true,
+                no_std: false,
             },
             "f64 with fused multiply-add (`mul_add`) for every a*b ± c".into(),
         ),
@@ -106,7 +108,22 @@ fn main() -> Result<()> {
             "scenes/{}",
             f.file_name().unwrap_or_default().to_string_lossy()
         );
-        let text = fs::read_to_string(f).with_context(|| format!("reading {shown}"))?;
+        let raw = fs::read_to_string(f).with_context(|| format!("reading {shown}"))?;
+        // A scene that takes its robot from a URDF (`urdf = "…"`, relative to `scenes/`) is
+        // expanded into its self-contained text, as every command loads it, so the module
+        // embeds that text and `compiled_match` finds it. The directory is given relative to
+        // this package (build scripts run there), so the text names the URDF by a relative
+        // path on every machine.
+        if let Some(urdf) = bf_codegen::spec::urdf_path(&raw, &scenes_dir) {
+            println!("cargo::rerun-if-changed={}", urdf.display());
+        }
+        let text = bf_codegen::spec::expand_toml(
+            &raw,
+            &shown,
+            Path::new("../scenes"),
+            &bf_codegen::spec::ChainChoice::default(),
+        )
+        .map_err(|e| anyhow!("invalid scene file {shown}:\n{e}"))?;
         let scene = bf_codegen::Scene::from_toml_str(&text, &shown)
             .map_err(|e| anyhow!("invalid scene file {shown}:\n{e}"))?;
         if names.contains(&scene.name) {

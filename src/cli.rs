@@ -127,6 +127,10 @@ pub struct GenerateArgs {
     /// Emit every `a*b ± c` as a fused multiply-add (`mul_add`, one rounding instead of two).
     #[arg(long)]
     pub fma: bool,
+    /// Emit a module for a `#![no_std]` crate: its own square root, sine and cosine, no
+    /// allocating `eval_flat` (not with --fma).
+    #[arg(long, conflicts_with = "fma")]
+    pub no_std: bool,
 }
 
 /// `--base`/`--tip`: which serial chain of a URDF scene file is the model (docs/scene-format.md).

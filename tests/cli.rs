@@ -181,17 +181,24 @@ fn generate_emits_the_robot_kernels_in_every_variant() {
     let text = std::fs::read_to_string(root().join("scenes/puma560.toml")).unwrap();
     let scene = Scene::from_toml_str(&text, "scenes/puma560.toml").unwrap();
     let full = with_robot_kernels(&scene);
-    for (flags, float, fma) in [
-        (vec![], FloatTy::F64, false),
-        (vec!["--float", "f32"], FloatTy::F32, false),
-        (vec!["--fma"], FloatTy::F64, true),
-        (vec!["--float", "f32", "--fma"], FloatTy::F32, true),
+    for (flags, float, fma, no_std) in [
+        (vec![], FloatTy::F64, false, false),
+        (vec!["--float", "f32"], FloatTy::F32, false, false),
+        (vec!["--fma"], FloatTy::F64, true, false),
+        (vec!["--float", "f32", "--fma"], FloatTy::F32, true, false),
+        (vec!["--no-std"], FloatTy::F64, false, true),
+        (
+            vec!["--float", "f32", "--no-std"],
+            FloatTy::F32,
+            false,
+            true,
+        ),
     ] {
         let mut args = vec!["generate", "scenes/puma560.toml"];
         args.extend(&flags);
         let out = run(&args);
         assert!(out.status.success(), "{flags:?}");
-        let want = generate_with(&full, &text, &EmitSettings { float, fma })
+        let want = generate_with(&full, &text, &EmitSettings { float, fma, no_std })
             .unwrap()
             .code;
         assert!(
@@ -207,10 +214,17 @@ fn generate_emits_the_robot_kernels_in_every_variant() {
         );
         assert!(code.contains("pub fn regressor("), "{flags:?}");
         assert_eq!(code.contains(&format!("{ty}::mul_add(")), fma, "{flags:?}");
+        // A no_std module carries its own mathematics and no allocating `eval_flat`.
+        assert_eq!(code.contains("trait KernelMath"), no_std, "{flags:?}");
+        assert_eq!(code.contains("pub fn eval_flat("), !no_std, "{flags:?}");
     }
     assert_clean_failure(
         &run(&["generate", "scenes/puma560.toml", "--float", "f16"]),
         &["--float", "f16"],
+    );
+    assert_clean_failure(
+        &run(&["generate", "scenes/puma560.toml", "--no-std", "--fma"]),
+        &["--no-std", "--fma"],
     );
 }
 

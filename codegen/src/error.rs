@@ -16,6 +16,9 @@ pub enum CodegenError {
     /// Bad numeric input to [`crate::eval_all`] (wrong length, non-finite value).
     #[error("input error: {0}")]
     Input(InputDefect),
+    /// Emit settings that cannot be combined (e.g. fused multiply-add in a no_std module).
+    #[error("emit settings: {0}")]
+    Settings(&'static str),
     /// A bug in the generator (an inconsistency between its own parts).
     #[error("internal generator error: {0}")]
     Internal(InternalDefect),

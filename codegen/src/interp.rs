@@ -1,4 +1,6 @@
-//! Interpreter: evaluates graph nodes in `f64` or in double-double ([`crate::dd::Dd`]).
+//! Interpreter: evaluates graph nodes in `f64` or in double-double ([`crate::dd::Dd`]), as a
+//! straight-line [`Tape`] of runs of one operation each, without allocation per call
+//! ([`Tape::eval_into`]).
 //! [`KernelF64`] is `f64` with the emitted kernels' sine and cosine ([`crate::trig`]), so an
 //! evaluation in it is bit-identical to the emitted f64 kernels; plain `f64` uses the standard
 //! library's, as the emitted optimal-control node kernels do.
@@ -32,6 +34,13 @@ pub trait Scalar:
     fn abs(self) -> Self;
     /// Nearest `f64`.
     fn to_f64(self) -> f64;
+    /// `(sin[i], x[i]) ← (sin x[i], cos x[i])` for every i: the angles are in `x` on entry,
+    /// their cosines on return (the tape's batch of joint-angle sines and cosines).
+    fn sin_cos_in_place(sin: &mut [Self], x: &mut [Self]) {
+        for (s, c) in sin.iter_mut().zip(x.iter_mut()) {
+            (*s, *c) = c.sin_cos();
+        }
+    }
 }
 
 impl Scalar for f64 {
@@ -127,14 +136,109 @@ impl Scalar for KernelF64 {
     fn to_f64(self) -> f64 {
         self.0
     }
+    /// Four lanes per [`crate::trig::sin_cos_n`] call; every lane's value is that of a call
+    /// with its argument alone (the helper's lanes are independent).
+    fn sin_cos_in_place(sin: &mut [Self], x: &mut [Self]) {
+        for (s4, c4) in sin.chunks_mut(4).zip(x.chunks_mut(4)) {
+            let mut lanes = [0.0; 4];
+            for (l, c) in lanes.iter_mut().zip(c4.iter()) {
+                *l = c.0;
+            }
+            let (sv, cv) = crate::trig::sin_cos_n(lanes);
+            for (i, (s, c)) in s4.iter_mut().zip(c4.iter_mut()).enumerate() {
+                (*s, *c) = (KernelF64(sv[i]), KernelF64(cv[i]));
+            }
+        }
+    }
 }
 
-/// A compiled evaluation order for a set of outputs (the cone, children first), with the
-/// nodes renumbered densely so an evaluation touches only the cone's values.
+/// The operation of a run of tape instructions (every instruction of a run has the same one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Kind {
+    Add,
+    Sub,
+    Mul,
+    Div,
+    Neg,
+    Sqrt,
+    Abs,
+    Min,
+    Max,
+    IfLt,
+    Sin,
+    Cos,
+}
+
+/// Number of kinds (the ready lists of the scheduler).
+const KINDS: usize = 12;
+
+impl Kind {
+    const ALL: [Kind; KINDS] = [
+        Kind::Add,
+        Kind::Sub,
+        Kind::Mul,
+        Kind::Div,
+        Kind::Neg,
+        Kind::Sqrt,
+        Kind::Abs,
+        Kind::Min,
+        Kind::Max,
+        Kind::IfLt,
+        Kind::Sin,
+        Kind::Cos,
+    ];
+
+    /// The kind and children of an operation node (`None` for constants and variables).
+    fn of(n: Node) -> Option<(Kind, [Option<Id>; 4])> {
+        Some(match n {
+            Node::Const(_) | Node::Var(_) => return None,
+            Node::Add(a, b) => (Kind::Add, [Some(a), Some(b), None, None]),
+            Node::Sub(a, b) => (Kind::Sub, [Some(a), Some(b), None, None]),
+            Node::Mul(a, b) => (Kind::Mul, [Some(a), Some(b), None, None]),
+            Node::Div(a, b) => (Kind::Div, [Some(a), Some(b), None, None]),
+            Node::Min(a, b) => (Kind::Min, [Some(a), Some(b), None, None]),
+            Node::Max(a, b) => (Kind::Max, [Some(a), Some(b), None, None]),
+            Node::Neg(a) => (Kind::Neg, [Some(a), None, None, None]),
+            Node::Sqrt(a) => (Kind::Sqrt, [Some(a), None, None, None]),
+            Node::Abs(a) => (Kind::Abs, [Some(a), None, None, None]),
+            Node::Sin(a) => (Kind::Sin, [Some(a), None, None, None]),
+            Node::Cos(a) => (Kind::Cos, [Some(a), None, None, None]),
+            Node::IfLt(a, b, t, f) => (Kind::IfLt, [Some(a), Some(b), Some(t), Some(f)]),
+        })
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// A straight-line program for a set of outputs (the cone of the outputs), evaluated without
+/// allocation by [`Tape::eval_into`] in a scratch vector the caller keeps.
+///
+/// Slots of the value vector, in order: the graph variables the cone reads, its constants, the
+/// sines and cosines of variables (computed together, four lanes per
+/// [`Scalar::sin_cos_slice`] call for [`KernelF64`]), then the operations in *runs*: a run is
+/// a sequence of operations of one kind whose operands are all computed before the run starts
+/// (a list scheduler takes, at each step, every ready operation of the kind with the most
+/// ready ones). So the interpreter decides the operation once per run, not once per node,
+/// and the operations of a run are independent of each other, which the processor overlaps.
+/// Every node is still computed by the same single operation on the same operands, so the
+/// values are those of the graph's node-by-node evaluation bit for bit.
 #[derive(Debug, Clone)]
 pub struct Tape {
-    nodes: Vec<(usize, Node)>,
-    outputs: Vec<Id>,
+    /// Graph variable of each variable slot.
+    vars: Vec<u32>,
+    /// Value of each constant slot.
+    consts: Vec<f64>,
+    /// Variable slot of each batched sine–cosine (sines, then cosines, follow the constants).
+    angles: Vec<u32>,
+    /// (kind, length) of each run.
+    runs: Vec<(Kind, u32)>,
+    /// Operand slots of the run instructions, in order (two per binary operation, one per
+    /// unary, four per `IfLt`).
+    args: Vec<u32>,
+    /// Slot of each output.
+    outputs: Vec<u32>,
     size: usize,
 }
 
@@ -143,72 +247,194 @@ impl Tape {
     pub fn new(g: &Graph, outputs: &[Id]) -> Self {
         let mark = g.cone(outputs);
         let max = outputs.iter().map(|o| o.index() + 1).max().unwrap_or(0);
-        // slot[i]: the dense index of graph node i (cone nodes only).
-        let mut slot = vec![0u32; max];
-        let mut nodes = Vec::new();
+        const NONE: u32 = u32::MAX;
+        let mut slot = vec![NONE; max];
+        let (mut vars, mut consts, mut angles) = (Vec::new(), Vec::new(), Vec::new());
         for i in (0..max).filter(|&i| mark[i]) {
-            let s = |c: Id| Id(slot[c.index()]);
-            let n = match g.node(Id(i as u32)) {
-                n @ (Node::Const(_) | Node::Var(_)) => n,
-                Node::Add(a, b) => Node::Add(s(a), s(b)),
-                Node::Sub(a, b) => Node::Sub(s(a), s(b)),
-                Node::Mul(a, b) => Node::Mul(s(a), s(b)),
-                Node::Div(a, b) => Node::Div(s(a), s(b)),
-                Node::Neg(a) => Node::Neg(s(a)),
-                Node::Sin(a) => Node::Sin(s(a)),
-                Node::Cos(a) => Node::Cos(s(a)),
-                Node::Sqrt(a) => Node::Sqrt(s(a)),
-                Node::Abs(a) => Node::Abs(s(a)),
-                Node::Min(a, b) => Node::Min(s(a), s(b)),
-                Node::Max(a, b) => Node::Max(s(a), s(b)),
-                Node::IfLt(a, b, t, f) => Node::IfLt(s(a), s(b), s(t), s(f)),
+            if let Node::Var(k) = g.node(Id(i as u32)) {
+                slot[i] = vars.len() as u32;
+                vars.push(k);
+            }
+        }
+        for i in (0..max).filter(|&i| mark[i]) {
+            if let Node::Const(b) = g.node(Id(i as u32)) {
+                slot[i] = (vars.len() + consts.len()) as u32;
+                consts.push(f64::from_bits(b));
+            }
+        }
+        // Sines and cosines of variables (the joint angles): one batch.
+        let mut angle_of = vec![NONE; max];
+        for i in (0..max).filter(|&i| mark[i]) {
+            if let Node::Sin(a) | Node::Cos(a) = g.node(Id(i as u32))
+                && let Node::Var(_) = g.node(a)
+                && angle_of[a.index()] == NONE
+            {
+                angle_of[a.index()] = angles.len() as u32;
+                angles.push(slot[a.index()]);
+            }
+        }
+        let trig = (vars.len() + consts.len()) as u32;
+        let na = angles.len() as u32;
+        for i in (0..max).filter(|&i| mark[i]) {
+            match g.node(Id(i as u32)) {
+                Node::Sin(a) if angle_of[a.index()] != NONE => slot[i] = trig + angle_of[a.index()],
+                Node::Cos(a) if angle_of[a.index()] != NONE => {
+                    slot[i] = trig + na + angle_of[a.index()]
+                }
+                _ => {}
+            }
+        }
+        // List scheduling of the remaining operations into runs.
+        let mut pending = vec![0u32; max];
+        let mut parents: Vec<Vec<u32>> = vec![Vec::new(); max];
+        let mut ready: [Vec<u32>; KINDS] = Default::default();
+        let mut left = 0usize;
+        for i in (0..max).filter(|&i| mark[i] && slot[i] == NONE) {
+            let Some((kind, children)) = Kind::of(g.node(Id(i as u32))) else {
+                continue;
             };
-            slot[i] = nodes.len() as u32;
-            nodes.push((nodes.len(), n));
+            left += 1;
+            for c in children.into_iter().flatten() {
+                if slot[c.index()] == NONE {
+                    pending[i] += 1;
+                    parents[c.index()].push(i as u32);
+                }
+            }
+            if pending[i] == 0 {
+                ready[kind.index()].push(i as u32);
+            }
+        }
+        let mut next = trig + 2 * na;
+        let (mut runs, mut args) = (Vec::new(), Vec::new());
+        while left > 0 {
+            let k = (0..KINDS)
+                .max_by_key(|&k| (ready[k].len(), std::cmp::Reverse(k)))
+                .unwrap_or(0);
+            let mut batch = std::mem::take(&mut ready[k]);
+            batch.sort_unstable();
+            for &i in &batch {
+                let (_, children) = Kind::of(g.node(Id(i))).unwrap_or((Kind::Add, [None; 4]));
+                args.extend(children.into_iter().flatten().map(|c| slot[c.index()]));
+                slot[i as usize] = next;
+                next += 1;
+            }
+            for &i in &batch {
+                for &p in &parents[i as usize] {
+                    pending[p as usize] -= 1;
+                    if pending[p as usize] == 0 {
+                        let (kind, _) = Kind::of(g.node(Id(p))).unwrap_or((Kind::Add, [None; 4]));
+                        ready[kind.index()].push(p);
+                    }
+                }
+            }
+            left -= batch.len();
+            runs.push((Kind::ALL[k], batch.len() as u32));
         }
         Tape {
-            outputs: outputs.iter().map(|o| Id(slot[o.index()])).collect(),
-            size: nodes.len(),
-            nodes,
+            outputs: outputs.iter().map(|o| slot[o.index()]).collect(),
+            size: next as usize,
+            vars,
+            consts,
+            angles,
+            runs,
+            args,
+        }
+    }
+
+    /// Number of outputs.
+    pub fn n_outputs(&self) -> usize {
+        self.outputs.len()
+    }
+
+    /// Computes every slot into `v` (resized to the tape's size: allocates only when a larger
+    /// tape than before uses it).
+    fn run<S: Scalar>(&self, vars: &[S], v: &mut Vec<S>) {
+        let zero = S::from_f64(0.0);
+        if v.len() < self.size {
+            v.resize(self.size, zero);
+        }
+        let (nv, nc, na) = (self.vars.len(), self.consts.len(), self.angles.len());
+        for (x, &k) in v.iter_mut().zip(&self.vars) {
+            *x = vars.get(k as usize).copied().unwrap_or(zero);
+        }
+        for (x, &c) in v[nv..].iter_mut().zip(&self.consts) {
+            *x = S::from_f64(c);
+        }
+        if na > 0 {
+            let (head, tail) = v.split_at_mut(nv + nc);
+            let (sin, tail) = tail.split_at_mut(na);
+            let cos = &mut tail[..na];
+            for (c, &a) in cos.iter_mut().zip(&self.angles) {
+                *c = head[a as usize];
+            }
+            S::sin_cos_in_place(sin, cos);
+        }
+        let mut dst = nv + nc + 2 * na;
+        let mut p = 0;
+        for &(kind, len) in &self.runs {
+            let len = len as usize;
+            let (done, rest) = v.split_at_mut(dst);
+            let out = &mut rest[..len];
+            // One loop per kind over the run's operands, `f` applied to each operation's.
+            macro_rules! each {
+                ($arity:literal, $f:expr) => {{
+                    let args = &self.args[p..p + $arity * len];
+                    for (o, a) in out.iter_mut().zip(args.chunks_exact($arity)) {
+                        *o = $f(a);
+                    }
+                    p += $arity * len;
+                }};
+            }
+            let d = |i: u32| done[i as usize];
+            match kind {
+                Kind::Add => each!(2, |a: &[u32]| d(a[0]) + d(a[1])),
+                Kind::Sub => each!(2, |a: &[u32]| d(a[0]) - d(a[1])),
+                Kind::Mul => each!(2, |a: &[u32]| d(a[0]) * d(a[1])),
+                Kind::Div => each!(2, |a: &[u32]| d(a[0]) / d(a[1])),
+                Kind::Min => each!(2, |a: &[u32]| {
+                    let (x, y) = (d(a[0]), d(a[1]));
+                    if y < x { y } else { x }
+                }),
+                Kind::Max => each!(2, |a: &[u32]| {
+                    let (x, y) = (d(a[0]), d(a[1]));
+                    if y > x { y } else { x }
+                }),
+                Kind::IfLt => each!(4, |a: &[u32]| if d(a[0]) < d(a[1]) {
+                    d(a[2])
+                } else {
+                    d(a[3])
+                }),
+                Kind::Neg => each!(1, |a: &[u32]| -d(a[0])),
+                Kind::Sqrt => each!(1, |a: &[u32]| d(a[0]).sqrt()),
+                Kind::Abs => each!(1, |a: &[u32]| d(a[0]).abs()),
+                Kind::Sin => each!(1, |a: &[u32]| d(a[0]).sin_cos().0),
+                Kind::Cos => each!(1, |a: &[u32]| d(a[0]).sin_cos().1),
+            }
+            dst += len;
+        }
+    }
+
+    /// Evaluates the outputs for the input variables `vars` (layout of
+    /// [`crate::robot::Layout`]; variables beyond `vars.len()` read as 0) into `out`, using
+    /// `scratch` for the values: no allocation once `scratch` has grown to the largest tape it
+    /// serves.
+    ///
+    /// # Panics
+    /// If `out.len()` is not [`Tape::n_outputs`] (a programming error).
+    pub fn eval_into<S: Scalar>(&self, vars: &[S], scratch: &mut Vec<S>, out: &mut [S]) {
+        assert_eq!(out.len(), self.outputs.len(), "output length");
+        self.run(vars, scratch);
+        for (o, &s) in out.iter_mut().zip(&self.outputs) {
+            *o = scratch[s as usize];
         }
     }
 
     /// Evaluate the outputs for the input variables `vars` (layout of [`crate::robot::Layout`]).
-    /// Variables beyond `vars.len()` read as 0.
+    /// Variables beyond `vars.len()` read as 0. Allocates; [`Tape::eval_into`] does not.
     pub fn eval<S: Scalar>(&self, vars: &[S]) -> Vec<S> {
-        let zero = S::from_f64(0.0);
-        let mut v: Vec<S> = vec![zero; self.size];
-        for &(i, n) in &self.nodes {
-            v[i] = match n {
-                Node::Const(b) => S::from_f64(f64::from_bits(b)),
-                Node::Var(k) => vars.get(k as usize).copied().unwrap_or(zero),
-                Node::Add(a, b) => v[a.index()] + v[b.index()],
-                Node::Sub(a, b) => v[a.index()] - v[b.index()],
-                Node::Mul(a, b) => v[a.index()] * v[b.index()],
-                Node::Div(a, b) => v[a.index()] / v[b.index()],
-                Node::Neg(a) => -v[a.index()],
-                Node::Sin(a) => v[a.index()].sin_cos().0,
-                Node::Cos(a) => v[a.index()].sin_cos().1,
-                Node::Sqrt(a) => v[a.index()].sqrt(),
-                Node::Abs(a) => v[a.index()].abs(),
-                Node::Min(a, b) => {
-                    let (x, y) = (v[a.index()], v[b.index()]);
-                    if y < x { y } else { x }
-                }
-                Node::Max(a, b) => {
-                    let (x, y) = (v[a.index()], v[b.index()]);
-                    if y > x { y } else { x }
-                }
-                Node::IfLt(a, b, t, f) => {
-                    if v[a.index()] < v[b.index()] {
-                        v[t.index()]
-                    } else {
-                        v[f.index()]
-                    }
-                }
-            };
-        }
-        self.outputs.iter().map(|o| v[o.index()]).collect()
+        let mut v = Vec::new();
+        self.run(vars, &mut v);
+        self.outputs.iter().map(|&s| v[s as usize]).collect()
     }
 }
 
@@ -256,6 +482,20 @@ impl RuntimeKernel {
     /// emitted `eval_flat_u` returns them.
     pub fn eval(&self, vars: &[KernelF64]) -> Vec<f64> {
         self.tape.eval(vars).into_iter().map(|v| v.0).collect()
+    }
+
+    /// As [`RuntimeKernel::eval`] without allocation: the outputs go to `out` (its length is
+    /// the sum of the outputs' lengths), the values to `scratch`, which the caller keeps
+    /// between calls.
+    ///
+    /// # Panics
+    /// If `out` has the wrong length (a programming error).
+    pub fn eval_into(&self, vars: &[KernelF64], scratch: &mut Vec<KernelF64>, out: &mut [f64]) {
+        assert_eq!(out.len(), self.tape.n_outputs(), "output length");
+        self.tape.run(vars, scratch);
+        for (o, &s) in out.iter_mut().zip(&self.tape.outputs) {
+            *o = scratch[s as usize].0;
+        }
     }
 }
 

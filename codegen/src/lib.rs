@@ -4,17 +4,21 @@
 //! dynamics eq. 22a/72–79, contact eq. 2–13/58–59 as [`graph`] expressions, derivatives by
 //! [`diff`]) → [`kernels`] (the catalogue of docs/kernels.md) → [`emit`] (SSA Rust code) with a
 //! [`report`]; [`interp`] evaluates the same graphs in f64 or double-double ([`dd`]);
-//! [`trig`] is the fast batched sine–cosine that emitted kernels carry;
+//! [`trig`] is the fast batched sine–cosine that emitted kernels carry ([`trig_nostd`]: the
+//! square root and one-argument sine–cosine of `#![no_std]` modules);
 //! [`nodefn`] differentiates, fingerprints and emits collocation node functions as kernels
 //! (the ball-and-finger node functions themselves are built in bf-problem).
 //!
-//! Entry points: [`generate`] (code + report) and [`eval_all`] (numbers for one state).
+//! Entry points: [`generate`] (code + report), [`Builder`] (the same from a user's build
+//! script, [`builder`]) and [`eval_all`] (numbers for one state).
 //!
 //! Cargo feature `emit` (default): the emitter ([`emit`], [`generate`],
 //! [`nodefn::emit_node_kernels`]) and its syn/quote/prettyplease dependencies. Without it the
 //! crate builds, differentiates and interprets the graphs, which is all a run-time user
 //! (bf-model's interpreted kernels, bf-optim's node functions) needs.
 
+#[cfg(feature = "emit")]
+pub mod builder;
 pub mod dd;
 pub mod diff;
 #[cfg(feature = "emit")]
@@ -27,6 +31,7 @@ pub mod nodefn;
 pub mod report;
 pub mod robot;
 pub mod trig;
+pub mod trig_nostd;
 
 #[cfg(feature = "emit")]
 use std::time::Instant;
@@ -35,6 +40,8 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 
 /// The scene file (bf-scene), under its historical path `bf_codegen::spec`.
 pub use bf_scene as spec;
+#[cfg(feature = "emit")]
+pub use builder::{BuildError, Builder, Emitted};
 #[cfg(feature = "emit")]
 pub use emit::{EmitSettings, FloatTy};
 pub use kernels::ALL_KERNELS;
@@ -87,6 +94,12 @@ pub fn generate_with(
     opts: &emit::EmitSettings,
 ) -> Result<Generated, CodegenError> {
     let start = Instant::now();
+    if opts.no_std && opts.fma {
+        return Err(CodegenError::Settings(
+            "fused multiply-add (`fma`) needs the standard library's `mul_add`; a no_std module \
+             cannot have it",
+        ));
+    }
     check_kernel_list(scene)?;
     let mut model = SymbolicRobot::new(scene)?;
     let mut defs = Vec::new();

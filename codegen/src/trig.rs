@@ -40,7 +40,7 @@ pub fn sin_cos_n<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
 /// One lane of [`sin_cos_n`]: `(sin x, cos x, fast)`, where `fast` is false if `x` is outside
 /// the range in which the reduction below is accurate (the values are then meaningless).
 #[inline(always)]
-fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
+pub(crate) fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
     // 2/π and π/2 = PIO2_1 + PIO2_1T + O(2⁻⁸⁷) (fdlibm `__ieee754_rem_pio2`: pio2_1, pio2_1t).
     const FRAC_2_PI: f64 = std::f64::consts::FRAC_2_PI;
     const PIO2_1: f64 = 1.57079632673412561417e+00;

@@ -31,6 +31,7 @@ fn fma_fuses_products_and_keeps_the_operation_count() {
     let opts = EmitSettings {
         float: FloatTy::F64,
         fma: true,
+        no_std: false,
     };
     let fused = generate_with(&scene, &text, &opts).unwrap();
     let n_fused = fused.code.matches("f64::mul_add(").count();
@@ -49,6 +50,7 @@ fn f32_changes_every_float_type() {
     let opts = EmitSettings {
         float: FloatTy::F32,
         fma: false,
+        no_std: false,
     };
     let code = generate_with(&scene, &text, &opts).unwrap().code;
     assert!(code.contains("pub fn mass_matrix(q: &[f32; NQ]"), "{code}");

@@ -20,6 +20,7 @@ use bf_codegen::{EmitSettings, FloatTy, Scene, generate, generate_with};
 const F32_FMA: EmitSettings = EmitSettings {
     float: FloatTy::F32,
     fma: true,
+    no_std: false,
 };
 
 const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden");
@@ -262,6 +263,7 @@ fn every_scene_is_formatted_as_prettyplease_formats_it() {
             EmitSettings {
                 float: FloatTy::F64,
                 fma: true,
+                no_std: false,
             },
         ] {
             let code = generate_with(&scene, &text, &opts).unwrap().code;

@@ -1,7 +1,8 @@
 //! The compiled kernels of every scene module against bf-codegen's interpreter evaluating the
 //! same graphs (random states, q̈ or τ, and perturbed runtime parameters). Both perform the same f64
 //! operations in the same order (sine and cosine by the emitted helper: the interpreter runs in
-//! `KernelF64`), so the results must be bit-identical.
+//! `KernelF64`), so the results must be bit-identical; the tape's allocation-free `eval_into`
+//! (one scratch vector shared by all tapes) gives the same bits as `eval`.
 
 use bf_codegen::Scene;
 use bf_codegen::interp::{KernelF64, Tape};
@@ -33,6 +34,8 @@ macro_rules! check_scene {
         );
         let mut rng = ChaCha8Rng::seed_from_u64($seed);
         let mut compared = 0usize;
+        // One scratch vector for every kernel's tape, as a caller of `eval_into` keeps it.
+        let mut scratch = Vec::new();
         for &k in s::KERNELS {
             let def = build_kernel(&mut model, k).unwrap();
             let ids: Vec<_> = def.output_ids();
@@ -64,6 +67,15 @@ macro_rules! check_scene {
                     .into_iter()
                     .map(|v| v.0)
                     .collect();
+                let mut into = vec![KernelF64(0.0); want.len()];
+                tape.eval_into(&vars, &mut scratch, &mut into);
+                assert!(
+                    into.iter()
+                        .zip(&want)
+                        .all(|(a, b)| a.0.to_bits() == b.to_bits()),
+                    "{}::{k}: eval_into differs from eval",
+                    stringify!($m)
+                );
                 let got = s::eval_flat_u(k, &q, &qd, &omega, eps, &u, &p).unwrap();
                 assert_eq!(
                     got.len(),

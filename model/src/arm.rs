@@ -31,9 +31,10 @@ enum Backend {
         potential: PotentialFn,
         p: Vec<f64>,
     },
+    // Boxed: a tape is several vectors, much larger than the compiled variant.
     Interpreted {
-        mass_cqd_g: Tape,
-        potential: Tape,
+        mass_cqd_g: Box<Tape>,
+        potential: Box<Tape>,
         layout: bf_codegen::robot::Layout,
         base_vars: Vec<KernelF64>,
     },
@@ -234,8 +235,8 @@ fn interpreted(scene: &Scene) -> Result<Backend> {
         base_vars,
     } = interpreted_tapes(scene, ["mass_cqd_g", "potential"])?;
     Ok(Backend::Interpreted {
-        mass_cqd_g,
-        potential,
+        mass_cqd_g: Box::new(mass_cqd_g),
+        potential: Box::new(potential),
         layout,
         base_vars,
     })

@@ -629,19 +629,58 @@ impl<const N: usize> InterpretedKernels<N> {
         })
     }
 
-    fn eval(&self, tape: &Tape, q: &[f64; N], qd: &[f64; N], w: &[f64; 3], eps: f64) -> Vec<f64> {
-        let mut v = self.base_vars.clone();
-        let l = &self.tape_layout;
-        for i in 0..N {
-            v[l.q(i) as usize] = KernelF64(q[i]);
-            v[l.qd(i) as usize] = KernelF64(qd[i]);
-        }
-        for i in 0..3 {
-            v[l.omega(i) as usize] = KernelF64(w[i]);
-        }
-        v[l.eps() as usize] = KernelF64(eps);
-        tape.eval(&v).into_iter().map(|x| x.0).collect()
+    /// `f` of the outputs of `tape` at (q, q̇, ω, ε), evaluated in this thread's
+    /// [`TAPE_BUFFERS`]: no allocation per call once they have grown. `f` must not evaluate a
+    /// tape itself (the buffers are borrowed while it runs; none of the callers below does).
+    fn eval<R>(
+        &self,
+        tape: &Tape,
+        (q, qd, w, eps): (&[f64; N], &[f64; N], &[f64; 3], f64),
+        f: impl FnOnce(&[f64]) -> R,
+    ) -> R {
+        TAPE_BUFFERS.with(|b| {
+            let mut b = b.borrow_mut();
+            let TapeBuffers {
+                vars,
+                values,
+                outputs,
+                flat,
+            } = &mut *b;
+            vars.clear();
+            vars.extend_from_slice(&self.base_vars);
+            let l = &self.tape_layout;
+            for i in 0..N {
+                vars[l.q(i) as usize] = KernelF64(q[i]);
+                vars[l.qd(i) as usize] = KernelF64(qd[i]);
+            }
+            for i in 0..3 {
+                vars[l.omega(i) as usize] = KernelF64(w[i]);
+            }
+            vars[l.eps() as usize] = KernelF64(eps);
+            outputs.clear();
+            outputs.resize(tape.n_outputs(), KernelF64(0.0));
+            tape.eval_into(vars, values, outputs);
+            flat.clear();
+            flat.extend(outputs.iter().map(|x| x.0));
+            f(flat)
+        })
     }
+}
+
+/// The buffers of one thread's interpreted kernel calls: the variable vector, the tape's
+/// values, its outputs and the outputs as `f64`.
+#[derive(Default)]
+struct TapeBuffers {
+    vars: Vec<KernelF64>,
+    values: Vec<KernelF64>,
+    outputs: Vec<KernelF64>,
+    flat: Vec<f64>,
+}
+
+thread_local! {
+    /// Per thread, so that [`InterpretedKernels`] stays `Sync` (multi-start runs share it
+    /// across threads) and a call allocates nothing once the buffers have grown.
+    static TAPE_BUFFERS: std::cell::RefCell<TapeBuffers> = std::cell::RefCell::default();
 }
 
 impl<const N: usize> Kernels<N> for InterpretedKernels<N> {
@@ -663,12 +702,13 @@ impl<const N: usize> Kernels<N> for InterpretedKernels<N> {
         Some(self.params)
     }
     fn mass_cqd_g(&self, q: &[f64; N], qd: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
-        let v = self.eval(&self.mass_cqd_g, q, qd, &[0.0; 3], 0.0);
-        let m = std::array::from_fn(|i| std::array::from_fn(|j| v[i * N + j]));
-        (m, std::array::from_fn(|i| v[N * N + i]))
+        self.eval(&self.mass_cqd_g, (q, qd, &[0.0; 3], 0.0), |v| {
+            let m = std::array::from_fn(|i| std::array::from_fn(|j| v[i * N + j]));
+            (m, std::array::from_fn(|i| v[N * N + i]))
+        })
     }
     fn potential(&self, q: &[f64; N]) -> f64 {
-        self.eval(&self.potential, q, &[0.0; N], &[0.0; 3], 0.0)[0]
+        self.eval(&self.potential, (q, &[0.0; N], &[0.0; 3], 0.0), |v| v[0])
     }
     fn contact(
         &self,
@@ -677,10 +717,10 @@ impl<const N: usize> Kernels<N> for InterpretedKernels<N> {
         omega: &[f64; 3],
         variant: ContactVariant,
     ) -> ContactGeometry<N> {
-        let v = match variant {
-            ContactVariant::Exact => self.eval(&self.exact, q, qd, omega, 0.0),
-            ContactVariant::Smooth(e) => self.eval(&self.smooth, q, qd, omega, e),
-        };
-        self.layout.geometry(&v)
+        let geometry = |v: &[f64]| self.layout.geometry(v);
+        match variant {
+            ContactVariant::Exact => self.eval(&self.exact, (q, qd, omega, 0.0), geometry),
+            ContactVariant::Smooth(e) => self.eval(&self.smooth, (q, qd, omega, e), geometry),
+        }
     }
 }

@@ -54,7 +54,9 @@ use serde::Deserialize;
 pub use constants::Constants;
 pub use error::{SpecError, SpecErrorKind, UrdfError};
 pub use id::{SceneId, UnknownScene};
-pub use load::{ChainChoice, URDF_GRAVITY, URDF_KERNELS, chain_toml, expand_toml, urdf_scene_text};
+pub use load::{
+    ChainChoice, URDF_GRAVITY, URDF_KERNELS, chain_toml, expand_toml, urdf_path, urdf_scene_text,
+};
 pub use mode::Mode;
 pub use state::state_len;
 pub use urdf::{UrdfChain, read_chain as read_urdf_chain, rpy_matrix};

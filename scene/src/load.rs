@@ -262,6 +262,21 @@ pub fn expand_toml(
     Ok(out)
 }
 
+/// The URDF file a TOML scene text names in its `urdf` key, resolved against `dir` (the scene
+/// file's directory); `None` if the text names none or does not parse (the scene parser
+/// reports that). For build scripts, which must tell Cargo every file they read.
+pub fn urdf_path(text: &str, dir: &Path) -> Option<std::path::PathBuf> {
+    let tree = toml::de::DeTable::parse(text).ok()?;
+    let (_, v) = tree
+        .get_ref()
+        .iter()
+        .find(|(k, _)| k.get_ref().as_ref() == "urdf")?;
+    match v.get_ref() {
+        toml::de::DeValue::String(s) => Some(dir.join(s.as_ref())),
+        _ => None,
+    }
+}
+
 impl Scene {
     /// Reads a scene file — TOML (its `urdf`, if any, resolved next to it) or `.urdf` — and
     /// returns the scene with its self-contained text (see [`expand_toml`]). Errors name the

@@ -10,7 +10,8 @@
 //! wall-clock time per call, so batches preempted on a loaded machine do not count.
 //! The compiled path calls the registry's `bf_generated::SceneKernels::eval_into` (the scene
 //! module's `eval_index_into` behind slices: outputs on the stack, copied into a buffer; no
-//! allocation), the interpreted path a compiled tape (allocates its value array per call).
+//! allocation), the interpreted path a compiled tape (`RuntimeKernel::eval_into`: values in
+//! a scratch vector kept across calls, outputs into a buffer; no allocation either).
 //! The budget `--time` is split evenly over the kernels and the two paths. Before timing,
 //! both paths are evaluated at every state and their largest relative difference is reported
 //! (the two must agree; a difference above 1e-12 is an error).
@@ -210,8 +211,10 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
                 black_box(call(k, black_box(&states[i]), &mut out));
             }));
         }
+        let mut scratch = Vec::new();
         let interpreted_ns = time_batches(states.len(), budget, |i| {
-            black_box(kern.eval(black_box(&vars[i])));
+            kern.eval_into(black_box(&vars[i]), &mut scratch, &mut out[..len]);
+            black_box(&out);
         });
         rows.push(Row {
             kernel: kern.name.clone(),

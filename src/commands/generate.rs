@@ -1,9 +1,10 @@
-//! `ball-finger generate SCENE [-o FILE] [--report] [--float f64|f32] [--fma]`: run the code
+//! `ball-finger generate SCENE [-o FILE] [--report] [--float f64|f32] [--fma] [--no-std]`: run the code
 //! generator (the paper's Maple step, Sect. 5) on any scene file and print or write the Rust
 //! module: the kernels of the scene's `kernels` list plus the inverse-dynamics family, the same
 //! module `bf-generated` compiles for a scene of `scenes/` (with the default options).
-//! `--float f32` emits single-precision kernels, `--fma` fused multiply-adds; every combination
-//! is valid.
+//! `--float f32` emits single-precision kernels, `--fma` fused multiply-adds, `--no-std` a
+//! module for a `#![no_std]` crate (own √, sin, cos; no `eval_flat`); every combination but
+//! `--fma --no-std` is valid.
 
 use crate::cli::{FloatArg, GenerateArgs};
 use crate::io::write_atomic;
@@ -29,6 +30,7 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
             FloatArg::F32 => bf_codegen::FloatTy::F32,
         },
         fma: args.fma,
+        no_std: args.no_std,
     };
     let generated = generate_module(&scene, &text, &opts)
         .with_context(|| format!("{}: code generation failed", args.scene.display()))?;

@@ -12,7 +12,8 @@
 //!
 //! [`EmitSettings`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
-//! multiply-add (`a*b ± c` as `mul_add`, one rounding instead of two). The defaults reproduce
+//! multiply-add (`a*b ± c` as `mul_add`, one rounding instead of two) and `no_std` (the
+//! module compiles in a `#![no_std]` crate: [`crate::trig_nostd`]). The defaults reproduce
 //! the plain f64 output byte for byte.
 
 use std::fmt::Write as _;
@@ -61,6 +62,10 @@ pub struct EmitSettings {
     /// Emit `a*b + c`, `a*b - c` and `c - a*b` as `mul_add` (fused multiply-add) whenever the
     /// product is a graph node of its own.
     pub fma: bool,
+    /// A module for a `#![no_std]` crate: it carries its own square root, sine and cosine
+    /// ([`crate::trig_nostd`]; the kernel bodies are the same text) and leaves out `eval_flat`
+    /// and `eval_flat_u`, which allocate. Not with `fma` (`core` has no fused multiply-add).
+    pub no_std: bool,
 }
 
 /// Tokens of an `f64` literal (exact: shortest representation that round-trips).
@@ -356,6 +361,54 @@ fn trig_text() -> Result<&'static str, CodegenError> {
     .map_err(|_| CodegenError::Internal(InternalDefect::Other("trig.rs does not format")))
 }
 
+/// The helper items of a `#![no_std]` file, formatted: [`trig_items`] with the standard
+/// library's fallback `sin_cos_n_exact` replaced by [`crate::trig_nostd`]'s items (square root,
+/// one-argument sine–cosine and the trait [`crate::trig_nostd::KernelMath`] the kernels call
+/// them through), all private and allowed to be unused (an f32 file or a kernel without
+/// square roots leaves some of them unused). The doc comments of [`crate::trig`] speak of
+/// the standard library's fallback and are left out.
+fn nostd_text() -> Result<&'static str, CodegenError> {
+    static TEXT: OnceLock<Result<String, String>> = OnceLock::new();
+    TEXT.get_or_init(|| nostd_items().map_err(|e| e.to_string()))
+        .as_deref()
+        .map_err(|_| CodegenError::Internal(InternalDefect::Other("trig_nostd.rs does not format")))
+}
+
+fn nostd_items() -> Result<String, CodegenError> {
+    let trig: syn::File =
+        syn::parse_str(include_str!("../trig.rs")).map_err(CodegenError::unparsable("trig.rs"))?;
+    let nostd: syn::File = syn::parse_str(include_str!("../trig_nostd.rs"))
+        .map_err(CodegenError::unparsable("trig_nostd.rs"))?;
+    let allow: syn::Attribute = syn::parse_quote!(#[allow(dead_code)]);
+    let mut out = TokenStream::new();
+    for item in trig.items {
+        if let syn::Item::Fn(mut f) = item
+            && f.sig.ident != "sin_cos_n_exact"
+        {
+            f.vis = syn::Visibility::Inherited;
+            f.attrs.retain(|a| !a.path().is_ident("doc"));
+            f.attrs.push(allow.clone());
+            out.extend(quote!(#f));
+        }
+    }
+    for mut item in nostd.items {
+        match &mut item {
+            syn::Item::Fn(f) => {
+                f.vis = syn::Visibility::Inherited;
+                f.attrs.push(allow.clone());
+            }
+            syn::Item::Trait(t) => {
+                t.vis = syn::Visibility::Inherited;
+                t.attrs.push(allow.clone());
+            }
+            syn::Item::Impl(_) => {}
+            _ => continue,
+        }
+        out.extend(quote!(#item));
+    }
+    Ok(unparse(out, "trig_nostd.rs")?.replace("std::f64::consts::", "core::f64::consts::"))
+}
+
 /// The items of [`lanes`] (`sin_cos_lanes`, which the batched node kernels call) for a
 /// generated file, without the module's tests; emitted once per file.
 pub fn lanes_items() -> Result<TokenStream, CodegenError> {
@@ -529,7 +582,13 @@ pub fn emit_file_with(
     } else {
         TokenStream::new()
     };
-    let trig = if trig_helper { trig_text()? } else { "" };
+    let trig = if opts.no_std {
+        nostd_text()?
+    } else if trig_helper {
+        trig_text()?
+    } else {
+        ""
+    };
     // The items before and after the kernels are formatted separately: `prettyplease` prints
     // the items of a file one after the other, so the kernels' text fits between them.
     let head = quote! {
@@ -549,7 +608,7 @@ pub fn emit_file_with(
         pub const SCENE_TOML: &str = #source_text;
         #contact
     };
-    let tail = quote! {
+    let flat = quote! {
         /// Calls kernel `name` and returns all its outputs flattened row-major, in argument
         /// order (`Contact` fields in declaration order); `None` if `name` is not in `KERNELS`.
         /// Kernels taking `qdd` or `tau` get zeros (see `eval_flat_u`).
@@ -583,6 +642,15 @@ pub fn emit_file_with(
             }
             Some(v)
         }
+    };
+    // `eval_flat` allocates: a no_std module has only `eval_index_into`.
+    let flat = if opts.no_std {
+        TokenStream::new()
+    } else {
+        flat
+    };
+    let tail = quote! {
+        #flat
         /// Calls kernel `KERNELS[k]` with outputs on the stack and copies them, flattened as by
         /// `eval_flat_u`, into the front of `out`; returns their number, or `None` if `k` is out
         /// of range or `out` too short. Does not allocate (for benchmarks).
@@ -614,6 +682,12 @@ pub fn emit_file_with(
         "// Conventions: standard DH unless the scene says otherwise, world axes, SI units,\n\
          // matrices row-major (see docs/kernels.md).\n",
     );
+    if opts.no_std {
+        out.push_str(
+            "// For #![no_std] crates: own square root, sine and cosine (trait `KernelMath`), no\n\
+             // allocation.\n",
+        );
+    }
     out.push_str(&head);
     out.push_str(trig);
     for k in kernel_code {
