@@ -1,5 +1,17 @@
-//! Solver settings. Names and defaults follow Ipopt's options (Wächter & Biegler 2006, Sect. 2–3
-//! and Table 1) wherever an equivalent exists.
+//! Solver settings. Names and defaults follow Ipopt's options (Wächter & Biegler 2006, "W&B",
+//! Sect. 2–3 and Table 1) wherever an equivalent exists. [`Settings`] is grouped by part of the
+//! algorithm (decision record 0019):
+//!
+//! * [`TerminationSettings`]: the termination test (W&B eq. (5), Sect. 2.1) and its limits;
+//! * [`BarrierSettings`]: the μ update (W&B eq. (7)), τ (eq. (8)), the initial point (Sect.
+//!   3.6), κ_Σ (eq. (16)), κ_d (Sect. 3.7), the slack safeguard and the proximal term;
+//! * [`ScalingSettings`]: the internal scaling of f and c;
+//! * [`LineSearchSettings`]: the filter line search (W&B eqs. (18)–(23), Sect. 2.3–2.4);
+//! * [`LinearSolverSettings`]: the static δ_c and the iterative refinement of KKT solves;
+//! * [`RecoverySettings`]: the inertia correction (W&B Algorithm IC, Sect. 3.1) and the
+//!   restoration phase (Sect. 3.3);
+//! * [`ExperimentalSettings`]: research switches no default path uses;
+//! * [`OutputSettings`]: the log.
 
 use serde::{Deserialize, Serialize};
 
