@@ -83,10 +83,9 @@ fn infeasible_inequalities_are_detected() {
     assert!((sol.x[0] - sol.x[1]).abs() < 1e-3, "{:?}", sol.x);
 }
 
-#[test]
-fn infeasible_equality_is_detected() {
-    // x² + 1 = 0 has no real solution; the infeasibility is stationary at x = 0.
-    let p = problem(
+/// min x s.t. x² + 1 = 0 from x = 3: no real solution; the infeasibility is stationary at x = 0.
+fn no_real_root() -> Hs {
+    problem(
         &[3.0],
         &[-INF],
         &[INF],
@@ -94,7 +93,13 @@ fn infeasible_equality_is_detected() {
         1,
         |x| x[0],
         |x| vec![x[0] * x[0] + 1.0],
-    );
+    )
+}
+
+#[test]
+fn infeasible_equality_is_detected() {
+    // x² + 1 = 0 has no real solution; the infeasibility is stationary at x = 0.
+    let p = no_real_root();
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
     assert_finite(&sol);
@@ -108,15 +113,7 @@ fn infeasible_equality_is_detected() {
 /// iterations before are the same solve.
 #[test]
 fn without_restoration_the_chain_gives_up_where_the_restoration_phase_would_start() {
-    let p = problem(
-        &[3.0],
-        &[-INF],
-        &[INF],
-        1,
-        1,
-        |x| x[0],
-        |x| vec![x[0] * x[0] + 1.0],
-    );
+    let p = no_real_root();
     let mut first_restoration = None;
     let mut on_log = Vec::new();
     let mut record = |info: &IterationInfo| {
