@@ -9,7 +9,7 @@
 
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{build, solve};
-use bf_optim::ipm::{KktOrdering, Settings, Status};
+use bf_optim::ipm::{ExperimentalSettings, KktOrdering, LinearSolverSettings, Settings, Status};
 use bf_optim::ocp::Scheme;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 
@@ -29,7 +29,10 @@ fn run(
         points,
         scheme,
         ipm: ordering.map(|kkt_ordering| Settings {
-            kkt_ordering,
+            experimental: ExperimentalSettings {
+                kkt_ordering,
+                ..Default::default()
+            },
             ..Settings::default()
         }),
         dual_regularization: delta_c,
@@ -290,8 +293,11 @@ fn the_backward_error_test_solves_a_fine_cot_mesh() {
     // the accuracy test matters less often, see the next test.
     let solve_with = |backward_error_tol: f64| {
         let ipm = Settings {
-            backward_error_tol,
-            max_refinement_steps: 3,
+            linear_solver: LinearSolverSettings {
+                backward_error_tol,
+                max_refinement_steps: 3,
+                ..Default::default()
+            },
             ..Settings::default()
         };
         solve_radau3(Problem::PeriodicCot, 72, ipm)
@@ -320,14 +326,17 @@ fn the_backward_error_test_solves_a_fine_cot_mesh() {
 fn ten_refinement_steps_solve_the_finest_human_mesh() {
     let solve_with = |max_refinement_steps: usize| {
         let ipm = Settings {
-            max_refinement_steps,
+            linear_solver: LinearSolverSettings {
+                max_refinement_steps,
+                ..Default::default()
+            },
             ..Settings::default()
         };
         solve_radau3(Problem::PeriodicCotHuman, 144, ipm)
     };
     let three = solve_with(3);
     assert_eq!(three.status, Status::Acceptable, "{:?}", three.stages);
-    let ten = solve_with(Settings::default().max_refinement_steps);
+    let ten = solve_with(Settings::default().linear_solver.max_refinement_steps);
     assert_eq!(ten.status, Status::Solved, "{:?}", ten.stages);
     assert_eq!(ten.stages.len(), 1, "{:?}", ten.stages);
 }
@@ -346,7 +355,10 @@ fn the_filter_reset_solves_the_crawling_cot_meshes() {
             points,
             scheme,
             ipm: Some(Settings {
-                max_refinement_steps: 3,
+                linear_solver: LinearSolverSettings {
+                    max_refinement_steps: 3,
+                    ..Default::default()
+                },
                 ..Settings::default()
             }),
             ..ProblemSettings::default()

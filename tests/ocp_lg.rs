@@ -280,8 +280,11 @@ fn lg_periodic_cot_problems_converge_from_the_default_guess() {
             scheme: Scheme::Radau { elements: 3 },
             max_iter: 600,
             ipm: Some(bf_optim::ipm::Settings {
-                backward_error_tol: 0.0,
-                max_refinement_steps: 3,
+                linear_solver: bf_optim::ipm::LinearSolverSettings {
+                    backward_error_tol: 0.0,
+                    max_refinement_steps: 3,
+                    ..Default::default()
+                },
                 ..bf_optim::ipm::Settings::default()
             }),
             ..ProblemSettings::default()

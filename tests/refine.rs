@@ -7,7 +7,7 @@ use ball_finger::pipeline::refine::{
     RefineRound, RefineSettings, current_mesh, error_estimate, refine, warm_initial_point,
 };
 use ball_finger::pipeline::{build, solve};
-use bf_optim::ipm::{Nlp, Settings, Status};
+use bf_optim::ipm::{Nlp, Settings, Status, TerminationSettings};
 use bf_optim::ocp::toys::{brachistochrone, cycloid_time, double_integrator};
 use bf_optim::ocp::{
     HpRule, MeshSpec, Ocp, Scheme, Transcription, collocation_errors, extract, solve_nlp,
@@ -16,7 +16,10 @@ use bf_problem::{Problem, ProblemSettings};
 
 fn quiet() -> Settings {
     Settings {
-        tol: 1e-10,
+        termination: TerminationSettings {
+            tol: 1e-10,
+            ..Default::default()
+        },
         ..Settings::default()
     }
 }

@@ -204,11 +204,17 @@ fn older_solver_settings_still_read() {
     let old: Settings =
         serde_json::from_str(r#"{"extrapolation_scope": "FinalBarrier", "tol": 1e-7}"#).unwrap();
     let default = Settings::default();
-    assert_eq!(old.extrapolation_scope, ExtrapolationScope::Answers);
-    assert_eq!(old.tol, 1e-7);
     assert_eq!(
-        (old.proximal_weight, old.proximal_after),
-        (default.proximal_weight, default.proximal_after)
+        old.experimental.extrapolation_scope,
+        ExtrapolationScope::Answers
+    );
+    assert_eq!(old.termination.tol, 1e-7);
+    assert_eq!(
+        (old.barrier.proximal_weight, old.barrier.proximal_after),
+        (
+            default.barrier.proximal_weight,
+            default.barrier.proximal_after
+        )
     );
     let ps: bf_problem::ProblemSettings = serde_json::from_str("{}").unwrap();
     assert_eq!(ps.proximal_weight, None);

@@ -26,7 +26,7 @@
 //! Run it: `cargo run --release -p bf-optim --example bryson_denham`.
 
 use bf_optim::OptimError;
-use bf_optim::ipm::{Settings, Solution, Status};
+use bf_optim::ipm::{Settings, Solution, Status, TerminationSettings};
 use bf_optim::ocp::{
     Graph, NodeFunction, Objective, Ocp, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme,
     Transcription, VarRef, extract, solve_nlp,
@@ -113,7 +113,10 @@ pub fn run(elements: usize) -> Result<(Solution, Vec<PhaseTrajectory>), OptimErr
     };
     let tr = Transcription::new(&ocp)?;
     let settings = Settings {
-        tol: 1e-10,
+        termination: TerminationSettings {
+            tol: 1e-10,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     let sol = solve_nlp(&tr, &settings, None, None)?;

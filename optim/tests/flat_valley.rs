@@ -11,7 +11,7 @@
 
 mod hs;
 
-use bf_optim::ipm::{Settings, Status, solve};
+use bf_optim::ipm::{ExperimentalSettings, LinearSolverSettings, Settings, Status, solve};
 use hs::Hs;
 use hs::dual::D;
 
@@ -53,14 +53,17 @@ fn valley(constrained: bool) -> Hs {
 /// The default: the backward-error test at 1e-14 (decision record 0008).
 fn backward() -> Settings {
     let s = Settings::default();
-    assert_eq!(s.backward_error_tol, 1e-14);
+    assert_eq!(s.linear_solver.backward_error_tol, 1e-14);
     s
 }
 
 /// The relative-residual test alone.
 fn relative_only() -> Settings {
     Settings {
-        backward_error_tol: 0.0,
+        linear_solver: LinearSolverSettings {
+            backward_error_tol: 0.0,
+            ..Default::default()
+        },
         ..Settings::default()
     }
 }
@@ -68,7 +71,10 @@ fn relative_only() -> Settings {
 #[test]
 fn newton_steps_along_a_flat_valley_are_taken_undamped() {
     let ratio = Settings {
-        residual_ratio_with_solution: true,
+        experimental: ExperimentalSettings {
+            residual_ratio_with_solution: true,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     for constrained in [false, true] {

@@ -5,6 +5,7 @@
 
 mod hs;
 
+use bf_optim::ipm::{BarrierSettings, OutputSettings};
 use bf_optim::ipm::{MuStrategy, Settings, Solution, Status, check_derivatives, solve};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -189,7 +190,10 @@ fn hs_suite_reaches_published_optima() {
 #[test]
 fn hs_suite_adaptive_mu() {
     let settings = Settings {
-        mu_strategy: MuStrategy::Adaptive,
+        barrier: BarrierSettings {
+            mu_strategy: MuStrategy::Adaptive,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     let rows = run_suite(&settings, OTHER_LOCAL_MIN_ADAPTIVE);
@@ -225,7 +229,10 @@ fn write_results_table() {
     let mono = run_suite(&Settings::default(), OTHER_LOCAL_MIN_MONOTONE);
     let adap = run_suite(
         &Settings {
-            mu_strategy: MuStrategy::Adaptive,
+            barrier: BarrierSettings {
+                mu_strategy: MuStrategy::Adaptive,
+                ..Default::default()
+            },
             ..Settings::default()
         },
         OTHER_LOCAL_MIN_ADAPTIVE,
@@ -314,11 +321,14 @@ fn debug_one() {
         .find(|p| p.name == name)
         .expect("unknown problem");
     let settings = Settings {
-        print_level: 2,
-        mu_strategy: if adaptive {
-            MuStrategy::Adaptive
-        } else {
-            MuStrategy::Monotone
+        output: OutputSettings { print_level: 2 },
+        barrier: BarrierSettings {
+            mu_strategy: if adaptive {
+                MuStrategy::Adaptive
+            } else {
+                MuStrategy::Monotone
+            },
+            ..Default::default()
         },
         ..Settings::default()
     };

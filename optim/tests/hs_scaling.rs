@@ -15,6 +15,7 @@
 
 mod hs;
 
+use bf_optim::ipm::ScalingSettings;
 use bf_optim::ipm::{
     IterationInfo, NlpScaling, ScalingMethod, Settings, Solution, Status, solve, solve_with,
 };
@@ -71,7 +72,10 @@ impl Scaling {
                     constraints: vec![1.0 / c; m],
                 }),
                 Settings {
-                    scaling: ScalingMethod::User,
+                    scaling: ScalingSettings {
+                        method: ScalingMethod::User,
+                        ..Default::default()
+                    },
                     ..Settings::default()
                 },
             ),
@@ -318,8 +322,8 @@ fn hs071_objective_times_1e12_is_solved_at_the_unscaled_solution() {
         base.z_l[0]
     );
     let settings = Settings::default();
-    assert!(sol.complementarity <= settings.compl_inf_tol);
-    assert!(sol.dual_infeasibility <= settings.dual_inf_tol);
+    assert!(sol.complementarity <= settings.termination.compl_inf_tol);
+    assert!(sol.dual_infeasibility <= settings.termination.dual_inf_tol);
 }
 
 /// A problem with every variable boxed cannot be unbounded: each all-boxed HS problem with a
@@ -343,7 +347,10 @@ fn boxed_problems_with_a_huge_objective_are_not_unbounded() {
             let sol = solve(
                 &t,
                 &Settings {
-                    scaling,
+                    scaling: ScalingSettings {
+                        method: scaling,
+                        ..Default::default()
+                    },
                     ..Settings::default()
                 },
             )
@@ -367,8 +374,8 @@ fn solved_runs_report_measures_within_tolerance() {
         if sol.status == Status::Solved {
             solved += 1;
             assert!(
-                sol.complementarity <= settings.compl_inf_tol
-                    && sol.dual_infeasibility <= settings.dual_inf_tol,
+                sol.complementarity <= settings.termination.compl_inf_tol
+                    && sol.dual_infeasibility <= settings.termination.dual_inf_tol,
                 "{}: complementarity {:e}, dual infeasibility {:e}",
                 p.name,
                 sol.complementarity,
@@ -442,8 +449,8 @@ fn reported_measures_are_the_termination_tests() {
             sol.dual_infeasibility
         );
         if status == Status::Solved {
-            assert!(sol.complementarity <= settings.compl_inf_tol);
-            assert!(sol.dual_infeasibility <= settings.dual_inf_tol);
+            assert!(sol.complementarity <= settings.termination.compl_inf_tol);
+            assert!(sol.dual_infeasibility <= settings.termination.dual_inf_tol);
         }
     }
 }

@@ -6,6 +6,7 @@
 
 mod common;
 
+use bf_optim::ipm::{BarrierSettings, OutputSettings};
 use bf_optim::ipm::{
     Nlp, Settings, Solution, Status, WarmStart, check_derivatives, solve, solve_with,
 };
@@ -108,9 +109,12 @@ fn nonlinear_drag_with_active_control_bound() {
     assert!(sol.objective > 12.0);
     // Warm start from the solution converges almost immediately to the same point.
     let settings = Settings {
-        mu_init: 1e-9,
-        warm_start_bound_push: 1e-9,
-        warm_start_mult_bound_push: 1e-12,
+        barrier: BarrierSettings {
+            mu_init: 1e-9,
+            warm_start_bound_push: 1e-9,
+            warm_start_mult_bound_push: 1e-12,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     let ws = WarmStart::from(&sol);
@@ -206,7 +210,7 @@ fn debug_cheb() {
     let sol = solve(
         &p,
         &Settings {
-            print_level: 3,
+            output: OutputSettings { print_level: 3 },
             ..Settings::default()
         },
     )

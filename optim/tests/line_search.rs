@@ -6,17 +6,24 @@
 
 mod hs;
 
+use bf_optim::ipm::LineSearchSettings;
 use bf_optim::ipm::Settings;
 use hs::{assert_same_results, sweep_scaled_objectives as sweep};
 
 #[test]
 fn filter_resets_keep_every_result() {
     let without = sweep(&Settings {
-        max_filter_resets: 0,
+        line_search: LineSearchSettings {
+            max_filter_resets: 0,
+            ..Default::default()
+        },
         ..Settings::default()
     });
     let eager = sweep(&Settings {
-        filter_reset_trigger: 1,
+        line_search: LineSearchSettings {
+            filter_reset_trigger: 1,
+            ..Default::default()
+        },
         ..Settings::default()
     });
     assert!(

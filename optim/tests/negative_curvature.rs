@@ -9,7 +9,10 @@
 
 mod hs;
 
-use bf_optim::ipm::{ExtrapolationScope, Settings, Status, solve};
+use bf_optim::ipm::{
+    BarrierSettings, ExperimentalSettings, ExtrapolationScope, LineSearchSettings, Settings,
+    Status, solve,
+};
 use hs::Hs;
 use hs::dual::D;
 
@@ -49,7 +52,10 @@ const XSTAR: f64 = 7.0710678118654755;
 /// No extrapolation (cap 1).
 fn without() -> Settings {
     Settings {
-        max_curvature_extrapolation: 1.0,
+        line_search: LineSearchSettings {
+            max_curvature_extrapolation: 1.0,
+            ..Default::default()
+        },
         ..Settings::default()
     }
 }
@@ -58,10 +64,16 @@ fn without() -> Settings {
 /// most the tolerance (`Answers`), the default.
 fn with(scope: ExtrapolationScope) -> Settings {
     let default = Settings::default();
-    assert_eq!(default.max_curvature_extrapolation, 16.0);
-    assert_eq!(default.extrapolation_scope, ExtrapolationScope::Answers);
+    assert_eq!(default.line_search.max_curvature_extrapolation, 16.0);
+    assert_eq!(
+        default.experimental.extrapolation_scope,
+        ExtrapolationScope::Answers
+    );
     Settings {
-        extrapolation_scope: scope,
+        experimental: ExperimentalSettings {
+            extrapolation_scope: scope,
+            ..default.experimental
+        },
         ..default
     }
 }
@@ -79,7 +91,10 @@ fn a_saddle_is_left_in_fewer_iterations_for_the_same_minimum() {
     // A barrier problem that is an answer from the start (μ₀ = tol): the scope that waits
     // for one then acts at the saddle too.
     let at_floor = |s: Settings| Settings {
-        mu_init: s.tol,
+        barrier: BarrierSettings {
+            mu_init: s.termination.tol,
+            ..s.barrier
+        },
         ..s
     };
     let off_floor = solve(&saddle(), &at_floor(without())).unwrap();
@@ -165,9 +180,15 @@ fn extrapolation_keeps_every_hock_schittkowski_result() {
 #[test]
 fn invalid_extrapolation_caps_are_rejected() {
     for bad in [0.5, 0.0, -1.0, f64::NAN, f64::INFINITY] {
-        let s = Settings {
-            max_curvature_extrapolation: bad,
-            ..with(ExtrapolationScope::Answers)
+        let s = {
+            let base = with(ExtrapolationScope::Answers);
+            Settings {
+                line_search: LineSearchSettings {
+                    max_curvature_extrapolation: bad,
+                    ..base.line_search
+                },
+                ..base
+            }
         };
         let err = solve(&saddle(), &s).unwrap_err().to_string();
         assert!(err.contains("max_curvature_extrapolation"), "{bad}: {err}");

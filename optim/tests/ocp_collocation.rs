@@ -2,6 +2,7 @@
 //! final time, one and two phases), ratio objective, derivative checks, convergence in N.
 
 use bf_codegen::graph::Graph;
+use bf_optim::ipm::TerminationSettings;
 use bf_optim::ipm::{Settings, Status, check_derivatives};
 use bf_optim::ocp::toys::{self, double_integrator_phase, rest_to_rest};
 use bf_optim::ocp::{
@@ -15,7 +16,10 @@ const INF: f64 = 1e20;
 
 fn quiet() -> Settings {
     Settings {
-        tol: 1e-10,
+        termination: TerminationSettings {
+            tol: 1e-10,
+            ..Default::default()
+        },
         ..Settings::default()
     }
 }

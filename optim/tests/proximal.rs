@@ -10,12 +10,15 @@
 
 mod hs;
 
-use bf_optim::ipm::{Settings, Status, solve};
+use bf_optim::ipm::{BarrierSettings, Settings, Status, solve};
 
 /// The term off.
 fn off() -> Settings {
     Settings {
-        proximal_weight: 0.0,
+        barrier: BarrierSettings {
+            proximal_weight: 0.0,
+            ..Default::default()
+        },
         ..Settings::default()
     }
 }
@@ -23,10 +26,19 @@ fn off() -> Settings {
 #[test]
 fn the_proximal_term_keeps_every_hock_schittkowski_result() {
     let default = Settings::default();
-    assert_eq!((default.proximal_weight, default.proximal_after), (0.1, 60));
+    assert_eq!(
+        (
+            default.barrier.proximal_weight,
+            default.barrier.proximal_after
+        ),
+        (0.1, 60)
+    );
     let without = hs::sweep_scaled_objectives(&off());
     let always = Settings {
-        proximal_after: 0,
+        barrier: BarrierSettings {
+            proximal_after: 0,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     for (label, settings) in [
@@ -46,7 +58,7 @@ fn the_proximal_term_keeps_every_hock_schittkowski_result() {
             .filter(|((_, _, a), (_, _, b))| a.iterations != b.iterations)
             .count();
         println!("{label}: {n} proximal iterations, {changed} solves with other iteration counts");
-        if settings.proximal_after == 0 {
+        if settings.barrier.proximal_after == 0 {
             // Every solve that starts above the tolerance carries it: the comparison covers
             // solves that it changes.
             assert!(n > 0 && changed > 0, "{label}: {n}, {changed}");
@@ -63,8 +75,11 @@ fn barrier_problems_that_are_answers_never_carry_it() {
     // even on the first iteration of a stall count of 0.
     for p in hs::all().into_iter().take(12) {
         let at_tol = |s: Settings| Settings {
-            mu_init: s.tol,
-            proximal_after: 0,
+            barrier: BarrierSettings {
+                mu_init: s.termination.tol,
+                proximal_after: 0,
+                ..s.barrier
+            },
             ..s
         };
         let a = solve(&p, &at_tol(off())).unwrap();
@@ -84,7 +99,10 @@ fn invalid_proximal_weights_are_rejected() {
     let p = hs::all().into_iter().next().unwrap();
     for bad in [-0.1, f64::NAN, f64::INFINITY] {
         let s = Settings {
-            proximal_weight: bad,
+            barrier: BarrierSettings {
+                proximal_weight: bad,
+                ..Default::default()
+            },
             ..Settings::default()
         };
         let err = solve(&p, &s).unwrap_err().to_string();

@@ -11,17 +11,21 @@
 
 mod hs;
 
+use bf_optim::ipm::LinearSolverSettings;
 use bf_optim::ipm::Settings;
 
 #[test]
 fn ten_refinement_steps_keep_every_hock_schittkowski_result() {
     let three = hs::sweep_scaled_objectives(&Settings {
-        max_refinement_steps: 3,
+        linear_solver: LinearSolverSettings {
+            max_refinement_steps: 3,
+            ..Default::default()
+        },
         ..Settings::default()
     });
-    assert_eq!(Settings::default().min_refinement_steps, 3);
+    assert_eq!(Settings::default().linear_solver.min_refinement_steps, 3);
     let ten = hs::sweep_scaled_objectives(&Settings::default());
-    assert_eq!(Settings::default().max_refinement_steps, 10);
+    assert_eq!(Settings::default().linear_solver.max_refinement_steps, 10);
     // HS013's Acceptable ends must not move away from the published optimum.
     hs::assert_same_optima(&three, &ten, "with ten steps", 1.0);
     let steps = |runs: &[(&str, f64, bf_optim::ipm::Solution)]| -> usize {

@@ -7,7 +7,9 @@ mod hs;
 
 use bf_optim::OptimError;
 use bf_optim::ipm::{
-    IterationInfo, Nlp, ScalingMethod, Settings, Solution, Status, WarmStart, solve, solve_with,
+    BarrierSettings, IterationInfo, LinearSolverSettings, Nlp, OutputSettings, RecoverySettings,
+    ScalingMethod, ScalingSettings, Settings, Solution, Status, TerminationSettings, WarmStart,
+    solve, solve_with,
 };
 use hs::Hs;
 use hs::dual::D;
@@ -81,10 +83,9 @@ fn infeasible_inequalities_are_detected() {
     assert!((sol.x[0] - sol.x[1]).abs() < 1e-3, "{:?}", sol.x);
 }
 
-#[test]
-fn infeasible_equality_is_detected() {
-    // x² + 1 = 0 has no real solution; the infeasibility is stationary at x = 0.
-    let p = problem(
+/// min x s.t. x² + 1 = 0 from x = 3: no real solution; the infeasibility is stationary at x = 0.
+fn no_real_root() -> Hs {
+    problem(
         &[3.0],
         &[-INF],
         &[INF],
@@ -92,12 +93,60 @@ fn infeasible_equality_is_detected() {
         1,
         |x| x[0],
         |x| vec![x[0] * x[0] + 1.0],
-    );
+    )
+}
+
+#[test]
+fn infeasible_equality_is_detected() {
+    // x² + 1 = 0 has no real solution; the infeasibility is stationary at x = 0.
+    let p = no_real_root();
     let sol = solve(&p, &Settings::default()).unwrap();
     assert_eq!(sol.status, Status::LocallyInfeasible, "{sol:?}");
     assert_finite(&sol);
     assert!(sol.x[0].abs() < 1e-3);
     assert!(sol.iterations < 200);
+}
+
+/// The recovery chain in its order: with the restoration phase switched off, an infeasible
+/// problem stops at the chain's "give up" link, on the very iteration at which, with it on, the
+/// chain's last link (the restoration phase) takes over and proves the problem infeasible; the
+/// iterations before are the same solve.
+#[test]
+fn without_restoration_the_chain_gives_up_where_the_restoration_phase_would_start() {
+    let p = no_real_root();
+    let mut first_restoration = None;
+    let mut on_log = Vec::new();
+    let mut record = |info: &IterationInfo| {
+        if info.restoration && first_restoration.is_none() {
+            first_restoration = Some(info.iter);
+        }
+        if !info.restoration {
+            on_log.push((info.iter, info.objective.to_bits()));
+        }
+        true
+    };
+    let on = solve_with(&p, &Settings::default(), None, Some(&mut record)).unwrap();
+    assert_eq!(on.status, Status::LocallyInfeasible, "{on:?}");
+    assert!(on.counters.restoration_iterations > 0);
+    let first_restoration = first_restoration.expect("a restoration phase");
+
+    let off_settings = Settings {
+        recovery: RecoverySettings {
+            restoration: false,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let mut off_log = Vec::new();
+    let mut record = |info: &IterationInfo| {
+        off_log.push((info.iter, info.objective.to_bits()));
+        true
+    };
+    let off = solve_with(&p, &off_settings, None, Some(&mut record)).unwrap();
+    assert_eq!(off.status, Status::RestorationFailed, "{off:?}");
+    assert_eq!(off.counters.restoration_iterations, 0);
+    assert_eq!(off.iterations, first_restoration);
+    assert_eq!(off_log[..], on_log[..off_log.len()]);
 }
 
 #[test]
@@ -203,7 +252,10 @@ fn invalid_input_is_rejected() {
     ));
     let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0] * x[0], none);
     let bad = Settings {
-        tau_min: 1.5,
+        barrier: BarrierSettings {
+            tau_min: 1.5,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     assert!(matches!(
@@ -215,28 +267,40 @@ fn invalid_input_is_rejected() {
         (
             "refinement_contraction",
             Settings {
-                refinement_contraction: 1.0,
+                linear_solver: LinearSolverSettings {
+                    refinement_contraction: 1.0,
+                    ..Default::default()
+                },
                 ..Settings::default()
             },
         ),
         (
             "refinement_tol",
             Settings {
-                refinement_tol: f64::NAN,
+                linear_solver: LinearSolverSettings {
+                    refinement_tol: f64::NAN,
+                    ..Default::default()
+                },
                 ..Settings::default()
             },
         ),
         (
             "backward_error_tol",
             Settings {
-                backward_error_tol: -1e-14,
+                linear_solver: LinearSolverSettings {
+                    backward_error_tol: -1e-14,
+                    ..Default::default()
+                },
                 ..Settings::default()
             },
         ),
         (
             "backward_error_forcing",
             Settings {
-                backward_error_forcing: 0.0,
+                linear_solver: LinearSolverSettings {
+                    backward_error_forcing: 0.0,
+                    ..Default::default()
+                },
                 ..Settings::default()
             },
         ),
@@ -286,7 +350,10 @@ fn iteration_and_time_limits() {
     let sol = solve(
         &p,
         &Settings {
-            max_iter: 2,
+            termination: TerminationSettings {
+                max_iter: 2,
+                ..Default::default()
+            },
             ..Settings::default()
         },
     )
@@ -296,7 +363,10 @@ fn iteration_and_time_limits() {
     let sol = solve(
         &p,
         &Settings {
-            max_wall_time: 1e-12,
+            termination: TerminationSettings {
+                max_wall_time: 1e-12,
+                ..Default::default()
+            },
             ..Settings::default()
         },
     )
@@ -309,9 +379,12 @@ fn warm_start_converges_immediately() {
     let p = hs071();
     let sol = solve(&p, &Settings::default()).unwrap();
     let s = Settings {
-        mu_init: 1e-9,
-        warm_start_bound_push: 1e-9,
-        warm_start_mult_bound_push: 1e-12,
+        barrier: BarrierSettings {
+            mu_init: 1e-9,
+            warm_start_bound_push: 1e-9,
+            warm_start_mult_bound_push: 1e-12,
+            ..Default::default()
+        },
         ..Settings::default()
     };
     let sol2 = solve_with(&p, &s, Some(&WarmStart::from(&sol)), None).unwrap();
@@ -422,7 +495,10 @@ fn gradient_scaling_handles_badly_scaled_functions() {
         let sol = solve(
             &scaled(hs071()),
             &Settings {
-                scaling,
+                scaling: ScalingSettings {
+                    method: scaling,
+                    ..Default::default()
+                },
                 ..Settings::default()
             },
         )
@@ -450,8 +526,11 @@ fn debug_cubic() {
     let sol = solve(
         &p,
         &Settings {
-            print_level: 3,
-            max_iter: 30,
+            output: OutputSettings { print_level: 3 },
+            termination: TerminationSettings {
+                max_iter: 30,
+                ..Default::default()
+            },
             ..Settings::default()
         },
     )

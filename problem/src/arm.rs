@@ -46,7 +46,7 @@ use bf_codegen::graph::{Graph, Id};
 use bf_codegen::nodefn::NodeFunction;
 use bf_codegen::robot::SymbolicRobot;
 use bf_codegen::{CodegenError, Scene};
-use bf_optim::ipm::{Nlp, Settings, Solution, Status};
+use bf_optim::ipm::{Nlp, OutputSettings, Settings, Solution, Status, TerminationSettings};
 use bf_optim::ocp::{
     KernelUse, Objective, Ocp, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme,
     Transcription, VarRef, extract,
@@ -327,9 +327,14 @@ impl ArmBuilt {
     /// Interior-point settings of the solve.
     pub fn solver_settings(&self) -> Settings {
         Settings {
-            tol: self.settings.tol,
-            max_iter: self.settings.max_iter,
-            print_level: self.settings.print_level,
+            termination: TerminationSettings {
+                tol: self.settings.tol,
+                max_iter: self.settings.max_iter,
+                ..Default::default()
+            },
+            output: OutputSettings {
+                print_level: self.settings.print_level,
+            },
             ..Settings::default()
         }
     }

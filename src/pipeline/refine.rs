@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use serde::{Deserialize, Serialize};
 
-use bf_optim::ipm::{IterationInfo, Settings};
+use bf_optim::ipm::{BarrierSettings, IterationInfo, Settings};
 use bf_optim::ocp::{HpRule, MeshSpec, collocation_errors};
 
 use super::error::PipelineError;
@@ -243,7 +243,10 @@ pub fn refine(
         if round == 0 {
             let base = solver_settings(settings);
             s.ipm = Some(Settings {
-                mu_init: opts.warm_mu_init,
+                barrier: BarrierSettings {
+                    mu_init: opts.warm_mu_init,
+                    ..base.barrier
+                },
                 ..base
             });
         }

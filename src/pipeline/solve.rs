@@ -10,7 +10,10 @@
 
 use std::time::Instant;
 
-use bf_optim::ipm::{ExtrapolationScope, IterationInfo, Nlp, Settings, Solution, WarmStart};
+use bf_optim::ipm::{
+    BarrierSettings, ExperimentalSettings, ExtrapolationScope, IterationInfo, LineSearchSettings,
+    LinearSolverSettings, Nlp, OutputSettings, Settings, Solution, TerminationSettings, WarmStart,
+};
 use bf_optim::ocp::solve_nlp;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
 
@@ -19,24 +22,45 @@ use super::error::PipelineError;
 /// Interior-point settings used by [`solve`].
 pub fn solver_settings(s: &ProblemSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| Settings {
-        tol: 1e-8,
+        termination: TerminationSettings {
+            tol: 1e-8,
+            ..Default::default()
+        },
         ..Settings::default()
     });
     Settings {
-        max_iter: s.max_iter,
-        print_level: s.print_level,
-        static_dual_regularization: s
-            .dual_regularization
-            .unwrap_or(base.static_dual_regularization),
-        residual_ratio_with_solution: s.kkt_residual_ratio || base.residual_ratio_with_solution,
-        max_curvature_extrapolation: s
-            .curvature_extrapolation
-            .unwrap_or(base.max_curvature_extrapolation),
-        proximal_weight: s.proximal_weight.unwrap_or(base.proximal_weight),
-        extrapolation_scope: if s.extrapolate_every_barrier {
-            ExtrapolationScope::EveryBarrier
-        } else {
-            base.extrapolation_scope
+        termination: TerminationSettings {
+            max_iter: s.max_iter,
+            ..base.termination
+        },
+        output: OutputSettings {
+            print_level: s.print_level,
+        },
+        linear_solver: LinearSolverSettings {
+            static_dual_regularization: s
+                .dual_regularization
+                .unwrap_or(base.linear_solver.static_dual_regularization),
+            ..base.linear_solver
+        },
+        experimental: ExperimentalSettings {
+            residual_ratio_with_solution: s.kkt_residual_ratio
+                || base.experimental.residual_ratio_with_solution,
+            extrapolation_scope: if s.extrapolate_every_barrier {
+                ExtrapolationScope::EveryBarrier
+            } else {
+                base.experimental.extrapolation_scope
+            },
+            ..base.experimental
+        },
+        line_search: LineSearchSettings {
+            max_curvature_extrapolation: s
+                .curvature_extrapolation
+                .unwrap_or(base.line_search.max_curvature_extrapolation),
+            ..base.line_search
+        },
+        barrier: BarrierSettings {
+            proximal_weight: s.proximal_weight.unwrap_or(base.barrier.proximal_weight),
+            ..base.barrier
         },
         ..base
     }
@@ -126,9 +150,9 @@ pub fn solve(
 pub fn warm_settings(s: &ProblemSettings) -> Settings {
     let mut st = solver_settings(s);
     if s.ipm.is_none() {
-        st.mu_init = 1e-4;
-        st.warm_start_bound_push = 1e-6;
-        st.warm_start_mult_bound_push = 1e-6;
+        st.barrier.mu_init = 1e-4;
+        st.barrier.warm_start_bound_push = 1e-6;
+        st.barrier.warm_start_mult_bound_push = 1e-6;
     }
     st
 }
@@ -154,14 +178,14 @@ pub const INTERPOLATED_MU_INIT_MAX: f64 = 1e-4;
 pub fn interpolated_warm_settings(s: &ProblemSettings, violation: f64) -> Settings {
     let mut st = warm_settings(s);
     if s.ipm.is_none() {
-        let floor = 0.1 * st.tol;
-        st.mu_init = if violation.is_finite() {
+        let floor = 0.1 * st.termination.tol;
+        st.barrier.mu_init = if violation.is_finite() {
             violation.clamp(floor, INTERPOLATED_MU_INIT_MAX)
         } else {
             INTERPOLATED_MU_INIT_MAX
         };
-        st.bound_push = st.warm_start_bound_push;
-        st.bound_frac = st.warm_start_bound_push;
+        st.barrier.bound_push = st.barrier.warm_start_bound_push;
+        st.barrier.bound_frac = st.barrier.warm_start_bound_push;
     }
     st
 }

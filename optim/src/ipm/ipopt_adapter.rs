@@ -140,15 +140,22 @@ pub fn solve_with_ipopt(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, 
     };
     let mut solver =
         Ipopt::new(adapter).map_err(|e| FactorizationError::Ipopt(format!("{e:?}")))?;
-    let print_level = if settings.print_level > 0 { 5 } else { 0 };
-    let mu_strategy = match settings.mu_strategy {
+    let print_level = if settings.output.print_level > 0 {
+        5
+    } else {
+        0
+    };
+    let mu_strategy = match settings.barrier.mu_strategy {
         super::settings::MuStrategy::Monotone => "monotone",
         super::settings::MuStrategy::Adaptive => "adaptive",
     };
-    solver.set_option("tol", settings.tol);
-    solver.set_option("acceptable_tol", settings.acceptable_tol);
-    solver.set_option("max_iter", settings.max_iter.min(i32::MAX as usize) as i32);
-    solver.set_option("mu_init", settings.mu_init);
+    solver.set_option("tol", settings.termination.tol);
+    solver.set_option("acceptable_tol", settings.termination.acceptable_tol);
+    solver.set_option(
+        "max_iter",
+        settings.termination.max_iter.min(i32::MAX as usize) as i32,
+    );
+    solver.set_option("mu_init", settings.barrier.mu_init);
     solver.set_option("mu_strategy", mu_strategy);
     solver.set_option("print_level", print_level);
     solver.set_intermediate_callback(Some(count_iterations));

@@ -45,7 +45,11 @@ pub use kkt::{
     FactorizationFailure, Inertia, KktSolver, LdltBackend, LdltOptions, LdltOrdering, SparseLdlt,
 };
 pub use nlp::{BOUND_INF, DerivativeReport, Nlp, NlpScaling, check_derivatives};
-pub use settings::{ExtrapolationScope, KktOrdering, MuStrategy, ScalingMethod, Settings};
+pub use settings::{
+    BarrierSettings, ExperimentalSettings, ExtrapolationScope, KktOrdering, LineSearchSettings,
+    LinearSolverSettings, MuStrategy, OutputSettings, RecoverySettings, ScalingMethod,
+    ScalingSettings, Settings, TerminationSettings,
+};
 pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};
 
 use self::core::{Core, CoreStart, Ctx};
@@ -140,9 +144,9 @@ pub fn solve_in(
             y: None,
             z_l: None,
             z_u: None,
-            mu: settings.mu_init,
-            bound_push: settings.bound_push,
-            bound_frac: settings.bound_frac,
+            mu: settings.barrier.mu_init,
+            bound_push: settings.barrier.bound_push,
+            bound_frac: settings.barrier.bound_frac,
             mult_floor: 0.0,
             relax_bounds: true,
             restoration: false,
@@ -172,10 +176,10 @@ pub fn solve_in(
                 y: Some(y),
                 z_l: Some(zl),
                 z_u: Some(zu),
-                mu: settings.mu_init,
-                bound_push: settings.warm_start_bound_push,
-                bound_frac: settings.warm_start_bound_push,
-                mult_floor: settings.warm_start_mult_bound_push,
+                mu: settings.barrier.mu_init,
+                bound_push: settings.barrier.warm_start_bound_push,
+                bound_frac: settings.barrier.warm_start_bound_push,
+                mult_floor: settings.barrier.warm_start_mult_bound_push,
                 relax_bounds: true,
                 restoration: false,
                 kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
@@ -241,7 +245,7 @@ pub fn solve_in(
     // As the termination test measures them at the final iterate, in user units.
     let (dual_inf, compl) = (out.dual_infeasibility, out.complementarity);
     ctx.timing.total = t_start.elapsed();
-    if settings.print_level > 0 {
+    if settings.output.print_level > 0 {
         println!(
             "status {:?}: f = {:.10e}, iterations {}, constraint violation {:.2e}, dual infeasibility {:.2e}",
             out.status, objective, ctx.iter, viol, dual_inf

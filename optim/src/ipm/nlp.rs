@@ -51,7 +51,7 @@ pub trait Nlp {
     /// Values of `σ_f ∇²f(x) + Σ_i λ_i ∇²g_i(x)` in the order of
     /// [`hessian_structure`](Nlp::hessian_structure).
     fn hessian_values(&self, x: &[f64], obj_factor: f64, lambda: &[f64], values: &mut [f64]);
-    /// Optional user scaling; used when `Settings::scaling` is `ScalingMethod::User`.
+    /// Optional user scaling; used when `ScalingSettings::scaling` is `ScalingMethod::User`.
     fn scaling(&self) -> Option<NlpScaling> {
         None
     }

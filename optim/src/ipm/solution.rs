@@ -76,11 +76,11 @@ pub struct Counters {
     /// Second-order corrections that were accepted.
     pub soc_accepted: usize,
     /// Full steps along negative curvature extended beyond α = 1
-    /// (`Settings::max_curvature_extrapolation`).
+    /// (`LineSearchSettings::max_curvature_extrapolation`).
     #[serde(default)]
     pub extrapolations: usize,
     /// Iterations whose KKT matrix carried the proximal term of a stalled barrier problem
-    /// (`Settings::proximal_weight`).
+    /// (`BarrierSettings::proximal_weight`).
     #[serde(default)]
     pub proximal_iterations: usize,
     /// Iteration at which the KKT factorization switched from AMD to AMD with 2 × 2 pivot
@@ -90,18 +90,18 @@ pub struct Counters {
     pub pivot_pairs_from: Option<usize>,
     /// Iteration at which the static dual regularization δ_c of the solve last grew (a factor
     /// with the right inertia was inaccurate, or the pivot pairs showed an AMD rejection to be
-    /// spurious); `None`: it kept `Settings::static_dual_regularization`.
+    /// spurious); `None`: it kept `LinearSolverSettings::static_dual_regularization`.
     #[serde(default)]
     pub dual_regularization_raised_at: Option<usize>,
-    /// Filter resets of the filter reset heuristic (`Settings::filter_reset_trigger`).
+    /// Filter resets of the filter reset heuristic (`LineSearchSettings::filter_reset_trigger`).
     #[serde(default)]
     pub filter_resets: usize,
     /// KKT solutions that failed the relative-residual test and were accepted on their normwise
-    /// backward error (`Settings::backward_error_tol`).
+    /// backward error (`LinearSolverSettings::backward_error_tol`).
     #[serde(default)]
     pub backward_error_accepts: usize,
     /// Iterative-refinement corrections computed for KKT solutions, over all solves, the ones
-    /// undone for too slow a contraction included (`Settings::max_refinement_steps` bounds them
+    /// undone for too slow a contraction included (`LinearSolverSettings::max_refinement_steps` bounds them
     /// per solve).
     #[serde(default)]
     pub refinement_steps: usize,

@@ -199,7 +199,7 @@ impl<'a> Reformulated<'a> {
             }
         });
         let (mut obj_scale, mut con_scale) = (1.0, vec![1.0; m]);
-        match settings.scaling {
+        match settings.scaling.method {
             ScalingMethod::None => {}
             ScalingMethod::User => {
                 if let Some(s) = nlp.scaling() {
@@ -221,7 +221,7 @@ impl<'a> Reformulated<'a> {
                 }
             }
             ScalingMethod::GradientBased => {
-                let gmax = settings.scaling_max_gradient;
+                let gmax = settings.scaling.scaling_max_gradient;
                 let mut grad = vec![0.0; n];
                 nlp.gradient(&xs, &mut grad);
                 let gn = grad.iter().fold(0.0f64, |a, v| a.max(v.abs()));
@@ -230,7 +230,8 @@ impl<'a> Reformulated<'a> {
                 // but without its floor) or from below, so that an objective c·f with such a
                 // gradient is scaled to the same internal objective whatever c: its iterates
                 // and the meaning of the absolute tolerances do not depend on c.
-                if gn.is_finite() && (gn > gmax || (gn > 0.0 && gn < settings.scaling_min_gradient))
+                if gn.is_finite()
+                    && (gn > gmax || (gn > 0.0 && gn < settings.scaling.scaling_min_gradient))
                 {
                     obj_scale = gmax / gn;
                 }
@@ -247,7 +248,7 @@ impl<'a> Reformulated<'a> {
                 }
             }
         }
-        obj_scale *= settings.obj_scaling_factor;
+        obj_scale *= settings.scaling.obj_scaling_factor;
         let mut xl = Vec::with_capacity(nf + ns);
         let mut xu = Vec::with_capacity(nf + ns);
         for &j in &free {

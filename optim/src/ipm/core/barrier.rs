@@ -20,7 +20,7 @@ pub(super) struct MuRule {
     pub(super) floor: f64,
     /// The optimality tolerance in scaled units: barrier problems with a larger μ are not
     /// answers (their complementarity alone exceeds it) and carry the proximal term of
-    /// `Settings::proximal_weight`.
+    /// `BarrierSettings::proximal_weight`.
     pub(super) answer_mu: f64,
     /// μ of the current barrier problem, and the iteration at which it was set.
     stage: (f64, usize),
@@ -40,14 +40,17 @@ impl MuRule {
     /// `obj_scale · compl_inf_tol` in scaled units (so a strongly down-scaled objective can
     /// still meet it); `mu_min` scales with the objective below 1.
     pub(super) fn new(settings: &Settings, mu: f64, obj_scale: f64) -> Self {
-        let scaled_tol = settings.tol.min(settings.compl_inf_tol * obj_scale);
+        let scaled_tol = settings
+            .termination
+            .tol
+            .min(settings.termination.compl_inf_tol * obj_scale);
         Self {
-            floor: (settings.mu_min * obj_scale.min(1.0))
-                .max(scaled_tol / (settings.barrier_tol_factor + 1.0))
+            floor: (settings.barrier.mu_min * obj_scale.min(1.0))
+                .max(scaled_tol / (settings.barrier.barrier_tol_factor + 1.0))
                 .min(mu),
             answer_mu: scaled_tol,
             stage: (f64::NAN, 0),
-            free_mode: settings.mu_strategy == MuStrategy::Adaptive,
+            free_mode: settings.barrier.mu_strategy == MuStrategy::Adaptive,
             refs: Vec::new(),
             force_decrease: false,
         }
@@ -68,7 +71,7 @@ impl Core<'_> {
     /// Slacks below this have underflowed in the rounding of `x − x_L` (Ipopt:
     /// `ε_mach · min(1, μ)`, at least the smallest positive double).
     fn slack_floor(&self) -> f64 {
-        let s = f64::EPSILON * self.mu.min(1.0);
+        let s = f64::EPSILON * self.barrier.mu.min(1.0);
         if s > 0.0 { s } else { f64::MIN_POSITIVE }
     }
 
@@ -81,15 +84,15 @@ impl Core<'_> {
         if raw >= s_min {
             return raw;
         }
-        (self.mu / z)
+        (self.barrier.mu / z)
             .max(s_min)
-            .min(raw.max(0.0) + self.slack_move * bound.abs().max(1.0))
+            .min(raw.max(0.0) + self.barrier.slack_move * bound.abs().max(1.0))
     }
 
     /// Whether the raw slack `raw` to `bound` lies outside the bound by more than the safeguard
     /// may move it (or is NaN): a trial point there is infeasible, not a rounded slack.
     fn violates(&self, raw: f64, bound: f64) -> bool {
-        raw.is_nan() || raw <= -self.slack_move * bound.abs().max(1.0)
+        raw.is_nan() || raw <= -self.barrier.slack_move * bound.abs().max(1.0)
     }
 
     /// Slacks `s_L = x − x_L`, `s_U = x_U − x` at the current iterate. A slack that has
@@ -100,23 +103,23 @@ impl Core<'_> {
     pub(super) fn update_slacks(&mut self) -> usize {
         let s_min = self.slack_floor();
         let mut moved = 0;
-        for (k, &j) in self.lo.iter().enumerate() {
-            let raw = self.x[j] - self.xl[j];
-            let s = self.safe_slack(raw, self.xl[j], self.zl[k], s_min);
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
+            let raw = self.iterate.x[j] - self.bounds.xl[j];
+            let s = self.safe_slack(raw, self.bounds.xl[j], self.iterate.zl[k], s_min);
             if s != raw {
-                self.xl[j] = self.x[j] - s;
+                self.bounds.xl[j] = self.iterate.x[j] - s;
                 moved += 1;
             }
-            self.sl[k] = s;
+            self.iterate.sl[k] = s;
         }
-        for (k, &j) in self.up.iter().enumerate() {
-            let raw = self.xu[j] - self.x[j];
-            let s = self.safe_slack(raw, self.xu[j], self.zu[k], s_min);
+        for (k, &j) in self.bounds.up.iter().enumerate() {
+            let raw = self.bounds.xu[j] - self.iterate.x[j];
+            let s = self.safe_slack(raw, self.bounds.xu[j], self.iterate.zu[k], s_min);
             if s != raw {
-                self.xu[j] = self.x[j] + s;
+                self.bounds.xu[j] = self.iterate.x[j] + s;
                 moved += 1;
             }
-            self.su[k] = s;
+            self.iterate.su[k] = s;
         }
         moved
     }
@@ -125,31 +128,37 @@ impl Core<'_> {
     /// current multipliers); +∞ where a slack is beyond its bound by more than the safeguard's
     /// move ([`Core::violates`]).
     pub(super) fn barrier_value(&self, x: &[f64], f: f64) -> f64 {
-        let mu = self.mu;
+        let mu = self.barrier.mu;
         let s_min = self.slack_floor();
         let mut phi = f;
-        for (k, &j) in self.lo.iter().enumerate() {
-            let raw = x[j] - self.xl[j];
-            if self.violates(raw, self.xl[j]) {
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
+            let raw = x[j] - self.bounds.xl[j];
+            if self.violates(raw, self.bounds.xl[j]) {
                 return f64::INFINITY;
             }
-            phi -= mu * self.safe_slack(raw, self.xl[j], self.zl[k], s_min).ln();
+            phi -= mu
+                * self
+                    .safe_slack(raw, self.bounds.xl[j], self.iterate.zl[k], s_min)
+                    .ln();
         }
-        for (k, &j) in self.up.iter().enumerate() {
-            let raw = self.xu[j] - x[j];
-            if self.violates(raw, self.xu[j]) {
+        for (k, &j) in self.bounds.up.iter().enumerate() {
+            let raw = self.bounds.xu[j] - x[j];
+            if self.violates(raw, self.bounds.xu[j]) {
                 return f64::INFINITY;
             }
-            phi -= mu * self.safe_slack(raw, self.xu[j], self.zu[k], s_min).ln();
+            phi -= mu
+                * self
+                    .safe_slack(raw, self.bounds.xu[j], self.iterate.zu[k], s_min)
+                    .ln();
         }
-        let kd = self.kappa_d * mu;
+        let kd = self.barrier.kappa_d * mu;
         if kd > 0.0 {
             for j in 0..self.n {
-                let d = self.damp[j];
+                let d = self.bounds.damp[j];
                 if d > 0.0 {
-                    phi += kd * (x[j] - self.xl[j]);
+                    phi += kd * (x[j] - self.bounds.xl[j]);
                 } else if d < 0.0 {
-                    phi += kd * (self.xu[j] - x[j]);
+                    phi += kd * (self.bounds.xu[j] - x[j]);
                 }
             }
         }
@@ -157,23 +166,23 @@ impl Core<'_> {
     }
 
     pub(super) fn compute_jty(&mut self) {
-        self.jty.iter_mut().for_each(|v| *v = 0.0);
-        for (k, &(r, c)) in self.jac_pat.iter().enumerate() {
-            self.jty[c] += self.jac[k] * self.y[r];
+        self.evals.jty.iter_mut().for_each(|v| *v = 0.0);
+        for (k, &(r, c)) in self.evals.jac_pat.iter().enumerate() {
+            self.evals.jty[c] += self.evals.jac[k] * self.iterate.y[r];
         }
     }
 
     pub(super) fn compute_grad_phi(&mut self) {
-        let mu = self.mu;
-        let kd = self.kappa_d * mu;
+        let mu = self.barrier.mu;
+        let kd = self.barrier.kappa_d * mu;
         for j in 0..self.n {
-            self.grad_phi[j] = self.grad[j] + kd * self.damp[j];
+            self.evals.grad_phi[j] = self.evals.grad[j] + kd * self.bounds.damp[j];
         }
-        for (k, &j) in self.lo.iter().enumerate() {
-            self.grad_phi[j] -= mu / self.sl[k];
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
+            self.evals.grad_phi[j] -= mu / self.iterate.sl[k];
         }
-        for (k, &j) in self.up.iter().enumerate() {
-            self.grad_phi[j] += mu / self.su[k];
+        for (k, &j) in self.bounds.up.iter().enumerate() {
+            self.evals.grad_phi[j] += mu / self.iterate.su[k];
         }
     }
 
@@ -186,20 +195,20 @@ impl Core<'_> {
         err: &Errors,
         e0: f64,
     ) {
-        let old_mu = self.mu;
+        let old_mu = self.barrier.mu;
         if rule.free_mode {
             let ref_max = rule.refs.iter().fold(0.0f64, |a, &b| a.max(b));
             if !rule.refs.is_empty() && e0 > 0.9999 * ref_max {
                 rule.free_mode = false;
                 if let Some((avg, _)) = self.avg_compl() {
-                    self.mu = (0.8 * avg).max(rule.floor);
+                    self.barrier.mu = (0.8 * avg).max(rule.floor);
                 }
             } else {
                 rule.refs.push(e0);
                 if rule.refs.len() > 4 {
                     rule.refs.remove(0);
                 }
-                self.mu = match self.avg_compl() {
+                self.barrier.mu = match self.avg_compl() {
                     Some((avg, min)) => {
                         let xi = (min / avg).clamp(0.0, 1.0);
                         let sigma = 0.1 * (0.05 * (1.0 - xi) / xi.max(1e-300)).min(2.0).powi(3);
@@ -209,7 +218,7 @@ impl Core<'_> {
                 };
             }
         } else {
-            if settings.mu_strategy == MuStrategy::Adaptive {
+            if settings.barrier.mu_strategy == MuStrategy::Adaptive {
                 let ref_min = rule.refs.iter().fold(f64::INFINITY, |a, &b| a.min(b));
                 if e0 <= 0.9999 * ref_min {
                     rule.free_mode = true;
@@ -218,24 +227,25 @@ impl Core<'_> {
                 }
             }
             loop {
-                let e_mu = err.e(self.compl_mu(self.mu));
-                if (e_mu <= settings.barrier_tol_factor * self.mu || rule.force_decrease)
-                    && self.mu > rule.floor
+                let e_mu = err.e(self.compl_mu(self.barrier.mu));
+                if (e_mu <= settings.barrier.barrier_tol_factor * self.barrier.mu
+                    || rule.force_decrease)
+                    && self.barrier.mu > rule.floor
                 {
                     rule.force_decrease = false;
-                    let new_mu = (settings.mu_linear_decrease * self.mu)
-                        .min(self.mu.powf(settings.mu_superlinear_power))
+                    let new_mu = (settings.barrier.mu_linear_decrease * self.barrier.mu)
+                        .min(self.barrier.mu.powf(settings.barrier.mu_superlinear_power))
                         .max(rule.floor);
-                    self.mu = new_mu;
-                    self.tau = settings.tau_min.max(1.0 - self.mu);
+                    self.barrier.mu = new_mu;
+                    self.barrier.tau = settings.barrier.tau_min.max(1.0 - self.barrier.mu);
                 } else {
                     break;
                 }
             }
             rule.force_decrease = false;
         }
-        if self.mu != old_mu {
-            self.tau = settings.tau_min.max(1.0 - self.mu);
+        if self.barrier.mu != old_mu {
+            self.barrier.tau = settings.barrier.tau_min.max(1.0 - self.barrier.mu);
             self.filter.clear();
         }
     }

@@ -36,8 +36,8 @@ impl Filter {
 
     /// Adds the point (θ, φ) with the margins of W&B eq. (21), removing entries it dominates.
     pub fn augment(&mut self, theta: f64, phi: f64, settings: &Settings) {
-        let t = (1.0 - settings.gamma_theta) * theta;
-        let p = phi - settings.gamma_phi * theta;
+        let t = (1.0 - settings.line_search.gamma_theta) * theta;
+        let p = phi - settings.line_search.gamma_phi * theta;
         self.entries.retain(|&(ft, fp)| !(ft >= t && fp >= p));
         self.entries.push((t, p));
     }
@@ -66,10 +66,10 @@ impl Filter {
     /// step. Returns whether the filter was reset.
     pub fn note_accept(&mut self, settings: &Settings) -> bool {
         let mut reset = false;
-        if self.resets < settings.max_filter_resets {
+        if self.resets < settings.line_search.max_filter_resets {
             if self.blocked_last {
                 self.blocked_run += 1;
-                if self.blocked_run >= settings.filter_reset_trigger {
+                if self.blocked_run >= settings.line_search.filter_reset_trigger {
                     self.entries.clear();
                     self.resets += 1;
                     self.blocked_run = 0;
@@ -104,10 +104,14 @@ mod tests {
         assert_eq!(f.entries().len(), 1);
         // Reset heuristic: `filter_reset_trigger` accepted steps, each after a rejection by
         // the filter alone, clear it; a plain rejection in between restarts the count.
-        for k in 1..=settings.filter_reset_trigger {
+        for k in 1..=settings.line_search.filter_reset_trigger {
             f.note_rejection(true);
             let reset = f.note_accept(&settings);
-            assert_eq!(reset, k == settings.filter_reset_trigger, "step {k}");
+            assert_eq!(
+                reset,
+                k == settings.line_search.filter_reset_trigger,
+                "step {k}"
+            );
         }
         assert!(f.entries().is_empty());
         f.augment(0.5, 1.0, &settings);

@@ -2,7 +2,7 @@
 //! `run` reads as the algorithm:
 //!
 //! * [`Core::analyse_kkt`]: the symbolic analysis of the KKT pattern (once per run), with the
-//!   elimination order of `Settings::kkt_ordering`;
+//!   elimination order of `ExperimentalSettings::kkt_ordering`;
 //! * [`Core::initialize`]: the initial point pushed into the bounds, the bound multipliers,
 //!   the first evaluations and the least-squares constraint multipliers (W&B Sect. 3.6), and
 //!   the filter's θ_max, θ_min (W&B Sect. 3.3);
@@ -15,95 +15,46 @@
 //!   search with extrapolation along negative curvature (decision record 0010), soft
 //!   restoration;
 //! * [`Core::accept_step`]: the new iterate, multipliers with the κ_Σ safeguard (W&B eq. (16));
-//! * [`Core::recover`]: what happens without an acceptable step: the adaptive rule's fallback
-//!   to monotone μ, the acceptable-level stop, the restoration phase (W&B Sect. 3.3).
+//!
+//! Without an acceptable step, the chain of recovery strategies of `recovery` decides
+//! ([`Core::recover`]).
 
 use std::time::Instant;
 
 use super::barrier::MuRule;
 use super::line_search::LsOutcome;
+use super::parts::{RunState, Taken};
+use super::recovery::NoStep;
 use super::step::StepResult;
 use super::{Core, CoreStart, Ctx, norm_1, norm_inf};
 use crate::error::OptimError;
 use crate::ipm::kkt::{KktSolver, LdltBackend, LdltOptions, LdltOrdering, SparseLdlt};
 use crate::ipm::settings::{ExtrapolationScope, KktOrdering};
-use crate::ipm::solution::{IterationInfo, Status};
-
-/// What the outer loop carries from one iteration to the next besides the iterate.
-pub(super) struct RunState {
-    /// Consecutive iterates at the acceptable level (termination).
-    pub acceptable_count: usize,
-    /// The last log line / callback record.
-    pub last: IterationInfo,
-    /// Consecutive tiny steps (W&B Sect. 3.9).
-    pub tiny_count: usize,
-    /// Consecutive soft restoration steps.
-    pub soft_count: usize,
-    /// Log lines printed (a header every ten).
-    pub lines: usize,
-}
-
-impl RunState {
-    /// The state before the first iteration.
-    pub fn new(iter: usize, restoration: bool, mu: f64) -> Self {
-        Self {
-            acceptable_count: 0,
-            last: IterationInfo {
-                iter,
-                restoration,
-                objective: 0.0,
-                inf_pr: 0.0,
-                inf_du: 0.0,
-                dual_infeasibility: 0.0,
-                complementarity: 0.0,
-                mu,
-                step_norm: 0.0,
-                delta_w: 0.0,
-                alpha_du: 0.0,
-                alpha_pr: 0.0,
-                ls_trials: 0,
-            },
-            tiny_count: 0,
-            soft_count: 0,
-            lines: 0,
-        }
-    }
-}
-
-/// A step the iteration takes: the trial point `x_t` (evaluated) at primal step `alpha`.
-pub(super) struct Taken {
-    /// Primal step size (above 1 after an extrapolation along negative curvature).
-    alpha: f64,
-    /// Dual step size when a soft restoration step fixed it; otherwise the fraction to the
-    /// boundary decides.
-    alpha_dual: Option<f64>,
-    /// Line-search trials.
-    trials: usize,
-}
+use crate::ipm::solution::Status;
 
 /// The outcome of the step-size phase.
 pub(super) enum StepChoice {
     /// Take this step.
     Take(Taken),
-    /// No acceptable step: recover ([`Core::recover`]).
-    Recover,
+    /// No acceptable step: the recovery chain decides ([`Core::recover`]).
+    Recover(NoStep),
     /// Stop with this status (tiny steps at the smallest μ).
     Stop(Status),
 }
 
 impl Core<'_> {
     /// Symbolic analysis of the KKT pattern, once per run, in the elimination order of
-    /// `Settings::kkt_ordering`.
+    /// `ExperimentalSettings::kkt_ordering`.
     pub(super) fn analyse_kkt(&mut self, ctx: &mut Ctx<'_, '_>) -> Result<(), OptimError> {
         let settings = ctx.settings;
         let t = Instant::now();
-        self.check_pairs = matches!(
-            settings.kkt_ordering,
+        self.kkt.check_pairs = matches!(
+            settings.experimental.kkt_ordering,
             KktOrdering::AmdThenPivotPairs | KktOrdering::AmdCheckedByPivotPairs
         ) && self.m > 0;
-        self.switched_to_pairs = false;
-        self.other_solver = None;
-        let ordering = match settings.kkt_ordering {
+        self.kkt.switched_to_pairs = false;
+        self.kkt.other_solver = None;
+        let ordering = match settings.experimental.kkt_ordering {
             KktOrdering::Amd
             | KktOrdering::AmdThenPivotPairs
             | KktOrdering::AmdCheckedByPivotPairs
@@ -113,7 +64,7 @@ impl Core<'_> {
             },
             KktOrdering::ConstraintsAfterVariables => {
                 let mut bounded = vec![false; self.n];
-                for &j in self.lo.iter().chain(&self.up) {
+                for &j in self.bounds.lo.iter().chain(&self.bounds.up) {
                     bounded[j] = true;
                 }
                 LdltOrdering::PairedAmd {
@@ -124,8 +75,8 @@ impl Core<'_> {
         };
         // A solver handed in by a workspace keeps its analysis when its options are the
         // ones this run needs (its backend is kept unless the ordering dictates one).
-        let current = self.solver.options();
-        let backend = match (settings.kkt_ordering, current.backend) {
+        let current = self.kkt.solver.options();
+        let backend = match (settings.experimental.kkt_ordering, current.backend) {
             (KktOrdering::ThresholdPivoting, _) => LdltBackend::Multifrontal,
             (_, LdltBackend::Multifrontal) => LdltBackend::Auto,
             (_, backend) => backend,
@@ -136,12 +87,12 @@ impl Core<'_> {
             ..current.clone()
         };
         if options != *current {
-            self.solver = SparseLdlt::with_options(options);
+            self.kkt.solver = SparseLdlt::with_options(options);
         }
-        self.solver.analyse(
+        self.kkt.solver.analyse(
             self.n + self.m,
-            &self.kkt.mat.col_ptr,
-            &self.kkt.mat.row_idx,
+            &self.kkt.matrix.mat.col_ptr,
+            &self.kkt.matrix.mat.row_idx,
         )?;
         ctx.timing.factorization += t.elapsed();
         Ok(())
@@ -156,22 +107,22 @@ impl Core<'_> {
         start: &CoreStart,
     ) -> Result<(), OptimError> {
         let settings = ctx.settings;
-        let mut x0 = std::mem::take(&mut self.x);
+        let mut x0 = std::mem::take(&mut self.iterate.x);
         self.push_into_bounds(&mut x0, start.bound_push, start.bound_frac);
-        self.x = x0;
+        self.iterate.x = x0;
         self.update_slacks();
         if let Some(z) = &start.z_l {
-            for (k, &j) in self.lo.iter().enumerate() {
-                self.zl[k] = z[j].max(start.mult_floor);
+            for (k, &j) in self.bounds.lo.iter().enumerate() {
+                self.iterate.zl[k] = z[j].max(start.mult_floor);
             }
         }
         if let Some(z) = &start.z_u {
-            for (k, &j) in self.up.iter().enumerate() {
-                self.zu[k] = z[j].max(start.mult_floor);
+            for (k, &j) in self.bounds.up.iter().enumerate() {
+                self.iterate.zu[k] = z[j].max(start.mult_floor);
             }
         }
         let (f, ok) = self.eval_fc(ctx, false);
-        self.f = f;
+        self.evals.f = f;
         if !ok {
             return Err(OptimError::NonFinite {
                 iter: ctx.iter,
@@ -185,10 +136,10 @@ impl Core<'_> {
             });
         }
         match &start.y {
-            Some(y) => self.y.copy_from_slice(y),
+            Some(y) => self.iterate.y.copy_from_slice(y),
             None => self.least_squares_y(ctx, settings),
         }
-        let theta0 = norm_1(&self.c);
+        let theta0 = norm_1(&self.evals.c);
         self.filter.set_bounds(theta0);
         Ok(())
     }
@@ -206,11 +157,11 @@ impl Core<'_> {
         let (os, _) = self.prob.scales();
         let last = &mut run.last;
         last.iter = ctx.iter;
-        last.objective = self.f / os;
+        last.objective = self.evals.f / os;
         last.inf_pr = err.primal_inf;
         last.inf_du = err.dual_inf;
         (last.dual_infeasibility, _, last.complementarity) = self.unscaled(err);
-        last.mu = self.mu;
+        last.mu = self.barrier.mu;
         if run.lines.is_multiple_of(10) {
             self.log_header(settings);
         }
@@ -221,10 +172,10 @@ impl Core<'_> {
         {
             return Some((Status::UserStop, false));
         }
-        if self.restoration && self.prob.early_stop(&self.x) {
+        if self.restoration && self.prob.early_stop(&self.iterate.x) {
             return Some((Status::Solved, true));
         }
-        if settings.print_level > 2 {
+        if settings.output.print_level > 2 {
             let (du_u, pr_u, co_u) = self.unscaled(err);
             println!(
                 "    E0 {e0:.2e}: dual {:.2e} (s_d {:.2e}), primal {:.2e}, compl {:.2e} (s_c {:.2e}); unscaled dual {du_u:.2e}, primal {pr_u:.2e}, compl {co_u:.2e}; acceptable {}",
@@ -248,7 +199,7 @@ impl Core<'_> {
         mu_rule: &mut MuRule,
     ) -> Result<bool, OptimError> {
         let settings = ctx.settings;
-        let stage_iterations = mu_rule.stage_iterations(self.mu, ctx.iter);
+        let stage_iterations = mu_rule.stage_iterations(self.barrier.mu, ctx.iter);
         if !self.eval_hessian(ctx) {
             return Err(OptimError::NonFinite {
                 iter: ctx.iter,
@@ -257,26 +208,26 @@ impl Core<'_> {
         }
         self.compute_grad_phi();
         self.set_rhs(None);
-        self.proximal = if self.mu > mu_rule.answer_mu
-            && stage_iterations >= settings.proximal_after
+        self.reg.proximal = if self.barrier.mu > mu_rule.answer_mu
+            && stage_iterations >= settings.barrier.proximal_after
             && !self.restoration
         {
-            if settings.proximal_weight > 0.0 {
+            if settings.barrier.proximal_weight > 0.0 {
                 ctx.counters.proximal_iterations += 1;
             }
-            settings.proximal_weight * self.mu
+            settings.barrier.proximal_weight * self.barrier.mu
         } else {
             0.0
         };
         Ok(matches!(
-            self.compute_step(ctx, settings, true),
+            self.compute_step(ctx, settings, true)?,
             StepResult::Ok
         ))
     }
 
     /// The step size along the direction just computed: the tiny-step rule (W&B Sect. 3.9),
     /// else the filter line search (extrapolating along negative curvature on the barrier
-    /// problems the scope allows, decision record 0010), else a soft restoration step.
+    /// problems the scope allows, decision record 0010).
     pub(super) fn find_step(
         &mut self,
         ctx: &mut Ctx<'_, '_>,
@@ -287,26 +238,27 @@ impl Core<'_> {
         let settings = ctx.settings;
         self.unpack_step();
         let tiny = self
+            .direction
             .dx
             .iter()
-            .zip(&self.x)
+            .zip(&self.iterate.x)
             .all(|(d, x)| d.abs() / (1.0 + x.abs()) < 10.0 * f64::EPSILON)
-            && err.primal_inf <= settings.constr_viol_tol;
+            && err.primal_inf <= settings.termination.constr_viol_tol;
         if tiny {
             run.tiny_count += 1;
-            if run.tiny_count >= 2 && self.mu <= mu_rule.floor {
+            if run.tiny_count >= 2 && self.barrier.mu <= mu_rule.floor {
                 return StepChoice::Stop(Status::SearchDirectionTooSmall);
             }
             mu_rule.force_decrease = true;
-            let amax = self.max_step_primal(&self.dx);
+            let amax = self.max_step_primal(&self.direction.dx);
             for j in 0..self.n {
-                self.x_t[j] = self.x[j] + amax * self.dx[j];
+                self.trial.x[j] = self.iterate.x[j] + amax * self.direction.dx[j];
             }
             let (f_t, ok) = self.eval_fc(ctx, true);
             if !ok {
-                return StepChoice::Recover;
+                return StepChoice::Recover(NoStep::TrialNotEvaluable);
             }
-            self.f_t = f_t;
+            self.trial.f = f_t;
             return StepChoice::Take(Taken {
                 alpha: amax,
                 alpha_dual: None,
@@ -314,9 +266,9 @@ impl Core<'_> {
             });
         }
         run.tiny_count = 0;
-        let extrapolate = settings.max_curvature_extrapolation > 1.0
-            && (self.mu <= mu_rule.answer_mu
-                || settings.extrapolation_scope == ExtrapolationScope::EveryBarrier);
+        let extrapolate = settings.line_search.max_curvature_extrapolation > 1.0
+            && (self.barrier.mu <= mu_rule.answer_mu
+                || settings.experimental.extrapolation_scope == ExtrapolationScope::EveryBarrier);
         match self.line_search(ctx, settings, extrapolate) {
             LsOutcome::Accepted { alpha, trials } => {
                 run.soft_count = 0;
@@ -326,20 +278,7 @@ impl Core<'_> {
                     trials,
                 })
             }
-            LsOutcome::Failed => {
-                let e_mu = err.e(self.compl_mu(self.mu));
-                match self.soft_restoration_step(ctx, settings, e_mu) {
-                    Some(a) if run.soft_count < 10 => {
-                        run.soft_count += 1;
-                        StepChoice::Take(Taken {
-                            alpha: a,
-                            alpha_dual: Some(a),
-                            trials: 0,
-                        })
-                    }
-                    _ => StepChoice::Recover,
-                }
-            }
+            LsOutcome::Failed => StepChoice::Recover(NoStep::LineSearchFailed),
         }
     }
 
@@ -355,32 +294,32 @@ impl Core<'_> {
         let settings = ctx.settings;
         let accepted_alpha = taken.alpha;
         let alpha_z = taken.alpha_dual.unwrap_or_else(|| self.max_step_dual());
-        std::mem::swap(&mut self.x, &mut self.x_t);
-        std::mem::swap(&mut self.c, &mut self.c_t);
-        self.f = self.f_t;
+        std::mem::swap(&mut self.iterate.x, &mut self.trial.x);
+        std::mem::swap(&mut self.evals.c, &mut self.trial.c);
+        self.evals.f = self.trial.f;
         // Slacks before the multipliers move: an underflowed slack takes μ / z with the z
         // the trial point was judged with (as Ipopt's trial slacks).
         self.update_slacks();
         // `y + dy` is the Newton estimate of the multipliers: a primal step extrapolated
         // beyond α = 1 along negative curvature does not extend it.
         for i in 0..self.m {
-            self.y[i] += accepted_alpha.min(1.0) * self.dy[i];
+            self.iterate.y[i] += accepted_alpha.min(1.0) * self.direction.dy[i];
         }
-        for k in 0..self.zl.len() {
-            self.zl[k] += alpha_z * self.dzl[k];
+        for k in 0..self.iterate.zl.len() {
+            self.iterate.zl[k] += alpha_z * self.direction.dzl[k];
         }
-        for k in 0..self.zu.len() {
-            self.zu[k] += alpha_z * self.dzu[k];
+        for k in 0..self.iterate.zu.len() {
+            self.iterate.zu[k] += alpha_z * self.direction.dzu[k];
         }
-        let ks = settings.kappa_sigma;
-        let mu = self.mu;
-        for k in 0..self.zl.len() {
-            let s = self.sl[k];
-            self.zl[k] = self.zl[k].min(ks * mu / s).max(mu / (ks * s));
+        let ks = settings.barrier.kappa_sigma;
+        let mu = self.barrier.mu;
+        for k in 0..self.iterate.zl.len() {
+            let s = self.iterate.sl[k];
+            self.iterate.zl[k] = self.iterate.zl[k].min(ks * mu / s).max(mu / (ks * s));
         }
-        for k in 0..self.zu.len() {
-            let s = self.su[k];
-            self.zu[k] = self.zu[k].min(ks * mu / s).max(mu / (ks * s));
+        for k in 0..self.iterate.zu.len() {
+            let s = self.iterate.su[k];
+            self.iterate.zu[k] = self.iterate.zu[k].min(ks * mu / s).max(mu / (ks * s));
         }
         if !self.eval_derivs(ctx) {
             return Err(OptimError::NonFinite {
@@ -393,58 +332,11 @@ impl Core<'_> {
             ctx.counters.restoration_iterations += 1;
         }
         let last = &mut run.last;
-        last.step_norm = norm_inf(&self.dx) * accepted_alpha;
-        last.delta_w = self.delta_w;
+        last.step_norm = norm_inf(&self.direction.dx) * accepted_alpha;
+        last.delta_w = self.reg.delta_w;
         last.alpha_du = alpha_z;
         last.alpha_pr = accepted_alpha;
         last.ls_trials = taken.trials;
         Ok(())
-    }
-
-    /// No acceptable step (`step_ok`: a direction existed but no step along it was
-    /// acceptable). In order: the adaptive μ rule falls back to monotone mode; inside
-    /// restoration (or with restoration off) the run fails; an iterate at the acceptable
-    /// level stops as `Acceptable`; otherwise the restoration phase runs. `Some(status)` ends
-    /// the run.
-    pub(super) fn recover(
-        &mut self,
-        ctx: &mut Ctx<'_, '_>,
-        step_ok: bool,
-        e0: f64,
-        pr_u: f64,
-        mu_rule: &mut MuRule,
-        run: &mut RunState,
-    ) -> Result<Option<Status>, OptimError> {
-        let settings = ctx.settings;
-        if mu_rule.free_mode {
-            mu_rule.free_mode = false;
-            if let Some((avg, _)) = self.avg_compl() {
-                self.mu = (0.8 * avg).max(mu_rule.floor);
-                self.tau = settings.tau_min.max(1.0 - self.mu);
-            }
-            self.filter.clear();
-            return Ok(None);
-        }
-        if self.restoration || !settings.restoration {
-            return Ok(Some(if step_ok {
-                Status::RestorationFailed
-            } else {
-                Status::ErrorInStepComputation
-            }));
-        }
-        if e0 <= settings.acceptable_tol && pr_u <= settings.acceptable_constr_viol_tol {
-            return Ok(Some(Status::Acceptable));
-        }
-        if let Some(status) = self.restoration_phase(ctx, settings)? {
-            return Ok(Some(status));
-        }
-        let last = &mut run.last;
-        last.restoration = false;
-        last.step_norm = 0.0;
-        last.alpha_du = 0.0;
-        last.alpha_pr = 0.0;
-        last.ls_trials = 0;
-        last.delta_w = 0.0;
-        Ok(None)
     }
 }

@@ -51,29 +51,30 @@ impl Core<'_> {
 
     /// The fraction-to-boundary step size (W&B eq. (15)) capped at `cap` instead of 1.
     pub(super) fn max_step_primal_upto(&self, dx: &[f64], cap: f64) -> f64 {
-        let tau = self.tau;
+        let tau = self.barrier.tau;
         let mut a: f64 = cap;
-        for (k, &j) in self.lo.iter().enumerate() {
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
             if dx[j] < 0.0 {
-                a = a.min(-tau * self.sl[k] / dx[j]);
+                a = a.min(-tau * self.iterate.sl[k] / dx[j]);
             }
         }
-        for (k, &j) in self.up.iter().enumerate() {
+        for (k, &j) in self.bounds.up.iter().enumerate() {
             if dx[j] > 0.0 {
-                a = a.min(tau * self.su[k] / dx[j]);
+                a = a.min(tau * self.iterate.su[k] / dx[j]);
             }
         }
         a
     }
 
     pub(super) fn max_step_dual(&self) -> f64 {
-        let tau = self.tau;
+        let tau = self.barrier.tau;
         let mut a: f64 = 1.0;
         for (z, dz) in self
+            .iterate
             .zl
             .iter()
-            .zip(&self.dzl)
-            .chain(self.zu.iter().zip(&self.dzu))
+            .zip(&self.direction.dzl)
+            .chain(self.iterate.zu.iter().zip(&self.direction.dzu))
         {
             if *dz < 0.0 {
                 a = a.min(-tau * z / dz);
@@ -101,22 +102,22 @@ impl Core<'_> {
         }
         if phi_t > phi {
             let inc = (phi_t - phi).log10();
-            if inc > settings.obj_max_inc + phi.abs().log10().max(1.0) {
+            if inc > settings.line_search.obj_max_inc + phi.abs().log10().max(1.0) {
                 return Trial::Rejected;
             }
         }
         let switching = gphi_dx < 0.0
-            && alpha * (-gphi_dx).powf(settings.s_phi)
-                > settings.switching_delta * theta.powf(settings.s_theta);
+            && alpha * (-gphi_dx).powf(settings.line_search.s_phi)
+                > settings.line_search.switching_delta * theta.powf(settings.line_search.s_theta);
         let eps = 10.0 * f64::EPSILON * phi.abs().max(1.0);
         let (progress, ftype) = if theta <= self.filter.theta_min && switching {
             (
-                phi_t - phi - eps <= settings.eta_phi * alpha * gphi_dx,
+                phi_t - phi - eps <= settings.line_search.eta_phi * alpha * gphi_dx,
                 true,
             )
         } else {
-            let ok = theta_t <= (1.0 - settings.gamma_theta) * theta
-                || phi_t - eps <= phi - settings.gamma_phi * theta;
+            let ok = theta_t <= (1.0 - settings.line_search.gamma_theta) * theta
+                || phi_t - eps <= phi - settings.line_search.gamma_phi * theta;
             (ok, false)
         };
         if !progress {
@@ -161,20 +162,26 @@ impl Core<'_> {
     /// `c_t` filled), or `None` where the functions are not finite there.
     fn trial_point(&mut self, ctx: &mut Ctx<'_, '_>, alpha: f64) -> Option<(f64, f64, f64)> {
         for j in 0..self.n {
-            self.x_t[j] = self.x[j] + alpha * self.dx[j];
+            self.trial.x[j] = self.iterate.x[j] + alpha * self.direction.dx[j];
         }
         let (f_t, ok) = self.eval_fc(ctx, true);
-        ok.then(|| (f_t, norm_1(&self.c_t), self.barrier_value(&self.x_t, f_t)))
+        ok.then(|| {
+            (
+                f_t,
+                norm_1(&self.trial.c),
+                self.barrier_value(&self.trial.x, f_t),
+            )
+        })
     }
 
     pub(super) fn alpha_min(&self, settings: &Settings, theta: f64, gphi_dx: f64) -> f64 {
-        let g = settings.gamma_theta;
+        let g = settings.line_search.gamma_theta;
         let a = if gphi_dx < 0.0 {
-            let b = g.min(settings.gamma_phi * theta / (-gphi_dx));
+            let b = g.min(settings.line_search.gamma_phi * theta / (-gphi_dx));
             if theta <= self.filter.theta_min {
                 b.min(
-                    settings.switching_delta * theta.powf(settings.s_theta)
-                        / (-gphi_dx).powf(settings.s_phi),
+                    settings.line_search.switching_delta * theta.powf(settings.line_search.s_theta)
+                        / (-gphi_dx).powf(settings.line_search.s_phi),
                 )
             } else {
                 b
@@ -197,11 +204,11 @@ impl Core<'_> {
         let t0 = Instant::now();
         let fe0 = ctx.timing.function_evals;
         let base = Base {
-            theta: norm_1(&self.c),
-            phi: self.barrier_value(&self.x, self.f),
-            gphi_dx: dot(&self.grad_phi, &self.dx),
+            theta: norm_1(&self.evals.c),
+            phi: self.barrier_value(&self.iterate.x, self.evals.f),
+            gphi_dx: dot(&self.evals.grad_phi, &self.direction.dx),
         };
-        let alpha_max = self.max_step_primal(&self.dx);
+        let alpha_max = self.max_step_primal(&self.direction.dx);
         let amin = self.alpha_min(settings, base.theta, base.gphi_dx);
         let mut alpha = alpha_max;
         let mut trials = 0;
@@ -213,7 +220,7 @@ impl Core<'_> {
             if let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, alpha) {
                 let verdict = self.acceptable(settings, base, alpha, theta_t, phi_t);
                 if self.take_verdict(ctx, settings, verdict, base) {
-                    self.f_t = f_t;
+                    self.trial.f = f_t;
                     if extrapolate && trials == 1 && alpha == 1.0 {
                         let a = self.extrapolate(ctx, settings, verdict, base, phi_t);
                         break LsOutcome::Accepted { alpha: a, trials };
@@ -222,14 +229,14 @@ impl Core<'_> {
                 }
                 if trials == 1
                     && theta_t >= base.theta
-                    && settings.max_soc > 0
+                    && settings.line_search.max_soc > 0
                     && self.m > 0
                     && let Some(a) = self.second_order_correction(ctx, settings, alpha, base)
                 {
                     break LsOutcome::Accepted { alpha: a, trials };
                 }
             }
-            alpha *= settings.alpha_red_factor;
+            alpha *= settings.line_search.alpha_red_factor;
         };
         let fe = ctx.timing.function_evals - fe0;
         ctx.timing.line_search += t0.elapsed().saturating_sub(fe);
@@ -241,13 +248,17 @@ impl Core<'_> {
     /// refinement buffers `corr`, `resid`, free once the step is computed.
     fn step_curvature(&mut self) -> f64 {
         let n = self.n;
-        self.corr[..n].copy_from_slice(&self.dx);
-        self.corr[n..].fill(0.0);
-        self.kkt.mat.sym_matvec(&self.corr, &mut self.resid);
-        dot(&self.dx, &self.resid[..n]) - self.delta_w * dot(&self.dx, &self.dx)
+        self.kkt.corr[..n].copy_from_slice(&self.direction.dx);
+        self.kkt.corr[n..].fill(0.0);
+        self.kkt
+            .matrix
+            .mat
+            .sym_matvec(&self.kkt.corr, &mut self.kkt.resid);
+        dot(&self.direction.dx, &self.kkt.resid[..n])
+            - self.reg.delta_w * dot(&self.direction.dx, &self.direction.dx)
     }
 
-    /// Extrapolation along negative curvature (`Settings::max_curvature_extrapolation`):
+    /// Extrapolation along negative curvature (`LineSearchSettings::max_curvature_extrapolation`):
     /// after the full step (α = 1) was accepted with `verdict` in an iteration whose inertia
     /// needed δ_w above the proximal floor (a step the proximal term shortened on purpose is
     /// not extended), and the curvature along it is negative, doubles α up to the
@@ -263,17 +274,20 @@ impl Core<'_> {
         base: Base,
         phi_1: f64,
     ) -> f64 {
-        if self.delta_w <= self.proximal || self.step_curvature() >= 0.0 {
+        if self.reg.delta_w <= self.reg.proximal || self.step_curvature() >= 0.0 {
             return 1.0;
         }
-        let cap = self.max_step_primal_upto(&self.dx, settings.max_curvature_extrapolation);
+        let cap = self.max_step_primal_upto(
+            &self.direction.dx,
+            settings.line_search.max_curvature_extrapolation,
+        );
         if cap < 2.0 {
             return 1.0;
         }
         // The best point so far lives in `best_x, best_c`; each better trial is swapped in, and
         // the buffer it leaves in `x_t, c_t` is overwritten by the next trial.
-        let (mut best_x, mut best_c) = (self.x_t.clone(), self.c_t.clone());
-        let (mut best_alpha, mut best_phi, mut best_f) = (1.0, phi_1, self.f_t);
+        let (mut best_x, mut best_c) = (self.trial.x.clone(), self.trial.c.clone());
+        let (mut best_alpha, mut best_phi, mut best_f) = (1.0, phi_1, self.trial.f);
         let mut alpha = 2.0;
         while alpha <= cap {
             let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, alpha) else {
@@ -283,14 +297,14 @@ impl Core<'_> {
             if v != verdict || phi_t >= best_phi {
                 break;
             }
-            std::mem::swap(&mut self.x_t, &mut best_x);
-            std::mem::swap(&mut self.c_t, &mut best_c);
+            std::mem::swap(&mut self.trial.x, &mut best_x);
+            std::mem::swap(&mut self.trial.c, &mut best_c);
             (best_alpha, best_phi, best_f) = (alpha, phi_t, f_t);
             alpha *= 2.0;
         }
-        self.x_t = best_x;
-        self.c_t = best_c;
-        self.f_t = best_f;
+        self.trial.x = best_x;
+        self.trial.c = best_c;
+        self.trial.f = best_f;
         if best_alpha > 1.0 {
             ctx.counters.extrapolations += 1;
         }
@@ -307,49 +321,50 @@ impl Core<'_> {
         base: Base,
     ) -> Option<f64> {
         let mut c_soc: Vec<f64> = self
+            .evals
             .c
             .iter()
-            .zip(&self.c_t)
+            .zip(&self.trial.c)
             .map(|(c, ct)| alpha * c + ct)
             .collect();
         let mut theta_old = base.theta;
         let saved = (
-            self.dx.clone(),
-            self.dy.clone(),
-            self.dzl.clone(),
-            self.dzu.clone(),
+            self.direction.dx.clone(),
+            self.direction.dy.clone(),
+            self.direction.dzl.clone(),
+            self.direction.dzu.clone(),
         );
-        for _ in 0..settings.max_soc {
+        for _ in 0..settings.line_search.max_soc {
             self.set_rhs(Some(&c_soc));
             self.solve_refined(ctx, settings);
             self.unpack_step();
-            let a_soc = self.max_step_primal(&self.dx);
+            let a_soc = self.max_step_primal(&self.direction.dx);
             let Some((f_t, theta_t, phi_t)) = self.trial_point(ctx, a_soc) else {
                 break;
             };
             // Judged against the same iterate, with the slope of the corrected step.
             let corrected = Base {
-                gphi_dx: dot(&self.grad_phi, &self.dx),
+                gphi_dx: dot(&self.evals.grad_phi, &self.direction.dx),
                 ..base
             };
             let verdict = self.acceptable(settings, corrected, a_soc, theta_t, phi_t);
             if self.take_verdict(ctx, settings, verdict, corrected) {
-                self.f_t = f_t;
+                self.trial.f = f_t;
                 ctx.counters.soc_accepted += 1;
                 return Some(a_soc);
             }
-            if theta_t > settings.kappa_soc * theta_old {
+            if theta_t > settings.line_search.kappa_soc * theta_old {
                 break;
             }
             theta_old = theta_t;
             for i in 0..self.m {
-                c_soc[i] = a_soc * c_soc[i] + self.c_t[i];
+                c_soc[i] = a_soc * c_soc[i] + self.trial.c[i];
             }
         }
-        self.dx = saved.0;
-        self.dy = saved.1;
-        self.dzl = saved.2;
-        self.dzu = saved.3;
+        self.direction.dx = saved.0;
+        self.direction.dy = saved.1;
+        self.direction.dzl = saved.2;
+        self.direction.dzu = saved.3;
         self.set_rhs(None);
         None
     }
@@ -367,12 +382,14 @@ impl Core<'_> {
     ) -> Option<f64> {
         // Only at nearly feasible points (θ ≤ θ_min), where the full restoration phase cannot
         // make progress on θ and would move x far from the current iterate.
-        if self.restoration || norm_1(&self.c) > self.filter.theta_min {
+        if self.restoration || norm_1(&self.evals.c) > self.filter.theta_min {
             return None;
         }
-        let a = self.max_step_primal(&self.dx).min(self.max_step_dual());
+        let a = self
+            .max_step_primal(&self.direction.dx)
+            .min(self.max_step_dual());
         for j in 0..self.n {
-            self.x_t[j] = self.x[j] + a * self.dx[j];
+            self.trial.x[j] = self.iterate.x[j] + a * self.direction.dx[j];
         }
         let (f_t, ok) = self.eval_fc(ctx, true);
         if !ok {
@@ -380,33 +397,37 @@ impl Core<'_> {
         }
         let t = Instant::now();
         let mut grad = vec![0.0; self.n];
-        let mut jac = vec![0.0; self.jac.len()];
-        self.prob.eval_grad(&self.x_t, &mut grad);
-        self.prob.eval_jac(&self.x_t, &mut jac);
+        let mut jac = vec![0.0; self.evals.jac.len()];
+        self.prob.eval_grad(&self.trial.x, &mut grad);
+        self.prob.eval_jac(&self.trial.x, &mut jac);
         ctx.timing.derivative_evals += t.elapsed();
-        let y: Vec<f64> = (0..self.m).map(|i| self.y[i] + a * self.dy[i]).collect();
-        let zl: Vec<f64> = (0..self.zl.len())
-            .map(|k| self.zl[k] + a * self.dzl[k])
+        let y: Vec<f64> = (0..self.m)
+            .map(|i| self.iterate.y[i] + a * self.direction.dy[i])
             .collect();
-        let zu: Vec<f64> = (0..self.zu.len())
-            .map(|k| self.zu[k] + a * self.dzu[k])
+        let zl: Vec<f64> = (0..self.iterate.zl.len())
+            .map(|k| self.iterate.zl[k] + a * self.direction.dzl[k])
+            .collect();
+        let zu: Vec<f64> = (0..self.iterate.zu.len())
+            .map(|k| self.iterate.zu[k] + a * self.direction.dzu[k])
             .collect();
         let mut rd = grad;
-        for (k, &(r, c)) in self.jac_pat.iter().enumerate() {
+        for (k, &(r, c)) in self.evals.jac_pat.iter().enumerate() {
             rd[c] += jac[k] * y[r];
         }
         let mut compl = 0.0f64;
-        for (k, &j) in self.lo.iter().enumerate() {
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
             rd[j] -= zl[k];
-            compl = compl.max(((self.x_t[j] - self.xl[j]) * zl[k] - self.mu).abs());
+            compl =
+                compl.max(((self.trial.x[j] - self.bounds.xl[j]) * zl[k] - self.barrier.mu).abs());
         }
-        for (k, &j) in self.up.iter().enumerate() {
+        for (k, &j) in self.bounds.up.iter().enumerate() {
             rd[j] += zu[k];
-            compl = compl.max(((self.xu[j] - self.x_t[j]) * zu[k] - self.mu).abs());
+            compl =
+                compl.max(((self.bounds.xu[j] - self.trial.x[j]) * zu[k] - self.barrier.mu).abs());
         }
-        let nz = self.lo.len() + self.up.len();
+        let nz = self.bounds.lo.len() + self.bounds.up.len();
         let zsum = norm_1(&zl) + norm_1(&zu);
-        let smax = settings.s_max;
+        let smax = settings.termination.s_max;
         let s_d = smax.max((norm_1(&y) + zsum) / ((self.m + self.n) as f64).max(1.0)) / smax;
         let s_c = if nz > 0 {
             smax.max(zsum / nz as f64) / smax
@@ -414,11 +435,13 @@ impl Core<'_> {
             1.0
         };
         let e = (norm_inf(&rd) / s_d)
-            .max(norm_inf(&self.c_t))
+            .max(norm_inf(&self.trial.c))
             .max(compl / s_c);
-        if e.is_finite() && e <= 0.9999 * e_mu_current && norm_1(&self.c_t) <= self.filter.theta_max
+        if e.is_finite()
+            && e <= 0.9999 * e_mu_current
+            && norm_1(&self.trial.c) <= self.filter.theta_max
         {
-            self.f_t = f_t;
+            self.trial.f = f_t;
             Some(a)
         } else {
             None

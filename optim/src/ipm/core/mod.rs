@@ -4,11 +4,16 @@
 //! * [`Core::run`]: the outer loop: initial point (W&B Sect. 3.6), optimality error and
 //!   termination ([`termination`]), barrier update ([`barrier`]), search direction with
 //!   inertia correction ([`step`]; with the proximal term on a barrier problem above the
-//!   tolerance that has stalled, decision record 0011), filter line search ([`line_search`];
-//!   extrapolation along negative curvature on the barrier problems with μ ≤ tol, decision
-//!   record 0010), slack safeguard for slacks that underflow (W&B end of Sect. 3.5,
-//!   [`barrier`]), multiplier update with the
-//!   κ_Σ safeguard (W&B eq. (16)), and feasibility restoration ([`restoration_phase`]);
+//!   tolerance that has stalled, decision record 0011), filter line search ([`line_search`],
+//!   [`filter`]; extrapolation along negative curvature on the barrier problems with μ ≤ tol,
+//!   decision record 0010), slack safeguard for slacks that underflow (W&B end of Sect. 3.5,
+//!   [`barrier`]), multiplier update with the κ_Σ safeguard (W&B eq. (16)); each phase is a
+//!   method of [`iteration`];
+//! * without an acceptable step, the chain of [`recovery`] strategies: soft restoration,
+//!   monotone fallback, give up, acceptable stop, feasibility restoration
+//!   ([`restoration_phase`], W&B Sect. 3.3);
+//! * [`Core`]'s state by part of the algorithm ([`parts`]): bounds, iterate, evaluations,
+//!   trial point, direction, KKT system, regularization, barrier parameters, filter;
 //! * [`Ctx`], [`CoreStart`], [`CoreOutput`]: the shared per-solve state, the primal-dual
 //!   starting point and the result, in internal variables (with the unscaled dual
 //!   infeasibility and complementarity of the termination test at the final iterate).
@@ -17,6 +22,8 @@ mod barrier;
 mod filter;
 mod iteration;
 mod line_search;
+mod parts;
+mod recovery;
 mod restoration_phase;
 mod step;
 mod termination;
@@ -25,9 +32,14 @@ use std::time::Instant;
 
 use self::barrier::MuRule;
 use self::filter::Filter;
-use self::iteration::{RunState, StepChoice};
+use self::iteration::StepChoice;
+use self::parts::{
+    Barrier, Bounds, Direction, Evaluations, Iterate, KktSystem, Regularization, RunState,
+    TrialPoint,
+};
+use self::recovery::{Failure, NoStep, Remedy};
 use self::termination::Verdict;
-use super::kkt::{KktPattern, SparseLdlt};
+use super::kkt::SparseLdlt;
 use super::settings::Settings;
 use super::solution::{Counters, IterationInfo, Status, Timing};
 use super::stdform::StdProblem;
@@ -90,91 +102,33 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
+/// The algorithm's state for one run, by part ([`parts`]): the problem and its bounds, the
+/// iterate and its evaluations, the trial point, the direction, the KKT system with its
+/// regularization, the barrier parameters and the filter.
 pub(crate) struct Core<'p> {
     prob: &'p mut dyn StdProblem,
     n: usize,
     m: usize,
-    xl: Vec<f64>,
-    xu: Vec<f64>,
-    lo: Vec<usize>,
-    up: Vec<usize>,
-    damp: Vec<f64>,
-    // iterate
-    x: Vec<f64>,
-    y: Vec<f64>,
-    zl: Vec<f64>,
-    zu: Vec<f64>,
-    f: f64,
-    grad: Vec<f64>,
-    /// The x at which `grad` and `jac` were last evaluated.
-    derivs_x: Vec<f64>,
-    c: Vec<f64>,
-    jac: Vec<f64>,
-    hess: Vec<f64>,
-    jac_pat: Vec<(usize, usize)>,
-    // derived
-    sl: Vec<f64>,
-    su: Vec<f64>,
-    grad_phi: Vec<f64>,
-    jty: Vec<f64>,
-    // KKT
-    kkt: KktPattern,
-    solver: SparseLdlt,
-    /// With [`KktOrdering::AmdThenPivotPairs`](super::settings::KktOrdering::AmdThenPivotPairs) before the switch: the solver with AMD and
-    /// 2 × 2 pivot pairs, analysed when first needed, that re-factors a rejected AMD factor's
-    /// matrix; after the switch: the AMD solver (handed back by [`Core::into_kkt_solver`]).
-    other_solver: Option<SparseLdlt>,
-    /// Rejected AMD factorizations are still to be checked with the pivot pairs (the switch
-    /// has not happened and the pair order differs from AMD's).
-    check_pairs: bool,
-    /// The solve switched to the pivot pairs.
-    switched_to_pairs: bool,
-    /// Static dual regularization of this solve: `static_dual_regularization`, raised when a
-    /// factor turns out unstable (see `step`).
-    static_dc: f64,
-    diag_x: Vec<f64>,
-    delta_w_last: f64,
-    /// Smallest δ_w of this iteration's KKT matrix: the proximal term κ_p μ of
-    /// `Settings::proximal_weight` on a stalled barrier problem whose μ is above the
-    /// tolerance, else 0. Read by the inertia correction (its starting δ_w) and by the
-    /// extrapolation (which extends only steps whose inertia needed more than this floor).
-    proximal: f64,
-    /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
-    /// factorization per iteration on collocation KKTs whose states carry no curvature).
-    skip_zero_trial: bool,
-    delta_w: f64,
-    delta_c: f64,
-    delta_c_target: f64,
-    rhs: Vec<f64>,
-    sol: Vec<f64>,
-    resid: Vec<f64>,
-    corr: Vec<f64>,
-    /// The KKT solution before the last refinement correction, which may be undone.
-    sol_before: Vec<f64>,
-    // step
-    dx: Vec<f64>,
-    dy: Vec<f64>,
-    dzl: Vec<f64>,
-    dzu: Vec<f64>,
-    // trial
-    x_t: Vec<f64>,
-    c_t: Vec<f64>,
-    f_t: f64,
-    // barrier & filter
-    mu: f64,
-    tau: f64,
+    bounds: Bounds,
+    iterate: Iterate,
+    evals: Evaluations,
+    trial: TrialPoint,
+    direction: Direction,
+    kkt: KktSystem,
+    reg: Regularization,
+    barrier: Barrier,
     /// The line search's filter, θ bounds and reset bookkeeping.
     filter: Filter,
+    /// This run is a restoration phase's inner solve.
     restoration: bool,
-    kappa_d: f64,
-    /// Ipopt's `slack_move` (see [`barrier`]).
-    slack_move: f64,
     /// Largest |x_j| over the variables without a finite lower or upper bound, over all
     /// iterates so far (the unboundedness test).
     unboxed_max: std::cell::Cell<f64>,
 }
 
 impl<'p> Core<'p> {
+    /// The state at `start` before the first evaluation (the bounds relaxed unless
+    /// `start.relax_bounds` is off, the bound multipliers at `bound_mult_init`).
     pub fn new(
         prob: &'p mut dyn StdProblem,
         settings: &Settings,
@@ -182,89 +136,69 @@ impl<'p> Core<'p> {
     ) -> Result<Self, OptimError> {
         let n = prob.n();
         let m = prob.m();
-        let mut xl = prob.x_lower().to_vec();
-        let mut xu = prob.x_upper().to_vec();
-        if start.relax_bounds && settings.bound_relax_factor > 0.0 {
-            let r = settings.bound_relax_factor;
-            for j in 0..n {
-                if xl[j].is_finite() {
-                    xl[j] -= r * xl[j].abs().max(1.0);
-                }
-                if xu[j].is_finite() {
-                    xu[j] += r * xu[j].abs().max(1.0);
-                }
-            }
-        }
-        let lo: Vec<usize> = (0..n).filter(|&j| xl[j].is_finite()).collect();
-        let up: Vec<usize> = (0..n).filter(|&j| xu[j].is_finite()).collect();
-        let damp = (0..n)
-            .map(|j| match (xl[j].is_finite(), xu[j].is_finite()) {
-                (true, false) => 1.0,
-                (false, true) => -1.0,
-                _ => 0.0,
-            })
-            .collect();
+        let relax = if start.relax_bounds {
+            settings.barrier.bound_relax_factor
+        } else {
+            0.0
+        };
+        let bounds = Bounds::new(prob.x_lower().to_vec(), prob.x_upper().to_vec(), relax);
         let jac_pat = prob.jac_pattern().to_vec();
         let hess_pat = prob.hess_pattern().to_vec();
-        let kkt = KktPattern::new(n, m, &hess_pat, &jac_pat);
-        let nlo = lo.len();
-        let nup = up.len();
+        let kkt = KktSystem::new(
+            n,
+            m,
+            &hess_pat,
+            &jac_pat,
+            start.kkt_solver.take().unwrap_or_default(),
+        );
+        let nlo = bounds.lo.len();
+        let nup = bounds.up.len();
         Ok(Self {
             n,
             m,
-            x: start.x.clone(),
-            y: vec![0.0; m],
-            zl: vec![settings.bound_mult_init; nlo],
-            zu: vec![settings.bound_mult_init; nup],
-            f: 0.0,
-            grad: vec![0.0; n],
-            derivs_x: Vec::new(),
-            c: vec![0.0; m],
-            jac: vec![0.0; jac_pat.len()],
-            hess: vec![0.0; hess_pat.len()],
-            jac_pat,
-            sl: vec![0.0; nlo],
-            su: vec![0.0; nup],
-            grad_phi: vec![0.0; n],
-            jty: vec![0.0; n],
+            iterate: Iterate {
+                x: start.x.clone(),
+                y: vec![0.0; m],
+                zl: vec![settings.barrier.bound_mult_init; nlo],
+                zu: vec![settings.barrier.bound_mult_init; nup],
+                sl: vec![0.0; nlo],
+                su: vec![0.0; nup],
+            },
+            evals: Evaluations {
+                f: 0.0,
+                c: vec![0.0; m],
+                grad: vec![0.0; n],
+                jac: vec![0.0; jac_pat.len()],
+                hess: vec![0.0; hess_pat.len()],
+                derivs_x: Vec::new(),
+                jac_pat,
+                grad_phi: vec![0.0; n],
+                jty: vec![0.0; n],
+            },
+            trial: TrialPoint {
+                x: vec![0.0; n],
+                c: vec![0.0; m],
+                f: 0.0,
+            },
+            direction: Direction {
+                dx: vec![0.0; n],
+                dy: vec![0.0; m],
+                dzl: vec![0.0; nlo],
+                dzu: vec![0.0; nup],
+            },
             kkt,
-            solver: start.kkt_solver.take().unwrap_or_default(),
-            other_solver: None,
-            check_pairs: false,
-            switched_to_pairs: false,
-            static_dc: settings.static_dual_regularization,
-            diag_x: vec![0.0; n],
-            delta_w_last: 0.0,
-            skip_zero_trial: false,
-            proximal: 0.0,
-            delta_w: 0.0,
-            delta_c: 0.0,
-            delta_c_target: 0.0,
-            rhs: vec![0.0; n + m],
-            sol: vec![0.0; n + m],
-            resid: vec![0.0; n + m],
-            corr: vec![0.0; n + m],
-            sol_before: vec![0.0; n + m],
-            dx: vec![0.0; n],
-            dy: vec![0.0; m],
-            dzl: vec![0.0; nlo],
-            dzu: vec![0.0; nup],
-            x_t: vec![0.0; n],
-            c_t: vec![0.0; m],
-            f_t: 0.0,
-            mu: start.mu,
-            tau: settings.tau_min.max(1.0 - start.mu),
+            reg: Regularization::new(settings),
+            barrier: Barrier {
+                mu: start.mu,
+                tau: settings.barrier.tau_min.max(1.0 - start.mu),
+                kappa_d: settings.barrier.kappa_d,
+                slack_move: settings.barrier.slack_move,
+            },
             filter: Filter::default(),
             restoration: start.restoration,
-            kappa_d: settings.kappa_d,
-            slack_move: settings.slack_move,
             unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
             prob,
-            xl,
-            xu,
-            lo,
-            up,
-            damp,
+            bounds,
         })
     }
 
@@ -273,9 +207,9 @@ impl<'p> Core<'p> {
     fn eval_fc(&mut self, ctx: &mut Ctx<'_, '_>, trial: bool) -> (f64, bool) {
         let t = Instant::now();
         let (x, c) = if trial {
-            (&self.x_t, &mut self.c_t)
+            (&self.trial.x, &mut self.trial.c)
         } else {
-            (&self.x, &mut self.c)
+            (&self.iterate.x, &mut self.evals.c)
         };
         let f = self.prob.eval_f(x);
         self.prob.eval_c(x, c);
@@ -288,26 +222,28 @@ impl<'p> Core<'p> {
 
     fn eval_derivs(&mut self, ctx: &mut Ctx<'_, '_>) -> bool {
         let t = Instant::now();
-        self.prob.eval_grad(&self.x, &mut self.grad);
-        self.prob.eval_jac(&self.x, &mut self.jac);
+        self.prob.eval_grad(&self.iterate.x, &mut self.evals.grad);
+        self.prob.eval_jac(&self.iterate.x, &mut self.evals.jac);
         ctx.timing.derivative_evals += t.elapsed();
-        self.derivs_x.clone_from(&self.x);
-        self.grad.iter().all(|v| v.is_finite()) && self.jac.iter().all(|v| v.is_finite())
+        self.evals.derivs_x.clone_from(&self.iterate.x);
+        self.evals.grad.iter().all(|v| v.is_finite())
+            && self.evals.jac.iter().all(|v| v.is_finite())
     }
 
     fn eval_hessian(&mut self, ctx: &mut Ctx<'_, '_>) -> bool {
         let t = Instant::now();
-        self.prob.eval_hess(&self.x, 1.0, &self.y, &mut self.hess);
+        self.prob
+            .eval_hess(&self.iterate.x, 1.0, &self.iterate.y, &mut self.evals.hess);
         ctx.counters.hessian_evals += 1;
         ctx.timing.derivative_evals += t.elapsed();
-        self.hess.iter().all(|v| v.is_finite())
+        self.evals.hess.iter().all(|v| v.is_finite())
     }
 
     // ---------- initialization ----------
 
     fn push_into_bounds(&self, x: &mut [f64], push: f64, frac: f64) {
         for j in 0..self.n {
-            let (l, u) = (self.xl[j], self.xu[j]);
+            let (l, u) = (self.bounds.xl[j], self.bounds.xu[j]);
             if l.is_finite() && u.is_finite() {
                 let pl = (push * l.abs().max(1.0)).min(frac * (u - l));
                 let pu = (push * u.abs().max(1.0)).min(frac * (u - l));
@@ -337,7 +273,7 @@ impl<'p> Core<'p> {
     }
 
     fn log_header(&self, settings: &Settings) {
-        if settings.print_level > 0 {
+        if settings.output.print_level > 0 {
             println!(
                 "iter    objective    inf_pr   inf_du lg(mu)  ||d||  lg(rg) alpha_du alpha_pr  ls"
             );
@@ -345,7 +281,7 @@ impl<'p> Core<'p> {
     }
 
     fn log(&self, settings: &Settings, info: &IterationInfo) {
-        if settings.print_level == 0 {
+        if settings.output.print_level == 0 {
             return;
         }
         let rg = if info.delta_w > 0.0 {
@@ -374,18 +310,23 @@ impl<'p> Core<'p> {
     /// derivatives re-evaluated first if x moved since they were last evaluated (a restoration
     /// point); where they are not finite there, the last finite ones stand.
     fn output(&mut self, ctx: &mut Ctx<'_, '_>, status: Status, early: bool) -> CoreOutput {
-        if self.derivs_x != self.x {
+        if self.evals.derivs_x != self.iterate.x {
             let saved = (
-                self.c.clone(),
-                self.grad.clone(),
-                self.jac.clone(),
-                self.derivs_x.clone(),
+                self.evals.c.clone(),
+                self.evals.grad.clone(),
+                self.evals.jac.clone(),
+                self.evals.derivs_x.clone(),
             );
             let (f, ok) = self.eval_fc(ctx, false);
             if ok && self.eval_derivs(ctx) {
-                self.f = f;
+                self.evals.f = f;
             } else {
-                (self.c, self.grad, self.jac, self.derivs_x) = saved;
+                (
+                    self.evals.c,
+                    self.evals.grad,
+                    self.evals.jac,
+                    self.evals.derivs_x,
+                ) = saved;
             }
         }
         self.compute_jty();
@@ -393,21 +334,21 @@ impl<'p> Core<'p> {
         let (dual_infeasibility, _, complementarity) = self.unscaled(&err);
         let mut zl = vec![0.0; self.n];
         let mut zu = vec![0.0; self.n];
-        for (k, &j) in self.lo.iter().enumerate() {
-            zl[j] = self.zl[k];
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
+            zl[j] = self.iterate.zl[k];
         }
-        for (k, &j) in self.up.iter().enumerate() {
-            zu[j] = self.zu[k];
+        for (k, &j) in self.bounds.up.iter().enumerate() {
+            zu[j] = self.iterate.zu[k];
         }
         CoreOutput {
             dual_infeasibility,
             complementarity,
             status,
-            x: self.x.clone(),
-            y: self.y.clone(),
+            x: self.iterate.x.clone(),
+            y: self.iterate.y.clone(),
             z_l: zl,
             z_u: zu,
-            mu: self.mu,
+            mu: self.barrier.mu,
             early_stopped: early,
         }
     }
@@ -416,15 +357,16 @@ impl<'p> Core<'p> {
     pub fn into_kkt_solver(self) -> SparseLdlt {
         // After a switch to the pivot pairs, the AMD solver is the one whose analysis the next
         // run (which starts with AMD again) can reuse.
-        match (self.switched_to_pairs, self.other_solver) {
+        match (self.kkt.switched_to_pairs, self.kkt.other_solver) {
             (true, Some(amd)) => amd,
-            _ => self.solver,
+            _ => self.kkt.solver,
         }
     }
 
     /// Runs the algorithm from `start`: W&B's Algorithm A, one outer iteration per pass of
     /// the loop. Each phase is a method of its own (`iteration.rs`, `step.rs`,
-    /// `line_search.rs`, `barrier.rs`, `termination.rs`, `restoration_phase.rs`).
+    /// `line_search.rs`, `barrier.rs`, `termination.rs`); an iteration without a step goes to
+    /// the chain of `recovery.rs` (which ends in `restoration_phase.rs`).
     pub fn run(
         &mut self,
         ctx: &mut Ctx<'_, '_>,
@@ -433,8 +375,8 @@ impl<'p> Core<'p> {
         let settings = ctx.settings;
         self.analyse_kkt(ctx)?;
         self.initialize(ctx, start)?;
-        let mut mu_rule = MuRule::new(settings, self.mu, self.prob.scales().0);
-        let mut run = RunState::new(ctx.iter, self.restoration, self.mu);
+        let mut mu_rule = MuRule::new(settings, self.barrier.mu, self.prob.scales().0);
+        let mut run = RunState::new(ctx.iter, self.restoration, self.barrier.mu);
         loop {
             // Optimality error E_0 (W&B eq. (5)), log and callback, termination tests.
             self.compute_jty();
@@ -451,24 +393,33 @@ impl<'p> Core<'p> {
             self.update_mu(settings, &mut mu_rule, &err, e0);
             // Search direction: the KKT system with inertia correction (Algorithm IC).
             let step_ok = self.search_direction(ctx, &mut mu_rule)?;
-            // Step size: tiny steps, filter line search, soft restoration (W&B Sect. 3.3–3.9).
+            // Step size: tiny steps, filter line search (W&B Sect. 3.3–3.9).
             let step = if step_ok {
                 self.find_step(ctx, &err, &mut mu_rule, &mut run)
             } else {
-                StepChoice::Recover
+                StepChoice::Recover(NoStep::NoDirection)
             };
-            match step {
-                StepChoice::Take(taken) => self.accept_step(ctx, taken, &mut run)?,
+            let taken = match step {
+                StepChoice::Take(taken) => taken,
                 StepChoice::Stop(status) => return Ok(self.output(ctx, status, false)),
-                // No acceptable step: the monotone fallback or the restoration phase.
-                StepChoice::Recover => {
-                    if let Some(status) =
-                        self.recover(ctx, step_ok, e0, pr_u, &mut mu_rule, &mut run)?
-                    {
-                        return Ok(self.output(ctx, status, false));
+                // No acceptable step: the chain of recovery strategies (`recovery`).
+                StepChoice::Recover(kind) => {
+                    let mut failure = Failure {
+                        kind,
+                        err: &err,
+                        e0,
+                        pr_u,
+                        mu_rule: &mut mu_rule,
+                        run: &mut run,
+                    };
+                    match self.recover(ctx, &mut failure)? {
+                        Remedy::Take(taken) => taken,
+                        Remedy::Resume => continue,
+                        Remedy::Stop(status) => return Ok(self.output(ctx, status, false)),
                     }
                 }
-            }
+            };
+            self.accept_step(ctx, taken, &mut run)?;
         }
     }
 }

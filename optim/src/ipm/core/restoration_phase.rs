@@ -19,31 +19,31 @@ impl Core<'_> {
         ctx: &mut Ctx<'_, '_>,
         settings: &Settings,
     ) -> Result<Option<Status>, OptimError> {
-        let theta = norm_1(&self.c);
-        let phi = self.barrier_value(&self.x, self.f);
+        let theta = norm_1(&self.evals.c);
+        let phi = self.barrier_value(&self.iterate.x, self.evals.f);
         self.filter.augment(theta, phi, settings);
         let outer = OuterInfo {
-            xl: self.xl.clone(),
-            xu: self.xu.clone(),
-            lo: self.lo.clone(),
-            up: self.up.clone(),
-            damp: self.damp.clone(),
-            kappa_d: self.kappa_d,
-            mu: self.mu,
+            xl: self.bounds.xl.clone(),
+            xu: self.bounds.xu.clone(),
+            lo: self.bounds.lo.clone(),
+            up: self.bounds.up.clone(),
+            damp: self.bounds.damp.clone(),
+            kappa_d: self.barrier.kappa_d,
+            mu: self.barrier.mu,
             filter: self.filter.entries().to_vec(),
             theta_ref: theta,
-            kappa_resto: settings.resto_required_reduction,
-            tol: settings.tol,
+            kappa_resto: settings.recovery.resto_required_reduction,
+            tol: settings.termination.tol,
         };
-        let mu_r = self.mu.max(norm_inf(&self.c));
-        let rho = settings.resto_penalty;
+        let mu_r = self.barrier.mu.max(norm_inf(&self.evals.c));
+        let rho = settings.recovery.resto_penalty;
         let n0 = self.n;
         let m = self.m;
-        let mut w = self.x.clone();
+        let mut w = self.iterate.x.clone();
         let mut p = vec![0.0; m];
         let mut nn = vec![0.0; m];
         for i in 0..m {
-            let ci = self.c[i];
+            let ci = self.evals.c[i];
             let a = (mu_r - rho * ci) / (2.0 * rho);
             nn[i] = a + (a * a + mu_r * ci / (2.0 * rho)).sqrt();
             p[i] = ci + nn[i];
@@ -52,17 +52,17 @@ impl Core<'_> {
         w.extend_from_slice(&nn);
         let mut zl = vec![0.0; n0 + 2 * m];
         let mut zu = vec![0.0; n0 + 2 * m];
-        for (k, &j) in self.lo.iter().enumerate() {
-            zl[j] = self.zl[k].min(rho);
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
+            zl[j] = self.iterate.zl[k].min(rho);
         }
-        for (k, &j) in self.up.iter().enumerate() {
-            zu[j] = self.zu[k].min(rho);
+        for (k, &j) in self.bounds.up.iter().enumerate() {
+            zu[j] = self.iterate.zu[k].min(rho);
         }
         for i in 0..m {
             zl[n0 + i] = mu_r / p[i];
             zl[n0 + m + i] = mu_r / nn[i];
         }
-        let x_ref = self.x.clone();
+        let x_ref = self.iterate.x.clone();
         let start = CoreStart {
             x: w,
             y: Some(vec![0.0; m]),
@@ -76,44 +76,50 @@ impl Core<'_> {
             restoration: true,
             kkt_solver: std::cell::Cell::new(None),
         };
-        if settings.print_level > 1 {
+        if settings.output.print_level > 1 {
             println!("  entering restoration phase (theta = {theta:.3e}, mu_R = {mu_r:.3e})");
         }
         let out = {
             let mut rp =
-                RestorationProblem::new(&mut *self.prob, x_ref, rho, self.mu.sqrt(), outer);
+                RestorationProblem::new(&mut *self.prob, x_ref, rho, self.barrier.mu.sqrt(), outer);
             let mut inner = Core::new(&mut rp, settings, &start)?;
-            inner.delta_w_last = self.delta_w_last;
+            inner.reg.delta_w_last = self.reg.delta_w_last;
             inner.run(ctx, &start)?
         };
         let x_new = out.x[..n0].to_vec();
         let finish = |me: &mut Self, ctx: &mut Ctx<'_, '_>| -> Result<bool, OptimError> {
-            me.x.copy_from_slice(&x_new);
+            me.iterate.x.copy_from_slice(&x_new);
             me.update_slacks();
-            if me.sl.iter().chain(&me.su).any(|&s| s <= 0.0) {
+            if me
+                .iterate
+                .sl
+                .iter()
+                .chain(&me.iterate.su)
+                .any(|&s| s <= 0.0)
+            {
                 return Ok(false);
             }
             let (f, ok) = me.eval_fc(ctx, false);
             if !ok {
                 return Ok(false);
             }
-            me.f = f;
+            me.evals.f = f;
             if !me.eval_derivs(ctx) {
                 return Err(OptimError::NonFinite {
                     iter: ctx.iter,
                     what: "gradient or Jacobian after restoration",
                 });
             }
-            for (k, &j) in me.lo.iter().enumerate() {
-                me.zl[k] = out.z_l[j];
+            for (k, &j) in me.bounds.lo.iter().enumerate() {
+                me.iterate.zl[k] = out.z_l[j];
             }
-            for (k, &j) in me.up.iter().enumerate() {
-                me.zu[k] = out.z_u[j];
+            for (k, &j) in me.bounds.up.iter().enumerate() {
+                me.iterate.zu[k] = out.z_u[j];
             }
-            let zmax = norm_inf(&me.zl).max(norm_inf(&me.zu));
+            let zmax = norm_inf(&me.iterate.zl).max(norm_inf(&me.iterate.zu));
             if zmax > 1e3 {
-                me.zl.iter_mut().for_each(|z| *z = 1.0);
-                me.zu.iter_mut().for_each(|z| *z = 1.0);
+                me.iterate.zl.iter_mut().for_each(|z| *z = 1.0);
+                me.iterate.zu.iter_mut().for_each(|z| *z = 1.0);
             }
             me.least_squares_y(ctx, settings);
             Ok(true)
@@ -138,9 +144,9 @@ impl Core<'_> {
                         .fold(0.0f64, |a, (c, s)| a.max((c / s).abs())),
                     None => norm_inf(&c),
                 };
-                if viol > settings.constr_viol_tol {
-                    self.x.copy_from_slice(&x_in);
-                    self.c.copy_from_slice(&c);
+                if viol > settings.termination.constr_viol_tol {
+                    self.iterate.x.copy_from_slice(&x_in);
+                    self.evals.c.copy_from_slice(&c);
                     self.update_slacks();
                     return Ok(Some(Status::LocallyInfeasible));
                 }

@@ -47,26 +47,29 @@ pub(super) enum Verdict {
 
 impl Core<'_> {
     pub(super) fn errors(&self, settings: &Settings) -> Errors {
-        let mut rd = self.grad.clone();
+        let mut rd = self.evals.grad.clone();
         for j in 0..self.n {
-            rd[j] += self.jty[j];
+            rd[j] += self.evals.jty[j];
         }
-        for (k, &j) in self.lo.iter().enumerate() {
-            rd[j] -= self.zl[k];
+        for (k, &j) in self.bounds.lo.iter().enumerate() {
+            rd[j] -= self.iterate.zl[k];
         }
-        for (k, &j) in self.up.iter().enumerate() {
-            rd[j] += self.zu[k];
+        for (k, &j) in self.bounds.up.iter().enumerate() {
+            rd[j] += self.iterate.zu[k];
         }
         let compl0 = self
+            .iterate
             .sl
             .iter()
-            .zip(&self.zl)
-            .chain(self.su.iter().zip(&self.zu))
+            .zip(&self.iterate.zl)
+            .chain(self.iterate.su.iter().zip(&self.iterate.zu))
             .fold(0.0f64, |a, (s, z)| a.max((s * z).abs()));
-        let nz = self.lo.len() + self.up.len();
-        let zsum = norm_1(&self.zl) + norm_1(&self.zu);
-        let smax = settings.s_max;
-        let s_d = (smax.max((norm_1(&self.y) + zsum) / ((self.m + self.n) as f64).max(1.0))) / smax;
+        let nz = self.bounds.lo.len() + self.bounds.up.len();
+        let zsum = norm_1(&self.iterate.zl) + norm_1(&self.iterate.zu);
+        let smax = settings.termination.s_max;
+        let s_d = (smax
+            .max((norm_1(&self.iterate.y) + zsum) / ((self.m + self.n) as f64).max(1.0)))
+            / smax;
         let s_c = if nz > 0 {
             smax.max(zsum / nz as f64) / smax
         } else {
@@ -74,7 +77,7 @@ impl Core<'_> {
         };
         Errors {
             dual_inf: norm_inf(&rd),
-            primal_inf: norm_inf(&self.c),
+            primal_inf: norm_inf(&self.evals.c),
             compl0,
             s_d,
             s_c,
@@ -82,25 +85,27 @@ impl Core<'_> {
     }
 
     pub(super) fn compl_mu(&self, mu: f64) -> f64 {
-        self.sl
+        self.iterate
+            .sl
             .iter()
-            .zip(&self.zl)
-            .chain(self.su.iter().zip(&self.zu))
+            .zip(&self.iterate.zl)
+            .chain(self.iterate.su.iter().zip(&self.iterate.zu))
             .fold(0.0f64, |a, (s, z)| a.max((s * z - mu).abs()))
     }
 
     pub(super) fn avg_compl(&self) -> Option<(f64, f64)> {
-        let nz = self.lo.len() + self.up.len();
+        let nz = self.bounds.lo.len() + self.bounds.up.len();
         if nz == 0 {
             return None;
         }
         let mut sum = 0.0;
         let mut min = f64::INFINITY;
         for (s, z) in self
+            .iterate
             .sl
             .iter()
-            .zip(&self.zl)
-            .chain(self.su.iter().zip(&self.zu))
+            .zip(&self.iterate.zl)
+            .chain(self.iterate.su.iter().zip(&self.iterate.zu))
         {
             sum += s * z;
             min = min.min(s * z);
@@ -113,6 +118,7 @@ impl Core<'_> {
         let (os, cs) = self.prob.scales();
         let primal = match cs {
             Some(cs) => self
+                .evals
                 .c
                 .iter()
                 .zip(cs)
@@ -133,19 +139,19 @@ impl Core<'_> {
     ) -> Verdict {
         let settings = ctx.settings;
         let (du_u, pr_u, co_u) = self.unscaled(err);
-        if e0 <= settings.tol
-            && du_u <= settings.dual_inf_tol
-            && pr_u <= settings.constr_viol_tol
-            && co_u <= settings.compl_inf_tol
+        if e0 <= settings.termination.tol
+            && du_u <= settings.termination.dual_inf_tol
+            && pr_u <= settings.termination.constr_viol_tol
+            && co_u <= settings.termination.compl_inf_tol
         {
             return Verdict::Stop(Status::Solved);
         }
-        if settings.acceptable_iter > 0
-            && e0 <= settings.acceptable_tol
-            && pr_u <= settings.acceptable_constr_viol_tol
+        if settings.termination.acceptable_iter > 0
+            && e0 <= settings.termination.acceptable_tol
+            && pr_u <= settings.termination.acceptable_constr_viol_tol
         {
             *acceptable_count += 1;
-            if *acceptable_count >= settings.acceptable_iter {
+            if *acceptable_count >= settings.termination.acceptable_iter {
                 return Verdict::Stop(Status::Acceptable);
             }
         } else {
@@ -155,26 +161,26 @@ impl Core<'_> {
         // are) with a free or one-sided bound can run away: the largest of them must exceed
         // its largest value at every earlier iterate.
         let unboxed = (0..self.prob.n_own())
-            .filter(|&j| !(self.xl[j].is_finite() && self.xu[j].is_finite()))
-            .map(|j| self.x[j].abs())
+            .filter(|&j| !(self.bounds.xl[j].is_finite() && self.bounds.xu[j].is_finite()))
+            .map(|j| self.iterate.x[j].abs())
             .fold(f64::NEG_INFINITY, f64::max);
         let prev = self.unboxed_max.get();
         let growing = unboxed.is_finite() && prev.is_finite() && unboxed > prev;
         self.unboxed_max.set(prev.max(unboxed));
         if !self.restoration
             && growing
-            && pr_u <= settings.constr_viol_tol
-            && self.f < -settings.unbounded_objective
+            && pr_u <= settings.termination.constr_viol_tol
+            && self.evals.f < -settings.termination.unbounded_objective
         {
             return Verdict::Stop(Status::Unbounded);
         }
-        if norm_inf(&self.x) > settings.diverging_iterates_tol {
+        if norm_inf(&self.iterate.x) > settings.termination.diverging_iterates_tol {
             return Verdict::Stop(Status::DivergingIterates);
         }
-        if ctx.iter >= settings.max_iter {
+        if ctx.iter >= settings.termination.max_iter {
             return Verdict::Stop(Status::MaxIterations);
         }
-        if ctx.start.elapsed().as_secs_f64() > settings.max_wall_time {
+        if ctx.start.elapsed().as_secs_f64() > settings.termination.max_wall_time {
             return Verdict::Stop(Status::MaxTime);
         }
         Verdict::Continue { pr_u }
