@@ -463,44 +463,45 @@ pub(super) fn section(
             finite_or_dash(r.presented_seconds, 2),
         );
     }
-    // Meshes of one scheme are separate solves that may land on different local optima:
-    // labelled markers, not a line.
-    let mesh_label = |r: &&MeshRow| format!("{}×{}", r.points, r.elements);
+    // One set per scheme and measurement: (solve time, error) of the rows that have it. Meshes
+    // of one scheme are separate solves that may land on different local optima: labelled
+    // markers, not a line.
+    let set = |scheme: &str, name: String, pick: &dyn Fn(&MeshRow) -> Option<(f64, f64)>| {
+        let kept: Vec<(&MeshRow, (f64, f64))> = rows
+            .iter()
+            .filter(|r| r.scheme == scheme)
+            .filter_map(|r| pick(r).map(|v| (r, v)))
+            .collect();
+        WorkPrecisionSet {
+            name,
+            time_s: kept.iter().map(|(_, v)| v.0).collect(),
+            error: kept.iter().map(|(_, v)| v.1).collect(),
+            labels: kept
+                .iter()
+                .map(|(r, _)| format!("{}×{}", r.points, r.elements))
+                .collect(),
+            joined: false,
+        }
+    };
     let mut methods: Vec<WorkPrecisionSet> = Vec::new();
     for s in ["LG", "Radau"] {
-        let cold: Vec<&MeshRow> = rows
-            .iter()
-            .filter(|r| r.scheme == s && r.same_branch)
-            .collect();
-        methods.push(WorkPrecisionSet {
-            name: format!("{s}, cold"),
-            time_s: cold.iter().map(|r| r.seconds).collect(),
-            error: cold.iter().map(|r| r.rel_error).collect(),
-            labels: cold.iter().map(mesh_label).collect(),
-            joined: false,
-        });
-        let warm: Vec<&MeshRow> = rows
-            .iter()
-            .filter(|r| r.scheme == s && r.warm_rel_error.is_finite())
-            .collect();
-        methods.push(WorkPrecisionSet {
-            name: format!("{s}, warm from the cold reference"),
-            time_s: warm.iter().map(|r| r.warm_seconds).collect(),
-            error: warm.iter().map(|r| r.warm_rel_error).collect(),
-            labels: warm.iter().map(mesh_label).collect(),
-            joined: false,
-        });
-        let at: Vec<&MeshRow> = rows
-            .iter()
-            .filter(|r| r.scheme == s && r.presented_rel_error.is_finite())
-            .collect();
-        methods.push(WorkPrecisionSet {
-            name: format!("{s}, at the presented optimum (vs J_ref,p)"),
-            time_s: at.iter().map(|r| r.presented_seconds).collect(),
-            error: at.iter().map(|r| r.presented_rel_error).collect(),
-            labels: at.iter().map(mesh_label).collect(),
-            joined: false,
-        });
+        methods.push(set(s, format!("{s}, cold"), &|r| {
+            r.same_branch.then_some((r.seconds, r.rel_error))
+        }));
+        methods.push(set(s, format!("{s}, warm from the cold reference"), &|r| {
+            r.warm_rel_error
+                .is_finite()
+                .then_some((r.warm_seconds, r.warm_rel_error))
+        }));
+        methods.push(set(
+            s,
+            format!("{s}, at the presented optimum (vs J_ref,p)"),
+            &|r| {
+                r.presented_rel_error
+                    .is_finite()
+                    .then_some((r.presented_seconds, r.presented_rel_error))
+            },
+        ));
     }
     if methods.iter().any(|m| !m.error.is_empty()) {
         let fig = wp_figure(
