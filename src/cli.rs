@@ -378,7 +378,8 @@ pub struct OptimizeArgs {
     #[command(flatten)]
     pub chain: ChainArgs,
     /// `reach-arm`: start configuration q1,q2,… (rad; m for prismatic joints) [default: q = 0
-    /// moved into the joint limits].
+    /// moved into the joint limits, or where the torque limits cannot hold the arm there
+    /// against gravity the pose it settles in from there (docs/your-robot.md)].
     #[arg(long, value_name = "Q", allow_hyphen_values = true)]
     pub start: Option<String>,
     /// `reach-arm`: target configuration q1,q2,… (rad; m for prismatic joints) [default: the

@@ -45,8 +45,7 @@ fn solve(text: &str) -> ArmSolution {
 
 /// The torques τ at the collocation state points (τ is a state: x = (q, q̇, τ)).
 fn torques(sol: &ArmSolution) -> impl Iterator<Item = &[f64]> {
-    let n = sol.start.len();
-    sol.raw.x.iter().map(move |x| &x[2 * n..3 * n])
+    sol.nodes.tau.iter().map(|t| t.as_slice())
 }
 
 /// At rest at both ends in the full sense, q̇ = 0 and q̈ = 0: the end torques are the gravity
@@ -351,9 +350,10 @@ fn cli_contact_problem_on_an_arm_is_refused_with_the_scene_and_the_reason() {
     assert!(err.contains("joint 5") && err.contains("limits"), "{err}");
 }
 
-/// Held at rest at the start needs τ(0) = g(q⁰): the fixture's default start (horizontal)
-/// needs |g₁| = 9.81 (1.2 · 0.45 + 0.7 · 1.3) = 14.2 N m (the closed form of the planar
-/// arm) against τ_max = 12 N m, so no solution exists, and the failed solve says why.
+/// Held at rest at the start needs τ(0) = g(q⁰): the fixture stretched out horizontally
+/// (q = 0, given as `--start`) needs |g₁| = 9.81 (1.2 · 0.45 + 0.7 · 1.3) = 14.2 N m (the
+/// closed form of the planar arm) against τ_max = 12 N m, so no solution exists, and the
+/// failed solve says why.
 #[test]
 fn a_start_that_no_admissible_torque_holds_fails_with_the_gravity_hint() {
     let dir = tmpdir("reach-arm-gravity");
@@ -363,6 +363,8 @@ fn a_start_that_no_admissible_torque_holds_fails_with_the_gravity_hint() {
         "reach-arm",
         "--scene",
         "tests/fixtures/planar2_arm.toml",
+        "--start",
+        "0,0",
         "--out",
         dir.join("out").to_str().unwrap(),
     ]);
@@ -375,5 +377,51 @@ fn a_start_that_no_admissible_torque_holds_fails_with_the_gravity_hint() {
             && stdout.contains("tau_max 1.2e1"),
         "{stdout}"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Without `--start` the fixture does not start from q = 0, which no admissible torque holds
+/// (test above), but from the pose it settles in from there: hanging, q = (−π/2, 0), where
+/// g(q) = 0 by the closed form g₁ = 9.81 (1.2 · 0.45 cos q₁ + 0.7 (cos q₁ + 0.3 cos(q₁ + q₂))),
+/// g₂ = 9.81 · 0.7 · 0.3 cos(q₁ + q₂) (link 1 of 1.0 m, centres of mass 0.45 m and 0.3 m from
+/// the joints). The documented default run
+/// then ends with a verified optimum, exit status 0.
+#[test]
+fn the_default_start_is_one_the_torque_bounds_hold() {
+    let dir = tmpdir("reach-arm-default");
+    let out = dir.join("out");
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach-arm",
+        "--scene",
+        "tests/fixtures/planar2_arm.toml",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let sol = json(&out.join("solution.json"));
+    let start: Vec<f64> = sol["start"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(
+        (start[0] + std::f64::consts::FRAC_PI_2).abs() < 1e-6 && start[1].abs() < 1e-6,
+        "{start:?}"
+    );
+    let (q1, q2) = (start[0], start[1]);
+    let g1 = 9.81 * (1.2 * 0.45 * q1.cos() + 0.7 * (q1.cos() + 0.3 * (q1 + q2).cos()));
+    let g2 = 9.81 * 0.7 * 0.3 * (q1 + q2).cos();
+    assert!(g1.abs() < 1e-5 && g2.abs() < 1e-5, "g = ({g1}, {g2})");
+    assert_eq!(sol["verified"], true, "{stdout}");
+    assert_eq!(sol["status"], "Solved", "{stdout}");
+    assert!(!out.join("FAILED").exists());
     std::fs::remove_dir_all(&dir).ok();
 }

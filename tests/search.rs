@@ -280,6 +280,53 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         e.contains("verified with rtol") && e.contains("--verify-rtol"),
         "{e}"
     );
+    // Shards searched with another --min-stick or refinement limit are refused, naming the
+    // option and both values; the files record the settings the command line gave.
+    let shard_settings = json(&shard_dirs[1].join("solution.json"))["search_settings"].clone();
+    assert_eq!(shard_settings["min_stick"], serde_json::json!(0.01));
+    assert_eq!(shard_settings["verify_refinements"], serde_json::json!(5));
+    for (field, value, option, shown) in [
+        ("min_stick", serde_json::json!(0.1), "--min-stick", "1e-1"),
+        (
+            "verify_refinements",
+            serde_json::json!(2),
+            "--verify-refinements",
+            "2",
+        ),
+        (
+            "max_points",
+            serde_json::json!(400),
+            "verification refinement point limit",
+            "400",
+        ),
+    ] {
+        let other = copy(&format!("other-{field}"));
+        let mut sol = json(&other.join("solution.json"));
+        sol["search_settings"][field] = value;
+        std::fs::write(other.join("solution.json"), sol.to_string()).unwrap();
+        let o = merge_with(&other);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        let ours = shard_settings["min_stick"].as_f64().unwrap();
+        assert!(
+            e.contains(&format!("searched with {option} {shown},"))
+                && e.contains(option)
+                && (field != "min_stick" || e.contains(&format!("{ours:e}"))),
+            "{e}"
+        );
+    }
+    // A shard that records no settings (an older file) beside one that does is refused.
+    let older = copy("older");
+    let mut sol = json(&older.join("solution.json"));
+    sol.as_object_mut().unwrap().remove("search_settings");
+    std::fs::write(older.join("solution.json"), sol.to_string()).unwrap();
+    let o = merge_with(&older);
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("records no search settings"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(!dir.join("refused").exists());
     // A start in two directories is refused.
     let o = run(&[

@@ -4,10 +4,22 @@
 //! accurate — and every linked figure exists.
 
 use ball_finger::paper::speed_accuracy::{SpeedAccuracy, VARIANT_KERNELS, VARIANTS};
+use ball_finger::pipeline;
+use bf_problem::{Problem, ProblemSettings};
 
 #[test]
 fn quick_report_is_consistent() {
-    let r = SpeedAccuracy::measure(true).expect("quick report measures");
+    // The optimum a report presents: here `optimize --strategy direct`'s (Radau 3 × 10).
+    let presented = {
+        let settings = ProblemSettings {
+            points: 30,
+            ..ProblemSettings::default()
+        };
+        let p = pipeline::build(Problem::PeriodicQc, &settings).unwrap();
+        pipeline::solve(&p, None).unwrap()
+    };
+    assert!(presented.status.is_success(), "{:?}", presented.status);
+    let r = SpeedAccuracy::measure_at(true, Some(&presented)).expect("quick report measures");
 
     // (a) DOPRI5: error of x(T) falls with rtol (within a factor 3 of noise per rung) and by
     // orders of magnitude over the ladder; the event times converge too.
@@ -59,6 +71,37 @@ fn quick_report_is_consistent() {
             .any(|m| m.same_branch || m.warm_rel_error.is_finite()),
         "no mesh on the reference optimum: {:?}",
         r.mesh
+    );
+    // (b) at the presented optimum: its refined reference is the presented solution's J to
+    // the discretisation error of its 3 × 10 mesh (refinement moves J, it does not change the
+    // optimum), the Radau meshes warm-started from it stay on it, their error falls as the
+    // elements double, and the finest one's J is the presented J to the error of the coarser
+    // of the two meshes.
+    let p = r.mesh_presented.as_ref().expect("a presented reference");
+    assert!(p.description.contains("(converged;"), "{}", p.description);
+    assert_eq!(p.presented_objective, presented.objective);
+    let j_ref_p = p.objective;
+    assert!(
+        (presented.objective - j_ref_p).abs() <= 1e-2 * j_ref_p,
+        "presented J {} vs its reference {j_ref_p}",
+        presented.objective
+    );
+    let radau: Vec<_> = r.mesh.iter().filter(|m| m.scheme == "Radau").collect();
+    assert!(radau.len() >= 2);
+    assert!(
+        radau.iter().all(|m| m.presented_rel_error.is_finite()),
+        "{radau:?}"
+    );
+    let (coarse, fine) = (radau[0], radau[radau.len() - 1]);
+    assert!(
+        fine.presented_rel_error < coarse.presented_rel_error,
+        "{coarse:?} then {fine:?}"
+    );
+    assert!(
+        (fine.presented_objective - presented.objective).abs()
+            <= coarse.presented_rel_error * j_ref_p,
+        "{fine:?} vs presented J {}",
+        presented.objective
     );
     let eps: Vec<_> = r.eps.iter().filter(|e| e.solved).collect();
     assert!(eps.len() >= 2, "{:?}", r.eps);

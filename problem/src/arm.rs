@@ -38,7 +38,8 @@
 //!   re-integration the study layer attaches.
 //!
 //! Start and target: [`default_start`] is the DH zero configuration (q = 0, the "home" pose of
-//! a DH table) moved into the joint limits; [`default_target`] is the start plus
+//! a DH table) moved into the joint limits, or, where no admissible torque holds the arm
+//! there, the pose it settles in from there under gravity; [`default_target`] is the start plus
 //! [`TARGET_OFFSET_REVOLUTE`] rad on every revolute joint and [`TARGET_OFFSET_PRISMATIC`] m on
 //! every prismatic one, moved into the limits.
 
@@ -144,12 +145,110 @@ pub fn torque_limits(scene: &Scene) -> Vec<f64> {
         .collect()
 }
 
-/// The default start q⁰: q = 0 moved into the joint limits.
+/// The default start q⁰: q = 0 moved into the joint limits, where the torque bounds hold
+/// the arm there against gravity; otherwise the pose it settles in when let go from there
+/// ([`settled_pose`]: hanging, held by no torque), since `reach-arm` starts at rest and no
+/// admissible torque holds q = 0 (the 2-link test arm stretched out horizontally needs
+/// 14.2 N m at the shoulder against its 12).
 pub fn default_start(scene: &Scene) -> Vec<f64> {
-    joint_limits(scene)
+    let zero: Vec<f64> = joint_limits(scene)
         .iter()
         .map(|&(lo, hi)| 0.0f64.clamp(lo, hi))
-        .collect()
+        .collect();
+    let Ok(mut potential) = Potential::new(scene) else {
+        // The build reports the scene's model error itself.
+        return zero;
+    };
+    let (_, g) = potential.at(&zero);
+    let held = g
+        .iter()
+        .zip(torque_limits(scene))
+        .all(|(g, t)| g.abs() <= t);
+    if held {
+        zero
+    } else {
+        settled_pose(scene, &mut potential, zero)
+    }
+}
+
+/// The potential energy V(q) and its gradient, the gravity torques g(q), of a scene.
+struct Potential {
+    tape: bf_codegen::interp::Tape,
+    vars: Vec<f64>,
+    q_vars: Vec<usize>,
+}
+
+impl Potential {
+    fn new(scene: &Scene) -> Result<Self, CodegenError> {
+        let mut model = SymbolicRobot::new(scene)?;
+        let lay = model.layout;
+        let v = model.potential();
+        let g = model.gravity();
+        let outs: Vec<Id> = std::iter::once(v).chain(g).collect();
+        let tape = bf_codegen::interp::Tape::new(&model.g, &outs);
+        let mut vars = vec![0.0; lay.n_vars()];
+        for (i, p) in model.params.iter().enumerate() {
+            vars[lay.param(i) as usize] = p.1;
+        }
+        let q_vars = (0..model.nq()).map(|i| lay.q(i) as usize).collect();
+        Ok(Potential { tape, vars, q_vars })
+    }
+
+    /// (V(q), g(q)).
+    fn at(&mut self, q: &[f64]) -> (f64, Vec<f64>) {
+        for (&v, &x) in self.q_vars.iter().zip(q) {
+            self.vars[v] = x;
+        }
+        let out: Vec<f64> = self.tape.eval(&self.vars);
+        (out[0], out[1..].to_vec())
+    }
+}
+
+/// The pose reached from `q` by descending the potential energy over the revolute joints
+/// within their limits (projected gradient steps of at most 0.1 rad, halved until V
+/// decreases): where the arm comes to rest when let go, a local minimum of V at which gravity
+/// needs no torque (or a joint limit takes it). Prismatic joints stay: along gravity an
+/// unlimited slide has no rest pose.
+fn settled_pose(scene: &Scene, potential: &mut Potential, mut q: Vec<f64>) -> Vec<f64> {
+    let limits = joint_limits(scene);
+    let revolute: Vec<bool> = scene
+        .links
+        .iter()
+        .map(|l| l.joint == JointType::Revolute)
+        .collect();
+    let project = |q: &mut [f64]| {
+        for (x, &(lo, hi)) in q.iter_mut().zip(&limits) {
+            *x = x.clamp(lo, hi);
+        }
+    };
+    let (mut v, mut g) = potential.at(&q);
+    let mut step: f64 = 0.1;
+    for _ in 0..10_000 {
+        let gmax = g
+            .iter()
+            .zip(&revolute)
+            .filter(|(_, r)| **r)
+            .map(|(g, _)| g.abs())
+            .fold(0.0, f64::max);
+        if !(gmax.is_finite() && gmax > 0.0) || step < 1e-12 {
+            break;
+        }
+        let mut trial = q.clone();
+        for ((x, gi), r) in trial.iter_mut().zip(&g).zip(&revolute) {
+            if *r {
+                *x -= step * gi / gmax;
+            }
+        }
+        project(&mut trial);
+        let (vt, gt) = potential.at(&trial);
+        if vt < v && trial != q {
+            (q, v, g) = (trial, vt, gt);
+            step = (2.0 * step).min(0.1);
+        } else {
+            step *= 0.5;
+        }
+    }
+    q
 }
 
 /// The default target: `start` plus the fixed offsets of the module docs, moved into the joint

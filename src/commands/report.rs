@@ -42,7 +42,9 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         "running"
     });
     let md = match a.which.as_str() {
-        "speed-accuracy" => crate::paper::speed_accuracy::speed_accuracy(out.path(), a.quick)?,
+        "speed-accuracy" => {
+            crate::paper::speed_accuracy::speed_accuracy(out.path(), a.quick, None)?
+        }
         _ => {
             let pb = super::optimize::iteration_spinner("strategies");
             pb.enable_steady_tick(std::time::Duration::from_millis(120));

@@ -121,6 +121,7 @@ pub fn solution_at(
         scene_toml: String::new(),
         scene_params: Vec::new(),
         active_bounds: None,
+        search_settings: None,
     })
 }
 

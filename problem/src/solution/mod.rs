@@ -126,6 +126,11 @@ pub struct OcpSolution {
     /// bounds; `None` where they were not computed (files of other commands, older files).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub active_bounds: Option<Vec<records::ActiveBound>>,
+    /// The search settings `optimize` ran with (stick bound, verification and refinement
+    /// limits, solver options), which `optimize merge` compares across shards; `None` in files
+    /// of other commands and in files written before they were recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub search_settings: Option<records::SearchSettings>,
 }
 
 impl OcpSolution {

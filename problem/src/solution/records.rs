@@ -522,3 +522,92 @@ impl ActiveBound {
         }
     }
 }
+
+/// The settings of `optimize` that shape which optimum a search reports but that the problem,
+/// scene, mesh and ε do not determine (`solution.json`'s `search_settings`): the stick-phase
+/// bound and its continuation, the verification and its refinement limits, and the
+/// interior-point options. `optimize merge` compares them so that shards searched under other
+/// settings do not compete as one run; files written before they were recorded have none.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SearchSettings {
+    /// Lower bound of the stick phase's duration (s; `--min-stick`).
+    pub min_stick: f64,
+    /// First stick-phase lower bound of the stick continuation (s; `None`: no continuation).
+    pub stick_continuation: Option<f64>,
+    /// DOPRI5 relative tolerance of the verification (`--verify-rtol`; 0 skips it).
+    pub verify_rtol: f64,
+    /// hp refinements of one unverified optimum at most (`--verify-refinements`).
+    pub verify_refinements: usize,
+    /// Rounds of one such refinement.
+    pub refine_rounds: usize,
+    /// Element-defect tolerance of the first such refinement.
+    pub refine_tol: f64,
+    /// Collocation points per phase such a refinement may reach.
+    pub max_points: usize,
+    /// Distinct unverified optima refined at most.
+    pub clusters: usize,
+    /// Interior-point iteration limit (`--max-iter`).
+    pub max_iter: usize,
+    /// `--dual-regularization` (`None`: the solver's default).
+    pub dual_regularization: Option<f64>,
+    /// `--kkt-residual-ratio`.
+    pub kkt_residual_ratio: bool,
+    /// `--curvature-extrapolation` (`None`: the solver's default).
+    pub curvature_extrapolation: Option<f64>,
+    /// `--extrapolate-every-barrier`.
+    pub extrapolate_every_barrier: bool,
+    /// `--proximal-weight` (`None`: the solver's default).
+    pub proximal_weight: Option<f64>,
+}
+
+impl SearchSettings {
+    /// Each setting as (the `optimize` option or quantity that sets it, its value as text),
+    /// in a fixed order.
+    pub fn entries(&self) -> [(&'static str, String); 14] {
+        let opt = |v: Option<f64>| v.map_or_else(|| "default".to_string(), |v| format!("{v:e}"));
+        [
+            ("--min-stick", format!("{:e}", self.min_stick)),
+            ("stick continuation bound (s)", opt(self.stick_continuation)),
+            ("--verify-rtol", format!("{:e}", self.verify_rtol)),
+            ("--verify-refinements", self.verify_refinements.to_string()),
+            (
+                "rounds per verification refinement",
+                self.refine_rounds.to_string(),
+            ),
+            (
+                "verification refinement tolerance",
+                format!("{:e}", self.refine_tol),
+            ),
+            (
+                "verification refinement point limit",
+                self.max_points.to_string(),
+            ),
+            ("refined optima at most", self.clusters.to_string()),
+            ("--max-iter", self.max_iter.to_string()),
+            ("--dual-regularization", opt(self.dual_regularization)),
+            ("--kkt-residual-ratio", self.kkt_residual_ratio.to_string()),
+            (
+                "--curvature-extrapolation",
+                opt(self.curvature_extrapolation),
+            ),
+            (
+                "--extrapolate-every-barrier",
+                self.extrapolate_every_barrier.to_string(),
+            ),
+            ("--proximal-weight", opt(self.proximal_weight)),
+        ]
+    }
+
+    /// The first setting in which `self` and `other` differ: (its name, `self`'s value,
+    /// `other`'s value); `None` when they agree in every one.
+    pub fn first_difference(
+        &self,
+        other: &SearchSettings,
+    ) -> Option<(&'static str, String, String)> {
+        self.entries()
+            .into_iter()
+            .zip(other.entries())
+            .find(|((_, a), (_, b))| a != b)
+            .map(|((name, a), (_, b))| (name, a, b))
+    }
+}

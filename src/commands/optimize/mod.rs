@@ -610,9 +610,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         print_verification(&sol)?;
     }
     let (scene_toml, scene_params) = scene_record(args, name)?;
+    let record = shards::search_settings(&settings, &policy);
     for s in std::iter::once(&mut sol).chain(candidates.iter_mut().map(|(_, c)| c)) {
         s.scene_toml.clone_from(&scene_toml);
         s.scene_params.clone_from(&scene_params);
+        s.search_settings = Some(record.clone());
     }
     if let Some((field, v)) = first_non_finite(&sol) {
         bail!(

@@ -7,11 +7,13 @@ use super::{OUTPUT_DIR, commit_solution, failure_of, print_verification, print_w
 use crate::cli::MergeArgs;
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search;
+use crate::pipeline::search::VerifyPolicy;
 use crate::pipeline::solve::recompute_at_own_point;
 use crate::pipeline::strategy::{StageRecord, Strategy, StrategyReport};
 use anyhow::{Context, Result, bail};
 use bf_output::OutputDir;
-use bf_problem::OcpSolution;
+use bf_problem::solution::records::SearchSettings;
+use bf_problem::{OcpSolution, ProblemSettings};
 use std::path::Path;
 
 /// The candidates of one `--shard` output set: (start index, solution), by file name.
@@ -66,8 +68,9 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 5] {
 }
 
 /// Errors naming both files and the quantity unless `sol` (read from `path`) was solved on the
-/// problem, scene (its file text), runtime parameters, mesh and ε of `first`, and (where both
-/// were verified) verified with the same tolerances.
+/// problem, scene (its file text), runtime parameters, mesh and ε of `first`, searched with
+/// the same [`SearchSettings`] (where either records them) and (where both were verified)
+/// verified with the same tolerances.
 fn check_same_run(
     first: &(std::path::PathBuf, OcpSolution),
     path: &Path,
@@ -98,6 +101,33 @@ fn check_same_run(
             a.rtol,
             a.atol
         );
+    }
+    match (&fsol.search_settings, &sol.search_settings) {
+        (Some(a), Some(b)) => {
+            if let Some((what, va, vb)) = a.first_difference(b) {
+                bail!(
+                    "optimize merge: {} was searched with {what} {vb}, {} with {what} {va}: \
+                     merge only the shards of one run",
+                    path.display(),
+                    fpath.display()
+                );
+            }
+        }
+        (None, None) => {}
+        (a, _) => {
+            let (with, without) = if a.is_some() {
+                (fpath.as_path(), path)
+            } else {
+                (path, fpath.as_path())
+            };
+            bail!(
+                "optimize merge: {} records no search settings (--min-stick, \
+                 --verify-refinements, …; written before they were recorded), {} does: they \
+                 cannot be compared; re-run the older shard",
+                without.display(),
+                with.display()
+            );
+        }
     }
     if fsol.scene_toml != sol.scene_toml {
         let line = fsol
@@ -260,4 +290,25 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         bail!("{f}");
     }
     Ok(())
+}
+
+/// The record of the settings a search of `optimize` ran with (`solution.json`'s
+/// `search_settings`), which [`check_same_run`] compares across shards.
+pub(super) fn search_settings(settings: &ProblemSettings, policy: &VerifyPolicy) -> SearchSettings {
+    SearchSettings {
+        min_stick: settings.min_stick,
+        stick_continuation: policy.stick_continuation,
+        verify_rtol: policy.rtol,
+        verify_refinements: policy.refine_attempts,
+        refine_rounds: policy.refine_rounds,
+        refine_tol: policy.refine_tol,
+        max_points: policy.max_points,
+        clusters: policy.clusters,
+        max_iter: settings.max_iter,
+        dual_regularization: settings.dual_regularization,
+        kkt_residual_ratio: settings.kkt_residual_ratio,
+        curvature_extrapolation: settings.curvature_extrapolation,
+        extrapolate_every_barrier: settings.extrapolate_every_barrier,
+        proximal_weight: settings.proximal_weight,
+    }
 }

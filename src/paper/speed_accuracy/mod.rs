@@ -32,7 +32,7 @@ pub mod meshes;
 pub mod smoothing;
 
 pub use kernel_variants::{KernelRow, VARIANT_KERNELS, VARIANTS};
-pub use meshes::MeshRow;
+pub use meshes::{MeshRow, PresentedReference};
 pub use smoothing::EpsRow;
 
 /// All measurements of the report.
@@ -46,6 +46,9 @@ pub struct SpeedAccuracy {
     pub sim: Vec<WorkPrecisionRow>,
     /// Part (b): reference mesh (description, objective, seconds).
     pub mesh_reference: (String, f64, f64),
+    /// Part (b): the reference at the optimum the report presents (`None` when none was
+    /// given, [`SpeedAccuracy::measure_at`]).
+    pub mesh_presented: Option<PresentedReference>,
     /// Part (b): LG and Radau meshes.
     pub mesh: Vec<MeshRow>,
     /// Part (b): smoothing ε ladder.
@@ -87,10 +90,15 @@ fn wp_figure(
     Ok(fig_work_precision_sets(title, error_label, &kept)?)
 }
 
-/// Runs the whole report: measures, writes `out_dir/figures/*.svg|png`, returns the Markdown
-/// section (image links relative to `out_dir`).
-pub fn speed_accuracy(out_dir: &Path, quick: bool) -> Result<String> {
-    let r = SpeedAccuracy::measure(quick)?;
+/// Runs the whole report: measures (the mesh study also at `presented`, the `periodic-qc`
+/// optimum the calling report presents, if given), writes `out_dir/figures/*.svg|png`, returns
+/// the Markdown section (image links relative to `out_dir`).
+pub fn speed_accuracy(
+    out_dir: &Path,
+    quick: bool,
+    presented: Option<&problems::OcpSolution>,
+) -> Result<String> {
+    let r = SpeedAccuracy::measure_at(quick, presented)?;
     r.write(out_dir)
 }
 
@@ -106,11 +114,17 @@ fn bar(len: usize, what: &str) -> ProgressBar {
 impl SpeedAccuracy {
     /// Measures studies (a)–(c); `quick` uses short ladders (< 20 s in release).
     pub fn measure(quick: bool) -> Result<Self> {
+        Self::measure_at(quick, None)
+    }
+
+    /// [`SpeedAccuracy::measure`], the mesh study also at `presented` (a `periodic-qc`
+    /// optimum: [`meshes`]).
+    pub fn measure_at(quick: bool, presented: Option<&problems::OcpSolution>) -> Result<Self> {
         let t = Instant::now();
         let (sim_t_end, sim) = integrators::measure(quick)?;
         let ta = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let (mesh_reference, mesh, eps) = measure_optim(quick)?;
+        let (mesh_reference, mesh_presented, mesh, eps) = measure_optim(quick, presented)?;
         let tb = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let kernels = kernel_variants::measure(quick)?;
@@ -120,6 +134,7 @@ impl SpeedAccuracy {
             sim_t_end,
             sim,
             mesh_reference,
+            mesh_presented,
             mesh,
             eps,
             kernels,
@@ -152,6 +167,7 @@ impl SpeedAccuracy {
         md.push_str(&integrators::section(self.sim_t_end, &self.sim, &fig_dir)?);
         md.push_str(&meshes::section(
             &self.mesh_reference,
+            self.mesh_presented.as_ref(),
             &self.mesh,
             self.quick,
             &fig_dir,
@@ -166,18 +182,23 @@ impl SpeedAccuracy {
 // Collocation solves shared by studies (b1) and (b2)
 // ---------------------------------------------------------------------------------------------
 
-type OptimRows = ((String, f64, f64), Vec<MeshRow>, Vec<EpsRow>);
+type OptimRows = (
+    (String, f64, f64),
+    Option<PresentedReference>,
+    Vec<MeshRow>,
+    Vec<EpsRow>,
+);
 
-/// Studies (b1) and (b2) under one progress bar, in that order.
-fn measure_optim(quick: bool) -> Result<OptimRows> {
+/// Studies (b1) (also at `presented`) and (b2) under one progress bar, in that order.
+fn measure_optim(quick: bool, presented: Option<&problems::OcpSolution>) -> Result<OptimRows> {
     let mesh_ladder = meshes::MeshLadder::new(quick);
     let eps_ladder = smoothing::ladder(quick);
     let iters = max_iter(quick);
     let pb = bar(mesh_ladder.solves() + eps_ladder.len(), "(b) optimisation");
-    let (reference, mesh) = meshes::measure(&mesh_ladder, iters, &pb)?;
+    let (reference, presented_ref, mesh) = meshes::measure(&mesh_ladder, iters, &pb, presented)?;
     let eps = smoothing::measure(eps_ladder, iters, &pb)?;
     pb.finish_and_clear();
-    Ok((reference, mesh, eps))
+    Ok((reference, presented_ref, mesh, eps))
 }
 
 /// A solve of `periodic-qc`: the solution if it succeeded, and the wall time either way.
