@@ -37,6 +37,8 @@ fn phase(contact: bool, x: &[f64; 9]) -> ReferencePhase {
         omega: vec![w; 3],
         omega_dot: vec![[0.0, 0.0, 1.0]; 3],
         lambda: vec![[0.05, 0.02, 0.1]; 3],
+        contact_point: vec![[0.0, 0.0, 1.0]; 3],
+        contact_point_dot: vec![[0.0; 3]; 3],
     }
 }
 
