@@ -500,7 +500,11 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
 
 /// `optimize --problem NAME` (the default search) then `track --controller hybrid --periods 50`
 /// on its solution, as a user runs them; returns tracking.json.
-fn default_optimum_tracked(problem: &str, periods: usize) -> serde_json::Value {
+fn default_optimum_tracked(
+    problem: &str,
+    controllers: &[&str],
+    periods: usize,
+) -> Vec<serde_json::Value> {
     let dir = cli::tmpdir(&format!("target-{problem}"));
     let sol = dir.join("opt");
     let r = cli::run(&[
@@ -513,20 +517,28 @@ fn default_optimum_tracked(problem: &str, periods: usize) -> serde_json::Value {
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let out = dir.join("track");
     let periods = periods.to_string();
-    let r = cli::run(&[
-        "track",
-        sol.join("solution.json").to_str().unwrap(),
-        "--controller",
-        "hybrid",
-        "--periods",
-        &periods,
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let text = std::fs::read_to_string(out.join("tracking.json")).unwrap();
+    let mut records = Vec::new();
+    for controller in controllers {
+        let r = cli::run(&[
+            "track",
+            sol.join("solution.json").to_str().unwrap(),
+            "--controller",
+            controller,
+            "--periods",
+            &periods,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            r.status.success(),
+            "{problem} {controller}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let text = std::fs::read_to_string(out.join("tracking.json")).unwrap();
+        records.push(serde_json::from_str(&text).unwrap());
+    }
     std::fs::remove_dir_all(&dir).ok();
-    serde_json::from_str(&text).unwrap()
+    records
 }
 
 /// The nominal target: 50 periods of the default `periodic-qc` and
@@ -534,13 +546,23 @@ fn default_optimum_tracked(problem: &str, periods: usize) -> serde_json::Value {
 /// contact and an ω error ≤ 2 %. Before the contact-point loop the human finger's optimum
 /// stayed at 4.9–5.8 % (the slip after each Newton impact displaces the contact point, and the
 /// ball leaves with ω ⊥ the wrong r_c); before the clearance guard the finger touched the ball
-/// again 86 ms after lift-off, where the optimum passes within 0.8 mm of it. Slow (two default
-/// searches, about 1–2 min): `cargo test --release --test track -- --ignored`.
+/// again 86 ms after lift-off, where the optimum passes within 0.8 mm of it. The QC optimum
+/// meets the target inside the paper's torque bound; the human finger's COT optimum only
+/// without it (the slip after its Newton impacts, 5 m/s, needs up to 7 N m to recover from;
+/// saturated at 1 N m the finger cannot stay on the ball). Slow (two default searches, about
+/// 1–2 min): `cargo test --release --test track -- --ignored`.
 #[test]
 #[ignore]
 fn default_optima_meet_the_nominal_target_for_fifty_periods() {
-    for problem in ["periodic-qc", "periodic-cot-human"] {
-        let t = default_optimum_tracked(problem, 50);
+    let runs = default_optimum_tracked("periodic-qc", &["hybrid", "hybrid-unbounded"], 50)
+        .into_iter()
+        .map(|t| ("periodic-qc", t))
+        .chain(
+            default_optimum_tracked("periodic-cot-human", &["hybrid-unbounded"], 50)
+                .into_iter()
+                .map(|t| ("periodic-cot-human", t)),
+        );
+    for (problem, t) in runs {
         assert_eq!(t["impact_law"], "newton");
         assert_eq!(t["lost_ball"], false, "{problem}: {}", t["lost_reason"]);
         let periods = t["periods"].as_array().unwrap();
@@ -554,4 +576,41 @@ fn default_optima_meet_the_nominal_target_for_fifty_periods() {
             );
         }
     }
+}
+
+/// The report's closed-loop parts on the QC optimum: the robustness table applies every
+/// perturbation (an edit that no longer matches the paper scene is an error, so a changed
+/// scene file cannot silently turn a row into the nominal plant) and meets the issue's
+/// target in every row; the comparison writes the Fig. 17 counterpart with one series per
+/// controller run.
+#[test]
+fn report_tables_run_every_plant_and_controller() {
+    use ball_finger::study::closed_loop::{comparison_markdown, robustness_markdown};
+    let md = robustness_markdown("periodic-qc", qc(), 5).unwrap();
+    eprintln!("{md}");
+    let rows: Vec<&str> = md
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| plant"))
+        .collect();
+    assert_eq!(rows.len(), 6, "{md}");
+    for row in &rows {
+        assert!(row.contains("5 of 5") && row.contains("| yes |"), "{row}");
+        assert!(!row.contains('⚑'), "{row}");
+        let tau: f64 = row
+            .trim_end_matches(" |")
+            .rsplit("| ")
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(tau <= 1.0, "{row}");
+    }
+    let dir = cli::tmpdir("fig17-closed");
+    let md = comparison_markdown("periodic-qc", qc(), 3, Some(&dir)).unwrap();
+    for name in ["open-loop", "pd", "hybrid", "hybrid-unbounded"] {
+        assert!(md.contains(&format!("| {name} |")), "{md}");
+    }
+    let svg = std::fs::read_to_string(dir.join("fig17_closed_loop_periodic-qc.svg")).unwrap();
+    assert!(svg.contains("hybrid-unbounded") && svg.contains("open-loop"));
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -42,7 +42,12 @@
 //!   model in Stick, the plant's λ (eq. 33) under this τ is exactly λ_cmd.
 //!
 //! **Torque bounds** ([`HybridController::with_torque_bound`]): the commanded τ is saturated at
-//! the actuators' bounds |τ_i| ≤ τ_max,i, and the normal-force integral is not updated at a
+//! the actuators' bounds |τ_i| ≤ τ_max,i. Before that the law keeps its planned part and
+//! scales the feedback: τ is affine in the commanded force and relative acceleration (in q̈
+//! in free phases), so τ_ff + α (τ_cmd − τ_ff) with the largest α ∈ [0, 1] inside the bounds
+//! keeps the correction's direction, τ_ff being the planned force λ* with Δv̇ = 0 (or
+//! ID(q, q̇, q̈*)); clipping joint by joint would change the contact force in uncontrolled
+//! ways. The normal-force integral is not updated at a
 //! step where the law asks for more than the bounds (conditional integration: the integral
 //! would otherwise wind up against an error only more torque could remove). The outer loop's
 //! offset is bounded by itself (below).
@@ -316,7 +321,7 @@ impl<K: Kernels<3>> HybridController<K> {
     /// for more (anti-windup, module doc). Errors on a bound that is not positive (NaN
     /// included); infinity means no bound.
     pub fn with_torque_bound(mut self, bound: [f64; 3]) -> Result<Self, ControlError> {
-        if let Some(&b) = bound.iter().find(|b| !(**b > 0.0)) {
+        if let Some(&b) = bound.iter().find(|b| b.is_nan() || **b <= 0.0) {
             return Err(ControlError::Gain {
                 name: "tau_max",
                 value: b,
@@ -557,7 +562,8 @@ impl<K: Kernels<3>> HybridController<K> {
         tau: &mut [f64; 3],
     ) -> Result<(), ControlError> {
         let cl = &self.gains.clearance;
-        if cl.gap <= 0.0 {
+        // A plant off the ball in a contact phase of the reference is to make contact again.
+        if cl.gap <= 0.0 || self.reference.phases[phase].contact {
             return Ok(());
         }
         let (since, until) = self.contact_margins(phase, s);

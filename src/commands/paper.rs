@@ -349,7 +349,12 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             (false, _) => CLOSED_LOOP_COT_PERIODS,
         };
         let pb = stage(1, "closed loop");
-        let md = crate::study::closed_loop::comparison_markdown(&r.name, &r.solution, periods);
+        let md = crate::study::closed_loop::comparison_markdown(
+            &r.name,
+            &r.solution,
+            periods,
+            Some(&dir.join("figures")),
+        );
         pb.finish();
         match md {
             Ok(md) => writeln!(report, "{md}")?,
@@ -357,6 +362,20 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 report,
                 "`{}`: not executed: {}\n",
                 r.name,
+                crate::errors::render(&e)
+            )?,
+        }
+    }
+    // The hybrid controller against perturbed plants: the QC optimum only (the paper scene's;
+    // 0.6 s periods), few periods, to keep the report's time.
+    if let Some(qc) = results.iter().find(|r| r.name == "periodic-qc") {
+        let periods = if args.quick { 4 } else { 10 };
+        let md = crate::study::closed_loop::robustness_markdown(&qc.name, &qc.solution, periods);
+        match md {
+            Ok(md) => writeln!(report, "{md}")?,
+            Err(e) => writeln!(
+                report,
+                "Robustness table not run: {}\n",
                 crate::errors::render(&e)
             )?,
         }
