@@ -363,8 +363,8 @@ pub fn comparison_markdown(
     if marked {
         writeln!(
             s,
-            "\n⚑ Above the optimisation's torque bound |τ| ≤ {tau_bound} N m, which the hybrid \
-             controller saturates at and the open loop and the PD do not enforce."
+            "\n⚑ Above the optimisation's torque bound |τ| ≤ {tau_bound} N m: `hybrid` saturates \
+             there; the open loop, the PD and `hybrid-unbounded` do not enforce it."
         )?;
     }
     writeln!(
@@ -372,16 +372,21 @@ pub fn comparison_markdown(
         "\nVerdict on \"the open loop matches well at the beginning\" for `{name}`: {verdict}.\n"
     )?;
     if let Some(dir) = figures {
+        // A run without a completed period (the open loop that never reaches the ball) has
+        // no point to draw; it is in the table above.
         let runs: Vec<(ControllerKind, &[PeriodMetrics])> = rows
             .iter()
             .filter_map(|r| Some((r.controller, r.tracking.as_ref().ok()?.periods.as_slice())))
+            .filter(|(_, p)| !p.is_empty())
             .collect();
-        let stem = format!("fig17_closed_loop_{name}");
-        error_figure(name, &runs, &dir.join(&stem))?;
-        writeln!(
-            s,
-            "![Fig. 17 counterpart, closed loop: ω error per period, `{name}`](figures/{stem}.svg)\n"
-        )?;
+        if !runs.is_empty() {
+            let stem = format!("fig17_closed_loop_{name}");
+            error_figure(name, &runs, &dir.join(&stem))?;
+            writeln!(
+                s,
+                "![Fig. 17 counterpart, closed loop: ω error per period, `{name}`](figures/{stem}.svg)\n"
+            )?;
+        }
     }
     Ok(s)
 }
