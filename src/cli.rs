@@ -337,7 +337,10 @@ pub struct TrackArgs {
     /// The optimum to execute: a solution.json of `optimize` on a periodic problem.
     pub solution: PathBuf,
     /// open-loop (the optimal torques τ*(t)), pd (τ*(t) plus joint PD 1 N m/rad, 0.2 N m s/rad
-    /// in the free phases), or hybrid (bf-control's controller; docs/decisions/0012-control-layer.md).
+    /// in the free phases), hybrid (bf-control's controller, torques saturated at the scene's
+    /// bounds; docs/decisions/0012-control-layer.md and
+    /// 0017-control-bounds-and-clearance.md) or hybrid-unbounded (the same
+    /// without the bounds).
     #[arg(long, default_value = "hybrid")]
     pub controller: String,
     /// Periods to run (a period ends when the plant starts the optimum's first phase again).

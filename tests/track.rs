@@ -1,11 +1,13 @@
-//! Closed-loop execution of the `periodic-qc` optimum (one direct solve on the default mesh,
-//! shared by the tests of this file) with bf-control's hybrid controller:
+//! Closed-loop execution of the default `periodic-qc` optimum (shared by the tests of this
+//! file) with bf-control's hybrid controller:
 //! * nominal plant, Newton's and the max-dissipation impact law: every one of 10 periods has
 //!   contact and a mean-ω error ≤ 2 % (the target);
 //! * the normal-force loop holds λ_n at the optimum's λ_n*(s) over the stick phase on a plant
 //!   with a 10 % heavier ball (the controller's inversion is then wrong);
 //! * event timing: a plant that starts 20 ms behind the controller's clock still meets the
 //!   planned impact state, and the contact phase starts at the plant's impact event;
+//! * with the torques saturated at the paper's 1 N m, the all-perturbations plant (which
+//!   needs up to 1.9 N m unbounded) still converges, and no sample exceeds the bound;
 //! * `track` writes tracking.json whose per-period figures a recomputation from
 //!   trajectory.json (an independent loop over its samples) reproduces, and refuses bad
 //!   arguments with a message naming the option.
@@ -16,25 +18,48 @@ mod cli;
 use ball_finger::paper::closed_loop::{
     ControllerKind, Tracking, reference_of, run_tracking, solution_model,
 };
-use ball_finger::pipeline::{OcpSolution, SolutionIo, build, solve};
+use ball_finger::pipeline::{OcpSolution, SolutionIo};
 use bf_control::{HybridController, HybridGains, InverseDynamics};
 use bf_model::{ImpactLaw, Kernels, Mode, State, Vec3};
-use bf_problem::{Problem, ProblemSettings};
 use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{HybridSystem, SimSettings};
 use std::sync::OnceLock;
 
+/// The default `periodic-qc` optimum: the multi-start's best start is its 4th, so 4 starts
+/// (1–2 s) give the optimum of the default 32 (free 0.361 s, stick 0.026 s, free 0.233 s).
+/// The single direct solve's optimum rides the torque bound at 13 nodes of its last phase,
+/// where no feedback is left under the saturated controller.
 fn qc() -> &'static OcpSolution {
     static SOL: OnceLock<OcpSolution> = OnceLock::new();
     SOL.get_or_init(|| {
-        let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
-        let sol = solve(&p, None).unwrap();
+        let dir = cli::tmpdir("qc-optimum");
+        let r = cli::run(&[
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--starts",
+            "4",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
         assert!(sol.status.is_success(), "{:?}", sol.stages);
+        std::fs::remove_dir_all(&dir).ok();
         sol
     })
 }
 
 fn hybrid(plant_toml: Option<&str>, law: ImpactLaw, periods: usize) -> Tracking {
+    tracked(ControllerKind::Hybrid, plant_toml, law, periods)
+}
+
+fn tracked(
+    controller: ControllerKind,
+    plant_toml: Option<&str>,
+    law: ImpactLaw,
+    periods: usize,
+) -> Tracking {
     let sol = qc();
     let plant = match plant_toml {
         None => solution_model(sol).unwrap().0,
@@ -43,7 +68,83 @@ fn hybrid(plant_toml: Option<&str>, law: ImpactLaw, periods: usize) -> Tracking 
             bf_model::fixtures::model_for_scene(&scene).unwrap().0
         }
     };
-    run_tracking(sol, ControllerKind::Hybrid, periods, plant, law).unwrap()
+    run_tracking(sol, controller, periods, plant, law).unwrap()
+}
+
+/// The paper scene with ball mass ×1.1, μ_s and μ_k ×0.8, every link's mass and inertia ×1.05
+/// and socket damping ×1.5 (the "all together" plant).
+fn all_four_plant() -> String {
+    let text = bf_generated::scene_toml("paper")
+        .unwrap()
+        .replace("mass = 0.02\ncom", "mass = 0.021\ncom")
+        .replace(
+            "inertia = [1.0677e-3, 2.3177e-3, 2.0833e-3]",
+            "inertia = [1.121085e-3, 2.433585e-3, 2.187465e-3]",
+        )
+        .replace(
+            "center = [0.0, 0.0, 0.0]\nmass = 0.02",
+            "center = [0.0, 0.0, 0.0]\nmass = 0.022",
+        )
+        .replace("mu_s = 0.8", "mu_s = 0.64")
+        .replace("mu_k = 0.6", "mu_k = 0.48")
+        .replace("socket_damping = 0.004", "socket_damping = 0.006");
+    for needle in [
+        "mass = 0.021\ncom",
+        "mass = 0.022",
+        "mu_s = 0.64",
+        "mu_k = 0.48",
+        "socket_damping = 0.006",
+    ] {
+        assert!(text.contains(needle), "{needle}");
+    }
+    assert_eq!(text.matches("mass = 0.021\ncom").count(), 3);
+    text
+}
+
+#[test]
+fn saturated_controller_keeps_the_torque_bound_and_still_converges() {
+    let plant = all_four_plant();
+    let bounded = tracked(ControllerKind::Hybrid, Some(&plant), ImpactLaw::Newton, 10);
+    let free = tracked(
+        ControllerKind::HybridUnbounded,
+        Some(&plant),
+        ImpactLaw::Newton,
+        10,
+    );
+    // Without the bound this plant needs more than the paper's 1 N m, so the bound is active.
+    let peak = |t: &Tracking| {
+        t.report
+            .samples
+            .iter()
+            .flat_map(|s| s.tau.iter())
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+    };
+    eprintln!(
+        "max |τ|: {} bounded, {} unbounded",
+        peak(&bounded),
+        peak(&free)
+    );
+    assert!(peak(&free) > 1.5, "{}", peak(&free));
+    // Every sample the plant received, not only the per-period maxima.
+    assert!(!bounded.report.samples.is_empty());
+    for s in &bounded.report.samples {
+        assert!(s.tau.iter().all(|v| v.abs() <= 1.0), "{:?}", s.tau);
+    }
+    assert!(bounded.lost.is_none(), "{:?}", bounded.lost);
+    assert_eq!(bounded.periods.len(), 10);
+    for (k, p) in bounded.periods.iter().enumerate() {
+        assert!(p.contact, "period {k}: {p:?}");
+        // The target for perturbed plants: ≤ 5 % from the 4th period on; measured
+        // 1.6 % in the 4th and below 0.1 % from the 7th.
+        if k >= 3 {
+            assert!(p.omega_error <= 0.05, "period {k}: {p:?}");
+        }
+    }
+    assert!(
+        bounded.periods[9].omega_error <= 0.005,
+        "{:?}",
+        bounded.periods[9]
+    );
 }
 
 #[test]
@@ -181,17 +282,18 @@ fn force_loop_holds_lambda_n_over_the_stick_phase() {
             "inertia = [1.28124e-3, 2.78124e-3, 2.49996e-3]",
         );
     assert_eq!(text.matches("mass = 0.024").count(), 3);
-    // The max-dissipation impact ends sticking, and no friction margin (so no force boost)
-    // leaves λ_n to the loop.
+    // The max-dissipation impact ends sticking, and no friction margin and no force boost
+    // leave λ_n to the loop (the optimum rides the friction cone, so the boost would set it).
     let mut gains = HybridGains::default();
     gains.contact.friction_margin = 0.0;
+    gains.contact.force_boost = 0.0;
     let with_loop = lambda_n_rms(&text, gains);
     gains.contact.force_integral = 0.0;
     let without = lambda_n_rms(&text, gains);
     eprintln!("RMS of λ_n − λ_n*: {with_loop} with the force loop, {without} without");
-    // Measured: 3.0 % with the loop, 4.0 % without. What the loop leaves is mostly lag behind
-    // the fast swings of λ_n* of this coarse-mesh optimum (the integral is updated once per
-    // accepted step, a few ms apart).
+    // Measured: 3.1 % with the loop, 12.2 % without. What the loop leaves is mostly lag
+    // behind the fast swings of λ_n* of this coarse-mesh optimum (the integral is updated
+    // once per accepted step, a few ms apart).
     assert!(with_loop < 0.035, "{with_loop}");
     assert!(with_loop < 0.85 * without, "{with_loop} vs {without}");
 }
@@ -393,5 +495,122 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
         dir.join("m").to_str().unwrap(),
     ]);
     assert!(!r.status.success() && String::from_utf8_lossy(&r.stderr).contains("missing.json"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `optimize --problem NAME` (the default search) then `track --controller hybrid --periods 50`
+/// on its solution, as a user runs them; returns tracking.json.
+fn default_optimum_tracked(
+    problem: &str,
+    controllers: &[&str],
+    periods: usize,
+) -> Vec<serde_json::Value> {
+    let dir = cli::tmpdir(&format!("target-{problem}"));
+    let sol = dir.join("opt");
+    let r = cli::run(&[
+        "optimize",
+        "--problem",
+        problem,
+        "--out",
+        sol.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let out = dir.join("track");
+    let periods = periods.to_string();
+    let mut records = Vec::new();
+    for controller in controllers {
+        let r = cli::run(&[
+            "track",
+            sol.join("solution.json").to_str().unwrap(),
+            "--controller",
+            controller,
+            "--periods",
+            &periods,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            r.status.success(),
+            "{problem} {controller}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+        let text = std::fs::read_to_string(out.join("tracking.json")).unwrap();
+        records.push(serde_json::from_str(&text).unwrap());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    records
+}
+
+/// The nominal target: 50 periods of the default `periodic-qc` and
+/// `periodic-cot-human` optima on their own scene with Newton's impact law, every period with
+/// contact and an ω error ≤ 2 %. Before the contact-point loop the human finger's optimum
+/// stayed at 4.9–5.8 % (the slip after each Newton impact displaces the contact point, and the
+/// ball leaves with ω ⊥ the wrong r_c); before the clearance guard the finger touched the ball
+/// again 86 ms after lift-off, where the optimum passes within 0.8 mm of it. The QC optimum
+/// meets the target inside the paper's torque bound; the human finger's COT optimum only
+/// without it (the slip after its Newton impacts, 5 m/s, needs up to 7 N m to recover from;
+/// saturated at 1 N m the finger cannot stay on the ball). Slow (two default searches, about
+/// 1–2 min): `cargo test --release --test track -- --ignored`.
+#[test]
+#[ignore]
+fn default_optima_meet_the_nominal_target_for_fifty_periods() {
+    let runs = default_optimum_tracked("periodic-qc", &["hybrid", "hybrid-unbounded"], 50)
+        .into_iter()
+        .map(|t| ("periodic-qc", t))
+        .chain(
+            default_optimum_tracked("periodic-cot-human", &["hybrid-unbounded"], 50)
+                .into_iter()
+                .map(|t| ("periodic-cot-human", t)),
+        );
+    for (problem, t) in runs {
+        assert_eq!(t["impact_law"], "newton");
+        assert_eq!(t["lost_ball"], false, "{problem}: {}", t["lost_reason"]);
+        let periods = t["periods"].as_array().unwrap();
+        assert_eq!(periods.len(), 50, "{problem}");
+        for (k, p) in periods.iter().enumerate() {
+            let e = p["omega_error"].as_f64().unwrap();
+            eprintln!("{problem} period {}: {:.3} %", k + 1, 100.0 * e);
+            assert!(
+                p["contact"] == true && e <= 0.02,
+                "{problem} period {k}: {p}"
+            );
+        }
+    }
+}
+
+/// The report's closed-loop parts on the QC optimum: the robustness table applies every
+/// perturbation (an edit that no longer matches the paper scene is an error, so a changed
+/// scene file cannot silently turn a row into the nominal plant) and meets the issue's
+/// target in every row; the comparison writes the Fig. 17 counterpart with one series per
+/// controller run.
+#[test]
+fn report_tables_run_every_plant_and_controller() {
+    use ball_finger::study::closed_loop::{comparison_markdown, robustness_markdown};
+    let md = robustness_markdown("periodic-qc", qc(), 5).unwrap();
+    eprintln!("{md}");
+    let rows: Vec<&str> = md
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| plant"))
+        .collect();
+    assert_eq!(rows.len(), 6, "{md}");
+    for row in &rows {
+        assert!(row.contains("5 of 5") && row.contains("| yes |"), "{row}");
+        assert!(!row.contains('⚑'), "{row}");
+        let tau: f64 = row
+            .trim_end_matches(" |")
+            .rsplit("| ")
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(tau <= 1.0, "{row}");
+    }
+    let dir = cli::tmpdir("fig17-closed");
+    let md = comparison_markdown("periodic-qc", qc(), 3, Some(&dir)).unwrap();
+    for name in ["open-loop", "pd", "hybrid", "hybrid-unbounded"] {
+        assert!(md.contains(&format!("| {name} |")), "{md}");
+    }
+    let svg = std::fs::read_to_string(dir.join("fig17_closed_loop_periodic-qc.svg")).unwrap();
+    assert!(svg.contains("hybrid-unbounded") && svg.contains("open-loop"));
     std::fs::remove_dir_all(&dir).ok();
 }

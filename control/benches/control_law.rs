@@ -1,6 +1,7 @@
 //! One evaluation of the hybrid controller's law for the paper finger (criterion): the
 //! computed-torque law of a free phase (generated inverse dynamics) and the force/velocity law
-//! of a contact phase in Stick and in Slip (contact kernel, mass matrix, 3 × 3 solves), at the
+//! of a contact phase in Stick and in Slip (contact kernel, mass matrix, 3 × 3 solves), the
+//! free law with the clearance guard active (`free_guard`), at the
 //! impact state of the default `periodic-qc` optimum. Run:
 //! `cargo bench -p bf-control --bench control_law -- --warm-up-time 1 --measurement-time 3`.
 
@@ -37,6 +38,8 @@ fn phase(contact: bool, x: &[f64; 9]) -> ReferencePhase {
         omega: vec![w; 3],
         omega_dot: vec![[0.0, 0.0, 1.0]; 3],
         lambda: vec![[0.05, 0.02, 0.1]; 3],
+        contact_point: vec![[0.0, 0.0, 1.0]; 3],
+        contact_point_dot: vec![[0.0; 3]; 3],
     }
 }
 
@@ -57,8 +60,32 @@ fn bench(c: &mut Criterion) {
         Box::new(bf_model::PaperKernels::default()) as bf_model::DynKernels
     )
     .expect("model");
-    let law = HybridController::new(dyn_model, id, reference, HybridGains::default(), 0.0, &x)
-        .expect("controller");
+    let law = HybridController::new(
+        dyn_model,
+        id.clone(),
+        reference,
+        HybridGains::default(),
+        0.0,
+        &x,
+    )
+    .expect("controller");
+    // A free reference phase first: at t = 0.03 s the finger touching the ball is below the
+    // clearance floor, so the free law also runs the guard (contact kernel, M_f solve).
+    let guarded = HybridController::new(
+        bf_model::Model::from_kernels(
+            Box::new(bf_model::PaperKernels::default()) as bf_model::DynKernels
+        )
+        .expect("model"),
+        id,
+        Reference {
+            phases: vec![phase(false, &x), phase(true, &x)],
+            mean_omega: [0.0, 0.0, 2.0],
+        },
+        HybridGains::default(),
+        0.0,
+        &x,
+    )
+    .expect("controller");
     let mut tau = [0.0; 3];
     let mut g = c.benchmark_group("control_law");
     for (name, mode) in [
@@ -81,6 +108,21 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
+    g.bench_function("free_guard", |b| {
+        b.iter(|| {
+            guarded
+                .tau_in_mode(
+                    Mode::Free,
+                    black_box(0.03),
+                    black_box(&x[..3]),
+                    black_box(&x[3..6]),
+                    black_box(&x[6..9]),
+                    &mut tau,
+                )
+                .expect("law");
+            black_box(tau)
+        })
+    });
     g.finish();
 }
 

@@ -8,7 +8,14 @@
 //! planned and an early one switches to the contact law at once.
 //!
 //! **Free phases:** computed torque ([`ComputedTorque`], [`InverseDynamics`]):
-//! τ = ID(q, q̇, q̈* + K_d (q̇* − q̇) + K_p (q* − q)) + μ_v q̇.
+//! τ = ID(q, q̇, q̈* + K_d (q̇* − q̇) + K_p (q* − q)) + μ_v q̇, with a clearance guard
+//! ([`Clearance`]): away from the planned contacts the gap h (eq. 4) is kept above a floor
+//! h_f that rises from 0 to h_c over t_c after a lift-off and falls back to 0 over t_c before
+//! the planned impact; below the floor the torque J_cᵀ n β (a push along the normal at the
+//! contact point, least in the M_f⁻¹ norm) raises ḧ to ω_n² (h_f − h) − 2 ω_n ḣ. The optima's
+//! path constraint h ≥ 0 holds at their nodes only, and a plan that passes the ball within a
+//! millimetre (the human finger's COT optimum, 86 ms after lift-off) would otherwise be
+//! tracked into an unplanned impact, which starts the next contact phase a period early.
 //!
 //! **Contact phases (Stick, Slip):** hybrid force/velocity control through the contact force.
 //! The force on the finger is commanded as λ_cmd = λ_n,cmd n + λ_∥,cmd:
@@ -17,15 +24,33 @@
 //!   semi-implicitly (ΔI = e Δt / (1 + k_f Δt), stable for any step Δt); after the planned end
 //!   of the phase −`lift_off_share` · max λ_n*, so the finger lets go;
 //! * tangential: the ball's equation (eq. 29b) I_b ω̇ = −ω × I_b ω − D ω − r_c × λ fixes the
-//!   component of λ normal to r_c that gives ω̇_cmd = ω̇* + k_ω (ω* + δ − ω):
+//!   component of λ normal to r_c that gives ω̇_cmd = ω̇* + k_ω (ω* + δ + ω_r − ω):
 //!   λ_∥ = (m × r_c)/‖r_c‖², m = −ω × I_b ω − D ω − I_b ω̇_cmd, then limited to
 //!   ‖λ_∥‖ ≤ (1 − margin) μ_s λ_n,cmd (eq. 18–19 with a margin);
+//! * the contact point: ω_r = k_r r_c × e / ‖r_c‖², e the tangential part of r_c* − r_c,
+//!   rolls the ball so that the contact point returns to the planned one (‖e‖ decays at the
+//!   rate k_r where the contact is at the fingertip, ṙ_c = ω × r_c). Sticking keeps the ball's
+//!   spin about n (no contact force has a moment about it), so ω ⊥ r_c at lift-off as planned
+//!   only if r_c is the planned one: a contact point displaced by the slip after an impact
+//!   would otherwise stay displaced through the stick phase and send the ball off with the
+//!   wrong ω (on the human finger's COT optimum 5 % of ‖ω̄*‖ in every period);
 //! * the finger's acceleration keeps the contact: from d/dt Δv = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ −
 //!   J_c q̈ = −k_s Δv, J_c q̈ = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ + k_s Δv with ω̇ the ball's response
 //!   to λ_cmd; in Stick Δv = 0 and this is the sticking constraint (eq. 27–28), after a slip it
 //!   drives the relative velocity back to zero (slip recovery);
 //! * τ = M q̈ + C q̇ + g + μ_v q̇ − J_cᵀ λ_cmd (eq. 29a solved for τ). On the controller's own
 //!   model in Stick, the plant's λ (eq. 33) under this τ is exactly λ_cmd.
+//!
+//! **Torque bounds** ([`HybridController::with_torque_bound`]): the commanded τ is saturated at
+//! the actuators' bounds |τ_i| ≤ τ_max,i. Before that the law keeps its planned part and
+//! scales the feedback: τ is affine in the commanded force and relative acceleration (in q̈
+//! in free phases), so τ_ff + α (τ_cmd − τ_ff) with the largest α ∈ [0, 1] inside the bounds
+//! keeps the correction's direction, τ_ff being the planned force λ* with Δv̇ = 0 (or
+//! ID(q, q̇, q̈*)); clipping joint by joint would change the contact force in uncontrolled
+//! ways. The normal-force integral is not updated at a
+//! step where the law asks for more than the bounds (conditional integration: the integral
+//! would otherwise wind up against an error only more torque could remove). The outer loop's
+//! offset is bounded by itself (below).
 //!
 //! **Outer loop:** at the end of each period (when the reference wraps to its first phase) the
 //! measured mean ω̄ of that period moves the ω offset of the contact phases,
@@ -51,8 +76,11 @@ use std::cell::RefCell;
 /// Gains of the contact law (module doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactGains {
-    /// k_ω (1/s): rate at which ω follows ω* + δ.
+    /// k_ω (1/s): rate at which ω follows its target ω* + δ + ω_r.
     pub omega_rate: f64,
+    /// k_r (1/s): rate at which the contact point r_c is brought back to the planned r_c*
+    /// through the ball's rolling (the ω_r of the module doc).
+    pub contact_point_rate: f64,
     /// k_f (1/s): integral gain of the normal-force loop.
     pub force_integral: f64,
     /// k_s (1/s): rate at which a relative velocity Δv (slip) is driven to zero.
@@ -69,11 +97,23 @@ pub struct ContactGains {
     pub lift_off_share: f64,
 }
 
+/// The clearance the free phases keep from the ball (module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Clearance {
+    /// h_c (m): the gap kept away from the planned contacts; 0 turns the guard off.
+    pub gap: f64,
+    /// t_c (s): the floor rises from 0 to h_c over this time after a lift-off and falls back
+    /// to 0 over it before a planned impact.
+    pub ramp: f64,
+}
+
 /// All gains of the [`HybridController`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HybridGains {
     /// Free phases.
     pub free: ComputedTorque,
+    /// Clearance from the ball in free phases.
+    pub clearance: Clearance,
     /// Contact phases.
     pub contact: ContactGains,
     /// γ of the outer loop (share of the period's mean ω error corrected per period), in
@@ -83,16 +123,26 @@ pub struct HybridGains {
 
 impl Default for HybridGains {
     /// ω_n = 20 rad/s, ζ = 1 (the free phases of the optima last 0.1–9 s, so errors decay in
-    /// a fraction of a phase); k_ω = 100/s (the contact phases of the optima last 26 ms and more), λ_n boost up to 3 × max λ_n*, k_f = 300/s (the loop must settle within a 26 ms stick phase), k_s = 100/s, a_s = 5 m/s²; a friction margin of 20 %
-    /// (a plant with μ 20 % below the model still sticks); lift-off share 5 %; γ = 0.5.
+    /// a fraction of a phase); clearance 5 mm with a 50 ms ramp (the QC optimum is 13 mm
+    /// from the ball 50 ms before its impact, so the guard leaves its approach alone);
+    /// k_ω = 100/s (the contact phases of the optima last 26 ms and more); k_r = 10/s (a
+    /// tenth of k_ω, so the ω loop follows the contact-point loop); λ_n boost up to
+    /// 3 × max λ_n*; k_f = 300/s (the loop must settle within a 26 ms stick phase);
+    /// k_s = 100/s, a_s = 20 m/s²; a friction margin of 20 % (a plant with μ 20 % below the
+    /// model still sticks); lift-off share 5 %; γ = 0.5.
     fn default() -> Self {
         HybridGains {
             free: ComputedTorque {
                 omega_n: 20.0,
                 zeta: 1.0,
             },
+            clearance: Clearance {
+                gap: 5e-3,
+                ramp: 0.05,
+            },
             contact: ContactGains {
                 omega_rate: 100.0,
+                contact_point_rate: 10.0,
                 force_boost: 3.0,
                 force_integral: 300.0,
                 slip_rate: 100.0,
@@ -112,11 +162,14 @@ impl HybridGains {
         let c = &self.contact;
         for (name, value) in [
             ("omega_rate", c.omega_rate),
+            ("contact_point_rate", c.contact_point_rate),
             ("force_integral", c.force_integral),
             ("slip_rate", c.slip_rate),
             ("slip_decel", c.slip_decel),
             ("force_boost", c.force_boost),
             ("lift_off_share", c.lift_off_share),
+            ("clearance.gap", self.clearance.gap),
+            ("clearance.ramp", self.clearance.ramp),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(ControlError::Gain {
@@ -188,6 +241,8 @@ pub struct HybridController<K: Kernels<3>> {
     gains: HybridGains,
     /// max λ_n* of each phase (N): the scale of the lift-off command.
     lambda_scale: Vec<f64>,
+    /// |τ_i| ≤ tau_max[i] (N m): the actuators' bounds, infinite unless set.
+    tau_max: [f64; 3],
     history: RefCell<Vec<Discrete>>,
     switches: RefCell<Vec<PhaseSwitch>>,
 }
@@ -255,9 +310,39 @@ impl<K: Kernels<3>> HybridController<K> {
             reference,
             gains,
             lambda_scale,
+            tau_max: [f64::INFINITY; 3],
             history: RefCell::new(vec![d]),
             switches: RefCell::new(Vec::new()),
         })
+    }
+
+    /// The controller with the actuators' torque bounds |τ_i| ≤ `bound[i]` (N m): the torque it
+    /// commands is saturated there, and the force loop's integral is held while the law asks
+    /// for more (anti-windup, module doc). Errors on a bound that is not positive (NaN
+    /// included); infinity means no bound.
+    pub fn with_torque_bound(mut self, bound: [f64; 3]) -> Result<Self, ControlError> {
+        if let Some(&b) = bound.iter().find(|b| b.is_nan() || **b <= 0.0) {
+            return Err(ControlError::Gain {
+                name: "tau_max",
+                value: b,
+                condition: "a positive torque bound (N m)",
+            });
+        }
+        self.tau_max = bound;
+        Ok(self)
+    }
+
+    /// The torque bounds (N m).
+    pub fn torque_bound(&self) -> [f64; 3] {
+        self.tau_max
+    }
+
+    /// Whether the law at (`mode`, `t`, `x`) with the discrete state `d` asks for a torque
+    /// beyond the bounds.
+    fn saturates(&self, d: &Discrete, mode: Mode, t: f64, x: &State<3>) -> bool {
+        let mut tau = [0.0; 3];
+        self.law(d, mode, t, x, &mut tau).is_ok()
+            && tau.iter().zip(&self.tau_max).any(|(v, b)| v.abs() > *b)
     }
 
     /// The reference tracked.
@@ -326,7 +411,18 @@ impl<K: Kernels<3>> HybridController<K> {
                 &r.qdd,
                 &mut qdd,
             );
-            return self.id.torque(x.q.as_slice(), x.qd.as_slice(), &qdd, out);
+            self.id.torque(x.q.as_slice(), x.qd.as_slice(), &qdd, out)?;
+            if mode == Mode::Free {
+                self.keep_clearance(phase, s, x, &qdd, out)?;
+            }
+            if !self.within_bounds(out) {
+                // The feed-forward ID(q, q̇, q̈*) plus as much feedback as the bounds allow.
+                let mut base = [0.0; 3];
+                self.id
+                    .torque(x.q.as_slice(), x.qd.as_slice(), &r.qdd, &mut base)?;
+                *out = self.fit_bounds(&base, out);
+            }
+            return Ok(());
         }
         let g = &self.gains.contact;
         let p = self.model.params();
@@ -340,12 +436,19 @@ impl<K: Kernels<3>> HybridController<K> {
             Vec3::from(r.lambda).dot(&n) + g.force_integral * d.force_int
         };
         let omega = x.omega;
-        let target = Vec3::from(r.omega) + Vec3::from(d.omega_offset);
+        let rc = c.r_c;
+        // The contact point rolls with the ball, ṙ_c = ω × r_c at the fingertip: the ω_r with
+        // ω_r × r_c = k_r e (e the tangential part of r_c* − r_c) makes |e| decay at the rate
+        // k_r. Without it a contact point displaced by a slip stays displaced, and with it the
+        // ω at lift-off (ω ⊥ r_c, as sticking keeps the spin about n) differs from the plan.
+        let e = Vec3::from(r.contact_point) - rc;
+        let e = e - n * n.dot(&e);
+        let omega_r = rc.cross(&e) * (g.contact_point_rate / rc.norm_squared());
+        let target = Vec3::from(r.omega) + Vec3::from(d.omega_offset) + omega_r;
         let omega_dot_cmd = Vec3::from(r.omega_dot) + (target - omega) * g.omega_rate;
         let ib: &Mat3 = p.ball_inertia();
         let f_b = omega.cross(&(ib * omega)) + omega * p.socket_damping();
         let m = -f_b - ib * omega_dot_cmd;
-        let rc = c.r_c;
         let perp = m.cross(&rc) / rc.norm_squared();
         let mut lambda_t = perp - n * n.dot(&perp);
         // The friction measured in a slip scales the static coefficient the margin is taken
@@ -380,7 +483,6 @@ impl<K: Kernels<3>> HybridController<K> {
             Some(t_hat) => (n + t_hat * d.mu_k) * lambda_n,
             None => n * lambda_n + lambda_t,
         };
-        let omega_dot = p.ball_inertia_inv() * (-f_b - rc.cross(&lambda));
         let dv = c.delta_v - n * n.dot(&c.delta_v);
         let dv_norm = dv.norm();
         // Δv̇ = −k_s Δv − a_s Δv/‖Δv‖: exponential plus a constant deceleration, so a slip
@@ -391,19 +493,148 @@ impl<K: Kernels<3>> HybridController<K> {
         if slip_dir.is_some() && dv_norm > 0.0 {
             dv_dot = -dv * (g.slip_rate + g.slip_decel / dv_norm);
         }
-        let stick_acc = omega_dot.cross(&rc) + omega.cross(&c.rc_dot) - c.jc_dot_qd - dv_dot;
         // The normal part keeps n·v_c = 0 (the derivative of eq. 36, as the slip law does).
         let normal = -(c.n_dot().dot(&c.v_c) + n.dot(&c.jc_dot_qd));
-        let a_c = stick_acc - n * n.dot(&stick_acc) + n * normal;
-        let qdd = c
-            .j_c
-            .lu()
-            .solve(&a_c)
-            .filter(|v| v.iter().all(|x| x.is_finite()))
-            .ok_or(ControlError::SingularJacobian { t })?;
-        let tau = kin.m_f * qdd + kin.cqd_g + x.qd * p.mu_v() - c.j_c.transpose() * lambda;
-        out.copy_from_slice(tau.as_slice());
+        let lu = c.j_c.lu();
+        // τ for the force λ on the finger and the relative acceleration Δv̇: affine in both.
+        let torque = |lambda: Vec3, dv_dot: Vec3| -> Result<[f64; 3], ControlError> {
+            let omega_dot = p.ball_inertia_inv() * (-f_b - rc.cross(&lambda));
+            let stick_acc = omega_dot.cross(&rc) + omega.cross(&c.rc_dot) - c.jc_dot_qd - dv_dot;
+            let a_c = stick_acc - n * n.dot(&stick_acc) + n * normal;
+            let qdd = lu
+                .solve(&a_c)
+                .filter(|v| v.iter().all(|x| x.is_finite()))
+                .ok_or(ControlError::SingularJacobian { t })?;
+            let tau = kin.m_f * qdd + kin.cqd_g + x.qd * p.mu_v() - c.j_c.transpose() * lambda;
+            Ok([tau[0], tau[1], tau[2]])
+        };
+        let tau = torque(lambda, dv_dot)?;
+        *out = if self.within_bounds(&tau) || planned_end {
+            tau
+        } else {
+            // The planned force (the kinetic friction it implies in Slip) without the
+            // feedback: the optimum keeps its torques inside the bounds, so the feedback is
+            // scaled down to what the actuators give.
+            let planned = Vec3::from(r.lambda);
+            let planned = match slip_dir {
+                Some(t_hat) => (n + t_hat * d.mu_k) * planned.dot(&n),
+                None => planned,
+            };
+            self.fit_bounds(&torque(planned, Vec3::zeros())?, &tau)
+        };
         Ok(())
+    }
+
+    /// Whether |τ_i| ≤ τ_max,i for every joint.
+    fn within_bounds(&self, tau: &[f64; 3]) -> bool {
+        tau.iter().zip(&self.tau_max).all(|(v, b)| v.abs() <= *b)
+    }
+
+    /// τ_0 + α (τ_1 − τ_0) with the largest α ∈ [0, 1] inside the bounds: the feed-forward
+    /// `base` plus as much of the feedback in `full` as the actuators give (α = 0 if `base`
+    /// itself is outside; the saturation in [`Input::tau_in_mode`] then clips it).
+    fn fit_bounds(&self, base: &[f64; 3], full: &[f64; 3]) -> [f64; 3] {
+        let mut alpha: f64 = 1.0;
+        for i in 0..3 {
+            let (a, b, bound) = (base[i], full[i] - base[i], self.tau_max[i]);
+            if a.abs() > bound {
+                alpha = 0.0;
+            } else if b > 0.0 {
+                alpha = alpha.min((bound - a) / b);
+            } else if b < 0.0 {
+                alpha = alpha.min((-bound - a) / b);
+            }
+        }
+        let alpha = alpha.clamp(0.0, 1.0);
+        std::array::from_fn(|i| base[i] + alpha * (full[i] - base[i]))
+    }
+
+    /// The clearance guard of a free phase (module doc): below the floor h_f, adds J_cᵀ n β to
+    /// the computed torque `tau` (for the commanded acceleration `qdd`) when the gap's
+    /// acceleration ḧ would fall below ω_n² (h_f − h) − 2 ω_n ḣ, the critically damped return
+    /// to the floor.
+    fn keep_clearance(
+        &self,
+        phase: usize,
+        s: f64,
+        x: &State<3>,
+        qdd: &[f64; 3],
+        tau: &mut [f64; 3],
+    ) -> Result<(), ControlError> {
+        let cl = &self.gains.clearance;
+        // A plant off the ball in a contact phase of the reference is to make contact again.
+        if cl.gap <= 0.0 || self.reference.phases[phase].contact {
+            return Ok(());
+        }
+        let (since, until) = self.contact_margins(phase, s);
+        let floor = if cl.ramp > 0.0 {
+            cl.gap * (since.min(until) / cl.ramp).clamp(0.0, 1.0)
+        } else if since > 0.0 && until > 0.0 {
+            cl.gap
+        } else {
+            0.0
+        };
+        if floor <= 0.0 {
+            return Ok(());
+        }
+        let kin = self.model.evaluate(x)?;
+        let c = &kin.contact;
+        // Only below the floor: above it a condition on ḧ would also brake the planned
+        // approach, whose gap closes at the impact speed.
+        if c.h >= floor {
+            return Ok(());
+        }
+        let n = c.n;
+        let h_ddot = n.dot(&(c.j_c * Vec3::from(*qdd) + c.jc_dot_qd)) + c.n_dot().dot(&c.rc_dot);
+        let w = self.gains.free.omega_n;
+        let wanted = w * w * (floor - c.h) - 2.0 * w * c.h_dot;
+        if h_ddot >= wanted {
+            return Ok(());
+        }
+        // β = (wanted − ḧ) / (wᵀ M⁻¹ w), w = J_cᵀ n: the least torque (in the M⁻¹ norm, a
+        // force along n at the contact point) that lifts ḧ to the wanted value.
+        let dir = c.j_c.transpose() * n;
+        let reach = kin
+            .m_f
+            .cholesky()
+            .map(|m| dir.dot(&m.solve(&dir)))
+            .filter(|r| r.is_finite() && *r > 0.0);
+        if let Some(reach) = reach {
+            let beta = (wanted - h_ddot) / reach;
+            for i in 0..3 {
+                tau[i] += dir[i] * beta;
+            }
+        }
+        Ok(())
+    }
+
+    /// Time since the last planned lift-off and until the next planned impact at time `s` of
+    /// free phase `phase` (s), through the consecutive free phases around it; infinite for a
+    /// reference without a contact phase.
+    fn contact_margins(&self, phase: usize, s: f64) -> (f64, f64) {
+        let phases = &self.reference.phases;
+        let np = phases.len();
+        let (mut since, mut until) = (s, phases[phase].duration - s);
+        let mut back = phase;
+        let mut ahead = phase;
+        for _ in 1..np {
+            back = (back + np - 1) % np;
+            if phases[back].contact {
+                break;
+            }
+            since += phases[back].duration;
+        }
+        for _ in 1..np {
+            ahead = (ahead + 1) % np;
+            if phases[ahead].contact {
+                break;
+            }
+            until += phases[ahead].duration;
+        }
+        if !phases.iter().any(|p| p.contact) {
+            return (f64::INFINITY, f64::INFINITY);
+        }
+        (since, until)
     }
 
     /// The free phase in force at time `t` when free phase `phase` began at `start`: two free
@@ -512,7 +743,11 @@ impl<K: Kernels<3>> Input for HybridController<K> {
         let out: &mut [f64; 3] = out.try_into().map_err(|_| len_err("torque output", 3))?;
         let d = self.state_at(t, mode);
         let x = State::new(q.into(), qd.into(), w.into());
-        self.law(&d, mode, t, &x, out).map_err(to_sim)
+        self.law(&d, mode, t, &x, out).map_err(to_sim)?;
+        for (v, b) in out.iter_mut().zip(&self.tau_max) {
+            *v = v.clamp(-b, *b);
+        }
+        Ok(())
     }
 
     fn wants_force(&self) -> bool {
@@ -555,7 +790,14 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                     }
                     let err = ph.lambda_n(m.t - d.start, &n) - lambda_n;
                     let kf = self.gains.contact.force_integral;
-                    if ph.contact && err.is_finite() && dt > 0.0 && m.t - d.start <= ph.duration {
+                    // Anti-windup: while the actuators saturate, the force error is theirs, not
+                    // the integral's to correct.
+                    if ph.contact
+                        && err.is_finite()
+                        && dt > 0.0
+                        && m.t - d.start <= ph.duration
+                        && !self.saturates(&d, m.mode, m.t, &s)
+                    {
                         d.force_int += err * dt / (1.0 + kf * dt);
                     }
                 }

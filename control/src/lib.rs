@@ -18,7 +18,7 @@ pub mod law;
 pub mod metrics;
 pub mod reference;
 
-pub use controller::{ContactGains, HybridController, HybridGains};
+pub use controller::{Clearance, ContactGains, HybridController, HybridGains};
 pub use error::ControlError;
 pub use law::{ComputedTorque, InverseDynamics};
 pub use metrics::{PeriodMetrics, period_metrics};

@@ -1,11 +1,12 @@
 //! The optimum as a reference, phase by phase, indexed by the time s since the phase began
 //! (not by the clock: [`crate::HybridController`] starts each phase at the plant's event).
 //!
-//! Per phase the dense samples of the optimum (q*, q̇*, ω*, τ*, λ*) plus the accelerations the
+//! Per phase the dense samples of the optimum (q*, q̇*, ω*, τ*, λ*), the planned contact point
+//! r_c* (eq. 3) with its rate ṙ_c*, plus the accelerations the
 //! controller's model gives them: q̈* from free motion (eq. 26) in free phases, ω̇* (and q̈*)
 //! from sticking (eq. 29, 33) in contact phases, so the reference is consistent with the model
-//! the feedback inverts. Between samples q* and q̇* (free phases) and ω* (contact phases) are
-//! cubic Hermite interpolants of their values and derivatives (third-order accurate, where a
+//! the feedback inverts. Between samples q* and q̇* (free phases), ω* (contact phases) and r_c*
+//! are cubic Hermite interpolants of their values and derivatives (third-order accurate, where a
 //! linear interpolation of 100 samples per phase would leave errors of order 10⁻⁴ of the
 //! accelerations); q̈*, ω̇* and λ* are linear. Past the end of a free phase the reference
 //! continues at the planned pre-impact velocity (q* = q*_T + q̇*_T (s − T), q̈* = 0), so a
@@ -36,6 +37,11 @@ pub struct ReferencePhase {
     pub omega_dot: Vec<[f64; 3]>,
     /// λ* on the finger (N, world axes; zero in free phases).
     pub lambda: Vec<[f64; 3]>,
+    /// r_c* = p_c* − o_b, the planned contact point relative to the ball's centre (m, world
+    /// axes; eq. 3), in every phase (in free phases the closest point of the last link).
+    pub contact_point: Vec<[f64; 3]>,
+    /// ṙ_c* (m/s), the slope of the interpolation of r_c*.
+    pub contact_point_dot: Vec<[f64; 3]>,
 }
 
 /// The reference at one instant of a phase.
@@ -53,6 +59,8 @@ pub struct Point {
     pub omega_dot: [f64; 3],
     /// λ*.
     pub lambda: [f64; 3],
+    /// r_c*.
+    pub contact_point: [f64; 3],
 }
 
 /// The optimum's phases of one period, in order.
@@ -149,6 +157,8 @@ impl Reference {
                 omega: Vec::new(),
                 omega_dot: Vec::new(),
                 lambda: Vec::new(),
+                contact_point: Vec::new(),
+                contact_point_dot: Vec::new(),
             };
             for k in (0..n).filter(|&k| samples.phase[k] == p) {
                 let s = samples.t[k] - t0;
@@ -164,6 +174,7 @@ impl Reference {
                 let model_err = |e| ControlError::Reference {
                     msg: format!("sample {k} (phase {p}): {e}"),
                 };
+                let geometry = model.evaluate(&state).map_err(model_err)?.contact;
                 let acc = if c {
                     model.stick(&state, &tau.into()).map_err(model_err)?
                 } else {
@@ -176,6 +187,8 @@ impl Reference {
                 ph.omega.push(omega);
                 ph.omega_dot.push(acc.omega_dot.into());
                 ph.lambda.push(if c { lambda } else { [0.0; 3] });
+                ph.contact_point.push(geometry.r_c.into());
+                ph.contact_point_dot.push(geometry.rc_dot.into());
             }
             if ph.s.len() < 2 {
                 return Err(ControlError::Reference {
@@ -239,6 +252,7 @@ impl ReferencePhase {
             omega: herm(&self.omega, &self.omega_dot),
             omega_dot: lin(&self.omega_dot),
             lambda: lin(&self.lambda),
+            contact_point: herm(&self.contact_point, &self.contact_point_dot),
         }
     }
 
@@ -250,6 +264,7 @@ impl ReferencePhase {
             omega: self.omega[k],
             omega_dot: self.omega_dot[k],
             lambda: self.lambda[k],
+            contact_point: self.contact_point[k],
         }
     }
 
