@@ -585,7 +585,7 @@ fn default_optima_meet_the_nominal_target_for_fifty_periods() {
 /// controller run.
 #[test]
 fn report_tables_run_every_plant_and_controller() {
-    use ball_finger::study::closed_loop::{comparison_markdown, robustness_markdown};
+    use ball_finger::paper::closed_loop::{comparison_markdown, robustness_markdown};
     let md = robustness_markdown("periodic-qc", qc(), 5).unwrap();
     eprintln!("{md}");
     let rows: Vec<&str> = md
