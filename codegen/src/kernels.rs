@@ -229,7 +229,10 @@ pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, 
             )
         }
         "mass_matrix" => {
-            let m = model.mass_matrix();
+            // The cheaper of the link-Jacobian form and the composite-rigid-body algorithm
+            // (arms: CRBA, O(n²) against O(n³) operations; docs/decisions/0023). The doc line
+            // stays as it was so modules whose choice did not change stay byte-identical.
+            let m = model.mass_matrix_cheapest();
             (
                 vec![Q, P],
                 vec![arr("m", &[Nq, Nq], flat2(&m))],
