@@ -256,8 +256,30 @@ impl SymbolicRobot {
     }
 
     /// Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) with τ the variables [`super::Layout::tau`]:
-    /// M = L D Lᵀ unrolled, then L y = b, D z = y, Lᵀ q̈ = z.
+    /// of the LDLᵀ form ([`SymbolicRobot::forward_dynamics_ldl`]) and the articulated-body
+    /// algorithm ([`SymbolicRobot::forward_dynamics_aba`]), the one with fewer operations (LDLᵀ
+    /// on a tie), each costed on a copy of the graph so the other leaves no nodes behind.
     pub fn forward_dynamics(&mut self) -> Vec<Id> {
+        let ldl = {
+            let mut m = self.clone();
+            let x = m.forward_dynamics_ldl();
+            m.g.cost(&x)
+        };
+        let aba = {
+            let mut m = self.clone();
+            let x = m.forward_dynamics_aba();
+            m.g.cost(&x)
+        };
+        if aba < ldl {
+            self.forward_dynamics_aba()
+        } else {
+            self.forward_dynamics_ldl()
+        }
+    }
+
+    /// Forward dynamics by M = L D Lᵀ unrolled (M and C q̇ + g as in the `mass_cqd_g` kernel),
+    /// then L y = b, D z = y, Lᵀ q̈ = z.
+    pub fn forward_dynamics_ldl(&mut self) -> Vec<Id> {
         let n = self.nq();
         // The cheapest M and C q̇ + g together, as in the `mass_cqd_g` kernel.
         let (m, h) = self.mass_cqd_g();

@@ -26,6 +26,7 @@
 //! kinematics, Jacobians and contact geometry are here. Joints are revolute (θ_i = q_i +
 //! offset) or prismatic (d_i = q_i + d).
 
+mod aba;
 mod crba;
 mod dynamics;
 mod inverse;
