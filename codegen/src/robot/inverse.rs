@@ -28,6 +28,15 @@ pub(super) enum Wrench<'a> {
 }
 use crate::graph::{Id, Node, V3};
 
+/// How a forward-dynamics graph was built ([`SymbolicRobot::forward_dynamics_form`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ForwardForm {
+    /// M (and C q̇ + g) as in the `mass_cqd_g` kernel, an unrolled LDLᵀ factorisation of M.
+    Ldl,
+    /// The articulated-body algorithm (`aba` module).
+    ArticulatedBody,
+}
+
 impl SymbolicRobot {
     /// π of link `i` as graph nodes from the scene's values (runtime parameters stay
     /// variables): [m, m c, I_o upper triangle], I_o = I_c + m(|c|² 1 − c cᵀ).
@@ -255,11 +264,17 @@ impl SymbolicRobot {
             .collect()
     }
 
-    /// Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) with τ the variables [`super::Layout::tau`]:
-    /// of the LDLᵀ form ([`SymbolicRobot::forward_dynamics_ldl`]) and the articulated-body
-    /// algorithm ([`SymbolicRobot::forward_dynamics_aba`]), the one with fewer operations (LDLᵀ
-    /// on a tie), each costed on a copy of the graph so the other leaves no nodes behind.
+    /// Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) with τ the variables [`super::Layout::tau`], by
+    /// the form [`SymbolicRobot::forward_dynamics_form`] picks.
     pub fn forward_dynamics(&mut self) -> Vec<Id> {
+        self.forward_dynamics_form().0
+    }
+
+    /// Forward dynamics of the LDLᵀ form ([`SymbolicRobot::forward_dynamics_ldl`]) or the
+    /// articulated-body algorithm ([`SymbolicRobot::forward_dynamics_aba`]), the one with fewer
+    /// operations (LDLᵀ on a tie), each costed on a copy of the graph so the other leaves no
+    /// nodes behind; with the form used.
+    pub fn forward_dynamics_form(&mut self) -> (Vec<Id>, ForwardForm) {
         let ldl = {
             let mut m = self.clone();
             let x = m.forward_dynamics_ldl();
@@ -271,9 +286,9 @@ impl SymbolicRobot {
             m.g.cost(&x)
         };
         if aba < ldl {
-            self.forward_dynamics_aba()
+            (self.forward_dynamics_aba(), ForwardForm::ArticulatedBody)
         } else {
-            self.forward_dynamics_ldl()
+            (self.forward_dynamics_ldl(), ForwardForm::Ldl)
         }
     }
 
