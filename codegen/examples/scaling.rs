@@ -139,6 +139,10 @@ fn exponent(x: &[f64], y: &[f64]) -> f64 {
     sxy / sxx
 }
 
+/// One chain's figures: operations per kernel, generation s (wall), code bytes, rustc s wall
+/// and CPU.
+type Row = (Vec<usize>, f64, f64, f64, Option<f64>);
+
 struct Args {
     joints: Vec<usize>,
     rustc_max: usize,
@@ -187,7 +191,7 @@ fn run() -> Result<(), String> {
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("cannot create `{}`: {e}", args.out.display()))?;
     let mut ns_f = Vec::new();
-    let mut rows: Vec<(Vec<usize>, f64, f64, f64, Option<f64>)> = Vec::new();
+    let mut rows: Vec<Row> = Vec::new();
     println!(
         "| n | {} | generate s (CPU) | code bytes | rustc -O s wall (CPU) |",
         KERNELS.map(|k| format!("`{k}` ops")).join(" | ")

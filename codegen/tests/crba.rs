@@ -26,6 +26,19 @@ fn scenes() -> Vec<(String, Scene)> {
     v
 }
 
+/// The random chain of `n` joints (`common::chain`) with the one kernel `kernel`.
+fn chain(n: usize, kernel: &str) -> Scene {
+    let text = common::chain::chain_scene(n, &[kernel]);
+    Scene::from_toml_str(&text, &format!("chain{n}.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// [`scenes`] and the random chain of `n` joints, named `chain{n}`.
+fn scenes_and_chain(n: usize, kernel: &str) -> Vec<(String, Scene)> {
+    let mut v = scenes();
+    v.push((format!("chain{n}"), chain(n, kernel)));
+    v
+}
+
 #[test]
 fn crba_equals_jacobian_mass_matrix() {
     for (name, s) in scenes() {
@@ -138,13 +151,7 @@ fn mass_matrix_kernel_is_the_cheaper_form_and_equals_the_jacobian_form() {
     // Jacobian form to rounding, never costs more than either candidate, and on a 12-joint
     // random chain has less than two thirds of the Jacobian form's operations (CRBA, O(n²)
     // against O(n³); measured 5304 against 9870).
-    let chain = common::chain::chain_scene(12, &["mass_matrix"]);
-    let mut all = scenes();
-    all.push((
-        "chain12".into(),
-        Scene::from_toml_str(&chain, "chain12.toml").unwrap_or_else(|e| panic!("{e}")),
-    ));
-    for (name, s) in all {
+    for (name, s) in scenes_and_chain(12, "mass_matrix") {
         let mut m = SymbolicRobot::new(&s).unwrap();
         // Each candidate on its own copy of the graph, as the selection costs them.
         let (mut a, mut b) = (m.clone(), m.clone());
@@ -175,13 +182,7 @@ fn articulated_body_forward_dynamics_equals_ldl_and_the_cheaper_is_chosen() {
     // independent path: composite inertias, Newton–Euler C q̇ + g, a factorisation) at random
     // states and torques, every scene and a 12-joint random chain; the `forward_dynamics`
     // choice costs no more than either candidate; the ABA's operations grow linearly.
-    let chain = common::chain::chain_scene(12, &["forward_dynamics"]);
-    let mut all = scenes();
-    all.push((
-        "chain12".into(),
-        Scene::from_toml_str(&chain, "chain12.toml").unwrap_or_else(|e| panic!("{e}")),
-    ));
-    for (name, s) in all {
+    for (name, s) in scenes_and_chain(12, "forward_dynamics") {
         let m = SymbolicRobot::new(&s).unwrap();
         let n = m.nq();
         let (mut a, mut b, mut c) = (m.clone(), m.clone(), m.clone());
@@ -200,9 +201,7 @@ fn articulated_body_forward_dynamics_equals_ldl_and_the_cheaper_is_chosen() {
             // O(n): twice the joints, at most 2.5 times the operations (quadratic growth would
             // give 4; the base link's zero velocity makes the count affine with a negative
             // intercept, so a little over 2: measured 4 256 and 9 828).
-            let six = common::chain::chain_scene(6, &["forward_dynamics"]);
-            let six = Scene::from_toml_str(&six, "chain6.toml").unwrap_or_else(|e| panic!("{e}"));
-            let mut m6 = SymbolicRobot::new(&six).unwrap();
+            let mut m6 = SymbolicRobot::new(&chain(6, "forward_dynamics")).unwrap();
             let x6 = m6.forward_dynamics_aba();
             let c6 = m6.g.cost(&x6);
             assert!(
