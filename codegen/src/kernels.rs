@@ -4,7 +4,7 @@
 //! `potential` eq. 22b, `contact*` eq. 2–13 and 58–59.
 
 use crate::graph::Id;
-use crate::robot::SymbolicRobot;
+use crate::robot::{ForwardForm, SymbolicRobot};
 use crate::{CodegenError, InternalDefect, SceneDefect};
 
 /// The graph nodes of the contact quantities in [`CONTACT_FIELDS`] order, row-major: the
@@ -229,7 +229,10 @@ pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, 
             )
         }
         "mass_matrix" => {
-            let m = model.mass_matrix();
+            // The cheaper of the link-Jacobian form and the composite-rigid-body algorithm
+            // (arms: CRBA, O(n²) against O(n³) operations; docs/decisions/0023). The doc line
+            // stays as it was so modules whose choice did not change stay byte-identical.
+            let m = model.mass_matrix_cheapest();
             (
                 vec![Q, P],
                 vec![arr("m", &[Nq, Nq], flat2(&m))],
@@ -352,14 +355,20 @@ pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, 
             )
         }
         "forward_dynamics" => {
-            let a = model.forward_dynamics();
-            (
-                vec![Q, Qd, Tau, P],
-                vec![arr("qdd", &[Nq], a)],
-                "Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) (eq. 26a without friction) by an \
-                 unrolled LDLᵀ factorisation of M."
-                    .into(),
-            )
+            // The cheaper of LDLᵀ and the articulated-body algorithm (docs/decisions/0023); the
+            // LDLᵀ doc line is the one modules had before the choice existed.
+            let (a, form) = model.forward_dynamics_form();
+            let doc = match form {
+                ForwardForm::Ldl => {
+                    "Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) (eq. 26a without friction) by an \
+                     unrolled LDLᵀ factorisation of M."
+                }
+                ForwardForm::ArticulatedBody => {
+                    "Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) (eq. 26a without friction) by the \
+                     articulated-body algorithm (fewer operations than an LDLᵀ of M here)."
+                }
+            };
+            (vec![Q, Qd, Tau, P], vec![arr("qdd", &[Nq], a)], doc.into())
         }
         "regressor" => {
             let y = model.regressor();

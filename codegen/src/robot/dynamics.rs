@@ -151,6 +151,29 @@ impl SymbolicRobot {
         }
     }
 
+    /// M(q) alone (the `mass_matrix` kernel): of the Jacobian form
+    /// ([`SymbolicRobot::mass_matrix`], O(n³) operations on a chain) and the composite-rigid-body
+    /// algorithm ([`SymbolicRobot::mass_matrix_crba`], O(n²)), the one with fewer operations (the
+    /// Jacobian form on a tie). Costed on copies of the graph as in
+    /// [`SymbolicRobot::mass_cqd_g`], so the losing candidate leaves no nodes behind. The
+    /// derivative kernels (∂M/∂q, Christoffel symbols) keep differentiating the Jacobian form.
+    pub fn mass_matrix_cheapest(&mut self) -> Vec<Vec<Id>> {
+        let cost = |m: &mut SymbolicRobot, crba: bool| {
+            let mm = if crba {
+                m.mass_matrix_crba()
+            } else {
+                m.mass_matrix()
+            };
+            let all: Vec<Id> = mm.iter().flatten().copied().collect();
+            m.g.cost(&all)
+        };
+        if cost(&mut self.clone(), true) < cost(&mut self.clone(), false) {
+            self.mass_matrix_crba()
+        } else {
+            self.mass_matrix()
+        }
+    }
+
     /// M and C q̇ + g for one kernel: of the mass matrix from link Jacobians
     /// ([`SymbolicRobot::mass_matrix`]) and by the composite-rigid-body algorithm
     /// ([`SymbolicRobot::mass_matrix_crba`]), each with its cheapest C q̇ + g

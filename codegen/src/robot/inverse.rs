@@ -28,6 +28,15 @@ pub(super) enum Wrench<'a> {
 }
 use crate::graph::{Id, Node, V3};
 
+/// How a forward-dynamics graph was built ([`SymbolicRobot::forward_dynamics_form`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ForwardForm {
+    /// M (and C q̇ + g) as in the `mass_cqd_g` kernel, an unrolled LDLᵀ factorisation of M.
+    Ldl,
+    /// The articulated-body algorithm (`aba` module).
+    ArticulatedBody,
+}
+
 impl SymbolicRobot {
     /// π of link `i` as graph nodes from the scene's values (runtime parameters stay
     /// variables): [m, m c, I_o upper triangle], I_o = I_c + m(|c|² 1 − c cᵀ).
@@ -255,9 +264,37 @@ impl SymbolicRobot {
             .collect()
     }
 
-    /// Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) with τ the variables [`super::Layout::tau`]:
-    /// M = L D Lᵀ unrolled, then L y = b, D z = y, Lᵀ q̈ = z.
+    /// Forward dynamics q̈ = M⁻¹(τ − C q̇ − g) with τ the variables [`super::Layout::tau`], by
+    /// the form [`SymbolicRobot::forward_dynamics_form`] picks.
     pub fn forward_dynamics(&mut self) -> Vec<Id> {
+        self.forward_dynamics_form().0
+    }
+
+    /// Forward dynamics of the LDLᵀ form ([`SymbolicRobot::forward_dynamics_ldl`]) or the
+    /// articulated-body algorithm ([`SymbolicRobot::forward_dynamics_aba`]), the one with fewer
+    /// operations (LDLᵀ on a tie), each costed on a copy of the graph so the other leaves no
+    /// nodes behind; with the form used.
+    pub fn forward_dynamics_form(&mut self) -> (Vec<Id>, ForwardForm) {
+        let ldl = {
+            let mut m = self.clone();
+            let x = m.forward_dynamics_ldl();
+            m.g.cost(&x)
+        };
+        let aba = {
+            let mut m = self.clone();
+            let x = m.forward_dynamics_aba();
+            m.g.cost(&x)
+        };
+        if aba < ldl {
+            (self.forward_dynamics_aba(), ForwardForm::ArticulatedBody)
+        } else {
+            (self.forward_dynamics_ldl(), ForwardForm::Ldl)
+        }
+    }
+
+    /// Forward dynamics by M = L D Lᵀ unrolled (M and C q̇ + g as in the `mass_cqd_g` kernel),
+    /// then L y = b, D z = y, Lᵀ q̈ = z.
+    pub fn forward_dynamics_ldl(&mut self) -> Vec<Id> {
         let n = self.nq();
         // The cheapest M and C q̇ + g together, as in the `mass_cqd_g` kernel.
         let (m, h) = self.mass_cqd_g();

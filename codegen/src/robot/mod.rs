@@ -22,13 +22,17 @@
 //! folded exactly (angle sums in product form).
 //!
 //! The joint-space dynamics (M, ∂M/∂q, C, g and the Newton–Euler path) live in the `dynamics`
-//! submodule, inverse and forward dynamics, their derivatives and the regressor in `inverse`;
+//! submodule, inverse and forward dynamics, their derivatives and the regressor in `inverse`,
+//! forward dynamics by the articulated-body algorithm in `aba`;
 //! kinematics, Jacobians and contact geometry are here. Joints are revolute (θ_i = q_i +
 //! offset) or prismatic (d_i = q_i + d).
 
+mod aba;
 mod crba;
 mod dynamics;
 mod inverse;
+
+pub use inverse::ForwardForm;
 
 use crate::diff;
 use crate::graph::{Graph, Id, M3, V3, m3_transpose};

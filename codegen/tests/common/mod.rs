@@ -1,6 +1,8 @@
 //! Shared helpers of the bf-codegen integration tests.
 #![allow(dead_code)]
 
+pub mod chain;
+
 use bf_codegen::Scene;
 use bf_codegen::graph::Id;
 use bf_codegen::interp::{Scalar, Tape};
