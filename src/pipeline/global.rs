@@ -88,7 +88,10 @@ pub fn sample<L: Landscape>(l: &L, ks: &[usize]) -> Vec<(usize, Option<L::Point>
 }
 
 /// The best of `points` by [`Landscape::better`] (the first of equals).
-pub fn best_of<'a, L: Landscape>(l: &L, points: impl IntoIterator<Item = &'a L::Point>) -> Option<&'a L::Point>
+pub fn best_of<'a, L: Landscape>(
+    l: &L,
+    points: impl IntoIterator<Item = &'a L::Point>,
+) -> Option<&'a L::Point>
 where
     L::Point: 'a,
 {
@@ -141,7 +144,13 @@ pub fn exploit<L: Landscape>(
         hop += n;
         let results: Vec<_> = jobs
             .par_iter()
-            .map(|&(h, o)| (h, o, l.hop(&pool[o], seed_of(h), settings.scale, first_id + h)))
+            .map(|&(h, o)| {
+                (
+                    h,
+                    o,
+                    l.hop(&pool[o], seed_of(h), settings.scale, first_id + h),
+                )
+            })
             .collect();
         for (h, o, r) in results {
             since += 1;
@@ -294,28 +303,46 @@ mod tests {
         for seed in 0..10 {
             let (pts, e) = run(seed);
             let x = e.best.expect("a point");
-            assert!(x.abs() < 1e-9 && f(x) < 1e-16, "seed {seed}: x = {x}, f = {}", f(x));
+            assert!(
+                x.abs() < 1e-9 && f(x) < 1e-16,
+                "seed {seed}: x = {x}, f = {}",
+                f(x)
+            );
             assert!(e.converged, "seed {seed}: the budget ended the search");
             assert!(e.hits >= 3, "seed {seed}: {} hits", e.hits);
-            let old = best_of(&Rastrigin { seed }, &pts).copied().expect("a start");
+            let old = best_of(&Rastrigin { seed }, &pts)
+                .copied()
+                .expect("a start");
             lucky += usize::from(old.abs() < 0.25);
         }
-        assert!(lucky <= 5, "{lucky} of 10 seeds found x = 0 by their starts alone");
+        assert!(
+            lucky <= 5,
+            "{lucky} of 10 seeds found x = 0 by their starts alone"
+        );
     }
 
     /// The result does not depend on the number of worker threads, and the search is
     /// monotonic: the best value never rises from the sampled best.
     #[test]
     fn thread_independent_and_monotonic() {
-        let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-        let three = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let three = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
         for seed in [1, 7] {
             let (pts, a) = one.install(|| run(seed));
             let (_, b) = three.install(|| run(seed));
             assert_eq!(a.best.map(f64::to_bits), b.best.map(f64::to_bits));
             assert_eq!(a.hops.len(), b.hops.len());
             for (x, y) in a.hops.iter().zip(&b.hops) {
-                assert_eq!((x.0, x.1, x.2.map(f64::to_bits)), (y.0, y.1, y.2.map(f64::to_bits)));
+                assert_eq!(
+                    (x.0, x.1, x.2.map(f64::to_bits)),
+                    (y.0, y.1, y.2.map(f64::to_bits))
+                );
             }
             let f0 = pts.iter().map(|&x| f(x)).fold(f64::INFINITY, f64::min);
             assert!(f(a.best.unwrap()) <= f0);

@@ -24,7 +24,7 @@ use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
 use super::solve::solve_recentred;
 use super::strategy::{
-    Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
+    Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
     prepare_chains, record, run_chain,
 };
 use super::verify::{VERIFIED_DEFECT, is_verified, verify};
@@ -467,7 +467,7 @@ struct OcpLandscape<'a> {
     problem: Problem,
     settings: &'a ProblemSettings,
     policy: &'a VerifyPolicy,
-    chains: Vec<Vec<(String, ProblemSettings)>>,
+    chains: Vec<Chain>,
     progress: Progress<'a>,
     /// Stage records of the solves (each start's or hop's pushed at once).
     records: Mutex<Vec<StageRecord>>,
@@ -571,12 +571,9 @@ impl Landscape for OcpLandscape<'_> {
         // Every other hop of `periodic-qc` goes through the stick continuation, as the starts
         // do: first with the stick phase bounded to the continuation's bound, then relaxed
         // (warm) to the problem's; a stick phase of real duration leads to other basins.
-        let through = self
-            .policy
-            .stick_continuation
-            .filter(|&s0| {
-                self.problem == Problem::PeriodicQc && s0 > settings.min_stick && id % 2 == 1
-            });
+        let through = self.policy.stick_continuation.filter(|&s0| {
+            self.problem == Problem::PeriodicQc && s0 > settings.min_stick && id % 2 == 1
+        });
         let label = match through {
             Some(s0) => format!("{label}, stick >= {s0}, relaxed"),
             None => label,
@@ -668,7 +665,12 @@ impl Search {
             refinements: Mutex::new(Vec::new()),
         };
         self.candidates.sort_by_key(|c| c.index);
-        let e = global::exploit(&land, &self.candidates, &HopSettings { seed, ..hops }, starts);
+        let e = global::exploit(
+            &land,
+            &self.candidates,
+            &HopSettings { seed, ..hops },
+            starts,
+        );
         let (records, refinements) = land.take_records();
         self.records.extend(records);
         self.refinements.extend(refinements);

@@ -326,6 +326,9 @@ pub(crate) fn effective(settings: &ProblemSettings, strategy: Strategy) -> Strat
     }
 }
 
+/// The stages of one chain: (label, settings of the stage).
+pub(crate) type Chain = Vec<(String, ProblemSettings)>;
+
 /// The target problem (built with `settings`) and the stages of every chain of `strategy`
 /// (index = chain/start index), with the stick continuation where it applies (`periodic-qc`,
 /// a first bound `stick_continuation` above the problem's).
@@ -334,7 +337,7 @@ pub(crate) fn prepare_chains(
     settings: &ProblemSettings,
     strategy: Strategy,
     stick_continuation: Option<f64>,
-) -> Result<(BuiltProblem, Vec<Vec<(String, ProblemSettings)>>), PipelineError> {
+) -> Result<(BuiltProblem, Vec<Chain>), PipelineError> {
     let target = build(problem, settings)?;
     let mut chains = chains_of(problem, settings, strategy, &target)?;
     if let Some(s0) = stick_continuation

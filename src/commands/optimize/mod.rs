@@ -497,7 +497,10 @@ pub fn hop_settings(
     }
     match hops {
         Some(0) => Ok(None),
-        Some(n) => Ok(Some(crate::pipeline::global::HopSettings { budget: n, ..h })),
+        Some(n) => Ok(Some(crate::pipeline::global::HopSettings {
+            budget: n,
+            ..h
+        })),
         None => Ok(Some(h)),
     }
 }

@@ -277,7 +277,12 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let (scene_toml, scene_params) = found
         .candidates
         .first()
-        .map(|c| (c.solution.scene_toml.clone(), c.solution.scene_params.clone()))
+        .map(|c| {
+            (
+                c.solution.scene_toml.clone(),
+                c.solution.scene_params.clone(),
+            )
+        })
         .unwrap_or_default();
     let (built, mut sol) = found.best()?;
     // A hop's solution records the run's scene like the shards' files.
