@@ -467,8 +467,8 @@ pub struct OptimizeArgs {
     /// multistart, like --starts.
     #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
-    /// Basin hops of the global search after the multi-start at most (0: keep the best start;
-    /// default 24; docs/optima.md).
+    /// Basin hops of the global search after the multi-start at most [default: 0, keep the
+    /// best verified start; 24 is the studied setting; docs/optima.md].
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
     pub hops: Option<usize>,
     /// Relative size of a basin hop: each phase duration is scaled by e^(s·u), u uniform in

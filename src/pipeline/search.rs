@@ -71,7 +71,8 @@ pub struct VerifyPolicy {
     pub hops: Option<HopSettings>,
 }
 
-/// The default basin hopping of the multi-start search ([`VerifyPolicy::hops`]): rounds of
+/// The basin hopping of `optimize --hops` ([`VerifyPolicy::hops`]; off by default: see
+/// docs/optima.md for its measured cost): rounds of
 /// four hops (durations scaled by up to e^±0.3 each, and the period by up to e^±0.3), at most
 /// 24, stopping once the best optimum was reached three times and eight hops in a row brought
 /// nothing better; then up to two polishing rounds (a re-solve and three hops of e^±0.05).
@@ -128,7 +129,7 @@ impl Default for VerifyPolicy {
             max_points: VERIFY_MAX_POINTS,
             clusters: 6,
             stick_continuation: Some(STICK_CONTINUATION),
-            hops: Some(DEFAULT_HOPS),
+            hops: None,
         }
     }
 }

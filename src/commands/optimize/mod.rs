@@ -482,8 +482,10 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
     Ok(())
 }
 
-/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` with
-/// `--hops 0`.
+/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` without
+/// `--hops` or with `--hops 0` (the default search keeps the best verified start: the hops
+/// cost 3–5× the time of a `periodic-qc` search and far more on the COT problems,
+/// docs/optima.md).
 pub fn hop_settings(
     hops: Option<usize>,
     hop_scale: Option<f64>,
@@ -501,7 +503,7 @@ pub fn hop_settings(
             budget: n,
             ..h
         })),
-        None => Ok(Some(h)),
+        None => Ok(None),
     }
 }
 

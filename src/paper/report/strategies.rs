@@ -74,7 +74,10 @@ fn row(problem: Problem, strategy: Strategy, global: bool) -> StrategyRow {
             &settings,
             strategy,
             Shard::WHOLE,
-            &VerifyPolicy::default(),
+            &VerifyPolicy {
+                hops: Some(crate::pipeline::search::DEFAULT_HOPS),
+                ..VerifyPolicy::default()
+            },
             None,
         )
         .and_then(|s| s.best())
