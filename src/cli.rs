@@ -475,6 +475,14 @@ pub struct OptimizeArgs {
     /// multistart, like --starts.
     #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
+    /// Basin hops of the global search after the multi-start at most [default: 0, keep the
+    /// best verified start; 24 is the studied setting; docs/optima.md].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
+    pub hops: Option<usize>,
+    /// Relative size of a basin hop: each phase duration is scaled by e^(s·u), u uniform in
+    /// [−1, 1] (default 0.3).
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub hop_scale: Option<f64>,
     /// Run shard k of m of the multi-start (`k/m`, 1 ≤ k ≤ m): the starts whose index is
     /// k − 1 modulo m. `--out` then also holds one `candidate-NNNN.json` per distinct optimum
     /// found; `optimize merge DIR…` picks the best verified one. See docs/sharding.md.
@@ -531,6 +539,12 @@ pub struct MergeArgs {
     /// Output directory (as `optimize --out`).
     #[arg(long, default_value = "out/optimize")]
     pub out: PathBuf,
+    /// `--hops` of the shards' command line (the basin hopping runs in the merge).
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
+    pub hops: Option<usize>,
+    /// `--hop-scale` of the shards' command line.
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub hop_scale: Option<f64>,
 }
 
 /// Arguments of `paper`.

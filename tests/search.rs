@@ -147,7 +147,8 @@ fn default_periodic_cot_search_beats_the_continuation_verified_and_thread_indepe
 #[test]
 fn shards_merged_give_the_unsharded_multistart_choice() {
     let dir = tmpdir("shards");
-    let base = ["--problem", "periodic-qc", "--starts", "12"];
+    // The shards sample; the merge runs the global search's basin hops on their union.
+    let base = ["--problem", "periodic-qc", "--starts", "12", "--hops", "8"];
     let whole = dir.join("whole");
     ok(&optimize_in(&whole, None, &base));
     let mut shard_dirs = Vec::new();
@@ -186,13 +187,31 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         shard_dirs[1].to_str().unwrap(),
         "--out",
         merged.to_str().unwrap(),
+        "--hops",
+        "8",
     ]);
-    ok(&o);
+    let merged_out = ok(&o);
     let (w, m) = (
         json(&whole.join("solution.json")),
         json(&merged.join("solution.json")),
     );
     assert_eq!(w["strategy"]["chosen"], m["strategy"]["chosen"]);
+    // The same hops (after the 12 starts, numbered on from 12) with the same outcome, and
+    // the same count of the winning optimum's hits, printed as recorded.
+    let hits = w["strategy"]["basin_hits"].as_u64().expect("basin_hits");
+    assert!(hits >= 1);
+    assert_eq!(m["strategy"]["basin_hits"], w["strategy"]["basin_hits"]);
+    assert!(
+        merged_out.contains(&format!("reached by {hits} of")),
+        "{merged_out}"
+    );
+    let hops = w["strategy"]["records"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|r| r["chain"].as_u64().unwrap() >= 12)
+        .count();
+    assert!((8..=8 + 8).contains(&hops), "{hops} hop records");
     let close = |x: &serde_json::Value, y: &serde_json::Value| {
         let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
         // One JSON round trip more on the merged side (serde_json parses to within an ulp).
@@ -608,4 +627,27 @@ fn the_default_point_limit_lets_the_best_candidate_verify() {
         wide.objective,
         narrow.objective
     );
+}
+
+/// Issue target of the global search: the `periodic-qc` search with `--hops 24` reaches J ≤ 0.08761
+/// (the best known optimum, 0.0876082, with the stick phase on its 0.01 s bound), verified,
+/// on every seed 0–9. BENCHMARKS.md ("Global search: basin hopping after the multi-start")
+/// records how far the current search is from it.
+#[test]
+#[ignore = "about 5 min on 2 idle cores (ten searches); run with `cargo test --release \
+            --test search every_seed_reaches_the_best_known_qc_optimum -- --ignored`"]
+fn every_seed_reaches_the_best_known_qc_optimum() {
+    let mut misses = Vec::new();
+    for seed in 0..10 {
+        let seed = seed.to_string();
+        let (_, v) = verified_default_search(
+            &format!("qc-seed-{seed}"),
+            &["--problem", "periodic-qc", "--seed", &seed, "--hops", "24"],
+        );
+        let j = v["objective"].as_f64().unwrap();
+        if j > 0.08761 {
+            misses.push(format!("seed {seed}: J {j}"));
+        }
+    }
+    assert!(misses.is_empty(), "{misses:?}");
 }

@@ -52,7 +52,11 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             let md = crate::paper::report::strategies_report(a.quick, &|r| {
                 let line = format!(
                     "{} {}: {} phi {:.4e} in {:.1} s",
-                    r.problem, r.strategy, r.status, r.objective, r.seconds
+                    r.problem,
+                    r.label(),
+                    r.status,
+                    r.objective,
+                    r.seconds
                 );
                 hb.line(&line);
                 pb.println(line);

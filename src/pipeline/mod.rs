@@ -8,6 +8,8 @@
 //! * [`strategy`]: continuation and multi-start searches for good local optima (Sect. 7);
 //! * [`search`]: the seeded multi-start search with re-integration and refinement of each end
 //!   point;
+//! * [`global`]: the global search (sampling, monotonic basin hopping, polishing) over any
+//!   [`global::Landscape`];
 //! * [`refine`]: adaptive hp mesh refinement (Sect. 5);
 //! * [`verify`]: re-integration of the optimal torques with the simulator (bf-sim);
 //! * [`bounds`]: the bounds an optimum sits on (eq. 60–65);
@@ -22,6 +24,7 @@
 pub mod arm;
 pub mod bounds;
 pub mod error;
+pub mod global;
 pub mod refine;
 pub mod search;
 pub mod solution_io;

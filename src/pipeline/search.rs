@@ -10,16 +10,22 @@
 //! result is bitwise the same with any number of threads; a [`Shard`] runs every m-th start
 //! and [`select`] over the shards' candidates gives the unsharded choice.
 
+use std::sync::Mutex;
 use std::time::Instant;
 
+use bf_optim::ipm::Nlp;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
-use rayon::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
 
+use super::build;
 use super::error::PipelineError;
+use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
+use super::solve::solve_recentred;
 use super::strategy::{
-    Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record, record,
-    run_chains,
+    Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
+    prepare_chains, record, run_chain,
 };
 use super::verify::{VERIFIED_DEFECT, is_verified, verify};
 
@@ -60,7 +66,39 @@ pub struct VerifyPolicy {
     /// relaxation reaches better optima with an interior stick duration. `None`: no
     /// continuation.
     pub stick_continuation: Option<f64>,
+    /// The global search's basin hopping and polishing after a multi-start
+    /// ([`Search::explore`]; its seed is the multi-start's); `None`: the best of the starts.
+    pub hops: Option<HopSettings>,
 }
+
+/// The basin hopping of `optimize --hops` ([`VerifyPolicy::hops`]; off by default: see
+/// docs/optima.md for its measured cost): rounds of
+/// four hops (durations scaled by up to e^±0.3 each, and the period by up to e^±0.3), at most
+/// 24, stopping once the best optimum was reached three times and eight hops in a row brought
+/// nothing better; then up to two polishing rounds (a re-solve and three hops of e^±0.05).
+pub const DEFAULT_HOPS: HopSettings = HopSettings {
+    batch: 4,
+    width: 4,
+    budget: 24,
+    confirmations: 3,
+    patience: 8,
+    scale: 0.3,
+    polish_scale: 0.05,
+    polish_rounds: 2,
+    seed: 0,
+};
+
+/// Initial barrier parameter of a hop's re-solve ([`solve_recentred`]): large enough for the
+/// iterates to leave the perturbed optimum's active set, small enough to stay in its region.
+pub const HOP_MU: f64 = 1e-2;
+
+/// Joint-angle offset of a hop of scale 1 (rad; the multi-start draws its starts within
+/// ±0.6 rad of the default configuration, `strategy::random_start`).
+pub const HOP_JOINT: f64 = 0.6;
+
+/// Iteration limit of a hop's re-solve: a solve from a perturbed optimum converges in tens
+/// to a few hundred iterations or wanders.
+pub const HOP_MAX_ITER: usize = 400;
 
 /// hp refinements of one unverified optimum by default ([`VerifyPolicy::refine_attempts`],
 /// `optimize --verify-refinements`): to element defects of 1e-4, 1e-5, …, 1e-8. A chain of
@@ -91,6 +129,7 @@ impl Default for VerifyPolicy {
             max_points: VERIFY_MAX_POINTS,
             clusters: 6,
             stick_continuation: Some(STICK_CONTINUATION),
+            hops: None,
         }
     }
 }
@@ -124,6 +163,9 @@ pub struct Search {
     pub refinements: Vec<StageRecord>,
     /// Wall time (s).
     pub seconds: f64,
+    /// Distinct sampled optima and hops that ended at the best optimum of the global search
+    /// ([`Search::explore`]; `None` before it ran).
+    pub basin_hits: Option<usize>,
 }
 
 /// Rank class of a solution: 0 verified, 1 successful but not verified, 2 failed.
@@ -137,7 +179,7 @@ fn class(sol: &OcpSolution) -> u8 {
     }
 }
 
-fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
+pub(crate) fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
     (a.objective - b.objective).abs() <= CLUSTER_RTOL * a.objective.abs().max(b.objective.abs())
         && (a.period - b.period).abs() <= 1e-3 * a.period.abs().max(b.period.abs())
 }
@@ -346,31 +388,25 @@ pub fn search(
 ) -> Result<Search, PipelineError> {
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
-    let results = run_chains(
+    let (_, chains) = prepare_chains(problem, settings, strategy, policy.stick_continuation)?;
+    let land = OcpLandscape {
         problem,
         settings,
-        strategy,
-        shard,
-        policy.stick_continuation,
+        policy,
+        chains,
         progress,
-    )?;
-    let records: Vec<StageRecord> = results.iter().flat_map(|(_, (r, _))| r.clone()).collect();
-    let mut refinements = Vec::new();
-    let mut cands: Vec<Candidate> = results
-        .into_iter()
-        .filter_map(|(k, (_, r))| {
-            r.map(|(p, s)| Candidate {
-                index: k,
-                problem: Some(p),
-                solution: s,
-            })
-        })
+        records: Mutex::new(Vec::new()),
+        refinements: Mutex::new(Vec::new()),
+    };
+    let ks: Vec<usize> = (0..land.chains.len())
+        .filter(|&k| shard.contains(k))
         .collect();
-    if policy.rtol > 0.0 {
-        cands
-            .par_iter_mut()
-            .for_each(|c| attach_verification(c, policy.rtol));
-    }
+    let cands: Vec<Candidate> = global::sample(&land, &ks)
+        .into_iter()
+        .filter_map(|(_, c)| c)
+        .collect();
+    let (records, _) = land.take_records();
+    let mut refinements = Vec::new();
     let mut cands = representatives(cands);
     if policy.rtol > 0.0 {
         let best_verified = cands
@@ -403,17 +439,250 @@ pub fn search(
         }
     }
     cands.sort_by_key(|c| c.index);
-    Ok(Search {
+    let mut found = Search {
         strategy,
         shard,
         candidates: cands,
         records,
         refinements,
         seconds: t0.elapsed().as_secs_f64(),
-    })
+        basin_hits: None,
+    };
+    // Shards sample only; `optimize merge` explores from the union of their candidates.
+    if shard == Shard::WHOLE {
+        found.explore(problem, settings, policy, progress);
+        found.seconds = t0.elapsed().as_secs_f64();
+    }
+    Ok(found)
+}
+
+/// The optimal-control problem as a [`Landscape`] of the global search: a start is a chain of
+/// the strategy ([`run_chain`]), a hop scales the phase durations of a local optimum's primal
+/// point (each by e^(s·u), u uniform in [−1, 1], times a common factor for the period of the
+/// same law) and re-solves it warm from μ = [`HOP_MU`] on the optimum's own mesh; every end
+/// point is re-integrated, and a hop that ends better than its origin but unverified is
+/// hp-refined like a sampled candidate ([`refine_until_verified`]). Points rank verified
+/// first, then by objective (better by more than [`CLUSTER_RTOL`] relative), and are the same
+/// optimum by [`same_optimum`].
+struct OcpLandscape<'a> {
+    problem: Problem,
+    settings: &'a ProblemSettings,
+    policy: &'a VerifyPolicy,
+    chains: Vec<Chain>,
+    progress: Progress<'a>,
+    /// Stage records of the solves (each start's or hop's pushed at once).
+    records: Mutex<Vec<StageRecord>>,
+    /// Records of the hp refinements of hops.
+    refinements: Mutex<Vec<StageRecord>>,
+}
+
+impl OcpLandscape<'_> {
+    /// The records so far, each list sorted by chain (stable: a chain's stages keep their
+    /// order, since each chain pushes its records at once), so they do not depend on the
+    /// order in which the threads finished.
+    fn take_records(&self) -> (Vec<StageRecord>, Vec<StageRecord>) {
+        let take = |m: &Mutex<Vec<StageRecord>>| {
+            let mut v = std::mem::take(&mut *m.lock().unwrap_or_else(|e| e.into_inner()));
+            v.sort_by_key(|r| r.chain);
+            v
+        };
+        (take(&self.records), take(&self.refinements))
+    }
+
+    fn push(&self, to: &Mutex<Vec<StageRecord>>, recs: Vec<StageRecord>) {
+        if let Some(f) = self.progress {
+            recs.iter().for_each(f);
+        }
+        to.lock().unwrap_or_else(|e| e.into_inner()).extend(recs);
+    }
+
+    /// The primal-dual point of `from` with its phase durations scaled (module docs of
+    /// [`global`]), clamped into the variable bounds of `p`; `None` if its layout is not `p`'s.
+    fn perturbed(
+        p: &BuiltProblem,
+        from: &OcpSolution,
+        seed: u64,
+        scale: f64,
+    ) -> Option<bf_optim::ipm::WarmStart> {
+        let mut w = from.nlp_warm.clone()?;
+        let n = Nlp::num_variables(&p.nlp);
+        if w.x.len() != n || w.z_l.len() != n || w.z_u.len() != n {
+            return None;
+        }
+        let (mut lo, mut up) = (vec![0.0; n], vec![0.0; n]);
+        Nlp::variable_bounds(&p.nlp, &mut lo, &mut up);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let common = scale * rng.random_range(-1.0..1.0);
+        for l in &p.nlp.phases {
+            let f = (common + scale * rng.random_range(-1.0..1.0)).exp();
+            w.x[l.t] = (w.x[l.t] * f).clamp(lo[l.t], up[l.t]);
+        }
+        // One offset of the joint angles (the first states) over the whole period, so the
+        // periodicity and the phase links stay as consistent as the optimum left them.
+        let nq = p.guess.free.len();
+        let dq: Vec<f64> = (0..nq)
+            .map(|_| scale * HOP_JOINT * rng.random_range(-1.0..1.0))
+            .collect();
+        for l in &p.nlp.phases {
+            for pt in 0..l.mesh.state_tau.len() {
+                for (i, d) in dq.iter().enumerate().take(l.nx) {
+                    let k = l.x(pt, i);
+                    w.x[k] = (w.x[k] + d).clamp(lo[k], up[k]);
+                }
+            }
+        }
+        Some(w)
+    }
+}
+
+impl Landscape for OcpLandscape<'_> {
+    type Point = Candidate;
+
+    fn sample(&self, k: usize) -> Option<Candidate> {
+        let stages = self.chains.get(k)?.clone();
+        let (recs, res) = run_chain(self.problem, k, stages, None, None);
+        self.push(&self.records, recs);
+        let (p, s) = res?;
+        let mut c = Candidate {
+            index: k,
+            problem: Some(p),
+            solution: s,
+        };
+        if self.policy.rtol > 0.0 {
+            attach_verification(&mut c, self.policy.rtol);
+        }
+        Some(c)
+    }
+
+    fn hop(&self, from: &Candidate, seed: u64, scale: f64, id: usize) -> Option<Candidate> {
+        let t0 = Instant::now();
+        let p = from.problem.as_ref()?;
+        let label = if scale == 0.0 {
+            format!("polish {}: re-solve from mu {HOP_MU:e}", from.index)
+        } else {
+            format!("hop from {} (scale {scale})", from.index)
+        };
+        let settings = ProblemSettings {
+            mesh: p.settings.mesh.clone(),
+            max_iter: self.settings.max_iter.min(HOP_MAX_ITER),
+            warm_start: None,
+            start: None,
+            ..self.settings.clone()
+        };
+        // Every other hop of `periodic-qc` goes through the stick continuation, as the starts
+        // do: first with the stick phase bounded to the continuation's bound, then relaxed
+        // (warm) to the problem's; a stick phase of real duration leads to other basins.
+        let through = self.policy.stick_continuation.filter(|&s0| {
+            self.problem == Problem::PeriodicQc && s0 > settings.min_stick && id % 2 == 1
+        });
+        let label = match through {
+            Some(s0) => format!("{label}, stick >= {s0}, relaxed"),
+            None => label,
+        };
+        let res = build(
+            self.problem,
+            &ProblemSettings {
+                min_stick: through.unwrap_or(settings.min_stick),
+                ..settings.clone()
+            },
+        )
+        .and_then(|b| {
+            let w = Self::perturbed(&b, &from.solution, seed, scale).ok_or(
+                PipelineError::Internal("a hop's origin does not fit its own problem"),
+            )?;
+            let sol = solve_recentred(&b, &w, HOP_MU)?;
+            if through.is_none() {
+                return Ok((b, sol));
+            }
+            let relaxed = build(self.problem, &settings)?;
+            let w = sol.nlp_warm.as_ref().ok_or(PipelineError::Internal(
+                "a bounded hop's solution has no primal-dual point",
+            ))?;
+            let mut fin = super::solve::solve_warm(&relaxed, w, None)?;
+            fin.iterations += sol.iterations;
+            Ok((relaxed, fin))
+        });
+        let (b, sol) = match res {
+            Ok(r) => r,
+            Err(e) => {
+                self.push(&self.records, vec![failed_record(id, label, &e, t0)]);
+                return None;
+            }
+        };
+        let mut c = Candidate {
+            index: id,
+            problem: Some(b),
+            solution: sol,
+        };
+        self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
+        if self.policy.rtol > 0.0 {
+            attach_verification(&mut c, self.policy.rtol);
+            if class(&c.solution) == 1 && c.solution.objective < from.solution.objective {
+                let (r, recs) = refine_until_verified(self.problem, self.settings, c, self.policy);
+                self.push(&self.refinements, recs);
+                c = r;
+            }
+        }
+        Some(c)
+    }
+
+    fn better(&self, a: &Candidate, b: &Candidate) -> bool {
+        let (ca, cb) = (class(&a.solution), class(&b.solution));
+        let (ja, jb) = (a.solution.objective, b.solution.objective);
+        ca < cb || (ca == cb && ca < 2 && ja < jb - CLUSTER_RTOL * jb.abs())
+    }
+
+    fn same(&self, a: &Candidate, b: &Candidate) -> bool {
+        class(&a.solution) == class(&b.solution) && same_optimum(&a.solution, &b.solution)
+    }
 }
 
 impl Search {
+    /// The global search's exploitation ([`global::exploit`], settings [`VerifyPolicy::hops`]
+    /// seeded by the multi-start's seed): monotonic basin hopping from the best candidate,
+    /// then polishing. Runs only after a multi-start; hops are numbered on from its starts
+    /// (their records' chain index), the best point joins the candidates if a hop found it,
+    /// and [`Search::basin_hits`] counts the candidates and hops that ended at it. Depends
+    /// on the candidates' values only (not their order): shards merged explore as the
+    /// unsharded run does.
+    pub fn explore(
+        &mut self,
+        problem: Problem,
+        settings: &ProblemSettings,
+        policy: &VerifyPolicy,
+        progress: Progress<'_>,
+    ) {
+        let (Some(hops), Strategy::Multistart { starts, seed }) = (policy.hops, self.strategy)
+        else {
+            return;
+        };
+        let land = OcpLandscape {
+            problem,
+            settings,
+            policy,
+            chains: Vec::new(),
+            progress,
+            records: Mutex::new(Vec::new()),
+            refinements: Mutex::new(Vec::new()),
+        };
+        self.candidates.sort_by_key(|c| c.index);
+        let e = global::exploit(
+            &land,
+            &self.candidates,
+            &HopSettings { seed, ..hops },
+            starts,
+        );
+        let (records, refinements) = land.take_records();
+        self.records.extend(records);
+        self.refinements.extend(refinements);
+        self.basin_hits = Some(e.hits);
+        if let Some(best) = e.best
+            && best.index >= starts
+        {
+            self.candidates.push(best);
+        }
+    }
+
     /// The chosen candidate ([`select`]) with its [`OcpSolution::strategy`] record (every
     /// stage, total iterations and time; the refinements are not in it, the chosen
     /// candidate's own is in [`OcpSolution::refinement`]); its problem is `None` only for candidates read
@@ -446,6 +715,7 @@ impl Search {
             chosen: sol.status.is_success().then_some(c.index),
             iterations,
             seconds: self.seconds,
+            basin_hits: self.basin_hits,
         });
         Ok((c.problem, sol))
     }

@@ -226,12 +226,13 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
     same.then_some(w)
 }
 
-/// `sol` recomputed at its own primal point ([`OcpSolution::nlp_warm`]) on its own problem,
-/// rebuilt from what the solution records (problem, scene text and runtime parameters, mesh,
-/// ε): objective, cost states and durations as that NLP gives them, whatever numbers the
-/// file states. Errors when the solution does not record enough to rebuild its NLP or its
-/// point does not fit the rebuilt NLP.
-pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, PipelineError> {
+/// The problem and settings a solution file records (problem, scene text and runtime
+/// parameters, points, scheme, ε; everything else the defaults, no mesh): its scene is `None`
+/// when the text and parameters are the problem's compiled scene's, so the problem is built
+/// on the same kernels as a run without `--scene`. Errors when the file does not record them.
+pub fn settings_of(
+    sol: &OcpSolution,
+) -> Result<(bf_problem::Problem, ProblemSettings), PipelineError> {
     let fail = |why: String| PipelineError::Unrecomputable(why);
     let problem: bf_problem::Problem = sol
         .problem
@@ -240,18 +241,38 @@ pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, Pipeline
     if sol.scene_toml.is_empty() {
         return Err(fail("it records no scene text (`scene_toml`)".into()));
     }
-    let mut scene = bf_codegen::Scene::from_toml_str(&sol.scene_toml, &sol.scene)
-        .map_err(|e| fail(format!("its `scene_toml`: {e}")))?;
-    bf_model::registry::set_parameters(&mut scene, &sol.scene_params)
-        .map_err(|e| fail(format!("its `scene_params`: {e}")))?;
-    let settings = ProblemSettings {
-        points: sol.points,
-        scheme: sol.scheme,
-        epsilon: Some(sol.epsilon),
-        mesh: sol.refinement.as_ref().map(|r| r.mesh.clone()),
-        scene: Some(scene),
-        ..ProblemSettings::default()
+    let compiled = sol.scene_params.is_empty()
+        && bf_generated::scene_toml(problem.scene().as_str()) == Some(sol.scene_toml.as_str());
+    let scene = if compiled {
+        None
+    } else {
+        let mut scene = bf_codegen::Scene::from_toml_str(&sol.scene_toml, &sol.scene)
+            .map_err(|e| fail(format!("its `scene_toml`: {e}")))?;
+        bf_model::registry::set_parameters(&mut scene, &sol.scene_params)
+            .map_err(|e| fail(format!("its `scene_params`: {e}")))?;
+        Some(scene)
     };
+    Ok((
+        problem,
+        ProblemSettings {
+            points: sol.points,
+            scheme: sol.scheme,
+            epsilon: Some(sol.epsilon),
+            scene,
+            ..ProblemSettings::default()
+        },
+    ))
+}
+
+/// `sol` recomputed at its own primal point ([`OcpSolution::nlp_warm`]) on its own problem,
+/// rebuilt from what the solution records (problem, scene text and runtime parameters, mesh,
+/// ε): objective, cost states and durations as that NLP gives them, whatever numbers the
+/// file states. Errors when the solution does not record enough to rebuild its NLP or its
+/// point does not fit the rebuilt NLP.
+pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, PipelineError> {
+    let fail = |why: String| PipelineError::Unrecomputable(why);
+    let (problem, mut settings) = settings_of(sol)?;
+    settings.mesh = sol.refinement.as_ref().map(|r| r.mesh.clone());
     let p = super::build(problem, &settings)?;
     let w = exact_warm_start(&p, sol).ok_or_else(|| {
         fail(format!(
@@ -277,6 +298,36 @@ pub fn solve_warm(
     out.solve_seconds = start.elapsed().as_secs_f64();
     out.stages = vec![(
         format!("warm start, eps {}", p.epsilon),
+        sol.status,
+        sol.iterations,
+    )];
+    Ok(out)
+}
+
+/// Solves `p` from the primal-dual point `warm` (same NLP layout) re-centred at the barrier
+/// parameter `mu_init`, with bound pushes of the same size (unless the caller set its own
+/// [`ProblemSettings::ipm`]): a basin hop of the global search ([`super::global`]) starts
+/// from a perturbed optimum, and a re-solve from a larger μ than [`warm_settings`]' 1e-4
+/// lets the iterates leave the old optimum's active set (e.g. reach a neighbouring optimum
+/// with a phase on its bound).
+pub fn solve_recentred(
+    p: &BuiltProblem,
+    warm: &WarmStart,
+    mu_init: f64,
+) -> Result<OcpSolution, PipelineError> {
+    let start = Instant::now();
+    let mut st = warm_settings(&p.settings);
+    if p.settings.ipm.is_none() {
+        st.barrier.mu_init = mu_init;
+        st.barrier.warm_start_bound_push = mu_init;
+        st.barrier.warm_start_mult_bound_push = mu_init;
+    }
+    let sol = solve_nlp(&p.nlp, &st, Some(warm), None)?;
+    let mut out = finish_solution(p, &sol)?;
+    out.iterations = sol.iterations;
+    out.solve_seconds = start.elapsed().as_secs_f64();
+    out.stages = vec![(
+        format!("re-centred warm start (mu {mu_init:e}), eps {}", p.epsilon),
         sol.status,
         sol.iterations,
     )];

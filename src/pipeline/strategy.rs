@@ -97,11 +97,11 @@ pub(crate) fn failed_record(
 }
 
 /// The outcome of one chain/start: its records and final problem and solution (if any).
-type ChainResult = (Vec<StageRecord>, Option<(BuiltProblem, OcpSolution)>);
+pub(crate) type ChainResult = (Vec<StageRecord>, Option<(BuiltProblem, OcpSolution)>);
 
 /// Runs `stages` (settings of each stage; stage k > 0 warm-starts from stage k − 1, whose NLP
 /// layout must be the same) as chain `chain`; stops at the first stage that errors.
-fn run_chain(
+pub(crate) fn run_chain(
     problem: Problem,
     chain: usize,
     stages: Vec<(String, ProblemSettings)>,
@@ -326,17 +326,18 @@ pub(crate) fn effective(settings: &ProblemSettings, strategy: Strategy) -> Strat
     }
 }
 
-/// Runs the chains of `strategy` that belong to `shard` (all of them for [`Shard::WHOLE`]),
-/// in parallel; the results come back in chain order with their global chain indices, so
-/// nothing depends on the scheduling of the threads.
-pub(crate) fn run_chains(
+/// The stages of one chain: (label, settings of the stage).
+pub(crate) type Chain = Vec<(String, ProblemSettings)>;
+
+/// The target problem (built with `settings`) and the stages of every chain of `strategy`
+/// (index = chain/start index), with the stick continuation where it applies (`periodic-qc`,
+/// a first bound `stick_continuation` above the problem's).
+pub(crate) fn prepare_chains(
     problem: Problem,
     settings: &ProblemSettings,
     strategy: Strategy,
-    shard: Shard,
     stick_continuation: Option<f64>,
-    progress: Progress<'_>,
-) -> Result<Vec<(usize, ChainResult)>, PipelineError> {
+) -> Result<(BuiltProblem, Vec<Chain>), PipelineError> {
     let target = build(problem, settings)?;
     let mut chains = chains_of(problem, settings, strategy, &target)?;
     if let Some(s0) = stick_continuation
@@ -363,6 +364,21 @@ pub(crate) fn run_chains(
             }
         }
     }
+    Ok((target, chains))
+}
+
+/// Runs the chains of `strategy` that belong to `shard` (all of them for [`Shard::WHOLE`]),
+/// in parallel; the results come back in chain order with their global chain indices, so
+/// nothing depends on the scheduling of the threads.
+pub(crate) fn run_chains(
+    problem: Problem,
+    settings: &ProblemSettings,
+    strategy: Strategy,
+    shard: Shard,
+    stick_continuation: Option<f64>,
+    progress: Progress<'_>,
+) -> Result<Vec<(usize, ChainResult)>, PipelineError> {
+    let (target, chains) = prepare_chains(problem, settings, strategy, stick_continuation)?;
     // `direct` solves the problem built above instead of building it again.
     let mut prebuilt: Vec<Option<BuiltProblem>> = chains.iter().map(|_| None).collect();
     if strategy == Strategy::Direct {
@@ -421,6 +437,7 @@ pub fn solve_with_strategy(
         chosen: ok.then_some(k),
         iterations,
         seconds: sol.solve_seconds,
+        basin_hits: None,
     });
     Ok((p, sol))
 }

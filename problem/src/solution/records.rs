@@ -74,6 +74,10 @@ pub struct StrategyReport {
     pub iterations: usize,
     /// Wall time (s).
     pub seconds: f64,
+    /// Distinct sampled optima and basin hops of the global search that ended at the kept
+    /// optimum (`None`: no global search ran, or a file from before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub basin_hits: Option<usize>,
 }
 
 impl StrategyReport {

@@ -482,6 +482,31 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
     Ok(())
 }
 
+/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` without
+/// `--hops` or with `--hops 0` (the default search keeps the best verified start: the hops
+/// cost 3–5× the time of a `periodic-qc` search and far more on the COT problems,
+/// docs/optima.md).
+pub fn hop_settings(
+    hops: Option<usize>,
+    hop_scale: Option<f64>,
+) -> Result<Option<crate::pipeline::global::HopSettings>> {
+    let mut h = crate::pipeline::search::DEFAULT_HOPS;
+    if let Some(s) = hop_scale {
+        if !(s.is_finite() && s > 0.0 && s <= 3.0) {
+            bail!("--hop-scale must be in (0, 3] (got {s})");
+        }
+        h.scale = s;
+    }
+    match hops {
+        Some(0) => Ok(None),
+        Some(n) => Ok(Some(crate::pipeline::global::HopSettings {
+            budget: n,
+            ..h
+        })),
+        None => Ok(None),
+    }
+}
+
 /// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
     run_with(args, RunSettings::default())
@@ -563,6 +588,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         refine_attempts: args
             .verify_refinements
             .unwrap_or(crate::pipeline::search::VERIFY_REFINEMENTS),
+        hops: hop_settings(args.hops, args.hop_scale)?,
         ..VerifyPolicy::default()
     };
     let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
@@ -666,6 +692,12 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         for b in &active {
             crate::outln!("  {}", b.describe())?;
         }
+    }
+    // How much evidence there is for this optimum: a basin reached once is a lottery win.
+    if let Some(n) = sol.strategy.as_ref().and_then(|r| r.basin_hits) {
+        crate::outln!(
+            "basin: the optimum was reached by {n} of the distinct sampled optima and basin hops"
+        )?;
     }
     if sol.problem.starts_with("periodic-cot") {
         crate::outln!(

@@ -3,13 +3,14 @@
 //! ([`search::select`]) and the stage records of every shard, written as one output set like
 //! an unsharded solve.
 
-use super::{OUTPUT_DIR, commit_solution, failure_of, print_verification, print_wrote};
+use super::{
+    OUTPUT_DIR, commit_solution, failure_of, hop_settings, print_verification, print_wrote,
+};
 use crate::cli::MergeArgs;
 use crate::pipeline::SolutionIo;
-use crate::pipeline::search;
-use crate::pipeline::search::VerifyPolicy;
-use crate::pipeline::solve::recompute_at_own_point;
-use crate::pipeline::strategy::{StageRecord, Strategy, StrategyReport};
+use crate::pipeline::search::{Candidate, Search, VerifyPolicy};
+use crate::pipeline::solve::{recompute_at_own_point, settings_of};
+use crate::pipeline::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result, bail};
 use bf_output::OutputDir;
 use bf_problem::solution::records::SearchSettings;
@@ -187,6 +188,7 @@ fn check_own_objective(path: &Path, sol: &OcpSolution) -> Result<()> {
 /// Run `optimize merge DIR…`: the best verified candidate of the shards ([`search::select`],
 /// the unsharded multi-start's rule) with the stage records of every shard.
 pub fn merge(args: &MergeArgs) -> Result<()> {
+    let hops = hop_settings(args.hops, args.hop_scale)?;
     let out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
     let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
     let mut records: Vec<StageRecord> = Vec::new();
@@ -258,21 +260,71 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             )?;
         }
     }
-    let views: Vec<(usize, &OcpSolution)> = cands.iter().map(|(k, s)| (*k, s)).collect();
-    let Some(i) = search::select(&views) else {
+    if cands.is_empty() {
         bail!("optimize merge: the directories hold no candidate of {problem}");
-    };
-    let (k, mut sol) = cands.swap_remove(i);
-    let iterations = records.iter().map(|r| r.iterations).sum();
-    sol.iterations = iterations;
-    sol.solve_seconds = seconds;
-    let rep = StrategyReport {
+    }
+    let ncands = cands.len();
+    // The global search's exploitation runs here, on the union of the shards' candidates,
+    // exactly as after an unsharded multi-start (the problems rebuilt from the files).
+    let (name, settings) = settings_of(&cands[0].1)
+        .with_context(|| format!("optimize merge: the candidates of {problem}"))?;
+    let mut found = Search {
         strategy,
+        shard: Shard::WHOLE,
+        candidates: Vec::new(),
         records,
-        chosen: sol.status.is_success().then_some(k),
-        iterations,
+        refinements: Vec::new(),
         seconds,
+        basin_hits: None,
     };
+    for (k, c) in cands {
+        let s = ProblemSettings {
+            mesh: c.refinement.as_ref().map(|r| r.mesh.clone()),
+            ..settings.clone()
+        };
+        let built = crate::pipeline::build(name, &s)
+            .with_context(|| format!("optimize merge: rebuilding the problem of start {k}"))?;
+        found.candidates.push(Candidate {
+            index: k,
+            problem: Some(built),
+            solution: c,
+        });
+    }
+    let rtol = found
+        .candidates
+        .iter()
+        .find_map(|c| c.solution.verification.as_ref().map(|v| v.rtol))
+        .unwrap_or(0.0);
+    let policy = VerifyPolicy {
+        rtol,
+        hops,
+        ..VerifyPolicy::default()
+    };
+    let t0 = std::time::Instant::now();
+    found.explore(name, &settings, &policy, None);
+    found.seconds = seconds + t0.elapsed().as_secs_f64();
+    let (scene_toml, scene_params) = found
+        .candidates
+        .first()
+        .map(|c| {
+            (
+                c.solution.scene_toml.clone(),
+                c.solution.scene_params.clone(),
+            )
+        })
+        .unwrap_or_default();
+    let (built, mut sol) = found.best()?;
+    // A hop's solution records the run's scene like the shards' files.
+    sol.scene_toml = scene_toml;
+    sol.scene_params = scene_params;
+    if let Some(p) = &built {
+        sol.active_bounds = Some(crate::pipeline::bounds::active_bounds(&p.ocp, &sol));
+    }
+    let k = sol.strategy.as_ref().and_then(|r| r.chosen).unwrap_or(0);
+    let rep = sol
+        .strategy
+        .take()
+        .ok_or_else(|| anyhow::anyhow!("internal: the merged search has no record"))?;
     crate::io::print_out(&rep.table())?;
     sol.strategy = Some(rep);
     print_verification(&sol)?;
@@ -280,11 +332,16 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     crate::outln!(
         "{}: merged {} candidates; chose start {k}: {}, objective {:.6e}, period {:.4} s",
         problem,
-        cands.len() + 1,
+        ncands,
         crate::names::name(&sol.status),
         sol.objective,
         sol.period
     )?;
+    if let Some(n) = sol.strategy.as_ref().and_then(|r| r.basin_hits) {
+        crate::outln!(
+            "basin: the optimum was reached by {n} of the distinct sampled optima and basin hops"
+        )?;
+    }
     print_wrote(&args.out, &sol)?;
     if let Some(f) = failure_of(&sol) {
         bail!("{f}");

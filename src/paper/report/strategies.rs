@@ -1,13 +1,15 @@
 //! The solve-strategy comparison (paper Sect. 4 problems, Sect. 6.1 objectives):
-//! cold start (`direct`) vs `continuation` vs `multistart` (N = 8, 32) on the periodic
-//! problems, with objective φ (eq. 60), iterations, wall time, the period found and the
-//! re-integration defects of each final solution (`pipeline::verify`).
-//! `--quick` runs `periodic-qc` only, without N = 32.
+//! cold start (`direct`) vs `continuation` vs `multistart` (N = 8, 32: the best start) vs the
+//! global search of `optimize` (the same starts, re-integrated and refined, then basin hopping
+//! and polishing, `pipeline::global`) on the periodic problems, with objective φ (eq. 60),
+//! iterations, wall time, the period found and the re-integration defects of each final
+//! solution (`pipeline::verify`). `--quick` runs `periodic-qc` only, without N = 32.
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use crate::pipeline::strategy::{Strategy, solve_with_strategy};
+use crate::pipeline::search::{VerifyPolicy, search};
+use crate::pipeline::strategy::{Shard, Strategy, solve_with_strategy};
 use crate::pipeline::verify::verify;
 use anyhow::Result;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
@@ -19,6 +21,8 @@ pub struct StrategyRow {
     pub problem: String,
     /// Strategy.
     pub strategy: Strategy,
+    /// Whether the global search ran on it (verification, refinement, basin hopping).
+    pub global: bool,
     /// Final status (Debug text) or the error.
     pub status: String,
     /// Objective φ (NaN on error).
@@ -35,25 +39,57 @@ pub struct StrategyRow {
     pub defect: f64,
 }
 
-/// The strategies compared.
-pub fn strategies(quick: bool) -> Vec<Strategy> {
+impl StrategyRow {
+    /// The strategy's name, with `+ global search` where the global search ran on it.
+    pub fn label(&self) -> String {
+        if self.global {
+            format!("{} + global search", self.strategy)
+        } else {
+            self.strategy.to_string()
+        }
+    }
+}
+
+/// The strategies compared (with whether the global search runs on them).
+pub fn strategies(quick: bool) -> Vec<(Strategy, bool)> {
+    let n = if quick { 8 } else { 32 };
     let mut v = vec![
-        Strategy::Direct,
-        Strategy::Continuation,
-        Strategy::Multistart { starts: 8, seed: 0 },
+        (Strategy::Direct, false),
+        (Strategy::Continuation, false),
+        (Strategy::Multistart { starts: 8, seed: 0 }, false),
     ];
     if !quick {
-        v.push(Strategy::Multistart {
-            starts: 32,
-            seed: 0,
-        });
+        v.push((Strategy::Multistart { starts: n, seed: 0 }, false));
     }
+    v.push((Strategy::Multistart { starts: n, seed: 0 }, true));
     v
 }
 
-fn row(problem: Problem, strategy: Strategy) -> StrategyRow {
+fn row(problem: Problem, strategy: Strategy, global: bool) -> StrategyRow {
     let t0 = Instant::now();
-    let res = solve_with_strategy(problem, &ProblemSettings::default(), strategy, None);
+    let settings = ProblemSettings::default();
+    let res = if global {
+        search(
+            problem,
+            &settings,
+            strategy,
+            Shard::WHOLE,
+            &VerifyPolicy {
+                hops: Some(crate::pipeline::search::DEFAULT_HOPS),
+                ..VerifyPolicy::default()
+            },
+            None,
+        )
+        .and_then(|s| s.best())
+        .and_then(|(p, sol)| {
+            p.map(|p| (p, sol))
+                .ok_or(crate::pipeline::PipelineError::Internal(
+                    "the global search's optimum has no problem",
+                ))
+        })
+    } else {
+        solve_with_strategy(problem, &settings, strategy, None)
+    };
     let seconds = t0.elapsed().as_secs_f64();
     match res {
         Ok((p, sol)) => {
@@ -61,6 +97,7 @@ fn row(problem: Problem, strategy: Strategy) -> StrategyRow {
             StrategyRow {
                 problem: problem.to_string(),
                 strategy,
+                global,
                 status: crate::names::name(&sol.status),
                 objective: sol.objective,
                 period: sol.period,
@@ -73,6 +110,7 @@ fn row(problem: Problem, strategy: Strategy) -> StrategyRow {
         Err(e) => StrategyRow {
             problem: problem.to_string(),
             strategy,
+            global,
             status: format!("error: {}", crate::errors::chain(&e)),
             objective: f64::NAN,
             period: f64::NAN,
@@ -106,8 +144,8 @@ pub fn strategies_report(quick: bool, progress: &dyn Fn(&StrategyRow)) -> Result
     };
     let mut rows = Vec::new();
     for &p in problems {
-        for s in strategies(quick) {
-            let r = row(p, s);
+        for (s, global) in strategies(quick) {
+            let r = row(p, s, global);
             progress(&r);
             rows.push(r);
         }
@@ -120,7 +158,10 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
     let mut md = String::from(
         "Default problem settings (hp-Radau 3 × 10 points per phase, ε = 0.01); every \
          strategy from scratch; wall time on this machine with 2 worker threads (rayon) for \
-         the parallel strategies. φ/φ_cold < 1 is a better optimum than the cold start's. \
+         the parallel strategies. `multistart` keeps its best start; `+ global search` is \
+         `optimize`'s default search: every start re-integrated, unverified better ones \
+         hp-refined, then basin hopping from the best distinct optima and polishing of the \
+         winner (docs/optima.md). φ/φ_cold < 1 is a better optimum than the cold start's. \
          Defect: the largest end-of-phase state error when each phase is re-integrated with \
          the optimal torques (DOPRI5, rtol 1e-10).\n\n\
          | problem | strategy | status | φ | φ/φ_cold | period (s) | successful solves | iterations | time (s) | defect |\n\
@@ -129,13 +170,13 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
     for r in rows {
         let cold = rows
             .iter()
-            .find(|c| c.problem == r.problem && c.strategy == Strategy::Direct)
+            .find(|c| c.problem == r.problem && c.strategy == Strategy::Direct && !c.global)
             .map_or(f64::NAN, |c| c.objective);
         let _ = writeln!(
             md,
             "| {} | {} | {} | {:.6e} | {:.3} | {:.3} | {}/{} | {} | {:.1} | {:.1e} |",
             r.problem,
-            r.strategy,
+            r.label(),
             r.status,
             r.objective,
             r.objective / cold,
