@@ -550,9 +550,10 @@ fn default_optimum_tracked(
 /// meets the target inside the paper's torque bound; the human finger's COT optimum only
 /// without it (the slip after its Newton impacts, 5 m/s, needs up to 7 N m to recover from;
 /// saturated at 1 N m the finger cannot stay on the ball). Slow (two default searches, about
-/// 1–2 min): `cargo test --release --test track -- --ignored`.
+/// 1–2 min).
 #[test]
-#[ignore]
+#[ignore = "two default searches and 50-period runs, about 1-2 min; run with `cargo test \
+            --release --test track default_optima_meet -- --ignored`"]
 fn default_optima_meet_the_nominal_target_for_fifty_periods() {
     let runs = default_optimum_tracked("periodic-qc", &["hybrid", "hybrid-unbounded"], 50)
         .into_iter()

@@ -293,13 +293,7 @@ pub fn comparison_markdown(
         match &row.tracking {
             Ok(t) => {
                 let first = t.periods.first().map_or("—".into(), |p| pct(p.omega_error));
-                let later = t
-                    .periods
-                    .iter()
-                    .skip(3)
-                    .map(|p| p.omega_error)
-                    .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))))
-                    .map_or("—".into(), pct);
+                let later = max_error_from_fourth(t).map_or("—".into(), pct);
                 let last = t.periods.last().map_or("—".into(), |p| {
                     format!("{:.1} / {:.1}", 1e3 * p.stick_time, 1e3 * p.slip_time)
                 });
@@ -523,12 +517,7 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
         match run {
             Ok(t) => {
                 let first = t.periods.first().map_or("—".into(), |p| pct(p.omega_error));
-                let later = t
-                    .periods
-                    .iter()
-                    .skip(3)
-                    .map(|p| p.omega_error)
-                    .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))));
+                let later = max_error_from_fourth(&t);
                 let met = later.is_some_and(|e| e <= 0.05) && t.lost.is_none();
                 let later = later.map_or("—".into(), |e| {
                     if met {
@@ -564,4 +553,14 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
         "\n⚑: above the 5 % target. The 50-period runs of these plants are in BENCHMARKS.md.\n"
     )?;
     Ok(s)
+}
+
+/// The largest ω error from the 4th period on (the robustness window), `None` for a
+/// run that completed fewer than four periods.
+fn max_error_from_fourth(t: &Tracking) -> Option<f64> {
+    t.periods
+        .iter()
+        .skip(3)
+        .map(|p| p.omega_error)
+        .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))))
 }
