@@ -45,7 +45,7 @@ use std::path::{Path, PathBuf};
 pub use prepare::palette;
 
 /// Least drawn width of a [`Band`] in pixels.
-pub const MIN_BAND_PX: f64 = 3.0;
+pub const MIN_BAND_PX: f64 = 6.0;
 
 /// Colour of a series.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
