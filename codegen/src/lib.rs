@@ -136,7 +136,11 @@ pub fn generate_split(
         });
     }
     let temporaries: Vec<usize> = reports.iter().map(|r| r.ops.temporaries).collect();
-    for ((code, d), own) in kernel_code.iter_mut().zip(&defs).zip(split.which(&temporaries)) {
+    for ((code, d), own) in kernel_code
+        .iter_mut()
+        .zip(&defs)
+        .zip(split.which(&temporaries))
+    {
         if own {
             *code = emit::own_module(&d.name, code);
         }

@@ -73,7 +73,10 @@ fn auto_split_follows_module_size_and_keeps_the_kernel_text() {
     use bf_codegen::emit::{INLINE_MAX_TEMPORARIES, SPLIT_MIN_TEMPORARIES};
     let big = SPLIT_MIN_TEMPORARIES / 2 + 1;
     let small = INLINE_MAX_TEMPORARIES;
-    assert_eq!(ModuleSplit::Auto.which(&[big, big - 2 - small, small]), [false; 3]);
+    assert_eq!(
+        ModuleSplit::Auto.which(&[big, big - 2 - small, small]),
+        [false; 3]
+    );
     assert_eq!(
         ModuleSplit::Auto.which(&[big, big, small]),
         [true, true, false]

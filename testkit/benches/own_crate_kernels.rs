@@ -22,7 +22,10 @@ const QD: [f64; 6] = [0.5, 0.0, -0.2, 0.1, 0.0, 0.3];
 const TAU: [f64; 6] = [1.0, 2.0, 3.0, 0.1, 0.2, 0.3];
 
 fn bench(c: &mut Criterion) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../examples/own-crate/robot.urdf");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../examples/own-crate/robot.urdf"
+    );
     let (scene, _) = Scene::load_with_text(path, &Default::default()).unwrap();
     let rt = SceneKernels::new(&scene).unwrap();
     let vars = rt.vars(&Q, &QD, [0.0; 3], 0.0, &TAU, None);
@@ -35,13 +38,13 @@ fn bench(c: &mut Criterion) {
     ur5::mass_cqd_g(&Q, &QD, p, &mut m, &mut v);
     ur5::forward_dynamics(&Q, &QD, &TAU, p, &mut qdd);
     let compiled: Vec<f64> = m.iter().flatten().chain(&v).copied().collect();
-    for (got, want) in [
-        (compiled, mcg.eval(&vars)),
-        (qdd.to_vec(), fd.eval(&vars)),
-    ] {
+    for (got, want) in [(compiled, mcg.eval(&vars)), (qdd.to_vec(), fd.eval(&vars))] {
         let scale = want.iter().fold(1.0f64, |a, x| a.max(x.abs()));
         for (g, w) in got.iter().zip(&want) {
-            assert!((g - w).abs() <= 1e-12 * scale, "compiled {g} vs interpreted {w}");
+            assert!(
+                (g - w).abs() <= 1e-12 * scale,
+                "compiled {g} vs interpreted {w}"
+            );
         }
     }
 

@@ -359,8 +359,7 @@ fn paper_finger_urdf_scene_equals_the_dh_paper_scene_kernel_by_kernel() {
     use bf_codegen::interp::SceneKernels;
     let root = env!("CARGO_MANIFEST_DIR");
     let (dh, _) =
-        Scene::load_with_text(format!("{root}/../scenes/paper.toml"), &Default::default())
-            .unwrap();
+        Scene::load_with_text(format!("{root}/../scenes/paper.toml"), &Default::default()).unwrap();
     let (urdf, text) = Scene::load_with_text(
         format!("{}/paper_finger_ball.toml", dir()),
         &Default::default(),
