@@ -31,10 +31,6 @@ impl SymbolicRobot {
         std::array::from_fn(|i| std::array::from_fn(|j| self.g.add(x[i][j], y[i][j])))
     }
 
-    fn m3_sub(&mut self, x: &M3, y: &M3) -> M3 {
-        std::array::from_fn(|i| std::array::from_fn(|j| self.g.sub(x[i][j], y[i][j])))
-    }
-
     /// [t]×, the matrix of t × ·.
     fn skew(&mut self, t: V3) -> M3 {
         let z = self.g.zero();
