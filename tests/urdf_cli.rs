@@ -3,8 +3,9 @@
 //! C q̇ would show as drift); `optimize --problem reach-arm --scene arm.urdf` brings the arm to
 //! rest at the target within the URDF's effort limits, verified by re-integration; a TOML scene
 //! that takes a 3-joint finger from a URDF and adds a ball simulates the finger striking the
-//! ball (an impact on the surface that reverses the approach velocity); and a branched URDF
-//! without `--tip` is refused naming the file, line and link.
+//! ball (an impact on the surface that reverses the approach velocity); `periodic-qc` on the
+//! paper's finger taken from a URDF reaches the optima of the DH paper scene; and a branched
+//! URDF without `--tip` is refused naming the file, line and link.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -165,4 +166,91 @@ fn a_branched_urdf_needs_a_tip() {
         "0,0,0,0,0,0,0",
     ]);
     ok(&o);
+}
+
+/// One `optimize --problem periodic-qc` run with `extra` arguments; its solution.json.
+fn periodic_qc(dir: &Path, tag: &str, extra: &[&str]) -> serde_json::Value {
+    let out = dir.join(tag);
+    let out_s = out.to_str().unwrap().to_string();
+    let mut args = vec!["optimize", "--problem", "periodic-qc", "--out", &out_s];
+    args.extend(extra);
+    ok(&run(&args));
+    let sol = json(&out.join("solution.json"));
+    assert_eq!(sol["status"], "Solved", "{tag}");
+    assert_eq!(
+        sol["verification"]["verified"], true,
+        "{tag}: {}",
+        sol["verification"]
+    );
+    assert_eq!(
+        sol["modes"],
+        serde_json::json!(["free", "stick", "free"]),
+        "{tag}"
+    );
+    sol
+}
+
+/// Objective and period of two periodic-qc solutions equal to solver tolerance.
+fn same_optimum(a: &serde_json::Value, b: &serde_json::Value) {
+    for key in ["objective", "period"] {
+        let (x, y) = (a[key].as_f64().unwrap(), b[key].as_f64().unwrap());
+        assert!((x - y).abs() <= 1e-6 * x.abs(), "{key}: {x} vs {y}");
+    }
+}
+
+const PAPER_URDF: &str = "testkit/tests/urdf/paper_finger_ball.toml";
+
+/// `periodic-qc` on a scene that takes the paper's 3-joint finger from a URDF
+/// (`paper_finger_ball.toml`: the hand-written `paper_finger.urdf` plus the paper's ball,
+/// friction and contact) from the paper's guess (`--strategy direct`) reaches the optimum the
+/// DH paper scene reaches from it, and a solve of either scene warm-started from the other's
+/// solution stays there: the two problems share that optimum (objective and period to 1e-6).
+/// The URDF scene's node functions run on interpreted kernels, the DH scene's compiled ones.
+#[test]
+fn periodic_qc_on_the_urdf_paper_finger_reaches_the_dh_scenes_optimum() {
+    let dir = tmpdir("urdf-qc");
+    let direct = ["--strategy", "direct"];
+    let dh = periodic_qc(&dir, "dh", &direct);
+    let urdf = periodic_qc(
+        &dir,
+        "urdf",
+        &[&direct[..], &["--scene", PAPER_URDF]].concat(),
+    );
+    assert_eq!(
+        (dh["scene"].as_str(), urdf["scene"].as_str()),
+        (Some("paper"), Some("paper_urdf"))
+    );
+    assert_eq!(urdf["kernels"], "interpreted");
+    same_optimum(&dh, &urdf);
+    let from = |tag: &str| dir.join(tag).join("solution.json").display().to_string();
+    let dh_warm = periodic_qc(&dir, "dh-warm", &["--warm-start", &from("urdf")]);
+    let urdf_warm = periodic_qc(
+        &dir,
+        "urdf-warm",
+        &["--scene", PAPER_URDF, "--warm-start", &from("dh")],
+    );
+    same_optimum(&dh, &dh_warm);
+    same_optimum(&dh, &urdf_warm);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The best optimum of the DH paper scene's default multistart (J ≈ 0.0877) is an optimum of
+/// the URDF scene too: the URDF scene warm-started from it is Solved there, verified, with
+/// the same objective and period to 1e-6. (The URDF scene's own multistart may keep another
+/// local optimum: its interpreted kernels differ from the compiled ones in the last bits, and
+/// some starts then follow other paths; docs/optima.md.)
+#[test]
+#[ignore = "slow: the DH scene's 32-start multistart, minutes on a loaded machine; run with \
+            `cargo test --release --test urdf_cli -- --ignored`"]
+fn the_dh_paper_scenes_best_periodic_qc_optimum_is_one_of_the_urdf_scene() {
+    let dir = tmpdir("urdf-qc-best");
+    let dh = periodic_qc(&dir, "dh", &[]);
+    let from = dir.join("dh").join("solution.json").display().to_string();
+    let urdf = periodic_qc(
+        &dir,
+        "urdf",
+        &["--scene", PAPER_URDF, "--warm-start", &from],
+    );
+    same_optimum(&dh, &urdf);
+    std::fs::remove_dir_all(&dir).ok();
 }

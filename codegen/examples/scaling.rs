@@ -6,12 +6,16 @@
 //!
 //! ```text
 //! cargo run --release -p bf-codegen --example scaling -- [--joints 3,5,7,10,14,20]
-//!     [--rustc-max 14] [--out DIR]
+//!     [--rustc-max 14] [--out DIR] [--compare-unsplit]
 //! ```
 //!
 //! `--rustc-max N` compiles (and times calls of) only the chains of at most N joints, since
 //! `rustc -O` of a large module takes minutes on a loaded machine; `--out` keeps the generated
-//! files (default: a directory under the system's temporary directory). CPU times are the
+//! files (default: a directory under the system's temporary directory). Modules are emitted
+//! as `generate` emits them (large ones split into a submodule per kernel, so that `rustc`
+//! optimises the kernels in parallel, `bf_codegen::ModuleSplit`); `--compare-unsplit` also
+//! compiles each chain's module in one piece, before the split one, and prints its `rustc -O`
+//! time in a column of its own. CPU times are the
 //! process's own (generation) and its waited children's (rustc), read from `/proc/self/stat`,
 //! so they do not count time lost to other processes; wall time is printed next to them.
 //! Nanoseconds per call are the median of 11 timed batches of random states (min–max in
@@ -51,8 +55,8 @@ fn cpu_seconds() -> Option<(f64, f64)> {
     (f.len() == 4).then(|| ((f[0] + f[1]) / 100.0, (f[2] + f[3]) / 100.0))
 }
 
-/// A binary that times every kernel of module `chain{n}.rs` and prints `name ns lo hi` lines.
-fn bench_main(n: usize) -> String {
+/// A binary that times every kernel of module `{module}.rs` and prints `name ns lo hi` lines.
+fn bench_main(module: &str) -> String {
     let mut calls = String::new();
     for k in KERNELS {
         let call = match k {
@@ -79,7 +83,7 @@ fn bench_main(n: usize) -> String {
     }
     format!(
         "#[allow(clippy::all, unused_variables, unused_parens, dead_code)]\n\
-         mod m {{ include!(\"chain{n}.rs\"); }}\n\
+         mod m {{ include!(\"{module}.rs\"); }}\n\
          struct S {{ q: [f64; m::NQ], qd: [f64; m::NQ], x: [f64; m::NQ] }}\n\
          const P: [f64; m::NP] = m::PARAM_DEFAULTS;\n\
          fn time(name: &str, states: &[S], f: impl Fn(&S) -> f64) {{\n\
@@ -107,11 +111,11 @@ fn bench_main(n: usize) -> String {
     )
 }
 
-/// Compiles `chain{n}_bench.rs` in `dir` with `rustc -O`: (wall s, CPU s of rustc), or the
+/// Compiles `{module}_bench.rs` in `dir` with `rustc -O`: (wall s, CPU s of rustc), or the
 /// compiler's message.
-fn compile(dir: &Path, n: usize) -> Result<(f64, Option<f64>, PathBuf), String> {
-    let src = dir.join(format!("chain{n}_bench.rs"));
-    let exe = dir.join(format!("chain{n}_bench"));
+fn compile(dir: &Path, module: &str) -> Result<(f64, Option<f64>, PathBuf), String> {
+    let src = dir.join(format!("{module}_bench.rs"));
+    let exe = dir.join(format!("{module}_bench"));
     let before = cpu_seconds();
     let t = Instant::now();
     let out = Command::new(std::env::var("RUSTC").unwrap_or_else(|_| "rustc".into()))
@@ -147,6 +151,7 @@ struct Args {
     joints: Vec<usize>,
     rustc_max: usize,
     out: PathBuf,
+    compare_unsplit: bool,
 }
 
 fn parse_args() -> Result<Args, String> {
@@ -154,9 +159,14 @@ fn parse_args() -> Result<Args, String> {
         joints: vec![3, 5, 7, 10, 14, 20],
         rustc_max: 14,
         out: std::env::temp_dir().join("bf-scaling"),
+        compare_unsplit: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
+        if flag == "--compare-unsplit" {
+            a.compare_unsplit = true;
+            continue;
+        }
         let val = it
             .next()
             .ok_or_else(|| format!("option `{flag}` needs a value"))?;
@@ -178,7 +188,7 @@ fn parse_args() -> Result<Args, String> {
             "--out" => a.out = PathBuf::from(val),
             _ => {
                 return Err(format!(
-                    "unknown option `{flag}` (--joints, --rustc-max, --out)"
+                    "unknown option `{flag}` (--joints, --rustc-max, --out, --compare-unsplit)"
                 ));
             }
         }
@@ -192,11 +202,20 @@ fn run() -> Result<(), String> {
         .map_err(|e| format!("cannot create `{}`: {e}", args.out.display()))?;
     let mut ns_f = Vec::new();
     let mut rows: Vec<Row> = Vec::new();
+    let unsplit_head = if args.compare_unsplit {
+        " unsplit: rustc -O s wall (CPU) |"
+    } else {
+        ""
+    };
     println!(
-        "| n | {} | generate s (CPU) | code bytes | rustc -O s wall (CPU) |",
+        "| n | {} | generate s (CPU) | code bytes | rustc -O s wall (CPU) |{unsplit_head}",
         KERNELS.map(|k| format!("`{k}` ops")).join(" | ")
     );
-    println!("|---|{}---|---|---|", "---|".repeat(KERNELS.len()));
+    println!(
+        "|---|{}---|---|---|{}",
+        "---|".repeat(KERNELS.len()),
+        if args.compare_unsplit { "---|" } else { "" }
+    );
     let mut timings = String::new();
     for &n in &args.joints {
         let text = chain::chain_scene(n, &KERNELS);
@@ -221,10 +240,28 @@ fn run() -> Result<(), String> {
         let write = |name: String, body: &str| {
             std::fs::write(args.out.join(&name), body).map_err(|e| format!("{name}: {e}"))
         };
-        write(format!("chain{n}.rs"), &generated.code)?;
-        write(format!("chain{n}_bench.rs"), &bench_main(n))?;
+        let module = format!("chain{n}");
+        write(format!("{module}.rs"), &generated.code)?;
+        write(format!("{module}_bench.rs"), &bench_main(&module))?;
+        let opt = |x: Option<f64>| x.map_or("?".into(), |v| format!("{v:.2}"));
+        let mut unsplit = String::new();
+        if args.compare_unsplit && n <= args.rustc_max {
+            let single = format!("chain{n}_unsplit");
+            let code = bf_codegen::generate_split(
+                &scene,
+                &text,
+                &Default::default(),
+                bf_codegen::ModuleSplit::Never,
+            )
+            .map_err(|e| format!("chain {n}: {e}"))?
+            .code;
+            write(format!("{single}.rs"), &code)?;
+            write(format!("{single}_bench.rs"), &bench_main(&single))?;
+            let (wall, cpu, _) = compile(&args.out, &single)?;
+            unsplit = format!(" {wall:.1} ({}) |", opt(cpu));
+        }
         let (rs_wall, rs_cpu) = if n <= args.rustc_max {
-            let (wall, cpu, exe) = compile(&args.out, n)?;
+            let (wall, cpu, exe) = compile(&args.out, &module)?;
             let out = Command::new(&exe)
                 .output()
                 .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
@@ -248,9 +285,8 @@ fn run() -> Result<(), String> {
         } else {
             (f64::NAN, None)
         };
-        let opt = |x: Option<f64>| x.map_or("?".into(), |v| format!("{v:.2}"));
         println!(
-            "| {n} | {} | {:.2} ({}) | {} | {} |",
+            "| {n} | {} | {:.2} ({}) | {} | {} |{unsplit}",
             ops.iter()
                 .map(|o| o.to_string())
                 .collect::<Vec<_>>()

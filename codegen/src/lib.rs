@@ -43,7 +43,7 @@ pub use bf_scene as spec;
 #[cfg(feature = "emit")]
 pub use builder::{BuildError, Builder, Emitted};
 #[cfg(feature = "emit")]
-pub use emit::{EmitSettings, FloatTy};
+pub use emit::{EmitSettings, FloatTy, ModuleSplit};
 pub use kernels::ALL_KERNELS;
 pub use report::{KernelReport, OpCounts, Report};
 pub use robot::SymbolicRobot;
@@ -93,6 +93,19 @@ pub fn generate_with(
     source_text: &str,
     opts: &emit::EmitSettings,
 ) -> Result<Generated, CodegenError> {
+    generate_split(scene, source_text, opts, emit::ModuleSplit::Auto)
+}
+
+#[cfg(feature = "emit")]
+/// As [`generate_with`], with the kernels put in submodules of their own as `split` says
+/// ([`emit::ModuleSplit`]; [`generate_with`] uses `Auto`): the same kernels, compiled in
+/// parallel code-generation units.
+pub fn generate_split(
+    scene: &Scene,
+    source_text: &str,
+    opts: &emit::EmitSettings,
+    split: emit::ModuleSplit,
+) -> Result<Generated, CodegenError> {
     let start = Instant::now();
     if opts.no_std && opts.fma {
         return Err(CodegenError::Settings(
@@ -121,6 +134,16 @@ pub fn generate_with(
             name: d.name.clone(),
             ops: e.ops,
         });
+    }
+    let temporaries: Vec<usize> = reports.iter().map(|r| r.ops.temporaries).collect();
+    for ((code, d), own) in kernel_code
+        .iter_mut()
+        .zip(&defs)
+        .zip(split.which(&temporaries))
+    {
+        if own {
+            *code = emit::own_module(&d.name, code);
+        }
     }
     let with_contact = scene.kernels.iter().any(|k| k.starts_with("contact"));
     let code = emit::emit_file_with(

@@ -1,9 +1,13 @@
 //! The build-script API (`bf_codegen::Builder`): with a scene's own kernel list it writes the
 //! golden file byte for byte; by default it adds the inverse-dynamics family as `generate`
-//! does; it imports a TOML scene's URDF and reports both files for `rerun-if-changed`; and each
-//! bad setting or input is a typed error naming the file and the cause.
+//! does; it imports a TOML scene's URDF and reports both files for `rerun-if-changed`; a large
+//! robot's module comes split into a submodule per big kernel, as `generate` splits it; and
+//! each bad setting or input is a typed error naming the file and the cause.
 
 use std::path::PathBuf;
+
+#[path = "common/chain.rs"]
+mod chain;
 
 use bf_codegen::{BuildError, Builder, CodegenError, Scene};
 
@@ -144,4 +148,38 @@ fn bad_settings_and_inputs_are_typed_errors_naming_the_file() {
     );
     let e = Builder::new(urdf).tip("no_link").generate().unwrap_err();
     assert!(e.to_string().contains("no_link"), "{e}");
+}
+
+/// A 20-joint chain (its module has more than `SPLIT_MIN_TEMPORARIES` temporaries): the
+/// Builder's module is `generate`'s, with every kernel of more than
+/// `INLINE_MAX_TEMPORARIES` temporaries, and only those, in a submodule of its own.
+#[test]
+fn a_large_robot_comes_split_per_kernel() {
+    use bf_codegen::emit::INLINE_MAX_TEMPORARIES;
+    let kernels = ["gravity", "mass_matrix", "mass_cqd_g", "forward_dynamics"];
+    let text = chain::chain_scene(20, &kernels);
+    let dir = out_dir("split");
+    let path = dir.join("chain20.toml");
+    std::fs::write(&path, &text).unwrap();
+    let built = Builder::new(&path)
+        .kernels(kernels)
+        .cargo_metadata(false)
+        .generate()
+        .unwrap();
+    let scene = Scene::from_toml_str(&text, &path.display().to_string()).unwrap();
+    let direct = bf_codegen::generate(&scene, &text).unwrap();
+    assert_eq!(built.code, direct.code);
+    let mut split = 0;
+    for k in &built.report.kernels {
+        let own = built.code.contains(&format!("\nmod kernel_{} {{", k.name));
+        assert_eq!(
+            own,
+            k.ops.temporaries > INLINE_MAX_TEMPORARIES,
+            "{}",
+            k.name
+        );
+        split += usize::from(own);
+    }
+    assert_eq!(split, 3, "all but gravity");
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -200,7 +200,7 @@ fn articulated_body_forward_dynamics_equals_ldl_and_the_cheaper_is_chosen() {
         if name == "chain12" {
             // O(n): twice the joints, at most 2.5 times the operations (quadratic growth would
             // give 4; the base link's zero velocity makes the count affine with a negative
-            // intercept, so a little over 2: measured 4 256 and 9 828).
+            // intercept, so a little over 2: measured 4 055 and 9 311).
             let mut m6 = SymbolicRobot::new(&chain(6, "forward_dynamics")).unwrap();
             let x6 = m6.forward_dynamics_aba();
             let c6 = m6.g.cost(&x6);

@@ -63,3 +63,48 @@ fn f32_changes_every_float_type() {
         .join("\n");
     assert!(!without_toml.contains("f64"), "f64 left in the f32 variant");
 }
+
+/// `ModuleSplit::Auto` leaves a module of at most `SPLIT_MIN_TEMPORARIES` temporaries whole
+/// (so the shipped scenes keep their text) and splits off a larger module's non-inline
+/// kernels; the split module holds the same kernel items, each inside `mod kernel_NAME`.
+#[test]
+fn auto_split_follows_module_size_and_keeps_the_kernel_text() {
+    use bf_codegen::ModuleSplit;
+    use bf_codegen::emit::{INLINE_MAX_TEMPORARIES, SPLIT_MIN_TEMPORARIES};
+    let big = SPLIT_MIN_TEMPORARIES / 2 + 1;
+    let small = INLINE_MAX_TEMPORARIES;
+    assert_eq!(
+        ModuleSplit::Auto.which(&[big, big - 2 - small, small]),
+        [false; 3]
+    );
+    assert_eq!(
+        ModuleSplit::Auto.which(&[big, big, small]),
+        [true, true, false]
+    );
+    assert_eq!(ModuleSplit::Large.which(&[small + 1, small]), [true, false]);
+    assert_eq!(ModuleSplit::All.which(&[1, 2]), [true, true]);
+    assert_eq!(ModuleSplit::Never.which(&[big, big]), [false, false]);
+
+    let (scene, text) = paper();
+    let opts = EmitSettings::default();
+    let whole = bf_codegen::generate_split(&scene, &text, &opts, ModuleSplit::Auto)
+        .unwrap()
+        .code;
+    assert_eq!(whole, generate(&scene, &text).unwrap().code);
+    assert!(!whole.contains("mod kernel_"));
+    let split = bf_codegen::generate_split(&scene, &text, &opts, ModuleSplit::All)
+        .unwrap()
+        .code;
+    for k in &scene.kernels {
+        assert!(split.contains(&format!("\nmod kernel_{k} {{\n    use super::*;\n")));
+        assert!(split.contains(&format!("\npub use kernel_{k}::{k};\n")));
+    }
+    // Undo the indentation of the submodules' bodies: the kernels' lines are the same.
+    let kernel_lines = |code: &str| -> Vec<String> {
+        code.lines()
+            .filter(|l| l.trim_start().starts_with("let ") || l.contains(" = "))
+            .map(|l| l.trim().to_string())
+            .collect()
+    };
+    assert_eq!(kernel_lines(&whole), kernel_lines(&split));
+}

@@ -2,6 +2,9 @@
 //! contact kernels and their square roots, and f32) and a URDF arm (the UR5-like arm of the
 //! test kit, f64) are compiled by `rustc --edition 2021` inside a `#![no_std]` library that
 //! denies warnings, then called from a small std program linked against it. Checked:
+//! - a copy of the arm's module with every kernel in a submodule of its own
+//!   ([`bf_codegen::ModuleSplit::All`], the form of large modules) compiles as well and gives
+//!   the arm's numbers bit for bit;
 //! - every kernel of every module against the interpreter (`SceneKernels`, the same graphs in
 //!   std f64): f64 to 1e-13 relative to the output's largest entry, f32 to 2e-4;
 //! - the modules' own square root equals `f64::sqrt` bit for bit (random, subnormal, huge);
@@ -17,7 +20,7 @@ use std::process::Command;
 
 use bf_codegen::dd::{self, Dd};
 use bf_codegen::interp::SceneKernels;
-use bf_codegen::{EmitSettings, FloatTy, Scene};
+use bf_codegen::{EmitSettings, FloatTy, ModuleSplit, Scene};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -45,6 +48,7 @@ struct Module {
     scene: Scene,
     text: String,
     float: FloatTy,
+    split: ModuleSplit,
 }
 
 fn modules() -> Vec<Module> {
@@ -70,18 +74,28 @@ fn modules() -> Vec<Module> {
             scene: paper,
             text: paper_text.clone(),
             float: FloatTy::F64,
+            split: ModuleSplit::Auto,
         },
         Module {
             name: "paper_f32",
             scene: paper_small,
             text: paper_text,
             float: FloatTy::F32,
+            split: ModuleSplit::Auto,
         },
         Module {
             name: "arm",
+            scene: arm.clone(),
+            text: arm_text.clone(),
+            float: FloatTy::F64,
+            split: ModuleSplit::Auto,
+        },
+        Module {
+            name: "arm_split",
             scene: arm,
             text: arm_text,
             float: FloatTy::F64,
+            split: ModuleSplit::All,
         },
     ]
 }
@@ -180,9 +194,19 @@ fn no_std_modules_compile_and_agree_with_std() {
             fma: false,
             no_std: true,
         };
-        let code = bf_codegen::generate_with(&m.scene, &m.text, &opts)
+        let code = bf_codegen::generate_split(&m.scene, &m.text, &opts, m.split)
             .unwrap()
             .code;
+        assert_eq!(
+            code.matches("\nmod kernel_").count(),
+            if m.split == ModuleSplit::All {
+                m.scene.kernels.len()
+            } else {
+                0
+            },
+            "{}: kernels in submodules",
+            m.name
+        );
         assert!(
             !code.replace("core::", "").contains("std::"),
             "{}: names std",
@@ -224,6 +248,16 @@ fn no_std_modules_compile_and_agree_with_std() {
     let out = run(Command::new(dir.join("main"))
         .current_dir(&dir)
         .arg("probes.txt"));
+
+    // The split arm module computes exactly what the arm module does.
+    let lines_of = |module: &str| -> Vec<String> {
+        let prefix = format!("kernel {module} ");
+        out.lines()
+            .filter_map(|l| l.strip_prefix(&prefix).map(String::from))
+            .collect()
+    };
+    assert_eq!(lines_of("arm"), lines_of("arm_split"));
+    assert_eq!(lines_of("arm").len(), 4);
 
     // Kernels against the interpreter.
     let mut seen = 0;

@@ -277,6 +277,12 @@ impl Reader<'_> {
                 }
                 Some((lo, hi, effort))
             }
+            // A continuous joint's <limit> has no range (URDF ignores lower/upper there), but
+            // its effort bounds the torque as a revolute joint's does.
+            (JointKind::Continuous, Some(l)) => {
+                let [effort] = self.numbers::<1>(l, "effort", Some([0.0]))?;
+                Some((0.0, 0.0, effort))
+            }
             _ => None,
         };
         Ok(Joint {

@@ -346,3 +346,66 @@ fn puma560_equals_its_urdf() {
 fn paper_finger_equals_its_urdf() {
     dh_equivalent("paper.toml");
 }
+
+/// The shipped URDF of the paper's finger (`tests/urdf/paper_finger.urdf`, written by hand
+/// from the DH table and inertias of `scenes/paper.toml`) with the paper's ball, friction and
+/// contact added by a TOML scene (`paper_finger_ball.toml`): every kernel of the paper scene —
+/// dynamics, contact geometry (exact and smooth), tip kinematics, of `frames` the fingertip
+/// frame, of the regressor Y the torques Y π — equals the DH scene's at
+/// random states (q, q̇, ω, ε, u) to 1e-12 relative to the output's largest entry. Both
+/// through the run-time interpreter, which evaluates the generator's graphs.
+#[test]
+fn paper_finger_urdf_scene_equals_the_dh_paper_scene_kernel_by_kernel() {
+    use bf_codegen::interp::SceneKernels;
+    let root = env!("CARGO_MANIFEST_DIR");
+    let (dh, _) =
+        Scene::load_with_text(format!("{root}/../scenes/paper.toml"), &Default::default()).unwrap();
+    let (urdf, text) = Scene::load_with_text(
+        format!("{}/paper_finger_ball.toml", dir()),
+        &Default::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(text.contains("[ball]"), "{text}");
+    assert_eq!(urdf.kernels, dh.kernels);
+    assert_eq!(
+        urdf.links.iter().map(|l| l.tau_max).collect::<Vec<_>>(),
+        vec![Some(1.0); 3]
+    );
+    let (a, b) = (
+        SceneKernels::new(&dh).unwrap(),
+        SceneKernels::new(&urdf).unwrap(),
+    );
+    let names = |s: &SceneKernels| s.kernels.iter().map(|k| k.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&a), names(&b));
+    let mut rng = ChaCha8Rng::seed_from_u64(35);
+    for (k, [q, qd, u]) in states(3, 6, 27).into_iter().enumerate() {
+        let omega = [0; 3].map(|_| rng.random_range(-2.0..2.0));
+        let eps = [0.01, 0.001][k % 2];
+        let (va, vb) = (
+            a.vars(&q, &qd, omega, eps, &u, None),
+            b.vars(&q, &qd, omega, eps, &u, None),
+        );
+        for (ka, kb) in a.kernels.iter().zip(&b.kernels) {
+            let (mut x, mut y) = (ka.eval(&va), kb.eval(&vb));
+            if ka.name == "frames" {
+                // Positions p_1..p_3 (9 values), then rotations R_1..R_3 (27). A URDF link's
+                // frame sits at its joint, DH frame i after the link's constant T_x(a) R_x(α):
+                // only the last frame (the fingertip, which the contact uses) is the same.
+                let tip = |v: &[f64]| [&v[6..9], &v[27..36]].concat();
+                (x, y) = (tip(&x), tip(&y));
+            }
+            if ka.name == "regressor" {
+                // Y's columns are the inertial parameters in each link's own frame, which differ
+                // between the conventions as the frames do; Y π (the torques) does not.
+                let torque = |y: &[f64], scene: &Scene| -> Vec<f64> {
+                    let pi = bf_codegen::robot::inertial_parameters(scene);
+                    y.chunks(pi.len())
+                        .map(|row| row.iter().zip(&pi).map(|(a, b)| a * b).sum())
+                        .collect()
+                };
+                (x, y) = (torque(&x, &dh), torque(&y, &urdf));
+            }
+            close(&format!("state {k}: `{}` DH vs URDF", ka.name), &x, &y);
+        }
+    }
+}

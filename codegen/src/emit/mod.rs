@@ -120,6 +120,72 @@ fn dim_value(d: Dim, nq: usize) -> usize {
 /// Kernels with at most this many temporaries are marked `#[inline]`.
 pub const INLINE_MAX_TEMPORARIES: usize = 1000;
 
+/// Whether the kernels of a module are put in submodules of their own.
+///
+/// `rustc` assigns all functions of one module to one code-generation unit and optimises
+/// units in parallel, one per core; a module of one inline module per scene optimises its
+/// kernels one after the other (a 20-joint chain: three kernels of 14 000–18 000 operations,
+/// 40 s of LLVM on one core). A kernel in a submodule of its own (`mod kernel_NAME { use
+/// super::*; … }`, re-exported by `pub use`) is a unit of its own, so the kernels of a large
+/// module compile side by side. The kernel bodies are the same text either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ModuleSplit {
+    /// [`ModuleSplit::Large`] when the module's kernels have more than
+    /// [`SPLIT_MIN_TEMPORARIES`] temporaries in all, else [`ModuleSplit::Never`]: smaller
+    /// modules (every shipped scene) keep their one-unit form, and their text, since a few
+    /// seconds of LLVM already run beside the other modules of the crate.
+    #[default]
+    Auto,
+    /// Every kernel in the module's own scope (the form of the shipped scenes).
+    Never,
+    /// Every kernel with more than [`INLINE_MAX_TEMPORARIES`] temporaries (one not marked
+    /// `#[inline]`, so compiled where it is defined) in a submodule of its own.
+    Large,
+    /// Every kernel in a submodule of its own.
+    All,
+}
+
+/// The total of temporaries over a module's kernels above which [`ModuleSplit::Auto`] splits
+/// it (the largest shipped scene module, the 7-joint iiwa, has 36 736; a random 20-joint
+/// chain 56 000).
+pub const SPLIT_MIN_TEMPORARIES: usize = 40_000;
+
+impl ModuleSplit {
+    /// For each kernel (given its number of temporaries), whether it gets a submodule.
+    pub fn which(self, temporaries: &[usize]) -> Vec<bool> {
+        let large = |t: &usize| *t > INLINE_MAX_TEMPORARIES;
+        match self {
+            ModuleSplit::Auto if temporaries.iter().sum::<usize>() > SPLIT_MIN_TEMPORARIES => {
+                temporaries.iter().map(large).collect()
+            }
+            ModuleSplit::Auto | ModuleSplit::Never => vec![false; temporaries.len()],
+            ModuleSplit::Large => temporaries.iter().map(large).collect(),
+            ModuleSplit::All => vec![true; temporaries.len()],
+        }
+    }
+}
+
+/// The kernel item `code` (of function `name`) inside a private module `kernel_NAME` that
+/// sees the file's items (`use super::*`: `NQ`, `Contact`, the sine–cosine helpers), plus the
+/// `pub use` that puts the function back where callers look for it.
+pub fn own_module(name: &str, code: &str) -> String {
+    let mut out = String::with_capacity(code.len() + code.len() / 16 + 256);
+    let _ = writeln!(
+        out,
+        "/// Kernel `{name}` in a module of its own: a code-generation unit of its own for \
+         `rustc`.\n#[allow(unused_imports)]\nmod kernel_{name} {{\n    use super::*;"
+    );
+    for line in code.lines() {
+        if !line.is_empty() {
+            out.push_str("    ");
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    let _ = writeln!(out, "}}\npub use kernel_{name}::{name};");
+    out
+}
+
 /// One emitted kernel: its function item as formatted text, plus its operation counts.
 pub struct EmittedKernel {
     /// The function item (doc comment, attributes, signature, body), formatted as
