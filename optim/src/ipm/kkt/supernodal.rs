@@ -68,6 +68,23 @@ pub(super) fn counted_pair(a: f64, b: f64, c: f64, inertia: &mut Inertia) -> Opt
     Some(det)
 }
 
+/// The [`Elimination`] of a [`BlockPlan`]'s pivot fields (a macro, so that the borrow is of
+/// those fields only and the blocks in `vals` stay writable beside it).
+macro_rules! elimination {
+    ($plan:expr) => {
+        Elimination {
+            d: &mut $plan.d,
+            inv_d: &mut $plan.inv_d,
+            e: &mut $plan.e,
+            inv_e: &mut $plan.inv_e,
+            pair: &$plan.pair,
+            l: &mut $plan.l,
+            l_col_ptr: &$plan.l_col_ptr,
+            coef: &mut $plan.coef,
+        }
+    };
+}
+
 /// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
 /// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
 /// structure (`parent(j) = j + 1`, `|L_j| = |L_{j+1}| + 1`) are stored as dense column-major
@@ -118,6 +135,8 @@ pub(super) struct BlockPlan {
     // workspaces
     pub(super) map: Vec<u32>,
     pub(super) tmp: Vec<f64>,
+    pub(super) wbuf: Vec<f64>,
+    pub(super) rel: Vec<u32>,
     pub(super) coef: Vec<f64>,
     pub(super) x: Vec<f64>,
 }
@@ -135,6 +154,7 @@ impl BlockPlan {
         col_ptr: &[usize],
         row_idx: &[usize],
         pair_first: &[bool],
+        relax: bool,
     ) -> Option<Self> {
         let (fwd, inv, lp, lr) = simplicial_structure(sym)?;
         if *lp.last()? > u32::MAX as usize || dim >= u32::MAX as usize || dim == 0 {
@@ -146,17 +166,34 @@ impl BlockPlan {
         // a supernode [f, l) has rows {f, …, l − 1} ∪ struct(l − 1) and no explicit zeros.
         // A granted pair [j, j + 1] joins one supernode as well: parent(j) = j + 1 gives
         // struct(L_j) ⊆ {j} ∪ struct(L_{j+1}), so the supernode's rows still contain every
-        // column's structure.
+        // column's structure. With `relax`, column j + 1 joins j's supernode whenever j's rows
+        // below j + 1 are among j + 1's ([`nested`]: so the supernode's rows contain every
+        // column's structure, with explicit zeros, also for siblings in the elimination tree
+        // such as the nodes of one collocation phase) and the explicit zeros stay few
+        // ([`relaxed`]): the descendants' many rank-1 scatters become fewer, wider updates.
         let mut pair = vec![false; dim];
         let mut sn_begin = vec![0usize];
+        // Entries of L in the current supernode's columns.
+        let mut nnz = 0;
         for j in 0..dim - 1 {
+            nnz += cnt(j);
             let parent_next = cnt(j) > 1 && lr[lp[j] + 1] == j + 1;
-            let chained = parent_next && cnt(j) == cnt(j + 1) + 1;
+            let f = sn_begin[sn_begin.len() - 1];
+            let chained = if relax {
+                nested(
+                    &lr[lp[j] + 1..lp[j + 1]],
+                    j + 1,
+                    &lr[lp[j + 1] + 1..lp[j + 2]],
+                ) && relaxed(j + 2 - f, cnt(j + 1), nnz + cnt(j + 1))
+            } else {
+                parent_next && cnt(j) == cnt(j + 1) + 1
+            };
             pair[j] = parent_next
                 && pair_first.get(j).copied().unwrap_or(false)
                 && (j == 0 || !pair[j - 1]);
             if !chained && !pair[j] {
                 sn_begin.push(j + 1);
+                nnz = 0;
             }
         }
         sn_begin.push(dim);
@@ -199,7 +236,7 @@ impl BlockPlan {
         for sn in 0..ns {
             upd_ptr[sn + 1] += upd_ptr[sn];
         }
-        let upd = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        let upd: Vec<(u32, u32, u32)> = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
         let sn_pair = (0..ns)
             .map(|sn| pair[sn_begin[sn]..sn_begin[sn + 1]].iter().any(|&p| p))
             .collect();
@@ -231,6 +268,18 @@ impl BlockPlan {
             .map(|sn| sn_row_ptr[sn + 1] - sn_row_ptr[sn])
             .max()
             .unwrap_or(0);
+        // The blocked kernel's `L D` factor of an update (target columns × descendant
+        // columns) or of a panel (its columns × the columns before it).
+        let (mut max_w, mut max_tmp) = (0, max_rows);
+        for t in 0..ns {
+            let w = sn_begin[t + 1] - sn_begin[t];
+            max_w = max_w.max((PANEL + 1).min(w) * w);
+            for &(d, p, q) in &upd[upd_ptr[t]..upd_ptr[t + 1]] {
+                let (d, p, q) = (d as usize, p as usize, q as usize);
+                max_w = max_w.max((q - p) * (sn_begin[d + 1] - sn_begin[d]));
+                max_tmp = max_tmp.max((sn_row_ptr[d + 1] - sn_row_ptr[d] - p) * (q - p));
+            }
+        }
         Some(Self {
             perm_fwd: fwd.to_vec(),
             perm_inv: inv.to_vec(),
@@ -252,20 +301,60 @@ impl BlockPlan {
             l_col_ptr,
             l_row_idx,
             map: vec![0; dim],
-            tmp: vec![0.0; max_rows],
+            tmp: vec![0.0; max_tmp],
+            rel: vec![0; max_rows],
+            wbuf: vec![0.0; max_w],
             coef: vec![0.0; max_rows],
             x: vec![0.0; dim],
         })
     }
 
-    /// Numeric LDLᵀ; pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
-    /// inertia, or `None` on a zero or non-finite pivot.
-    pub(super) fn factor(&mut self, values: &[f64], eps: f64, delta: f64) -> Option<Inertia> {
-        let (eps, delta) = (eps.abs(), delta.abs());
+    /// The values of `K` scattered into the zeroed blocks.
+    fn load(&mut self, values: &[f64]) {
         self.vals.iter_mut().for_each(|v| *v = 0.0);
         for (&dst, &v) in self.a_dst.iter().zip(values) {
             self.vals[dst] = v;
         }
+    }
+
+    /// Numeric LDLᵀ with dense kernels where they pay ([`factor_with`](Self::factor_with)
+    /// `blocked`). Pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
+    /// inertia, or `None` on a zero or non-finite pivot.
+    pub(super) fn factor(&mut self, values: &[f64], eps: f64, delta: f64) -> Option<Inertia> {
+        self.factor_with(values, eps, delta, true)
+    }
+
+    /// Numeric LDLᵀ with column-by-column updates only (each target column receives a linear
+    /// combination of a descendant's columns, four at a time; each diagonal block is factored
+    /// left-looking column by column): the kernel before the dense products, kept as
+    /// [`LdltBackend::SupernodalColumns`](super::LdltBackend::SupernodalColumns) for comparison.
+    pub(super) fn factor_columns(
+        &mut self,
+        values: &[f64],
+        eps: f64,
+        delta: f64,
+    ) -> Option<Inertia> {
+        self.factor_with(values, eps, delta, false)
+    }
+
+    /// The numeric LDLᵀ. With `blocked`, a descendant's update of at least
+    /// [`GEMM_MIN`] columns into at least [`GEMM_MIN`] consecutive columns of a supernode whose
+    /// rows land on consecutive rows of the target is one matrix product
+    /// `L_d[rows] (L_d D_d)[cols]ᵀ` on 4 × 4 register tiles ([`gemm_sub`]) subtracted in
+    /// place, and a diagonal block of at least `2 PANEL` columns is factored by panels of
+    /// [`PANEL`] columns (the block's earlier columns update a panel by one product, the
+    /// panel's own columns are eliminated one by one); every other update is a linear
+    /// combination per target column. The pivots, static pivoting, 2 × 2 pairs and inertia
+    /// count are the same either way; only the summation order differs.
+    fn factor_with(
+        &mut self,
+        values: &[f64],
+        eps: f64,
+        delta: f64,
+        blocked: bool,
+    ) -> Option<Inertia> {
+        let (eps, delta) = (eps.abs(), delta.abs());
+        self.load(values);
         let ns = self.sn_begin.len() - 1;
         let mut inertia = Inertia::default();
         for sn in 0..ns {
@@ -291,6 +380,66 @@ impl BlockPlan {
                 // in place without the row map.
                 let first = self.map[rd[p1] as usize] as usize;
                 let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
+                let nc = p2 - p1;
+                if blocked && wd * nc >= GEMM_MIN {
+                    // W = (L_d D_d) on the target's columns, k-major: w[k·nc + j]. Rows rd[p1..]
+                    // are consecutive rows of the block and rd[p1..p2] its consecutive columns
+                    // (the block's own columns are its first rows); entries above the target's
+                    // diagonal land in the block's unused upper triangle.
+                    let wbuf = &mut self.wbuf[..nc * wd];
+                    for j in 0..nc {
+                        let coef = &mut self.coef[..wd];
+                        if self.sn_pair[dd] {
+                            dl_t(
+                                coef,
+                                bd,
+                                nrd,
+                                p1 + j,
+                                dpiv,
+                                &self.e[fd..ld],
+                                &self.pair[fd..ld],
+                            );
+                        } else {
+                            for (k, cf) in coef.iter_mut().enumerate() {
+                                *cf = bd[k * nrd + p1 + j] * dpiv[k];
+                            }
+                        }
+                        for (k, &cf) in coef.iter().enumerate() {
+                            wbuf[k * nc + j] = cf;
+                        }
+                    }
+                    let m = nrd - p1;
+                    if contiguous {
+                        let c0 = rd[p1] as usize - f;
+                        gemm_sub(
+                            &mut blk[c0 * nr + first..],
+                            nr,
+                            &bd[p1..],
+                            nrd,
+                            m,
+                            wbuf,
+                            nc,
+                            wd,
+                        );
+                        continue;
+                    }
+                    // Elsewhere the product goes to a buffer, scattered through the row map
+                    // once per target column (lower part only).
+                    let tmp = &mut self.tmp[..m * nc];
+                    tmp.iter_mut().for_each(|t| *t = 0.0);
+                    gemm_sub(tmp, m, &bd[p1..], nrd, m, wbuf, nc, wd);
+                    let rel = &mut self.rel[..m];
+                    for (x, &r) in rel.iter_mut().zip(&rd[p1..]) {
+                        *x = self.map[r as usize];
+                    }
+                    for j in 0..nc {
+                        let bcol = &mut blk[(rd[p1 + j] as usize - f) * nr..][..nr];
+                        for (&i, &t) in rel[j..].iter().zip(&tmp[j * m + j..(j + 1) * m]) {
+                            bcol[i as usize] += t;
+                        }
+                    }
+                    continue;
+                }
                 for q in p1..p2 {
                     let c = rd[q] as usize - f;
                     let len = nrd - q;
@@ -328,73 +477,50 @@ impl BlockPlan {
                     }
                 }
             }
-            // Dense left-looking LDLᵀ of the block's own columns.
+            // Dense LDLᵀ of the block's own columns: left-looking column by column, or by
+            // panels whose columns the earlier ones update by one product.
             let has_pair = self.sn_pair[sn];
-            let mut c = 0;
-            while c < w {
-                let two = self.pair[f + c];
-                for t in c..c + 1 + usize::from(two) {
-                    let coef = &mut self.coef[..c];
-                    if has_pair {
-                        let (d, e, p) =
-                            (&self.d[f..f + c], &self.e[f..f + c], &self.pair[f..f + c]);
-                        dl_t(coef, blk, nr, t, d, e, p);
-                    } else {
-                        for (k, cf) in coef.iter_mut().enumerate() {
-                            *cf = blk[k * nr + t] * self.d[f + k];
+            let panel = if blocked && w >= 2 * PANEL { PANEL } else { w };
+            let mut c0 = 0;
+            while c0 < w {
+                let mut c1 = (c0 + panel).min(w);
+                if c1 < w && self.pair[f + c1 - 1] {
+                    c1 += 1;
+                }
+                if c0 > 0 {
+                    let nc = c1 - c0;
+                    let wbuf = &mut self.wbuf[..nc * c0];
+                    for j in 0..nc {
+                        let coef = &mut self.coef[..c0];
+                        if has_pair {
+                            let r = f..f + c0;
+                            dl_t(
+                                coef,
+                                blk,
+                                nr,
+                                c0 + j,
+                                &self.d[r.clone()],
+                                &self.e[r.clone()],
+                                &self.pair[r],
+                            );
+                        } else {
+                            for (k, cf) in coef.iter_mut().enumerate() {
+                                *cf = blk[k * nr + c0 + j] * self.d[f + k];
+                            }
+                        }
+                        for (k, &cf) in coef.iter().enumerate() {
+                            wbuf[k * nc + j] = cf;
                         }
                     }
-                    let (left, right) = blk.split_at_mut(t * nr);
-                    lincomb_sub(&mut right[t..nr], left, nr, t, coef);
+                    let (left, right) = blk.split_at_mut(c0 * nr);
+                    gemm_sub(&mut right[c0..], nr, &left[c0..], nr, nr - c0, wbuf, nc, c0);
                 }
-                if !two {
-                    let col = &mut blk[c * nr + c..(c + 1) * nr];
-                    let (d, _) = counted_pivot(col[0], delta, eps, &mut inertia)?;
-                    col[0] = d;
-                    let inv = d.recip();
-                    col[1..].iter_mut().for_each(|v| *v *= inv);
-                    self.d[f + c] = d;
-                    self.inv_d[f + c] = inv;
-                    self.e[f + c] = 0.0;
-                    self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
-                    c += 1;
-                    continue;
+                let mut elim = elimination!(self);
+                let mut c = c0;
+                while c < c1 {
+                    c = elim.column(blk, nr, f, c0, c, has_pair, eps, delta, &mut inertia)?;
                 }
-                // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it
-                // are [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
-                let (cc, c1) = blk.split_at_mut((c + 1) * nr);
-                let (col0, col1) = (&mut cc[c * nr + c..], &mut c1[c + 1..nr]);
-                let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
-                if a.abs() <= eps {
-                    a = 0.0;
-                    // Two 1 × 1 pivots: the static pivoting of each applies.
-                    for d in [&mut d1, &mut d2] {
-                        if delta > 0.0 && d.abs() <= eps {
-                            *d = if *d < 0.0 { -delta } else { delta };
-                        }
-                    }
-                }
-                let det = counted_pair(d1, a, d2, &mut inertia)?;
-                let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
-                for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
-                    let (u, v) = (*x, *y);
-                    *x = u * i11 + v * i12;
-                    *y = u * i12 + v * i22;
-                }
-                col0[0] = d1;
-                col0[1] = 0.0;
-                col1[0] = d2;
-                let j = f + c;
-                self.d[j] = d1;
-                self.d[j + 1] = d2;
-                self.e[j] = a;
-                self.e[j + 1] = 0.0;
-                self.inv_d[j] = i11;
-                self.inv_d[j + 1] = i22;
-                self.inv_e[j] = i12;
-                self.l[self.l_col_ptr[j]..self.l_col_ptr[j + 1]].copy_from_slice(col0);
-                self.l[self.l_col_ptr[j + 1]..self.l_col_ptr[j + 2]].copy_from_slice(col1);
-                c += 2;
+                c0 = c1;
             }
         }
         Some(inertia)
@@ -440,6 +566,111 @@ impl BlockPlan {
         for i in 0..n {
             rhs[i] = x[self.perm_inv[i]];
         }
+    }
+}
+
+/// The pivot state of a [`BlockPlan`] that eliminating one column (or 2 × 2 pair) writes:
+/// `D`, its inverse, the pair marks and `L`'s solve copy.
+struct Elimination<'a> {
+    d: &'a mut [f64],
+    inv_d: &'a mut [f64],
+    e: &'a mut [f64],
+    inv_e: &'a mut [f64],
+    pair: &'a [bool],
+    l: &'a mut [f64],
+    l_col_ptr: &'a [usize],
+    coef: &'a mut [f64],
+}
+
+impl Elimination<'_> {
+    /// Eliminates column `c` (with `c + 1` when they are a 2 × 2 pair) of the supernode whose
+    /// first column is `f` and whose `nr`-row block is `blk`: the updates from its columns
+    /// `c0..c` (those before `c0` are already applied), the static pivoting, the pivot's count
+    /// into `inertia`, `L`'s columns scaled by the pivot's inverse and copied for the solves.
+    /// The next column to eliminate, or `None` on a zero or non-finite pivot.
+    #[allow(clippy::too_many_arguments)]
+    fn column(
+        &mut self,
+        blk: &mut [f64],
+        nr: usize,
+        f: usize,
+        c0: usize,
+        c: usize,
+        has_pair: bool,
+        eps: f64,
+        delta: f64,
+        inertia: &mut Inertia,
+    ) -> Option<usize> {
+        let two = self.pair[f + c];
+        for t in c..c + 1 + usize::from(two) {
+            let coef = &mut self.coef[..c - c0];
+            let (left, right) = blk.split_at_mut(t * nr);
+            let src = &left[c0 * nr..];
+            if has_pair {
+                let r = f + c0..f + c;
+                dl_t(
+                    coef,
+                    src,
+                    nr,
+                    t,
+                    &self.d[r.clone()],
+                    &self.e[r.clone()],
+                    &self.pair[r],
+                );
+            } else {
+                for (k, cf) in coef.iter_mut().enumerate() {
+                    *cf = src[k * nr + t] * self.d[f + c0 + k];
+                }
+            }
+            lincomb_sub(&mut right[t..nr], src, nr, t, coef);
+        }
+        if !two {
+            let col = &mut blk[c * nr + c..(c + 1) * nr];
+            let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;
+            col[0] = d;
+            let inv = d.recip();
+            col[1..].iter_mut().for_each(|v| *v *= inv);
+            self.d[f + c] = d;
+            self.inv_d[f + c] = inv;
+            self.e[f + c] = 0.0;
+            self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
+            return Some(c + 1);
+        }
+        // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it are
+        // [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
+        let (cc, c1) = blk.split_at_mut((c + 1) * nr);
+        let (col0, col1) = (&mut cc[c * nr + c..], &mut c1[c + 1..nr]);
+        let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
+        if a.abs() <= eps {
+            a = 0.0;
+            // Two 1 × 1 pivots: the static pivoting of each applies.
+            for d in [&mut d1, &mut d2] {
+                if delta > 0.0 && d.abs() <= eps {
+                    *d = if *d < 0.0 { -delta } else { delta };
+                }
+            }
+        }
+        let det = counted_pair(d1, a, d2, inertia)?;
+        let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
+        for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
+            let (u, v) = (*x, *y);
+            *x = u * i11 + v * i12;
+            *y = u * i12 + v * i22;
+        }
+        col0[0] = d1;
+        col0[1] = 0.0;
+        col1[0] = d2;
+        let j = f + c;
+        self.d[j] = d1;
+        self.d[j + 1] = d2;
+        self.e[j] = a;
+        self.e[j + 1] = 0.0;
+        self.inv_d[j] = i11;
+        self.inv_d[j + 1] = i22;
+        self.inv_e[j] = i12;
+        self.l[self.l_col_ptr[j]..self.l_col_ptr[j + 1]].copy_from_slice(col0);
+        self.l[self.l_col_ptr[j + 1]..self.l_col_ptr[j + 2]].copy_from_slice(col1);
+        Some(c + 2)
     }
 }
 
@@ -509,4 +740,125 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
         tail += v * x[r as usize];
     }
     (s[0] + s[1]) + (s[2] + s[3]) + tail
+}
+
+/// Whether the sorted rows `below` of a column, except `next`, are all among the sorted rows
+/// `of_next` of column `next`.
+fn nested(below: &[usize], next: usize, of_next: &[usize]) -> bool {
+    let mut it = of_next.iter().peekable();
+    below.iter().filter(|&&r| r != next).all(|&r| {
+        while it.next_if(|&&x| x < r).is_some() {}
+        it.next_if(|&&x| x == r).is_some()
+    })
+}
+
+/// Whether a supernode of `w` columns whose last column has `last` entries (diagonal
+/// included) and whose columns have `nnz` entries in all is dense enough to be one block:
+/// CHOLMOD's relaxed amalgamation rule (any ≤ 4 columns, ≤ 16 columns with at most 80 % explicit
+/// zeros, ≤ 48 with 10 %, wider with 5 %).
+fn relaxed(w: usize, last: usize, nnz: usize) -> bool {
+    let rows = w + last - 1;
+    let stored = w * rows - w * (w - 1) / 2;
+    let zeros = stored.saturating_sub(nnz) as f64 / stored as f64;
+    zeros < 0.05 || (w <= 16 && zeros < 0.2)
+}
+
+/// Columns of a diagonal-block panel of the blocked kernel: the columns before the panel
+/// update it by one dense matrix product, the panel's own columns are eliminated one by one.
+const PANEL: usize = 16;
+
+/// Fewest descendant columns and target columns for which the blocked kernel computes an
+/// update as one matrix product (below it the per-column linear combination is as fast).
+const GEMM_MIN: usize = 1;
+
+/// `out[j·ld + i] −= Σ_k a[k·lda + i] · w[k·nc + j]` for `i < m`, `j < nc` (a product of the
+/// `m × kd` column-major `a` and the transpose of the `nc × kd` k-major `w`), on 4 × 4 tiles
+/// held in registers over the whole sum; tiles entirely above the diagonal (`i < j`) are
+/// skipped, entries above it inside a diagonal tile are written too (the callers' blocks leave
+/// their upper triangles unused).
+#[allow(clippy::too_many_arguments)]
+fn gemm_sub(
+    out: &mut [f64],
+    ld: usize,
+    a: &[f64],
+    lda: usize,
+    m: usize,
+    w: &[f64],
+    nc: usize,
+    kd: usize,
+) {
+    let mut j0 = 0;
+    while j0 < nc {
+        let cols = (nc - j0).min(4);
+        let mut i0 = j0 - j0 % 4;
+        while i0 < m {
+            let rows = (m - i0).min(4);
+            let t = Tile {
+                out: &mut *out,
+                ld,
+                a,
+                lda,
+                w,
+                nc,
+                kd,
+                i0,
+                j0,
+            };
+            match (rows, cols) {
+                (4, 4) => t.run::<4, 4>(),
+                (4, 3) => t.run::<4, 3>(),
+                (4, 2) => t.run::<4, 2>(),
+                (4, 1) => t.run::<4, 1>(),
+                (3, 4) => t.run::<3, 4>(),
+                (3, 3) => t.run::<3, 3>(),
+                (3, 2) => t.run::<3, 2>(),
+                (3, 1) => t.run::<3, 1>(),
+                (2, 4) => t.run::<2, 4>(),
+                (2, 3) => t.run::<2, 3>(),
+                (2, 2) => t.run::<2, 2>(),
+                (2, 1) => t.run::<2, 1>(),
+                (1, 4) => t.run::<1, 4>(),
+                (1, 3) => t.run::<1, 3>(),
+                (1, 2) => t.run::<1, 2>(),
+                _ => t.run::<1, 1>(),
+            }
+            i0 += 4;
+        }
+        j0 += 4;
+    }
+}
+
+/// One `R × C` tile of [`gemm_sub`] at rows `i0..`, columns `j0..`.
+struct Tile<'a> {
+    out: &'a mut [f64],
+    ld: usize,
+    a: &'a [f64],
+    lda: usize,
+    w: &'a [f64],
+    nc: usize,
+    kd: usize,
+    i0: usize,
+    j0: usize,
+}
+
+impl Tile<'_> {
+    #[inline(always)]
+    fn run<const R: usize, const C: usize>(self) {
+        let mut acc = [[0.0f64; R]; C];
+        for k in 0..self.kd {
+            let ak = &self.a[k * self.lda + self.i0..][..R];
+            let wk = &self.w[k * self.nc + self.j0..][..C];
+            for c in 0..C {
+                for r in 0..R {
+                    acc[c][r] += ak[r] * wk[c];
+                }
+            }
+        }
+        for (c, col) in acc.iter().enumerate() {
+            let o = &mut self.out[(self.j0 + c) * self.ld + self.i0..][..R];
+            for (x, &v) in o.iter_mut().zip(col) {
+                *x -= v;
+            }
+        }
+    }
 }
