@@ -490,14 +490,7 @@ impl KktSolver for SparseLdlt {
             _ => false,
         };
         let block = if supernodal {
-            BlockPlan::new(
-                &faer.symbolic,
-                dim,
-                col_ptr,
-                row_idx,
-                &pair_first,
-                opts.backend != LdltBackend::SupernodalColumns,
-            )
+            BlockPlan::new(&faer.symbolic, dim, col_ptr, row_idx, &pair_first)
         } else {
             None
         };

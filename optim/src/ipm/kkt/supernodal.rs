@@ -154,7 +154,6 @@ impl BlockPlan {
         col_ptr: &[usize],
         row_idx: &[usize],
         pair_first: &[bool],
-        relax: bool,
     ) -> Option<Self> {
         let (fwd, inv, lp, lr) = simplicial_structure(sym)?;
         if *lp.last()? > u32::MAX as usize || dim >= u32::MAX as usize || dim == 0 {
@@ -166,34 +165,17 @@ impl BlockPlan {
         // a supernode [f, l) has rows {f, …, l − 1} ∪ struct(l − 1) and no explicit zeros.
         // A granted pair [j, j + 1] joins one supernode as well: parent(j) = j + 1 gives
         // struct(L_j) ⊆ {j} ∪ struct(L_{j+1}), so the supernode's rows still contain every
-        // column's structure. With `relax`, column j + 1 joins j's supernode whenever j's rows
-        // below j + 1 are among j + 1's ([`nested`]: so the supernode's rows contain every
-        // column's structure, with explicit zeros, also for siblings in the elimination tree
-        // such as the nodes of one collocation phase) and the explicit zeros stay few
-        // ([`relaxed`]): the descendants' many rank-1 scatters become fewer, wider updates.
+        // column's structure.
         let mut pair = vec![false; dim];
         let mut sn_begin = vec![0usize];
-        // Entries of L in the current supernode's columns.
-        let mut nnz = 0;
         for j in 0..dim - 1 {
-            nnz += cnt(j);
             let parent_next = cnt(j) > 1 && lr[lp[j] + 1] == j + 1;
-            let f = sn_begin[sn_begin.len() - 1];
-            let chained = if relax {
-                nested(
-                    &lr[lp[j] + 1..lp[j + 1]],
-                    j + 1,
-                    &lr[lp[j + 1] + 1..lp[j + 2]],
-                ) && relaxed(j + 2 - f, cnt(j + 1), nnz + cnt(j + 1))
-            } else {
-                parent_next && cnt(j) == cnt(j + 1) + 1
-            };
+            let chained = parent_next && cnt(j) == cnt(j + 1) + 1;
             pair[j] = parent_next
                 && pair_first.get(j).copied().unwrap_or(false)
                 && (j == 0 || !pair[j - 1]);
             if !chained && !pair[j] {
                 sn_begin.push(j + 1);
-                nnz = 0;
             }
         }
         sn_begin.push(dim);
@@ -337,15 +319,17 @@ impl BlockPlan {
         self.factor_with(values, eps, delta, false)
     }
 
-    /// The numeric LDLᵀ. With `blocked`, a descendant's update of at least
-    /// [`GEMM_MIN`] columns into at least [`GEMM_MIN`] consecutive columns of a supernode whose
-    /// rows land on consecutive rows of the target is one matrix product
-    /// `L_d[rows] (L_d D_d)[cols]ᵀ` on 4 × 4 register tiles ([`gemm_sub`]) subtracted in
-    /// place, and a diagonal block of at least `2 PANEL` columns is factored by panels of
-    /// [`PANEL`] columns (the block's earlier columns update a panel by one product, the
-    /// panel's own columns are eliminated one by one); every other update is a linear
-    /// combination per target column. The pivots, static pivoting, 2 × 2 pairs and inertia
-    /// count are the same either way; only the summation order differs.
+    /// The numeric LDLᵀ. With `blocked`, a descendant's update of at least [`GEMM_MIN`]
+    /// columns into at least [`GEMM_MIN`] columns of a supernode is one matrix product
+    /// `L_d[rows] (L_d D_d)[cols]ᵀ` on 4 × 4 register tiles ([`gemm_sub`]), subtracted in place
+    /// where the descendant's rows are consecutive rows of the target and scattered from a
+    /// buffer otherwise, and a diagonal block of at least `2 PANEL` columns without 2 × 2
+    /// pivots is factored by panels of [`PANEL`] columns (the block's earlier columns update a
+    /// panel by one product, the panel's own columns are eliminated one by one); every other
+    /// update is a linear combination per target column. The products perform the column
+    /// kernel's operations in its order (groups of four source columns, then single ones, per
+    /// descendant in the same order), so the factor is bit for bit the same either way: the
+    /// blocked kernel changes the time, not the path.
     fn factor_with(
         &mut self,
         values: &[f64],
@@ -381,7 +365,7 @@ impl BlockPlan {
                 let first = self.map[rd[p1] as usize] as usize;
                 let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
                 let nc = p2 - p1;
-                if blocked && wd * nc >= GEMM_MIN {
+                if blocked && wd >= GEMM_MIN && nc >= GEMM_MIN {
                     // W = (L_d D_d) on the target's columns, k-major: w[k·nc + j]. Rows rd[p1..]
                     // are consecutive rows of the block and rd[p1..p2] its consecutive columns
                     // (the block's own columns are its first rows); entries above the target's
@@ -480,13 +464,18 @@ impl BlockPlan {
             // Dense LDLᵀ of the block's own columns: left-looking column by column, or by
             // panels whose columns the earlier ones update by one product.
             let has_pair = self.sn_pair[sn];
-            let panel = if blocked && w >= 2 * PANEL { PANEL } else { w };
+            // Panels start at multiples of four columns, so that the product before a panel and
+            // the columns' own combinations group the source columns as the column kernel
+            // does; a supernode with a 2 × 2 pivot (which may straddle a panel) keeps that
+            // kernel.
+            let panel = if blocked && w >= 2 * PANEL && !has_pair {
+                PANEL
+            } else {
+                w
+            };
             let mut c0 = 0;
             while c0 < w {
-                let mut c1 = (c0 + panel).min(w);
-                if c1 < w && self.pair[f + c1 - 1] {
-                    c1 += 1;
-                }
+                let c1 = (c0 + panel).min(w);
                 if c0 > 0 {
                     let nc = c1 - c0;
                     let wbuf = &mut self.wbuf[..nc * c0];
@@ -742,34 +731,13 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
 
-/// Whether the sorted rows `below` of a column, except `next`, are all among the sorted rows
-/// `of_next` of column `next`.
-fn nested(below: &[usize], next: usize, of_next: &[usize]) -> bool {
-    let mut it = of_next.iter().peekable();
-    below.iter().filter(|&&r| r != next).all(|&r| {
-        while it.next_if(|&&x| x < r).is_some() {}
-        it.next_if(|&&x| x == r).is_some()
-    })
-}
-
-/// Whether a supernode of `w` columns whose last column has `last` entries (diagonal
-/// included) and whose columns have `nnz` entries in all is dense enough to be one block:
-/// CHOLMOD's relaxed amalgamation rule (any ≤ 4 columns, ≤ 16 columns with at most 80 % explicit
-/// zeros, ≤ 48 with 10 %, wider with 5 %).
-fn relaxed(w: usize, last: usize, nnz: usize) -> bool {
-    let rows = w + last - 1;
-    let stored = w * rows - w * (w - 1) / 2;
-    let zeros = stored.saturating_sub(nnz) as f64 / stored as f64;
-    zeros < 0.05 || (w <= 16 && zeros < 0.2)
-}
-
 /// Columns of a diagonal-block panel of the blocked kernel: the columns before the panel
 /// update it by one dense matrix product, the panel's own columns are eliminated one by one.
 const PANEL: usize = 16;
 
 /// Fewest descendant columns and target columns for which the blocked kernel computes an
 /// update as one matrix product (below it the per-column linear combination is as fast).
-const GEMM_MIN: usize = 1;
+const GEMM_MIN: usize = 4;
 
 /// `out[j·ld + i] −= Σ_k a[k·lda + i] · w[k·nc + j]` for `i < m`, `j < nc` (a product of the
 /// `m × kd` column-major `a` and the transpose of the `nc × kd` k-major `w`), on 4 × 4 tiles
@@ -845,20 +813,33 @@ impl Tile<'_> {
     #[inline(always)]
     fn run<const R: usize, const C: usize>(self) {
         let mut acc = [[0.0f64; R]; C];
-        for k in 0..self.kd {
-            let ak = &self.a[k * self.lda + self.i0..][..R];
-            let wk = &self.w[k * self.nc + self.j0..][..C];
+        for (c, col) in acc.iter_mut().enumerate() {
+            col.copy_from_slice(&self.out[(self.j0 + c) * self.ld + self.i0..][..R]);
+        }
+        let a = |k: usize| -> &[f64] { &self.a[k * self.lda + self.i0..][..R] };
+        let w = |k: usize| -> &[f64] { &self.w[k * self.nc + self.j0..][..C] };
+        // The operations of `lincomb_sub`, in its order: per group of four source columns one
+        // subtraction of `(w₀a₀ + w₁a₁) + (w₂a₂ + w₃a₃)`, then one per remaining column.
+        let groups = self.kd / 4 * 4;
+        for k in (0..groups).step_by(4) {
+            let (a0, a1, a2, a3) = (a(k), a(k + 1), a(k + 2), a(k + 3));
+            let (w0, w1, w2, w3) = (w(k), w(k + 1), w(k + 2), w(k + 3));
             for c in 0..C {
                 for r in 0..R {
-                    acc[c][r] += ak[r] * wk[c];
+                    acc[c][r] -= (w0[c] * a0[r] + w1[c] * a1[r]) + (w2[c] * a2[r] + w3[c] * a3[r]);
+                }
+            }
+        }
+        for k in groups..self.kd {
+            let (ak, wk) = (a(k), w(k));
+            for c in 0..C {
+                for r in 0..R {
+                    acc[c][r] -= wk[c] * ak[r];
                 }
             }
         }
         for (c, col) in acc.iter().enumerate() {
-            let o = &mut self.out[(self.j0 + c) * self.ld + self.i0..][..R];
-            for (x, &v) in o.iter_mut().zip(col) {
-                *x -= v;
-            }
+            self.out[(self.j0 + c) * self.ld + self.i0..][..R].copy_from_slice(col);
         }
     }
 }
