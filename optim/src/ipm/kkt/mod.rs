@@ -270,13 +270,8 @@ pub enum LdltBackend {
     /// factor and solution.
     Simplicial,
     /// Left-looking supernodal LDLᵀ on the fundamental supernodes of the simplicial structure
-    /// (no relaxation zeros) with dense kernels: each update of a supernode is one register-
-    /// tiled matrix product, its diagonal block is factored by panels; different rounding from
-    /// the simplicial backend.
+    /// (no relaxation zeros); different rounding from the simplicial backend.
     Supernodal,
-    /// The supernodal backend's structure and pivots with column-by-column updates (the kernel
-    /// before the dense products), kept for comparison (BENCHMARKS.md); same rounding class.
-    SupernodalColumns,
     /// faer's own simplicial numeric factorization and solve.
     FaerSimplicial,
     /// faer's own supernodal numeric factorization and solve.
@@ -476,7 +471,7 @@ impl KktSolver for SparseLdlt {
             return Ok(());
         }
         let supernodal = match opts.backend {
-            LdltBackend::Supernodal | LdltBackend::SupernodalColumns => true,
+            LdltBackend::Supernodal => true,
             // Where faer's flop rule picks its supernodal factor (dense LG blocks), the
             // supernodal kernel on the simplicial structure replaces it (same factor speed
             // there, no relaxation fill, faster solves). 2 × 2 pivots exist in the supernodal
@@ -547,11 +542,6 @@ impl SparseLdlt {
             };
         let singular = || failure(FactorizationFailure::SingularPivot);
         let inertia = match &mut self.kernel {
-            Kernel::Supernodal(block) if self.options.backend == LdltBackend::SupernodalColumns => {
-                block
-                    .factor_columns(values, eps, delta)
-                    .ok_or_else(singular)?
-            }
             Kernel::Supernodal(block) => block.factor(values, eps, delta).ok_or_else(singular)?,
             Kernel::Multifrontal(mf) => mf.factor(values, eps, delta).ok_or_else(singular)?,
             Kernel::Simplicial(plan) => {

@@ -68,23 +68,6 @@ pub(super) fn counted_pair(a: f64, b: f64, c: f64, inertia: &mut Inertia) -> Opt
     Some(det)
 }
 
-/// The [`Elimination`] of a [`BlockPlan`]'s pivot fields (a macro, so that the borrow is of
-/// those fields only and the blocks in `vals` stay writable beside it).
-macro_rules! elimination {
-    ($plan:expr) => {
-        Elimination {
-            d: &mut $plan.d,
-            inv_d: &mut $plan.inv_d,
-            e: &mut $plan.e,
-            inv_e: &mut $plan.inv_e,
-            pair: &$plan.pair,
-            l: &mut $plan.l,
-            l_col_ptr: &$plan.l_col_ptr,
-            coef: &mut $plan.coef,
-        }
-    };
-}
-
 /// Left-looking supernodal LDLᵀ on the fundamental supernodes of faer's simplicial structure
 /// (same AMD permutation, same `L` pattern, no explicit zeros): runs of columns with nested
 /// structure (`parent(j) = j + 1`, `|L_j| = |L_{j+1}| + 1`) are stored as dense column-major
@@ -135,8 +118,6 @@ pub(super) struct BlockPlan {
     // workspaces
     pub(super) map: Vec<u32>,
     pub(super) tmp: Vec<f64>,
-    pub(super) wbuf: Vec<f64>,
-    pub(super) rel: Vec<u32>,
     pub(super) coef: Vec<f64>,
     pub(super) x: Vec<f64>,
 }
@@ -218,7 +199,7 @@ impl BlockPlan {
         for sn in 0..ns {
             upd_ptr[sn + 1] += upd_ptr[sn];
         }
-        let upd: Vec<(u32, u32, u32)> = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        let upd = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
         let sn_pair = (0..ns)
             .map(|sn| pair[sn_begin[sn]..sn_begin[sn + 1]].iter().any(|&p| p))
             .collect();
@@ -250,18 +231,6 @@ impl BlockPlan {
             .map(|sn| sn_row_ptr[sn + 1] - sn_row_ptr[sn])
             .max()
             .unwrap_or(0);
-        // The blocked kernel's `L D` factor of an update (target columns × descendant
-        // columns) or of a panel (its columns × the columns before it).
-        let (mut max_w, mut max_tmp) = (0, max_rows);
-        for t in 0..ns {
-            let w = sn_begin[t + 1] - sn_begin[t];
-            max_w = max_w.max((PANEL + 1).min(w) * w);
-            for &(d, p, q) in &upd[upd_ptr[t]..upd_ptr[t + 1]] {
-                let (d, p, q) = (d as usize, p as usize, q as usize);
-                max_w = max_w.max((q - p) * (sn_begin[d + 1] - sn_begin[d]));
-                max_tmp = max_tmp.max((sn_row_ptr[d + 1] - sn_row_ptr[d] - p) * (q - p));
-            }
-        }
         Some(Self {
             perm_fwd: fwd.to_vec(),
             perm_inv: inv.to_vec(),
@@ -283,62 +252,20 @@ impl BlockPlan {
             l_col_ptr,
             l_row_idx,
             map: vec![0; dim],
-            tmp: vec![0.0; max_tmp],
-            rel: vec![0; max_rows],
-            wbuf: vec![0.0; max_w],
+            tmp: vec![0.0; max_rows],
             coef: vec![0.0; max_rows],
             x: vec![0.0; dim],
         })
     }
 
-    /// The values of `K` scattered into the zeroed blocks.
-    fn load(&mut self, values: &[f64]) {
+    /// Numeric LDLᵀ; pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
+    /// inertia, or `None` on a zero or non-finite pivot.
+    pub(super) fn factor(&mut self, values: &[f64], eps: f64, delta: f64) -> Option<Inertia> {
+        let (eps, delta) = (eps.abs(), delta.abs());
         self.vals.iter_mut().for_each(|v| *v = 0.0);
         for (&dst, &v) in self.a_dst.iter().zip(values) {
             self.vals[dst] = v;
         }
-    }
-
-    /// Numeric LDLᵀ with dense kernels where they pay ([`factor_with`](Self::factor_with)
-    /// `blocked`). Pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
-    /// inertia, or `None` on a zero or non-finite pivot.
-    pub(super) fn factor(&mut self, values: &[f64], eps: f64, delta: f64) -> Option<Inertia> {
-        self.factor_with(values, eps, delta, true)
-    }
-
-    /// Numeric LDLᵀ with column-by-column updates only (each target column receives a linear
-    /// combination of a descendant's columns, four at a time; each diagonal block is factored
-    /// left-looking column by column): the kernel before the dense products, kept as
-    /// [`LdltBackend::SupernodalColumns`](super::LdltBackend::SupernodalColumns) for comparison.
-    pub(super) fn factor_columns(
-        &mut self,
-        values: &[f64],
-        eps: f64,
-        delta: f64,
-    ) -> Option<Inertia> {
-        self.factor_with(values, eps, delta, false)
-    }
-
-    /// The numeric LDLᵀ. With `blocked`, a descendant's update of at least [`GEMM_MIN`]
-    /// columns into at least [`GEMM_MIN`] columns of a supernode is one matrix product
-    /// `L_d[rows] (L_d D_d)[cols]ᵀ` on 4 × 4 register tiles ([`gemm_sub`]), subtracted in place
-    /// where the descendant's rows are consecutive rows of the target and scattered from a
-    /// buffer otherwise, and a diagonal block of at least `2 PANEL` columns without 2 × 2
-    /// pivots is factored by panels of [`PANEL`] columns (the block's earlier columns update a
-    /// panel by one product, the panel's own columns are eliminated one by one); every other
-    /// update is a linear combination per target column. The products perform the column
-    /// kernel's operations in its order (groups of four source columns, then single ones, per
-    /// descendant in the same order), so the factor is bit for bit the same either way: the
-    /// blocked kernel changes the time, not the path.
-    fn factor_with(
-        &mut self,
-        values: &[f64],
-        eps: f64,
-        delta: f64,
-        blocked: bool,
-    ) -> Option<Inertia> {
-        let (eps, delta) = (eps.abs(), delta.abs());
-        self.load(values);
         let ns = self.sn_begin.len() - 1;
         let mut inertia = Inertia::default();
         for sn in 0..ns {
@@ -364,66 +291,6 @@ impl BlockPlan {
                 // in place without the row map.
                 let first = self.map[rd[p1] as usize] as usize;
                 let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
-                let nc = p2 - p1;
-                if blocked && wd >= GEMM_MIN && nc >= GEMM_MIN {
-                    // W = (L_d D_d) on the target's columns, k-major: w[k·nc + j]. Rows rd[p1..]
-                    // are consecutive rows of the block and rd[p1..p2] its consecutive columns
-                    // (the block's own columns are its first rows); entries above the target's
-                    // diagonal land in the block's unused upper triangle.
-                    let wbuf = &mut self.wbuf[..nc * wd];
-                    for j in 0..nc {
-                        let coef = &mut self.coef[..wd];
-                        if self.sn_pair[dd] {
-                            dl_t(
-                                coef,
-                                bd,
-                                nrd,
-                                p1 + j,
-                                dpiv,
-                                &self.e[fd..ld],
-                                &self.pair[fd..ld],
-                            );
-                        } else {
-                            for (k, cf) in coef.iter_mut().enumerate() {
-                                *cf = bd[k * nrd + p1 + j] * dpiv[k];
-                            }
-                        }
-                        for (k, &cf) in coef.iter().enumerate() {
-                            wbuf[k * nc + j] = cf;
-                        }
-                    }
-                    let m = nrd - p1;
-                    if contiguous {
-                        let c0 = rd[p1] as usize - f;
-                        gemm_sub(
-                            &mut blk[c0 * nr + first..],
-                            nr,
-                            &bd[p1..],
-                            nrd,
-                            m,
-                            wbuf,
-                            nc,
-                            wd,
-                        );
-                        continue;
-                    }
-                    // Elsewhere the product goes to a buffer, scattered through the row map
-                    // once per target column (lower part only).
-                    let tmp = &mut self.tmp[..m * nc];
-                    tmp.iter_mut().for_each(|t| *t = 0.0);
-                    gemm_sub(tmp, m, &bd[p1..], nrd, m, wbuf, nc, wd);
-                    let rel = &mut self.rel[..m];
-                    for (x, &r) in rel.iter_mut().zip(&rd[p1..]) {
-                        *x = self.map[r as usize];
-                    }
-                    for j in 0..nc {
-                        let bcol = &mut blk[(rd[p1 + j] as usize - f) * nr..][..nr];
-                        for (&i, &t) in rel[j..].iter().zip(&tmp[j * m + j..(j + 1) * m]) {
-                            bcol[i as usize] += t;
-                        }
-                    }
-                    continue;
-                }
                 for q in p1..p2 {
                     let c = rd[q] as usize - f;
                     let len = nrd - q;
@@ -461,55 +328,73 @@ impl BlockPlan {
                     }
                 }
             }
-            // Dense LDLᵀ of the block's own columns: left-looking column by column, or by
-            // panels whose columns the earlier ones update by one product.
+            // Dense left-looking LDLᵀ of the block's own columns.
             let has_pair = self.sn_pair[sn];
-            // Panels start at multiples of four columns, so that the product before a panel and
-            // the columns' own combinations group the source columns as the column kernel
-            // does; a supernode with a 2 × 2 pivot (which may straddle a panel) keeps that
-            // kernel.
-            let panel = if blocked && w >= 2 * PANEL && !has_pair {
-                PANEL
-            } else {
-                w
-            };
-            let mut c0 = 0;
-            while c0 < w {
-                let c1 = (c0 + panel).min(w);
-                if c0 > 0 {
-                    let nc = c1 - c0;
-                    let wbuf = &mut self.wbuf[..nc * c0];
-                    for j in 0..nc {
-                        let coef = &mut self.coef[..c0];
-                        if has_pair {
-                            let r = f..f + c0;
-                            dl_t(
-                                coef,
-                                blk,
-                                nr,
-                                c0 + j,
-                                &self.d[r.clone()],
-                                &self.e[r.clone()],
-                                &self.pair[r],
-                            );
-                        } else {
-                            for (k, cf) in coef.iter_mut().enumerate() {
-                                *cf = blk[k * nr + c0 + j] * self.d[f + k];
-                            }
-                        }
-                        for (k, &cf) in coef.iter().enumerate() {
-                            wbuf[k * nc + j] = cf;
+            let mut c = 0;
+            while c < w {
+                let two = self.pair[f + c];
+                for t in c..c + 1 + usize::from(two) {
+                    let coef = &mut self.coef[..c];
+                    if has_pair {
+                        let (d, e, p) =
+                            (&self.d[f..f + c], &self.e[f..f + c], &self.pair[f..f + c]);
+                        dl_t(coef, blk, nr, t, d, e, p);
+                    } else {
+                        for (k, cf) in coef.iter_mut().enumerate() {
+                            *cf = blk[k * nr + t] * self.d[f + k];
                         }
                     }
-                    let (left, right) = blk.split_at_mut(c0 * nr);
-                    gemm_sub(&mut right[c0..], nr, &left[c0..], nr, nr - c0, wbuf, nc, c0);
+                    let (left, right) = blk.split_at_mut(t * nr);
+                    lincomb_sub(&mut right[t..nr], left, nr, t, coef);
                 }
-                let mut elim = elimination!(self);
-                let mut c = c0;
-                while c < c1 {
-                    c = elim.column(blk, nr, f, c0, c, has_pair, eps, delta, &mut inertia)?;
+                if !two {
+                    let col = &mut blk[c * nr + c..(c + 1) * nr];
+                    let (d, _) = counted_pivot(col[0], delta, eps, &mut inertia)?;
+                    col[0] = d;
+                    let inv = d.recip();
+                    col[1..].iter_mut().for_each(|v| *v *= inv);
+                    self.d[f + c] = d;
+                    self.inv_d[f + c] = inv;
+                    self.e[f + c] = 0.0;
+                    self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
+                    c += 1;
+                    continue;
                 }
-                c0 = c1;
+                // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it
+                // are [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
+                let (cc, c1) = blk.split_at_mut((c + 1) * nr);
+                let (col0, col1) = (&mut cc[c * nr + c..], &mut c1[c + 1..nr]);
+                let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
+                if a.abs() <= eps {
+                    a = 0.0;
+                    // Two 1 × 1 pivots: the static pivoting of each applies.
+                    for d in [&mut d1, &mut d2] {
+                        if delta > 0.0 && d.abs() <= eps {
+                            *d = if *d < 0.0 { -delta } else { delta };
+                        }
+                    }
+                }
+                let det = counted_pair(d1, a, d2, &mut inertia)?;
+                let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
+                for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
+                    let (u, v) = (*x, *y);
+                    *x = u * i11 + v * i12;
+                    *y = u * i12 + v * i22;
+                }
+                col0[0] = d1;
+                col0[1] = 0.0;
+                col1[0] = d2;
+                let j = f + c;
+                self.d[j] = d1;
+                self.d[j + 1] = d2;
+                self.e[j] = a;
+                self.e[j + 1] = 0.0;
+                self.inv_d[j] = i11;
+                self.inv_d[j + 1] = i22;
+                self.inv_e[j] = i12;
+                self.l[self.l_col_ptr[j]..self.l_col_ptr[j + 1]].copy_from_slice(col0);
+                self.l[self.l_col_ptr[j + 1]..self.l_col_ptr[j + 2]].copy_from_slice(col1);
+                c += 2;
             }
         }
         Some(inertia)
@@ -555,111 +440,6 @@ impl BlockPlan {
         for i in 0..n {
             rhs[i] = x[self.perm_inv[i]];
         }
-    }
-}
-
-/// The pivot state of a [`BlockPlan`] that eliminating one column (or 2 × 2 pair) writes:
-/// `D`, its inverse, the pair marks and `L`'s solve copy.
-struct Elimination<'a> {
-    d: &'a mut [f64],
-    inv_d: &'a mut [f64],
-    e: &'a mut [f64],
-    inv_e: &'a mut [f64],
-    pair: &'a [bool],
-    l: &'a mut [f64],
-    l_col_ptr: &'a [usize],
-    coef: &'a mut [f64],
-}
-
-impl Elimination<'_> {
-    /// Eliminates column `c` (with `c + 1` when they are a 2 × 2 pair) of the supernode whose
-    /// first column is `f` and whose `nr`-row block is `blk`: the updates from its columns
-    /// `c0..c` (those before `c0` are already applied), the static pivoting, the pivot's count
-    /// into `inertia`, `L`'s columns scaled by the pivot's inverse and copied for the solves.
-    /// The next column to eliminate, or `None` on a zero or non-finite pivot.
-    #[allow(clippy::too_many_arguments)]
-    fn column(
-        &mut self,
-        blk: &mut [f64],
-        nr: usize,
-        f: usize,
-        c0: usize,
-        c: usize,
-        has_pair: bool,
-        eps: f64,
-        delta: f64,
-        inertia: &mut Inertia,
-    ) -> Option<usize> {
-        let two = self.pair[f + c];
-        for t in c..c + 1 + usize::from(two) {
-            let coef = &mut self.coef[..c - c0];
-            let (left, right) = blk.split_at_mut(t * nr);
-            let src = &left[c0 * nr..];
-            if has_pair {
-                let r = f + c0..f + c;
-                dl_t(
-                    coef,
-                    src,
-                    nr,
-                    t,
-                    &self.d[r.clone()],
-                    &self.e[r.clone()],
-                    &self.pair[r],
-                );
-            } else {
-                for (k, cf) in coef.iter_mut().enumerate() {
-                    *cf = src[k * nr + t] * self.d[f + c0 + k];
-                }
-            }
-            lincomb_sub(&mut right[t..nr], src, nr, t, coef);
-        }
-        if !two {
-            let col = &mut blk[c * nr + c..(c + 1) * nr];
-            let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;
-            col[0] = d;
-            let inv = d.recip();
-            col[1..].iter_mut().for_each(|v| *v *= inv);
-            self.d[f + c] = d;
-            self.inv_d[f + c] = inv;
-            self.e[f + c] = 0.0;
-            self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
-            return Some(c + 1);
-        }
-        // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it are
-        // [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
-        let (cc, c1) = blk.split_at_mut((c + 1) * nr);
-        let (col0, col1) = (&mut cc[c * nr + c..], &mut c1[c + 1..nr]);
-        let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
-        if a.abs() <= eps {
-            a = 0.0;
-            // Two 1 × 1 pivots: the static pivoting of each applies.
-            for d in [&mut d1, &mut d2] {
-                if delta > 0.0 && d.abs() <= eps {
-                    *d = if *d < 0.0 { -delta } else { delta };
-                }
-            }
-        }
-        let det = counted_pair(d1, a, d2, inertia)?;
-        let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
-        for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
-            let (u, v) = (*x, *y);
-            *x = u * i11 + v * i12;
-            *y = u * i12 + v * i22;
-        }
-        col0[0] = d1;
-        col0[1] = 0.0;
-        col1[0] = d2;
-        let j = f + c;
-        self.d[j] = d1;
-        self.d[j + 1] = d2;
-        self.e[j] = a;
-        self.e[j + 1] = 0.0;
-        self.inv_d[j] = i11;
-        self.inv_d[j + 1] = i22;
-        self.inv_e[j] = i12;
-        self.l[self.l_col_ptr[j]..self.l_col_ptr[j + 1]].copy_from_slice(col0);
-        self.l[self.l_col_ptr[j + 1]..self.l_col_ptr[j + 2]].copy_from_slice(col1);
-        Some(c + 2)
     }
 }
 
@@ -729,117 +509,4 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
         tail += v * x[r as usize];
     }
     (s[0] + s[1]) + (s[2] + s[3]) + tail
-}
-
-/// Columns of a diagonal-block panel of the blocked kernel: the columns before the panel
-/// update it by one dense matrix product, the panel's own columns are eliminated one by one.
-const PANEL: usize = 16;
-
-/// Fewest descendant columns and target columns for which the blocked kernel computes an
-/// update as one matrix product (below it the per-column linear combination is as fast).
-const GEMM_MIN: usize = 4;
-
-/// `out[j·ld + i] −= Σ_k a[k·lda + i] · w[k·nc + j]` for `i < m`, `j < nc` (a product of the
-/// `m × kd` column-major `a` and the transpose of the `nc × kd` k-major `w`), on 4 × 4 tiles
-/// held in registers over the whole sum; tiles entirely above the diagonal (`i < j`) are
-/// skipped, entries above it inside a diagonal tile are written too (the callers' blocks leave
-/// their upper triangles unused).
-#[allow(clippy::too_many_arguments)]
-fn gemm_sub(
-    out: &mut [f64],
-    ld: usize,
-    a: &[f64],
-    lda: usize,
-    m: usize,
-    w: &[f64],
-    nc: usize,
-    kd: usize,
-) {
-    let mut j0 = 0;
-    while j0 < nc {
-        let cols = (nc - j0).min(4);
-        let mut i0 = j0 - j0 % 4;
-        while i0 < m {
-            let rows = (m - i0).min(4);
-            let t = Tile {
-                out: &mut *out,
-                ld,
-                a,
-                lda,
-                w,
-                nc,
-                kd,
-                i0,
-                j0,
-            };
-            match (rows, cols) {
-                (4, 4) => t.run::<4, 4>(),
-                (4, 3) => t.run::<4, 3>(),
-                (4, 2) => t.run::<4, 2>(),
-                (4, 1) => t.run::<4, 1>(),
-                (3, 4) => t.run::<3, 4>(),
-                (3, 3) => t.run::<3, 3>(),
-                (3, 2) => t.run::<3, 2>(),
-                (3, 1) => t.run::<3, 1>(),
-                (2, 4) => t.run::<2, 4>(),
-                (2, 3) => t.run::<2, 3>(),
-                (2, 2) => t.run::<2, 2>(),
-                (2, 1) => t.run::<2, 1>(),
-                (1, 4) => t.run::<1, 4>(),
-                (1, 3) => t.run::<1, 3>(),
-                (1, 2) => t.run::<1, 2>(),
-                _ => t.run::<1, 1>(),
-            }
-            i0 += 4;
-        }
-        j0 += 4;
-    }
-}
-
-/// One `R × C` tile of [`gemm_sub`] at rows `i0..`, columns `j0..`.
-struct Tile<'a> {
-    out: &'a mut [f64],
-    ld: usize,
-    a: &'a [f64],
-    lda: usize,
-    w: &'a [f64],
-    nc: usize,
-    kd: usize,
-    i0: usize,
-    j0: usize,
-}
-
-impl Tile<'_> {
-    #[inline(always)]
-    fn run<const R: usize, const C: usize>(self) {
-        let mut acc = [[0.0f64; R]; C];
-        for (c, col) in acc.iter_mut().enumerate() {
-            col.copy_from_slice(&self.out[(self.j0 + c) * self.ld + self.i0..][..R]);
-        }
-        let a = |k: usize| -> &[f64] { &self.a[k * self.lda + self.i0..][..R] };
-        let w = |k: usize| -> &[f64] { &self.w[k * self.nc + self.j0..][..C] };
-        // The operations of `lincomb_sub`, in its order: per group of four source columns one
-        // subtraction of `(w₀a₀ + w₁a₁) + (w₂a₂ + w₃a₃)`, then one per remaining column.
-        let groups = self.kd / 4 * 4;
-        for k in (0..groups).step_by(4) {
-            let (a0, a1, a2, a3) = (a(k), a(k + 1), a(k + 2), a(k + 3));
-            let (w0, w1, w2, w3) = (w(k), w(k + 1), w(k + 2), w(k + 3));
-            for c in 0..C {
-                for r in 0..R {
-                    acc[c][r] -= (w0[c] * a0[r] + w1[c] * a1[r]) + (w2[c] * a2[r] + w3[c] * a3[r]);
-                }
-            }
-        }
-        for k in groups..self.kd {
-            let (ak, wk) = (a(k), w(k));
-            for c in 0..C {
-                for r in 0..R {
-                    acc[c][r] -= wk[c] * ak[r];
-                }
-            }
-        }
-        for (c, col) in acc.iter().enumerate() {
-            self.out[(self.j0 + c) * self.ld + self.i0..][..R].copy_from_slice(col);
-        }
-    }
 }
