@@ -180,7 +180,8 @@ const VARIANTS: [(&str, LdltBackend, bool, bool, f64); 9] = [
 /// The KKT of `periodic-qc` (hp-Radau 3 × 10 per phase, and LG with 30 points per phase):
 /// fill of L and flops per variant, then all variants factored and solved round-robin (each
 /// round runs every variant once, so that the load of a shared machine hits all alike; the
-/// minimum printed), then criterion on the default backend with both orderings.
+/// minimum printed), then criterion on the default backend with both orderings, the supernodal
+/// and simplicial kernels and the multifrontal one.
 fn bench_kkt(c: &mut Criterion) {
     let lg = ProblemSettings {
         scheme: Scheme::Lg,
@@ -265,7 +266,10 @@ fn bench_kkt(c: &mut Criterion) {
             })
         });
         for (v, s) in VARIANTS.iter().zip(&mut solvers) {
-            if !v.0.starts_with("auto") && !v.0.starts_with("multifrontal") {
+            if !["auto", "multifrontal", "block", "simplicial"]
+                .iter()
+                .any(|p| v.0.starts_with(p))
+            {
                 continue;
             }
             g.bench_function(format!("factor_{}", v.0), |b| {

@@ -220,3 +220,35 @@ fn debug_cheb() {
         sol.status, sol.objective, sol.timing
     );
 }
+
+/// `solve` keeps the KKT solver of the thread's last solve (its symbolic analysis is reused
+/// for the same pattern): a solve after one of the same structure, and one after a solve of
+/// another structure, give bit for bit the solution of a solve with a fresh workspace, so
+/// results do not depend on what the thread solved before.
+#[test]
+fn reused_analysis_changes_no_result() {
+    use bf_optim::ipm::{Workspace, solve_in};
+    let settings = Settings::default();
+    let (small, large) = (DoubleIntegrator::new(40), DoubleIntegrator::new(60));
+    let fresh = solve_in(&mut Workspace::new(), &small, &settings, None, None).unwrap();
+    assert_eq!(fresh.status, Status::Solved);
+    let first = solve(&small, &settings).unwrap();
+    let again = solve(&small, &settings).unwrap();
+    solve(&large, &settings).unwrap();
+    let after_other = solve(&small, &settings).unwrap();
+    for s in [&first, &again, &after_other] {
+        assert_eq!(s.iterations, fresh.iterations);
+        assert_eq!(s.objective.to_bits(), fresh.objective.to_bits());
+        assert!(
+            s.x.iter()
+                .zip(&fresh.x)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+        assert!(
+            s.lambda
+                .iter()
+                .zip(&fresh.lambda)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        );
+    }
+}

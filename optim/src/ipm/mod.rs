@@ -77,16 +77,31 @@ impl Workspace {
     }
 }
 
+thread_local! {
+    /// The workspace of this thread's last [`solve_with`]: the starts of a multi-start, the
+    /// re-solves of a parameter sweep or of a fixed mesh share one NLP structure, so the
+    /// symbolic analysis of its KKT pattern is made once per thread instead of once per solve.
+    /// A reused analysis is the one a fresh solver would make (same pattern, same options), so
+    /// results do not depend on what the thread solved before.
+    static LAST_WORKSPACE: std::cell::RefCell<Workspace> = std::cell::RefCell::new(Workspace::new());
+}
+
 /// Solves `nlp`, optionally from a primal-dual warm start (its multipliers in the convention of
 /// [`Solution`]; consider a small `mu_init`, e.g. 1e-6, and small `warm_start_bound_push`) and
-/// with a per-iteration callback (return `false` to stop with [`Status::UserStop`]).
+/// with a per-iteration callback (return `false` to stop with [`Status::UserStop`]). The KKT
+/// solver of the thread's previous solve is reused, and with it its symbolic analysis when the
+/// pattern is the same (a [`Workspace`] kept per thread; [`solve_in`] takes one explicitly).
 pub fn solve_with(
     nlp: &dyn Nlp,
     settings: &Settings,
     warm: Option<&WarmStart>,
     callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
 ) -> Result<Solution, OptimError> {
-    solve_in(&mut Workspace::new(), nlp, settings, warm, callback)
+    // Taken out for the solve, so that a solve started from the callback finds an empty one.
+    let mut workspace = LAST_WORKSPACE.with(|w| w.take());
+    let result = solve_in(&mut workspace, nlp, settings, warm, callback);
+    LAST_WORKSPACE.with(|w| w.replace(workspace));
+    result
 }
 
 /// [`solve_with`] reusing (and updating) `workspace` so that repeated solves of the same
