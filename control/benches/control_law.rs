@@ -40,6 +40,8 @@ fn phase(contact: bool, x: &[f64; 9]) -> ReferencePhase {
         lambda: vec![[0.05, 0.02, 0.1]; 3],
         contact_point: vec![[0.0, 0.0, 1.0]; 3],
         contact_point_dot: vec![[0.0; 3]; 3],
+        gap: vec![0.0; 3],
+        gap_rate: vec![0.0; 3],
     }
 }
 
