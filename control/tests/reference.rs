@@ -46,7 +46,11 @@ fn hermite_gap_reproduces_a_quadratic_and_its_rate() {
         let s = 0.001 * k as f64;
         let (h, hd) = ph.gap_at(s);
         assert!((h - gap(s)).abs() < 1e-15, "s {s}: {h} vs {}", gap(s));
-        assert!((hd - gap_rate(s)).abs() < 1e-13, "s {s}: {hd} vs {}", gap_rate(s));
+        assert!(
+            (hd - gap_rate(s)).abs() < 1e-13,
+            "s {s}: {hd} vs {}",
+            gap_rate(s)
+        );
     }
 }
 
