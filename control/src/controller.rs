@@ -68,12 +68,16 @@
 //! **Outer loop:** at the end of each period (when the reference wraps to its first phase) the
 //! measured mean ω̄ of that period moves the ω offset of the contact phases,
 //! δ ← δ + (γ/ρ) (ω̄* − ω̄), with ‖δ‖ ≤ 0.5 ‖ω*_lo‖ (anti-windup), ω*_lo the planned ω at
-//! lift-off and ρ = ‖ω̄*‖ / ‖ω*_lo‖ (at most 1). δ moves the ω the contact phase leaves the
-//! ball with, and the flight's socket damping (eq. 29b, ω decays as e^{−D t / I_b}) passes
-//! only about the share ρ of it on to the period's mean: ρ ≈ 0.2 on the human finger's COT
-//! optimum (an 8.5 s flight against I_b / D = 2 s), where a gain γ on the mean's error alone
-//! corrects a tenth per period, and a plant with 50 % more socket damping needs the ball
-//! to leave 50 % faster.
+//! lift-off and ρ = ‖ω̄‖ / ‖ω_lo‖ the period's measured ratio of its mean ω to its lift-off
+//! ω (the plan's ‖ω̄*‖ / ‖ω*_lo‖ for a period without lift-off; in [0.05, 1]). δ moves the
+//! ω the contact phase leaves the ball with, and the flight's socket damping (eq. 29b, ω
+//! decays as e^{−D t / I_b}) passes only the share ρ of it on to the period's mean: ρ ≈ 0.2
+//! on the human finger's COT optimum (an 8.5 s flight against I_b / D = 2 s), where a gain γ
+//! on the mean's error alone corrects a tenth per period, and a plant with 50 % more socket
+//! damping (ρ a third lower than planned) needs the ball to leave 50 % faster. δ ramps in
+//! over the last t_δ = 0.1 s of a contact phase (all of a shorter one), and the
+//! contact-point loop's target moves with the roll it causes (above), so that loop does not
+//! undo it.
 //!
 //! **Friction measured:** in Slip the measured force gives the plant's μ_k = ‖λ_∥‖ / λ_n; the
 //! controller predicts the kinetic friction with it and scales its μ_s (the friction cone of
@@ -227,6 +231,9 @@ impl HybridGains {
 /// Largest ‖δ‖ of the outer loop, as a share of the planned lift-off ‖ω*_lo‖.
 const OFFSET_LIMIT: f64 = 0.5;
 
+/// t_δ (s): the outer loop's offset ramps in over at most this last part of a contact phase.
+const OFFSET_RAMP: f64 = 0.1;
+
 /// Least ρ of the outer loop (module doc): its gain γ/ρ stays at most 20 γ.
 const MIN_SENSITIVITY: f64 = 0.05;
 
@@ -289,6 +296,8 @@ struct Discrete {
     omega_offset: [f64; 3],
     omega_int: [f64; 3],
     omega_last: [f64; 3],
+    /// ‖ω‖ at the last lift-off (rad/s), 0 before the first.
+    lift_off_omega: f64,
     period_start: f64,
     periods: usize,
     slips: usize,
@@ -321,8 +330,8 @@ pub struct HybridController<K: Kernels<3>> {
     lambda_scale: Vec<f64>,
     /// The re-timed approach of each phase, if it has one.
     approach: Vec<Option<Approach>>,
-    /// γ/ρ of the outer loop (module doc).
-    outer_gain: f64,
+    /// The plan's ρ of the outer loop (module doc), until a period measures its own.
+    sensitivity: f64,
     /// Largest ‖δ‖ (rad/s).
     offset_limit: f64,
     /// |τ_i| ≤ tau_max[i] (N m): the actuators' bounds, infinite unless set.
@@ -400,6 +409,7 @@ impl<K: Kernels<3>> HybridController<K> {
             omega_offset: [0.0; 3],
             omega_int: [0.0; 3],
             omega_last: omega,
+            lift_off_omega: 0.0,
             period_start: t0,
             periods: 0,
             slips: 0,
@@ -412,7 +422,7 @@ impl<K: Kernels<3>> HybridController<K> {
             gains,
             lambda_scale,
             approach,
-            outer_gain: gains.outer / sensitivity,
+            sensitivity,
             offset_limit: OFFSET_LIMIT * lift_off,
             tau_max: [f64::INFINITY; 3],
             history: RefCell::new(vec![d]),
@@ -552,10 +562,24 @@ impl<K: Kernels<3>> HybridController<K> {
         // ω_r × r_c = k_r e (e the tangential part of r_c* − r_c) makes |e| decay at the rate
         // k_r. Without it a contact point displaced by a slip stays displaced, and with it the
         // ω at lift-off (ω ⊥ r_c, as sticking keeps the spin about n) differs from the plan.
-        let e = Vec3::from(r.contact_point) - rc;
+        // The outer loop's offset δ ramps in over the last t_δ of the phase (w from 0 to 1),
+        // so the ball leaves with ω* + δ, and rolls the contact point by δ × r_c* ∫w more
+        // than planned: that displaced point is the contact-point loop's target, or the loop
+        // would undo δ within 1/k_r (it did on the human finger's COT optimum, whose stick
+        // phase lasts 0.55 s); the ramp keeps that roll to |δ| t_δ / 2.
+        let ramp = ph.duration.min(OFFSET_RAMP);
+        let late = (s.clamp(0.0, ph.duration) - (ph.duration - ramp)).max(0.0);
+        let (w, rolled) = if ramp > 0.0 {
+            (late / ramp, 0.5 * late * late / ramp)
+        } else {
+            (1.0, 0.0)
+        };
+        let offset = Vec3::from(d.omega_offset);
+        let rc_ref = Vec3::from(r.contact_point);
+        let e = rc_ref + offset.cross(&rc_ref) * rolled - rc;
         let e = e - n * n.dot(&e);
         let omega_r = rc.cross(&e) * (g.contact_point_rate / rc.norm_squared());
-        let target = Vec3::from(r.omega) + Vec3::from(d.omega_offset) + omega_r;
+        let target = Vec3::from(r.omega) + offset * w + omega_r;
         let omega_dot_cmd = Vec3::from(r.omega_dot) + (target - omega) * g.omega_rate;
         let ib: &Mat3 = p.ball_inertia();
         let f_b = omega.cross(&(ib * omega)) + omega * p.socket_damping();
@@ -835,9 +859,18 @@ impl<K: Kernels<3>> HybridController<K> {
     fn end_period(&self, d: &mut Discrete, t: f64) {
         let len = t - d.period_start;
         if len > 0.0 {
+            let mean = d.omega_int.map(|v| v / len);
+            // ρ measured in the period when it had a lift-off: a plant whose flight differs
+            // from the plan (more socket damping) passes a different share of δ to the mean.
+            let measured = Vec3::from(mean).norm() / d.lift_off_omega;
+            let sensitivity = if d.lift_off_omega > 0.0 && measured.is_finite() {
+                measured.clamp(MIN_SENSITIVITY, 1.0)
+            } else {
+                self.sensitivity
+            };
             for i in 0..3 {
-                let mean = d.omega_int[i] / len;
-                d.omega_offset[i] += self.outer_gain * (self.reference.mean_omega[i] - mean);
+                d.omega_offset[i] +=
+                    self.gains.outer / sensitivity * (self.reference.mean_omega[i] - mean[i]);
             }
             // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
             // (and with it the contact forces) without bound.
@@ -848,6 +881,7 @@ impl<K: Kernels<3>> HybridController<K> {
             }
         }
         d.omega_int = [0.0; 3];
+        d.lift_off_omega = 0.0;
         d.period_start = t;
         d.periods += 1;
     }
@@ -952,6 +986,9 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                 let was_contact = from != Mode::Free;
                 let is_contact = m.mode != Mode::Free;
                 if was_contact != is_contact {
+                    if was_contact {
+                        d.lift_off_omega = Vec3::from(omega).norm();
+                    }
                     let in_contact_phase = self.reference.phases[d.phase].contact;
                     if in_contact_phase != is_contact {
                         self.advance(&mut d, m.t, is_contact);
