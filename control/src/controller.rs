@@ -46,7 +46,8 @@
 //!   spin about n (no contact force has a moment about it), so ω ⊥ r_c at lift-off as planned
 //!   only if r_c is the planned one: a contact point displaced by the slip after an impact
 //!   would otherwise stay displaced through the stick phase and send the ball off with the
-//!   wrong ω (on the human finger's COT optimum 5 % of ‖ω̄*‖ in every period);
+//!   wrong ω (on the human finger's COT optimum 5 % of ‖ω̄*‖ in every period); the target
+//!   is r_c* moved by the roll the outer loop's offset causes, (δ × r_c*) ∫w (below);
 //! * the finger's acceleration keeps the contact: from d/dt Δv = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ −
 //!   J_c q̈ = −k_s Δv, J_c q̈ = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ + k_s Δv with ω̇ the ball's response
 //!   to λ_cmd; in Stick Δv = 0 and this is the sticking constraint (eq. 27–28), after a slip it
@@ -75,9 +76,9 @@
 //! on the human finger's COT optimum (an 8.5 s flight against I_b / D = 2 s), where a gain γ
 //! on the mean's error alone corrects a tenth per period, and a plant with 50 % more socket
 //! damping (ρ a third lower than planned) needs the ball to leave 50 % faster. δ ramps in
-//! over the last t_δ = 0.1 s of a contact phase (all of a shorter one), and the
-//! contact-point loop's target moves with the roll it causes (above), so that loop does not
-//! undo it.
+//! with the weight w over the last t_δ = 0.1 s of a contact phase (all of a shorter one),
+//! and the contact-point loop's target moves with the roll it causes (above), so that loop
+//! does not undo it; the ramp keeps that roll to ‖δ‖ t_δ / 2.
 //!
 //! **Friction measured:** in Slip the measured force gives the plant's μ_k = ‖λ_∥‖ / λ_n; the
 //! controller predicts the kinetic friction with it and scales its μ_s (the friction cone of

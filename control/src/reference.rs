@@ -273,13 +273,18 @@ impl ReferencePhase {
         // The samples after `from` fall with s: the first one at or below h ends the segment.
         let first = self.s.partition_point(|&x| x <= from);
         let k = first + self.gap[first..].partition_point(|&g| g > h);
-        let (mut lo, mut hi) = (self.s[k - 1].max(from), self.s[k.min(last)]);
+        let (a, b) = (k - 1, k.min(last));
+        let (s0, width) = (self.s[a], self.s[b] - self.s[a]);
+        let (g, r) = (&self.gap, &self.gap_rate);
+        // The segment's cubic itself (what `gap_at` evaluates there), without its search.
+        let gap = |s: f64| hermite(g[a], g[b], r[a], r[b], width, (s - s0) / width);
+        let (mut lo, mut hi) = (s0.max(from), self.s[b]);
         while hi - lo > 1e-15 * (1.0 + hi.abs()) {
             let mid = 0.5 * (lo + hi);
             if mid <= lo || mid >= hi {
                 break;
             }
-            if self.gap_at(mid).0 > h {
+            if gap(mid) > h {
                 lo = mid;
             } else {
                 hi = mid;
