@@ -708,25 +708,21 @@ fn default_optimum(problem: &str) -> OcpSolution {
 /// The issue's perturbed-plant target over 50 periods: every plant of the robustness table
 /// (ball mass ×1.1, μ_s and μ_k ×0.8, socket damping ×1.5, link masses ×1.05, all four, the
 /// max-dissipation impact law), contact in every period and an ω error ≤ 5 % from the 4th
-/// period to the 50th. Met by the default `periodic-qc` optimum with the bounded hybrid
-/// controller on every plant. The default `periodic-cot-human` optimum (unbounded: under the
-/// 1 N m bound it cannot survive even the nominal plant's Newton impacts, decision 0017)
-/// meets it where the plant leaves the ball's flight as planned (friction, link masses, the
-/// impact law) and misses it, measured at 9.4 %, 28 % and 22 %, where the flight's decay time
-/// I_b / D changes (ball mass, socket damping, all four): its 8.5 s flight is four decay times
-/// long, so the period's mean ω is a fifth of the lift-off ω and moves with I_b / D, and
-/// lifting the ball off faster in the planned 0.55 s stick phase would roll the contact point
-/// some 0.4 m further than planned (docs/decisions/0026). The test asserts both, so a change
-/// that meets the target there is noticed. The bounded `periodic-cot-human` and the
-/// unbounded `periodic-cot` runs are printed for BENCHMARKS.md, not asserted. Slow (three
-/// default searches, 24 runs of 50 periods, about 8 min).
+/// period to the 50th, for the default `periodic-qc` optimum with the bounded hybrid
+/// controller and the default `periodic-cot-human` optimum with the unbounded one (under the
+/// 1 N m bound it cannot survive even the nominal plant's Newton impacts, decision 0017).
+/// The human finger's plants that change the flight's decay time I_b / D (ball mass, socket
+/// damping, all four) met it only once the outer loop measured its sensitivity ρ and its
+/// offset rolled the contact point (decision 0026; before: 9.4 %, 28 %, 22 %); the damping
+/// plant's 4th period is the closest, measured 4.90 %. The bounded `periodic-cot-human` and
+/// the unbounded `periodic-cot` runs are printed for BENCHMARKS.md, not asserted. Slow
+/// (three default searches, 24 runs of 50 periods, about 8 min).
 #[test]
 #[ignore = "three default searches and 24 runs of 50 periods, about 8 min; run with \
             `cargo test --release --test track perturbed_plants -- --ignored --nocapture`"]
 fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
     use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs};
-    let flight_changed = ["ball mass ×1.1", "socket damping ×1.5", "all four"];
-    let mut unexpected = Vec::new();
+    let mut failures = Vec::new();
     for (problem, controller, asserted) in [
         ("periodic-qc", ControllerKind::Hybrid, true),
         ("periodic-cot-human", ControllerKind::HybridUnbounded, true),
@@ -753,13 +749,12 @@ fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
                 && t.periods.len() == 50
                 && t.periods.iter().all(|p| p.contact)
                 && later.is_some_and(|e| e <= 0.05);
-            let expected = problem == "periodic-qc" || !flight_changed.contains(&case.as_str());
-            if asserted && met != expected {
-                unexpected.push(format!("{problem} {case}: met {met}, expected {expected}"));
+            if asserted && !met {
+                failures.push(format!("{problem} {case}"));
             }
         }
     }
-    assert!(unexpected.is_empty(), "{unexpected:?}");
+    assert!(failures.is_empty(), "{failures:?}");
 }
 
 /// The report's closed-loop parts on the QC optimum: the robustness table applies every
