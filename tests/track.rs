@@ -4,8 +4,13 @@
 //!   contact and a mean-ω error ≤ 2 % (the issue's target);
 //! * the normal-force loop holds λ_n at the optimum's λ_n*(s) over the stick phase on a plant
 //!   with a 10 % heavier ball (the controller's inversion is then wrong);
-//! * event timing: a plant that starts 20 ms behind the controller's clock still meets the
-//!   planned impact state, and the contact phase starts at the plant's impact event;
+//! * event timing: a plant that starts 50 ms behind the controller's clock meets the
+//!   planned impact state after its first lift-off, and the contact phase starts at the
+//!   plant's impact event; the approach re-timed by the gap: a plant 20 ms late or early on
+//!   the approach meets the planned impact state when its own schedule says (the
+//!   clock-timed law misses it), a velocity error decays within the error dynamics' envelope;
+//! * ignored (slow): the default optima's nominal target over 50 periods, and the perturbed
+//!   plants' target over 50 periods;
 //! * with the torques saturated at the paper's 1 N m, the all-perturbations plant (which
 //!   needs up to 1.9 N m unbounded) still converges, and no sample exceeds the bound;
 //! * `track` writes tracking.json whose per-period figures a recomputation from
@@ -180,6 +185,27 @@ fn closed_loop(
     BallFinger<bf_model::DynKernels, HybridController<bf_model::DynKernels>>,
     bf_sim::SimOutput<Mode>,
 ) {
+    let d = &qc().nodes;
+    let x0: Vec<f64> = [&d.q[0], &d.qd[0], &d.omega[0]]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+    closed_loop_from(plant_toml, law, gains, t0, &x0, t_end)
+}
+
+/// [`closed_loop`] from the plant state `x0` (q, q̇, ω) at time 0.
+fn closed_loop_from(
+    plant_toml: Option<&str>,
+    law: ImpactLaw,
+    gains: HybridGains,
+    t0: f64,
+    x0: &[f64],
+    t_end: f64,
+) -> (
+    BallFinger<bf_model::DynKernels, HybridController<bf_model::DynKernels>>,
+    bf_sim::SimOutput<Mode>,
+) {
     let sol = qc();
     let (model, scene) = solution_model(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
@@ -189,13 +215,7 @@ fn closed_loop(
         model.params().mu_v(),
     )
     .unwrap();
-    let d = &sol.nodes;
-    let x0: Vec<f64> = [&d.q[0], &d.qd[0], &d.omega[0]]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect();
-    let controller = HybridController::new(model, id, reference, gains, t0, &x0).unwrap();
+    let controller = HybridController::new(model, id, reference, gains, t0, x0).unwrap();
     let plant = match plant_toml {
         None => solution_model(sol).unwrap().0,
         Some(text) => {
@@ -217,7 +237,7 @@ fn closed_loop(
         sim,
         Mode::Free,
         0.0,
-        &x0,
+        x0,
         t_end,
     )
     .unwrap();
@@ -369,6 +389,95 @@ fn a_late_lift_off_still_meets_the_planned_impact_state() {
         .map(|s| s.t)
         .collect();
     assert_eq!(starts[..2], [impacts[0].t, second.t]);
+}
+
+/// The approach re-timed by the gap (bf-control's module doc): the plant starts on the plan's
+/// approach, 40 ms before the planned impact of the QC optimum, with the controller's clock
+/// 20 ms ahead (a late plant) or behind (an early one), on the plan's velocity or 10 % above
+/// it. Indexed by the gap, the reference's position error is zero from the start, and so is
+/// its velocity error on the plan's velocity: by the error dynamics the plant then stays on
+/// the plan and meets the planned impact state when its own schedule says, whatever the
+/// clock; what is left is the reference's interpolation (q̈* linear between samples, q*
+/// Hermite). A velocity error v₀ at the start decays along the path as e^{−2ζω_n t} and, where
+/// the path turns, through the critically damped cross-path mode, whose envelope
+/// v₀ (1 + ω_n t) e^{−ω_n t} bounds it at the impact. The clock-timed law (re-timing off)
+/// chases the clock instead: the late plant is pushed to the clock's impact time and arrives
+/// off the planned state.
+#[test]
+fn a_late_or_early_approach_meets_the_planned_impact_state() {
+    let sol = qc();
+    let (model, _) = solution_model(sol).unwrap();
+    let reference = reference_of(sol, &model).unwrap();
+    let approach = &reference.phases[0];
+    assert!(!approach.contact && reference.phases[1].contact);
+    let last = approach.s.len() - 1;
+    let end = approach.s[last];
+    // The optimum's last sample is 0.09 mm off the ball: the planned impact state is its
+    // state carried on at the planned velocity to h = 0.
+    let to_contact = approach.gap[last] / -approach.gap_rate[last];
+    assert!((0.0..1e-3).contains(&to_contact), "{to_contact}");
+    let plan = approach.at(end + to_contact);
+    let lead = 0.04;
+    let delay = 0.02;
+    let start = approach.at(end - lead);
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let gains = HybridGains::default();
+    let wn = gains.free.omega_n;
+    assert_eq!(gains.free.zeta, 1.0);
+    let mut clock_timed = gains;
+    clock_timed.approach = 0.0;
+    let run = |shift: f64, boost: f64, gains: HybridGains| {
+        let x0: Vec<f64> = start
+            .q
+            .iter()
+            .copied()
+            .chain(start.qd.iter().map(|v| v * boost))
+            .chain(start.omega)
+            .collect();
+        let (_, out) = closed_loop_from(
+            None,
+            ImpactLaw::MaxDissipation,
+            gains,
+            -(end - lead + shift),
+            &x0,
+            lead + 0.1,
+        );
+        let impact = out
+            .events
+            .into_iter()
+            .find(|e| e.mode_before == Mode::Free)
+            .expect("an impact");
+        let dq: Vec<f64> = (0..3).map(|i| impact.x_pre[i] - plan.q[i]).collect();
+        let dqd: Vec<f64> = (0..3).map(|i| impact.x_pre[3 + i] - plan.qd[i]).collect();
+        (impact.t, norm(&dq), norm(&dqd) / norm(&plan.qd))
+    };
+    let own_schedule = lead + to_contact;
+    let mut on_plan = (0.0f64, 0.0f64);
+    for (label, shift) in [("late", delay), ("early", -delay)] {
+        let (t, dq, dqd) = run(shift, 1.0, gains);
+        on_plan = (on_plan.0.max(dq), on_plan.1.max(dqd));
+        eprintln!(
+            "{label}: impact at {t:.5} s (own schedule {own_schedule:.5}), |Δq| {dq:.2e} rad, |Δq̇|/|q̇*| {dqd:.2e}"
+        );
+        // Measured: 0.01 ms, 2e-6 rad, 8.5e-5 (the reference's interpolation).
+        assert!((t - own_schedule).abs() < 5e-4, "{label}: impact at {t}");
+        assert!(dq < 1e-4 && dqd < 1e-3, "{label}: {dq} {dqd}");
+        let (t, dq, dqd) = run(shift, 1.1, gains);
+        let envelope = 0.1 * norm(&start.qd) / norm(&plan.qd) * (1.0 + wn * t) * (-wn * t).exp();
+        eprintln!(
+            "{label} and 10 % fast: impact at {t:.5} s, |Δq| {dq:.2e} rad, |Δq̇|/|q̇*| {dqd:.2e} (envelope {envelope:.2e})"
+        );
+        assert!(dqd < envelope, "{label} and fast: {dqd} vs {envelope}");
+    }
+    let (t, dq, dqd) = run(delay, 1.0, clock_timed);
+    eprintln!("late, clock-timed: impact at {t:.5} s, |Δq| {dq:.2e} rad, |Δq̇|/|q̇*| {dqd:.2e}");
+    // Measured: 6 ms early (the clock's schedule is 20 ms early), 4.6e-3 rad and 1.6 % off,
+    // some 200 times the re-timed law's errors.
+    assert!(own_schedule - t > 0.004, "{t}");
+    assert!(
+        dq > 100.0 * on_plan.0 && dqd > 100.0 * on_plan.1,
+        "{dq} {dqd} vs {on_plan:?}"
+    );
 }
 
 /// Per-period figures recomputed from trajectory.json with their own loop.
@@ -577,6 +686,75 @@ fn default_optima_meet_the_nominal_target_for_fifty_periods() {
             );
         }
     }
+}
+
+/// The default optimum of `problem` (`optimize --problem NAME`, the default search, as a user
+/// runs it).
+fn default_optimum(problem: &str) -> OcpSolution {
+    let dir = cli::tmpdir(&format!("default-{problem}"));
+    let r = cli::run(&[
+        "optimize",
+        "--problem",
+        problem,
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    sol
+}
+
+/// The issue's perturbed-plant target over 50 periods: every plant of the robustness table
+/// (ball mass ×1.1, μ_s and μ_k ×0.8, socket damping ×1.5, link masses ×1.05, all four, the
+/// max-dissipation impact law), contact in every period and an ω error ≤ 5 % from the 4th
+/// period to the 50th, for the default `periodic-qc` optimum with the bounded hybrid
+/// controller and the default `periodic-cot-human` optimum with the unbounded one (under the
+/// 1 N m bound it cannot survive even the nominal plant's Newton impacts, decision 0017).
+/// The human finger's plants that change the flight's decay time I_b / D (ball mass, socket
+/// damping, all four) met it only once the outer loop measured its sensitivity ρ and its
+/// offset rolled the contact point (decision 0026; before: 9.4 %, 28 %, 22 %); the damping
+/// plant's 4th period is the closest, measured 4.90 %. The bounded `periodic-cot-human` and
+/// the unbounded `periodic-cot` runs are printed for BENCHMARKS.md, not asserted. Slow
+/// (three default searches, 24 runs of 50 periods, about 8 min).
+#[test]
+#[ignore = "three default searches and 24 runs of 50 periods, about 8 min; run with \
+            `cargo test --release --test track perturbed_plants -- --ignored --nocapture`"]
+fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
+    use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs};
+    let mut failures = Vec::new();
+    for (problem, controller, asserted) in [
+        ("periodic-qc", ControllerKind::Hybrid, true),
+        ("periodic-cot-human", ControllerKind::HybridUnbounded, true),
+        ("periodic-cot-human", ControllerKind::Hybrid, false),
+        ("periodic-cot", ControllerKind::HybridUnbounded, false),
+    ] {
+        let sol = default_optimum(problem);
+        for (case, run) in robustness_runs(&sol, controller, 50) {
+            let t = run.unwrap();
+            let later = max_error_from_fourth(&t);
+            let tau = t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max);
+            eprintln!(
+                "{problem} {} {case}: {} periods, 1st {:.2} %, max from the 4th {} %, max |τ| \
+                 {tau:.3} N m, lost: {:?}",
+                controller.name(),
+                t.periods.len(),
+                t.periods
+                    .first()
+                    .map_or(f64::NAN, |p| 100.0 * p.omega_error),
+                later.map_or("—".into(), |e| format!("{:.2}", 100.0 * e)),
+                t.lost
+            );
+            let met = t.lost.is_none()
+                && t.periods.len() == 50
+                && t.periods.iter().all(|p| p.contact)
+                && later.is_some_and(|e| e <= 0.05);
+            if asserted && !met {
+                failures.push(format!("{problem} {case}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
 }
 
 /// The report's closed-loop parts on the QC optimum: the robustness table applies every

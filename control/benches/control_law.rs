@@ -1,7 +1,8 @@
 //! One evaluation of the hybrid controller's law for the paper finger (criterion): the
 //! computed-torque law of a free phase (generated inverse dynamics) and the force/velocity law
 //! of a contact phase in Stick and in Slip (contact kernel, mass matrix, 3 × 3 solves), the
-//! free law with the clearance guard active (`free_guard`), at the
+//! free law with the clearance guard active (`free_guard`) and with the approach re-timed by
+//! the gap (`free_approach`), at the
 //! impact state of the default `periodic-qc` optimum. Run:
 //! `cargo bench -p bf-control --bench control_law -- --warm-up-time 1 --measurement-time 3`.
 
@@ -40,6 +41,8 @@ fn phase(contact: bool, x: &[f64; 9]) -> ReferencePhase {
         lambda: vec![[0.05, 0.02, 0.1]; 3],
         contact_point: vec![[0.0, 0.0, 1.0]; 3],
         contact_point_dot: vec![[0.0; 3]; 3],
+        gap: vec![0.0; 3],
+        gap_rate: vec![0.0; 3],
     }
 }
 
@@ -76,12 +79,35 @@ fn bench(c: &mut Criterion) {
             Box::new(bf_model::PaperKernels::default()) as bf_model::DynKernels
         )
         .expect("model"),
-        id,
+        id.clone(),
         Reference {
             phases: vec![phase(false, &x), phase(true, &x)],
             mean_omega: [0.0, 0.0, 2.0],
         },
         HybridGains::default(),
+        0.0,
+        &x,
+    )
+    .expect("controller");
+    // A free phase whose planned gap falls through 0 at s = 0.067 s (the finger touches the
+    // ball, h = 0): the free law re-times the reference by the gap (contact kernel, bisection
+    // on h*); the clearance guard is off to time the re-timing alone.
+    let mut approach = phase(false, &x);
+    approach.gap = vec![0.01, 0.0025, -0.005];
+    approach.gap_rate = vec![-0.15; 3];
+    let mut no_guard = HybridGains::default();
+    no_guard.clearance.gap = 0.0;
+    let approaching = HybridController::new(
+        bf_model::Model::from_kernels(
+            Box::new(bf_model::PaperKernels::default()) as bf_model::DynKernels
+        )
+        .expect("model"),
+        id,
+        Reference {
+            phases: vec![approach, phase(true, &x)],
+            mean_omega: [0.0, 0.0, 2.0],
+        },
+        no_guard,
         0.0,
         &x,
     )
@@ -111,6 +137,21 @@ fn bench(c: &mut Criterion) {
     g.bench_function("free_guard", |b| {
         b.iter(|| {
             guarded
+                .tau_in_mode(
+                    Mode::Free,
+                    black_box(0.03),
+                    black_box(&x[..3]),
+                    black_box(&x[3..6]),
+                    black_box(&x[6..9]),
+                    &mut tau,
+                )
+                .expect("law");
+            black_box(tau)
+        })
+    });
+    g.bench_function("free_approach", |b| {
+        b.iter(|| {
+            approaching
                 .tau_in_mode(
                     Mode::Free,
                     black_box(0.03),

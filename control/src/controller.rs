@@ -4,8 +4,21 @@
 //! The plant's impact (Free → Stick/Slip, the h = 0 guard of eq. 50) starts the next contact
 //! phase of the reference, its lift-off (λ_n = 0, eq. 48) the next free phase, whatever the
 //! clock says; a free phase that lasts longer than planned continues at the planned
-//! pre-impact velocity ([`crate::reference`]), so a late plant still approaches the ball as
-//! planned and an early one switches to the contact law at once.
+//! pre-impact velocity ([`crate::reference`]), and an early plant switches to the contact law
+//! at once.
+//!
+//! **Approach re-timed by the gap.** Over the last t_a of a free phase before a planned
+//! impact (where the planned gap h*(s) falls at half the impact's rate or faster) the reference is indexed by the measured gap h
+//! (eq. 4), not by the clock: σ solves h*(σ) = h, and the free law tracks q*(σ), q̇*(σ) with
+//! the feed-forward q̈*(σ) σ̇, σ̇ = ḣ / ḣ*(σ). The planned velocity is then a field over the
+//! path, so a late or early plant meets the planned impact state (q*(T), q̇*(T)) at h = 0
+//! instead of chasing the clock (which leaves a velocity error of order δ ω_n / e for a delay
+//! δ). On the controller's model the error dynamics follow: e = q*(σ) − q has no component
+//! that changes h (h(q*(σ)) = h), so with e_v = q̇*(σ) − q̇, ė = P e_v (P projects along
+//! q̇* onto the level set of h) and ė_v = −K_d e_v − K_p e: the velocity error along the path
+//! decays as e^{−2ζω_n t}, the cross-path error as in the clock-timed law. A plant above the
+//! window's top when its clock is past it (late) is re-timed on the tangent of h* there; one
+//! that reaches the top up to a window's length early is re-timed from then on.
 //!
 //! **Free phases:** computed torque ([`ComputedTorque`], [`InverseDynamics`]):
 //! τ = ID(q, q̇, q̈* + K_d (q̇* − q̇) + K_p (q* − q)) + μ_v q̇, with a clearance guard
@@ -33,7 +46,8 @@
 //!   spin about n (no contact force has a moment about it), so ω ⊥ r_c at lift-off as planned
 //!   only if r_c is the planned one: a contact point displaced by the slip after an impact
 //!   would otherwise stay displaced through the stick phase and send the ball off with the
-//!   wrong ω (on the human finger's COT optimum 5 % of ‖ω̄*‖ in every period);
+//!   wrong ω (on the human finger's COT optimum 5 % of ‖ω̄*‖ in every period); the target
+//!   is r_c* moved by the roll the outer loop's offset causes, (δ × r_c*) ∫w (below);
 //! * the finger's acceleration keeps the contact: from d/dt Δv = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ −
 //!   J_c q̈ = −k_s Δv, J_c q̈ = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ + k_s Δv with ω̇ the ball's response
 //!   to λ_cmd; in Stick Δv = 0 and this is the sticking constraint (eq. 27–28), after a slip it
@@ -54,7 +68,17 @@
 //!
 //! **Outer loop:** at the end of each period (when the reference wraps to its first phase) the
 //! measured mean ω̄ of that period moves the ω offset of the contact phases,
-//! δ ← δ + γ (ω̄* − ω̄), with ‖δ‖ ≤ 0.25 ‖ω̄*‖ (anti-windup).
+//! δ ← δ + (γ/ρ) (ω̄* − ω̄), with ‖δ‖ ≤ 0.5 ‖ω*_lo‖ (anti-windup), ω*_lo the planned ω at
+//! lift-off and ρ = ‖ω̄‖ / ‖ω_lo‖ the period's measured ratio of its mean ω to its lift-off
+//! ω (the plan's ‖ω̄*‖ / ‖ω*_lo‖ for a period without lift-off; in [0.05, 1]). δ moves the
+//! ω the contact phase leaves the ball with, and the flight's socket damping (eq. 29b, ω
+//! decays as e^{−D t / I_b}) passes only the share ρ of it on to the period's mean: ρ ≈ 0.2
+//! on the human finger's COT optimum (an 8.5 s flight against I_b / D = 2 s), where a gain γ
+//! on the mean's error alone corrects a tenth per period, and a plant with 50 % more socket
+//! damping (ρ a third lower than planned) needs the ball to leave 50 % faster. δ ramps in
+//! with the weight w over the last t_δ = 0.1 s of a contact phase (all of a shorter one),
+//! and the contact-point loop's target moves with the roll it causes (above), so that loop
+//! does not undo it; the ramp keeps that roll to ‖δ‖ t_δ / 2.
 //!
 //! **Friction measured:** in Slip the measured force gives the plant's μ_k = ‖λ_∥‖ / λ_n; the
 //! controller predicts the kinetic friction with it and scales its μ_s (the friction cone of
@@ -114,6 +138,10 @@ pub struct HybridGains {
     pub free: ComputedTorque,
     /// Clearance from the ball in free phases.
     pub clearance: Clearance,
+    /// t_a (s): the last t_a of a free phase before a planned impact (at most the part where
+    /// the planned gap falls) is tracked as a function of the measured gap h, not of the
+    /// clock (module doc); 0 turns the re-timing off.
+    pub approach: f64,
     /// Contact phases.
     pub contact: ContactGains,
     /// γ of the outer loop (share of the period's mean ω error corrected per period), in
@@ -125,6 +153,8 @@ impl Default for HybridGains {
     /// ω_n = 20 rad/s, ζ = 1 (the free phases of the optima last 0.1–9 s, so errors decay in
     /// a fraction of a phase); clearance 5 mm with a 50 ms ramp (the QC optimum is 13 mm
     /// from the ball 50 ms before its impact, so the guard leaves its approach alone);
+    /// approach re-timed over its last 0.1 s (two time constants 1/(2ζω_n) of the velocity
+    /// error along the path, so a plant that enters it late and fast is slowed to the plan);
     /// k_ω = 100/s (the contact phases of the optima last 26 ms and more); k_r = 10/s (a
     /// tenth of k_ω, so the ω loop follows the contact-point loop); λ_n boost up to
     /// 3 × max λ_n*; k_f = 300/s (the loop must settle within a 26 ms stick phase);
@@ -140,6 +170,7 @@ impl Default for HybridGains {
                 gap: 5e-3,
                 ramp: 0.05,
             },
+            approach: 0.1,
             contact: ContactGains {
                 omega_rate: 100.0,
                 contact_point_rate: 10.0,
@@ -170,6 +201,7 @@ impl HybridGains {
             ("lift_off_share", c.lift_off_share),
             ("clearance.gap", self.clearance.gap),
             ("clearance.ramp", self.clearance.ramp),
+            ("approach", self.approach),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(ControlError::Gain {
@@ -197,8 +229,62 @@ impl HybridGains {
     }
 }
 
-/// Largest ‖δ‖ of the outer loop, as a share of ‖ω̄*‖.
-const OFFSET_LIMIT: f64 = 0.25;
+/// Largest ‖δ‖ of the outer loop, as a share of the planned lift-off ‖ω*_lo‖.
+const OFFSET_LIMIT: f64 = 0.5;
+
+/// t_δ (s): the outer loop's offset ramps in over at most this last part of a contact phase.
+const OFFSET_RAMP: f64 = 0.1;
+
+/// Least ρ of the outer loop (module doc): its gain γ/ρ stays at most 20 γ.
+const MIN_SENSITIVITY: f64 = 0.05;
+
+/// Largest rate σ̇ of the re-timed approach's reference time (a plant closing the gap faster
+/// than this multiple of the plan's rate gets the feed-forward of this multiple).
+const MAX_RETIME_RATE: f64 = 3.0;
+
+/// The re-timing keeps to where the plan closes the gap at least at this share of its impact
+/// speed: σ = h*⁻¹(h) turns a gap error into a time error 1/|ḣ*| times larger, and the QC
+/// optimum hovers 15 mm from the ball at 1 cm/s 80 ms before its impact (at 33 cm/s).
+const RETIME_MIN_RATE: f64 = 0.5;
+
+/// The re-timed end of a free phase before a planned impact (module doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Approach {
+    /// σ_a: where the re-timing begins (s since the phase began).
+    start: f64,
+    /// h*(σ_a) (m).
+    gap: f64,
+    /// ḣ*(σ_a) (m/s), negative.
+    rate: f64,
+}
+
+impl Approach {
+    /// The approach window of `phase`, followed by a contact phase: its last `window` s,
+    /// shortened to the samples from which on h* falls at least at [`RETIME_MIN_RATE`] times
+    /// the planned impact's ḣ*; `None` when h* does not fall at the planned impact, the
+    /// window is empty or the next phase is free.
+    fn of(reference: &Reference, phase: usize, window: f64) -> Option<Approach> {
+        let phases = &reference.phases;
+        let ph = &phases[phase];
+        if ph.contact || !phases[(phase + 1) % phases.len()].contact || window <= 0.0 {
+            return None;
+        }
+        let last = ph.s.len() - 1;
+        let closing = RETIME_MIN_RATE * ph.gap_rate[last];
+        let falling = ph
+            .gap_rate
+            .iter()
+            .rev()
+            .take_while(|r| closing < 0.0 && **r <= closing)
+            .count();
+        if falling < 2 {
+            return None;
+        }
+        let start = (ph.s[last] - window).max(ph.s[last + 1 - falling]);
+        let (gap, rate) = ph.gap_at(start);
+        (rate <= closing && gap > ph.gap[last]).then_some(Approach { start, gap, rate })
+    }
+}
 
 /// The discrete state of the controller from time `t` on.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -211,6 +297,8 @@ struct Discrete {
     omega_offset: [f64; 3],
     omega_int: [f64; 3],
     omega_last: [f64; 3],
+    /// ‖ω‖ at the last lift-off (rad/s), 0 before the first.
+    lift_off_omega: f64,
     period_start: f64,
     periods: usize,
     slips: usize,
@@ -241,6 +329,12 @@ pub struct HybridController<K: Kernels<3>> {
     gains: HybridGains,
     /// max λ_n* of each phase (N): the scale of the lift-off command.
     lambda_scale: Vec<f64>,
+    /// The re-timed approach of each phase, if it has one.
+    approach: Vec<Option<Approach>>,
+    /// The plan's ρ of the outer loop (module doc), until a period measures its own.
+    sensitivity: f64,
+    /// Largest ‖δ‖ (rad/s).
+    offset_limit: f64,
     /// |τ_i| ≤ tau_max[i] (N m): the actuators' bounds, infinite unless set.
     tau_max: [f64; 3],
     history: RefCell<Vec<Discrete>>,
@@ -284,6 +378,23 @@ impl<K: Kernels<3>> HybridController<K> {
                     .fold(0.0, f64::max)
             })
             .collect();
+        // ω*_lo: the largest planned ω at the end of a contact phase; without one, the mean.
+        let mean = Vec3::from(reference.mean_omega).norm();
+        let lift_off = reference
+            .phases
+            .iter()
+            .filter(|p| p.contact)
+            .map(|p| Vec3::from(p.omega[p.omega.len() - 1]).norm())
+            .fold(0.0, f64::max);
+        let lift_off = if lift_off > 0.0 { lift_off } else { mean };
+        let sensitivity = if lift_off > 0.0 {
+            (mean / lift_off).clamp(MIN_SENSITIVITY, 1.0)
+        } else {
+            1.0
+        };
+        let approach = (0..reference.phases.len())
+            .map(|p| Approach::of(&reference, p, gains.approach))
+            .collect();
         let mode = if reference.phases[0].contact {
             Mode::Stick
         } else {
@@ -299,6 +410,7 @@ impl<K: Kernels<3>> HybridController<K> {
             omega_offset: [0.0; 3],
             omega_int: [0.0; 3],
             omega_last: omega,
+            lift_off_omega: 0.0,
             period_start: t0,
             periods: 0,
             slips: 0,
@@ -310,6 +422,9 @@ impl<K: Kernels<3>> HybridController<K> {
             reference,
             gains,
             lambda_scale,
+            approach,
+            sensitivity,
+            offset_limit: OFFSET_LIMIT * lift_off,
             tau_max: [f64::INFINITY; 3],
             history: RefCell::new(vec![d]),
             switches: RefCell::new(Vec::new()),
@@ -402,24 +517,31 @@ impl<K: Kernels<3>> HybridController<K> {
         let s = t - start;
         let r = ph.at(s);
         if mode == Mode::Free || !ph.contact {
+            let (sigma, rate) = if mode == Mode::Free {
+                self.retime(phase, s, x)?
+            } else {
+                (s, 1.0)
+            };
+            let r = if sigma == s { r } else { ph.at(sigma) };
+            let qdd_ff = r.qdd.map(|v| v * rate);
             let mut qdd = [0.0; 3];
             self.gains.free.acceleration(
                 x.q.as_slice(),
                 x.qd.as_slice(),
                 &r.q,
                 &r.qd,
-                &r.qdd,
+                &qdd_ff,
                 &mut qdd,
             );
             self.id.torque(x.q.as_slice(), x.qd.as_slice(), &qdd, out)?;
             if mode == Mode::Free {
-                self.keep_clearance(phase, s, x, &qdd, out)?;
+                self.keep_clearance(phase, sigma, x, &qdd, out)?;
             }
             if !self.within_bounds(out) {
                 // The feed-forward ID(q, q̇, q̈*) plus as much feedback as the bounds allow.
                 let mut base = [0.0; 3];
                 self.id
-                    .torque(x.q.as_slice(), x.qd.as_slice(), &r.qdd, &mut base)?;
+                    .torque(x.q.as_slice(), x.qd.as_slice(), &qdd_ff, &mut base)?;
                 *out = self.fit_bounds(&base, out);
             }
             return Ok(());
@@ -441,10 +563,24 @@ impl<K: Kernels<3>> HybridController<K> {
         // ω_r × r_c = k_r e (e the tangential part of r_c* − r_c) makes |e| decay at the rate
         // k_r. Without it a contact point displaced by a slip stays displaced, and with it the
         // ω at lift-off (ω ⊥ r_c, as sticking keeps the spin about n) differs from the plan.
-        let e = Vec3::from(r.contact_point) - rc;
+        // The outer loop's offset δ ramps in over the last t_δ of the phase (w from 0 to 1),
+        // so the ball leaves with ω* + δ, and rolls the contact point by δ × r_c* ∫w more
+        // than planned: that displaced point is the contact-point loop's target, or the loop
+        // would undo δ within 1/k_r (it did on the human finger's COT optimum, whose stick
+        // phase lasts 0.55 s); the ramp keeps that roll to |δ| t_δ / 2.
+        let ramp = ph.duration.min(OFFSET_RAMP);
+        let late = (s.clamp(0.0, ph.duration) - (ph.duration - ramp)).max(0.0);
+        let (w, rolled) = if ramp > 0.0 {
+            (late / ramp, 0.5 * late * late / ramp)
+        } else {
+            (1.0, 0.0)
+        };
+        let offset = Vec3::from(d.omega_offset);
+        let rc_ref = Vec3::from(r.contact_point);
+        let e = rc_ref + offset.cross(&rc_ref) * rolled - rc;
         let e = e - n * n.dot(&e);
         let omega_r = rc.cross(&e) * (g.contact_point_rate / rc.norm_squared());
-        let target = Vec3::from(r.omega) + Vec3::from(d.omega_offset) + omega_r;
+        let target = Vec3::from(r.omega) + offset * w + omega_r;
         let omega_dot_cmd = Vec3::from(r.omega_dot) + (target - omega) * g.omega_rate;
         let ib: &Mat3 = p.ball_inertia();
         let f_b = omega.cross(&(ib * omega)) + omega * p.socket_damping();
@@ -523,6 +659,41 @@ impl<K: Kernels<3>> HybridController<K> {
             self.fit_bounds(&torque(planned, Vec3::zeros())?, &tau)
         };
         Ok(())
+    }
+
+    /// The reference time σ and its rate σ̇ at time `s` of free phase `phase` for the plant
+    /// state `x` (module doc): (s, 1) outside the approach window; in it the σ at which the
+    /// plan's gap h*(σ) is the measured h (above the window's top, on the tangent of h* at
+    /// σ_a, for a late plant), and σ̇ = ḣ / ḣ*(σ) in [0, [`MAX_RETIME_RATE`]].
+    fn retime(&self, phase: usize, s: f64, x: &State<3>) -> Result<(f64, f64), ControlError> {
+        let Some(a) = self.approach[phase] else {
+            return Ok((s, 1.0));
+        };
+        let ph = &self.reference.phases[phase];
+        let window = ph.s[ph.s.len() - 1] - a.start;
+        // An early plant is re-timed from one window's length before the window on.
+        if s < a.start - window {
+            return Ok((s, 1.0));
+        }
+        let c = self.model.evaluate(x)?.contact;
+        if s < a.start && c.h > a.gap {
+            return Ok((s, 1.0));
+        }
+        let (sigma, planned_rate) = if c.h >= a.gap {
+            (
+                (a.start + (c.h - a.gap) / a.rate).max(a.start - window),
+                a.rate,
+            )
+        } else {
+            let sigma = ph.time_of_gap(c.h, a.start);
+            (sigma, ph.gap_at(sigma).1)
+        };
+        let rate = if planned_rate < 0.0 {
+            (c.h_dot / planned_rate).clamp(0.0, MAX_RETIME_RATE)
+        } else {
+            1.0
+        };
+        Ok((sigma, rate))
     }
 
     /// Whether |τ_i| ≤ τ_max,i for every joint.
@@ -689,19 +860,29 @@ impl<K: Kernels<3>> HybridController<K> {
     fn end_period(&self, d: &mut Discrete, t: f64) {
         let len = t - d.period_start;
         if len > 0.0 {
+            let mean = d.omega_int.map(|v| v / len);
+            // ρ measured in the period when it had a lift-off: a plant whose flight differs
+            // from the plan (more socket damping) passes a different share of δ to the mean.
+            let measured = Vec3::from(mean).norm() / d.lift_off_omega;
+            let sensitivity = if d.lift_off_omega > 0.0 && measured.is_finite() {
+                measured.clamp(MIN_SENSITIVITY, 1.0)
+            } else {
+                self.sensitivity
+            };
             for i in 0..3 {
-                let mean = d.omega_int[i] / len;
-                d.omega_offset[i] += self.gains.outer * (self.reference.mean_omega[i] - mean);
+                d.omega_offset[i] +=
+                    self.gains.outer / sensitivity * (self.reference.mean_omega[i] - mean[i]);
             }
             // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
             // (and with it the contact forces) without bound.
-            let limit = OFFSET_LIMIT * Vec3::from(self.reference.mean_omega).norm();
+            let limit = self.offset_limit;
             let norm = Vec3::from(d.omega_offset).norm();
             if norm > limit {
                 d.omega_offset = d.omega_offset.map(|v| v * limit / norm);
             }
         }
         d.omega_int = [0.0; 3];
+        d.lift_off_omega = 0.0;
         d.period_start = t;
         d.periods += 1;
     }
@@ -806,6 +987,9 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                 let was_contact = from != Mode::Free;
                 let is_contact = m.mode != Mode::Free;
                 if was_contact != is_contact {
+                    if was_contact {
+                        d.lift_off_omega = Vec3::from(omega).norm();
+                    }
                     let in_contact_phase = self.reference.phases[d.phase].contact;
                     if in_contact_phase != is_contact {
                         self.advance(&mut d, m.t, is_contact);

@@ -42,6 +42,10 @@ pub struct ReferencePhase {
     pub contact_point: Vec<[f64; 3]>,
     /// ṙ_c* (m/s), the slope of the interpolation of r_c*.
     pub contact_point_dot: Vec<[f64; 3]>,
+    /// h* (m): the planned gap between the finger and the ball (eq. 4), zero in contact.
+    pub gap: Vec<f64>,
+    /// ḣ* (m/s), the slope of the interpolation of h*.
+    pub gap_rate: Vec<f64>,
 }
 
 /// The reference at one instant of a phase.
@@ -159,6 +163,8 @@ impl Reference {
                 lambda: Vec::new(),
                 contact_point: Vec::new(),
                 contact_point_dot: Vec::new(),
+                gap: Vec::new(),
+                gap_rate: Vec::new(),
             };
             for k in (0..n).filter(|&k| samples.phase[k] == p) {
                 let s = samples.t[k] - t0;
@@ -189,6 +195,8 @@ impl Reference {
                 ph.lambda.push(if c { lambda } else { [0.0; 3] });
                 ph.contact_point.push(geometry.r_c.into());
                 ph.contact_point_dot.push(geometry.rc_dot.into());
+                ph.gap.push(geometry.h);
+                ph.gap_rate.push(geometry.h_dot);
             }
             if ph.s.len() < 2 {
                 return Err(ControlError::Reference {
@@ -217,7 +225,74 @@ fn hermite(a: f64, b: f64, da: f64, db: f64, h: f64, w: f64) -> f64 {
         + (w3 - w2) * h * db
 }
 
+/// The slope of [`hermite`] with respect to s (not w).
+fn hermite_slope(a: f64, b: f64, da: f64, db: f64, h: f64, w: f64) -> f64 {
+    let w2 = w * w;
+    ((6.0 * w2 - 6.0 * w) * (a - b)) / h
+        + (3.0 * w2 - 4.0 * w + 1.0) * da
+        + (3.0 * w2 - 2.0 * w) * db
+}
+
 impl ReferencePhase {
+    /// The planned gap h*(s) and its rate ḣ*(s): the cubic Hermite interpolant of the samples
+    /// h*, ḣ* and its slope (consistent with the interpolation of q*); outside [0, T] the end
+    /// values.
+    pub fn gap_at(&self, s: f64) -> (f64, f64) {
+        let last = self.s.len() - 1;
+        if s >= self.s[last] {
+            return (self.gap[last], self.gap_rate[last]);
+        }
+        if s.is_nan() || s <= self.s[0] {
+            return (self.gap[0], self.gap_rate[0]);
+        }
+        let k = self.s.partition_point(|&x| x <= s);
+        let (a, b) = (k - 1, k);
+        let h = self.s[b] - self.s[a];
+        let w = (s - self.s[a]) / h;
+        let (g, r) = (&self.gap, &self.gap_rate);
+        (
+            hermite(g[a], g[b], r[a], r[b], h, w),
+            hermite_slope(g[a], g[b], r[a], r[b], h, w),
+        )
+    }
+
+    /// The time σ ∈ [`from`, T] at which the planned gap is `h`, for a phase whose h* falls
+    /// on that interval (the approach to a planned impact): the segment by bisection on the
+    /// samples, then bisection on its cubic to the rounding of s. A gap above h*(`from`)
+    /// gives `from`, one below h*(T) gives T.
+    pub fn time_of_gap(&self, h: f64, from: f64) -> f64 {
+        let last = self.s.len() - 1;
+        let end = self.s[last];
+        let from = from.clamp(self.s[0], end);
+        if !h.is_finite() || h >= self.gap_at(from).0 {
+            return from;
+        }
+        if h <= self.gap[last] {
+            return end;
+        }
+        // The samples after `from` fall with s: the first one at or below h ends the segment.
+        let first = self.s.partition_point(|&x| x <= from);
+        let k = first + self.gap[first..].partition_point(|&g| g > h);
+        let (a, b) = (k - 1, k.min(last));
+        let (s0, width) = (self.s[a], self.s[b] - self.s[a]);
+        let (g, r) = (&self.gap, &self.gap_rate);
+        // The segment's cubic itself (what `gap_at` evaluates there), without its search.
+        let gap = |s: f64| hermite(g[a], g[b], r[a], r[b], width, (s - s0) / width);
+        let (mut lo, mut hi) = (s0.max(from), self.s[b]);
+        while hi - lo > 1e-15 * (1.0 + hi.abs()) {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            if gap(mid) > h {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+
     /// The reference at time `s` since the phase began (module doc for s outside [0, T]).
     pub fn at(&self, s: f64) -> Point {
         let last = self.s.len() - 1;

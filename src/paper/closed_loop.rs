@@ -458,29 +458,27 @@ const PERTURBATIONS: [(&str, &[(&str, &str)]); 4] = [
 /// One row of the robustness table: its name, the scene edits and the plant's impact law.
 type Case = (String, Vec<(&'static str, &'static str)>, ImpactLaw);
 
-/// A perturbed copy of the paper scene: `edits` applied to its TOML text (every occurrence);
-/// an error if an edit finds nothing to replace (the scene file changed).
-fn perturbed_paper(edits: &[(&str, &str)]) -> Result<Model<DynKernels>> {
-    let mut text = bf_generated::scene_toml("paper")
-        .ok_or_else(|| anyhow!("the paper scene is not compiled in"))?
+/// A perturbed copy of the compiled scene `name` (the paper scene or the human finger's, which
+/// share these values): `edits` applied to its TOML text (every occurrence); an error if an
+/// edit finds nothing to replace (the scene file changed).
+fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernels>> {
+    let mut text = bf_generated::scene_toml(name)
+        .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?
         .to_string();
     for (from, to) in edits {
         if !text.contains(from) {
-            bail!("the paper scene has no `{from}` to perturb");
+            bail!("the scene `{name}` has no `{from}` to perturb");
         }
         text = text.replace(from, to);
     }
-    let scene = bf_codegen::Scene::from_toml_str(&text, "paper (perturbed)")?;
+    let scene = bf_codegen::Scene::from_toml_str(&text, &format!("{name} (perturbed)"))?;
     Ok(bf_model::fixtures::model_for_scene(&scene)?.0)
 }
 
-/// The robustness table: the bounded hybrid controller on the optimum `sol` of the paper
-/// scene for `periods` periods against each perturbed plant ([`PERTURBATIONS`] alone, all
-/// four, and the max-dissipation impact law instead of Newton's on the nominal plant): the
-/// ω error of the first period, the largest from the 4th on (the target: 5 %),
-/// contact in every period, the largest |τ|.
-pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Result<String> {
-    use std::fmt::Write as _;
+/// The plants of the robustness table: [`PERTURBATIONS`] alone, all four together, and the
+/// max-dissipation impact law instead of Newton's on the nominal plant; each with its name,
+/// scene edits and impact law.
+fn robustness_cases() -> Vec<Case> {
     let mut cases: Vec<Case> = PERTURBATIONS
         .iter()
         .map(|(n, e)| (n.to_string(), e.to_vec(), ImpactLaw::Newton))
@@ -498,6 +496,38 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
         Vec::new(),
         ImpactLaw::MaxDissipation,
     ));
+    cases
+}
+
+/// Runs `controller` on the optimum `sol` for `periods` periods against every plant of the
+/// robustness table (perturbed copies of the solution's own scene); each run with its row's
+/// name.
+pub fn robustness_runs(
+    sol: &OcpSolution,
+    controller: ControllerKind,
+    periods: usize,
+) -> Vec<(String, Result<Tracking>)> {
+    let scene = if sol.scene.is_empty() {
+        "paper"
+    } else {
+        &sol.scene
+    };
+    robustness_cases()
+        .into_iter()
+        .map(|(case, edits, law)| {
+            let run = perturbed_scene(scene, &edits)
+                .and_then(|plant| run_tracking(sol, controller, periods, plant, law));
+            (case, run)
+        })
+        .collect()
+}
+
+/// The robustness table: the bounded hybrid controller on the optimum `sol` for `periods`
+/// periods against each plant of [`robustness_runs`]: the ω error of the first period, the
+/// largest from the 4th on (the target: 5 %), contact in every period, the largest
+/// |τ|.
+pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Result<String> {
+    use std::fmt::Write as _;
     let pct = |e: f64| format!("{:.2}", 100.0 * e);
     let mut s = String::new();
     writeln!(
@@ -511,9 +541,7 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
         "| plant | periods completed | ω error, 1st period (%) | max ω error from the 4th period (%) | contact in every period | max \\|τ\\| (N m) |"
     )?;
     writeln!(s, "|---|---|---|---|---|---|")?;
-    for (case, edits, law) in cases {
-        let run = perturbed_paper(&edits)
-            .and_then(|plant| run_tracking(sol, ControllerKind::Hybrid, periods, plant, law));
+    for (case, run) in robustness_runs(sol, ControllerKind::Hybrid, periods) {
         match run {
             Ok(t) => {
                 let first = t.periods.first().map_or("—".into(), |p| pct(p.omega_error));
@@ -557,7 +585,7 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
 
 /// The largest ω error from the 4th period on (the robustness window), `None` for a
 /// run that completed fewer than four periods.
-fn max_error_from_fourth(t: &Tracking) -> Option<f64> {
+pub fn max_error_from_fourth(t: &Tracking) -> Option<f64> {
     t.periods
         .iter()
         .skip(3)
