@@ -394,15 +394,18 @@ fn lg_and_archetype_solutions_verify() {
 #[test]
 fn penetration_beyond_the_allowance_is_not_verified() {
     use ball_finger::pipeline::verify::{PENETRATION_TOLERANCE, is_verified, path_failure};
-    let (p, mut sol) = solved("reach", &ProblemSettings::default());
-    let v = verify(&p, &sol, RTOL).unwrap();
-    let touch = v.phases[0].min_h.unwrap();
-    // Reaching the ball from above: the re-integrated path stays outside it (up to the
-    // touch-down tolerance) and the solution verifies.
-    assert!(touch >= -PENETRATION_TOLERANCE, "{v}");
-    sol.verification = Some(v.clone());
-    assert!(is_verified(&sol) && v.verified, "{v}");
+    let (p, sol) = qc_default();
+    let mut sol = sol.clone();
+    let mut v = verify(p, &sol, RTOL).unwrap();
+    // The approach to the ball from above: the re-integrated path stays outside it (up to
+    // the touch-down tolerance).
+    assert!(v.phases[0].min_h.unwrap() >= -PENETRATION_TOLERANCE, "{v}");
     assert_eq!(path_failure(&v), None);
+    // The record with its element defects within the tolerance (the coarse direct solve's
+    // release phase exceeds it) verifies.
+    v.max_defect = 1e-6;
+    sol.verification = Some(v.clone());
+    assert!(is_verified(&sol), "{v}");
     // The same record with the path 2.55 mm inside the ball.
     let mut deep = v.clone();
     deep.phases[0].min_h = Some(-2.55e-3);
