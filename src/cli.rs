@@ -399,6 +399,12 @@ pub struct OptimizeArgs {
     /// `reach-arm`: a fixed duration T (s, in [0.01, 20]) instead of the optimal one.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub duration: Option<f64>,
+    /// `reach-arm`: keep the torques within tau_max between the collocation points too, by
+    /// bounding the Bernstein coefficients of each element's torque polynomial elevated to M
+    /// times its degree (1..=8; larger M is less conservative); 0: bounds at the collocation
+    /// points only, where a bang-bang optimum overshoots between them [default: 2].
+    #[arg(long, value_name = "M")]
+    pub torque_hull: Option<usize>,
     /// Runtime parameter of the scene, `name=value` (repeatable; names from the scene's
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]

@@ -557,9 +557,11 @@ fn five_refinements_verify_the_best_candidate_of_seed_8() {
 
 /// The default `periodic-cot-human` search: the first refinement of its best coarse candidate
 /// (start 1) ends on its starting mesh without verifying, because the refined mesh's solve
-/// failed; the second attempt, with a tighter tolerance, refines differently and verifies the
+/// failed; the second attempt, with a tighter tolerance, refines differently and reaches the
 /// lower optimum J ≈ 0.066532 (stopping after the first attempt, as for a refinement the point
-/// limit stopped, gave start 0's J ≈ 0.066536 instead).
+/// limit stopped, gave start 0's J ≈ 0.066536 instead). Its release phase dips 2.55 mm into
+/// the ball between its nodes, so it does not verify (decision record 0028); the further
+/// attempts split the penetrating elements and verify J ≈ 0.0665675 with min h ≥ −1e-4 m.
 #[test]
 #[ignore = "about 60 s: the default periodic-cot-human search"]
 fn a_refinement_whose_refined_mesh_failed_is_retried() {
@@ -568,9 +570,14 @@ fn a_refinement_whose_refined_mesh_failed_is_retried() {
         .lines()
         .filter(|l| l.starts_with("verification refinement: refine start 1 "))
         .count();
-    assert!(attempts >= 2, "{stdout}");
+    assert!(attempts >= 3, "{stdout}");
     let j = sol["objective"].as_f64().unwrap();
-    assert!(j < 0.066534, "J = {j}");
+    assert!(j < 0.06658, "J = {j}");
+    for ph in sol["verification"]["phases"].as_array().unwrap() {
+        if let Some(h) = ph["min_h"].as_f64() {
+            assert!(h >= -1e-4, "phase {}: min h {h}", ph["phase"]);
+        }
+    }
 }
 
 /// The default `periodic-cot` search of seed 12: the refinements of its best coarse candidate

@@ -132,6 +132,17 @@ pub enum OptimError {
         /// What is wrong.
         defect: PointDefect,
     },
+    /// A bound on a state between the state points ([`crate::ocp::StateBoundBetweenPoints`])
+    /// names no state of the transcription, or its bounds or point count are unusable.
+    #[error("bound on state {component} of phase {phase} between the state points: {reason}")]
+    StateBound {
+        /// Phase index as given.
+        phase: usize,
+        /// State component as given.
+        component: usize,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// The differentiation matrix of a Gauss mesh could not be inverted (too many points).
     #[error("singular Gauss differentiation matrix ({points} collocation points)")]
     SingularDifferentiation {

@@ -16,7 +16,11 @@
 //! holds at the end time exactly, not only at the last collocation node (Radau nodes do not
 //! include the end of a phase). The torque bounds are state bounds, met at the state points;
 //! between them the torque polynomial can overshoot where the optimum is bang-bang (small
-//! effort weights), which the study layer's verification reports (decision record 0014).
+//! effort weights; decision records 0014, 0022). So the bound is also imposed between them,
+//! through the Bernstein coefficients of each element's torque polynomial
+//! ([`ArmSettings::torque_hull`]; bf-optim's [`StateBoundBetweenPoints`] with
+//! [`Between::Hull`], linear rows on the state values; decision record 0028): the polynomial
+//! lies in their convex hull, so it stays within τ_max everywhere.
 //!
 //! The small acceleration term (w_a = [`DEFAULT_ACCELERATION_WEIGHT`]) is a regularisation:
 //! with time and torque effort alone, a joint of tiny inertia (a wrist: M_ii ≈ 4e-5 kg m² on
@@ -48,9 +52,10 @@ use bf_codegen::nodefn::NodeFunction;
 use bf_codegen::robot::SymbolicRobot;
 use bf_codegen::{CodegenError, Scene};
 use bf_optim::ipm::{Nlp, OutputSettings, Settings, Solution, Status, TerminationSettings};
+use bf_optim::ocp::transcription::Between;
 use bf_optim::ocp::{
     KernelUse, Objective, Ocp, Phase, PhaseGuess, PhaseTrajectory, PointFunction, Scheme,
-    Transcription, VarRef, extract,
+    StateBoundBetweenPoints, Transcription, VarRef, extract,
 };
 use bf_scene::JointType;
 use serde::{Deserialize, Serialize};
@@ -75,6 +80,9 @@ pub const MIN_DURATION: f64 = 0.01;
 /// Default acceleration weight w_a (s⁴ N⁻² m⁻²-free: per (rad/s²)²).
 pub const DEFAULT_ACCELERATION_WEIGHT: f64 = 1e-3;
 
+/// Default [`ArmSettings::torque_hull`] (decision record 0028, BENCHMARKS.md).
+pub const DEFAULT_TORQUE_HULL: usize = 2;
+
 /// Samples of the dense output ([`ArmSolution::dense`]).
 pub const DENSE_SAMPLES: usize = 201;
 
@@ -97,6 +105,10 @@ pub struct ArmSettings {
     pub acceleration_weight: f64,
     /// A fixed duration T (s) instead of the free one in [[`MIN_DURATION`], [`MAX_DURATION`]].
     pub duration: Option<f64>,
+    /// Degree elevation m of the hull bound on the torque polynomials (bf-optim's
+    /// [`Between::Hull`]: |τ_i(t)| ≤ τ_max,i everywhere between the state points); 0: the
+    /// bound at the state points only (see the module docs).
+    pub torque_hull: usize,
     /// Interior-point iteration limit.
     pub max_iter: usize,
     /// Interior-point convergence tolerance.
@@ -115,6 +127,7 @@ impl Default for ArmSettings {
             effort_weight: 1.0,
             acceleration_weight: DEFAULT_ACCELERATION_WEIGHT,
             duration: None,
+            torque_hull: DEFAULT_TORQUE_HULL,
             max_iter: 1500,
             tol: 1e-8,
             print_level: 0,
@@ -705,7 +718,22 @@ fn build_inner(scene: &Scene, settings: &ArmSettings) -> Result<ArmBuilt, Proble
             elements: settings.elements,
         },
     };
-    let nlp = Transcription::with_kernels(&ocp, &[], KernelUse::Never)?;
+    let mut nlp = Transcription::with_kernels(&ocp, &[], KernelUse::Never)?;
+    if settings.torque_hull > 0 {
+        let between: Vec<StateBoundBetweenPoints> = tau_max
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.is_finite())
+            .map(|(i, &t)| StateBoundBetweenPoints {
+                phase: 0,
+                component: 2 * nq + i,
+                lower: -t,
+                upper: t,
+                how: Between::Hull(settings.torque_hull),
+            })
+            .collect();
+        nlp.bound_states_between_points(&between)?;
+    }
     Ok(ArmBuilt {
         scene: scene.clone(),
         start,
@@ -796,6 +824,10 @@ pub struct ArmSolution {
     pub nlp_size: (usize, usize),
     /// Collocation points and Radau elements.
     pub points: usize,
+    /// Degree elevation of the hull bound on the torques ([`ArmSettings::torque_hull`];
+    /// absent in older files: 0, bounds at the state points only).
+    #[serde(default)]
+    pub torque_hull: usize,
     /// Radau elements.
     pub elements: usize,
     /// Values at the collocation state points.
@@ -869,6 +901,7 @@ pub fn arm_solution_at(
         dual_infeasibility: sol.dual_infeasibility,
         nlp_size: size,
         points: p.settings.points,
+        torque_hull: p.settings.torque_hull,
         elements: p.settings.elements,
         nodes,
         dense,

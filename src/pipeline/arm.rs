@@ -6,7 +6,9 @@
 //! * [`verify_arm`]: re-integration with bf-sim's arm simulator ([`bf_sim::arm::FreeArm`] on
 //!   [`bf_model::arm::ArmModel`], compiled kernels when the scene is a compiled one) under the
 //!   optimal torques. Like the ball problems' verification, the torques between the nodes are
-//!   the solution's own control polynomial on each collocation element (not clamped), and
+//!   the solution's own torque polynomial on each collocation element, clamped to τ_max
+//!   ([`ElementTorque`]; the optimisation bounds it between the points too, decision record
+//!   0028, so the clamp only trims what remains between its samples), and
 //!   **every element restarts from its collocated initial state**: the element defects
 //!   |x_sim − x_colloc| at the element ends measure the discretisation error of the
 //!   collocation, also for an arm whose open-loop motion is unstable (a hanging arm swung up
@@ -24,6 +26,7 @@ use std::time::Instant;
 use bf_codegen::Scene;
 use bf_model::arm::ArmModel;
 use bf_optim::ocp::nodes::lagrange_basis;
+use bf_optim::ocp::transcription::sample_taus;
 use bf_optim::ocp::{PhaseTrajectory, solve_nlp};
 use bf_problem::arm::{
     ArmSettings, ArmSolution, ArmVerification, arm_solution_at, build_reach_arm,
@@ -123,20 +126,33 @@ pub fn scene_of(sol: &ArmSolution) -> Result<Scene, PipelineError> {
     Ok(scene)
 }
 
-/// The torque polynomial of one collocation element: τ is a state of `reach-arm`
-/// (bf_problem::arm), so this is the element's state polynomial of τ, the Lagrange
-/// interpolation through its state points (both ends included), in time.
+/// The torque of one collocation element: τ is a state of `reach-arm` (bf_problem::arm), so
+/// this is the element's state polynomial of τ, the Lagrange interpolation through its state
+/// points (both ends included), in time, clamped to |τ_i| ≤ τ_max,i: a drive delivers no
+/// more, so the verification and `simulate --init` replay what a real arm would do, and the
+/// clamp's effect (where the polynomial overshoots between the points) is part of the
+/// re-integration defect instead of a torque no drive has.
 #[derive(Debug, Clone)]
 pub struct ElementTorque {
     t0: f64,
     duration: f64,
     taus: Vec<f64>,
     values: Vec<Vec<f64>>,
+    limits: Vec<f64>,
+}
+
+/// τ_max per joint of an arm solution, ∞ where it has none.
+pub fn torque_limits(sol: &ArmSolution) -> Vec<f64> {
+    sol.tau_max
+        .iter()
+        .map(|t| t.map_or(f64::INFINITY, f64::abs))
+        .collect()
 }
 
 impl ElementTorque {
-    /// The polynomial of element `e` of `tr`, an arm of `n` joints (state (q, q̇, τ)).
-    pub fn new(tr: &PhaseTrajectory, e: usize, n: usize) -> Self {
+    /// The torque of element `e` of `tr`, an arm of `n` joints (state (q, q̇, τ)) with the
+    /// torque limits `limits` (∞ where none; missing entries count as none).
+    pub fn new(tr: &PhaseTrajectory, e: usize, n: usize, limits: &[f64]) -> Self {
         let (a, b) = tr.elements[e];
         ElementTorque {
             t0: tr.t0,
@@ -146,15 +162,27 @@ impl ElementTorque {
                 .iter()
                 .map(|x| x[2 * n..3 * n].to_vec())
                 .collect(),
+            limits: (0..n)
+                .map(|i| limits.get(i).copied().unwrap_or(f64::INFINITY))
+                .collect(),
         }
     }
 
-    /// τ at time `t`.
-    pub fn at(&self, t: f64, out: &mut [f64]) {
+    /// The unclamped polynomial at time `t`.
+    pub fn polynomial_at(&self, t: f64, out: &mut [f64]) {
         let s = 2.0 * (t - self.t0) / self.duration - 1.0;
         let l = lagrange_basis(&self.taus, s);
         for (i, o) in out.iter_mut().enumerate() {
             *o = self.values.iter().zip(&l).map(|(v, w)| w * v[i]).sum();
+        }
+    }
+
+    /// τ at time `t`: the polynomial clamped to the limits.
+    pub fn at(&self, t: f64, out: &mut [f64]) {
+        self.polynomial_at(t, out);
+        for (o, &m) in out.iter_mut().zip(&self.limits) {
+            // max/min rather than clamp: never panics, whatever the limits are.
+            *o = o.max(-m).min(m);
         }
     }
 }
@@ -169,12 +197,13 @@ pub struct PhaseTorque {
 }
 
 impl PhaseTorque {
-    /// The torques of `tr`, an arm of `n` joints.
-    pub fn new(tr: &PhaseTrajectory, n: usize) -> Self {
+    /// The torques of `tr`, an arm of `n` joints with the torque limits `limits`
+    /// ([`ElementTorque::new`]).
+    pub fn new(tr: &PhaseTrajectory, n: usize, limits: &[f64]) -> Self {
         let elements = (0..tr.elements.len())
             .map(|e| {
                 let end = tr.time(tr.state_tau[tr.elements[e].1 - 1]);
-                (end, ElementTorque::new(tr, e, n))
+                (end, ElementTorque::new(tr, e, n, limits))
             })
             .collect();
         PhaseTorque { elements, n }
@@ -218,6 +247,12 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Points inside every interval between state points at which [`verify_arm`] evaluates the
+/// torque polynomials for [`ArmVerification::max_torque_overshoot`] (beside the state points):
+/// denser than the optimisation's [`bf_problem::arm::DEFAULT_TORQUE_SAMPLES`], so that what
+/// remains between those is seen.
+pub const OVERSHOOT_SAMPLES: usize = 16;
+
 /// Re-integrates `sol` on its scene (see the module docs) with DOPRI5 at `rtol`
 /// (atol = rtol · [`ATOL_FACTOR`]).
 pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, PipelineError> {
@@ -227,6 +262,7 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Pipel
     })?;
     let tr = &sol.raw;
     let n = model.nq();
+    let limits = torque_limits(sol);
     let settings = SimSettings {
         rtol,
         atol: rtol * ATOL_FACTOR,
@@ -246,11 +282,13 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Pipel
     let mut failure = None;
     let mut overshoot: f64 = 0.0;
     for (e, &(a, b)) in tr.elements.iter().enumerate() {
-        let poly = ElementTorque::new(tr, e, n);
+        let poly = ElementTorque::new(tr, e, n, &limits);
         let (t0, t1) = (tr.time(tr.state_tau[a]), tr.time(tr.state_tau[b - 1]));
         let mut tau = vec![0.0; n];
-        for k in 0..=32 {
-            poly.at(t0 + (t1 - t0) * k as f64 / 32.0, &mut tau);
+        let support = &tr.state_tau[a..b];
+        let samples = sample_taus(support, OVERSHOOT_SAMPLES);
+        for &s in support.iter().chain(&samples) {
+            poly.polynomial_at(tr.time(s), &mut tau);
             for (v, m) in tau.iter().zip(&sol.tau_max) {
                 if let Some(m) = m {
                     overshoot = overshoot.max(v.abs() - m);
@@ -288,7 +326,7 @@ pub fn verify_arm(sol: &ArmSolution, rtol: f64) -> Result<ArmVerification, Pipel
         .chain(std::iter::repeat_n(0.0, n))
         .collect();
     let x0: Vec<f64> = tr.x.first().map_or(vec![], |x| x[..2 * n].to_vec());
-    let sys = FreeArm::new(model, PhaseTorque::new(tr, n))?;
+    let sys = FreeArm::new(model, PhaseTorque::new(tr, n, &limits))?;
     let t_end = tr.t0 + tr.duration;
     let open_loop_end_error = match bf_sim::simulate(
         &sys as &dyn HybridSystem<Mode = ArmMode>,

@@ -33,7 +33,7 @@ pub use problem::{
     NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
 };
 pub use trajectory::{PhaseTrajectory, extract};
-pub use transcription::{PhaseLayout, Transcription};
+pub use transcription::{PhaseLayout, StateBoundBetweenPoints, Transcription};
 
 use crate::OptimError;
 use crate::ipm::{IterationInfo, Settings, Solution, WarmStart, solve_with};

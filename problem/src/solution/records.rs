@@ -298,6 +298,11 @@ pub struct PhaseVerification {
     pub max_torque_overshoot: f64,
     /// Free phases: min h along the element re-integrations (m; < 0 is penetration).
     pub min_h: Option<f64>,
+    /// Free phases: min h along each element's re-integration (m; NaN where it failed or the
+    /// element is empty; empty in stick phases and in older files): where the collocated path
+    /// dips into the ball between its nodes, so that a refinement splits those elements.
+    #[serde(default, with = "nan_null_vec")]
+    pub element_min_h: Vec<f64>,
     /// Stick phases: max ‖Δv‖ along the element re-integrations (m/s; drift of Δv = 0).
     pub max_delta_v: Option<f64>,
     /// Stick phases: min λ_n along the element re-integrations (N; < 0 means the contact
@@ -347,8 +352,9 @@ pub struct Verification {
     /// `VERIFIED_DEFECT`).
     #[serde(default)]
     pub tolerance: f64,
-    /// Whether every phase completed with `max_defect` ≤ `tolerance`; a solution that is not
-    /// verified is flagged wherever it is shown.
+    /// Whether every phase completed with `max_defect` ≤ `tolerance` and its path checks
+    /// within their allowances (the study layer's verification: the free phases' penetration);
+    /// a solution that is not verified is flagged wherever it is shown.
     #[serde(default)]
     pub verified: bool,
 }

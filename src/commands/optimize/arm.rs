@@ -8,6 +8,7 @@ use crate::cli::OptimizeArgs;
 use crate::io::parse_list;
 use crate::pipeline::verify::VERIFIED_DEFECT;
 use anyhow::{Context, Result, bail};
+use bf_optim::ocp::transcription::MAX_ELEVATION;
 use bf_output::{Outcome, OutputDir};
 use bf_problem::arm::{ArmSettings, ArmSolution, MAX_DURATION, MIN_DURATION, REACH_ARM};
 
@@ -112,6 +113,11 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             Some(t) if (MIN_DURATION..=MAX_DURATION).contains(&t) => Some(t),
             Some(t) => bail!("--duration must be in [{MIN_DURATION}, {MAX_DURATION}] s (got {t})"),
             None => None,
+        },
+        torque_hull: match args.torque_hull {
+            Some(m) if m <= MAX_ELEVATION => m,
+            Some(m) => bail!("--torque-hull must be in 0..={MAX_ELEVATION} (got {m})"),
+            None => bf_problem::arm::DEFAULT_TORQUE_HULL,
         },
         max_iter: args.max_iter,
         print_level: args.print_level,

@@ -18,7 +18,9 @@ use crate::cli::{OptimizeArgs, OptimizeCommand};
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::VerifyPolicy;
 use crate::pipeline::strategy::{self, DEFAULT_SEED, DEFAULT_STARTS, Shard, Strategy};
-use crate::pipeline::verify::{MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verify};
+use crate::pipeline::verify::{
+    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, path_failure, verify,
+};
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
@@ -340,16 +342,21 @@ pub fn failure_of(sol: &OcpSolution) -> Option<String> {
         ));
     }
     match &sol.verification {
-        Some(v) if !is_verified(sol) => Some(format!(
-            "the solution is unverified: its re-integration defect {:.3e} exceeds {:e}{}",
-            v.max_defect,
-            VERIFIED_DEFECT,
-            if v.completed() {
-                ""
-            } else {
-                " (a phase could not be re-integrated to its end)"
+        Some(v) if !is_verified(sol) => Some(match path_failure(v) {
+            Some(path) if v.passes(VERIFIED_DEFECT) => {
+                format!("the solution is unverified: {path}")
             }
-        )),
+            _ => format!(
+                "the solution is unverified: its re-integration defect {:.3e} exceeds {:e}{}",
+                v.max_defect,
+                VERIFIED_DEFECT,
+                if v.completed() {
+                    ""
+                } else {
+                    " (a phase could not be re-integrated to its end)"
+                }
+            ),
+        }),
         _ => None,
     }
 }
@@ -473,10 +480,13 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
     if let Some(v) = &sol.verification {
         crate::outln!("{}", v.summary().trim_end())?;
         crate::outln!(
-            "verified: {} (re-integration defect {:.3e}, tolerance {:e})",
+            "verified: {} (re-integration defect {:.3e}, tolerance {:e}{})",
             if is_verified(sol) { "yes" } else { "NO" },
             v.max_defect,
-            VERIFIED_DEFECT
+            VERIFIED_DEFECT,
+            path_failure(v)
+                .map(|p| format!("; {p}"))
+                .unwrap_or_default()
         )?;
     }
     Ok(())
@@ -526,6 +536,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         ("--effort-weight", args.effort_weight.is_some()),
         ("--acceleration-weight", args.acceleration_weight.is_some()),
         ("--duration", args.duration.is_some()),
+        ("--torque-hull", args.torque_hull.is_some()),
     ] {
         if given {
             bail!("{opt}: only `--problem {REACH_ARM}` takes it");

@@ -160,6 +160,7 @@ fn arm_replay(
             path.display()
         );
     }
-    let torque = crate::pipeline::arm::PhaseTorque::new(&sol.raw, n);
+    let limits = crate::pipeline::arm::torque_limits(&sol);
+    let torque = crate::pipeline::arm::PhaseTorque::new(&sol.raw, n, &limits);
     Ok((sol.start.clone(), torque, sol.duration))
 }

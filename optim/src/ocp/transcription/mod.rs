@@ -27,6 +27,8 @@
 //! The sparsity is alike: per state component and phase the differential rows have a dense
 //! N × (N + 1) block in the states and a diagonal in f, the integral rows two state columns and
 //! a dense N × N block in f (plus one duplicate T triplet per node, summed by the solver).
+//!
+//! Optional linear rows bound a state between its state points ([`between`]).
 
 use super::block::{GraphFn, KernelUse};
 pub use super::mesh::{Colloc, Mesh};
@@ -35,7 +37,13 @@ use crate::OptimError;
 use crate::error::{PhaseDefect, PointDefect};
 use crate::ipm::{BOUND_INF, Nlp};
 
+mod between;
 mod nlp;
+
+pub use between::{
+    Between, MAX_ELEVATION, MAX_HULL_DEGREE, MAX_PER_INTERVAL, StateBoundBetweenPoints, hull_rows,
+    sample_taus,
+};
 
 #[derive(Debug, Clone)]
 struct Instance {
