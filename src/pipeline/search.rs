@@ -90,13 +90,14 @@ pub struct VerifyPolicy {
 
 /// The sampling phase of the global search on a coarse mesh ([`VerifyPolicy::coarse`]): every
 /// start of the multi-start is solved on `elements` Radau elements of `points` points per
-/// phase in all, its end points are clustered ([`promoted`]), and only the `promote` best
-/// distinct optima are re-solved on the problem's own mesh, warm-started from their coarse
-/// trajectories (interpolated). A start is then several times cheaper, so many more of them
-/// fit the same time: the good basins of `periodic-qc` are each reached by about one start in
-/// a hundred (BENCHMARKS.md, "Coarse sampling"), which 32 starts on the full mesh miss on
-/// most seeds. Applies to Radau problems whose mesh has more points than the coarse one and
-/// no explicit element layout.
+/// phase in all, the basin hopping runs there ([`Search::explore`]), and only the `promote`
+/// best distinct optima are re-solved on the problem's own mesh, warm-started from their
+/// coarse trajectories (interpolated; [`Search::promote`]). A coarse start costs about a
+/// fifth of one on the default mesh and ends at the same objective to about 1e-4, and the
+/// good basins of `periodic-qc` are each reached by about one start in 250 (BENCHMARKS.md,
+/// "Global search by default: coarse sampling"), so many cheap starts and hops find more
+/// than a few expensive ones. Applies to multi-starts on Radau meshes of more points than the
+/// coarse one and no explicit element layout.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CoarseSampling {
     /// Radau elements per phase of the coarse mesh.
@@ -523,11 +524,11 @@ fn coarse_mesh(
 /// The optimal-control problem as a [`Landscape`] of the global search: a start is a chain of
 /// the strategy ([`run_chain`]), a hop scales the phase durations of a local optimum's primal
 /// point (each by e^(s·u), u uniform in [−1, 1], times a common factor for the period of the
-/// same law) and re-solves it warm from μ = [`HOP_MU`] on the optimum's own mesh; every end
-/// point is re-integrated, and a hop that ends better than its origin but unverified is
-/// hp-refined like a sampled candidate ([`refine_until_verified`]). Points rank verified
-/// first, then by objective (better by more than [`CLUSTER_RTOL`] relative), and are the same
-/// optimum by [`same_optimum`].
+/// same law) and re-solves it warm from μ = [`HOP_MU`] on the optimum's own mesh (the coarse
+/// one of [`CoarseSampling`] by default); end points on the problem's mesh are
+/// re-integrated. Points rank successful first, then by objective (better by more than
+/// [`CLUSTER_RTOL`] relative): the verification and refinement come after the exploration
+/// ([`Search::refine_candidates`]). Points are the same optimum by [`same_optimum`].
 struct OcpLandscape<'a> {
     problem: Problem,
     settings: &'a ProblemSettings,
@@ -730,7 +731,7 @@ impl Landscape for OcpLandscape<'_> {
     fn better(&self, a: &Candidate, b: &Candidate) -> bool {
         let (ca, cb) = (solved(&a.solution), solved(&b.solution));
         let (ja, jb) = (a.solution.objective, b.solution.objective);
-        (ca && !cb) || (ca && cb && ja < jb - CLUSTER_RTOL * jb.abs())
+        ca && (!cb || ja < jb - CLUSTER_RTOL * jb.abs())
     }
 
     fn same(&self, a: &Candidate, b: &Candidate) -> bool {
@@ -824,12 +825,12 @@ impl Search {
     }
 
     /// The global search's exploitation ([`global::exploit`], settings [`VerifyPolicy::hops`]
-    /// seeded by the multi-start's seed): monotonic basin hopping from the best candidate,
-    /// then polishing. Runs only after a multi-start; hops are numbered on from its starts
-    /// (their records' chain index), the best point joins the candidates if a hop found it,
-    /// and [`Search::basin_hits`] counts the candidates and hops that ended at it. Depends
-    /// on the candidates' values only (not their order): shards merged explore as the
-    /// unsharded run does.
+    /// seeded by the multi-start's seed): monotonic basin hopping from the best candidates,
+    /// then polishing, on the candidates' own mesh. Runs only after a multi-start; hops are
+    /// numbered on from its starts (their records' chain index), every distinct optimum a hop
+    /// found joins the candidates, and [`Search::basin_hits`] counts the candidates and hops
+    /// that ended at the best. Depends on the candidates' values only (not their order):
+    /// shards merged explore as the unsharded run does.
     pub fn explore(
         &mut self,
         problem: Problem,
