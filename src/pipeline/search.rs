@@ -1,22 +1,35 @@
-//! The default search of `optimize` and the paper report ([`search`]): the chains of a
-//! [`Strategy`] (for `periodic-qc` a continuation in the stick phase's lower bound, first
-//! ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound), every end point re-integrated
-//! ([`verify`]), one [`Candidate`] per distinct optimum (objectives within [`CLUSTER_RTOL`]),
-//! hp refinement of the unverified optima that beat the best verified one (lowest objective
-//! first, one after the other until one verifies), driven by their element-wise
-//! re-integration defects, until these are at most
-//! [`super::verify::VERIFIED_DEFECT`] ([`VerifyPolicy`]), and the choice [`select`]: verified first, then the lowest objective, then the lowest start
-//! index. Results are collected in index order and every choice depends on values only, so the
+//! The default search of `optimize` and the paper report ([`search`]), a global search
+//! ([`super::global`]) over the local optima of the problems of Sect. 4 (eq. 60–66):
+//!
+//! 1. Sampling: the chains of a [`Strategy`] (for the periodic problems [`DEFAULT_STARTS`]
+//!    seeded starts; for `periodic-qc` each a continuation in the stick phase's lower bound,
+//!    first ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound), solved on a coarse
+//!    mesh ([`CoarseSampling`]), one point per distinct optimum (objectives within
+//!    [`CLUSTER_RTOL`], [`representatives`]).
+//! 2. Exploration on that mesh ([`Search::explore`]): monotonic basin hopping from the best
+//!    distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
+//! 3. Promotion ([`Search::promote`]): the best distinct optima re-solved on the problem's
+//!    mesh from their coarse trajectories, each re-integrated ([`verify`]).
+//! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
+//!    first, one after the other until one verifies), driven by their element-wise
+//!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
+//!    ([`VerifyPolicy`], [`Search::refine_candidates`]).
+//! 5. The choice [`select`]: verified first, then the lowest objective, then the lowest index.
+//!
+//! Results are collected in index order and every choice depends on values only, so the
 //! result is bitwise the same with any number of threads; a [`Shard`] runs every m-th start
-//! and [`select`] over the shards' candidates gives the unsharded choice.
+//! and writes its distinct sampled optima, and `optimize merge` runs steps 2–5 on their union,
+//! which is the unsharded run.
 
 use std::sync::Mutex;
 use std::time::Instant;
 
 use bf_optim::ipm::Nlp;
+use bf_optim::ocp::Scheme;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 use super::build;
 use super::error::PipelineError;
@@ -69,19 +82,57 @@ pub struct VerifyPolicy {
     /// The global search's basin hopping and polishing after a multi-start
     /// ([`Search::explore`]; its seed is the multi-start's); `None`: the best of the starts.
     pub hops: Option<HopSettings>,
+    /// The multi-start's sampling on a coarse mesh, of which only the best distinct optima are
+    /// re-solved on the problem's mesh ([`CoarseSampling`]); `None`: every start on the
+    /// problem's mesh.
+    pub coarse: Option<CoarseSampling>,
 }
 
-/// The basin hopping of `optimize --hops` ([`VerifyPolicy::hops`]; off by default: see
-/// docs/optima.md for its measured cost): rounds of
+/// The sampling phase of the global search on a coarse mesh ([`VerifyPolicy::coarse`]): every
+/// start of the multi-start is solved on `elements` Radau elements of `points` points per
+/// phase in all, the basin hopping runs there ([`Search::explore`]), and only the `promote`
+/// best distinct optima are re-solved on the problem's own mesh, warm-started from their
+/// coarse trajectories (interpolated; [`Search::promote`]). A coarse start costs about a
+/// fifth of one on the default mesh and ends at the same objective to about 1e-4, and the
+/// good basins of `periodic-qc` are each reached by about one start in 250 (BENCHMARKS.md,
+/// "Global search by default: coarse sampling"), so many cheap starts and hops find more
+/// than a few expensive ones. Applies to multi-starts on Radau meshes of more points than the
+/// coarse one and no explicit element layout.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CoarseSampling {
+    /// Radau elements per phase of the coarse mesh.
+    pub elements: usize,
+    /// Collocation points per phase of the coarse mesh.
+    pub points: usize,
+    /// Distinct coarse optima (lowest objectives first) re-solved on the problem's mesh.
+    pub promote: usize,
+}
+
+/// The default coarse sampling: 3 Radau elements of 4 points per phase (the default mesh has
+/// 3 of 10), the 8 best distinct optima re-solved on the problem's mesh.
+pub const DEFAULT_COARSE: CoarseSampling = CoarseSampling {
+    elements: 3,
+    points: 12,
+    promote: 8,
+};
+
+/// Stage label of the re-solve of a coarse optimum on the problem's mesh ([`CoarseSampling`]).
+pub const PROMOTE_LABEL: &str = "full mesh";
+
+/// The basin hopping of the default search ([`VerifyPolicy::hops`], `optimize --hops N` sets
+/// the budget, `--hops 0` turns it off), on the coarse mesh of the sampling: rounds of
 /// four hops (durations scaled by up to e^±0.3 each, and the period by up to e^±0.3), at most
-/// 24, stopping once the best optimum was reached three times and eight hops in a row brought
+/// 64, stopping once the best optimum was reached three times and 24 hops in a row brought
 /// nothing better; then up to two polishing rounds (a re-solve and three hops of e^±0.05).
+/// A patience of 8 stopped `periodic-qc` seed 1 at J 0.1176, one hop short of the 0.0769
+/// basin next to it (BENCHMARKS.md, "Global search by default"); a coarse hop costs about
+/// 0.1 s.
 pub const DEFAULT_HOPS: HopSettings = HopSettings {
     batch: 4,
     width: 4,
-    budget: 24,
+    budget: 64,
     confirmations: 3,
-    patience: 8,
+    patience: 24,
     scale: 0.3,
     polish_scale: 0.05,
     polish_rounds: 2,
@@ -129,7 +180,8 @@ impl Default for VerifyPolicy {
             max_points: VERIFY_MAX_POINTS,
             clusters: 6,
             stick_continuation: Some(STICK_CONTINUATION),
-            hops: None,
+            hops: Some(DEFAULT_HOPS),
+            coarse: Some(DEFAULT_COARSE),
         }
     }
 }
@@ -153,8 +205,11 @@ pub struct Search {
     pub strategy: Strategy,
     /// The shard that ran.
     pub shard: Shard,
-    /// One candidate per distinct optimum (its lowest-index start), in index order.
+    /// One candidate per distinct optimum (its lowest-index start, or hop), in index order.
     pub candidates: Vec<Candidate>,
+    /// The distinct optima of the sampling (re-solved on the problem's mesh, not refined), in
+    /// index order: what a shard hands to `optimize merge`.
+    pub sampled: Vec<Candidate>,
     /// Every stage of every chain/start, in index order.
     pub records: Vec<StageRecord>,
     /// The hp refinements of unverified optima (one record per refinement, its chain the
@@ -177,6 +232,13 @@ fn class(sol: &OcpSolution) -> u8 {
     } else {
         1
     }
+}
+
+/// Whether the solve succeeded with a finite objective: the exploration ranks the problem's
+/// own landscape on its mesh and leaves the verification to the refinement that follows it
+/// ([`Search::refine_candidates`]).
+fn solved(sol: &OcpSolution) -> bool {
+    class(sol) < 2
 }
 
 pub(crate) fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
@@ -210,7 +272,7 @@ pub fn select(cands: &[(usize, &OcpSolution)]) -> Option<usize> {
 /// One candidate per distinct optimum: candidates sorted by (class, objective, index) are
 /// grouped greedily (a group takes every following end point of its class within
 /// [`same_optimum`] of its first); each group is represented by its lowest start index.
-fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
+pub fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
     let mut order: Vec<usize> = (0..cands.len()).collect();
     let key = |c: &Candidate| {
         let j = c.solution.objective;
@@ -388,15 +450,17 @@ pub fn search(
 ) -> Result<Search, PipelineError> {
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
-    let (_, chains) = prepare_chains(problem, settings, strategy, policy.stick_continuation)?;
+    let coarse = coarse_mesh(settings, strategy, policy);
+    let sampled_on = coarse.as_ref().map_or(settings, |(_, s)| s);
+    let (_, chains) = prepare_chains(problem, sampled_on, strategy, policy.stick_continuation)?;
     let land = OcpLandscape {
         problem,
         settings,
         policy,
         chains,
+        verify_samples: coarse.is_none(),
         progress,
         records: Mutex::new(Vec::new()),
-        refinements: Mutex::new(Vec::new()),
     };
     let ks: Vec<usize> = (0..land.chains.len())
         .filter(|&k| shard.contains(k))
@@ -405,88 +469,87 @@ pub fn search(
         .into_iter()
         .filter_map(|(_, c)| c)
         .collect();
-    let (records, _) = land.take_records();
-    let mut refinements = Vec::new();
+    let records = land.take_records();
     let mut cands = representatives(cands);
-    if policy.rtol > 0.0 {
-        let best_verified = cands
-            .iter()
-            .filter(|c| class(&c.solution) == 0)
-            .map(|c| c.solution.objective)
-            .fold(f64::INFINITY, f64::min);
-        let mut todo: Vec<usize> = (0..cands.len())
-            .filter(|&i| {
-                let s = &cands[i].solution;
-                class(s) == 1 && s.objective < best_verified
-            })
-            .collect();
-        todo.sort_by(|&a, &b| {
-            cands[a]
-                .solution
-                .objective
-                .total_cmp(&cands[b].solution.objective)
-                .then(cands[a].index.cmp(&cands[b].index))
-        });
-        let refined = refine_in_order(
-            &todo,
-            policy.clusters,
-            |&i| refine_until_verified(problem, settings, cands[i].clone(), policy),
-            |(c, _)| is_verified(&c.solution),
-        );
-        for (i, (c, recs)) in refined {
-            cands[i] = c;
-            refinements.extend(recs);
-        }
-    }
     cands.sort_by_key(|c| c.index);
     let mut found = Search {
         strategy,
         shard,
+        sampled: cands.clone(),
         candidates: cands,
         records,
-        refinements,
+        refinements: Vec::new(),
         seconds: t0.elapsed().as_secs_f64(),
         basin_hits: None,
     };
-    // Shards sample only; `optimize merge` explores from the union of their candidates.
+    // Shards sample only; `optimize merge` explores from the union of their samples. A
+    // shard still promotes and refines its own candidates for its own output set.
     if shard == Shard::WHOLE {
         found.explore(problem, settings, policy, progress);
-        found.seconds = t0.elapsed().as_secs_f64();
     }
+    if let Some((c, _)) = coarse {
+        found.promote(problem, settings, policy, c.promote, progress);
+    }
+    found.refine_candidates(problem, settings, policy);
+    found.seconds = t0.elapsed().as_secs_f64();
     Ok(found)
+}
+
+/// The coarse sampling of `policy` and the settings of its mesh, where it applies
+/// ([`CoarseSampling`]: a multi-start on a Radau mesh of more points than the coarse one).
+fn coarse_mesh(
+    settings: &ProblemSettings,
+    strategy: Strategy,
+    policy: &VerifyPolicy,
+) -> Option<(CoarseSampling, ProblemSettings)> {
+    let c = policy.coarse?;
+    let applies = matches!(strategy, Strategy::Multistart { .. })
+        && matches!(settings.scheme, Scheme::Radau { .. })
+        && settings.mesh.is_none()
+        && c.points < settings.points;
+    applies.then(|| {
+        (
+            c,
+            ProblemSettings {
+                points: c.points,
+                scheme: Scheme::Radau {
+                    elements: c.elements,
+                },
+                ..settings.clone()
+            },
+        )
+    })
 }
 
 /// The optimal-control problem as a [`Landscape`] of the global search: a start is a chain of
 /// the strategy ([`run_chain`]), a hop scales the phase durations of a local optimum's primal
 /// point (each by e^(s·u), u uniform in [−1, 1], times a common factor for the period of the
-/// same law) and re-solves it warm from μ = [`HOP_MU`] on the optimum's own mesh; every end
-/// point is re-integrated, and a hop that ends better than its origin but unverified is
-/// hp-refined like a sampled candidate ([`refine_until_verified`]). Points rank verified
-/// first, then by objective (better by more than [`CLUSTER_RTOL`] relative), and are the same
-/// optimum by [`same_optimum`].
+/// same law) and re-solves it warm from μ = [`HOP_MU`] on the optimum's own mesh (the coarse
+/// one of [`CoarseSampling`] by default); end points on the problem's mesh are
+/// re-integrated. Points rank successful first, then by objective (better by more than
+/// [`CLUSTER_RTOL`] relative): the verification and refinement come after the exploration
+/// ([`Search::refine_candidates`]). Points are the same optimum by [`same_optimum`].
 struct OcpLandscape<'a> {
     problem: Problem,
     settings: &'a ProblemSettings,
     policy: &'a VerifyPolicy,
     chains: Vec<Chain>,
+    /// Whether a start's end point is re-integrated (not on a coarse mesh, whose end points
+    /// are re-solved on the problem's mesh first).
+    verify_samples: bool,
     progress: Progress<'a>,
     /// Stage records of the solves (each start's or hop's pushed at once).
     records: Mutex<Vec<StageRecord>>,
-    /// Records of the hp refinements of hops.
-    refinements: Mutex<Vec<StageRecord>>,
 }
 
 impl OcpLandscape<'_> {
-    /// The records so far, each list sorted by chain (stable: a chain's stages keep their
-    /// order, since each chain pushes its records at once), so they do not depend on the
-    /// order in which the threads finished.
-    fn take_records(&self) -> (Vec<StageRecord>, Vec<StageRecord>) {
-        let take = |m: &Mutex<Vec<StageRecord>>| {
-            let mut v = std::mem::take(&mut *m.lock().unwrap_or_else(|e| e.into_inner()));
-            v.sort_by_key(|r| r.chain);
-            v
-        };
-        (take(&self.records), take(&self.refinements))
+    /// The records so far, sorted by chain (stable: a chain's stages keep their order, since
+    /// each chain pushes its records at once), so they do not depend on the order in which
+    /// the threads finished.
+    fn take_records(&self) -> Vec<StageRecord> {
+        let mut v = std::mem::take(&mut *self.records.lock().unwrap_or_else(|e| e.into_inner()));
+        v.sort_by_key(|r| r.chain);
+        v
     }
 
     fn push(&self, to: &Mutex<Vec<StageRecord>>, recs: Vec<StageRecord>) {
@@ -494,6 +557,48 @@ impl OcpLandscape<'_> {
             recs.iter().for_each(f);
         }
         to.lock().unwrap_or_else(|e| e.into_inner()).extend(recs);
+    }
+
+    /// The coarse end point `from` re-solved on the problem's mesh, warm-started from its
+    /// trajectory interpolated onto that mesh, and re-integrated ([`CoarseSampling`]).
+    fn promote(&self, from: &Candidate) -> Option<Candidate> {
+        let t0 = Instant::now();
+        let label = PROMOTE_LABEL.to_string();
+        let res = build(
+            self.problem,
+            &ProblemSettings {
+                warm_start: Some(from.solution.clone()),
+                start: None,
+                ..self.settings.clone()
+            },
+        )
+        .and_then(|b| {
+            let sol = super::solve::solve(&b, None)?;
+            Ok((b, sol))
+        });
+        let (b, sol) = match res {
+            Ok(r) => r,
+            Err(e) => {
+                self.push(
+                    &self.records,
+                    vec![failed_record(from.index, label, &e, t0)],
+                );
+                return None;
+            }
+        };
+        let mut c = Candidate {
+            index: from.index,
+            problem: Some(b),
+            solution: sol,
+        };
+        self.push(
+            &self.records,
+            vec![record(from.index, label, &c.solution, t0)],
+        );
+        if self.policy.rtol > 0.0 {
+            attach_verification(&mut c, self.policy.rtol);
+        }
+        Some(c)
     }
 
     /// The primal-dual point of `from` with its phase durations scaled (module docs of
@@ -548,7 +653,7 @@ impl Landscape for OcpLandscape<'_> {
             problem: Some(p),
             solution: s,
         };
-        if self.policy.rtol > 0.0 {
+        if self.policy.rtol > 0.0 && self.verify_samples {
             attach_verification(&mut c, self.policy.rtol);
         }
         Some(c)
@@ -563,6 +668,8 @@ impl Landscape for OcpLandscape<'_> {
             format!("hop from {} (scale {scale})", from.index)
         };
         let settings = ProblemSettings {
+            points: p.settings.points,
+            scheme: p.settings.scheme,
             mesh: p.settings.mesh.clone(),
             max_iter: self.settings.max_iter.min(HOP_MAX_ITER),
             warm_start: None,
@@ -615,36 +722,115 @@ impl Landscape for OcpLandscape<'_> {
             solution: sol,
         };
         self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
-        if self.policy.rtol > 0.0 {
+        if self.policy.rtol > 0.0 && self.verify_samples {
             attach_verification(&mut c, self.policy.rtol);
-            if class(&c.solution) == 1 && c.solution.objective < from.solution.objective {
-                let (r, recs) = refine_until_verified(self.problem, self.settings, c, self.policy);
-                self.push(&self.refinements, recs);
-                c = r;
-            }
         }
         Some(c)
     }
 
     fn better(&self, a: &Candidate, b: &Candidate) -> bool {
-        let (ca, cb) = (class(&a.solution), class(&b.solution));
+        let (ca, cb) = (solved(&a.solution), solved(&b.solution));
         let (ja, jb) = (a.solution.objective, b.solution.objective);
-        ca < cb || (ca == cb && ca < 2 && ja < jb - CLUSTER_RTOL * jb.abs())
+        ca && (!cb || ja < jb - CLUSTER_RTOL * jb.abs())
     }
 
     fn same(&self, a: &Candidate, b: &Candidate) -> bool {
-        class(&a.solution) == class(&b.solution) && same_optimum(&a.solution, &b.solution)
+        solved(&a.solution) == solved(&b.solution) && same_optimum(&a.solution, &b.solution)
     }
 }
 
 impl Search {
+    /// The `promote` best distinct candidates (successful, lowest objective, then lowest
+    /// index) re-solved on the problem's own mesh from their coarse trajectories, in
+    /// parallel; they replace the candidates ([`CoarseSampling`]).
+    pub fn promote(
+        &mut self,
+        problem: Problem,
+        settings: &ProblemSettings,
+        policy: &VerifyPolicy,
+        promote: usize,
+        progress: Progress<'_>,
+    ) {
+        let land = OcpLandscape {
+            problem,
+            settings,
+            policy,
+            chains: Vec::new(),
+            verify_samples: true,
+            progress,
+            records: Mutex::new(Vec::new()),
+        };
+        let mut order: Vec<&Candidate> = self
+            .candidates
+            .iter()
+            .filter(|c| solved(&c.solution))
+            .collect();
+        order.sort_by(|a, b| {
+            a.solution
+                .objective
+                .total_cmp(&b.solution.objective)
+                .then(a.index.cmp(&b.index))
+        });
+        order.truncate(promote);
+        let mut done: Vec<Candidate> = order.par_iter().filter_map(|c| land.promote(c)).collect();
+        self.records.extend(land.take_records());
+        done = representatives(done);
+        done.sort_by_key(|c| c.index);
+        self.candidates = done;
+    }
+
+    /// hp-refines the unverified candidates that beat the best verified one, lowest objective
+    /// first, until one verifies ([`refine_until_verified`], at most
+    /// [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
+    /// after the exploration, so that the hops start from the problem's own mesh and only
+    /// the winners are refined.
+    pub fn refine_candidates(
+        &mut self,
+        problem: Problem,
+        settings: &ProblemSettings,
+        policy: &VerifyPolicy,
+    ) {
+        if policy.rtol <= 0.0 {
+            return;
+        }
+        let cands = &mut self.candidates;
+        let best_verified = cands
+            .iter()
+            .filter(|c| class(&c.solution) == 0)
+            .map(|c| c.solution.objective)
+            .fold(f64::INFINITY, f64::min);
+        let mut todo: Vec<usize> = (0..cands.len())
+            .filter(|&i| {
+                let s = &cands[i].solution;
+                class(s) == 1 && s.objective < best_verified
+            })
+            .collect();
+        todo.sort_by(|&a, &b| {
+            cands[a]
+                .solution
+                .objective
+                .total_cmp(&cands[b].solution.objective)
+                .then(cands[a].index.cmp(&cands[b].index))
+        });
+        let refined = refine_in_order(
+            &todo,
+            policy.clusters,
+            |&i| refine_until_verified(problem, settings, cands[i].clone(), policy),
+            |(c, _)| is_verified(&c.solution),
+        );
+        for (i, (c, recs)) in refined {
+            cands[i] = c;
+            self.refinements.extend(recs);
+        }
+    }
+
     /// The global search's exploitation ([`global::exploit`], settings [`VerifyPolicy::hops`]
-    /// seeded by the multi-start's seed): monotonic basin hopping from the best candidate,
-    /// then polishing. Runs only after a multi-start; hops are numbered on from its starts
-    /// (their records' chain index), the best point joins the candidates if a hop found it,
-    /// and [`Search::basin_hits`] counts the candidates and hops that ended at it. Depends
-    /// on the candidates' values only (not their order): shards merged explore as the
-    /// unsharded run does.
+    /// seeded by the multi-start's seed): monotonic basin hopping from the best candidates,
+    /// then polishing, on the candidates' own mesh. Runs only after a multi-start; hops are
+    /// numbered on from its starts (their records' chain index), every distinct optimum a hop
+    /// found joins the candidates, and [`Search::basin_hits`] counts the candidates and hops
+    /// that ended at the best. Depends on the candidates' values only (not their order):
+    /// shards merged explore as the unsharded run does.
     pub fn explore(
         &mut self,
         problem: Problem,
@@ -661,9 +847,9 @@ impl Search {
             settings,
             policy,
             chains: Vec::new(),
+            verify_samples: coarse_mesh(settings, self.strategy, policy).is_none(),
             progress,
             records: Mutex::new(Vec::new()),
-            refinements: Mutex::new(Vec::new()),
         };
         self.candidates.sort_by_key(|c| c.index);
         let e = global::exploit(
@@ -672,15 +858,16 @@ impl Search {
             &HopSettings { seed, ..hops },
             starts,
         );
-        let (records, refinements) = land.take_records();
-        self.records.extend(records);
-        self.refinements.extend(refinements);
+        self.records.extend(land.take_records());
         self.basin_hits = Some(e.hits);
-        if let Some(best) = e.best
-            && best.index >= starts
-        {
-            self.candidates.push(best);
-        }
+        // Every distinct optimum the hops found is a candidate: the refinement that follows
+        // takes them in objective order, so a winner that does not verify leaves the next.
+        let found: Vec<Candidate> = e.hops.into_iter().filter_map(|(_, _, p)| p).collect();
+        let mut all = std::mem::take(&mut self.candidates);
+        all.extend(found);
+        all = representatives(all);
+        all.sort_by_key(|c| c.index);
+        self.candidates = all;
     }
 
     /// The chosen candidate ([`select`]) with its [`OcpSolution::strategy`] record (every

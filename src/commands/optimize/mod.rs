@@ -492,15 +492,16 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
     Ok(())
 }
 
-/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` without
-/// `--hops` or with `--hops 0` (the default search keeps the best verified start: the hops
-/// cost 3–5× the time of a `periodic-qc` search and far more on the COT problems,
-/// docs/optima.md).
+/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): the default
+/// ([`crate::pipeline::search::DEFAULT_HOPS`]) without `--hops`, `None` with `--hops 0` (the
+/// search keeps its best verified start).
 pub fn hop_settings(
     hops: Option<usize>,
     hop_scale: Option<f64>,
 ) -> Result<Option<crate::pipeline::global::HopSettings>> {
-    let mut h = crate::pipeline::search::DEFAULT_HOPS;
+    let mut h = VerifyPolicy::default()
+        .hops
+        .unwrap_or(crate::pipeline::search::DEFAULT_HOPS);
     if let Some(s) = hop_scale {
         if !(s.is_finite() && s > 0.0 && s <= 3.0) {
             bail!("--hop-scale must be in (0, 3] (got {s})");
@@ -513,7 +514,7 @@ pub fn hop_settings(
             budget: n,
             ..h
         })),
-        None => Ok(None),
+        None => Ok(Some(h)),
     }
 }
 
@@ -603,10 +604,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         ..VerifyPolicy::default()
     };
     let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
-    // A shard keeps every distinct optimum it found for `optimize merge`.
+    // A shard keeps every distinct optimum it sampled (unrefined) for `optimize merge`.
     let mut candidates: Vec<(String, OcpSolution)> = if args.shard.is_some() {
         found
-            .candidates
+            .sampled
             .iter()
             .map(|c| (candidate_file(c.index), c.solution.clone()))
             .collect()

@@ -8,7 +8,7 @@ use super::{
 };
 use crate::cli::MergeArgs;
 use crate::pipeline::SolutionIo;
-use crate::pipeline::search::{Candidate, Search, VerifyPolicy};
+use crate::pipeline::search::{self, Candidate, PROMOTE_LABEL, Search, VerifyPolicy};
 use crate::pipeline::solve::{recompute_at_own_point, settings_of};
 use crate::pipeline::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result, bail};
@@ -194,6 +194,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let mut records: Vec<StageRecord> = Vec::new();
     let mut head: Option<(String, Strategy)> = None;
     let mut first: Option<(std::path::PathBuf, OcpSolution)> = None;
+    let mut first_candidate: Option<(std::path::PathBuf, OcpSolution)> = None;
     let mut seconds: f64 = 0.0;
     for dir in &args.dirs {
         let path = dir.join("solution.json");
@@ -238,9 +239,11 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         if found.is_empty() {
             crate::outln!("note: {} has no candidate files", dir.display())?;
         }
+        // Candidates may be on the sampling's coarse mesh: they are compared with each other.
         for (k, cpath, c) in found {
-            if let Some(f) = &first {
-                check_same_run(f, &cpath, &c)?;
+            match &first_candidate {
+                Some(f) => check_same_run(f, &cpath, &c)?,
+                None => first_candidate = Some((cpath.clone(), c.clone())),
             }
             cands.push((k, c));
         }
@@ -248,6 +251,9 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let Some((problem, strategy)) = head else {
         bail!("optimize merge: no directories given");
     };
+    // A shard re-solved its own best coarse optima on the problem's mesh for its own output;
+    // the merge re-solves the best of the union, as the unsharded run does.
+    records.retain(|r| r.stage != PROMOTE_LABEL);
     // Stable: the stages of a chain keep their order.
     records.sort_by_key(|r| r.chain);
     if let Strategy::Multistart { starts, .. } = strategy {
@@ -266,12 +272,16 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let ncands = cands.len();
     // The global search's exploitation runs here, on the union of the shards' candidates,
     // exactly as after an unsharded multi-start (the problems rebuilt from the files).
-    let (name, settings) = settings_of(&cands[0].1)
-        .with_context(|| format!("optimize merge: the candidates of {problem}"))?;
+    // The shards' own solutions are on the problem's mesh; their candidates may be on the
+    // coarse mesh of the sampling.
+    let full = first.as_ref().map_or(&cands[0].1, |(_, s)| s);
+    let (name, settings) =
+        settings_of(full).with_context(|| format!("optimize merge: the solution of {problem}"))?;
     let mut found = Search {
         strategy,
         shard: Shard::WHOLE,
         candidates: Vec::new(),
+        sampled: Vec::new(),
         records,
         refinements: Vec::new(),
         seconds,
@@ -279,6 +289,8 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     };
     for (k, c) in cands {
         let s = ProblemSettings {
+            points: c.points,
+            scheme: c.scheme,
             mesh: c.refinement.as_ref().map(|r| r.mesh.clone()),
             ..settings.clone()
         };
@@ -301,7 +313,18 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         ..VerifyPolicy::default()
     };
     let t0 = std::time::Instant::now();
+    found.candidates = search::representatives(std::mem::take(&mut found.candidates));
+    found.candidates.sort_by_key(|c| c.index);
     found.explore(name, &settings, &policy, None);
+    if let Some(c) = policy.coarse
+        && found
+            .candidates
+            .iter()
+            .any(|c| c.solution.points < settings.points)
+    {
+        found.promote(name, &settings, &policy, c.promote, None);
+    }
+    found.refine_candidates(name, &settings, &policy);
     found.seconds = seconds + t0.elapsed().as_secs_f64();
     let (scene_toml, scene_params) = found
         .candidates
