@@ -497,3 +497,37 @@ fn the_hull_bound_keeps_bang_bang_torques_within_their_limits_between_the_points
     );
     assert_rest_at_both_ends(&hull, &scene);
 }
+
+/// `--torque-hull` names itself when refused: out of range, or given to a ball problem.
+#[test]
+fn torque_hull_errors_name_the_option() {
+    let dir = tmpdir("reach-arm-hull-option");
+    let out = dir.join("out");
+    for (args, mention) in [
+        (
+            vec![
+                "--problem",
+                "reach-arm",
+                "--scene",
+                "tests/fixtures/planar2_arm.toml",
+                "--torque-hull",
+                "9",
+            ],
+            "--torque-hull must be in 0..=8 (got 9)",
+        ),
+        (
+            vec!["--problem", "periodic-qc", "--torque-hull", "2"],
+            "--torque-hull: only `--problem reach-arm` takes it",
+        ),
+    ] {
+        let mut all = vec!["optimize"];
+        all.extend(args);
+        all.extend(["--out", out.to_str().unwrap()]);
+        let o = run(&all);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.contains(mention), "{err}");
+        assert!(!out.join("solution.json").exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
