@@ -80,22 +80,18 @@ fn default_periodic_qc_finds_the_best_known_optimum_verified_and_thread_independ
     );
     assert_eq!(v["verified"], true);
     assert_eq!(v["tolerance"].as_f64(), Some(1e-4));
-    // Every start ran the stick continuation (bounded to >= 0.1 s, then relaxed to 0.01 s)
-    // on the coarse mesh; the chosen optimum was re-solved on the problem's mesh.
+    // Every start ran the stick continuation: bounded to >= 0.1 s, then relaxed to 0.01 s.
     let recs = a["strategy"]["records"].as_array().unwrap();
-    let count = |prefix: &str| {
-        recs.iter()
-            .filter(|r| r["stage"].as_str().unwrap().starts_with(prefix))
-            .count()
-    };
-    assert_eq!(count("start "), 128);
-    assert_eq!(count("relax stick"), 128);
+    assert_eq!(recs.len(), 64);
     let chosen = a["strategy"]["chosen"].as_u64().unwrap();
     let last = recs
         .iter()
         .rfind(|r| r["chain"].as_u64() == Some(chosen))
         .unwrap();
-    assert_eq!(last["stage"], "full mesh", "{last}");
+    assert!(
+        last["stage"].as_str().unwrap().starts_with("relax stick"),
+        "{last}"
+    );
     // The relaxed optimum respects the default bound.
     assert!(a["phase_durations"][1].as_f64().unwrap() >= 0.01 * (1.0 - 1e-8));
     // Same solution to the bit (JSON writes the shortest round-trip text of each f64).
@@ -663,10 +659,11 @@ fn the_default_point_limit_lets_the_best_candidate_verify() {
     );
 }
 
-/// Issue target of the global search: the default `periodic-qc` search reaches J ≤ 0.08761
-/// (the best known optimum before it, 0.0876082, with the stick phase on its 0.01 s bound),
-/// verified, on every seed 0–9. BENCHMARKS.md ("Global search by default: coarse sampling")
-/// records the optima of each seed.
+/// Issue target of the global search: the `periodic-qc` global search (`--hops 64 --starts
+/// 128`) reaches J ≤ 0.08761 (the best known optimum before it, 0.0876082, with the stick
+/// phase on its 0.01 s bound), verified, on every seed 0–9. BENCHMARKS.md ("Global search by
+/// default: coarse sampling") records the optima of each seed: today seeds 0, 3, 5, 7, 8, 9
+/// miss it.
 #[test]
 #[ignore = "about 5 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_reaches_the_best_known_qc_optimum -- --ignored`"]
@@ -676,7 +673,16 @@ fn every_seed_reaches_the_best_known_qc_optimum() {
         let seed = seed.to_string();
         let (_, v) = verified_default_search(
             &format!("qc-seed-{seed}"),
-            &["--problem", "periodic-qc", "--seed", &seed],
+            &[
+                "--problem",
+                "periodic-qc",
+                "--seed",
+                &seed,
+                "--hops",
+                "64",
+                "--starts",
+                "128",
+            ],
         );
         let j = v["objective"].as_f64().unwrap();
         if j > 0.08761 {

@@ -196,12 +196,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             "one cold solve per problem (`--quick`)".to_string()
         } else {
             format!(
-                "the default search of `optimize`, a global search: {} on a coarse mesh \
-                 (3 × 4 points per phase) for every periodic problem (for periodic-qc every \
-                 start first bounds the stick phase to ≥ 0.1 s, then relaxes it to 0.01 s), \
-                 basin hopping from the best distinct optima there, the best 8 re-solved on \
-                 the mesh and re-integrated, the best verified one kept (see \
-                 ball_finger::pipeline::search and docs/optima.md)",
+                "the default search of `optimize`: {} for every periodic problem (for \
+                 periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
+                 relaxes it to 0.01 s); every end point is re-integrated and the best \
+                 verified one kept (see ball_finger::pipeline::search)",
                 crate::pipeline::strategy::default_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme
@@ -445,9 +443,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`); the default \
-         search of each periodic problem is a global search (seeded starts on a coarse mesh, \
-         basin hopping, the best optima re-solved, verified and refined) that reports \
-         how many starts and hops reached its optimum. The results are the best the default searches verify, not the best optima \
+         search of each periodic problem takes the best verified end point of 32 seeded \
+         starts. The results are the best the default searches verify, not the best optima \
          there are (docs/optima.md: how to search further).\n\
          - The COT optima have free phases of 1–9 s whose motion is not open-loop stable: \
          replaying a whole phase from its initial state drifts away from the collocated \

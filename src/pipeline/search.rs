@@ -1,15 +1,17 @@
-//! The default search of `optimize` and the paper report ([`search`]), a global search
-//! ([`super::global`]) over the local optima of the problems of Sect. 4 (eq. 60–66):
+//! The search of `optimize` and the paper report ([`search`]), with the global search
+//! ([`super::global`], `optimize --hops N`, [`VerifyPolicy::global`]) over the local optima of
+//! the problems of Sect. 4 (eq. 60–66):
 //!
-//! 1. Sampling: the chains of a [`Strategy`] (for the periodic problems [`DEFAULT_STARTS`]
-//!    seeded starts; for `periodic-qc` each a continuation in the stick phase's lower bound,
-//!    first ≥ [`STICK_CONTINUATION`], then relaxed to the problem's bound), solved on a coarse
-//!    mesh ([`CoarseSampling`]), one point per distinct optimum (objectives within
-//!    [`CLUSTER_RTOL`], [`representatives`]).
-//! 2. Exploration on that mesh ([`Search::explore`]): monotonic basin hopping from the best
-//!    distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
-//! 3. Promotion ([`Search::promote`]): the best distinct optima re-solved on the problem's
-//!    mesh from their coarse trajectories, each re-integrated ([`verify`]).
+//! 1. Sampling: the chains of a [`Strategy`] (for the periodic problems
+//!    [`super::strategy::DEFAULT_STARTS`] seeded starts; for `periodic-qc` each a continuation
+//!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
+//!    problem's bound), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
+//!    [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
+//!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
+//! 2. Global search only: exploration on that mesh ([`Search::explore`]), monotonic basin
+//!    hopping from the best distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
+//! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
+//!    on the problem's mesh from their coarse trajectories, each re-integrated.
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
 //!    first, one after the other until one verifies), driven by their element-wise
 //!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
@@ -80,7 +82,8 @@ pub struct VerifyPolicy {
     /// continuation.
     pub stick_continuation: Option<f64>,
     /// The global search's basin hopping and polishing after a multi-start
-    /// ([`Search::explore`]; its seed is the multi-start's); `None`: the best of the starts.
+    /// ([`Search::explore`]; its seed is the multi-start's); `None` (the default): the best of
+    /// the starts. [`VerifyPolicy::global`] sets it with the coarse sampling.
     pub hops: Option<HopSettings>,
     /// The multi-start's sampling on a coarse mesh, of which only the best distinct optima are
     /// re-solved on the problem's mesh ([`CoarseSampling`]); `None`: every start on the
@@ -95,7 +98,7 @@ pub struct VerifyPolicy {
 /// coarse trajectories (interpolated; [`Search::promote`]). A coarse start costs about a
 /// fifth of one on the default mesh and ends at the same objective to about 1e-4, and the
 /// good basins of `periodic-qc` are each reached by about one start in 250 (BENCHMARKS.md,
-/// "Global search by default: coarse sampling"), so many cheap starts and hops find more
+/// "Global search on a coarse mesh"), so many cheap starts and hops find more
 /// than a few expensive ones. Applies to multi-starts on Radau meshes of more points than the
 /// coarse one and no explicit element layout.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -119,13 +122,13 @@ pub const DEFAULT_COARSE: CoarseSampling = CoarseSampling {
 /// Stage label of the re-solve of a coarse optimum on the problem's mesh ([`CoarseSampling`]).
 pub const PROMOTE_LABEL: &str = "full mesh";
 
-/// The basin hopping of the default search ([`VerifyPolicy::hops`], `optimize --hops N` sets
-/// the budget, `--hops 0` turns it off), on the coarse mesh of the sampling: rounds of
+/// The basin hopping of the global search ([`VerifyPolicy::global`], `optimize --hops N` with
+/// the budget N), on the coarse mesh of the sampling: rounds of
 /// four hops (durations scaled by up to e^±0.3 each, and the period by up to e^±0.3), at most
 /// 64, stopping once the best optimum was reached three times and 24 hops in a row brought
 /// nothing better; then up to two polishing rounds (a re-solve and three hops of e^±0.05).
 /// A patience of 8 stopped `periodic-qc` seed 1 at J 0.1176, one hop short of the 0.0769
-/// basin next to it (BENCHMARKS.md, "Global search by default"); a coarse hop costs about
+/// basin next to it (BENCHMARKS.md, "Global search on a coarse mesh"); a coarse hop costs about
 /// 0.1 s.
 pub const DEFAULT_HOPS: HopSettings = HopSettings {
     batch: 4,
@@ -170,6 +173,20 @@ pub const VERIFY_REFINEMENTS: usize = 5;
 /// (BENCHMARKS.md, "A point limit of 800 (2026-11-26)").
 pub const VERIFY_MAX_POINTS: usize = 800;
 
+impl VerifyPolicy {
+    /// The policy of the global search (`optimize --hops N`): `self` with the basin hopping
+    /// `hops` and the coarse sampling [`DEFAULT_COARSE`]. Opt-in, not the default: with it as
+    /// the default `paper` took 244 s CPU (over its 90 s budget on 2 cores) and
+    /// `periodic-qc` reached the best known optimum on 4 seeds in 10 (decision record 0024).
+    pub fn global(self, hops: HopSettings) -> Self {
+        VerifyPolicy {
+            hops: Some(hops),
+            coarse: Some(DEFAULT_COARSE),
+            ..self
+        }
+    }
+}
+
 impl Default for VerifyPolicy {
     fn default() -> Self {
         VerifyPolicy {
@@ -180,8 +197,8 @@ impl Default for VerifyPolicy {
             max_points: VERIFY_MAX_POINTS,
             clusters: 6,
             stick_continuation: Some(STICK_CONTINUATION),
-            hops: Some(DEFAULT_HOPS),
-            coarse: Some(DEFAULT_COARSE),
+            hops: None,
+            coarse: None,
         }
     }
 }

@@ -442,13 +442,16 @@ pub fn solve_with_strategy(
     Ok((p, sol))
 }
 
-/// Starts of the default multi-start of the periodic problems ([`default_strategy`]): the
-/// sampling phase of the global search, on a coarse mesh
-/// ([`super::search::CoarseSampling`], where a start costs about a fifth of one on the
-/// default mesh). The good `periodic-qc` basins are each reached by about one start in 250
-/// (BENCHMARKS.md, "Global search by default"): the starts find the neighbourhoods, the basin
-/// hopping the optima.
-pub const DEFAULT_STARTS: usize = 128;
+/// Starts of the default multi-start of the periodic problems ([`default_strategy`]); the
+/// budget curve in BENCHMARKS.md shows how the best objective grows with the starts.
+pub const DEFAULT_STARTS: usize = 32;
+
+/// Starts of the global search's sampling on its coarse mesh (`optimize --hops N --starts
+/// 128`, `report strategies`; [`super::search::CoarseSampling`], where a start costs about a
+/// fifth of one on the default mesh): the good `periodic-qc` basins are each reached by about
+/// one start in 250 (BENCHMARKS.md, "Global search on a coarse mesh"), so the starts find the
+/// neighbourhoods and the basin hopping the optima.
+pub const GLOBAL_STARTS: usize = 128;
 
 /// Seed of the default multi-start.
 pub const DEFAULT_SEED: u64 = 0;

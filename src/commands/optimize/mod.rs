@@ -492,16 +492,15 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
     Ok(())
 }
 
-/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): the default
-/// ([`crate::pipeline::search::DEFAULT_HOPS`]) without `--hops`, `None` with `--hops 0` (the
-/// search keeps its best verified start).
+/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` without
+/// `--hops` or with `--hops 0` (the search keeps its best verified start; the global search is
+/// opt-in, decision record 0024), else [`crate::pipeline::search::DEFAULT_HOPS`] with the
+/// budget N.
 pub fn hop_settings(
     hops: Option<usize>,
     hop_scale: Option<f64>,
 ) -> Result<Option<crate::pipeline::global::HopSettings>> {
-    let mut h = VerifyPolicy::default()
-        .hops
-        .unwrap_or(crate::pipeline::search::DEFAULT_HOPS);
+    let mut h = crate::pipeline::search::DEFAULT_HOPS;
     if let Some(s) = hop_scale {
         if !(s.is_finite() && s > 0.0 && s <= 3.0) {
             bail!("--hop-scale must be in (0, 3] (got {s})");
@@ -514,7 +513,7 @@ pub fn hop_settings(
             budget: n,
             ..h
         })),
-        None => Ok(Some(h)),
+        None => Ok(None),
     }
 }
 
@@ -600,8 +599,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         refine_attempts: args
             .verify_refinements
             .unwrap_or(crate::pipeline::search::VERIFY_REFINEMENTS),
-        hops: hop_settings(args.hops, args.hop_scale)?,
         ..VerifyPolicy::default()
+    };
+    let policy = match hop_settings(args.hops, args.hop_scale)? {
+        Some(h) => policy.global(h),
+        None => policy,
     };
     let found = search_with_progress(name, settings.clone(), strategy, shard, &policy)?;
     // A shard keeps every distinct optimum it sampled (unrefined) for `optimize merge`.

@@ -309,8 +309,11 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         .unwrap_or(0.0);
     let policy = VerifyPolicy {
         rtol,
-        hops,
         ..VerifyPolicy::default()
+    };
+    let policy = match hops {
+        Some(h) => policy.global(h),
+        None => policy,
     };
     let t0 = std::time::Instant::now();
     found.candidates = search::representatives(std::mem::take(&mut found.candidates));

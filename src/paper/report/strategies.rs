@@ -61,11 +61,11 @@ pub fn strategies(quick: bool) -> Vec<(Strategy, bool)> {
     if !quick {
         v.push((Strategy::Multistart { starts: n, seed: 0 }, false));
     }
-    // The global search with the default search's starts (sampled on the coarse mesh).
+    // The global search with its starts (sampled on the coarse mesh).
     let g = if quick {
         n
     } else {
-        crate::pipeline::strategy::DEFAULT_STARTS
+        crate::pipeline::strategy::GLOBAL_STARTS
     };
     v.push((Strategy::Multistart { starts: g, seed: 0 }, true));
     v
@@ -80,7 +80,7 @@ fn row(problem: Problem, strategy: Strategy, global: bool) -> StrategyRow {
             &settings,
             strategy,
             Shard::WHOLE,
-            &VerifyPolicy::default(),
+            &VerifyPolicy::default().global(crate::pipeline::search::DEFAULT_HOPS),
             None,
         )
         .and_then(|s| s.best())
@@ -162,7 +162,7 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
         "Default problem settings (hp-Radau 3 × 10 points per phase, ε = 0.01); every \
          strategy from scratch; wall time on this machine with 2 worker threads (rayon) for \
          the parallel strategies. `multistart` keeps its best start; `+ global search` is \
-         `optimize`'s default search: the starts solved on a coarse mesh (3 × 4 points per \
+         `optimize --hops 64`: the starts solved on a coarse mesh (3 × 4 points per \
          phase), basin hopping from the best distinct optima and polishing of the winner \
          there, the best distinct optima re-solved on the problem's mesh and re-integrated, \
          unverified better ones hp-refined (docs/optima.md). φ/φ_cold < 1 is a better optimum than the cold start's. \
