@@ -847,6 +847,17 @@ fn contact_bands_are_visible_or_not_listed() {
         ax.px(4.005)
     );
     assert!(legend_texts(&els).iter().any(|l| l == "contact"));
+    // Widened, it is filled more strongly than a band of its own width, which would not show
+    // between the dashed switch markers.
+    let wide = Phases {
+        switches: vec![(4.0, "impact".into()), (6.0, "lift-off".into())],
+        contact: vec![(4.0, 6.0)],
+    };
+    let pw = render(&fig_ball_omega("ω", &omega, &wide).unwrap(), d.join("wide")).unwrap();
+    let wide_els = read(&pw[0]);
+    let wide_band = wide_els.iter().find(|e| e.class() == "band").unwrap();
+    assert!(wide_band.num("width") > 10.0 * MIN_BAND_PX);
+    assert!(bands[0].num("fill-opacity") >= 2.0 * wide_band.num("fill-opacity"));
     // A contact interval outside the x range is not drawn and not listed.
     let mut f = fig_ball_omega("ω", &omega, &short).unwrap();
     f.x_range = Some((5.0, 10.0));

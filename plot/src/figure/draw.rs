@@ -8,6 +8,8 @@ use super::{Layout, LineFigure, Scale};
 use crate::PlotError;
 use crate::canvas::{Anchor, Canvas, RectSpec, Stroke, TextSpec};
 
+/// Fill opacity factor of a band drawn wider than its data ([`super::MIN_BAND_PX`]).
+const NARROW_BAND_OPACITY_GAIN: f64 = 3.0;
 pub(super) fn draw_all(
     cv: &mut dyn Canvas,
     size: (u32, u32),
@@ -129,10 +131,18 @@ pub(super) fn draw_panel(
         let grow = 0.5 * (super::MIN_BAND_PX - (xc - xa)).max(0.0);
         xa = (xa - grow).max(p.x0);
         xc = (xc + grow).min(p.x1);
+        // A widened band is a few pixels next to the dashed switch markers: at the fill of a
+        // wide band it does not show, so it gets a stronger one.
+        let (colour, opacity) = band_fill(b);
+        let opacity = if grow > 0.0 {
+            (NARROW_BAND_OPACITY_GAIN * opacity).min(1.0)
+        } else {
+            opacity
+        };
         cv.rect(&RectSpec {
             p0: (xa, p.y0),
             p1: (xc, p.y1),
-            fill: Some(band_fill(b)),
+            fill: Some((colour, opacity)),
             stroke: None,
             class: "band",
         })?;
