@@ -313,6 +313,10 @@ fn run() -> Result<(), String> {
     );
     print!("{timings}");
     let ns: Vec<f64> = args.joints.iter().map(|&n| n as f64).collect();
+    if ns.len() < 2 {
+        // A growth exponent needs two chain lengths at least.
+        return Ok(());
+    }
     println!(
         "\nfitted exponent b of y ≈ a nᵇ over n = {:?}:",
         args.joints
