@@ -114,11 +114,14 @@ fn bench(c: &mut Criterion) {
     .expect("controller");
     let mut tau = [0.0; 3];
     let mut g = c.benchmark_group("control_law");
-    for (name, mode) in [
-        ("free", Mode::Free),
-        ("stick", Mode::Stick),
-        ("slip", Mode::Slip),
-    ] {
+    let cases = [
+        ("free", &law, Mode::Free),
+        ("stick", &law, Mode::Stick),
+        ("slip", &law, Mode::Slip),
+        ("free_guard", &guarded, Mode::Free),
+        ("free_approach", &approaching, Mode::Free),
+    ];
+    for (name, law, mode) in cases {
         g.bench_function(name, |b| {
             b.iter(|| {
                 law.tau_in_mode(
@@ -134,36 +137,6 @@ fn bench(c: &mut Criterion) {
             })
         });
     }
-    g.bench_function("free_guard", |b| {
-        b.iter(|| {
-            guarded
-                .tau_in_mode(
-                    Mode::Free,
-                    black_box(0.03),
-                    black_box(&x[..3]),
-                    black_box(&x[3..6]),
-                    black_box(&x[6..9]),
-                    &mut tau,
-                )
-                .expect("law");
-            black_box(tau)
-        })
-    });
-    g.bench_function("free_approach", |b| {
-        b.iter(|| {
-            approaching
-                .tau_in_mode(
-                    Mode::Free,
-                    black_box(0.03),
-                    black_box(&x[..3]),
-                    black_box(&x[3..6]),
-                    black_box(&x[6..9]),
-                    &mut tau,
-                )
-                .expect("law");
-            black_box(tau)
-        })
-    });
     g.finish();
 }
 
