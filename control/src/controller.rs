@@ -515,14 +515,13 @@ impl<K: Kernels<3>> HybridController<K> {
         let (phase, start) = self.timed_phase(d.phase, d.start, t);
         let ph = &self.reference.phases[phase];
         let s = t - start;
-        let r = ph.at(s);
         if mode == Mode::Free || !ph.contact {
             let (sigma, rate) = if mode == Mode::Free {
                 self.retime(phase, s, x)?
             } else {
                 (s, 1.0)
             };
-            let r = if sigma == s { r } else { ph.at(sigma) };
+            let r = ph.at(sigma);
             let qdd_ff = r.qdd.map(|v| v * rate);
             let mut qdd = [0.0; 3];
             self.gains.free.acceleration(
@@ -546,6 +545,7 @@ impl<K: Kernels<3>> HybridController<K> {
             }
             return Ok(());
         }
+        let r = ph.at(s);
         let g = &self.gains.contact;
         let p = self.model.params();
         let kin = self.model.evaluate(x)?;
