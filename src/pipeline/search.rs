@@ -258,6 +258,17 @@ fn solved(sol: &OcpSolution) -> bool {
     class(sol) < 2
 }
 
+/// The order in which candidates are promoted and refined: lowest objective first, ties by
+/// the lower index (values only, so shards merged order as the unsharded run does).
+fn lowest_first(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
+    a.solution
+        .objective
+        .total_cmp(&b.solution.objective)
+        .then(a.index.cmp(&b.index))
+}
+
+/// Whether two end points are the same local optimum: objectives within [`CLUSTER_RTOL`]
+/// and periods within 0.1 %.
 pub(crate) fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
     (a.objective - b.objective).abs() <= CLUSTER_RTOL * a.objective.abs().max(b.objective.abs())
         && (a.period - b.period).abs() <= 1e-3 * a.period.abs().max(b.period.abs())
@@ -782,12 +793,7 @@ impl Search {
             .iter()
             .filter(|c| solved(&c.solution))
             .collect();
-        order.sort_by(|a, b| {
-            a.solution
-                .objective
-                .total_cmp(&b.solution.objective)
-                .then(a.index.cmp(&b.index))
-        });
+        order.sort_by(|a, b| lowest_first(a, b));
         order.truncate(promote);
         let mut done: Vec<Candidate> = order.par_iter().filter_map(|c| land.promote(c)).collect();
         self.records.extend(land.take_records());
@@ -822,13 +828,7 @@ impl Search {
                 class(s) == 1 && s.objective < best_verified
             })
             .collect();
-        todo.sort_by(|&a, &b| {
-            cands[a]
-                .solution
-                .objective
-                .total_cmp(&cands[b].solution.objective)
-                .then(cands[a].index.cmp(&cands[b].index))
-        });
+        todo.sort_by(|&a, &b| lowest_first(&cands[a], &cands[b]));
         let refined = refine_in_order(
             &todo,
             policy.clusters,
