@@ -247,6 +247,11 @@ const MAX_RETIME_RATE: f64 = 3.0;
 /// optimum hovers 15 mm from the ball at 1 cm/s 80 ms before its impact (at 33 cm/s).
 const RETIME_MIN_RATE: f64 = 0.5;
 
+/// Share of the torque bounds a saturated command's feed-forward is scaled into
+/// (`HybridController::fit_bounds`): strictly inside, so the feedback fitted on top of it is a
+/// continuous function of the state.
+const FIT_INNER: f64 = 0.95;
+
 /// The re-timed end of a free phase before a planned impact (module doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Approach {
@@ -701,23 +706,9 @@ impl<K: Kernels<3>> HybridController<K> {
         tau.iter().zip(&self.tau_max).all(|(v, b)| v.abs() <= *b)
     }
 
-    /// τ_0 + α (τ_1 − τ_0) with the largest α ∈ [0, 1] inside the bounds: the feed-forward
-    /// `base` plus as much of the feedback in `full` as the actuators give (α = 0 if `base`
-    /// itself is outside; the saturation in [`Input::tau_in_mode`] then clips it).
+    /// [`fit_bounds`] with this controller's bounds.
     fn fit_bounds(&self, base: &[f64; 3], full: &[f64; 3]) -> [f64; 3] {
-        let mut alpha: f64 = 1.0;
-        for i in 0..3 {
-            let (a, b, bound) = (base[i], full[i] - base[i], self.tau_max[i]);
-            if a.abs() > bound {
-                alpha = 0.0;
-            } else if b > 0.0 {
-                alpha = alpha.min((bound - a) / b);
-            } else if b < 0.0 {
-                alpha = alpha.min((-bound - a) / b);
-            }
-        }
-        let alpha = alpha.clamp(0.0, 1.0);
-        std::array::from_fn(|i| base[i] + alpha * (full[i] - base[i]))
+        fit_bounds(&self.tau_max, base, full)
     }
 
     /// The clearance guard of a free phase (module doc): below the floor h_f, adds J_cᵀ n β to
@@ -888,6 +879,37 @@ impl<K: Kernels<3>> HybridController<K> {
     }
 }
 
+/// τ_0 + α (τ_1 − τ_0) with the largest α ∈ [0, 1] inside the bounds |τ_i| ≤ `tau_max[i]`:
+/// the feed-forward `base`, scaled (direction kept) to within [`FIT_INNER`] of the bounds, plus
+/// as much of the feedback in `full` as the actuators give.
+///
+/// The command must be continuous in the state, or a plant whose command sits on a bound slides
+/// along it in nanosecond steps (a Filippov sliding mode the integrator cannot step over). With
+/// the base strictly inside, α is continuous and equals 1 where `full` reaches the bounds, so the
+/// command meets `full` there. A base on or beyond a bound made α jump between 0 and 1 wherever
+/// the feedback in that joint changed sign.
+fn fit_bounds(tau_max: &[f64; 3], base: &[f64; 3], full: &[f64; 3]) -> [f64; 3] {
+    let kappa = (0..3)
+        .filter(|&i| base[i].abs() > 0.0)
+        .map(|i| FIT_INNER * tau_max[i] / base[i].abs())
+        .fold(1.0_f64, f64::min);
+    let base: [f64; 3] = std::array::from_fn(|i| kappa * base[i]);
+    let mut alpha: f64 = 1.0;
+    for i in 0..3 {
+        let (a, b, bound) = (base[i], full[i] - base[i], tau_max[i]);
+        if b > 0.0 {
+            alpha = alpha.min((bound - a) / b);
+        } else if b < 0.0 {
+            alpha = alpha.min((-bound - a) / b);
+        }
+    }
+    if alpha >= 1.0 {
+        return *full;
+    }
+    let alpha = alpha.max(0.0);
+    std::array::from_fn(|i| base[i] + alpha * (full[i] - base[i]))
+}
+
 fn to_sim(e: ControlError) -> SimError {
     SimError::system(e)
 }
@@ -1008,5 +1030,63 @@ impl<K: Kernels<3>> Input for HybridController<K> {
         d.t = m.t;
         d.mode = m.mode;
         h.push(d);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::fit_bounds;
+
+    const BOUND: [f64; 3] = [1.0, 2.0, 0.5];
+
+    fn inside(tau: &[f64; 3]) -> bool {
+        tau.iter()
+            .zip(&BOUND)
+            .all(|(v, b)| v.abs() <= b * (1.0 + 1e-12))
+    }
+
+    #[test]
+    fn a_command_inside_the_bounds_is_kept_and_one_outside_is_brought_inside() {
+        let base = [0.3, -0.5, 0.1];
+        let full = [0.9, 1.5, -0.4];
+        assert_eq!(fit_bounds(&BOUND, &base, &full), full);
+        for full in [[3.0, 0.0, 0.0], [0.0, -5.0, 0.2], [-2.0, 4.0, -1.0]] {
+            let out = fit_bounds(&BOUND, &base, &full);
+            assert!(inside(&out), "{out:?}");
+            // On the segment from the base to the full command, and on the boundary.
+            let on_bound = out
+                .iter()
+                .zip(&BOUND)
+                .any(|(v, b)| (v.abs() - b).abs() < 1e-12);
+            assert!(on_bound, "{out:?}");
+        }
+    }
+
+    /// The command is continuous where the full command crosses a bound, also when the
+    /// feed-forward itself is on or beyond it (the case that jumped: α = 0 on one side of the
+    /// crossing, α = 1 on the other).
+    #[test]
+    fn the_command_is_continuous_where_the_full_command_crosses_a_bound() {
+        for base in [[1.0, 0.5, 0.0], [1.3, -0.5, 0.2], [0.2, 0.1, 0.0]] {
+            for eps in [1e-3, 1e-6, 1e-9] {
+                let below = fit_bounds(&BOUND, &base, &[1.0 - eps, 2.5, 0.1]);
+                let above = fit_bounds(&BOUND, &base, &[1.0 + eps, 2.5, 0.1]);
+                let jump = below
+                    .iter()
+                    .zip(&above)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                assert!(jump < 50.0 * eps, "base {base:?}, eps {eps}: jump {jump}");
+                // And where the feedback in the saturated joint changes sign.
+                let below = fit_bounds(&BOUND, &base, &[base[0] - eps, 2.5, 0.1]);
+                let above = fit_bounds(&BOUND, &base, &[base[0] + eps, 2.5, 0.1]);
+                let jump = below
+                    .iter()
+                    .zip(&above)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
+                assert!(jump < 50.0 * eps, "base {base:?}, eps {eps}: jump {jump}");
+            }
+        }
     }
 }
