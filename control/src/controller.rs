@@ -1067,25 +1067,22 @@ mod tests {
     /// crossing, α = 1 on the other).
     #[test]
     fn the_command_is_continuous_where_the_full_command_crosses_a_bound() {
+        let jump = |base: &[f64; 3], a: f64, b: f64| {
+            let below = fit_bounds(&BOUND, base, &[a, 2.5, 0.1]);
+            let above = fit_bounds(&BOUND, base, &[b, 2.5, 0.1]);
+            below
+                .iter()
+                .zip(&above)
+                .map(|(x, y)| (x - y).abs())
+                .fold(0.0, f64::max)
+        };
         for base in [[1.0, 0.5, 0.0], [1.3, -0.5, 0.2], [0.2, 0.1, 0.0]] {
             for eps in [1e-3, 1e-6, 1e-9] {
-                let below = fit_bounds(&BOUND, &base, &[1.0 - eps, 2.5, 0.1]);
-                let above = fit_bounds(&BOUND, &base, &[1.0 + eps, 2.5, 0.1]);
-                let jump = below
-                    .iter()
-                    .zip(&above)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max);
-                assert!(jump < 50.0 * eps, "base {base:?}, eps {eps}: jump {jump}");
-                // And where the feedback in the saturated joint changes sign.
-                let below = fit_bounds(&BOUND, &base, &[base[0] - eps, 2.5, 0.1]);
-                let above = fit_bounds(&BOUND, &base, &[base[0] + eps, 2.5, 0.1]);
-                let jump = below
-                    .iter()
-                    .zip(&above)
-                    .map(|(a, b)| (a - b).abs())
-                    .fold(0.0, f64::max);
-                assert!(jump < 50.0 * eps, "base {base:?}, eps {eps}: jump {jump}");
+                // Across the bound, and where the feedback in the saturated joint changes sign.
+                for (a, b) in [(1.0 - eps, 1.0 + eps), (base[0] - eps, base[0] + eps)] {
+                    let d = jump(&base, a, b);
+                    assert!(d < 50.0 * eps, "base {base:?}, eps {eps}: jump {d}");
+                }
             }
         }
     }
