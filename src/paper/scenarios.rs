@@ -80,11 +80,6 @@ pub struct ScenarioResult {
     /// Share of the contact (stick) samples with ‖λ_∥‖ ≥ 0.99 μ_s λ_n (on the friction-cone
     /// boundary).
     pub cone_share: f64,
-    /// Largest normal force λ_n over the contact samples (N): the scale of the friction-cone
-    /// margins σ = μ_s λ_n − ‖λ_∥‖ (eq. 18).
-    pub max_lambda_n: f64,
-    /// The static friction coefficient μ_s the cone margins were measured with.
-    pub mu_s: f64,
     /// The bounds of the problem the solution sits on ([`crate::pipeline::bounds::active_bounds`]).
     pub active: Vec<crate::pipeline::bounds::ActiveBound>,
 }
@@ -420,15 +415,8 @@ pub fn run_scenario(
     } else {
         f64::NAN
     };
-    let max_lambda_n = lambda_n
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| is_stick(&sol, d, *i))
-        .fold(0.0f64, |m, (_, v)| m.max(*v));
     Ok(ScenarioResult {
         name: name.to_string(),
-        max_lambda_n,
-        mu_s,
         active: crate::pipeline::bounds::active_bounds(&problem.ocp, &sol),
         max_tau,
         contact_from_tip: (loc.0, mean, loc.2),
@@ -644,61 +632,53 @@ pub fn active_bounds_markdown(results: &[ScenarioResult]) -> String {
 }
 
 /// Penetration and friction-cone margins of each verified re-integration against their
-/// tolerances ([`crate::pipeline::verify::PENETRATION_TOLERANCE`],
-/// [`crate::pipeline::verify::CONE_TOLERANCE`]), with the verdict.
+/// allowances, as the verification's verdict judges them: the "within" cells are
+/// [`crate::pipeline::verify::penetration_failure`] and the worst stick phase of
+/// [`crate::pipeline::verify::worst_cone_margin`] (whose allowance uses the max λ_n and μ_s of
+/// the record), so the table and the `verified` column cannot disagree.
 pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
     use crate::pipeline::verify::{
-        CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT, path_failure,
+        CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT, penetration_failure,
+        worst_cone_margin,
     };
     let mut s = format!(
-        "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e} and, along \
-         the re-integrated free phases, penetration min h ≥ −{PENETRATION_TOLERANCE:e} m (the \
-         problem's own allowance at touch-down and release); both decide the verdict. The \
-         friction-cone margin of the stick phases is reported against min σ ≥ \
-         −{CONE_TOLERANCE} · μ_s max λ_n (σ = μ_s λ_n − ‖λ_∥‖, eq. 18; the optimum satisfies \
-         σ ≥ 0 at its collocation nodes only) but does not yet decide the verdict: a **no** \
-         there flags a verified optimum whose contact slips more than that between the \
-         nodes.\n\n\
-         | scenario | min h (m) | within | min σ (N) | −{CONE_TOLERANCE} · μ_s max λ_n (N) | within |\n\
-         |---|---|---|---|---|---|\n"
+        "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e}; along the \
+         re-integrated free phases, penetration min h ≥ −{PENETRATION_TOLERANCE:e} m (the \
+         problem's own allowance at touch-down and release); along the re-integrated stick \
+         phases, friction-cone margin min σ ≥ −{CONE_TOLERANCE} · μ_s max λ_n of the phase \
+         (σ = μ_s λ_n − ‖λ_∥‖, eq. 18; the optimum satisfies σ ≥ 0 at its collocation nodes \
+         only). All three decide the verdict; the cone columns show the stick phase with the \
+         lowest margin relative to its allowance.\n\n\
+         | scenario | min h (m) | within | phase | min σ (N) | −{CONE_TOLERANCE} · μ_s max λ_n (N) | within |\n\
+         |---|---|---|---|---|---|---|\n"
     );
     for r in results {
         let Some(v) = &r.solution.verification else {
-            s.push_str(&format!("| {} | not verified | | | | |\n", r.name));
+            s.push_str(&format!("| {} | not verified | | | | | |\n", r.name));
             continue;
         };
-        let min = |f: &dyn Fn(&crate::pipeline::verify::PhaseVerification) -> Option<f64>| {
-            v.phases.iter().filter_map(f).fold(f64::INFINITY, f64::min)
-        };
-        let h = min(&|p| p.min_h);
-        let sigma = min(&|p| p.min_sigma);
-        let mu = r.mu_s;
-        let cone = CONE_TOLERANCE * mu * r.max_lambda_n;
+        let h = v
+            .phases
+            .iter()
+            .filter_map(|p| p.min_h)
+            .fold(f64::INFINITY, f64::min);
         let yes = |ok: bool| if ok { "yes" } else { "**no**" };
-        let cell = |v: f64| {
-            if v.is_finite() {
-                format!("{v:.2e}")
-            } else {
-                "—".to_string()
-            }
+        let h_cells = if h.is_finite() {
+            format!("{h:.2e} | {}", yes(penetration_failure(v).is_none()))
+        } else {
+            "— | —".to_string()
         };
-        s.push_str(&format!(
-            "| {} | {} | {} | {} | {:.2e} | {} |\n",
-            r.name,
-            cell(h),
-            if h.is_finite() {
-                yes(path_failure(v).is_none())
-            } else {
-                "—"
-            },
-            cell(sigma),
-            -cone,
-            if sigma.is_finite() {
-                yes(sigma >= -cone)
-            } else {
-                "—"
-            }
-        ));
+        let cone_cells = match worst_cone_margin(v) {
+            Some(m) => format!(
+                "{} | {:.2e} | {:.2e} | {}",
+                m.phase,
+                m.min_sigma,
+                -m.allowance,
+                yes(m.within())
+            ),
+            None => "— | — | — | —".to_string(),
+        };
+        s.push_str(&format!("| {} | {h_cells} | {cone_cells} |\n", r.name));
     }
     s
 }

@@ -8,8 +8,9 @@
 //! | free phases: q̈, ω̇ from `bf_model::Model::free` | eq. 26 |
 //! | stick phases: λ from the index-reduced stick law (`Model::stick`, d/dt Δv = 0) | eq. 29, 33 |
 //! | [`PhaseVerification::max_delta_v`]: drift of the stick constraint Δv = 0 | eq. 13–14 |
-//! | [`PhaseVerification::min_lambda_n`], [`PhaseVerification::min_sigma`] | eq. 12, 18 |
-//! | [`PhaseVerification::min_h`]: penetration check of free phases | eq. 4 |
+//! | [`PhaseVerification::min_lambda_n`], [`PhaseVerification::max_lambda_n`], [`PhaseVerification::min_sigma`] | eq. 12, 18 |
+//! | [`cone_failure`]: min σ against [`CONE_TOLERANCE`] · μ_s max λ_n ([`cone_allowance`]), part of the verdict | eq. 18–19 |
+//! | [`PhaseVerification::min_h`], [`penetration_failure`]: penetration check of free phases, part of the verdict | eq. 4 |
 //! | [`PhaseVerification::node_residual`]: the OCP's dynamics residual at the collocation nodes, evaluated with bf-model's kernels and parameters | eq. 26, 29 |
 //! | contact geometry with the smooth saturation of the solution's ε | eq. 58–59 |
 //!
@@ -330,12 +331,13 @@ fn node_residual<const N: usize>(
     Ok(worst)
 }
 
-/// Running path checks of one phase.
-#[derive(Default)]
+/// Running path checks of one element or phase.
+#[derive(Clone, Copy)]
 struct PathStats {
     min_h: f64,
     max_dv: f64,
     min_ln: f64,
+    max_ln: f64,
     min_sigma: f64,
     max_abs_h: f64,
     overshoot: f64,
@@ -347,6 +349,7 @@ impl PathStats {
             min_h: f64::INFINITY,
             max_dv: 0.0,
             min_ln: f64::INFINITY,
+            max_ln: f64::NEG_INFINITY,
             min_sigma: f64::INFINITY,
             max_abs_h: 0.0,
             overshoot: 0.0,
@@ -373,11 +376,23 @@ impl PathStats {
                     .map_err(|e| e.to_string())?;
                 self.max_dv = self.max_dv.max(kin.contact.delta_v.norm());
                 self.min_ln = self.min_ln.min(acc.force.lambda_n);
+                self.max_ln = self.max_ln.max(acc.force.lambda_n);
                 self.min_sigma = self.min_sigma.min(acc.force.sigma);
                 self.max_abs_h = self.max_abs_h.max(h.abs());
             }
         }
         Ok(())
+    }
+
+    /// Folds the checks of another stretch of the same phase into these.
+    fn merge(&mut self, o: &PathStats) {
+        self.min_h = self.min_h.min(o.min_h);
+        self.max_dv = self.max_dv.max(o.max_dv);
+        self.min_ln = self.min_ln.min(o.min_ln);
+        self.max_ln = self.max_ln.max(o.max_ln);
+        self.min_sigma = self.min_sigma.min(o.min_sigma);
+        self.max_abs_h = self.max_abs_h.max(o.max_abs_h);
+        self.overshoot = self.overshoot.max(o.overshoot);
     }
 
     fn add_output<const N: usize>(
@@ -487,6 +502,7 @@ fn verify_phase<const N: usize>(
     let mut parts = [0.0f64; 3];
     let mut element_defects = Vec::with_capacity(tr.elements.len());
     let mut element_min_h = Vec::with_capacity(tr.elements.len());
+    let mut element_min_sigma = Vec::with_capacity(tr.elements.len());
     let mut interval_defect = 0.0f64;
     let mut x_open = x_start.clone();
     let mut open_loop_failure = None;
@@ -501,6 +517,7 @@ fn verify_phase<const N: usize>(
         if tb <= ta {
             element_defects.push(0.0);
             element_min_h.push(f64::NAN);
+            element_min_sigma.push(f64::NAN);
             continue;
         }
         let ks: Vec<usize> = (0..tr.node_tau.len())
@@ -539,15 +556,14 @@ fn verify_phase<const N: usize>(
         steps += out.stats.accepted_steps;
         rejected += out.stats.rejected_steps;
         rhs += out.stats.rhs_evals;
-        // min h of this element alone (for the refinement), then folded into the phase's.
-        let min_h_before = std::mem::replace(&mut stats.min_h, f64::INFINITY);
-        let path = stats.add_output(&sys, mode, &out);
-        element_min_h.push(if err.is_some() || path.is_err() {
-            f64::NAN
-        } else {
-            stats.min_h
-        });
-        stats.min_h = stats.min_h.min(min_h_before);
+        // The path checks of this element alone (min h, min σ for the refinement), then
+        // folded into the phase's.
+        let mut el = PathStats::new();
+        let path = el.add_output(&sys, mode, &out);
+        let measured = err.is_none() && path.is_ok();
+        element_min_h.push(if measured { el.min_h } else { f64::NAN });
+        element_min_sigma.push(if measured { el.min_sigma } else { f64::NAN });
+        stats.merge(&el);
         let d = end_defect(N, &out, &err, x_b);
         match err.or(path.err()) {
             Some(msg) => {
@@ -632,7 +648,9 @@ fn verify_phase<const N: usize>(
         element_min_h: if stick { Vec::new() } else { element_min_h },
         max_delta_v: finite_or_none(stats.max_dv, stick),
         min_lambda_n: finite_or_none(stats.min_ln, stick),
+        max_lambda_n: finite_or_none(stats.max_ln, stick),
         min_sigma: finite_or_none(stats.min_sigma, stick),
+        element_min_sigma: if stick { element_min_sigma } else { Vec::new() },
         max_abs_h: finite_or_none(stats.max_abs_h, stick),
     })
 }
@@ -650,10 +668,11 @@ pub const VERIFIED_DEFECT: f64 = 1e-4;
 pub const PENETRATION_TOLERANCE: f64 = 1e-4;
 
 /// Friction-cone margin the re-integrated stick phases may show, as a fraction of the cone's
-/// size μ_s max λ_n: the optimum satisfies σ = μ_s λ_n − ‖λ_∥‖ ≥ 0 (eq. 18) at its collocation
-/// nodes only; between them the torques are interpolated and the re-integration computes λ
-/// from the stick law (eq. 33) on a state that is off the collocated one by up to
-/// [`VERIFIED_DEFECT`]. The report accepts margins down to −1 % of the cone and flags any below.
+/// size μ_s max λ_n of the phase: the optimum satisfies σ = μ_s λ_n − ‖λ_∥‖ ≥ 0 (eq. 18) at
+/// its collocation nodes only; between them the torques are interpolated and the
+/// re-integration computes λ from the stick law (eq. 33) on a state that is off the collocated
+/// one by up to [`VERIFIED_DEFECT`]. Margins down to −1 % of the cone pass; a lower one
+/// fails the verification ([`path_failure`]).
 pub const CONE_TOLERANCE: f64 = 0.01;
 
 /// Whether `sol` carries a re-integration that reached the end of every element with an
@@ -673,12 +692,19 @@ fn passes(v: &Verification) -> bool {
 }
 
 /// The first path check of `v` outside its allowance, as a sentence naming the phase, the
-/// quantity, its value and the allowance: a free phase whose re-integrated path penetrates
-/// the ball deeper than [`PENETRATION_TOLERANCE`] (min h < −10⁻⁴ m). The collocation bounds h
-/// at its nodes only; between them a long free phase that grazes the ball can dip into it
+/// quantity, its value and the allowance: a free phase that penetrates the ball
+/// ([`penetration_failure`]), else a stick phase that slips ([`cone_failure`]). The
+/// collocation imposes both bounds at its nodes only; between them a path can break them
 /// although every node and every element end agree with the model, so the element-wise
 /// defect alone would call such an optimum verified.
 pub fn path_failure(v: &Verification) -> Option<String> {
+    penetration_failure(v).or_else(|| cone_failure(v))
+}
+
+/// The first free phase of `v` whose re-integrated path penetrates the ball deeper than
+/// [`PENETRATION_TOLERANCE`] (min h < −10⁻⁴ m), as a sentence naming the phase, min h and the
+/// allowance: a long free phase that grazes the ball can sag into it between its nodes.
+pub fn penetration_failure(v: &Verification) -> Option<String> {
     v.phases.iter().find_map(|p| {
         let h = p.min_h?;
         (p.mode == PhaseMode::Free && h < -PENETRATION_TOLERANCE).then(|| {
@@ -691,13 +717,96 @@ pub fn path_failure(v: &Verification) -> Option<String> {
     })
 }
 
-/// The error of an element whose re-integrated free path penetrates the ball by `depth` > 0
-/// (m) beyond [`PENETRATION_TOLERANCE`], in the state units of the element defects: the
-/// penetration as a multiple of its allowance times [`VERIFIED_DEFECT`], so that such an
-/// element is refined like one whose defect exceeds the verification's tolerance by that
-/// factor (more nodes bound h at more points along it).
-fn penetration_error(depth: f64) -> f64 {
-    VERIFIED_DEFECT * depth / PENETRATION_TOLERANCE
+/// The friction-cone margin of one re-integrated stick phase against its allowance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ConeMargin {
+    /// Phase index.
+    pub phase: usize,
+    /// min σ = μ_s λ_n − ‖λ_∥‖ along the phase's re-integration (N).
+    pub min_sigma: f64,
+    /// The margin the phase may show: min σ ≥ −`allowance` passes (N).
+    pub allowance: f64,
+}
+
+impl ConeMargin {
+    /// Whether min σ is within the allowance.
+    pub fn within(&self) -> bool {
+        self.min_sigma >= -self.allowance
+    }
+
+    /// min σ in units of the allowance (< −1: outside it); the order in which phases are
+    /// worse.
+    fn relative(&self) -> f64 {
+        if self.allowance > 0.0 {
+            self.min_sigma / self.allowance
+        } else if self.min_sigma >= 0.0 {
+            0.0
+        } else {
+            f64::NEG_INFINITY
+        }
+    }
+}
+
+/// [`CONE_TOLERANCE`] · μ_s · max λ_n (N): the margin σ a stick phase whose re-integrated
+/// normal force peaks at `max_lambda_n` may show (0 if the force never pushes).
+pub fn cone_allowance(mu_s: f64, max_lambda_n: f64) -> f64 {
+    CONE_TOLERANCE * mu_s * max_lambda_n.max(0.0)
+}
+
+/// The cone margin of every stick phase of `v` that has one (the record holds μ_s, and the
+/// phase min σ and max λ_n; older files hold neither), in phase order.
+pub fn cone_margins(v: &Verification) -> Vec<ConeMargin> {
+    if !v.mu_s.is_finite() {
+        return Vec::new();
+    }
+    v.phases
+        .iter()
+        .filter(|p| p.mode == PhaseMode::Stick)
+        .filter_map(|p| {
+            Some(ConeMargin {
+                phase: p.phase,
+                min_sigma: p.min_sigma?,
+                allowance: cone_allowance(v.mu_s, p.max_lambda_n?),
+            })
+        })
+        .collect()
+}
+
+/// The stick phase of `v` whose margin is lowest relative to its allowance (the first of
+/// equals): outside its allowance iff some phase is.
+pub fn worst_cone_margin(v: &Verification) -> Option<ConeMargin> {
+    cone_margins(v)
+        .into_iter()
+        .reduce(|a, b| if b.relative() < a.relative() { b } else { a })
+}
+
+/// The stick phase of `v` that slips most beyond its allowance ([`worst_cone_margin`]), as a
+/// sentence naming the phase, min σ and the allowance: between the nodes the interpolated
+/// torques can push the contact force out of the friction cone (eq. 18), which the
+/// collocation bounds at its nodes only.
+pub fn cone_failure(v: &Verification) -> Option<String> {
+    let m = worst_cone_margin(v)?;
+    (!m.within()).then(|| {
+        format!(
+            "phase {} (stick): the re-integrated contact force leaves the friction cone, min σ = \
+             {:.3e} N below the allowance -{:.3e} N ({CONE_TOLERANCE} · μ_s · max λ_n)",
+            m.phase, m.min_sigma, m.allowance
+        )
+    })
+}
+
+/// An element error of the refinement for a path check outside its allowance: the excess
+/// `value` (> `allowance` > 0, in the check's units) as a multiple of the allowance times
+/// [`VERIFIED_DEFECT`] (state units), so that such an element is refined like one whose
+/// defect exceeds the verification's tolerance by that factor (more nodes impose the bound,
+/// h ≥ −10⁻⁴ m or σ ≥ 0, at more points along it). A zero allowance counts as
+/// [`FAILED_ELEMENT_ERROR`].
+fn excess_error(value: f64, allowance: f64) -> f64 {
+    if allowance > 0.0 {
+        VERIFIED_DEFECT * value / allowance
+    } else {
+        FAILED_ELEMENT_ERROR
+    }
 }
 
 /// Element error of the refinement for an element whose re-integration failed (state
@@ -707,18 +816,31 @@ pub const FAILED_ELEMENT_ERROR: f64 = 1.0;
 /// The element-wise defects of `sol` ([`verify`] at `rtol`) per phase and element, as the
 /// element errors of a mesh refinement ([`super::refine::RefineCriterion::Reintegration`]);
 /// an element whose re-integration failed counts as [`FAILED_ELEMENT_ERROR`], one whose free
-/// path penetrates the ball deeper than [`PENETRATION_TOLERANCE`] at least as its
-/// [`penetration_error`].
+/// path penetrates the ball deeper than [`PENETRATION_TOLERANCE`] or whose stick path leaves
+/// the friction cone by more than its phase's [`cone_allowance`] at least as its
+/// [`excess_error`].
 pub fn element_errors(
     p: &BuiltProblem,
     sol: &OcpSolution,
     rtol: f64,
 ) -> Result<Vec<Vec<f64>>, PipelineError> {
     let v = verify(p, sol, rtol)?;
-    Ok(v.phases
-        .into_iter()
+    Ok(record_element_errors(&v))
+}
+
+/// The element errors of [`element_errors`] from the verification record `v`: per phase and
+/// element, the element defect, raised where the element's min h or min σ is outside its
+/// allowance ([`excess_error`]), [`FAILED_ELEMENT_ERROR`] where the element failed.
+pub fn record_element_errors(v: &Verification) -> Vec<Vec<f64>> {
+    let margins = cone_margins(v);
+    v.phases
+        .iter()
         .map(|ph| {
-            let min_h = |e: usize| ph.element_min_h.get(e).copied().unwrap_or(f64::INFINITY);
+            let at = |xs: &[f64], e: usize| xs.get(e).copied().unwrap_or(f64::INFINITY);
+            let cone = margins
+                .iter()
+                .find(|m| m.phase == ph.phase)
+                .map_or(f64::INFINITY, |m| m.allowance);
             ph.element_defects
                 .iter()
                 .enumerate()
@@ -726,16 +848,20 @@ pub fn element_errors(
                     if d.is_nan() {
                         return FAILED_ELEMENT_ERROR;
                     }
-                    let h = min_h(e);
+                    let h = at(&ph.element_min_h, e);
+                    let sigma = at(&ph.element_min_sigma, e);
+                    let mut err = d;
                     if h < -PENETRATION_TOLERANCE {
-                        d.max(penetration_error(-h))
-                    } else {
-                        d
+                        err = err.max(excess_error(-h, PENETRATION_TOLERANCE));
                     }
+                    if cone.is_finite() && sigma < -cone {
+                        err = err.max(excess_error(-sigma, cone));
+                    }
+                    err
                 })
                 .collect()
         })
-        .collect())
+        .collect()
 }
 
 /// [`verify_with`] at `rtol` with atol = rtol · [`ATOL_FACTOR`] and the clamped torque
@@ -834,6 +960,7 @@ pub fn verify_with(
         max_interval_defect,
         max_open_loop_defect,
         max_node_residual,
+        mu_s: p.physics.mu_s,
         phases,
         seconds: start.elapsed().as_secs_f64(),
     };

@@ -308,8 +308,18 @@ pub struct PhaseVerification {
     /// Stick phases: min λ_n along the element re-integrations (N; < 0 means the contact
     /// would open).
     pub min_lambda_n: Option<f64>,
+    /// Stick phases: max λ_n along the element re-integrations (N): the scale of the
+    /// friction cone, whose margin σ is judged against a fraction of μ_s · this (absent in
+    /// free phases and in older files).
+    #[serde(default)]
+    pub max_lambda_n: Option<f64>,
     /// Stick phases: min σ = μ_s λ_n − ‖λ_∥‖ (N; < 0 means the contact would slip).
     pub min_sigma: Option<f64>,
+    /// Stick phases: min σ along each element's re-integration (N; NaN where it failed or the
+    /// element is empty; empty in free phases and in older files): where the contact slips
+    /// between the nodes, so that a refinement splits those elements.
+    #[serde(default, with = "nan_null_vec")]
+    pub element_min_sigma: Vec<f64>,
     /// Stick phases: max |h| along the element re-integrations (m).
     pub max_abs_h: Option<f64>,
 }
@@ -346,6 +356,10 @@ pub struct Verification {
     /// Max node residual over all phases.
     #[serde(with = "nan_null")]
     pub max_node_residual: f64,
+    /// Static friction coefficient μ_s of the re-integrated stick dynamics (the σ of the
+    /// stick phases; NaN in older files, whose cone margins then decide nothing).
+    #[serde(default = "nan", with = "nan_null")]
+    pub mu_s: f64,
     /// Wall time of the verification (s).
     pub seconds: f64,
     /// Largest `max_defect` at which the solution counts as verified (the study layer's
@@ -353,7 +367,8 @@ pub struct Verification {
     #[serde(default)]
     pub tolerance: f64,
     /// Whether every phase completed with `max_defect` ≤ `tolerance` and its path checks
-    /// within their allowances (the study layer's verification: the free phases' penetration);
+    /// within their allowances (the study layer's verification: the free phases' penetration,
+    /// the stick phases' friction-cone margin);
     /// a solution that is not verified is flagged wherever it is shown.
     #[serde(default)]
     pub verified: bool,
@@ -437,9 +452,10 @@ impl fmt::Display for Verification {
             let path = match p.mode {
                 PhaseMode::Free => format!("min h {}", fmt_opt(p.min_h)),
                 PhaseMode::Stick => format!(
-                    "max|dv| {}  min lambda_n {}  min sigma {}  max|h| {}",
+                    "max|dv| {}  lambda_n {} .. {}  min sigma {}  max|h| {}",
                     fmt_opt(p.max_delta_v),
                     fmt_opt(p.min_lambda_n),
+                    fmt_opt(p.max_lambda_n),
                     fmt_opt(p.min_sigma),
                     fmt_opt(p.max_abs_h)
                 ),
