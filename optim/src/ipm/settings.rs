@@ -386,10 +386,10 @@ pub struct LinearSolverSettings {
     /// With [`KktOrdering::AmdCheckedByPivotPairs`]: largest δ_w of a rejected AMD factor that
     /// the pivot pairs re-factor to check. What the check detects is a rounding artefact of the
     /// bare −δ_c pivots, an error of order `ε ‖a‖² / δ_c` (≈ 1e-7 ‖a‖² at δ_c = 1e-9) in the
-    /// reduced Hessian, which a larger δ_w outweighs; above it the check only confirmed the
-    /// rejection (every check above 7.8e-7 in the cold solves of the seven problems on Radau
-    /// 3 × 10 and LG-30), at 1.55 times an AMD factorization's cost (decision record 0031).
-    pivot_pairs_check_max_delta_w: f64 = 1e-5,
+    /// reduced Hessian, which a larger δ_w outweighs; there a check only confirms the
+    /// rejection, at 1.55 times an AMD factorization's cost. The largest δ_w at which a check
+    /// was seen to accept is 1.3e-5 (decision record 0031).
+    pivot_pairs_check_max_delta_w: f64 = 1e-3,
     /// Maximum iterative-refinement steps per solve (the default is Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for
     /// when refinement stops earlier. An unpivoted factor with pivot growth refines, but

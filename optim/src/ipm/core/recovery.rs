@@ -130,8 +130,9 @@ pub(super) const KKT_CHAIN: [&dyn for<'m> Recovery<Rejection<'m>, KktAction>; 4]
 /// Re-factors a rejected AMD factor's matrix with 2 × 2 pivot pairs, once per step
 /// (`Core::try_pivot_pairs`; with `AmdCheckedByPivotPairs` only at a δ_w up to
 /// `LinearSolverSettings::pivot_pairs_check_max_delta_w`): where the pairs accept it, the
-/// rejection was an artefact of AMD's bare −δ_c pivots. `AmdThenPivotPairs` takes the pairs' step and keeps their order,
-/// `AmdCheckedByPivotPairs` passes the artefact on to [`RaiseStaticDualRegularization`].
+/// rejection was an artefact of AMD's bare −δ_c pivots. `AmdThenPivotPairs` takes the pairs'
+/// step and keeps their order, `AmdCheckedByPivotPairs` passes the artefact on to
+/// [`RaiseStaticDualRegularization`].
 pub(super) struct PivotPairsCheck;
 
 impl<'m> Recovery<Rejection<'m>, KktAction> for PivotPairsCheck {
