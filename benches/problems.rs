@@ -4,13 +4,16 @@
 //! solver's own `Timing`. Every problem runs with hp-Radau 3 × 10 (`{name}/radau3x10`) and with
 //! Legendre–Gauss, 30 points per phase as in the paper (`{name}/lg30`: integral-form Gauss
 //! defects, stick phases at the acceleration level, δ_c = 3e-8), and `periodic-qc`
-//! also with Radau 3 × 12, the mesh that matches LG-30's objective error.
+//! also with Radau 3 × 12, the mesh that matches LG-30's objective error, and on Radau 3 × 10
+//! and LG-30 with every rejected KKT factor checked by the pivot pairs (`*_check_all`, the
+//! default before decision record 0031: the same path with more factorizations).
 //!
 //! Quick run: `cargo bench --bench problems -- --warm-up-time 1 --measurement-time 5`
 
 use std::hint::black_box;
 
 use ball_finger::pipeline::{build, solve};
+use bf_optim::ipm::{LinearSolverSettings, Settings, TerminationSettings};
 use bf_optim::ocp::Scheme;
 use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -30,10 +33,29 @@ fn bench(c: &mut Criterion) {
         points: 36,
         ..ProblemSettings::default()
     };
+    // Every rejected AMD factor checked by the pivot pairs, whatever its δ_w (the default
+    // before decision record 0031; the same path, more factorizations).
+    let check_all = |s: &ProblemSettings| ProblemSettings {
+        ipm: Some(Settings {
+            termination: TerminationSettings {
+                tol: 1e-8,
+                ..Default::default()
+            },
+            linear_solver: LinearSolverSettings {
+                pivot_pairs_check_max_delta_w: f64::MAX,
+                ..Default::default()
+            },
+            ..Settings::default()
+        }),
+        ..s.clone()
+    };
+    let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
     for (name, label, settings) in [
         (Problem::PeriodicQc, "radau3x10", &radau),
+        (Problem::PeriodicQc, "radau3x10_check_all", &radau_check_all),
         (Problem::PeriodicQc, "radau3x12", &radau36),
         (Problem::PeriodicQc, "lg30", &lg),
+        (Problem::PeriodicQc, "lg30_check_all", &lg_check_all),
         (Problem::PeriodicCot, "radau3x10", &radau),
         (Problem::PeriodicCot, "lg30", &lg),
         (Problem::PeriodicCotHuman, "radau3x10", &radau),

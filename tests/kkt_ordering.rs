@@ -9,7 +9,9 @@
 
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{build, solve};
-use bf_optim::ipm::{ExperimentalSettings, KktOrdering, LinearSolverSettings, Settings, Status};
+use bf_optim::ipm::{
+    ExperimentalSettings, KktOrdering, LinearSolverSettings, Settings, Status, TerminationSettings,
+};
 use bf_optim::ocp::Scheme;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 
@@ -100,6 +102,47 @@ fn pivot_pairs_solve_fine_meshes_with_the_default_regularization() {
         assert_eq!(sol.status, Status::Solved, "{name}: {:?}", sol.stages);
         assert_eq!(sol.stages.len(), 1, "{name}: {:?}", sol.stages);
     }
+}
+
+/// The pivot-pair check of a rejected AMD factor is skipped where its δ_w exceeds
+/// `pivot_pairs_check_max_delta_w` (decision record 0031): on `periodic-qc` Radau 3 × 10 the
+/// checks it skips would all have confirmed the rejection, so the solve is the one that checks
+/// every rejection, bit for bit (objective, iterations, pivot-pair accepts), with fewer
+/// factorizations.
+#[test]
+fn pivot_pair_checks_at_a_large_delta_w_only_confirm_the_rejection() {
+    let with = |max_delta_w: f64| {
+        let s = ProblemSettings {
+            ipm: Some(Settings {
+                termination: TerminationSettings {
+                    tol: 1e-8,
+                    ..Default::default()
+                },
+                linear_solver: LinearSolverSettings {
+                    pivot_pairs_check_max_delta_w: max_delta_w,
+                    ..Default::default()
+                },
+                ..Settings::default()
+            }),
+            ..ProblemSettings::default()
+        };
+        solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap()
+    };
+    let default = with(LinearSolverSettings::default().pivot_pairs_check_max_delta_w);
+    let everywhere = with(f64::MAX);
+    assert_eq!(default.status, Status::Solved);
+    assert_eq!(default.objective.to_bits(), everywhere.objective.to_bits());
+    assert_eq!(default.iterations, everywhere.iterations);
+    assert_eq!(
+        default.counters.dual_regularization_raised_at,
+        everywhere.counters.dual_regularization_raised_at
+    );
+    assert!(
+        default.counters.factorizations < everywhere.counters.factorizations,
+        "{} factorizations, {} when every rejection is checked",
+        default.counters.factorizations,
+        everywhere.counters.factorizations
+    );
 }
 
 /// The settings of the library before the adaptive default (plain AMD; δ_c = 3e-8 for LG,

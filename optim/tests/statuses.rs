@@ -304,6 +304,16 @@ fn invalid_input_is_rejected() {
                 ..Settings::default()
             },
         ),
+        (
+            "pivot_pairs_check_max_delta_w",
+            Settings {
+                linear_solver: LinearSolverSettings {
+                    pivot_pairs_check_max_delta_w: f64::NAN,
+                    ..Default::default()
+                },
+                ..Settings::default()
+            },
+        ),
     ] {
         match solve(&p, &bad) {
             Err(OptimError::InvalidSetting { name: n, .. }) => assert_eq!(n, name),

@@ -81,7 +81,8 @@ pub enum KktOrdering {
     /// where AMD eliminates no constraint row bare never try the pairs.
     AmdThenPivotPairs,
     /// [`Amd`](KktOrdering::Amd), with the first rejected factorization of each Newton step
-    /// checked by [`AmdPivotPairs`](KktOrdering::AmdPivotPairs) on the same matrix: where the
+    /// checked by [`AmdPivotPairs`](KktOrdering::AmdPivotPairs) on the same matrix if its δ_w
+    /// is at most `LinearSolverSettings::pivot_pairs_check_max_delta_w`: where the
     /// pairs accept what AMD rejected, the rejection is an artefact of the bare −δ_c pivots,
     /// and the static δ_c of the solve grows (`static_dual_regularization_growth`, up to
     /// `static_dual_regularization_max`), which shrinks their 1/δ_c growth; the order stays
@@ -382,6 +383,13 @@ pub struct LinearSolverSettings {
     /// Largest static δ_c that this growth may reach (a value at most
     /// `static_dual_regularization` disables the growth).
     static_dual_regularization_max: f64 = 3e-8,
+    /// With [`KktOrdering::AmdCheckedByPivotPairs`]: largest δ_w of a rejected AMD factor that
+    /// the pivot pairs re-factor to check. What the check detects is a rounding artefact of the
+    /// bare −δ_c pivots, an error of order `ε ‖a‖² / δ_c` (≈ 1e-7 ‖a‖² at δ_c = 1e-9) in the
+    /// reduced Hessian, which a larger δ_w outweighs; there a check only confirms the
+    /// rejection, at 1.55 times an AMD factorization's cost. The largest δ_w at which a check
+    /// was seen to accept is 1.3e-5 (decision record 0031).
+    pivot_pairs_check_max_delta_w: f64 = 1e-3,
     /// Maximum iterative-refinement steps per solve (the default is Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for
     /// when refinement stops earlier. An unpivoted factor with pivot growth refines, but
@@ -576,6 +584,10 @@ impl Settings {
         nonneg(
             "static_dual_regularization_max",
             self.linear_solver.static_dual_regularization_max,
+        )?;
+        nonneg(
+            "pivot_pairs_check_max_delta_w",
+            self.linear_solver.pivot_pairs_check_max_delta_w,
         )?;
         pos(
             "first_hessian_perturbation",

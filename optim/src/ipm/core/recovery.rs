@@ -8,7 +8,9 @@
 //!
 //! 1. [`PivotPairsCheck`]: the same matrix re-factored once per step with 2 × 2 (variable,
 //!    constraint row) pivots tells an artefact of AMD's bare −δ_c pivots from a genuine need
-//!    for δ_w (with `AmdThenPivotPairs` its factor is the step);
+//!    for δ_w (with `AmdThenPivotPairs` its factor is the step); with
+//!    `AmdCheckedByPivotPairs` only where the rejected δ_w is at most
+//!    `LinearSolverSettings::pivot_pairs_check_max_delta_w`;
 //! 2. [`RaiseStaticDualRegularization`]: an artefact, or a factor with the right inertia that
 //!    does not solve its own matrix, raises the static δ_c of the solve;
 //! 3. [`JacobianRegularization`]: a singular matrix gets `δ_c = δ̄_c μ^κ_c`;
@@ -126,9 +128,11 @@ pub(super) const KKT_CHAIN: [&dyn for<'m> Recovery<Rejection<'m>, KktAction>; 4]
 ];
 
 /// Re-factors a rejected AMD factor's matrix with 2 × 2 pivot pairs, once per step
-/// (`Core::try_pivot_pairs`): where the pairs accept it, the rejection was an artefact of
-/// AMD's bare −δ_c pivots. `AmdThenPivotPairs` takes the pairs' step and keeps their order,
-/// `AmdCheckedByPivotPairs` passes the artefact on to [`RaiseStaticDualRegularization`].
+/// (`Core::try_pivot_pairs`; with `AmdCheckedByPivotPairs` only at a δ_w up to
+/// `LinearSolverSettings::pivot_pairs_check_max_delta_w`): where the pairs accept it, the
+/// rejection was an artefact of AMD's bare −δ_c pivots. `AmdThenPivotPairs` takes the pairs'
+/// step and keeps their order, `AmdCheckedByPivotPairs` passes the artefact on to
+/// [`RaiseStaticDualRegularization`].
 pub(super) struct PivotPairsCheck;
 
 impl<'m> Recovery<Rejection<'m>, KktAction> for PivotPairsCheck {
@@ -147,6 +151,12 @@ impl<'m> Recovery<Rejection<'m>, KktAction> for PivotPairsCheck {
         }
         r.memory.pairs_checked = true;
         let switch = ctx.settings.experimental.kkt_ordering == KktOrdering::AmdThenPivotPairs;
+        // A δ_w this large outweighs the bare pivots' rounding: the check would only confirm
+        // the rejection (`LinearSolverSettings::pivot_pairs_check_max_delta_w`). Within a step
+        // δ_w only grows, so the step is not checked later either, as before.
+        if !switch && r.old_w > ctx.settings.linear_solver.pivot_pairs_check_max_delta_w {
+            return Ok(Outcome::Pass);
+        }
         if core.try_pivot_pairs(ctx, ctx.settings, switch) {
             if switch {
                 return Ok(Outcome::Act(KktAction::Solved));
