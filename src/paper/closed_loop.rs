@@ -78,6 +78,8 @@ pub struct Tracking {
     /// Why the run counts as having lost the ball, if it does: fewer periods completed than
     /// asked for, a period without contact, or a failed simulation.
     pub lost: Option<String>,
+    /// The re-plans at the lift-offs ([`super::replan`]; empty without re-planning).
+    pub replans: Vec<super::replan::ReplanRecord>,
 }
 
 /// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none) as a
@@ -154,6 +156,25 @@ pub fn run_tracking(
     plant: Model<DynKernels>,
     impact_law: ImpactLaw,
 ) -> Result<Tracking> {
+    run_tracking_replanned(sol, controller, periods, plant, impact_law, false)
+}
+
+/// [`run_tracking`], with `replan`: the hybrid controllers re-plan at every lift-off
+/// ([`super::replan::SolverReplanner`]); an error for the open loop and the PD.
+pub fn run_tracking_replanned(
+    sol: &OcpSolution,
+    controller: ControllerKind,
+    periods: usize,
+    plant: Model<DynKernels>,
+    impact_law: ImpactLaw,
+    replan: bool,
+) -> Result<Tracking> {
+    if replan && matches!(controller, ControllerKind::OpenLoop | ControllerKind::Pd) {
+        bail!(
+            "--replan needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
+            controller.name()
+        );
+    }
     if periods == 0 {
         bail!("--periods must be at least 1");
     }
@@ -173,6 +194,7 @@ pub fn run_tracking(
         impact_law,
         ..BallFingerSettings::default()
     };
+    let log = std::rc::Rc::new(std::cell::RefCell::new(Vec::new()));
     let (output, report, stopped) = match controller {
         ControllerKind::OpenLoop => {
             simulate_optimum(sol, plant, periodic_torques(sol, copies)?, settings, t_end)?
@@ -197,9 +219,17 @@ pub fn run_tracking(
                 ControllerKind::Hybrid => torque_bound(sol),
                 _ => [f64::INFINITY; 3],
             };
-            let law =
+            let mut law =
                 HybridController::new(model, id, reference, HybridGains::default(), 0.0, &x0)?
                     .with_torque_bound(bound)?;
+            if replan {
+                let replanner = super::replan::SolverReplanner::new(
+                    sol,
+                    solution_model(sol)?.0,
+                    std::rc::Rc::clone(&log),
+                )?;
+                law = law.with_replanner(Box::new(replanner));
+            }
             simulate_optimum(sol, plant, law, settings, t_end)?
         }
     };
@@ -228,6 +258,7 @@ pub fn run_tracking(
         stopped,
         periods: metrics,
         lost,
+        replans: log.take(),
     })
 }
 

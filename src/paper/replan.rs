@@ -1,0 +1,165 @@
+//! Re-planning at each lift-off (`track --replan`): bf-control's [`Replanner`] on the solve
+//! pipeline. At the plant's lift-off in the measured state x_m the transient period of the
+//! optimum's problem (bf-problem's `catalogue::replan`: release from x_m, approach, stick,
+//! ending on the optimum's lift-off state x*_lo, the same ratio objective eq. 60) is solved,
+//! warm-started from the plan in force, and becomes the controller's reference until the next
+//! lift-off.
+//!
+//! * The NLP is transcribed once; each re-plan only moves the bounds of its fixed first state
+//!   (`catalogue::replan::set_measured`), so a re-plan after a successful one starts from its
+//!   primal-dual point exactly (the pipeline's warm start, μ₀ = 1e-4), and the first one from
+//!   the optimum rotated to start at the lift-off (primal point only).
+//! * A re-plan that does not converge within [`REPLAN_MAX_ITER`] iterations is not used: the
+//!   controller then tracks the optimum from its lift-off (rotated the same way), and the
+//!   next re-plan starts from it again.
+//! * Determinism: the plant waits for the plan in simulated time (bf-control's controller
+//!   calls the replanner at the lift-off event and tracks the result from that instant), and
+//!   the iteration limit, not a time limit, ends a re-plan, so a run is the same on any
+//!   machine; the wall time of every re-plan is recorded ([`ReplanRecord`]) against the
+//!   budget of a tenth of the period.
+
+use super::closed_loop::reference_of;
+use crate::pipeline::solve::{settings_of, solve};
+use anyhow::{Context, Result};
+use bf_control::{Reference, Replanner};
+use bf_model::{DynKernels, Model};
+use bf_problem::catalogue::replan::{LiftOff, lift_off_state, rotate_to_lift_off, set_measured};
+use bf_problem::{BuiltProblem, OcpSolution, warm_initial_point};
+use serde::Serialize;
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::Instant;
+
+/// Iteration limit of one re-plan (the optimum's own solves converge from a warm start in
+/// far fewer; a re-plan that needs more is not converging and would overrun its budget).
+pub const REPLAN_MAX_ITER: usize = 200;
+
+/// One re-plan of a run, as `tracking.json` records it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ReplanRecord {
+    /// Plant time of the lift-off (s).
+    pub t: f64,
+    /// Wall time of the re-plan (s): moving the measured state, the warm start, the solve and
+    /// the reference.
+    pub seconds: f64,
+    /// Interior-point iterations.
+    pub iterations: usize,
+    /// The solver's status.
+    pub status: String,
+    /// Whether the plan was used (converged); otherwise the optimum was tracked.
+    pub used: bool,
+    /// The plan's objective (the ratio eq. 60 over its transient period).
+    pub objective: f64,
+    /// Largest distance of the measured lift-off state from the optimum's, max |x_m − x*_lo|.
+    pub deviation: f64,
+}
+
+/// The solve pipeline as bf-control's [`Replanner`] (module doc).
+#[derive(Debug)]
+pub struct SolverReplanner {
+    problem: BuiltProblem,
+    model: Model<DynKernels>,
+    /// x*_lo.
+    target: Vec<f64>,
+    /// The optimum rotated to start at its lift-off: the plan when a re-plan fails.
+    nominal: OcpSolution,
+    nominal_reference: Reference,
+    /// The plan in force, the warm start of the next re-plan.
+    current: OcpSolution,
+    log: Rc<RefCell<Vec<ReplanRecord>>>,
+}
+
+impl SolverReplanner {
+    /// The replanner of the optimum `sol` (a periodic solution that records its problem and
+    /// scene) with the controller's model `model` (for the references); every re-plan is
+    /// appended to `log`. Builds (transcribes) the re-plan problem once.
+    pub fn new(
+        sol: &OcpSolution,
+        model: Model<DynKernels>,
+        log: Rc<RefCell<Vec<ReplanRecord>>>,
+    ) -> Result<Self> {
+        let (problem, mut settings) =
+            settings_of(sol).context("re-planning needs the solution's problem and scene")?;
+        let target = lift_off_state(sol)?;
+        let nominal = rotate_to_lift_off(sol)?;
+        settings.mesh = sol
+            .refinement
+            .as_ref()
+            .map(|r| [2, 0, 1].iter().filter_map(|&p| r.mesh.get(p).cloned()).collect());
+        settings.max_iter = REPLAN_MAX_ITER;
+        settings.replan = Some(LiftOff {
+            measured: target.clone(),
+            target: target.clone(),
+        });
+        settings.warm_start = Some(nominal.clone());
+        let problem = crate::pipeline::build(problem, &settings)?;
+        let nominal_reference = reference_of(&nominal, &model)?;
+        Ok(SolverReplanner {
+            problem,
+            model,
+            target,
+            current: nominal.clone(),
+            nominal,
+            nominal_reference,
+            log,
+        })
+    }
+
+    /// The transient period from `x`, warm-started from the plan in force: the solution, or
+    /// an error (the problem's, the solver's, or the reference's).
+    fn solve_from(&mut self, x: &[f64]) -> Result<OcpSolution> {
+        set_measured(&mut self.problem, x)?;
+        warm_initial_point(&mut self.problem, &self.current)?;
+        self.problem.settings.warm_start = Some(self.current.clone());
+        Ok(solve(&self.problem, None)?)
+    }
+}
+
+impl Replanner for SolverReplanner {
+    fn replan(&mut self, t: f64, x: &[f64; 9]) -> Option<Reference> {
+        let start = Instant::now();
+        let deviation = x
+            .iter()
+            .zip(&self.target)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        let solved = self.solve_from(x);
+        let (plan, record) = match solved {
+            Ok(sol) if sol.status.is_success() => match reference_of(&sol, &self.model) {
+                Ok(r) => {
+                    let rec = (sol.iterations, format!("{:?}", sol.status), true, sol.objective);
+                    self.current = sol;
+                    (r, rec)
+                }
+                Err(e) => {
+                    self.current = self.nominal.clone();
+                    let why = format!("{:?} (no reference: {e})", sol.status);
+                    (self.nominal_reference.clone(), (sol.iterations, why, false, sol.objective))
+                }
+            },
+            Ok(sol) => {
+                self.current = self.nominal.clone();
+                let status = format!("{:?}", sol.status);
+                (self.nominal_reference.clone(), (sol.iterations, status, false, sol.objective))
+            }
+            Err(e) => {
+                self.current = self.nominal.clone();
+                (
+                    self.nominal_reference.clone(),
+                    (0, crate::errors::render(&e), false, f64::NAN),
+                )
+            }
+        };
+        let (iterations, status, used, objective) = record;
+        self.log.borrow_mut().push(ReplanRecord {
+            t,
+            seconds: start.elapsed().as_secs_f64(),
+            iterations,
+            status,
+            used,
+            objective,
+            deviation,
+        });
+        Some(plan)
+    }
+}
