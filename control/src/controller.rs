@@ -998,7 +998,6 @@ impl Plan {
         }
         (phase, start)
     }
-
 }
 
 fn to_sim(e: ControlError) -> SimError {

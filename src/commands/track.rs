@@ -4,9 +4,7 @@
 //! is marked FAILED and exits non-zero.
 
 use crate::cli::TrackArgs;
-use crate::paper::closed_loop::{
-    ControllerKind, Tracking, run_tracking_replanned, solution_model,
-};
+use crate::paper::closed_loop::{ControllerKind, Tracking, run_tracking_replanned, solution_model};
 use crate::paper::replan::ReplanRecord;
 use crate::pipeline::SolutionIo as _;
 use anyhow::{Context, Result, anyhow, bail};

@@ -82,10 +82,12 @@ impl SolverReplanner {
             settings_of(sol).context("re-planning needs the solution's problem and scene")?;
         let target = lift_off_state(sol)?;
         let nominal = rotate_to_lift_off(sol)?;
-        settings.mesh = sol
-            .refinement
-            .as_ref()
-            .map(|r| [2, 0, 1].iter().filter_map(|&p| r.mesh.get(p).cloned()).collect());
+        settings.mesh = sol.refinement.as_ref().map(|r| {
+            [2, 0, 1]
+                .iter()
+                .filter_map(|&p| r.mesh.get(p).cloned())
+                .collect()
+        });
         settings.max_iter = REPLAN_MAX_ITER;
         settings.replan = Some(LiftOff {
             measured: target.clone(),
@@ -127,20 +129,31 @@ impl Replanner for SolverReplanner {
         let (plan, record) = match solved {
             Ok(sol) if sol.status.is_success() => match reference_of(&sol, &self.model) {
                 Ok(r) => {
-                    let rec = (sol.iterations, format!("{:?}", sol.status), true, sol.objective);
+                    let rec = (
+                        sol.iterations,
+                        format!("{:?}", sol.status),
+                        true,
+                        sol.objective,
+                    );
                     self.current = sol;
                     (r, rec)
                 }
                 Err(e) => {
                     self.current = self.nominal.clone();
                     let why = format!("{:?} (no reference: {e})", sol.status);
-                    (self.nominal_reference.clone(), (sol.iterations, why, false, sol.objective))
+                    (
+                        self.nominal_reference.clone(),
+                        (sol.iterations, why, false, sol.objective),
+                    )
                 }
             },
             Ok(sol) => {
                 self.current = self.nominal.clone();
                 let status = format!("{:?}", sol.status);
-                (self.nominal_reference.clone(), (sol.iterations, status, false, sol.objective))
+                (
+                    self.nominal_reference.clone(),
+                    (sol.iterations, status, false, sol.objective),
+                )
             }
             Err(e) => {
                 self.current = self.nominal.clone();

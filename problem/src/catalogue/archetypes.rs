@@ -145,7 +145,12 @@ pub(crate) fn periodic_from_lift_off(
     )];
     points.extend(apex(c, 1)?);
     points.extend(contact_sequence(scene, c.physics, eps, TOL_H, settings, 1)?);
-    points.push(fixed_state(2, true, &r.target, "ends on the periodic lift-off state"));
+    points.push(fixed_state(
+        2,
+        true,
+        &r.target,
+        "ends on the periodic lift-off state",
+    ));
     points.push(continuity(c.nx(), 0, 1, "release -> approach continuity"));
     points.extend(p.period_row);
     Ok(Spec {

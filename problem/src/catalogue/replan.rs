@@ -45,7 +45,10 @@ impl LiftOff {
         ] {
             if x.len() != nx {
                 return Err(ProblemError::Replan {
-                    msg: format!("the {what} has {} values, expected {nx} (q, qd, omega)", x.len()),
+                    msg: format!(
+                        "the {what} has {} values, expected {nx} (q, qd, omega)",
+                        x.len()
+                    ),
                 });
             }
             if let Some((i, v)) = x.iter().enumerate().find(|(_, v)| !v.is_finite()) {

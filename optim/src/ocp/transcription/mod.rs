@@ -645,7 +645,11 @@ impl Transcription {
     /// re-solved from several values without transcribing the problem again. Errors when no
     /// block has that name, `bounds` has another length than the block, or a bound is NaN or
     /// its lower end above its upper.
-    pub fn set_block_bounds(&mut self, name: &str, bounds: &[(f64, f64)]) -> Result<(), OptimError> {
+    pub fn set_block_bounds(
+        &mut self,
+        name: &str,
+        bounds: &[(f64, f64)],
+    ) -> Result<(), OptimError> {
         let rows = self
             .row_blocks
             .iter()
