@@ -61,41 +61,69 @@ pub struct SolverReplanner {
     model: Model<DynKernels>,
     /// x*_lo.
     target: Vec<f64>,
-    /// The optimum rotated to start at its lift-off: the plan when a re-plan fails.
+    /// The optimum as a solution of the re-plan from its own lift-off state (the rotated
+    /// optimum if that solve failed): the warm start after a failed re-plan.
     nominal: OcpSolution,
+    /// The rotated optimum as a reference: the plan when a re-plan fails.
     nominal_reference: Reference,
     /// The plan in force, the warm start of the next re-plan.
     current: OcpSolution,
     log: Rc<RefCell<Vec<ReplanRecord>>>,
 }
 
+/// The re-plan problem of the periodic optimum `sol` (a solution that records its problem and
+/// scene), transcribed once from the optimum's own lift-off state x*_lo, with `sol` rotated to
+/// start there (its warm start) and x*_lo itself.
+pub fn replan_problem(sol: &OcpSolution) -> Result<(BuiltProblem, OcpSolution, Vec<f64>)> {
+    let (problem, mut settings) =
+        settings_of(sol).context("re-planning needs the solution's problem and scene")?;
+    let target = lift_off_state(sol)?;
+    let rotated = rotate_to_lift_off(sol)?;
+    // A refined optimum's mesh, phase by phase in the transient's order.
+    settings.mesh = sol.refinement.as_ref().map(|r| {
+        [2, 0, 1]
+            .iter()
+            .filter_map(|&p| r.mesh.get(p).cloned())
+            .collect()
+    });
+    settings.max_iter = REPLAN_MAX_ITER;
+    settings.replan = Some(LiftOff {
+        measured: target.clone(),
+        target: target.clone(),
+    });
+    settings.warm_start = Some(rotated.clone());
+    let problem = crate::pipeline::build(problem, &settings)?;
+    Ok((problem, rotated, target))
+}
+
+/// Solves the re-plan `p` ([`replan_problem`]) from the measured lift-off state `x`,
+/// warm-started from `warm`: exactly (primal-dual) when `warm` is a previous solution of `p`,
+/// from its primal point otherwise (the pipeline's [`solve`]).
+pub fn solve_replan(p: &mut BuiltProblem, warm: &OcpSolution, x: &[f64]) -> Result<OcpSolution> {
+    set_measured(p, x)?;
+    warm_initial_point(p, warm)?;
+    p.settings.warm_start = Some(warm.clone());
+    Ok(solve(p, None)?)
+}
+
 impl SolverReplanner {
-    /// The replanner of the optimum `sol` (a periodic solution that records its problem and
-    /// scene) with the controller's model `model` (for the references); every re-plan is
-    /// appended to `log`. Builds (transcribes) the re-plan problem once.
+    /// The replanner of the optimum `sol` ([`replan_problem`]) with the controller's model
+    /// `model` (for the references); every re-plan is appended to `log`. Transcribes the
+    /// re-plan problem once and solves it once from the optimum's own lift-off state (where it
+    /// is the optimum, rotated), so that every re-plan starts from a primal-dual point of its
+    /// own NLP; if that solve fails, the first re-plan starts from the rotated optimum's primal
+    /// point.
     pub fn new(
         sol: &OcpSolution,
         model: Model<DynKernels>,
         log: Rc<RefCell<Vec<ReplanRecord>>>,
     ) -> Result<Self> {
-        let (problem, mut settings) =
-            settings_of(sol).context("re-planning needs the solution's problem and scene")?;
-        let target = lift_off_state(sol)?;
-        let nominal = rotate_to_lift_off(sol)?;
-        settings.mesh = sol.refinement.as_ref().map(|r| {
-            [2, 0, 1]
-                .iter()
-                .filter_map(|&p| r.mesh.get(p).cloned())
-                .collect()
-        });
-        settings.max_iter = REPLAN_MAX_ITER;
-        settings.replan = Some(LiftOff {
-            measured: target.clone(),
-            target: target.clone(),
-        });
-        settings.warm_start = Some(nominal.clone());
-        let problem = crate::pipeline::build(problem, &settings)?;
+        let (mut problem, nominal, target) = replan_problem(sol)?;
         let nominal_reference = reference_of(&nominal, &model)?;
+        let nominal = match solve_replan(&mut problem, &nominal, &target) {
+            Ok(own) if own.status.is_success() => own,
+            _ => nominal,
+        };
         Ok(SolverReplanner {
             problem,
             model,
@@ -105,15 +133,6 @@ impl SolverReplanner {
             nominal_reference,
             log,
         })
-    }
-
-    /// The transient period from `x`, warm-started from the plan in force: the solution, or
-    /// an error (the problem's, the solver's, or the reference's).
-    fn solve_from(&mut self, x: &[f64]) -> Result<OcpSolution> {
-        set_measured(&mut self.problem, x)?;
-        warm_initial_point(&mut self.problem, &self.current)?;
-        self.problem.settings.warm_start = Some(self.current.clone());
-        Ok(solve(&self.problem, None)?)
     }
 }
 
@@ -125,7 +144,7 @@ impl Replanner for SolverReplanner {
             .zip(&self.target)
             .map(|(a, b)| (a - b).abs())
             .fold(0.0, f64::max);
-        let solved = self.solve_from(x);
+        let solved = solve_replan(&mut self.problem, &self.current, x);
         let (plan, record) = match solved {
             Ok(sol) if sol.status.is_success() => match reference_of(&sol, &self.model) {
                 Ok(r) => {
