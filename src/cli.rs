@@ -365,6 +365,10 @@ pub struct TrackArgs {
     /// (docs/decisions/0030-replanning-at-lift-off.md).
     #[arg(long)]
     pub replan: bool,
+    /// Interior-point iterations allowed per re-plan (with --replan) [default: 200]; a re-plan
+    /// that needs more is not used (the optimum is tracked instead).
+    #[arg(long, value_parser = whole)]
+    pub replan_iterations: Option<usize>,
 }
 
 /// Arguments of `optimize` (exit status: see [`Command::Optimize`]).

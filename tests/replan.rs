@@ -17,7 +17,7 @@
 mod cli;
 
 use ball_finger::paper::closed_loop::{ControllerKind, run_tracking_replanned, solution_model};
-use ball_finger::paper::replan::{replan_problem, solve_replan};
+use ball_finger::paper::replan::{REPLAN_MAX_ITER, replan_problem, solve_replan};
 use ball_finger::pipeline::{OcpSolution, SolutionIo};
 use bf_model::ImpactLaw;
 use bf_problem::catalogue::replan::{LiftOff, set_measured};
@@ -59,7 +59,7 @@ fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 #[test]
 fn replan_from_the_optimum_lift_off_state_is_the_optimum_rotated() {
     let sol = qc();
-    let (mut p, rotated, x_lo) = replan_problem(sol).unwrap();
+    let (mut p, rotated, x_lo) = replan_problem(sol, REPLAN_MAX_ITER).unwrap();
     // x*_lo is where the optimum's stick phase ends (continuity), independently of the helper.
     let stick_end = sol.raw[1].x.last().unwrap();
     let gap = x_lo
@@ -105,7 +105,7 @@ fn replan_from_the_optimum_lift_off_state_is_the_optimum_rotated() {
 #[test]
 fn replan_from_a_perturbed_state_starts_there_and_ends_on_the_orbit() {
     let sol = qc();
-    let (mut p, rotated, x_lo) = replan_problem(sol).unwrap();
+    let (mut p, rotated, x_lo) = replan_problem(sol, REPLAN_MAX_ITER).unwrap();
     // A plant that lifts off 2 % faster at the joints and with 3 % less ball spin.
     let mut x_m = x_lo.clone();
     for v in &mut x_m[3..6] {
@@ -153,7 +153,7 @@ fn replan_from_a_perturbed_state_starts_there_and_ends_on_the_orbit() {
 #[test]
 fn replan_refuses_bad_states_and_non_periodic_problems() {
     let sol = qc();
-    let (mut p, _, x_lo) = replan_problem(sol).unwrap();
+    let (mut p, _, x_lo) = replan_problem(sol, REPLAN_MAX_ITER).unwrap();
     let mut nan = x_lo.clone();
     nan[4] = f64::NAN;
     let e = set_measured(&mut p, &nan).unwrap_err().to_string();
@@ -184,7 +184,7 @@ fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
             3,
             plant,
             ImpactLaw::Newton,
-            true,
+            Some(REPLAN_MAX_ITER),
         )
         .unwrap()
     };
@@ -195,22 +195,110 @@ fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
         assert!(p.contact && p.omega_error <= 0.02, "period {k}: {p:?}");
         assert!(p.max_abs_tau <= 1.0 + 1e-12, "period {k}: {p:?}");
     }
-    assert!(a.replans.len() >= 3, "{:?}", a.replans);
-    assert!(a.replans.iter().any(|r| r.used), "{:?}", a.replans);
+    // The set-up solve from the optimum's own lift-off state converges (it is the optimum).
+    let setup = a.replans.setup.as_ref().unwrap();
+    assert!(setup.used, "{setup:?}");
+    let replans = &a.replans.replans;
+    assert!(replans.len() >= 3, "{replans:?}");
+    assert!(replans.iter().any(|r| r.used), "{replans:?}");
     // The measured lift-off states are off the optimum's (Newton's impact law slips), so the
     // plans are new ones.
-    assert!(
-        a.replans.iter().all(|r| r.deviation > 1e-4),
-        "{:?}",
-        a.replans
-    );
+    assert!(replans.iter().all(|r| r.deviation > 1e-4), "{replans:?}");
     // Nothing depends on the wall clock: the same figures bit for bit.
     assert_eq!(a.periods, b.periods);
     let plans = |t: &ball_finger::paper::closed_loop::Tracking| -> Vec<(u64, usize, bool)> {
         t.replans
+            .replans
             .iter()
             .map(|r| (r.t.to_bits(), r.iterations, r.used))
             .collect()
     };
     assert_eq!(plans(&a), plans(&b));
+}
+
+/// The default optimum of `problem` (`optimize --problem NAME`, the default search).
+fn default_optimum(problem: &str) -> OcpSolution {
+    let dir = cli::tmpdir(&format!("replan-default-{problem}"));
+    let r = cli::run(&[
+        "optimize",
+        "--problem",
+        problem,
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    sol
+}
+
+/// The issue's targets with re-planning at every lift-off, bounded controller (1 N m), on the
+/// nominal plant (every period ≤ 2 %) and the perturbed plants of the robustness table
+/// (≤ 5 % from the 4th period, contact in every period), over `PERIODS` periods: asserted for
+/// the default `periodic-qc` optimum; printed, not asserted, for the default
+/// `periodic-cot-human` optimum, whose re-plans do not converge from the states its Newton
+/// impacts leave (docs/decisions/0030-replanning-at-lift-off.md, BENCHMARKS.md "Closed loop:
+/// re-planning at lift-off"). Slow (two default searches, 14 runs with a re-plan per period).
+#[test]
+#[ignore = "two default searches and 14 runs with re-plans, about 10 min; run with `cargo test \
+            --release --test replan targets_with_replanning -- --ignored --nocapture`"]
+fn targets_with_replanning_on_every_plant() {
+    use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs_replanned};
+    const PERIODS: usize = 10;
+    let mut failures = Vec::new();
+    for (problem, asserted) in [("periodic-qc", true), ("periodic-cot-human", false)] {
+        let sol = default_optimum(problem);
+        let nominal = run_tracking_replanned(
+            &sol,
+            ControllerKind::Hybrid,
+            PERIODS,
+            solution_model(&sol).unwrap().0,
+            ImpactLaw::Newton,
+            Some(REPLAN_MAX_ITER),
+        )
+        .map(|t| ("nominal".to_string(), Ok(t)));
+        let runs = std::iter::once(nominal.unwrap()).chain(robustness_runs_replanned(
+            &sol,
+            ControllerKind::Hybrid,
+            PERIODS,
+            Some(REPLAN_MAX_ITER),
+        ));
+        for (case, run) in runs {
+            let t = run.unwrap();
+            let errors: Vec<String> = t
+                .periods
+                .iter()
+                .map(|p| format!("{:.2}", 100.0 * p.omega_error))
+                .collect();
+            let mut secs: Vec<f64> = t.replans.replans.iter().map(|r| r.seconds).collect();
+            secs.sort_by(f64::total_cmp);
+            let used = t.replans.replans.iter().filter(|r| r.used).count();
+            let tau = t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max);
+            eprintln!(
+                "{problem} {case}: {} periods, errors (%) [{}], max from the 4th {:?}, max |τ| \
+                 {tau:.3}, re-plans {} ({used} used), wall median {:.3} s max {:.3} s, \
+                 setup {:?}, lost {:?}",
+                t.periods.len(),
+                errors.join(" "),
+                max_error_from_fourth(&t).map(|e| 100.0 * e),
+                secs.len(),
+                secs.get(secs.len() / 2).copied().unwrap_or(f64::NAN),
+                secs.last().copied().unwrap_or(f64::NAN),
+                t.replans.setup.as_ref().map(|s| (s.iterations, s.seconds)),
+                t.lost
+            );
+            let met = t.lost.is_none()
+                && t.periods.len() == PERIODS
+                && t.periods.iter().all(|p| p.contact)
+                && if case == "nominal" {
+                    t.periods.iter().all(|p| p.omega_error <= 0.02)
+                } else {
+                    max_error_from_fourth(&t).is_some_and(|e| e <= 0.05)
+                };
+            if asserted && !met {
+                failures.push(format!("{problem} {case}"));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
 }

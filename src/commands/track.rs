@@ -5,7 +5,7 @@
 
 use crate::cli::TrackArgs;
 use crate::paper::closed_loop::{ControllerKind, Tracking, run_tracking_replanned, solution_model};
-use crate::paper::replan::ReplanRecord;
+use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::PeriodMetrics;
@@ -44,6 +44,9 @@ pub struct TrackingJson<'a> {
     pub periods: &'a [PeriodMetrics],
     /// Whether the controller re-planned at every lift-off (`--replan`).
     pub replan: bool,
+    /// The set-up solve of the re-planning (from the optimum's own lift-off state; null
+    /// without `--replan`).
+    pub replan_setup: Option<&'a ReplanRecord>,
     /// The re-plans, one per lift-off (empty without `--replan`): plant time, wall time (s),
     /// iterations, status, whether the plan was used.
     pub replans: &'a [ReplanRecord],
@@ -65,7 +68,7 @@ impl<'a> TrackingJson<'a> {
         period: f64,
         replan: bool,
     ) -> Self {
-        let mut secs: Vec<f64> = r.replans.iter().map(|p| p.seconds).collect();
+        let mut secs: Vec<f64> = r.replans.replans.iter().map(|p| p.seconds).collect();
         secs.sort_by(f64::total_cmp);
         TrackingJson {
             controller: r.controller.name(),
@@ -79,7 +82,8 @@ impl<'a> TrackingJson<'a> {
             max_omega_error: r.periods.iter().map(|p| p.omega_error).fold(0.0, f64::max),
             periods: &r.periods,
             replan,
-            replans: &r.replans,
+            replan_setup: r.replans.setup.as_ref(),
+            replans: &r.replans.replans,
             replan_budget_seconds: period / 10.0,
             replan_seconds_median: (!secs.is_empty()).then(|| secs[secs.len() / 2]),
             replan_seconds_max: secs.last().copied(),
@@ -103,8 +107,22 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         None => solution_model(&sol).with_context(|| args.solution.display().to_string())?,
     };
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
-    let run = run_tracking_replanned(&sol, controller, args.periods, plant, law, args.replan)
-        .with_context(|| format!("tracking {}", args.solution.display()))?;
+    let max_iter = args.replan_iterations.unwrap_or(REPLAN_MAX_ITER);
+    if max_iter == 0 {
+        bail!("--replan-iterations must be at least 1");
+    }
+    if args.replan_iterations.is_some() && !args.replan {
+        bail!("--replan-iterations needs --replan");
+    }
+    let run = run_tracking_replanned(
+        &sol,
+        controller,
+        args.periods,
+        plant,
+        law,
+        args.replan.then_some(max_iter),
+    )
+    .with_context(|| format!("tracking {}", args.solution.display()))?;
     out_dir.file("summary.json")?;
     run.report
         .write_dir(out_dir.path(), &run.output, run.stopped.as_deref())
@@ -148,10 +166,10 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         )?;
     }
     if let (Some(median), Some(max)) = (record.replan_seconds_median, record.replan_seconds_max) {
-        let used = run.replans.iter().filter(|p| p.used).count();
+        let used = run.replans.replans.iter().filter(|p| p.used).count();
         crate::outln!(
             "re-plans: {} ({used} converged and used), wall time median {median:.3} s, max {max:.3} s (budget a tenth of the period: {:.3} s)",
-            run.replans.len(),
+            run.replans.replans.len(),
             record.replan_budget_seconds
         )?;
     }

@@ -54,6 +54,16 @@ pub struct ReplanRecord {
     pub deviation: f64,
 }
 
+/// The re-plans of a run: the one solve made when the replanner is set up (from the
+/// optimum's own lift-off state, [`SolverReplanner::new`]) and one per lift-off.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ReplanLog {
+    /// The set-up solve (`t` = 0, deviation 0), if the replanner was made.
+    pub setup: Option<ReplanRecord>,
+    /// One per lift-off, in time order.
+    pub replans: Vec<ReplanRecord>,
+}
+
 /// The solve pipeline as bf-control's [`Replanner`] (module doc).
 #[derive(Debug)]
 pub struct SolverReplanner {
@@ -68,13 +78,17 @@ pub struct SolverReplanner {
     nominal_reference: Reference,
     /// The plan in force, the warm start of the next re-plan.
     current: OcpSolution,
-    log: Rc<RefCell<Vec<ReplanRecord>>>,
+    log: Rc<RefCell<ReplanLog>>,
 }
 
 /// The re-plan problem of the periodic optimum `sol` (a solution that records its problem and
-/// scene), transcribed once from the optimum's own lift-off state x*_lo, with `sol` rotated to
-/// start there (its warm start) and x*_lo itself.
-pub fn replan_problem(sol: &OcpSolution) -> Result<(BuiltProblem, OcpSolution, Vec<f64>)> {
+/// scene), transcribed once from the optimum's own lift-off state x*_lo with the iteration
+/// limit `max_iter` ([`REPLAN_MAX_ITER`] by default), with `sol` rotated to start there (its
+/// warm start) and x*_lo itself.
+pub fn replan_problem(
+    sol: &OcpSolution,
+    max_iter: usize,
+) -> Result<(BuiltProblem, OcpSolution, Vec<f64>)> {
     let (problem, mut settings) =
         settings_of(sol).context("re-planning needs the solution's problem and scene")?;
     let target = lift_off_state(sol)?;
@@ -86,7 +100,7 @@ pub fn replan_problem(sol: &OcpSolution) -> Result<(BuiltProblem, OcpSolution, V
             .filter_map(|&p| r.mesh.get(p).cloned())
             .collect()
     });
-    settings.max_iter = REPLAN_MAX_ITER;
+    settings.max_iter = max_iter;
     settings.replan = Some(LiftOff {
         measured: target.clone(),
         target: target.clone(),
@@ -107,8 +121,9 @@ pub fn solve_replan(p: &mut BuiltProblem, warm: &OcpSolution, x: &[f64]) -> Resu
 }
 
 impl SolverReplanner {
-    /// The replanner of the optimum `sol` ([`replan_problem`]) with the controller's model
-    /// `model` (for the references); every re-plan is appended to `log`. Transcribes the
+    /// The replanner of the optimum `sol` ([`replan_problem`], `max_iter` iterations per
+    /// re-plan) with the controller's model `model` (for the references); the set-up solve and
+    /// every re-plan are recorded in `log`. Transcribes the
     /// re-plan problem once and solves it once from the optimum's own lift-off state (where it
     /// is the optimum, rotated), so that every re-plan starts from a primal-dual point of its
     /// own NLP; if that solve fails, the first re-plan starts from the rotated optimum's primal
@@ -116,14 +131,31 @@ impl SolverReplanner {
     pub fn new(
         sol: &OcpSolution,
         model: Model<DynKernels>,
-        log: Rc<RefCell<Vec<ReplanRecord>>>,
+        max_iter: usize,
+        log: Rc<RefCell<ReplanLog>>,
     ) -> Result<Self> {
-        let (mut problem, nominal, target) = replan_problem(sol)?;
+        let start = Instant::now();
+        let (mut problem, nominal, target) = replan_problem(sol, max_iter)?;
         let nominal_reference = reference_of(&nominal, &model)?;
-        let nominal = match solve_replan(&mut problem, &nominal, &target) {
-            Ok(own) if own.status.is_success() => own,
+        let own = solve_replan(&mut problem, &nominal, &target);
+        let (iterations, status, objective) = match &own {
+            Ok(s) => (s.iterations, format!("{:?}", s.status), s.objective),
+            Err(e) => (0, crate::errors::render(e), f64::NAN),
+        };
+        let used = own.as_ref().is_ok_and(|s| s.status.is_success());
+        let nominal = match own {
+            Ok(own) if used => own,
             _ => nominal,
         };
+        log.borrow_mut().setup = Some(ReplanRecord {
+            t: 0.0,
+            seconds: start.elapsed().as_secs_f64(),
+            iterations,
+            status,
+            used,
+            objective,
+            deviation: 0.0,
+        });
         Ok(SolverReplanner {
             problem,
             model,
@@ -183,7 +215,7 @@ impl Replanner for SolverReplanner {
             }
         };
         let (iterations, status, used, objective) = record;
-        self.log.borrow_mut().push(ReplanRecord {
+        self.log.borrow_mut().replans.push(ReplanRecord {
             t,
             seconds: start.elapsed().as_secs_f64(),
             iterations,
