@@ -19,7 +19,7 @@
 //!   budget of a tenth of the period.
 
 use super::closed_loop::reference_of;
-use crate::pipeline::solve::{settings_of, solve};
+use crate::pipeline::solve::{INTERPOLATED_MU_INIT_MAX, settings_of, solve, solve_recentred};
 use anyhow::{Context, Result};
 use bf_control::{Reference, Replanner};
 use bf_model::{DynKernels, Model};
@@ -111,13 +111,35 @@ pub fn replan_problem(
 }
 
 /// Solves the re-plan `p` ([`replan_problem`]) from the measured lift-off state `x`,
-/// warm-started from `warm`: exactly (primal-dual) when `warm` is a previous solution of `p`,
-/// from its primal point otherwise (the pipeline's [`solve`]).
+/// warm-started from `warm`. When `warm` is a previous solution of `p` (its primal-dual point
+/// fits `p`'s NLP), exactly from that point, re-centred at the barrier parameter
+/// μ₀ = clamp(v, tol / 10, 10⁻⁴) with v its largest constraint violation in `p` (the measured
+/// state moved): the pipeline's warm start takes μ₀ = 10⁻⁴ whatever the start's distance,
+/// which cost the human finger's COT re-plan from its own optimum 47 iterations where the
+/// start is optimal. Otherwise from `warm`'s primal point (the pipeline's [`solve`], which
+/// takes μ₀ from the violation in the same way).
 pub fn solve_replan(p: &mut BuiltProblem, warm: &OcpSolution, x: &[f64]) -> Result<OcpSolution> {
     set_measured(p, x)?;
     warm_initial_point(p, warm)?;
     p.settings.warm_start = Some(warm.clone());
-    Ok(solve(p, None)?)
+    let n = bf_optim::ipm::Nlp::num_variables(&p.nlp);
+    let m = bf_optim::ipm::Nlp::num_constraints(&p.nlp);
+    let exact = warm.nlp_warm.as_ref().filter(|w| {
+        warm.nlp_size == (n, m) && w.x.len() == n && w.lambda.len() == m && w.z_l.len() == n
+    });
+    match exact {
+        Some(w) => {
+            let tol = crate::pipeline::solver_settings(&p.settings).termination.tol;
+            let (violation, _) = p.nlp.max_violation(&w.x);
+            let mu = if violation.is_finite() {
+                violation.clamp(0.1 * tol, INTERPOLATED_MU_INIT_MAX)
+            } else {
+                INTERPOLATED_MU_INIT_MAX
+            };
+            Ok(solve_recentred(p, w, mu)?)
+        }
+        None => Ok(solve(p, None)?),
+    }
 }
 
 impl SolverReplanner {

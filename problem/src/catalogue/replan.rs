@@ -84,10 +84,13 @@ fn check_periodic(sol: &OcpSolution) -> Result<(), ProblemError> {
 pub fn lift_off_state(sol: &OcpSolution) -> Result<Vec<f64>, ProblemError> {
     check_periodic(sol)?;
     let release = &sol.raw[2];
-    match (release.state_tau.first(), release.x.first()) {
-        (Some(&tau), Some(x)) if tau == -1.0 => Ok(x.clone()),
-        _ => Ok(release.x_at(-1.0)),
+    // Radau's first state point is the phase's start (τ = −1); any other mesh interpolates.
+    if release.state_tau.first() == Some(&-1.0)
+        && let Some(x) = release.x.first()
+    {
+        return Ok(x.clone());
     }
+    Ok(release.x_at(-1.0))
 }
 
 /// The periodic solution with its phases in the transient's order (release, approach,
