@@ -227,6 +227,7 @@ pub fn run_tracking_replanned(
                 let replanner = super::replan::SolverReplanner::new(
                     sol,
                     solution_model(sol)?.0,
+                    reference_of,
                     max_iter,
                     std::rc::Rc::clone(&log),
                 )?;

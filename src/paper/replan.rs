@@ -18,7 +18,6 @@
 //!   machine; the wall time of every re-plan is recorded ([`ReplanRecord`]) against the
 //!   budget of a tenth of the period.
 
-use super::closed_loop::reference_of;
 use crate::pipeline::solve::{INTERPOLATED_MU_INIT_MAX, settings_of, solve, solve_recentred};
 use anyhow::{Context, Result};
 use bf_control::{Reference, Replanner};
@@ -64,11 +63,16 @@ pub struct ReplanLog {
     pub replans: Vec<ReplanRecord>,
 }
 
+/// How a solution becomes the controller's reference on its model (the closed loop's
+/// `reference_of`, handed in so that this module does not import the one that uses it).
+pub type ReferenceOf = fn(&OcpSolution, &Model<DynKernels>) -> Result<Reference>;
+
 /// The solve pipeline as bf-control's [`Replanner`] (module doc).
 #[derive(Debug)]
 pub struct SolverReplanner {
     problem: BuiltProblem,
     model: Model<DynKernels>,
+    reference_of: ReferenceOf,
     /// x*_lo.
     target: Vec<f64>,
     /// The optimum as a solution of the re-plan from its own lift-off state (the rotated
@@ -129,7 +133,9 @@ pub fn solve_replan(p: &mut BuiltProblem, warm: &OcpSolution, x: &[f64]) -> Resu
     });
     match exact {
         Some(w) => {
-            let tol = crate::pipeline::solver_settings(&p.settings).termination.tol;
+            let tol = crate::pipeline::solver_settings(&p.settings)
+                .termination
+                .tol;
             let (violation, _) = p.nlp.max_violation(&w.x);
             let mu = if violation.is_finite() {
                 violation.clamp(0.1 * tol, INTERPOLATED_MU_INIT_MAX)
@@ -144,8 +150,8 @@ pub fn solve_replan(p: &mut BuiltProblem, warm: &OcpSolution, x: &[f64]) -> Resu
 
 impl SolverReplanner {
     /// The replanner of the optimum `sol` ([`replan_problem`], `max_iter` iterations per
-    /// re-plan) with the controller's model `model` (for the references); the set-up solve and
-    /// every re-plan are recorded in `log`. Transcribes the
+    /// re-plan) with the controller's model `model`, whose references `reference_of` makes;
+    /// the set-up solve and every re-plan are recorded in `log`. Transcribes the
     /// re-plan problem once and solves it once from the optimum's own lift-off state (where it
     /// is the optimum, rotated), so that every re-plan starts from a primal-dual point of its
     /// own NLP; if that solve fails, the first re-plan starts from the rotated optimum's primal
@@ -153,6 +159,7 @@ impl SolverReplanner {
     pub fn new(
         sol: &OcpSolution,
         model: Model<DynKernels>,
+        reference_of: ReferenceOf,
         max_iter: usize,
         log: Rc<RefCell<ReplanLog>>,
     ) -> Result<Self> {
@@ -181,6 +188,7 @@ impl SolverReplanner {
         Ok(SolverReplanner {
             problem,
             model,
+            reference_of,
             target,
             current: nominal.clone(),
             nominal,
@@ -200,7 +208,7 @@ impl Replanner for SolverReplanner {
             .fold(0.0, f64::max);
         let solved = solve_replan(&mut self.problem, &self.current, x);
         let (plan, record) = match solved {
-            Ok(sol) if sol.status.is_success() => match reference_of(&sol, &self.model) {
+            Ok(sol) if sol.status.is_success() => match (self.reference_of)(&sol, &self.model) {
                 Ok(r) => {
                     let rec = (
                         sol.iterations,
