@@ -240,7 +240,7 @@ fn default_optimum(problem: &str) -> OcpSolution {
 /// impacts leave (docs/decisions/0030-replanning-at-lift-off.md, BENCHMARKS.md "Closed loop:
 /// re-planning at lift-off"). Slow (two default searches, 14 runs with a re-plan per period).
 #[test]
-#[ignore = "two default searches and 14 runs with re-plans, about 10 min; run with `cargo test \
+#[ignore = "two default searches and 14 runs with re-plans, about 17 min under load; run with `cargo test \
             --release --test replan targets_with_replanning -- --ignored --nocapture`"]
 fn targets_with_replanning_on_every_plant() {
     use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs_replanned};
