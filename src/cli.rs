@@ -359,6 +359,16 @@ pub struct TrackArgs {
     /// Output directory (the files of `simulate` and tracking.json); replaced as a whole.
     #[arg(long, default_value = "out/track")]
     pub out: PathBuf,
+    /// Re-plan at every lift-off (hybrid controllers): solve the transient period from the
+    /// measured state back to the optimum's lift-off state, warm-started from the plan in
+    /// force; tracking.json records each re-plan's wall time
+    /// (docs/decisions/0030-replanning-at-lift-off.md).
+    #[arg(long)]
+    pub replan: bool,
+    /// Interior-point iterations allowed per re-plan (with --replan) [default: 200]; a re-plan
+    /// that needs more is not used (the optimum is tracked instead).
+    #[arg(long, value_parser = whole)]
+    pub replan_iterations: Option<usize>,
 }
 
 /// Arguments of `optimize` (exit status: see [`Command::Optimize`]).

@@ -85,7 +85,15 @@
 //! the margin) by the ratio to the model's μ_k, so a plant with less friction than the model
 //! is found out at its first slip.
 //!
-//! The discrete state (phase, its start, the force integral, δ, the ω integral, μ_k) is recorded
+//! **Re-planning** ([`HybridController::with_replanner`], optional): at every lift-off the
+//! [`Replanner`] gets the measured state and returns a new plan, which the controller tracks
+//! from its first phase (a free phase starting at that state) on; the optimum's plans and
+//! the outer loop's target ω̄* stay. The plan is made in zero simulated time (the plant waits
+//! for it), so a run does not depend on the wall clock; what a re-plan costs in computing time
+//! is the replanner's to measure against its budget. With plans that begin at the lift-off the
+//! outer loop's periods run from lift-off to lift-off (the first one from the start).
+//!
+//! The discrete state (plan, phase, its start, the force integral, δ, the ω integral, μ_k) is recorded
 //! with its time at every observation, so τ at an earlier time (the per-sample report written
 //! after the run) is recomputed with the state that held then. The controller is for fingers
 //! with 3 joints (the paper's and the human finger).
@@ -96,6 +104,7 @@ use crate::reference::Reference;
 use bf_model::{Kernels, Mat3, Mode, Model, State, Vec3};
 use bf_sim::{Input, Measurement, SimError};
 use std::cell::RefCell;
+use std::rc::Rc;
 
 /// Gains of the contact law (module doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -309,6 +318,17 @@ struct Discrete {
     slips: usize,
     /// μ_k measured in the last slip (|λ_∥| / λ_n); the model's μ_k before any slip.
     mu_k: f64,
+    /// The plan in force (index into [`HybridController::plans`]).
+    plan: usize,
+}
+
+/// Makes a new plan at a lift-off of the plant (module doc, re-planning).
+pub trait Replanner: std::fmt::Debug {
+    /// The plan to track from the lift-off at plant time `t` in the measured state `x`
+    /// (q, q̇, ω) on, starting with a free phase at `x`; `None` keeps the current plan.
+    /// Called once per lift-off, in time order; it must not depend on the wall clock (the
+    /// plant waits for it in simulated time).
+    fn replan(&mut self, t: f64, x: &[f64; 9]) -> Option<Reference>;
 }
 
 /// A phase switch of the controller: plant time, reference phase entered, and the mode
@@ -330,12 +350,14 @@ pub struct PhaseSwitch {
 pub struct HybridController<K: Kernels<3>> {
     model: Model<K, 3>,
     id: InverseDynamics,
-    reference: Reference,
     gains: HybridGains,
-    /// max λ_n* of each phase (N): the scale of the lift-off command.
-    lambda_scale: Vec<f64>,
-    /// The re-timed approach of each phase, if it has one.
-    approach: Vec<Option<Approach>>,
+    /// The optimum's mean ω̄* (rad/s), the outer loop's target.
+    mean_omega: [f64; 3],
+    /// The plans tracked, in the order they were made: the optimum first, then one per
+    /// re-plan ([`Replanner`]); [`Discrete::plan`] says which is in force.
+    plans: RefCell<Vec<Rc<Plan>>>,
+    /// Makes a new plan at each lift-off, if set.
+    replanner: Option<RefCell<Box<dyn Replanner>>>,
     /// The plan's ρ of the outer loop (module doc), until a period measures its own.
     sensitivity: f64,
     /// Largest ‖δ‖ (rad/s).
@@ -373,16 +395,6 @@ impl<K: Kernels<3>> HybridController<K> {
                 found: x0.iter().filter(|v| v.is_finite()).count(),
             });
         }
-        let lambda_scale = reference
-            .phases
-            .iter()
-            .map(|p| {
-                p.lambda
-                    .iter()
-                    .map(|l| Vec3::from(*l).norm())
-                    .fold(0.0, f64::max)
-            })
-            .collect();
         // ω*_lo: the largest planned ω at the end of a contact phase; without one, the mean.
         let mean = Vec3::from(reference.mean_omega).norm();
         let lift_off = reference
@@ -397,9 +409,6 @@ impl<K: Kernels<3>> HybridController<K> {
         } else {
             1.0
         };
-        let approach = (0..reference.phases.len())
-            .map(|p| Approach::of(&reference, p, gains.approach))
-            .collect();
         let mode = if reference.phases[0].contact {
             Mode::Stick
         } else {
@@ -420,14 +429,17 @@ impl<K: Kernels<3>> HybridController<K> {
             periods: 0,
             slips: 0,
             mu_k: model.params().mu_k(),
+            plan: 0,
         };
+        let mean_omega = reference.mean_omega;
+        let plan = Plan::new(reference, gains.approach, t0);
         Ok(HybridController {
             model,
             id,
-            reference,
             gains,
-            lambda_scale,
-            approach,
+            mean_omega,
+            plans: RefCell::new(vec![Rc::new(plan)]),
+            replanner: None,
             sensitivity,
             offset_limit: OFFSET_LIMIT * lift_off,
             tau_max: [f64::INFINITY; 3],
@@ -465,9 +477,30 @@ impl<K: Kernels<3>> HybridController<K> {
             && tau.iter().zip(&self.tau_max).any(|(v, b)| v.abs() > *b)
     }
 
-    /// The reference tracked.
-    pub fn reference(&self) -> &Reference {
-        &self.reference
+    /// The controller that re-plans at every lift-off of the plant with `replanner` (the
+    /// module doc's re-planning).
+    pub fn with_replanner(mut self, replanner: Box<dyn Replanner>) -> Self {
+        self.replanner = Some(RefCell::new(replanner));
+        self
+    }
+
+    /// The reference the controller was made with (the optimum).
+    pub fn reference(&self) -> Reference {
+        self.plans.borrow()[0].reference.clone()
+    }
+
+    /// The plans made at lift-offs so far (plant time from which each was tracked, and the
+    /// plan), in time order; the optimum itself is not among them.
+    pub fn replans(&self) -> Vec<(f64, Reference)> {
+        self.plans.borrow()[1..]
+            .iter()
+            .map(|p| (p.t, p.reference.clone()))
+            .collect()
+    }
+
+    fn plan(&self, k: usize) -> Rc<Plan> {
+        let plans = self.plans.borrow();
+        Rc::clone(&plans[k.min(plans.len() - 1)])
     }
 
     /// The phase switches so far, in time order.
@@ -517,12 +550,14 @@ impl<K: Kernels<3>> HybridController<K> {
         x: &State<3>,
         out: &mut [f64; 3],
     ) -> Result<(), ControlError> {
-        let (phase, start) = self.timed_phase(d.phase, d.start, t);
-        let ph = &self.reference.phases[phase];
+        let plan = self.plan(d.plan);
+        let plan = &*plan;
+        let (phase, start) = plan.timed_phase(d.phase, d.start, t);
+        let ph = &plan.reference.phases[phase];
         let s = t - start;
         if mode == Mode::Free || !ph.contact {
             let (sigma, rate) = if mode == Mode::Free {
-                self.retime(phase, s, x)?
+                self.retime(plan, phase, s, x)?
             } else {
                 (s, 1.0)
             };
@@ -539,7 +574,7 @@ impl<K: Kernels<3>> HybridController<K> {
             );
             self.id.torque(x.q.as_slice(), x.qd.as_slice(), &qdd, out)?;
             if mode == Mode::Free {
-                self.keep_clearance(phase, sigma, x, &qdd, out)?;
+                self.keep_clearance(plan, phase, sigma, x, &qdd, out)?;
             }
             if !self.within_bounds(out) {
                 // The feed-forward ID(q, q̇, q̈*) plus as much feedback as the bounds allow.
@@ -558,7 +593,7 @@ impl<K: Kernels<3>> HybridController<K> {
         let n = c.n;
         let planned_end = s > ph.duration;
         let mut lambda_n = if planned_end {
-            -g.lift_off_share * self.lambda_scale[phase]
+            -g.lift_off_share * plan.lambda_scale[phase]
         } else {
             Vec3::from(r.lambda).dot(&n) + g.force_integral * d.force_int
         };
@@ -604,7 +639,7 @@ impl<K: Kernels<3>> HybridController<K> {
             // Press harder when the tangential force ω needs exceeds the friction cone with
             // its margin, up to `force_boost` times the phase's largest planned force.
             let needed = lambda_t.norm() / grip;
-            lambda_n = lambda_n.max(needed.min(g.force_boost * self.lambda_scale[phase]));
+            lambda_n = lambda_n.max(needed.min(g.force_boost * plan.lambda_scale[phase]));
         }
         let cap = grip * lambda_n.max(0.0);
         let lt = lambda_t.norm();
@@ -670,11 +705,17 @@ impl<K: Kernels<3>> HybridController<K> {
     /// state `x` (module doc): (s, 1) outside the approach window; in it the σ at which the
     /// plan's gap h*(σ) is the measured h (above the window's top, on the tangent of h* at
     /// σ_a, for a late plant), and σ̇ = ḣ / ḣ*(σ) in [0, [`MAX_RETIME_RATE`]].
-    fn retime(&self, phase: usize, s: f64, x: &State<3>) -> Result<(f64, f64), ControlError> {
-        let Some(a) = self.approach[phase] else {
+    fn retime(
+        &self,
+        plan: &Plan,
+        phase: usize,
+        s: f64,
+        x: &State<3>,
+    ) -> Result<(f64, f64), ControlError> {
+        let Some(a) = plan.approach[phase] else {
             return Ok((s, 1.0));
         };
-        let ph = &self.reference.phases[phase];
+        let ph = &plan.reference.phases[phase];
         let window = ph.s[ph.s.len() - 1] - a.start;
         // An early plant is re-timed from one window's length before the window on.
         if s < a.start - window {
@@ -717,6 +758,7 @@ impl<K: Kernels<3>> HybridController<K> {
     /// to the floor.
     fn keep_clearance(
         &self,
+        plan: &Plan,
         phase: usize,
         s: f64,
         x: &State<3>,
@@ -725,10 +767,10 @@ impl<K: Kernels<3>> HybridController<K> {
     ) -> Result<(), ControlError> {
         let cl = &self.gains.clearance;
         // A plant off the ball in a contact phase of the reference is to make contact again.
-        if cl.gap <= 0.0 || self.reference.phases[phase].contact {
+        if cl.gap <= 0.0 || plan.reference.phases[phase].contact {
             return Ok(());
         }
-        let (since, until) = self.contact_margins(phase, s);
+        let (since, until) = plan.contact_margins(phase, s);
         let floor = if cl.ramp > 0.0 {
             cl.gap * (since.min(until) / cl.ramp).clamp(0.0, 1.0)
         } else if since > 0.0 && until > 0.0 {
@@ -768,6 +810,138 @@ impl<K: Kernels<3>> HybridController<K> {
             }
         }
         Ok(())
+    }
+
+    /// [`Plan::timed_phase`] of `plan` applied to `d` at time `t`, ending the period when
+    /// the reference wraps to its first phase.
+    fn advance_timed(&self, plan: &Plan, d: &mut Discrete, t: f64) {
+        let (phase, start) = plan.timed_phase(d.phase, d.start, t);
+        if phase != d.phase {
+            if phase < d.phase {
+                self.end_period(d, start);
+            }
+            d.phase = phase;
+            d.start = start;
+        }
+    }
+
+    /// Moves `d` to the next reference phase whose contact flag is `contact`, starting at `t`;
+    /// wrapping past the last phase ends a period (outer loop).
+    fn advance(&self, plan: &Plan, d: &mut Discrete, t: f64, contact: bool) {
+        let np = plan.reference.phases.len();
+        let mut next = d.phase;
+        for _ in 0..np {
+            next = (next + 1) % np;
+            if next == 0 {
+                self.end_period(d, t);
+            }
+            if plan.reference.phases[next].contact == contact {
+                break;
+            }
+        }
+        d.phase = next;
+        d.start = t;
+        d.force_int = 0.0;
+    }
+
+    /// At a lift-off at time `t` in state `x`: the plan made then (already made if this
+    /// lift-off was observed before, e.g. again after a rejected step), or a new one from the
+    /// replanner, tracked from its first phase on; without a replanner or a new plan, `d` is
+    /// left as it is.
+    fn replan(&self, d: &mut Discrete, t: f64, x: &[f64]) {
+        let Some(replanner) = &self.replanner else {
+            return;
+        };
+        let Ok(x) = <[f64; 9]>::try_from(x) else {
+            return;
+        };
+        let made = {
+            let plans = self.plans.borrow();
+            (plans.len() > 1 && plans[plans.len() - 1].t == t).then(|| plans.len() - 1)
+        };
+        let k = match made {
+            Some(k) => k,
+            None => {
+                let Some(reference) = replanner.borrow_mut().replan(t, &x) else {
+                    return;
+                };
+                let mut plans = self.plans.borrow_mut();
+                plans.push(Rc::new(Plan::new(reference, self.gains.approach, t)));
+                plans.len() - 1
+            }
+        };
+        d.plan = k;
+        d.phase = 0;
+        d.start = t;
+        d.force_int = 0.0;
+    }
+
+    fn end_period(&self, d: &mut Discrete, t: f64) {
+        let len = t - d.period_start;
+        if len > 0.0 {
+            let mean = d.omega_int.map(|v| v / len);
+            // ρ measured in the period when it had a lift-off: a plant whose flight differs
+            // from the plan (more socket damping) passes a different share of δ to the mean.
+            let measured = Vec3::from(mean).norm() / d.lift_off_omega;
+            let sensitivity = if d.lift_off_omega > 0.0 && measured.is_finite() {
+                measured.clamp(MIN_SENSITIVITY, 1.0)
+            } else {
+                self.sensitivity
+            };
+            for i in 0..3 {
+                d.omega_offset[i] +=
+                    self.gains.outer / sensitivity * (self.mean_omega[i] - mean[i]);
+            }
+            // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
+            // (and with it the contact forces) without bound.
+            let limit = self.offset_limit;
+            let norm = Vec3::from(d.omega_offset).norm();
+            if norm > limit {
+                d.omega_offset = d.omega_offset.map(|v| v * limit / norm);
+            }
+        }
+        d.omega_int = [0.0; 3];
+        d.lift_off_omega = 0.0;
+        d.period_start = t;
+        d.periods += 1;
+    }
+}
+
+/// A reference with what the law derives from it once: the largest λ_n* of each phase and
+/// the re-timed approach of each phase.
+#[derive(Debug)]
+struct Plan {
+    /// Plant time from which on it is tracked (s).
+    t: f64,
+    reference: Reference,
+    /// max λ_n* of each phase (N): the scale of the lift-off command.
+    lambda_scale: Vec<f64>,
+    /// The re-timed approach of each phase, if it has one.
+    approach: Vec<Option<Approach>>,
+}
+
+impl Plan {
+    /// `reference` tracked from plant time `t`, its approach windows `window` s long at most.
+    fn new(reference: Reference, window: f64, t: f64) -> Plan {
+        let lambda_scale = reference
+            .phases
+            .iter()
+            .map(|p| {
+                p.lambda
+                    .iter()
+                    .map(|l| Vec3::from(*l).norm())
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let approach = (0..reference.phases.len())
+            .map(|p| Approach::of(&reference, p, window))
+            .collect();
+        Plan {
+            t,
+            reference,
+            lambda_scale,
+            approach,
+        }
     }
 
     /// Time since the last planned lift-off and until the next planned impact at time `s` of
@@ -814,68 +988,6 @@ impl<K: Kernels<3>> HybridController<K> {
             phase = next;
         }
         (phase, start)
-    }
-
-    /// [`HybridController::timed_phase`] applied to `d` at time `t`, ending the period when
-    /// the reference wraps to its first phase.
-    fn advance_timed(&self, d: &mut Discrete, t: f64) {
-        let (phase, start) = self.timed_phase(d.phase, d.start, t);
-        if phase != d.phase {
-            if phase < d.phase {
-                self.end_period(d, start);
-            }
-            d.phase = phase;
-            d.start = start;
-        }
-    }
-
-    /// Moves `d` to the next reference phase whose contact flag is `contact`, starting at `t`;
-    /// wrapping past the last phase ends a period (outer loop).
-    fn advance(&self, d: &mut Discrete, t: f64, contact: bool) {
-        let np = self.reference.phases.len();
-        let mut next = d.phase;
-        for _ in 0..np {
-            next = (next + 1) % np;
-            if next == 0 {
-                self.end_period(d, t);
-            }
-            if self.reference.phases[next].contact == contact {
-                break;
-            }
-        }
-        d.phase = next;
-        d.start = t;
-        d.force_int = 0.0;
-    }
-
-    fn end_period(&self, d: &mut Discrete, t: f64) {
-        let len = t - d.period_start;
-        if len > 0.0 {
-            let mean = d.omega_int.map(|v| v / len);
-            // ρ measured in the period when it had a lift-off: a plant whose flight differs
-            // from the plan (more socket damping) passes a different share of δ to the mean.
-            let measured = Vec3::from(mean).norm() / d.lift_off_omega;
-            let sensitivity = if d.lift_off_omega > 0.0 && measured.is_finite() {
-                measured.clamp(MIN_SENSITIVITY, 1.0)
-            } else {
-                self.sensitivity
-            };
-            for i in 0..3 {
-                d.omega_offset[i] +=
-                    self.gains.outer / sensitivity * (self.reference.mean_omega[i] - mean[i]);
-            }
-            // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
-            // (and with it the contact forces) without bound.
-            let limit = self.offset_limit;
-            let norm = Vec3::from(d.omega_offset).norm();
-            if norm > limit {
-                d.omega_offset = d.omega_offset.map(|v| v * limit / norm);
-            }
-        }
-        d.omega_int = [0.0; 3];
-        d.lift_off_omega = 0.0;
-        d.period_start = t;
-        d.periods += 1;
     }
 }
 
@@ -965,7 +1077,9 @@ impl<K: Kernels<3>> Input for HybridController<K> {
             h.pop();
         }
         self.switches.borrow_mut().retain(|s| s.t <= m.t);
+        self.plans.borrow_mut().retain(|p| p.t <= m.t);
         let mut d = h[h.len() - 1];
+        let plan = self.plan(d.plan);
         let Some(omega) = m.x.get(6..9).and_then(|w| <[f64; 3]>::try_from(w).ok()) else {
             return;
         };
@@ -974,10 +1088,10 @@ impl<K: Kernels<3>> Input for HybridController<K> {
             d.omega_int[i] += 0.5 * (d.omega_last[i] + omega[i]) * dt;
         }
         d.omega_last = omega;
-        self.advance_timed(&mut d, m.t);
+        self.advance_timed(&plan, &mut d, m.t);
         match m.from {
             None => {
-                let ph = &self.reference.phases[d.phase];
+                let ph = &plan.reference.phases[d.phase];
                 if let (Some(lambda), true) = (m.lambda, m.mode != Mode::Free)
                     && let Some(s) = State::<3>::from_slice(m.x)
                     && let Ok(kin) = self.model.evaluate(&s)
@@ -1012,9 +1126,12 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                     if was_contact {
                         d.lift_off_omega = Vec3::from(omega).norm();
                     }
-                    let in_contact_phase = self.reference.phases[d.phase].contact;
+                    let in_contact_phase = plan.reference.phases[d.phase].contact;
                     if in_contact_phase != is_contact {
-                        self.advance(&mut d, m.t, is_contact);
+                        self.advance(&plan, &mut d, m.t, is_contact);
+                    }
+                    if was_contact {
+                        self.replan(&mut d, m.t, m.x);
                     }
                     self.switches.borrow_mut().push(PhaseSwitch {
                         t: m.t,

@@ -61,6 +61,41 @@ fn rest_to_rest_min_energy_matches_closed_form() {
     }
 }
 
+/// `Transcription::set_block_bounds` moves a fixed end state without transcribing again: the
+/// rest-to-rest double integrator's target position moved from 1 to d gives the closed-form
+/// ∫u² = 12 d²; a block that does not exist, a wrong length and a reversed bound are refused.
+#[test]
+fn moved_end_state_matches_closed_form() {
+    let ocp = Ocp {
+        phases: vec![double_integrator_phase(8, false, (1.0, 1.0), 1.0)],
+        n_costs: 2,
+        params: vec![],
+        points: rest_to_rest(1),
+        cost_bounds: vec![],
+        objective: Objective::Cost(0),
+        scheme: Scheme::Radau { elements: 3 },
+    };
+    let mut tr = Transcription::new(&ocp).unwrap();
+    for d in [2.0, -0.5] {
+        // Rows of the block: x0(0), x1(0), x0(T), x1(T).
+        let b = [(0.0, 0.0), (0.0, 0.0), (d, d), (0.0, 0.0)];
+        tr.set_block_bounds("boundary", &b).unwrap();
+        let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
+        assert_eq!(sol.status, Status::Solved);
+        assert!(
+            (sol.objective - 12.0 * d * d).abs() < 1e-7 * (1.0 + d * d),
+            "d = {d}: {}",
+            sol.objective
+        );
+        let traj = bf_optim::ocp::extract(&tr, &sol.x);
+        assert!((traj[0].x.last().unwrap()[0] - d).abs() < 1e-8);
+    }
+    assert!(tr.set_block_bounds("no such block", &[(0.0, 0.0)]).is_err());
+    assert!(tr.set_block_bounds("boundary", &[(0.0, 0.0)]).is_err());
+    let reversed = [(0.0, 0.0), (0.0, 0.0), (1.0, 0.5), (0.0, 0.0)];
+    assert!(tr.set_block_bounds("boundary", &reversed).is_err());
+}
+
 #[test]
 fn free_final_time_two_phases() {
     // J = ∫(1 + u²) dt over two linked phases, distance 1: J(T) = T + 12/T³, T* = 36^{1/4}.

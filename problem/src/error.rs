@@ -88,6 +88,13 @@ pub enum ProblemError {
         /// What the search found (values of h and the configurations tried).
         reason: String,
     },
+    /// A re-plan from a lift-off state that cannot be posed (catalogue `replan`): a state of
+    /// the wrong length or with a non-finite value, a problem or solution that is not periodic.
+    #[error("re-plan: {msg}")]
+    Replan {
+        /// What is wrong, naming the state, component or problem.
+        msg: String,
+    },
     /// A warm start from a solution with a different number of phases.
     #[error("warm start has {found} phases, the problem {expected}")]
     WarmStartPhases {

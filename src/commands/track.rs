@@ -4,7 +4,8 @@
 //! is marked FAILED and exits non-zero.
 
 use crate::cli::TrackArgs;
-use crate::paper::closed_loop::{ControllerKind, Tracking, run_tracking, solution_model};
+use crate::paper::closed_loop::{ControllerKind, Tracking, run_tracking_replanned, solution_model};
+use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::PeriodMetrics;
@@ -41,6 +42,20 @@ pub struct TrackingJson<'a> {
     pub max_omega_error: f64,
     /// The periods.
     pub periods: &'a [PeriodMetrics],
+    /// Whether the controller re-planned at every lift-off (`--replan`).
+    pub replan: bool,
+    /// The set-up solve of the re-planning (from the optimum's own lift-off state; null
+    /// without `--replan`).
+    pub replan_setup: Option<&'a ReplanRecord>,
+    /// The re-plans, one per lift-off (empty without `--replan`): plant time, wall time (s),
+    /// iterations, status, whether the plan was used.
+    pub replans: &'a [ReplanRecord],
+    /// The budget of one re-plan: a tenth of the optimum's period (s).
+    pub replan_budget_seconds: f64,
+    /// Median and largest wall time of the re-plans (s; null without re-plans).
+    pub replan_seconds_median: Option<f64>,
+    /// Largest wall time of a re-plan (s).
+    pub replan_seconds_max: Option<f64>,
 }
 
 impl<'a> TrackingJson<'a> {
@@ -50,7 +65,11 @@ impl<'a> TrackingJson<'a> {
         plant_scene: &'a str,
         impact_law: &'a str,
         optimum: [f64; 3],
+        period: f64,
+        replan: bool,
     ) -> Self {
+        let mut secs: Vec<f64> = r.replans.replans.iter().map(|p| p.seconds).collect();
+        secs.sort_by(f64::total_cmp);
         TrackingJson {
             controller: r.controller.name(),
             plant_scene,
@@ -62,6 +81,12 @@ impl<'a> TrackingJson<'a> {
             lost_reason: r.lost.as_deref(),
             max_omega_error: r.periods.iter().map(|p| p.omega_error).fold(0.0, f64::max),
             periods: &r.periods,
+            replan,
+            replan_setup: r.replans.setup.as_ref(),
+            replans: &r.replans.replans,
+            replan_budget_seconds: period / 10.0,
+            replan_seconds_median: (!secs.is_empty()).then(|| secs[secs.len() / 2]),
+            replan_seconds_max: secs.last().copied(),
         }
     }
 }
@@ -82,14 +107,35 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         None => solution_model(&sol).with_context(|| args.solution.display().to_string())?,
     };
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
-    let run = run_tracking(&sol, controller, args.periods, plant, law)
-        .with_context(|| format!("tracking {}", args.solution.display()))?;
+    let max_iter = args.replan_iterations.unwrap_or(REPLAN_MAX_ITER);
+    if max_iter == 0 {
+        bail!("--replan-iterations must be at least 1");
+    }
+    if args.replan_iterations.is_some() && !args.replan {
+        bail!("--replan-iterations needs --replan");
+    }
+    let run = run_tracking_replanned(
+        &sol,
+        controller,
+        args.periods,
+        plant,
+        law,
+        args.replan.then_some(max_iter),
+    )
+    .with_context(|| format!("tracking {}", args.solution.display()))?;
     out_dir.file("summary.json")?;
     run.report
         .write_dir(out_dir.path(), &run.output, run.stopped.as_deref())
         .map_err(|e| anyhow!(out_dir.rename_in(&crate::errors::chain(&e))))
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
-    let record = TrackingJson::of(&run, &plant_name, law.name(), sol.mean_omega);
+    let record = TrackingJson::of(
+        &run,
+        &plant_name,
+        law.name(),
+        sol.mean_omega,
+        sol.period,
+        args.replan,
+    );
     let bytes = serde_json::to_vec_pretty(&record)?;
     out_dir.write("tracking.json", &bytes)?;
     let failure = run
@@ -117,6 +163,14 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             p.stick_time,
             p.slip_time,
             p.max_abs_tau
+        )?;
+    }
+    if let (Some(median), Some(max)) = (record.replan_seconds_median, record.replan_seconds_max) {
+        let used = run.replans.replans.iter().filter(|p| p.used).count();
+        crate::outln!(
+            "re-plans: {} ({used} converged and used), wall time median {median:.3} s, max {max:.3} s (budget a tenth of the period: {:.3} s)",
+            run.replans.replans.len(),
+            record.replan_budget_seconds
         )?;
     }
     crate::outln!("output: {}", args.out.display())?;

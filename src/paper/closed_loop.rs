@@ -78,6 +78,8 @@ pub struct Tracking {
     /// Why the run counts as having lost the ball, if it does: fewer periods completed than
     /// asked for, a period without contact, or a failed simulation.
     pub lost: Option<String>,
+    /// The re-plans at the lift-offs ([`super::replan`]; empty without re-planning).
+    pub replans: super::replan::ReplanLog,
 }
 
 /// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none) as a
@@ -154,6 +156,26 @@ pub fn run_tracking(
     plant: Model<DynKernels>,
     impact_law: ImpactLaw,
 ) -> Result<Tracking> {
+    run_tracking_replanned(sol, controller, periods, plant, impact_law, None)
+}
+
+/// [`run_tracking`], with `replan` = `Some(max_iter)`: the hybrid controllers re-plan at every
+/// lift-off ([`super::replan::SolverReplanner`], at most `max_iter` iterations per re-plan);
+/// an error for the open loop and the PD.
+pub fn run_tracking_replanned(
+    sol: &OcpSolution,
+    controller: ControllerKind,
+    periods: usize,
+    plant: Model<DynKernels>,
+    impact_law: ImpactLaw,
+    replan: Option<usize>,
+) -> Result<Tracking> {
+    if replan.is_some() && matches!(controller, ControllerKind::OpenLoop | ControllerKind::Pd) {
+        bail!(
+            "--replan needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
+            controller.name()
+        );
+    }
     if periods == 0 {
         bail!("--periods must be at least 1");
     }
@@ -173,6 +195,7 @@ pub fn run_tracking(
         impact_law,
         ..BallFingerSettings::default()
     };
+    let log = std::rc::Rc::new(std::cell::RefCell::new(super::replan::ReplanLog::default()));
     let (output, report, stopped) = match controller {
         ControllerKind::OpenLoop => {
             simulate_optimum(sol, plant, periodic_torques(sol, copies)?, settings, t_end)?
@@ -197,9 +220,19 @@ pub fn run_tracking(
                 ControllerKind::Hybrid => torque_bound(sol),
                 _ => [f64::INFINITY; 3],
             };
-            let law =
+            let mut law =
                 HybridController::new(model, id, reference, HybridGains::default(), 0.0, &x0)?
                     .with_torque_bound(bound)?;
+            if let Some(max_iter) = replan {
+                let replanner = super::replan::SolverReplanner::new(
+                    sol,
+                    solution_model(sol)?.0,
+                    reference_of,
+                    max_iter,
+                    std::rc::Rc::clone(&log),
+                )?;
+                law = law.with_replanner(Box::new(replanner));
+            }
             simulate_optimum(sol, plant, law, settings, t_end)?
         }
     };
@@ -228,6 +261,7 @@ pub fn run_tracking(
         stopped,
         periods: metrics,
         lost,
+        replans: log.take(),
     })
 }
 
@@ -507,6 +541,17 @@ pub fn robustness_runs(
     controller: ControllerKind,
     periods: usize,
 ) -> Vec<(String, Result<Tracking>)> {
+    robustness_runs_replanned(sol, controller, periods, None)
+}
+
+/// [`robustness_runs`], re-planning at every lift-off with `replan` = `Some(max_iter)`
+/// ([`run_tracking_replanned`]).
+pub fn robustness_runs_replanned(
+    sol: &OcpSolution,
+    controller: ControllerKind,
+    periods: usize,
+    replan: Option<usize>,
+) -> Vec<(String, Result<Tracking>)> {
     let scene = if sol.scene.is_empty() {
         "paper"
     } else {
@@ -515,8 +560,9 @@ pub fn robustness_runs(
     robustness_cases()
         .into_iter()
         .map(|(case, edits, law)| {
-            let run = perturbed_scene(scene, &edits)
-                .and_then(|plant| run_tracking(sol, controller, periods, plant, law));
+            let run = perturbed_scene(scene, &edits).and_then(|plant| {
+                run_tracking_replanned(sol, controller, periods, plant, law, replan)
+            });
             (case, run)
         })
         .collect()

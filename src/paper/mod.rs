@@ -6,6 +6,8 @@
 //! * [`claims`]: the paper's claims of Sect. 6.1 with verdicts and, where they differ, why;
 //! * [`openloop`]: the optimal torques replayed open loop in the full hybrid model (Sect. 6.2);
 //! * [`closed_loop`]: the same optima executed with feedback (bf-control; Sect. 6.2 and 7);
+//! * [`replan`]: re-planning at each lift-off for the closed loop (the solve pipeline as
+//!   bf-control's replanner);
 //! * [`appendix`]: the paper's Appendix A/B as printed against derivations (the misprints);
 //! * [`extremes`]: numerical stability at the edges of the domain (one file per probe);
 //! * [`speed_accuracy`]: error versus computing time for integrators, collocation meshes, the
@@ -17,6 +19,7 @@ pub mod claims;
 pub mod closed_loop;
 pub mod extremes;
 pub mod openloop;
+pub mod replan;
 pub mod report;
 pub mod scenarios;
 pub mod speed_accuracy;

@@ -91,128 +91,214 @@ fn iota_params() -> Vec<Param> {
         .collect()
 }
 
-/// Free–stick–free periodic rotation with the QC or COT ratio objective (Sect. 6.1).
+/// Free–stick–free periodic rotation with the QC or COT ratio objective (Sect. 6.1); with
+/// [`ProblemSettings::replan`] its transient from a measured lift-off state
+/// ([`periodic_from_lift_off`]).
 pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
-    let (scene, eps, settings) = (c.scene, c.eps, c.settings);
-    let qc = c.problem == Problem::PeriodicQc;
-    let margin = settings.hdot_margin;
-    // Phase durations: ≤ 5 s for QC (its optimum has a short period); for COT only the
-    // total period is bounded (≤ COT_MAX_PERIOD).
-    let tmax = if qc { 5.0 } else { COT_MAX_PERIOD };
-    if !(settings.min_stick.is_finite() && settings.min_stick > 0.0 && settings.min_stick < tmax) {
-        return Err(ProblemError::InvalidSetting {
-            name: "minimum stick duration (s)",
-            value: settings.min_stick,
-            expected: "positive and below the phase's maximum duration (5 s for QC, the \
-                       maximum period for COT)",
-        });
+    if let Some(r) = &c.settings.replan {
+        return periodic_from_lift_off(c, r);
     }
-    let phases = vec![
-        PhaseDef {
+    let (scene, eps, settings) = (c.scene, c.eps, c.settings);
+    let p = PeriodicParts::of(c)?;
+    let phases = vec![p.approach, p.stick, p.release];
+    let mut points = apex(c, 0)?;
+    points.extend(contact_sequence(scene, c.physics, eps, TOL_H, settings, 0)?);
+    points.extend(stick_end(c)?);
+    points.push(continuity(c.nx(), 1, 2, "stick -> free continuity"));
+    points.push(continuity(c.nx(), 2, 0, "periodicity"));
+    points.extend(p.period_row);
+    Ok(Spec {
+        phases,
+        cost: p.cost,
+        objective: Objective::Ratio(0, 1),
+        points,
+        params: iota_params(),
+        cost_bounds: p.cost_bounds,
+        q_limits: c.q_limits(),
+    })
+}
+
+/// The transient period of a re-plan (module `replan` of the catalogue): the periodic
+/// problem's phases in the order the plant meets them after a lift-off — release (free,
+/// h ≥ −tol_h), approach (free, h ≥ 0, from the apex ḣ = 0 with h ≥ 0.3 r), stick — with
+/// the release's first state fixed to the measured lift-off state and the stick phase's last
+/// state fixed to the periodic optimum's lift-off state, so the plan ends on the periodic
+/// orbit. The same objective (the ratio over the three phases, one period's worth) and the
+/// same constraints as the periodic problem otherwise; the stick end's Δv = 0 row is left out,
+/// as the fixed final state (where Δv = 0) implies it and the duplicate would make the
+/// constraint Jacobian rank deficient. Started from the optimum's own lift-off state its
+/// feasible set is the periodic problem's restricted to that lift-off state, which holds the
+/// optimum: the re-plan is the optimum with its phases rotated.
+pub(crate) fn periodic_from_lift_off(
+    c: &Context<'_>,
+    r: &super::replan::LiftOff,
+) -> Result<Spec, ProblemError> {
+    let (scene, eps, settings) = (c.scene, c.eps, c.settings);
+    r.validate(c.nx())?;
+    let p = PeriodicParts::of(c)?;
+    let phases = vec![p.release, p.approach, p.stick];
+    let mut points = vec![fixed_state(
+        0,
+        false,
+        &r.measured,
+        super::replan::MEASURED_ROWS,
+    )];
+    points.extend(apex(c, 1)?);
+    points.extend(contact_sequence(scene, c.physics, eps, TOL_H, settings, 1)?);
+    points.push(fixed_state(
+        2,
+        true,
+        &r.target,
+        "ends on the periodic lift-off state",
+    ));
+    points.push(continuity(c.nx(), 0, 1, "release -> approach continuity"));
+    points.extend(p.period_row);
+    Ok(Spec {
+        phases,
+        cost: p.cost,
+        objective: Objective::Ratio(0, 1),
+        points,
+        params: iota_params(),
+        cost_bounds: p.cost_bounds,
+        q_limits: c.q_limits(),
+    })
+}
+
+/// What the periodic problem and its re-plan share: the three phases, the cost, the period
+/// row and the cost bounds.
+struct PeriodicParts {
+    approach: PhaseDef,
+    stick: PhaseDef,
+    release: PhaseDef,
+    cost: CostKind,
+    period_row: Option<PointFunction>,
+    cost_bounds: Vec<(f64, f64)>,
+}
+
+impl PeriodicParts {
+    fn of(c: &Context<'_>) -> Result<PeriodicParts, ProblemError> {
+        let settings = c.settings;
+        let qc = c.problem == Problem::PeriodicQc;
+        let margin = settings.hdot_margin;
+        // Phase durations: ≤ 5 s for QC (its optimum has a short period); for COT only the
+        // total period is bounded (≤ COT_MAX_PERIOD).
+        let tmax = if qc { 5.0 } else { COT_MAX_PERIOD };
+        if !(settings.min_stick.is_finite()
+            && settings.min_stick > 0.0
+            && settings.min_stick < tmax)
+        {
+            return Err(ProblemError::InvalidSetting {
+                name: "minimum stick duration (s)",
+                value: settings.min_stick,
+                expected: "positive and below the phase's maximum duration (5 s for QC, the \
+                           maximum period for COT)",
+            });
+        }
+        let approach = PhaseDef {
             mode: PhaseMode::Free,
             h: Some((0.0, f64::INFINITY)),
             hdot: margin.map(|m| (f64::NEG_INFINITY, -m)),
             duration: (0.01, tmax),
             guess_duration: 1.0,
-        },
-        PhaseDef {
+        };
+        let stick = PhaseDef {
             mode: PhaseMode::Stick,
             h: None,
             hdot: None,
             duration: (settings.min_stick, tmax),
             guess_duration: 1.0,
-        },
-        PhaseDef {
+        };
+        let release = PhaseDef {
             mode: PhaseMode::Free,
             h: Some((-TOL_H, f64::INFINITY)),
             hdot: margin.map(|m| (m, f64::INFINITY)),
             duration: (0.01, tmax),
             guess_duration: 1.0,
-        },
-    ];
-    let cost = if qc {
-        CostKind::Qc {
-            w: settings.effort_scale,
-            omega_ref: super::QC_OMEGA_REF,
+        };
+        let cost = if qc {
+            CostKind::Qc {
+                w: settings.effort_scale,
+                omega_ref: super::QC_OMEGA_REF,
+            }
+        } else {
+            let s = std::f64::consts::FRAC_1_SQRT_2;
+            CostKind::Cot {
+                w: 10.0,
+                omega_hat: [s, -s, 0.0],
+            }
+        };
+        // COT bounds the period; for QC the duration bounds imply 0.03 ≤ T ≤ 15 s, and the
+        // row is only added when `period_bounds` is given (a continuation gives it in every
+        // stage, so all stages share one NLP layout for primal-dual warm starts). An inactive
+        // row is not free: it changes the barrier path and with it the iterations.
+        let (plo, phi) = if qc {
+            (0.03, 3.0 * tmax)
+        } else {
+            (0.0, COT_MAX_PERIOD)
+        };
+        let (plo, phi) = match settings.period_bounds {
+            Some((lo, hi)) => (lo.max(plo), hi.min(phi)),
+            None => (plo, phi),
+        };
+        if !(plo <= phi && plo.is_finite() && phi.is_finite()) {
+            return Err(ProblemError::PeriodBounds {
+                lower: plo,
+                upper: phi,
+            });
         }
-    } else {
-        let s = std::f64::consts::FRAC_1_SQRT_2;
-        CostKind::Cot {
-            w: 10.0,
-            omega_hat: [s, -s, 0.0],
-        }
-    };
-    let mut points = vec![
+        let period_row = (!qc || settings.period_bounds.is_some()).then(|| {
+            duration_sum(
+                3,
+                plo,
+                phi,
+                if qc {
+                    "period bounds"
+                } else {
+                    "period <= 10 s"
+                },
+            )
+        });
+        // COT: the rotation measure must stay positive for the ratio to be meaningful.
+        let cost_bounds = if qc {
+            vec![]
+        } else {
+            vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)]
+        };
+        Ok(PeriodicParts {
+            approach,
+            stick,
+            release,
+            cost,
+            period_row,
+            cost_bounds,
+        })
+    }
+}
+
+/// The apex rows at the start of the approach phase `phase`: h ≥ 0.3 r and ḣ = 0.
+fn apex(c: &Context<'_>, phase: usize) -> Result<Vec<PointFunction>, ProblemError> {
+    Ok(vec![
         end_point(
-            scene,
-            eps,
-            0,
+            c.scene,
+            c.eps,
+            phase,
             false,
             EndQuantity::H(0.3 * c.physics.radius, f64::INFINITY),
             "h(0) >= 0.3 r",
         )?,
         // The period may start anywhere on the free arc with h ≥ 0.3 r: a continuum of
-        // equivalent optima (a flat direction that stalls Newton's method). Starting at the
-        // arc's apex (ḣ(0) = 0) picks one without changing the optimal value, since the apex is
-        // where h is largest.
+        // equivalent optima (a flat direction that stalls Newton's method). Starting at
+        // the arc's apex (ḣ(0) = 0) picks one without changing the optimal value, since
+        // the apex is where h is largest.
         end_point(
-            scene,
-            eps,
-            0,
+            c.scene,
+            c.eps,
+            phase,
             false,
             EndQuantity::HDot(0.0, 0.0),
             "apex start: hdot(0) = 0",
         )?,
-    ];
-    points.extend(contact_sequence(scene, c.physics, eps, TOL_H, settings)?);
-    points.push(continuity(c.nx(), 1, 2, "stick -> free continuity"));
-    points.push(continuity(c.nx(), 2, 0, "periodicity"));
-    // COT bounds the period; for QC the duration bounds imply 0.03 ≤ T ≤ 15 s, and the row is
-    // only added when `period_bounds` is given (a continuation gives it in every stage, so all
-    // stages share one NLP layout for primal-dual warm starts). An inactive row is not free:
-    // it changes the barrier path and with it the iterations.
-    let (plo, phi) = if qc {
-        (0.03, 3.0 * tmax)
-    } else {
-        (0.0, COT_MAX_PERIOD)
-    };
-    let (plo, phi) = match settings.period_bounds {
-        Some((lo, hi)) => (lo.max(plo), hi.min(phi)),
-        None => (plo, phi),
-    };
-    if !(plo <= phi && plo.is_finite() && phi.is_finite()) {
-        return Err(ProblemError::PeriodBounds {
-            lower: plo,
-            upper: phi,
-        });
-    }
-    if !qc || settings.period_bounds.is_some() {
-        points.push(duration_sum(
-            3,
-            plo,
-            phi,
-            if qc {
-                "period bounds"
-            } else {
-                "period <= 10 s"
-            },
-        ));
-    }
-    // COT: the rotation measure must stay positive for the ratio to be meaningful.
-    let cost_bounds = if qc {
-        vec![]
-    } else {
-        vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)]
-    };
-    Ok(Spec {
-        phases,
-        cost,
-        objective: Objective::Ratio(0, 1),
-        points,
-        params: iota_params(),
-        cost_bounds,
-        q_limits: c.q_limits(),
-    })
+    ])
 }
 
 /// From rest at q⁰ to touching the ball at rest, minimising time plus effort.
@@ -272,8 +358,9 @@ pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
     ];
     let mut points = vec![initial_state(&c.x_rest())];
     points.extend(contact_sequence(
-        c.scene, c.physics, c.eps, TOL_H, c.settings,
+        c.scene, c.physics, c.eps, TOL_H, c.settings, 0,
     )?);
+    points.extend(stick_end(c)?);
     let z = [0.0, 0.0, 1.0];
     let (cost, cost_bounds) = match c.problem {
         Problem::Reorient => {
@@ -310,10 +397,10 @@ pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
     })
 }
 
-/// The point constraints of a free → stick switch at the end of phase 0: touch
-/// (0 ≤ h⁽¹⁾(t_f) ≤ tol_h, Sect. 7), the sticking impact law (eq. 40) with the impulse ι as
-/// parameters, and (Radau only) the stick constraint Δv = 0 at the end of phase 1, which the
-/// Radau points do not include.
+/// The point constraints of a free → stick switch at the end of phase `approach`: touch
+/// (0 ≤ h(t_f) ≤ tol_h, Sect. 7) and the sticking impact law (eq. 40) with the impulse ι as
+/// parameters. With Radau the callers add the stick constraint Δv = 0 at the end of the stick
+/// phase, which the Radau points do not include (the re-plan fixes that state instead).
 ///
 /// With Legendre–Gauss the stick phases impose d(Δv)/dt = 0 at the Gauss nodes
 /// ([`crate::node::StickLevel::Acceleration`]) and the impact imposes Δv⁺ = 0 (eq. 40c) at the start, so
@@ -326,30 +413,35 @@ fn contact_sequence(
     eps: f64,
     tol_h: f64,
     settings: &ProblemSettings,
+    approach: usize,
 ) -> Result<Vec<PointFunction>, ProblemError> {
     let lg = settings.scheme == Scheme::Lg;
-    let mut points = vec![
+    Ok(vec![
         end_point(
             scene,
             eps,
-            0,
+            approach,
             true,
             EndQuantity::H(0.0, tol_h),
             "0 <= h1(tf) <= 1e-4",
         )?,
-        impact(scene, ph, eps, 0, 0, settings.impulse_cone, lg)?,
-    ];
-    if !lg {
-        points.push(end_point(
-            scene,
-            eps,
-            1,
-            true,
-            EndQuantity::DeltaV,
-            "stick end: delta v = 0",
-        )?);
+        impact(scene, ph, eps, approach, 0, settings.impulse_cone, lg)?,
+    ])
+}
+
+/// Δv = 0 at the end of stick phase 1 (Radau only, see [`contact_sequence`]).
+fn stick_end(c: &Context<'_>) -> Result<Option<PointFunction>, ProblemError> {
+    if c.settings.scheme == Scheme::Lg {
+        return Ok(None);
     }
-    Ok(points)
+    Ok(Some(end_point(
+        c.scene,
+        c.eps,
+        1,
+        true,
+        EndQuantity::DeltaV,
+        "stick end: delta v = 0",
+    )?))
 }
 
 fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
@@ -370,17 +462,29 @@ fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
 
 /// Fixes x(0) of phase 0 to `x0`.
 fn initial_state(x0: &[f64]) -> PointFunction {
+    fixed_state(0, false, x0, "initial state")
+}
+
+/// Fixes the first (`fin` false) or last state of `phase` to `x`.
+fn fixed_state(phase: usize, fin: bool, x: &[f64], name: &str) -> PointFunction {
     let mut g = Graph::new();
-    let v: Vec<_> = (0..x0.len() as u32).map(|i| g.var(i)).collect();
+    let v: Vec<_> = (0..x.len() as u32).map(|i| g.var(i)).collect();
     PointFunction {
-        name: "initial state".into(),
+        name: name.into(),
         graph: g,
-        vars: (0..x0.len())
-            .map(|i| (i as u32, VarRef::Initial { phase: 0, i }))
+        vars: (0..x.len())
+            .map(|i| {
+                let r = if fin {
+                    VarRef::Final { phase, i }
+                } else {
+                    VarRef::Initial { phase, i }
+                };
+                (i as u32, r)
+            })
             .collect(),
         fixed: vec![],
         outputs: v,
-        bounds: x0.iter().map(|&x| (x, x)).collect(),
+        bounds: x.iter().map(|&v| (v, v)).collect(),
     }
 }
 

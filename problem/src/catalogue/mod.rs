@@ -15,6 +15,7 @@
 //! | `reorient` | free–stick | ∫(1 + 0.1‖τ‖²) s.t. ∫ω_z dt = π/2 (ball turned by 90° about z) |
 //! | `rotate-ref` | free–stick | ∫‖ω − ω_ref‖² + 0.1‖τ‖² over a fixed 3 s horizon, ω_ref = (0,0,1) |
 //! | `rotate-fast` | free–stick | ∫(0.01‖τ‖² − ω_z) over a fixed 2 s horizon |
+//! | any periodic one with [`ProblemSettings::replan`] | free–free–stick from a measured lift-off state to the optimum's ([`replan`]) | the same ratio |
 //!
 //! Transcription: the default is Legendre–Gauss–Radau with 3 elements per phase (30 points
 //! per phase in total). The paper's Legendre–Gauss scheme ([`Scheme::Lg`]) is available. With
@@ -45,6 +46,7 @@
 pub mod archetypes;
 pub mod extract;
 pub mod guess;
+pub mod replan;
 
 use std::fmt;
 use std::str::FromStr;
@@ -210,6 +212,11 @@ pub struct ProblemSettings {
     /// [`MIN_STICK`]). Many QC optima sit on it ("taps": the ball is spun mostly by the
     /// impact impulse), so it is a modelling choice, not a numerical one.
     pub min_stick: f64,
+    /// Re-plan a periodic problem from a measured lift-off state: its transient period from
+    /// there back to the periodic optimum's lift-off state ([`replan`]); `None`: the periodic
+    /// problem itself. An error for the other problems.
+    #[serde(skip)]
+    pub replan: Option<replan::LiftOff>,
 }
 
 /// Default lower bound of every phase duration of the periodic problems, the stick phase's
@@ -240,6 +247,7 @@ impl Default for ProblemSettings {
             proximal_weight: None,
             scene: None,
             min_stick: MIN_STICK,
+            replan: None,
         }
     }
 }
@@ -351,6 +359,11 @@ fn build_inner(
         settings,
         q_guess: &conf.free,
     };
+    if settings.replan.is_some() && problem.archetype() != Archetype::Periodic {
+        return Err(ProblemError::Replan {
+            msg: format!("`{problem}` is not a periodic problem; only those are re-planned"),
+        });
+    }
     let spec = match problem.archetype() {
         Archetype::Periodic => archetypes::periodic(&ctx)?,
         Archetype::Reach => archetypes::reach(&ctx)?,

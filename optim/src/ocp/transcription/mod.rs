@@ -640,6 +640,44 @@ impl Transcription {
         &self.fns[..self.phases.len()]
     }
 
+    /// Replaces the bounds of the rows of the block `name` (a point function's name, see
+    /// [`Transcription::row_blocks`]), e.g. the fixed value of an initial state that is
+    /// re-solved from several values without transcribing the problem again. Errors when no
+    /// block has that name, `bounds` has another length than the block, or a bound is NaN or
+    /// its lower end above its upper.
+    pub fn set_block_bounds(
+        &mut self,
+        name: &str,
+        bounds: &[(f64, f64)],
+    ) -> Result<(), OptimError> {
+        let rows = self
+            .row_blocks
+            .iter()
+            .find(|b| b.0 == name)
+            .map(|b| b.1.clone())
+            .unwrap_or(0..0);
+        if rows.len() != bounds.len() || rows.is_empty() {
+            return Err(OptimError::DimensionMismatch {
+                what: "bounds of the named row block",
+                expected: rows.len(),
+                found: bounds.len(),
+            });
+        }
+        for (row, &(lo, hi)) in rows.zip(bounds) {
+            if lo.is_nan() || hi.is_nan() || lo > hi {
+                return Err(OptimError::InvalidBounds {
+                    what: "constraint",
+                    index: row,
+                    lower: lo,
+                    upper: hi,
+                });
+            }
+            self.gl[row] = clean_bound(lo, true);
+            self.gu[row] = clean_bound(hi, false);
+        }
+        Ok(())
+    }
+
     /// Name of the block that contains `row`.
     pub fn row_name(&self, row: usize) -> &str {
         self.row_blocks
