@@ -42,6 +42,28 @@ pub trait Landscape: Sync {
 
     /// Whether `a` and `b` are the same local optimum.
     fn same(&self, a: &Self::Point, b: &Self::Point) -> bool;
+
+    /// Whether `a` and `b` have the same shape (one basin, up to the noise of the local
+    /// solves): the reshaping ([`HopSettings::reshape_width`]) starts from points that differ
+    /// in shape. Default: [`Landscape::same`].
+    fn alike(&self, a: &Self::Point, b: &Self::Point) -> bool {
+        self.same(a, b)
+    }
+
+    /// The number of deterministic reshaping moves from `from` ([`Landscape::reshape`]);
+    /// default none.
+    fn reshapes(&self, _from: &Self::Point) -> usize {
+        0
+    }
+
+    /// Reshaping move `kind` (< [`Landscape::reshapes`]) from `from`: a local solve with some of
+    /// the variables held away from `from`'s values by a bound (so that the solve must leave
+    /// `from`'s basin in that direction), then a local solve with the bound released, warm
+    /// from the first; its result carries the index `id`. Unlike [`Landscape::hop`] it draws no
+    /// random numbers: every origin is moved in every direction.
+    fn reshape(&self, _from: &Self::Point, _kind: usize, _id: usize) -> Option<Self::Point> {
+        None
+    }
 }
 
 /// The budget and stopping rule of [`exploit`].
@@ -66,6 +88,13 @@ pub struct HopSettings {
     pub polish_rounds: usize,
     /// Seed of the hops' perturbations.
     pub seed: u64,
+    /// Points reshaped per reshaping round ([`Landscape::reshape`], every move from each): the
+    /// best points that differ in shape ([`Landscape::alike`]) and were not reshaped before.
+    /// 0: no reshaping.
+    pub reshape_width: usize,
+    /// Reshaping rounds at most; the reshaping also stops when the `reshape_width` best
+    /// shapes have all been reshaped (no move found a point among them).
+    pub reshape_rounds: usize,
 }
 
 /// What [`exploit`] did.
@@ -115,31 +144,30 @@ pub fn exploit<L: Landscape>(
         hits: 0,
         converged: false,
     };
-    let Some(mut best) = out.best.clone() else {
+    if out.best.is_none() {
+        return out;
+    }
+    let batch = settings.batch.max(1);
+    let mut hop = 0usize;
+    // Every point so far (sampled, then reshaped, in a fixed order).
+    let mut all: Vec<L::Point> = sampled.to_vec();
+    reshape_rounds(l, &mut all, settings, first_id, &mut hop, &mut out.hops);
+    let Some(mut best) = best_of(l, &all).cloned() else {
         return out;
     };
-    let batch = settings.batch.max(1);
     // The origins: the `width` best distinct points, best first; each is replaced by a hop
     // from it that ends better (monotonic per origin).
-    let mut pool: Vec<L::Point> = Vec::new();
-    let mut rest: Vec<&L::Point> = sampled.iter().collect();
-    while pool.len() < settings.width.max(1) {
-        let Some(p) = best_of(l, rest.iter().copied()).cloned() else {
-            break;
-        };
-        rest.retain(|q| !l.same(q, &p));
-        pool.push(p);
-    }
-    let mut hop = 0usize;
+    let mut pool = distinct_best(l, &all, settings.width.max(1), |a, b| l.same(a, b));
+    let budget = hop + settings.budget;
     let mut since = 0usize;
-    let mut reached = sampled.iter().filter(|p| l.same(p, &best)).count();
+    let mut reached = all.iter().filter(|p| l.same(p, &best)).count();
     let seed_of = |h: usize| settings.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ h as u64;
-    while hop < settings.budget {
+    while hop < budget {
         if reached >= settings.confirmations && since >= settings.patience {
             out.converged = true;
             break;
         }
-        let n = batch.min(settings.budget - hop);
+        let n = batch.min(budget - hop);
         let jobs: Vec<(usize, usize)> = (hop..hop + n).map(|h| (h, h % pool.len())).collect();
         hop += n;
         let results: Vec<_> = jobs
@@ -205,6 +233,74 @@ pub fn exploit<L: Landscape>(
         .count();
     out.best = Some(best);
     out
+}
+
+/// The `n` best points of `points` that are pairwise not `alike`, best first.
+fn distinct_best<L: Landscape>(
+    l: &L,
+    points: &[L::Point],
+    n: usize,
+    alike: impl Fn(&L::Point, &L::Point) -> bool,
+) -> Vec<L::Point> {
+    let mut out: Vec<L::Point> = Vec::new();
+    let mut rest: Vec<&L::Point> = points.iter().collect();
+    while out.len() < n {
+        let Some(p) = best_of(l, rest.iter().copied()).cloned() else {
+            break;
+        };
+        rest.retain(|q| !alike(q, &p));
+        out.push(p);
+    }
+    out
+}
+
+/// The reshaping before the basin hopping: each round takes the
+/// [`HopSettings::reshape_width`] best points of `all` that differ in shape
+/// ([`Landscape::alike`]), applies every move of [`Landscape::reshape`] to those not reshaped
+/// before (in parallel, results in move order, numbered on from `first_id + *hop`), and adds
+/// the results to `all` and `hops`. It stops when every one of those best shapes has been
+/// reshaped, or after [`HopSettings::reshape_rounds`] rounds. A basin that random hops of
+/// the time scale do not leave (BENCHMARKS.md, "Global search on a coarse mesh") is left by a
+/// move that bounds the trajectory away from its shape; chains of such moves go on from every
+/// better shape they find.
+fn reshape_rounds<L: Landscape>(
+    l: &L,
+    all: &mut Vec<L::Point>,
+    settings: &HopSettings,
+    first_id: usize,
+    hop: &mut usize,
+    hops: &mut Vec<(usize, bool, Option<L::Point>)>,
+) {
+    let mut done: Vec<L::Point> = Vec::new();
+    for _ in 0..settings.reshape_rounds {
+        let fresh: Vec<L::Point> =
+            distinct_best(l, all, settings.reshape_width, |a, b| l.alike(a, b))
+                .into_iter()
+                .filter(|o| !done.iter().any(|d| l.alike(d, o)))
+                .collect();
+        let jobs: Vec<(usize, usize)> = fresh
+            .iter()
+            .enumerate()
+            .flat_map(|(o, p)| (0..l.reshapes(p)).map(move |kind| (o, kind)))
+            .collect();
+        if jobs.is_empty() {
+            break;
+        }
+        let base = *hop;
+        let results: Vec<_> = jobs
+            .par_iter()
+            .enumerate()
+            .map(|(j, &(o, kind))| (base + j, l.reshape(&fresh[o], kind, first_id + base + j)))
+            .collect();
+        *hop += jobs.len();
+        done.extend(fresh);
+        for (h, r) in results {
+            if let Some(p) = &r {
+                all.push(p.clone());
+            }
+            hops.push((h, false, r));
+        }
+    }
 }
 
 #[cfg(test)]
@@ -280,6 +376,8 @@ mod tests {
         polish_scale: 0.3,
         polish_rounds: 2,
         seed: 0,
+        reshape_width: 0,
+        reshape_rounds: 0,
     };
 
     const STARTS: usize = 4;

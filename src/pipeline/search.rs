@@ -37,6 +37,7 @@ use super::build;
 use super::error::PipelineError;
 use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
+use super::reshape::{MOVES, Move, flip_elbow, with_duration_bounds};
 use super::solve::solve_recentred;
 use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
@@ -46,6 +47,10 @@ use super::verify::{VERIFIED_DEFECT, is_verified, verify};
 
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
+
+/// Relative difference of objectives and phase durations within which two end points have
+/// the same shape ([`same_shape`]).
+pub const SHAPE_RTOL: f64 = 0.02;
 
 /// First stick-phase lower bound (s) of the stick continuation
 /// ([`VerifyPolicy::stick_continuation`]).
@@ -140,6 +145,8 @@ pub const DEFAULT_HOPS: HopSettings = HopSettings {
     polish_scale: 0.05,
     polish_rounds: 2,
     seed: 0,
+    reshape_width: 4,
+    reshape_rounds: 6,
 };
 
 /// Initial barrier parameter of a hop's re-solve ([`solve_recentred`]): large enough for the
@@ -765,6 +772,86 @@ impl Landscape for OcpLandscape<'_> {
     fn same(&self, a: &Candidate, b: &Candidate) -> bool {
         solved(&a.solution) == solved(&b.solution) && same_optimum(&a.solution, &b.solution)
     }
+
+    fn alike(&self, a: &Candidate, b: &Candidate) -> bool {
+        solved(&a.solution) == solved(&b.solution) && same_shape(&a.solution, &b.solution)
+    }
+
+    fn reshapes(&self, from: &Candidate) -> usize {
+        if solved(&from.solution) && from.problem.is_some() {
+            MOVES.len()
+        } else {
+            0
+        }
+    }
+
+    fn reshape(&self, from: &Candidate, kind: usize, id: usize) -> Option<Candidate> {
+        let t0 = Instant::now();
+        let p = from.problem.as_ref()?;
+        let m = MOVES.get(kind)?;
+        let within: Vec<(f64, f64)> = p.ocp.phases.iter().map(|ph| ph.duration_bounds).collect();
+        let bounds = m.bounds(&from.solution.phase_durations, &within, &p.modes)?;
+        let label = format!(
+            "reshape {} from {}: {}, released",
+            kind,
+            from.index,
+            m.describe()
+        );
+        let max_iter = self.settings.max_iter.min(HOP_MAX_ITER);
+        let res = (|| {
+            let mut released = p.clone();
+            released.settings.max_iter = max_iter;
+            let fit = || PipelineError::Internal("a reshaped optimum does not fit its own problem");
+            if *m == Move::ElbowFlip {
+                let mut w = Self::perturbed(&released, &from.solution, 0, 0.0).ok_or_else(fit)?;
+                let n = Nlp::num_variables(&released.nlp);
+                let (mut lo, mut up) = (vec![0.0; n], vec![0.0; n]);
+                Nlp::variable_bounds(&released.nlp, &mut lo, &mut up);
+                flip_elbow(&released, released.guess.free.len(), &mut w.x, &lo, &up);
+                let sol = solve_recentred(&released, &w, HOP_MU)?;
+                return Ok((released, sol));
+            }
+            let held = with_duration_bounds(&released, &bounds)?;
+            let w = Self::perturbed(&held, &from.solution, 0, 0.0).ok_or_else(fit)?;
+            let sol = solve_recentred(&held, &w, HOP_MU)?;
+            let w = sol.nlp_warm.as_ref().ok_or(PipelineError::Internal(
+                "a reshaped solve's solution has no primal-dual point",
+            ))?;
+            let mut fin = super::solve::solve_warm(&released, w, None)?;
+            fin.iterations += sol.iterations;
+            Ok::<_, PipelineError>((released, fin))
+        })();
+        let (b, sol) = match res {
+            Ok(r) => r,
+            Err(e) => {
+                self.push(&self.records, vec![failed_record(id, label, &e, t0)]);
+                return None;
+            }
+        };
+        let mut c = Candidate {
+            index: id,
+            problem: Some(b),
+            solution: sol,
+        };
+        self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
+        if self.policy.rtol > 0.0 && self.verify_samples {
+            attach_verification(&mut c, self.policy.rtol);
+        }
+        Some(c)
+    }
+}
+
+/// Whether two end points have the same shape: objectives within [`SHAPE_RTOL`] and every
+/// phase duration within [`SHAPE_RTOL`] relative or 5 ms (the reshaping's origins differ
+/// in shape, so that the moves are not spent on variants of one basin).
+pub(crate) fn same_shape(a: &OcpSolution, b: &OcpSolution) -> bool {
+    let close = |x: f64, y: f64, abs: f64| (x - y).abs() <= SHAPE_RTOL * x.abs().max(y.abs()) + abs;
+    close(a.objective, b.objective, 0.0)
+        && a.phase_durations.len() == b.phase_durations.len()
+        && a.phase_durations
+            .iter()
+            .zip(&b.phase_durations)
+            .all(|(x, y)| close(*x, *y, 5e-3))
 }
 
 impl Search {
