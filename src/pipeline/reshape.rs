@@ -217,13 +217,18 @@ mod tests {
     const FSF: [PhaseMode; 3] = [PhaseMode::Free, PhaseMode::Stick, PhaseMode::Free];
     const WITHIN: [(f64, f64); 3] = [(0.01, 5.0), (0.01, 5.0), (0.01, 5.0)];
 
-    /// Every move excludes the optimum's own durations from its bounds (so the solve must
+    /// Every bound move excludes the optimum's own durations from its bounds (so the solve must
     /// move), keeps its bounds inside the problem's, and a move that cannot apply (a stick
     /// phase on its lower bound shortened) gives `None`.
     #[test]
     fn every_move_excludes_the_optimum_and_stays_within_the_problem() {
         let d = [0.3, 0.12, 0.5];
-        for m in MOVES {
+        // The flip moves the posture and leaves the durations free.
+        assert_eq!(
+            Move::ElbowFlip.bounds(&d, &WITHIN, &FSF),
+            Some(WITHIN.to_vec())
+        );
+        for m in MOVES.into_iter().filter(|m| *m != Move::ElbowFlip) {
             let b = m.bounds(&d, &WITHIN, &FSF).expect("applies");
             assert!(
                 d.iter().zip(&b).any(|(x, (lo, hi))| x < lo || x > hi),

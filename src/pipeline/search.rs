@@ -792,10 +792,15 @@ impl Landscape for OcpLandscape<'_> {
         let within: Vec<(f64, f64)> = p.ocp.phases.iter().map(|ph| ph.duration_bounds).collect();
         let bounds = m.bounds(&from.solution.phase_durations, &within, &p.modes)?;
         let label = format!(
-            "reshape {} from {}: {}, released",
+            "reshape {} from {}: {}{}",
             kind,
             from.index,
-            m.describe()
+            m.describe(),
+            if *m == Move::ElbowFlip {
+                ""
+            } else {
+                ", released"
+            }
         );
         let max_iter = self.settings.max_iter.min(HOP_MAX_ITER);
         let res = (|| {
