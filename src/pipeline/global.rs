@@ -512,7 +512,10 @@ mod tests {
             assert!(e0.hops.is_empty());
             missed_without += usize::from(e0.best.expect("a point").abs() > 0.25);
         }
-        assert!(missed_without >= 5, "{missed_without} of 10 missed without reshaping");
+        assert!(
+            missed_without >= 5,
+            "{missed_without} of 10 missed without reshaping"
+        );
     }
 
     /// The polishing takes the neighbouring optimum: from x ≈ 1 (f ≈ 0.1) with no hops at all

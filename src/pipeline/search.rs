@@ -13,7 +13,8 @@
 //! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
 //!    on the problem's mesh from their coarse trajectories, each re-integrated.
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
-//!    first, one after the other until one verifies), driven by their element-wise
+//!    first, one after the other until no candidate below the best verified objective is
+//!    left, `refine_in_order`), driven by their element-wise
 //!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
 //!    ([`VerifyPolicy`], [`Search::refine_candidates`]).
 //! 5. The choice [`select`]: verified first, then the lowest objective, then the lowest index.
@@ -73,7 +74,8 @@ pub struct VerifyPolicy {
     /// Collocation points per phase at most ([`VERIFY_MAX_POINTS`] by default).
     pub max_points: usize,
     /// Distinct unverified optima (better than the best verified one) refined at most: they are
-    /// refined one after the other, lowest objective first, until one verifies, so a spurious
+    /// refined one after the other, lowest objective first, until none below the best verified
+    /// objective is left, so a spurious
     /// optimum that cannot be verified (e.g. a collapsed phase) does not hide the next one.
     /// Default 6: the budget costs refinements only when the better candidates fail, and with
     /// 3 the `periodic-cot` search of seed 8 ended unverified (its fifth candidate verifies;
@@ -446,24 +448,33 @@ fn refine_until_verified(
     (cur, records)
 }
 
-/// Applies `refine` to the items of `order` one after the other until `verified` holds for a
-/// result, at most `max` of them; returns each item refined with its result. Sequential on
-/// purpose: the next candidate is refined only if the previous one did not verify, which
-/// depends on values only, so the outcome does not depend on the number of threads.
+/// Applies `refine` to the items of `order` (lowest `value` first) one after the other, at
+/// most `max` of them, until the next item's `value` is no lower than the best `verified`
+/// value of the results so far (`None`: the result did not verify); returns each item
+/// refined with its result. A refinement may verify at a much higher objective than its
+/// candidate's (the refined meshes' solves move between nearby basins: a `periodic-cot`
+/// candidate of J 1.1e-4 verified at 1.7e-3 while the next one verifies lower), so the first
+/// verified result does not end the refinements while a lower candidate is left. Sequential
+/// on purpose: whether the next candidate is refined depends on values only, so the outcome
+/// does not depend on the number of threads.
 fn refine_in_order<I: Copy, T>(
     order: &[I],
     max: usize,
+    value: impl Fn(&I) -> f64,
     mut refine: impl FnMut(&I) -> T,
-    verified: impl Fn(&T) -> bool,
+    verified: impl Fn(&T) -> Option<f64>,
 ) -> Vec<(I, T)> {
     let mut out = Vec::new();
+    let mut best = f64::INFINITY;
     for i in order.iter().take(max) {
-        let r = refine(i);
-        let done = verified(&r);
-        out.push((*i, r));
-        if done {
+        if value(i) >= best {
             break;
         }
+        let r = refine(i);
+        if let Some(v) = verified(&r) {
+            best = best.min(v);
+        }
+        out.push((*i, r));
     }
     out
 }
@@ -471,8 +482,8 @@ fn refine_in_order<I: Copy, T>(
 /// A search for the best verified optimum: runs the chains of `strategy` in `shard`
 /// (in parallel, results in index order), re-integrates every end point, keeps one
 /// candidate per distinct optimum, and hp-refines the unverified optima that beat the best
-/// verified one, lowest objective first, until one verifies ([`refine_until_verified`], at
-/// most `policy.clusters` of them). Every
+/// verified one, lowest objective first, until none below the best verified objective is left
+/// ([`refine_until_verified`], at most `policy.clusters` of them). Every
 /// decision depends on the computed values only, never on thread scheduling, so the result is
 /// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
 pub fn search(
@@ -895,8 +906,8 @@ impl Search {
     }
 
     /// hp-refines the unverified candidates that beat the best verified one, lowest objective
-    /// first, until one verifies ([`refine_until_verified`], at most
-    /// [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
+    /// first, until none below the best verified objective is left ([`refine_until_verified`],
+    /// at most [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
     /// after the exploration, so that the hops start from the problem's own mesh and only
     /// the winners are refined.
     pub fn refine_candidates(
@@ -924,8 +935,9 @@ impl Search {
         let refined = refine_in_order(
             &todo,
             policy.clusters,
+            |&i| cands[i].solution.objective,
             |&i| refine_until_verified(problem, settings, cands[i].clone(), policy),
-            |(c, _)| is_verified(&c.solution),
+            |(c, _)| is_verified(&c.solution).then_some(c.solution.objective),
         );
         for (i, (c, recs)) in refined {
             cands[i] = c;
@@ -1021,27 +1033,35 @@ impl Search {
 mod tests {
     use super::refine_in_order;
 
-    /// The first candidate that verifies ends the refinements; a failed one passes on to the
-    /// next; at most `max` are refined.
+    /// A verified result ends the refinements once the next candidate is no lower than the
+    /// best verified value; a failed one passes on to the next; at most `max` are refined.
     #[test]
-    fn refinement_moves_on_until_a_candidate_verifies() {
-        let verifies = [false, false, true, true];
+    fn refinement_moves_on_while_a_lower_candidate_is_left() {
+        // (candidate value, verified value of its refinement)
+        let cands = [
+            (1.0, None),
+            (2.0, Some(9.0)),
+            (3.0, Some(2.5)),
+            (4.0, Some(4.0)),
+        ];
         let run = |max: usize| {
             let mut calls = Vec::new();
             let out = refine_in_order(
                 &[0usize, 1, 2, 3],
                 max,
+                |&i| cands[i].0,
                 |&i| {
                     calls.push(i);
-                    verifies[i]
+                    cands[i].1
                 },
-                |&v| v,
+                |v| *v,
             );
             (calls, out)
         };
+        // 1 fails, 2 verifies at 9 (above 3), 3 verifies at 2.5, which is below 4: stop.
         let (calls, out) = run(10);
         assert_eq!(calls, [0, 1, 2]);
-        assert_eq!(out, [(0, false), (1, false), (2, true)]);
+        assert_eq!(out, [(0, None), (1, Some(9.0)), (2, Some(2.5))]);
         let (calls, _) = run(2);
         assert_eq!(calls, [0, 1]);
         let (calls, out) = run(0);
