@@ -1,11 +1,16 @@
 //! A global search that does not depend on one lucky start: a sampling phase (seeded starts,
-//! each solved locally) followed by monotonic basin hopping from the best candidate and a short
-//! polishing of the winner, written against the small [`Landscape`] trait so that the same
+//! each solved locally) followed by deterministic reshaping moves, monotonic basin hopping from
+//! the best candidates and a short polishing of the winner, written against the small [`Landscape`] trait so that the same
 //! code runs the optimal-control problems ([`super::search`], the local solves of eq. 60–66
 //! transcribed by Sect. 4.2) and a toy function with known basins (the tests below).
 //!
 //! * Sampling ([`sample`]): start k of a seed is [`Landscape::sample`]`(k)`; the starts run in
 //!   parallel and come back in index order.
+//! * Reshaping (first in [`exploit`], [`HopSettings::reshape_width`]): every deterministic move
+//!   of [`Landscape::reshape`] (for the optimal-control problems the elbow flip and bounds on
+//!   the phase durations, [`super::reshape`]) from each of the best points that differ in shape
+//!   ([`Landscape::alike`]), in rounds that go on from the best new shapes until the best
+//!   shapes have all been moved.
 //! * Exploitation ([`exploit`]): monotonic basin hopping. Each round perturbs the current best
 //!   point [`HopSettings::batch`] times ([`Landscape::hop`], hop h seeded by h alone, scale
 //!   [`HopSettings::scale`]), solves locally, and keeps a result only if it ranks strictly
@@ -507,7 +512,7 @@ mod tests {
             let x = e.best.expect("a point");
             assert!(x.abs() < 1e-9, "seed {seed}: x = {x}");
             // Two moves per reshaped shape, at most two shapes per round.
-            assert!(e.hops.len() <= 12 * 2 * 2 && e.hops.len() % 2 == 0);
+            assert!(e.hops.len() <= 12 * 2 * 2 && e.hops.len().is_multiple_of(2));
             let e0 = exploit(&l, &pts, &HopSettings { seed, ..only(0) }, STARTS);
             assert!(e0.hops.is_empty());
             missed_without += usize::from(e0.best.expect("a point").abs() > 0.25);
