@@ -3,7 +3,8 @@
 //! the problems of Sect. 4 (eq. 60–66):
 //!
 //! 1. Sampling: the chains of a [`Strategy`] (for the periodic problems
-//!    [`super::strategy::DEFAULT_STARTS`] seeded starts; for `periodic-qc` each a continuation
+//!    [`super::strategy::GLOBAL_STARTS`] seeded starts by default, with the global search;
+//!    for `periodic-qc` each a continuation
 //!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
 //!    problem's bound), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
 //!    [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
