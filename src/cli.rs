@@ -482,8 +482,9 @@ pub struct OptimizeArgs {
     /// multistart, like --starts.
     #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
-    /// Basin hops of the global search at most [default: 64; 0: no global search, the best
-    /// verified of the starts on the problem's mesh]: the starts on a coarse mesh, reshaping
+    /// Basin hops of the global search at most [default: 64 for the periodic problems, none
+    /// for the others; 0: no global search, the best verified of the starts on the problem's
+    /// mesh]: the starts on a coarse mesh, reshaping
     /// moves and basin hopping there, the best optima re-solved on the mesh (docs/optima.md).
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
     pub hops: Option<usize>,

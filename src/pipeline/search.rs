@@ -16,8 +16,8 @@
 //! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
 //!    on the problem's mesh from their coarse trajectories, each re-integrated.
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
-//!    first, one after the other until no candidate below the best verified objective is
-//!    left, `refine_in_order`), driven by their element-wise
+//!    first, one after the other until no candidate below half the best verified objective
+//!    is left, `refine_in_order`), driven by their element-wise
 //!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
 //!    ([`VerifyPolicy`], [`Search::refine_candidates`]).
 //! 5. The choice [`select`]: verified first, then the lowest objective, then the lowest index.
@@ -77,8 +77,8 @@ pub struct VerifyPolicy {
     /// Collocation points per phase at most ([`VERIFY_MAX_POINTS`] by default).
     pub max_points: usize,
     /// Distinct unverified optima (better than the best verified one) refined at most: they are
-    /// refined one after the other, lowest objective first, until none below the best verified
-    /// objective is left, so a spurious
+    /// refined one after the other, lowest objective first, until none below half the best
+    /// verified objective is left, so a spurious
     /// optimum that cannot be verified (e.g. a collapsed phase) does not hide the next one.
     /// Default 6: the budget costs refinements only when the better candidates fail, and with
     /// 3 the `periodic-cot` search of seed 8 ended unverified (its fifth candidate verifies;
@@ -452,13 +452,21 @@ fn refine_until_verified(
     (cur, records)
 }
 
+/// Fraction of the best verified objective below which a further candidate is still refined
+/// ([`refine_in_order`]): a refinement may verify far above its candidate's objective, so a
+/// candidate well below the best verified one is worth its refinements; one close to it
+/// rarely is, and each costs up to five refinements on meshes of hundreds of points (on
+/// `periodic-cot` seed 1, refining every lower candidate took 353 s of CPU).
+pub const REFINE_BELOW: f64 = 0.5;
+
 /// Applies `refine` to the items of `order` (lowest `value` first) one after the other, at
-/// most `max` of them, until the next item's `value` is no lower than the best `verified`
-/// value of the results so far (`None`: the result did not verify); returns each item
-/// refined with its result. A refinement may verify at a much higher objective than its
-/// candidate's (the refined meshes' solves move between nearby basins: a `periodic-cot`
-/// candidate of J 1.1e-4 verified at 1.7e-3 while the next one verifies lower), so the first
-/// verified result does not end the refinements while a lower candidate is left. Sequential
+/// most `max` of them, until the next item's `value` is no lower than [`REFINE_BELOW`] times
+/// the best `verified` value of the results so far (`None`: the result did not verify);
+/// returns each item refined with its result. A refinement may verify at a much higher
+/// objective than its candidate's (the refined meshes' solves move between nearby basins: a
+/// `periodic-cot` candidate of J 1.1e-4 verified at 1.7e-3 while the third one verifies at
+/// 4.1e-4), so the first verified result does not end the refinements while a much lower
+/// candidate is left. Sequential
 /// on purpose: whether the next candidate is refined depends on values only, so the outcome
 /// does not depend on the number of threads.
 fn refine_in_order<I: Copy, T>(
@@ -471,7 +479,7 @@ fn refine_in_order<I: Copy, T>(
     let mut out = Vec::new();
     let mut best = f64::INFINITY;
     for i in order.iter().take(max) {
-        if value(i) >= best {
+        if value(i) >= REFINE_BELOW * best {
             break;
         }
         let r = refine(i);
@@ -486,8 +494,8 @@ fn refine_in_order<I: Copy, T>(
 /// A search for the best verified optimum: runs the chains of `strategy` in `shard`
 /// (in parallel, results in index order), re-integrates every end point, keeps one
 /// candidate per distinct optimum, and hp-refines the unverified optima that beat the best
-/// verified one, lowest objective first, until none below the best verified objective is left
-/// ([`refine_until_verified`], at most `policy.clusters` of them). Every
+/// verified one, lowest objective first, until none below half the best verified objective
+/// is left ([`refine_until_verified`], at most `policy.clusters` of them). Every
 /// decision depends on the computed values only, never on thread scheduling, so the result is
 /// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
 pub fn search(
@@ -910,7 +918,7 @@ impl Search {
     }
 
     /// hp-refines the unverified candidates that beat the best verified one, lowest objective
-    /// first, until none below the best verified objective is left ([`refine_until_verified`],
+    /// first, until none below half the best verified objective is left ([`refine_until_verified`],
     /// at most [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
     /// after the exploration, so that the hops start from the problem's own mesh and only
     /// the winners are refined.
@@ -1037,8 +1045,9 @@ impl Search {
 mod tests {
     use super::refine_in_order;
 
-    /// A verified result ends the refinements once the next candidate is no lower than the
-    /// best verified value; a failed one passes on to the next; at most `max` are refined.
+    /// A verified result ends the refinements once the next candidate is no lower than
+    /// [`REFINE_BELOW`](super::REFINE_BELOW) times the best verified value; a failed one passes
+    /// on to the next; at most `max` are refined.
     #[test]
     fn refinement_moves_on_while_a_lower_candidate_is_left() {
         // (candidate value, verified value of its refinement)
@@ -1062,7 +1071,8 @@ mod tests {
             );
             (calls, out)
         };
-        // 1 fails, 2 verifies at 9 (above 3), 3 verifies at 2.5, which is below 4: stop.
+        // 0 fails, 1 verifies at 9 (3 is below half of it), 2 verifies at 2.5, and 4 is not
+        // below half of 2.5: stop.
         let (calls, out) = run(10);
         assert_eq!(calls, [0, 1, 2]);
         assert_eq!(out, [(0, None), (1, Some(9.0)), (2, Some(2.5))]);

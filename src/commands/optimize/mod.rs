@@ -497,7 +497,8 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
 /// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` with
 /// `--hops 0` (the search keeps its best verified start), else
 /// [`crate::pipeline::search::DEFAULT_HOPS`] with the budget N (default: its own, 64; the
-/// global search is the default since decision record 0029).
+/// global search is the default of the periodic problems since decision record 0029, the
+/// callers drop it for the others without `--hops`).
 pub fn hop_settings(
     hops: Option<usize>,
     hop_scale: Option<f64>,
@@ -547,7 +548,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     let name = parse_problem(problem_arg(args))?;
     let mut settings = settings_from_args(args)?;
     settings.scene = scene_from_args(args, name)?;
-    let hops = hop_settings(args.hops, args.hop_scale)?;
+    // Without `--hops` the global search runs for the periodic problems only (the others'
+    // default is the continuation; an explicit multi-start of them keeps its best start).
+    let hops = hop_settings(args.hops, args.hop_scale)?
+        .filter(|_| args.hops.is_some() || name.is_periodic());
     // The global search samples many cheap coarse starts; without it (`--hops 0`) the
     // multi-start keeps its 32 starts on the problem's mesh.
     let default_starts = if hops.is_some() {

@@ -30,13 +30,13 @@ pub fn solve_with_progress(
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    let found = search_with_progress(
-        name,
-        settings,
-        strategy,
-        Shard::WHOLE,
-        &VerifyPolicy::default().global(crate::pipeline::search::DEFAULT_HOPS),
-    )?;
+    // The global search of `optimize`'s default for the periodic problems.
+    let policy = if name.is_periodic() {
+        VerifyPolicy::default().global(crate::pipeline::search::DEFAULT_HOPS)
+    } else {
+        VerifyPolicy::default()
+    };
+    let found = search_with_progress(name, settings, strategy, Shard::WHOLE, &policy)?;
     let (p, sol) = found.best()?;
     let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
     Ok((p, sol))
