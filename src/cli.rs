@@ -473,7 +473,8 @@ pub struct OptimizeArgs {
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
     /// `multistart` (`--starts` seeded guesses around the default, in parallel). Default with
-    /// `--scheme radau`: multistart with 32 starts (seed 0) for the periodic problems,
+    /// `--scheme radau`: multistart with 128 starts (seed 0) and the global search (`--hops`)
+    /// for the periodic problems,
     /// continuation for the others; with `--scheme lg`: direct (an LG-30 solve takes about 4× a Radau
     /// 3 × 10 one). `periodic-qc` chains first bound the stick phase to ≥ 0.1 s and then relax
     /// it to --min-stick (warm-started). Every end point is re-integrated; one distinct optimum
@@ -483,17 +484,18 @@ pub struct OptimizeArgs {
     /// result is a local optimum: docs/optima.md says how to look for better ones.
     #[arg(long, value_parser = ["direct", "continuation", "multistart"])]
     pub strategy: Option<String>,
-    /// Number of starts of the multi-start (start 0 is the default guess) [default: 32];
-    /// without --strategy it selects multistart.
+    /// Number of starts of the multi-start (start 0 is the default guess) [default: 128 with
+    /// the global search, 32 with `--hops 0`]; without --strategy it selects multistart.
     #[arg(long, allow_hyphen_values = true, value_parser = starts)]
     pub starts: Option<u64>,
     /// Seed of the multi-start guesses [default: 0]; without --strategy it selects
     /// multistart, like --starts.
     #[arg(long, allow_hyphen_values = true)]
     pub seed: Option<u64>,
-    /// Run the global search with at most N basin hops [default: off, keep the best verified
-    /// start]: the starts on a coarse mesh, basin hopping there, the best optima re-solved on
-    /// the mesh (64 with `--starts 128` is the studied setting; docs/optima.md).
+    /// Basin hops of the global search at most [default: 64 for the periodic problems, none
+    /// for the others; 0: no global search, the best verified of the starts on the problem's
+    /// mesh]: the starts on a coarse mesh, reshaping
+    /// moves and basin hopping there, the best optima re-solved on the mesh (docs/optima.md).
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
     pub hops: Option<usize>,
     /// Relative size of a basin hop: each phase duration is scaled by e^(s·u), u uniform in

@@ -198,8 +198,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             format!(
                 "the default search of `optimize`: {} for every periodic problem (for \
                  periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
-                 relaxes it to 0.01 s); every end point is re-integrated and the best \
-                 verified one kept (see ball_finger::pipeline::search)",
+                 relaxes it to 0.01 s), solved on a coarse mesh, then the global search's \
+                 reshaping moves and basin hopping there, the best optima re-solved on the \
+                 mesh; every end point is re-integrated and the best verified one kept (see \
+                 ball_finger::pipeline::search and docs/optima.md)",
                 crate::pipeline::strategy::default_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme

@@ -10,6 +10,7 @@
 //!   point;
 //! * [`global`]: the global search (sampling, monotonic basin hopping, polishing) over any
 //!   [`global::Landscape`];
+//! * [`reshape`]: the reshaping moves of the global search (phase-duration bounds);
 //! * [`refine`]: adaptive hp mesh refinement (Sect. 5);
 //! * [`verify`]: re-integration of the optimal torques with the simulator (bf-sim);
 //! * [`bounds`]: the bounds an optimum sits on (eq. 60–65);
@@ -26,6 +27,7 @@ pub mod bounds;
 pub mod error;
 pub mod global;
 pub mod refine;
+pub mod reshape;
 pub mod search;
 pub mod solution_io;
 pub mod solve;

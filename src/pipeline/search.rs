@@ -3,17 +3,21 @@
 //! the problems of Sect. 4 (eq. 60–66):
 //!
 //! 1. Sampling: the chains of a [`Strategy`] (for the periodic problems
-//!    [`super::strategy::DEFAULT_STARTS`] seeded starts; for `periodic-qc` each a continuation
+//!    [`super::strategy::GLOBAL_STARTS`] seeded starts by default, with the global search;
+//!    for `periodic-qc` each a continuation
 //!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
 //!    problem's bound), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
 //!    [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
 //!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
-//! 2. Global search only: exploration on that mesh ([`Search::explore`]), monotonic basin
-//!    hopping from the best distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
+//! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping moves
+//!    ([`super::reshape`]: the elbow flip, phase-duration bounds then released) from the best
+//!    distinct shapes ([`same_shape`]), monotonic basin hopping from the best distinct optima
+//!    and polishing of the winner ([`DEFAULT_HOPS`]).
 //! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
 //!    on the problem's mesh from their coarse trajectories, each re-integrated.
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
-//!    first, one after the other until one verifies), driven by their element-wise
+//!    first, one after the other until no candidate below half the best verified objective
+//!    is left, `refine_in_order`), driven by their element-wise
 //!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
 //!    ([`VerifyPolicy`], [`Search::refine_candidates`]).
 //! 5. The choice [`select`]: verified first, then the lowest objective, then the lowest index.
@@ -37,6 +41,7 @@ use super::build;
 use super::error::PipelineError;
 use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
+use super::reshape::{MOVES, Move, flip_elbow, with_duration_bounds};
 use super::solve::solve_recentred;
 use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
@@ -46,6 +51,10 @@ use super::verify::{VERIFIED_DEFECT, is_verified, verify};
 
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
+
+/// Relative difference of objectives and phase durations within which two end points have
+/// the same shape ([`same_shape`]).
+pub const SHAPE_RTOL: f64 = 0.02;
 
 /// First stick-phase lower bound (s) of the stick continuation
 /// ([`VerifyPolicy::stick_continuation`]).
@@ -68,7 +77,8 @@ pub struct VerifyPolicy {
     /// Collocation points per phase at most ([`VERIFY_MAX_POINTS`] by default).
     pub max_points: usize,
     /// Distinct unverified optima (better than the best verified one) refined at most: they are
-    /// refined one after the other, lowest objective first, until one verifies, so a spurious
+    /// refined one after the other, lowest objective first, until none below half the best
+    /// verified objective is left, so a spurious
     /// optimum that cannot be verified (e.g. a collapsed phase) does not hide the next one.
     /// Default 6: the budget costs refinements only when the better candidates fail, and with
     /// 3 the `periodic-cot` search of seed 8 ended unverified (its fifth candidate verifies;
@@ -122,8 +132,9 @@ pub const DEFAULT_COARSE: CoarseSampling = CoarseSampling {
 /// Stage label of the re-solve of a coarse optimum on the problem's mesh ([`CoarseSampling`]).
 pub const PROMOTE_LABEL: &str = "full mesh";
 
-/// The basin hopping of the global search ([`VerifyPolicy::global`], `optimize --hops N` with
-/// the budget N), on the coarse mesh of the sampling: rounds of
+/// The reshaping and basin hopping of the global search ([`VerifyPolicy::global`], `optimize
+/// --hops N` with the budget N), on the coarse mesh of the sampling: up to 6 rounds of every
+/// reshaping move from the 4 best distinct shapes ([`super::reshape::MOVES`]), then rounds of
 /// four hops (durations scaled by up to e^±0.3 each, and the period by up to e^±0.3), at most
 /// 64, stopping once the best optimum was reached three times and 24 hops in a row brought
 /// nothing better; then up to two polishing rounds (a re-solve and three hops of e^±0.05).
@@ -140,6 +151,8 @@ pub const DEFAULT_HOPS: HopSettings = HopSettings {
     polish_scale: 0.05,
     polish_rounds: 2,
     seed: 0,
+    reshape_width: 4,
+    reshape_rounds: 6,
 };
 
 /// Initial barrier parameter of a hop's re-solve ([`solve_recentred`]): large enough for the
@@ -174,10 +187,10 @@ pub const VERIFY_REFINEMENTS: usize = 5;
 pub const VERIFY_MAX_POINTS: usize = 800;
 
 impl VerifyPolicy {
-    /// The policy of the global search (`optimize --hops N`): `self` with the basin hopping
-    /// `hops` and the coarse sampling [`DEFAULT_COARSE`]. Opt-in, not the default: with it as
-    /// the default `paper` took 244 s CPU (over its 90 s budget on 2 cores) and
-    /// `periodic-qc` reached the best known optimum on 4 seeds in 10 (decision record 0024).
+    /// The policy of the global search (the default of `optimize` and the paper report for
+    /// multi-starts; `--hops N` sets the budget, `--hops 0` leaves it out): `self` with the
+    /// reshaping and basin hopping `hops` and the coarse sampling [`DEFAULT_COARSE`]. With it
+    /// `periodic-qc` reaches J ≤ 0.08761 on every seed 0–9 (decision record 0029).
     pub fn global(self, hops: HopSettings) -> Self {
         VerifyPolicy {
             hops: Some(hops),
@@ -439,24 +452,41 @@ fn refine_until_verified(
     (cur, records)
 }
 
-/// Applies `refine` to the items of `order` one after the other until `verified` holds for a
-/// result, at most `max` of them; returns each item refined with its result. Sequential on
-/// purpose: the next candidate is refined only if the previous one did not verify, which
-/// depends on values only, so the outcome does not depend on the number of threads.
+/// Fraction of the best verified objective below which a further candidate is still refined
+/// ([`refine_in_order`]): a refinement may verify far above its candidate's objective, so a
+/// candidate well below the best verified one is worth its refinements; one close to it
+/// rarely is, and each costs up to five refinements on meshes of hundreds of points (on
+/// `periodic-cot` seed 1, refining every lower candidate took 353 s of CPU).
+pub const REFINE_BELOW: f64 = 0.5;
+
+/// Applies `refine` to the items of `order` (lowest `value` first) one after the other, at
+/// most `max` of them, until the next item's `value` is no lower than [`REFINE_BELOW`] times
+/// the best `verified` value of the results so far (`None`: the result did not verify);
+/// returns each item refined with its result. A refinement may verify at a much higher
+/// objective than its candidate's (the refined meshes' solves move between nearby basins: a
+/// `periodic-cot` candidate of J 1.1e-4 verified at 1.7e-3 while the third one verifies at
+/// 4.1e-4), so the first verified result does not end the refinements while a much lower
+/// candidate is left. Sequential
+/// on purpose: whether the next candidate is refined depends on values only, so the outcome
+/// does not depend on the number of threads.
 fn refine_in_order<I: Copy, T>(
     order: &[I],
     max: usize,
+    value: impl Fn(&I) -> f64,
     mut refine: impl FnMut(&I) -> T,
-    verified: impl Fn(&T) -> bool,
+    verified: impl Fn(&T) -> Option<f64>,
 ) -> Vec<(I, T)> {
     let mut out = Vec::new();
+    let mut best = f64::INFINITY;
     for i in order.iter().take(max) {
-        let r = refine(i);
-        let done = verified(&r);
-        out.push((*i, r));
-        if done {
+        if value(i) >= REFINE_BELOW * best {
             break;
         }
+        let r = refine(i);
+        if let Some(v) = verified(&r) {
+            best = best.min(v);
+        }
+        out.push((*i, r));
     }
     out
 }
@@ -464,8 +494,8 @@ fn refine_in_order<I: Copy, T>(
 /// A search for the best verified optimum: runs the chains of `strategy` in `shard`
 /// (in parallel, results in index order), re-integrates every end point, keeps one
 /// candidate per distinct optimum, and hp-refines the unverified optima that beat the best
-/// verified one, lowest objective first, until one verifies ([`refine_until_verified`], at
-/// most `policy.clusters` of them). Every
+/// verified one, lowest objective first, until none below half the best verified objective
+/// is left ([`refine_until_verified`], at most `policy.clusters` of them). Every
 /// decision depends on the computed values only, never on thread scheduling, so the result is
 /// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
 pub fn search(
@@ -765,6 +795,91 @@ impl Landscape for OcpLandscape<'_> {
     fn same(&self, a: &Candidate, b: &Candidate) -> bool {
         solved(&a.solution) == solved(&b.solution) && same_optimum(&a.solution, &b.solution)
     }
+
+    fn alike(&self, a: &Candidate, b: &Candidate) -> bool {
+        solved(&a.solution) == solved(&b.solution) && same_shape(&a.solution, &b.solution)
+    }
+
+    fn reshapes(&self, from: &Candidate) -> usize {
+        if solved(&from.solution) && from.problem.is_some() {
+            MOVES.len()
+        } else {
+            0
+        }
+    }
+
+    fn reshape(&self, from: &Candidate, kind: usize, id: usize) -> Option<Candidate> {
+        let t0 = Instant::now();
+        let p = from.problem.as_ref()?;
+        let m = MOVES.get(kind)?;
+        let within: Vec<(f64, f64)> = p.ocp.phases.iter().map(|ph| ph.duration_bounds).collect();
+        let bounds = m.bounds(&from.solution.phase_durations, &within, &p.modes)?;
+        let label = format!(
+            "reshape {} from {}: {}{}",
+            kind,
+            from.index,
+            m.describe(),
+            if *m == Move::ElbowFlip {
+                ""
+            } else {
+                ", released"
+            }
+        );
+        let max_iter = self.settings.max_iter.min(HOP_MAX_ITER);
+        let res = (|| {
+            let mut released = p.clone();
+            released.settings.max_iter = max_iter;
+            let fit = || PipelineError::Internal("a reshaped optimum does not fit its own problem");
+            if *m == Move::ElbowFlip {
+                let mut w = Self::perturbed(&released, &from.solution, 0, 0.0).ok_or_else(fit)?;
+                let n = Nlp::num_variables(&released.nlp);
+                let (mut lo, mut up) = (vec![0.0; n], vec![0.0; n]);
+                Nlp::variable_bounds(&released.nlp, &mut lo, &mut up);
+                flip_elbow(&released, released.guess.free.len(), &mut w.x, &lo, &up);
+                let sol = solve_recentred(&released, &w, HOP_MU)?;
+                return Ok((released, sol));
+            }
+            let held = with_duration_bounds(&released, &bounds)?;
+            let w = Self::perturbed(&held, &from.solution, 0, 0.0).ok_or_else(fit)?;
+            let sol = solve_recentred(&held, &w, HOP_MU)?;
+            let w = sol.nlp_warm.as_ref().ok_or(PipelineError::Internal(
+                "a reshaped solve's solution has no primal-dual point",
+            ))?;
+            let mut fin = super::solve::solve_warm(&released, w, None)?;
+            fin.iterations += sol.iterations;
+            Ok::<_, PipelineError>((released, fin))
+        })();
+        let (b, sol) = match res {
+            Ok(r) => r,
+            Err(e) => {
+                self.push(&self.records, vec![failed_record(id, label, &e, t0)]);
+                return None;
+            }
+        };
+        let mut c = Candidate {
+            index: id,
+            problem: Some(b),
+            solution: sol,
+        };
+        self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
+        if self.policy.rtol > 0.0 && self.verify_samples {
+            attach_verification(&mut c, self.policy.rtol);
+        }
+        Some(c)
+    }
+}
+
+/// Whether two end points have the same shape: objectives within [`SHAPE_RTOL`] and every
+/// phase duration within [`SHAPE_RTOL`] relative or 5 ms (the reshaping's origins differ
+/// in shape, so that the moves are not spent on variants of one basin).
+pub(crate) fn same_shape(a: &OcpSolution, b: &OcpSolution) -> bool {
+    let close = |x: f64, y: f64, abs: f64| (x - y).abs() <= SHAPE_RTOL * x.abs().max(y.abs()) + abs;
+    close(a.objective, b.objective, 0.0)
+        && a.phase_durations.len() == b.phase_durations.len()
+        && a.phase_durations
+            .iter()
+            .zip(&b.phase_durations)
+            .all(|(x, y)| close(*x, *y, 5e-3))
 }
 
 impl Search {
@@ -803,8 +918,8 @@ impl Search {
     }
 
     /// hp-refines the unverified candidates that beat the best verified one, lowest objective
-    /// first, until one verifies ([`refine_until_verified`], at most
-    /// [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
+    /// first, until none below half the best verified objective is left ([`refine_until_verified`],
+    /// at most [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
     /// after the exploration, so that the hops start from the problem's own mesh and only
     /// the winners are refined.
     pub fn refine_candidates(
@@ -832,8 +947,9 @@ impl Search {
         let refined = refine_in_order(
             &todo,
             policy.clusters,
+            |&i| cands[i].solution.objective,
             |&i| refine_until_verified(problem, settings, cands[i].clone(), policy),
-            |(c, _)| is_verified(&c.solution),
+            |(c, _)| is_verified(&c.solution).then_some(c.solution.objective),
         );
         for (i, (c, recs)) in refined {
             cands[i] = c;
@@ -929,27 +1045,37 @@ impl Search {
 mod tests {
     use super::refine_in_order;
 
-    /// The first candidate that verifies ends the refinements; a failed one passes on to the
-    /// next; at most `max` are refined.
+    /// A verified result ends the refinements once the next candidate is no lower than
+    /// [`REFINE_BELOW`](super::REFINE_BELOW) times the best verified value; a failed one passes
+    /// on to the next; at most `max` are refined.
     #[test]
-    fn refinement_moves_on_until_a_candidate_verifies() {
-        let verifies = [false, false, true, true];
+    fn refinement_moves_on_while_a_lower_candidate_is_left() {
+        // (candidate value, verified value of its refinement)
+        let cands = [
+            (1.0, None),
+            (2.0, Some(9.0)),
+            (3.0, Some(2.5)),
+            (4.0, Some(4.0)),
+        ];
         let run = |max: usize| {
             let mut calls = Vec::new();
             let out = refine_in_order(
                 &[0usize, 1, 2, 3],
                 max,
+                |&i| cands[i].0,
                 |&i| {
                     calls.push(i);
-                    verifies[i]
+                    cands[i].1
                 },
-                |&v| v,
+                |v| *v,
             );
             (calls, out)
         };
+        // 0 fails, 1 verifies at 9 (3 is below half of it), 2 verifies at 2.5, and 4 is not
+        // below half of 2.5: stop.
         let (calls, out) = run(10);
         assert_eq!(calls, [0, 1, 2]);
-        assert_eq!(out, [(0, false), (1, false), (2, true)]);
+        assert_eq!(out, [(0, None), (1, Some(9.0)), (2, Some(2.5))]);
         let (calls, _) = run(2);
         assert_eq!(calls, [0, 1]);
         let (calls, out) = run(0);

@@ -21,7 +21,8 @@
 //!   uniform, phase durations log-uniform in [0.05, 1.6] s; start 0 is the default guess
 //!   itself, so the result is never worse than `Direct`), solved in parallel; the best
 //!   successful solution wins. [`default_strategy`] of the periodic problems:
-//!   [`DEFAULT_STARTS`] starts with seed [`DEFAULT_SEED`].
+//!   [`GLOBAL_STARTS`] starts with seed [`DEFAULT_SEED`] (the global search's sampling;
+//!   [`DEFAULT_STARTS`] without it).
 //!
 //! [`solve_with_strategy`] returns the best end point as solved. For `periodic-qc` the chains
 //! can run as a continuation in the stick phase's lower bound (a stage relaxing it to the
@@ -442,8 +443,9 @@ pub fn solve_with_strategy(
     Ok((p, sol))
 }
 
-/// Starts of the default multi-start of the periodic problems ([`default_strategy`]); the
-/// budget curve in BENCHMARKS.md shows how the best objective grows with the starts.
+/// Starts of the multi-start of the periodic problems without the global search (`optimize
+/// --hops 0`); the budget curve in BENCHMARKS.md shows how the best objective grows with the
+/// starts.
 pub const DEFAULT_STARTS: usize = 32;
 
 /// Starts of the global search's sampling on its coarse mesh (`optimize --hops N --starts
@@ -457,17 +459,17 @@ pub const GLOBAL_STARTS: usize = 128;
 pub const DEFAULT_SEED: u64 = 0;
 
 /// The default strategy of `problem` on `scheme`: a seeded multi-start of
-/// [`DEFAULT_STARTS`] starts for the periodic problems (their landscapes have many local
-/// optima: for `periodic-qc` the continuation's best end point is 66 % above the best known
-/// optimum, which one start in 32 reaches; for `periodic-cot` it is 25× above the
-/// multi-start's verified optimum, BENCHMARKS.md), the
+/// [`GLOBAL_STARTS`] starts for the periodic problems, the sampling of the global search that
+/// `optimize` and the paper report run on it (their landscapes have many local optima: for
+/// `periodic-qc` the continuation's best end point is 66 % above the best known optimum; for
+/// `periodic-cot` it is 25× above the multi-start's verified optimum, BENCHMARKS.md), the
 /// continuation in ε for the others, and one direct solve with Legendre–Gauss (an LG solve
 /// takes about 4× a Radau one).
 pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
     match scheme {
         Scheme::Lg => Strategy::Direct,
         Scheme::Radau { .. } if problem.is_periodic() => Strategy::Multistart {
-            starts: DEFAULT_STARTS,
+            starts: GLOBAL_STARTS,
             seed: DEFAULT_SEED,
         },
         Scheme::Radau { .. } => Strategy::Continuation,

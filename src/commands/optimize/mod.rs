@@ -17,7 +17,9 @@
 use crate::cli::{OptimizeArgs, OptimizeCommand};
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::VerifyPolicy;
-use crate::pipeline::strategy::{self, DEFAULT_SEED, DEFAULT_STARTS, Shard, Strategy};
+use crate::pipeline::strategy::{
+    self, DEFAULT_SEED, DEFAULT_STARTS, GLOBAL_STARTS, Shard, Strategy,
+};
 use crate::pipeline::verify::{
     MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, path_failure, verify,
 };
@@ -492,10 +494,11 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
     Ok(())
 }
 
-/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` without
-/// `--hops` or with `--hops 0` (the search keeps its best verified start; the global search is
-/// opt-in, decision record 0024), else [`crate::pipeline::search::DEFAULT_HOPS`] with the
-/// budget N.
+/// The basin hopping of `--hops` and `--hop-scale` ([`VerifyPolicy::hops`]): `None` with
+/// `--hops 0` (the search keeps its best verified start), else
+/// [`crate::pipeline::search::DEFAULT_HOPS`] with the budget N (default: its own, 64; the
+/// global search is the default of the periodic problems since decision record 0029, the
+/// callers drop it for the others without `--hops`).
 pub fn hop_settings(
     hops: Option<usize>,
     hop_scale: Option<f64>,
@@ -513,7 +516,7 @@ pub fn hop_settings(
             budget: n,
             ..h
         })),
-        None => Ok(None),
+        None => Ok(Some(h)),
     }
 }
 
@@ -545,12 +548,29 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     let name = parse_problem(problem_arg(args))?;
     let mut settings = settings_from_args(args)?;
     settings.scene = scene_from_args(args, name)?;
-    let starts = args.starts.unwrap_or(DEFAULT_STARTS as u64);
+    // Without `--hops` the global search runs for the periodic problems only (the others'
+    // default is the continuation; an explicit multi-start of them keeps its best start).
+    let hops = hop_settings(args.hops, args.hop_scale)?
+        .filter(|_| args.hops.is_some() || name.is_periodic());
+    // The global search samples many cheap coarse starts; without it (`--hops 0`) the
+    // multi-start keeps its 32 starts on the problem's mesh.
+    let default_starts = if hops.is_some() {
+        GLOBAL_STARTS
+    } else {
+        DEFAULT_STARTS
+    };
+    let starts = args.starts.unwrap_or(default_starts as u64);
     let seed = args.seed.unwrap_or(DEFAULT_SEED);
     let strategy = match (&args.strategy, args.starts.is_some() || args.seed.is_some()) {
         (Some(text), _) => parse_strategy(text, starts, seed)?,
         (None, true) => parse_strategy("multistart", starts, seed)?,
-        (None, false) => strategy::default_strategy(name, settings.scheme),
+        (None, false) => match strategy::default_strategy(name, settings.scheme) {
+            Strategy::Multistart { seed, .. } => Strategy::Multistart {
+                starts: default_starts,
+                seed,
+            },
+            other => other,
+        },
     };
     // The multi-start's options must not be dropped silently by another strategy.
     if !matches!(strategy, Strategy::Multistart { .. }) {
@@ -601,7 +621,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             .unwrap_or(crate::pipeline::search::VERIFY_REFINEMENTS),
         ..VerifyPolicy::default()
     };
-    let policy = match hop_settings(args.hops, args.hop_scale)? {
+    let policy = match hops {
         Some(h) => policy.global(h),
         None => policy,
     };

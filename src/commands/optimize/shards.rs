@@ -311,7 +311,8 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         rtol,
         ..VerifyPolicy::default()
     };
-    let policy = match hops {
+    // As `optimize`: without `--hops` the global search runs for the periodic problems only.
+    let policy = match hops.filter(|_| args.hops.is_some() || name.is_periodic()) {
         Some(h) => policy.global(h),
         None => policy,
     };
