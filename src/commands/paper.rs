@@ -196,13 +196,14 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             "one cold solve per problem (`--quick`)".to_string()
         } else {
             format!(
-                "the default search of `optimize`: {} for every periodic problem (for \
+                "the search of `optimize --hops 0`: {} for every periodic problem (for \
                  periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
-                 relaxes it to 0.01 s), solved on a coarse mesh, then the global search's \
-                 reshaping moves and basin hopping there, the best optima re-solved on the \
-                 mesh; every end point is re-integrated and the best verified one kept (see \
-                 ball_finger::pipeline::search and docs/optima.md)",
-                crate::pipeline::strategy::default_strategy(
+                 relaxes it to 0.01 s); every end point is re-integrated and the best \
+                 verified one kept (see ball_finger::pipeline::search). Not `optimize`'s \
+                 default global search: its COT searches take minutes, and its lower optima \
+                 are taps that a Newton plant cannot execute (docs/optima.md, decision \
+                 record 0029)",
+                crate::pipeline::strategy::multistart_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme
                 )
@@ -261,7 +262,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         let strategy = if args.quick {
             crate::pipeline::strategy::Strategy::Direct
         } else {
-            crate::pipeline::strategy::default_strategy(
+            crate::pipeline::strategy::multistart_strategy(
                 bf_problem::Problem::PeriodicQc,
                 settings.scheme,
             )

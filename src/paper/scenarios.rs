@@ -716,10 +716,10 @@ pub fn run_all(
             ..ProblemSettings::default()
         };
         // `--quick` is a smoke run of the pipeline: one cold solve per problem. Otherwise the
-        // default search of `optimize`, so the report shows the optima a user gets.
+        // search of `optimize --hops 0` (`multistart_strategy` says why not the global one).
         let strategy = match name.parse::<Problem>() {
             _ if quick => Strategy::Direct,
-            Ok(p) => crate::pipeline::strategy::default_strategy(p, settings.scheme),
+            Ok(p) => crate::pipeline::strategy::multistart_strategy(p, settings.scheme),
             Err(_) => Strategy::default(),
         };
         match run_scenario(name, settings, strategy, dir, mu_s, solve)

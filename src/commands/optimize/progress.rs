@@ -22,20 +22,16 @@ pub fn iteration_spinner(label: &str) -> ProgressBar {
 
 /// Solve with `strategy` behind a progress spinner that shows each finished stage; every end
 /// point is re-integrated, a verified one is preferred and an unverified optimum that beats
-/// the best verified one is hp-refined until it verifies ([`search_with_progress`] with the
-/// global search of `optimize`'s default, [`VerifyPolicy::global`]; it applies to multi-starts
-/// only); what still fails is flagged in the tables.
+/// the best verified one is hp-refined until it verifies ([`search_with_progress`] without the
+/// global search, as `optimize --hops 0`: the paper report's searches,
+/// [`crate::pipeline::strategy::multistart_strategy`] says why); what still fails is flagged
+/// in the tables.
 pub fn solve_with_progress(
     name: Problem,
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    // The global search of `optimize`'s default for the periodic problems.
-    let policy = if name.is_periodic() {
-        VerifyPolicy::default().global(crate::pipeline::search::DEFAULT_HOPS)
-    } else {
-        VerifyPolicy::default()
-    };
+    let policy = VerifyPolicy::default();
     let found = search_with_progress(name, settings, strategy, Shard::WHOLE, &policy)?;
     let (p, sol) = found.best()?;
     let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
