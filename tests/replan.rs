@@ -18,7 +18,7 @@ mod cli;
 
 use ball_finger::paper::closed_loop::{ControllerKind, run_tracking_replanned, solution_model};
 use ball_finger::paper::replan::{REPLAN_MAX_ITER, replan_problem, solve_replan};
-use ball_finger::pipeline::{OcpSolution, SolutionIo};
+use ball_finger::pipeline::OcpSolution;
 use bf_model::ImpactLaw;
 use bf_problem::catalogue::replan::{LiftOff, set_measured};
 use bf_problem::node::PhaseMode;
@@ -30,22 +30,8 @@ use std::sync::OnceLock;
 fn qc() -> &'static OcpSolution {
     static SOL: OnceLock<OcpSolution> = OnceLock::new();
     SOL.get_or_init(|| {
-        let dir = cli::tmpdir("replan-qc");
-        let r = cli::run(&[
-            "optimize",
-            "--hops",
-            "0",
-            "--problem",
-            "periodic-qc",
-            "--starts",
-            "4",
-            "--out",
-            dir.to_str().unwrap(),
-        ]);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+        let sol = cli::multistart_optimum("periodic-qc", &["--starts", "4"]);
         assert!(sol.status.is_success(), "{:?}", sol.stages);
-        std::fs::remove_dir_all(&dir).ok();
         sol
     })
 }
@@ -218,24 +204,6 @@ fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
     assert_eq!(plans(&a), plans(&b));
 }
 
-/// The 32-start optimum of `problem` (`optimize --hops 0 --problem NAME`, what `paper` presents).
-fn default_optimum(problem: &str) -> OcpSolution {
-    let dir = cli::tmpdir(&format!("replan-default-{problem}"));
-    let r = cli::run(&[
-        "optimize",
-        "--hops",
-        "0",
-        "--problem",
-        problem,
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
-    sol
-}
-
 /// The targets with re-planning at every lift-off, bounded controller (1 N m), on the
 /// nominal plant (every period ≤ 2 %) and the perturbed plants of the robustness table
 /// (≤ 5 % from the 4th period, contact in every period), over `PERIODS` periods: asserted for
@@ -251,7 +219,7 @@ fn targets_with_replanning_on_every_plant() {
     const PERIODS: usize = 10;
     let mut failures = Vec::new();
     for (problem, asserted) in [("periodic-qc", true), ("periodic-cot-human", false)] {
-        let sol = default_optimum(problem);
+        let sol = cli::multistart_optimum(problem, &[]);
         let nominal = run_tracking_replanned(
             &sol,
             ControllerKind::Hybrid,

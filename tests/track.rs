@@ -38,22 +38,8 @@ use std::sync::OnceLock;
 fn qc() -> &'static OcpSolution {
     static SOL: OnceLock<OcpSolution> = OnceLock::new();
     SOL.get_or_init(|| {
-        let dir = cli::tmpdir("qc-optimum");
-        let r = cli::run(&[
-            "optimize",
-            "--hops",
-            "0",
-            "--problem",
-            "periodic-qc",
-            "--starts",
-            "4",
-            "--out",
-            dir.to_str().unwrap(),
-        ]);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+        let sol = cli::multistart_optimum("periodic-qc", &["--starts", "4"]);
         assert!(sol.status.is_success(), "{:?}", sol.stages);
-        std::fs::remove_dir_all(&dir).ok();
         sol
     })
 }
@@ -695,24 +681,6 @@ fn default_optima_meet_the_nominal_target_for_fifty_periods() {
     }
 }
 
-/// The 32-start optimum of `problem` (`optimize --hops 0 --problem NAME`, as `paper` runs it).
-fn default_optimum(problem: &str) -> OcpSolution {
-    let dir = cli::tmpdir(&format!("default-{problem}"));
-    let r = cli::run(&[
-        "optimize",
-        "--hops",
-        "0",
-        "--problem",
-        problem,
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
-    sol
-}
-
 /// The perturbed-plant target over 50 periods: every plant of the robustness table
 /// (ball mass ×1.1, μ_s and μ_k ×0.8, socket damping ×1.5, link masses ×1.05, all four, the
 /// max-dissipation impact law), contact in every period and an ω error ≤ 5 % from the 4th
@@ -737,7 +705,7 @@ fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
         ("periodic-cot-human", ControllerKind::Hybrid, false),
         ("periodic-cot", ControllerKind::HybridUnbounded, false),
     ] {
-        let sol = default_optimum(problem);
+        let sol = cli::multistart_optimum(problem, &[]);
         for (case, run) in robustness_runs(&sol, controller, 50) {
             let t = run.unwrap();
             let later = max_error_from_fourth(&t);

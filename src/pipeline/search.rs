@@ -601,6 +601,35 @@ struct OcpLandscape<'a> {
 }
 
 impl OcpLandscape<'_> {
+    /// The candidate of a hop's or a reshaping move's solve `res` (`label` in the records,
+    /// timed from `t0`), re-integrated when the policy verifies; `None`, recorded, when the
+    /// solve failed.
+    fn candidate(
+        &self,
+        id: usize,
+        label: String,
+        t0: Instant,
+        res: Result<(BuiltProblem, OcpSolution), PipelineError>,
+    ) -> Option<Candidate> {
+        let (b, sol) = match res {
+            Ok(r) => r,
+            Err(e) => {
+                self.push(&self.records, vec![failed_record(id, label, &e, t0)]);
+                return None;
+            }
+        };
+        let mut c = Candidate {
+            index: id,
+            problem: Some(b),
+            solution: sol,
+        };
+        self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
+        if self.policy.rtol > 0.0 && self.verify_samples {
+            attach_verification(&mut c, self.policy.rtol);
+        }
+        Some(c)
+    }
+
     /// The records so far, sorted by chain (stable: a chain's stages keep their order, since
     /// each chain pushes its records at once), so they do not depend on the order in which
     /// the threads finished.
@@ -767,23 +796,7 @@ impl Landscape for OcpLandscape<'_> {
             fin.iterations += sol.iterations;
             Ok((relaxed, fin))
         });
-        let (b, sol) = match res {
-            Ok(r) => r,
-            Err(e) => {
-                self.push(&self.records, vec![failed_record(id, label, &e, t0)]);
-                return None;
-            }
-        };
-        let mut c = Candidate {
-            index: id,
-            problem: Some(b),
-            solution: sol,
-        };
-        self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
-        if self.policy.rtol > 0.0 && self.verify_samples {
-            attach_verification(&mut c, self.policy.rtol);
-        }
-        Some(c)
+        self.candidate(id, label, t0, res)
     }
 
     fn better(&self, a: &Candidate, b: &Candidate) -> bool {
@@ -849,23 +862,7 @@ impl Landscape for OcpLandscape<'_> {
             fin.iterations += sol.iterations;
             Ok::<_, PipelineError>((released, fin))
         })();
-        let (b, sol) = match res {
-            Ok(r) => r,
-            Err(e) => {
-                self.push(&self.records, vec![failed_record(id, label, &e, t0)]);
-                return None;
-            }
-        };
-        let mut c = Candidate {
-            index: id,
-            problem: Some(b),
-            solution: sol,
-        };
-        self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
-        if self.policy.rtol > 0.0 && self.verify_samples {
-            attach_verification(&mut c, self.policy.rtol);
-        }
-        Some(c)
+        self.candidate(id, label, t0, res)
     }
 }
 

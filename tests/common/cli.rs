@@ -35,3 +35,28 @@ pub fn run(args: &[&str]) -> Output {
         .output()
         .expect("binary runs")
 }
+
+/// The optimum of `problem` from the 32-start search (`optimize --hops 0 --problem NAME`, with
+/// `extra` options such as `--starts 4`): the search whose optima `paper` presents and executes
+/// in closed loop (the global search's lower optima are taps that a Newton plant cannot
+/// execute, docs/optima.md).
+pub fn multistart_optimum(problem: &str, extra: &[&str]) -> ball_finger::pipeline::OcpSolution {
+    use ball_finger::pipeline::SolutionIo;
+    let dir = tmpdir(&format!("multistart-{problem}-{}", extra.join("")));
+    let out = dir.to_str().unwrap();
+    let mut args = vec![
+        "optimize",
+        "--hops",
+        "0",
+        "--problem",
+        problem,
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    let r = run(&args);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let sol = ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    sol
+}
