@@ -18,23 +18,10 @@ mod cli;
 
 use ball_finger::paper::closed_loop::{ControllerKind, run_tracking_replanned, solution_model};
 use ball_finger::paper::replan::{REPLAN_MAX_ITER, replan_problem, solve_replan};
-use ball_finger::pipeline::OcpSolution;
 use bf_model::ImpactLaw;
 use bf_problem::catalogue::replan::{LiftOff, set_measured};
 use bf_problem::node::PhaseMode;
 use bf_problem::{Problem, ProblemSettings};
-use std::sync::OnceLock;
-
-/// The `periodic-qc` optimum of the 32-start search (`--hops 0`; 4 starts reach it, as in
-/// tests/track.rs).
-fn qc() -> &'static OcpSolution {
-    static SOL: OnceLock<OcpSolution> = OnceLock::new();
-    SOL.get_or_init(|| {
-        let sol = cli::multistart_optimum("periodic-qc", &["--starts", "4"]);
-        assert!(sol.status.is_success(), "{:?}", sol.stages);
-        sol
-    })
-}
 
 fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
     assert_eq!(a.len(), b.len());
@@ -46,7 +33,7 @@ fn max_diff(a: &[Vec<f64>], b: &[Vec<f64>]) -> f64 {
 
 #[test]
 fn replan_from_the_optimum_lift_off_state_is_the_optimum_rotated() {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (mut p, rotated, x_lo) = replan_problem(sol, REPLAN_MAX_ITER).unwrap();
     // x*_lo is where the optimum's stick phase ends (continuity), independently of the helper.
     let stick_end = sol.raw[1].x.last().unwrap();
@@ -92,7 +79,7 @@ fn replan_from_the_optimum_lift_off_state_is_the_optimum_rotated() {
 
 #[test]
 fn replan_from_a_perturbed_state_starts_there_and_ends_on_the_orbit() {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (mut p, rotated, x_lo) = replan_problem(sol, REPLAN_MAX_ITER).unwrap();
     // A plant that lifts off 2 % faster at the joints and with 3 % less ball spin.
     let mut x_m = x_lo.clone();
@@ -140,7 +127,7 @@ fn replan_from_a_perturbed_state_starts_there_and_ends_on_the_orbit() {
 
 #[test]
 fn replan_refuses_bad_states_and_non_periodic_problems() {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (mut p, _, x_lo) = replan_problem(sol, REPLAN_MAX_ITER).unwrap();
     let mut nan = x_lo.clone();
     nan[4] = f64::NAN;
@@ -163,7 +150,7 @@ fn replan_refuses_bad_states_and_non_periodic_problems() {
 
 #[test]
 fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let run = || {
         let plant = solution_model(sol).unwrap().0;
         run_tracking_replanned(

@@ -24,25 +24,11 @@ mod cli;
 use ball_finger::paper::closed_loop::{
     ControllerKind, Tracking, reference_of, run_tracking, solution_model,
 };
-use ball_finger::pipeline::{OcpSolution, SolutionIo};
+use ball_finger::pipeline::SolutionIo;
 use bf_control::{HybridController, HybridGains, InverseDynamics};
 use bf_model::{ImpactLaw, Kernels, Mode, State, Vec3};
 use bf_sim::ball_finger::{BallFinger, BallFingerSettings};
 use bf_sim::{HybridSystem, SimSettings};
-use std::sync::OnceLock;
-
-/// The default `periodic-qc` optimum: the multi-start's best start is its 4th, so 4 starts
-/// (1–2 s) give the optimum of the default 32 (free 0.361 s, stick 0.026 s, free 0.233 s).
-/// The single direct solve's optimum rides the torque bound at 13 nodes of its last phase,
-/// where no feedback is left under the saturated controller.
-fn qc() -> &'static OcpSolution {
-    static SOL: OnceLock<OcpSolution> = OnceLock::new();
-    SOL.get_or_init(|| {
-        let sol = cli::multistart_optimum("periodic-qc", &["--starts", "4"]);
-        assert!(sol.status.is_success(), "{:?}", sol.stages);
-        sol
-    })
-}
 
 fn hybrid(plant_toml: Option<&str>, law: ImpactLaw, periods: usize) -> Tracking {
     tracked(ControllerKind::Hybrid, plant_toml, law, periods)
@@ -54,7 +40,7 @@ fn tracked(
     law: ImpactLaw,
     periods: usize,
 ) -> Tracking {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let plant = match plant_toml {
         None => solution_model(sol).unwrap().0,
         Some(text) => {
@@ -154,7 +140,8 @@ fn hybrid_control_meets_the_omega_target_for_ten_periods() {
             assert!(p.omega_error <= 0.02, "{law:?} period {k}: {p:?}");
             // One period of the optimum's length, re-timed by the plant's events.
             assert!(
-                (p.end - p.start - qc().period).abs() < 0.02 * qc().period,
+                (p.end - p.start - cli::qc_optimum().period).abs()
+                    < 0.02 * cli::qc_optimum().period,
                 "{p:?}"
             );
         }
@@ -174,7 +161,7 @@ fn closed_loop(
     BallFinger<bf_model::DynKernels, HybridController<bf_model::DynKernels>>,
     bf_sim::SimOutput<Mode>,
 ) {
-    let d = &qc().nodes;
+    let d = &cli::qc_optimum().nodes;
     let x0: Vec<f64> = [&d.q[0], &d.qd[0], &d.omega[0]]
         .into_iter()
         .flatten()
@@ -195,7 +182,7 @@ fn closed_loop_from(
     BallFinger<bf_model::DynKernels, HybridController<bf_model::DynKernels>>,
     bf_sim::SimOutput<Mode>,
 ) {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (model, scene) = solution_model(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     let id = InverseDynamics::compiled(
@@ -236,7 +223,7 @@ fn closed_loop_from(
 /// RMS of λ_n − λ_n*(s) over the Stick samples of the first contact phase, relative to the
 /// phase's largest |λ*|.
 fn lambda_n_rms(plant_toml: &str, gains: HybridGains) -> f64 {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (model, _) = solution_model(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     let contact = reference.phases.iter().position(|p| p.contact).unwrap();
@@ -309,7 +296,7 @@ fn force_loop_holds_lambda_n_over_the_stick_phase() {
 
 #[test]
 fn a_late_lift_off_still_meets_the_planned_impact_state() {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (model, _) = solution_model(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     // The optimum: free, stick, free; its impact state is the end of phase 0.
@@ -394,7 +381,7 @@ fn a_late_lift_off_still_meets_the_planned_impact_state() {
 /// off the planned state.
 #[test]
 fn a_late_or_early_approach_meets_the_planned_impact_state() {
-    let sol = qc();
+    let sol = cli::qc_optimum();
     let (model, _) = solution_model(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     let approach = &reference.phases[0];
@@ -520,7 +507,7 @@ fn recompute(traj: &serde_json::Value, optimum: [f64; 3]) -> Vec<[f64; 7]> {
 fn track_writes_tracking_json_that_trajectory_json_reproduces() {
     let dir = cli::tmpdir("track");
     let sol_path = dir.join("solution.json");
-    qc().write_json(&sol_path).unwrap();
+    cli::qc_optimum().write_json(&sol_path).unwrap();
     let out = dir.join("out");
     let r = cli::run(&[
         "track",
@@ -542,7 +529,7 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
     assert_eq!(tracking["completed_periods"], 3);
     assert_eq!(tracking["lost_ball"], false);
     let optimum: [f64; 3] = serde_json::from_value(tracking["optimum_mean_omega"].clone()).unwrap();
-    let m = qc().mean_omega;
+    let m = cli::qc_optimum().mean_omega;
     assert_eq!(optimum, m);
     let expect = recompute(&traj, optimum);
     let periods = tracking["periods"].as_array().unwrap();
@@ -741,7 +728,7 @@ fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
 #[test]
 fn report_tables_run_every_plant_and_controller() {
     use ball_finger::paper::closed_loop::{comparison_markdown, robustness_markdown};
-    let md = robustness_markdown("periodic-qc", qc(), 5).unwrap();
+    let md = robustness_markdown("periodic-qc", cli::qc_optimum(), 5).unwrap();
     eprintln!("{md}");
     let rows: Vec<&str> = md
         .lines()
@@ -761,7 +748,7 @@ fn report_tables_run_every_plant_and_controller() {
         assert!(tau <= 1.0, "{row}");
     }
     let dir = cli::tmpdir("fig17-closed");
-    let md = comparison_markdown("periodic-qc", qc(), 3, Some(&dir)).unwrap();
+    let md = comparison_markdown("periodic-qc", cli::qc_optimum(), 3, Some(&dir)).unwrap();
     for name in ["open-loop", "pd", "hybrid", "hybrid-unbounded"] {
         assert!(md.contains(&format!("| {name} |")), "{md}");
     }

@@ -564,13 +564,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     let strategy = match (&args.strategy, args.starts.is_some() || args.seed.is_some()) {
         (Some(text), _) => parse_strategy(text, starts, seed)?,
         (None, true) => parse_strategy("multistart", starts, seed)?,
-        (None, false) => match strategy::default_strategy(name, settings.scheme) {
-            Strategy::Multistart { seed, .. } => Strategy::Multistart {
-                starts: default_starts,
-                seed,
-            },
-            other => other,
-        },
+        (None, false) if hops.is_some() => strategy::default_strategy(name, settings.scheme),
+        (None, false) => strategy::multistart_strategy(name, settings.scheme),
     };
     // The multi-start's options must not be dropped silently by another strategy.
     if !matches!(strategy, Strategy::Multistart { .. }) {
