@@ -485,8 +485,7 @@ pub struct ExperimentalSettings {
     /// A larger factor (1/2, or 1: the δ_w that worked last) rejects fewer first trials, 1.41
     /// and 1.49 factorizations per iteration against 1.53 on the seven problems' cold solves;
     /// not the default because the larger δ_w changes every path, and the changed paths end at
-    /// better and worse local optima alike, with as many iterations or more (decision record
-    /// 0035).
+    /// better and worse local optima alike, in more or fewer iterations (decision record 0035).
     perturb_dec_fact_after_rejection: Option<f64> = None,
 }
 }
