@@ -480,6 +480,13 @@ pub struct ExperimentalSettings {
     /// creeps along the valley. Not the default because the undamped steps change the paths of the
     /// collocation solves, not always for the better (BENCHMARKS.md).
     residual_ratio_with_solution: bool = false,
+    /// First trial δ_w of a step whose previous step grew δ_w beyond its own first trial:
+    /// this factor times δ_w_last in place of κ_w⁻ δ_w_last (`None`: κ_w⁻, W&B Algorithm IC).
+    /// A larger factor (1/2, or 1: the δ_w that worked last) rejects fewer first trials, 1.41
+    /// and 1.49 factorizations per iteration against 1.53 on the seven problems' cold solves;
+    /// not the default because the larger δ_w changes every path, and the changed paths end at
+    /// better and worse local optima alike, in more or fewer iterations (decision record 0035).
+    perturb_dec_fact_after_rejection: Option<f64> = None,
 }
 }
 
@@ -599,6 +606,14 @@ impl Settings {
         )?;
         nonneg("proximal_weight", self.barrier.proximal_weight)?;
         unit("perturb_dec_fact", self.recovery.perturb_dec_fact)?;
+        if let Some(v) = self.experimental.perturb_dec_fact_after_rejection {
+            check(
+                "perturb_dec_fact_after_rejection",
+                v,
+                v > 0.0 && v <= 1.0,
+                "in (0, 1]",
+            )?;
+        }
         pos("perturb_inc_fact", self.recovery.perturb_inc_fact)?;
         pos(
             "perturb_inc_fact_first",

@@ -71,6 +71,15 @@ pub struct Counters {
     pub hessian_evals: usize,
     /// Numeric factorizations.
     pub factorizations: usize,
+    /// Factorizations (among `factorizations`) of a KKT matrix whose factor gave no step: wrong
+    /// inertia, no factor, or an inaccurate solution; each is followed by another (the inertia
+    /// correction, W&B Algorithm IC). Pivot-pair checks are counted apart.
+    #[serde(default)]
+    pub rejected_factorizations: usize,
+    /// Factorizations (among `factorizations`) with 2 × 2 pivot pairs that check a rejected
+    /// AMD factor ([`KktOrdering::AmdCheckedByPivotPairs`](crate::ipm::KktOrdering::AmdCheckedByPivotPairs)).
+    #[serde(default)]
+    pub pivot_pair_checks: usize,
     /// Iterations spent in the restoration phase (included in `iterations`).
     pub restoration_iterations: usize,
     /// Second-order corrections that were accepted.

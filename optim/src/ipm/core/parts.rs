@@ -198,6 +198,9 @@ pub(super) struct Regularization {
     /// The previous step's δ_w = 0 attempt failed: start from κ_w⁻ δ_w_last (saves one
     /// factorization per iteration on collocation KKTs whose states carry no curvature).
     pub skip_zero_trial: bool,
+    /// The last accepted step grew δ_w beyond its first trial: its next step's first trial
+    /// is `ExperimentalSettings::perturb_dec_fact_after_rejection` δ_w_last.
+    pub grew_from_first_trial: bool,
     /// δ_w of the current matrix.
     pub delta_w: f64,
     /// δ_c of the current matrix.
@@ -214,6 +217,7 @@ impl Regularization {
             delta_w_last: 0.0,
             proximal: 0.0,
             skip_zero_trial: false,
+            grew_from_first_trial: false,
             delta_w: 0.0,
             delta_c: 0.0,
             delta_c_target: 0.0,

@@ -84,6 +84,7 @@ impl Core<'_> {
                 RestorationProblem::new(&mut *self.prob, x_ref, rho, self.barrier.mu.sqrt(), outer);
             let mut inner = Core::new(&mut rp, settings, &start)?;
             inner.reg.delta_w_last = self.reg.delta_w_last;
+            inner.reg.grew_from_first_trial = self.reg.grew_from_first_trial;
             inner.run(ctx, &start)?
         };
         let x_new = out.x[..n0].to_vec();

@@ -238,7 +238,11 @@ impl Core<'_> {
                 .matrix
                 .assemble(&zeros, &self.evals.jac, &self.kkt.diag_x, -self.reg.delta_c);
         }
-        let first_w = settings.recovery.perturb_dec_fact * self.reg.delta_w_last;
+        let dec = match settings.experimental.perturb_dec_fact_after_rejection {
+            Some(after) if self.reg.grew_from_first_trial => after,
+            _ => settings.recovery.perturb_dec_fact,
+        };
+        let first_w = dec * self.reg.delta_w_last;
         if use_hessian && self.reg.skip_zero_trial && first_w >= 1e-12 {
             self.reg.delta_w = first_w.max(settings.recovery.min_hessian_perturbation);
             self.kkt.matrix.shift_diagonal(self.reg.delta_w, 0.0);
@@ -251,6 +255,7 @@ impl Core<'_> {
                 .shift_diagonal(self.reg.proximal - self.reg.delta_w, 0.0);
             self.reg.delta_w = self.reg.proximal;
         }
+        let first_trial_w = self.reg.delta_w;
         ctx.timing.kkt_assembly += t.elapsed();
         let mut memory = StepMemory::default();
         loop {
@@ -277,7 +282,7 @@ impl Core<'_> {
                     println!("    KKT: relative residual after refinement {res:.2e}");
                 }
                 if res <= ACCURATE_SOLVE {
-                    self.accept_perturbation(use_hessian);
+                    self.accept_perturbation(use_hessian, first_trial_w);
                     return Ok(StepResult::Ok);
                 }
                 // Right inertia but refinement cannot reach the exact system: the matrix is
@@ -286,12 +291,13 @@ impl Core<'_> {
                 rejection.singular = true;
                 rejection.inaccurate = true;
             }
+            ctx.counters.rejected_factorizations += 1;
             // The inertia correction: the first strategy of the chain that acts decides
             // (`recovery`; its last link always acts).
             match first_remedy(&KKT_CHAIN, self, ctx, &mut rejection)? {
                 Some((_, KktAction::Refactor)) => {}
                 Some((_, KktAction::Solved)) => {
-                    self.accept_perturbation(use_hessian);
+                    self.accept_perturbation(use_hessian, first_trial_w);
                     return Ok(StepResult::Ok);
                 }
                 Some((_, KktAction::GiveUp)) | None => return Ok(StepResult::Failed),
@@ -299,13 +305,17 @@ impl Core<'_> {
         }
     }
 
-    /// Bookkeeping of an accepted factorization with the current δ_w.
-    fn accept_perturbation(&mut self, use_hessian: bool) {
+    /// Bookkeeping of an accepted factorization with the current δ_w; `first_trial_w`: the
+    /// δ_w of the step's first factorization.
+    fn accept_perturbation(&mut self, use_hessian: bool, first_trial_w: f64) {
         if self.reg.delta_w == 0.0 && use_hessian {
             self.reg.skip_zero_trial = false;
         }
         if self.reg.delta_w > 0.0 {
             self.reg.delta_w_last = self.reg.delta_w;
+        }
+        if use_hessian {
+            self.reg.grew_from_first_trial = self.reg.delta_w > first_trial_w;
         }
     }
 
@@ -347,6 +357,7 @@ impl Core<'_> {
         };
         std::mem::swap(&mut self.kkt.solver, pairs);
         let inertia = self.factor_current(ctx);
+        ctx.counters.pivot_pair_checks += 1;
         let good = matches!(inertia, Ok(i) if i.positive == self.n && i.negative == self.m);
         let res = if good {
             self.solve_refined(ctx, settings)
