@@ -18,7 +18,7 @@
 //! Modules: [`nlp`] (problem trait, derivative checker), [`settings`], [`solution`],
 //! [`kkt`] (KKT assembly and its sparse LDLᵀ [`KktSolver`]), `stdform` (user problem → standard
 //! form), `core` (the algorithm), `restoration` (feasibility restoration problem), and with the
-//! `ipopt` feature [`ipopt_adapter`].
+//! `ipopt` feature `ipopt_adapter`.
 //!
 //! ```no_run
 //! use bf_optim::ipm::{solve, Settings};

@@ -279,7 +279,7 @@ pub enum LdltBackend {
     /// Multifrontal LDLᵀ on the fundamental supernodes of the simplicial structure with
     /// threshold Bunch–Kaufman 1 × 1 / 2 × 2 pivoting among each front's fully summed columns
     /// and delayed pivots (`multifrontal`): the order is AMD's, modified at factorization time
-    /// wherever a pivot fails the test [`SparseLdlt::pivot_threshold`]; bounded growth and the
+    /// wherever a pivot fails the test [`LdltOptions::pivot_threshold`]; bounded growth and the
     /// inertia of the matrix for any δ_c ≥ 0. With `constraint_rows_from` set it starts from
     /// the order of `pivot_pairs` (AMD with each row AMD would eliminate bare delayed to a
     /// variable of its own), which leaves far fewer pivots to delay numerically.

@@ -28,7 +28,8 @@
 //! N × (N + 1) block in the states and a diagonal in f, the integral rows two state columns and
 //! a dense N × N block in f (plus one duplicate T triplet per node, summed by the solver).
 //!
-//! Optional linear rows bound a state between its state points ([`between`]).
+//! Optional linear rows bound a state between its state points (`between`:
+//! [`Transcription::bound_states_between_points`]).
 
 use super::block::{GraphFn, KernelUse};
 pub use super::mesh::{Colloc, Mesh};
