@@ -50,4 +50,4 @@ pub use catalogue::{
 #[cfg(feature = "catalogue")]
 pub use error::ProblemError;
 #[cfg(feature = "catalogue")]
-pub use solution::{OcpSolution, Samples};
+pub use solution::{OcpSolution, PlannedImpact, Samples};
