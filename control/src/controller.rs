@@ -1005,10 +1005,12 @@ impl Plan {
 }
 
 /// Relative damping ε of [`LeastConstraint`]: (W + ε tr(W)/3 · 1)⁻¹ caps the gain of a
-/// contact-space error at 3/(ε tr W), a condition number of W (J_c M⁻¹ J_cᵀ) of 1/ε. Where J_c
-/// is well conditioned (the paper's optima: κ(W) below 10³) the contact acceleration is met to
-/// a share ε κ(W) ≤ 0.1 of its error.
-const CONTACT_DAMPING: f64 = 1e-4;
+/// contact-space error at 3/(ε tr W), as if W (J_c M⁻¹ J_cᵀ) had a condition number of at most
+/// about 1/ε. Measured on the Newton-planned QC optimum (J 0.2273), whose stick phase passes
+/// near a singular J_c: ε = 10⁻⁹ (the undamped law) commanded up to 1.7·10⁷ N m unbounded and
+/// lost the ball bounded; 10⁻⁴ left 34 N m unbounded; 10⁻³ keeps it to 4.6 N m with the first
+/// ten periods within 0.5 % (BENCHMARKS.md, "Newton-planned optima").
+const CONTACT_DAMPING: f64 = 1e-3;
 
 /// The finger acceleration of the contact law: the one closest to the free law's command q̈_f
 /// in the kinetic-energy norm whose contact point accelerates by a_c (Gauss's least constraint),
