@@ -51,7 +51,10 @@
 //! * the finger's acceleration keeps the contact: from d/dt Δv = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ −
 //!   J_c q̈ = −k_s Δv, J_c q̈ = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ + k_s Δv with ω̇ the ball's response
 //!   to λ_cmd; in Stick Δv = 0 and this is the sticking constraint (eq. 27–28), after a slip it
-//!   drives the relative velocity back to zero (slip recovery);
+//!   drives the relative velocity back to zero (slip recovery); q̈ is the acceleration
+//!   closest to the free law's command (computed torque on q*) that meets it (Gauss's least
+//!   constraint, `LeastConstraint`), so a finger motion that does not move the contact point
+//!   (J_c singular: joint 1's axis through it) follows q* instead of 1/σ_min(J_c);
 //! * τ = M q̈ + C q̇ + g + μ_v q̇ − J_cᵀ λ_cmd (eq. 29a solved for τ). On the controller's own
 //!   model in Stick, the plant's λ (eq. 33) under this τ is exactly λ_cmd.
 //!

@@ -1,6 +1,8 @@
 //! Point functions of the ball-and-finger problems on the bf-codegen expression graph: the
 //! sticking impact law (eq. 40a–c) as the Free→Stick reset with the impulse ι as decision
-//! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66); contact quantities (h eq. 4, ḣ,
+//! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66), or Newton's law (eq. 39: ω⁺ = ω⁻,
+//! q̇⁺ within [`NEWTON_VELOCITY_LIMIT`] of the plant's, ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`]) in
+//! its place; contact quantities (h eq. 4, ḣ,
 //! Δv eq. 13–14) at phase end points; continuity and periodicity; and [`Diagnostics`], an
 //! evaluator of the contact quantities at a state. The contact geometry uses the smooth
 //! saturation (eq. 58–59) with ε as a fixed input.
