@@ -513,6 +513,15 @@ pub struct OptimizeArgs {
     /// value (e.g. 0.1) asks for a stick phase of real duration.
     #[arg(long, value_name = "SECS", default_value_t = 0.01, allow_hyphen_values = true, value_parser = positive)]
     pub min_stick: f64,
+    /// Impact law of the plan: `stick` (eq. 40, the paper's Sect. 6: the impulse stops the
+    /// contact point and spins the ball) or `newton` (eq. 39, the law of the paper's Sect. 6.2
+    /// simulations and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint
+    /// velocity within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at
+    /// 0.1 m/s or faster; 3 joints). A `stick` plan whose stick phase is short spins the ball
+    /// mostly by the impact and cannot be executed on a Newton plant; a `newton` plan can
+    /// (docs/optima.md). Recorded in solution.json as `impact_law`.
+    #[arg(long, value_name = "LAW", default_value = "stick")]
+    pub impact_law: String,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]

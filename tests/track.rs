@@ -528,6 +528,9 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
     assert_eq!(tracking["controller"], "hybrid");
     assert_eq!(tracking["completed_periods"], 3);
     assert_eq!(tracking["lost_ball"], false);
+    // The optimum was planned with the sticking law, the plant is Newton's (the default).
+    assert_eq!(tracking["planned_impact_law"], "stick");
+    assert_eq!(tracking["impact_law"], "newton");
     let optimum: [f64; 3] = serde_json::from_value(tracking["optimum_mean_omega"].clone()).unwrap();
     let m = cli::qc_optimum().mean_omega;
     assert_eq!(optimum, m);

@@ -51,7 +51,10 @@
 //! * the finger's acceleration keeps the contact: from d/dt Δv = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ −
 //!   J_c q̈ = −k_s Δv, J_c q̈ = ω̇ × r_c + ω × ṙ_c − J̇_c q̇ + k_s Δv with ω̇ the ball's response
 //!   to λ_cmd; in Stick Δv = 0 and this is the sticking constraint (eq. 27–28), after a slip it
-//!   drives the relative velocity back to zero (slip recovery);
+//!   drives the relative velocity back to zero (slip recovery); q̈ is the acceleration
+//!   closest to the free law's command (computed torque on q*) that meets it (Gauss's least
+//!   constraint, `LeastConstraint`), so a finger motion that does not move the contact point
+//!   (J_c singular: joint 1's axis through it) follows q* instead of 1/σ_min(J_c);
 //! * τ = M q̈ + C q̇ + g + μ_v q̇ − J_cᵀ λ_cmd (eq. 29a solved for τ). On the controller's own
 //!   model in Stick, the plant's λ (eq. 33) under this τ is exactly λ_cmd.
 //!
@@ -671,14 +674,27 @@ impl<K: Kernels<3>> HybridController<K> {
         }
         // The normal part keeps n·v_c = 0 (the derivative of eq. 36, as the slip law does).
         let normal = -(c.n_dot().dot(&c.v_c) + n.dot(&c.jc_dot_qd));
-        let lu = c.j_c.lu();
+        // The finger's motion that leaves the contact point in place (ker J_c: joint 1's axis
+        // through the contact point, a folded finger) is the free law's to choose: the least
+        // constraint on the computed-torque command (module doc).
+        let mut qdd_free = [0.0; 3];
+        self.gains.free.acceleration(
+            x.q.as_slice(),
+            x.qd.as_slice(),
+            &r.q,
+            &r.qd,
+            &r.qdd,
+            &mut qdd_free,
+        );
+        let qdd_free = Vec3::from(qdd_free);
+        let least =
+            LeastConstraint::new(&kin.m_f, &c.j_c).ok_or(ControlError::SingularJacobian { t })?;
         // τ for the force λ on the finger and the relative acceleration Δv̇: affine in both.
         let torque = |lambda: Vec3, dv_dot: Vec3| -> Result<[f64; 3], ControlError> {
             let omega_dot = p.ball_inertia_inv() * (-f_b - rc.cross(&lambda));
             let stick_acc = omega_dot.cross(&rc) + omega.cross(&c.rc_dot) - c.jc_dot_qd - dv_dot;
             let a_c = stick_acc - n * n.dot(&stick_acc) + n * normal;
-            let qdd = lu
-                .solve(&a_c)
+            let qdd = Some(least.acceleration(&a_c, &qdd_free))
                 .filter(|v| v.iter().all(|x| x.is_finite()))
                 .ok_or(ControlError::SingularJacobian { t })?;
             let tau = kin.m_f * qdd + kin.cqd_g + x.qd * p.mu_v() - c.j_c.transpose() * lambda;
@@ -988,6 +1004,56 @@ impl Plan {
             phase = next;
         }
         (phase, start)
+    }
+}
+
+/// Relative damping ε of [`LeastConstraint`]: (W + ε tr(W)/3 · 1)⁻¹ caps the gain of a
+/// contact-space error at 3/(ε tr W), as if W (J_c M⁻¹ J_cᵀ) had a condition number of at most
+/// about 1/ε. Measured on the Newton-planned QC optimum (J 0.2273), whose stick phase passes
+/// near a singular J_c: ε = 10⁻⁹ (the undamped law) commanded up to 1.7·10⁷ N m unbounded and
+/// lost the ball bounded; 10⁻⁴ left 34 N m unbounded; 10⁻³ keeps it to 4.6 N m with the first
+/// ten periods within 0.5 % (BENCHMARKS.md, "Newton-planned optima").
+const CONTACT_DAMPING: f64 = 1e-3;
+
+/// The finger acceleration of the contact law: the one closest to the free law's command q̈_f
+/// in the kinetic-energy norm whose contact point accelerates by a_c (Gauss's least constraint),
+/// q̈ = q̈_f + M⁻¹ J_cᵀ (W + δ² 1)⁻¹ (a_c − J_c q̈_f), W = J_c M⁻¹ J_cᵀ, with the damping
+/// δ² = [`CONTACT_DAMPING`] tr(W)/3.
+///
+/// With a regular J_c and δ = 0 this is J_c⁻¹ a_c whatever q̈_f is, the sticking constraint
+/// (eq. 27–28). Where J_c is singular (a finger motion that does not move the contact point:
+/// joint 1's axis through it, or a folded finger) J_c⁻¹ a_c sends that motion to 1/σ_min(J_c),
+/// and the term J̇_c q̇ of a_c feeds the motion's own velocity back through it: a Newton-planned
+/// optimum that sticks there (decision 0033) had its joint-1 torque grow as e^{t/σ} to
+/// 10¹⁰ N m. Here that motion follows the free law's tracking of q* instead, and the torque
+/// it takes is M q̈_f on it, as in free motion.
+#[derive(Debug, Clone, Copy)]
+struct LeastConstraint {
+    /// M⁻¹ J_cᵀ.
+    minv_jct: Mat3,
+    /// J_c.
+    j_c: Mat3,
+    /// (W + δ² 1)⁻¹.
+    gain: Mat3,
+}
+
+impl LeastConstraint {
+    /// `None` where M is not positive definite.
+    fn new(m_f: &Mat3, j_c: &Mat3) -> Option<Self> {
+        let minv_jct = m_f.cholesky()?.solve(&j_c.transpose());
+        let w = j_c * minv_jct;
+        let delta2 = CONTACT_DAMPING * w.trace() / 3.0;
+        let gain = (w + Mat3::identity() * delta2).cholesky()?.inverse();
+        Some(LeastConstraint {
+            minv_jct,
+            j_c: *j_c,
+            gain,
+        })
+    }
+
+    /// q̈ for the contact acceleration `a_c` and the free law's command `qdd_free`.
+    fn acceleration(&self, a_c: &Vec3, qdd_free: &Vec3) -> Vec3 {
+        qdd_free + self.minv_jct * (self.gain * (a_c - self.j_c * qdd_free))
     }
 }
 

@@ -9,8 +9,8 @@
 //!
 //! and, with the `catalogue` feature (default; needs bf-optim):
 //!
-//! * [`points`]: the sticking impact law (eq. 40, 66) and the other point functions, contact
-//!   diagnostics;
+//! * [`points`]: the sticking impact law (eq. 40, 66) or Newton's (eq. 39) and the other point
+//!   functions, contact diagnostics;
 //! * [`catalogue`]: the problems ([`Problem`]) with one function per archetype, their
 //!   settings and initial guesses, built into a transcribed [`BuiltProblem`], whose solution
 //!   record it builds at an NLP point ([`solution_at`]);
@@ -50,4 +50,4 @@ pub use catalogue::{
 #[cfg(feature = "catalogue")]
 pub use error::ProblemError;
 #[cfg(feature = "catalogue")]
-pub use solution::{OcpSolution, Samples};
+pub use solution::{OcpSolution, PlannedImpact, Samples};

@@ -1,6 +1,8 @@
 //! Point functions of the ball-and-finger problems on the bf-codegen expression graph: the
 //! sticking impact law (eq. 40a–c) as the Free→Stick reset with the impulse ι as decision
-//! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66); contact quantities (h eq. 4, ḣ,
+//! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66), or Newton's law (eq. 39: ω⁺ = ω⁻,
+//! q̇⁺ within [`NEWTON_VELOCITY_LIMIT`] of the plant's, ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`]) in
+//! its place; contact quantities (h eq. 4, ḣ,
 //! Δv eq. 13–14) at phase end points; continuity and periodicity; and [`Diagnostics`], an
 //! evaluator of the contact quantities at a state. The contact geometry uses the smooth
 //! saturation (eq. 58–59) with ε as a fixed input.
@@ -135,10 +137,38 @@ pub fn continuity(nx: usize, from_phase: usize, to_phase: usize, name: &str) -> 
     }
 }
 
+/// Largest distance (rad/s, Euclidean over the joints) between a Newton plan's post-impact
+/// joint velocity q̇⁺ and the one Newton's law gives the plant from the same pre-impact state:
+/// small enough that the plant's slip after the impact (at most ‖J_c‖ times this) ends within
+/// a millisecond, large enough to leave the inequality an interior.
+pub const NEWTON_VELOCITY_LIMIT: f64 = 1e-3;
+
+/// Least normal speed (m/s) at which a Newton plan's finger reaches the ball, ḣ⁻ ≤ −v: the
+/// Newton impact costs nothing in ω, so the plans otherwise land with ḣ⁻ = 0, and a plant a
+/// gap error δh off the plan then touches down δh / |ḣ| late, unboundedly (`track` lost the
+/// ball of such a plan: its finger hovered 5 mm above it). The sticking plans reach the ball at
+/// 0.3–7 m/s.
+pub const NEWTON_APPROACH_SPEED: f64 = 0.1;
+
 /// Sticking impact (eq. 40) between the end of `free_phase` and the start of `free_phase + 1`,
 /// with the impulse ι = params `iota0..iota0+3`: q⁺ = q⁻, M (q̇⁺ − q̇⁻) − J_cᵀ ι = 0,
 /// I_b (ω⁺ − ω⁻) + r_c × ι = 0, ω⁺ × r_c − J_c q̇⁺ = 0, ι_n ≥ 0 and optionally the impulse
 /// cone (eq. 66, squared form).
+///
+/// `newton` plans the impact with Newton's law instead (eq. 39, restitution 0, the law of the
+/// paper's Sect. 6.2 simulations; 3 joints): ω⁺ = ω⁻ replaces the ball's impulse balance, ι
+/// is the impulse the finger receives, and the post-impact joint velocity must be within
+/// [`NEWTON_VELOCITY_LIMIT`] of the plant's, q̇_N = J_c⁻¹ T_n J_c q̇⁻ (T_n = 1 − n nᵀ), so that
+/// the stick phase that follows starts sticking under Newton's law as well (paper Sect. 7),
+/// and the finger must arrive at [`NEWTON_APPROACH_SPEED`] or faster.
+/// Without J_c⁻¹ (which the graph cannot form where J_c is singular) the condition reads
+/// ‖det(J_c) q̇⁺ − adj(J_c) T_n J_c q̇⁻‖² ≤ v² det(J_c)², adj(J_c) J_c = det(J_c) 1.
+///
+/// Why in joint space: the stick node's Δv⁺ = 0 makes J_c (q̇⁺ − q̇_N) = T_n Δv⁻, the
+/// tangential relative velocity before the impact. A bound on that alone (how this law was
+/// first planned) let the plans put the contact point on a singular J_c (joint 1's axis passes
+/// through the ball's centre), where a slip of 1 mm/s moves q̇⁺ by rad/s: the optimum used an
+/// impulse of 75–1000 N s that no plant applies (docs/decisions/0033-newton-impact-plan.md).
 ///
 /// `delta_v_plus` adds ω⁺ × r_c − J_c q̇⁺ = 0 (eq. 40c); leave it out when the stick phase's
 /// first state point is a collocation node (Radau), where the node's Δv = 0 already imposes
@@ -150,6 +180,7 @@ pub fn impact(
     free_phase: usize,
     iota0: usize,
     impulse_cone: bool,
+    newton: bool,
     delta_v_plus: bool,
 ) -> Result<PointFunction, ProblemError> {
     let Built {
@@ -158,6 +189,13 @@ pub fn impact(
         base,
     } = build_model(scene, eps)?;
     let nq = ph.nq;
+    if newton && nq != 3 {
+        return Err(ProblemError::InvalidSetting {
+            name: "the joint count of a Newton impact plan (J_c square)",
+            value: nq as f64,
+            expected: "3",
+        });
+    }
     let lay = model.layout;
     let mass = model.mass_matrix();
     let ce = model
@@ -212,11 +250,15 @@ pub fn impact(
         let ji = g.v3_dot(col, iota);
         out.push(g.sub(m, ji));
     }
-    let ib = m3_const(g, ph.ib);
     let dw = g.v3_sub(wpi, wmi);
-    let ibdw = g.m3_mul_v(&ib, dw);
-    let rci = g.v3_cross(ce.r_c, iota);
-    out.extend(g.v3_add(ibdw, rci));
+    if newton {
+        out.extend(dw);
+    } else {
+        let ib = m3_const(g, ph.ib);
+        let ibdw = g.m3_mul_v(&ib, dw);
+        let rci = g.v3_cross(ce.r_c, iota);
+        out.extend(g.v3_add(ibdw, rci));
+    }
     if delta_v_plus {
         let wr = g.v3_cross(wpi, ce.r_c);
         for r in 0..3 {
@@ -236,8 +278,41 @@ pub fn impact(
         out.push(g.sub(a, ii));
         bounds.push((0.0, f64::INFINITY));
     }
+    if newton {
+        // Rows a_r of J_c: adj(J_c) = [a₁ × a₂ | a₂ × a₀ | a₀ × a₁], det = a₀ · (a₁ × a₂).
+        let row = |r: usize| [ce.j_c[r][0], ce.j_c[r][1], ce.j_c[r][2]];
+        let (a0, a1, a2) = (row(0), row(1), row(2));
+        let adj = [g.v3_cross(a1, a2), g.v3_cross(a2, a0), g.v3_cross(a0, a1)];
+        let det = g.v3_dot(a0, adj[0]);
+        // T_n v_c⁻, the contact point's velocity without its normal part (eq. 39).
+        let vc = ce.v_c;
+        let vn = g.v3_dot(vc, ce.n);
+        let vnn = g.v3_scale(vn, ce.n);
+        let t = g.v3_sub(vc, vnn);
+        let mut norm2 = Vec::with_capacity(3);
+        for i in 0..3 {
+            let dq = g.mul(det, qdpi[i]);
+            let terms: Vec<Id> = (0..3).map(|c| g.mul(adj[c][i], t[c])).collect();
+            let at = g.sum(&terms);
+            let e = g.sub(dq, at);
+            norm2.push(g.square(e));
+        }
+        let e2 = g.sum(&norm2);
+        let v2 = g.constant(NEWTON_VELOCITY_LIMIT * NEWTON_VELOCITY_LIMIT);
+        let d2 = g.square(det);
+        let allowed = g.mul(v2, d2);
+        out.push(g.sub(e2, allowed));
+        bounds.push((f64::NEG_INFINITY, 0.0));
+        out.push(ce.h_dot);
+        bounds.push((f64::NEG_INFINITY, -NEWTON_APPROACH_SPEED));
+    }
     Ok(PointFunction {
-        name: "impact (eq. 40)".into(),
+        name: if newton {
+            "impact (eq. 39)"
+        } else {
+            "impact (eq. 40)"
+        }
+        .into(),
         graph: std::mem::take(&mut model.g),
         vars: vars_list,
         fixed,

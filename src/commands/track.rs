@@ -28,6 +28,8 @@ pub struct TrackingJson<'a> {
     pub plant_scene: &'a str,
     /// The plant's impact law.
     pub impact_law: &'a str,
+    /// The impact law the optimum was planned with (`solution.json`'s `impact_law`).
+    pub planned_impact_law: &'static str,
     /// The optimum's mean ω (rad/s).
     pub optimum_mean_omega: [f64; 3],
     /// Periods asked for.
@@ -64,6 +66,7 @@ impl<'a> TrackingJson<'a> {
         r: &'a Tracking,
         plant_scene: &'a str,
         impact_law: &'a str,
+        planned_impact_law: &'static str,
         optimum: [f64; 3],
         period: f64,
         replan: bool,
@@ -74,6 +77,7 @@ impl<'a> TrackingJson<'a> {
             controller: r.controller.name(),
             plant_scene,
             impact_law,
+            planned_impact_law,
             optimum_mean_omega: optimum,
             requested_periods: r.requested_periods,
             completed_periods: r.periods.len(),
@@ -132,6 +136,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         &run,
         &plant_name,
         law.name(),
+        sol.impact_law.name(),
         sol.mean_omega,
         sol.period,
         args.replan,
@@ -146,6 +151,16 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         Some(f) => Outcome::Failed(f),
         None => Outcome::Success,
     })?;
+    if law.name() != sol.impact_law.name() {
+        // A sticking plan on a Newton plant: short stick phases spin the ball by an impulse
+        // the plant does not give (docs/optima.md, "Low optima that a Newton plant cannot
+        // execute").
+        eprintln!(
+            "note: the optimum was planned with the {} impact law, the plant uses {}",
+            sol.impact_law.name(),
+            law.name()
+        );
+    }
     crate::outln!(
         "controller {}, plant {plant_name}, impact law {}: {} of {} periods, max omega error {:.3} %",
         controller.name(),

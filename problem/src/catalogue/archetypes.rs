@@ -425,7 +425,16 @@ fn contact_sequence(
             EndQuantity::H(0.0, tol_h),
             "0 <= h1(tf) <= 1e-4",
         )?,
-        impact(scene, ph, eps, approach, 0, settings.impulse_cone, lg)?,
+        impact(
+            scene,
+            ph,
+            eps,
+            approach,
+            0,
+            settings.impulse_cone,
+            settings.impact_law == crate::solution::PlannedImpact::Newton,
+            lg,
+        )?,
     ])
 }
 

@@ -122,6 +122,7 @@ pub fn solution_at(
         scene_params: Vec::new(),
         active_bounds: None,
         search_settings: None,
+        impact_law: p.settings.impact_law,
     })
 }
 

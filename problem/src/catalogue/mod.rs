@@ -156,6 +156,10 @@ pub struct ProblemSettings {
     pub warm_start: Option<OcpSolution>,
     /// Impulse friction cone at the impact (eq. 66).
     pub impulse_cone: bool,
+    /// The impact law of the plan: the sticking law (eq. 40, default) or Newton's (eq. 39: ω
+    /// unchanged, the finger arriving without tangential velocity relative to the ball), so
+    /// that a plant with Newton's law executes the plan ([`crate::points::impact`]).
+    pub impact_law: crate::solution::PlannedImpact,
     /// ḣ margins of Sect. 7 (ḣ ≤ −m in the approach, ḣ ≥ m in the release phase).
     pub hdot_margin: Option<f64>,
     /// Initial guess (ignored with a warm start).
@@ -231,6 +235,7 @@ impl Default for ProblemSettings {
             epsilon: None,
             warm_start: None,
             impulse_cone: false,
+            impact_law: crate::solution::PlannedImpact::Stick,
             hdot_margin: None,
             guess: GuessKind::Auto,
             ipm: None,

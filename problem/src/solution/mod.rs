@@ -40,6 +40,41 @@ pub struct Samples {
     pub alpha: Vec<f64>,
 }
 
+/// The impact law a plan assumes at its impacts (`solution.json`'s `impact_law`,
+/// [`crate::ProblemSettings::impact_law`], `optimize --impact-law`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlannedImpact {
+    /// The sticking impact (eq. 40): the impulse stops the contact point and changes ω. The
+    /// paper's problems; files written before the law was recorded planned with it.
+    #[default]
+    Stick,
+    /// Newton's law with restitution 0 (eq. 39): ω unchanged, the finger arriving without
+    /// tangential velocity relative to the ball ([`crate::points::impact`]).
+    Newton,
+}
+
+impl PlannedImpact {
+    /// The name on the command line and in `solution.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannedImpact::Stick => "stick",
+            PlannedImpact::Newton => "newton",
+        }
+    }
+
+    /// Parses `stick` or `newton`; the error says what was given and what is accepted.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        match text {
+            "stick" => Ok(PlannedImpact::Stick),
+            "newton" => Ok(PlannedImpact::Newton),
+            other => Err(format!(
+                "unknown impact law {other:?}; use `stick` (eq. 40) or `newton` (eq. 39)"
+            )),
+        }
+    }
+}
+
 /// A solution of a problem; serialises to `solution.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct OcpSolution {
@@ -131,6 +166,10 @@ pub struct OcpSolution {
     /// of other commands and in files written before they were recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub search_settings: Option<records::SearchSettings>,
+    /// The impact law the plan assumed at its impacts (`stick` in files written before it was
+    /// recorded, which all planned with eq. 40); `track` reports it next to the plant's.
+    #[serde(default)]
+    pub impact_law: PlannedImpact,
 }
 
 impl OcpSolution {

@@ -23,12 +23,14 @@ use crate::pipeline::strategy::{
 use crate::pipeline::verify::{
     MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, path_failure, verify,
 };
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_problem::arm::REACH_ARM;
-use bf_problem::{BuiltProblem, COT_MAX_PERIOD, OcpSolution, Problem, ProblemSettings};
+use bf_problem::{
+    BuiltProblem, COT_MAX_PERIOD, OcpSolution, PlannedImpact, Problem, ProblemSettings,
+};
 use std::path::Path;
 
 mod arm;
@@ -207,7 +209,10 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         }
         None => None,
     };
+    let impact_law =
+        PlannedImpact::parse(&args.impact_law).map_err(|e| anyhow!("--impact-law: {e}"))?;
     Ok(ProblemSettings {
+        impact_law,
         points: args.points,
         scheme,
         epsilon: Some(args.epsilon),

@@ -58,9 +58,10 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolu
 
 /// What every file of one multi-start shares (the shards' `solution.json` and candidates):
 /// (quantity, value as shown). The scene text is compared apart ([`check_same_run`]).
-fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 5] {
+fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 6] {
     [
         ("problem", sol.problem.clone()),
+        ("impact law", sol.impact_law.name().to_string()),
         ("scene", sol.scene.clone()),
         ("runtime parameters", format!("{:?}", sol.scene_params)),
         ("mesh", format!("{} points, {:?}", sol.points, sol.scheme)),
@@ -69,7 +70,7 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 5] {
 }
 
 /// Errors naming both files and the quantity unless `sol` (read from `path`) was solved on the
-/// problem, scene (its file text), runtime parameters, mesh and ε of `first`, searched with
+/// problem, impact law, scene (its file text), runtime parameters, mesh and ε of `first`, searched with
 /// the same [`SearchSettings`] (where either records them) and (where both were verified)
 /// verified with the same tolerances.
 fn check_same_run(
