@@ -160,7 +160,7 @@ pub fn torque_limits(scene: &Scene) -> Vec<f64> {
 
 /// The default start q⁰: q = 0 moved into the joint limits, where the torque bounds hold
 /// the arm there against gravity; otherwise the pose it settles in when let go from there
-/// ([`settled_pose`]: hanging, held by no torque), since `reach-arm` starts at rest and no
+/// (`settled_pose`: hanging, held by no torque), since `reach-arm` starts at rest and no
 /// admissible torque holds q = 0 (the 2-link test arm stretched out horizontally needs
 /// 14.2 N m at the shoulder against its 12).
 pub fn default_start(scene: &Scene) -> Vec<f64> {

@@ -331,7 +331,7 @@ fn cost_integrands(
 
 /// Node function of one phase with the stick constraint at `level` (only matters for
 /// [`PhaseMode::Stick`]); returns it with the variable indices. Path rows: finger dynamics (nq),
-/// ball (3), then [stick: Δv or d(Δv)/dt (3), λ_n, cone], then [h], then [ḣ].
+/// ball (3), then [stick: Δv or d(Δv)/dt (3), λ_n, cone], then \[h\], then \[ḣ\].
 ///
 /// Why Legendre–Gauss needs [`StickLevel::Acceleration`]: with Δv = 0 at the Gauss nodes the
 /// stick phase is collocated as an index-2 DAE, and Gauss collocation is not stiffly accurate

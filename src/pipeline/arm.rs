@@ -15,7 +15,7 @@
 //!   amplifies any error exponentially). The open-loop replay from the start over the whole
 //!   motion is reported beside it ([`ArmVerification::open_loop_end_error`]), not judged.
 //!   A solution is verified when the largest element defect is at most
-//!   [`VERIFIED_DEFECT`](super::verify::VERIFIED_DEFECT) (rad, rad/s).
+//!   [`VERIFIED_DEFECT`] (rad, rad/s).
 //! * [`write_arm_solution`]: `solution.json`, `torques.csv` (the format `simulate --torques`
 //!   reads) and `trajectory.csv` (t, q, q̇, τ on the dense grid).
 
@@ -249,8 +249,9 @@ fn max_abs_diff(a: &[f64], b: &[f64]) -> f64 {
 
 /// Points inside every interval between state points at which [`verify_arm`] evaluates the
 /// torque polynomials for [`ArmVerification::max_torque_overshoot`] (beside the state points):
-/// denser than the optimisation's [`bf_problem::arm::DEFAULT_TORQUE_SAMPLES`], so that what
-/// remains between those is seen.
+/// where the optimisation bounds the torque at the state points and through the Bernstein hull
+/// of each element ([`bf_problem::arm::ArmSettings::torque_hull`]), so that an overshoot the
+/// hull would not have excluded is seen.
 pub const OVERSHOOT_SAMPLES: usize = 16;
 
 /// Re-integrates `sol` on its scene (see the module docs) with DOPRI5 at `rtol`

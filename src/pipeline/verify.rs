@@ -818,7 +818,7 @@ pub const FAILED_ELEMENT_ERROR: f64 = 1.0;
 /// an element whose re-integration failed counts as [`FAILED_ELEMENT_ERROR`], one whose free
 /// path penetrates the ball deeper than [`PENETRATION_TOLERANCE`] or whose stick path leaves
 /// the friction cone by more than its phase's [`cone_allowance`] at least as its
-/// [`excess_error`].
+/// `excess_error`.
 pub fn element_errors(
     p: &BuiltProblem,
     sol: &OcpSolution,
@@ -830,7 +830,7 @@ pub fn element_errors(
 
 /// The element errors of [`element_errors`] from the verification record `v`: per phase and
 /// element, the element defect, raised where the element's min h or min σ is outside its
-/// allowance ([`excess_error`]), [`FAILED_ELEMENT_ERROR`] where the element failed.
+/// allowance (`excess_error`), [`FAILED_ELEMENT_ERROR`] where the element failed.
 pub fn record_element_errors(v: &Verification) -> Vec<Vec<f64>> {
     let margins = cone_margins(v);
     v.phases

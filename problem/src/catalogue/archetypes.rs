@@ -1,7 +1,7 @@
 //! The archetypes of the catalogue, one function each: the periodic rotation (free–stick–free,
 //! Sect. 6.1, QC eq. 64–65 or COT eq. 61–63 ratio objective eq. 60), reaching the ball (free),
 //! and the free–stick problems (reorient, rotate at a reference velocity, rotate fast;
-//! Sect. 4.1). Each returns a [`Spec`]: its phases, cost integrands, objective, point
+//! Sect. 4.1). Each returns a `Spec`: its phases, cost integrands, objective, point
 //! functions (impact law eq. 40, Sect. 7 touch-down tolerances, continuity, periodicity,
 //! horizons) and parameters.
 

@@ -186,26 +186,26 @@ pub struct ProblemSettings {
     /// the study layer's mesh refinement.
     pub mesh: Option<Vec<MeshSpec>>,
     /// Static dual regularization δ_c of the KKT factorization
-    /// ([`Settings::static_dual_regularization`]) at the start of a solve; `None`: the
-    /// solver's 1e-9 with either scheme, which the solver itself raises to 3e-8 within a solve
+    /// ([`bf_optim::ipm::LinearSolverSettings::static_dual_regularization`]) at the start of
+    /// a solve; `None`: the solver's 1e-9 with either scheme, which the solver itself raises to 3e-8 within a solve
     /// whose factor turns out misleading or inaccurate.
     /// Overrides `ipm`.
     pub dual_regularization: Option<f64>,
     /// Judge each KKT solve by the residual ratio `‖K s − r‖ / (‖r‖ + ‖s‖)`
-    /// ([`Settings::residual_ratio_with_solution`]) in every solve of the problem; overrides
-    /// `ipm`.
+    /// ([`bf_optim::ipm::ExperimentalSettings::residual_ratio_with_solution`]) in every solve
+    /// of the problem; overrides `ipm`.
     pub kkt_residual_ratio: bool,
     /// Largest step size of the solver's extrapolation along negative curvature
-    /// ([`Settings::max_curvature_extrapolation`]) in every solve of the problem; `None`: the
-    /// solver's default (16, on the barrier problems whose μ is at most the tolerance; 1 turns
+    /// ([`bf_optim::ipm::LineSearchSettings::max_curvature_extrapolation`]) in every solve of
+    /// the problem; `None`: the solver's default (16, on the barrier problems whose μ is at most the tolerance; 1 turns
     /// it off). Overrides `ipm`.
     pub curvature_extrapolation: Option<f64>,
     /// Extrapolate along negative curvature on every barrier problem
     /// ([`bf_optim::ipm::ExtrapolationScope::EveryBarrier`]); overrides `ipm`.
     pub extrapolate_every_barrier: bool,
     /// Weight of the proximal term on stalled barrier problems above the tolerance
-    /// ([`Settings::proximal_weight`]) in every solve of the problem; `None`: the solver's
-    /// default (0.1; 0 turns it off). Overrides `ipm`.
+    /// ([`bf_optim::ipm::BarrierSettings::proximal_weight`]) in every solve of the problem;
+    /// `None`: the solver's default (0.1; 0 turns it off). Overrides `ipm`.
     pub proximal_weight: Option<f64>,
     /// The scene to pose the problem on instead of the problem's compiled scene (a parsed scene
     /// file, e.g. `optimize --scene`); its phase node functions run on emitted kernels where

@@ -6,7 +6,7 @@
 //! it by periodicity, x⁽³⁾(T₃) = x⁽¹⁾(0). A plant that lifts off the ball in a state x_m other
 //! than the optimum's x*_lo cannot be put on that problem: its period passes through x_m only
 //! if a periodic orbit does. [`LiftOff`] turns a periodic problem into its **transient
-//! period** ([`super::archetypes::periodic_from_lift_off`]): release (free, from
+//! period** (`archetypes::periodic_from_lift_off`): release (free, from
 //! x⁽¹⁾(0) = x_m), approach (free, from the apex ḣ = 0 to the impact), stick (ending at
 //! x⁽³⁾(T₃) = x*_lo), under the periodic problem's objective (the QC or COT ratio eq. 60 over
 //! the three phases) and constraints. It ends on the periodic orbit, so the plan after it is

@@ -3,14 +3,14 @@
 //! increasing element count; error of the objective J against a converged reference, versus
 //! solve time. The reference is a cold Radau solve refined by the hp rule of
 //! [`crate::pipeline::refine`] until the largest element error estimate is below
-//! [`MeshLadder`]'s tolerance (1e-8; 1e-6 quick); its own error is estimated by the largest
+//! `MeshLadder`'s tolerance (1e-8; 1e-6 quick); its own error is estimated by the largest
 //! change of J over the last three refinement rounds and stated with it. A cold solve that lands on another local optimum than the reference's is
 //! re-solved on the same mesh warm-started from the reference solution, which gives the mesh's
 //! discretisation error at the reference's optimum.
 //!
 //! The cold solves find a local optimum (J ≈ 0.56 on the full ladder) several times worse than
 //! the one the report presents (the default search's, J ≈ 0.09); the discretisation error a
-//! reader wants is at the latter. Given that optimum ([`measure`]'s `presented`), every mesh is
+//! reader wants is at the latter. Given that optimum (`measure`'s `presented`), every mesh is
 //! also solved warm-started from it, against a reference refined from it the same way as the
 //! cold one ([`PresentedReference`]); the table and `sa_mesh` show both, labelled.
 
