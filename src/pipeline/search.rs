@@ -41,7 +41,7 @@ use super::build;
 use super::error::PipelineError;
 use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
-use super::reshape::{MOVES, Move, flip_elbow, with_duration_bounds};
+use super::reshape::{MOVES, Move, flip_elbow, mirror_first_joint, with_duration_bounds};
 use super::solve::solve_recentred;
 use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
@@ -832,7 +832,7 @@ impl Landscape for OcpLandscape<'_> {
             kind,
             from.index,
             m.describe(),
-            if *m == Move::ElbowFlip {
+            if m.moves_posture() {
                 ""
             } else {
                 ", released"
@@ -843,12 +843,17 @@ impl Landscape for OcpLandscape<'_> {
             let mut released = p.clone();
             released.settings.max_iter = max_iter;
             let fit = || PipelineError::Internal("a reshaped optimum does not fit its own problem");
-            if *m == Move::ElbowFlip {
+            if m.moves_posture() {
                 let mut w = Self::perturbed(&released, &from.solution, 0, 0.0).ok_or_else(fit)?;
                 let n = Nlp::num_variables(&released.nlp);
                 let (mut lo, mut up) = (vec![0.0; n], vec![0.0; n]);
                 Nlp::variable_bounds(&released.nlp, &mut lo, &mut up);
-                flip_elbow(&released, released.guess.free.len(), &mut w.x, &lo, &up);
+                let nq = released.guess.free.len();
+                if *m == Move::Mirror {
+                    mirror_first_joint(&released, nq, &mut w.x, &lo, &up);
+                } else {
+                    flip_elbow(&released, nq, &mut w.x, &lo, &up);
+                }
                 let sol = solve_recentred(&released, &w, HOP_MU)?;
                 return Ok((released, sol));
             }
