@@ -362,7 +362,10 @@ mod tests {
         mirror_first_joint(&p, nq, &mut y, &lo, &up);
         assert_eq!(mismatched(&y), 0);
         let gy = rows(&y);
-        assert!((0..nc).any(|i| (gy[i] - g[i]).abs() > 1e-6), "cost rows unchanged");
+        assert!(
+            (0..nc).any(|i| (gy[i] - g[i]).abs() > 1e-6),
+            "cost rows unchanged"
+        );
         let mut z = y.clone();
         mirror_first_joint(&p, nq, &mut z, &lo, &up);
         assert_eq!(z, x);
