@@ -11,6 +11,12 @@
 //! to ≥ 0.1 s, then released; BENCHMARKS.md, "Global search on a coarse mesh"). A bound is
 //! that transition made systematic: every optimum is pushed in every direction of its shape.
 //!
+//! Two moves change the posture instead, where no bound reaches: the elbow flip
+//! ([`flip_elbow`], the other inverse-kinematics branch of the last two joints) and the mirror
+//! ([`mirror_first_joint`], q₁ → −q₁ with the ball's spin ω, the contact force λ (eq. 29) and
+//! the impact impulse ι (eq. 40) mirrored about the plane through the ball centre that holds
+//! the first joint's axis and gravity).
+//!
 //! * [`MOVES`]: the moves, [`Move::bounds`] their duration bounds for an optimum's durations;
 //! * [`with_duration_bounds`]: a built problem transcribed again with other duration bounds
 //!   (the same NLP layout, so primal-dual warm starts carry over).
