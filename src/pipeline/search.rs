@@ -11,8 +11,8 @@
 //!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
 //!    moves ([`super::reshape`]: the elbow flip, the mirror, phase-duration bounds then
-//!    released) from the best distinct shapes ([`same_shape`]), monotonic basin hopping from the best distinct optima
-//!    and polishing of the winner ([`DEFAULT_HOPS`]).
+//!    released) from the best distinct shapes ([`same_shape`]), monotonic basin hopping from
+//!    the best distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
 //! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
 //!    on the problem's mesh from their coarse trajectories, each re-integrated.
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
