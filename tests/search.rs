@@ -688,8 +688,10 @@ fn the_default_point_limit_lets_the_best_candidate_verify() {
 /// Issue target of the global search: the default `periodic-qc` search (128 coarse starts,
 /// the reshaping moves, 64 hops) reaches J ≤ 0.08761 (the best known optimum before it,
 /// 0.0876082, with the stick phase on its 0.01 s bound), verified, on every seed 0–9.
-/// BENCHMARKS.md ("Global search with reshaping moves") records the optimum of each seed
-/// (0.0769202 or 0.0876082); without the elbow flip, seeds 0, 3, 5, 7, 8, 9 missed it.
+/// BENCHMARKS.md ("Mirror move and refinement progress") records the optimum of each seed:
+/// 0.0876082 on all, the lower 0.0769202 tap that the mirror move reaches on every seed
+/// failing the friction-cone verdict; without the elbow flip, seeds 0, 3, 5, 7, 8, 9 missed
+/// the target.
 #[test]
 #[ignore = "about 4 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_reaches_the_best_known_qc_optimum -- --ignored`"]
