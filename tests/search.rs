@@ -199,6 +199,12 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         json(&merged.join("solution.json")),
     );
     assert_eq!(w["strategy"]["chosen"], m["strategy"]["chosen"]);
+    // The merge verifies and refines as the unsharded run does: the shards' coarse candidates
+    // carry no verification, so its tolerance is the shards' own (before, the merge ran
+    // without verification and chose an unverified 0.0769202 tap that the unsharded run
+    // had rejected on its friction-cone margin).
+    assert_eq!(w["verified"], true);
+    assert_eq!(m["verified"], w["verified"]);
     // The same hops (after the 12 starts, numbered on from 12) with the same outcome, and
     // the same count of the winning optimum's hits, printed as recorded.
     let hits = w["strategy"]["basin_hits"].as_u64().expect("basin_hits");
