@@ -20,8 +20,8 @@
 //!    is left, `refine_in_order`), driven by their element-wise
 //!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
 //!    ([`VerifyPolicy`], [`Search::refine_candidates`]); a candidate whose defects verify but
-//!    whose path leaves the friction cone or penetrates the ball only while each refinement
-//!    halves that excess ([`PATH_PROGRESS`]).
+//!    whose path leaves the friction cone or penetrates the ball only while the refinements
+//!    bring it closer to its allowance (`path_stalled`).
 //! 5. The choice [`select`]: verified first, then the lowest objective, then the lowest index.
 //!
 //! Results are collected in index order and every choice depends on values only, so the
