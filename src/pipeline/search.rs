@@ -371,8 +371,8 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
 /// splitting or raising the degree of the elements whose element-wise re-integration defect
 /// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. An attempt that could not refine its mesh
 /// at all (point limit, non-finite defects) ends the attempts, and so does one whose defects
-/// verify and whose path check stays stuck beyond its allowance ([`path_stalled`]). Returns the last successful
-/// refinement (or the candidate unchanged) and a record per attempt.
+/// verify and whose path check stays stuck beyond its allowance ([`path_stalled`]). Returns
+/// the last successful refinement (or the candidate unchanged) and a record per attempt.
 fn refine_until_verified(
     problem: Problem,
     settings: &ProblemSettings,
@@ -477,7 +477,7 @@ fn refine_until_verified(
 
 /// Factor by which a refinement must shrink how far the path check of a candidate whose
 /// defects already verify is beyond its allowance ([`path_excess`] − 1), for the next
-/// refinement to be tried ([`path_stalled`]).
+/// refinement to be tried (`path_stalled`).
 pub const PATH_PROGRESS: f64 = 0.5;
 
 /// The path-check excess ([`path_excess`]) of a verification whose only failure is a path
