@@ -7,8 +7,8 @@
 //! * Sampling ([`sample`]): start k of a seed is [`Landscape::sample`]`(k)`; the starts run in
 //!   parallel and come back in index order.
 //! * Reshaping (first in [`exploit`], [`HopSettings::reshape_width`]): every deterministic move
-//!   of [`Landscape::reshape`] (for the optimal-control problems the elbow flip and bounds on
-//!   the phase durations, [`super::reshape`]) from each of the best points that differ in shape
+//!   of [`Landscape::reshape`] (for the optimal-control problems the elbow flip, the mirror of
+//!   the first joint and bounds on the phase durations, [`super::reshape`]) from each of the best points that differ in shape
 //!   ([`Landscape::alike`]), in rounds that go on from the best new shapes until the best
 //!   shapes have all been moved.
 //! * Exploitation ([`exploit`]): monotonic basin hopping. Each round perturbs the current best

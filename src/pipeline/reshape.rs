@@ -11,6 +11,12 @@
 //! to ≥ 0.1 s, then released; BENCHMARKS.md, "Global search on a coarse mesh"). A bound is
 //! that transition made systematic: every optimum is pushed in every direction of its shape.
 //!
+//! Two moves change the posture instead, where no bound reaches: the elbow flip
+//! ([`flip_elbow`], the other inverse-kinematics branch of the last two joints) and the mirror
+//! ([`mirror_first_joint`], q₁ → −q₁ with the ball's spin ω, the contact force λ (eq. 29) and
+//! the impact impulse ι (eq. 40) mirrored about the plane through the ball centre that holds
+//! the first joint's axis and gravity).
+//!
 //! * [`MOVES`]: the moves, [`Move::bounds`] their duration bounds for an optimum's durations;
 //! * [`with_duration_bounds`]: a built problem transcribed again with other duration bounds
 //!   (the same NLP layout, so primal-dual warm starts carry over).
@@ -51,6 +57,17 @@ pub enum Move {
     /// q₃ < 0, those of the 0.155–0.177 basins q₃ > 0). On other chains it is an
     /// approximate flip that the solve repairs.
     ElbowFlip,
+    /// The mirror about the plane through the ball centre that contains the first joint's axis
+    /// and gravity (world y = 0 on the paper's scenes: base at (2r, 0, 0), first axis along
+    /// world x): q'₁ = −q₁ with q₂, q₃ kept, the ball's angular velocity, a pseudovector,
+    /// mirrored as ω' = (−ω_x, ω_y, −ω_z), and likewise τ₁, q̈₁, ω̇ and the y components of
+    /// λ and of the impact impulse ι, at every point; the durations unbounded
+    /// ([`mirror_first_joint`]). On a mirror-symmetric scene the mirrored point satisfies every
+    /// dynamics, contact and periodicity row; only the objective differs (its reference spin is
+    /// not mirrored), and the solve starts from the finger on the other side of the ball, which
+    /// neither a hop nor the elbow flip reaches (the `periodic-qc` optima 0.0769 and 0.0876
+    /// have q₁ ≈ +π/2 and −π/2).
+    Mirror,
     /// The first free phase at least `factor`·d₀ and the second at most d₂ / `factor` long
     /// (time moved into the first free phase), or the reverse for `factor` < 1.
     Shift {
@@ -60,8 +77,9 @@ pub enum Move {
 }
 
 /// The moves tried from every reshaped optimum, in this order (the move number is its index).
-pub const MOVES: [Move; 10] = [
+pub const MOVES: [Move; 11] = [
     Move::ElbowFlip,
+    Move::Mirror,
     Move::StickAtLeast {
         abs: 0.05,
         factor: 2.0,
@@ -107,7 +125,7 @@ impl Move {
         };
         match *self {
             // The posture moves, not the durations.
-            Move::ElbowFlip => return Some(b),
+            Move::ElbowFlip | Move::Mirror => return Some(b),
             Move::StickAtLeast { abs, factor } => at_least(&mut b, 1, abs.max(factor * d[1])),
             Move::StickAtMost { factor } => at_most(&mut b, 1, d[1] / factor),
             Move::Period { factor } if factor > 1.0 => {
@@ -132,10 +150,18 @@ impl Move {
         moves.then_some(b)
     }
 
+    /// Whether the move transforms the posture ([`flip_elbow`], [`mirror_first_joint`])
+    /// rather than bounding the durations: solved once from the transformed point, with no
+    /// bounds to release.
+    pub fn moves_posture(&self) -> bool {
+        matches!(self, Move::ElbowFlip | Move::Mirror)
+    }
+
     /// A short description for the search's records.
     pub fn describe(&self) -> String {
         match *self {
             Move::ElbowFlip => "elbow flip".to_string(),
+            Move::Mirror => "mirror q1".to_string(),
             Move::StickAtLeast { abs, factor } => format!("stick >= max({abs}, {factor} x)"),
             Move::StickAtMost { factor } => format!("stick <= 1/{factor} x"),
             Move::Period { factor } if factor > 1.0 => format!("phases <= 1/{factor} x"),
@@ -170,6 +196,42 @@ pub fn flip_elbow(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64], up: &[
                 x[kj] = (-qj).clamp(lo[kj], up[kj]);
             }
         }
+    }
+}
+
+/// The mirror ([`Move::Mirror`]) of the primal point `x` of `p` (`nq` joints; states
+/// [q, q̇, ω, …] at every state point, node variables [q̈, ω̇, λ] and [τ], the impact impulse
+/// ι as the problem's three parameters when it has them), each value kept inside its
+/// variable bounds. Nothing without joints.
+pub fn mirror_first_joint(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64], up: &[f64]) {
+    if nq == 0 {
+        return;
+    }
+    let mut negate = |k: usize| x[k] = (-x[k]).clamp(lo[k], up[k]);
+    // Components that change sign: q₁ and q̇₁, and ω_x, ω_z (ω' = −S ω for the reflection
+    // S = diag(1, −1, 1)); in the node variables q̈₁, ω̇_x, ω̇_z and λ_y (λ is a force: S λ).
+    let states = [0, nq, 2 * nq, 2 * nq + 2];
+    let nodes = [0, nq, nq + 2, nq + 4];
+    for l in &p.nlp.phases {
+        for pt in 0..l.mesh.state_tau.len() {
+            states
+                .iter()
+                .filter(|&&i| i < l.nx)
+                .for_each(|&i| negate(l.x(pt, i)));
+        }
+        for k in 0..l.mesh.colloc.len() {
+            nodes
+                .iter()
+                .filter(|&&i| i < l.na)
+                .for_each(|&i| negate(l.a(k, i)));
+            if l.nu > 0 {
+                negate(l.u(k, 0));
+            }
+        }
+    }
+    // ι is a Cartesian impulse (eq. 40): its y component changes sign.
+    if p.ocp.params.len() == 3 && p.ocp.params.iter().all(|q| q.name.starts_with("iota")) {
+        negate(p.nlp.p0 + 1);
     }
 }
 
@@ -223,12 +285,12 @@ mod tests {
     #[test]
     fn every_move_excludes_the_optimum_and_stays_within_the_problem() {
         let d = [0.3, 0.12, 0.5];
-        // The flip moves the posture and leaves the durations free.
-        assert_eq!(
-            Move::ElbowFlip.bounds(&d, &WITHIN, &FSF),
-            Some(WITHIN.to_vec())
-        );
-        for m in MOVES.into_iter().filter(|m| *m != Move::ElbowFlip) {
+        // The flip and the mirror move the posture and leave the durations free.
+        for m in [Move::ElbowFlip, Move::Mirror] {
+            assert!(m.moves_posture() && MOVES.contains(&m));
+            assert_eq!(m.bounds(&d, &WITHIN, &FSF), Some(WITHIN.to_vec()));
+        }
+        for m in MOVES.into_iter().filter(|m| !m.moves_posture()) {
             let b = m.bounds(&d, &WITHIN, &FSF).expect("applies");
             assert!(
                 d.iter().zip(&b).any(|(x, (lo, hi))| x < lo || x > hi),
@@ -257,5 +319,74 @@ mod tests {
         for (x, (_, hi)) in d.iter().zip(&b) {
             assert!((hi - 0.8 * x).abs() < 1e-15);
         }
+    }
+
+    /// The mirror is an exact symmetry of the paper's scene: at a generic point of the
+    /// `periodic-qc` NLP (every variable perturbed, so nothing is symmetric by accident),
+    /// every dynamics, contact, path, linkage and periodicity row of the mirrored point has the
+    /// magnitude of the original's (rows map to ± themselves), while the cost-state rows differ
+    /// (the reference spin ω_ref is not mirrored); mirroring twice is the identity. Mirroring
+    /// q₁ alone, or with ω unmirrored, breaks the dynamics rows (so the test can fail).
+    #[test]
+    fn the_mirror_keeps_every_constraint_row_of_the_paper_scene_but_the_cost() {
+        use bf_optim::ipm::Nlp;
+        use bf_problem::{Problem, ProblemSettings};
+
+        let settings = ProblemSettings {
+            points: 12,
+            scheme: bf_optim::ocp::Scheme::Radau { elements: 3 },
+            ..ProblemSettings::default()
+        };
+        let p = crate::pipeline::build(Problem::PeriodicQc, &settings).expect("builds");
+        let (n, m) = (Nlp::num_variables(&p.nlp), Nlp::num_constraints(&p.nlp));
+        let mut x = vec![0.0; n];
+        Nlp::initial_point(&p.nlp, &mut x);
+        // A deterministic generic point (a golden-ratio sequence in [−0.5, 0.5)).
+        for (i, v) in x.iter_mut().enumerate() {
+            *v += ((i as f64 * 0.618_033_988_749_895).fract() - 0.5) * 0.8;
+        }
+        for l in &p.nlp.phases {
+            x[l.t] = 0.3;
+        }
+        let (lo, up) = (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]);
+        let nq = p.guess.free.len();
+        let nc = p.nlp.row_blocks[0].1.end;
+        assert_eq!(p.nlp.row_blocks[0].0, "cost states");
+        let rows = |x: &[f64]| {
+            let mut g = vec![0.0; m];
+            Nlp::constraints(&p.nlp, x, &mut g);
+            g
+        };
+        let g = rows(&x);
+        let mismatched = |y: &[f64]| {
+            let gy = rows(y);
+            (nc..m)
+                .filter(|&i| (gy[i].abs() - g[i].abs()).abs() > 1e-9 * (1.0 + g[i].abs()))
+                .count()
+        };
+        let mut y = x.clone();
+        mirror_first_joint(&p, nq, &mut y, &lo, &up);
+        assert_eq!(mismatched(&y), 0);
+        let gy = rows(&y);
+        assert!(
+            (0..nc).any(|i| (gy[i] - g[i]).abs() > 1e-6),
+            "cost rows unchanged"
+        );
+        let mut z = y.clone();
+        mirror_first_joint(&p, nq, &mut z, &lo, &up);
+        assert_eq!(z, x);
+        // The joint alone (q₁, q̇₁ and τ₁) is not the mirror of the whole system.
+        let mut q_only = x.clone();
+        for l in &p.nlp.phases {
+            for pt in 0..l.mesh.state_tau.len() {
+                q_only[l.x(pt, 0)] *= -1.0;
+                q_only[l.x(pt, nq)] *= -1.0;
+            }
+            for k in 0..l.mesh.colloc.len() {
+                q_only[l.a(k, 0)] *= -1.0;
+                q_only[l.u(k, 0)] *= -1.0;
+            }
+        }
+        assert!(mismatched(&q_only) > 10, "{}", mismatched(&q_only));
     }
 }

@@ -701,6 +701,31 @@ pub fn path_failure(v: &Verification) -> Option<String> {
     penetration_failure(v).or_else(|| cone_failure(v))
 }
 
+/// How far the worst path check of `v` is outside its allowance, in units of the allowance:
+/// the deepest penetration of a free phase over [`PENETRATION_TOLERANCE`] and the lowest cone
+/// margin of a stick phase over its [`cone_allowance`] (as −min h / tol and −min σ /
+/// allowance), 0 when no path check goes below zero; above 1 exactly when [`path_failure`]
+/// names a failure. The refinement ([`super::search`]) stops refining a candidate whose
+/// only failure is a path check that a refinement did not bring closer.
+pub fn path_excess(v: &Verification) -> f64 {
+    excess_of(
+        v.phases
+            .iter()
+            .filter(|p| p.mode == PhaseMode::Free)
+            .filter_map(|p| p.min_h),
+        worst_cone_margin(v),
+    )
+}
+
+/// [`path_excess`] of the free phases' min h `min_h` and the worst cone margin `cone`.
+fn excess_of(min_h: impl Iterator<Item = f64>, cone: Option<ConeMargin>) -> f64 {
+    let pen = min_h
+        .map(|h| -h / PENETRATION_TOLERANCE)
+        .fold(0.0, f64::max);
+    let cone = cone.map_or(0.0, |m| -m.relative());
+    pen.max(cone).max(0.0)
+}
+
 /// The first free phase of `v` whose re-integrated path penetrates the ball deeper than
 /// [`PENETRATION_TOLERANCE`] (min h < −10⁻⁴ m), as a sentence naming the phase, min h and the
 /// allowance: a long free phase that grazes the ball can sag into it between its nodes.
@@ -999,4 +1024,46 @@ fn verify_phases<const N: usize>(
         )?);
     }
     Ok(phases)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The path-check excess is above 1 exactly when a path check fails by the verdict's own
+    /// rules (min h below −[`PENETRATION_TOLERANCE`], or a cone margin outside its allowance),
+    /// scales with the violation, and is 0 when nothing goes below zero.
+    #[test]
+    fn path_excess_is_above_one_exactly_when_a_path_check_fails() {
+        let tol = PENETRATION_TOLERANCE;
+        for h in [1e-3, 0.0, -0.5 * tol, -tol, -1.01 * tol, -3.0 * tol] {
+            for (sigma, allowance) in [
+                (0.1, 1e-3),
+                (-0.5e-3, 1e-3),
+                (-1e-3, 1e-3),
+                (-2e-3, 1e-3),
+                (-1e-6, 0.0),
+                (0.0, 0.0),
+            ] {
+                let m = ConeMargin {
+                    phase: 1,
+                    min_sigma: sigma,
+                    allowance,
+                };
+                let e = excess_of([h, 1e-2].into_iter(), Some(m));
+                let fails = h < -tol || !m.within();
+                assert_eq!(
+                    e > 1.0,
+                    fails,
+                    "h {h}, sigma {sigma}, allowance {allowance}: {e}"
+                );
+                assert!(e >= 0.0);
+                if h <= 0.0 && allowance > 0.0 {
+                    let want = (-h / tol).max(-sigma / allowance).max(0.0);
+                    assert!((e - want).abs() <= 1e-12 * want.max(1.0), "{e} {want}");
+                }
+            }
+        }
+        assert_eq!(excess_of(std::iter::empty(), None), 0.0);
+    }
 }

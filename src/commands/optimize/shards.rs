@@ -303,10 +303,13 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             solution: c,
         });
     }
-    let rtol = found
-        .candidates
+    // The verification's tolerance of the shards' runs: their own solutions are verified on
+    // the problem's mesh; the candidates of a coarse sampling carry no verification.
+    let rtol = first
         .iter()
-        .find_map(|c| c.solution.verification.as_ref().map(|v| v.rtol))
+        .map(|(_, s)| s)
+        .chain(found.candidates.iter().map(|c| &c.solution))
+        .find_map(|s| s.verification.as_ref().map(|v| v.rtol))
         .unwrap_or(0.0);
     let policy = VerifyPolicy {
         rtol,
