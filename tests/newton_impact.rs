@@ -164,8 +164,8 @@ fn a_newton_plan_keeps_omega_matches_the_plants_law_and_is_tracked() {
 /// problem fails every one of these plants under the bound (about 100 %: its impact impulse
 /// spins the ball, which a Newton impact does not; decision 0017, BENCHMARKS.md).
 #[test]
-#[ignore = "a 32-start Newton search of periodic-cot-human and 7 runs of 50 periods (10 s \
-            each), several minutes; run with `cargo test --release --test newton_impact -- \
+#[ignore = "a 32-start Newton search of periodic-cot-human and 7 runs of 50 periods of 10 s, \
+            about 40 s on 2 cores; run with `cargo test --release --test newton_impact -- \
             --ignored --nocapture`"]
 fn the_newton_planned_human_optimum_meets_the_nominal_and_robustness_targets_bounded() {
     use ball_finger::paper::closed_loop::{NOMINAL_TARGET, max_error_from_fourth, robustness_runs};

@@ -70,9 +70,9 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 6] {
 }
 
 /// Errors naming both files and the quantity unless `sol` (read from `path`) was solved on the
-/// problem, impact law, scene (its file text), runtime parameters, mesh and ε of `first`, searched with
-/// the same [`SearchSettings`] (where either records them) and (where both were verified)
-/// verified with the same tolerances.
+/// problem, impact law, scene (its file text), runtime parameters, mesh and ε of `first`,
+/// searched with the same [`SearchSettings`] (where either records them) and (where both were
+/// verified) verified with the same tolerances.
 fn check_same_run(
     first: &(std::path::PathBuf, OcpSolution),
     path: &Path,
