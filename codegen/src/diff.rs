@@ -119,7 +119,7 @@ pub fn partial(g: &mut Graph, outputs: &[Id], var: u32) -> Vec<Id> {
     forward(g, outputs, &|v| (v == var).then_some(one))
 }
 
-/// Total time derivative along a direction: d/dt f = Σ_k ∂f/∂x_{vars[k]} · rates[k].
+/// Total time derivative along a direction: `d/dt f = Σ_k ∂f/∂x_{vars[k]} · rates[k]`.
 /// With `vars` = q and `rates` = q̇ this is d/dt f(q) with q̇ held constant (so d/dt of
 /// J(q) q̇ gives J̇ q̇).
 pub fn time_derivative(g: &mut Graph, outputs: &[Id], vars: &[u32], rates: &[Id]) -> Vec<Id> {

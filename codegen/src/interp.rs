@@ -217,7 +217,7 @@ impl Kind {
 ///
 /// Slots of the value vector, in order: the graph variables the cone reads, its constants, the
 /// sines and cosines of variables (computed together, four lanes per
-/// [`Scalar::sin_cos_slice`] call for [`KernelF64`]), then the operations in *runs*: a run is
+/// [`Scalar::sin_cos_in_place`] call for [`KernelF64`]), then the operations in *runs*: a run is
 /// a sequence of operations of one kind whose operands are all computed before the run starts
 /// (a list scheduler takes, at each step, every ready operation of the kind with the most
 /// ready ones). So the interpreter decides the operation once per run, not once per node,

@@ -375,7 +375,7 @@ pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, 
             (
                 vec![Q, Qd, Qdd, P],
                 vec![arr("y", &[Nq, Nq, Lit(10)], flat3(&y))],
-                "Dynamic regressor: `y[i][l][k]` = ∂τ_i/∂π_{l,k}, so τ = Σ y[i][l][k] π_{l,k} \
+                "Dynamic regressor: `y[i][l][k]` = ∂τ_i/∂π_{l,k}, so `τ = Σ y[i][l][k] π_{l,k}` \
                  with π_l = [m, m c_x, m c_y, m c_z, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz] of link \
                  l + 1 (c the COG and I the inertia about the link frame's origin, link-frame \
                  axes)."

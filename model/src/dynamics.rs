@@ -14,7 +14,7 @@
 //! The generalised force vector of eq. 32 is f = [C q̇ + μ_v q̇ + g − τ; ω × I_b ω + D ω]; the
 //! gyroscopic term uses the full I_b, so it is exact for a non-isotropic ball.
 //!
-//! Any number of joints N (const parameter, default 3): M_f is N×N (Cholesky [`Spd`]), J_c 3×N,
+//! Any number of joints N (const parameter, default 3): M_f is N×N (Cholesky, `Spd`), J_c 3×N,
 //! M_f⁻¹ J_cᵀ N×3; the contact-space matrices W and Γ stay 3×3 whatever N is, so the stick and
 //! slip laws solve the same 3×3 (or scalar) problems. Γ = W + S(r_c) I_b⁻¹ S(r_c)ᵀ stays
 //! invertible for N < 3 as long as the finger can move along the normal (nᵀ W n > 0): the

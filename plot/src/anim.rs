@@ -17,13 +17,13 @@ use std::path::{Path, PathBuf};
 /// One animation frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AnimFrame {
-    /// Time [s].
+    /// Time \[s\].
     pub t: f64,
-    /// World positions of the frame origins from the finger base to the fingertip [m].
+    /// World positions of the frame origins from the finger base to the fingertip \[m\].
     pub joints: Vec<[f64; 3]>,
     /// Ball orientation: rotation matrix body → world, row-major.
     pub ball_rotation: [[f64; 3]; 3],
-    /// Contact point [m] when the finger touches the ball.
+    /// Contact point \[m\] when the finger touches the ball.
     pub contact: Option<[f64; 3]>,
 }
 
@@ -32,9 +32,9 @@ pub struct AnimFrame {
 pub struct Animation {
     /// Page heading.
     pub title: String,
-    /// Ball centre o_b [m].
+    /// Ball centre o_b \[m\].
     pub ball_center: [f64; 3],
-    /// Ball radius r [m].
+    /// Ball radius r \[m\].
     pub ball_radius: f64,
     /// Frames in increasing time.
     pub frames: Vec<AnimFrame>,

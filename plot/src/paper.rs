@@ -24,7 +24,7 @@ use crate::figure::{
 /// Sampled signals on a common time grid: `values[k][i]` is component `k` at `t[i]`.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct TimeSeries {
-    /// Sample times [s].
+    /// Sample times \[s\].
     pub t: Vec<f64>,
     /// One vector per component, each as long as `t`.
     pub values: Vec<Vec<f64>>,
@@ -84,9 +84,9 @@ impl TimeSeries {
 /// Phase structure of a trajectory (Sect. 4.2): switching times and the contact intervals.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct Phases {
-    /// (time [s], short label) of each switch, e.g. (0.8, "impact"), (1.3, "lift-off").
+    /// (time \[s\], short label) of each switch, e.g. (0.8, "impact"), (1.3, "lift-off").
     pub switches: Vec<(f64, String)>,
-    /// Closed intervals [s] during which the finger touches the ball (shaded).
+    /// Closed intervals \[s\] during which the finger touches the ball (shaded).
     pub contact: Vec<(f64, f64)>,
 }
 
@@ -136,9 +136,9 @@ pub fn fig_ball_omega(
     Ok(fig)
 }
 
-/// Fig. 7 / 14: two stacked panels over the same time axis: the minimum distance h [m]
+/// Fig. 7 / 14: two stacked panels over the same time axis: the minimum distance h \[m\]
 /// (with the h = 0 contact line) and the distance of the contact point from the fingertip,
-/// |sat_{−ℓ}^{0}(α)| [m] (0: tip contact; ℓ: the joint end of the last link).
+/// |sat_{−ℓ}^{0}(α)| \[m\] (0: tip contact; ℓ: the joint end of the last link).
 pub fn fig_distance(
     title: &str,
     t: &[f64],
@@ -238,7 +238,7 @@ pub fn fig_torques(
     })
 }
 
-/// Fig. 9 / 16: contact force: λ_n, ‖λ_∥‖ and the friction-cone bound μ_s λ_n [N], on an axis
+/// Fig. 9 / 16: contact force: λ_n, ‖λ_∥‖ and the friction-cone bound μ_s λ_n \[N\], on an axis
 /// that includes zero. Sticking
 /// requires ‖λ_∥‖ ≤ μ_s λ_n; where the two curves touch the motion is on the verge of slipping
 /// (Fig. 16). Samples outside contact may be NaN (they leave gaps).
@@ -357,7 +357,7 @@ pub fn fig_ball_omega_ref(
     Ok(fig)
 }
 
-/// Contact modes of a simulation over time, for shading (Fig. 17): closed intervals [s].
+/// Contact modes of a simulation over time, for shading (Fig. 17): closed intervals \[s\].
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SimModes {
     /// Intervals in which the finger slips on the ball.
@@ -470,12 +470,12 @@ pub fn fig_open_loop_vs_optimal(
     })
 }
 
-/// One method of a work–precision diagram: (computing time [s], error) per setting.
+/// One method of a work–precision diagram: (computing time \[s\], error) per setting.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct WorkPrecision {
     /// Method name (legend).
     pub name: String,
-    /// Computing time per run [s].
+    /// Computing time per run \[s\].
     pub time_s: Vec<f64>,
     /// Error per run (same length); non-positive errors are skipped on the log axis.
     pub error: Vec<f64>,
@@ -519,7 +519,7 @@ pub fn fig_work_precision(
 pub struct WorkPrecisionSet {
     /// Legend text.
     pub name: String,
-    /// Computing time per run [s].
+    /// Computing time per run \[s\].
     pub time_s: Vec<f64>,
     /// Error per run (same length); non-positive errors are skipped on the log axis.
     pub error: Vec<f64>,

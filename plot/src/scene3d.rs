@@ -50,7 +50,7 @@ fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 impl View {
-    /// Projects a world point onto (horizontal, vertical) screen coordinates [m].
+    /// Projects a world point onto (horizontal, vertical) screen coordinates \[m\].
     pub fn project(self, p: [f64; 3]) -> (f64, f64) {
         match self {
             View::FrontXZ => (p[0], p[2]),
@@ -73,15 +73,15 @@ impl View {
 /// Finger configurations and paths around the ball.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct FingerPaths {
-    /// Ball centre o_b [m].
+    /// Ball centre o_b \[m\].
     pub ball_center: [f64; 3],
-    /// Ball radius r [m].
+    /// Ball radius r \[m\].
     pub ball_radius: f64,
-    /// Finger snapshots: each the frame origins from the base o_f to the fingertip p_e [m].
+    /// Finger snapshots: each the frame origins from the base o_f to the fingertip p_e \[m\].
     pub snapshots: Vec<Vec<[f64; 3]>>,
-    /// Fingertip path p_e(t) [m].
+    /// Fingertip path p_e(t) \[m\].
     pub tip_path: Vec<[f64; 3]>,
-    /// Contact-point path p_c(t) [m]; NaN samples (no contact) leave gaps; may be empty.
+    /// Contact-point path p_c(t) \[m\]; NaN samples (no contact) leave gaps; may be empty.
     pub contact_path: Vec<[f64; 3]>,
 }
 
@@ -216,7 +216,7 @@ pub fn fig_finger_paths(
 pub struct NamedPath {
     /// Legend text, e.g. "human finger: closest point".
     pub name: String,
-    /// Points [m]; NaN samples leave gaps.
+    /// Points \[m\]; NaN samples leave gaps.
     pub points: Vec<[f64; 3]>,
 }
 

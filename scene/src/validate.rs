@@ -192,7 +192,7 @@ pub fn symmetric_eigenvalues(a: &[[f64; 3]; 3]) -> [f64; 3] {
 }
 
 /// Principal moments (ascending) of a valid inertia and whether they satisfy the triangle
-/// inequality I₃ ≤ I₁ + I₂ (up to [`MATRIX_TOL`] of the trace), which every rigid body's
+/// inequality I₃ ≤ I₁ + I₂ (up to `MATRIX_TOL` of the trace), which every rigid body's
 /// inertia about its centre of mass does (Iₖ = ∫ (r² − xₖ²) dm, so I₁ + I₂ − I₃ = 2∫ x₃² dm).
 pub fn principal_moments(m: &[[f64; 3]; 3]) -> ([f64; 3], bool) {
     let scale = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));

@@ -200,7 +200,7 @@ pub fn flip_elbow(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64], up: &[
 }
 
 /// The mirror ([`Move::Mirror`]) of the primal point `x` of `p` (`nq` joints; states
-/// [q, q̇, ω, …] at every state point, node variables [q̈, ω̇, λ] and [τ], the impact impulse
+/// [q, q̇, ω, …] at every state point, node variables [q̈, ω̇, λ] and \[τ\], the impact impulse
 /// ι as the problem's three parameters when it has them), each value kept inside its
 /// variable bounds. Nothing without joints.
 pub fn mirror_first_joint(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64], up: &[f64]) {

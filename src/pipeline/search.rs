@@ -11,7 +11,7 @@
 //!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
 //!    moves ([`super::reshape`]: the elbow flip, the mirror, phase-duration bounds then
-//!    released) from the best distinct shapes ([`same_shape`]), monotonic basin hopping from
+//!    released) from the best distinct shapes (`same_shape`), monotonic basin hopping from
 //!    the best distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
 //! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
 //!    on the problem's mesh from their coarse trajectories, each re-integrated.
@@ -55,7 +55,7 @@ use super::verify::{VERIFIED_DEFECT, is_verified, path_excess, verify};
 pub const CLUSTER_RTOL: f64 = 1e-6;
 
 /// Relative difference of objectives and phase durations within which two end points have
-/// the same shape ([`same_shape`]).
+/// the same shape (`same_shape`).
 pub const SHAPE_RTOL: f64 = 0.02;
 
 /// First stick-phase lower bound (s) of the stick continuation
@@ -314,7 +314,7 @@ pub fn select(cands: &[(usize, &OcpSolution)]) -> Option<usize> {
 
 /// One candidate per distinct optimum: candidates sorted by (class, objective, index) are
 /// grouped greedily (a group takes every following end point of its class within
-/// [`same_optimum`] of its first); each group is represented by its lowest start index.
+/// `same_optimum` of its first); each group is represented by its lowest start index.
 pub fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
     let mut order: Vec<usize> = (0..cands.len()).collect();
     let key = |c: &Candidate| {
@@ -501,7 +501,7 @@ fn path_stalled(before: Option<f64>, now: Option<f64>) -> bool {
 }
 
 /// Fraction of the best verified objective below which a further candidate is still refined
-/// ([`refine_in_order`]): a refinement may verify far above its candidate's objective, so a
+/// (`refine_in_order`): a refinement may verify far above its candidate's objective, so a
 /// candidate well below the best verified one is worth its refinements; one close to it
 /// rarely is, and each costs up to five refinements on meshes of hundreds of points (on
 /// `periodic-cot` seed 1, refining every lower candidate took 353 s of CPU).
@@ -543,7 +543,7 @@ fn refine_in_order<I: Copy, T>(
 /// (in parallel, results in index order), re-integrates every end point, keeps one
 /// candidate per distinct optimum, and hp-refines the unverified optima that beat the best
 /// verified one, lowest objective first, until none below half the best verified objective
-/// is left ([`refine_until_verified`], at most `policy.clusters` of them). Every
+/// is left (`refine_until_verified`, at most `policy.clusters` of them). Every
 /// decision depends on the computed values only, never on thread scheduling, so the result is
 /// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
 pub fn search(
@@ -634,7 +634,7 @@ fn coarse_mesh(
 /// one of [`CoarseSampling`] by default); end points on the problem's mesh are
 /// re-integrated. Points rank successful first, then by objective (better by more than
 /// [`CLUSTER_RTOL`] relative): the verification and refinement come after the exploration
-/// ([`Search::refine_candidates`]). Points are the same optimum by [`same_optimum`].
+/// ([`Search::refine_candidates`]). Points are the same optimum by `same_optimum`.
 struct OcpLandscape<'a> {
     problem: Problem,
     settings: &'a ProblemSettings,
@@ -964,7 +964,7 @@ impl Search {
     }
 
     /// hp-refines the unverified candidates that beat the best verified one, lowest objective
-    /// first, until none below half the best verified objective is left ([`refine_until_verified`],
+    /// first, until none below half the best verified objective is left (`refine_until_verified`,
     /// at most [`VerifyPolicy::clusters`] of them); nothing without verification (`rtol` 0). Runs
     /// after the exploration, so that the hops start from the problem's own mesh and only
     /// the winners are refined.

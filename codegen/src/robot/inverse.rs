@@ -244,7 +244,7 @@ impl SymbolicRobot {
             .collect()
     }
 
-    /// The dynamic regressor: `out[i][l][k]` = ∂τ_i/∂π_{l,k}, so τ = Σ_{l,k} Y[i][l][k] π_{l,k}
+    /// The dynamic regressor: `out[i][l][k]` = ∂τ_i/∂π_{l,k}, so `τ = Σ_{l,k} Y[i][l][k] π_{l,k}`
     /// with π of [`super::inertial_parameters`].
     pub fn regressor(&mut self) -> Vec<Vec<Vec<Id>>> {
         let n = self.nq();

@@ -771,7 +771,7 @@ pub fn forward_dynamics(
     qdd[0] = t61;
     qdd[1] = t58;
 }
-/// Dynamic regressor: `y[i][l][k]` = ∂τ_i/∂π_{l,k}, so τ = Σ y[i][l][k] π_{l,k} with π_l = [m, m c_x, m c_y, m c_z, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz] of link l + 1 (c the COG and I the inertia about the link frame's origin, link-frame axes).
+/// Dynamic regressor: `y[i][l][k]` = ∂τ_i/∂π_{l,k}, so `τ = Σ y[i][l][k] π_{l,k}` with π_l = [m, m c_x, m c_y, m c_z, I_xx, I_xy, I_xz, I_yy, I_yz, I_zz] of link l + 1 (c the COG and I the inertia about the link frame's origin, link-frame axes).
 ///
 /// Arguments, in order:
 /// * `q`: joint angles (rad)

@@ -224,7 +224,7 @@ pub struct Band {
 pub struct LineFigure {
     /// Caption above the axes (may be empty inside a [`PanelFigure`]).
     pub title: String,
-    /// x-axis description including the unit, e.g. "t [s]".
+    /// x-axis description including the unit, e.g. "t \[s\]".
     pub x_label: String,
     /// y-axis description including the unit, e.g. "ω [rad/s]".
     pub y_label: String,
