@@ -13,6 +13,7 @@
 
 #[path = "common/cli.rs"]
 mod cli;
+mod common;
 
 use ball_finger::paper::closed_loop::{ControllerKind, run_tracking, solution_model};
 use ball_finger::pipeline::build;
@@ -21,7 +22,7 @@ use bf_optim::ipm::{Nlp, check_derivatives};
 use bf_optim::ocp::Scheme;
 use bf_problem::points::{NEWTON_APPROACH_SPEED, NEWTON_VELOCITY_LIMIT};
 use bf_problem::{PlannedImpact, ProblemSettings};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 #[test]
@@ -36,15 +37,7 @@ fn newton_impact_derivatives_match_finite_differences() {
         };
         let p = build("periodic-qc".parse().unwrap(), &s).unwrap();
         let m = p.nlp.num_constraints();
-        let mut x = p.nlp.initial().to_vec();
-        for v in x.iter_mut() {
-            *v += rng.random_range(-0.3..0.3);
-        }
-        for l in &p.nlp.phases {
-            x[l.t] = rng.random_range(0.5..1.5);
-        }
-        x[p.nlp.c0 + 1] = rng.random_range(1.0..2.0);
-        let lam: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let (x, lam) = common::fd::random_point(&p.nlp, &mut rng);
         let rep = check_derivatives(&p.nlp, &x, 0.5, &lam, 1e-6);
         assert!(rep.max_error() < 1e-5, "{scheme:?}: {rep:?}");
         // The Newton rows are there: two more constraints than the sticking plan (the

@@ -10,7 +10,7 @@ use bf_optim::ipm::{Nlp, Status, check_derivatives};
 use bf_optim::ocp::Scheme;
 use bf_problem::{GuessKind, OcpSolution, Problem, ProblemSettings};
 use bf_testkit::small::solve3;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 fn settings(points: usize) -> ProblemSettings {
@@ -40,16 +40,7 @@ fn nlp_derivatives_match_finite_differences() {
             };
             let p = build(name.parse().unwrap(), &s).unwrap();
             let n = p.nlp.num_variables();
-            let m = p.nlp.num_constraints();
-            let mut x = p.nlp.initial().to_vec();
-            for v in x.iter_mut() {
-                *v += rng.random_range(-0.3..0.3);
-            }
-            for l in &p.nlp.phases {
-                x[l.t] = rng.random_range(0.5..1.5);
-            }
-            x[p.nlp.c0 + 1] = rng.random_range(1.0..2.0);
-            let lam: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let (x, lam) = common::fd::random_point(&p.nlp, &mut rng);
             let rep = check_derivatives(&p.nlp, &x, 0.5, &lam, 1e-6);
             assert!(rep.max_error() < 1e-5, "{name} {scheme:?} n={n}: {rep:?}");
         }
