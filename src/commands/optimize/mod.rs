@@ -29,7 +29,7 @@ use bf_optim::ocp::problem::Scheme;
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_problem::arm::REACH_ARM;
 use bf_problem::{
-    BuiltProblem, COT_MAX_PERIOD, OcpSolution, PlannedImpact, Problem, ProblemSettings,
+    BuiltProblem, COT_MAX_PERIOD, OcpSolution, PhaseMode, PlannedImpact, Problem, ProblemSettings,
 };
 use std::path::Path;
 
@@ -449,6 +449,30 @@ pub fn scene_record(args: &OptimizeArgs, problem: Problem) -> Result<(String, Ve
     Ok((text, super::parse_params(&args.param)?))
 }
 
+/// The hint for a plan that a Newton plant cannot execute, or `None`: a sticking-law plan
+/// (eq. 40) whose stick phase sits on its minimum `min_stick` (within 1e-6 relative) spins the
+/// ball mostly through the impact impulse, which Newton's law (eq. 39, `track`'s nominal
+/// plant) does not give (docs/optima.md, "Low optima that a Newton plant cannot execute").
+pub fn tap_hint(
+    law: PlannedImpact,
+    modes: &[PhaseMode],
+    durations: &[f64],
+    min_stick: f64,
+) -> Option<String> {
+    let on_minimum = modes
+        .iter()
+        .zip(durations)
+        .any(|(m, &d)| *m == PhaseMode::Stick && d <= min_stick * (1.0 + 1e-6));
+    (law == PlannedImpact::Stick && on_minimum).then(|| {
+        format!(
+            "hint: the stick phase is on its minimum ({min_stick} s): the plan spins the ball \
+             mostly by the sticking impact (eq. 40), which a plant with Newton's law (`track`'s \
+             default) does not reproduce; --impact-law newton plans an impact such a plant can \
+             execute, --min-stick 0.1 rules such taps out (docs/optima.md)"
+        )
+    })
+}
+
 /// The hint for a failed solve whose configurations `at` (label, q) need more torque than
 /// the scene's limits against gravity alone: the joints i with |g_i(q)| > τ_max,i (at rest no
 /// other torque acts, so no admissible torque holds the arm there), or `None`.
@@ -739,6 +763,14 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             COT_MAX_PERIOD
         )?;
     }
+    if let Some(h) = tap_hint(
+        sol.impact_law,
+        &sol.modes,
+        &sol.phase_durations,
+        args.min_stick,
+    ) {
+        crate::outln!("{h}")?;
+    }
     print_wrote(&args.out, &sol)?;
     // An Acceptable end of the default KKT settings may end Solved on another path.
     if sol.status == Status::Acceptable
@@ -771,4 +803,29 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         bail!("{f}");
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Only a sticking plan whose stick phase is on its minimum gets the hint: a longer stick
+    /// phase, a Newton plan or a plan without a stick phase does not.
+    #[test]
+    fn the_tap_hint_names_sticking_plans_on_the_stick_minimum_only() {
+        use PhaseMode::{Free, Stick};
+        let modes = [Free, Stick, Free];
+        let tap = [0.5, 0.01, 0.1];
+        let long = [0.5, 0.0101, 0.1];
+        let hint = tap_hint(PlannedImpact::Stick, &modes, &tap, 0.01).unwrap();
+        assert!(
+            hint.contains("--impact-law newton") && hint.contains("0.01 s"),
+            "{hint}"
+        );
+        assert!(tap_hint(PlannedImpact::Stick, &modes, &long, 0.01).is_none());
+        assert!(tap_hint(PlannedImpact::Newton, &modes, &tap, 0.01).is_none());
+        assert!(tap_hint(PlannedImpact::Stick, &[Free, Free, Free], &tap, 0.01).is_none());
+        // The larger minimum of `--min-stick 0.1` is the one compared with.
+        assert!(tap_hint(PlannedImpact::Stick, &modes, &[0.5, 0.1, 0.1], 0.1).is_some());
+    }
 }
