@@ -100,22 +100,12 @@ pub(crate) fn periodic(c: &Context<'_>) -> Result<Spec, ProblemError> {
     }
     let (scene, eps, settings) = (c.scene, c.eps, c.settings);
     let p = PeriodicParts::of(c)?;
-    let phases = vec![p.approach, p.stick, p.release];
     let mut points = apex(c, 0)?;
     points.extend(contact_sequence(scene, c.physics, eps, TOL_H, settings, 0)?);
     points.extend(stick_end(c)?);
     points.push(continuity(c.nx(), 1, 2, "stick -> free continuity"));
     points.push(continuity(c.nx(), 2, 0, "periodicity"));
-    points.extend(p.period_row);
-    Ok(Spec {
-        phases,
-        cost: p.cost,
-        objective: Objective::Ratio(0, 1),
-        points,
-        params: iota_params(),
-        cost_bounds: p.cost_bounds,
-        q_limits: c.q_limits(),
-    })
+    Ok(p.spec(c, |p| vec![p.approach, p.stick, p.release], points))
 }
 
 /// The transient period of a re-plan (module `replan` of the catalogue): the periodic
@@ -136,7 +126,6 @@ pub(crate) fn periodic_from_lift_off(
     let (scene, eps, settings) = (c.scene, c.eps, c.settings);
     r.validate(c.nx())?;
     let p = PeriodicParts::of(c)?;
-    let phases = vec![p.release, p.approach, p.stick];
     let mut points = vec![fixed_state(
         0,
         false,
@@ -152,30 +141,46 @@ pub(crate) fn periodic_from_lift_off(
         "ends on the periodic lift-off state",
     ));
     points.push(continuity(c.nx(), 0, 1, "release -> approach continuity"));
-    points.extend(p.period_row);
-    Ok(Spec {
-        phases,
-        cost: p.cost,
-        objective: Objective::Ratio(0, 1),
-        points,
-        params: iota_params(),
-        cost_bounds: p.cost_bounds,
-        q_limits: c.q_limits(),
-    })
+    Ok(p.spec(c, |p| vec![p.release, p.approach, p.stick], points))
 }
 
-/// What the periodic problem and its re-plan share: the three phases, the cost, the period
-/// row and the cost bounds.
-struct PeriodicParts {
+/// The three phases of a periodic problem, which [`PeriodicParts::spec`] puts in order.
+struct PeriodicPhases {
     approach: PhaseDef,
     stick: PhaseDef,
     release: PhaseDef,
+}
+
+/// What the periodic problem and its re-plan share: the three phases, the cost, the period
+/// row and the cost bounds; [`PeriodicParts::spec`] makes a problem of them.
+struct PeriodicParts {
+    phases: PeriodicPhases,
     cost: CostKind,
     period_row: Option<PointFunction>,
     cost_bounds: Vec<(f64, f64)>,
 }
 
 impl PeriodicParts {
+    /// The problem of `points` (the period row appended) over the phases `order` takes from
+    /// these parts: the ratio objective over one period, the impact impulse as parameters.
+    fn spec(
+        self,
+        c: &Context<'_>,
+        order: impl FnOnce(PeriodicPhases) -> Vec<PhaseDef>,
+        mut points: Vec<PointFunction>,
+    ) -> Spec {
+        points.extend(self.period_row);
+        Spec {
+            phases: order(self.phases),
+            cost: self.cost,
+            objective: Objective::Ratio(0, 1),
+            points,
+            params: iota_params(),
+            cost_bounds: self.cost_bounds,
+            q_limits: c.q_limits(),
+        }
+    }
+
     fn of(c: &Context<'_>) -> Result<PeriodicParts, ProblemError> {
         let settings = c.settings;
         let qc = c.problem == Problem::PeriodicQc;
@@ -265,9 +270,11 @@ impl PeriodicParts {
             vec![(f64::NEG_INFINITY, f64::INFINITY), (1e-3, f64::INFINITY)]
         };
         Ok(PeriodicParts {
-            approach,
-            stick,
-            release,
+            phases: PeriodicPhases {
+                approach,
+                stick,
+                release,
+            },
             cost,
             period_row,
             cost_bounds,
