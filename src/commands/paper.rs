@@ -81,15 +81,20 @@ fn newton_plan_markdown(
     sol.verification = crate::pipeline::verify::verify(&problem, &sol, 1e-10).ok();
     crate::pipeline::solution_io::write_solution(&sol, &dir.join(NEWTON_PLAN))?;
     let verified = crate::pipeline::verify::is_verified(&sol);
-    let stick = sol.phase_durations.get(1).copied().unwrap_or(f64::NAN);
+    let stick = sol
+        .modes
+        .iter()
+        .position(|m| *m == bf_problem::PhaseMode::Stick)
+        .and_then(|k| sol.phase_durations.get(k).copied())
+        .unwrap_or(f64::NAN);
     let head = format!(
         "**The same problem planned with the plant's impact law.** `periodic-cot-human` \
          re-solved with Newton's law at the impact (eq. 39: ω unchanged, the finger's joint \
          velocity after the impact the one Newton's law gives; `optimize --impact-law newton \
-         --warm-start`, decision record 0033), from the sticking optimum above: {:?} after {} \
+         --warm-start`, decision record 0033), from the sticking optimum above: {} after {} \
          iterations, J = {:.6} (sticking plan {:.6}), stick phase {:.3} s, {}. Solution: \
          `{NEWTON_PLAN}/solution.json`.\n",
-        sol.status,
+        crate::names::name(&sol.status),
         sol.iterations,
         sol.objective,
         sticking.objective,

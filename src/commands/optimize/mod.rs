@@ -450,9 +450,10 @@ pub fn scene_record(args: &OptimizeArgs, problem: Problem) -> Result<(String, Ve
 }
 
 /// The hint for a plan that a Newton plant cannot execute, or `None`: a sticking-law plan
-/// (eq. 40) whose stick phase sits on its minimum `min_stick` (within 1e-6 relative) spins the
-/// ball mostly through the impact impulse, which Newton's law (eq. 39, `track`'s nominal
-/// plant) does not give (docs/optima.md, "Low optima that a Newton plant cannot execute").
+/// (eq. 40) whose stick phase sits on its minimum `min_stick` (as `active bounds` lists it,
+/// [`crate::pipeline::bounds::on_bound`]) spins the ball mostly through the impact impulse,
+/// which Newton's law (eq. 39, `track`'s nominal plant) does not give (docs/optima.md, "Low
+/// optima that a Newton plant cannot execute").
 pub fn tap_hint(
     law: PlannedImpact,
     modes: &[PhaseMode],
@@ -462,7 +463,7 @@ pub fn tap_hint(
     let on_minimum = modes
         .iter()
         .zip(durations)
-        .any(|(m, &d)| *m == PhaseMode::Stick && d <= min_stick * (1.0 + 1e-6));
+        .any(|(m, &d)| *m == PhaseMode::Stick && crate::pipeline::bounds::on_bound(d, min_stick));
     (law == PlannedImpact::Stick && on_minimum).then(|| {
         format!(
             "hint: the stick phase is on its minimum ({min_stick} s): the plan spins the ball \
@@ -816,7 +817,7 @@ mod tests {
         use PhaseMode::{Free, Stick};
         let modes = [Free, Stick, Free];
         let tap = [0.5, 0.01, 0.1];
-        let long = [0.5, 0.0101, 0.1];
+        let long = [0.5, 0.0102, 0.1];
         let hint = tap_hint(PlannedImpact::Stick, &modes, &tap, 0.01).unwrap();
         assert!(
             hint.contains("--impact-law newton") && hint.contains("0.01 s"),
