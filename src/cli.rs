@@ -369,6 +369,14 @@ pub struct TrackArgs {
     /// that needs more is not used (the optimum is tracked instead).
     #[arg(long, value_parser = whole)]
     pub replan_iterations: Option<usize>,
+    /// Run the robustness table instead of one plant: the controller on the solution's own
+    /// scene perturbed (ball mass ×1.1; μ_s, μ_k ×0.8; socket damping ×1.5; every link mass
+    /// ×1.05; all four) with Newton's impact law, and on the nominal scene with the
+    /// max-dissipation law. Writes robustness.md and robustness.json to --out and exits
+    /// non-zero if a plant misses the target (ω error ≤ 5 % in every period from the 4th on,
+    /// contact in every period); the scene of a compiled problem only.
+    #[arg(long, conflicts_with_all = ["plant_scene", "impact_law"])]
+    pub robustness: bool,
 }
 
 /// Arguments of `optimize` (exit status: see [`Command::Optimize`]).
@@ -522,6 +530,26 @@ pub struct OptimizeArgs {
     /// (docs/optima.md). Recorded in solution.json as `impact_law`.
     #[arg(long, value_name = "LAW", default_value = "stick")]
     pub impact_law: String,
+    /// Share of the friction cone the plan's stick phases leave unused, in [0, 1): the plan
+    /// keeps |λ_∥| ≤ (1 − M) μ_s λ_n, so that `track`'s force loop has grip to spare (it keeps
+    /// 20 % of μ_s λ_n for feedback). Recorded in solution.json as `cone_margin`.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub cone_margin: f64,
+    /// Share of every joint's torque limit the plan leaves unused, in [0, 1): |τ_i| ≤ (1 − M)
+    /// τ_max,i, so that feedback keeps authority under the limit. Recorded in solution.json
+    /// as `torque_margin`.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub torque_margin: f64,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]

@@ -4,6 +4,10 @@
 //!   adj(J_c) and its approach-speed row included) has the derivatives of finite differences;
 //! * `--impact-law` refuses an unknown law naming the option and the value, and a
 //!   `solution.json` written before the law was recorded reads as a sticking plan;
+//! * plan margins (`--cone-margin`, `--torque-margin`): a direct solve with each margin set
+//!   tighter than what the plain optimum uses keeps every stick node's tangential force within
+//!   (1 − m) μ_s λ_n (λ_n recomputed from the file's λ and σ) and every torque within
+//!   (1 − m) τ_max, records both margins, and values outside [0, 1) are refused by name;
 //! * ignored (slow, a 4-start Newton search of about a minute of CPU): the solved plan keeps
 //!   ω through the impact (eq. 39), its post-impact q̇ is within the bound of what bf-model's
 //!   own Newton law gives from the plan's pre-impact state (an independent implementation,
@@ -20,6 +24,7 @@ use ball_finger::pipeline::build;
 use bf_model::{ImpactLaw, State, Vec3, VecN};
 use bf_optim::ipm::{Nlp, check_derivatives};
 use bf_optim::ocp::Scheme;
+use bf_problem::node::CONE_DELTA;
 use bf_problem::points::{NEWTON_APPROACH_SPEED, NEWTON_VELOCITY_LIMIT};
 use bf_problem::{PlannedImpact, ProblemSettings};
 use rand::SeedableRng;
@@ -40,8 +45,9 @@ fn newton_impact_derivatives_match_finite_differences() {
         let (x, lam) = common::fd::random_point(&p.nlp, &mut rng);
         let rep = check_derivatives(&p.nlp, &x, 0.5, &lam, 1e-6);
         assert!(rep.max_error() < 1e-5, "{scheme:?}: {rep:?}");
-        // The Newton rows are there: two more constraints than the sticking plan (the
-        // joint-space bound and the approach speed; ω⁺ = ω⁻ replaces the ball's balance).
+        // The Newton rows are there: three more constraints than the sticking plan (the
+        // joint-space bound, J_c's conditioning and the approach speed; ω⁺ = ω⁻ replaces the
+        // ball's balance).
         let stick = build(
             "periodic-qc".parse().unwrap(),
             &ProblemSettings {
@@ -50,7 +56,7 @@ fn newton_impact_derivatives_match_finite_differences() {
             },
         )
         .unwrap();
-        assert_eq!(m, stick.nlp.num_constraints() + 2, "{scheme:?}");
+        assert_eq!(m, stick.nlp.num_constraints() + 3, "{scheme:?}");
     }
 }
 
@@ -196,4 +202,100 @@ fn the_newton_planned_human_optimum_meets_the_nominal_and_robustness_targets_bou
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// λ_n and ‖λ_∥‖ of a stick node from the file's λ and σ = μ_s λ_n − ‖λ_∥‖ (eq. 18): λ_n is
+/// the non-negative root of (1 + μ²) λ_n² − 2 μ σ λ_n + σ² − ‖λ‖² = 0.
+fn normal_and_tangential(lambda: &[f64], sigma: f64, mu: f64) -> (f64, f64) {
+    let l2: f64 = lambda.iter().map(|v| v * v).sum();
+    let a = 1.0 + mu * mu;
+    let disc = (mu * sigma).powi(2) - a * (sigma * sigma - l2);
+    let ln = (mu * sigma + disc.max(0.0).sqrt()) / a;
+    (ln, (l2 - ln * ln).max(0.0).sqrt())
+}
+
+/// Over the stick collocation nodes of `sol` (scene μ_s `mu`): the largest ‖λ_∥‖ − μ_eff λ_n, and the
+/// largest ‖λ_∥‖ / (μ λ_n) where λ_n ≥ 1e-3 N; and the largest |τ_i| of any collocation node.
+fn cone_use(sol: &ball_finger::pipeline::OcpSolution, mu: f64, mu_eff: f64) -> (f64, f64, f64) {
+    let n = &sol.nodes;
+    let (mut excess, mut grip, mut tau) = (f64::NEG_INFINITY, 0.0_f64, 0.0_f64);
+    for k in 0..n.t.len() {
+        // The phase's end point is a state point but not a collocation point (Radau:
+        // Legendre–Gauss–Radau points include the start), so λ and τ are not constrained there.
+        if n.phase.get(k + 1) != Some(&n.phase[k]) {
+            continue;
+        }
+        tau = n.tau[k].iter().fold(tau, |m, v| m.max(v.abs()));
+        if sol.modes[n.phase[k]] != bf_problem::PhaseMode::Stick {
+            continue;
+        }
+        let (ln, lt) = normal_and_tangential(&n.lambda[k], n.sigma[k], mu);
+        excess = excess.max(lt - mu_eff * ln);
+        if ln >= 1e-3 {
+            grip = grip.max(lt / (mu * ln));
+        }
+    }
+    (excess, grip, tau)
+}
+
+#[test]
+fn plan_margins_keep_the_plan_inside_the_shrunk_cone_and_torque_limits() {
+    use ball_finger::pipeline::SolutionIo;
+    const MU_S: f64 = 0.8; // scenes/paper.toml
+    const TAU_MAX: f64 = 1.0;
+    let solve = |extra: &[&str]| {
+        let dir = cli::tmpdir(&format!("margins{}", extra.join("")));
+        let mut args = vec![
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--strategy",
+            "direct",
+            "--verify-rtol",
+            "0",
+            "--out",
+            dir.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        let r = cli::run(&args);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let sol =
+            ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        sol
+    };
+    let plain = solve(&[]);
+    assert_eq!((plain.cone_margin, plain.torque_margin), (0.0, 0.0));
+    let (_, grip0, tau0) = cone_use(&plain, MU_S, MU_S);
+    // Margins that the plain optimum violates, so the checks below can fail.
+    let cone = 1.0 - 0.5 * grip0;
+    let torque = 1.0 - 0.5 * tau0 / TAU_MAX;
+    let mu_eff = (1.0 - cone) * MU_S;
+    let (excess0, _, _) = cone_use(&plain, MU_S, mu_eff);
+    assert!(
+        excess0 > 10.0 * CONE_DELTA && tau0 > 0.1,
+        "{excess0} {tau0}"
+    );
+    let (c, t) = (format!("{cone}"), format!("{torque}"));
+    let sol = solve(&["--cone-margin", &c, "--torque-margin", &t]);
+    assert_eq!((sol.cone_margin, sol.torque_margin), (cone, torque));
+    let (excess, _, tau) = cone_use(&sol, MU_S, mu_eff);
+    // σ_δ ≥ 0 (the smooth cone of eq. 59) lets ‖λ_∥‖ exceed the cone by at most δ.
+    assert!(
+        excess <= CONE_DELTA + 1e-7,
+        "cone excess {excess} at margin {cone}"
+    );
+    assert!(tau <= (1.0 - torque) * TAU_MAX + 1e-7, "|tau| {tau}");
+    for (opt, bad) in [
+        ("--cone-margin", "1"),
+        ("--torque-margin", "-0.1"),
+        ("--cone-margin", "NaN"),
+    ] {
+        let r = cli::run(&["optimize", "--problem", "periodic-qc", opt, bad]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains(opt),
+            "{opt} {bad}: {err}"
+        );
+    }
 }

@@ -211,14 +211,14 @@ fn kernel_derivatives_match_finite_differences() {
 
 #[test]
 fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
-    // μ_s is a constant of the graph (σ_δ row), not an input: another value changes the
-    // structure, so no emitted kernel may claim the stick node.
-    let text = bf_generated::paper::SCENE_TOML.replace("\nmu_s = 0.8\n", "\nmu_s = 0.7\n");
-    assert!(
-        text != bf_generated::paper::SCENE_TOML,
-        "mu_s = 0.8 not found in the paper scene"
-    );
-    let scene = bf_codegen::Scene::from_toml_str(&text, "test").unwrap();
+    // μ_v is a constant of the graph (the joints' viscous friction), not an input: another
+    // value changes the structure, so no emitted kernel may claim the stick node. μ_s is an
+    // input (the σ_δ row's (1 − m) μ_s): another nonzero value runs on the same kernel.
+    let edit = |from: &str, to: &str| {
+        let text = bf_generated::paper::SCENE_TOML.replace(from, to);
+        assert!(text != bf_generated::paper::SCENE_TOML, "{from} not found");
+        bf_codegen::Scene::from_toml_str(&text, "test").unwrap()
+    };
     let opt = bf_problem::node::NodeSettings {
         mode: bf_problem::PhaseMode::Stick,
         cost: bf_problem::CostKind::Qc {
@@ -228,10 +228,15 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         h_bounds: None,
         hdot_bounds: None,
         eps: 0.01,
+        cone_margin: 0.0,
     };
-    // The name of the kernel the stick node of `scene` runs on, if any.
-    let kernel_of = |scene: &bf_codegen::Scene| {
+    // The name of the kernel the stick node of `scene` with cone margin `m` runs on, if any.
+    let kernel_of = |scene: &bf_codegen::Scene, m: f64| {
         let ph = bf_problem::points::physics(scene).unwrap();
+        let opt = bf_problem::node::NodeSettings {
+            cone_margin: m,
+            ..opt.clone()
+        };
         let (nd, _) =
             bf_problem::node::node_function(scene, &ph, &opt, bf_problem::StickLevel::Velocity)
                 .unwrap();
@@ -245,17 +250,26 @@ fn a_node_with_other_baked_constants_is_interpreted_not_mismatched() {
         )
         .kernel_name()
     };
-    assert_eq!(kernel_of(&scene), None);
-    // The same node on the paper scene does find its kernel.
+    assert_eq!(
+        kernel_of(&edit("\nmu_v = 0.001\n", "\nmu_v = 0.002\n"), 0.0),
+        None
+    );
+    // The same node on the paper scene does find its kernel, with any μ_s and cone margin.
     let paper = bf_codegen::Scene::from_toml_str(bf_generated::paper::SCENE_TOML, "paper").unwrap();
-    assert_eq!(kernel_of(&paper), Some("paper_qc_stick"));
+    assert_eq!(kernel_of(&paper, 0.0), Some("paper_qc_stick"));
+    assert_eq!(kernel_of(&paper, 0.2), Some("paper_qc_stick"));
+    let other_mu = edit("\nmu_s = 0.8\n", "\nmu_s = 0.7\n");
+    assert_eq!(kernel_of(&other_mu, 0.0), Some("paper_qc_stick"));
 }
 
-/// The paper scene with another μ_s: a graph no emitted kernel was built from.
-fn paper_with_other_mu_s(name: &str) -> Option<&'static str> {
+/// The paper scene without friction (μ_s = μ_k = 0): the cone row's μ is then a constant 0,
+/// not an input (`Inputs` keeps zeros), a stick node no emitted kernel was built from.
+fn paper_without_friction(name: &str) -> Option<&'static str> {
     static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
     let text = TEXT.get_or_init(|| {
-        bf_generated::paper::SCENE_TOML.replace("\nmu_s = 0.8\n", "\nmu_s = 0.7\n")
+        bf_generated::paper::SCENE_TOML
+            .replace("\nmu_s = 0.8\n", "\nmu_s = 0.0\n")
+            .replace("\nmu_k = 0.6\n", "\nmu_k = 0.0\n")
     });
     (name == "paper").then_some(text.as_str())
 }
@@ -264,11 +278,11 @@ fn paper_with_other_mu_s(name: &str) -> Option<&'static str> {
 fn a_catalogue_that_requires_kernels_refuses_a_graph_without_one() {
     let settings = ProblemSettings::default();
     let required = Generated {
-        scene_toml: paper_with_other_mu_s,
+        scene_toml: paper_without_friction,
         ..GENERATED
     };
     let e = bf_problem::build(Problem::PeriodicQc, &settings, &required)
-        .expect_err("no kernel has the stick node with mu_s = 0.7");
+        .expect_err("no kernel has the stick node with mu_s = 0");
     assert!(e.to_string().contains("no emitted node kernel"), "{e}");
     // Preferring kernels, it builds and interprets exactly the stick phase (μ_s appears only
     // in the friction-cone row of the stick node function).
@@ -276,7 +290,7 @@ fn a_catalogue_that_requires_kernels_refuses_a_graph_without_one() {
         panic!("the solve pipeline hands in a kernel lookup")
     };
     let preferred = Generated {
-        scene_toml: paper_with_other_mu_s,
+        scene_toml: paper_without_friction,
         kernels: KernelUse::Prefer(lookup),
     };
     let p = bf_problem::build(Problem::PeriodicQc, &settings, &preferred).unwrap();

@@ -53,6 +53,7 @@ fn acceleration_level_stick_rows_are_the_time_derivative_of_delta_v() {
         h_bounds: None,
         hdot_bounds: None,
         eps,
+        cone_margin: 0.0,
     };
     let (nf, _) = node_function_with(&scene, &ph, &opt, StickLevel::Acceleration).unwrap();
     let (nv, _) = node_function_with(&scene, &ph, &opt, StickLevel::Velocity).unwrap();

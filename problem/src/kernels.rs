@@ -62,6 +62,7 @@ pub fn node_kernel_specs(scene: &Scene) -> Vec<NodeKernelSpec> {
             h_bounds: Some((0.0, f64::INFINITY)),
             hdot_bounds: None,
             eps: 0.01,
+            cone_margin: 0.0,
         };
         let name = |s: &str| format!("{}_{}_{s}", scene.name, cost.tag());
         push(name("free"), base.clone(), StickLevel::Velocity);
@@ -161,6 +162,7 @@ mod tests {
             h_bounds: Some((0.0, f64::INFINITY)),
             hdot_bounds: None,
             eps,
+            cone_margin: 0.0,
         }
     }
 
@@ -177,6 +179,17 @@ mod tests {
         // Another mode, stick level, row set or baked constant: another function.
         let stick = fp(&opts(PhaseMode::Stick, 0.01, 1.0), StickLevel::Velocity);
         let stick_acc = fp(&opts(PhaseMode::Stick, 0.01, 1.0), StickLevel::Acceleration);
+        // The cone margin scales μ_s, an input: same kernel.
+        assert_eq!(
+            stick,
+            fp(
+                &NodeSettings {
+                    cone_margin: 0.2,
+                    ..opts(PhaseMode::Stick, 0.01, 1.0)
+                },
+                StickLevel::Velocity
+            )
+        );
         let no_h = fp(
             &NodeSettings {
                 h_bounds: None,

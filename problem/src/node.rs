@@ -169,6 +169,10 @@ pub struct NodeSettings {
     pub hdot_bounds: Option<(f64, f64)>,
     /// ε of the smooth saturation.
     pub eps: f64,
+    /// Fraction of the friction cone a stick phase leaves unused: its cone row is σ_δ with
+    /// (1 − m) μ_s in place of μ_s (eq. 18), so that a controller keeps that share of μ_s λ_n
+    /// for its feedback. An input of the node function, like ε: any m uses the same kernel.
+    pub cone_margin: f64,
 }
 
 /// Level at which a stick phase's nodes impose the no-slip constraint (eq. 14/27).
@@ -373,7 +377,7 @@ pub fn node_function(
     };
     let tau_v = take(nq);
     let t_v = take(1)[0];
-    // Cost constants become inputs after T.
+    // μ (stick phases) and the cost constants become inputs after T.
     let first_input = t_v + 1;
     let mass = model.mass_matrix();
     let bias = model.cqd_g_rnea();
@@ -388,6 +392,10 @@ pub fn node_function(
         Some(v3(&vars(g, &lam_v)))
     } else {
         None
+    };
+    let mut inputs = Inputs {
+        next: first_input,
+        fixed: &mut fixed,
     };
     let muv = g.constant(ph.mu_v);
     let mut path = Vec::new();
@@ -434,7 +442,9 @@ pub fn node_function(
         let s2 = g.add(par2, d2);
         let root = g.sqrt(s2);
         let sm = g.sub(root, d);
-        let mu = g.constant(ph.mu_s);
+        // μ is an input, so that one kernel serves every scene's μ_s and every planning
+        // margin (a zero μ_s stays a constant, as `Inputs` keeps zeros).
+        let mu = inputs.scalar(g, (1.0 - opt.cone_margin) * ph.mu_s);
         let a = g.mul(mu, ln);
         path.push(g.sub(a, sm));
         bounds.push((0.0, f64::INFINITY));
@@ -447,10 +457,6 @@ pub fn node_function(
         path.push(ce.h_dot);
         bounds.push(b);
     }
-    let mut inputs = Inputs {
-        next: first_input,
-        fixed: &mut fixed,
-    };
     let costs = cost_integrands(g, opt.cost, &tau, w, &mut inputs);
     let mut xdot = qd.clone();
     xdot.extend(&qdd);

@@ -1,7 +1,8 @@
 //! Point functions of the ball-and-finger problems on the bf-codegen expression graph: the
 //! sticking impact law (eq. 40a–c) as the Free→Stick reset with the impulse ι as decision
 //! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66), or Newton's law (eq. 39: ω⁺ = ω⁻,
-//! q̇⁺ within [`NEWTON_VELOCITY_LIMIT`] of the plant's, ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`]) in
+//! q̇⁺ within [`NEWTON_VELOCITY_LIMIT`] of the plant's, ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`], J_c
+//! conditioned at least [`NEWTON_MIN_CONDITION`]) in
 //! its place; contact quantities (h eq. 4, ḣ,
 //! Δv eq. 13–14) at phase end points; continuity and periodicity; and [`Diagnostics`], an
 //! evaluator of the contact quantities at a state. The contact geometry uses the smooth
@@ -150,6 +151,15 @@ pub const NEWTON_VELOCITY_LIMIT: f64 = 1e-3;
 /// 0.3–7 m/s.
 pub const NEWTON_APPROACH_SPEED: f64 = 0.1;
 
+/// Least conditioning of J_c at a Newton plan's impact, |det J_c| ≥ κ (‖J_c‖_F² / 3)^{3/2}: the
+/// ratio is σ₁σ₂σ₃ over the cube of the singular values' quadratic mean, 1 for a multiple of an
+/// orthogonal matrix and 0 at a singular one. Newton's law q̇⁺ = J_c⁻¹ T_n J_c q̇⁻ amplifies a
+/// state error by 1/σ_min; near a singular J_c the velocity bound above holds with any q̇⁺
+/// (both sides scale with det), so the plans went there: periodic-qc optima with κ ≈ 2e-5 at
+/// q₂ = π and the impulse on its 1000 N s bound, which no plant executes. Executed plans have
+/// κ ≈ 0.44–0.58 (docs/decisions/0033-newton-impact-plan.md).
+pub const NEWTON_MIN_CONDITION: f64 = 0.1;
+
 /// Sticking impact (eq. 40) between the end of `free_phase` and the start of `free_phase + 1`,
 /// with the impulse ι = params `iota0..iota0+3`: q⁺ = q⁻, M (q̇⁺ − q̇⁻) − J_cᵀ ι = 0,
 /// I_b (ω⁺ − ω⁻) + r_c × ι = 0, ω⁺ × r_c − J_c q̇⁺ = 0, ι_n ≥ 0 and optionally the impulse
@@ -160,8 +170,8 @@ pub const NEWTON_APPROACH_SPEED: f64 = 0.1;
 /// is the impulse the finger receives, and the post-impact joint velocity must be within
 /// [`NEWTON_VELOCITY_LIMIT`] of the plant's, q̇_N = J_c⁻¹ T_n J_c q̇⁻ (T_n = 1 − n nᵀ), so that
 /// the stick phase that follows starts sticking under Newton's law as well (paper Sect. 7),
-/// and the finger must arrive at [`NEWTON_APPROACH_SPEED`] or faster.
-/// Without J_c⁻¹ (which the graph cannot form where J_c is singular) the condition reads
+/// and the finger must arrive at [`NEWTON_APPROACH_SPEED`] or faster, at a J_c conditioned at
+/// least [`NEWTON_MIN_CONDITION`]. Without J_c⁻¹ (which the graph cannot form where J_c is singular) the condition reads
 /// ‖det(J_c) q̇⁺ − adj(J_c) T_n J_c q̇⁻‖² ≤ v² det(J_c)², adj(J_c) J_c = det(J_c) 1.
 ///
 /// Why in joint space: the stick node's Δv⁺ = 0 makes J_c (q̇⁺ − q̇_N) = T_n Δv⁻, the
@@ -303,6 +313,17 @@ pub fn impact(
         let allowed = g.mul(v2, d2);
         out.push(g.sub(e2, allowed));
         bounds.push((f64::NEG_INFINITY, 0.0));
+        // det² ≥ κ² (‖J_c‖_F² / 3)³ (NEWTON_MIN_CONDITION), squared so that its sign is free.
+        let fro_terms: Vec<Id> = [a0, a1, a2].iter().map(|&r| g.v3_dot(r, r)).collect();
+        let fro = g.sum(&fro_terms);
+        let third = g.constant(1.0 / 3.0);
+        let mean = g.mul(fro, third);
+        let mean2 = g.square(mean);
+        let cube = g.mul(mean2, mean);
+        let k2 = g.constant(NEWTON_MIN_CONDITION * NEWTON_MIN_CONDITION);
+        let least = g.mul(k2, cube);
+        out.push(g.sub(d2, least));
+        bounds.push((0.0, f64::INFINITY));
         out.push(ce.h_dot);
         bounds.push((f64::NEG_INFINITY, -NEWTON_APPROACH_SPEED));
     }

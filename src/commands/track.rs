@@ -1,15 +1,21 @@
 //! `track`: executes an optimum in closed loop ([`crate::paper::closed_loop`]) and writes the
 //! files of `simulate` (trajectory, events, summary) plus `tracking.json` (docs/files.md) into
 //! an output directory replaced as a whole (`bf_output::OutputDir`); a run that lost the ball
-//! is marked FAILED and exits non-zero.
+//! is marked FAILED and exits non-zero. `--robustness` runs the robustness table of
+//! [`crate::paper::closed_loop::robustness_rows`] instead (robustness.md, robustness.json),
+//! marked FAILED when a plant misses the target.
 
 use crate::cli::TrackArgs;
-use crate::paper::closed_loop::{ControllerKind, Tracking, run_tracking_replanned, solution_model};
+use crate::paper::closed_loop::{
+    ControllerKind, Tracking, robustness_rows, robustness_table, run_tracking_replanned,
+    solution_model,
+};
 use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::PeriodMetrics;
 use bf_output::{DirSpec, Outcome, OutputDir};
+use bf_problem::OcpSolution;
 use serde::Serialize;
 
 /// The output directory of `track`.
@@ -95,12 +101,63 @@ impl<'a> TrackingJson<'a> {
     }
 }
 
+/// The re-plan iteration limit of `args` (`None` without `--replan`), checked.
+fn replan_limit(args: &TrackArgs) -> Result<Option<usize>> {
+    let max_iter = args.replan_iterations.unwrap_or(REPLAN_MAX_ITER);
+    if max_iter == 0 {
+        bail!("--replan-iterations must be at least 1");
+    }
+    if args.replan_iterations.is_some() && !args.replan {
+        bail!("--replan-iterations needs --replan");
+    }
+    Ok(args.replan.then_some(max_iter))
+}
+
+/// `track --robustness`: the robustness table of `controller` on `sol`, printed and written
+/// (robustness.md, robustness.json); the directory is marked FAILED, and the command fails,
+/// when a plant misses the target.
+fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -> Result<()> {
+    let replan = replan_limit(args)?;
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let name = args.solution.display().to_string();
+    let rows = robustness_rows(sol, controller, args.periods, replan);
+    let md = robustness_table(&name, controller, args.periods, &rows)?;
+    out_dir.write("robustness.md", md.as_bytes())?;
+    out_dir.write("robustness.json", &serde_json::to_vec_pretty(&rows)?)?;
+    let missed: Vec<&str> = rows
+        .iter()
+        .filter(|r| !r.meets_target)
+        .map(|r| r.plant.as_str())
+        .collect();
+    let failure = (!missed.is_empty()).then(|| {
+        format!(
+            "{} of {} plants miss the robustness target: {}",
+            missed.len(),
+            rows.len(),
+            missed.join(", ")
+        )
+    });
+    out_dir.commit(match &failure {
+        Some(f) => Outcome::Failed(f),
+        None => Outcome::Success,
+    })?;
+    crate::outln!("{md}")?;
+    crate::outln!("output: {}", args.out.display())?;
+    match failure {
+        Some(f) => bail!("{f}"),
+        None => Ok(()),
+    }
+}
+
 /// Runs `track`.
 pub fn run(args: &TrackArgs) -> Result<()> {
     let controller = ControllerKind::parse(&args.controller).context("--controller")?;
     let law = super::simulate::parse_impact_law(&args.impact_law).context("--impact-law")?;
-    let sol = bf_problem::OcpSolution::read_json(&args.solution)
+    let sol = OcpSolution::read_json(&args.solution)
         .with_context(|| format!("reading the solution {}", args.solution.display()))?;
+    if args.robustness {
+        return robustness(args, controller, &sol);
+    }
     let (plant, plant_name) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
@@ -110,23 +167,10 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         }
         None => solution_model(&sol).with_context(|| args.solution.display().to_string())?,
     };
+    let replan = replan_limit(args)?;
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
-    let max_iter = args.replan_iterations.unwrap_or(REPLAN_MAX_ITER);
-    if max_iter == 0 {
-        bail!("--replan-iterations must be at least 1");
-    }
-    if args.replan_iterations.is_some() && !args.replan {
-        bail!("--replan-iterations needs --replan");
-    }
-    let run = run_tracking_replanned(
-        &sol,
-        controller,
-        args.periods,
-        plant,
-        law,
-        args.replan.then_some(max_iter),
-    )
-    .with_context(|| format!("tracking {}", args.solution.display()))?;
+    let run = run_tracking_replanned(&sol, controller, args.periods, plant, law, replan)
+        .with_context(|| format!("tracking {}", args.solution.display()))?;
     out_dir.file("summary.json")?;
     run.report
         .write_dir(out_dir.path(), &run.output, run.stopped.as_deref())

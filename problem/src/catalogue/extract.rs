@@ -123,6 +123,8 @@ pub fn solution_at(
         active_bounds: None,
         search_settings: None,
         impact_law: p.settings.impact_law,
+        cone_margin: p.settings.cone_margin,
+        torque_margin: p.settings.torque_margin,
     })
 }
 

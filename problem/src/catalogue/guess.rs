@@ -121,6 +121,14 @@ pub fn guess_configurations(scene: &Scene, eps: f64) -> Result<GuessConfiguratio
     })
 }
 
+/// The shares of the friction cone and of the torque limits a plan leaves to feedback
+/// ([`crate::ProblemSettings::cone_margin`], [`crate::ProblemSettings::torque_margin`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct PlanMargins {
+    pub(crate) cone: f64,
+    pub(crate) torque: f64,
+}
+
 /// One phase of an archetype: its mode, the bounds of its h and ḣ path rows (`None`: no
 /// row), its duration bounds and the duration of the default guess.
 pub(crate) struct PhaseDef {
@@ -144,6 +152,7 @@ pub(crate) fn make_phases(
     q_guess: &[f64],
     start: Option<&StartGuess>,
     stick: StickLevel,
+    margins: PlanMargins,
 ) -> Result<Vec<Phase>, ProblemError> {
     let nq = ph.nq;
     if let Some(sg) = start {
@@ -170,6 +179,7 @@ pub(crate) fn make_phases(
                 h_bounds: d.h,
                 hdot_bounds: d.hdot,
                 eps,
+                cone_margin: margins.cone,
             },
             stick,
         )
@@ -190,7 +200,14 @@ pub(crate) fn make_phases(
             node,
             x_bounds,
             a_bounds: vec![(f64::NEG_INFINITY, f64::INFINITY); na],
-            u_bounds: ph.tau_max.iter().map(|&t| (-t, t)).collect(),
+            u_bounds: ph
+                .tau_max
+                .iter()
+                .map(|&t| {
+                    let t = (1.0 - margins.torque) * t;
+                    (-t, t)
+                })
+                .collect(),
             duration_bounds: d.duration,
             points,
             guess: PhaseGuess::constant(

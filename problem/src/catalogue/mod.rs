@@ -160,6 +160,15 @@ pub struct ProblemSettings {
     /// unchanged, the finger arriving without tangential velocity relative to the ball), so
     /// that a plant with Newton's law executes the plan ([`crate::points::impact`]).
     pub impact_law: crate::solution::PlannedImpact,
+    /// Share of the friction cone a stick phase leaves unused, in [0, 1): the plan's cone is
+    /// (1 − m) μ_s λ_n ≥ |λ_∥| (eq. 18), so that a force controller executing it keeps m μ_s λ_n
+    /// of grip for its feedback (`track`'s hybrid controller keeps 20 %). 0: the paper's cone.
+    /// The verdict checks the scene's cone, which a plan with a margin meets with room.
+    pub cone_margin: f64,
+    /// Share of every joint's torque limit the plan leaves unused, in [0, 1): |τ_i| ≤ (1 − m)
+    /// τ_max,i, so that feedback has m τ_max,i of authority under the limit. 0: the scene's
+    /// limits.
+    pub torque_margin: f64,
     /// ḣ margins of Sect. 7 (ḣ ≤ −m in the approach, ḣ ≥ m in the release phase).
     pub hdot_margin: Option<f64>,
     /// Initial guess (ignored with a warm start).
@@ -236,6 +245,8 @@ impl Default for ProblemSettings {
             warm_start: None,
             impulse_cone: false,
             impact_law: crate::solution::PlannedImpact::Stick,
+            cone_margin: 0.0,
+            torque_margin: 0.0,
             hdot_margin: None,
             guess: GuessKind::Auto,
             ipm: None,
@@ -343,6 +354,18 @@ fn build_inner(
             expected: "positive",
         });
     }
+    for (name, value) in [
+        ("cone_margin", settings.cone_margin),
+        ("torque_margin", settings.torque_margin),
+    ] {
+        if !(0.0..1.0).contains(&value) {
+            return Err(ProblemError::InvalidSetting {
+                name,
+                value,
+                expected: "in [0, 1)",
+            });
+        }
+    }
     if !(settings.effort_scale.is_finite() && settings.effort_scale > 0.0) {
         return Err(ProblemError::InvalidSetting {
             name: "effort_scale",
@@ -390,6 +413,10 @@ fn build_inner(
             StickLevel::Acceleration
         } else {
             StickLevel::Velocity
+        },
+        guess::PlanMargins {
+            cone: settings.cone_margin,
+            torque: settings.torque_margin,
         },
     )?;
     // A warm start replaces the whole initial point after the transcription (below).

@@ -170,6 +170,14 @@ pub struct OcpSolution {
     /// recorded, which all planned with eq. 40); `track` reports it next to the plant's.
     #[serde(default)]
     pub impact_law: PlannedImpact,
+    /// The share of the friction cone the plan left unused ([`crate::ProblemSettings::cone_margin`];
+    /// 0 in files written before it was recorded).
+    #[serde(default)]
+    pub cone_margin: f64,
+    /// The share of the torque limits the plan left unused
+    /// ([`crate::ProblemSettings::torque_margin`]; 0 in older files).
+    #[serde(default)]
+    pub torque_margin: f64,
 }
 
 impl OcpSolution {

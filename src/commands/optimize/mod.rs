@@ -211,8 +211,18 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     };
     let impact_law =
         PlannedImpact::parse(&args.impact_law).map_err(|e| anyhow!("--impact-law: {e}"))?;
+    for (name, m) in [
+        ("--cone-margin", args.cone_margin),
+        ("--torque-margin", args.torque_margin),
+    ] {
+        if !(0.0..1.0).contains(&m) {
+            bail!("{name} must be in [0, 1) (got {m})");
+        }
+    }
     Ok(ProblemSettings {
         impact_law,
+        cone_margin: args.cone_margin,
+        torque_margin: args.torque_margin,
         points: args.points,
         scheme,
         epsilon: Some(args.epsilon),

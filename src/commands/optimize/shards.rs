@@ -58,10 +58,12 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolu
 
 /// What every file of one multi-start shares (the shards' `solution.json` and candidates):
 /// (quantity, value as shown). The scene text is compared apart ([`check_same_run`]).
-fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 6] {
+fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 8] {
     [
         ("problem", sol.problem.clone()),
         ("impact law", sol.impact_law.name().to_string()),
+        ("cone margin", format!("{:e}", sol.cone_margin)),
+        ("torque margin", format!("{:e}", sol.torque_margin)),
         ("scene", sol.scene.clone()),
         ("runtime parameters", format!("{:?}", sol.scene_params)),
         ("mesh", format!("{} points, {:?}", sol.points, sol.scheme)),
@@ -70,7 +72,7 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 6] {
 }
 
 /// Errors naming both files and the quantity unless `sol` (read from `path`) was solved on the
-/// problem, impact law, scene (its file text), runtime parameters, mesh and ε of `first`,
+/// problem, impact law, plan margins, scene (its file text), runtime parameters, mesh and ε of `first`,
 /// searched with the same [`SearchSettings`] (where either records them) and (where both were
 /// verified) verified with the same tolerances.
 fn check_same_run(
