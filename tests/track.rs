@@ -723,33 +723,68 @@ fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
     assert!(failures.is_empty(), "{failures:?}");
 }
 
-/// The report's closed-loop parts on the QC optimum: the robustness table applies every
-/// perturbation (an edit that no longer matches the paper scene is an error, so a changed
-/// scene file cannot silently turn a row into the nominal plant) and meets the issue's
-/// target in every row; the comparison writes the Fig. 17 counterpart with one series per
+/// The report's closed-loop parts on the QC optimum: the robustness table (`track
+/// --robustness`) applies every perturbation (an edit that no longer matches the paper scene
+/// is an error, so a changed scene file cannot silently turn a row into the nominal plant) and
+/// meets the target in every row, its JSON verdict agreeing with its own figures and
+/// its markdown table; the comparison writes the Fig. 17 counterpart with one series per
 /// controller run.
 #[test]
 fn report_tables_run_every_plant_and_controller() {
-    use ball_finger::paper::closed_loop::{comparison_markdown, robustness_markdown};
-    let md = robustness_markdown("periodic-qc", cli::qc_optimum(), 5).unwrap();
-    eprintln!("{md}");
-    let rows: Vec<&str> = md
-        .lines()
-        .filter(|l| l.starts_with("| ") && !l.starts_with("| plant"))
-        .collect();
-    assert_eq!(rows.len(), 6, "{md}");
-    for row in &rows {
-        assert!(row.contains("5 of 5") && row.contains("| yes |"), "{row}");
-        assert!(!row.contains('⚑'), "{row}");
-        let tau: f64 = row
-            .trim_end_matches(" |")
-            .rsplit("| ")
-            .next()
-            .unwrap()
-            .parse()
-            .unwrap();
-        assert!(tau <= 1.0, "{row}");
+    use ball_finger::paper::closed_loop::comparison_markdown;
+    use ball_finger::pipeline::SolutionIo;
+    let work = cli::tmpdir("robustness");
+    let sol_path = work.join("solution.json");
+    cli::qc_optimum().write_json(&sol_path).unwrap();
+    let out = work.join("out");
+    let r = cli::run(&[
+        "track",
+        sol_path.to_str().unwrap(),
+        "--robustness",
+        "--periods",
+        "5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let md = std::fs::read_to_string(out.join("robustness.md")).unwrap();
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("robustness.json")).unwrap()).unwrap();
+    let rows = json.as_array().unwrap();
+    assert_eq!(rows.len(), 6, "{json}");
+    for row in rows {
+        let f = |k: &str| row[k].as_f64().unwrap_or(f64::NAN);
+        assert_eq!(row["completed_periods"], 5, "{row}");
+        assert_eq!(row["contact_every_period"], true, "{row}");
+        assert!(f("max_error_from_fourth") <= 0.05, "{row}");
+        assert_eq!(row["meets_target"], true, "{row}");
+        assert!(f("max_abs_tau") <= 1.0, "{row}");
+        let plant = row["plant"].as_str().unwrap();
+        let line = md
+            .lines()
+            .find(|l| l.starts_with(&format!("| {plant} |")))
+            .unwrap_or_else(|| panic!("{plant} not in {md}"));
+        assert!(
+            line.contains("5 of 5") && line.contains("| yes |"),
+            "{line}"
+        );
+        assert!(!line.contains('⚑'), "{line}");
     }
+    // A robustness run with too few periods for the 4th-period window misses the target: the
+    // directory says FAILED and the exit status says so.
+    let short = work.join("short");
+    let r = cli::run(&[
+        "track",
+        sol_path.to_str().unwrap(),
+        "--robustness",
+        "--periods",
+        "2",
+        "--out",
+        short.to_str().unwrap(),
+    ]);
+    assert!(!r.status.success());
+    assert!(short.join("FAILED").exists());
+    std::fs::remove_dir_all(&work).ok();
     let dir = cli::tmpdir("fig17-closed");
     let md = comparison_markdown("periodic-qc", cli::qc_optimum(), 3, Some(&dir)).unwrap();
     for name in ["open-loop", "pd", "hybrid", "hybrid-unbounded"] {
