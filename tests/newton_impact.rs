@@ -8,6 +8,8 @@
 //!   tighter than what the plain optimum uses keeps every stick node's tangential force within
 //!   (1 − m) μ_s λ_n (λ_n recomputed from the file's λ and σ) and every torque within
 //!   (1 − m) τ_max, records both margins, and values outside [0, 1) are refused by name;
+//! * ignored: the human finger's 32-start and the QC global search's Newton plans meet the
+//!   nominal and robustness targets under the 1 N m bound;
 //! * ignored (slow, a 4-start Newton search of about a minute of CPU): the solved plan keeps
 //!   ω through the impact (eq. 39), its post-impact q̇ is within the bound of what bf-model's
 //!   own Newton law gives from the plan's pre-impact state (an independent implementation,
@@ -167,12 +169,44 @@ fn a_newton_plan_keeps_omega_matches_the_plants_law_and_is_tracked() {
             about 40 s on 2 cores; run with `cargo test --release --test newton_impact -- \
             --ignored --nocapture`"]
 fn the_newton_planned_human_optimum_meets_the_nominal_and_robustness_targets_bounded() {
-    use ball_finger::paper::closed_loop::{NOMINAL_TARGET, max_error_from_fourth, robustness_runs};
     let sol = cli::multistart_optimum("periodic-cot-human", &["--impact-law", "newton"]);
+    meets_the_nominal_and_robustness_targets_bounded(&sol);
+}
+
+/// The same targets for the QC plan of the default global search with Newton's law: the plan
+/// stays off the singular contact Jacobian (decision 0033's conditioning row; without it the
+/// search ended at q₂ = π with the impulse on its bound, and the controller lost the ball).
+#[test]
+#[ignore = "the global Newton search of periodic-qc (about a minute of CPU) and 7 runs of 50 \
+            periods; run with `cargo test --release --test newton_impact -- --ignored \
+            --nocapture`"]
+fn the_newton_planned_qc_optimum_of_the_global_search_meets_the_nominal_and_robustness_targets() {
+    use ball_finger::pipeline::SolutionIo;
+    let dir = cli::tmpdir("qc-newton-global");
+    let r = cli::run(&[
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--impact-law",
+        "newton",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let sol = ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    meets_the_nominal_and_robustness_targets_bounded(&sol);
+}
+
+/// Asserts the closed-loop targets on the Newton plan `sol`, torques bounded: 50 periods on the
+/// nominal Newton plant each within 2 % of the plan's mean ω, and every plant of the robustness
+/// table meeting its target.
+fn meets_the_nominal_and_robustness_targets_bounded(sol: &ball_finger::pipeline::OcpSolution) {
+    use ball_finger::paper::closed_loop::{NOMINAL_TARGET, robustness_rows};
     assert!(sol.status.is_success(), "{:?}", sol.stages);
     assert_eq!(sol.impact_law, PlannedImpact::Newton);
-    let (plant, _) = solution_model(&sol).unwrap();
-    let nominal = run_tracking(&sol, ControllerKind::Hybrid, 50, plant, ImpactLaw::Newton).unwrap();
+    let (plant, _) = solution_model(sol).unwrap();
+    let nominal = run_tracking(sol, ControllerKind::Hybrid, 50, plant, ImpactLaw::Newton).unwrap();
     assert!(nominal.lost.is_none(), "{:?}", nominal.lost);
     assert_eq!(nominal.periods.len(), 50);
     for (k, p) in nominal.periods.iter().enumerate() {
@@ -183,24 +217,16 @@ fn the_newton_planned_human_optimum_meets_the_nominal_and_robustness_targets_bou
         );
         assert!(p.max_abs_tau <= 1.0 + 1e-9, "period {k}: {p:?}");
     }
-    let mut failures = Vec::new();
-    for (case, run) in robustness_runs(&sol, ControllerKind::Hybrid, 50) {
-        let t = run.unwrap();
-        let later = max_error_from_fourth(&t);
-        eprintln!(
-            "{case}: {} periods, max from the 4th {:?}, lost {:?}",
-            t.periods.len(),
-            later,
-            t.lost
-        );
-        let met = t.lost.is_none()
-            && t.periods.len() == 50
-            && t.periods.iter().all(|p| p.contact)
-            && later.is_some_and(|e| e <= 0.05);
-        if !met {
-            failures.push(case);
-        }
+    let rows = robustness_rows(sol, ControllerKind::Hybrid, 50, None);
+    for r in &rows {
+        eprintln!("{r:?}");
+        assert!(r.max_abs_tau <= 1.0 + 1e-9, "{r:?}");
     }
+    let failures: Vec<&str> = rows
+        .iter()
+        .filter(|r| !r.meets_target)
+        .map(|r| r.plant.as_str())
+        .collect();
     assert!(failures.is_empty(), "{failures:?}");
 }
 
