@@ -6,7 +6,9 @@
 //! defects, stick phases at the acceleration level, δ_c = 3e-8), and `periodic-qc`
 //! also with Radau 3 × 12, the mesh that matches LG-30's objective error, and on Radau 3 × 10
 //! and LG-30 with every rejected KKT factor checked by the pivot pairs (`*_check_all`, the
-//! default before decision record 0031: the same path with more factorizations).
+//! default before decision record 0031: the same path with more factorizations) and without
+//! the speculative factorization on a second core (`*_sequential`, decision record 0036: the
+//! same path, every factorization on the solve's thread).
 //!
 //! Quick run: `cargo bench --bench problems -- --warm-up-time 1 --measurement-time 5`
 
@@ -50,12 +52,35 @@ fn bench(c: &mut Criterion) {
         ..s.clone()
     };
     let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
+    // Without the speculative factorization on the second core (decision record 0036; the
+    // same path, every factorization on the solve's own thread).
+    let sequential = |s: &ProblemSettings| ProblemSettings {
+        ipm: Some(Settings {
+            termination: TerminationSettings {
+                tol: 1e-8,
+                ..Default::default()
+            },
+            linear_solver: LinearSolverSettings {
+                speculative_factorization: false,
+                ..Default::default()
+            },
+            ..Settings::default()
+        }),
+        ..s.clone()
+    };
+    let (radau_sequential, lg_sequential) = (sequential(&radau), sequential(&lg));
     for (name, label, settings) in [
         (Problem::PeriodicQc, "radau3x10", &radau),
         (Problem::PeriodicQc, "radau3x10_check_all", &radau_check_all),
+        (
+            Problem::PeriodicQc,
+            "radau3x10_sequential",
+            &radau_sequential,
+        ),
         (Problem::PeriodicQc, "radau3x12", &radau36),
         (Problem::PeriodicQc, "lg30", &lg),
         (Problem::PeriodicQc, "lg30_check_all", &lg_check_all),
+        (Problem::PeriodicQc, "lg30_sequential", &lg_sequential),
         (Problem::PeriodicCot, "radau3x10", &radau),
         (Problem::PeriodicCot, "lg30", &lg),
         (Problem::PeriodicCotHuman, "radau3x10", &radau),
@@ -83,6 +108,10 @@ fn bench(c: &mut Criterion) {
                     t.factorization.as_secs_f64() * 1e3,
                     t.solve.as_secs_f64() * 1e3,
                     t.line_search.as_secs_f64() * 1e3
+                );
+                println!(
+                    "{name}/{label}: second thread (speculative factorizations) {:.1} ms",
+                    t.speculative_factorization.as_secs_f64() * 1e3
                 );
             }
             Err(e) => eprintln!("{name}/{label}: solve failed: {e}"),

@@ -49,6 +49,7 @@ mod multifrontal;
 mod ordering;
 pub mod pattern;
 mod simplicial;
+mod speculative;
 mod supernodal;
 #[cfg(test)]
 mod tests;
@@ -59,6 +60,7 @@ use self::faer::FaerFactor;
 use self::multifrontal::MultifrontalPlan;
 pub use self::pattern::KktPattern;
 use self::simplicial::SimplicialPlan;
+pub use self::speculative::{MIN_SPECULATION_FLOPS, Speculator};
 use self::supernodal::BlockPlan;
 use crate::error::{FactorizationError, OptimError};
 
@@ -287,6 +289,7 @@ pub enum LdltBackend {
 }
 
 /// The numeric kernel chosen at analysis time.
+#[derive(Clone)]
 enum Kernel {
     Faer,
     Simplicial(Box<SimplicialPlan>),
@@ -350,6 +353,21 @@ impl SparseLdlt {
             kernel: Kernel::Faer,
             last: Err(FactorizationFailure::NotAnalysed),
         }
+    }
+
+    /// A second solver with these options and this symbolic analysis (ordering, structure,
+    /// kernel plan) and no factor yet, so that two matrices of the pattern can be factored at
+    /// once ([`Speculator`]); each factor is the one this solver would compute. `None` before
+    /// an analysis or if a workspace cannot be allocated.
+    pub fn duplicate(&self) -> Option<Self> {
+        let faer = self.faer.as_ref()?.duplicate()?;
+        Some(Self {
+            options: self.options.clone(),
+            has_pairs: self.has_pairs,
+            faer: Some(faer),
+            kernel: self.kernel.clone(),
+            last: Err(FactorizationFailure::NotAnalysed),
+        })
     }
 
     /// The options the solver was made with.
