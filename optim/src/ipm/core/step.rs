@@ -6,7 +6,10 @@
 //!   positive and m negative eigenvalues and its refined solution is accurate; otherwise the
 //!   chain of KKT strategies of `recovery` corrects the matrix (pivot-pair check, static δ_c
 //!   raised, Jacobian regularization δ_c, δ_w grown) and [`Core::compute_step`] factors it
-//!   again. A static `δ_c` is always on the constraint block and removed again by iterative
+//!   again ([`Core::factor_trial`]: with `LinearSolverSettings::speculative_factorization`,
+//!   the next trial's matrix is factored ahead on a second core and its factor taken when
+//!   asked for, the same factor bit for bit; decision record 0036). A static `δ_c` is always
+//!   on the constraint block and removed again by iterative
 //!   refinement; on a stalled barrier problem above the tolerance the correction starts from
 //!   the proximal floor `δ_w = κ_p μ` (`BarrierSettings::proximal_weight`, decision record
 //!   0011); a step whose δ_w = 0 trial failed starts the next one from κ_w⁻ δ_w_last;

@@ -35,6 +35,10 @@
 //!     every entry of `L` is bounded by `1/u` outside the root front, and the sign count is
 //!     the inertia of `K` for any δ_c ≥ 0 (no bare −δ_c pivot and no pair with
 //!     `det ≈ −Σ δ_c` can pass the test). Supernodes are amalgamated (`amalgamation`).
+//! * [`Speculator`] (`speculative`): a second thread that factors, with a
+//!   [`SparseLdlt::duplicate`] of the solver, the matrix the inertia correction would factor
+//!   next, so that a rejected trial's successor is ready when it is asked for (bit for bit the
+//!   factor the solver would compute; decision record 0036).
 //! * `ordering`: the elimination order. With plain AMD a constraint row eliminated before all
 //!   of its primal variables has the pivot exactly `−δ_c`, and for a small δ_c the update
 //!   `Jᵢᵀ Jᵢ / δ_c` swamps the reduced Hessian's curvature in rounding, so the sign count no

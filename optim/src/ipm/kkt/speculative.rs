@@ -127,8 +127,10 @@ impl Speculator {
         self.waiting < MAX_RUN_QUEUE_WAIT
     }
 
-    /// Time the second thread spent factoring in the jobs that came back since the last call.
+    /// Time the second thread spent factoring in the jobs that came back since the last call
+    /// (a finished job is collected first).
     pub fn take_busy(&mut self) -> Duration {
+        self.poll();
         std::mem::take(&mut self.busy)
     }
 
