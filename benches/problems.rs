@@ -35,38 +35,40 @@ fn bench(c: &mut Criterion) {
         points: 36,
         ..ProblemSettings::default()
     };
-    // Every rejected AMD factor checked by the pivot pairs, whatever its δ_w (the default
-    // before decision record 0031; the same path, more factorizations).
-    let check_all = |s: &ProblemSettings| ProblemSettings {
+    // The cold solve's settings (tolerance 1e-8) with other linear-solver settings.
+    let with = |s: &ProblemSettings, linear_solver: LinearSolverSettings| ProblemSettings {
         ipm: Some(Settings {
             termination: TerminationSettings {
                 tol: 1e-8,
                 ..Default::default()
             },
-            linear_solver: LinearSolverSettings {
-                pivot_pairs_check_max_delta_w: f64::MAX,
-                ..Default::default()
-            },
+            linear_solver,
             ..Settings::default()
         }),
         ..s.clone()
     };
+    // Every rejected AMD factor checked by the pivot pairs, whatever its δ_w (the default
+    // before decision record 0031; the same path, more factorizations).
+    let check_all = |s| {
+        with(
+            s,
+            LinearSolverSettings {
+                pivot_pairs_check_max_delta_w: f64::MAX,
+                ..Default::default()
+            },
+        )
+    };
     let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
     // Without the speculative factorization on the second core (decision record 0036; the
     // same path, every factorization on the solve's own thread).
-    let sequential = |s: &ProblemSettings| ProblemSettings {
-        ipm: Some(Settings {
-            termination: TerminationSettings {
-                tol: 1e-8,
-                ..Default::default()
-            },
-            linear_solver: LinearSolverSettings {
+    let sequential = |s| {
+        with(
+            s,
+            LinearSolverSettings {
                 speculative_factorization: false,
                 ..Default::default()
             },
-            ..Settings::default()
-        }),
-        ..s.clone()
+        )
     };
     let (radau_sequential, lg_sequential) = (sequential(&radau), sequential(&lg));
     for (name, label, settings) in [

@@ -113,21 +113,13 @@ fn pivot_pairs_solve_fine_meshes_with_the_default_regularization() {
 #[test]
 fn pivot_pair_checks_at_a_large_delta_w_only_confirm_the_rejection() {
     let with = |max_delta_w: f64| {
-        let s = ProblemSettings {
-            ipm: Some(Settings {
-                termination: TerminationSettings {
-                    tol: 1e-8,
-                    ..Default::default()
-                },
-                linear_solver: LinearSolverSettings {
-                    pivot_pairs_check_max_delta_w: max_delta_w,
-                    ..Default::default()
-                },
-                ..Settings::default()
-            }),
-            ..ProblemSettings::default()
-        };
-        solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap()
+        periodic_qc(
+            ProblemSettings::default(),
+            LinearSolverSettings {
+                pivot_pairs_check_max_delta_w: max_delta_w,
+                ..Default::default()
+            },
+        )
     };
     let default = with(LinearSolverSettings::default().pivot_pairs_check_max_delta_w);
     let everywhere = with(f64::MAX);
@@ -156,23 +148,17 @@ fn speculative_factorization_changes_no_path() {
     let radau = ProblemSettings::default();
     for (scheme, points) in [(radau.scheme, radau.points), (Scheme::Lg, 30)] {
         let with = |speculative: bool| {
-            let s = ProblemSettings {
-                scheme,
-                points,
-                ipm: Some(Settings {
-                    termination: TerminationSettings {
-                        tol: 1e-8,
-                        ..Default::default()
-                    },
-                    linear_solver: LinearSolverSettings {
-                        speculative_factorization: speculative,
-                        ..Default::default()
-                    },
-                    ..Settings::default()
-                }),
-                ..ProblemSettings::default()
-            };
-            solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap()
+            periodic_qc(
+                ProblemSettings {
+                    scheme,
+                    points,
+                    ..ProblemSettings::default()
+                },
+                LinearSolverSettings {
+                    speculative_factorization: speculative,
+                    ..Default::default()
+                },
+            )
         };
         let (on, off) = (with(true), with(false));
         let what = label(scheme, points);
@@ -205,6 +191,23 @@ fn speculative_factorization_changes_no_path() {
             );
         }
     }
+}
+
+/// A cold `periodic-qc` solve with the mesh of `mesh`, the cold solve's tolerance (1e-8) and
+/// these linear-solver settings.
+fn periodic_qc(mesh: ProblemSettings, linear_solver: LinearSolverSettings) -> OcpSolution {
+    let s = ProblemSettings {
+        ipm: Some(Settings {
+            termination: TerminationSettings {
+                tol: 1e-8,
+                ..Default::default()
+            },
+            linear_solver,
+            ..Settings::default()
+        }),
+        ..mesh
+    };
+    solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap()
 }
 
 /// The settings of the library before the adaptive default (plain AMD; δ_c = 3e-8 for LG,
