@@ -6,9 +6,9 @@
 //! defects, stick phases at the acceleration level, δ_c = 3e-8), and `periodic-qc`
 //! also with Radau 3 × 12, the mesh that matches LG-30's objective error, and on Radau 3 × 10
 //! and LG-30 with every rejected KKT factor checked by the pivot pairs (`*_check_all`, the
-//! default before decision record 0031: the same path with more factorizations) and without
-//! the speculative factorization on a second core (`*_sequential`, decision record 0036: the
-//! same path, every factorization on the solve's thread).
+//! default before decision record 0031: the same path with more factorizations) and with
+//! the speculative factorization on a second core (`*_speculative`, decision record 0036: the
+//! same path, the next trial's factor computed ahead on another thread).
 //!
 //! Quick run: `cargo bench --bench problems -- --warm-up-time 1 --measurement-time 5`
 
@@ -59,30 +59,30 @@ fn bench(c: &mut Criterion) {
         )
     };
     let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
-    // Without the speculative factorization on the second core (decision record 0036; the
-    // same path, every factorization on the solve's own thread).
-    let sequential = |s| {
+    // With the speculative factorization on a second core (decision record 0036; the same
+    // path, the next trial's factor computed ahead on another thread).
+    let speculative = |s| {
         with(
             s,
             LinearSolverSettings {
-                speculative_factorization: false,
+                speculative_factorization: true,
                 ..Default::default()
             },
         )
     };
-    let (radau_sequential, lg_sequential) = (sequential(&radau), sequential(&lg));
+    let (radau_speculative, lg_speculative) = (speculative(&radau), speculative(&lg));
     for (name, label, settings) in [
         (Problem::PeriodicQc, "radau3x10", &radau),
         (Problem::PeriodicQc, "radau3x10_check_all", &radau_check_all),
         (
             Problem::PeriodicQc,
-            "radau3x10_sequential",
-            &radau_sequential,
+            "radau3x10_speculative",
+            &radau_speculative,
         ),
         (Problem::PeriodicQc, "radau3x12", &radau36),
         (Problem::PeriodicQc, "lg30", &lg),
         (Problem::PeriodicQc, "lg30_check_all", &lg_check_all),
-        (Problem::PeriodicQc, "lg30_sequential", &lg_sequential),
+        (Problem::PeriodicQc, "lg30_speculative", &lg_speculative),
         (Problem::PeriodicCot, "radau3x10", &radau),
         (Problem::PeriodicCot, "lg30", &lg),
         (Problem::PeriodicCotHuman, "radau3x10", &radau),
