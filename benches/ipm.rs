@@ -16,7 +16,7 @@ use std::hint::black_box;
 use std::time::Duration;
 
 use ball_finger::pipeline::build;
-use bf_optim::ipm::kkt::KktPattern;
+use bf_optim::ipm::kkt::{KktPattern, Speculator};
 use bf_optim::ipm::{
     KktSolver, LdltBackend, LdltOptions, LdltOrdering, Nlp, Settings, Solution, SparseLdlt,
     Workspace, solve, solve_in,
@@ -283,6 +283,30 @@ fn bench_kkt(c: &mut Criterion) {
                 })
             });
         }
+        // Two matrices of an inertia-correction chain (δ_w and 8 δ_w): factored one after the
+        // other on this thread, and at once with the second on the speculative factorization's
+        // thread (decision record 0036), which is what a rejected first trial costs without
+        // and with it.
+        let mut first = SparseLdlt::new();
+        first
+            .analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
+            .expect("analyse");
+        let mut second = Vec::new();
+        pat.shifted_values(8.0, 0.0, &mut second);
+        let mut spec = Speculator::new();
+        g.bench_function("factor_auto_two_in_turn", |b| {
+            b.iter(|| {
+                black_box(first.factor(&pat.mat.values)).ok();
+                black_box(first.factor(&second)).ok();
+            })
+        });
+        g.bench_function("factor_auto_two_at_once", |b| {
+            b.iter(|| {
+                spec.start(&first, |out| out.clone_from(&second));
+                black_box(first.factor(&pat.mat.values)).ok();
+                black_box(spec.take(&mut first, &second)).map(|(r, _)| r.ok())
+            })
+        });
         g.finish();
     }
 }

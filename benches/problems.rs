@@ -6,7 +6,9 @@
 //! defects, stick phases at the acceleration level, δ_c = 3e-8), and `periodic-qc`
 //! also with Radau 3 × 12, the mesh that matches LG-30's objective error, and on Radau 3 × 10
 //! and LG-30 with every rejected KKT factor checked by the pivot pairs (`*_check_all`, the
-//! default before decision record 0031: the same path with more factorizations).
+//! default before decision record 0031: the same path with more factorizations) and with
+//! the speculative factorization on a second core (`*_speculative`, decision record 0036: the
+//! same path, the next trial's factor computed ahead on another thread).
 //!
 //! Quick run: `cargo bench --bench problems -- --warm-up-time 1 --measurement-time 5`
 
@@ -33,29 +35,54 @@ fn bench(c: &mut Criterion) {
         points: 36,
         ..ProblemSettings::default()
     };
-    // Every rejected AMD factor checked by the pivot pairs, whatever its δ_w (the default
-    // before decision record 0031; the same path, more factorizations).
-    let check_all = |s: &ProblemSettings| ProblemSettings {
+    // The cold solve's settings (tolerance 1e-8) with other linear-solver settings.
+    let with = |s: &ProblemSettings, linear_solver: LinearSolverSettings| ProblemSettings {
         ipm: Some(Settings {
             termination: TerminationSettings {
                 tol: 1e-8,
                 ..Default::default()
             },
-            linear_solver: LinearSolverSettings {
-                pivot_pairs_check_max_delta_w: f64::MAX,
-                ..Default::default()
-            },
+            linear_solver,
             ..Settings::default()
         }),
         ..s.clone()
     };
+    // Every rejected AMD factor checked by the pivot pairs, whatever its δ_w (the default
+    // before decision record 0031; the same path, more factorizations).
+    let check_all = |s| {
+        with(
+            s,
+            LinearSolverSettings {
+                pivot_pairs_check_max_delta_w: f64::MAX,
+                ..Default::default()
+            },
+        )
+    };
     let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
+    // With the speculative factorization on a second core (decision record 0036; the same
+    // path, the next trial's factor computed ahead on another thread).
+    let speculative = |s| {
+        with(
+            s,
+            LinearSolverSettings {
+                speculative_factorization: true,
+                ..Default::default()
+            },
+        )
+    };
+    let (radau_speculative, lg_speculative) = (speculative(&radau), speculative(&lg));
     for (name, label, settings) in [
         (Problem::PeriodicQc, "radau3x10", &radau),
         (Problem::PeriodicQc, "radau3x10_check_all", &radau_check_all),
+        (
+            Problem::PeriodicQc,
+            "radau3x10_speculative",
+            &radau_speculative,
+        ),
         (Problem::PeriodicQc, "radau3x12", &radau36),
         (Problem::PeriodicQc, "lg30", &lg),
         (Problem::PeriodicQc, "lg30_check_all", &lg_check_all),
+        (Problem::PeriodicQc, "lg30_speculative", &lg_speculative),
         (Problem::PeriodicCot, "radau3x10", &radau),
         (Problem::PeriodicCot, "lg30", &lg),
         (Problem::PeriodicCotHuman, "radau3x10", &radau),
@@ -83,6 +110,10 @@ fn bench(c: &mut Criterion) {
                     t.factorization.as_secs_f64() * 1e3,
                     t.solve.as_secs_f64() * 1e3,
                     t.line_search.as_secs_f64() * 1e3
+                );
+                println!(
+                    "{name}/{label}: second thread (speculative factorizations) {:.1} ms",
+                    t.speculative_factorization.as_secs_f64() * 1e3
                 );
             }
             Err(e) => eprintln!("{name}/{label}: solve failed: {e}"),

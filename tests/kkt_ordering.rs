@@ -14,6 +14,7 @@ use bf_optim::ipm::{
 };
 use bf_optim::ocp::Scheme;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
+use std::time::Duration;
 
 /// Solves `name` on `scheme` with `points` per phase, KKT `ordering` and static dual
 /// regularization `delta_c` (`None` for both: the library's default handling; the residual
@@ -112,21 +113,13 @@ fn pivot_pairs_solve_fine_meshes_with_the_default_regularization() {
 #[test]
 fn pivot_pair_checks_at_a_large_delta_w_only_confirm_the_rejection() {
     let with = |max_delta_w: f64| {
-        let s = ProblemSettings {
-            ipm: Some(Settings {
-                termination: TerminationSettings {
-                    tol: 1e-8,
-                    ..Default::default()
-                },
-                linear_solver: LinearSolverSettings {
-                    pivot_pairs_check_max_delta_w: max_delta_w,
-                    ..Default::default()
-                },
-                ..Settings::default()
-            }),
-            ..ProblemSettings::default()
-        };
-        solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap()
+        periodic_qc(
+            ProblemSettings::default(),
+            LinearSolverSettings {
+                pivot_pairs_check_max_delta_w: max_delta_w,
+                ..Default::default()
+            },
+        )
     };
     let default = with(LinearSolverSettings::default().pivot_pairs_check_max_delta_w);
     let everywhere = with(f64::MAX);
@@ -143,6 +136,78 @@ fn pivot_pair_checks_at_a_large_delta_w_only_confirm_the_rejection() {
         default.counters.factorizations,
         everywhere.counters.factorizations
     );
+}
+
+/// The speculative factorization on a second core (decision record 0036) changes no path: a
+/// cold `periodic-qc` solve on both meshes with it and without it (the default) ends at the
+/// same objective and point (bits), after the same iterations, with the same counters
+/// (factorizations, rejections, pivot-pair checks); with two or more cores the second thread
+/// did factor.
+#[test]
+fn speculative_factorization_changes_no_path() {
+    let radau = ProblemSettings::default();
+    for (scheme, points) in [(radau.scheme, radau.points), (Scheme::Lg, 30)] {
+        let with = |speculative: bool| {
+            periodic_qc(
+                ProblemSettings {
+                    scheme,
+                    points,
+                    ..ProblemSettings::default()
+                },
+                LinearSolverSettings {
+                    speculative_factorization: speculative,
+                    ..Default::default()
+                },
+            )
+        };
+        let (on, off) = (with(true), with(false));
+        let what = label(scheme, points);
+        assert_eq!(on.status, Status::Solved, "{what}");
+        assert_eq!(on.objective.to_bits(), off.objective.to_bits(), "{what}");
+        assert_eq!(on.iterations, off.iterations, "{what}");
+        assert_eq!(on.counters, off.counters, "{what}");
+        assert!(
+            off.counters.rejected_factorizations > 0,
+            "{what}: no retry to speculate on"
+        );
+        for (a, b) in on
+            .nodes
+            .q
+            .iter()
+            .flatten()
+            .zip(off.nodes.q.iter().flatten())
+        {
+            assert_eq!(a.to_bits(), b.to_bits(), "{what}: a joint angle differs");
+        }
+        assert_eq!(
+            off.timing.speculative_factorization,
+            Duration::ZERO,
+            "{what}"
+        );
+        if std::thread::available_parallelism().map_or(1, usize::from) >= 2 {
+            assert!(
+                on.timing.speculative_factorization > Duration::ZERO,
+                "{what}"
+            );
+        }
+    }
+}
+
+/// A cold `periodic-qc` solve with the mesh of `mesh`, the cold solve's tolerance (1e-8) and
+/// these linear-solver settings.
+fn periodic_qc(mesh: ProblemSettings, linear_solver: LinearSolverSettings) -> OcpSolution {
+    let s = ProblemSettings {
+        ipm: Some(Settings {
+            termination: TerminationSettings {
+                tol: 1e-8,
+                ..Default::default()
+            },
+            linear_solver,
+            ..Settings::default()
+        }),
+        ..mesh
+    };
+    solve(&build(Problem::PeriodicQc, &s).unwrap(), None).unwrap()
 }
 
 /// The settings of the library before the adaptive default (plain AMD; δ_c = 3e-8 for LG,

@@ -7,7 +7,8 @@
 //!   3.6), κ_Σ (eq. (16)), κ_d (Sect. 3.7), the slack safeguard and the proximal term;
 //! * [`ScalingSettings`]: the internal scaling of f and c;
 //! * [`LineSearchSettings`]: the filter line search (W&B eqs. (18)–(23), Sect. 2.3–2.4);
-//! * [`LinearSolverSettings`]: the static δ_c and the iterative refinement of KKT solves;
+//! * [`LinearSolverSettings`]: the static δ_c, the pivot-pair checks, the speculative
+//!   factorization on a second core and the iterative refinement of KKT solves;
 //! * [`RecoverySettings`]: the inertia correction (W&B Algorithm IC, Sect. 3.1) and the
 //!   restoration phase (Sect. 3.3);
 //! * [`ExperimentalSettings`]: research switches no default path uses;
@@ -390,6 +391,19 @@ pub struct LinearSolverSettings {
     /// rejection, at 1.55 times an AMD factorization's cost. The largest δ_w at which a check
     /// was seen to accept is 1.3e-5 (decision record 0031).
     pivot_pairs_check_max_delta_w: f64 = 1e-3,
+    /// Factor on a second core, while the inertia correction (W&B Algorithm IC) factors
+    /// `K(δ_w, δ_c)`, the matrix it would factor next if this one were rejected (δ_w grown by
+    /// κ_w⁺), and take that factor when the correction asks for exactly that matrix (decision
+    /// record 0036). The path of a solve is bit for bit the same either way, on any number of
+    /// cores; only the wall time changes. Used only where it can pay: at least two cores, one
+    /// of them idle (the solve's thread has not been waiting for a core), a KKT factorization
+    /// of at least [`MIN_SPECULATION_FLOPS`](crate::ipm::kkt::MIN_SPECULATION_FLOPS)
+    /// multiply–adds, and a solve not running on a worker of a rayon pool that already uses
+    /// every core (a parallel multi-start). Left off in the defaults because on a machine whose
+    /// cores are shared with other work the second thread takes its time from the solve's own
+    /// thread (cold solves measured up to 50 % slower on the shared 2-core machine, and no
+    /// gain beyond the noise); meant for a single solve on a machine with an idle core.
+    speculative_factorization: bool = false,
     /// Maximum iterative-refinement steps per solve (the default is Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for
     /// when refinement stops earlier. An unpivoted factor with pivot growth refines, but

@@ -58,6 +58,11 @@ pub struct Timing {
     pub solve: Duration,
     /// Line-search bookkeeping (filter, step sizes), excluding its function evaluations.
     pub line_search: Duration,
+    /// Factorizations on the second thread of `LinearSolverSettings::speculative_factorization`
+    /// (that thread's time, used or not): concurrent with the parts above, so not part of
+    /// `total`.
+    #[serde(default)]
+    pub speculative_factorization: Duration,
 }
 
 /// Counters of a solve.

@@ -18,7 +18,7 @@
 //! * [`RunState`], [`Taken`]: what the outer loop carries between iterations (acceptable,
 //!   tiny-step and soft-restoration counts, the log record) and the step an iteration takes.
 
-use crate::ipm::kkt::{KktPattern, SparseLdlt};
+use crate::ipm::kkt::{KktPattern, SparseLdlt, Speculator};
 use crate::ipm::settings::Settings;
 use crate::ipm::solution::IterationInfo;
 
@@ -155,6 +155,10 @@ pub(super) struct KktSystem {
     pub corr: Vec<f64>,
     /// The KKT solution before the last refinement correction, which may be undone.
     pub sol_before: Vec<f64>,
+    /// The second thread of `LinearSolverSettings::speculative_factorization`.
+    pub speculation: Speculator,
+    /// Whether this solve speculates (decided at its first factorization in a Newton step).
+    pub speculate: Option<bool>,
 }
 
 impl KktSystem {
@@ -179,6 +183,8 @@ impl KktSystem {
             resid: vec![0.0; n + m],
             corr: vec![0.0; n + m],
             sol_before: vec![0.0; n + m],
+            speculation: Speculator::new(),
+            speculate: None,
         }
     }
 }

@@ -33,11 +33,11 @@
 use std::time::Instant;
 
 use super::barrier::MuRule;
-use super::parts::{RunState, Taken};
+use super::parts::{Regularization, RunState, Taken};
 use super::termination::Errors;
 use super::{Core, Ctx};
 use crate::error::OptimError;
-use crate::ipm::settings::KktOrdering;
+use crate::ipm::settings::{KktOrdering, RecoverySettings};
 use crate::ipm::solution::Status;
 
 /// A strategy's answer: pass the failure on, or act.
@@ -284,19 +284,8 @@ impl<'m> Recovery<Rejection<'m>, KktAction> for HessianPerturbation {
         r: &mut Rejection<'m>,
     ) -> Result<Outcome<KktAction>, OptimError> {
         let rec = &ctx.settings.recovery;
-        let reg = &mut core.reg;
-        if reg.delta_w == 0.0 {
-            reg.delta_w = if reg.delta_w_last == 0.0 {
-                rec.first_hessian_perturbation
-            } else {
-                (rec.perturb_dec_fact * reg.delta_w_last).max(rec.min_hessian_perturbation)
-            };
-        } else if reg.delta_w_last == 0.0 {
-            reg.delta_w *= rec.perturb_inc_fact_first;
-        } else {
-            reg.delta_w *= rec.perturb_inc_fact;
-        }
-        if reg.delta_w > rec.max_hessian_perturbation {
+        core.reg.delta_w = next_delta_w(&core.reg, rec);
+        if core.reg.delta_w > rec.max_hessian_perturbation {
             return Ok(Outcome::Act(KktAction::GiveUp));
         }
         let t = Instant::now();
@@ -305,6 +294,23 @@ impl<'m> Recovery<Rejection<'m>, KktAction> for HessianPerturbation {
             .shift_diagonal(core.reg.delta_w - r.old_w, core.reg.delta_c - r.old_c);
         ctx.timing.kkt_assembly += t.elapsed();
         Ok(Outcome::Act(KktAction::Refactor))
+    }
+}
+
+/// The δ_w that [`HessianPerturbation`] gives the matrix after a rejection of the current one
+/// (beyond `max_hessian_perturbation`: no step). Also the prediction of the speculative
+/// factorization (`Core::factor_trial`), so both are this one rule.
+pub(super) fn next_delta_w(reg: &Regularization, rec: &RecoverySettings) -> f64 {
+    if reg.delta_w == 0.0 {
+        if reg.delta_w_last == 0.0 {
+            rec.first_hessian_perturbation
+        } else {
+            (rec.perturb_dec_fact * reg.delta_w_last).max(rec.min_hessian_perturbation)
+        }
+    } else if reg.delta_w_last == 0.0 {
+        reg.delta_w * rec.perturb_inc_fact_first
+    } else {
+        reg.delta_w * rec.perturb_inc_fact
     }
 }
 

@@ -6,7 +6,10 @@
 //!   positive and m negative eigenvalues and its refined solution is accurate; otherwise the
 //!   chain of KKT strategies of `recovery` corrects the matrix (pivot-pair check, static δ_c
 //!   raised, Jacobian regularization δ_c, δ_w grown) and [`Core::compute_step`] factors it
-//!   again. A static `δ_c` is always on the constraint block and removed again by iterative
+//!   again ([`Core::factor_trial`]: with `LinearSolverSettings::speculative_factorization`,
+//!   the next trial's matrix is factored ahead on a second core and its factor taken when
+//!   asked for, the same factor bit for bit; decision record 0036). A static `δ_c` is always
+//!   on the constraint block and removed again by iterative
 //!   refinement; on a stalled barrier problem above the tolerance the correction starts from
 //!   the proximal floor `δ_w = κ_p μ` (`BarrierSettings::proximal_weight`, decision record
 //!   0011); a step whose δ_w = 0 trial failed starts the next one from κ_w⁻ δ_w_last;
@@ -21,11 +24,11 @@
 
 use std::time::Instant;
 
-use super::recovery::{KKT_CHAIN, KktAction, Rejection, StepMemory, first_remedy};
+use super::recovery::{KKT_CHAIN, KktAction, Rejection, StepMemory, first_remedy, next_delta_w};
 use super::{Core, Ctx, norm_inf};
 use crate::error::OptimError;
 use crate::ipm::kkt::{
-    FactorizationFailure, Inertia, KktSolver, LdltOptions, LdltOrdering, SparseLdlt,
+    FactorizationFailure, Inertia, KktSolver, LdltOptions, LdltOrdering, SparseLdlt, Speculator,
 };
 use crate::ipm::settings::Settings;
 
@@ -66,6 +69,57 @@ impl Core<'_> {
         ctx.counters.factorizations += 1;
         ctx.timing.factorization += t.elapsed();
         r
+    }
+
+    /// [`Core::factor_current`] for a trial of the inertia correction, with the speculative
+    /// factorization of `LinearSolverSettings::speculative_factorization` (`kkt::speculative`):
+    /// a finished factor of this very matrix from the second thread is taken instead of
+    /// factoring; otherwise, before factoring, the second thread starts on the matrix the
+    /// correction factors next if this one's inertia is wrong ([`HessianPerturbation`]'s δ_w,
+    /// δ_c unchanged), if a core is idle. Either way the factor is the one `factor_current`
+    /// computes.
+    ///
+    /// [`HessianPerturbation`]: super::recovery::HessianPerturbation
+    fn factor_trial(
+        &mut self,
+        ctx: &mut Ctx<'_, '_>,
+        settings: &Settings,
+    ) -> Result<Inertia, FactorizationFailure> {
+        if !settings.linear_solver.speculative_factorization {
+            return self.factor_current(ctx);
+        }
+        let speculate = *self
+            .kkt
+            .speculate
+            .get_or_insert_with(|| Speculator::worthwhile(&self.kkt.solver));
+        if !speculate {
+            return self.factor_current(ctx);
+        }
+        let t = Instant::now();
+        let kkt = &mut self.kkt;
+        let taken = kkt
+            .speculation
+            .take(&mut kkt.solver, &kkt.matrix.mat.values);
+        ctx.timing.speculative_factorization += kkt.speculation.take_busy();
+        if let Some((result, _waited)) = taken {
+            ctx.counters.factorizations += 1;
+            ctx.timing.factorization += t.elapsed();
+            if settings.output.print_level > 2 {
+                println!("    KKT: factor from the second thread");
+            }
+            return result;
+        }
+        let next_w = next_delta_w(&self.reg, &settings.recovery);
+        if self.kkt.speculation.idle_core() && next_w <= settings.recovery.max_hessian_perturbation
+        {
+            let change = next_w - self.reg.delta_w;
+            let matrix = &self.kkt.matrix;
+            self.kkt.speculation.start(&self.kkt.solver, |out| {
+                matrix.shifted_values(change, 0.0, out)
+            });
+        }
+        ctx.timing.factorization += t.elapsed();
+        self.factor_current(ctx)
     }
 
     /// Solves `K sol = rhs` with refinement against `K(δ_w, δ_c_target)`; returns the final
@@ -259,7 +313,7 @@ impl Core<'_> {
         ctx.timing.kkt_assembly += t.elapsed();
         let mut memory = StepMemory::default();
         loop {
-            let inertia = self.factor_current(ctx);
+            let inertia = self.factor_trial(ctx, settings);
             let good = matches!(inertia, Ok(i) if i.positive == self.n && i.negative == self.m);
             if settings.output.print_level > 2 {
                 println!(

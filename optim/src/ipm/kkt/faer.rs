@@ -6,6 +6,8 @@
 //! `LdltRegularization`), and the inertia is read from the signs of `D` (Sylvester's law of
 //! inertia; invariant under the symmetric permutation).
 
+use std::sync::Arc;
+
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
 use faer::perm::PermRef;
@@ -23,7 +25,8 @@ use crate::error::{FactorizationError, OptimError};
 /// faer's symbolic analysis of one lower-triangle pattern, its value storage for `L` (faer's
 /// layout) and the workspace of its numeric factorization and solve.
 pub(super) struct FaerFactor {
-    pub(super) symbolic: SymbolicCholesky<usize>,
+    /// Shared with the copies of [`FaerFactor::duplicate`] (read-only after the analysis).
+    pub(super) symbolic: Arc<SymbolicCholesky<usize>>,
     pub(super) l_values: Vec<f64>,
     mem: MemBuffer,
     pub(super) col_ptr: Vec<usize>,
@@ -74,10 +77,29 @@ impl FaerFactor {
             .map_err(|_| OptimError::from(FactorizationError::OutOfMemory))?;
         Ok(Self {
             l_values: vec![0.0; symbolic.len_val()],
-            symbolic,
+            symbolic: Arc::new(symbolic),
             mem,
             col_ptr: col_ptr.to_vec(),
             row_idx: row_idx.to_vec(),
+        })
+    }
+
+    /// A copy of the analysis with its own value storage and workspace (no factor): what
+    /// [`FaerFactor::analyse`] of the same pattern and order returns, without the ordering
+    /// work. `None` if the workspace cannot be allocated.
+    pub(super) fn duplicate(&self) -> Option<Self> {
+        let params: Spec<LdltParams, f64> = Default::default();
+        let req = StackReq::any_of(&[
+            self.symbolic
+                .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, params),
+            self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        Some(Self {
+            symbolic: Arc::clone(&self.symbolic),
+            l_values: vec![0.0; self.l_values.len()],
+            mem: MemBuffer::try_new(req).ok()?,
+            col_ptr: self.col_ptr.clone(),
+            row_idx: self.row_idx.clone(),
         })
     }
 

@@ -35,6 +35,10 @@
 //!     every entry of `L` is bounded by `1/u` outside the root front, and the sign count is
 //!     the inertia of `K` for any δ_c ≥ 0 (no bare −δ_c pivot and no pair with
 //!     `det ≈ −Σ δ_c` can pass the test). Supernodes are amalgamated (`amalgamation`).
+//! * [`Speculator`] (`speculative`): a second thread that factors, with a
+//!   [`SparseLdlt::duplicate`] of the solver, the matrix the inertia correction would factor
+//!   next, so that a rejected trial's successor is ready when it is asked for (bit for bit the
+//!   factor the solver would compute; decision record 0036).
 //! * `ordering`: the elimination order. With plain AMD a constraint row eliminated before all
 //!   of its primal variables has the pivot exactly `−δ_c`, and for a small δ_c the update
 //!   `Jᵢᵀ Jᵢ / δ_c` swamps the reduced Hessian's curvature in rounding, so the sign count no
@@ -49,6 +53,7 @@ mod multifrontal;
 mod ordering;
 pub mod pattern;
 mod simplicial;
+mod speculative;
 mod supernodal;
 #[cfg(test)]
 mod tests;
@@ -59,6 +64,7 @@ use self::faer::FaerFactor;
 use self::multifrontal::MultifrontalPlan;
 pub use self::pattern::KktPattern;
 use self::simplicial::SimplicialPlan;
+pub use self::speculative::{MIN_SPECULATION_FLOPS, Speculator};
 use self::supernodal::BlockPlan;
 use crate::error::{FactorizationError, OptimError};
 
@@ -287,6 +293,7 @@ pub enum LdltBackend {
 }
 
 /// The numeric kernel chosen at analysis time.
+#[derive(Clone)]
 enum Kernel {
     Faer,
     Simplicial(Box<SimplicialPlan>),
@@ -350,6 +357,21 @@ impl SparseLdlt {
             kernel: Kernel::Faer,
             last: Err(FactorizationFailure::NotAnalysed),
         }
+    }
+
+    /// A second solver with these options and this symbolic analysis (ordering, structure,
+    /// kernel plan) and no factor yet, so that two matrices of the pattern can be factored at
+    /// once ([`Speculator`]); each factor is the one this solver would compute. `None` before
+    /// an analysis or if a workspace cannot be allocated.
+    pub fn duplicate(&self) -> Option<Self> {
+        let faer = self.faer.as_ref()?.duplicate()?;
+        Some(Self {
+            options: self.options.clone(),
+            has_pairs: self.has_pairs,
+            faer: Some(faer),
+            kernel: self.kernel.clone(),
+            last: Err(FactorizationFailure::NotAnalysed),
+        })
     }
 
     /// The options the solver was made with.

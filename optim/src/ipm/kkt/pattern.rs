@@ -90,11 +90,31 @@ impl KktPattern {
     /// Adds `delta` to every primal diagonal entry and `-delta_c_change` to every dual one
     /// (used by the inertia-correction loop without a full reassembly).
     pub fn shift_diagonal(&mut self, delta_w_change: f64, delta_c_change: f64) {
-        for j in 0..self.n {
-            self.mat.values[self.diag_dst[j]] += delta_w_change;
-        }
-        for i in 0..self.m {
-            self.mat.values[self.diag_dst[self.n + i]] -= delta_c_change;
-        }
+        shift(
+            &mut self.mat.values,
+            &self.diag_dst,
+            self.n,
+            delta_w_change,
+            delta_c_change,
+        );
+    }
+
+    /// Writes into `out` the values [`shift_diagonal`](KktPattern::shift_diagonal) would leave
+    /// (bit for bit: the same operations), without changing the matrix.
+    pub fn shifted_values(&self, delta_w_change: f64, delta_c_change: f64, out: &mut Vec<f64>) {
+        out.clear();
+        out.extend_from_slice(&self.mat.values);
+        shift(out, &self.diag_dst, self.n, delta_w_change, delta_c_change);
+    }
+}
+
+/// Adds `delta_w_change` to the primal diagonal entries (`diag_dst[..n]`) of `values` and
+/// `-delta_c_change` to the dual ones.
+fn shift(values: &mut [f64], diag_dst: &[usize], n: usize, dw: f64, dc: f64) {
+    for &d in &diag_dst[..n] {
+        values[d] += dw;
+    }
+    for &d in &diag_dst[n..] {
+        values[d] -= dc;
     }
 }

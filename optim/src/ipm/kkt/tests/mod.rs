@@ -5,6 +5,7 @@
 use super::*;
 
 mod multifrontal;
+mod speculative;
 
 /// max |K x − b| after solving K x = b with `s` and `steps` refinement steps, for a fixed
 /// right-hand side.
