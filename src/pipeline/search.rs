@@ -1210,6 +1210,93 @@ mod tests {
         assert_eq!(super::period_row(&qc), None);
     }
 
+    /// Shards sample what the unsharded search samples, held starts included: the held
+    /// chains keep their global start index, so the union of two shards' sampled optima and
+    /// of their start records is the unsharded run's, bit for bit (`optimize merge` explores
+    /// from that union). Four starts of `periodic-cot-human` (1 and 3 held), no reshaping,
+    /// hops or verification, one optimum promoted.
+    #[test]
+    fn shards_sample_the_held_starts_as_the_unsharded_search_does() {
+        use bf_problem::{Problem, ProblemSettings};
+
+        use crate::pipeline::strategy::{Shard, Strategy};
+
+        let policy = super::VerifyPolicy {
+            rtol: 0.0,
+            ..super::VerifyPolicy::default()
+        }
+        .global(super::HopSettings {
+            budget: 0,
+            polish_rounds: 0,
+            reshape_width: 0,
+            ..super::DEFAULT_HOPS
+        });
+        let policy = super::VerifyPolicy {
+            coarse: Some(super::CoarseSampling {
+                promote: 1,
+                ..super::DEFAULT_COARSE
+            }),
+            ..policy
+        };
+        let strategy = Strategy::Multistart {
+            starts: 4,
+            seed: 5,
+        };
+        let run = |shard| {
+            super::search(
+                Problem::PeriodicCotHuman,
+                &ProblemSettings::default(),
+                strategy,
+                shard,
+                &policy,
+                None,
+            )
+            .expect("searches")
+        };
+        let key = |s: &super::Search| {
+            let mut v: Vec<(usize, u64, u64)> = s
+                .sampled
+                .iter()
+                .map(|c| {
+                    let o = &c.solution;
+                    (c.index, o.objective.to_bits(), o.period.to_bits())
+                })
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        let starts = |s: &super::Search| {
+            let mut v: Vec<(usize, String, u64)> = s
+                .records
+                .iter()
+                .filter(|r| r.stage != super::PROMOTE_LABEL)
+                .map(|r| (r.chain, r.stage.clone(), r.objective.to_bits()))
+                .collect();
+            v.sort();
+            v
+        };
+        let whole = run(Shard::WHOLE);
+        let (a, b) = (
+            run(Shard { index: 0, count: 2 }),
+            run(Shard { index: 1, count: 2 }),
+        );
+        let mut union = key(&a);
+        union.extend(key(&b));
+        union.sort_unstable();
+        assert_eq!(union, key(&whole));
+        let mut recs = starts(&a);
+        recs.extend(starts(&b));
+        recs.sort();
+        assert_eq!(recs, starts(&whole));
+        // Starts 1 and 3 were held, then released.
+        let released = recs
+            .iter()
+            .filter(|(_, st, _)| st == super::RELEASE_PERIOD_LABEL)
+            .map(|(k, _, _)| *k)
+            .collect::<Vec<_>>();
+        assert_eq!(released, [1, 3]);
+    }
+
     /// The refinements stop on a path check that does not move towards its allowance and go
     /// on while it does, on the measured sequences of path excesses (× the allowance):
     /// the `periodic-qc` tap (24.1 on the problem's mesh and refined), the
