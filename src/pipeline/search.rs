@@ -6,7 +6,8 @@
 //!    [`super::strategy::GLOBAL_STARTS`] seeded starts by default, with the global search;
 //!    for `periodic-qc` each a continuation
 //!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
-//!    problem's bound), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
+//!    problem's bound; with the global search on the COT problems every odd start a
+//!    continuation in the period bound, `hold_the_period`), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
 //!    [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
 //!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
