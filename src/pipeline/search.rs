@@ -1239,10 +1239,7 @@ mod tests {
             }),
             ..policy
         };
-        let strategy = Strategy::Multistart {
-            starts: 4,
-            seed: 5,
-        };
+        let strategy = Strategy::Multistart { starts: 4, seed: 5 };
         let run = |shard| {
             super::search(
                 Problem::PeriodicCotHuman,
