@@ -7,8 +7,8 @@
 //!    for `periodic-qc` each a continuation
 //!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
 //!    problem's bound; with the global search on the COT problems every odd start a
-//!    continuation in the period bound, `hold_the_period`), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
-//!    [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
+//!    continuation in the period bound, `hold_the_period`), one point per distinct optimum
+//!    (objectives within [`CLUSTER_RTOL`], [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
 //!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
 //!    moves ([`super::reshape`]: the elbow flip, the mirror, phase-duration bounds then
@@ -638,8 +638,11 @@ fn hold_the_period(chains: &mut [Chain]) {
         let Some(start) = st.start.as_ref().filter(|_| k % 2 == 1) else {
             continue;
         };
+        // A start whose period is outside the given bounds is not held (its held stage
+        // would loosen the upper bound or be infeasible).
         let t: f64 = start.durations.iter().sum();
-        if !(t.is_finite() && t > 0.0) {
+        let (lo, hi) = st.period_bounds.unwrap_or((0.0, f64::INFINITY));
+        if !(t.is_finite() && t > lo && t < hi) {
             continue;
         }
         let released = ProblemSettings {
@@ -647,7 +650,6 @@ fn hold_the_period(chains: &mut [Chain]) {
             max_iter: st.max_iter.min(HOP_MAX_ITER),
             ..st.clone()
         };
-        let lo = st.period_bounds.map_or(0.0, |(lo, _)| lo);
         st.period_bounds = Some((lo, t));
         label.push_str(&format!(", period <= {t:.3}"));
         chain.push((RELEASE_PERIOD_LABEL.to_string(), released));
@@ -1191,6 +1193,16 @@ mod tests {
         assert_eq!(held[27].len(), 2);
         assert_eq!(held[27][0].1.period_bounds, Some((0.0, start)));
         assert_eq!(held[27][1].1.period_bounds, plain[27][0].1.period_bounds);
+        // Under an upper period bound below the start's period nothing is held (the held
+        // stage would loosen it).
+        let mut tight = plain.clone();
+        tight
+            .iter_mut()
+            .flatten()
+            .for_each(|(_, st)| st.period_bounds = Some((0.0, 0.1)));
+        let before = tight.clone();
+        super::hold_the_period(&mut tight);
+        assert_eq!(tight, before);
 
         let (_, a) = run_chain(p, 27, plain[27].clone(), None, None);
         let (recs, b) = run_chain(p, 27, held[27].clone(), None, None);
