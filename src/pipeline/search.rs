@@ -6,8 +6,9 @@
 //!    [`super::strategy::GLOBAL_STARTS`] seeded starts by default, with the global search;
 //!    for `periodic-qc` each a continuation
 //!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
-//!    problem's bound), one point per distinct optimum (objectives within [`CLUSTER_RTOL`],
-//!    [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
+//!    problem's bound; with the global search on the COT problems every odd start a
+//!    continuation in the period bound, `hold_the_period`), one point per distinct optimum
+//!    (objectives within [`CLUSTER_RTOL`], [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
 //!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
 //!    moves ([`super::reshape`]: the elbow flip, the mirror, phase-duration bounds then
@@ -34,6 +35,7 @@ use std::time::Instant;
 
 use bf_optim::ipm::Nlp;
 use bf_optim::ocp::Scheme;
+use bf_optim::terms::VarRef;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -558,7 +560,11 @@ pub fn search(
     let strategy = effective(settings, strategy);
     let coarse = coarse_mesh(settings, strategy, policy);
     let sampled_on = coarse.as_ref().map_or(settings, |(_, s)| s);
-    let (_, chains) = prepare_chains(problem, sampled_on, strategy, policy.stick_continuation)?;
+    let (target, mut chains) =
+        prepare_chains(problem, sampled_on, strategy, policy.stick_continuation)?;
+    if policy.hops.is_some() && period_row(&target).is_some() {
+        hold_the_period(&mut chains);
+    }
     let land = OcpLandscape {
         problem,
         settings,
@@ -600,6 +606,58 @@ pub fn search(
     found.seconds = t0.elapsed().as_secs_f64();
     Ok(found)
 }
+
+/// The period row of `p` (the point function with one output, the sum of every phase's
+/// duration) and its bounds; `None` if it has none (`periodic-qc` without
+/// [`ProblemSettings::period_bounds`]).
+pub fn period_row(p: &BuiltProblem) -> Option<(usize, (f64, f64))> {
+    let n = p.ocp.phases.len();
+    p.ocp.points.iter().enumerate().find_map(|(i, f)| {
+        let durations = f.vars.len() == n
+            && (0..n).all(|k| f.vars.iter().any(|(_, v)| *v == VarRef::Duration(k)))
+            && f.vars.iter().all(|(_, v)| matches!(v, VarRef::Duration(_)));
+        (durations && f.outputs.len() == 1 && f.bounds.len() == 1).then(|| (i, f.bounds[0]))
+    })
+}
+
+/// The period continuation of the global search's starts on a problem with a period row
+/// ([`period_row`]: the COT problems): every odd start is first solved with its period at
+/// most its start's (the sum of the start's durations, 0.15–4.8 s,
+/// [`super::strategy::random_start`]), then released warm to the problem's period bounds (at
+/// most [`HOP_MAX_ITER`] iterations). The COT ratio pulls a cold start to the period's 10 s
+/// bound: on `periodic-cot-human` seeds 5 and 6 every start, reshaping move and hop ended
+/// there, while the best optimum (8.46 s) is reached through short-period optima (2.6 s,
+/// J 0.020 on the coarse mesh) that a start held short finds and keeps once released
+/// (decision record 0037). Even starts keep the plain solve; chains that are not single
+/// starts are left alone.
+fn hold_the_period(chains: &mut [Chain]) {
+    for (k, chain) in chains.iter_mut().enumerate() {
+        let [(label, st)] = chain.as_mut_slice() else {
+            continue;
+        };
+        let Some(start) = st.start.as_ref().filter(|_| k % 2 == 1) else {
+            continue;
+        };
+        // A start whose period is outside the given bounds is not held (its held stage
+        // would loosen the upper bound or be infeasible).
+        let t: f64 = start.durations.iter().sum();
+        let (lo, hi) = st.period_bounds.unwrap_or((0.0, f64::INFINITY));
+        if !(t.is_finite() && t > lo && t < hi) {
+            continue;
+        }
+        let released = ProblemSettings {
+            start: None,
+            max_iter: st.max_iter.min(HOP_MAX_ITER),
+            ..st.clone()
+        };
+        st.period_bounds = Some((lo, t));
+        label.push_str(&format!(", period <= {t:.3}"));
+        chain.push((RELEASE_PERIOD_LABEL.to_string(), released));
+    }
+}
+
+/// Stage label of the release of a start held to a short period ([`hold_the_period`]).
+pub const RELEASE_PERIOD_LABEL: &str = "release the period";
 
 /// The coarse sampling of `policy` and the settings of its mesh, where it applies
 /// ([`CoarseSampling`]: a multi-start on a Radau mesh of more points than the coarse one).
@@ -1090,6 +1148,164 @@ impl Search {
 #[cfg(test)]
 mod tests {
     use super::{path_stalled, refine_in_order};
+
+    /// The period continuation of the starts ([`super::hold_the_period`]) on the coarse mesh of
+    /// the global search: start 27 of `periodic-cot-human` seed 5 solved plainly ends on the
+    /// 10 s period bound (J ≈ 0.07, the region every start and move of that seed ended in
+    /// before), held to its start's period (0.88 s) and released it ends at a short-period
+    /// optimum (≈ 2.6 s) of less than a third of that objective, off the bound: the region
+    /// from which the reshaping reaches the best known optimum (J 0.0158 verified). Even
+    /// starts, and problems without a period row (`periodic-qc`), are not held.
+    #[test]
+    fn a_start_held_short_leaves_the_period_bound_that_a_plain_start_ends_on() {
+        use bf_optim::ocp::Scheme;
+        use bf_problem::{Problem, ProblemSettings};
+
+        use crate::pipeline::strategy::{Strategy, prepare_chains, run_chain};
+
+        let coarse = ProblemSettings {
+            points: super::DEFAULT_COARSE.points,
+            scheme: Scheme::Radau {
+                elements: super::DEFAULT_COARSE.elements,
+            },
+            ..ProblemSettings::default()
+        };
+        let strategy = Strategy::Multistart {
+            starts: 28,
+            seed: 5,
+        };
+        let p = Problem::PeriodicCotHuman;
+        let (target, plain) = prepare_chains(p, &coarse, strategy, None).expect("builds");
+        let (_, (_, tmax)) = super::period_row(&target).expect("COT bounds its period");
+        let mut held = plain.clone();
+        super::hold_the_period(&mut held);
+        for k in (0..28).step_by(2) {
+            assert_eq!(held[k], plain[k]);
+        }
+        let start: f64 = plain[27][0]
+            .1
+            .start
+            .as_ref()
+            .unwrap()
+            .durations
+            .iter()
+            .sum();
+        assert_eq!(held[27].len(), 2);
+        assert_eq!(held[27][0].1.period_bounds, Some((0.0, start)));
+        assert_eq!(held[27][1].1.period_bounds, plain[27][0].1.period_bounds);
+        // Under an upper period bound below the start's period nothing is held (the held
+        // stage would loosen it).
+        let mut tight = plain.clone();
+        tight
+            .iter_mut()
+            .flatten()
+            .for_each(|(_, st)| st.period_bounds = Some((0.0, 0.1)));
+        let before = tight.clone();
+        super::hold_the_period(&mut tight);
+        assert_eq!(tight, before);
+
+        let (_, a) = run_chain(p, 27, plain[27].clone(), None, None);
+        let (recs, b) = run_chain(p, 27, held[27].clone(), None, None);
+        let (a, b) = (a.expect("solves").1, b.expect("solves").1);
+        assert!(a.status.is_success() && b.status.is_success());
+        assert!(a.period > tmax * (1.0 - 1e-4), "plain: T {}", a.period);
+        // The held stage ends on its bound, the release far below the problem's.
+        assert!(recs[0].period <= start * (1.0 + 1e-6), "{:?}", recs[0]);
+        assert!(b.period < 0.5 * tmax, "held: T {}", b.period);
+        assert!(
+            b.objective < a.objective / 3.0,
+            "held J {} vs plain J {}",
+            b.objective,
+            a.objective
+        );
+
+        let qc = crate::pipeline::build(Problem::PeriodicQc, &coarse).expect("builds");
+        assert_eq!(super::period_row(&qc), None);
+    }
+
+    /// Shards sample what the unsharded search samples, held starts included: the held
+    /// chains keep their global start index, so the union of two shards' sampled optima and
+    /// of their start records is the unsharded run's, bit for bit (`optimize merge` explores
+    /// from that union). Four starts of `periodic-cot-human` (1 and 3 held), no reshaping,
+    /// hops or verification, one optimum promoted.
+    #[test]
+    fn shards_sample_the_held_starts_as_the_unsharded_search_does() {
+        use bf_problem::{Problem, ProblemSettings};
+
+        use crate::pipeline::strategy::{Shard, Strategy};
+
+        let policy = super::VerifyPolicy {
+            rtol: 0.0,
+            ..super::VerifyPolicy::default()
+        }
+        .global(super::HopSettings {
+            budget: 0,
+            polish_rounds: 0,
+            reshape_width: 0,
+            ..super::DEFAULT_HOPS
+        });
+        let policy = super::VerifyPolicy {
+            coarse: Some(super::CoarseSampling {
+                promote: 1,
+                ..super::DEFAULT_COARSE
+            }),
+            ..policy
+        };
+        let strategy = Strategy::Multistart { starts: 4, seed: 5 };
+        let run = |shard| {
+            super::search(
+                Problem::PeriodicCotHuman,
+                &ProblemSettings::default(),
+                strategy,
+                shard,
+                &policy,
+                None,
+            )
+            .expect("searches")
+        };
+        let key = |s: &super::Search| {
+            let mut v: Vec<(usize, u64, u64)> = s
+                .sampled
+                .iter()
+                .map(|c| {
+                    let o = &c.solution;
+                    (c.index, o.objective.to_bits(), o.period.to_bits())
+                })
+                .collect();
+            v.sort_unstable();
+            v
+        };
+        let starts = |s: &super::Search| {
+            let mut v: Vec<(usize, String, u64)> = s
+                .records
+                .iter()
+                .filter(|r| r.stage != super::PROMOTE_LABEL)
+                .map(|r| (r.chain, r.stage.clone(), r.objective.to_bits()))
+                .collect();
+            v.sort();
+            v
+        };
+        let whole = run(Shard::WHOLE);
+        let (a, b) = (
+            run(Shard { index: 0, count: 2 }),
+            run(Shard { index: 1, count: 2 }),
+        );
+        let mut union = key(&a);
+        union.extend(key(&b));
+        union.sort_unstable();
+        assert_eq!(union, key(&whole));
+        let mut recs = starts(&a);
+        recs.extend(starts(&b));
+        recs.sort();
+        assert_eq!(recs, starts(&whole));
+        // Starts 1 and 3 were held, then released.
+        let released = recs
+            .iter()
+            .filter(|(_, st, _)| st == super::RELEASE_PERIOD_LABEL)
+            .map(|(k, _, _)| *k)
+            .collect::<Vec<_>>();
+        assert_eq!(released, [1, 3]);
+    }
 
     /// The refinements stop on a path check that does not move towards its allowance and go
     /// on while it does, on the measured sequences of path excesses (× the allowance):
