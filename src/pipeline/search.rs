@@ -656,7 +656,7 @@ fn hold_the_period(chains: &mut [Chain]) {
     }
 }
 
-/// Stage label of the release of a start held to a short period ([`hold_the_period`]).
+/// Stage label of the release of a start held to a short period (`hold_the_period`).
 pub const RELEASE_PERIOD_LABEL: &str = "release the period";
 
 /// The coarse sampling of `policy` and the settings of its mesh, where it applies

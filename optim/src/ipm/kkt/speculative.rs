@@ -107,7 +107,7 @@ impl Speculator {
     /// Whether a core looks idle from the calling thread: the share of the wall time since
     /// the last call that it spent waiting for a core (Linux `/proc/thread-self/schedstat`,
     /// its second field), halved with each call and averaged with the new share, is below
-    /// [`MAX_RUN_QUEUE_WAIT`]. Without that file (other systems): always.
+    /// `MAX_RUN_QUEUE_WAIT`. Without that file (other systems): always.
     pub fn idle_core(&mut self) -> bool {
         let Some(wait) = std::fs::read_to_string("/proc/thread-self/schedstat")
             .ok()
