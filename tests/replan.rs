@@ -202,7 +202,7 @@ fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
 #[ignore = "two default searches and 14 runs with re-plans, about 17 min under load; run with `cargo test \
             --release --test replan targets_with_replanning -- --ignored --nocapture`"]
 fn targets_with_replanning_on_every_plant() {
-    use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs_replanned};
+    use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs};
     const PERIODS: usize = 10;
     let mut failures = Vec::new();
     for (problem, asserted) in [("periodic-qc", true), ("periodic-cot-human", false)] {
@@ -216,7 +216,7 @@ fn targets_with_replanning_on_every_plant() {
             Some(REPLAN_MAX_ITER),
         )
         .map(|t| ("nominal".to_string(), Ok(t)));
-        let runs = std::iter::once(nominal.unwrap()).chain(robustness_runs_replanned(
+        let runs = std::iter::once(nominal.unwrap()).chain(robustness_runs(
             &sol,
             ControllerKind::Hybrid,
             PERIODS,

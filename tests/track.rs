@@ -687,7 +687,7 @@ fn default_optima_meet_the_nominal_target_for_fifty_periods() {
 #[ignore = "three default searches and 24 runs of 50 periods, about 8 min; run with \
             `cargo test --release --test track perturbed_plants -- --ignored --nocapture`"]
 fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
-    use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs};
+    use ball_finger::paper::closed_loop::robustness_rows;
     let mut failures = Vec::new();
     for (problem, controller, asserted) in [
         ("periodic-qc", ControllerKind::Hybrid, true),
@@ -696,27 +696,10 @@ fn perturbed_plants_meet_the_robustness_target_for_fifty_periods() {
         ("periodic-cot", ControllerKind::HybridUnbounded, false),
     ] {
         let sol = cli::multistart_optimum(problem, &[]);
-        for (case, run) in robustness_runs(&sol, controller, 50) {
-            let t = run.unwrap();
-            let later = max_error_from_fourth(&t);
-            let tau = t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max);
-            eprintln!(
-                "{problem} {} {case}: {} periods, 1st {:.2} %, max from the 4th {} %, max |τ| \
-                 {tau:.3} N m, lost: {:?}",
-                controller.name(),
-                t.periods.len(),
-                t.periods
-                    .first()
-                    .map_or(f64::NAN, |p| 100.0 * p.omega_error),
-                later.map_or("—".into(), |e| format!("{:.2}", 100.0 * e)),
-                t.lost
-            );
-            let met = t.lost.is_none()
-                && t.periods.len() == 50
-                && t.periods.iter().all(|p| p.contact)
-                && later.is_some_and(|e| e <= 0.05);
-            if asserted && !met {
-                failures.push(format!("{problem} {case}"));
+        for r in robustness_rows(&sol, controller, 50, None) {
+            eprintln!("{problem} {}: {r:?}", controller.name());
+            if asserted && !r.meets_target {
+                failures.push(format!("{problem} {}", r.plant));
             }
         }
     }

@@ -534,19 +534,10 @@ fn robustness_cases() -> Vec<Case> {
 }
 
 /// Runs `controller` on the optimum `sol` for `periods` periods against every plant of the
-/// robustness table (perturbed copies of the solution's own scene); each run with its row's
-/// name.
+/// robustness table (perturbed copies of the solution's own scene), re-planning at every
+/// lift-off with `replan` = `Some(max_iter)` ([`run_tracking_replanned`]); each run with its
+/// row's name.
 pub fn robustness_runs(
-    sol: &OcpSolution,
-    controller: ControllerKind,
-    periods: usize,
-) -> Vec<(String, Result<Tracking>)> {
-    robustness_runs_replanned(sol, controller, periods, None)
-}
-
-/// [`robustness_runs`], re-planning at every lift-off with `replan` = `Some(max_iter)`
-/// ([`run_tracking_replanned`]).
-pub fn robustness_runs_replanned(
     sol: &OcpSolution,
     controller: ControllerKind,
     periods: usize,
@@ -596,14 +587,14 @@ pub struct RobustnessRow {
 }
 
 /// The rows of the robustness table: `controller` on the optimum `sol` for `periods` periods
-/// against each plant of [`robustness_runs_replanned`].
+/// against each plant of [`robustness_runs`].
 pub fn robustness_rows(
     sol: &OcpSolution,
     controller: ControllerKind,
     periods: usize,
     replan: Option<usize>,
 ) -> Vec<RobustnessRow> {
-    robustness_runs_replanned(sol, controller, periods, replan)
+    robustness_runs(sol, controller, periods, replan)
         .into_iter()
         .map(|(plant, run)| match run {
             Ok(t) => {

@@ -44,6 +44,40 @@ pub fn bound_hits(quantities: &[(String, Vec<f64>, (f64, f64))]) -> Vec<ActiveBo
     out
 }
 
+/// The constraint rows of `ocp` on phase durations alone (point functions of one bounded row
+/// whose variables are all durations): the phases each one reads, and its bounds. The period
+/// row of the periodic problems reads every phase.
+pub fn duration_rows(ocp: &Ocp) -> Vec<(Vec<usize>, (f64, f64))> {
+    ocp.points
+        .iter()
+        .filter_map(|pf| {
+            let phases: Option<Vec<usize>> = pf
+                .vars
+                .iter()
+                .map(|(_, v)| match v {
+                    VarRef::Duration(i) => Some(*i),
+                    _ => None,
+                })
+                .collect();
+            match (phases, pf.bounds.as_slice()) {
+                (Some(ph), [b]) => Some((ph, *b)),
+                _ => None,
+            }
+        })
+        .collect()
+}
+
+/// The period row's bounds of `ocp` (the [`duration_rows`] entry that reads every phase);
+/// `None` if it has none (`periodic-qc` without `ProblemSettings::period_bounds`).
+pub fn period_row(ocp: &Ocp) -> Option<(f64, f64)> {
+    let n = ocp.phases.len();
+    duration_rows(ocp).into_iter().find_map(|(mut ph, b)| {
+        ph.sort_unstable();
+        ph.dedup();
+        (ph.len() == n).then_some(b)
+    })
+}
+
 /// The bounds of `ocp` that `sol` sits on: each phase's duration bounds, every constraint row
 /// on phase durations alone (the period), the control bounds (torque limits, at the
 /// collocation nodes) and the state bounds (joint limits, at the state points). Constraints
@@ -64,27 +98,17 @@ pub fn active_bounds(ocp: &Ocp, sol: &OcpSolution) -> Vec<ActiveBound> {
             ph.duration_bounds,
         ));
     }
-    for pf in &ocp.points {
-        let phases: Option<Vec<usize>> = pf
-            .vars
+    for (ph, b) in duration_rows(ocp) {
+        let sum = ph
             .iter()
-            .map(|(_, v)| match v {
-                VarRef::Duration(i) => Some(*i),
-                _ => None,
-            })
-            .collect();
-        if let (Some(ph), [b]) = (phases, pf.bounds.as_slice()) {
-            let sum = ph
-                .iter()
-                .map(|&i| sol.phase_durations.get(i).copied().unwrap_or(f64::NAN))
-                .sum::<f64>();
-            let what = if ph.len() == sol.phase_durations.len() {
-                "period (s)".to_string()
-            } else {
-                format!("sum of the durations of phases {ph:?} (s)")
-            };
-            q.push((what, vec![sum], *b));
-        }
+            .map(|&i| sol.phase_durations.get(i).copied().unwrap_or(f64::NAN))
+            .sum::<f64>();
+        let what = if ph.len() == sol.phase_durations.len() {
+            "period (s)".to_string()
+        } else {
+            format!("sum of the durations of phases {ph:?} (s)")
+        };
+        q.push((what, vec![sum], b));
     }
     for (p, (ph, tr)) in ocp.phases.iter().zip(&sol.raw).enumerate() {
         for (i, b) in ph.u_bounds.iter().enumerate() {

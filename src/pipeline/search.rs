@@ -35,7 +35,6 @@ use std::time::Instant;
 
 use bf_optim::ipm::Nlp;
 use bf_optim::ocp::Scheme;
-use bf_optim::terms::VarRef;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -562,7 +561,7 @@ pub fn search(
     let sampled_on = coarse.as_ref().map_or(settings, |(_, s)| s);
     let (target, mut chains) =
         prepare_chains(problem, sampled_on, strategy, policy.stick_continuation)?;
-    if policy.hops.is_some() && period_row(&target).is_some() {
+    if policy.hops.is_some() && super::bounds::period_row(&target.ocp).is_some() {
         hold_the_period(&mut chains);
     }
     let land = OcpLandscape {
@@ -607,21 +606,8 @@ pub fn search(
     Ok(found)
 }
 
-/// The period row of `p` (the point function with one output, the sum of every phase's
-/// duration) and its bounds; `None` if it has none (`periodic-qc` without
-/// [`ProblemSettings::period_bounds`]).
-pub fn period_row(p: &BuiltProblem) -> Option<(usize, (f64, f64))> {
-    let n = p.ocp.phases.len();
-    p.ocp.points.iter().enumerate().find_map(|(i, f)| {
-        let durations = f.vars.len() == n
-            && (0..n).all(|k| f.vars.iter().any(|(_, v)| *v == VarRef::Duration(k)))
-            && f.vars.iter().all(|(_, v)| matches!(v, VarRef::Duration(_)));
-        (durations && f.outputs.len() == 1 && f.bounds.len() == 1).then(|| (i, f.bounds[0]))
-    })
-}
-
 /// The period continuation of the global search's starts on a problem with a period row
-/// ([`period_row`]: the COT problems): every odd start is first solved with its period at
+/// ([`super::bounds::period_row`]: the COT problems): every odd start is first solved with its period at
 /// most its start's (the sum of the start's durations, 0.15–4.8 s,
 /// [`super::strategy::random_start`]), then released warm to the problem's period bounds (at
 /// most [`HOP_MAX_ITER`] iterations). The COT ratio pulls a cold start to the period's 10 s
@@ -1176,7 +1162,8 @@ mod tests {
         };
         let p = Problem::PeriodicCotHuman;
         let (target, plain) = prepare_chains(p, &coarse, strategy, None).expect("builds");
-        let (_, (_, tmax)) = super::period_row(&target).expect("COT bounds its period");
+        let (_, tmax) =
+            crate::pipeline::bounds::period_row(&target.ocp).expect("COT bounds its period");
         let mut held = plain.clone();
         super::hold_the_period(&mut held);
         for k in (0..28).step_by(2) {
@@ -1220,7 +1207,7 @@ mod tests {
         );
 
         let qc = crate::pipeline::build(Problem::PeriodicQc, &coarse).expect("builds");
-        assert_eq!(super::period_row(&qc), None);
+        assert_eq!(crate::pipeline::bounds::period_row(&qc.ocp), None);
     }
 
     /// Shards sample what the unsharded search samples, held starts included: the held
