@@ -15,7 +15,7 @@
 use std::hint::black_box;
 
 use ball_finger::pipeline::{build, solve};
-use bf_optim::ipm::{LinearSolverSettings, Settings, TerminationSettings};
+use bf_optim::ipm::{LinearSolverSettings, Settings};
 use bf_optim::ocp::Scheme;
 use bf_problem::{Problem, ProblemSettings};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -38,12 +38,8 @@ fn bench(c: &mut Criterion) {
     // The cold solve's settings (tolerance 1e-8) with other linear-solver settings.
     let with = |s: &ProblemSettings, linear_solver: LinearSolverSettings| ProblemSettings {
         ipm: Some(Settings {
-            termination: TerminationSettings {
-                tol: 1e-8,
-                ..Default::default()
-            },
             linear_solver,
-            ..Settings::default()
+            ..ball_finger::pipeline::solver_settings(s)
         }),
         ..s.clone()
     };

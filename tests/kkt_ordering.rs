@@ -9,9 +9,7 @@
 
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{build, solve};
-use bf_optim::ipm::{
-    ExperimentalSettings, KktOrdering, LinearSolverSettings, Settings, Status, TerminationSettings,
-};
+use bf_optim::ipm::{ExperimentalSettings, KktOrdering, LinearSolverSettings, Settings, Status};
 use bf_optim::ocp::Scheme;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 use std::time::Duration;
@@ -198,12 +196,8 @@ fn speculative_factorization_changes_no_path() {
 fn periodic_qc(mesh: ProblemSettings, linear_solver: LinearSolverSettings) -> OcpSolution {
     let s = ProblemSettings {
         ipm: Some(Settings {
-            termination: TerminationSettings {
-                tol: 1e-8,
-                ..Default::default()
-            },
             linear_solver,
-            ..Settings::default()
+            ..ball_finger::pipeline::solver_settings(&mesh)
         }),
         ..mesh
     };
