@@ -115,6 +115,15 @@ fn newton_plan_markdown(
     Ok(format!("{head}\n{table}"))
 }
 
+/// Appends the report section `md` to `report`, or, where it could not be made, one line
+/// `failed: why` in its place (the report goes on with its other sections).
+fn section(report: &mut String, md: Result<String>, failed: &str) -> std::fmt::Result {
+    match md {
+        Ok(md) => writeln!(report, "{md}"),
+        Err(e) => writeln!(report, "{failed}: {}\n", crate::errors::render(&e)),
+    }
+}
+
 /// The output directory of `paper`.
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     option: "--out",
@@ -424,15 +433,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             Some(&dir.join("figures")),
         );
         pb.finish();
-        match md {
-            Ok(md) => writeln!(report, "{md}")?,
-            Err(e) => writeln!(
-                report,
-                "`{}`: not executed: {}\n",
-                r.name,
-                crate::errors::render(&e)
-            )?,
-        }
+        section(&mut report, md, &format!("`{}`: not executed", r.name))?;
     }
     // The human finger's COT problem planned with the plant's impact law (eq. 39, decision
     // 0033), warm-started from its sticking optimum above: under the 1 N m bound the hybrid
@@ -446,14 +447,11 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         let pb = stage(1, "Newton plan");
         let md = newton_plan_markdown(&human.solution, &dir);
         pb.finish();
-        match md {
-            Ok(md) => writeln!(report, "{md}")?,
-            Err(e) => writeln!(
-                report,
-                "The Newton plan of `periodic-cot-human` failed: {}\n",
-                crate::errors::render(&e)
-            )?,
-        }
+        section(
+            &mut report,
+            md,
+            "The Newton plan of `periodic-cot-human` failed",
+        )?;
     }
     // The hybrid controller against perturbed plants: the default QC optimum only (the paper
     // scene's; 0.6 s periods), 10 periods, to keep the report's time. Not with --quick: its
@@ -465,14 +463,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     {
         let periods = 10;
         let md = crate::paper::closed_loop::robustness_markdown(&qc.name, &qc.solution, periods);
-        match md {
-            Ok(md) => writeln!(report, "{md}")?,
-            Err(e) => writeln!(
-                report,
-                "Robustness table not run: {}\n",
-                crate::errors::render(&e)
-            )?,
-        }
+        section(&mut report, md, "Robustness table not run")?;
     }
 
     // Stage 6: stability at the extremes.
