@@ -327,6 +327,15 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         e.contains("another scene file text") && e.contains("line"),
         "{e}"
     );
+    // A shard planned with another friction-cone margin is another problem.
+    let other_margin = copy("other-margin");
+    let mut sol = json(&other_margin.join("solution.json"));
+    sol["cone_margin"] = serde_json::json!(0.2);
+    std::fs::write(other_margin.join("solution.json"), sol.to_string()).unwrap();
+    let o = merge_with(&other_margin);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("cone margin 2e-1"), "{e}");
     // Shards verified with other tolerances are refused, naming the option.
     let other_rtol = copy("other-rtol");
     let mut sol = json(&other_rtol.join("solution.json"));
