@@ -71,8 +71,12 @@
 //!
 //! **Outer loop:** at the end of each period (when the reference wraps to its first phase) the
 //! measured mean ω̄ of that period moves the ω offset of the contact phases,
-//! δ ← δ + (γ/ρ) (ω̄* − ω̄), with ‖δ‖ ≤ 0.5 ‖ω*_lo‖ (anti-windup), ω*_lo the planned ω at
-//! lift-off and ρ = ‖ω̄‖ / ‖ω_lo‖ the period's measured ratio of its mean ω to its lift-off
+//! δ ← δ + (γ/ρ) P (ω̄* − ω̄), with ‖δ‖ ≤ 0.5 ‖ω*_lo‖ (anti-windup), ω*_lo the planned ω at
+//! lift-off, P = 1 − r̂ r̂ᵀ with r̂ the direction of the contact point r_c at the period's
+//! lift-off (every contact force's moment r_c × λ is normal to r_c, so no contact phase
+//! changes the spin about r̂: integrated, that part of the error wound δ up against the
+//! socket damping alone, and its leak into the tangential force saturated the actuators),
+//! and ρ = ‖ω̄‖ / ‖ω_lo‖ the period's measured ratio of its mean ω to its lift-off
 //! ω (the plan's ‖ω̄*‖ / ‖ω*_lo‖ for a period without lift-off; in [0.05, 1]). δ moves the
 //! ω the contact phase leaves the ball with, and the flight's socket damping (eq. 29b, ω
 //! decays as e^{−D t / I_b}) passes only the share ρ of it on to the period's mean: ρ ≈ 0.2
@@ -316,6 +320,9 @@ struct Discrete {
     omega_last: [f64; 3],
     /// ‖ω‖ at the last lift-off (rad/s), 0 before the first.
     lift_off_omega: f64,
+    /// Unit vector of the contact point r_c at the last lift-off (from the ball's centre),
+    /// zero before the first: the direction of ω no contact force can change.
+    lift_off_contact: [f64; 3],
     period_start: f64,
     periods: usize,
     slips: usize,
@@ -428,6 +435,7 @@ impl<K: Kernels<3>> HybridController<K> {
             omega_int: [0.0; 3],
             omega_last: omega,
             lift_off_omega: 0.0,
+            lift_off_contact: [0.0; 3],
             period_start: t0,
             periods: 0,
             slips: 0,
@@ -904,9 +912,15 @@ impl<K: Kernels<3>> HybridController<K> {
             } else {
                 self.sensitivity
             };
+            // Every contact force acts at r_c, so its moment r_c × λ is normal to r_c: the
+            // spin about the contact point's direction is the socket damping's alone. An
+            // error along it is left out of δ, which would otherwise wind up against it
+            // (and through the contact point's motion leak into the tangential force).
+            let error = Vec3::from(self.mean_omega) - Vec3::from(mean);
+            let axis = Vec3::from(d.lift_off_contact);
+            let error = error - axis * axis.dot(&error);
             for i in 0..3 {
-                d.omega_offset[i] +=
-                    self.gains.outer / sensitivity * (self.mean_omega[i] - mean[i]);
+                d.omega_offset[i] += self.gains.outer / sensitivity * error[i];
             }
             // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
             // (and with it the contact forces) without bound.
@@ -918,6 +932,7 @@ impl<K: Kernels<3>> HybridController<K> {
         }
         d.omega_int = [0.0; 3];
         d.lift_off_omega = 0.0;
+        d.lift_off_contact = [0.0; 3];
         d.period_start = t;
         d.periods += 1;
     }
@@ -1191,6 +1206,10 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                 if was_contact != is_contact {
                     if was_contact {
                         d.lift_off_omega = Vec3::from(omega).norm();
+                        d.lift_off_contact = State::<3>::from_slice(m.x)
+                            .and_then(|s| self.model.evaluate(&s).ok())
+                            .and_then(|kin| kin.contact.r_c.try_normalize(0.0))
+                            .map_or([0.0; 3], |u| [u[0], u[1], u[2]]);
                     }
                     let in_contact_phase = plan.reference.phases[d.phase].contact;
                     if in_contact_phase != is_contact {

@@ -204,6 +204,13 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             sol.impact_law.name(),
             law.name()
         );
+        if law.name() == "newton" {
+            eprintln!(
+                "note: plans that the hybrid controller executes on a Newton plant, also with \
+                 model error: `optimize --impact-law newton --torque-margin 0.3` \
+                 (docs/decisions/0038-plan-margins.md)"
+            );
+        }
     }
     crate::outln!(
         "controller {}, plant {plant_name}, impact law {}: {} of {} periods, max omega error {:.3} %",
