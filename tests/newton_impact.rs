@@ -132,16 +132,19 @@ fn a_newton_plan_keeps_omega_matches_the_plants_law_and_is_tracked() {
     let gap = (vec(&nodes.qd[first]) - newton.qd).norm();
     eprintln!("ḣ⁻ = {}, ‖q̇⁺ − q̇_N‖ = {gap}", kin.contact.h_dot);
     // The plan's contact is the ε-smoothed one (eq. 58–59), bf-model's the exact one: both
-    // bounds hold up to that difference (measured on the 4-start plan: ḣ⁻ = −0.09995 m/s,
-    // ‖q̇⁺ − q̇_N‖ = 1.08·10⁻³ rad/s).
+    // bounds hold up to that difference, which acts on q̇⁻ through J_c and so grows with it
+    // (measured on 4-start plans: ḣ⁻ = −0.09995 m/s, ‖q̇⁺ − q̇_N‖ = 1.08·10⁻³ rad/s; with the
+    // conditioning row ḣ⁻ = −5.80 m/s, 1.52·10⁻³ rad/s). A plan that ignored Newton's law
+    // would be off by the order of ‖q̇⁻‖ itself.
     assert!(
         kin.contact.h_dot <= -NEWTON_APPROACH_SPEED * (1.0 - 1e-3),
         "ḣ⁻ = {}",
         kin.contact.h_dot
     );
+    let allowance = NEWTON_VELOCITY_LIMIT * 1.5 + 1e-3 * pre.qd.norm();
     assert!(
-        gap <= NEWTON_VELOCITY_LIMIT * 1.5,
-        "q̇⁺ {:?} vs the plant's {}: {gap}",
+        gap <= allowance,
+        "q̇⁺ {:?} vs the plant's {}: {gap} > {allowance}",
         nodes.qd[first],
         newton.qd
     );
@@ -196,6 +199,41 @@ fn the_newton_planned_qc_optimum_of_the_global_search_meets_the_nominal_and_robu
     let sol = ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
     std::fs::remove_dir_all(&dir).ok();
     meets_the_nominal_and_robustness_targets_bounded(&sol);
+}
+
+/// One setting for both default problems: `optimize --impact-law newton --torque-margin 0.3`
+/// (the plan keeps 30 % of every actuator's range for the feedback, decision 0038) gives a
+/// `periodic-qc` and a `periodic-cot-human` plan of the default global search that meet both
+/// closed-loop targets under the 1 N m bound. Without the margin the human finger's search
+/// ends in a plan whose torques ride the bound (socket damping ×1.5: 16 %); with it, before
+/// the outer loop left out the spin about the contact point, the QC plan missed the target
+/// with heavier links (11.6 %).
+#[test]
+#[ignore = "two global Newton searches (about 1.5 min of CPU) and 14 runs of 50 periods; run \
+            with `cargo test --release --test newton_impact -- --ignored --nocapture`"]
+fn with_a_torque_margin_both_default_newton_searches_meet_the_nominal_and_robustness_targets() {
+    use ball_finger::pipeline::SolutionIo;
+    for problem in ["periodic-qc", "periodic-cot-human"] {
+        let dir = cli::tmpdir(&format!("{problem}-newton-margin"));
+        let r = cli::run(&[
+            "optimize",
+            "--problem",
+            problem,
+            "--impact-law",
+            "newton",
+            "--torque-margin",
+            "0.3",
+            "--out",
+            dir.to_str().unwrap(),
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        let sol =
+            ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        assert_eq!(sol.torque_margin, 0.3);
+        eprintln!("{problem}: J = {}", sol.objective);
+        meets_the_nominal_and_robustness_targets_bounded(&sol);
+    }
 }
 
 /// Asserts the closed-loop targets on the Newton plan `sol`, torques bounded: 50 periods on the

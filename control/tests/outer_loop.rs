@@ -100,7 +100,11 @@ fn the_outer_loop_corrects_the_error_the_contact_can_change_and_nothing_along_r_
     }
     assert_eq!(law.periods(), 0);
     step(0.1, Mode::Free, Some(Mode::Stick));
-    assert_eq!(law.periods(), 1, "the lift-off after the last phase ends the period");
+    assert_eq!(
+        law.periods(),
+        1,
+        "the lift-off after the last phase ends the period"
+    );
 
     // ρ = ‖ω̄‖ / ‖ω_lo‖ = 1 for a constant ω: δ = γ P (ω* − ω) = −γ 0.1 n̂.
     let delta = Vec3::from(law.omega_offset());
