@@ -548,8 +548,11 @@ pub fn robustness_runs(
     } else {
         &sol.scene
     };
+    // The plants are independent runs: one per thread, collected in the table's order, so
+    // the table does not depend on the thread count.
+    use rayon::prelude::*;
     robustness_cases()
-        .into_iter()
+        .into_par_iter()
         .map(|(case, edits, law)| {
             let run = perturbed_scene(scene, &edits).and_then(|plant| {
                 run_tracking_replanned(sol, controller, periods, plant, law, replan)
