@@ -777,3 +777,22 @@ fn report_tables_run_every_plant_and_controller() {
     assert!(svg.contains("hybrid-unbounded") && svg.contains("open-loop"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The robustness table's six plants run in parallel; the table is the same, bit for bit, on
+/// one thread and on two (each plant an independent run, collected in the table's order).
+#[test]
+fn the_robustness_table_is_the_same_on_one_thread_and_on_two() {
+    use ball_finger::paper::closed_loop::robustness_rows;
+    let table = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let rows =
+            pool.install(|| robustness_rows(cli::qc_optimum(), ControllerKind::Hybrid, 3, None));
+        serde_json::to_string(&rows).unwrap()
+    };
+    let one = table(1);
+    assert!(one.contains("all four"), "{one}");
+    assert_eq!(one, table(2));
+}
