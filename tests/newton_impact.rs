@@ -189,20 +189,10 @@ fn the_newton_planned_human_optimum_meets_the_nominal_and_robustness_targets_bou
             periods; run with `cargo test --release --test newton_impact -- --ignored \
             --nocapture`"]
 fn the_newton_planned_qc_optimum_of_the_global_search_meets_the_nominal_and_robustness_targets() {
-    use ball_finger::pipeline::SolutionIo;
-    let dir = cli::tmpdir("qc-newton-global");
-    let r = cli::run(&[
-        "optimize",
-        "--problem",
-        "periodic-qc",
-        "--impact-law",
-        "newton",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let sol = ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
-    std::fs::remove_dir_all(&dir).ok();
+    let sol = optimized(
+        "qc-newton-global",
+        &["--problem", "periodic-qc", "--impact-law", "newton"],
+    );
     meets_the_nominal_and_robustness_targets_bounded(&sol);
 }
 
@@ -218,29 +208,26 @@ fn the_newton_planned_qc_optimum_of_the_global_search_meets_the_nominal_and_robu
 fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robust() {
     use ball_finger::paper::closed_loop::{NOMINAL_TARGET, robustness_rows};
     use ball_finger::pipeline::SolutionIo;
-    let dir = cli::tmpdir("plan-to-execute");
+    let dir = cli::tmpdir("plan-to-execute-sticking");
     let sticking = dir.join("sticking.json");
     cli::qc_optimum().write_json(&sticking).unwrap();
-    let out = dir.join("plan");
-    let r = cli::run(&[
-        "optimize",
-        "--problem",
-        "periodic-qc",
-        "--impact-law",
-        "newton",
-        "--torque-margin",
-        "0.3",
-        "--cone-margin",
-        "0.2",
-        "--strategy",
-        "direct",
-        "--warm-start",
-        sticking.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-    let sol = ball_finger::pipeline::OcpSolution::read_json(&out.join("solution.json")).unwrap();
+    let sol = optimized(
+        "plan-to-execute",
+        &[
+            "--problem",
+            "periodic-qc",
+            "--impact-law",
+            "newton",
+            "--torque-margin",
+            "0.3",
+            "--cone-margin",
+            "0.2",
+            "--strategy",
+            "direct",
+            "--warm-start",
+            sticking.to_str().unwrap(),
+        ],
+    );
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(sol.impact_law, PlannedImpact::Newton);
     let (plant, _) = solution_model(&sol).unwrap();
@@ -269,28 +256,37 @@ fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robus
 #[ignore = "two global Newton searches (about 1.5 min of CPU) and 14 runs of 50 periods; run \
             with `cargo test --release --test newton_impact -- --ignored --nocapture`"]
 fn with_a_torque_margin_both_default_newton_searches_meet_the_nominal_and_robustness_targets() {
-    use ball_finger::pipeline::SolutionIo;
     for problem in ["periodic-qc", "periodic-cot-human"] {
-        let dir = cli::tmpdir(&format!("{problem}-newton-margin"));
-        let r = cli::run(&[
-            "optimize",
-            "--problem",
-            problem,
-            "--impact-law",
-            "newton",
-            "--torque-margin",
-            "0.3",
-            "--out",
-            dir.to_str().unwrap(),
-        ]);
-        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
-        let sol =
-            ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
-        std::fs::remove_dir_all(&dir).ok();
+        let sol = optimized(
+            &format!("{problem}-newton-margin"),
+            &[
+                "--problem",
+                problem,
+                "--impact-law",
+                "newton",
+                "--torque-margin",
+                "0.3",
+            ],
+        );
         assert_eq!(sol.torque_margin, 0.3);
         eprintln!("{problem}: J = {}", sol.objective);
         meets_the_nominal_and_robustness_targets_bounded(&sol);
     }
+}
+
+/// The solution of `optimize ARGS --out DIR` (a temporary `DIR` named after `name`, removed
+/// afterwards); the command must succeed.
+fn optimized(name: &str, args: &[&str]) -> ball_finger::pipeline::OcpSolution {
+    use ball_finger::pipeline::SolutionIo;
+    let dir = cli::tmpdir(name);
+    let mut all = vec!["optimize"];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", dir.to_str().unwrap()]);
+    let r = cli::run(&all);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let sol = ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    sol
 }
 
 /// Asserts the closed-loop targets on the Newton plan `sol`, torques bounded: 50 periods on the

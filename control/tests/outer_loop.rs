@@ -14,18 +14,14 @@
 //! against the closed form: the normal part corrected with the gain γ (ρ = 1 for a constant
 //! ω), nothing along r_c.
 
+use bf_control::Reference;
 use bf_control::reference::Samples;
-use bf_control::{HybridController, HybridGains, InverseDynamics, Reference};
-use bf_model::{Kernels, Mode, State, Vec3, VecN};
+use bf_model::{Mode, State, Vec3, VecN};
 use bf_sim::{Input, Measurement};
 
-/// A posture of the paper finger touching the ball (h = 0): link 2 folded back onto link 1,
-/// link 3 across the ball's near side where the world x axis pierces it.
-const TOUCHING: [f64; 3] = [
-    -std::f64::consts::FRAC_PI_2,
-    std::f64::consts::PI,
-    -std::f64::consts::FRAC_PI_2,
-];
+mod common;
+
+use common::TOUCHING;
 
 #[test]
 fn the_outer_loop_corrects_the_error_the_contact_can_change_and_nothing_along_r_c() {
@@ -62,15 +58,7 @@ fn the_outer_loop_corrects_the_error_the_contact_can_change_and_nothing_along_r_
         [omega_star[0], omega_star[1], omega_star[2]],
     )
     .unwrap();
-    let id = InverseDynamics::compiled(
-        "paper",
-        model.kernels().param_values(),
-        model.params().mu_v(),
-    )
-    .unwrap();
-    let gains = HybridGains::default();
-    let x0: Vec<f64> = q.iter().copied().chain([0.0; 6]).collect();
-    let law = HybridController::new(model.clone(), id, reference, gains, 0.0, &x0).unwrap();
+    let (law, gains) = common::controller(&model, reference, q);
 
     // The measured ball: ω* plus 0.3 rad/s along r_c and 0.1 rad/s normal to both.
     let normal = axis.cross(&omega_star).normalize();

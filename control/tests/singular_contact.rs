@@ -12,20 +12,14 @@
 //!   law's tracking asks: (M q̈)₁ − (M q̈*)₁ = M₁₁ K_d (q̇₁* − q̇₁), the computed-torque law's
 //!   closed form in the one direction where the contact exerts no torque.
 
+use bf_control::Reference;
 use bf_control::reference::Samples;
-use bf_control::{HybridController, HybridGains, InverseDynamics, Reference};
-use bf_model::{Kernels, Mode, State, Vec3, VecN};
+use bf_model::{Mode, State, Vec3, VecN};
 use bf_sim::Input;
 
-/// The paper finger's posture q = (−π/2, π, −π/2): link 2 folded back onto link 1, link 3
-/// across the ball's near side, touching it (h = 0) where joint 1's axis (the world x axis
-/// through the ball's centre) pierces it. The Newton-planned QC optimum of the global search
-/// impacts there.
-const SINGULAR: [f64; 3] = [
-    -std::f64::consts::FRAC_PI_2,
-    std::f64::consts::PI,
-    -std::f64::consts::FRAC_PI_2,
-];
+mod common;
+
+use common::TOUCHING as SINGULAR;
 
 #[test]
 fn joint_motion_that_keeps_the_contact_point_follows_the_free_law() {
@@ -64,15 +58,7 @@ fn joint_motion_that_keeps_the_contact_point_follows_the_free_law() {
         [0.0; 3],
     )
     .unwrap();
-    let id = InverseDynamics::compiled(
-        "paper",
-        model.kernels().param_values(),
-        model.params().mu_v(),
-    )
-    .unwrap();
-    let gains = HybridGains::default();
-    let x0: Vec<f64> = q.iter().copied().chain([0.0; 6]).collect();
-    let law = HybridController::new(model.clone(), id, reference, gains, 0.0, &x0).unwrap();
+    let (law, gains) = common::controller(&model, reference, q);
     // The plant turns joint 1 at 0.3 rad/s: the contact point stays where it is (Δv = 0).
     let qd = [0.3, 0.0, 0.0];
     let moving = State::new(VecN::from(q), VecN::from(qd), Vec3::zeros());
