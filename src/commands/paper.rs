@@ -462,9 +462,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     }
     // The hybrid controller against perturbed plants: the QC optimum (the paper scene's;
     // 0.6 s periods) beside the Newton plan's table above, 10 periods each, to keep the
-    // report's time. Not with --quick: its
-    // cold direct QC optimum rides the torque bound, where the saturated controller has no
-    // feedback left (BENCHMARKS.md).
+    // report's time. Not with --quick: its cold direct QC optimum rides the torque bound,
+    // where the saturated controller has no feedback left (BENCHMARKS.md).
     if let Some(qc) = results
         .iter()
         .find(|r| r.name == "periodic-qc" && !args.quick)
