@@ -274,9 +274,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                  periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
                  relaxes it to 0.01 s); every end point is re-integrated and the best \
                  verified one kept (see ball_finger::pipeline::search). Not `optimize`'s \
-                 default global search: its COT searches take minutes, and its lower optima \
-                 are taps that a Newton plant cannot execute (docs/optima.md, decision \
-                 record 0029)",
+                 default global search: with it this report takes about twice as long, \
+                 beyond its 90 s (decision record 0039), and its lower optima are taps \
+                 that a Newton plant cannot execute (docs/optima.md, decision record 0029)",
                 crate::pipeline::strategy::multistart_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme
