@@ -778,21 +778,25 @@ fn report_tables_run_every_plant_and_controller() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The robustness table's six plants run in parallel; the table is the same, bit for bit, on
-/// one thread and on two (each plant an independent run, collected in the table's order).
+/// The robustness table's six plants and the comparison's four controllers run in parallel;
+/// both tables are the same, bit for bit, on one thread and on two (each row an independent
+/// run, collected in the table's order).
 #[test]
-fn the_robustness_table_is_the_same_on_one_thread_and_on_two() {
-    use ball_finger::paper::closed_loop::robustness_rows;
-    let table = |threads: usize| {
+fn the_report_tables_are_the_same_on_one_thread_and_on_two() {
+    use ball_finger::paper::closed_loop::{comparison_markdown, robustness_rows};
+    let tables = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap();
-        let rows =
-            pool.install(|| robustness_rows(cli::qc_optimum(), ControllerKind::Hybrid, 3, None));
-        serde_json::to_string(&rows).unwrap()
+        pool.install(|| {
+            let rows = robustness_rows(cli::qc_optimum(), ControllerKind::Hybrid, 3, None);
+            let comparison = comparison_markdown("periodic-qc", cli::qc_optimum(), 3, None);
+            (serde_json::to_string(&rows).unwrap(), comparison.unwrap())
+        })
     };
-    let one = table(1);
-    assert!(one.contains("all four"), "{one}");
-    assert_eq!(one, table(2));
+    let one = tables(1);
+    assert!(one.0.contains("all four"), "{}", one.0);
+    assert!(one.1.contains("| hybrid-unbounded |"), "{}", one.1);
+    assert_eq!(one, tables(2));
 }

@@ -291,19 +291,24 @@ pub fn comparison_markdown(
     // The nominal plant and the text below: Newton's law (eq. 39), not the simulator's
     // default (the sticking impact, which hides the slip after every impact).
     let law = ImpactLaw::Newton;
-    let mut rows = Vec::new();
-    for controller in [
+    // Independent runs, one per thread, collected in the table's order (the table does not
+    // depend on the thread count).
+    use rayon::prelude::*;
+    let rows = [
         ControllerKind::OpenLoop,
         ControllerKind::Pd,
         ControllerKind::Hybrid,
         ControllerKind::HybridUnbounded,
-    ] {
+    ]
+    .into_par_iter()
+    .map(|controller| {
         let (plant, _) = solution_model(sol)?;
-        rows.push(Row {
+        Ok(Row {
             controller,
             tracking: run_tracking(sol, controller, periods, plant, law),
-        });
-    }
+        })
+    })
+    .collect::<Result<Vec<Row>>>()?;
     // The optimisation's torque bound: the hybrid controller saturates there, the open loop
     // and the PD do not; a run above it is marked.
     let tau_bound = torque_bound(sol)
