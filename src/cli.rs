@@ -97,6 +97,7 @@ pub enum Command {
     /// Execute an optimum in closed loop on the hybrid model (paper Sect. 6.2, 7): open loop,
     /// joint PD, or the hybrid controller (computed torque in free phases, event-timed
     /// force/velocity control in contact). Writes the files of `simulate` plus tracking.json.
+    /// Which plans can be executed, and what to look at when one is not: docs/closed-loop.md.
     ///
     /// Exit status: 0 when every period made contact and all periods completed; 1 when the run
     /// lost the ball (the output set is still written, marked FAILED, and tracking.json says
@@ -527,7 +528,8 @@ pub struct OptimizeArgs {
     /// velocity within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at
     /// 0.1 m/s or faster; 3 joints). A `stick` plan whose stick phase is short spins the ball
     /// mostly by the impact and cannot be executed on a Newton plant; a `newton` plan can
-    /// (docs/optima.md). Recorded in solution.json as `impact_law`.
+    /// (with `--torque-margin 0.3`: a plan to execute, docs/closed-loop.md). Recorded in
+    /// solution.json as `impact_law`.
     #[arg(long, value_name = "LAW", default_value = "stick")]
     pub impact_law: String,
     /// Share of the friction cone the plan's stick phases leave unused, in [0, 1): the plan
@@ -541,8 +543,9 @@ pub struct OptimizeArgs {
     )]
     pub cone_margin: f64,
     /// Share of every joint's torque limit the plan leaves unused, in [0, 1): |τ_i| ≤ (1 − M)
-    /// τ_max,i, so that feedback keeps authority under the limit. Recorded in solution.json
-    /// as `torque_margin`.
+    /// τ_max,i, so that feedback keeps authority under the limit (0.3 with `--impact-law
+    /// newton` gives both default problems plans that `track` executes within its targets,
+    /// docs/closed-loop.md). Recorded in solution.json as `torque_margin`.
     #[arg(
         long,
         value_name = "M",
