@@ -711,19 +711,7 @@ fn the_default_point_limit_lets_the_best_candidate_verify() {
 #[ignore = "about 4 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_reaches_the_best_known_qc_optimum -- --ignored`"]
 fn every_seed_reaches_the_best_known_qc_optimum() {
-    let mut misses = Vec::new();
-    for seed in 0..10 {
-        let seed = seed.to_string();
-        let (_, v) = verified_default_search(
-            &format!("qc-seed-{seed}"),
-            &["--problem", "periodic-qc", "--seed", &seed],
-        );
-        let j = v["objective"].as_f64().unwrap();
-        if j > 0.08761 {
-            misses.push(format!("seed {seed}: J {j}"));
-        }
-    }
-    assert!(misses.is_empty(), "{misses:?}");
+    every_seed_verifies_at_most("periodic-qc", 0.08761);
 }
 
 /// Issue target of the global search for the human finger: the default `periodic-cot-human`
@@ -735,17 +723,23 @@ fn every_seed_reaches_the_best_known_qc_optimum() {
 #[ignore = "about 6 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_reaches_the_best_known_cot_human_optimum -- --ignored`"]
 fn every_seed_reaches_the_best_known_cot_human_optimum() {
+    every_seed_verifies_at_most("periodic-cot-human", 1.02 * 0.0158287);
+}
+
+/// Runs the default search of `problem` for seeds 0–9 and asserts that each verifies at an
+/// objective of at most `target`, naming every seed that does not.
+fn every_seed_verifies_at_most(problem: &str, target: f64) {
     let mut misses = Vec::new();
     for seed in 0..10 {
         let seed = seed.to_string();
         let (_, v) = verified_default_search(
-            &format!("cot-human-seed-{seed}"),
-            &["--problem", "periodic-cot-human", "--seed", &seed],
+            &format!("{problem}-seed-{seed}"),
+            &["--problem", problem, "--seed", &seed],
         );
         let j = v["objective"].as_f64().unwrap();
-        if j > 1.02 * 0.0158287 {
+        if j > target {
             misses.push(format!("seed {seed}: J {j}"));
         }
     }
-    assert!(misses.is_empty(), "{misses:?}");
+    assert!(misses.is_empty(), "{problem}: {misses:?}");
 }

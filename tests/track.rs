@@ -719,16 +719,19 @@ fn report_tables_run_every_plant_and_controller() {
     let work = cli::tmpdir("robustness");
     let sol_path = work.join("solution.json");
     cli::qc_optimum().write_json(&sol_path).unwrap();
+    let robustness = |periods: &str, out: &std::path::Path| {
+        cli::run(&[
+            "track",
+            sol_path.to_str().unwrap(),
+            "--robustness",
+            "--periods",
+            periods,
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
     let out = work.join("out");
-    let r = cli::run(&[
-        "track",
-        sol_path.to_str().unwrap(),
-        "--robustness",
-        "--periods",
-        "5",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let r = robustness("5", &out);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let md = std::fs::read_to_string(out.join("robustness.md")).unwrap();
     let json: serde_json::Value =
@@ -756,15 +759,7 @@ fn report_tables_run_every_plant_and_controller() {
     // A robustness run with too few periods for the 4th-period window misses the target: the
     // directory says FAILED and the exit status says so.
     let short = work.join("short");
-    let r = cli::run(&[
-        "track",
-        sol_path.to_str().unwrap(),
-        "--robustness",
-        "--periods",
-        "2",
-        "--out",
-        short.to_str().unwrap(),
-    ]);
+    let r = robustness("2", &short);
     assert!(!r.status.success());
     assert!(short.join("FAILED").exists());
     std::fs::remove_dir_all(&work).ok();

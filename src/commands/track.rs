@@ -204,11 +204,11 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             sol.impact_law.name(),
             law.name()
         );
-        if law.name() == "newton" {
+        if law == bf_model::ImpactLaw::Newton {
             eprintln!(
                 "note: plans that the hybrid controller executes on a Newton plant, also with \
                  model error: `optimize --impact-law newton --torque-margin 0.3` \
-                 (docs/decisions/0038-plan-margins.md)"
+                 (docs/closed-loop.md)"
             );
         }
     }

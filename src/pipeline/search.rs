@@ -8,8 +8,9 @@
 //!    in the stick phase's lower bound, first ≥ [`STICK_CONTINUATION`], then relaxed to the
 //!    problem's bound; with the global search on the COT problems every odd start a
 //!    continuation in the period bound, `hold_the_period`), one point per distinct optimum
-//!    (objectives within [`CLUSTER_RTOL`], [`representatives`]); with the global search on a coarse mesh ([`CoarseSampling`]),
-//!    otherwise on the problem's mesh, each re-integrated ([`verify`]).
+//!    (objectives within [`CLUSTER_RTOL`], [`representatives`]); with the global search on a
+//!    coarse mesh ([`CoarseSampling`]), otherwise on the problem's mesh, each re-integrated
+//!    ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
 //!    moves ([`super::reshape`]: the elbow flip, the mirror, phase-duration bounds then
 //!    released) from the best distinct shapes (`same_shape`), monotonic basin hopping from
@@ -607,8 +608,8 @@ pub fn search(
 }
 
 /// The period continuation of the global search's starts on a problem with a period row
-/// ([`super::bounds::period_row`]: the COT problems): every odd start is first solved with its period at
-/// most its start's (the sum of the start's durations, 0.15–4.8 s,
+/// ([`super::bounds::period_row`]: the COT problems): every odd start is first solved with
+/// its period at most its start's (the sum of the start's durations, 0.15–4.8 s,
 /// [`super::strategy::random_start`]), then released warm to the problem's period bounds (at
 /// most [`HOP_MAX_ITER`] iterations). The COT ratio pulls a cold start to the period's 10 s
 /// bound: on `periodic-cot-human` seeds 5 and 6 every start, reshaping move and hop ended
