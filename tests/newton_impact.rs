@@ -232,6 +232,75 @@ fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robus
     meets_the_targets_bounded(&sol, 10, 6);
 }
 
+/// A verified-looking plan that grazes the ball is flagged: the same warm start without the
+/// cone margin ends at J = 0.0889, whose approach passes the ball a few µm clear by the
+/// smoothed contact (eq. 58–59) but touches it by the exact one 0.11 s before its impact.
+/// `optimize` reports it unverified (exit 1), naming the touch; and the hybrid simulator, with
+/// the exact contact, replaying the plan's torques open loop strikes the ball there
+/// (within a tenth of the lead), not at the planned impact.
+#[test]
+fn a_plan_that_grazes_the_ball_is_not_verified_and_a_plant_strikes_it_there() {
+    use ball_finger::pipeline::SolutionIo;
+    let dir = cli::tmpdir("grazing-plan");
+    let sticking = dir.join("sticking.json");
+    cli::qc_optimum().write_json(&sticking).unwrap();
+    let out = dir.join("plan");
+    let r = cli::run(&[
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--impact-law",
+        "newton",
+        "--torque-margin",
+        "0.3",
+        "--strategy",
+        "direct",
+        "--warm-start",
+        sticking.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success(), "{stderr}");
+    assert!(stderr.contains("touches the ball"), "{stderr}");
+    let sol = ball_finger::pipeline::OcpSolution::read_json(&out.join("solution.json")).unwrap();
+    let v = sol.verification.as_ref().unwrap();
+    let approach = sol.phase_durations[0];
+    let touch = v.phases[0].first_touch.unwrap();
+    let lead = approach - touch;
+    assert!(
+        lead > 0.05,
+        "touch at {touch} s of an approach of {approach} s"
+    );
+    let replay = dir.join("replay");
+    let r = cli::run(&[
+        "track",
+        out.join("solution.json").to_str().unwrap(),
+        "--controller",
+        "open-loop",
+        "--periods",
+        "1",
+        "--out",
+        replay.to_str().unwrap(),
+    ]);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let events: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(replay.join("events.json")).unwrap()).unwrap();
+    let first_impact = events["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "impact")
+        .and_then(|e| e["t"].as_f64())
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(
+        (first_impact - touch).abs() < 0.1 * lead,
+        "the plant strikes at {first_impact} s, the verification's touch is at {touch} s, the \
+         planned impact at {approach} s"
+    );
+}
+
 /// The human finger's plan to execute in one cold solve: `optimize --problem
 /// periodic-cot-human --impact-law newton --torque-margin 0.3 --strategy direct` reaches the
 /// basin of the default search with the same setting (J = 0.0675, a 0.29 s stick phase; the

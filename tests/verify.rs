@@ -450,6 +450,54 @@ fn penetration_beyond_the_allowance_is_not_verified() {
     assert!(is_verified(&sol));
 }
 
+/// Honest output: an optimum whose free path touches the ball by the exact contact (the
+/// plant's) well before its planned impact is not verified. The smoothed contact (eq. 58–59)
+/// keeps such a path a few µm clear, so its nodes and its min h pass; a plant strikes the
+/// ball there. The verdict fails a first touch that leads the phase's end by more than
+/// `TOUCH_LEAD_TOLERANCE` of its duration, names the phase and the time, and the path excess
+/// the refinement reads is above 1 exactly then; stick phases have no touch.
+#[test]
+fn a_touch_well_before_the_impact_is_not_verified() {
+    use ball_finger::pipeline::verify::{
+        TOUCH_LEAD_TOLERANCE, is_verified, path_excess, path_failure, touch_failure,
+    };
+    let (p, sol) = qc_default();
+    let mut sol = sol.clone();
+    let mut v = verify(p, &sol, RTOL).unwrap();
+    // The plan's approach reaches the ball only at its impact (a touch, if any, in its last
+    // sample), and its release leaves it at the lift-off.
+    for ph in v.phases.iter().filter(|ph| ph.mode == PhaseMode::Free) {
+        let lead = ph.first_touch.map_or(0.0, |t| ph.duration - t);
+        assert!(lead <= 1e-3 * ph.duration, "{:?} {v}", ph.first_touch);
+    }
+    v.max_defect = 1e-6;
+    v.phases[1].min_sigma = Some(0.0);
+    assert_eq!(touch_failure(&v), None);
+    let t0 = v.phases[0].duration;
+    let allowance = TOUCH_LEAD_TOLERANCE * t0;
+    for (touch, fails) in [
+        (t0 - 0.5 * allowance, false),
+        (t0 - 1.5 * allowance, true),
+        (0.3 * t0, true),
+    ] {
+        let mut w = v.clone();
+        w.phases[0].first_touch = Some(touch);
+        sol.verification = Some(w.clone());
+        assert_eq!(!is_verified(&sol), fails, "touch at {touch} of {t0} s");
+        assert_eq!(path_excess(&w) > 1.0, fails, "touch at {touch} of {t0} s");
+        if fails {
+            let why = path_failure(&w).unwrap();
+            assert!(
+                why.contains("phase 0 (free)") && why.contains("touches the ball"),
+                "{why}"
+            );
+        }
+    }
+    let mut w = v.clone();
+    w.phases[1].first_touch = Some(0.0);
+    assert_eq!(touch_failure(&w), None, "a stick phase has no touch");
+}
+
 /// The stick phase of a verification record (periodic-qc has one, between two free phases).
 fn stick_phase(v: &Verification) -> usize {
     let k: Vec<usize> = v

@@ -113,6 +113,8 @@ pub const MAX_VERIFY_JOINTS: usize = 7;
 /// limits.
 struct ElementSystem<'a, const N: usize> {
     model: &'a Model<DynKernels<N>, N>,
+    /// The same model with the exact contact (the plant's), for [`Touch`].
+    exact: &'a Model<DynKernels<N>, N>,
     duration: f64,
     node_tau: Vec<f64>,
     node_u: Vec<[f64; N]>,
@@ -188,11 +190,12 @@ fn nan_max(a: f64, b: f64) -> f64 {
     }
 }
 
-/// The bf-model model of `p`'s scene (`N` joints) with the smooth contact of ε, after checking
-/// that its physical constants are the ones the OCP was built with.
+/// The bf-model model of `p`'s scene (`N` joints) with the contact `variant` (the smooth
+/// contact of the solution's ε, or the exact one for [`Touch`]), after checking that its
+/// physical constants are the ones the OCP was built with.
 fn verification_model<const N: usize>(
     p: &BuiltProblem,
-    eps: f64,
+    variant: ContactVariant,
 ) -> Result<Model<DynKernels<N>, N>, PipelineError> {
     let settings = TransitionSettings {
         contact_tolerance: CONTACT_TOLERANCE,
@@ -207,7 +210,7 @@ fn verification_model<const N: usize>(
         .map_err(model_err)?
         .with_settings(settings)
         .map_err(model_err)?
-        .with_contact_variant(ContactVariant::Smooth(eps))
+        .with_contact_variant(variant)
         .map_err(model_err)?;
     let pm = model.params();
     let ph = &p.physics;
@@ -408,6 +411,58 @@ impl PathStats {
     }
 }
 
+/// Distance from the ball (m) beyond which a free path counts as clear of it for [`Touch`]:
+/// the penetration allowance, so that the exact distance's wobble about 0 at a touch-down or
+/// lift-off is not read as leaving and touching again.
+pub const TOUCH_CLEARANCE: f64 = PENETRATION_TOLERANCE;
+
+/// The first touch of a free phase that ends at an impact by the exact contact distance h₀
+/// (the plant's): the first sample with h₀ ≤ 0 after one with h₀ > [`TOUCH_CLEARANCE`]. The
+/// phase touches at its end, or, if it grazes the ball on its way, earlier, and a plant with
+/// the exact contact strikes the ball then (`track`'s first impact came 0.16 s early on a
+/// verified plan). Releases are not tracked: the problems allow their paths h ≥ −10⁻⁴ m
+/// (the touch-down and release tolerance), which [`penetration_failure`] checks.
+#[derive(Clone, Copy, Default)]
+struct Touch {
+    clear: bool,
+    first: Option<f64>,
+}
+
+impl Touch {
+    /// Adds the sample at phase-local time `t` of the state `x` (exact h₀ evaluated only until
+    /// the first touch).
+    fn add<const N: usize>(
+        &mut self,
+        sys: &ElementSystem<'_, N>,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(), String> {
+        if self.first.is_none() {
+            let st = ElementSystem::<N>::state(x).map_err(|e| e.to_string())?;
+            let h = sys
+                .exact
+                .evaluate(&st)
+                .map_err(|e| e.to_string())?
+                .contact
+                .h;
+            self.add_distance(t, h);
+        }
+        Ok(())
+    }
+
+    /// Adds the exact distance `h` (m) at phase-local time `t`, samples in time order.
+    fn add_distance(&mut self, t: f64, h: f64) {
+        if self.first.is_some() {
+            return;
+        }
+        if h > TOUCH_CLEARANCE {
+            self.clear = true;
+        } else if h <= 0.0 && self.clear {
+            self.first = Some(t);
+        }
+    }
+}
+
 /// The collocation intervals of element `e` of `tr` on [s_start, s_end] (τ): consecutive
 /// state points with their collocated states. Radau elements contain both their boundaries
 /// as state points; the last Legendre–Gauss element ends at the phase end, the final state
@@ -481,6 +536,7 @@ fn end_defect(nq: usize, out: &SimOutput<PhaseMode>, err: &Option<String>, x: &[
 
 fn verify_phase<const N: usize>(
     model: &Model<DynKernels<N>, N>,
+    exact: &Model<DynKernels<N>, N>,
     tau_max: [f64; N],
     k: usize,
     mode: PhaseMode,
@@ -488,6 +544,7 @@ fn verify_phase<const N: usize>(
     rtol: f64,
     atol: f64,
     interp: TorqueInterpolant,
+    ends_at_impact: bool,
 ) -> Result<PhaseVerification, PipelineError> {
     let big_t = tr.duration;
     // The first and last state points are τ = −1 and +1 in both schemes (LG: the final state
@@ -497,6 +554,7 @@ fn verify_phase<const N: usize>(
     let node_residual = node_residual(model, k, mode, tr)?;
     let time = |s: f64| 0.5 * (s + 1.0) * big_t;
     let mut stats = PathStats::new();
+    let mut touch = Touch::default();
     let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
     let mut failure: Option<(f64, String)> = None;
     let mut parts = [0.0f64; 3];
@@ -531,6 +589,7 @@ fn verify_phase<const N: usize>(
         }
         let sys = ElementSystem {
             model,
+            exact,
             duration: big_t,
             node_tau: ks.iter().map(|&j| tr.node_tau[j]).collect(),
             node_u: ks
@@ -559,7 +618,15 @@ fn verify_phase<const N: usize>(
         // The path checks of this element alone (min h, min σ for the refinement), then
         // folded into the phase's.
         let mut el = PathStats::new();
-        let path = el.add_output(&sys, mode, &out);
+        let mut path = el.add_output(&sys, mode, &out);
+        if ends_at_impact && path.is_ok() {
+            path = out
+                .trajectory
+                .t
+                .iter()
+                .zip(&out.trajectory.x)
+                .try_for_each(|(t, x)| touch.add(&sys, *t, x));
+        }
         let measured = err.is_none() && path.is_ok();
         element_min_h.push(if measured { el.min_h } else { f64::NAN });
         element_min_sigma.push(if measured { el.min_sigma } else { f64::NAN });
@@ -646,6 +713,7 @@ fn verify_phase<const N: usize>(
         max_torque_overshoot: stats.overshoot,
         min_h: finite_or_none(stats.min_h, !stick),
         element_min_h: if stick { Vec::new() } else { element_min_h },
+        first_touch: touch.first,
         max_delta_v: finite_or_none(stats.max_dv, stick),
         min_lambda_n: finite_or_none(stats.min_ln, stick),
         max_lambda_n: finite_or_none(stats.max_ln, stick),
@@ -698,7 +766,9 @@ fn passes(v: &Verification) -> bool {
 /// although every node and every element end agree with the model, so the element-wise
 /// defect alone would call such an optimum verified.
 pub fn path_failure(v: &Verification) -> Option<String> {
-    penetration_failure(v).or_else(|| cone_failure(v))
+    penetration_failure(v)
+        .or_else(|| touch_failure(v))
+        .or_else(|| cone_failure(v))
 }
 
 /// How far the worst path check of `v` is outside its allowance, in units of the allowance:
@@ -708,6 +778,12 @@ pub fn path_failure(v: &Verification) -> Option<String> {
 /// names a failure. The refinement ([`super::search`]) stops refining a candidate whose
 /// only failure is a path check that a refinement did not bring closer.
 pub fn path_excess(v: &Verification) -> f64 {
+    let touch = v
+        .phases
+        .iter()
+        .filter_map(touch_lead)
+        .map(|(lead, allowance)| lead / allowance)
+        .fold(0.0, f64::max);
     excess_of(
         v.phases
             .iter()
@@ -715,6 +791,45 @@ pub fn path_excess(v: &Verification) -> f64 {
             .filter_map(|p| p.min_h),
         worst_cone_margin(v),
     )
+    .max(touch)
+}
+
+/// How long before the end of its free phase a plant with the exact contact would touch the
+/// ball (s) may be, as a fraction of the phase's duration: a plan whose path only touches at
+/// its impact has no touch at all along its re-integration ([`PhaseVerification::first_touch`]
+/// is `None` on every default optimum), a path that grazes the ball on its way touches
+/// 2–30 % of the phase early (BENCHMARKS.md, "Plans that graze the ball").
+pub const TOUCH_LEAD_TOLERANCE: f64 = 0.01;
+
+/// The lead of `p`'s first touch ([`PhaseVerification::first_touch`]) before the phase's
+/// end and its allowance ([`TOUCH_LEAD_TOLERANCE`] · duration), both in s, for a free phase
+/// that touches.
+fn touch_lead(p: &PhaseVerification) -> Option<(f64, f64)> {
+    let t = p.first_touch.filter(|_| p.mode == PhaseMode::Free)?;
+    let allowance = TOUCH_LEAD_TOLERANCE * p.duration;
+    Some(((p.duration - t).max(0.0), allowance.max(f64::MIN_POSITIVE)))
+}
+
+/// The first free phase of `v` whose path touches the ball by the exact contact (the plant's)
+/// more than [`TOUCH_LEAD_TOLERANCE`] of its duration before its end, as a sentence naming the
+/// phase, the time and the allowance: the smoothed contact (eq. 58–59) keeps such a path a
+/// few µm clear of the ball, so its nodes and its min h pass, but a plant strikes the ball
+/// there instead of at the planned impact.
+pub fn touch_failure(v: &Verification) -> Option<String> {
+    v.phases.iter().find_map(|p| {
+        let (lead, allowance) = touch_lead(p)?;
+        (lead > allowance).then(|| {
+            format!(
+                "phase {} (free): the path touches the ball with the exact contact (the \
+                 plant's) at t = {:.4} s, {lead:.4} s before the phase ends (allowance {:.0} % \
+                 of its {:.4} s)",
+                p.phase,
+                p.duration - lead,
+                100.0 * TOUCH_LEAD_TOLERANCE,
+                p.duration
+            )
+        })
+    })
 }
 
 /// [`path_excess`] of the free phases' min h `min_h` and the worst cone margin `cone`.
@@ -1002,7 +1117,8 @@ fn verify_phases<const N: usize>(
     atol: f64,
 ) -> Result<Vec<PhaseVerification>, PipelineError> {
     let eps = sol.epsilon;
-    let model = verification_model::<N>(p, eps)?;
+    let model = verification_model::<N>(p, ContactVariant::Smooth(eps))?;
+    let exact = verification_model::<N>(p, ContactVariant::Exact)?;
     let mut tau_max = [f64::INFINITY; N];
     for (t, m) in tau_max.iter_mut().zip(&p.physics.tau_max) {
         if !m.is_nan() {
@@ -1014,6 +1130,7 @@ fn verify_phases<const N: usize>(
         check_phase_data(k, tr, N, State::<N>::DIM)?;
         phases.push(verify_phase(
             &model,
+            &exact,
             tau_max,
             k,
             sol.modes[k],
@@ -1021,6 +1138,10 @@ fn verify_phases<const N: usize>(
             opt.rtol,
             atol,
             opt.torque,
+            // A free phase before a stick phase ends at an impact; its path must reach the
+            // ball there only ([`Touch`]). A release may come back within the problem's
+            // allowance h ≥ −10⁻⁴ m, which the penetration check holds it to.
+            sol.modes[k] == PhaseMode::Free && sol.modes.get(k + 1) == Some(&PhaseMode::Stick),
         )?);
     }
     Ok(phases)
@@ -1065,5 +1186,45 @@ mod tests {
             }
         }
         assert_eq!(excess_of(std::iter::empty(), None), 0.0);
+    }
+
+    /// The first touch of the exact distance h₀(t) sampled at 1 ms over a 1 s free phase.
+    fn first_touch(h: impl Fn(f64) -> f64) -> Option<f64> {
+        let mut touch = Touch::default();
+        for k in 0..=1000 {
+            let t = k as f64 * 1e-3;
+            touch.add_distance(t, h(t));
+        }
+        touch.first
+    }
+
+    /// A free phase that starts at a lift-off (h₀ slightly negative, as the smoothing leaves
+    /// it) and rises, or ends at an impact from above, has no touch before its end; one that
+    /// grazes the ball on its way (h₀ dips to 0 and rises again) touches at the dip, and one
+    /// that skims along the ball before its impact touches where it first reaches it; a dip
+    /// that stays above 0 is no touch. The lead of the touch before the end decides the
+    /// verdict ([`touch_failure`]).
+    #[test]
+    fn a_touch_is_where_the_exact_distance_first_reaches_the_ball_after_leaving_it() {
+        let c = TOUCH_CLEARANCE;
+        // Lift-off at t = 0 from h₀ = −10 µm, rising at 0.1 m/s: no touch.
+        assert_eq!(first_touch(|t| -1e-5 + 0.1 * t), None);
+        // An impact at t = 1 s at 0.1 m/s, reaching h₀ = 0 at 0.9999 s: a touch within the
+        // last sample.
+        let end = first_touch(|t| 0.1 * (1.0 - t) - 1e-5).unwrap();
+        assert!(end > 0.999 - 1e-12 && end <= 1.0, "{end}");
+        // A graze at t = 0.4 s (h₀ = 1 mm (t − 0.4)² / 0.01 − 1 µm), then away, then an
+        // impact: the touch is at the graze.
+        let graze = |t: f64| 1e-3 * (t - 0.4f64).powi(2) / 0.01 - 1e-6;
+        let g = first_touch(|t| graze(t).min(0.1 * (1.0 - t))).unwrap();
+        assert!((g - 0.4).abs() < 0.011, "{g}");
+        // The same dip staying 0.5 clearances above the ball is no touch.
+        assert_eq!(
+            first_touch(|t| (graze(t) + 0.5 * c).max(0.1 * (1.0 - t) + 1e-3)),
+            None
+        );
+        // Skimming at h₀ = 0 from 0.8 s to the impact: the touch is at 0.8 s.
+        let s = first_touch(|t| if t < 0.8 { 0.5 * (0.8 - t) } else { 0.0 }).unwrap();
+        assert!((s - 0.8).abs() < 1.5e-3, "{s}");
     }
 }

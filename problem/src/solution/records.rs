@@ -303,6 +303,13 @@ pub struct PhaseVerification {
     /// dips into the ball between its nodes, so that a refinement splits those elements.
     #[serde(default, with = "nan_null_vec")]
     pub element_min_h: Vec<f64>,
+    /// Free phases that end at an impact: the phase-local time (s) at which the exact contact
+    /// distance (the plant's, without the smoothing ε of eq. 58–59) first reaches 0 along the
+    /// element re-integrations after the path has been clear of the ball; `None` when it does
+    /// not (and in other phases and older files). A plant with the exact contact makes contact
+    /// there, `duration` − this before the plan's own impact.
+    #[serde(default)]
+    pub first_touch: Option<f64>,
     /// Stick phases: max ‖Δv‖ along the element re-integrations (m/s; drift of Δv = 0).
     pub max_delta_v: Option<f64>,
     /// Stick phases: min λ_n along the element re-integrations (N; < 0 means the contact
