@@ -411,8 +411,8 @@ impl PathStats {
     }
 }
 
-/// Distance from the ball (m) beyond which a free path counts as clear of it for [`Touch`]:
-/// the penetration allowance, so that the exact distance's wobble about 0 at a touch-down or
+/// Distance from the ball (m) beyond which a free path counts as clear of it for the touch check
+/// ([`touch_failure`]): the penetration allowance, so that the exact distance's wobble about 0 at a touch-down or
 /// lift-off is not read as leaving and touching again.
 pub const TOUCH_CLEARANCE: f64 = PENETRATION_TOLERANCE;
 
