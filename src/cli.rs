@@ -553,6 +553,17 @@ pub struct OptimizeArgs {
         allow_hyphen_values = true
     )]
     pub torque_margin: f64,
+    /// Clearance (m) the periodic problems' approach keeps from the ball at its collocation
+    /// nodes, falling linearly to 0 over its last 10 %, so that the plan does not graze the
+    /// ball before its impact (docs/optima.md, "Plans that graze the ball"); at most a tenth
+    /// of the ball's radius. Recorded in solution.json as `approach_clearance`.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub approach_clearance: f64,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]

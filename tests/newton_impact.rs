@@ -232,6 +232,116 @@ fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robus
     meets_the_targets_bounded(&sol, 10, 6);
 }
 
+/// A plan's file rebuilds the problem it was planned on: the impact law and both margins of
+/// a Newton plan with margins come back from `solution.json` (`settings_of`, what re-planning
+/// and `optimize merge` build on), and the NLP rebuilt from the file gives, at the plan's own
+/// point, the objective the file states. Re-planning used to rebuild the sticking problem
+/// without margins for every plan, so the human finger's Newton re-plans never converged
+/// (0 of 7 used; 7 of 7 now, BENCHMARKS.md "Plans that graze the ball").
+#[test]
+fn a_newton_plan_with_margins_is_rebuilt_from_its_file_as_planned() {
+    use ball_finger::pipeline::SolutionIo;
+    use ball_finger::pipeline::solve::{recompute_at_own_point, settings_of};
+    let dir = cli::tmpdir("rebuilt-newton-plan");
+    let sticking = dir.join("sticking.json");
+    cli::qc_optimum().write_json(&sticking).unwrap();
+    let sol = optimized(
+        "rebuilt-newton-plan-out",
+        &[
+            "--problem",
+            "periodic-qc",
+            "--impact-law",
+            "newton",
+            "--torque-margin",
+            "0.3",
+            "--cone-margin",
+            "0.2",
+            "--strategy",
+            "direct",
+            "--verify-rtol",
+            "0",
+            "--warm-start",
+            sticking.to_str().unwrap(),
+        ],
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    let (_, settings) = settings_of(&sol).unwrap();
+    assert_eq!(settings.impact_law, sol.impact_law);
+    assert_eq!(settings.impact_law.name(), "newton");
+    assert_eq!((settings.cone_margin, settings.torque_margin), (0.2, 0.3));
+    let own = recompute_at_own_point(&sol).unwrap();
+    assert!(
+        (own.objective - sol.objective).abs() <= 1e-9 * sol.objective.abs(),
+        "rebuilt {} against the file's {}",
+        own.objective,
+        sol.objective
+    );
+}
+
+/// `--approach-clearance C` keeps the approach's collocation nodes at h ≥ C, falling
+/// linearly to h ≥ 0 over the approach's last 10 %: warm-started from the sticking QC optimum,
+/// whose approach passes 1 cm inside that bound for C = 2 cm (13 mm from the ball 50 ms before
+/// its impact), the plan moves out to meet it at every node and records C; values outside
+/// [0, r/10] are refused by name.
+#[test]
+fn an_approach_clearance_keeps_the_approach_nodes_away_from_the_ball() {
+    use ball_finger::pipeline::SolutionIo;
+    const C: f64 = 0.02;
+    let dir = cli::tmpdir("approach-clearance");
+    let sticking = dir.join("sticking.json");
+    cli::qc_optimum().write_json(&sticking).unwrap();
+    let plan = |clearance: &str| {
+        optimized(
+            &format!("approach-clearance-{clearance}"),
+            &[
+                "--problem",
+                "periodic-qc",
+                "--strategy",
+                "direct",
+                "--verify-rtol",
+                "0",
+                "--warm-start",
+                sticking.to_str().unwrap(),
+                "--approach-clearance",
+                clearance,
+            ],
+        )
+    };
+    // min over the approach's nodes before its end of h − C min(1, (1 − t/T₀)/0.1).
+    let margin = |sol: &ball_finger::pipeline::OcpSolution| {
+        let n = &sol.nodes;
+        let t0 = sol.phase_durations[0];
+        (0..n.h.len())
+            .filter(|&k| n.phase[k] == 0 && n.t[k] < t0 * (1.0 - 1e-9))
+            .map(|k| n.h[k] - C * ((1.0 - n.t[k] / t0) / 0.1).min(1.0))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let plain = plan("0");
+    assert!(margin(&plain) < -1e-3, "{}", margin(&plain));
+    let clear = plan(&C.to_string());
+    assert_eq!(clear.approach_clearance, C);
+    assert!(margin(&clear) > -1e-7, "{}", margin(&clear));
+    for bad in ["-1e-3", "NaN", "0.5"] {
+        let r = cli::run(&[
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--strategy",
+            "direct",
+            "--approach-clearance",
+            bad,
+            "--out",
+            dir.join("bad").to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(
+            !r.status.success() && err.contains("approach_clearance"),
+            "{bad}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// A verified-looking plan that grazes the ball is flagged: the same warm start without the
 /// cone margin ends at J = 0.0889, whose approach passes the ball a few µm clear by the
 /// smoothed contact (eq. 58–59) but touches it by the exact one 0.11 s before its impact.

@@ -71,6 +71,7 @@ fn phase(points: usize, x0: f64, v0: f64) -> Phase {
         duration_bounds: (1.0, 1.0),
         points,
         guess: PhaseGuess::constant(vec![x0, v0], vec![], vec![0.0], 1.0),
+        end_ramp: None,
     }
 }
 

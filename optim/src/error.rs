@@ -234,6 +234,21 @@ pub enum PhaseDefect {
         /// The length the node function needs.
         expected: usize,
     },
+    /// An [`crate::ocp::EndRamp`] outside its ranges.
+    #[error(
+        "end ramp on path output {index} of {outputs}: clearance {clearance} (finite, ≥ 0) \
+         and ramp {ramp} (in (0, 1]) out of range"
+    )]
+    EndRamp {
+        /// The path output it bounds.
+        index: usize,
+        /// Number of path outputs.
+        outputs: usize,
+        /// Its clearance.
+        clearance: f64,
+        /// Its ramp.
+        ramp: f64,
+    },
     /// Emitted kernels are required but none has the structure of the node function.
     #[error(
         "no emitted node kernel has the structure of its node function (the graphs changed \

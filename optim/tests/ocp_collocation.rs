@@ -215,6 +215,7 @@ fn assembled_derivatives_match_finite_differences() {
             duration_bounds: (0.1, 5.0),
             points: 5,
             guess: PhaseGuess::constant(vec![0.1, 0.2], vec![0.0], vec![0.3], 1.0),
+            end_ramp: None,
         };
         let ocp = Ocp {
             phases: vec![phase.clone(), phase],
@@ -269,4 +270,105 @@ fn brachistochrone_error(scheme: Scheme, points: usize) -> f64 {
     let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
     assert!(sol.status.is_success(), "{:?}", sol.status);
     (sol.objective - toys::cycloid_time()).abs()
+}
+
+/// The single integrator ẋ = u from x(0) = 1 to x(1) = 0 minimising ∫u² dt, with the path
+/// output x ≥ 0 and an end ramp of clearance 0.5 over the last 20 % of the phase: x ≥ 0.5
+/// until s = 0.8, then x ≥ 2.5 (1 − s). The optimum is the taut string through (0.8, 0.5),
+/// ∫u² = 0.5²/0.8 + 0.5²/0.2 = 1.5625, which lies in the collocation space when 0.8 is an
+/// element break (Radau, 5 equal elements); without the ramp it is the straight line, ∫u² = 1.
+#[test]
+fn an_end_ramp_bounds_the_path_away_from_the_phase_end_only() {
+    use bf_optim::ocp::EndRamp;
+    let mut g = Graph::new();
+    let (x, u) = (g.var(0), g.var(1));
+    let u2 = g.square(u);
+    let node = NodeFunction {
+        graph: g,
+        x: vec![0],
+        a: vec![],
+        u: vec![1],
+        duration: 2,
+        fixed: vec![],
+        xdot: vec![u],
+        path: vec![x],
+        path_bounds: vec![(0.0, INF)],
+        costs: vec![u2],
+    };
+    let ramp = EndRamp {
+        index: 0,
+        clearance: 0.5,
+        ramp: 0.2,
+    };
+    let solve = |end_ramp: Option<EndRamp>| {
+        let ocp = Ocp {
+            phases: vec![Phase {
+                name: "string".into(),
+                node: node.clone(),
+                x_bounds: vec![(-INF, INF)],
+                a_bounds: vec![],
+                u_bounds: vec![(-INF, INF)],
+                duration_bounds: (1.0, 1.0),
+                points: 4,
+                guess: PhaseGuess::constant(vec![0.5], vec![], vec![0.0], 1.0),
+                end_ramp,
+            }],
+            n_costs: 1,
+            params: vec![],
+            points: vec![toys::fixed_ends(0, &[(0, 1.0)], 0, &[(0, 0.0)])],
+            cost_bounds: vec![],
+            objective: Objective::Cost(0),
+            scheme: Scheme::Radau { elements: 5 },
+        };
+        let tr = Transcription::new(&ocp).unwrap();
+        let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
+        assert_eq!(sol.status, Status::Solved);
+        (sol.objective, bf_optim::ocp::extract(&tr, &sol.x))
+    };
+    let (plain, _) = solve(None);
+    assert!((plain - 1.0).abs() < 1e-7, "{plain}");
+    let (j, traj) = solve(Some(ramp));
+    assert!((j - 1.5625).abs() < 1e-6, "{j}");
+    // Every collocation node meets its own bound, and the string touches it at s = 0.8.
+    for (k, &tau) in traj[0].node_tau.iter().enumerate() {
+        let s = 0.5 * (tau + 1.0);
+        let xk = traj[0].x[traj[0].node_state[k]][0];
+        assert!(xk >= ramp.extra(s) - 1e-8, "s = {s}: x = {xk}");
+    }
+    let at = traj[0].x_at(2.0 * 0.8 - 1.0)[0];
+    assert!((at - 0.5).abs() < 1e-6, "{at}");
+    // A ramp outside its ranges is refused by name.
+    for bad in [
+        EndRamp { ramp: 0.0, ..ramp },
+        EndRamp {
+            clearance: -1.0,
+            ..ramp
+        },
+        EndRamp { index: 1, ..ramp },
+    ] {
+        let ocp = Ocp {
+            phases: vec![Phase {
+                name: "string".into(),
+                node: node.clone(),
+                x_bounds: vec![(-INF, INF)],
+                a_bounds: vec![],
+                u_bounds: vec![(-INF, INF)],
+                duration_bounds: (1.0, 1.0),
+                points: 4,
+                guess: PhaseGuess::constant(vec![0.5], vec![], vec![0.0], 1.0),
+                end_ramp: Some(bad),
+            }],
+            n_costs: 1,
+            params: vec![],
+            points: vec![],
+            cost_bounds: vec![],
+            objective: Objective::Cost(0),
+            scheme: Scheme::Radau { elements: 5 },
+        };
+        let Err(err) = Transcription::new(&ocp) else {
+            panic!("{bad:?} accepted");
+        };
+        let err = err.to_string();
+        assert!(err.contains("end ramp"), "{err}");
+    }
 }

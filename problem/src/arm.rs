@@ -701,6 +701,7 @@ fn build_inner(scene: &Scene, settings: &ArmSettings) -> Result<ArmBuilt, Proble
         duration_bounds,
         points: settings.points,
         guess,
+        end_ramp: None,
     };
     let ocp = Ocp {
         phases: vec![phase],

@@ -227,7 +227,8 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
 }
 
 /// The problem and settings a solution file records (problem, scene text and runtime
-/// parameters, points, scheme, ε; everything else the defaults, no mesh): its scene is `None`
+/// parameters, points, scheme, ε, the planned impact law, the cone and torque margins and the
+/// approach clearance; everything else the defaults, no mesh): its scene is `None`
 /// when the text and parameters are the problem's compiled scene's, so the problem is built
 /// on the same kernels as a run without `--scene`. Errors when the file does not record them.
 pub fn settings_of(
@@ -259,6 +260,10 @@ pub fn settings_of(
             scheme: sol.scheme,
             epsilon: Some(sol.epsilon),
             scene,
+            impact_law: sol.impact_law,
+            cone_margin: sol.cone_margin,
+            torque_margin: sol.torque_margin,
+            approach_clearance: sol.approach_clearance,
             ..ProblemSettings::default()
         },
     ))

@@ -30,7 +30,7 @@ pub use block::{GraphFn, KernelLookup, KernelUse, NodeKernel, NodeKernelFn, Node
 pub use estimate::collocation_errors;
 pub use mesh::{HpRule, Mesh, MeshSpec};
 pub use problem::{
-    NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
+    EndRamp, NodeFunction, Objective, Ocp, Param, Phase, PhaseGuess, PointFunction, Scheme, VarRef,
 };
 pub use trajectory::{PhaseTrajectory, extract};
 pub use transcription::{PhaseLayout, StateBoundBetweenPoints, Transcription};

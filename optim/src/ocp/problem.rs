@@ -118,6 +118,32 @@ pub struct Phase {
     pub points: usize,
     /// Initial guess.
     pub guess: PhaseGuess,
+    /// A path lower bound that tightens away from the phase's end (`None`: every node has
+    /// the node function's bounds).
+    pub end_ramp: Option<EndRamp>,
+}
+
+/// A lower bound on one path output that depends on the collocation node: at normalised
+/// phase time s ∈ [0, 1] the lower bound of path output `index` is its node-function bound
+/// plus `clearance` · min(1, (1 − s) / `ramp`). Far from the end the output keeps
+/// `clearance` above its bound; over the last `ramp` of the phase the extra bound falls
+/// linearly to 0, so that the phase may end on the plain bound (an approach that must stay
+/// clear of an obstacle it reaches at its end).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EndRamp {
+    /// Index into the node function's `path`.
+    pub index: usize,
+    /// Extra lower bound away from the end (≥ 0, in the output's units).
+    pub clearance: f64,
+    /// Share of the phase over which the extra bound falls to 0, in (0, 1].
+    pub ramp: f64,
+}
+
+impl EndRamp {
+    /// The extra lower bound at normalised phase time `s` ∈ [0, 1].
+    pub fn extra(&self, s: f64) -> f64 {
+        self.clearance * ((1.0 - s) / self.ramp).clamp(0.0, 1.0)
+    }
 }
 
 /// A static decision parameter.

@@ -118,6 +118,7 @@ pub fn double_integrator_phase(
         duration_bounds,
         points,
         guess: PhaseGuess::constant(vec![0.0, 0.0], vec![0.0; na], vec![0.0], duration_guess),
+        end_ramp: None,
     }
 }
 
@@ -196,6 +197,7 @@ pub fn brachistochrone(implicit: bool, scheme: Scheme, points: usize) -> Ocp {
             u: vec![vec![1.0]],
             duration: 0.5,
         },
+        end_ramp: None,
     };
     Ocp {
         phases: vec![phase],

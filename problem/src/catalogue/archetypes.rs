@@ -18,6 +18,9 @@ use crate::points::{EndQuantity, continuity, end_point, impact};
 
 /// Tolerance on h at the touch-down and the release (m; Sect. 7 work-arounds).
 const TOL_H: f64 = 1e-4;
+/// Share of the approach over which its clearance (`ProblemSettings::approach_clearance`) falls
+/// to 0 before the impact: the approach may close the last of the gap only then.
+const APPROACH_CLEARANCE_RAMP: f64 = 0.1;
 
 /// The shape of a problem.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -205,6 +208,8 @@ impl PeriodicParts {
             hdot: margin.map(|m| (f64::NEG_INFINITY, -m)),
             duration: (0.01, tmax),
             guess_duration: 1.0,
+            clearance: (settings.approach_clearance > 0.0)
+                .then_some((settings.approach_clearance, APPROACH_CLEARANCE_RAMP)),
         };
         let stick = PhaseDef {
             mode: PhaseMode::Stick,
@@ -212,6 +217,7 @@ impl PeriodicParts {
             hdot: None,
             duration: (settings.min_stick, tmax),
             guess_duration: 1.0,
+            clearance: None,
         };
         let release = PhaseDef {
             mode: PhaseMode::Free,
@@ -219,6 +225,7 @@ impl PeriodicParts {
             hdot: margin.map(|m| (m, f64::INFINITY)),
             duration: (0.01, tmax),
             guess_duration: 1.0,
+            clearance: None,
         };
         let cost = if qc {
             CostKind::Qc {
@@ -317,6 +324,7 @@ pub(crate) fn reach(c: &Context<'_>) -> Result<Spec, ProblemError> {
         hdot: None,
         duration: (0.05, 10.0),
         guess_duration: 1.0,
+        clearance: None,
     }];
     let points = vec![
         initial_state(&c.x_rest()),
@@ -351,6 +359,7 @@ pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
             hdot: None,
             duration: (0.05, 5.0),
             guess_duration: 1.0,
+            clearance: None,
         },
         // |h| ≤ tol_h at the stick nodes: Δv = 0 (or its rate) alone let h drift when the
         // contact point slides over the smoothed fingertip (sat, eq. 58–59), and the
@@ -361,6 +370,7 @@ pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
             hdot: None,
             duration: (0.05, 5.0),
             guess_duration: 1.0,
+            clearance: None,
         },
     ];
     let mut points = vec![initial_state(&c.x_rest())];

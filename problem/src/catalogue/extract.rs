@@ -125,6 +125,7 @@ pub fn solution_at(
         impact_law: p.settings.impact_law,
         cone_margin: p.settings.cone_margin,
         torque_margin: p.settings.torque_margin,
+        approach_clearance: p.settings.approach_clearance,
     })
 }
 

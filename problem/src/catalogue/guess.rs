@@ -13,7 +13,7 @@
 //! (bisection) the contact configuration, and q(c_c / 2) the free configuration q⁰.
 
 use bf_codegen::Scene;
-use bf_optim::ocp::{Phase, PhaseGuess};
+use bf_optim::ocp::{EndRamp, Phase, PhaseGuess};
 use bf_scene::state_len;
 
 use crate::ProblemError;
@@ -137,6 +137,9 @@ pub(crate) struct PhaseDef {
     pub(crate) hdot: Option<(f64, f64)>,
     pub(crate) duration: (f64, f64),
     pub(crate) guess_duration: f64,
+    /// Extra lower bound on h (m) away from the phase's end and the share of the phase over
+    /// which it falls to 0 (an `EndRamp` on h; with `h` only).
+    pub(crate) clearance: Option<(f64, f64)>,
 }
 
 /// The phases of `defs` with their node functions, bounds and the default (q ≡ `q_guess`) or
@@ -195,6 +198,15 @@ pub(crate) fn make_phases(
                 xg[i] = xg[i].clamp(lo, hi);
             }
         }
+        // node::node_function pushes h, then ḣ, last among the path outputs.
+        let end_ramp =
+            d.h.and(d.clearance)
+                .filter(|&(c, _)| c > 0.0)
+                .map(|(clearance, ramp)| EndRamp {
+                    index: node.path.len() - 1 - usize::from(d.hdot.is_some()),
+                    clearance,
+                    ramp,
+                });
         out.push(Phase {
             name: format!("{:?}", d.mode).to_lowercase(),
             node,
@@ -218,6 +230,7 @@ pub(crate) fn make_phases(
                     sg.durations[k].clamp(d.duration.0, d.duration.1)
                 }),
             ),
+            end_ramp,
         });
     }
     Ok(out)

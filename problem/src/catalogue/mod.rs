@@ -169,6 +169,12 @@ pub struct ProblemSettings {
     /// τ_max,i, so that feedback has m τ_max,i of authority under the limit. 0: the scene's
     /// limits.
     pub torque_margin: f64,
+    /// Clearance (m) the periodic problems' approach keeps from the ball: h ≥ this at its
+    /// collocation nodes, falling linearly to h ≥ 0 over the approach's last 10 % (an
+    /// `EndRamp` of bf-optim), so that no node of the approach grazes the ball before the
+    /// impact (the smoothed contact, eq. 58–59, lets a path pass micrometres from it where
+    /// the exact one, the plant's, touches). 0: the paper's h ≥ 0.
+    pub approach_clearance: f64,
     /// ḣ margins of Sect. 7 (ḣ ≤ −m in the approach, ḣ ≥ m in the release phase).
     pub hdot_margin: Option<f64>,
     /// Initial guess (ignored with a warm start).
@@ -247,6 +253,7 @@ impl Default for ProblemSettings {
             impact_law: crate::solution::PlannedImpact::Stick,
             cone_margin: 0.0,
             torque_margin: 0.0,
+            approach_clearance: 0.0,
             hdot_margin: None,
             guess: GuessKind::Auto,
             ipm: None,
@@ -365,6 +372,14 @@ fn build_inner(
                 expected: "in [0, 1)",
             });
         }
+    }
+    // Up to a tenth of the ball's radius: the approach starts at h ≥ 0.3 r.
+    if !(settings.approach_clearance >= 0.0 && settings.approach_clearance <= 0.1 * ph.radius) {
+        return Err(ProblemError::InvalidSetting {
+            name: "approach_clearance (m)",
+            value: settings.approach_clearance,
+            expected: "in [0, r / 10], r the ball's radius",
+        });
     }
     if !(settings.effort_scale.is_finite() && settings.effort_scale > 0.0) {
         return Err(ProblemError::InvalidSetting {

@@ -178,6 +178,10 @@ pub struct OcpSolution {
     /// ([`crate::ProblemSettings::torque_margin`]; 0 in older files).
     #[serde(default)]
     pub torque_margin: f64,
+    /// The clearance (m) the plan's approach kept from the ball
+    /// ([`crate::ProblemSettings::approach_clearance`]; 0 in older files).
+    #[serde(default)]
+    pub approach_clearance: f64,
 }
 
 impl OcpSolution {

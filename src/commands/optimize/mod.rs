@@ -223,6 +223,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         impact_law,
         cone_margin: args.cone_margin,
         torque_margin: args.torque_margin,
+        approach_clearance: args.approach_clearance,
         points: args.points,
         scheme,
         epsilon: Some(args.epsilon),

@@ -58,12 +58,16 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolu
 
 /// What every file of one multi-start shares (the shards' `solution.json` and candidates):
 /// (quantity, value as shown). The scene text is compared apart ([`check_same_run`]).
-fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 8] {
+fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 9] {
     [
         ("problem", sol.problem.clone()),
         ("impact law", sol.impact_law.name().to_string()),
         ("cone margin", format!("{:e}", sol.cone_margin)),
         ("torque margin", format!("{:e}", sol.torque_margin)),
+        (
+            "approach clearance",
+            format!("{:e}", sol.approach_clearance),
+        ),
         ("scene", sol.scene.clone()),
         ("runtime parameters", format!("{:?}", sol.scene_params)),
         ("mesh", format!("{} points, {:?}", sol.points, sol.scheme)),

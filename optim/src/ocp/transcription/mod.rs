@@ -6,10 +6,12 @@
 //! Radau     Σ_j D_kj X_j − s_k (T/2) f(X_k, A_k, U_k) = 0        (k = 1..N_c, per element)
 //! LG        X_k − X_0 − (T/2) Σ_j A_kj f(X_j, A_j, U_j) = 0       (k = 1..N, A = D₁⁻¹)
 //! LG end    X_f − X_0 − Σ_k w_k (T/2) f_k = 0                     (Benson/Garg form)
-//! path      g_L ≤ g(X_k, A_k, U_k) ≤ g_U
+//! path      g_L + e(t̂_k) ≤ g(X_k, A_k, U_k) ≤ g_U  (e = 0 unless the phase has an EndRamp)
 //! costs     c_j − Σ_phases Σ_k w_k s_k (T/2) L_j(X_k, A_k, U_k) = 0   (eq. 51c, c(0) = 0)
 //! ```
-//! with s_k = 1/K for K Radau elements (1 for LG). The objective is c_j or c_j/c_k (eq. 60), a
+//! with s_k = 1/K for K Radau elements (1 for LG); in the path row, t̂_k = (τ_k + 1)/2 is the
+//! node's normalised time and e the phase's [`EndRamp`](super::EndRamp) on one output
+//! (a lower bound that tightens away from the phase's end). The objective is c_j or c_j/c_k (eq. 60), a
 //! function of two NLP variables only, so its Hessian stays sparse. Event and linkage
 //! constraints (57c–d) are [`PointFunction`](super::PointFunction)s. All nonlinear pieces are [`GraphFn`]s with
 //! exact Jacobians and Hessians; the NLP's derivatives are their scattered sums.
@@ -252,6 +254,20 @@ impl Transcription {
                     }));
                 }
             }
+            if let Some(r) = ph.end_ramp
+                && !(r.index < nd.path.len()
+                    && r.clearance.is_finite()
+                    && r.clearance >= 0.0
+                    && r.ramp > 0.0
+                    && r.ramp <= 1.0)
+            {
+                return Err(bad(PhaseDefect::EndRamp {
+                    index: r.index,
+                    outputs: nd.path.len(),
+                    clearance: r.clearance,
+                    ramp: r.ramp,
+                }));
+            }
             let mesh = match meshes.get(pi) {
                 Some(Some(spec)) => Mesh::from_spec(spec)?,
                 _ => Mesh::new(ocp.scheme, ph.points)?,
@@ -394,9 +410,13 @@ impl Transcription {
             }
             let path0 = m;
             m += ncol * n_path;
-            for _ in 0..ncol {
-                for b in &nd.path_bounds {
-                    gl.push(clean_bound(b.0, true));
+            for c in &l.mesh.colloc {
+                for (j, b) in nd.path_bounds.iter().enumerate() {
+                    let lower = match ph.end_ramp {
+                        Some(r) if r.index == j => b.0 + r.extra(0.5 * (c.tau + 1.0)),
+                        _ => b.0,
+                    };
+                    gl.push(clean_bound(lower, true));
                     gu.push(clean_bound(b.1, false));
                 }
             }
