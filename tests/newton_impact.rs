@@ -207,28 +207,17 @@ fn the_newton_planned_qc_optimum_of_the_global_search_meets_the_nominal_and_robu
 /// without the spin about the contact point").
 #[test]
 fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robust() {
-    use ball_finger::pipeline::SolutionIo;
-    let dir = cli::tmpdir("plan-to-execute-sticking");
-    let sticking = dir.join("sticking.json");
-    cli::qc_optimum().write_json(&sticking).unwrap();
-    let sol = optimized(
+    let sol = from_the_sticking_qc_optimum(
         "plan-to-execute",
         &[
-            "--problem",
-            "periodic-qc",
             "--impact-law",
             "newton",
             "--torque-margin",
             "0.3",
             "--cone-margin",
             "0.2",
-            "--strategy",
-            "direct",
-            "--warm-start",
-            sticking.to_str().unwrap(),
         ],
     );
-    std::fs::remove_dir_all(&dir).ok();
     meets_the_targets_bounded(&sol, 10, 6);
 }
 
@@ -240,31 +229,20 @@ fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robus
 /// (0 of 7 used; 7 of 7 now, BENCHMARKS.md "Plans that graze the ball").
 #[test]
 fn a_newton_plan_with_margins_is_rebuilt_from_its_file_as_planned() {
-    use ball_finger::pipeline::SolutionIo;
     use ball_finger::pipeline::solve::{recompute_at_own_point, settings_of};
-    let dir = cli::tmpdir("rebuilt-newton-plan");
-    let sticking = dir.join("sticking.json");
-    cli::qc_optimum().write_json(&sticking).unwrap();
-    let sol = optimized(
-        "rebuilt-newton-plan-out",
+    let sol = from_the_sticking_qc_optimum(
+        "rebuilt-newton-plan",
         &[
-            "--problem",
-            "periodic-qc",
             "--impact-law",
             "newton",
             "--torque-margin",
             "0.3",
             "--cone-margin",
             "0.2",
-            "--strategy",
-            "direct",
             "--verify-rtol",
             "0",
-            "--warm-start",
-            sticking.to_str().unwrap(),
         ],
     );
-    std::fs::remove_dir_all(&dir).ok();
     let (_, settings) = settings_of(&sol).unwrap();
     assert_eq!(settings.impact_law, sol.impact_law);
     assert_eq!(settings.impact_law.name(), "newton");
@@ -285,26 +263,11 @@ fn a_newton_plan_with_margins_is_rebuilt_from_its_file_as_planned() {
 /// [0, r/10] are refused by name.
 #[test]
 fn an_approach_clearance_keeps_the_approach_nodes_away_from_the_ball() {
-    use ball_finger::pipeline::SolutionIo;
     const C: f64 = 0.02;
-    let dir = cli::tmpdir("approach-clearance");
-    let sticking = dir.join("sticking.json");
-    cli::qc_optimum().write_json(&sticking).unwrap();
     let plan = |clearance: &str| {
-        optimized(
+        from_the_sticking_qc_optimum(
             &format!("approach-clearance-{clearance}"),
-            &[
-                "--problem",
-                "periodic-qc",
-                "--strategy",
-                "direct",
-                "--verify-rtol",
-                "0",
-                "--warm-start",
-                sticking.to_str().unwrap(),
-                "--approach-clearance",
-                clearance,
-            ],
+            &["--verify-rtol", "0", "--approach-clearance", clearance],
         )
     };
     // min over the approach's nodes before its end of h − C min(1, (1 − t/T₀)/0.1).
@@ -321,6 +284,7 @@ fn an_approach_clearance_keeps_the_approach_nodes_away_from_the_ball() {
     let clear = plan(&C.to_string());
     assert_eq!(clear.approach_clearance, C);
     assert!(margin(&clear) > -1e-7, "{}", margin(&clear));
+    let dir = cli::tmpdir("approach-clearance");
     for bad in ["-1e-3", "NaN", "0.5"] {
         let r = cli::run(&[
             "optimize",
@@ -463,6 +427,27 @@ fn with_a_torque_margin_both_default_newton_searches_meet_the_nominal_and_robust
         eprintln!("{problem}: J = {}", sol.objective);
         meets_the_nominal_and_robustness_targets_bounded(&sol);
     }
+}
+
+/// `optimize --problem periodic-qc --strategy direct --warm-start STICKING ARGS` from the
+/// sticking `periodic-qc` optimum ([`cli::qc_optimum`]), named after `name` ([`optimized`]).
+fn from_the_sticking_qc_optimum(name: &str, args: &[&str]) -> ball_finger::pipeline::OcpSolution {
+    use ball_finger::pipeline::SolutionIo;
+    let dir = cli::tmpdir(&format!("{name}-sticking"));
+    let sticking = dir.join("sticking.json");
+    cli::qc_optimum().write_json(&sticking).unwrap();
+    let mut all = vec![
+        "--problem",
+        "periodic-qc",
+        "--strategy",
+        "direct",
+        "--warm-start",
+        sticking.to_str().unwrap(),
+    ];
+    all.extend_from_slice(args);
+    let sol = optimized(name, &all);
+    std::fs::remove_dir_all(&dir).ok();
+    sol
 }
 
 /// The solution of `optimize ARGS --out DIR` (a temporary `DIR` named after `name`, removed

@@ -300,26 +300,30 @@ fn an_end_ramp_bounds_the_path_away_from_the_phase_end_only() {
         clearance: 0.5,
         ramp: 0.2,
     };
+    let ocp = |end_ramp: Option<EndRamp>, points: Vec<PointFunction>| Ocp {
+        phases: vec![Phase {
+            name: "string".into(),
+            node: node.clone(),
+            x_bounds: vec![(-INF, INF)],
+            a_bounds: vec![],
+            u_bounds: vec![(-INF, INF)],
+            duration_bounds: (1.0, 1.0),
+            points: 4,
+            guess: PhaseGuess::constant(vec![0.5], vec![], vec![0.0], 1.0),
+            end_ramp,
+        }],
+        n_costs: 1,
+        params: vec![],
+        points,
+        cost_bounds: vec![],
+        objective: Objective::Cost(0),
+        scheme: Scheme::Radau { elements: 5 },
+    };
     let solve = |end_ramp: Option<EndRamp>| {
-        let ocp = Ocp {
-            phases: vec![Phase {
-                name: "string".into(),
-                node: node.clone(),
-                x_bounds: vec![(-INF, INF)],
-                a_bounds: vec![],
-                u_bounds: vec![(-INF, INF)],
-                duration_bounds: (1.0, 1.0),
-                points: 4,
-                guess: PhaseGuess::constant(vec![0.5], vec![], vec![0.0], 1.0),
-                end_ramp,
-            }],
-            n_costs: 1,
-            params: vec![],
-            points: vec![toys::fixed_ends(0, &[(0, 1.0)], 0, &[(0, 0.0)])],
-            cost_bounds: vec![],
-            objective: Objective::Cost(0),
-            scheme: Scheme::Radau { elements: 5 },
-        };
+        let ocp = ocp(
+            end_ramp,
+            vec![toys::fixed_ends(0, &[(0, 1.0)], 0, &[(0, 0.0)])],
+        );
         let tr = Transcription::new(&ocp).unwrap();
         let sol = solve_nlp(&tr, &quiet(), None, None).unwrap();
         assert_eq!(sol.status, Status::Solved);
@@ -346,25 +350,7 @@ fn an_end_ramp_bounds_the_path_away_from_the_phase_end_only() {
         },
         EndRamp { index: 1, ..ramp },
     ] {
-        let ocp = Ocp {
-            phases: vec![Phase {
-                name: "string".into(),
-                node: node.clone(),
-                x_bounds: vec![(-INF, INF)],
-                a_bounds: vec![],
-                u_bounds: vec![(-INF, INF)],
-                duration_bounds: (1.0, 1.0),
-                points: 4,
-                guess: PhaseGuess::constant(vec![0.5], vec![], vec![0.0], 1.0),
-                end_ramp: Some(bad),
-            }],
-            n_costs: 1,
-            params: vec![],
-            points: vec![],
-            cost_bounds: vec![],
-            objective: Objective::Cost(0),
-            scheme: Scheme::Radau { elements: 5 },
-        };
+        let ocp = ocp(Some(bad), vec![]);
         let Err(err) = Transcription::new(&ocp) else {
             panic!("{bad:?} accepted");
         };
