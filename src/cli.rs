@@ -554,7 +554,7 @@ pub struct OptimizeArgs {
     )]
     pub torque_margin: f64,
     /// Clearance (m) the periodic problems' approach keeps from the ball at its collocation
-    /// nodes, falling linearly to 0 over its last 10 %, so that the plan does not graze the
+    /// nodes, falling linearly to 0 over its last 1 %, so that the plan does not graze the
     /// ball before its impact (docs/optima.md, "Plans that graze the ball"); at most a tenth
     /// of the ball's radius. Recorded in solution.json as `approach_clearance`.
     #[arg(

@@ -257,7 +257,7 @@ fn a_newton_plan_with_margins_is_rebuilt_from_its_file_as_planned() {
 }
 
 /// `--approach-clearance C` keeps the approach's collocation nodes at h ≥ C, falling
-/// linearly to h ≥ 0 over the approach's last 10 %: warm-started from the sticking QC optimum,
+/// linearly to h ≥ 0 over the approach's last 1 %: warm-started from the sticking QC optimum,
 /// whose approach passes 1 cm inside that bound for C = 2 cm (13 mm from the ball 50 ms before
 /// its impact), the plan moves out to meet it at every node and records C; values outside
 /// [0, r/10] are refused by name.
@@ -276,7 +276,7 @@ fn an_approach_clearance_keeps_the_approach_nodes_away_from_the_ball() {
         let t0 = sol.phase_durations[0];
         (0..n.h.len())
             .filter(|&k| n.phase[k] == 0 && n.t[k] < t0 * (1.0 - 1e-9))
-            .map(|k| n.h[k] - C * ((1.0 - n.t[k] / t0) / 0.1).min(1.0))
+            .map(|k| n.h[k] - C * ((1.0 - n.t[k] / t0) / 0.01).min(1.0))
             .fold(f64::INFINITY, f64::min)
     };
     let plain = plan("0");

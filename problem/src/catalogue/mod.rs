@@ -170,7 +170,7 @@ pub struct ProblemSettings {
     /// limits.
     pub torque_margin: f64,
     /// Clearance (m) the periodic problems' approach keeps from the ball: h ≥ this at its
-    /// collocation nodes, falling linearly to h ≥ 0 over the approach's last 10 % (an
+    /// collocation nodes, falling linearly to h ≥ 0 over the approach's last 1 % (an
     /// `EndRamp` of bf-optim), so that no node of the approach grazes the ball before the
     /// impact (the smoothed contact, eq. 58–59, lets a path pass micrometres from it where
     /// the exact one, the plant's, touches). 0: the paper's h ≥ 0.
