@@ -522,16 +522,17 @@ pub struct OptimizeArgs {
     /// value (e.g. 0.1) asks for a stick phase of real duration.
     #[arg(long, value_name = "SECS", default_value_t = 0.01, allow_hyphen_values = true, value_parser = positive)]
     pub min_stick: f64,
-    /// Impact law of the plan: `stick` (eq. 40, the paper's Sect. 6: the impulse stops the
-    /// contact point and spins the ball) or `newton` (eq. 39, the law of the paper's Sect. 6.2
-    /// simulations and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint
-    /// velocity within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at
-    /// 0.1 m/s or faster; 3 joints). A `stick` plan whose stick phase is short spins the ball
-    /// mostly by the impact and cannot be executed on a Newton plant; a `newton` plan can
-    /// (with `--torque-margin 0.3`: a plan to execute, docs/closed-loop.md). Recorded in
-    /// solution.json as `impact_law`.
-    #[arg(long, value_name = "LAW", default_value = "stick")]
-    pub impact_law: String,
+    /// Impact law of the plan: `newton` (eq. 39, the law of the paper's Sect. 6.2 simulations
+    /// and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint velocity
+    /// within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at 0.1 m/s or
+    /// faster; 3 joints) or `stick` (eq. 40, the paper's Sect. 6: the impulse stops the contact
+    /// point and spins the ball). A `stick` plan whose stick phase is short spins the ball
+    /// mostly by the impact and cannot be executed on a Newton plant. Recorded in
+    /// solution.json as `impact_law` [default: `newton` for the periodic problems on a
+    /// 3-joint finger, the plans `track` executes (docs/closed-loop.md); `stick` otherwise;
+    /// `--impact-law stick` poses the paper's problem, margins and clearance 0 unless given].
+    #[arg(long, value_name = "LAW")]
+    pub impact_law: Option<String>,
     /// Share of the friction cone the plan's stick phases leave unused, in [0, 1): the plan
     /// keeps |λ_∥| ≤ (1 − M) μ_s λ_n, so that `track`'s force loop has grip to spare (it keeps
     /// 20 % of μ_s λ_n for feedback). Recorded in solution.json as `cone_margin`.
@@ -543,27 +544,19 @@ pub struct OptimizeArgs {
     )]
     pub cone_margin: f64,
     /// Share of every joint's torque limit the plan leaves unused, in [0, 1): |τ_i| ≤ (1 − M)
-    /// τ_max,i, so that feedback keeps authority under the limit (0.3 with `--impact-law
-    /// newton` gives both default problems plans that `track` executes within its targets,
-    /// docs/closed-loop.md). Recorded in solution.json as `torque_margin`.
-    #[arg(
-        long,
-        value_name = "M",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub torque_margin: f64,
+    /// τ_max,i, so that feedback keeps authority under the limit. Recorded in solution.json as
+    /// `torque_margin` [default: 0.3 for a `newton` plan of a periodic problem
+    /// (docs/closed-loop.md); 0 otherwise].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub torque_margin: Option<f64>,
     /// Clearance (m) the periodic problems' approach keeps from the ball at its collocation
     /// nodes, falling linearly to 0 over its last 1 %, so that the plan does not graze the
     /// ball before its impact (docs/optima.md, "Plans that graze the ball"); at most a tenth
-    /// of the ball's radius. Recorded in solution.json as `approach_clearance`.
-    #[arg(
-        long,
-        value_name = "M",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub approach_clearance: f64,
+    /// of the ball's radius. Recorded in solution.json as `approach_clearance` [default: for a
+    /// `newton` plan of a periodic problem the gap `track`'s hybrid controller keeps from the
+    /// ball in free flight (5 mm); 0 otherwise].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub approach_clearance: Option<f64>,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4).
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]

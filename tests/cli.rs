@@ -422,7 +422,8 @@ fn optimize_dual_regularization_reaches_the_solver() {
     );
 }
 
-/// Runs `optimize --problem periodic-cot --strategy direct` on `points` Radau points with
+/// Runs `optimize --problem periodic-cot --impact-law stick --strategy direct` (the paper's
+/// problem, which these solver figures were measured on) on `points` Radau points with
 /// `--max-iter max_iter`, no re-integration and the `extra` options, writing to `dir`.
 fn direct_cot_output(
     dir: &std::path::Path,
@@ -434,6 +435,7 @@ fn direct_cot_output(
     bin()
         .current_dir(root())
         .args(["optimize", "--problem", "periodic-cot", "--points", &points])
+        .args(["--impact-law", "stick"])
         .args(["--strategy", "direct", "--max-iter", &max_iter])
         .args(["--verify-rtol", "0"])
         .args(extra)

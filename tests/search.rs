@@ -1,5 +1,6 @@
-//! The default search of `optimize` (`ball_finger::pipeline::search::search`): on
-//! `periodic-qc` it must reach at least the best optimum known before it (J = 0.1065805,
+//! The default search of `optimize` (`ball_finger::pipeline::search::search`) on the paper's
+//! problems (the sticking law, eq. 40, asked for by `--impact-law stick`): on `periodic-qc`
+//! it must reach at least the best optimum known before it (J = 0.1065805,
 //! confirmed as a KKT point of the same transcription by an independent CasADi + IPOPT solve)
 //! with a re-integration that verifies it, bit for bit the same with one and two worker threads; shards of a multi-start
 //! merged must give the unsharded choice; a solution whose re-integration does not verify it
@@ -16,11 +17,16 @@ fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// `optimize --out DIR EXTRA` on the paper's problems: the sticking law (eq. 40) unless
+/// `extra` names `--impact-law` (the figures below are the paper problems' searches).
 fn optimize_in(dir: &Path, threads: Option<&str>, extra: &[&str]) -> std::process::Output {
     let mut c = bin();
     c.current_dir(root())
         .args(["optimize", "--out", dir.to_str().unwrap()])
         .args(extra);
+    if !extra.contains(&"--impact-law") {
+        c.args(["--impact-law", "stick"]);
+    }
     if let Some(t) = threads {
         c.env("RAYON_NUM_THREADS", t);
     }

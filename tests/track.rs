@@ -586,7 +586,8 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `optimize --hops 0 --problem NAME` (the 32-start search that `paper` runs; the global
+/// `optimize --hops 0 --problem NAME --impact-law stick` (the 32-start search of the paper's
+/// problem that `paper` runs; the global
 /// search's lower optima are taps that a Newton plant cannot execute, BENCHMARKS.md "Closed
 /// loop: a continuous saturated command") then `track --controller hybrid --periods 50`
 /// on its solution, as a user runs them; returns tracking.json.
@@ -603,6 +604,8 @@ fn default_optimum_tracked(
         "0",
         "--problem",
         problem,
+        "--impact-law",
+        "stick",
         "--out",
         sol.to_str().unwrap(),
     ]);

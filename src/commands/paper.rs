@@ -64,7 +64,8 @@ const ROBUSTNESS_PERIODS: usize = 10;
 const NEWTON_PLAN: &str = "periodic-cot-human-newton";
 
 /// The closed-loop section's Newton plan: `periodic-cot-human` re-solved with Newton's impact
-/// law (eq. 39; `optimize --impact-law newton --warm-start`) from its sticking optimum
+/// law (eq. 39; `optimize --impact-law newton --torque-margin 0 --approach-clearance 0
+/// --warm-start`) from its sticking optimum
 /// `sticking`, verified, written to `DIR/periodic-cot-human-newton/`, and executed by every
 /// controller ([`crate::paper::closed_loop::comparison_markdown`]).
 fn newton_plan_markdown(
@@ -94,7 +95,7 @@ fn newton_plan_markdown(
         "**The same problem planned with the plant's impact law.** `periodic-cot-human` \
          re-solved with Newton's law at the impact (eq. 39: ω unchanged, the finger's joint \
          velocity after the impact the one Newton's law gives; `optimize --impact-law newton \
-         --warm-start`, decision record 0033), from the sticking optimum above: {} after {} \
+         --torque-margin 0 --approach-clearance 0 --warm-start`, decision record 0033), from the sticking optimum above: {} after {} \
          iterations, J = {:.6} (sticking plan {:.6}), stick phase {:.3} s, {}. Solution: \
          `{NEWTON_PLAN}/solution.json`.\n",
         crate::names::name(&sol.status),
@@ -270,7 +271,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             "one cold solve per problem (`--quick`)".to_string()
         } else {
             format!(
-                "the search of `optimize --hops 0`: {} for every periodic problem (for \
+                "the search of `optimize --hops 0 --impact-law stick` (the paper's \
+                 sticking problem; `optimize` plans for a Newton plant by default, decision \
+                 record 0040): {} for every periodic problem (for \
                  periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
                  relaxes it to 0.01 s); every end point is re-integrated and the best \
                  verified one kept (see ball_finger::pipeline::search). Not `optimize`'s \

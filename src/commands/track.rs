@@ -207,7 +207,8 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         if law == bf_model::ImpactLaw::Newton {
             eprintln!(
                 "note: plans that the hybrid controller executes on a Newton plant, also with \
-                 model error: `optimize --impact-law newton --torque-margin 0.3` \
+                 model error: `optimize` without --impact-law, which plans periodic problems \
+                 for Newton's law with a torque margin and an approach clearance \
                  (docs/closed-loop.md)"
             );
         }

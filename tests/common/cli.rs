@@ -37,9 +37,10 @@ pub fn run(args: &[&str]) -> Output {
 }
 
 /// The optimum of `problem` from the 32-start search (`optimize --hops 0 --problem NAME`, with
-/// `extra` options such as `--starts 4`): the search whose optima `paper` presents and executes
-/// in closed loop (the global search's lower optima are taps that a Newton plant cannot
-/// execute, docs/optima.md).
+/// `extra` options such as `--starts 4`), planned with the sticking law (eq. 40) unless
+/// `extra` names `--impact-law`: the search and problem whose optima `paper` presents and
+/// executes in closed loop (the global search's lower optima are taps that a Newton plant
+/// cannot execute, docs/optima.md).
 pub fn multistart_optimum(problem: &str, extra: &[&str]) -> ball_finger::pipeline::OcpSolution {
     use ball_finger::pipeline::SolutionIo;
     let dir = tmpdir(&format!("multistart-{problem}-{}", extra.join("")));
@@ -54,6 +55,9 @@ pub fn multistart_optimum(problem: &str, extra: &[&str]) -> ball_finger::pipelin
         out,
     ];
     args.extend_from_slice(extra);
+    if !extra.contains(&"--impact-law") {
+        args.extend_from_slice(&["--impact-law", "stick"]);
+    }
     let r = run(&args);
     assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
     let sol = ball_finger::pipeline::OcpSolution::read_json(&dir.join("solution.json")).unwrap();
@@ -61,8 +65,9 @@ pub fn multistart_optimum(problem: &str, extra: &[&str]) -> ball_finger::pipelin
     sol
 }
 
-/// The `periodic-qc` optimum of the 32-start search with 4 starts (`optimize --hops 0
-/// --starts 4`, which reach the 32 starts' optimum), solved once per test binary.
+/// The sticking `periodic-qc` optimum of the 32-start search with 4 starts (`optimize --hops 0
+/// --starts 4 --impact-law stick`, which reach the 32 starts' optimum), solved once per test
+/// binary.
 pub fn qc_optimum() -> &'static ball_finger::pipeline::OcpSolution {
     static SOL: std::sync::OnceLock<ball_finger::pipeline::OcpSolution> =
         std::sync::OnceLock::new();

@@ -181,9 +181,11 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
     })
 }
 
-/// Build the problem settings from the command line.
+/// Build the problem settings from the command line: every option checked, the scene of
+/// `--scene` / `--param` ([`scene_from_args`]) and what the plan is planned for
+/// ([`PlanFor::of`]).
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
-    parse_problem(problem_arg(args))?;
+    let problem = parse_problem(problem_arg(args))?;
     if args.points < 2 {
         bail!("--points must be at least 2 (got {})", args.points);
     }
@@ -209,21 +211,27 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         }
         None => None,
     };
-    let impact_law =
-        PlannedImpact::parse(&args.impact_law).map_err(|e| anyhow!("--impact-law: {e}"))?;
-    for (name, m) in [
-        ("--cone-margin", args.cone_margin),
-        ("--torque-margin", args.torque_margin),
-    ] {
-        if !(0.0..1.0).contains(&m) {
-            bail!("{name} must be in [0, 1) (got {m})");
-        }
+    if !(0.0..1.0).contains(&args.cone_margin) {
+        bail!("--cone-margin must be in [0, 1) (got {})", args.cone_margin);
     }
+    let scene = scene_from_args(args, problem)?;
+    let joints = match &scene {
+        Some(s) => s.links.len(),
+        None => compiled_joints(problem)?,
+    };
+    let plan = PlanFor::of(
+        problem,
+        joints,
+        args.impact_law.as_deref(),
+        args.torque_margin,
+        args.approach_clearance,
+    )?;
     Ok(ProblemSettings {
-        impact_law,
+        impact_law: plan.impact_law,
         cone_margin: args.cone_margin,
-        torque_margin: args.torque_margin,
-        approach_clearance: args.approach_clearance,
+        torque_margin: plan.torque_margin,
+        approach_clearance: plan.approach_clearance,
+        scene,
         points: args.points,
         scheme,
         epsilon: Some(args.epsilon),
@@ -238,6 +246,78 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         proximal_weight: args.proximal_weight,
         ..ProblemSettings::default()
     })
+}
+
+/// The torque margin of a plan meant for `track`'s Newton plant: the share of every joint's
+/// limit left to feedback, with which both default periodic problems' plans meet `track`'s
+/// nominal and robustness targets (docs/decisions/0040-touch-check-and-the-default-plan.md).
+pub const EXECUTABLE_TORQUE_MARGIN: f64 = 0.3;
+
+/// What a plan is planned for: its impact law, the share of the torque limits it leaves to
+/// feedback and the clearance its approach keeps from the ball.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanFor {
+    /// The impact law planned at the touch-down.
+    pub impact_law: PlannedImpact,
+    /// `--torque-margin`.
+    pub torque_margin: f64,
+    /// `--approach-clearance` (m).
+    pub approach_clearance: f64,
+}
+
+impl PlanFor {
+    /// The plan of `problem` on a finger of `joints` joints, from `--impact-law` (`law`),
+    /// `--torque-margin` and `--approach-clearance` where given. The defaults plan for the
+    /// plant that executes the plan (docs/decisions/0040-touch-check-and-the-default-plan.md):
+    /// a periodic problem, which `track` executes on a Newton plant, gets Newton's law
+    /// (eq. 39) where the Newton impact plan exists (3 joints, J_c square), with
+    /// [`EXECUTABLE_TORQUE_MARGIN`] and the clearance that `track`'s hybrid controller keeps
+    /// in free flight; the other problems, and the periodic ones on other fingers, get the
+    /// sticking law (eq. 40) of the paper's Sect. 6 with the exact limits and no clearance.
+    /// The margin's and the clearance's defaults follow the law actually planned, so
+    /// `--impact-law stick` alone poses the paper's problem.
+    pub fn of(
+        problem: Problem,
+        joints: usize,
+        law: Option<&str>,
+        torque_margin: Option<f64>,
+        approach_clearance: Option<f64>,
+    ) -> Result<PlanFor> {
+        let impact_law = match law {
+            Some(text) => PlannedImpact::parse(text).map_err(|e| anyhow!("--impact-law: {e}"))?,
+            None if problem.is_periodic() && joints == 3 => PlannedImpact::Newton,
+            None => PlannedImpact::Stick,
+        };
+        let executable = problem.is_periodic() && impact_law == PlannedImpact::Newton;
+        let torque_margin = match torque_margin {
+            Some(m) if !(0.0..1.0).contains(&m) => {
+                bail!("--torque-margin must be in [0, 1) (got {m})")
+            }
+            Some(m) => m,
+            None if executable => EXECUTABLE_TORQUE_MARGIN,
+            None => 0.0,
+        };
+        let approach_clearance = match approach_clearance {
+            Some(c) => c,
+            None if executable => bf_control::HybridGains::default().clearance.gap,
+            None => 0.0,
+        };
+        Ok(PlanFor {
+            impact_law,
+            torque_margin,
+            approach_clearance,
+        })
+    }
+}
+
+/// The joint count of `problem`'s compiled scene.
+fn compiled_joints(problem: Problem) -> Result<usize> {
+    let id = problem.scene();
+    let text = bf_generated::scene_toml(id.as_str())
+        .with_context(|| format!("problem {problem}: no compiled scene"))?;
+    Ok(bf_codegen::Scene::from_toml_str(text, id.as_str())?
+        .links
+        .len())
 }
 
 /// The `--problem` text (empty when absent: only `optimize merge` runs without it).
@@ -479,8 +559,8 @@ pub fn tap_hint(
         format!(
             "hint: the stick phase is on its minimum ({min_stick} s): the plan spins the ball \
              mostly by the sticking impact (eq. 40), which a plant with Newton's law (`track`'s \
-             default) does not reproduce; --impact-law newton plans an impact such a plant can \
-             execute, --min-stick 0.1 rules such taps out (docs/optima.md)"
+             default) does not reproduce; `optimize` without --impact-law plans a periodic \
+             problem for such a plant, --min-stick 0.1 rules such taps out (docs/optima.md)"
         )
     })
 }
@@ -587,8 +667,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         }
     }
     let name = parse_problem(problem_arg(args))?;
-    let mut settings = settings_from_args(args)?;
-    settings.scene = scene_from_args(args, name)?;
+    let settings = settings_from_args(args)?;
     // Without `--hops` the global search runs for the periodic problems only (the others'
     // default is the continuation; an explicit multi-start of them keeps its best start).
     let hops = hop_settings(args.hops, args.hop_scale)?
@@ -821,6 +900,47 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
 mod tests {
     use super::*;
 
+    /// The defaults plan periodic problems on 3 joints for `track`'s Newton plant (Newton's
+    /// law, the torque margin, the controller's clearance); `--impact-law stick`, other
+    /// fingers and other problems get the paper's problem; given values win.
+    #[test]
+    fn periodic_problems_on_three_joints_plan_for_the_newton_plant_by_default() {
+        let gap = bf_control::HybridGains::default().clearance.gap;
+        let plan = |p: Problem, joints, law, margin, clearance| {
+            PlanFor::of(p, joints, law, margin, clearance).unwrap()
+        };
+        let newton = PlanFor {
+            impact_law: PlannedImpact::Newton,
+            torque_margin: EXECUTABLE_TORQUE_MARGIN,
+            approach_clearance: gap,
+        };
+        let paper = PlanFor {
+            impact_law: PlannedImpact::Stick,
+            torque_margin: 0.0,
+            approach_clearance: 0.0,
+        };
+        for p in [
+            Problem::PeriodicQc,
+            Problem::PeriodicCot,
+            Problem::PeriodicCotHuman,
+        ] {
+            assert_eq!(plan(p, 3, None, None, None), newton);
+            // The paper's problem by name, and fingers without a Newton impact plan.
+            assert_eq!(plan(p, 3, Some("stick"), None, None), paper);
+            assert_eq!(plan(p, 4, None, None, None), paper);
+            // Given values win; the law's defaults fill the rest.
+            let own = plan(p, 3, None, Some(0.1), Some(0.0));
+            assert_eq!((own.torque_margin, own.approach_clearance), (0.1, 0.0));
+            assert_eq!(
+                plan(p, 3, Some("stick"), Some(0.2), None).torque_margin,
+                0.2
+            );
+        }
+        assert_eq!(plan(Problem::Reach, 3, None, None, None), paper);
+        assert!(PlanFor::of(Problem::PeriodicQc, 3, None, Some(1.0), None).is_err());
+        assert!(PlanFor::of(Problem::PeriodicQc, 3, Some("elastic"), None, None).is_err());
+    }
+
     /// Only a sticking plan whose stick phase is on its minimum gets the hint: a longer stick
     /// phase, a Newton plan or a plan without a stick phase does not.
     #[test]
@@ -831,7 +951,7 @@ mod tests {
         let long = [0.5, 0.0102, 0.1];
         let hint = tap_hint(PlannedImpact::Stick, &modes, &tap, 0.01).unwrap();
         assert!(
-            hint.contains("--impact-law newton") && hint.contains("0.01 s"),
+            hint.contains("without --impact-law") && hint.contains("0.01 s"),
             "{hint}"
         );
         assert!(tap_hint(PlannedImpact::Stick, &modes, &long, 0.01).is_none());
