@@ -152,7 +152,7 @@ fn records_without_the_new_figures_still_read() {
 }
 
 #[test]
-#[ignore = "slow: the default periodic-cot search with its refinement (about 25 s CPU, over a \
+#[ignore = "slow: the default search of the paper's periodic-cot with its refinement (about 25 s CPU, over a \
             minute wall on a loaded 2-core machine); run with `cargo test --release --test \
             elementwise_verification -- --ignored`"]
 fn default_periodic_cot_ends_solved_and_verified() {
@@ -164,6 +164,8 @@ fn default_periodic_cot_ends_solved_and_verified() {
             "optimize",
             "--problem",
             "periodic-cot",
+            "--impact-law",
+            "stick",
             "--out",
             out.to_str().unwrap(),
         ])
