@@ -154,6 +154,8 @@ pub struct NodeVars {
     pub tau: Vec<u32>,
     /// T.
     pub duration: u32,
+    /// Index of h among the path outputs (`None` without `h_bounds`).
+    pub h_path: Option<usize>,
 }
 
 /// Settings of a phase's node function.
@@ -449,10 +451,11 @@ pub fn node_function(
         path.push(g.sub(a, sm));
         bounds.push((0.0, f64::INFINITY));
     }
-    if let Some(b) = opt.h_bounds {
+    let h_path = opt.h_bounds.map(|b| {
         path.push(ce.h);
         bounds.push(b);
-    }
+        path.len() - 1
+    });
     if let Some(b) = opt.hdot_bounds {
         path.push(ce.h_dot);
         bounds.push(b);
@@ -485,6 +488,7 @@ pub fn node_function(
             lambda: lam_v,
             tau: tau_v,
             duration: t_v,
+            h_path,
         },
     ))
 }

@@ -1218,11 +1218,17 @@ mod tests {
         let graze = |t: f64| 1e-3 * (t - 0.4f64).powi(2) / 0.01 - 1e-6;
         let g = first_touch(|t| graze(t).min(0.1 * (1.0 - t))).unwrap();
         assert!((g - 0.4).abs() < 0.011, "{g}");
-        // The same dip staying 0.5 clearances above the ball is no touch.
+        // The same dip staying 0.5 clearances above the ball (its minimum 49 µm), then the
+        // approach ending 1 mm short: no touch.
         assert_eq!(
-            first_touch(|t| (graze(t) + 0.5 * c).max(0.1 * (1.0 - t) + 1e-3)),
+            first_touch(|t| (graze(t) + 0.5 * c).min(0.1 * (1.0 - t) + 1e-3)),
             None
         );
+        // The same dip 0.5 clearances lower reaches the ball: a touch where it first does,
+        // 0.1 (t − 0.4)² = 0.5 c + 1 µm, within one sample.
+        let low = first_touch(|t| (graze(t) - 0.5 * c).min(0.1 * (1.0 - t) + 1e-3)).unwrap();
+        let reach = 0.4 - ((0.5 * c + 1e-6) / 0.1f64).sqrt();
+        assert!(low >= reach && low < reach + 1e-3, "{low} vs {reach}");
         // Skimming at h₀ = 0 from 0.8 s to the impact: the touch is at 0.8 s.
         let s = first_touch(|t| if t < 0.8 { 0.5 * (0.8 - t) } else { 0.0 }).unwrap();
         assert!((s - 0.8).abs() < 1.5e-3, "{s}");

@@ -212,8 +212,7 @@ impl PeriodicParts {
             hdot: margin.map(|m| (f64::NEG_INFINITY, -m)),
             duration: (0.01, tmax),
             guess_duration: 1.0,
-            clearance: (settings.approach_clearance > 0.0)
-                .then_some((settings.approach_clearance, APPROACH_CLEARANCE_RAMP)),
+            clearance: Some((settings.approach_clearance, APPROACH_CLEARANCE_RAMP)),
         };
         let stick = PhaseDef {
             mode: PhaseMode::Stick,

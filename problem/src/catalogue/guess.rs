@@ -138,7 +138,7 @@ pub(crate) struct PhaseDef {
     pub(crate) duration: (f64, f64),
     pub(crate) guess_duration: f64,
     /// Extra lower bound on h (m) away from the phase's end and the share of the phase over
-    /// which it falls to 0 (an `EndRamp` on h; with `h` only).
+    /// which it falls to 0 (an `EndRamp` on h; with `h` only; none for a clearance of 0).
     pub(crate) clearance: Option<(f64, f64)>,
 }
 
@@ -173,7 +173,7 @@ pub(crate) fn make_phases(
     }
     let mut out = Vec::new();
     for (k, d) in defs.iter().enumerate() {
-        let (node, _) = node_function(
+        let (node, vars) = node_function(
             scene,
             ph,
             &NodeSettings {
@@ -198,15 +198,13 @@ pub(crate) fn make_phases(
                 xg[i] = xg[i].clamp(lo, hi);
             }
         }
-        // node::node_function pushes h, then ḣ, last among the path outputs.
-        let end_ramp =
-            d.h.and(d.clearance)
-                .filter(|&(c, _)| c > 0.0)
-                .map(|(clearance, ramp)| EndRamp {
-                    index: node.path.len() - 1 - usize::from(d.hdot.is_some()),
-                    clearance,
-                    ramp,
-                });
+        let end_ramp = vars.h_path.zip(d.clearance.filter(|&(c, _)| c > 0.0)).map(
+            |(index, (clearance, ramp))| EndRamp {
+                index,
+                clearance,
+                ramp,
+            },
+        );
         out.push(Phase {
             name: format!("{:?}", d.mode).to_lowercase(),
             node,

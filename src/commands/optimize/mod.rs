@@ -217,7 +217,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     let scene = scene_from_args(args, problem)?;
     let joints = match &scene {
         Some(s) => s.links.len(),
-        None => compiled_joints(problem)?,
+        None => compiled_scene(problem)?.links.len(),
     };
     let plan = PlanFor::of(
         problem,
@@ -310,14 +310,12 @@ impl PlanFor {
     }
 }
 
-/// The joint count of `problem`'s compiled scene.
-fn compiled_joints(problem: Problem) -> Result<usize> {
+/// `problem`'s compiled scene, parsed.
+fn compiled_scene(problem: Problem) -> Result<bf_codegen::Scene> {
     let id = problem.scene();
     let text = bf_generated::scene_toml(id.as_str())
         .with_context(|| format!("problem {problem}: no compiled scene"))?;
-    Ok(bf_codegen::Scene::from_toml_str(text, id.as_str())?
-        .links
-        .len())
+    Ok(bf_codegen::Scene::from_toml_str(text, id.as_str())?)
 }
 
 /// The `--problem` text (empty when absent: only `optimize merge` runs without it).
@@ -495,10 +493,7 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
         None if args.param.is_empty() => return Ok(None),
         // `--param` alone: the problem's compiled scene with other runtime parameters.
         None => {
-            let id = problem.scene();
-            let text = bf_generated::scene_toml(id.as_str())
-                .with_context(|| format!("problem {problem}: no compiled scene"))?;
-            let mut scene = bf_codegen::Scene::from_toml_str(text, id.as_str())?;
+            let mut scene = compiled_scene(problem)?;
             let assignments = super::parse_params(&args.param)?;
             bf_model::registry::set_parameters(&mut scene, &assignments)
                 .map_err(|e| anyhow::anyhow!("--param: {e}"))?;
