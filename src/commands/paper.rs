@@ -1,4 +1,4 @@
-//! `ball-finger paper [--out DIR] [--quick]`: the paper's study (Sect. 6) end to end, as far as
+//! `ball-finger paper [--out DIR] [--quick | --search]`: the paper's study (Sect. 6) end to end, as far as
 //! the pipeline exists today. Every number in the report is computed in this run; the parts not
 //! implemented yet are listed as such (no placeholder numbers).
 //!
@@ -37,6 +37,54 @@ fn stage(len: u64, msg: &str) -> ProgressBar {
     pb
 }
 
+/// The optimum `paper` presents for `problem` posed with `settings`: with `--quick` the cold
+/// solve `strategy` is; with `--search` `optimize`'s default global search; otherwise the
+/// stored optimum of that search ([`crate::paper::stored`]) solved again from its own point.
+fn presented_optimum(
+    args: &PaperArgs,
+    problem: bf_problem::Problem,
+    settings: bf_problem::ProblemSettings,
+    strategy: crate::pipeline::strategy::Strategy,
+) -> Result<(bf_problem::BuiltProblem, bf_problem::OcpSolution)> {
+    if args.quick {
+        return super::optimize::solve_with_progress(problem, settings, strategy);
+    }
+    if args.search {
+        return super::optimize::solve_globally_with_progress(problem, settings, strategy);
+    }
+    let stored = crate::paper::stored::stored_optimum(
+        problem,
+        Some(settings.impact_law.name()),
+        settings.min_stick,
+    )
+    .with_context(|| {
+        format!(
+            "no stored optimum of {problem} with --min-stick {} (data/optima/); \
+                 `paper --search` runs the search",
+            settings.min_stick
+        )
+    })?;
+    let pb = stage(1, &format!("{problem}: stored optimum"));
+    let out = stored
+        .resolve()
+        .with_context(|| format!("the stored optimum {}", stored.path().display()))?;
+    pb.inc(1);
+    pb.finish();
+    Ok(out)
+}
+
+/// The lines of a strategy table ([`bf_problem::solution::records::StrategyReport::table`])
+/// a report shows: the summary, the column heads and the kept chain's stages (marked `*`); a
+/// global search records hundreds of stages.
+fn kept_stages(table: &str) -> String {
+    table
+        .lines()
+        .enumerate()
+        .filter(|(i, l)| *i < 2 || l.starts_with('*'))
+        .map(|(_, l)| format!("{l}\n"))
+        .collect()
+}
+
 /// Push the headings of an embedded markdown document one level down, so it nests under the
 /// report's own section heading.
 fn demote(md: &str) -> String {
@@ -59,31 +107,47 @@ const CLOSED_LOOP_COT_PERIODS: usize = 20;
 /// Periods of the report's robustness tables: the 4th to the 10th decide the target.
 const ROBUSTNESS_PERIODS: usize = 10;
 
-/// Scenario name (directory, figure stem) of the human finger's COT problem planned with
-/// Newton's impact law in the closed-loop section.
-const NEWTON_PLAN: &str = "periodic-cot-human-newton";
+/// Scenario name (directory, figure stem) of `problem`'s plan for the plant (Newton's impact
+/// law) in the closed-loop section.
+fn plan_dir(problem: bf_problem::Problem) -> String {
+    format!("{}-newton", problem.name())
+}
 
-/// The closed-loop section's Newton plan: `periodic-cot-human` re-solved with Newton's impact
-/// law (eq. 39; `optimize --impact-law newton --torque-margin 0 --approach-clearance 0
-/// --warm-start`) from its sticking optimum
-/// `sticking`, verified, written to `DIR/periodic-cot-human-newton/`, and executed by every
-/// controller ([`crate::paper::closed_loop::comparison_markdown`]).
-fn newton_plan_markdown(
+/// The closed-loop section's plan of `problem`: what `optimize --problem P` plans by default
+/// for the plant that executes it (decision record 0040: Newton's impact law, eq. 39, a torque
+/// margin and an approach clearance), the stored optimum of that search re-solved
+/// ([`crate::paper::stored`]) or, with `--search`, the search itself; verified, written to
+/// `DIR/P-newton/`, executed by every controller
+/// ([`crate::paper::closed_loop::comparison_markdown`]) and against perturbed plants.
+/// `sticking` is the problem's sticking optimum above, for comparison.
+fn plan_markdown(
+    args: &PaperArgs,
+    problem: bf_problem::Problem,
     sticking: &bf_problem::OcpSolution,
+    periods: usize,
     dir: &std::path::Path,
 ) -> Result<String> {
-    let settings = bf_problem::ProblemSettings {
-        impact_law: bf_problem::PlannedImpact::Newton,
-        warm_start: Some(sticking.clone()),
-        ..bf_problem::ProblemSettings::default()
+    let name = plan_dir(problem);
+    let plan = super::optimize::PlanFor::of(problem, 3, None, None, None)?;
+    let (built, mut sol) = if args.search {
+        let settings = bf_problem::ProblemSettings {
+            impact_law: plan.impact_law,
+            torque_margin: plan.torque_margin,
+            approach_clearance: plan.approach_clearance,
+            ..bf_problem::ProblemSettings::default()
+        };
+        let strategy = crate::pipeline::strategy::default_strategy(problem, settings.scheme);
+        super::optimize::solve_globally_with_progress(problem, settings, strategy)?
+    } else {
+        let stored =
+            crate::paper::stored::stored_optimum(problem, None, bf_problem::catalogue::MIN_STICK)
+                .with_context(|| format!("no stored plan of {problem} (data/optima/)"))?;
+        stored
+            .resolve()
+            .with_context(|| format!("the stored plan {}", stored.path().display()))?
     };
-    let (problem, mut sol) = super::optimize::solve_with_progress(
-        bf_problem::Problem::PeriodicCotHuman,
-        settings,
-        crate::pipeline::strategy::Strategy::Direct,
-    )?;
-    sol.verification = crate::pipeline::verify::verify(&problem, &sol, 1e-10).ok();
-    crate::pipeline::solution_io::write_solution(&sol, &dir.join(NEWTON_PLAN))?;
+    sol.verification = crate::pipeline::verify::verify(&built, &sol, 1e-10).ok();
+    crate::pipeline::solution_io::write_solution(&sol, &dir.join(&name))?;
     let verified = crate::pipeline::verify::is_verified(&sol);
     let stick = sol
         .modes
@@ -92,12 +156,21 @@ fn newton_plan_markdown(
         .and_then(|k| sol.phase_durations.get(k).copied())
         .unwrap_or(f64::NAN);
     let head = format!(
-        "**The same problem planned with the plant's impact law.** `periodic-cot-human` \
-         re-solved with Newton's law at the impact (eq. 39: ω unchanged, the finger's joint \
-         velocity after the impact the one Newton's law gives; `optimize --impact-law newton \
-         --torque-margin 0 --approach-clearance 0 --warm-start`, decision record 0033), from the sticking optimum above: {} after {} \
-         iterations, J = {:.6} (sticking plan {:.6}), stick phase {:.3} s, {}. Solution: \
-         `{NEWTON_PLAN}/solution.json`.\n",
+        "**`{problem}` planned for the plant.** The plan `optimize --problem {problem}` makes \
+         by default (decision record 0040): Newton's law at the impact (eq. 39: ω unchanged, \
+         the finger's joint velocity after the impact the one Newton's law gives), torques \
+         within {:.0} % of their limits and an approach that keeps {:.0} mm from the ball until \
+         its last 1 %, so that the plant's impact and the controller's feedback have what the \
+         plan assumes; found by the same global search ({}): {} after {} iterations, J = {:.6} \
+         (sticking optimum above {:.6}), stick phase {:.3} s, {}. Solution: \
+         `{name}/solution.json`.\n",
+        100.0 * (1.0 - plan.torque_margin),
+        1e3 * plan.approach_clearance,
+        if args.search {
+            "run here"
+        } else {
+            "its stored optimum, solved again here"
+        },
         crate::names::name(&sol.status),
         sol.iterations,
         sol.objective,
@@ -110,16 +183,12 @@ fn newton_plan_markdown(
         },
     );
     let figures = dir.join("figures");
-    let table = crate::paper::closed_loop::comparison_markdown(
-        NEWTON_PLAN,
-        &sol,
-        CLOSED_LOOP_COT_PERIODS,
-        Some(&figures),
-    )?;
-    // The plan to execute against the perturbed plants as well, as many periods as the QC
-    // optimum's table below (the 10 s periods make it the longer run, about 2 s per plant).
+    let table =
+        crate::paper::closed_loop::comparison_markdown(&name, &sol, periods, Some(&figures))?;
+    // Against the perturbed plants, 10 periods each to keep the report's time (the COT plan's
+    // 10 s periods make it the longer run, about 2 s per plant).
     let robustness =
-        crate::paper::closed_loop::robustness_markdown(NEWTON_PLAN, &sol, ROBUSTNESS_PERIODS)?;
+        crate::paper::closed_loop::robustness_markdown(&name, &sol, ROBUSTNESS_PERIODS)?;
     Ok(format!("{head}\n{table}\n{robustness}"))
 }
 
@@ -256,9 +325,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         report,
         "Three phases (free, stick, free), periodic, {} collocation points per phase (hp \
          Legendre–Gauss–Radau, 3 elements), ε = 0.01, |τ| ≤ 1 N m, h(0) ≥ 0.3 r. The COT period \
-         is bounded by {} s (COT lets the finger rest at no cost). Strategy: {} (the problems \
-         have many local optima; `ball-finger report strategies` compares cold start, \
-         continuation and multi-start). Every solution is verified by re-integrating each \
+         is bounded by {} s (COT lets the finger rest at no cost). The problems have many local \
+         optima (`ball-finger report strategies` compares cold start, continuation, multi-start \
+         and the global search). Strategy: {} Every solution is verified by re-integrating each \
          collocation element from its collocated start state with the optimal torques (DOPRI5, \
          rtol 1e-10; the largest state error at the element ends is the \"re-integration \
          defect\", which measures the discretisation error; docs/decisions/0005); an optimum \
@@ -268,32 +337,37 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         if args.quick { 20 } else { 30 },
         bf_problem::COT_MAX_PERIOD,
         if args.quick {
-            "one cold solve per problem (`--quick`)".to_string()
+            "one cold solve per problem (`--quick`).".to_string()
         } else {
             format!(
-                "the search of `optimize --hops 0 --impact-law stick` (the paper's \
-                 sticking problem; `optimize` plans for a Newton plant by default, decision \
-                 record 0040): {} for every periodic problem (for \
-                 periodic-qc every start first bounds the stick phase to ≥ 0.1 s, then \
-                 relaxes it to 0.01 s); every end point is re-integrated and the best \
-                 verified one kept (see ball_finger::pipeline::search). Not `optimize`'s \
-                 default global search: with it this report takes about twice as long, \
-                 beyond its 90 s (decision record 0039), and its lower optima are taps \
-                 that a Newton plant cannot execute (docs/optima.md, decision record 0029)",
-                crate::pipeline::strategy::multistart_strategy(
+                "the default search of `optimize --impact-law stick` (the paper's sticking \
+                 problem; `optimize` plans for a Newton plant by default, decision record \
+                 0040): {} on a coarse mesh for every periodic problem (for periodic-qc every \
+                 start first bounds the stick phase to ≥ 0.1 s, then relaxes it to 0.01 s), \
+                 then reshaping moves, basin hops and polishing, the best optima re-solved on \
+                 the problem's mesh, re-integrated and hp-refined until one verifies (see \
+                 ball_finger::pipeline::global and docs/optima.md). {}",
+                crate::pipeline::strategy::default_strategy(
                     bf_problem::Problem::PeriodicQc,
                     bf_problem::ProblemSettings::default().scheme
-                )
+                ),
+                if args.search {
+                    "The searches ran in this run (`--search`)."
+                } else {
+                    "The searches' optima (seed 0) are stored in the repository \
+                     (`data/optima/`, with the command that produced each) and were solved \
+                     again here, warm from their own primal-dual points on their own meshes, \
+                     and re-integrated like any optimum: a stored optimum that this program no \
+                     longer reproduces is marked unverified below. `paper --search` runs the \
+                     searches instead (about two more minutes on 2 cores; decision record 0041)."
+                }
             )
         },
         crate::pipeline::verify::VERIFIED_DEFECT
     )?;
-    let (results, failures) = crate::paper::scenarios::run_all(
-        &dir,
-        args.quick,
-        mu_s,
-        &super::optimize::solve_with_progress,
-    )?;
+    let presented =
+        |problem, settings, strategy| presented_optimum(args, problem, settings, strategy);
+    let (results, failures) = crate::paper::scenarios::run_all(&dir, args.quick, mu_s, &presented)?;
     writeln!(
         report,
         "{}",
@@ -310,7 +384,13 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             crate::paper::scenarios::figures_markdown(&r.name)
         )?;
         if let Some(st) = &r.solution.strategy {
-            writeln!(report, "Solve stages:\n\n```text\n{}```\n", st.table())?;
+            writeln!(
+                report,
+                "Solve stages (the search's summary and the kept chain; every stage is in \
+                 `{}/solution.json`):\n\n```text\n{}```\n",
+                r.name,
+                kept_stages(&st.table())
+            )?;
             if let Some(n) = st.basin_hits {
                 writeln!(
                     report,
@@ -339,7 +419,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         let strategy = if args.quick {
             crate::pipeline::strategy::Strategy::Direct
         } else {
-            crate::pipeline::strategy::multistart_strategy(
+            crate::pipeline::strategy::default_strategy(
                 bf_problem::Problem::PeriodicQc,
                 settings.scheme,
             )
@@ -350,7 +430,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             strategy,
             &dir.join(LONG_DIR),
             mu_s,
-            &super::optimize::solve_with_progress,
+            &presented,
         );
         match long {
             Ok(long) => {
@@ -445,38 +525,31 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         pb.finish();
         section(&mut report, md, &format!("`{}`: not executed", r.name))?;
     }
-    // The human finger's COT problem planned with the plant's impact law (eq. 39, decision
-    // 0033), warm-started from its sticking optimum above: under the 1 N m bound the hybrid
-    // controller cannot execute the sticking plan on a Newton plant (the plan's impulse spins
-    // the ball, a Newton impact does not), and it executes this one. Not with --quick, whose
-    // cold direct optimum is not the one above.
-    if let Some(human) = results
-        .iter()
-        .find(|r| r.name == "periodic-cot-human" && !args.quick)
-    {
-        let pb = stage(1, "Newton plan");
-        let md = newton_plan_markdown(&human.solution, &dir);
-        pb.finish();
-        section(
-            &mut report,
-            md,
-            "The Newton plan of `periodic-cot-human` failed",
-        )?;
-    }
-    // The hybrid controller against perturbed plants: the QC optimum (the paper scene's;
-    // 0.6 s periods) beside the Newton plan's table above, 10 periods each, to keep the
-    // report's time. Not with --quick: its cold direct QC optimum rides the torque bound,
-    // where the saturated controller has no feedback left (BENCHMARKS.md).
-    if let Some(qc) = results
-        .iter()
-        .find(|r| r.name == "periodic-qc" && !args.quick)
-    {
-        let md = crate::paper::closed_loop::robustness_markdown(
-            &qc.name,
-            &qc.solution,
-            ROBUSTNESS_PERIODS,
-        );
-        section(&mut report, md, "Robustness table not run")?;
+    // The plans for the plant (eq. 39, decision records 0033, 0040) of the QC problem and the
+    // human finger's COT problem: the hybrid controller cannot execute the sticking optima on
+    // a Newton plant when their short stick phase spins the ball through the sticking
+    // impact's impulse, which a Newton impact does not give, and it executes these. Not with
+    // --quick (a smoke run).
+    for (problem, periods) in [
+        (bf_problem::Problem::PeriodicQc, 20),
+        (
+            bf_problem::Problem::PeriodicCotHuman,
+            CLOSED_LOOP_COT_PERIODS,
+        ),
+    ] {
+        if let Some(sticking) = results
+            .iter()
+            .find(|r| r.name == problem.name() && !args.quick)
+        {
+            let pb = stage(1, &format!("{problem}: plan for the plant"));
+            let md = plan_markdown(args, problem, &sticking.solution, periods, &dir);
+            pb.finish();
+            section(
+                &mut report,
+                md,
+                &format!("The plan of `{problem}` for the plant failed"),
+            )?;
+        }
     }
 
     // Stage 6: stability at the extremes.
@@ -528,10 +601,11 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          dual regularization from 1e-9 to 3e-8 (optim/README.md, \
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
-         the strategy and on rounding (section 4 and `report strategies`); the default \
-         search of each periodic problem takes the best verified end point of 32 seeded \
-         starts. The results are the best the default searches verify, not the best optima \
-         there are (docs/optima.md: how to search further).\n\
+         the strategy and on rounding (section 4 and `report strategies`); the optima shown \
+         are those `optimize`'s default global search verifies with seed 0, not the best \
+         optima there are: on `periodic-cot` other seeds verify optima up to 3× lower, and \
+         the plans for the plant of `periodic-qc` range over J 0.096–0.105 with the seed \
+         (docs/optima.md: how to search further).\n\
          - The COT optima have free phases of 1–9 s whose motion is not open-loop stable: \
          replaying a whole phase from its initial state drifts away from the collocated \
          trajectory (the \"open-loop drift\" in each verification summary, O(10) rad), even \

@@ -12,7 +12,8 @@
 //! * [`extremes`]: numerical stability at the edges of the domain (one file per probe);
 //! * [`speed_accuracy`]: error versus computing time for integrators, collocation meshes, the
 //!   smoothing ε and the generated-kernel variants (one file per study);
-//! * [`report`]: the `report` command's studies (search strategies, the stick-phase minimum).
+//! * [`report`]: the `report` command's studies (search strategies, the stick-phase minimum);
+//! * [`stored`]: the global search's optima that the report presents, stored and re-solved.
 
 pub mod appendix;
 pub mod claims;
@@ -23,3 +24,4 @@ pub mod replan;
 pub mod report;
 pub mod scenarios;
 pub mod speed_accuracy;
+pub mod stored;

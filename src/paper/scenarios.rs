@@ -715,11 +715,11 @@ pub fn run_all(
             points: if quick { 20 } else { 30 },
             ..ProblemSettings::default()
         };
-        // `--quick` is a smoke run of the pipeline: one cold solve per problem. Otherwise the
-        // search of `optimize --hops 0` (`multistart_strategy` says why not the global one).
+        // `--quick` is a smoke run of the pipeline: one cold solve per problem. Otherwise
+        // `optimize`'s default search, which `solve` runs or whose stored optimum it presents.
         let strategy = match name.parse::<Problem>() {
             _ if quick => Strategy::Direct,
-            Ok(p) => crate::pipeline::strategy::multistart_strategy(p, settings.scheme),
+            Ok(p) => crate::pipeline::strategy::default_strategy(p, settings.scheme),
             Err(_) => Strategy::default(),
         };
         match run_scenario(name, settings, strategy, dir, mu_s, solve)

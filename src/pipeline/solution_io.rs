@@ -409,6 +409,22 @@ pub fn internals_path(path: &Path, v: &Value) -> std::path::PathBuf {
     }
 }
 
+/// A solution from the text of its two documents (`solution.json` parsed as `public`, its
+/// internals' text `internals`), named `path` and `ipath` in errors: what
+/// [`SolutionIo::read_json`] does once it has read the files, for documents held elsewhere
+/// (e.g. compiled into the program).
+pub fn read_documents(
+    public: &Value,
+    internals: &str,
+    path: &Path,
+    ipath: &Path,
+) -> Result<OcpSolution, PipelineError> {
+    let internals: Value = serde_json::from_str(internals).map_err(|e| io_err(ipath, e))?;
+    let sol = from_documents(public, &internals, path)?;
+    check_internals_belong(&sol, &internals, path, ipath)?;
+    Ok(sol)
+}
+
 impl SolutionIo for OcpSolution {
     fn write_json(&self, path: &Path) -> Result<(), PipelineError> {
         let name = internals_file(path);
@@ -435,11 +451,7 @@ impl SolutionIo for OcpSolution {
                         format!("cannot read the internals of {} ({e})", path.display()),
                     )
                 })?;
-                let internals: Value =
-                    serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
-                let sol = from_documents(&v, &internals, path)?;
-                check_internals_belong(&sol, &internals, path, &ipath)?;
-                Ok(sol)
+                read_documents(&v, &text, path, &ipath)
             }
             Some((x, _)) => Err(io_err(
                 path,

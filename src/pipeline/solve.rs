@@ -227,8 +227,9 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
 }
 
 /// The problem and settings a solution file records (problem, scene text and runtime
-/// parameters, points, scheme, ε, the planned impact law, the cone and torque margins and the
-/// approach clearance; everything else the defaults, no mesh): its scene is `None`
+/// parameters, points, scheme, ε, the planned impact law, the cone and torque margins, the
+/// approach clearance and the stick-phase bound; everything else the defaults, no mesh): its
+/// scene is `None`
 /// when the text and parameters are the problem's compiled scene's, so the problem is built
 /// on the same kernels as a run without `--scene`. Errors when the file does not record them.
 pub fn settings_of(
@@ -264,6 +265,12 @@ pub fn settings_of(
             cone_margin: sol.cone_margin,
             torque_margin: sol.torque_margin,
             approach_clearance: sol.approach_clearance,
+            // The stick-phase bound is a bound of the problem (eq. 66), recorded with the
+            // search's settings; a file without them was posed with the default.
+            min_stick: sol
+                .search_settings
+                .as_ref()
+                .map_or(ProblemSettings::default().min_stick, |s| s.min_stick),
             ..ProblemSettings::default()
         },
     ))
@@ -288,6 +295,34 @@ pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, Pipeline
         ))
     })?;
     Ok(solution_at(&p, &w.x, sol.status)?)
+}
+
+/// `sol` solved again on its own problem and mesh (rebuilt as in [`recompute_at_own_point`]),
+/// warm from its own primal-dual point: the optimum a solution file records, recomputed by
+/// this program in a few iterations (a stored optimum presented without its search). The
+/// result keeps the file's records of how it was found (strategy, search settings, scene,
+/// refinement); its verification is the caller's.
+pub fn resolve_at_own_point(
+    sol: &OcpSolution,
+) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
+    let (problem, mut settings) = settings_of(sol)?;
+    settings.mesh = sol.refinement.as_ref().map(|r| r.mesh.clone());
+    let p = super::build(problem, &settings)?;
+    let w = exact_warm_start(&p, sol).ok_or_else(|| {
+        PipelineError::Unrecomputable(format!(
+            "its primal-dual point (`nlp_warm` of the internals, {} variables) does not fit its \
+             problem rebuilt on its mesh ({} variables)",
+            sol.nlp_warm.as_ref().map_or(0, |w| w.x.len()),
+            Nlp::num_variables(&p.nlp)
+        ))
+    })?;
+    let mut out = solve_warm(&p, w, None)?;
+    out.strategy.clone_from(&sol.strategy);
+    out.search_settings.clone_from(&sol.search_settings);
+    out.scene_toml.clone_from(&sol.scene_toml);
+    out.scene_params.clone_from(&sol.scene_params);
+    out.refinement.clone_from(&sol.refinement);
+    Ok((p, out))
 }
 
 /// Solves `p` from the primal-dual point `warm` (same NLP layout) with [`warm_settings`].

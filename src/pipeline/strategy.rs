@@ -477,12 +477,8 @@ pub fn default_strategy(problem: Problem, scheme: Scheme) -> Strategy {
 }
 
 /// [`default_strategy`] without the global search (`optimize --hops 0`): for the periodic
-/// problems [`DEFAULT_STARTS`] starts on the problem's own mesh. The paper report runs it
-/// (decision records 0029, 0039): with the global search the report took 175 s against 86 s
-/// with these starts (one after the other on the same machine), beyond its 90 s, and its lower
-/// optima are taps, whose 10 ms stick phase spins the ball through the sticking impact's
-/// impulse, which a plant with Newton's impact law cannot execute (the report's Sect. 6.2;
-/// BENCHMARKS.md, "Closed loop: a continuous saturated command").
+/// problems [`DEFAULT_STARTS`] starts on the problem's own mesh, a cheaper search whose optima
+/// depend more on the seed (decision record 0029).
 pub fn multistart_strategy(problem: Problem, scheme: Scheme) -> Strategy {
     match default_strategy(problem, scheme) {
         Strategy::Multistart { seed, .. } => Strategy::Multistart {

@@ -38,9 +38,9 @@ pub fn run(args: &[&str]) -> Output {
 
 /// The optimum of `problem` from the 32-start search (`optimize --hops 0 --problem NAME`, with
 /// `extra` options such as `--starts 4`), planned with the sticking law (eq. 40) unless
-/// `extra` names `--impact-law`: the search and problem whose optima `paper` presents and
-/// executes in closed loop (the global search's lower optima are taps that a Newton plant
-/// cannot execute, docs/optima.md).
+/// `extra` names `--impact-law`: the paper's problem by the cheaper search, whose optima have
+/// stick phases of real duration (the global search's lower optima are taps that a Newton
+/// plant cannot execute, docs/optima.md).
 pub fn multistart_optimum(problem: &str, extra: &[&str]) -> ball_finger::pipeline::OcpSolution {
     use ball_finger::pipeline::SolutionIo;
     let dir = tmpdir(&format!("multistart-{problem}-{}", extra.join("")));

@@ -39,7 +39,8 @@ mod shards;
 
 use arm::run_reach_arm;
 pub use progress::{
-    iteration_spinner, refine_with_progress, search_with_progress, solve_with_progress,
+    iteration_spinner, refine_with_progress, search_with_progress, solve_globally_with_progress,
+    solve_with_progress,
 };
 pub use shards::merge;
 

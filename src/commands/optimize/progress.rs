@@ -23,16 +23,36 @@ pub fn iteration_spinner(label: &str) -> ProgressBar {
 /// Solve with `strategy` behind a progress spinner that shows each finished stage; every end
 /// point is re-integrated, a verified one is preferred and an unverified optimum that beats
 /// the best verified one is hp-refined until it verifies ([`search_with_progress`] without the
-/// global search, as `optimize --hops 0`: the paper report's searches,
-/// [`crate::pipeline::strategy::multistart_strategy`] says why); what still fails is flagged
-/// in the tables.
+/// global search, as `optimize --hops 0`); what still fails is flagged in the tables.
 pub fn solve_with_progress(
     name: Problem,
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    let policy = VerifyPolicy::default();
-    let found = search_with_progress(name, settings, strategy, Shard::WHOLE, &policy)?;
+    best_found(name, settings, strategy, &VerifyPolicy::default())
+}
+
+/// [`solve_with_progress`] with `optimize`'s default global search (coarse sampling,
+/// reshaping, basin hopping and polishing, [`search::DEFAULT_HOPS`]): what `paper --search`
+/// runs, and what produced the optima `paper` presents otherwise
+/// ([`crate::paper::stored`]).
+pub fn solve_globally_with_progress(
+    name: Problem,
+    settings: ProblemSettings,
+    strategy: Strategy,
+) -> Result<(BuiltProblem, OcpSolution)> {
+    let policy = VerifyPolicy::default().global(search::DEFAULT_HOPS);
+    best_found(name, settings, strategy, &policy)
+}
+
+/// The chosen solution of [`search_with_progress`] with its problem.
+fn best_found(
+    name: Problem,
+    settings: ProblemSettings,
+    strategy: Strategy,
+    policy: &VerifyPolicy,
+) -> Result<(BuiltProblem, OcpSolution)> {
+    let found = search_with_progress(name, settings, strategy, Shard::WHOLE, policy)?;
     let (p, sol) = found.best()?;
     let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
     Ok((p, sol))
