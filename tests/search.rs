@@ -217,7 +217,7 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
     assert!(hits >= 1);
     assert_eq!(m["strategy"]["basin_hits"], w["strategy"]["basin_hits"]);
     assert!(
-        merged_out.contains(&format!("reached by {hits} of")),
+        merged_out.contains(&format!("basin: {hits} of")),
         "{merged_out}"
     );
     let hops = w["strategy"]["records"]

@@ -391,12 +391,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 r.name,
                 kept_stages(&st.table())
             )?;
-            if let Some(n) = st.basin_hits {
-                writeln!(
-                    report,
-                    "Basin: the optimum was reached by {n} of the distinct sampled optima and \
-                     basin hops of the global search.\n"
-                )?;
+            if let Some(line) = crate::pipeline::search::basin_line(st) {
+                writeln!(report, "Global search, {line}.\n")?;
             }
         }
         if let Some(v) = &r.solution.verification {

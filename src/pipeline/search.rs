@@ -960,6 +960,18 @@ impl Landscape for OcpLandscape<'_> {
     }
 }
 
+/// What the global search's [`StrategyReport::basin_hits`] says, as `optimize` and `paper`
+/// print it (`None` where no global search ran).
+pub fn basin_line(report: &StrategyReport) -> Option<String> {
+    report.basin_hits.map(|n| {
+        format!(
+            "basin: {n} of the distinct sampled optima and basin hops ended in the optimum's \
+             basin (its shape: objective and every phase duration within {:.0} %)",
+            100.0 * SHAPE_RTOL
+        )
+    })
+}
+
 /// Whether two end points have the same shape: objectives within [`SHAPE_RTOL`] and every
 /// phase duration within [`SHAPE_RTOL`] relative or 5 ms (the reshaping's origins differ
 /// in shape, so that the moves are not spent on variants of one basin).
@@ -1053,7 +1065,7 @@ impl Search {
     /// then polishing, on the candidates' own mesh. Runs only after a multi-start; hops are
     /// numbered on from its starts (their records' chain index), every distinct optimum a hop
     /// found joins the candidates, and [`Search::basin_hits`] counts the candidates and hops
-    /// that ended at the best. Depends on the candidates' values only (not their order):
+    /// that ended in the best's basin (its shape, [`same_shape`]). Depends on the candidates' values only (not their order):
     /// shards merged explore as the unsharded run does.
     pub fn explore(
         &mut self,

@@ -74,8 +74,9 @@ pub struct StrategyReport {
     pub iterations: usize,
     /// Wall time (s).
     pub seconds: f64,
-    /// Distinct sampled optima and basin hops of the global search that ended at the kept
-    /// optimum (`None`: no global search ran, or a file from before it).
+    /// Distinct sampled optima and basin hops of the global search that ended in the basin of
+    /// its best point (the same shape: objective and phase durations within 2 %; `None`: no
+    /// global search ran, or a file from before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub basin_hits: Option<usize>,
 }

@@ -839,10 +839,12 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         }
     }
     // How much evidence there is for this optimum: a basin reached once is a lottery win.
-    if let Some(n) = sol.strategy.as_ref().and_then(|r| r.basin_hits) {
-        crate::outln!(
-            "basin: the optimum was reached by {n} of the distinct sampled optima and basin hops"
-        )?;
+    if let Some(line) = sol
+        .strategy
+        .as_ref()
+        .and_then(crate::pipeline::search::basin_line)
+    {
+        crate::outln!("{line}")?;
     }
     if sol.problem.starts_with("periodic-cot") {
         crate::outln!(

@@ -374,10 +374,12 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         sol.objective,
         sol.period
     )?;
-    if let Some(n) = sol.strategy.as_ref().and_then(|r| r.basin_hits) {
-        crate::outln!(
-            "basin: the optimum was reached by {n} of the distinct sampled optima and basin hops"
-        )?;
+    if let Some(line) = sol
+        .strategy
+        .as_ref()
+        .and_then(crate::pipeline::search::basin_line)
+    {
+        crate::outln!("{line}")?;
     }
     print_wrote(&args.out, &sol)?;
     if let Some(f) = failure_of(&sol) {
