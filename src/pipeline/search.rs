@@ -1065,7 +1065,8 @@ impl Search {
     /// then polishing, on the candidates' own mesh. Runs only after a multi-start; hops are
     /// numbered on from its starts (their records' chain index), every distinct optimum a hop
     /// found joins the candidates, and [`Search::basin_hits`] counts the candidates and hops
-    /// that ended in the best's basin (its shape, [`same_shape`]). Depends on the candidates' values only (not their order):
+    /// that ended in the best's basin (its shape: objective and phase durations within
+    /// [`SHAPE_RTOL`]). Depends on the candidates' values only (not their order):
     /// shards merged explore as the unsharded run does.
     pub fn explore(
         &mut self,
