@@ -508,7 +508,8 @@ pub struct OptimizeArgs {
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
     pub hops: Option<usize>,
     /// Relative size of a basin hop: each phase duration is scaled by e^(s·u), u uniform in
-    /// [−1, 1] (default 0.3).
+    /// [−1, 1], and the joint angles shifted by up to 0.6·s rad (default 0.3); every other
+    /// round of hops is 8/3 times as wide.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub hop_scale: Option<f64>,
     /// Run shard k of m of the multi-start (`k/m`, 1 ≤ k ≤ m): the starts whose index is

@@ -599,8 +599,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          - The periodic problems have many local optima; which one a solve reaches depends on \
          the strategy and on rounding (section 4 and `report strategies`); the optima shown \
          are those `optimize`'s default global search verifies with seed 0, not the best \
-         optima there are: on `periodic-cot` other seeds verify optima up to 3× lower, and \
-         the plans for the plant of `periodic-qc` range over J 0.096–0.105 with the seed \
+         optima there are: on `periodic-cot` other seeds verify optima up to 3× lower \
          (docs/optima.md: how to search further).\n\
          - The COT optima have free phases of 1–9 s whose motion is not open-loop stable: \
          replaying a whole phase from its initial state drifts away from the collocated \

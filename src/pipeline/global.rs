@@ -13,7 +13,7 @@
 //!   shapes have all been moved.
 //! * Exploitation ([`exploit`]): monotonic basin hopping. Each round perturbs the current best
 //!   point [`HopSettings::batch`] times ([`Landscape::hop`], hop h seeded by h alone, scale
-//!   [`HopSettings::scale`]), solves locally, and keeps a result only if it ranks strictly
+//!   [`HopSettings::scale`], every other round that times [`HopSettings::wide`]), solves locally, and keeps a result only if it ranks strictly
 //!   better ([`Landscape::better`]). The search stops when the best optimum has been reached
 //!   from at least [`HopSettings::confirmations`] starts or hops ([`Landscape::same`]) and the
 //!   last
@@ -89,6 +89,9 @@ pub struct HopSettings {
     pub patience: usize,
     /// Relative size of a hop's perturbation.
     pub scale: f64,
+    /// Factor of the hops' size in every other round (1: one size): wide hops reach basins
+    /// that hops of [`HopSettings::scale`] fall back from, small ones the neighbouring optima.
+    pub wide: f64,
     /// Relative size of a polishing hop's perturbation.
     pub polish_scale: f64,
     /// Polishing rounds at most (each of [`HopSettings::batch`] hops).
@@ -174,6 +177,15 @@ pub fn exploit<L: Landscape>(
     // 0042).
     let mut reached = all.iter().filter(|p| l.same(p, &best)).count();
     let seed_of = |h: usize| settings.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ h as u64;
+    // Rounds alternate between small and wide hops (the round, not the hop, so that every
+    // origin of the pool gets both).
+    let scale_of = |h: usize| {
+        if (h / batch) % 2 == 1 {
+            settings.scale * settings.wide
+        } else {
+            settings.scale
+        }
+    };
     while hop < budget {
         if reached >= settings.confirmations && since >= settings.patience {
             out.converged = true;
@@ -184,13 +196,7 @@ pub fn exploit<L: Landscape>(
         hop += n;
         let results: Vec<_> = jobs
             .par_iter()
-            .map(|&(h, o)| {
-                (
-                    h,
-                    o,
-                    l.hop(&pool[o], seed_of(h), settings.scale, first_id + h),
-                )
-            })
+            .map(|&(h, o)| (h, o, l.hop(&pool[o], seed_of(h), scale_of(h), first_id + h)))
             .collect();
         for (h, o, r) in results {
             since += 1;
@@ -407,6 +413,7 @@ mod tests {
         confirmations: 3,
         patience: 20,
         scale: 2.5,
+        wide: 1.0,
         polish_scale: 0.3,
         polish_rounds: 2,
         seed: 0,
