@@ -1,6 +1,8 @@
-//! `ball-finger paper [--out DIR] [--quick | --search]`: the paper's study (Sect. 6) end to end, as far as
-//! the pipeline exists today. Every number in the report is computed in this run; the parts not
-//! implemented yet are listed as such (no placeholder numbers).
+//! `ball-finger paper [--out DIR] [--quick | --search]`: the paper's study (Sect. 6) end to
+//! end, as far as the pipeline exists today. Every number in the report is computed in this
+//! run (the optima of Sect. 6.1 and the plans of the closed loop are the global search's,
+//! stored and solved again here unless `--search` runs the searches, decision record 0041);
+//! the parts not implemented yet are listed as such (no placeholder numbers).
 //!
 //! Stages: (1) code generation for every built-in scene with op counts and timing (replaces the
 //! Maple step, Sect. 5); (2) kernel verification at sample states: compiled kernels against the
