@@ -398,6 +398,7 @@ fn refine_until_verified(
         .verification
         .as_ref()
         .and_then(path_only_excess);
+    let mut defects = DefectProgress::new(cur.solution.verification.as_ref().map(|v| v.max_defect));
     for _ in 0..policy.refine_attempts {
         if is_verified(&cur.solution) {
             break;
@@ -469,8 +470,13 @@ fn refine_until_verified(
                 let now = v.and_then(path_only_excess);
                 let no_progress = path_stalled(before, now);
                 before = now;
+                // A candidate whose defect does not fall is not brought to verify by finer
+                // meshes either: a `periodic-cot` candidate kept a defect of 1.8e2 through five
+                // refinements (BENCHMARKS.md, "Refinements whose defect does not fall").
+                let fails = defect.is_nan() || defect > VERIFIED_DEFECT;
+                let defect_stalled = fails && defects.stalled(defect);
                 cur = next;
-                if no_progress {
+                if no_progress || defect_stalled {
                     break;
                 }
                 if stuck {
@@ -485,6 +491,45 @@ fn refine_until_verified(
         tol *= 0.1;
     }
     (cur, records)
+}
+
+/// Factor by which a refinement must lower the lowest re-integration defect of a candidate's
+/// refinements so far to count as progress.
+pub const DEFECT_PROGRESS: f64 = 0.5;
+
+/// Refinements in a row without progress on the defect after which a candidate's refinements
+/// stop.
+pub const DEFECT_STALLS: usize = 2;
+
+/// The defects of a candidate's refinements: progress is a defect below [`DEFECT_PROGRESS`]
+/// times the lowest one so far (the candidate's own counts); [`DEFECT_STALLS`] refinements in
+/// a row without it end the refinements. Defects that are not finite are no progress.
+#[derive(Debug, Clone, Copy)]
+struct DefectProgress {
+    lowest: f64,
+    stalls: usize,
+}
+
+impl DefectProgress {
+    fn new(start: Option<f64>) -> Self {
+        DefectProgress {
+            lowest: start.filter(|d| d.is_finite()).unwrap_or(f64::INFINITY),
+            stalls: 0,
+        }
+    }
+
+    /// Records the defect of the next refinement; whether the refinements should stop.
+    fn stalled(&mut self, defect: f64) -> bool {
+        if defect.is_finite() && defect < DEFECT_PROGRESS * self.lowest {
+            self.stalls = 0;
+        } else {
+            self.stalls += 1;
+        }
+        if defect.is_finite() {
+            self.lowest = self.lowest.min(defect);
+        }
+        self.stalls >= DEFECT_STALLS
+    }
 }
 
 /// Factor by which a refinement must shrink how far the path check of a candidate whose
@@ -1157,7 +1202,7 @@ impl Search {
 
 #[cfg(test)]
 mod tests {
-    use super::{path_stalled, refine_in_order};
+    use super::{DefectProgress, path_stalled, refine_in_order};
 
     /// The period continuation of the starts ([`super::hold_the_period`]) on the coarse mesh of
     /// the global search: start 27 of `periodic-cot-human` seed 5 solved plainly ends on the
@@ -1316,6 +1361,28 @@ mod tests {
             .map(|(k, _, _)| *k)
             .collect::<Vec<_>>();
         assert_eq!(released, [1, 3]);
+    }
+
+    /// The refinements stop after two in a row that do not halve the lowest defect so far, on
+    /// the measured sequences of `periodic-cot` seed 8 (BENCHMARKS.md, "Refinements whose
+    /// defect does not fall"): a candidate stuck at 1.8e2 stops at its second refinement; one
+    /// whose defect falls unevenly (0.14, 0.026, 0.037, 0.0015, 0.0010) is refined on.
+    #[test]
+    fn refinements_stop_when_the_defect_does_not_fall() {
+        let stops = |start: f64, seq: &[f64]| {
+            let mut p = DefectProgress::new(Some(start));
+            seq.iter().position(|&d| p.stalled(d))
+        };
+        assert_eq!(stops(1.8e2, &[1.8e2, 1.8e2, 1.8e2, 1.8e2, 1.8e2]), Some(1));
+        assert_eq!(
+            stops(5.0e-1, &[1.4e-1, 2.6e-2, 3.7e-2, 1.5e-3, 1.0e-3]),
+            None
+        );
+        // Non-finite defects are no progress, and a start without a defect counts as none.
+        assert_eq!(stops(1.0, &[f64::NAN, f64::INFINITY]), Some(1));
+        let mut p = DefectProgress::new(None);
+        assert!(!p.stalled(1.0));
+        assert!(!p.stalled(0.4));
     }
 
     /// The refinements stop on a path check that does not move towards its allowance and go
