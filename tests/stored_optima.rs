@@ -158,7 +158,7 @@ fn paper_refuses_search_with_quick() {
 /// writes the new results into `data/optima/` instead (compact JSON), like the golden files
 /// of the generator.
 #[test]
-#[ignore = "runs six global searches (about 4 min of CPU on 2 cores)"]
+#[ignore = "runs six global searches (about 3 min of CPU, 2 min of wall time on 2 cores)"]
 fn the_searches_still_find_the_stored_optima() {
     use ball_finger::pipeline::SolutionIo;
     let overwrite = std::env::var("BF_OVERWRITE_OPTIMA").as_deref() == Ok("1");

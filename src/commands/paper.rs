@@ -75,18 +75,6 @@ fn presented_optimum(
     Ok(out)
 }
 
-/// The lines of a strategy table ([`bf_problem::solution::records::StrategyReport::table`])
-/// a report shows: the summary, the column heads and the kept chain's stages (marked `*`); a
-/// global search records hundreds of stages.
-fn kept_stages(table: &str) -> String {
-    table
-        .lines()
-        .enumerate()
-        .filter(|(i, l)| *i < 2 || l.starts_with('*'))
-        .map(|(_, l)| format!("{l}\n"))
-        .collect()
-}
-
 /// Push the headings of an embedded markdown document one level down, so it nests under the
 /// report's own section heading.
 fn demote(md: &str) -> String {
@@ -132,12 +120,7 @@ fn plan_markdown(
     let name = plan_dir(problem);
     let plan = super::optimize::PlanFor::of(problem, 3, None, None, None)?;
     let (built, mut sol) = if args.search {
-        let settings = bf_problem::ProblemSettings {
-            impact_law: plan.impact_law,
-            torque_margin: plan.torque_margin,
-            approach_clearance: plan.approach_clearance,
-            ..bf_problem::ProblemSettings::default()
-        };
+        let settings = plan.apply(bf_problem::ProblemSettings::default());
         let strategy = crate::pipeline::strategy::default_strategy(problem, settings.scheme);
         super::optimize::solve_globally_with_progress(problem, settings, strategy)?
     } else {
@@ -391,7 +374,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 "Solve stages (the search's summary and the kept chain; every stage is in \
                  `{}/solution.json`):\n\n```text\n{}```\n",
                 r.name,
-                kept_stages(&st.table())
+                st.kept_table()
             )?;
             if let Some(line) = crate::pipeline::search::basin_line(st) {
                 writeln!(report, "Global search, {line}.\n")?;

@@ -2,7 +2,7 @@
 //! sticking impact law of eq. 40) and the plan it executes in closed loop (Sect. 6.2, Newton's
 //! law eq. 39): the verified results of `optimize`'s default global search (seed 0;
 //! [`crate::pipeline::global`]), stored under `data/optima/` and compiled into the program, so
-//! that the report shows the global search's optima without spending the two to three minutes
+//! that the report shows the global search's optima without spending the three minutes
 //! of CPU those searches take on two cores (decision record 0041).
 //!
 //! * [`STORED_OPTIMA`]: one entry per presented problem, with the command that produced it
@@ -120,13 +120,10 @@ impl StoredOptimum {
 
     /// The stored solution as `optimize` wrote it.
     pub fn solution(&self) -> Result<OcpSolution, PipelineError> {
-        let path = self.path().join("solution.json");
-        let public: serde_json::Value = serde_json::from_str(self.solution)
-            .map_err(|e| PipelineError::Unrecomputable(format!("{}: {e}", path.display())))?;
         crate::pipeline::solution_io::read_documents(
-            &public,
+            self.solution,
             self.internals,
-            &path,
+            &self.path().join("solution.json"),
             &self.path().join("solution-internals.json"),
         )
     }

@@ -530,6 +530,64 @@ mod tests {
         }
     }
 
+    /// [`Rastrigin`] that records the scale of every hop by the hop's index.
+    struct Recorded {
+        inner: Rastrigin,
+        scales: std::sync::Mutex<Vec<(usize, f64)>>,
+    }
+
+    impl Landscape for Recorded {
+        type Point = f64;
+        fn sample(&self, k: usize) -> Option<f64> {
+            self.inner.sample(k)
+        }
+        fn hop(&self, from: &f64, hop: u64, scale: f64, id: usize) -> Option<f64> {
+            self.scales.lock().unwrap().push((id, scale));
+            self.inner.hop(from, hop, scale, id)
+        }
+        fn better(&self, a: &f64, b: &f64) -> bool {
+            self.inner.better(a, b)
+        }
+        fn same(&self, a: &f64, b: &f64) -> bool {
+            self.inner.same(a, b)
+        }
+    }
+
+    /// Rounds of hops alternate between the small and the wide size, whole rounds at a time
+    /// (so every origin of the pool gets both), and the polishing keeps its own size.
+    #[test]
+    fn every_other_round_of_hops_is_wide() {
+        let l = Recorded {
+            inner: Rastrigin { seed: 2 },
+            scales: Default::default(),
+        };
+        let ks: Vec<usize> = (0..STARTS).collect();
+        let pts: Vec<f64> = sample(&l, &ks).into_iter().filter_map(|(_, p)| p).collect();
+        let settings = HopSettings {
+            budget: 12,
+            patience: 100,
+            wide: 3.0,
+            polish_rounds: 1,
+            ..SETTINGS
+        };
+        exploit(&l, &pts, &settings, STARTS);
+        let mut scales = l.scales.into_inner().unwrap();
+        scales.sort_by_key(|&(id, _)| id);
+        assert_eq!(scales.len(), 12 + settings.batch);
+        for &(id, scale) in &scales[..12] {
+            let round = (id - STARTS) / settings.batch;
+            let want = if round % 2 == 1 { 7.5 } else { 2.5 };
+            assert_eq!(scale, want, "hop {id}");
+        }
+        // The polishing round: a plain re-solve, then hops of the polishing size.
+        assert_eq!(scales[12].1, 0.0);
+        assert!(
+            scales[13..]
+                .iter()
+                .all(|&(_, s)| s == settings.polish_scale)
+        );
+    }
+
     /// The result does not depend on the number of worker threads, and the search is
     /// monotonic: the best value never rises from the sampled best.
     #[test]

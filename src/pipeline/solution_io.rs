@@ -409,20 +409,46 @@ pub fn internals_path(path: &Path, v: &Value) -> std::path::PathBuf {
     }
 }
 
-/// A solution from the text of its two documents (`solution.json` parsed as `public`, its
-/// internals' text `internals`), named `path` and `ipath` in errors: what
-/// [`SolutionIo::read_json`] does once it has read the files, for documents held elsewhere
-/// (e.g. compiled into the program).
+/// A solution from the text of its two documents (`solution.json` as `public`, the internals
+/// it names as `internals`), named `path` and `ipath` in errors: [`SolutionIo::read_json`] for
+/// documents held elsewhere (e.g. compiled into the program), the same checks included.
 pub fn read_documents(
-    public: &Value,
+    public: &str,
     internals: &str,
     path: &Path,
     ipath: &Path,
 ) -> Result<OcpSolution, PipelineError> {
-    let internals: Value = serde_json::from_str(internals).map_err(|e| io_err(ipath, e))?;
-    let sol = from_documents(public, &internals, path)?;
-    check_internals_belong(&sol, &internals, path, ipath)?;
-    Ok(sol)
+    from_texts(public, path, |_| {
+        Ok((internals.to_string(), ipath.to_path_buf()))
+    })
+}
+
+/// The solution of the `solution.json` text `s` (named `path` in errors): before schema 2 the
+/// record itself; of schema 2 with its internals, whose text and path `internals` gives for
+/// the parsed document.
+fn from_texts(
+    s: &str,
+    path: &Path,
+    internals: impl FnOnce(&Value) -> Result<(String, std::path::PathBuf), PipelineError>,
+) -> Result<OcpSolution, PipelineError> {
+    let v: Value = serde_json::from_str(s).map_err(|e| io_err(path, e))?;
+    match v.get("schema_version").map(|x| (x, x.as_u64())) {
+        None => serde_json::from_value(v).map_err(|e| io_err(path, e)),
+        Some((_, Some(SCHEMA_VERSION))) => {
+            let (text, ipath) = internals(&v)?;
+            let internals: Value = serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
+            let sol = from_documents(&v, &internals, path)?;
+            check_internals_belong(&sol, &internals, path, &ipath)?;
+            Ok(sol)
+        }
+        Some((x, _)) => Err(io_err(
+            path,
+            format!(
+                "schema_version {x} is not one this program reads (it reads {SCHEMA_VERSION} \
+                 and files without schema_version)"
+            ),
+        )),
+    }
 }
 
 impl SolutionIo for OcpSolution {
@@ -439,28 +465,16 @@ impl SolutionIo for OcpSolution {
     fn read_json(path: &Path) -> Result<OcpSolution, PipelineError> {
         let s =
             std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
-        let v: Value = serde_json::from_str(&s).map_err(|e| io_err(path, e))?;
-        match v.get("schema_version").map(|x| (x, x.as_u64())) {
-            // Before schema 2: the record itself.
-            None => serde_json::from_value(v).map_err(|e| io_err(path, e)),
-            Some((_, Some(SCHEMA_VERSION))) => {
-                let ipath = internals_path(path, &v);
-                let text = std::fs::read_to_string(&ipath).map_err(|e| {
-                    io_err(
-                        &ipath,
-                        format!("cannot read the internals of {} ({e})", path.display()),
-                    )
-                })?;
-                read_documents(&v, &text, path, &ipath)
-            }
-            Some((x, _)) => Err(io_err(
-                path,
-                format!(
-                    "schema_version {x} is not one this program reads (it reads {SCHEMA_VERSION} \
-                     and files without schema_version)"
-                ),
-            )),
-        }
+        from_texts(&s, path, |v| {
+            let ipath = internals_path(path, v);
+            let text = std::fs::read_to_string(&ipath).map_err(|e| {
+                io_err(
+                    &ipath,
+                    format!("cannot read the internals of {} ({e})", path.display()),
+                )
+            })?;
+            Ok((text, ipath))
+        })
     }
 
     fn write_torques_csv(&self, path: &Path) -> Result<(), PipelineError> {

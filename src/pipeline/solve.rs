@@ -276,35 +276,11 @@ pub fn settings_of(
     ))
 }
 
-/// `sol` recomputed at its own primal point ([`OcpSolution::nlp_warm`]) on its own problem,
-/// rebuilt from what the solution records (problem, scene text and runtime parameters, mesh,
-/// ε): objective, cost states and durations as that NLP gives them, whatever numbers the
-/// file states. Errors when the solution does not record enough to rebuild its NLP or its
-/// point does not fit the rebuilt NLP.
-pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, PipelineError> {
-    let fail = |why: String| PipelineError::Unrecomputable(why);
-    let (problem, mut settings) = settings_of(sol)?;
-    settings.mesh = sol.refinement.as_ref().map(|r| r.mesh.clone());
-    let p = super::build(problem, &settings)?;
-    let w = exact_warm_start(&p, sol).ok_or_else(|| {
-        fail(format!(
-            "its primal point (`nlp_warm` of the internals, {} variables) does not fit its \
-             problem rebuilt on its mesh ({} variables)",
-            sol.nlp_warm.as_ref().map_or(0, |w| w.x.len()),
-            Nlp::num_variables(&p.nlp)
-        ))
-    })?;
-    Ok(solution_at(&p, &w.x, sol.status)?)
-}
-
-/// `sol` solved again on its own problem and mesh (rebuilt as in [`recompute_at_own_point`]),
-/// warm from its own primal-dual point: the optimum a solution file records, recomputed by
-/// this program in a few iterations (a stored optimum presented without its search). The
-/// result keeps the file's records of how it was found (strategy, search settings, scene,
-/// refinement); its verification is the caller's.
-pub fn resolve_at_own_point(
-    sol: &OcpSolution,
-) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
+/// `sol`'s own problem rebuilt from what the solution records (problem, scene text and
+/// runtime parameters, mesh, ε, the plan's law, margins and bounds, [`settings_of`]) and its
+/// own primal-dual point ([`OcpSolution::nlp_warm`]) on it. Errors when the solution does not
+/// record enough to rebuild its NLP or its point does not fit the rebuilt NLP.
+pub fn own_problem(sol: &OcpSolution) -> Result<(BuiltProblem, &WarmStart), PipelineError> {
     let (problem, mut settings) = settings_of(sol)?;
     settings.mesh = sol.refinement.as_ref().map(|r| r.mesh.clone());
     let p = super::build(problem, &settings)?;
@@ -316,6 +292,25 @@ pub fn resolve_at_own_point(
             Nlp::num_variables(&p.nlp)
         ))
     })?;
+    Ok((p, w))
+}
+
+/// `sol` recomputed at its own primal point on its own problem ([`own_problem`]): objective,
+/// cost states and durations as that NLP gives them, whatever numbers the file states.
+pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, PipelineError> {
+    let (p, w) = own_problem(sol)?;
+    Ok(solution_at(&p, &w.x, sol.status)?)
+}
+
+/// `sol` solved again on its own problem, warm from its own primal-dual point
+/// ([`own_problem`]): the optimum a solution file records, recomputed by this program in a few
+/// iterations (a stored optimum presented without its search). The result keeps the file's
+/// records of how it was found (strategy, search settings, scene, refinement); its
+/// verification is the caller's.
+pub fn resolve_at_own_point(
+    sol: &OcpSolution,
+) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
+    let (p, w) = own_problem(sol)?;
     let mut out = solve_warm(&p, w, None)?;
     out.strategy.clone_from(&sol.strategy);
     out.search_settings.clone_from(&sol.search_settings);

@@ -84,6 +84,17 @@ pub struct StrategyReport {
 impl StrategyReport {
     /// A plain-text table of the records, one line each, the kept chain marked `*`.
     pub fn table(&self) -> String {
+        self.table_of(|_| true)
+    }
+
+    /// [`StrategyReport::table`] with the stages of the kept chain only (the summary still
+    /// counts every solve): a global search records hundreds of stages.
+    pub fn kept_table(&self) -> String {
+        self.table_of(|r| Some(r.chain) == self.chosen)
+    }
+
+    /// The table's summary and column heads, and a line for each record `keep` keeps.
+    fn table_of(&self, keep: impl Fn(&StageRecord) -> bool) -> String {
         let mut s = format!(
             "strategy {}: {} solves, {} iterations, {:.2} s\n  chain  stage                 status          objective     period  iter  time(s)\n",
             self.strategy,
@@ -91,7 +102,7 @@ impl StrategyReport {
             self.iterations,
             self.seconds
         );
-        for r in &self.records {
+        for r in self.records.iter().filter(|r| keep(r)) {
             s.push_str(&format!(
                 "{} {:5}  {:<20}  {:<14} {:>12.6e} {:>8.4} {:>5} {:>8.2}\n",
                 if Some(r.chain) == self.chosen {
@@ -643,5 +654,44 @@ impl SearchSettings {
             .zip(other.entries())
             .find(|((_, a), (_, b))| a != b)
             .map(|((name, a), (_, b))| (name, a, b))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The kept table keeps the summary of every solve and the kept chain's stages only, each
+    /// marked `*`; the whole table has every stage.
+    #[test]
+    fn the_kept_table_has_the_kept_chain_only() {
+        let rec = |chain, stage: &str, objective| StageRecord {
+            chain,
+            stage: stage.into(),
+            status: Status::Solved,
+            objective,
+            period: 1.0,
+            iterations: 10,
+            seconds: 0.1,
+        };
+        let report = StrategyReport {
+            strategy: Strategy::Multistart { starts: 2, seed: 0 },
+            records: vec![
+                rec(0, "start 0", 2.0),
+                rec(1, "start 1", 1.0),
+                rec(1, "relax", 0.5),
+            ],
+            chosen: Some(1),
+            iterations: 30,
+            seconds: 0.3,
+            basin_hits: None,
+        };
+        let kept = report.kept_table();
+        let lines: Vec<&str> = kept.lines().collect();
+        assert!(lines[0].contains("3 solves"), "{kept}");
+        assert_eq!(lines.len(), 4, "{kept}");
+        assert!(lines[2..].iter().all(|l| l.starts_with('*')), "{kept}");
+        assert!(lines[3].contains("relax"));
+        assert_eq!(report.table().lines().count(), 5);
     }
 }

@@ -227,11 +227,8 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         args.torque_margin,
         args.approach_clearance,
     )?;
-    Ok(ProblemSettings {
-        impact_law: plan.impact_law,
+    Ok(plan.apply(ProblemSettings {
         cone_margin: args.cone_margin,
-        torque_margin: plan.torque_margin,
-        approach_clearance: plan.approach_clearance,
         scene,
         points: args.points,
         scheme,
@@ -246,7 +243,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         extrapolate_every_barrier: args.extrapolate_every_barrier,
         proximal_weight: args.proximal_weight,
         ..ProblemSettings::default()
-    })
+    }))
 }
 
 /// The torque margin of a plan meant for `track`'s Newton plant: the share of every joint's
@@ -308,6 +305,16 @@ impl PlanFor {
             torque_margin,
             approach_clearance,
         })
+    }
+
+    /// `settings` with this plan's impact law, torque margin and approach clearance.
+    pub fn apply(self, settings: ProblemSettings) -> ProblemSettings {
+        ProblemSettings {
+            impact_law: self.impact_law,
+            torque_margin: self.torque_margin,
+            approach_clearance: self.approach_clearance,
+            ..settings
+        }
     }
 }
 
@@ -935,6 +942,21 @@ mod tests {
             );
         }
         assert_eq!(plan(Problem::Reach, 3, None, None, None), paper);
+        // Applied to settings, the plan sets its three fields and keeps the others.
+        let base = ProblemSettings {
+            min_stick: 0.1,
+            ..ProblemSettings::default()
+        };
+        let s = newton.apply(base);
+        assert_eq!(
+            (
+                s.impact_law,
+                s.torque_margin,
+                s.approach_clearance,
+                s.min_stick
+            ),
+            (PlannedImpact::Newton, EXECUTABLE_TORQUE_MARGIN, gap, 0.1)
+        );
         assert!(PlanFor::of(Problem::PeriodicQc, 3, None, Some(1.0), None).is_err());
         assert!(PlanFor::of(Problem::PeriodicQc, 3, Some("elastic"), None, None).is_err());
     }
