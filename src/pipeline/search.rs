@@ -19,7 +19,8 @@
 //!    on the problem's mesh from their coarse trajectories, each re-integrated.
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
 //!    first, one after the other until no candidate below half the best verified objective
-//!    is left, `refine_in_order`), driven by their element-wise
+//!    is left, `refine_in_order`, which refines as many side by side as there are threads
+//!    and returns what the one-after-the-other order gives), driven by their element-wise
 //!    re-integration defects, until these are at most [`super::verify::VERIFIED_DEFECT`]
 //!    ([`VerifyPolicy`], [`Search::refine_candidates`]); a candidate whose defects verify but
 //!    whose path leaves the friction cone or penetrates the ball only while the refinements
@@ -383,13 +384,16 @@ fn attach_verification(c: &mut Candidate, rtol: f64) {
 /// splitting or raising the degree of the elements whose element-wise re-integration defect
 /// exceeds `refine_tol`·10⁻ᵃ, and re-integrates. An attempt that could not refine its mesh
 /// at all (point limit, non-finite defects) ends the attempts, and so does one whose defects
-/// verify and whose path check stays stuck beyond its allowance ([`path_stalled`]). Returns
-/// the last successful refinement (or the candidate unchanged) and a record per attempt.
+/// verify and whose path check stays stuck beyond its allowance ([`path_stalled`]), and so
+/// does `wanted` turning false (checked before each attempt: another candidate's result has
+/// made this one's moot, `refine_in_order`). Returns the last successful refinement (or the
+/// candidate unchanged) and a record per attempt.
 fn refine_until_verified(
     problem: Problem,
     settings: &ProblemSettings,
     mut cur: Candidate,
     policy: &VerifyPolicy,
+    wanted: &dyn Fn() -> bool,
 ) -> (Candidate, Vec<StageRecord>) {
     let mut records = Vec::new();
     let mut tol = policy.refine_tol;
@@ -400,7 +404,7 @@ fn refine_until_verified(
         .and_then(path_only_excess);
     let mut defects = DefectProgress::new(cur.solution.verification.as_ref().map(|v| v.max_defect));
     for _ in 0..policy.refine_attempts {
-        if is_verified(&cur.solution) {
+        if is_verified(&cur.solution) || !wanted() {
             break;
         }
         let Some(p) = cur.problem.as_ref() else { break };
@@ -564,34 +568,82 @@ fn path_stalled(before: Option<f64>, now: Option<f64>) -> bool {
 /// `periodic-cot` seed 1, refining every lower candidate took 353 s of CPU).
 pub const REFINE_BELOW: f64 = 0.5;
 
-/// Applies `refine` to the items of `order` (lowest `value` first) one after the other, at
-/// most `max` of them, until the next item's `value` is no lower than [`REFINE_BELOW`] times
-/// the best `verified` value of the results so far (`None`: the result did not verify);
-/// returns each item refined with its result. A refinement may verify at a much higher
-/// objective than its candidate's (the refined meshes' solves move between nearby basins: a
-/// `periodic-cot` candidate of J 1.1e-4 verified at 1.7e-3 while the third one verifies at
-/// 4.1e-4), so the first verified result does not end the refinements while a much lower
-/// candidate is left. Sequential
-/// on purpose: whether the next candidate is refined depends on values only, so the outcome
-/// does not depend on the number of threads.
-fn refine_in_order<I: Copy, T>(
+/// Applies `refine` to the items of `order` (lowest `value` first), at most `max` of them,
+/// until the next item's `value` is no lower than [`REFINE_BELOW`] times the best `verified`
+/// value of the results before it (`None`: the result did not verify); returns each item
+/// refined with its result. A refinement may verify at a much higher objective than its
+/// candidate's (the refined meshes' solves move between nearby basins: a `periodic-cot`
+/// candidate of J 1.1e-4 verified at 1.7e-3 while the third one verifies at 4.1e-4), so the
+/// first verified result does not end the refinements while a much lower candidate is left.
+///
+/// The rule is sequential, and so is the result: the items and results returned are those of
+/// refining one item after the other, whatever `width`. Up to `width` items are refined at a
+/// time (each refinement chain is sequential, so a second core would otherwise idle): a
+/// worker takes the next item unless the results already finished before it rule it out,
+/// and `refine` gets a `wanted` check that turns false once they do (a chain checks it
+/// between refinements and stops; its result is dropped). An item that the sequential rule
+/// refines is never ruled out by a subset of the results before it, so it is always refined
+/// to its end.
+fn refine_in_order<I: Copy + Sync, T: Send>(
     order: &[I],
     max: usize,
-    value: impl Fn(&I) -> f64,
-    mut refine: impl FnMut(&I) -> T,
-    verified: impl Fn(&T) -> Option<f64>,
+    width: usize,
+    value: impl Fn(&I) -> f64 + Sync,
+    refine: impl Fn(&I, &dyn Fn() -> bool) -> T + Sync,
+    verified: impl Fn(&T) -> Option<f64> + Sync,
 ) -> Vec<(I, T)> {
+    let n = order.len().min(max);
+    // Finished results by position in `order`, and the next position to hand out.
+    let state: Mutex<(Vec<Option<T>>, usize)> = Mutex::new(((0..n).map(|_| None).collect(), 0));
+    // Whether the finished results before position k rule it out.
+    let ruled_out = |done: &[Option<T>], k: usize| {
+        let best = done[..k]
+            .iter()
+            .flatten()
+            .filter_map(&verified)
+            .fold(f64::INFINITY, f64::min);
+        value(&order[k]) >= REFINE_BELOW * best
+    };
+    let lock = || state.lock().unwrap_or_else(|e| e.into_inner());
+    let work = || {
+        loop {
+            let k = {
+                let mut st = lock();
+                let k = st.1;
+                if k >= n || ruled_out(&st.0, k) {
+                    // Values ascend: every later item is ruled out as well.
+                    st.1 = n;
+                    return;
+                }
+                st.1 += 1;
+                k
+            };
+            let wanted = || !ruled_out(&lock().0, k);
+            let r = refine(&order[k], &wanted);
+            lock().0[k] = Some(r);
+        }
+    };
+    if width <= 1 || n <= 1 {
+        work();
+    } else {
+        rayon::scope(|sc| {
+            for _ in 0..width.min(n) {
+                sc.spawn(|_| work());
+            }
+        });
+    }
+    let done = state.into_inner().unwrap_or_else(|e| e.into_inner()).0;
     let mut out = Vec::new();
     let mut best = f64::INFINITY;
-    for i in order.iter().take(max) {
-        if value(i) >= REFINE_BELOW * best {
+    for (k, r) in done.into_iter().enumerate() {
+        if value(&order[k]) >= REFINE_BELOW * best {
             break;
         }
-        let r = refine(i);
+        let Some(r) = r else { break };
         if let Some(v) = verified(&r) {
             best = best.min(v);
         }
-        out.push((*i, r));
+        out.push((order[k], r));
     }
     out
 }
@@ -1105,8 +1157,9 @@ impl Search {
         let refined = refine_in_order(
             &todo,
             policy.clusters,
+            rayon::current_num_threads(),
             |&i| cands[i].solution.objective,
-            |&i| refine_until_verified(problem, settings, cands[i].clone(), policy),
+            |&i, wanted| refine_until_verified(problem, settings, cands[i].clone(), policy, wanted),
             |(c, _)| is_verified(&c.solution).then_some(c.solution.objective),
         );
         for (i, (c, recs)) in refined {
@@ -1418,18 +1471,19 @@ mod tests {
             (4.0, Some(4.0)),
         ];
         let run = |max: usize| {
-            let mut calls = Vec::new();
+            let calls = std::sync::Mutex::new(Vec::new());
             let out = refine_in_order(
                 &[0usize, 1, 2, 3],
                 max,
+                1,
                 |&i| cands[i].0,
-                |&i| {
-                    calls.push(i);
+                |&i, _| {
+                    calls.lock().unwrap().push(i);
                     cands[i].1
                 },
                 |v| *v,
             );
-            (calls, out)
+            (calls.into_inner().unwrap(), out)
         };
         // 0 fails, 1 verifies at 9 (3 is below half of it), 2 verifies at 2.5, and 4 is not
         // below half of 2.5: stop.
@@ -1440,5 +1494,85 @@ mod tests {
         assert_eq!(calls, [0, 1]);
         let (calls, out) = run(0);
         assert!(calls.is_empty() && out.is_empty());
+    }
+
+    /// Refined several at a time, the items and results are those of one after the other,
+    /// however the refinements' durations order their ends: random values, verified results
+    /// and durations (later items often finish first), widths 1–4, against the sequential
+    /// rule written out here.
+    #[test]
+    fn refinements_side_by_side_return_the_sequential_result() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _case in 0..40 {
+            let n = rng.random_range(0..8usize);
+            let mut values: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..10.0)).collect();
+            values.sort_by(f64::total_cmp);
+            let results: Vec<Option<f64>> = (0..n)
+                .map(|_| rng.random_bool(0.6).then(|| rng.random_range(0.0..20.0)))
+                .collect();
+            let micros: Vec<u64> = (0..n).map(|_| rng.random_range(0..3000)).collect();
+            let max = rng.random_range(0..10usize);
+            // The rule, sequentially.
+            let mut expected = Vec::new();
+            let mut best = f64::INFINITY;
+            for k in 0..n.min(max) {
+                if values[k] >= super::REFINE_BELOW * best {
+                    break;
+                }
+                if let Some(v) = results[k] {
+                    best = best.min(v);
+                }
+                expected.push((k, results[k]));
+            }
+            let order: Vec<usize> = (0..n).collect();
+            for width in 1..=4 {
+                let out = refine_in_order(
+                    &order,
+                    max,
+                    width,
+                    |&k| values[k],
+                    |&k, _| {
+                        std::thread::sleep(std::time::Duration::from_micros(micros[k]));
+                        results[k]
+                    },
+                    |v| *v,
+                );
+                assert_eq!(out, expected, "width {width}");
+            }
+        }
+    }
+
+    /// A refinement started beside an earlier one is told to stop once that one's verified
+    /// result rules it out, and its result is not returned.
+    #[test]
+    fn a_refinement_ruled_out_by_an_earlier_result_is_stopped() {
+        let stopped = std::sync::atomic::AtomicBool::new(false);
+        // Item 0 (value 1) verifies at 1.5 after 50 ms; item 1 (value 2 ≥ half of 1.5) runs
+        // until it is no longer wanted (at most 10 s).
+        let out = refine_in_order(
+            &[0usize, 1],
+            2,
+            2,
+            |&k| [1.0, 2.0][k],
+            |&k, wanted| {
+                if k == 0 {
+                    std::thread::sleep(std::time::Duration::from_millis(50));
+                    return Some(1.5);
+                }
+                let t0 = std::time::Instant::now();
+                while t0.elapsed() < std::time::Duration::from_secs(10) {
+                    if !wanted() {
+                        stopped.store(true, std::sync::atomic::Ordering::SeqCst);
+                        return Some(0.1);
+                    }
+                    std::thread::sleep(std::time::Duration::from_millis(1));
+                }
+                None
+            },
+            |v| *v,
+        );
+        assert_eq!(out, [(0, Some(1.5))]);
+        assert!(stopped.load(std::sync::atomic::Ordering::SeqCst));
     }
 }
