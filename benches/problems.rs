@@ -7,8 +7,8 @@
 //! also with Radau 3 × 12, the mesh that matches LG-30's objective error, and on Radau 3 × 10
 //! and LG-30 with every rejected KKT factor checked by the pivot pairs (`*_check_all`, the
 //! default before decision record 0031: the same path with more factorizations) and with
-//! the speculative factorization on a second core (`*_speculative`, decision record 0036: the
-//! same path, the next trial's factor computed ahead on another thread).
+//! without the speculative factorization on a second core (`*_sequential`, decision record
+//! 0036: the same path, every factor on the solve's own thread).
 //!
 //! Quick run: `cargo bench --bench problems -- --warm-up-time 1 --measurement-time 5`
 
@@ -55,30 +55,30 @@ fn bench(c: &mut Criterion) {
         )
     };
     let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
-    // With the speculative factorization on a second core (decision record 0036; the same
-    // path, the next trial's factor computed ahead on another thread).
-    let speculative = |s| {
+    // Without the speculative factorization on a second core (decision record 0036: the
+    // same path, every factor on the solve's own thread).
+    let sequential = |s| {
         with(
             s,
             LinearSolverSettings {
-                speculative_factorization: true,
+                speculative_factorization: false,
                 ..Default::default()
             },
         )
     };
-    let (radau_speculative, lg_speculative) = (speculative(&radau), speculative(&lg));
+    let (radau_sequential, lg_sequential) = (sequential(&radau), sequential(&lg));
     for (name, label, settings) in [
         (Problem::PeriodicQc, "radau3x10", &radau),
         (Problem::PeriodicQc, "radau3x10_check_all", &radau_check_all),
         (
             Problem::PeriodicQc,
-            "radau3x10_speculative",
-            &radau_speculative,
+            "radau3x10_sequential",
+            &radau_sequential,
         ),
         (Problem::PeriodicQc, "radau3x12", &radau36),
         (Problem::PeriodicQc, "lg30", &lg),
         (Problem::PeriodicQc, "lg30_check_all", &lg_check_all),
-        (Problem::PeriodicQc, "lg30_speculative", &lg_speculative),
+        (Problem::PeriodicQc, "lg30_sequential", &lg_sequential),
         (Problem::PeriodicCot, "radau3x10", &radau),
         (Problem::PeriodicCot, "lg30", &lg),
         (Problem::PeriodicCotHuman, "radau3x10", &radau),
