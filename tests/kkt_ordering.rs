@@ -137,7 +137,7 @@ fn pivot_pair_checks_at_a_large_delta_w_only_confirm_the_rejection() {
 }
 
 /// The speculative factorization on a second core (decision record 0036) changes no path: a
-/// cold `periodic-qc` solve on both meshes with it and without it (the default) ends at the
+/// cold `periodic-qc` solve on both meshes with it (the default) and without it ends at the
 /// same objective and point (bits), after the same iterations, with the same counters
 /// (factorizations, rejections, pivot-pair checks); with two or more cores the second thread
 /// did factor.
