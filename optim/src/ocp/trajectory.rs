@@ -1,7 +1,8 @@
 //! Solution extraction: per-phase times, states at the state points, algebraic variables and
 //! controls at the collocation nodes ([`extract`]), and Lagrange interpolation (dense output);
-//! [`values_at`] evaluates each element's own polynomials (exact interpolation onto another
-//! mesh), also used by the error estimate ([`super::estimate`]).
+//! [`values_at`] ([`PhaseValues`] for many points) evaluates each element's own polynomials
+//! (exact interpolation onto another mesh), also used by the error estimate
+//! ([`super::estimate`]).
 
 use super::nodes::lagrange_basis;
 use super::transcription::Transcription;
@@ -135,14 +136,22 @@ pub(super) fn element_views(tr: &PhaseTrajectory) -> Vec<ElementView> {
         .copied()
         .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
         .collect();
-    let owner = |p: usize| elements.iter().rposition(|&(a, b)| (a..b).contains(&p));
+    // The owner of each state point: the last element that contains it (later elements
+    // overwrite earlier ones), found once rather than per node and element.
+    let mut owner: Vec<Option<usize>> = vec![None; tr.state_tau.len()];
+    for (e, &(a, b)) in elements.iter().enumerate() {
+        owner[a..b].iter_mut().for_each(|o| *o = Some(e));
+    }
+    let mut nodes: Vec<Vec<usize>> = vec![Vec::new(); elements.len()];
+    for (k, &p) in tr.node_state.iter().enumerate().take(tr.node_tau.len()) {
+        if let Some(&Some(e)) = owner.get(p) {
+            nodes[e].push(k);
+        }
+    }
     elements
         .iter()
-        .enumerate()
-        .map(|(e, &(a, b))| {
-            let nodes: Vec<usize> = (0..tr.node_tau.len())
-                .filter(|&k| owner(tr.node_state[k]) == Some(e))
-                .collect();
+        .zip(nodes)
+        .map(|(&(a, b), nodes)| {
             let last_is_own_node = nodes.iter().any(|&k| tr.node_state[k] == b - 1);
             let end = if last_is_own_node && b < tr.state_tau.len() {
                 b
@@ -188,15 +197,121 @@ pub(super) fn element_values(tr: &PhaseTrajectory, ev: &ElementView, t: f64) -> 
 
 /// The values of `tr` at τ, each quantity from the element that contains τ in the half-open
 /// sense [start, end) (the last element also owns τ = 1). Used to interpolate a solution onto
-/// another mesh exactly (a warm start).
+/// another mesh exactly (a warm start). For many points of one phase, [`PhaseValues`] finds
+/// the elements once.
 pub fn values_at(tr: &PhaseTrajectory, tau: f64) -> [Vec<f64>; 3] {
-    let ev = element_views(tr);
-    let idx = ev
-        .iter()
-        .position(|e| tau < e.tb)
-        .unwrap_or(ev.len().saturating_sub(1));
-    match ev.get(idx) {
-        Some(e) => element_values(tr, e, tau),
-        None => [vec![], vec![], vec![]],
+    PhaseValues::new(tr).at(tau)
+}
+
+/// [`values_at`] for many τ of one phase: the elements and their own nodes are found once
+/// (a warm start onto a mesh of hundreds of points evaluates the phase at every point).
+pub struct PhaseValues<'a> {
+    tr: &'a PhaseTrajectory,
+    views: Vec<ElementView>,
+}
+
+impl<'a> PhaseValues<'a> {
+    /// The elements of `tr`.
+    pub fn new(tr: &'a PhaseTrajectory) -> Self {
+        PhaseValues {
+            tr,
+            views: element_views(tr),
+        }
+    }
+
+    /// State, algebraic variables and controls at τ ([`values_at`]).
+    pub fn at(&self, tau: f64) -> [Vec<f64>; 3] {
+        let ev = &self.views;
+        let idx = ev
+            .iter()
+            .position(|e| tau < e.tb)
+            .unwrap_or(ev.len().saturating_sub(1));
+        match ev.get(idx) {
+            Some(e) => element_values(self.tr, e, tau),
+            None => [vec![], vec![], vec![]],
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{PhaseTrajectory, PhaseValues, element_values, element_views, values_at};
+    use crate::ocp::Scheme;
+    use crate::ocp::mesh::{Mesh, MeshSpec};
+
+    /// A phase on `mesh` whose states, algebraic variables and controls are smooth functions of
+    /// τ sampled at the mesh's points.
+    fn phase(mesh: &Mesh) -> PhaseTrajectory {
+        let f = |t: f64| vec![t.sin(), (2.0 * t).cos(), t * t];
+        PhaseTrajectory {
+            t0: 0.0,
+            duration: 1.0,
+            state_tau: mesh.state_tau.clone(),
+            x: mesh.state_tau.iter().map(|&t| f(t)).collect(),
+            node_tau: mesh.colloc.iter().map(|c| c.tau).collect(),
+            node_state: mesh.colloc.iter().map(|c| c.state_point).collect(),
+            node_weight: mesh.colloc.iter().map(|c| c.weight).collect(),
+            a: mesh.colloc.iter().map(|c| f(c.tau + 0.5)).collect(),
+            u: mesh.colloc.iter().map(|c| f(-c.tau)).collect(),
+            elements: mesh.elements.iter().map(|r| (r.start, r.end)).collect(),
+        }
+    }
+
+    /// The elements' own nodes as first written: each node given to the last element whose
+    /// state points contain its state point, searched per element and node.
+    fn nodes_by_search(tr: &PhaseTrajectory) -> Vec<Vec<usize>> {
+        let elements: Vec<(usize, usize)> = tr
+            .elements
+            .iter()
+            .copied()
+            .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
+            .collect();
+        let owner = |p: usize| elements.iter().rposition(|&(a, b)| (a..b).contains(&p));
+        (0..elements.len())
+            .map(|e| {
+                (0..tr.node_tau.len())
+                    .filter(|&k| owner(tr.node_state[k]) == Some(e))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The elements' own nodes found in one pass are those of the per-node search, on
+    /// hp-Radau meshes (a node on every element's first point, none at the phase end),
+    /// Legendre–Gauss (one element, the phase end a state point of its own) and a refined
+    /// non-uniform Radau mesh; and the values at many τ from [`PhaseValues`] are bit for bit
+    /// those of [`values_at`] and of the element's own polynomials.
+    #[test]
+    fn one_pass_element_nodes_match_the_search() {
+        let refined = MeshSpec::uniform(4, 3).unwrap().refined(
+            &[1.0, 1e-9, 1.0, 1e-9],
+            1e-3,
+            Default::default(),
+        );
+        let meshes = [
+            Mesh::new(Scheme::Radau { elements: 3 }, 10).unwrap(),
+            Mesh::new(Scheme::Lg, 12).unwrap(),
+            Mesh::from_spec(&refined).unwrap(),
+        ];
+        for mesh in &meshes {
+            let tr = phase(mesh);
+            let views = element_views(&tr);
+            let want = nodes_by_search(&tr);
+            assert_eq!(views.len(), want.len());
+            for (v, w) in views.iter().zip(&want) {
+                assert_eq!(&v.nodes, w);
+            }
+            let pv = PhaseValues::new(&tr);
+            for i in 0..=200 {
+                let t = -1.0 + 2.0 * i as f64 / 200.0;
+                let got = pv.at(t);
+                assert_eq!(got, values_at(&tr, t));
+                let e = views
+                    .iter()
+                    .position(|e| t < e.tb)
+                    .unwrap_or(views.len() - 1);
+                assert_eq!(got, element_values(&tr, &views[e], t));
+            }
+        }
     }
 }

@@ -5,7 +5,7 @@
 //! functions ran on emitted kernels.
 
 use bf_optim::ipm::{Counters, Nlp, Status, Timing};
-use bf_optim::ocp::trajectory::values_at;
+use bf_optim::ocp::trajectory::PhaseValues;
 use bf_optim::ocp::{PhaseTrajectory, extract};
 
 use super::BuiltProblem;
@@ -161,12 +161,13 @@ pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<()
                 }
             }
         };
+        let raw_values = PhaseValues::new(raw);
         for (pt, &tau) in l.mesh.state_tau.iter().enumerate() {
-            let [xv, _, _] = values_at(raw, tau);
+            let [xv, _, _] = raw_values.at(tau);
             put(&mut x, &|i| l.x(pt, i), &xv, l.nx);
         }
         for (k, c) in l.mesh.colloc.iter().enumerate() {
-            let [_, a, u] = values_at(raw, c.tau);
+            let [_, a, u] = raw_values.at(c.tau);
             put(&mut x, &|i| l.a(k, i), &a, l.na);
             put(&mut x, &|i| l.u(k, i), &u, l.nu);
         }
