@@ -763,12 +763,13 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     for r in &refinements {
         crate::outln!(
-            "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} iterations",
+            "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} iterations in {:.1} s",
             r.stage,
             crate::names::name(&r.status),
             r.objective,
             r.period,
-            r.iterations
+            r.iterations,
+            r.seconds
         )?;
     }
     if args.shard.is_some() {
