@@ -130,12 +130,7 @@ pub(super) struct ElementView {
 /// included. The element ends at its last support point unless that point is one of its own
 /// nodes (Legendre–Gauss); then it ends at the next state point (the phase end).
 pub(super) fn element_views(tr: &PhaseTrajectory) -> Vec<ElementView> {
-    let elements: Vec<(usize, usize)> = tr
-        .elements
-        .iter()
-        .copied()
-        .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
-        .collect();
+    let elements = usable_elements(tr);
     // The owner of each state point: the last element that contains it (later elements
     // overwrite earlier ones), found once rather than per node and element.
     let mut owner: Vec<Option<usize>> = vec![None; tr.state_tau.len()];
@@ -165,6 +160,16 @@ pub(super) fn element_views(tr: &PhaseTrajectory) -> Vec<ElementView> {
                 nodes,
             }
         })
+        .collect()
+}
+
+/// The elements of `tr` that can carry a polynomial: at least two state points, all of them
+/// in the phase.
+fn usable_elements(tr: &PhaseTrajectory) -> Vec<(usize, usize)> {
+    tr.elements
+        .iter()
+        .copied()
+        .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
         .collect()
 }
 
@@ -235,7 +240,9 @@ impl<'a> PhaseValues<'a> {
 
 #[cfg(test)]
 mod tests {
-    use super::{PhaseTrajectory, PhaseValues, element_values, element_views, values_at};
+    use super::{
+        PhaseTrajectory, PhaseValues, element_values, element_views, usable_elements, values_at,
+    };
     use crate::ocp::Scheme;
     use crate::ocp::mesh::{Mesh, MeshSpec};
 
@@ -260,12 +267,7 @@ mod tests {
     /// The elements' own nodes as first written: each node given to the last element whose
     /// state points contain its state point, searched per element and node.
     fn nodes_by_search(tr: &PhaseTrajectory) -> Vec<Vec<usize>> {
-        let elements: Vec<(usize, usize)> = tr
-            .elements
-            .iter()
-            .copied()
-            .filter(|&(a, b)| b >= a + 2 && b <= tr.state_tau.len())
-            .collect();
+        let elements = usable_elements(tr);
         let owner = |p: usize| elements.iter().rposition(|&(a, b)| (a..b).contains(&p));
         (0..elements.len())
             .map(|e| {
