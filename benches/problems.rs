@@ -6,7 +6,7 @@
 //! defects, stick phases at the acceleration level, δ_c = 3e-8), and `periodic-qc`
 //! also with Radau 3 × 12, the mesh that matches LG-30's objective error, and on Radau 3 × 10
 //! and LG-30 with every rejected KKT factor checked by the pivot pairs (`*_check_all`, the
-//! default before decision record 0031: the same path with more factorizations) and with
+//! default before decision record 0031: the same path with more factorizations) and
 //! without the speculative factorization on a second core (`*_sequential`, decision record
 //! 0036: the same path, every factor on the solve's own thread).
 //!

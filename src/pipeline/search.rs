@@ -632,20 +632,17 @@ fn refine_in_order<I: Copy + Sync, T: Send>(
             }
         });
     }
+    // The sequential rule over the finished results: the items up to the first that all the
+    // results before it rule out (every item before that one was refined to its end).
     let done = state.into_inner().unwrap_or_else(|e| e.into_inner()).0;
-    let mut out = Vec::new();
-    let mut best = f64::INFINITY;
-    for (k, r) in done.into_iter().enumerate() {
-        if value(&order[k]) >= REFINE_BELOW * best {
-            break;
-        }
-        let Some(r) = r else { break };
-        if let Some(v) = verified(&r) {
-            best = best.min(v);
-        }
-        out.push((order[k], r));
-    }
-    out
+    let kept = (0..n)
+        .take_while(|&k| done[k].is_some() && !ruled_out(&done, k))
+        .count();
+    order
+        .iter()
+        .copied()
+        .zip(done.into_iter().take(kept).flatten())
+        .collect()
 }
 
 /// A search for the best verified optimum: runs the chains of `strategy` in `shard`
@@ -1544,35 +1541,50 @@ mod tests {
     }
 
     /// A refinement started beside an earlier one is told to stop once that one's verified
-    /// result rules it out, and its result is not returned.
+    /// result rules it out, and its result is not returned. On a pool of two threads of its
+    /// own, item 0 finishes only after item 1 has started, so the two run side by side
+    /// whatever else the machine runs.
     #[test]
     fn a_refinement_ruled_out_by_an_earlier_result_is_stopped() {
-        let stopped = std::sync::atomic::AtomicBool::new(false);
-        // Item 0 (value 1) verifies at 1.5 after 50 ms; item 1 (value 2 ≥ half of 1.5) runs
-        // until it is no longer wanted (at most 10 s).
-        let out = refine_in_order(
-            &[0usize, 1],
-            2,
-            2,
-            |&k| [1.0, 2.0][k],
-            |&k, wanted| {
-                if k == 0 {
-                    std::thread::sleep(std::time::Duration::from_millis(50));
-                    return Some(1.5);
-                }
-                let t0 = std::time::Instant::now();
-                while t0.elapsed() < std::time::Duration::from_secs(10) {
-                    if !wanted() {
-                        stopped.store(true, std::sync::atomic::Ordering::SeqCst);
-                        return Some(0.1);
+        use std::sync::atomic::{AtomicBool, Ordering};
+        use std::time::{Duration, Instant};
+        let (started, stopped) = (AtomicBool::new(false), AtomicBool::new(false));
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        // Item 0 (value 1) verifies at 1.5 once item 1 runs; item 1 (value 2, not below half
+        // of 1.5) runs until it is no longer wanted. Each waits at most 10 s.
+        let out = pool.install(|| {
+            refine_in_order(
+                &[0usize, 1],
+                2,
+                2,
+                |&k| [1.0, 2.0][k],
+                |&k, wanted| {
+                    let t0 = Instant::now();
+                    if k == 0 {
+                        while !started.load(Ordering::SeqCst)
+                            && t0.elapsed() < Duration::from_secs(10)
+                        {
+                            std::thread::sleep(Duration::from_millis(1));
+                        }
+                        return Some(1.5);
                     }
-                    std::thread::sleep(std::time::Duration::from_millis(1));
-                }
-                None
-            },
-            |v| *v,
-        );
+                    started.store(true, Ordering::SeqCst);
+                    while t0.elapsed() < Duration::from_secs(10) {
+                        if !wanted() {
+                            stopped.store(true, Ordering::SeqCst);
+                            return Some(0.1);
+                        }
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
+                    None
+                },
+                |v| *v,
+            )
+        });
         assert_eq!(out, [(0, Some(1.5))]);
-        assert!(stopped.load(std::sync::atomic::Ordering::SeqCst));
+        assert!(started.load(Ordering::SeqCst) && stopped.load(Ordering::SeqCst));
     }
 }

@@ -1,7 +1,7 @@
 //! Solution extraction: per-phase times, states at the state points, algebraic variables and
 //! controls at the collocation nodes ([`extract`]), and Lagrange interpolation (dense output);
-//! [`values_at`] ([`PhaseValues`] for many points) evaluates each element's own polynomials
-//! (exact interpolation onto another mesh), also used by the error estimate
+//! [`PhaseValues`] evaluates each element's own polynomials (exact interpolation onto another
+//! mesh); its elements (`element_views`) also serve the error estimate
 //! ([`super::estimate`]).
 
 use super::nodes::lagrange_basis;
@@ -200,16 +200,10 @@ pub(super) fn element_values(tr: &PhaseTrajectory, ev: &ElementView, t: f64) -> 
     ]
 }
 
-/// The values of `tr` at τ, each quantity from the element that contains τ in the half-open
-/// sense [start, end) (the last element also owns τ = 1). Used to interpolate a solution onto
-/// another mesh exactly (a warm start). For many points of one phase, [`PhaseValues`] finds
-/// the elements once.
-pub fn values_at(tr: &PhaseTrajectory, tau: f64) -> [Vec<f64>; 3] {
-    PhaseValues::new(tr).at(tau)
-}
-
-/// [`values_at`] for many τ of one phase: the elements and their own nodes are found once
-/// (a warm start onto a mesh of hundreds of points evaluates the phase at every point).
+/// The values of a phase at any τ, each quantity from the element that contains τ in the
+/// half-open sense [start, end) (the last element also owns τ = 1): a solution interpolated
+/// onto another mesh exactly (a warm start). The elements and their own nodes are found once,
+/// since a warm start onto a mesh of hundreds of points evaluates the phase at every point.
 pub struct PhaseValues<'a> {
     tr: &'a PhaseTrajectory,
     views: Vec<ElementView>,
@@ -224,7 +218,7 @@ impl<'a> PhaseValues<'a> {
         }
     }
 
-    /// State, algebraic variables and controls at τ ([`values_at`]).
+    /// State, algebraic variables and controls at τ.
     pub fn at(&self, tau: f64) -> [Vec<f64>; 3] {
         let ev = &self.views;
         let idx = ev
@@ -240,16 +234,20 @@ impl<'a> PhaseValues<'a> {
 
 #[cfg(test)]
 mod tests {
-    use super::{
-        PhaseTrajectory, PhaseValues, element_values, element_views, usable_elements, values_at,
-    };
+    use super::{PhaseTrajectory, PhaseValues, element_views, usable_elements};
     use crate::ocp::Scheme;
     use crate::ocp::mesh::{Mesh, MeshSpec};
 
-    /// A phase on `mesh` whose states, algebraic variables and controls are smooth functions of
-    /// τ sampled at the mesh's points.
+    /// The quadratic every quantity of the test phase follows: a state, algebraic variables and
+    /// controls sampled from it are interpolated exactly by any element of at least three
+    /// support points.
+    fn f(t: f64) -> Vec<f64> {
+        vec![1.0 + t, 2.0 * t * t - 0.5, 0.25 - t * t + 3.0 * t]
+    }
+
+    /// A phase on `mesh` whose states, algebraic variables and controls are `f` at its points
+    /// (the algebraic variables and controls shifted, so each quantity is a different curve).
     fn phase(mesh: &Mesh) -> PhaseTrajectory {
-        let f = |t: f64| vec![t.sin(), (2.0 * t).cos(), t * t];
         PhaseTrajectory {
             t0: 0.0,
             duration: 1.0,
@@ -279,10 +277,10 @@ mod tests {
     }
 
     /// The elements' own nodes found in one pass are those of the per-node search, on
-    /// hp-Radau meshes (a node on every element's first point, none at the phase end),
+    /// hp-Radau (a node on every element's first point, none at the phase end),
     /// Legendre–Gauss (one element, the phase end a state point of its own) and a refined
-    /// non-uniform Radau mesh; and the values at many τ from [`PhaseValues`] are bit for bit
-    /// those of [`values_at`] and of the element's own polynomials.
+    /// non-uniform Radau mesh; and [`PhaseValues`] reproduces the quadratics the phase was
+    /// sampled from at 201 points of [−1, 1], element ends included.
     #[test]
     fn one_pass_element_nodes_match_the_search() {
         let refined = MeshSpec::uniform(4, 3).unwrap().refined(
@@ -306,13 +304,13 @@ mod tests {
             let pv = PhaseValues::new(&tr);
             for i in 0..=200 {
                 let t = -1.0 + 2.0 * i as f64 / 200.0;
-                let got = pv.at(t);
-                assert_eq!(got, values_at(&tr, t));
-                let e = views
-                    .iter()
-                    .position(|e| t < e.tb)
-                    .unwrap_or(views.len() - 1);
-                assert_eq!(got, element_values(&tr, &views[e], t));
+                let [x, a, u] = pv.at(t);
+                for (got, want) in [(x, f(t)), (a, f(t + 0.5)), (u, f(-t))] {
+                    for (g, w) in got.iter().zip(&want) {
+                        assert!((g - w).abs() <= 1e-12, "τ {t}: {got:?} against {want:?}");
+                    }
+                    assert_eq!(got.len(), 3);
+                }
             }
         }
     }
