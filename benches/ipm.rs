@@ -217,7 +217,7 @@ fn bench_kkt(c: &mut Criterion) {
                 s
             })
             .collect();
-        let rhs0: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin()).collect();
+        let rhs0: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64 * 0.37)).collect();
         // Batches timed by this thread's CPU time (unaffected by preemption on a loaded machine;
         // schedstat advances in scheduler ticks, hence ≥ 0.1 s per batch), round-robin over the
         // variants; the minimum per call over 5 rounds.

@@ -415,8 +415,8 @@ fn the_default_start_is_one_the_torque_bounds_hold() {
         "{start:?}"
     );
     let (q1, q2) = (start[0], start[1]);
-    let g1 = 9.81 * (1.2 * 0.45 * q1.cos() + 0.7 * (q1.cos() + 0.3 * (q1 + q2).cos()));
-    let g2 = 9.81 * 0.7 * 0.3 * (q1 + q2).cos();
+    let g1 = 9.81 * (1.2 * 0.45 * libm::cos(q1) + 0.7 * (libm::cos(q1) + 0.3 * libm::cos(q1 + q2)));
+    let g2 = 9.81 * 0.7 * 0.3 * libm::cos(q1 + q2);
     assert!(g1.abs() < 1e-5 && g2.abs() < 1e-5, "g = ({g1}, {g2})");
     assert_eq!(sol["verified"], true, "{stdout}");
     assert_eq!(sol["status"], "Solved", "{stdout}");

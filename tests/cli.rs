@@ -505,7 +505,7 @@ fn optimize_curvature_extrapolation_reaches_the_solver() {
     reach_arm_refuses("--extrapolate-every-barrier");
 }
 
-/// `--proximal-weight` reaches the solver: the direct `periodic-cot` LG-30 solve from the
+/// `--proximal-weight` reaches the solver: the direct `periodic-cot` LG-40 solve from the
 /// default guess stalls on a barrier problem above the tolerance for more than 60 iterations,
 /// so by default some iterations carry the proximal term (`counters.proximal_iterations`),
 /// with `--proximal-weight 0` none and the path differs (other iteration counts), both
@@ -515,7 +515,7 @@ fn optimize_curvature_extrapolation_reaches_the_solver() {
 fn optimize_proximal_weight_reaches_the_solver() {
     let lg = |tag: &str, extra: &[&str]| {
         let args = [&["--scheme", "lg"][..], extra].concat();
-        let (stages, c) = direct_cot_run(tag, 30, 600, &args);
+        let (stages, c) = direct_cot_run(tag, 40, 600, &args);
         (stages, c["proximal_iterations"].as_u64().unwrap())
     };
     let (on_stages, on) = lg("prox-on", &[]);

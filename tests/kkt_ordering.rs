@@ -9,7 +9,9 @@
 
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{build, solve};
-use bf_optim::ipm::{ExperimentalSettings, KktOrdering, LinearSolverSettings, Settings, Status};
+use bf_optim::ipm::{
+    ExperimentalSettings, KktOrdering, LineSearchSettings, LinearSolverSettings, Settings, Status,
+};
 use bf_optim::ocp::Scheme;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 use std::time::Duration;
@@ -443,16 +445,18 @@ fn ten_refinement_steps_solve_the_finest_human_mesh() {
     assert_eq!(ten.stages.len(), 1, "{:?}", ten.stages);
 }
 
-/// `periodic-cot` Radau 3 × 16 and LG-40 used to reach the iteration limit from the default
-/// guess (the Contact-guess fallback then solved them): late in the solve an old filter entry
-/// blocked every step that raised the constraint violation, so the filter admitted only steps
-/// of ~1e-4. With Ipopt's filter reset heuristic (docs/decisions/0007-filter-reset.md) both
-/// direct solves end Solved in one stage, and the heuristic is what acts in them. (With three
-/// refinement steps, as when the test was introduced: with ten, decision record 0009, the
-/// Radau path no longer meets the old filter entry.)
+/// Ipopt's filter reset heuristic (docs/decisions/0007-filter-reset.md) is what solves the
+/// crawling `periodic-cot` meshes: late in a solve an old filter entry can block every step
+/// that raises the constraint violation, so that the filter admits only steps of ~1e-4. On
+/// Radau with 31 points per phase and on LG-26 (three refinement steps of the KKT solves, as
+/// when the test was introduced) the direct solves from the default guess end Solved in one
+/// stage with resets; with the heuristic off (`max_filter_resets` 0) the Radau solve reaches
+/// the iteration limit in both stages of its guess fallback and the LG one takes more than
+/// three times the iterations. (Which meshes crawl depends on the path: with ten refinement
+/// steps, decision record 0009, or other rounding, others do.)
 #[test]
 fn the_filter_reset_solves_the_crawling_cot_meshes() {
-    for (scheme, points) in [(Scheme::Radau { elements: 3 }, 48), (Scheme::Lg, 40)] {
+    let solve_with = |scheme: Scheme, points: usize, resets: usize| {
         let s = ProblemSettings {
             points,
             scheme,
@@ -461,12 +465,20 @@ fn the_filter_reset_solves_the_crawling_cot_meshes() {
                     max_refinement_steps: 3,
                     ..Default::default()
                 },
+                line_search: LineSearchSettings {
+                    max_filter_resets: resets,
+                    ..Default::default()
+                },
                 ..Settings::default()
             }),
             ..ProblemSettings::default()
         };
         let problem: Problem = "periodic-cot".parse().unwrap();
-        let sol = solve(&build(problem, &s).unwrap(), None).unwrap();
+        solve(&build(problem, &s).unwrap(), None).unwrap()
+    };
+    let default_resets = LineSearchSettings::default().max_filter_resets;
+    for (scheme, points) in [(Scheme::Radau { elements: 3 }, 31), (Scheme::Lg, 26)] {
+        let sol = solve_with(scheme, points, default_resets);
         assert_eq!(
             sol.status,
             Status::Solved,
@@ -479,6 +491,14 @@ fn the_filter_reset_solves_the_crawling_cot_meshes() {
             sol.iterations < 500,
             "{scheme:?} {points}: {} iterations",
             sol.iterations
+        );
+        let off = solve_with(scheme, points, 0);
+        assert_eq!(off.counters.filter_resets, 0);
+        let crawled = off.stages.len() > 1 || off.iterations > 3 * sol.iterations;
+        assert!(
+            crawled,
+            "{scheme:?} {points} without resets: {:?}",
+            off.stages
         );
     }
 }

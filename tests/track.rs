@@ -439,7 +439,7 @@ fn a_late_or_early_approach_meets_the_planned_impact_state() {
         assert!((t - own_schedule).abs() < 5e-4, "{label}: impact at {t}");
         assert!(dq < 1e-4 && dqd < 1e-3, "{label}: {dq} {dqd}");
         let (t, dq, dqd) = run(shift, 1.1, gains);
-        let envelope = 0.1 * norm(&start.qd) / norm(&plan.qd) * (1.0 + wn * t) * (-wn * t).exp();
+        let envelope = 0.1 * norm(&start.qd) / norm(&plan.qd) * (1.0 + wn * t) * libm::exp(-wn * t);
         eprintln!(
             "{label} and 10 % fast: impact at {t:.5} s, |Δq| {dq:.2e} rad, |Δq̇|/|q̇*| {dqd:.2e} (envelope {envelope:.2e})"
         );

@@ -134,8 +134,8 @@ fn compile(dir: &Path, module: &str) -> Result<(f64, Option<f64>, PathBuf), Stri
 
 /// Least-squares slope of log y on log x.
 fn exponent(x: &[f64], y: &[f64]) -> f64 {
-    let lx: Vec<f64> = x.iter().map(|v| v.ln()).collect();
-    let ly: Vec<f64> = y.iter().map(|v| v.ln()).collect();
+    let lx: Vec<f64> = x.iter().map(|&v| libm::log(v)).collect();
+    let ly: Vec<f64> = y.iter().map(|&v| libm::log(v)).collect();
     let k = lx.len() as f64;
     let (mx, my) = (lx.iter().sum::<f64>() / k, ly.iter().sum::<f64>() / k);
     let sxy: f64 = lx.iter().zip(&ly).map(|(a, b)| (a - mx) * (b - my)).sum();

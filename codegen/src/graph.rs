@@ -112,7 +112,7 @@ pub fn cos_pi_value(num: i64, den: i64) -> f64 {
         (3, 4) | (5, 4) => -(0.5f64.sqrt()),
         (1, 6) | (11, 6) => 3.0f64.sqrt() * 0.5,
         (5, 6) | (7, 6) => -(3.0f64.sqrt() * 0.5),
-        _ => (rn as f64 / rd as f64 * std::f64::consts::PI).cos(),
+        _ => libm::cos(rn as f64 / rd as f64 * std::f64::consts::PI),
     }
 }
 
@@ -534,7 +534,7 @@ impl Graph {
     /// sin a
     pub fn sin(&mut self, a: Id) -> Id {
         if let Some(x) = self.as_const(a) {
-            return self.constant(x.sin());
+            return self.constant(libm::sin(x));
         }
         if let Some(x) = self.neg_inner(a) {
             let s = self.sin(x);
@@ -546,7 +546,7 @@ impl Graph {
     /// cos a
     pub fn cos(&mut self, a: Id) -> Id {
         if let Some(x) = self.as_const(a) {
-            return self.constant(x.cos());
+            return self.constant(libm::cos(x));
         }
         if let Some(x) = self.neg_inner(a) {
             return self.cos(x);

@@ -47,8 +47,9 @@ impl Scalar for f64 {
     fn from_f64(v: f64) -> Self {
         v
     }
+    /// The emitted kernels' one-angle sine and cosine ([`crate::trig::sin_cos`]).
     fn sin_cos(self) -> (Self, Self) {
-        f64::sin_cos(self)
+        crate::trig::sin_cos(self)
     }
     fn sqrt(self) -> Self {
         f64::sqrt(self)

@@ -128,7 +128,7 @@ pub fn generate_split(
     let mut trig_helper = false;
     for d in &defs {
         let e = emit::emit_kernel_with(&model.g, &model.layout, d, opts)?;
-        trig_helper |= e.fast_trig;
+        trig_helper |= e.trig;
         kernel_code.push(e.code);
         reports.push(KernelReport {
             name: d.name.clone(),

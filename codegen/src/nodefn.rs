@@ -25,7 +25,9 @@ use quote::quote;
 use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
-use crate::emit::{BODY_MARKER, BodyText, EmitSettings, body_text, lanes_items, splice_bodies};
+use crate::emit::{
+    BODY_MARKER, BodyText, EmitSettings, body_text, lanes_items, splice_bodies, trig_items,
+};
 use crate::graph::{Graph, Id, Node};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
@@ -553,11 +555,16 @@ pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
     }
     entries.sort_by_key(|e| e.0);
     let items = entries.iter().map(|e| &e.1);
-    let helpers = if nodes.iter().any(|n| n.x4) {
-        lanes_items()?
-    } else {
+    // Every kernel's sine and cosine come from the trig helpers, emitted once (unused ones are
+    // allowed); the batched kernels also call `sin_cos_lanes`.
+    let mut helpers = if nodes.is_empty() {
         TokenStream::new()
+    } else {
+        trig_items(crate::emit::FloatTy::F64)?
     };
+    if nodes.iter().any(|n| n.x4) {
+        helpers.extend(lanes_items()?);
+    }
     let tokens = quote! {
         /// Every emitted node kernel, sorted by fingerprint (binary search).
         pub static NODE_KERNELS: &[NodeKernel] = &[#(#items)*];

@@ -6,8 +6,15 @@
 //! first three with at most 32 significant bits, so k·Pᵢ is exact for |k| < 2²⁰), the reduced
 //! argument kept as a double-double (hi + lo, accurate to ~2⁻¹¹⁵ absolute, below the smallest
 //! |r| a double of magnitude ≤ 2²⁰ can have), and the minimax polynomials of fdlibm's
-//! `__kernel_sin`/`__kernel_cos` on |r| ≤ π/4 (error < 1 ulp). For |x| > 2²⁰ and for
-//! non-finite x a lane falls back to the standard library's `f64::sin_cos`.
+//! `__kernel_sin`/`__kernel_cos` on |r| ≤ π/4 (error < 1 ulp). Lanes next to a multiple of
+//! π/2 fall back to fdlibm's three-step reduction ([`sin_cos_medium`]); beyond |x| = 2²⁰ rad
+//! (no joint turns 10⁵ times) and for non-finite x the result is NaN.
+//!
+//! Every sine and cosine of the emitted kernels and of the interpreter is computed here
+//! ([`sin_cos_n`] for the batched joint angles, [`sin_cos`] and [`sin_cos_f32`] for one
+//! angle), with plain arithmetic: the platform's libm picks its variant by CPU (glibc uses FMA
+//! where the CPU has it), and a kernel that called it would give other bits on another
+//! machine.
 //!
 //! The functions below are emitted verbatim (as private items) into every generated scene
 //! file that needs them, so a generated file stays self-contained; this module is the one
@@ -18,8 +25,9 @@
 //! that this notice is preserved").
 
 /// `(sin x[i], cos x[i])` for every lane `i`, each within about 1 ulp of the exact value
-/// (measured maximum in BENCHMARKS.md); lanes with |x| > 2²⁰, next to a multiple of π/2 or
-/// not finite use `f64::sin_cos`. Every lane's result depends on that lane's argument only.
+/// (measured maximum in BENCHMARKS.md); lanes next to a multiple of π/2 are recomputed by
+/// [`sin_cos_medium`], lanes with |x| > 2²⁰ or not finite are NaN. Every lane's result depends
+/// on that lane's argument only.
 #[inline(always)]
 pub fn sin_cos_n<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut sin = [0.0; N];
@@ -102,13 +110,83 @@ pub(crate) fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
 }
 
 /// The lanes of [`sin_cos_n`] outside the fast path (|x| > 2²⁰, next to a multiple of π/2,
-/// or not finite), recomputed by `f64::sin_cos`.
+/// or not finite), recomputed by [`sin_cos_medium`].
 #[cold]
 #[inline(never)]
 fn sin_cos_n_exact<const N: usize>(x: &[f64; N], sin: &mut [f64; N], cos: &mut [f64; N]) {
     for i in 0..N {
         if !sin_cos_lane(x[i]).2 {
-            (sin[i], cos[i]) = x[i].sin_cos();
+            (sin[i], cos[i]) = sin_cos_medium(x[i]);
         }
     }
+}
+
+/// `(sin x, cos x)` for |x| ≤ 2²⁰ by fdlibm's medium-size reduction x = k·π/2 + (y₀ + y₁),
+/// with π/2 in up to three parts so that y₀ + y₁ keeps its accuracy when x is next to a
+/// multiple of π/2; NaN for larger or non-finite x.
+pub fn sin_cos_medium(x: f64) -> (f64, f64) {
+    const FRAC_2_PI: f64 = core::f64::consts::FRAC_2_PI;
+    // fdlibm `__ieee754_rem_pio2`: pio2_1 (33 bits), pio2_1t = π/2 − pio2_1, pio2_2 (33 bits),
+    // pio2_2t = π/2 − pio2_1 − pio2_2, pio2_3 (33 bits), pio2_3t.
+    const PIO2_1: f64 = 1.57079632673412561417e+00;
+    const PIO2_1T: f64 = 6.07710050650619224932e-11;
+    const PIO2_2: f64 = 6.07710050630396597660e-11;
+    const PIO2_2T: f64 = 2.02226624879595063154e-21;
+    const PIO2_3: f64 = 2.02226624871116645580e-21;
+    const PIO2_3T: f64 = 8.47842766036889956997e-32;
+    const LIMIT: f64 = 1048576.0;
+    if x.is_nan() || x.abs() > LIMIT {
+        return (f64::NAN, f64::NAN);
+    }
+    // k = x·2/π rounded to an integer; |k| < 2²⁰, so k times a 33-bit part is exact.
+    let k = {
+        let shift = 6755399441055744.0;
+        (x * FRAC_2_PI + shift) - shift
+    };
+    let exponent = |v: f64| ((v.to_bits() >> 52) & 0x7ff) as i32;
+    let e = exponent(x);
+    let mut r = x - k * PIO2_1;
+    let mut w = k * PIO2_1T;
+    let mut y0 = r - w;
+    // One more part of π/2: r − k·part exactly, w the error of the tail and of that step.
+    let step = |t: f64, part: f64, tail: f64| {
+        let w = k * part;
+        let r = t - w;
+        let w = k * tail - ((t - r) - w);
+        (r, w, r - w)
+    };
+    // Each step is needed when the previous one cancelled more than its spare bits.
+    if e - exponent(y0) > 16 {
+        (r, w, y0) = step(r, PIO2_2, PIO2_2T);
+        if e - exponent(y0) > 49 {
+            (r, w, y0) = step(r, PIO2_3, PIO2_3T);
+        }
+    }
+    let y1 = (r - y0) - w;
+    // |y0| ≤ π/4 (+ rounding of k), where the fast lane is accurate; y1 enters to first order
+    // (y1² is below 2⁻¹⁰⁰ relative).
+    let (s0, c0, _) = sin_cos_lane(y0);
+    let (s, c) = (s0 + y1 * c0, c0 - y1 * s0);
+    match (k as i64) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+
+/// `(sin x, cos x)` of one angle: the one lane of [`sin_cos_n`] (the kernels' sine and cosine
+/// of anything but the batched joint angles, and the interpreter's).
+#[inline(always)]
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    let ([s], [c]) = sin_cos_n([x]);
+    (s, c)
+}
+
+/// `(sin x, cos x)` in single precision: [`sin_cos`] of `x` widened, each result rounded once
+/// (within 1 ulp of `f32`).
+#[inline(always)]
+pub fn sin_cos_f32(x: f32) -> (f32, f32) {
+    let (s, c) = sin_cos(x as f64);
+    (s as f32, c as f32)
 }

@@ -71,9 +71,9 @@ fn f32_fma_variant_agrees_with_f64_and_dispatchers_agree() {
     assert_eq!(planar2::KERNELS, planar2_f32_fma::KERNELS);
     for j in 0..20 {
         let t = j as f64;
-        let q = [(1.3 * t).sin() * 3.0, (0.7 * t + 0.2).cos() * 3.0];
-        let qd = [(2.1 * t).cos() * 2.0, (0.3 * t).sin() * 2.0];
-        let u = [(0.9 * t).cos() * 4.0, (1.7 * t).sin() * 4.0];
+        let q = [libm::sin(1.3 * t) * 3.0, libm::cos(0.7 * t + 0.2) * 3.0];
+        let qd = [libm::cos(2.1 * t) * 2.0, libm::sin(0.3 * t) * 2.0];
+        let u = [libm::cos(0.9 * t) * 4.0, libm::sin(1.7 * t) * 4.0];
         let p = planar2::PARAM_DEFAULTS;
         let f = |v: [f64; 2]| v.map(|x| x as f32);
         for (k, name) in planar2::KERNELS.iter().enumerate() {
@@ -136,11 +136,11 @@ fn planar_arm_matches_textbook_closed_forms() {
         let p = [m2];
         for j in 0..20 {
             let t = (k * 20 + j) as f64;
-            let q = [(1.3 * t).sin() * 3.0, (0.7 * t + 0.2).cos() * 3.0];
-            let qd = [(2.1 * t).cos() * 2.0, (0.3 * t).sin() * 2.0];
-            let (s2, c2) = q[1].sin_cos();
-            let c1 = q[0].cos();
-            let c12 = (q[0] + q[1]).cos();
+            let q = [libm::sin(1.3 * t) * 3.0, libm::cos(0.7 * t + 0.2) * 3.0];
+            let qd = [libm::cos(2.1 * t) * 2.0, libm::sin(0.3 * t) * 2.0];
+            let (s2, c2) = libm::sincos(q[1]);
+            let c1 = libm::cos(q[0]);
+            let c12 = libm::cos(q[0] + q[1]);
             let mm = [
                 [
                     m1 * lc1 * lc1 + i1 + m2 * (l1 * l1 + lc2 * lc2 + 2.0 * l1 * lc2 * c2) + i2,
@@ -180,7 +180,7 @@ fn planar_arm_matches_textbook_closed_forms() {
             }
             // The emitted inverse dynamics τ = M q̈ + C q̇ + g, its round trip through the
             // emitted forward dynamics, and Y π = τ with π from the closed-form parameters.
-            let qdd = [(0.9 * t).cos() * 4.0, (1.7 * t).sin() * 4.0];
+            let qdd = [libm::cos(0.9 * t) * 4.0, libm::sin(1.7 * t) * 4.0];
             let tau_cf: Vec<f64> = (0..2)
                 .map(|a| mm[a][0] * qdd[0] + mm[a][1] * qdd[1] + cqd[a] + g[a])
                 .collect();
@@ -218,8 +218,8 @@ fn planar_arm_matches_textbook_closed_forms() {
                 assert!((ypi - tau_cf[a]).abs() < 1e-12 * scale, "Y π[{a}]");
             }
             // Tip Jacobian of the planar arm.
-            let s1 = q[0].sin();
-            let s12 = (q[0] + q[1]).sin();
+            let s1 = libm::sin(q[0]);
+            let s12 = libm::sin(q[0] + q[1]);
             let mut jp = [[0.0; 2]; 3];
             let mut jo = [[0.0; 2]; 3];
             planar2::tip_jacobian(&q, &p, &mut jp, &mut jo);

@@ -117,7 +117,7 @@ fn polar_arm_matches_closed_form() {
         let qd = rand_vec(&mut r, 2, -2.0, 2.0);
         let qdd = rand_vec(&mut r, 2, -5.0, 5.0);
         let rad = q[1] + lc;
-        let (s1, c1) = q[0].sin_cos();
+        let (s1, c1) = libm::sincos(q[0]);
         let mm = [[i1 + i2 + m2 * rad * rad, 0.0], [0.0, m2]];
         let cqd = [2.0 * m2 * rad * qd[0] * qd[1], -m2 * rad * qd[0] * qd[0]];
         let grav = [m2 * g * rad * c1, m2 * g * s1];

@@ -33,11 +33,11 @@ fn rt(r: [[f64; 3]; 3], t: [f64; 3]) -> M4 {
 }
 
 fn rz(th: f64) -> M4 {
-    let (s, c) = th.sin_cos();
+    let (s, c) = libm::sincos(th);
     rt([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], [0.0; 3])
 }
 fn rx(al: f64) -> M4 {
-    let (s, c) = al.sin_cos();
+    let (s, c) = libm::sincos(al);
     rt([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]], [0.0; 3])
 }
 fn tz(d: f64) -> M4 {

@@ -31,8 +31,8 @@ fn appendix_a_kinematics() {
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     for _ in 0..50 {
         let q: Vec<f64> = (0..3).map(|_| rng.random_range(-3.2..3.2)).collect();
-        let s = |x: f64| x.sin();
-        let c = |x: f64| x.cos();
+        let s = |x: f64| libm::sin(x);
+        let c = |x: f64| libm::cos(x);
         let (q1, q2, q3) = (q[0], q[1], q[2]);
         let l = 1.0;
         // eq. 67 (s_{1-2-3} = sin(q1 − q2 − q3), ...)
@@ -99,8 +99,8 @@ fn appendix_b_dynamics() {
         let q: Vec<f64> = (0..3).map(|_| rng.random_range(-3.2..3.2)).collect();
         let (q1, q2, q3) = (q[0], q[1], q[2]);
         // s_{xyz} = sin(x q1 + y q2 + z q3), c likewise (App. B notation).
-        let s = |x: f64, y: f64, z: f64| (x * q1 + y * q2 + z * q3).sin();
-        let c = |x: f64, y: f64, z: f64| (x * q1 + y * q2 + z * q3).cos();
+        let s = |x: f64, y: f64, z: f64| libm::sin(x * q1 + y * q2 + z * q3);
+        let c = |x: f64, y: f64, z: f64| libm::cos(x * q1 + y * q2 + z * q3);
         // eq. 75
         let m11 = 0.125 * (-4.0 * ixx + 4.0 * iyy + m3 * l * l) * c(0., 2., 2.)
             + 0.5 * m3 * l * l * c(0., 2., 1.)
@@ -169,7 +169,7 @@ fn appendix_b_christoffel_symbols() {
     for _ in 0..50 {
         let q: Vec<f64> = (0..3).map(|_| rng.random_range(-3.2..3.2)).collect();
         let (q1, q2, q3) = (q[0], q[1], q[2]);
-        let s = |x: f64, y: f64, z: f64| (x * q1 + y * q2 + z * q3).sin();
+        let s = |x: f64, y: f64, z: f64| libm::sin(x * q1 + y * q2 + z * q3);
         let l2 = l * l;
         let p112 = 0.125 * (4.0 * ixx - 4.0 * iyy - m3 * l2) * s(0., 2., 2.)
             - 0.5 * m3 * l2 * s(0., 2., 1.)

@@ -16,16 +16,16 @@ const B: f64 = 0.05;
 
 /// Inverse dynamics of the pendulum.
 fn pendulum_id(q: f64, qd: f64, qdd: f64) -> f64 {
-    M * L * L * qdd + M * G * L * q.sin() + B * qd
+    M * L * L * qdd + M * G * L * libm::sin(q) + B * qd
 }
 
 /// Reference q*(t) = A sin(Ω t) and its derivatives.
 fn reference(t: f64) -> (f64, f64, f64) {
     let (a, w) = (0.8, 3.0);
     (
-        a * (w * t).sin(),
-        a * w * (w * t).cos(),
-        -a * w * w * (w * t).sin(),
+        a * libm::sin(w * t),
+        a * w * libm::cos(w * t),
+        -a * w * w * libm::sin(w * t),
     )
 }
 
@@ -35,7 +35,7 @@ fn rhs(ct: &ComputedTorque, t: f64, x: [f64; 2]) -> [f64; 2] {
     let mut cmd = [0.0];
     ct.acceleration(&[x[0]], &[x[1]], &[qr], &[qdr], &[qddr], &mut cmd);
     let tau = pendulum_id(x[0], x[1], cmd[0]);
-    let qdd = (tau - M * G * L * x[0].sin() - B * x[1]) / (M * L * L);
+    let qdd = (tau - M * G * L * libm::sin(x[0]) - B * x[1]) / (M * L * L);
     [x[1], qdd]
 }
 
@@ -70,15 +70,15 @@ fn pendulum_error_follows_the_second_order_closed_form() {
     let (w, z) = (ct.omega_n, ct.zeta);
     let wd = w * (1.0 - z * z).sqrt();
     for (t, e) in simulate(&ct, e0, ed0) {
-        let exact =
-            (-z * w * t).exp() * (e0 * (wd * t).cos() + (ed0 + z * w * e0) / wd * (wd * t).sin());
+        let exact = libm::exp(-z * w * t)
+            * (e0 * libm::cos(wd * t) + (ed0 + z * w * e0) / wd * libm::sin(wd * t));
         assert!((e - exact).abs() < 1e-9, "ζ = 0.3, t = {t}: {e} vs {exact}");
     }
     // Critically damped: e = (e0 + (ė0 + ω e0) t) e^{−ω t}.
     let ct = ComputedTorque::new(8.0, 1.0).unwrap();
     let w = ct.omega_n;
     for (t, e) in simulate(&ct, e0, ed0) {
-        let exact = (e0 + (ed0 + w * e0) * t) * (-w * t).exp();
+        let exact = (e0 + (ed0 + w * e0) * t) * libm::exp(-w * t);
         assert!((e - exact).abs() < 1e-9, "ζ = 1, t = {t}: {e} vs {exact}");
     }
     assert_eq!(ct.kp(), 64.0);

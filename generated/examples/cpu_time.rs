@@ -61,9 +61,9 @@ fn main() {
         black_box(&ct);
     });
     time("3 x f64::sin_cos", n, || {
-        let a = black_box(q[0]).sin_cos();
-        let b = black_box(q[1]).sin_cos();
-        let c = black_box(q[2]).sin_cos();
+        let a = libm::sincos(black_box(q[0]));
+        let b = libm::sincos(black_box(q[1]));
+        let c = libm::sincos(black_box(q[2]));
         black_box((a, b, c));
     });
 }

@@ -238,7 +238,7 @@ macro_rules! check_dynamics {
 
         // Inverse dynamics against the reference's world-axes Newton–Euler pass, at a q̈
         // derived from the state (|q̈| ≤ 2).
-        let qdd: [f64; N] = std::array::from_fn(|i| 2.0 * (1.7 * q[i] + 0.3 * i as f64).sin());
+        let qdd: [f64; N] = std::array::from_fn(|i| 2.0 * libm::sin(1.7 * q[i] + 0.3 * i as f64));
         let tau_ref = rf.inverse_dynamics_ne(&q, &qd, &qdd);
         let s_tau = (v * v + 2.0) * ms;
         let mut tau = [0.0; N];

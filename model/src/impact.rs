@@ -416,8 +416,8 @@ fn max_dissipation_impulse<const N: usize>(
 /// A = Q diag(λ) Qᵀ.
 fn sym_eig2(a: &nalgebra::Matrix2<f64>) -> ([f64; 2], nalgebra::Matrix2<f64>) {
     let (p, q, s) = (a[(0, 0)], a[(0, 1)], a[(1, 1)]);
-    let th = 0.5 * (2.0 * q).atan2(p - s);
-    let (sn, cs) = th.sin_cos();
+    let th = 0.5 * libm::atan2(2.0 * q, p - s);
+    let (sn, cs) = libm::sincos(th);
     let l1 = p * cs * cs + 2.0 * q * sn * cs + s * sn * sn;
     let l2 = p * sn * sn - 2.0 * q * sn * cs + s * cs * cs;
     ([l1, l2], nalgebra::Matrix2::new(cs, -sn, sn, cs))
@@ -622,7 +622,7 @@ mod tests {
         let mut best = (obj(&Vector2::zeros()), Vector2::zeros());
         for i in 0..720 {
             let th = i as f64 / 720.0 * std::f64::consts::TAU;
-            let e = Vector2::new(th.cos(), th.sin());
+            let e = Vector2::new(libm::cos(th), libm::sin(th));
             let den = 1.0 + k.dot(&e);
             if den <= 0.0 {
                 continue;

@@ -98,7 +98,7 @@ fn brute_max_dissipation(kin: &bf_model::ContactKinematics, params: &bf_model::P
     let minv = kin.m_f.try_inverse().unwrap();
     let mu = params.mu_k();
     let energy = |rho: f64, th: f64| {
-        let d = n + (t1 * th.cos() + t2 * th.sin()) * rho;
+        let d = n + (t1 * libm::cos(th) + t2 * libm::sin(th)) * rho;
         let den = n.dot(&(kin.contact.j_c * minv * kin.contact.j_c.transpose() * d));
         if den <= 0.0 {
             return f64::INFINITY;

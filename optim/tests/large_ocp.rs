@@ -40,9 +40,11 @@ fn double_integrator_derivatives() {
     let mut p = DoubleIntegrator::new(6);
     p.drag = 0.7;
     let x: Vec<f64> = (0..p.num_variables())
-        .map(|i| 0.3 + 0.1 * (i as f64 * 1.7).sin())
+        .map(|i| 0.3 + 0.1 * libm::sin(i as f64 * 1.7))
         .collect();
-    let lam: Vec<f64> = (0..p.num_constraints()).map(|i| (i as f64).cos()).collect();
+    let lam: Vec<f64> = (0..p.num_constraints())
+        .map(|i| libm::cos(i as f64))
+        .collect();
     let rep = check_derivatives(&p, &x, 1.3, &lam, 1e-6);
     assert!(rep.max_error() < 1e-6, "{rep:?}");
 }
@@ -133,10 +135,10 @@ fn chebyshev_collocation_derivatives() {
     let mut p = common::cheb::ChebDoubleIntegrator::new(2, 2, 5);
     p.drag = 0.4;
     let x: Vec<f64> = (0..p.num_variables())
-        .map(|i| 0.2 + 0.3 * (i as f64 * 0.77).sin())
+        .map(|i| 0.2 + 0.3 * libm::sin(i as f64 * 0.77))
         .collect();
     let lam: Vec<f64> = (0..p.num_constraints())
-        .map(|i| (i as f64 * 1.3).cos())
+        .map(|i| libm::cos(i as f64 * 1.3))
         .collect();
     let rep = check_derivatives(&p, &x, 0.9, &lam, 1e-6);
     assert!(rep.max_error() < 1e-6, "{rep:?}");

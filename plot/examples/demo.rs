@@ -14,7 +14,7 @@ fn main() -> Result<(), PlotError> {
             (0..200)
                 .map(|i| {
                     let t = i as f64 * 0.05;
-                    (t, (t + k as f64 * 0.4).sin() * (1.0 + 0.1 * k as f64))
+                    (t, libm::sin(t + k as f64 * 0.4) * (1.0 + 0.1 * k as f64))
                 })
                 .collect(),
         ));

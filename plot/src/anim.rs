@@ -140,11 +140,11 @@ pub fn angular_velocities(frames: &[AnimFrame]) -> Vec<[f64; 3]> {
         let (r0, r1) = (&a.ball_rotation, &b.ball_rotation);
         let m = |i: usize, j: usize| (0..3).map(|l| r1[i][l] * r0[j][l]).sum::<f64>();
         let tr = m(0, 0) + m(1, 1) + m(2, 2);
-        let th = ((tr - 1.0) / 2.0).clamp(-1.0, 1.0).acos();
+        let th = libm::acos(((tr - 1.0) / 2.0).clamp(-1.0, 1.0));
         let f = if th < 1e-6 {
             0.5
         } else {
-            th / (2.0 * th.sin())
+            th / (2.0 * libm::sin(th))
         };
         out[k] = [
             f * (m(2, 1) - m(1, 2)) / dt,

@@ -381,7 +381,7 @@ pub(crate) fn split_sharp_turns(
         let e2 = ((b.0 - v.0) as f64, (b.1 - v.1) as f64);
         cur.push(pts[w[1]]);
         // cos φ > 1/2 ⇔ φ < 60°.
-        if e1.0 * e2.0 + e1.1 * e2.1 > 0.5 * e1.0.hypot(e1.1) * e2.0.hypot(e2.1) {
+        if e1.0 * e2.0 + e1.1 * e2.1 > 0.5 * libm::hypot(e1.0, e1.1) * libm::hypot(e2.0, e2.1) {
             strokes.push(std::mem::replace(&mut cur, vec![pts[w[1]]]));
             joins.push(pts[w[1]]);
         }

@@ -123,7 +123,7 @@ pub fn fig_finger_paths(
         (0..=120)
             .map(|i| {
                 let th = i as f64 * std::f64::consts::TAU / 120.0;
-                let (s, co) = th.sin_cos();
+                let (s, co) = libm::sincos(th);
                 [0, 1, 2].map(|k| c[k] + r * (co * a[k] + s * b[k]))
             })
             .collect()
@@ -142,7 +142,7 @@ pub fn fig_finger_paths(
         let outline = (0..=120)
             .map(|i| {
                 let th = i as f64 * std::f64::consts::TAU / 120.0;
-                (cu + r * th.cos(), cv + r * th.sin())
+                (cu + r * libm::cos(th), cv + r * libm::sin(th))
             })
             .collect();
         p.series.push(Series::new("ball", outline).styled(style(
@@ -225,7 +225,7 @@ fn sphere_series(c: [f64; 3], r: f64, v: View) -> Vec<Series> {
         (0..=120)
             .map(|i| {
                 let th = i as f64 * std::f64::consts::TAU / 120.0;
-                let (s, co) = th.sin_cos();
+                let (s, co) = libm::sincos(th);
                 v.project([0, 1, 2].map(|k| c[k] + r * (co * a[k] + s * b[k])))
             })
             .collect()
@@ -234,7 +234,7 @@ fn sphere_series(c: [f64; 3], r: f64, v: View) -> Vec<Series> {
     let outline = (0..=120)
         .map(|i| {
             let th = i as f64 * std::f64::consts::TAU / 120.0;
-            (cu + r * th.cos(), cv + r * th.sin())
+            (cu + r * libm::cos(th), cv + r * libm::sin(th))
         })
         .collect();
     let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
@@ -350,7 +350,7 @@ mod tests {
             let (cu, cv) = v.project(data.ball_center);
             for s in &p.series[1..4] {
                 for &(u, w) in &s.points {
-                    assert!((u - cu).hypot(w - cv) <= 1.0 + 1e-12);
+                    assert!(libm::hypot(u - cu, w - cv) <= 1.0 + 1e-12);
                 }
             }
         }

@@ -61,7 +61,7 @@ pub fn linear_ticks(
     }
     let span = hi - lo;
     let max_ticks = max_ticks.max(2) as f64;
-    let mut k = (span / max_ticks).log10().floor() as i32 - 1;
+    let mut k = libm::log10(span / max_ticks).floor() as i32 - 1;
     let mut last = Vec::new();
     for _ in 0..12 {
         for m in [1i64, 2, 5] {
@@ -102,12 +102,12 @@ pub fn log_ticks(lo: f64, hi: f64, fits: &dyn Fn(&[Tick]) -> bool) -> Vec<Tick> 
             if m > 1 && decades > 8 {
                 break;
             }
-            if inside((m as f64).log10() + e as f64) {
+            if inside(libm::log10(m as f64) + e as f64) {
                 all.push((m, e));
             }
         }
     }
-    let pos = |(m, e): (i64, i32)| (m as f64).log10() + e as f64;
+    let pos = |(m, e): (i64, i32)| libm::log10(m as f64) + e as f64;
     let label = |(m, e): (i64, i32)| format!("{m}e{e}");
     let build = |keep: &dyn Fn((i64, i32)) -> bool| -> Vec<Tick> {
         all.iter()
@@ -140,12 +140,12 @@ pub fn log_ticks(lo: f64, hi: f64, fits: &dyn Fn(&[Tick]) -> bool) -> Vec<Tick> 
     if usable.is_empty() {
         // Less than two labellable mantissas (a narrow range): nice linear values, placed at
         // their logarithm.
-        let (a, b) = (10f64.powf(lo), 10f64.powf(hi));
+        let (a, b) = (libm::pow(10f64, lo), libm::pow(10f64, hi));
         return linear_ticks(a, b, 6, &|t: &[Tick]| {
             let moved: Vec<Tick> = t
                 .iter()
                 .map(|t| Tick {
-                    pos: t.pos.log10(),
+                    pos: libm::log10(t.pos),
                     label: t.label.clone(),
                 })
                 .collect();
@@ -154,7 +154,7 @@ pub fn log_ticks(lo: f64, hi: f64, fits: &dyn Fn(&[Tick]) -> bool) -> Vec<Tick> 
         .into_iter()
         .filter(|t| t.pos > 0.0)
         .map(|t| Tick {
-            pos: t.pos.log10(),
+            pos: libm::log10(t.pos),
             label: t.label,
         })
         .collect();
@@ -222,13 +222,13 @@ mod tests {
         assert_eq!(t.len(), 10);
         for tk in &t {
             let v: f64 = tk.label.as_deref().unwrap().parse().unwrap();
-            assert!((v.log10() - tk.pos).abs() < 1e-12, "{tk:?}");
+            assert!((libm::log10(v) - tk.pos).abs() < 1e-12, "{tk:?}");
         }
         let two = t
             .iter()
             .find(|t| t.label.as_deref() == Some("2e-7"))
             .unwrap();
-        assert!((two.pos - (2e-7f64).log10()).abs() < 1e-12);
+        assert!((two.pos - libm::log10(2e-7f64)).abs() < 1e-12);
         // Only decades fit: minor ticks stay, unlabelled, at m·10^e.
         let dec = log_ticks(-9.0, -3.0, &|l: &[Tick]| l.len() <= 7);
         let labels: Vec<&str> = dec.iter().filter_map(|t| t.label.as_deref()).collect();
@@ -238,18 +238,18 @@ mod tests {
         );
         assert!(
             dec.iter()
-                .any(|t| (t.pos - (3e-6f64).log10()).abs() < 1e-12)
+                .any(|t| (t.pos - libm::log10(3e-6f64)).abs() < 1e-12)
         );
         // Many decades: every 5th labelled.
         let wide = log_ticks(-16.0, 0.0, &|l: &[Tick]| l.len() <= 5);
         let labels: Vec<&str> = wide.iter().filter_map(|t| t.label.as_deref()).collect();
         assert_eq!(labels, ["1e-15", "1e-10", "1e-5", "1e0"]);
         // Narrow range inside one mantissa step: linear values at their logarithm.
-        let narrow = log_ticks((2.1e-7f64).log10(), (2.9e-7f64).log10(), &all_fit);
+        let narrow = log_ticks(libm::log10(2.1e-7f64), libm::log10(2.9e-7f64), &all_fit);
         assert!(narrow.len() >= 2);
         for tk in &narrow {
             let v: f64 = tk.label.as_deref().unwrap().parse().unwrap();
-            assert!((v.log10() - tk.pos).abs() < 1e-12 && (2.1e-7..=2.9e-7).contains(&v));
+            assert!((libm::log10(v) - tk.pos).abs() < 1e-12 && (2.1e-7..=2.9e-7).contains(&v));
         }
     }
 }

@@ -99,7 +99,7 @@ fn eight_series_get_distinct_colours_legend_and_paths() {
             (0..300)
                 .map(|i| {
                     let t = i as f64 * 0.03;
-                    (t, (t + 0.5 * k as f64).sin() + 0.3 * k as f64)
+                    (t, libm::sin(t + 0.5 * k as f64) + 0.3 * k as f64)
                 })
                 .collect(),
         ));
@@ -209,7 +209,7 @@ fn paper_time_series_figures_render() {
         &[
             &|x| 0.5 * (x - 1.0).clamp(0.0, 0.6),
             &|x| -0.4 * (x - 1.0).clamp(0.0, 0.6),
-            &|x| 0.1 * x.sin(),
+            &|x| 0.1 * libm::sin(x),
         ],
         &["ω_x", "ω_y", "ω_z"],
     );
@@ -252,7 +252,9 @@ fn paper_time_series_figures_render() {
 
     let tau = ts(
         &t,
-        &[&|x| x.sin(), &|x| (2.0 * x).cos() * 1.2, &|x| 0.3 * x],
+        &[&|x| libm::sin(x), &|x| libm::cos(2.0 * x) * 1.2, &|x| {
+            0.3 * x
+        }],
         &["τ₁", "τ₂", "τ₃"],
     );
     let f8 = fig_torques("Fig. 8: torques", &tau, Some(1.0), &phases()).unwrap();
@@ -299,7 +301,7 @@ fn paper_time_series_figures_render() {
         &[
             &|x| 0.5 * (x - 1.0).clamp(0.0, 0.5),
             &|x| -0.4 * (x - 1.0).clamp(0.0, 0.7),
-            &|x| 0.12 * x.sin(),
+            &|x| 0.12 * libm::sin(x),
         ],
         &["ω_x", "ω_y", "ω_z"],
     );
@@ -349,9 +351,9 @@ fn finger(q1: f64, q2: f64, q3: f64) -> Vec<[f64; 3]> {
     for q in [0.0, q2, q3] {
         a += q;
         p = [
-            p[0] + a.cos() * 0.9,
-            p[1] + 0.2 * q1.sin(),
-            p[2] + a.sin() * 0.9,
+            p[0] + libm::cos(a) * 0.9,
+            p[1] + 0.2 * libm::sin(q1),
+            p[2] + libm::sin(a) * 0.9,
         ];
         pts.push(p);
     }
@@ -453,7 +455,7 @@ fn animation_html_is_self_contained_with_all_frames() {
         assert!(html.contains(id));
     }
     // Rotation matrices are stored row-major: frame 1 has R = Rz(0.11).
-    assert!(html.contains(&format!("r:[{},", fmt5((0.11f64).cos()))));
+    assert!(html.contains(&format!("r:[{},", fmt5(libm::cos(0.11f64)))));
 
     // Bad input.
     let mut b = a.clone();
@@ -546,7 +548,7 @@ fn explicit_small_range_clips_segments_to_the_axes() {
         p.series.push(Series::new(
             "plain",
             (0..50)
-                .map(|i| (i as f64, (0.2 * i as f64).sin()))
+                .map(|i| (i as f64, libm::sin(0.2 * i as f64)))
                 .collect(),
         ));
         p
@@ -641,13 +643,13 @@ fn explicit_small_range_clips_segments_to_the_axes() {
         .iter()
         .filter(|p| p.len() == 2)
         .max_by(|a, b| {
-            let l = |p: &Vec<(f64, f64)>| (p[1].0 - p[0].0).hypot(p[1].1 - p[0].1);
+            let l = |p: &Vec<(f64, f64)>| libm::hypot(p[1].0 - p[0].0, p[1].1 - p[0].1);
             l(a).total_cmp(&l(b))
         })
         .expect("clipped crossing segment in the SVG");
     let (dx, dy) = (longest[1].0 - longest[0].0, longest[1].1 - longest[0].1);
     assert!(
-        dx.hypot(dy) > 100.0,
+        libm::hypot(dx, dy) > 100.0,
         "crossing segment too short: {longest:?}"
     );
     assert!(

@@ -95,11 +95,11 @@ struct Axes {
 
 impl Axes {
     fn px(&self, x: f64) -> f64 {
-        let v = if self.xlog { x.log10() } else { x };
+        let v = if self.xlog { libm::log10(x) } else { x };
         self.x0 + (v - self.xr.0) / (self.xr.1 - self.xr.0) * (self.x1 - self.x0)
     }
     fn py(&self, y: f64) -> f64 {
-        let v = if self.ylog { y.log10() } else { y };
+        let v = if self.ylog { libm::log10(y) } else { y };
         self.y1 - (v - self.yr.0) / (self.yr.1 - self.yr.0) * (self.y1 - self.y0)
     }
 }
@@ -219,7 +219,10 @@ fn log_tick_labels_match_positions() {
         let p = render(&f, d.join(format!("log{i}"))).unwrap();
         let els = read(&p[0]);
         let ax = axes(&els)[0];
-        assert!((ax.xr.0 - xr.0.log10()).abs() < 1e-12 && (ax.yr.1 - yr.1.log10()).abs() < 1e-12);
+        assert!(
+            (ax.xr.0 - libm::log10(xr.0)).abs() < 1e-12
+                && (ax.yr.1 - libm::log10(yr.1)).abs() < 1e-12
+        );
         let n = check_ticks(&els, &ax, &known, "#C80064");
         assert!(n >= 5, "case {i}: only {n} labelled ticks");
         let labels: Vec<&str> = els
@@ -360,7 +363,9 @@ fn assert_legend_clear_of_data(els: &[El], what: &str) {
                 let p = polyline_points(e);
                 let mut s = Vec::new();
                 for w in p.windows(2) {
-                    let n = ((w[1].0 - w[0].0).hypot(w[1].1 - w[0].1)).ceil().max(1.0) as usize;
+                    let n = (libm::hypot(w[1].0 - w[0].0, w[1].1 - w[0].1))
+                        .ceil()
+                        .max(1.0) as usize;
                     for k in 0..=n {
                         let f = k as f64 / n as f64;
                         s.push((
@@ -434,8 +439,8 @@ fn crowded_figures_have_legends_and_no_overlaps() {
     // Data filling every corner: the legend needs head room.
     let omega = ts(
         &t,
-        &[&|x| (9.0 * x).sin(), &|x| (9.0 * x).cos(), &|x| {
-            0.8 * (5.0 * x).sin()
+        &[&|x| libm::sin(9.0 * x), &|x| libm::cos(9.0 * x), &|x| {
+            0.8 * libm::sin(5.0 * x)
         }],
         &["ω_x", "ω_y", "ω_z"],
     );
@@ -466,7 +471,7 @@ fn crowded_figures_have_legends_and_no_overlaps() {
     // Torques of ≤ 0.15 N m with a 1 N m limit: the axis fits the data.
     let tau = ts(
         &t,
-        &[&|x| 0.15 * x.sin(), &|x| -0.1 * x.cos(), &|x| {
+        &[&|x| 0.15 * libm::sin(x), &|x| -0.1 * libm::cos(x), &|x| {
             0.9 * (x - 1.5)
         }],
         &["τ1", "τ2", "τ3"],
@@ -554,7 +559,7 @@ fn work_precision_sets_label_points_and_do_not_join_unordered_runs() {
         let (px, py) = (ax.px(x), ax.py(y));
         let dx = (b.0 - px).max(px - b.2).max(0.0);
         let dy = (b.1 - py).max(py - b.3).max(0.0);
-        assert!(dx.hypot(dy) < 30.0, "{l} far from its point");
+        assert!(libm::hypot(dx, dy) < 30.0, "{l} far from its point");
     }
     assert_no_text_overlap(&els, "wp");
     assert_legend_clear_of_data(&els, "wp");
@@ -634,7 +639,7 @@ fn fig11_compares_paths_with_a_legend_entry_each() {
         (0..80)
             .map(|k| {
                 let a = 0.02 * k as f64;
-                [r * a.cos(), r * a.sin(), z]
+                [r * libm::cos(a), r * libm::sin(a), z]
             })
             .collect()
     };
@@ -696,9 +701,12 @@ fn random_figures_keep_texts_apart_and_legends_off_the_data() {
             let pts: Vec<(f64, f64)> = (0..n)
                 .map(|i| {
                     let t = 0.1 + 3.0 * i as f64 / n as f64;
-                    let y = c * (a * t + b).sin();
+                    let y = c * libm::sin(a * t + b);
                     if log {
-                        (10f64.powf(t - 2.0), 10f64.powf(y.abs().min(8.0) - 6.0))
+                        (
+                            libm::pow(10f64, t - 2.0),
+                            libm::pow(10f64, y.abs().min(8.0) - 6.0),
+                        )
                     } else {
                         (t, y)
                     }
@@ -755,7 +763,7 @@ fn many_switching_times_keep_three_label_rows_and_every_line() {
     f.series.push(Series::new(
         "ω_x",
         (0..500)
-            .map(|i| (0.02 * i as f64, (0.1 * i as f64).sin()))
+            .map(|i| (0.02 * i as f64, libm::sin(0.1 * i as f64)))
             .collect(),
     ));
     for p in 0..10 {
@@ -784,9 +792,11 @@ fn torque_and_force_axes_include_zero_in_every_panel() {
     // τ1 varies by ±3 % about 0.3 N m: without zero on the axis it would fill the panel.
     let tau = ts(
         &t,
-        &[&|x| 0.3 + 0.01 * x.sin(), &|x| -0.5 - 0.1 * x.cos(), &|x| {
-            0.2 * x.sin()
-        }],
+        &[
+            &|x| 0.3 + 0.01 * libm::sin(x),
+            &|x| -0.5 - 0.1 * libm::cos(x),
+            &|x| 0.2 * libm::sin(x),
+        ],
         &["τ1", "τ2", "τ3"],
     );
     let ph = Phases::default();

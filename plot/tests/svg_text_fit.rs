@@ -31,8 +31,8 @@ fn all_figures(dir: &std::path::Path) -> Vec<PathBuf> {
     );
     let omega = ts(
         &t,
-        &[&|x| 0.5 * x.sin(), &|x| -0.4 * x.cos(), &|x| {
-            2.2 + 0.1 * x.sin()
+        &[&|x| 0.5 * libm::sin(x), &|x| -0.4 * libm::cos(x), &|x| {
+            2.2 + 0.1 * libm::sin(x)
         }],
         &["ω_x", "ω_y", "ω_z"],
     );
@@ -64,7 +64,9 @@ fn all_figures(dir: &std::path::Path) -> Vec<PathBuf> {
     out.push(render_panels(&f, dir.join("fig7")).unwrap()[0].clone());
     let tau = ts(
         &t,
-        &[&|x| 0.3 + 0.01 * x.sin(), &|x| x.cos(), &|x| -0.2 * x.sin()],
+        &[&|x| 0.3 + 0.01 * libm::sin(x), &|x| libm::cos(x), &|x| {
+            -0.2 * libm::sin(x)
+        }],
         &["τ1", "τ2", "τ3"],
     );
     let f = fig_torques(
@@ -89,8 +91,8 @@ fn all_figures(dir: &std::path::Path) -> Vec<PathBuf> {
     out.push(render(&f, dir.join("fig16")).unwrap()[0].clone());
     let ol = ts(
         &t,
-        &[&|x| 0.6 * x.sin(), &|x| -0.3 * x.cos(), &|x| {
-            2.0 + 0.2 * x.sin()
+        &[&|x| 0.6 * libm::sin(x), &|x| -0.3 * libm::cos(x), &|x| {
+            2.0 + 0.2 * libm::sin(x)
         }],
         &["ω_x", "ω_y", "ω_z"],
     );
@@ -134,7 +136,7 @@ fn all_figures(dir: &std::path::Path) -> Vec<PathBuf> {
     let tip: Vec<[f64; 3]> = (0..200)
         .map(|k| {
             let a = 0.03 * k as f64;
-            [1.2 * a.cos(), 1.2 * a.sin(), 0.4]
+            [1.2 * libm::cos(a), 1.2 * libm::sin(a), 0.4]
         })
         .collect();
     let paths = FingerPaths {

@@ -76,7 +76,7 @@ impl Angle {
             }
         }
         let x = self.radians();
-        (x.cos(), x.sin())
+        (libm::cos(x), libm::sin(x))
     }
 
     /// Parses the string form of an angle: `"pi/2"`, `"-pi/2"`, `"3*pi/4"`, `"3pi/4"`,

@@ -308,12 +308,12 @@ fn transpose(a: M3) -> M3 {
 const IDENTITY: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 
 fn rot_x(a: f64) -> M3 {
-    let (s, c) = a.sin_cos();
+    let (s, c) = libm::sincos(a);
     [[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]
 }
 
 fn rot_z(a: f64) -> M3 {
-    let (s, c) = a.sin_cos();
+    let (s, c) = libm::sincos(a);
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 }
 

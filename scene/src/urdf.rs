@@ -300,9 +300,9 @@ impl Reader<'_> {
 
 /// R = R_z(yaw) R_y(pitch) R_x(roll), the URDF convention.
 pub fn rpy_matrix([r, p, y]: V3) -> M3 {
-    let (sr, cr) = r.sin_cos();
-    let (sp, cp) = p.sin_cos();
-    let (sy, cy) = y.sin_cos();
+    let (sr, cr) = libm::sincos(r);
+    let (sp, cp) = libm::sincos(p);
+    let (sy, cy) = libm::sincos(y);
     [
         [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],

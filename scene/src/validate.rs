@@ -185,9 +185,9 @@ pub fn symmetric_eigenvalues(a: &[[f64; 3]; 3]) -> [f64; 3] {
         std::array::from_fn(|j| (a[i][j] - if i == j { q } else { 0.0 }) / p)
     });
     let r = (det3(&b) / 2.0).clamp(-1.0, 1.0);
-    let phi = r.acos() / 3.0;
-    let hi = q + 2.0 * p * phi.cos();
-    let lo = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+    let phi = libm::acos(r) / 3.0;
+    let hi = q + 2.0 * p * libm::cos(phi);
+    let lo = q + 2.0 * p * libm::cos(phi + 2.0 * std::f64::consts::FRAC_PI_3);
     [lo, 3.0 * q - hi - lo, hi]
 }
 

@@ -37,7 +37,7 @@ fn run_smooth(set: SimSettings) -> (f64, usize) {
     let out = simulate(&Oscillator { omega: 2.0 }, set, (), 0.0, &[1.0, 0.0], 10.0)
         .expect("oscillator runs");
     let x = out.trajectory.x.last().expect("samples");
-    let err = (x[0] - 20f64.cos()).hypot(x[1] + 2.0 * 20f64.sin());
+    let err = libm::hypot(x[0] - libm::cos(20f64), x[1] + 2.0 * libm::sin(20f64));
     (err, out.stats.accepted_steps)
 }
 

@@ -79,7 +79,7 @@ pub struct Pendulum {
 impl Pendulum {
     /// Energy per unit mass, ½ l² θ'² − g l cos θ (J/kg).
     pub fn energy(&self, x: &[f64]) -> f64 {
-        0.5 * self.l * self.l * x[1] * x[1] - self.g * self.l * x[0].cos()
+        0.5 * self.l * self.l * x[1] * x[1] - self.g * self.l * libm::cos(x[0])
     }
 }
 
@@ -90,7 +90,7 @@ impl HybridSystem for Pendulum {
     }
     fn rhs(&self, _: (), _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
         dx[0] = x[1];
-        dx[1] = -self.g / self.l * x[0].sin();
+        dx[1] = -self.g / self.l * libm::sin(x[0]);
         Ok(())
     }
 }
@@ -201,11 +201,11 @@ impl BouncingBall {
             return ((v0 + u) / g, -u);
         }
         let vinf = g / k;
-        let y = |tau: f64| y0 + (v0 + vinf) * (1.0 - (-k * tau).exp()) / k - vinf * tau;
-        let v = |tau: f64| (v0 + vinf) * (-k * tau).exp() - vinf;
+        let y = |tau: f64| y0 + (v0 + vinf) * (1.0 - libm::exp(-k * tau)) / k - vinf * tau;
+        let v = |tau: f64| (v0 + vinf) * libm::exp(-k * tau) - vinf;
         // Bracket: y > 0 just after the apex time, y < 0 eventually (terminal velocity).
         let t_apex = if v0 > 0.0 {
-            (1.0 + v0 / vinf).ln() / k
+            libm::log(1.0 + v0 / vinf) / k
         } else {
             0.0
         };

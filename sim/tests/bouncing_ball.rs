@@ -66,7 +66,7 @@ fn impacts_found_with_huge_steps_after_reset_on_surface() {
     let e: f64 = 0.7;
     let u1 = (2.0 * G).sqrt();
     let b = BouncingBall {
-        v_rest: Some(e.powf(10.5) * u1),
+        v_rest: Some(libm::pow(e, 10.5) * u1),
         ..ball(e)
     };
     let set = SimSettings {

@@ -440,7 +440,7 @@ pub fn check_appendix_scaled(tol_scale: f64) -> Result<Vec<Entry>> {
                 let [m1, m2, m3] = p.m;
                 // Appendix-A reading: s_{11} = sin 2q1, s_{1-1} = 0, s_{111} = sin 3q1,
                 // s_{1-1-1} = sin(−q1).
-                let s = f64::sin;
+                let s = libm::sin;
                 let g11 = 2.0 * m1 * s(q[0])
                     + (s(2.0 * q[0]) + 4.0 * s(q[0])) * m2
                     + (s(3.0 * q[0]) + s(-q[0]) + 2.0 * s(2.0 * q[0]) + 4.0 * s(q[0])) * m3;

@@ -335,15 +335,15 @@ mod tests {
     }
 
     fn f(x: f64) -> f64 {
-        x * x / 10.0 - (std::f64::consts::TAU * x).cos() + 1.0
+        x * x / 10.0 - libm::cos(std::f64::consts::TAU * x) + 1.0
     }
 
     fn df(x: f64) -> f64 {
-        x / 5.0 + std::f64::consts::TAU * (std::f64::consts::TAU * x).sin()
+        x / 5.0 + std::f64::consts::TAU * libm::sin(std::f64::consts::TAU * x)
     }
 
     fn d2f(x: f64) -> f64 {
-        0.2 + std::f64::consts::TAU.powi(2) * (std::f64::consts::TAU * x).cos()
+        0.2 + std::f64::consts::TAU.powi(2) * libm::cos(std::f64::consts::TAU * x)
     }
 
     /// The local solver: damped Newton (gradient steps where the curvature is not positive),

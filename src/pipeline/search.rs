@@ -903,7 +903,7 @@ impl OcpLandscape<'_> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let common = scale * rng.random_range(-1.0..1.0);
         for l in &p.nlp.phases {
-            let f = (common + scale * rng.random_range(-1.0..1.0)).exp();
+            let f = libm::exp(common + scale * rng.random_range(-1.0..1.0));
             w.x[l.t] = (w.x[l.t] * f).clamp(lo[l.t], up[l.t]);
         }
         // One offset of the joint angles (the first states) over the whole period, so the

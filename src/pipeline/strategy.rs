@@ -185,7 +185,7 @@ pub fn random_start(k: usize, seed: u64, q0: &[f64], nphases: usize) -> StartGue
     StartGuess {
         q: q0.iter().map(|q| q + rng.random_range(-0.6..0.6)).collect(),
         durations: (0..nphases)
-            .map(|_| 10f64.powf(rng.random_range(-1.3..0.2)))
+            .map(|_| libm::pow(10f64, rng.random_range(-1.3..0.2)))
             .collect(),
     }
 }

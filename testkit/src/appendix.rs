@@ -116,12 +116,12 @@ impl AppendixParams {
 
 /// Appendix A: sin of a signed sum of joints, `sa(q, &[1, -2, -3])` = s_{1\bar2\bar3}.
 fn sa(q: &[f64; 3], idx: &[i32]) -> f64 {
-    sum_a(q, idx).sin()
+    libm::sin(sum_a(q, idx))
 }
 
 /// Appendix A: cos of a signed sum of joints.
 fn ca(q: &[f64; 3], idx: &[i32]) -> f64 {
-    sum_a(q, idx).cos()
+    libm::cos(sum_a(q, idx))
 }
 
 fn sum_a(q: &[f64; 3], idx: &[i32]) -> f64 {
@@ -135,12 +135,12 @@ fn sum_a(q: &[f64; 3], idx: &[i32]) -> f64 {
 
 /// Appendix B: s_{xyz} = sin(x q1 + y q2 + z q3) (missing trailing coefficients are 0).
 fn sb(q: &[f64; 3], c: &[i32]) -> f64 {
-    sum_b(q, c).sin()
+    libm::sin(sum_b(q, c))
 }
 
 /// Appendix B: c_{xyz} = cos(x q1 + y q2 + z q3).
 fn cb(q: &[f64; 3], c: &[i32]) -> f64 {
-    sum_b(q, c).cos()
+    libm::cos(sum_b(q, c))
 }
 
 fn sum_b(q: &[f64; 3], c: &[i32]) -> f64 {

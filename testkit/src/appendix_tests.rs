@@ -322,7 +322,7 @@ fn appendix_b_subscripts_are_coefficients() {
         let [m1, m2, m3] = p.m;
         // Appendix-A reading: s_{11} = sin(q1 + q1), s_{1\bar1} = sin(q1 − q1) = 0,
         // s_{111} = sin(3 q1), s_{1\bar1\bar1} = sin(−q1).
-        let s = |x: f64| x.sin();
+        let s = |x: f64| libm::sin(x);
         let g11 = 2.0 * m1 * s(q[0])
             + (s(2.0 * q[0]) + 0.0 + 4.0 * s(q[0])) * m2
             + (s(3.0 * q[0]) + s(-q[0]) + 2.0 * s(2.0 * q[0]) + 0.0 + 4.0 * s(q[0])) * m3;

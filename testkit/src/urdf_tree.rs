@@ -45,16 +45,46 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 fn rpy(r: f64, p: f64, y: f64) -> Matrix3<f64> {
-    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, r.cos(), -r.sin(), 0.0, r.sin(), r.cos());
-    let ry = Matrix3::new(p.cos(), 0.0, p.sin(), 0.0, 1.0, 0.0, -p.sin(), 0.0, p.cos());
-    let rz = Matrix3::new(y.cos(), -y.sin(), 0.0, y.sin(), y.cos(), 0.0, 0.0, 0.0, 1.0);
+    let rx = Matrix3::new(
+        1.0,
+        0.0,
+        0.0,
+        0.0,
+        libm::cos(r),
+        -libm::sin(r),
+        0.0,
+        libm::sin(r),
+        libm::cos(r),
+    );
+    let ry = Matrix3::new(
+        libm::cos(p),
+        0.0,
+        libm::sin(p),
+        0.0,
+        1.0,
+        0.0,
+        -libm::sin(p),
+        0.0,
+        libm::cos(p),
+    );
+    let rz = Matrix3::new(
+        libm::cos(y),
+        -libm::sin(y),
+        0.0,
+        libm::sin(y),
+        libm::cos(y),
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+    );
     rz * ry * rx
 }
 
 /// Rotation by `q` about the unit axis `u` (Rodrigues, via the matrix exponential form).
 fn axis_angle(u: &Vector3<f64>, q: f64) -> Matrix3<f64> {
     let k = skew(u);
-    Matrix3::identity() + k * q.sin() + k * k * (1.0 - q.cos())
+    Matrix3::identity() + k * libm::sin(q) + k * k * (1.0 - libm::cos(q))
 }
 
 fn numbers(s: Option<&str>, default: &[f64]) -> Vec<f64> {

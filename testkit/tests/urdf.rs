@@ -166,7 +166,7 @@ fn planar_two_link_arm_matches_the_tree_reference_and_the_closed_form() {
     // M12 = m2 (lc² + l lc c2) + I2, M22 = m2 lc² + I2, with I the moment about z.
     let (m, l, lc, i) = (1.0, 1.0, 0.5, 0.08353);
     for [q, qd, qdd] in states(2, 3, 3) {
-        let c2 = q[1].cos();
+        let c2 = libm::cos(q[1]);
         let want = [
             m * lc * lc + m * (l * l + lc * lc + 2.0 * l * lc * c2) + 2.0 * i,
             m * (lc * lc + l * lc * c2) + i,
@@ -235,12 +235,12 @@ fn rpy(r: &[[f64; 3]; 3]) -> [f64; 3] {
         } else {
             -std::f64::consts::FRAC_PI_2
         };
-        return [0.0, p, (-r[0][1]).atan2(r[1][1])];
+        return [0.0, p, libm::atan2(-r[0][1], r[1][1])];
     }
     [
-        r[2][1].atan2(r[2][2]),
-        (-r[2][0]).atan2(r[2][1].hypot(r[2][2])),
-        r[1][0].atan2(r[0][0]),
+        libm::atan2(r[2][1], r[2][2]),
+        libm::atan2(-r[2][0], libm::hypot(r[2][1], r[2][2])),
+        libm::atan2(r[1][0], r[0][0]),
     ]
 }
 

@@ -3,7 +3,7 @@
 
 #![allow(dead_code)]
 
-use bf_optim::ipm::Nlp;
+use bf_optim::ipm::{Nlp, Status};
 use bf_problem::{BuiltProblem, OcpSolution};
 
 /// (max |∇f + Jᵀλ − z_L + z_U|, max constraint violation) at `sol`'s stored point.
@@ -25,4 +25,13 @@ pub fn ocp_kkt_residual(p: &BuiltProblem, sol: &OcpSolution) -> (f64, f64) {
         .map(|j| (grad[j] - w.z_l[j] + w.z_u[j]).abs())
         .fold(0.0, f64::max);
     (stat, p.nlp.max_violation(&w.x).0)
+}
+
+/// Solved, or for `rotate-fast` also Acceptable: its bang-bang optimum is degenerate (torques
+/// on their bounds at many nodes, multipliers not unique), its last iterations reduce the dual
+/// infeasibility only linearly, and whether a solve ends Solved or Acceptable (7.5e-8 after 409
+/// iterations on Radau 3 × 10) depends on the last bits of its path. The callers assert the
+/// KKT residual either way.
+pub fn solved_or_degenerate(name: &str, sol: &OcpSolution) -> bool {
+    sol.status == Status::Solved || (name == "rotate-fast" && sol.status == Status::Acceptable)
 }

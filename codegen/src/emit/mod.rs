@@ -193,9 +193,9 @@ pub struct EmittedKernel {
     pub code: String,
     /// Operation counts.
     pub ops: OpCounts,
-    /// Whether the kernel calls the batched sine–cosine helper (`sin_cos_n`, see
-    /// [`trig_items`]), which the file must then define.
-    pub fast_trig: bool,
+    /// Whether the kernel computes a sine or cosine, with the helpers of [`trig_items`]
+    /// (`sin_cos_n`, `sin_cos`, `sin_cos_f32`), which the file must then define.
+    pub trig: bool,
 }
 
 /// Writes the text of graph variable `v` of a dynamics kernel (`q[i]`, `qd[i]`, `omega[i]`,
@@ -386,7 +386,7 @@ pub fn emit_kernel_with(
     Ok(EmittedKernel {
         code,
         ops,
-        fast_trig: ir.batched,
+        trig: ir.uses_trig(),
     })
 }
 
@@ -397,66 +397,76 @@ fn unparse(tokens: TokenStream, what: &'static str) -> Result<String, CodegenErr
     Ok(prettyplease::unparse(&file))
 }
 
-/// The helper items that kernels with [`EmittedKernel::fast_trig`] call (`sin_cos_n` and its
-/// exact fallback, from [`crate::trig`]), as private items for a generated file; emitted once
-/// per file.
-pub fn trig_items() -> Result<TokenStream, CodegenError> {
-    let mut file: syn::File =
+/// The helper items that kernels with [`EmittedKernel::trig`] call (`sin_cos_n`, `sin_cos`
+/// and the reductions behind them, and in an f32 file `sin_cos_f32`, from [`crate::trig`]), as
+/// private items for a generated file of kernels of type `ft`, each allowed to be unused;
+/// emitted once per file. They are plain arithmetic: no kernel calls the platform's libm.
+pub fn trig_items(ft: FloatTy) -> Result<TokenStream, CodegenError> {
+    Ok(trig_fns(ft, true)?
+        .into_iter()
+        .map(|f| quote!(#f))
+        .collect())
+}
+
+/// The functions of [`crate::trig`] for a file of type `ft`, private and allowed to be unused,
+/// with their doc comments if `docs`.
+fn trig_fns(ft: FloatTy, docs: bool) -> Result<Vec<syn::ItemFn>, CodegenError> {
+    let file: syn::File =
         syn::parse_str(include_str!("../trig.rs")).map_err(CodegenError::unparsable("trig.rs"))?;
-    file.attrs.clear();
-    let mut out = TokenStream::new();
-    for item in &mut file.items {
-        if let syn::Item::Fn(f) = item {
+    let allow: syn::Attribute = syn::parse_quote!(#[allow(dead_code)]);
+    Ok(file
+        .items
+        .into_iter()
+        .filter_map(|item| match item {
+            syn::Item::Fn(f) if ft == FloatTy::F32 || f.sig.ident != "sin_cos_f32" => Some(f),
+            _ => None,
+        })
+        .map(|mut f| {
             f.vis = syn::Visibility::Inherited;
-        }
-        out.extend(quote!(#item));
-    }
-    Ok(out)
+            if !docs {
+                f.attrs.retain(|a| !a.path().is_ident("doc"));
+            }
+            f.attrs.push(allow.clone());
+            f
+        })
+        .collect())
 }
 
-/// [`trig_items`] formatted by `prettyplease`; the same text for every file, so formatted
-/// once per process.
-fn trig_text() -> Result<&'static str, CodegenError> {
-    static TEXT: OnceLock<Result<String, String>> = OnceLock::new();
-    TEXT.get_or_init(|| {
-        trig_items()
-            .and_then(|t| unparse(t, "trig.rs"))
-            .map_err(|e| e.to_string())
-    })
-    .as_deref()
-    .map_err(|_| CodegenError::Internal(InternalDefect::Other("trig.rs does not format")))
+/// [`trig_items`] formatted by `prettyplease`; the same text for every file of one float
+/// type, so formatted once per process.
+fn trig_text(ft: FloatTy) -> Result<&'static str, CodegenError> {
+    static TEXT: [OnceLock<Result<String, String>>; 2] = [OnceLock::new(), OnceLock::new()];
+    TEXT[ft as usize]
+        .get_or_init(|| {
+            trig_items(ft)
+                .and_then(|t| unparse(t, "trig.rs"))
+                .map_err(|e| e.to_string())
+        })
+        .as_deref()
+        .map_err(|_| CodegenError::Internal(InternalDefect::Other("trig.rs does not format")))
 }
 
-/// The helper items of a `#![no_std]` file, formatted: [`trig_items`] with the standard
-/// library's fallback `sin_cos_n_exact` replaced by [`crate::trig_nostd`]'s items (square root,
-/// one-argument sine–cosine and the trait [`crate::trig_nostd::KernelMath`] the kernels call
-/// them through), all private and allowed to be unused (an f32 file or a kernel without
-/// square roots leaves some of them unused). The doc comments of [`crate::trig`] speak of
-/// the standard library's fallback and are left out.
-fn nostd_text() -> Result<&'static str, CodegenError> {
-    static TEXT: OnceLock<Result<String, String>> = OnceLock::new();
-    TEXT.get_or_init(|| nostd_items().map_err(|e| e.to_string()))
+/// The helper items of a `#![no_std]` file of type `ft`, formatted: [`trig_items`] and
+/// [`crate::trig_nostd`]'s items (the square root and the trait
+/// [`crate::trig_nostd::KernelMath`] the kernels call it through), all private and allowed to
+/// be unused (a kernel without square roots leaves some of them unused), without the doc
+/// comments of [`crate::trig`].
+fn nostd_text(ft: FloatTy) -> Result<&'static str, CodegenError> {
+    static TEXT: [OnceLock<Result<String, String>>; 2] = [OnceLock::new(), OnceLock::new()];
+    TEXT[ft as usize]
+        .get_or_init(|| nostd_items(ft).map_err(|e| e.to_string()))
         .as_deref()
         .map_err(|_| CodegenError::Internal(InternalDefect::Other("trig_nostd.rs does not format")))
 }
 
-fn nostd_items() -> Result<String, CodegenError> {
-    let trig: syn::File =
-        syn::parse_str(include_str!("../trig.rs")).map_err(CodegenError::unparsable("trig.rs"))?;
+fn nostd_items(ft: FloatTy) -> Result<String, CodegenError> {
     let nostd: syn::File = syn::parse_str(include_str!("../trig_nostd.rs"))
         .map_err(CodegenError::unparsable("trig_nostd.rs"))?;
     let allow: syn::Attribute = syn::parse_quote!(#[allow(dead_code)]);
-    let mut out = TokenStream::new();
-    for item in trig.items {
-        if let syn::Item::Fn(mut f) = item
-            && f.sig.ident != "sin_cos_n_exact"
-        {
-            f.vis = syn::Visibility::Inherited;
-            f.attrs.retain(|a| !a.path().is_ident("doc"));
-            f.attrs.push(allow.clone());
-            out.extend(quote!(#f));
-        }
-    }
+    let mut out: TokenStream = trig_fns(ft, false)?
+        .into_iter()
+        .map(|f| quote!(#f))
+        .collect();
     for mut item in nostd.items {
         match &mut item {
             syn::Item::Fn(f) => {
@@ -605,7 +615,7 @@ pub fn emit_file(
 /// Emit the whole scene module file around the kernels' items `kernel_code`
 /// ([`EmittedKernel::code`]); `opts.float` sets the type of `PARAM_DEFAULTS`, of the
 /// `Contact` fields and of `eval_flat` (the kernels must use the same options);
-/// `trig_helper` adds [`trig_items`] (needed when a kernel has [`EmittedKernel::fast_trig`]).
+/// `trig_helper` adds [`trig_items`] (needed when a kernel has [`EmittedKernel::trig`]).
 #[allow(clippy::too_many_arguments)]
 pub fn emit_file_with(
     scene_name: &str,
@@ -649,9 +659,9 @@ pub fn emit_file_with(
         TokenStream::new()
     };
     let trig = if opts.no_std {
-        nostd_text()?
+        nostd_text(opts.float)?
     } else if trig_helper {
-        trig_text()?
+        trig_text(opts.float)?
     } else {
         ""
     };
@@ -750,8 +760,7 @@ pub fn emit_file_with(
     );
     if opts.no_std {
         out.push_str(
-            "// For #![no_std] crates: own square root, sine and cosine (trait `KernelMath`), no\n\
-             // allocation.\n",
+            "// For #![no_std] crates: own square root (trait `KernelMath`), no allocation.\n",
         );
     }
     out.push_str(&head);

@@ -76,19 +76,18 @@ pub(crate) enum Stmt {
 
 /// A kernel body in SSA form: statements before the lane loop (only with lanes), the
 /// statements, the operand that names each node's value (`refs[i]`, `None` outside the cone),
-/// the operation counts and whether `sin_cos_n` is called.
+/// and the operation counts.
 pub(crate) struct SsaIr {
     pub(crate) pre: Vec<Stmt>,
     pub(crate) stmts: Vec<Stmt>,
     pub(crate) refs: Vec<Option<Operand>>,
     pub(crate) ops: OpCounts,
-    pub(crate) batched: bool,
 }
 
 /// The SSA statements of the cone of `roots`, in node order. With `batch_trig` and `f64`,
 /// every sine and cosine of a graph variable (the joint angles) comes from one `sin_cos_n`
-/// call at the top ([`SsaIr::batched`] says whether it was emitted); other sin/cos and `f32`
-/// use the standard library, sin and cos of one argument sharing a `sin_cos` call. With
+/// call at the top; other sin/cos and `f32` call the one-angle helper (`sin_cos` or
+/// `sin_cos_f32`, [`crate::trig`]), sin and cos of one argument sharing a call. With
 /// `lanes` (f64 only; `batch_trig` then does not apply), the statements are the body of a
 /// loop over four lanes and the sines and cosines of graph variables are computed before it
 /// by `sin_cos_lanes` ([`SsaIr::pre`]), read as `t{n}[l]`.
@@ -101,7 +100,6 @@ pub(crate) fn build(
 ) -> SsaIr {
     let lanes = lanes && opts.float == FloatTy::F64;
     let batch_trig = batch_trig && !lanes && opts.float == FloatTy::F64;
-    let mut batched = false;
     // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
     let as_mul = |id: Id| -> Option<(Id, Id)> {
         match g.node(id) {
@@ -146,7 +144,6 @@ pub(crate) fn build(
                     args,
                 });
             }
-            batched = batch_trig;
             ops.sincos += angles.len();
             ops.temporaries += 2 * angles.len();
             for i in 0..max {
@@ -286,7 +283,17 @@ pub(crate) fn build(
         stmts,
         refs,
         ops,
-        batched,
+    }
+}
+
+impl SsaIr {
+    /// Whether the body computes a sine or cosine, and so calls the helpers of
+    /// [`crate::trig`] that its file must carry.
+    pub(crate) fn uses_trig(&self) -> bool {
+        self.pre.iter().chain(&self.stmts).any(|s| match s {
+            Stmt::Let(_, e) => matches!(e, Expr::Sin(_) | Expr::Cos(_)),
+            Stmt::SinCos { .. } | Stmt::SinCosN { .. } | Stmt::SinCosLanes { .. } => true,
+        })
     }
 }
 
@@ -300,6 +307,16 @@ fn float_name(ft: FloatTy) -> &'static str {
     match ft {
         FloatTy::F64 => "f64",
         FloatTy::F32 => "f32",
+    }
+}
+
+/// The helper that computes `(sin x, cos x)` in kernels of type `ft`: [`crate::trig::sin_cos`]
+/// or [`crate::trig::sin_cos_f32`], emitted into every file whose kernels call it, so that no
+/// kernel depends on the platform's libm (whose results differ between CPUs).
+fn sin_cos_name(ft: FloatTy) -> &'static str {
+    match ft {
+        FloatTy::F64 => "sin_cos",
+        FloatTy::F32 => "sin_cos_f32",
     }
 }
 
@@ -403,8 +420,16 @@ impl TextPrinter<'_> {
             Expr::Abs(a) => self.call(out, "abs", &[a]),
             Expr::Min(a, b) => self.call(out, "min", &[a, b]),
             Expr::Max(a, b) => self.call(out, "max", &[a, b]),
-            Expr::Sin(a) => self.call(out, "sin", &[a]),
-            Expr::Cos(a) => self.call(out, "cos", &[a]),
+            Expr::Sin(a) | Expr::Cos(a) => {
+                out.push_str(sin_cos_name(self.ft));
+                out.push('(');
+                self.operand(out, a);
+                out.push_str(if matches!(e, Expr::Sin(_)) {
+                    ").0"
+                } else {
+                    ").1"
+                });
+            }
             Expr::IfLt(a, b, t, f) => {
                 out.push_str("if ");
                 self.binary(out, a, " < ", b);
@@ -449,7 +474,7 @@ impl TextPrinter<'_> {
                 out.push(';');
             }
             Stmt::SinCos { s, c, x } => {
-                let _ = write!(out, "let (t{s}, t{c}) = {}::sin_cos(", float_name(self.ft));
+                let _ = write!(out, "let (t{s}, t{c}) = {}(", sin_cos_name(self.ft));
                 self.operand(out, *x);
                 out.push_str(");");
             }
@@ -608,12 +633,12 @@ mod tests {
                     quote!(#ft::max(#x, #y))
                 }
                 Expr::Sin(a) => {
-                    let x = o(a);
-                    quote!(#ft::sin(#x))
+                    let (f, x) = (Ident::new(sin_cos_name(self.ft), Span::call_site()), o(a));
+                    quote!(#f(#x).0)
                 }
                 Expr::Cos(a) => {
-                    let x = o(a);
-                    quote!(#ft::cos(#x))
+                    let (f, x) = (Ident::new(sin_cos_name(self.ft), Span::call_site()), o(a));
+                    quote!(#f(#x).1)
                 }
                 Expr::IfLt(a, b, t, f) => {
                     let (x, y, tt, ff) = (o(a), o(b), o(t), o(f));
@@ -636,7 +661,6 @@ mod tests {
 
         /// Tokens of statement `s`.
         fn stmt(&self, s: &Stmt) -> TokenStream {
-            let ft = self.ft.tokens();
             match s {
                 Stmt::Let(t, e) => {
                     let t = temp_ident(*t);
@@ -645,7 +669,8 @@ mod tests {
                 }
                 Stmt::SinCos { s, c, x } => {
                     let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));
-                    quote!(let (#s, #c) = #ft::sin_cos(#x);)
+                    let f = Ident::new(sin_cos_name(self.ft), Span::call_site());
+                    quote!(let (#s, #c) = #f(#x);)
                 }
                 Stmt::SinCosN { sc, args } => {
                     let sins = sc.iter().map(|p| temp_ident(p.0));

@@ -344,7 +344,7 @@ impl SymbolicRobot {
 
     fn angle_cs(&mut self, a: Angle) -> (Id, Id) {
         match a {
-            Angle::Radians(x) => (self.g.constant(x.cos()), self.g.constant(x.sin())),
+            Angle::Radians(x) => (self.g.constant(libm::cos(x)), self.g.constant(libm::sin(x))),
             Angle::PiMultiple { num, den } => (self.g.cos_pi(num, den), self.g.sin_pi(num, den)),
         }
     }

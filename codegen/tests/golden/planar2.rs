@@ -31,9 +31,11 @@ pub const SCENE_NAME: &str = "planar2";
 /// The scene file's text.
 pub const SCENE_TOML: &str = "# Golden test scene: a planar two-link arm (textbook closed forms for M, C q\u{307}, g).\nname = \"planar2\"\ndh = \"standard\"\nkernels = [\"frames\", \"tip_jacobian\", \"mass_matrix\", \"coriolis_qd\", \"gravity\", \"potential\",\n           \"cqd_g\", \"cqd_g_rnea\", \"mass_cqd_g\", \"inverse_dynamics\", \"inverse_dynamics_dq\",\n           \"inverse_dynamics_dqd\", \"forward_dynamics\", \"regressor\"]\ngravity = [0.0, -9.81, 0.0]\nruntime_parameters = [\"link2.mass\"]\n\n[[links]]\na = 1.0\nalpha = \"0\"\nmass = 1.2\ncom = [-0.55, 0.0, 0.0]\ninertia = [0.02, 0.09, 0.1]\n\n[[links]]\na = 0.8\nalpha = \"0\"\nmass = 0.7\ncom = [-0.5, 0.0, 0.0]\ninertia = [0.01, 0.04, 0.05]\n";
 /// `(sin x[i], cos x[i])` for every lane `i`, each within about 1 ulp of the exact value
-/// (measured maximum in BENCHMARKS.md); lanes with |x| > 2²⁰, next to a multiple of π/2 or
-/// not finite use `f64::sin_cos`. Every lane's result depends on that lane's argument only.
+/// (measured maximum in BENCHMARKS.md); lanes next to a multiple of π/2 are recomputed by
+/// [`sin_cos_medium`], lanes with |x| > 2²⁰ or not finite are NaN. Every lane's result depends
+/// on that lane's argument only.
 #[inline(always)]
+#[allow(dead_code)]
 fn sin_cos_n<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
     let mut sin = [0.0; N];
     let mut cos = [0.0; N];
@@ -52,6 +54,7 @@ fn sin_cos_n<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
 /// One lane of [`sin_cos_n`]: `(sin x, cos x, fast)`, where `fast` is false if `x` is outside
 /// the range in which the reduction below is accurate (the values are then meaningless).
 #[inline(always)]
+#[allow(dead_code)]
 fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
     const FRAC_2_PI: f64 = std::f64::consts::FRAC_2_PI;
     const PIO2_1: f64 = 1.57079632673412561417e+00;
@@ -100,9 +103,10 @@ fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
     )
 }
 /// The lanes of [`sin_cos_n`] outside the fast path (|x| > 2²⁰, next to a multiple of π/2,
-/// or not finite), recomputed by `f64::sin_cos`.
+/// or not finite), recomputed by [`sin_cos_medium`].
 #[cold]
 #[inline(never)]
+#[allow(dead_code)]
 fn sin_cos_n_exact<const N: usize>(
     x: &[f64; N],
     sin: &mut [f64; N],
@@ -110,9 +114,64 @@ fn sin_cos_n_exact<const N: usize>(
 ) {
     for i in 0..N {
         if !sin_cos_lane(x[i]).2 {
-            (sin[i], cos[i]) = x[i].sin_cos();
+            (sin[i], cos[i]) = sin_cos_medium(x[i]);
         }
     }
+}
+/// `(sin x, cos x)` for |x| ≤ 2²⁰ by fdlibm's medium-size reduction x = k·π/2 + (y₀ + y₁),
+/// with π/2 in up to three parts so that y₀ + y₁ keeps its accuracy when x is next to a
+/// multiple of π/2; NaN for larger or non-finite x.
+#[allow(dead_code)]
+fn sin_cos_medium(x: f64) -> (f64, f64) {
+    const FRAC_2_PI: f64 = core::f64::consts::FRAC_2_PI;
+    const PIO2_1: f64 = 1.57079632673412561417e+00;
+    const PIO2_1T: f64 = 6.07710050650619224932e-11;
+    const PIO2_2: f64 = 6.07710050630396597660e-11;
+    const PIO2_2T: f64 = 2.02226624879595063154e-21;
+    const PIO2_3: f64 = 2.02226624871116645580e-21;
+    const PIO2_3T: f64 = 8.47842766036889956997e-32;
+    const LIMIT: f64 = 1048576.0;
+    if x.is_nan() || x.abs() > LIMIT {
+        return (f64::NAN, f64::NAN);
+    }
+    let k = {
+        let shift = 6755399441055744.0;
+        (x * FRAC_2_PI + shift) - shift
+    };
+    let exponent = |v: f64| ((v.to_bits() >> 52) & 0x7ff) as i32;
+    let e = exponent(x);
+    let mut r = x - k * PIO2_1;
+    let mut w = k * PIO2_1T;
+    let mut y0 = r - w;
+    let step = |t: f64, part: f64, tail: f64| {
+        let w = k * part;
+        let r = t - w;
+        let w = k * tail - ((t - r) - w);
+        (r, w, r - w)
+    };
+    if e - exponent(y0) > 16 {
+        (r, w, y0) = step(r, PIO2_2, PIO2_2T);
+        if e - exponent(y0) > 49 {
+            (r, w, y0) = step(r, PIO2_3, PIO2_3T);
+        }
+    }
+    let y1 = (r - y0) - w;
+    let (s0, c0, _) = sin_cos_lane(y0);
+    let (s, c) = (s0 + y1 * c0, c0 - y1 * s0);
+    match (k as i64) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+/// `(sin x, cos x)` of one angle: the one lane of [`sin_cos_n`] (the kernels' sine and cosine
+/// of anything but the batched joint angles, and the interpreter's).
+#[inline(always)]
+#[allow(dead_code)]
+fn sin_cos(x: f64) -> (f64, f64) {
+    let ([s], [c]) = sin_cos_n([x]);
+    (s, c)
 }
 /// World origin `pos[i]` (m) and rotation `rot[i]` (row-major, columns = frame axes in world coordinates) of DH frames 1..NQ (eq. 67–68); frame NQ includes the tool transform if any.
 ///

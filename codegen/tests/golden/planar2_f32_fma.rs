@@ -30,6 +30,157 @@ pub const KERNELS: &[&str] = &[
 pub const SCENE_NAME: &str = "planar2";
 /// The scene file's text.
 pub const SCENE_TOML: &str = "# Golden test scene: a planar two-link arm (textbook closed forms for M, C q\u{307}, g).\nname = \"planar2\"\ndh = \"standard\"\nkernels = [\"frames\", \"tip_jacobian\", \"mass_matrix\", \"coriolis_qd\", \"gravity\", \"potential\",\n           \"cqd_g\", \"cqd_g_rnea\", \"mass_cqd_g\", \"inverse_dynamics\", \"inverse_dynamics_dq\",\n           \"inverse_dynamics_dqd\", \"forward_dynamics\", \"regressor\"]\ngravity = [0.0, -9.81, 0.0]\nruntime_parameters = [\"link2.mass\"]\n\n[[links]]\na = 1.0\nalpha = \"0\"\nmass = 1.2\ncom = [-0.55, 0.0, 0.0]\ninertia = [0.02, 0.09, 0.1]\n\n[[links]]\na = 0.8\nalpha = \"0\"\nmass = 0.7\ncom = [-0.5, 0.0, 0.0]\ninertia = [0.01, 0.04, 0.05]\n";
+/// `(sin x[i], cos x[i])` for every lane `i`, each within about 1 ulp of the exact value
+/// (measured maximum in BENCHMARKS.md); lanes next to a multiple of π/2 are recomputed by
+/// [`sin_cos_medium`], lanes with |x| > 2²⁰ or not finite are NaN. Every lane's result depends
+/// on that lane's argument only.
+#[inline(always)]
+#[allow(dead_code)]
+fn sin_cos_n<const N: usize>(x: [f64; N]) -> ([f64; N], [f64; N]) {
+    let mut sin = [0.0; N];
+    let mut cos = [0.0; N];
+    let mut outside = false;
+    for i in 0..N {
+        let (s, c, fast) = sin_cos_lane(x[i]);
+        sin[i] = s;
+        cos[i] = c;
+        outside |= !fast;
+    }
+    if outside {
+        sin_cos_n_exact(&x, &mut sin, &mut cos);
+    }
+    (sin, cos)
+}
+/// One lane of [`sin_cos_n`]: `(sin x, cos x, fast)`, where `fast` is false if `x` is outside
+/// the range in which the reduction below is accurate (the values are then meaningless).
+#[inline(always)]
+#[allow(dead_code)]
+fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
+    const FRAC_2_PI: f64 = std::f64::consts::FRAC_2_PI;
+    const PIO2_1: f64 = 1.57079632673412561417e+00;
+    const PIO2_1T: f64 = 6.07710050650619224932e-11;
+    const SHIFT: f64 = 6755399441055744.0;
+    const LIMIT: f64 = 1048576.0;
+    const CLOSE: f64 = 3.725290298461914e-9;
+    const S1: f64 = -1.66666666666666324348e-01;
+    const S2: f64 = 8.33333333332248946124e-03;
+    const S3: f64 = -1.98412698298579493134e-04;
+    const S4: f64 = 2.75573137070700676789e-06;
+    const S5: f64 = -2.50507602534068634195e-08;
+    const S6: f64 = 1.58969099521155010221e-10;
+    const C1: f64 = 4.16666666666666019037e-02;
+    const C2: f64 = -1.38888888888741095749e-03;
+    const C3: f64 = 2.48015872894767294178e-05;
+    const C4: f64 = -2.75573143513906633035e-07;
+    const C5: f64 = 2.08757232129817482790e-09;
+    const C6: f64 = -1.13596475577881948265e-11;
+    let mut fast = xi.abs() <= LIMIT;
+    let shifted = xi * FRAC_2_PI + SHIFT;
+    let quadrant = shifted.to_bits();
+    let k = shifted - SHIFT;
+    let a = xi - k * PIO2_1;
+    let w = k * PIO2_1T;
+    let hi = a - w;
+    let lo = (a - hi) - w;
+    fast &= hi.abs() >= k.abs() * CLOSE;
+    let z = hi * hi;
+    let w = z * z;
+    let rs = S2 + z * (S3 + z * S4) + z * w * (S5 + z * S6);
+    let v = z * hi;
+    let sr = hi - ((z * (0.5 * lo - v * rs) - lo) - v * S1);
+    let rc = z * (C1 + z * (C2 + z * C3)) + w * w * (C4 + z * (C5 + z * C6));
+    let hz = 0.5 * z;
+    let wc = 1.0 - hz;
+    let cr = wc + (((1.0 - wc) - hz) + (z * rc - hi * lo));
+    let swap = (quadrant & 1).wrapping_neg();
+    let (sb, cb) = (sr.to_bits(), cr.to_bits());
+    let sin_sign = (quadrant & 2) << 62;
+    let cos_sign = (quadrant.wrapping_add(1) & 2) << 62;
+    (
+        f64::from_bits(((sb & !swap) | (cb & swap)) ^ sin_sign),
+        f64::from_bits(((cb & !swap) | (sb & swap)) ^ cos_sign),
+        fast,
+    )
+}
+/// The lanes of [`sin_cos_n`] outside the fast path (|x| > 2²⁰, next to a multiple of π/2,
+/// or not finite), recomputed by [`sin_cos_medium`].
+#[cold]
+#[inline(never)]
+#[allow(dead_code)]
+fn sin_cos_n_exact<const N: usize>(
+    x: &[f64; N],
+    sin: &mut [f64; N],
+    cos: &mut [f64; N],
+) {
+    for i in 0..N {
+        if !sin_cos_lane(x[i]).2 {
+            (sin[i], cos[i]) = sin_cos_medium(x[i]);
+        }
+    }
+}
+/// `(sin x, cos x)` for |x| ≤ 2²⁰ by fdlibm's medium-size reduction x = k·π/2 + (y₀ + y₁),
+/// with π/2 in up to three parts so that y₀ + y₁ keeps its accuracy when x is next to a
+/// multiple of π/2; NaN for larger or non-finite x.
+#[allow(dead_code)]
+fn sin_cos_medium(x: f64) -> (f64, f64) {
+    const FRAC_2_PI: f64 = core::f64::consts::FRAC_2_PI;
+    const PIO2_1: f64 = 1.57079632673412561417e+00;
+    const PIO2_1T: f64 = 6.07710050650619224932e-11;
+    const PIO2_2: f64 = 6.07710050630396597660e-11;
+    const PIO2_2T: f64 = 2.02226624879595063154e-21;
+    const PIO2_3: f64 = 2.02226624871116645580e-21;
+    const PIO2_3T: f64 = 8.47842766036889956997e-32;
+    const LIMIT: f64 = 1048576.0;
+    if x.is_nan() || x.abs() > LIMIT {
+        return (f64::NAN, f64::NAN);
+    }
+    let k = {
+        let shift = 6755399441055744.0;
+        (x * FRAC_2_PI + shift) - shift
+    };
+    let exponent = |v: f64| ((v.to_bits() >> 52) & 0x7ff) as i32;
+    let e = exponent(x);
+    let mut r = x - k * PIO2_1;
+    let mut w = k * PIO2_1T;
+    let mut y0 = r - w;
+    let step = |t: f64, part: f64, tail: f64| {
+        let w = k * part;
+        let r = t - w;
+        let w = k * tail - ((t - r) - w);
+        (r, w, r - w)
+    };
+    if e - exponent(y0) > 16 {
+        (r, w, y0) = step(r, PIO2_2, PIO2_2T);
+        if e - exponent(y0) > 49 {
+            (r, w, y0) = step(r, PIO2_3, PIO2_3T);
+        }
+    }
+    let y1 = (r - y0) - w;
+    let (s0, c0, _) = sin_cos_lane(y0);
+    let (s, c) = (s0 + y1 * c0, c0 - y1 * s0);
+    match (k as i64) & 3 {
+        0 => (s, c),
+        1 => (c, -s),
+        2 => (-s, -c),
+        _ => (-c, s),
+    }
+}
+/// `(sin x, cos x)` of one angle: the one lane of [`sin_cos_n`] (the kernels' sine and cosine
+/// of anything but the batched joint angles, and the interpreter's).
+#[inline(always)]
+#[allow(dead_code)]
+fn sin_cos(x: f64) -> (f64, f64) {
+    let ([s], [c]) = sin_cos_n([x]);
+    (s, c)
+}
+/// `(sin x, cos x)` in single precision: [`sin_cos`] of `x` widened, each result rounded once
+/// (within 1 ulp of `f32`).
+#[inline(always)]
+#[allow(dead_code)]
+fn sin_cos_f32(x: f32) -> (f32, f32) {
+    let (s, c) = sin_cos(x as f64);
+    (s as f32, c as f32)
+}
 /// World origin `pos[i]` (m) and rotation `rot[i]` (row-major, columns = frame axes in world coordinates) of DH frames 1..NQ (eq. 67–68); frame NQ includes the tool transform if any.
 ///
 /// Arguments, in order:
@@ -47,9 +198,9 @@ pub fn frames(
     pos: &mut [[f32; 3]; NQ],
     rot: &mut [[[f32; 3]; 3]; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
+    let (t0, t1) = sin_cos_f32(q[0]);
     let t2 = -t0;
-    let (t3, t4) = f32::sin_cos(q[1]);
+    let (t3, t4) = sin_cos_f32(q[1]);
     let t5 = t1 * t4;
     let t6 = t0 * t3;
     let t7 = f32::mul_add(t1, t4, -t6);
@@ -107,8 +258,8 @@ pub fn tip_jacobian(
     jp: &mut [[f32; NQ]; 3],
     jo: &mut [[f32; NQ]; 3],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t1 * t3;
     let t5 = t0 * t2;
     let t6 = t1 * t2;
@@ -147,7 +298,7 @@ pub fn tip_jacobian(
 #[inline]
 #[allow(unused_variables)]
 pub fn mass_matrix(q: &[f32; NQ], p: &[f32; NP], m: &mut [[f32; NQ]; NQ]) {
-    let (t0, t1) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[1]);
     let t2 = t1 + 0.30000000000000004;
     let t3 = t0 * t0;
     let t4 = t2 * t2;
@@ -176,7 +327,7 @@ pub fn mass_matrix(q: &[f32; NQ], p: &[f32; NP], m: &mut [[f32; NQ]; NQ]) {
 #[inline]
 #[allow(unused_variables)]
 pub fn coriolis_qd(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[1]);
     let t2 = t1 + 0.30000000000000004;
     let t3 = qd[1] * qd[1];
     let t4 = qd[0] * qd[1];
@@ -209,8 +360,8 @@ pub fn coriolis_qd(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32;
 #[inline]
 #[allow(unused_variables)]
 pub fn gravity(q: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t2 * p[0];
     let t5 = 9.81 * p[0];
     let t6 = t3 * p[0];
@@ -242,8 +393,8 @@ pub fn gravity(q: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
 #[inline]
 #[allow(unused_variables)]
 pub fn potential(q: &[f32; NQ], p: &[f32; NP], out: &mut f32) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t1 * t2;
     let t5 = t0 * t3;
     let t6 = f32::mul_add(t1, t2, t5);
@@ -271,8 +422,8 @@ pub fn potential(q: &[f32; NQ], p: &[f32; NP], out: &mut f32) {
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t3 + 0.30000000000000004;
     let t5 = qd[1] * qd[1];
     let t6 = qd[0] * qd[1];
@@ -323,8 +474,8 @@ pub fn cqd_g(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) 
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g_rnea(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t1 * t3;
     let t5 = t1 * t2;
     let t6 = qd[0] * qd[0];
@@ -382,8 +533,8 @@ pub fn mass_cqd_g(
     m: &mut [[f32; NQ]; NQ],
     cqd_g: &mut [f32; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t3 + 0.30000000000000004;
     let t5 = t2 * t2;
     let t6 = t4 * t4;
@@ -455,8 +606,8 @@ pub fn inverse_dynamics(
     p: &[f32; NP],
     tau: &mut [f32; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = qd[0] * qd[0];
     let t5 = 9.81 * t0;
     let t6 = 9.81 * t1;
@@ -534,8 +685,8 @@ pub fn inverse_dynamics_dq(
     p: &[f32; NP],
     out: &mut [[f32; NQ]; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t1 * t3;
     let t5 = t0 * t2;
     let t6 = t1 * t2;
@@ -648,7 +799,7 @@ pub fn inverse_dynamics_dqd(
     p: &[f32; NP],
     out: &mut [[f32; NQ]; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[1]);
     let t2 = qd[0] + qd[1];
     let t3 = p[0] * t2;
     let t4 = t1 * qd[0];
@@ -708,8 +859,8 @@ pub fn forward_dynamics(
     p: &[f32; NP],
     qdd: &mut [f32; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = t3 + 0.30000000000000004;
     let t5 = t2 * t2;
     let t6 = t4 * t4;
@@ -790,8 +941,8 @@ pub fn regressor(
     p: &[f32; NP],
     y: &mut [[[f32; 10]; NQ]; NQ],
 ) {
-    let (t0, t1) = f32::sin_cos(q[0]);
-    let (t2, t3) = f32::sin_cos(q[1]);
+    let (t0, t1) = sin_cos_f32(q[0]);
+    let (t2, t3) = sin_cos_f32(q[1]);
     let t4 = 0.8 * t3;
     let t5 = t2 * t2;
     let t6 = qd[0] * qd[0];

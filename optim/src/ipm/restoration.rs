@@ -157,14 +157,14 @@ impl StdProblem for RestorationProblem<'_> {
             if s <= 0.0 {
                 return false;
             }
-            phi -= o.mu * s.ln();
+            phi -= o.mu * libm::log(s);
         }
         for &j in &o.up {
             let s = o.xu[j] - x[j];
             if s <= 0.0 {
                 return false;
             }
-            phi -= o.mu * s.ln();
+            phi -= o.mu * libm::log(s);
         }
         let kd = o.kappa_d * o.mu;
         for j in 0..self.n0 {

@@ -281,7 +281,7 @@ pub struct BarrierSettings {
     /// ε_mach · min(1, μ)), s + slack_move · max(1, |x_L|))` and the bound moved to `x − s`, so
     /// that every slack stays positive and representable (the default, `ε_mach^{3/4}`, is about
     /// 1.8e-12; must be positive).
-    slack_move: f64 = f64::EPSILON.powf(0.75),
+    slack_move: f64 = libm::pow(f64::EPSILON, 0.75),
     /// Weight κ_p of the primal proximal regularization δ_w ≥ κ_p μ on a stalled barrier
     /// problem that is not an answer (0 turns it off): one whose μ exceeds the
     /// optimality tolerance (its complementarity alone exceeds `tol`, in the scaled units of

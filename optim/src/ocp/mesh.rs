@@ -125,7 +125,7 @@ impl MeshSpec {
                 degrees.push(n);
                 continue;
             }
-            let p = ((err / tol).ln() / (n as f64).ln()).ceil().max(1.0) as usize;
+            let p = (libm::log(err / tol) / libm::log(n as f64)).ceil().max(1.0) as usize;
             if n + p <= n_max {
                 breaks.push(b);
                 degrees.push(n + p);

@@ -40,7 +40,7 @@ pub fn legendre_gauss(n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut w = vec![0.0; n];
     for i in 0..n {
         // Descending guess cos(π (i + 3/4) / (n + 1/2)); stored ascending.
-        let mut t = (std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5)).cos();
+        let mut t = libm::cos(std::f64::consts::PI * (i as f64 + 0.75) / (n as f64 + 0.5));
         for _ in 0..100 {
             let (p, dp) = legendre(n, t);
             let dt = p / dp;
@@ -63,7 +63,7 @@ pub fn legendre_gauss_radau(n: usize) -> (Vec<f64>, Vec<f64>) {
     let mut w = vec![2.0 / (nf * nf); n];
     for i in 1..n {
         // Chebyshev–Gauss–Radau guess −cos(2π i / (2n − 1)).
-        let mut t = -(2.0 * std::f64::consts::PI * i as f64 / (2.0 * nf - 1.0)).cos();
+        let mut t = -libm::cos(2.0 * std::f64::consts::PI * i as f64 / (2.0 * nf - 1.0));
         for _ in 0..100 {
             let (a, da) = legendre(n - 1, t);
             let (b, db) = legendre(n, t);

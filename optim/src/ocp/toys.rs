@@ -218,13 +218,13 @@ pub fn brachistochrone(implicit: bool, scheme: Scheme, points: usize) -> Ocp {
 /// Optimal time of [`brachistochrone`]: the cycloid x = R(φ − sin φ), y = R(1 − cos φ)
 /// through (1, 0.6) (φ_f by bisection of (φ − sin φ)/(1 − cos φ) = 1/0.6), T = φ_f √(R/g).
 pub fn cycloid_time() -> f64 {
-    let f = |p: f64| (p - p.sin()) / (1.0 - p.cos()) - TARGET.0 / TARGET.1;
+    let f = |p: f64| (p - libm::sin(p)) / (1.0 - libm::cos(p)) - TARGET.0 / TARGET.1;
     let (mut lo, mut hi) = (1e-3, 2.0 * std::f64::consts::PI - 1e-3);
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         if f(mid) > 0.0 { hi = mid } else { lo = mid }
     }
     let phi = 0.5 * (lo + hi);
-    let r = TARGET.1 / (1.0 - phi.cos());
+    let r = TARGET.1 / (1.0 - libm::cos(phi));
     phi * (r / G).sqrt()
 }

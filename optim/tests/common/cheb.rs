@@ -72,7 +72,7 @@ fn legendre(n: usize, x: f64) -> (f64, f64) {
 fn lgr(n: usize) -> (Vec<f64>, Vec<f64>) {
     let pi = std::f64::consts::PI;
     let mut x: Vec<f64> = (0..n)
-        .map(|j| -(2.0 * pi * j as f64 / (2 * n - 1) as f64).cos())
+        .map(|j| -libm::cos(2.0 * pi * j as f64 / (2 * n - 1) as f64))
         .collect();
     for xi in x.iter_mut().skip(1) {
         for _ in 0..100 {

@@ -49,20 +49,20 @@ impl D {
         self.chain(s, 0.5 / s, -0.25 / (s * self.a))
     }
     pub fn exp(self) -> Self {
-        let e = self.a.exp();
+        let e = libm::exp(self.a);
         self.chain(e, e, e)
     }
     pub fn ln(self) -> Self {
         let a = self.a;
-        self.chain(a.ln(), 1.0 / a, -1.0 / (a * a))
+        self.chain(libm::log(a), 1.0 / a, -1.0 / (a * a))
     }
     pub fn sin(self) -> Self {
         let a = self.a;
-        self.chain(a.sin(), a.cos(), -a.sin())
+        self.chain(libm::sin(a), libm::cos(a), -libm::sin(a))
     }
     pub fn cos(self) -> Self {
         let a = self.a;
-        self.chain(a.cos(), -a.sin(), -a.cos())
+        self.chain(libm::cos(a), -libm::sin(a), -libm::cos(a))
     }
 }
 

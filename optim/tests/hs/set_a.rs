@@ -460,8 +460,8 @@ pub(super) fn list() -> Vec<Hs> {
             m = 2,
             f = |x| -x[0],
             g = |x| vec![x[1] - x[0].exp(), x[2] - x[1].exp()],
-            fstar = -(10f64.ln().ln()),
-            xstar = Some(vec![10f64.ln().ln(), 10f64.ln(), 10.0])
+            fstar = -libm::log(libm::log(10f64)),
+            xstar = Some(vec![libm::log(libm::log(10f64)), libm::log(10f64), 10.0])
         ),
         hs!(
             "HS035",

@@ -22,10 +22,10 @@ pub(super) fn list() -> Vec<Hs> {
             ],
             fstar = -0.25,
             xstar = Some(vec![
-                2f64.powf(-1.0 / 3.0),
-                2f64.powf(-0.5),
-                2f64.powf(-11.0 / 12.0),
-                2f64.powf(-0.25)
+                libm::pow(2f64, -1.0 / 3.0),
+                libm::pow(2f64, -0.5),
+                libm::pow(2f64, -11.0 / 12.0),
+                libm::pow(2f64, -0.25)
             ])
         ),
         hs!(

@@ -247,7 +247,7 @@ pub(super) fn band_fill(b: &Band) -> (Rgb, f64) {
 pub(super) fn data_samples(fig: &LineFigure, prep: &Prepared, m: &Mapping) -> Vec<(f64, f64)> {
     let mut out = Vec::new();
     let mut line = |a: (f64, f64), b: (f64, f64)| {
-        let n = ((b.0 - a.0).hypot(b.1 - a.1) / 4.0)
+        let n = (libm::hypot(b.0 - a.0, b.1 - a.1) / 4.0)
             .ceil()
             .clamp(1.0, 2000.0) as usize;
         for k in 0..=n {

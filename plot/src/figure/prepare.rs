@@ -32,7 +32,7 @@ pub(super) const DASHES: [Dash; 4] = [Dash::Solid, Dash::Dashed, Dash::Dotted, D
 pub(super) fn tx(v: f64, s: Scale) -> Option<f64> {
     match s {
         Scale::Linear => v.is_finite().then_some(v),
-        Scale::Log10 => (v.is_finite() && v > 0.0).then(|| v.log10()),
+        Scale::Log10 => (v.is_finite() && v > 0.0).then(|| libm::log10(v)),
     }
 }
 

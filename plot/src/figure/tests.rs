@@ -155,8 +155,8 @@ fn sharp_turns_split_and_gentle_ones_do_not() {
     for (deg, split) in [(59.0f64, true), (61.0, false)] {
         let r = deg.to_radians();
         let b = (
-            (1000.0 * r.cos()).round() as i32,
-            (1000.0 * r.sin()).round() as i32,
+            (1000.0 * libm::cos(r)).round() as i32,
+            (1000.0 * libm::sin(r)).round() as i32,
         );
         let (s, _) = split_px(&[(1000, 0), (0, 0), b]);
         assert_eq!(s.len() == 2, split, "{deg}°");
@@ -189,7 +189,7 @@ fn split_strokes_polygonize_without_spikes() {
                 } else {
                     0.0
                 };
-                (qx - t * dx).hypot(qy - t * dy)
+                libm::hypot(qx - t * dx, qy - t * dy)
             })
             .fold(f64::INFINITY, f64::min)
     };

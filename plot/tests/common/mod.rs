@@ -35,7 +35,7 @@ pub fn ts(t: &[f64], f: &[&dyn Fn(f64) -> f64], names: &[&str]) -> TimeSeries {
 
 /// The rotation by `a` about z (row-major).
 pub fn rot_z(a: f64) -> [[f64; 3]; 3] {
-    let (s, c) = a.sin_cos();
+    let (s, c) = libm::sincos(a);
     [[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]
 }
 
@@ -77,9 +77,9 @@ pub fn hairpin_tip_path(n: usize) -> Vec<[f64; 3]> {
         .map(|k| {
             let t = k as f64 * std::f64::consts::TAU / (n - 1) as f64;
             [
-                0.6 + 0.3 * t.cos(),
-                0.9 * t.sin(),
-                0.8 + 0.3 * (2.0 * t).sin(),
+                0.6 + 0.3 * libm::cos(t),
+                0.9 * libm::sin(t),
+                0.8 + 0.3 * libm::sin(2.0 * t),
             ]
         })
         .collect()

@@ -364,8 +364,8 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
                     Ok(found) => {
                         if !fixed {
                             let expo1 = 0.2 - PI_BETA * 0.75;
-                            let fac11 = err.max(1e-300).powf(expo1);
-                            let fac = (fac11 / self.err_old.powf(PI_BETA) / PI_SAFE)
+                            let fac11 = libm::pow(err.max(1e-300), expo1);
+                            let fac = (fac11 / libm::pow(self.err_old, PI_BETA) / PI_SAFE)
                                 .clamp(1.0 / FAC_MAX, 1.0 / FAC_MIN);
                             let mut h_new = h / fac;
                             if self.last_rejected {
@@ -401,7 +401,7 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
             self.last_rejected = true;
             last = false;
             h = if err.is_finite() && cause.is_none() {
-                let fac11 = err.powf(0.2 - PI_BETA * 0.75);
+                let fac11 = libm::pow(err, 0.2 - PI_BETA * 0.75);
                 h / (fac11 / PI_SAFE).min(1.0 / FAC_MIN)
             } else {
                 0.25 * h

@@ -17,7 +17,7 @@ use super::states::press_torque;
 /// q₂ at which links 2–3 (with q₁ = q₃ = 0) point from the end of link 1 at (2, 0, 1) straight
 /// at the ball centre: x₂ = (−sin q₂, 0, cos q₂) = (−2, 0, −1)/√5.
 pub fn singular_q2() -> f64 {
-    PI - 2f64.atan()
+    PI - libm::atan(2f64)
 }
 
 /// The human finger touching a ball (radius chosen through the runtime parameter `ball.radius`)
@@ -82,19 +82,19 @@ pub fn singular_threshold() -> anyhow::Result<f64> {
             Err(e) => Err(anyhow!("unexpected error at δ = {d:e}: {e}")),
         }
     };
-    let (mut lo, mut hi) = (1e-9f64.ln(), 1e-1f64.ln());
-    if !is_singular(lo.exp())? || is_singular(hi.exp())? {
+    let (mut lo, mut hi) = (libm::log(1e-9f64), libm::log(1e-1f64));
+    if !is_singular(libm::exp(lo))? || is_singular(libm::exp(hi))? {
         bail!("no singular → regular switch of stick on δ ∈ [1e-9, 1e-1]");
     }
     for _ in 0..60 {
         let mid = 0.5 * (lo + hi);
-        if is_singular(mid.exp())? {
+        if is_singular(libm::exp(mid))? {
             lo = mid
         } else {
             hi = mid
         }
     }
-    Ok(hi.exp())
+    Ok(libm::exp(hi))
 }
 
 /// The report rows of probe 4.

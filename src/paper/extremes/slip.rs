@@ -56,7 +56,7 @@ pub fn slip_small_dv(q: Vec3, s: f64) -> anyhow::Result<SlipProbe> {
         lambda_n: acc.force.lambda_n,
         lambda_t_norm: acc.force.lambda_t.norm(),
         law_residual,
-        friction_angle: cosang.acos(),
+        friction_angle: libm::acos(cosang),
         slip_to_stick,
     })
 }

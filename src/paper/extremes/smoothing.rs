@@ -68,7 +68,7 @@ pub const Q_INTERIOR: [f64; 3] = [0.0, 1.4, 2.2];
 pub fn observed_orders(errs: &[(f64, f64)], floor: f64) -> Vec<f64> {
     errs.windows(2)
         .filter(|w| w[1].1 > floor && w[0].1 > floor)
-        .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
+        .map(|w| libm::log(w[0].1 / w[1].1) / libm::log(w[0].0 / w[1].0))
         .collect()
 }
 

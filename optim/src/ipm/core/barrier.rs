@@ -136,20 +136,16 @@ impl Core<'_> {
             if self.violates(raw, self.bounds.xl[j]) {
                 return f64::INFINITY;
             }
-            phi -= mu
-                * self
-                    .safe_slack(raw, self.bounds.xl[j], self.iterate.zl[k], s_min)
-                    .ln();
+            phi -=
+                mu * libm::log(self.safe_slack(raw, self.bounds.xl[j], self.iterate.zl[k], s_min));
         }
         for (k, &j) in self.bounds.up.iter().enumerate() {
             let raw = self.bounds.xu[j] - x[j];
             if self.violates(raw, self.bounds.xu[j]) {
                 return f64::INFINITY;
             }
-            phi -= mu
-                * self
-                    .safe_slack(raw, self.bounds.xu[j], self.iterate.zu[k], s_min)
-                    .ln();
+            phi -=
+                mu * libm::log(self.safe_slack(raw, self.bounds.xu[j], self.iterate.zu[k], s_min));
         }
         let kd = self.barrier.kappa_d * mu;
         if kd > 0.0 {
@@ -234,7 +230,10 @@ impl Core<'_> {
                 {
                     rule.force_decrease = false;
                     let new_mu = (settings.barrier.mu_linear_decrease * self.barrier.mu)
-                        .min(self.barrier.mu.powf(settings.barrier.mu_superlinear_power))
+                        .min(libm::pow(
+                            self.barrier.mu,
+                            settings.barrier.mu_superlinear_power,
+                        ))
                         .max(rule.floor);
                     self.barrier.mu = new_mu;
                     self.barrier.tau = settings.barrier.tau_min.max(1.0 - self.barrier.mu);

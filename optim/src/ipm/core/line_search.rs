@@ -101,14 +101,15 @@ impl Core<'_> {
             return Trial::Rejected;
         }
         if phi_t > phi {
-            let inc = (phi_t - phi).log10();
-            if inc > settings.line_search.obj_max_inc + phi.abs().log10().max(1.0) {
+            let inc = libm::log10(phi_t - phi);
+            if inc > settings.line_search.obj_max_inc + libm::log10(phi.abs()).max(1.0) {
                 return Trial::Rejected;
             }
         }
         let switching = gphi_dx < 0.0
-            && alpha * (-gphi_dx).powf(settings.line_search.s_phi)
-                > settings.line_search.switching_delta * theta.powf(settings.line_search.s_theta);
+            && alpha * libm::pow(-gphi_dx, settings.line_search.s_phi)
+                > settings.line_search.switching_delta
+                    * libm::pow(theta, settings.line_search.s_theta);
         let eps = 10.0 * f64::EPSILON * phi.abs().max(1.0);
         let (progress, ftype) = if theta <= self.filter.theta_min && switching {
             (
@@ -180,8 +181,9 @@ impl Core<'_> {
             let b = g.min(settings.line_search.gamma_phi * theta / (-gphi_dx));
             if theta <= self.filter.theta_min {
                 b.min(
-                    settings.line_search.switching_delta * theta.powf(settings.line_search.s_theta)
-                        / (-gphi_dx).powf(settings.line_search.s_phi),
+                    settings.line_search.switching_delta
+                        * libm::pow(theta, settings.line_search.s_theta)
+                        / libm::pow(-gphi_dx, settings.line_search.s_phi),
                 )
             } else {
                 b

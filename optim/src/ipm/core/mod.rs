@@ -285,7 +285,7 @@ impl<'p> Core<'p> {
             return;
         }
         let rg = if info.delta_w > 0.0 {
-            format!("{:5.1}", info.delta_w.log10())
+            format!("{:5.1}", libm::log10(info.delta_w))
         } else {
             "    -".to_string()
         };
@@ -296,7 +296,7 @@ impl<'p> Core<'p> {
             info.objective,
             info.inf_pr,
             info.inf_du,
-            info.mu.log10(),
+            libm::log10(info.mu),
             info.step_norm,
             rg,
             info.alpha_du,

@@ -249,7 +249,7 @@ impl<'m> Recovery<Rejection<'m>, KktAction> for JacobianRegularization {
         r.memory.singular_handled = true;
         let rec = &ctx.settings.recovery;
         let dc = rec.jacobian_regularization_value
-            * core.barrier.mu.powf(rec.jacobian_regularization_exponent);
+            * libm::pow(core.barrier.mu, rec.jacobian_regularization_exponent);
         core.reg.delta_c = dc.max(core.reg.static_dc);
         core.reg.delta_c_target = core.reg.delta_c;
         // δ_c unchanged (μ small enough that δ̄_c μ^κ_c ≤ the static δ_c): the matrix and the

@@ -261,8 +261,8 @@ mod tests {
         assert_eq!(batched.phase_functions()[0].kernel_name(), Some("toy"));
         assert!(plain.phase_functions()[0].kernel_name().is_none());
         let (n, m) = (plain.num_variables(), plain.num_constraints());
-        let x: Vec<f64> = (0..n).map(|i| 0.3 + (1.7 * i as f64).sin()).collect();
-        let lambda: Vec<f64> = (0..m).map(|i| (0.9 * i as f64).cos()).collect();
+        let x: Vec<f64> = (0..n).map(|i| 0.3 + libm::sin(1.7 * i as f64)).collect();
+        let lambda: Vec<f64> = (0..m).map(|i| libm::cos(0.9 * i as f64)).collect();
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         let before = BATCHED_CALLS.load(Ordering::Relaxed);
         let (mut g0, mut g1) = (vec![0.0; m], vec![0.0; m]);

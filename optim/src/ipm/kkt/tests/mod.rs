@@ -11,7 +11,7 @@ mod speculative;
 /// right-hand side.
 fn refined_residual(s: &mut SparseLdlt, pat: &KktPattern, steps: usize) -> f64 {
     let dim = pat.mat.dim;
-    let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.37).sin() + 0.1).collect();
+    let b: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64 * 0.37) + 0.1).collect();
     let mut x = b.clone();
     s.solve(&mut x).unwrap();
     let mut r = vec![0.0; dim];
@@ -157,7 +157,7 @@ fn inertia_matches_dense_eigenvalues() {
             if i % 7 == 0 {
                 -2.0
             } else {
-                4.0 + (i as f64).cos()
+                4.0 + libm::cos(i as f64)
             },
         ));
         if i + 1 < n {
@@ -214,7 +214,7 @@ fn prepared_simplicial_path_is_bitwise_faer() {
     let jv: Vec<_> = jac.iter().map(|&(_, _, v)| v).collect();
     let mut pat = KktPattern::new(n, m, &hp, &jp);
     let dim = n + m;
-    let b: Vec<f64> = (0..dim).map(|i| (i as f64 * 0.71).cos()).collect();
+    let b: Vec<f64> = (0..dim).map(|i| libm::cos(i as f64 * 0.71)).collect();
     for shift in [0.0, 0.5, 10.0] {
         pat.assemble(&hv, &jv, &vec![shift; n], -1e-9);
         let mut out = Vec::new();
