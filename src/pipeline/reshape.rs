@@ -15,7 +15,9 @@
 //! ([`flip_elbow`], the other inverse-kinematics branch of the last two joints) and the mirror
 //! ([`mirror_first_joint`], q₁ → −q₁ with the ball's spin ω, the contact force λ (eq. 29) and
 //! the impact impulse ι (eq. 40) mirrored about the plane through the ball centre that holds
-//! the first joint's axis and gravity).
+//! the first joint's axis and gravity), each also applied to a small hop of the optimum
+//! ([`Move::ElbowFlipOfHop`], [`Move::MirrorOfHop`]: the solve from a transformed point is
+//! sensitive to that point, docs/decisions/0046-posture-moves-of-a-hop.md).
 //!
 //! * [`MOVES`]: the moves, [`Move::bounds`] their duration bounds for an optimum's durations;
 //! * [`with_duration_bounds`]: a built problem transcribed again with other duration bounds
@@ -68,6 +70,15 @@ pub enum Move {
     /// neither a hop nor the elbow flip reaches (the `periodic-qc` optima 0.0769 and 0.0876
     /// have q₁ ≈ +π/2 and −π/2).
     Mirror,
+    /// The elbow flip of a small hop of the optimum (its durations scaled by e^(±s), its joint
+    /// angles shifted by up to 0.6·s rad, s = [`POSTURE_HOP_SCALE`]): the solve from a
+    /// flipped point is sensitive to the point, so the flip gets a second, nearby start. The
+    /// `periodic-qc` tap 0.0769, reached by two paths of two searches and flipped, was solved
+    /// to the 0.0876 optimum from one of them and to 0.333 from the other (the two points
+    /// equal to the solver's tolerance).
+    ElbowFlipOfHop,
+    /// The mirror ([`Move::Mirror`]) of a small hop of the optimum, as [`Move::ElbowFlipOfHop`].
+    MirrorOfHop,
     /// The first free phase at least `factor`·d₀ and the second at most d₂ / `factor` long
     /// (time moved into the first free phase), or the reverse for `factor` < 1.
     Shift {
@@ -76,10 +87,16 @@ pub enum Move {
     },
 }
 
+/// Relative size of the hop that [`Move::ElbowFlipOfHop`] and [`Move::MirrorOfHop`] apply
+/// before the posture change (a third of the search's default hop).
+pub const POSTURE_HOP_SCALE: f64 = 0.1;
+
 /// The moves tried from every reshaped optimum, in this order (the move number is its index).
-pub const MOVES: [Move; 11] = [
+pub const MOVES: [Move; 13] = [
     Move::ElbowFlip,
     Move::Mirror,
+    Move::ElbowFlipOfHop,
+    Move::MirrorOfHop,
     Move::StickAtLeast {
         abs: 0.05,
         factor: 2.0,
@@ -125,7 +142,9 @@ impl Move {
         };
         match *self {
             // The posture moves, not the durations.
-            Move::ElbowFlip | Move::Mirror => return Some(b),
+            Move::ElbowFlip | Move::Mirror | Move::ElbowFlipOfHop | Move::MirrorOfHop => {
+                return Some(b);
+            }
             Move::StickAtLeast { abs, factor } => at_least(&mut b, 1, abs.max(factor * d[1])),
             Move::StickAtMost { factor } => at_most(&mut b, 1, d[1] / factor),
             Move::Period { factor } if factor > 1.0 => {
@@ -154,7 +173,24 @@ impl Move {
     /// rather than bounding the durations: solved once from the transformed point, with no
     /// bounds to release.
     pub fn moves_posture(&self) -> bool {
-        matches!(self, Move::ElbowFlip | Move::Mirror)
+        matches!(
+            self,
+            Move::ElbowFlip | Move::Mirror | Move::ElbowFlipOfHop | Move::MirrorOfHop
+        )
+    }
+
+    /// Whether the move is the mirror ([`Move::Mirror`], [`Move::MirrorOfHop`]) rather than
+    /// the elbow flip among the posture moves.
+    pub fn mirrors(&self) -> bool {
+        matches!(self, Move::Mirror | Move::MirrorOfHop)
+    }
+
+    /// The relative size of the hop applied before the posture change (0: none).
+    pub fn hop_scale(&self) -> f64 {
+        match self {
+            Move::ElbowFlipOfHop | Move::MirrorOfHop => POSTURE_HOP_SCALE,
+            _ => 0.0,
+        }
     }
 
     /// A short description for the search's records.
@@ -162,6 +198,8 @@ impl Move {
         match *self {
             Move::ElbowFlip => "elbow flip".to_string(),
             Move::Mirror => "mirror q1".to_string(),
+            Move::ElbowFlipOfHop => format!("elbow flip of a hop ({POSTURE_HOP_SCALE})"),
+            Move::MirrorOfHop => format!("mirror q1 of a hop ({POSTURE_HOP_SCALE})"),
             Move::StickAtLeast { abs, factor } => format!("stick >= max({abs}, {factor} x)"),
             Move::StickAtMost { factor } => format!("stick <= 1/{factor} x"),
             Move::Period { factor } if factor > 1.0 => format!("phases <= 1/{factor} x"),

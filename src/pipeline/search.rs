@@ -46,7 +46,7 @@ use super::build;
 use super::error::PipelineError;
 use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
-use super::reshape::{MOVES, Move, flip_elbow, mirror_first_joint, with_duration_bounds};
+use super::reshape::{MOVES, flip_elbow, mirror_first_joint, with_duration_bounds};
 use super::solve::solve_recentred;
 use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
@@ -1037,12 +1037,15 @@ impl Landscape for OcpLandscape<'_> {
             released.settings.max_iter = max_iter;
             let fit = || PipelineError::Internal("a reshaped optimum does not fit its own problem");
             if m.moves_posture() {
-                let mut w = Self::perturbed(&released, &from.solution, 0, 0.0).ok_or_else(fit)?;
+                // The hop's seed is the reshaped point's global index: the same on every
+                // thread count and shard.
+                let mut w = Self::perturbed(&released, &from.solution, id as u64, m.hop_scale())
+                    .ok_or_else(fit)?;
                 let n = Nlp::num_variables(&released.nlp);
                 let (mut lo, mut up) = (vec![0.0; n], vec![0.0; n]);
                 Nlp::variable_bounds(&released.nlp, &mut lo, &mut up);
                 let nq = released.guess.free.len();
-                if *m == Move::Mirror {
+                if m.mirrors() {
                     mirror_first_joint(&released, nq, &mut w.x, &lo, &up);
                 } else {
                     flip_elbow(&released, nq, &mut w.x, &lo, &up);
