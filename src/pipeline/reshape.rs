@@ -323,11 +323,21 @@ mod tests {
     #[test]
     fn every_move_excludes_the_optimum_and_stays_within_the_problem() {
         let d = [0.3, 0.12, 0.5];
-        // The flip and the mirror move the posture and leave the durations free.
-        for m in [Move::ElbowFlip, Move::Mirror] {
+        // The flip and the mirror, alone and of a small hop, move the posture and leave the
+        // durations free; the hop variants start from a hop, the plain ones from the optimum.
+        for m in [
+            Move::ElbowFlip,
+            Move::Mirror,
+            Move::ElbowFlipOfHop,
+            Move::MirrorOfHop,
+        ] {
             assert!(m.moves_posture() && MOVES.contains(&m));
             assert_eq!(m.bounds(&d, &WITHIN, &FSF), Some(WITHIN.to_vec()));
+            let of_hop = matches!(m, Move::ElbowFlipOfHop | Move::MirrorOfHop);
+            assert_eq!(m.hop_scale() > 0.0, of_hop, "{m:?}");
+            assert_eq!(m.mirrors(), matches!(m, Move::Mirror | Move::MirrorOfHop));
         }
+        assert_eq!(MOVES.iter().filter(|m| m.moves_posture()).count(), 4);
         for m in MOVES.into_iter().filter(|m| !m.moves_posture()) {
             let b = m.bounds(&d, &WITHIN, &FSF).expect("applies");
             assert!(
