@@ -726,7 +726,7 @@ fn every_seed_reaches_the_best_known_qc_optimum() {
 /// starts (decision record 0037) seeds 5 and 6 verified 0.0665669, on the 10 s period bound.
 /// BENCHMARKS.md ("Period continuation of the starts") records each seed. The target is not
 /// met since the search's arithmetic no longer depends on the CPU (decision record 0045):
-/// seed 1 verifies 0.0665669, none of its held starts staying short when released
+/// seed 1 verifies 0.0665669, none of its held starts that stay short leading to the best basin
 /// (decision record 0046), so this test fails on seed 1.
 #[test]
 #[ignore = "about 6 min on 2 idle cores (ten searches); run with `cargo test --release \
