@@ -183,6 +183,15 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     (s, c)
 }
 
+/// `(sin x[i], cos x[i])` in single precision for every lane: [`sin_cos_n`] of the lanes
+/// widened, each result rounded once, so every lane is bitwise [`sin_cos_f32`] of that lane
+/// (the f32 kernels' batch of joint angles).
+#[inline(always)]
+pub fn sin_cos_n_f32<const N: usize>(x: [f32; N]) -> ([f32; N], [f32; N]) {
+    let (s, c) = sin_cos_n(x.map(|v| v as f64));
+    (s.map(|v| v as f32), c.map(|v| v as f32))
+}
+
 /// `(sin x, cos x)` in single precision: [`sin_cos`] of `x` widened, each result rounded once
 /// (within 1 ulp of `f32`).
 #[inline(always)]

@@ -6,7 +6,7 @@
 //! beyond the range (NaN) and at special values; the one-angle helpers are its lanes.
 
 use bf_codegen::dd::{self, Dd};
-use bf_codegen::trig::{sin_cos, sin_cos_f32, sin_cos_n};
+use bf_codegen::trig::{sin_cos, sin_cos_f32, sin_cos_n, sin_cos_n_f32};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -157,7 +157,8 @@ fn outside_the_range_is_nan_lane_by_lane() {
     assert_eq!((s[2], c[2]), (0.0, 1.0));
 }
 
-/// The one-angle helpers are the lanes of `sin_cos_n` (f64) and those rounded once (f32),
+/// The one-angle helpers are the lanes of `sin_cos_n` (f64) and those rounded once (f32), and
+/// the f32 batch's lanes are the f32 helper,
 /// also next to multiples of π/2, where the fallback reduction takes over.
 #[test]
 fn one_angle_helpers_are_the_lanes() {
@@ -174,6 +175,11 @@ fn one_angle_helpers_are_the_lanes() {
         let x32 = x as f32;
         let ([s], [c]) = sin_cos_n([x32 as f64]);
         assert_eq!(sin_cos_f32(x32), (s as f32, c as f32), "x = {x32:e}");
+        let lanes = [x32, 0.5, -x32];
+        let (s4, c4) = sin_cos_n_f32(lanes);
+        for l in 0..3 {
+            assert_eq!((s4[l], c4[l]), sin_cos_f32(lanes[l]), "x = {:e}", lanes[l]);
+        }
     }
 }
 

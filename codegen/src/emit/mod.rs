@@ -398,7 +398,8 @@ fn unparse(tokens: TokenStream, what: &'static str) -> Result<String, CodegenErr
 }
 
 /// The helper items that kernels with [`EmittedKernel::trig`] call (`sin_cos_n`, `sin_cos`
-/// and the reductions behind them, and in an f32 file `sin_cos_f32`, from [`crate::trig`]), as
+/// and the reductions behind them, and in an f32 file `sin_cos_n_f32` and `sin_cos_f32`, from
+/// [`crate::trig`]), as
 /// private items for a generated file of kernels of type `ft`, each allowed to be unused;
 /// emitted once per file. They are plain arithmetic: no kernel calls the platform's libm.
 pub fn trig_items(ft: FloatTy) -> Result<TokenStream, CodegenError> {
@@ -418,7 +419,12 @@ fn trig_fns(ft: FloatTy, docs: bool) -> Result<Vec<syn::ItemFn>, CodegenError> {
         .items
         .into_iter()
         .filter_map(|item| match item {
-            syn::Item::Fn(f) if ft == FloatTy::F32 || f.sig.ident != "sin_cos_f32" => Some(f),
+            syn::Item::Fn(f)
+                if ft == FloatTy::F32
+                    || (f.sig.ident != "sin_cos_f32" && f.sig.ident != "sin_cos_n_f32") =>
+            {
+                Some(f)
+            }
             _ => None,
         })
         .map(|mut f| {

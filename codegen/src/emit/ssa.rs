@@ -84,9 +84,9 @@ pub(crate) struct SsaIr {
     pub(crate) ops: OpCounts,
 }
 
-/// The SSA statements of the cone of `roots`, in node order. With `batch_trig` and `f64`,
-/// every sine and cosine of a graph variable (the joint angles) comes from one `sin_cos_n`
-/// call at the top; other sin/cos and `f32` call the one-angle helper (`sin_cos` or
+/// The SSA statements of the cone of `roots`, in node order. With `batch_trig`, every sine
+/// and cosine of a graph variable (the joint angles) comes from one `sin_cos_n` call at the
+/// top (`sin_cos_n_f32` in f32 kernels); other sin/cos call the one-angle helper (`sin_cos` or
 /// `sin_cos_f32`, [`crate::trig`]), sin and cos of one argument sharing a call. With
 /// `lanes` (f64 only; `batch_trig` then does not apply), the statements are the body of a
 /// loop over four lanes and the sines and cosines of graph variables are computed before it
@@ -99,7 +99,7 @@ pub(crate) fn build(
     lanes: bool,
 ) -> SsaIr {
     let lanes = lanes && opts.float == FloatTy::F64;
-    let batch_trig = batch_trig && !lanes && opts.float == FloatTy::F64;
+    let batch_trig = batch_trig && !lanes;
     // Product operands of a Mul node that a later Add/Sub may fuse (only when FMA is on).
     let as_mul = |id: Id| -> Option<(Id, Id)> {
         match g.node(id) {
@@ -320,6 +320,16 @@ fn sin_cos_name(ft: FloatTy) -> &'static str {
     }
 }
 
+/// The batched helper of the joint angles' sines and cosines in kernels of type `ft`:
+/// [`crate::trig::sin_cos_n`] or [`crate::trig::sin_cos_n_f32`] (each lane bitwise the
+/// one-angle helper of [`sin_cos_name`]).
+fn sin_cos_n_name(ft: FloatTy) -> &'static str {
+    match ft {
+        FloatTy::F64 => "sin_cos_n",
+        FloatTy::F32 => "sin_cos_n_f32",
+    }
+}
+
 /// Writes the literal of `v` as `float_tokens` prints it.
 pub(crate) fn write_float(out: &mut String, v: f64, ft: FloatTy) {
     let t = float_name(ft);
@@ -487,7 +497,7 @@ impl TextPrinter<'_> {
                 for (k, (_, c)) in sc.iter().enumerate() {
                     let _ = write!(out, "{}t{c}", if k > 0 { ", " } else { "" });
                 }
-                out.push_str("]) = sin_cos_n([");
+                let _ = write!(out, "]) = {}([", sin_cos_n_name(self.ft));
                 self.operands(out, args);
                 out.push_str("]);");
             }
@@ -676,7 +686,8 @@ mod tests {
                     let sins = sc.iter().map(|p| temp_ident(p.0));
                     let coss = sc.iter().map(|p| temp_ident(p.1));
                     let args = args.iter().map(|&a| self.operand(a));
-                    quote!(let ([#(#sins),*], [#(#coss),*]) = sin_cos_n([#(#args),*]);)
+                    let f = Ident::new(sin_cos_n_name(self.ft), Span::call_site());
+                    quote!(let ([#(#sins),*], [#(#coss),*]) = #f([#(#args),*]);)
                 }
                 Stmt::SinCosLanes { s, c, x } => {
                     let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));

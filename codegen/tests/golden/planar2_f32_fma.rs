@@ -173,6 +173,15 @@ fn sin_cos(x: f64) -> (f64, f64) {
     let ([s], [c]) = sin_cos_n([x]);
     (s, c)
 }
+/// `(sin x[i], cos x[i])` in single precision for every lane: [`sin_cos_n`] of the lanes
+/// widened, each result rounded once, so every lane is bitwise [`sin_cos_f32`] of that lane
+/// (the f32 kernels' batch of joint angles).
+#[inline(always)]
+#[allow(dead_code)]
+fn sin_cos_n_f32<const N: usize>(x: [f32; N]) -> ([f32; N], [f32; N]) {
+    let (s, c) = sin_cos_n(x.map(|v| v as f64));
+    (s.map(|v| v as f32), c.map(|v| v as f32))
+}
 /// `(sin x, cos x)` in single precision: [`sin_cos`] of `x` widened, each result rounded once
 /// (within 1 ulp of `f32`).
 #[inline(always)]
@@ -198,15 +207,14 @@ pub fn frames(
     pos: &mut [[f32; 3]; NQ],
     rot: &mut [[[f32; 3]; 3]; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let t2 = -t0;
-    let (t3, t4) = sin_cos_f32(q[1]);
-    let t5 = t1 * t4;
-    let t6 = t0 * t3;
-    let t7 = f32::mul_add(t1, t4, -t6);
-    let t8 = t1 * t3;
-    let t9 = t0 * t4;
-    let t10 = f32::mul_add(t1, t3, t9);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
+    let t4 = -t0;
+    let t5 = t1 * t3;
+    let t6 = t0 * t2;
+    let t7 = f32::mul_add(t1, t3, -t6);
+    let t8 = t1 * t2;
+    let t9 = t0 * t3;
+    let t10 = f32::mul_add(t1, t2, t9);
     let t11 = -t10;
     let t12 = 0.8 * t5;
     let t13 = 0.8 * t6;
@@ -223,7 +231,7 @@ pub fn frames(
     pos[1][1] = t19;
     pos[1][2] = 0.0;
     rot[0][0][0] = t1;
-    rot[0][0][1] = t2;
+    rot[0][0][1] = t4;
     rot[0][0][2] = 0.0;
     rot[0][1][0] = t0;
     rot[0][1][1] = t1;
@@ -258,8 +266,7 @@ pub fn tip_jacobian(
     jp: &mut [[f32; NQ]; 3],
     jo: &mut [[f32; NQ]; 3],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t1 * t3;
     let t5 = t0 * t2;
     let t6 = t1 * t2;
@@ -298,7 +305,7 @@ pub fn tip_jacobian(
 #[inline]
 #[allow(unused_variables)]
 pub fn mass_matrix(q: &[f32; NQ], p: &[f32; NP], m: &mut [[f32; NQ]; NQ]) {
-    let (t0, t1) = sin_cos_f32(q[1]);
+    let ([t0], [t1]) = sin_cos_n_f32([q[1]]);
     let t2 = t1 + 0.30000000000000004;
     let t3 = t0 * t0;
     let t4 = t2 * t2;
@@ -327,7 +334,7 @@ pub fn mass_matrix(q: &[f32; NQ], p: &[f32; NP], m: &mut [[f32; NQ]; NQ]) {
 #[inline]
 #[allow(unused_variables)]
 pub fn coriolis_qd(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = sin_cos_f32(q[1]);
+    let ([t0], [t1]) = sin_cos_n_f32([q[1]]);
     let t2 = t1 + 0.30000000000000004;
     let t3 = qd[1] * qd[1];
     let t4 = qd[0] * qd[1];
@@ -360,8 +367,7 @@ pub fn coriolis_qd(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32;
 #[inline]
 #[allow(unused_variables)]
 pub fn gravity(q: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t2 * p[0];
     let t5 = 9.81 * p[0];
     let t6 = t3 * p[0];
@@ -393,8 +399,7 @@ pub fn gravity(q: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
 #[inline]
 #[allow(unused_variables)]
 pub fn potential(q: &[f32; NQ], p: &[f32; NP], out: &mut f32) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t1 * t2;
     let t5 = t0 * t3;
     let t6 = f32::mul_add(t1, t2, t5);
@@ -422,8 +427,7 @@ pub fn potential(q: &[f32; NQ], p: &[f32; NP], out: &mut f32) {
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t3 + 0.30000000000000004;
     let t5 = qd[1] * qd[1];
     let t6 = qd[0] * qd[1];
@@ -474,8 +478,7 @@ pub fn cqd_g(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) 
 #[inline]
 #[allow(unused_variables)]
 pub fn cqd_g_rnea(q: &[f32; NQ], qd: &[f32; NQ], p: &[f32; NP], out: &mut [f32; NQ]) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t1 * t3;
     let t5 = t1 * t2;
     let t6 = qd[0] * qd[0];
@@ -533,8 +536,7 @@ pub fn mass_cqd_g(
     m: &mut [[f32; NQ]; NQ],
     cqd_g: &mut [f32; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t3 + 0.30000000000000004;
     let t5 = t2 * t2;
     let t6 = t4 * t4;
@@ -606,8 +608,7 @@ pub fn inverse_dynamics(
     p: &[f32; NP],
     tau: &mut [f32; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = qd[0] * qd[0];
     let t5 = 9.81 * t0;
     let t6 = 9.81 * t1;
@@ -685,8 +686,7 @@ pub fn inverse_dynamics_dq(
     p: &[f32; NP],
     out: &mut [[f32; NQ]; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t1 * t3;
     let t5 = t0 * t2;
     let t6 = t1 * t2;
@@ -799,7 +799,7 @@ pub fn inverse_dynamics_dqd(
     p: &[f32; NP],
     out: &mut [[f32; NQ]; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[1]);
+    let ([t0], [t1]) = sin_cos_n_f32([q[1]]);
     let t2 = qd[0] + qd[1];
     let t3 = p[0] * t2;
     let t4 = t1 * qd[0];
@@ -859,8 +859,7 @@ pub fn forward_dynamics(
     p: &[f32; NP],
     qdd: &mut [f32; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = t3 + 0.30000000000000004;
     let t5 = t2 * t2;
     let t6 = t4 * t4;
@@ -941,8 +940,7 @@ pub fn regressor(
     p: &[f32; NP],
     y: &mut [[[f32; 10]; NQ]; NQ],
 ) {
-    let (t0, t1) = sin_cos_f32(q[0]);
-    let (t2, t3) = sin_cos_f32(q[1]);
+    let ([t0, t2], [t1, t3]) = sin_cos_n_f32([q[0], q[1]]);
     let t4 = 0.8 * t3;
     let t5 = t2 * t2;
     let t6 = qd[0] * qd[0];
