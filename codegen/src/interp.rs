@@ -1,9 +1,8 @@
 //! Interpreter: evaluates graph nodes in `f64` or in double-double ([`crate::dd::Dd`]), as a
 //! straight-line [`Tape`] of runs of one operation each, without allocation per call
 //! ([`Tape::eval_into`]).
-//! [`KernelF64`] is `f64` with the emitted kernels' sine and cosine ([`crate::trig`]), so an
-//! evaluation in it is bit-identical to the emitted f64 kernels; plain `f64` uses the standard
-//! library's, as the emitted optimal-control node kernels do.
+//! In `f64` the sine and cosine are the emitted kernels' own ([`crate::trig`]), so an
+//! evaluation is bit-identical to the emitted f64 kernels and node kernels.
 //!
 //! Used by `eval_all` (the CLI `eval` of scene files that are not built in), by the tests
 //! that compare emitted kernels with the graph they came from, and for accuracy measurements
@@ -51,6 +50,18 @@ impl Scalar for f64 {
     fn sin_cos(self) -> (Self, Self) {
         crate::trig::sin_cos(self)
     }
+    /// Four lanes per [`crate::trig::sin_cos_n`] call, as the emitted kernels batch the joint
+    /// angles; every lane's value is that of [`crate::trig::sin_cos`] of its argument alone
+    /// (the helper's lanes are independent).
+    fn sin_cos_in_place(sin: &mut [Self], x: &mut [Self]) {
+        for (s4, c4) in sin.chunks_mut(4).zip(x.chunks_mut(4)) {
+            let mut lanes = [0.0; 4];
+            lanes[..c4.len()].copy_from_slice(c4);
+            let (sv, cv) = crate::trig::sin_cos_n(lanes);
+            s4.copy_from_slice(&sv[..s4.len()]);
+            c4.copy_from_slice(&cv[..c4.len()]);
+        }
+    }
     fn sqrt(self) -> Self {
         f64::sqrt(self)
     }
@@ -77,79 +88,6 @@ impl Scalar for Dd {
     }
     fn to_f64(self) -> f64 {
         Dd::to_f64(self)
-    }
-}
-
-/// `f64` whose sine and cosine are those of the emitted kernels ([`crate::trig::sin_cos_n`]);
-/// all other operations are plain `f64` operations.
-#[derive(Debug, Clone, Copy, PartialEq, PartialOrd, Default)]
-pub struct KernelF64(pub f64);
-
-impl Add for KernelF64 {
-    type Output = Self;
-    fn add(self, y: Self) -> Self {
-        KernelF64(self.0 + y.0)
-    }
-}
-
-impl Sub for KernelF64 {
-    type Output = Self;
-    fn sub(self, y: Self) -> Self {
-        KernelF64(self.0 - y.0)
-    }
-}
-
-impl Mul for KernelF64 {
-    type Output = Self;
-    fn mul(self, y: Self) -> Self {
-        KernelF64(self.0 * y.0)
-    }
-}
-
-impl Div for KernelF64 {
-    type Output = Self;
-    fn div(self, y: Self) -> Self {
-        KernelF64(self.0 / y.0)
-    }
-}
-
-impl Neg for KernelF64 {
-    type Output = Self;
-    fn neg(self) -> Self {
-        KernelF64(-self.0)
-    }
-}
-
-impl Scalar for KernelF64 {
-    fn from_f64(v: f64) -> Self {
-        KernelF64(v)
-    }
-    fn sin_cos(self) -> (Self, Self) {
-        let ([s], [c]) = crate::trig::sin_cos_n([self.0]);
-        (KernelF64(s), KernelF64(c))
-    }
-    fn sqrt(self) -> Self {
-        KernelF64(self.0.sqrt())
-    }
-    fn abs(self) -> Self {
-        KernelF64(self.0.abs())
-    }
-    fn to_f64(self) -> f64 {
-        self.0
-    }
-    /// Four lanes per [`crate::trig::sin_cos_n`] call; every lane's value is that of a call
-    /// with its argument alone (the helper's lanes are independent).
-    fn sin_cos_in_place(sin: &mut [Self], x: &mut [Self]) {
-        for (s4, c4) in sin.chunks_mut(4).zip(x.chunks_mut(4)) {
-            let mut lanes = [0.0; 4];
-            for (l, c) in lanes.iter_mut().zip(c4.iter()) {
-                *l = c.0;
-            }
-            let (sv, cv) = crate::trig::sin_cos_n(lanes);
-            for (i, (s, c)) in s4.iter_mut().zip(c4.iter_mut()).enumerate() {
-                (*s, *c) = (KernelF64(sv[i]), KernelF64(cv[i]));
-            }
-        }
     }
 }
 
@@ -218,7 +156,7 @@ impl Kind {
 ///
 /// Slots of the value vector, in order: the graph variables the cone reads, its constants, the
 /// sines and cosines of variables (computed together, four lanes per
-/// [`Scalar::sin_cos_in_place`] call for [`KernelF64`]), then the operations in *runs*: a run is
+/// [`Scalar::sin_cos_in_place`] call in `f64`), then the operations in *runs*: a run is
 /// a sequence of operations of one kind whose operands are all computed before the run starts
 /// (a list scheduler takes, at each step, every ready operation of the kind with the most
 /// ready ones). So the interpreter decides the operation once per run, not once per node,
@@ -481,8 +419,8 @@ pub struct RuntimeKernel {
 impl RuntimeKernel {
     /// Evaluates the kernel; `vars` from [`SceneKernels::vars`]. Outputs flattened as the
     /// emitted `eval_flat_u` returns them.
-    pub fn eval(&self, vars: &[KernelF64]) -> Vec<f64> {
-        self.tape.eval(vars).into_iter().map(|v| v.0).collect()
+    pub fn eval(&self, vars: &[f64]) -> Vec<f64> {
+        self.tape.eval(vars)
     }
 
     /// As [`RuntimeKernel::eval`] without allocation: the outputs go to `out` (its length is
@@ -491,18 +429,15 @@ impl RuntimeKernel {
     ///
     /// # Panics
     /// If `out` has the wrong length (a programming error).
-    pub fn eval_into(&self, vars: &[KernelF64], scratch: &mut Vec<KernelF64>, out: &mut [f64]) {
+    pub fn eval_into(&self, vars: &[f64], scratch: &mut Vec<f64>, out: &mut [f64]) {
         assert_eq!(out.len(), self.tape.n_outputs(), "output length");
-        self.tape.run(vars, scratch);
-        for (o, &s) in out.iter_mut().zip(&self.tape.outputs) {
-            *o = scratch[s as usize].0;
-        }
+        self.tape.eval_into(vars, scratch, out);
     }
 }
 
 /// Every kernel a scene's module holds (its `kernels` list plus
 /// [`crate::kernels::ROBOT_KERNELS`]), interpreted: the run-time counterpart of the compiled
-/// module, with the same f64 operations (sine and cosine of [`KernelF64`]).
+/// module, with the same f64 operations (sine and cosine of [`crate::trig`]).
 #[derive(Debug, Clone)]
 pub struct SceneKernels {
     /// Input layout of the scene's graph.
@@ -576,7 +511,7 @@ impl SceneKernels {
         eps: f64,
         u: &[f64],
         p: Option<&[f64]>,
-    ) -> Vec<KernelF64> {
+    ) -> Vec<f64> {
         let l = self.layout;
         let n = l.nq;
         assert!(
@@ -595,6 +530,6 @@ impl SceneKernels {
             v[l.qdd(i) as usize] = *x;
             v[l.tau(i) as usize] = *x;
         }
-        v.into_iter().map(KernelF64).collect()
+        v
     }
 }

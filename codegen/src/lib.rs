@@ -349,12 +349,9 @@ pub fn eval_all(
         items.push(("J_c_smooth".into(), Shape::M(n), cs.j_c.concat()));
     }
     let all: Vec<graph::Id> = items.iter().flat_map(|i| i.2.iter().copied()).collect();
-    // In `KernelF64`, so the numbers are those of the emitted f64 kernels bit for bit.
-    let vars: Vec<interp::KernelF64> = vars.into_iter().map(interp::KernelF64).collect();
-    let vals: Vec<f64> = interp::eval(&model.g, &all, &vars)
-        .into_iter()
-        .map(|v| v.0)
-        .collect();
+    // In `f64`, whose sine and cosine are the emitted kernels' own: the numbers are those of
+    // the emitted f64 kernels bit for bit.
+    let vals: Vec<f64> = interp::eval(&model.g, &all, &vars);
     let mut off = 0;
     let mut out = EvalOutput::default();
     for (name, shape, ids) in items {

@@ -25,9 +25,7 @@ use quote::quote;
 use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
-use crate::emit::{
-    BODY_MARKER, BodyText, EmitSettings, body_text, lanes_items, splice_bodies, trig_items,
-};
+use crate::emit::{BODY_MARKER, BodyText, EmitSettings, body_text, splice_bodies, trig_items};
 use crate::graph::{Graph, Id, Node};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
@@ -363,7 +361,7 @@ impl CompiledNode {
 /// into `out[0..roots.len()]`; with `x4`, the batched variant computing four nodes at once:
 /// `local`, `w` and `out` then hold the four nodes' entries interleaved (node `l`'s entry `k`
 /// at `4·k + l`), `fixed` is shared, and the body is the scalar body in a loop over the lanes
-/// `l` ([`crate::emit::lanes`]). `uses_w`: whether `roots` read the weights (only then the
+/// `l` ([`crate::emit::body_text`]). `uses_w`: whether `roots` read the weights (only then the
 /// batched kernel checks their length). The body is printed as text
 /// ([`crate::emit::body_text`]), the rest formatted by `prettyplease`.
 fn kernel_fn(
@@ -556,15 +554,12 @@ pub fn emit_node_kernels(nodes: &[NamedNode]) -> Result<String, CodegenError> {
     entries.sort_by_key(|e| e.0);
     let items = entries.iter().map(|e| &e.1);
     // Every kernel's sine and cosine come from the trig helpers, emitted once (unused ones are
-    // allowed); the batched kernels also call `sin_cos_lanes`.
-    let mut helpers = if nodes.is_empty() {
+    // allowed).
+    let helpers = if nodes.is_empty() {
         TokenStream::new()
     } else {
         trig_items(crate::emit::FloatTy::F64)?
     };
-    if nodes.iter().any(|n| n.x4) {
-        helpers.extend(lanes_items()?);
-    }
     let tokens = quote! {
         /// Every emitted node kernel, sorted by fingerprint (binary search).
         pub static NODE_KERNELS: &[NodeKernel] = &[#(#items)*];

@@ -157,28 +157,47 @@ fn outside_the_range_is_nan_lane_by_lane() {
     assert_eq!((s[2], c[2]), (0.0, 1.0));
 }
 
-/// The one-angle helpers are the lanes of `sin_cos_n` (f64) and those rounded once (f32), and
-/// the f32 batch's lanes are the f32 helper,
-/// also next to multiples of π/2, where the fallback reduction takes over.
+/// The one-angle helpers against the double-double reference, random and next to multiples
+/// of π/2 (where the fallback reduction takes over): `sin_cos` within 1 ulp, `sin_cos_f32`
+/// within 1 ulp of f32. A batch of four gives each lane what the helper gives it alone (in
+/// f64 and f32), whatever the other lanes hold (one near a multiple of π/2 sends the batch
+/// through the fallback).
 #[test]
-fn one_angle_helpers_are_the_lanes() {
+fn one_angle_helpers_are_accurate_and_batches_are_lane_by_lane() {
+    let ulps_f32 = |got: f32, exact: Dd| {
+        let e = exact.to_f64();
+        let a = (e as f32).abs();
+        let ulp = f32::from_bits(a.to_bits() + 1) - a;
+        ((got as f64 - e) / ulp as f64).abs()
+    };
     let mut rng = ChaCha8Rng::seed_from_u64(23);
     for k in 0..20_000 {
-        let x = if k % 2 == 0 {
-            rng.random_range(-1e5..1e5)
-        } else {
+        let near = |rng: &mut ChaCha8Rng| {
             let m = rng.random_range(-60_000i64..60_000) as f64;
             m * std::f64::consts::FRAC_PI_2 + rng.random_range(-1e-9..1e-9)
         };
-        let ([s], [c]) = sin_cos_n([x]);
-        assert_eq!(sin_cos(x), (s, c), "x = {x:e}");
+        let x = if k % 2 == 0 {
+            rng.random_range(-1e5..1e5)
+        } else {
+            near(&mut rng)
+        };
+        let (s, c) = sin_cos(x);
+        let (es, ec) = Dd::new(x).sin_cos();
+        assert!(ulps(s, es) <= 1.0 && ulps(c, ec) <= 1.0, "x = {x:e}");
         let x32 = x as f32;
-        let ([s], [c]) = sin_cos_n([x32 as f64]);
-        assert_eq!(sin_cos_f32(x32), (s as f32, c as f32), "x = {x32:e}");
-        let lanes = [x32, 0.5, -x32];
-        let (s4, c4) = sin_cos_n_f32(lanes);
-        for l in 0..3 {
-            assert_eq!((s4[l], c4[l]), sin_cos_f32(lanes[l]), "x = {:e}", lanes[l]);
+        let (s, c) = sin_cos_f32(x32);
+        let (es, ec) = Dd::new(x32 as f64).sin_cos();
+        assert!(
+            ulps_f32(s, es) <= 1.0 && ulps_f32(c, ec) <= 1.0,
+            "x = {x32:e}"
+        );
+        let lanes = [x, 0.5, -x, near(&mut rng)];
+        let (s4, c4) = sin_cos_n(lanes);
+        let (s4f, c4f) = sin_cos_n_f32(lanes.map(|v| v as f32));
+        for l in 0..4 {
+            assert_eq!((s4[l], c4[l]), sin_cos(lanes[l]), "x = {:e}", lanes[l]);
+            let v = lanes[l] as f32;
+            assert_eq!((s4f[l], c4f[l]), sin_cos_f32(v), "x = {v:e}");
         }
     }
 }

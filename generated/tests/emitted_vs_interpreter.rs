@@ -1,11 +1,11 @@
 //! The compiled kernels of every scene module against bf-codegen's interpreter evaluating the
 //! same graphs (random states, q̈ or τ, and perturbed runtime parameters). Both perform the same f64
-//! operations in the same order (sine and cosine by the emitted helper: the interpreter runs in
-//! `KernelF64`), so the results must be bit-identical; the tape's allocation-free `eval_into`
+//! operations in the same order (sine and cosine by the emitted helper, `bf_codegen::trig`, in
+//! both), so the results must be bit-identical; the tape's allocation-free `eval_into`
 //! (one scratch vector shared by all tapes) gives the same bits as `eval`.
 
 use bf_codegen::Scene;
-use bf_codegen::interp::{KernelF64, Tape};
+use bf_codegen::interp::Tape;
 use bf_codegen::kernels::build_kernel;
 use bf_codegen::robot::SymbolicRobot;
 use rand::{Rng, SeedableRng};
@@ -61,18 +61,13 @@ macro_rules! check_scene {
                 for (i, pi) in p.iter().enumerate() {
                     vars[l.param(i) as usize] = *pi;
                 }
-                let vars: Vec<KernelF64> = vars.into_iter().map(KernelF64).collect();
-                let want: Vec<f64> = tape
-                    .eval::<KernelF64>(&vars)
-                    .into_iter()
-                    .map(|v| v.0)
-                    .collect();
-                let mut into = vec![KernelF64(0.0); want.len()];
+                let want: Vec<f64> = tape.eval::<f64>(&vars);
+                let mut into = vec![0.0; want.len()];
                 tape.eval_into(&vars, &mut scratch, &mut into);
                 assert!(
                     into.iter()
                         .zip(&want)
-                        .all(|(a, b)| a.0.to_bits() == b.to_bits()),
+                        .all(|(a, b)| a.to_bits() == b.to_bits()),
                     "{}::{k}: eval_into differs from eval",
                     stringify!($m)
                 );

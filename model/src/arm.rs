@@ -9,7 +9,7 @@
 //! - [`ArmModel::energy`]: E = ½ q̇ᵀ M q̇ + U(q), whose rate is τ·q̇ − μ_v |q̇|² (the power
 //!   balance the simulator's energy check integrates).
 
-use bf_codegen::interp::{KernelF64, Tape};
+use bf_codegen::interp::Tape;
 use bf_codegen::spec::Scene;
 use bf_generated::{MassCqdGFn, PotentialFn};
 use nalgebra::{DMatrix, DVector};
@@ -36,7 +36,7 @@ enum Backend {
         mass_cqd_g: Box<Tape>,
         potential: Box<Tape>,
         layout: bf_codegen::robot::Layout,
-        base_vars: Vec<KernelF64>,
+        base_vars: Vec<f64>,
     },
 }
 
@@ -157,10 +157,10 @@ impl ArmModel {
             } => {
                 let mut v = base_vars.clone();
                 for i in 0..n {
-                    v[layout.q(i) as usize] = KernelF64(q[i]);
-                    v[layout.qd(i) as usize] = KernelF64(qd[i]);
+                    v[layout.q(i) as usize] = q[i];
+                    v[layout.qd(i) as usize] = qd[i];
                 }
-                let out: Vec<f64> = mass_cqd_g.eval(&v).into_iter().map(|x| x.0).collect();
+                let out = mass_cqd_g.eval(&v);
                 (out[..n * n].to_vec(), out[n * n..].to_vec())
             }
         };
@@ -185,9 +185,9 @@ impl ArmModel {
             } => {
                 let mut v = base_vars.clone();
                 for (i, &x) in q.iter().enumerate() {
-                    v[layout.q(i) as usize] = KernelF64(x);
+                    v[layout.q(i) as usize] = x;
                 }
-                potential.eval(&v)[0].0
+                potential.eval(&v)[0]
             }
         };
         if !u.is_finite() {

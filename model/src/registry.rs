@@ -2,8 +2,8 @@
 //! scene is one that was compiled in (possibly with other runtime-parameter values), otherwise
 //! kernels evaluated at run time by bf-codegen's interpreter on the same expression graphs
 //! (`mass_cqd_g` eq. 22a/24, `potential` eq. 22b, `contact` eq. 2–13, `contact_smooth`
-//! eq. 58–59). The interpreter runs in [`bf_codegen::interp::KernelF64`], whose arithmetic and
-//! sine–cosine are those of the emitted f64 kernels, so both paths give the same numbers for
+//! eq. 58–59). The interpreter runs in `f64` with the emitted kernels' own
+//! sine–cosine (`bf_codegen::trig`), so its arithmetic is that of the emitted f64 kernels, so both paths give the same numbers for
 //! the same scene; the interpreted path is only slower.
 //!
 //! - [`compiled_match`]: the compiled entry a parsed scene is equal to, ignoring what does not
@@ -24,7 +24,7 @@
 
 use std::fmt;
 
-use bf_codegen::interp::{KernelF64, Tape};
+use bf_codegen::interp::Tape;
 use bf_codegen::kernels::{CONTACT_FIELDS, Dim, build_kernel};
 use bf_codegen::spec::{Angle, InertiaSpec, Scene, SceneId};
 use bf_generated::{ContactFn, MassCqdGFn, PotentialFn};
@@ -532,7 +532,7 @@ pub(crate) struct InterpretedTapes<const N: usize> {
     pub layout: bf_codegen::robot::Layout,
     /// The variable vector with the runtime parameters at the scene's values (q, q̇, ω, ε are
     /// set per call).
-    pub base_vars: Vec<KernelF64>,
+    pub base_vars: Vec<f64>,
 }
 
 /// The tapes of `kernels` of `scene` (see [`InterpretedTapes`]).
@@ -554,9 +554,9 @@ pub(crate) fn interpreted_tapes<const N: usize>(
     let tapes: [Tape; N] = tapes
         .try_into()
         .map_err(|_| scene_err(&scene.name, "internal: one tape per kernel"))?;
-    let mut base_vars = vec![KernelF64(0.0); m.layout.n_vars()];
+    let mut base_vars = vec![0.0; m.layout.n_vars()];
     for (i, p) in m.params.iter().enumerate() {
-        base_vars[m.layout.param(i) as usize] = KernelF64(p.1);
+        base_vars[m.layout.param(i) as usize] = p.1;
     }
     Ok(InterpretedTapes {
         tapes,
@@ -579,7 +579,7 @@ pub struct InterpretedKernels<const N: usize = 3> {
     layout: ContactLayout,
     tape_layout: bf_codegen::robot::Layout,
     /// The variable vector with the runtime parameters filled in (q, q̇, ω, ε are set per call).
-    base_vars: Vec<KernelF64>,
+    base_vars: Vec<f64>,
 }
 
 impl InterpretedKernels<3> {
@@ -644,37 +644,33 @@ impl<const N: usize> InterpretedKernels<N> {
                 vars,
                 values,
                 outputs,
-                flat,
             } = &mut *b;
             vars.clear();
             vars.extend_from_slice(&self.base_vars);
             let l = &self.tape_layout;
             for i in 0..N {
-                vars[l.q(i) as usize] = KernelF64(q[i]);
-                vars[l.qd(i) as usize] = KernelF64(qd[i]);
+                vars[l.q(i) as usize] = q[i];
+                vars[l.qd(i) as usize] = qd[i];
             }
             for i in 0..3 {
-                vars[l.omega(i) as usize] = KernelF64(w[i]);
+                vars[l.omega(i) as usize] = w[i];
             }
-            vars[l.eps() as usize] = KernelF64(eps);
+            vars[l.eps() as usize] = eps;
             outputs.clear();
-            outputs.resize(tape.n_outputs(), KernelF64(0.0));
+            outputs.resize(tape.n_outputs(), 0.0);
             tape.eval_into(vars, values, outputs);
-            flat.clear();
-            flat.extend(outputs.iter().map(|x| x.0));
-            f(flat)
+            f(outputs)
         })
     }
 }
 
 /// The buffers of one thread's interpreted kernel calls: the variable vector, the tape's
-/// values, its outputs and the outputs as `f64`.
+/// values and its outputs.
 #[derive(Default)]
 struct TapeBuffers {
-    vars: Vec<KernelF64>,
-    values: Vec<KernelF64>,
-    outputs: Vec<KernelF64>,
-    flat: Vec<f64>,
+    vars: Vec<f64>,
+    values: Vec<f64>,
+    outputs: Vec<f64>,
 }
 
 thread_local! {

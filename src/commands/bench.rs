@@ -22,7 +22,7 @@ use std::time::Instant;
 use crate::cli::BenchArgs;
 use anyhow::{Context, Result, bail};
 use bf_codegen::Scene;
-use bf_codegen::interp::{KernelF64, SceneKernels};
+use bf_codegen::interp::SceneKernels;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
@@ -175,7 +175,7 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
         }
     }
     let states = random_states(scene, n_states, seed);
-    let vars: Vec<Vec<KernelF64>> = states
+    let vars: Vec<Vec<f64>> = states
         .iter()
         .map(|s| rt.vars(&s.q, &s.qd, s.omega, s.eps, &s.u, None))
         .collect();

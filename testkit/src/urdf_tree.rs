@@ -45,39 +45,10 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 fn rpy(r: f64, p: f64, y: f64) -> Matrix3<f64> {
-    let rx = Matrix3::new(
-        1.0,
-        0.0,
-        0.0,
-        0.0,
-        libm::cos(r),
-        -libm::sin(r),
-        0.0,
-        libm::sin(r),
-        libm::cos(r),
-    );
-    let ry = Matrix3::new(
-        libm::cos(p),
-        0.0,
-        libm::sin(p),
-        0.0,
-        1.0,
-        0.0,
-        -libm::sin(p),
-        0.0,
-        libm::cos(p),
-    );
-    let rz = Matrix3::new(
-        libm::cos(y),
-        -libm::sin(y),
-        0.0,
-        libm::sin(y),
-        libm::cos(y),
-        0.0,
-        0.0,
-        0.0,
-        1.0,
-    );
+    let ((sr, cr), (sp, cp), (sy, cy)) = (libm::sincos(r), libm::sincos(p), libm::sincos(y));
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, cr, -sr, 0.0, sr, cr);
+    let ry = Matrix3::new(cp, 0.0, sp, 0.0, 1.0, 0.0, -sp, 0.0, cp);
+    let rz = Matrix3::new(cy, -sy, 0.0, sy, cy, 0.0, 0.0, 0.0, 1.0);
     rz * ry * rx
 }
 

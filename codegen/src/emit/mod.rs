@@ -8,7 +8,7 @@
 //! cosines of all joint angles come from one call of the vectorised helper `sin_cos_n`
 //! ([`crate::trig`], emitted once per file by [`trig_items`]); elsewhere sin/cos of one
 //! argument share a `sin_cos` call. The batched node kernels put the scalar body in a loop
-//! over four lanes ([`lanes`]).
+//! over four lanes (`body_text`).
 //!
 //! [`EmitSettings`] select variants for accuracy/speed studies: the float type
 //! ([`FloatTy::F32`] rounds every constant and operation to single precision) and fused
@@ -30,7 +30,6 @@ use crate::robot::Layout;
 use crate::{CodegenError, InternalDefect};
 
 mod dispatch;
-pub mod lanes;
 mod ssa;
 use dispatch::{eval_flat_arm, eval_into_arm};
 
@@ -419,9 +418,9 @@ fn trig_fns(ft: FloatTy, docs: bool) -> Result<Vec<syn::ItemFn>, CodegenError> {
         .items
         .into_iter()
         .filter_map(|item| match item {
+            // The f32 helpers are named `*_f32`; an f64 file has no use for them.
             syn::Item::Fn(f)
-                if ft == FloatTy::F32
-                    || (f.sig.ident != "sin_cos_f32" && f.sig.ident != "sin_cos_n_f32") =>
+                if ft == FloatTy::F32 || !f.sig.ident.to_string().ends_with("_f32") =>
             {
                 Some(f)
             }
@@ -491,22 +490,6 @@ fn nostd_items(ft: FloatTy) -> Result<String, CodegenError> {
     Ok(unparse(out, "trig_nostd.rs")?.replace("std::f64::consts::", "core::f64::consts::"))
 }
 
-/// The items of [`lanes`] (`sin_cos_lanes`, which the batched node kernels call) for a
-/// generated file, without the module's tests; emitted once per file.
-pub fn lanes_items() -> Result<TokenStream, CodegenError> {
-    let file: syn::File =
-        syn::parse_str(include_str!("lanes.rs")).map_err(CodegenError::unparsable("lanes.rs"))?;
-    let mut out = TokenStream::new();
-    for item in &file.items {
-        if let syn::Item::Fn(f) = item {
-            let mut f = f.clone();
-            f.vis = syn::Visibility::Inherited;
-            out.extend(quote!(#f));
-        }
-    }
-    Ok(out)
-}
-
 /// A kernel body as text: statements before the lane loop (only with `lanes`), the
 /// statements and output assignments, and the operation counts.
 pub(crate) struct BodyText {
@@ -522,13 +505,18 @@ pub(crate) struct BodyText {
 /// The `let` bindings of the cone of `roots` and the assignment of every root, as text;
 /// graph variables are printed by `var`, and `lhs(out, k)` writes the place root `k` is
 /// assigned to. For the OCP node kernels (`crate::nodefn`): every node is computed with the
-/// same `f64` operation as in the dynamics kernels and the interpreter, sin/cos by the
-/// standard library (`sin_cos` per angle).
+/// same `f64` operation as in the dynamics kernels and the interpreter, sin/cos by the file's
+/// one-angle `sin_cos` ([`crate::trig`]).
 ///
-/// With `lanes` (f64 only), the statements are the body of a loop over four lanes `l`
-/// ([`lanes`]; `var` must then name lane `l`'s value): every sine and cosine of a graph
-/// variable is instead computed before the loop, four lanes at once by `sin_cos_lanes`, in
-/// [`BodyText::pre`], and read as `name[l]` in the loop.
+/// With `lanes` (f64 only), the statements are the body of a loop over four lanes `l` (`var`
+/// must then name lane `l`'s value): the batched (`_x4`) node kernels evaluate four
+/// collocation nodes with the nodes' entries interleaved (node `l`'s entry `k` at `4·k + l`),
+/// so every load and store of the loop is unit-stride in `l` and LLVM's loop vectoriser turns
+/// it into SIMD code (SSE2 on the baseline x86-64 target, no `unsafe`), each lane computing
+/// exactly the scalar kernel's operations. Calls inside the loop would keep it scalar, so
+/// every sine and cosine of a graph variable is computed before the loop, four lanes per angle
+/// by one `sin_cos_n` call (each lane bitwise the one-angle `sin_cos`), in [`BodyText::pre`],
+/// and read as `name[l]` in the loop.
 pub(crate) fn body_text(
     g: &Graph,
     roots: &[Id],

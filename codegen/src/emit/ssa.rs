@@ -70,7 +70,8 @@ pub(crate) enum Stmt {
         sc: Vec<(u32, u32)>,
         args: Vec<Operand>,
     },
-    /// `let (t{s}, t{c}) = sin_cos_lanes(std::array::from_fn(|l| x));` (before a lane loop).
+    /// `let (t{s}, t{c}) = sin_cos_n::<4>(std::array::from_fn(|l| x));` (before a lane loop: the
+    /// angle's four lanes).
     SinCosLanes { s: u32, c: u32, x: Operand },
 }
 
@@ -90,7 +91,7 @@ pub(crate) struct SsaIr {
 /// `sin_cos_f32`, [`crate::trig`]), sin and cos of one argument sharing a call. With
 /// `lanes` (f64 only; `batch_trig` then does not apply), the statements are the body of a
 /// loop over four lanes and the sines and cosines of graph variables are computed before it
-/// by `sin_cos_lanes` ([`SsaIr::pre`]), read as `t{n}[l]`.
+/// four lanes per `sin_cos_n` call ([`SsaIr::pre`]), read as `t{n}[l]`.
 pub(crate) fn build(
     g: &Graph,
     roots: &[Id],
@@ -504,7 +505,7 @@ impl TextPrinter<'_> {
             Stmt::SinCosLanes { s, c, x } => {
                 let _ = write!(
                     out,
-                    "let (t{s}, t{c}) = sin_cos_lanes(std::array::from_fn(|l| "
+                    "let (t{s}, t{c}) = sin_cos_n::<4>(std::array::from_fn(|l| "
                 );
                 self.operand(out, *x);
                 out.push_str("));");
@@ -691,7 +692,7 @@ mod tests {
                 }
                 Stmt::SinCosLanes { s, c, x } => {
                     let (s, c, x) = (temp_ident(*s), temp_ident(*c), self.operand(*x));
-                    quote!(let (#s, #c) = sin_cos_lanes(std::array::from_fn(|l| #x));)
+                    quote!(let (#s, #c) = sin_cos_n::<4>(std::array::from_fn(|l| #x));)
                 }
             }
         }
