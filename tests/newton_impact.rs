@@ -396,6 +396,13 @@ fn the_human_fingers_plan_to_execute_is_tracked_and_robust() {
             "direct",
         ],
     );
+    // The search verified it in closed loop (decision record 0048), and says so.
+    let check = sol
+        .verification
+        .as_ref()
+        .and_then(|v| v.execution.as_ref())
+        .expect("the search's closed-loop check of a Newton plan");
+    assert!(check.failure.is_none(), "{check:?}");
     meets_the_targets_bounded(&sol, 10, 6);
 }
 

@@ -9,8 +9,9 @@
 //! * Reshaping (first in [`exploit`], [`HopSettings::reshape_width`]): every deterministic move
 //!   of [`Landscape::reshape`] (for the optimal-control problems the elbow flip, the mirror of
 //!   the first joint and bounds on the phase durations, [`super::reshape`]) from each of the best points that differ in shape
-//!   ([`Landscape::alike`]), in rounds that go on from the best new shapes until the best
-//!   shapes have all been moved.
+//!   ([`Landscape::alike`]) and were not moved before, in [`HopSettings::reshape_rounds`]
+//!   rounds: each round moves the best shapes not yet moved, new ones from the earlier rounds
+//!   among them, so the reshaping goes down the ranking where the best shapes lead nowhere.
 //! * Exploitation ([`exploit`]): monotonic basin hopping. Each round perturbs the current best
 //!   point [`HopSettings::batch`] times ([`Landscape::hop`], hop h seeded by h alone, scale
 //!   [`HopSettings::scale`], every other round that times [`HopSettings::wide`]), solves locally, and keeps a result only if it ranks strictly
@@ -102,8 +103,8 @@ pub struct HopSettings {
     /// best points that differ in shape ([`Landscape::alike`]) and were not reshaped before.
     /// 0: no reshaping.
     pub reshape_width: usize,
-    /// Reshaping rounds at most; the reshaping also stops when the `reshape_width` best
-    /// shapes have all been reshaped (no move found a point among them).
+    /// Reshaping rounds; the reshaping stops earlier only when every shape has been
+    /// reshaped.
     pub reshape_rounds: usize,
 }
 
@@ -254,14 +255,17 @@ pub fn exploit<L: Landscape>(
 }
 
 /// The `n` best points of `points` that are pairwise not `alike`, best first.
-fn distinct_best<L: Landscape>(
+fn distinct_best<'a, L: Landscape>(
     l: &L,
-    points: &[L::Point],
+    points: impl IntoIterator<Item = &'a L::Point>,
     n: usize,
     alike: impl Fn(&L::Point, &L::Point) -> bool,
-) -> Vec<L::Point> {
+) -> Vec<L::Point>
+where
+    L::Point: 'a,
+{
     let mut out: Vec<L::Point> = Vec::new();
-    let mut rest: Vec<&L::Point> = points.iter().collect();
+    let mut rest: Vec<&L::Point> = points.into_iter().collect();
     while out.len() < n {
         let Some(p) = best_of(l, rest.iter().copied()).cloned() else {
             break;
@@ -274,13 +278,14 @@ fn distinct_best<L: Landscape>(
 
 /// The reshaping before the basin hopping: each round takes the
 /// [`HopSettings::reshape_width`] best points of `all` that differ in shape
-/// ([`Landscape::alike`]), applies every move of [`Landscape::reshape`] to those not reshaped
-/// before (in parallel, results in move order, numbered on from `first_id + *hop`), and adds
-/// the results to `all` and `hops`. It stops when every one of those best shapes has been
-/// reshaped, or after [`HopSettings::reshape_rounds`] rounds. A basin that random hops of
-/// the time scale do not leave (BENCHMARKS.md, "Global search on a coarse mesh") is left by a
-/// move that bounds the trajectory away from its shape; chains of such moves go on from every
-/// better shape they find.
+/// ([`Landscape::alike`]) from each other and from every point reshaped before, applies every
+/// move of [`Landscape::reshape`] to them (in parallel, results in move order, numbered on
+/// from `first_id + *hop`), and adds the results to `all` and `hops`; after
+/// [`HopSettings::reshape_rounds`] rounds, or when no shape is left, it stops. A basin that
+/// random hops of the time scale do not leave (BENCHMARKS.md, "Global search on a coarse
+/// mesh") is left by a move that bounds the trajectory away from its shape; chains of such
+/// moves go on from every better shape they find, and where the best shapes' moves find
+/// nothing better the next shapes down the ranking are moved (decision record 0047).
 fn reshape_rounds<L: Landscape>(
     l: &L,
     all: &mut Vec<L::Point>,
@@ -291,11 +296,11 @@ fn reshape_rounds<L: Landscape>(
 ) {
     let mut done: Vec<L::Point> = Vec::new();
     for _ in 0..settings.reshape_rounds {
-        let fresh: Vec<L::Point> =
-            distinct_best(l, all, settings.reshape_width, |a, b| l.alike(a, b))
-                .into_iter()
-                .filter(|o| !done.iter().any(|d| l.alike(d, o)))
-                .collect();
+        // The best shapes not moved before: where the moves of the best shapes found nothing
+        // better, the next ones down the ranking are moved (the way into the best basin may
+        // start from a worse shape: decision record 0047).
+        let untried = all.iter().filter(|o| !done.iter().any(|d| l.alike(d, o)));
+        let fresh = distinct_best(l, untried, settings.reshape_width, |a, b| l.alike(a, b));
         let jobs: Vec<(usize, usize)> = fresh
             .iter()
             .enumerate()
@@ -398,10 +403,11 @@ mod tests {
         /// Move 0 holds x ≥ from + 0.6, move 1 x ≤ from − 0.6 (the next basin on either side,
         /// basins being 1 wide), then releases the bound.
         fn reshape(&self, from: &f64, kind: usize, _id: usize) -> Option<f64> {
+            // No move beyond the domain's ends (as a duration bound past the problem's).
             let held = match kind {
-                0 => descend_in(from + 0.6, from + 0.6, 10.0),
-                _ => descend_in(from - 0.6, -10.0, from - 0.6),
-            };
+                0 => (from + 0.6 <= 10.0).then(|| descend_in(from + 0.6, from + 0.6, 10.0)),
+                _ => (from - 0.6 >= -10.0).then(|| descend_in(from - 0.6, -10.0, from - 0.6)),
+            }?;
             Some(descend(held))
         }
     }
@@ -648,6 +654,62 @@ mod tests {
             missed_without >= 5,
             "{missed_without} of 10 missed without reshaping"
         );
+    }
+
+    /// Where the best shape's moves find nothing better, the next shape down the ranking is
+    /// moved. Basins on a line, each reached from its neighbours by a reshaping move only
+    /// (hops stay put); the starts land in basin 0 (f = 1, the best sampled) and basin 6
+    /// (f = 2), the global minimum is basin 5 (f = 0). Moving basin 0 gives only basin 1
+    /// (f = 3), so a reshaping that went on only from the best shapes would stop at basin 0;
+    /// the second round moves basin 6, the best shape not moved yet, into basin 5.
+    #[test]
+    fn reshaping_moves_a_worse_shape_when_the_best_leads_nowhere() {
+        const F: [f64; 11] = [1.0, 3.0, 4.0, 4.0, 4.0, 0.0, 2.0, 4.0, 4.0, 4.0, 4.0];
+        struct Ladder;
+        impl Landscape for Ladder {
+            type Point = usize;
+            fn sample(&self, k: usize) -> Option<usize> {
+                [0, 6].get(k).copied()
+            }
+            fn hop(&self, from: &usize, _hop: u64, _scale: f64, _id: usize) -> Option<usize> {
+                Some(*from)
+            }
+            fn better(&self, a: &usize, b: &usize) -> bool {
+                F[*a] < F[*b]
+            }
+            fn same(&self, a: &usize, b: &usize) -> bool {
+                a == b
+            }
+            fn reshapes(&self, _from: &usize) -> usize {
+                2
+            }
+            fn reshape(&self, from: &usize, kind: usize, _id: usize) -> Option<usize> {
+                match kind {
+                    0 => from.checked_sub(1),
+                    _ => Some(from + 1).filter(|&n| n < F.len()),
+                }
+            }
+        }
+        let pts: Vec<usize> = sample(&Ladder, &[0, 1])
+            .into_iter()
+            .filter_map(|(_, p)| p)
+            .collect();
+        assert_eq!(pts, [0, 6]);
+        let only = |rounds: usize| HopSettings {
+            budget: 0,
+            polish_rounds: 0,
+            reshape_width: 1,
+            reshape_rounds: rounds,
+            ..SETTINGS
+        };
+        // One round moves the best shape only: basin 1, worse, and the search keeps basin 0.
+        let e = exploit(&Ladder, &pts, &only(1), 2);
+        assert_eq!(e.best, Some(0));
+        // The second round moves basin 6 (not basin 0 again): its left move is basin 5.
+        let e = exploit(&Ladder, &pts, &only(2), 2);
+        assert_eq!(e.best, Some(5));
+        let moved: Vec<Option<usize>> = e.hops.iter().map(|(_, _, p)| *p).collect();
+        assert_eq!(moved, [None, Some(1), Some(5), Some(7)]);
     }
 
     /// The polishing takes the neighbouring optimum: from x ≈ 1 (f ≈ 0.1) with no hops at all

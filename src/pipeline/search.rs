@@ -13,10 +13,14 @@
 //!    ([`verify`]).
 //! 2. Global search only: exploration on that mesh ([`Search::explore`]): the reshaping
 //!    moves ([`super::reshape`]: the elbow flip, the mirror, phase-duration bounds then
-//!    released) from the best distinct shapes (`same_shape`), monotonic basin hopping from
-//!    the best distinct optima and polishing of the winner ([`DEFAULT_HOPS`]).
-//! 3. Global search only: promotion ([`Search::promote`]), the best distinct optima re-solved
-//!    on the problem's mesh from their coarse trajectories, each re-integrated.
+//!    released) from the best distinct shapes not moved before (`same_shape`), monotonic
+//!    basin hopping from the best distinct optima and polishing of the winner
+//!    ([`DEFAULT_HOPS`]).
+//! 3. Global search only: promotion ([`Search::promote_and_refine`]), the best optima that
+//!    differ in shape re-solved on the problem's mesh from their coarse trajectories, each
+//!    re-integrated (and, for a plan for the plant, executed in closed loop:
+//!    [`VerifyPolicy::execution`]), and refined as in step 4; while none verifies, the next
+//!    shapes down the ranking ([`PROMOTE_ROUNDS`]).
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
 //!    first, one after the other until no candidate below half the best verified objective
 //!    is left, `refine_in_order`, which refines as many side by side as there are threads
@@ -37,6 +41,7 @@ use std::time::Instant;
 
 use bf_optim::ipm::Nlp;
 use bf_optim::ocp::Scheme;
+use bf_problem::solution::records::ExecutionCheck;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -52,7 +57,7 @@ use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
     prepare_chains, record, run_chain,
 };
-use super::verify::{VERIFIED_DEFECT, is_verified, path_excess, verify};
+use super::verify::{VERIFIED_DEFECT, execution_failure, is_verified, passes, path_excess, verify};
 
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
@@ -104,16 +109,41 @@ pub struct VerifyPolicy {
     /// re-solved on the problem's mesh ([`CoarseSampling`]); `None`: every start on the
     /// problem's mesh.
     pub coarse: Option<CoarseSampling>,
+    /// The closed-loop execution of every candidate whose re-integration verifies
+    /// ([`Execution`]; `optimize` sets it for the plans for the plant, decision record 0048);
+    /// `None`: the re-integration alone decides.
+    pub execution: Option<Execution>,
+}
+
+/// A closed-loop run of a candidate whose re-integration verified, supplied by the layer that
+/// owns the controller (`paper::closed_loop`): its record joins the candidate's verification
+/// ([`Verification::execution`](bf_problem::solution::records::Verification::execution)), and
+/// a plan it fails is not verified ([`super::verify::execution_failure`]), so a search chooses
+/// among the plans that are executed. `None` from the function: no run was possible (a scene
+/// that is not compiled in), and the re-integration decides alone.
+#[derive(Clone, Copy)]
+pub struct Execution(pub fn(&OcpSolution) -> Option<ExecutionCheck>);
+
+impl std::fmt::Debug for Execution {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Execution(..)")
+    }
+}
+
+impl PartialEq for Execution {
+    fn eq(&self, other: &Self) -> bool {
+        std::ptr::fn_addr_eq(self.0, other.0)
+    }
 }
 
 /// The sampling phase of the global search on a coarse mesh ([`VerifyPolicy::coarse`]): every
 /// start of the multi-start is solved on `elements` Radau elements of `points` points per
 /// phase in all, the basin hopping runs there ([`Search::explore`]), and only the `promote`
-/// best distinct optima are re-solved on the problem's own mesh, warm-started from their
-/// coarse trajectories (interpolated; [`Search::promote`]). A coarse start costs about a
-/// fifth of one on the default mesh and ends at the same objective to about 1e-4, and the
-/// good basins of `periodic-qc` are each reached by about one start in 250 (BENCHMARKS.md,
-/// "Global search on a coarse mesh"), so many cheap starts and hops find more
+/// best optima that differ in shape are re-solved on the problem's own mesh, warm-started from
+/// their coarse trajectories (interpolated; [`Search::promote_and_refine`]). A coarse start
+/// costs about a fifth of one on the default mesh and ends at the same objective to about
+/// 1e-4, and the good basins of `periodic-qc` are each reached by about one start in 250
+/// (BENCHMARKS.md, "Global search on a coarse mesh"), so many cheap starts and hops find more
 /// than a few expensive ones. Applies to multi-starts on Radau meshes of more points than the
 /// coarse one and no explicit element layout.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -122,12 +152,18 @@ pub struct CoarseSampling {
     pub elements: usize,
     /// Collocation points per phase of the coarse mesh.
     pub points: usize,
-    /// Distinct coarse optima (lowest objectives first) re-solved on the problem's mesh.
+    /// Coarse optima that differ in shape (lowest objectives first) re-solved on the problem's
+    /// mesh.
     pub promote: usize,
 }
 
+/// Promotion rounds at most ([`Search::promote_and_refine`]): while no re-solved candidate
+/// verifies, the next [`CoarseSampling::promote`] shapes are re-solved, up to this many rounds
+/// (24 shapes by default).
+pub const PROMOTE_ROUNDS: usize = 3;
+
 /// The default coarse sampling: 3 Radau elements of 4 points per phase (the default mesh has
-/// 3 of 10), the 8 best distinct optima re-solved on the problem's mesh.
+/// 3 of 10), the 8 best optima that differ in shape re-solved on the problem's mesh.
 pub const DEFAULT_COARSE: CoarseSampling = CoarseSampling {
     elements: 3,
     points: 12,
@@ -138,12 +174,13 @@ pub const DEFAULT_COARSE: CoarseSampling = CoarseSampling {
 pub const PROMOTE_LABEL: &str = "full mesh";
 
 /// The reshaping and basin hopping of the global search ([`VerifyPolicy::global`], `optimize
-/// --hops N` with the budget N), on the coarse mesh of the sampling: up to 6 rounds of every
-/// reshaping move from the 4 best distinct shapes ([`super::reshape::MOVES`]), then rounds of
-/// four hops (durations scaled by up to e^±0.3 each, and the period by up to e^±0.3; every
-/// other round e^±0.8, [`WIDE_HOPS`]), at most 64, stopping once the best optimum was reached
-/// three times and 24 hops in a row brought nothing better; then up to two polishing rounds (a
-/// re-solve and three hops of e^±0.05).
+/// --hops N` with the budget N), on the coarse mesh of the sampling: 4 rounds of every
+/// reshaping move from the 4 best distinct shapes not moved before ([`super::reshape::MOVES`];
+/// 6 rounds took the default `periodic-qc` search to 29–33 s, decision record 0047), then
+/// rounds of four hops (durations scaled by up to e^±0.3 each, and the period by up to
+/// e^±0.3; every other round e^±0.8, [`WIDE_HOPS`]), at most 64, stopping once the best
+/// optimum was reached three times and 24 hops in a row brought nothing better; then up to two
+/// polishing rounds (a re-solve and three hops of e^±0.05).
 /// A patience of 8 stopped `periodic-qc` seed 1 at J 0.1176, one hop short of the 0.0769
 /// basin next to it (BENCHMARKS.md, "Global search on a coarse mesh"); a coarse hop costs about
 /// 0.1 s.
@@ -159,7 +196,7 @@ pub const DEFAULT_HOPS: HopSettings = HopSettings {
     polish_rounds: 2,
     seed: 0,
     reshape_width: 4,
-    reshape_rounds: 6,
+    reshape_rounds: 4,
 };
 
 /// Size of the wide hops of every other round relative to the small ones
@@ -227,6 +264,7 @@ impl Default for VerifyPolicy {
             stick_continuation: Some(STICK_CONTINUATION),
             hops: None,
             coarse: None,
+            execution: None,
         }
     }
 }
@@ -372,11 +410,28 @@ pub fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
         .collect()
 }
 
-/// Re-integrates the candidate's solution ([`verify`]) and stores the result in it.
-fn attach_verification(c: &mut Candidate, rtol: f64) {
-    if let Some(p) = &c.problem {
-        c.solution.verification = verify(p, &c.solution, rtol).ok();
+/// Re-integrates the candidate's solution ([`verify`]) at the policy's tolerance and stores
+/// the result in it; a candidate that verifies is then executed in closed loop where the
+/// policy asks for it ([`VerifyPolicy::execution`]), and its verdict includes the run.
+fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy) {
+    let Some(p) = &c.problem else { return };
+    let mut v = verify(p, &c.solution, policy.rtol).ok();
+    if let (Some(v), Some(Execution(run))) = (v.as_mut(), policy.execution)
+        && v.verified
+    {
+        v.execution = run(&c.solution);
+        v.verified = passes(v);
     }
+    c.solution.verification = v;
+}
+
+/// Whether `sol` was executed in closed loop and failed ([`super::verify::execution_failure`]):
+/// a refinement changes the collocation's accuracy, not what the plan does, so it is not
+/// refined.
+fn execution_failed(sol: &OcpSolution) -> bool {
+    sol.verification
+        .as_ref()
+        .is_some_and(|v| execution_failure(v).is_some())
 }
 
 /// hp-refines an unverified candidate (Radau only) until it is verified or the policy's
@@ -404,7 +459,7 @@ fn refine_until_verified(
         .and_then(path_only_excess);
     let mut defects = DefectProgress::new(cur.solution.verification.as_ref().map(|v| v.max_defect));
     for _ in 0..policy.refine_attempts {
-        if is_verified(&cur.solution) || !wanted() {
+        if is_verified(&cur.solution) || execution_failed(&cur.solution) || !wanted() {
             break;
         }
         let Some(p) = cur.problem.as_ref() else { break };
@@ -434,7 +489,7 @@ fn refine_until_verified(
                     problem: Some(b),
                     solution: sol,
                 };
-                attach_verification(&mut next, policy.rtol);
+                attach_verification(&mut next, policy);
                 let v = next.solution.verification.as_ref();
                 let defect = v.map_or(f64::NAN, |v| v.max_defect);
                 let excess = v.map_or(f64::NAN, path_excess);
@@ -703,10 +758,16 @@ pub fn search(
     if shard == Shard::WHOLE {
         found.explore(problem, settings, policy, progress);
     }
-    if let Some((c, _)) = coarse {
-        found.promote(problem, settings, policy, c.promote, progress);
+    found.promote_and_refine(
+        problem,
+        settings,
+        policy,
+        coarse.map(|(c, _)| c.promote),
+        progress,
+    );
+    if shard == Shard::WHOLE {
+        found.fall_back_to_the_starts(problem, settings, policy, progress)?;
     }
-    found.refine_candidates(problem, settings, policy);
     found.seconds = t0.elapsed().as_secs_f64();
     Ok(found)
 }
@@ -746,6 +807,10 @@ fn hold_the_period(chains: &mut [Chain]) {
         chain.push((RELEASE_PERIOD_LABEL.to_string(), released));
     }
 }
+
+/// Stage label prefix of the starts of a global search's fallback
+/// ([`Search::fall_back_to_the_starts`]).
+pub const FALLBACK_LABEL: &str = "fallback";
 
 /// Stage label of the release of a start held to a short period (`hold_the_period`).
 pub const RELEASE_PERIOD_LABEL: &str = "release the period";
@@ -822,7 +887,7 @@ impl OcpLandscape<'_> {
         };
         self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
         if self.policy.rtol > 0.0 && self.verify_samples {
-            attach_verification(&mut c, self.policy.rtol);
+            attach_verification(&mut c, self.policy);
         }
         Some(c)
     }
@@ -880,7 +945,7 @@ impl OcpLandscape<'_> {
             vec![record(from.index, label, &c.solution, t0)],
         );
         if self.policy.rtol > 0.0 {
-            attach_verification(&mut c, self.policy.rtol);
+            attach_verification(&mut c, self.policy);
         }
         Some(c)
     }
@@ -938,7 +1003,7 @@ impl Landscape for OcpLandscape<'_> {
             solution: s,
         };
         if self.policy.rtol > 0.0 && self.verify_samples {
-            attach_verification(&mut c, self.policy.rtol);
+            attach_verification(&mut c, self.policy);
         }
         Some(c)
     }
@@ -1093,17 +1158,27 @@ pub(crate) fn same_shape(a: &OcpSolution, b: &OcpSolution) -> bool {
 }
 
 impl Search {
-    /// The `promote` best distinct candidates (successful, lowest objective, then lowest
-    /// index) re-solved on the problem's own mesh from their coarse trajectories, in
-    /// parallel; they replace the candidates ([`CoarseSampling`]).
-    pub fn promote(
+    /// The promotion and refinement of a coarse sampling ([`CoarseSampling`]): the `promote`
+    /// best candidates that differ in shape (`same_shape`; successful, lowest objective, then
+    /// lowest index) re-solved on the problem's own mesh from their coarse trajectories, in
+    /// parallel, then refined ([`Search::refine_candidates`]); while none of the re-solved
+    /// candidates verifies, the next `promote` shapes down the ranking, for at most
+    /// [`PROMOTE_ROUNDS`] rounds (a plan for the plant whose best shapes the controller does not
+    /// execute, decision record 0048). The re-solved candidates replace the coarse ones.
+    /// `promote` = `None`: the candidates are on the problem's mesh already and are only
+    /// refined.
+    pub fn promote_and_refine(
         &mut self,
         problem: Problem,
         settings: &ProblemSettings,
         policy: &VerifyPolicy,
-        promote: usize,
+        promote: Option<usize>,
         progress: Progress<'_>,
     ) {
+        let Some(promote) = promote.filter(|&n| n > 0) else {
+            self.refine_candidates(problem, settings, policy);
+            return;
+        };
         let land = OcpLandscape {
             problem,
             settings,
@@ -1113,18 +1188,97 @@ impl Search {
             progress,
             records: Mutex::new(Vec::new()),
         };
-        let mut order: Vec<&Candidate> = self
-            .candidates
-            .iter()
-            .filter(|c| solved(&c.solution))
-            .collect();
+        let coarse = std::mem::take(&mut self.candidates);
+        let mut order: Vec<&Candidate> = coarse.iter().filter(|c| solved(&c.solution)).collect();
         order.sort_by(|a, b| lowest_first(a, b));
-        order.truncate(promote);
-        let mut done: Vec<Candidate> = order.par_iter().filter_map(|c| land.promote(c)).collect();
-        self.records.extend(land.take_records());
-        done = representatives(done);
-        done.sort_by_key(|c| c.index);
-        self.candidates = done;
+        // One candidate per shape: coarse optima that differ only in the last digits of solves
+        // that met the acceptable tolerances are one basin, which re-solves to one optimum on
+        // the problem's mesh (decision record 0047).
+        let mut shapes: Vec<&Candidate> = Vec::new();
+        for c in order {
+            if !shapes.iter().any(|s| same_shape(&s.solution, &c.solution)) {
+                shapes.push(c);
+            }
+        }
+        let mut kept: Vec<Candidate> = Vec::new();
+        for batch in shapes.chunks(promote).take(PROMOTE_ROUNDS) {
+            let mut done: Vec<Candidate> =
+                batch.par_iter().filter_map(|c| land.promote(c)).collect();
+            self.records.extend(land.take_records());
+            done = representatives(done);
+            done.sort_by_key(|c| c.index);
+            // Each round refines its own candidates only: an earlier round's were refined
+            // already, and none of them verified.
+            self.candidates = done;
+            self.refine_candidates(problem, settings, policy);
+            kept.append(&mut self.candidates);
+            if kept.iter().any(|c| is_verified(&c.solution)) || policy.rtol <= 0.0 {
+                break;
+            }
+        }
+        kept = representatives(kept);
+        kept.sort_by_key(|c| c.index);
+        self.candidates = kept;
+    }
+
+    /// The strategy checkpoint of a global search ([`VerifyPolicy::hops`]) that ends without a
+    /// verified candidate: the [`super::strategy::DEFAULT_STARTS`] starts of the same seed on
+    /// the problem's own mesh (the search of `optimize --hops 0`), verified and refined the
+    /// same way, whose candidates join this search's (their chains numbered after its own).
+    /// The coarse ranking can place every shape of a family that does not verify above the
+    /// ones that do: on the plans for the plant of `periodic-cot-human`, seeds 4 and 5 promoted
+    /// 24 shapes of the lower plans that the controller does not execute, while the starts on
+    /// the problem's mesh verify J = 0.0674642 (decision record 0048). Nothing happens when a
+    /// candidate verifies, without verification (`rtol` 0), and for searches that are not
+    /// global; `optimize merge` calls it as the unsharded run does.
+    pub fn fall_back_to_the_starts(
+        &mut self,
+        problem: Problem,
+        settings: &ProblemSettings,
+        policy: &VerifyPolicy,
+        progress: Progress<'_>,
+    ) -> Result<(), PipelineError> {
+        let Strategy::Multistart { seed, .. } = self.strategy else {
+            return Ok(());
+        };
+        if policy.hops.is_none()
+            || policy.rtol <= 0.0
+            || self.candidates.iter().any(|c| is_verified(&c.solution))
+        {
+            return Ok(());
+        }
+        let plain = VerifyPolicy {
+            hops: None,
+            coarse: None,
+            ..*policy
+        };
+        let starts = Strategy::Multistart {
+            starts: super::strategy::DEFAULT_STARTS,
+            seed,
+        };
+        let found = search(problem, settings, starts, Shard::WHOLE, &plain, progress)?;
+        let offset = self
+            .records
+            .iter()
+            .map(|r| r.chain + 1)
+            .chain(self.candidates.iter().map(|c| c.index + 1))
+            .max()
+            .unwrap_or(0);
+        let renumber = |mut r: StageRecord| {
+            r.chain += offset;
+            r.stage = format!("{FALLBACK_LABEL}: {}", r.stage);
+            r
+        };
+        self.records.extend(found.records.into_iter().map(renumber));
+        self.refinements
+            .extend(found.refinements.into_iter().map(renumber));
+        self.candidates
+            .extend(found.candidates.into_iter().map(|mut c| {
+                c.index += offset;
+                c
+            }));
+        self.candidates.sort_by_key(|c| c.index);
+        Ok(())
     }
 
     /// hp-refines the unverified candidates that beat the best verified one, lowest objective
@@ -1150,7 +1304,8 @@ impl Search {
         let mut todo: Vec<usize> = (0..cands.len())
             .filter(|&i| {
                 let s = &cands[i].solution;
-                class(s) == 1 && s.objective < best_verified
+                // A plan the controller did not execute stays what it is on a finer mesh.
+                class(s) == 1 && s.objective < best_verified && !execution_failed(s)
             })
             .collect();
         todo.sort_by(|&a, &b| lowest_first(&cands[a], &cands[b]));

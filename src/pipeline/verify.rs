@@ -751,12 +751,31 @@ pub fn is_verified(sol: &OcpSolution) -> bool {
 }
 
 /// The verdict of a verification record: completed, defect ≤ [`VERIFIED_DEFECT`], path
-/// checks within their allowances.
-fn passes(v: &Verification) -> bool {
+/// checks within their allowances and, where one ran, the plan executed in closed loop
+/// ([`execution_failure`]).
+pub fn passes(v: &Verification) -> bool {
     v.completed()
         && v.max_defect.is_finite()
         && v.max_defect <= VERIFIED_DEFECT
-        && path_failure(v).is_none()
+        && verdict_failure(v).is_none()
+}
+
+/// Why `v` fails its verdict other than by its defects: the first path check outside its
+/// allowance ([`path_failure`]), else a closed-loop execution that failed
+/// ([`execution_failure`]).
+pub fn verdict_failure(v: &Verification) -> Option<String> {
+    path_failure(v).or_else(|| execution_failure(v))
+}
+
+/// The failure of `v`'s closed-loop execution ([`Verification::execution`]), as a sentence
+/// naming the controller and the error, if one ran and failed.
+pub fn execution_failure(v: &Verification) -> Option<String> {
+    let e = v.execution.as_ref()?;
+    let why = e.failure.as_ref()?;
+    Some(format!(
+        "executed in closed loop ({} controller, Newton's impact law): {why}",
+        e.controller
+    ))
 }
 
 /// The first path check of `v` outside its allowance, as a sentence naming the phase, the
@@ -1103,6 +1122,7 @@ pub fn verify_with(
         mu_s: p.physics.mu_s,
         phases,
         seconds: start.elapsed().as_secs_f64(),
+        execution: None,
     };
     v.verified = passes(&v);
     Ok(v)

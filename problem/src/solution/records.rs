@@ -391,6 +391,43 @@ pub struct Verification {
     /// a solution that is not verified is flagged wherever it is shown.
     #[serde(default)]
     pub verified: bool,
+    /// The closed-loop execution of a plan for the plant (Newton's impact law), when the
+    /// search that made it ran one ([`ExecutionCheck`]); absent for the paper's problems and in
+    /// older files. A plan that the controller does not execute is not verified.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub execution: Option<ExecutionCheck>,
+}
+
+/// A plan run in closed loop: the hybrid controller (computed torque in free flight, hybrid
+/// force/velocity control in contact, torques within the scene's bounds) on the hybrid model,
+/// from the plan's first state, on the nominal plant of its own scene with Newton's impact
+/// law and on the perturbed plants of `track --robustness`. A plan whose collocation and
+/// re-integration agree can still be one that no controller follows (a release that grazes
+/// the ball falls back onto it and chatters) or one that only the exact model lets it follow,
+/// and only the execution shows it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExecutionCheck {
+    /// The controller (`track --controller`).
+    pub controller: String,
+    /// Periods run on the nominal plant.
+    pub periods: usize,
+    /// Largest relative error of a period's mean ball spin ‖ω̄_k − ω̄*‖ / ‖ω̄*‖ on the nominal
+    /// plant over the periods completed (NaN when none completed).
+    #[serde(with = "nan_null")]
+    pub max_omega_error: f64,
+    /// Largest `max_omega_error` that passes.
+    pub tolerance: f64,
+    /// Periods run on each perturbed plant (0: not run, the nominal run failed).
+    pub robustness_periods: usize,
+    /// Largest error from the 4th period on over the perturbed plants (NaN: not run, or a
+    /// plant that completed fewer than four periods).
+    #[serde(with = "nan_null")]
+    pub robustness_error: f64,
+    /// Largest `robustness_error` that passes.
+    pub robustness_tolerance: f64,
+    /// Why the plan is not executed (an error beyond its tolerance, with the plant named; a
+    /// lost ball; a simulation that failed); `None`: executed.
+    pub failure: Option<String>,
 }
 
 impl Verification {
@@ -516,7 +553,27 @@ impl fmt::Display for Verification {
             "max element-wise defect: {:.3e} (informative: collocation intervals {:.3e}, \
              open-loop drift {:.3e})",
             self.max_defect, self.max_interval_defect, self.max_open_loop_defect
-        )
+        )?;
+        if let Some(e) = &self.execution {
+            write!(
+                f,
+                "\nclosed loop ({} controller, Newton's impact law): nominal plant max omega \
+                 error {:.3} % over {} periods (tolerance {} %); perturbed plants {:.3} % from \
+                 the 4th of {} periods (tolerance {} %){}",
+                e.controller,
+                100.0 * e.max_omega_error,
+                e.periods,
+                100.0 * e.tolerance,
+                100.0 * e.robustness_error,
+                e.robustness_periods,
+                100.0 * e.robustness_tolerance,
+                match &e.failure {
+                    Some(why) => format!(": FAILED, {why}"),
+                    None => String::new(),
+                }
+            )?;
+        }
+        Ok(())
     }
 }
 

@@ -16,12 +16,12 @@
 
 use crate::cli::{OptimizeArgs, OptimizeCommand};
 use crate::pipeline::SolutionIo;
-use crate::pipeline::search::VerifyPolicy;
+use crate::pipeline::search::{Execution, VerifyPolicy};
 use crate::pipeline::strategy::{
     self, DEFAULT_SEED, DEFAULT_STARTS, GLOBAL_STARTS, Shard, Strategy,
 };
 use crate::pipeline::verify::{
-    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, path_failure, verify,
+    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verdict_failure, verify,
 };
 use anyhow::{Context, Result, anyhow, bail};
 use bf_optim::ipm::Status;
@@ -246,6 +246,15 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     }))
 }
 
+/// The closed-loop check of a search's candidates ([`VerifyPolicy::execution`]) for the
+/// plans meant for `track`'s plant: a periodic problem planned with Newton's impact law is
+/// verified only if the hybrid controller executes it on its nominal plant
+/// (docs/decisions/0048-plans-verified-in-closed-loop.md); `None` for every other problem.
+pub fn execution_for(problem: Problem, settings: &ProblemSettings) -> Option<Execution> {
+    (problem.is_periodic() && settings.impact_law == PlannedImpact::Newton)
+        .then_some(Execution(crate::paper::closed_loop::execution_check))
+}
+
 /// The torque margin of a plan meant for `track`'s Newton plant: the share of every joint's
 /// limit left to feedback, with which both default periodic problems' plans meet `track`'s
 /// nominal and robustness targets (docs/decisions/0040-touch-check-and-the-default-plan.md).
@@ -446,7 +455,7 @@ pub fn failure_of(sol: &OcpSolution) -> Option<String> {
         ));
     }
     match &sol.verification {
-        Some(v) if !is_verified(sol) => Some(match path_failure(v) {
+        Some(v) if !is_verified(sol) => Some(match verdict_failure(v) {
             Some(path) if v.passes(VERIFIED_DEFECT) => {
                 format!("the solution is unverified: {path}")
             }
@@ -610,7 +619,7 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
             if is_verified(sol) { "yes" } else { "NO" },
             v.max_defect,
             VERIFIED_DEFECT,
-            path_failure(v)
+            verdict_failure(v)
                 .map(|p| format!("; {p}"))
                 .unwrap_or_default()
         )?;
@@ -737,6 +746,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         refine_attempts: args
             .verify_refinements
             .unwrap_or(crate::pipeline::search::VERIFY_REFINEMENTS),
+        execution: execution_for(name, &settings),
         ..VerifyPolicy::default()
     };
     let policy = match hops {

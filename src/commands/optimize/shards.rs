@@ -319,6 +319,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         .unwrap_or(0.0);
     let policy = VerifyPolicy {
         rtol,
+        execution: super::execution_for(name, &settings),
         ..VerifyPolicy::default()
     };
     // As `optimize`: without `--hops` the global search runs for the periodic problems only.
@@ -330,15 +331,14 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     found.candidates = search::representatives(std::mem::take(&mut found.candidates));
     found.candidates.sort_by_key(|c| c.index);
     found.explore(name, &settings, &policy, None);
-    if let Some(c) = policy.coarse
-        && found
+    let promote = policy.coarse.map(|c| c.promote).filter(|_| {
+        found
             .candidates
             .iter()
             .any(|c| c.solution.points < settings.points)
-    {
-        found.promote(name, &settings, &policy, c.promote, None);
-    }
-    found.refine_candidates(name, &settings, &policy);
+    });
+    found.promote_and_refine(name, &settings, &policy, promote, None);
+    found.fall_back_to_the_starts(name, &settings, &policy, None)?;
     found.seconds = seconds + t0.elapsed().as_secs_f64();
     let (scene_toml, scene_params) = found
         .candidates
