@@ -745,7 +745,7 @@ fn every_seed_reaches_the_best_known_cot_human_optimum() {
 /// the check but one promotion round seed 2 ended unverified (its 8 best shapes all
 /// failed it). BENCHMARKS.md ("Plans verified in closed loop") records each seed.
 #[test]
-#[ignore = "about 6 min on 2 idle cores (ten searches); run with `cargo test --release \
+#[ignore = "about 8 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_verifies_an_executed_human_plan -- --ignored`"]
 fn every_seed_verifies_an_executed_human_plan() {
     every_seed_verifies_at_most_with(

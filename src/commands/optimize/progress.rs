@@ -21,7 +21,8 @@ pub fn iteration_spinner(label: &str) -> ProgressBar {
 }
 
 /// Solve with `strategy` behind a progress spinner that shows each finished stage; every end
-/// point is re-integrated, a verified one is preferred and an unverified optimum that beats
+/// point is re-integrated (and a plan for the plant run in closed loop, [`super::execution_for`]),
+/// a verified one is preferred and an unverified optimum that beats
 /// the best verified one is hp-refined until it verifies ([`search_with_progress`] without the
 /// global search, as `optimize --hops 0`); what still fails is flagged in the tables.
 pub fn solve_with_progress(
@@ -29,7 +30,11 @@ pub fn solve_with_progress(
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    best_found(name, settings, strategy, &VerifyPolicy::default())
+    let policy = VerifyPolicy {
+        execution: super::execution_for(name, &settings),
+        ..VerifyPolicy::default()
+    };
+    best_found(name, settings, strategy, &policy)
 }
 
 /// [`solve_with_progress`] with `optimize`'s default global search (coarse sampling,
@@ -41,7 +46,11 @@ pub fn solve_globally_with_progress(
     settings: ProblemSettings,
     strategy: Strategy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
-    let policy = VerifyPolicy::default().global(search::DEFAULT_HOPS);
+    let policy = VerifyPolicy {
+        execution: super::execution_for(name, &settings),
+        ..VerifyPolicy::default()
+    }
+    .global(search::DEFAULT_HOPS);
     best_found(name, settings, strategy, &policy)
 }
 
