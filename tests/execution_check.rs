@@ -11,7 +11,7 @@
 
 use std::path::{Path, PathBuf};
 
-use ball_finger::paper::closed_loop::{EXECUTION_PERIODS, EXECUTION_TOLERANCE, execution_check};
+use ball_finger::paper::closed_loop::{EXECUTION_TOLERANCE, execution_check};
 use ball_finger::pipeline::verify::{execution_failure, is_verified, verdict_failure};
 use ball_finger::pipeline::{OcpSolution, SolutionIo};
 
@@ -37,8 +37,8 @@ fn the_grazing_human_plan_verifies_by_its_reintegration_but_fails_the_closed_loo
     );
 
     let check = execution_check(&sol).expect("the human scene is compiled in");
-    assert_eq!(check.periods, EXECUTION_PERIODS);
-    assert_eq!(check.tolerance, EXECUTION_TOLERANCE);
+    // It fails on the nominal plant already, so the perturbed plants are not run.
+    assert_eq!(check.robustness_periods, 0);
     assert!(
         check.max_omega_error > 10.0 * EXECUTION_TOLERANCE,
         "max error {}",

@@ -9,6 +9,7 @@
 use super::openloop::{
     DEFAULT_PD_TRACK, initial_state, periodic_torques, simulate_optimum, tracking_input,
 };
+use crate::pipeline::verify::nan_max;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::{
     HybridController, HybridGains, InverseDynamics, PeriodMetrics, Reference, period_metrics,
@@ -189,7 +190,12 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
             return Some(check);
         }
     };
-    check.max_omega_error = nan_max(t.periods.iter().map(|p| p.omega_error));
+    check.max_omega_error = t
+        .periods
+        .iter()
+        .map(|p| p.omega_error)
+        .reduce(nan_max)
+        .unwrap_or(f64::NAN);
     if let Some(lost) = &t.lost {
         check.failure = Some(format!("the nominal plant lost the ball ({lost})"));
         return Some(check);
@@ -211,10 +217,11 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
         None,
     );
     check.robustness_periods = EXECUTION_ROBUSTNESS_PERIODS;
-    check.robustness_error = nan_max(
-        rows.iter()
-            .map(|r| r.max_error_from_fourth.unwrap_or(f64::NAN)),
-    );
+    check.robustness_error = rows
+        .iter()
+        .map(|r| r.max_error_from_fourth.unwrap_or(f64::NAN))
+        .reduce(nan_max)
+        .unwrap_or(f64::NAN);
     if let Some(r) = rows.iter().find(|r| !r.meets_target) {
         check.failure = Some(match (&r.error, &r.lost, r.max_error_from_fourth) {
             (Some(e), _, _) => format!("the plant `{}` could not be run: {e}", r.plant),
@@ -233,19 +240,6 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
         });
     }
     Some(check)
-}
-
-/// The largest of `values`, NaN if any is NaN or there are none (a missing figure fails).
-fn nan_max(values: impl Iterator<Item = f64>) -> f64 {
-    values
-        .fold(None, |m: Option<f64>, e| {
-            Some(match m {
-                Some(m) if m.is_nan() || e.is_nan() => f64::NAN,
-                Some(m) => m.max(e),
-                None => e,
-            })
-        })
-        .unwrap_or(f64::NAN)
 }
 
 /// Simulation time allowed for `periods` periods of `period` s after a lead-in of at most one

@@ -24,7 +24,7 @@ use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 
 use super::build;
 use super::solve::{solve, solver_settings};
-use super::verify::element_errors;
+use super::verify::{element_errors, nan_max};
 pub use bf_problem::catalogue::warm_initial_point;
 pub use bf_problem::solution::records::{RefineCriterion, RefineReport, RefineRound};
 
@@ -111,16 +111,6 @@ pub fn current_mesh(p: &BuiltProblem) -> Result<Vec<MeshSpec>, PipelineError> {
         .collect()
 }
 
-fn max_nan(v: impl IntoIterator<Item = f64>) -> f64 {
-    v.into_iter().fold(0.0f64, |m, e| {
-        if e.is_nan() || m.is_nan() {
-            f64::NAN
-        } else {
-            m.max(e)
-        }
-    })
-}
-
 type IterCallback<'a> = Option<&'a mut dyn FnMut(&IterationInfo) -> bool>;
 
 fn reborrow<'a>(c: &'a mut IterCallback<'_>) -> IterCallback<'a> {
@@ -179,8 +169,11 @@ pub fn refine(
             RefineCriterion::Estimate => error_estimate(&p, &sol)?,
             RefineCriterion::Reintegration { rtol } => element_errors(&p, &sol, rtol)?,
         };
-        let phase_errors: Vec<f64> = errors.iter().map(|e| max_nan(e.iter().copied())).collect();
-        let max_error = max_nan(phase_errors.iter().copied());
+        let phase_errors: Vec<f64> = errors
+            .iter()
+            .map(|e| e.iter().copied().fold(0.0, nan_max))
+            .collect();
+        let max_error = phase_errors.iter().copied().fold(0.0, nan_max);
         let rec = RefineRound {
             round,
             elements: mesh.iter().map(MeshSpec::n_elements).collect(),

@@ -181,8 +181,9 @@ impl<const N: usize> HybridSystem for ElementSystem<'_, N> {
     }
 }
 
-/// max that propagates NaN (f64::max ignores it).
-fn nan_max(a: f64, b: f64) -> f64 {
+/// max that propagates NaN (`f64::max` drops it, which would hide a failed figure): the fold
+/// of every "largest error" that a NaN must fail.
+pub fn nan_max(a: f64, b: f64) -> f64 {
     if a.is_nan() || b.is_nan() {
         f64::NAN
     } else {

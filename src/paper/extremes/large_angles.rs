@@ -10,9 +10,10 @@ use std::time::Instant;
 use bf_codegen::dd::Dd;
 
 use super::graph_eval::GraphEval;
-use super::numerics::{f64_max_nan, flat3, rel_err};
+use super::numerics::{flat3, rel_err};
 use super::report::{ExtremesRow, Rows};
 use super::states::{OMEGA_PROBE, Q_DIR, QD_PROBE};
+use crate::pipeline::verify::nan_max;
 
 /// Errors of the compiled `paper` kernels at q = `q_mag` · [`Q_DIR`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -71,7 +72,7 @@ pub fn kernel_accuracy(reference: &GraphEval, q_mag: f64) -> KernelAccuracy {
             let exact = Dd::new(x) - Dd::new(kf) * two_pi;
             (exact - Dd::new(xr)).to_f64().abs()
         })
-        .fold(0.0, f64_max_nan);
+        .fold(0.0, nan_max);
     KernelAccuracy {
         q,
         m: rel_err(&m, dd.get("M")),

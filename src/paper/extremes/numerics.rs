@@ -1,6 +1,8 @@
-//! Small numerics shared by the probes: the normwise relative error every row reports, a NaN-
-//! propagating max (so a NaN can never hide behind `f64::max`), and the spectra of 3×3
-//! matrices (SPD checks of M, eq. 22a; rank of J_c, eq. 7).
+//! Small numerics shared by the probes: the normwise relative error every row reports (its
+//! maxima NaN-propagating, [`crate::pipeline::verify::nan_max`], so a NaN can never hide behind
+//! `f64::max`), and the spectra of 3×3 matrices (SPD checks of M, eq. 22a; rank of J_c, eq. 7).
+
+use crate::pipeline::verify::nan_max;
 
 use bf_model::Mat3;
 
@@ -10,18 +12,9 @@ pub fn rel_err(a: &[f64], b: &[f64]) -> f64 {
         .iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64_max_nan);
-    let den = b.iter().map(|y| y.abs()).fold(0.0, f64_max_nan);
+        .fold(0.0, nan_max);
+    let den = b.iter().map(|y| y.abs()).fold(0.0, nan_max);
     if num == 0.0 { 0.0 } else { num / den }
-}
-
-/// max that propagates NaN (f64::max drops it, which would hide failures).
-pub(super) fn f64_max_nan(a: f64, b: f64) -> f64 {
-    if a.is_nan() || b.is_nan() {
-        f64::NAN
-    } else {
-        a.max(b)
-    }
 }
 
 pub(super) fn all_finite(v: &[f64]) -> bool {

@@ -11,9 +11,10 @@ use bf_codegen::spec::{InertiaSpec, Scene};
 use bf_model::{HumanKernels, Model, State, Vec3};
 
 use super::graph_eval::{GraphEval, human_scene_spec, paper_scene_spec};
-use super::numerics::{f64_max_nan, flat3, rel_err, sym_eigenvalues};
+use super::numerics::{flat3, rel_err, sym_eigenvalues};
 use super::report::{ExtremesRow, Rows};
 use super::states::{OMEGA_PROBE, QD_PROBE};
+use crate::pipeline::verify::nan_max;
 
 /// Geometric similarity: every length × `k_len` (DH a and d, COGs, base translation, ball
 /// radius and centre), every mass × `k_mass`, every link inertia × `k_mass · k_len²`.
@@ -236,7 +237,7 @@ fn similarity_rows(paper: &GraphEval, rows: &mut Vec<ExtremesRow>) {
                     s.m_eig_ratio,
                     f64::EPSILON,
                 );
-                let law = s.law_deviation.iter().copied().fold(0.0, f64_max_nan);
+                let law = s.law_deviation.iter().copied().fold(0.0, nan_max);
                 r.num(
                     &par,
                     "max dev. from similarity laws (M, g, C q̇, h, J_c)",

@@ -9,9 +9,10 @@ use std::time::Instant;
 use bf_model::{ContactVariant, InterpretedKernels, Model, ModelError, State, Vec3};
 
 use super::graph_eval::{GraphEval, paper_scene_spec};
-use super::numerics::{all_finite, f64_max_nan, rel_err};
+use super::numerics::{all_finite, rel_err};
 use super::report::{ExtremesRow, Rows, model_err_outcome};
 use super::states::{OMEGA_PROBE, QD_PROBE, press_torque};
+use crate::pipeline::verify::nan_max;
 
 /// Smooth vs exact contact at one ε (probe 6).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,7 +54,7 @@ pub fn smooth_convergence(q: [f64; 3], eps: f64) -> SmoothError {
         alpha: c.alpha,
         sat: (s.sat_alpha - c.sat_alpha).abs(),
         h: (s.h - c.h).abs(),
-        p_c: rel_err(&s.p_c, &c.p_c) * c.p_c.iter().map(|v| v.abs()).fold(0.0, f64_max_nan),
+        p_c: rel_err(&s.p_c, &c.p_c) * c.p_c.iter().map(|v| v.abs()).fold(0.0, nan_max),
         finite,
     }
 }

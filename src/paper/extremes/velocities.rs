@@ -5,9 +5,10 @@
 use std::time::Instant;
 
 use super::graph_eval::GraphEval;
-use super::numerics::{f64_max_nan, rel_err};
+use super::numerics::rel_err;
 use super::report::{ExtremesRow, Rows};
 use super::states::QD_PROBE;
+use crate::pipeline::verify::nan_max;
 
 /// C q̇ at extreme |q̇| (probe 2).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -39,7 +40,7 @@ pub fn velocity_extremes(reference: &GraphEval, qd_mag: f64) -> VelocityExtreme 
         qd_mag,
         cqd: rel_err(&c, dd.get("Cqd")),
         homogeneity: rel_err(&c, &predicted),
-        magnitude: c.iter().map(|v| v.abs()).fold(0.0, f64_max_nan),
+        magnitude: c.iter().map(|v| v.abs()).fold(0.0, nan_max),
     }
 }
 
