@@ -87,10 +87,12 @@ pub enum Command {
     /// Exit status: 0 when the solution is Solved or Acceptable and verified (re-integration
     /// defect at most 1e-4, after hp refinement if needed, and for a plan for the plant, a
     /// periodic problem with Newton's impact law, executed by `track`'s controller on the
-    /// nominal and the perturbed plants: docs/closed-loop.md) or not re-integrated
-    /// (--verify-rtol 0); 1 when it did not converge or is unverified (the output set is still
-    /// written, marked FAILED; solution.json has `verification.verified: false` and the
-    /// defect) and for other errors; 2 for usage errors.
+    /// nominal plant; a perturbed plant of the robustness table that misses its target is
+    /// printed as "robustness: MISSED" and recorded in solution.json, and the search prefers
+    /// plans that meet it: docs/closed-loop.md) or not re-integrated (--verify-rtol 0); 1 when
+    /// it did not converge or is unverified (the output set is still written, marked FAILED;
+    /// solution.json has `verification.verified: false` and the defect) and for other errors;
+    /// 2 for usage errors.
     Optimize(OptimizeArgs),
     /// Reproduce the paper's study (Sect. 6) and write a report.
     Paper(PaperArgs),

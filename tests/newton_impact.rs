@@ -402,7 +402,10 @@ fn the_human_fingers_plan_to_execute_is_tracked_and_robust() {
         .as_ref()
         .and_then(|v| v.execution.as_ref())
         .expect("the search's closed-loop check of a Newton plan");
-    assert!(check.failure.is_none(), "{check:?}");
+    assert!(
+        check.failure.is_none() && check.robustness_failure.is_none(),
+        "{check:?}"
+    );
     meets_the_targets_bounded(&sol, 10, 6);
 }
 

@@ -163,8 +163,10 @@ pub const EXECUTION_ROBUSTNESS_PERIODS: usize = 10;
 /// then on every plant of the robustness table ([`robustness_rows`],
 /// [`EXECUTION_ROBUSTNESS_PERIODS`] periods) to its target ([`ROBUSTNESS_TARGET`] from the 4th
 /// period on, contact in every period): what `paper` asks of the plans it executes. `None`
-/// where no run is possible (the plan's scene is not compiled in, as for `track`); a run that
-/// fails or loses the ball is a failed check.
+/// where no run is possible (the plan's scene is not compiled in, as for `track`); a nominal
+/// run that fails or loses the ball is a failed check (`failure`), a perturbed plant that
+/// misses its target a robustness miss (`robustness_failure`), which grades the plan without
+/// unverifying it ([`crate::pipeline::verify::robustness_miss`]).
 pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
     let (plant, _) = solution_model(sol).ok()?;
     let mut check = ExecutionCheck {
@@ -176,6 +178,7 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
         robustness_error: f64::NAN,
         robustness_tolerance: ROBUSTNESS_TARGET,
         failure: None,
+        robustness_failure: None,
     };
     let t = match run_tracking(
         sol,
@@ -223,7 +226,7 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
         .reduce(nan_max)
         .unwrap_or(f64::NAN);
     if let Some(r) = rows.iter().find(|r| !r.meets_target) {
-        check.failure = Some(match (&r.error, &r.lost, r.max_error_from_fourth) {
+        check.robustness_failure = Some(match (&r.error, &r.lost, r.max_error_from_fourth) {
             (Some(e), _, _) => format!("the plant `{}` could not be run: {e}", r.plant),
             (_, Some(lost), _) => format!("the plant `{}` lost the ball ({lost})", r.plant),
             (_, _, Some(e)) if r.contact_every_period => format!(

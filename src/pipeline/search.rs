@@ -19,8 +19,9 @@
 //! 3. Global search only: promotion ([`Search::promote_and_refine`]), the best optima that
 //!    differ in shape re-solved on the problem's mesh from their coarse trajectories, each
 //!    re-integrated (and, for a plan for the plant, executed in closed loop:
-//!    [`VerifyPolicy::execution`]), and refined as in step 4; while none verifies, the next
-//!    shapes down the ranking ([`PROMOTE_ROUNDS`]).
+//!    [`VerifyPolicy::execution`]), and refined as in step 4; while none verifies (for a plan,
+//!    executed and robust), the next shapes down the ranking ([`PROMOTE_ROUNDS`]), then the
+//!    fallback ([`Search::fall_back_to_the_starts`]).
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
 //!    first, one after the other until no candidate below half the best verified objective
 //!    is left, `refine_in_order`, which refines as many side by side as there are threads
@@ -29,7 +30,9 @@
 //!    ([`VerifyPolicy`], [`Search::refine_candidates`]); a candidate whose defects verify but
 //!    whose path leaves the friction cone or penetrates the ball only while the refinements
 //!    bring it closer to its allowance (`path_stalled`).
-//! 5. The choice [`select`]: verified first, then the lowest objective, then the lowest index.
+//! 5. The choice [`select`]: verified and robust first (a plan for the plant whose perturbed
+//!    plants miss the robustness target comes after those that meet it, before the
+//!    unverified), then the lowest objective, then the lowest index.
 //!
 //! Results are collected in index order and every choice depends on values only, so the
 //! result is bitwise the same with any number of threads; a [`Shard`] runs every m-th start
@@ -57,7 +60,9 @@ use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
     prepare_chains, record, run_chain,
 };
-use super::verify::{VERIFIED_DEFECT, execution_failure, is_verified, passes, path_excess, verify};
+use super::verify::{
+    VERIFIED_DEFECT, execution_failure, is_robust, is_verified, passes, path_excess, verify,
+};
 
 /// Relative objective difference within which two end points are one local optimum.
 pub const CLUSTER_RTOL: f64 = 1e-6;
@@ -117,10 +122,13 @@ pub struct VerifyPolicy {
 
 /// A closed-loop run of a candidate whose re-integration verified, supplied by the layer that
 /// owns the controller (`paper::closed_loop`): its record joins the candidate's verification
-/// ([`Verification::execution`](bf_problem::solution::records::Verification::execution)), and
-/// a plan it fails is not verified ([`super::verify::execution_failure`]), so a search chooses
-/// among the plans that are executed. `None` from the function: no run was possible (a scene
-/// that is not compiled in), and the re-integration decides alone.
+/// ([`Verification::execution`](bf_problem::solution::records::Verification::execution)): a
+/// plan that the nominal plant does not execute is not verified
+/// ([`super::verify::execution_failure`]), one that misses the robustness target on a
+/// perturbed plant is verified but ranked below every plan that meets it
+/// ([`super::verify::robustness_miss`]), so a search chooses among the executed plans and
+/// prefers robust ones. `None` from the function: no run was possible (a scene that is not
+/// compiled in), and the re-integration decides alone.
 #[derive(Clone, Copy)]
 pub struct Execution(pub fn(&OcpSolution) -> Option<ExecutionCheck>);
 
@@ -306,22 +314,33 @@ pub struct Search {
     pub basin_hits: Option<usize>,
 }
 
-/// Rank class of a solution: 0 verified, 1 successful but not verified, 2 failed.
+/// Rank class of a solution: 0 verified and, where its plan was run on the perturbed
+/// plants, robust ([`is_robust`]); 1 verified, but a perturbed plant missed the robustness
+/// target ([`super::verify::robustness_miss`]); 2 successful but not verified; 3 failed.
 fn class(sol: &OcpSolution) -> u8 {
     if !sol.status.is_success() || !sol.objective.is_finite() {
-        2
-    } else if is_verified(sol) {
+        3
+    } else if is_robust(sol) {
         0
-    } else {
+    } else if is_verified(sol) {
         1
+    } else {
+        2
     }
 }
+
+/// Rank class of a verified solution that meets every check, the robustness target included:
+/// the search's goal, whose absence sends it on to further shapes and to the fallback.
+const SETTLED: u8 = 0;
+
+/// Rank class of a successful, unverified solution: the one that refinement may verify.
+const UNVERIFIED: u8 = 2;
 
 /// Whether the solve succeeded with a finite objective: the exploration ranks the problem's
 /// own landscape on its mesh and leaves the verification to the refinement that follows it
 /// ([`Search::refine_candidates`]).
 fn solved(sol: &OcpSolution) -> bool {
-    class(sol) < 2
+    class(sol) <= UNVERIFIED
 }
 
 /// The order in which candidates are promoted and refined: lowest objective first, ties by
@@ -341,7 +360,8 @@ pub(crate) fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
 }
 
 /// The candidate a search returns (its position in `cands`, given as (start index,
-/// solution)): the best class (verified, then successful, then failed), in it the lowest
+/// solution)): the best class (verified and robust, verified, successful, failed: `class`),
+/// in it the lowest
 /// objective, and among the end points within [`CLUSTER_RTOL`] of that objective (one optimum,
 /// reached from several starts) the lowest start index. The rule depends on the set only, not
 /// on its order, so shards merged give the unsharded choice.
@@ -1212,7 +1232,7 @@ impl Search {
             self.candidates = done;
             self.refine_candidates(problem, settings, policy);
             kept.append(&mut self.candidates);
-            if kept.iter().any(|c| is_verified(&c.solution)) || policy.rtol <= 0.0 {
+            if kept.iter().any(|c| class(&c.solution) == SETTLED) || policy.rtol <= 0.0 {
                 break;
             }
         }
@@ -1243,7 +1263,10 @@ impl Search {
         };
         if policy.hops.is_none()
             || policy.rtol <= 0.0
-            || self.candidates.iter().any(|c| is_verified(&c.solution))
+            || self
+                .candidates
+                .iter()
+                .any(|c| class(&c.solution) == SETTLED)
         {
             return Ok(());
         }
@@ -1298,14 +1321,14 @@ impl Search {
         let cands = &mut self.candidates;
         let best_verified = cands
             .iter()
-            .filter(|c| class(&c.solution) == 0)
+            .filter(|c| class(&c.solution) == SETTLED)
             .map(|c| c.solution.objective)
             .fold(f64::INFINITY, f64::min);
         let mut todo: Vec<usize> = (0..cands.len())
             .filter(|&i| {
                 let s = &cands[i].solution;
                 // A plan the controller did not execute stays what it is on a finer mesh.
-                class(s) == 1 && s.objective < best_verified && !execution_failed(s)
+                class(s) == UNVERIFIED && s.objective < best_verified && !execution_failed(s)
             })
             .collect();
         todo.sort_by(|&a, &b| lowest_first(&cands[a], &cands[b]));
@@ -1315,7 +1338,7 @@ impl Search {
             rayon::current_num_threads(),
             |&i| cands[i].solution.objective,
             |&i, wanted| refine_until_verified(problem, settings, cands[i].clone(), policy, wanted),
-            |(c, _)| is_verified(&c.solution).then_some(c.solution.objective),
+            |(c, _)| (class(&c.solution) == SETTLED).then_some(c.solution.objective),
         );
         for (i, (c, recs)) in refined {
             cands[i] = c;

@@ -425,9 +425,15 @@ pub struct ExecutionCheck {
     pub robustness_error: f64,
     /// Largest `robustness_error` that passes.
     pub robustness_tolerance: f64,
-    /// Why the plan is not executed (an error beyond its tolerance, with the plant named; a
+    /// Why the plan is not executed on the nominal plant (an error beyond its tolerance; a
     /// lost ball; a simulation that failed); `None`: executed.
     pub failure: Option<String>,
+    /// Why a perturbed plant misses the robustness target (the plant named), where the
+    /// perturbed plants ran; `None`: every one met it, or they did not run. A miss grades the
+    /// plan below the plans that meet the target but does not unverify it: it measures the
+    /// controller's margin against model error, not whether the plan is executed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robustness_failure: Option<String>,
 }
 
 impl Verification {
@@ -576,6 +582,8 @@ impl fmt::Display for Verification {
             }
             if let Some(why) = &e.failure {
                 write!(f, ": FAILED, {why}")?;
+            } else if let Some(why) = &e.robustness_failure {
+                write!(f, ": executed; robustness target MISSED, {why}")?;
             }
         }
         Ok(())

@@ -21,7 +21,7 @@ use crate::pipeline::strategy::{
     self, DEFAULT_SEED, DEFAULT_STARTS, GLOBAL_STARTS, Shard, Strategy,
 };
 use crate::pipeline::verify::{
-    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, verdict_failure, verify,
+    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, robustness_miss, verdict_failure, verify,
 };
 use anyhow::{Context, Result, anyhow, bail};
 use bf_optim::ipm::Status;
@@ -623,6 +623,13 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
                 .map(|p| format!("; {p}"))
                 .unwrap_or_default()
         )?;
+        if let Some(miss) = robustness_miss(v).filter(|_| is_verified(sol)) {
+            crate::outln!(
+                "robustness: MISSED {miss}: the plan is executed on the plant it was planned \
+                 for, but the controller does not hold it to the target under that model \
+                 error (docs/closed-loop.md)"
+            )?;
+        }
     }
     Ok(())
 }
