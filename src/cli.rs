@@ -352,7 +352,9 @@ pub struct TrackArgs {
     #[arg(long, default_value_t = 10, value_parser = whole)]
     pub periods: usize,
     /// Scene file of the plant [default: the solution's own scene]; the controller always uses
-    /// the solution's scene, so a second file tests model error.
+    /// the solution's scene, so a second file tests model error. A copy of a compiled scene
+    /// that changes only the ball's mass or inertia, friction or damping runs on the compiled
+    /// kernels, any other change on the interpreter (the same numbers, slower).
     #[arg(long)]
     pub plant_scene: Option<PathBuf>,
     /// A URDF plant scene's serial chain (`--base LINK --tip LINK`).

@@ -11,6 +11,9 @@
 //!   node-kernel lists) and the values of the compiled scene's runtime parameters, which become
 //!   the parameter vector `p`. A scene named like a compiled one with any other difference
 //!   (a link length, a mass, the ball) does not match.
+//! - [`compiled_kernels_match`]: the same, also ignoring the physical parameters the model
+//!   applies outside its kernels (ball mass and inertia, friction, damping), for a model that
+//!   takes them from the scene (a perturbed plant: `fixtures::model_with_scene_params`).
 //! - [`contact_kernels_n`]: a boxed [`Kernels<N>`] for a scene with `N` joints, a ball and a
 //!   contact (any N: the compiled registry emits the contact kernels of every scene with a
 //!   ball, and the interpreter needs no build), and the [`KernelSource`] it runs on;
@@ -95,9 +98,44 @@ fn kernel_relevant(scene: &Scene) -> Scene {
     s
 }
 
+/// [`kernel_relevant`] without what the model applies outside its kernels ([`Params`]): the
+/// ball's mass and inertia, and the friction and damping constants. The kernels read the
+/// finger, the gravity and the contact geometry (the ball's radius and centre) only.
+fn kernel_inputs(scene: &Scene) -> Scene {
+    let mut s = kernel_relevant(scene);
+    if let Some(b) = &mut s.ball {
+        b.mass = 0.0;
+        b.inertia = None;
+        b.nonphysical_inertia = None;
+    }
+    s.friction = None;
+    s
+}
+
 /// The compiled scene `scene` is equal to (see the module docs) and the parameter vector `p`
 /// (the scene's values of the compiled scene's runtime parameters, in `PARAM_NAMES` order).
 pub fn compiled_match(scene: &Scene) -> Option<(&'static bf_generated::SceneKernels, Vec<f64>)> {
+    match_by(scene, kernel_relevant)
+}
+
+/// The compiled scene whose kernels compute `scene`'s kernel functions, and the parameter
+/// vector `p` as for [`compiled_match`]: the scene may also differ from it in the physical
+/// parameters that the model applies outside its kernels (the ball's mass and inertia,
+/// friction and damping), which a model on these kernels must then take from `scene`
+/// ([`crate::fixtures::model_with_scene_params`]).
+pub fn compiled_kernels_match(
+    scene: &Scene,
+) -> Option<(&'static bf_generated::SceneKernels, Vec<f64>)> {
+    match_by(scene, kernel_inputs)
+}
+
+/// The compiled entry of `scene`'s name, if `relevant` of the scene with the compiled runtime
+/// parameters' values equals `relevant` of the compiled scene, and the scene's values of those
+/// parameters.
+fn match_by(
+    scene: &Scene,
+    relevant: fn(&Scene) -> Scene,
+) -> Option<(&'static bf_generated::SceneKernels, Vec<f64>)> {
     let entry = bf_generated::scene(&scene.name)?;
     let compiled = Scene::from_toml_str(entry.toml, entry.name).ok()?;
     let mut p = Vec::with_capacity(entry.param_names.len());
@@ -107,7 +145,7 @@ pub fn compiled_match(scene: &Scene) -> Option<(&'static bf_generated::SceneKern
         p.push(scene.constant(name)?);
         set_constant(&mut mine, name, default).ok()?;
     }
-    (kernel_relevant(&mine) == kernel_relevant(&compiled)).then_some((entry, p))
+    (relevant(&mine) == relevant(&compiled)).then_some((entry, p))
 }
 
 /// Sets the runtime parameters `assignments` (name, value) of the scene `out`. Every name must

@@ -66,6 +66,63 @@ fn same_name_other_numbers_is_interpreted() {
     assert!((m_heavy - m_paper).norm() > 1.0, "{m_heavy} vs {m_paper}");
 }
 
+/// A perturbed plant (a heavier ball, less friction, more socket damping: what the model
+/// applies outside its kernels) runs on the compiled kernels with its own parameters, and its
+/// physics is bit for bit that of the interpreted model of the same scene, which is what it
+/// ran on before; a perturbed link enters the kernels and is interpreted.
+#[test]
+fn parameters_outside_the_kernels_keep_the_compiled_kernels() {
+    let text = PAPER_TOML
+        .replace(
+            "[ball]\nradius = 1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 0.02\n",
+            "[ball]\nradius = 1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 0.022\n",
+        )
+        .replace("mu_s = 0.8\n", "mu_s = 0.64\n")
+        .replace("socket_damping = 0.004\n", "socket_damping = 0.006\n");
+    assert_ne!(text, PAPER_TOML);
+    let scene = parse(&text);
+    assert_eq!(scene.name, "paper");
+    assert!(compiled_match(&scene).is_none());
+    let (plant, source) = fixtures::model_with_scene_params(&scene).unwrap();
+    assert_eq!(source, KernelSource::Compiled);
+    let (interpreted, source) = fixtures::model_for_scene(&scene).unwrap();
+    assert_eq!(source, KernelSource::Interpreted);
+
+    let nominal = fixtures::paper_scene().unwrap();
+    assert_eq!(plant.params(), interpreted.params());
+    assert_eq!(plant.params().socket_damping(), 0.006);
+    assert_eq!(plant.params().mu_s(), 0.64);
+    assert_ne!(
+        plant.params().ball_inertia(),
+        nominal.params().ball_inertia()
+    );
+    assert_identical(plant.kernels(), interpreted.kernels());
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    for _ in 0..20 {
+        let (q, qd, w) = random_state(&mut rng);
+        let x = State::new(Vec3::from(q), Vec3::from(qd), Vec3::from(w));
+        let tau = Vec3::new(0.3, -0.2, 0.1);
+        assert_eq!(
+            plant.free(&x, &tau).unwrap(),
+            interpreted.free(&x, &tau).unwrap()
+        );
+        // and the perturbed ball and damping change the ball's acceleration
+        assert_ne!(
+            plant.free(&x, &tau).unwrap().omega_dot,
+            nominal.free(&x, &tau).unwrap().omega_dot
+        );
+    }
+
+    // The unperturbed scene: the same model as `model_for_scene`'s.
+    let (same, source) = fixtures::model_with_scene_params(&parse(PAPER_TOML)).unwrap();
+    assert_eq!(source, KernelSource::Compiled);
+    assert_eq!(same.params(), nominal.params());
+
+    let heavier_link = PAPER_TOML.replacen("mass = 0.02\ncom", "mass = 0.021\ncom", 1);
+    let (_, source) = fixtures::model_with_scene_params(&parse(&heavier_link)).unwrap();
+    assert_eq!(source, KernelSource::Interpreted);
+}
+
 #[test]
 fn interpreted_kernels_equal_compiled_kernels_bitwise() {
     let paper = InterpretedKernels::new(&parse(PAPER_TOML)).unwrap();

@@ -615,8 +615,11 @@ fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernel
         }
         text = text.replace(from, to);
     }
-    let scene = bf_codegen::Scene::from_toml_str(&text, &format!("{name} (perturbed)"))?;
-    Ok(bf_model::fixtures::model_for_scene(&scene)?.0)
+    // The scene keeps its name: a perturbation of what the model applies outside its kernels
+    // (the ball's mass, friction, damping) runs on the compiled kernels with the perturbed
+    // parameters; one of the links (their masses) is interpreted.
+    let scene = bf_codegen::Scene::from_toml_str(&text, name)?;
+    Ok(bf_model::fixtures::model_with_scene_params(&scene)?.0)
 }
 
 /// The plants of the robustness table: [`PERTURBATIONS`] alone, all four together, and the
