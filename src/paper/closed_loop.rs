@@ -617,7 +617,7 @@ fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernel
     }
     // The scene keeps its name: a perturbation of what the model applies outside its kernels
     // (the ball's mass, friction, damping) runs on the compiled kernels with the perturbed
-    // parameters; one of the links (their masses) is interpreted.
+    // parameters; a perturbation of the links (their masses) is interpreted.
     let scene = bf_codegen::Scene::from_toml_str(&text, name)?;
     Ok(bf_model::fixtures::model_with_scene_params(&scene)?.0)
 }

@@ -361,10 +361,9 @@ pub(crate) fn same_optimum(a: &OcpSolution, b: &OcpSolution) -> bool {
 
 /// The candidate a search returns (its position in `cands`, given as (start index,
 /// solution)): the best class (verified and robust, verified, successful, failed: `class`),
-/// in it the lowest
-/// objective, and among the end points within [`CLUSTER_RTOL`] of that objective (one optimum,
-/// reached from several starts) the lowest start index. The rule depends on the set only, not
-/// on its order, so shards merged give the unsharded choice.
+/// in it the lowest objective, and among the end points within [`CLUSTER_RTOL`] of that
+/// objective (one optimum, reached from several starts) the lowest start index. The rule
+/// depends on the set only, not on its order, so shards merged give the unsharded choice.
 pub fn select(cands: &[(usize, &OcpSolution)]) -> Option<usize> {
     let best_class = cands.iter().map(|(_, s)| class(s)).min()?;
     let in_class = || {

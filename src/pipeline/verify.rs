@@ -791,9 +791,9 @@ pub fn execution_failure(v: &Verification) -> Option<String> {
 /// perturbed plants ran and one missed. It does not fail the verdict ([`passes`]): the plan
 /// is executed on the plant it was planned for, and what the miss measures is the
 /// controller's margin against model error (the low `periodic-cot` plans are executed within
-/// 0.2 % on the nominal plant and missed by 100 % and more with 50 % more socket damping). The search
-/// ranks such a plan below every verified plan that meets the target (decision record 0048),
-/// and `optimize` flags it.
+/// 0.2 % on the nominal plant and missed by 100 % and more with 50 % more socket damping).
+/// The search ranks such a plan below every verified plan that meets the target (decision
+/// record 0048), and `optimize` flags it.
 pub fn robustness_miss(v: &Verification) -> Option<String> {
     let e = v.execution.as_ref()?;
     let why = e.robustness_failure.as_ref()?;
