@@ -27,6 +27,7 @@ use ball_finger::pipeline::verify::{
     execution_failure, is_robust, is_verified, robustness_miss, verdict_failure,
 };
 use ball_finger::pipeline::{OcpSolution, SolutionIo};
+use bf_problem::solution::records::ExecutionCheck;
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
@@ -38,6 +39,14 @@ fn grazing_plan() -> OcpSolution {
 
 fn fragile_plan() -> OcpSolution {
     OcpSolution::read_json(&root().join("tests/fixtures/fragile-cot-plan/solution.json")).unwrap()
+}
+
+/// The closed-loop check the search that wrote `sol` ran on it.
+fn searched_check(sol: &OcpSolution) -> &ExecutionCheck {
+    sol.verification
+        .as_ref()
+        .and_then(|v| v.execution.as_ref())
+        .expect("the search's closed-loop check of a plan")
 }
 
 fn stored_plan(dir: &str) -> OcpSolution {
@@ -90,11 +99,7 @@ fn the_stored_default_plans_pass_the_closed_loop_check() {
             "{dir}: {check:?}"
         );
         // The search that stored it ran the same check, with the same verdict.
-        let stored = sol
-            .verification
-            .as_ref()
-            .and_then(|v| v.execution.as_ref())
-            .expect("the stored plan's check");
+        let stored = searched_check(&sol);
         assert!(
             stored.failure.is_none() && stored.robustness_failure.is_none(),
             "{dir}: {stored:?}"
@@ -123,11 +128,7 @@ fn a_low_cot_plan_is_executed_but_misses_the_robustness_target() {
         "{check:?}"
     );
     // The search that chose it ran the same check, with the same outcome.
-    let stored = sol
-        .verification
-        .as_ref()
-        .and_then(|v| v.execution.as_ref())
-        .expect("the search's check");
+    let stored = searched_check(&sol);
     assert!(stored.failure.is_none() && stored.robustness_failure.is_some());
 
     let mut v = sol.verification.clone().expect("a verification record");
@@ -152,11 +153,7 @@ fn a_low_cot_plan_is_executed_but_misses_the_robustness_target() {
 fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
     let robust = stored_plan("periodic-cot-human-plan");
     assert!(is_robust(&robust));
-    let passed = robust
-        .verification
-        .as_ref()
-        .and_then(|v| v.execution.clone())
-        .expect("the stored plan's check");
+    let passed = searched_check(&robust).clone();
 
     let with_check = |failure: Option<&str>, robustness: Option<&str>| {
         let mut sol = grazing_plan();
@@ -200,12 +197,7 @@ fn optimize_flags_a_verified_plan_that_misses_the_robustness_target() {
         "--out",
         dir.to_str().unwrap(),
     ]);
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stdout = cli::ok(&out);
     assert!(stdout.contains("verified: yes"), "{stdout}");
     let miss = stdout
         .lines()
@@ -216,11 +208,7 @@ fn optimize_flags_a_verified_plan_that_misses_the_robustness_target() {
 
     let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
     assert!(is_verified(&sol) && !is_robust(&sol));
-    let check = sol
-        .verification
-        .as_ref()
-        .and_then(|v| v.execution.as_ref())
-        .expect("the closed-loop check of a plan");
+    let check = searched_check(&sol);
     assert!(check.failure.is_none(), "{check:?}");
     assert!(
         check.max_omega_error <= EXECUTION_TOLERANCE

@@ -33,15 +33,7 @@ fn optimize_in(dir: &Path, threads: Option<&str>, extra: &[&str]) -> std::proces
     c.output().unwrap()
 }
 
-fn ok(o: &std::process::Output) -> String {
-    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
-    assert!(
-        o.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    stdout
-}
+use cli_util::ok;
 
 /// The fields that define a solution (not its timings).
 fn essence(v: &serde_json::Value) -> Vec<serde_json::Value> {

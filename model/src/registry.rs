@@ -12,8 +12,10 @@
 //!   the parameter vector `p`. A scene named like a compiled one with any other difference
 //!   (a link length, a mass, the ball) does not match.
 //! - [`compiled_kernels_match`]: the same, also ignoring the physical parameters the model
-//!   applies outside its kernels (ball mass and inertia, friction, damping), for a model that
-//!   takes them from the scene (a perturbed plant: `fixtures::model_with_scene_params`).
+//!   applies outside its kernels (ball mass and inertia, friction, damping): what
+//!   [`contact_kernels_n`] runs on, the compiled kernels carrying the scene's own parameters
+//!   ([`CompiledKernels::with_physical_params`]), so that a heavier ball, less friction or more
+//!   damping (a perturbed plant) runs compiled.
 //! - [`contact_kernels_n`]: a boxed [`Kernels<N>`] for a scene with `N` joints, a ball and a
 //!   contact (any N: the compiled registry emits the contact kernels of every scene with a
 //!   ball, and the interpreter needs no build), and the [`KernelSource`] it runs on;
@@ -122,7 +124,7 @@ pub fn compiled_match(scene: &Scene) -> Option<(&'static bf_generated::SceneKern
 /// vector `p` as for [`compiled_match`]: the scene may also differ from it in the physical
 /// parameters that the model applies outside its kernels (the ball's mass and inertia,
 /// friction and damping), which a model on these kernels must then take from `scene`
-/// ([`crate::fixtures::model_with_scene_params`]).
+/// ([`CompiledKernels::with_physical_params`], as [`contact_kernels_n`] does).
 pub fn compiled_kernels_match(
     scene: &Scene,
 ) -> Option<(&'static bf_generated::SceneKernels, Vec<f64>)> {
@@ -323,15 +325,17 @@ pub fn contact_kernels(scene: &Scene) -> Result<(DynKernels, KernelSource)> {
     contact_kernels_n::<3>(scene)
 }
 
-/// The kernels of a contact scene with `N` joints: compiled when [`compiled_match`] finds the
-/// scene (with its runtime-parameter values), interpreted otherwise. Errors unless the scene
-/// has a ball, a contact, friction and `N` joints.
+/// The kernels of a contact scene with `N` joints: compiled when [`compiled_kernels_match`]
+/// finds the scene (with its runtime-parameter values, and its own ball mass, friction and
+/// damping as the kernels' physical parameters), interpreted otherwise. Errors unless the
+/// scene has a ball, a contact, friction and `N` joints.
 pub fn contact_kernels_n<const N: usize>(scene: &Scene) -> Result<(DynKernels<N>, KernelSource)> {
     check_contact_scene(scene)?;
     check_joints::<N>(scene)?;
-    if let Some((entry, p)) = compiled_match(scene)
+    if let Some((entry, p)) = compiled_kernels_match(scene)
         && let Some(k) = CompiledKernels::<N>::from_entry(entry, p)?
     {
+        let k = k.with_physical_params(Params::from_scene(scene)?);
         return Ok((Box::new(k), KernelSource::Compiled));
     }
     Ok((
@@ -350,6 +354,10 @@ pub struct CompiledKernels<const N: usize = 3> {
     contact: ContactFn,
     p: Vec<f64>,
     layout: ContactLayout,
+    /// The physical parameters of the scene these kernels serve, where it is not the compiled
+    /// scene itself ([`CompiledKernels::with_physical_params`]); `None`: the compiled scene's
+    /// (with the runtime parameters).
+    params: Option<Params>,
 }
 
 impl CompiledKernels<3> {
@@ -411,7 +419,16 @@ impl<const N: usize> CompiledKernels<N> {
             contact,
             p,
             layout: ContactLayout::new(N)?,
+            params: None,
         }))
+    }
+
+    /// These kernels for a scene whose physical parameters outside the kernels (the ball's
+    /// mass and inertia, friction, damping) are `params` ([`compiled_kernels_match`]): what
+    /// [`Kernels::physical_params`] then gives a model built on them.
+    pub fn with_physical_params(mut self, params: Params) -> Self {
+        self.params = Some(params);
+        self
     }
 }
 
@@ -448,6 +465,9 @@ impl<const N: usize> Kernels<N> for CompiledKernels<N> {
     }
     fn param_values(&self) -> &[f64] {
         &self.p
+    }
+    fn physical_params(&self) -> Option<Params> {
+        self.params
     }
     fn mass_cqd_g(&self, q: &[f64; N], qd: &[f64; N]) -> ([[f64; N]; N], [f64; N]) {
         let mut m = [[0.0; N]; N];

@@ -68,8 +68,8 @@ fn same_name_other_numbers_is_interpreted() {
 
 /// A perturbed plant (a heavier ball, less friction, more socket damping: what the model
 /// applies outside its kernels) runs on the compiled kernels with its own parameters, and its
-/// physics is bit for bit that of the interpreted model of the same scene, which is what it
-/// ran on before; a perturbed link enters the kernels and is interpreted.
+/// physics is bit for bit that of the interpreter on the same scene, which is what it ran on
+/// before; a perturbed link enters the kernels and is interpreted.
 #[test]
 fn parameters_outside_the_kernels_keep_the_compiled_kernels() {
     let text = PAPER_TOML
@@ -83,10 +83,10 @@ fn parameters_outside_the_kernels_keep_the_compiled_kernels() {
     let scene = parse(&text);
     assert_eq!(scene.name, "paper");
     assert!(compiled_match(&scene).is_none());
-    let (plant, source) = fixtures::model_with_scene_params(&scene).unwrap();
+    let (plant, source) = fixtures::model_for_scene(&scene).unwrap();
     assert_eq!(source, KernelSource::Compiled);
-    let (interpreted, source) = fixtures::model_for_scene(&scene).unwrap();
-    assert_eq!(source, KernelSource::Interpreted);
+    let interpreted =
+        bf_model::Model::from_kernels(InterpretedKernels::new(&scene).unwrap()).unwrap();
 
     let nominal = fixtures::paper_scene().unwrap();
     assert_eq!(plant.params(), interpreted.params());
@@ -113,13 +113,13 @@ fn parameters_outside_the_kernels_keep_the_compiled_kernels() {
         );
     }
 
-    // The unperturbed scene: the same model as `model_for_scene`'s.
-    let (same, source) = fixtures::model_with_scene_params(&parse(PAPER_TOML)).unwrap();
+    // The unperturbed scene: the compiled scene's own parameters.
+    let (same, source) = fixtures::model_for_scene(&parse(PAPER_TOML)).unwrap();
     assert_eq!(source, KernelSource::Compiled);
     assert_eq!(same.params(), nominal.params());
 
     let heavier_link = PAPER_TOML.replacen("mass = 0.02\ncom", "mass = 0.021\ncom", 1);
-    let (_, source) = fixtures::model_with_scene_params(&parse(&heavier_link)).unwrap();
+    let (_, source) = fixtures::model_for_scene(&parse(&heavier_link)).unwrap();
     assert_eq!(source, KernelSource::Interpreted);
 }
 

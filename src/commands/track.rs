@@ -161,9 +161,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let (plant, plant_name) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
-            // A copy of a compiled scene with another ball, friction or damping runs on the
-            // compiled kernels (the same numbers as interpreted, faster).
-            let (model, _) = bf_model::fixtures::model_with_scene_params(&scene)
+            let (model, _) = bf_model::fixtures::model_for_scene(&scene)
                 .with_context(|| format!("--plant-scene {}", path.display()))?;
             (model, path.display().to_string())
         }

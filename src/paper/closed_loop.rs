@@ -619,7 +619,7 @@ fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernel
     // (the ball's mass, friction, damping) runs on the compiled kernels with the perturbed
     // parameters; a perturbation of the links (their masses) is interpreted.
     let scene = bf_codegen::Scene::from_toml_str(&text, name)?;
-    Ok(bf_model::fixtures::model_with_scene_params(&scene)?.0)
+    Ok(bf_model::fixtures::model_for_scene(&scene)?.0)
 }
 
 /// The plants of the robustness table: [`PERTURBATIONS`] alone, all four together, and the

@@ -320,12 +320,12 @@ pub struct Search {
 fn class(sol: &OcpSolution) -> u8 {
     if !sol.status.is_success() || !sol.objective.is_finite() {
         3
+    } else if !is_verified(sol) {
+        UNVERIFIED
     } else if is_robust(sol) {
-        0
-    } else if is_verified(sol) {
-        1
+        SETTLED
     } else {
-        2
+        1
     }
 }
 

@@ -77,6 +77,7 @@ use bf_sim::{HybridSystem, SimError, SimOutput, SimSettings};
 
 use super::error::{PhaseDataDefect, PipelineError};
 
+use bf_problem::solution::records::ExecutionCheck;
 pub use bf_problem::solution::records::{PhaseVerification, TorqueInterpolant, Verification};
 
 /// Contact tolerance (fraction of the ball radius) of the stick dynamics during verification.
@@ -778,10 +779,19 @@ pub fn verdict_failure(v: &Verification) -> Option<String> {
 /// ([`Verification::execution`]), as a sentence naming the controller and the error, if one
 /// ran and failed.
 pub fn execution_failure(v: &Verification) -> Option<String> {
+    closed_loop(v, |e| e.failure.as_ref()).map(|s| format!("executed {s}"))
+}
+
+/// "in closed loop (C controller, Newton's impact law): WHY" for the reason `why` picks from
+/// `v`'s closed-loop check, if one ran and `why` gives a reason.
+fn closed_loop(
+    v: &Verification,
+    why: impl Fn(&ExecutionCheck) -> Option<&String>,
+) -> Option<String> {
     let e = v.execution.as_ref()?;
-    let why = e.failure.as_ref()?;
+    let why = why(e)?;
     Some(format!(
-        "executed in closed loop ({} controller, Newton's impact law): {why}",
+        "in closed loop ({} controller, Newton's impact law): {why}",
         e.controller
     ))
 }
@@ -795,22 +805,20 @@ pub fn execution_failure(v: &Verification) -> Option<String> {
 /// The search ranks such a plan below every verified plan that meets the target (decision
 /// record 0048), and `optimize` flags it.
 pub fn robustness_miss(v: &Verification) -> Option<String> {
-    let e = v.execution.as_ref()?;
-    let why = e.robustness_failure.as_ref()?;
-    Some(format!(
-        "in closed loop ({} controller, Newton's impact law) {why}",
-        e.controller
-    ))
+    closed_loop(v, |e| e.robustness_failure.as_ref())
+}
+
+/// Whether `v` records a robustness miss ([`robustness_miss`], without its sentence).
+fn misses_robustness(v: &Verification) -> bool {
+    v.execution
+        .as_ref()
+        .is_some_and(|e| e.robustness_failure.is_some())
 }
 
 /// Whether `sol` is verified ([`is_verified`]) and, where the perturbed plants ran, meets the
 /// robustness target on every one ([`robustness_miss`]).
 pub fn is_robust(sol: &OcpSolution) -> bool {
-    is_verified(sol)
-        && sol
-            .verification
-            .as_ref()
-            .is_none_or(|v| robustness_miss(v).is_none())
+    is_verified(sol) && !sol.verification.as_ref().is_some_and(misses_robustness)
 }
 
 /// The first path check of `v` outside its allowance, as a sentence naming the phase, the

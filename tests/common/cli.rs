@@ -36,6 +36,17 @@ pub fn run(args: &[&str]) -> Output {
         .expect("binary runs")
 }
 
+/// The standard output of a run that must have succeeded (the assertion shows both streams).
+pub fn ok(o: &Output) -> String {
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert!(
+        o.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    stdout
+}
+
 /// The optimum of `problem` from the 32-start search (`optimize --hops 0 --problem NAME`, with
 /// `extra` options such as `--starts 4`), planned with the sticking law (eq. 40) unless
 /// `extra` names `--impact-law`: the paper's problem by the cheaper search, whose optima have
