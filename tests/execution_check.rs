@@ -2,12 +2,11 @@
 //! `paper::closed_loop::execution_check`, run by the search on every candidate of a Newton
 //! plan whose re-integration verifies):
 //! * the human finger's plan of J = 0.0452 (a fixture: the default search's optimum before the
-//!   check) re-integrates within its tolerance and passes every path check, yet the bounded
-//!   hybrid controller does not execute it (its release grazes the ball, and the plant falls
-//!   back onto it after the lift-off): the check fails it, far beyond the tolerance;
+//!   check) re-integrates within its tolerance; it leaves the ball at ḣ = 0, and without the
+//!   clearance guard the plant falls back onto it right after the lift-off, far beyond the
+//!   tolerance; the guard's rising floor lifts the finger off, the bounded controller executes
+//!   it, and it misses the robustness target (verified, flagged);
 //! * the stored default plans that `paper` executes pass it;
-//! * a verification record with a failed check is not verified, and its verdict names the
-//!   closed loop, while the same record without the check is verified;
 //! * the default `periodic-cot` plan of seed 1 (a fixture: the search's choice) is executed on
 //!   the nominal plant, but the controller cannot hold its spin with 50 % more socket damping:
 //!   a robustness miss, which keeps the plan verified and flags it;
@@ -21,12 +20,17 @@ mod cli;
 
 use std::path::{Path, PathBuf};
 
-use ball_finger::paper::closed_loop::{EXECUTION_TOLERANCE, execution_check};
+use ball_finger::paper::closed_loop::{
+    ControllerKind, EXECUTION_TOLERANCE, Tracking, execution_check, run_tracking_with,
+    solution_model,
+};
 use ball_finger::pipeline::search::select;
 use ball_finger::pipeline::verify::{
     execution_failure, is_robust, is_verified, robustness_miss, verdict_failure,
 };
 use ball_finger::pipeline::{OcpSolution, SolutionIo};
+use bf_control::HybridGains;
+use bf_model::{ImpactLaw, Mode};
 use bf_problem::solution::records::ExecutionCheck;
 
 fn root() -> PathBuf {
@@ -53,8 +57,31 @@ fn stored_plan(dir: &str) -> OcpSolution {
     OcpSolution::read_json(&root().join("data/optima").join(dir).join("solution.json")).unwrap()
 }
 
+/// The earliest impact after a lift-off in a run, in seconds after that lift-off.
+fn earliest_recontact(t: &Tracking) -> f64 {
+    let ev = &t.output.events;
+    let mut gap = f64::INFINITY;
+    for (k, e) in ev.iter().enumerate() {
+        if e.guard != "lambda_n" || e.mode_after != Some(Mode::Free) {
+            continue;
+        }
+        if let Some(next) = ev[k + 1..].iter().find(|n| n.mode_before == Mode::Free) {
+            gap = gap.min(next.t - e.t);
+        }
+    }
+    gap
+}
+
+/// The human finger's plan of J = 0.0452 (a fixture: the default search's optimum before the
+/// closed-loop check) leaves the ball at ḣ = 0, and only its planned ḧ > 0 separates the
+/// finger. Without the clearance guard the plant falls back onto the ball within milliseconds
+/// of the lift-off and the controller takes the touch for the next impact: far beyond the
+/// tolerance. With the guard's floor rising at h_c / t_r after every lift-off (its rate part
+/// of the guard's target) the plant leaves the ball, and the bounded controller executes the
+/// plan within the tolerance. Its spin still misses the target with 50 % more socket damping:
+/// verified, and flagged.
 #[test]
-fn the_grazing_human_plan_verifies_by_its_reintegration_but_fails_the_closed_loop() {
+fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
     let mut sol = grazing_plan();
     assert!(sol.objective < 0.046, "J = {}", sol.objective);
     let mut v = sol.verification.clone().expect("a verification record");
@@ -66,22 +93,54 @@ fn the_grazing_human_plan_verifies_by_its_reintegration_but_fails_the_closed_loo
         verdict_failure(&v)
     );
 
-    let check = execution_check(&sol).expect("the human scene is compiled in");
-    // It fails on the nominal plant already, so the perturbed plants are not run.
-    assert_eq!(check.robustness_periods, 0);
+    let run = |gains: HybridGains| {
+        let (plant, _) = solution_model(&sol).unwrap();
+        run_tracking_with(
+            &sol,
+            ControllerKind::Hybrid,
+            gains,
+            6,
+            plant,
+            ImpactLaw::Newton,
+            None,
+        )
+        .unwrap()
+    };
+    let error = |t: &Tracking| t.periods.iter().map(|p| p.omega_error).fold(0.0, f64::max);
+    let mut unguarded = HybridGains::default();
+    unguarded.clearance.gap = 0.0;
+    let fell_back = run(unguarded);
     assert!(
-        check.max_omega_error > 10.0 * EXECUTION_TOLERANCE,
-        "max error {}",
-        check.max_omega_error
+        earliest_recontact(&fell_back) < 0.01,
+        "{}",
+        earliest_recontact(&fell_back)
     );
-    assert!(check.failure.is_some());
+    assert!(error(&fell_back) > 10.0 * EXECUTION_TOLERANCE);
 
+    let guarded = run(HybridGains::default());
+    let rise = HybridGains::default().clearance.rise;
+    assert!(
+        earliest_recontact(&guarded) > rise,
+        "{}",
+        earliest_recontact(&guarded)
+    );
+    assert!(guarded.lost.is_none(), "{:?}", guarded.lost);
+    assert!(
+        error(&guarded) <= EXECUTION_TOLERANCE,
+        "{}",
+        error(&guarded)
+    );
+
+    let check = execution_check(&sol).expect("the human scene is compiled in");
+    assert!(check.failure.is_none(), "{check:?}");
+    let miss = check
+        .robustness_failure
+        .clone()
+        .expect("a perturbed plant misses");
+    assert!(miss.contains("socket damping"), "{miss}");
     v.execution = Some(check);
-    sol.verification = Some(v.clone());
-    assert!(!is_verified(&sol));
-    let why = verdict_failure(&v).expect("a reason");
-    assert!(why.contains("closed loop"), "{why}");
-    assert_eq!(execution_failure(&v).as_deref(), Some(why.as_str()));
+    sol.verification = Some(v);
+    assert!(is_verified(&sol) && !is_robust(&sol));
 }
 
 #[test]
@@ -170,6 +229,11 @@ fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
     assert!(fragile.objective < robust.objective);
     assert!(is_verified(&fragile) && !is_robust(&fragile));
     assert!(!is_verified(&not_executed));
+    // A failed nominal run is the verdict's reason, named as the closed loop.
+    let v = not_executed.verification.as_ref().unwrap();
+    let why = verdict_failure(v).expect("a reason");
+    assert!(why.contains("closed loop"), "{why}");
+    assert_eq!(execution_failure(v).as_deref(), Some(why.as_str()));
 
     assert_eq!(select(&[(0, &fragile), (1, &robust)]), Some(1));
     assert_eq!(select(&[(0, &robust), (1, &fragile)]), Some(0));

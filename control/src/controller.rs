@@ -23,9 +23,13 @@
 //! **Free phases:** computed torque ([`ComputedTorque`], [`InverseDynamics`]):
 //! τ = ID(q, q̇, q̈* + K_d (q̇* − q̇) + K_p (q* − q)) + μ_v q̇, with a clearance guard
 //! ([`Clearance`]): away from the planned contacts the gap h (eq. 4) is kept above a floor
-//! h_f that rises from 0 to h_c over t_c after a lift-off and falls back to 0 over t_c before
+//! h_f that rises from 0 to h_c over t_r after a lift-off and falls back to 0 over t_c before
 //! the planned impact; below the floor the torque J_cᵀ n β (a push along the normal at the
-//! contact point, least in the M_f⁻¹ norm) raises ḧ to ω_n² (h_f − h) − 2 ω_n ḣ. The optima's
+//! contact point, least in the M_f⁻¹ norm) raises ḧ to ω_n² (h_f − h) + 2 ω_n (ḣ_f − ḣ). A
+//! lift-off leaves the ball at ḣ = 0 (λ_n falls to 0 with the velocity continuous), so the
+//! floor's rate ḣ_f = h_c / t_r is what asks the finger to leave: without it a plant whose
+//! links are heavier than the model falls back onto the ball within a microsecond, which the
+//! timing by events takes for the next impact. The optima's
 //! path constraint h ≥ 0 holds at their nodes only, and a plan that passes the ball within a
 //! millimetre (the human finger's COT optimum, 86 ms after lift-off) would otherwise be
 //! tracked into an unplanned impact, which starts the next contact phase a period early.
@@ -142,9 +146,11 @@ pub struct ContactGains {
 pub struct Clearance {
     /// h_c (m): the gap kept away from the planned contacts; 0 turns the guard off.
     pub gap: f64,
-    /// t_c (s): the floor rises from 0 to h_c over this time after a lift-off and falls back
-    /// to 0 over it before a planned impact.
+    /// t_c (s): the floor falls from h_c to 0 over this time before a planned impact.
     pub ramp: f64,
+    /// t_r (s): the floor rises from 0 to h_c over this time after a lift-off; 0 puts it at
+    /// h_c at once.
+    pub rise: f64,
 }
 
 /// All gains of the [`HybridController`].
@@ -167,8 +173,11 @@ pub struct HybridGains {
 
 impl Default for HybridGains {
     /// ω_n = 20 rad/s, ζ = 1 (the free phases of the optima last 0.1–9 s, so errors decay in
-    /// a fraction of a phase); clearance 5 mm with a 50 ms ramp (the QC optimum is 13 mm
-    /// from the ball 50 ms before its impact, so the guard leaves its approach alone);
+    /// a fraction of a phase); clearance 5 mm, falling over 50 ms before an impact (the QC
+    /// optimum is 13 mm from the ball 50 ms before its impact, so the guard leaves its
+    /// approach alone) and rising over 20 ms after a lift-off (ḧ ≥ 2 ω_n h_c / t_r = 10 m/s²
+    /// as the finger leaves; 4 m/s² did not lift a plant with 5 % heavier links off the
+    /// `periodic-cot` plan of `tests/fixtures/fragile-cot-plan`);
     /// approach re-timed over its last 0.1 s (two time constants 1/(2ζω_n) of the velocity
     /// error along the path, so a plant that enters it late and fast is slowed to the plan);
     /// k_ω = 100/s (the contact phases of the optima last 26 ms and more); k_r = 10/s (a
@@ -185,6 +194,7 @@ impl Default for HybridGains {
             clearance: Clearance {
                 gap: 5e-3,
                 ramp: 0.05,
+                rise: 0.02,
             },
             approach: 0.1,
             contact: ContactGains {
@@ -217,6 +227,7 @@ impl HybridGains {
             ("lift_off_share", c.lift_off_share),
             ("clearance.gap", self.clearance.gap),
             ("clearance.ramp", self.clearance.ramp),
+            ("clearance.rise", self.clearance.rise),
             ("approach", self.approach),
         ] {
             if !(value.is_finite() && value >= 0.0) {
@@ -778,8 +789,8 @@ impl<K: Kernels<3>> HybridController<K> {
 
     /// The clearance guard of a free phase (module doc): below the floor h_f, adds J_cᵀ n β to
     /// the computed torque `tau` (for the commanded acceleration `qdd`) when the gap's
-    /// acceleration ḧ would fall below ω_n² (h_f − h) − 2 ω_n ḣ, the critically damped return
-    /// to the floor.
+    /// acceleration ḧ would fall below ω_n² (h_f − h) + 2 ω_n (ḣ_f − ḣ), the critically damped
+    /// return to the moving floor.
     fn keep_clearance(
         &self,
         plan: &Plan,
@@ -795,13 +806,7 @@ impl<K: Kernels<3>> HybridController<K> {
             return Ok(());
         }
         let (since, until) = plan.contact_margins(phase, s);
-        let floor = if cl.ramp > 0.0 {
-            cl.gap * (since.min(until) / cl.ramp).clamp(0.0, 1.0)
-        } else if since > 0.0 && until > 0.0 {
-            cl.gap
-        } else {
-            0.0
-        };
+        let (floor, floor_rate) = clearance_floor(cl, since, until);
         if floor <= 0.0 {
             return Ok(());
         }
@@ -815,7 +820,7 @@ impl<K: Kernels<3>> HybridController<K> {
         let n = c.n;
         let h_ddot = n.dot(&(c.j_c * Vec3::from(*qdd) + c.jc_dot_qd)) + c.n_dot().dot(&c.rc_dot);
         let w = self.gains.free.omega_n;
-        let wanted = w * w * (floor - c.h) - 2.0 * w * c.h_dot;
+        let wanted = w * w * (floor - c.h) + 2.0 * w * (floor_rate - c.h_dot);
         if h_ddot >= wanted {
             return Ok(());
         }
@@ -1069,6 +1074,53 @@ impl LeastConstraint {
     /// q̈ for the contact acceleration `a_c` and the free law's command `qdd_free`.
     fn acceleration(&self, a_c: &Vec3, qdd_free: &Vec3) -> Vec3 {
         qdd_free + self.minv_jct * (self.gain * (a_c - self.j_c * qdd_free))
+    }
+}
+
+/// The clearance floor h_f and its rate ḣ_f (module doc) at `since` seconds after the last
+/// contact and `until` seconds before the next planned one: rising linearly over t_r after a
+/// lift-off, falling linearly over t_c before an impact (the nearer of the two decides), h_c
+/// in between.
+///
+/// The rate is part of the guard's target because a lift-off leaves the ball with ḣ = 0: the
+/// plan's own ḧ > 0 is all that separates the finger, and on a plant whose links are 5 %
+/// heavier than the model that acceleration was negative, so the finger fell back onto the
+/// ball within a microsecond and the controller took the touch for the next impact. A floor
+/// that is only a position (ω_n² h_f, of order 10⁻⁵ m/s² there) does not see this; its rate
+/// asks for ḧ ≥ 2 ω_n h_c / t_r at the lift-off. The rise is shorter than the fall because a
+/// fast fall would hold the finger off a plan whose approach is within h_c of the ball for
+/// longer than t_r.
+fn clearance_floor(cl: &Clearance, since: f64, until: f64) -> (f64, f64) {
+    if cl.ramp <= 0.0 && cl.rise <= 0.0 {
+        return if since > 0.0 && until > 0.0 {
+            (cl.gap, 0.0)
+        } else {
+            (0.0, 0.0)
+        };
+    }
+    // Each ramp's progress in [0, 1]; a zero-length ramp is complete once its side is open.
+    let progress = |elapsed: f64, length: f64| {
+        if length > 0.0 {
+            elapsed / length
+        } else if elapsed > 0.0 {
+            f64::INFINITY
+        } else {
+            0.0
+        }
+    };
+    let up = progress(since, cl.rise);
+    let down = progress(until, cl.ramp);
+    let (part, rate) = if up < down {
+        (up, if up < 1.0 { cl.gap / cl.rise } else { 0.0 })
+    } else {
+        (down, if down < 1.0 { -cl.gap / cl.ramp } else { 0.0 })
+    };
+    if part <= 0.0 {
+        (0.0, 0.0)
+    } else if part >= 1.0 {
+        (cl.gap, 0.0)
+    } else {
+        (cl.gap * part, rate)
     }
 }
 

@@ -275,6 +275,29 @@ pub fn run_tracking_replanned(
     impact_law: ImpactLaw,
     replan: Option<usize>,
 ) -> Result<Tracking> {
+    run_tracking_with(
+        sol,
+        controller,
+        HybridGains::default(),
+        periods,
+        plant,
+        impact_law,
+        replan,
+    )
+}
+
+/// [`run_tracking_replanned`] with the hybrid controllers' `gains` instead of
+/// [`HybridGains::default`] (ignored by the open loop and the PD): what a gain does to the
+/// execution of a plan, measured on the same plant.
+pub fn run_tracking_with(
+    sol: &OcpSolution,
+    controller: ControllerKind,
+    gains: HybridGains,
+    periods: usize,
+    plant: Model<DynKernels>,
+    impact_law: ImpactLaw,
+    replan: Option<usize>,
+) -> Result<Tracking> {
     if replan.is_some() && matches!(controller, ControllerKind::OpenLoop | ControllerKind::Pd) {
         bail!(
             "--replan needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
@@ -325,9 +348,8 @@ pub fn run_tracking_replanned(
                 ControllerKind::Hybrid => torque_bound(sol),
                 _ => [f64::INFINITY; 3],
             };
-            let mut law =
-                HybridController::new(model, id, reference, HybridGains::default(), 0.0, &x0)?
-                    .with_torque_bound(bound)?;
+            let mut law = HybridController::new(model, id, reference, gains, 0.0, &x0)?
+                .with_torque_bound(bound)?;
             if let Some(max_iter) = replan {
                 let replanner = super::replan::SolverReplanner::new(
                     sol,
