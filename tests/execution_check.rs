@@ -4,12 +4,12 @@
 //! * the human finger's plan of J = 0.0452 (a fixture: the default search's optimum before the
 //!   check) re-integrates within its tolerance; it leaves the ball at ḣ = 0, and without the
 //!   clearance guard the plant falls back onto it right after the lift-off, far beyond the
-//!   tolerance; the guard's rising floor lifts the finger off, the bounded controller executes
-//!   it, and it misses the robustness target (verified, flagged);
+//!   tolerance; the guard's rising floor lifts the finger off, and the bounded controller
+//!   executes it, also on the perturbed plants (verified and robust);
 //! * the stored default plans that `paper` executes pass it;
-//! * the default `periodic-cot` plan of seed 1 (a fixture: the search's choice) is executed on
-//!   the nominal plant, but the controller cannot hold its spin with 50 % more socket damping:
-//!   a robustness miss, which keeps the plan verified and flags it;
+//! * the default `periodic-cot` plan of seed 1 (a fixture: the search's choice, flagged then)
+//!   misses its spin with 50 % more socket damping when the outer loop has only the lift-off
+//!   spin to move, and meets the target when it also paces the flight (decision record 0051);
 //! * the search's choice ranks a robust plan above a lower one that misses the robustness
 //!   target, and that one above an unverified plan;
 //! * `optimize` says so: a direct solve of the `periodic-qc` plan that misses the target exits
@@ -25,9 +25,7 @@ use ball_finger::paper::closed_loop::{
     solution_model,
 };
 use ball_finger::pipeline::search::select;
-use ball_finger::pipeline::verify::{
-    execution_failure, is_robust, is_verified, robustness_miss, verdict_failure,
-};
+use ball_finger::pipeline::verify::{execution_failure, is_robust, is_verified, verdict_failure};
 use ball_finger::pipeline::{OcpSolution, SolutionIo};
 use bf_control::HybridGains;
 use bf_model::{ImpactLaw, Mode};
@@ -78,8 +76,7 @@ fn earliest_recontact(t: &Tracking) -> f64 {
 /// of the lift-off and the controller takes the touch for the next impact: far beyond the
 /// tolerance. With the guard's floor rising at h_c / t_r after every lift-off (its rate part
 /// of the guard's target) the plant leaves the ball, and the bounded controller executes the
-/// plan within the tolerance. Its spin still misses the target with 50 % more socket damping:
-/// verified, and flagged.
+/// plan within the tolerance; with the flight's pace it meets the robustness target too.
 #[test]
 fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
     let mut sol = grazing_plan();
@@ -132,15 +129,13 @@ fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
     );
 
     let check = execution_check(&sol).expect("the human scene is compiled in");
-    assert!(check.failure.is_none(), "{check:?}");
-    let miss = check
-        .robustness_failure
-        .clone()
-        .expect("a perturbed plant misses");
-    assert!(miss.contains("socket damping"), "{miss}");
+    assert!(
+        check.failure.is_none() && check.robustness_failure.is_none(),
+        "{check:?}"
+    );
     v.execution = Some(check);
     sol.verification = Some(v);
-    assert!(is_verified(&sol) && !is_robust(&sol));
+    assert!(is_verified(&sol) && is_robust(&sol));
 }
 
 #[test]
@@ -166,42 +161,78 @@ fn the_stored_default_plans_pass_the_closed_loop_check() {
     }
 }
 
-/// The default `periodic-cot` plan of seed 1 (J = 7.9e-4, a release of 8.1 s of its 10 s
-/// period): the bounded hybrid controller executes it on the nominal plant, but with 50 % more
-/// socket damping it misses the plan's mean spin far beyond the 5 % target. That is a miss of
-/// the robustness target, not a failed execution: the plan stays verified, and the record and
-/// its table say MISSED.
+/// The scene of `tests/fixtures/fragile-cot-plan` with 50 % more socket damping.
+fn damped_paper_plant() -> bf_model::Model<bf_model::DynKernels> {
+    let text = bf_generated::scene_toml("paper").expect("the paper scene is compiled in");
+    assert!(text.contains("socket_damping = 0.004\n"));
+    let text = text.replace("socket_damping = 0.004\n", "socket_damping = 0.006\n");
+    let scene = bf_codegen::Scene::from_toml_str(&text, "paper").unwrap();
+    bf_model::fixtures::model_for_scene(&scene).unwrap().0
+}
+
+/// The default `periodic-cot` plan of seed 1 before the flight's pace (J = 7.9e-4: a flight of
+/// 9.75 s, five times the ball's decay time I_b / D, after a stick phase that ends 1.3 cm from
+/// the fingertip). With 50 % more socket damping the mean spin of a period falls by a third.
+/// With the pace off, the outer loop can only ask the ball to leave faster; the extra roll takes
+/// the contact past the end of the link, and the plant misses the plan's mean spin far beyond
+/// the 5 % target. With the pace, the flights shorten instead, by about the damping's ratio
+/// (the mean is the spin's integral over the period), and every plant of the robustness table
+/// meets the target: the plan is verified and robust. The search that chose it flagged it.
 #[test]
-fn a_low_cot_plan_is_executed_but_misses_the_robustness_target() {
+fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
     let mut sol = fragile_plan();
-    let check = execution_check(&sol).expect("the paper scene is compiled in");
-    assert!(check.failure.is_none(), "{check:?}");
-    assert!(check.max_omega_error <= EXECUTION_TOLERANCE, "{check:?}");
-    let miss = check
-        .robustness_failure
-        .clone()
-        .expect("a perturbed plant misses the target");
-    assert!(miss.contains("socket damping"), "{miss}");
-    assert!(
-        check.robustness_error > 4.0 * check.robustness_tolerance,
-        "{check:?}"
-    );
-    // The search that chose it ran the same check, with the same outcome.
     let stored = searched_check(&sol);
     assert!(stored.failure.is_none() && stored.robustness_failure.is_some());
 
+    let run = |gains: HybridGains| {
+        run_tracking_with(
+            &sol,
+            ControllerKind::Hybrid,
+            gains,
+            10,
+            damped_paper_plant(),
+            ImpactLaw::Newton,
+            None,
+        )
+        .unwrap()
+    };
+    let from_fourth = |t: &Tracking| {
+        t.periods[3..]
+            .iter()
+            .map(|p| p.omega_error)
+            .fold(0.0, f64::max)
+    };
+    let mut no_pace = HybridGains::default();
+    no_pace.pace = 0.0;
+    let rolled = run(no_pace);
+    assert!(
+        from_fourth(&rolled) > 4.0 * 0.05,
+        "{}",
+        from_fourth(&rolled)
+    );
+
+    let paced = run(HybridGains::default());
+    assert!(paced.lost.is_none(), "{:?}", paced.lost);
+    assert!(from_fourth(&paced) <= 0.05, "{}", from_fourth(&paced));
+    let last = paced.periods.last().unwrap();
+    let ratio = (last.end - last.start) / sol.period;
+    assert!(
+        (ratio - 1.0 / 1.5).abs() < 0.1,
+        "a period of {} s against the plan's {} s",
+        last.end - last.start,
+        sol.period
+    );
+
+    let check = execution_check(&sol).expect("the paper scene is compiled in");
+    assert!(
+        check.failure.is_none() && check.robustness_failure.is_none(),
+        "{check:?}"
+    );
+    assert!(check.robustness_error <= check.robustness_tolerance);
     let mut v = sol.verification.clone().expect("a verification record");
     v.execution = Some(check);
-    sol.verification = Some(v.clone());
-    assert!(is_verified(&sol), "{:?}", verdict_failure(&v));
-    assert!(!is_robust(&sol));
-    assert!(verdict_failure(&v).is_none());
-    let why = robustness_miss(&v).expect("the miss, as a sentence");
-    assert!(
-        why.contains("closed loop") && why.contains("socket damping"),
-        "{why}"
-    );
-    assert!(v.to_string().contains("robustness target MISSED"), "{v}");
+    sol.verification = Some(v);
+    assert!(is_verified(&sol) && is_robust(&sol));
 }
 
 /// `select` (the search's choice among its candidates): a plan for the plant that meets the

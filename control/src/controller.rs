@@ -91,6 +91,24 @@
 //! and the contact-point loop's target moves with the roll it causes (above), so that loop
 //! does not undo it; the ramp keeps that roll to ‖δ‖ t_δ / 2.
 //!
+//! **The flight's pace:** the outer loop has a second lever, the length of the flight. Each
+//! flight (from a lift-off to the next planned contact, planned length F) keeps the plan's
+//! clock over its first and last 15 % (the lift-off with its clearance floor, the approach
+//! re-timed by the gap) and runs the reference at the pace κ through the middle: the free law
+//! tracks q*(σ), κ q̇*(σ) with the feed-forward κ² q̈*(σ) there, and the flight lasts
+//! F − (1 − 1/κ) 0.7 F. Where the ball's spin dies out in the flight (socket damping, eq. 29b:
+//! I_b / D = 2 s against the 8–9 s flights of the COT plans) the period's mean is ω_lo I_b / D
+//! over the period's length T, and 50 % more damping takes a third of it: δ would need the ball
+//! to leave 50 % faster, more roll in the same stick phase, and on the low `periodic-cot` plans,
+//! which stick at the fingertip, that roll takes the contact past the end of the link. A flight
+//! shortened by the same ratio keeps the mean with the planned lift-off. At the end of each
+//! period the error along ω̄* is split: the share 1 − ρ goes to the pace, which aims at the
+//! period T ← T (ω̄ · ω̂* / ‖ω̄*‖)^{γ_κ (1 − ρ)} (the plan's period less what the middle saves,
+//! κ ∈ [1/3, 3]), the rest and the error across ω̄* to δ as above. A flight whose middle has
+//! not begun when its period ends takes the new pace at once (a period that ends just after
+//! the lift-off), others from the next lift-off on. Flights planned shorter than 1 s keep the
+//! plan's pace (the QC plans).
+//!
 //! **Friction measured:** in Slip the measured force gives the plant's μ_k = ‖λ_∥‖ / λ_n; the
 //! controller predicts the kinetic friction with it and scales its μ_s (the friction cone of
 //! the margin) by the ratio to the model's μ_k, so a plant with less friction than the model
@@ -169,6 +187,10 @@ pub struct HybridGains {
     /// γ of the outer loop (share of the period's mean ω error corrected per period), in
     /// [0, 1].
     pub outer: f64,
+    /// γ_κ of the flight's pace (module doc): share of the period's error along ω̄* that the
+    /// pace corrects per period, of the part 1 − ρ it is given, in [0, 1]; 0 leaves every
+    /// flight at the plan's pace.
+    pub pace: f64,
 }
 
 impl Default for HybridGains {
@@ -184,7 +206,10 @@ impl Default for HybridGains {
     /// tenth of k_ω, so the ω loop follows the contact-point loop); λ_n boost up to
     /// 3 × max λ_n*; k_f = 300/s (the loop must settle within a 26 ms stick phase);
     /// k_s = 100/s, a_s = 20 m/s²; a friction margin of 20 % (a plant with μ 20 % below the
-    /// model still sticks); lift-off share 5 %; γ = 0.5.
+    /// model still sticks); lift-off share 5 %; γ = 0.5; γ_κ = 1 (where the ball's spin dies
+    /// out in the flight the mean is the spin's integral over the period's length, so the
+    /// pace's step is Newton's on its share; 0.5 left the low `periodic-cot` plans within
+    /// 5–7 % in their 4th period with 50 % more socket damping, 1 within 3.4 %).
     fn default() -> Self {
         HybridGains {
             free: ComputedTorque {
@@ -208,6 +233,7 @@ impl Default for HybridGains {
                 lift_off_share: 0.05,
             },
             outer: 0.5,
+            pace: 1.0,
         }
     }
 }
@@ -245,12 +271,14 @@ impl HybridGains {
                 condition: "a value in [0, 1)",
             });
         }
-        if !(0.0..=1.0).contains(&self.outer) {
-            return Err(ControlError::Gain {
-                name: "outer",
-                value: self.outer,
-                condition: "a value in [0, 1]",
-            });
+        for (name, value) in [("outer", self.outer), ("pace", self.pace)] {
+            if !(0.0..=1.0).contains(&value) {
+                return Err(ControlError::Gain {
+                    name,
+                    value,
+                    condition: "a value in [0, 1]",
+                });
+            }
         }
         Ok(())
     }
@@ -268,6 +296,84 @@ const MIN_SENSITIVITY: f64 = 0.05;
 /// Largest rate σ̇ of the re-timed approach's reference time (a plant closing the gap faster
 /// than this multiple of the plan's rate gets the feed-forward of this multiple).
 const MAX_RETIME_RATE: f64 = 3.0;
+
+/// Share of a flight's planned length kept at the planned pace at each end (module doc, the
+/// flight's pace): the lift-off with its clearance floor, and the approach re-timed by the gap.
+const PACE_ENDS: f64 = 0.15;
+
+/// Shortest planned flight (s) whose middle the outer loop may pace.
+const PACE_MIN_FLIGHT: f64 = 1.0;
+
+/// Bounds of the pace κ of a flight's middle (the reference advances κ seconds per second).
+const PACE_LIMITS: (f64, f64) = (1.0 / 3.0, 3.0);
+
+/// The clock of one flight (module doc, the flight's pace): from the lift-off at plant time
+/// `start`, the reference runs at the planned pace for `ends` s, at pace `kappa` through the
+/// next `middle` s of the reference, and at the planned pace again to the impact.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Flight {
+    start: f64,
+    ends: f64,
+    middle: f64,
+    kappa: f64,
+}
+
+impl Flight {
+    /// No flight: the reference's clock is the plant's.
+    const NONE: Flight = Flight {
+        start: f64::NAN,
+        ends: 0.0,
+        middle: 0.0,
+        kappa: 1.0,
+    };
+
+    /// A flight from a lift-off at `start`, planned to last `length` s, paced at `kappa`.
+    fn new(start: f64, length: f64, kappa: f64) -> Flight {
+        if !(length.is_finite() && length >= PACE_MIN_FLIGHT) {
+            return Flight {
+                start,
+                ..Flight::NONE
+            };
+        }
+        let ends = PACE_ENDS * length;
+        Flight {
+            start,
+            ends,
+            middle: length - 2.0 * ends,
+            kappa,
+        }
+    }
+
+    /// The reference time at plant time `t` and its rate.
+    fn reference_time(&self, t: f64) -> (f64, f64) {
+        let u = t - self.start;
+        if !(u > self.ends) || self.middle <= 0.0 {
+            return (t, 1.0);
+        }
+        let paced = self.middle / self.kappa;
+        if u <= self.ends + paced {
+            (
+                self.start + self.ends + self.kappa * (u - self.ends),
+                self.kappa,
+            )
+        } else {
+            (t + self.middle - paced, 1.0)
+        }
+    }
+
+    /// The plant time at reference time `r` (the inverse of [`Flight::reference_time`]).
+    fn plant_time(&self, r: f64) -> f64 {
+        let u = r - self.start;
+        if !(u > self.ends) || self.middle <= 0.0 {
+            return r;
+        }
+        if u <= self.ends + self.middle {
+            self.start + self.ends + (u - self.ends) / self.kappa
+        } else {
+            r - self.middle + self.middle / self.kappa
+        }
+    }
+}
 
 /// The re-timing keeps to where the plan closes the gap at least at this share of its impact
 /// speed: σ = h*⁻¹(h) turns a gap error into a time error 1/|ḣ*| times larger, and the QC
@@ -341,6 +447,10 @@ struct Discrete {
     mu_k: f64,
     /// The plan in force (index into [`HybridController::plans`]).
     plan: usize,
+    /// The pace κ the outer loop sets for the next flights (1: the plan's).
+    pace: f64,
+    /// The flight in progress, or the last one until the next lift-off.
+    flight: Flight,
 }
 
 /// Makes a new plan at a lift-off of the plant (module doc, re-planning).
@@ -452,6 +562,8 @@ impl<K: Kernels<3>> HybridController<K> {
             slips: 0,
             mu_k: model.params().mu_k(),
             plan: 0,
+            pace: 1.0,
+            flight: Flight::NONE,
         };
         let mean_omega = reference.mean_omega;
         let plan = Plan::new(reference, gains.approach, t0);
@@ -574,9 +686,14 @@ impl<K: Kernels<3>> HybridController<K> {
     ) -> Result<(), ControlError> {
         let plan = self.plan(d.plan);
         let plan = &*plan;
-        let (phase, start) = plan.timed_phase(d.phase, d.start, t);
+        let (t_ref, pace) = if plan.reference.phases[d.phase].contact {
+            (t, 1.0)
+        } else {
+            d.flight.reference_time(t)
+        };
+        let (phase, start) = plan.timed_phase(d.phase, d.start, t_ref);
         let ph = &plan.reference.phases[phase];
-        let s = t - start;
+        let s = t_ref - start;
         if mode == Mode::Free || !ph.contact {
             let (sigma, rate) = if mode == Mode::Free {
                 self.retime(plan, phase, s, x)?
@@ -584,13 +701,14 @@ impl<K: Kernels<3>> HybridController<K> {
                 (s, 1.0)
             };
             let r = ph.at(sigma);
-            let qdd_ff = r.qdd.map(|v| v * rate);
+            let qd_ref = r.qd.map(|v| v * pace);
+            let qdd_ff = r.qdd.map(|v| v * rate * pace * pace);
             let mut qdd = [0.0; 3];
             self.gains.free.acceleration(
                 x.q.as_slice(),
                 x.qd.as_slice(),
                 &r.q,
-                &r.qd,
+                &qd_ref,
                 &qdd_ff,
                 &mut qdd,
             );
@@ -844,10 +962,15 @@ impl<K: Kernels<3>> HybridController<K> {
     /// [`Plan::timed_phase`] of `plan` applied to `d` at time `t`, ending the period when
     /// the reference wraps to its first phase.
     fn advance_timed(&self, plan: &Plan, d: &mut Discrete, t: f64) {
-        let (phase, start) = plan.timed_phase(d.phase, d.start, t);
+        let t_ref = if plan.reference.phases[d.phase].contact {
+            t
+        } else {
+            d.flight.reference_time(t).0
+        };
+        let (phase, start) = plan.timed_phase(d.phase, d.start, t_ref);
         if phase != d.phase {
             if phase < d.phase {
-                self.end_period(d, start);
+                self.end_period(d, d.flight.plant_time(start));
             }
             d.phase = phase;
             d.start = start;
@@ -924,8 +1047,50 @@ impl<K: Kernels<3>> HybridController<K> {
             let error = Vec3::from(self.mean_omega) - Vec3::from(mean);
             let axis = Vec3::from(d.lift_off_contact);
             let error = error - axis * axis.dot(&error);
+            // The flight's pace takes the share 1 − ρ of the error along ω̄*: where the ball's
+            // spin dies out in the flight (ρ small) the period's mean is its spin's integral
+            // over the period's length, and a shorter flight raises it without the extra roll
+            // in contact that a faster lift-off ω takes.
+            let target = Vec3::from(self.mean_omega);
+            let along = target.try_normalize(0.0);
+            let share = if self.gains.pace > 0.0 && d.flight.middle > 0.0 && along.is_some() {
+                1.0 - sensitivity
+            } else {
+                0.0
+            };
+            let mut correction = error;
+            if let Some(u) = along
+                && share > 0.0
+            {
+                correction -= u * (share * u.dot(&error));
+                let ratio = Vec3::from(mean).dot(&u) / target.norm();
+                if ratio > 0.0 {
+                    // The period the pace should give, and the plant time its flight's middle
+                    // then takes: the plan's period less what the shorter middle saves.
+                    let wanted = len * ratio.powf(self.gains.pace * share);
+                    let planned: f64 = self
+                        .plan(d.plan)
+                        .reference
+                        .phases
+                        .iter()
+                        .map(|p| p.duration)
+                        .sum();
+                    let paced = d.flight.middle - (planned - wanted);
+                    let kappa = if paced > 0.0 {
+                        d.flight.middle / paced
+                    } else {
+                        PACE_LIMITS.1
+                    };
+                    d.pace = kappa.clamp(PACE_LIMITS.0, PACE_LIMITS.1);
+                    // A flight still in its first part (the period ended right after its
+                    // lift-off) is the next period's: it takes the new pace now.
+                    if t - d.flight.start <= d.flight.ends {
+                        d.flight.kappa = d.pace;
+                    }
+                }
+            }
             for i in 0..3 {
-                d.omega_offset[i] += self.gains.outer / sensitivity * error[i];
+                d.omega_offset[i] += self.gains.outer / sensitivity * correction[i];
             }
             // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
             // (and with it the contact forces) without bound.
@@ -1269,6 +1434,11 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                     }
                     if was_contact {
                         self.replan(&mut d, m.t, m.x);
+                        let plan = self.plan(d.plan);
+                        if !plan.reference.phases[d.phase].contact {
+                            let length = plan.contact_margins(d.phase, 0.0).1;
+                            d.flight = Flight::new(m.t, length, d.pace);
+                        }
                     }
                     self.switches.borrow_mut().push(PhaseSwitch {
                         t: m.t,
