@@ -202,8 +202,10 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
             .map(|p| p.omega_error)
             .fold(0.0, f64::max)
     };
-    let mut no_pace = HybridGains::default();
-    no_pace.pace = 0.0;
+    let no_pace = HybridGains {
+        pace: 0.0,
+        ..HybridGains::default()
+    };
     let rolled = run(no_pace);
     assert!(
         from_fourth(&rolled) > 4.0 * 0.05,

@@ -347,7 +347,7 @@ impl Flight {
     /// The reference time at plant time `t` and its rate.
     fn reference_time(&self, t: f64) -> (f64, f64) {
         let u = t - self.start;
-        if !(u > self.ends) || self.middle <= 0.0 {
+        if u.is_nan() || u <= self.ends || self.middle <= 0.0 {
             return (t, 1.0);
         }
         let paced = self.middle / self.kappa;
@@ -364,7 +364,7 @@ impl Flight {
     /// The plant time at reference time `r` (the inverse of [`Flight::reference_time`]).
     fn plant_time(&self, r: f64) -> f64 {
         let u = r - self.start;
-        if !(u > self.ends) || self.middle <= 0.0 {
+        if u.is_nan() || u <= self.ends || self.middle <= 0.0 {
             return r;
         }
         if u <= self.ends + self.middle {
@@ -1067,7 +1067,7 @@ impl<K: Kernels<3>> HybridController<K> {
                 if ratio > 0.0 {
                     // The period the pace should give, and the plant time its flight's middle
                     // then takes: the plan's period less what the shorter middle saves.
-                    let wanted = len * ratio.powf(self.gains.pace * share);
+                    let wanted = len * libm::pow(ratio, self.gains.pace * share);
                     let planned: f64 = self
                         .plan(d.plan)
                         .reference
