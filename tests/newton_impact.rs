@@ -379,8 +379,7 @@ fn a_plan_that_grazes_the_ball_is_not_verified_and_a_plant_strikes_it_there() {
 /// basin of the default search with the same setting (J = 0.0675, a 0.29 s stick phase; the
 /// search's plan is asserted by the ignored test below). The bounded hybrid controller
 /// tracks it within 2 % in every one of 10 periods of 10 s on the nominal Newton plant, and
-/// every perturbed plant meets the robustness target (6 periods; socket damping ×1.5 is the
-/// closest, 4.97 % in its 4th period).
+/// every perturbed plant meets the robustness target (6 periods).
 #[test]
 fn the_human_fingers_plan_to_execute_is_tracked_and_robust() {
     let sol = optimized(

@@ -1245,11 +1245,11 @@ impl Search {
     /// the problem's own mesh (the search of `optimize --hops 0`), verified and refined the
     /// same way, whose candidates join this search's (their chains numbered after its own).
     /// The coarse ranking can place every shape of a family that does not verify above the
-    /// ones that do: on the plans for the plant of `periodic-cot-human`, seeds 4 and 5 promoted
-    /// 24 shapes of the lower plans that the controller does not execute, while the starts on
-    /// the problem's mesh verify J = 0.0674642 (decision record 0048). Nothing happens when a
-    /// candidate verifies, without verification (`rtol` 0), and for searches that are not
-    /// global; `optimize merge` calls it as the unsharded run does.
+    /// ones that do: on the plans for the plant of `periodic-cot-human`, with the controller of
+    /// decision record 0048, seeds 4 and 5 promoted 24 shapes of the lower plans that it did
+    /// not execute, while the starts on the problem's mesh verified J = 0.0674642. Nothing
+    /// happens when a candidate verifies, without verification (`rtol` 0), and for searches
+    /// that are not global; `optimize merge` calls it as the unsharded run does.
     pub fn fall_back_to_the_starts(
         &mut self,
         problem: Problem,
