@@ -1459,7 +1459,7 @@ impl<K: Kernels<3>> Input for HybridController<K> {
 
 #[cfg(test)]
 mod tests {
-    use super::fit_bounds;
+    use super::{Clearance, Flight, PACE_ENDS, clearance_floor, fit_bounds};
 
     const BOUND: [f64; 3] = [1.0, 2.0, 0.5];
 
@@ -1509,5 +1509,64 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A flight's clock: the reference and the plant agree over the first and last 15 %, the
+    /// middle runs κ times faster, the flight is (1 − 1/κ) of the middle shorter, and the two
+    /// maps are inverse to each other; a flight shorter than 1 s keeps the plan's clock.
+    #[test]
+    fn a_paced_flight_keeps_its_ends_and_shortens_its_middle() {
+        let (start, length, kappa) = (3.0, 10.0, 1.6);
+        let f = Flight::new(start, length, kappa);
+        let ends = PACE_ENDS * length;
+        let middle = length - 2.0 * ends;
+        let plant_length = length - middle * (1.0 - 1.0 / kappa);
+        // The impact, planned at start + length, comes at start + plant_length.
+        let (at_impact, rate) = f.reference_time(start + plant_length);
+        assert!((at_impact - (start + length)).abs() < 1e-12);
+        assert_eq!(rate, 1.0);
+        for k in 0..=200 {
+            let t = start + plant_length * f64::from(k) / 200.0;
+            let (r, rate) = f.reference_time(t);
+            let u = t - start;
+            if u <= ends {
+                assert_eq!((r, rate), (t, 1.0));
+            } else if u < ends + middle / kappa {
+                assert_eq!(rate, kappa);
+            }
+            assert!((f.plant_time(r) - t).abs() < 1e-12, "t = {t}");
+        }
+        // Before the lift-off's flight and without one, the clocks agree.
+        assert_eq!(Flight::NONE.reference_time(7.0), (7.0, 1.0));
+        assert_eq!(
+            Flight::new(start, 0.9, kappa).reference_time(3.5),
+            (3.5, 1.0)
+        );
+    }
+
+    /// The clearance floor: 0 at a contact, rising at h_c / t_r after a lift-off, h_c away from
+    /// the contacts, falling at h_c / t_c before an impact; the nearer contact decides.
+    #[test]
+    fn the_clearance_floor_rises_after_a_lift_off_and_falls_before_an_impact() {
+        let cl = Clearance {
+            gap: 5e-3,
+            ramp: 0.05,
+            rise: 0.02,
+        };
+        assert_eq!(clearance_floor(&cl, 0.0, 1.0), (0.0, 0.0));
+        let (h, rate) = clearance_floor(&cl, 0.01, 1.0);
+        assert!((h - 2.5e-3).abs() < 1e-15 && (rate - 0.25).abs() < 1e-12);
+        assert_eq!(clearance_floor(&cl, 0.5, 1.0), (5e-3, 0.0));
+        let (h, rate) = clearance_floor(&cl, 1.0, 0.025);
+        assert!((h - 2.5e-3).abs() < 1e-15 && (rate + 0.1).abs() < 1e-12);
+        assert_eq!(clearance_floor(&cl, 1.0, 0.0), (0.0, 0.0));
+        // Without ramps the floor is h_c between the contacts and 0 at them.
+        let flat = Clearance {
+            ramp: 0.0,
+            rise: 0.0,
+            ..cl
+        };
+        assert_eq!(clearance_floor(&flat, 0.01, 0.01), (5e-3, 0.0));
+        assert_eq!(clearance_floor(&flat, 0.0, 0.01), (0.0, 0.0));
     }
 }
