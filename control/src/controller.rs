@@ -686,11 +686,7 @@ impl<K: Kernels<3>> HybridController<K> {
     ) -> Result<(), ControlError> {
         let plan = self.plan(d.plan);
         let plan = &*plan;
-        let (t_ref, pace) = if plan.reference.phases[d.phase].contact {
-            (t, 1.0)
-        } else {
-            d.flight.reference_time(t)
-        };
+        let (t_ref, pace) = plan.reference_time(d, t);
         let (phase, start) = plan.timed_phase(d.phase, d.start, t_ref);
         let ph = &plan.reference.phases[phase];
         let s = t_ref - start;
@@ -962,11 +958,7 @@ impl<K: Kernels<3>> HybridController<K> {
     /// [`Plan::timed_phase`] of `plan` applied to `d` at time `t`, ending the period when
     /// the reference wraps to its first phase.
     fn advance_timed(&self, plan: &Plan, d: &mut Discrete, t: f64) {
-        let t_ref = if plan.reference.phases[d.phase].contact {
-            t
-        } else {
-            d.flight.reference_time(t).0
-        };
+        let (t_ref, _) = plan.reference_time(d, t);
         let (phase, start) = plan.timed_phase(d.phase, d.start, t_ref);
         if phase != d.phase {
             if phase < d.phase {
@@ -1068,14 +1060,7 @@ impl<K: Kernels<3>> HybridController<K> {
                     // The period the pace should give, and the plant time its flight's middle
                     // then takes: the plan's period less what the shorter middle saves.
                     let wanted = len * libm::pow(ratio, self.gains.pace * share);
-                    let planned: f64 = self
-                        .plan(d.plan)
-                        .reference
-                        .phases
-                        .iter()
-                        .map(|p| p.duration)
-                        .sum();
-                    let paced = d.flight.middle - (planned - wanted);
+                    let paced = d.flight.middle - (self.plan(d.plan).period() - wanted);
                     let kappa = if paced > 0.0 {
                         d.flight.middle / paced
                     } else {
@@ -1143,6 +1128,21 @@ impl Plan {
             lambda_scale,
             approach,
         }
+    }
+
+    /// The reference's clock at plant time `t` in the discrete state `d`, and its rate: the
+    /// flight's paced clock ([`Flight`]) in a free phase, the plant's in a contact phase.
+    fn reference_time(&self, d: &Discrete, t: f64) -> (f64, f64) {
+        if self.reference.phases[d.phase].contact {
+            (t, 1.0)
+        } else {
+            d.flight.reference_time(t)
+        }
+    }
+
+    /// The planned period (s): the sum of the phase durations.
+    fn period(&self) -> f64 {
+        self.reference.phases.iter().map(|p| p.duration).sum()
     }
 
     /// Time since the last planned lift-off and until the next planned impact at time `s` of

@@ -627,7 +627,7 @@ type Case = (String, Vec<(&'static str, &'static str)>, ImpactLaw);
 /// A perturbed copy of the compiled scene `name` (the paper scene or the human finger's, which
 /// share these values): `edits` applied to its TOML text (every occurrence); an error if an
 /// edit finds nothing to replace (the scene file changed).
-fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernels>> {
+pub fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernels>> {
     let mut text = bf_generated::scene_toml(name)
         .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?
         .to_string();

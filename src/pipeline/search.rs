@@ -319,13 +319,13 @@ pub struct Search {
 /// target ([`super::verify::robustness_miss`]); 2 successful but not verified; 3 failed.
 fn class(sol: &OcpSolution) -> u8 {
     if !sol.status.is_success() || !sol.objective.is_finite() {
-        3
+        FAILED
     } else if !is_verified(sol) {
         UNVERIFIED
     } else if is_robust(sol) {
         SETTLED
     } else {
-        1
+        FLAGGED
     }
 }
 
@@ -333,8 +333,14 @@ fn class(sol: &OcpSolution) -> u8 {
 /// the search's goal, whose absence sends it on to further shapes and to the fallback.
 const SETTLED: u8 = 0;
 
+/// Rank class of a verified solution that missed the robustness target on a perturbed plant.
+const FLAGGED: u8 = 1;
+
 /// Rank class of a successful, unverified solution: the one that refinement may verify.
 const UNVERIFIED: u8 = 2;
+
+/// Rank class of a failed solve or a non-finite objective.
+const FAILED: u8 = 3;
 
 /// Whether the solve succeeded with a finite objective: the exploration ranks the problem's
 /// own landscape on its mesh and leaves the verification to the refinement that follows it
