@@ -51,10 +51,6 @@ fn searched_check(sol: &OcpSolution) -> &ExecutionCheck {
         .expect("the search's closed-loop check of a plan")
 }
 
-fn stored_plan(dir: &str) -> OcpSolution {
-    OcpSolution::read_json(&root().join("data/optima").join(dir).join("solution.json")).unwrap()
-}
-
 /// The earliest impact after a lift-off in a run, in seconds after that lift-off.
 fn earliest_recontact(t: &Tracking) -> f64 {
     let ev = &t.output.events;
@@ -243,7 +239,11 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
 /// not execute is unverified.
 #[test]
 fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
-    let robust = stored_plan("periodic-cot-human-plan");
+    // The human finger's default plan before the winner's neighbourhood (decision record
+    // 0052), executed and robust.
+    let robust =
+        OcpSolution::read_json(&root().join("tests/fixtures/human-plan-j0509500/solution.json"))
+            .unwrap();
     assert!(is_robust(&robust));
     let passed = searched_check(&robust).clone();
 

@@ -339,6 +339,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     });
     found.promote_and_refine(name, &settings, &policy, promote, None);
     found.fall_back_to_the_starts(name, &settings, &policy, None)?;
+    found.polish_the_winner(name, &settings, &policy, None);
     found.seconds = seconds + t0.elapsed().as_secs_f64();
     let (scene_toml, scene_params) = found
         .candidates
