@@ -218,17 +218,27 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         .iter()
         .filter(|r| r["chain"].as_u64().unwrap() >= 12)
         .count();
-    // The reshaping (every move from the best shapes) and at most 8 hops and 8 polishing hops.
-    let reshaped = w["strategy"]["records"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .filter(|r| r["stage"].as_str().unwrap().starts_with("reshape"))
-        .count();
+    // The reshaping (every move from the best shapes) and at most 8 hops and 8 polishing hops,
+    // then the winner's neighbourhood: every move and the 4 hops and 2 polishing solves of
+    // `POLISH_HOPS` from the verified winner (the same in the merge: records compared below).
+    let stages = |prefix: &str| {
+        w["strategy"]["records"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|r| r["stage"].as_str().unwrap().starts_with(prefix))
+            .count()
+    };
+    let reshaped = stages("reshape");
     assert!(reshaped >= 1, "no reshaping record");
+    let neighbourhood = stages(ball_finger::pipeline::search::POLISH_LABEL);
+    assert_eq!(
+        neighbourhood,
+        ball_finger::pipeline::reshape::MOVES.len() + 4 + 2
+    );
     assert!(
-        (8..=reshaped + 8 + 8 + 8).contains(&hops),
-        "{hops} hop records, {reshaped} reshaped"
+        (8..=reshaped + 8 + 8 + 8 + neighbourhood).contains(&hops),
+        "{hops} hop records, {reshaped} reshaped, {neighbourhood} in the winner's neighbourhood"
     );
     let close = |x: &serde_json::Value, y: &serde_json::Value| {
         let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
