@@ -1363,6 +1363,16 @@ impl Search {
         Ok(())
     }
 
+    /// The position in [`Search::candidates`] of the candidate [`select`] chooses.
+    fn choice(&self) -> Option<usize> {
+        let views: Vec<(usize, &OcpSolution)> = self
+            .candidates
+            .iter()
+            .map(|c| (c.index, &c.solution))
+            .collect();
+        select(&views)
+    }
+
     /// The first chain index after every record and candidate so far: where the stages of a
     /// later step of the search are numbered from.
     fn next_index(&self) -> usize {
@@ -1450,13 +1460,11 @@ impl Search {
         lower
             .par_iter_mut()
             .for_each(|c| attach_verification(c, policy));
-        // The winner bounds the refinement: only the new candidates below it are refined,
-        // and each only while it stays below it. The first refinement of a point solved on
-        // an already refined mesh says where the point settles: on `periodic-cot` seed 5 two
-        // points 1.5 % below the winner refined to 0.5 % above it and stayed there through
-        // five more refinements (56 s of CPU).
+        // Only the new candidates are refined, each only while it stays below the winner. The
+        // first refinement of a point solved on an already refined mesh says where the point
+        // settles: on `periodic-cot` seed 5 two points 1.5 % below the winner refined to 0.5 %
+        // above it and stayed there through five more refinements (56 s of CPU).
         let rest = std::mem::take(&mut self.candidates);
-        lower.push(winner);
         lower.sort_by_key(|c| c.index);
         self.candidates = lower;
         self.refine_below(problem, settings, policy, j);
@@ -1467,12 +1475,7 @@ impl Search {
         self.candidates = all;
         // A winner found here was reached by its own solve and by the others of the
         // neighbourhood that ended in its shape; the exploration's count was another basin's.
-        let views: Vec<(usize, &OcpSolution)> = self
-            .candidates
-            .iter()
-            .map(|c| (c.index, &c.solution))
-            .collect();
-        let chosen = select(&views).map(|i| &self.candidates[i]);
+        let chosen = self.choice().map(|i| &self.candidates[i]);
         if let Some(w) = chosen.filter(|w| w.index >= first) {
             let others = results
                 .iter()
@@ -1592,12 +1595,7 @@ impl Search {
     /// candidate's own is in [`OcpSolution::refinement`]); its problem is `None` only for candidates read
     /// from files. Errors when no chain produced a solution.
     pub fn best(mut self) -> Result<(Option<BuiltProblem>, OcpSolution), PipelineError> {
-        let views: Vec<(usize, &OcpSolution)> = self
-            .candidates
-            .iter()
-            .map(|c| (c.index, &c.solution))
-            .collect();
-        let Some(i) = select(&views) else {
+        let Some(i) = self.choice() else {
             let stages = self
                 .records
                 .iter()
