@@ -19,9 +19,11 @@
 //! 3. Global search only: promotion ([`Search::promote_and_refine`]), the best optima that
 //!    differ in shape re-solved on the problem's mesh from their coarse trajectories, each
 //!    re-integrated (and, for a plan for the plant, executed in closed loop:
-//!    [`VerifyPolicy::execution`]), and refined as in step 4; while none verifies (for a plan,
-//!    executed and robust), the next shapes down the ranking ([`PROMOTE_ROUNDS`]), then the
-//!    fallback ([`Search::fall_back_to_the_starts`]).
+//!    [`VerifyPolicy::execution`]); while the next shape's coarse objective is below the best
+//!    re-solved one, the next shapes too (the bound, [`PROMOTE_BOUND_ROUNDS`]); then refined
+//!    as in step 4; while none verifies (for a plan, executed and robust), the next shapes
+//!    down the ranking ([`PROMOTE_ROUNDS`]), then the fallback
+//!    ([`Search::fall_back_to_the_starts`]).
 //! 4. hp refinement of the unverified optima that beat the best verified one (lowest objective
 //!    first, one after the other until no candidate below half the best verified objective
 //!    is left, `refine_in_order`, which refines as many side by side as there are threads
@@ -173,6 +175,11 @@ pub struct CoarseSampling {
 /// verifies, the next [`CoarseSampling::promote`] shapes are re-solved, up to this many rounds
 /// (24 shapes by default).
 pub const PROMOTE_ROUNDS: usize = 3;
+
+/// Promotion rounds at most in all ([`Search::promote_and_refine`]), those the bound asks for
+/// included: while the next shape's coarse objective is below the best objective re-solved on
+/// the problem's mesh, the next [`CoarseSampling::promote`] shapes are re-solved too.
+pub const PROMOTE_BOUND_ROUNDS: usize = 8;
 
 /// The default coarse sampling: 3 Radau elements of 4 points per phase (the default mesh has
 /// 3 of 10), the 8 best optima that differ in shape re-solved on the problem's mesh.
@@ -1246,10 +1253,15 @@ impl Search {
     /// The promotion and refinement of a coarse sampling ([`CoarseSampling`]): the `promote`
     /// best candidates that differ in shape (`same_shape`; successful, lowest objective, then
     /// lowest index) re-solved on the problem's own mesh from their coarse trajectories, in
-    /// parallel, then refined ([`Search::refine_candidates`]); while none of the re-solved
-    /// candidates verifies, the next `promote` shapes down the ranking, for at most
-    /// [`PROMOTE_ROUNDS`] rounds (a plan for the plant whose best shapes the controller does not
-    /// execute, decision record 0048). The re-solved candidates replace the coarse ones.
+    /// parallel; while the next shape's coarse objective is below the lowest objective
+    /// re-solved so far, the next `promote` shapes as well (the bound, decision record 0053:
+    /// the coarse mesh under-prices the long free phases of the COT orbits up to 100-fold, so
+    /// the lowest coarse shapes can all re-solve above a shape further down), for at most
+    /// [`PROMOTE_BOUND_ROUNDS`] rounds in all; then the rounds not yet refined are refined
+    /// ([`Search::refine_candidates`]). While none of the candidates verifies, the next
+    /// `promote` shapes down the ranking the same way, refined at most [`PROMOTE_ROUNDS`] times
+    /// (a plan for the plant whose best shapes the controller does not execute, decision
+    /// record 0048). The re-solved candidates replace the coarse ones.
     /// `promote` = `None`: the candidates are on the problem's mesh already and are only
     /// refined.
     pub fn promote_and_refine(
@@ -1286,18 +1298,43 @@ impl Search {
             }
         }
         let mut kept: Vec<Candidate> = Vec::new();
-        for batch in shapes.chunks(promote).take(PROMOTE_ROUNDS) {
+        // Promoted and not yet refined.
+        let mut pending: Vec<Candidate> = Vec::new();
+        let mut failed_rounds = 0;
+        let mut batches = shapes.chunks(promote).take(PROMOTE_BOUND_ROUNDS).peekable();
+        while let Some(batch) = batches.next() {
             let mut done: Vec<Candidate> =
                 batch.par_iter().filter_map(|c| land.promote(c)).collect();
             self.records.extend(land.take_records());
-            done = representatives(done);
-            done.sort_by_key(|c| c.index);
-            // Each round refines its own candidates only: an earlier round's were refined
-            // already, and none of them verified.
-            self.candidates = done;
+            pending.append(&mut done);
+            // The bound: the coarse mesh prices a shape below its optimum on the problem's
+            // mesh, so a shape whose coarse objective is not below the best re-solved one
+            // cannot win; while the next shape's is, it is promoted before anything is
+            // refined (decision record 0053).
+            let best = kept
+                .iter()
+                .chain(&pending)
+                .filter(|c| solved(&c.solution))
+                .map(|c| c.solution.objective)
+                .fold(f64::INFINITY, f64::min);
+            if batches
+                .peek()
+                .is_some_and(|next| next[0].solution.objective < best)
+            {
+                continue;
+            }
+            pending = representatives(std::mem::take(&mut pending));
+            pending.sort_by_key(|c| c.index);
+            // Each refinement refines the rounds since the last one only: an earlier round's
+            // were refined already, and none of them verified.
+            self.candidates = std::mem::take(&mut pending);
             self.refine_candidates(problem, settings, policy);
             kept.append(&mut self.candidates);
-            if kept.iter().any(|c| class(&c.solution) == SETTLED) || policy.rtol <= 0.0 {
+            failed_rounds += 1;
+            if kept.iter().any(|c| class(&c.solution) == SETTLED)
+                || policy.rtol <= 0.0
+                || failed_rounds >= PROMOTE_ROUNDS
+            {
                 break;
             }
         }
