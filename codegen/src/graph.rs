@@ -12,6 +12,66 @@
 //! true values, so cos(π/2) is exactly 0 and whole subtrees vanish.
 
 use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hash, Hasher};
+
+/// A multiply–rotate hasher for the memo table (the scheme of rustc's `FxHasher`): the keys are
+/// small fixed-size nodes made by this program, so SipHash's defence against chosen keys buys
+/// nothing, and interning is a hot loop of the symbolic differentiation. Deterministic (no
+/// random seed); the table is only looked up, never iterated, so nothing depends on its order.
+#[derive(Default, Clone, Copy)]
+pub struct NodeHasher(u64);
+
+const NODE_HASH_K: u64 = 0x51_7c_c1_b7_27_22_0a_95;
+
+impl NodeHasher {
+    fn add(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(NODE_HASH_K);
+    }
+}
+
+impl Hasher for NodeHasher {
+    fn write(&mut self, bytes: &[u8]) {
+        let mut chunks = bytes.chunks_exact(8);
+        for c in &mut chunks {
+            let mut w = [0u8; 8];
+            w.copy_from_slice(c);
+            self.add(u64::from_le_bytes(w));
+        }
+        for &b in chunks.remainder() {
+            self.add(b as u64);
+        }
+    }
+    fn write_u8(&mut self, x: u8) {
+        self.add(x as u64);
+    }
+    fn write_u32(&mut self, x: u32) {
+        self.add(x as u64);
+    }
+    fn write_u64(&mut self, x: u64) {
+        self.add(x);
+    }
+    fn write_usize(&mut self, x: usize) {
+        self.add(x as u64);
+    }
+    fn write_isize(&mut self, x: isize) {
+        self.add(x as u64);
+    }
+    fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+/// The node list so far, as its length and a 128-bit hash of every node in order
+/// ([`Graph::history`]): two graphs with the same history hold the same nodes with the same
+/// ids (up to a hash collision), so any deterministic construction on them adds the same
+/// nodes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct History {
+    /// Number of nodes.
+    pub len: usize,
+    /// Hash of the nodes in id order.
+    pub hash: u128,
+}
 
 /// Index of a node in a [`Graph`] arena.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -81,7 +141,9 @@ impl Node {
 #[derive(Debug, Clone, Default)]
 pub struct Graph {
     nodes: Vec<Node>,
-    memo: HashMap<Node, Id>,
+    memo: HashMap<Node, Id, BuildHasherDefault<NodeHasher>>,
+    /// Running hash of `nodes` ([`History`]), two lanes.
+    history: [u64; 2],
 }
 
 fn norm_bits(v: f64) -> u64 {
@@ -162,10 +224,42 @@ impl Graph {
         if let Some(&id) = self.memo.get(&n) {
             return id;
         }
+        self.push_new(n)
+    }
+
+    /// Appends `n`, which the graph does not hold yet.
+    fn push_new(&mut self, n: Node) -> Id {
         let id = Id(u32::try_from(self.nodes.len()).expect("graph exceeds u32::MAX nodes"));
         self.nodes.push(n);
         self.memo.insert(n, id);
+        let mut h = NodeHasher::default();
+        n.hash(&mut h);
+        let x = h.finish();
+        self.history[0] = (self.history[0] ^ x).wrapping_mul(0x0000_0100_0000_01b3);
+        self.history[1] = (self.history[1].rotate_left(17) ^ x).wrapping_mul(NODE_HASH_K);
         id
+    }
+
+    /// The nodes so far as a [`History`]: what a deterministic construction on this graph
+    /// depends on.
+    pub fn history(&self) -> History {
+        History {
+            len: self.nodes.len(),
+            hash: ((self.history[0] as u128) << 64) | self.history[1] as u128,
+        }
+    }
+
+    /// Appends `nodes` in order, as a construction that added them to a graph of this
+    /// graph's history did (each interned: a node already present keeps its id, which such
+    /// a construction never produced).
+    pub fn extend_with(&mut self, nodes: &[Node]) {
+        self.nodes.reserve(nodes.len());
+        self.memo.reserve(nodes.len());
+        for &n in nodes {
+            if !self.memo.contains_key(&n) {
+                self.push_new(n);
+            }
+        }
     }
 
     /// The constant `v` (−0.0 is stored as 0.0).

@@ -26,7 +26,9 @@ use crate::CodegenError;
 use crate::diff;
 #[cfg(feature = "emit")]
 use crate::emit::{BODY_MARKER, BodyText, EmitSettings, body_text, splice_bodies, trig_items};
-use crate::graph::{Graph, Id, Node};
+use crate::graph::{Graph, History, Id, Node};
+use std::collections::HashMap;
+use std::sync::{Arc, LazyLock, Mutex};
 
 /// What a phase's dynamics, path constraints and cost integrands are, at one collocation node.
 ///
@@ -118,9 +120,59 @@ pub struct Derivatives {
     pub hess_ids: Vec<Id>,
 }
 
+/// What [`Derivatives::new`] depends on: the graph's nodes so far, the outputs, the locals and
+/// the ids (not the values) of the fixed inputs.
+type DerivativesKey = (History, Vec<Id>, Vec<u32>, Vec<u32>);
+
+/// What [`Derivatives::new`] made: the nodes it added to the graph, in order, and the result.
+type DerivativesMade = Arc<(Vec<Node>, Derivatives)>;
+
+/// Differentiations done so far in this process ([`Derivatives::new`]): a search builds the
+/// same problem hundreds of times (every start, move, hop and refinement), and the symbolic
+/// differentiation was about 5 % of its CPU time. At most [`DERIVATIVES_CACHED`] entries
+/// (emptied when full: the studies that build many scenes do not grow it without bound).
+static DERIVATIVES: LazyLock<Mutex<HashMap<DerivativesKey, DerivativesMade>>> =
+    LazyLock::new(|| Mutex::new(HashMap::new()));
+
+/// Entries of the differentiation cache at most.
+const DERIVATIVES_CACHED: usize = 64;
+
 impl Derivatives {
-    /// Differentiates `outputs` of `g` with respect to the graph variables `locals`.
+    /// Differentiates `outputs` of `g` with respect to the graph variables `locals`. The
+    /// construction is deterministic, so a graph with the same [`History`] gets the nodes and
+    /// the result of an earlier call replayed ([`Graph::extend_with`]): the same graph and the
+    /// same result, without differentiating again.
     pub fn new(g: &mut Graph, outputs: &[Id], locals: &[u32], fixed: &[(u32, f64)]) -> Self {
+        let key: DerivativesKey = (
+            g.history(),
+            outputs.to_vec(),
+            locals.to_vec(),
+            fixed.iter().map(|f| f.0).collect(),
+        );
+        let lock = || DERIVATIVES.lock().unwrap_or_else(|e| e.into_inner());
+        let made = lock().get(&key).cloned();
+        if let Some(made) = made {
+            g.extend_with(&made.0);
+            return made.1.clone();
+        }
+        let before = g.len();
+        let d = Self::differentiate(g, outputs, locals, fixed);
+        let made = Arc::new((g.nodes()[before..].to_vec(), d.clone()));
+        let mut cache = lock();
+        if cache.len() >= DERIVATIVES_CACHED {
+            cache.clear();
+        }
+        cache.insert(key, made);
+        d
+    }
+
+    /// [`Derivatives::new`] without the cache.
+    pub fn differentiate(
+        g: &mut Graph,
+        outputs: &[Id],
+        locals: &[u32],
+        fixed: &[(u32, f64)],
+    ) -> Self {
         let mark = g.cone(outputs);
         let mut max_var = 0usize;
         for (i, m) in mark.iter().enumerate() {
