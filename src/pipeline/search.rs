@@ -1300,7 +1300,7 @@ impl Search {
         let mut kept: Vec<Candidate> = Vec::new();
         // Promoted and not yet refined.
         let mut pending: Vec<Candidate> = Vec::new();
-        let mut failed_rounds = 0;
+        let mut refinements = 0;
         let mut batches = shapes.chunks(promote).take(PROMOTE_BOUND_ROUNDS).peekable();
         while let Some(batch) = batches.next() {
             let mut done: Vec<Candidate> =
@@ -1330,10 +1330,10 @@ impl Search {
             self.candidates = std::mem::take(&mut pending);
             self.refine_candidates(problem, settings, policy);
             kept.append(&mut self.candidates);
-            failed_rounds += 1;
+            refinements += 1;
             if kept.iter().any(|c| class(&c.solution) == SETTLED)
                 || policy.rtol <= 0.0
-                || failed_rounds >= PROMOTE_ROUNDS
+                || refinements >= PROMOTE_ROUNDS
             {
                 break;
             }
