@@ -810,6 +810,8 @@ fn the_promotion_goes_on_while_a_coarse_shape_can_still_win() {
     );
     let j = v["objective"].as_f64().unwrap();
     assert!(j < 1e-3, "J {j}");
+    // Executed in closed loop, and robust.
+    assert!(v["verification"]["execution"].is_object());
     assert!(
         v["verification"]["execution"]["robustness_failure"].is_null(),
         "{}",
