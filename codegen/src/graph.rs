@@ -19,7 +19,7 @@ use std::hash::{BuildHasherDefault, Hash, Hasher};
 /// nothing, and interning is a hot loop of the symbolic differentiation. Deterministic (no
 /// random seed); the table is only looked up, never iterated, so nothing depends on its order.
 #[derive(Default, Clone, Copy)]
-pub struct NodeHasher(u64);
+struct NodeHasher(u64);
 
 const NODE_HASH_K: u64 = 0x51_7c_c1_b7_27_22_0a_95;
 
