@@ -1082,7 +1082,10 @@ impl Landscape for OcpLandscape<'_> {
         let label = if scale == 0.0 {
             format!("polish {}: re-solve from mu {HOP_MU:e}", from.index)
         } else {
-            format!("hop from {} (scale {scale})", from.index)
+            // The wide scale is a product (0.3 × 8/3): shown to six decimals, not as the
+            // float's full expansion (0.7999999999999999).
+            let shown = (scale * 1e6).round() / 1e6;
+            format!("hop from {} (scale {shown})", from.index)
         };
         let settings = ProblemSettings {
             points: p.settings.points,
