@@ -690,6 +690,51 @@ fn path_stalled(before: Option<f64>, now: Option<f64>) -> bool {
 /// `periodic-cot` seed 1, refining every lower candidate took 353 s of CPU).
 pub const REFINE_BELOW: f64 = 0.5;
 
+/// The refinement of [`Search::refine_candidates`] on `cands`, with each refinement chain
+/// stopped once a refinement's objective is not below `ceiling` (`refine_until_verified`);
+/// returns the refinements' stage records.
+fn refine_below(
+    cands: &mut [Candidate],
+    problem: Problem,
+    settings: &ProblemSettings,
+    policy: &VerifyPolicy,
+    ceiling: f64,
+) -> Vec<StageRecord> {
+    if policy.rtol <= 0.0 {
+        return Vec::new();
+    }
+    let best_verified = cands
+        .iter()
+        .filter(|c| class(&c.solution) == SETTLED)
+        .map(|c| c.solution.objective)
+        .fold(f64::INFINITY, f64::min);
+    let mut todo: Vec<usize> = (0..cands.len())
+        .filter(|&i| {
+            let s = &cands[i].solution;
+            // A plan the controller did not execute stays what it is on a finer mesh.
+            class(s) == UNVERIFIED && s.objective < best_verified && !execution_failed(s)
+        })
+        .collect();
+    todo.sort_by(|&a, &b| lowest_first(&cands[a], &cands[b]));
+    let refined = refine_in_order(
+        &todo,
+        policy.clusters,
+        rayon::current_num_threads(),
+        |&i| cands[i].solution.objective,
+        |&i, wanted| {
+            let c = cands[i].clone();
+            refine_until_verified(problem, settings, c, policy, ceiling, wanted)
+        },
+        |(c, _)| (class(&c.solution) == SETTLED).then_some(c.solution.objective),
+    );
+    let mut records = Vec::new();
+    for (i, (c, recs)) in refined {
+        cands[i] = c;
+        records.extend(recs);
+    }
+    records
+}
+
 /// Applies `refine` to the items of `order` (lowest `value` first), at most `max` of them,
 /// until the next item's `value` is no lower than [`REFINE_BELOW`] times the best `verified`
 /// value of the results before it (`None`: the result did not verify); returns each item
@@ -1330,9 +1375,9 @@ impl Search {
             pending.sort_by_key(|c| c.index);
             // Each refinement refines the rounds since the last one only: an earlier round's
             // were refined already, and none of them verified.
-            self.candidates = std::mem::take(&mut pending);
-            self.refine_candidates(problem, settings, policy);
-            kept.append(&mut self.candidates);
+            let records = refine_below(&mut pending, problem, settings, policy, f64::INFINITY);
+            self.refinements.extend(records);
+            kept.append(&mut pending);
             refinements += 1;
             if kept.iter().any(|c| class(&c.solution) == SETTLED)
                 || policy.rtol <= 0.0
@@ -1504,12 +1549,11 @@ impl Search {
         // first refinement of a point solved on an already refined mesh says where the point
         // settles: on `periodic-cot` seed 5 two points 1.5 % below the winner refined to 0.5 %
         // above it and stayed there through five more refinements (56 s of CPU).
-        let rest = std::mem::take(&mut self.candidates);
         lower.sort_by_key(|c| c.index);
-        self.candidates = lower;
-        self.refine_below(problem, settings, policy, j);
-        let mut all = rest;
-        all.append(&mut self.candidates);
+        let records = refine_below(&mut lower, problem, settings, policy, j);
+        self.refinements.extend(records);
+        let mut all = std::mem::take(&mut self.candidates);
+        all.append(&mut lower);
         all = representatives(all);
         all.sort_by_key(|c| c.index);
         self.candidates = all;
@@ -1537,50 +1581,14 @@ impl Search {
         settings: &ProblemSettings,
         policy: &VerifyPolicy,
     ) {
-        self.refine_below(problem, settings, policy, f64::INFINITY);
-    }
-
-    /// [`Search::refine_candidates`] with each refinement chain stopped once a refinement's
-    /// objective is not below `ceiling` (`refine_until_verified`).
-    fn refine_below(
-        &mut self,
-        problem: Problem,
-        settings: &ProblemSettings,
-        policy: &VerifyPolicy,
-        ceiling: f64,
-    ) {
-        if policy.rtol <= 0.0 {
-            return;
-        }
-        let cands = &mut self.candidates;
-        let best_verified = cands
-            .iter()
-            .filter(|c| class(&c.solution) == SETTLED)
-            .map(|c| c.solution.objective)
-            .fold(f64::INFINITY, f64::min);
-        let mut todo: Vec<usize> = (0..cands.len())
-            .filter(|&i| {
-                let s = &cands[i].solution;
-                // A plan the controller did not execute stays what it is on a finer mesh.
-                class(s) == UNVERIFIED && s.objective < best_verified && !execution_failed(s)
-            })
-            .collect();
-        todo.sort_by(|&a, &b| lowest_first(&cands[a], &cands[b]));
-        let refined = refine_in_order(
-            &todo,
-            policy.clusters,
-            rayon::current_num_threads(),
-            |&i| cands[i].solution.objective,
-            |&i, wanted| {
-                let c = cands[i].clone();
-                refine_until_verified(problem, settings, c, policy, ceiling, wanted)
-            },
-            |(c, _)| (class(&c.solution) == SETTLED).then_some(c.solution.objective),
+        let records = refine_below(
+            &mut self.candidates,
+            problem,
+            settings,
+            policy,
+            f64::INFINITY,
         );
-        for (i, (c, recs)) in refined {
-            cands[i] = c;
-            self.refinements.extend(recs);
-        }
+        self.refinements.extend(records);
     }
 
     /// The global search's exploitation ([`global::exploit`], settings [`VerifyPolicy::hops`]
