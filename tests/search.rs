@@ -761,7 +761,10 @@ fn every_seed_verifies_an_executed_human_plan() {
 /// seed 0–9 returns a verified plan that the bounded hybrid controller executes on every
 /// perturbed plant of the robustness table. Before the clearance floor's rise (decision record
 /// 0050) and the flight's pace (0051), seven seeds returned a plan that missed the target with
-/// 50 % more socket damping. BENCHMARKS.md ("The flight's pace") records each seed.
+/// 50 % more socket damping. BENCHMARKS.md ("The flight's pace") records each seed. And no
+/// seed ends in the family that holds the base joint still (J ≈ 1e-2, three seeds in ten
+/// while the starts stayed within ±0.6 rad of the default guess, decision record 0054): every
+/// plan is below 3e-3.
 #[test]
 #[ignore = "about 15 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_returns_a_robust_cot_plan -- --ignored`"]
@@ -784,17 +787,19 @@ fn every_seed_returns_a_robust_cot_plan() {
         if check.is_null() || !check["robustness_failure"].is_null() {
             misses.push(format!("seed {seed}: {check}"));
         }
+        let j = v["objective"].as_f64().unwrap();
+        if j >= 3e-3 {
+            misses.push(format!("seed {seed}: J {j}"));
+        }
     }
     assert!(misses.is_empty(), "{misses:?}");
 }
 
-/// The promotion's bound (decision record 0053). On the coarse mesh, `periodic-cot` seed 0
-/// reaches the low family of plans (coarse J ≈ 7e-4, the base joint swinging through most of
-/// a turn) and, below it, 15 shapes of coarse J 2e-5–5.5e-4 whose long free phases the coarse
-/// mesh under-prices: every one re-solves on the problem's mesh at J > 8e-3. With only
-/// the eight lowest promoted, the search verified J = 1.03e-2 (the other family, on the 10 s
-/// period bound). With the promotion going on while a coarse shape is below the best
-/// re-solved objective, it verifies a plan of the low family, more than ten times lower.
+/// The promotion's bound (decision record 0053). The coarse mesh under-prices the long free
+/// phases of the `periodic-cot` orbits, so the lowest coarse shapes need not be the lowest on
+/// the problem's mesh. On seed 0 the first round of eight promoted shapes re-solves at
+/// J ≥ 9.3e-4; coarse shapes below that go on being promoted, and the fourth round's
+/// re-solve at 8.3e-4, which the search verifies and executes.
 #[test]
 fn the_promotion_goes_on_while_a_coarse_shape_can_still_win() {
     let (_, v) = verified_default_search(
@@ -809,7 +814,7 @@ fn the_promotion_goes_on_while_a_coarse_shape_can_still_win() {
         ],
     );
     let j = v["objective"].as_f64().unwrap();
-    assert!(j < 1e-3, "J {j}");
+    assert!(j < 9e-4, "J {j}");
     // Executed in closed loop, and robust.
     assert!(v["verification"]["execution"].is_object());
     assert!(

@@ -3,9 +3,12 @@
 //! re-integration; multi-start must be deterministic and never worse than its start 0 (the
 //! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
 
-use ball_finger::pipeline::strategy::{Strategy, random_start, solve_with_strategy};
+use ball_finger::pipeline::strategy::{
+    START_PRISMATIC_HALF_WIDTH, Strategy, random_start, solve_with_strategy, start_intervals,
+};
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{SolutionIo, build, solve, solve_warm};
+use bf_codegen::spec::JointType;
 use bf_optim::ipm::Status;
 use bf_problem::catalogue::Q_GUESS;
 use bf_problem::{OcpSolution, Problem, ProblemSettings, StartGuess};
@@ -77,21 +80,82 @@ fn multistart_is_deterministic_and_never_worse_than_its_default_start() {
 
 #[test]
 fn random_starts_are_reproducible_and_within_their_ranges() {
-    let d = random_start(0, 5, &Q_GUESS, 3);
+    let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
+    let wide = start_intervals(&p.scene, &Q_GUESS);
+    let d = random_start(0, 5, &Q_GUESS, &wide, 3);
     assert_eq!(d.q, Q_GUESS.to_vec());
     assert_eq!(d.durations, vec![1.0; 3]);
-    let a = random_start(4, 5, &Q_GUESS, 3);
-    assert_eq!(a, random_start(4, 5, &Q_GUESS, 3));
-    assert_ne!(a, random_start(4, 6, &Q_GUESS, 3));
-    assert_ne!(a, random_start(5, 5, &Q_GUESS, 3));
+    let a = random_start(4, 5, &Q_GUESS, &wide, 3);
+    assert_eq!(a, random_start(4, 5, &Q_GUESS, &wide, 3));
+    assert_ne!(a, random_start(4, 6, &Q_GUESS, &wide, 3));
+    assert_ne!(a, random_start(5, 5, &Q_GUESS, &wide, 3));
+    // The paper's finger has three revolute joints without limits: each start angle anywhere
+    // in the joint's revolution around q⁰, and 200 starts cover each revolution.
+    let pi = std::f64::consts::PI;
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let narrow = vec![(-0.1, 0.1); 3];
     for k in 1..200 {
-        let g = random_start(k, 1, &Q_GUESS, 3);
-        for (q, q0) in g.q.iter().zip(Q_GUESS) {
-            assert!((q - q0).abs() <= 0.6);
+        let g = random_start(k, 1, &Q_GUESS, &wide, 3);
+        for (i, (q, q0)) in g.q.iter().zip(Q_GUESS).enumerate() {
+            assert!((q - q0).abs() <= pi, "joint {i}: {q}");
+            lo[i] = lo[i].min(q - q0);
+            hi[i] = hi[i].max(q - q0);
         }
         for t in &g.durations {
             assert!((0.05..1.6).contains(t), "{t}");
         }
+        // The intervals move the joints only, never the durations.
+        let n = random_start(k, 1, &Q_GUESS, &narrow, 3);
+        assert_eq!(n.durations, g.durations);
+        assert!(n.q.iter().all(|q| (-0.1..=0.1).contains(q)), "{:?}", n.q);
+    }
+    for i in 0..3 {
+        assert!(
+            lo[i] < -0.9 * pi && hi[i] > 0.9 * pi,
+            "joint {i}: {}..{}",
+            lo[i],
+            hi[i]
+        );
+    }
+}
+
+#[test]
+fn start_intervals_keep_to_the_joint_limits_and_joint_kinds() {
+    let mut scene = build(Problem::PeriodicQc, &ProblemSettings::default())
+        .unwrap()
+        .scene;
+    let pi = std::f64::consts::PI;
+    let q0 = [0.1, 0.6, 0.9];
+    let whole = start_intervals(&scene, &q0);
+    for (&(lo, hi), q) in whole.iter().zip(q0) {
+        assert_eq!((lo, hi), (q - pi, q + pi));
+    }
+    // A lower limit inside the revolution cuts it; a prismatic joint keeps its neighbourhood
+    // in metres; limits that leave no room around q⁰ leave q⁰ alone.
+    scene.links[0].q_min = Some(-0.5);
+    scene.links[1].joint = JointType::Prismatic;
+    scene.links[2].q_min = Some(2.0);
+    scene.links[2].q_max = Some(1.0);
+    let cut = start_intervals(&scene, &q0);
+    assert_eq!(cut[0], (-0.5, 0.1 + pi));
+    assert_eq!(
+        cut[1],
+        (
+            0.6 - START_PRISMATIC_HALF_WIDTH,
+            0.6 + START_PRISMATIC_HALF_WIDTH
+        )
+    );
+    assert_eq!(cut[2], (0.9, 0.9));
+    for k in 1..50 {
+        let g = random_start(k, 3, &q0, &cut, 3);
+        assert!((-0.5..=0.1 + pi).contains(&g.q[0]), "{:?}", g.q);
+        assert!(
+            (g.q[1] - 0.6).abs() <= START_PRISMATIC_HALF_WIDTH,
+            "{:?}",
+            g.q
+        );
+        assert_eq!(g.q[2], 0.9);
     }
 }
 

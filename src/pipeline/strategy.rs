@@ -17,10 +17,11 @@
 //!
 //!   The chains run in parallel (rayon) and the best successful end point wins. Problems
 //!   without a period run the ε-homotopy alone (steps 3 from ε₀ = 10ε).
-//! * [`Strategy::Multistart`]: N guesses around the default (joint angles q⁰ ± 0.6 rad
-//!   uniform, phase durations log-uniform in [0.05, 1.6] s; start 0 is the default guess
-//!   itself, so the result is never worse than `Direct`), solved in parallel; the best
-//!   successful solution wins. [`default_strategy`] of the periodic problems:
+//! * [`Strategy::Multistart`]: N guesses over the finger's configuration space (each revolute
+//!   joint uniform over its whole revolution q⁰ᵢ ± π, cut to its limits where the scene gives
+//!   them, [`start_intervals`]; phase durations log-uniform in [0.05, 1.6] s; start 0 is the
+//!   default guess itself, so the result is never worse than `Direct`), solved in parallel;
+//!   the best successful solution wins. [`default_strategy`] of the periodic problems:
 //!   [`GLOBAL_STARTS`] starts with seed [`DEFAULT_SEED`] (the global search's sampling;
 //!   [`DEFAULT_STARTS`] without it).
 //!
@@ -37,6 +38,8 @@
 
 use std::time::Instant;
 
+use bf_codegen::Scene;
+use bf_codegen::spec::JointType;
 use bf_optim::ipm::Status;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, Problem, ProblemSettings, StartGuess};
 use rand::{Rng, SeedableRng};
@@ -170,9 +173,52 @@ fn best_index(results: &[ChainResult]) -> Option<(usize, bool)> {
     best.map(|(k, ok, _)| (k, ok))
 }
 
-/// Random start `k` of a multi-start around the default guess's configuration `q0` (the
-/// problem's [`BuiltProblem::guess`]`.free`; k = 0: the default guess itself).
-pub fn random_start(k: usize, seed: u64, q0: &[f64], nphases: usize) -> StartGuess {
+/// Half-width (m) of the interval a start draws a prismatic joint from, around q⁰ᵢ
+/// ([`start_intervals`]).
+pub const START_PRISMATIC_HALF_WIDTH: f64 = 0.6;
+
+/// The interval `[lo, hi]` each joint of a random start is drawn from ([`random_start`]): a
+/// revolute joint anywhere in its revolution, q⁰ᵢ ± π, a prismatic one within
+/// ±[`START_PRISMATIC_HALF_WIDTH`] of q⁰ᵢ, each cut to the joint's limits where the scene gives
+/// them (an interval the limits leave empty is q⁰ᵢ alone).
+///
+/// The whole revolution, not a neighbourhood of q⁰: the starts are the global search's only
+/// sampling of the configuration space, and the basins of the periodic problems differ in
+/// which joints swing and where the finger meets the ball. The lowest `periodic-cot` plans
+/// swing the first joint through about 4.6 rad and touch the ball at q₁ ≈ −1.35 rad; starts
+/// within ±0.6 rad of q⁰ (q⁰₁ = 0.1) never reached them on three seeds in ten, which ended
+/// at 13× their objective with the first joint held still (decision record 0054).
+pub fn start_intervals(scene: &Scene, q0: &[f64]) -> Vec<(f64, f64)> {
+    q0.iter()
+        .enumerate()
+        .map(|(i, &q)| {
+            let link = scene.links.get(i);
+            let half = match link.map(|l| l.joint) {
+                Some(JointType::Prismatic) => START_PRISMATIC_HALF_WIDTH,
+                _ => std::f64::consts::PI,
+            };
+            let lo = link
+                .and_then(|l| l.q_min)
+                .map_or(q - half, |m| m.max(q - half));
+            let hi = link
+                .and_then(|l| l.q_max)
+                .map_or(q + half, |m| m.min(q + half));
+            if lo < hi { (lo, hi) } else { (q, q) }
+        })
+        .collect()
+}
+
+/// Random start `k` of a multi-start from the default guess's configuration `q0` (the
+/// problem's [`BuiltProblem::guess`]`.free`; k = 0: the default guess itself): joint i uniform
+/// in `intervals[i]` ([`start_intervals`]; `q0[i]` where none is given), every phase duration
+/// log-uniform in [0.05, 1.6] s.
+pub fn random_start(
+    k: usize,
+    seed: u64,
+    q0: &[f64],
+    intervals: &[(f64, f64)],
+    nphases: usize,
+) -> StartGuess {
     if k == 0 {
         return StartGuess {
             q: q0.to_vec(),
@@ -183,7 +229,16 @@ pub fn random_start(k: usize, seed: u64, q0: &[f64], nphases: usize) -> StartGue
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(k as u64);
     StartGuess {
-        q: q0.iter().map(|q| q + rng.random_range(-0.6..0.6)).collect(),
+        // One draw per joint whatever its interval, so that the durations of start k do not
+        // depend on the intervals.
+        q: q0
+            .iter()
+            .enumerate()
+            .map(|(i, &q)| {
+                let u: f64 = rng.random();
+                intervals.get(i).map_or(q, |&(lo, hi)| lo + (hi - lo) * u)
+            })
+            .collect(),
         durations: (0..nphases)
             .map(|_| libm::pow(10f64, rng.random_range(-1.3..0.2)))
             .collect(),
@@ -242,6 +297,7 @@ fn chains_of(
 ) -> Result<Vec<Vec<(String, ProblemSettings)>>, PipelineError> {
     let eps = target.epsilon;
     let q0 = &target.guess.free;
+    let intervals = start_intervals(&target.scene, q0);
     let nphases = target.modes.len();
     let periodic = problem.is_periodic();
     Ok(match strategy {
@@ -299,7 +355,7 @@ fn chains_of(
             }
             (0..starts)
                 .map(|k| {
-                    let sg = random_start(k, seed, q0, nphases);
+                    let sg = random_start(k, seed, q0, &intervals, nphases);
                     vec![(
                         format!("start {k}"),
                         ProblemSettings {

@@ -20,7 +20,7 @@ pub enum Strategy {
     /// Period sweep + release + ε-homotopy; the default.
     #[default]
     Continuation,
-    /// `starts` guesses drawn around the default with seed `seed`.
+    /// `starts` guesses drawn with seed `seed` (each revolute joint over its revolution).
     Multistart {
         /// Number of starts (≥ 1; start 0 is the default guess).
         starts: usize,

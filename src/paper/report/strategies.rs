@@ -161,13 +161,14 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
     let mut md = String::from(
         "Default problem settings (hp-Radau 3 × 10 points per phase, ε = 0.01); every \
          strategy from scratch; wall time on this machine with 2 worker threads (rayon) for \
-         the parallel strategies. `multistart` keeps its best start (`optimize --hops 0`); \
+         the parallel strategies. `multistart` keeps its best start (`optimize --hops 0`; \
+         each start draws every joint over its whole revolution); \
          `+ global search` is the default of `optimize`: the starts solved on a coarse mesh \
          (3 × 4 points per phase; on the COT problems every other start first held to the \
          period of its guess, then released), reshaping moves (the elbow flip, phase-duration bounds) \
          and basin hopping from the best distinct optima and polishing of the winner there, the best optima that differ in shape re-solved on the problem's mesh (more of them while a \
          coarse objective is below the best re-solved one) and re-integrated, unverified better \
-         ones hp-refined, then the moves and hops again around the verified winner on its own mesh \
+         ones hp-refined (each only while it stays below the best verified one), then the moves and hops again around the verified winner on its own mesh \
          (docs/optima.md). φ/φ_cold < 1 is a better optimum than the cold start's. \
          Defect: the largest end-of-phase state error when each phase is re-integrated with \
          the optimal torques (DOPRI5, rtol 1e-10).\n\n\
