@@ -1791,14 +1791,7 @@ mod tests {
         for k in (0..10).step_by(2) {
             assert_eq!(held[k], plain[k]);
         }
-        let start: f64 = plain[9][0]
-            .1
-            .start
-            .as_ref()
-            .unwrap()
-            .durations
-            .iter()
-            .sum();
+        let start: f64 = plain[9][0].1.start.as_ref().unwrap().durations.iter().sum();
         assert_eq!(held[9].len(), 2);
         assert_eq!(held[9][0].1.period_bounds, Some((0.0, start)));
         assert_eq!(held[9][1].1.period_bounds, plain[9][0].1.period_bounds);
