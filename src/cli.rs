@@ -487,9 +487,9 @@ pub struct OptimizeArgs {
     pub proximal_weight: Option<f64>,
     /// How to search for a good local optimum: `direct` (one solve from the paper's guess),
     /// `continuation` (period sweep + release + ε-homotopy, chains in parallel) or
-    /// `multistart` (`--starts` seeded guesses over the finger's configuration space: each
-    /// revolute joint anywhere in its revolution, within its limits if the scene gives any; in
-    /// parallel). Default with
+    /// `multistart` (`--starts` seeded guesses, in parallel: with the global search each revolute
+    /// joint anywhere in its revolution, within its limits if the scene gives any; with
+    /// `--hops 0` within 0.6 rad of the default guess). Default with
     /// `--scheme radau`: multistart with 128 starts (seed 0) and the global search (`--hops`)
     /// for the periodic problems,
     /// continuation for the others; with `--scheme lg`: direct (an LG-30 solve takes about 4× a Radau

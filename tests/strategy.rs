@@ -4,7 +4,8 @@
 //! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
 
 use ball_finger::pipeline::strategy::{
-    START_PRISMATIC_HALF_WIDTH, Strategy, random_start, solve_with_strategy, start_intervals,
+    START_NEIGHBOURHOOD, START_PRISMATIC_HALF_WIDTH, Strategy, random_start, solve_with_strategy,
+    start_intervals,
 };
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{SolutionIo, build, solve, solve_warm};
@@ -82,13 +83,13 @@ fn multistart_is_deterministic_and_never_worse_than_its_default_start() {
 fn random_starts_are_reproducible_and_within_their_ranges() {
     let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
     let wide = start_intervals(&p.scene, &Q_GUESS);
-    let d = random_start(0, 5, &Q_GUESS, &wide, 3);
+    let d = random_start(0, 5, &Q_GUESS, Some(&wide), 3);
     assert_eq!(d.q, Q_GUESS.to_vec());
     assert_eq!(d.durations, vec![1.0; 3]);
-    let a = random_start(4, 5, &Q_GUESS, &wide, 3);
-    assert_eq!(a, random_start(4, 5, &Q_GUESS, &wide, 3));
-    assert_ne!(a, random_start(4, 6, &Q_GUESS, &wide, 3));
-    assert_ne!(a, random_start(5, 5, &Q_GUESS, &wide, 3));
+    let a = random_start(4, 5, &Q_GUESS, Some(&wide), 3);
+    assert_eq!(a, random_start(4, 5, &Q_GUESS, Some(&wide), 3));
+    assert_ne!(a, random_start(4, 6, &Q_GUESS, Some(&wide), 3));
+    assert_ne!(a, random_start(5, 5, &Q_GUESS, Some(&wide), 3));
     // The paper's finger has three revolute joints without limits: each start angle anywhere
     // in the joint's revolution around q⁰, and 200 starts cover each revolution.
     let pi = std::f64::consts::PI;
@@ -96,7 +97,7 @@ fn random_starts_are_reproducible_and_within_their_ranges() {
     let mut hi = [f64::NEG_INFINITY; 3];
     let narrow = vec![(-0.1, 0.1); 3];
     for k in 1..200 {
-        let g = random_start(k, 1, &Q_GUESS, &wide, 3);
+        let g = random_start(k, 1, &Q_GUESS, Some(&wide), 3);
         for (i, (q, q0)) in g.q.iter().zip(Q_GUESS).enumerate() {
             assert!((q - q0).abs() <= pi, "joint {i}: {q}");
             lo[i] = lo[i].min(q - q0);
@@ -106,9 +107,15 @@ fn random_starts_are_reproducible_and_within_their_ranges() {
             assert!((0.05..1.6).contains(t), "{t}");
         }
         // The intervals move the joints only, never the durations.
-        let n = random_start(k, 1, &Q_GUESS, &narrow, 3);
+        let n = random_start(k, 1, &Q_GUESS, Some(&narrow), 3);
         assert_eq!(n.durations, g.durations);
         assert!(n.q.iter().all(|q| (-0.1..=0.1).contains(q)), "{:?}", n.q);
+        // Without intervals (the plain multi-start): near the default guess.
+        let near = random_start(k, 1, &Q_GUESS, None, 3);
+        assert_eq!(near.durations, g.durations);
+        for (q, q0) in near.q.iter().zip(Q_GUESS) {
+            assert!((q - q0).abs() <= START_NEIGHBOURHOOD, "{:?}", near.q);
+        }
     }
     for i in 0..3 {
         assert!(
@@ -148,7 +155,7 @@ fn start_intervals_keep_to_the_joint_limits_and_joint_kinds() {
     );
     assert_eq!(cut[2], (0.9, 0.9));
     for k in 1..50 {
-        let g = random_start(k, 3, &q0, &cut, 3);
+        let g = random_start(k, 3, &q0, Some(&cut), 3);
         assert!((-0.5..=0.1 + pi).contains(&g.q[0]), "{:?}", g.q);
         assert!(
             (g.q[1] - 0.6).abs() <= START_PRISMATIC_HALF_WIDTH,

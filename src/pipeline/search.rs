@@ -900,6 +900,9 @@ fn refine_in_order<I: Copy + Sync, T: Send>(
 /// left (`refine_until_verified`, at most `policy.clusters` of them). Every
 /// decision depends on the computed values only, never on thread scheduling, so the result is
 /// the same bit for bit with any number of threads. [`Search::best`] then picks by [`select`].
+/// The starts of a global search ([`VerifyPolicy::hops`]) sample each joint's revolution,
+/// those of a plain multi-start the neighbourhood of the default guess (decision record
+/// 0054).
 pub fn search(
     problem: Problem,
     settings: &ProblemSettings,
@@ -908,12 +911,35 @@ pub fn search(
     policy: &VerifyPolicy,
     progress: Progress<'_>,
 ) -> Result<Search, PipelineError> {
+    let revolution = policy.hops.is_some();
+    search_sampling(
+        problem, settings, strategy, shard, policy, progress, revolution,
+    )
+}
+
+/// [`search`] with its starts drawn over each joint's revolution or not (`revolution`): the
+/// global search's fallback to the starts ([`Search::fall_back_to_the_starts`]) runs without
+/// hops but samples as the global search does.
+fn search_sampling(
+    problem: Problem,
+    settings: &ProblemSettings,
+    strategy: Strategy,
+    shard: Shard,
+    policy: &VerifyPolicy,
+    progress: Progress<'_>,
+    revolution: bool,
+) -> Result<Search, PipelineError> {
     let t0 = Instant::now();
     let strategy = effective(settings, strategy);
     let coarse = coarse_mesh(settings, strategy, policy);
     let sampled_on = coarse.as_ref().map_or(settings, |(_, s)| s);
-    let (target, mut chains) =
-        prepare_chains(problem, sampled_on, strategy, policy.stick_continuation)?;
+    let (target, mut chains) = prepare_chains(
+        problem,
+        sampled_on,
+        strategy,
+        policy.stick_continuation,
+        revolution,
+    )?;
     if policy.hops.is_some() && super::bounds::period_row(&target.ocp).is_some() {
         hold_the_period(&mut chains);
     }
@@ -1474,8 +1500,9 @@ impl Search {
 
     /// The strategy checkpoint of a global search ([`VerifyPolicy::hops`]) that ends without a
     /// verified candidate: the [`super::strategy::DEFAULT_STARTS`] starts of the same seed on
-    /// the problem's own mesh (the search of `optimize --hops 0`), verified and refined the
-    /// same way, whose candidates join this search's (their chains numbered after its own).
+    /// the problem's own mesh (the search of `optimize --hops 0`, but with the global search's
+    /// sampling of each joint's revolution), verified and refined the same way, whose
+    /// candidates join this search's (their chains numbered after its own).
     /// The coarse ranking can place every shape of a family that does not verify above the
     /// ones that do: on the plans for the plant of `periodic-cot-human`, with the controller of
     /// decision record 0048, seeds 4 and 5 promoted 24 shapes of the lower plans that it did
@@ -1510,7 +1537,17 @@ impl Search {
             starts: super::strategy::DEFAULT_STARTS,
             seed,
         };
-        let found = search(problem, settings, starts, Shard::WHOLE, &plain, progress)?;
+        // The global search's sampling goes on: on the problem's mesh, without hops (on
+        // `periodic-cot` seed 4 these starts verify J = 1.2e-3, near q⁰ 2.9e-2).
+        let found = search_sampling(
+            problem,
+            settings,
+            starts,
+            Shard::WHOLE,
+            &plain,
+            progress,
+            true,
+        )?;
         let offset = self.next_index();
         let renumber = |mut r: StageRecord| {
             r.chain += offset;
@@ -1783,7 +1820,7 @@ mod tests {
             seed: 5,
         };
         let p = Problem::PeriodicCotHuman;
-        let (target, plain) = prepare_chains(p, &coarse, strategy, None).expect("builds");
+        let (target, plain) = prepare_chains(p, &coarse, strategy, None, true).expect("builds");
         let (_, tmax) =
             crate::pipeline::bounds::period_row(&target.ocp).expect("COT bounds its period");
         let mut held = plain.clone();

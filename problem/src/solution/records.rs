@@ -20,7 +20,8 @@ pub enum Strategy {
     /// Period sweep + release + ε-homotopy; the default.
     #[default]
     Continuation,
-    /// `starts` guesses drawn with seed `seed` (each revolute joint over its revolution).
+    /// `starts` guesses drawn with seed `seed` (with the global search each revolute joint over
+    /// its revolution, without it near the default guess).
     Multistart {
         /// Number of starts (≥ 1; start 0 is the default guess).
         starts: usize,
