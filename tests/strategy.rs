@@ -4,8 +4,7 @@
 //! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
 
 use ball_finger::pipeline::strategy::{
-    START_NEIGHBOURHOOD, START_PRISMATIC_HALF_WIDTH, Strategy, random_start, solve_with_strategy,
-    start_intervals,
+    START_NEIGHBOURHOOD, Strategy, random_start, solve_with_strategy, start_intervals,
 };
 use ball_finger::pipeline::verify::verify;
 use ball_finger::pipeline::{SolutionIo, build, solve, solve_warm};
@@ -148,20 +147,13 @@ fn start_intervals_keep_to_the_joint_limits_and_joint_kinds() {
     assert_eq!(cut[0], (-0.5, 0.1 + pi));
     assert_eq!(
         cut[1],
-        (
-            0.6 - START_PRISMATIC_HALF_WIDTH,
-            0.6 + START_PRISMATIC_HALF_WIDTH
-        )
+        (0.6 - START_NEIGHBOURHOOD, 0.6 + START_NEIGHBOURHOOD)
     );
     assert_eq!(cut[2], (0.9, 0.9));
     for k in 1..50 {
         let g = random_start(k, 3, &q0, Some(&cut), 3);
         assert!((-0.5..=0.1 + pi).contains(&g.q[0]), "{:?}", g.q);
-        assert!(
-            (g.q[1] - 0.6).abs() <= START_PRISMATIC_HALF_WIDTH,
-            "{:?}",
-            g.q
-        );
+        assert!((g.q[1] - 0.6).abs() <= START_NEIGHBOURHOOD, "{:?}", g.q);
         assert_eq!(g.q[2], 0.9);
     }
 }

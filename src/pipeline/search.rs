@@ -513,21 +513,19 @@ fn execution_failed(sol: &OcpSolution) -> bool {
 fn refine_until_verified(
     problem: Problem,
     settings: &ProblemSettings,
-    mut cur: Candidate,
+    start: Candidate,
     policy: &VerifyPolicy,
     ceiling: f64,
     earlier: &dyn Fn() -> Option<f64>,
 ) -> RefinedChain {
     let mut records = Vec::new();
-    let mut steps = Vec::new();
+    let mut steps: Vec<(Candidate, usize)> = Vec::new();
     let mut tol = policy.refine_tol;
-    let mut before = cur
-        .solution
-        .verification
-        .as_ref()
-        .and_then(path_only_excess);
-    let mut defects = DefectProgress::new(cur.solution.verification.as_ref().map(|v| v.max_defect));
+    let start_check = start.solution.verification.as_ref();
+    let mut before = start_check.and_then(path_only_excess);
+    let mut defects = DefectProgress::new(start_check.map(|v| v.max_defect));
     for _ in 0..policy.refine_attempts {
+        let cur = steps.last().map_or(&start, |(c, _)| c);
         if is_verified(&cur.solution) || execution_failed(&cur.solution) || earlier().is_none() {
             break;
         }
@@ -614,8 +612,7 @@ fn refine_until_verified(
                 // No longer wanted (its result is dropped): it stops as if above.
                 let bound = earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
                 let above = next.solution.objective >= bound;
-                cur = next;
-                steps.push((cur.clone(), records.len()));
+                steps.push((next, records.len()));
                 if no_progress || defect_stalled || above {
                     break;
                 }
@@ -631,18 +628,19 @@ fn refine_until_verified(
         tol *= 0.1;
     }
     RefinedChain {
-        end: cur,
+        start,
         records,
         steps,
     }
 }
 
-/// A candidate's refinement chain ([`refine_until_verified`]): where it ended, a record per
-/// attempt, and each successful refinement with the number of records up to it, so that the
-/// chain can be ended where a lower ceiling would have ended it ([`RefinedChain::cut`]).
+/// A candidate's refinement chain ([`refine_until_verified`]): the candidate it started
+/// from, a record per attempt, and each successful refinement with the number of records up
+/// to it, so that the chain can be ended where a lower ceiling would have ended it
+/// ([`RefinedChain::cut`]). It ends at its last successful refinement, or where it started.
 #[derive(Debug, Clone)]
 struct RefinedChain {
-    end: Candidate,
+    start: Candidate,
     records: Vec<StageRecord>,
     steps: Vec<(Candidate, usize)>,
 }
@@ -660,17 +658,24 @@ impl RefinedChain {
     /// up to there, so the chain is a prefix of this one).
     fn cut(mut self, c: f64) -> Self {
         if let Some(i) = self.cut_at(c) {
+            let n = self.steps[i].1;
             self.steps.truncate(i + 1);
-            let (end, n) = self.steps[i].clone();
-            self.end = end;
             self.records.truncate(n);
         }
         self
     }
 
+    /// Where the chain ended.
+    fn end(self) -> Candidate {
+        self.steps.into_iter().last().map_or(self.start, |(c, _)| c)
+    }
+
     /// The objective at which the chain cut at `c` ends verified and robust, if it does.
     fn settled(&self, c: f64) -> Option<f64> {
-        let end = self.cut_at(c).map_or(&self.end, |i| &self.steps[i].0);
+        let end = match self.cut_at(c) {
+            Some(i) => &self.steps[i].0,
+            None => self.steps.last().map_or(&self.start, |(s, _)| s),
+        };
         (class(&end.solution) == SETTLED).then_some(end.solution.objective)
     }
 }
@@ -789,9 +794,9 @@ fn refine_below(
         RefinedChain::cut,
     );
     let mut records = Vec::new();
-    for (i, chain) in refined {
-        cands[i] = chain.end;
-        records.extend(chain.records);
+    for (i, mut chain) in refined {
+        records.append(&mut chain.records);
+        cands[i] = chain.end();
     }
     records
 }
@@ -834,12 +839,10 @@ fn refine_in_order<I: Copy + Sync, T: Send>(
     // if they rule out k.
     let lowest_before = |done: &[Option<T>], k: usize| {
         let mut best = f64::INFINITY;
-        for j in 0..k {
-            if value(&order[j]) >= REFINE_BELOW * best {
-                // Values ascend: k is ruled out as well.
-                return None;
-            }
-            let Some(t) = &done[j] else { break };
+        // (A result before k that the rule itself rules out may still lower `best` here, but
+        // values ascend, so k is ruled out by it either way.)
+        for t in &done[..k] {
+            let Some(t) = t else { break };
             if let Some(v) = verified(t, best) {
                 best = best.min(v);
             }

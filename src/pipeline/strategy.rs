@@ -175,12 +175,9 @@ fn best_index(results: &[ChainResult]) -> Option<(usize, bool)> {
     best.map(|(k, ok, _)| (k, ok))
 }
 
-/// Half-width (m) of the interval a start draws a prismatic joint from, around q⁰ᵢ
-/// ([`start_intervals`]).
-pub const START_PRISMATIC_HALF_WIDTH: f64 = 0.6;
-
 /// Half-width (rad, or m for a prismatic joint) of the neighbourhood of q⁰ that the starts of
-/// a plain multi-start draw every joint from ([`random_start`] without intervals). A plain
+/// a plain multi-start draw every joint from ([`random_start`] without intervals), and the
+/// global search's starts a prismatic joint ([`start_intervals`]). A plain
 /// multi-start keeps the best start as solved, with no moves or hops to carry a start into
 /// a better basin, so its starts stay near the default guess: on `periodic-qc` (sticking law)
 /// 4 starts within it reach J = 0.0877, while 8 drawn over the revolution end at 0.124.
@@ -188,8 +185,8 @@ pub const START_NEIGHBOURHOOD: f64 = 0.6;
 
 /// The interval `[lo, hi]` each joint of a random start is drawn from ([`random_start`]): a
 /// revolute joint anywhere in its revolution, q⁰ᵢ ± π, a prismatic one within
-/// ±[`START_PRISMATIC_HALF_WIDTH`] of q⁰ᵢ, each cut to the joint's limits where the scene gives
-/// them (an interval the limits leave empty is q⁰ᵢ alone).
+/// ±[`START_NEIGHBOURHOOD`] of q⁰ᵢ, each cut to the joint's limits where the scene gives them
+/// ([`bf_problem::arm::joint_limits`]; an interval the limits leave empty is q⁰ᵢ alone).
 ///
 /// The whole revolution, not a neighbourhood of q⁰: the starts are the global search's only
 /// sampling of the configuration space, and the basins of the periodic problems differ in
@@ -198,20 +195,16 @@ pub const START_NEIGHBOURHOOD: f64 = 0.6;
 /// within ±0.6 rad of q⁰ (q⁰₁ = 0.1) never reached them on three seeds in ten, which ended
 /// at 13× their objective with the first joint held still (decision record 0054).
 pub fn start_intervals(scene: &Scene, q0: &[f64]) -> Vec<(f64, f64)> {
+    let limits = bf_problem::arm::joint_limits(scene);
     q0.iter()
-        .enumerate()
-        .map(|(i, &q)| {
-            let link = scene.links.get(i);
-            let half = match link.map(|l| l.joint) {
-                Some(JointType::Prismatic) => START_PRISMATIC_HALF_WIDTH,
-                _ => std::f64::consts::PI,
+        .zip(&scene.links)
+        .zip(limits)
+        .map(|((&q, link), (q_min, q_max))| {
+            let half = match link.joint {
+                JointType::Prismatic => START_NEIGHBOURHOOD,
+                JointType::Revolute => std::f64::consts::PI,
             };
-            let lo = link
-                .and_then(|l| l.q_min)
-                .map_or(q - half, |m| m.max(q - half));
-            let hi = link
-                .and_then(|l| l.q_max)
-                .map_or(q + half, |m| m.min(q + half));
+            let (lo, hi) = ((q - half).max(q_min), (q + half).min(q_max));
             if lo < hi { (lo, hi) } else { (q, q) }
         })
         .collect()
@@ -220,7 +213,8 @@ pub fn start_intervals(scene: &Scene, q0: &[f64]) -> Vec<(f64, f64)> {
 /// Random start `k` of a multi-start from the default guess's configuration `q0` (the
 /// problem's [`BuiltProblem::guess`]`.free`; k = 0: the default guess itself): joint i uniform
 /// in `intervals[i]` ([`start_intervals`]; `q0[i]` where none is given), or, without
-/// intervals, within ±[`START_NEIGHBOURHOOD`] of `q0[i]`; every phase duration log-uniform in
+/// intervals, within ±[`START_NEIGHBOURHOOD`] of `q0[i]` (the draws the plain multi-start has
+/// always made, so its optima stay as they were); every phase duration log-uniform in
 /// [0.05, 1.6] s.
 pub fn random_start(
     k: usize,
