@@ -74,40 +74,43 @@
 //! offset is bounded by itself (below).
 //!
 //! **Outer loop:** at the end of each period (when the reference wraps to its first phase) the
-//! measured mean ω̄ of that period moves the ω offset of the contact phases,
-//! δ ← δ + (γ/ρ) P (ω̄* − ω̄), with ‖δ‖ ≤ 0.5 ‖ω*_lo‖ (anti-windup), ω*_lo the planned ω at
-//! lift-off, P = 1 − r̂ r̂ᵀ with r̂ the direction of the contact point r_c at the period's
-//! lift-off (every contact force's moment r_c × λ is normal to r_c, so no contact phase
-//! changes the spin about r̂: integrated, that part of the error wound δ up against the
-//! socket damping alone, and its leak into the tangential force saturated the actuators),
-//! and ρ = ‖ω̄‖ / ‖ω_lo‖ the period's measured ratio of its mean ω to its lift-off
-//! ω (the plan's ‖ω̄*‖ / ‖ω*_lo‖ for a period without lift-off; in [0.05, 1]). δ moves the
-//! ω the contact phase leaves the ball with, and the flight's socket damping (eq. 29b, ω
-//! decays as e^{−D t / I_b}) passes only the share ρ of it on to the period's mean: ρ ≈ 0.2
-//! on the human finger's COT optimum (an 8.5 s flight against I_b / D = 2 s), where a gain γ
-//! on the mean's error alone corrects a tenth per period, and a plant with 50 % more socket
-//! damping (ρ a third lower than planned) needs the ball to leave 50 % faster. δ ramps in
-//! with the weight w over the last t_δ = 0.1 s of a contact phase (all of a shorter one),
-//! and the contact-point loop's target moves with the roll it causes (above), so that loop
-//! does not undo it; the ramp keeps that roll to ‖δ‖ t_δ / 2.
+//! measured mean ω̄ of that period corrects one of two levers: the length of the next flights
+//! where the period's flight is long enough to pace (below), otherwise the ω offset δ of the
+//! contact phases.
 //!
-//! **The flight's pace:** the outer loop has a second lever, the length of the flight. Each
-//! flight (from a lift-off to the next planned contact, planned length F) keeps the plan's
-//! clock over its first and last 15 % (the lift-off with its clearance floor, the approach
-//! re-timed by the gap) and runs the reference at the pace κ through the middle: the free law
-//! tracks q*(σ), κ q̇*(σ) with the feed-forward κ² q̈*(σ) there, and the flight lasts
-//! F − (1 − 1/κ) 0.7 F. Where the ball's spin dies out in the flight (socket damping, eq. 29b:
-//! I_b / D = 2 s against the 8–9 s flights of the COT plans) the period's mean is ω_lo I_b / D
-//! over the period's length T, and 50 % more damping takes a third of it: δ would need the ball
-//! to leave 50 % faster, more roll in the same stick phase, and on the low `periodic-cot` plans,
-//! which stick at the fingertip, that roll takes the contact past the end of the link. A flight
-//! shortened by the same ratio keeps the mean with the planned lift-off. At the end of each
-//! period the error along ω̄* is split: the share 1 − ρ goes to the pace, which aims at the
-//! period T ← T (ω̄ · ω̂* / ‖ω̄*‖)^{γ_κ (1 − ρ)} (the plan's period less what the middle saves,
-//! κ ∈ [1/3, 3]), the rest and the error across ω̄* to δ as above. A flight whose middle has
-//! not begun when its period ends takes the new pace at once (a period that ends just after
-//! the lift-off), others from the next lift-off on. Flights planned shorter than 1 s keep the
-//! plan's pace (the QC plans).
+//! **The flight's pace** (flights planned 1 s or longer: the COT plans). Each flight (from a
+//! lift-off to the next planned contact, planned length F) keeps the plan's clock over its
+//! first and last 15 % (the lift-off with its clearance floor, the approach re-timed by the
+//! gap) and runs the reference at the pace κ through the middle: the free law tracks q*(σ),
+//! κ q̇*(σ) with the feed-forward κ² q̈*(σ) there, and the flight lasts F − (1 − 1/κ) 0.7 F.
+//! In a flight the ball's spin only decays (eq. 29b with the solid sphere's I_b:
+//! I_b ω̇ = −D ω), so a flight changes the period's mean by its length and never its
+//! direction; where the spin dies out in the flight (I_b / D = 2 s against the 6–10 s flights
+//! of the COT plans) the mean is ω_lo I_b / D over the period's length T, and 50 % more
+//! damping takes a third of it. So the pace takes the whole error along ω̄*, a Newton step on
+//! that model: it aims at the period T ← T (ω̄ · ω̂* / ‖ω̄*‖)^{γ_κ} (the plan's period less
+//! what the middle saves, κ ∈ [1/3, 3]), and δ stays as it is. The direction of ω̄ is the
+//! lift-off ω's, which the contact law tracks. A δ across ω̄* would ask the end of a stick
+//! phase for tangential force while λ_n falls to zero for the lift-off: on the low
+//! `periodic-cot` plans it broke the friction cone, the slip spun the ball about the vertical,
+//! and δ wound up against an error of its own making, the mean spin drifting away period after
+//! period (decision record 0056). A flight whose middle has not begun when its period ends
+//! takes the new pace at once (a period that ends just after the lift-off), others from the
+//! next lift-off on.
+//!
+//! **The ω offset** (periods without a flight to pace: the QC plans' flights of 0.1–0.5 s, or
+//! a pace turned off): δ ← δ + (γ/ρ) P (ω̄* − ω̄), with ‖δ‖ ≤ 0.5 ‖ω*_lo‖ (anti-windup),
+//! ω*_lo the planned ω at lift-off, P = 1 − r̂ r̂ᵀ with r̂ the direction of the contact point
+//! r_c at the period's lift-off (every contact force's moment r_c × λ is normal to r_c, so no
+//! contact phase changes the spin about r̂: integrated, that part of the error wound δ up
+//! against the socket damping alone, and its leak into the tangential force saturated the
+//! actuators), and ρ = ‖ω̄‖ / ‖ω_lo‖ the period's measured ratio of its mean ω to its lift-off
+//! ω (the plan's ‖ω̄*‖ / ‖ω*_lo‖ for a period without lift-off; in [0.05, 1]): δ moves the ω
+//! the contact phase leaves the ball with, and the flight's socket damping passes only the
+//! share ρ of it on to the period's mean. δ ramps in with the weight w over the last
+//! t_δ = 0.1 s of a contact phase (all of a shorter one), and the contact-point loop's target
+//! moves with the roll it causes (above), so that loop does not undo it; the ramp keeps that
+//! roll to ‖δ‖ t_δ / 2.
 //!
 //! **Friction measured:** in Slip the measured force gives the plant's μ_k = ‖λ_∥‖ / λ_n; the
 //! controller predicts the kinetic friction with it and scales its μ_s (the friction cone of
@@ -184,12 +187,12 @@ pub struct HybridGains {
     pub approach: f64,
     /// Contact phases.
     pub contact: ContactGains,
-    /// γ of the outer loop (share of the period's mean ω error corrected per period), in
-    /// [0, 1].
+    /// γ of the outer loop's ω offset (share of the period's mean ω error corrected per
+    /// period where the flight is not paced), in [0, 1].
     pub outer: f64,
     /// γ_κ of the flight's pace (module doc): share of the period's error along ω̄* that the
-    /// pace corrects per period, of the part 1 − ρ it is given, in [0, 1]; 0 leaves every
-    /// flight at the plan's pace.
+    /// pace corrects per period, in [0, 1]; 0 leaves every flight at the plan's pace (and
+    /// the ω offset takes the error).
     pub pace: f64,
 }
 
@@ -208,8 +211,9 @@ impl Default for HybridGains {
     /// k_s = 100/s, a_s = 20 m/s²; a friction margin of 20 % (a plant with μ 20 % below the
     /// model still sticks); lift-off share 5 %; γ = 0.5; γ_κ = 1 (where the ball's spin dies
     /// out in the flight the mean is the spin's integral over the period's length, so the
-    /// pace's step is Newton's on its share; 0.5 left the low `periodic-cot` plans within
-    /// 5–7 % in their 4th period with 50 % more socket damping, 1 within 3.4 %).
+    /// pace's step is Newton's; BENCHMARKS.md, "The flight's pace" and "The pace takes the
+    /// whole error along the mean spin", measure the low `periodic-cot` plans with 50 % more
+    /// socket damping).
     fn default() -> Self {
         HybridGains {
             free: ComputedTorque {
@@ -657,6 +661,12 @@ impl<K: Kernels<3>> HybridController<K> {
         self.last().omega_offset
     }
 
+    /// The pace κ the outer loop has set for the next flights (1: the plan's; module doc,
+    /// the flight's pace).
+    pub fn pace(&self) -> f64 {
+        self.last().pace
+    }
+
     fn last(&self) -> Discrete {
         let h = self.history.borrow();
         h[h.len() - 1]
@@ -1032,50 +1042,51 @@ impl<K: Kernels<3>> HybridController<K> {
             } else {
                 self.sensitivity
             };
-            // Every contact force acts at r_c, so its moment r_c × λ is normal to r_c: the
-            // spin about the contact point's direction is the socket damping's alone. An
-            // error along it is left out of δ, which would otherwise wind up against it
-            // (and through the contact point's motion leak into the tangential force).
-            let error = Vec3::from(self.mean_omega) - Vec3::from(mean);
-            let axis = Vec3::from(d.lift_off_contact);
-            let error = error - axis * axis.dot(&error);
-            // The flight's pace takes the share 1 − ρ of the error along ω̄*: where the ball's
-            // spin dies out in the flight (ρ small) the period's mean is its spin's integral
-            // over the period's length, and a shorter flight raises it without the extra roll
-            // in contact that a faster lift-off ω takes.
             let target = Vec3::from(self.mean_omega);
             let along = target.try_normalize(0.0);
-            let share = if self.gains.pace > 0.0 && d.flight.middle > 0.0 && along.is_some() {
-                1.0 - sensitivity
-            } else {
-                0.0
+            // The flight's pace, where this period's flight has a middle to pace, takes the
+            // whole error along ω̄* and δ none of it. In a flight the ball's spin only decays
+            // (eq. 29b with an isotropic I_b: I_b ω̇ = −D ω), so the flight changes the
+            // period's mean by its length and never its direction; that direction is the
+            // lift-off ω's, which the contact law tracks. A δ across ω̄* asks the end of a
+            // stick phase for tangential force while λ_n falls to zero for the lift-off: on
+            // the low `periodic-cot` plans it broke the cone and the slip spun the ball about
+            // the vertical, so δ wound up against an error of its own making (docs/decisions
+            // 0056). Where the spin dies out in the flight the mean is its integral over the
+            // period's length, so the pace's step is Newton's.
+            let ratio = along.map(|u| Vec3::from(mean).dot(&u) / target.norm());
+            let pace_ratio = match ratio {
+                Some(r) if self.gains.pace > 0.0 && d.flight.middle > 0.0 && r > 0.0 => Some(r),
+                _ => None,
             };
-            let mut correction = error;
-            if let Some(u) = along
-                && share > 0.0
-            {
-                correction -= u * (share * u.dot(&error));
-                let ratio = Vec3::from(mean).dot(&u) / target.norm();
-                if ratio > 0.0 {
-                    // The period the pace should give, and the plant time its flight's middle
-                    // then takes: the plan's period less what the shorter middle saves.
-                    let wanted = len * libm::pow(ratio, self.gains.pace * share);
-                    let paced = d.flight.middle - (self.plan(d.plan).period() - wanted);
-                    let kappa = if paced > 0.0 {
-                        d.flight.middle / paced
-                    } else {
-                        PACE_LIMITS.1
-                    };
-                    d.pace = kappa.clamp(PACE_LIMITS.0, PACE_LIMITS.1);
-                    // A flight still in its first part (the period ended right after its
-                    // lift-off) is the next period's: it takes the new pace now.
-                    if t - d.flight.start <= d.flight.ends {
-                        d.flight.kappa = d.pace;
-                    }
+            if let Some(ratio) = pace_ratio {
+                // The period the pace should give, and the plant time its flight's middle
+                // then takes: the plan's period less what the shorter middle saves.
+                let wanted = len * libm::pow(ratio, self.gains.pace);
+                let paced = d.flight.middle - (self.plan(d.plan).period() - wanted);
+                let kappa = if paced > 0.0 {
+                    d.flight.middle / paced
+                } else {
+                    PACE_LIMITS.1
+                };
+                d.pace = kappa.clamp(PACE_LIMITS.0, PACE_LIMITS.1);
+                // A flight still in its first part (the period ended right after its
+                // lift-off) is the next period's: it takes the new pace now.
+                if t - d.flight.start <= d.flight.ends {
+                    d.flight.kappa = d.pace;
                 }
-            }
-            for i in 0..3 {
-                d.omega_offset[i] += self.gains.outer / sensitivity * correction[i];
+            } else {
+                // Every contact force acts at r_c, so its moment r_c × λ is normal to r_c:
+                // the spin about the contact point's direction is the socket damping's
+                // alone. An error along it is left out of δ, which would otherwise wind up
+                // against it (and through the contact point's motion leak into the
+                // tangential force).
+                let error = target - Vec3::from(mean);
+                let axis = Vec3::from(d.lift_off_contact);
+                let correction = error - axis * axis.dot(&error);
+                for i in 0..3 {
+                    d.omega_offset[i] += self.gains.outer / sensitivity * correction[i];
+                }
             }
             // Anti-windup: a plant that cannot reach the optimum's ω must not drive the offset
             // (and with it the contact forces) without bound.

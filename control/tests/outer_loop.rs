@@ -107,3 +107,98 @@ fn the_outer_loop_corrects_the_error_the_contact_can_change_and_nothing_along_r_
         delta.dot(&axis)
     );
 }
+
+/// A plan whose flight is long enough to pace (2 s, at least `PACE_MIN_FLIGHT` = 1 s): the
+/// flight's pace takes the whole error along ω̄* and δ none of the error, across ω̄* included.
+/// In a flight the ball's spin only decays (eq. 29b, I_b ω̇ = −D ω for the solid sphere), so a
+/// flight changes the period's mean by its length, never its direction; a δ across ω̄* asked
+/// the end of a stick phase for tangential force while λ_n fell to zero, and on the low
+/// `periodic-cot` plans the slip it caused drove the spin about the vertical away period after
+/// period (decision record 0056).
+///
+/// Two periods of a free phase of 2 s and a stick phase of 0.05 s: the first (from the start,
+/// so without a lift-off to pace from) at ω*, the second (from its lift-off, paced) at
+/// 0.8 ω* plus 0.1 rad/s across it. Closed form of the pace: the period should become
+/// T (ω̄ · ω̂* / ‖ω̄*‖)^γ_κ = 2.05 · 0.8 = 1.64 s, so the flight's middle (2 s less 15 % at
+/// each end, 1.4 s) must take 1.4 − (2.05 − 1.64) = 0.99 s: κ = 1.4 / 0.99.
+#[test]
+fn a_paced_flight_corrects_the_mean_by_its_pace_and_leaves_delta_alone() {
+    let model = bf_model::fixtures::paper_scene().unwrap();
+    let q = TOUCHING;
+    let rest = State::new(VecN::from(q), VecN::zeros(), Vec3::zeros());
+    let axis = model.evaluate(&rest).unwrap().contact.r_c.normalize();
+    let omega_star = Vec3::new(0.0, 0.0, 2.0);
+    let row = |v: [f64; 3]| vec![v.to_vec(); 4];
+    let t = [0.0, 2.0, 2.0, 2.05];
+    let phase = [0, 0, 1, 1];
+    let (qs, zeros) = (row(q), row([0.0; 3]));
+    let omegas = row([omega_star[0], omega_star[1], omega_star[2]]);
+    let reference = Reference::from_samples(
+        &model,
+        &[false, true],
+        &[2.0, 0.05],
+        Samples {
+            t: &t,
+            phase: &phase,
+            q: &qs,
+            qd: &zeros,
+            omega: &omegas,
+            tau: &zeros,
+            lambda: &zeros,
+        },
+        [omega_star[0], omega_star[1], omega_star[2]],
+    )
+    .unwrap();
+    let (law, gains) = common::controller(&model, reference, q);
+    assert_eq!(gains.pace, 1.0, "the closed form below takes γ_κ = 1");
+
+    let state = |omega: Vec3| -> Vec<f64> {
+        q.iter()
+            .copied()
+            .chain([0.0; 3])
+            .chain(omega.iter().copied())
+            .collect()
+    };
+    let normal = axis.cross(&omega_star).normalize();
+    let period = |t0: f64, omega: Vec3| {
+        let x = state(omega);
+        let step = |t: f64, mode: Mode, from: Option<Mode>| {
+            law.observe(&Measurement {
+                t,
+                mode,
+                from,
+                x: &x,
+                lambda: None,
+            })
+        };
+        // The period's first sample: at the start, or right after the lift-off that ended
+        // the last period (no time passes, so the mean is this period's ω alone).
+        step(t0, Mode::Free, None);
+        for k in 1..=20 {
+            step(t0 + 0.1 * k as f64, Mode::Free, None);
+        }
+        step(t0 + 2.0, Mode::Stick, Some(Mode::Free));
+        for k in 1..=5 {
+            step(t0 + 2.0 + 0.01 * k as f64, Mode::Stick, None);
+        }
+        step(t0 + 2.05, Mode::Free, Some(Mode::Stick));
+    };
+    period(0.0, omega_star);
+    assert_eq!(law.periods(), 1);
+    assert_eq!(law.omega_offset(), [0.0; 3], "no error, no offset");
+    assert_eq!(law.pace(), 1.0, "an unpaced first period leaves the pace");
+
+    period(2.05, omega_star * 0.8 + normal * 0.1);
+    assert_eq!(law.periods(), 2);
+    assert_eq!(
+        law.omega_offset(),
+        [0.0; 3],
+        "a paced flight leaves δ alone, also across ω̄*"
+    );
+    let want = 1.4 / (1.4 - (2.05 - 2.05 * 0.8));
+    assert!(
+        (law.pace() - want).abs() < 1e-9,
+        "κ = {}, expected {want}",
+        law.pace()
+    );
+}
