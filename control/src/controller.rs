@@ -1034,14 +1034,6 @@ impl<K: Kernels<3>> HybridController<K> {
         let len = t - d.period_start;
         if len > 0.0 {
             let mean = d.omega_int.map(|v| v / len);
-            // ρ measured in the period when it had a lift-off: a plant whose flight differs
-            // from the plan (more socket damping) passes a different share of δ to the mean.
-            let measured = Vec3::from(mean).norm() / d.lift_off_omega;
-            let sensitivity = if d.lift_off_omega > 0.0 && measured.is_finite() {
-                measured.clamp(MIN_SENSITIVITY, 1.0)
-            } else {
-                self.sensitivity
-            };
             let target = Vec3::from(self.mean_omega);
             let along = target.try_normalize(0.0);
             // The flight's pace, where this period's flight has a middle to pace, takes the
@@ -1084,6 +1076,15 @@ impl<K: Kernels<3>> HybridController<K> {
                 let error = target - Vec3::from(mean);
                 let axis = Vec3::from(d.lift_off_contact);
                 let correction = error - axis * axis.dot(&error);
+                // ρ measured in the period when it had a lift-off: a plant whose flight
+                // differs from the plan (more socket damping) passes a different share of δ
+                // to the mean.
+                let measured = Vec3::from(mean).norm() / d.lift_off_omega;
+                let sensitivity = if d.lift_off_omega > 0.0 && measured.is_finite() {
+                    measured.clamp(MIN_SENSITIVITY, 1.0)
+                } else {
+                    self.sensitivity
+                };
                 for i in 0..3 {
                     d.omega_offset[i] += self.gains.outer / sensitivity * correction[i];
                 }

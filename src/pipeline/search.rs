@@ -764,10 +764,11 @@ fn best_settled(cands: &[Candidate]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// The refinement of [`Search::refine_candidates`] on `cands`, with each refinement chain
-/// stopped once a refinement's objective is not below `ceiling`, the best verified candidate
-/// already in `cands`, or the best verified by the chains before it
-/// (`refine_until_verified`); returns the refinements' stage records.
+/// The refinement of [`Search::refine_candidates`] on the unverified candidates of `cands`
+/// below `ceiling` and below the best verified candidate already in `cands`, with each
+/// refinement chain stopped once a refinement's objective is not below either, or below the
+/// best verified by the chains before it (`refine_until_verified`); returns the refinements'
+/// stage records.
 fn refine_below(
     cands: &mut [Candidate],
     problem: Problem,
