@@ -724,8 +724,10 @@ fn every_seed_reaches_the_best_known_qc_optimum() {
 }
 
 /// Issue target of the global search for the human finger: the default `periodic-cot-human`
-/// search verifies within 2 % of the best known optimum, J = 0.0158287 (period 8.46 s, the
-/// stick phase on its 0.01 s bound), on every seed 0–9. Before the period continuation of the
+/// search verifies within 2 % of the best known optimum, J = 0.0157881 (period 8.46 s, the
+/// stick phase on its 0.01 s bound; five seeds of ten find it since the promotion below the
+/// best verified plan, decision record 0053, the others 0.0158121–0.0158145), on every seed
+/// 0–9. Before the period continuation of the
 /// starts (decision record 0037) seeds 5 and 6 verified 0.0665669, on the 10 s period bound.
 /// With the search's arithmetic independent of the CPU (decision record 0045), seed 1 verified
 /// 0.0665669 while the reshaping stopped once the 4 best shapes had been moved: its way into
@@ -736,7 +738,19 @@ fn every_seed_reaches_the_best_known_qc_optimum() {
 #[ignore = "about 6 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_reaches_the_best_known_cot_human_optimum -- --ignored`"]
 fn every_seed_reaches_the_best_known_cot_human_optimum() {
-    every_seed_verifies_at_most("periodic-cot-human", 1.02 * 0.0158287);
+    every_seed_verifies_at_most("periodic-cot-human", 1.02 * 0.0157881);
+}
+
+/// Issue target of the global search for the paper's robotic-finger COT problem (the sticking
+/// law): every seed 0–9 verifies within 2 % of the best known optimum, J = 8.0564e-5 (period
+/// 3.86 s). BENCHMARKS.md ("The promotion below the best verified plan") records each seed:
+/// 8.0564e-5–8.0776e-5; before the promotion below the best verified plan (decision record
+/// 0053) four seeds ended 12–68 % higher.
+#[test]
+#[ignore = "about 7 min on 2 idle cores (ten searches); run with `cargo test --release \
+            --test search every_seed_reaches_the_best_known_cot_optimum -- --ignored`"]
+fn every_seed_reaches_the_best_known_cot_optimum() {
+    every_seed_verifies_at_most("periodic-cot", 1.02 * 8.0564e-5);
 }
 
 /// The plan that `paper` executes in closed loop: the default `periodic-cot-human` plan

@@ -23,6 +23,37 @@ mod common;
 
 use common::TOUCHING;
 
+/// A plan of a free phase of `free` s and a stick phase of `stick` s at the posture
+/// [`TOUCHING`], the ball spinning at `omega_star` throughout (the mean ω̄* too).
+fn constant_spin_plan(
+    model: &bf_model::Model<bf_model::PaperKernels>,
+    free: f64,
+    stick: f64,
+    omega_star: Vec3,
+) -> Reference {
+    let row = |v: [f64; 3]| vec![v.to_vec(); 4];
+    let t = [0.0, free, free, free + stick];
+    let phase = [0, 0, 1, 1];
+    let (qs, zeros) = (row(TOUCHING), row([0.0; 3]));
+    let w = [omega_star[0], omega_star[1], omega_star[2]];
+    Reference::from_samples(
+        model,
+        &[false, true],
+        &[free, stick],
+        Samples {
+            t: &t,
+            phase: &phase,
+            q: &qs,
+            qd: &zeros,
+            omega: &row(w),
+            tau: &zeros,
+            lambda: &zeros,
+        },
+        w,
+    )
+    .unwrap()
+}
+
 #[test]
 fn the_outer_loop_corrects_the_error_the_contact_can_change_and_nothing_along_r_c() {
     let model = bf_model::fixtures::paper_scene().unwrap();
@@ -37,27 +68,7 @@ fn the_outer_loop_corrects_the_error_the_contact_can_change_and_nothing_along_r_
     // asks for).
     let omega_star = Vec3::new(0.0, 0.0, 2.0);
     assert!(axis.dot(&omega_star).abs() < 1e-9, "ω* along r_c");
-    let row = |v: [f64; 3]| vec![v.to_vec(); 4];
-    let t = [0.0, 0.05, 0.05, 0.1];
-    let phase = [0, 0, 1, 1];
-    let (qs, zeros) = (row(q), row([0.0; 3]));
-    let omegas = row([omega_star[0], omega_star[1], omega_star[2]]);
-    let reference = Reference::from_samples(
-        &model,
-        &[false, true],
-        &[0.05, 0.05],
-        Samples {
-            t: &t,
-            phase: &phase,
-            q: &qs,
-            qd: &zeros,
-            omega: &omegas,
-            tau: &zeros,
-            lambda: &zeros,
-        },
-        [omega_star[0], omega_star[1], omega_star[2]],
-    )
-    .unwrap();
+    let reference = constant_spin_plan(&model, 0.05, 0.05, omega_star);
     let (law, gains) = common::controller(&model, reference, q);
 
     // The measured ball: ω* plus 0.3 rad/s along r_c and 0.1 rad/s normal to both.
@@ -128,27 +139,7 @@ fn a_paced_flight_corrects_the_mean_by_its_pace_and_leaves_delta_alone() {
     let rest = State::new(VecN::from(q), VecN::zeros(), Vec3::zeros());
     let axis = model.evaluate(&rest).unwrap().contact.r_c.normalize();
     let omega_star = Vec3::new(0.0, 0.0, 2.0);
-    let row = |v: [f64; 3]| vec![v.to_vec(); 4];
-    let t = [0.0, 2.0, 2.0, 2.05];
-    let phase = [0, 0, 1, 1];
-    let (qs, zeros) = (row(q), row([0.0; 3]));
-    let omegas = row([omega_star[0], omega_star[1], omega_star[2]]);
-    let reference = Reference::from_samples(
-        &model,
-        &[false, true],
-        &[2.0, 0.05],
-        Samples {
-            t: &t,
-            phase: &phase,
-            q: &qs,
-            qd: &zeros,
-            omega: &omegas,
-            tau: &zeros,
-            lambda: &zeros,
-        },
-        [omega_star[0], omega_star[1], omega_star[2]],
-    )
-    .unwrap();
+    let reference = constant_spin_plan(&model, 2.0, 0.05, omega_star);
     let (law, gains) = common::controller(&model, reference, q);
     assert_eq!(gains.pace, 1.0, "the closed form below takes γ_κ = 1");
 

@@ -779,16 +779,15 @@ fn refine_below(
     if policy.rtol <= 0.0 {
         return Vec::new();
     }
-    let best_verified = ceiling.min(best_settled(cands));
+    let ceiling = ceiling.min(best_settled(cands));
     let mut todo: Vec<usize> = (0..cands.len())
         .filter(|&i| {
             let s = &cands[i].solution;
             // A plan the controller did not execute stays what it is on a finer mesh.
-            class(s) == UNVERIFIED && s.objective < best_verified && !execution_failed(s)
+            class(s) == UNVERIFIED && s.objective < ceiling && !execution_failed(s)
         })
         .collect();
     todo.sort_by(|&a, &b| lowest_first(&cands[a], &cands[b]));
-    let ceiling = best_verified;
     let refined = refine_in_order(
         &todo,
         policy.clusters,

@@ -21,8 +21,8 @@
 //!   0 is the default guess itself, so the result is never worse than `Direct`), solved in
 //!   parallel; the best successful solution wins. The joints of a start: for the global
 //!   search ([`super::search`]) each revolute joint anywhere in its revolution q⁰ᵢ ± π, cut to
-//!   its limits where the scene gives them ([`start_intervals`]); for the plain multi-start
-//!   (`optimize --hops 0`, and the global search's fallback) within
+//!   its limits where the scene gives them ([`start_intervals`]), its fallback to the starts
+//!   included; for the plain multi-start (`optimize --hops 0`) within
 //!   ±[`START_NEIGHBOURHOOD`] of q⁰. [`default_strategy`] of the periodic problems:
 //!   [`GLOBAL_STARTS`] starts with seed [`DEFAULT_SEED`] (the global search's sampling;
 //!   [`DEFAULT_STARTS`] without it).

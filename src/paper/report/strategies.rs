@@ -162,8 +162,9 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
         "Default problem settings (hp-Radau 3 × 10 points per phase, ε = 0.01); every \
          strategy from scratch; wall time on this machine with 2 worker threads (rayon) for \
          the parallel strategies. `multistart` keeps its best start (`optimize --hops 0`; \
-         each start draws every joint over its whole revolution); \
-         `+ global search` is the default of `optimize`: the starts solved on a coarse mesh \
+         each start draws every joint within 0.6 rad of the default guess); \
+         `+ global search` is the default of `optimize`: the starts (each joint anywhere in its \
+         revolution) solved on a coarse mesh \
          (3 × 4 points per phase; on the COT problems every other start first held to the \
          period of its guess, then released), reshaping moves (the elbow flip, phase-duration bounds) \
          and basin hopping from the best distinct optima and polishing of the winner there, the best optima that differ in shape re-solved on the problem's mesh (more of them while a \
