@@ -523,8 +523,9 @@ fn execution_failed(sol: &OcpSolution) -> bool {
 /// at all (point limit, non-finite defects) ends the attempts, and so does one whose defects
 /// verify and whose path check stays stuck beyond its allowance ([`path_stalled`]), and so
 /// does one whose defects fail after a point of the chain had them verified (the solve left
-/// the optimum being verified), and so does `earlier` turning `None` (checked before each attempt: another candidate's result has
-/// made this one's moot, `refine_in_order`), and so does a refinement whose objective is not
+/// the optimum being verified, [`LeftOptimum`]), and so does `earlier` turning `None`
+/// (checked before each attempt: another candidate's result has made this one's moot,
+/// `refine_in_order`), and so does a refinement whose objective is not
 /// below `ceiling` or below the lowest objective verified by the candidates refined before
 /// this one (`earlier`: a refined plan above a verified one no longer competes with it;
 /// `ceiling` is infinite but in [`Search::polish_the_winner`], where it is the winner's).
@@ -544,7 +545,7 @@ fn refine_until_verified(
     let mut before = start_check.and_then(path_only_excess);
     let mut defects = DefectProgress::new(start_check.map(|v| v.max_defect));
     let mut leaving = LeftOptimum::default();
-    leaving.step(start_check.and_then(completed_defect));
+    leaving.step(start_check.is_some_and(|v| v.passes(VERIFIED_DEFECT)));
     for _ in 0..policy.refine_attempts {
         let cur = steps.last().map_or(&start, |(c, _)| c);
         if is_verified(&cur.solution) || execution_failed(&cur.solution) || earlier().is_none() {
@@ -636,7 +637,7 @@ fn refine_until_verified(
                 // verifies another one (on `periodic-cot` seed 7 a chain whose defects
                 // verified at 1e-6, with its path 4.6x its allowance, jumped to a defect of
                 // 2e-3 and an objective 2.8 times higher, and spent 11 s more on it).
-                let left = leaving.step(v.and_then(completed_defect));
+                let left = leaving.step(v.is_some_and(|v| v.passes(VERIFIED_DEFECT)));
                 // No longer wanted (its result is dropped): it stops as if above.
                 let bound = earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
                 let above = next.solution.objective >= bound;
@@ -756,12 +757,7 @@ pub const PATH_PROGRESS: f64 = 0.5;
 /// check (completed, defects within [`VERIFIED_DEFECT`], excess above 1); `None` otherwise.
 fn path_only_excess(v: &bf_problem::solution::records::Verification) -> Option<f64> {
     let e = path_excess(v);
-    (completed_defect(v).is_some_and(|d| d <= VERIFIED_DEFECT) && e > 1.0).then_some(e)
-}
-
-/// A verification's element-wise defect if its re-integration completed, `None` otherwise.
-fn completed_defect(v: &bf_problem::solution::records::Verification) -> Option<f64> {
-    v.completed().then_some(v.max_defect)
+    (v.passes(VERIFIED_DEFECT) && e > 1.0).then_some(e)
 }
 
 /// Whether a refinement chain has left the optimum it set out to verify: a point whose
@@ -775,10 +771,9 @@ struct LeftOptimum {
 }
 
 impl LeftOptimum {
-    /// Records the next point of the chain (its defect if its re-integration completed, see
-    /// [`completed_defect`]); whether the chain has left its optimum there.
-    fn step(&mut self, defect: Option<f64>) -> bool {
-        let verifies = defect.is_some_and(|d| d <= VERIFIED_DEFECT);
+    /// Records the next point of the chain (whether its re-integration completed with its
+    /// defects within [`VERIFIED_DEFECT`]); whether the chain has left its optimum there.
+    fn step(&mut self, verifies: bool) -> bool {
         let left = self.verified_once && !verifies;
         self.verified_once |= verifies;
         left
@@ -1680,8 +1675,7 @@ impl Search {
     /// 0.0509500 plan, whose neighbour on the 10 s period bound, J = 0.0448, no coarse shape
     /// of seeds 0, 1 and 6 led to (decision record 0052). While a round's verified results
     /// give a new winner [`NEIGHBOURHOOD_GAIN`] lower or more, the next round is the new
-    /// winner's neighbourhood, up to
-    /// [`NEIGHBOURHOOD_ROUNDS`] rounds: the plan a round reaches can have a lower family
+    /// winner's neighbourhood, up to [`NEIGHBOURHOOD_ROUNDS`] rounds: the plan a round reaches can have a lower family
     /// beside it that no move from the first winner reaches (on `periodic-cot` seed 7 the
     /// first round moves the 8.289e-4 plan to 8.271e-4, whose second round reaches 8.000e-4;
     /// decision record 0057). Where the search's choice comes from here,
@@ -1726,8 +1720,7 @@ impl Search {
             .iter()
             .filter(|c| class(&c.solution) == SETTLED && c.problem.is_some())
             .min_by(|a, b| lowest_first(a, b))
-            .cloned();
-        let winner = winner?;
+            .cloned()?;
         let land = OcpLandscape {
             problem,
             settings,
@@ -2090,10 +2083,12 @@ mod tests {
     /// leaves at the first refinement that fails or whose re-integration does not complete.
     #[test]
     fn a_refinement_that_leaves_its_optimum_ends_the_chain() {
+        // Each point: its defect, or `None` where its re-integration did not complete.
         let leaves = |start: Option<f64>, seq: &[Option<f64>]| {
+            let verifies = |d: Option<f64>| d.is_some_and(|d| d <= VERIFIED_DEFECT);
             let mut l = LeftOptimum::default();
-            assert!(!l.step(start), "a start has left nothing");
-            seq.iter().position(|&d| l.step(d))
+            assert!(!l.step(verifies(start)), "a start has left nothing");
+            seq.iter().position(|&d| l.step(verifies(d)))
         };
         let seed_7 = [2.7e-1, 6.0e-5, 9.2e-7, 2.0e-3, 3.9e-5].map(Some);
         assert_eq!(leaves(None, &seed_7), Some(3));
@@ -2102,9 +2097,8 @@ mod tests {
         assert_eq!(leaves(Some(1.0), &[None, Some(1e-2), Some(1e-5)]), None);
         assert_eq!(leaves(Some(1e-6), &[Some(2e-6), Some(3e-4)]), Some(1));
         assert_eq!(leaves(Some(1e-6), &[None]), Some(0));
-        // The tolerance itself verifies.
+        // The tolerance itself verifies; NaN defects fail.
         assert_eq!(leaves(Some(1e-6), &[Some(VERIFIED_DEFECT)]), None);
-        // NaN defects fail.
         assert_eq!(leaves(Some(1e-6), &[Some(f64::NAN)]), Some(0));
     }
 
