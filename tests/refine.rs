@@ -1,12 +1,16 @@
 //! Mesh refinement: the collocation error estimate ([`collocation_errors`]) on problems with
 //! closed-form optima (exact polynomial optimum; the brachistochrone against the cycloid),
 //! custom hp-Radau meshes, the ph rule, the exact warm start, and adaptive refinement of the
-//! named problems (`reach`, `periodic-qc`).
+//! named problems (`reach`, `periodic-qc`), and a round that leaves its optimum solved again
+//! (a `periodic-cot` plan).
 
 use ball_finger::pipeline::refine::{
-    RefineRound, RefineSettings, current_mesh, error_estimate, refine, warm_initial_point,
+    RefineCriterion, RefineRound, RefineSettings, current_mesh, error_estimate, refine,
+    refine_solution, warm_initial_point,
 };
-use ball_finger::pipeline::{build, solve};
+use ball_finger::pipeline::solve::{own_problem, settings_of};
+use ball_finger::pipeline::verify::verify;
+use ball_finger::pipeline::{OcpSolution, SolutionIo, build, solve};
 use bf_optim::ipm::{Nlp, Settings, Status, TerminationSettings};
 use bf_optim::ocp::toys::{brachistochrone, cycloid_time, double_integrator};
 use bf_optim::ocp::{
@@ -418,6 +422,61 @@ fn refinement_of_periodic_qc_converges_to_1e_4() {
     // Warm-started rounds are much cheaper than the cold first solve.
     let warm: f64 = h[1..].iter().map(|r| r.iterations as f64).sum::<f64>() / (h.len() - 1) as f64;
     assert!(warm < 0.6 * h[0].iterations as f64, "{h:?}");
+}
+
+/// A round that leaves the optimum it was warm-started from is solved again from a closer
+/// start (`RefineSettings::max_rise`). The fixture is a `periodic-cot` plan (J = 7.816e-4,
+/// period 9.075 s, re-integration defect 3.7e-4) that the winner's neighbourhood of the
+/// seed-7 search solved on a refined mesh. From μ₀ = 1e-5 its first refinement round ends
+/// in another optimum, J = 4.7e-3 with the period on its 10 s bound; solved again from
+/// μ₀ = 1e-7, the round stays on the plan, whose refined trajectory the re-integration then
+/// confirms.
+#[test]
+fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
+    let sol = OcpSolution::read_json(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures/leaving-cot-plan/solution.json"),
+    )
+    .unwrap();
+    let j0 = sol.objective;
+    let (problem, settings) = settings_of(&sol).unwrap();
+    let (p, _) = own_problem(&sol).unwrap();
+    let before = verify(&p, &sol, 1e-10).unwrap().max_defect;
+    let s = ProblemSettings {
+        mesh: Some(current_mesh(&p).unwrap()),
+        ..settings
+    };
+    let opts = RefineSettings {
+        tol: 1e-4,
+        criterion: RefineCriterion::Reintegration { rtol: 1e-10 },
+        max_rounds: 1,
+        max_points: 800,
+        ..RefineSettings::default()
+    };
+    let never = RefineSettings {
+        max_rise: f64::INFINITY,
+        ..opts
+    };
+    let (_, away) = refine_solution(problem, &s, sol.clone(), &never, None).unwrap();
+    assert!(away.objective > 3.0 * j0, "{} from {j0}", away.objective);
+    let (b, kept) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
+    let h = &kept.refinement.as_ref().unwrap().history;
+    assert_eq!(h.len(), 2, "{h:?}");
+    for r in h {
+        assert!(r.status.is_success(), "{h:?}");
+        assert!((r.objective - j0).abs() < 1e-4 * j0, "{h:?}");
+    }
+    // The retry's iterations are counted with the round's.
+    assert!(h[1].iterations > away.refinement.as_ref().unwrap().history[1].iterations);
+    let after = verify(&b, &kept, 1e-10).unwrap().max_defect;
+    assert!(after < 0.5 * before, "defect {before:.2e} -> {after:.2e}");
+    // Not a positive bound: an error that names the field.
+    let bad = RefineSettings {
+        max_rise: f64::NAN,
+        ..opts
+    };
+    let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
+    assert!(e.to_string().contains("max_rise"), "{e}");
 }
 
 #[test]

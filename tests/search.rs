@@ -857,8 +857,11 @@ fn the_promotion_goes_on_while_a_coarse_shape_can_still_win() {
 /// promotion went on while none verified; once it met the target, the search returned it.
 /// The winner's neighbourhood then goes on in rounds (decision record 0057): its first round
 /// from the promoted 8.289e-4 plan verifies 8.271e-4 (0.21 % lower, above the rounds' gain
-/// threshold), and only the second round, from that one, reaches 8.000e-4 (the longer stick
-/// phase).
+/// threshold), and only the second round, from that one, reaches lower: its 7.816e-4 plan,
+/// which verifies only because a refinement round that leaves its optimum is solved again
+/// from closer (decision record 0058; without that, the round's refinement left it for
+/// 4.9e-3 and the search returned 8.000e-4). The best optimum any seed finds is 7.809e-4:
+/// seed 7 ends within the 2 % of issue 37's target.
 #[test]
 fn the_promotion_goes_on_below_the_best_verified_plan() {
     let (stdout, v) = verified_default_search(
@@ -873,7 +876,7 @@ fn the_promotion_goes_on_below_the_best_verified_plan() {
         ],
     );
     let j = v["objective"].as_f64().unwrap();
-    assert!(j < 8.1e-4, "J {j}");
+    assert!(j < 1.02 * 7.809e-4, "J {j}");
     // The winner is a solve of the neighbourhood's second round: its stage record carries the
     // round's label and the chosen chain.
     let chosen = v["strategy"]["chosen"].as_u64().unwrap();

@@ -1675,10 +1675,10 @@ impl Search {
     /// 0.0509500 plan, whose neighbour on the 10 s period bound, J = 0.0448, no coarse shape
     /// of seeds 0, 1 and 6 led to (decision record 0052). While a round's verified results
     /// give a new winner [`NEIGHBOURHOOD_GAIN`] lower or more, the next round is the new
-    /// winner's neighbourhood, up to [`NEIGHBOURHOOD_ROUNDS`] rounds: the plan a round reaches can have a lower family
-    /// beside it that no move from the first winner reaches (on `periodic-cot` seed 7 the
-    /// first round moves the 8.289e-4 plan to 8.271e-4, whose second round reaches 8.000e-4;
-    /// decision record 0057). Where the search's choice comes from here,
+    /// winner's neighbourhood, up to [`NEIGHBOURHOOD_ROUNDS`] rounds: the plan a round
+    /// reaches can have a lower family beside it that no move from the first winner reaches
+    /// (on `periodic-cot` seed 7 the first round moves the 8.289e-4 plan to 8.271e-4, whose
+    /// second round reaches 7.816e-4; decision records 0057 and 0058). Where the search's choice comes from here,
     /// [`Search::basin_hits`] counts the solves of its round that ended in its shape. Only
     /// for a global search that verifies; `optimize merge` calls it as the unsharded run
     /// does.
