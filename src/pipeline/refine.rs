@@ -185,9 +185,11 @@ pub fn refine(
         // trajectory its objective moves by what the finer mesh changes. One that rose far
         // more has been pulled out of that optimum by the barrier's re-centring, and is solved
         // again from a start that the barrier leaves closer to it.
+        let mut solved_again = false;
         if let Some((prev, ..)) = best.as_ref().filter(|_| round > 0)
             && left_the_optimum(prev.objective, &sol, opts.max_rise)
         {
+            solved_again = true;
             let close = close_start(&s, opts);
             let pc = build(problem, &close)?;
             match solve(&pc, reborrow(&mut callback)) {
@@ -218,6 +220,7 @@ pub fn refine(
             status: sol.status,
             iterations: sol.iterations,
             seconds: start.elapsed().as_secs_f64(),
+            solved_again,
         };
         if let Some(f) = on_round.as_mut() {
             f(&rec);

@@ -141,10 +141,15 @@ pub struct RefineRound {
     pub max_error: f64,
     /// Solver status.
     pub status: Status,
-    /// Interior-point iterations.
+    /// Interior-point iterations (of both solves where the round was solved again).
     pub iterations: usize,
     /// Wall time of the round: build, solve and estimate (s).
     pub seconds: f64,
+    /// Whether the round's first solve left the optimum of the round before it and the round
+    /// was solved again from a closer barrier start (`bf`'s `RefineSettings::max_rise`),
+    /// whichever of the two solutions it kept. Absent in files written before it: false.
+    #[serde(default)]
+    pub solved_again: bool,
 }
 
 /// What the mesh refinement measures in each element.

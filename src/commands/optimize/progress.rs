@@ -125,14 +125,19 @@ pub fn refine_with_progress(
     let mut write_error = None;
     let mut show = |r: &RefineRound| {
         let line = crate::outln!(
-            "  {:5}  {:<18}  {:>13.8e}  {:>9.2e}  {:<12}  {:>4}  {:>7.2}",
+            "  {:5}  {:<18}  {:>13.8e}  {:>9.2e}  {:<12}  {:>4}  {:>7.2}{}",
             r.round,
             format!("{:?}", r.points),
             r.objective,
             r.max_error,
             crate::names::name(&r.status),
             r.iterations,
-            r.seconds
+            r.seconds,
+            if r.solved_again {
+                "  (left its optimum: solved again from a closer start)"
+            } else {
+                ""
+            }
         );
         if let Err(e) = line {
             write_error.get_or_insert(e);
