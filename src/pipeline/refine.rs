@@ -198,6 +198,7 @@ pub fn refine(
                     (p, sol) = (pc, again);
                 }
                 Ok(again) => sol.iterations += again.iterations,
+                // The round's first solve stands; the failed retry changes nothing.
                 Err(_) => {}
             }
         }
@@ -271,14 +272,7 @@ pub fn refine(
             ..sol.clone()
         });
         if round == 0 {
-            let base = solver_settings(settings);
-            s.ipm = Some(Settings {
-                barrier: BarrierSettings {
-                    mu_init: opts.warm_mu_init,
-                    ..base.barrier
-                },
-                ..base
-            });
+            s.ipm = Some(with_mu_init(solver_settings(settings), opts.warm_mu_init));
         }
     }
     let (solution, mesh, errors) = best.ok_or(PipelineError::Internal(
@@ -326,14 +320,20 @@ fn left_the_optimum(before: f64, sol: &OcpSolution, max_rise: f64) -> bool {
 fn close_start(s: &ProblemSettings, opts: &RefineSettings) -> ProblemSettings {
     let base = s.ipm.clone().unwrap_or_else(|| solver_settings(s));
     ProblemSettings {
-        ipm: Some(Settings {
-            barrier: BarrierSettings {
-                mu_init: opts.warm_mu_init * CLOSE_MU_FACTOR,
-                ..base.barrier
-            },
-            ..base
-        }),
+        ipm: Some(with_mu_init(base, opts.warm_mu_init * CLOSE_MU_FACTOR)),
         ..s.clone()
+    }
+}
+
+/// `base` with the initial barrier parameter `mu_init`: the warm starts of the rounds after
+/// the first, and their close starts.
+fn with_mu_init(base: Settings, mu_init: f64) -> Settings {
+    Settings {
+        barrier: BarrierSettings {
+            mu_init,
+            ..base.barrier
+        },
+        ..base
     }
 }
 

@@ -1678,10 +1678,10 @@ impl Search {
     /// winner's neighbourhood, up to [`NEIGHBOURHOOD_ROUNDS`] rounds: the plan a round
     /// reaches can have a lower family beside it that no move from the first winner reaches
     /// (on `periodic-cot` seed 7 the first round moves the 8.289e-4 plan to 8.271e-4, whose
-    /// second round reaches 7.816e-4; decision records 0057 and 0058). Where the search's choice comes from here,
-    /// [`Search::basin_hits`] counts the solves of its round that ended in its shape. Only
-    /// for a global search that verifies; `optimize merge` calls it as the unsharded run
-    /// does.
+    /// second round reaches 7.816e-4; decision records 0057 and 0058). Where the search's
+    /// choice comes from here, [`Search::basin_hits`] counts the solves of its round that
+    /// ended in its shape. Only for a global search that verifies; `optimize merge` calls it
+    /// as the unsharded run does.
     pub fn polish_the_winner(
         &mut self,
         problem: Problem,
