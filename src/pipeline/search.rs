@@ -17,8 +17,9 @@
 //!    basin hopping from the best distinct optima and polishing of the winner
 //!    ([`DEFAULT_HOPS`]).
 //! 3. Global search only: promotion ([`Search::promote_and_refine`]), the best optima that
-//!    differ in shape re-solved on the problem's mesh from their coarse trajectories, each
-//!    re-integrated (and, for a plan for the plant, executed in closed loop:
+//!    differ in shape re-solved on the problem's mesh from their coarse trajectories (twice:
+//!    from a warm start's barrier parameter and from a close one, [`PROMOTE_MU_INIT`], the
+//!    lower kept), each re-integrated (and, for a plan for the plant, executed in closed loop:
 //!    [`VerifyPolicy::execution`]); while the next shape's coarse objective is below the best
 //!    re-solved one, the next shapes too (the bound, [`PROMOTE_BOUND_ROUNDS`]); then refined
 //!    as in step 4; once one verifies (for a plan, executed and robust), the next shapes
@@ -65,7 +66,7 @@ use super::error::PipelineError;
 use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
 use super::reshape::{MOVES, flip_elbow, mirror_first_joint, with_duration_bounds};
-use super::solve::solve_recentred;
+use super::solve::{INTERPOLATED_MU_INIT_MAX, solve_recentred, solve_with_mu_max};
 use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
     prepare_chains, record, run_chain,
@@ -236,6 +237,28 @@ pub const POLISH_LABEL: &str = "winner's neighbourhood";
 /// Stage label of the re-solve of a coarse optimum on the problem's mesh ([`CoarseSampling`]).
 pub const PROMOTE_LABEL: &str = "full mesh";
 
+/// Stage label of the promotion's second solve, from the close barrier start
+/// [`PROMOTE_MU_INIT`].
+pub const PROMOTE_CLOSE_LABEL: &str = "full mesh, close start";
+
+/// Whether a stage record is one of a promotion's solves ([`PROMOTE_LABEL`],
+/// [`PROMOTE_CLOSE_LABEL`]).
+pub fn is_promotion(stage: &str) -> bool {
+    stage == PROMOTE_LABEL || stage == PROMOTE_CLOSE_LABEL
+}
+
+/// Largest initial barrier parameter μ₀ of a promotion's second solve, the close start
+/// ([`super::solve::solve_with_mu_max`]); the first starts from a warm start's
+/// [`super::solve::INTERPOLATED_MU_INIT_MAX`] = 1e-4, and the lower successful solution is
+/// kept. From 1e-4 the re-centring of the interpolated start can carry the iterates out of a
+/// narrow basin, as in a refinement round ([`super::refine::CLOSE_MU_FACTOR`]): of the 56
+/// shapes that `periodic-cot` seed 1 promotes, 1 re-solved below 8e-4 from 1e-4 and 9 from
+/// 1e-6; 21 ended more than three times above their coarse objective from 1e-4 (14 of them
+/// with the period on its 10 s bound), 11 from 1e-6 (8); from 1e-6 they took half the
+/// iterations (3 572 against 6 947). Neither start is the better one everywhere (on seed 4
+/// the lowest plan comes from 1e-4 only), hence both (decision record 0059).
+pub const PROMOTE_MU_INIT: f64 = 1e-6;
+
 /// The reshaping and basin hopping of the global search ([`VerifyPolicy::global`], `optimize
 /// --hops N` with the budget N), on the coarse mesh of the sampling: 4 rounds of every
 /// reshaping move from the 4 best distinct shapes not moved before ([`super::reshape::MOVES`];
@@ -404,6 +427,12 @@ const FAILED: u8 = 3;
 /// ([`Search::refine_candidates`]).
 fn solved(sol: &OcpSolution) -> bool {
     class(sol) <= UNVERIFIED
+}
+
+/// Whether `a` is a better solve of one problem than `b`: successful where `b` is not, or
+/// both successful and `a` lower.
+fn lower(a: &OcpSolution, b: &OcpSolution) -> bool {
+    solved(a) && (!solved(b) || a.objective < b.objective)
 }
 
 /// The order in which candidates are promoted and refined: lowest objective first, ties by
@@ -1186,25 +1215,22 @@ impl OcpLandscape<'_> {
     }
 
     /// The coarse end point `from` re-solved on the problem's mesh, warm-started from its
-    /// trajectory interpolated onto that mesh, and re-integrated ([`CoarseSampling`]).
+    /// trajectory interpolated onto that mesh, and re-integrated ([`CoarseSampling`]): solved
+    /// from a warm start's barrier parameter and from a close one ([`PROMOTE_MU_INIT`]), the
+    /// lower successful solution kept.
     fn promote(&self, from: &Candidate) -> Option<Candidate> {
         let t0 = Instant::now();
-        let label = PROMOTE_LABEL.to_string();
-        let res = build(
+        let b = match build(
             self.problem,
             &ProblemSettings {
                 warm_start: Some(from.solution.clone()),
                 start: None,
                 ..self.settings.clone()
             },
-        )
-        .and_then(|b| {
-            let sol = super::solve::solve(&b, None)?;
-            Ok((b, sol))
-        });
-        let (b, sol) = match res {
-            Ok(r) => r,
+        ) {
+            Ok(b) => b,
             Err(e) => {
+                let label = PROMOTE_LABEL.to_string();
                 self.push(
                     &self.records,
                     vec![failed_record(from.index, label, &e, t0)],
@@ -1212,15 +1238,30 @@ impl OcpLandscape<'_> {
                 return None;
             }
         };
+        let starts = [
+            (PROMOTE_LABEL.to_string(), INTERPOLATED_MU_INIT_MAX),
+            (PROMOTE_CLOSE_LABEL.to_string(), PROMOTE_MU_INIT),
+        ];
+        let mut recs = Vec::new();
+        let mut best: Option<OcpSolution> = None;
+        for (label, mu_max) in starts {
+            let t0 = Instant::now();
+            match solve_with_mu_max(&b, mu_max, None) {
+                Ok(sol) => {
+                    recs.push(record(from.index, label, &sol, t0));
+                    if best.as_ref().is_none_or(|kept| lower(&sol, kept)) {
+                        best = Some(sol);
+                    }
+                }
+                Err(e) => recs.push(failed_record(from.index, label, &e, t0)),
+            }
+        }
+        self.push(&self.records, recs);
         let mut c = Candidate {
             index: from.index,
             problem: Some(b),
-            solution: sol,
+            solution: best?,
         };
-        self.push(
-            &self.records,
-            vec![record(from.index, label, &c.solution, t0)],
-        );
         if self.policy.rtol > 0.0 {
             attach_verification(&mut c, self.policy);
         }
@@ -2024,7 +2065,7 @@ mod tests {
             let mut v: Vec<(usize, String, u64)> = s
                 .records
                 .iter()
-                .filter(|r| r.stage != super::PROMOTE_LABEL)
+                .filter(|r| !super::is_promotion(&r.stage))
                 .map(|r| (r.chain, r.stage.clone(), r.objective.to_bits()))
                 .collect();
             v.sort();

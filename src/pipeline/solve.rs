@@ -84,6 +84,16 @@ fn reborrow<'a>(c: &'a mut Callback<'_>) -> Callback<'a> {
 /// [`Strategy`](crate::pipeline::strategy::Strategy) wraps this in a continuation.
 pub fn solve(
     p: &BuiltProblem,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<OcpSolution, PipelineError> {
+    solve_with_mu_max(p, INTERPOLATED_MU_INIT_MAX, callback)
+}
+
+/// [`solve`], with an interpolated warm start re-centred at μ₀ at most `mu_max` (instead of
+/// [`INTERPOLATED_MU_INIT_MAX`]; the rule of [`interpolated_warm_settings`] otherwise).
+pub fn solve_with_mu_max(
+    p: &BuiltProblem,
+    mu_max: f64,
     mut callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
 ) -> Result<OcpSolution, PipelineError> {
     let start = Instant::now();
@@ -96,7 +106,9 @@ pub fn solve(
         .and_then(|ws| exact_warm_start(p, ws));
     let settings = match (&p.settings.warm_start, exact) {
         (Some(_), Some(_)) => warm_settings(&p.settings),
-        (Some(_), None) => interpolated_warm_settings(&p.settings, start_violation(p)),
+        (Some(_), None) => {
+            interpolated_warm_settings_below(&p.settings, start_violation(p), mu_max)
+        }
         (None, _) => solver_settings(&p.settings),
     };
     let label = match (exact.is_some(), p.settings.warm_start.is_some()) {
@@ -176,13 +188,24 @@ pub const INTERPOLATED_MU_INIT_MAX: f64 = 1e-4;
 ///   rather than the cold 1e-2, which would move every active bound (a stick phase at its
 ///   minimum duration, a torque at its limit) off the optimum.
 pub fn interpolated_warm_settings(s: &ProblemSettings, violation: f64) -> Settings {
+    interpolated_warm_settings_below(s, violation, INTERPOLATED_MU_INIT_MAX)
+}
+
+/// [`interpolated_warm_settings`] with μ₀ at most `mu_max` instead of
+/// [`INTERPOLATED_MU_INIT_MAX`] (and at least the floor tol / 10).
+pub fn interpolated_warm_settings_below(
+    s: &ProblemSettings,
+    violation: f64,
+    mu_max: f64,
+) -> Settings {
     let mut st = warm_settings(s);
     if s.ipm.is_none() {
         let floor = 0.1 * st.termination.tol;
+        let ceiling = mu_max.max(floor);
         st.barrier.mu_init = if violation.is_finite() {
-            violation.clamp(floor, INTERPOLATED_MU_INIT_MAX)
+            violation.clamp(floor, ceiling)
         } else {
-            INTERPOLATED_MU_INIT_MAX
+            ceiling
         };
         st.barrier.bound_push = st.barrier.warm_start_bound_push;
         st.barrier.bound_frac = st.barrier.warm_start_bound_push;

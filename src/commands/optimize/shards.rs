@@ -8,7 +8,7 @@ use super::{
 };
 use crate::cli::MergeArgs;
 use crate::pipeline::SolutionIo;
-use crate::pipeline::search::{self, Candidate, PROMOTE_LABEL, Search, VerifyPolicy};
+use crate::pipeline::search::{self, Candidate, Search, VerifyPolicy};
 use crate::pipeline::solve::{recompute_at_own_point, settings_of};
 use crate::pipeline::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result, bail};
@@ -260,7 +260,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     };
     // A shard re-solved its own best coarse optima on the problem's mesh for its own output;
     // the merge re-solves the best of the union, as the unsharded run does.
-    records.retain(|r| r.stage != PROMOTE_LABEL);
+    records.retain(|r| !search::is_promotion(&r.stage));
     // Stable: the stages of a chain keep their order.
     records.sort_by_key(|r| r.chain);
     if let Strategy::Multistart { starts, .. } = strategy {
