@@ -350,7 +350,7 @@ fn bad_cli_input_gives_clear_errors() {
 /// verification are printed and stored in solution.json, and they agree with each other.
 #[test]
 fn optimize_refines_verifies_and_records_it() {
-    let dir = std::env::temp_dir().join(format!("bf-cli-opt-{}", std::process::id()));
+    let dir = tmpdir("opt");
     let out = run(&[
         "optimize",
         "--problem",
@@ -453,7 +453,7 @@ fn direct_cot_run(
     max_iter: usize,
     extra: &[&str],
 ) -> (Vec<serde_json::Value>, serde_json::Value) {
-    let dir = std::env::temp_dir().join(format!("bf-cli-{tag}-{}", std::process::id()));
+    let dir = tmpdir(tag);
     let out = direct_cot_output(&dir, points, max_iter, extra);
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success(), "{stdout}");

@@ -512,7 +512,7 @@ fn the_filter_reset_solves_the_crawling_cot_meshes() {
 /// `proximal_weight: Some(0.0)` LG-40's direct stage fails again (the fallback stage solves it).
 #[test]
 #[ignore = "about 90 s: the 3 × 48 solve takes some 600 iterations"]
-fn the_defaults_solve_the_two_cells_left_by_session_15() {
+fn the_defaults_solve_the_two_sweep_cells_left_unsolved_before_them() {
     let problem: Problem = "periodic-cot".parse().unwrap();
     for (scheme, points, proximal) in [
         (Scheme::Radau { elements: 3 }, 144, None),

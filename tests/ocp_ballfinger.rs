@@ -2,6 +2,9 @@
 //! guess, KKT residuals, re-integration with the generated kernels, refinement in N, the
 //! Sect. 6.1 qualitative results, and the output files.
 
+#[path = "common/cli.rs"]
+mod cli_util;
+
 mod common;
 
 use ball_finger::pipeline::{SolutionIo, build, solve};
@@ -311,7 +314,7 @@ fn periodic_cot_problems_converge() {
 #[test]
 fn outputs_round_trip_and_warm_start() {
     let (_, sol) = solve_named("reach", &settings(20));
-    let dir = std::env::temp_dir().join(format!("bf_ocp_test_{}", std::process::id()));
+    let dir = cli_util::tmpdir("json");
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("solution.json");
     sol.write_json(&json).unwrap();

@@ -19,6 +19,9 @@
 //! * an LG-30 optimum re-loaded without its NLP vector is interpolated onto the same mesh
 //!   exactly (every Gauss node, the last included) and re-solved in at most 10 iterations.
 
+#[path = "common/cli.rs"]
+mod cli_util;
+
 mod common;
 
 use ball_finger::pipeline::{SolutionIo, build, solve};
@@ -457,7 +460,7 @@ fn lg_reach_and_reorient_are_solved() {
 fn lg_warm_start_without_the_nlp_vector_restarts_at_the_optimum() {
     let (_, sol) = solve_named("periodic-qc", Scheme::Lg, 30);
     assert_eq!(sol.status, Status::Solved, "{:?}", sol.stages);
-    let dir = std::env::temp_dir().join(format!("bf-lg-warm-{}", std::process::id()));
+    let dir = cli_util::tmpdir("lg-warm");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("solution.json");
     sol.write_json(&path).unwrap();

@@ -35,7 +35,7 @@ fn pd_tracking_stays_closer_to_the_optimum_than_the_open_loop() {
     let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
     let sol = solve(&p, None).unwrap();
     assert!(sol.status.is_success(), "{:?}", sol.stages);
-    let dir = std::env::temp_dir().join(format!("bf-openloop-{}", std::process::id()));
+    let dir = cli::tmpdir("open-loop");
     let periods = 2;
     let open = run_open_loop(&sol, periods, &dir.join("open-loop")).unwrap();
     let zero = PdTrack {

@@ -2,6 +2,9 @@
 //! directory, lists every built-in scene, and the verification numbers it states are the ones
 //! required of the kernels (compiled = interpreted to 1e-12, M positive definite, Ṁ − 2C skew).
 
+#[path = "common/cli.rs"]
+mod cli_util;
+
 use std::process::Command;
 
 fn numbers_after(report: &str, row_prefix: &str) -> f64 {
@@ -21,7 +24,7 @@ fn numbers_after(report: &str, row_prefix: &str) -> f64 {
 
 #[test]
 fn paper_quick_writes_a_consistent_report() {
-    let out = std::env::temp_dir().join(format!("bf-paper-{}", std::process::id()));
+    let out = cli_util::tmpdir("quick");
     let status = Command::new(env!("CARGO_BIN_EXE_ball-finger"))
         .args(["paper", "--quick", "--out", out.to_str().unwrap()])
         .output()
@@ -261,7 +264,7 @@ fn paper_quick_writes_a_consistent_report() {
         );
     }
     // Every artefact is written through a temporary file and a rename: none may be left over.
-    let mut stack = vec![out.clone()];
+    let mut stack = vec![out.to_path_buf()];
     while let Some(dir) = stack.pop() {
         for e in std::fs::read_dir(&dir).unwrap().flatten() {
             let p = e.path();

@@ -3,6 +3,9 @@
 //! with double-double to a few ulps, f32 ones only to single precision, FMA is no less
 //! accurate — and every linked figure exists.
 
+#[path = "common/cli.rs"]
+mod cli_util;
+
 use ball_finger::paper::speed_accuracy::{SpeedAccuracy, VARIANT_KERNELS, VARIANTS};
 use ball_finger::pipeline;
 use bf_problem::{Problem, ProblemSettings};
@@ -148,7 +151,7 @@ fn quick_report_is_consistent() {
     }
 
     // Figures: every image the Markdown links exists and is non-empty.
-    let dir = std::env::temp_dir().join(format!("bf-speed-accuracy-{}", std::process::id()));
+    let dir = cli_util::tmpdir("report");
     let _ = std::fs::remove_dir_all(&dir);
     let md = r.write(&dir).expect("report renders");
     let links: Vec<&str> = md

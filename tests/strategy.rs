@@ -3,6 +3,9 @@
 //! re-integration; multi-start must be deterministic and never worse than its start 0 (the
 //! cold start); exact warm starts must restart at the optimum; bad strategy inputs are errors.
 
+#[path = "common/cli.rs"]
+mod cli_util;
+
 use ball_finger::pipeline::strategy::{
     START_NEIGHBOURHOOD, Strategy, random_start, solve_with_strategy, start_intervals,
 };
@@ -164,7 +167,7 @@ fn exact_warm_start_restarts_at_the_optimum_also_through_json() {
     let p = build(Problem::PeriodicQc, &s).unwrap();
     let sol = solve(&p, None).unwrap();
     assert_eq!(sol.status, Status::Solved);
-    let dir = std::env::temp_dir().join(format!("bf-strategy-{}", std::process::id()));
+    let dir = cli_util::tmpdir("warm");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("solution.json");
     sol.write_json(&path).unwrap();

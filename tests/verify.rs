@@ -4,6 +4,9 @@
 //! solution makes them large (the check is not a no-op), that the re-integrated end state
 //! agrees with an independent fixed-step RK4 of hand-written dynamics, and the error handling.
 
+#[path = "common/cli.rs"]
+mod cli_util;
+
 use std::sync::OnceLock;
 
 use ball_finger::pipeline::verify::{
@@ -692,10 +695,10 @@ fn report_tolerance_table_agrees_with_the_verdict() {
 #[test]
 #[ignore = "about 1-3 min: runs the default search of periodic-cot-human"]
 fn human_optimum_respects_the_ball_and_the_friction_cone() {
-    let dir = std::env::temp_dir().join(format!("bf-human-pen-{}", std::process::id()));
+    let dir = cli_util::tmpdir("human-pen");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_ball-finger"))
         .args(["optimize", "--problem", "periodic-cot-human", "--out"])
-        .arg(&dir)
+        .arg(&*dir)
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);

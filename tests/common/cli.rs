@@ -3,6 +3,11 @@
 #![allow(dead_code)] // each test file uses its own subset
 
 use std::path::PathBuf;
+
+#[path = "tempdir.rs"]
+mod tempdir;
+pub use tempdir::TempDir;
+
 use std::process::{Command, Output};
 
 /// The built `ball-finger` binary.
@@ -15,16 +20,15 @@ pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// An empty temporary directory for `tag`, unique per test file and process.
-pub fn tmpdir(tag: &str) -> PathBuf {
+/// An empty temporary directory for `tag`, unique per test file and process, removed with
+/// its contents when the returned guard is dropped ([`TempDir`]).
+pub fn tmpdir(tag: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!(
         "bf-{}-{tag}-{}",
         env!("CARGO_CRATE_NAME"),
         std::process::id()
     ));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir::fresh(d)
 }
 
 /// Runs the binary with `args` in the repository root and captures its output.

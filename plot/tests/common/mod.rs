@@ -4,16 +4,17 @@
 
 #![allow(dead_code)]
 
-use std::path::PathBuf;
+#[path = "../../../tests/common/tempdir.rs"]
+mod tempdir;
+pub use tempdir::TempDir;
 
 use bf_plot::paper::TimeSeries;
 
-/// A fresh, empty temporary directory for one test (process id and `name` keep runs apart).
-pub fn tmp(name: &str) -> PathBuf {
+/// A fresh, empty temporary directory for one test (process id and `name` keep runs apart),
+/// removed with its contents when the returned guard is dropped ([`TempDir`]).
+pub fn tmp(name: &str) -> TempDir {
     let d = std::env::temp_dir().join(format!("bf-plot-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    TempDir::fresh(d)
 }
 
 /// `n` equally spaced times from 0 to `t1`.
