@@ -774,9 +774,9 @@ fn every_seed_verifies_an_executed_human_plan() {
 /// 50 % more socket damping. BENCHMARKS.md ("The flight's pace") records each seed. And no
 /// seed ends in the family that holds the base joint still (J ≈ 1e-2, three seeds in ten
 /// while the starts stayed within ±0.6 rad of the default guess, decision record 0054), and
-/// every seed ends in the low family (7.8e-4–8.3e-4): every plan is below 9e-4. Before the
-/// controller of decision record 0056 and the promotion below the best verified plan (0053),
-/// seeds 2, 4 and 7 ended at 2.2e-3, 1.2e-3 and 9.2e-4.
+/// every seed ends in the low family (7.558e-4–7.984e-4 since decision record 0059): every
+/// plan is below 9e-4. Before the controller of decision record 0056 and the promotion below
+/// the best verified plan (0053), seeds 2, 4 and 7 ended at 2.2e-3, 1.2e-3 and 9.2e-4.
 #[test]
 #[ignore = "about 15 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_returns_a_robust_cot_plan -- --ignored`"]
