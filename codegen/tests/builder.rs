@@ -4,6 +4,10 @@
 //! robot's module comes split into a submodule per big kernel, as `generate` splits it; and
 //! each bad setting or input is a typed error naming the file and the cause.
 
+#[path = "../../tests/common/tempdir.rs"]
+mod tempdir;
+use tempdir::TempDir;
+
 use std::path::PathBuf;
 
 #[path = "common/chain.rs"]
@@ -13,10 +17,10 @@ use bf_codegen::{BuildError, Builder, CodegenError, Scene};
 
 const GOLDEN: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/golden");
 
-fn out_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-codegen-builder-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn out_dir(name: &str) -> TempDir {
+    TempDir::fresh(
+        std::env::temp_dir().join(format!("bf-codegen-builder-{}-{name}", std::process::id())),
+    )
 }
 
 #[test]

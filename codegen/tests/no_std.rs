@@ -15,6 +15,10 @@
 //!
 //! `rustc` is `$RUSTC` or the one on `PATH` (where Cargo is, it is).
 
+#[path = "../../tests/common/tempdir.rs"]
+mod tempdir;
+use tempdir::TempDir;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -184,8 +188,9 @@ fn probes() -> Vec<f64> {
 
 #[test]
 fn no_std_modules_compile_and_agree_with_std() {
-    let dir = std::env::temp_dir().join(format!("bf-codegen-nostd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = TempDir::fresh(
+        std::env::temp_dir().join(format!("bf-codegen-nostd-{}", std::process::id())),
+    );
     let mods = modules();
     let mut lib = String::from("#![no_std]\n#![deny(warnings)]\n");
     for m in &mods {

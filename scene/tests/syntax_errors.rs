@@ -2,6 +2,10 @@
 //! the key path (`FILE:LINE:COLUMN: PATH: message`) — syntax, unknown and missing keys, wrong
 //! types and shapes, non-finite numbers, unreadable files.
 
+#[path = "../../tests/common/tempdir.rs"]
+mod tempdir;
+use tempdir::TempDir;
+
 mod common;
 
 use bf_scene::{Scene, SpecError, SpecErrorKind};
@@ -313,8 +317,8 @@ fn io_error_names_the_file() {
 
 #[test]
 fn load_reports_the_path_in_errors() {
-    let dir = std::env::temp_dir().join(format!("bf_spec_test_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir =
+        TempDir::fresh(std::env::temp_dir().join(format!("bf_spec_test_{}", std::process::id())));
     let path = dir.join("foo.toml");
     std::fs::write(&path, edit("mass = 0.02", 1, "mass = -0.02")).unwrap();
     let err = Scene::load(&path).unwrap_err();

@@ -2,6 +2,10 @@
 //! element and the attribute; and the TOML side of `urdf = ...` scenes (placement-form links,
 //! the keys that conflict with an imported chain, line numbers kept for the user's part).
 
+#[path = "../../tests/common/tempdir.rs"]
+mod tempdir;
+use tempdir::TempDir;
+
 use bf_scene::{ChainChoice, Scene, SpecError, read_urdf_chain};
 
 const FILE: &str = "robot.urdf";
@@ -215,10 +219,10 @@ fn fixed_only_chains_have_no_joint() {
     );
 }
 
-fn tmpdir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-scene-urdf-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(name: &str) -> TempDir {
+    TempDir::fresh(
+        std::env::temp_dir().join(format!("bf-scene-urdf-{name}-{}", std::process::id())),
+    )
 }
 
 #[test]

@@ -4,14 +4,15 @@
 //! samples computed before, which must still match x = 1/(1/x₀ − t). A system error raised
 //! mid-run (the model's "singular Γ") must likewise come back with the partial data.
 
+#[path = "../../tests/common/tempdir.rs"]
+mod tempdir;
+use tempdir::TempDir;
+
 use bf_sim::toys::{BallMode, BlowUp, BouncingBall, Oscillator};
 use bf_sim::{Guard, HybridSystem, SimError, SimSettings, Transition, simulate};
-use std::path::PathBuf;
 
-fn tmpdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("bf-sim-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn tmpdir(tag: &str) -> TempDir {
+    TempDir::fresh(std::env::temp_dir().join(format!("bf-sim-{tag}-{}", std::process::id())))
 }
 
 #[test]
