@@ -963,6 +963,34 @@ fn a_promotion_stays_in_the_basin_of_its_coarse_optimum() {
     assert!(close.iterations < away.iterations);
 }
 
+/// The choice between two solves of one problem (`pipeline::solve::better_solve`: the
+/// promotion's two starts, a refinement round and its solve again): a successful solve beats
+/// a failed one whatever the objectives, a non-finite objective never wins, between two
+/// successful ones the lower wins, and of two equal ones neither (the first is kept).
+#[test]
+fn the_better_of_two_solves_is_the_successful_lower_one() {
+    use ball_finger::pipeline::solve::better_solve;
+    use ball_finger::pipeline::{OcpSolution, SolutionIo};
+    use bf_optim::ipm::Status;
+
+    let base =
+        OcpSolution::read_json(&root().join("tests/fixtures/coarse-cot-shape/solution.json"))
+            .unwrap();
+    let with = |status, objective| OcpSolution {
+        status,
+        objective,
+        ..base.clone()
+    };
+    let (low, high) = (with(Status::Solved, 1.0), with(Status::Acceptable, 2.0));
+    assert!(better_solve(&low, &high) && !better_solve(&high, &low));
+    assert!(!better_solve(&low, &low.clone()));
+    let failed = with(Status::MaxIterations, 0.5);
+    assert!(better_solve(&high, &failed) && !better_solve(&failed, &high));
+    let nan = with(Status::Solved, f64::NAN);
+    assert!(better_solve(&high, &nan) && !better_solve(&nan, &high));
+    assert!(!better_solve(&failed, &nan) && !better_solve(&nan, &failed));
+}
+
 /// Runs the default search of `problem` for seeds 0–9 and asserts that each verifies at an
 /// objective of at most `target`, naming every seed that does not.
 fn every_seed_verifies_at_most(problem: &str, target: f64) {

@@ -330,8 +330,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                  0040): {} on a coarse mesh for every periodic problem (for periodic-qc every \
                  start first bounds the stick phase to ≥ 0.1 s, then relaxes it to 0.01 s), \
                  then reshaping moves, basin hops and polishing, the best optima re-solved on \
-                 the problem's mesh (more of them while a coarse objective is below the best \
-                 re-solved one), re-integrated and hp-refined until one verifies, then the \
+                 the problem's mesh (each from a warm and from a close barrier start, the lower \
+                 kept; more of them while a coarse objective is below the best re-solved one), \
+                 re-integrated and hp-refined until one verifies, then the \
                  moves and hops again around the verified winner on its own mesh (see \
                  ball_finger::pipeline::global and docs/optima.md). {}",
                 crate::pipeline::strategy::default_strategy(

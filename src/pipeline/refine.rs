@@ -26,7 +26,7 @@ use crate::errors::chain;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
 
 use super::build;
-use super::solve::{solve, solver_settings};
+use super::solve::{better_solve, solve, solver_settings};
 use super::verify::{element_errors, nan_max};
 pub use bf_problem::catalogue::warm_initial_point;
 pub use bf_problem::solution::records::{RefineCriterion, RefineReport, RefineRound};
@@ -190,10 +190,11 @@ pub fn refine(
             && left_the_optimum(prev.objective, &sol, opts.max_rise)
         {
             solved_again = true;
-            let close = close_start(&s, opts);
-            let pc = build(problem, &close)?;
+            // The same transcription and interpolated start; only the barrier start differs.
+            let mut pc = p.clone();
+            pc.settings.ipm = Some(close_start(&s, opts));
             match solve(&pc, reborrow(&mut callback)) {
-                Ok(mut again) if again.status.is_success() && again.objective < sol.objective => {
+                Ok(mut again) if better_solve(&again, &sol) => {
                     again.iterations += sol.iterations;
                     (p, sol) = (pc, again);
                 }
@@ -315,14 +316,11 @@ fn left_the_optimum(before: f64, sol: &OcpSolution, max_rise: f64) -> bool {
     sol.status.is_success() && sol.objective - before > max_rise * before.abs()
 }
 
-/// The settings `s` of a refinement round with the barrier of a close start
-/// ([`CLOSE_MU_FACTOR`]).
-fn close_start(s: &ProblemSettings, opts: &RefineSettings) -> ProblemSettings {
+/// The solver settings of a refinement round with settings `s`, with the barrier of a close
+/// start ([`CLOSE_MU_FACTOR`]).
+fn close_start(s: &ProblemSettings, opts: &RefineSettings) -> Settings {
     let base = s.ipm.clone().unwrap_or_else(|| solver_settings(s));
-    ProblemSettings {
-        ipm: Some(with_mu_init(base, opts.warm_mu_init * CLOSE_MU_FACTOR)),
-        ..s.clone()
-    }
+    with_mu_init(base, opts.warm_mu_init * CLOSE_MU_FACTOR)
 }
 
 /// `base` with the initial barrier parameter `mu_init`: the warm starts of the rounds after

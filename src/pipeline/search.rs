@@ -66,7 +66,7 @@ use super::error::PipelineError;
 use super::global::{self, HopSettings, Landscape};
 use super::refine::{self, RefineCriterion, RefineSettings};
 use super::reshape::{MOVES, flip_elbow, mirror_first_joint, with_duration_bounds};
-use super::solve::{INTERPOLATED_MU_INIT_MAX, solve_recentred, solve_with_mu_max};
+use super::solve::{INTERPOLATED_MU_INIT_MAX, better_solve, solve_recentred, solve_with_mu_max};
 use super::strategy::{
     Chain, Progress, Shard, StageRecord, Strategy, StrategyReport, effective, failed_record,
     prepare_chains, record, run_chain,
@@ -427,12 +427,6 @@ const FAILED: u8 = 3;
 /// ([`Search::refine_candidates`]).
 fn solved(sol: &OcpSolution) -> bool {
     class(sol) <= UNVERIFIED
-}
-
-/// Whether `a` is a better solve of one problem than `b`: successful where `b` is not, or
-/// both successful and `a` lower.
-fn lower(a: &OcpSolution, b: &OcpSolution) -> bool {
-    solved(a) && (!solved(b) || a.objective < b.objective)
 }
 
 /// The order in which candidates are promoted and refined: lowest objective first, ties by
@@ -1249,7 +1243,7 @@ impl OcpLandscape<'_> {
             match solve_with_mu_max(&b, mu_max, None) {
                 Ok(sol) => {
                     recs.push(record(from.index, label, &sol, t0));
-                    if best.as_ref().is_none_or(|kept| lower(&sol, kept)) {
+                    if best.as_ref().is_none_or(|kept| better_solve(&sol, kept)) {
                         best = Some(sol);
                     }
                 }

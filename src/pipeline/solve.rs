@@ -156,6 +156,14 @@ pub fn solve_with_mu_max(
     Ok(out)
 }
 
+/// Whether `a` is the better of two solves of one problem: successful with a finite objective
+/// where `b` is not, or both so and `a` lower. The search keeps the better of a promotion's two
+/// starts by it, and a refinement the better of a round and its solve again.
+pub fn better_solve(a: &OcpSolution, b: &OcpSolution) -> bool {
+    let ok = |s: &OcpSolution| s.status.is_success() && s.objective.is_finite();
+    ok(a) && (!ok(b) || a.objective < b.objective)
+}
+
 /// Interior-point settings for a warm-started stage: a small initial μ and bound pushes, so
 /// the iterates stay near the previous solution instead of re-centring (unless the caller set
 /// its own [`ProblemSettings::ipm`]).

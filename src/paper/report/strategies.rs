@@ -167,7 +167,7 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
          revolution) solved on a coarse mesh \
          (3 × 4 points per phase; on the COT problems every other start first held to the \
          period of its guess, then released), reshaping moves (the elbow flip, phase-duration bounds) \
-         and basin hopping from the best distinct optima and polishing of the winner there, the best optima that differ in shape re-solved on the problem's mesh (more of them while a \
+         and basin hopping from the best distinct optima and polishing of the winner there, the best optima that differ in shape re-solved on the problem's mesh (each from a warm and from a close barrier start, the lower kept; more of them while a \
          coarse objective is below the best re-solved one, or the best verified one) and re-integrated, unverified better \
          ones hp-refined (each only while it stays below the best verified one), then the moves and hops again around the verified winner on its own mesh \
          (a second round around a new winner at least 0.1 % lower; docs/optima.md). φ/φ_cold < 1 is a better optimum than the cold start's. \
