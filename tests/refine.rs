@@ -2,11 +2,11 @@
 //! closed-form optima (exact polynomial optimum; the brachistochrone against the cycloid),
 //! custom hp-Radau meshes, the ph rule, the exact warm start, and adaptive refinement of the
 //! named problems (`reach`, `periodic-qc`), and a round that leaves its optimum solved again
-//! (a `periodic-cot` plan).
+//! (two `periodic-cot` plans: one whose objective jumps, one whose phase durations do).
 
 use ball_finger::pipeline::refine::{
-    RefineCriterion, RefineRound, RefineSettings, current_mesh, error_estimate, refine,
-    refine_solution, warm_initial_point,
+    REFINE_SHIFT_MAX, RefineCriterion, RefineRound, RefineSettings, current_mesh, duration_shift,
+    error_estimate, refine, refine_solution, warm_initial_point,
 };
 use ball_finger::pipeline::solve::{own_problem, settings_of};
 use ball_finger::pipeline::verify::verify;
@@ -16,7 +16,7 @@ use bf_optim::ocp::toys::{brachistochrone, cycloid_time, double_integrator};
 use bf_optim::ocp::{
     HpRule, MeshSpec, Ocp, Scheme, Transcription, collocation_errors, extract, solve_nlp,
 };
-use bf_problem::{Problem, ProblemSettings};
+use bf_problem::{BuiltProblem, Problem, ProblemSettings};
 
 fn quiet() -> Settings {
     Settings {
@@ -424,6 +424,37 @@ fn refinement_of_periodic_qc_converges_to_1e_4() {
     assert!(warm < 0.6 * h[0].iterations as f64, "{h:?}");
 }
 
+/// The solution stored in `tests/fixtures/NAME`, its problem, the settings that solve it on
+/// its own mesh, and that problem built.
+fn fixture_on_its_mesh(name: &str) -> (OcpSolution, Problem, ProblemSettings, BuiltProblem) {
+    let sol = OcpSolution::read_json(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/fixtures")
+            .join(name)
+            .join("solution.json"),
+    )
+    .unwrap();
+    let (problem, settings) = settings_of(&sol).unwrap();
+    let (p, _) = own_problem(&sol).unwrap();
+    let s = ProblemSettings {
+        mesh: Some(current_mesh(&p).unwrap()),
+        ..settings
+    };
+    (sol, problem, s, p)
+}
+
+/// A refinement to the search's verification tolerance (re-integration defect 1e-4) in at
+/// most `rounds` rounds.
+fn verifying_rounds(rounds: usize) -> RefineSettings {
+    RefineSettings {
+        tol: 1e-4,
+        criterion: RefineCriterion::Reintegration { rtol: 1e-10 },
+        max_rounds: rounds,
+        max_points: 800,
+        ..RefineSettings::default()
+    }
+}
+
 /// A round that leaves the optimum it was warm-started from is solved again from a closer
 /// start (`RefineSettings::max_rise`). The fixture is a `periodic-cot` plan (J = 7.816e-4,
 /// period 9.075 s, re-integration defect 3.7e-4) that the winner's neighbourhood of the
@@ -433,28 +464,13 @@ fn refinement_of_periodic_qc_converges_to_1e_4() {
 /// confirms.
 #[test]
 fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
-    let sol = OcpSolution::read_json(
-        &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/fixtures/leaving-cot-plan/solution.json"),
-    )
-    .unwrap();
+    let (sol, problem, s, p) = fixture_on_its_mesh("leaving-cot-plan");
     let j0 = sol.objective;
-    let (problem, settings) = settings_of(&sol).unwrap();
-    let (p, _) = own_problem(&sol).unwrap();
     let before = verify(&p, &sol, 1e-10).unwrap().max_defect;
-    let s = ProblemSettings {
-        mesh: Some(current_mesh(&p).unwrap()),
-        ..settings
-    };
-    let opts = RefineSettings {
-        tol: 1e-4,
-        criterion: RefineCriterion::Reintegration { rtol: 1e-10 },
-        max_rounds: 1,
-        max_points: 800,
-        ..RefineSettings::default()
-    };
+    let opts = verifying_rounds(1);
     let never = RefineSettings {
         max_rise: f64::INFINITY,
+        max_shift: f64::INFINITY,
         ..opts
     };
     let (_, away) = refine_solution(problem, &s, sol.clone(), &never, None).unwrap();
@@ -480,6 +496,83 @@ fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
     };
     let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
     assert!(e.to_string().contains("max_rise"), "{e}");
+}
+
+/// A round whose phase durations move far more than a finer mesh explains has left its
+/// optimum even when its objective hardly rises (`RefineSettings::max_shift`). The fixture
+/// is a `periodic-cot` plan on the default mesh (3 × 10 points per phase; J = 7.580e-4,
+/// period 9.205 s) that the seed-2 search promoted. Refined without the check, its third
+/// round moves the period onto its 10 s bound and halves the first free phase's share, for
+/// an objective only 1.5 % higher, and the refinement verifies there, at J ≈ 7.78e-4 (the
+/// seed's answer before the check). With it, the third round is solved again from a closer
+/// start, stays on the plan's shape, and verifies lower.
+#[test]
+fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
+    let (sol, problem, s, _) = fixture_on_its_mesh("shifting-cot-plan");
+    let opts = verifying_rounds(4);
+    let unchecked = RefineSettings {
+        max_shift: f64::INFINITY,
+        ..opts
+    };
+    let period = |x: &OcpSolution| x.phase_durations.iter().sum::<f64>();
+    let (_, away) = refine_solution(problem, &s, sol.clone(), &unchecked, None).unwrap();
+    let (_, kept) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
+    let (ha, hk) = (
+        &away.refinement.as_ref().unwrap().history,
+        &kept.refinement.as_ref().unwrap().history,
+    );
+    // Without the check the refinement ends on the period bound, far from the plan's
+    // durations, and the objective check alone does not see it: every round not solved
+    // again by it rose by less than 2 %.
+    assert!(period(&away) > 9.99, "{:?}", away.phase_durations);
+    assert!(
+        ha.windows(2)
+            .all(|w| w[1].solved_again || w[1].objective < 1.02 * w[0].objective),
+        "{ha:?}"
+    );
+    assert!(
+        duration_shift(&sol, &away) > REFINE_SHIFT_MAX,
+        "{:?}",
+        away.phase_durations
+    );
+    // With it: some round was solved again, the plan keeps its period, and it verifies
+    // more than 1 % lower.
+    assert!(hk.iter().any(|r| r.solved_again), "{hk:?}");
+    assert!(kept.refinement.as_ref().unwrap().converged, "{hk:?}");
+    assert!(period(&kept) < 9.8, "{:?}", kept.phase_durations);
+    assert!(
+        kept.objective < 0.99 * away.objective,
+        "{} against {}",
+        kept.objective,
+        away.objective
+    );
+    // Not a positive bound: an error that names the field.
+    let bad = RefineSettings {
+        max_shift: 0.0,
+        ..opts
+    };
+    let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
+    assert!(e.to_string().contains("max_shift"), "{e}");
+}
+
+/// The duration shift of the refinement's check: the largest change of a phase duration as a
+/// fraction of the earlier period; infinite where the phases do not correspond, 0 without
+/// phases.
+#[test]
+fn the_duration_shift_is_the_largest_move_over_the_period() {
+    let (mut a, ..) = fixture_on_its_mesh("shifting-cot-plan");
+    a.phase_durations = vec![6.0, 1.0, 3.0];
+    let mut b = a.clone();
+    b.phase_durations = vec![5.5, 1.1, 3.0];
+    assert!((duration_shift(&a, &b) - 0.05).abs() < 1e-12);
+    assert!((duration_shift(&b, &a) - 0.5 / 9.6).abs() < 1e-12);
+    b.phase_durations = vec![6.0, 1.0];
+    assert_eq!(duration_shift(&a, &b), f64::INFINITY);
+    b.phase_durations = vec![6.0, f64::NAN, 3.0];
+    assert_eq!(duration_shift(&a, &b), f64::INFINITY);
+    a.phase_durations.clear();
+    b.phase_durations.clear();
+    assert_eq!(duration_shift(&a, &b), 0.0);
 }
 
 #[test]

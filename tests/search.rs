@@ -739,9 +739,10 @@ fn every_seed_reaches_the_best_known_cot_human_optimum() {
 
 /// Issue target of the global search for the paper's robotic-finger COT problem (the sticking
 /// law): every seed 0–9 verifies within 2 % of the best known optimum, J = 8.0564e-5 (period
-/// 3.86 s). BENCHMARKS.md ("The promotion below the best verified plan") records each seed:
-/// 8.0564e-5–8.0776e-5; before the promotion below the best verified plan (decision record
-/// 0053) four seeds ended 12–68 % higher.
+/// 3.86 s). BENCHMARKS.md ("Refinement rounds that change their shape") records each seed:
+/// 8.05640e-5–8.05675e-5 (8.0564e-5–8.0776e-5 before decision record 0060); before the
+/// promotion below the best verified plan (decision record 0053) four seeds ended 12–68 %
+/// higher.
 #[test]
 #[ignore = "about 7 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_reaches_the_best_known_cot_optimum -- --ignored`"]

@@ -8,9 +8,10 @@
 //! elements above the tolerance → re-solve warm-started from the
 //! previous solution interpolated exactly onto the new mesh → … until the largest element error
 //! is ≤ tol, or the round or size limits stop it (reported as not converged). A round whose
-//! objective rises by more than [`RefineSettings::max_rise`] has left the optimum it started
-//! from and is solved again from a closer barrier start ([`CLOSE_MU_FACTOR`]); the lower of
-//! its two solutions is kept. The result holds
+//! objective rises by more than [`RefineSettings::max_rise`] or whose phase durations move by
+//! more than [`RefineSettings::max_shift`] of the period has left the optimum it started from
+//! and is solved again from a closer barrier start ([`CLOSE_MU_FACTOR`]); the lower of its two
+//! solutions is kept. The result holds
 //! the final solution, its mesh (a [`MeshSpec`] per phase, for
 //! [`ProblemSettings::mesh`]) and the history of objective and error per round.
 
@@ -53,6 +54,11 @@ pub struct RefineSettings {
     /// is solved again from a closer start ([`CLOSE_MU_FACTOR`]) and the lower of its two
     /// solutions kept (default [`REFINE_RISE_MAX`]; `f64::INFINITY`: never).
     pub max_rise: f64,
+    /// Largest change of a phase duration from one round to the next, as a fraction of the
+    /// earlier round's period, that is taken as the same optimum on a finer mesh; a round
+    /// whose durations move more is solved again from a closer start, as for
+    /// [`RefineSettings::max_rise`] (default [`REFINE_SHIFT_MAX`]; `f64::INFINITY`: never).
+    pub max_shift: f64,
 }
 
 impl Default for RefineSettings {
@@ -65,6 +71,7 @@ impl Default for RefineSettings {
             max_points: 400,
             warm_mu_init: 1e-5,
             max_rise: REFINE_RISE_MAX,
+            max_shift: REFINE_SHIFT_MAX,
         }
     }
 }
@@ -154,6 +161,13 @@ pub fn refine(
             expected: "positive (infinite: never solve a round again)",
         });
     }
+    if opts.max_shift.is_nan() || opts.max_shift <= 0.0 {
+        return Err(PipelineError::InvalidOption {
+            name: "max_shift",
+            value: opts.max_shift,
+            expected: "positive (infinite: never solve a round again)",
+        });
+    }
     if !(opts.tol.is_finite() && opts.tol > 0.0) {
         return Err(PipelineError::InvalidOption {
             name: "refinement tolerance",
@@ -182,12 +196,13 @@ pub fn refine(
             Err(e) => return Err(e),
         };
         // A round starts from the previous round's optimum, interpolated: on the same
-        // trajectory its objective moves by what the finer mesh changes. One that rose far
-        // more has been pulled out of that optimum by the barrier's re-centring, and is solved
-        // again from a start that the barrier leaves closer to it.
+        // trajectory its objective and its phase durations move by what the finer mesh
+        // changes. One that moved far more has been pulled out of that optimum by the
+        // barrier's re-centring, and is solved again from a start that the barrier leaves
+        // closer to it.
         let mut solved_again = false;
         if let Some((prev, ..)) = best.as_ref().filter(|_| round > 0)
-            && left_the_optimum(prev.objective, &sol, opts.max_rise)
+            && left_the_optimum(prev, &sol, opts)
         {
             solved_again = true;
             // The same transcription and interpolated start; only the barrier start differs.
@@ -303,17 +318,56 @@ pub fn refine(
 /// 6.355e-3 to 1.759e-2 (docs/decisions/0058-refinement-rounds-that-leave-their-optimum.md).
 pub const REFINE_RISE_MAX: f64 = 0.5;
 
+/// The largest change of a phase duration from one refinement round to the next, as a
+/// fraction of the earlier round's period, that a finer mesh of the same trajectory explains.
+/// Over the 156 refinement rounds of the `periodic-cot` plan searches of seeds 0–9, each also
+/// solved from the close start to measure it: of the 13 rounds that moved by more than 10 %
+/// (the period onto its bound, a free phase halved), the close start ended lower in 10 and
+/// stayed within 1.5 % of the period in all 13; of the 129 that moved by less than 5 %, it
+/// ended more than 0.1 % lower in 17 and higher in 7. A threshold of 5 % was measured too:
+/// more rounds solved again, and the searches of three seeds ended higher
+/// (docs/decisions/0060-refinement-rounds-that-change-their-shape.md).
+pub const REFINE_SHIFT_MAX: f64 = 0.1;
+
 /// The barrier parameter of a round solved again after it left its optimum
-/// ([`REFINE_RISE_MAX`]), as a multiple of [`RefineSettings::warm_mu_init`]: μ₀ = 1e-5 pulls
-/// the interpolated start towards the analytic centre far enough to leave a narrow basin;
-/// from 1e-7 the same round of the 7.816e-4 plan stays on it (7.8163e-4).
+/// ([`REFINE_RISE_MAX`], [`REFINE_SHIFT_MAX`]), as a multiple of
+/// [`RefineSettings::warm_mu_init`]: μ₀ = 1e-5 pulls the interpolated start towards the
+/// analytic centre far enough to leave a narrow basin; from 1e-7 the same round of the
+/// 7.816e-4 plan stays on it (7.8163e-4).
 pub const CLOSE_MU_FACTOR: f64 = 1e-2;
 
-/// Whether a round's solution `sol` has left the optimum of the round before it, whose
-/// objective was `before`: its objective rose by more than `max_rise` times `|before|`
-/// ([`RefineSettings::max_rise`]).
-fn left_the_optimum(before: f64, sol: &OcpSolution, max_rise: f64) -> bool {
-    sol.status.is_success() && sol.objective - before > max_rise * before.abs()
+/// Whether a round's successful solution `sol` has left the optimum `prev` of the round
+/// before it: its objective rose by more than [`RefineSettings::max_rise`] times
+/// `|prev.objective|`, or a phase duration moved by more than [`RefineSettings::max_shift`]
+/// of `prev`'s period ([`duration_shift`]).
+fn left_the_optimum(prev: &OcpSolution, sol: &OcpSolution, opts: &RefineSettings) -> bool {
+    sol.status.is_success()
+        && (sol.objective - prev.objective > opts.max_rise * prev.objective.abs()
+            || duration_shift(prev, sol) > opts.max_shift)
+}
+
+/// The largest change of a phase duration from `prev` to `sol`, as a fraction of `prev`'s
+/// period (the sum of its phase durations); 0 without phases, infinite when the phases do
+/// not correspond or a duration is not finite.
+pub fn duration_shift(prev: &OcpSolution, sol: &OcpSolution) -> f64 {
+    let (a, b) = (&prev.phase_durations, &sol.phase_durations);
+    if a.is_empty() && b.is_empty() {
+        return 0.0;
+    }
+    let period: f64 = a.iter().sum();
+    if a.len() != b.len() || period.is_nan() || period <= 0.0 {
+        return f64::INFINITY;
+    }
+    let shift = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / period)
+        .fold(0.0, nan_max);
+    if shift.is_finite() {
+        shift
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// The solver settings of a refinement round with settings `s`, with the barrier of a close

@@ -146,8 +146,9 @@ pub struct RefineRound {
     /// Wall time of the round: build, solve and estimate (s).
     pub seconds: f64,
     /// Whether the round's first solve left the optimum of the round before it and the round
-    /// was solved again from a closer barrier start (`bf`'s `RefineSettings::max_rise`),
-    /// whichever of the two solutions it kept. Absent in files written before it: false.
+    /// was solved again from a closer barrier start (its objective or phase durations moved
+    /// beyond `bf`'s `RefineSettings::max_rise` or `max_shift`), whichever of the two
+    /// solutions it kept. Absent in files written before it: false.
     #[serde(default)]
     pub solved_again: bool,
 }
