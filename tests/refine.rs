@@ -514,7 +514,6 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
         max_shift: f64::INFINITY,
         ..opts
     };
-    let period = |x: &OcpSolution| x.phase_durations.iter().sum::<f64>();
     let (_, away) = refine_solution(problem, &s, sol.clone(), &unchecked, None).unwrap();
     let (_, kept) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
     let (ha, hk) = (
@@ -524,7 +523,7 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
     // Without the check the refinement ends on the period bound, far from the plan's
     // durations, and the objective check alone does not see it: every round not solved
     // again by it rose by less than 2 %.
-    assert!(period(&away) > 9.99, "{:?}", away.phase_durations);
+    assert!(away.period > 9.99, "{:?}", away.phase_durations);
     assert!(
         ha.windows(2)
             .all(|w| w[1].solved_again || w[1].objective < 1.02 * w[0].objective),
@@ -535,11 +534,13 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
         "{:?}",
         away.phase_durations
     );
-    // With it: some round was solved again, the plan keeps its period, and it verifies
-    // more than 1 % lower.
-    assert!(hk.iter().any(|r| r.solved_again), "{hk:?}");
+    // With it: more rounds are solved again than the objective check alone solves again
+    // (both solve the first round again, whose objective jumps), the plan keeps its period,
+    // and it verifies more than 1 % lower.
+    let again = |h: &[RefineRound]| h.iter().filter(|r| r.solved_again).count();
+    assert!(again(hk) > again(ha), "{hk:?}\n{ha:?}");
     assert!(kept.refinement.as_ref().unwrap().converged, "{hk:?}");
-    assert!(period(&kept) < 9.8, "{:?}", kept.phase_durations);
+    assert!(kept.period < 9.8, "{:?}", kept.phase_durations);
     assert!(
         kept.objective < 0.99 * away.objective,
         "{} against {}",
@@ -562,8 +563,10 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
 fn the_duration_shift_is_the_largest_move_over_the_period() {
     let (mut a, ..) = fixture_on_its_mesh("shifting-cot-plan");
     a.phase_durations = vec![6.0, 1.0, 3.0];
+    a.period = 10.0;
     let mut b = a.clone();
     b.phase_durations = vec![5.5, 1.1, 3.0];
+    b.period = 9.6;
     assert!((duration_shift(&a, &b) - 0.05).abs() < 1e-12);
     assert!((duration_shift(&b, &a) - 0.5 / 9.6).abs() < 1e-12);
     b.phase_durations = vec![6.0, 1.0];

@@ -347,27 +347,22 @@ fn left_the_optimum(prev: &OcpSolution, sol: &OcpSolution, opts: &RefineSettings
 }
 
 /// The largest change of a phase duration from `prev` to `sol`, as a fraction of `prev`'s
-/// period (the sum of its phase durations); 0 without phases, infinite when the phases do
-/// not correspond or a duration is not finite.
+/// period ([`OcpSolution::period`]); 0 without phases, infinite when the phases do not
+/// correspond or a duration is not finite.
 pub fn duration_shift(prev: &OcpSolution, sol: &OcpSolution) -> f64 {
     let (a, b) = (&prev.phase_durations, &sol.phase_durations);
     if a.is_empty() && b.is_empty() {
         return 0.0;
     }
-    let period: f64 = a.iter().sum();
-    if a.len() != b.len() || period.is_nan() || period <= 0.0 {
+    if a.len() != b.len() || prev.period.is_nan() || prev.period <= 0.0 {
         return f64::INFINITY;
     }
     let shift = a
         .iter()
         .zip(b)
-        .map(|(x, y)| (x - y).abs() / period)
+        .map(|(x, y)| (x - y).abs() / prev.period)
         .fold(0.0, nan_max);
-    if shift.is_finite() {
-        shift
-    } else {
-        f64::INFINITY
-    }
+    if shift.is_nan() { f64::INFINITY } else { shift }
 }
 
 /// The solver settings of a refinement round with settings `s`, with the barrier of a close
