@@ -5,6 +5,40 @@
 //! and leaves the underlying error to `source()`, so the chain that `anyhow`'s `{:#}` prints
 //! states each reason once.
 
+/// A wrong command line that the argument parser could not see: an option's value out of its
+/// range, an unknown name, or options that do not go together. The binary exits with status 2
+/// for it, as clap does for the arguments it rejects itself, so that a script can tell a wrong
+/// call (2) from a run that failed or did not verify (1). A file that cannot be read, or whose
+/// content does not fit, is not a usage error.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// A [`UsageError`] with the message `msg`, as the commands return their errors.
+pub fn usage(msg: impl Into<String>) -> anyhow::Error {
+    anyhow::Error::new(UsageError(msg.into()))
+}
+
+/// Returns early from a command with a [`UsageError`] formatted like `format!`.
+macro_rules! bail_usage {
+    ($($arg:tt)*) => {
+        return Err($crate::errors::usage(format!($($arg)*)))
+    };
+}
+pub(crate) use bail_usage;
+
+/// Whether `e` or one of its causes is a [`UsageError`].
+pub fn is_usage(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| c.downcast_ref::<UsageError>().is_some())
+}
+
 /// The error and its causes, joined by `": "`.
 pub fn render(e: &anyhow::Error) -> String {
     format!("{e:#}")
@@ -40,6 +74,19 @@ mod tests {
 
     fn io() -> std::io::Error {
         std::io::Error::from(std::io::ErrorKind::AlreadyExists)
+    }
+
+    #[test]
+    fn a_usage_error_is_found_under_context_and_nothing_else_is_one() {
+        let e = usage("--points must be at least 2 (got 0)").context("optimize");
+        assert!(is_usage(&e));
+        assert_eq!(render(&e), "optimize: --points must be at least 2 (got 0)");
+        let not: anyhow::Error = io().into();
+        assert!(!is_usage(&not.context("--warm-start x.json")));
+        fn bails() -> anyhow::Result<()> {
+            bail_usage!("--eps must be positive (got {})", -1);
+        }
+        assert!(is_usage(&bails().unwrap_err()));
     }
 
     #[test]

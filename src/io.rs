@@ -2,7 +2,8 @@
 //! a single file is replaced atomically, a run's output directory as a whole), standard output
 //! that reports write errors instead of panicking, and parsing of numeric command-line lists.
 
-use anyhow::{Context, Result, bail};
+use crate::errors::bail_usage;
+use anyhow::{Context, Result};
 use std::io::Write as _;
 
 pub use bf_output::{DirSpec, Outcome, OutputDir, write_atomic};
@@ -25,16 +26,20 @@ macro_rules! outln {
 }
 
 /// Parse a comma-separated list of finite numbers given for the option `name`
-/// (e.g. `--q 0.1,0.2,0.3`), checking the expected length when one is given.
+/// (e.g. `--q 0.1,0.2,0.3`), checking the expected length when one is given; a bad list is a
+/// [`crate::errors::UsageError`].
 pub fn parse_list(name: &str, text: &str, expected_len: Option<usize>) -> Result<Vec<f64>> {
     let mut values = Vec::new();
     for (i, item) in text.split(',').enumerate() {
         let item = item.trim();
-        let v: f64 = item
-            .parse()
-            .with_context(|| format!("{name}: element {} ({item:?}) is not a number", i + 1))?;
+        let v: f64 = item.parse().map_err(|_| {
+            crate::errors::usage(format!(
+                "{name}: element {} ({item:?}) is not a number",
+                i + 1
+            ))
+        })?;
         if !v.is_finite() {
-            bail!(
+            bail_usage!(
                 "{name}: element {} is {v}; only finite values are allowed",
                 i + 1
             );
@@ -44,7 +49,7 @@ pub fn parse_list(name: &str, text: &str, expected_len: Option<usize>) -> Result
     if let Some(n) = expected_len
         && values.len() != n
     {
-        bail!(
+        bail_usage!(
             "{name}: expected {n} comma-separated values, got {}",
             values.len()
         );
@@ -70,5 +75,10 @@ mod tests {
         assert!(e.contains("expected 3"), "{e}");
         let e = parse_list("--qd", "1,x", None).unwrap_err().to_string();
         assert!(e.contains("--qd") && e.contains("\"x\""), "{e}");
+        // Every refusal is a wrong command line (exit status 2).
+        for (text, n) in [("1,NaN,3", Some(3)), ("1,2", Some(3)), ("1,x", None)] {
+            let e = parse_list("--q", text, n).unwrap_err();
+            assert!(crate::errors::is_usage(&e), "{text}: {e}");
+        }
     }
 }

@@ -498,7 +498,8 @@ fn the_hull_bound_keeps_bang_bang_torques_within_their_limits_between_the_points
     assert_rest_at_both_ends(&hull, &scene);
 }
 
-/// `--torque-hull` names itself when refused: out of range, or given to a ball problem.
+/// `--torque-hull` names itself when refused (a wrong command line, exit status 2): out of
+/// range, or given to a ball problem.
 #[test]
 fn torque_hull_errors_name_the_option() {
     let dir = tmpdir("reach-arm-hull-option");
@@ -525,7 +526,7 @@ fn torque_hull_errors_name_the_option() {
         all.extend(["--out", out.to_str().unwrap()]);
         let o = run(&all);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert_eq!(o.status.code(), Some(2), "{err}");
         assert!(err.contains(mention), "{err}");
         assert!(!out.join("solution.json").exists());
     }

@@ -9,6 +9,18 @@ use std::process::Output;
 mod cli_util;
 use cli_util::{bin, root, run, tmpdir};
 
+/// [`assert_clean_failure`] of a wrong command line: exit status 2 (clap's, and the commands'
+/// own checks of their options), as `optimize --help` documents.
+fn assert_usage_error(out: &Output, must_mention: &[&str]) {
+    assert_clean_failure(out, must_mention);
+    assert_eq!(
+        out.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn assert_clean_failure(out: &Output, must_mention: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
@@ -234,7 +246,7 @@ fn bad_cli_input_gives_clear_errors() {
         &run(&["eval", "scenes/nope.toml", "--q", "0,0,0", "--qd", "0,0,0"]),
         &["scenes/nope.toml"],
     );
-    assert_clean_failure(
+    assert_usage_error(
         &run(&[
             "eval",
             "scenes/paper.toml",
@@ -245,11 +257,11 @@ fn bad_cli_input_gives_clear_errors() {
         ]),
         &["--q", "element 2"],
     );
-    assert_clean_failure(
+    assert_usage_error(
         &run(&["eval", "scenes/paper.toml", "--q", "0,0", "--qd", "0,0,0"]),
         &["--q", "expected 3"],
     );
-    assert_clean_failure(
+    assert_usage_error(
         &run(&[
             "eval",
             "scenes/paper.toml",
@@ -281,11 +293,11 @@ fn bad_cli_input_gives_clear_errors() {
         &["mass"],
     );
     assert!(!out_file.exists(), "no output file on failure");
-    assert_clean_failure(
+    assert_usage_error(
         &run(&["optimize", "--problem", "periodic-nope"]),
         &["--problem", "periodic-qc"],
     );
-    assert_clean_failure(
+    assert_usage_error(
         &run(&[
             "optimize",
             "--problem",
@@ -295,7 +307,7 @@ fn bad_cli_input_gives_clear_errors() {
         ]),
         &["--scheme"],
     );
-    assert_clean_failure(
+    assert_usage_error(
         &run(&["optimize", "--problem", "periodic-qc", "--epsilon", "-1"]),
         &["--epsilon"],
     );
@@ -314,36 +326,94 @@ fn bad_cli_input_gives_clear_errors() {
         a.extend_from_slice(extra);
         run(&a)
     };
-    assert_clean_failure(&opt(&["--strategy", "annealing"]), &["--strategy"]);
-    assert_clean_failure(
+    assert_usage_error(&opt(&["--strategy", "annealing"]), &["--strategy"]);
+    assert_usage_error(
         &opt(&["--strategy", "multistart", "--starts", "0"]),
         &["--starts"],
     );
     // A multi-start option with another strategy would be ignored: refused instead.
-    assert_clean_failure(
+    assert_usage_error(
         &opt(&["--strategy", "direct", "--seed", "3"]),
         &["--seed", "multi-start"],
     );
-    assert_clean_failure(
+    assert_usage_error(
         &opt(&["--strategy", "continuation", "--starts", "8"]),
         &["--starts", "multi-start"],
     );
-    assert_clean_failure(&opt(&["--seed", "-1"]), &["--seed"]);
-    assert_clean_failure(&opt(&["--refine", "-1e-4"]), &["--refine"]);
-    assert_clean_failure(&opt(&["--refine", "nan"]), &["--refine"]);
-    assert_clean_failure(
+    assert_usage_error(&opt(&["--seed", "-1"]), &["--seed"]);
+    assert_usage_error(&opt(&["--refine", "-1e-4"]), &["--refine"]);
+    assert_usage_error(&opt(&["--refine", "nan"]), &["--refine"]);
+    assert_usage_error(
         &opt(&["--scheme", "lg", "--refine", "1e-4"]),
         &["--refine", "radau"],
     );
-    assert_clean_failure(&opt(&["--verify-rtol", "2"]), &["--verify-rtol"]);
+    assert_usage_error(&opt(&["--verify-rtol", "2"]), &["--verify-rtol"]);
     for bad in ["-3e-8", "nan", "0", "0.5"] {
-        assert_clean_failure(
+        assert_usage_error(
             &opt(&["--dual-regularization", bad]),
             &["--dual-regularization"],
         );
     }
-    assert_clean_failure(&opt(&["--print-level", "7"]), &["--print-level"]);
+    assert_usage_error(&opt(&["--print-level", "7"]), &["--print-level"]);
     std::fs::remove_dir_all(dir).ok();
+}
+
+/// The commands' own checks of their options exit with status 2 as clap's do (the documented
+/// contract of `optimize --help` and `track --help`; more cases in
+/// `bad_cli_input_gives_clear_errors`); a file that cannot be read, or a run that does not
+/// converge, exits with 1. A script can then tell a wrong call from a failed run.
+#[test]
+fn wrong_command_lines_exit_with_status_2_and_failed_runs_with_1() {
+    let opt = |extra: &[&str]| {
+        let mut a = vec![
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--out",
+            "/nonexistent/out",
+        ];
+        a.extend_from_slice(extra);
+        run(&a)
+    };
+    for (extra, flag) in [
+        (&["--points", "0"][..], "--points"),
+        (&["--max-iter", "0"], "--max-iter"),
+        (&["--elements", "0"], "--elements"),
+        (&["--scheme", "lg", "--points", "201"], "--points"),
+        (&["--cone-margin", "2"], "--cone-margin"),
+        (&["--torque-margin", "nan"], "--torque-margin"),
+        (&["--hop-scale", "-1"], "--hop-scale"),
+        (&["--param", "nothing"], "--param"),
+        (&["--param", "no.such.name=1"], "--param"),
+        (&["--impact-law", "elastic"], "--impact-law"),
+        (&["--shard", "3/2"], "--shard"),
+    ] {
+        assert_usage_error(&opt(extra), &[flag]);
+    }
+    assert_usage_error(&run(&["simulate", "--t-end", "-1"]), &["--t-end"]);
+    let plan = root().join("data/optima/periodic-qc-plan/solution.json");
+    assert_usage_error(
+        &run(&["track", plan.to_str().unwrap(), "--periods", "0"]),
+        &["--periods"],
+    );
+    // Not usage errors: a missing file, and a solve that stops at its iteration limit.
+    let out = opt(&["--warm-start", "/nonexistent.json"]);
+    assert_clean_failure(&out, &["--warm-start"]);
+    assert_eq!(out.status.code(), Some(1));
+    let dir = tmpdir("max-iter-1");
+    let out = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "direct",
+        "--max-iter",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    assert_clean_failure(&out, &["MaxIterations"]);
+    assert_eq!(out.status.code(), Some(1));
 }
 
 /// `optimize` end to end on a small problem: the strategy table, the refinement rounds and the
@@ -547,11 +617,12 @@ fn an_iteration_limit_hints_at_the_curvature_extrapolation() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-/// `optimize --problem periodic-cot FLAG VALUE` fails for every value of `bad`, naming `flag`.
+/// `optimize --problem periodic-cot FLAG VALUE` fails as a usage error for every value of
+/// `bad`, naming `flag`.
 fn optimize_refuses_values(flag: &str, bad: &[&str]) {
     for value in bad {
         let out = run(&["optimize", "--problem", "periodic-cot", flag, value]);
-        assert!(!out.status.success(), "{flag} {value}");
+        assert_eq!(out.status.code(), Some(2), "{flag} {value}");
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert!(stderr.contains(flag), "{flag} {value}: {stderr}");
     }
@@ -569,8 +640,8 @@ fn reach_arm_refuses(flag: &str) {
         flag,
     ];
     let out = run(&args);
-    assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains(flag), "{stderr}");
 }
 

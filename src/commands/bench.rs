@@ -16,6 +16,7 @@
 //! both paths are evaluated at every state and their largest relative difference is reported
 //! (the two must agree; a difference above 1e-12 is an error).
 
+use crate::errors::bail_usage;
 use std::hint::black_box;
 use std::time::Instant;
 
@@ -242,13 +243,13 @@ pub const MAX_TIME: f64 = 3600.0;
 /// Run `bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
     if !(args.time.is_finite() && args.time > 0.0 && args.time <= MAX_TIME) {
-        bail!(
+        bail_usage!(
             "--time must be a positive number of seconds, at most {MAX_TIME} (got {:?})",
             args.time
         );
     }
     if args.states == 0 {
-        bail!("--states must be at least 1 (got 0)");
+        bail_usage!("--states must be at least 1 (got 0)");
     }
     let (scene, text) = super::load_scene(&args.scene, &args.chain)?;
     let b = bench(&scene, &text, args.time, args.states, args.seed)

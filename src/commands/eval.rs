@@ -14,6 +14,7 @@
 //! quantity or the kernel and the entry (indices from 1), never a `null` in the JSON.
 
 use crate::cli::EvalArgs;
+use crate::errors::bail_usage;
 use crate::io::parse_list;
 use anyhow::{Context, Result, bail};
 use bf_codegen::interp::{OutputShape, SceneKernels};
@@ -47,7 +48,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
         .unwrap_or(0.01);
     if !(eps.is_finite() && eps > 0.0) {
-        anyhow::bail!("--eps must be a finite positive number (got {eps})");
+        bail_usage!("--eps must be a finite positive number (got {eps})");
     }
     let state = State {
         q: &q,

@@ -41,7 +41,7 @@ pub fn load_scene_with_params(
     let (mut scene, text) = load_scene(path, chain)?;
     let assignments = parse_params(params)?;
     bf_model::registry::set_parameters(&mut scene, &assignments)
-        .map_err(|e| anyhow::anyhow!("--param: {}: {e}", path.display()))?;
+        .map_err(|e| crate::errors::usage(format!("--param: {}: {e}", path.display())))?;
     Ok((scene, text))
 }
 
@@ -52,11 +52,10 @@ pub fn parse_params(params: &[String]) -> Result<Vec<(String, f64)>> {
         .map(|p| {
             let (name, value) = p
                 .split_once('=')
-                .ok_or_else(|| anyhow::anyhow!("--param {p}: expected NAME=VALUE"))?;
-            let value: f64 = value
-                .trim()
-                .parse()
-                .map_err(|_| anyhow::anyhow!("--param {p}: `{}` is not a number", value.trim()))?;
+                .ok_or_else(|| crate::errors::usage(format!("--param {p}: expected NAME=VALUE")))?;
+            let value: f64 = value.trim().parse().map_err(|_| {
+                crate::errors::usage(format!("--param {p}: `{}` is not a number", value.trim()))
+            })?;
             Ok((name.trim().to_string(), value))
         })
         .collect()

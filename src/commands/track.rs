@@ -6,6 +6,7 @@
 //! marked FAILED when a plant misses the target.
 
 use crate::cli::TrackArgs;
+use crate::errors::bail_usage;
 use crate::paper::closed_loop::{
     ControllerKind, Tracking, robustness_rows, robustness_table, run_tracking_replanned,
     solution_model,
@@ -105,10 +106,10 @@ impl<'a> TrackingJson<'a> {
 fn replan_limit(args: &TrackArgs) -> Result<Option<usize>> {
     let max_iter = args.replan_iterations.unwrap_or(REPLAN_MAX_ITER);
     if max_iter == 0 {
-        bail!("--replan-iterations must be at least 1");
+        bail_usage!("--replan-iterations must be at least 1");
     }
     if args.replan_iterations.is_some() && !args.replan {
-        bail!("--replan-iterations needs --replan");
+        bail_usage!("--replan-iterations needs --replan");
     }
     Ok(args.replan.then_some(max_iter))
 }

@@ -9,6 +9,7 @@
 use super::openloop::{
     DEFAULT_PD_TRACK, initial_state, periodic_torques, simulate_optimum, tracking_input,
 };
+use crate::errors::bail_usage;
 use crate::pipeline::verify::nan_max;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::{
@@ -299,13 +300,13 @@ pub fn run_tracking_with(
     replan: Option<usize>,
 ) -> Result<Tracking> {
     if replan.is_some() && matches!(controller, ControllerKind::OpenLoop | ControllerKind::Pd) {
-        bail!(
+        bail_usage!(
             "--replan needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
             controller.name()
         );
     }
     if periods == 0 {
-        bail!("--periods must be at least 1");
+        bail_usage!("--periods must be at least 1");
     }
     if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
         bail!(

@@ -5,6 +5,7 @@
 
 use super::{OUTPUT_DIR, RunSettings, check_size, parse_scheme};
 use crate::cli::OptimizeArgs;
+use crate::errors::bail_usage;
 use crate::io::parse_list;
 use crate::pipeline::verify::VERIFIED_DEFECT;
 use anyhow::{Context, Result, bail};
@@ -37,7 +38,7 @@ fn first_non_finite_arm(sol: &ArmSolution) -> Option<(String, f64)> {
 pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     use crate::pipeline::arm::{failure_of, solve_verified, write_arm_solution};
     let Some(path) = &args.scene else {
-        bail!(
+        bail_usage!(
             "--problem {REACH_ARM} needs --scene FILE (an arm, e.g. scenes/puma560.toml): it has \
              no built-in scene"
         );
@@ -62,22 +63,25 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--proximal-weight", args.proximal_weight.is_some()),
     ] {
         if given {
-            bail!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
+            bail_usage!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
         }
     }
     if args.scheme != "radau" {
-        bail!(
+        bail_usage!(
             "--scheme {}: --problem {REACH_ARM} is transcribed with radau only",
             args.scheme
         );
     }
     if args.points < 2 {
-        bail!("--points must be at least 2 (got {})", args.points);
+        bail_usage!("--points must be at least 2 (got {})", args.points);
+    }
+    if args.max_iter == 0 {
+        bail_usage!("--max-iter must be at least 1");
     }
     let scheme = parse_scheme(&args.scheme, args.elements)?;
     check_size(args.points, scheme)?;
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
-        bail!(
+        bail_usage!(
             "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
             args.verify_rtol
         );
@@ -94,7 +98,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     let weight = |opt: &str, v: Option<f64>, default: f64| -> Result<f64> {
         match v {
             Some(w) if w.is_finite() && w >= 0.0 => Ok(w),
-            Some(w) => bail!("{opt} must be a finite number >= 0 (got {w})"),
+            Some(w) => bail_usage!("{opt} must be a finite number >= 0 (got {w})"),
             None => Ok(default),
         }
     };
@@ -111,12 +115,14 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         )?,
         duration: match args.duration {
             Some(t) if (MIN_DURATION..=MAX_DURATION).contains(&t) => Some(t),
-            Some(t) => bail!("--duration must be in [{MIN_DURATION}, {MAX_DURATION}] s (got {t})"),
+            Some(t) => {
+                bail_usage!("--duration must be in [{MIN_DURATION}, {MAX_DURATION}] s (got {t})")
+            }
             None => None,
         },
         torque_hull: match args.torque_hull {
             Some(m) if m <= MAX_ELEVATION => m,
-            Some(m) => bail!("--torque-hull must be in 0..={MAX_ELEVATION} (got {m})"),
+            Some(m) => bail_usage!("--torque-hull must be in 0..={MAX_ELEVATION} (got {m})"),
             None => bf_problem::arm::DEFAULT_TORQUE_HULL,
         },
         max_iter: args.max_iter,

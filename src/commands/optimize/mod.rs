@@ -15,6 +15,7 @@
 //! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
 use crate::cli::{OptimizeArgs, OptimizeCommand};
+use crate::errors::bail_usage;
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::{Execution, VerifyPolicy};
 use crate::pipeline::strategy::{
@@ -23,7 +24,7 @@ use crate::pipeline::strategy::{
 use crate::pipeline::verify::{
     MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, robustness_miss, verdict_failure, verify,
 };
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
 use bf_optim::ocp::problem::Scheme;
 use bf_output::{DirSpec, Outcome, OutputDir};
@@ -69,15 +70,15 @@ pub fn parse_scheme(text: &str, elements: usize) -> Result<Scheme> {
     match text {
         "lg" => Ok(Scheme::Lg),
         "radau" if elements >= 1 => Ok(Scheme::Radau { elements }),
-        "radau" => bail!("--elements must be at least 1"),
-        other => bail!("--scheme: unknown scheme {other:?}; use `lg` or `radau`"),
+        "radau" => bail_usage!("--elements must be at least 1"),
+        other => bail_usage!("--scheme: unknown scheme {other:?}; use `lg` or `radau`"),
     }
 }
 
 /// Checks the size of the transcription before anything is allocated (see the module docs).
 pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
     match scheme {
-        Scheme::Lg if points > MAX_LG_POINTS => bail!(
+        Scheme::Lg if points > MAX_LG_POINTS => bail_usage!(
             "--points {points} with --scheme lg: at most {MAX_LG_POINTS} Legendre–Gauss points \
              per phase are supported (the nodes' interpolation weights overflow at about 900 \
              points, and the dense differentiation blocks grow as N²); for a finer mesh use \
@@ -87,7 +88,7 @@ pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
             let per_element = points.div_ceil(elements).max(2);
             let total = per_element.saturating_mul(elements);
             if per_element > MAX_LG_POINTS || total > MAX_RADAU_POINTS {
-                bail!(
+                bail_usage!(
                     "--points {points} --elements {elements}: {elements} Radau elements of \
                      {per_element} points are {total} points per phase; at most \
                      {MAX_RADAU_POINTS} per phase (and {MAX_LG_POINTS} per element) are supported"
@@ -178,7 +179,9 @@ fn check_json_values(option: &str, path: &Path, value: &serde_json::Value) -> Re
 /// Parse `--problem` (a catalogue problem; `reach-arm` is dispatched before, by [`run_with`]).
 pub fn parse_problem(text: &str) -> Result<Problem> {
     text.parse().map_err(|e| {
-        anyhow::anyhow!("--problem: {e}, {REACH_ARM} (an arm without a ball, with --scene)")
+        crate::errors::usage(format!(
+            "--problem: {e}, {REACH_ARM} (an arm without a ball, with --scene)"
+        ))
     })
 }
 
@@ -188,10 +191,13 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     let problem = parse_problem(problem_arg(args))?;
     if args.points < 2 {
-        bail!("--points must be at least 2 (got {})", args.points);
+        bail_usage!("--points must be at least 2 (got {})", args.points);
+    }
+    if args.max_iter == 0 {
+        bail_usage!("--max-iter must be at least 1");
     }
     if !(args.epsilon.is_finite() && args.epsilon > 0.0) {
-        bail!(
+        bail_usage!(
             "--epsilon must be a finite positive number (got {})",
             args.epsilon
         );
@@ -199,7 +205,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     if let Some(dc) = args.dual_regularization
         && !(dc.is_finite() && dc > 0.0 && dc <= 1e-4)
     {
-        bail!("--dual-regularization must be in (0, 1e-4] (got {dc})");
+        bail_usage!("--dual-regularization must be in (0, 1e-4] (got {dc})");
     }
     let scheme = parse_scheme(&args.scheme, args.elements)?;
     check_size(args.points, scheme)?;
@@ -213,7 +219,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         None => None,
     };
     if !(0.0..1.0).contains(&args.cone_margin) {
-        bail!("--cone-margin must be in [0, 1) (got {})", args.cone_margin);
+        bail_usage!("--cone-margin must be in [0, 1) (got {})", args.cone_margin);
     }
     let scene = scene_from_args(args, problem)?;
     let joints = match &scene {
@@ -291,14 +297,15 @@ impl PlanFor {
         approach_clearance: Option<f64>,
     ) -> Result<PlanFor> {
         let impact_law = match law {
-            Some(text) => PlannedImpact::parse(text).map_err(|e| anyhow!("--impact-law: {e}"))?,
+            Some(text) => PlannedImpact::parse(text)
+                .map_err(|e| crate::errors::usage(format!("--impact-law: {e}")))?,
             None if problem.is_periodic() && joints == 3 => PlannedImpact::Newton,
             None => PlannedImpact::Stick,
         };
         let executable = problem.is_periodic() && impact_law == PlannedImpact::Newton;
         let torque_margin = match torque_margin {
             Some(m) if !(0.0..1.0).contains(&m) => {
-                bail!("--torque-margin must be in [0, 1) (got {m})")
+                bail_usage!("--torque-margin must be in [0, 1) (got {m})")
             }
             Some(m) => m,
             None if executable => EXECUTABLE_TORQUE_MARGIN,
@@ -349,7 +356,7 @@ pub fn parse_strategy(text: &str, starts: u64, seed: u64) -> Result<Strategy> {
             starts: usize::try_from(starts).context("--starts is too large")?,
             seed,
         }),
-        other => bail!(
+        other => bail_usage!(
             "--strategy: unknown strategy {other:?}; use `direct`, `continuation` or `multistart`"
         ),
     }
@@ -513,7 +520,7 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
             let mut scene = compiled_scene(problem)?;
             let assignments = super::parse_params(&args.param)?;
             bf_model::registry::set_parameters(&mut scene, &assignments)
-                .map_err(|e| anyhow::anyhow!("--param: {e}"))?;
+                .map_err(|e| crate::errors::usage(format!("--param: {e}")))?;
             return Ok(Some(scene));
         }
     };
@@ -528,7 +535,7 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
     // ends with, re-integrates up to MAX_VERIFY_JOINTS.
     let nq = scene.links.len();
     if nq > MAX_VERIFY_JOINTS {
-        anyhow::bail!(
+        bail!(
             "--scene {}: problem {problem} runs fingers with 1 to {MAX_VERIFY_JOINTS} joints; \
              scene `{}` has {nq}",
             path.display(),
@@ -646,7 +653,7 @@ pub fn hop_settings(
     let mut h = crate::pipeline::search::DEFAULT_HOPS;
     if let Some(s) = hop_scale {
         if !(s.is_finite() && s > 0.0 && s <= 3.0) {
-            bail!("--hop-scale must be in (0, 3] (got {s})");
+            bail_usage!("--hop-scale must be in (0, 3] (got {s})");
         }
         h.scale = s;
     }
@@ -682,7 +689,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         ("--torque-hull", args.torque_hull.is_some()),
     ] {
         if given {
-            bail!("{opt}: only `--problem {REACH_ARM}` takes it");
+            bail_usage!("{opt}: only `--problem {REACH_ARM}` takes it");
         }
     }
     let name = parse_problem(problem_arg(args))?;
@@ -713,18 +720,20 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             ("--seed", args.seed.is_some()),
         ] {
             if given {
-                bail!("{opt}: only the multi-start takes it (got --strategy {strategy})");
+                bail_usage!("{opt}: only the multi-start takes it (got --strategy {strategy})");
             }
         }
     }
     let shard = match &args.shard {
         Some(text) => {
-            let sh = Shard::parse(text).map_err(|e| anyhow::anyhow!(e))?;
+            let sh = Shard::parse(text).map_err(crate::errors::usage)?;
             let Strategy::Multistart { starts, .. } = strategy else {
-                bail!("--shard {text}: sharding needs the multi-start (got --strategy {strategy})");
+                bail_usage!(
+                    "--shard {text}: sharding needs the multi-start (got --strategy {strategy})"
+                );
             };
             if sh.index >= starts {
-                bail!("--shard {text}: shard {sh} of {starts} starts has no start");
+                bail_usage!("--shard {text}: shard {sh} of {starts} starts has no start");
             }
             sh
         }
@@ -732,14 +741,14 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     };
     if let Some(tol) = args.refine {
         if !(tol.is_finite() && tol > 0.0) {
-            bail!("--refine must be a finite positive tolerance (got {tol})");
+            bail_usage!("--refine must be a finite positive tolerance (got {tol})");
         }
         if settings.scheme == Scheme::Lg {
-            bail!("--refine needs --scheme radau (mesh refinement splits Radau elements)");
+            bail_usage!("--refine needs --scheme radau (mesh refinement splits Radau elements)");
         }
     }
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
-        bail!(
+        bail_usage!(
             "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
             args.verify_rtol
         );

@@ -6,6 +6,7 @@
 use super::torques::{CliInput, pd_controller};
 use super::{OUTPUT_DIR, RunSettings, check_limits, interpreted_note, settings};
 use crate::cli::SimulateArgs;
+use crate::errors::bail_usage;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_output::{Outcome, OutputDir};
@@ -25,7 +26,7 @@ pub(super) fn run_arm(
     let n = scene.links.len();
     let name = &scene.name;
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
-        bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
+        bail_usage!("--t-end must be a finite number > 0 (got {})", args.t_end);
     }
     // `--init` an arm solution.json (`optimize --problem reach-arm`): replay its optimal
     // torques from its start at rest, over its duration.
@@ -38,7 +39,7 @@ pub(super) fn run_arm(
         ("--mode0", args.mode0 != "free"),
     ] {
         if given {
-            bail!(
+            bail_usage!(
                 "{opt}: scene `{name}` ({scene_label}) has no ball; only free motion of the arm is simulated (use --q0, --qd0)"
             );
         }

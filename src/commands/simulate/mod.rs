@@ -38,6 +38,7 @@
 //! second show their progress on stderr (a bar on a terminal, a line every 10 s otherwise).
 
 use crate::cli::SimulateArgs;
+use crate::errors::bail_usage;
 use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_model::{ImpactLaw, KernelSource, Kernels, Mode, Model, State, Vec3, VecN};
@@ -262,7 +263,7 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
     };
     let min_steps = args.t_end / h;
     if min_steps > args.max_steps as f64 {
-        bail!(
+        bail_usage!(
             "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more \
              than --max-steps {}; shorten --t-end or raise --max-steps",
             args.t_end,
@@ -270,7 +271,7 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
         );
     }
     if set.record_steps && min_steps > args.max_samples as f64 {
-        bail!(
+        bail_usage!(
             "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each \
              stored as a sample, more than --max-samples {}; shorten --t-end or raise \
              --max-samples",
@@ -281,7 +282,7 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
     if let Some(dt) = args.output_dt {
         let n = args.t_end / dt;
         if n > args.max_samples as f64 {
-            bail!(
+            bail_usage!(
                 "--output-dt {dt} s over --t-end {} s is {n:.3e} samples, more than \
                  --max-samples {}; raise --output-dt or --max-samples",
                 args.t_end,
@@ -308,7 +309,7 @@ pub fn run_with(args: &SimulateArgs, opts: RunSettings) -> Result<()> {
     }
     // Validate every option before the (possibly long) run.
     if !(args.t_end.is_finite() && args.t_end > 0.0) {
-        bail!("--t-end must be a finite number > 0 (got {})", args.t_end);
+        bail_usage!("--t-end must be a finite number > 0 (got {})", args.t_end);
     }
     let nq = scene.links.len();
     match nq {

@@ -58,7 +58,7 @@ pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)>
         };
         let assignments = crate::commands::parse_params(&args.param)?;
         bf_model::registry::set_parameters(&mut scene, &assignments)
-            .map_err(|e| anyhow!("--param: {label}: {e}"))?;
+            .map_err(|e| crate::errors::usage(format!("--param: {label}: {e}")))?;
         return Ok((scene, label));
     }
     default_scene(args)
@@ -76,6 +76,6 @@ fn default_scene(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)> {
     let mut scene = bf_codegen::Scene::from_toml_str(toml, "paper")?;
     let assignments = crate::commands::parse_params(&args.param)?;
     bf_model::registry::set_parameters(&mut scene, &assignments)
-        .map_err(|e| anyhow!("--param: the compiled paper scene: {e}"))?;
+        .map_err(|e| crate::errors::usage(format!("--param: the compiled paper scene: {e}")))?;
     Ok((scene, "the compiled paper scene".into()))
 }

@@ -4,6 +4,7 @@
 //! none.
 
 use crate::cli::SimulateArgs;
+use crate::errors::bail_usage;
 use crate::io::parse_list;
 use anyhow::{Context, Result, bail};
 use bf_sim::{Input, PdController, SimError, TorqueSeries, TrackingPd};
@@ -60,7 +61,7 @@ pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Resu
     let (kp, kd) = match g.len() {
         2 => (vec![g[0]; n], vec![g[1]; n]),
         k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
-        k => bail!(
+        k => bail_usage!(
             "--pd-gains: expected 2 values (kp,kd) or {} (kp1..{n},kd1..{n}), got {k}",
             2 * n
         ),
@@ -70,7 +71,7 @@ pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Resu
     // hits its sample limit. Refused before the run.
     for (name, gains) in [("kp", &kp), ("kd", &kd)] {
         if let Some((i, v)) = gains.iter().enumerate().find(|(_, v)| **v < 0.0) {
-            bail!(
+            bail_usage!(
                 "--pd-gains {}: {name} of joint {} is {v}; gains must be >= 0 (a negative gain \
                  destabilises the joint)",
                 args.pd_gains,
@@ -112,7 +113,7 @@ fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
     use crate::pipeline::SolutionIo as _;
     let g = parse_list("--pd-track", gains, Some(2))?;
     let Some(path) = &args.init else {
-        bail!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
+        bail_usage!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
     };
     let sol = bf_problem::OcpSolution::read_json(path)
         .with_context(|| format!("--pd-track: reading the solution {}", path.display()))?;
