@@ -391,6 +391,10 @@ fn wrong_command_lines_exit_with_status_2_and_failed_runs_with_1() {
         assert_usage_error(&opt(extra), &[flag]);
     }
     assert_usage_error(&run(&["simulate", "--t-end", "-1"]), &["--t-end"]);
+    assert_usage_error(
+        &run(&["report", "bogus"]),
+        &["unknown report", "strategies"],
+    );
     let plan = root().join("data/optima/periodic-qc-plan/solution.json");
     assert_usage_error(
         &run(&["track", plan.to_str().unwrap(), "--periods", "0"]),

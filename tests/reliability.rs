@@ -18,8 +18,8 @@ fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
-/// Fails with exit status 1 (2 for clap's usage errors), no panic, and every `mention` in
-/// stderr.
+/// Fails with exit status `code` (1, or 2 for a wrong command line), no panic, and every
+/// `mention` in stderr.
 fn assert_error(out: &Output, code: i32, mention: &[&str]) {
     let e = stderr(out);
     assert_eq!(out.status.code(), Some(code), "{e}");
@@ -338,8 +338,9 @@ fn io_errors_do_not_panic() {
     }
 }
 
-/// Runs that cannot fit their limits are refused up front with the option and the limit; a
-/// run that reaches the sample limit stops, writes what it has and marks it FAILED.
+/// Runs that cannot fit their limits are refused up front with the option and the limit, as
+/// wrong command lines (exit status 2); a run that reaches the sample limit stops, writes what
+/// it has and marks it FAILED (exit status 1).
 #[test]
 fn resource_limits_are_checked() {
     let dir = tmpdir("limits");
@@ -372,7 +373,7 @@ fn resource_limits_are_checked() {
         ),
     ];
     for (args, mention) in cases {
-        assert_error(&run(args), 1, mention);
+        assert_error(&run(args), 2, mention);
     }
     assert!(!out.exists(), "nothing written by refused runs");
     let o = run(&[
@@ -478,8 +479,8 @@ fn non_finite_eval_results_are_errors() {
 }
 
 /// `--param` values pass the scene file's checks: a negative ball radius or a zero link mass is
-/// an error naming the parameter, its value and the rule, before anything is computed
-/// (previously both ran and printed numbers).
+/// a wrong command line (exit status 2) naming the parameter, its value and the rule, before
+/// anything is computed (previously both ran and printed numbers).
 #[test]
 fn param_values_are_validated_as_the_scene_file_is() {
     let o = run(&[
@@ -492,7 +493,7 @@ fn param_values_are_validated_as_the_scene_file_is() {
         "--param",
         "ball.radius=-1",
     ]);
-    assert_error(&o, 1, &["ball.radius", "-1", "must be > 0"]);
+    assert_error(&o, 2, &["ball.radius", "-1", "must be > 0"]);
     assert!(
         o.stdout.is_empty(),
         "{}",
@@ -513,7 +514,7 @@ fn param_values_are_validated_as_the_scene_file_is() {
     ]);
     assert_error(
         &o,
-        1,
+        2,
         &["link3.mass", "= 0", "links[2].mass", "must be > 0"],
     );
     assert!(!out.exists());
@@ -529,12 +530,13 @@ fn param_values_are_validated_as_the_scene_file_is() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert_error(&o, 1, &["link3.mass", "1e-300"]);
+    assert_error(&o, 2, &["link3.mass", "1e-300"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// Unclear messages and unbounded runs: each error names the option or file, the quantity and
-/// the value, and exits 1 before any work.
+/// the value, before any work; a wrong command line exits with status 2, a state or file that
+/// does not fit with 1.
 #[test]
 fn errors_name_the_cause_and_runs_are_bounded() {
     let dir = tmpdir("cause");
@@ -542,7 +544,7 @@ fn errors_name_the_cause_and_runs_are_bounded() {
     let out_s = out.to_str().unwrap();
     // bench: a budget beyond the documented maximum.
     let o = run(&["bench", "scenes/paper.toml", "--time", "1e300"]);
-    assert_error(&o, 1, &["--time", "at most 3600", "1e300"]);
+    assert_error(&o, 2, &["--time", "at most 3600", "1e300"]);
     // simulate: a contact mode away from the ball names h(q0) and its value.
     let o = run(&[
         "simulate", "--mode0", "stick", "--t-end", "0.1", "--out", out_s,
@@ -593,7 +595,7 @@ fn errors_name_the_cause_and_runs_are_bounded() {
         "--out",
         out_s,
     ]);
-    assert_error(&o, 1, &["--pd-gains", "kp of joint 1 is -100", ">= 0"]);
+    assert_error(&o, 2, &["--pd-gains", "kp of joint 1 is -100", ">= 0"]);
     // A negative shard index is --shard's error, not clap's "unexpected argument".
     let o = run(&[
         "optimize",
@@ -604,7 +606,7 @@ fn errors_name_the_cause_and_runs_are_bounded() {
         "--out",
         out_s,
     ]);
-    assert_error(&o, 1, &["--shard", "-1/2", "1 <= k <= m"]);
+    assert_error(&o, 2, &["--shard", "-1/2", "1 <= k <= m"]);
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

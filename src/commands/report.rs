@@ -2,7 +2,8 @@
 //! `DIR/<which>.md` and the figures under `DIR/figures/` as one output set (DIR, by default
 //! `out/report/<which>`, is checked before the work and replaced as a whole at the end).
 
-use anyhow::{Result, bail};
+use crate::errors::bail_usage;
+use anyhow::Result;
 use bf_output::{DirSpec, Outcome, OutputDir};
 use std::path::PathBuf;
 
@@ -14,7 +15,7 @@ pub const REPORTS: &[&str] = &["speed-accuracy", "strategies"];
 /// Runs the report named by `a.which`.
 pub fn run(a: &ReportArgs) -> Result<()> {
     if !REPORTS.contains(&a.which.as_str()) {
-        bail!(
+        bail_usage!(
             "unknown report `{}`; known reports: {}",
             a.which,
             REPORTS.join(", ")

@@ -18,7 +18,7 @@ pub fn run(a: &crate::cli::VerifyArgs) -> Result<()> {
             let entries = crate::paper::appendix::check_appendix()?;
             crate::outln!("{}", crate::paper::appendix::markdown(&entries)?)
         }
-        other => anyhow::bail!("unknown verification `{other}`; known: appendix"),
+        other => crate::errors::bail_usage!("unknown verification `{other}`; known: appendix"),
     }
 }
 
