@@ -1,5 +1,5 @@
-//! Error rendering for the binary: the cause chain on one line, and recognition of a closed
-//! output pipe.
+//! Error rendering for the binary: the cause chain on one line, recognition of a closed
+//! output pipe, and [`UsageError`], the mark of a wrong command line (exit status 2).
 //!
 //! Every error of the workspace names only its own context (operation, file, option, value)
 //! and leaves the underlying error to `source()`, so the chain that `anyhow`'s `{:#}` prints
@@ -36,7 +36,9 @@ pub(crate) use bail_usage;
 
 /// Whether `e` or one of its causes is a [`UsageError`].
 pub fn is_usage(e: &anyhow::Error) -> bool {
-    e.chain().any(|c| c.downcast_ref::<UsageError>().is_some())
+    // `downcast_ref` also finds a `UsageError` attached as context, the chain one underneath.
+    e.downcast_ref::<UsageError>().is_some()
+        || e.chain().any(|c| c.downcast_ref::<UsageError>().is_some())
 }
 
 /// The error and its causes, joined by `": "`.
@@ -83,6 +85,8 @@ mod tests {
         assert_eq!(render(&e), "optimize: --points must be at least 2 (got 0)");
         let not: anyhow::Error = io().into();
         assert!(!is_usage(&not.context("--warm-start x.json")));
+        let attached = anyhow::Error::from(io()).context(UsageError("--param x".into()));
+        assert!(is_usage(&attached));
         fn bails() -> anyhow::Result<()> {
             bail_usage!("--eps must be positive (got {})", -1);
         }

@@ -1,8 +1,9 @@
 //! `ball-finger` command-line interface: parses arguments, dispatches to
-//! [`ball_finger::commands`], and turns errors into a message on stderr and exit code 1
-//! (2 for usage errors: clap's own and the commands' [`ball_finger::errors::UsageError`]s). A closed output pipe (`ball-finger eval … | head -c 10`)
-//! ends the program quietly with status 141, the status a shell reports for a Unix tool
-//! stopped by SIGPIPE.
+//! [`ball_finger::commands`], and turns errors into a message on stderr and exit code 1 (2 for
+//! a wrong command line: clap's own refusals and the commands'
+//! [`ball_finger::errors::UsageError`]s). A closed output pipe
+//! (`ball-finger eval … | head -c 10`) ends the program quietly with status 141, the status a
+//! shell reports for a Unix tool stopped by SIGPIPE.
 
 use ball_finger::cli::{Cli, Command};
 use ball_finger::commands;
