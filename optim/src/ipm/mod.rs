@@ -61,13 +61,18 @@ pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError>
     solve_with(nlp, settings, None, None)
 }
 
-/// State kept between solves of NLPs with the same sparsity structure: the KKT solver with its
-/// symbolic analysis (AMD ordering, elimination tree, supernodes) and workspace. Pass the same
-/// `Workspace` to [`solve_in`] for repeated solves (parameter sweeps, mesh-fixed re-solves, warm
-/// starts); a different pattern is detected and re-analysed automatically.
+/// State kept between solves: the KKT solver with its symbolic analyses (AMD ordering,
+/// elimination tree, supernodes, workspaces; the current pattern's and those of the last
+/// [`kkt::KEPT_ANALYSES`] others) and the solvers with 2 × 2 pivot pairs that checked rejected
+/// AMD factors. Pass the same `Workspace` to [`solve_in`] for repeated solves (parameter
+/// sweeps, mesh-fixed re-solves, warm starts, a search that alternates between meshes); a
+/// pattern not seen before is analysed automatically (decision record 0062).
 #[derive(Debug, Default)]
 pub struct Workspace {
     kkt: Option<SparseLdlt>,
+    /// The solvers with 2 × 2 pivot pairs that checked rejected AMD factors, one per
+    /// `LdltOptions` (their order depends on the number of variables), most recent last.
+    pairs: Vec<SparseLdlt>,
 }
 
 impl Workspace {
@@ -166,6 +171,7 @@ pub fn solve_in(
             relax_bounds: true,
             restoration: false,
             kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
+            pairs_solvers: std::cell::Cell::new(std::mem::take(&mut workspace.pairs)),
         },
         Some(w) => {
             let mut y = vec![0.0; m];
@@ -198,6 +204,7 @@ pub fn solve_in(
                 relax_bounds: true,
                 restoration: false,
                 kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
+                pairs_solvers: std::cell::Cell::new(std::mem::take(&mut workspace.pairs)),
             }
         }
     };
@@ -212,7 +219,9 @@ pub fn solve_in(
     let out = {
         let mut core = Core::new(&mut reform, settings, &start)?;
         let out = core.run(&mut ctx, &start);
-        workspace.kkt = Some(core.into_kkt_solver());
+        let (kkt, pairs) = core.into_kkt_solvers();
+        workspace.kkt = Some(kkt);
+        workspace.pairs = pairs;
         out?
     };
     // Map back to user space.

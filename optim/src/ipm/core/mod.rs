@@ -73,7 +73,14 @@ pub(crate) struct CoreStart {
     pub restoration: bool,
     /// A previously analysed KKT solver to reuse (see [`super::Workspace`]).
     pub kkt_solver: std::cell::Cell<Option<SparseLdlt>>,
+    /// Previously analysed solvers with 2 × 2 pivot pairs to reuse for the pivot-pair checks.
+    pub pairs_solvers: std::cell::Cell<Vec<SparseLdlt>>,
 }
+
+/// Solvers with 2 × 2 pivot pairs a run hands back for later runs ([`Core::into_kkt_solvers`]):
+/// one per set of options, i.e. per number of variables, which a search's threads alternate
+/// between a few of.
+pub(crate) const KEPT_PAIRS_SOLVERS: usize = 4;
 
 /// Result of a core run in internal variables.
 pub(crate) struct CoreOutput {
@@ -150,6 +157,7 @@ impl<'p> Core<'p> {
             &hess_pat,
             &jac_pat,
             start.kkt_solver.take().unwrap_or_default(),
+            start.pairs_solvers.take(),
         );
         let nlo = bounds.lo.len();
         let nup = bounds.up.len();
@@ -353,14 +361,20 @@ impl<'p> Core<'p> {
         }
     }
 
-    /// Hands the (analysed) KKT solver back for reuse by a later solve.
-    pub fn into_kkt_solver(self) -> SparseLdlt {
+    /// Hands the (analysed) KKT solvers back for reuse by a later solve: the one a run starts
+    /// with, and the ones with 2 × 2 pivot pairs (at most [`KEPT_PAIRS_SOLVERS`]).
+    pub fn into_kkt_solvers(self) -> (SparseLdlt, Vec<SparseLdlt>) {
+        let mut kkt = self.kkt;
         // After a switch to the pivot pairs, the AMD solver is the one whose analysis the next
         // run (which starts with AMD again) can reuse.
-        match (self.kkt.switched_to_pairs, self.kkt.other_solver) {
-            (true, Some(amd)) => amd,
-            _ => self.kkt.solver,
-        }
+        let (main, pairs) = match (kkt.switched_to_pairs, kkt.other_solver) {
+            (true, Some(amd)) => (amd, Some(kkt.solver)),
+            (_, other) => (kkt.solver, other),
+        };
+        kkt.spare_pairs.extend(pairs);
+        let excess = kkt.spare_pairs.len().saturating_sub(KEPT_PAIRS_SOLVERS);
+        kkt.spare_pairs.drain(..excess);
+        (main, kkt.spare_pairs)
     }
 
     /// Runs the algorithm from `start`: W&B's Algorithm A, one outer iteration per pass of

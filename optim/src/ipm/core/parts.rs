@@ -137,8 +137,11 @@ pub(super) struct KktSystem {
     /// With [`KktOrdering::AmdThenPivotPairs`](crate::ipm::settings::KktOrdering::AmdThenPivotPairs)
     /// before the switch (or `AmdCheckedByPivotPairs`): the solver with AMD and 2 × 2 pivot
     /// pairs, analysed when first needed, that re-factors a rejected AMD factor's matrix;
-    /// after the switch: the AMD solver (handed back by [`Core::into_kkt_solver`](super::Core::into_kkt_solver)).
+    /// after the switch: the AMD solver (handed back by [`Core::into_kkt_solvers`](super::Core::into_kkt_solvers)).
     pub other_solver: Option<SparseLdlt>,
+    /// Solvers with 2 × 2 pivot pairs of earlier runs (from the workspace), one of which
+    /// becomes `other_solver` when its options are the ones a check needs.
+    pub spare_pairs: Vec<SparseLdlt>,
     /// Rejected AMD factorizations are still to be checked with the pivot pairs.
     pub check_pairs: bool,
     /// The solve switched to the pivot pairs.
@@ -163,18 +166,21 @@ pub(super) struct KktSystem {
 
 impl KktSystem {
     /// The system of a problem with `n` variables, `m` constraints and these Hessian and
-    /// Jacobian patterns, factored by `solver` (a workspace's, or a new one).
+    /// Jacobian patterns, factored by `solver` (a workspace's, or a new one), with a
+    /// workspace's `spare_pairs` for the pivot-pair checks.
     pub fn new(
         n: usize,
         m: usize,
         hess_pat: &[(usize, usize)],
         jac_pat: &[(usize, usize)],
         solver: SparseLdlt,
+        spare_pairs: Vec<SparseLdlt>,
     ) -> Self {
         Self {
             matrix: KktPattern::new(n, m, hess_pat, jac_pat),
             solver,
             other_solver: None,
+            spare_pairs,
             check_pairs: false,
             switched_to_pairs: false,
             diag_x: vec![0.0; n],

@@ -75,6 +75,7 @@ impl Core<'_> {
             relax_bounds: false,
             restoration: true,
             kkt_solver: std::cell::Cell::new(None),
+            pairs_solvers: std::cell::Cell::new(Vec::new()),
         };
         if settings.output.print_level > 1 {
             println!("  entering restoration phase (theta = {theta:.3e}, mu_R = {mu_r:.3e})");

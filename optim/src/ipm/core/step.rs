@@ -386,12 +386,23 @@ impl Core<'_> {
     ) -> bool {
         if self.kkt.other_solver.is_none() {
             let t = Instant::now();
-            let mut pairs = SparseLdlt::with_options(LdltOptions {
+            let options = LdltOptions {
                 ordering: LdltOrdering::AmdPivotPairs {
                     constraint_rows_from: self.n,
                 },
                 ..self.kkt.solver.options().clone()
-            });
+            };
+            // An earlier run's solver with these options keeps its analyses (bit for bit the
+            // ones a new solver would make).
+            let mut pairs = match self
+                .kkt
+                .spare_pairs
+                .iter()
+                .position(|p| *p.options() == options)
+            {
+                Some(k) => self.kkt.spare_pairs.remove(k),
+                None => SparseLdlt::with_options(options),
+            };
             let analysed = pairs
                 .analyse(
                     self.n + self.m,

@@ -10,9 +10,10 @@
 //!
 //! * [`pattern`]: [`KktPattern`], the lower-triangle CSC pattern of `K` and its assembly.
 //! * [`KktSolver`]: the factor/solve interface the IPM uses, in typed phases: symbolic
-//!   analysis once per pattern, numeric refactorization per iteration returning the inertia
-//!   of the factor or a [`FactorizationFailure`] that says why there is none, solves that
-//!   refuse without a current factor.
+//!   analysis once per pattern (a [`SparseLdlt`] keeps the analyses of its last
+//!   [`KEPT_ANALYSES`] other patterns too), numeric refactorization per iteration returning
+//!   the inertia of the factor or a [`FactorizationFailure`] that says why there is none,
+//!   solves that refuse without a current factor.
 //! * [`LdltOptions`]: what a [`SparseLdlt`] is (backend, [`LdltOrdering`], static pivoting,
 //!   pivot threshold, amalgamation), fixed at construction, so an analysis can never belong
 //!   to other options than the solver's; defaults as constants (`DEFAULT_*`).
@@ -311,6 +312,25 @@ pub struct SparseLdlt {
     kernel: Kernel,
     /// The last numeric factorization's outcome: a solve needs `Ok`.
     last: Result<Inertia, FactorizationFailure>,
+    /// Analyses of earlier patterns, most recent last (at most [`KEPT_ANALYSES`]): a thread
+    /// that alternates between a few KKT patterns (a search's coarse and full meshes, a solve
+    /// with a bound held and one without) analyses each once.
+    kept: Vec<Analysis>,
+    /// Symbolic analyses computed (not taken from `kept` or the current one).
+    analyses: usize,
+}
+
+/// Earlier patterns' analyses a [`SparseLdlt`] keeps besides its current one: a search's
+/// threads alternate between about ten KKT patterns (with and without 2 × 2 pivot pairs), and
+/// a `periodic-qc` search analysed about 1 350 times without them (decision record 0062).
+pub const KEPT_ANALYSES: usize = 8;
+
+/// One symbolic analysis of a [`SparseLdlt`]: the ordering and structure (`faer`) and the
+/// kernel's plan, as [`KktSolver::analyse`] makes them for one pattern.
+struct Analysis {
+    has_pairs: bool,
+    faer: FaerFactor,
+    kernel: Kernel,
 }
 
 impl std::fmt::Debug for SparseLdlt {
@@ -356,6 +376,8 @@ impl SparseLdlt {
             faer: None,
             kernel: Kernel::Faer,
             last: Err(FactorizationFailure::NotAnalysed),
+            kept: Vec::new(),
+            analyses: 0,
         }
     }
 
@@ -371,7 +393,32 @@ impl SparseLdlt {
             faer: Some(faer),
             kernel: self.kernel.clone(),
             last: Err(FactorizationFailure::NotAnalysed),
+            kept: Vec::new(),
+            analyses: 0,
         })
+    }
+
+    /// Symbolic analyses this solver has computed; a pattern analysed before (the current one
+    /// or one of the [`KEPT_ANALYSES`] kept) is not counted again.
+    pub fn analyses(&self) -> usize {
+        self.analyses
+    }
+
+    /// Moves the current analysis (if any) to the kept ones, dropping the oldest beyond
+    /// [`KEPT_ANALYSES`].
+    fn keep_current(&mut self) {
+        if let Some(faer) = self.faer.take() {
+            let kernel = std::mem::replace(&mut self.kernel, Kernel::Faer);
+            self.kept.push(Analysis {
+                has_pairs: self.has_pairs,
+                faer,
+                kernel,
+            });
+            if self.kept.len() > KEPT_ANALYSES {
+                self.kept.remove(0);
+            }
+        }
+        self.has_pairs = false;
     }
 
     /// The options the solver was made with.
@@ -436,9 +483,25 @@ impl KktSolver for SparseLdlt {
             && a.col_ptr == col_ptr
             && a.row_idx == row_idx
         {
-            self.last = Err(FactorizationFailure::NotAnalysed);
             return Ok(());
         }
+        // A pattern analysed before: its analysis is the one a new analysis would make (same
+        // pattern, same options, and the ordering depends on nothing else), and its kernel's
+        // workspaces are overwritten by every factorization.
+        if let Some(k) = self
+            .kept
+            .iter()
+            .position(|a| a.faer.col_ptr == col_ptr && a.faer.row_idx == row_idx)
+        {
+            let found = self.kept.remove(k);
+            self.keep_current();
+            self.has_pairs = found.has_pairs;
+            self.faer = Some(found.faer);
+            self.kernel = found.kernel;
+            return Ok(());
+        }
+        self.keep_current();
+        self.analyses += 1;
         let opts = &self.options;
         // The elimination order: faer's AMD, AMD with 2 × 2 (variable, row) pivot pairs, or
         // AMD on the graph of pairs (module docs).

@@ -640,3 +640,76 @@ fn factorization_failures_are_typed() {
     // The same solver factors again after the failure.
     assert_eq!(s.factor(&pat.mat.values), Ok(good));
 }
+
+/// A solver that returns to a pattern it analysed before takes the kept analysis instead of
+/// analysing again, and factors and solves with it bit for bit as a new solver does; beyond
+/// [`KEPT_ANALYSES`] other patterns, the oldest is analysed again. Every backend that keeps
+/// per-pattern workspaces (the simplicial, supernodal and multifrontal plans) and the pivot
+/// pairs' ordering are covered.
+#[test]
+fn a_pattern_analysed_before_is_taken_back_bit_for_bit() {
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    // Factor and solve with `s` (analysed for `pat`): the inertia and the solution's bits.
+    let run = |s: &mut SparseLdlt, pat: &KktPattern| {
+        let dim = pat.mat.col_ptr.len() - 1;
+        s.analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+        let inertia = s.factor(&pat.mat.values);
+        let mut x: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64 * 0.37)).collect();
+        s.solve(&mut x).unwrap();
+        (inertia, bits(&x))
+    };
+    let patterns: Vec<KktPattern> = (0..KEPT_ANALYSES + 2)
+        .map(|k| random_kkt(40 + k as u64, 60 + 7 * k, 30 + 3 * k, 0.5).0)
+        .collect();
+    for options in [
+        LdltOptions::default(),
+        LdltOptions {
+            backend: LdltBackend::Supernodal,
+            ..LdltOptions::default()
+        },
+        LdltOptions {
+            backend: LdltBackend::Multifrontal,
+            ..LdltOptions::default()
+        },
+    ] {
+        let fresh = |pat: &KktPattern| run(&mut SparseLdlt::with_options(options.clone()), pat);
+        let mut s = SparseLdlt::with_options(options.clone());
+        // A, B, A: the second A is the kept analysis, with a dirty workspace from B.
+        let first = run(&mut s, &patterns[0]);
+        let _ = run(&mut s, &patterns[1]);
+        let again = run(&mut s, &patterns[0]);
+        assert_eq!(s.analyses(), 2, "{options:?}");
+        assert_eq!(first, again, "{options:?}");
+        assert_eq!(again, fresh(&patterns[0]), "{options:?}");
+        // Every other pattern once more: pattern 0 drops out of the kept ones.
+        for pat in &patterns[1..] {
+            assert_eq!(run(&mut s, pat), fresh(pat), "{options:?}");
+        }
+        assert_eq!(s.analyses(), patterns.len(), "{options:?}");
+        assert_eq!(run(&mut s, &patterns[0]), first, "{options:?}");
+        assert_eq!(s.analyses(), patterns.len() + 1, "{options:?}");
+    }
+    // The pivot pairs' order (its options depend on the number of variables, as in
+    // `Core::try_pivot_pairs`): one solver per `n`, patterns of that `n` kept.
+    let shape = KktShape {
+        zero_diag_every: 7,
+        block: 8,
+        density: 0.7,
+        row_vars: 6,
+        stride: 3,
+    };
+    let pairs = |seed| banded_kkt(seed, (80, 40), &shape, &vec![0.5; 80], 1e-9).0;
+    let options = LdltOptions {
+        ordering: LdltOrdering::AmdPivotPairs {
+            constraint_rows_from: 80,
+        },
+        ..LdltOptions::default()
+    };
+    let (a, b) = (pairs(1), pairs(2));
+    let mut s = SparseLdlt::with_options(options.clone());
+    let first = run(&mut s, &a);
+    let _ = run(&mut s, &b);
+    assert_eq!(run(&mut s, &a), first);
+    assert_eq!(s.analyses(), 2);
+    assert_eq!(first, run(&mut SparseLdlt::with_options(options), &a));
+}
