@@ -413,6 +413,8 @@ impl Core<'_> {
             ctx.timing.factorization += t.elapsed();
             if !analysed || !pairs.has_pivot_pairs() {
                 self.kkt.check_pairs = false;
+                // Kept for later runs: this pattern's answer is known without analysing again.
+                self.kkt.spare_pairs.push(pairs);
                 return false;
             }
             self.kkt.other_solver = Some(pairs);

@@ -691,14 +691,7 @@ fn a_pattern_analysed_before_is_taken_back_bit_for_bit() {
     }
     // The pivot pairs' order (its options depend on the number of variables, as in
     // `Core::try_pivot_pairs`): one solver per `n`, patterns of that `n` kept.
-    let shape = KktShape {
-        zero_diag_every: 7,
-        block: 8,
-        density: 0.7,
-        row_vars: 6,
-        stride: 3,
-    };
-    let pairs = |seed| banded_kkt(seed, (80, 40), &shape, &vec![0.5; 80], 1e-9).0;
+    let pairs = |seed| random_kkt(seed, 80, 40, 0.5).0;
     let options = LdltOptions {
         ordering: LdltOrdering::AmdPivotPairs {
             constraint_rows_from: 80,
