@@ -60,6 +60,14 @@ pub fn whole(text: &str) -> Result<usize, String> {
     Err(format!("must be a whole number (got {text:?})"))
 }
 
+/// Parses a whole number ≥ 1 (a count or a limit that 0 would make empty).
+pub fn positive_whole(text: &str) -> Result<usize, String> {
+    match whole(text)? {
+        0 => Err("must be a whole number ≥ 1 (got 0)".into()),
+        v => Ok(v),
+    }
+}
+
 /// ball-finger: DH table → verified flat Rust dynamics kernels; simulate and optimise a finger
 /// rolling a trackball (Ball-and-finger system: modeling and optimal trajectories).
 #[derive(Debug, Parser)]
@@ -214,7 +222,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 3.0)]
     pub time: f64,
     /// Number of random states cycled through.
-    #[arg(long, default_value_t = 256)]
+    #[arg(long, default_value_t = 256, value_parser = positive_whole)]
     pub states: usize,
     /// Seed of the random states.
     #[arg(long, default_value_t = 1)]
@@ -349,7 +357,7 @@ pub struct TrackArgs {
     #[arg(long, default_value = "hybrid")]
     pub controller: String,
     /// Periods to run (a period ends when the plant starts the optimum's first phase again).
-    #[arg(long, default_value_t = 10, value_parser = whole)]
+    #[arg(long, default_value_t = 10, value_parser = positive_whole)]
     pub periods: usize,
     /// Scene file of the plant [default: the solution's own scene]; the controller always uses
     /// the solution's scene, so a second file tests model error. A copy of a compiled scene
@@ -374,7 +382,7 @@ pub struct TrackArgs {
     pub replan: bool,
     /// Interior-point iterations allowed per re-plan (with --replan) [default: 200]; a re-plan
     /// that needs more is not used (the optimum is tracked instead).
-    #[arg(long, value_parser = whole)]
+    #[arg(long, value_parser = positive_whole)]
     pub replan_iterations: Option<usize>,
     /// Run the robustness table instead of one plant: the controller on the solution's own
     /// scene perturbed (ball mass ×1.1; μ_s, μ_k ×0.8; socket damping ×1.5; every link mass
@@ -445,7 +453,7 @@ pub struct OptimizeArgs {
     #[arg(long, default_value_t = 3, allow_hyphen_values = true, value_parser = whole)]
     pub elements: usize,
     /// Interior-point iteration limit.
-    #[arg(long, default_value_t = 1500, allow_hyphen_values = true, value_parser = whole)]
+    #[arg(long, default_value_t = 1500, allow_hyphen_values = true, value_parser = positive_whole)]
     pub max_iter: usize,
     /// ε of the smooth saturation.
     #[arg(long, default_value_t = 0.01, allow_hyphen_values = true)]

@@ -396,9 +396,23 @@ fn wrong_command_lines_exit_with_status_2_and_failed_runs_with_1() {
         &["unknown report", "strategies"],
     );
     let plan = root().join("data/optima/periodic-qc-plan/solution.json");
+    for (extra, flag) in [
+        (&["--periods", "0"][..], "--periods"),
+        (
+            &["--replan", "--replan-iterations", "0"],
+            "--replan-iterations",
+        ),
+        (&["--controller", "bogus"], "--controller"),
+        (&["--replan", "--controller", "pd"], "--replan"),
+        (&["--impact-law", "bounce"], "--impact-law"),
+    ] {
+        let mut args = vec!["track", plan.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        assert_usage_error(&run(&args), &[flag]);
+    }
     assert_usage_error(
-        &run(&["track", plan.to_str().unwrap(), "--periods", "0"]),
-        &["--periods"],
+        &run(&["bench", "scenes/paper.toml", "--states", "0"]),
+        &["--states"],
     );
     // Not usage errors: a missing file, and a solve that stops at its iteration limit.
     let out = opt(&["--warm-start", "/nonexistent.json"]);

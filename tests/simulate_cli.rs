@@ -224,41 +224,54 @@ fn cli_bad_inputs_give_clear_errors() {
     let two = dir.join("two.csv");
     std::fs::write(&two, "t,tau1,tau2\n0,0,0\n").unwrap();
     let two = two.to_str().unwrap();
-    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+    // (options, mentions, exit status: 2 for a wrong command line, 1 for a file or a state
+    // that does not fit).
+    let cases: Vec<(Vec<&str>, Vec<&str>, i32)> = vec![
         (
             vec!["--torques", "no/such/file.csv"],
             vec!["no/such/file.csv"],
+            1,
         ),
         (
             vec!["--torques", bad_csv],
             vec!["bad.csv:3", "tau2", "not a number"],
+            1,
         ),
-        (vec!["--torques", two], vec!["3 joints"]),
-        (vec!["--q0", "0.1,NaN,0.5"], vec!["--q0", "finite"]),
-        (vec!["--q0", "0.1,0.5"], vec!["--q0", "expected 3"]),
-        (vec!["--t-end", "0"], vec!["--t-end", "> 0"]),
-        (vec!["--t-end", "-1"], vec!["--t-end"]),
+        (vec!["--torques", two], vec!["3 joints"], 1),
+        (vec!["--q0", "0.1,NaN,0.5"], vec!["--q0", "finite"], 2),
+        (vec!["--q0", "0.1,0.5"], vec!["--q0", "expected 3"], 2),
+        (vec!["--t-end", "0"], vec!["--t-end", "> 0"], 2),
+        (vec!["--t-end", "-1"], vec!["--t-end"], 2),
         (
             vec!["--integrator", "euler"],
-            vec!["unknown integrator `euler`"],
+            vec!["--integrator", "unknown integrator `euler`"],
+            2,
         ),
         (
             vec!["--impact-law", "bounce"],
-            vec!["unknown impact law `bounce`"],
+            vec!["--impact-law", "unknown impact law `bounce`"],
+            2,
         ),
-        (vec!["--rtol", "0"], vec!["--rtol"]),
+        (vec!["--mode0", "roll"], vec!["--mode0", "unknown mode"], 2),
+        (vec!["--rtol", "0"], vec!["--rtol"], 2),
         (
             vec!["--pd", "0,0,0", "--pd-gains", "1,2,3"],
             vec!["--pd-gains"],
+            2,
         ),
-        (vec!["--q0", "0.0,1.6,0.5", "--mode0", "stick"], vec!["h"]),
+        (
+            vec!["--q0", "0.0,1.6,0.5", "--mode0", "stick"],
+            vec!["h"],
+            1,
+        ),
         (
             vec!["--scene", "scenes/puma560.toml", "--omega0", "0,0,1"],
             vec!["puma560", "no ball", "--omega0"],
+            2,
         ),
-        (vec!["--init", "missing.json"], vec!["missing.json"]),
+        (vec!["--init", "missing.json"], vec!["missing.json"], 1),
     ];
-    for (extra, mention) in cases {
+    for (extra, mention, status) in cases {
         let mut args = vec!["simulate", "--out", out];
         if !extra.contains(&"--t-end") {
             args.extend(["--t-end", "0.1"]);
@@ -266,6 +279,7 @@ fn cli_bad_inputs_give_clear_errors() {
         args.extend(extra.iter().copied());
         let o = run(&args);
         assert_clean_failure(&o, &mention);
+        assert_eq!(o.status.code(), Some(status), "{extra:?}");
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -248,9 +248,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             args.time
         );
     }
-    if args.states == 0 {
-        bail_usage!("--states must be at least 1 (got 0)");
-    }
     let (scene, text) = super::load_scene(&args.scene, &args.chain)?;
     let b = bench(&scene, &text, args.time, args.states, args.seed)
         .with_context(|| format!("{}: bench failed", args.scene.display()))?;

@@ -102,14 +102,18 @@ impl<'a> TrackingJson<'a> {
     }
 }
 
-/// The re-plan iteration limit of `args` (`None` without `--replan`), checked.
-fn replan_limit(args: &TrackArgs) -> Result<Option<usize>> {
+/// The re-plan iteration limit of `args` (`None` without `--replan`), checked against the
+/// other options (`controller`: one that re-plans).
+fn replan_limit(args: &TrackArgs, controller: ControllerKind) -> Result<Option<usize>> {
     let max_iter = args.replan_iterations.unwrap_or(REPLAN_MAX_ITER);
-    if max_iter == 0 {
-        bail_usage!("--replan-iterations must be at least 1");
-    }
     if args.replan_iterations.is_some() && !args.replan {
         bail_usage!("--replan-iterations needs --replan");
+    }
+    if args.replan && !controller.replans() {
+        bail_usage!(
+            "--replan needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
+            controller.name()
+        );
     }
     Ok(args.replan.then_some(max_iter))
 }
@@ -118,7 +122,7 @@ fn replan_limit(args: &TrackArgs) -> Result<Option<usize>> {
 /// (robustness.md, robustness.json); the directory is marked FAILED, and the command fails,
 /// when a plant misses the target.
 fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -> Result<()> {
-    let replan = replan_limit(args)?;
+    let replan = replan_limit(args, controller)?;
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
     let name = args.solution.display().to_string();
     let rows = robustness_rows(sol, controller, args.periods, replan);
@@ -152,8 +156,9 @@ fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -
 
 /// Runs `track`.
 pub fn run(args: &TrackArgs) -> Result<()> {
-    let controller = ControllerKind::parse(&args.controller).context("--controller")?;
-    let law = super::simulate::parse_impact_law(&args.impact_law).context("--impact-law")?;
+    let controller = ControllerKind::parse(&args.controller)
+        .map_err(|e| crate::errors::usage(format!("--controller: {e}")))?;
+    let law = super::simulate::parse_impact_law(&args.impact_law)?;
     let sol = OcpSolution::read_json(&args.solution)
         .with_context(|| format!("reading the solution {}", args.solution.display()))?;
     if args.robustness {
@@ -168,7 +173,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         }
         None => solution_model(&sol).with_context(|| args.solution.display().to_string())?,
     };
-    let replan = replan_limit(args)?;
+    let replan = replan_limit(args, controller)?;
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
     let run = run_tracking_replanned(&sol, controller, args.periods, plant, law, replan)
         .with_context(|| format!("tracking {}", args.solution.display()))?;

@@ -9,7 +9,6 @@
 use super::openloop::{
     DEFAULT_PD_TRACK, initial_state, periodic_torques, simulate_optimum, tracking_input,
 };
-use crate::errors::bail_usage;
 use crate::pipeline::verify::nan_max;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::{
@@ -47,6 +46,14 @@ impl ControllerKind {
             ControllerKind::Hybrid => "hybrid",
             ControllerKind::HybridUnbounded => "hybrid-unbounded",
         }
+    }
+
+    /// Whether the controller can re-plan at lift-off (`--replan`): the hybrid ones.
+    pub fn replans(self) -> bool {
+        matches!(
+            self,
+            ControllerKind::Hybrid | ControllerKind::HybridUnbounded
+        )
     }
 
     /// Parses `open-loop`, `pd`, `hybrid` or `hybrid-unbounded`; the error lists them.
@@ -299,14 +306,14 @@ pub fn run_tracking_with(
     impact_law: ImpactLaw,
     replan: Option<usize>,
 ) -> Result<Tracking> {
-    if replan.is_some() && matches!(controller, ControllerKind::OpenLoop | ControllerKind::Pd) {
-        bail_usage!(
-            "--replan needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
+    if replan.is_some() && !controller.replans() {
+        bail!(
+            "re-planning needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
             controller.name()
         );
     }
     if periods == 0 {
-        bail_usage!("--periods must be at least 1");
+        bail!("a tracking run needs at least 1 period");
     }
     if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
         bail!(

@@ -75,9 +75,6 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     if args.points < 2 {
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
-    if args.max_iter == 0 {
-        bail_usage!("--max-iter must be at least 1");
-    }
     let scheme = parse_scheme(&args.scheme, args.elements)?;
     check_size(args.points, scheme)?;
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {

@@ -193,9 +193,6 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     if args.points < 2 {
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
-    if args.max_iter == 0 {
-        bail_usage!("--max-iter must be at least 1");
-    }
     if !(args.epsilon.is_finite() && args.epsilon > 0.0) {
         bail_usage!(
             "--epsilon must be a finite positive number (got {})",

@@ -95,9 +95,9 @@ pub fn parse_impact_law(name: &str) -> Result<ImpactLaw> {
         "max-dissipation" => ImpactLaw::MaxDissipation,
         "min-slip" | "min-relative-velocity" => ImpactLaw::MinRelativeVelocity,
         "normal-impulse" => ImpactLaw::NormalImpulse,
-        _ => bail!(
-            "unknown impact law `{name}`; expected one of: newton, stick, max-dissipation, \
-             min-slip, normal-impulse"
+        _ => bail_usage!(
+            "--impact-law: unknown impact law `{name}`; expected one of: newton, stick, \
+             max-dissipation, min-slip, normal-impulse"
         ),
     })
 }
@@ -116,13 +116,15 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
     let method = match args.integrator.as_str() {
         "dopri5" => Method::Dopri5,
         "rk4" => Method::Rk4 { h: args.step },
-        other => bail!("unknown integrator `{other}`; expected dopri5 or rk4"),
+        other => bail_usage!("--integrator: unknown integrator `{other}`; expected dopri5 or rk4"),
     };
     let pos = |name: &str, v: f64| {
         if v.is_finite() && v > 0.0 {
             Ok(())
         } else {
-            Err(anyhow!("{name} must be a finite number > 0 (got {v})"))
+            Err(crate::errors::usage(format!(
+                "{name} must be a finite number > 0 (got {v})"
+            )))
         }
     };
     pos("--rtol", args.rtol)?;
@@ -246,7 +248,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
     // something other than the default.
     let mode = match (mode, args.mode0.as_str()) {
         (Some(m), "free") => parse_mode(&m)?,
-        (_, m) => parse_mode(m)?,
+        (_, m) => parse_mode(m).map_err(|e| crate::errors::usage(format!("--mode0: {e}")))?,
     };
     Ok((
         mode,
