@@ -2,6 +2,9 @@
 //! `points::impact` with `newton`; docs/decisions/0033-newton-impact-plan.md):
 //! * the assembled NLP of `periodic-qc` with the Newton impact (its joint-space bound through
 //!   adj(J_c) and its approach-speed row included) has the derivatives of finite differences;
+//! * the joint-space row, evaluated at a plan's pre-impact state against bf-model's own Newton
+//!   law q̇_N, is interior by more than 100 times the solver's bound relaxation at q̇⁺ = q̇_N,
+//!   holds at v/2 from it and is violated beyond that relaxation at 1.05 v and 2 v;
 //! * `--impact-law` refuses an unknown law naming the option and the value, and a
 //!   `solution.json` written before the law was recorded reads as a sticking plan;
 //! * plan margins (`--cone-margin`, `--torque-margin`): a direct solve with each margin set
@@ -131,14 +134,9 @@ fn a_newton_plan_keeps_omega_matches_the_plants_law_and_is_tracked() {
     assert!(sol.status.is_success(), "{:?}", sol.stages);
     assert_eq!(sol.impact_law, PlannedImpact::Newton);
     let nodes = &sol.nodes;
-    let last = nodes.phase.iter().rposition(|&p| p == 0).unwrap();
+    let (last, pre) = pre_impact(&sol);
     let first = nodes.phase.iter().position(|&p| p == 1).unwrap();
     let vec = |v: &[f64]| VecN::<3>::from_column_slice(v);
-    let pre = State::new(
-        vec(&nodes.q[last]),
-        vec(&nodes.qd[last]),
-        Vec3::from_column_slice(&nodes.omega[last]),
-    );
     // ω⁺ = ω⁻ (eq. 39), q⁺ = q⁻.
     for i in 0..3 {
         assert!((nodes.omega[first][i] - nodes.omega[last][i]).abs() < 1e-7);
@@ -608,4 +606,98 @@ fn plan_margins_keep_the_plan_inside_the_shrunk_cone_and_torque_limits() {
             "{opt} {bad}: {err}"
         );
     }
+}
+
+/// The joint-space row of the Newton impact (`points::impact`, ‖e‖² / v − v det² ≤ 0 with
+/// e = det(J_c) q̇⁺ − adj(J_c) T_n J_c q̇⁻) against bf-model's own Newton law q̇_N (an independent
+/// implementation that inverts J_c numerically), at the pre-impact state of the stored
+/// `periodic-qc` plan, with q̇⁺ = q̇_N + δ u: the row admits δ = v/2 and refuses δ = 2 v; it
+/// refuses δ = 1.05 v by more than the solver's bound relaxation, so a solve cannot hide a 5 %
+/// excess in that relaxation; and at δ = 0 it is inactive by more than 100 times the relaxation,
+/// so a plan on Newton's law is an interior point of the row that the solver can tell from an
+/// active one. The row unscaled, ‖e‖² − v² det², had a margin of v² det² ≈ 1e-8 there, the size
+/// of the relaxation: its slack sat on the bound with multipliers of 1e5–1e7, solves crept to
+/// `Acceptable`, and the plans' q̇⁺ was up to 1.48 v off Newton's law (docs/decisions/0063-the-newton-row-scaled.md).
+#[test]
+fn the_newton_row_is_interior_at_the_plants_law_and_refuses_more_than_v_beyond_the_relaxation() {
+    use ball_finger::pipeline::SolutionIo;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("data/optima/periodic-qc-plan/solution.json");
+    let sol = ball_finger::pipeline::OcpSolution::read_json(&path).unwrap();
+    assert_eq!(sol.impact_law, PlannedImpact::Newton);
+    let text = bf_generated::scene_toml("paper").unwrap();
+    let scene = bf_codegen::Scene::from_toml_str(text, "paper").unwrap();
+    let ph = bf_problem::points::physics(&scene).unwrap();
+    let f = bf_problem::points::impact(&scene, &ph, sol.epsilon, 0, 0, false, true, false).unwrap();
+    // The one row bounded above by 0 alone.
+    let rows: Vec<usize> = (0..f.bounds.len())
+        .filter(|&k| f.bounds[k] == (f64::NEG_INFINITY, 0.0))
+        .collect();
+    assert_eq!(rows.len(), 1, "{:?}", f.bounds);
+    let row = rows[0];
+    let nodes = &sol.nodes;
+    let (last, pre) = pre_impact(&sol);
+    let (model, _) = solution_model(&sol).unwrap();
+    let q_n = model.impact(&pre, ImpactLaw::Newton).unwrap().qd;
+    let relax = bf_optim::ipm::Settings::default()
+        .barrier
+        .bound_relax_factor;
+    let size = f
+        .vars
+        .iter()
+        .map(|v| v.0)
+        .chain(f.fixed.iter().map(|v| v.0))
+        .max()
+        .unwrap() as usize
+        + 1;
+    let u = VecN::<3>::new(1.0, -2.0, 2.0) / 3.0;
+    let v = NEWTON_VELOCITY_LIMIT;
+    let at = |delta: f64| -> f64 {
+        let qd_plus = q_n + u * delta;
+        let pre_x: Vec<f64> = nodes.q[last]
+            .iter()
+            .chain(&nodes.qd[last])
+            .chain(&nodes.omega[last])
+            .copied()
+            .collect();
+        let post_x: Vec<f64> = nodes.q[last]
+            .iter()
+            .copied()
+            .chain(qd_plus.iter().copied())
+            .chain(nodes.omega[last].iter().copied())
+            .collect();
+        let mut vals = vec![0.0; size];
+        for &(k, val) in &f.fixed {
+            vals[k as usize] = val;
+        }
+        for &(k, r) in &f.vars {
+            vals[k as usize] = match r {
+                bf_optim::terms::VarRef::Final { i, .. } => pre_x[i],
+                bf_optim::terms::VarRef::Initial { i, .. } => post_x[i],
+                _ => 0.0, // the impulse: not in this row
+            };
+        }
+        bf_codegen::interp::eval(&f.graph, &f.outputs, &vals)[row]
+    };
+    let (centre, inside, beyond, outside) = (at(0.0), at(0.5 * v), at(1.05 * v), at(2.0 * v));
+    eprintln!(
+        "row at q̇_N + δ u, δ = 0, v/2, 1.05 v, 2 v: {centre:e} {inside:e} {beyond:e} {outside:e}"
+    );
+    assert!(centre < -100.0 * relax, "{centre:e}");
+    assert!(inside < 0.0, "{inside:e}");
+    assert!(beyond > relax, "{beyond:e}");
+    assert!(outside > relax, "{outside:e}");
+}
+
+/// The last state point of the approach (phase 0) of `sol`: its index and the state there.
+fn pre_impact(sol: &ball_finger::pipeline::OcpSolution) -> (usize, State) {
+    let nodes = &sol.nodes;
+    let last = nodes.phase.iter().rposition(|&p| p == 0).unwrap();
+    let vec = |v: &[f64]| VecN::<3>::from_column_slice(v);
+    let pre = State::new(
+        vec(&nodes.q[last]),
+        vec(&nodes.qd[last]),
+        Vec3::from_column_slice(&nodes.omega[last]),
+    );
+    (last, pre)
 }

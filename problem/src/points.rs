@@ -171,8 +171,17 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// [`NEWTON_VELOCITY_LIMIT`] of the plant's, q̇_N = J_c⁻¹ T_n J_c q̇⁻ (T_n = 1 − n nᵀ), so that
 /// the stick phase that follows starts sticking under Newton's law as well (paper Sect. 7),
 /// and the finger must arrive at [`NEWTON_APPROACH_SPEED`] or faster, at a J_c conditioned at
-/// least [`NEWTON_MIN_CONDITION`]. Without J_c⁻¹ (which the graph cannot form where J_c is singular) the condition reads
-/// ‖det(J_c) q̇⁺ − adj(J_c) T_n J_c q̇⁻‖² ≤ v² det(J_c)², adj(J_c) J_c = det(J_c) 1.
+/// least [`NEWTON_MIN_CONDITION`]. Without J_c⁻¹ (which the graph cannot form where J_c is
+/// singular) the condition reads ‖e‖² ≤ v² det(J_c)² with e = det(J_c) q̇⁺ − adj(J_c) T_n J_c
+/// q̇⁻ (adj(J_c) J_c = det(J_c) 1), and the row is that inequality divided by v:
+/// ‖e‖² / v − v det(J_c)² ≤ 0.
+///
+/// Why divided by v: at Newton's law (e = 0) the row's margin is then v det² (about 1e-5 on the
+/// paper's finger), a thousand times the solver's bound relaxation (1e-8), and it refuses 5 %
+/// more than v by more than that relaxation. Undivided, the margin v² det² was the size of the
+/// relaxation: the plans' q̇⁺ sat up to 1.48 v off Newton's law, and solves held the row's slack
+/// on its bound with multipliers of 1e5–1e7 that the dual regularization let fall by |c| / δ_c
+/// per iteration, so they crept to `Acceptable` (docs/decisions/0063-the-newton-row-scaled.md).
 ///
 /// Why in joint space: the stick node's Δv⁺ = 0 makes J_c (q̇⁺ − q̇_N) = T_n Δv⁻, the
 /// tangential relative velocity before the impact. A bound on that alone (how this law was
@@ -307,11 +316,14 @@ pub fn impact(
             let e = g.sub(dq, at);
             norm2.push(g.square(e));
         }
+        // ‖e‖² ≤ v² det² divided by v (see the function's docs): ‖e‖² / v − v det² ≤ 0.
         let e2 = g.sum(&norm2);
-        let v2 = g.constant(NEWTON_VELOCITY_LIMIT * NEWTON_VELOCITY_LIMIT);
+        let inv_v = g.constant(1.0 / NEWTON_VELOCITY_LIMIT);
+        let scaled = g.mul(inv_v, e2);
         let d2 = g.square(det);
-        let allowed = g.mul(v2, d2);
-        out.push(g.sub(e2, allowed));
+        let v = g.constant(NEWTON_VELOCITY_LIMIT);
+        let vd2 = g.mul(v, d2);
+        out.push(g.sub(scaled, vd2));
         bounds.push((f64::NEG_INFINITY, 0.0));
         // det² ≥ κ² (‖J_c‖_F² / 3)³ (NEWTON_MIN_CONDITION), squared so that its sign is free.
         let fro_terms: Vec<Id> = [a0, a1, a2].iter().map(|&r| g.v3_dot(r, r)).collect();
