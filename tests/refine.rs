@@ -5,8 +5,8 @@
 //! (two `periodic-cot` plans: one whose objective jumps, one whose phase durations do).
 
 use ball_finger::pipeline::refine::{
-    REFINE_SHIFT_MAX, RefineCriterion, RefineRound, RefineSettings, current_mesh, duration_shift,
-    error_estimate, refine, refine_solution, warm_initial_point,
+    REFINE_RISE_MAX, REFINE_SHIFT_MAX, RefineCriterion, RefineRound, RefineSettings, current_mesh,
+    duration_shift, error_estimate, refine, refine_solution, warm_initial_point,
 };
 use ball_finger::pipeline::solve::{own_problem, settings_of};
 use ball_finger::pipeline::verify::verify;
@@ -456,37 +456,43 @@ fn verifying_rounds(rounds: usize) -> RefineSettings {
 }
 
 /// A round that leaves the optimum it was warm-started from is solved again from a closer
-/// start (`RefineSettings::max_rise`). The fixture is a `periodic-cot` plan (J = 7.816e-4,
-/// period 9.075 s, re-integration defect 3.7e-4) that the winner's neighbourhood of the
-/// seed-7 search solved on a refined mesh. From μ₀ = 1e-5 its first refinement round ends
-/// in another optimum, J = 4.7e-3 with the period on its 10 s bound; solved again from
-/// μ₀ = 1e-7, the round stays on the plan, whose refined trajectory the re-integration then
-/// confirms.
+/// start (`RefineSettings::max_rise`). The fixture is a `periodic-cot` plan on the default mesh
+/// (J = 7.580e-4, period 9.205 s) that the seed-2 search promoted. Refined without the checks,
+/// its third round rises 9.5 % and moves the period onto its 10 s bound, and the refinement
+/// verifies there, at J ≈ 8.27e-4. With the rise check alone at 5 % (the shift check off), that
+/// round is solved again from μ₀ = 1e-7: it stays on the plan's shape and the refinement
+/// verifies more than 1 % lower. (Decision record 0058's own fixture, a plan whose first round
+/// rose threefold, was planned on the Newton row before decision record 0063 and no longer
+/// leaves.)
 #[test]
 fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
-    let (sol, problem, s, p) = fixture_on_its_mesh("leaving-cot-plan");
-    let j0 = sol.objective;
+    let (sol, problem, s, p) = fixture_on_its_mesh("shifting-cot-plan");
     let before = verify(&p, &sol, 1e-10).unwrap().max_defect;
-    let opts = verifying_rounds(1);
+    let opts = verifying_rounds(4);
     let never = RefineSettings {
         max_rise: f64::INFINITY,
         max_shift: f64::INFINITY,
         ..opts
     };
+    let rise = RefineSettings {
+        max_rise: 0.05,
+        ..never
+    };
     let (_, away) = refine_solution(problem, &s, sol.clone(), &never, None).unwrap();
-    assert!(away.objective > 3.0 * j0, "{} from {j0}", away.objective);
-    let (b, kept) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
+    let ha = &away.refinement.as_ref().unwrap().history;
+    assert!(ha[2].objective > 1.05 * ha[1].objective, "{ha:?}");
+    assert!(away.period > 9.99, "{:?}", away.phase_durations);
+    let (b, kept) = refine_solution(problem, &s, sol.clone(), &rise, None).unwrap();
     let h = &kept.refinement.as_ref().unwrap().history;
-    assert_eq!(h.len(), 2, "{h:?}");
     for r in h {
         assert!(r.status.is_success(), "{h:?}");
-        assert!((r.objective - j0).abs() < 1e-4 * j0, "{h:?}");
     }
     // The round says it was solved again, and its iterations count both solves.
-    let first = &away.refinement.as_ref().unwrap().history;
-    assert!(h[1].solved_again && !h[0].solved_again, "{h:?}");
-    assert!(first.iter().all(|r| !r.solved_again), "{first:?}");
-    assert!(h[1].iterations > first[1].iterations);
+    assert!(h[2].solved_again, "{h:?}");
+    assert!(h.iter().filter(|r| r.solved_again).count() == 1, "{h:?}");
+    assert!(ha.iter().all(|r| !r.solved_again), "{ha:?}");
+    assert!(h[2].iterations > ha[2].iterations, "{h:?}\n{ha:?}");
+    kept_on_the_plan(&kept, &away);
     let after = verify(&b, &kept, 1e-10).unwrap().max_defect;
     assert!(after < 0.5 * before, "defect {before:.2e} -> {after:.2e}");
     // Not a positive bound: an error that names the field.
@@ -499,13 +505,14 @@ fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
 }
 
 /// A round whose phase durations move far more than a finer mesh explains has left its
-/// optimum even when its objective hardly rises (`RefineSettings::max_shift`). The fixture
-/// is a `periodic-cot` plan on the default mesh (3 × 10 points per phase; J = 7.580e-4,
-/// period 9.205 s) that the seed-2 search promoted. Refined without the check, its third
-/// round moves the period onto its 10 s bound and halves the first free phase's share, for
-/// an objective only 1.5 % higher, and the refinement verifies there, at J ≈ 7.78e-4 (the
-/// seed's answer before the check). With it, the third round is solved again from a closer
-/// start, stays on the plan's shape, and verifies lower.
+/// optimum even when its objective rises less than the rise check sees
+/// (`RefineSettings::max_shift`). The fixture is a `periodic-cot` plan on the default mesh
+/// (3 × 10 points per phase; J = 7.580e-4, period 9.205 s) that the seed-2 search promoted.
+/// Refined without the shift check, its third round moves the period onto its 10 s bound and
+/// its durations by 13 % of the period, for an objective 9.5 % higher (1.5 % on the Newton row
+/// before decision record 0063), below the rise check's 50 %, and the refinement verifies
+/// there. With it, the third round is solved again from a closer start, stays on the plan's
+/// shape, and verifies lower.
 #[test]
 fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
     let (sol, problem, s, _) = fixture_on_its_mesh("shifting-cot-plan");
@@ -522,11 +529,11 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
     );
     // Without the check the refinement ends on the period bound, far from the plan's
     // durations, and the objective check alone does not see it: every round not solved
-    // again by it rose by less than 2 %.
+    // again by it rose by less than the rise check's bound.
     assert!(away.period > 9.99, "{:?}", away.phase_durations);
     assert!(
-        ha.windows(2)
-            .all(|w| w[1].solved_again || w[1].objective < 1.02 * w[0].objective),
+        ha.windows(2).all(|w| w[1].solved_again
+            || w[1].objective < (1.0 + REFINE_RISE_MAX) * w[0].objective),
         "{ha:?}"
     );
     assert!(
@@ -534,19 +541,11 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
         "{:?}",
         away.phase_durations
     );
-    // With it: more rounds are solved again than the objective check alone solves again
-    // (both solve the first round again, whose objective jumps), the plan keeps its period,
-    // and it verifies more than 1 % lower.
+    // With it: more rounds are solved again than the objective check alone solves again,
+    // the plan keeps its period, and it verifies more than 1 % lower.
     let again = |h: &[RefineRound]| h.iter().filter(|r| r.solved_again).count();
     assert!(again(hk) > again(ha), "{hk:?}\n{ha:?}");
-    assert!(kept.refinement.as_ref().unwrap().converged, "{hk:?}");
-    assert!(kept.period < 9.8, "{:?}", kept.phase_durations);
-    assert!(
-        kept.objective < 0.99 * away.objective,
-        "{} against {}",
-        kept.objective,
-        away.objective
-    );
+    kept_on_the_plan(&kept, &away);
     // Not a positive bound: an error that names the field.
     let bad = RefineSettings {
         max_shift: 0.0,
@@ -554,6 +553,21 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
     };
     let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
     assert!(e.to_string().contains("max_shift"), "{e}");
+}
+
+/// The shifting fixture's refinement with a check (`kept`) against the one without (`away`,
+/// which ends on the 10 s period bound): `kept` converged, kept its period below 9.8 s and
+/// verifies more than 1 % lower.
+fn kept_on_the_plan(kept: &OcpSolution, away: &OcpSolution) {
+    let r = kept.refinement.as_ref().unwrap();
+    assert!(r.converged, "{:?}", r.history);
+    assert!(kept.period < 9.8, "{:?}", kept.phase_durations);
+    assert!(
+        kept.objective < 0.99 * away.objective,
+        "{} against {}",
+        kept.objective,
+        away.objective
+    );
 }
 
 /// The duration shift of the refinement's check: the largest change of a phase duration as a
