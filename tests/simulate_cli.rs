@@ -259,6 +259,7 @@ fn cli_bad_inputs_give_clear_errors() {
             vec!["--pd-gains"],
             2,
         ),
+        (vec!["--pd-gains", "1,2"], vec!["--pd-gains", "--pd"], 2),
         (
             vec!["--q0", "0.0,1.6,0.5", "--mode0", "stick"],
             vec!["h"],
