@@ -775,7 +775,7 @@ fn every_seed_verifies_an_executed_human_plan() {
 /// 50 % more socket damping. BENCHMARKS.md ("The flight's pace") records each seed. And no
 /// seed ends in the family that holds the base joint still (J ≈ 1e-2, three seeds in ten
 /// while the starts stayed within ±0.6 rad of the default guess, decision record 0054), and
-/// every seed ends in the low family (7.558e-4–7.984e-4 since decision record 0059): every
+/// every seed ends in the low family (7.507e-4–8.220e-4 since decision record 0063): every
 /// plan is below 9e-4. Before the controller of decision record 0056 and the promotion below
 /// the best verified plan (0053), seeds 2, 4 and 7 ended at 2.2e-3, 1.2e-3 and 9.2e-4.
 #[test]
@@ -846,24 +846,23 @@ fn the_promotion_goes_on_while_a_coarse_shape_can_still_win() {
 }
 
 /// The promotion's two barrier starts (decision record 0059) and its bound against what
-/// verified (0053), on `periodic-cot` seed 7. The winner's coarse shape (start 140) re-solved
-/// on the problem's mesh from a warm start's μ₀ = 1e-4 leaves its basin for J ≈ 1.0e-2 with
-/// the period on its 10 s bound; from the close start it ends at 7.58e-4, which refines to
-/// the winner, 7.984e-4. Before that, the lowest re-solved shape (6.55e-4 on the problem's
-/// mesh) verified at 8.342e-4, and the search went on below it. (Before decision record 0059
-/// this seed's first verified plan was 9.214e-4 and its winner came from the second round of
-/// the winner's neighbourhood, 7.816e-4; the seeds' spread is in BENCHMARKS.md, "Two barrier
-/// starts for a promotion".)
+/// verified (0053), on `periodic-cot` seed 8. The winner's shape (chain 149) re-solved on the
+/// problem's mesh from a warm start's μ₀ = 1e-4 ends at 8.23e-4; from the close start at
+/// 7.80e-4, which refines to the winner, 7.817e-4. Refinements of other candidates verified
+/// at 8.28e-4 and 8.44e-4, and the search went on below them. (On the Newton row before
+/// decision record 0063 the test ran seed 7, whose warm-started promotion left its basin for
+/// J ≈ 1.0e-2 on the 10 s period bound; no seed's winner does that now. The seeds' spread is
+/// in BENCHMARKS.md, "The Newton row divided by v".)
 #[test]
 fn the_promotion_goes_on_below_the_best_verified_plan() {
     use ball_finger::pipeline::search::{PROMOTE_CLOSE_LABEL, PROMOTE_LABEL};
     let (stdout, v) = verified_default_search(
-        "cot-plan-seed-7-bound",
+        "cot-plan-seed-8-bound",
         &[
             "--problem",
             "periodic-cot",
             "--seed",
-            "7",
+            "8",
             "--impact-law",
             "newton",
         ],
@@ -875,8 +874,8 @@ fn the_promotion_goes_on_below_the_best_verified_plan() {
         "{}",
         v["verification"]["execution"]
     );
-    // The winner's promotion: the warm start's solve left the basin (ten times higher, the
-    // period on its bound), the close start's stayed.
+    // The winner's promotion: the close start's solve is more than 5 % below the warm
+    // start's.
     let chosen = v["strategy"]["chosen"].as_u64().unwrap();
     let promotion = |label: &str| {
         v["strategy"]["records"]
@@ -892,8 +891,7 @@ fn the_promotion_goes_on_below_the_best_verified_plan() {
         far["objective"].as_f64().unwrap(),
         close["objective"].as_f64().unwrap(),
     );
-    assert!(jc < 0.2 * jf && jc < j, "{far} {close}");
-    assert!(far["period"].as_f64().unwrap() > 10.0 - 1e-6, "{far}");
+    assert!(jc < 0.95 * jf && jc < j, "{far} {close}");
     // A refinement verified (its line names no failure and its defect is within the
     // tolerance) at an objective more than 3 % above the winner's: the search went on past it.
     let verified_above = stdout
