@@ -616,7 +616,7 @@ fn plan_margins_keep_the_plan_inside_the_shrunk_cone_and_torque_limits() {
 /// excess in that relaxation; and at δ = 0 it is inactive by more than 100 times the relaxation,
 /// so a plan on Newton's law is an interior point of the row that the solver can tell from an
 /// active one. The row unscaled, ‖e‖² − v² det², had a margin of v² det² ≈ 1e-8 there, the size
-/// of the relaxation: its slack sat on the bound with multipliers of 1e5–1e7, solves crept to
+/// of the relaxation: its slack sat on the bound with multipliers of 1e4–1e7, solves crept to
 /// `Acceptable`, and the plans' q̇⁺ was up to 1.48 v off Newton's law (docs/decisions/0063-the-newton-row-scaled.md).
 #[test]
 fn the_newton_row_is_interior_at_the_plants_law_and_refuses_more_than_v_beyond_the_relaxation() {

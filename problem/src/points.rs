@@ -180,7 +180,7 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// paper's finger), a thousand times the solver's bound relaxation (1e-8), and it refuses 5 %
 /// more than v by more than that relaxation. Undivided, the margin v² det² was the size of the
 /// relaxation: the plans' q̇⁺ sat up to 1.48 v off Newton's law, and solves held the row's slack
-/// on its bound with multipliers of 1e5–1e7 that the dual regularization let fall by |c| / δ_c
+/// on its bound with multipliers of 1e4–1e7 that the dual regularization let fall by |c| / δ_c
 /// per iteration, so they crept to `Acceptable` (docs/decisions/0063-the-newton-row-scaled.md).
 ///
 /// Why in joint space: the stick node's Δv⁺ = 0 makes J_c (q̇⁺ − q̇_N) = T_n Δv⁻, the
