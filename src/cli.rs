@@ -259,15 +259,16 @@ pub struct SimulateArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub pd: Option<String>,
     /// PD gains `kp,kd` (all joints) or `kp1,kp2,kp3,kd1,kd2,kd3` (N m/rad, N m s/rad) of
-    /// `--pd` [default: 1.0,0.2]; without `--pd` there is no PD controller to take them, so
-    /// they are refused rather than ignored.
+    /// `--pd`; given without `--pd`, which has no PD controller to take them, they are refused
+    /// rather than ignored (a default does not count as given).
     #[arg(
         long,
         value_name = "GAINS",
         allow_hyphen_values = true,
+        default_value = "1.0,0.2",
         requires = "pd"
     )]
-    pub pd_gains: Option<String>,
+    pub pd_gains: String,
     /// Replay the solution of `--init` (a solution.json of `optimize`), periodically, with
     /// joint-space PD tracking of its trajectory: τ = τ*(t) + KP (q*(t) − q) + KD (q̇*(t) − q̇),
     /// gains `KP,KD` (N m/rad, N m s/rad; the paper study uses 1,0.2); the feedback acts in

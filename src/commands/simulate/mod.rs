@@ -422,7 +422,7 @@ fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
         (CliInput::Pd(_), _) => format!(
             "--pd {} --pd-gains {}",
             args.pd.as_deref().unwrap_or(""),
-            torques::pd_gains(args)
+            args.pd_gains
         ),
         _ => "zero torques".into(),
     }

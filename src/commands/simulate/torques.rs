@@ -53,19 +53,11 @@ impl Input for CliInput {
     }
 }
 
-/// `--pd-gains` when none are given.
-pub(super) const DEFAULT_PD_GAINS: &str = "1.0,0.2";
-
-/// The `--pd-gains` text of `args`, or [`DEFAULT_PD_GAINS`].
-pub(super) fn pd_gains(args: &SimulateArgs) -> &str {
-    args.pd_gains.as_deref().unwrap_or(DEFAULT_PD_GAINS)
-}
-
 /// The `--pd` controller of `n` joints: target angles `target` (the `--pd` text) and
 /// `--pd-gains`, one (kp, kd) pair for all joints or kp₁..kpₙ, kd₁..kdₙ.
 pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Result<PdController> {
     let target = parse_list("--pd", target, Some(n))?;
-    let g = parse_list("--pd-gains", pd_gains(args), None)?;
+    let g = parse_list("--pd-gains", &args.pd_gains, None)?;
     let (kp, kd) = match g.len() {
         2 => (vec![g[0]; n], vec![g[1]; n]),
         k if k == 2 * n => (g[..n].to_vec(), g[n..].to_vec()),
@@ -82,7 +74,7 @@ pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Resu
             bail_usage!(
                 "--pd-gains {}: {name} of joint {} is {v}; gains must be >= 0 (a negative gain \
                  destabilises the joint)",
-                pd_gains(args),
+                args.pd_gains,
                 i + 1
             );
         }
