@@ -768,6 +768,19 @@ fn every_seed_verifies_an_executed_human_plan() {
     );
 }
 
+/// The default `periodic-qc` plan (Newton's law with the margins and the clearance): every
+/// seed 0–9 returns a verified plan that the hybrid controller executes on every perturbed
+/// plant of the robustness table, within 2 % of J = 0.0961814, the plan every seed found in
+/// the sweep of BENCHMARKS.md ("The Newton row divided by v"; 0.0961760 on every seed before
+/// decision record 0063). Its best basin is reached by 9–46 distinct sampled optima and hops
+/// per search, so a seed that misses it means the sampling or the exploration broke.
+#[test]
+#[ignore = "about 8 min on 2 idle cores (ten searches); run with `cargo test --release \
+            --test search every_seed_returns_the_same_robust_qc_plan -- --ignored`"]
+fn every_seed_returns_the_same_robust_qc_plan() {
+    every_seed_returns_a_robust_plan_below("periodic-qc", 1.02 * 0.0961814);
+}
+
 /// The default `periodic-cot` plan (Newton's law with the margins and the clearance): every
 /// seed 0–9 returns a verified plan that the bounded hybrid controller executes on every
 /// perturbed plant of the robustness table. Before the clearance floor's rise (decision record
@@ -782,14 +795,20 @@ fn every_seed_verifies_an_executed_human_plan() {
 #[ignore = "about 15 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_returns_a_robust_cot_plan -- --ignored`"]
 fn every_seed_returns_a_robust_cot_plan() {
+    every_seed_returns_a_robust_plan_below("periodic-cot", 9e-4);
+}
+
+/// The default plan search (Newton's law) of `problem` over seeds 0–9: every seed verifies,
+/// executes on every perturbed plant of the robustness table, and ends at J ≤ `limit`.
+fn every_seed_returns_a_robust_plan_below(problem: &str, limit: f64) {
     let mut misses = Vec::new();
     for seed in 0..10 {
         let seed = seed.to_string();
         let (_, v) = verified_default_search(
-            &format!("periodic-cot-plan-seed-{seed}"),
+            &format!("{problem}-plan-seed-{seed}"),
             &[
                 "--problem",
-                "periodic-cot",
+                problem,
                 "--seed",
                 &seed,
                 "--impact-law",
@@ -801,11 +820,11 @@ fn every_seed_returns_a_robust_cot_plan() {
             misses.push(format!("seed {seed}: {check}"));
         }
         let j = v["objective"].as_f64().unwrap();
-        if j >= 9e-4 {
+        if j > limit {
             misses.push(format!("seed {seed}: J {j}"));
         }
     }
-    assert!(misses.is_empty(), "{misses:?}");
+    assert!(misses.is_empty(), "{problem}: {misses:?}");
 }
 
 /// The promotion's bound (decision record 0053). The coarse mesh under-prices the long free
