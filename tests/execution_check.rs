@@ -282,7 +282,7 @@ fn a_low_cot_plan_holds_its_mean_spin_beyond_the_robustness_window() {
 }
 
 /// `select` (the search's choice among its candidates): a plan for the plant that meets the
-/// robustness target wins over a lower one that misses it (J 0.0509 against 0.0452 here), a
+/// robustness target wins over a lower one that misses it (J 0.0505 against 0.0452 here), a
 /// verified plan that misses it wins over an unverified one, and one the nominal plant does
 /// not execute is unverified.
 #[test]
@@ -290,7 +290,7 @@ fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
     // The human finger's default plan before the winner's neighbourhood (decision record
     // 0052), executed and robust.
     let robust =
-        OcpSolution::read_json(&root().join("tests/fixtures/human-plan-j0509500/solution.json"))
+        OcpSolution::read_json(&root().join("tests/fixtures/human-plan-j0505279/solution.json"))
             .unwrap();
     assert!(is_robust(&robust));
     let passed = searched_check(&robust).clone();

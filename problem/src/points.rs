@@ -172,16 +172,19 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// the stick phase that follows starts sticking under Newton's law as well (paper Sect. 7),
 /// and the finger must arrive at [`NEWTON_APPROACH_SPEED`] or faster, at a J_c conditioned at
 /// least [`NEWTON_MIN_CONDITION`]. Without J_c⁻¹ (which the graph cannot form where J_c is
-/// singular) the condition reads ‖e‖² ≤ v² det(J_c)² with e = det(J_c) q̇⁺ − adj(J_c) T_n J_c
-/// q̇⁻ (adj(J_c) J_c = det(J_c) 1), and the row is that inequality divided by v:
-/// ‖e‖² / v − v det(J_c)² ≤ 0.
+/// singular) q̇⁺ − q̇_N = e / det(J_c) with e = det(J_c) q̇⁺ − adj(J_c) T_n J_c q̇⁻
+/// (adj(J_c) J_c = det(J_c) 1). The bound is a box inside the ball of radius v, |q̇⁺_i − q̇_N,i|
+/// ≤ v / √3 for each joint, as six rows ±e_i det − (v / √3) det² ≤ 0 (the box's condition
+/// |e_i| ≤ (v / √3) |det| multiplied by |det|, which holds for either sign of det).
 ///
-/// Why divided by v: at Newton's law (e = 0) the row's margin is then v det² (about 1e-5 on the
-/// paper's finger), a thousand times the solver's bound relaxation (1e-8), and it refuses 5 %
-/// more than v by more than that relaxation. Undivided, the margin v² det² was the size of the
-/// relaxation: the plans' q̇⁺ sat up to 1.48 v off Newton's law, and solves held the row's slack
-/// on its bound with multipliers of 1e4–1e7 that the dual regularization let fall by |c| / δ_c
-/// per iteration, so they crept to `Acceptable` (docs/decisions/0063-the-newton-row-scaled.md).
+/// Why a box of linear rows: the ball ‖e‖² ≤ v² det² as one row has a double root at Newton's
+/// law (its gradient in q̇⁺ vanishes at e = 0), so Newton steps approach it by halves and the
+/// barrier around its thin interior is stiff: cold starts took 3–5 times the iterations of the
+/// sticking law's (docs/decisions/0065-the-newton-bound-as-a-box.md). The box rows are linear
+/// in e, with gradient det² in q̇⁺_i. Their margin at Newton's law, (v / √3) det² (about 5e-6
+/// on the paper's finger), is about 500 times the solver's bound relaxation (1e-8): a margin
+/// of the relaxation's size let solves creep to `Acceptable` with huge multipliers
+/// (docs/decisions/0063-the-newton-row-scaled.md).
 ///
 /// Why in joint space: the stick node's Δv⁺ = 0 makes J_c (q̇⁺ − q̇_N) = T_n Δv⁻, the
 /// tangential relative velocity before the impact. A bound on that alone (how this law was
@@ -308,23 +311,23 @@ pub fn impact(
         let vn = g.v3_dot(vc, ce.n);
         let vnn = g.v3_scale(vn, ce.n);
         let t = g.v3_sub(vc, vnn);
-        let mut norm2 = Vec::with_capacity(3);
+        // |e_i| ≤ (v / √3) |det| for each joint, multiplied by |det| so that no sign of det
+        // is assumed (see the function's docs): ±e_i det − (v / √3) det² ≤ 0.
+        let d2 = g.square(det);
+        let half_width = g.constant(NEWTON_VELOCITY_LIMIT / 3f64.sqrt());
+        let wd2 = g.mul(half_width, d2);
         for i in 0..3 {
             let dq = g.mul(det, qdpi[i]);
             let terms: Vec<Id> = (0..3).map(|c| g.mul(adj[c][i], t[c])).collect();
             let at = g.sum(&terms);
             let e = g.sub(dq, at);
-            norm2.push(g.square(e));
+            let ed = g.mul(e, det);
+            out.push(g.sub(ed, wd2));
+            bounds.push((f64::NEG_INFINITY, 0.0));
+            let ned = g.neg(ed);
+            out.push(g.sub(ned, wd2));
+            bounds.push((f64::NEG_INFINITY, 0.0));
         }
-        // ‖e‖² ≤ v² det² divided by v (see the function's docs): ‖e‖² / v − v det² ≤ 0.
-        let e2 = g.sum(&norm2);
-        let inv_v = g.constant(1.0 / NEWTON_VELOCITY_LIMIT);
-        let scaled = g.mul(inv_v, e2);
-        let d2 = g.square(det);
-        let v = g.constant(NEWTON_VELOCITY_LIMIT);
-        let vd2 = g.mul(v, d2);
-        out.push(g.sub(scaled, vd2));
-        bounds.push((f64::NEG_INFINITY, 0.0));
         // det² ≥ κ² (‖J_c‖_F² / 3)³ (NEWTON_MIN_CONDITION), squared so that its sign is free.
         let fro_terms: Vec<Id> = [a0, a1, a2].iter().map(|&r| g.v3_dot(r, r)).collect();
         let fro = g.sum(&fro_terms);
