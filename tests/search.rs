@@ -770,9 +770,10 @@ fn every_seed_verifies_an_executed_human_plan() {
 
 /// The default `periodic-qc` plan (Newton's law with the margins and the clearance): every
 /// seed 0–9 returns a verified plan that the hybrid controller executes on every perturbed
-/// plant of the robustness table, within 2 % of J = 0.0961834, the plan nine seeds found in
-/// the sweep of BENCHMARKS.md ("The Newton bound as a box"; seed 9 0.0965813; 0.0961814 on
-/// every seed with the bound as a ball, 0.0961760 before decision record 0063). Its best basin is reached by 9–46 distinct sampled optima and hops
+/// plant of the robustness table, within 2 % of J = 0.0961834, the plan every seed found in
+/// the sweep of BENCHMARKS.md ("The reshaping stops on evidence"; seed 9 0.0965813 before
+/// decision record 0066; 0.0961814 on every seed with the bound as a ball, 0.0961760 before
+/// decision record 0063). Its best basin is reached by 9–46 distinct sampled optima and hops
 /// per search, so a seed that misses it means the sampling or the exploration broke.
 #[test]
 #[ignore = "about 8 min on 2 idle cores (ten searches); run with `cargo test --release \

@@ -11,7 +11,9 @@
 //!   the first joint and bounds on the phase durations, [`super::reshape`]) from each of the best points that differ in shape
 //!   ([`Landscape::alike`]) and were not moved before, in [`HopSettings::reshape_rounds`]
 //!   rounds: each round moves the best shapes not yet moved, new ones from the earlier rounds
-//!   among them, so the reshaping goes down the ranking where the best shapes lead nowhere.
+//!   among them, so the reshaping goes down the ranking where the best shapes lead nowhere,
+//!   until a round finds nothing better while the best point has been reached from
+//!   [`HopSettings::confirmations`] starts and moves.
 //! * Exploitation ([`exploit`]): monotonic basin hopping. Each round perturbs the current best
 //!   point [`HopSettings::batch`] times ([`Landscape::hop`], hop h seeded by h alone, scale
 //!   [`HopSettings::scale`], every other round that times [`HopSettings::wide`]), solves locally, and keeps a result only if it ranks strictly
@@ -103,8 +105,9 @@ pub struct HopSettings {
     /// best points that differ in shape ([`Landscape::alike`]) and were not reshaped before.
     /// 0: no reshaping.
     pub reshape_width: usize,
-    /// Reshaping rounds; the reshaping stops earlier only when every shape has been
-    /// reshaped.
+    /// Reshaping rounds at most; the reshaping stops earlier when every shape has been
+    /// reshaped, or when a round found nothing better than the best point and that point was
+    /// reached at least [`HopSettings::confirmations`] times ([`Landscape::same`]).
     pub reshape_rounds: usize,
 }
 
@@ -281,7 +284,9 @@ where
 /// ([`Landscape::alike`]) from each other and from every point reshaped before, applies every
 /// move of [`Landscape::reshape`] to them (in parallel, results in move order, numbered on
 /// from `first_id + *hop`), and adds the results to `all` and `hops`; after
-/// [`HopSettings::reshape_rounds`] rounds, or when no shape is left, it stops. A basin that
+/// [`HopSettings::reshape_rounds`] rounds, when no shape is left, or when a round found nothing
+/// better and the best point was reached from [`HopSettings::confirmations`] starts and moves
+/// (the evidence that ends the hopping, decision record 0066), it stops. A basin that
 /// random hops of the time scale do not leave (BENCHMARKS.md, "Global search on a coarse
 /// mesh") is left by a move that bounds the trajectory away from its shape; chains of such
 /// moves go on from every better shape they find, and where the best shapes' moves find
@@ -295,6 +300,7 @@ fn reshape_rounds<L: Landscape>(
     hops: &mut Vec<(usize, bool, Option<L::Point>)>,
 ) {
     let mut done: Vec<L::Point> = Vec::new();
+    let mut best = best_of(l, all.iter()).cloned();
     for _ in 0..settings.reshape_rounds {
         // The best shapes not moved before: where the moves of the best shapes found nothing
         // better, the next ones down the ranking are moved (the way into the best basin may
@@ -317,11 +323,26 @@ fn reshape_rounds<L: Landscape>(
             .collect();
         *hop += jobs.len();
         done.extend(fresh);
+        let mut improved = false;
         for (h, r) in results {
             if let Some(p) = &r {
+                if best.as_ref().is_none_or(|b| l.better(p, b)) {
+                    best = Some(p.clone());
+                    improved = true;
+                }
                 all.push(p.clone());
             }
             hops.push((h, false, r));
+        }
+        // The hopping's evidence (`confirmations`, `patience`) applied to the rounds: a round
+        // that found nothing better, where the best point was reached from enough starts and
+        // moves, ends the reshaping. Where the best was reached once, the way into a better
+        // basin may still start further down the ranking, and the rounds go on.
+        let reached = best
+            .as_ref()
+            .map_or(0, |b| all.iter().filter(|p| l.same(p, b)).count());
+        if !improved && reached >= settings.confirmations {
+            break;
         }
     }
 }
@@ -656,6 +677,63 @@ mod tests {
         );
     }
 
+    /// The objective of each [`Ladder`] basin.
+    const F: [f64; 11] = [1.0, 3.0, 4.0, 4.0, 4.0, 0.0, 2.0, 4.0, 4.0, 4.0, 4.0];
+
+    /// Basins on a line, each reached from its neighbours by a reshaping move only (hops stay
+    /// put): basin 0 (f = 1), basin 6 (f = 2) and the global minimum, basin 5 (f = 0); start k
+    /// lands in basin `starts[k]`.
+    struct Ladder {
+        starts: &'static [usize],
+    }
+    impl Ladder {
+        /// Every start's point, in start order.
+        fn sampled(&self) -> Vec<usize> {
+            let ks: Vec<usize> = (0..self.starts.len()).collect();
+            sample(self, &ks)
+                .into_iter()
+                .filter_map(|(_, p)| p)
+                .collect()
+        }
+    }
+
+    /// Settings that only reshape: one shape per round, at most `rounds` rounds, no hops
+    /// and no polishing.
+    fn reshaping_only(rounds: usize) -> HopSettings {
+        HopSettings {
+            budget: 0,
+            polish_rounds: 0,
+            reshape_width: 1,
+            reshape_rounds: rounds,
+            ..SETTINGS
+        }
+    }
+
+    impl Landscape for Ladder {
+        type Point = usize;
+        fn sample(&self, k: usize) -> Option<usize> {
+            self.starts.get(k).copied()
+        }
+        fn hop(&self, from: &usize, _hop: u64, _scale: f64, _id: usize) -> Option<usize> {
+            Some(*from)
+        }
+        fn better(&self, a: &usize, b: &usize) -> bool {
+            F[*a] < F[*b]
+        }
+        fn same(&self, a: &usize, b: &usize) -> bool {
+            a == b
+        }
+        fn reshapes(&self, _from: &usize) -> usize {
+            2
+        }
+        fn reshape(&self, from: &usize, kind: usize, _id: usize) -> Option<usize> {
+            match kind {
+                0 => from.checked_sub(1),
+                _ => Some(from + 1).filter(|&n| n < F.len()),
+            }
+        }
+    }
+
     /// Where the best shape's moves find nothing better, the next shape down the ranking is
     /// moved. Basins on a line, each reached from its neighbours by a reshaping move only
     /// (hops stay put); the starts land in basin 0 (f = 1, the best sampled) and basin 6
@@ -664,52 +742,46 @@ mod tests {
     /// the second round moves basin 6, the best shape not moved yet, into basin 5.
     #[test]
     fn reshaping_moves_a_worse_shape_when_the_best_leads_nowhere() {
-        const F: [f64; 11] = [1.0, 3.0, 4.0, 4.0, 4.0, 0.0, 2.0, 4.0, 4.0, 4.0, 4.0];
-        struct Ladder;
-        impl Landscape for Ladder {
-            type Point = usize;
-            fn sample(&self, k: usize) -> Option<usize> {
-                [0, 6].get(k).copied()
-            }
-            fn hop(&self, from: &usize, _hop: u64, _scale: f64, _id: usize) -> Option<usize> {
-                Some(*from)
-            }
-            fn better(&self, a: &usize, b: &usize) -> bool {
-                F[*a] < F[*b]
-            }
-            fn same(&self, a: &usize, b: &usize) -> bool {
-                a == b
-            }
-            fn reshapes(&self, _from: &usize) -> usize {
-                2
-            }
-            fn reshape(&self, from: &usize, kind: usize, _id: usize) -> Option<usize> {
-                match kind {
-                    0 => from.checked_sub(1),
-                    _ => Some(from + 1).filter(|&n| n < F.len()),
-                }
-            }
-        }
-        let pts: Vec<usize> = sample(&Ladder, &[0, 1])
-            .into_iter()
-            .filter_map(|(_, p)| p)
-            .collect();
+        let ladder = Ladder { starts: &[0, 6] };
+        let pts = ladder.sampled();
         assert_eq!(pts, [0, 6]);
-        let only = |rounds: usize| HopSettings {
-            budget: 0,
-            polish_rounds: 0,
-            reshape_width: 1,
-            reshape_rounds: rounds,
-            ..SETTINGS
-        };
         // One round moves the best shape only: basin 1, worse, and the search keeps basin 0.
-        let e = exploit(&Ladder, &pts, &only(1), 2);
+        let e = exploit(&ladder, &pts, &reshaping_only(1), 2);
         assert_eq!(e.best, Some(0));
         // The second round moves basin 6 (not basin 0 again): its left move is basin 5.
-        let e = exploit(&Ladder, &pts, &only(2), 2);
+        let e = exploit(&ladder, &pts, &reshaping_only(2), 2);
         assert_eq!(e.best, Some(5));
         let moved: Vec<Option<usize>> = e.hops.iter().map(|(_, _, p)| *p).collect();
         assert_eq!(moved, [None, Some(1), Some(5), Some(7)]);
+    }
+
+    /// The reshaping's stopping rule: a round that finds nothing better ends the rounds once
+    /// the best point was reached [`HopSettings::confirmations`] times. With three starts in
+    /// basin 0 and one in basin 6, the first round's moves of basin 0 find only basin 1, and
+    /// the search keeps basin 0 after that one round (2 moves) where two rounds were allowed;
+    /// with basin 0 reached once (the test above) the second round runs and finds basin 5.
+    #[test]
+    fn the_reshaping_stops_when_its_best_is_confirmed_and_a_round_finds_nothing() {
+        let confirmed = Ladder {
+            starts: &[0, 0, 0, 6],
+        };
+        let pts = confirmed.sampled();
+        assert_eq!(SETTINGS.confirmations, 3);
+        let e = exploit(&confirmed, &pts, &reshaping_only(2), 4);
+        assert_eq!(e.best, Some(0));
+        let moved: Vec<Option<usize>> = e.hops.iter().map(|(_, _, p)| *p).collect();
+        assert_eq!(moved, [None, Some(1)]);
+        // One confirmation fewer, and the second round runs.
+        let e = exploit(&confirmed, &pts[1..], &reshaping_only(2), 4);
+        assert_eq!(e.best, Some(5));
+        // The confirmations are the current best's: from basin 1 (three starts) the first
+        // round finds basin 0, reached once, so the rounds go on to their limit (four rounds
+        // of two moves) although the starts' basin was confirmed.
+        let downhill = Ladder { starts: &[1, 1, 1] };
+        let pts = downhill.sampled();
+        let e = exploit(&downhill, &pts, &reshaping_only(4), 3);
+        assert_eq!(e.best, Some(0));
+        assert_eq!(e.hops.len(), 8);
     }
 
     /// The polishing takes the neighbouring optimum: from x ≈ 1 (f ≈ 0.1) with no hops at all
