@@ -776,7 +776,7 @@ fn every_seed_verifies_an_executed_human_plan() {
 /// decision record 0063). Its best basin is reached by 9–46 distinct sampled optima and hops
 /// per search, so a seed that misses it means the sampling or the exploration broke.
 #[test]
-#[ignore = "about 8 min on 2 idle cores (ten searches); run with `cargo test --release \
+#[ignore = "about 4.5 min on 2 idle cores (ten searches); run with `cargo test --release \
             --test search every_seed_returns_the_same_robust_qc_plan -- --ignored`"]
 fn every_seed_returns_the_same_robust_qc_plan() {
     every_seed_returns_a_robust_plan_below("periodic-qc", 1.02 * 0.0961834);
