@@ -287,8 +287,8 @@ fn a_low_cot_plan_holds_its_mean_spin_beyond_the_robustness_window() {
 /// not execute is unverified.
 #[test]
 fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
-    // The human finger's default plan before the winner's neighbourhood (decision record
-    // 0052), executed and robust.
+    // A human finger's plan above the searches' family (the winner's neighbourhood fixture,
+    // decision record 0052), executed and robust.
     let robust =
         OcpSolution::read_json(&root().join("tests/fixtures/human-plan-j0505279/solution.json"))
             .unwrap();

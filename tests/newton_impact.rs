@@ -616,7 +616,8 @@ fn plan_margins_keep_the_plan_inside_the_shrunk_cone_and_torque_limits() {
 /// δ = 0.87 v): the rows admit δ = v/2 and refuse δ = 2 v; they refuse δ = 1.05 v by more than
 /// the solver's bound relaxation, so a solve cannot hide an excess over v in that relaxation;
 /// and at δ = 0 they are inactive by more than 100 times the relaxation, so a plan on Newton's
-/// law is an interior point that the solver can tell from an active one. The ball as one row
+/// law is an interior point that the solver can tell from an active one; and they bound a box,
+/// not the ball: 5 % inside its edge is admitted, 5 % beyond it refused. The ball as one row
 /// unscaled, ‖e‖² − v² det², had a margin of v² det² ≈ 1e-8 there, the size of the relaxation:
 /// its slack sat on the bound with multipliers of 1e4–1e7, solves crept to `Acceptable`, and
 /// the plans' q̇⁺ was up to 1.48 v off Newton's law (docs/decisions/0063-the-newton-row-scaled.md).
@@ -691,6 +692,13 @@ fn the_newton_rows_are_interior_at_the_plants_law_and_refuse_more_than_v_beyond_
     assert!(inside < 0.0, "{inside:e}");
     assert!(beyond > relax, "{beyond:e}");
     assert!(outside > relax, "{outside:e}");
+    // The box's edge, where u's largest component reaches v / √3: admitted 5 % inside it,
+    // refused 5 % beyond it by more than the relaxation (the ball of radius v would still
+    // admit that point, a box of half-width v would admit both).
+    let edge = v / 3f64.sqrt() / (2.0 / 3.0);
+    let (below, above) = (at(0.95 * edge), at(1.05 * edge));
+    assert!(below < 0.0, "{below:e}");
+    assert!(above > relax, "{above:e}");
 }
 
 /// The last state point of the approach (phase 0) of `sol`: its index and the state there.

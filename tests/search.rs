@@ -1016,11 +1016,11 @@ fn every_seed_verifies_at_most_with(problem: &str, target: f64, extra: &[&str]) 
 }
 
 /// The winner's neighbourhood on its own mesh (`Search::polish_the_winner`, decision record
-/// 0052). The fixture is a human finger's plan of the family that seeds 0, 1 and 6 returned
-/// before that polishing (J = 0.0509500, phases 8.10 / 0.19 / 0.17 s), re-solved on the box
-/// rows of decision record 0065 from that file (`optimize --warm-start`): J = 0.0505279,
-/// phases 9.64 / 0.19 / 0.17 s on the 10 s period bound, verified, executed in closed loop
-/// and robust. From it alone, the reshaping moves and hops solved on its refined mesh reach
+/// 0052). The fixture is a human finger's plan solved on the box rows of decision record 0065
+/// warm from the plan that seeds 0, 1 and 6 returned before that polishing (J = 0.0509500,
+/// phases 8.10 / 0.19 / 0.17 s; `optimize --warm-start` of that file): J = 0.0505279, phases
+/// 9.64 / 0.19 / 0.17 s on the 10 s period bound, verified, executed in closed loop and
+/// robust. From it alone, the reshaping moves and hops solved on its refined mesh reach
 /// the family that the searches return, at J ≈ 0.0448 (phases 2.53 / 0.19 / 7.28 s): more
 /// than 10 % lower, verified, executed and robust.
 #[test]

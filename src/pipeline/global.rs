@@ -179,7 +179,7 @@ pub fn exploit<L: Landscape>(
     // basin with other last digits (solves that met only the acceptable tolerances), the
     // hopping goes on to its budget, and those hops do find better basins (decision record
     // 0042).
-    let mut reached = all.iter().filter(|p| l.same(p, &best)).count();
+    let mut reached = times_reached(l, all.iter(), &best);
     let seed_of = |h: usize| settings.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ h as u64;
     // Rounds alternate between small and wide hops (the round, not the hop, so that every
     // origin of the pool gets both).
@@ -257,6 +257,19 @@ pub fn exploit<L: Landscape>(
     out
 }
 
+/// How many of `points` are the very optimum `best` ([`Landscape::same`]): the evidence of
+/// the hopping's and the reshaping's stopping rules.
+fn times_reached<'a, L: Landscape>(
+    l: &L,
+    points: impl IntoIterator<Item = &'a L::Point>,
+    best: &L::Point,
+) -> usize
+where
+    L::Point: 'a,
+{
+    points.into_iter().filter(|p| l.same(p, best)).count()
+}
+
 /// The `n` best points of `points` that are pairwise not `alike`, best first.
 fn distinct_best<'a, L: Landscape>(
     l: &L,
@@ -300,7 +313,6 @@ fn reshape_rounds<L: Landscape>(
     hops: &mut Vec<(usize, bool, Option<L::Point>)>,
 ) {
     let mut done: Vec<L::Point> = Vec::new();
-    let mut best = best_of(l, all.iter()).cloned();
     for _ in 0..settings.reshape_rounds {
         // The best shapes not moved before: where the moves of the best shapes found nothing
         // better, the next ones down the ranking are moved (the way into the best basin may
@@ -315,6 +327,7 @@ fn reshape_rounds<L: Landscape>(
         if jobs.is_empty() {
             break;
         }
+        let before = best_of(l, all.iter()).cloned();
         let base = *hop;
         let results: Vec<_> = jobs
             .par_iter()
@@ -323,13 +336,8 @@ fn reshape_rounds<L: Landscape>(
             .collect();
         *hop += jobs.len();
         done.extend(fresh);
-        let mut improved = false;
         for (h, r) in results {
             if let Some(p) = &r {
-                if best.as_ref().is_none_or(|b| l.better(p, b)) {
-                    best = Some(p.clone());
-                    improved = true;
-                }
                 all.push(p.clone());
             }
             hops.push((h, false, r));
@@ -338,10 +346,11 @@ fn reshape_rounds<L: Landscape>(
         // that found nothing better, where the best point was reached from enough starts and
         // moves, ends the reshaping. Where the best was reached once, the way into a better
         // basin may still start further down the ranking, and the rounds go on.
-        let reached = best
-            .as_ref()
-            .map_or(0, |b| all.iter().filter(|p| l.same(p, b)).count());
-        if !improved && reached >= settings.confirmations {
+        let Some(best) = best_of(l, all.iter()) else {
+            continue;
+        };
+        let improved = before.as_ref().is_none_or(|b| l.better(best, b));
+        if !improved && times_reached(l, all.iter(), best) >= settings.confirmations {
             break;
         }
     }
