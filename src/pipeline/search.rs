@@ -517,17 +517,56 @@ pub fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
 
 /// Re-integrates the candidate's solution ([`verify`]) at the policy's tolerance and stores
 /// the result in it; a candidate that verifies is then executed in closed loop where the
-/// policy asks for it ([`VerifyPolicy::execution`]), and its verdict includes the run.
-fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy) {
+/// policy asks for it ([`VerifyPolicy::execution`]), and its verdict includes the run. The
+/// run is made only where the candidate could still be chosen over the verified and robust
+/// objective `bound` ([`could_be_chosen`]; infinite: none yet): one above it is left
+/// unexecuted, and so unverified ([`leave_unexecuted`]). The closed loop runs a plan over
+/// periods of the hybrid model on the nominal and every perturbed plant, seconds a plan
+/// where its re-integration takes a fraction of one, and the search's rules stop a
+/// candidate above a verified plan whatever its verdict (decision record 0067).
+fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
     let Some(p) = &c.problem else { return };
     let mut v = verify(p, &c.solution, policy.rtol).ok();
     if let (Some(v), Some(Execution(run))) = (v.as_mut(), policy.execution)
         && v.verified
     {
-        v.execution = run(&c.solution);
+        if could_be_chosen(c.solution.objective, bound) {
+            v.execution = run(&c.solution);
+        } else {
+            v.not_executed = Some(ABOVE_A_VERIFIED_PLAN.to_string());
+        }
         v.verified = passes(v);
     }
     c.solution.verification = v;
+}
+
+/// Why the search left a plan unexecuted ([`bf_problem::solution::records::Verification::not_executed`]).
+pub const ABOVE_A_VERIFIED_PLAN: &str =
+    "its objective lies above a verified and robust plan's, so it could not have been chosen";
+
+/// Whether a plan of objective `j` could still be chosen over a verified and robust one of
+/// objective `bound` ([`select`]: objectives within [`CLUSTER_RTOL`] of the lowest are one
+/// optimum, of which the lowest start index is chosen); always where `bound` is +∞, never
+/// where it is −∞ (a refinement whose result the search drops, `refine_in_order`).
+fn could_be_chosen(j: f64, bound: f64) -> bool {
+    if bound.is_infinite() {
+        return bound > 0.0;
+    }
+    j <= bound + CLUSTER_RTOL * bound.abs()
+}
+
+/// The verification of `c` as [`attach_verification`] would have left it with a bound that
+/// rules the candidate out: a closed-loop run it made is dropped and the candidate is
+/// unverified. A refinement chain run beside earlier ones executes a candidate that the
+/// sequential order would not have (the earlier chains' results were not in yet,
+/// `refine_in_order`); this undoes that run, so the result is the sequential one.
+fn leave_unexecuted(c: &mut Candidate) {
+    if let Some(v) = c.solution.verification.as_mut()
+        && v.execution.take().is_some()
+    {
+        v.not_executed = Some(ABOVE_A_VERIFIED_PLAN.to_string());
+        v.verified = passes(v);
+    }
 }
 
 /// Whether `sol` was executed in closed loop and failed ([`super::verify::execution_failure`]):
@@ -562,7 +601,7 @@ fn refine_until_verified(
     earlier: &dyn Fn() -> Option<f64>,
 ) -> RefinedChain {
     let mut records = Vec::new();
-    let mut steps: Vec<(Candidate, usize)> = Vec::new();
+    let mut steps: Vec<Step> = Vec::new();
     let mut tol = policy.refine_tol;
     let start_check = start.solution.verification.as_ref();
     let mut before = start_check.and_then(path_only_excess);
@@ -570,7 +609,7 @@ fn refine_until_verified(
     let mut leaving = LeftOptimum::default();
     leaving.step(start_check.is_some_and(|v| v.passes(VERIFIED_DEFECT)));
     for _ in 0..policy.refine_attempts {
-        let cur = steps.last().map_or(&start, |(c, _)| c);
+        let cur = steps.last().map_or(&start, |s| &s.point);
         if is_verified(&cur.solution) || execution_failed(&cur.solution) || earlier().is_none() {
             break;
         }
@@ -601,26 +640,14 @@ fn refine_until_verified(
                     problem: Some(b),
                     solution: sol,
                 };
-                attach_verification(&mut next, policy);
+                // Executed only while it could beat the best verified before it.
+                let could_win = earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
+                attach_verification(&mut next, policy, could_win);
                 let v = next.solution.verification.as_ref();
                 let defect = v.map_or(f64::NAN, |v| v.max_defect);
-                let excess = v.map_or(f64::NAN, path_excess);
-                let path = if excess > 1.0 {
-                    format!(", path {excess:.1}x its allowance")
-                } else {
-                    String::new()
-                };
-                // What the closed loop made of a plan whose defects and paths verify: the
-                // search ranks a robustness miss below every robust plan, so a low refined
-                // plan that loses says why here.
-                let closed_loop = match v {
-                    Some(v) if execution_failure(v).is_some() => ", execution failed",
-                    Some(v) if robustness_miss(v).is_some() => ", robustness missed",
-                    _ => "",
-                };
                 let mut r = record(
                     cur.index,
-                    format!("{label} (defect {defect:.1e}{path}{closed_loop})"),
+                    refinement_label(&label, &next.solution),
                     &next.solution,
                     t0,
                 );
@@ -664,7 +691,11 @@ fn refine_until_verified(
                 // No longer wanted (its result is dropped): it stops as if above.
                 let bound = earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
                 let above = next.solution.objective >= bound;
-                steps.push((next, records.len()));
+                steps.push(Step {
+                    point: next,
+                    records: records.len(),
+                    label,
+                });
                 if no_progress || defect_stalled || left || above {
                     break;
                 }
@@ -686,15 +717,46 @@ fn refine_until_verified(
     }
 }
 
+/// The stage label of a refinement's record: `label` (the attempt) with the refined point's
+/// re-integration defect, its path checks where one is beyond its allowance, and what the
+/// closed loop made of it: the search ranks a robustness miss below every robust plan, so a
+/// low refined plan that loses says why here.
+fn refinement_label(label: &str, sol: &OcpSolution) -> String {
+    let v = sol.verification.as_ref();
+    let defect = v.map_or(f64::NAN, |v| v.max_defect);
+    let excess = v.map_or(f64::NAN, path_excess);
+    let path = if excess > 1.0 {
+        format!(", path {excess:.1}x its allowance")
+    } else {
+        String::new()
+    };
+    let closed_loop = match v {
+        Some(v) if execution_failure(v).is_some() => ", execution failed",
+        Some(v) if robustness_miss(v).is_some() => ", robustness missed",
+        Some(v) if v.not_executed.is_some() => ", not executed: above a verified plan",
+        _ => "",
+    };
+    format!("{label} (defect {defect:.1e}{path}{closed_loop})")
+}
+
+/// A successful refinement of a chain ([`RefinedChain`]): the refined point, the number of
+/// the chain's records up to it, and its attempt's label ([`refinement_label`]).
+#[derive(Debug, Clone)]
+struct Step {
+    point: Candidate,
+    records: usize,
+    label: String,
+}
+
 /// A candidate's refinement chain ([`refine_until_verified`]): the candidate it started
-/// from, a record per attempt, and each successful refinement with the number of records up
-/// to it, so that the chain can be ended where a lower ceiling would have ended it
-/// ([`RefinedChain::cut`]). It ends at its last successful refinement, or where it started.
+/// from, a record per attempt, and each successful refinement ([`Step`]), so that the chain
+/// can be ended where a lower ceiling would have ended it ([`RefinedChain::cut`]). It ends
+/// at its last successful refinement, or where it started.
 #[derive(Debug, Clone)]
 struct RefinedChain {
     start: Candidate,
     records: Vec<StageRecord>,
-    steps: Vec<(Candidate, usize)>,
+    steps: Vec<Step>,
 }
 
 impl RefinedChain {
@@ -703,32 +765,43 @@ impl RefinedChain {
     fn cut_at(&self, c: f64) -> Option<usize> {
         self.steps
             .iter()
-            .position(|(s, _)| s.solution.objective >= c)
+            .position(|s| s.point.solution.objective >= c)
     }
 
     /// The chain as it would have ended with the ceiling `c` (the refinements run the same
-    /// up to there, so the chain is a prefix of this one).
+    /// up to there, so the chain is a prefix of this one), its end left unexecuted where it
+    /// could not be chosen over `c` ([`attach_verification`] with that bound).
     fn cut(mut self, c: f64) -> Self {
         if let Some(i) = self.cut_at(c) {
-            let n = self.steps[i].1;
+            let n = self.steps[i].records;
             self.steps.truncate(i + 1);
             self.records.truncate(n);
+            let step = &mut self.steps[i];
+            if !could_be_chosen(step.point.solution.objective, c) {
+                leave_unexecuted(&mut step.point);
+                self.records[n - 1].stage = refinement_label(&step.label, &step.point.solution);
+            }
         }
         self
     }
 
     /// Where the chain ended.
     fn end(self) -> Candidate {
-        self.steps.into_iter().last().map_or(self.start, |(c, _)| c)
+        self.steps
+            .into_iter()
+            .last()
+            .map_or(self.start, |s| s.point)
     }
 
-    /// The objective at which the chain cut at `c` ends verified and robust, if it does.
+    /// The objective at which the chain cut at `c` ends verified and robust, if it does
+    /// (an end above `c` is left unexecuted by the cut, [`RefinedChain::cut`]).
     fn settled(&self, c: f64) -> Option<f64> {
         let end = match self.cut_at(c) {
-            Some(i) => &self.steps[i].0,
-            None => self.steps.last().map_or(&self.start, |(s, _)| s),
+            Some(i) => &self.steps[i].point,
+            None => self.steps.last().map_or(&self.start, |s| &s.point),
         };
-        (class(&end.solution) == SETTLED).then_some(end.solution.objective)
+        let j = end.solution.objective;
+        (class(&end.solution) == SETTLED && could_be_chosen(j, c)).then_some(j)
     }
 }
 
@@ -1187,7 +1260,7 @@ impl OcpLandscape<'_> {
         };
         self.push(&self.records, vec![record(id, label, &c.solution, t0)]);
         if self.policy.rtol > 0.0 && self.verify_samples {
-            attach_verification(&mut c, self.policy);
+            attach_verification(&mut c, self.policy, f64::INFINITY);
         }
         Some(c)
     }
@@ -1211,8 +1284,9 @@ impl OcpLandscape<'_> {
     /// The coarse end point `from` re-solved on the problem's mesh, warm-started from its
     /// trajectory interpolated onto that mesh, and re-integrated ([`CoarseSampling`]): solved
     /// from a warm start's barrier parameter and from a close one ([`PROMOTE_MU_INIT`]), the
-    /// lower successful solution kept.
-    fn promote(&self, from: &Candidate) -> Option<Candidate> {
+    /// lower successful solution kept; executed in closed loop only where it could be chosen
+    /// over the verified and robust objective `bound` ([`attach_verification`]).
+    fn promote(&self, from: &Candidate, bound: f64) -> Option<Candidate> {
         let t0 = Instant::now();
         let b = match build(
             self.problem,
@@ -1257,7 +1331,7 @@ impl OcpLandscape<'_> {
             solution: best?,
         };
         if self.policy.rtol > 0.0 {
-            attach_verification(&mut c, self.policy);
+            attach_verification(&mut c, self.policy, bound);
         }
         Some(c)
     }
@@ -1315,7 +1389,7 @@ impl Landscape for OcpLandscape<'_> {
             solution: s,
         };
         if self.policy.rtol > 0.0 && self.verify_samples {
-            attach_verification(&mut c, self.policy);
+            attach_verification(&mut c, self.policy, f64::INFINITY);
         }
         Some(c)
     }
@@ -1554,8 +1628,11 @@ impl Search {
         let mut refinements = 0;
         let mut batches = shapes.chunks(promote).take(PROMOTE_BOUND_ROUNDS).peekable();
         while let Some(batch) = batches.next() {
-            let mut done: Vec<Candidate> =
-                batch.par_iter().filter_map(|c| land.promote(c)).collect();
+            let verified = best_settled(&kept);
+            let mut done: Vec<Candidate> = batch
+                .par_iter()
+                .filter_map(|c| land.promote(c, verified))
+                .collect();
             self.records.extend(land.take_records());
             pending.append(&mut done);
             // The bound: the coarse mesh prices a shape below its optimum on the problem's
@@ -1803,7 +1880,7 @@ impl Search {
         lower = representatives(lower);
         lower
             .par_iter_mut()
-            .for_each(|c| attach_verification(c, policy));
+            .for_each(|c| attach_verification(c, policy, j));
         // Only the new candidates are refined, each only while it stays below the winner. The
         // first refinement of a point solved on an already refined mesh says where the point
         // settles: on `periodic-cot` seed 5 two points 1.5 % below the winner refined to 0.5 %
@@ -1933,6 +2010,102 @@ impl Search {
 #[cfg(test)]
 mod tests {
     use super::{DefectProgress, LeftOptimum, VERIFIED_DEFECT, path_stalled, refine_in_order};
+
+    /// The closed loop runs only on a plan that could be chosen (decision record 0067). The
+    /// fixture is a human finger's plan, verified, executed and robust (J = 0.0505279).
+    /// Above a verified plan 1 % lower it is re-integrated but not run: its defects pass, it
+    /// is not verified, and its verdict says why. Within [`super::CLUSTER_RTOL`] of that plan
+    /// it is the same optimum, which `select` may choose, and it is run (and robust). A
+    /// refinement chain that ran it beside an earlier chain, before that chain's lower plan
+    /// was in, reads once cut at that plan as the chain run after it: unexecuted, with the
+    /// same record, and settling nothing.
+    #[test]
+    fn a_plan_that_could_not_be_chosen_is_not_run_in_closed_loop() {
+        use std::time::Instant;
+
+        use super::{
+            CLUSTER_RTOL, Candidate, Execution, RefinedChain, Step, VerifyPolicy,
+            attach_verification, refinement_label,
+        };
+        use crate::paper::closed_loop::execution_check;
+        use crate::pipeline::solve::own_problem;
+        use crate::pipeline::strategy::record;
+        use crate::pipeline::verify::{is_robust, is_verified, verdict_failure};
+        use crate::pipeline::{OcpSolution, SolutionIo};
+
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let sol =
+            OcpSolution::read_json(&root.join("tests/fixtures/human-plan-j0505279/solution.json"))
+                .expect("the fixture reads");
+        assert!(is_robust(&sol));
+        let j = sol.objective;
+        let policy = VerifyPolicy {
+            rtol: sol.verification.as_ref().expect("verified").rtol,
+            execution: Some(Execution(execution_check)),
+            ..VerifyPolicy::default()
+        };
+        let (built, _) = own_problem(&sol).expect("the fixture's problem builds");
+        let plan = Candidate {
+            index: 0,
+            problem: Some(built),
+            solution: OcpSolution {
+                verification: None,
+                ..sol
+            },
+        };
+        let lower = 0.99 * j;
+        let mut above = plan.clone();
+        attach_verification(&mut above, &policy, lower);
+        let v = above.solution.verification.as_ref().expect("re-integrated");
+        assert!(v.passes(VERIFIED_DEFECT), "defect {}", v.max_defect);
+        assert!(v.execution.is_none() && v.not_executed.is_some());
+        assert!(!v.verified && !is_verified(&above.solution));
+        let why = verdict_failure(v).expect("a reason");
+        assert!(why.contains("not run in closed loop"), "{why}");
+
+        let same = j * (1.0 - 0.5 * CLUSTER_RTOL);
+        let mut run = plan.clone();
+        attach_verification(&mut run, &policy, same);
+        let ran = run.solution.verification.as_ref().expect("re-integrated");
+        assert!(ran.execution.is_some() && ran.not_executed.is_none());
+        assert!(is_robust(&run.solution));
+
+        let label = "refine start 0 to 1e-4".to_string();
+        let chain = RefinedChain {
+            start: plan,
+            records: vec![record(
+                0,
+                refinement_label(&label, &run.solution),
+                &run.solution,
+                Instant::now(),
+            )],
+            steps: vec![Step {
+                point: run.clone(),
+                records: 1,
+                label: label.clone(),
+            }],
+        };
+        assert_eq!(chain.settled(same), Some(j));
+        let kept = chain.clone().cut(same);
+        assert!(is_robust(&kept.steps[0].point.solution));
+        let cut = chain.cut(lower);
+        assert_eq!(cut.settled(f64::INFINITY), None);
+        assert_eq!(
+            cut.records[0].stage,
+            refinement_label(&label, &above.solution)
+        );
+        assert!(cut.records[0].stage.contains("not executed"));
+        let end = cut.steps[0]
+            .point
+            .solution
+            .verification
+            .as_ref()
+            .expect("kept");
+        assert_eq!(
+            (end.verified, &end.execution, &end.not_executed),
+            (v.verified, &v.execution, &v.not_executed)
+        );
+    }
 
     /// The period continuation of the starts ([`super::hold_the_period`]) on the coarse mesh of
     /// the global search: start 9 of `periodic-cot-human` seed 5 solved plainly ends on the

@@ -41,7 +41,9 @@
 //! loop by the search (`Verification::execution`, decision record 0048): a plan that the
 //! nominal plant does not execute fails the verdict ([`execution_failure`]); one that misses
 //! the robustness target on a perturbed plant is verified and graded below the robust ones
-//! ([`robustness_miss`], [`is_robust`]).
+//! ([`robustness_miss`], [`is_robust`]). The search runs it only on plans that could still be
+//! chosen; one above a verified and robust plan is left unexecuted, and so unverified
+//! (`Verification::not_executed`, decision record 0067).
 //!
 //! Conventions:
 //! * **Torques between collocation nodes** are the solution's own dense output: in each
@@ -770,9 +772,16 @@ pub fn passes(v: &Verification) -> bool {
 
 /// Why `v` fails its verdict other than by its defects: the first path check outside its
 /// allowance ([`path_failure`]), else a closed-loop execution that failed
-/// ([`execution_failure`]).
+/// ([`execution_failure`]), else a closed-loop execution that the search did not run because
+/// the plan could not have been chosen ([`Verification::not_executed`]).
 pub fn verdict_failure(v: &Verification) -> Option<String> {
-    path_failure(v).or_else(|| execution_failure(v))
+    path_failure(v)
+        .or_else(|| execution_failure(v))
+        .or_else(|| {
+            v.not_executed
+                .as_ref()
+                .map(|why| format!("not run in closed loop: {why}"))
+        })
 }
 
 /// The failure of `v`'s closed-loop execution on the nominal plant
@@ -1166,6 +1175,7 @@ pub fn verify_with(
         phases,
         seconds: start.elapsed().as_secs_f64(),
         execution: None,
+        not_executed: None,
     };
     v.verified = passes(&v);
     Ok(v)

@@ -403,6 +403,12 @@ pub struct Verification {
     /// older files. A plan that the controller does not execute is not verified.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub execution: Option<ExecutionCheck>,
+    /// Why the closed-loop execution that the search runs on a plan for the plant was not
+    /// run on this one, whose re-integration passed: its objective lies above a verified and
+    /// robust plan's, so it could not have been chosen. Such a plan is not verified (it was
+    /// not executed); absent where the execution ran or was not asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub not_executed: Option<String>,
 }
 
 /// A plan run in closed loop: the hybrid controller (computed torque in free flight, hybrid
@@ -592,6 +598,9 @@ impl fmt::Display for Verification {
             } else if let Some(why) = &e.robustness_failure {
                 write!(f, ": executed; robustness target MISSED, {why}")?;
             }
+        }
+        if let Some(why) = &self.not_executed {
+            write!(f, "\nclosed loop: NOT RUN, {why}")?;
         }
         Ok(())
     }
