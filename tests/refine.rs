@@ -1,12 +1,14 @@
 //! Mesh refinement: the collocation error estimate ([`collocation_errors`]) on problems with
 //! closed-form optima (exact polynomial optimum; the brachistochrone against the cycloid),
 //! custom hp-Radau meshes, the ph rule, the exact warm start, and adaptive refinement of the
-//! named problems (`reach`, `periodic-qc`), and a round that leaves its optimum solved again
-//! (two `periodic-cot` plans: one whose objective jumps, one whose phase durations do).
+//! named problems (`reach`, `periodic-qc`), a round that leaves its optimum solved again
+//! (two `periodic-cot` plans: one whose objective jumps, one whose phase durations do), and a
+//! refinement that ends on its ceiling.
 
 use ball_finger::pipeline::refine::{
-    REFINE_RISE_MAX, REFINE_SHIFT_MAX, RefineCriterion, RefineRound, RefineSettings, current_mesh,
-    duration_shift, error_estimate, refine, refine_solution, warm_initial_point,
+    REFINE_RISE_MAX, REFINE_SHIFT_MAX, RefineCriterion, RefineRound, RefineSettings,
+    above_the_ceiling, current_mesh, duration_shift, error_estimate, refine, refine_solution,
+    warm_initial_point,
 };
 use ball_finger::pipeline::solve::{own_problem, settings_of};
 use ball_finger::pipeline::verify::verify;
@@ -662,4 +664,54 @@ fn radau_3x12_matches_lg30_accuracy_on_periodic_qc() {
         "Radau 3x12 {radau12:e} vs LG-30 {lg30:e}"
     );
     assert!(radau10 > 5.0 * lg30.max(radau12), "Radau 3x10 {radau10:e}");
+}
+
+/// The ceiling's rule on the rounds of decision record 0068: a round above the ceiling by
+/// more than its change from the round before ends the refinement; by less, not (the
+/// `periodic-cot` seed-1 round that rose 1.2 % to 0.9 % above its ceiling and came back
+/// below it); nothing ends it without a ceiling or on a NaN objective.
+#[test]
+fn a_round_ends_the_refinement_only_beyond_its_change_above_the_ceiling() {
+    assert!(!above_the_ceiling(7.792374e-4, 7.886003e-4, 7.814233e-4));
+    assert!(above_the_ceiling(2.543875e-4, 4.719683e-3, 1.355340e-4));
+    assert!(!above_the_ceiling(2.543875e-4, 4.719683e-3, f64::INFINITY));
+    assert!(!above_the_ceiling(2.543875e-4, f64::NAN, 1.355340e-4));
+    // Below the ceiling nothing ends it, however far the round moved.
+    assert!(!above_the_ceiling(1e-3, 1e-4, 2e-4));
+}
+
+/// A refinement with a ceiling (`RefineSettings::ceiling`, decision record 0068) runs the
+/// same rounds as without one up to the first that lies above it by more than its change,
+/// and ends there, unconverged, naming the ceiling. The fixture is the `periodic-cot` plan of
+/// `a_round_that_leaves_its_optimum_is_solved_again_from_closer` (J = 7.780e-4), whose
+/// rounds rise to 8.056e-4; the ceiling is 1 % below where they end.
+#[test]
+fn a_refinement_ends_at_a_round_beyond_its_ceiling() {
+    let (sol, problem, s, _) = fixture_on_its_mesh("rising-cot-plan");
+    let opts = verifying_rounds(4);
+    let (_, full) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
+    let h = &full.refinement.as_ref().unwrap().history;
+    let ceiling = 0.99 * full.objective;
+    let r = (1..h.len())
+        .find(|&r| above_the_ceiling(h[r - 1].objective, h[r].objective, ceiling))
+        .expect("a round beyond the ceiling");
+    assert!(r + 1 < h.len(), "the ceiling ends nothing early: {h:?}");
+    let capped = RefineSettings { ceiling, ..opts };
+    let (_, ended) = refine_solution(problem, &s, sol.clone(), &capped, None).unwrap();
+    let report = ended.refinement.as_ref().unwrap();
+    let objectives = |h: &[RefineRound]| h.iter().map(|x| x.objective).collect::<Vec<_>>();
+    assert_eq!(objectives(&report.history), objectives(&h[..=r]));
+    assert!(
+        !report.converged && report.stop_reason.contains("ceiling"),
+        "{}",
+        report.stop_reason
+    );
+    assert_eq!(ended.objective, h[r].objective);
+    // Not a number: an error that names the field.
+    let bad = RefineSettings {
+        ceiling: f64::NAN,
+        ..opts
+    };
+    let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
+    assert!(e.to_string().contains("ceiling"), "{e}");
 }

@@ -627,6 +627,7 @@ fn refine_until_verified(
             criterion: RefineCriterion::Reintegration { rtol: policy.rtol },
             max_rounds: policy.refine_rounds,
             max_points: policy.max_points,
+            ceiling,
             ..RefineSettings::default()
         };
         // One significant digit: the tolerance is divided by 10 per attempt, which leaves
