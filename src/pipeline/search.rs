@@ -520,10 +520,10 @@ pub fn representatives(cands: Vec<Candidate>) -> Vec<Candidate> {
 /// policy asks for it ([`VerifyPolicy::execution`]), and its verdict includes the run. The
 /// run is made only where the candidate could still be chosen over the verified and robust
 /// objective `bound` ([`could_be_chosen`]; infinite: none yet): one above it is left
-/// unexecuted, and so unverified ([`leave_unexecuted`]). The closed loop runs a plan over
-/// periods of the hybrid model on the nominal and every perturbed plant, seconds a plan
-/// where its re-integration takes a fraction of one, and the search's rules stop a
-/// candidate above a verified plan whatever its verdict (decision record 0067).
+/// unexecuted, and so unverified ([`leave_unexecuted`]). The closed loop simulates the plan
+/// for periods of the hybrid model on the nominal and every perturbed plant, seconds of CPU
+/// where the re-integration takes a fraction of one, and the search's rules stop a
+/// candidate above a verified plan whatever that run shows (decision record 0067).
 fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
     let Some(p) = &c.problem else { return };
     let mut v = verify(p, &c.solution, policy.rtol).ok();
@@ -540,7 +540,8 @@ fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
     c.solution.verification = v;
 }
 
-/// Why the search left a plan unexecuted ([`bf_problem::solution::records::Verification::not_executed`]).
+/// Why the search left a plan unexecuted
+/// ([`bf_problem::solution::records::Verification::not_executed`]).
 pub const ABOVE_A_VERIFIED_PLAN: &str =
     "its objective lies above a verified and robust plan's, so it could not have been chosen";
 
