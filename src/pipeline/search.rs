@@ -463,7 +463,7 @@ pub fn select(cands: &[(usize, &OcpSolution)]) -> Option<usize> {
         .filter(|j| j.is_finite())
         .fold(f64::INFINITY, f64::min);
     in_class()
-        .filter(|(_, (_, s))| !jmin.is_finite() || s.objective <= jmin + CLUSTER_RTOL * jmin.abs())
+        .filter(|(_, (_, s))| could_be_chosen(s.objective, jmin))
         .min_by_key(|(_, (k, _))| *k)
         .map(|(i, _)| i)
 }
@@ -532,10 +532,10 @@ fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
     {
         if could_be_chosen(c.solution.objective, bound) {
             v.execution = run(&c.solution);
+            v.verified = passes(v);
         } else {
-            v.not_executed = Some(ABOVE_A_VERIFIED_PLAN.to_string());
+            unexecuted(v);
         }
-        v.verified = passes(v);
     }
     c.solution.verification = v;
 }
@@ -545,10 +545,10 @@ fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
 pub const ABOVE_A_VERIFIED_PLAN: &str =
     "its objective lies above a verified and robust plan's, so it could not have been chosen";
 
-/// Whether a plan of objective `j` could still be chosen over a verified and robust one of
-/// objective `bound` ([`select`]: objectives within [`CLUSTER_RTOL`] of the lowest are one
-/// optimum, of which the lowest start index is chosen); always where `bound` is +∞, never
-/// where it is −∞ (a refinement whose result the search drops, `refine_in_order`).
+/// Whether a plan of objective `j` could still be chosen over one of objective `bound` in
+/// its rank class: [`select`]'s rule (objectives within [`CLUSTER_RTOL`] of the lowest are
+/// one optimum, of which the lowest start index is chosen); always where `bound` is +∞,
+/// never where it is −∞ (a refinement whose result the search drops, `refine_in_order`).
 fn could_be_chosen(j: f64, bound: f64) -> bool {
     if bound.is_infinite() {
         return bound > 0.0;
@@ -563,11 +563,18 @@ fn could_be_chosen(j: f64, bound: f64) -> bool {
 /// `refine_in_order`); this undoes that run, so the result is the sequential one.
 fn leave_unexecuted(c: &mut Candidate) {
     if let Some(v) = c.solution.verification.as_mut()
-        && v.execution.take().is_some()
+        && v.execution.is_some()
     {
-        v.not_executed = Some(ABOVE_A_VERIFIED_PLAN.to_string());
-        v.verified = passes(v);
+        unexecuted(v);
     }
+}
+
+/// `v` without a closed-loop run, as the search leaves a plan that could not be chosen
+/// ([`ABOVE_A_VERIFIED_PLAN`]): unverified.
+fn unexecuted(v: &mut bf_problem::solution::records::Verification) {
+    v.execution = None;
+    v.not_executed = Some(ABOVE_A_VERIFIED_PLAN.to_string());
+    v.verified = passes(v);
 }
 
 /// Whether `sol` was executed in closed loop and failed ([`super::verify::execution_failure`]):
@@ -609,6 +616,9 @@ fn refine_until_verified(
     let mut defects = DefectProgress::new(start_check.map(|v| v.max_defect));
     let mut leaving = LeftOptimum::default();
     leaving.step(start_check.is_some_and(|v| v.passes(VERIFIED_DEFECT)));
+    // The lowest objective verified before this chain, or the ceiling; −∞ once the chain's
+    // result is no longer wanted. Read anew each time: earlier chains finish meanwhile.
+    let bound = || earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
     for _ in 0..policy.refine_attempts {
         let cur = steps.last().map_or(&start, |s| &s.point);
         if is_verified(&cur.solution) || execution_failed(&cur.solution) || earlier().is_none() {
@@ -643,8 +653,7 @@ fn refine_until_verified(
                     solution: sol,
                 };
                 // Executed only while it could beat the best verified before it.
-                let could_win = earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
-                attach_verification(&mut next, policy, could_win);
+                attach_verification(&mut next, policy, bound());
                 let v = next.solution.verification.as_ref();
                 let defect = v.map_or(f64::NAN, |v| v.max_defect);
                 let mut r = record(
@@ -691,8 +700,7 @@ fn refine_until_verified(
                 // 2e-3 and an objective 2.8 times higher, and spent 11 s more on it).
                 let left = leaving.step(v.is_some_and(|v| v.passes(VERIFIED_DEFECT)));
                 // No longer wanted (its result is dropped): it stops as if above.
-                let bound = earlier().map_or(f64::NEG_INFINITY, |b| b.min(ceiling));
-                let above = next.solution.objective >= bound;
+                let above = next.solution.objective >= bound();
                 steps.push(Step {
                     point: next,
                     records: records.len(),
