@@ -813,6 +813,19 @@ impl RefinedChain {
         let j = end.solution.objective;
         (class(&end.solution) == SETTLED && could_be_chosen(j, c)).then_some(j)
     }
+
+    /// The highest objective of the chain, where it ends verified and robust uncut: under any
+    /// ceiling above it the chain is not cut and ends settled at or below it
+    /// (`refine_in_order`'s `peak`); `None` where the chain does not end settled.
+    fn peak(&self) -> Option<f64> {
+        let end = self.settled(f64::INFINITY)?;
+        Some(
+            self.steps
+                .iter()
+                .map(|s| s.point.solution.objective)
+                .fold(end, f64::max),
+        )
+    }
 }
 
 /// Factor by which a refinement must lower the lowest re-integration defect of a candidate's
@@ -952,6 +965,7 @@ fn refine_below(
         },
         RefinedChain::settled,
         RefinedChain::cut,
+        RefinedChain::peak,
     );
     let mut records = Vec::new();
     for (i, mut chain) in refined {
@@ -979,9 +993,17 @@ fn refine_below(
 /// or `None` once those results rule the item out (a chain checks it between refinements and
 /// stops at a refinement not below it; a ruled-out chain's result is dropped). Both read only
 /// the finished results at the front of the order (up to the first unfinished one), cut as
-/// the sequential rule cuts them: further results can only lower that value. So an item the
-/// sequential rule refines is never ruled out, and a chain never stops before the sequential
-/// rule would stop it; the result is then cut where the sequential rule ends it.
+/// the sequential rule cuts them: further results can only lower that value. A result
+/// finished behind an unfinished one bounds it too, through its `peak` (`Some(p)`: under
+/// every ceiling above `p` the result is left as it is and verifies, at a value not above
+/// `p`; `None`: it does not verify). Whatever the ceiling `c` the sequential rule hands that
+/// result, the lowest value verified after it is at most `p`: above `p` the result verifies
+/// at most there, and a ceiling not above `p` is itself that low. (A result that was told to
+/// stop belongs to an item the sequential rule rules out, and then every later item is ruled
+/// out as well.) So an item the sequential rule refines is never ruled out, and a chain never
+/// stops before the sequential rule would stop it; the result is then cut where the
+/// sequential rule ends it.
+#[allow(clippy::too_many_arguments)]
 fn refine_in_order<I: Copy + Sync, T: Send>(
     order: &[I],
     max: usize,
@@ -990,13 +1012,15 @@ fn refine_in_order<I: Copy + Sync, T: Send>(
     refine: impl Fn(&I, &dyn Fn() -> Option<f64>) -> T + Sync,
     verified: impl Fn(&T, f64) -> Option<f64> + Sync,
     cut: impl Fn(T, f64) -> T,
+    peak: impl Fn(&T) -> Option<f64> + Sync,
 ) -> Vec<(I, T)> {
     let n = order.len().min(max);
     // Finished results by position in `order`, and the next position to hand out.
     let state: Mutex<(Vec<Option<T>>, usize)> = Mutex::new(((0..n).map(|_| None).collect(), 0));
     // The sequential rule over the finished results at the front of the order, before
-    // position k: the lowest value they verify (each cut at the lowest before it), or `None`
-    // if they rule out k.
+    // position k: the lowest value they verify (each cut at the lowest before it), and the
+    // peaks of the results finished behind the first unfinished one; `None` if they rule out
+    // k.
     let lowest_before = |done: &[Option<T>], k: usize| {
         let mut best = f64::INFINITY;
         // (A result before k that the rule itself rules out may still lower `best` here, but
@@ -1007,6 +1031,15 @@ fn refine_in_order<I: Copy + Sync, T: Send>(
                 best = best.min(v);
             }
         }
+        // A long chain at the front would otherwise let the other workers refine item after
+        // item that a result finished behind it already rules out (on `periodic-cot` seed 6
+        // four chains and their closed-loop runs, while the front chain's ran for 13 s).
+        let behind = done[..k]
+            .iter()
+            .flatten()
+            .filter_map(&peak)
+            .fold(f64::INFINITY, f64::min);
+        let best = best.min(behind);
         (value(&order[k]) < REFINE_BELOW * best).then_some(best)
     };
     let lock = || state.lock().unwrap_or_else(|e| e.into_inner());
@@ -2365,6 +2398,7 @@ mod tests {
                 },
                 |v, _| *v,
                 |v, _| v,
+                |v| *v,
             );
             (calls.into_inner().unwrap(), out)
         };
@@ -2407,6 +2441,12 @@ mod tests {
         cut_steps(steps.to_vec(), c)
             .last()
             .and_then(|&(v, ok)| ok.then_some(v))
+    }
+
+    /// The highest step of steps that end verified uncut (`RefinedChain::peak`).
+    fn peak_steps(steps: &[(f64, bool)]) -> Option<f64> {
+        let end = settled_steps(steps, f64::INFINITY)?;
+        Some(steps.iter().map(|s| s.0).fold(end, f64::max))
     }
 
     /// Refined several at a time, the items and results are those of one after the other,
@@ -2471,6 +2511,7 @@ mod tests {
                     },
                     |s: &Vec<_>, c| settled_steps(s, c),
                     cut_steps,
+                    |s: &Vec<_>| peak_steps(s),
                 );
                 assert_eq!(out, expected, "width {width}");
             }
@@ -2496,6 +2537,7 @@ mod tests {
                 |&k, earlier| run_steps(&chains[k], earlier),
                 |s: &Vec<_>, c| settled_steps(s, c),
                 cut_steps,
+                |s: &Vec<_>| peak_steps(s),
             );
             assert_eq!(
                 out,
@@ -2518,10 +2560,7 @@ mod tests {
         use std::sync::atomic::{AtomicBool, Ordering};
         use std::time::{Duration, Instant};
         let (started, stopped) = (AtomicBool::new(false), AtomicBool::new(false));
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
+        let pool = pool_of_two();
         // Item 0 (value 1) verifies at 1.5 once item 1 runs; item 1 (value 2, not below 1.5)
         // runs until it is no longer wanted. Each waits at most 10 s.
         let out = pool.install(|| {
@@ -2552,9 +2591,68 @@ mod tests {
                 },
                 |v, _| *v,
                 |v, _| v,
+                |v| *v,
             )
         });
         assert_eq!(out, [(0, Some(1.5))]);
         assert!(started.load(Ordering::SeqCst) && stopped.load(Ordering::SeqCst));
+    }
+
+    /// A rayon pool of two threads of its own, so that two refinements run side by side
+    /// whatever else the machine runs.
+    fn pool_of_two() -> rayon::ThreadPool {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap()
+    }
+
+    /// A result finished behind a refinement still running rules out the items above its
+    /// peak: item 0 (value 1) runs until well after item 1 (value 2) has verified at 2.5, and
+    /// item 2 (value 3, not below 2.5) is never started, although nothing before it is
+    /// settled while item 0 runs; the result is the sequential one (item 0 fails).
+    #[test]
+    fn a_result_behind_a_running_refinement_rules_out_the_items_above_it() {
+        use std::sync::atomic::{AtomicBool, Ordering};
+        use std::time::{Duration, Instant};
+        let one_done = AtomicBool::new(false);
+        let calls = std::sync::Mutex::new(Vec::new());
+        let pool = pool_of_two();
+        let out = pool.install(|| {
+            refine_in_order(
+                &[0usize, 1, 2],
+                3,
+                2,
+                |&k| [1.0, 2.0, 3.0][k],
+                |&k, _| {
+                    calls.lock().unwrap().push(k);
+                    match k {
+                        0 => {
+                            let t0 = Instant::now();
+                            while !one_done.load(Ordering::SeqCst)
+                                && t0.elapsed() < Duration::from_secs(10)
+                            {
+                                std::thread::sleep(Duration::from_millis(1));
+                            }
+                            // Time for the other worker to hand out item 2 if it would.
+                            std::thread::sleep(Duration::from_millis(100));
+                            None
+                        }
+                        1 => {
+                            one_done.store(true, Ordering::SeqCst);
+                            Some(2.5)
+                        }
+                        _ => Some(0.5),
+                    }
+                },
+                |v, _| *v,
+                |v, _| v,
+                |v| *v,
+            )
+        });
+        assert_eq!(out, [(0, None), (1, Some(2.5))]);
+        let mut calls = calls.into_inner().unwrap();
+        calls.sort_unstable();
+        assert_eq!(calls, [0, 1]);
     }
 }
