@@ -22,7 +22,7 @@ use std::path::{Path, PathBuf};
 
 use ball_finger::paper::closed_loop::{
     ControllerKind, EXECUTION_TOLERANCE, ROBUSTNESS_TARGET, Tracking, execution_check,
-    perturbed_scene, run_tracking_with, solution_model,
+    max_error_from_fourth, perturbed_scene, run_tracking_with, solution_model,
 };
 use ball_finger::pipeline::search::select;
 use ball_finger::pipeline::verify::{execution_failure, is_robust, is_verified, verdict_failure};
@@ -96,6 +96,7 @@ fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
             plant,
             ImpactLaw::Newton,
             None,
+            false,
         )
         .unwrap()
     };
@@ -184,6 +185,7 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
             .unwrap(),
             ImpactLaw::Newton,
             None,
+            false,
         )
         .unwrap()
     };
@@ -233,6 +235,69 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
     assert!(is_verified(&sol) && is_robust(&sol));
 }
 
+/// A run ended at its first missed period (decision record 0070) is the whole run up to that
+/// period: the fragile plan above without the flight's pace, with 50 % more socket damping,
+/// misses the target from the 4th period on. Ended at the first such period, the run has the
+/// whole run's samples and periods up to it, bit for bit, it is not counted as lost, and its
+/// error from the 4th period on misses the target as the whole run's does. With the pace the
+/// plant meets the target, and the run that would end on a miss runs all ten periods, the
+/// same as the whole run.
+#[test]
+fn a_run_that_misses_the_target_ends_at_its_first_missed_period() {
+    let sol = fragile_plan();
+    let damped = || {
+        perturbed_scene(
+            "paper",
+            &[("socket_damping = 0.004\n", "socket_damping = 0.006\n")],
+        )
+        .unwrap()
+    };
+    let no_pace = HybridGains {
+        pace: 0.0,
+        ..HybridGains::default()
+    };
+    let run = |gains: HybridGains, until_miss: bool| {
+        run_tracking_with(
+            &sol,
+            ControllerKind::Hybrid,
+            gains,
+            10,
+            damped(),
+            ImpactLaw::Newton,
+            None,
+            until_miss,
+        )
+        .unwrap()
+    };
+    let whole = run(no_pace, false);
+    let ended = run(no_pace, true);
+    let first_miss = whole
+        .periods
+        .iter()
+        .enumerate()
+        .skip(3)
+        .find(|(_, p)| p.omega_error > ROBUSTNESS_TARGET)
+        .map(|(k, _)| k)
+        .expect("the unpaced plan misses the target");
+    assert_eq!(ended.periods[..], whole.periods[..=first_miss]);
+    assert!(ended.lost.is_none(), "{:?}", ended.lost);
+    let (a, b) = (&ended.output.trajectory, &whole.output.trajectory);
+    assert!(a.t.len() < b.t.len() && ended.output.t_final < whole.output.t_final);
+    assert_eq!(a.t[..], b.t[..a.t.len()]);
+    assert_eq!(a.x[..], b.x[..a.x.len()]);
+    let (e, w) = (
+        max_error_from_fourth(&ended).unwrap(),
+        max_error_from_fourth(&whole).unwrap(),
+    );
+    assert!(e > ROBUSTNESS_TARGET && e <= w, "{e} against {w}");
+
+    let paced = run(HybridGains::default(), true);
+    let paced_whole = run(HybridGains::default(), false);
+    assert_eq!(paced.periods, paced_whole.periods);
+    assert_eq!(paced.periods.len(), 10);
+    assert_eq!(paced.output.trajectory.x, paced_whole.output.trajectory.x);
+}
+
 /// The same plan for twenty periods, twice the robustness table's ten: on the nominal plant and
 /// with 50 % more socket damping every period from the 4th holds the plan's mean spin, and the
 /// error stays where it settled. Before decision record 0056 the outer loop's offset δ also
@@ -265,6 +330,7 @@ fn a_low_cot_plan_holds_its_mean_spin_beyond_the_robustness_window() {
             plant,
             ImpactLaw::Newton,
             None,
+            false,
         )
         .unwrap();
         assert!(t.lost.is_none(), "{name}: {:?}", t.lost);

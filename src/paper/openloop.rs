@@ -223,6 +223,25 @@ pub fn simulate_optimum<K: Kernels<3>, I: Input>(
     settings: BallFingerSettings,
     t_end: f64,
 ) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
+    simulate_optimum_until(sol, plant, input, settings, t_end, None)
+}
+
+/// When [`simulate_optimum_until`] ends a run: asked with the trajectory recorded so far.
+pub type Until<'a> = &'a dyn Fn(&bf_sim::Trajectory<Mode>) -> bool;
+
+/// [`simulate_optimum`], ended early where `until` says so: it is asked after every accepted
+/// step and every event with the trajectory recorded so far, and `true` ends the run there
+/// (ended without error, `t_final` before `t_end`). The steps up to that point are those of
+/// the whole run, sample for sample: the same step loop ([`bf_sim::Simulator::advance`]) runs
+/// either way.
+pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
+    sol: &OcpSolution,
+    plant: Model<K>,
+    input: I,
+    settings: BallFingerSettings,
+    t_end: f64,
+    until: Option<Until<'_>>,
+) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
     let sys = BallFinger::new(plant, input, settings)?;
     let x0 = initial_state(sol)?;
     let mode0 = if sol.modes.first() == Some(&bf_problem::node::PhaseMode::Stick) {
@@ -236,18 +255,27 @@ pub fn simulate_optimum<K: Kernels<3>, I: Input>(
         ..SimSettings::default()
     };
     let cpu = std::time::Instant::now();
-    let (out, stopped) = match bf_sim::simulate(
-        &sys as &dyn HybridSystem<Mode = Mode>,
-        sim,
-        mode0,
-        0.0,
-        &x0,
-        t_end,
-    ) {
-        Ok(out) => (out, None),
-        Err(f) => {
-            let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);
-            (f.partial, Some(msg))
+    let sys_dyn = &sys as &dyn HybridSystem<Mode = Mode>;
+    let (out, stopped) = match until {
+        None => match bf_sim::simulate(sys_dyn, sim, mode0, 0.0, &x0, t_end) {
+            Ok(out) => (out, None),
+            Err(f) => {
+                let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);
+                (f.partial, Some(msg))
+            }
+        },
+        Some(until) => {
+            let mut run = bf_sim::Simulator::new(sys_dyn, sim, mode0, 0.0, &x0, t_end)
+                .map_err(|e| anyhow!("the simulation could not start: {e}"))?;
+            let stopped = loop {
+                match run.advance() {
+                    Ok(true) if until(run.trajectory()) => break None,
+                    Ok(true) => {}
+                    Ok(false) => break None,
+                    Err(e) => break Some(format!("stopped at t = {:.4} s: {e}", run.t())),
+                }
+            };
+            (run.finish(), stopped)
         }
     };
     let report = sys.report(&out, 0.0, cpu.elapsed().as_secs_f64());

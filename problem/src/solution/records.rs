@@ -430,10 +430,12 @@ pub struct ExecutionCheck {
     pub max_omega_error: f64,
     /// Largest `max_omega_error` that passes.
     pub tolerance: f64,
-    /// Periods run on each perturbed plant (0: not run, the nominal run failed).
+    /// Periods run on each perturbed plant (0: not run, the nominal run failed); a plant's run
+    /// ends early at its first period from the 4th on that misses the target.
     pub robustness_periods: usize,
     /// Largest error from the 4th period on over the perturbed plants (NaN: not run, or a
-    /// plant that completed fewer than four periods).
+    /// plant that completed fewer than four periods); on a plant whose run ended at a missed
+    /// period, up to that period.
     #[serde(with = "nan_null")]
     pub robustness_error: f64,
     /// Largest `robustness_error` that passes.
