@@ -434,7 +434,7 @@ pub fn run_tracking_with(
     let mut metrics = period_metrics(&tr.t, &tr.mode, &omega, &tau, sol.mean_omega);
     metrics.truncate(periods);
     let lost = if missed.get() {
-        // Ended on a missed period, not lost (`run_tracking_until`).
+        // Ended on a missed period, not lost (`until_miss`).
         None
     } else if let Some(s) = &stopped {
         Some(format!("the simulation stopped: {s}"))
