@@ -50,7 +50,7 @@ pub mod work_precision;
 pub use error::SimError;
 pub use input::{Input, Measurement, PdController, TorqueSeries, TrackingPd};
 pub use settings::{Method, SimSettings};
-pub use simulator::{SimFailure, Simulator, StopReason, simulate};
+pub use simulator::{SimFailure, Simulator, StopReason, simulate, simulate_until};
 pub use system::{Direction, Guard, HybridSystem, Transition};
 pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory};
 pub use work_precision::{WorkPrecisionRow, format_table, work_precision};

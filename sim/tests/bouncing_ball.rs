@@ -10,7 +10,7 @@
 //! Zeno error close to t_∞; with a rest threshold the number of bounces is known in closed form.
 
 use bf_sim::toys::{BallMode, BouncingBall};
-use bf_sim::{SampleKind, SimError, SimSettings, simulate};
+use bf_sim::{SampleKind, SimError, SimSettings, simulate, simulate_until};
 
 const G: f64 = 9.81;
 
@@ -274,4 +274,59 @@ fn trajectory_has_pre_and_post_samples_and_no_penetration() {
     for x in &out.trajectory.x {
         assert!(x[0] > -1e-9, "penetration y = {}", x[0]);
     }
+}
+
+/// A run ended by `simulate_until` is the whole run up to there: asked to stop once the
+/// trajectory holds its third impact, the run ends right after it (the closed-form impact
+/// times), without error, with the whole run's samples and events up to that point, bit for
+/// bit; a condition that never holds gives the whole run.
+#[test]
+fn a_run_ended_early_is_a_prefix_of_the_whole_run() {
+    let b = ball(0.5);
+    let refs = b.reference_impacts(1.0, 0.0, 6);
+    let t_end = refs[5].0 + 0.5 * (refs[5].0 - refs[4].0);
+    let run = |stop_after: usize| {
+        simulate_until(
+            &b,
+            SimSettings::default(),
+            BallMode::Flight,
+            0.0,
+            &[1.0, 0.0],
+            t_end,
+            |tr| {
+                tr.kind
+                    .iter()
+                    .filter(|k| **k == SampleKind::EventPre)
+                    .count()
+                    >= stop_after
+            },
+        )
+        .expect("run succeeds")
+    };
+    let whole = simulate(
+        &b,
+        SimSettings::default(),
+        BallMode::Flight,
+        0.0,
+        &[1.0, 0.0],
+        t_end,
+    )
+    .expect("run succeeds");
+    let ended = run(3);
+    assert_eq!(ended.events.len(), 3);
+    assert!(
+        (ended.t_final - refs[2].0).abs() < 1e-9,
+        "{} vs {}",
+        ended.t_final,
+        refs[2].0
+    );
+    assert!(!ended.terminated && whole.events.len() == 6);
+    let n = ended.trajectory.t.len();
+    assert!(n < whole.trajectory.t.len());
+    assert_eq!(ended.trajectory.t[..], whole.trajectory.t[..n]);
+    assert_eq!(ended.trajectory.x[..], whole.trajectory.x[..n]);
+    assert_eq!(ended.events[..], whole.events[..3]);
+    let never = run(usize::MAX);
+    assert_eq!(never.trajectory.x, whole.trajectory.x);
+    assert_eq!(never.t_final, whole.t_final);
 }

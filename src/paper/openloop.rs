@@ -232,8 +232,7 @@ pub type Until<'a> = &'a dyn Fn(&bf_sim::Trajectory<Mode>) -> bool;
 /// [`simulate_optimum`], ended early where `until` says so: it is asked after every accepted
 /// step and every event with the trajectory recorded so far, and `true` ends the run there
 /// (ended without error, `t_final` before `t_end`). The steps up to that point are those of
-/// the whole run, sample for sample: the same step loop ([`bf_sim::Simulator::advance`]) runs
-/// either way.
+/// the whole run, sample for sample ([`bf_sim::simulate_until`]).
 pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
     sol: &OcpSolution,
     plant: Model<K>,
@@ -255,27 +254,19 @@ pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
         ..SimSettings::default()
     };
     let cpu = std::time::Instant::now();
-    let sys_dyn = &sys as &dyn HybridSystem<Mode = Mode>;
-    let (out, stopped) = match until {
-        None => match bf_sim::simulate(sys_dyn, sim, mode0, 0.0, &x0, t_end) {
-            Ok(out) => (out, None),
-            Err(f) => {
-                let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);
-                (f.partial, Some(msg))
-            }
-        },
-        Some(until) => {
-            let mut run = bf_sim::Simulator::new(sys_dyn, sim, mode0, 0.0, &x0, t_end)
-                .map_err(|e| anyhow!("the simulation could not start: {e}"))?;
-            let stopped = loop {
-                match run.advance() {
-                    Ok(true) if until(run.trajectory()) => break None,
-                    Ok(true) => {}
-                    Ok(false) => break None,
-                    Err(e) => break Some(format!("stopped at t = {:.4} s: {e}", run.t())),
-                }
-            };
-            (run.finish(), stopped)
+    let (out, stopped) = match bf_sim::simulate_until(
+        &sys as &dyn HybridSystem<Mode = Mode>,
+        sim,
+        mode0,
+        0.0,
+        &x0,
+        t_end,
+        |tr| until.is_some_and(|u| u(tr)),
+    ) {
+        Ok(out) => (out, None),
+        Err(f) => {
+            let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);
+            (f.partial, Some(msg))
         }
     };
     let report = sys.report(&out, 0.0, cpu.elapsed().as_secs_f64());

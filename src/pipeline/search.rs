@@ -1019,8 +1019,8 @@ fn refine_in_order<I: Copy + Sync, T: Send>(
     let state: Mutex<(Vec<Option<T>>, usize)> = Mutex::new(((0..n).map(|_| None).collect(), 0));
     // The sequential rule over the finished results at the front of the order, before
     // position k: the lowest value they verify (each cut at the lowest before it), and the
-    // peaks of the results finished behind the first unfinished one; `None` if they rule out
-    // k.
+    // lowest peak of every result finished before k (at the front a peak adds nothing: the
+    // front's value is at most it); `None` if they rule out k.
     let lowest_before = |done: &[Option<T>], k: usize| {
         let mut best = f64::INFINITY;
         // (A result before k that the rule itself rules out may still lower `best` here, but

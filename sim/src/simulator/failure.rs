@@ -75,8 +75,22 @@ pub fn simulate<S: HybridSystem + ?Sized>(
     x0: &[f64],
     t_end: f64,
 ) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
+    simulate_until(sys, settings, mode0, t0, x0, t_end, |_| false)
+}
+
+/// [`simulate`] with [`Simulator::run_until`]: the run ends early, without error, once
+/// `until` says so (asked with the trajectory recorded so far after every step and event).
+pub fn simulate_until<S: HybridSystem + ?Sized>(
+    sys: &S,
+    settings: SimSettings,
+    mode0: S::Mode,
+    t0: f64,
+    x0: &[f64],
+    t_end: f64,
+    mut until: impl FnMut(&Trajectory<S::Mode>) -> bool,
+) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
     match Simulator::new(sys, settings, mode0, t0, x0, t_end) {
-        Ok(sim) => sim.run(),
+        Ok(sim) => sim.run_until(|s| until(s.trajectory())),
         Err(error) => Err(Box::new(SimFailure {
             error,
             t: t0,

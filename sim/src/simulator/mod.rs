@@ -32,7 +32,7 @@
 mod failure;
 mod reset;
 
-pub use failure::{SimFailure, simulate};
+pub use failure::{SimFailure, simulate, simulate_until};
 
 use crate::events::{GuardProbe, beyond_triggered, scan_guard};
 use crate::integrator::{
@@ -686,9 +686,21 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
 
     /// Runs to `t_end` (or termination). On failure, returns the error together with the
     /// partial trajectory and event log up to the last accepted point.
-    pub fn run(mut self) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
+    pub fn run(self) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
+        self.run_until(|_| false)
+    }
+
+    /// [`Simulator::run`], ended early where `until` says so: it is asked after every turn of
+    /// the loop ([`Simulator::advance`]: an accepted step, or one ending at an event with its
+    /// reset applied) and `true` ends the run there, without error. Every step before is the
+    /// one [`Simulator::run`] takes, so the output is a prefix of the whole run's.
+    pub fn run_until(
+        mut self,
+        mut until: impl FnMut(&Self) -> bool,
+    ) -> Result<SimOutput<S::Mode>, Box<SimFailure<S::Mode>>> {
         loop {
             match self.advance() {
+                Ok(true) if until(&self) => break,
                 Ok(true) => {}
                 Ok(false) => break,
                 Err(error) => {
