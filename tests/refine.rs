@@ -388,6 +388,75 @@ fn refinement_of_reach_meets_the_tolerance_and_stops() {
     assert!(refine(Problem::Reach, &lg, &opts, None, None).is_err());
 }
 
+/// A round after the first has `round_max_iter` iterations at most; one that does not
+/// converge within them fails and ends the refinement with the round before it, whose
+/// optimum and mesh are returned unchanged. The first round (here a cold solve) is not
+/// limited.
+#[test]
+fn a_refinement_round_that_runs_out_of_iterations_ends_with_the_round_before() {
+    let opts = RefineSettings {
+        tol: 2e-6,
+        ..RefineSettings::default()
+    };
+    let full = refine(
+        Problem::Reach,
+        &ProblemSettings::default(),
+        &opts,
+        None,
+        None,
+    )
+    .unwrap();
+    let h = &full.history;
+    assert!(h.len() >= 2 && h.iter().all(|r| r.status.is_success()));
+    let budget = 2;
+    assert!(
+        h[0].iterations > budget && h[1].iterations > budget,
+        "the budget must be below what both rounds take: {h:?}"
+    );
+    let short = RefineSettings {
+        round_max_iter: budget,
+        ..opts
+    };
+    let cut = refine(
+        Problem::Reach,
+        &ProblemSettings::default(),
+        &short,
+        None,
+        None,
+    )
+    .unwrap();
+    let c = &cut.history;
+    assert_eq!(c.len(), 2, "{c:?}");
+    // The cold first round is the same solve, to the last bit.
+    assert_eq!(c[0].iterations, h[0].iterations);
+    assert_eq!(c[0].objective.to_bits(), h[0].objective.to_bits());
+    // The second round stops at its budget, unconverged, and is discarded.
+    assert_eq!(c[1].iterations, budget);
+    assert!(!c[1].status.is_success(), "{:?}", c[1].status);
+    assert!(!cut.converged);
+    assert!(cut.stop_reason.contains("round 1"), "{}", cut.stop_reason);
+    assert_eq!(cut.solution.objective.to_bits(), h[0].objective.to_bits());
+    assert_eq!(cut.mesh[0].n_points(), h[0].points[0]);
+    assert!(cut.errors.iter().flatten().any(|&e| e > opts.tol));
+    // No budget is no refinement at all: an error that names the setting.
+    let none = RefineSettings {
+        round_max_iter: 0,
+        ..opts
+    };
+    let err = refine(
+        Problem::Reach,
+        &ProblemSettings::default(),
+        &none,
+        None,
+        None,
+    )
+    .unwrap_err();
+    assert!(
+        err.to_string().contains("refinement round iterations"),
+        "{err}"
+    );
+}
+
 #[test]
 fn refinement_of_periodic_qc_converges_to_1e_4() {
     let opts = RefineSettings {

@@ -12,7 +12,9 @@
 //! objective rises by more than [`RefineSettings::max_rise`] or whose phase durations move by
 //! more than [`RefineSettings::max_shift`] of the period has left the optimum it started from
 //! and is solved again from a closer barrier start ([`CLOSE_MU_FACTOR`]); the lower of its two
-//! solutions is kept. The result holds
+//! solutions is kept. Each solve of a round after the first has at most
+//! [`RefineSettings::round_max_iter`] iterations; a round that does not converge ends the
+//! refinement with the round before it. The result holds
 //! the final solution, its mesh (a [`MeshSpec`] per phase, for
 //! [`ProblemSettings::mesh`]) and the history of objective and error per round.
 
@@ -67,6 +69,11 @@ pub struct RefineSettings {
     /// verified objective before a candidate's refinements, which a plan above it cannot
     /// beat.
     pub ceiling: f64,
+    /// Iterations at most of each solve of a round after the first (default
+    /// [`REFINE_ROUND_MAX_ITER`], and never more than the problem's `max_iter`). Such a solve
+    /// starts from the previous round's optimum on a finer mesh; one that has not converged
+    /// by then fails, and a failed round ends the refinement with the round before it.
+    pub round_max_iter: usize,
 }
 
 impl Default for RefineSettings {
@@ -81,9 +88,19 @@ impl Default for RefineSettings {
             max_rise: REFINE_RISE_MAX,
             max_shift: REFINE_SHIFT_MAX,
             ceiling: f64::INFINITY,
+            round_max_iter: REFINE_ROUND_MAX_ITER,
         }
     }
 }
+
+/// Iterations at most of a refinement round's solve after the first round
+/// ([`RefineSettings::round_max_iter`]). Such a solve is warm-started from the previous
+/// round's optimum, interpolated onto a finer mesh. In the default `periodic-cot` plan
+/// searches the converged ones took 11–240 iterations. A round that has not converged by
+/// then is not expected to: one that ran to the problem's 1 500 iterations ended at 60 times
+/// the objective it started from, was discarded as every failed round is, and took 20 s on
+/// the search's critical path (docs/decisions/0071-a-refinement-round-has-500-iterations.md).
+pub const REFINE_ROUND_MAX_ITER: usize = 500;
 
 /// Result of [`refine`]: the record ([`RefineReport`], also reachable through `Deref`), the
 /// total time and the final solution.
@@ -175,6 +192,13 @@ pub fn refine(
             name: "max_shift",
             value: opts.max_shift,
             expected: "positive (infinite: never solve a round again)",
+        });
+    }
+    if opts.round_max_iter == 0 {
+        return Err(PipelineError::InvalidOption {
+            name: "refinement round iterations",
+            value: 0.0,
+            expected: "at least 1",
         });
     }
     if opts.ceiling.is_nan() {
@@ -316,6 +340,7 @@ pub fn refine(
         });
         if round == 0 {
             s.ipm = Some(with_mu_init(solver_settings(settings), opts.warm_mu_init));
+            s.max_iter = s.max_iter.min(opts.round_max_iter);
         }
     }
     let (solution, mesh, errors) = best.ok_or(PipelineError::Internal(
