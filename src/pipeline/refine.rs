@@ -95,11 +95,12 @@ impl Default for RefineSettings {
 
 /// Iterations at most of a refinement round's solve after the first round
 /// ([`RefineSettings::round_max_iter`]). Such a solve is warm-started from the previous
-/// round's optimum, interpolated onto a finer mesh. In the default `periodic-cot` plan
-/// searches the converged ones took 11–240 iterations. A round that has not converged by
-/// then is not expected to: one that ran to the problem's 1 500 iterations ended at 60 times
-/// the objective it started from, was discarded as every failed round is, and took 20 s on
-/// the search's critical path (docs/decisions/0071-a-refinement-round-has-500-iterations.md).
+/// round's optimum, interpolated onto a finer mesh. In the default `periodic-cot` searches
+/// (plan and sticking law, seeds 0–9) the converged ones took at most 379 iterations. A
+/// round that has not converged by then is not expected to: one that ran to the problem's
+/// 1 500 iterations ended at 63 times the objective it started from, was discarded as every
+/// failed round is, and took 20 s of CPU
+/// (docs/decisions/0071-a-refinement-round-has-500-iterations.md).
 pub const REFINE_ROUND_MAX_ITER: usize = 500;
 
 /// Result of [`refine`]: the record ([`RefineReport`], also reachable through `Deref`), the
