@@ -584,8 +584,8 @@ pub struct OptimizeArgs {
     pub approach_clearance: Option<f64>,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
     /// error estimate is at most TOL (e.g. 1e-4). Each round after the first is solved warm
-    /// from the round before in at most 500 iterations (or `--max-iter`); a round that does
-    /// not converge ends the refinement with the round before it.
+    /// from the round before in at most 500 iterations (or `--max-iter` if lower); a round
+    /// that does not converge ends the refinement with the round before it.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub refine: Option<f64>,
     /// Refinement rounds at most (with `--refine`).

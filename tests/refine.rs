@@ -398,14 +398,9 @@ fn a_refinement_round_that_runs_out_of_iterations_ends_with_the_round_before() {
         tol: 2e-6,
         ..RefineSettings::default()
     };
-    let full = refine(
-        Problem::Reach,
-        &ProblemSettings::default(),
-        &opts,
-        None,
-        None,
-    )
-    .unwrap();
+    let reach =
+        |o: &RefineSettings| refine(Problem::Reach, &ProblemSettings::default(), o, None, None);
+    let full = reach(&opts).unwrap();
     let h = &full.history;
     assert!(h.len() >= 2 && h.iter().all(|r| r.status.is_success()));
     let budget = 2;
@@ -417,14 +412,7 @@ fn a_refinement_round_that_runs_out_of_iterations_ends_with_the_round_before() {
         round_max_iter: budget,
         ..opts
     };
-    let cut = refine(
-        Problem::Reach,
-        &ProblemSettings::default(),
-        &short,
-        None,
-        None,
-    )
-    .unwrap();
+    let cut = reach(&short).unwrap();
     let c = &cut.history;
     assert_eq!(c.len(), 2, "{c:?}");
     // The cold first round is the same solve, to the last bit.
@@ -443,14 +431,7 @@ fn a_refinement_round_that_runs_out_of_iterations_ends_with_the_round_before() {
         round_max_iter: 0,
         ..opts
     };
-    let err = refine(
-        Problem::Reach,
-        &ProblemSettings::default(),
-        &none,
-        None,
-        None,
-    )
-    .unwrap_err();
+    let err = reach(&none).unwrap_err();
     assert!(
         err.to_string().contains("refinement round iterations"),
         "{err}"
