@@ -459,13 +459,27 @@ pub fn refine_solution(
     opts: &RefineSettings,
     on_round: Option<&mut dyn FnMut(&RefineRound)>,
 ) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
+    refine_solution_with(problem, settings, sol, opts, on_round, None)
+}
+
+/// [`refine_solution`] with a `callback` that sees every interior-point iteration of its
+/// rounds (return `false` to stop the solve; the refinement then ends as [`refine`] ends on a
+/// solve that did not succeed).
+pub fn refine_solution_with(
+    problem: Problem,
+    settings: &ProblemSettings,
+    sol: OcpSolution,
+    opts: &RefineSettings,
+    on_round: Option<&mut dyn FnMut(&RefineRound)>,
+    callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
     let strategy = sol.strategy.clone();
     let (iters0, secs0) = (sol.iterations, sol.solve_seconds);
     let start = ProblemSettings {
         warm_start: Some(sol),
         ..settings.clone()
     };
-    let res = refine(problem, &start, opts, None, on_round)?;
+    let res = refine(problem, &start, opts, callback, on_round)?;
     let built = build(
         problem,
         &ProblemSettings {

@@ -53,7 +53,7 @@
 use std::sync::Mutex;
 use std::time::Instant;
 
-use bf_optim::ipm::Nlp;
+use bf_optim::ipm::{IterationInfo, Nlp};
 use bf_optim::ocp::Scheme;
 use bf_problem::solution::records::ExecutionCheck;
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings};
@@ -594,10 +594,10 @@ fn execution_failed(sol: &OcpSolution) -> bool {
 /// verify and whose path check stays stuck beyond its allowance ([`path_stalled`]), and so
 /// does one whose defects fail after a point of the chain had them verified (the solve left
 /// the optimum being verified, [`LeftOptimum`]), and so does `earlier` turning `None`
-/// (checked before each attempt: another candidate's result has made this one's moot,
-/// `refine_in_order`), and so does a refinement whose objective is not
-/// below `ceiling` or below the lowest objective verified by the candidates refined before
-/// this one (`earlier`: a refined plan above a verified one no longer competes with it;
+/// (checked before each attempt and at each interior-point iteration of its solves: another
+/// candidate's result has made this one's moot, `refine_in_order`), and so does a refinement
+/// whose objective is not below `ceiling` or below the lowest objective verified by the
+/// candidates refined before this one (`earlier`: a refined plan above a verified one no longer competes with it;
 /// `ceiling` is infinite but in [`Search::polish_the_winner`], where it is the winner's).
 /// Returns every successful refinement with the records up to it ([`RefinedChain`]).
 fn refine_until_verified(
@@ -645,7 +645,22 @@ fn refine_until_verified(
         // rounding digits (1.0000000000000002e-6) that say nothing.
         let label = format!("refine start {} to {tol:.0e}", cur.index);
         let iters0 = cur.solution.iterations;
-        match refine::refine_solution(problem, &s, cur.solution.clone(), &opts, None) {
+        // A chain that `earlier` rules out is dropped whatever it returns (`refine_in_order`),
+        // so its solve stops at its next iteration rather than at the end of its round: a
+        // chain run beside an earlier one is ruled out when that one verifies below it.
+        let mut wanted = |_: &IterationInfo| earlier().is_some();
+        let refined = refine::refine_solution_with(
+            problem,
+            &s,
+            cur.solution.clone(),
+            &opts,
+            None,
+            Some(&mut wanted),
+        );
+        if earlier().is_none() {
+            break;
+        }
+        match refined {
             Ok((b, sol)) => {
                 let mut next = Candidate {
                     index: cur.index,
@@ -2596,6 +2611,51 @@ mod tests {
         });
         assert_eq!(out, [(0, Some(1.5))]);
         assert!(started.load(Ordering::SeqCst) && stopped.load(Ordering::SeqCst));
+    }
+
+    /// A chain that `earlier` rules out while its refinement solves stops inside that solve
+    /// and returns nothing: `earlier` allows the attempt and the solve's first iteration, then
+    /// rules the chain out, and is asked once more after the stopped solve. The fixture is a
+    /// `periodic-cot` plan whose first refinement, unstopped, takes about 25 times as long.
+    #[test]
+    fn a_chain_ruled_out_inside_its_solve_stops_there() {
+        use std::cell::Cell;
+
+        use super::{Candidate, VerifyPolicy, refine_until_verified};
+        use crate::pipeline::refine::current_mesh;
+        use crate::pipeline::solve::{own_problem, settings_of};
+        use crate::pipeline::{OcpSolution, SolutionIo};
+        use bf_problem::ProblemSettings;
+
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let sol =
+            OcpSolution::read_json(&root.join("tests/fixtures/rising-cot-plan/solution.json"))
+                .expect("the fixture reads");
+        let (problem, settings) = settings_of(&sol).expect("the fixture's settings");
+        let (built, _) = own_problem(&sol).expect("the fixture's problem builds");
+        let settings = ProblemSettings {
+            mesh: Some(current_mesh(&built).expect("a Radau mesh")),
+            ..settings
+        };
+        let start = Candidate {
+            index: 0,
+            problem: Some(built),
+            solution: OcpSolution {
+                verification: None,
+                ..sol
+            },
+        };
+        let calls = Cell::new(0usize);
+        let earlier = || {
+            calls.set(calls.get() + 1);
+            (calls.get() <= 2).then_some(f64::INFINITY)
+        };
+        let policy = VerifyPolicy::default();
+        let chain =
+            refine_until_verified(problem, &settings, start, &policy, f64::INFINITY, &earlier);
+        assert!(chain.steps.is_empty() && chain.records.is_empty());
+        // Before the attempt, at the first and second iterations (the stop), and after.
+        assert_eq!(calls.get(), 4);
     }
 
     /// A rayon pool of two threads of its own, so that two refinements run side by side
