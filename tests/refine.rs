@@ -530,11 +530,11 @@ fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
         max_rise: 0.05,
         ..never
     };
-    let (_, away) = refine_solution(problem, &s, sol.clone(), &never, None).unwrap();
+    let (_, away) = refine_solution(problem, &s, sol.clone(), &never, None, None).unwrap();
     let ha = &away.refinement.as_ref().unwrap().history;
     assert!(ha[1].objective > 1.05 * ha[0].objective, "{ha:?}");
     assert!(away.period > 9.99, "{:?}", away.phase_durations);
-    let (b, kept) = refine_solution(problem, &s, sol.clone(), &rise, None).unwrap();
+    let (b, kept) = refine_solution(problem, &s, sol.clone(), &rise, None, None).unwrap();
     let h = &kept.refinement.as_ref().unwrap().history;
     for r in h {
         assert!(r.status.is_success(), "{h:?}");
@@ -552,7 +552,7 @@ fn a_round_that_leaves_its_optimum_is_solved_again_from_closer() {
         max_rise: f64::NAN,
         ..opts
     };
-    let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
+    let e = refine_solution(problem, &s, sol, &bad, None, None).unwrap_err();
     assert!(e.to_string().contains("max_rise"), "{e}");
 }
 
@@ -574,8 +574,8 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
         max_shift: f64::INFINITY,
         ..opts
     };
-    let (_, away) = refine_solution(problem, &s, sol.clone(), &unchecked, None).unwrap();
-    let (_, kept) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
+    let (_, away) = refine_solution(problem, &s, sol.clone(), &unchecked, None, None).unwrap();
+    let (_, kept) = refine_solution(problem, &s, sol.clone(), &opts, None, None).unwrap();
     let (ha, hk) = (
         &away.refinement.as_ref().unwrap().history,
         &kept.refinement.as_ref().unwrap().history,
@@ -604,7 +604,7 @@ fn a_round_that_changes_its_shape_is_solved_again_from_closer() {
         max_shift: 0.0,
         ..opts
     };
-    let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
+    let e = refine_solution(problem, &s, sol, &bad, None, None).unwrap_err();
     assert!(e.to_string().contains("max_shift"), "{e}");
 }
 
@@ -739,7 +739,7 @@ fn a_round_ends_the_refinement_only_beyond_its_change_above_the_ceiling() {
 fn a_refinement_ends_at_a_round_beyond_its_ceiling() {
     let (sol, problem, s, _) = fixture_on_its_mesh("rising-cot-plan");
     let opts = verifying_rounds(4);
-    let (_, full) = refine_solution(problem, &s, sol.clone(), &opts, None).unwrap();
+    let (_, full) = refine_solution(problem, &s, sol.clone(), &opts, None, None).unwrap();
     let h = &full.refinement.as_ref().unwrap().history;
     let ceiling = 0.99 * full.objective;
     let r = (1..h.len())
@@ -747,7 +747,7 @@ fn a_refinement_ends_at_a_round_beyond_its_ceiling() {
         .expect("a round beyond the ceiling");
     assert!(r + 1 < h.len(), "the ceiling ends nothing early: {h:?}");
     let capped = RefineSettings { ceiling, ..opts };
-    let (_, ended) = refine_solution(problem, &s, sol.clone(), &capped, None).unwrap();
+    let (_, ended) = refine_solution(problem, &s, sol.clone(), &capped, None, None).unwrap();
     let report = ended.refinement.as_ref().unwrap();
     let objectives = |h: &[RefineRound]| h.iter().map(|x| x.objective).collect::<Vec<_>>();
     assert_eq!(objectives(&report.history), objectives(&h[..=r]));
@@ -762,6 +762,6 @@ fn a_refinement_ends_at_a_round_beyond_its_ceiling() {
         ceiling: f64::NAN,
         ..opts
     };
-    let e = refine_solution(problem, &s, sol, &bad, None).unwrap_err();
+    let e = refine_solution(problem, &s, sol, &bad, None, None).unwrap_err();
     assert!(e.to_string().contains("ceiling"), "{e}");
 }

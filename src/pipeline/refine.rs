@@ -452,26 +452,16 @@ fn with_mu_init(base: Settings, mu_init: f64) -> Settings {
 /// Refines the mesh of `sol`, a solution of `problem` with `settings`, warm-started from it
 /// ([`refine`]); returns the final mesh's problem and solution, which keeps `sol`'s strategy
 /// record, gains the refinement record, and counts the iterations and time of both.
+/// `callback` sees every interior-point iteration of the rounds (return `false` to stop a
+/// solve; the refinement then ends as [`refine`] ends on a solve that did not succeed),
+/// `on_round` every finished round.
 pub fn refine_solution(
     problem: Problem,
     settings: &ProblemSettings,
     sol: OcpSolution,
     opts: &RefineSettings,
-    on_round: Option<&mut dyn FnMut(&RefineRound)>,
-) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
-    refine_solution_with(problem, settings, sol, opts, on_round, None)
-}
-
-/// [`refine_solution`] with a `callback` that sees every interior-point iteration of its
-/// rounds (return `false` to stop the solve; the refinement then ends as [`refine`] ends on a
-/// solve that did not succeed).
-pub fn refine_solution_with(
-    problem: Problem,
-    settings: &ProblemSettings,
-    sol: OcpSolution,
-    opts: &RefineSettings,
-    on_round: Option<&mut dyn FnMut(&RefineRound)>,
     callback: Option<&mut dyn FnMut(&IterationInfo) -> bool>,
+    on_round: Option<&mut dyn FnMut(&RefineRound)>,
 ) -> Result<(BuiltProblem, OcpSolution), PipelineError> {
     let strategy = sol.strategy.clone();
     let (iters0, secs0) = (sol.iterations, sol.solve_seconds);

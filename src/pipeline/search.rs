@@ -597,8 +597,9 @@ fn execution_failed(sol: &OcpSolution) -> bool {
 /// (checked before each attempt and at each interior-point iteration of its solves: another
 /// candidate's result has made this one's moot, `refine_in_order`), and so does a refinement
 /// whose objective is not below `ceiling` or below the lowest objective verified by the
-/// candidates refined before this one (`earlier`: a refined plan above a verified one no longer competes with it;
-/// `ceiling` is infinite but in [`Search::polish_the_winner`], where it is the winner's).
+/// candidates refined before this one (`earlier`: a refined plan above a verified one no
+/// longer competes with it; `ceiling` is infinite but in [`Search::polish_the_winner`], where
+/// it is the winner's).
 /// Returns every successful refinement with the records up to it ([`RefinedChain`]).
 fn refine_until_verified(
     problem: Problem,
@@ -649,13 +650,13 @@ fn refine_until_verified(
         // so its solve stops at its next iteration rather than at the end of its round: a
         // chain run beside an earlier one is ruled out when that one verifies below it.
         let mut wanted = |_: &IterationInfo| earlier().is_some();
-        let refined = refine::refine_solution_with(
+        let refined = refine::refine_solution(
             problem,
             &s,
             cur.solution.clone(),
             &opts,
-            None,
             Some(&mut wanted),
+            None,
         );
         if earlier().is_none() {
             break;

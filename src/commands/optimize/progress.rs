@@ -143,7 +143,7 @@ pub fn refine_with_progress(
             write_error.get_or_insert(e);
         }
     };
-    let (built, out) = refine::refine_solution(name, settings, sol, &opts, Some(&mut show))
+    let (built, out) = refine::refine_solution(name, settings, sol, &opts, None, Some(&mut show))
         .with_context(|| format!("refining the mesh of {name}"))?;
     if let Some(e) = write_error {
         return Err(e);

@@ -250,6 +250,7 @@ fn converged_reference(
         start.clone(),
         &opts,
         None,
+        None,
     ) {
         Ok((_, sol)) => {
             let desc = match &sol.refinement {
