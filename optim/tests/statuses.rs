@@ -107,6 +107,17 @@ fn infeasible_equality_is_detected() {
     assert!(sol.iterations < 200);
 }
 
+/// The default settings with the restoration phase switched off.
+fn without_restoration() -> Settings {
+    Settings {
+        recovery: RecoverySettings {
+            restoration: false,
+            ..Default::default()
+        },
+        ..Default::default()
+    }
+}
+
 /// The recovery chain in its order: with the restoration phase switched off, an infeasible
 /// problem stops at the chain's "give up" link, on the very iteration at which, with it on, the
 /// chain's last link (the restoration phase) takes over and proves the problem infeasible; the
@@ -130,13 +141,7 @@ fn without_restoration_the_chain_gives_up_where_the_restoration_phase_would_star
     assert!(on.counters.restoration_iterations > 0);
     let first_restoration = first_restoration.expect("a restoration phase");
 
-    let off_settings = Settings {
-        recovery: RecoverySettings {
-            restoration: false,
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    let off_settings = without_restoration();
     let mut off_log = Vec::new();
     let mut record = |info: &IterationInfo| {
         off_log.push((info.iter, info.objective.to_bits()));
@@ -564,4 +569,39 @@ fn workspace_reuse_gives_identical_results_and_handles_pattern_changes() {
     assert!((c.objective - 680.6300573).abs() < 1e-6 * 680.0);
     let d = solve_in(&mut ws, &p, &Settings::default(), None, None).unwrap();
     assert_eq!(a.x, d.x);
+}
+
+/// A restoration phase starts with the solvers the last one handed back (decision record
+/// 0072): the workspace keeps the restoration problem's analysis (a pattern the outer run's
+/// solver never sees), a second solve through it analyses nothing, and both are bit for bit
+/// the solve with a fresh workspace.
+#[test]
+fn restoration_phases_take_their_analyses_back() {
+    use bf_optim::ipm::{Workspace, solve_in};
+    let p = no_real_root();
+    let settings = Settings::default();
+    let fresh = solve_in(&mut Workspace::new(), &p, &settings, None, None).unwrap();
+    assert!(fresh.counters.restoration_iterations > 0, "{fresh:?}");
+    // The same solve up to the restoration phase analyses the problem's patterns only.
+    let without = without_restoration();
+    let mut outer_only = Workspace::new();
+    solve_in(&mut outer_only, &p, &without, None, None).unwrap();
+    let mut ws = Workspace::new();
+    let first = solve_in(&mut ws, &p, &settings, None, None).unwrap();
+    let analysed = ws.analyses();
+    // ... and the restoration problem's pattern (three times the variables) is kept besides.
+    assert!(
+        analysed > outer_only.analyses(),
+        "{analysed} analyses kept, {} without restoration",
+        outer_only.analyses()
+    );
+    let second = solve_in(&mut ws, &p, &settings, None, None).unwrap();
+    assert_eq!(ws.analyses(), analysed, "the second solve analysed again");
+    // Everything but the timings: status, point, multipliers, iterations and counters.
+    let untimed = |s: &Solution| Solution {
+        timing: Default::default(),
+        ..s.clone()
+    };
+    assert_eq!(untimed(&first), untimed(&fresh));
+    assert_eq!(untimed(&second), untimed(&fresh));
 }

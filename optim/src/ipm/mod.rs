@@ -52,7 +52,7 @@ pub use settings::{
 };
 pub use solution::{Counters, IterationInfo, Solution, Status, Timing, WarmStart};
 
-use self::core::{Core, CoreStart, Ctx};
+use self::core::{Core, CoreStart, Ctx, KeptSolvers};
 use crate::error::OptimError;
 use stdform::{Reformulated, StdProblem};
 
@@ -63,22 +63,29 @@ pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError>
 
 /// State kept between solves: the KKT solver with its symbolic analyses (AMD ordering,
 /// elimination tree, supernodes, workspaces; the current pattern's and those of the last
-/// [`kkt::KEPT_ANALYSES`] others) and the solvers with 2 × 2 pivot pairs that checked rejected
-/// AMD factors. Pass the same `Workspace` to [`solve_in`] for repeated solves (parameter
-/// sweeps, mesh-fixed re-solves, warm starts, a search that alternates between meshes); a
-/// pattern not seen before is analysed automatically (decision record 0062).
+/// [`kkt::KEPT_ANALYSES`] others), the solvers with 2 × 2 pivot pairs that checked rejected
+/// AMD factors, and the same again for the feasibility restoration phases. Pass the same
+/// `Workspace` to [`solve_in`] for repeated solves (parameter sweeps, mesh-fixed re-solves,
+/// warm starts, a search that alternates between meshes); a pattern not seen before is
+/// analysed automatically (decision records 0062 and 0072).
 #[derive(Debug, Default)]
 pub struct Workspace {
-    kkt: Option<SparseLdlt>,
-    /// The solvers with 2 × 2 pivot pairs that checked rejected AMD factors, one per
-    /// `LdltOptions` (their order depends on the number of variables), most recent last.
-    pairs: Vec<SparseLdlt>,
+    /// The KKT solver, the solvers with 2 × 2 pivot pairs that checked rejected AMD factors
+    /// (one per `LdltOptions`, most recent last) and those of the restoration phases.
+    solvers: KeptSolvers,
 }
 
 impl Workspace {
     /// An empty workspace.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Symbolic analyses computed by the solvers this workspace holds, over the solves it
+    /// served: a pattern analysed before and kept (the restoration problem's included) is not
+    /// counted again, so a repeated solve that adds nothing here analysed nothing.
+    pub fn analyses(&self) -> usize {
+        self.solvers.analyses()
     }
 }
 
@@ -170,8 +177,7 @@ pub fn solve_in(
             mult_floor: 0.0,
             relax_bounds: true,
             restoration: false,
-            kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
-            pairs_solvers: std::cell::Cell::new(std::mem::take(&mut workspace.pairs)),
+            solvers: std::cell::Cell::new(std::mem::take(&mut workspace.solvers)),
         },
         Some(w) => {
             let mut y = vec![0.0; m];
@@ -203,8 +209,7 @@ pub fn solve_in(
                 mult_floor: settings.barrier.warm_start_mult_bound_push,
                 relax_bounds: true,
                 restoration: false,
-                kkt_solver: std::cell::Cell::new(workspace.kkt.take()),
-                pairs_solvers: std::cell::Cell::new(std::mem::take(&mut workspace.pairs)),
+                solvers: std::cell::Cell::new(std::mem::take(&mut workspace.solvers)),
             }
         }
     };
@@ -219,9 +224,7 @@ pub fn solve_in(
     let out = {
         let mut core = Core::new(&mut reform, settings, &start)?;
         let out = core.run(&mut ctx, &start);
-        let (kkt, pairs) = core.into_kkt_solvers();
-        workspace.kkt = Some(kkt);
-        workspace.pairs = pairs;
+        workspace.solvers = core.into_kkt_solvers();
         out?
     };
     // Map back to user space.

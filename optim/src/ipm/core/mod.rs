@@ -71,10 +71,33 @@ pub(crate) struct CoreStart {
     /// the outer problem's relaxed ones).
     pub relax_bounds: bool,
     pub restoration: bool,
-    /// A previously analysed KKT solver to reuse (see [`super::Workspace`]).
-    pub kkt_solver: std::cell::Cell<Option<SparseLdlt>>,
-    /// Previously analysed solvers with 2 × 2 pivot pairs to reuse for the pivot-pair checks.
-    pub pairs_solvers: std::cell::Cell<Vec<SparseLdlt>>,
+    /// Previously analysed KKT solvers to reuse (see [`super::Workspace`]).
+    pub solvers: std::cell::Cell<KeptSolvers>,
+}
+
+/// The analysed KKT solvers a run starts with and hands back ([`Core::into_kkt_solvers`]),
+/// so that a later run on a pattern analysed before takes its analysis back (decision records
+/// 0062 and 0072). A kept analysis is the one a new solver would make for the same pattern and
+/// options, so what a run is given changes no result.
+#[derive(Debug, Default)]
+pub(crate) struct KeptSolvers {
+    /// The solver a run starts with (AMD, its last pattern's and [`crate::ipm::kkt::KEPT_ANALYSES`]
+    /// others' analyses).
+    pub main: Option<SparseLdlt>,
+    /// Solvers with 2 × 2 pivot pairs for the pivot-pair checks, one per set of options.
+    pub pairs: Vec<SparseLdlt>,
+    /// Those of the restoration phases' inner runs, whose patterns (the problem's with the
+    /// elastic variables `p`, `n`) the outer run's solvers never see.
+    pub restoration: Option<Box<KeptSolvers>>,
+}
+
+impl KeptSolvers {
+    /// Symbolic analyses computed by these solvers and the restoration phases' ones.
+    pub fn analyses(&self) -> usize {
+        self.main.as_ref().map_or(0, SparseLdlt::analyses)
+            + self.pairs.iter().map(SparseLdlt::analyses).sum::<usize>()
+            + self.restoration.as_ref().map_or(0, |r| r.analyses())
+    }
 }
 
 /// Solvers with 2 × 2 pivot pairs a run hands back for later runs ([`Core::into_kkt_solvers`]):
@@ -151,13 +174,15 @@ impl<'p> Core<'p> {
         let bounds = Bounds::new(prob.x_lower().to_vec(), prob.x_upper().to_vec(), relax);
         let jac_pat = prob.jac_pattern().to_vec();
         let hess_pat = prob.hess_pattern().to_vec();
+        let kept = start.solvers.take();
         let kkt = KktSystem::new(
             n,
             m,
             &hess_pat,
             &jac_pat,
-            start.kkt_solver.take().unwrap_or_default(),
-            start.pairs_solvers.take(),
+            kept.main.unwrap_or_default(),
+            kept.pairs,
+            kept.restoration,
         );
         let nlo = bounds.lo.len();
         let nup = bounds.up.len();
@@ -362,8 +387,9 @@ impl<'p> Core<'p> {
     }
 
     /// Hands the (analysed) KKT solvers back for reuse by a later solve: the one a run starts
-    /// with, and the ones with 2 × 2 pivot pairs (at most [`KEPT_PAIRS_SOLVERS`]).
-    pub fn into_kkt_solvers(self) -> (SparseLdlt, Vec<SparseLdlt>) {
+    /// with, the ones with 2 × 2 pivot pairs (at most [`KEPT_PAIRS_SOLVERS`]) and those of its
+    /// restoration phases.
+    pub fn into_kkt_solvers(self) -> KeptSolvers {
         let mut kkt = self.kkt;
         // After a switch to the pivot pairs, the AMD solver is the one whose analysis the next
         // run (which starts with AMD again) can reuse.
@@ -374,7 +400,11 @@ impl<'p> Core<'p> {
         kkt.spare_pairs.extend(pairs);
         let excess = kkt.spare_pairs.len().saturating_sub(KEPT_PAIRS_SOLVERS);
         kkt.spare_pairs.drain(..excess);
-        (main, kkt.spare_pairs)
+        KeptSolvers {
+            main: Some(main),
+            pairs: kkt.spare_pairs,
+            restoration: kkt.restoration_solvers,
+        }
     }
 
     /// Runs the algorithm from `start`: W&B's Algorithm A, one outer iteration per pass of

@@ -18,6 +18,7 @@
 //! * [`RunState`], [`Taken`]: what the outer loop carries between iterations (acceptable,
 //!   tiny-step and soft-restoration counts, the log record) and the step an iteration takes.
 
+use super::KeptSolvers;
 use crate::ipm::kkt::{KktPattern, SparseLdlt, Speculator};
 use crate::ipm::settings::Settings;
 use crate::ipm::solution::IterationInfo;
@@ -142,6 +143,9 @@ pub(super) struct KktSystem {
     /// Solvers with 2 × 2 pivot pairs of earlier runs (from the workspace), one of which
     /// becomes `other_solver` when its options are the ones a check needs.
     pub spare_pairs: Vec<SparseLdlt>,
+    /// The solvers of this run's restoration phases, kept from one phase to the next and
+    /// across runs (each phase's inner run starts with them and hands them back).
+    pub restoration_solvers: Option<Box<KeptSolvers>>,
     /// Rejected AMD factorizations are still to be checked with the pivot pairs.
     pub check_pairs: bool,
     /// The solve switched to the pivot pairs.
@@ -167,7 +171,8 @@ pub(super) struct KktSystem {
 impl KktSystem {
     /// The system of a problem with `n` variables, `m` constraints and these Hessian and
     /// Jacobian patterns, factored by `solver` (a workspace's, or a new one), with a
-    /// workspace's `spare_pairs` for the pivot-pair checks.
+    /// workspace's `spare_pairs` for the pivot-pair checks and its `restoration_solvers` for
+    /// the restoration phases.
     pub fn new(
         n: usize,
         m: usize,
@@ -175,12 +180,14 @@ impl KktSystem {
         jac_pat: &[(usize, usize)],
         solver: SparseLdlt,
         spare_pairs: Vec<SparseLdlt>,
+        restoration_solvers: Option<Box<KeptSolvers>>,
     ) -> Self {
         Self {
             matrix: KktPattern::new(n, m, hess_pat, jac_pat),
             solver,
             other_solver: None,
             spare_pairs,
+            restoration_solvers,
             check_pairs: false,
             switched_to_pairs: false,
             diag_x: vec![0.0; n],

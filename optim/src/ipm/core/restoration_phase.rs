@@ -74,8 +74,13 @@ impl Core<'_> {
             mult_floor: 1e-12,
             relax_bounds: false,
             restoration: true,
-            kkt_solver: std::cell::Cell::new(None),
-            pairs_solvers: std::cell::Cell::new(Vec::new()),
+            solvers: std::cell::Cell::new(
+                self.kkt
+                    .restoration_solvers
+                    .take()
+                    .map(|kept| *kept)
+                    .unwrap_or_default(),
+            ),
         };
         if settings.output.print_level > 1 {
             println!("  entering restoration phase (theta = {theta:.3e}, mu_R = {mu_r:.3e})");
@@ -86,7 +91,11 @@ impl Core<'_> {
             let mut inner = Core::new(&mut rp, settings, &start)?;
             inner.reg.delta_w_last = self.reg.delta_w_last;
             inner.reg.grew_from_first_trial = self.reg.grew_from_first_trial;
-            inner.run(ctx, &start)?
+            let out = inner.run(ctx, &start);
+            // The next phase (of this run or of a later one on this thread) meets the same
+            // pattern again and takes the analysis back (decision record 0072).
+            self.kkt.restoration_solvers = Some(Box::new(inner.into_kkt_solvers()));
+            out?
         };
         let x_new = out.x[..n0].to_vec();
         let finish = |me: &mut Self, ctx: &mut Ctx<'_, '_>| -> Result<bool, OptimError> {
