@@ -174,16 +174,7 @@ impl<'p> Core<'p> {
         let bounds = Bounds::new(prob.x_lower().to_vec(), prob.x_upper().to_vec(), relax);
         let jac_pat = prob.jac_pattern().to_vec();
         let hess_pat = prob.hess_pattern().to_vec();
-        let kept = start.solvers.take();
-        let kkt = KktSystem::new(
-            n,
-            m,
-            &hess_pat,
-            &jac_pat,
-            kept.main.unwrap_or_default(),
-            kept.pairs,
-            kept.restoration,
-        );
+        let kkt = KktSystem::new(n, m, &hess_pat, &jac_pat, start.solvers.take());
         let nlo = bounds.lo.len();
         let nup = bounds.up.len();
         Ok(Self {

@@ -170,24 +170,22 @@ pub(super) struct KktSystem {
 
 impl KktSystem {
     /// The system of a problem with `n` variables, `m` constraints and these Hessian and
-    /// Jacobian patterns, factored by `solver` (a workspace's, or a new one), with a
-    /// workspace's `spare_pairs` for the pivot-pair checks and its `restoration_solvers` for
-    /// the restoration phases.
+    /// Jacobian patterns, with the solvers a workspace `kept`: its main solver factors (a new
+    /// one if it has none), its pivot-pair solvers serve the checks, and its restoration
+    /// solvers the restoration phases.
     pub fn new(
         n: usize,
         m: usize,
         hess_pat: &[(usize, usize)],
         jac_pat: &[(usize, usize)],
-        solver: SparseLdlt,
-        spare_pairs: Vec<SparseLdlt>,
-        restoration_solvers: Option<Box<KeptSolvers>>,
+        kept: KeptSolvers,
     ) -> Self {
         Self {
             matrix: KktPattern::new(n, m, hess_pat, jac_pat),
-            solver,
+            solver: kept.main.unwrap_or_default(),
             other_solver: None,
-            spare_pairs,
-            restoration_solvers,
+            spare_pairs: kept.pairs,
+            restoration_solvers: kept.restoration,
             check_pairs: false,
             switched_to_pairs: false,
             diag_x: vec![0.0; n],
