@@ -1,7 +1,8 @@
 //! Compiled contact kernels of a finger with another joint count than 3: `scenes/paper4.toml`
 //! (4 joints) is compiled in, so the registry's slice wrappers and `CompiledKernels<4>` run.
 //! They agree with bf-codegen's interpreter of the same graphs (`InterpretedKernels<4>`) at
-//! random states, and `optimize` verifies a 4-joint `reach` on them.
+//! random states, `optimize` verifies a 4-joint `reach` on them, and `track` refuses that
+//! plan with what it supports (3-joint fingers).
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -114,6 +115,26 @@ fn simulate_and_optimize_run_the_compiled_4_joint_scene() {
     assert_eq!(sol["status"], "Solved");
     assert_eq!(sol["scene"], "paper4");
     assert_eq!(sol["verification"]["verified"], true, "{out}");
+    // The closed loop is for 3-joint fingers: `track` refuses the 4-joint plan with what it
+    // supports, exit status 1, and writes no output set.
+    let trk = dir.join("track");
+    let o = run(&[
+        "track",
+        opt.join("solution.json").to_str().unwrap(),
+        "--periods",
+        "2",
+        "--out",
+        trk.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("`paper4`")
+            && err.contains("4 joints")
+            && err.contains("3-joint fingers only"),
+        "{err}"
+    );
+    assert!(!trk.exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -2,9 +2,9 @@
 //! as before, and up to `max_refinement_steps` = 10 (Ipopt's default) while the solution
 //! still fails the accuracy test and each step at least halves the residual
 //! (`refinement_contraction`; a slower step is undone). An unpivoted factor with pivot growth
-//! refines slowly, 0.1–0.3 per step on the finest `periodic-cot-human` mesh, where three steps
+//! refines slowly, 0.1–0.3 per step on a fine `periodic-cot-human` mesh, where three steps
 //! left every step "inaccurate" (tests/kkt_ordering.rs,
-//! `ten_refinement_steps_solve_the_finest_human_mesh`). Here: the longer refinement changes no
+//! `ten_refinement_steps_solve_a_fine_human_mesh`). Here: the longer refinement changes no
 //! status of the Hock–Schittkowski suite (objective as given and × 1e8, × 1e12) and no Solved
 //! optimum, does not move HS013's Acceptable ends away from the published optimum, and the
 //! comparison covers solves where it took more than three steps.

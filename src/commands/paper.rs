@@ -585,15 +585,18 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          dual regularization from 1e-9 to 3e-8 (optim/README.md, \
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
-         the strategy and on rounding (section 4 and `report strategies`); the optima shown \
-         are those `optimize`'s default global search verifies with seed 0, not the best \
-         optima there are: on `periodic-cot` other seeds verify optima up to 3× lower \
-         (docs/optima.md: how to search further).\n\
-         - The COT optima have free phases of 1–9 s whose motion is not open-loop stable: \
-         replaying a whole phase from its initial state drifts away from the collocated \
-         trajectory (the \"open-loop drift\" in each verification summary, O(10) rad), even \
-         where every element re-integrates to within the tolerance. The open-loop section \
-         shows the same drift over periods and what joint-space PD tracking recovers."
+         the strategy and on rounding (section 4 and `report strategies`). The optima shown \
+         are those `optimize`'s default global search verifies with seed 0: verified local \
+         optima, not certified global ones. Over seeds 0–9 the searches of the problems \
+         shown end within 0.3 % of each other; `optimize`'s default plan of `periodic-cot` \
+         (not shown here) ends a few percent apart from seed to seed (docs/optima.md gives \
+         the figures per problem and how to search further).\n\
+         - Each verification summary gives the open-loop drift: one phase replayed whole from \
+         its collocated initial state (informative; the verdict re-integrates element by \
+         element). Replayed over whole periods in the plant (Newton's law, slip), the optimal \
+         torques leave the optimum within the first periods (section 5). Feedback executes \
+         the plans for the plant; the sticking problems' optima assume an impact the plant \
+         does not have (section 5, decision record 0040)."
     )?;
 
     out.write("report.md", report.as_bytes())?;

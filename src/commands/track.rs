@@ -167,6 +167,8 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let (plant, plant_name) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
+            crate::paper::closed_loop::three_joints(&scene)
+                .with_context(|| format!("--plant-scene {}", path.display()))?;
             let (model, _) = bf_model::fixtures::model_for_scene(&scene)
                 .with_context(|| format!("--plant-scene {}", path.display()))?;
             (model, path.display().to_string())

@@ -7,7 +7,7 @@
 //! ‖ω̄_k − ω̄*‖ / ‖ω̄*‖). The search's check of a plan ([`execution_check`]) runs each
 //! perturbed plant of the robustness table only up to its first period, from the 4th on, that
 //! misses [`ROBUSTNESS_TARGET`] ([`run_tracking_with`]'s `until_miss`); the paper's tables and
-//! `track` run every period.
+//! `track` run every period. The controller is written for 3-joint fingers ([`three_joints`]).
 
 use super::openloop::{
     DEFAULT_PD_TRACK, Until, initial_state, periodic_torques, simulate_optimum_until,
@@ -107,9 +107,26 @@ pub fn solution_model(sol: &OcpSolution) -> Result<(Model<DynKernels>, String)> 
     let text = bf_generated::scene_toml(name)
         .ok_or_else(|| anyhow!("the solution's scene `{name}` is not a compiled scene"))?;
     let scene = bf_codegen::Scene::from_toml_str(text, name)?;
+    three_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
     let (model, _) = bf_model::fixtures::model_for_scene(&scene)
         .with_context(|| format!("the solution's scene `{name}`"))?;
     Ok((model, name.to_string()))
+}
+
+/// Error unless `scene` is a 3-joint finger: the hybrid controller's inverse dynamics and
+/// contact laws are written for the paper's three joints, while `optimize` and `simulate`
+/// take any number, so a plan of another finger is refused with what `track` supports
+/// rather than with the kernel registry's joint-count mismatch.
+pub fn three_joints(scene: &bf_codegen::Scene) -> Result<()> {
+    let n = scene.links.len();
+    if n == 3 {
+        Ok(())
+    } else {
+        Err(anyhow!(
+            "it has {n} joints; the closed loop (`track`, the hybrid controller) executes \
+             plans on 3-joint fingers only"
+        ))
+    }
 }
 
 /// The optimum as a [`Reference`] of the controller's model `model`.

@@ -32,10 +32,10 @@
 //!   error of the interior node values that `solution.json` tabulates.
 //! * **Open-loop drift** ([`PhaseVerification::open_loop_defect`], informative): one
 //!   integration through the whole phase from its collocated initial state, compared at the
-//!   phase end. It measures how the phase's motion amplifies small errors (the free flight
-//!   of the COT optima balances the finger near an unstable equilibrium for seconds and
-//!   drifts by radians), i.e. whether the torques could be played back without feedback; it
-//!   says nothing about whether the collocated trajectory solves the dynamics.
+//!   phase end. It measures how the phase's motion amplifies small errors (it grows with the
+//!   length of a free flight and with how unstable its motion is), i.e. whether the torques
+//!   could be played back without feedback; it says nothing about whether the collocated
+//!   trajectory solves the dynamics.
 //!
 //! A plan for the plant (a periodic problem planned with Newton's law) is also run in closed
 //! loop by the search (`Verification::execution`, decision record 0048): a plan that the
