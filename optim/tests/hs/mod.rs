@@ -330,7 +330,7 @@ pub fn assert_same_optima(
 /// Heading of the section of `optim/HS_RESULTS.md` written by the `hs_scaling` test.
 pub const SCALING_HEADING: &str = "## Scale invariance";
 
-fn results_path() -> &'static str {
+pub fn results_path() -> &'static str {
     concat!(env!("CARGO_MANIFEST_DIR"), "/HS_RESULTS.md")
 }
 
