@@ -207,10 +207,7 @@ fn hs_suite_adaptive_mu() {
 /// The IPOPT cells of the table in `optim/HS_RESULTS.md` by problem name, and its line of
 /// IPOPT totals: what a run without the `ipopt` feature keeps, since it cannot measure them.
 fn kept_ipopt_column() -> (std::collections::HashMap<String, String>, Option<String>) {
-    let old = std::fs::read_to_string(hs::results_path()).unwrap_or_default();
-    let head = old
-        .find(hs::SCALING_HEADING)
-        .map_or(&old[..], |i| &old[..i]);
+    let (head, _) = hs::results_parts();
     let cells = head
         .lines()
         .filter_map(|l| {
@@ -220,9 +217,9 @@ fn kept_ipopt_column() -> (std::collections::HashMap<String, String>, Option<Str
                 .split('|')
                 .map(str::trim)
                 .collect();
-            (c.len() == 12 && c[0].starts_with("HS")).then(|| (c[0].to_string(), c[11].to_string()))
+            (c.len() == 12 && c[0].starts_with("HS") && c[11] != "not measured")
+                .then(|| (c[0].to_string(), c[11].to_string()))
         })
-        .filter(|(_, v)| v != "not measured")
         .collect();
     let totals = head
         .lines()
@@ -231,22 +228,25 @@ fn kept_ipopt_column() -> (std::collections::HashMap<String, String>, Option<Str
     (cells, totals)
 }
 
-#[cfg(feature = "ipopt")]
-fn ipopt_column(p: &hs::Hs, _kept: &std::collections::HashMap<String, String>) -> (String, usize) {
-    match bf_optim::ipm::ipopt_adapter::solve_with_ipopt(p, &Settings::default()) {
-        Ok(sol) => (
-            format!("{} {:?} {:.10e}", sol.iterations, sol.status, sol.objective),
-            sol.iterations,
-        ),
-        Err(e) => (format!("error {e}"), 0),
-    }
-}
-
-/// Without the feature: the cell of the last run with it, else "not measured".
-#[cfg(not(feature = "ipopt"))]
+/// The IPOPT column's cell for `p`: measured with the feature, else the cell kept from the
+/// last run with it, else "not measured"; and the iterations measured (0 when not).
 fn ipopt_column(p: &hs::Hs, kept: &std::collections::HashMap<String, String>) -> (String, usize) {
-    let cell = kept.get(p.name).cloned();
-    (cell.unwrap_or_else(|| "not measured".into()), 0)
+    #[cfg(feature = "ipopt")]
+    {
+        let _ = kept;
+        match bf_optim::ipm::ipopt_adapter::solve_with_ipopt(p, &Settings::default()) {
+            Ok(sol) => (
+                format!("{} {:?} {:.10e}", sol.iterations, sol.status, sol.objective),
+                sol.iterations,
+            ),
+            Err(e) => (format!("error {e}"), 0),
+        }
+    }
+    #[cfg(not(feature = "ipopt"))]
+    {
+        let cell = kept.get(p.name).cloned();
+        (cell.unwrap_or_else(|| "not measured".into()), 0)
+    }
 }
 
 /// Regenerates `optim/HS_RESULTS.md` up to its scale-invariance section:
@@ -274,10 +274,11 @@ fn write_results_table() {
     writeln!(s, "Default settings (tol 1e-8); `f*` is the published optimum (Hock & Schittkowski 1981); ✓ = relative error ≤ 1e-6.").unwrap();
     writeln!(s, "`local` = a different KKT point (verified independently from the problem's derivatives; objective ≥ f*).").unwrap();
     let (kept, kept_totals) = kept_ipopt_column();
+    let ipopt = "IPOPT column: C++ Ipopt (Debian coinor-libipopt 3.11.9, MUMPS) through the `ipopt` feature, same tol/μ settings (monotone)";
     if cfg!(feature = "ipopt") {
-        writeln!(s, "IPOPT column: C++ Ipopt (Debian coinor-libipopt 3.11.9, MUMPS) through the `ipopt` feature, same tol/μ settings (monotone).\n").unwrap();
+        writeln!(s, "{ipopt}.\n").unwrap();
     } else if !kept.is_empty() {
-        writeln!(s, "IPOPT column: C++ Ipopt (Debian coinor-libipopt 3.11.9, MUMPS) through the `ipopt` feature, same tol/μ settings (monotone), kept from the last run with the feature; \"not measured\" where the problem was added later.\n").unwrap();
+        writeln!(s, "{ipopt}, kept from the last run with the feature; \"not measured\" where the problem was added later.\n").unwrap();
     } else {
         writeln!(s, "IPOPT iteration counts are **not measured** (the optional `ipopt` feature was not built for this table).\n").unwrap();
     }

@@ -330,7 +330,7 @@ pub fn assert_same_optima(
 /// Heading of the section of `optim/HS_RESULTS.md` written by the `hs_scaling` test.
 pub const SCALING_HEADING: &str = "## Scale invariance";
 
-pub fn results_path() -> &'static str {
+fn results_path() -> &'static str {
     concat!(env!("CARGO_MANIFEST_DIR"), "/HS_RESULTS.md")
 }
 
@@ -345,11 +345,18 @@ pub fn write_results_section(heading: &str, text: &str) {
     std::fs::write(results_path(), format!("{}\n\n{text}", head.trim_end())).unwrap();
 }
 
+/// `optim/HS_RESULTS.md` split at [`SCALING_HEADING`]: the part before it (the whole file if
+/// that section is absent) and the section itself (empty then).
+pub fn results_parts() -> (String, String) {
+    let old = std::fs::read_to_string(results_path()).unwrap_or_default();
+    let i = old.find(SCALING_HEADING).unwrap_or(old.len());
+    (old[..i].to_string(), old[i..].to_string())
+}
+
 /// Replaces the part of `optim/HS_RESULTS.md` before [`SCALING_HEADING`] (the whole file if
 /// that section is absent) by `text`.
 pub fn write_results_head(text: &str) {
-    let old = std::fs::read_to_string(results_path()).unwrap_or_default();
-    let tail = old.find(SCALING_HEADING).map_or("", |i| &old[i..]);
+    let (_, tail) = results_parts();
     let sep = if tail.is_empty() { "" } else { "\n" };
     std::fs::write(results_path(), format!("{text}{sep}{tail}")).unwrap();
 }
