@@ -5,7 +5,7 @@
 
 mod hs;
 
-use bf_optim::ipm::{BarrierSettings, OutputSettings};
+use bf_optim::ipm::BarrierSettings;
 use bf_optim::ipm::{MuStrategy, Settings, Solution, Status, check_derivatives, solve};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -343,33 +343,4 @@ fn write_results_table() {
     }
     // The scale-invariance section (written by the hs_scaling test) is kept.
     hs::write_results_head(&s);
-}
-
-/// Debug helper: `HS_NAME=HS013 cargo test --release -p bf-optim --test hock_schittkowski -- --ignored debug_one --nocapture`
-#[test]
-#[ignore = "manual debugging aid (prints the iteration log of one problem)"]
-fn debug_one() {
-    let name = std::env::var("HS_NAME").unwrap_or_else(|_| "HS071".into());
-    let adaptive = std::env::var("HS_ADAPTIVE").is_ok();
-    let p = hs::all()
-        .into_iter()
-        .find(|p| p.name == name)
-        .expect("unknown problem");
-    let settings = Settings {
-        output: OutputSettings { print_level: 2 },
-        barrier: BarrierSettings {
-            mu_strategy: if adaptive {
-                MuStrategy::Adaptive
-            } else {
-                MuStrategy::Monotone
-            },
-            ..Default::default()
-        },
-        ..Settings::default()
-    };
-    let sol = solve(&p, &settings).unwrap();
-    println!(
-        "{:?} x = {:?} f = {} z_l = {:?} z_u = {:?} lambda = {:?}",
-        sol.status, sol.x, sol.objective, sol.z_l, sol.z_u, sol.lambda
-    );
 }

@@ -6,7 +6,7 @@
 
 mod common;
 
-use bf_optim::ipm::{BarrierSettings, OutputSettings};
+use bf_optim::ipm::BarrierSettings;
 use bf_optim::ipm::{
     Nlp, Settings, Solution, Status, WarmStart, check_derivatives, solve, solve_with,
 };
@@ -202,24 +202,6 @@ fn chebyshev_exact_solution_is_feasible() {
         (p.objective(&x) - p.closed_form()).abs() < 1e-10,
         "{}",
         p.objective(&x)
-    );
-}
-
-#[test]
-#[ignore = "manual debugging aid"]
-fn debug_cheb() {
-    let p = common::cheb::ChebDoubleIntegrator::new(3, 80, 30);
-    let sol = solve(
-        &p,
-        &Settings {
-            output: OutputSettings { print_level: 3 },
-            ..Settings::default()
-        },
-    )
-    .unwrap();
-    println!(
-        "{:?} J = {} timing {:?}",
-        sol.status, sol.objective, sol.timing
     );
 }
 

@@ -7,9 +7,8 @@ mod hs;
 
 use bf_optim::OptimError;
 use bf_optim::ipm::{
-    BarrierSettings, IterationInfo, LinearSolverSettings, Nlp, OutputSettings, RecoverySettings,
-    ScalingMethod, ScalingSettings, Settings, Solution, Status, TerminationSettings, WarmStart,
-    solve, solve_with,
+    BarrierSettings, IterationInfo, LinearSolverSettings, Nlp, RecoverySettings, ScalingMethod,
+    ScalingSettings, Settings, Solution, Status, TerminationSettings, WarmStart, solve, solve_with,
 };
 use hs::Hs;
 use hs::dual::D;
@@ -532,25 +531,6 @@ fn gradient_scaling_handles_badly_scaled_functions() {
             (sol.lambda[0] - 10.0 * base.lambda[0]).abs() < 1e-4 * base.lambda[0].abs().max(1.0)
         );
     }
-}
-
-#[test]
-#[ignore = "manual debugging aid"]
-fn debug_cubic() {
-    let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0].powi(3) + x[0], none);
-    let sol = solve(
-        &p,
-        &Settings {
-            output: OutputSettings { print_level: 3 },
-            termination: TerminationSettings {
-                max_iter: 30,
-                ..Default::default()
-            },
-            ..Settings::default()
-        },
-    )
-    .unwrap();
-    println!("{:?}", sol.status);
 }
 
 #[test]
