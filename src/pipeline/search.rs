@@ -319,13 +319,10 @@ pub const VERIFY_REFINEMENTS: usize = 5;
 /// default ([`VerifyPolicy::max_points`]): the bound on what one refinement chain may cost.
 /// The `periodic-cot` optima have long free phases whose element-wise defects need many short
 /// elements. When the limit was set, three of the default searches over seeds 0–19 stopped the
-/// refinement of their best candidate at 400 (defects 5.1e-2, 6.2e-3, 2.1e-4) and reported a
-/// candidate 3–4× worse; with 800 those candidates verified (BENCHMARKS.md, "A point limit of
-/// 800 (2026-11-26)"). The search has changed since, and its winners now verify on far fewer
-/// points: the default searches of the three periodic problems on at most 109 per phase over
-/// seeds 0–9, and the direct solves' refinements end at 247 at most (BENCHMARKS.md, "The
-/// proximal term in the default searches; refinement sizes"). Neither limit is reached on
-/// them today; the default stays the larger one, which costs only where a chain needs it.
+/// refinement of their best candidate at 400 points and reported a candidate 3–4× worse; with
+/// 800 those candidates verified (BENCHMARKS.md, "A point limit of 800 (2026-11-26)"). Today's
+/// winners verify on far fewer points than either limit (BENCHMARKS.md, "The proximal term in
+/// the default searches; refinement sizes"); the larger one costs only where a chain needs it.
 pub const VERIFY_MAX_POINTS: usize = 800;
 
 impl VerifyPolicy {
