@@ -29,9 +29,13 @@ pub(super) struct SimplicialPlan {
     a_src: Vec<usize>,
     /// Row patterns of `L` in faer's elimination-tree reach order (faer's `ereach`, done once
     /// here instead of per factorization): for row k, `reach[reach_ptr[k]..reach_ptr[k+1]]`
-    /// holds `(j, p)` with `p` the position of `L[k, j]` in the value array.
+    /// holds `[j, a, p]` with `a` the position of column j's first off-diagonal entry and `p`
+    /// that of `L[k, j]` in the value array, so `a..p` is the part of column j already
+    /// computed. Keeping `a` here rather than reading `l_col_ptr[j]` took about 7 % off a
+    /// hp-Radau factorization (BENCHMARKS.md, "The simplicial kernel's reach with its column
+    /// starts").
     reach_ptr: Vec<usize>,
-    reach: Vec<(u32, u32)>,
+    reach: Vec<[u32; 3]>,
     /// Structure of `L` (diagonal first, rows increasing within a column), 32-bit rows.
     l_col_ptr: Vec<usize>,
     l_row_idx: Vec<u32>,
@@ -124,7 +128,7 @@ impl SimplicialPlan {
                 if l_rows.get(next[j]) != Some(&k) {
                     return None; // not faer's structure: use faer's own path
                 }
-                reach.push((j as u32, next[j] as u32));
+                reach.push([j as u32, l_col_ptr[j] as u32 + 1, next[j] as u32]);
             }
             reach_ptr.push(reach.len());
         }
@@ -153,8 +157,9 @@ impl SimplicialPlan {
             *dst = values[src];
         }
         let (eps, delta) = (eps.abs(), delta.abs());
-        let x = &mut self.x;
+        let x = &mut self.x[..n];
         x.iter_mut().for_each(|v| *v = 0.0);
+        let inv_d = &mut self.inv_d[..n];
         for k in 0..n {
             let (a0, a1) = (self.a_col_ptr[k], self.a_col_ptr[k + 1]);
             for (&i, &aik) in self.a_row_idx[a0..a1].iter().zip(&self.a_val[a0..a1]) {
@@ -162,13 +167,11 @@ impl SimplicialPlan {
             }
             let mut d = x[k];
             x[k] = 0.0;
-            for &(j, row) in &self.reach[self.reach_ptr[k]..self.reach_ptr[k + 1]] {
-                let (j, row) = (j as usize, row as usize);
-                let xj = x[j];
-                x[j] = 0.0;
-                let lkj = xj * self.inv_d[j];
-                let range = self.l_col_ptr[j] + 1..row;
-                axpy_scatter(x, &self.l_row_idx[range.clone()], &l[range], xj);
+            for &[j, a, row] in &self.reach[self.reach_ptr[k]..self.reach_ptr[k + 1]] {
+                let (j, a, row) = (j as usize, a as usize, row as usize);
+                let xj = std::mem::replace(&mut x[j], 0.0);
+                let lkj = xj * inv_d[j];
+                axpy_scatter(x, &self.l_row_idx[a..row], &l[a..row], xj);
                 d -= lkj * xj;
                 l[row] = lkj;
             }
@@ -179,7 +182,7 @@ impl SimplicialPlan {
                 return false;
             }
             l[self.l_col_ptr[k]] = d;
-            self.inv_d[k] = d.recip();
+            inv_d[k] = d.recip();
         }
         true
     }
