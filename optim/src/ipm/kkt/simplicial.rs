@@ -31,9 +31,9 @@ pub(super) struct SimplicialPlan {
     /// here instead of per factorization): for row k, `reach[reach_ptr[k]..reach_ptr[k+1]]`
     /// holds `[j, a, p]` with `a` the position of column j's first off-diagonal entry and `p`
     /// that of `L[k, j]` in the value array, so `a..p` is the part of column j already
-    /// computed. Keeping `a` here rather than reading `l_col_ptr[j]` on every step of the walk
-    /// makes the factorization measurably faster (BENCHMARKS.md, "The simplicial kernel's
-    /// column starts").
+    /// computed. `a` is `l_col_ptr[j] + 1`, kept here so that the walk reads one array instead
+    /// of two; with the working arrays cut to the dimension in `factor`, the factorization is
+    /// measurably faster (BENCHMARKS.md, "The simplicial kernel's column starts").
     reach_ptr: Vec<usize>,
     reach: Vec<[u32; 3]>,
     /// Structure of `L` (diagonal first, rows increasing within a column), 32-bit rows.
