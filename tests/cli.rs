@@ -387,6 +387,9 @@ fn wrong_command_lines_exit_with_status_2_and_failed_runs_with_1() {
         (&["--param", "no.such.name=1"], "--param"),
         (&["--impact-law", "elastic"], "--impact-law"),
         (&["--shard", "3/2"], "--shard"),
+        // Ranges of the problem and its scene: a tenth of the ball's radius, the longest phase.
+        (&["--approach-clearance", "1"], "approach_clearance"),
+        (&["--min-stick", "5"], "minimum stick duration"),
     ] {
         assert_usage_error(&opt(extra), &[flag]);
     }

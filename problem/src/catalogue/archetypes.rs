@@ -11,7 +11,7 @@ use bf_codegen::spec::SceneId;
 use bf_optim::ocp::{Objective, Param, PointFunction, Scheme, VarRef};
 
 use super::guess::PhaseDef;
-use super::{COT_MAX_PERIOD, Problem, ProblemSettings};
+use super::{COT_MAX_PERIOD, Problem, ProblemSettings, max_phase_duration};
 use crate::ProblemError;
 use crate::node::{CostKind, PhaseMode, Physics};
 use crate::points::{EndQuantity, continuity, end_point, impact};
@@ -193,19 +193,9 @@ impl PeriodicParts {
         let qc = c.problem == Problem::PeriodicQc;
         let margin = settings.hdot_margin;
         // Phase durations: ≤ 5 s for QC (its optimum has a short period); for COT only the
-        // total period is bounded (≤ COT_MAX_PERIOD).
-        let tmax = if qc { 5.0 } else { COT_MAX_PERIOD };
-        if !(settings.min_stick.is_finite()
-            && settings.min_stick > 0.0
-            && settings.min_stick < tmax)
-        {
-            return Err(ProblemError::InvalidSetting {
-                name: "minimum stick duration (s)",
-                value: settings.min_stick,
-                expected: "positive and below the phase's maximum duration (5 s for QC, the \
-                           maximum period for COT)",
-            });
-        }
+        // total period is bounded (≤ COT_MAX_PERIOD). `min_stick` is below it
+        // (`check_settings`).
+        let tmax = max_phase_duration(c.problem);
         let approach = PhaseDef {
             mode: PhaseMode::Free,
             h: Some((0.0, f64::INFINITY)),

@@ -4,7 +4,8 @@
 //! archetype builds the phases, costs and point functions ([`archetypes`]); the initial guesses
 //! are in [`guess`]; [`extract`] turns an NLP point of a built problem into its solution record
 //! ([`crate::solution`]) and a record into a warm start. The problems themselves are named by
-//! [`Problem`] ([`crate::id`]).
+//! [`Problem`] ([`crate::id`]). [`check_settings`] runs [`build`]'s checks of the numeric
+//! settings alone, for callers that refuse a user's value before any work starts.
 //!
 //! | name | phases | objective |
 //! |---|---|---|
@@ -334,26 +335,47 @@ pub fn build(
     })
 }
 
-fn build_inner(
+/// Longest phase of a `periodic-qc` plan, s: its optimum has a short period, so each phase is
+/// bounded on its own (the COT problems bound only the period, by [`COT_MAX_PERIOD`]).
+pub(crate) const QC_MAX_PHASE: f64 = 5.0;
+
+/// The longest a phase of `problem` may last, s: what `min_stick` must stay below.
+pub(crate) fn max_phase_duration(problem: Problem) -> f64 {
+    if problem == Problem::PeriodicQc {
+        QC_MAX_PHASE
+    } else {
+        COT_MAX_PERIOD
+    }
+}
+
+/// Checks the numeric settings that [`build`] refuses for `problem` on `scene` (ε, the cone
+/// and torque margins, the approach clearance against the ball's radius, the effort scale and,
+/// for the periodic problems, the minimum stick duration) without building anything, so that
+/// a caller who takes them from a user can refuse a wrong value before any work starts.
+/// [`build`] runs the same checks.
+pub fn check_settings(
     problem: Problem,
     settings: &ProblemSettings,
-    generated: &Generated,
-) -> Result<BuiltProblem, ProblemError> {
-    let scene = match &settings.scene {
-        Some(s) => s.clone(),
-        None => scene(generated, &problem.scene())?,
-    };
-    // A scene given by the caller may have no emitted node kernels (other numbers): interpret
-    // what has none rather than fail.
-    let kernels = match (&settings.scene, generated.kernels) {
-        (Some(_), KernelUse::Require(f)) => KernelUse::Prefer(f),
-        (_, k) => k,
-    };
-    let ph = crate::points::physics(&scene)?;
-    let eps = settings
+    scene: &Scene,
+) -> Result<(), ProblemError> {
+    check_settings_on(problem, settings, scene, &crate::points::physics(scene)?)
+}
+
+/// The contact smoothing ε of a solve: the setting's, else the scene's, else 0.01.
+fn smoothing_eps(settings: &ProblemSettings, scene: &Scene) -> f64 {
+    settings
         .epsilon
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
-        .unwrap_or(0.01);
+        .unwrap_or(0.01)
+}
+
+fn check_settings_on(
+    problem: Problem,
+    settings: &ProblemSettings,
+    scene: &Scene,
+    ph: &Physics,
+) -> Result<(), ProblemError> {
+    let eps = smoothing_eps(settings, scene);
     if !(eps.is_finite() && eps > 0.0) {
         return Err(ProblemError::InvalidSetting {
             name: "epsilon",
@@ -388,6 +410,40 @@ fn build_inner(
             expected: "positive",
         });
     }
+    let tmax = max_phase_duration(problem);
+    if problem.is_periodic()
+        && !(settings.min_stick.is_finite()
+            && settings.min_stick > 0.0
+            && settings.min_stick < tmax)
+    {
+        return Err(ProblemError::InvalidSetting {
+            name: "minimum stick duration (s)",
+            value: settings.min_stick,
+            expected: "positive and below the phase's maximum duration (5 s for QC, the \
+                       maximum period for COT)",
+        });
+    }
+    Ok(())
+}
+
+fn build_inner(
+    problem: Problem,
+    settings: &ProblemSettings,
+    generated: &Generated,
+) -> Result<BuiltProblem, ProblemError> {
+    let scene = match &settings.scene {
+        Some(s) => s.clone(),
+        None => scene(generated, &problem.scene())?,
+    };
+    // A scene given by the caller may have no emitted node kernels (other numbers): interpret
+    // what has none rather than fail.
+    let kernels = match (&settings.scene, generated.kernels) {
+        (Some(_), KernelUse::Require(f)) => KernelUse::Prefer(f),
+        (_, k) => k,
+    };
+    let ph = crate::points::physics(&scene)?;
+    check_settings_on(problem, settings, &scene, &ph)?;
+    let eps = smoothing_eps(settings, &scene);
     // The scene's ε, not the solve's: q⁰ is where `reach` starts, so it must not move with
     // the ε of a continuation stage.
     let conf = guess::guess_configurations(
@@ -468,4 +524,59 @@ fn build_inner(
         warm_initial_point(&mut built, ws)?;
     }
     Ok(built)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paper() -> Scene {
+        Scene::from_toml_str(include_str!("../../../scenes/paper.toml"), "paper").unwrap()
+    }
+
+    fn refused(problem: Problem, settings: &ProblemSettings) -> Option<&'static str> {
+        match check_settings(problem, settings, &paper()) {
+            Ok(()) => None,
+            Err(ProblemError::InvalidSetting { name, .. }) => Some(name),
+            Err(e) => panic!("not a setting's range: {e}"),
+        }
+    }
+
+    /// The ranges that depend on the problem or the scene, at their edges: the approach
+    /// clearance up to a tenth of the ball's radius, and the minimum stick duration below the
+    /// longest phase of the periodic problems (5 s for QC, the period bound for COT) and
+    /// ignored by the others.
+    #[test]
+    fn check_settings_refuses_the_ranges_that_depend_on_the_problem_and_the_scene() {
+        let r = crate::points::physics(&paper()).unwrap().radius;
+        let with = |clearance: f64, min_stick: f64| ProblemSettings {
+            approach_clearance: clearance,
+            min_stick,
+            ..ProblemSettings::default()
+        };
+        let qc = Problem::PeriodicQc;
+        assert_eq!(refused(qc, &with(0.1 * r, 0.01)), None);
+        assert_eq!(
+            refused(qc, &with(0.1 * r * (1.0 + 1e-9), 0.01)),
+            Some("approach_clearance (m)")
+        );
+        assert_eq!(
+            refused(qc, &with(-1e-12, 0.01)),
+            Some("approach_clearance (m)")
+        );
+        assert_eq!(refused(qc, &with(0.0, 4.99)), None);
+        for min_stick in [QC_MAX_PHASE, 0.0, f64::NAN] {
+            assert_eq!(
+                refused(qc, &with(0.0, min_stick)),
+                Some("minimum stick duration (s)")
+            );
+        }
+        let cot = Problem::PeriodicCot;
+        assert_eq!(refused(cot, &with(0.0, QC_MAX_PHASE)), None);
+        assert_eq!(
+            refused(cot, &with(0.0, COT_MAX_PERIOD)),
+            Some("minimum stick duration (s)")
+        );
+        assert_eq!(refused(Problem::Reach, &with(0.0, COT_MAX_PERIOD)), None);
+    }
 }

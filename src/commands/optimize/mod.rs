@@ -30,7 +30,8 @@ use bf_optim::ocp::problem::Scheme;
 use bf_output::{DirSpec, Outcome, OutputDir};
 use bf_problem::arm::REACH_ARM;
 use bf_problem::{
-    BuiltProblem, COT_MAX_PERIOD, OcpSolution, PhaseMode, PlannedImpact, Problem, ProblemSettings,
+    BuiltProblem, COT_MAX_PERIOD, OcpSolution, PhaseMode, PlannedImpact, Problem, ProblemError,
+    ProblemSettings, check_settings,
 };
 use std::path::Path;
 
@@ -219,10 +220,12 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         bail_usage!("--cone-margin must be in [0, 1) (got {})", args.cone_margin);
     }
     let scene = scene_from_args(args, problem)?;
-    let joints = match &scene {
-        Some(s) => s.links.len(),
-        None => compiled_scene(problem)?.links.len(),
+    // The scene the problem will be built on: `--scene`'s, or the problem's compiled one.
+    let built_on = match &scene {
+        Some(s) => s.clone(),
+        None => compiled_scene(problem)?,
     };
+    let joints = built_on.links.len();
     let plan = PlanFor::of(
         problem,
         joints,
@@ -230,7 +233,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         args.torque_margin,
         args.approach_clearance,
     )?;
-    Ok(plan.apply(ProblemSettings {
+    let settings = plan.apply(ProblemSettings {
         cone_margin: args.cone_margin,
         scene,
         points: args.points,
@@ -246,7 +249,15 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         extrapolate_every_barrier: args.extrapolate_every_barrier,
         proximal_weight: args.proximal_weight,
         ..ProblemSettings::default()
-    }))
+    });
+    // Ranges that depend on the problem or the scene (`--min-stick` below the longest phase,
+    // `--approach-clearance` within a tenth of the ball's radius) are the problem's own checks,
+    // run here so that a wrong value is refused as a usage error before any work starts.
+    match check_settings(problem, &settings, &built_on) {
+        Ok(()) => Ok(settings),
+        Err(e @ ProblemError::InvalidSetting { .. }) => bail_usage!("{problem}: {e}"),
+        Err(e) => Err(e.into()),
+    }
 }
 
 /// The closed-loop check of a search's candidates ([`VerifyPolicy::execution`]) for the
