@@ -364,7 +364,8 @@ pub struct TrackArgs {
     /// without the bounds).
     #[arg(long, default_value = "hybrid")]
     pub controller: String,
-    /// Periods to run (a period ends when the plant starts the optimum's first phase again).
+    /// Periods to run (a period ends when the plant starts the optimum's first phase again), at
+    /// most 1000: every period's samples are kept, in memory and in the output files.
     #[arg(long, default_value_t = 10, value_parser = positive_whole)]
     pub periods: usize,
     /// Scene file of the plant [default: the solution's own scene]; the controller always uses

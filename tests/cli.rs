@@ -401,6 +401,7 @@ fn wrong_command_lines_exit_with_status_2_and_failed_runs_with_1() {
     let plan = root().join("data/optima/periodic-qc-plan/solution.json");
     for (extra, flag) in [
         (&["--periods", "0"][..], "--periods"),
+        (&["--periods", "1001"], "--periods"),
         (
             &["--replan", "--replan-iterations", "0"],
             "--replan-iterations",

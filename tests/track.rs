@@ -16,7 +16,9 @@
 //!   needs up to 1.9 N m unbounded) still converges, and no sample exceeds the bound;
 //! * `track` writes tracking.json whose per-period figures a recomputation from
 //!   trajectory.json (an independent loop over its samples) reproduces, and refuses bad
-//!   arguments with a message naming the option.
+//!   arguments with a message naming the option;
+//! * ignored (slow): a 300-period run of the human finger's plan, which needs more steps than
+//!   the simulator's default budget, completes without a lost ball.
 
 #[path = "common/cli.rs"]
 mod cli;
@@ -797,4 +799,38 @@ fn the_report_tables_are_the_same_on_one_thread_and_on_two() {
     assert!(one.0.contains("all four"), "{}", one.0);
     assert!(one.1.contains("| hybrid-unbounded |"), "{}", one.1);
     assert_eq!(one, tables(2));
+}
+
+/// A long run is not cut short by the simulator's step budget: the stored human-finger plan
+/// takes some 3 300–3 900 attempted steps a period in closed loop, so 300 periods and their
+/// horizon's margin need more than the simulator's default budget of 10⁶ steps, and get
+/// [`tracking_step_budget`]'s instead. With the default budget `track --periods 300` stopped
+/// at t = 3 469 s, after all 300 periods but before the end of its horizon, and reported the
+/// run as a lost ball. Slow (about half a minute, some 1.3 GB of samples).
+#[test]
+#[ignore = "a 300-period run, about 30 s; run with `cargo test --release --test track \
+            a_long_run -- --ignored`"]
+fn a_long_run_is_not_cut_by_the_step_budget() {
+    use ball_finger::paper::closed_loop::tracking_step_budget;
+    let path = cli::root().join("data/optima/periodic-cot-human-plan/solution.json");
+    let sol = ball_finger::pipeline::OcpSolution::read_json(&path).unwrap();
+    let plant = solution_model(&sol).unwrap().0;
+    let periods = 300;
+    let t = run_tracking(
+        &sol,
+        ControllerKind::Hybrid,
+        periods,
+        plant,
+        ImpactLaw::Newton,
+    )
+    .unwrap();
+    let stats = &t.output.stats;
+    let steps = stats.accepted_steps + stats.rejected_steps;
+    assert!(
+        steps > SimSettings::default().max_steps && steps <= tracking_step_budget(periods),
+        "{steps} steps"
+    );
+    assert_eq!(t.lost, None);
+    assert_eq!(t.periods.len(), periods);
+    assert!(t.periods.iter().all(|p| p.contact));
 }

@@ -8,6 +8,8 @@
 //! perturbed plant of the robustness table only up to its first period, from the 4th on, that
 //! misses [`ROBUSTNESS_TARGET`] ([`run_tracking_with`]'s `until_miss`); the paper's tables and
 //! `track` run every period. The controller is written for 3-joint fingers ([`three_joints`]).
+//! A run takes at most [`MAX_TRACKING_PERIODS`] periods, with a simulator step budget that
+//! grows with them ([`tracking_step_budget`]).
 
 use super::openloop::{
     DEFAULT_PD_TRACK, Until, initial_state, periodic_torques, simulate_optimum_until,
@@ -23,8 +25,8 @@ use bf_model::{DynKernels, ImpactLaw, Kernels, Mode, Model};
 use bf_problem::OcpSolution;
 use bf_problem::node::PhaseMode;
 use bf_problem::solution::records::ExecutionCheck;
-use bf_sim::SimOutput;
 use bf_sim::ball_finger::{BallFingerSettings, RunReport};
+use bf_sim::{SimOutput, SimSettings};
 use std::path::Path;
 
 /// The controller executing the optimum.
@@ -284,6 +286,23 @@ fn horizon(periods: usize, period: f64) -> f64 {
     1.25 * (periods + 1) as f64 * period
 }
 
+/// Most periods a tracking run takes. Every period's samples are kept (about 1.6 MB of memory
+/// and 1.3 MB of files per period of the `periodic-qc` plan), so a longer run would exhaust the
+/// machine before it ended.
+pub const MAX_TRACKING_PERIODS: usize = 1000;
+
+/// Attempted simulator steps allowed per period of a tracking run. The stored plans take about
+/// 1 200 (`periodic-qc`) to 3 900 (`periodic-cot-human`) per period in closed loop, so the
+/// budget stops only a run whose steps collapse (a plant chattering on the ball), not a long
+/// one. Ten periods get the simulator's default budget, 10⁶.
+pub const TRACKING_STEPS_PER_PERIOD: usize = 100_000;
+
+/// The step budget of a tracking run of `periods` periods: [`TRACKING_STEPS_PER_PERIOD`] for
+/// each, and at least the simulator's default.
+pub fn tracking_step_budget(periods: usize) -> usize {
+    (TRACKING_STEPS_PER_PERIOD * periods).max(SimSettings::default().max_steps)
+}
+
 /// Runs `controller` on the optimum `sol` for `periods` periods on `plant` with `impact_law`,
 /// from the optimum's initial state.
 pub fn run_tracking(
@@ -373,8 +392,8 @@ pub fn run_tracking_with(
             controller.name()
         );
     }
-    if periods == 0 {
-        bail!("a tracking run needs at least 1 period");
+    if !(1..=MAX_TRACKING_PERIODS).contains(&periods) {
+        bail!("a tracking run takes 1 to {MAX_TRACKING_PERIODS} periods (got {periods})");
     }
     if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
         bail!(
@@ -387,6 +406,7 @@ pub fn run_tracking_with(
         bail!("the plant scene's runtime parameters are incomplete");
     }
     let t_end = horizon(periods, sol.period);
+    let max_steps = tracking_step_budget(periods);
     let copies = (t_end / sol.period).ceil() as usize + 1;
     let settings = BallFingerSettings {
         impact_law,
@@ -407,6 +427,7 @@ pub fn run_tracking_with(
             periodic_torques(sol, copies)?,
             settings,
             t_end,
+            max_steps,
             until,
         )?,
         ControllerKind::Pd => simulate_optimum_until(
@@ -415,6 +436,7 @@ pub fn run_tracking_with(
             tracking_input(sol, copies, &DEFAULT_PD_TRACK)?,
             settings,
             t_end,
+            max_steps,
             until,
         )?,
         ControllerKind::Hybrid | ControllerKind::HybridUnbounded => {
@@ -442,7 +464,7 @@ pub fn run_tracking_with(
                 )?;
                 law = law.with_replanner(Box::new(replanner));
             }
-            simulate_optimum_until(sol, plant, law, settings, t_end, until)?
+            simulate_optimum_until(sol, plant, law, settings, t_end, max_steps, until)?
         }
     };
     let tr = &output.trajectory;

@@ -223,22 +223,25 @@ pub fn simulate_optimum<K: Kernels<3>, I: Input>(
     settings: BallFingerSettings,
     t_end: f64,
 ) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
-    simulate_optimum_until(sol, plant, input, settings, t_end, None)
+    let max_steps = SimSettings::default().max_steps;
+    simulate_optimum_until(sol, plant, input, settings, t_end, max_steps, None)
 }
 
 /// When [`simulate_optimum_until`] ends a run: asked with the trajectory recorded so far.
 pub type Until<'a> = &'a dyn Fn(&bf_sim::Trajectory<Mode>) -> bool;
 
-/// [`simulate_optimum`], ended early where `until` says so: it is asked after every accepted
-/// step and every event with the trajectory recorded so far, and `true` ends the run there
-/// (ended without error, `t_final` before `t_end`). The steps up to that point are those of
-/// the whole run, sample for sample ([`bf_sim::simulate_until`]).
+/// [`simulate_optimum`] with a budget of `max_steps` attempted steps (the simulator's default
+/// budget fits a few hundred seconds of these plans), ended early where `until` says so: it is
+/// asked after every accepted step and every event with the trajectory recorded so far, and
+/// `true` ends the run there (ended without error, `t_final` before `t_end`). The steps up to
+/// that point are those of the whole run, sample for sample ([`bf_sim::simulate_until`]).
 pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
     sol: &OcpSolution,
     plant: Model<K>,
     input: I,
     settings: BallFingerSettings,
     t_end: f64,
+    max_steps: usize,
     until: Option<Until<'_>>,
 ) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
     let sys = BallFinger::new(plant, input, settings)?;
@@ -251,6 +254,7 @@ pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
     let sim = SimSettings {
         rtol: 1e-8,
         output_dt: Some(sol.period / 400.0),
+        max_steps,
         ..SimSettings::default()
     };
     let cpu = std::time::Instant::now();
