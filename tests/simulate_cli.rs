@@ -3,7 +3,7 @@
 //! physics (h ≥ −tol at every sample, the Sect. 3.1 transitions, a closing energy balance),
 //! RK4 agrees with DOPRI5, a 4-joint scene runs on interpreted kernels, joint counts are
 //! checked. Bad inputs end with a clear error and a non-zero exit; a failure mid-run keeps the
-//! partial trajectory.
+//! partial trajectory, and a run whose energy balance fails its check is marked failed.
 
 use bf_model::{Model, State, Vec3};
 use serde_json::Value;
@@ -469,6 +469,41 @@ fn cli_joint_counts_are_checked() {
         let mut args = vec!["simulate", "--out", out, "--t-end", "0.1"];
         args.extend(extra.iter().copied());
         assert_clean_failure(&run(&args), &mention);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A run whose energy balance misses the simulator's tolerance (1e-3 J) failed its own check:
+/// RK4 with a 0.1 s step over a passive 2 s flight leaves a balance error of about 2e-2 J, and
+/// the run exits 1 with the whole trajectory written and the set marked FAILED; with 0.05 s the
+/// error is below the tolerance and the same run succeeds, unmarked.
+#[test]
+fn a_run_whose_energy_balance_fails_is_marked_failed() {
+    let dir = tmpdir("energy-check");
+    for (step, fails) in [("0.1", true), ("0.05", false)] {
+        let out_dir = dir.join(step);
+        let o = run(&[
+            "simulate",
+            "--t-end",
+            "2",
+            "--integrator",
+            "rk4",
+            "--step",
+            step,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        let summary = json(&out_dir.join("summary.json"));
+        let error = summary["energy_error"].as_f64().unwrap();
+        assert_eq!(error > 1e-3, fails, "step {step}: balance error {error}");
+        assert_eq!(summary["t_final"].as_f64().unwrap(), 2.0, "step {step}");
+        assert_eq!(out_dir.join("FAILED").exists(), fails, "step {step}");
+        if fails {
+            assert_clean_failure(&o, &["energy balance failed its check"]);
+            assert_eq!(o.status.code(), Some(1));
+        } else {
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        }
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -29,7 +29,10 @@
 //! `events.{json,csv}` and `summary.json`; a summary goes to stdout. DIR is one output set
 //! (`bf_output::OutputDir`): it is checked before the run and replaced as a whole at the end,
 //! so it never mixes files of two runs. A run that fails midway still writes everything up to
-//! the failure, marks the set with a `FAILED` file and exits non-zero.
+//! the failure, marks the set with a `FAILED` file and exits non-zero. So does a run that ends
+//! with its energy balance (E(t) − E(0) − ∫P dt − ΣΔE of the events) off by more than the
+//! simulator's tolerance (1e-3 J): its step was too long for the dynamics, and the whole
+//! trajectory is written but marked as failed.
 //!
 //! Resources are bounded: a run whose `--t-end` needs more steps than `--max-steps` (at least
 //! t_end / h_max with DOPRI5, t_end / step with RK4), or whose `--output-dt` grid has more
@@ -556,6 +559,26 @@ fn run_model<K: Kernels<N>, const N: usize>(
             e
         }
     });
+    // A run that ends but whose energy balance fails its own check (the step too long for the
+    // dynamics) has a trajectory no one should take for a result: the set is written whole
+    // and marked as failed.
+    let unbalanced = report
+        .summary
+        .warnings
+        .iter()
+        .find(|w| w.kind == "energy_error")
+        .filter(|_| error.is_none())
+        .map(|w| {
+            format!(
+                "the energy balance failed its check at t = {} s: {}; the whole trajectory ({} \
+                 samples, {} events) was written to {}",
+                w.t,
+                w.message,
+                out.trajectory.len(),
+                out.events.len(),
+                args.out.display()
+            )
+        });
     out_dir.file("summary.json")?;
     report
         .write_dir(out_dir.path(), &out, error.as_deref())
@@ -571,6 +594,7 @@ fn run_model<K: Kernels<N>, const N: usize>(
             args.out.display()
         )
     });
+    let failure = failure.or(unbalanced);
     out_dir.commit(match &failure {
         Some(f) => Outcome::Failed(f),
         None => Outcome::Success,
