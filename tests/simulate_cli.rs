@@ -22,6 +22,21 @@ fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// `simulate` of the default passive drop for `t_end` s with fixed-step RK4 of `step` s.
+fn passive_rk4(t_end: f64, step: &str, out_dir: &Path) -> Output {
+    run(&[
+        "simulate",
+        "--t-end",
+        &t_end.to_string(),
+        "--integrator",
+        "rk4",
+        "--step",
+        step,
+        "--out",
+        out_dir.to_str().unwrap(),
+    ])
+}
+
 fn assert_clean_failure(out: &Output, must_mention: &[&str]) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "expected failure; stderr: {stderr}");
@@ -293,17 +308,7 @@ fn cli_bad_inputs_give_clear_errors() {
 fn cli_coarse_rk4_grazes_instead_of_failing() {
     let dir = tmpdir("graze");
     let out_dir = dir.join("out");
-    let o = run(&[
-        "simulate",
-        "--t-end",
-        "2",
-        "--integrator",
-        "rk4",
-        "--step",
-        "1e-2",
-        "--out",
-        out_dir.to_str().unwrap(),
-    ]);
+    let o = passive_rk4(2.0, "1e-2", &out_dir);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let ev = json(&out_dir.join("events.json"));
     let grazes: Vec<&Value> = ev["events"]
@@ -482,17 +487,7 @@ fn a_run_whose_energy_balance_fails_is_marked_failed() {
     let dir = tmpdir("energy-check");
     for (step, fails) in [("0.1", true), ("0.05", false)] {
         let out_dir = dir.join(step);
-        let o = run(&[
-            "simulate",
-            "--t-end",
-            "2",
-            "--integrator",
-            "rk4",
-            "--step",
-            step,
-            "--out",
-            out_dir.to_str().unwrap(),
-        ]);
+        let o = passive_rk4(2.0, step, &out_dir);
         let summary = json(&out_dir.join("summary.json"));
         let error = summary["energy_error"].as_f64().unwrap();
         assert_eq!(error > 1e-3, fails, "step {step}: balance error {error}");
