@@ -47,6 +47,19 @@ pub fn starts(text: &str) -> Result<u64, String> {
     }
 }
 
+/// Parses the periods of a tracking run: 1 to
+/// [`MAX_TRACKING_PERIODS`](crate::paper::closed_loop::MAX_TRACKING_PERIODS), since every
+/// period's samples are kept.
+pub fn tracking_periods(text: &str) -> Result<usize, String> {
+    use crate::paper::closed_loop::MAX_TRACKING_PERIODS;
+    match whole(text)? {
+        n @ 1..=MAX_TRACKING_PERIODS => Ok(n),
+        n => Err(format!(
+            "must be from 1 to {MAX_TRACKING_PERIODS} (got {n}); every period's samples are kept"
+        )),
+    }
+}
+
 /// Parses a whole number ≥ 0, with a message for negative and fractional values.
 pub fn whole(text: &str) -> Result<usize, String> {
     let t = text.trim();
@@ -366,7 +379,7 @@ pub struct TrackArgs {
     pub controller: String,
     /// Periods to run (a period ends when the plant starts the optimum's first phase again), at
     /// most 1000: every period's samples are kept, in memory and in the output files.
-    #[arg(long, default_value_t = 10, value_parser = positive_whole)]
+    #[arg(long, default_value_t = 10, value_parser = tracking_periods)]
     pub periods: usize,
     /// Scene file of the plant [default: the solution's own scene]; the controller always uses
     /// the solution's scene, so a second file tests model error. A copy of a compiled scene

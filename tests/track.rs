@@ -806,7 +806,7 @@ fn the_report_tables_are_the_same_on_one_thread_and_on_two() {
 /// horizon's margin need more than the simulator's default budget of 10⁶ steps, and get
 /// [`tracking_step_budget`]'s instead. With the default budget `track --periods 300` stopped
 /// at t = 3 469 s, after all 300 periods but before the end of its horizon, and reported the
-/// run as a lost ball. Slow (about half a minute, some 1.3 GB of samples).
+/// run as a lost ball. Slow (about half a minute, some 1.4 GB of samples).
 #[test]
 #[ignore = "a 300-period run, about 30 s; run with `cargo test --release --test track \
             a_long_run -- --ignored`"]

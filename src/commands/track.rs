@@ -8,8 +8,8 @@
 use crate::cli::TrackArgs;
 use crate::errors::bail_usage;
 use crate::paper::closed_loop::{
-    ControllerKind, MAX_TRACKING_PERIODS, Tracking, robustness_rows, robustness_table,
-    run_tracking_replanned, solution_model,
+    ControllerKind, Tracking, robustness_rows, robustness_table, run_tracking_replanned,
+    solution_model,
 };
 use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
@@ -158,12 +158,6 @@ fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -
 pub fn run(args: &TrackArgs) -> Result<()> {
     let controller = ControllerKind::parse(&args.controller)
         .map_err(|e| crate::errors::usage(format!("--controller: {e}")))?;
-    if args.periods > MAX_TRACKING_PERIODS {
-        bail_usage!(
-            "--periods: at most {MAX_TRACKING_PERIODS} (got {}); every period's samples are kept",
-            args.periods
-        );
-    }
     let law = super::simulate::parse_impact_law(&args.impact_law)?;
     let sol = OcpSolution::read_json(&args.solution)
         .with_context(|| format!("reading the solution {}", args.solution.display()))?;

@@ -21,6 +21,9 @@ use crate::{Input, SimError, SimWarning};
 use bf_model::{Kernels, Mode};
 use serde::Serialize;
 
+/// Kind of the warning of a failed energy-balance check ([`RunSummary::energy_check_failure`]).
+const ENERGY_ERROR: &str = "energy_error";
+
 impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
     /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
@@ -271,7 +274,7 @@ fn summarize<const N: usize>(
     if energy_error > settings.energy_error_tol {
         warnings.push(SimWarning {
             t: t_error,
-            kind: "energy_error",
+            kind: ENERGY_ERROR,
             message: format!(
                 "energy-balance error {energy_error:.3e} J exceeds {:e} J: the integration \
                  step is too long for the dynamics",
@@ -376,6 +379,14 @@ fn energy_balance_error<const N: usize>(
 }
 
 impl RunSummary {
+    /// The warning of a failed energy-balance check (the balance error above
+    /// `BallFingerSettings::energy_error_tol`): the one warning that says the run's own accuracy
+    /// check failed, rather than something the model did (an impact that raised the energy, a
+    /// Zeno fallback).
+    pub fn energy_check_failure(&self) -> Option<&SimWarning> {
+        self.warnings.iter().find(|w| w.kind == ENERGY_ERROR)
+    }
+
     /// One line per kind of warning (count, worst case, what to do), for the CLI.
     pub fn warning_lines(&self) -> Vec<String> {
         let mut lines = Vec::new();
@@ -388,7 +399,7 @@ impl RunSummary {
                 self.max_impact_energy_gain
             ));
         }
-        for w in of("energy_error") {
+        for w in of(ENERGY_ERROR) {
             lines.push(format!("t = {} s: {}", w.t, w.message));
         }
         let z: Vec<&SimWarning> = of("zeno_fallback").collect();

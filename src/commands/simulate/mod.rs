@@ -561,24 +561,18 @@ fn run_model<K: Kernels<N>, const N: usize>(
     });
     // A run that ends but whose energy balance fails its own check (the step too long for the
     // dynamics) has a trajectory no one should take for a result: the set is written whole
-    // and marked as failed.
-    let unbalanced = report
-        .summary
-        .warnings
-        .iter()
-        .find(|w| w.kind == "energy_error")
-        .filter(|_| error.is_none())
-        .map(|w| {
-            format!(
-                "the energy balance failed its check at t = {} s: {}; the whole trajectory ({} \
+    // and marked as failed. A run that stopped early reports its stop instead (`failure`).
+    let unbalanced = report.summary.energy_check_failure().map(|w| {
+        format!(
+            "the energy balance failed its check at t = {} s: {}; the whole trajectory ({} \
                  samples, {} events) was written to {}",
-                w.t,
-                w.message,
-                out.trajectory.len(),
-                out.events.len(),
-                args.out.display()
-            )
-        });
+            w.t,
+            w.message,
+            out.trajectory.len(),
+            out.events.len(),
+            args.out.display()
+        )
+    });
     out_dir.file("summary.json")?;
     report
         .write_dir(out_dir.path(), &out, error.as_deref())
