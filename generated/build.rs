@@ -22,7 +22,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 
 fn write_if_changed(path: &Path, text: &str) -> Result<()> {
     if fs::read_to_string(path).ok().as_deref() == Some(text) {
@@ -123,9 +123,9 @@ fn main() -> Result<()> {
             Path::new("../scenes"),
             &bf_codegen::spec::ChainChoice::default(),
         )
-        .map_err(|e| anyhow!("invalid scene file {shown}:\n{e}"))?;
+        .with_context(|| format!("invalid scene file {shown}"))?;
         let scene = bf_codegen::Scene::from_toml_str(&text, &shown)
-            .map_err(|e| anyhow!("invalid scene file {shown}:\n{e}"))?;
+            .with_context(|| format!("invalid scene file {shown}"))?;
         if names.contains(&scene.name) {
             bail!(
                 "{shown}: scene name `{}` is used by another scene file",
@@ -134,7 +134,7 @@ fn main() -> Result<()> {
         }
         let full = bf_codegen::kernels::with_robot_kernels(&scene);
         let generated = bf_codegen::generate(&full, &text)
-            .map_err(|e| anyhow!("cannot generate kernels for {shown}: {e}"))?;
+            .with_context(|| format!("cannot generate kernels for {shown}"))?;
         let name = scene.name.clone();
         write_if_changed(&out.join(format!("{name}.rs")), &generated.code)?;
         let desc = scene
@@ -153,7 +153,7 @@ fn main() -> Result<()> {
             for (vscene, opts, what) in variants(&scene) {
                 let vname = vscene.name.clone();
                 let generated = bf_codegen::generate_with(&vscene, &text, &opts)
-                    .map_err(|e| anyhow!("cannot generate variant {vname} of {shown}: {e}"))?;
+                    .with_context(|| format!("cannot generate variant {vname} of {shown}"))?;
                 write_if_changed(&out.join(format!("{vname}.rs")), &generated.code)?;
                 modules.push_str(&format!(
                     "#[doc = \"Variant of `paper` for the speed–accuracy report: {what}.\"]\n#[doc = \"\"]\n#[doc = \"Kernels: {}.\"]\n\
@@ -169,7 +169,7 @@ fn main() -> Result<()> {
     // Optimal-control node kernels of the scenes with a ball and a contact.
     let refs: Vec<&bf_codegen::Scene> = scenes.iter().collect();
     let ocp = bf_problem::kernels::emit_node_kernels(&refs)
-        .map_err(|e| anyhow!("cannot generate the optimal-control node kernels: {e}"))?;
+        .context("cannot generate the optimal-control node kernels")?;
     write_if_changed(&out.join("ocp_kernels.rs"), &ocp)?;
     modules.push_str(
         "/// Every scene of `scenes/*.toml`, sorted by file name: (name, TOML text).\n\

@@ -242,10 +242,19 @@ fn generate_emits_the_robot_kernels_in_every_variant() {
 
 #[test]
 fn bad_cli_input_gives_clear_errors() {
-    assert_clean_failure(
-        &run(&["eval", "scenes/nope.toml", "--q", "0,0,0", "--qd", "0,0,0"]),
-        &["scenes/nope.toml"],
-    );
+    let missing = run(&["eval", "scenes/nope.toml", "--q", "0,0,0", "--qd", "0,0,0"]);
+    assert_clean_failure(&missing, &["scenes/nope.toml"]);
+    // Each error in the chain states only its own context, so the operating system's reason
+    // (the last part of the message) appears once.
+    let stderr = String::from_utf8_lossy(&missing.stderr);
+    let os_reason = stderr
+        .rsplit(": ")
+        .next()
+        .map(str::trim)
+        .unwrap_or_default()
+        .to_string();
+    assert!(!os_reason.is_empty(), "{stderr}");
+    assert_eq!(stderr.matches(&os_reason).count(), 1, "{stderr}");
     assert_usage_error(
         &run(&[
             "eval",

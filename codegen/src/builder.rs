@@ -27,7 +27,7 @@ use crate::{CodegenError, Generated, Report, Scene};
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
     /// The scene or URDF file cannot be read or is invalid (file, line, element, attribute).
-    #[error("{0}")]
+    #[error(transparent)]
     Scene(#[from] SpecError),
     /// The scene is valid but cannot be turned into the kernels asked for (an unknown kernel,
     /// fused multiply-add in a no_std module, values that overflow, …).

@@ -29,7 +29,7 @@ pub enum SpecErrorKind {
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
     /// The file could not be read.
-    #[error("{file}: cannot read scene file: {source}")]
+    #[error("{file}: cannot read scene file")]
     Io {
         /// The path as given.
         file: String,

@@ -313,6 +313,10 @@ fn io_error_names_the_file() {
         err.to_string().starts_with("/nonexistent/dir/scene.toml: "),
         "{err}"
     );
+    // The reason is the error's source, not part of its message, so that a printed chain
+    // states it once.
+    let reason = std::error::Error::source(&err).expect("the I/O error as source");
+    assert!(!err.to_string().contains(&reason.to_string()), "{err}");
 }
 
 #[test]
