@@ -397,8 +397,8 @@ fn wrong_command_lines_exit_with_status_2_and_failed_runs_with_1() {
         (&["--impact-law", "elastic"], "--impact-law"),
         (&["--shard", "3/2"], "--shard"),
         // Ranges of the problem and its scene: a tenth of the ball's radius, the longest phase.
-        (&["--approach-clearance", "1"], "approach_clearance"),
-        (&["--min-stick", "5"], "minimum stick duration"),
+        (&["--approach-clearance", "1"], "--approach-clearance"),
+        (&["--min-stick", "5"], "--min-stick"),
     ] {
         assert_usage_error(&opt(extra), &[flag]);
     }

@@ -46,7 +46,8 @@ pub enum ProblemError {
     /// A numeric problem setting is outside its valid range.
     #[error("{name} must be {expected}, got {value}")]
     InvalidSetting {
-        /// The setting (`epsilon`, `effort_scale`).
+        /// The setting: the [`ProblemSettings`](crate::ProblemSettings) field (`epsilon`,
+        /// `approach_clearance`, `min_stick`, …) where it is one.
         name: &'static str,
         /// Its value.
         value: f64,

@@ -398,9 +398,9 @@ fn check_settings_on(
     // Up to a tenth of the ball's radius: the approach starts at h ≥ 0.3 r.
     if !(settings.approach_clearance >= 0.0 && settings.approach_clearance <= 0.1 * ph.radius) {
         return Err(ProblemError::InvalidSetting {
-            name: "approach_clearance (m)",
+            name: "approach_clearance",
             value: settings.approach_clearance,
-            expected: "in [0, r / 10], r the ball's radius",
+            expected: "in [0, r / 10] m, r the ball's radius",
         });
     }
     if !(settings.effort_scale.is_finite() && settings.effort_scale > 0.0) {
@@ -417,9 +417,9 @@ fn check_settings_on(
             && settings.min_stick < tmax)
     {
         return Err(ProblemError::InvalidSetting {
-            name: "minimum stick duration (s)",
+            name: "min_stick",
             value: settings.min_stick,
-            expected: "positive and below the phase's maximum duration (5 s for QC, the \
+            expected: "positive and below the phase's maximum duration, in s (5 s for QC, the \
                        maximum period for COT)",
         });
     }
@@ -558,25 +558,16 @@ mod tests {
         assert_eq!(refused(qc, &with(0.1 * r, 0.01)), None);
         assert_eq!(
             refused(qc, &with(0.1 * r * (1.0 + 1e-9), 0.01)),
-            Some("approach_clearance (m)")
+            Some("approach_clearance")
         );
-        assert_eq!(
-            refused(qc, &with(-1e-12, 0.01)),
-            Some("approach_clearance (m)")
-        );
+        assert_eq!(refused(qc, &with(-1e-12, 0.01)), Some("approach_clearance"));
         assert_eq!(refused(qc, &with(0.0, 4.99)), None);
         for min_stick in [QC_MAX_PHASE, 0.0, f64::NAN] {
-            assert_eq!(
-                refused(qc, &with(0.0, min_stick)),
-                Some("minimum stick duration (s)")
-            );
+            assert_eq!(refused(qc, &with(0.0, min_stick)), Some("min_stick"));
         }
         let cot = Problem::PeriodicCot;
         assert_eq!(refused(cot, &with(0.0, QC_MAX_PHASE)), None);
-        assert_eq!(
-            refused(cot, &with(0.0, COT_MAX_PERIOD)),
-            Some("minimum stick duration (s)")
-        );
+        assert_eq!(refused(cot, &with(0.0, COT_MAX_PERIOD)), Some("min_stick"));
         assert_eq!(refused(Problem::Reach, &with(0.0, COT_MAX_PERIOD)), None);
     }
 }

@@ -255,8 +255,24 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     // run here so that a wrong value is refused as a usage error before any work starts.
     match check_settings(problem, &settings, &built_on) {
         Ok(()) => Ok(settings),
-        Err(e @ ProblemError::InvalidSetting { .. }) => bail_usage!("{problem}: {e}"),
+        Err(e @ ProblemError::InvalidSetting { name, .. }) => match option_of(name) {
+            Some(option) => bail_usage!("{option}: {problem}: {e}"),
+            None => bail_usage!("{problem}: {e}"),
+        },
         Err(e) => Err(e.into()),
+    }
+}
+
+/// The option of `optimize` that sets the problem setting `name` (the field that
+/// [`ProblemError::InvalidSetting`] names), so that a refused value names what the user typed.
+fn option_of(name: &str) -> Option<&'static str> {
+    match name {
+        "epsilon" => Some("--epsilon"),
+        "cone_margin" => Some("--cone-margin"),
+        "torque_margin" => Some("--torque-margin"),
+        "approach_clearance" => Some("--approach-clearance"),
+        "min_stick" => Some("--min-stick"),
+        _ => None,
     }
 }
 
