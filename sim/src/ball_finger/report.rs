@@ -9,8 +9,10 @@
 //! # Energy warnings
 //! The run summary reports each impact that raises the energy (only Newton's law, eq. 39, can:
 //! see bf-model's impact module) and the energy-balance error E(t) − E(t₀) − ∫ P dt of the
-//! integration (P of the power balance, eq. 22/25); above `BallFingerSettings::energy_error_tol`
-//! it is a warning (e.g. fixed-step RK4 with a step too long for the dynamics).
+//! integration (P of the power balance, eq. 22/25), as it accumulates over any
+//! `BallFingerSettings::energy_window` of simulated time; above
+//! `BallFingerSettings::energy_error_tol` it is a warning (e.g. fixed-step RK4 with a step too
+//! long for the dynamics).
 //!
 //! [`SampleInfo`], [`EventInfo`] and [`RunReport`] carry the number of joints N (default 3)
 //! for the torque vector τ ∈ ℝᴺ; [`RunSummary`] does not depend on N.
@@ -214,10 +216,15 @@ pub struct RunSummary {
     /// Largest energy change E⁺ − E⁻ over the impacts (J); > 0 only for Newton's law (eq. 39),
     /// which does not guarantee dissipation. 0 without impacts.
     pub max_impact_energy_gain: f64,
-    /// Largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events| over the samples (J): the energy-balance
-    /// error of the integration (P from the power balance, trapezoidal rule between samples;
-    /// jumps at events excluded).
+    /// The energy-balance error of the integration that the run is checked on (J): the largest
+    /// change of the residual E(t) − E(t₀) − ∫ P dt − Σ ΔE_events over any
+    /// `BallFingerSettings::energy_window` of simulated time (P from the power balance,
+    /// trapezoidal rule between samples; jumps at events excluded). For a run no longer than
+    /// the window it is the largest |residual| from t₀, [`energy_drift`](Self::energy_drift).
     pub energy_error: f64,
+    /// The largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events| over the whole run (J): the
+    /// residual from t₀, which grows with the run's length.
+    pub energy_drift: f64,
     /// Conditions that qualify the result: `energy_raising_impact` (one per impact raising E by
     /// more than `BallFingerSettings::impact_energy_tol`), `energy_error` (energy-balance error
     /// above `BallFingerSettings::energy_error_tol`), `zeno_fallback` (see the module docs).
@@ -269,15 +276,25 @@ fn summarize<const N: usize>(
             });
         }
     }
-    let (energy_error, t_error) = energy_balance_error(tr, samples);
+    let (t_res, residual) = balance_residual(tr, samples);
+    let energy_drift = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
+    let (energy_error, t_error) = window_error(&t_res, &residual, settings.energy_window);
     warnings.extend(out.warnings.iter().cloned());
     if energy_error > settings.energy_error_tol {
+        let span = if t_error - t0 > settings.energy_window {
+            format!(
+                "over the {} s up to t = {t_error} s",
+                settings.energy_window
+            )
+        } else {
+            format!("from t = {t0} s")
+        };
         warnings.push(SimWarning {
             t: t_error,
             kind: ENERGY_ERROR,
             message: format!(
-                "energy-balance error {energy_error:.3e} J exceeds {:e} J: the integration \
-                 step is too long for the dynamics",
+                "energy-balance error {energy_error:.3e} J {span} exceeds {:e} J: the \
+                 integration step is too long for the dynamics",
                 settings.energy_error_tol
             ),
         });
@@ -340,6 +357,7 @@ fn summarize<const N: usize>(
         energy_final: samples.last().map_or(f64::NAN, |s| s.energy),
         max_impact_energy_gain,
         energy_error,
+        energy_drift,
         warnings,
         stats: out.stats,
         cpu_seconds,
@@ -352,27 +370,49 @@ fn summarize<const N: usize>(
     }
 }
 
-/// Largest |E(t) − E(t₀) − ∫ P dt| over the samples, with the jumps at events (the interval
-/// ending at an `EventPost` sample) left out, and the time where it occurs. Non-finite samples
-/// (a failed run's last state) are skipped.
-fn energy_balance_error<const N: usize>(
+/// The sample times and the energy-balance residual E(t) − E(t₀) − ∫ P dt at each, with the
+/// jumps at events (the interval ending at an `EventPost` sample) left out. A non-finite
+/// interval (a failed run's last state) adds nothing.
+fn balance_residual<const N: usize>(
     tr: &crate::Trajectory<Mode>,
     samples: &[SampleInfo<N>],
-) -> (f64, f64) {
-    let mut residual = 0.0f64;
-    let mut worst = (0.0f64, tr.t.first().copied().unwrap_or(0.0));
-    for i in 1..tr.len() {
-        if tr.kind[i] == SampleKind::EventPost {
-            continue;
+) -> (Vec<f64>, Vec<f64>) {
+    let n = tr.len().min(samples.len());
+    let mut residual = Vec::with_capacity(n);
+    let mut sum = 0.0f64;
+    for i in 0..n {
+        if i > 0 && tr.kind[i] != SampleKind::EventPost {
+            let (a, b) = (&samples[i - 1], &samples[i]);
+            let step = (b.energy - a.energy) - 0.5 * (a.power + b.power) * (tr.t[i] - tr.t[i - 1]);
+            if step.is_finite() {
+                sum += step;
+            }
         }
-        let (a, b) = (&samples[i - 1], &samples[i]);
-        let step = (b.energy - a.energy) - 0.5 * (a.power + b.power) * (tr.t[i] - tr.t[i - 1]);
-        if !step.is_finite() {
-            continue;
+        residual.push(sum);
+    }
+    (tr.t[..n].to_vec(), residual)
+}
+
+/// The largest change of the residual `r` (sampled at the non-decreasing times `t`) over a
+/// trailing `window`, and the time where it ends: at sample i, |r(tᵢ) − r(tⱼ)| with j the last
+/// sample at or before tᵢ − `window`, or |r(tᵢ)| while there is none (r = 0 before t₀). With a
+/// window at least as long as the run it is the largest |r| from t₀.
+fn window_error(t: &[f64], r: &[f64], window: f64) -> (f64, f64) {
+    let mut worst = (0.0f64, t.first().copied().unwrap_or(0.0));
+    let mut base: Option<usize> = None;
+    for i in 0..t.len().min(r.len()) {
+        // The times are non-decreasing, so the base only moves forward.
+        loop {
+            let next = base.map_or(0, |j| j + 1);
+            if next < i && t[next] <= t[i] - window {
+                base = Some(next);
+            } else {
+                break;
+            }
         }
-        residual += step;
-        if residual.abs() > worst.0 {
-            worst = (residual.abs(), tr.t[i]);
+        let e = (r[i] - base.map_or(0.0, |j| r[j])).abs();
+        if e > worst.0 {
+            worst = (e, t[i]);
         }
     }
     worst
@@ -444,11 +484,13 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J",
+            "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J (drift over \
+             the run {:.3e} J)",
             self.energy_initial,
             self.energy_final,
             self.energy_final - self.energy_initial,
-            self.energy_error
+            self.energy_error,
+            self.energy_drift
         )?;
         writeln!(
             f,
@@ -481,5 +523,47 @@ pub(super) fn mode_name(m: Mode) -> &'static str {
         Mode::Free => "free",
         Mode::Stick => "stick",
         Mode::Slip => "slip",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::window_error;
+
+    /// A residual that drifts at a constant rate d: over a window W the check sees d·W, where
+    /// it started (at t₀) it sees d·t, whatever the run's length.
+    #[test]
+    fn a_steady_drift_is_checked_per_window() {
+        let d = 1e-4;
+        let t: Vec<f64> = (0..=4000).map(|k| 0.01 * k as f64).collect();
+        let r: Vec<f64> = t.iter().map(|t| -d * t).collect();
+        // The window reaches back to a sample, so it spans W to W plus one sample interval.
+        let (e, at) = window_error(&t, &r, 10.0);
+        assert!(e >= d * 10.0 - 1e-12 && e <= d * 10.01 + 1e-12, "{e}");
+        assert!(at >= 10.0, "{at}");
+        let (e, at) = window_error(&t, &r, f64::INFINITY);
+        assert!((e - d * 40.0).abs() <= 1e-12, "{e}");
+        assert_eq!(at, 40.0);
+        // Within the first window, the check is the residual from t₀.
+        let (e, _) = window_error(&t[..=500], &r[..=500], 10.0);
+        assert!((e - d * 5.0).abs() <= 1e-12, "{e}");
+    }
+
+    /// A jump of the residual (a badly integrated event) is seen at its full size by every
+    /// window that holds it, however long the run goes on after it, and a jump that comes
+    /// back within a window is seen as well.
+    #[test]
+    fn a_jump_is_checked_whatever_follows() {
+        let t: Vec<f64> = (0..=10_000).map(|k| 0.01 * k as f64).collect();
+        let jump = |t: f64| if t >= 37.0 { 2e-3 } else { 0.0 };
+        let r: Vec<f64> = t.iter().map(|&t| jump(t)).collect();
+        let (e, at) = window_error(&t, &r, 10.0);
+        assert_eq!(e, 2e-3);
+        assert!((at - 37.0).abs() < 1e-9, "{at}");
+        let spike: Vec<f64> = t
+            .iter()
+            .map(|&t| if (37.0..37.5).contains(&t) { 2e-3 } else { 0.0 })
+            .collect();
+        assert_eq!(window_error(&t, &spike, 10.0).0, 2e-3);
     }
 }

@@ -27,11 +27,20 @@ pub struct BallFingerSettings {
     /// An impact that raises the energy E by more than this (J) is reported as an
     /// `energy_raising_impact` warning; only Newton's law (eq. 39) can do so (default: 1e-9).
     pub impact_energy_tol: f64,
-    /// A run whose energy-balance error (the largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events|,
-    /// P = dE/dt of the power balance, trapezoidal rule over the samples) exceeds this (J) gets an
-    /// `energy_error` warning: the step is too long for the dynamics (e.g. fixed-step RK4 with a
-    /// large step) (default: 1e-3).
+    /// A run whose energy-balance error (the residual E(t) − E(t₀) − ∫ P dt − Σ ΔE_events,
+    /// P = dE/dt of the power balance, trapezoidal rule over the samples, as it accumulates
+    /// over any [`energy_window`](Self::energy_window) of simulated time) exceeds this (J) gets
+    /// an `energy_error` warning: the step is too long for the dynamics (e.g. fixed-step RK4
+    /// with a large step) (default: 1e-3).
     pub energy_error_tol: f64,
+    /// The span of simulated time (s) over which the balance error is held to
+    /// [`energy_error_tol`](Self::energy_error_tol): at every sample, the residual accumulated
+    /// since the last sample at least this long before (since t₀ within the first span). A run
+    /// this long or shorter is checked from t₀ as a whole; a longer one is held to the same
+    /// accuracy per span, since even an accurate integration accumulates a residual in
+    /// proportion to its length (default: 10, the length of a default `simulate` run;
+    /// `f64::INFINITY` checks every run from t₀).
+    pub energy_window: f64,
 }
 
 impl Default for BallFingerSettings {
@@ -44,6 +53,7 @@ impl Default for BallFingerSettings {
             zeno_hold_time: 1e-2,
             impact_energy_tol: 1e-9,
             energy_error_tol: 1e-3,
+            energy_window: 10.0,
         }
     }
 }

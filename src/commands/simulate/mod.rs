@@ -30,9 +30,9 @@
 //! (`bf_output::OutputDir`): it is checked before the run and replaced as a whole at the end,
 //! so it never mixes files of two runs. A run that fails midway still writes everything up to
 //! the failure, marks the set with a `FAILED` file and exits non-zero. So does a run that ends
-//! with its energy balance (E(t) − E(0) − ∫P dt − ΣΔE of the events) off by more than the
-//! simulator's tolerance (1e-3 J): its step was too long for the dynamics, and the whole
-//! trajectory is written but marked as failed.
+//! with its energy balance (E(t) − E(0) − ∫P dt − ΣΔE of the events, as it accumulates over any
+//! 10 s of the run) off by more than the simulator's tolerance (1e-3 J): its step was too long
+//! for the dynamics, and the whole trajectory is written but marked as failed.
 //!
 //! Resources are bounded: a run whose `--t-end` needs more steps than `--max-steps` (at least
 //! t_end / h_max with DOPRI5, t_end / step with RK4), or whose `--output-dt` grid has more
