@@ -294,7 +294,8 @@ fn summarize<const N: usize>(
             kind: ENERGY_ERROR,
             message: format!(
                 "energy-balance error {energy_error:.3e} J {span} exceeds {:e} J: the \
-                 integration step is too long for the dynamics",
+                 integration is too coarse for the dynamics (its step too long, or its \
+                 tolerance too loose)",
                 settings.energy_error_tol
             ),
         });

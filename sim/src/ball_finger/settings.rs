@@ -30,8 +30,8 @@ pub struct BallFingerSettings {
     /// A run whose energy-balance error (the residual E(t) − E(t₀) − ∫ P dt − Σ ΔE_events,
     /// P = dE/dt of the power balance, trapezoidal rule over the samples, as it accumulates
     /// over any [`energy_window`](Self::energy_window) of simulated time) exceeds this (J) gets
-    /// an `energy_error` warning: the step is too long for the dynamics (e.g. fixed-step RK4
-    /// with a large step) (default: 1e-3).
+    /// an `energy_error` warning: the integration is too coarse for the dynamics (e.g.
+    /// fixed-step RK4 with a large step, or a loose tolerance) (default: 1e-3).
     pub energy_error_tol: f64,
     /// The span of simulated time (s) over which the balance error is held to
     /// [`energy_error_tol`](Self::energy_error_tol): at every sample, the residual accumulated

@@ -31,8 +31,9 @@
 //! so it never mixes files of two runs. A run that fails midway still writes everything up to
 //! the failure, marks the set with a `FAILED` file and exits non-zero. So does a run that ends
 //! with its energy balance (E(t) − E(0) − ∫P dt − ΣΔE of the events, as it accumulates over any
-//! 10 s of the run) off by more than the simulator's tolerance (1e-3 J): its step was too long
-//! for the dynamics, and the whole trajectory is written but marked as failed.
+//! 10 s of the run) off by more than the simulator's tolerance (1e-3 J): its integration was too
+//! coarse for the dynamics (the step or the tolerance), and the whole trajectory is written but
+//! marked as failed.
 //!
 //! Resources are bounded: a run whose `--t-end` needs more steps than `--max-steps` (at least
 //! t_end / h_max with DOPRI5, t_end / step with RK4), or whose `--output-dt` grid has more
@@ -559,9 +560,9 @@ fn run_model<K: Kernels<N>, const N: usize>(
             e
         }
     });
-    // A run that ends but whose energy balance fails its own check (the step too long for the
-    // dynamics) has a trajectory no one should take for a result: the set is written whole
-    // and marked as failed. A run that stopped early reports its stop instead (`failure`).
+    // A run that ends but whose energy balance fails its own check (the integration too
+    // coarse for the dynamics) has a trajectory no one should take for a result: the set is
+    // written whole and marked as failed. A run that stopped early reports its stop instead (`failure`).
     let unbalanced = report.summary.energy_check_failure().map(|w| {
         format!(
             "the energy balance failed its check at t = {} s: {}; the whole trajectory ({} \
