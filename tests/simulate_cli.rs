@@ -529,5 +529,31 @@ fn a_run_whose_energy_balance_fails_is_marked_failed() {
     );
     assert!(drift > 1e-3 && error < 1e-3, "error {error}, drift {drift}");
     assert!(!out_dir.join("FAILED").exists());
+    // An arm without a ball is held to the same rule, relative to the energy it moves: the
+    // PUMA's passive fall with RK4 at 0.1 s fails, with everything written.
+    let arm_dir = dir.join("arm");
+    let puma = root().join("scenes/puma560.toml");
+    let o = run(&[
+        "simulate",
+        "--scene",
+        puma.to_str().unwrap(),
+        "--integrator",
+        "rk4",
+        "--step",
+        "0.1",
+        "--t-end",
+        "5",
+        "--out",
+        arm_dir.to_str().unwrap(),
+    ]);
+    assert_clean_failure(&o, &["energy balance failed its check", "too coarse"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(arm_dir.join("FAILED").exists());
+    let summary = json(&arm_dir.join("summary.json"));
+    assert!(
+        summary["energy_error"].as_f64().unwrap() > summary["energy_tolerance"].as_f64().unwrap(),
+        "{summary}"
+    );
+    assert!(summary["error"].is_string(), "{summary}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -6,7 +6,7 @@
 use bf_codegen::spec::Scene;
 use bf_model::arm::ArmModel;
 use bf_sim::arm::{ArmMode, FreeArm};
-use bf_sim::{Input, PdController, SimError, SimSettings, simulate};
+use bf_sim::{Input, Method, PdController, SimError, SimSettings, simulate};
 
 /// τ = 0.
 struct Zero(usize);
@@ -57,6 +57,42 @@ fn puma_falling_under_gravity_conserves_energy() {
         (s.energy_final - s.energy_initial).abs() < 1e-7 * (1.0 + s.energy_initial.abs()),
         "{s}"
     );
+    assert_eq!(s.energy_check_failure(), None, "{s}");
+}
+
+/// The energy check holds an arm run to a share of the energy it moves: the PUMA's passive fall
+/// passes with DOPRI5 at the default tolerance, and fails with RK4 at a step of 0.1 s, whose
+/// balance error is of the order of that energy; the tolerance is the same for both runs up
+/// to the motion they compute.
+#[test]
+fn a_coarse_arm_run_fails_its_energy_check() {
+    let x0 = [0.0, 0.3, -0.2, 0.1, 0.4, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    let run = |settings: SimSettings| {
+        let sys = FreeArm::new(arm(include_str!("../../scenes/puma560.toml")), Zero(6)).unwrap();
+        let out = simulate(&sys, settings, ArmMode::Free, 0.0, &x0, 5.0).unwrap();
+        sys.report(&out, 0.0).unwrap().summary
+    };
+    let fine = run(SimSettings::default());
+    let coarse = run(SimSettings {
+        method: Method::Rk4 { h: 0.1 },
+        ..SimSettings::default()
+    });
+    assert_eq!(fine.energy_check_failure(), None, "{fine}");
+    assert!(fine.energy_error < 1e-3 * fine.energy_tolerance, "{fine}");
+    assert!(
+        coarse
+            .energy_check_failure()
+            .is_some_and(|w| w.contains("too coarse")),
+        "{coarse}"
+    );
+    // The energy the fall moves (its kinetic energy) sets the tolerance: about the same for
+    // both runs, and far below the coarse run's error.
+    assert!(
+        coarse.energy_error > 10.0 * coarse.energy_tolerance,
+        "{coarse}"
+    );
+    let ratio = coarse.energy_tolerance / fine.energy_tolerance;
+    assert!((0.5..2.0).contains(&ratio), "{coarse} / {fine}");
 }
 
 #[test]
@@ -72,6 +108,7 @@ fn iiwa_under_pd_control_keeps_the_energy_balance() {
     assert!(s.work.abs() > 1e-2, "the controller does work: {s}");
     // the trapezoidal ∫ P dt between accepted steps limits the balance to ~1e-6 relative
     assert!(s.energy_error < 1e-5 * (1.0 + s.work.abs()), "{s}");
+    assert_eq!(s.energy_check_failure(), None, "{s}");
     // input of the wrong size is refused
     let pd3 = PdController::new(vec![1.0; 3], vec![1.0; 3], vec![0.0; 3]).unwrap();
     let model = arm(include_str!("../../scenes/iiwa7.toml"));

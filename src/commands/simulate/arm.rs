@@ -107,18 +107,30 @@ pub(super) fn run_arm(
         .report(&out, start.elapsed().as_secs_f64())
         .map_err(|e| anyhow!("{e}"))?;
     report.summary.kernels = Some(source.name().to_string());
+    // A run that ends but fails its energy check is no result either, as for the ball and
+    // finger: written whole, marked as failed.
+    let failure = error.or_else(|| {
+        report.summary.energy_check_failure().map(|w| {
+            format!(
+                "the energy balance failed its check: {w}; the whole trajectory ({} samples) was \
+                 written to {}",
+                report.samples.len(),
+                args.out.display()
+            )
+        })
+    });
     out_dir.file("summary.json")?;
     report
-        .write_dir(out_dir.path(), error.as_deref())
+        .write_dir(out_dir.path(), failure.as_deref())
         .map_err(|e| anyhow!(out_dir.rename_in(&e.to_string())))
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
-    out_dir.commit(match &error {
+    out_dir.commit(match &failure {
         Some(e) => Outcome::Failed(e),
         None => Outcome::Success,
     })?;
     crate::outln!("{}", report.summary)?;
     crate::outln!("output: {}", args.out.display())?;
-    match error {
+    match failure {
         Some(e) => bail!("{e}"),
         None => Ok(()),
     }
