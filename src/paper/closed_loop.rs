@@ -98,27 +98,6 @@ pub struct Tracking {
     pub replans: super::replan::ReplanLog,
 }
 
-impl Tracking {
-    /// Why the run is no result, if it is not: the ball was lost ([`Tracking::lost`]), or the
-    /// simulation's energy balance missed the simulator's own check
-    /// (`RunSummary::energy_check_failure`), when its periods measure the integrator's error
-    /// rather than the controller.
-    pub fn failure(&self) -> Option<String> {
-        if let Some(lost) = &self.lost {
-            return Some(format!(
-                "the {} controller lost the ball: {lost}",
-                self.controller.name()
-            ));
-        }
-        self.report.summary.energy_check_failure().map(|w| {
-            format!(
-                "the energy balance failed its check at t = {} s: {}",
-                w.t, w.message
-            )
-        })
-    }
-}
-
 /// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none) as a
 /// model on the compiled kernels, with its name.
 pub fn solution_model(sol: &OcpSolution) -> Result<(Model<DynKernels>, String)> {
