@@ -126,7 +126,8 @@ pub enum Command {
     ///
     /// Exit status: 0 when every period made contact and all periods completed; 1 when the run
     /// lost the ball (the output set is still written, marked FAILED, and tracking.json says
-    /// why) and for other errors; 2 for usage errors.
+    /// why) or its energy balance failed the simulator's check (marked FAILED likewise), and
+    /// for other errors; 2 for usage errors.
     Track(TrackArgs),
     /// Check the paper against derivations (`appendix`: each Appendix A/B formula as printed
     /// vs derived, and the misprints; exits non-zero if a derivation fails).

@@ -24,7 +24,7 @@
 mod cli;
 
 use ball_finger::paper::closed_loop::{
-    ControllerKind, Tracking, reference_of, run_tracking, solution_model,
+    ControllerKind, Tracking, reference_of, robustness_row, run_tracking, solution_model,
 };
 use ball_finger::pipeline::SolutionIo;
 use bf_control::{HybridController, HybridGains, InverseDynamics};
@@ -51,6 +51,43 @@ fn tracked(
         }
     };
     run_tracking(sol, controller, periods, plant, law).unwrap()
+}
+
+#[test]
+fn a_tracking_run_fails_on_a_lost_ball_or_a_failed_energy_check() {
+    let mut run = hybrid(None, ImpactLaw::Newton, 1);
+    let row = robustness_row("nominal".into(), &run, 1);
+    assert_eq!(row.error, None);
+    assert_eq!(row.completed_periods, 1);
+    let tol = BallFingerSettings::default().energy_error_tol;
+    assert!(
+        run.report.summary.energy_error <= tol,
+        "{}",
+        run.report.summary.energy_error
+    );
+    assert_eq!(run.failure(), None);
+    // The warning the simulator records when the balance misses `tol` (its kind is the
+    // documented `summary.json` key).
+    run.report.summary.warnings.push(bf_sim::SimWarning {
+        t: 1.0,
+        kind: "energy_error",
+        message: format!("energy-balance error 1e-2 J from t = 0 s exceeds {tol} J"),
+    });
+    let failure = run.failure().expect("a failed energy check fails the run");
+    assert!(failure.contains("energy balance failed"), "{failure}");
+    // In the robustness table it is an error that misses the target, not a row of errors.
+    let row = robustness_row("nominal".into(), &run, 1);
+    assert!(!row.meets_target);
+    assert!(
+        row.error
+            .as_deref()
+            .is_some_and(|e| e.contains("energy balance failed")),
+        "{row:?}"
+    );
+    // A lost ball is the first thing to say.
+    run.lost = Some("no contact in period 1".into());
+    let failure = run.failure().expect("a lost ball fails the run");
+    assert!(failure.contains("lost the ball"), "{failure}");
 }
 
 /// The paper scene with ball mass ×1.1, μ_s and μ_k ×0.8, every link's mass and inertia ×1.05

@@ -1,7 +1,8 @@
 //! `track`: executes an optimum in closed loop ([`crate::paper::closed_loop`]) and writes the
 //! files of `simulate` (trajectory, events, summary) plus `tracking.json` (docs/files.md) into
-//! an output directory replaced as a whole (`bf_output::OutputDir`); a run that lost the ball
-//! is marked FAILED and exits non-zero. `--robustness` runs the robustness table of
+//! an output directory replaced as a whole (`bf_output::OutputDir`); a run that lost the ball,
+//! or whose energy balance failed the simulator's check, is marked FAILED and exits non-zero
+//! (`Tracking::failure`). `--robustness` runs the robustness table of
 //! [`crate::paper::closed_loop::robustness_rows`] instead (robustness.md, robustness.json),
 //! marked FAILED when a plant misses the target.
 
@@ -195,10 +196,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     );
     let bytes = serde_json::to_vec_pretty(&record)?;
     out_dir.write("tracking.json", &bytes)?;
-    let failure = run
-        .lost
-        .as_ref()
-        .map(|l| format!("the {} controller lost the ball: {l}", controller.name()));
+    let failure = run.failure();
     out_dir.commit(match &failure {
         Some(f) => Outcome::Failed(f),
         None => Outcome::Success,
@@ -239,6 +237,9 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             p.slip_time,
             p.max_abs_tau
         )?;
+    }
+    for line in run.report.summary.warning_lines() {
+        eprintln!("warning: {line}");
     }
     if let (Some(median), Some(max)) = (record.replan_seconds_median, record.replan_seconds_max) {
         let used = run.replans.replans.iter().filter(|p| p.used).count();

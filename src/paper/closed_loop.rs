@@ -98,6 +98,34 @@ pub struct Tracking {
     pub replans: super::replan::ReplanLog,
 }
 
+impl Tracking {
+    /// Why the run is no result, if it is not: the ball was lost ([`Tracking::lost`]), or the
+    /// simulation's energy balance missed the simulator's own check
+    /// (`RunSummary::energy_check_failure`), when its periods measure the integrator's error
+    /// rather than the controller.
+    pub fn failure(&self) -> Option<String> {
+        if let Some(lost) = &self.lost {
+            return Some(format!(
+                "the {} controller lost the ball: {lost}",
+                self.controller.name()
+            ));
+        }
+        self.energy_check_failure()
+    }
+
+    /// Why the simulation's energy balance failed the simulator's check
+    /// (`RunSummary::energy_check_failure`), if it did: its periods measure the integrator's
+    /// error, whatever they say of the controller.
+    pub fn energy_check_failure(&self) -> Option<String> {
+        self.report.summary.energy_check_failure().map(|w| {
+            format!(
+                "the energy balance failed its check at t = {} s: {}",
+                w.t, w.message
+            )
+        })
+    }
+}
+
 /// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none) as a
 /// model on the compiled kernels, with its name.
 pub fn solution_model(sol: &OcpSolution) -> Result<(Model<DynKernels>, String)> {
@@ -232,6 +260,10 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
         .unwrap_or(f64::NAN);
     if let Some(lost) = &t.lost {
         check.failure = Some(format!("the nominal plant lost the ball ({lost})"));
+        return Some(check);
+    }
+    if let Some(unbalanced) = t.energy_check_failure() {
+        check.failure = Some(format!("the nominal run is not a result: {unbalanced}"));
         return Some(check);
     }
     // A NaN error (no period completed) fails as well.
@@ -576,9 +608,10 @@ pub fn comparison_markdown(
                 } else {
                     format!("{tau:.3}")
                 };
-                let ball = match &t.lost {
-                    Some(why) => format!("**lost**: {why}"),
-                    None => "kept".into(),
+                let ball = match (&t.lost, t.energy_check_failure()) {
+                    (Some(why), _) => format!("**lost**: {why}"),
+                    (None, Some(why)) => format!("kept, but **not a result**: {why}"),
+                    (None, None) => "kept".into(),
                 };
                 writeln!(
                     s,
@@ -842,8 +875,27 @@ pub struct RobustnessRow {
     /// Whether the run met the target: all periods completed, contact in each, error ≤
     /// [`ROBUSTNESS_TARGET`] from the 4th period on.
     pub meets_target: bool,
-    /// Why the run could not be made (the plant could not be built or simulated).
+    /// Why the run could not be made (the plant could not be built or simulated), or why it is
+    /// not a result (its energy balance failed the simulator's check).
     pub error: Option<String>,
+}
+
+impl RobustnessRow {
+    /// The row of a run on `plant` that is no result, for the reason `error`: it misses the
+    /// target.
+    fn failed(plant: String, error: String) -> RobustnessRow {
+        RobustnessRow {
+            plant,
+            completed_periods: 0,
+            first_error: None,
+            max_error_from_fourth: None,
+            contact_every_period: false,
+            lost: None,
+            max_abs_tau: 0.0,
+            meets_target: false,
+            error: Some(error),
+        }
+    }
 }
 
 /// The rows of the robustness table: `controller` on the optimum `sol` for `periods` periods
@@ -870,36 +922,37 @@ fn rows(
     runs(sol, controller, periods, replan, until_miss)
         .into_iter()
         .map(|(plant, run)| match run {
-            Ok(t) => {
-                let later = max_error_from_fourth(&t);
-                let contact = t.lost.is_none() && t.periods.iter().all(|p| p.contact);
-                RobustnessRow {
-                    plant,
-                    completed_periods: t.periods.len(),
-                    first_error: t.periods.first().map(|p| p.omega_error),
-                    max_error_from_fourth: later,
-                    contact_every_period: contact,
-                    lost: t.lost.clone(),
-                    max_abs_tau: t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max),
-                    meets_target: contact
-                        && t.periods.len() == periods
-                        && later.is_some_and(|e| e <= ROBUSTNESS_TARGET),
-                    error: None,
-                }
-            }
-            Err(e) => RobustnessRow {
-                plant,
-                completed_periods: 0,
-                first_error: None,
-                max_error_from_fourth: None,
-                contact_every_period: false,
-                lost: None,
-                max_abs_tau: 0.0,
-                meets_target: false,
-                error: Some(crate::errors::render(&e)),
-            },
+            Ok(t) => robustness_row(plant, &t, periods),
+            Err(e) => RobustnessRow::failed(plant, crate::errors::render(&e)),
         })
         .collect()
+}
+
+/// The row of the robustness table of run `t` on `plant`, asked for `periods` periods. A run
+/// whose energy check failed ([`Tracking::energy_check_failure`]) measured the integrator, not
+/// the plant: its row is an error, and misses the target.
+pub fn robustness_row(plant: String, t: &Tracking, periods: usize) -> RobustnessRow {
+    if let (None, Some(unbalanced)) = (&t.lost, t.energy_check_failure()) {
+        return RobustnessRow {
+            completed_periods: t.periods.len(),
+            ..RobustnessRow::failed(plant, unbalanced)
+        };
+    }
+    let later = max_error_from_fourth(t);
+    let contact = t.lost.is_none() && t.periods.iter().all(|p| p.contact);
+    RobustnessRow {
+        plant,
+        completed_periods: t.periods.len(),
+        first_error: t.periods.first().map(|p| p.omega_error),
+        max_error_from_fourth: later,
+        contact_every_period: contact,
+        lost: t.lost.clone(),
+        max_abs_tau: t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max),
+        meets_target: contact
+            && t.periods.len() == periods
+            && later.is_some_and(|e| e <= ROBUSTNESS_TARGET),
+        error: None,
+    }
 }
 
 /// The robustness table of `rows` (of `controller` on the optimum `name`, `periods` periods) as

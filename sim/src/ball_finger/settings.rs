@@ -28,7 +28,7 @@ pub struct BallFingerSettings {
     /// `energy_raising_impact` warning; only Newton's law (eq. 39) can do so (default: 1e-9).
     pub impact_energy_tol: f64,
     /// A run whose energy-balance error (the residual E(t) − E(t₀) − ∫ P dt − Σ ΔE_events,
-    /// P = dE/dt of the power balance, trapezoidal rule over the samples, as it accumulates
+    /// P = dE/dt of the power balance, Simpson's rule over each step, as it accumulates
     /// over any [`energy_window`](Self::energy_window) of simulated time) exceeds this (J) gets
     /// an `energy_error` warning: the integration is too coarse for the dynamics (e.g.
     /// fixed-step RK4 with a large step, or a loose tolerance) (default: 1e-3).
