@@ -21,7 +21,7 @@
 
 use super::{BallFinger, BallFingerSettings, state_of};
 use crate::trajectory::{SampleKind, SimOutput};
-use crate::{HybridSystem, Input, SimError, SimWarning};
+use crate::{Input, SimError, SimWarning};
 use bf_model::{Kernels, Mode};
 use serde::Serialize;
 
@@ -32,6 +32,17 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
     /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
     pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo<N>, SimError> {
+        self.sample_eval(mode, t, x).map(|(info, _)| info)
+    }
+
+    /// [`BallFinger::sample_info`] and the state derivative ẋ at the sample, from one
+    /// evaluation of the model.
+    fn sample_eval(
+        &self,
+        mode: Mode,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(SampleInfo<N>, Vec<f64>), SimError> {
         let s = state_of::<N>(x)?;
         let tau = self.tau(mode, t, &s)?;
         let kin = self.model.evaluate(&s).map_err(SimError::system)?;
@@ -41,8 +52,10 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             .map_err(SimError::system)?;
         let e = self.model.energy(&s).map_err(SimError::system)?;
         let power = bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force);
+        let mut dx = vec![0.0; x.len()];
+        acc.write_state_derivative(&s.qd, &mut dx);
         let c = &kin.contact;
-        Ok(SampleInfo {
+        let info = SampleInfo {
             tau: tau.into(),
             lambda: acc.force.lambda.into(),
             lambda_n: acc.force.lambda_n,
@@ -52,7 +65,20 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             normal_velocity: c.normal_velocity(),
             energy: e.total,
             power: power.total,
-        })
+        };
+        Ok((info, dx))
+    }
+
+    /// P of the power balance at (t, x) in `mode`: [`BallFinger::sample_info`]'s `power` alone.
+    fn power_at(&self, mode: Mode, t: f64, x: &[f64]) -> Result<f64, SimError> {
+        let s = state_of::<N>(x)?;
+        let tau = self.tau(mode, t, &s)?;
+        let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+        let acc = self
+            .model
+            .accelerations(mode, &s, &tau)
+            .map_err(SimError::system)?;
+        Ok(bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force).total)
     }
 
     /// [`BallFinger::sample_info`] that never fails: a sample where the model cannot be
@@ -73,6 +99,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         tr: &crate::Trajectory<Mode>,
         i: usize,
         samples: &[SampleInfo<N>],
+        slopes: &[Option<Vec<f64>>],
     ) -> f64 {
         if i == 0 || tr.kind[i] == SampleKind::EventPost {
             return 0.0;
@@ -83,25 +110,25 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         if h.is_nan() || h <= 0.0 {
             return 0.0;
         }
-        // The interval (t[i-1], t[i]] was integrated in the mode of its end sample.
+        // The interval (t[i-1], t[i]] was integrated in the mode of its end sample; its start
+        // is in the same mode but after an event, which this interval does not hold.
         let mode = tr.mode[i];
-        let power_at = |t: f64, x: &[f64]| self.sample_info(mode, t, x).map(|s| s.power);
         let trapezoid = 0.5 * (samples[i - 1].power + samples[i].power) * h;
         let simpson = || -> Result<f64, SimError> {
             let (xa, xb) = (&tr.x[i - 1], &tr.x[i]);
-            let (mut fa, mut fb) = (vec![0.0; xa.len()], vec![0.0; xb.len()]);
-            self.rhs(mode, ta, xa, &mut fa)?;
-            self.rhs(mode, tb, xb, &mut fb)?;
+            let (Some(fa), Some(fb)) = (&slopes[i - 1], &slopes[i]) else {
+                return Err(SimError::system(
+                    "no state derivative at the interval's ends",
+                ));
+            };
+            if tr.mode[i - 1] != mode {
+                return Err(SimError::system("the interval starts in another mode"));
+            }
             let mid: Vec<f64> = (0..xa.len())
                 .map(|k| 0.5 * (xa[k] + xb[k]) + h / 8.0 * (fa[k] - fb[k]))
                 .collect();
-            let pa = if tr.mode[i - 1] == mode {
-                samples[i - 1].power
-            } else {
-                power_at(ta, xa)?
-            };
-            let pm = power_at(ta + 0.5 * h, &mid)?;
-            Ok(h / 6.0 * (pa + 4.0 * pm + samples[i].power))
+            let pm = self.power_at(mode, ta + 0.5 * h, &mid)?;
+            Ok(h / 6.0 * (samples[i - 1].power + 4.0 * pm + samples[i].power))
         };
         simpson()
             .ok()
@@ -113,9 +140,12 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// is the wall time the run took (for the real-time factor).
     pub fn report(&self, out: &SimOutput<Mode>, t0: f64, cpu_seconds: f64) -> RunReport<N> {
         let tr = &out.trajectory;
-        let samples: Vec<SampleInfo<N>> = (0..tr.len())
-            .map(|i| self.sample_info_or_nan(tr.mode[i], tr.t[i], &tr.x[i]))
-            .collect();
+        let (samples, slopes): (Vec<SampleInfo<N>>, Vec<Option<Vec<f64>>>) = (0..tr.len())
+            .map(|i| match self.sample_eval(tr.mode[i], tr.t[i], &tr.x[i]) {
+                Ok((info, dx)) => (info, Some(dx)),
+                Err(_) => (SampleInfo::NAN, None),
+            })
+            .unzip();
         let events: Vec<EventInfo<N>> = out
             .events
             .iter()
@@ -137,7 +167,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             })
             .collect();
         let work: Vec<f64> = (0..tr.len())
-            .map(|i| self.interval_work(tr, i, &samples))
+            .map(|i| self.interval_work(tr, i, &samples, &slopes))
             .collect();
         let summary = summarize(
             out,
