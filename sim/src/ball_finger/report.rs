@@ -22,8 +22,22 @@
 use super::{BallFinger, BallFingerSettings, state_of};
 use crate::trajectory::{SampleKind, SimOutput};
 use crate::{Input, SimError, SimWarning};
-use bf_model::{Kernels, Mode};
+use bf_model::{Kernels, Mode, State};
 use serde::Serialize;
+
+/// The model evaluated at one state in one mode, for the samples and the steps' midpoints.
+struct Evaluated<const N: usize> {
+    /// The state.
+    state: State<N>,
+    /// τ from the input.
+    tau: bf_model::VecN<N>,
+    /// The contact kinematics.
+    kin: bf_model::ContactKinematics<N>,
+    /// The mode's accelerations and contact forces.
+    acc: bf_model::Accelerations<N>,
+    /// P of the power balance (W).
+    power: f64,
+}
 
 /// Kind of the warning of a failed energy-balance check ([`RunSummary::energy_check_failure`]).
 const ENERGY_ERROR: &str = "energy_error";
@@ -35,6 +49,25 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         self.sample_eval(mode, t, x).map(|(info, _)| info)
     }
 
+    /// The model at (t, x) in `mode` ([`Evaluated`]).
+    fn dynamics_at(&self, mode: Mode, t: f64, x: &[f64]) -> Result<Evaluated<N>, SimError> {
+        let s = state_of::<N>(x)?;
+        let tau = self.tau(mode, t, &s)?;
+        let kin = self.model.evaluate(&s).map_err(SimError::system)?;
+        let acc = self
+            .model
+            .accelerations(mode, &s, &tau)
+            .map_err(SimError::system)?;
+        let power = bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force);
+        Ok(Evaluated {
+            state: s,
+            tau,
+            kin,
+            acc,
+            power: power.total,
+        })
+    }
+
     /// [`BallFinger::sample_info`] and the state derivative ẋ at the sample, from one
     /// evaluation of the model.
     fn sample_eval(
@@ -43,15 +76,14 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         t: f64,
         x: &[f64],
     ) -> Result<(SampleInfo<N>, Vec<f64>), SimError> {
-        let s = state_of::<N>(x)?;
-        let tau = self.tau(mode, t, &s)?;
-        let kin = self.model.evaluate(&s).map_err(SimError::system)?;
-        let acc = self
-            .model
-            .accelerations(mode, &s, &tau)
-            .map_err(SimError::system)?;
+        let Evaluated {
+            state: s,
+            tau,
+            kin,
+            acc,
+            power,
+        } = self.dynamics_at(mode, t, x)?;
         let e = self.model.energy(&s).map_err(SimError::system)?;
-        let power = bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force);
         let mut dx = vec![0.0; x.len()];
         acc.write_state_derivative(&s.qd, &mut dx);
         let c = &kin.contact;
@@ -64,21 +96,9 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             slip_speed: c.delta_v.norm(),
             normal_velocity: c.normal_velocity(),
             energy: e.total,
-            power: power.total,
+            power,
         };
         Ok((info, dx))
-    }
-
-    /// P of the power balance at (t, x) in `mode`: [`BallFinger::sample_info`]'s `power` alone.
-    fn power_at(&self, mode: Mode, t: f64, x: &[f64]) -> Result<f64, SimError> {
-        let s = state_of::<N>(x)?;
-        let tau = self.tau(mode, t, &s)?;
-        let kin = self.model.evaluate(&s).map_err(SimError::system)?;
-        let acc = self
-            .model
-            .accelerations(mode, &s, &tau)
-            .map_err(SimError::system)?;
-        Ok(bf_model::energy::power_balance(&kin, self.model.params(), &tau, &acc.force).total)
     }
 
     /// [`BallFinger::sample_info`] that never fails: a sample where the model cannot be
@@ -127,7 +147,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             let mid: Vec<f64> = (0..xa.len())
                 .map(|k| 0.5 * (xa[k] + xb[k]) + h / 8.0 * (fa[k] - fb[k]))
                 .collect();
-            let pm = self.power_at(mode, ta + 0.5 * h, &mid)?;
+            let pm = self.dynamics_at(mode, ta + 0.5 * h, &mid)?.power;
             Ok(h / 6.0 * (samples[i - 1].power + 4.0 * pm + samples[i].power))
         };
         simpson()
