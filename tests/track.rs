@@ -567,6 +567,7 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
     assert_eq!(tracking["controller"], "hybrid");
     assert_eq!(tracking["completed_periods"], 3);
     assert_eq!(tracking["lost_ball"], false);
+    assert!(tracking["energy_check_failure"].is_null(), "{tracking}");
     // The optimum was planned with the sticking law, the plant is Newton's (the default).
     assert_eq!(tracking["planned_impact_law"], "stick");
     assert_eq!(tracking["impact_law"], "newton");

@@ -48,6 +48,9 @@ pub struct TrackingJson<'a> {
     pub lost_ball: bool,
     /// Why, if it did.
     pub lost_reason: Option<&'a str>,
+    /// Why the run's energy balance failed the simulator's check, if it did
+    /// (`Tracking::energy_check_failure`): the run is then no result either.
+    pub energy_check_failure: Option<String>,
     /// Largest `omega_error` over the completed periods.
     pub max_omega_error: f64,
     /// The periods.
@@ -91,6 +94,7 @@ impl<'a> TrackingJson<'a> {
             completed_periods: r.periods.len(),
             lost_ball: r.lost.is_some(),
             lost_reason: r.lost.as_deref(),
+            energy_check_failure: r.energy_check_failure(),
             max_omega_error: r.periods.iter().map(|p| p.omega_error).fold(0.0, f64::max),
             periods: &r.periods,
             replan,
