@@ -17,6 +17,7 @@ use std::path::Path;
 use bf_model::arm::ArmModel;
 use serde::Serialize;
 
+use crate::integrator::{StepEnd, simpson_over_step};
 use crate::trajectory::write_atomic;
 use crate::{HybridSystem, Input, SimError, SimOutput, SimStats};
 
@@ -71,39 +72,6 @@ impl<I: Input> FreeArm<I> {
         Ok(tau)
     }
 
-    /// ∫ P dt over the step of `out` that ends at sample `i`, by Simpson's rule with the state
-    /// at the midpoint from the step's cubic Hermite interpolant, as the ball-and-finger
-    /// simulator's balance takes it: its error is below the integration's, so the balance
-    /// measures the integration (the trapezoidal rule's error, of order h³ P'' per step,
-    /// dominates runs of high power). A step whose midpoint cannot be evaluated falls back to
-    /// the trapezoid.
-    fn interval_work(&self, out: &SimOutput<ArmMode>, i: usize, samples: &[ArmSample]) -> f64 {
-        let (a, b) = (&samples[i - 1], &samples[i]);
-        let h = b.t - a.t;
-        if h.is_nan() || h <= 0.0 {
-            return 0.0;
-        }
-        let trapezoid = 0.5 * (a.power + b.power) * h;
-        let n = self.model.nq();
-        let simpson = || -> Result<f64, SimError> {
-            let (xa, xb) = (&out.trajectory.x[i - 1], &out.trajectory.x[i]);
-            let (mut fa, mut fb) = (vec![0.0; xa.len()], vec![0.0; xb.len()]);
-            self.rhs(ArmMode::Free, a.t, xa, &mut fa)?;
-            self.rhs(ArmMode::Free, b.t, xb, &mut fb)?;
-            let mid: Vec<f64> = (0..xa.len())
-                .map(|k| 0.5 * (xa[k] + xb[k]) + h / 8.0 * (fa[k] - fb[k]))
-                .collect();
-            let tm = a.t + 0.5 * h;
-            let tau = self.tau(tm, &mid)?;
-            let pm = self.model.power(&mid[n..], &tau);
-            Ok(h / 6.0 * (a.power + 4.0 * pm + b.power))
-        };
-        simpson()
-            .ok()
-            .filter(|w| w.is_finite())
-            .unwrap_or(trapezoid)
-    }
-
     /// Torques, energy and power at every sample of `out`, and the summary of the run.
     pub fn report(
         &self,
@@ -114,7 +82,11 @@ impl<I: Input> FreeArm<I> {
         let tr = &out.trajectory;
         let mut samples = Vec::with_capacity(tr.len());
         let mut kinetic_max = 0.0f64;
+        // ẋ at each sample, for the Hermite midpoints of the balance's quadrature.
+        let mut slopes = Vec::with_capacity(tr.len());
         for (&t, x) in tr.t.iter().zip(&tr.x) {
+            let mut f = vec![0.0; x.len()];
+            slopes.push(self.rhs(ArmMode::Free, t, x, &mut f).ok().map(|()| f));
             let tau = self.tau(t, x)?;
             let energy = self.model.energy(&x[..n], &x[n..]).map_err(system_err)?;
             let potential = self.model.potential(&x[..n]).map_err(system_err)?;
@@ -132,7 +104,24 @@ impl<I: Input> FreeArm<I> {
         let (mut work, mut flow, mut energy_error) = (0.0, 0.0, 0.0f64);
         for (i, w) in samples.windows(2).enumerate() {
             let dt = w[1].t - w[0].t;
-            work += self.interval_work(out, i + 1, &samples);
+            // Simpson's rule on the step's Hermite interpolant, as the ball-and-finger
+            // balance takes it (decision record 0078): the trapezoid's error dominates runs of
+            // high power; it stays the fallback where the midpoint cannot be evaluated.
+            let end = |k: usize| {
+                Some(StepEnd {
+                    t: samples[k].t,
+                    x: &tr.x[k],
+                    f: slopes[k].as_deref()?,
+                    g: samples[k].power,
+                })
+            };
+            let simpson = end(i).zip(end(i + 1)).and_then(|(a, b)| {
+                simpson_over_step(a, b, |t, x| {
+                    let tau = self.tau(t, x).ok()?;
+                    Some(self.model.power(&x[n..], &tau))
+                })
+            });
+            work += simpson.unwrap_or(0.5 * (w[0].power + w[1].power) * dt);
             flow += 0.5 * (w[0].power.abs() + w[1].power.abs()) * dt;
             let e0 = samples[0].energy;
             energy_error = energy_error.max((w[1].energy - e0 - work).abs());

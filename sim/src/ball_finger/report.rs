@@ -20,6 +20,7 @@
 //! for the torque vector τ ∈ ℝᴺ; [`RunSummary`] does not depend on N.
 
 use super::{BallFinger, BallFingerSettings, state_of};
+use crate::integrator::{StepEnd, simpson_over_step};
 use crate::trajectory::{SampleKind, SimOutput};
 use crate::{Input, SimError, SimWarning};
 use bf_model::{Kernels, Mode, State};
@@ -109,11 +110,11 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
 
     /// ∫ P dt over the interval of the trajectory `tr` that ends at sample `i` (0 for the first
     /// sample and for an event's jump, the interval that ends at an `EventPost` sample), by
-    /// Simpson's rule with the state at the midpoint from the cubic Hermite interpolant of the
-    /// interval's ends and their derivatives in the interval's mode: exact to O(h⁵) per step,
-    /// so the balance measures the integration rather than the quadrature, whose trapezoidal
-    /// error over a step is of order h³ P'' and dominates runs of high power (decision record
-    /// 0078). An interval whose midpoint cannot be evaluated falls back to the trapezoid.
+    /// Simpson's rule on the step's Hermite interpolant in the interval's mode
+    /// ([`crate::integrator::simpson_over_step`]), so that the balance measures the integration
+    /// rather than the quadrature, whose trapezoidal error of order h³ P'' per step dominates
+    /// runs of high power (decision record 0078). `slopes` are ẋ at the samples. An interval
+    /// whose midpoint cannot be evaluated falls back to the trapezoid.
     fn interval_work(
         &self,
         tr: &crate::Trajectory<Mode>,
@@ -124,36 +125,26 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         if i == 0 || tr.kind[i] == SampleKind::EventPost {
             return 0.0;
         }
-        let (ta, tb) = (tr.t[i - 1], tr.t[i]);
-        let h = tb - ta;
-        // An event's two samples share their time; NaN times (a failed run) add nothing.
-        if h.is_nan() || h <= 0.0 {
-            return 0.0;
-        }
         // The interval (t[i-1], t[i]] was integrated in the mode of its end sample; its start
-        // is in the same mode but after an event, which this interval does not hold.
+        // has that mode too, unless it is the state before an event.
         let mode = tr.mode[i];
-        let trapezoid = 0.5 * (samples[i - 1].power + samples[i].power) * h;
-        let simpson = || -> Result<f64, SimError> {
-            let (xa, xb) = (&tr.x[i - 1], &tr.x[i]);
-            let (Some(fa), Some(fb)) = (&slopes[i - 1], &slopes[i]) else {
-                return Err(SimError::system(
-                    "no state derivative at the interval's ends",
-                ));
-            };
-            if tr.mode[i - 1] != mode {
-                return Err(SimError::system("the interval starts in another mode"));
-            }
-            let mid: Vec<f64> = (0..xa.len())
-                .map(|k| 0.5 * (xa[k] + xb[k]) + h / 8.0 * (fa[k] - fb[k]))
-                .collect();
-            let pm = self.dynamics_at(mode, ta + 0.5 * h, &mid)?.power;
-            Ok(h / 6.0 * (samples[i - 1].power + 4.0 * pm + samples[i].power))
+        let end = |k: usize| {
+            Some(StepEnd {
+                t: tr.t[k],
+                x: &tr.x[k],
+                f: slopes[k].as_deref()?,
+                g: samples[k].power,
+            })
         };
-        simpson()
-            .ok()
-            .filter(|w| w.is_finite())
-            .unwrap_or(trapezoid)
+        let simpson = match (end(i - 1), end(i)) {
+            (Some(a), Some(b)) if tr.mode[i - 1] == mode => simpson_over_step(a, b, |t, x| {
+                self.dynamics_at(mode, t, x).ok().map(|e| e.power)
+            }),
+            _ => None,
+        };
+        simpson.unwrap_or_else(|| {
+            0.5 * (samples[i - 1].power + samples[i].power) * (tr.t[i] - tr.t[i - 1])
+        })
     }
 
     /// Derived quantities at every sample and event of a run, plus its summary. `cpu_seconds`
@@ -389,9 +380,10 @@ fn summarize<const N: usize>(
             });
         }
     }
-    let (t_res, residual) = balance_residual(tr, samples, work);
+    let residual = balance_residual(tr, samples, work);
     let energy_drift = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
-    let (energy_error, t_error) = window_error(&t_res, &residual, settings.energy_window);
+    let (energy_error, t_error) =
+        window_error(&tr.t[..residual.len()], &residual, settings.energy_window);
     warnings.extend(out.warnings.iter().cloned());
     if energy_error > settings.energy_error_tol {
         let span = if t_error - t0 > settings.energy_window {
@@ -484,7 +476,7 @@ fn summarize<const N: usize>(
     }
 }
 
-/// The sample times and the energy-balance residual E(t) − E(t₀) − ∫ P dt at each, `work[i]`
+/// The energy-balance residual E(t) − E(t₀) − ∫ P dt at each sample, `work[i]`
 /// being ∫ P dt over the interval that ends at sample i (`BallFinger::interval_work`), with the
 /// jumps at events (the interval ending at an `EventPost` sample) left out. A non-finite
 /// interval (a failed run's last state) adds nothing.
@@ -492,7 +484,7 @@ fn balance_residual<const N: usize>(
     tr: &crate::Trajectory<Mode>,
     samples: &[SampleInfo<N>],
     work: &[f64],
-) -> (Vec<f64>, Vec<f64>) {
+) -> Vec<f64> {
     let n = tr.len().min(samples.len()).min(work.len());
     let mut residual = Vec::with_capacity(n);
     let mut sum = 0.0f64;
@@ -505,7 +497,7 @@ fn balance_residual<const N: usize>(
         }
         residual.push(sum);
     }
-    (tr.t[..n].to_vec(), residual)
+    residual
 }
 
 /// The largest change of the residual `r` (sampled at the non-decreasing times `t`) over a

@@ -562,7 +562,8 @@ fn run_model<K: Kernels<N>, const N: usize>(
     });
     // A run that ends but whose energy balance fails its own check (the integration too
     // coarse for the dynamics) has a trajectory no one should take for a result: the set is
-    // written whole and marked as failed. A run that stopped early reports its stop instead (`failure`).
+    // written whole and marked as failed. A run that stopped early reports its stop instead
+    // (`failure`).
     let unbalanced = report.summary.energy_check_failure().map(|w| {
         format!(
             "the energy balance failed its check at t = {} s: {}; the whole trajectory ({} \
