@@ -87,7 +87,7 @@ fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
     );
 
     let run = |gains: HybridGains| {
-        let (plant, _) = solution_model(&sol).unwrap();
+        let (plant, _) = solution_model::<3>(&sol).unwrap();
         run_tracking_with(
             &sol,
             ControllerKind::Hybrid,
@@ -178,7 +178,7 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
             ControllerKind::Hybrid,
             gains,
             10,
-            perturbed_scene(
+            perturbed_scene::<3>(
                 "paper",
                 &[("socket_damping = 0.004\n", "socket_damping = 0.006\n")],
             )
@@ -246,7 +246,7 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
 fn a_run_that_misses_the_target_ends_at_its_first_missed_period() {
     let sol = fragile_plan();
     let damped = || {
-        perturbed_scene(
+        perturbed_scene::<3>(
             "paper",
             &[("socket_damping = 0.004\n", "socket_damping = 0.006\n")],
         )
@@ -310,10 +310,10 @@ fn a_run_that_misses_the_target_ends_at_its_first_missed_period() {
 fn a_low_cot_plan_holds_its_mean_spin_beyond_the_robustness_window() {
     let sol = fragile_plan();
     let plants = [
-        ("nominal", solution_model(&sol).unwrap().0, 0.005),
+        ("nominal", solution_model::<3>(&sol).unwrap().0, 0.005),
         (
             "socket damping ×1.5",
-            perturbed_scene(
+            perturbed_scene::<3>(
                 "paper",
                 &[("socket_damping = 0.004\n", "socket_damping = 0.006\n")],
             )

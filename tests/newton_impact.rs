@@ -144,7 +144,7 @@ fn a_newton_plan_keeps_omega_matches_the_plants_law_and_is_tracked() {
     }
     // The plant's Newton law from the plan's pre-impact state (bf-model: J_c q̇⁺ = T_n J_c q̇⁻
     // solved with J_c⁻¹) gives the plan's q̇⁺ within the bound.
-    let (model, _) = solution_model(&sol).unwrap();
+    let (model, _) = solution_model::<3>(&sol).unwrap();
     let kin = model.evaluate(&pre).unwrap();
     let newton = model.impact(&pre, ImpactLaw::Newton).unwrap();
     let gap = (vec(&nodes.qd[first]) - newton.qd).norm();
@@ -167,7 +167,7 @@ fn a_newton_plan_keeps_omega_matches_the_plants_law_and_is_tracked() {
         newton.qd
     );
     // Executed on a Newton plant, torques saturated at the scene's 1 N m.
-    let (plant, _) = solution_model(&sol).unwrap();
+    let (plant, _) = solution_model::<3>(&sol).unwrap();
     let run = run_tracking(&sol, ControllerKind::Hybrid, 10, plant, ImpactLaw::Newton).unwrap();
     assert!(run.lost.is_none(), "{:?}", run.lost);
     assert_eq!(run.periods.len(), 10);
@@ -478,7 +478,7 @@ fn meets_the_targets_bounded(
     use ball_finger::paper::closed_loop::{NOMINAL_TARGET, robustness_rows};
     assert!(sol.status.is_success(), "{:?}", sol.stages);
     assert_eq!(sol.impact_law, PlannedImpact::Newton);
-    let (plant, _) = solution_model(sol).unwrap();
+    let (plant, _) = solution_model::<3>(sol).unwrap();
     let run = run_tracking(
         sol,
         ControllerKind::Hybrid,
@@ -639,7 +639,7 @@ fn the_newton_rows_are_interior_at_the_plants_law_and_refuse_more_than_v_beyond_
     assert_eq!(rows.len(), 6, "{:?}", f.bounds);
     let nodes = &sol.nodes;
     let (last, pre) = pre_impact(&sol);
-    let (model, _) = solution_model(&sol).unwrap();
+    let (model, _) = solution_model::<3>(&sol).unwrap();
     let q_n = model.impact(&pre, ImpactLaw::Newton).unwrap().qd;
     let relax = bf_optim::ipm::Settings::default()
         .barrier

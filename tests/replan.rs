@@ -152,7 +152,7 @@ fn replan_refuses_bad_states_and_non_periodic_problems() {
 fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
     let sol = cli::qc_optimum();
     let run = || {
-        let plant = solution_model(sol).unwrap().0;
+        let plant = solution_model::<3>(sol).unwrap().0;
         run_tracking_replanned(
             sol,
             ControllerKind::Hybrid,
@@ -211,12 +211,12 @@ fn targets_with_replanning_on_every_plant() {
             &sol,
             ControllerKind::Hybrid,
             PERIODS,
-            solution_model(&sol).unwrap().0,
+            solution_model::<3>(&sol).unwrap().0,
             ImpactLaw::Newton,
             Some(REPLAN_MAX_ITER),
         )
         .map(|t| ("nominal".to_string(), Ok(t)));
-        let runs = std::iter::once(nominal.unwrap()).chain(robustness_runs(
+        let runs = std::iter::once(nominal.unwrap()).chain(robustness_runs::<3>(
             &sol,
             ControllerKind::Hybrid,
             PERIODS,

@@ -44,7 +44,7 @@ fn tracked(
 ) -> Tracking {
     let sol = cli::qc_optimum();
     let plant = match plant_toml {
-        None => solution_model(sol).unwrap().0,
+        None => solution_model::<3>(sol).unwrap().0,
         Some(text) => {
             let scene = bf_codegen::Scene::from_toml_str(text, "perturbed").unwrap();
             bf_model::fixtures::model_for_scene(&scene).unwrap().0
@@ -222,7 +222,7 @@ fn closed_loop_from(
     bf_sim::SimOutput<Mode>,
 ) {
     let sol = cli::qc_optimum();
-    let (model, scene) = solution_model(sol).unwrap();
+    let (model, scene) = solution_model::<3>(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     let id = InverseDynamics::compiled(
         &scene,
@@ -232,7 +232,7 @@ fn closed_loop_from(
     .unwrap();
     let controller = HybridController::new(model, id, reference, gains, t0, x0).unwrap();
     let plant = match plant_toml {
-        None => solution_model(sol).unwrap().0,
+        None => solution_model::<3>(sol).unwrap().0,
         Some(text) => {
             let scene = bf_codegen::Scene::from_toml_str(text, "perturbed").unwrap();
             bf_model::fixtures::model_for_scene(&scene).unwrap().0
@@ -263,7 +263,7 @@ fn closed_loop_from(
 /// phase's largest |λ*|.
 fn lambda_n_rms(plant_toml: &str, gains: HybridGains) -> f64 {
     let sol = cli::qc_optimum();
-    let (model, _) = solution_model(sol).unwrap();
+    let (model, _) = solution_model::<3>(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     let contact = reference.phases.iter().position(|p| p.contact).unwrap();
     let phase = &reference.phases[contact];
@@ -336,7 +336,7 @@ fn force_loop_holds_lambda_n_over_the_stick_phase() {
 #[test]
 fn a_late_lift_off_still_meets_the_planned_impact_state() {
     let sol = cli::qc_optimum();
-    let (model, _) = solution_model(sol).unwrap();
+    let (model, _) = solution_model::<3>(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     // The optimum: free, stick, free; its impact state is the end of phase 0.
     assert_eq!(
@@ -421,7 +421,7 @@ fn a_late_lift_off_still_meets_the_planned_impact_state() {
 #[test]
 fn a_late_or_early_approach_meets_the_planned_impact_state() {
     let sol = cli::qc_optimum();
-    let (model, _) = solution_model(sol).unwrap();
+    let (model, _) = solution_model::<3>(sol).unwrap();
     let reference = reference_of(sol, &model).unwrap();
     let approach = &reference.phases[0];
     assert!(!approach.contact && reference.phases[1].contact);
@@ -852,7 +852,7 @@ fn a_long_run_is_not_cut_by_the_step_budget() {
     use ball_finger::paper::closed_loop::tracking_step_budget;
     let path = cli::root().join("data/optima/periodic-cot-human-plan/solution.json");
     let sol = ball_finger::pipeline::OcpSolution::read_json(&path).unwrap();
-    let plant = solution_model(&sol).unwrap().0;
+    let plant = solution_model::<3>(&sol).unwrap().0;
     let periods = 300;
     let t = run_tracking(
         &sol,

@@ -127,13 +127,17 @@
 //!
 //! The discrete state (plan, phase, its start, the force integral, δ, the ω integral, μ_k) is recorded
 //! with its time at every observation, so τ at an earlier time (the per-sample report written
-//! after the run) is recomputed with the state that held then. The controller is for fingers
-//! with 3 joints (the paper's and the human finger).
+//! after the run) is recomputed with the state that held then.
+//!
+//! **Joints.** The controller is generic in the finger's joint count N ≥ 3: the contact law
+//! commands a 3-D contact force through J_cᵀ λ and places the contact point's acceleration
+//! through J_c q̈, which needs J_c (3 × N) of full row rank; with N > 3 the least constraint
+//! leaves the motion in ker J_c to the free law. Fingers with fewer joints are refused.
 
 use crate::error::ControlError;
 use crate::law::{ComputedTorque, InverseDynamics};
 use crate::reference::Reference;
-use bf_model::{Kernels, Mat3, Mode, Model, State, Vec3};
+use bf_model::{Kernels, Mat3, Mat3xN, MatN, MatNx3, Mode, Model, State, Vec3, VecN};
 use bf_sim::{Input, Measurement, SimError};
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -405,7 +409,7 @@ impl Approach {
     /// shortened to the samples from which on h* falls at least at [`RETIME_MIN_RATE`] times
     /// the planned impact's ḣ*; `None` when h* does not fall at the planned impact, the
     /// window is empty or the next phase is free.
-    fn of(reference: &Reference, phase: usize, window: f64) -> Option<Approach> {
+    fn of<const N: usize>(reference: &Reference<N>, phase: usize, window: f64) -> Option<Approach> {
         let phases = &reference.phases;
         let ph = &phases[phase];
         if ph.contact || !phases[(phase + 1) % phases.len()].contact || window <= 0.0 {
@@ -458,12 +462,12 @@ struct Discrete {
 }
 
 /// Makes a new plan at a lift-off of the plant (module doc, re-planning).
-pub trait Replanner: std::fmt::Debug {
+pub trait Replanner<const N: usize = 3>: std::fmt::Debug {
     /// The plan to track from the lift-off at plant time `t` in the measured state `x`
-    /// (q, q̇, ω) on, starting with a free phase at `x`; `None` keeps the current plan.
+    /// (q, q̇, ω; 2N + 3 values) on, starting with a free phase at `x`; `None` keeps the current plan.
     /// Called once per lift-off, in time order; it must not depend on the wall clock (the
     /// plant waits for it in simulated time).
-    fn replan(&mut self, t: f64, x: &[f64; 9]) -> Option<Reference>;
+    fn replan(&mut self, t: f64, x: &[f64]) -> Option<Reference<N>>;
 }
 
 /// A phase switch of the controller: plant time, reference phase entered, and the mode
@@ -480,53 +484,60 @@ pub struct PhaseSwitch {
     pub to: Mode,
 }
 
-/// The hybrid controller (module doc); a bf-sim [`Input`] for 3 joints.
+/// The hybrid controller (module doc); a bf-sim [`Input`] for `N` joints.
 #[derive(Debug)]
-pub struct HybridController<K: Kernels<3>> {
-    model: Model<K, 3>,
+pub struct HybridController<K: Kernels<N>, const N: usize = 3> {
+    model: Model<K, N>,
     id: InverseDynamics,
     gains: HybridGains,
     /// The optimum's mean ω̄* (rad/s), the outer loop's target.
     mean_omega: [f64; 3],
     /// The plans tracked, in the order they were made: the optimum first, then one per
     /// re-plan ([`Replanner`]); [`Discrete::plan`] says which is in force.
-    plans: RefCell<Vec<Rc<Plan>>>,
+    plans: RefCell<Vec<Rc<Plan<N>>>>,
     /// Makes a new plan at each lift-off, if set.
-    replanner: Option<RefCell<Box<dyn Replanner>>>,
+    replanner: Option<RefCell<Box<dyn Replanner<N>>>>,
     /// The plan's ρ of the outer loop (module doc), until a period measures its own.
     sensitivity: f64,
     /// Largest ‖δ‖ (rad/s).
     offset_limit: f64,
     /// |τ_i| ≤ tau_max[i] (N m): the actuators' bounds, infinite unless set.
-    tau_max: [f64; 3],
+    tau_max: [f64; N],
     history: RefCell<Vec<Discrete>>,
     switches: RefCell<Vec<PhaseSwitch>>,
 }
 
-impl<K: Kernels<3>> HybridController<K> {
+impl<K: Kernels<N>, const N: usize> HybridController<K, N> {
     /// The controller on `model` (its own model of the plant: the optimum's scene) with the
     /// inverse dynamics `id` of the same scene, tracking `reference` from its first phase,
     /// which begins at plant time `t0` with the plant's initial state `x0` (q, q̇, ω).
     pub fn new(
-        model: Model<K, 3>,
+        model: Model<K, N>,
         id: InverseDynamics,
-        reference: Reference,
+        reference: Reference<N>,
         gains: HybridGains,
         t0: f64,
         x0: &[f64],
     ) -> Result<Self, ControlError> {
         gains.validate()?;
-        if id.nq() != 3 {
+        if N < 3 {
+            return Err(ControlError::Dimension {
+                what: "finger joints (the contact law commands a 3-D force)",
+                expected: 3,
+                found: N,
+            });
+        }
+        if id.nq() != N {
             return Err(ControlError::Dimension {
                 what: "inverse dynamics joints",
-                expected: 3,
+                expected: N,
                 found: id.nq(),
             });
         }
-        if x0.len() != 9 || x0.iter().any(|v| !v.is_finite()) || !t0.is_finite() {
+        if x0.len() != 2 * N + 3 || x0.iter().any(|v| !v.is_finite()) || !t0.is_finite() {
             return Err(ControlError::Dimension {
                 what: "finite initial state (q, qd, omega)",
-                expected: 9,
+                expected: 2 * N + 3,
                 found: x0.iter().filter(|v| v.is_finite()).count(),
             });
         }
@@ -549,7 +560,7 @@ impl<K: Kernels<3>> HybridController<K> {
         } else {
             Mode::Free
         };
-        let omega = [x0[6], x0[7], x0[8]];
+        let omega = [x0[2 * N], x0[2 * N + 1], x0[2 * N + 2]];
         let d = Discrete {
             t: t0,
             mode,
@@ -580,7 +591,7 @@ impl<K: Kernels<3>> HybridController<K> {
             replanner: None,
             sensitivity,
             offset_limit: OFFSET_LIMIT * lift_off,
-            tau_max: [f64::INFINITY; 3],
+            tau_max: [f64::INFINITY; N],
             history: RefCell::new(vec![d]),
             switches: RefCell::new(Vec::new()),
         })
@@ -590,7 +601,7 @@ impl<K: Kernels<3>> HybridController<K> {
     /// commands is saturated there, and the force loop's integral is held while the law asks
     /// for more (anti-windup, module doc). Errors on a bound that is not positive (NaN
     /// included); infinity means no bound.
-    pub fn with_torque_bound(mut self, bound: [f64; 3]) -> Result<Self, ControlError> {
+    pub fn with_torque_bound(mut self, bound: [f64; N]) -> Result<Self, ControlError> {
         if let Some(&b) = bound.iter().find(|b| b.is_nan() || **b <= 0.0) {
             return Err(ControlError::Gain {
                 name: "tau_max",
@@ -603,40 +614,40 @@ impl<K: Kernels<3>> HybridController<K> {
     }
 
     /// The torque bounds (N m).
-    pub fn torque_bound(&self) -> [f64; 3] {
+    pub fn torque_bound(&self) -> [f64; N] {
         self.tau_max
     }
 
     /// Whether the law at (`mode`, `t`, `x`) with the discrete state `d` asks for a torque
     /// beyond the bounds.
-    fn saturates(&self, d: &Discrete, mode: Mode, t: f64, x: &State<3>) -> bool {
-        let mut tau = [0.0; 3];
+    fn saturates(&self, d: &Discrete, mode: Mode, t: f64, x: &State<N>) -> bool {
+        let mut tau = [0.0; N];
         self.law(d, mode, t, x, &mut tau).is_ok()
             && tau.iter().zip(&self.tau_max).any(|(v, b)| v.abs() > *b)
     }
 
     /// The controller that re-plans at every lift-off of the plant with `replanner` (the
     /// module doc's re-planning).
-    pub fn with_replanner(mut self, replanner: Box<dyn Replanner>) -> Self {
+    pub fn with_replanner(mut self, replanner: Box<dyn Replanner<N>>) -> Self {
         self.replanner = Some(RefCell::new(replanner));
         self
     }
 
     /// The reference the controller was made with (the optimum).
-    pub fn reference(&self) -> Reference {
+    pub fn reference(&self) -> Reference<N> {
         self.plans.borrow()[0].reference.clone()
     }
 
     /// The plans made at lift-offs so far (plant time from which each was tracked, and the
     /// plan), in time order; the optimum itself is not among them.
-    pub fn replans(&self) -> Vec<(f64, Reference)> {
+    pub fn replans(&self) -> Vec<(f64, Reference<N>)> {
         self.plans.borrow()[1..]
             .iter()
             .map(|p| (p.t, p.reference.clone()))
             .collect()
     }
 
-    fn plan(&self, k: usize) -> Rc<Plan> {
+    fn plan(&self, k: usize) -> Rc<Plan<N>> {
         let plans = self.plans.borrow();
         Rc::clone(&plans[k.min(plans.len() - 1)])
     }
@@ -691,8 +702,8 @@ impl<K: Kernels<3>> HybridController<K> {
         d: &Discrete,
         mode: Mode,
         t: f64,
-        x: &State<3>,
-        out: &mut [f64; 3],
+        x: &State<N>,
+        out: &mut [f64; N],
     ) -> Result<(), ControlError> {
         let plan = self.plan(d.plan);
         let plan = &*plan;
@@ -709,7 +720,7 @@ impl<K: Kernels<3>> HybridController<K> {
             let r = ph.at(sigma);
             let qd_ref = r.qd.map(|v| v * pace);
             let qdd_ff = r.qdd.map(|v| v * rate * pace * pace);
-            let mut qdd = [0.0; 3];
+            let mut qdd = [0.0; N];
             self.gains.free.acceleration(
                 x.q.as_slice(),
                 x.qd.as_slice(),
@@ -724,7 +735,7 @@ impl<K: Kernels<3>> HybridController<K> {
             }
             if !self.within_bounds(out) {
                 // The feed-forward ID(q, q̇, q̈*) plus as much feedback as the bounds allow.
-                let mut base = [0.0; 3];
+                let mut base = [0.0; N];
                 self.id
                     .torque(x.q.as_slice(), x.qd.as_slice(), &qdd_ff, &mut base)?;
                 *out = self.fit_bounds(&base, out);
@@ -820,7 +831,7 @@ impl<K: Kernels<3>> HybridController<K> {
         // The finger's motion that leaves the contact point in place (ker J_c: joint 1's axis
         // through the contact point, a folded finger) is the free law's to choose: the least
         // constraint on the computed-torque command (module doc).
-        let mut qdd_free = [0.0; 3];
+        let mut qdd_free = [0.0; N];
         self.gains.free.acceleration(
             x.q.as_slice(),
             x.qd.as_slice(),
@@ -829,11 +840,11 @@ impl<K: Kernels<3>> HybridController<K> {
             &r.qdd,
             &mut qdd_free,
         );
-        let qdd_free = Vec3::from(qdd_free);
+        let qdd_free = VecN::<N>::from(qdd_free);
         let least =
             LeastConstraint::new(&kin.m_f, &c.j_c).ok_or(ControlError::SingularJacobian { t })?;
         // τ for the force λ on the finger and the relative acceleration Δv̇: affine in both.
-        let torque = |lambda: Vec3, dv_dot: Vec3| -> Result<[f64; 3], ControlError> {
+        let torque = |lambda: Vec3, dv_dot: Vec3| -> Result<[f64; N], ControlError> {
             let omega_dot = p.ball_inertia_inv() * (-f_b - rc.cross(&lambda));
             let stick_acc = omega_dot.cross(&rc) + omega.cross(&c.rc_dot) - c.jc_dot_qd - dv_dot;
             let a_c = stick_acc - n * n.dot(&stick_acc) + n * normal;
@@ -841,7 +852,7 @@ impl<K: Kernels<3>> HybridController<K> {
                 .filter(|v| v.iter().all(|x| x.is_finite()))
                 .ok_or(ControlError::SingularJacobian { t })?;
             let tau = kin.m_f * qdd + kin.cqd_g + x.qd * p.mu_v() - c.j_c.transpose() * lambda;
-            Ok([tau[0], tau[1], tau[2]])
+            Ok(tau.into())
         };
         let tau = torque(lambda, dv_dot)?;
         *out = if self.within_bounds(&tau) || planned_end {
@@ -866,10 +877,10 @@ impl<K: Kernels<3>> HybridController<K> {
     /// σ_a, for a late plant), and σ̇ = ḣ / ḣ*(σ) in [0, [`MAX_RETIME_RATE`]].
     fn retime(
         &self,
-        plan: &Plan,
+        plan: &Plan<N>,
         phase: usize,
         s: f64,
-        x: &State<3>,
+        x: &State<N>,
     ) -> Result<(f64, f64), ControlError> {
         let Some(a) = plan.approach[phase] else {
             return Ok((s, 1.0));
@@ -902,12 +913,12 @@ impl<K: Kernels<3>> HybridController<K> {
     }
 
     /// Whether |τ_i| ≤ τ_max,i for every joint.
-    fn within_bounds(&self, tau: &[f64; 3]) -> bool {
+    fn within_bounds(&self, tau: &[f64; N]) -> bool {
         tau.iter().zip(&self.tau_max).all(|(v, b)| v.abs() <= *b)
     }
 
     /// [`fit_bounds`] with this controller's bounds.
-    fn fit_bounds(&self, base: &[f64; 3], full: &[f64; 3]) -> [f64; 3] {
+    fn fit_bounds(&self, base: &[f64; N], full: &[f64; N]) -> [f64; N] {
         fit_bounds(&self.tau_max, base, full)
     }
 
@@ -917,12 +928,12 @@ impl<K: Kernels<3>> HybridController<K> {
     /// return to the moving floor.
     fn keep_clearance(
         &self,
-        plan: &Plan,
+        plan: &Plan<N>,
         phase: usize,
         s: f64,
-        x: &State<3>,
-        qdd: &[f64; 3],
-        tau: &mut [f64; 3],
+        x: &State<N>,
+        qdd: &[f64; N],
+        tau: &mut [f64; N],
     ) -> Result<(), ControlError> {
         let cl = &self.gains.clearance;
         // A plant off the ball in a contact phase of the reference is to make contact again.
@@ -942,7 +953,8 @@ impl<K: Kernels<3>> HybridController<K> {
             return Ok(());
         }
         let n = c.n;
-        let h_ddot = n.dot(&(c.j_c * Vec3::from(*qdd) + c.jc_dot_qd)) + c.n_dot().dot(&c.rc_dot);
+        let h_ddot =
+            n.dot(&(c.j_c * VecN::<N>::from(*qdd) + c.jc_dot_qd)) + c.n_dot().dot(&c.rc_dot);
         let w = self.gains.free.omega_n;
         let wanted = w * w * (floor - c.h) + 2.0 * w * (floor_rate - c.h_dot);
         if h_ddot >= wanted {
@@ -958,7 +970,7 @@ impl<K: Kernels<3>> HybridController<K> {
             .filter(|r| r.is_finite() && *r > 0.0);
         if let Some(reach) = reach {
             let beta = (wanted - h_ddot) / reach;
-            for i in 0..3 {
+            for i in 0..N {
                 tau[i] += dir[i] * beta;
             }
         }
@@ -967,7 +979,7 @@ impl<K: Kernels<3>> HybridController<K> {
 
     /// [`Plan::timed_phase`] of `plan` applied to `d` at time `t`, ending the period when
     /// the reference wraps to its first phase.
-    fn advance_timed(&self, plan: &Plan, d: &mut Discrete, t: f64) {
+    fn advance_timed(&self, plan: &Plan<N>, d: &mut Discrete, t: f64) {
         let (t_ref, _) = plan.reference_time(d, t);
         let (phase, start) = plan.timed_phase(d.phase, d.start, t_ref);
         if phase != d.phase {
@@ -981,7 +993,7 @@ impl<K: Kernels<3>> HybridController<K> {
 
     /// Moves `d` to the next reference phase whose contact flag is `contact`, starting at `t`;
     /// wrapping past the last phase ends a period (outer loop).
-    fn advance(&self, plan: &Plan, d: &mut Discrete, t: f64, contact: bool) {
+    fn advance(&self, plan: &Plan<N>, d: &mut Discrete, t: f64, contact: bool) {
         let np = plan.reference.phases.len();
         let mut next = d.phase;
         for _ in 0..np {
@@ -1006,9 +1018,9 @@ impl<K: Kernels<3>> HybridController<K> {
         let Some(replanner) = &self.replanner else {
             return;
         };
-        let Ok(x) = <[f64; 9]>::try_from(x) else {
+        if x.len() != 2 * N + 3 {
             return;
-        };
+        }
         let made = {
             let plans = self.plans.borrow();
             (plans.len() > 1 && plans[plans.len() - 1].t == t).then(|| plans.len() - 1)
@@ -1016,7 +1028,7 @@ impl<K: Kernels<3>> HybridController<K> {
         let k = match made {
             Some(k) => k,
             None => {
-                let Some(reference) = replanner.borrow_mut().replan(t, &x) else {
+                let Some(reference) = replanner.borrow_mut().replan(t, x) else {
                     return;
                 };
                 let mut plans = self.plans.borrow_mut();
@@ -1108,19 +1120,19 @@ impl<K: Kernels<3>> HybridController<K> {
 /// A reference with what the law derives from it once: the largest λ_n* of each phase and
 /// the re-timed approach of each phase.
 #[derive(Debug)]
-struct Plan {
+struct Plan<const N: usize> {
     /// Plant time from which on it is tracked (s).
     t: f64,
-    reference: Reference,
+    reference: Reference<N>,
     /// max λ_n* of each phase (N): the scale of the lift-off command.
     lambda_scale: Vec<f64>,
     /// The re-timed approach of each phase, if it has one.
     approach: Vec<Option<Approach>>,
 }
 
-impl Plan {
+impl<const N: usize> Plan<N> {
     /// `reference` tracked from plant time `t`, its approach windows `window` s long at most.
-    fn new(reference: Reference, window: f64, t: f64) -> Plan {
+    fn new(reference: Reference<N>, window: f64, t: f64) -> Plan<N> {
         let lambda_scale = reference
             .phases
             .iter()
@@ -1225,18 +1237,18 @@ const CONTACT_DAMPING: f64 = 1e-3;
 /// 10¹⁰ N m. Here that motion follows the free law's tracking of q* instead, and the torque
 /// it takes is M q̈_f on it, as in free motion.
 #[derive(Debug, Clone, Copy)]
-struct LeastConstraint {
+struct LeastConstraint<const N: usize> {
     /// M⁻¹ J_cᵀ.
-    minv_jct: Mat3,
+    minv_jct: MatNx3<N>,
     /// J_c.
-    j_c: Mat3,
+    j_c: Mat3xN<N>,
     /// (W + δ² 1)⁻¹.
     gain: Mat3,
 }
 
-impl LeastConstraint {
+impl<const N: usize> LeastConstraint<N> {
     /// `None` where M is not positive definite.
-    fn new(m_f: &Mat3, j_c: &Mat3) -> Option<Self> {
+    fn new(m_f: &MatN<N>, j_c: &Mat3xN<N>) -> Option<Self> {
         let minv_jct = m_f.cholesky()?.solve(&j_c.transpose());
         let w = j_c * minv_jct;
         let delta2 = CONTACT_DAMPING * w.trace() / 3.0;
@@ -1249,7 +1261,7 @@ impl LeastConstraint {
     }
 
     /// q̈ for the contact acceleration `a_c` and the free law's command `qdd_free`.
-    fn acceleration(&self, a_c: &Vec3, qdd_free: &Vec3) -> Vec3 {
+    fn acceleration(&self, a_c: &Vec3, qdd_free: &VecN<N>) -> VecN<N> {
         qdd_free + self.minv_jct * (self.gain * (a_c - self.j_c * qdd_free))
     }
 }
@@ -1310,14 +1322,14 @@ fn clearance_floor(cl: &Clearance, since: f64, until: f64) -> (f64, f64) {
 /// the base strictly inside, α is continuous and equals 1 where `full` reaches the bounds, so the
 /// command meets `full` there. A base on or beyond a bound made α jump between 0 and 1 wherever
 /// the feedback in that joint changed sign.
-fn fit_bounds(tau_max: &[f64; 3], base: &[f64; 3], full: &[f64; 3]) -> [f64; 3] {
-    let kappa = (0..3)
+fn fit_bounds<const N: usize>(tau_max: &[f64; N], base: &[f64; N], full: &[f64; N]) -> [f64; N] {
+    let kappa = (0..N)
         .filter(|&i| base[i].abs() > 0.0)
         .map(|i| FIT_INNER * tau_max[i] / base[i].abs())
         .fold(1.0_f64, f64::min);
-    let base: [f64; 3] = std::array::from_fn(|i| kappa * base[i]);
+    let base: [f64; N] = std::array::from_fn(|i| kappa * base[i]);
     let mut alpha: f64 = 1.0;
-    for i in 0..3 {
+    for i in 0..N {
         let (a, b, bound) = (base[i], full[i] - base[i], tau_max[i]);
         if b > 0.0 {
             alpha = alpha.min((bound - a) / b);
@@ -1336,9 +1348,9 @@ fn to_sim(e: ControlError) -> SimError {
     SimError::system(e)
 }
 
-impl<K: Kernels<3>> Input for HybridController<K> {
+impl<K: Kernels<N>, const N: usize> Input for HybridController<K, N> {
     fn dim(&self) -> usize {
-        3
+        N
     }
 
     fn tau(&self, t: f64, q: &[f64], qd: &[f64], out: &mut [f64]) -> Result<(), SimError> {
@@ -1355,17 +1367,20 @@ impl<K: Kernels<3>> Input for HybridController<K> {
         omega: &[f64],
         out: &mut [f64],
     ) -> Result<(), SimError> {
-        let len_err = |what, found| SimError::DimensionMismatch {
+        let len_err = |what, expected, found| SimError::DimensionMismatch {
             what,
-            expected: 3,
+            expected,
             found,
         };
-        let q: [f64; 3] = q.try_into().map_err(|_| len_err("q", q.len()))?;
-        let qd: [f64; 3] = qd.try_into().map_err(|_| len_err("qd", qd.len()))?;
+        let q: [f64; N] = q.try_into().map_err(|_| len_err("q", N, q.len()))?;
+        let qd: [f64; N] = qd.try_into().map_err(|_| len_err("qd", N, qd.len()))?;
         let w: [f64; 3] = omega
             .try_into()
-            .map_err(|_| len_err("omega", omega.len()))?;
-        let out: &mut [f64; 3] = out.try_into().map_err(|_| len_err("torque output", 3))?;
+            .map_err(|_| len_err("omega", 3, omega.len()))?;
+        let found = out.len();
+        let out: &mut [f64; N] = out
+            .try_into()
+            .map_err(|_| len_err("torque output", N, found))?;
         let d = self.state_at(t, mode);
         let x = State::new(q.into(), qd.into(), w.into());
         self.law(&d, mode, t, &x, out).map_err(to_sim)?;
@@ -1390,7 +1405,10 @@ impl<K: Kernels<3>> Input for HybridController<K> {
         self.plans.borrow_mut().retain(|p| p.t <= m.t);
         let mut d = h[h.len() - 1];
         let plan = self.plan(d.plan);
-        let Some(omega) = m.x.get(6..9).and_then(|w| <[f64; 3]>::try_from(w).ok()) else {
+        let Some(omega) =
+            m.x.get(2 * N..2 * N + 3)
+                .and_then(|w| <[f64; 3]>::try_from(w).ok())
+        else {
             return;
         };
         let dt = m.t - d.t;
@@ -1403,7 +1421,7 @@ impl<K: Kernels<3>> Input for HybridController<K> {
             None => {
                 let ph = &plan.reference.phases[d.phase];
                 if let (Some(lambda), true) = (m.lambda, m.mode != Mode::Free)
-                    && let Some(s) = State::<3>::from_slice(m.x)
+                    && let Some(s) = State::<N>::from_slice(m.x)
                     && let Ok(kin) = self.model.evaluate(&s)
                 {
                     let n = kin.contact.n;
@@ -1435,7 +1453,7 @@ impl<K: Kernels<3>> Input for HybridController<K> {
                 if was_contact != is_contact {
                     if was_contact {
                         d.lift_off_omega = Vec3::from(omega).norm();
-                        d.lift_off_contact = State::<3>::from_slice(m.x)
+                        d.lift_off_contact = State::<N>::from_slice(m.x)
                             .and_then(|s| self.model.evaluate(&s).ok())
                             .and_then(|kin| kin.contact.r_c.try_normalize(0.0))
                             .map_or([0.0; 3], |u| [u[0], u[1], u[2]]);

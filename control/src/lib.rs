@@ -10,6 +10,10 @@
 //! | [`error`] | [`ControlError`] | — |
 //! | [`metrics`] | per-period figures of a run: mean ω, its error against the optimum, contact, stick and slip time, max |τ| | eq. 61 (mean ω) |
 //!
+//! The reference and the controller are generic in the finger's joint count N (`Reference<N>`,
+//! `HybridController<K, N>`, both 3 by default); the controller refuses N < 3 (its contact law
+//! commands a 3-D force through the joints).
+//!
 //! Why a crate of its own above bf-sim and not a module of it: docs/decisions/0012-control-layer.md.
 
 pub mod controller;

@@ -16,9 +16,9 @@
 use crate::error::ControlError;
 use bf_model::{Kernels, Model, State, Vec3};
 
-/// One phase of the reference (3 joints).
+/// One phase of the reference of a finger with `N` joints.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ReferencePhase {
+pub struct ReferencePhase<const N: usize = 3> {
     /// Whether the phase is a contact (stick) phase.
     pub contact: bool,
     /// Planned duration T (s).
@@ -26,11 +26,11 @@ pub struct ReferencePhase {
     /// Sample times since the phase began (s), strictly increasing, from 0 to T.
     pub s: Vec<f64>,
     /// q* (rad).
-    pub q: Vec<[f64; 3]>,
+    pub q: Vec<[f64; N]>,
     /// q̇* (rad/s).
-    pub qd: Vec<[f64; 3]>,
+    pub qd: Vec<[f64; N]>,
     /// q̈* (rad/s²).
-    pub qdd: Vec<[f64; 3]>,
+    pub qdd: Vec<[f64; N]>,
     /// ω* (rad/s).
     pub omega: Vec<[f64; 3]>,
     /// ω̇* (rad/s²).
@@ -49,14 +49,14 @@ pub struct ReferencePhase {
 }
 
 /// The reference at one instant of a phase.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Point {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Point<const N: usize = 3> {
     /// q*.
-    pub q: [f64; 3],
+    pub q: [f64; N],
     /// q̇*.
-    pub qd: [f64; 3],
+    pub qd: [f64; N],
     /// q̈*.
-    pub qdd: [f64; 3],
+    pub qdd: [f64; N],
     /// ω*.
     pub omega: [f64; 3],
     /// ω̇*.
@@ -69,9 +69,9 @@ pub struct Point {
 
 /// The optimum's phases of one period, in order.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Reference {
+pub struct Reference<const N: usize = 3> {
     /// The phases.
-    pub phases: Vec<ReferencePhase>,
+    pub phases: Vec<ReferencePhase<N>>,
     /// Mean ω over one period of the optimum (rad/s).
     pub mean_omega: [f64; 3],
 }
@@ -95,9 +95,12 @@ pub struct Samples<'a> {
     pub lambda: &'a [Vec<f64>],
 }
 
-fn arr(v: &[f64], what: &'static str, k: usize) -> Result<[f64; 3], ControlError> {
-    let a: [f64; 3] = v.try_into().map_err(|_| ControlError::Reference {
-        msg: format!("sample {k}: {what} has {} components, expected 3", v.len()),
+fn arr<const L: usize>(v: &[f64], what: &'static str, k: usize) -> Result<[f64; L], ControlError> {
+    let a: [f64; L] = v.try_into().map_err(|_| ControlError::Reference {
+        msg: format!(
+            "sample {k}: {what} has {} components, expected {L}",
+            v.len()
+        ),
     })?;
     if a.iter().any(|x| !x.is_finite()) {
         return Err(ControlError::Reference {
@@ -107,13 +110,13 @@ fn arr(v: &[f64], what: &'static str, k: usize) -> Result<[f64; 3], ControlError
     Ok(a)
 }
 
-impl Reference {
+impl<const N: usize> Reference<N> {
     /// Builds the reference from the samples of one period, the contact flag and duration of
     /// every phase, and the period's mean ω; q̈* and ω̇* come from `model` (module doc).
     /// Errors name the sample or phase: missing or non-finite values, fewer than two samples
     /// in a phase, times not increasing within a phase, a model error at a sample.
-    pub fn from_samples<K: Kernels<3>>(
-        model: &Model<K, 3>,
+    pub fn from_samples<K: Kernels<N>>(
+        model: &Model<K, N>,
         contact: &[bool],
         durations: &[f64],
         samples: Samples<'_>,
@@ -171,11 +174,11 @@ impl Reference {
                 if ph.s.last().is_some_and(|&l| s <= l) {
                     continue;
                 }
-                let q = arr(&samples.q[k], "q", k)?;
-                let qd = arr(&samples.qd[k], "qd", k)?;
-                let omega = arr(&samples.omega[k], "omega", k)?;
-                let tau = arr(&samples.tau[k], "tau", k)?;
-                let lambda = arr(&samples.lambda[k], "lambda", k)?;
+                let q: [f64; N] = arr(&samples.q[k], "q", k)?;
+                let qd: [f64; N] = arr(&samples.qd[k], "qd", k)?;
+                let omega: [f64; 3] = arr(&samples.omega[k], "omega", k)?;
+                let tau: [f64; N] = arr(&samples.tau[k], "tau", k)?;
+                let lambda: [f64; 3] = arr(&samples.lambda[k], "lambda", k)?;
                 let state = State::new(q.into(), qd.into(), omega.into());
                 let model_err = |e| ControlError::Reference {
                     msg: format!("sample {k} (phase {p}): {e}"),
@@ -233,7 +236,7 @@ fn hermite_slope(a: f64, b: f64, da: f64, db: f64, h: f64, w: f64) -> f64 {
         + (3.0 * w2 - 2.0 * w) * db
 }
 
-impl ReferencePhase {
+impl<const N: usize> ReferencePhase<N> {
     /// The planned gap h*(s) and its rate ḣ*(s): the cubic Hermite interpolant of the samples
     /// h*, ḣ* and its slope (consistent with the interpolation of q*); outside [0, T] the end
     /// values.
@@ -294,16 +297,16 @@ impl ReferencePhase {
     }
 
     /// The reference at time `s` since the phase began (module doc for s outside [0, T]).
-    pub fn at(&self, s: f64) -> Point {
+    pub fn at(&self, s: f64) -> Point<N> {
         let last = self.s.len() - 1;
         if s >= self.s[last] {
             let mut p = self.point(last);
             if !self.contact {
                 let ds = s - self.s[last];
-                for i in 0..3 {
+                for i in 0..N {
                     p.q[i] += p.qd[i] * ds;
                 }
-                p.qdd = [0.0; 3];
+                p.qdd = [0.0; N];
             }
             return p;
         }
@@ -314,24 +317,29 @@ impl ReferencePhase {
         let (a, b) = (k - 1, k);
         let h = self.s[b] - self.s[a];
         let w = (s - self.s[a]) / h;
-        let lin = |v: &[[f64; 3]]| -> [f64; 3] {
+        fn lin<const L: usize>(v: &[[f64; L]], a: usize, b: usize, w: f64) -> [f64; L] {
             std::array::from_fn(|i| v[a][i] + w * (v[b][i] - v[a][i]))
-        };
-        let herm = |v: &[[f64; 3]], d: &[[f64; 3]]| -> [f64; 3] {
+        }
+        fn herm<const L: usize>(
+            v: &[[f64; L]],
+            d: &[[f64; L]],
+            (a, b, h, w): (usize, usize, f64, f64),
+        ) -> [f64; L] {
             std::array::from_fn(|i| hermite(v[a][i], v[b][i], d[a][i], d[b][i], h, w))
-        };
+        }
+        let at = (a, b, h, w);
         Point {
-            q: herm(&self.q, &self.qd),
-            qd: herm(&self.qd, &self.qdd),
-            qdd: lin(&self.qdd),
-            omega: herm(&self.omega, &self.omega_dot),
-            omega_dot: lin(&self.omega_dot),
-            lambda: lin(&self.lambda),
-            contact_point: herm(&self.contact_point, &self.contact_point_dot),
+            q: herm(&self.q, &self.qd, at),
+            qd: herm(&self.qd, &self.qdd, at),
+            qdd: lin(&self.qdd, a, b, w),
+            omega: herm(&self.omega, &self.omega_dot, at),
+            omega_dot: lin(&self.omega_dot, a, b, w),
+            lambda: lin(&self.lambda, a, b, w),
+            contact_point: herm(&self.contact_point, &self.contact_point_dot, at),
         }
     }
 
-    fn point(&self, k: usize) -> Point {
+    fn point(&self, k: usize) -> Point<N> {
         Point {
             q: self.q[k],
             qd: self.qd[k],

@@ -10,7 +10,7 @@ use crate::cli::TrackArgs;
 use crate::errors::bail_usage;
 use crate::paper::closed_loop::{
     ControllerKind, Tracking, robustness_rows, robustness_table, run_tracking_replanned,
-    solution_model,
+    solution_model, solution_scene, tracked_joints, with_joints,
 };
 use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
@@ -73,8 +73,8 @@ pub struct TrackingJson<'a> {
 
 impl<'a> TrackingJson<'a> {
     /// The record of run `r` on plant `plant_scene` with impact law `impact_law`.
-    pub fn of(
-        r: &'a Tracking,
+    pub fn of<const N: usize>(
+        r: &'a Tracking<N>,
         plant_scene: &'a str,
         impact_law: &'a str,
         planned_impact_law: &'static str,
@@ -169,20 +169,46 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     if args.robustness {
         return robustness(args, controller, &sol);
     }
+    let (scene, name) =
+        solution_scene(&sol).with_context(|| args.solution.display().to_string())?;
+    let joints = tracked_joints(&scene)
+        .with_context(|| format!("the solution's scene `{name}`"))
+        .with_context(|| args.solution.display().to_string())?;
+    with_joints!(
+        joints,
+        run_n(args, controller, law, &sol),
+        bail!("the solution's scene `{name}` has {joints} joints")
+    )
+}
+
+/// `track` of the optimum `sol` of a finger with `N` joints.
+fn run_n<const N: usize>(
+    args: &TrackArgs,
+    controller: ControllerKind,
+    law: bf_model::ImpactLaw,
+    sol: &OcpSolution,
+) -> Result<()> {
     let (plant, plant_name) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
-            crate::paper::closed_loop::three_joints(&scene)
-                .with_context(|| format!("--plant-scene {}", path.display()))?;
-            let (model, _) = bf_model::fixtures::model_for_scene(&scene)
-                .with_context(|| format!("--plant-scene {}", path.display()))?;
+            let context = || format!("--plant-scene {}", path.display());
+            let n = tracked_joints(&scene).with_context(context)?;
+            if n != N {
+                bail!(
+                    "{}: the plant has {n} joints, the solution's finger {N}",
+                    context()
+                );
+            }
+            let (kernels, _) =
+                bf_model::registry::contact_kernels_n::<N>(&scene).with_context(context)?;
+            let model = bf_model::Model::from_kernels(kernels).with_context(context)?;
             (model, path.display().to_string())
         }
-        None => solution_model(&sol).with_context(|| args.solution.display().to_string())?,
+        None => solution_model::<N>(sol).with_context(|| args.solution.display().to_string())?,
     };
     let replan = replan_limit(args, controller)?;
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
-    let run = run_tracking_replanned(&sol, controller, args.periods, plant, law, replan)
+    let run = run_tracking_replanned(sol, controller, args.periods, plant, law, replan)
         .with_context(|| format!("tracking {}", args.solution.display()))?;
     out_dir.file("summary.json")?;
     run.report

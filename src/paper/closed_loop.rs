@@ -7,7 +7,12 @@
 //! ‖ω̄_k − ω̄*‖ / ‖ω̄*‖). The search's check of a plan ([`execution_check`]) runs each
 //! perturbed plant of the robustness table only up to its first period, from the 4th on, that
 //! misses [`ROBUSTNESS_TARGET`] ([`run_tracking_with`]'s `until_miss`); the paper's tables and
-//! `track` run every period. The controller is written for 3-joint fingers ([`three_joints`]).
+//! `track` run every period. The hybrid controller runs fingers of 3 to [`MAX_TRACKED_JOINTS`]
+//! joints ([`tracked_joints`]; `run_tracking_with`, [`Tracking`] and the robustness runs are
+//! generic in the joint count N, and `track`, the robustness rows and [`execution_check`]
+//! dispatch on the solution's, `with_joints!`). The robustness table perturbs the scene's
+//! text (`PERTURBATIONS`: the values of the paper's finger, which the human finger and
+//! `scenes/paper4.toml` share). Only periodic optima are tracked.
 //! A run takes at most [`MAX_TRACKING_PERIODS`] periods, with a simulator step budget that
 //! grows with them ([`tracking_step_budget`]).
 
@@ -28,6 +33,23 @@ use bf_problem::solution::records::ExecutionCheck;
 use bf_sim::ball_finger::{BallFingerSettings, RunReport};
 use bf_sim::{SimOutput, SimSettings};
 use std::path::Path;
+
+/// `$f::<N>(args…)` with N the joint count `$n` of a finger the closed loop runs (3 to
+/// [`MAX_TRACKED_JOINTS`]), `$other` for any other count: one compiled copy of the controller
+/// and the simulator's finger per joint count, as `simulate` has.
+macro_rules! with_joints {
+    ($n:expr, $f:ident($($a:expr),* $(,)?), $other:expr) => {
+        match $n {
+            3 => $f::<3>($($a),*),
+            4 => $f::<4>($($a),*),
+            5 => $f::<5>($($a),*),
+            6 => $f::<6>($($a),*),
+            7 => $f::<7>($($a),*),
+            _ => $other,
+        }
+    };
+}
+pub(crate) use with_joints;
 
 /// The controller executing the optimum.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,8 +99,8 @@ impl ControllerKind {
     }
 }
 
-/// A closed-loop run.
-pub struct Tracking {
+/// A closed-loop run of a finger with `N` joints.
+pub struct Tracking<const N: usize = 3> {
     /// The controller.
     pub controller: ControllerKind,
     /// Periods asked for.
@@ -86,7 +108,7 @@ pub struct Tracking {
     /// The simulation's output.
     pub output: SimOutput<Mode>,
     /// Its derived per-sample quantities (τ, λ, …) and summary.
-    pub report: RunReport<3>,
+    pub report: RunReport<N>,
     /// Why the simulation stopped early, if it did.
     pub stopped: Option<String>,
     /// The completed periods, at most `requested_periods`.
@@ -98,7 +120,7 @@ pub struct Tracking {
     pub replans: super::replan::ReplanLog,
 }
 
-impl Tracking {
+impl<const N: usize> Tracking<N> {
     /// Why the run is no result, if it is not: the ball was lost ([`Tracking::lost`]), or the
     /// simulation's energy balance missed the simulator's own check
     /// (`RunSummary::energy_check_failure`), when its periods measure the integrator's error
@@ -126,9 +148,9 @@ impl Tracking {
     }
 }
 
-/// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none) as a
-/// model on the compiled kernels, with its name.
-pub fn solution_model(sol: &OcpSolution) -> Result<(Model<DynKernels>, String)> {
+/// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none), a
+/// compiled scene, parsed, with its name.
+pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> {
     let name = if sol.scene.is_empty() {
         "paper"
     } else {
@@ -137,30 +159,52 @@ pub fn solution_model(sol: &OcpSolution) -> Result<(Model<DynKernels>, String)> 
     let text = bf_generated::scene_toml(name)
         .ok_or_else(|| anyhow!("the solution's scene `{name}` is not a compiled scene"))?;
     let scene = bf_codegen::Scene::from_toml_str(text, name)?;
-    three_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
-    let (model, _) = bf_model::fixtures::model_for_scene(&scene)
-        .with_context(|| format!("the solution's scene `{name}`"))?;
-    Ok((model, name.to_string()))
+    Ok((scene, name.to_string()))
 }
 
-/// Error unless `scene` is a 3-joint finger: the hybrid controller's inverse dynamics and
-/// contact laws are written for the paper's three joints, while `optimize` and `simulate`
-/// take any number, so a plan of another finger is refused with what `track` supports
-/// rather than with the kernel registry's joint-count mismatch.
-pub fn three_joints(scene: &bf_codegen::Scene) -> Result<()> {
+/// The optimum's scene ([`solution_scene`]) as a model of a finger with `N` joints on the
+/// compiled kernels, with its name; an error names the scene when it is no such finger.
+pub fn solution_model<const N: usize>(
+    sol: &OcpSolution,
+) -> Result<(Model<DynKernels<N>, N>, String)> {
+    let (scene, name) = solution_scene(sol)?;
+    let n = tracked_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
+    if n != N {
+        bail!("the solution's scene `{name}` has {n} joints, not {N}");
+    }
+    let (kernels, _) = bf_model::registry::contact_kernels_n::<N>(&scene)
+        .with_context(|| format!("the solution's scene `{name}`"))?;
+    let model =
+        Model::from_kernels(kernels).with_context(|| format!("the solution's scene `{name}`"))?;
+    Ok((model, name))
+}
+
+/// Most joints of a finger the closed loop runs (the simulator's largest finger).
+pub const MAX_TRACKED_JOINTS: usize = 7;
+
+/// The joint count of `scene`, an error unless the closed loop runs it: 3 to
+/// [`MAX_TRACKED_JOINTS`] joints. The contact law commands the 3-D contact force through
+/// J_cᵀ λ (bf-control's module doc), which a finger of fewer joints cannot give, while
+/// `optimize` and `simulate` take such fingers; so a plan of one is refused with what `track`
+/// supports rather than with a failure inside the run.
+pub fn tracked_joints(scene: &bf_codegen::Scene) -> Result<usize> {
     let n = scene.links.len();
-    if n == 3 {
-        Ok(())
+    if (3..=MAX_TRACKED_JOINTS).contains(&n) {
+        Ok(n)
     } else {
         Err(anyhow!(
             "it has {n} joints; the closed loop (`track`, the hybrid controller) executes \
-             plans on 3-joint fingers only"
+             plans on fingers of 3 to {MAX_TRACKED_JOINTS} joints (its contact law commands \
+             a 3-D contact force through the joints)"
         ))
     }
 }
 
 /// The optimum as a [`Reference`] of the controller's model `model`.
-pub fn reference_of(sol: &OcpSolution, model: &Model<DynKernels>) -> Result<Reference> {
+pub fn reference_of<const N: usize>(
+    sol: &OcpSolution,
+    model: &Model<DynKernels<N>, N>,
+) -> Result<Reference<N>> {
     let d = &sol.dense;
     let contact: Vec<bool> = sol.modes.iter().map(|m| *m != PhaseMode::Free).collect();
     Reference::from_samples(
@@ -183,7 +227,7 @@ pub fn reference_of(sol: &OcpSolution, model: &Model<DynKernels>) -> Result<Refe
 
 /// The torque bounds |τ_i| ≤ τ_max,i of the optimum's scene (N m; infinite where the scene
 /// sets none or is not compiled in).
-pub fn torque_bound(sol: &OcpSolution) -> [f64; 3] {
+pub fn torque_bound<const N: usize>(sol: &OcpSolution) -> [f64; N] {
     let name = if sol.scene.is_empty() {
         "paper"
     } else {
@@ -227,7 +271,14 @@ pub const EXECUTION_ROBUSTNESS_PERIODS: usize = 10;
 /// misses its target a robustness miss (`robustness_failure`), which grades the plan without
 /// unverifying it ([`crate::pipeline::verify::robustness_miss`]).
 pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
-    let (plant, _) = solution_model(sol).ok()?;
+    let (scene, _) = solution_scene(sol).ok()?;
+    let joints = tracked_joints(&scene).ok()?;
+    with_joints!(joints, execution_check_n(sol), None)
+}
+
+/// [`execution_check`] of a plan for a finger with `N` joints.
+fn execution_check_n<const N: usize>(sol: &OcpSolution) -> Option<ExecutionCheck> {
+    let (plant, _) = solution_model::<N>(sol).ok()?;
     let mut check = ExecutionCheck {
         controller: ControllerKind::Hybrid.name().to_string(),
         periods: EXECUTION_PERIODS,
@@ -278,12 +329,14 @@ pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
     }
     // A perturbed plant that misses the target is run only up to its first missed period:
     // the verdict is the same, and such runs are the chaotic, slow ones.
-    let rows = rows(
+    let rows = rows_n::<N>(
         sol,
-        ControllerKind::Hybrid,
-        EXECUTION_ROBUSTNESS_PERIODS,
-        None,
-        true,
+        TableRuns {
+            controller: ControllerKind::Hybrid,
+            periods: EXECUTION_ROBUSTNESS_PERIODS,
+            replan: None,
+            until_miss: true,
+        },
     );
     check.robustness_periods = EXECUTION_ROBUSTNESS_PERIODS;
     check.robustness_error = rows
@@ -337,27 +390,27 @@ pub fn tracking_step_budget(periods: usize) -> usize {
 
 /// Runs `controller` on the optimum `sol` for `periods` periods on `plant` with `impact_law`,
 /// from the optimum's initial state.
-pub fn run_tracking(
+pub fn run_tracking<const N: usize>(
     sol: &OcpSolution,
     controller: ControllerKind,
     periods: usize,
-    plant: Model<DynKernels>,
+    plant: Model<DynKernels<N>, N>,
     impact_law: ImpactLaw,
-) -> Result<Tracking> {
+) -> Result<Tracking<N>> {
     run_tracking_replanned(sol, controller, periods, plant, impact_law, None)
 }
 
 /// [`run_tracking`], with `replan` = `Some(max_iter)`: the hybrid controllers re-plan at every
 /// lift-off ([`super::replan::SolverReplanner`], at most `max_iter` iterations per re-plan);
 /// an error for the open loop and the PD.
-pub fn run_tracking_replanned(
+pub fn run_tracking_replanned<const N: usize>(
     sol: &OcpSolution,
     controller: ControllerKind,
     periods: usize,
-    plant: Model<DynKernels>,
+    plant: Model<DynKernels<N>, N>,
     impact_law: ImpactLaw,
     replan: Option<usize>,
-) -> Result<Tracking> {
+) -> Result<Tracking<N>> {
     run_tracking_with(
         sol,
         controller,
@@ -370,6 +423,13 @@ pub fn run_tracking_replanned(
     )
 }
 
+/// The ball's spin ω of every state (q, q̇, ω) of a finger with `joints` joints.
+fn ball_spin(x: &[Vec<f64>], joints: usize) -> Vec<[f64; 3]> {
+    x.iter()
+        .map(|x| std::array::from_fn(|i| x[2 * joints + i]))
+        .collect()
+}
+
 /// Whether the trajectory `tr` recorded so far holds a completed period, among the first
 /// `periods`, from the 4th on whose mean ω is off the plan's `optimum` by more than
 /// [`ROBUSTNESS_TARGET`]: [`period_metrics`] on its samples, which are those of the finished
@@ -379,6 +439,7 @@ pub fn run_tracking_replanned(
 /// followed by one in contact).
 fn misses_from_fourth(
     tr: &bf_sim::Trajectory<Mode>,
+    joints: usize,
     optimum: [f64; 3],
     periods: usize,
     checked: &std::cell::Cell<usize>,
@@ -388,7 +449,7 @@ fn misses_from_fourth(
     if !(from..n).any(|i| tr.mode[i - 1] == Mode::Free && tr.mode[i] != Mode::Free) {
         return false;
     }
-    let omega: Vec<[f64; 3]> = tr.x[..n].iter().map(|x| [x[6], x[7], x[8]]).collect();
+    let omega = ball_spin(&tr.x[..n], joints);
     // Torques do not enter the error.
     let tau = vec![Vec::new(); n];
     period_metrics(&tr.t[..n], &tr.mode[..n], &omega, &tau, optimum)
@@ -408,16 +469,16 @@ fn misses_from_fourth(
 /// periods, 10 s of simulation and more where a robust one takes 1–2 s, decision record
 /// 0070).
 #[allow(clippy::too_many_arguments)]
-pub fn run_tracking_with(
+pub fn run_tracking_with<const N: usize>(
     sol: &OcpSolution,
     controller: ControllerKind,
     gains: HybridGains,
     periods: usize,
-    plant: Model<DynKernels>,
+    plant: Model<DynKernels<N>, N>,
     impact_law: ImpactLaw,
     replan: Option<usize>,
     until_miss: bool,
-) -> Result<Tracking> {
+) -> Result<Tracking<N>> {
     if replan.is_some() && !controller.replans() {
         bail!(
             "re-planning needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
@@ -426,6 +487,23 @@ pub fn run_tracking_with(
     }
     if !(1..=MAX_TRACKING_PERIODS).contains(&periods) {
         bail!("a tracking run takes 1 to {MAX_TRACKING_PERIODS} periods (got {periods})");
+    }
+    // A solution of another problem (`reach`, …) has a duration but no period to repeat, and
+    // no mean spin to measure one against.
+    if let Ok(problem) = sol.problem.parse::<bf_problem::Problem>()
+        && !problem.is_periodic()
+    {
+        bail!(
+            "`{}` is not a periodic problem: the closed loop repeats a periodic optimum \
+             ({})",
+            sol.problem,
+            bf_problem::Problem::ALL
+                .iter()
+                .filter(|p| p.is_periodic())
+                .map(|p| p.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
         bail!(
@@ -447,7 +525,7 @@ pub fn run_tracking_with(
     let log = std::rc::Rc::new(std::cell::RefCell::new(super::replan::ReplanLog::default()));
     let (checked, missed) = (std::cell::Cell::new(0), std::cell::Cell::new(false));
     let miss = |tr: &bf_sim::Trajectory<Mode>| {
-        let m = misses_from_fourth(tr, sol.mean_omega, periods, &checked);
+        let m = misses_from_fourth(tr, N, sol.mean_omega, periods, &checked);
         missed.set(m);
         m
     };
@@ -472,7 +550,7 @@ pub fn run_tracking_with(
             until,
         )?,
         ControllerKind::Hybrid | ControllerKind::HybridUnbounded => {
-            let (model, scene) = solution_model(sol)?;
+            let (model, scene) = solution_model::<N>(sol)?;
             let reference = reference_of(sol, &model)?;
             let id = InverseDynamics::compiled(
                 &scene,
@@ -481,16 +559,16 @@ pub fn run_tracking_with(
             )?;
             let x0 = initial_state(sol)?;
             let bound = match controller {
-                ControllerKind::Hybrid => torque_bound(sol),
-                _ => [f64::INFINITY; 3],
+                ControllerKind::Hybrid => torque_bound::<N>(sol),
+                _ => [f64::INFINITY; N],
             };
             let mut law = HybridController::new(model, id, reference, gains, 0.0, &x0)?
                 .with_torque_bound(bound)?;
             if let Some(max_iter) = replan {
                 let replanner = super::replan::SolverReplanner::new(
                     sol,
-                    solution_model(sol)?.0,
-                    reference_of,
+                    solution_model::<N>(sol)?.0,
+                    reference_of::<N>,
                     max_iter,
                     std::rc::Rc::clone(&log),
                 )?;
@@ -500,7 +578,7 @@ pub fn run_tracking_with(
         }
     };
     let tr = &output.trajectory;
-    let omega: Vec<[f64; 3]> = tr.x.iter().map(|x| [x[6], x[7], x[8]]).collect();
+    let omega = ball_spin(&tr.x, N);
     let tau: Vec<Vec<f64>> = report.samples.iter().map(|s| s.tau.to_vec()).collect();
     let mut metrics = period_metrics(&tr.t, &tr.mode, &omega, &tau, sol.mean_omega);
     metrics.truncate(periods);
@@ -568,7 +646,7 @@ pub fn comparison_markdown(
     ]
     .into_par_iter()
     .map(|controller| {
-        let (plant, _) = solution_model(sol)?;
+        let (plant, _) = solution_model::<3>(sol)?;
         Ok(Row {
             controller,
             tracking: run_tracking(sol, controller, periods, plant, law),
@@ -577,7 +655,7 @@ pub fn comparison_markdown(
     .collect::<Result<Vec<Row>>>()?;
     // The optimisation's torque bound: the hybrid controller saturates there, the open loop
     // and the PD do not; a run above it is marked.
-    let tau_bound = torque_bound(sol)
+    let tau_bound = torque_bound::<3>(sol)
         .iter()
         .copied()
         .fold(f64::INFINITY, f64::min);
@@ -767,7 +845,10 @@ type Case = (String, Vec<(&'static str, &'static str)>, ImpactLaw);
 /// A perturbed copy of the compiled scene `name` (the paper scene or the human finger's, which
 /// share these values): `edits` applied to its TOML text (every occurrence); an error if an
 /// edit finds nothing to replace (the scene file changed).
-pub fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKernels>> {
+pub fn perturbed_scene<const N: usize>(
+    name: &str,
+    edits: &[(&str, &str)],
+) -> Result<Model<DynKernels<N>, N>> {
     let mut text = bf_generated::scene_toml(name)
         .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?
         .to_string();
@@ -781,7 +862,8 @@ pub fn perturbed_scene(name: &str, edits: &[(&str, &str)]) -> Result<Model<DynKe
     // (the ball's mass, friction, damping) runs on the compiled kernels with the perturbed
     // parameters; a perturbation of the links (their masses) is interpreted.
     let scene = bf_codegen::Scene::from_toml_str(&text, name)?;
-    Ok(bf_model::fixtures::model_for_scene(&scene)?.0)
+    let (kernels, _) = bf_model::registry::contact_kernels_n::<N>(&scene)?;
+    Ok(Model::from_kernels(kernels)?)
 }
 
 /// The plants of the robustness table: [`PERTURBATIONS`] alone, all four together, and the
@@ -811,25 +893,41 @@ fn robustness_cases() -> Vec<Case> {
 /// Runs `controller` on the optimum `sol` for `periods` periods against every plant of the
 /// robustness table (perturbed copies of the solution's own scene), re-planning at every
 /// lift-off with `replan` = `Some(max_iter)` ([`run_tracking_replanned`]); each run with its
-/// row's name.
-pub fn robustness_runs(
+/// row's name. `N`: the joints of the solution's finger.
+pub fn robustness_runs<const N: usize>(
     sol: &OcpSolution,
     controller: ControllerKind,
     periods: usize,
     replan: Option<usize>,
-) -> Vec<(String, Result<Tracking>)> {
-    runs(sol, controller, periods, replan, false)
+) -> Vec<(String, Result<Tracking<N>>)> {
+    let how = TableRuns {
+        controller,
+        periods,
+        replan,
+        until_miss: false,
+    };
+    runs(sol, how)
 }
 
-/// [`robustness_runs`]; with `until_miss` each run ends at its first period that misses the
-/// target ([`run_tracking_with`]).
-fn runs(
-    sol: &OcpSolution,
+/// How the plants of the robustness table are run: `controller` for `periods` periods,
+/// re-planning with `replan` = `Some(max_iter)`; with `until_miss` each run ends at its first
+/// period that misses the target ([`run_tracking_with`]).
+#[derive(Debug, Clone, Copy)]
+struct TableRuns {
     controller: ControllerKind,
     periods: usize,
     replan: Option<usize>,
     until_miss: bool,
-) -> Vec<(String, Result<Tracking>)> {
+}
+
+/// [`robustness_runs`] as `how` says.
+fn runs<const N: usize>(sol: &OcpSolution, how: TableRuns) -> Vec<(String, Result<Tracking<N>>)> {
+    let TableRuns {
+        controller,
+        periods,
+        replan,
+        until_miss,
+    } = how;
     let scene = if sol.scene.is_empty() {
         "paper"
     } else {
@@ -906,23 +1004,32 @@ pub fn robustness_rows(
     periods: usize,
     replan: Option<usize>,
 ) -> Vec<RobustnessRow> {
-    rows(sol, controller, periods, replan, false)
+    let how = TableRuns {
+        controller,
+        periods,
+        replan,
+        until_miss: false,
+    };
+    let joints = solution_scene(sol).and_then(|(scene, name)| {
+        tracked_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))
+    });
+    match joints {
+        Ok(n) => with_joints!(n, rows_n(sol, how), Vec::new()),
+        Err(e) => robustness_cases()
+            .into_iter()
+            .map(|(plant, _, _)| RobustnessRow::failed(plant, crate::errors::render(&e)))
+            .collect(),
+    }
 }
 
-/// [`robustness_rows`]; with `until_miss` each run ends at its first period that misses the
-/// target ([`run_tracking_with`]): the same rows' verdicts, a missing row's error that of its
-/// first missed period rather than its largest.
-fn rows(
-    sol: &OcpSolution,
-    controller: ControllerKind,
-    periods: usize,
-    replan: Option<usize>,
-    until_miss: bool,
-) -> Vec<RobustnessRow> {
-    runs(sol, controller, periods, replan, until_miss)
+/// The rows of the robustness table of a finger with `N` joints, run as `how` says; with
+/// `until_miss` the same rows' verdicts, a missing row's error that of its first missed
+/// period rather than its largest.
+fn rows_n<const N: usize>(sol: &OcpSolution, how: TableRuns) -> Vec<RobustnessRow> {
+    runs::<N>(sol, how)
         .into_iter()
         .map(|(plant, run)| match run {
-            Ok(t) => robustness_row(plant, &t, periods),
+            Ok(t) => robustness_row(plant, &t, how.periods),
             Err(e) => RobustnessRow::failed(plant, crate::errors::render(&e)),
         })
         .collect()
@@ -931,7 +1038,11 @@ fn rows(
 /// The row of the robustness table of run `t` on `plant`, asked for `periods` periods. A run
 /// whose energy check failed ([`Tracking::energy_check_failure`]) measured the integrator, not
 /// the plant: its row is an error, and misses the target.
-pub fn robustness_row(plant: String, t: &Tracking, periods: usize) -> RobustnessRow {
+pub fn robustness_row<const N: usize>(
+    plant: String,
+    t: &Tracking<N>,
+    periods: usize,
+) -> RobustnessRow {
     if let (None, Some(unbalanced)) = (&t.lost, t.energy_check_failure()) {
         return RobustnessRow {
             completed_periods: t.periods.len(),
@@ -1022,7 +1133,7 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
 
 /// The largest ω error from the 4th period on (the issue's robustness window), `None` for a
 /// run that completed fewer than four periods.
-pub fn max_error_from_fourth(t: &Tracking) -> Option<f64> {
+pub fn max_error_from_fourth<const N: usize>(t: &Tracking<N>) -> Option<f64> {
     t.periods
         .iter()
         .skip(3)

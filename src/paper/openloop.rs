@@ -216,13 +216,13 @@ fn replay<I: Input>(
 /// first collocation point) and first mode until `t_end` (DOPRI5, rtol 1e-8, 400 output
 /// samples per period besides steps and events); returns the output, its per-sample report
 /// and, for a run that stopped early, why (the output is then the partial trajectory).
-pub fn simulate_optimum<K: Kernels<3>, I: Input>(
+pub fn simulate_optimum<K: Kernels<N>, I: Input, const N: usize>(
     sol: &OcpSolution,
-    plant: Model<K>,
+    plant: Model<K, N>,
     input: I,
     settings: BallFingerSettings,
     t_end: f64,
-) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
+) -> Result<(SimOutput<Mode>, RunReport<N>, Option<String>)> {
     let max_steps = SimSettings::default().max_steps;
     simulate_optimum_until(sol, plant, input, settings, t_end, max_steps, None)
 }
@@ -235,17 +235,25 @@ pub type Until<'a> = &'a dyn Fn(&bf_sim::Trajectory<Mode>) -> bool;
 /// asked after every accepted step and every event with the trajectory recorded so far, and
 /// `true` ends the run there (ended without error, `t_final` before `t_end`). The steps up to
 /// that point are those of the whole run, sample for sample ([`bf_sim::simulate_until`]).
-pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
+pub fn simulate_optimum_until<K: Kernels<N>, I: Input, const N: usize>(
     sol: &OcpSolution,
-    plant: Model<K>,
+    plant: Model<K, N>,
     input: I,
     settings: BallFingerSettings,
     t_end: f64,
     max_steps: usize,
     until: Option<Until<'_>>,
-) -> Result<(SimOutput<Mode>, RunReport<3>, Option<String>)> {
+) -> Result<(SimOutput<Mode>, RunReport<N>, Option<String>)> {
     let sys = BallFinger::new(plant, input, settings)?;
     let x0 = initial_state(sol)?;
+    if x0.len() != 2 * N + 3 {
+        bail!(
+            "the solution's initial state has {} values, the plant's finger {N} joints \
+             (q, qd, omega: {} values)",
+            x0.len(),
+            2 * N + 3
+        );
+    }
     let mode0 = if sol.modes.first() == Some(&bf_problem::node::PhaseMode::Stick) {
         Mode::Stick
     } else {
@@ -277,17 +285,25 @@ pub fn simulate_optimum_until<K: Kernels<3>, I: Input>(
     Ok((out, report, stopped))
 }
 
-/// The optimum's initial state x(0) = (q, q̇, ω) at its first collocation point (3 joints).
+/// The optimum's initial state x(0) = (q, q̇, ω) at its first collocation point: 2N + 3
+/// values for a finger with N joints.
 pub fn initial_state(sol: &OcpSolution) -> Result<Vec<f64>> {
     let d = &sol.nodes;
-    let x0: Vec<f64> = [&d.q, &d.qd, &d.omega]
-        .iter()
-        .filter_map(|v| v.first())
-        .flatten()
-        .copied()
-        .collect();
-    if x0.len() != 9 || x0.iter().any(|v| !v.is_finite()) {
-        bail!("the solution's initial state is not 9 finite values (q, qd, omega of 3 joints)");
+    let first = |v: &[Vec<f64>]| v.first().cloned().unwrap_or_default();
+    let (q, qd, omega) = (first(&d.q), first(&d.qd), first(&d.omega));
+    let n = q.len();
+    if n == 0 || qd.len() != n || omega.len() != 3 {
+        bail!(
+            "the solution's initial state is not (q, qd, omega) of one finger: {} joint \
+             angles, {} joint rates, {} ball rates",
+            n,
+            qd.len(),
+            omega.len()
+        );
+    }
+    let x0: Vec<f64> = q.into_iter().chain(qd).chain(omega).collect();
+    if x0.iter().any(|v| !v.is_finite()) {
+        bail!("the solution's initial state is not finite (q, qd, omega of {n} joints)");
     }
     Ok(x0)
 }

@@ -65,21 +65,22 @@ pub struct ReplanLog {
 
 /// How a solution becomes the controller's reference on its model (the closed loop's
 /// `reference_of`, handed in so that this module does not import the one that uses it).
-pub type ReferenceOf = fn(&OcpSolution, &Model<DynKernels>) -> Result<Reference>;
+pub type ReferenceOf<const N: usize = 3> =
+    fn(&OcpSolution, &Model<DynKernels<N>, N>) -> Result<Reference<N>>;
 
-/// The solve pipeline as bf-control's [`Replanner`] (module doc).
+/// The solve pipeline as bf-control's [`Replanner`] (module doc) for a finger with `N` joints.
 #[derive(Debug)]
-pub struct SolverReplanner {
+pub struct SolverReplanner<const N: usize = 3> {
     problem: BuiltProblem,
-    model: Model<DynKernels>,
-    reference_of: ReferenceOf,
+    model: Model<DynKernels<N>, N>,
+    reference_of: ReferenceOf<N>,
     /// x*_lo.
     target: Vec<f64>,
     /// The optimum as a solution of the re-plan from its own lift-off state (the rotated
     /// optimum if that solve failed): the warm start after a failed re-plan.
     nominal: OcpSolution,
     /// The rotated optimum as a reference: the plan when a re-plan fails.
-    nominal_reference: Reference,
+    nominal_reference: Reference<N>,
     /// The plan in force, the warm start of the next re-plan.
     current: OcpSolution,
     log: Rc<RefCell<ReplanLog>>,
@@ -148,7 +149,7 @@ pub fn solve_replan(p: &mut BuiltProblem, warm: &OcpSolution, x: &[f64]) -> Resu
     }
 }
 
-impl SolverReplanner {
+impl<const N: usize> SolverReplanner<N> {
     /// The replanner of the optimum `sol` ([`replan_problem`], `max_iter` iterations per
     /// re-plan) with the controller's model `model`, whose references `reference_of` makes;
     /// the set-up solve and every re-plan are recorded in `log`. Transcribes the
@@ -158,8 +159,8 @@ impl SolverReplanner {
     /// point.
     pub fn new(
         sol: &OcpSolution,
-        model: Model<DynKernels>,
-        reference_of: ReferenceOf,
+        model: Model<DynKernels<N>, N>,
+        reference_of: ReferenceOf<N>,
         max_iter: usize,
         log: Rc<RefCell<ReplanLog>>,
     ) -> Result<Self> {
@@ -198,8 +199,8 @@ impl SolverReplanner {
     }
 }
 
-impl Replanner for SolverReplanner {
-    fn replan(&mut self, t: f64, x: &[f64; 9]) -> Option<Reference> {
+impl<const N: usize> Replanner<N> for SolverReplanner<N> {
+    fn replan(&mut self, t: f64, x: &[f64]) -> Option<Reference<N>> {
         let start = Instant::now();
         let deviation = x
             .iter()
