@@ -369,7 +369,9 @@ pub struct SimulateArgs {
 /// Arguments of `track` (exit status: see [`Command::Track`]).
 #[derive(Debug, Args)]
 pub struct TrackArgs {
-    /// The optimum to execute: a solution.json of `optimize` on a periodic problem.
+    /// The optimum to execute: a solution.json of `optimize` on a periodic problem, of a
+    /// finger with 3 to 7 joints (the scene it records: compiled kernels where it is a
+    /// compiled scene, interpreted otherwise).
     pub solution: PathBuf,
     /// open-loop (the optimal torques τ*(t)), pd (τ*(t) plus joint PD 1 N m/rad, 0.2 N m s/rad
     /// in the free phases), hybrid (bf-control's controller, torques saturated at the scene's
@@ -412,7 +414,8 @@ pub struct TrackArgs {
     /// ×1.05; all four) with Newton's impact law, and on the nominal scene with the
     /// max-dissipation law. Writes robustness.md and robustness.json to --out and exits
     /// non-zero if a plant misses the target (ω error ≤ 5 % in every period from the 4th on,
-    /// contact in every period); the scene of a compiled problem only.
+    /// contact in every period). A scene without the value a perturbation edits (the paper
+    /// finger's) gives that row an error.
     #[arg(long, conflicts_with_all = ["plant_scene", "impact_law"])]
     pub robustness: bool,
 }

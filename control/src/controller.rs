@@ -729,15 +729,14 @@ impl<K: Kernels<N>, const N: usize> HybridController<K, N> {
                 &qdd_ff,
                 &mut qdd,
             );
-            self.id.torque(x.q.as_slice(), x.qd.as_slice(), &qdd, out)?;
+            self.inverse_dynamics(x, &qdd, out)?;
             if mode == Mode::Free {
                 self.keep_clearance(plan, phase, sigma, x, &qdd, out)?;
             }
             if !self.within_bounds(out) {
                 // The feed-forward ID(q, q̇, q̈*) plus as much feedback as the bounds allow.
                 let mut base = [0.0; N];
-                self.id
-                    .torque(x.q.as_slice(), x.qd.as_slice(), &qdd_ff, &mut base)?;
+                self.inverse_dynamics(x, &qdd_ff, &mut base)?;
                 *out = self.fit_bounds(&base, out);
             }
             return Ok(());
@@ -910,6 +909,24 @@ impl<K: Kernels<N>, const N: usize> HybridController<K, N> {
             1.0
         };
         Ok((sigma, rate))
+    }
+
+    /// τ = ID(q, q̇, q̈) + μ_v q̇ at the state `x` for the acceleration `qdd`: the generated
+    /// kernel where the scene has one, else M(q) q̈ + (C q̇ + g)(q, q̇) + μ_v q̇ from the
+    /// controller's model ([`InverseDynamics::from_model`]).
+    fn inverse_dynamics(
+        &self,
+        x: &State<N>,
+        qdd: &[f64; N],
+        out: &mut [f64; N],
+    ) -> Result<(), ControlError> {
+        if self.id.is_compiled() {
+            return self.id.torque(x.q.as_slice(), x.qd.as_slice(), qdd, out);
+        }
+        let kin = self.model.evaluate(x)?;
+        let tau = kin.m_f * VecN::<N>::from(*qdd) + kin.cqd_g + x.qd * self.id.mu_v();
+        *out = tau.into();
+        Ok(())
     }
 
     /// Whether |τ_i| ≤ τ_max,i for every joint.

@@ -7,7 +7,10 @@
 //!   independent of the link inertias (unlike fixed N m/rad PD gains).
 //! * [`InverseDynamics`]: the generated kernel `inverse_dynamics` of a compiled scene,
 //!   τ = M q̈ + C q̇ + g (eq. 24, Newton–Euler), plus the joints' viscous friction μ_v q̇ of
-//!   eq. 26a, so that ID inverts the free-motion dynamics the simulator integrates.
+//!   eq. 26a, so that ID inverts the free-motion dynamics the simulator integrates; or, for a
+//!   scene without that kernel (a user's scene on interpreted kernels), the same sum formed
+//!   from the controller's model, M(q) q̈ + (C q̇ + g)(q, q̇) + μ_v q̇
+//!   ([`InverseDynamics::from_model`]), which the controller evaluates itself.
 
 use crate::error::ControlError;
 use bf_generated::EvalIntoFn;
@@ -68,13 +71,13 @@ impl ComputedTorque {
     }
 }
 
-/// The generated inverse dynamics of a compiled scene plus viscous joint friction:
-/// τ = M(q) q̈ + C(q, q̇) q̇ + g(q) + μ_v q̇.
+/// The inverse dynamics plus viscous joint friction, τ = M(q) q̈ + C(q, q̇) q̇ + g(q) + μ_v q̇:
+/// the generated kernel of a compiled scene ([`InverseDynamics::compiled`]), or the model's
+/// M and C q̇ + g ([`InverseDynamics::from_model`]).
 #[derive(Debug, Clone)]
 pub struct InverseDynamics {
-    eval: EvalIntoFn,
-    kernel: usize,
-    params: Vec<f64>,
+    /// The generated kernel (function, index, runtime parameter values); `None`: the model's.
+    kernel: Option<(EvalIntoFn, usize, Vec<f64>)>,
     mu_v: f64,
     nq: usize,
 }
@@ -106,12 +109,29 @@ impl InverseDynamics {
             });
         }
         Ok(InverseDynamics {
-            eval: entry.eval_into,
-            kernel,
-            params: params.to_vec(),
+            kernel: Some((entry.eval_into, kernel, params.to_vec())),
             mu_v,
             nq: entry.nq,
         })
+    }
+
+    /// The inverse dynamics of a finger with `nq` joints formed from the controller's own
+    /// model: τ = M(q) q̈ + (C q̇ + g)(q, q̇) + μ_v q̇ with M and C q̇ + g from the model's
+    /// kernels (`mass_cqd_g`), for a scene that emits no `inverse_dynamics` kernel. The same
+    /// torque as the kernel's to rounding (eq. 24 and eq. 26a are one equation), at the cost
+    /// of one evaluation of the model. Only the [`crate::HybridController`] can evaluate it
+    /// ([`InverseDynamics::torque`] errors): it holds the model.
+    pub fn from_model(nq: usize, mu_v: f64) -> Self {
+        InverseDynamics {
+            kernel: None,
+            mu_v,
+            nq,
+        }
+    }
+
+    /// Whether τ comes from a generated kernel (otherwise from the controller's model).
+    pub fn is_compiled(&self) -> bool {
+        self.kernel.is_some()
     }
 
     /// Number of joints.
@@ -119,7 +139,13 @@ impl InverseDynamics {
         self.nq
     }
 
-    /// Writes τ = ID(q, q̇, q̈) + μ_v q̇ into `out`.
+    /// The viscous joint friction μ_v (N m s/rad) added to the inverse dynamics.
+    pub fn mu_v(&self) -> f64 {
+        self.mu_v
+    }
+
+    /// Writes τ = ID(q, q̇, q̈) + μ_v q̇ into `out`; an error for [`InverseDynamics::from_model`],
+    /// which has no kernel to evaluate.
     pub fn torque(
         &self,
         q: &[f64],
@@ -127,7 +153,15 @@ impl InverseDynamics {
         qdd: &[f64],
         out: &mut [f64],
     ) -> Result<(), ControlError> {
-        let written = (self.eval)(self.kernel, q, qd, &[0.0; 3], 0.0, qdd, &self.params, out);
+        let Some((eval, kernel, params)) = &self.kernel else {
+            return Err(ControlError::Scene {
+                scene: "(the controller's model)".into(),
+                msg: "has no inverse-dynamics kernel: the controller forms M q̈ + C q̇ + g \
+                      from its model"
+                    .into(),
+            });
+        };
+        let written = eval(*kernel, q, qd, &[0.0; 3], 0.0, qdd, params, out);
         if written != Some(self.nq) || out.len() != self.nq {
             return Err(ControlError::Dimension {
                 what: "inverse dynamics",

@@ -12,7 +12,8 @@
 //!
 //! The reference and the controller are generic in the finger's joint count N (`Reference<N>`,
 //! `HybridController<K, N>`, both 3 by default); the controller refuses N < 3 (its contact law
-//! commands a 3-D force through the joints).
+//! commands a 3-D force through the joints). Its free law's inverse dynamics is a scene's
+//! generated kernel, or the model's M q̈ + C q̇ + g for scenes without one.
 //!
 //! Why a crate of its own above bf-sim and not a module of it: docs/decisions/0012-control-layer.md.
 

@@ -150,3 +150,38 @@ fn at_zero_error_a_4_joint_finger_gets_the_planned_acceleration_and_force() {
     let err = (got - free_plan.qdd).norm() / (1.0 + free_plan.qdd.norm());
     assert!(err < 1e-9, "q̈ = {got}, q̈* = {} ({err:e})", free_plan.qdd);
 }
+
+/// [`InverseDynamics::from_model`] (M q̈ + C q̇ + g + μ_v q̇ from the controller's model, for
+/// scenes without a generated `inverse_dynamics`) gives the generated kernel's torque: the
+/// free law of the same controller, off the ball and off the plan, commands the same τ with
+/// either, to rounding.
+#[test]
+fn the_model_s_inverse_dynamics_is_the_generated_kernel_s() {
+    let model = paper4();
+    let q = [0.1, -0.4, -0.4, -0.4];
+    let rest = State::new(VecN::from(q), VecN::zeros(), Vec3::zeros());
+    let gravity = model.evaluate(&rest).unwrap().cqd_g;
+    let plan = || resting(&model, q, false, gravity * 0.5, Vec3::zeros());
+    let compiled = controller(&model, plan(), q);
+    let x0: Vec<f64> = q.iter().copied().chain([0.0; 7]).collect();
+    let id = InverseDynamics::from_model(4, model.params().mu_v());
+    assert!(!id.is_compiled());
+    let from_model =
+        HybridController::new(model.clone(), id, plan(), HybridGains::default(), 0.0, &x0).unwrap();
+    // A plant off the plan: displaced and moving, so every term of ID is exercised.
+    let (qp, qdp) = ([0.15, -0.35, -0.45, -0.38], [0.3, -0.2, 0.5, -0.4]);
+    let (mut a, mut b) = ([0.0; 4], [0.0; 4]);
+    compiled
+        .tau_in_mode(Mode::Free, 0.01, &qp, &qdp, &[0.0; 3], &mut a)
+        .unwrap();
+    from_model
+        .tau_in_mode(Mode::Free, 0.01, &qp, &qdp, &[0.0; 3], &mut b)
+        .unwrap();
+    let (a, b) = (VecN::<4>::from(a), VecN::<4>::from(b));
+    assert!(
+        (a - b).norm() <= 1e-12 * (1.0 + a.norm()),
+        "generated {a}, from the model {b}"
+    );
+    // Not trivially equal: the torque (no bound set) is the feedback's, well away from zero.
+    assert!(a.norm() > 1e-3, "τ = {a}");
+}

@@ -40,6 +40,9 @@ pub struct TrackingJson<'a> {
     pub planned_impact_law: &'static str,
     /// The optimum's mean ω (rad/s).
     pub optimum_mean_omega: [f64; 3],
+    /// Whether the plan passed its own verification (`solution.json`'s `verified`): an
+    /// unverified plan's errors include the plan's own.
+    pub plan_verified: bool,
     /// Periods asked for.
     pub requested_periods: usize,
     /// Periods completed (at most the requested ones).
@@ -78,8 +81,7 @@ impl<'a> TrackingJson<'a> {
         plant_scene: &'a str,
         impact_law: &'a str,
         planned_impact_law: &'static str,
-        optimum: [f64; 3],
-        period: f64,
+        sol: &OcpSolution,
         replan: bool,
     ) -> Self {
         let mut secs: Vec<f64> = r.replans.replans.iter().map(|p| p.seconds).collect();
@@ -89,7 +91,8 @@ impl<'a> TrackingJson<'a> {
             plant_scene,
             impact_law,
             planned_impact_law,
-            optimum_mean_omega: optimum,
+            optimum_mean_omega: sol.mean_omega,
+            plan_verified: crate::pipeline::verify::is_verified(sol),
             requested_periods: r.requested_periods,
             completed_periods: r.periods.len(),
             lost_ball: r.lost.is_some(),
@@ -100,7 +103,7 @@ impl<'a> TrackingJson<'a> {
             replan,
             replan_setup: r.replans.setup.as_ref(),
             replans: &r.replans.replans,
-            replan_budget_seconds: period / 10.0,
+            replan_budget_seconds: sol.period / 10.0,
             replan_seconds_median: (!secs.is_empty()).then(|| secs[secs.len() / 2]),
             replan_seconds_max: secs.last().copied(),
         }
@@ -220,8 +223,7 @@ fn run_n<const N: usize>(
         &plant_name,
         law.name(),
         sol.impact_law.name(),
-        sol.mean_omega,
-        sol.period,
+        sol,
         args.replan,
     );
     let bytes = serde_json::to_vec_pretty(&record)?;
@@ -231,6 +233,14 @@ fn run_n<const N: usize>(
         Some(f) => Outcome::Failed(f),
         None => Outcome::Success,
     })?;
+    if !record.plan_verified {
+        // Honest output: the run measures the plan's own error as well as the controller's.
+        eprintln!(
+            "warning: {} failed its own verification (solution.json `verified`): the errors \
+             below include the plan's",
+            args.solution.display()
+        );
+    }
     if law.name() != sol.impact_law.name() {
         // A sticking plan on a Newton plant: short stick phases spin the ball by an impulse
         // the plant does not give (docs/optima.md, "Low optima that a Newton plant cannot

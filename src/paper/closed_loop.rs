@@ -7,7 +7,9 @@
 //! ‖ω̄_k − ω̄*‖ / ‖ω̄*‖). The search's check of a plan ([`execution_check`]) runs each
 //! perturbed plant of the robustness table only up to its first period, from the 4th on, that
 //! misses [`ROBUSTNESS_TARGET`] ([`run_tracking_with`]'s `until_miss`); the paper's tables and
-//! `track` run every period. The hybrid controller runs fingers of 3 to [`MAX_TRACKED_JOINTS`]
+//! `track` run every period. Every run ends at the impact that completes its last period
+//! (`periods_complete`): the horizon's margin is there for a late plant, not simulated after
+//! the periods. The hybrid controller runs fingers of 3 to [`MAX_TRACKED_JOINTS`]
 //! joints ([`tracked_joints`]; `run_tracking_with`, [`Tracking`] and the robustness runs are
 //! generic in the joint count N, and `track`, the robustness rows and [`execution_check`]
 //! dispatch on the solution's, `with_joints!`). The robustness table perturbs the scene's
@@ -148,34 +150,89 @@ impl<const N: usize> Tracking<N> {
     }
 }
 
-/// The optimum's scene (`solution.json`'s `scene`; `paper` for solutions that name none), a
-/// compiled scene, parsed, with its name.
-pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> {
+/// The text of the optimum's scene with its runtime parameter values, and its name: the scene
+/// file's text the solution records (`scene_toml`, `scene_params`), or, in files that record
+/// none, the compiled scene it names (`paper` for solutions that name none). A solution on a
+/// scene of the user's own runs on interpreted kernels like its `optimize` and `simulate`.
+fn solution_scene_text(sol: &OcpSolution) -> Result<SceneText> {
     let name = if sol.scene.is_empty() {
         "paper"
     } else {
         &sol.scene
     };
-    let text = bf_generated::scene_toml(name)
-        .ok_or_else(|| anyhow!("the solution's scene `{name}` is not a compiled scene"))?;
-    let scene = bf_codegen::Scene::from_toml_str(text, name)?;
-    Ok((scene, name.to_string()))
+    if !sol.scene_toml.is_empty() {
+        return Ok(SceneText {
+            text: sol.scene_toml.clone(),
+            name: name.to_string(),
+            params: sol.scene_params.clone(),
+        });
+    }
+    let text = bf_generated::scene_toml(name).ok_or_else(|| {
+        anyhow!(
+            "the solution records no scene text (`scene_toml`), and its scene `{name}` is not \
+             a compiled scene"
+        )
+    })?;
+    Ok(SceneText {
+        text: text.to_string(),
+        name: name.to_string(),
+        params: Vec::new(),
+    })
 }
 
-/// The optimum's scene ([`solution_scene`]) as a model of a finger with `N` joints on the
-/// compiled kernels, with its name; an error names the scene when it is no such finger.
+/// A scene file's text, its name and the runtime parameter values set on it.
+struct SceneText {
+    text: String,
+    name: String,
+    params: Vec<(String, f64)>,
+}
+
+/// `text` parsed as the scene `name` with the runtime parameter values `params` set.
+fn scene_with(text: &str, name: &str, params: &[(String, f64)]) -> Result<bf_codegen::Scene> {
+    let mut scene = bf_codegen::Scene::from_toml_str(text, name)?;
+    bf_model::registry::set_parameters(&mut scene, params)
+        .with_context(|| format!("the scene `{name}`'s runtime parameters"))?;
+    Ok(scene)
+}
+
+/// The optimum's scene parsed, with its name: the scene file's text the solution records
+/// (`scene_toml`, with `scene_params`), or, in files that record none, the compiled scene it
+/// names (`paper` for solutions that name none).
+pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> {
+    let s = solution_scene_text(sol)?;
+    Ok((scene_with(&s.text, &s.name, &s.params)?, s.name))
+}
+
+/// The model of a finger with `N` joints on the kernels of `scene` (compiled where the scene
+/// is a compiled one, interpreted otherwise) and its inverse dynamics for the hybrid
+/// controller: the compiled `inverse_dynamics` kernel where the kernels are compiled and the
+/// scene emits one, otherwise the model's own M q̈ + C q̇ + g
+/// ([`InverseDynamics::from_model`]).
+pub fn finger_model<const N: usize>(
+    scene: &bf_codegen::Scene,
+) -> Result<(Model<DynKernels<N>, N>, InverseDynamics)> {
+    let n = tracked_joints(scene)?;
+    if n != N {
+        bail!("it has {n} joints, not {N}");
+    }
+    let (kernels, source) = bf_model::registry::contact_kernels_n::<N>(scene)?;
+    let model = Model::from_kernels(kernels)?;
+    let mu_v = model.params().mu_v();
+    let compiled = (source == bf_model::KernelSource::Compiled)
+        .then(|| InverseDynamics::compiled(&scene.name, model.kernels().param_values(), mu_v).ok())
+        .flatten();
+    let id = compiled.unwrap_or_else(|| InverseDynamics::from_model(N, mu_v));
+    Ok((model, id))
+}
+
+/// The optimum's scene ([`solution_scene`]) as a model of a finger with `N` joints, with its
+/// name; an error names the scene when it is no such finger.
 pub fn solution_model<const N: usize>(
     sol: &OcpSolution,
 ) -> Result<(Model<DynKernels<N>, N>, String)> {
     let (scene, name) = solution_scene(sol)?;
-    let n = tracked_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
-    if n != N {
-        bail!("the solution's scene `{name}` has {n} joints, not {N}");
-    }
-    let (kernels, _) = bf_model::registry::contact_kernels_n::<N>(&scene)
-        .with_context(|| format!("the solution's scene `{name}`"))?;
-    let model =
-        Model::from_kernels(kernels).with_context(|| format!("the solution's scene `{name}`"))?;
+    let (model, _) =
+        finger_model::<N>(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
     Ok((model, name))
 }
 
@@ -226,16 +283,11 @@ pub fn reference_of<const N: usize>(
 }
 
 /// The torque bounds |τ_i| ≤ τ_max,i of the optimum's scene (N m; infinite where the scene
-/// sets none or is not compiled in).
+/// sets none or cannot be read).
 pub fn torque_bound<const N: usize>(sol: &OcpSolution) -> [f64; N] {
-    let name = if sol.scene.is_empty() {
-        "paper"
-    } else {
-        &sol.scene
-    };
-    let max = bf_generated::scene_toml(name)
-        .and_then(|text| bf_codegen::Scene::from_toml_str(text, name).ok())
-        .and_then(|scene| bf_codegen::spec::Constants::of(&scene))
+    let max = solution_scene(sol)
+        .ok()
+        .and_then(|(scene, _)| bf_codegen::spec::Constants::of(&scene))
         .map(|c| c.tau_max);
     std::array::from_fn(|i| {
         max.as_ref()
@@ -430,6 +482,29 @@ fn ball_spin(x: &[Vec<f64>], joints: usize) -> Vec<[f64; 3]> {
         .collect()
 }
 
+/// Whether the trajectory `tr` recorded so far holds `periods` completed periods: periods run
+/// from impact to impact ([`period_metrics`]; a run that starts in contact counts its first
+/// sample as one), so `periods` + 1 impacts. `seen`: the samples examined before and the
+/// impacts among them, so each sample is looked at once.
+fn periods_complete(
+    tr: &bf_sim::Trajectory<Mode>,
+    periods: usize,
+    seen: &std::cell::Cell<(usize, usize)>,
+) -> bool {
+    let (from, mut impacts) = seen.get();
+    let n = tr.t.len().min(tr.mode.len());
+    for i in from..n {
+        let starts = if i == 0 {
+            tr.mode[0] != Mode::Free
+        } else {
+            tr.mode[i - 1] == Mode::Free && tr.mode[i] != Mode::Free
+        };
+        impacts += usize::from(starts);
+    }
+    seen.set((n.max(from), impacts));
+    impacts > periods
+}
+
 /// Whether the trajectory `tr` recorded so far holds a completed period, among the first
 /// `periods`, from the 4th on whose mean ω is off the plan's `optimum` by more than
 /// [`ROBUSTNESS_TARGET`]: [`period_metrics`] on its samples, which are those of the finished
@@ -524,12 +599,19 @@ pub fn run_tracking_with<const N: usize>(
     };
     let log = std::rc::Rc::new(std::cell::RefCell::new(super::replan::ReplanLog::default()));
     let (checked, missed) = (std::cell::Cell::new(0), std::cell::Cell::new(false));
-    let miss = |tr: &bf_sim::Trajectory<Mode>| {
-        let m = misses_from_fourth(tr, N, sol.mean_omega, periods, &checked);
+    let impacts = std::cell::Cell::new((0, 0));
+    // The run ends once its periods are complete (the horizon's margin is for a late plant,
+    // not to be simulated after the last period), or, with `until_miss`, at its first
+    // missed period from the 4th on.
+    let stop = |tr: &bf_sim::Trajectory<Mode>| {
+        if periods_complete(tr, periods, &impacts) {
+            return true;
+        }
+        let m = until_miss && misses_from_fourth(tr, N, sol.mean_omega, periods, &checked);
         missed.set(m);
         m
     };
-    let until = until_miss.then_some(&miss as Until<'_>);
+    let until = Some(&stop as Until<'_>);
     let (output, report, stopped) = match controller {
         ControllerKind::OpenLoop => simulate_optimum_until(
             sol,
@@ -550,13 +632,10 @@ pub fn run_tracking_with<const N: usize>(
             until,
         )?,
         ControllerKind::Hybrid | ControllerKind::HybridUnbounded => {
-            let (model, scene) = solution_model::<N>(sol)?;
+            let (scene, name) = solution_scene(sol)?;
+            let (model, id) = finger_model::<N>(&scene)
+                .with_context(|| format!("the solution's scene `{name}`"))?;
             let reference = reference_of(sol, &model)?;
-            let id = InverseDynamics::compiled(
-                &scene,
-                model.kernels().param_values(),
-                model.params().mu_v(),
-            )?;
             let x0 = initial_state(sol)?;
             let bound = match controller {
                 ControllerKind::Hybrid => torque_bound::<N>(sol),
@@ -849,9 +928,21 @@ pub fn perturbed_scene<const N: usize>(
     name: &str,
     edits: &[(&str, &str)],
 ) -> Result<Model<DynKernels<N>, N>> {
-    let mut text = bf_generated::scene_toml(name)
-        .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?
-        .to_string();
+    let text = bf_generated::scene_toml(name)
+        .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?;
+    perturbed(text, name, &[], edits)
+}
+
+/// The scene of `text` (named `name`, with the runtime parameter values `params`) with
+/// `edits` applied to its text (every occurrence), as a model of a finger with `N` joints; an
+/// error if an edit finds nothing to replace.
+fn perturbed<const N: usize>(
+    text: &str,
+    name: &str,
+    params: &[(String, f64)],
+    edits: &[(&str, &str)],
+) -> Result<Model<DynKernels<N>, N>> {
+    let mut text = text.to_string();
     for (from, to) in edits {
         if !text.contains(from) {
             bail!("the scene `{name}` has no `{from}` to perturb");
@@ -861,9 +952,8 @@ pub fn perturbed_scene<const N: usize>(
     // The scene keeps its name: a perturbation of what the model applies outside its kernels
     // (the ball's mass, friction, damping) runs on the compiled kernels with the perturbed
     // parameters; a perturbation of the links (their masses) is interpreted.
-    let scene = bf_codegen::Scene::from_toml_str(&text, name)?;
-    let (kernels, _) = bf_model::registry::contact_kernels_n::<N>(&scene)?;
-    Ok(Model::from_kernels(kernels)?)
+    let scene = scene_with(&text, name, params)?;
+    Ok(finger_model::<N>(&scene)?.0)
 }
 
 /// The plants of the robustness table: [`PERTURBATIONS`] alone, all four together, and the
@@ -928,18 +1018,18 @@ fn runs<const N: usize>(sol: &OcpSolution, how: TableRuns) -> Vec<(String, Resul
         replan,
         until_miss,
     } = how;
-    let scene = if sol.scene.is_empty() {
-        "paper"
-    } else {
-        &sol.scene
-    };
+    let scene = solution_scene_text(sol);
     // The plants are independent runs: one per thread, collected in the table's order, so
     // the table does not depend on the thread count.
     use rayon::prelude::*;
     robustness_cases()
         .into_par_iter()
         .map(|(case, edits, law)| {
-            let run = perturbed_scene(scene, &edits).and_then(|plant| {
+            let plant = match &scene {
+                Ok(s) => perturbed::<N>(&s.text, &s.name, &s.params, &edits),
+                Err(e) => Err(anyhow!("{e:#}")),
+            };
+            let run = plant.and_then(|plant| {
                 let gains = HybridGains::default();
                 run_tracking_with(
                     sol, controller, gains, periods, plant, law, replan, until_miss,
