@@ -13,7 +13,8 @@
 //! * the search's choice ranks a robust plan above a lower one that misses the robustness
 //!   target, and that one above an unverified plan;
 //! * `optimize` says so: a direct solve of the `periodic-qc` plan that misses the target exits
-//!   0, prints the miss under its verdict and records it in `solution.json`.
+//!   0, prints the miss under its verdict and records it in `solution.json`;
+//! * the check runs on the scene the plan was made on, `--param` values included.
 
 #[path = "common/cli.rs"]
 mod cli;
@@ -125,7 +126,7 @@ fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
         error(&guarded)
     );
 
-    let check = execution_check(&sol).expect("the human scene is compiled in");
+    let check = execution_check(&sol, None).expect("the human scene is compiled in");
     assert!(
         check.failure.is_none() && check.robustness_failure.is_none(),
         "{check:?}"
@@ -141,7 +142,7 @@ fn the_stored_default_plans_pass_the_closed_loop_check() {
         let sol =
             OcpSolution::read_json(&root().join("data/optima").join(dir).join("solution.json"))
                 .unwrap();
-        let check = execution_check(&sol).expect("a compiled scene");
+        let check = execution_check(&sol, None).expect("a compiled scene");
         assert!(
             check.failure.is_none()
                 && check.robustness_failure.is_none()
@@ -223,7 +224,7 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
         sol.period
     );
 
-    let check = execution_check(&sol).expect("the paper scene is compiled in");
+    let check = execution_check(&sol, None).expect("the paper scene is compiled in");
     assert!(
         check.failure.is_none() && check.robustness_failure.is_none(),
         "{check:?}"
@@ -391,6 +392,24 @@ fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
     );
 }
 
+/// `optimize --problem periodic-qc --strategy direct` with `extra` into `dir`: it must exit
+/// 0 with a verified plan; its standard output.
+fn verified_direct_qc(dir: &Path, extra: &[&str]) -> String {
+    let mut args = vec![
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--strategy",
+        "direct",
+        "--out",
+        dir.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let stdout = cli::ok(&cli::run(&args));
+    assert!(stdout.contains("verified: yes"), "{stdout}");
+    stdout
+}
+
 /// The whole path of a miss through `optimize`: the direct solve of the default `periodic-qc`
 /// plan (J ≈ 0.6045, the paper's guess and no other candidate) is executed on the nominal plant
 /// but misses the target with 50 % more socket damping. The command exits 0 (the plan is
@@ -399,17 +418,7 @@ fn the_search_prefers_a_robust_plan_to_a_lower_one_that_misses_the_target() {
 #[test]
 fn optimize_flags_a_verified_plan_that_misses_the_robustness_target() {
     let dir = cli::tmpdir("robustness-miss");
-    let out = cli::run(&[
-        "optimize",
-        "--problem",
-        "periodic-qc",
-        "--strategy",
-        "direct",
-        "--out",
-        dir.to_str().unwrap(),
-    ]);
-    let stdout = cli::ok(&out);
-    assert!(stdout.contains("verified: yes"), "{stdout}");
+    let stdout = verified_direct_qc(&dir, &[]);
     let miss = stdout
         .lines()
         .find(|l| l.starts_with("robustness: MISSED"))
@@ -426,5 +435,27 @@ fn optimize_flags_a_verified_plan_that_misses_the_robustness_target() {
             && check.robustness_error > check.robustness_tolerance,
         "{check:?}"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The check runs on the scene the plan was made on, runtime parameters included: a direct
+/// `periodic-qc` plan of the human finger on a ball of radius 0.8 (`--param ball.radius=0.8`)
+/// is executed on that ball. The check once read the compiled scene by name, with the default
+/// radius 1, so the plan's contact phase lay 0.2 m inside that ball: its reference failed
+/// ("not in contact: h = −0.1999 m") and the plan was refused as unverified.
+#[test]
+fn the_check_runs_on_the_scene_the_plan_was_made_on() {
+    let dir = cli::tmpdir("param-check");
+    let human = root().join("scenes/human.toml");
+    let human = human.to_str().unwrap();
+    verified_direct_qc(&dir, &["--scene", human, "--param", "ball.radius=0.8"]);
+    let sol = OcpSolution::read_json(&dir.join("solution.json")).unwrap();
+    assert_eq!(sol.scene_params, vec![("ball.radius".to_string(), 0.8)]);
+    let check = searched_check(&sol);
+    assert!(check.failure.is_none(), "{check:?}");
+    assert!(check.max_omega_error <= EXECUTION_TOLERANCE, "{check:?}");
+    // The file's own record of its scene gives the same nominal run outside the search.
+    let again = execution_check(&sol, None).expect("the solution records its scene");
+    assert_eq!(again.max_omega_error, check.max_omega_error);
     std::fs::remove_dir_all(&dir).ok();
 }

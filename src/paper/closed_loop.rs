@@ -150,43 +150,6 @@ impl<const N: usize> Tracking<N> {
     }
 }
 
-/// The text of the optimum's scene with its runtime parameter values, and its name: the scene
-/// file's text the solution records (`scene_toml`, `scene_params`), or, in files that record
-/// none, the compiled scene it names (`paper` for solutions that name none). A solution on a
-/// scene of the user's own runs on interpreted kernels like its `optimize` and `simulate`.
-fn solution_scene_text(sol: &OcpSolution) -> Result<SceneText> {
-    let name = if sol.scene.is_empty() {
-        "paper"
-    } else {
-        &sol.scene
-    };
-    if !sol.scene_toml.is_empty() {
-        return Ok(SceneText {
-            text: sol.scene_toml.clone(),
-            name: name.to_string(),
-            params: sol.scene_params.clone(),
-        });
-    }
-    let text = bf_generated::scene_toml(name).ok_or_else(|| {
-        anyhow!(
-            "the solution records no scene text (`scene_toml`), and its scene `{name}` is not \
-             a compiled scene"
-        )
-    })?;
-    Ok(SceneText {
-        text: text.to_string(),
-        name: name.to_string(),
-        params: Vec::new(),
-    })
-}
-
-/// A scene file's text, its name and the runtime parameter values set on it.
-struct SceneText {
-    text: String,
-    name: String,
-    params: Vec<(String, f64)>,
-}
-
 /// `text` parsed as the scene `name` with the runtime parameter values `params` set.
 fn scene_with(text: &str, name: &str, params: &[(String, f64)]) -> Result<bf_codegen::Scene> {
     let mut scene = bf_codegen::Scene::from_toml_str(text, name)?;
@@ -198,9 +161,27 @@ fn scene_with(text: &str, name: &str, params: &[(String, f64)]) -> Result<bf_cod
 /// The optimum's scene parsed, with its name: the scene file's text the solution records
 /// (`scene_toml`, with `scene_params`), or, in files that record none, the compiled scene it
 /// names (`paper` for solutions that name none).
+/// A solution on a scene of the user's own runs on interpreted kernels, like its `optimize`
+/// and `simulate`.
 pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> {
-    let s = solution_scene_text(sol)?;
-    Ok((scene_with(&s.text, &s.name, &s.params)?, s.name))
+    let name = if sol.scene.is_empty() {
+        "paper"
+    } else {
+        &sol.scene
+    };
+    if !sol.scene_toml.is_empty() {
+        return Ok((
+            scene_with(&sol.scene_toml, name, &sol.scene_params)?,
+            name.into(),
+        ));
+    }
+    let text = bf_generated::scene_toml(name).ok_or_else(|| {
+        anyhow!(
+            "the solution records no scene text (`scene_toml`), and its scene `{name}` is not \
+             a compiled scene"
+        )
+    })?;
+    Ok((scene_with(text, name, &[])?, name.into()))
 }
 
 /// The model of a finger with `N` joints on the kernels of `scene` (compiled where the scene
@@ -285,10 +266,15 @@ pub fn reference_of<const N: usize>(
 /// The torque bounds |τ_i| ≤ τ_max,i of the optimum's scene (N m; infinite where the scene
 /// sets none or cannot be read).
 pub fn torque_bound<const N: usize>(sol: &OcpSolution) -> [f64; N] {
-    let max = solution_scene(sol)
-        .ok()
-        .and_then(|(scene, _)| bf_codegen::spec::Constants::of(&scene))
-        .map(|c| c.tau_max);
+    match solution_scene(sol) {
+        Ok((scene, _)) => scene_torque_bound(&scene),
+        Err(_) => [f64::INFINITY; N],
+    }
+}
+
+/// The torque bounds |τ_i| ≤ τ_max,i of `scene` (N m; infinite where it sets none).
+fn scene_torque_bound<const N: usize>(scene: &bf_codegen::Scene) -> [f64; N] {
+    let max = bf_codegen::spec::Constants::of(scene).map(|c| c.tau_max);
     std::array::from_fn(|i| {
         max.as_ref()
             .and_then(|m| m.get(i).copied())
@@ -317,20 +303,32 @@ pub const EXECUTION_ROBUSTNESS_PERIODS: usize = 10;
 /// [`EXECUTION_PERIODS`] periods, each within [`EXECUTION_TOLERANCE`] of the plan's mean spin,
 /// then on every plant of the robustness table ([`robustness_rows`],
 /// [`EXECUTION_ROBUSTNESS_PERIODS`] periods) to its target ([`ROBUSTNESS_TARGET`] from the 4th
-/// period on, contact in every period): what `paper` asks of the plans it executes. `None`
-/// where no run is possible (the plan's scene is not compiled in, as for `track`); a nominal
+/// period on, contact in every period): what `paper` asks of the plans it executes. The
+/// plan's scene is `scene` where given (a search's candidate, which records no scene text
+/// yet: its problem's scene, `--param` values included), else the one the solution records
+/// ([`solution_scene`]). `None` where no run is possible (no such scene, or a finger the
+/// closed loop does not run); a nominal
 /// run that fails or loses the ball is a failed check (`failure`), a perturbed plant that
 /// misses its target a robustness miss (`robustness_failure`), which grades the plan without
 /// unverifying it ([`crate::pipeline::verify::robustness_miss`]).
-pub fn execution_check(sol: &OcpSolution) -> Option<ExecutionCheck> {
-    let (scene, _) = solution_scene(sol).ok()?;
+pub fn execution_check(
+    sol: &OcpSolution,
+    scene: Option<&bf_codegen::Scene>,
+) -> Option<ExecutionCheck> {
+    let scene = match scene {
+        Some(s) => s.clone(),
+        None => solution_scene(sol).ok()?.0,
+    };
     let joints = tracked_joints(&scene).ok()?;
-    with_joints!(joints, execution_check_n(sol), None)
+    with_joints!(joints, execution_check_n(sol, &scene), None)
 }
 
-/// [`execution_check`] of a plan for a finger with `N` joints.
-fn execution_check_n<const N: usize>(sol: &OcpSolution) -> Option<ExecutionCheck> {
-    let (plant, _) = solution_model::<N>(sol).ok()?;
+/// [`execution_check`] of a plan for a finger with `N` joints on `scene`.
+fn execution_check_n<const N: usize>(
+    sol: &OcpSolution,
+    scene: &bf_codegen::Scene,
+) -> Option<ExecutionCheck> {
+    let (plant, _) = finger_model::<N>(scene).ok()?;
     let mut check = ExecutionCheck {
         controller: ControllerKind::Hybrid.name().to_string(),
         periods: EXECUTION_PERIODS,
@@ -342,12 +340,19 @@ fn execution_check_n<const N: usize>(sol: &OcpSolution) -> Option<ExecutionCheck
         failure: None,
         robustness_failure: None,
     };
-    let t = match run_tracking(
+    let nominal = TableRuns {
+        controller: ControllerKind::Hybrid,
+        periods: EXECUTION_PERIODS,
+        replan: None,
+        until_miss: false,
+    };
+    let t = match run_tracking_on(
         sol,
-        ControllerKind::Hybrid,
-        EXECUTION_PERIODS,
+        scene,
+        HybridGains::default(),
         plant,
         ImpactLaw::Newton,
+        nominal,
     ) {
         Ok(t) => t,
         Err(e) => {
@@ -383,6 +388,7 @@ fn execution_check_n<const N: usize>(sol: &OcpSolution) -> Option<ExecutionCheck
     // the verdict is the same, and such runs are the chaotic, slow ones.
     let rows = rows_n::<N>(
         sol,
+        scene,
         TableRuns {
             controller: ControllerKind::Hybrid,
             periods: EXECUTION_ROBUSTNESS_PERIODS,
@@ -554,6 +560,33 @@ pub fn run_tracking_with<const N: usize>(
     replan: Option<usize>,
     until_miss: bool,
 ) -> Result<Tracking<N>> {
+    let (scene, name) = solution_scene(sol)?;
+    let how = TableRuns {
+        controller,
+        periods,
+        replan,
+        until_miss,
+    };
+    run_tracking_on(sol, &scene, gains, plant, impact_law, how)
+        .with_context(|| format!("the solution's scene `{name}`"))
+}
+
+/// [`run_tracking_with`] with the controller's model on `scene` (the optimum's scene, which a
+/// search's candidate does not record yet: [`execution_check`]), run as `how` says.
+fn run_tracking_on<const N: usize>(
+    sol: &OcpSolution,
+    scene: &bf_codegen::Scene,
+    gains: HybridGains,
+    plant: Model<DynKernels<N>, N>,
+    impact_law: ImpactLaw,
+    how: TableRuns,
+) -> Result<Tracking<N>> {
+    let TableRuns {
+        controller,
+        periods,
+        replan,
+        until_miss,
+    } = how;
     if replan.is_some() && !controller.replans() {
         bail!(
             "re-planning needs a hybrid controller (hybrid or hybrid-unbounded), not `{}`",
@@ -632,13 +665,11 @@ pub fn run_tracking_with<const N: usize>(
             until,
         )?,
         ControllerKind::Hybrid | ControllerKind::HybridUnbounded => {
-            let (scene, name) = solution_scene(sol)?;
-            let (model, id) = finger_model::<N>(&scene)
-                .with_context(|| format!("the solution's scene `{name}`"))?;
+            let (model, id) = finger_model::<N>(scene)?;
             let reference = reference_of(sol, &model)?;
             let x0 = initial_state(sol)?;
             let bound = match controller {
-                ControllerKind::Hybrid => torque_bound::<N>(sol),
+                ControllerKind::Hybrid => scene_torque_bound::<N>(scene),
                 _ => [f64::INFINITY; N],
             };
             let mut law = HybridController::new(model, id, reference, gains, 0.0, &x0)?
@@ -646,7 +677,7 @@ pub fn run_tracking_with<const N: usize>(
             if let Some(max_iter) = replan {
                 let replanner = super::replan::SolverReplanner::new(
                     sol,
-                    solution_model::<N>(sol)?.0,
+                    finger_model::<N>(scene)?.0,
                     reference_of::<N>,
                     max_iter,
                     std::rc::Rc::clone(&log),
@@ -885,41 +916,80 @@ pub fn error_figure(
 /// The issue's nominal target for every period's ω error.
 pub const NOMINAL_TARGET: f64 = 0.02;
 
-/// The perturbed plants of the robustness table: name and the edit of the scene's TOML text
-/// (each alone, then all together).
-const PERTURBATIONS: [(&str, &[(&str, &str)]); 4] = [
-    (
-        "ball mass ×1.1",
-        &[(
-            "[ball]\nradius = 1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 0.02\n",
-            "[ball]\nradius = 1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 0.022\n",
-        )],
-    ),
-    (
-        "μ_s, μ_k ×0.8",
-        &[
-            ("mu_s = 0.8\n", "mu_s = 0.64\n"),
-            ("mu_k = 0.6\n", "mu_k = 0.48\n"),
-        ],
-    ),
-    (
-        "socket damping ×1.5",
-        &[("socket_damping = 0.004\n", "socket_damping = 0.006\n")],
-    ),
-    (
-        "link masses ×1.05",
-        &[
-            ("mass = 0.02\ncom", "mass = 0.021\ncom"),
-            (
-                "inertia = [1.0677e-3, 2.3177e-3, 2.0833e-3]",
-                "inertia = [1.121085e-3, 2.433585e-3, 2.187465e-3]",
-            ),
-        ],
-    ),
+/// A perturbation of the plant in the robustness table: factors on the scene's physical
+/// values ([`Perturbation::apply`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Perturbation {
+    /// The ball's mass ×1.1 (its inertia follows where it is the default (2/5) m r²).
+    BallMass,
+    /// μ_s and μ_k ×0.8.
+    Friction,
+    /// The socket damping ×1.5.
+    SocketDamping,
+    /// Every link's mass and inertia ×1.05.
+    LinkMasses,
+}
+
+/// `v` with 12 significant digits, as a scene file states a value: the perturbed values are
+/// the decimals a user would write (0.02 × 1.1 is 0.022, not 0.022000000000000002).
+fn stated(v: f64) -> f64 {
+    format!("{v:.11e}").parse().unwrap_or(v)
+}
+
+impl Perturbation {
+    /// `scene` with this perturbation; an error names what the scene lacks (a ball, friction).
+    fn apply(self, scene: &mut bf_codegen::Scene) -> Result<()> {
+        let name = scene.name.clone();
+        match self {
+            Perturbation::BallMass => {
+                let ball = scene
+                    .ball
+                    .as_mut()
+                    .ok_or_else(|| anyhow!("the scene `{name}` has no ball"))?;
+                ball.mass = stated(ball.mass * 1.1);
+            }
+            Perturbation::Friction | Perturbation::SocketDamping => {
+                let f = scene
+                    .friction
+                    .as_mut()
+                    .ok_or_else(|| anyhow!("the scene `{name}` has no [friction]"))?;
+                if self == Perturbation::Friction {
+                    f.mu_s = stated(f.mu_s * 0.8);
+                    f.mu_k = stated(f.mu_k * 0.8);
+                } else {
+                    f.socket_damping = stated(f.socket_damping * 1.5);
+                }
+            }
+            Perturbation::LinkMasses => {
+                for link in &mut scene.links {
+                    link.mass = stated(link.mass * 1.05);
+                    link.inertia = match link.inertia {
+                        bf_codegen::spec::InertiaSpec::Diagonal(d) => {
+                            bf_codegen::spec::InertiaSpec::Diagonal(d.map(|v| stated(v * 1.05)))
+                        }
+                        bf_codegen::spec::InertiaSpec::Full(m) => {
+                            bf_codegen::spec::InertiaSpec::Full(
+                                m.map(|row| row.map(|v| stated(v * 1.05))),
+                            )
+                        }
+                    };
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The perturbed plants of the robustness table, each alone, then all together.
+const PERTURBATIONS: [(&str, Perturbation); 4] = [
+    ("ball mass ×1.1", Perturbation::BallMass),
+    ("μ_s, μ_k ×0.8", Perturbation::Friction),
+    ("socket damping ×1.5", Perturbation::SocketDamping),
+    ("link masses ×1.05", Perturbation::LinkMasses),
 ];
 
-/// One row of the robustness table: its name, the scene edits and the plant's impact law.
-type Case = (String, Vec<(&'static str, &'static str)>, ImpactLaw);
+/// One row of the robustness table: its name, the perturbations and the plant's impact law.
+type Case = (String, Vec<Perturbation>, ImpactLaw);
 
 /// A perturbed copy of the compiled scene `name` (the paper scene or the human finger's, which
 /// share these values): `edits` applied to its TOML text (every occurrence); an error if an
@@ -928,31 +998,30 @@ pub fn perturbed_scene<const N: usize>(
     name: &str,
     edits: &[(&str, &str)],
 ) -> Result<Model<DynKernels<N>, N>> {
-    let text = bf_generated::scene_toml(name)
-        .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?;
-    perturbed(text, name, &[], edits)
-}
-
-/// The scene of `text` (named `name`, with the runtime parameter values `params`) with
-/// `edits` applied to its text (every occurrence), as a model of a finger with `N` joints; an
-/// error if an edit finds nothing to replace.
-fn perturbed<const N: usize>(
-    text: &str,
-    name: &str,
-    params: &[(String, f64)],
-    edits: &[(&str, &str)],
-) -> Result<Model<DynKernels<N>, N>> {
-    let mut text = text.to_string();
+    let mut text = bf_generated::scene_toml(name)
+        .ok_or_else(|| anyhow!("the scene `{name}` is not compiled in"))?
+        .to_string();
     for (from, to) in edits {
         if !text.contains(from) {
             bail!("the scene `{name}` has no `{from}` to perturb");
         }
         text = text.replace(from, to);
     }
+    Ok(finger_model::<N>(&scene_with(&text, name, &[])?)?.0)
+}
+
+/// `scene` with the perturbations `edits`, as a model of a finger with `N` joints.
+fn perturbed<const N: usize>(
+    scene: &bf_codegen::Scene,
+    edits: &[Perturbation],
+) -> Result<Model<DynKernels<N>, N>> {
+    let mut scene = scene.clone();
+    for e in edits {
+        e.apply(&mut scene)?;
+    }
     // The scene keeps its name: a perturbation of what the model applies outside its kernels
     // (the ball's mass, friction, damping) runs on the compiled kernels with the perturbed
     // parameters; a perturbation of the links (their masses) is interpreted.
-    let scene = scene_with(&text, name, params)?;
     Ok(finger_model::<N>(&scene)?.0)
 }
 
@@ -962,14 +1031,11 @@ fn perturbed<const N: usize>(
 fn robustness_cases() -> Vec<Case> {
     let mut cases: Vec<Case> = PERTURBATIONS
         .iter()
-        .map(|(n, e)| (n.to_string(), e.to_vec(), ImpactLaw::Newton))
+        .map(|(n, e)| (n.to_string(), vec![*e], ImpactLaw::Newton))
         .collect();
     cases.push((
         "all four".into(),
-        PERTURBATIONS
-            .iter()
-            .flat_map(|(_, e)| e.iter().copied())
-            .collect(),
+        PERTURBATIONS.iter().map(|(_, e)| *e).collect(),
         ImpactLaw::Newton,
     ));
     cases.push((
@@ -996,7 +1062,13 @@ pub fn robustness_runs<const N: usize>(
         replan,
         until_miss: false,
     };
-    runs(sol, how)
+    match solution_scene(sol) {
+        Ok((scene, _)) => runs(sol, &scene, how),
+        Err(e) => robustness_cases()
+            .into_iter()
+            .map(|(plant, _, _)| (plant, Err(anyhow!("{e:#}"))))
+            .collect(),
+    }
 }
 
 /// How the plants of the robustness table are run: `controller` for `periods` periods,
@@ -1011,29 +1083,19 @@ struct TableRuns {
 }
 
 /// [`robustness_runs`] as `how` says.
-fn runs<const N: usize>(sol: &OcpSolution, how: TableRuns) -> Vec<(String, Result<Tracking<N>>)> {
-    let TableRuns {
-        controller,
-        periods,
-        replan,
-        until_miss,
-    } = how;
-    let scene = solution_scene_text(sol);
+fn runs<const N: usize>(
+    sol: &OcpSolution,
+    scene: &bf_codegen::Scene,
+    how: TableRuns,
+) -> Vec<(String, Result<Tracking<N>>)> {
     // The plants are independent runs: one per thread, collected in the table's order, so
     // the table does not depend on the thread count.
     use rayon::prelude::*;
     robustness_cases()
         .into_par_iter()
         .map(|(case, edits, law)| {
-            let plant = match &scene {
-                Ok(s) => perturbed::<N>(&s.text, &s.name, &s.params, &edits),
-                Err(e) => Err(anyhow!("{e:#}")),
-            };
-            let run = plant.and_then(|plant| {
-                let gains = HybridGains::default();
-                run_tracking_with(
-                    sol, controller, gains, periods, plant, law, replan, until_miss,
-                )
+            let run = perturbed::<N>(scene, &edits).and_then(|plant| {
+                run_tracking_on(sol, scene, HybridGains::default(), plant, law, how)
             });
             (case, run)
         })
@@ -1100,11 +1162,12 @@ pub fn robustness_rows(
         replan,
         until_miss: false,
     };
-    let joints = solution_scene(sol).and_then(|(scene, name)| {
-        tracked_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))
+    let scene = solution_scene(sol).and_then(|(scene, name)| {
+        let n = tracked_joints(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
+        Ok((scene, n))
     });
-    match joints {
-        Ok(n) => with_joints!(n, rows_n(sol, how), Vec::new()),
+    match scene {
+        Ok((scene, n)) => with_joints!(n, rows_n(sol, &scene, how), Vec::new()),
         Err(e) => robustness_cases()
             .into_iter()
             .map(|(plant, _, _)| RobustnessRow::failed(plant, crate::errors::render(&e)))
@@ -1115,8 +1178,12 @@ pub fn robustness_rows(
 /// The rows of the robustness table of a finger with `N` joints, run as `how` says; with
 /// `until_miss` the same rows' verdicts, a missing row's error that of its first missed
 /// period rather than its largest.
-fn rows_n<const N: usize>(sol: &OcpSolution, how: TableRuns) -> Vec<RobustnessRow> {
-    runs::<N>(sol, how)
+fn rows_n<const N: usize>(
+    sol: &OcpSolution,
+    scene: &bf_codegen::Scene,
+    how: TableRuns,
+) -> Vec<RobustnessRow> {
+    runs::<N>(sol, scene, how)
         .into_iter()
         .map(|(plant, run)| match run {
             Ok(t) => robustness_row(plant, &t, how.periods),

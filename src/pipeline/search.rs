@@ -139,10 +139,12 @@ pub struct VerifyPolicy {
 /// ([`super::verify::execution_failure`]), one that misses the robustness target on a
 /// perturbed plant is verified but ranked below every plan that meets it
 /// ([`super::verify::robustness_miss`]), so a search chooses among the executed plans and
-/// prefers robust ones. `None` from the function: no run was possible (a scene that is not
-/// compiled in), and the re-integration decides alone.
+/// prefers robust ones. The function gets the candidate and its problem's scene (`None`: the
+/// problem's compiled scene), since a candidate records no scene text until `optimize`
+/// writes it. `None` from the function: no run was possible, and the re-integration decides
+/// alone.
 #[derive(Clone, Copy)]
-pub struct Execution(pub fn(&OcpSolution) -> Option<ExecutionCheck>);
+pub struct Execution(pub fn(&OcpSolution, Option<&bf_codegen::Scene>) -> Option<ExecutionCheck>);
 
 impl std::fmt::Debug for Execution {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -532,7 +534,9 @@ fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
         && v.verified
     {
         if could_be_chosen(c.solution.objective, bound) {
-            v.execution = run(&c.solution);
+            // The candidate records no scene text yet (`optimize` adds it to the file): the
+            // problem's own scene (with `--param` values) is the one the plan was made on.
+            v.execution = run(&c.solution, p.settings.scene.as_ref());
             v.verified = passes(v);
         } else {
             unexecuted(v);
