@@ -4,8 +4,9 @@
 //! rest at the target within the URDF's effort limits, verified by re-integration; a TOML scene
 //! that takes a 3-joint finger from a URDF and adds a ball simulates the finger striking the
 //! ball (an impact on the surface that reverses the approach velocity); `periodic-qc` on the
-//! paper's finger taken from a URDF reaches the optima of the DH paper scene; and a branched
-//! URDF without `--tip` is refused naming the file, line and link.
+//! paper's finger taken from a URDF reaches the optima of the DH paper scene; its plan is
+//! tracked and replayed from the solution file alone; and a branched URDF without `--tip` is
+//! refused naming the file, line and link.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -269,5 +270,63 @@ fn the_dh_paper_scenes_best_periodic_qc_optimum_is_one_of_the_urdf_scene() {
         &["--scene", PAPER_URDF, "--warm-start", &from],
     );
     same_optimum(&dh, &urdf);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A ball problem posed on a TOML scene that takes its finger from a URDF records the scene
+/// self-contained (the chain written out, as for arms): `track` and `simulate --init` read
+/// the solution alone. They once failed on the recorded `urdf = …` key ("unknown field
+/// `base_link`"). The sticking plan, tracked on a sticking plant, stays within 2 % per period.
+#[test]
+fn a_plan_of_a_urdf_finger_is_tracked_and_replayed_from_its_file_alone() {
+    let dir = tmpdir("urdf-finger-track");
+    let opt = dir.join("opt");
+    let scene = format!("{URDF}/paper_finger_ball.toml");
+    ok(&run(&[
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--scene",
+        &scene,
+        "--impact-law",
+        "stick",
+        "--strategy",
+        "direct",
+        "--out",
+        opt.to_str().unwrap(),
+    ]));
+    let sol = json(&opt.join("solution.json"));
+    let text = sol["scene_toml"].as_str().unwrap();
+    assert!(!text.lines().any(|l| l.starts_with("urdf")), "{text}");
+    bf_codegen::Scene::from_toml_str(text, "solution").unwrap();
+    let solution = opt.join("solution.json");
+    let trk = dir.join("track");
+    ok(&run(&[
+        "track",
+        solution.to_str().unwrap(),
+        "--periods",
+        "3",
+        "--impact-law",
+        "stick",
+        "--out",
+        trk.to_str().unwrap(),
+    ]));
+    let tracking = json(&trk.join("tracking.json"));
+    assert_eq!(tracking["completed_periods"], 3);
+    assert!(
+        tracking["max_omega_error"].as_f64().unwrap() <= 0.02,
+        "{}",
+        tracking["max_omega_error"]
+    );
+    let sim = dir.join("sim");
+    ok(&run(&[
+        "simulate",
+        "--init",
+        solution.to_str().unwrap(),
+        "--t-end",
+        "0.5",
+        "--out",
+        sim.to_str().unwrap(),
+    ]));
     std::fs::remove_dir_all(&dir).ok();
 }

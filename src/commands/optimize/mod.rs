@@ -571,11 +571,17 @@ pub fn scene_from_args(args: &OptimizeArgs, problem: Problem) -> Result<Option<b
 
 /// The scene text and `--param` values the run poses `problem` on, as its solution files
 /// record them ([`OcpSolution::scene_toml`], [`OcpSolution::scene_params`]): the `--scene`
-/// file's text, else the problem's compiled scene's.
+/// file's self-contained text (a URDF it names expanded into its chain, as the scene loader
+/// reads it), else the problem's compiled scene's.
 pub fn scene_record(args: &OptimizeArgs, problem: Problem) -> Result<(String, Vec<(String, f64)>)> {
     let text = match &args.scene {
-        Some(p) => std::fs::read_to_string(p)
-            .with_context(|| format!("--scene {}: cannot read", p.display()))?,
+        // The self-contained text (a `urdf` key resolved to its chain), so that the file needs
+        // nothing else to be replayed or tracked.
+        Some(p) => {
+            bf_codegen::Scene::load_with_text(p, &args.chain.choice())
+                .with_context(|| format!("--scene {}", p.display()))?
+                .1
+        }
         None => bf_generated::scene_toml(problem.scene().as_str())
             .with_context(|| format!("problem {problem}: no compiled scene"))?
             .to_string(),
