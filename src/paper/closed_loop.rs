@@ -560,7 +560,7 @@ pub fn run_tracking_with<const N: usize>(
     replan: Option<usize>,
     until_miss: bool,
 ) -> Result<Tracking<N>> {
-    let (scene, name) = solution_scene(sol)?;
+    let (scene, _) = solution_scene(sol)?;
     let how = TableRuns {
         controller,
         periods,
@@ -568,7 +568,6 @@ pub fn run_tracking_with<const N: usize>(
         until_miss,
     };
     run_tracking_on(sol, &scene, gains, plant, impact_law, how)
-        .with_context(|| format!("the solution's scene `{name}`"))
 }
 
 /// [`run_tracking_with`] with the controller's model on `scene` (the optimum's scene, which a
@@ -665,7 +664,8 @@ fn run_tracking_on<const N: usize>(
             until,
         )?,
         ControllerKind::Hybrid | ControllerKind::HybridUnbounded => {
-            let (model, id) = finger_model::<N>(scene)?;
+            let (model, id) = finger_model::<N>(scene)
+                .with_context(|| format!("the solution's scene `{}`", scene.name))?;
             let reference = reference_of(sol, &model)?;
             let x0 = initial_state(sol)?;
             let bound = match controller {
