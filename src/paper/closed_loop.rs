@@ -8,7 +8,7 @@
 //! perturbed plant of the robustness table only up to its first period, from the 4th on, that
 //! misses [`ROBUSTNESS_TARGET`] ([`run_tracking_with`]'s `until_miss`); the paper's tables and
 //! `track` run every period. Every run ends at the impact that completes its last period
-//! (`periods_complete`): the horizon's margin is there for a late plant, not simulated after
+//! (`count_impacts`): the horizon's margin is there for a late plant, not simulated after
 //! the periods. The hybrid controller runs fingers of 3 to [`MAX_TRACKED_JOINTS`]
 //! joints ([`tracked_joints`]; `run_tracking_with`, [`Tracking`] and the robustness runs are
 //! generic in the joint count N, and `track`, the robustness rows and [`execution_check`]
@@ -150,14 +150,6 @@ impl<const N: usize> Tracking<N> {
     }
 }
 
-/// `text` parsed as the scene `name` with the runtime parameter values `params` set.
-fn scene_with(text: &str, name: &str, params: &[(String, f64)]) -> Result<bf_codegen::Scene> {
-    let mut scene = bf_codegen::Scene::from_toml_str(text, name)?;
-    bf_model::registry::set_parameters(&mut scene, params)
-        .with_context(|| format!("the scene `{name}`'s runtime parameters"))?;
-    Ok(scene)
-}
-
 /// The optimum's scene parsed, with its name: the scene file's text the solution records
 /// (`scene_toml`, with `scene_params`), or, in files that record none, the compiled scene it
 /// names (`paper` for solutions that name none).
@@ -169,11 +161,10 @@ pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> 
     } else {
         &sol.scene
     };
-    if !sol.scene_toml.is_empty() {
-        return Ok((
-            scene_with(&sol.scene_toml, name, &sol.scene_params)?,
-            name.into(),
-        ));
+    if let Some(scene) = crate::pipeline::solve::recorded_scene(sol)
+        .with_context(|| format!("the solution's scene `{name}`"))?
+    {
+        return Ok((scene, name.into()));
     }
     let text = bf_generated::scene_toml(name).ok_or_else(|| {
         anyhow!(
@@ -181,7 +172,7 @@ pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> 
              a compiled scene"
         )
     })?;
-    Ok((scene_with(text, name, &[])?, name.into()))
+    Ok((bf_codegen::Scene::from_toml_str(text, name)?, name.into()))
 }
 
 /// The model of a finger with `N` joints on the kernels of `scene` (compiled where the scene
@@ -488,17 +479,17 @@ fn ball_spin(x: &[Vec<f64>], joints: usize) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// Whether the trajectory `tr` recorded so far holds `periods` completed periods: periods run
-/// from impact to impact ([`period_metrics`]; a run that starts in contact counts its first
-/// sample as one), so `periods` + 1 impacts. `seen`: the samples examined before and the
-/// impacts among them, so each sample is looked at once.
-fn periods_complete(
+/// The impacts in the trajectory `tr` recorded so far, before and after its new samples:
+/// periods run from impact to impact ([`period_metrics`]; a run that starts in contact counts
+/// its first sample as one), so `periods` are complete at `periods` + 1 impacts. `seen`: the
+/// samples examined before and the impacts among them, so each sample is looked at once.
+fn count_impacts(
     tr: &bf_sim::Trajectory<Mode>,
-    periods: usize,
     seen: &std::cell::Cell<(usize, usize)>,
-) -> bool {
-    let (from, mut impacts) = seen.get();
+) -> (usize, usize) {
+    let (from, before) = seen.get();
     let n = tr.t.len().min(tr.mode.len());
+    let mut impacts = before;
     for i in from..n {
         let starts = if i == 0 {
             tr.mode[0] != Mode::Free
@@ -508,28 +499,22 @@ fn periods_complete(
         impacts += usize::from(starts);
     }
     seen.set((n.max(from), impacts));
-    impacts > periods
+    (before, impacts)
 }
 
 /// Whether the trajectory `tr` recorded so far holds a completed period, among the first
 /// `periods`, from the 4th on whose mean ω is off the plan's `optimum` by more than
 /// [`ROBUSTNESS_TARGET`]: [`period_metrics`] on its samples, which are those of the finished
 /// run up to there, so the period's error is the one the finished run's row would show, and
-/// the row misses its target whatever follows. `checked`: the samples examined before; the
-/// periods are computed again only when a new period has ended (an impact: a free sample
-/// followed by one in contact).
+/// the row misses its target whatever follows. Asked only when a period has just ended
+/// ([`count_impacts`]).
 fn misses_from_fourth(
     tr: &bf_sim::Trajectory<Mode>,
     joints: usize,
     optimum: [f64; 3],
     periods: usize,
-    checked: &std::cell::Cell<usize>,
 ) -> bool {
     let n = tr.t.len().min(tr.mode.len()).min(tr.x.len());
-    let from = checked.replace(n).max(1);
-    if !(from..n).any(|i| tr.mode[i - 1] == Mode::Free && tr.mode[i] != Mode::Free) {
-        return false;
-    }
     let omega = ball_spin(&tr.x[..n], joints);
     // Torques do not enter the error.
     let tau = vec![Vec::new(); n];
@@ -630,16 +615,17 @@ fn run_tracking_on<const N: usize>(
         ..BallFingerSettings::default()
     };
     let log = std::rc::Rc::new(std::cell::RefCell::new(super::replan::ReplanLog::default()));
-    let (checked, missed) = (std::cell::Cell::new(0), std::cell::Cell::new(false));
+    let missed = std::cell::Cell::new(false);
     let impacts = std::cell::Cell::new((0, 0));
     // The run ends once its periods are complete (the horizon's margin is for a late plant,
     // not to be simulated after the last period), or, with `until_miss`, at its first
     // missed period from the 4th on.
     let stop = |tr: &bf_sim::Trajectory<Mode>| {
-        if periods_complete(tr, periods, &impacts) {
+        let (before, now) = count_impacts(tr, &impacts);
+        if now > periods {
             return true;
         }
-        let m = until_miss && misses_from_fourth(tr, N, sol.mean_omega, periods, &checked);
+        let m = until_miss && now > before && misses_from_fourth(tr, N, sol.mean_omega, periods);
         missed.set(m);
         m
     };
@@ -1007,7 +993,7 @@ pub fn perturbed_scene<const N: usize>(
         }
         text = text.replace(from, to);
     }
-    Ok(finger_model::<N>(&scene_with(&text, name, &[])?)?.0)
+    Ok(finger_model::<N>(&bf_codegen::Scene::from_toml_str(&text, name)?)?.0)
 }
 
 /// `scene` with the perturbations `edits`, as a model of a finger with `N` joints.

@@ -257,6 +257,21 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
     same.then_some(w)
 }
 
+/// The scene a solution file records: its `scene_toml` parsed, with its `scene_params` set;
+/// `None` for a file that records no scene text (written before it was recorded). The error
+/// names the field that does not parse or set.
+pub fn recorded_scene(sol: &OcpSolution) -> Result<Option<bf_codegen::Scene>, PipelineError> {
+    if sol.scene_toml.is_empty() {
+        return Ok(None);
+    }
+    let fail = |why: String| PipelineError::Unrecomputable(why);
+    let mut scene = bf_codegen::Scene::from_toml_str(&sol.scene_toml, &sol.scene)
+        .map_err(|e| fail(format!("its `scene_toml`: {e}")))?;
+    bf_model::registry::set_parameters(&mut scene, &sol.scene_params)
+        .map_err(|e| fail(format!("its `scene_params`: {e}")))?;
+    Ok(Some(scene))
+}
+
 /// The problem and settings a solution file records (problem, scene text and runtime
 /// parameters, points, scheme, ε, the planned impact law, the cone and torque margins, the
 /// approach clearance and the stick-phase bound; everything else the defaults, no mesh): its
@@ -276,15 +291,7 @@ pub fn settings_of(
     }
     let compiled = sol.scene_params.is_empty()
         && bf_generated::scene_toml(problem.scene().as_str()) == Some(sol.scene_toml.as_str());
-    let scene = if compiled {
-        None
-    } else {
-        let mut scene = bf_codegen::Scene::from_toml_str(&sol.scene_toml, &sol.scene)
-            .map_err(|e| fail(format!("its `scene_toml`: {e}")))?;
-        bf_model::registry::set_parameters(&mut scene, &sol.scene_params)
-            .map_err(|e| fail(format!("its `scene_params`: {e}")))?;
-        Some(scene)
-    };
+    let scene = if compiled { None } else { recorded_scene(sol)? };
     Ok((
         problem,
         ProblemSettings {
