@@ -241,7 +241,7 @@ fn the_hybrid_controller_executes_a_4_joint_plan() {
     for (scene, expected) in [
         (
             "scenes/paper.toml",
-            "the plant has 3 joints, the solution's finger 4",
+            "it has 3 joints where the plan's finger has 4",
         ),
         ("tests/fixtures/finger2.toml", "fingers of 3 to 7 joints"),
     ] {

@@ -9,8 +9,8 @@
 use crate::cli::TrackArgs;
 use crate::errors::bail_usage;
 use crate::paper::closed_loop::{
-    ControllerKind, Tracking, robustness_rows, robustness_table, run_tracking_replanned,
-    solution_model, solution_scene, tracked_joints, with_joints,
+    ControllerKind, Tracking, finger_model, robustness_rows, robustness_table,
+    run_tracking_replanned, solution_model, solution_scene, tracked_joints, with_joints,
 };
 use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
@@ -194,17 +194,8 @@ fn run_n<const N: usize>(
     let (plant, plant_name) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
-            let context = || format!("--plant-scene {}", path.display());
-            let n = tracked_joints(&scene).with_context(context)?;
-            if n != N {
-                bail!(
-                    "{}: the plant has {n} joints, the solution's finger {N}",
-                    context()
-                );
-            }
-            let (kernels, _) =
-                bf_model::registry::contact_kernels_n::<N>(&scene).with_context(context)?;
-            let model = bf_model::Model::from_kernels(kernels).with_context(context)?;
+            let (model, _) = finger_model::<N>(&scene)
+                .with_context(|| format!("--plant-scene {}", path.display()))?;
             (model, path.display().to_string())
         }
         None => solution_model::<N>(sol).with_context(|| args.solution.display().to_string())?,

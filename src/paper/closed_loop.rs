@@ -185,7 +185,7 @@ pub fn finger_model<const N: usize>(
 ) -> Result<(Model<DynKernels<N>, N>, InverseDynamics)> {
     let n = tracked_joints(scene)?;
     if n != N {
-        bail!("it has {n} joints, not {N}");
+        bail!("it has {n} joints where the plan's finger has {N}");
     }
     let (kernels, source) = bf_model::registry::contact_kernels_n::<N>(scene)?;
     let model = Model::from_kernels(kernels)?;
