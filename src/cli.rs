@@ -568,11 +568,12 @@ pub struct OptimizeArgs {
     /// Impact law of the plan: `newton` (eq. 39, the law of the paper's Sect. 6.2 simulations
     /// and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint velocity
     /// within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at 0.1 m/s or
-    /// faster; 3 joints) or `stick` (eq. 40, the paper's Sect. 6: the impulse stops the contact
+    /// faster; 3 joints or more) or `stick` (eq. 40, the paper's Sect. 6: the impulse stops the contact
     /// point and spins the ball). A `stick` plan whose stick phase is short spins the ball
     /// mostly by the impact and cannot be executed on a Newton plant. Recorded in
     /// solution.json as `impact_law` [default: `newton` for the periodic problems on a
-    /// 3-joint finger, the plans `track` executes (docs/closed-loop.md); `stick` otherwise;
+    /// finger of 3 joints or more, the plans `track` executes (docs/closed-loop.md); `stick`
+    /// otherwise;
     /// `--impact-law stick` poses the paper's problem, margins and clearance 0 unless given].
     #[arg(long, value_name = "LAW")]
     pub impact_law: Option<String>,

@@ -5,6 +5,9 @@
 //! * the joint-space row, evaluated at a plan's pre-impact state against bf-model's own Newton
 //!   law q̇_N, is interior by more than 100 times the solver's bound relaxation at q̇⁺ = q̇_N,
 //!   holds at v/2 from it and is violated beyond that relaxation at 1.05 v and 2 v;
+//! * a redundant finger's Newton plan (4 joints: the plant's q̇_N and ι_N as parameters after
+//!   ι) has the derivatives of finite differences and 2N + 5 more rows than its sticking plan;
+//!   a 2-joint finger's is refused;
 //! * `--impact-law` refuses an unknown law naming the option and the value, and a
 //!   `solution.json` written before the law was recorded reads as a sticking plan;
 //! * plan margins (`--cone-margin`, `--torque-margin`): a direct solve with each margin set
@@ -52,6 +55,26 @@ const NEWTON_WITHOUT_MARGINS: [&str; 6] = [
     "0",
 ];
 
+/// The `periodic-qc` Newton plan of settings `s`, its derivatives checked against finite
+/// differences at a random point, and how many more constraints it has than the sticking plan
+/// of the same settings.
+fn newton_plan_checked(
+    s: &ProblemSettings,
+    rng: &mut ChaCha8Rng,
+) -> (bf_problem::BuiltProblem, usize) {
+    let p = build("periodic-qc".parse().unwrap(), s).unwrap();
+    let (x, lam) = common::fd::random_point(&p.nlp, rng);
+    let rep = check_derivatives(&p.nlp, &x, 0.5, &lam, 1e-6);
+    assert!(rep.max_error() < 1e-5, "{:?}: {rep:?}", s.scheme);
+    let stick = ProblemSettings {
+        impact_law: PlannedImpact::Stick,
+        ..s.clone()
+    };
+    let stick = build("periodic-qc".parse().unwrap(), &stick).unwrap();
+    let extra = p.nlp.num_constraints() - stick.nlp.num_constraints();
+    (p, extra)
+}
+
 #[test]
 fn newton_impact_derivatives_match_finite_differences() {
     let mut rng = ChaCha8Rng::seed_from_u64(33);
@@ -62,24 +85,66 @@ fn newton_impact_derivatives_match_finite_differences() {
             impact_law: PlannedImpact::Newton,
             ..ProblemSettings::default()
         };
-        let p = build("periodic-qc".parse().unwrap(), &s).unwrap();
-        let m = p.nlp.num_constraints();
-        let (x, lam) = common::fd::random_point(&p.nlp, &mut rng);
-        let rep = check_derivatives(&p.nlp, &x, 0.5, &lam, 1e-6);
-        assert!(rep.max_error() < 1e-5, "{scheme:?}: {rep:?}");
         // The Newton rows are there: eight more constraints than the sticking plan (the
         // joint-space box's six rows, J_c's conditioning and the approach speed; ω⁺ = ω⁻
         // replaces the ball's balance).
-        let stick = build(
-            "periodic-qc".parse().unwrap(),
-            &ProblemSettings {
-                impact_law: PlannedImpact::Stick,
-                ..s.clone()
-            },
-        )
-        .unwrap();
-        assert_eq!(m, stick.nlp.num_constraints() + 8, "{scheme:?}");
+        let (_, extra_rows) = newton_plan_checked(&s, &mut rng);
+        assert_eq!(extra_rows, 8, "{scheme:?}");
     }
+}
+
+/// A redundant finger's Newton plan (`scenes/paper4.toml`, 4 joints): the plant's q̇_N and ι_N
+/// are N + 3 more parameters after ι, and the rows that hold them (the plant's impulse
+/// balance, J_c q̇_N = T_n J_c q̇⁻), the joint-space box, the Gram determinant's conditioning
+/// and the approach speed have the derivatives of finite differences. A finger of 2 joints
+/// has no Newton plan: refused by name.
+#[test]
+fn a_redundant_finger_s_newton_rows_match_finite_differences() {
+    let load = |path: &str| {
+        let text = std::fs::read_to_string(cli::root().join(path)).unwrap();
+        bf_codegen::Scene::from_toml_str(&text, path).unwrap()
+    };
+    let paper4 = load("scenes/paper4.toml");
+    let mut rng = ChaCha8Rng::seed_from_u64(34);
+    for scheme in [Scheme::Lg, Scheme::Radau { elements: 2 }] {
+        let s = ProblemSettings {
+            scene: Some(paper4.clone()),
+            points: 4,
+            scheme,
+            impact_law: PlannedImpact::Newton,
+            ..ProblemSettings::default()
+        };
+        let (p, extra_rows) = newton_plan_checked(&s, &mut rng);
+        let names: Vec<&str> = p.ocp.params.iter().map(|q| q.name.as_str()).collect();
+        assert_eq!(
+            names,
+            [
+                "iota1",
+                "iota2",
+                "iota3",
+                "qd_newton1",
+                "qd_newton2",
+                "qd_newton3",
+                "qd_newton4",
+                "iota_newton1",
+                "iota_newton2",
+                "iota_newton3"
+            ]
+        );
+        // N balance rows and 3 rows of J_c q̇_N, the box's N rows, conditioning and approach
+        // speed: 2N + 5 more than the sticking plan.
+        assert_eq!(extra_rows, 13, "{scheme:?}");
+    }
+    let finger2 = ProblemSettings {
+        scene: Some(load("tests/fixtures/finger2.toml")),
+        impact_law: PlannedImpact::Newton,
+        ..ProblemSettings::default()
+    };
+    let Err(err) = build("periodic-qc".parse().unwrap(), &finger2) else {
+        panic!("no Newton plan for 2 joints");
+    };
+    let err = err.to_string();
+    assert!(err.contains("Newton impact plan"), "{err}");
 }
 
 #[test]

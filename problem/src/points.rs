@@ -166,9 +166,9 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// cone (eq. 66, squared form).
 ///
 /// `newton` plans the impact with Newton's law instead (eq. 39, restitution 0, the law of the
-/// paper's Sect. 6.2 simulations; 3 joints): ω⁺ = ω⁻ replaces the ball's impulse balance, ι
+/// paper's Sect. 6.2 simulations): ω⁺ = ω⁻ replaces the ball's impulse balance, ι
 /// is the impulse the finger receives, and the post-impact joint velocity must be within
-/// [`NEWTON_VELOCITY_LIMIT`] of the plant's, q̇_N = J_c⁻¹ T_n J_c q̇⁻ (T_n = 1 − n nᵀ), so that
+/// [`NEWTON_VELOCITY_LIMIT`] of the plant's (for 3 joints q̇_N = J_c⁻¹ T_n J_c q̇⁻, T_n = 1 − n nᵀ), so that
 /// the stick phase that follows starts sticking under Newton's law as well (paper Sect. 7),
 /// and the finger must arrive at [`NEWTON_APPROACH_SPEED`] or faster, at a J_c conditioned at
 /// least [`NEWTON_MIN_CONDITION`]. Without J_c⁻¹ (which the graph cannot form where J_c is
@@ -192,6 +192,17 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// through the ball's centre), where a slip of 1 mm/s moves q̇⁺ by rad/s: the optimum used an
 /// impulse of 75–1000 N s that no plant applies (docs/decisions/0033-newton-impact-plan.md).
 ///
+/// A redundant finger (N > 3 joints; `newton` needs at least 3): J_c is 3 × N, and the plant's
+/// law takes, of the velocities with J_c q̇ = T_n J_c q̇⁻, the one closest to q̇⁻ in the
+/// kinetic-energy norm: q̇_N = q̇⁻ + M⁻¹ J_cᵀ ι_N with (J_c M⁻¹ J_cᵀ) ι_N = −n (n · v_c⁻)
+/// (bf-model's `ImpactLaw::Newton`). The graph forms neither M⁻¹ nor an adjugate of
+/// J_c here: q̇_N and ι_N are N + 3 more parameters after ι (`iota0 + 3 ..`, in that order,
+/// [`newton_lifted_param_count`]), held by M (q̇_N − q̇⁻) − J_cᵀ ι_N = 0 and
+/// J_c q̇_N = T_n J_c q̇⁻ (regular wherever J_c has rank 3). The plan's q̇⁺ then lies in the box
+/// |q̇⁺_i − q̇_N,i| ≤ v / √N, and det(J_c J_cᵀ) ≥ κ² (‖J_c‖_F² / 3)³, the 3-joint row on the
+/// Gram determinant (det(J_c)² for N = 3). The 3-joint rows stay as above, so its plans are
+/// unchanged.
+///
 /// `delta_v_plus` adds ω⁺ × r_c − J_c q̇⁺ = 0 (eq. 40c); leave it out when the stick phase's
 /// first state point is a collocation node (Radau), where the node's Δv = 0 already imposes
 /// it (a duplicate row would make the constraint Jacobian rank deficient).
@@ -211,11 +222,11 @@ pub fn impact(
         base,
     } = build_model(scene, eps)?;
     let nq = ph.nq;
-    if newton && nq != 3 {
+    if newton && nq < 3 {
         return Err(ProblemError::InvalidSetting {
-            name: "the joint count of a Newton impact plan (J_c square)",
+            name: "the joint count of a Newton impact plan (J_c of rank 3)",
             value: nq as f64,
-            expected: "3",
+            expected: "at least 3",
         });
     }
     let lay = model.layout;
@@ -253,6 +264,18 @@ pub fn impact(
     }
     for (i, &v) in io.iter().enumerate() {
         vars_list.push((v, VarRef::Param(iota0 + i)));
+    }
+    // A redundant finger's Newton plan carries the plant's post-impact velocity and impulse
+    // as parameters after ι (see the function's docs).
+    let lifted = newton && nq > 3;
+    let qdn: Vec<u32> = (0..nq as u32)
+        .map(|i| base + 2 * nq as u32 + 6 + i)
+        .collect();
+    let ion: Vec<u32> = (0..3u32).map(|i| base + 3 * nq as u32 + 6 + i).collect();
+    if lifted {
+        for (i, &v) in qdn.iter().chain(&ion).enumerate() {
+            vars_list.push((v, VarRef::Param(iota0 + 3 + i)));
+        }
     }
     let qmi = vars(g, &qm);
     let qpi = vars(g, &qp);
@@ -300,7 +323,19 @@ pub fn impact(
         out.push(g.sub(a, ii));
         bounds.push((0.0, f64::INFINITY));
     }
-    if newton {
+    if lifted {
+        newton_lifted_rows(
+            g,
+            &ce,
+            &mass,
+            &qdmi,
+            &qdpi,
+            &qdn,
+            &ion,
+            &mut out,
+            &mut bounds,
+        );
+    } else if newton {
         // Rows a_r of J_c: adj(J_c) = [a₁ × a₂ | a₂ × a₀ | a₀ × a₁], det = a₀ · (a₁ × a₂).
         let row = |r: usize| [ce.j_c[r][0], ce.j_c[r][1], ce.j_c[r][2]];
         let (a0, a1, a2) = (row(0), row(1), row(2));
@@ -331,16 +366,7 @@ pub fn impact(
         // det² ≥ κ² (‖J_c‖_F² / 3)³ (NEWTON_MIN_CONDITION), squared so that its sign is free.
         let fro_terms: Vec<Id> = [a0, a1, a2].iter().map(|&r| g.v3_dot(r, r)).collect();
         let fro = g.sum(&fro_terms);
-        let third = g.constant(1.0 / 3.0);
-        let mean = g.mul(fro, third);
-        let mean2 = g.square(mean);
-        let cube = g.mul(mean2, mean);
-        let k2 = g.constant(NEWTON_MIN_CONDITION * NEWTON_MIN_CONDITION);
-        let least = g.mul(k2, cube);
-        out.push(g.sub(d2, least));
-        bounds.push((0.0, f64::INFINITY));
-        out.push(ce.h_dot);
-        bounds.push((f64::NEG_INFINITY, -NEWTON_APPROACH_SPEED));
+        conditioning_and_approach_rows(g, d2, fro, ce.h_dot, &mut out, &mut bounds);
     }
     Ok(PointFunction {
         name: if newton {
@@ -355,6 +381,104 @@ pub fn impact(
         outputs: out,
         bounds,
     })
+}
+
+/// The Newton rows of a redundant finger (N > 3 joints, see [`impact`]): the plant's
+/// post-impact velocity q̇_N and impulse ι_N (variables `qdn`, `ion`) solve
+/// M (q̇_N − q̇⁻) − J_cᵀ ι_N = 0 and J_c q̇_N = T_n J_c q̇⁻, the plan's q̇⁺ lies in the box
+/// |q̇⁺_i − q̇_N,i| ≤ v / √N, J_c J_cᵀ is conditioned at least κ, and ḣ⁻ ≤ −v_approach.
+#[allow(clippy::too_many_arguments)]
+fn newton_lifted_rows(
+    g: &mut Graph,
+    ce: &bf_codegen::robot::ContactExprs,
+    mass: &[Vec<Id>],
+    qdm: &[Id],
+    qdp: &[Id],
+    qdn: &[u32],
+    ion: &[u32],
+    out: &mut Vec<Id>,
+    bounds: &mut Vec<(f64, f64)>,
+) {
+    let nq = qdm.len();
+    let qdn = vars(g, qdn);
+    let iota_n = v3(&vars(g, ion));
+    // M (q̇_N − q̇⁻) − J_cᵀ ι_N = 0: the plant's impulse balance (eq. 40a).
+    let dqd: Vec<Id> = (0..nq).map(|i| g.sub(qdn[i], qdm[i])).collect();
+    for (i, m_row) in mass.iter().enumerate() {
+        let m = g.dot(m_row, &dqd);
+        let col = [ce.j_c[0][i], ce.j_c[1][i], ce.j_c[2][i]];
+        let ji = g.v3_dot(col, iota_n);
+        out.push(g.sub(m, ji));
+        bounds.push((0.0, 0.0));
+    }
+    // J_c q̇_N − T_n v_c⁻ = 0 (eq. 39): with the balance above, the q̇_N closest to q̇⁻ in the
+    // kinetic-energy norm, which is what the plant's law computes (bf_model::impact).
+    let vc = ce.v_c;
+    let vn = g.v3_dot(vc, ce.n);
+    let vnn = g.v3_scale(vn, ce.n);
+    let t = g.v3_sub(vc, vnn);
+    for (r, &tr) in t.iter().enumerate() {
+        let jq = g.dot(&ce.j_c[r], &qdn);
+        out.push(g.sub(jq, tr));
+        bounds.push((0.0, 0.0));
+    }
+    // |q̇⁺_i − q̇_N,i| ≤ v / √N: the box inside the ball of radius v, as for 3 joints.
+    let half_width = NEWTON_VELOCITY_LIMIT / (nq as f64).sqrt();
+    for i in 0..nq {
+        let d = g.sub(qdp[i], qdn[i]);
+        out.push(d);
+        bounds.push((-half_width, half_width));
+    }
+    // det(J_c J_cᵀ) ≥ κ² (‖J_c‖_F² / 3)³: the Gram determinant is det(J_c)² for 3 joints, so
+    // this is the 3-joint row on the product of J_c's three squared singular values.
+    let gram: Vec<Vec<Id>> = (0..3)
+        .map(|r| (0..3).map(|c| g.dot(&ce.j_c[r], &ce.j_c[c])).collect())
+        .collect();
+    let minor = |g: &mut Graph, a: Id, b: Id, c: Id, d: Id| {
+        let ad = g.mul(a, d);
+        let bc = g.mul(b, c);
+        g.sub(ad, bc)
+    };
+    let m0 = minor(g, gram[1][1], gram[1][2], gram[2][1], gram[2][2]);
+    let m1 = minor(g, gram[1][0], gram[1][2], gram[2][0], gram[2][2]);
+    let m2 = minor(g, gram[1][0], gram[1][1], gram[2][0], gram[2][1]);
+    let t0 = g.mul(gram[0][0], m0);
+    let t1 = g.mul(gram[0][1], m1);
+    let t2 = g.mul(gram[0][2], m2);
+    let t01 = g.sub(t0, t1);
+    let det = g.add(t01, t2);
+    let fro = g.sum(&[gram[0][0], gram[1][1], gram[2][2]]);
+    conditioning_and_approach_rows(g, det, fro, ce.h_dot, out, bounds);
+}
+
+/// The last two rows of every Newton plan: `det2` ≥ κ² (`fro` / 3)³
+/// ([`NEWTON_MIN_CONDITION`]; `det2` = det(J_c J_cᵀ), `fro` = ‖J_c‖_F²) and
+/// ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`].
+fn conditioning_and_approach_rows(
+    g: &mut Graph,
+    det2: Id,
+    fro: Id,
+    h_dot: Id,
+    out: &mut Vec<Id>,
+    bounds: &mut Vec<(f64, f64)>,
+) {
+    let third = g.constant(1.0 / 3.0);
+    let mean = g.mul(fro, third);
+    let mean2 = g.square(mean);
+    let cube = g.mul(mean2, mean);
+    let k2 = g.constant(NEWTON_MIN_CONDITION * NEWTON_MIN_CONDITION);
+    let least = g.mul(k2, cube);
+    out.push(g.sub(det2, least));
+    bounds.push((0.0, f64::INFINITY));
+    out.push(h_dot);
+    bounds.push((f64::NEG_INFINITY, -NEWTON_APPROACH_SPEED));
+}
+
+/// How many parameters a Newton impact plan adds after the impulse ι for a finger of `nq`
+/// joints: q̇_N and ι_N of the plant's law for a redundant finger (N > 3, see [`impact`]),
+/// none for 3 joints.
+pub fn newton_lifted_param_count(nq: usize) -> usize {
+    if nq > 3 { nq + 3 } else { 0 }
 }
 
 /// Evaluator of contact diagnostics (α, sat α, h, ḣ, n, r_c, Δv) at a state.

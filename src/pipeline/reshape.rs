@@ -239,8 +239,8 @@ pub fn flip_elbow(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64], up: &[
 
 /// The mirror ([`Move::Mirror`]) of the primal point `x` of `p` (`nq` joints; states
 /// [q, q̇, ω, …] at every state point, node variables [q̈, ω̇, λ] and \[τ\], the impact impulse
-/// ι as the problem's three parameters when it has them), each value kept inside its
-/// variable bounds. Nothing without joints.
+/// ι and a redundant finger's Newton parameters q̇_N, ι_N, found by name, when the problem has
+/// them), each value kept inside its variable bounds. Nothing without joints.
 pub fn mirror_first_joint(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64], up: &[f64]) {
     if nq == 0 {
         return;
@@ -267,9 +267,12 @@ pub fn mirror_first_joint(p: &BuiltProblem, nq: usize, x: &mut [f64], lo: &[f64]
             }
         }
     }
-    // ι is a Cartesian impulse (eq. 40): its y component changes sign.
-    if p.ocp.params.len() == 3 && p.ocp.params.iter().all(|q| q.name.starts_with("iota")) {
-        negate(p.nlp.p0 + 1);
+    // ι (and a redundant finger's Newton impulse ι_N) is a Cartesian impulse (eq. 40): its y
+    // component changes sign; the Newton plan's post-impact q̇_N as q̇ (its first joint's).
+    for (k, q) in p.ocp.params.iter().enumerate() {
+        if matches!(q.name.as_str(), "iota2" | "iota_newton2" | "qd_newton1") {
+            negate(p.nlp.p0 + k);
+        }
     }
 }
 

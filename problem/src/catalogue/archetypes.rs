@@ -86,16 +86,24 @@ impl Context<'_> {
     }
 }
 
-/// The impact impulse ι (eq. 40) as three parameters.
-fn iota_params() -> Vec<Param> {
-    (0..3)
-        .map(|i| Param {
-            name: format!("iota{}", i + 1),
-            lower: -1e3,
-            upper: 1e3,
-            guess: 0.0,
-        })
-        .collect()
+/// The impact impulse ι (eq. 40) as three parameters; a redundant finger's Newton plan adds
+/// the plant's post-impact velocity q̇_N (`qd_newton1..N`) and impulse ι_N (`iota_newton1..3`)
+/// ([`crate::points::impact`]).
+fn iota_params(c: &Context<'_>) -> Vec<Param> {
+    let param = |name: String| Param {
+        name,
+        lower: -1e3,
+        upper: 1e3,
+        guess: 0.0,
+    };
+    let mut params: Vec<Param> = (0..3).map(|i| param(format!("iota{}", i + 1))).collect();
+    if c.settings.impact_law == crate::solution::PlannedImpact::Newton
+        && crate::points::newton_lifted_param_count(c.nq()) > 0
+    {
+        params.extend((0..c.nq()).map(|i| param(format!("qd_newton{}", i + 1))));
+        params.extend((0..3).map(|i| param(format!("iota_newton{}", i + 1))));
+    }
+    params
 }
 
 /// Free–stick–free periodic rotation with the QC or COT ratio objective (Sect. 6.1); with
@@ -182,7 +190,7 @@ impl PeriodicParts {
             cost: self.cost,
             objective: Objective::Ratio(0, 1),
             points,
-            params: iota_params(),
+            params: iota_params(c),
             cost_bounds: self.cost_bounds,
             q_limits: c.q_limits(),
         }
@@ -401,7 +409,7 @@ pub(crate) fn free_stick(c: &Context<'_>) -> Result<Spec, ProblemError> {
         cost,
         objective: Objective::Cost(0),
         points,
-        params: iota_params(),
+        params: iota_params(c),
         cost_bounds,
         q_limits: c.q_limits(),
     })

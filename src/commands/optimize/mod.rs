@@ -307,9 +307,9 @@ impl PlanFor {
     /// `--torque-margin` and `--approach-clearance` where given. The defaults plan for the
     /// plant that executes the plan (docs/decisions/0040-touch-check-and-the-default-plan.md):
     /// a periodic problem, which `track` executes on a Newton plant, gets Newton's law
-    /// (eq. 39) where the Newton impact plan exists (3 joints, J_c square), with
+    /// (eq. 39) where the Newton impact plan exists (3 joints or more, J_c of rank 3), with
     /// [`EXECUTABLE_TORQUE_MARGIN`] and the clearance that `track`'s hybrid controller keeps
-    /// in free flight; the other problems, and the periodic ones on other fingers, get the
+    /// in free flight; the other problems, and the periodic ones on fingers of fewer joints, get the
     /// sticking law (eq. 40) of the paper's Sect. 6 with the exact limits and no clearance.
     /// The margin's and the clearance's defaults follow the law actually planned, so
     /// `--impact-law stick` alone poses the paper's problem.
@@ -323,7 +323,7 @@ impl PlanFor {
         let impact_law = match law {
             Some(text) => PlannedImpact::parse(text)
                 .map_err(|e| crate::errors::usage(format!("--impact-law: {e}")))?,
-            None if problem.is_periodic() && joints == 3 => PlannedImpact::Newton,
+            None if problem.is_periodic() && joints >= 3 => PlannedImpact::Newton,
             None => PlannedImpact::Stick,
         };
         let executable = problem.is_periodic() && impact_law == PlannedImpact::Newton;
@@ -962,11 +962,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
 mod tests {
     use super::*;
 
-    /// The defaults plan periodic problems on 3 joints for `track`'s Newton plant (Newton's
-    /// law, the torque margin, the controller's clearance); `--impact-law stick`, other
-    /// fingers and other problems get the paper's problem; given values win.
+    /// The defaults plan periodic problems on 3 joints or more for `track`'s Newton plant
+    /// (Newton's law, the torque margin, the controller's clearance); `--impact-law stick`,
+    /// fingers of fewer joints and other problems get the paper's problem; given values win.
     #[test]
-    fn periodic_problems_on_three_joints_plan_for_the_newton_plant_by_default() {
+    fn periodic_problems_on_three_joints_or_more_plan_for_the_newton_plant_by_default() {
         let gap = bf_control::HybridGains::default().clearance.gap;
         let plan = |p: Problem, joints, law, margin, clearance| {
             PlanFor::of(p, joints, law, margin, clearance).unwrap()
@@ -987,9 +987,11 @@ mod tests {
             Problem::PeriodicCotHuman,
         ] {
             assert_eq!(plan(p, 3, None, None, None), newton);
+            assert_eq!(plan(p, 4, None, None, None), newton);
+            assert_eq!(plan(p, 7, None, None, None), newton);
             // The paper's problem by name, and fingers without a Newton impact plan.
             assert_eq!(plan(p, 3, Some("stick"), None, None), paper);
-            assert_eq!(plan(p, 4, None, None, None), paper);
+            assert_eq!(plan(p, 2, None, None, None), paper);
             // Given values win; the law's defaults fill the rest.
             let own = plan(p, 3, None, Some(0.1), Some(0.0));
             assert_eq!((own.torque_margin, own.approach_clearance), (0.1, 0.0));
