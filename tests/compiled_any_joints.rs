@@ -215,6 +215,11 @@ fn the_hybrid_controller_executes_a_4_joint_plan() {
     // bf-model's the exact one, so the bounds hold up to that difference. A plan that ignored
     // Newton's law would be off by the order of ‖q̇⁻‖ itself.
     let allowance = NEWTON_VELOCITY_LIMIT * 1.5 + 1e-3 * pre.qd.norm();
+    eprintln!(
+        "ḣ⁻ = {}, ‖q̇⁺ − q̇_N‖ = {gap}, ‖q̇⁻‖ = {}",
+        kin.contact.h_dot,
+        pre.qd.norm()
+    );
     assert!(
         gap <= allowance && pre.qd.norm() > 100.0 * allowance,
         "q̇⁺ {:?} vs the plant's {}: {gap} > {allowance} (‖q̇⁻‖ {})",

@@ -197,7 +197,7 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// kinetic-energy norm: q̇_N = q̇⁻ + M⁻¹ J_cᵀ ι_N with (J_c M⁻¹ J_cᵀ) ι_N = −n (n · v_c⁻)
 /// (bf-model's `ImpactLaw::Newton`). The graph forms neither M⁻¹ nor an adjugate of
 /// J_c here: q̇_N and ι_N are N + 3 more parameters after ι (`iota0 + 3 ..`, in that order,
-/// [`newton_lifted_param_count`]), held by M (q̇_N − q̇⁻) − J_cᵀ ι_N = 0 and
+/// [`newton_lifted_param_names`]), held by M (q̇_N − q̇⁻) − J_cᵀ ι_N = 0 and
 /// J_c q̇_N = T_n J_c q̇⁻ (regular wherever J_c has rank 3). The plan's q̇⁺ then lies in the box
 /// |q̇⁺_i − q̇_N,i| ≤ v / √N, and det(J_c J_cᵀ) ≥ κ² (‖J_c‖_F² / 3)³, the 3-joint row on the
 /// Gram determinant (det(J_c)² for N = 3). The 3-joint rows stay as above, so its plans are
@@ -431,22 +431,12 @@ fn newton_lifted_rows(
     }
     // det(J_c J_cᵀ) ≥ κ² (‖J_c‖_F² / 3)³: the Gram determinant is det(J_c)² for 3 joints, so
     // this is the 3-joint row on the product of J_c's three squared singular values.
-    let gram: Vec<Vec<Id>> = (0..3)
-        .map(|r| (0..3).map(|c| g.dot(&ce.j_c[r], &ce.j_c[c])).collect())
+    let gram: Vec<[Id; 3]> = (0..3)
+        .map(|r| [0, 1, 2].map(|c| g.dot(&ce.j_c[r], &ce.j_c[c])))
         .collect();
-    let minor = |g: &mut Graph, a: Id, b: Id, c: Id, d: Id| {
-        let ad = g.mul(a, d);
-        let bc = g.mul(b, c);
-        g.sub(ad, bc)
-    };
-    let m0 = minor(g, gram[1][1], gram[1][2], gram[2][1], gram[2][2]);
-    let m1 = minor(g, gram[1][0], gram[1][2], gram[2][0], gram[2][2]);
-    let m2 = minor(g, gram[1][0], gram[1][1], gram[2][0], gram[2][1]);
-    let t0 = g.mul(gram[0][0], m0);
-    let t1 = g.mul(gram[0][1], m1);
-    let t2 = g.mul(gram[0][2], m2);
-    let t01 = g.sub(t0, t1);
-    let det = g.add(t01, t2);
+    // det G = G₀ · (G₁ × G₂) over its rows, as the 3-joint det(J_c) is formed above.
+    let cross = g.v3_cross(gram[1], gram[2]);
+    let det = g.v3_dot(gram[0], cross);
     let fro = g.sum(&[gram[0][0], gram[1][1], gram[2][2]]);
     conditioning_and_approach_rows(g, det, fro, ce.h_dot, out, bounds);
 }
@@ -474,11 +464,16 @@ fn conditioning_and_approach_rows(
     bounds.push((f64::NEG_INFINITY, -NEWTON_APPROACH_SPEED));
 }
 
-/// How many parameters a Newton impact plan adds after the impulse ι for a finger of `nq`
-/// joints: q̇_N and ι_N of the plant's law for a redundant finger (N > 3, see [`impact`]),
-/// none for 3 joints.
-pub fn newton_lifted_param_count(nq: usize) -> usize {
-    if nq > 3 { nq + 3 } else { 0 }
+/// The names of the parameters a Newton impact plan adds after the impulse ι for a finger of
+/// `nq` joints, in [`impact`]'s order: q̇_N (`qd_newton1..N`) and ι_N (`iota_newton1..3`) of
+/// the plant's law for a redundant finger (N > 3), none for 3 joints or fewer.
+pub fn newton_lifted_param_names(nq: usize) -> Vec<String> {
+    if nq <= 3 {
+        return Vec::new();
+    }
+    let qd = (1..=nq).map(|i| format!("qd_newton{i}"));
+    qd.chain((1..=3).map(|i| format!("iota_newton{i}")))
+        .collect()
 }
 
 /// Evaluator of contact diagnostics (α, sat α, h, ḣ, n, r_c, Δv) at a state.

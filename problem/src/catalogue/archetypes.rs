@@ -97,11 +97,12 @@ fn iota_params(c: &Context<'_>) -> Vec<Param> {
         guess: 0.0,
     };
     let mut params: Vec<Param> = (0..3).map(|i| param(format!("iota{}", i + 1))).collect();
-    if c.settings.impact_law == crate::solution::PlannedImpact::Newton
-        && crate::points::newton_lifted_param_count(c.nq()) > 0
-    {
-        params.extend((0..c.nq()).map(|i| param(format!("qd_newton{}", i + 1))));
-        params.extend((0..3).map(|i| param(format!("iota_newton{}", i + 1))));
+    if c.settings.impact_law == crate::solution::PlannedImpact::Newton {
+        params.extend(
+            crate::points::newton_lifted_param_names(c.nq())
+                .into_iter()
+                .map(param),
+        );
     }
     params
 }
