@@ -481,9 +481,10 @@ pub struct OptimizeArgs {
     /// Interior-point iteration limit.
     #[arg(long, default_value_t = 1500, allow_hyphen_values = true, value_parser = positive_whole)]
     pub max_iter: usize,
-    /// ε of the smooth saturation.
-    #[arg(long, default_value_t = 0.01, allow_hyphen_values = true)]
-    pub epsilon: f64,
+    /// ε of the smooth saturation (eq. 59), m; default: the scene's `contact.smooth_eps`
+    /// (0.01 in every shipped scene).
+    #[arg(long, allow_hyphen_values = true)]
+    pub epsilon: Option<f64>,
     /// Warm start from a previous solution.json.
     #[arg(long)]
     pub warm_start: Option<PathBuf>,

@@ -784,3 +784,65 @@ fn optimize_lists_the_active_bounds_of_its_optimum() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// Without `--epsilon`, `optimize` smooths the contact with the scene's `contact.smooth_eps`,
+/// as `eval` and `verify` do (it once took 0.01 whatever the scene said). The paper's scene
+/// with `smooth_eps = 0.02`: 20 iterations of the direct solve record ε = 0.02 and reach the
+/// same objective, bit for bit, as `--epsilon 0.02` on it, and another one than
+/// `--epsilon 0.01` (ε enters the stick phases' contact point, eq. 58–59).
+#[test]
+fn optimize_takes_the_scenes_contact_smoothing() {
+    let dir = tmpdir("scene-eps");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
+    assert!(
+        text.contains("smooth_eps = 0.01"),
+        "the paper scene's ε moved"
+    );
+    let scene = dir.join("eps002.toml");
+    std::fs::write(
+        &scene,
+        text.replace("smooth_eps = 0.01", "smooth_eps = 0.02"),
+    )
+    .unwrap();
+    let solve = |tag: &str, extra: &[&str]| -> serde_json::Value {
+        let out = dir.join(tag);
+        let o = bin()
+            .current_dir(root())
+            .args([
+                "optimize",
+                "--problem",
+                "periodic-qc",
+                "--impact-law",
+                "stick",
+            ])
+            .args([
+                "--strategy",
+                "direct",
+                "--max-iter",
+                "20",
+                "--verify-rtol",
+                "0",
+            ])
+            .arg("--scene")
+            .arg(&scene)
+            .args(extra)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        // 20 iterations end at the iteration limit: a failed run whose set is still written.
+        assert_clean_failure(&o, &["MaxIterations"]);
+        serde_json::from_str(&std::fs::read_to_string(out.join("solution.json")).unwrap()).unwrap()
+    };
+    let (scene_eps, given, other) = (
+        solve("scene", &[]),
+        solve("given", &["--epsilon", "0.02"]),
+        solve("other", &["--epsilon", "0.01"]),
+    );
+    assert_eq!(scene_eps["epsilon"].as_f64(), Some(0.02));
+    assert_eq!(other["epsilon"].as_f64(), Some(0.01));
+    let j = |s: &serde_json::Value| s["objective"].as_f64().unwrap();
+    assert_eq!(j(&scene_eps).to_bits(), j(&given).to_bits());
+    assert_ne!(j(&scene_eps), j(&other));
+    std::fs::remove_dir_all(dir).ok();
+}

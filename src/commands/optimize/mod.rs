@@ -194,11 +194,10 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     if args.points < 2 {
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
-    if !(args.epsilon.is_finite() && args.epsilon > 0.0) {
-        bail_usage!(
-            "--epsilon must be a finite positive number (got {})",
-            args.epsilon
-        );
+    if let Some(eps) = args.epsilon
+        && !(eps.is_finite() && eps > 0.0)
+    {
+        bail_usage!("--epsilon must be a finite positive number (got {eps})");
     }
     if let Some(dc) = args.dual_regularization
         && !(dc.is_finite() && dc > 0.0 && dc <= 1e-4)
@@ -238,7 +237,9 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         scene,
         points: args.points,
         scheme,
-        epsilon: Some(args.epsilon),
+        // Without `--epsilon` the problem takes the scene's `contact.smooth_eps`, as `eval`
+        // and `verify` do.
+        epsilon: args.epsilon,
         warm_start,
         max_iter: args.max_iter,
         print_level: args.print_level,
