@@ -806,30 +806,12 @@ fn optimize_takes_the_scenes_contact_smoothing() {
     .unwrap();
     let solve = |tag: &str, extra: &[&str]| -> serde_json::Value {
         let out = dir.join(tag);
-        let o = bin()
-            .current_dir(root())
-            .args([
-                "optimize",
-                "--problem",
-                "periodic-qc",
-                "--impact-law",
-                "stick",
-            ])
-            .args([
-                "--strategy",
-                "direct",
-                "--max-iter",
-                "20",
-                "--verify-rtol",
-                "0",
-            ])
-            .arg("--scene")
-            .arg(&scene)
-            .args(extra)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
+        let scene = scene.to_str().unwrap();
+        let args = [
+            &["--max-iter", "20", "--verify-rtol", "0", "--scene", scene],
+            extra,
+        ];
+        let o = cli_util::direct_sticking_qc(&args.concat(), &out);
         // 20 iterations end at the iteration limit: a failed run whose set is still written.
         assert_clean_failure(&o, &["MaxIterations"]);
         serde_json::from_str(&std::fs::read_to_string(out.join("solution.json")).unwrap()).unwrap()

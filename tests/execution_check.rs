@@ -70,10 +70,12 @@ fn earliest_recontact(t: &Tracking) -> f64 {
 /// The human finger's plan of J = 0.0452 (a fixture: the default search's optimum before the
 /// closed-loop check) leaves the ball at ḣ = 0, and only its planned ḧ > 0 separates the
 /// finger. Without the clearance guard the plant falls back onto the ball within milliseconds
-/// of the lift-off and the controller takes the touch for the next impact: far beyond the
-/// tolerance. With the guard's floor rising at h_c / t_r after every lift-off (its rate part
-/// of the guard's target) the plant leaves the ball, and the bounded controller executes the
-/// plan within the tolerance; with the flight's pace it meets the robustness target too.
+/// of the lift-off (25 µs) and the controller takes the touch for the next impact: it runs a
+/// second contact phase in the same period (a bounce, not a period of its own: decision record
+/// 0081), and every period is 16–17 % off, far beyond the tolerance. With the guard's floor
+/// rising at h_c / t_r after every lift-off (its rate part of the guard's target) the plant
+/// leaves the ball, and the bounded controller executes the plan within the tolerance; with
+/// the flight's pace it meets the robustness target too.
 #[test]
 fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
     let mut sol = grazing_plan();
@@ -110,7 +112,7 @@ fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
         "{}",
         earliest_recontact(&fell_back)
     );
-    assert!(error(&fell_back) > 10.0 * EXECUTION_TOLERANCE);
+    assert!(error(&fell_back) > 5.0 * EXECUTION_TOLERANCE);
 
     let guarded = run(HybridGains::default());
     let rise = HybridGains::default().clearance.rise;

@@ -507,8 +507,16 @@ fn recompute(traj: &serde_json::Value, optimum: [f64; 3]) -> Vec<[f64; 7]> {
         .map(|d| serde_json::from_value(d["tau"].clone()).unwrap())
         .collect();
     let free = |m: &str| m.eq_ignore_ascii_case("free");
+    // An impact starts a period unless it comes less than `MIN_FLIGHT` after the last contact
+    // sample (a bounce, docs/decisions/0081-a-bounce-is-not-a-period.md).
     let starts: Vec<usize> = (1..t.len())
         .filter(|&i| free(&mode[i - 1]) && !free(&mode[i]))
+        .filter(|&i| {
+            (0..i)
+                .rev()
+                .find(|&k| !free(&mode[k]))
+                .is_none_or(|k| t[i] - t[k] >= bf_control::MIN_FLIGHT)
+        })
         .collect();
     let on = (optimum[0].powi(2) + optimum[1].powi(2) + optimum[2].powi(2)).sqrt();
     starts
@@ -623,6 +631,67 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
         dir.join("m").to_str().unwrap(),
     ]);
     assert!(!r.status.success() && String::from_utf8_lossy(&r.stderr).contains("missing.json"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A plan whose finger chatters on the plant: the paper's sticking plan from a single solve
+/// (`optimize --problem periodic-qc --impact-law stick --strategy direct`, period 2.57 s) on
+/// the Newton plant strikes the ball again 0.48 s after its first impact and chatters there,
+/// an impact every few microseconds. Those bounces are not periods (decision record 0081): the
+/// run goes on past them, every period it reports lasts longer than a plan's shortest flight,
+/// the figures are what trajectory.json gives, and the run, which fails its energy check, is
+/// flagged (exit status 1, `FAILED`). Before, six bounces completed "6 of 6 periods" at
+/// 0.56 s.
+#[test]
+fn a_chattering_finger_completes_no_period_by_its_bounces() {
+    let dir = cli::tmpdir("track-chatter");
+    let opt = dir.join("opt");
+    cli::ok(&cli::direct_sticking_qc(&[], &opt));
+    let out = dir.join("out");
+    let r = cli::run(&[
+        "track",
+        opt.join("solution.json").to_str().unwrap(),
+        "--periods",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
+    };
+    let (tracking, traj) = (read("tracking.json"), read("trajectory.json"));
+    // The chatter: impacts less than MIN_FLIGHT after a lift-off.
+    let t: Vec<f64> = serde_json::from_value(traj["t"].clone()).unwrap();
+    let mode: Vec<String> = serde_json::from_value(traj["mode"].clone()).unwrap();
+    let contact = |i: usize| !mode[i].eq_ignore_ascii_case("free");
+    let bounces = (1..t.len())
+        .filter(|&i| contact(i) && !contact(i - 1))
+        .filter(|&i| {
+            (0..i)
+                .rev()
+                .find(|&k| contact(k))
+                .is_some_and(|k| t[i] - t[k] < bf_control::MIN_FLIGHT)
+        })
+        .count();
+    assert!(
+        bounces >= 6,
+        "{bounces} bounces: the plan no longer chatters"
+    );
+    let periods = tracking["periods"].as_array().unwrap();
+    assert_eq!(periods.len(), 3, "{tracking}");
+    let optimum: [f64; 3] = serde_json::from_value(tracking["optimum_mean_omega"].clone()).unwrap();
+    let expect = recompute(&traj, optimum);
+    for (p, e) in periods.iter().zip(&expect) {
+        let (start, end) = (p["start"].as_f64().unwrap(), p["end"].as_f64().unwrap());
+        assert!(end - start > 2.0 * bf_control::MIN_FLIGHT, "{p}");
+        let err = p["omega_error"].as_f64().unwrap();
+        assert!((err - e[3]).abs() <= 1e-12 * (1.0 + e[3]), "{p} vs {e:?}");
+    }
+    assert!(*t.last().unwrap() >= periods[2]["end"].as_f64().unwrap());
+    // The energy check fails on this run, and the run says so.
+    assert!(!tracking["energy_check_failure"].is_null(), "{tracking}");
+    assert_eq!(r.status.code(), Some(1));
+    assert!(out.join("FAILED").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -282,19 +282,7 @@ fn a_plan_of_a_urdf_finger_is_tracked_and_replayed_from_its_file_alone() {
     let dir = tmpdir("urdf-finger-track");
     let opt = dir.join("opt");
     let scene = format!("{URDF}/paper_finger_ball.toml");
-    ok(&run(&[
-        "optimize",
-        "--problem",
-        "periodic-qc",
-        "--scene",
-        &scene,
-        "--impact-law",
-        "stick",
-        "--strategy",
-        "direct",
-        "--out",
-        opt.to_str().unwrap(),
-    ]));
+    ok(&cli_util::direct_sticking_qc(&["--scene", &scene], &opt));
     let sol = json(&opt.join("solution.json"));
     let text = sol["scene_toml"].as_str().unwrap();
     assert!(!text.lines().any(|l| l.starts_with("urdf")), "{text}");

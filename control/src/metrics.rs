@@ -3,7 +3,12 @@
 //! A period runs from one impact (Free → Stick/Slip) to the next: the optimum's period holds
 //! one contact phase, and its mean ω is the same over any window of one period, so ω̄_k over
 //! [impact k, impact k + 1) compares with the optimum's ω̄*; the flight before the first
-//! impact (a run that starts in contact: the first sample) is the lead-in, not a period. Per
+//! impact (a run that starts in contact: the first sample) is the lead-in, not a period. An
+//! impact after a flight shorter than [`MIN_FLIGHT`] is a bounce of the contact it left, not
+//! the start of a period ([`PeriodStarts`]): a finger that chatters on the ball (impact,
+//! lift-off, impact again microseconds later) is one contact phase, and counting each bounce
+//! as a period once ended a run of six planned periods of 2.6 s at 0.56 s, "6 of 6 periods"
+//! (docs/decisions/0081-a-bounce-is-not-a-period.md). Per
 //! period: the mean ω̄_k = (1/T_k) ∫ ω dt (trapezoidal rule over the samples, the counterpart
 //! of the optimum's mean ω, eq. 61), its relative error ‖ω̄_k − ω̄*‖ / ‖ω̄*‖, whether the finger
 //! touched the ball, the time spent in Stick and in Slip, and the largest |τ_i| of its samples.
@@ -32,6 +37,40 @@ pub struct PeriodMetrics {
     pub max_abs_tau: f64,
 }
 
+/// The shortest flight between two contacts that makes the second one the start of a new
+/// period (s). The periodic problems bound each free phase below by 0.01 s, so a plan's flight
+/// (the release and the approach) lasts at least 0.02 s; a flight of less than half of that is
+/// no flight of a plan but a bounce of the contact phase.
+pub const MIN_FLIGHT: f64 = 0.01;
+
+/// The period starts of a run, found sample by sample (module doc): the first sample if the run
+/// starts in contact, and every impact (a contact sample after a free one) whose flight since
+/// the last contact sample lasted at least [`MIN_FLIGHT`], or that ends the lead-in.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct PeriodStarts {
+    /// Whether the last sample seen was free; `None` before the first.
+    last_free: Option<bool>,
+    /// Time of the last contact sample seen.
+    last_contact: Option<f64>,
+}
+
+impl PeriodStarts {
+    /// Whether the next sample of the run, at time `t` in plant mode `mode`, starts a period.
+    pub fn starts(&mut self, t: f64, mode: Mode) -> bool {
+        let free = mode == Mode::Free;
+        let start = !free
+            && match self.last_free {
+                None => true,
+                Some(was_free) => was_free && self.last_contact.is_none_or(|c| t - c >= MIN_FLIGHT),
+            };
+        self.last_free = Some(free);
+        if !free {
+            self.last_contact = Some(t);
+        }
+        start
+    }
+}
+
 /// The completed periods of a run sampled at `t` (non-decreasing) with plant modes `mode`, ball
 /// angular velocities `omega` and torques `tau`, against the optimum's mean ω `optimum`
 /// (module doc).
@@ -45,17 +84,14 @@ pub fn period_metrics(
     let n = t.len().min(mode.len()).min(omega.len()).min(tau.len());
     let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
     let scale = norm(optimum);
-    let boundary = |i: usize| mode[i - 1] == Mode::Free && mode[i] != Mode::Free;
+    let mut starts = PeriodStarts::default();
+    let boundaries: Vec<usize> = (0..n).filter(|&i| starts.starts(t[i], mode[i])).collect();
     let mut out = Vec::new();
-    let Some(mut first) =
-        (0..n).find(|&i| (i == 0 && mode[0] != Mode::Free) || (i > 0 && boundary(i)))
-    else {
+    let Some((&start, rest)) = boundaries.split_first() else {
         return out;
     };
-    for i in first + 1..n {
-        if !boundary(i) {
-            continue;
-        }
+    let mut first = start;
+    for &i in rest {
         let mut p = PeriodMetrics {
             start: t[first],
             end: t[i],

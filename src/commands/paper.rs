@@ -491,7 +491,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          (τ*(t) repeated), the joint-space PD around the optimal trajectory in the free phases, \
          and bf-control's hybrid controller (computed torque in free motion, force/velocity \
          control in contact, timed by the contact events; `ball-finger track`). The ω error of \
-         a period is ‖ω̄_k − ω̄*‖ / ‖ω̄*‖, a period runs from one impact to the next.\n"
+         a period is ‖ω̄_k − ω̄*‖ / ‖ω̄*‖, a period runs from one impact to the next (a bounce, an \
+         impact less than {} s after a lift-off, is part of its contact phase).\n",
+        bf_control::MIN_FLIGHT
     )?;
     for r in &results {
         let periods = match (args.quick, r.name.as_str()) {

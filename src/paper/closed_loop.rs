@@ -8,7 +8,7 @@
 //! perturbed plant of the robustness table only up to its first period, from the 4th on, that
 //! misses [`ROBUSTNESS_TARGET`] ([`run_tracking_with`]'s `until_miss`); the paper's tables and
 //! `track` run every period. Every run ends at the impact that completes its last period
-//! (`count_impacts`): the horizon's margin is there for a late plant, not simulated after
+//! (`count_period_starts`): the horizon's margin is there for a late plant, not simulated after
 //! the periods. The hybrid controller runs fingers of 3 to [`MAX_TRACKED_JOINTS`]
 //! joints ([`tracked_joints`]; `run_tracking_with`, [`Tracking`] and the robustness runs are
 //! generic in the joint count N, and `track`, the robustness rows and [`execution_check`]
@@ -25,8 +25,8 @@ use super::openloop::{
 use crate::pipeline::verify::nan_max;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_control::{
-    HybridController, HybridGains, InverseDynamics, PeriodMetrics, Reference, period_metrics,
-    reference::Samples,
+    HybridController, HybridGains, InverseDynamics, PeriodMetrics, PeriodStarts, Reference,
+    period_metrics, reference::Samples,
 };
 use bf_model::{DynKernels, ImpactLaw, Kernels, Mode, Model};
 use bf_problem::OcpSolution;
@@ -479,27 +479,23 @@ fn ball_spin(x: &[Vec<f64>], joints: usize) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// The impacts in the trajectory `tr` recorded so far, before and after its new samples:
-/// periods run from impact to impact ([`period_metrics`]; a run that starts in contact counts
-/// its first sample as one), so `periods` are complete at `periods` + 1 impacts. `seen`: the
-/// samples examined before and the impacts among them, so each sample is looked at once.
-fn count_impacts(
+/// The period starts in the trajectory `tr` recorded so far, before and after its new samples:
+/// periods run from impact to impact, a bounce not counted ([`period_metrics`],
+/// [`PeriodStarts`]; a run that starts in contact counts its first sample as one), so `periods`
+/// are complete at `periods` + 1 starts. `seen`: the samples examined before, the starts among
+/// them and the finder's state, so each sample is looked at once.
+fn count_period_starts(
     tr: &bf_sim::Trajectory<Mode>,
-    seen: &std::cell::Cell<(usize, usize)>,
+    seen: &std::cell::Cell<(usize, usize, PeriodStarts)>,
 ) -> (usize, usize) {
-    let (from, before) = seen.get();
+    let (from, before, mut finder) = seen.get();
     let n = tr.t.len().min(tr.mode.len());
-    let mut impacts = before;
+    let mut starts = before;
     for i in from..n {
-        let starts = if i == 0 {
-            tr.mode[0] != Mode::Free
-        } else {
-            tr.mode[i - 1] == Mode::Free && tr.mode[i] != Mode::Free
-        };
-        impacts += usize::from(starts);
+        starts += usize::from(finder.starts(tr.t[i], tr.mode[i]));
     }
-    seen.set((n.max(from), impacts));
-    (before, impacts)
+    seen.set((n.max(from), starts, finder));
+    (before, starts)
 }
 
 /// Whether the trajectory `tr` recorded so far holds a completed period, among the first
@@ -507,7 +503,7 @@ fn count_impacts(
 /// [`ROBUSTNESS_TARGET`]: [`period_metrics`] on its samples, which are those of the finished
 /// run up to there, so the period's error is the one the finished run's row would show, and
 /// the row misses its target whatever follows. Asked only when a period has just ended
-/// ([`count_impacts`]).
+/// ([`count_period_starts`]).
 fn misses_from_fourth(
     tr: &bf_sim::Trajectory<Mode>,
     joints: usize,
@@ -616,12 +612,12 @@ fn run_tracking_on<const N: usize>(
     };
     let log = std::rc::Rc::new(std::cell::RefCell::new(super::replan::ReplanLog::default()));
     let missed = std::cell::Cell::new(false);
-    let impacts = std::cell::Cell::new((0, 0));
+    let period_starts = std::cell::Cell::new((0, 0, PeriodStarts::default()));
     // The run ends once its periods are complete (the horizon's margin is for a late plant,
     // not to be simulated after the last period), or, with `until_miss`, at its first
     // missed period from the 4th on.
     let stop = |tr: &bf_sim::Trajectory<Mode>| {
-        let (before, now) = count_impacts(tr, &impacts);
+        let (before, now) = count_period_starts(tr, &period_starts);
         if now > periods {
             return true;
         }

@@ -51,6 +51,27 @@ pub fn ok(o: &Output) -> String {
     stdout
 }
 
+/// `optimize --problem periodic-qc --impact-law stick --strategy direct` with the `extra`
+/// options, writing to `out`: the paper's problem in one solve from its guess (about 2 s), a
+/// sticking plan whose stick phase lasts, unlike the global search's taps.
+pub fn direct_sticking_qc(extra: &[&str], out: &std::path::Path) -> Output {
+    bin()
+        .current_dir(root())
+        .args([
+            "optimize",
+            "--problem",
+            "periodic-qc",
+            "--impact-law",
+            "stick",
+        ])
+        .args(["--strategy", "direct"])
+        .args(extra)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .expect("binary runs")
+}
+
 /// The optimum of `problem` from the 32-start search (`optimize --hops 0 --problem NAME`, with
 /// `extra` options such as `--starts 4`), planned with the sticking law (eq. 40) unless
 /// `extra` names `--impact-law`: the paper's problem by the cheaper search, whose optima have

@@ -1,0 +1,122 @@
+//! Period figures of a run (`period_metrics`): periods from impact to impact, a bounce not
+//! counted, on sampled runs whose mean ω is known in closed form.
+
+use bf_control::{MIN_FLIGHT, PeriodStarts, period_metrics};
+use bf_model::Mode;
+
+/// A sampled run: times, plant modes, ball angular velocities and torques.
+type Run = (Vec<f64>, Vec<Mode>, Vec<[f64; 3]>, Vec<Vec<f64>>);
+
+/// A run sampled every `dt` from 0 to `t_end`, in contact on the intervals `contact` (start,
+/// end; Stick) and free elsewhere, with ω(t) = (0, 0, a + b t), which the trapezoidal rule
+/// integrates exactly: the mean over [s, e) is a + b (s + e) / 2.
+fn run(contact: &[(f64, f64)], dt: f64, t_end: f64, (a, b): (f64, f64)) -> Run {
+    let mut t: Vec<f64> = (0..=(t_end / dt).round() as usize)
+        .map(|k| k as f64 * dt)
+        .collect();
+    // The event times themselves are samples, as the simulator records them.
+    for &(s, e) in contact {
+        t.extend([s, e]);
+    }
+    t.sort_by(f64::total_cmp);
+    t.dedup();
+    let mode = t
+        .iter()
+        .map(|&x| {
+            if contact.iter().any(|&(s, e)| s <= x && x < e) {
+                Mode::Stick
+            } else {
+                Mode::Free
+            }
+        })
+        .collect();
+    let omega = t.iter().map(|&x| [0.0, 0.0, a + b * x]).collect();
+    // |τ| peaks at 0.5 + t / 10 at a period's end sample.
+    let tau = t.iter().map(|&x| vec![0.5 + 0.1 * x, -0.5]).collect();
+    (t, mode, omega, tau)
+}
+
+#[test]
+fn a_bounce_is_part_of_its_contact_phase_not_a_period() {
+    // Contacts at 0.3, 1.3 and 2.3 s, each 0.2 s long; the second ends in a bounce: the
+    // finger leaves at 1.5 s, strikes again 5 µs later and stays 0.01 s more.
+    let bounce = 1.5 + 5e-6;
+    let contact = [
+        (0.3, 0.5),
+        (1.3, 1.5),
+        (bounce, bounce + 0.01),
+        (2.3, 2.5),
+        (3.3, 3.5),
+    ];
+    let (a, b) = (1.0, 0.25);
+    let (t, mode, omega, tau) = run(&contact, 1e-3, 3.6, (a, b));
+    let optimum = [0.0, 0.0, 1.5];
+    let periods = period_metrics(&t, &mode, &omega, &tau, optimum);
+    let ends: Vec<(f64, f64)> = periods.iter().map(|p| (p.start, p.end)).collect();
+    assert_eq!(ends, [(0.3, 1.3), (1.3, 2.3), (2.3, 3.3)]);
+    for p in &periods {
+        let mean = a + b * 0.5 * (p.start + p.end);
+        assert!((p.mean_omega[2] - mean).abs() < 1e-12, "{p:?}");
+        assert!(
+            (p.omega_error - (mean - 1.5).abs() / 1.5).abs() < 1e-12,
+            "{p:?}"
+        );
+        assert!(p.contact);
+        assert!((p.max_abs_tau - (0.5 + 0.1 * p.end)).abs() < 1e-12, "{p:?}");
+    }
+    // The bounce's contact is the second period's: 0.2 + 0.01 s of stick.
+    assert!(
+        (periods[1].stick_time - 0.21).abs() < 1e-9,
+        "{:?}",
+        periods[1]
+    );
+    assert!(
+        (periods[0].stick_time - 0.2).abs() < 1e-9,
+        "{:?}",
+        periods[0]
+    );
+}
+
+#[test]
+fn a_flight_of_min_flight_starts_a_period_and_a_shorter_one_does_not() {
+    for (gap, new_period) in [
+        (1.01 * MIN_FLIGHT, true),
+        (0.99 * MIN_FLIGHT, false),
+        (1e-6, false),
+    ] {
+        let mut s = PeriodStarts::default();
+        // Lead-in flight, then the first impact: a period starts whatever the flight's length.
+        assert!(!s.starts(0.0, Mode::Free));
+        assert!(s.starts(1e-6, Mode::Slip));
+        assert!(!s.starts(0.1, Mode::Stick));
+        assert!(!s.starts(0.1 + gap / 2.0, Mode::Free));
+        assert_eq!(s.starts(0.1 + gap, Mode::Slip), new_period, "gap {gap}");
+        // Contact after contact is never a new period.
+        assert!(!s.starts(0.2, Mode::Stick));
+    }
+    // A run that starts in contact starts a period at its first sample.
+    let mut s = PeriodStarts::default();
+    assert!(s.starts(0.0, Mode::Stick));
+    assert!(!s.starts(0.1, Mode::Stick));
+}
+
+#[test]
+fn chattering_alone_completes_no_period() {
+    // The finger strikes at 0.3 s and chatters for 22 µs (impacts every 5.7 µs, as a sticking
+    // plan of the paper's finger does on the Newton plant): one period start, no period.
+    let mut contact = Vec::new();
+    let mut x = 0.3;
+    for _ in 0..7 {
+        contact.push((x, x + 1e-7));
+        x += 5.7e-6;
+    }
+    let (t, mode, omega, tau) = run(&contact, 1e-3, 0.5, (1.0, 0.0));
+    assert!(period_metrics(&t, &mode, &omega, &tau, [0.0, 0.0, 1.0]).is_empty());
+    let mut s = PeriodStarts::default();
+    let starts = t
+        .iter()
+        .zip(&mode)
+        .filter(|&(&x, &m)| s.starts(x, m))
+        .count();
+    assert_eq!(starts, 1);
+}
