@@ -458,7 +458,9 @@ fn max_abs_tau(sol: &serde_json::Value) -> f64 {
 /// times looser relative to the ball, so the optima may differ slightly: the direct solve of
 /// `periodic-qc` from the paper's guess ends verified at the paper scene's objective and period
 /// within 1e-4. This separates a user's small finger's physics from the scale it is drawn at:
-/// the solver and the verification do not depend on the unit of length.
+/// the sticking plan's solve and verification do not depend on the unit of length. (The plan
+/// for the plant does, through its absolute approach speed and its conditioning row:
+/// BENCHMARKS.md, "The paper's finger at a twentieth of its size; a small URDF finger".)
 #[test]
 fn a_dynamically_similar_finger_at_a_twentieth_of_the_size_has_the_same_optimum() {
     let dir = tmpdir("similar");
