@@ -599,7 +599,7 @@ pub struct OptimizeArgs {
     /// ball before its impact (docs/optima.md, "Plans that graze the ball"); at most a tenth
     /// of the ball's radius. Recorded in solution.json as `approach_clearance` [default: for a
     /// `newton` plan of a periodic problem the gap `track`'s hybrid controller keeps from the
-    /// ball in free flight (5 mm); 0 otherwise].
+    /// ball in free flight (0.005 r: 5 mm on the paper's ball of 1 m); 0 otherwise].
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub approach_clearance: Option<f64>,
     /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element

@@ -201,7 +201,8 @@ pub struct HybridGains {
 }
 
 impl Default for HybridGains {
-    /// ω_n = 20 rad/s, ζ = 1 (the free phases of the optima last 0.1–9 s, so errors decay in
+    /// The gains for the paper's ball of 1 m ([`HybridGains::for_ball`] scales them to
+    /// another): ω_n = 20 rad/s, ζ = 1 (the free phases of the optima last 0.1–9 s, so errors decay in
     /// a fraction of a phase); clearance 5 mm, falling over 50 ms before an impact (the QC
     /// optimum is 13 mm from the ball 50 ms before its impact, so the guard leaves its
     /// approach alone) and rising over 20 ms after a lift-off (ḧ ≥ 2 ω_n h_c / t_r = 10 m/s²
@@ -247,6 +248,18 @@ impl Default for HybridGains {
 }
 
 impl HybridGains {
+    /// The [`Default`] gains for a ball of radius `radius` (m): the two gains in metres, the
+    /// clearance gap h_c and the slip deceleration a_s, scaled by r (the defaults are those of
+    /// the paper's ball of 1 m); the rates, shares and times stay. A finger drawn at another
+    /// scale with the same dynamics (lengths × s, masses × 1/s², gravity × s) keeps its joint
+    /// motion and times, so these gains track it as the defaults track the paper's finger.
+    pub fn for_ball(radius: f64) -> Self {
+        let mut gains = HybridGains::default();
+        gains.clearance.gap *= radius;
+        gains.contact.slip_decel *= radius;
+        gains
+    }
+
     /// Checks every gain (finite, in range); the error names it.
     pub fn validate(&self) -> Result<(), ControlError> {
         ComputedTorque::new(self.free.omega_n, self.free.zeta)?;

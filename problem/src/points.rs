@@ -1,7 +1,7 @@
 //! Point functions of the ball-and-finger problems on the bf-codegen expression graph: the
 //! sticking impact law (eq. 40a–c) as the Free→Stick reset with the impulse ι as decision
 //! variables, ι_n ≥ 0 and the optional impulse cone (eq. 66), or Newton's law (eq. 39: ω⁺ = ω⁻,
-//! q̇⁺ within [`NEWTON_VELOCITY_LIMIT`] of the plant's, ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`], J_c
+//! q̇⁺ within [`NEWTON_VELOCITY_LIMIT`] of the plant's, ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`] r, J_c
 //! conditioned at least [`NEWTON_MIN_CONDITION`]) in
 //! its place; contact quantities (h eq. 4, ḣ,
 //! Δv eq. 13–14) at phase end points; continuity and periodicity; and [`Diagnostics`], an
@@ -144,11 +144,12 @@ pub fn continuity(nx: usize, from_phase: usize, to_phase: usize, name: &str) -> 
 /// a millisecond, large enough to leave the inequality an interior.
 pub const NEWTON_VELOCITY_LIMIT: f64 = 1e-3;
 
-/// Least normal speed (m/s) at which a Newton plan's finger reaches the ball, ḣ⁻ ≤ −v: the
+/// Least normal speed, in ball radii per second (0.1 m/s on the paper's ball of 1 m), at which
+/// a Newton plan's finger reaches the ball, ḣ⁻ ≤ −v r: the
 /// Newton impact costs nothing in ω, so the plans otherwise land with ḣ⁻ = 0, and a plant a
 /// gap error δh off the plan then touches down δh / |ḣ| late, unboundedly (`track` lost the
 /// ball of such a plan: its finger hovered 5 mm above it). The sticking plans reach the ball at
-/// 0.3–7 m/s.
+/// 0.3–7 m/s. In radii, so that a finger drawn at another scale gets the same plan.
 pub const NEWTON_APPROACH_SPEED: f64 = 0.1;
 
 /// Least conditioning of J_c at a Newton plan's impact, |det J_c| ≥ κ (‖J_c‖_F² / 3)^{3/2}: the
@@ -185,6 +186,13 @@ pub const NEWTON_MIN_CONDITION: f64 = 0.1;
 /// on the paper's finger), is about 500 times the solver's bound relaxation (1e-8): a margin
 /// of the relaxation's size let solves creep to `Acceptable` with huge multipliers
 /// (docs/decisions/0063-the-newton-row-scaled.md).
+///
+/// Why in ball radii: every length in these rows is divided by the ball's radius r (J_c / r,
+/// v_c / r, the approach speed in r per second; 1 on the paper's ball, where the rows are
+/// those above). The box and conditioning rows are of degree 6 in J_c, so in metres a finger
+/// a twentieth of the paper's size had rows and margins s⁶ ≈ 1.6e-8 times as large, below the
+/// solver's bound relaxation: its plan ended `Acceptable`, 13 % off the dynamically similar
+/// optimum, and lost the ball (BENCHMARKS.md, "The plan for the plant in ball radii").
 ///
 /// Why in joint space: the stick node's Δv⁺ = 0 makes J_c (q̇⁺ − q̇_N) = T_n Δv⁻, the
 /// tangential relative velocity before the impact. A bound on that alone (how this law was
@@ -327,6 +335,7 @@ pub fn impact(
         newton_lifted_rows(
             g,
             &ce,
+            ph.radius,
             &mass,
             &qdmi,
             &qdpi,
@@ -336,16 +345,22 @@ pub fn impact(
             &mut bounds,
         );
     } else if newton {
-        // Rows a_r of J_c: adj(J_c) = [a₁ × a₂ | a₂ × a₀ | a₀ × a₁], det = a₀ · (a₁ × a₂).
-        let row = |r: usize| [ce.j_c[r][0], ce.j_c[r][1], ce.j_c[r][2]];
-        let (a0, a1, a2) = (row(0), row(1), row(2));
+        // J_c and v_c in ball radii (see the function's docs): rows a_r of J_c / r,
+        // adj = [a₁ × a₂ | a₂ × a₀ | a₀ × a₁], det = a₀ · (a₁ × a₂).
+        let per_radius = g.constant(1.0 / ph.radius);
+        let row = |g: &mut Graph, r: usize| {
+            let a = [ce.j_c[r][0], ce.j_c[r][1], ce.j_c[r][2]];
+            g.v3_scale(per_radius, a)
+        };
+        let (a0, a1, a2) = (row(g, 0), row(g, 1), row(g, 2));
         let adj = [g.v3_cross(a1, a2), g.v3_cross(a2, a0), g.v3_cross(a0, a1)];
         let det = g.v3_dot(a0, adj[0]);
-        // T_n v_c⁻, the contact point's velocity without its normal part (eq. 39).
+        // T_n v_c⁻ / r, the contact point's velocity without its normal part (eq. 39).
         let vc = ce.v_c;
         let vn = g.v3_dot(vc, ce.n);
         let vnn = g.v3_scale(vn, ce.n);
-        let t = g.v3_sub(vc, vnn);
+        let tv = g.v3_sub(vc, vnn);
+        let t = g.v3_scale(per_radius, tv);
         // |e_i| ≤ (v / √3) |det| for each joint, multiplied by |det| so that no sign of det
         // is assumed (see the function's docs): ±e_i det − (v / √3) det² ≤ 0.
         let d2 = g.square(det);
@@ -366,7 +381,8 @@ pub fn impact(
         // det² ≥ κ² (‖J_c‖_F² / 3)³ (NEWTON_MIN_CONDITION), squared so that its sign is free.
         let fro_terms: Vec<Id> = [a0, a1, a2].iter().map(|&r| g.v3_dot(r, r)).collect();
         let fro = g.sum(&fro_terms);
-        conditioning_and_approach_rows(g, d2, fro, ce.h_dot, &mut out, &mut bounds);
+        let speed = NEWTON_APPROACH_SPEED * ph.radius;
+        conditioning_and_approach_rows(g, d2, fro, ce.h_dot, speed, &mut out, &mut bounds);
     }
     Ok(PointFunction {
         name: if newton {
@@ -391,6 +407,7 @@ pub fn impact(
 fn newton_lifted_rows(
     g: &mut Graph,
     ce: &bf_codegen::robot::ContactExprs,
+    radius: f64,
     mass: &[Vec<Id>],
     qdm: &[Id],
     qdp: &[Id],
@@ -411,14 +428,22 @@ fn newton_lifted_rows(
         out.push(g.sub(m, ji));
         bounds.push((0.0, 0.0));
     }
-    // J_c q̇_N − T_n v_c⁻ = 0 (eq. 39): with the balance above, the q̇_N closest to q̇⁻ in the
-    // kinetic-energy norm, which is what the plant's law computes (bf_model::impact).
+    // (J_c q̇_N − T_n v_c⁻) / r = 0 (eq. 39): with the balance above, the q̇_N closest to q̇⁻ in
+    // the kinetic-energy norm, which is what the plant's law computes (bf_model::impact). J_c
+    // is taken in ball radii here and below (see [`impact`]).
+    let per_radius = g.constant(1.0 / radius);
+    let j_c: Vec<Vec<Id>> = ce
+        .j_c
+        .iter()
+        .map(|row| row.iter().map(|&x| g.mul(per_radius, x)).collect())
+        .collect();
     let vc = ce.v_c;
     let vn = g.v3_dot(vc, ce.n);
     let vnn = g.v3_scale(vn, ce.n);
-    let t = g.v3_sub(vc, vnn);
+    let tv = g.v3_sub(vc, vnn);
+    let t = g.v3_scale(per_radius, tv);
     for (r, &tr) in t.iter().enumerate() {
-        let jq = g.dot(&ce.j_c[r], &qdn);
+        let jq = g.dot(&j_c[r], &qdn);
         out.push(g.sub(jq, tr));
         bounds.push((0.0, 0.0));
     }
@@ -432,23 +457,25 @@ fn newton_lifted_rows(
     // det(J_c J_cᵀ) ≥ κ² (‖J_c‖_F² / 3)³: the Gram determinant is det(J_c)² for 3 joints, so
     // this is the 3-joint row on the product of J_c's three squared singular values.
     let gram: Vec<[Id; 3]> = (0..3)
-        .map(|r| [0, 1, 2].map(|c| g.dot(&ce.j_c[r], &ce.j_c[c])))
+        .map(|r| [0, 1, 2].map(|c| g.dot(&j_c[r], &j_c[c])))
         .collect();
     // det G = G₀ · (G₁ × G₂) over its rows, as the 3-joint det(J_c) is formed above.
     let cross = g.v3_cross(gram[1], gram[2]);
     let det = g.v3_dot(gram[0], cross);
     let fro = g.sum(&[gram[0][0], gram[1][1], gram[2][2]]);
-    conditioning_and_approach_rows(g, det, fro, ce.h_dot, out, bounds);
+    let speed = NEWTON_APPROACH_SPEED * radius;
+    conditioning_and_approach_rows(g, det, fro, ce.h_dot, speed, out, bounds);
 }
 
 /// The last two rows of every Newton plan: `det2` ≥ κ² (`fro` / 3)³
-/// ([`NEWTON_MIN_CONDITION`]; `det2` = det(J_c J_cᵀ), `fro` = ‖J_c‖_F²) and
-/// ḣ⁻ ≤ −[`NEWTON_APPROACH_SPEED`].
+/// ([`NEWTON_MIN_CONDITION`]; `det2` = det(J_c J_cᵀ), `fro` = ‖J_c‖_F², J_c in ball radii) and
+/// ḣ⁻ ≤ −`speed` ([`NEWTON_APPROACH_SPEED`] ball radii per second).
 fn conditioning_and_approach_rows(
     g: &mut Graph,
     det2: Id,
     fro: Id,
     h_dot: Id,
+    speed: f64,
     out: &mut Vec<Id>,
     bounds: &mut Vec<(f64, f64)>,
 ) {
@@ -461,7 +488,7 @@ fn conditioning_and_approach_rows(
     out.push(g.sub(det2, least));
     bounds.push((0.0, f64::INFINITY));
     out.push(h_dot);
-    bounds.push((f64::NEG_INFINITY, -NEWTON_APPROACH_SPEED));
+    bounds.push((f64::NEG_INFINITY, -speed));
 }
 
 /// The names of the parameters a Newton impact plan adds after the impulse ι for a finger of

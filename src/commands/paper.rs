@@ -118,7 +118,7 @@ fn plan_markdown(
     dir: &std::path::Path,
 ) -> Result<String> {
     let name = plan_dir(problem);
-    let plan = super::optimize::PlanFor::of(problem, 3, None, None, None)?;
+    let plan = super::optimize::PlanFor::of(problem, 3, 1.0, None, None, None)?;
     let (built, mut sol) = if args.search {
         let settings = plan.apply(bf_problem::ProblemSettings::default());
         let strategy = crate::pipeline::strategy::default_strategy(problem, settings.scheme);

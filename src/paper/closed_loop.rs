@@ -60,7 +60,8 @@ pub enum ControllerKind {
     OpenLoop,
     /// τ*(t) plus joint-space PD on (q*(t), q̇*(t)) in the free phases ([`DEFAULT_PD_TRACK`]).
     Pd,
-    /// bf-control's [`HybridController`] with [`HybridGains::default`], its torque saturated
+    /// bf-control's [`HybridController`] with the gains for the scene's ball
+    /// ([`default_gains`]), its torque saturated
     /// at the scene's bounds ([`torque_bound`]).
     Hybrid,
     /// The same controller without the torque bounds.
@@ -340,7 +341,7 @@ fn execution_check_n<const N: usize>(
     let t = match run_tracking_on(
         sol,
         scene,
-        HybridGains::default(),
+        default_gains(scene),
         plant,
         ImpactLaw::Newton,
         nominal,
@@ -460,16 +461,20 @@ pub fn run_tracking_replanned<const N: usize>(
     impact_law: ImpactLaw,
     replan: Option<usize>,
 ) -> Result<Tracking<N>> {
-    run_tracking_with(
-        sol,
+    let (scene, _) = solution_scene(sol)?;
+    let how = TableRuns {
         controller,
-        HybridGains::default(),
         periods,
-        plant,
-        impact_law,
         replan,
-        false,
-    )
+        until_miss: false,
+    };
+    run_tracking_on(sol, &scene, default_gains(&scene), plant, impact_law, how)
+}
+
+/// The hybrid controller's default gains for the ball of `scene`
+/// ([`HybridGains::for_ball`]: the defaults, in metres scaled by the ball's radius).
+pub fn default_gains(scene: &bf_codegen::Scene) -> HybridGains {
+    HybridGains::for_ball(scene.ball.as_ref().map_or(1.0, |b| b.radius))
 }
 
 /// The ball's spin ω of every state (q, q̇, ω) of a finger with `joints` joints.
@@ -522,7 +527,7 @@ fn misses_from_fourth(
 }
 
 /// [`run_tracking_replanned`] with the hybrid controllers' `gains` instead of
-/// [`HybridGains::default`] (ignored by the open loop and the PD): what a gain does to the
+/// [`default_gains`] (ignored by the open loop and the PD): what a gain does to the
 /// execution of a plan, measured on the same plant. With `until_miss` the run ends at the
 /// first completed period from the 4th on that misses [`ROBUSTNESS_TARGET`]
 /// (`misses_from_fourth`): such a run returns the periods up to that one, fewer than
@@ -1077,7 +1082,7 @@ fn runs<const N: usize>(
         .into_par_iter()
         .map(|(case, edits, law)| {
             let run = perturbed::<N>(scene, &edits).and_then(|plant| {
-                run_tracking_on(sol, scene, HybridGains::default(), plant, law, how)
+                run_tracking_on(sol, scene, default_gains(scene), plant, law, how)
             });
             (case, run)
         })
