@@ -413,7 +413,7 @@ fn lg_and_archetype_solutions_verify() {
 }
 
 /// Honest output: an optimum whose re-integrated free path penetrates the ball deeper than
-/// the problem's own allowance (h ≥ −10⁻⁴ m at its nodes) is not verified, whatever its
+/// the problem's own allowance (h ≥ −10⁻⁴ r at its nodes) is not verified, whatever its
 /// element defects, and the reason names the phase, min h and the allowance. The human
 /// finger's `periodic-cot-human` optimum was reported verified with min h = −2.55e-3 m in its
 /// release phase (element defects ≤ 8.5e-5): the collocation bounds h at its nodes only.
@@ -447,10 +447,19 @@ fn penetration_beyond_the_allowance_is_not_verified() {
         why.contains("phase 0 (free)") && why.contains("-2.550e-3 m") && why.contains("-1e-4 m"),
         "{why}"
     );
-    // Within the allowance: verified.
-    deep.phases[0].min_h = Some(-0.9 * PENETRATION_TOLERANCE);
-    sol.verification = Some(deep);
+    // The allowance is in radii of the ball: 2.55 mm is within it on a ball of 30 m (3 mm).
+    let mut large = deep.clone();
+    large.radius = 30.0;
+    sol.verification = Some(large);
     assert!(is_verified(&sol));
+    // Within the allowance: verified; on a ball of 5 cm (5 µm) the same path fails.
+    deep.phases[0].min_h = Some(-0.9 * PENETRATION_TOLERANCE);
+    sol.verification = Some(deep.clone());
+    assert!(is_verified(&sol));
+    deep.radius = 0.05;
+    sol.verification = Some(deep.clone());
+    assert!(!is_verified(&sol));
+    assert!(path_failure(&deep).unwrap().contains("-5e-6 m"));
 }
 
 /// Honest output: an optimum whose free path touches the ball by the exact contact (the

@@ -643,8 +643,8 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
     };
     let mut s = format!(
         "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e}; along the \
-         re-integrated free phases, penetration min h ≥ −{PENETRATION_TOLERANCE:e} m (the \
-         problem's own allowance at touch-down and release); along the re-integrated stick \
+         re-integrated free phases, penetration min h ≥ −{PENETRATION_TOLERANCE:e} r, r the \
+         ball's radius (the problem's own allowance at touch-down and release); along the re-integrated stick \
          phases, friction-cone margin min σ ≥ −{CONE_TOLERANCE} · μ_s max λ_n of the phase \
          (σ = μ_s λ_n − ‖λ_∥‖, eq. 18; the optimum satisfies σ ≥ 0 at its collocation nodes \
          only). All three decide the verdict; the cone columns show the stick phase with the \

@@ -421,24 +421,35 @@ impl PathStats {
     }
 }
 
-/// Distance from the ball (m) beyond which a free path counts as clear of it for the touch check
-/// ([`touch_failure`]): the penetration allowance, so that the exact distance's wobble about 0 at a touch-down or
-/// lift-off is not read as leaving and touching again.
+/// Distance from the ball, in its radii, beyond which a free path counts as clear of it for the
+/// touch check ([`touch_failure`]): the penetration allowance, so that the exact distance's
+/// wobble about 0 at a touch-down or lift-off is not read as leaving and touching again.
 pub const TOUCH_CLEARANCE: f64 = PENETRATION_TOLERANCE;
 
 /// The first touch of a free phase that ends at an impact by the exact contact distance h₀
 /// (the plant's): the first sample with h₀ ≤ 0 after one with h₀ > [`TOUCH_CLEARANCE`]. The
 /// phase touches at its end, or, if it grazes the ball on its way, earlier, and a plant with
 /// the exact contact strikes the ball then (`track`'s first impact came 0.16 s early on a
-/// verified plan). Releases are not tracked: the problems allow their paths h ≥ −10⁻⁴ m
+/// verified plan). Releases are not tracked: the problems allow their paths h ≥ −10⁻⁴ r
 /// (the touch-down and release tolerance), which [`penetration_failure`] checks.
-#[derive(Clone, Copy, Default)]
+#[derive(Clone, Copy)]
 struct Touch {
+    /// [`TOUCH_CLEARANCE`] in metres.
+    clearance: f64,
     clear: bool,
     first: Option<f64>,
 }
 
 impl Touch {
+    /// No sample yet, for a ball of radius `radius` (m).
+    fn new(radius: f64) -> Touch {
+        Touch {
+            clearance: TOUCH_CLEARANCE * radius,
+            clear: false,
+            first: None,
+        }
+    }
+
     /// Adds the sample at phase-local time `t` of the state `x` (exact h₀ evaluated only until
     /// the first touch).
     fn add<const N: usize>(
@@ -465,7 +476,7 @@ impl Touch {
         if self.first.is_some() {
             return;
         }
-        if h > TOUCH_CLEARANCE {
+        if h > self.clearance {
             self.clear = true;
         } else if h <= 0.0 && self.clear {
             self.first = Some(t);
@@ -555,6 +566,7 @@ fn verify_phase<const N: usize>(
     atol: f64,
     interp: TorqueInterpolant,
     ends_at_impact: bool,
+    radius: f64,
 ) -> Result<PhaseVerification, PipelineError> {
     let big_t = tr.duration;
     // The first and last state points are τ = −1 and +1 in both schemes (LG: the final state
@@ -564,7 +576,7 @@ fn verify_phase<const N: usize>(
     let node_residual = node_residual(model, k, mode, tr)?;
     let time = |s: f64| 0.5 * (s + 1.0) * big_t;
     let mut stats = PathStats::new();
-    let mut touch = Touch::default();
+    let mut touch = Touch::new(radius);
     let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
     let mut failure: Option<(f64, String)> = None;
     let mut parts = [0.0f64; 3];
@@ -738,9 +750,10 @@ fn verify_phase<const N: usize>(
 /// with its torques, and every place that shows the solution flags it.
 pub const VERIFIED_DEFECT: f64 = 1e-4;
 
-/// Penetration the re-integrated path may show (m): the problem's own allowance h ≥ −10⁻⁴ m at
-/// the touch-down and release (the tolerance on h of the periodic problems in bf-problem's
-/// catalogue). The optimum satisfies its distance bounds at the collocation nodes only, and
+/// Penetration the re-integrated path may show, in radii of the ball
+/// ([`Verification::radius`]; 0.1 mm on the paper's ball of 1 m): the problem's own
+/// allowance h ≥ −10⁻⁴ r at the touch-down and release (the tolerance on h of the periodic
+/// problems in bf-problem's catalogue). The optimum satisfies its distance bounds at the collocation nodes only, and
 /// the re-integration follows the model within [`VERIFIED_DEFECT`], so min h is reported
 /// against this, not against 0.
 pub const PENETRATION_TOLERANCE: f64 = 1e-4;
@@ -860,6 +873,7 @@ pub fn path_excess(v: &Verification) -> f64 {
             .iter()
             .filter(|p| p.mode == PhaseMode::Free)
             .filter_map(|p| p.min_h),
+        PENETRATION_TOLERANCE * v.radius,
         worst_cone_margin(v),
     )
     .max(touch)
@@ -903,25 +917,25 @@ pub fn touch_failure(v: &Verification) -> Option<String> {
     })
 }
 
-/// [`path_excess`] of the free phases' min h `min_h` and the worst cone margin `cone`.
-fn excess_of(min_h: impl Iterator<Item = f64>, cone: Option<ConeMargin>) -> f64 {
-    let pen = min_h
-        .map(|h| -h / PENETRATION_TOLERANCE)
-        .fold(0.0, f64::max);
+/// [`path_excess`] of the free phases' min h `min_h` against the penetration allowance `tol`
+/// (m) and of the worst cone margin `cone`.
+fn excess_of(min_h: impl Iterator<Item = f64>, tol: f64, cone: Option<ConeMargin>) -> f64 {
+    let pen = min_h.map(|h| -h / tol).fold(0.0, f64::max);
     let cone = cone.map_or(0.0, |m| -m.relative());
     pen.max(cone).max(0.0)
 }
 
 /// The first free phase of `v` whose re-integrated path penetrates the ball deeper than
-/// [`PENETRATION_TOLERANCE`] (min h < −10⁻⁴ m), as a sentence naming the phase, min h and the
-/// allowance: a long free phase that grazes the ball can sag into it between its nodes.
+/// [`PENETRATION_TOLERANCE`] radii (min h < −10⁻⁴ r), as a sentence naming the phase, min h
+/// and the allowance: a long free phase that grazes the ball can sag into it between its nodes.
 pub fn penetration_failure(v: &Verification) -> Option<String> {
+    let tol = PENETRATION_TOLERANCE * v.radius;
     v.phases.iter().find_map(|p| {
         let h = p.min_h?;
-        (p.mode == PhaseMode::Free && h < -PENETRATION_TOLERANCE).then(|| {
+        (p.mode == PhaseMode::Free && h < -tol).then(|| {
             format!(
                 "phase {} (free): the re-integrated path penetrates the ball, min h = {h:.3e} m \
-                 below the allowance -{PENETRATION_TOLERANCE:e} m",
+                 below the allowance -{tol:e} m",
                 p.phase
             )
         })
@@ -1010,7 +1024,7 @@ pub fn cone_failure(v: &Verification) -> Option<String> {
 /// `value` (> `allowance` > 0, in the check's units) as a multiple of the allowance times
 /// [`VERIFIED_DEFECT`] (state units), so that such an element is refined like one whose
 /// defect exceeds the verification's tolerance by that factor (more nodes impose the bound,
-/// h ≥ −10⁻⁴ m or σ ≥ 0, at more points along it). A zero allowance counts as
+/// h ≥ −10⁻⁴ r or σ ≥ 0, at more points along it). A zero allowance counts as
 /// [`FAILED_ELEMENT_ERROR`].
 fn excess_error(value: f64, allowance: f64) -> f64 {
     if allowance > 0.0 {
@@ -1172,6 +1186,7 @@ pub fn verify_with(
         max_open_loop_defect,
         max_node_residual,
         mu_s: p.physics.mu_s,
+        radius: p.physics.radius,
         phases,
         seconds: start.elapsed().as_secs_f64(),
         execution: None,
@@ -1213,8 +1228,9 @@ fn verify_phases<const N: usize>(
             opt.torque,
             // A free phase before a stick phase ends at an impact; its path must reach the
             // ball there only ([`Touch`]). A release may come back within the problem's
-            // allowance h ≥ −10⁻⁴ m, which the penetration check holds it to.
+            // allowance h ≥ −10⁻⁴ r, which the penetration check holds it to.
             sol.modes[k] == PhaseMode::Free && sol.modes.get(k + 1) == Some(&PhaseMode::Stick),
+            p.physics.radius,
         )?);
     }
     Ok(phases)
@@ -1244,7 +1260,7 @@ mod tests {
                     min_sigma: sigma,
                     allowance,
                 };
-                let e = excess_of([h, 1e-2].into_iter(), Some(m));
+                let e = excess_of([h, 1e-2].into_iter(), tol, Some(m));
                 let fails = h < -tol || !m.within();
                 assert_eq!(
                     e > 1.0,
@@ -1258,12 +1274,12 @@ mod tests {
                 }
             }
         }
-        assert_eq!(excess_of(std::iter::empty(), None), 0.0);
+        assert_eq!(excess_of(std::iter::empty(), tol, None), 0.0);
     }
 
     /// The first touch of the exact distance h₀(t) sampled at 1 ms over a 1 s free phase.
     fn first_touch(h: impl Fn(f64) -> f64) -> Option<f64> {
-        let mut touch = Touch::default();
+        let mut touch = Touch::new(1.0);
         for k in 0..=1000 {
             let t = k as f64 * 1e-3;
             touch.add_distance(t, h(t));

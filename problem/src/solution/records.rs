@@ -225,6 +225,12 @@ fn nan() -> f64 {
     f64::NAN
 }
 
+/// The ball radius of an older file's verification: every such file is of a scene with the
+/// paper's ball of 1 m.
+fn paper_radius() -> f64 {
+    1.0
+}
+
 /// Torques between the collocation nodes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
 pub enum TorqueInterpolant {
@@ -386,6 +392,11 @@ pub struct Verification {
     /// stick phases; NaN in older files, whose cone margins then decide nothing).
     #[serde(default = "nan", with = "nan_null")]
     pub mu_s: f64,
+    /// Radius r of the ball (m): the unit of the penetration allowance of the free paths (the
+    /// problems' tolerance on h is in radii too; 1 in older files, whose scenes all have the
+    /// paper's ball).
+    #[serde(default = "paper_radius")]
+    pub radius: f64,
     /// Wall time of the verification (s).
     pub seconds: f64,
     /// Largest `max_defect` at which the solution counts as verified (the study layer's
