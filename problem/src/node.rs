@@ -8,7 +8,7 @@
 //!   I_b ω̇ + ω × I_b ω + D ω + r_c × λ = 0, and the stick constraint Δv = 0 (eq. 14/27) or
 //!   its time derivative ([`StickLevel::Acceleration`], the index-1 form of eq. 31–32);
 //! * validity: h (eq. 4), λ_n = λ·n ≥ 0 (eq. 12) and the friction cone (eq. 18–19) as
-//!   σ_δ = μ_s λ_n − (sqrt(‖λ_∥‖² + δ²) − δ) ≥ 0 (the smooth |·| of eq. 59, δ = [`CONE_DELTA`]);
+//!   σ_δ = μ_s λ_n − (sqrt(‖λ_∥‖² + δ²) − δ) ≥ 0 (the smooth |·| of eq. 59, δ = [`CONE_DELTA`] / r);
 //! * cost integrands (eq. 60): QC (eq. 64–65), COT (eq. 61–63), and the effort/time/tracking
 //!   integrands of the other problems of Sect. 4.1 ([`CostKind`]).
 //!
@@ -25,7 +25,10 @@ use bf_codegen::nodefn::NodeFunction;
 use bf_codegen::robot::SymbolicRobot;
 use bf_codegen::{CodegenError, Scene, SceneDefect, diff};
 
-/// δ of the smooth friction-cone margin σ_δ (N); σ_δ ≥ 0 implies σ ≥ −δ.
+/// δ r of the smooth friction-cone margin σ_δ (N m: δ = 1e-4 N on the paper's ball of 1 m);
+/// σ_δ ≥ 0 implies σ ≥ −δ. Divided by the ball's radius r because a finger drawn at a scale s
+/// with the same dynamics (lengths × s, masses × 1/s², gravity × s) presses with forces 1/s
+/// times the paper's, so δ keeps its share of them (decision record 0082).
 pub const CONE_DELTA: f64 = 1e-4;
 
 /// Contact mode prescribed to a phase (paper Fig. 3, blue part). Not the hybrid system's
@@ -439,8 +442,9 @@ pub fn node_function(
         let ll = g.v3_dot(l, l);
         let ln2 = g.square(ln);
         let par2 = g.sub(ll, ln2);
-        let d = g.constant(CONE_DELTA);
-        let d2 = g.constant(CONE_DELTA * CONE_DELTA);
+        let delta = CONE_DELTA / ph.radius;
+        let d = g.constant(delta);
+        let d2 = g.constant(delta * delta);
         let s2 = g.add(par2, d2);
         let root = g.sqrt(s2);
         let sm = g.sub(root, d);
