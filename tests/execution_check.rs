@@ -94,7 +94,7 @@ fn the_grazing_human_plan_is_executed_once_the_guard_lifts_the_finger_off() {
         run_tracking_with(
             &sol,
             ControllerKind::Hybrid,
-            gains,
+            Some(gains),
             6,
             plant,
             ImpactLaw::Newton,
@@ -179,7 +179,7 @@ fn a_low_cot_plan_meets_the_robustness_target_by_its_flights_pace() {
         run_tracking_with(
             &sol,
             ControllerKind::Hybrid,
-            gains,
+            Some(gains),
             10,
             perturbed_scene::<3>(
                 "paper",
@@ -263,7 +263,7 @@ fn a_run_that_misses_the_target_ends_at_its_first_missed_period() {
         run_tracking_with(
             &sol,
             ControllerKind::Hybrid,
-            gains,
+            Some(gains),
             10,
             damped(),
             ImpactLaw::Newton,
@@ -328,7 +328,7 @@ fn a_low_cot_plan_holds_its_mean_spin_beyond_the_robustness_window() {
         let t = run_tracking_with(
             &sol,
             ControllerKind::Hybrid,
-            HybridGains::default(),
+            Some(HybridGains::default()),
             20,
             plant,
             ImpactLaw::Newton,

@@ -38,7 +38,15 @@ fn every_stored_optimum_is_the_problem_it_names_found_by_the_global_search() {
         let (problem, settings) = settings_of(&sol).unwrap();
         assert_eq!(problem, s.problem, "{}", s.dir);
         // What `optimize` poses for the entry's `--impact-law` on the 3-joint fingers.
-        let plan = PlanFor::of(s.problem, 3, 1.0, s.law, None, None).unwrap();
+        let plan = PlanFor::of(
+            s.problem,
+            3,
+            bf_control::HybridGains::default().clearance.gap,
+            s.law,
+            None,
+            None,
+        )
+        .unwrap();
         assert_eq!(settings.impact_law, plan.impact_law, "{}", s.dir);
         assert_eq!(
             (

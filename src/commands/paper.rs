@@ -119,7 +119,8 @@ fn plan_markdown(
 ) -> Result<String> {
     let name = plan_dir(problem);
     // The paper's problems are posed on its compiled scenes: 3 joints, a ball of 1 m.
-    let plan = super::optimize::PlanFor::of(problem, 3, 1.0, None, None, None)?;
+    let gap = bf_control::HybridGains::default().clearance.gap;
+    let plan = super::optimize::PlanFor::of(problem, 3, gap, None, None, None)?;
     let (built, mut sol) = if args.search {
         let settings = plan.apply(bf_problem::ProblemSettings::default());
         let strategy = crate::pipeline::strategy::default_strategy(problem, settings.scheme);

@@ -461,18 +461,14 @@ pub fn run_tracking_replanned<const N: usize>(
     impact_law: ImpactLaw,
     replan: Option<usize>,
 ) -> Result<Tracking<N>> {
-    let (scene, _) = solution_scene(sol)?;
-    let how = TableRuns {
-        controller,
-        periods,
-        replan,
-        until_miss: false,
-    };
-    run_tracking_on(sol, &scene, default_gains(&scene), plant, impact_law, how)
+    run_tracking_with(
+        sol, controller, None, periods, plant, impact_law, replan, false,
+    )
 }
 
 /// The hybrid controller's default gains for the ball of `scene`
-/// ([`HybridGains::for_ball`]: the defaults, in metres scaled by the ball's radius).
+/// ([`HybridGains::for_ball`]: the defaults, in metres scaled by the ball's radius); the
+/// defaults themselves for a scene without a ball, which no closed loop runs on.
 pub fn default_gains(scene: &bf_codegen::Scene) -> HybridGains {
     HybridGains::for_ball(scene.ball.as_ref().map_or(1.0, |b| b.radius))
 }
@@ -526,8 +522,8 @@ fn misses_from_fourth(
         .any(|p| p.omega_error > ROBUSTNESS_TARGET)
 }
 
-/// [`run_tracking_replanned`] with the hybrid controllers' `gains` instead of
-/// [`default_gains`] (ignored by the open loop and the PD): what a gain does to the
+/// [`run_tracking_replanned`] with the hybrid controllers' `gains` where given (`None`: the
+/// [`default_gains`] of the solution's scene; ignored by the open loop and the PD): what a gain does to the
 /// execution of a plan, measured on the same plant. With `until_miss` the run ends at the
 /// first completed period from the 4th on that misses [`ROBUSTNESS_TARGET`]
 /// (`misses_from_fourth`): such a run returns the periods up to that one, fewer than
@@ -539,7 +535,7 @@ fn misses_from_fourth(
 pub fn run_tracking_with<const N: usize>(
     sol: &OcpSolution,
     controller: ControllerKind,
-    gains: HybridGains,
+    gains: Option<HybridGains>,
     periods: usize,
     plant: Model<DynKernels<N>, N>,
     impact_law: ImpactLaw,
@@ -547,6 +543,7 @@ pub fn run_tracking_with<const N: usize>(
     until_miss: bool,
 ) -> Result<Tracking<N>> {
     let (scene, _) = solution_scene(sol)?;
+    let gains = gains.unwrap_or_else(|| default_gains(&scene));
     let how = TableRuns {
         controller,
         periods,

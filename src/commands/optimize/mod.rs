@@ -225,11 +225,13 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         None => compiled_scene(problem)?,
     };
     let joints = built_on.links.len();
-    let radius = built_on.ball.as_ref().map_or(1.0, |b| b.radius);
+    let gap = crate::paper::closed_loop::default_gains(&built_on)
+        .clearance
+        .gap;
     let plan = PlanFor::of(
         problem,
         joints,
-        radius,
+        gap,
         args.impact_law.as_deref(),
         args.torque_margin,
         args.approach_clearance,
@@ -315,12 +317,13 @@ impl PlanFor {
     /// in free flight; the other problems, and the periodic ones on fingers of fewer joints, get the
     /// sticking law (eq. 40) of the paper's Sect. 6 with the exact limits and no clearance.
     /// The margin's and the clearance's defaults follow the law actually planned, so
-    /// `--impact-law stick` alone poses the paper's problem. `radius` is the ball's (m): the
-    /// default clearance is the controller's for that ball ([`bf_control::HybridGains::for_ball`]).
+    /// `--impact-law stick` alone poses the paper's problem. `gap` (m) is the clearance the
+    /// controller keeps from the scene's ball
+    /// ([`crate::paper::closed_loop::default_gains`]), the default clearance of a plan for it.
     pub fn of(
         problem: Problem,
         joints: usize,
-        radius: f64,
+        gap: f64,
         law: Option<&str>,
         torque_margin: Option<f64>,
         approach_clearance: Option<f64>,
@@ -342,7 +345,7 @@ impl PlanFor {
         };
         let approach_clearance = match approach_clearance {
             Some(c) => c,
-            None if executable => bf_control::HybridGains::for_ball(radius).clearance.gap,
+            None if executable => gap,
             None => 0.0,
         };
         Ok(PlanFor {
@@ -974,7 +977,7 @@ mod tests {
     fn periodic_problems_on_three_joints_or_more_plan_for_the_newton_plant_by_default() {
         let gap = bf_control::HybridGains::default().clearance.gap;
         let plan = |p: Problem, joints, law, margin, clearance| {
-            PlanFor::of(p, joints, 1.0, law, margin, clearance).unwrap()
+            PlanFor::of(p, joints, gap, law, margin, clearance).unwrap()
         };
         let newton = PlanFor {
             impact_law: PlannedImpact::Newton,
@@ -1006,9 +1009,6 @@ mod tests {
             );
         }
         assert_eq!(plan(Problem::Reach, 3, None, None, None), paper);
-        // The default clearance is the controller's gap for the scene's ball, in its radii.
-        let small = PlanFor::of(Problem::PeriodicQc, 3, 0.05, None, None, None).unwrap();
-        assert_eq!(small.approach_clearance, gap * 0.05);
         // Applied to settings, the plan sets its three fields and keeps the others.
         let base = ProblemSettings {
             min_stick: 0.1,
@@ -1024,8 +1024,8 @@ mod tests {
             ),
             (PlannedImpact::Newton, EXECUTABLE_TORQUE_MARGIN, gap, 0.1)
         );
-        assert!(PlanFor::of(Problem::PeriodicQc, 3, 1.0, None, Some(1.0), None).is_err());
-        assert!(PlanFor::of(Problem::PeriodicQc, 3, 1.0, Some("elastic"), None, None).is_err());
+        assert!(PlanFor::of(Problem::PeriodicQc, 3, gap, None, Some(1.0), None).is_err());
+        assert!(PlanFor::of(Problem::PeriodicQc, 3, gap, Some("elastic"), None, None).is_err());
     }
 
     /// Only a sticking plan whose stick phase is on its minimum gets the hint: a longer stick
