@@ -4,7 +4,7 @@
 //! Sect. 4), `paper` (the study of Sect. 6 end to end) and `report`.
 
 use clap::{Args, Parser, Subcommand};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Parses a number that must be finite and > 0. Negative values reach this parser (the options
 /// allow leading hyphens), so the message says why `-1e-8` is wrong rather than calling it an
@@ -317,9 +317,10 @@ pub struct SimulateArgs {
     /// --mode0 when it is not `free` (the default).
     #[arg(long)]
     pub init: Option<PathBuf>,
-    /// End time (s).
-    #[arg(long, default_value_t = 10.0, allow_hyphen_values = true)]
-    pub t_end: f64,
+    /// End time (s) [default: 10; for an arm's `solution.json` given with --init, its
+    /// duration].
+    #[arg(long, allow_hyphen_values = true)]
+    pub t_end: Option<f64>,
     /// Integrator: dopri5 or rk4.
     #[arg(long, default_value = "dopri5")]
     pub integrator: String,
@@ -337,12 +338,12 @@ pub struct SimulateArgs {
     pub h_max: f64,
     /// Step limit (accepted + rejected); the run stops with an error when it is reached, and a
     /// run that needs more steps (--t-end over --h-max or --step) is refused up front.
-    #[arg(long, default_value_t = 10_000_000, allow_hyphen_values = true, value_parser = whole)]
+    #[arg(long, default_value_t = 10_000_000, allow_hyphen_values = true, value_parser = positive_whole)]
     pub max_steps: usize,
     /// Sample limit (every step and event, plus the --output-dt grid; each takes about 1.2 kB
     /// of memory and 1 kB of output); a run that reaches it stops with an error, and an
     /// --output-dt grid larger than it is refused up front.
-    #[arg(long, default_value_t = 1_000_000, allow_hyphen_values = true, value_parser = whole)]
+    #[arg(long, default_value_t = 1_000_000, allow_hyphen_values = true, value_parser = positive_whole)]
     pub max_samples: usize,
     /// Wall-clock limit of the integration (s); a run that reaches it stops with an error.
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = positive)]
@@ -381,7 +382,8 @@ pub struct TrackArgs {
     #[arg(long, default_value = "hybrid")]
     pub controller: String,
     /// Periods to run (a period ends when the plant starts the optimum's first phase again), at
-    /// most 1000: every period's samples are kept, in memory and in the output files.
+    /// most 1000: every period's samples are kept, in memory and in the output files. With
+    /// --robustness at least 4: its target is judged from the 4th period on.
     #[arg(long, default_value_t = 10, value_parser = tracking_periods)]
     pub periods: usize,
     /// Scene file of the plant [default: the solution's own scene]; the controller always uses
@@ -696,4 +698,55 @@ pub struct VerifyArgs {
     /// What to verify: `appendix` (the paper's Appendix A/B and eq. 22b, 23).
     #[arg(value_parser = ["appendix"])]
     pub what: String,
+}
+
+/// The files and directories a run reads, which its `--out` directory must not hold: it is
+/// replaced as a whole (bf-output's `OutputDir::create`).
+pub trait Inputs {
+    /// The paths the run reads.
+    fn inputs(&self) -> Vec<&Path>;
+}
+
+/// The end time of a `simulate` run when neither `--t-end` nor an arm's solution gives one (s).
+pub const DEFAULT_T_END: f64 = 10.0;
+
+impl SimulateArgs {
+    /// The end time: `--t-end`, or [`DEFAULT_T_END`].
+    pub fn t_end(&self) -> f64 {
+        self.t_end.unwrap_or(DEFAULT_T_END)
+    }
+}
+
+impl Inputs for SimulateArgs {
+    fn inputs(&self) -> Vec<&Path> {
+        [&self.scene, &self.torques, &self.init]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect()
+    }
+}
+
+impl Inputs for TrackArgs {
+    fn inputs(&self) -> Vec<&Path> {
+        std::iter::once(self.solution.as_path())
+            .chain(self.plant_scene.as_deref())
+            .collect()
+    }
+}
+
+impl Inputs for OptimizeArgs {
+    fn inputs(&self) -> Vec<&Path> {
+        [&self.scene, &self.warm_start]
+            .into_iter()
+            .flatten()
+            .map(PathBuf::as_path)
+            .collect()
+    }
+}
+
+impl Inputs for MergeArgs {
+    fn inputs(&self) -> Vec<&Path> {
+        self.dirs.iter().map(PathBuf::as_path).collect()
+    }
 }

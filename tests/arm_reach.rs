@@ -303,6 +303,50 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
         .map(|x| x.parse().unwrap())
         .collect();
     assert_eq!(&first[..5], &[0.0, HANGING[0], 0.0, 0.0, 0.0]);
+
+    // --t-end, when given, ends the replay there.
+    let half = dir.join("half");
+    let o = run(&[
+        "simulate",
+        "--init",
+        out.join("solution.json").to_str().unwrap(),
+        &format!("--t-end={}", 0.5 * duration),
+        "--out",
+        half.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = json(&half.join("summary.json"));
+    let t_final = summary["t_final"].as_f64().unwrap();
+    assert!((t_final - 0.5 * duration).abs() < 1e-9, "{summary}");
+
+    // The optimum's directory holds the replay's input and is `optimize`'s: a replay into it
+    // is refused before any work, and the optimum is left as it was.
+    let before = std::fs::read(out.join("solution.json")).unwrap();
+    let o = run(&[
+        "simulate",
+        "--init",
+        out.join("solution.json").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("`optimize`") && err.contains("--out"), "{err}");
+    assert_eq!(std::fs::read(out.join("solution.json")).unwrap(), before);
+
+    // `track` executes finger plans only, and says so by name.
+    let o = run(&[
+        "track",
+        out.join("solution.json").to_str().unwrap(),
+        "--out",
+        dir.join("track").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("reach-arm") && err.contains("simulate --init"),
+        "{err}"
+    );
 }
 
 #[test]

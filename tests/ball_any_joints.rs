@@ -1,10 +1,12 @@
-//! The ball problems of `optimize` on a finger with another number of joints than the paper's
-//! three: the 4-joint finger of `tests/fixtures/finger4.toml` (interpreted kernels). Its guess
-//! configurations are solved for on its own geometry (checked against bf-model's h), `reach`
-//! ends Solved and verified by re-integration with the torque bounds, the touch and the rest
+//! The ball problems of `optimize` on fingers other than the paper's: the 4-joint finger of
+//! `tests/fixtures/finger4.toml` (interpreted kernels), and 3-joint fingers of other
+//! proportions or with joint limits. Guess configurations that do not fit a finger are solved
+//! for on its own geometry (checked against bf-model's h); `reach` on the 4-joint finger ends
+//! Solved and verified by re-integration with the torque bounds, the touch and the rest
 //! conditions holding on bf-model's kernels, a different optimum than the 3-joint finger's,
-//! and corrupted torques failing the verification; a finger that cannot reach the ball and one
-//! with more joints than the verification runs are refused with errors naming them.
+//! and corrupted torques failing the verification; the scene's joint limits bound the joint
+//! angles of the problems; a finger that cannot reach the ball and one with more joints than
+//! the verification runs are refused with errors naming them.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -74,6 +76,76 @@ fn guess_configurations_are_the_papers_for_3_joints_and_solved_for_4() {
     }
     let h_c = h_model::<4>(&f4, &qc);
     assert!(h_c.abs() < 1e-9, "h(q_c) = {h_c}");
+}
+
+/// The TriFinger-like fixture: 3 joints with URDF limits, 16 cm links over a 5 cm ball.
+const FINGER3_URDF: &str = "testkit/tests/urdf/finger3_ball.toml";
+
+#[test]
+fn a_3_joint_finger_the_papers_configurations_do_not_fit_gets_its_own() {
+    let f3 = Scene::load(root().join(FINGER3_URDF)).unwrap();
+    // The paper's pressed-in configuration does not reach this finger's ball, so the segment
+    // from q⁰ to it holds no contact configuration.
+    assert!(h_model::<3>(&f3, &Q_DEEP) > 0.0);
+    let c = guess_configurations(&f3, f3.contact.as_ref().unwrap().smooth_eps).unwrap();
+    assert_ne!(c.free, Q_GUESS.to_vec());
+    let limits: Vec<(f64, f64)> = f3
+        .links
+        .iter()
+        .map(|l| (l.q_min.unwrap(), l.q_max.unwrap()))
+        .collect();
+    for q in [&c.free, &c.deep] {
+        assert_eq!(q.len(), 3);
+        for (v, (lo, hi)) in q.iter().zip(&limits) {
+            assert!((*lo..=*hi).contains(v), "{q:?} outside {limits:?}");
+        }
+    }
+    let (h_free, h_deep) = (h_model::<3>(&f3, &c.free), h_model::<3>(&f3, &c.deep));
+    let r = f3.ball.as_ref().unwrap().radius;
+    assert!(h_free > 0.0 && h_free < r, "h(q0) = {h_free}");
+    assert!(h_deep < 0.0, "h(q_deep) = {h_deep}");
+}
+
+#[test]
+fn the_scenes_joint_limits_bound_every_finger_problem() {
+    // The paper's `reach` overshoots q3 = 1.62 on its way to the ball (to about 1.71 rad) and
+    // ends below it (about 1.55 rad); with q3 ≤ 1.62 the optimum keeps to the limit and costs
+    // more.
+    let paper = build(Problem::Reach, &ProblemSettings::default()).unwrap();
+    let free = solve(&paper, None).unwrap();
+    assert_eq!(free.status, Status::Solved);
+    let peak = |sol: &OcpSolution| sol.raw[0].x.iter().map(|x| x[2]).fold(f64::MIN, f64::max);
+    const Q3_MAX: f64 = 1.62;
+    assert!(peak(&free) > Q3_MAX + 0.05, "{}", peak(&free));
+
+    let mut limited = scene(&scene_text("scenes/paper.toml"), "paper-q3-limit");
+    limited.links[2].q_max = Some(Q3_MAX);
+    // The paper's guess configurations are within the limit, so the guess is the paper's.
+    assert_eq!(guess_configurations(&limited, 0.01).unwrap().free, Q_GUESS);
+    let s = ProblemSettings {
+        scene: Some(limited),
+        ..ProblemSettings::default()
+    };
+    let p = build(Problem::Reach, &s).unwrap();
+    // The limits are the states' bounds in every phase; the unlimited joints stay free.
+    for ph in &p.ocp.phases {
+        assert_eq!(ph.x_bounds[2], (f64::NEG_INFINITY, Q3_MAX));
+        assert_eq!(ph.x_bounds[1], (f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let sol = solve(&p, None).unwrap();
+    assert_eq!(sol.status, Status::Solved, "{:?}", sol.stages);
+    assert!(peak(&sol) <= Q3_MAX + 1e-8, "{}", peak(&sol));
+    assert!(
+        peak(&sol) > Q3_MAX - 1e-6,
+        "the limit is active: {}",
+        peak(&sol)
+    );
+    assert!(
+        sol.objective > free.objective,
+        "{} {}",
+        sol.objective,
+        free.objective
+    );
 }
 
 /// `reach` on the 4-joint finger, solved once for the tests below by one direct solve on 6

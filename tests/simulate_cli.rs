@@ -241,6 +241,12 @@ fn cli_bad_inputs_give_clear_errors() {
     let two = dir.join("two.csv");
     std::fs::write(&two, "t,tau1,tau2\n0,0,0\n").unwrap();
     let two = two.to_str().unwrap();
+    // A solution of a schema this program does not know (a newer one).
+    let newer = dir.join("newer.json");
+    let mut sol = json(&root().join("data/optima/periodic-qc/solution.json"));
+    sol["schema_version"] = serde_json::json!(99);
+    std::fs::write(&newer, sol.to_string()).unwrap();
+    let newer = newer.to_str().unwrap();
     // (options, mentions, exit status: 2 for a wrong command line, 1 for a file or a state
     // that does not fit).
     let cases: Vec<(Vec<&str>, Vec<&str>, i32)> = vec![
@@ -288,6 +294,25 @@ fn cli_bad_inputs_give_clear_errors() {
             2,
         ),
         (vec!["--init", "missing.json"], vec!["missing.json"], 1),
+        (
+            vec!["--init", newer],
+            vec!["newer.json", "schema_version 99"],
+            1,
+        ),
+        (vec!["--max-steps", "0"], vec!["--max-steps", "≥ 1"], 2),
+        (
+            vec![
+                "--scene",
+                "scenes/human.toml",
+                "--param",
+                "ball.radius=0.5",
+                "--param",
+                "ball.radius=0.6",
+            ],
+            vec!["--param ball.radius=0.6", "already set to 0.5"],
+            2,
+        ),
+        (vec!["--max-samples", "0"], vec!["--max-samples", "≥ 1"], 2),
     ];
     for (extra, mention, status) in cases {
         let mut args = vec!["simulate", "--out", out];
@@ -592,5 +617,30 @@ fn an_arm_run_whose_energy_balance_fails_is_marked_failed() {
         "{summary}"
     );
     assert!(summary["error"].is_string(), "{summary}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A replay of a plan that failed its own checks says so: it shows that plan, not a verified
+/// optimum. The same file marked verified replays without the warning.
+#[test]
+fn a_replay_of_an_unverified_solution_is_flagged() {
+    let dir = tmpdir("unverified-replay");
+    let mut sol = json(&root().join("data/optima/periodic-qc/solution.json"));
+    for (verified, warned) in [(true, false), (false, true)] {
+        sol["verified"] = serde_json::json!(verified);
+        let path = dir.join("solution.json");
+        std::fs::write(&path, sol.to_string()).unwrap();
+        let o = simulate_into(
+            &dir.join("out"),
+            &["--init", path.to_str().unwrap(), "--t-end", "0.05"],
+        );
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(
+            err.contains("warning") && err.contains("not verified"),
+            warned,
+            "{err}"
+        );
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -605,11 +605,13 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
         }
         assert_eq!(p["contact"], true);
     }
-    // Bad arguments: named in the message, non-zero exit, nothing written.
+    // Bad arguments: named in the message, non-zero exit, nothing written. A robustness
+    // table judges each plant from the 4th period on, so it needs 4 periods at least.
     for (args, needle) in [
         (vec!["--controller", "pid"], "--controller"),
         (vec!["--impact-law", "elastic"], "--impact-law"),
         (vec!["--periods", "0"], "--periods"),
+        (vec!["--robustness", "--periods", "3"], "--periods 3"),
     ] {
         let bad = dir.join("bad");
         let mut a = vec![
@@ -631,6 +633,25 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
         dir.join("m").to_str().unwrap(),
     ]);
     assert!(!r.status.success() && String::from_utf8_lossy(&r.stderr).contains("missing.json"));
+    // A value no optimum has is refused by name, as `simulate --init` refuses it, rather than
+    // run into a lost ball.
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&sol_path).unwrap()).unwrap();
+    doc["nodes"]["q1"][0] = serde_json::json!(1e300);
+    std::fs::write(&sol_path, doc.to_string()).unwrap();
+    let r = cli::run(&[
+        "track",
+        sol_path.to_str().unwrap(),
+        "--out",
+        dir.join("huge").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("nodes.q1[0]") && err.contains("out of range"),
+        "{err}"
+    );
+    assert!(!dir.join("huge").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -868,12 +889,12 @@ fn report_tables_run_every_plant_and_controller() {
         );
         assert!(!line.contains('⚑'), "{line}");
     }
-    // A robustness run with too few periods for the 4th-period window misses the target: the
-    // directory says FAILED and the exit status says so.
+    // A robustness run with too few periods for the 4th-period window is refused before any
+    // work: a usage error, and nothing written.
     let short = work.join("short");
     let r = robustness("2", &short);
-    assert!(!r.status.success());
-    assert!(short.join("FAILED").exists());
+    assert_eq!(r.status.code(), Some(2));
+    assert!(!short.exists());
     std::fs::remove_dir_all(&work).ok();
     let dir = cli::tmpdir("fig17-closed");
     let md = comparison_markdown("periodic-qc", cli::qc_optimum(), 3, Some(&dir)).unwrap();

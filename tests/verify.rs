@@ -724,7 +724,7 @@ fn human_optimum_respects_the_ball_and_the_friction_cone() {
         if let Some(h) = ph["min_h"].as_f64() {
             assert!(h >= -1e-4, "phase {}: min h {h}", ph["phase"]);
         }
-        if ph["mode"] == "Stick" {
+        if ph["mode"] == "stick" {
             sticks += 1;
             let sigma = ph["min_sigma"].as_f64().unwrap();
             let max_ln = ph["max_lambda_n"].as_f64().unwrap();

@@ -20,9 +20,10 @@
 //!   target. The next [`OutputDir::create`] on the same target removes staging and backup
 //!   directories whose process no longer exists (on systems with `/proc`).
 //! * Replacing a directory as a whole deletes what was in it, so [`OutputDir::create`] accepts
-//!   an existing target only if it is empty, carries a manifest, or holds one of the files the
-//!   command wrote before manifests existed ([`DirSpec::legacy_files`]); anything else (a
-//!   source tree, a home directory, a file) is refused before the run starts.
+//!   an existing target only if it is empty, carries a manifest of the same command, or holds
+//!   one of the files the command wrote before manifests existed ([`DirSpec::legacy_files`]);
+//!   anything else (a source tree, a home directory, a file, another command's output) is
+//!   refused before the run starts, and so is a target that holds one of the run's inputs.
 //! * A fault can be injected at the n-th write ([`OutputDir::inject_fault_at_write`]), so tests
 //!   can show that a run stopped between two writes leaves the previous directory untouched.
 
@@ -181,9 +182,14 @@ pub struct OutputDir {
 impl OutputDir {
     /// Checks `target` and creates the staging directory next to it. Fails, naming
     /// `spec.option` and the path, when the target exists and is not a directory, is a
-    /// directory this command did not write (it would be replaced as a whole), or when its
+    /// directory this command did not write, holds one of `inputs` (the files and directories
+    /// the run reads: the target is replaced as a whole, so they would be lost), or when its
     /// parent cannot be created or written. Call it before the run's work.
-    pub fn create(target: &Path, spec: &DirSpec<'_>) -> Result<OutputDir, OutputError> {
+    pub fn create(
+        target: &Path,
+        spec: &DirSpec<'_>,
+        inputs: &[&Path],
+    ) -> Result<OutputDir, OutputError> {
         let opt = spec.option;
         let name = target
             .file_name()
@@ -198,6 +204,7 @@ impl OutputDir {
             .to_string_lossy()
             .into_owned();
         check_target(target, spec)?;
+        check_inputs(target, spec, inputs)?;
         let parent = parent_of(target);
         fs::create_dir_all(&parent).map_err(|e| {
             OutputError::io(&format!("{opt}: cannot create the directory"), &parent, &e)
@@ -316,6 +323,44 @@ impl Drop for OutputDir {
     }
 }
 
+/// Refuses a target that holds one of `inputs` (or is one): replacing it would delete them.
+fn check_inputs(target: &Path, spec: &DirSpec<'_>, inputs: &[&Path]) -> Result<(), OutputError> {
+    let Ok(target) = fs::canonicalize(target) else {
+        // No target yet: nothing of it is replaced.
+        return Ok(());
+    };
+    for input in inputs {
+        if let Ok(canonical) = fs::canonicalize(input)
+            && canonical.starts_with(&target)
+        {
+            return Err(OutputError::invalid(format!(
+                "{} {}: holds {}, an input of this run; the output directory is replaced as a \
+                 whole, so give another directory",
+                spec.option,
+                target.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The command named by the manifest text `manifest` (`None` if it names none).
+fn manifest_command(manifest: &str) -> Option<String> {
+    let rest = manifest.split_once("\"command\"")?.1.trim_start();
+    let rest = rest.strip_prefix(':')?.trim_start().strip_prefix('"')?;
+    let mut command = String::new();
+    let mut chars = rest.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' => return Some(command),
+            '\\' => command.push(chars.next()?),
+            c => command.push(c),
+        }
+    }
+    None
+}
+
 /// Refuses a target that is not a directory, or a directory that is neither empty nor an
 /// earlier output of the command.
 fn check_target(target: &Path, spec: &DirSpec<'_>) -> Result<(), OutputError> {
@@ -347,8 +392,27 @@ fn check_target(target: &Path, spec: &DirSpec<'_>) -> Result<(), OutputError> {
     let mut entries = fs::read_dir(target)
         .map_err(|e| OutputError::io(&format!("{opt}: cannot read"), target, &e))?;
     let empty = entries.next().is_none();
-    let ours = target.join(MANIFEST).is_file()
-        || spec.legacy_files.iter().any(|f| target.join(f).exists());
+    let manifest = target.join(MANIFEST);
+    if manifest.is_file() {
+        let text = fs::read_to_string(&manifest)
+            .map_err(|e| OutputError::io(&format!("{opt}: cannot read"), &manifest, &e))?;
+        return match manifest_command(&text) {
+            Some(c) if c == spec.command => Ok(()),
+            other => Err(OutputError::invalid(format!(
+                "{opt} {}: the directory holds the output of {}, not of `{}`; the output \
+                 directory is replaced as a whole, so give a new or empty directory, or one \
+                 written by `{}`",
+                target.display(),
+                other.map_or_else(
+                    || format!("an unknown command (its {MANIFEST} names none)"),
+                    |c| format!("`{c}`")
+                ),
+                spec.command,
+                spec.command
+            ))),
+        };
+    }
+    let ours = spec.legacy_files.iter().any(|f| target.join(f).exists());
     if empty || ours {
         Ok(())
     } else {
@@ -519,7 +583,7 @@ mod tests {
     }
 
     fn run(target: &Path, files: &[(&str, &str)], fault: Option<usize>) -> Result<(), OutputError> {
-        let mut out = OutputDir::create(target, &SPEC)?;
+        let mut out = OutputDir::create(target, &SPEC, &[])?;
         if let Some(n) = fault {
             out.inject_fault_at_write(n);
         }
@@ -581,7 +645,7 @@ mod tests {
     fn a_failed_run_is_marked() {
         let dir = scratch("failed");
         let target = dir.join("out");
-        let mut out = OutputDir::create(&target, &SPEC).unwrap();
+        let mut out = OutputDir::create(&target, &SPEC, &[]).unwrap();
         out.write("x.csv", b"t\n").unwrap();
         out.commit(Outcome::Failed("solver stopped: \"max iter\""))
             .unwrap();
@@ -602,13 +666,13 @@ mod tests {
     fn concurrent_runs_get_distinct_staging_directories() {
         let dir = scratch("twice");
         let target = dir.join("out");
-        let a = OutputDir::create(&target, &SPEC).unwrap();
-        let b = OutputDir::create(&target, &SPEC).unwrap();
+        let a = OutputDir::create(&target, &SPEC, &[]).unwrap();
+        let b = OutputDir::create(&target, &SPEC, &[]).unwrap();
         assert_ne!(a.path(), b.path());
         drop(a);
         drop(b);
         assert!(names(&dir).is_empty(), "{:?}", names(&dir));
-        let c = OutputDir::create(&target, &SPEC).unwrap();
+        let c = OutputDir::create(&target, &SPEC, &[]).unwrap();
         let msg = format!(
             "I/O error on {}: disk full",
             c.path().join("x.csv").display()
@@ -625,24 +689,71 @@ mod tests {
         let dir = scratch("refuse");
         let file = dir.join("file.txt");
         fs::write(&file, "x").unwrap();
-        let e = OutputDir::create(&file, &SPEC).unwrap_err().to_string();
+        let e = OutputDir::create(&file, &SPEC, &[])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("--out") && e.contains("not a directory"), "{e}");
-        let e = OutputDir::create(&file.join("sub"), &SPEC)
+        let e = OutputDir::create(&file.join("sub"), &SPEC, &[])
             .unwrap_err()
             .to_string();
         assert!(e.contains("--out") && e.contains("file.txt"), "{e}");
         let foreign = dir.join("src");
         fs::create_dir_all(&foreign).unwrap();
         fs::write(foreign.join("main.rs"), "fn main() {}").unwrap();
-        let e = OutputDir::create(&foreign, &SPEC).unwrap_err().to_string();
+        let e = OutputDir::create(&foreign, &SPEC, &[])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("was not written by `test`"), "{e}");
-        assert!(OutputDir::create(Path::new(".."), &SPEC).is_err());
+        assert!(OutputDir::create(Path::new(".."), &SPEC, &[]).is_err());
         // A directory from before manifests existed is recognised by its files.
         let legacy = dir.join("legacy");
         fs::create_dir_all(&legacy).unwrap();
         fs::write(legacy.join("summary.json"), "{}").unwrap();
         run(&legacy, &[("summary.json", "{\"new\":1}")], None).unwrap();
         assert_eq!(names(&legacy), [MANIFEST, "summary.json"]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn another_commands_output_and_a_runs_own_inputs_are_refused() {
+        let dir = scratch("others");
+        let target = dir.join("out");
+        run(&target, &[("solution.json", "{}")], None).unwrap();
+        let other = DirSpec {
+            command: "other",
+            ..SPEC
+        };
+        let e = OutputDir::create(&target, &other, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("output of `test`, not of `other`"), "{e}");
+        assert_eq!(names(&target), [MANIFEST, "solution.json"]);
+        // The same command may replace its own output, unless the run reads from it.
+        let input = target.join("solution.json");
+        let e = OutputDir::create(&target, &SPEC, &[&input])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("an input of this run") && e.contains("solution.json"),
+            "{e}"
+        );
+        let e = OutputDir::create(&target, &SPEC, &[&target])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("an input of this run"), "{e}");
+        let elsewhere = dir.join("in.json");
+        fs::write(&elsewhere, "{}").unwrap();
+        drop(OutputDir::create(&target, &SPEC, &[&elsewhere]).unwrap());
+        // A manifest that names no command is nobody's.
+        fs::write(target.join(MANIFEST), "{}").unwrap();
+        let e = OutputDir::create(&target, &SPEC, &[])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("names none"), "{e}");
+        assert_eq!(
+            manifest_command("{\n  \"command\": \"a \\\"b\\\"\",\n}").as_deref(),
+            Some("a \"b\"")
+        );
         fs::remove_dir_all(&dir).unwrap();
     }
 

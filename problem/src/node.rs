@@ -34,12 +34,16 @@ pub const CONE_DELTA: f64 = 1e-4;
 /// Contact mode prescribed to a phase (paper Fig. 3, blue part). Not the hybrid system's
 /// [`bf_scene::Mode`]: a phase is free or sticking (the problems of Sect. 4 have no slip
 /// phases, so a slip variant would be a case every match must reject), and `solution.json`
-/// writes it as `"Free"` / `"Stick"`.
+/// writes it in lowercase like every mode (`"free"` / `"stick"`); files written before read
+/// as well (`"Free"` / `"Stick"`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum PhaseMode {
     /// No contact (eq. 26).
+    #[serde(alias = "Free")]
     Free,
     /// Sticking contact (eq. 29, 14).
+    #[serde(alias = "Stick")]
     Stick,
 }
 

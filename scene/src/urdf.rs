@@ -427,6 +427,10 @@ pub fn read_chain(
     let mut parent_joint: Vec<Option<usize>> = vec![None; links.len()];
     for n in elems("joint") {
         let j = rd.joint(n, &links)?;
+        // Joint names key the scene's links and the kernels' variables, as link names do.
+        if joints.iter().any(|k| k.name == j.name) {
+            return Err(rd.node_err(n, "name", format!("joint {:?} is defined twice", j.name)));
+        }
         if let Some(other) = parent_joint[j.child] {
             return Err(rd.node_err(
                 n,

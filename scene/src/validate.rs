@@ -11,8 +11,8 @@
 //! [`principal_moments`] of 3×3 inertia tensors.
 
 use super::{
-    Angle, CONTACT_KERNELS, CONTACT_KINDS, InertiaSpec, KNOWN_KERNELS, OCP_COSTS, RotationSpec,
-    Scene, SourceIndex, SpecError, TransformSpec,
+    Angle, CONTACT_KERNELS, CONTACT_KINDS, DhConvention, InertiaSpec, JointType, KNOWN_KERNELS,
+    OCP_COSTS, RotationSpec, Scene, SourceIndex, SpecError, TransformSpec,
 };
 
 const RUST_KEYWORDS: &[&str] = &[
@@ -356,16 +356,23 @@ impl Scene {
         if let Some(b) = &self.ball {
             bodies.push(("ball".into(), b.mass, trace(b.inertia_matrix())));
         }
-        let m_max = bodies.iter().fold(0.0f64, |a, b| a.max(b.1));
-        let i_max = bodies.iter().fold(0.0f64, |a, b| a.max(b.2));
+        // The largest body is named too: it may be the one whose value is wrong.
+        let largest = |key: fn(&(String, f64, f64)) -> f64| {
+            bodies.iter().fold(
+                ("", 0.0f64),
+                |a, b| if key(b) > a.1 { (&b.0, key(b)) } else { a },
+            )
+        };
+        let (m_name, m_max) = largest(|b| b.1);
+        let (i_name, i_max) = largest(|b| b.2);
         for (p, m, i) in &bodies {
             if *m < SCALE_FLOOR * m_max {
                 return Err(ix.invalid(
                     &format!("{p}.mass"),
                     format!(
                         "mass {m:e} kg is below {SCALE_FLOOR:e} × the scene's largest mass \
-                         ({m_max:e} kg): negligible at f64 precision, the body's joint \
-                         accelerations would be rounding noise"
+                         ({m_name}: {m_max:e} kg): negligible at f64 precision, the body's \
+                         joint accelerations would be rounding noise"
                     ),
                 ));
             }
@@ -374,11 +381,43 @@ impl Scene {
                     &format!("{p}.inertia"),
                     format!(
                         "inertia trace {i:e} kg m² is below {SCALE_FLOOR:e} × the scene's \
-                         largest ({i_max:e} kg m²): negligible at f64 precision, the body's \
-                         joint accelerations would be rounding noise"
+                         largest ({i_name}: {i_max:e} kg m²): negligible at f64 precision, the \
+                         body's joint accelerations would be rounding noise"
                     ),
                 ));
             }
+        }
+        Ok(())
+    }
+
+    /// The last link carries the contact (Sect. 2.2): the finger turns it about a revolute
+    /// joint, and in standard DH form its length a_N > 0 is the contact segment's (a point
+    /// finger of length 0 has no segment, and the simulator measures ℓ > 0 from the contact
+    /// kernel). Refused here so that every command says so, not only the simulator.
+    fn check_contact_link(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {
+        let last = self.links.len().saturating_sub(1);
+        let Some(l) = self.links.last() else {
+            return Ok(());
+        };
+        if l.joint == JointType::Prismatic {
+            return Err(ix.invalid(
+                &format!("links[{last}].joint"),
+                "a finger touching a ball ([contact]) needs a revolute last joint: the contact \
+                 link turns about it (paper Sect. 2.2)"
+                    .to_string(),
+            ));
+        }
+        if !self.is_placement() && self.dh == DhConvention::Standard && (l.a.is_nan() || l.a <= 0.0)
+        {
+            return Err(ix.invalid(
+                &format!("links[{last}].a"),
+                format!(
+                    "a finger touching a ball ([contact]) needs a last link of length a > 0 \
+                     (got {}): the contact link runs from p_e - a e_x to the tip p_e (paper \
+                     Sect. 2.2)",
+                    l.a
+                ),
+            ));
         }
         Ok(())
     }
@@ -449,6 +488,18 @@ impl Scene {
             check_positive(ix, "ball.mass", b.mass)?;
             if let Some(i) = &b.inertia {
                 check_inertia(ix, "ball.inertia", i)?;
+            } else {
+                let j = b.inertia_matrix()[0][0];
+                if !(j.is_finite() && j > 0.0) {
+                    return Err(ix.invalid(
+                        "ball.radius",
+                        format!(
+                            "the ball's inertia (2/5) m r² = {j:e} kg m² (mass {:e} kg, \
+                             radius {:e} m) is not a finite number > 0 in f64",
+                            b.mass, b.radius
+                        ),
+                    ));
+                }
             }
             check_triangle(
                 ix,
@@ -482,6 +533,7 @@ impl Scene {
                 ));
             }
             check_positive(ix, "contact.smooth_eps", c.smooth_eps)?;
+            self.check_contact_link(ix)?;
         }
         if self.kernels.is_empty() {
             return Err(ix.invalid(

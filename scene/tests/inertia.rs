@@ -35,6 +35,16 @@ fn a_body_negligible_next_to_the_others_is_refused_naming_the_value() {
         "1e-300",
     );
     assert!(shown.contains("2e-2"), "{shown}");
+    // The largest body is named: its value may be the wrong one.
+    let text = edit("mass = 0.02", 0, "mass = 1.0e300");
+    let shown = expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line_no(&text, "mass = 0.02", 0),
+        "links[1].mass",
+        "links[0]: 1e300",
+    );
+    assert!(shown.contains("2e-2"), "{shown}");
     let tiny = "inertia = [1.0e-300, 1.0e-300, 1.0e-300]";
     let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, tiny);
     expect_err(
@@ -251,5 +261,19 @@ fn shipped_scenes_warn_only_about_published_puma_data() {
     assert!(
         err.contains("links[2].inertia") && err.contains("8.6e-2 > 1.25e-2 + 6.6e-2"),
         "{err}"
+    );
+}
+
+#[test]
+fn a_ball_whose_inertia_overflows_names_its_radius() {
+    // (2/5) m r² of a 1e300 m ball is not a number f64 holds: the radius is named, not the
+    // triangle inequality of an inertia the file never gave.
+    let text = edit("radius = 1.0", 0, "radius = 1.0e300");
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line_no(&text, "radius = 1.0e300", 0),
+        "ball.radius",
+        "not a finite number > 0",
     );
 }

@@ -170,6 +170,20 @@ fn a_link_not_on_any_chain() {
 }
 
 #[test]
+fn a_joint_name_used_twice_is_refused() {
+    // The second joint named like the first: the line of the second.
+    let twice = J2.replace("name=\"j2\"", "name=\"j1\"");
+    expect(
+        &arm(&twice),
+        None,
+        10,
+        "joint",
+        "name",
+        "joint \"j1\" is defined twice",
+    );
+}
+
+#[test]
 fn loops_are_refused() {
     // l2 → l1 closes the loop l1 → l2 → l1 (l1 then has two parents).
     let closing = format!(

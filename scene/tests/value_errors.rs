@@ -1,6 +1,6 @@
 //! Scene files that parse but break a semantic rule: masses, inertias (symmetric positive
 //! definite), kernel and cost lists, runtime parameters, names, friction, ball, joint limits,
-//! rotations, contact kinds and angle strings; each error names the line, key path and value.
+//! rotations, contact kinds, the contact link and angle strings; each error names the line, key path and value.
 
 mod common;
 
@@ -474,6 +474,40 @@ fn base_rotation_matrix_must_be_a_rotation() {
     let a = Scene::from_toml_str(BASE, FILE).unwrap();
     assert_eq!(m.base_rotation(), a.base_rotation());
     assert!(matches!(m.base.rotation, Some(RotationSpec::Matrix(_))));
+}
+
+#[test]
+fn the_contact_link_turns_about_a_revolute_joint_and_has_a_length() {
+    // The last link's `a = 1.0` (the second such line) and its joint.
+    let new = "a = 1.0\njoint = \"prismatic\"";
+    let text = edit("a = 1.0", 1, new);
+    let line = line_no(&text, "joint = \"prismatic\"", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[1].joint",
+        "revolute last joint",
+    );
+    for a in ["a = 0.0", "a = -0.5"] {
+        let text = edit("a = 1.0", 1, a);
+        let line = line_no(&text, a, 0);
+        expect_err(
+            &text,
+            SpecErrorKind::Invalid,
+            line,
+            "links[1].a",
+            "length a > 0",
+        );
+    }
+    // A prismatic joint elsewhere, or a zero-length last link of an arm without a ball, is fine.
+    let text = edit("a = 1.0", 0, "a = 1.0\njoint = \"prismatic\"");
+    assert!(Scene::from_toml_str(&text, FILE).is_ok());
+    let arm = edit("a = 1.0", 1, "a = 0.0");
+    let arm = arm[..arm.find("[ball]").unwrap()].replace(", \"contact\"]", "]");
+    if let Err(e) = Scene::from_toml_str(&arm, FILE) {
+        panic!("{e}");
+    }
 }
 
 #[test]

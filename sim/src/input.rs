@@ -125,7 +125,11 @@ impl TorqueSeries {
                 return Err(parse_err(
                     path,
                     line(k),
-                    format!("sample {k} has {} torques, expected {n}", row.len()),
+                    format!(
+                        "sample {k} has {} torques and sample 0 has {n}: every sample needs \
+                         one torque per joint",
+                        row.len()
+                    ),
                 ));
             }
             if !t[k].is_finite() {
@@ -583,7 +587,10 @@ mod tests {
     #[test]
     fn malformed_json_errors() {
         for (text, needle) in [
-            (r#"{"t":[0,1],"tau":[[1],[2,3]]}"#, "expected 1"),
+            (
+                r#"{"t":[0,1],"tau":[[1],[2,3]]}"#,
+                "sample 1 has 2 torques and sample 0 has 1",
+            ),
             (r#"{"t":[0,1,2],"tau":[[1],[2]]}"#, "3 times but 2"),
             (r#"{"t":[1,0],"tau":[[1],[2]]}"#, "not strictly increasing"),
             (r#"{"t":[0,1],"tau":[[1],[null]]}"#, "invalid JSON"),

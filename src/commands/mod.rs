@@ -45,18 +45,24 @@ pub fn load_scene_with_params(
     Ok((scene, text))
 }
 
-/// `--param name=value` options as (name, value); the error names the option.
+/// `--param name=value` options as (name, value); the error names the option. A name given
+/// twice is refused rather than the last value silently winning.
 pub fn parse_params(params: &[String]) -> Result<Vec<(String, f64)>> {
-    params
-        .iter()
-        .map(|p| {
-            let (name, value) = p
-                .split_once('=')
-                .ok_or_else(|| crate::errors::usage(format!("--param {p}: expected NAME=VALUE")))?;
-            let value: f64 = value.trim().parse().map_err(|_| {
-                crate::errors::usage(format!("--param {p}: `{}` is not a number", value.trim()))
-            })?;
-            Ok((name.trim().to_string(), value))
-        })
-        .collect()
+    let mut out: Vec<(String, f64)> = Vec::with_capacity(params.len());
+    for p in params {
+        let (name, value) = p
+            .split_once('=')
+            .ok_or_else(|| crate::errors::usage(format!("--param {p}: expected NAME=VALUE")))?;
+        let value: f64 = value.trim().parse().map_err(|_| {
+            crate::errors::usage(format!("--param {p}: `{}` is not a number", value.trim()))
+        })?;
+        let name = name.trim().to_string();
+        if let Some((_, first)) = out.iter().find(|(n, _)| *n == name) {
+            return Err(crate::errors::usage(format!(
+                "--param {p}: `{name}` is already set to {first}; give each parameter once"
+            )));
+        }
+        out.push((name, value));
+    }
+    Ok(out)
 }

@@ -236,7 +236,7 @@ pub fn codegen_table(
 
 /// Run `paper`.
 pub fn run(args: &PaperArgs) -> Result<()> {
-    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR, &[])?;
     let dir = out.path().to_path_buf();
     // CI logs (stderr not a terminal) get a line per stage and one every 5 s.
     let hb = crate::progress::Heartbeat::start("paper");

@@ -34,6 +34,7 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             command: "report",
             legacy_files: &legacy,
         },
+        &[],
     )?;
     // CI logs (stderr not a terminal) get a line every 5 s while the report runs.
     let hb = crate::progress::Heartbeat::start(&format!("report {}", a.which));

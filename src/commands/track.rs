@@ -6,10 +6,11 @@
 //! [`crate::paper::closed_loop::robustness_rows`] instead (robustness.md, robustness.json),
 //! marked FAILED when a plant misses the target.
 
+use crate::cli::Inputs as _;
 use crate::cli::TrackArgs;
 use crate::errors::bail_usage;
 use crate::paper::closed_loop::{
-    ControllerKind, Tracking, finger_model, robustness_rows, robustness_table,
+    ControllerKind, FIRST_JUDGED_PERIOD, Tracking, finger_model, robustness_rows, robustness_table,
     run_tracking_replanned, solution_model, solution_scene, tracked_joints, with_joints,
 };
 use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
@@ -40,8 +41,9 @@ pub struct TrackingJson<'a> {
     pub planned_impact_law: &'static str,
     /// The optimum's mean ω (rad/s).
     pub optimum_mean_omega: [f64; 3],
-    /// Whether the plan passed its own verification (`solution.json`'s `verified`): an
-    /// unverified plan's errors include the plan's own.
+    /// Whether the plan passed its own verification: the verdict of `solution.json`'s
+    /// `verification` record (what `optimize` wrote as `verified`), false without a record.
+    /// An unverified plan's errors include the plan's own.
     pub plan_verified: bool,
     /// Periods asked for.
     pub requested_periods: usize,
@@ -131,7 +133,7 @@ fn replan_limit(args: &TrackArgs, controller: ControllerKind) -> Result<Option<u
 /// when a plant misses the target.
 fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -> Result<()> {
     let replan = replan_limit(args, controller)?;
-    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let name = args.solution.display().to_string();
     let rows = robustness_rows(sol, controller, args.periods, replan);
     let md = robustness_table(&name, controller, args.periods, &rows)?;
@@ -167,6 +169,30 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     let controller = ControllerKind::parse(&args.controller)
         .map_err(|e| crate::errors::usage(format!("--controller: {e}")))?;
     let law = super::simulate::parse_impact_law(&args.impact_law)?;
+    if args.robustness && args.periods < FIRST_JUDGED_PERIOD {
+        bail_usage!(
+            "--periods {}: --robustness judges each plant from period {FIRST_JUDGED_PERIOD} \
+             on; give --periods {FIRST_JUDGED_PERIOD} or more",
+            args.periods
+        );
+    }
+    // The same range check as `simulate --init` and `--warm-start`: a value no optimum has
+    // would otherwise surface as a lost ball.
+    super::optimize::check_solution_values("track", &args.solution)?;
+    let problem = std::fs::read_to_string(&args.solution)
+        .ok()
+        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+        .and_then(|v| v.get("problem")?.as_str().map(str::to_string));
+    if problem.as_deref() == Some(bf_problem::arm::REACH_ARM) {
+        bail!(
+            "{}: a solution of `optimize --problem {}` (an arm without a ball); `track` \
+             executes the periodic plans of a finger on its ball. Replay an arm's motion with \
+             `simulate --init {}`",
+            args.solution.display(),
+            bf_problem::arm::REACH_ARM,
+            args.solution.display()
+        );
+    }
     let sol = OcpSolution::read_json(&args.solution)
         .with_context(|| format!("reading the solution {}", args.solution.display()))?;
     if args.robustness {
@@ -201,7 +227,7 @@ fn run_n<const N: usize>(
         None => solution_model::<N>(sol).with_context(|| args.solution.display().to_string())?,
     };
     let replan = replan_limit(args, controller)?;
-    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let run = run_tracking_replanned(sol, controller, args.periods, plant, law, replan)
         .with_context(|| format!("tracking {}", args.solution.display()))?;
     out_dir.file("summary.json")?;
@@ -226,9 +252,13 @@ fn run_n<const N: usize>(
     })?;
     if !record.plan_verified {
         // Honest output: the run measures the plan's own error as well as the controller's.
+        let why = if sol.verification.is_some() {
+            "failed its own verification (solution.json `verification`)"
+        } else {
+            "was not re-integrated (it has no `verification` record: `optimize --verify-rtol 0`)"
+        };
         eprintln!(
-            "warning: {} failed its own verification (solution.json `verified`): the errors \
-             below include the plan's",
+            "warning: {} {why}: the errors below include the plan's",
             args.solution.display()
         );
     }

@@ -1272,12 +1272,16 @@ pub fn robustness_markdown(name: &str, sol: &OcpSolution, periods: usize) -> Res
     robustness_table(name, ControllerKind::Hybrid, periods, &rows)
 }
 
+/// The first period (1-based) whose ω error the robustness target judges: the earlier ones
+/// are the controller's transient.
+pub const FIRST_JUDGED_PERIOD: usize = 4;
+
 /// The largest ω error from the 4th period on (the robustness window), `None` for a
 /// run that completed fewer than four periods.
 pub fn max_error_from_fourth<const N: usize>(t: &Tracking<N>) -> Option<f64> {
     t.periods
         .iter()
-        .skip(3)
+        .skip(FIRST_JUDGED_PERIOD - 1)
         .map(|p| p.omega_error)
         .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.max(e))))
 }

@@ -432,15 +432,22 @@ fn from_texts(
     internals: impl FnOnce(&Value) -> Result<(String, std::path::PathBuf), PipelineError>,
 ) -> Result<OcpSolution, PipelineError> {
     let v: Value = serde_json::from_str(s).map_err(|e| io_err(path, e))?;
+    check_schema_version(&v, path)?;
+    if v.get("schema_version").is_none() {
+        return serde_json::from_value(v).map_err(|e| io_err(path, e));
+    }
+    let (text, ipath) = internals(&v)?;
+    let internals: Value = serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
+    let sol = from_documents(&v, &internals, path)?;
+    check_internals_belong(&sol, &internals, path, &ipath)?;
+    Ok(sol)
+}
+
+/// Refuses a solution document `v` (of the file `path`) whose `schema_version` this program
+/// does not read: a newer schema may mean other things by the same fields.
+pub fn check_schema_version(v: &Value, path: &Path) -> Result<(), PipelineError> {
     match v.get("schema_version").map(|x| (x, x.as_u64())) {
-        None => serde_json::from_value(v).map_err(|e| io_err(path, e)),
-        Some((_, Some(SCHEMA_VERSION))) => {
-            let (text, ipath) = internals(&v)?;
-            let internals: Value = serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
-            let sol = from_documents(&v, &internals, path)?;
-            check_internals_belong(&sol, &internals, path, &ipath)?;
-            Ok(sol)
-        }
+        None | Some((_, Some(SCHEMA_VERSION))) => Ok(()),
         Some((x, _)) => Err(io_err(
             path,
             format!(

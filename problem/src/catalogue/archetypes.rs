@@ -7,7 +7,6 @@
 
 use bf_codegen::Scene;
 use bf_codegen::graph::Graph;
-use bf_codegen::spec::SceneId;
 use bf_optim::ocp::{Objective, Param, PointFunction, Scheme, VarRef};
 
 use super::guess::PhaseDef;
@@ -58,7 +57,7 @@ pub(crate) struct Spec {
     pub(crate) points: Vec<PointFunction>,
     pub(crate) params: Vec<Param>,
     pub(crate) cost_bounds: Vec<(f64, f64)>,
-    /// Joint bounds of the states (the scene's limits on the human scene, none otherwise).
+    /// Joint bounds of the states: the scene's joint limits (±∞ where it gives none).
     pub(crate) q_limits: Vec<(f64, f64)>,
 }
 
@@ -77,11 +76,7 @@ impl Context<'_> {
     }
 
     fn q_limits(&self) -> Vec<(f64, f64)> {
-        if self.problem.scene() == SceneId::HUMAN {
-            self.physics.q_limits.clone()
-        } else {
-            vec![(f64::NEG_INFINITY, f64::INFINITY); self.nq()]
-        }
+        self.physics.q_limits.clone()
     }
 
     /// The state at rest in the default guess's configuration.

@@ -4,13 +4,16 @@
 //! (eq. 4).
 //!
 //! The guess configurations of a scene ([`GuessConfigurations`], [`guess_configurations`]):
-//! a 3-joint finger starts from the paper's q⁰ = [`Q_GUESS`] and the pressed-in [`Q_DEEP`]; a
-//! finger with any other number of joints N from configurations solved for on its own
-//! geometry. They lie on the curl family q(c) = (q⁰₁, c, …, c) (N = 1: q(c) = (c)): the
-//! first joint at the paper's q⁰₁ and the others bent alike, as the paper's q⁰ bends joints 2
-//! and 3 towards the ball. The first c (scanned in steps of [`CURL_STEP`], either sign) with
-//! h(q(c)) < 0 is the pressed-in configuration, the root c_c of h(q(c)) = 0 before it
-//! (bisection) the contact configuration, and q(c_c / 2) the free configuration q⁰.
+//! a 3-joint finger starts from the paper's q⁰ = [`Q_GUESS`] and the pressed-in [`Q_DEEP`]
+//! where they are guesses for its geometry: q⁰ clear of the ball, `Q_DEEP` pressed into it,
+//! both within the joint limits. Any other finger (another number of joints N, or a 3-joint
+//! finger of other proportions, such as a URDF robot's) starts from configurations solved for
+//! on its own geometry. They lie on the curl family q(c) = (q⁰₁, c, …, c) (N = 1:
+//! q(c) = (c)): the first joint at the paper's q⁰₁ and the others bent alike, as the paper's
+//! q⁰ bends joints 2 and 3 towards the ball, each joint held within its limits. The first c
+//! (scanned in steps of [`CURL_STEP`], either sign) with h(q(c)) < 0 is the pressed-in
+//! configuration, the root c_c of h(q(c)) = 0 before it (bisection) the contact
+//! configuration, and q(c_c / 2) the free configuration q⁰.
 
 use bf_codegen::Scene;
 use bf_optim::ocp::{EndRamp, Phase, PhaseGuess};
@@ -46,14 +49,22 @@ pub struct GuessConfigurations {
     pub deep: Vec<f64>,
 }
 
-/// The curl family q(c) of an `nq`-joint finger (module docs).
-fn curl(nq: usize, c: f64) -> Vec<f64> {
-    if nq == 1 {
-        return vec![c];
-    }
-    std::iter::once(Q_GUESS[0])
-        .chain(std::iter::repeat_n(c, nq - 1))
+/// The curl family q(c) of a finger with the joint limits `limits` (module docs): each joint
+/// held within its limits, so that a limit stops that joint and the others bend on.
+fn curl(limits: &[(f64, f64)], c: f64) -> Vec<f64> {
+    let first = if limits.len() == 1 { c } else { Q_GUESS[0] };
+    std::iter::once(first)
+        .chain(std::iter::repeat_n(c, limits.len() - 1))
+        .zip(limits)
+        .map(|(v, &(lo, hi))| v.max(lo).min(hi))
         .collect()
+}
+
+/// Whether every joint of `q` is within `limits`.
+fn within(q: &[f64], limits: &[(f64, f64)]) -> bool {
+    q.iter()
+        .zip(limits)
+        .all(|(v, &(lo, hi))| lo <= *v && *v <= hi)
 }
 
 /// h(q) at rest.
@@ -64,27 +75,42 @@ fn h_at(diag: &Diagnostics, q: &[f64]) -> f64 {
 }
 
 /// The guess configurations of `scene` (module docs), with the smooth saturation of ε = `eps`
-/// in h (the catalogue passes the scene's `smooth_eps`). Errors when the finger of a scene without 3 joints touches the ball straight or never
-/// reaches it on its curl family.
+/// in h (the catalogue passes the scene's `smooth_eps`). Errors when a finger that the paper's
+/// configurations do not fit touches the ball straight or never reaches it on its curl family.
 pub fn guess_configurations(scene: &Scene, eps: f64) -> Result<GuessConfigurations, ProblemError> {
     let nq = scene.links.len();
-    if nq == 3 {
+    let limits: Vec<(f64, f64)> = scene
+        .links
+        .iter()
+        .map(|l| {
+            (
+                l.q_min.unwrap_or(f64::NEG_INFINITY),
+                l.q_max.unwrap_or(f64::INFINITY),
+            )
+        })
+        .collect();
+    let diag = Diagnostics::new(scene, eps)?;
+    if nq == 3
+        && within(&Q_GUESS, &limits)
+        && within(&Q_DEEP, &limits)
+        && h_at(&diag, &Q_GUESS) > 0.0
+        && h_at(&diag, &Q_DEEP) < 0.0
+    {
         return Ok(GuessConfigurations {
             free: Q_GUESS.to_vec(),
             deep: Q_DEEP.to_vec(),
         });
     }
-    let diag = Diagnostics::new(scene, eps)?;
     let fail = |reason: String| ProblemError::NoContactConfiguration {
         scene: scene.name.clone(),
         joints: nq,
         reason,
     };
-    let h0 = h_at(&diag, &curl(nq, 0.0));
+    let h0 = h_at(&diag, &curl(&limits, 0.0));
     if h0.is_nan() || h0 <= 0.0 {
         return Err(fail(format!(
             "h = {h0:e} m at q = {:?}, the finger touches the ball unbent",
-            curl(nq, 0.0)
+            curl(&limits, 0.0)
         )));
     }
     let steps = (std::f64::consts::PI / CURL_STEP).round() as usize;
@@ -92,7 +118,7 @@ pub fn guess_configurations(scene: &Scene, eps: f64) -> Result<GuessConfiguratio
     let deep = (1..=steps).find_map(|k| {
         [1.0, -1.0].into_iter().find_map(|sign| {
             let c = sign * k as f64 * CURL_STEP;
-            (h_at(&diag, &curl(nq, c)) < 0.0).then_some((c, sign))
+            (h_at(&diag, &curl(&limits, c)) < 0.0).then_some((c, sign))
         })
     });
     let Some((c_deep, sign)) = deep else {
@@ -101,23 +127,28 @@ pub fn guess_configurations(scene: &Scene, eps: f64) -> Result<GuessConfiguratio
         } else {
             format!("({}, c, ..., c)", Q_GUESS[0])
         };
+        let held = if limits.iter().any(|l| l.0.is_finite() || l.1.is_finite()) {
+            " (each joint held within its limits)"
+        } else {
+            ""
+        };
         return Err(fail(format!(
-            "h > 0 at every q(c) = {family} with |c| <= pi, the curled finger never reaches \
-             the ball"
+            "h > 0 at every q(c) = {family}{held} with |c| <= pi, the curled finger never \
+             reaches the ball"
         )));
     };
     let (mut lo, mut hi) = (c_deep - sign * CURL_STEP, c_deep);
     for _ in 0..BISECTIONS {
         let mid = 0.5 * (lo + hi);
-        if h_at(&diag, &curl(nq, mid)) > 0.0 {
+        if h_at(&diag, &curl(&limits, mid)) > 0.0 {
             lo = mid
         } else {
             hi = mid
         }
     }
     Ok(GuessConfigurations {
-        free: curl(nq, 0.5 * lo),
-        deep: curl(nq, c_deep),
+        free: curl(&limits, 0.5 * lo),
+        deep: curl(&limits, c_deep),
     })
 }
 

@@ -4,6 +4,7 @@
 //! output set (`solution.json`, `torques.csv`, `trajectory.csv`).
 
 use super::{OUTPUT_DIR, RunSettings, check_size, parse_scheme};
+use crate::cli::Inputs as _;
 use crate::cli::OptimizeArgs;
 use crate::errors::bail_usage;
 use crate::io::parse_list;
@@ -126,7 +127,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         print_level: args.print_level,
         ..ArmSettings::default()
     };
-    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     if let Some(n) = opts.fail_at_write {
         out.inject_fault_at_write(n);
     }

@@ -14,6 +14,7 @@
 //! Radau element). With Radau the points of a phase (points per element times elements) are
 //! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
 
+use crate::cli::Inputs as _;
 use crate::cli::{OptimizeArgs, OptimizeCommand};
 use crate::errors::bail_usage;
 use crate::pipeline::SolutionIo;
@@ -791,7 +792,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             args.verify_rtol
         );
     }
-    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     if let Some(n) = opts.fail_at_write {
         out.inject_fault_at_write(n);
     }

@@ -6,6 +6,7 @@
 use super::{
     OUTPUT_DIR, commit_solution, failure_of, hop_settings, print_verification, print_wrote,
 };
+use crate::cli::Inputs as _;
 use crate::cli::MergeArgs;
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::{self, Candidate, Search, VerifyPolicy};
@@ -196,7 +197,7 @@ fn check_own_objective(path: &Path, sol: &OcpSolution) -> Result<()> {
 /// the unsharded multi-start's rule) with the stage records of every shard.
 pub fn merge(args: &MergeArgs) -> Result<()> {
     let hops = hop_settings(args.hops, args.hop_scale)?;
-    let out = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
     let mut records: Vec<StageRecord> = Vec::new();
     let mut head: Option<(String, Strategy)> = None;

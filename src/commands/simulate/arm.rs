@@ -4,7 +4,9 @@
 //! `summary.json` (energy balance) as one output set.
 
 use super::torques::{CliInput, pd_controller};
-use super::{OUTPUT_DIR, RunSettings, check_limits, interpreted_note, settings};
+use super::{OUTPUT_DIR, RunSettings, check_limits, check_t_end, interpreted_note, settings};
+use crate::cli::DEFAULT_T_END;
+use crate::cli::Inputs as _;
 use crate::cli::SimulateArgs;
 use crate::errors::bail_usage;
 use crate::io::parse_list;
@@ -25,15 +27,17 @@ pub(super) fn run_arm(
 ) -> Result<()> {
     let n = scene.links.len();
     let name = &scene.name;
-    if !(args.t_end.is_finite() && args.t_end > 0.0) {
-        bail_usage!("--t-end must be a finite number > 0 (got {})", args.t_end);
-    }
     // `--init` an arm solution.json (`optimize --problem reach-arm`): replay its optimal
-    // torques from its start at rest, over its duration.
+    // torques from its start at rest, over its duration unless --t-end says otherwise.
     let replay = match &args.init {
         Some(p) => Some(arm_replay(p, n)?),
         None => None,
     };
+    let t_end = args
+        .t_end
+        .or(replay.as_ref().map(|r| r.2))
+        .unwrap_or(DEFAULT_T_END);
+    check_t_end(t_end)?;
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
         ("--mode0", args.mode0 != "free"),
@@ -45,7 +49,7 @@ pub(super) fn run_arm(
         }
     }
     let set = settings(args)?;
-    check_limits(args, &set)?;
+    check_limits(args, &set, t_end)?;
     let q0 = match (&args.q0, &replay) {
         (Some(s), _) => parse_list("--q0", s, Some(n))?,
         (None, Some((q, _, _))) => q.clone(),
@@ -72,7 +76,6 @@ pub(super) fn run_arm(
     } else {
         CliInput::Arm(n)
     };
-    let t_end = replay.as_ref().map_or(args.t_end, |r| r.2);
     let setup = Instant::now();
     let (model, source) = bf_model::arm::ArmModel::from_scene(scene)
         .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
@@ -83,7 +86,7 @@ pub(super) fn run_arm(
     );
     let sys = FreeArm::new(model, inp)?;
     let x0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
-    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     if let Some(k) = run_opts.fail_at_write {
         out_dir.inject_fault_at_write(k);
     }

@@ -41,6 +41,7 @@
 //! `--max-samples` or `--max-time` stops with an error like a failed one. Runs longer than a
 //! second show their progress on stderr (a bar on a terminal, a line every 10 s otherwise).
 
+use crate::cli::Inputs as _;
 use crate::cli::SimulateArgs;
 use crate::errors::bail_usage;
 use crate::io::parse_list;
@@ -196,6 +197,24 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
         }
         if v.get("nodes").is_some() && v.get("modes").is_some() {
             // A solution of `optimize`: replay it from its own initial state and mode.
+            crate::pipeline::solution_io::check_schema_version(&v, path)
+                .with_context(|| format!("--init {}", path.display()))?;
+            // Honest output: a replay of a plan that failed its own checks is no check of it.
+            let status = v.get("status").and_then(|s| s.as_str()).unwrap_or("?");
+            if v.get("verified").and_then(|b| b.as_bool()) == Some(false)
+                || !matches!(status, "Solved" | "Acceptable")
+            {
+                eprintln!(
+                    "warning: --init {}: the solution is {} (status {status}): its replay \
+                     shows that plan, not a verified optimum",
+                    path.display(),
+                    if v.get("verified").and_then(|b| b.as_bool()) == Some(true) {
+                        "verified"
+                    } else {
+                        "not verified"
+                    }
+                );
+            }
             let (sq, sqd, sw, smode) = crate::pipeline::solution_io::initial_state_of(&v)
                 .with_context(|| {
                     format!(
@@ -262,17 +281,17 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
 
 /// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
 /// samples (see the module docs). The error names the options and the limit.
-pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
+pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Result<()> {
     let (h, h_opt) = match set.method {
         Method::Rk4 { h } => (h, "--step"),
         Method::Dopri5 => (set.h_max, "--h-max"),
     };
-    let min_steps = args.t_end / h;
+    let min_steps = t_end / h;
     if min_steps > args.max_steps as f64 {
         bail_usage!(
             "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more \
              than --max-steps {}; shorten --t-end or raise --max-steps",
-            args.t_end,
+            t_end,
             args.max_steps
         );
     }
@@ -281,20 +300,28 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings) -> Result<()> {
             "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each \
              stored as a sample, more than --max-samples {}; shorten --t-end or raise \
              --max-samples",
-            args.t_end,
+            t_end,
             args.max_samples
         );
     }
     if let Some(dt) = args.output_dt {
-        let n = args.t_end / dt;
+        let n = t_end / dt;
         if n > args.max_samples as f64 {
             bail_usage!(
                 "--output-dt {dt} s over --t-end {} s is {n:.3e} samples, more than \
                  --max-samples {}; raise --output-dt or --max-samples",
-                args.t_end,
+                t_end,
                 args.max_samples
             );
         }
+    }
+    Ok(())
+}
+
+/// Refuses an end time that is not a finite number > 0.
+pub(super) fn check_t_end(t_end: f64) -> Result<()> {
+    if !(t_end.is_finite() && t_end > 0.0) {
+        bail_usage!("--t-end must be a finite number > 0 (got {t_end:e})");
     }
     Ok(())
 }
@@ -314,9 +341,7 @@ pub fn run_with(args: &SimulateArgs, opts: RunSettings) -> Result<()> {
         return run_arm(args, opts, &scene, &scene_label);
     }
     // Validate every option before the (possibly long) run.
-    if !(args.t_end.is_finite() && args.t_end > 0.0) {
-        bail_usage!("--t-end must be a finite number > 0 (got {})", args.t_end);
-    }
+    check_t_end(args.t_end())?;
     let nq = scene.links.len();
     match nq {
         1 => run_contact::<1>(args, opts, &scene, &scene_label),
@@ -342,7 +367,7 @@ fn run_contact<const N: usize>(
     scene_label: &str,
 ) -> Result<()> {
     let set = settings(args)?;
-    check_limits(args, &set)?;
+    check_limits(args, &set, args.t_end())?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state::<N>(args)?;
     let inp = input(args, N)?;
@@ -484,12 +509,12 @@ fn run_model<K: Kernels<N>, const N: usize>(
             initial_state_options(args)
         );
     }
-    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR)?;
+    let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     if let Some(n) = run_opts.fail_at_write {
         out_dir.inject_fault_at_write(n);
     }
     let t0 = 0.0;
-    let t_end = args.t_end;
+    let t_end = args.t_end();
     // A trait object: one compiled copy of the simulator serves every joint count (the virtual
     // calls cost nothing beside the kernels they make).
     let dyn_sys: &dyn HybridSystem<Mode = Mode> = &sys;

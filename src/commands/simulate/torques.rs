@@ -125,11 +125,11 @@ fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
             sol.dense.t.len()
         );
     }
-    let periods = (args.t_end / sol.period).ceil().max(1.0);
+    let periods = (args.t_end() / sol.period).ceil().max(1.0);
     if periods.is_nan() || periods > MAX_TRACKED_PERIODS {
         bail!(
             "--pd-track: --t-end {} s is {periods} periods of {} s of {}, more than {}",
-            args.t_end,
+            args.t_end(),
             sol.period,
             path.display(),
             MAX_TRACKED_PERIODS
