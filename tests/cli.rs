@@ -283,6 +283,12 @@ fn bad_cli_input_gives_clear_errors() {
         ]),
         &["--eps"],
     );
+    // An arm has no ball: the ball's velocity and the contact's ε have nothing to act on.
+    for (opt, value) in [("--omega", "0,0,1"), ("--eps", "0.01")] {
+        let mut args = vec!["eval", "scenes/puma560.toml", "--q", "0,0,0,0,0,0"];
+        args.extend(["--qd", "0,0,0,0,0,0", opt, value]);
+        assert_usage_error(&run(&args), &[opt, "puma560", "no ball"]);
+    }
     let dir = tmpdir("bad");
     let bad = dir.join("bad.toml");
     let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();

@@ -28,6 +28,21 @@ use serde::ser::{Serialize, SerializeMap, Serializer};
 pub fn run(args: &EvalArgs) -> Result<()> {
     let (scene, _) = super::load_scene_with_params(&args.scene, &args.chain, &args.param)?;
     let n = scene.links.len();
+    if scene.ball.is_none() {
+        // As `simulate` refuses --omega0 for an arm: an option with nothing to act on is a
+        // mistake in the command line, not a value to ignore.
+        for (opt, given) in [
+            ("--omega", args.omega.is_some()),
+            ("--eps", args.eps.is_some()),
+        ] {
+            if given {
+                bail_usage!(
+                    "{opt}: scene `{}` has no ball, so no ball velocity or contact to evaluate",
+                    scene.name
+                );
+            }
+        }
+    }
     let q = parse_list("--q", &args.q, Some(n))?;
     let qd = parse_list("--qd", &args.qd, Some(n))?;
     let omega = match &args.omega {
