@@ -459,8 +459,10 @@ fn arm_err(scene: &Scene, message: String) -> ProblemError {
     }
 }
 
-/// Checks a configuration given in the settings: one finite value per joint, inside the limits.
-fn check_configuration(scene: &Scene, what: &str, q: &[f64]) -> Result<(), ProblemError> {
+/// Checks a configuration given in the settings (`what`: "start" or "target"): one finite
+/// value per joint, inside the joint limits. Public so that a caller can name its own option
+/// for the same check before posing the problem.
+pub fn check_configuration(scene: &Scene, what: &str, q: &[f64]) -> Result<(), ProblemError> {
     let nq = scene.links.len();
     if q.len() != nq {
         return Err(arm_err(

@@ -87,11 +87,20 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     let (scene, text) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
     let params = crate::commands::parse_params(&args.param)?;
     let nq = scene.links.len();
+    // A configuration outside the joint limits is a value out of its range: a usage error
+    // that names the option (the problem's own check, `check_configuration`).
     let config = |opt: &str, v: &Option<String>| -> Result<Option<Vec<f64>>> {
-        v.as_deref()
+        let q = v
+            .as_deref()
             .map(|s| parse_list(opt, s, Some(nq)))
             .transpose()
-            .with_context(|| format!("scene {} has {nq} joints", path.display()))
+            .with_context(|| format!("scene {} has {nq} joints", path.display()))?;
+        if let Some(q) = &q
+            && let Err(e) = bf_problem::arm::check_configuration(&scene, &opt[2..], q)
+        {
+            bail_usage!("{opt}: {e}");
+        }
+        Ok(q)
     };
     let weight = |opt: &str, v: Option<f64>, default: f64| -> Result<f64> {
         match v {
