@@ -717,31 +717,28 @@ impl SimulateArgs {
     }
 }
 
+/// The paths of `options` that were given.
+fn given<'a>(options: &[&'a Option<PathBuf>]) -> Vec<&'a Path> {
+    options.iter().filter_map(|o| o.as_deref()).collect()
+}
+
 impl Inputs for SimulateArgs {
     fn inputs(&self) -> Vec<&Path> {
-        [&self.scene, &self.torques, &self.init]
-            .into_iter()
-            .flatten()
-            .map(PathBuf::as_path)
-            .collect()
+        given(&[&self.scene, &self.torques, &self.init])
     }
 }
 
 impl Inputs for TrackArgs {
     fn inputs(&self) -> Vec<&Path> {
-        std::iter::once(self.solution.as_path())
-            .chain(self.plant_scene.as_deref())
-            .collect()
+        let mut paths = given(&[&self.plant_scene]);
+        paths.push(&self.solution);
+        paths
     }
 }
 
 impl Inputs for OptimizeArgs {
     fn inputs(&self) -> Vec<&Path> {
-        [&self.scene, &self.warm_start]
-            .into_iter()
-            .flatten()
-            .map(PathBuf::as_path)
-            .collect()
+        given(&[&self.scene, &self.warm_start])
     }
 }
 

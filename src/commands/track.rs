@@ -178,12 +178,8 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     }
     // The same range check as `simulate --init` and `--warm-start`: a value no optimum has
     // would otherwise surface as a lost ball.
-    super::optimize::check_solution_values("track", &args.solution)?;
-    let problem = std::fs::read_to_string(&args.solution)
-        .ok()
-        .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
-        .and_then(|v| v.get("problem")?.as_str().map(str::to_string));
-    if problem.as_deref() == Some(bf_problem::arm::REACH_ARM) {
+    let doc = super::optimize::check_solution_values("track", &args.solution)?;
+    if crate::pipeline::arm::is_arm_solution(&doc) {
         bail!(
             "{}: a solution of `optimize --problem {}` (an arm without a ball); `track` \
              executes the periodic plans of a finger on its ball. Replay an arm's motion with \

@@ -463,6 +463,12 @@ pub fn write_arm_solution(sol: &ArmSolution, dir: &Path) -> Result<(), PipelineE
     Ok(())
 }
 
+/// Whether the solution document `doc` is an arm's (`optimize --problem reach-arm`): the
+/// commands that take a finger's solution name it instead of failing on its missing fields.
+pub fn is_arm_solution(doc: &serde_json::Value) -> bool {
+    doc.get("problem").and_then(|p| p.as_str()) == Some(bf_problem::arm::REACH_ARM)
+}
+
 /// Reads an arm `solution.json`.
 pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, PipelineError> {
     let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Arm {
@@ -471,20 +477,8 @@ pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, PipelineError> {
     let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| PipelineError::Arm {
         message: format!("{}: not JSON: {e}", path.display()),
     })?;
-    let version = super::solution_io::SCHEMA_VERSION;
-    match doc.get("schema_version") {
-        // Files written before arm solutions had a schema version have the same fields.
-        None => {}
-        Some(v) if v.as_u64() == Some(version) => {}
-        Some(v) => {
-            return Err(PipelineError::Arm {
-                message: format!(
-                    "{}: schema_version {v} is not one this program reads (it reads {version})",
-                    path.display()
-                ),
-            });
-        }
-    }
+    // Files written before arm solutions had a schema version have the same fields.
+    super::solution_io::check_schema_version(&doc, path)?;
     serde_json::from_value(doc).map_err(|e| PipelineError::Arm {
         message: format!("{}: not an arm solution: {e}", path.display()),
     })

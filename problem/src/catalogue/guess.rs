@@ -79,16 +79,7 @@ fn h_at(diag: &Diagnostics, q: &[f64]) -> f64 {
 /// configurations do not fit touches the ball straight or never reaches it on its curl family.
 pub fn guess_configurations(scene: &Scene, eps: f64) -> Result<GuessConfigurations, ProblemError> {
     let nq = scene.links.len();
-    let limits: Vec<(f64, f64)> = scene
-        .links
-        .iter()
-        .map(|l| {
-            (
-                l.q_min.unwrap_or(f64::NEG_INFINITY),
-                l.q_max.unwrap_or(f64::INFINITY),
-            )
-        })
-        .collect();
+    let limits = crate::arm::joint_limits(scene);
     let diag = Diagnostics::new(scene, eps)?;
     if nq == 3
         && within(&Q_GUESS, &limits)

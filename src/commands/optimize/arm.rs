@@ -89,14 +89,14 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     let nq = scene.links.len();
     // A configuration outside the joint limits is a value out of its range: a usage error
     // that names the option (the problem's own check, `check_configuration`).
-    let config = |opt: &str, v: &Option<String>| -> Result<Option<Vec<f64>>> {
+    let config = |opt: &str, what: &str, v: &Option<String>| -> Result<Option<Vec<f64>>> {
         let q = v
             .as_deref()
             .map(|s| parse_list(opt, s, Some(nq)))
             .transpose()
             .with_context(|| format!("scene {} has {nq} joints", path.display()))?;
         if let Some(q) = &q
-            && let Err(e) = bf_problem::arm::check_configuration(&scene, &opt[2..], q)
+            && let Err(e) = bf_problem::arm::check_configuration(&scene, what, q)
         {
             bail_usage!("{opt}: {e}");
         }
@@ -112,8 +112,8 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     let settings = ArmSettings {
         points: args.points.max(2 * args.elements),
         elements: args.elements,
-        start: config("--start", &args.start)?,
-        target: config("--target", &args.target)?,
+        start: config("--start", "start", &args.start)?,
+        target: config("--target", "target", &args.target)?,
         effort_weight: weight("--effort-weight", args.effort_weight, 1.0)?,
         acceleration_weight: weight(
             "--acceleration-weight",

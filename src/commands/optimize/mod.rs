@@ -110,26 +110,26 @@ pub const MAX_WARM_START_VALUE: f64 = 1e12;
 /// (`solution-internals.json`: the raw collocation data the warm start is built from) against
 /// [`MAX_WARM_START_VALUE`]; the error names the file, the field path and the value.
 pub fn check_warm_start_values(path: &Path) -> Result<()> {
-    check_solution_values("--warm-start", path)
+    check_solution_values("--warm-start", path).map(|_| ())
 }
 
 /// [`check_warm_start_values`] for the file given to `option` (`--warm-start`, `simulate
 /// --init`): the same range check wherever a solution file comes back in, the error naming
 /// the option, the file, the field path and the value. The internals file is checked where the
 /// file names one (a `solution.json` with `schema_version`); a plain initial-state file has
-/// none.
-pub fn check_solution_values(option: &str, path: &Path) -> Result<()> {
+/// none. Returns the file's document, so that a caller reads it once.
+pub fn check_solution_values(option: &str, path: &Path) -> Result<serde_json::Value> {
     let value = read_json_value(option, path)?;
     check_json_values(option, path, &value)?;
     if value.get("schema_version").is_some() {
         let ipath = crate::pipeline::solution_io::internals_path(path, &value);
         if option != "--warm-start" && !ipath.exists() {
             // A replay reads only the solution itself; its internals may be left behind.
-            return Ok(());
+            return Ok(value);
         }
         check_json_values(option, &ipath, &read_json_value(option, &ipath)?)?;
     }
-    Ok(())
+    Ok(value)
 }
 
 /// The JSON document of the file `path` given to `option`; the error names both.

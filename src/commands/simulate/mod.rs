@@ -185,7 +185,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
             )
         };
         let v: serde_json::Value = serde_json::from_str(&text).with_context(shape)?;
-        if v.get("problem").and_then(|p| p.as_str()) == Some(bf_problem::arm::REACH_ARM) {
+        if crate::pipeline::arm::is_arm_solution(&v) {
             bail!(
                 "--init {}: an arm solution of `optimize --problem {}` (scene `{}`, without \
                  a ball), the scene of this run has a ball: replay it without --scene (the \
@@ -201,18 +201,13 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                 .with_context(|| format!("--init {}", path.display()))?;
             // Honest output: a replay of a plan that failed its own checks is no check of it.
             let status = v.get("status").and_then(|s| s.as_str()).unwrap_or("?");
-            if v.get("verified").and_then(|b| b.as_bool()) == Some(false)
-                || !matches!(status, "Solved" | "Acceptable")
-            {
+            let verified = v.get("verified").and_then(|b| b.as_bool()) != Some(false);
+            if !verified || !matches!(status, "Solved" | "Acceptable") {
                 eprintln!(
                     "warning: --init {}: the solution is {} (status {status}): its replay \
                      shows that plan, not a verified optimum",
                     path.display(),
-                    if v.get("verified").and_then(|b| b.as_bool()) == Some(true) {
-                        "verified"
-                    } else {
-                        "not verified"
-                    }
+                    if verified { "verified" } else { "not verified" }
                 );
             }
             let (sq, sqd, sw, smode) = crate::pipeline::solution_io::initial_state_of(&v)
