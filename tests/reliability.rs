@@ -352,8 +352,8 @@ fn resource_limits_are_checked() {
             &["--output-dt", "--max-samples 1000000"],
         ),
         (
-            &["simulate", "--t-end", "1e12", "--out", out_s],
-            &["--t-end", "--max-steps 10000000"],
+            &["simulate", "--t-end", "1e300", "--out", out_s],
+            &["--t-end 1e300 s", "--max-steps 10000000"],
         ),
         (
             &["optimize", "--problem", "reach", "--elements", "100000"],

@@ -164,6 +164,33 @@ fn old_and_future_solution_files() {
     assert!(e.contains(INTERNALS_FILE), "{e}");
 }
 
+#[test]
+fn edited_phase_lists_are_blamed_on_the_field() {
+    let dir = cli::tmpdir("phases");
+    let stored = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/optima/periodic-qc");
+    std::fs::copy(stored.join(INTERNALS_FILE), dir.join(INTERNALS_FILE)).unwrap();
+    let text = std::fs::read_to_string(stored.join("solution.json")).unwrap();
+    let sol: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let p = dir.join("solution.json");
+    // The copy reads: its internals belong to it.
+    std::fs::write(&p, &text).unwrap();
+    assert!(OcpSolution::read_json(&p).is_ok());
+    for (modes, needle) in [
+        (serde_json::json!([]), "`modes` is empty"),
+        (
+            serde_json::json!(["free", "stick"]),
+            "`modes` lists 2 phases and `phase_durations` 3",
+        ),
+    ] {
+        let mut edited = sol.clone();
+        edited["modes"] = modes;
+        std::fs::write(&p, edited.to_string()).unwrap();
+        let e = OcpSolution::read_json(&p).unwrap_err().to_string();
+        assert!(e.contains(needle) && e.contains("solution.json"), "{e}");
+        assert!(!e.contains("internals"), "{e}");
+    }
+}
+
 /// Every f64 the commands write to JSON reads back bit for bit (serde_json's
 /// `float_roundtrip`), so `simulate --init solution.json` starts exactly at the optimum's first
 /// node and a warm start from a file is the solution itself. The first value was 1 ulp off

@@ -131,7 +131,13 @@ fn identifier(name: &str) -> String {
 /// The scene text of a URDF file alone: its chain, gravity [`URDF_GRAVITY`], the kernels
 /// [`URDF_KERNELS`], no ball.
 pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<String, SpecError> {
-    let chain = read_chain(urdf, file, choice.base.as_deref(), choice.tip.as_deref())?;
+    let chain = read_chain(
+        urdf,
+        file,
+        choice.base.as_deref(),
+        choice.tip.as_deref(),
+        None,
+    )?;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -167,7 +173,10 @@ pub fn expand_toml(
     let mut keys: Vec<(&str, String, std::ops::Range<usize>)> = Vec::new();
     for (k, v) in table.iter() {
         let name = k.get_ref().as_ref();
-        if !matches!(name, "urdf" | "base_link" | "tip_link") {
+        if !matches!(
+            name,
+            "urdf" | "base_link" | "tip_link" | "nonphysical_inertia"
+        ) {
             continue;
         }
         let toml::de::DeValue::String(s) = v.get_ref() else {
@@ -178,12 +187,11 @@ pub fn expand_toml(
             ));
         };
         keys.push((
-            if name == "urdf" {
-                "urdf"
-            } else if name == "base_link" {
-                "base_link"
-            } else {
-                "tip_link"
+            match name {
+                "urdf" => "urdf",
+                "base_link" => "base_link",
+                "tip_link" => "tip_link",
+                _ => "nonphysical_inertia",
             },
             s.to_string(),
             k.span().start..v.span().end,
@@ -192,10 +200,13 @@ pub fn expand_toml(
     let get = |n: &str| keys.iter().find(|k| k.0 == n).map(|k| k.1.clone());
     let Some(urdf) = get("urdf") else {
         if let Some((n, ..)) = keys.first() {
-            return Err(ix.invalid(
-                n,
-                format!("`{n}` needs `urdf` (the URDF file it names a link of)"),
-            ));
+            let what = if *n == "nonphysical_inertia" {
+                "whose inertias it keeps; a scene's own link takes the key in its \
+                 [[links]] table"
+            } else {
+                "the URDF file it names a link of"
+            };
+            return Err(ix.invalid(n, format!("`{n}` at the top level needs `urdf` ({what})")));
         }
         if choice.base.is_some() || choice.tip.is_some() {
             return Err(SpecError::At {
@@ -229,6 +240,7 @@ pub fn expand_toml(
         &file,
         chain_choice.base.as_deref(),
         chain_choice.tip.as_deref(),
+        get("nonphysical_inertia").as_deref(),
     )?;
     let has_gravity = table.iter().any(|(k, _)| k.get_ref().as_ref() == "gravity");
     let mut out = String::with_capacity(text.len() + 4096);

@@ -375,11 +375,17 @@ fn lump(acc: Option<Inertial>, b: Inertial) -> Inertial {
 
 /// Reads the chain `base` → `tip` of the URDF text `text` (`file` names it in errors). `base`
 /// defaults to the root link, `tip` to the only leaf of a tree that does not branch.
+///
+/// Each model link's lumped inertia must be positive definite and satisfy the triangle
+/// inequality of its principal moments, or the error names the URDF link. `nonphysical`,
+/// the source of published values that break the triangle inequality (a scene's
+/// `nonphysical_inertia` key), keeps such links as they are, marked with that source.
 pub fn read_chain(
     text: &str,
     file: &str,
     base: Option<&str>,
     tip: Option<&str>,
+    nonphysical: Option<&str>,
 ) -> Result<UrdfChain, SpecError> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
         let p = e.pos();
@@ -611,8 +617,8 @@ pub fn read_chain(
         if jt.kind == JointKind::Fixed {
             continue;
         }
+        let c = &links[jt.child];
         let Some(body) = lumped[k].clone() else {
-            let c = &links[jt.child];
             return Err(rd.err(
                 c.pos,
                 "link",
@@ -624,6 +630,42 @@ pub fn read_chain(
                 ),
             ));
         };
+        let bodies = owner
+            .iter()
+            .zip(&links)
+            .filter(|(o, l)| l.inertial.is_some() && matches!(o, Some((Some(i), _)) if *i == k))
+            .count();
+        let lumped_note = if bodies > 1 {
+            " (with the links fixed to it)"
+        } else {
+            ""
+        };
+        if let Some(msg) = crate::validate::definiteness_violation(&body.inertia) {
+            return Err(rd.err(
+                c.pos,
+                "link",
+                "inertial",
+                format!(
+                    "link {:?}{lumped_note}, moved by joint {:?}: {msg}",
+                    c.name, jt.name
+                ),
+            ));
+        }
+        let triangle = crate::validate::triangle_violation(&body.inertia);
+        if let (Some(msg), None) = (&triangle, nonphysical) {
+            return Err(rd.err(
+                c.pos,
+                "link",
+                "inertial",
+                format!(
+                    "link {:?}{lumped_note}, moved by joint {:?}: {msg}; correct its \
+                     <inertia>, or keep the URDF's values by naming their source with \
+                     `nonphysical_inertia = \"...\"` beside `urdf` in a scene file \
+                     (docs/scene-format.md)",
+                    c.name, jt.name
+                ),
+            ));
+        }
         let (q_min, q_max, tau_max) = match jt.limit {
             Some((lo, hi, effort)) if lo < hi => {
                 (Some(lo), Some(hi), (effort > 0.0).then_some(effort))
@@ -650,7 +692,7 @@ pub fn read_chain(
             mass: body.mass,
             com: body.com,
             inertia: InertiaSpec::Full(body.inertia),
-            nonphysical_inertia: None,
+            nonphysical_inertia: triangle.and(nonphysical.map(str::to_string)),
             q_min,
             q_max,
             tau_max,

@@ -100,23 +100,29 @@ fn check_inertia(ix: &SourceIndex<'_>, path: &str, spec: &InertiaSpec) -> Result
             }
         }
     }
+    match definiteness_violation(&m) {
+        Some(msg) => Err(ix.invalid(path, msg)),
+        None => Ok(()),
+    }
+}
+
+/// The message for a symmetric inertia tensor that is not positive definite, naming its
+/// leading minors; `None` if it is.
+pub(super) fn definiteness_violation(m: &[[f64; 3]; 3]) -> Option<String> {
+    let scale = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
     // Sylvester's criterion on the leading principal minors of the symmetric tensor, scaled by
     // its largest entry first so that tiny (1e-300) or huge inertias neither underflow nor
     // overflow the minors: definiteness does not depend on the unit.
-    let n = scaled(&m, scale);
+    let n = scaled(m, scale);
     let m1 = n[0][0];
     let m2 = n[0][0] * n[1][1] - n[0][1] * n[1][0];
     let m3 = det3(&n);
-    if !(scale > 0.0 && m1 > 0.0 && m2 > 0.0 && m3 > 0.0) {
-        return Err(ix.invalid(
-            path,
-            format!(
-                "inertia must be positive definite (leading minors of I / {scale:e}: \
-                 {m1:e}, {m2:e}, {m3:e})"
-            ),
-        ));
-    }
-    Ok(())
+    (!(scale > 0.0 && m1 > 0.0 && m2 > 0.0 && m3 > 0.0)).then(|| {
+        format!(
+            "inertia must be positive definite (leading minors of I / {scale:e}: \
+             {m1:e}, {m2:e}, {m3:e})"
+        )
+    })
 }
 
 /// `m / scale`, entry by entry.

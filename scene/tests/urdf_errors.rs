@@ -40,7 +40,7 @@ fn expect(
     attribute: &str,
     needle: &str,
 ) {
-    let err = read_urdf_chain(text, FILE, None, tip).unwrap_err();
+    let err = read_urdf_chain(text, FILE, None, tip, None).unwrap_err();
     let shown = err.to_string();
     match &err {
         SpecError::Urdf(u) => {
@@ -57,7 +57,7 @@ fn expect(
 
 #[test]
 fn the_valid_arm_reads() {
-    let c = read_urdf_chain(&arm(J2), FILE, None, None).unwrap();
+    let c = read_urdf_chain(&arm(J2), FILE, None, None, None).unwrap();
     assert_eq!(c.joint_names, ["j1", "j2"]);
     assert_eq!(
         c.links[1].origin.as_ref().unwrap().translation,
@@ -155,13 +155,13 @@ fn a_link_not_on_any_chain() {
         "<link name=\"base\"/>\n  <link name=\"stray\"/>",
     );
     expect(&text, None, 3, "link", "name", "form 2 trees");
-    let err = read_urdf_chain(&arm(J2), FILE, Some("l2"), Some("l1")).unwrap_err();
+    let err = read_urdf_chain(&arm(J2), FILE, Some("l2"), Some("l1"), None).unwrap_err();
     assert!(
         err.to_string()
             .contains("link \"l1\" is not on any chain from base link \"l2\""),
         "{err}"
     );
-    let err = read_urdf_chain(&arm(J2), FILE, None, Some("nope")).unwrap_err();
+    let err = read_urdf_chain(&arm(J2), FILE, None, Some("nope"), None).unwrap_err();
     assert!(
         err.to_string()
             .contains("tip link \"nope\" is not a link of the robot"),
@@ -195,7 +195,7 @@ fn loops_are_refused() {
         "<joint name=\"j1\" type=\"revolute\"><parent link=\"base\"/>",
         "<joint name=\"j1\" type=\"revolute\"><parent link=\"l2\"/>",
     );
-    let err = read_urdf_chain(&text, FILE, None, None).unwrap_err();
+    let err = read_urdf_chain(&text, FILE, None, None, None).unwrap_err();
     assert!(err.to_string().contains("the joints form a loop"), "{err}");
 }
 
@@ -206,11 +206,12 @@ fn malformed_xml_and_a_wrong_root() {
         FILE,
         None,
         None,
+        None,
     )
     .unwrap_err();
     assert!(err.to_string().starts_with("robot.urdf:3:"), "{err}");
     assert!(err.to_string().contains("not well-formed XML"), "{err}");
-    let err = read_urdf_chain("<sdf/>", FILE, None, None).unwrap_err();
+    let err = read_urdf_chain("<sdf/>", FILE, None, None, None).unwrap_err();
     assert!(
         err.to_string().contains("the root element must be <robot>"),
         "{err}"
@@ -275,13 +276,100 @@ fn a_toml_scene_takes_its_robot_from_a_urdf_next_to_it() {
     .unwrap();
     let err = Scene::load(&path).unwrap_err();
     assert!(
-        err.to_string().contains("`base_link` needs `urdf`"),
+        err.to_string()
+            .contains("`base_link` at the top level needs `urdf`"),
         "{err}"
     );
     // A URDF that is not there is an I/O error naming it.
     std::fs::write(&path, scene_text.replace("arm.urdf", "missing.urdf")).unwrap();
     let err = Scene::load(&path).unwrap_err();
     assert!(err.to_string().contains("missing.urdf"), "{err}");
+}
+
+/// The second link's inertia replaced by the diagonal `ixx`, `iyy`, `izz`.
+fn arm_with_l2_inertia(ixx: &str, iyy: &str, izz: &str) -> String {
+    arm(J2).replacen(
+        r#"<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>
+  </link>
+  <joint"#,
+        &format!(
+            r#"<inertia ixx="{ixx}" ixy="0" ixz="0" iyy="{iyy}" iyz="0" izz="{izz}"/></inertial>
+  </link>
+  <joint"#
+        ),
+        1,
+    )
+}
+
+#[test]
+fn an_inertia_no_rigid_body_has_names_the_urdf_link() {
+    // 0.3 > 0.1 + 0.1: the triangle inequality of the principal moments fails.
+    let text = arm_with_l2_inertia("0.1", "0.1", "0.3");
+    assert_ne!(text, arm(J2));
+    expect(
+        &text,
+        None,
+        6,
+        "link",
+        "inertial",
+        "link \"l2\", moved by joint \"j2\": principal moments",
+    );
+    let err = read_urdf_chain(&text, FILE, None, None, None).unwrap_err();
+    assert!(err.to_string().contains("`nonphysical_inertia"), "{err}");
+    // A point mass (no rotational inertia) is not positive definite.
+    expect(
+        &arm_with_l2_inertia("0", "0", "0"),
+        None,
+        6,
+        "link",
+        "inertial",
+        "inertia must be positive definite",
+    );
+    // The scene's source keeps the published values, on the violating link only.
+    let c = read_urdf_chain(&text, FILE, None, None, Some("vendor data sheet")).unwrap();
+    assert_eq!(c.links[0].nonphysical_inertia, None);
+    assert_eq!(
+        c.links[1].nonphysical_inertia.as_deref(),
+        Some("vendor data sheet")
+    );
+    assert_eq!(c.links[1].inertia_matrix()[2][2], 0.3);
+}
+
+#[test]
+fn a_scene_keeps_a_urdfs_nonphysical_inertia_by_naming_its_source() {
+    let dir = tmpdir("nonphysical");
+    std::fs::write(
+        dir.join("arm.urdf"),
+        arm_with_l2_inertia("0.1", "0.1", "0.3"),
+    )
+    .unwrap();
+    let path = dir.join("arm.toml");
+    let scene_text = "name = \"arm2\"\nurdf = \"arm.urdf\"\nkernels = [\"mass_matrix\"]\n";
+    std::fs::write(&path, scene_text).unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    let shown = err.to_string();
+    assert!(shown.contains("arm.urdf:6:"), "the URDF's line: {shown}");
+    std::fs::write(
+        &path,
+        format!("{scene_text}nonphysical_inertia = \"vendor data sheet\"\n"),
+    )
+    .unwrap();
+    let (scene, text) = Scene::load_with_text(&path, &ChainChoice::default()).unwrap();
+    assert_eq!(scene.nq(), 2);
+    // The mark travels with the self-contained text.
+    assert_eq!(Scene::from_toml_str(&text, "again").unwrap(), scene);
+    // Without `urdf` the top-level key has nothing to apply to.
+    std::fs::write(
+        &path,
+        "name = \"x\"\nnonphysical_inertia = \"s\"\ngravity = [0.0, 0.0, -9.81]\nkernels = []\n",
+    )
+    .unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("`nonphysical_inertia` at the top level needs `urdf`"),
+        "{err}"
+    );
 }
 
 #[test]

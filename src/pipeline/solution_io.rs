@@ -439,8 +439,32 @@ fn from_texts(
     let (text, ipath) = internals(&v)?;
     let internals: Value = serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
     let sol = from_documents(&v, &internals, path)?;
+    check_phases(&sol, path)?;
     check_internals_belong(&sol, &internals, path, &ipath)?;
     Ok(sol)
+}
+
+/// Errors naming `path` unless the solution's own phase lists agree: at least one phase, and
+/// one duration per mode. Checked before the internals, so an edited `modes` is blamed on the
+/// field and not on the internals it no longer matches.
+fn check_phases(sol: &OcpSolution, path: &Path) -> Result<(), PipelineError> {
+    if sol.modes.is_empty() {
+        return Err(io_err(
+            path,
+            "`modes` is empty: a solution has at least one phase",
+        ));
+    }
+    if sol.phase_durations.len() != sol.modes.len() {
+        return Err(io_err(
+            path,
+            format!(
+                "`modes` lists {} phases and `phase_durations` {}: one duration per phase",
+                sol.modes.len(),
+                sol.phase_durations.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Refuses a solution document `v` (of the file `path`) whose `schema_version` this program

@@ -25,7 +25,7 @@ fn read(name: &str) -> String {
 
 /// A scene holding the imported chain of `text` (gravity −9.81 z, no ball).
 fn scene_of(text: &str, file: &str, base: Option<&str>, tip: Option<&str>) -> Scene {
-    let chain = read_urdf_chain(text, file, base, tip).unwrap_or_else(|e| panic!("{e}"));
+    let chain = read_urdf_chain(text, file, base, tip, None).unwrap_or_else(|e| panic!("{e}"));
     scene_from_chain(&chain, file)
 }
 
@@ -195,7 +195,7 @@ fn ur5_like_arm_with_non_dh_offsets() {
 fn seven_joint_arm_with_a_locked_two_finger_hand() {
     let text = read("panda_like.urdf");
     // The tree branches at the hand: no default tip.
-    let err = read_urdf_chain(&text, "panda_like.urdf", None, None).unwrap_err();
+    let err = read_urdf_chain(&text, "panda_like.urdf", None, None, None).unwrap_err();
     assert!(
         err.to_string().contains("branches at link \"panda_hand\""),
         "{err}"
@@ -316,10 +316,28 @@ fn dh_equivalent(path: &str) {
     dh.runtime_parameters.clear();
     dh.kernels = vec!["mass_matrix".to_string()];
     let text = urdf_of(&dh);
-    let mut chain = read_urdf_chain(&text, path, None, None).unwrap_or_else(|e| panic!("{e}"));
-    // Published inertias kept as published (PUMA 560 link 3) stay accepted.
-    for (c, l) in chain.links.iter_mut().zip(&dh.links) {
-        c.nonphysical_inertia.clone_from(&l.nonphysical_inertia);
+    // Published inertias kept as published (PUMA 560 link 3) are kept from the URDF too, by
+    // the scene's source, and marked on the same links only.
+    let source = dh
+        .links
+        .iter()
+        .find_map(|l| l.nonphysical_inertia.as_deref());
+    let chain = read_urdf_chain(&text, path, None, None, source).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        chain
+            .links
+            .iter()
+            .map(|c| c.nonphysical_inertia.is_some())
+            .collect::<Vec<_>>(),
+        dh.links
+            .iter()
+            .map(|l| l.nonphysical_inertia.is_some())
+            .collect::<Vec<_>>(),
+        "{path}: the links kept as published"
+    );
+    if source.is_some() {
+        let err = read_urdf_chain(&text, path, None, None, None).unwrap_err();
+        assert!(err.to_string().contains("triangle inequality"), "{err}");
     }
     let urdf = scene_from_chain(&chain, path);
     assert_eq!(urdf.nq(), dh.nq());

@@ -286,7 +286,7 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Resul
         bail_usage!(
             "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more \
              than --max-steps {}; shorten --t-end or raise --max-steps",
-            t_end,
+            crate::cli::shown(t_end),
             args.max_steps
         );
     }
@@ -295,7 +295,7 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Resul
             "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each \
              stored as a sample, more than --max-samples {}; shorten --t-end or raise \
              --max-samples",
-            t_end,
+            crate::cli::shown(t_end),
             args.max_samples
         );
     }
@@ -303,9 +303,10 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Resul
         let n = t_end / dt;
         if n > args.max_samples as f64 {
             bail_usage!(
-                "--output-dt {dt} s over --t-end {} s is {n:.3e} samples, more than \
+                "--output-dt {} s over --t-end {} s is {n:.3e} samples, more than \
                  --max-samples {}; raise --output-dt or --max-samples",
-                t_end,
+                crate::cli::shown(dt),
+                crate::cli::shown(t_end),
                 args.max_samples
             );
         }
