@@ -245,7 +245,7 @@ pub struct BenchArgs {
     /// Total time budget (s), split over the kernels; at most 3600.
     #[arg(long, default_value_t = 3.0)]
     pub time: f64,
-    /// Number of random states cycled through.
+    /// Number of random states cycled through; at most 100000.
     #[arg(long, default_value_t = 256, value_parser = positive_whole)]
     pub states: usize,
     /// Seed of the random states.
@@ -713,8 +713,22 @@ pub struct VerifyArgs {
 /// The files and directories a run reads, which its `--out` directory must not hold: it is
 /// replaced as a whole (bf-output's `OutputDir::create`).
 pub trait Inputs {
-    /// The paths the run reads.
-    fn inputs(&self) -> Vec<&Path>;
+    /// The paths the run reads, scene files with the URDF each names ([`scene_files`]).
+    fn inputs(&self) -> Vec<PathBuf>;
+}
+
+/// A scene file and the URDF its `urdf` key names (resolved next to it), if any: what a run
+/// on the scene reads. A file that cannot be read is returned alone (its reading fails later,
+/// with its own error).
+pub fn scene_files(scene: &Path) -> Vec<PathBuf> {
+    let mut out = vec![scene.to_path_buf()];
+    if let Ok(text) = std::fs::read_to_string(scene)
+        && let Some(urdf) =
+            bf_codegen::spec::urdf_path(&text, scene.parent().unwrap_or(Path::new("")))
+    {
+        out.push(urdf);
+    }
+    out
 }
 
 /// The end time of a `simulate` run when neither `--t-end` nor an arm's solution gives one (s).
@@ -727,33 +741,35 @@ impl SimulateArgs {
     }
 }
 
-/// The paths of `options` that were given.
-fn given<'a>(options: &[&'a Option<PathBuf>]) -> Vec<&'a Path> {
-    options.iter().filter_map(|o| o.as_deref()).collect()
+/// The paths of `options` that were given, the scene `scene` with its URDF.
+fn given(scene: &Option<PathBuf>, options: &[&Option<PathBuf>]) -> Vec<PathBuf> {
+    let mut out = scene.as_deref().map(scene_files).unwrap_or_default();
+    out.extend(options.iter().filter_map(|o| (*o).clone()));
+    out
 }
 
 impl Inputs for SimulateArgs {
-    fn inputs(&self) -> Vec<&Path> {
-        given(&[&self.scene, &self.torques, &self.init])
+    fn inputs(&self) -> Vec<PathBuf> {
+        given(&self.scene, &[&self.torques, &self.init])
     }
 }
 
 impl Inputs for TrackArgs {
-    fn inputs(&self) -> Vec<&Path> {
-        let mut paths = given(&[&self.plant_scene]);
-        paths.push(&self.solution);
+    fn inputs(&self) -> Vec<PathBuf> {
+        let mut paths = given(&self.plant_scene, &[]);
+        paths.push(self.solution.clone());
         paths
     }
 }
 
 impl Inputs for OptimizeArgs {
-    fn inputs(&self) -> Vec<&Path> {
-        given(&[&self.scene, &self.warm_start])
+    fn inputs(&self) -> Vec<PathBuf> {
+        given(&self.scene, &[&self.warm_start])
     }
 }
 
 impl Inputs for MergeArgs {
-    fn inputs(&self) -> Vec<&Path> {
-        self.dirs.iter().map(PathBuf::as_path).collect()
+    fn inputs(&self) -> Vec<PathBuf> {
+        self.dirs.clone()
     }
 }

@@ -105,10 +105,15 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     let dir = tmpdir("optset");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    // A set written before manifests existed is recognised by its files.
+    // A previous set of `optimize` (its manifest names the command).
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("solution.json"), "old").unwrap();
     std::fs::write(out.join("torques.csv"), "old").unwrap();
+    std::fs::write(
+        out.join(bf_output::MANIFEST),
+        r#"{"command": "optimize", "status": "success"}"#,
+    )
+    .unwrap();
     std::env::set_current_dir(root()).unwrap();
     let Sub::Optimize(args) = parse(&[
         "optimize",
@@ -131,7 +136,10 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
     )
     .unwrap_err();
     assert!(format!("{e:#}").contains("torques.csv"), "{e:#}");
-    assert_eq!(names(&out), ["solution.json", "torques.csv"]);
+    assert_eq!(
+        names(&out),
+        [bf_output::MANIFEST, "solution.json", "torques.csv"]
+    );
     assert_eq!(
         std::fs::read_to_string(out.join("solution.json")).unwrap(),
         "old"
@@ -301,6 +309,67 @@ fn foreign_or_file_out_is_refused_before_the_work() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// No run overwrites what it reads or what it did not write: `generate -o` refuses its own
+/// scene and the URDF the scene names, `--out` refuses a directory holding that URDF, and a
+/// directory that merely holds a file of the command's output name (a stored optimum) is not
+/// taken for an earlier output.
+#[test]
+fn a_runs_inputs_and_foreign_files_are_never_overwritten() {
+    let dir = tmpdir("inputs");
+    let urdf_dir = dir.join("robot");
+    std::fs::create_dir_all(&urdf_dir).unwrap();
+    let urdf = std::fs::read_to_string(root().join("testkit/tests/urdf/planar2.urdf")).unwrap();
+    std::fs::write(urdf_dir.join("arm.urdf"), &urdf).unwrap();
+    let scene = dir.join("arm.toml");
+    let scene_text = "name = \"arm\"\nurdf = \"robot/arm.urdf\"\nkernels = [\"mass_matrix\"]\n";
+    std::fs::write(&scene, scene_text).unwrap();
+    let scene_s = scene.to_str().unwrap();
+    for target in [scene.clone(), urdf_dir.join("arm.urdf")] {
+        let o = run(&["generate", scene_s, "-o", target.to_str().unwrap()]);
+        assert_error(&o, 1, &["-o", "an input of this run"]);
+    }
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), scene_text);
+    assert_eq!(
+        std::fs::read_to_string(urdf_dir.join("arm.urdf")).unwrap(),
+        urdf
+    );
+    // An earlier `simulate` output that now holds the URDF of the scene.
+    let out = urdf_dir.to_str().unwrap();
+    std::fs::write(
+        urdf_dir.join(bf_output::MANIFEST),
+        r#"{"command": "simulate", "status": "success"}"#,
+    )
+    .unwrap();
+    let o = run(&[
+        "simulate", "--scene", scene_s, "--q0", "0,0", "--t-end", "0.1", "--out", out,
+    ]);
+    assert_error(&o, 1, &["--out", "arm.urdf", "an input of this run"]);
+    assert_eq!(
+        std::fs::read_to_string(urdf_dir.join("arm.urdf")).unwrap(),
+        urdf
+    );
+    // A stored solution with notes beside it, and no manifest.
+    let stored = dir.join("stored");
+    std::fs::create_dir_all(stored.join("notes")).unwrap();
+    std::fs::write(stored.join("solution.json"), "{}").unwrap();
+    std::fs::write(stored.join("notes/why.txt"), "keep").unwrap();
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "direct",
+        "--out",
+        stored.to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["--out", "was not written by `optimize`"]);
+    assert_eq!(
+        std::fs::read_to_string(stored.join("notes/why.txt")).unwrap(),
+        "keep"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A closed pipe ends the program quietly with the status of a process stopped by SIGPIPE; a
 /// full device is an error naming it.
 #[test]
@@ -375,6 +444,12 @@ fn resource_limits_are_checked() {
     for (args, mention) in cases {
         assert_error(&run(args), 2, mention);
     }
+    // Refused before the states are allocated (a billion would exhaust the memory).
+    assert_error(
+        &run(&["bench", "scenes/paper.toml", "--states", "1000000000"]),
+        2,
+        &["--states", "100000"],
+    );
     assert!(!out.exists(), "nothing written by refused runs");
     let o = run(&[
         "simulate",

@@ -20,10 +20,10 @@
 //!   target. The next [`OutputDir::create`] on the same target removes staging and backup
 //!   directories whose process no longer exists (on systems with `/proc`).
 //! * Replacing a directory as a whole deletes what was in it, so [`OutputDir::create`] accepts
-//!   an existing target only if it is empty, carries a manifest of the same command, or holds
-//!   one of the files the command wrote before manifests existed ([`DirSpec::legacy_files`]);
-//!   anything else (a source tree, a home directory, a file, another command's output) is
-//!   refused before the run starts, and so is a target that holds one of the run's inputs.
+//!   an existing target only if it is empty or carries a manifest of the same command; anything
+//!   else (a source tree, a home directory, a file, another command's output, a directory that
+//!   merely holds a file of the command's name, such as a stored `solution.json`) is refused
+//!   before the run starts, and so is a target that holds one of the run's inputs.
 //! * A fault can be injected at the n-th write ([`OutputDir::inject_fault_at_write`]), so tests
 //!   can show that a run stopped between two writes leaves the previous directory untouched.
 
@@ -150,9 +150,6 @@ pub struct DirSpec<'a> {
     pub option: &'a str,
     /// The command writing it (recorded in the manifest).
     pub command: &'a str,
-    /// Files that identify a directory written by this command before manifests existed; a
-    /// directory holding any of them may be replaced.
-    pub legacy_files: &'a [&'a str],
 }
 
 /// How a run ended, recorded by [`OutputDir::commit`].
@@ -188,7 +185,7 @@ impl OutputDir {
     pub fn create(
         target: &Path,
         spec: &DirSpec<'_>,
-        inputs: &[&Path],
+        inputs: &[PathBuf],
     ) -> Result<OutputDir, OutputError> {
         let opt = spec.option;
         let name = target
@@ -324,7 +321,7 @@ impl Drop for OutputDir {
 }
 
 /// Refuses a target that holds one of `inputs` (or is one): replacing it would delete them.
-fn check_inputs(target: &Path, spec: &DirSpec<'_>, inputs: &[&Path]) -> Result<(), OutputError> {
+fn check_inputs(target: &Path, spec: &DirSpec<'_>, inputs: &[PathBuf]) -> Result<(), OutputError> {
     let Ok(target) = fs::canonicalize(target) else {
         // No target yet: nothing of it is replaced.
         return Ok(());
@@ -412,8 +409,7 @@ fn check_target(target: &Path, spec: &DirSpec<'_>) -> Result<(), OutputError> {
             ))),
         };
     }
-    let ours = spec.legacy_files.iter().any(|f| target.join(f).exists());
-    if empty || ours {
+    if empty {
         Ok(())
     } else {
         Err(OutputError::invalid(format!(
@@ -563,7 +559,6 @@ mod tests {
     const SPEC: DirSpec<'static> = DirSpec {
         option: "--out",
         command: "test",
-        legacy_files: &["summary.json"],
     };
 
     fn scratch(tag: &str) -> PathBuf {
@@ -705,12 +700,20 @@ mod tests {
             .to_string();
         assert!(e.contains("was not written by `test`"), "{e}");
         assert!(OutputDir::create(Path::new(".."), &SPEC, &[]).is_err());
-        // A directory from before manifests existed is recognised by its files.
-        let legacy = dir.join("legacy");
-        fs::create_dir_all(&legacy).unwrap();
-        fs::write(legacy.join("summary.json"), "{}").unwrap();
-        run(&legacy, &[("summary.json", "{\"new\":1}")], None).unwrap();
-        assert_eq!(names(&legacy), [MANIFEST, "summary.json"]);
+        // A file of the command's name does not make a directory its output: the notes
+        // beside it would be lost.
+        let stored = dir.join("stored");
+        fs::create_dir_all(stored.join("sub")).unwrap();
+        fs::write(stored.join("summary.json"), "{}").unwrap();
+        fs::write(stored.join("sub/notes.txt"), "keep").unwrap();
+        let e = run(&stored, &[("summary.json", "{\"new\":1}")], None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("has no .ball-finger.json"), "{e}");
+        assert_eq!(
+            fs::read_to_string(stored.join("sub/notes.txt")).unwrap(),
+            "keep"
+        );
         fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -730,20 +733,20 @@ mod tests {
         assert_eq!(names(&target), [MANIFEST, "solution.json"]);
         // The same command may replace its own output, unless the run reads from it.
         let input = target.join("solution.json");
-        let e = OutputDir::create(&target, &SPEC, &[&input])
+        let e = OutputDir::create(&target, &SPEC, std::slice::from_ref(&input))
             .unwrap_err()
             .to_string();
         assert!(
             e.contains("an input of this run") && e.contains("solution.json"),
             "{e}"
         );
-        let e = OutputDir::create(&target, &SPEC, &[&target])
+        let e = OutputDir::create(&target, &SPEC, std::slice::from_ref(&target))
             .unwrap_err()
             .to_string();
         assert!(e.contains("an input of this run"), "{e}");
         let elsewhere = dir.join("in.json");
         fs::write(&elsewhere, "{}").unwrap();
-        drop(OutputDir::create(&target, &SPEC, &[&elsewhere]).unwrap());
+        drop(OutputDir::create(&target, &SPEC, std::slice::from_ref(&elsewhere)).unwrap());
         // A manifest that names no command is nobody's.
         fs::write(target.join(MANIFEST), "{}").unwrap();
         let e = OutputDir::create(&target, &SPEC, &[])

@@ -240,12 +240,23 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
 /// budget only keeps the machine busy (and 1e300 would never end).
 pub const MAX_TIME: f64 = 3600.0;
 
+/// Largest `--states`: 100 000 states (some 25 MB for a 7-joint scene) already cycle through
+/// more memory than the caches hold, so more would time the memory, not the kernels, and a
+/// huge count would exhaust the memory before any timing.
+pub const MAX_STATES: usize = 100_000;
+
 /// Run `bench`.
 pub fn run(args: &BenchArgs) -> Result<()> {
     if !(args.time.is_finite() && args.time > 0.0 && args.time <= MAX_TIME) {
         bail_usage!(
             "--time must be a positive number of seconds, at most {MAX_TIME} (got {:?})",
             args.time
+        );
+    }
+    if args.states > MAX_STATES {
+        bail_usage!(
+            "--states must be at most {MAX_STATES} (got {})",
+            args.states
         );
     }
     let (scene, text) = super::load_scene(&args.scene, &args.chain)?;

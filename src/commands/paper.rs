@@ -192,7 +192,6 @@ fn section(report: &mut String, md: Result<String>, failed: &str) -> std::fmt::R
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     option: "--out",
     command: "paper",
-    legacy_files: &["report.md"],
 };
 
 /// The code-generation table of the report (scene, joints, kernels, graph nodes, code bytes,

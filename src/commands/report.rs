@@ -26,13 +26,11 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out/report").join(&a.which));
     let md_name = format!("{}.md", a.which);
-    let legacy = [md_name.as_str()];
     let mut out = OutputDir::create(
         &target,
         &DirSpec {
             option: "--out",
             command: "report",
-            legacy_files: &legacy,
         },
         &[],
     )?;

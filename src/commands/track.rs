@@ -25,7 +25,6 @@ use serde::Serialize;
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     option: "--out",
     command: "track",
-    legacy_files: &[],
 };
 
 /// The contents of `tracking.json`.

@@ -57,7 +57,6 @@ pub const MAX_RADAU_POINTS: usize = 5000;
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     option: "--out",
     command: "optimize",
-    legacy_files: &["solution.json", "torques.csv"],
 };
 
 /// Settings of a run that are not on the command line.

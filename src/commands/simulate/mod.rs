@@ -67,7 +67,6 @@ pub use torques::{CliInput, MAX_TRACKED_PERIODS, input};
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
     option: "--out",
     command: "simulate",
-    legacy_files: &["summary.json", "trajectory.csv"],
 };
 
 /// Settings of a run that are not on the command line.
