@@ -193,8 +193,6 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         shard_dirs[1].to_str().unwrap(),
         "--out",
         merged.to_str().unwrap(),
-        "--hops",
-        "8",
     ]);
     let merged_out = ok(&o);
     let (w, m) = (
@@ -202,6 +200,13 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         json(&merged.join("solution.json")),
     );
     assert_eq!(w["strategy"]["chosen"], m["strategy"]["chosen"]);
+    // The merge ran the shards' recorded `--hops 8` without being told, and records the run's
+    // scene and settings as the unsharded file does (a replay reads its scene from there).
+    assert_eq!(w["search_settings"]["hops"], 8);
+    for k in ["scene_toml", "scene_params", "search_settings"] {
+        assert_eq!(m[k], w[k], "{k}");
+    }
+    assert!(!w["scene_toml"].as_str().unwrap().is_empty());
     // The merge verifies and refines as the unsharded run does: the shards' coarse candidates
     // carry no verification, so its tolerance is the shards' own (before, the merge ran
     // without verification and chose an unverified 0.0769202 tap that the unsharded run
@@ -411,6 +416,20 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
         "{}",
         String::from_utf8_lossy(&o.stderr)
     );
+    // A merge told other hops than the shards searched with would run another search.
+    let o = run(&[
+        "optimize",
+        "merge",
+        shard_dirs[0].to_str().unwrap(),
+        shard_dirs[1].to_str().unwrap(),
+        "--hops",
+        "0",
+        "--out",
+        dir.join("refused").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--hops 0") && e.contains("--hops 8"), "{e}");
     assert!(!dir.join("refused").exists());
     // A start in two directories is refused.
     let o = run(&[

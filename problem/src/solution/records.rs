@@ -702,12 +702,19 @@ pub struct SearchSettings {
     pub extrapolate_every_barrier: bool,
     /// `--proximal-weight` (`None`: the solver's default).
     pub proximal_weight: Option<f64>,
+    /// Basin hops of the global search at most (`--hops`; 0: no global search, so no coarse
+    /// sampling either); `None` in files written before it was recorded.
+    #[serde(default)]
+    pub hops: Option<usize>,
+    /// Relative size of a hop (`--hop-scale`); `None` without hops and in older files.
+    #[serde(default)]
+    pub hop_scale: Option<f64>,
 }
 
 impl SearchSettings {
     /// Each setting as (the `optimize` option or quantity that sets it, its value as text),
     /// in a fixed order.
-    pub fn entries(&self) -> [(&'static str, String); 14] {
+    pub fn entries(&self) -> [(&'static str, String); 16] {
         let opt = |v: Option<f64>| v.map_or_else(|| "default".to_string(), |v| format!("{v:e}"));
         [
             ("--min-stick", format!("{:e}", self.min_stick)),
@@ -739,6 +746,12 @@ impl SearchSettings {
                 self.extrapolate_every_barrier.to_string(),
             ),
             ("--proximal-weight", opt(self.proximal_weight)),
+            (
+                "--hops",
+                self.hops
+                    .map_or_else(|| "not recorded".to_string(), |h| h.to_string()),
+            ),
+            ("--hop-scale", opt(self.hop_scale)),
         ]
     }
 

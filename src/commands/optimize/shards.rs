@@ -8,6 +8,7 @@ use super::{
 };
 use crate::cli::Inputs as _;
 use crate::cli::MergeArgs;
+use crate::errors::bail_usage;
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::{self, Candidate, Search, VerifyPolicy};
 use crate::pipeline::solve::{recompute_at_own_point, settings_of};
@@ -62,6 +63,8 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolu
 fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 9] {
     [
         ("problem", sol.problem.clone()),
+        ("scene", sol.scene.clone()),
+        ("runtime parameters", format!("{:?}", sol.scene_params)),
         ("impact law", sol.impact_law.name().to_string()),
         ("cone margin", format!("{:e}", sol.cone_margin)),
         ("torque margin", format!("{:e}", sol.torque_margin)),
@@ -69,8 +72,6 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 9] {
             "approach clearance",
             format!("{:e}", sol.approach_clearance),
         ),
-        ("scene", sol.scene.clone()),
-        ("runtime parameters", format!("{:?}", sol.scene_params)),
         ("mesh", format!("{} points, {:?}", sol.points, sol.scheme)),
         ("epsilon", format!("{:e}", sol.epsilon)),
     ]
@@ -196,7 +197,8 @@ fn check_own_objective(path: &Path, sol: &OcpSolution) -> Result<()> {
 /// Run `optimize merge DIR…`: the best verified candidate of the shards ([`search::select`],
 /// the unsharded multi-start's rule) with the stage records of every shard.
 pub fn merge(args: &MergeArgs) -> Result<()> {
-    let hops = hop_settings(args.hops, args.hop_scale)?;
+    // Checked before any work; the hops that run are the shards' own (see below).
+    hop_settings(args.hops, args.hop_scale)?;
     let out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
     let mut records: Vec<StageRecord> = Vec::new();
@@ -282,7 +284,9 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     // exactly as after an unsharded multi-start (the problems rebuilt from the files).
     // The shards' own solutions are on the problem's mesh; their candidates may be on the
     // coarse mesh of the sampling.
-    let full = first.as_ref().map_or(&cands[0].1, |(_, s)| s);
+    let Some((_, full)) = first.as_ref() else {
+        bail!("optimize merge: no directories given");
+    };
     let (name, settings) =
         settings_of(full).with_context(|| format!("optimize merge: the solution of {problem}"))?;
     let mut found = Search {
@@ -324,7 +328,8 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         ..VerifyPolicy::default()
     };
     // As `optimize`: without `--hops` the global search runs for the periodic problems only.
-    let policy = match hops.filter(|_| args.hops.is_some() || name.is_periodic()) {
+    let (given_hops, hops) = merge_hops(args, full)?;
+    let policy = match hops.filter(|_| given_hops || name.is_periodic()) {
         Some(h) => policy.global(h),
         None => policy,
     };
@@ -342,20 +347,12 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     found.fall_back_to_the_starts(name, &settings, &policy, None)?;
     found.polish_the_winner(name, &settings, &policy, None);
     found.seconds = seconds + t0.elapsed().as_secs_f64();
-    let (scene_toml, scene_params) = found
-        .candidates
-        .first()
-        .map(|c| {
-            (
-                c.solution.scene_toml.clone(),
-                c.solution.scene_params.clone(),
-            )
-        })
-        .unwrap_or_default();
     let (built, mut sol) = found.best()?;
-    // A hop's solution records the run's scene like the shards' files.
-    sol.scene_toml = scene_toml;
-    sol.scene_params = scene_params;
+    // The merged solution records the run's scene and settings as the shards' files do
+    // (every shard's, checked equal above): a solution re-solved in the merge carries none.
+    sol.scene_toml.clone_from(&full.scene_toml);
+    sol.scene_params.clone_from(&full.scene_params);
+    sol.search_settings.clone_from(&full.search_settings);
     if let Some(p) = &built {
         sol.active_bounds = Some(crate::pipeline::bounds::active_bounds(&p.ocp, &sol));
     }
@@ -390,6 +387,45 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     Ok(())
 }
 
+/// The hops the merge runs, and whether they were given rather than the problem's default:
+/// the shards' recorded `--hops` and `--hop-scale` (a merge's own values must equal them, or
+/// the merge would run another search than the unsharded one), or the merge's options for
+/// shards written before the hops were recorded.
+fn merge_hops(
+    args: &MergeArgs,
+    shard: &OcpSolution,
+) -> Result<(bool, Option<crate::pipeline::global::HopSettings>)> {
+    let recorded = shard.search_settings.as_ref().filter(|s| s.hops.is_some());
+    let Some(rec) = recorded else {
+        return Ok((
+            args.hops.is_some(),
+            hop_settings(args.hops, args.hop_scale)?,
+        ));
+    };
+    let mismatch = |opt: &str, given: String, theirs: String| -> Result<()> {
+        bail_usage!(
+            "{opt} {given}: the shards searched with {opt} {theirs}, and the merge runs their \
+             search; give their value or leave {opt} out"
+        )
+    };
+    if let (Some(a), Some(b)) = (args.hops, rec.hops)
+        && a != b
+    {
+        mismatch("--hops", a.to_string(), b.to_string())?;
+    }
+    if let Some(a) = args.hop_scale
+        && rec.hop_scale != Some(a)
+    {
+        mismatch(
+            "--hop-scale",
+            a.to_string(),
+            rec.hop_scale
+                .map_or_else(|| "none (no hops)".to_string(), |b| b.to_string()),
+        )?;
+    }
+    Ok((true, hop_settings(rec.hops, rec.hop_scale)?))
+}
+
 /// The record of the settings a search of `optimize` ran with (`solution.json`'s
 /// `search_settings`), which [`check_same_run`] compares across shards.
 pub(super) fn search_settings(settings: &ProblemSettings, policy: &VerifyPolicy) -> SearchSettings {
@@ -408,5 +444,7 @@ pub(super) fn search_settings(settings: &ProblemSettings, policy: &VerifyPolicy)
         curvature_extrapolation: settings.curvature_extrapolation,
         extrapolate_every_barrier: settings.extrapolate_every_barrier,
         proximal_weight: settings.proximal_weight,
+        hops: Some(policy.hops.as_ref().map_or(0, |h| h.budget)),
+        hop_scale: policy.hops.as_ref().map(|h| h.scale),
     }
 }
