@@ -252,6 +252,36 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
             "good.json has",
         ],
     );
+    // Collocation data cut short would index out of themselves in the warm start: refused,
+    // naming the file and the field, before any solve (no panic).
+    for (edit, needle) in [("x", "state rows"), ("elements", "`elements[1]`")] {
+        let mut short = internals.clone();
+        let rows = short["raw"][0][edit].as_array_mut().unwrap();
+        if edit == "x" {
+            rows.pop();
+        } else {
+            rows.remove(1);
+        }
+        assert_error(
+            &warm(&short),
+            1,
+            &["solution-internals.json", "raw[0]", needle],
+        );
+    }
+    // A field missing from the internals is blamed on them, not on the solution file.
+    let mut missing = internals.clone();
+    missing["raw"][0].as_object_mut().unwrap().remove("a");
+    let o = warm(&missing);
+    assert_error(
+        &o,
+        1,
+        &["solution-internals.json", "`raw`", "missing field `a`"],
+    );
+    assert!(
+        stderr(&o).contains("solution-internals.json: `raw`: missing field"),
+        "{}",
+        stderr(&o)
+    );
     let mut other = internals;
     other["problem"] = serde_json::json!("roll");
     assert_error(&warm(&other), 1, &["solution-internals.json", "\"roll\""]);

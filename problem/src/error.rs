@@ -104,6 +104,15 @@ pub enum ProblemError {
         /// Phases of the problem.
         expected: usize,
     },
+    /// A warm start whose collocation data of one phase do not fit together or do not fit the
+    /// problem's phase (other state, algebraic or control widths).
+    #[error("warm start: raw[{phase}]: {reason}")]
+    WarmStartShape {
+        /// The phase.
+        phase: usize,
+        /// What does not fit.
+        reason: String,
+    },
     /// An arm problem (`reach-arm`) cannot be posed on the scene as configured.
     #[error("scene `{scene}`: {message}")]
     Arm {

@@ -385,6 +385,10 @@ fn check_internals_belong(
             ),
         ));
     }
+    for (i, raw) in sol.raw.iter().enumerate() {
+        raw.check_shape()
+            .map_err(|m| io_err(ipath, format!("raw[{i}]: {m}")))?;
+    }
     if sol.raw.len() != sol.modes.len() {
         return Err(io_err(
             ipath,
@@ -438,10 +442,30 @@ fn from_texts(
     }
     let (text, ipath) = internals(&v)?;
     let internals: Value = serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
+    check_internal_fields(&internals, &ipath)?;
     let sol = from_documents(&v, &internals, path)?;
     check_phases(&sol, path)?;
     check_internals_belong(&sol, &internals, path, &ipath)?;
     Ok(sol)
+}
+
+/// Errors naming the internals file `ipath` and the field unless its collocation data,
+/// parameters and NLP point read as their types: the two documents are read as one, and a
+/// field missing from the internals would otherwise be blamed on `solution.json`.
+fn check_internal_fields(internals: &Value, ipath: &Path) -> Result<(), PipelineError> {
+    fn check<T: serde::de::DeserializeOwned>(
+        internals: &Value,
+        key: &str,
+        ipath: &Path,
+    ) -> Result<(), PipelineError> {
+        let v = internals.get(key).cloned().unwrap_or(Value::Null);
+        serde_json::from_value::<T>(v)
+            .map(drop)
+            .map_err(|e| io_err(ipath, format!("`{key}`: {e}")))
+    }
+    check::<Vec<bf_optim::ocp::PhaseTrajectory>>(internals, "raw", ipath)?;
+    check::<Vec<f64>>(internals, "params", ipath)?;
+    check::<Option<bf_optim::ipm::WarmStart>>(internals, "nlp_warm", ipath)
 }
 
 /// Errors naming `path` unless the solution's own phase lists agree: at least one phase, and

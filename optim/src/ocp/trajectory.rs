@@ -33,6 +33,84 @@ pub struct PhaseTrajectory {
 }
 
 impl PhaseTrajectory {
+    /// Checks that the phase's collocation data fit together, so that interpolating them
+    /// (a warm start, the dense samples) cannot index out of them: one state row per state
+    /// point, each node with its weight, state point, algebraic and control row, rows of one
+    /// width each, τ increasing within [−1, 1], and elements of at least two state points
+    /// that start at the first, share their end points and end at the last (or, for
+    /// Legendre–Gauss, at the one before the phase end). The error says what does not fit,
+    /// naming the field.
+    pub fn check_shape(&self) -> Result<(), String> {
+        let n = self.state_tau.len();
+        if n < 2 || self.x.len() != n {
+            return Err(format!(
+                "{} state points (`state_tau`) and {} state rows (`x`): a phase needs at \
+                 least two, one row each",
+                n,
+                self.x.len()
+            ));
+        }
+        let m = self.node_tau.len();
+        for (what, len) in [
+            ("node_state", self.node_state.len()),
+            ("node_weight", self.node_weight.len()),
+            ("a", self.a.len()),
+            ("u", self.u.len()),
+        ] {
+            if len != m {
+                return Err(format!(
+                    "{m} nodes (`node_tau`) but {len} entries of `{what}`"
+                ));
+            }
+        }
+        for (what, rows) in [("x", &self.x), ("a", &self.a), ("u", &self.u)] {
+            if let Some(first) = rows.first()
+                && let Some(k) = rows.iter().position(|r| r.len() != first.len())
+            {
+                return Err(format!(
+                    "`{what}[{k}]` has {} values, `{what}[0]` {}",
+                    rows[k].len(),
+                    first.len()
+                ));
+            }
+        }
+        if let Some(k) = (1..n).find(|&k| {
+            !(self.state_tau[k] > self.state_tau[k - 1] && self.state_tau[k].abs() <= 1.0)
+        }) {
+            return Err(format!(
+                "`state_tau` is not increasing within [-1, 1] at entry {k}"
+            ));
+        }
+        if let Some(k) = self.node_state.iter().position(|&p| p >= n) {
+            return Err(format!(
+                "`node_state[{k}]` = {} is not one of the {n} state points",
+                self.node_state[k]
+            ));
+        }
+        if self.elements.is_empty() {
+            return Err("no `elements`: every mesh has at least one".to_string());
+        }
+        let mut next = 0;
+        for (e, &(a, b)) in self.elements.iter().enumerate() {
+            if a != next || b < a + 2 || b > n {
+                return Err(format!(
+                    "`elements[{e}]` = ({a}, {b}) does not continue the elements before it \
+                     (it should start at state point {next} and hold at least two of the \
+                     {n})"
+                ));
+            }
+            next = b - 1;
+        }
+        if !(next + 1 == n || next + 2 == n) {
+            return Err(format!(
+                "the elements end at state point {}, the phase at {}",
+                next,
+                n - 1
+            ));
+        }
+        Ok(())
+    }
+
     /// Time of normalised τ.
     pub fn time(&self, tau: f64) -> f64 {
         self.t0 + 0.5 * (tau + 1.0) * self.duration
@@ -311,6 +389,55 @@ mod tests {
                     }
                     assert_eq!(got.len(), 3);
                 }
+            }
+        }
+    }
+
+    /// The phases of every scheme pass [`PhaseTrajectory::check_shape`], and each kind of edit
+    /// that would make their interpolation index out of the data is named.
+    #[test]
+    fn check_shape_accepts_every_scheme_and_names_what_does_not_fit() {
+        let meshes = [
+            Mesh::new(Scheme::Radau { elements: 3 }, 10).unwrap(),
+            Mesh::new(Scheme::Lg, 12).unwrap(),
+        ];
+        for mesh in &meshes {
+            let tr = phase(mesh);
+            assert_eq!(tr.check_shape(), Ok(()));
+            type Edit = fn(&mut PhaseTrajectory);
+            let edits: [(Edit, &str); 6] = [
+                (
+                    |t| {
+                        t.x.pop();
+                    },
+                    "state rows",
+                ),
+                (
+                    |t| {
+                        t.u.pop();
+                    },
+                    "entries of `u`",
+                ),
+                (
+                    |t| {
+                        t.x[1].pop();
+                    },
+                    "`x[1]` has 2 values",
+                ),
+                (|t| t.node_state[0] = 999, "`node_state[0]` = 999"),
+                (
+                    |t| {
+                        t.elements.remove(0);
+                    },
+                    "elements",
+                ),
+                (|t| t.state_tau.swap(1, 2), "`state_tau` is not increasing"),
+            ];
+            for (edit, needle) in edits {
+                let mut bad = tr.clone();
+                edit(&mut bad);
+                let e = bad.check_shape().unwrap_err();
+                assert!(e.contains(needle), "{e} lacks {needle:?}");
             }
         }
     }

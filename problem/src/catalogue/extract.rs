@@ -152,6 +152,22 @@ pub fn warm_initial_point(p: &mut BuiltProblem, prev: &OcpSolution) -> Result<()
             expected: p.nlp.phases.len(),
         });
     }
+    for (phase, (l, raw)) in p.nlp.phases.iter().zip(&prev.raw).enumerate() {
+        let shape = |reason: String| ProblemError::WarmStartShape { phase, reason };
+        raw.check_shape().map_err(shape)?;
+        for (what, rows, n) in [
+            ("x", &raw.x, l.nx),
+            ("a", &raw.a, l.na),
+            ("u", &raw.u, l.nu),
+        ] {
+            if let Some(r) = rows.first().filter(|r| r.len() != n) {
+                return Err(shape(format!(
+                    "its rows of `{what}` have {} values, the problem's phase {n}",
+                    r.len()
+                )));
+            }
+        }
+    }
     let mut x = p.nlp.initial().to_vec();
     for (l, raw) in p.nlp.phases.iter().zip(&prev.raw) {
         let put = |x: &mut Vec<f64>, idx: &dyn Fn(usize) -> usize, v: &[f64], n: usize| {
