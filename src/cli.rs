@@ -182,6 +182,17 @@ pub struct ChainArgs {
 }
 
 impl ChainArgs {
+    /// A usage error if `--base` or `--tip` is given without the scene option `option` they
+    /// apply to (`scene` is that option's value).
+    pub fn check_given_with(&self, scene: Option<&Path>, option: &str) -> anyhow::Result<()> {
+        if scene.is_none() && (self.base.is_some() || self.tip.is_some()) {
+            return Err(crate::errors::usage(format!(
+                "--base/--tip choose the chain of a URDF scene; they need {option}"
+            )));
+        }
+        Ok(())
+    }
+
     /// As the scene loader's chain choice.
     pub fn choice(&self) -> bf_codegen::spec::ChainChoice {
         bf_codegen::spec::ChainChoice {
@@ -334,17 +345,17 @@ pub struct SimulateArgs {
     /// Integrator: dopri5 or rk4.
     #[arg(long, default_value = "dopri5")]
     pub integrator: String,
-    /// Relative tolerance of the adaptive integrator.
-    #[arg(long, default_value_t = 1e-8, allow_hyphen_values = true, value_parser = positive)]
+    /// Relative tolerance of the adaptive integrator (dopri5).
+    #[arg(long, default_value_t = DEFAULT_RTOL, allow_hyphen_values = true, value_parser = positive)]
     pub rtol: f64,
-    /// Absolute tolerance of the adaptive integrator [default: 1e-2 · rtol].
+    /// Absolute tolerance of the adaptive integrator (dopri5) [default: 1e-2 · rtol].
     #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub atol: Option<f64>,
     /// Fixed step of rk4 (s).
-    #[arg(long, default_value_t = 1e-3, allow_hyphen_values = true, value_parser = positive)]
+    #[arg(long, default_value_t = DEFAULT_STEP, allow_hyphen_values = true, value_parser = positive)]
     pub step: f64,
     /// Largest step of dopri5 (s).
-    #[arg(long, default_value_t = 0.05, allow_hyphen_values = true, value_parser = positive)]
+    #[arg(long, default_value_t = DEFAULT_H_MAX, allow_hyphen_values = true, value_parser = positive)]
     pub h_max: f64,
     /// Step limit (accepted + rejected); the run stops with an error when it is reached, and a
     /// run that needs more steps (--t-end over --h-max or --step) is refused up front.
@@ -730,6 +741,13 @@ pub fn scene_files(scene: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+/// `simulate --rtol` when not given.
+pub const DEFAULT_RTOL: f64 = 1e-8;
+/// `simulate --step` (rk4) when not given (s).
+pub const DEFAULT_STEP: f64 = 1e-3;
+/// `simulate --h-max` (dopri5) when not given (s).
+pub const DEFAULT_H_MAX: f64 = 0.05;
 
 /// The end time of a `simulate` run when neither `--t-end` nor an arm's solution gives one (s).
 pub const DEFAULT_T_END: f64 = 10.0;

@@ -247,6 +247,9 @@ fn cli_bad_inputs_give_clear_errors() {
     sol["schema_version"] = serde_json::json!(99);
     std::fs::write(&newer, sol.to_string()).unwrap();
     let newer = newer.to_str().unwrap();
+    let mode_file = dir.join("mode.json");
+    std::fs::write(&mode_file, r#"{"q": [0.1, 0.5, 0.5], "mode": "flying"}"#).unwrap();
+    let mode_file = mode_file.to_str().unwrap();
     // (options, mentions, exit status: 2 for a wrong command line, 1 for a file or a state
     // that does not fit).
     let cases: Vec<(Vec<&str>, Vec<&str>, i32)> = vec![
@@ -276,6 +279,31 @@ fn cli_bad_inputs_give_clear_errors() {
             2,
         ),
         (vec!["--mode0", "roll"], vec!["--mode0", "unknown mode"], 2),
+        (
+            vec!["--step", "0.01"],
+            vec!["--step does not apply to --integrator dopri5"],
+            2,
+        ),
+        (
+            vec!["--integrator", "rk4", "--h-max", "0.01"],
+            vec!["--h-max does not apply to --integrator rk4"],
+            2,
+        ),
+        (
+            vec!["--integrator", "rk4", "--atol", "1e-9"],
+            vec!["--atol does not apply"],
+            2,
+        ),
+        (
+            vec!["--scene", "scenes/puma560.toml", "--impact-law", "stick"],
+            vec!["--impact-law", "no ball"],
+            2,
+        ),
+        (
+            vec!["--scene", "scenes/puma560.toml", "--no-projection"],
+            vec!["--no-projection", "no ball"],
+            2,
+        ),
         (vec!["--rtol", "0"], vec!["--rtol"], 2),
         (
             vec!["--pd", "0,0,0", "--pd-gains", "1,2,3"],
@@ -294,6 +322,11 @@ fn cli_bad_inputs_give_clear_errors() {
             2,
         ),
         (vec!["--init", "missing.json"], vec!["missing.json"], 1),
+        (
+            vec!["--init", mode_file],
+            vec!["mode.json", "`mode`", "unknown mode `flying`"],
+            1,
+        ),
         (
             vec!["--init", newer],
             vec!["newer.json", "schema_version 99"],

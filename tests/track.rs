@@ -652,6 +652,27 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
         "{err}"
     );
     assert!(!dir.join("huge").exists());
+    // Every period's error is relative to the plan's mean ω: a zero or altered `mean_omega`
+    // is refused against the mean of the plan's own dense ω, not reported as an infinite or
+    // wrong error.
+    doc["nodes"]["q1"][0] = serde_json::json!(0.1);
+    let stated = doc["mean_omega"].clone();
+    for (scale, needle) in [(0.0, "mean_omega"), (1.5, "not the mean of its own dense")] {
+        for k in ["omega_x", "omega_y", "omega_z"] {
+            doc["mean_omega"][k] = serde_json::json!(stated[k].as_f64().unwrap() * scale);
+        }
+        std::fs::write(&sol_path, doc.to_string()).unwrap();
+        let r = cli::run(&[
+            "track",
+            sol_path.to_str().unwrap(),
+            "--out",
+            dir.join("omega").to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(1), "{err}");
+        assert!(err.contains(needle), "{err}");
+        assert!(!dir.join("omega").exists());
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -5,8 +5,8 @@
 //! that takes a 3-joint finger from a URDF and adds a ball simulates the finger striking the
 //! ball (an impact on the surface that reverses the approach velocity); `periodic-qc` on the
 //! paper's finger taken from a URDF reaches the optima of the DH paper scene; its plan is
-//! tracked and replayed from the solution file alone; and a branched URDF without `--tip` is
-//! refused naming the file, line and link.
+//! tracked and replayed from the solution file alone; a branched URDF without `--tip` is
+//! refused naming the file, line and link; and `--base`/`--tip` without a URDF are usage errors.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -316,5 +316,73 @@ fn a_plan_of_a_urdf_finger_is_tracked_and_replayed_from_its_file_alone() {
         "--out",
         sim.to_str().unwrap(),
     ]));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `--base`/`--tip` choose a URDF's chain: given for a scene that is not a URDF and names
+/// none, or without the scene option they apply to, they are a wrong command line (exit
+/// status 2), never silently ignored.
+#[test]
+fn base_and_tip_without_a_urdf_are_usage_errors() {
+    let dir = tmpdir("urdf-chain-args");
+    let out = dir.join("never");
+    let out_s = out.to_str().unwrap();
+    let optimum = "data/optima/periodic-qc/solution.json";
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &[
+                "eval",
+                "scenes/paper.toml",
+                "--q",
+                "0,0,0",
+                "--qd",
+                "0,0,0",
+                "--tip",
+                "x",
+            ],
+            "names none",
+        ),
+        (&["bench", "scenes/paper.toml", "--base", "x"], "names none"),
+        (&["simulate", "--tip", "x", "--out", out_s], "need --scene"),
+        (
+            &[
+                "optimize",
+                "--problem",
+                "reach",
+                "--base",
+                "x",
+                "--out",
+                out_s,
+            ],
+            "need --scene",
+        ),
+        (
+            &["track", optimum, "--base", "x", "--out", out_s],
+            "need --plant-scene",
+        ),
+        (
+            &[
+                "track",
+                optimum,
+                "--plant-scene",
+                "scenes/paper.toml",
+                "--tip",
+                "x",
+                "--out",
+                out_s,
+            ],
+            "names none",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = run(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("--base/--tip") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!out.exists());
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -165,6 +165,8 @@ fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -
 
 /// Runs `track`.
 pub fn run(args: &TrackArgs) -> Result<()> {
+    args.chain
+        .check_given_with(args.plant_scene.as_deref(), "--plant-scene")?;
     let controller = ControllerKind::parse(&args.controller)
         .map_err(|e| crate::errors::usage(format!("--controller: {e}")))?;
     let law = super::simulate::parse_impact_law(&args.impact_law)?;
@@ -190,6 +192,7 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     }
     let sol = OcpSolution::read_json(&args.solution)
         .with_context(|| format!("reading the solution {}", args.solution.display()))?;
+    check_mean_omega(&sol).with_context(|| args.solution.display().to_string())?;
     if args.robustness {
         return robustness(args, controller, &sol);
     }
@@ -203,6 +206,45 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         run_n(args, controller, law, &sol),
         bail!("the solution's scene `{name}` has {joints} joints")
     )
+}
+
+/// Relative agreement asked of a plan's `mean_omega` with the mean of its own dense ω: the
+/// trapezoid over the 100 samples per phase differs from the collocation quadrature by about
+/// 1e-4 relatively on the stored optima.
+const MEAN_OMEGA_RTOL: f64 = 1e-2;
+
+/// Errors unless the plan's stated mean ω, against which every period's error is measured,
+/// is that of its own trajectory (the mean of its dense ω) and not zero: an edited or zero
+/// `mean_omega` would make every error relative to a wrong or vanishing target.
+fn check_mean_omega(sol: &OcpSolution) -> Result<()> {
+    let d = &sol.dense;
+    let mut integral = [0.0; 3];
+    for k in 1..d.t.len().min(d.omega.len()) {
+        let dt = d.t[k] - d.t[k - 1];
+        for (j, v) in integral.iter_mut().enumerate() {
+            let (a, b) = (d.omega[k - 1].get(j), d.omega[k].get(j));
+            *v += dt * 0.5 * (a.copied().unwrap_or(f64::NAN) + b.copied().unwrap_or(f64::NAN));
+        }
+    }
+    let span = d.t.last().zip(d.t.first()).map_or(0.0, |(b, a)| b - a);
+    let own = integral.map(|v| v / span);
+    let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let diff = norm(std::array::from_fn(|j| sol.mean_omega[j] - own[j]));
+    if !(norm(own).is_finite() && norm(own) > 0.0) {
+        bail!(
+            "the plan's dense samples give no mean ball rotation ({own:?} rad/s): the tracking \
+             error of a period is relative to it"
+        );
+    }
+    if diff.is_nan() || diff > MEAN_OMEGA_RTOL * norm(own) {
+        bail!(
+            "its `mean_omega` {:?} rad/s is not the mean of its own dense ω, {own:?} rad/s \
+             (differs by {:.1e} relatively): the file was altered",
+            sol.mean_omega,
+            diff / norm(own)
+        );
+    }
+    Ok(())
 }
 
 /// `track` of the optimum `sol` of a finger with `N` joints.

@@ -715,6 +715,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     if let Some(OptimizeCommand::Merge(m)) = &args.command {
         return merge(m);
     }
+    args.chain
+        .check_given_with(args.scene.as_deref(), "--scene")?;
     if problem_arg(args) == REACH_ARM {
         return run_reach_arm(args, opts);
     }

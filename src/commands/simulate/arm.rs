@@ -41,6 +41,8 @@ pub(super) fn run_arm(
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
         ("--mode0", args.mode0 != "free"),
+        ("--impact-law", args.impact_law != "newton"),
+        ("--no-projection", args.no_projection),
     ] {
         if given {
             bail_usage!(

@@ -122,6 +122,23 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
         "rk4" => Method::Rk4 { h: args.step },
         other => bail_usage!("--integrator: unknown integrator `{other}`; expected dopri5 or rk4"),
     };
+    // An option of the other integrator would be ignored: refused instead. Given at its
+    // default value it changes nothing and passes.
+    let foreign: &[(&str, bool)] = match method {
+        Method::Dopri5 => &[("--step", args.step != crate::cli::DEFAULT_STEP)],
+        Method::Rk4 { .. } => &[
+            ("--rtol", args.rtol != crate::cli::DEFAULT_RTOL),
+            ("--atol", args.atol.is_some()),
+            ("--h-max", args.h_max != crate::cli::DEFAULT_H_MAX),
+        ],
+    };
+    if let Some((opt, _)) = foreign.iter().find(|(_, given)| *given) {
+        bail_usage!(
+            "{opt} does not apply to --integrator {}: --step sets rk4's fixed step, --rtol, \
+             --atol and --h-max the adaptive dopri5",
+            args.integrator
+        );
+    }
     let pos = |name: &str, v: f64| {
         if v.is_finite() && v > 0.0 {
             Ok(())
@@ -251,6 +268,9 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                 bail!("{}: `{name}` must be finite", path.display());
             }
         }
+        if let Some(m) = &mode {
+            parse_mode(m).with_context(|| format!("--init {}: `mode`", path.display()))?;
+        }
     }
     if let Some(s) = &args.q0 {
         q.copy_from_slice(&parse_list("--q0", s, Some(N))?);
@@ -328,6 +348,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 
 /// Run `simulate` with `opts`.
 pub fn run_with(args: &SimulateArgs, opts: RunSettings) -> Result<()> {
+    args.chain
+        .check_given_with(args.scene.as_deref(), "--scene")?;
     if let Some(path) = &args.init {
         crate::commands::optimize::check_solution_values("--init", path)?;
     }
