@@ -128,9 +128,75 @@ fn identifier(name: &str) -> String {
     s
 }
 
+/// A chain written into a scene text: errors that the scene's validation finds on its lines
+/// (from `first_line` on) are about the URDF, so [`Imported::relocate`] names the URDF link.
+struct Imported {
+    chain: UrdfChain,
+    /// The URDF file as named in errors.
+    file: String,
+    /// The first line of the scene text that the chain was written into.
+    first_line: usize,
+}
+
+impl Imported {
+    /// `e` located at the URDF element it is about, if the scene's validation found it on the
+    /// chain's generated lines: `links[i]…` at model link i's `<link>`, anything else at the
+    /// robot. Errors on the user's own lines are returned as they are.
+    fn relocate(&self, e: SpecError) -> SpecError {
+        let SpecError::At {
+            line,
+            path,
+            message,
+            ..
+        } = &e
+        else {
+            return e;
+        };
+        if *line < self.first_line {
+            return e;
+        }
+        let link = path
+            .strip_prefix("links[")
+            .and_then(|r| r.split_once(']'))
+            .and_then(|(i, rest)| Some((i.parse::<usize>().ok()?, rest)));
+        let (line, column, element, attribute, message) = match link {
+            Some((i, rest)) if i < self.chain.link_positions.len() => {
+                let (line, column) = self.chain.link_positions[i];
+                (
+                    line,
+                    column,
+                    "link",
+                    rest.trim_start_matches('.').to_string(),
+                    format!(
+                        "link moved by joint {:?} ({path} of the imported chain): {message}",
+                        self.chain.joint_names[i]
+                    ),
+                )
+            }
+            _ => (1, 1, "robot", path.clone(), message.clone()),
+        };
+        SpecError::Urdf(Box::new(crate::error::UrdfError {
+            file: self.file.clone(),
+            line,
+            column,
+            element: element.to_string(),
+            attribute,
+            message,
+        }))
+    }
+}
+
 /// The scene text of a URDF file alone: its chain, gravity [`URDF_GRAVITY`], the kernels
 /// [`URDF_KERNELS`], no ball.
 pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<String, SpecError> {
+    urdf_scene(urdf, file, choice).map(|(text, _)| text)
+}
+
+fn urdf_scene(
+    urdf: &str,
+    file: &str,
+    choice: &ChainChoice,
+) -> Result<(String, Imported), SpecError> {
     let chain = read_chain(
         urdf,
         file,
@@ -149,7 +215,12 @@ pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<S
     let kernels: Vec<String> = URDF_KERNELS.iter().map(|k| format!("{k:?}")).collect();
     let _ = writeln!(out, "kernels = [{}]", kernels.join(", "));
     out.push_str(&chain_toml(&chain));
-    Ok(out)
+    let imported = Imported {
+        chain,
+        file: file.to_string(),
+        first_line: 1,
+    };
+    Ok((out, imported))
 }
 
 /// A TOML scene text with its `urdf`, `base_link` and `tip_link` keys resolved: the keys become
@@ -164,9 +235,19 @@ pub fn expand_toml(
     dir: &Path,
     choice: &ChainChoice,
 ) -> Result<String, SpecError> {
+    expand(text, origin, dir, choice).map(|(text, _)| text)
+}
+
+/// [`expand_toml`], with the chain it wrote in (`None` for a text without `urdf`).
+fn expand(
+    text: &str,
+    origin: &str,
+    dir: &Path,
+    choice: &ChainChoice,
+) -> Result<(String, Option<Imported>), SpecError> {
     let Ok(tree) = toml::de::DeTable::parse(text) else {
         // Syntax errors are reported, located, by the scene parser.
-        return Ok(text.to_string());
+        return Ok((text.to_string(), None));
     };
     let ix = crate::error::SourceIndex::new(text, origin, Some(tree.get_ref()));
     let table = tree.get_ref();
@@ -219,7 +300,7 @@ pub fn expand_toml(
                     .to_string(),
             });
         }
-        return Ok(text.to_string());
+        return Ok((text.to_string(), None));
     };
     for (key, what) in [("links", "its links"), ("tool", "its tool (the tip link)")] {
         if table.iter().any(|(k, _)| k.get_ref().as_ref() == key) {
@@ -235,8 +316,14 @@ pub fn expand_toml(
     };
     let path = dir.join(&urdf);
     let file = path.display().to_string();
+    let urdf_text = std::fs::read_to_string(&path).map_err(|e| {
+        ix.invalid(
+            "urdf",
+            format!("cannot read the URDF file {file} (relative to the scene file): {e}"),
+        )
+    })?;
     let chain = read_chain(
-        &read(&path)?,
+        &urdf_text,
         &file,
         chain_choice.base.as_deref(),
         chain_choice.tip.as_deref(),
@@ -265,13 +352,19 @@ pub fn expand_toml(
         last = end;
     }
     out.push_str(&text[last..]);
+    let first_line = out.lines().count() + 1;
     let _ = writeln!(
         out,
         "\n# Imported from {file:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
         chain.robot, chain.base_link, chain.tip_link, chain.joint_names
     );
     out.push_str(&chain_toml(&chain));
-    Ok(out)
+    let imported = Imported {
+        chain,
+        file,
+        first_line,
+    };
+    Ok((out, Some(imported)))
 }
 
 /// The URDF file a TOML scene text names in its `urdf` key, resolved against `dir` (the scene
@@ -300,13 +393,17 @@ impl Scene {
         let path = path.as_ref();
         let file = path.display().to_string();
         let raw = read(path)?;
-        let text = if is_urdf(path) {
-            urdf_scene_text(&raw, &file, choice)?
+        let (text, imported) = if is_urdf(path) {
+            let (text, imported) = urdf_scene(&raw, &file, choice)?;
+            (text, Some(imported))
         } else {
             let dir = path.parent().unwrap_or(Path::new(""));
-            expand_toml(&raw, &file, dir, choice)?
+            expand(&raw, &file, dir, choice)?
         };
-        let scene = Scene::from_toml_str(&text, &file)?;
+        let scene = Scene::from_toml_str(&text, &file).map_err(|e| match &imported {
+            Some(im) => im.relocate(e),
+            None => e,
+        })?;
         Ok((scene, text))
     }
 }

@@ -47,6 +47,9 @@ pub struct UrdfChain {
     pub tool: Option<TransformSpec>,
     /// The names of the moving joints, in chain order.
     pub joint_names: Vec<String>,
+    /// Where each model link's `<link>` element (the moving joint's child) is in the URDF:
+    /// (line, column), 1-based, so that errors found on the generated links can name it.
+    pub link_positions: Vec<(usize, usize)>,
 }
 
 #[derive(Debug, Clone)]
@@ -608,6 +611,7 @@ pub fn read_chain(
         lumped[*k] = Some(lump(lumped[*k].take(), moved));
     }
     let mut out = Vec::with_capacity(moving.len());
+    let mut link_positions = Vec::with_capacity(moving.len());
     // Placement of joint k: the chain's origins from the previous moving joint's child.
     let mut pose = (I3, [0.0; 3]);
     let mut k = 0;
@@ -697,6 +701,8 @@ pub fn read_chain(
             q_max,
             tau_max,
         });
+        let p = doc.text_pos_at(c.pos);
+        link_positions.push((p.row as usize, p.col as usize));
         pose = (I3, [0.0; 3]);
         k += 1;
     }
@@ -711,5 +717,6 @@ pub fn read_chain(
         links: out,
         tool,
         joint_names: moving.iter().map(|&j| joints[j].name.clone()).collect(),
+        link_positions,
     })
 }

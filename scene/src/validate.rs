@@ -235,15 +235,20 @@ fn check_link_form(
     l: &crate::LinkSpec,
     placement: bool,
 ) -> Result<(), SpecError> {
-    if l.is_placement() != placement {
-        let (this, first) = if placement {
-            ("a DH row", "placement form (axis)")
-        } else {
-            ("in placement form (axis)", "a DH row")
-        };
+    if placement && !l.is_placement() {
+        return Err(ix.missing(
+            &format!("{p}.axis"),
+            "missing field `axis`: the first link is in placement form (axis), and one form \
+             serves all links"
+                .to_string(),
+        ));
+    }
+    if !placement && l.is_placement() {
         return Err(ix.invalid(
             p,
-            format!("link is {this} but the first link is {first}: one form for all links"),
+            "link is in placement form (axis) but the first link is a DH row: one form for all \
+             links"
+                .to_string(),
         ));
     }
     if let Some(axis) = &l.axis {

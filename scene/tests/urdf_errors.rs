@@ -372,6 +372,55 @@ fn a_scene_keeps_a_urdfs_nonphysical_inertia_by_naming_its_source() {
     );
 }
 
+/// A value the scene's validation refuses on an imported link (here the relative mass floor,
+/// which the URDF reader does not check) is reported at the URDF's `<link>` element, on the
+/// URDF's own line, for a `.urdf` given directly and for a scene that names it: not on a line
+/// of the scene text generated from it.
+#[test]
+fn validation_errors_on_imported_links_name_the_urdf_link() {
+    let dir = tmpdir("relocated");
+    // Blank lines first, so that the URDF's lines differ from the generated text's.
+    let text = format!(
+        "{}{}",
+        "\n".repeat(40),
+        arm(J2).replacen(r#"<mass value="1"/>"#, r#"<mass value="1e300"/>"#, 1)
+    );
+    let l2_line = text
+        .lines()
+        .position(|l| l.contains(r#"<link name="l2">"#))
+        .unwrap()
+        + 1;
+    let urdf = dir.join("arm.urdf");
+    std::fs::write(&urdf, &text).unwrap();
+    let scene = dir.join("arm.toml");
+    std::fs::write(
+        &scene,
+        "name = \"arm2\"\nurdf = \"arm.urdf\"\nkernels = [\"mass_matrix\"]\n",
+    )
+    .unwrap();
+    for path in [&urdf, &scene] {
+        let err = Scene::load(path).unwrap_err();
+        let SpecError::Urdf(u) = &err else {
+            panic!("not located in the URDF: {err}");
+        };
+        assert!(u.file.ends_with("arm.urdf"), "{err}");
+        assert_eq!(u.line, l2_line, "{err}");
+        assert_eq!((u.element.as_str(), u.attribute.as_str()), ("link", "mass"));
+        assert!(
+            u.message.contains("joint \"j2\"") && u.message.contains("below 1e-12"),
+            "{err}"
+        );
+    }
+    // The user's own lines keep their location.
+    std::fs::write(
+        &scene,
+        "name = \"arm2\"\nurdf = \"arm.urdf\"\nkernels = [\"mass_matrix\"]\n[ball]\nradius = -1.0\ncenter = [0.0, 0.0, 0.0]\nmass = 1.0\n",
+    )
+    .unwrap();
+    let err = Scene::load(&scene).unwrap_err();
+    assert_eq!(err.path(), Some("ball.radius"), "{err}");
+}
+
 #[test]
 fn placement_links_in_toml_are_checked() {
     let base = "name = \"p\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\naxis = [0.0, 0.0, 1.0]\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
@@ -390,7 +439,21 @@ fn placement_links_in_toml_are_checked() {
         "{base}\n[[links]]\na = 1.0\nalpha = 0.0\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n"
     );
     let err = Scene::from_toml_str(&mixed, "p.toml").unwrap_err();
+    assert_eq!(err.path(), Some("links[1].axis"), "{err}");
+    assert!(err.to_string().contains("missing field `axis`"), "{err}");
+    // A placement link after DH rows.
+    let dh_first = format!(
+        "name = \"m\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\na = 1.0\nalpha = 0.0\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n{}",
+        &base[base.find("[[links]]").unwrap()..]
+    );
+    let err = Scene::from_toml_str(&dh_first, "m.toml").unwrap_err();
     assert!(err.to_string().contains("one form for all links"), "{err}");
+    // A placement link with an origin but no axis is missing its axis, not "a DH row".
+    let origin_only = format!(
+        "{base}\n[[links]]\norigin = {{ translation = [1.0, 0.0, 0.0] }}\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n"
+    );
+    let err = Scene::from_toml_str(&origin_only, "p.toml").unwrap_err();
+    assert_eq!(err.path(), Some("links[1].axis"), "{err}");
     // A DH row still needs a and alpha.
     let dh = "name = \"d\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\nalpha = 0.0\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
     let err = Scene::from_toml_str(dh, "d.toml").unwrap_err();
