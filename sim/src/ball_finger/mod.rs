@@ -106,9 +106,22 @@ fn contact_link_length<K: Kernels<N>, const N: usize>(
     turn[N - 1] = pi;
     let probe = VecN::<N>::from_fn(|i, _| PROBE_Q.get(i).copied().unwrap_or(0.0));
     let mut lengths = Vec::new();
-    for q in [VecN::<N>::zeros(), probe] {
-        let (a0, s0) = alpha(q)?;
-        let (a1, s1) = alpha(q + turn)?;
+    // Where the ball's centre lies on the contact link's line the contact normal is undefined
+    // and the kernel's geometry not finite: such a configuration is passed over for another.
+    let mut singular = None;
+    let mut failed = 0;
+    for q in [VecN::<N>::zeros(), probe, -probe, 0.5 * probe, 1.7 * probe] {
+        if lengths.len() == 2 {
+            break;
+        }
+        let (a0, s0, a1, s1) = match (alpha(q), alpha(q + turn)) {
+            (Ok((a0, s0)), Ok((a1, s1))) => (a0, s0, a1, s1),
+            (Err(e), _) | (_, Err(e)) => {
+                singular = Some(e);
+                failed += 1;
+                continue;
+            }
+        };
         let l = -0.5 * (a0 + a1);
         // The side with α < −ℓ has sat(α) = −ℓ for the exact saturation.
         let (a_low, s_low) = if a0 < a1 { (a0, s0) } else { (a1, s1) };
@@ -118,6 +131,16 @@ fn contact_link_length<K: Kernels<N>, const N: usize>(
             return Err(contact_link_error(l, "sat(alpha) does not saturate at -l"));
         }
         lengths.push(l);
+    }
+    if lengths.len() < 2 {
+        let why = singular.map_or_else(String::new, |e| format!(" ({e})"));
+        return Err(contact_link_error(
+            f64::NAN,
+            &format!(
+                "the contact kernel is not finite at {failed} of the 5 configurations \
+                 tried{why}"
+            ),
+        ));
     }
     let l = lengths[0];
     if !(l.is_finite() && l > 0.0) || (lengths[1] - l).abs() > 1e-9 * (1.0 + l) {
