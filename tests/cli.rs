@@ -270,6 +270,18 @@ fn bad_cli_input_gives_clear_errors() {
         &run(&["eval", "scenes/paper.toml", "--q", "0,0", "--qd", "0,0,0"]),
         &["--q", "expected 3"],
     );
+    // Beyond ±2²⁰ rad the kernels' sine and cosine are NaN: the angle is refused by name.
+    assert_usage_error(
+        &run(&[
+            "eval",
+            "scenes/paper.toml",
+            "--q",
+            "0,2e6,0",
+            "--qd",
+            "0,0,0",
+        ]),
+        &["--q", "q2 = 2e6 rad", "2²⁰"],
+    );
     assert_usage_error(
         &run(&[
             "eval",

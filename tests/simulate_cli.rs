@@ -266,6 +266,11 @@ fn cli_bad_inputs_give_clear_errors() {
         (vec!["--torques", two], vec!["3 joints"], 1),
         (vec!["--q0", "0.1,NaN,0.5"], vec!["--q0", "finite"], 2),
         (vec!["--q0", "0.1,0.5"], vec!["--q0", "expected 3"], 2),
+        (
+            vec!["--q0", "1100000,0,0"],
+            vec!["--q0", "q1 = 1.1e6 rad", "2²⁰"],
+            2,
+        ),
         (vec!["--t-end", "0"], vec!["--t-end", "> 0"], 2),
         (vec!["--t-end", "-1"], vec!["--t-end"], 2),
         (

@@ -109,6 +109,10 @@ pub(crate) fn sin_cos_lane(xi: f64) -> (f64, f64, bool) {
     )
 }
 
+/// Largest |x| (rad) at which the kernels' sine and cosine are defined, 2²⁰: beyond it they
+/// are NaN (the reduction by π/2 would lose its accuracy), so joint angles must lie within it.
+pub const ANGLE_RANGE: f64 = 1048576.0;
+
 /// The lanes of [`sin_cos_n`] outside the fast path (|x| > 2²⁰, next to a multiple of π/2,
 /// or not finite), recomputed by [`sin_cos_medium`].
 #[cold]

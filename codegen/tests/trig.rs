@@ -216,3 +216,21 @@ fn periodic_and_odd_even() {
         }
     }
 }
+
+/// `ANGLE_RANGE` is the kernels' range: the sine and cosine (one lane and four) are finite up
+/// to it and NaN just beyond, which the CLI's range check of joint angles relies on.
+#[test]
+fn the_angle_range_is_where_sine_and_cosine_end() {
+    let r = bf_codegen::trig::ANGLE_RANGE;
+    for x in [r, -r] {
+        let (s, c) = sin_cos(x);
+        assert!(s.is_finite() && c.is_finite(), "{x}");
+    }
+    let beyond = r * (1.0 + f64::EPSILON);
+    for x in [beyond, -beyond] {
+        let (s, c) = sin_cos(x);
+        assert!(s.is_nan() && c.is_nan(), "{x}");
+        let (s4, c4) = sin_cos_n([x, 0.5, x, 1.0]);
+        assert!(s4[0].is_nan() && c4[2].is_nan() && s4[1].is_finite(), "{x}");
+    }
+}

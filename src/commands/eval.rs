@@ -44,6 +44,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         }
     }
     let q = parse_list("--q", &args.q, Some(n))?;
+    super::check_angles("--q", &scene, &q)?;
     let qd = parse_list("--qd", &args.qd, Some(n))?;
     let omega = match &args.omega {
         Some(s) => parse_list("--omega", s, Some(3))?,

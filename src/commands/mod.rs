@@ -45,6 +45,24 @@ pub fn load_scene(
     Ok((scene, text))
 }
 
+/// A usage error naming `option` unless every revolute joint angle of `q` lies within
+/// ±[`bf_codegen::trig::ANGLE_RANGE`] rad, where the kernels' sine and cosine are defined
+/// (beyond it every kernel output would be NaN).
+pub fn check_angles(option: &str, scene: &bf_codegen::Scene, q: &[f64]) -> Result<()> {
+    let range = bf_codegen::trig::ANGLE_RANGE;
+    for (i, (l, &v)) in scene.links.iter().zip(q).enumerate() {
+        if l.joint == bf_codegen::spec::JointType::Revolute && v.abs() > range {
+            return Err(crate::errors::usage(format!(
+                "{option}: q{} = {} rad is beyond ±2²⁰ = ±{range} rad, where the kernels' sine \
+                 and cosine are not defined; give the angle modulo 2π",
+                i + 1,
+                crate::cli::shown(v)
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// Load a scene file (as [`load_scene`]) and set its runtime parameters from `--param
 /// name=value` options; the error names the option, the file and the valid names.
 pub fn load_scene_with_params(

@@ -387,6 +387,11 @@ fn run_contact<const N: usize>(
     check_limits(args, &set, args.t_end())?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state::<N>(args)?;
+    crate::commands::check_angles(
+        if args.q0.is_some() { "--q0" } else { "--init" },
+        scene,
+        x0.q.as_slice(),
+    )?;
     let inp = input(args, N)?;
     if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
         let m = max_torque(s);
