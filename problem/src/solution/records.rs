@@ -462,6 +462,45 @@ pub struct ExecutionCheck {
     pub robustness_failure: Option<String>,
 }
 
+impl ExecutionCheck {
+    /// One line: the nominal plant's error against its tolerance, the perturbed plants' where
+    /// they ran, and the verdict where it is not a pass.
+    pub fn summary(&self) -> String {
+        let mut out = format!(
+            "closed loop ({} controller, Newton's impact law): nominal plant max omega error \
+             {:.3} % over {} periods (tolerance {} %)",
+            self.controller,
+            100.0 * self.max_omega_error,
+            self.periods,
+            100.0 * self.tolerance,
+        );
+        // The perturbed plants run only after the nominal one passed. NaN: a plant gave no
+        // error from the 4th period (it could not be run, lost the ball or completed too few
+        // periods; `robustness_failure` says which).
+        if self.robustness_periods > 0 {
+            if self.robustness_error.is_finite() {
+                out += &format!(
+                    "; perturbed plants {:.3} % from the 4th of {} periods (tolerance {} %)",
+                    100.0 * self.robustness_error,
+                    self.robustness_periods,
+                    100.0 * self.robustness_tolerance,
+                );
+            } else {
+                out += &format!(
+                    "; perturbed plants: one gave no error from the 4th of {} periods",
+                    self.robustness_periods
+                );
+            }
+        }
+        if let Some(why) = &self.failure {
+            out += &format!(": FAILED, {why}");
+        } else if let Some(why) = &self.robustness_failure {
+            out += &format!(": executed; robustness target MISSED, {why}");
+        }
+        out
+    }
+}
+
 impl Verification {
     /// Whether every collocation element of every phase was re-integrated to its end.
     pub fn completed(&self) -> bool {
@@ -587,30 +626,7 @@ impl fmt::Display for Verification {
             self.max_defect, self.max_interval_defect, self.max_open_loop_defect
         )?;
         if let Some(e) = &self.execution {
-            write!(
-                f,
-                "\nclosed loop ({} controller, Newton's impact law): nominal plant max omega \
-                 error {:.3} % over {} periods (tolerance {} %)",
-                e.controller,
-                100.0 * e.max_omega_error,
-                e.periods,
-                100.0 * e.tolerance,
-            )?;
-            // The perturbed plants run only after the nominal one passed.
-            if e.robustness_periods > 0 {
-                write!(
-                    f,
-                    "; perturbed plants {:.3} % from the 4th of {} periods (tolerance {} %)",
-                    100.0 * e.robustness_error,
-                    e.robustness_periods,
-                    100.0 * e.robustness_tolerance,
-                )?;
-            }
-            if let Some(why) = &e.failure {
-                write!(f, ": FAILED, {why}")?;
-            } else if let Some(why) = &e.robustness_failure {
-                write!(f, ": executed; robustness target MISSED, {why}")?;
-            }
+            write!(f, "\n{}", e.summary())?;
         }
         if let Some(why) = &self.not_executed {
             write!(f, "\nclosed loop: NOT RUN, {why}")?;
@@ -772,6 +788,35 @@ impl SearchSettings {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A perturbed plant that gave no error (NaN) is said so, with the reason, never "NaN %".
+    #[test]
+    fn an_execution_summary_never_shows_nan() {
+        let mut e = ExecutionCheck {
+            controller: "hybrid".into(),
+            periods: 10,
+            max_omega_error: 0.004,
+            tolerance: 0.02,
+            robustness_periods: 10,
+            robustness_error: 0.03,
+            robustness_tolerance: 0.05,
+            failure: None,
+            robustness_failure: None,
+        };
+        let ok = e.summary();
+        assert!(
+            ok.contains("0.400 %") && ok.contains("perturbed plants 3.000 %"),
+            "{ok}"
+        );
+        e.robustness_error = f64::NAN;
+        e.robustness_failure = Some("the plant `heavy ball` lost the ball".into());
+        let missed = e.summary();
+        assert!(!missed.contains("NaN"), "{missed}");
+        assert!(
+            missed.contains("one gave no error") && missed.contains("`heavy ball` lost"),
+            "{missed}"
+        );
+    }
 
     /// The kept table keeps the summary of every solve and the kept chain's stages only, each
     /// marked `*`; the whole table has every stage.
