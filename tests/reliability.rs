@@ -581,6 +581,28 @@ fn non_finite_eval_results_are_errors() {
         "1,0,0",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // A URDF joint origin that overflows is among the extreme values the error names (the
+    // placement origins are baked into the kernels, not named constants).
+    let dir = tmpdir("origin");
+    let urdf = std::fs::read_to_string(root().join("testkit/tests/urdf/planar2.urdf")).unwrap();
+    let huge = urdf.replacen(
+        r#"<origin xyz="1 0 0"/>"#,
+        r#"<origin xyz="1e308 0 0"/>"#,
+        1,
+    );
+    assert_ne!(huge, urdf);
+    let path = dir.join("huge.urdf");
+    std::fs::write(&path, huge).unwrap();
+    let o = run(&[
+        "eval",
+        path.to_str().unwrap(),
+        "--q",
+        "0.3,0.2",
+        "--qd",
+        "0,0",
+    ]);
+    assert_error(&o, 1, &["not finite", "link2.origin.x = 1e308"]);
+    std::fs::remove_dir_all(&dir).unwrap();
 }
 
 /// `--param` values pass the scene file's checks: a negative ball radius or a zero link mass is

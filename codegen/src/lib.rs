@@ -173,11 +173,16 @@ pub fn generate_split(
 /// The scene constants of largest and smallest nonzero magnitude (at most three of each), as
 /// `key = value`: the likely sources when folding them overflows.
 fn extreme_constants(scene: &Scene) -> ExtremeValues {
-    let mut c: Vec<(String, f64)> = scene
-        .constants()
-        .into_iter()
-        .filter(|c| c.1 != 0.0)
-        .collect();
+    let mut all = scene.constants();
+    // Placement origins are baked into the code, not named constants, but overflow as well.
+    for (i, l) in scene.links.iter().enumerate() {
+        if let Some(o) = &l.origin {
+            for (c, x) in ["x", "y", "z"].iter().zip(o.translation()) {
+                all.push((format!("link{}.origin.{c}", i + 1), x));
+            }
+        }
+    }
+    let mut c: Vec<(String, f64)> = all.into_iter().filter(|c| c.1 != 0.0).collect();
     c.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()).then(a.0.cmp(&b.0)));
     let mut shown: Vec<(String, f64)> = c.iter().take(3).cloned().collect();
     for (k, v) in c.iter().rev().take(3) {
