@@ -149,14 +149,34 @@ impl Reader<'_> {
         Ok(out)
     }
 
-    fn child<'n>(&self, n: roxmltree::Node<'n, 'n>, tag: &str) -> Option<roxmltree::Node<'n, 'n>> {
-        n.children()
-            .find(|c| c.is_element() && c.tag_name().name() == tag)
+    /// The child element `tag` of `n`, if any; an error naming the second one if `n` has two
+    /// (the URDF allows one: silently taking the first would drop what the author meant).
+    fn child<'n>(
+        &self,
+        n: roxmltree::Node<'n, 'n>,
+        tag: &str,
+    ) -> Result<Option<roxmltree::Node<'n, 'n>>, SpecError> {
+        let mut found = n
+            .children()
+            .filter(|c| c.is_element() && c.tag_name().name() == tag);
+        let first = found.next();
+        if let Some(second) = found.next() {
+            return Err(self.err(
+                second.range().start,
+                tag,
+                "",
+                format!(
+                    "<{}> has a second <{tag}>; the URDF allows one",
+                    n.tag_name().name()
+                ),
+            ));
+        }
+        Ok(first)
     }
 
     /// `<origin xyz rpy>` of `n` (identity when absent).
     fn origin(&self, n: roxmltree::Node) -> Result<(M3, V3), SpecError> {
-        let Some(o) = self.child(n, "origin") else {
+        let Some(o) = self.child(n, "origin")? else {
             return Ok((I3, [0.0; 3]));
         };
         let xyz = self.numbers::<3>(o, "xyz", Some([0.0; 3]))?;
@@ -166,11 +186,11 @@ impl Reader<'_> {
 
     fn link(&self, n: roxmltree::Node) -> Result<Link, SpecError> {
         let name = self.attr(n, "name")?.to_string();
-        let inertial = match self.child(n, "inertial") {
+        let inertial = match self.child(n, "inertial")? {
             None => None,
             Some(i) => {
                 let (r, c) = self.origin(i)?;
-                let m = self.child(i, "mass").ok_or_else(|| {
+                let m = self.child(i, "mass")?.ok_or_else(|| {
                     self.node_err(i, "mass", "<inertial> has no <mass> element".to_string())
                 })?;
                 let [mass] = self.numbers::<1>(m, "value", None)?;
@@ -181,7 +201,7 @@ impl Reader<'_> {
                         format!("mass must be > 0 (got {mass})"),
                     ));
                 }
-                let t = self.child(i, "inertia").ok_or_else(|| {
+                let t = self.child(i, "inertia")?.ok_or_else(|| {
                     self.node_err(
                         i,
                         "inertia",
@@ -240,7 +260,7 @@ impl Reader<'_> {
             }
         };
         let end = |tag: &str| -> Result<usize, SpecError> {
-            let e = self.child(n, tag).ok_or_else(|| {
+            let e = self.child(n, tag)?.ok_or_else(|| {
                 self.node_err(n, tag, format!("joint {name:?} has no <{tag}> element"))
             })?;
             let l = self.attr(e, "link")?;
@@ -251,7 +271,7 @@ impl Reader<'_> {
         let parent = end("parent")?;
         let child = end("child")?;
         let origin = self.origin(n)?;
-        let axis = match self.child(n, "axis") {
+        let axis = match self.child(n, "axis")? {
             None => [1.0, 0.0, 0.0],
             Some(a) => {
                 let v = self.numbers::<3>(a, "xyz", Some([1.0, 0.0, 0.0]))?;
@@ -266,7 +286,7 @@ impl Reader<'_> {
                 if norm < 1e-9 { v } else { v.map(|x| x / norm) }
             }
         };
-        let limit = match (kind, self.child(n, "limit")) {
+        let limit = match (kind, self.child(n, "limit")?) {
             (JointKind::Revolute | JointKind::Prismatic, Some(l)) => {
                 let [lo] = self.numbers::<1>(l, "lower", Some([0.0]))?;
                 let [hi] = self.numbers::<1>(l, "upper", Some([0.0]))?;

@@ -90,6 +90,28 @@ fn an_inertial_without_mass_and_a_bad_mass() {
     expect(&text, None, 4, "mass", "value", "mass must be > 0 (got -2)");
 }
 
+/// A second `<inertial>` of a link or `<axis>` of a joint is refused at its own line: taking
+/// the first silently would drop what the author meant (a duplicated `<inertial>` changed M).
+#[test]
+fn a_second_element_where_the_urdf_allows_one_is_refused() {
+    let inertial = r#"<inertial><origin xyz="0.5 0 0"/><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>"#;
+    let text = arm(J2).replacen(inertial, &format!("{inertial}\n    {inertial}"), 1);
+    assert_ne!(text, arm(J2));
+    expect(
+        &text,
+        None,
+        8,
+        "inertial",
+        "",
+        "<link> has a second <inertial>",
+    );
+    let text = arm(&J2.replace(
+        r#"<axis xyz="0 0 1"/>"#,
+        "<axis xyz=\"0 0 1\"/>\n<axis xyz=\"1 0 0\"/>",
+    ));
+    expect(&text, None, 11, "axis", "", "<joint> has a second <axis>");
+}
+
 #[test]
 fn unknown_and_unsupported_joint_types() {
     expect(
