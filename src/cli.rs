@@ -273,8 +273,8 @@ pub struct SimulateArgs {
     /// Scene file. A compiled scene (same content as one of scenes/*.toml at build time) runs
     /// on the compiled kernels, any other file on kernels interpreted from the same expression
     /// graphs (slower, same numbers). Default: with `--init` a solution.json, the scene the
-    /// solution records (an arm solution stores its scene file's text; a ball problem's
-    /// solution names a compiled scene); otherwise scenes/paper.toml. A `.urdf` file is an arm
+    /// solution records (its `scene_toml`, the text of the scene file it was solved on);
+    /// otherwise scenes/paper.toml. A `.urdf` file is an arm
     /// (its chain chosen by `--base`/`--tip`).
     #[arg(long)]
     pub scene: Option<PathBuf>,
@@ -433,12 +433,12 @@ pub struct TrackArgs {
     #[arg(long, value_parser = positive_whole)]
     pub replan_iterations: Option<usize>,
     /// Run the robustness table instead of one plant: the controller on the solution's own
-    /// scene perturbed (ball mass ×1.1; μ_s, μ_k ×0.8; socket damping ×1.5; every link mass
-    /// ×1.05; all four) with Newton's impact law, and on the nominal scene with the
+    /// scene perturbed (ball mass ×1.1; μ_s, μ_k ×0.8; socket damping ×1.5; every link's mass
+    /// and inertia ×1.05; all four) with Newton's impact law, and on the nominal scene with the
     /// max-dissipation law. Writes robustness.md and robustness.json to --out and exits
     /// non-zero if a plant misses the target (ω error ≤ 5 % in every period from the 4th on,
-    /// contact in every period). A scene without the value a perturbation edits (the paper
-    /// finger's) gives that row an error.
+    /// contact in every period). A scene without a value that a perturbation edits (no
+    /// `[friction]`, say) gives that row an error.
     #[arg(long, conflicts_with_all = ["plant_scene", "impact_law"])]
     pub robustness: bool,
 }
@@ -491,8 +491,8 @@ pub struct OptimizeArgs {
     /// `runtime_parameters`, e.g. `ball.radius=0.8` for scenes/human.toml).
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     pub param: Vec<String>,
-    /// Collocation points per phase (at most 200 with `--scheme lg`; with radau, points times
-    /// elements at most 5000).
+    /// Collocation points per phase (at most 200 with `--scheme lg`; with radau, split over
+    /// `--elements`, at most 64 per element and 5000 per phase).
     #[arg(long, default_value_t = 30, allow_hyphen_values = true, value_parser = whole)]
     pub points: usize,
     /// Transcription: lg (Legendre–Gauss, as the paper) or radau (hp Legendre–Gauss–Radau).
@@ -585,8 +585,8 @@ pub struct OptimizeArgs {
     pub shard: Option<String>,
     /// Lower bound of the stick phase's duration in the periodic problems (s). From cold
     /// starts most QC optima sit on it (short "taps" that spin the ball mostly by the impact
-    /// impulse); the default search's best has an interior stick phase of 26 ms. A larger
-    /// value (e.g. 0.1) asks for a stick phase of real duration.
+    /// impulse), and so do the default search's best optima of the sticking law (docs/optima.md).
+    /// A larger value (e.g. 0.1) asks for a stick phase of real duration.
     #[arg(long, value_name = "SECS", default_value_t = 0.01, allow_hyphen_values = true, value_parser = positive)]
     pub min_stick: f64,
     /// Impact law of the plan: `newton` (eq. 39, the law of the paper's Sect. 6.2 simulations

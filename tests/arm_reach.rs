@@ -566,6 +566,29 @@ fn torque_hull_errors_name_the_option() {
             vec!["--problem", "periodic-qc", "--torque-hull", "2"],
             "--torque-hull: only `--problem reach-arm` takes it",
         ),
+        // The ball's options have nothing to act on, and no search hops.
+        (
+            vec![
+                "--problem",
+                "reach-arm",
+                "--scene",
+                "tests/fixtures/planar2_arm.toml",
+                "--impact-law",
+                "newton",
+            ],
+            "--impact-law: --problem reach-arm moves an arm without a ball",
+        ),
+        (
+            vec![
+                "--problem",
+                "reach-arm",
+                "--scene",
+                "tests/fixtures/planar2_arm.toml",
+                "--hops",
+                "4",
+            ],
+            "--hops: not available with --problem reach-arm",
+        ),
     ] {
         let mut all = vec!["optimize"];
         all.extend(args);

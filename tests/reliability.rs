@@ -445,7 +445,21 @@ fn resource_limits_are_checked() {
     let dir = tmpdir("limits");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    let cases: [(&[&str], &[&str]); 4] = [
+    let cases: [(&[&str], &[&str]); 5] = [
+        // 65 points in one Radau element: more than the mesh's 64 (the solve used to fail
+        // after its start with exit status 1).
+        (
+            &[
+                "optimize",
+                "--problem",
+                "reach",
+                "--points",
+                "130",
+                "--elements",
+                "2",
+            ],
+            &["--points 130 --elements 2", "64 per element"],
+        ),
         (
             &["simulate", "--output-dt", "1e-7", "--out", out_s],
             &["--output-dt", "--max-samples 1000000"],

@@ -20,6 +20,10 @@ use super::problem::Scheme;
 use crate::OptimError;
 use crate::error::MeshDefect;
 
+/// Largest degree (collocation points) of one hp-Radau element: a refinement raises degrees
+/// up to it before it splits elements, and a mesh with a larger degree is refused.
+pub const MAX_RADAU_DEGREE: usize = 64;
+
 /// An hp-Radau mesh of one phase.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MeshSpec {
@@ -92,7 +96,9 @@ impl MeshSpec {
             return bad(MeshDefect::NotIncreasing { element });
         }
         let mut degrees = self.degrees.iter().enumerate();
-        if let Some((element, &degree)) = degrees.find(|&(_, &d)| !(2..=64).contains(&d)) {
+        if let Some((element, &degree)) =
+            degrees.find(|&(_, &d)| !(2..=MAX_RADAU_DEGREE).contains(&d))
+        {
             return bad(MeshDefect::Degree { element, degree });
         }
         Ok(())

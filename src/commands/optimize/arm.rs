@@ -62,9 +62,22 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             args.extrapolate_every_barrier,
         ),
         ("--proximal-weight", args.proximal_weight.is_some()),
+        ("--hops", args.hops.is_some()),
+        ("--hop-scale", args.hop_scale.is_some()),
     ] {
         if given {
             bail_usage!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
+        }
+    }
+    // The ball's options: an arm's motion has no contact to plan.
+    for (opt, given) in [
+        ("--impact-law", args.impact_law.is_some()),
+        ("--torque-margin", args.torque_margin.is_some()),
+        ("--approach-clearance", args.approach_clearance.is_some()),
+        ("--epsilon", args.epsilon.is_some()),
+    ] {
+        if given {
+            bail_usage!("{opt}: --problem {REACH_ARM} moves an arm without a ball");
         }
     }
     if args.scheme != "radau" {

@@ -10,9 +10,10 @@
 //! phase with one polynomial: the barycentric weights of its nodes (products of node
 //! distances) leave the range of f64 at about 900 points, which ends as a singular
 //! differentiation matrix, and its dense differentiation blocks make the KKT system grow as
-//! N² well before that; so `--points` is at most [`MAX_LG_POINTS`] with `--scheme lg` (and per
-//! Radau element). With Radau the points of a phase (points per element times elements) are
-//! at most [`MAX_RADAU_POINTS`], which bounds the memory of the NLP.
+//! N² well before that; so `--points` is at most [`MAX_LG_POINTS`] with `--scheme lg`. With
+//! Radau the points of a phase (points per element times elements) are at most
+//! [`MAX_RADAU_POINTS`], which bounds the memory of the NLP, and an element holds at most
+//! `bf_optim::ocp::mesh::MAX_RADAU_DEGREE` of them.
 
 use crate::cli::Inputs as _;
 use crate::cli::{OptimizeArgs, OptimizeCommand};
@@ -88,11 +89,12 @@ pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
         Scheme::Radau { elements } => {
             let per_element = points.div_ceil(elements).max(2);
             let total = per_element.saturating_mul(elements);
-            if per_element > MAX_LG_POINTS || total > MAX_RADAU_POINTS {
+            let max_degree = bf_optim::ocp::mesh::MAX_RADAU_DEGREE;
+            if per_element > max_degree || total > MAX_RADAU_POINTS {
                 bail_usage!(
                     "--points {points} --elements {elements}: {elements} Radau elements of \
                      {per_element} points are {total} points per phase; at most \
-                     {MAX_RADAU_POINTS} per phase (and {MAX_LG_POINTS} per element) are supported"
+                     {MAX_RADAU_POINTS} per phase (and {max_degree} per element) are supported"
                 );
             }
             Ok(())
