@@ -166,6 +166,25 @@ fn an_unknown_impact_law_is_refused_and_old_files_read_as_sticking_plans() {
         err.contains("--impact-law") && err.contains("elastic") && err.contains("newton"),
         "{err}"
     );
+    // Newton's law asked for a finger too short for its plan is a wrong command line.
+    let r = cli::run(&[
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--scene",
+        "tests/fixtures/finger2.toml",
+        "--impact-law",
+        "newton",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--impact-law newton") && err.contains("has 2"),
+        "{err}"
+    );
+    assert!(!out.exists());
     // A solution written before `impact_law` was recorded: every such plan used eq. 40.
     let p = build(
         "periodic-qc".parse().unwrap(),

@@ -336,6 +336,12 @@ impl PlanFor {
             None if problem.is_periodic() && joints >= 3 => PlannedImpact::Newton,
             None => PlannedImpact::Stick,
         };
+        if law.is_some() && impact_law == PlannedImpact::Newton && joints < 3 {
+            bail_usage!(
+                "--impact-law newton: the Newton impact plan needs a finger of 3 joints or more \
+                 (J_c of rank 3); this one has {joints}"
+            );
+        }
         let executable = problem.is_periodic() && impact_law == PlannedImpact::Newton;
         let torque_margin = match torque_margin {
             Some(m) if !(0.0..1.0).contains(&m) => {
