@@ -657,7 +657,7 @@ fn track_writes_tracking_json_that_trajectory_json_reproduces() {
     // wrong error.
     doc["nodes"]["q1"][0] = serde_json::json!(0.1);
     let stated = doc["mean_omega"].clone();
-    for (scale, needle) in [(0.0, "mean_omega"), (1.5, "not the mean of its own dense")] {
+    for (scale, needle) in [(0.0, "mean_omega"), (1.5, "not the mean of its own ω")] {
         for k in ["omega_x", "omega_y", "omega_z"] {
             doc["mean_omega"][k] = serde_json::json!(stated[k].as_f64().unwrap() * scale);
         }

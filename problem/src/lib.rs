@@ -45,7 +45,7 @@ pub use node::{CostKind, PhaseMode, Physics, StickLevel};
 #[cfg(feature = "catalogue")]
 pub use catalogue::{
     BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, Problem, ProblemSettings, QC_OMEGA_REF,
-    StartGuess, build, check_settings, solution_at, warm_initial_point,
+    StartGuess, build, check_settings, mean_omega, solution_at, warm_initial_point,
 };
 #[cfg(feature = "catalogue")]
 pub use error::ProblemError;

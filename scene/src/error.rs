@@ -19,6 +19,9 @@ pub enum SpecErrorKind {
     WrongType,
     /// A well-typed value that is physically or logically invalid (NaN, m ≤ 0, ...).
     Invalid,
+    /// A chain choice (`--base`/`--tip` of the command line) for a scene that names no URDF
+    /// to choose it from: a mistake in the command line rather than in the file.
+    ChainChoice,
 }
 
 /// Error from loading or validating a scene. Display format:

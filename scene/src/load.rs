@@ -291,12 +291,13 @@ fn expand(
         }
         if choice.base.is_some() || choice.tip.is_some() {
             return Err(SpecError::At {
-                kind: SpecErrorKind::Invalid,
+                kind: SpecErrorKind::ChainChoice,
                 file: origin.to_string(),
                 line: 1,
                 column: 1,
                 path: "urdf".to_string(),
-                message: "--base/--tip choose a chain of a URDF; this scene has no `urdf`"
+                message: "--base/--tip choose the chain of a URDF; this scene is not a URDF \
+                          and names none (no `urdf` key)"
                     .to_string(),
             });
         }

@@ -24,21 +24,14 @@ pub fn load_scene(
     path: &std::path::Path,
     chain: &crate::cli::ChainArgs,
 ) -> Result<(bf_codegen::Scene, String)> {
-    let is_urdf = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-    if (chain.base.is_some() || chain.tip.is_some())
-        && !is_urdf
-        && let Ok(text) = std::fs::read_to_string(path)
-        && bf_codegen::spec::urdf_path(&text, std::path::Path::new("")).is_none()
-    {
-        return Err(crate::errors::usage(format!(
-            "--base/--tip choose the chain of a URDF; {} is not a URDF and names none (no \
-             `urdf` key)",
-            path.display()
-        )));
-    }
-    let (scene, text) = bf_codegen::Scene::load_with_text(path, &chain.choice())?;
+    let (scene, text) = bf_codegen::Scene::load_with_text(path, &chain.choice()).map_err(|e| {
+        // A chain choice the scene cannot take is a wrong command line (exit status 2).
+        if e.kind() == Some(bf_codegen::spec::SpecErrorKind::ChainChoice) {
+            crate::errors::usage(e.to_string())
+        } else {
+            e.into()
+        }
+    })?;
     for w in scene.warnings() {
         eprintln!("warning: {}: {w}", path.display());
     }

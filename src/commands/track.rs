@@ -215,38 +215,25 @@ pub fn run(args: &TrackArgs) -> Result<()> {
     )
 }
 
-/// Relative agreement asked of a plan's `mean_omega` with the mean of its own dense ω: the
-/// trapezoid over the 100 samples per phase differs from the collocation quadrature by about
-/// 1e-4 relatively on the stored optima.
-const MEAN_OMEGA_RTOL: f64 = 1e-2;
-
 /// Errors unless the plan's stated mean ω, against which every period's error is measured,
-/// is that of its own trajectory (the mean of its dense ω) and not zero: an edited or zero
-/// `mean_omega` would make every error relative to a wrong or vanishing target.
+/// is that of its own trajectory ([`bf_problem::mean_omega`] of its collocation data, the
+/// definition it was written with, so equal to the bit but for an edit) and not zero: an
+/// edited or zero `mean_omega` would make every error relative to a wrong or vanishing target.
 fn check_mean_omega(sol: &OcpSolution) -> Result<()> {
-    let d = &sol.dense;
-    let mut integral = [0.0; 3];
-    for k in 1..d.t.len().min(d.omega.len()) {
-        let dt = d.t[k] - d.t[k - 1];
-        for (j, v) in integral.iter_mut().enumerate() {
-            let (a, b) = (d.omega[k - 1].get(j), d.omega[k].get(j));
-            *v += dt * 0.5 * (a.copied().unwrap_or(f64::NAN) + b.copied().unwrap_or(f64::NAN));
-        }
-    }
-    let span = d.t.last().zip(d.t.first()).map_or(0.0, |(b, a)| b - a);
-    let own = integral.map(|v| v / span);
+    let nq = sol.dense.q.first().map_or(0, Vec::len);
+    let own = bf_problem::mean_omega(&sol.raw, nq);
     let norm = |v: [f64; 3]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    let diff = norm(std::array::from_fn(|j| sol.mean_omega[j] - own[j]));
     if !(norm(own).is_finite() && norm(own) > 0.0) {
         bail!(
-            "the plan's dense samples give no mean ball rotation ({own:?} rad/s): the tracking \
-             error of a period is relative to it"
+            "the plan's collocation data give no mean ball rotation ({own:?} rad/s): the \
+             tracking error of a period is relative to it"
         );
     }
-    if diff.is_nan() || diff > MEAN_OMEGA_RTOL * norm(own) {
+    let diff = norm(std::array::from_fn(|j| sol.mean_omega[j] - own[j]));
+    if diff.is_nan() || diff > 1e-9 * norm(own) {
         bail!(
-            "its `mean_omega` {:?} rad/s is not the mean of its own dense ω, {own:?} rad/s \
-             (differs by {:.1e} relatively): the file was altered",
+            "its `mean_omega` {:?} rad/s is not the mean of its own ω, {own:?} rad/s (differs \
+             by {:.1e} relatively): the file was altered",
             sol.mean_omega,
             diff / norm(own)
         );

@@ -61,6 +61,28 @@ fn samples(p: &BuiltProblem, diag: &Diagnostics, traj: &[PhaseTrajectory], dense
     s
 }
 
+/// The period's mean ball angular velocity ω̄ = (1/T) ∫ ω dt over the phases `traj` of a
+/// finger with `nq` joints (ω the states 2nq … 2nq + 2), by each phase's collocation
+/// quadrature: the `mean_omega` of [`solution_at`], which `track` measures every period
+/// against. NaN where the data lack those states (an edited file).
+pub fn mean_omega(traj: &[PhaseTrajectory], nq: usize) -> [f64; 3] {
+    let period: f64 = traj.iter().map(|t| t.duration).sum();
+    let mut mean = [0.0; 3];
+    for tr in traj {
+        for (k, &sp) in tr.node_state.iter().enumerate() {
+            let w = tr.node_weight.get(k).copied().unwrap_or(f64::NAN);
+            for (i, m) in mean.iter_mut().enumerate() {
+                let omega = tr.x.get(sp).and_then(|r| r.get(2 * nq + i));
+                *m += 0.5 * tr.duration * w * omega.copied().unwrap_or(f64::NAN);
+            }
+        }
+    }
+    if period > 0.0 {
+        mean.iter_mut().for_each(|v| *v /= period);
+    }
+    mean
+}
+
 /// Builds the [`OcpSolution`] of `p` at the NLP point `x`.
 pub fn solution_at(
     p: &BuiltProblem,
@@ -71,17 +93,7 @@ pub fn solution_at(
     let traj = extract(&p.nlp, x);
     let nq = p.physics.nq;
     let period: f64 = traj.iter().map(|t| t.duration).sum();
-    let mut mean = [0.0; 3];
-    for tr in &traj {
-        for (k, &sp) in tr.node_state.iter().enumerate() {
-            for i in 0..3 {
-                mean[i] += 0.5 * tr.duration * tr.node_weight[k] * tr.x[sp][2 * nq + i];
-            }
-        }
-    }
-    if period > 0.0 {
-        mean.iter_mut().for_each(|v| *v /= period);
-    }
+    let mean = mean_omega(&traj, nq);
     let c0 = p.nlp.c0;
     let np = p.ocp.params.len();
     let (viol, _) = p.nlp.max_violation(x);

@@ -64,7 +64,7 @@ pub use crate::id::Problem;
 use crate::node::{PhaseMode, Physics, StickLevel};
 use crate::solution::OcpSolution;
 use archetypes::Archetype;
-pub use extract::{node_kernel_source, solution_at, warm_initial_point};
+pub use extract::{mean_omega, node_kernel_source, solution_at, warm_initial_point};
 pub use guess::{GuessConfigurations, Q_DEEP, Q_GUESS, StartGuess, guess_configurations};
 
 impl Problem {
