@@ -201,7 +201,7 @@ impl OutputDir {
             .to_string_lossy()
             .into_owned();
         check_target(target, spec)?;
-        check_inputs(target, spec, inputs)?;
+        refuse_inputs(target, spec.option, inputs)?;
         let parent = parent_of(target);
         fs::create_dir_all(&parent).map_err(|e| {
             OutputError::io(&format!("{opt}: cannot create the directory"), &parent, &e)
@@ -320,21 +320,27 @@ impl Drop for OutputDir {
     }
 }
 
-/// Refuses a target that holds one of `inputs` (or is one): replacing it would delete them.
-fn check_inputs(target: &Path, spec: &DirSpec<'_>, inputs: &[PathBuf]) -> Result<(), OutputError> {
-    let Ok(target) = fs::canonicalize(target) else {
-        // No target yet: nothing of it is replaced.
+/// Refuses an output `target` named by `option` (a directory that [`OutputDir`] replaces as a
+/// whole, or a file that [`write_atomic`] replaces) that is one of `inputs` or holds one:
+/// writing it would delete what the run reads. Paths are compared after resolving links and
+/// relative parts; a target that does not exist yet replaces nothing.
+pub fn refuse_inputs(target: &Path, option: &str, inputs: &[PathBuf]) -> Result<(), OutputError> {
+    let Ok(canonical_target) = fs::canonicalize(target) else {
         return Ok(());
     };
     for input in inputs {
         if let Ok(canonical) = fs::canonicalize(input)
-            && canonical.starts_with(&target)
+            && canonical.starts_with(&canonical_target)
         {
+            let (relation, kind) = if canonical_target.is_dir() {
+                ("holds", "directory")
+            } else {
+                ("is", "file")
+            };
             return Err(OutputError::invalid(format!(
-                "{} {}: holds {}, an input of this run; the output directory is replaced as a \
-                 whole, so give another directory",
-                spec.option,
-                target.display(),
+                "{option} {}: {relation} {}, an input of this run; the output {kind} is \
+                 replaced as a whole, so give another {kind}",
+                canonical_target.display(),
                 input.display()
             )));
         }

@@ -24,7 +24,7 @@ pub fn generate_module(
 /// Run `generate`.
 pub fn run(args: &GenerateArgs) -> Result<()> {
     if let Some(path) = &args.output {
-        check_not_an_input(path, &crate::cli::scene_files(&args.scene))?;
+        bf_output::refuse_inputs(path, "-o", &crate::cli::scene_files(&args.scene))?;
     }
     let (scene, text) = super::load_scene(&args.scene, &args.chain)?;
     let opts = bf_codegen::EmitSettings {
@@ -50,25 +50,6 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
             if args.report {
                 eprintln!("{}", generated.report);
             }
-        }
-    }
-    Ok(())
-}
-
-/// Refuses an output file `path` that is one of the run's `inputs` (the scene, its URDF):
-/// writing the code would replace the description it was generated from.
-fn check_not_an_input(path: &std::path::Path, inputs: &[std::path::PathBuf]) -> Result<()> {
-    let Ok(target) = std::fs::canonicalize(path) else {
-        // No such file yet: nothing of it is replaced.
-        return Ok(());
-    };
-    for input in inputs {
-        if std::fs::canonicalize(input).is_ok_and(|c| c == target) {
-            anyhow::bail!(
-                "-o {}: is {}, an input of this run; give another file",
-                path.display(),
-                input.display()
-            );
         }
     }
     Ok(())
