@@ -8,7 +8,7 @@
 mod common;
 
 use bf_codegen::Scene;
-use bf_codegen::robot::SymbolicRobot;
+use bf_codegen::robot::{CHRISTOFFEL_CANDIDATE_MAX_JOINTS, SymbolicRobot};
 use common::*;
 use rand::Rng;
 
@@ -172,6 +172,51 @@ fn mass_matrix_kernel_is_the_cheaper_form_and_equals_the_jacobian_form() {
             let st = State::random(&m, &mut rng);
             let e = rel_err(&ev(&m, &cheap, &st), &ev(&m, &jac, &st), 0.0);
             assert!(e < 1e-12, "{name}: kernel M vs Jacobian M: {e:e}");
+        }
+    }
+}
+
+#[test]
+fn the_christoffel_candidate_already_loses_where_it_stops_being_built() {
+    // `cqd_g_cheapest` builds the Christoffel path of C q̇ + g only up to
+    // CHRISTOFFEL_CANDIDATE_MAX_JOINTS joints, because its graph grows as n⁴. That is safe only
+    // if the path already loses clearly there: at the cutoff, on every scene with that many
+    // joints or more and on random chains of 4 joints up to the cutoff, it costs more than the
+    // Newton–Euler pass (at the cutoff at least twice as much), with M's entries shared as in
+    // the `mass_cqd_g` kernel.
+    let max = CHRISTOFFEL_CANDIDATE_MAX_JOINTS;
+    let mut cases: Vec<(String, Scene)> = scenes()
+        .into_iter()
+        .filter(|(_, s)| s.links.len() >= 4)
+        .collect();
+    for n in 4..=max {
+        cases.push((format!("chain{n}"), chain(n, "mass_matrix")));
+    }
+    for (name, s) in cases {
+        let m = SymbolicRobot::new(&s).unwrap();
+        for crba in [false, true] {
+            let mut m = m.clone();
+            let mm = if crba {
+                m.mass_matrix_crba()
+            } else {
+                m.mass_matrix()
+            };
+            let shared = flat2(&mm);
+            let rnea = m.cqd_g_rnea();
+            let c = m.coriolis_qd_christoffel();
+            let g = m.gravity();
+            let chr: Vec<_> = c.iter().zip(&g).map(|(&a, &b)| m.g.add(a, b)).collect();
+            let cost = |v: &[bf_codegen::graph::Id]| {
+                let mut all = shared.clone();
+                all.extend_from_slice(v);
+                m.g.cost(&all)
+            };
+            let (c_chr, c_rnea) = (cost(&chr), cost(&rnea));
+            let factor = if m.nq() >= max { 2 } else { 1 };
+            assert!(
+                c_chr > factor * c_rnea,
+                "{name} (CRBA {crba}): Christoffel {c_chr} against Newton–Euler {c_rnea}"
+            );
         }
     }
 }

@@ -12,6 +12,14 @@ use super::{Pose, SymbolicRobot};
 use crate::diff;
 use crate::graph::{Id, M3, V3};
 
+/// The most joints for which [`SymbolicRobot::cqd_g_cheapest`] builds the Christoffel path of
+/// C q̇ as a candidate. That graph grows as n⁴ (n³ symbols, each from n-term derivatives of
+/// M): a 45-joint chain took 2 GB and half a minute to build it, only to discard it. The
+/// Christoffel path wins at two and three joints; from four on the Newton–Euler pass is
+/// cheaper on every scene and random chain measured, by 2.5–3.7 times at six joints, and the
+/// ratio grows as n² (`codegen/tests/crba.rs` checks it on the scenes and random chains).
+pub const CHRISTOFFEL_CANDIDATE_MAX_JOINTS: usize = 6;
+
 impl SymbolicRobot {
     /// Mass matrix M(q), eq. 22a, from link-frame Jacobians.
     pub fn mass_matrix(&mut self) -> Vec<Vec<Id>> {
@@ -134,8 +142,12 @@ impl SymbolicRobot {
 
     /// C q̇ + g with the cheaper of the Newton–Euler and Christoffel paths, counting the
     /// operations shared with `with` (e.g. the entries of M computed in the same kernel).
+    /// Above [`CHRISTOFFEL_CANDIDATE_MAX_JOINTS`] joints only the Newton–Euler path is built.
     pub fn cqd_g_cheapest(&mut self, with: &[Id]) -> Vec<Id> {
         let rnea = self.cqd_g_rnea();
+        if self.nq() > CHRISTOFFEL_CANDIDATE_MAX_JOINTS {
+            return rnea;
+        }
         let c = self.coriolis_qd_christoffel();
         let g = self.gravity();
         let chr: Vec<Id> = c.iter().zip(&g).map(|(&a, &b)| self.g.add(a, b)).collect();

@@ -32,6 +32,7 @@ mod crba;
 mod dynamics;
 mod inverse;
 
+pub use dynamics::CHRISTOFFEL_CANDIDATE_MAX_JOINTS;
 pub use inverse::ForwardForm;
 
 use crate::diff;
