@@ -390,7 +390,7 @@ fn an_approach_clearance_keeps_the_approach_nodes_away_from_the_ball() {
 /// smoothed contact (eq. 58–59) but touches it by the exact one 0.11 s before its impact.
 /// `optimize` reports it unverified (exit 1), naming the touch; and the hybrid simulator, with
 /// the exact contact, replaying the plan's torques open loop strikes the ball there
-/// (within a tenth of the lead), not at the planned impact.
+/// (within a tenth of the lead), not at the planned impact, and loses it.
 #[test]
 fn a_plan_that_grazes_the_ball_is_not_verified_and_a_plant_strikes_it_there() {
     use ball_finger::pipeline::SolutionIo;
@@ -438,7 +438,13 @@ fn a_plan_that_grazes_the_ball_is_not_verified_and_a_plant_strikes_it_there() {
         "--out",
         replay.to_str().unwrap(),
     ]);
-    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    // The early strike is a touch that sends the finger off the ball, not the plan's contact
+    // phase, so the replay lost the ball (exit 1); it still writes its files.
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        !r.status.success() && stderr.contains("lost the ball"),
+        "{stderr}"
+    );
     let events: serde_json::Value =
         serde_json::from_slice(&std::fs::read(replay.join("events.json")).unwrap()).unwrap();
     let first_impact = events["events"]

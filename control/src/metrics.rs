@@ -10,8 +10,11 @@
 //! as a period once ended a run of six planned periods of 2.6 s at 0.56 s, "6 of 6 periods"
 //! (docs/decisions/0081-a-bounce-is-not-a-period.md). Per
 //! period: the mean ω̄_k = (1/T_k) ∫ ω dt (trapezoidal rule over the samples, the counterpart
-//! of the optimum's mean ω, eq. 61), its relative error ‖ω̄_k − ω̄*‖ / ‖ω̄*‖, whether the finger
-//! touched the ball, the time spent in Stick and in Slip, and the largest |τ_i| of its samples.
+//! of the optimum's mean ω, eq. 61), its relative error ‖ω̄_k − ω̄*‖ / ‖ω̄*‖, whether it has a
+//! contact phase (more than the impact's instant), the time spent in Stick and in Slip, and the largest
+//! |τ_i| of its samples. [`PeriodMetrics::contact_failure`] says whether a period executed the
+//! plan's contact phase: some time on the ball, and a length below [`MAX_PERIOD_RATIO`] times
+//! the plan's period (a longer one missed the ball).
 
 use bf_model::Mode;
 use serde::Serialize;
@@ -27,7 +30,10 @@ pub struct PeriodMetrics {
     pub mean_omega: [f64; 3],
     /// ‖ω̄_k − ω̄*‖ / ‖ω̄*‖.
     pub omega_error: f64,
-    /// Whether the finger was in contact at some sample of the period.
+    /// Whether the period has a contact phase: some time in Stick or Slip, or a contact after
+    /// the impact's instant (the finger bouncing on the ball, flights shorter than
+    /// [`MIN_FLIGHT`]). A period starts at an impact, so a touch alone (an impact that let go
+    /// at once and flew on) is no contact phase of the plan.
     pub contact: bool,
     /// Time in Stick (s).
     pub stick_time: f64,
@@ -42,6 +48,37 @@ pub struct PeriodMetrics {
 /// (the release and the approach) lasts at least 0.02 s; a flight of less than half of that is
 /// no flight of a plan but a bounce of the contact phase.
 pub const MIN_FLIGHT: f64 = 0.01;
+
+/// How much longer than the plan's period a run's period may last before it counts as a
+/// missed contact ([`PeriodMetrics::contact_failure`]). A period runs from impact to impact,
+/// so a finger that misses the ball once makes a period of about twice the plan's; a tracked
+/// period stays within a few per cent of it, and a perturbed plant's within some ten.
+pub const MAX_PERIOD_RATIO: f64 = 1.5;
+
+impl PeriodMetrics {
+    /// Why the period did not execute the plan's one contact phase, if it did not: the finger
+    /// only touched the ball ([`contact`](Self::contact) false), or the period lasted at least
+    /// [`MAX_PERIOD_RATIO`] times the plan's `period` (s), so the finger missed the ball and
+    /// found it again a period or more later.
+    pub fn contact_failure(&self, period: f64) -> Option<String> {
+        let len = self.end - self.start;
+        if !self.contact {
+            Some(format!(
+                "the finger only touched the ball at t = {:.4} s and flew on",
+                self.start
+            ))
+        } else if len >= MAX_PERIOD_RATIO * period || len.is_nan() {
+            Some(format!(
+                "the period from t = {:.4} s lasted {len:.4} s, {:.2} times the plan's \
+                 {period:.4} s: the finger missed the ball",
+                self.start,
+                len / period
+            ))
+        } else {
+            None
+        }
+    }
+}
 
 /// The period starts of a run, found sample by sample (module doc): the first sample if the run
 /// starts in contact, and every impact (a contact sample after a free one) whose flight since
@@ -103,13 +140,16 @@ pub fn period_metrics(
             max_abs_tau: 0.0,
         };
         let mut integral = [0.0; 3];
+        // Every contact sample of the period belongs to the contact phase that its impact
+        // starts: a contact after a flight of MIN_FLIGHT would have started the next period.
+        let mut last_contact = t[first];
         for k in first..=i {
             p.max_abs_tau = tau[k].iter().fold(p.max_abs_tau, |m, v| m.max(v.abs()));
-            if k < i && mode[k] != Mode::Free {
-                p.contact = true;
-            }
             if k == i {
                 break;
+            }
+            if mode[k] != Mode::Free {
+                last_contact = t[k];
             }
             let dt = t[k + 1] - t[k];
             match mode[k] {
@@ -121,6 +161,7 @@ pub fn period_metrics(
                 integral[j] += 0.5 * (omega[k][j] + omega[k + 1][j]) * dt;
             }
         }
+        p.contact = p.stick_time + p.slip_time > 0.0 || last_contact > p.start;
         let len = p.end - p.start;
         if len > 0.0 {
             p.mean_omega = integral.map(|v| v / len);

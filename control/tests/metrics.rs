@@ -1,7 +1,7 @@
 //! Period figures of a run (`period_metrics`): periods from impact to impact, a bounce not
 //! counted, on sampled runs whose mean ω is known in closed form.
 
-use bf_control::{MIN_FLIGHT, PeriodStarts, period_metrics};
+use bf_control::{MAX_PERIOD_RATIO, MIN_FLIGHT, PeriodStarts, period_metrics};
 use bf_model::Mode;
 
 /// A sampled run: times, plant modes, ball angular velocities and torques.
@@ -119,4 +119,82 @@ fn chattering_alone_completes_no_period() {
         .filter(|&(&x, &m)| s.starts(x, m))
         .count();
     assert_eq!(starts, 1);
+}
+
+#[test]
+fn a_period_that_misses_the_ball_or_only_touches_it_has_no_contact() {
+    // A plan of period 1 s with a 0.2 s contact phase. The finger misses the contact at
+    // 2.3 s, so the period from 1.3 s lasts 2 s; the others execute the plan.
+    let contact = [(0.3, 0.5), (1.3, 1.5), (3.3, 3.5), (4.3, 4.5)];
+    let (t, mode, omega, tau) = run(&contact, 1e-3, 4.6, (1.0, 0.0));
+    let periods = period_metrics(&t, &mode, &omega, &tau, [0.0, 0.0, 1.0]);
+    let ends: Vec<(f64, f64)> = periods.iter().map(|p| (p.start, p.end)).collect();
+    assert_eq!(ends, [(0.3, 1.3), (1.3, 3.3), (3.3, 4.3)]);
+    // Every period starts at an impact and stays on the ball for 0.2 s.
+    assert!(periods.iter().all(|p| p.contact));
+    let verdicts: Vec<bool> = periods
+        .iter()
+        .map(|p| p.contact_failure(1.0).is_some())
+        .collect();
+    assert_eq!(verdicts, [false, true, false]);
+    let why = periods[1].contact_failure(1.0).unwrap();
+    assert!(why.contains("2.00 times"), "{why}");
+    // A period just below MAX_PERIOD_RATIO plans passes; one at it does not.
+    let p = &periods[0];
+    assert!(p.contact_failure(1.0 / (MAX_PERIOD_RATIO - 1e-9)).is_none());
+    assert!(p.contact_failure(1.0 / MAX_PERIOD_RATIO).is_some());
+
+    // The impact at 1.3 s lets go at once: its sample in Stick is followed by a Free sample
+    // at the same time (the lift-off event), so the period holds no time on the ball.
+    let contact = [(0.3, 0.5), (1.3, 1.3 + 1e-3), (2.3, 2.5), (3.3, 3.5)];
+    let (mut t, mut mode, mut omega, mut tau) = run(&contact, 1e-3, 3.6, (1.0, 0.0));
+    let k = t.iter().position(|&x| x == 1.3).unwrap();
+    assert_eq!((mode[k], mode[k + 1]), (Mode::Stick, Mode::Free));
+    t[k + 1] = t[k];
+    t.insert(k + 2, 1.3 + 1e-3);
+    mode.insert(k + 2, Mode::Free);
+    omega.insert(k + 2, omega[k + 1]);
+    tau.insert(k + 2, tau[k + 1].clone());
+    let periods = period_metrics(&t, &mode, &omega, &tau, [0.0, 0.0, 1.0]);
+    let touched = periods.iter().find(|p| p.start == 1.3).unwrap();
+    assert_eq!(touched.stick_time + touched.slip_time, 0.0);
+    assert!(!touched.contact);
+    let why = touched.contact_failure(1.0).unwrap();
+    assert!(why.contains("only touched"), "{why}");
+
+    // A finger that bounces on the ball (leaves and strikes again within MIN_FLIGHT, never a
+    // step in contact) has a contact phase: the bounces are its contact, as on a Newton plant.
+    let mut x = 1.3;
+    let mut bounces = Vec::new();
+    for _ in 0..5 {
+        bounces.push((x, x));
+        x += 0.2 * MIN_FLIGHT;
+    }
+    let contact = [(0.3, 0.5), (2.3, 2.5)];
+    let (mut t, mut mode, mut omega, mut tau) = run(&contact, 1e-3, 2.6, (1.0, 0.0));
+    for &(b, _) in &bounces {
+        // Each bounce: a contact sample and a free one at the same instant.
+        let k = t.iter().position(|&s| s > b).unwrap();
+        for m in [Mode::Free, Mode::Stick] {
+            t.insert(k, b);
+            mode.insert(k, m);
+            omega.insert(k, omega[k - 1]);
+            tau.insert(k, tau[k - 1].clone());
+        }
+    }
+    let periods = period_metrics(&t, &mode, &omega, &tau, [0.0, 0.0, 1.0]);
+    let ends: Vec<(f64, f64)> = periods.iter().map(|p| (p.start, p.end)).collect();
+    assert_eq!(ends, [(0.3, 1.3), (1.3, 2.3)]);
+    let chatter = &periods[1];
+    assert_eq!(chatter.stick_time + chatter.slip_time, 0.0);
+    assert!(
+        chatter.contact && chatter.contact_failure(1.0).is_none(),
+        "{chatter:?}"
+    );
+    assert!(
+        periods
+            .iter()
+            .filter(|p| p.start != 1.3)
+            .all(|p| p.contact && p.contact_failure(1.0).is_none())
+    );
 }

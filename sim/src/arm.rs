@@ -7,7 +7,7 @@
 //! step, the midpoint from the step's interpolant), which vanishes for the exact solution up to
 //! the integration's error, and its check against
 //! [`ENERGY_ERROR_REL`] times the energy the run moves (an arm's energies span orders of
-//! magnitude, so the tolerance is relative, where the ball-and-finger scene's is absolute;
+//! magnitude, so the tolerance is relative, as the ball-and-finger system's is;
 //! [`ArmSummary::energy_check_failure`]); [`ArmReport::write_dir`] writes `trajectory.csv`
 //! (t, q, q̇, τ, E) and `summary.json`.
 
@@ -24,13 +24,13 @@ use crate::{HybridSystem, Input, SimError, SimOutput, SimStats};
 /// The energy-balance tolerance of an arm run relative to the energy it moves: the largest
 /// kinetic energy ½ q̇ᵀ M q̇ over the samples plus ∫ |P| dt (the work of the torques and the
 /// friction, either sign). A run above it has an integration too coarse for its dynamics.
-/// 1e-3 is the ball-and-finger scene's absolute 1e-3 J at its own scale (kinetic energies of
-/// the order of 1 J), and some 100 times what DOPRI5 leaves at its default tolerance.
+/// 1e-3 is some 100 times what DOPRI5 leaves at its default tolerance; the ball-and-finger
+/// system's check uses the same share by default (`BallFingerSettings::energy_error_rel`).
 pub const ENERGY_ERROR_REL: f64 = 1e-3;
 
 /// The part of the tolerance that does not scale with the motion, relative to the largest
 /// |E| of the run: rounding of E itself, for a run that barely moves.
-const ENERGY_ROUNDING_REL: f64 = 1e-9;
+pub(crate) const ENERGY_ROUNDING_REL: f64 = 1e-9;
 
 /// The single mode of [`FreeArm`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

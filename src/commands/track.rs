@@ -55,6 +55,10 @@ pub struct TrackingJson<'a> {
     /// Why the run's energy balance failed the simulator's check, if it did
     /// (`Tracking::energy_check_failure`): the run is then no result either.
     pub energy_check_failure: Option<String>,
+    /// Why the run's contact is not the plant's physics, if it is not: the simulator held it
+    /// against the model's conditions (`RunSummary::held_contact`); the run is then no result
+    /// either.
+    pub held_contact: Option<String>,
     /// Largest `omega_error` over the completed periods.
     pub max_omega_error: f64,
     /// The periods.
@@ -99,6 +103,7 @@ impl<'a> TrackingJson<'a> {
             lost_ball: r.lost.is_some(),
             lost_reason: r.lost.as_deref(),
             energy_check_failure: r.energy_check_failure(),
+            held_contact: r.report.summary.held_contact().map(|w| w.message.clone()),
             max_omega_error: r.periods.iter().map(|p| p.omega_error).fold(0.0, f64::max),
             periods: &r.periods,
             replan,
@@ -340,6 +345,22 @@ fn run_n<const N: usize>(
             run.replans.replans.len(),
             record.replan_budget_seconds
         )?;
+        let late = run
+            .replans
+            .replans
+            .iter()
+            .filter(|p| p.used && p.seconds > record.replan_budget_seconds)
+            .count();
+        if late > 0 {
+            // The plant waits for each plan in simulated time (so a run is the same on any
+            // machine); on a real plant a plan that overruns arrives after the contact it was
+            // made for.
+            eprintln!(
+                "warning: {late} of the re-plans used took longer than their budget of {:.3} s \
+                 (wall time on this machine): a real-time controller would get them late",
+                record.replan_budget_seconds
+            );
+        }
     }
     crate::outln!("output: {}", args.out.display())?;
     match failure {

@@ -24,7 +24,7 @@ mod hybrid;
 mod report;
 mod settings;
 
-pub use report::{EventInfo, RunReport, RunSummary, SampleInfo, event_kind};
+pub use report::{EventInfo, ImpulseInfo, RunReport, RunSummary, SampleInfo, event_kind};
 pub use settings::BallFingerSettings;
 
 use crate::{Input, SimError};

@@ -12,9 +12,11 @@
 //! integration (P of the power balance, eq. 22/25; ∫ P dt by Simpson's rule over each step,
 //! with the midpoint state from the step's cubic Hermite interpolant, so that the residual is
 //! the integration's and not the quadrature's), as it accumulates over any
-//! `BallFingerSettings::energy_window` of simulated time; above
-//! `BallFingerSettings::energy_error_tol` it is a warning (e.g. fixed-step RK4 with a step too
-//! long for the dynamics).
+//! `BallFingerSettings::energy_window` of simulated time; above its tolerance,
+//! `BallFingerSettings::energy_error_rel` times the energy the run moves (the largest kinetic
+//! energy T plus the largest ∫ |P| dt over a window), it is a warning (e.g. fixed-step RK4
+//! with a step too long for the dynamics). The tolerance is relative so that the check means
+//! the same for a scene of any size: the same motion with every mass ×10⁵ has errors ×10⁵.
 //!
 //! [`SampleInfo`], [`EventInfo`] and [`RunReport`] carry the number of joints N (default 3)
 //! for the torque vector τ ∈ ℝᴺ; [`RunSummary`] does not depend on N.
@@ -23,7 +25,7 @@ use super::{BallFinger, BallFingerSettings, state_of};
 use crate::integrator::{StepEnd, simpson_over_step};
 use crate::trajectory::{SampleKind, SimOutput};
 use crate::{Input, SimError, SimWarning};
-use bf_model::{Kernels, Mode, State};
+use bf_model::{ImpactLaw, Kernels, Mode, State};
 use serde::Serialize;
 
 /// The model evaluated at one state in one mode, for the samples and the steps' midpoints.
@@ -42,6 +44,18 @@ struct Evaluated<const N: usize> {
 
 /// Kind of the warning of a failed energy-balance check ([`RunSummary::energy_check_failure`]).
 const ENERGY_ERROR: &str = "energy_error";
+/// Kind of the warning of a contact held while the ball pulled the finger ([`HeldContact`]).
+const HELD_CONTACT: &str = "held_contact";
+/// Kind of the warning of a stick held outside the friction cone ([`HeldContact`]).
+const HELD_OUTSIDE_CONE: &str = "held_outside_cone";
+/// Kind of the warning of an impact whose impulse pulls the finger onto the ball (ι·n < 0).
+const PULLING_IMPULSE: &str = "pulling_impulse";
+/// Kind of the warning of a sticking impact whose impulse lies outside the static friction cone
+/// (eq. 66).
+const IMPULSE_OUTSIDE_CONE: &str = "impulse_outside_cone";
+/// How far (relative to the impulse) an impulse may be outside its bounds before it is warned
+/// of: rounding only.
+const IMPULSE_REL_TOL: f64 = 1e-9;
 
 impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
@@ -97,9 +111,29 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             slip_speed: c.delta_v.norm(),
             normal_velocity: c.normal_velocity(),
             energy: e.total,
+            kinetic: e.kinetic_finger + e.kinetic_ball,
             power,
         };
         Ok((info, dx))
+    }
+
+    /// The impulse of the impact whose state before the reset is `x_pre` and after it `x_post`
+    /// ([`ImpulseInfo`]); `None` if the model cannot be evaluated there.
+    fn impulse_at(&self, x_pre: &[f64], x_post: &[f64]) -> Option<ImpulseInfo> {
+        // The impact law ran on the event's position as the reset left it (projected onto the
+        // surface if it was off it) with the velocities before the reset.
+        let mut x = x_pre.to_vec();
+        x.get_mut(..N)?.copy_from_slice(x_post.get(..N)?);
+        let s = state_of::<N>(&x).ok()?;
+        let out = self.model.impact(&s, self.settings.impact_law).ok()?;
+        let mu_s = self.model.params().mu_s();
+        let tangential = out.impulse_t.norm();
+        Some(ImpulseInfo {
+            impulse: out.impulse.into(),
+            normal: out.impulse_n,
+            tangential,
+            static_cone_margin: mu_s * out.impulse_n - tangential,
+        })
     }
 
     /// [`BallFinger::sample_info`] that never fails: a sample where the model cannot be
@@ -175,6 +209,10 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
                     e.t,
                     &e.x_post,
                 ),
+                impulse: (e.mode_before == Mode::Free
+                    && e.mode_after.is_some_and(|m| m != Mode::Free))
+                .then(|| self.impulse_at(&e.x_pre, &e.x_post))
+                .flatten(),
             })
             .collect();
         let work: Vec<f64> = (0..tr.len())
@@ -234,6 +272,8 @@ pub struct SampleInfo<const N: usize = 3> {
     pub normal_velocity: f64,
     /// Total energy E = T + U (J, eq. 22).
     pub energy: f64,
+    /// Kinetic energy T = ½ q̇ᵀ M_f q̇ + ½ ωᵀ I_b ω (J, eq. 22); JSON only.
+    pub kinetic: f64,
     /// dE/dt = q̇ᵀτ − μ_v‖q̇‖² − D‖ω‖² − λ·Δv of the power balance (W); JSON only.
     pub power: f64,
 }
@@ -258,6 +298,7 @@ impl<const N: usize> SampleInfo<N> {
         slip_speed: f64::NAN,
         normal_velocity: f64::NAN,
         energy: f64::NAN,
+        kinetic: f64::NAN,
         power: f64::NAN,
     };
 }
@@ -285,6 +326,25 @@ pub struct EventInfo<const N: usize = 3> {
     pub pre: SampleInfo<N>,
     /// Derived quantities after the reset (in `mode_after`).
     pub post: SampleInfo<N>,
+    /// At an impact, the impulse the law gave the finger ([`ImpulseInfo`]); `None` (JSON
+    /// `null`) at other events.
+    pub impulse: Option<ImpulseInfo>,
+}
+
+/// The impulse of an impact (eq. 39–43), recomputed by the run's impact law from the state it
+/// was applied to: the event's position (after the projection onto h = 0, if any) with its
+/// pre-impact velocities, so it is the impulse the run applied, bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ImpulseInfo {
+    /// ι on the finger (N s, world axes).
+    pub impulse: [f64; 3],
+    /// ι·n (N s): positive when the ball pushes the finger away, as a contact can.
+    pub normal: f64,
+    /// ‖ι_∥‖ (N s).
+    pub tangential: f64,
+    /// μ_s ι·n − ‖ι_∥‖ (N s, eq. 66): non-negative when static friction can hold the impulse
+    /// without slipping.
+    pub static_cone_margin: f64,
 }
 
 /// Summary of a run (printed by the CLI, written as `summary.json`).
@@ -328,9 +388,17 @@ pub struct RunSummary {
     /// The largest |E(t) − E(t₀) − ∫ P dt − Σ ΔE_events| over the whole run (J): the
     /// residual from t₀, which can grow with the run's length.
     pub energy_drift: f64,
+    /// What [`energy_error`](Self::energy_error) is checked against (J):
+    /// `BallFingerSettings::energy_error_rel` times the energy the run moves (its largest
+    /// kinetic energy plus the largest ∫ |P| dt over a window), plus the rounding of E.
+    pub energy_tolerance: f64,
     /// Conditions that qualify the result: `energy_raising_impact` (one per impact raising E by
     /// more than `BallFingerSettings::impact_energy_tol`), `energy_error` (energy-balance error
-    /// above `BallFingerSettings::energy_error_tol`), `zeno_fallback` (see the module docs).
+    /// above [`energy_tolerance`](Self::energy_tolerance)), `pulling_impulse` (an impact
+    /// whose impulse pulls the finger onto the ball, ι·n < 0), `impulse_outside_cone` (a
+    /// sticking impact whose impulse static friction cannot hold, eq. 66), `held_contact`
+    /// (contact kept with λ_n < 0: only the Zeno fallback does), `held_outside_cone` (stick
+    /// kept with σ < 0, likewise), `zeno_fallback` (see the module docs).
     pub warnings: Vec<SimWarning>,
     /// Accepted steps, rejected steps, vector-field evaluations.
     pub stats: crate::SimStats,
@@ -380,12 +448,43 @@ fn summarize<const N: usize>(
             });
         }
     }
+    for e in events {
+        let Some(imp) = e.impulse else { continue };
+        // Relative to the impulse, so that rounding of a tangential impulse does not count.
+        let tol = IMPULSE_REL_TOL * imp.tangential.max(imp.normal.abs());
+        let law = settings.impact_law.name();
+        if imp.normal < -tol {
+            warnings.push(SimWarning {
+                t: e.t,
+                kind: PULLING_IMPULSE,
+                message: format!(
+                    "the {law} impact pulls the finger onto the ball (ι·n = {:.3e} N s < 0), \
+                     which no contact can: the law's impulse is not physical here",
+                    imp.normal
+                ),
+            });
+        } else if settings.impact_law == ImpactLaw::Stick && imp.static_cone_margin < -tol {
+            warnings.push(SimWarning {
+                t: e.t,
+                kind: IMPULSE_OUTSIDE_CONE,
+                message: format!(
+                    "the sticking impulse needs ‖ι_∥‖ = {:.3e} N s of friction, more than \
+                     μ_s ι·n = {:.3e} N s (eq. 66): a real finger would slip at this impact \
+                     (max-dissipation keeps the impulse in the cone)",
+                    imp.tangential,
+                    imp.tangential + imp.static_cone_margin
+                ),
+            });
+        }
+    }
     let residual = balance_residual(tr, samples, work);
     let energy_drift = residual.iter().fold(0.0f64, |m, r| m.max(r.abs()));
     let (energy_error, t_error) =
         window_error(&tr.t[..residual.len()], &residual, settings.energy_window);
+    let energy_tolerance = energy_tolerance(tr, samples, work, settings);
     warnings.extend(out.warnings.iter().cloned());
-    if energy_error > settings.energy_error_tol {
+    // A NaN error is not within.
+    if energy_error > energy_tolerance || energy_error.is_nan() {
         let span = if t_error - t0 > settings.energy_window {
             format!(
                 "over the {} s up to t = {t_error} s",
@@ -398,13 +497,14 @@ fn summarize<const N: usize>(
             t: t_error,
             kind: ENERGY_ERROR,
             message: format!(
-                "energy-balance error {energy_error:.3e} J {span} exceeds {:e} J: the \
-                 integration is too coarse for the dynamics (its step too long, or its \
-                 tolerance too loose)",
-                settings.energy_error_tol
+                "energy-balance error {energy_error:.3e} J {span} exceeds {energy_tolerance:.3e} \
+                 J ({:e} of the energy the run moves): the integration is too coarse for the \
+                 dynamics (its step too long, or its tolerance too loose)",
+                settings.energy_error_rel
             ),
         });
     }
+    warnings.extend(held_contact(tr, samples).warnings());
     warnings.sort_by(|a, b| a.t.total_cmp(&b.t));
     let event_counts = kinds
         .iter()
@@ -464,6 +564,7 @@ fn summarize<const N: usize>(
         max_impact_energy_gain,
         energy_error,
         energy_drift,
+        energy_tolerance,
         warnings,
         stats: out.stats,
         cpu_seconds,
@@ -500,6 +601,134 @@ fn balance_residual<const N: usize>(
     residual
 }
 
+/// Where a run's contact broke the model's own conditions (λ_n ≥ 0 in contact, eq. 48; σ ≥ 0
+/// in Stick, eq. 19), as only the Zeno fallback lets it: its guards switch the mode at those
+/// bounds otherwise, up to the event location's rounding.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct HeldContact {
+    /// The smallest λ_n over the samples that begin a step in contact (N; +∞ without).
+    min_lambda_n: f64,
+    /// The smallest σ over the samples that begin a step in Stick (N; +∞ without).
+    min_sigma: f64,
+    /// The time spent in contact with λ_n < 0 (s), and when it first was.
+    pulling: (f64, Option<f64>),
+    /// The time spent sticking with σ < 0 but λ_n ≥ 0 (s), and when it first was.
+    outside_cone: (f64, Option<f64>),
+}
+
+/// How far (relative to the run's largest contact force) λ_n or σ may fall below zero at a
+/// contact sample before the contact counts as held against the model: the event location's
+/// rounding.
+const HELD_FORCE_REL_TOL: f64 = 1e-6;
+
+impl HeldContact {
+    /// The warnings of a held contact: `held_contact` where the finger was kept on the ball
+    /// while the ball pulled it (λ_n < 0: it would have left; the run's contact there is not
+    /// the model's), `held_outside_cone` where it was kept sticking with too little friction
+    /// (σ < 0: it would have slipped, by as much as the chatter the fallback stopped).
+    fn warnings(&self) -> Vec<SimWarning> {
+        let mut out = Vec::new();
+        if let (time, Some(t)) = self.pulling {
+            out.push(SimWarning {
+                t,
+                kind: HELD_CONTACT,
+                message: format!(
+                    "the Zeno fallback kept the finger on the ball for {time:.4} s while the \
+                     ball pulled it (λ_n down to {:.3e} N; a contact needs λ_n ≥ 0, eq. 48): \
+                     the finger would have left, so the run's contact there is not the \
+                     model's physics",
+                    self.min_lambda_n
+                ),
+            });
+        }
+        if let (time, Some(t)) = self.outside_cone {
+            out.push(SimWarning {
+                t,
+                kind: HELD_OUTSIDE_CONE,
+                message: format!(
+                    "the Zeno fallback kept the finger sticking for {time:.4} s with too little \
+                     friction (σ down to {:.3e} N; sticking needs σ ≥ 0, eq. 19): it would have \
+                     slipped there",
+                    self.min_sigma
+                ),
+            });
+        }
+        out
+    }
+}
+
+fn held_contact<const N: usize>(
+    tr: &crate::Trajectory<Mode>,
+    samples: &[SampleInfo<N>],
+) -> HeldContact {
+    let n = tr.len().min(samples.len());
+    let contact = |i: usize| tr.mode[i] != Mode::Free;
+    let scale = (0..n)
+        .filter(|&i| contact(i))
+        .map(|i| samples[i].lambda.iter().map(|v| v * v).sum::<f64>().sqrt())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let tol = HELD_FORCE_REL_TOL * scale;
+    let mut held = HeldContact {
+        min_lambda_n: f64::INFINITY,
+        min_sigma: f64::INFINITY,
+        pulling: (0.0, None),
+        outside_cone: (0.0, None),
+    };
+    // The samples that begin an interval integrated in contact: a contact sample that an
+    // event leaves at once (an impact whose post-impact λ_n < 0 lifts off in the same instant)
+    // is the guard doing its work, not a held contact.
+    let integrated =
+        |i: usize| contact(i) && i + 1 < n && tr.mode[i + 1] == tr.mode[i] && tr.t[i + 1] > tr.t[i];
+    for i in (0..n).filter(|&i| integrated(i)) {
+        let s = &samples[i];
+        let dt = tr.t[i + 1] - tr.t[i];
+        held.min_lambda_n = held.min_lambda_n.min(s.lambda_n);
+        if tr.mode[i] == Mode::Stick {
+            held.min_sigma = held.min_sigma.min(s.sigma);
+        }
+        let slot = if s.lambda_n < -tol {
+            &mut held.pulling
+        } else if tr.mode[i] == Mode::Stick && s.sigma < -tol {
+            &mut held.outside_cone
+        } else {
+            continue;
+        };
+        slot.0 += dt;
+        slot.1.get_or_insert(tr.t[i]);
+    }
+    held
+}
+
+/// The tolerance of the energy-balance error of a run (`RunSummary::energy_tolerance`):
+/// `settings.energy_error_rel` times the largest kinetic energy of its samples plus the largest
+/// ∫ |P| dt over a window (Σ |∫ P dt| over the steps, the windows of [`window_error`]), plus
+/// the rounding of E, relative to its largest |E|, for a run that barely moves. Samples that
+/// could not be evaluated (NaN) are left out.
+fn energy_tolerance<const N: usize>(
+    tr: &crate::Trajectory<Mode>,
+    samples: &[SampleInfo<N>],
+    work: &[f64],
+    settings: &BallFingerSettings,
+) -> f64 {
+    let finite_max =
+        |v: &mut dyn Iterator<Item = f64>| v.filter(|x| x.is_finite()).fold(0.0f64, f64::max);
+    let kinetic = finite_max(&mut samples.iter().map(|s| s.kinetic));
+    let largest = finite_max(&mut samples.iter().map(|s| s.energy.abs()));
+    let n = tr.len().min(work.len());
+    let mut flow = Vec::with_capacity(n);
+    let mut sum = 0.0f64;
+    for w in &work[..n] {
+        if w.is_finite() {
+            sum += w.abs();
+        }
+        flow.push(sum);
+    }
+    let (window_flow, _) = window_error(&tr.t[..n], &flow, settings.energy_window);
+    settings.energy_error_rel * (kinetic + window_flow)
+        + crate::arm::ENERGY_ROUNDING_REL * largest.max(1.0)
+}
+
 /// The largest change of the residual `r` (sampled at the non-decreasing times `t`) over a
 /// trailing `window`, and the time where it ends: at sample i, |r(tᵢ) − r(tⱼ)| with j the last
 /// sample at or before tᵢ − `window`, or |r(tᵢ)| while there is none (r = 0 before t₀). With a
@@ -527,11 +756,18 @@ fn window_error(t: &[f64], r: &[f64], window: f64) -> (f64, f64) {
 
 impl RunSummary {
     /// The warning of a failed energy-balance check (the balance error above
-    /// `BallFingerSettings::energy_error_tol`): the one warning that says the run's own accuracy
+    /// [`RunSummary::energy_tolerance`]): the one warning that says the run's own accuracy
     /// check failed, rather than something the model did (an impact that raised the energy, a
     /// Zeno fallback).
     pub fn energy_check_failure(&self) -> Option<&SimWarning> {
         self.warnings.iter().find(|w| w.kind == ENERGY_ERROR)
+    }
+
+    /// The warning of a contact held while the ball pulled the finger (λ_n < 0 over steps of
+    /// the run, which only the Zeno fallback allows): the finger would have left, so the
+    /// run's contact there is the regularisation's, not the model's physics.
+    pub fn held_contact(&self) -> Option<&SimWarning> {
+        self.warnings.iter().find(|w| w.kind == HELD_CONTACT)
     }
 
     /// One line per kind of warning (count, worst case, what to do), for the CLI.
@@ -547,6 +783,20 @@ impl RunSummary {
             ));
         }
         for w in of(ENERGY_ERROR) {
+            lines.push(format!("t = {} s: {}", w.t, w.message));
+        }
+        for kind in [PULLING_IMPULSE, IMPULSE_OUTSIDE_CONE] {
+            let w: Vec<&SimWarning> = of(kind).collect();
+            if let Some(first) = w.first() {
+                lines.push(format!(
+                    "{} impact(s) with {kind}, first at t = {} s: {}",
+                    w.len(),
+                    first.t,
+                    first.message
+                ));
+            }
+        }
+        for w in of(HELD_CONTACT).chain(of(HELD_OUTSIDE_CONE)) {
             lines.push(format!("t = {} s: {}", w.t, w.message));
         }
         let z: Vec<&SimWarning> = of("zeno_fallback").collect();
@@ -591,12 +841,13 @@ impl std::fmt::Display for RunSummary {
         )?;
         writeln!(
             f,
-            "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J (drift over \
-             the run {:.3e} J)",
+            "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J of {:.3e} J \
+             allowed (drift over the run {:.3e} J)",
             self.energy_initial,
             self.energy_final,
             self.energy_final - self.energy_initial,
             self.energy_error,
+            self.energy_tolerance,
             self.energy_drift
         )?;
         writeln!(

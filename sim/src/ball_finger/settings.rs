@@ -29,12 +29,15 @@ pub struct BallFingerSettings {
     pub impact_energy_tol: f64,
     /// A run whose energy-balance error (the residual E(t) − E(t₀) − ∫ P dt − Σ ΔE_events,
     /// P = dE/dt of the power balance, Simpson's rule over each step, as it accumulates
-    /// over any [`energy_window`](Self::energy_window) of simulated time) exceeds this (J) gets
-    /// an `energy_error` warning: the integration is too coarse for the dynamics (e.g.
-    /// fixed-step RK4 with a large step, or a loose tolerance) (default: 1e-3).
-    pub energy_error_tol: f64,
+    /// over any [`energy_window`](Self::energy_window) of simulated time) exceeds this share
+    /// of the energy the run moves (its largest kinetic energy plus the largest ∫ |P| dt over
+    /// a window; `RunSummary::energy_tolerance`) gets an `energy_error` warning: the
+    /// integration is too coarse for the dynamics (e.g. fixed-step RK4 with a large step, or
+    /// a loose tolerance). Relative, so that a scene's size does not decide the verdict
+    /// (default: [`crate::arm::ENERGY_ERROR_REL`], 1e-3, as for an arm).
+    pub energy_error_rel: f64,
     /// The span of simulated time (s) over which the balance error is held to
-    /// [`energy_error_tol`](Self::energy_error_tol): at every sample, the residual accumulated
+    /// [`energy_error_rel`](Self::energy_error_rel): at every sample, the residual accumulated
     /// since the last sample at least this long before (since t₀ within the first span). A run
     /// this long or shorter is checked from t₀ as a whole; a longer one is held to the same
     /// accuracy per span, since even an accurate integration accumulates a residual in
@@ -52,7 +55,7 @@ impl Default for BallFingerSettings {
             lift_off_speed: 1e-8,
             zeno_hold_time: 1e-2,
             impact_energy_tol: 1e-9,
-            energy_error_tol: 1e-3,
+            energy_error_rel: crate::arm::ENERGY_ERROR_REL,
             energy_window: 10.0,
         }
     }
