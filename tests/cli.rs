@@ -846,3 +846,24 @@ fn optimize_takes_the_scenes_contact_smoothing() {
     assert_ne!(j(&scene_eps), j(&other));
     std::fs::remove_dir_all(dir).ok();
 }
+
+/// A `[tool]` that turns the finger's tip frame off its last link would make segment contact
+/// use another segment than the link: every command refuses the scene, naming the file, the
+/// line of `[tool]` and the key.
+#[test]
+fn a_tool_that_moves_the_contact_segment_off_the_link_is_refused() {
+    let dir = tmpdir("tool");
+    let path = dir.join("finger2_tool.toml");
+    let text = std::fs::read_to_string(root().join("tests/fixtures/finger2.toml")).unwrap()
+        + "\n[tool]\ntranslation = [0.0, 0.0, 0.3]\nrotation = { axis = \"z\", angle = \"pi/2\" }\n";
+    let line = 1 + text.lines().position(|l| l == "[tool]").unwrap();
+    std::fs::write(&path, &text).unwrap();
+    let p = path.to_str().unwrap();
+    for args in [
+        vec!["eval", p, "--q", "-2.504,2.559", "--qd", "0,0"],
+        vec!["generate", p],
+    ] {
+        let out = run(&args);
+        assert_clean_failure(&out, &[&format!("finger2_tool.toml:{line}:"), "tool: "]);
+    }
+}

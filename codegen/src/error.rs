@@ -123,17 +123,30 @@ pub enum SceneDefect {
          does not hold; use kind = \"tip\""
     )]
     SegmentContactModifiedDh,
-    /// Segment contact on placement links whose last joint does not lie on the tip frame's
-    /// x axis behind the tip (the segment p_e − ℓ e_x … p_e must end at the last joint).
+    /// Segment contact whose segment start (where the last link leaves its joint's axis, in
+    /// tip-frame coordinates: `Scene::contact_segment_start`) is not on the tip frame's x axis
+    /// behind the tip (the segment p_e − ℓ e_x … p_e must end at the last joint's axis).
     #[error(
-        "contact.kind = \"segment\" on a URDF/placement chain needs the last joint on the tip \
-         frame's x axis, behind the tip (the contact segment runs from the joint to the tip \
-         along e_x); the joint sits at {joint:?} in tip-frame coordinates; turn the tip link \
-         so that its x axis points along the last link, or use kind = \"tip\""
+        "contact.kind = \"segment\" needs the point where the last link leaves its joint's axis \
+         on the tip frame's x axis, behind the tip (the contact segment runs from there to the \
+         tip along e_x); that point sits at {start:?} in tip-frame coordinates; turn or move \
+         the [tool] (the tip link) so that its x axis points along the last link, or use \
+         kind = \"tip\""
     )]
     SegmentContactGeometry {
-        /// The last joint's origin in tip-frame coordinates.
-        joint: [f64; 3],
+        /// The segment's start in tip-frame coordinates.
+        start: [f64; 3],
+    },
+    /// Segment contact with a runtime parameter that moves the segment whose length the
+    /// kernels bake in: a tool translation, or a_n with a tool that is not the identity.
+    #[error(
+        "contact.kind = \"segment\": runtime parameter `{name}` would change the contact \
+         segment, whose length the kernels bake in at generation time; keep it baked or use \
+         kind = \"tip\""
+    )]
+    SegmentLengthRuntime {
+        /// The runtime parameter.
+        name: String,
     },
     /// Folding the scene's values gives a non-finite constant in a kernel (it would be emitted
     /// as `f64::INFINITY`).

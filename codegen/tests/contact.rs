@@ -208,3 +208,172 @@ fn tip_contact_has_no_saturation() {
     assert!(rel_err(&v.p_c, &pe, 1.0) < 1e-15);
     assert!(rel_err(&v.j_c, &jpv, 1.0) < 1e-15);
 }
+
+/// The text of `tests/fixtures/finger2.toml` (standard DH, links 1 m and 2.5 m, segment
+/// contact) with `extra` appended.
+fn finger2_text(extra: &str) -> String {
+    let path = format!(
+        "{}/../tests/fixtures/finger2.toml",
+        env!("CARGO_MANIFEST_DIR")
+    );
+    std::fs::read_to_string(path).unwrap() + extra
+}
+
+/// A tool that turns the tip frame about z and lifts it: the segment p_e − ℓ e_x … p_e is no
+/// longer the last link (at q = (−2.504, 2.559) it reached into the ball, h = −0.36, while the
+/// link is 0.12 m clear). Every command refuses the scene at `[tool]`; the generator refuses
+/// such a scene built without validation.
+#[test]
+fn a_tool_that_turns_the_tip_frame_off_the_link_is_refused() {
+    let tool =
+        "\n[tool]\ntranslation = [0.0, 0.0, 0.3]\nrotation = { axis = \"z\", angle = \"pi/2\" }\n";
+    let text = finger2_text(tool);
+    let line = 1 + text.lines().position(|l| l == "[tool]").unwrap();
+    let err = bf_codegen::Scene::from_toml_str(&text, "finger2_tool.toml").unwrap_err();
+    let shown = err.to_string();
+    assert!(
+        shown.starts_with(&format!("finger2_tool.toml:{line}:")) && shown.contains(": tool: "),
+        "{shown}"
+    );
+    let mut s = bf_codegen::Scene::from_toml_str(&finger2_text(""), "finger2.toml").unwrap();
+    s.tool = bf_codegen::Scene::from_toml_str(
+        &text.replace("kind = \"segment\"", "kind = \"tip\""),
+        "t",
+    )
+    .unwrap()
+    .tool;
+    let err = SymbolicRobot::new(&s).unwrap().contact(false).unwrap_err();
+    match err {
+        bf_codegen::CodegenError::Scene(bf_codegen::SceneDefect::SegmentContactGeometry {
+            start,
+        }) => {
+            assert!(rel_err(&start, &[0.0, 2.5, -0.3], 1.0) < 1e-15, "{start:?}")
+        }
+        other => panic!("{other}"),
+    }
+}
+
+/// 4×4 homogeneous transforms for the reference kinematics below.
+type T4 = nalgebra::Matrix4<f64>;
+
+fn rot(axis: usize, a: f64) -> T4 {
+    let (s, c) = libm::sincos(a);
+    let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
+    let mut m = T4::identity();
+    m[(i, i)] = c;
+    m[(i, j)] = -s;
+    m[(j, i)] = s;
+    m[(j, j)] = c;
+    m
+}
+
+fn trans(v: [f64; 3]) -> T4 {
+    let mut m = T4::identity();
+    for k in 0..3 {
+        m[(k, 3)] = v[k];
+    }
+    m
+}
+
+fn origin(t: &T4) -> nalgebra::Vector3<f64> {
+    nalgebra::Vector3::new(t[(0, 3)], t[(1, 3)], t[(2, 3)])
+}
+
+/// A tool that moves the tip 0.1 m further along the last link: the contact segment runs from
+/// joint 2 to the new tip, ℓ = a₂ + 0.1 = 2.6. The kernels' distance h and closest point p_c
+/// equal an independent computation: the DH chain by 4×4 matrices, the closest point of the
+/// segment joint 2 → tip to the ball's centre by projection.
+#[test]
+fn a_tool_along_the_last_link_lengthens_the_contact_segment() {
+    let text = finger2_text("\n[tool]\ntranslation = [0.1, 0.0, 0.0]\n");
+    let scene = bf_codegen::Scene::from_toml_str(&text, "finger2_x.toml").unwrap();
+    assert_eq!(scene.contact_segment_length(), Some(Ok(2.6)));
+    let mut m = SymbolicRobot::new(&scene).unwrap();
+    let (c, cs) = (m.contact(false).unwrap(), m.contact(true).unwrap());
+    let ids = contact_ids(&c);
+    let smooth = [cs.sat_alpha, cs.h];
+    let (ob, r) = (nalgebra::Vector3::new(0.0, 0.0, 0.0), 1.0);
+    let mut rng = rng(35);
+    let mut states: Vec<State> = (0..300).map(|_| State::random(&m, &mut rng)).collect();
+    states[0].q = vec![-2.504, 2.559];
+    // The states cover closest points inside the segment and at the joint end, where a
+    // segment of length a₂ (ending 0.1 m short of the joint) would give another h.
+    let (mut inside, mut at_joint) = (0, 0);
+    for s in &states {
+        // Reference: T = base · A₁ · A₂ · tool, A = R_z(q) T_x(a) R_x(α) (d = 0 here).
+        let base = trans([2.0, 0.0, 0.0]) * rot(1, -std::f64::consts::FRAC_PI_2);
+        let t1 =
+            base * rot(2, s.q[0]) * trans([1.0, 0.0, 0.0]) * rot(0, std::f64::consts::FRAC_PI_2);
+        let t2 = t1 * rot(2, s.q[1]) * trans([2.5, 0.0, 0.0]);
+        let tip = t2 * trans([0.1, 0.0, 0.0]);
+        let (joint, pe) = (origin(&t1), origin(&tip));
+        let u = pe - joint;
+        let t = ((ob - joint).dot(&u) / u.dot(&u)).clamp(0.0, 1.0);
+        if t == 0.0 {
+            at_joint += 1;
+        } else if t < 1.0 {
+            inside += 1;
+        }
+        let p_ref = joint + t * u;
+        let h_ref = (ob - p_ref).norm() - r;
+        let ex = u / u.norm();
+        let sat_ref = (ob - pe).dot(&ex).clamp(-2.6, 0.0);
+        let v = unpack(&ev(&m, &ids, s), 2);
+        assert!(
+            (v.h - h_ref).abs() < 1e-12,
+            "q = {:?}: h {} vs {h_ref}",
+            s.q,
+            v.h
+        );
+        assert!((v.sat - sat_ref).abs() < 1e-12, "q = {:?}", s.q);
+        assert!(
+            rel_err(&v.p_c, p_ref.as_slice(), 1.0) < 1e-12,
+            "q = {:?}",
+            s.q
+        );
+        // The smooth saturation is within ε of the exact one.
+        let w = ev(&m, &smooth, s);
+        assert!((w[0] - sat_ref).abs() <= s.eps, "q = {:?}", s.q);
+    }
+    // At the audit's configuration the link is clear of the ball.
+    let v = unpack(&ev(&m, &ids, &states[0]), 2);
+    assert!(v.h > 0.1, "h = {}", v.h);
+    assert!(inside > 10 && at_joint > 10, "{inside} {at_joint}");
+}
+
+/// A standard DH table without a tool keeps ℓ = a_n as it is, a runtime parameter included;
+/// with a tool ℓ is baked, so a runtime a_n (or tool translation) is refused by the generator
+/// too, for scenes built without validation.
+#[test]
+fn the_segment_length_is_a_runtime_a_n_only_without_a_tool() {
+    let text = finger2_text("").replace(
+        "gravity = [0.0, 0.0, -9.81]",
+        "gravity = [0.0, 0.0, -9.81]\nruntime_parameters = [\"link2.a\"]",
+    );
+    let scene = bf_codegen::Scene::from_toml_str(&text, "finger2_p.toml").unwrap();
+    let mut m = SymbolicRobot::new(&scene).unwrap();
+    let c = m.contact(false).unwrap();
+    // Far from the ball along the link's backward line, sat(α) = −a₂ whatever a₂ is set to.
+    let mut s = State::random(&m, &mut rng(36));
+    s.q = vec![0.0, 0.0];
+    for a in [2.5, 1.7] {
+        s.p = vec![a];
+        let sat = ev(&m, &[c.sat_alpha, c.alpha], &s);
+        assert!(sat[1] < -a && sat[0] == -a, "a = {a}: {sat:?}");
+    }
+    for (tool, name) in [
+        ("\n[tool]\ntranslation = [0.1, 0.0, 0.0]\n", "link2.a"),
+        (
+            "\n[tool]\ntranslation = [0.0, 0.0, 0.0]\n",
+            "tool.translation.x",
+        ),
+    ] {
+        let mut s = bf_codegen::Scene::from_toml_str(&finger2_text(tool), "t").unwrap();
+        s.runtime_parameters = vec![name.to_string()];
+        let err = SymbolicRobot::new(&s).unwrap().contact(false).unwrap_err();
+        assert!(
+            matches!(&err, bf_codegen::CodegenError::Scene(bf_codegen::SceneDefect::SegmentLengthRuntime { name: n }) if n == name),
+            "{err}"
+        );
+    }
+}

@@ -99,7 +99,10 @@ fn segment_contact_on_placements_needs_the_joint_behind_the_tip() {
     let mut r = SymbolicRobot::new(&s).unwrap();
     let err = r.contact(false).unwrap_err().to_string();
     assert!(
-        err.contains("needs the last joint on the tip frame's x axis"),
+        err.contains("on the tip frame's x axis, behind the tip") && err.contains("0.01"),
         "{err}"
     );
+    // The scene's validation says so too, at the key that chooses the segment.
+    let err = s.validate("paper-placed").unwrap_err();
+    assert_eq!(err.path(), Some("contact.kind"), "{err}");
 }

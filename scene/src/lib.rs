@@ -243,9 +243,11 @@ pub struct FrictionSpec {
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactSpec {
-    /// `"segment"`: the last link is the segment from p_e − a_n e_x to p_e (point or line
-    /// contact, eq. 3 with sat); `"tip"`: only the fingertip can touch (α not saturated,
-    /// no line-contact saturation is generated).
+    /// `"segment"`: the last link is the segment from p_e − ℓ e_x to p_e (point or line
+    /// contact, eq. 3 with sat), from where the last link leaves its joint's axis to the tip
+    /// ([`Scene::contact_segment_length`]; ℓ = a_n for a standard DH table without a tool);
+    /// `"tip"`: only the fingertip can touch (α not saturated, no line-contact saturation is
+    /// generated).
     #[serde(default = "default_contact_kind")]
     pub kind: String,
     /// Default ε of the smooth saturation |x| ≈ sqrt(x² + ε²) (eq. 59); kernels take ε at run time.
@@ -554,6 +556,49 @@ impl Scene {
         self.tool
             .as_ref()
             .map_or([0.0; 3], TransformSpec::translation)
+    }
+
+    /// Whether the tip frame is the last link frame: no `[tool]`, or one that is exactly the
+    /// identity transform.
+    pub fn has_identity_tool(&self) -> bool {
+        self.tool_rotation() == IDENTITY && self.tool_translation() == [0.0; 3]
+    }
+
+    /// The start of the contact segment (paper Sect. 2.2) in tip-frame coordinates: the point
+    /// where the last link leaves its joint's axis, R_toolᵀ (p − t_tool) for its position p in
+    /// the last link frame. In placement form p is that frame's origin (0, 0, 0), which the
+    /// last joint's axis passes through; in standard DH p = (−a_n, 0, 0) of frame n, because
+    /// the last link runs a_n along x_n from the axis z_{n−1}. `None` for modified DH (its
+    /// table holds a_{n−1}, not the last link's length) and for a scene without links.
+    pub fn contact_segment_start(&self) -> Option<[f64; 3]> {
+        let last = self.links.last()?;
+        let p = if self.is_placement() {
+            [0.0; 3]
+        } else if self.dh == DhConvention::Standard {
+            [-last.a, 0.0, 0.0]
+        } else {
+            return None;
+        };
+        let (r, t) = (self.tool_rotation(), self.tool_translation());
+        Some([0, 1, 2].map(|i| (0..3).map(|k| r[k][i] * (p[k] - t[k])).sum::<f64>()))
+    }
+
+    /// The length ℓ of the contact segment p_e − ℓ e_x … p_e (paper Sect. 2.2, eq. 3): the
+    /// contact kernels saturate α to [−ℓ, 0], so the segment must end where the last link
+    /// leaves its joint's axis. `Ok(ℓ)` when [`Scene::contact_segment_start`] is (−ℓ, 0, 0)
+    /// with ℓ > 0 (y and z zero to 1e-9 relative to ℓ, at least 1e-12 m), `Err(start)` with
+    /// the offending point otherwise; `None` where there is no start (modified DH, no links).
+    /// With no tool (or the identity) and a standard DH table, ℓ = a_n exactly.
+    pub fn contact_segment_length(&self) -> Option<Result<f64, [f64; 3]>> {
+        let start = self.contact_segment_start()?;
+        let l = -start[0];
+        let tol = 1e-9 * l.abs().max(1e-3);
+        let on_axis = start[1].abs() <= tol && start[2].abs() <= tol;
+        Some(if l > 0.0 && l.is_finite() && on_axis {
+            Ok(l)
+        } else {
+            Err(start)
+        })
     }
 
     /// Inertia tensor of link `i` (0-based index into `links`) about its COG, in link-frame

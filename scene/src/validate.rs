@@ -430,6 +430,67 @@ impl Scene {
                 ),
             ));
         }
+        if self.contact.as_ref().is_some_and(|c| c.kind == "segment") {
+            self.check_contact_segment(ix)?;
+        }
+        Ok(())
+    }
+
+    /// Segment contact (eq. 3: α saturated to [−ℓ, 0]) needs a segment from where the last
+    /// link leaves its joint's axis to the tip along the tip frame's x axis
+    /// ([`Scene::contact_segment_length`]), and an ℓ that the kernels' runtime parameters
+    /// cannot move, because the generator bakes it in unless it is the DH `a_n` itself.
+    fn check_contact_segment(&self, ix: &SourceIndex<'_>) -> Result<(), SpecError> {
+        let placement = self.is_placement();
+        if !placement && self.dh == DhConvention::Modified {
+            return Err(ix.invalid(
+                "contact.kind",
+                "contact kind \"segment\" needs the length of the last link, which a modified \
+                 DH table does not hold (its last row gives a and alpha of the link before); \
+                 use kind = \"tip\", or give the links in placement form (`axis`, `origin`) \
+                 with a [tool] at the tip"
+                    .to_string(),
+            ));
+        }
+        if let Some(Err(start)) = self.contact_segment_length() {
+            let (key, turn) = if placement {
+                ("contact.kind", "the tip link's frame (the [tool])")
+            } else {
+                ("tool", "the [tool]")
+            };
+            return Err(ix.invalid(
+                key,
+                format!(
+                    "contact kind \"segment\" runs from where the last link leaves its joint's \
+                     axis to the tip, along the tip frame's x axis, so that point must be \
+                     (-l, 0, 0) with l > 0 in tip-frame coordinates; it is {start:?}: turn or \
+                     move {turn} so that its x axis points along the last link, away from the \
+                     joint, or use kind = \"tip\""
+                ),
+            ));
+        }
+        let a_n = format!("link{}.a", self.links.len());
+        for (i, r) in self.runtime_parameters.iter().enumerate() {
+            let baked = if r.starts_with("tool.translation.") {
+                Some("places the tip, one end of the contact segment")
+            } else if *r == a_n && !self.has_identity_tool() {
+                Some("sets the segment's length together with the [tool] (not the identity)")
+            } else {
+                None
+            };
+            if let Some(why) = baked {
+                let l = self.contact_segment_length().and_then(Result::ok);
+                return Err(ix.invalid(
+                    &format!("runtime_parameters[{i}]"),
+                    format!(
+                        "{r:?} cannot be a runtime parameter with contact kind \"segment\": it \
+                         {why}, and the generated kernels bake the segment's length in \
+                         (l = {} m at the scene's values); keep it baked, or use kind = \"tip\"",
+                        l.unwrap_or(f64::NAN)
+                    ),
+                ));
+            }
+        }
         Ok(())
     }
 

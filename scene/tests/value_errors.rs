@@ -574,3 +574,118 @@ fn validate_checks_scenes_built_in_code() {
     s.kernels.push("contact".into());
     assert_eq!(s.validate("code").unwrap_err().path(), Some("kernels[3]"));
 }
+
+/// [`BASE`] with a `[tool]` table of the given body appended.
+fn with_tool(body: &str) -> String {
+    format!("{BASE}\n[tool]\n{body}\n")
+}
+
+#[test]
+fn the_contact_segment_must_run_along_the_tip_frames_x_axis_to_the_last_joint() {
+    // Without a tool the segment is the last link: start (-a_n, 0, 0), l = a_n.
+    let s = Scene::from_toml_str(BASE, FILE).unwrap();
+    assert_eq!(s.contact_segment_start(), Some([-1.0, 0.0, 0.0]));
+    assert_eq!(s.contact_segment_length(), Some(Ok(1.0)));
+    // A tool that turns the tip frame about z and lifts it: the tip frame's x axis no longer
+    // runs along the last link, so the segment p_e - l e_x would not be the link.
+    let text =
+        with_tool("translation = [0.0, 0.0, 0.3]\nrotation = { axis = \"z\", angle = \"pi/2\" }");
+    let line = line_no(&text, "[tool]", 0);
+    let shown = expect_err(&text, SpecErrorKind::Invalid, line, "tool", "(-l, 0, 0)");
+    assert!(shown.contains("[0.0, 1.0, -0.3]"), "{shown}");
+    // Moved sideways off the link's line: refused too.
+    let text = with_tool("translation = [0.1, 0.01, 0.0]");
+    let line = line_no(&text, "[tool]", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "tool",
+        "tip frame's x axis",
+    );
+    // Extending the finger along x lengthens the segment; a tool that only turns the frame
+    // about x leaves it as it is; with tip contact there is no segment to check.
+    let s = Scene::from_toml_str(&with_tool("translation = [0.1, 0.0, 0.0]"), FILE).unwrap();
+    assert_eq!(s.contact_segment_length(), Some(Ok(1.1)));
+    let s = Scene::from_toml_str(
+        &with_tool("rotation = { axis = \"x\", angle = \"pi/3\" }"),
+        FILE,
+    )
+    .unwrap();
+    assert_eq!(s.contact_segment_length(), Some(Ok(1.0)));
+    let tip = with_tool("rotation = { axis = \"z\", angle = \"pi/2\" }")
+        .replace("kind = \"segment\"", "kind = \"tip\"");
+    assert!(Scene::from_toml_str(&tip, FILE).is_ok());
+}
+
+#[test]
+fn segment_contact_on_modified_dh_is_refused_at_the_contact_kind() {
+    let text = BASE.replace(
+        "name = \"test_scene\"",
+        "name = \"test_scene\"\ndh = \"modified\"",
+    );
+    let line = line_no(&text, "kind = \"segment\"", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "contact.kind",
+        "modified DH table does not hold",
+    );
+    assert!(Scene::from_toml_str(&text.replace("\"segment\"", "\"tip\""), FILE).is_ok());
+}
+
+#[test]
+fn a_baked_segment_length_cannot_be_a_runtime_parameter() {
+    let runtime = |text: &str, names: &str| {
+        text.replace(
+            "gravity = [0.0, 0.0, -9.81]",
+            &format!("gravity = [0.0, 0.0, -9.81]\nruntime_parameters = [{names}]"),
+        )
+    };
+    // Without a tool l is link2.a itself, which may stay a runtime parameter.
+    let s = Scene::from_toml_str(&runtime(BASE, "\"link2.a\""), FILE).unwrap();
+    assert!(s.is_runtime("link2.a"));
+    // With a tool the kernels bake l = a_2 + 0.1 in.
+    let text = runtime(
+        &with_tool("translation = [0.1, 0.0, 0.0]"),
+        "\"ball.radius\", \"link2.a\"",
+    );
+    let line = line_no(
+        &text,
+        "runtime_parameters = [\"ball.radius\", \"link2.a\"]",
+        0,
+    );
+    let shown = expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "runtime_parameters[1]",
+        "bake the segment's length in (l = 1.1 m",
+    );
+    assert!(shown.contains("\"link2.a\""), "{shown}");
+    // A tool translation places the tip, whatever the tool.
+    let text = runtime(
+        &with_tool("translation = [0.0, 0.0, 0.0]"),
+        "\"tool.translation.x\"",
+    );
+    let line = line_no(&text, "runtime_parameters = [\"tool.translation.x\"]", 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "runtime_parameters[0]",
+        "places the tip",
+    );
+    // Neither matters for tip contact, nor does link1.a.
+    assert!(Scene::from_toml_str(&text.replace("\"segment\"", "\"tip\""), FILE).is_ok());
+    let text = runtime(&with_tool("translation = [0.1, 0.0, 0.0]"), "\"link1.a\"");
+    assert!(Scene::from_toml_str(&text, FILE).is_ok());
+    // Scenes built in code are checked alike.
+    let mut s = Scene::from_toml_str(&with_tool("translation = [0.1, 0.0, 0.0]"), FILE).unwrap();
+    s.runtime_parameters.push("link2.a".into());
+    assert_eq!(
+        s.validate("code").unwrap_err().path(),
+        Some("runtime_parameters[0]")
+    );
+}

@@ -171,6 +171,18 @@ pub struct ContactExprs {
     pub jc_dot_qd: V3,
 }
 
+/// Which points of the last link the contact kernels let touch the ball.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Segment {
+    /// Only the tip (`contact.kind = "tip"`): α is not saturated.
+    Tip,
+    /// The segment of length `link{n}.a`, a constant or a runtime parameter (standard DH, tip
+    /// frame = last link frame).
+    LastLinkA,
+    /// The segment of this length, checked by the scene.
+    Length(f64),
+}
+
 /// The scene's symbolic robot model (the graph counterpart of bf-model's numeric `Model`): one
 /// graph holding every requested quantity.
 #[derive(Debug, Clone)]
@@ -688,6 +700,30 @@ impl SymbolicRobot {
         self.dt(&v)
     }
 
+    /// The length of the contact segment (eq. 3: α saturated to [−ℓ, 0]). A standard DH
+    /// table whose tip frame is the last link frame keeps the symbolic a_n (it may be a runtime
+    /// parameter); otherwise ℓ is the scene's checked number
+    /// ([`Scene::contact_segment_length`]), so no runtime parameter may move it.
+    fn segment_length(&self) -> Result<Segment, CodegenError> {
+        let scene = &self.scene;
+        let identity_tool = scene.has_identity_tool();
+        let n = scene.links.len();
+        let a_n = format!("link{n}.a");
+        for name in &scene.runtime_parameters {
+            if name.starts_with("tool.translation.") || (*name == a_n && !identity_tool) {
+                return Err(SceneDefect::SegmentLengthRuntime { name: name.clone() }.into());
+            }
+        }
+        if self.frames == FrameKind::DhStandard && identity_tool {
+            return Ok(Segment::LastLinkA);
+        }
+        match scene.contact_segment_length() {
+            Some(Ok(l)) => Ok(Segment::Length(l)),
+            Some(Err(start)) => Err(SceneDefect::SegmentContactGeometry { start }.into()),
+            None => Err(SceneDefect::SegmentContactModifiedDh.into()),
+        }
+    }
+
     /// Contact quantities (Sect. 2.2); `smooth` selects the smooth saturation (eq. 58–59).
     pub fn contact(&mut self, smooth: bool) -> Result<ContactExprs, CodegenError> {
         let (Some(_), Some(cs)) = (&self.scene.ball, &self.scene.contact) else {
@@ -703,10 +739,10 @@ impl SymbolicRobot {
         if !tip_only && self.frames == FrameKind::DhModified {
             return Err(SceneDefect::SegmentContactModifiedDh.into());
         }
-        let segment = if tip_only || self.frames == FrameKind::DhStandard {
-            None
+        let segment = if tip_only {
+            Segment::Tip
         } else {
-            Some(placement_segment_length(&self.scene)?)
+            self.segment_length()?
         };
         let n = self.nq();
         let tip = self.tip;
@@ -716,12 +752,12 @@ impl SymbolicRobot {
         let radius = self.constant("ball.radius");
         let d = self.g.v3_sub(ob, pe);
         let alpha = self.g.v3_dot(d, ex);
-        let sat = if tip_only {
+        let sat = if let Segment::Tip = segment {
             self.g.zero()
         } else {
             let an = match segment {
-                Some(l) => self.g.constant(l),
-                None => self.constant(&format!("link{n}.a")),
+                Segment::Length(l) => self.g.constant(l),
+                _ => self.constant(&format!("link{n}.a")),
             };
             let lo = self.g.neg(an);
             let hi = self.g.zero();
@@ -824,18 +860,4 @@ pub fn joint_placements(scene: &Scene) -> Vec<JointPlacement> {
             }
         })
         .collect()
-}
-
-/// ℓ of segment contact on placement links: the last joint's origin in tip-frame coordinates,
-/// −R_toolᵀ t_tool, must be (−ℓ, 0, 0) with ℓ > 0 (the standard-DH geometry, where the segment
-/// p_e − a_n e_x … p_e ends at the last joint's axis).
-fn placement_segment_length(scene: &Scene) -> Result<f64, CodegenError> {
-    let (r, t) = (scene.tool_rotation(), scene.tool_translation());
-    let joint = [0, 1, 2].map(|i| -(0..3).map(|k| r[k][i] * t[k]).sum::<f64>());
-    let l = -joint[0];
-    let tol = 1e-9 * l.abs().max(1e-3);
-    if l.is_nan() || l <= 0.0 || joint[1].abs() > tol || joint[2].abs() > tol {
-        return Err(SceneDefect::SegmentContactGeometry { joint }.into());
-    }
-    Ok(l)
 }
