@@ -170,6 +170,18 @@ impl<'a> SourceIndex<'a> {
         }
     }
 
+    /// Whether the text gives `path` as a string (`"…"` or `'…'`); `None` for a scene built
+    /// in code (no text).
+    pub(super) fn is_string(&self, path: &str) -> Option<bool> {
+        self.tree.then(|| {
+            self.entries
+                .iter()
+                .find(|(p, ..)| p == path)
+                .and_then(|(.., value)| self.text.get(value.clone()))
+                .is_some_and(|v| v.starts_with(['"', '\'']))
+        })
+    }
+
     /// Whether the text gives `path`; `None` for a scene built in code (no text).
     pub(super) fn has(&self, path: &str) -> Option<bool> {
         self.tree

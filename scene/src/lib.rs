@@ -190,12 +190,13 @@ pub struct LinkSpec {
     /// Must be non-empty, and is refused on an inertia that satisfies the inequality.
     #[serde(default)]
     pub nonphysical_inertia: Option<String>,
-    /// Lower joint limit (radians), optional; used by the optimiser. In the file it may also be
-    /// written like an angle (`"-160deg"`, `"-pi/2"`), converted to radians.
+    /// Lower joint limit (radians; metres for a prismatic joint), optional; used by the
+    /// optimiser. For a revolute joint the file may also write it like an angle (`"-160deg"`,
+    /// `"-pi/2"`), converted to radians; a prismatic joint's limit is a plain number.
     #[serde(default, deserialize_with = "de::opt_angle_radians")]
     pub q_min: Option<f64>,
-    /// Upper joint limit (radians), optional; used by the optimiser (angle strings accepted as
-    /// for `q_min`).
+    /// Upper joint limit (radians; metres for a prismatic joint), optional; used by the
+    /// optimiser (angle strings accepted for revolute joints as for `q_min`).
     #[serde(default, deserialize_with = "de::opt_angle_radians")]
     pub q_max: Option<f64>,
     /// Torque limit |τ_i| (N m), optional; used by the optimiser.

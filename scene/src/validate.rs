@@ -12,7 +12,7 @@
 
 use super::{
     Angle, CONTACT_KERNELS, CONTACT_KINDS, DhConvention, InertiaSpec, JointType, KNOWN_KERNELS,
-    OCP_COSTS, RotationSpec, Scene, SourceIndex, SpecError, TransformSpec,
+    OCP_COSTS, RotationSpec, Scene, SourceIndex, SpecError, SpecErrorKind, TransformSpec,
 };
 
 const RUST_KEYWORDS: &[&str] = &[
@@ -536,6 +536,22 @@ impl Scene {
                 &l.inertia_matrix(),
                 l.nonphysical_inertia.as_ref(),
             )?;
+            if l.joint == JointType::Prismatic {
+                for key in ["q_min", "q_max"] {
+                    let kp = format!("{p}.{key}");
+                    if ix.is_string(&kp) == Some(true) {
+                        return Err(ix.at(
+                            SpecErrorKind::WrongType,
+                            &kp,
+                            format!(
+                                "a prismatic joint's {key} is a length in metres: give a plain \
+                                 number (an angle such as \"-90deg\" or \"pi/2\" is for \
+                                 revolute joints)"
+                            ),
+                        ));
+                    }
+                }
+            }
             if let Some(v) = l.q_min {
                 check_finite(ix, &format!("{p}.q_min"), v)?;
             }

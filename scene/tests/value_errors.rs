@@ -689,3 +689,35 @@ fn a_baked_segment_length_cannot_be_a_runtime_parameter() {
         Some("runtime_parameters[0]")
     );
 }
+
+#[test]
+fn a_prismatic_joints_limits_are_plain_lengths() {
+    let prismatic = BASE.replacen("a = 1.0\n", "joint = \"prismatic\"\na = 1.0\n", 1);
+    for (old, new, key) in [
+        ("q_min = -1.0", "q_min = \"-90deg\"", "links[0].q_min"),
+        ("q_max = 1.0", "q_max = \"pi/2\"", "links[0].q_max"),
+        ("q_min = -1.0", "q_min = '-pi'", "links[0].q_min"),
+    ] {
+        let text = prismatic.replacen(old, new, 1);
+        let line = line_no(&text, new, 0);
+        expect_err(
+            &text,
+            SpecErrorKind::WrongType,
+            line,
+            key,
+            "length in metres",
+        );
+    }
+    // Plain numbers are metres; a revolute joint still takes angles.
+    let s = Scene::from_toml_str(
+        &prismatic.replacen("q_min = -1.0", "q_min = -0.25", 1),
+        FILE,
+    )
+    .unwrap();
+    assert_eq!(
+        (s.links[0].q_min, s.links[0].q_max),
+        (Some(-0.25), Some(1.0))
+    );
+    let s = Scene::from_toml_str(&edit("q_min = -1.0", 0, "q_min = \"-90deg\""), FILE).unwrap();
+    assert_eq!(s.links[0].q_min, Some(-PI / 2.0));
+}
