@@ -505,6 +505,14 @@ impl Scene {
                 ),
             ));
         }
+        if self.is_placement() && ix.has("dh") == Some(true) {
+            return Err(ix.invalid(
+                "dh",
+                "`dh` is the convention of a DH table, but this scene's links are in placement \
+                 form (`axis`/`origin`, or read from a `urdf`), which has none: remove `dh`"
+                    .to_string(),
+            ));
+        }
         check_transform(ix, "base", &self.base)?;
         if let Some(t) = &self.tool {
             check_transform(ix, "tool", t)?;

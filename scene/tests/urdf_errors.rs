@@ -482,3 +482,22 @@ fn placement_links_in_toml_are_checked() {
     assert_eq!(err.path(), Some("links[0].a"), "{err}");
     assert!(err.to_string().contains("missing field `a`"), "{err}");
 }
+
+/// `dh` has no meaning for a chain read from a URDF (placement form); the generated text of an
+/// import carries no `dh`, so only the user's own key is refused, on the user's line.
+#[test]
+fn a_dh_convention_beside_a_urdf_is_refused() {
+    let dir = tmpdir("dh");
+    std::fs::write(dir.join("arm.urdf"), arm(J2)).unwrap();
+    let path = dir.join("arm.toml");
+    let scene =
+        "name = \"arm2\"\nurdf = \"arm.urdf\"\ntip_link = \"l2\"\nkernels = [\"mass_matrix\"]\n";
+    std::fs::write(&path, format!("{scene}dh = \"standard\"\n")).unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert_eq!((err.path(), err.line()), (Some("dh"), Some(5)), "{err}");
+    assert!(err.to_string().contains("urdf"), "{err}");
+    std::fs::write(&path, scene).unwrap();
+    let (_, text) = Scene::load_with_text(&path, &ChainChoice::default()).unwrap();
+    assert!(!text.contains("dh ="), "{text}");
+    assert!(Scene::load(dir.join("arm.urdf")).is_ok());
+}

@@ -721,3 +721,16 @@ fn a_prismatic_joints_limits_are_plain_lengths() {
     let s = Scene::from_toml_str(&edit("q_min = -1.0", 0, "q_min = \"-90deg\""), FILE).unwrap();
     assert_eq!(s.links[0].q_min, Some(-PI / 2.0));
 }
+
+#[test]
+fn a_dh_convention_on_placement_links_is_refused() {
+    let placement = "name = \"p\"\ndh = \"modified\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\naxis = [0.0, 0.0, 1.0]\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
+    for dh in ["dh = \"modified\"", "dh = \"standard\""] {
+        let text = placement.replace("dh = \"modified\"", dh);
+        let err = Scene::from_toml_str(&text, "p.toml").unwrap_err();
+        assert_eq!((err.path(), err.line()), (Some("dh"), Some(2)), "{err}");
+        assert!(err.to_string().contains("placement form"), "{err}");
+    }
+    let text = placement.replace("dh = \"modified\"\n", "");
+    assert!(Scene::from_toml_str(&text, "p.toml").is_ok());
+}
