@@ -60,7 +60,7 @@ pub use load::{
 pub use mode::Mode;
 pub use state::state_len;
 pub use urdf::{UrdfChain, read_chain as read_urdf_chain, rpy_matrix};
-pub use validate::{principal_moments, symmetric_eigenvalues};
+pub use validate::{principal_moments, reserved_scene_name, symmetric_eigenvalues};
 
 use error::SourceIndex;
 

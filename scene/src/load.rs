@@ -113,7 +113,8 @@ pub fn chain_toml(chain: &UrdfChain) -> String {
     out
 }
 
-/// A Rust identifier from a URDF robot name (`ur5-arm` → `ur5_arm`).
+/// A Rust identifier from a URDF robot name (`ur5-arm` → `ur5_arm`), with `_robot` appended to
+/// a keyword or a name the generated crate takes itself.
 fn identifier(name: &str) -> String {
     let mut s: String = name
         .chars()
@@ -122,7 +123,7 @@ fn identifier(name: &str) -> String {
     if s.is_empty() || s.starts_with(|c: char| c.is_ascii_digit()) {
         s.insert_str(0, "robot_");
     }
-    if crate::validate::is_keyword(&s) {
+    if crate::validate::is_keyword(&s) || crate::validate::reserved_scene_name(&s).is_some() {
         s.push_str("_robot");
     }
     s

@@ -23,6 +23,64 @@ const RUST_KEYWORDS: &[&str] = &[
     "override", "priv", "typeof", "unsized", "virtual", "yield", "try", "gen", "union", "_",
 ];
 
+/// Names that `bf-generated` defines beside its scene modules, with what each is there; a scene
+/// module of the same name would clash with it or overwrite its file. From
+/// `generated/src/lib.rs` and `generated/build.rs`: the modules and types at the crate root,
+/// the files the build script writes to `OUT_DIR` as `<name>.rs`, the variant modules of the
+/// `paper` scene, and the standard crates, which a module at the crate root would shadow.
+/// (The root's functions and statics live in the value namespace and do not clash with a
+/// module.)
+const RESERVED_NAMES: &[(&str, &str)] = &[
+    ("ocp", "the module of the optimal-control node kernels"),
+    (
+        "registry",
+        "the module of the model-kernel registry (and its file registry.rs)",
+    ),
+    (
+        "modules",
+        "the file modules.rs that declares the scene modules",
+    ),
+    (
+        "ocp_kernels",
+        "the file ocp_kernels.rs of the optimal-control node kernels",
+    ),
+    ("SceneKernels", "the type of a registry entry"),
+    ("MassCqdGFn", "the type of a registered mass_cqd_g"),
+    ("PotentialFn", "the type of a registered potential"),
+    ("ContactFn", "the type of a registered contact kernel"),
+    ("EvalIntoFn", "the type of a registered kernel dispatcher"),
+    ("NodeKernelFn", "the type of a node kernel function"),
+    ("NodeKernel", "the type of an optimal-control node kernel"),
+    ("NodeKernelX4", "the type of a batched node kernel"),
+    (
+        "paper_f32",
+        "the single-precision variant module of the `paper` scene",
+    ),
+    (
+        "paper_fma",
+        "the fused-multiply-add variant module of the `paper` scene",
+    ),
+    (
+        "paper_runtime",
+        "the all-runtime-parameter variant module of the `paper` scene",
+    ),
+    (
+        "std",
+        "the standard library, which the generated code names",
+    ),
+    ("core", "the core library"),
+    ("alloc", "the alloc library"),
+];
+
+/// What `bf-generated` already calls `name` (see the list in this module's source), if it is
+/// taken there: such a name cannot be a scene's, whose module would clash with it.
+pub fn reserved_scene_name(name: &str) -> Option<&'static str> {
+    RESERVED_NAMES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, what)| *what)
+}
+
 /// Relative tolerance for symmetry of inertia tensors and orthonormality of rotation matrices.
 const MATRIX_TOL: f64 = 1e-9;
 
@@ -501,6 +559,16 @@ impl Scene {
                 format!(
                     "scene name {:?} must be an ASCII Rust identifier ([A-Za-z_][A-Za-z0-9_]*) \
                      and not a keyword: it becomes the generated module name",
+                    self.name
+                ),
+            ));
+        }
+        if let Some(what) = reserved_scene_name(&self.name) {
+            return Err(ix.invalid(
+                "name",
+                format!(
+                    "scene name {:?} clashes with the generated crate (bf-generated), where it \
+                     is {what}; the scene's module would take the same name: choose another",
                     self.name
                 ),
             ));

@@ -501,3 +501,26 @@ fn a_dh_convention_beside_a_urdf_is_refused() {
     assert!(!text.contains("dh ="), "{text}");
     assert!(Scene::load(dir.join("arm.urdf")).is_ok());
 }
+
+/// A robot whose name a scene may not take gets `_robot` appended, as a keyword does.
+#[test]
+fn a_urdf_robot_named_like_a_generated_item_is_renamed() {
+    for (robot, name) in [
+        ("registry", "registry_robot"),
+        ("std", "std_robot"),
+        ("fn", "fn_robot"),
+    ] {
+        let text = arm(J2).replace("<robot name=\"arm\">", &format!("<robot name=\"{robot}\">"));
+        let toml = bf_scene::urdf_scene_text(
+            &text,
+            FILE,
+            &ChainChoice {
+                base: None,
+                tip: Some("l2".into()),
+            },
+        )
+        .unwrap();
+        let scene = Scene::from_toml_str(&toml, FILE).unwrap();
+        assert_eq!(scene.name, name);
+    }
+}

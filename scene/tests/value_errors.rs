@@ -723,6 +723,97 @@ fn a_prismatic_joints_limits_are_plain_lengths() {
 }
 
 #[test]
+fn scene_names_the_generated_crate_takes_are_refused() {
+    for (bad, needle) in [
+        ("ocp", "optimal-control node kernels"),
+        ("registry", "registry"),
+        ("modules", "modules.rs"),
+        ("ocp_kernels", "ocp_kernels.rs"),
+        ("SceneKernels", "type"),
+        ("NodeKernel", "type"),
+        ("paper_f32", "variant module of the `paper` scene"),
+        ("paper_runtime", "variant module"),
+        ("std", "standard library"),
+        ("core", "core library"),
+        ("alloc", "alloc library"),
+    ] {
+        let new = format!("name = \"{bad}\"");
+        let text = edit("name = \"test_scene\"", 0, &new);
+        let shown = expect_err(&text, SpecErrorKind::Invalid, 1, "name", needle);
+        assert!(
+            shown.contains("clashes with the generated crate"),
+            "{shown}"
+        );
+        assert!(bf_scene::reserved_scene_name(bad).is_some(), "{bad}");
+    }
+    // The crate's functions and statics do not clash with a module; nor do near misses.
+    for good in ["scene", "scene_toml", "paper_f64", "ocp2", "Registry"] {
+        let text = edit("name = \"test_scene\"", 0, &format!("name = \"{good}\""));
+        assert!(Scene::from_toml_str(&text, FILE).is_ok(), "{good}");
+    }
+}
+
+/// The reserved names are those `bf-generated` defines: every module and type at the root of
+/// its `src/lib.rs`, every file its build script writes to `OUT_DIR` by a fixed name, and
+/// every variant module it emits for `paper`. A new one added there without reserving it here
+/// fails this test.
+#[test]
+fn reserved_scene_names_cover_what_the_generated_crate_defines() {
+    let dir = format!("{}/../generated", env!("CARGO_MANIFEST_DIR"));
+    let lib = std::fs::read_to_string(format!("{dir}/src/lib.rs")).unwrap();
+    let build = std::fs::read_to_string(format!("{dir}/build.rs")).unwrap();
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut defined = Vec::new();
+    for line in lib.lines() {
+        for kw in [
+            "pub mod ",
+            "mod ",
+            "pub struct ",
+            "pub type ",
+            "pub enum ",
+            "pub trait ",
+        ] {
+            if let Some(rest) = line.strip_prefix(kw) {
+                defined.push(ident(rest));
+            }
+        }
+    }
+    for (i, _) in build.match_indices("out.join(\"") {
+        let rest = &build[i + "out.join(\"".len()..];
+        let file = ident(rest);
+        if rest[file.len()..].starts_with(".rs\"") {
+            defined.push(file);
+        }
+    }
+    for (i, _) in build.match_indices("named(\"") {
+        defined.push(format!("paper_{}", ident(&build[i + "named(\"".len()..])));
+    }
+    for want in [
+        "ocp",
+        "registry",
+        "modules",
+        "ocp_kernels",
+        "SceneKernels",
+        "paper_fma",
+    ] {
+        assert!(
+            defined.iter().any(|d| d == want),
+            "{want} not found in {defined:?}"
+        );
+    }
+    for d in &defined {
+        assert!(
+            bf_scene::reserved_scene_name(d).is_some(),
+            "bf-generated defines `{d}`, which scene names may still take"
+        );
+    }
+}
+
+#[test]
 fn a_dh_convention_on_placement_links_is_refused() {
     let placement = "name = \"p\"\ndh = \"modified\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\naxis = [0.0, 0.0, 1.0]\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
     for dh in ["dh = \"modified\"", "dh = \"standard\""] {
