@@ -113,9 +113,8 @@ fn main() -> Result<()> {
         let raw = fs::read_to_string(f).with_context(|| format!("reading {shown}"))?;
         // A scene that takes its robot from a URDF (`urdf = "…"`, relative to `scenes/`) is
         // expanded into its self-contained text, as every command loads it, so the module
-        // embeds that text and `compiled_match` finds it. The directory is given relative to
-        // this package (build scripts run there), so the text names the URDF by a relative
-        // path on every machine.
+        // embeds that text and `compiled_match` finds it (the text names the URDF by its file
+        // name only, whatever directory it is read from).
         if let Some(urdf) = bf_codegen::spec::urdf_path(&raw, &scenes_dir) {
             println!("cargo::rerun-if-changed={}", urdf.display());
         }

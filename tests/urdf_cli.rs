@@ -386,3 +386,34 @@ fn base_and_tip_without_a_urdf_are_usage_errors() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `generate` of a URDF, and of a TOML scene that names one, writes the same module whatever
+/// directory it is run from and however the path is spelt: the scene text records the URDF by
+/// its file name alone.
+#[test]
+fn generate_gives_the_same_module_from_any_directory() {
+    let dir = tmpdir("urdf-paths");
+    let sub = dir.join("robots");
+    std::fs::create_dir_all(&sub).unwrap();
+    let root = cli_util::root();
+    for f in ["finger3.urdf", "finger3_ball.toml"] {
+        std::fs::copy(root.join(URDF).join(f), sub.join(f)).unwrap();
+    }
+    let generate = |cwd: &Path, scene: &str| {
+        let o = cli_util::bin()
+            .current_dir(cwd)
+            .args(["generate", scene])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        o.stdout
+    };
+    for f in ["finger3.urdf", "finger3_ball.toml"] {
+        let a = generate(&dir, &format!("robots/{f}"));
+        let b = generate(&sub, f);
+        let c = generate(&dir, &format!("./robots/../robots/{f}"));
+        assert!(a == b && a == c, "{f}: the module depends on the path");
+        let text = String::from_utf8(a).unwrap();
+        assert!(text.contains("\\\"finger3.urdf\\\""), "{f}");
+    }
+}

@@ -113,6 +113,16 @@ pub fn chain_toml(chain: &UrdfChain) -> String {
     out
 }
 
+/// The file name of `path` without its directory, for the provenance comment of a scene text:
+/// the text (and the code generated from it) must not depend on the directory the command
+/// was started from or on how the path was spelt.
+fn provenance(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
 /// A Rust identifier from a URDF robot name (`ur5-arm` → `ur5_arm`), with `_robot` appended to
 /// a keyword or a name the generated crate takes itself.
 fn identifier(name: &str) -> String {
@@ -208,8 +218,12 @@ fn urdf_scene(
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "# Made from the URDF file {file:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
-        chain.robot, chain.base_link, chain.tip_link, chain.joint_names
+        "# Made from the URDF file {:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
+        provenance(Path::new(file)),
+        chain.robot,
+        chain.base_link,
+        chain.tip_link,
+        chain.joint_names
     );
     let _ = writeln!(out, "name = {:?}", identifier(&chain.robot));
     let _ = writeln!(out, "gravity = {}", vec3(URDF_GRAVITY));
@@ -357,8 +371,12 @@ fn expand(
     let first_line = out.lines().count() + 1;
     let _ = writeln!(
         out,
-        "\n# Imported from {file:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
-        chain.robot, chain.base_link, chain.tip_link, chain.joint_names
+        "\n# Imported from {:?}: robot {:?}, chain {:?} -> {:?}, joints {:?}.",
+        provenance(&path),
+        chain.robot,
+        chain.base_link,
+        chain.tip_link,
+        chain.joint_names
     );
     out.push_str(&chain_toml(&chain));
     let imported = Imported {

@@ -483,6 +483,39 @@ fn placement_links_in_toml_are_checked() {
     assert!(err.to_string().contains("missing field `a`"), "{err}");
 }
 
+/// The scene text of a URDF (alone, or named by a TOML scene) does not depend on how the path to
+/// it was spelt: the provenance comment names the URDF by its file name only, so the same files
+/// give the same text, and the same generated code, from any working directory.
+#[test]
+fn a_scene_text_names_its_urdf_by_the_file_name_alone() {
+    let dir = tmpdir("provenance");
+    let sub = dir.join("robots");
+    std::fs::create_dir_all(&sub).unwrap();
+    std::fs::write(sub.join("arm.urdf"), arm(J2)).unwrap();
+    std::fs::write(
+        sub.join("arm.toml"),
+        "name = \"arm2\"\nurdf = \"arm.urdf\"\ntip_link = \"l2\"\nkernels = [\"mass_matrix\"]\n",
+    )
+    .unwrap();
+    let roundabout = dir.join("robots").join("..").join("robots");
+    for file in ["arm.urdf", "arm.toml"] {
+        let choice = ChainChoice::default();
+        let (_, a) = Scene::load_with_text(sub.join(file), &choice).unwrap();
+        let (_, b) = Scene::load_with_text(roundabout.join(file), &choice).unwrap();
+        assert_eq!(a, b, "{file}");
+        assert!(a.contains("\"arm.urdf\""), "{a}");
+        assert!(!a.contains(&*dir.to_string_lossy()), "{a}");
+    }
+    // Errors still name the path as given, to find the file.
+    std::fs::write(
+        sub.join("bad.urdf"),
+        arm(J2).replace("value=\"1\"", "value=\"-1\""),
+    )
+    .unwrap();
+    let err = Scene::load(roundabout.join("bad.urdf")).unwrap_err();
+    assert!(err.to_string().contains("/../robots/bad.urdf"), "{err}");
+}
+
 /// `dh` has no meaning for a chain read from a URDF (placement form); the generated text of an
 /// import carries no `dh`, so only the user's own key is refused, on the user's line.
 #[test]
