@@ -155,7 +155,8 @@ pub struct GenerateArgs {
     /// Write the generated Rust source to this file instead of stdout.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Print op counts and generation time per kernel (to stderr when the code goes to stdout).
+    /// Print the op counts of every kernel, then the graph size, the code size and the total
+    /// generation time (to stderr when the code goes to stdout).
     #[arg(long)]
     pub report: bool,
     /// Float type of the emitted kernels: arguments, constants and arithmetic.
@@ -205,9 +206,10 @@ impl ChainArgs {
 /// `--float` of `generate`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum FloatArg {
-    /// Double precision (the default; batched fast sine–cosine).
+    /// Double precision (the default; the module's own batched sine–cosine).
     F64,
-    /// Single precision (standard-library sine–cosine).
+    /// Single precision (the module's own sine–cosine, computed in f64 and rounded once to
+    /// f32).
     F32,
 }
 

@@ -847,6 +847,27 @@ fn optimize_takes_the_scenes_contact_smoothing() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// `generate --help` says what the options do: the f32 module computes its sines and cosines
+/// with its own functions (docs/kernels.md), and `--report` prints one generation time for the
+/// whole module, after the per-kernel op counts.
+#[test]
+fn generate_help_describes_the_float_types_and_the_report_as_they_are() {
+    let help = String::from_utf8(run(&["generate", "--help"]).stdout).unwrap();
+    assert!(!help.contains("standard-library"), "{help}");
+    assert!(help.contains("own sine–cosine, computed in f64"), "{help}");
+    assert!(help.contains("total generation time"), "{help}");
+    assert!(!help.contains("time per kernel"), "{help}");
+    let report = run(&["generate", "tests/fixtures/finger2.toml", "--report"]);
+    let text = String::from_utf8_lossy(&report.stderr);
+    assert_eq!(text.matches("generated in").count(), 1, "{text}");
+    assert_eq!(
+        text.lines().filter(|l| l.contains(" ms")).count(),
+        1,
+        "{text}"
+    );
+    assert!(text.contains("contact_smooth"), "{text}");
+}
+
 /// A `[tool]` that turns the finger's tip frame off its last link would make segment contact
 /// use another segment than the link: every command refuses the scene, naming the file, the
 /// line of `[tool]` and the key.

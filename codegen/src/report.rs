@@ -1,4 +1,5 @@
-//! Generation report: per-kernel operation counts and generation time (`docs/architecture.md`, "Report").
+//! Generation report: per-kernel operation counts, the graph and code sizes and the total
+//! generation time (`docs/architecture.md`, "Report").
 
 use std::fmt;
 
