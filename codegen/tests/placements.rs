@@ -106,3 +106,36 @@ fn segment_contact_on_placements_needs_the_joint_behind_the_tip() {
     let err = s.validate("paper-placed").unwrap_err();
     assert_eq!(err.path(), Some("contact.kind"), "{err}");
 }
+
+/// A placement axis written with eight digits is normalised when the scene is read, so the
+/// kernels turn about the unit axis: the tip rotation stays orthonormal to rounding and equals
+/// that of the exact axis (the axis as written, of norm 1 − 7e-9, would be off by ~1e-8).
+#[test]
+fn kernels_turn_about_the_normalised_axis() {
+    let text = |axis: &str| {
+        format!(
+            "name = \"tilted\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"frames\"]\n\n[[links]]\naxis = {axis}\nmass = 1.0\ncom = [0.1, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n\n[tool]\ntranslation = [0.5, 0.0, 0.0]\n"
+        )
+    };
+    let short = Scene::from_toml_str(&text("[0.0, 0.70710678, 0.70710678]"), "t.toml").unwrap();
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    let exact = Scene::from_toml_str(&text(&format!("[0.0, {h:?}, {h:?}]")), "t.toml").unwrap();
+    let pose = |scene: &Scene, q: f64| {
+        let r = SymbolicRobot::new(scene).unwrap();
+        let p = r.tip_pose();
+        let ids: Vec<Id> = p.r.iter().flatten().copied().chain(p.t).collect();
+        let mut v = vec![0.0; r.layout.n_vars()];
+        v[0] = q;
+        bf_codegen::interp::eval(&r.g, &ids, &v)
+    };
+    for q in [0.3, 1.7, -2.9] {
+        let (a, b) = (pose(&short, q), pose(&exact, q));
+        for (x, y) in a.iter().zip(&b) {
+            assert!((x - y).abs() < 1e-15, "q = {q}: {a:?} vs {b:?}");
+        }
+        for i in 0..3 {
+            let col: f64 = (0..3).map(|k| a[3 * k + i] * a[3 * k + i]).sum();
+            assert!((col - 1.0).abs() < 1e-15, "q = {q}: column {i} norm² {col}");
+        }
+    }
+}

@@ -170,6 +170,11 @@ impl<'a> SourceIndex<'a> {
         }
     }
 
+    /// Whether a scene text was parsed (a scene built in code has none).
+    pub(super) fn parsed(&self) -> bool {
+        self.tree
+    }
+
     /// Whether the text gives `path` as a string (`"…"` or `'…'`); `None` for a scene built
     /// in code (no text).
     pub(super) fn is_string(&self, path: &str) -> Option<bool> {

@@ -174,7 +174,8 @@ pub struct LinkSpec {
     #[serde(default)]
     pub origin: Option<TransformSpec>,
     /// Placement form: the joint axis, a unit vector in the joint's frame; giving it selects
-    /// the placement form.
+    /// the placement form. In a scene text its norm may be within 1e-6 of 1: it is normalised
+    /// when the scene is read.
     #[serde(default, deserialize_with = "de::opt_exact3")]
     pub axis: Option<[f64; 3]>,
     /// Link mass m_i (kg), > 0.
@@ -469,8 +470,9 @@ impl Scene {
             }
         };
         let ix = SourceIndex::new(text, origin, Some(tree.get_ref()));
-        let scene: Scene = toml::from_str(text).map_err(|e| ix.locate_toml_error(&e, false))?;
+        let mut scene: Scene = toml::from_str(text).map_err(|e| ix.locate_toml_error(&e, false))?;
         scene.validate_with(&ix)?;
+        scene.normalize_axes();
         Ok(scene)
     }
 
@@ -481,9 +483,22 @@ impl Scene {
     }
 
     /// Checks every semantic rule (already applied by [`Scene::from_toml_str`]); for scenes
-    /// built in code. Errors carry `origin`, line 1 and the field path.
+    /// built in code. Errors carry `origin`, line 1 and the field path. Unlike a scene read
+    /// from text, whose placement axes are normalised when read, a scene built in code is
+    /// used as it is, so its axes must be unit vectors to 1e-9.
     pub fn validate(&self, origin: &str) -> Result<(), SpecError> {
         self.validate_with(&SourceIndex::new("", origin, None))
+    }
+
+    /// Divides every placement `axis` by its norm (validation has checked it is within 1e-6 of
+    /// 1), so that the kernels, and any text written from the links, use the unit vector.
+    fn normalize_axes(&mut self) {
+        for l in &mut self.links {
+            if let Some(a) = &mut l.axis {
+                let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+                *a = a.map(|x| x / norm);
+            }
+        }
     }
 
     /// Accepted but physically doubtful values, one message each naming the field and values:

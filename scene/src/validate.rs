@@ -84,6 +84,12 @@ pub fn reserved_scene_name(name: &str) -> Option<&'static str> {
 /// Relative tolerance for symmetry of inertia tensors and orthonormality of rotation matrices.
 const MATRIX_TOL: f64 = 1e-9;
 
+/// How far from 1 the norm of a placement `axis` read from a scene text may be: such an axis
+/// is normalised when the scene is read, so an axis written with eight digits
+/// (`[0.0, 0.70710678, 0.70710678]`) is the unit vector meant. A scene built in code is not
+/// normalised and needs a unit axis to [`MATRIX_TOL`].
+const AXIS_NORM_TOL: f64 = 1e-6;
+
 /// Smallest mass (inertia trace) of a body relative to the scene's largest one. Below it the
 /// body's rows of M(q) (eq. 22a) vanish next to the others' in f64 (relative 1e-16 rounding,
 /// 1e-12 leaves four digits), so accelerations of its joints are rounding noise: the
@@ -321,10 +327,20 @@ fn check_link_form(
         let ap = format!("{p}.axis");
         check_vec(ix, &ap, axis)?;
         let norm = axis.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if (norm - 1.0).abs() > MATRIX_TOL {
+        // A text is normalised after validation (`Scene::from_toml_str`); a scene built in
+        // code is used as it is, so its axis must already be unit.
+        let (tol, what) = if ix.parsed() {
+            (AXIS_NORM_TOL, "; it is normalised when read")
+        } else {
+            (MATRIX_TOL, "; a scene built in code is not normalised")
+        };
+        if (norm - 1.0).abs() > tol {
             return Err(ix.invalid(
                 &ap,
-                format!("the joint axis must be a unit vector (got {axis:?}, norm {norm})"),
+                format!(
+                    "the joint axis must be a unit vector, its norm within {tol:e} of 1 (got \
+                     {axis:?}, norm {norm}){what}"
+                ),
             ));
         }
         if let Some(o) = &l.origin {

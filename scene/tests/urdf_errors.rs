@@ -557,3 +557,48 @@ fn a_urdf_robot_named_like_a_generated_item_is_renamed() {
         assert_eq!(scene.name, name);
     }
 }
+
+/// A placement axis written with a few digits is the unit vector meant: accepted within 1e-6
+/// of unit length and normalised when read; zero, non-finite and clearly non-unit axes are
+/// refused at the key.
+#[test]
+fn a_placement_axis_is_normalised_when_read() {
+    let base = "name = \"p\"\ngravity = [0.0, 0.0, -9.81]\nkernels = [\"mass_matrix\"]\n\n[[links]]\naxis = [0.0, 0.0, 1.0]\nmass = 1.0\ncom = [0.0, 0.0, 0.0]\ninertia = [0.1, 0.1, 0.1]\n";
+    let s = Scene::from_toml_str(
+        &base.replace("[0.0, 0.0, 1.0]", "[0.0, 0.70710678, 0.70710678]"),
+        "p.toml",
+    )
+    .unwrap();
+    let a = s.links[0].axis.unwrap();
+    let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
+    assert!((norm - 1.0).abs() < 4e-16, "{a:?}: norm {norm}");
+    assert_eq!(a[1], a[2]);
+    assert!(
+        (a[1] - std::f64::consts::FRAC_1_SQRT_2).abs() < 1e-15,
+        "{a:?}"
+    );
+    // A unit axis is kept bit for bit.
+    let s = Scene::from_toml_str(base, "p.toml").unwrap();
+    assert_eq!(s.links[0].axis, Some([0.0, 0.0, 1.0]));
+    for bad in [
+        "[0.0, 0.0, 1.00001]",
+        "[0.0, 0.7071, 0.7071]",
+        "[0.0, 0.0, 0.0]",
+        "[0.0, 0.0, nan]",
+    ] {
+        let err =
+            Scene::from_toml_str(&base.replace("[0.0, 0.0, 1.0]", bad), "p.toml").unwrap_err();
+        assert_eq!(err.line(), Some(6), "{bad}: {err}");
+        assert!(
+            err.path().is_some_and(|p| p.starts_with("links[0].axis")),
+            "{bad}: {err}"
+        );
+    }
+    // A scene built in code is used as it is: its axis must be unit to 1e-9.
+    let mut s = Scene::from_toml_str(base, "p.toml").unwrap();
+    s.links[0].axis = Some([0.0, 0.6, 0.800_000_1]);
+    assert_eq!(
+        s.validate("code").unwrap_err().path(),
+        Some("links[0].axis")
+    );
+}
