@@ -1,9 +1,14 @@
 //! `ball-finger report <which> [--out DIR] [--quick]`: stand-alone reports. Writes
 //! `DIR/<which>.md` and the figures under `DIR/figures/` as one output set (DIR, by default
 //! `out/report/<which>`, is checked before the work and replaced as a whole at the end).
+//!
+//! `strategies` flags unverified rows, and ratios against an unverified or failed cold start,
+//! in the table and on stdout: they are measurements of the strategies. A row whose solve
+//! errored leaves the comparison incomplete: the set is marked FAILED and the command exits 1.
 
 use crate::errors::bail_usage;
-use anyhow::Result;
+use crate::paper::report::strategies;
+use anyhow::{Result, bail};
 use bf_output::{DirSpec, Outcome, OutputDir};
 use std::path::PathBuf;
 
@@ -41,6 +46,10 @@ pub fn run(a: &ReportArgs) -> Result<()> {
     } else {
         "running"
     });
+    // Lines the reader must not miss (rows that errored or are unverified), printed after the
+    // report is written; `failure` marks the set FAILED and the command exits 1.
+    let mut flagged: Vec<String> = Vec::new();
+    let mut failure: Option<String> = None;
     let md = match a.which.as_str() {
         "speed-accuracy" => {
             crate::paper::speed_accuracy::speed_accuracy(out.path(), a.quick, None)?
@@ -49,26 +58,43 @@ pub fn run(a: &ReportArgs) -> Result<()> {
             let pb = super::optimize::iteration_spinner("strategies");
             pb.enable_steady_tick(std::time::Duration::from_millis(120));
             pb.set_message("solving ...");
-            let md = crate::paper::report::strategies_report(a.quick, &|r| {
+            let rows = crate::paper::report::strategies_report(a.quick, &|r| {
                 let line = format!(
-                    "{} {}: {} phi {:.4e} in {:.1} s",
+                    "{} {}: {} phi {:.4e} in {:.1} s, {}",
                     r.problem,
                     r.label(),
                     r.status,
                     r.objective,
-                    r.seconds
+                    r.seconds,
+                    r.verdict()
                 );
                 hb.line(&line);
                 pb.println(line);
             })?;
             pb.finish_and_clear();
-            md
+            flagged = strategies::flags(&rows);
+            failure = strategies::failures(&rows);
+            strategies::markdown(&rows)
         }
     };
-    let text = format!("# ball-finger: {} report\n\n{md}", a.which);
+    let head = match &failure {
+        Some(f) => format!("**FAILED**: {f}\n\n"),
+        None => String::new(),
+    };
+    let text = format!("# ball-finger: {} report\n\n{head}{md}", a.which);
     out.write(&md_name, text.as_bytes())?;
-    out.commit(Outcome::Success)?;
+    out.commit(match &failure {
+        Some(f) => Outcome::Failed(f),
+        None => Outcome::Success,
+    })?;
     hb.stage("done");
     drop(hb);
-    crate::outln!("wrote {}", target.join(&md_name).display())
+    for f in &flagged {
+        crate::outln!("flagged: {f}")?;
+    }
+    crate::outln!("wrote {}", target.join(&md_name).display())?;
+    match failure {
+        Some(f) => bail!("{f}"),
+        None => Ok(()),
+    }
 }
