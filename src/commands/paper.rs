@@ -15,7 +15,7 @@
 //! leaves the previous report untouched.
 
 use crate::cli::PaperArgs;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use bf_output::{DirSpec, Outcome, OutputDir};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::fmt::Write as _;
@@ -116,7 +116,7 @@ fn plan_markdown(
     sticking: &bf_problem::OcpSolution,
     periods: usize,
     dir: &std::path::Path,
-) -> Result<String> {
+) -> Result<(String, Option<String>)> {
     let name = plan_dir(problem);
     // The paper's problems are posed on its compiled scenes: 3 joints, a ball of 1 m.
     let gap = bf_control::HybridGains::default().clearance.gap;
@@ -176,15 +176,99 @@ fn plan_markdown(
     // 10 s periods make it the longer run, about 2 s per plant).
     let robustness =
         crate::paper::closed_loop::robustness_markdown(&name, &sol, ROBUSTNESS_PERIODS)?;
-    Ok(format!("{head}\n{table}\n{robustness}"))
+    let failure = optimum_failure(&sol).map(|why| format!("the plan of `{problem}`: {why}"));
+    Ok((format!("{head}\n{table}\n{robustness}"), failure))
+}
+
+/// Why the optimum `sol` does not count as a result: the solver did not converge, or its
+/// re-integration failed the verification or could not run.
+fn optimum_failure(sol: &bf_problem::OcpSolution) -> Option<String> {
+    super::optimize::failure_of(sol).or_else(|| {
+        sol.verification
+            .is_none()
+            .then(|| "the optimum could not be re-integrated, so it is unverified".to_string())
+    })
+}
+
+/// What decides a run's outcome: the checks that failed (a scenario that could not be solved
+/// or is unverified, a plan that could not be made, verified or executed, a stability probe
+/// that failed), which mark the set FAILED and exit 1, and the measurements flagged beyond
+/// their bounds, which are results of the run, counted in the summary.
+#[derive(Debug, Default)]
+pub struct RunVerdict {
+    /// Failed checks, one sentence each.
+    pub failures: Vec<String>,
+    /// Flagged measurements, one sentence each.
+    pub flags: Vec<String>,
+}
+
+impl RunVerdict {
+    /// The report's summary section: the failed checks first (the run is FAILED), then the
+    /// flagged measurements.
+    pub fn summary_markdown(&self) -> String {
+        let mut s = String::from("## Summary\n\n");
+        if self.failures.is_empty() {
+            s.push_str(
+                "Every scenario and plan was solved and verified, every plan executed, every \
+                 stability probe returned a finite number or a clear error.\n\n",
+            );
+        } else {
+            let _ = writeln!(
+                s,
+                "**FAILED**: {} check{} failed (the set is marked by its `FAILED` file):\n",
+                self.failures.len(),
+                if self.failures.len() == 1 { "" } else { "s" }
+            );
+            for f in &self.failures {
+                let _ = writeln!(s, "- {f}");
+            }
+            s.push('\n');
+        }
+        if self.flags.is_empty() {
+            s.push_str("No measurement is flagged beyond its bound.\n\n");
+        } else {
+            s.push_str(
+                "Flagged measurements (results of this run beyond a bound they are judged on, \
+                 not failures of the run):\n\n",
+            );
+            for f in &self.flags {
+                let _ = writeln!(s, "- {f}");
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// The error the set is marked FAILED with, if a check failed.
+    pub fn failure(&self) -> Option<String> {
+        (!self.failures.is_empty()).then(|| {
+            format!(
+                "{} check{} of the paper run failed: {}",
+                self.failures.len(),
+                if self.failures.len() == 1 { "" } else { "s" },
+                self.failures.join("; ")
+            )
+        })
+    }
 }
 
 /// Appends the report section `md` to `report`, or, where it could not be made, one line
-/// `failed: why` in its place (the report goes on with its other sections).
-fn section(report: &mut String, md: Result<String>, failed: &str) -> std::fmt::Result {
+/// `failed: why` in its place (the report goes on with its other sections) and that line to
+/// `failures`.
+fn section(
+    report: &mut String,
+    md: Result<String>,
+    failed: &str,
+    failures: &mut Vec<String>,
+) -> std::fmt::Result {
     match md {
         Ok(md) => writeln!(report, "{md}"),
-        Err(e) => writeln!(report, "{failed}: {}\n", crate::errors::render(&e)),
+        Err(e) => {
+            let line = format!("{failed}: {}", crate::errors::render(&e));
+            writeln!(report, "{line}\n")?;
+            failures.push(line);
+            Ok(())
+        }
     }
 }
 
@@ -239,17 +323,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     let dir = out.path().to_path_buf();
     // CI logs (stderr not a terminal) get a line per stage and one every 5 s.
     let hb = crate::progress::Heartbeat::start("paper");
+    // The sections; the title and the summary, which needs all of them, go before them at
+    // the end.
     let mut report = String::new();
-    writeln!(
-        report,
-        "# ball-finger: reproduction of *Ball-and-finger system* (Sect. 6)\n"
-    )?;
-    writeln!(
-        report,
-        "Generated by `ball-finger paper{}` ({}). Every number below was computed in this run.\n",
-        if args.quick { " --quick" } else { "" },
-        env!("CARGO_PKG_VERSION")
-    )?;
+    let mut verdict = RunVerdict::default();
 
     // Stage 1: generation.
     hb.stage("1/8 code generation");
@@ -363,7 +440,21 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         crate::paper::scenarios::results_markdown(&results)?
     )?;
     if !failures.is_empty() {
-        writeln!(report, "Scenarios that failed:\n\n{failures}")?;
+        writeln!(report, "Scenarios that failed:\n")?;
+        for f in &failures {
+            writeln!(report, "- {f}")?;
+        }
+        writeln!(report)?;
+        verdict
+            .failures
+            .extend(failures.iter().map(|f| format!("scenario {f}")));
+    }
+    for r in &results {
+        if let Some(why) = optimum_failure(&r.solution) {
+            verdict
+                .failures
+                .push(format!("scenario `{}`: {why}", r.name));
+        }
     }
     for r in &results {
         writeln!(
@@ -419,6 +510,11 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         );
         match long {
             Ok(long) => {
+                if let Some(why) = optimum_failure(&long.solution) {
+                    verdict
+                        .failures
+                        .push(format!("QC with `--min-stick {LONG_MIN_STICK}`: {why}"));
+                }
                 let runs = [
                     StickRun {
                         min_stick: bf_problem::ProblemSettings::default().min_stick,
@@ -439,12 +535,16 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                     })?
                 )?;
             }
-            // Like a failed scenario of the main table: reported, not fatal.
-            Err(e) => writeln!(
-                report,
-                "QC with `--min-stick {LONG_MIN_STICK}` failed: {}\n",
-                crate::errors::render(&e)
-            )?,
+            // Like a failed scenario of the main table: reported, the report goes on, the run
+            // is FAILED.
+            Err(e) => {
+                let line = format!(
+                    "QC with `--min-stick {LONG_MIN_STICK}` failed: {}",
+                    crate::errors::render(&e)
+                );
+                writeln!(report, "{line}\n")?;
+                verdict.failures.push(line);
+            }
         }
     }
 
@@ -510,7 +610,12 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             Some(&dir.join("figures")),
         );
         pb.finish();
-        section(&mut report, md, &format!("`{}`: not executed", r.name))?;
+        section(
+            &mut report,
+            md,
+            &format!("`{}`: not executed", r.name),
+            &mut verdict.failures,
+        )?;
     }
     // The plans for the plant (eq. 39, decision records 0033, 0040) of the QC problem and the
     // human finger's COT problem: the hybrid controller cannot execute the sticking optima on
@@ -531,10 +636,15 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             let pb = stage(1, &format!("{problem}: plan for the plant"));
             let md = plan_markdown(args, problem, &sticking.solution, periods, &dir);
             pb.finish();
+            let md = md.map(|(md, failure)| {
+                verdict.failures.extend(failure);
+                md
+            });
             section(
                 &mut report,
                 md,
                 &format!("The plan of `{problem}` for the plant failed"),
+                &mut verdict.failures,
             )?;
         }
     }
@@ -546,6 +656,19 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     let ext = crate::paper::extremes::run_extremes(args.quick)?;
     pb.finish();
     writeln!(report, "{}", ext.to_markdown())?;
+    for f in ext.failures() {
+        verdict.failures.push(format!(
+            "stability probe {} / {} / {} failed (section 6)",
+            f.case, f.parameter, f.quantity
+        ));
+    }
+    let (exceeded, measures) = ext.flag_counts();
+    if exceeded > 0 {
+        verdict.flags.push(format!(
+            "⚑ {exceeded} of {measures} error measures of the stability probes exceed their \
+             flag bound (section 6): deliberate measurements of the methods at their extremes"
+        ));
+    }
     out.write(
         crate::paper::extremes::report::CSV_NAME,
         ext.to_csv().as_bytes(),
@@ -602,11 +725,38 @@ pub fn run(args: &PaperArgs) -> Result<()> {
          does not have (section 5, decision record 0040)."
     )?;
 
-    out.write("report.md", report.as_bytes())?;
-    out.commit(Outcome::Success)?;
+    let head = format!(
+        "# ball-finger: reproduction of *Ball-and-finger system* (Sect. 6)\n\n\
+         Generated by `ball-finger paper{}` ({}). Every number below was computed in this run.\n\n\
+         {}",
+        if args.quick { " --quick" } else { "" },
+        env!("CARGO_PKG_VERSION"),
+        verdict.summary_markdown()
+    );
+    out.write("report.md", format!("{head}{report}").as_bytes())?;
+    let failure = verdict.failure();
+    out.commit(match &failure {
+        Some(f) => Outcome::Failed(f),
+        None => Outcome::Success,
+    })?;
     hb.stage("done");
     drop(hb);
-    crate::outln!("wrote {}", args.out.join("report.md").display())
+    for f in &verdict.failures {
+        eprintln!("paper: FAILED: {f}");
+    }
+    for f in &verdict.flags {
+        eprintln!("paper: flagged: {f}");
+    }
+    crate::outln!("wrote {}", args.out.join("report.md").display())?;
+    match failure {
+        Some(_) => bail!(
+            "{} check(s) of the paper run failed (listed above and at the top of {}); the set \
+             is marked FAILED",
+            verdict.failures.len(),
+            args.out.join("report.md").display()
+        ),
+        None => Ok(()),
+    }
 }
 
 #[cfg(test)]
@@ -643,6 +793,67 @@ mod tests {
                 .len()
                 > paper.kernels.len()
         );
+    }
+
+    /// A run with a failed check says FAILED at the top of its summary, lists every reason and
+    /// gives the set its error; flagged measurements are counted apart, and alone they do not
+    /// fail the run.
+    #[test]
+    fn the_summary_lists_failed_checks_apart_from_flagged_measurements() {
+        let flagged = RunVerdict {
+            failures: vec![],
+            flags: vec!["⚑ 5 of 75 error measures exceed their flag bound".into()],
+        };
+        assert_eq!(flagged.failure(), None);
+        let md = flagged.summary_markdown();
+        assert!(md.starts_with("## Summary\n"), "{md}");
+        assert!(!md.contains("FAILED"), "{md}");
+        assert!(md.contains("- ⚑ 5 of 75 error measures"), "{md}");
+
+        let failed = RunVerdict {
+            failures: vec![
+                "scenario `periodic-qc` failed: no solution".into(),
+                "the plan of `periodic-cot-human`: the solution is unverified".into(),
+            ],
+            flags: vec![],
+        };
+        let md = failed.summary_markdown();
+        assert!(md.contains("**FAILED**: 2 checks failed"), "{md}");
+        assert!(
+            md.contains("- scenario `periodic-qc` failed: no solution\n"),
+            "{md}"
+        );
+        assert!(md.contains("No measurement is flagged"), "{md}");
+        let why = failed.failure().unwrap();
+        assert!(
+            why.starts_with("2 checks of the paper run failed: scenario `periodic-qc`"),
+            "{why}"
+        );
+        assert!(why.contains("the plan of `periodic-cot-human`"), "{why}");
+    }
+
+    /// A presented optimum fails the run when it is unverified or was not re-integrated at all.
+    #[test]
+    fn an_unverified_or_unchecked_optimum_is_a_failure() {
+        let stored = crate::paper::stored::stored_optimum(
+            bf_problem::Problem::PeriodicQc,
+            Some("stick"),
+            bf_problem::catalogue::MIN_STICK,
+        )
+        .unwrap();
+        let sol = stored.solution().unwrap();
+        assert!(crate::pipeline::verify::is_verified(&sol));
+        assert_eq!(optimum_failure(&sol), None);
+        let mut unverified = sol.clone();
+        if let Some(v) = unverified.verification.as_mut() {
+            v.max_defect = 1.0;
+        }
+        let why = optimum_failure(&unverified).unwrap();
+        assert!(why.contains("unverified"), "{why}");
+        let mut unchecked = sol;
+        unchecked.verification = None;
+        let why = optimum_failure(&unchecked).unwrap();
+        assert!(why.contains("could not be re-integrated"), "{why}");
     }
 
     fn generate_module_code(scene: &bf_codegen::Scene, text: &str) -> String {

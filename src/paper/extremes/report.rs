@@ -67,6 +67,17 @@ impl ExtremesReport {
             .collect()
     }
 
+    /// (rows whose error measure exceeds its flag bound, rows that are error measures).
+    pub fn flag_counts(&self) -> (usize, usize) {
+        let measures = self
+            .rows
+            .iter()
+            .filter(|r| is_error_measure(&r.quantity))
+            .count();
+        let exceeded = self.rows.iter().filter(|r| exceeds(r).is_some()).count();
+        (exceeded, measures)
+    }
+
     /// The report section: failures (if any) first, then one line per probe with its worst
     /// case, a flag where an error measure exceeds its bound, and what the "error estimate"
     /// column means. The full table is [`ExtremesReport::to_csv`] (written beside the report as
@@ -102,12 +113,7 @@ impl ExtremesReport {
              full table of {} rows is `{CSV_NAME}`.\n\n",
             self.rows.len()
         ));
-        let measures = self
-            .rows
-            .iter()
-            .filter(|r| is_error_measure(&r.quantity))
-            .count();
-        let exceeded = self.rows.iter().filter(|r| exceeds(r).is_some()).count();
+        let (exceeded, measures) = self.flag_counts();
         s.push_str(&format!(
             "⚑ {exceeded} of {measures} error measures exceed their flag bound ({ROUNDOFF_FLAG} u \
              for arithmetic, the stated tolerance otherwise; ⚑ ×k: outcome = k × flag bound; \
