@@ -572,6 +572,18 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 &dir,
             )?;
             pb.finish();
+            let runs = std::iter::once(("open loop".to_string(), &o)).chain(
+                tracked
+                    .iter()
+                    .map(|t| (t.feedback.map_or(String::new(), |pd| pd.label()), t)),
+            );
+            for (name, run) in runs {
+                for line in run.warning_lines() {
+                    verdict
+                        .flags
+                        .push(format!("section 5, {name}: {}", line.replace("**", "")));
+                }
+            }
             writeln!(
                 report,
                 "{}{}",

@@ -47,6 +47,13 @@ pub struct OpenLoop {
     /// max |Δq̇| (rad/s)) between the simulated pre-impact state and the optimal state at
     /// the end of phase 1 — separates drift of the free flight from the impact model.
     pub first_impact: Option<(f64, f64, f64, f64)>,
+    /// The simulator's warnings of the run (`RunSummary::warnings`: impacts that raised the
+    /// energy, a failed energy-balance check, Zeno fallbacks), in time order.
+    pub warnings: Vec<bf_sim::SimWarning>,
+    /// The largest energy gain of an impact (J; `RunSummary::max_impact_energy_gain`).
+    pub max_impact_energy_gain: f64,
+    /// The energy at the run's first sample (J), the scale of the gains.
+    pub energy_initial: f64,
 }
 
 /// The share of [`OpenLoop::omega_scale`] up to which a replay's ω error counts as a match
@@ -194,12 +201,17 @@ pub fn tracking_input(sol: &OcpSolution, periods: usize, pd: &PdTrack) -> Result
 
 /// Simulates `periods` periods under `input` from the optimal initial state and writes the
 /// files of `simulate` into `dir`; a failed run returns its partial output and the reason.
+/// The run's summary comes with it, for its warnings.
 fn replay<I: Input>(
     sol: &OcpSolution,
     periods: usize,
     input: I,
     dir: &Path,
-) -> Result<(SimOutput<Mode>, Option<String>)> {
+) -> Result<(
+    SimOutput<Mode>,
+    Option<String>,
+    bf_sim::ball_finger::RunSummary,
+)> {
     let model = bf_model::fixtures::paper_scene().context("paper scene")?;
     let settings = BallFingerSettings {
         impact_law: ImpactLaw::Newton,
@@ -209,7 +221,7 @@ fn replay<I: Input>(
     let (out, report, stopped) = simulate_optimum(sol, model, input, settings, t_end)?;
     // The files of `simulate` (same columns, units and mode names).
     report.write_dir(dir, &out, stopped.as_deref())?;
-    Ok((out, stopped))
+    Ok((out, stopped, report.summary))
 }
 
 /// Simulates `plant` under `input` with `settings` from the optimum's initial state x(0) (its
@@ -312,8 +324,11 @@ pub fn initial_state(sol: &OcpSolution) -> Result<Vec<f64>> {
 fn analyse(
     sol: &OcpSolution,
     periods: usize,
-    out: SimOutput<Mode>,
-    stopped: Option<String>,
+    (out, stopped, summary): (
+        SimOutput<Mode>,
+        Option<String>,
+        bf_sim::ball_finger::RunSummary,
+    ),
     feedback: Option<PdTrack>,
 ) -> OpenLoop {
     let tr = &out.trajectory;
@@ -389,6 +404,9 @@ fn analyse(
         mode_time,
         events,
         first_impact,
+        warnings: summary.warnings,
+        max_impact_energy_gain: summary.max_impact_energy_gain,
+        energy_initial: summary.energy_initial,
     }
 }
 
@@ -466,8 +484,8 @@ fn write_figure(
 
 /// Run the open-loop simulation and write its trajectory, events and Fig. 17 into `dir`.
 pub fn run_open_loop(sol: &OcpSolution, periods: usize, dir: &Path) -> Result<OpenLoop> {
-    let (out, stopped) = replay(sol, periods, periodic_torques(sol, periods)?, dir)?;
-    let o = analyse(sol, periods, out, stopped, None);
+    let run = replay(sol, periods, periodic_torques(sol, periods)?, dir)?;
+    let o = analyse(sol, periods, run, None);
     write_figure(sol, &o, &[], dir)?;
     Ok(o)
 }
@@ -480,8 +498,8 @@ pub fn run_pd_tracked(
     pd: &PdTrack,
     dir: &Path,
 ) -> Result<OpenLoop> {
-    let (out, stopped) = replay(sol, periods, tracking_input(sol, periods, pd)?, dir)?;
-    Ok(analyse(sol, periods, out, stopped, Some(*pd)))
+    let run = replay(sol, periods, tracking_input(sol, periods, pd)?, dir)?;
+    Ok(analyse(sol, periods, run, Some(*pd)))
 }
 
 /// The pure open loop (files in `dir/open-loop`) and a PD-tracked replay of the same torques
@@ -494,8 +512,8 @@ pub fn run_open_loop_study(
     dir: &Path,
 ) -> Result<(OpenLoop, Vec<OpenLoop>)> {
     let open_dir = dir.join("open-loop");
-    let (out, stopped) = replay(sol, periods, periodic_torques(sol, periods)?, &open_dir)?;
-    let open = analyse(sol, periods, out, stopped, None);
+    let run = replay(sol, periods, periodic_torques(sol, periods)?, &open_dir)?;
+    let open = analyse(sol, periods, run, None);
     let mut tracked = Vec::new();
     for (j, pd) in variants.iter().enumerate() {
         let name = match j {
@@ -506,6 +524,87 @@ pub fn run_open_loop_study(
     }
     write_figure(sol, &open, &tracked, &open_dir)?;
     Ok((open, tracked))
+}
+
+/// Kind of the warning of a failed energy-balance check (bf-sim's `RunSummary`).
+const ENERGY_ERROR: &str = "energy_error";
+
+impl OpenLoop {
+    /// The simulator's warnings of the run, one sentence per kind: how many, the worst (the
+    /// largest energy gain of an impact, as a share of the run's initial energy), when the
+    /// first occurred. A failed energy-balance check is marked: the run's own accuracy check
+    /// failed, so its figures measure the integration as much as the open loop.
+    pub fn warning_lines(&self) -> Vec<String> {
+        let mut kinds: Vec<&str> = Vec::new();
+        for w in &self.warnings {
+            if !kinds.contains(&w.kind) {
+                kinds.push(w.kind);
+            }
+        }
+        kinds
+            .into_iter()
+            .map(|kind| {
+                let of: Vec<&bf_sim::SimWarning> =
+                    self.warnings.iter().filter(|w| w.kind == kind).collect();
+                let first = of[0];
+                let n = of.len();
+                match kind {
+                    "energy_raising_impact" => {
+                        let share = if self.energy_initial.abs() > 0.0 {
+                            format!(
+                                " ({:.1} % of the run's initial energy {:.3e} J)",
+                                100.0 * self.max_impact_energy_gain / self.energy_initial.abs(),
+                                self.energy_initial
+                            )
+                        } else {
+                            String::new()
+                        };
+                        format!(
+                            "{n} impact{} raised the energy (`{kind}`), the largest by \
+                             {:+.3e} J{share}, the first at t = {:.4} s: Newton's law (eq. 39) \
+                             does not guarantee dissipation",
+                            if n == 1 { "" } else { "s" },
+                            self.max_impact_energy_gain,
+                            first.t
+                        )
+                    }
+                    ENERGY_ERROR => format!(
+                        "**the energy balance failed its check** (`{kind}`) at t = {:.4} s: {}",
+                        first.t,
+                        crate::names::tidy(&first.message)
+                    ),
+                    _ => format!(
+                        "{n} `{kind}` warning{}, the first at t = {:.4} s: {}",
+                        if n == 1 { "" } else { "s" },
+                        first.t,
+                        crate::names::tidy(&first.message)
+                    ),
+                }
+            })
+            .collect()
+    }
+
+    /// Whether the run's energy balance failed the simulator's check.
+    pub fn energy_check_failed(&self) -> bool {
+        self.warnings.iter().any(|w| w.kind == ENERGY_ERROR)
+    }
+}
+
+/// The simulator's warnings of the run `o` named `name` as a paragraph ("none" too: the reader
+/// should not have to guess whether they were looked at).
+fn warnings_markdown(name: &str, o: &OpenLoop) -> String {
+    let lines = o.warning_lines();
+    if lines.is_empty() {
+        return format!("Simulator warnings, {name}: none.\n");
+    }
+    let mut s = format!(
+        "Simulator warnings, {name} ({}, `summary.json`'s `warnings`):\n",
+        o.warnings.len()
+    );
+    for l in lines {
+        s.push_str(&format!("- {l}\n"));
+    }
+    s
 }
 
 /// The report section.
@@ -549,6 +648,7 @@ pub fn markdown(o: &OpenLoop) -> Result<String> {
     for (k, n) in &o.events {
         writeln!(s, "| {k} | {n} |")?;
     }
+    writeln!(s, "\n{}", warnings_markdown("open loop", o))?;
     writeln!(
         s,
         "\n![Fig. 17 counterpart](figures/fig17_open_loop.svg)\n\n\
@@ -582,13 +682,14 @@ pub fn pd_markdown(open: &OpenLoop, tracked: &[OpenLoop]) -> Result<String> {
          the dotted and long-dashed curves of the figure above.\n"
     )?;
     for o in tracked {
+        let label = o.feedback.map_or(String::new(), |pd| pd.label());
         if let Some(msg) = &o.stopped {
-            let label = o.feedback.map_or(String::new(), |pd| pd.label());
             writeln!(
                 s,
                 "**The run {label} stopped early** ({msg}); the partial trajectory is reported.\n"
             )?;
         }
+        writeln!(s, "{}", warnings_markdown(&label, o))?;
     }
     let runs: Vec<(String, &OpenLoop)> = std::iter::once(("open loop".to_string(), open))
         .chain(
@@ -642,4 +743,73 @@ pub fn pd_markdown(open: &OpenLoop, tracked: &[OpenLoop]) -> Result<String> {
         )?;
     }
     Ok(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(warnings: Vec<bf_sim::SimWarning>) -> OpenLoop {
+        OpenLoop {
+            periods: 1,
+            t_reached: 3.0,
+            stopped: None,
+            omega_error_per_period: vec![0.5],
+            q_error_per_period: vec![0.1],
+            omega_scale: 1.0,
+            feedback: None,
+            trajectory: bf_sim::Trajectory::default(),
+            mode_time: [3.0, 0.0, 0.0],
+            events: vec![],
+            first_impact: None,
+            max_impact_energy_gain: 5.534e-3,
+            energy_initial: 0.11,
+            warnings,
+        }
+    }
+
+    fn impact(t: f64, gain: f64) -> bf_sim::SimWarning {
+        bf_sim::SimWarning {
+            t,
+            kind: "energy_raising_impact",
+            message: format!("newton impact raised the energy by {gain:+.3e} J"),
+        }
+    }
+
+    /// The simulator's warnings reach the report section: per kind, the count, the worst gain
+    /// and its share of the run's energy; a failed energy check is marked; no warnings say so.
+    #[test]
+    fn the_open_loop_section_shows_the_simulators_warnings() {
+        let o = run(vec![
+            impact(2.0662460095657007, 5.534e-3),
+            impact(5.93, 5.5e-3),
+        ]);
+        let md = markdown(&o).unwrap();
+        assert!(
+            md.contains(
+                "- 2 impacts raised the energy (`energy_raising_impact`), the largest by \
+                 +5.534e-3 J (5.0 % of the run's initial energy 1.100e-1 J), the first at \
+                 t = 2.0662 s"
+            ),
+            "{md}"
+        );
+        assert!(!o.energy_check_failed());
+        let mut failed = run(vec![bf_sim::SimWarning {
+            t: 1.4299208130706953,
+            kind: "energy_error",
+            message: "energy-balance error 3.211e-3 J from t = 0 s exceeds 1e-3 J".into(),
+        }]);
+        failed.feedback = Some(DEFAULT_PD_TRACK);
+        assert!(failed.energy_check_failed());
+        let md = pd_markdown(&run(vec![]), &[failed]).unwrap();
+        assert!(
+            md.contains("**the energy balance failed its check** (`energy_error`) at t = 1.4299 s"),
+            "{md}"
+        );
+        assert!(
+            markdown(&run(vec![]))
+                .unwrap()
+                .contains("Simulator warnings, open loop: none.")
+        );
+    }
 }
