@@ -463,13 +463,17 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             r.name,
             crate::paper::scenarios::figures_markdown(&r.name)
         )?;
-        if let Some(st) = &r.solution.strategy {
+        let resolved = !args.quick && !args.search;
+        if let (Some(st), Some(stages)) = (
+            &r.solution.strategy,
+            crate::paper::scenarios::solve_stages(&r.solution, resolved),
+        ) {
             writeln!(
                 report,
-                "Solve stages (the search's summary and the kept chain; every stage is in \
-                 `{}/solution.json`):\n\n```text\n{}```\n",
+                "Solve stages (the search's summary, the kept chain, the rounds of the hp \
+                 refinement that verified it, and last the optimum of the table above; every \
+                 stage is in `{}/solution.json`):\n\n```text\n{stages}```\n",
                 r.name,
-                st.kept_table()
             )?;
             if let Some(line) = crate::pipeline::search::basin_line(st) {
                 writeln!(report, "Global search, {line}.\n")?;

@@ -683,6 +683,83 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
     s
 }
 
+/// One line of [`solve_stages`], in the columns of `StrategyReport::kept_table`.
+fn stage_line(
+    chain: Option<usize>,
+    stage: &str,
+    status: &bf_optim::ipm::Status,
+    objective: f64,
+    period: Option<f64>,
+    iterations: usize,
+    seconds: f64,
+) -> String {
+    let period = period.map_or("-".to_string(), |p| format!("{p:.4}"));
+    let chain = chain.map_or("-".to_string(), |c| c.to_string());
+    format!(
+        "* {chain:>5}  {stage:<20}  {:<14} {objective:>12.6e} {period:>8} {iterations:>5} {seconds:>8.2}\n",
+        crate::names::name(status),
+    )
+}
+
+/// The solve stages of `sol` as the report shows them: the strategy's summary and the stages
+/// of its kept chain (`StrategyReport::kept_table`), then the rounds of the hp refinement
+/// that verified it (`solution.json`'s `refinement.history`), and last the optimum the
+/// results table reports: where `resolved`, the solve of the stored optimum from its own
+/// point in this run, otherwise a line of its own only where it differs from the line before.
+/// `None` for a solution without a strategy record.
+pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
+    let st = sol.strategy.as_ref()?;
+    let mut s = st.kept_table();
+    let chain = st.chosen;
+    let mut last = st
+        .records
+        .iter()
+        .rev()
+        .find(|r| Some(r.chain) == chain)
+        .map(|r| r.objective);
+    if let Some(refinement) = &sol.refinement {
+        let what = match refinement.criterion {
+            bf_problem::solution::records::RefineCriterion::Estimate => "error estimate",
+            bf_problem::solution::records::RefineCriterion::Reintegration { .. } => "defect",
+        };
+        for r in &refinement.history {
+            let points: Vec<String> = r.points.iter().map(usize::to_string).collect();
+            s.push_str(&stage_line(
+                chain,
+                &format!(
+                    "hp round {}: {} points, {what} {:.1e}",
+                    r.round,
+                    points.join("/"),
+                    r.max_error
+                ),
+                &r.status,
+                r.objective,
+                None,
+                r.iterations,
+                r.seconds,
+            ));
+            last = Some(r.objective);
+        }
+    }
+    if resolved || last.is_none_or(|o| o.to_bits() != sol.objective.to_bits()) {
+        let stage = if resolved {
+            "stored optimum solved again here from its own point"
+        } else {
+            "reported optimum"
+        };
+        s.push_str(&stage_line(
+            chain,
+            stage,
+            &sol.status,
+            sol.objective,
+            Some(sol.period),
+            sol.iterations,
+            sol.solve_seconds,
+        ));
+    }
+    Some(s)
+}
+
 /// Figures of one scenario as markdown image links (relative to the report).
 pub fn figures_markdown(name: &str) -> String {
     let mut s: String = SCENARIO_FIGURES
@@ -758,6 +835,56 @@ mod tests {
         // Degenerate durations still give the minimum per phase, no panic.
         let t = path_taus(&[0.0, f64::NAN]);
         assert!(t.iter().all(|t| t.len() == PATH_SAMPLES_PER_PHASE));
+    }
+
+    /// The stages end at the optimum the table reports: the kept chain, then every round of
+    /// the hp refinement, then the solve of the stored optimum in this run, or a line of its
+    /// own for an optimum that differs from the last round.
+    #[test]
+    fn solve_stages_end_with_the_reported_optimum() {
+        let stored = crate::paper::stored::stored_optimum(
+            Problem::PeriodicCotHuman,
+            Some("stick"),
+            bf_problem::catalogue::MIN_STICK,
+        )
+        .unwrap();
+        let sol = stored.solution().unwrap();
+        let history = &sol.refinement.as_ref().unwrap().history;
+        assert!(history.len() > 1, "the stored optimum was refined");
+        let last_round = history.last().unwrap();
+        let text = solve_stages(&sol, false).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        for r in history {
+            assert!(
+                lines
+                    .iter()
+                    .any(|l| l.contains(&format!("hp round {}: ", r.round))),
+                "round {} missing:\n{text}",
+                r.round
+            );
+        }
+        let tail = *lines.last().unwrap();
+        assert!(
+            tail.contains(&format!("hp round {}", last_round.round)),
+            "{text}"
+        );
+        assert!(
+            tail.contains(&format!("{:.6e}", last_round.objective)),
+            "{text}"
+        );
+        assert_eq!(last_round.objective.to_bits(), sol.objective.to_bits());
+
+        let mut moved = sol.clone();
+        moved.objective *= 1.001;
+        let text = solve_stages(&moved, false).unwrap();
+        let tail = text.lines().last().unwrap();
+        assert!(tail.contains("reported optimum"), "{text}");
+        assert!(tail.contains(&format!("{:.6e}", moved.objective)), "{text}");
+
+        let text = solve_stages(&sol, true).unwrap();
+        let tail = text.lines().last().unwrap();
+        assert!(tail.contains("solved again here"), "{text}");
+        assert!(tail.contains(&format!("{:.6e}", sol.objective)), "{text}");
     }
 
     #[test]
