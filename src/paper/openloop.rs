@@ -597,10 +597,8 @@ fn warnings_markdown(name: &str, o: &OpenLoop) -> String {
     if lines.is_empty() {
         return format!("Simulator warnings, {name}: none.\n");
     }
-    let mut s = format!(
-        "Simulator warnings, {name} ({}, `summary.json`'s `warnings`):\n",
-        o.warnings.len()
-    );
+    let n = o.warnings.len();
+    let mut s = format!("Simulator warnings, {name} ({n} in its `summary.json`'s `warnings`):\n\n");
     for l in lines {
         s.push_str(&format!("- {l}\n"));
     }
