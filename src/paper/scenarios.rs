@@ -671,7 +671,7 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
         let cone_cells = match worst_cone_margin(v) {
             Some(m) => format!(
                 "{} | {:.2e} | {:.2e} | {}",
-                m.phase,
+                m.phase + 1,
                 m.min_sigma,
                 -m.allowance,
                 yes(m.within())
@@ -885,6 +885,54 @@ mod tests {
         let tail = text.lines().last().unwrap();
         assert!(tail.contains("solved again here"), "{text}");
         assert!(tail.contains(&format!("{:.6e}", sol.objective)), "{text}");
+    }
+
+    /// Text for readers counts phases from 1, as the active bounds do: the stick phase of
+    /// free, stick, free (index 1 in the file) is phase 2 in the tolerance table and in the
+    /// verification summary, and so are the verdict's sentences.
+    #[test]
+    fn phases_are_numbered_from_one_in_every_text() {
+        let stored = crate::paper::stored::stored_optimum(
+            Problem::PeriodicQc,
+            Some("stick"),
+            bf_problem::catalogue::MIN_STICK,
+        )
+        .unwrap();
+        let sol = stored.solution().unwrap();
+        let v = sol.verification.clone().unwrap();
+        assert_eq!(v.phases[1].phase, 1, "the file's index is 0-based");
+        let r = ScenarioResult {
+            name: "periodic-qc".into(),
+            solution: sol,
+            max_tau: 0.0,
+            contact_from_tip: (0.0, 0.0, 0.0),
+            cone_share: 1.0,
+            active: vec![],
+        };
+        let md = tolerances_markdown(&[r]);
+        let row = md
+            .lines()
+            .find(|l| l.starts_with("| periodic-qc |"))
+            .unwrap();
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        assert_eq!(cells[4], "2", "{row}");
+        let summary = v.summary();
+        assert!(
+            summary.lines().any(|l| l.starts_with("    2 stick")),
+            "{summary}"
+        );
+        assert!(
+            !summary.lines().any(|l| l.starts_with("    0 ")),
+            "{summary}"
+        );
+        let mut slipping = v.clone();
+        slipping.phases[1].min_sigma = Some(-1.0);
+        let why = crate::pipeline::verify::cone_failure(&slipping).unwrap();
+        assert!(why.starts_with("phase 2 (stick)"), "{why}");
+        let mut sagging = v;
+        sagging.phases[0].min_h = Some(-1.0);
+        let why = crate::pipeline::verify::penetration_failure(&sagging).unwrap();
+        assert!(why.starts_with("phase 1 (free)"), "{why}");
     }
 
     #[test]

@@ -106,7 +106,8 @@ pub fn active_bounds(ocp: &Ocp, sol: &OcpSolution) -> Vec<ActiveBound> {
         let what = if ph.len() == sol.phase_durations.len() {
             "period (s)".to_string()
         } else {
-            format!("sum of the durations of phases {ph:?} (s)")
+            let phases: Vec<String> = ph.iter().map(|i| (i + 1).to_string()).collect();
+            format!("sum of the durations of phases {} (s)", phases.join(", "))
         };
         q.push((what, vec![sum], b));
     }

@@ -92,11 +92,11 @@ pub enum PipelineError {
         source: bf_model::ModelError,
     },
     /// bf-model cannot evaluate a collocation node of the solution to verify.
-    #[error("verification: phase {phase} node {node} cannot be evaluated")]
+    #[error("verification: phase {} node {} cannot be evaluated", .phase + 1, .node + 1)]
     NodeEvaluation {
-        /// The phase.
+        /// The phase, 0-based (the message counts from 1).
         phase: usize,
-        /// The node within the phase.
+        /// The node within the phase, 0-based (the message counts from 1).
         node: usize,
         /// Why.
         #[source]
@@ -143,9 +143,9 @@ pub enum PipelineError {
         problem: f64,
     },
     /// A phase trajectory of the solution to verify is inconsistent.
-    #[error("verification: phase {phase} has {defect}")]
+    #[error("verification: phase {} has {defect}", .phase + 1)]
     PhaseData {
-        /// The phase.
+        /// The phase, 0-based (the message counts from 1).
         phase: usize,
         /// What is wrong.
         defect: PhaseDataDefect,

@@ -908,7 +908,7 @@ pub fn touch_failure(v: &Verification) -> Option<String> {
                 "phase {} (free): the path touches the ball with the exact contact (the \
                  plant's) at t = {:.4} s, {lead:.4} s before the phase ends (allowance {:.0} % \
                  of its {:.4} s)",
-                p.phase,
+                p.phase + 1,
                 p.duration - lead,
                 100.0 * TOUCH_LEAD_TOLERANCE,
                 p.duration
@@ -936,7 +936,7 @@ pub fn penetration_failure(v: &Verification) -> Option<String> {
             format!(
                 "phase {} (free): the re-integrated path penetrates the ball, min h = {h:.3e} m \
                  below the allowance -{tol:e} m",
-                p.phase
+                p.phase + 1
             )
         })
     })
@@ -945,7 +945,7 @@ pub fn penetration_failure(v: &Verification) -> Option<String> {
 /// The friction-cone margin of one re-integrated stick phase against its allowance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ConeMargin {
-    /// Phase index.
+    /// Phase index, 0-based (text for readers counts phases from 1).
     pub phase: usize,
     /// min σ = μ_s λ_n − ‖λ_∥‖ along the phase's re-integration (N).
     pub min_sigma: f64,
@@ -1015,7 +1015,9 @@ pub fn cone_failure(v: &Verification) -> Option<String> {
         format!(
             "phase {} (stick): the re-integrated contact force leaves the friction cone, min σ = \
              {:.3e} N below the allowance -{:.3e} N ({CONE_TOLERANCE} · μ_s · max λ_n)",
-            m.phase, m.min_sigma, m.allowance
+            m.phase + 1,
+            m.min_sigma,
+            m.allowance
         )
     })
 }

@@ -252,7 +252,7 @@ pub enum TorqueInterpolant {
 /// whole phase from its collocated initial state (`open_loop_*`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PhaseVerification {
-    /// Phase index.
+    /// Phase index, 0-based (text for readers counts phases from 1).
     pub phase: usize,
     /// Contact mode.
     pub mode: PhaseMode,
@@ -590,7 +590,9 @@ impl fmt::Display for Verification {
             writeln!(
                 f,
                 "{:>5} {:>5} {:>9.4} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>9.2e} {:>6} {:>9.2e} {:>9.2e}  {}",
-                p.phase,
+                // Phases are counted from 1 in text, as in every report (`phase` of the record
+                // is the 0-based index).
+                p.phase + 1,
                 mode,
                 p.duration,
                 p.defect,
