@@ -378,6 +378,38 @@ fn a_runs_inputs_and_foreign_files_are_never_overwritten() {
         std::fs::read_to_string(urdf_dir.join("arm.urdf")).unwrap(),
         urdf
     );
+    // One report's set is not another's: the manifest names the report, which is checked
+    // before the work.
+    let strategies = dir.join("strategies");
+    std::fs::create_dir_all(&strategies).unwrap();
+    std::fs::write(strategies.join("strategies.md"), "# table").unwrap();
+    std::fs::write(
+        strategies.join(bf_output::MANIFEST),
+        format!(
+            r#"{{"command": "{}", "status": "success"}}"#,
+            ball_finger::commands::report::output_command("strategies")
+        ),
+    )
+    .unwrap();
+    let o = run(&[
+        "report",
+        "speed-accuracy",
+        "--quick",
+        "--out",
+        strategies.to_str().unwrap(),
+    ]);
+    assert_error(
+        &o,
+        1,
+        &[
+            "--out",
+            "output of `report strategies`, not of `report speed-accuracy`",
+        ],
+    );
+    assert_eq!(
+        std::fs::read_to_string(strategies.join("strategies.md")).unwrap(),
+        "# table"
+    );
     // A stored solution with notes beside it, and no manifest.
     let stored = dir.join("stored");
     std::fs::create_dir_all(stored.join("notes")).unwrap();

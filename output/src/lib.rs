@@ -148,7 +148,9 @@ fn parent_of(path: &Path) -> PathBuf {
 pub struct DirSpec<'a> {
     /// The command-line option that named the directory (`--out`), for error messages.
     pub option: &'a str,
-    /// The command writing it (recorded in the manifest).
+    /// The command writing it, recorded in the manifest: a directory is replaced only by the
+    /// command that wrote it. With the subcommand where that chooses what the set holds
+    /// (`report strategies`).
     pub command: &'a str,
 }
 
@@ -195,7 +197,7 @@ impl OutputDir {
                     "{opt} {}: does not name a directory that could be replaced (give a \
                      directory name such as out/{})",
                     target.display(),
-                    spec.command
+                    spec.command.replace(' ', "-")
                 ))
             })?
             .to_string_lossy()

@@ -17,6 +17,12 @@ use crate::cli::ReportArgs;
 /// Names of the reports `report` knows.
 pub const REPORTS: &[&str] = &["speed-accuracy", "strategies"];
 
+/// The command an output set of the report `which` records in its manifest
+/// (`report strategies`), which [`OutputDir::create`] compares with the directory it replaces.
+pub fn output_command(which: &str) -> String {
+    format!("report {which}")
+}
+
 /// Runs the report named by `a.which`.
 pub fn run(a: &ReportArgs) -> Result<()> {
     if !REPORTS.contains(&a.which.as_str()) {
@@ -31,11 +37,14 @@ pub fn run(a: &ReportArgs) -> Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out/report").join(&a.which));
     let md_name = format!("{}.md", a.which);
+    // The manifest names the report, not only the command: one report's set is not another's,
+    // so `report speed-accuracy` refuses a directory `report strategies` wrote.
+    let command = output_command(&a.which);
     let mut out = OutputDir::create(
         &target,
         &DirSpec {
             option: "--out",
-            command: "report",
+            command: &command,
         },
         &[],
     )?;
