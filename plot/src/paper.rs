@@ -165,9 +165,14 @@ pub fn fig_distance(
         fit: true,
     });
     phases.apply(&mut a);
+    // The legend names the plotted quantity as the axis does (with its definition by the
+    // saturated contact parameter, eq. 3); a distance: the axis starts at 0.
     let mut b = LineFigure::new("contact point to fingertip", "t [s]", "|p_c − p_e| [m]");
-    b.series
-        .push(Series::new("|sat(α)|", pts(contact_from_tip)).styled(fixed(C_ORANGE, Dash::Solid)));
+    b.y_non_negative = true;
+    b.series.push(
+        Series::new("|p_c − p_e| = |sat(α)|", pts(contact_from_tip))
+            .styled(fixed(C_ORANGE, Dash::Solid)),
+    );
     phases.apply(&mut b);
     Ok(PanelFigure {
         title: title.into(),
@@ -596,6 +601,23 @@ mod tests {
                 .collect(),
             names: (0..comps).map(|k| format!("c{k}")).collect(),
         }
+    }
+
+    /// The contact-point panel's legend names the quantity its axis plots, and the axis of that
+    /// distance starts at 0 (an identically-zero series is not centred on an axis −1…1).
+    #[test]
+    fn the_contact_distance_panel_is_consistent_and_non_negative() {
+        let t = [0.0, 1.0, 2.0];
+        let f = fig_distance("d", &t, &[0.3, 0.0, 0.3], &[0.0; 3], &Phases::default()).unwrap();
+        let b = &f.panels[1];
+        assert!(b.y_non_negative && !f.panels[0].y_non_negative);
+        let quantity = b.y_label.trim_end_matches(" [m]");
+        assert!(
+            b.series[0].name.starts_with(quantity),
+            "{} vs {}",
+            b.series[0].name,
+            b.y_label
+        );
     }
 
     #[test]

@@ -20,7 +20,8 @@
 //! explicit `x_range`/`y_range` narrower than the data never draw outside the axes, and thick
 //! bitmap lines are split at sharp turns (`canvas::split_sharp_turns`) because plotters' bitmap stroker
 //! would otherwise extend hairpins into spikes across the whole image. Default ranges cover
-//! every finite point of every series (equal-aspect views: 5 % margin on both axes).
+//! every finite point of every series (equal-aspect views: 5 % margin on both axes); a log axis
+//! ends at ticks (whole decades where it spans two or more, so that its ends are labelled).
 //! Colours follow a 10-colour qualitative palette and dash patterns cycle with period 4, so the
 //! first 20 automatically styled series of a figure are pairwise distinct even in grey-scale print.
 //!
@@ -248,6 +249,10 @@ pub struct LineFigure {
     /// matters (torques, forces), so that a small variation about a non-zero value is not
     /// blown up to the full height, and all panels of a figure read the same way.
     pub y_includes_zero: bool,
+    /// The quantity cannot be negative (a distance, a norm; linear axes; default false): the
+    /// fitted y range does not extend below 0, and a series that is identically 0 gets the
+    /// range [0, 1] rather than one around 0.
+    pub y_non_negative: bool,
     /// Same data-to-pixel scale on both axes (for geometric views; linear axes only).
     pub equal_aspect: bool,
     /// Legend placement (default [`LegendPos::Auto`]).
@@ -276,6 +281,7 @@ impl LineFigure {
             x_range: None,
             y_range: None,
             y_includes_zero: false,
+            y_non_negative: false,
             equal_aspect: false,
             legend: LegendPos::Auto,
             size: (1000, 600),

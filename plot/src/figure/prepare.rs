@@ -200,7 +200,7 @@ pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
     } else {
         0.0
     };
-    let xr = xr_fixed.unwrap_or_else(|| widen(fold(|p| p.0), x_pad));
+    let xr = xr_fixed.unwrap_or_else(|| snap_log(widen(fold(|p| p.0), x_pad), fig.x_scale));
     let yr = yr_fixed.unwrap_or_else(|| {
         let (mut lo, mut hi) = fold(|p| p.1);
         for h in fig.hlines.iter().filter(|h| h.fit) {
@@ -213,7 +213,17 @@ pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
             lo = lo.min(0.0);
             hi = hi.max(0.0);
         }
-        widen((lo, hi), 0.05)
+        let non_negative = fig.y_non_negative && fig.y_scale == Scale::Linear && lo >= 0.0;
+        if non_negative && hi <= 0.0 {
+            // Identically 0: the axis of a quantity that cannot be negative starts at 0.
+            return (0.0, 1.0);
+        }
+        let (lo, hi) = widen((lo, hi), 0.05);
+        if non_negative {
+            (lo.max(0.0), hi)
+        } else {
+            snap_log((lo, hi), fig.y_scale)
+        }
     });
     Ok(Prepared {
         series: out,
@@ -221,6 +231,36 @@ pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
         xr,
         yr,
     })
+}
+
+/// On a log axis, the range `(lo, hi)` (log10 units) widened to ticks: to whole decades where it
+/// spans two decades or more, so that the decade labels include both ends, otherwise to the
+/// nearest mantissa ticks m·10^e (m = 1…9) at or beyond its ends, so that no data lies beyond
+/// the outermost tick. Linear ranges are returned as they are.
+pub(super) fn snap_log((lo, hi): (f64, f64), scale: Scale) -> (f64, f64) {
+    if scale != Scale::Log10 || !(lo.is_finite() && hi.is_finite() && hi > lo) {
+        return (lo, hi);
+    }
+    // Positions within this of a tick count as on it (rounding of log10).
+    const ON: f64 = 1e-9;
+    if hi - lo >= 2.0 - ON {
+        return ((lo + ON).floor(), (hi - ON).ceil());
+    }
+    let down = |v: f64| {
+        let e = (v + ON).floor();
+        let m = libm::pow(10.0, v - e);
+        e + libm::log10((m + ON).floor().max(1.0))
+    };
+    let up = |v: f64| {
+        let e = (v - ON).floor();
+        let m = (libm::pow(10.0, v - e) - ON).ceil();
+        if m >= 10.0 {
+            e + 1.0
+        } else {
+            e + libm::log10(m)
+        }
+    };
+    (down(lo), up(hi))
 }
 
 /// Pads a range by `frac` of its span and makes degenerate ranges non-empty.

@@ -15,6 +15,63 @@ fn widen_handles_degenerate_ranges() {
     assert!((a + 1.0).abs() < 1e-12 && (b - 11.0).abs() < 1e-12);
 }
 
+/// A quantity that cannot be negative gets a [0, …] axis: [0, 1] when it is identically 0
+/// (not −1…1), and never a padding below 0 otherwise; without the flag nothing changes.
+#[test]
+fn non_negative_axes_start_at_zero() {
+    let mut f = LineFigure::new("t", "t [s]", "d [m]");
+    f.series
+        .push(Series::new("d", vec![(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]));
+    assert_eq!(prepare(&f).unwrap().yr, (-1.0, 1.0));
+    f.y_non_negative = true;
+    assert_eq!(prepare(&f).unwrap().yr, (0.0, 1.0));
+    f.series[0].points[1].1 = 0.5;
+    let (lo, hi) = prepare(&f).unwrap().yr;
+    assert_eq!(lo, 0.0);
+    assert!(hi > 0.5, "{hi}");
+}
+
+/// An autoscaled log axis ends at ticks: at whole decades when it spans two or more (both
+/// ends labelled), at mantissa ticks otherwise, so no point lies beyond the outermost tick.
+#[test]
+fn log_axes_end_at_ticks() {
+    let lg = |v: f64| libm::log10(v);
+    let near = |a: (f64, f64), b: (f64, f64)| (a.0 - b.0).abs() < 1e-9 && (a.1 - b.1).abs() < 1e-9;
+    // Solve times 0.12–0.35 s: from the tick 1e-1 to the tick 4e-1.
+    let r = snap_log((lg(0.12), lg(0.35)), Scale::Log10);
+    assert!(near(r, (lg(0.1), lg(0.4))), "{r:?}");
+    // On ticks already: unchanged.
+    let r = snap_log((lg(0.2), lg(0.5)), Scale::Log10);
+    assert!(near(r, (lg(0.2), lg(0.5))), "{r:?}");
+    // Errors 5.25e-9 … 3.58e-3: whole decades 1e-9 … 1e-2.
+    let r = snap_log((lg(5.25e-9), lg(3.58e-3)), Scale::Log10);
+    assert!(near(r, (-9.0, -2.0)), "{r:?}");
+    // Up to the next decade from 9.5.
+    let r = snap_log((lg(2.0), lg(9.5)), Scale::Log10);
+    assert!(near(r, (lg(2.0), 1.0)), "{r:?}");
+    assert_eq!(snap_log((0.3, 0.7), Scale::Linear), (0.3, 0.7));
+    // Through prepare: the x range of a log axis ends at the ticks.
+    let mut f = LineFigure::new("t", "time [s]", "error");
+    f.x_scale = Scale::Log10;
+    f.y_scale = Scale::Log10;
+    f.series.push(Series::new(
+        "runs",
+        vec![
+            (0.12, 3.58e-3),
+            (0.15, 4.7e-4),
+            (0.18, 5.25e-5),
+            (0.35, 5.25e-9),
+        ],
+    ));
+    let p = prepare(&f).unwrap();
+    assert!(
+        p.xr.0 <= lg(0.1) + 1e-12 && p.xr.1 >= lg(0.35),
+        "{:?}",
+        p.xr
+    );
+    assert_eq!((p.yr.0.fract(), p.yr.1.fract()), (0.0, 0.0), "{:?}", p.yr);
+}
+
 #[test]
 fn nan_splits_series_and_is_counted() {
     let mut f = LineFigure::new("t", "x", "y");

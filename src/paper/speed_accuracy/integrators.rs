@@ -88,6 +88,71 @@ pub(super) fn measure(quick: bool) -> Result<(f64, Vec<WorkPrecisionRow>)> {
     Ok((t_end, rows))
 }
 
+/// The ladder's knob of a row as the figures label it: the fixed step for RK4, rtol for DOPRI5.
+fn knob(r: &WorkPrecisionRow) -> String {
+    if r.method == "rk4" {
+        format!("h {:.0e} s", r.parameter)
+    } else {
+        format!("rtol {:.0e}", r.parameter)
+    }
+}
+
+/// The runs of `method` that a figure leaves out: those that failed, and, for the event-time
+/// figure (`events`), those whose event sequence differs from the reference's (their event
+/// times cannot be compared one to one).
+fn left_out<'a>(
+    rows: &'a [WorkPrecisionRow],
+    method: &str,
+    events: bool,
+) -> Vec<&'a WorkPrecisionRow> {
+    rows.iter()
+        .filter(|r| r.method == method)
+        .filter(|r| r.failure.is_some() || (events && !r.same_events))
+        .collect()
+}
+
+/// The legend name of `method`'s set in a figure, with how many of its runs the figure
+/// leaves out ([`left_out`]), so that a missing point is never taken for a missing run.
+fn set_name(rows: &[WorkPrecisionRow], method: &str, events: bool) -> String {
+    let all = rows.iter().filter(|r| r.method == method).count();
+    let out = left_out(rows, method, events).len();
+    if out == 0 {
+        method.to_string()
+    } else {
+        format!("{method} ({out} of {all} runs not shown)")
+    }
+}
+
+/// The sentence under the figures naming the runs they leave out and why; empty when none.
+fn left_out_note(rows: &[WorkPrecisionRow]) -> String {
+    let mut s = String::new();
+    for (figure, events) in [("sa_sim_state", false), ("sa_sim_events", true)] {
+        let mut parts = Vec::new();
+        for m in ["dopri5", "rk4"] {
+            let failed: Vec<String> = left_out(rows, m, false).iter().map(|r| knob(r)).collect();
+            let differs: Vec<String> = left_out(rows, m, events)
+                .iter()
+                .filter(|r| r.failure.is_none())
+                .map(|r| knob(r))
+                .collect();
+            if !failed.is_empty() {
+                parts.push(format!("{m} {} (the run failed)", failed.join(", ")));
+            }
+            if !differs.is_empty() {
+                parts.push(format!(
+                    "{m} {} (event sequence differs from the reference's, so its event times \
+                     cannot be compared)",
+                    differs.join(", ")
+                ));
+            }
+        }
+        if !parts.is_empty() {
+            let _ = write!(s, "`{figure}` leaves out {}. ", parts.join("; "));
+        }
+    }
+    s.trim_end().to_string()
+}
+
 /// The Markdown section of study (a) and its figures `sa_sim_state`, `sa_sim_events`.
 pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> Result<String> {
     let mut md = String::new();
@@ -100,7 +165,7 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
         t_end
     );
     md.push_str(&format_table(rows));
-    let series = |f: &dyn Fn(&WorkPrecisionRow) -> f64| -> Vec<WorkPrecisionSet> {
+    let series = |events: bool, f: &dyn Fn(&WorkPrecisionRow) -> f64| -> Vec<WorkPrecisionSet> {
         ["dopri5", "rk4"]
             .iter()
             .map(|m| {
@@ -109,20 +174,10 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
                     .filter(|r| r.method == *m && r.failure.is_none())
                     .collect();
                 WorkPrecisionSet {
-                    name: m.to_string(),
+                    name: set_name(rows, m, events),
                     time_s: ok.iter().map(|r| r.cpu_seconds).collect(),
                     error: ok.iter().map(|r| f(r)).collect(),
-                    // The ladder's knob: rtol for DOPRI5, the fixed step for RK4.
-                    labels: ok
-                        .iter()
-                        .map(|r| {
-                            if *m == "rk4" {
-                                format!("h {:.0e} s", r.parameter)
-                            } else {
-                                format!("rtol {:.0e}", r.parameter)
-                            }
-                        })
-                        .collect(),
+                    labels: ok.iter().map(|r| knob(r)).collect(),
                     joined: true,
                 }
             })
@@ -131,13 +186,13 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
     let fig = wp_figure(
         "Simulation: state error vs CPU time",
         "‖x(T) − x_ref(T)‖∞",
-        &series(&|r| r.error),
+        &series(false, &|r| r.error),
     )?;
     bf_plot::render(&fig, fig_dir.join("sa_sim_state"))?;
     let fig = wp_figure(
         "Simulation: event-time error vs CPU time",
         "max |t_event − t_event,ref| [s]",
-        &series(&|r| {
+        &series(true, &|r| {
             if r.same_events {
                 r.event_time_error
             } else {
@@ -150,5 +205,64 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
         "\n![state error vs time](figures/sa_sim_state.svg)\n\
          ![event-time error vs time](figures/sa_sim_events.svg)\n\n",
     );
+    let note = left_out_note(rows);
+    if !note.is_empty() {
+        let _ = writeln!(md, "{note}\n");
+    }
     Ok(md)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(
+        method: &'static str,
+        parameter: f64,
+        same_events: bool,
+        failed: bool,
+    ) -> WorkPrecisionRow {
+        WorkPrecisionRow {
+            method,
+            parameter,
+            error: if failed { f64::INFINITY } else { 1e-3 },
+            event_time_error: if same_events { 1e-4 } else { f64::NAN },
+            same_events,
+            cpu_seconds: 1e-3,
+            steps: 10,
+            rhs_evals: 40,
+            failure: failed.then(|| "step limit".to_string()),
+        }
+    }
+
+    /// The event-time figure says, in its legend and in the text, which runs it leaves out
+    /// because their event sequence differs; the state figure leaves out failed runs only.
+    #[test]
+    fn runs_left_out_of_the_figures_are_named() {
+        let rows = [
+            row("dopri5", 1e-3, true, false),
+            row("dopri5", 1e-6, true, false),
+            row("rk4", 1e-2, false, false),
+            row("rk4", 3e-3, false, false),
+            row("rk4", 1e-3, true, false),
+            row("rk4", 1e-4, true, true),
+        ];
+        assert_eq!(set_name(&rows, "dopri5", true), "dopri5");
+        assert_eq!(set_name(&rows, "rk4", true), "rk4 (3 of 4 runs not shown)");
+        assert_eq!(set_name(&rows, "rk4", false), "rk4 (1 of 4 runs not shown)");
+        let note = left_out_note(&rows);
+        assert!(
+            note.contains(
+                "`sa_sim_events` leaves out rk4 h 1e-4 s (the run failed); rk4 h 1e-2 s, \
+                 h 3e-3 s (event sequence differs"
+            ),
+            "{note}"
+        );
+        assert!(
+            note.contains("`sa_sim_state` leaves out rk4 h 1e-4 s (the run failed)."),
+            "{note}"
+        );
+        let clean = [row("dopri5", 1e-3, true, false)];
+        assert_eq!(left_out_note(&clean), "");
+    }
 }

@@ -439,48 +439,7 @@ pub(super) fn section(
              cold optimum only; `paper` adds the optimum its scenarios present).\n\n",
         ),
     }
-    md.push_str(
-        "| scheme | points/phase | elements | status | cold: J | cold: period (s) | cold: rel. error of J (vs J_ref) | cold: solve (s) | iterations | warm from the cold reference: rel. error of J | warm: solve (s) | presented: J | presented: rel. error of J (vs J_ref,p) | presented: solve (s) |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
-    );
-    for r in rows {
-        let _ = writeln!(
-            md,
-            "| {} | {} | {} | {} | {:.8} | {:.4} | {} | {:.2} | {} | {} | {} | {} | {} | {} |",
-            r.scheme,
-            r.points,
-            r.elements,
-            if r.solved { "solved" } else { "not solved" },
-            r.objective,
-            r.period,
-            if r.same_branch {
-                format!("{:.2e}", r.rel_error)
-            } else if r.solved {
-                "other local optimum".into()
-            } else {
-                "—".into()
-            },
-            r.seconds,
-            r.iterations,
-            if r.warm_rel_error.is_finite() {
-                format!("{:.2e}", r.warm_rel_error)
-            } else {
-                "—".into()
-            },
-            if r.warm_seconds.is_finite() {
-                format!("{:.2}", r.warm_seconds)
-            } else {
-                "—".into()
-            },
-            finite_or_dash(r.presented_objective, 8),
-            if r.presented_rel_error.is_finite() {
-                format!("{:.2e}", r.presented_rel_error)
-            } else {
-                "—".into()
-            },
-            finite_or_dash(r.presented_seconds, 2),
-        );
-    }
+    md.push_str(&table(rows, presented.is_some()));
     // One set per scheme and measurement: (solve time, error) of the rows that have it. Meshes
     // of one scheme are separate solves that may land on different local optima: labelled
     // markers, not a line.
@@ -511,19 +470,25 @@ pub(super) fn section(
                 .is_finite()
                 .then_some((r.warm_seconds, r.warm_rel_error))
         }));
-        methods.push(set(
-            s,
-            format!("{s}, at the presented optimum (vs J_ref,p)"),
-            &|r| {
-                r.presented_rel_error
-                    .is_finite()
-                    .then_some((r.presented_seconds, r.presented_rel_error))
-            },
-        ));
+        if presented.is_some() {
+            methods.push(set(
+                s,
+                format!("{s}, at the presented optimum (vs J_ref,p)"),
+                &|r| {
+                    r.presented_rel_error
+                        .is_finite()
+                        .then_some((r.presented_seconds, r.presented_rel_error))
+                },
+            ));
+        }
     }
     if methods.iter().any(|m| !m.error.is_empty()) {
         let fig = wp_figure(
-            "periodic-qc: objective error vs solve time (cold and presented optima)",
+            if presented.is_some() {
+                "periodic-qc: objective error vs solve time (cold and presented optima)"
+            } else {
+                "periodic-qc: objective error vs solve time (cold optima)"
+            },
             "|J − J_ref| / |J_ref|",
             &methods,
         )?;
@@ -535,11 +500,115 @@ pub(super) fn section(
     Ok(md)
 }
 
+/// The mesh table; the three columns at the presented optimum only where one was given
+/// (`presented`): without it they would hold nothing but "—".
+fn table(rows: &[MeshRow], presented: bool) -> String {
+    let mut md = String::from(
+        "| scheme | points/phase | elements | status | cold: J | cold: period (s) | cold: rel. error of J (vs J_ref) | cold: solve (s) | iterations | warm from the cold reference: rel. error of J | warm: solve (s) |",
+    );
+    if presented {
+        md.push_str(
+            " presented: J | presented: rel. error of J (vs J_ref,p) | presented: solve (s) |",
+        );
+    }
+    md.push_str(if presented {
+        "\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n"
+    } else {
+        "\n|---|---|---|---|---|---|---|---|---|---|---|\n"
+    });
+    for r in rows {
+        let _ = write!(
+            md,
+            "| {} | {} | {} | {} | {:.8} | {:.4} | {} | {:.2} | {} | {} | {} |",
+            r.scheme,
+            r.points,
+            r.elements,
+            if r.solved { "solved" } else { "not solved" },
+            r.objective,
+            r.period,
+            if r.same_branch {
+                format!("{:.2e}", r.rel_error)
+            } else if r.solved {
+                "other local optimum".into()
+            } else {
+                "—".into()
+            },
+            r.seconds,
+            r.iterations,
+            if r.warm_rel_error.is_finite() {
+                format!("{:.2e}", r.warm_rel_error)
+            } else {
+                "—".into()
+            },
+            finite_or_dash(r.warm_seconds, 2),
+        );
+        if presented {
+            let _ = write!(
+                md,
+                " {} | {} | {} |",
+                finite_or_dash(r.presented_objective, 8),
+                if r.presented_rel_error.is_finite() {
+                    format!("{:.2e}", r.presented_rel_error)
+                } else {
+                    "—".into()
+                },
+                finite_or_dash(r.presented_seconds, 2),
+            );
+        }
+        md.push('\n');
+    }
+    md
+}
+
 /// `v` with `digits` decimals, or "—" when it is not finite (no such solve).
 fn finite_or_dash(v: f64, digits: usize) -> String {
     if v.is_finite() {
         format!("{v:.digits$}")
     } else {
         "—".into()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(presented: f64) -> MeshRow {
+        MeshRow {
+            scheme: "Radau".into(),
+            points: 10,
+            elements: 2,
+            solved: true,
+            objective: 0.5,
+            period: 2.5,
+            same_branch: true,
+            rel_error: 1e-3,
+            seconds: 0.1,
+            iterations: 90,
+            warm_rel_error: f64::NAN,
+            warm_seconds: f64::NAN,
+            presented_rel_error: presented,
+            presented_objective: 0.0876,
+            presented_seconds: 0.02,
+        }
+    }
+
+    /// Without a presented optimum the table has no presented columns (they would be all
+    /// "—"); with one, every row has them.
+    #[test]
+    fn the_presented_columns_appear_only_with_a_presented_optimum() {
+        let cells = |md: &str| -> Vec<usize> {
+            md.lines()
+                .filter(|l| l.starts_with('|'))
+                .map(|l| l.matches('|').count() - 1)
+                .collect()
+        };
+        let alone = table(&[row(f64::NAN)], false);
+        assert!(!alone.contains("presented"), "{alone}");
+        assert!(cells(&alone).iter().all(|&n| n == 11), "{alone}");
+        let with = table(&[row(1.3e-6)], true);
+        assert!(with.contains("presented: rel. error of J"), "{with}");
+        assert!(cells(&with).iter().all(|&n| n == 14), "{with}");
+        assert!(with.contains("| 0.08760000 | 1.30e-6 | 0.02 |"), "{with}");
     }
 }
