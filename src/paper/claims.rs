@@ -9,6 +9,7 @@
 
 use std::fmt::Write as _;
 
+use crate::paper::report::min_stick::LONG_MIN_STICK;
 use crate::pipeline::bounds::ActiveBound;
 
 /// What the claims need to know of one scenario's optimum.
@@ -26,6 +27,8 @@ pub struct Facts {
     pub mean_omega_z: f64,
     /// Share of contact samples on the friction-cone boundary.
     pub cone_share: f64,
+    /// Duration of the stick phase (s; NaN without one).
+    pub stick_duration: f64,
     /// Contact point's distance from the fingertip during contact (m): min, mean, max.
     pub from_tip: (f64, f64, f64),
     /// The bounds the optimum sits on.
@@ -75,10 +78,12 @@ fn active_list(f: &Facts) -> String {
     }
 }
 
-fn stick_on_minimum(f: &Facts) -> bool {
+/// The lower bound of the stick phase's duration (s) when the optimum sits on it.
+fn stick_minimum(f: &Facts) -> Option<f64> {
     f.active
         .iter()
-        .any(|a| a.lower && a.what.contains("(stick) duration"))
+        .find(|a| a.lower && a.what.contains("(stick) duration"))
+        .map(|a| a.bound)
 }
 
 fn claim(claim: &str, here: String, agrees: bool, on: &[&Facts], why: String) -> Claim {
@@ -107,7 +112,11 @@ pub fn claims(facts: &[Facts], omega_ref_z: f64) -> Vec<Claim> {
         let rel = (wz - omega_ref_z) / omega_ref_z;
         out.push(claim(
             &format!("QC: the average angular velocity matches ω_ref = (0, 0, {omega_ref_z})"),
-            format!("mean ω_z = {wz:.3} rad/s ({:+.1} %)", 100.0 * rel),
+            format!(
+                "mean ω_z = {wz:.3} rad/s ({:+.1} %; a match: within ±{:.0} %)",
+                100.0 * rel,
+                100.0 * OMEGA_REF_MATCH
+            ),
             rel.abs() < OMEGA_REF_MATCH,
             &[qc],
             format!(
@@ -119,34 +128,46 @@ pub fn claims(facts: &[Facts], omega_ref_z: f64) -> Vec<Claim> {
                 active_list(qc)
             ),
         ));
-        let stick = stick_on_minimum(qc);
+        // What the stick phase is, and whether the longer bound compared in the report could
+        // change it, from this optimum's numbers: a sentence that holds for each.
+        let stick = match stick_minimum(qc) {
+            Some(b) if b < LONG_MIN_STICK => format!(
+                "Its stick phase sits on its lower bound ({b} s), the shortest contact the \
+                 problem allows; whether a longer one pushes against the cone is what the run \
+                 with `--min-stick {LONG_MIN_STICK}` below measures."
+            ),
+            Some(b) => format!(
+                "Its stick phase sits on its lower bound ({b} s), and the tangential force \
+                 stays inside the cone for part of it."
+            ),
+            None => format!(
+                "Its stick phase ({:.3} s) is longer than its lower bound, and the tangential \
+                 force stays inside the cone for part of it.",
+                qc.stick_duration
+            ),
+        };
         out.push(claim(
             "QC: the friction-cone constraint is always active during contact",
             format!(
-                "{:.0} % of the contact samples on the boundary",
-                100.0 * qc.cone_share
+                "{:.0} % of the contact samples on the boundary (always: > {:.0} %)",
+                100.0 * qc.cone_share,
+                100.0 * ALWAYS_ON_CONE
             ),
             qc.cone_share > ALWAYS_ON_CONE,
             &[qc],
             format!(
                 "Only {:.0} % of the contact samples of the QC optimum lie on the cone boundary \
-                 (‖λ_∥‖ ≥ 0.99 μ_s λ_n). {} {search}; {}. A longer lower bound on the stick \
-                 phase (`--min-stick 0.1`, compared below) forces a stick phase of real \
-                 duration, in which the paper's optimum pushes against the cone.",
+                 (‖λ_∥‖ ≥ 0.99 μ_s λ_n). {stick} {search}; {}.",
                 100.0 * qc.cone_share,
-                if stick {
-                    "Its stick phase sits on its lower bound: the ball is spun up by the \
-                     impact impulse (a tap) and the short contact needs little friction."
-                } else {
-                    "Its stick phase is longer than its lower bound, and the tangential force \
-                     stays inside the cone for part of it."
-                },
                 active_list(qc)
             ),
         ));
         out.push(claim(
             "QC: only the fingertip is used",
-            format!("contact point at most {:.3} m from the tip", qc.from_tip.2),
+            format!(
+                "contact point at most {:.3} m from the tip (tip: ≤ {TIP_CONTACT} m)",
+                qc.from_tip.2
+            ),
             qc.from_tip.2 < TIP_CONTACT,
             &[qc],
             format!(
@@ -183,8 +204,9 @@ pub fn claims(facts: &[Facts], omega_ref_z: f64) -> Vec<Claim> {
         out.push(claim(
             "COT, robotic finger: the contact point lies on the side of the link",
             format!(
-                "contact point {:.3}–{:.3} m from the tip",
-                cot.from_tip.0, cot.from_tip.2
+                "contact point {:.3}–{:.3} m from the tip, mean {:.3} m (side: mean > \
+                 {TIP_CONTACT} m)",
+                cot.from_tip.0, cot.from_tip.2, cot.from_tip.1
             ),
             cot.from_tip.1 > TIP_CONTACT,
             &[cot],
@@ -206,7 +228,10 @@ pub fn claims(facts: &[Facts], omega_ref_z: f64) -> Vec<Claim> {
     if let Some(h) = get("periodic-cot-human") {
         out.push(claim(
             "COT, human finger: touches with the fingertip only",
-            format!("contact point at most {:.3} m from the tip", h.from_tip.2),
+            format!(
+                "contact point at most {:.3} m from the tip (tip: ≤ {TIP_CONTACT} m)",
+                h.from_tip.2
+            ),
             h.from_tip.2 < TIP_CONTACT,
             &[h],
             format!(
@@ -287,6 +312,7 @@ mod tests {
             period,
             mean_omega_z: 1.0,
             cone_share: 0.2,
+            stick_duration: if stick_min { 0.01 } else { 0.3 },
             from_tip: (0.0, tip, tip),
             active: if stick_min {
                 vec![ActiveBound {
@@ -334,7 +360,8 @@ mod tests {
             c[0].why
                 .contains("phase 2 (stick) duration (s) = 0.010000 on its minimum")
         );
-        assert!(c[1].why.contains("tap"));
+        assert!(c[1].why.contains("sits on its lower bound (0.01 s)"));
+        assert!(c[1].why.contains("`--min-stick 0.1` below measures"));
         // Agreeing claims: no paragraph at all.
         let good = [
             Facts {
@@ -348,5 +375,40 @@ mod tests {
         let c = claims(&good, 2.2);
         assert!(c.iter().all(|c| c.agrees && c.why.is_empty()), "{c:?}");
         assert!(!markdown(&c).contains("- **Claim"));
+    }
+
+    /// The verdict's thresholds are stated beside the numbers, and claim 2's explanation
+    /// follows the optimum's stick phase: the comparison with the longer bound is pointed to
+    /// only where the stick phase sits on a shorter bound, never for a stick phase that is
+    /// already longer, nor for the run with the longer bound itself.
+    #[test]
+    fn the_text_follows_the_numbers() {
+        let mut qc = facts("periodic-qc", 1.0, 2.6, 0.0, false);
+        qc.mean_omega_z = 2.2 * (1.0 - 0.07);
+        qc.stick_duration = 1.426;
+        let c = claims(std::slice::from_ref(&qc), 2.2);
+        assert!(c[0].agrees);
+        assert!(
+            c[0].here.contains("(-7.0 %; a match: within ±10 %)"),
+            "{}",
+            c[0].here
+        );
+        assert!(c[1].here.contains("(always: > 90 %)"), "{}", c[1].here);
+        assert!(c[2].here.contains("(tip: ≤ 0.02 m)"), "{}", c[2].here);
+        assert!(
+            c[1].why
+                .contains("Its stick phase (1.426 s) is longer than its lower bound")
+        );
+        assert!(!c[1].why.contains("--min-stick"), "{}", c[1].why);
+        let mut long = facts("periodic-qc", 1.0, 0.65, 0.0, true);
+        long.active[0].bound = LONG_MIN_STICK;
+        long.active[0].value = LONG_MIN_STICK;
+        let c = claims(&[long], 2.2);
+        assert!(
+            c[1].why.contains("sits on its lower bound (0.1 s)"),
+            "{}",
+            c[1].why
+        );
+        assert!(!c[1].why.contains("below measures"), "{}", c[1].why);
     }
 }

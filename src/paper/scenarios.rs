@@ -605,6 +605,13 @@ fn facts_of(r: &ScenarioResult) -> Facts {
         period: r.solution.period,
         mean_omega_z: r.solution.mean_omega[2],
         cone_share: r.cone_share,
+        stick_duration: r
+            .solution
+            .modes
+            .iter()
+            .position(|m| *m == bf_problem::node::PhaseMode::Stick)
+            .and_then(|k| r.solution.phase_durations.get(k).copied())
+            .unwrap_or(f64::NAN),
         from_tip: r.contact_from_tip,
         active: r.active.clone(),
     }
