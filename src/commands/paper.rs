@@ -135,6 +135,7 @@ fn plan_markdown(
     };
     sol.verification = crate::pipeline::verify::verify(&built, &sol, 1e-10).ok();
     crate::pipeline::solution_io::write_solution(&sol, &dir.join(&name))?;
+    crate::paper::scenarios::write_animation(&name, &built, &sol, dir)?;
     let verified = crate::pipeline::verify::is_verified(&sol);
     let stick = sol
         .modes
@@ -150,7 +151,8 @@ fn plan_markdown(
          its last 1 %, so that the plant's impact and the controller's feedback have what the \
          plan assumes; found by the same global search ({}): {} after {} iterations, J = {:.6} \
          (sticking optimum above {:.6}), stick phase {:.3} s, {}. Solution: \
-         `{name}/solution.json`.\n",
+         `{name}/solution.json`; animation of one period: \
+         [animation_{name}.html](animation_{name}.html).\n",
         100.0 * (1.0 - plan.torque_margin),
         1e3 * plan.approach_clearance,
         if args.search {

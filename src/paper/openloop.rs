@@ -289,7 +289,13 @@ pub fn simulate_optimum_until<K: Kernels<N>, I: Input, const N: usize>(
     ) {
         Ok(out) => (out, None),
         Err(f) => {
-            let msg = format!("stopped at t = {:.4} s: {}", f.t, f.error);
+            // The simulator's message carries full-precision times and Rust's mode names; the
+            // tables this ends up in want neither.
+            let msg = format!(
+                "stopped at t = {:.4} s: {}",
+                f.t,
+                crate::names::tidy(&f.error.to_string())
+            );
             (f.partial, Some(msg))
         }
     };

@@ -400,16 +400,7 @@ pub fn run_scenario(
         )?,
         stem("paths"),
     )?;
-    let frames = animation_frames(&sol, d, &geo);
-    bf_plot::anim::write_animation_html(
-        &bf_plot::anim::Animation {
-            title: format!("{name}: one period"),
-            ball_center: [0.0; 3],
-            ball_radius: 1.0,
-            frames,
-        },
-        dir.join(format!("animation_{name}.html")),
-    )?;
+    animation_from(name, &sol, &geo, dir)?;
     let mean = if loc.3 > 0 {
         loc.1 / loc.3 as f64
     } else {
@@ -427,6 +418,39 @@ pub fn run_scenario(
         },
         solution: sol,
     })
+}
+
+/// Writes `dir/animation_<name>.html` of `sol` from its geometry `geo` at the dense samples.
+fn animation_from(name: &str, sol: &OcpSolution, geo: &[Geometry], dir: &Path) -> Result<()> {
+    let frames = animation_frames(sol, &sol.dense, geo);
+    bf_plot::anim::write_animation_html(
+        &bf_plot::anim::Animation {
+            title: format!("{name}: one period"),
+            ball_center: [0.0; 3],
+            ball_radius: 1.0,
+            frames,
+        },
+        dir.join(format!("animation_{name}.html")),
+    )?;
+    Ok(())
+}
+
+/// Writes `dir/animation_<name>.html`, the self-contained 3-D animation of one period of
+/// `sol`, a solution of `built` (a scenario's figures write theirs in [`run_scenario`]; the
+/// plans for the plant use this).
+pub fn write_animation(
+    name: &str,
+    built: &BuiltProblem,
+    sol: &OcpSolution,
+    dir: &Path,
+) -> Result<()> {
+    let scene = built.problem.scene();
+    let base = built.scene.base_translation();
+    let d = &sol.dense;
+    let geo: Vec<Geometry> = (0..d.t.len())
+        .map(|i| geometry(&scene, base, &d.q[i], &d.qd[i], &d.omega[i]))
+        .collect();
+    animation_from(name, sol, &geo, dir)
 }
 
 /// Base translation of a compiled-in scene (from bf-generated's registry).
@@ -940,6 +964,30 @@ mod tests {
         sagging.phases[0].min_h = Some(-1.0);
         let why = crate::pipeline::verify::penetration_failure(&sagging).unwrap();
         assert!(why.starts_with("phase 1 (free)"), "{why}");
+    }
+
+    /// The plans for the plant get their animation like the scenarios: the human finger's
+    /// plan on its own scene, written under the plan's name.
+    #[test]
+    fn a_plan_gets_its_animation() {
+        let stored = crate::paper::stored::stored_optimum(
+            Problem::PeriodicCotHuman,
+            None,
+            bf_problem::catalogue::MIN_STICK,
+        )
+        .unwrap();
+        let sol = stored.solution().unwrap();
+        let (built, _) = crate::pipeline::solve::own_problem(&sol).unwrap();
+        let dir = std::env::temp_dir().join(format!("bf-plan-animation-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        write_animation("periodic-cot-human-newton", &built, &sol, &dir).unwrap();
+        let html =
+            std::fs::read_to_string(dir.join("animation_periodic-cot-human-newton.html")).unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        assert!(
+            html.contains("periodic-cot-human-newton: one period"),
+            "title"
+        );
     }
 
     #[test]

@@ -100,7 +100,10 @@ impl ExtremesReport {
                 if let Outcome::Failed { message } = &f.outcome {
                     s.push_str(&format!(
                         "- **FAILED** {} / {} / {}: {}\n",
-                        f.case, f.parameter, f.quantity, message
+                        f.case,
+                        f.parameter,
+                        f.quantity,
+                        crate::names::tidy(message)
                     ));
                 }
             }
@@ -311,8 +314,15 @@ fn cells(r: &ExtremesRow) -> (String, String) {
                 fmt_num(*error_estimate),
             )
         }
-        Outcome::ClearError { message } => (format!("error: {}", esc(message)), "—".into()),
-        Outcome::Failed { message } => (format!("**FAILED: {}**", esc(message)), "—".into()),
+        // The table cell rounds the lower layers' full-precision numbers; the CSV keeps them.
+        Outcome::ClearError { message } => (
+            format!("error: {}", esc(&crate::names::tidy(message))),
+            "—".into(),
+        ),
+        Outcome::Failed { message } => (
+            format!("**FAILED: {}**", esc(&crate::names::tidy(message))),
+            "—".into(),
+        ),
     }
 }
 
@@ -494,6 +504,25 @@ mod tests {
         let line = md.lines().find(|l| l.starts_with("| painlevé")).unwrap();
         assert!(line.contains("error: no consistent"), "{line}");
         assert!(md.contains(ESTIMATE_MEANING));
+    }
+
+    /// A clear error's full-precision numbers are rounded in the table cell and kept whole in
+    /// the CSV.
+    #[test]
+    fn error_cells_round_full_precision_numbers() {
+        let mut r = report();
+        r.rows[4].outcome = Outcome::ClearError {
+            message: "Painlevé paradox (Inconsistent): slip normal inverse mass \
+                      -5.459312364956617e-1 <= 0"
+                .into(),
+        };
+        let md = r.to_markdown();
+        let line = md.lines().find(|l| l.starts_with("| painlevé")).unwrap();
+        assert!(
+            line.contains("slip normal inverse mass -5.45931e-1 <= 0"),
+            "{line}"
+        );
+        assert!(r.to_csv().contains("-5.459312364956617e-1"));
     }
 
     #[test]
