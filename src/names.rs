@@ -117,7 +117,7 @@ fn round(v: f64, exponent: bool) -> String {
     let mag = if v == 0.0 {
         0
     } else {
-        v.abs().log10().floor() as i32
+        libm::log10(v.abs()).floor() as i32
     };
     if exponent || !(-3..6).contains(&mag) {
         let s = format!("{v:.*e}", TIDY_DIGITS - 1);

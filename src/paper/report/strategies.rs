@@ -89,7 +89,7 @@ fn unverified_reason(v: &crate::pipeline::verify::Verification) -> Option<String
     }
     Some(if !v.completed() {
         "a phase could not be re-integrated to its end".to_string()
-    } else if !(v.max_defect <= VERIFIED_DEFECT) {
+    } else if v.max_defect.is_nan() || v.max_defect > VERIFIED_DEFECT {
         format!("defect {:.1e} > {VERIFIED_DEFECT:e}", v.max_defect)
     } else {
         verdict_failure(v).unwrap_or_else(|| "its verdict failed".to_string())
