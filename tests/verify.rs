@@ -594,7 +594,7 @@ fn cone_margin_beyond_the_allowance_is_not_verified() {
     let why = path_failure(&v).unwrap();
     assert_eq!(cone_failure(&v).as_ref(), Some(&why));
     assert!(
-        why.contains(&format!("phase {k} (stick)"))
+        why.contains(&format!("phase {} (stick)", k + 1))
             && why.contains(&format!("{min_sigma:.3e} N"))
             && why.contains(&format!("-{allowance:.3e} N")),
         "{why}"
@@ -682,7 +682,7 @@ fn report_tolerance_table_agrees_with_the_verdict() {
         // scenario | min h | within | phase | min σ | allowance | within
         let (h_ok, cone_ok) = (cells[2] == "yes", cells[6] == "yes");
         assert_eq!(h_ok && cone_ok, is_verified(&r.solution), "{row}");
-        assert_eq!(cells[3], k.to_string(), "{row}");
+        assert_eq!(cells[3], (k + 1).to_string(), "{row}");
         let (sigma, allow): (f64, f64) = (cells[4].parse().unwrap(), cells[5].parse().unwrap());
         assert!((allow + allowance).abs() <= 1e-2 * allowance, "{row}");
         assert_eq!(cone_ok, sigma >= allow, "{row}");
