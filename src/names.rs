@@ -40,11 +40,11 @@ pub fn method(m: &Method) -> String {
 }
 
 /// Significant digits [`tidy`] keeps of a long number.
-const TIDY_DIGITS: usize = 6;
+pub const TIDY_DIGITS: usize = 6;
 
 /// Significant digits from which [`tidy`] counts a decimal number as long: the full-precision
 /// text of an f64 (16–17 digits), not a number someone wrote with 7 on purpose.
-const LONG_DIGITS: usize = 8;
+pub const LONG_DIGITS: usize = 8;
 
 /// `text` (an error message of a lower layer, written for a log) made fit for a table cell:
 /// every decimal number (with a point or an exponent) of [`LONG_DIGITS`] or more significant
