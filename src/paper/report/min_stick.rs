@@ -17,8 +17,7 @@ use bf_problem::solution::Samples;
 
 use crate::paper::scenarios::ScenarioResult;
 
-/// The longer minimum stick duration of the comparison (s).
-pub const LONG_MIN_STICK: f64 = 0.1;
+pub use crate::paper::claims::LONG_MIN_STICK;
 
 /// Output subdirectory (of the report) of the QC run with [`LONG_MIN_STICK`].
 pub const LONG_DIR: &str = "min-stick-0.1";
