@@ -988,3 +988,61 @@ fn a_long_run_is_not_cut_by_the_step_budget() {
     assert_eq!(t.periods.len(), periods);
     assert!(t.periods.iter().all(|p| p.contact));
 }
+
+/// A plant with less friction (μ_s = μ_k = 0.5) makes the `periodic-qc` plan's stick phase
+/// chatter, and the simulator's Zeno fallback holds the contact, at times while the ball pulls
+/// the finger. `track` must not report that as tracking (decision record 0086): it exits 1, and
+/// its `held_contact` time is what `trajectory.json` shows, recomputed here as the steps that
+/// begin in contact with λ_n below −1e-6 of the largest contact force.
+#[test]
+fn a_contact_held_while_the_ball_pulls_the_finger_is_no_result() {
+    let dir = cli::tmpdir("held-contact");
+    let text = std::fs::read_to_string(cli::root().join("scenes/paper.toml")).unwrap();
+    let text = text
+        .replace("mu_s = 0.8", "mu_s = 0.5")
+        .replace("mu_k = 0.6", "mu_k = 0.5");
+    let plant = dir.join("paper_mu05.toml");
+    std::fs::write(&plant, text).unwrap();
+    let out = dir.join("out");
+    let r = cli::run(&[
+        "track",
+        "data/optima/periodic-qc-plan/solution.json",
+        "--plant-scene",
+        plant.to_str().unwrap(),
+        "--periods",
+        "3",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("contact was held"), "{stderr}");
+    let read = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
+    };
+    let (tracking, traj) = (read("tracking.json"), read("trajectory.json"));
+    let message = tracking["held_contact"].as_str().expect("held_contact");
+    let t: Vec<f64> = serde_json::from_value(traj["t"].clone()).unwrap();
+    let mode: Vec<String> = serde_json::from_value(traj["mode"].clone()).unwrap();
+    let d = traj["derived"].as_array().unwrap();
+    let lambda_n = |i: usize| d[i]["lambda_n"].as_f64().unwrap_or(f64::NAN);
+    let contact = |i: usize| !mode[i].eq_ignore_ascii_case("free");
+    let force = (0..t.len())
+        .filter(|&i| contact(i))
+        .map(|i| {
+            let l: Vec<f64> = serde_json::from_value(d[i]["lambda"].clone()).unwrap();
+            l.iter().map(|v| v * v).sum::<f64>().sqrt()
+        })
+        .fold(0.0, f64::max);
+    let held: f64 = (0..t.len().saturating_sub(1))
+        .filter(|&i| contact(i) && mode[i + 1] == mode[i] && t[i + 1] > t[i])
+        .filter(|&i| lambda_n(i) < -1e-6 * force)
+        .map(|i| t[i + 1] - t[i])
+        .sum();
+    assert!(held > 1e-3, "{held} s held: the plant no longer pulls");
+    assert!(
+        message.contains(&format!("for {held:.4} s")),
+        "{message} against {held:.4} s"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -599,6 +599,30 @@ impl Scene {
         Some([0, 1, 2].map(|i| (0..3).map(|k| r[k][i] * (p[k] - t[k])).sum::<f64>()))
     }
 
+    /// The runtime parameter that segment contact cannot leave free, if one is: its index in
+    /// `runtime_parameters` and why. The kernels bake the segment's length ℓ in unless the
+    /// tip frame is the last DH link frame (then ℓ = a_n stays symbolic), so a tool translation
+    /// (it places the tip, one end of the segment) and, with a tool other than the identity,
+    /// the last link's `a` cannot be runtime parameters.
+    pub fn segment_runtime_conflict(&self) -> Option<(usize, &'static str)> {
+        let a_n = format!("link{}.a", self.links.len());
+        self.runtime_parameters
+            .iter()
+            .enumerate()
+            .find_map(|(i, r)| {
+                if r.starts_with("tool.translation.") {
+                    Some((i, "places the tip, one end of the contact segment"))
+                } else if *r == a_n && !self.has_identity_tool() {
+                    Some((
+                        i,
+                        "sets the segment's length together with the [tool] (not the identity)",
+                    ))
+                } else {
+                    None
+                }
+            })
+    }
+
     /// The length ℓ of the contact segment p_e − ℓ e_x … p_e (paper Sect. 2.2, eq. 3): the
     /// contact kernels saturate α to [−ℓ, 0], so the segment must end where the last link
     /// leaves its joint's axis. `Ok(ℓ)` when [`Scene::contact_segment_start`] is (−ℓ, 0, 0)

@@ -543,27 +543,18 @@ impl Scene {
                 ),
             ));
         }
-        let a_n = format!("link{}.a", self.links.len());
-        for (i, r) in self.runtime_parameters.iter().enumerate() {
-            let baked = if r.starts_with("tool.translation.") {
-                Some("places the tip, one end of the contact segment")
-            } else if *r == a_n && !self.has_identity_tool() {
-                Some("sets the segment's length together with the [tool] (not the identity)")
-            } else {
-                None
-            };
-            if let Some(why) = baked {
-                let l = self.contact_segment_length().and_then(Result::ok);
-                return Err(ix.invalid(
-                    &format!("runtime_parameters[{i}]"),
-                    format!(
-                        "{r:?} cannot be a runtime parameter with contact kind \"segment\": it \
-                         {why}, and the generated kernels bake the segment's length in \
-                         (l = {} m at the scene's values); keep it baked, or use kind = \"tip\"",
-                        l.unwrap_or(f64::NAN)
-                    ),
-                ));
-            }
+        if let Some((i, why)) = self.segment_runtime_conflict() {
+            let r = &self.runtime_parameters[i];
+            let l = self.contact_segment_length().and_then(Result::ok);
+            return Err(ix.invalid(
+                &format!("runtime_parameters[{i}]"),
+                format!(
+                    "{r:?} cannot be a runtime parameter with contact kind \"segment\": it \
+                     {why}, and the generated kernels bake the segment's length in \
+                     (l = {} m at the scene's values); keep it baked, or use kind = \"tip\"",
+                    l.unwrap_or(f64::NAN)
+                ),
+            ));
         }
         Ok(())
     }

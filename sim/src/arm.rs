@@ -30,7 +30,14 @@ pub const ENERGY_ERROR_REL: f64 = 1e-3;
 
 /// The part of the tolerance that does not scale with the motion, relative to the largest
 /// |E| of the run: rounding of E itself, for a run that barely moves.
-pub(crate) const ENERGY_ROUNDING_REL: f64 = 1e-9;
+const ENERGY_ROUNDING_REL: f64 = 1e-9;
+
+/// The energy-balance tolerance of a run that moves `kinetic` (its largest kinetic energy) and
+/// `flow` (∫ |P| dt) with the largest |E| `largest`: `rel` times the energy moved, plus the
+/// rounding of E. One rule for the arm and the ball-and-finger system.
+pub(crate) fn balance_tolerance(rel: f64, kinetic: f64, flow: f64, largest: f64) -> f64 {
+    rel * (kinetic + flow) + ENERGY_ROUNDING_REL * largest.max(1.0)
+}
 
 /// The single mode of [`FreeArm`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -127,8 +134,7 @@ impl<I: Input> FreeArm<I> {
             energy_error = energy_error.max((w[1].energy - e0 - work).abs());
         }
         let largest = samples.iter().fold(0.0f64, |m, s| m.max(s.energy.abs()));
-        let energy_tolerance =
-            ENERGY_ERROR_REL * (kinetic_max + flow) + ENERGY_ROUNDING_REL * largest.max(1.0);
+        let energy_tolerance = balance_tolerance(ENERGY_ERROR_REL, kinetic_max, flow, largest);
         let summary = ArmSummary {
             scene: self.model.name().to_string(),
             kernels: None,

@@ -11,8 +11,10 @@
 //! in the run (docs/appendix-errata.md explains each misprint).
 //!
 //! `--out` is one output set (`bf_output::OutputDir`): every stage writes into a private staging
-//! directory, which replaces `--out` as a whole when the report is complete; a run that fails
-//! leaves the previous report untouched.
+//! directory, which replaces `--out` as a whole when the report is complete. A run whose checks
+//! fail (a scenario failed or unverified, a plan not executed, a failed probe) still replaces
+//! it, marked FAILED, and exits 1; a run that stops on an error leaves the previous report
+//! untouched.
 
 use crate::cli::PaperArgs;
 use anyhow::{Context, Result, bail};
@@ -137,12 +139,7 @@ fn plan_markdown(
     crate::pipeline::solution_io::write_solution(&sol, &dir.join(&name))?;
     crate::paper::scenarios::write_animation(&name, &built, &sol, dir)?;
     let verified = crate::pipeline::verify::is_verified(&sol);
-    let stick = sol
-        .modes
-        .iter()
-        .position(|m| *m == bf_problem::PhaseMode::Stick)
-        .and_then(|k| sol.phase_durations.get(k).copied())
-        .unwrap_or(f64::NAN);
+    let stick = sol.stick_duration().unwrap_or(f64::NAN);
     let head = format!(
         "**`{problem}` planned for the plant.** The plan `optimize --problem {problem}` makes \
          by default (decision record 0040): Newton's law at the impact (eq. 39: ω unchanged, \

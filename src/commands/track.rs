@@ -56,8 +56,8 @@ pub struct TrackingJson<'a> {
     /// (`Tracking::energy_check_failure`): the run is then no result either.
     pub energy_check_failure: Option<String>,
     /// Why the run's contact is not the plant's physics, if it is not: the simulator held it
-    /// against the model's conditions (`RunSummary::held_contact`); the run is then no result
-    /// either.
+    /// while the ball pulled the finger (`RunSummary::held_contact`); the run is then no
+    /// result either.
     pub held_contact: Option<String>,
     /// Largest `omega_error` over the completed periods.
     pub max_omega_error: f64,

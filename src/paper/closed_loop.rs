@@ -143,9 +143,10 @@ impl<const N: usize> Tracking<N> {
     }
 
     /// Why the simulation is not the plant's physics, if it is not: its energy balance failed
-    /// ([`Tracking::energy_check_failure`]), or the Zeno fallback held the contact against the
-    /// model's conditions (`RunSummary::held_contact`: λ_n < 0, or σ < 0 sticking), so the
-    /// periods measure a regularisation rather than the controller.
+    /// ([`Tracking::energy_check_failure`]), or the Zeno fallback held the contact while the
+    /// ball pulled the finger (`RunSummary::held_contact`: λ_n < 0 over steps), so the periods
+    /// measure a regularisation rather than the controller. A stick held with σ < 0 is only a
+    /// warning (decision record 0086).
     pub fn check_failure(&self) -> Option<String> {
         self.energy_check_failure().or_else(|| {
             self.report.summary.held_contact().map(|w| {
@@ -1210,8 +1211,9 @@ fn rows_n<const N: usize>(
 }
 
 /// The row of the robustness table of run `t` on `plant`, asked for `periods` periods. A run
-/// whose energy check failed ([`Tracking::energy_check_failure`]) measured the integrator, not
-/// the plant: its row is an error, and misses the target.
+/// that is no result ([`Tracking::check_failure`]: a failed energy check, a contact held while
+/// the ball pulled the finger) measured the simulator, not the plant: its row is an error, and
+/// misses the target.
 pub fn robustness_row<const N: usize>(
     plant: String,
     t: &Tracking<N>,

@@ -285,7 +285,8 @@ pub fn run_scenario(
     let problem: Problem = name.parse().map_err(|e| anyhow!("{e}"))?;
     let (problem, mut sol) = solve(problem, settings, strategy)?;
     // Re-integration of every phase with the optimal torques: stored in solution.json and
-    // shown in the results table; a failure to verify is not fatal.
+    // shown in the results table; an optimum that fails it (or cannot be re-integrated) does
+    // not stop the run here, but marks the whole set FAILED at its end (`commands::paper`).
     sol.verification = crate::pipeline::verify::verify(&problem, &sol, 1e-10).ok();
     write_solution(&sol, &dir.join(name))?;
     let scene = problem.problem.scene();
@@ -629,13 +630,7 @@ fn facts_of(r: &ScenarioResult) -> Facts {
         period: r.solution.period,
         mean_omega_z: r.solution.mean_omega[2],
         cone_share: r.cone_share,
-        stick_duration: r
-            .solution
-            .modes
-            .iter()
-            .position(|m| *m == bf_problem::node::PhaseMode::Stick)
-            .and_then(|k| r.solution.phase_durations.get(k).copied())
-            .unwrap_or(f64::NAN),
+        stick_duration: r.solution.stick_duration().unwrap_or(f64::NAN),
         from_tip: r.contact_from_tip,
         active: r.active.clone(),
     }

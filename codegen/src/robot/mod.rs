@@ -706,15 +706,11 @@ impl SymbolicRobot {
     /// ([`Scene::contact_segment_length`]), so no runtime parameter may move it.
     fn segment_length(&self) -> Result<Segment, CodegenError> {
         let scene = &self.scene;
-        let identity_tool = scene.has_identity_tool();
-        let n = scene.links.len();
-        let a_n = format!("link{n}.a");
-        for name in &scene.runtime_parameters {
-            if name.starts_with("tool.translation.") || (*name == a_n && !identity_tool) {
-                return Err(SceneDefect::SegmentLengthRuntime { name: name.clone() }.into());
-            }
+        if let Some((i, _)) = scene.segment_runtime_conflict() {
+            let name = scene.runtime_parameters[i].clone();
+            return Err(SceneDefect::SegmentLengthRuntime { name }.into());
         }
-        if self.frames == FrameKind::DhStandard && identity_tool {
+        if self.frames == FrameKind::DhStandard && scene.has_identity_tool() {
             return Ok(Segment::LastLinkA);
         }
         match scene.contact_segment_length() {

@@ -185,6 +185,14 @@ pub struct OcpSolution {
 }
 
 impl OcpSolution {
+    /// The duration of the plan's stick phase (s), `None` if it has none.
+    pub fn stick_duration(&self) -> Option<f64> {
+        self.modes
+            .iter()
+            .position(|m| *m == crate::node::PhaseMode::Stick)
+            .and_then(|i| self.phase_durations.get(i).copied())
+    }
+
     /// The torques as `t [s],tau1 [N m],...,tauN [N m]` CSV (sim/README.md): dense samples with strictly
     /// increasing times (a sample equal in time to the previous one, at a phase boundary, is
     /// dropped), full precision.

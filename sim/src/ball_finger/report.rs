@@ -725,8 +725,7 @@ fn energy_tolerance<const N: usize>(
         flow.push(sum);
     }
     let (window_flow, _) = window_error(&tr.t[..n], &flow, settings.energy_window);
-    settings.energy_error_rel * (kinetic + window_flow)
-        + crate::arm::ENERGY_ROUNDING_REL * largest.max(1.0)
+    crate::arm::balance_tolerance(settings.energy_error_rel, kinetic, window_flow, largest)
 }
 
 /// The largest change of the residual `r` (sampled at the non-decreasing times `t`) over a

@@ -12,7 +12,6 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
-use bf_problem::OcpSolution;
 use bf_problem::solution::Samples;
 
 use crate::paper::scenarios::ScenarioResult;
@@ -44,14 +43,6 @@ pub fn spin_up(d: &Samples) -> Option<(f64, f64)> {
         d.omega[first][2] - d.omega[pre][2],
         d.omega[last][2] - d.omega[first][2],
     ))
-}
-
-/// The duration of the stick phase (s), if there is one.
-fn stick_duration(sol: &OcpSolution) -> Option<f64> {
-    sol.modes
-        .iter()
-        .position(|m| *m == bf_problem::node::PhaseMode::Stick)
-        .and_then(|i| sol.phase_durations.get(i).copied())
 }
 
 /// What the comparison paragraph needs of one run: its bound, its stick phase, its φ.
@@ -128,7 +119,7 @@ pub fn markdown(
     )?;
     for r in runs {
         let o = &r.result.solution;
-        let stick = stick_duration(o);
+        let stick = o.stick_duration();
         let (jump, roll) = spin_up(&o.dense).unwrap_or((f64::NAN, f64::NAN));
         writeln!(
             s,
@@ -159,7 +150,7 @@ pub fn markdown(
     writeln!(s)?;
     for r in runs {
         let o = &r.result.solution;
-        let stick = stick_duration(o).unwrap_or(f64::NAN);
+        let stick = o.stick_duration().unwrap_or(f64::NAN);
         writeln!(
             s,
             "- min stick {} s: the stick phase lasts {:.1} ms; {} (J = {:.6}).",
@@ -178,7 +169,7 @@ pub fn markdown(
     if let [a, b] = runs {
         let of = |r: &StickRun| Bounded {
             min_stick: r.min_stick,
-            stick: stick_duration(&r.result.solution).unwrap_or(f64::NAN),
+            stick: r.result.solution.stick_duration().unwrap_or(f64::NAN),
             objective: r.result.solution.objective,
         };
         writeln!(s, "\n{}\n", comparison(&of(a), &of(b)))?;
