@@ -613,6 +613,13 @@ pub struct OptimizeArgs {
         allow_hyphen_values = true
     )]
     pub cone_margin: f64,
+    /// Impose the impulse friction cone at the impact (eq. 66, the paper's Sect. 7):
+    /// ‖ι_∥‖ ≤ μ_s ι·n, so that static friction holds the impulse the plan's impact law gives
+    /// the finger. Without it a plan may need any friction at its impact; the verification
+    /// records how much (`verification.impacts` in solution.json) and flags a plan that needs
+    /// more than μ_s. Recorded in solution.json as `impulse_cone`.
+    #[arg(long)]
+    pub impulse_cone: bool,
     /// Share of every joint's torque limit the plan leaves unused, in [0, 1): |τ_i| ≤ (1 − M)
     /// τ_max,i, so that feedback keeps authority under the limit. Recorded in solution.json as
     /// `torque_margin` [default: 0.3 for a `newton` plan of a periodic problem

@@ -307,10 +307,10 @@ fn a_plan_to_execute_warm_started_from_the_sticking_optimum_is_tracked_and_robus
     meets_the_targets_bounded(&sol, 10, 6);
 }
 
-/// A plan's file rebuilds the problem it was planned on: the impact law and both margins of
-/// a Newton plan with margins come back from `solution.json` (`settings_of`, what re-planning
-/// and `optimize merge` build on), and the NLP rebuilt from the file gives, at the plan's own
-/// point, the objective the file states. Re-planning used to rebuild the sticking problem
+/// A plan's file rebuilds the problem it was planned on: the impact law, both margins and the
+/// impulse cone (`--impulse-cone`, eq. 66) of a Newton plan come back from `solution.json`
+/// (`settings_of`, what re-planning and `optimize merge` build on), and the NLP rebuilt from
+/// the file gives, at the plan's own point, the objective the file states. Re-planning used to rebuild the sticking problem
 /// without margins for every plan, so the human finger's Newton re-plans never converged
 /// (0 of 7 used; 7 of 7 now, BENCHMARKS.md "Plans that graze the ball").
 #[test]
@@ -318,9 +318,16 @@ fn a_newton_plan_with_margins_is_rebuilt_from_its_file_as_planned() {
     use ball_finger::pipeline::solve::{recompute_at_own_point, settings_of};
     let sol = from_the_sticking_qc_optimum(
         "rebuilt-newton-plan",
-        &["--cone-margin", "0.2", "--verify-rtol", "0"],
+        &[
+            "--cone-margin",
+            "0.2",
+            "--impulse-cone",
+            "--verify-rtol",
+            "0",
+        ],
     );
     let (_, settings) = settings_of(&sol).unwrap();
+    assert!(sol.impulse_cone && settings.impulse_cone);
     assert_eq!(settings.approach_clearance, sol.approach_clearance);
     assert!(sol.approach_clearance > 0.0);
     assert_eq!(settings.impact_law, sol.impact_law);

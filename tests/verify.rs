@@ -738,3 +738,89 @@ fn human_optimum_respects_the_ball_and_the_friction_cone() {
     assert_eq!(sticks, 1, "{v}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The verification's impact record (eq. 66) against the generated kernels, on the stored
+/// `periodic-cot` optimum (the paper's problem, the sticking law, no cone imposed): the normal n
+/// of the contact kernel at the stick phase's first configuration splits the plan's impulse
+/// into ι·n and ‖ι_∥‖, the impact speed is −n·J_c q̇⁻ at the approach's last state, and the
+/// plan's ι is the impulse of the velocity jump it plans (M_f (q̇⁺ − q̇⁻) = J_cᵀ ι, eq. 40a).
+/// That impulse needs μ ≈ 3 against μ_s = 0.8: flagged, and the verdict stays verified, since the
+/// problem left the cone out; the same record with the cone imposed fails the verdict.
+#[test]
+fn the_impact_record_agrees_with_the_kernels_and_flags_an_impulse_outside_the_cone() {
+    use ball_finger::pipeline::verify::{
+        impulse_cone_failure, impulse_cone_warning, is_verified, passes,
+    };
+    let stored = ball_finger::paper::stored::stored_optimum(
+        bf_problem::Problem::PeriodicCot,
+        Some("stick"),
+        bf_problem::catalogue::MIN_STICK,
+        false,
+    )
+    .unwrap();
+    let (p, mut sol) = stored.resolve().unwrap();
+    let v = verify(&p, &sol, RTOL).unwrap();
+    assert_eq!(v.impacts.len(), 1, "{v}");
+    let c = v.impacts[0];
+    assert_eq!((c.phase, c.imposed), (0, false));
+    let eps = sol.epsilon;
+    let contact = |x: &[f64]| {
+        let mut out = k::Contact::default();
+        k::contact_smooth(
+            &[x[0], x[1], x[2]],
+            &[x[3], x[4], x[5]],
+            &[x[6], x[7], x[8]],
+            eps,
+            &k::PARAM_DEFAULTS,
+            &mut out,
+        );
+        out
+    };
+    let pre = sol.raw[0].x.last().unwrap().clone();
+    let post = sol.raw[1].x[0].clone();
+    let at_post = contact(&post);
+    let n = at_post.n;
+    let iota = [sol.impulse[0], sol.impulse[1], sol.impulse[2]];
+    let normal: f64 = (0..3).map(|i| iota[i] * n[i]).sum();
+    let tangential = (0..3)
+        .map(|i| (iota[i] - normal * n[i]).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b.abs().max(1e-6);
+    assert!(close(c.normal, normal), "{} {normal}", c.normal);
+    assert!(
+        close(c.tangential, tangential),
+        "{} {tangential}",
+        c.tangential
+    );
+    assert!(close(c.margin, 0.8 * normal - tangential), "{}", c.margin);
+    let at_pre = contact(&pre);
+    let speed = -(0..3).map(|i| at_pre.n[i] * at_pre.v_c[i]).sum::<f64>();
+    assert!(close(c.impact_speed, speed), "{} {speed}", c.impact_speed);
+    assert!(speed > 0.0, "the finger approaches the ball: {speed}");
+    // Eq. 40a: the plan's ι is the impulse of its own velocity jump.
+    let mut m = [[0.0; 3]; 3];
+    k::mass_matrix(&[post[0], post[1], post[2]], &k::PARAM_DEFAULTS, &mut m);
+    for (i, row) in m.iter().enumerate() {
+        let lhs: f64 = (0..3).map(|j| row[j] * (post[3 + j] - pre[3 + j])).sum();
+        let rhs: f64 = (0..3).map(|r| at_post.j_c[r][i] * iota[r]).sum();
+        assert!(
+            (lhs - rhs).abs() <= 1e-6 * rhs.abs().max(1e-3),
+            "row {i}: {lhs} {rhs}"
+        );
+    }
+    // μ ≈ 3 against μ_s = 0.8: flagged, not failed.
+    assert!(tangential / normal > 2.5, "{}", tangential / normal);
+    let warning = impulse_cone_warning(&v).unwrap();
+    assert!(warning.contains("needs static friction 3.0"), "{warning}");
+    assert!(impulse_cone_failure(&v).is_none());
+    sol.verification = Some(v.clone());
+    assert!(is_verified(&sol), "{v}");
+    // Had the problem imposed the cone, the same impulse fails the verdict.
+    let mut imposed = v;
+    imposed.impacts[0].imposed = true;
+    assert!(impulse_cone_warning(&imposed).is_none());
+    let failure = impulse_cone_failure(&imposed).unwrap();
+    assert!(failure.contains("end of phase 1"), "{failure}");
+    assert!(!passes(&imposed));
+}

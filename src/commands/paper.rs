@@ -60,6 +60,7 @@ fn presented_optimum(
         problem,
         Some(settings.impact_law.name()),
         settings.min_stick,
+        settings.impulse_cone,
     )
     .with_context(|| {
         format!(
@@ -111,14 +112,15 @@ fn plan_dir(problem: bf_problem::Problem) -> String {
 /// ([`crate::paper::stored`]) or, with `--search`, the search itself; verified, written to
 /// `DIR/P-newton/`, executed by every controller
 /// ([`crate::paper::closed_loop::comparison_markdown`]) and against perturbed plants.
-/// `sticking` is the problem's sticking optimum above, for comparison.
+/// `sticking` is the problem's sticking optimum above, for comparison. Returns the section,
+/// the plan's failure (the run is FAILED) and its flag ([`impulse_flag`]).
 fn plan_markdown(
     args: &PaperArgs,
     problem: bf_problem::Problem,
     sticking: &bf_problem::OcpSolution,
     periods: usize,
     dir: &std::path::Path,
-) -> Result<(String, Option<String>)> {
+) -> Result<(String, Option<String>, Option<String>)> {
     let name = plan_dir(problem);
     // The paper's problems are posed on its compiled scenes: 3 joints, a ball of 1 m.
     let gap = bf_control::HybridGains::default().clearance.gap;
@@ -128,9 +130,13 @@ fn plan_markdown(
         let strategy = crate::pipeline::strategy::default_strategy(problem, settings.scheme);
         super::optimize::solve_globally_with_progress(problem, settings, strategy)?
     } else {
-        let stored =
-            crate::paper::stored::stored_optimum(problem, None, bf_problem::catalogue::MIN_STICK)
-                .with_context(|| format!("no stored plan of {problem} (data/optima/)"))?;
+        let stored = crate::paper::stored::stored_optimum(
+            problem,
+            None,
+            bf_problem::catalogue::MIN_STICK,
+            false,
+        )
+        .with_context(|| format!("no stored plan of {problem} (data/optima/)"))?;
         stored
             .resolve()
             .with_context(|| format!("the stored plan {}", stored.path().display()))?
@@ -176,7 +182,119 @@ fn plan_markdown(
     let robustness =
         crate::paper::closed_loop::robustness_markdown(&name, &sol, ROBUSTNESS_PERIODS)?;
     let failure = optimum_failure(&sol).map(|why| format!("the plan of `{problem}`: {why}"));
-    Ok((format!("{head}\n{table}\n{robustness}"), failure))
+    let flag = impulse_flag(&format!("the plan of `{problem}`"), &sol);
+    Ok((format!("{head}\n{table}\n{robustness}"), failure, flag))
+}
+
+/// A variant of `problem`'s scenario, the report's part `label`, posed with `settings` (their
+/// mesh and strategy set here as for the scenarios: 20 points and a direct solve with
+/// `--quick`, otherwise 30 points and the default strategy) and written under `dir`; judged
+/// into `verdict` ([`RunVerdict::judge`]). A variant that could not be solved is, like a
+/// failed scenario of the main table, a line of `report` and a failure of the run, and `None`:
+/// the report goes on.
+fn scenario_variant(
+    label: &str,
+    problem: bf_problem::Problem,
+    settings: bf_problem::ProblemSettings,
+    dir: &std::path::Path,
+    (args, mu_s, presented): (&PaperArgs, f64, crate::paper::scenarios::Solver<'_>),
+    report: &mut String,
+    verdict: &mut RunVerdict,
+) -> Result<Option<crate::paper::scenarios::ScenarioResult>> {
+    let settings = bf_problem::ProblemSettings {
+        points: if args.quick { 20 } else { 30 },
+        ..settings
+    };
+    let strategy = if args.quick {
+        crate::pipeline::strategy::Strategy::Direct
+    } else {
+        crate::pipeline::strategy::default_strategy(problem, settings.scheme)
+    };
+    match crate::paper::scenarios::run_scenario(
+        problem.name(),
+        settings,
+        strategy,
+        dir,
+        mu_s,
+        presented,
+    ) {
+        Ok(r) => {
+            verdict.judge(label, &r.solution);
+            Ok(Some(r))
+        }
+        Err(e) => {
+            let line = format!("{label} failed: {}", crate::errors::render(&e));
+            writeln!(report, "{line}\n")?;
+            verdict.failures.push(line);
+            Ok(None)
+        }
+    }
+}
+
+/// The report's section on the impulse cone (eq. 66, Sect. 7): the planned impulses of the
+/// Sect. 6.1 scenarios and of COT with the cone imposed (`coned`, written under
+/// [`crate::paper::report::impulse_cone::CONE_DIR`], `how` saying how it was found), the QC
+/// sentence and the COT comparison.
+fn impulse_cone_section(
+    results: &[crate::paper::scenarios::ScenarioResult],
+    cot: &crate::paper::scenarios::ScenarioResult,
+    coned: &crate::paper::scenarios::ScenarioResult,
+    mu_s: f64,
+    how: &str,
+) -> String {
+    use crate::paper::report::impulse_cone::{
+        CONE_DIR, CotFacts, comparison, cone_table, first_impact, qc_sentence,
+    };
+    let mut rows: Vec<(String, &bf_problem::OcpSolution)> = results
+        .iter()
+        .map(|r| (format!("`{}`", r.name), &r.solution))
+        .collect();
+    rows.push((
+        format!("`periodic-cot`, cone imposed (`{CONE_DIR}/`)"),
+        &coned.solution,
+    ));
+    let mut s = format!(
+        "### The impulse friction cone at the impact (Sect. 7, eq. 66)\n\n\
+         The sticking impact law (eq. 40) gives the finger whatever impulse ι stops the contact \
+         point; the problems of Sect. 6.1 do not ask whether static friction can hold it, \
+         ‖ι_∥‖ ≤ μ_s ι·n (eq. 66), which the paper discusses as an option in Sect. 7 \
+         (`optimize --impulse-cone`). Each optimum's planned impulse against the cone, from the \
+         re-integration's records (`verification.impacts` in its `solution.json`; ⚑: a real \
+         contact would slip at the impact, which the plan assumes it does not):\n\n{}\n",
+        cone_table(&rows, mu_s)
+    );
+    if let Some(qc) = results
+        .iter()
+        .find(|r| r.name == "periodic-qc")
+        .and_then(|r| first_impact(&r.solution))
+    {
+        s += &format!("{}\n\n", qc_sentence(qc, mu_s));
+    }
+    match (CotFacts::of(&cot.solution), CotFacts::of(&coned.solution)) {
+        (Some(free), Some(imposed)) => {
+            s += &format!(
+                "COT with the cone imposed, {how} ({}):\n\n{}\n",
+                if crate::pipeline::verify::is_verified(&coned.solution) {
+                    "verified"
+                } else {
+                    "**unverified**"
+                },
+                comparison(&free, &imposed, mu_s)
+            );
+        }
+        _ => s += "COT with the cone imposed: no re-integrated impact to compare.\n",
+    }
+    s
+}
+
+/// The flag of an optimum whose planned impact needs more static friction than μ_s, its problem
+/// leaving the cone of eq. 66 out ([`crate::pipeline::verify::impulse_cone_warning`]): a result
+/// of the run, counted in the summary, not a failure (the paper's problems leave the cone out).
+fn impulse_flag(label: &str, sol: &bf_problem::OcpSolution) -> Option<String> {
+    sol.verification
+        .as_ref()
+        .and_then(crate::pipeline::verify::impulse_cone_warning)
+        .map(|w| format!("{label}: {w}"))
 }
 
 /// Why the optimum `sol` does not count as a result: the solver did not converge, or its
@@ -236,6 +354,14 @@ impl RunVerdict {
             s.push('\n');
         }
         s
+    }
+
+    /// Adds what the optimum `sol` of the part `label` gives the verdict: its failure
+    /// ([`optimum_failure`]) and its flag ([`impulse_flag`]).
+    pub fn judge(&mut self, label: &str, sol: &bf_problem::OcpSolution) {
+        self.failures
+            .extend(optimum_failure(sol).map(|why| format!("{label}: {why}")));
+        self.flags.extend(impulse_flag(label, sol));
     }
 
     /// The error the set is marked FAILED with, if a check failed.
@@ -449,11 +575,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             .extend(failures.iter().map(|f| format!("scenario {f}")));
     }
     for r in &results {
-        if let Some(why) = optimum_failure(&r.solution) {
-            verdict
-                .failures
-                .push(format!("scenario `{}`: {why}", r.name));
-        }
+        verdict.judge(&format!("scenario `{}`", r.name), &r.solution);
     }
     for r in &results {
         writeln!(
@@ -490,64 +612,74 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     // QC again with the longer minimum stick duration, by the same strategy as above.
     if let Some(short) = results.iter().find(|r| r.name == "periodic-qc") {
         use crate::paper::report::min_stick::{LONG_DIR, LONG_MIN_STICK, StickRun};
-        let settings = bf_problem::ProblemSettings {
-            points: if args.quick { 20 } else { 30 },
-            min_stick: LONG_MIN_STICK,
-            ..bf_problem::ProblemSettings::default()
-        };
-        let strategy = if args.quick {
-            crate::pipeline::strategy::Strategy::Direct
-        } else {
-            crate::pipeline::strategy::default_strategy(
-                bf_problem::Problem::PeriodicQc,
-                settings.scheme,
-            )
-        };
-        let long = crate::paper::scenarios::run_scenario(
-            "periodic-qc",
-            settings,
-            strategy,
+        let long = scenario_variant(
+            &format!("QC with `--min-stick {LONG_MIN_STICK}`"),
+            bf_problem::Problem::PeriodicQc,
+            bf_problem::ProblemSettings {
+                min_stick: LONG_MIN_STICK,
+                ..bf_problem::ProblemSettings::default()
+            },
             &dir.join(LONG_DIR),
-            mu_s,
-            &presented,
-        );
-        match long {
-            Ok(long) => {
-                if let Some(why) = optimum_failure(&long.solution) {
-                    verdict
-                        .failures
-                        .push(format!("QC with `--min-stick {LONG_MIN_STICK}`: {why}"));
-                }
-                let runs = [
-                    StickRun {
-                        min_stick: bf_problem::ProblemSettings::default().min_stick,
-                        result: short.clone(),
-                        prefix: String::new(),
-                    },
-                    StickRun {
-                        min_stick: LONG_MIN_STICK,
-                        result: long,
-                        prefix: LONG_DIR.to_string(),
-                    },
-                ];
-                writeln!(
-                    report,
-                    "{}",
-                    crate::paper::report::min_stick::markdown(&runs, &|r| {
-                        crate::paper::scenarios::results_markdown(r)
-                    })?
-                )?;
-            }
-            // Like a failed scenario of the main table: reported, the report goes on, the run
-            // is FAILED.
-            Err(e) => {
-                let line = format!(
-                    "QC with `--min-stick {LONG_MIN_STICK}` failed: {}",
-                    crate::errors::render(&e)
-                );
-                writeln!(report, "{line}\n")?;
-                verdict.failures.push(line);
-            }
+            (args, mu_s, &presented),
+            &mut report,
+            &mut verdict,
+        )?;
+        if let Some(long) = long {
+            let runs = [
+                StickRun {
+                    min_stick: bf_problem::ProblemSettings::default().min_stick,
+                    result: short.clone(),
+                    prefix: String::new(),
+                },
+                StickRun {
+                    min_stick: LONG_MIN_STICK,
+                    result: long,
+                    prefix: LONG_DIR.to_string(),
+                },
+            ];
+            writeln!(
+                report,
+                "{}",
+                crate::paper::report::min_stick::markdown(&runs, &|r| {
+                    crate::paper::scenarios::results_markdown(r)
+                })?
+            )?;
+        }
+    }
+
+    // COT again with the impulse cone of eq. 66 imposed (Sect. 7), by the same strategy.
+    if let Some(cot) = results.iter().find(|r| r.name == "periodic-cot") {
+        let coned = scenario_variant(
+            "COT with `--impulse-cone`",
+            bf_problem::Problem::PeriodicCot,
+            bf_problem::ProblemSettings {
+                impulse_cone: true,
+                // `--quick`'s cold solves land in other optima than the searches; from the
+                // COT optimum above, the cone's own effect on it is what the section shows.
+                warm_start: args.quick.then(|| cot.solution.clone()),
+                ..bf_problem::ProblemSettings::default()
+            },
+            &dir.join(crate::paper::report::impulse_cone::CONE_DIR),
+            (args, mu_s, &presented),
+            &mut report,
+            &mut verdict,
+        )?;
+        if let Some(coned) = coned {
+            writeln!(
+                report,
+                "{}",
+                impulse_cone_section(
+                    &results,
+                    cot,
+                    &coned,
+                    mu_s,
+                    if args.quick {
+                        "solved warm from the COT optimum above (`--quick`)"
+                    } else {
+                        "found by the same strategy as the table above"
+                    }
+                )
+            )?;
         }
     }
 
@@ -651,8 +783,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             let pb = stage(1, &format!("{problem}: plan for the plant"));
             let md = plan_markdown(args, problem, &sticking.solution, periods, &dir);
             pb.finish();
-            let md = md.map(|(md, failure)| {
+            let md = md.map(|(md, failure, flag)| {
                 verdict.failures.extend(failure);
+                verdict.flags.extend(flag);
                 md
             });
             section(
@@ -854,6 +987,7 @@ mod tests {
             bf_problem::Problem::PeriodicQc,
             Some("stick"),
             bf_problem::catalogue::MIN_STICK,
+            false,
         )
         .unwrap();
         let sol = stored.solution().unwrap();

@@ -872,6 +872,7 @@ mod tests {
             Problem::PeriodicCotHuman,
             Some("stick"),
             bf_problem::catalogue::MIN_STICK,
+            false,
         )
         .unwrap();
         let sol = stored.solution().unwrap();
@@ -922,6 +923,7 @@ mod tests {
             Problem::PeriodicQc,
             Some("stick"),
             bf_problem::catalogue::MIN_STICK,
+            false,
         )
         .unwrap();
         let sol = stored.solution().unwrap();
@@ -969,6 +971,7 @@ mod tests {
             Problem::PeriodicCotHuman,
             None,
             bf_problem::catalogue::MIN_STICK,
+            false,
         )
         .unwrap();
         let sol = stored.solution().unwrap();

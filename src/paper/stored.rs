@@ -38,17 +38,23 @@ pub struct StoredOptimum {
     pub law: Option<&'static str>,
     /// `--min-stick` of the search (s).
     pub min_stick: f64,
+    /// `--impulse-cone` of the search (eq. 66 imposed at the impact).
+    pub impulse_cone: bool,
     solution: &'static str,
     internals: &'static str,
 }
 
 macro_rules! stored {
     ($dir:literal, $problem:expr, $law:expr, $min_stick:expr) => {
+        stored!($dir, $problem, $law, $min_stick, false)
+    };
+    ($dir:literal, $problem:expr, $law:expr, $min_stick:expr, $impulse_cone:expr) => {
         StoredOptimum {
             dir: $dir,
             problem: $problem,
             law: $law,
             min_stick: $min_stick,
+            impulse_cone: $impulse_cone,
             solution: include_str!(concat!("../../data/optima/", $dir, "/solution.json")),
             internals: include_str!(concat!(
                 "../../data/optima/",
@@ -59,12 +65,12 @@ macro_rules! stored {
     };
 }
 
-/// The optima `paper` presents: the three problems of Sect. 6.1 and `periodic-qc` with a stick
-/// phase of at least 0.1 s, posed as the paper poses them (the sticking impact law, eq. 40),
-/// and the plans `optimize` makes of `periodic-qc` and `periodic-cot-human` by default for the
-/// plant that executes them (Newton's impact law with margins), which the report executes in
-/// closed loop.
-pub static STORED_OPTIMA: [StoredOptimum; 6] = [
+/// The optima `paper` presents: the three problems of Sect. 6.1, `periodic-qc` with a stick
+/// phase of at least 0.1 s and `periodic-cot` with the impulse cone of eq. 66 imposed (Sect. 7),
+/// posed as the paper poses them (the sticking impact law, eq. 40), and the plans `optimize`
+/// makes of `periodic-qc` and `periodic-cot-human` by default for the plant that executes them
+/// (Newton's impact law with margins), which the report executes in closed loop.
+pub static STORED_OPTIMA: [StoredOptimum; 7] = [
     stored!("periodic-qc", Problem::PeriodicQc, Some("stick"), MIN_STICK),
     stored!(
         "periodic-cot",
@@ -83,6 +89,13 @@ pub static STORED_OPTIMA: [StoredOptimum; 6] = [
         Problem::PeriodicQc,
         Some("stick"),
         crate::paper::report::min_stick::LONG_MIN_STICK
+    ),
+    stored!(
+        "periodic-cot-impulse-cone",
+        Problem::PeriodicCot,
+        Some("stick"),
+        MIN_STICK,
+        true
     ),
     stored!("periodic-qc-plan", Problem::PeriodicQc, None, MIN_STICK),
     stored!(
@@ -111,8 +124,13 @@ impl StoredOptimum {
         } else {
             format!(" --min-stick {}", self.min_stick)
         };
+        let cone = if self.impulse_cone {
+            " --impulse-cone"
+        } else {
+            ""
+        };
         format!(
-            "ball-finger optimize --problem {}{law}{stick} --out {}",
+            "ball-finger optimize --problem {}{law}{stick}{cone} --out {}",
             self.problem.name(),
             self.path().display()
         )
@@ -136,14 +154,19 @@ impl StoredOptimum {
 }
 
 /// The stored optimum of `problem` searched with the impact law `law` (`--impact-law`, `None`
-/// for `optimize`'s default plan) and the stick-phase bound `min_stick`, if one of
-/// [`STORED_OPTIMA`] is (a test checks that every file records the problem its entry names).
+/// for `optimize`'s default plan), the stick-phase bound `min_stick` and, where
+/// `impulse_cone`, eq. 66 imposed, if one of [`STORED_OPTIMA`] is (a test checks that every
+/// file records the problem and settings its entry names).
 pub fn stored_optimum(
     problem: Problem,
     law: Option<&str>,
     min_stick: f64,
+    impulse_cone: bool,
 ) -> Option<&'static StoredOptimum> {
-    STORED_OPTIMA
-        .iter()
-        .find(|s| s.problem == problem && s.law == law && s.min_stick == min_stick)
+    STORED_OPTIMA.iter().find(|s| {
+        s.problem == problem
+            && s.law == law
+            && s.min_stick == min_stick
+            && s.impulse_cone == impulse_cone
+    })
 }

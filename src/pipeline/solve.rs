@@ -301,6 +301,7 @@ pub fn settings_of(
             scene,
             impact_law: sol.impact_law,
             cone_margin: sol.cone_margin,
+            impulse_cone: sol.impulse_cone,
             torque_margin: sol.torque_margin,
             approach_clearance: sol.approach_clearance,
             // The stick-phase bound is a bound of the problem (eq. 66), recorded with the

@@ -12,6 +12,7 @@
 //! | [`cone_failure`]: min σ against [`CONE_TOLERANCE`] · μ_s max λ_n ([`cone_allowance`]), part of the verdict | eq. 18–19 |
 //! | [`PhaseVerification::min_h`], [`penetration_failure`]: penetration check of free phases, part of the verdict | eq. 4 |
 //! | [`PhaseVerification::node_residual`]: the OCP's dynamics residual at the collocation nodes, evaluated with bf-model's kernels and parameters | eq. 26, 29 |
+//! | [`ImpactCone`] (`Verification::impacts`): each planned impulse against the friction cone, part of the verdict where the problem imposed it ([`impulse_cone_failure`]), a flag otherwise ([`impulse_cone_warning`], decision record 0087) | eq. 36, 66 |
 //! | contact geometry with the smooth saturation of the solution's ε | eq. 58–59 |
 //!
 //! Three figures per phase, one of them the criterion:
@@ -80,7 +81,9 @@ use bf_sim::{HybridSystem, SimError, SimOutput, SimSettings};
 use super::error::{PhaseDataDefect, PipelineError};
 
 use bf_problem::solution::records::ExecutionCheck;
-pub use bf_problem::solution::records::{PhaseVerification, TorqueInterpolant, Verification};
+pub use bf_problem::solution::records::{
+    ImpactCone, PhaseVerification, TorqueInterpolant, Verification,
+};
 
 /// Contact tolerance (fraction of the ball radius) of the stick dynamics during verification.
 pub const CONTACT_TOLERANCE: f64 = 0.05;
@@ -789,6 +792,7 @@ pub fn passes(v: &Verification) -> bool {
 /// the plan could not have been chosen ([`Verification::not_executed`]).
 pub fn verdict_failure(v: &Verification) -> Option<String> {
     path_failure(v)
+        .or_else(|| impulse_cone_failure(v))
         .or_else(|| execution_failure(v))
         .or_else(|| {
             v.not_executed
@@ -1153,7 +1157,7 @@ pub fn verify_with(
             problem: p.epsilon,
         });
     }
-    let phases = match p.physics.nq {
+    let (phases, impacts) = match p.physics.nq {
         1 => verify_phases::<1>(p, sol, opt, atol)?,
         2 => verify_phases::<2>(p, sol, opt, atol)?,
         3 => verify_phases::<3>(p, sol, opt, atol)?,
@@ -1193,19 +1197,20 @@ pub fn verify_with(
         seconds: start.elapsed().as_secs_f64(),
         execution: None,
         not_executed: None,
+        impacts,
     };
     v.verified = passes(&v);
     Ok(v)
 }
 
-/// The phase verifications of [`verify_with`] for a finger of `N` joints (tolerances, modes
-/// and ε checked by the caller).
+/// The phase verifications and the impacts' cone records of [`verify_with`] for a finger of
+/// `N` joints (tolerances, modes and ε checked by the caller).
 fn verify_phases<const N: usize>(
     p: &BuiltProblem,
     sol: &OcpSolution,
     opt: &VerifySettings,
     atol: f64,
-) -> Result<Vec<PhaseVerification>, PipelineError> {
+) -> Result<(Vec<PhaseVerification>, Vec<ImpactCone>), PipelineError> {
     let eps = sol.epsilon;
     let model = verification_model::<N>(p, ContactVariant::Smooth(eps))?;
     let exact = verification_model::<N>(p, ContactVariant::Exact)?;
@@ -1235,7 +1240,116 @@ fn verify_phases<const N: usize>(
             p.physics.radius,
         )?);
     }
-    Ok(phases)
+    let impacts = impact_cones(&model, p, sol)?;
+    Ok((phases, impacts))
+}
+
+/// The cone record ([`ImpactCone`]) of every free → stick switch of `sol`: the plan's impulse ι
+/// (its NLP parameters, three per impact in phase order) against the contact normal n of
+/// `model` at the stick phase's collocated first configuration, where the impact happens.
+fn impact_cones<const N: usize>(
+    model: &Model<DynKernels<N>, N>,
+    p: &BuiltProblem,
+    sol: &OcpSolution,
+) -> Result<Vec<ImpactCone>, PipelineError> {
+    let switches = (0..sol.modes.len().saturating_sub(1))
+        .filter(|&k| sol.modes[k] == PhaseMode::Free && sol.modes[k + 1] == PhaseMode::Stick);
+    let mut impacts = Vec::new();
+    // The state at the first (`first`) or last point of phase `k`.
+    let state = |k: usize, first: bool| {
+        let xs = &sol.raw[k].x;
+        let x = if first { xs.first() } else { xs.last() };
+        x.and_then(|x| State::<N>::from_slice(x))
+            .ok_or(PipelineError::Unrecomputable(format!(
+                "phase {} has no {} state of {} values",
+                k + 1,
+                if first { "first" } else { "last" },
+                State::<N>::DIM
+            )))
+    };
+    for (k, iota) in switches.zip(sol.impulse.chunks_exact(3)) {
+        let (pre, x) = (state(k, false)?, state(k + 1, true)?);
+        let geometry = |x: &State<N>| {
+            model
+                .evaluate(x)
+                .map(|k| k.contact)
+                .map_err(|source| PipelineError::VerifyModel {
+                    scene: p.scene.name.clone(),
+                    source,
+                })
+        };
+        let n = geometry(&x)?.n;
+        let impact_speed = -geometry(&pre)?.normal_velocity();
+        let impulse = [iota[0], iota[1], iota[2]];
+        let normal = impulse[0] * n[0] + impulse[1] * n[1] + impulse[2] * n[2];
+        let tangential = (0..3)
+            .map(|i| (impulse[i] - normal * n[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        impacts.push(ImpactCone {
+            phase: k,
+            impulse,
+            normal,
+            tangential,
+            margin: p.physics.mu_s * normal - tangential,
+            impact_speed,
+            imposed: p.settings.impulse_cone,
+        });
+    }
+    Ok(impacts)
+}
+
+/// The impulse allowance of an impact whose impulse pushes with `normal` = ι·n: the margin
+/// μ_s ι·n − ‖ι_∥‖ an impact that imposes eq. 66 may show, [`CONE_TOLERANCE`] · μ_s · ι·n as
+/// for the stick phases' forces ([`cone_allowance`]).
+pub fn impulse_allowance(mu_s: f64, normal: f64) -> f64 {
+    cone_allowance(mu_s, normal)
+}
+
+/// The first impact of `v` that imposed the impulse cone (eq. 66) and leaves it by more than
+/// its [`impulse_allowance`], as a sentence naming the phase, the margin and the allowance.
+/// The cone is a point constraint of the NLP, so only an inaccurate solve breaks it.
+pub fn impulse_cone_failure(v: &Verification) -> Option<String> {
+    v.impacts
+        .iter()
+        .find(|c| c.imposed && c.margin < -impulse_allowance(v.mu_s, c.normal))
+        .map(|c| {
+            format!(
+                "the impact at the end of phase {} leaves the impulse cone it imposed (eq. 66): \
+                 mu_s iota.n - |iota_t| = {:.3e} N s below the allowance -{:.3e} N s",
+                c.phase + 1,
+                c.margin,
+                impulse_allowance(v.mu_s, c.normal)
+            )
+        })
+}
+
+/// The first impact of `v` whose impulse needs more static friction than μ_s (eq. 66) and
+/// whose problem did not impose the cone, as a sentence for the places that show the plan
+/// (a flag, not a failure of the verdict: the paper's problems leave the cone out, Sect. 7).
+pub fn impulse_cone_warning(v: &Verification) -> Option<String> {
+    v.impacts
+        .iter()
+        .find(|c| !c.imposed && c.margin < -impulse_allowance(v.mu_s, c.normal))
+        .map(|c| {
+            format!(
+                "the impact at the end of phase {} needs static friction {} against mu_s = {} \
+                 (|iota_t| / iota.n, eq. 66): a real contact would slip there; \
+                 `optimize --impulse-cone` imposes the cone",
+                c.phase + 1,
+                fmt_friction(c.friction_needed()),
+                v.mu_s
+            )
+        })
+}
+
+/// A friction coefficient as text: three significant digits, `inf` when no friction holds.
+fn fmt_friction(mu: f64) -> String {
+    if mu.is_finite() {
+        format!("{mu:.3}")
+    } else {
+        "inf (the impulse does not push)".into()
+    }
 }
 
 #[cfg(test)]

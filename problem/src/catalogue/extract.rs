@@ -136,6 +136,7 @@ pub fn solution_at(
         search_settings: None,
         impact_law: p.settings.impact_law,
         cone_margin: p.settings.cone_margin,
+        impulse_cone: p.settings.impulse_cone,
         torque_margin: p.settings.torque_margin,
         approach_clearance: p.settings.approach_clearance,
     })

@@ -174,6 +174,10 @@ pub struct OcpSolution {
     /// 0 in files written before it was recorded).
     #[serde(default)]
     pub cone_margin: f64,
+    /// Whether the plan's impact imposed the impulse friction cone (eq. 66,
+    /// [`crate::ProblemSettings::impulse_cone`]; false in older files, which all left it out).
+    #[serde(default)]
+    pub impulse_cone: bool,
     /// The share of the torque limits the plan left unused
     /// ([`crate::ProblemSettings::torque_margin`]; 0 in older files).
     #[serde(default)]

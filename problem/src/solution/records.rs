@@ -356,6 +356,45 @@ pub struct PhaseVerification {
     pub max_abs_h: Option<f64>,
 }
 
+/// A planned impact's impulse against the friction cone (eq. 66): whether static friction
+/// can hold the impulse ι that the plan's impact law (eq. 39 or 40) gives the finger, or the
+/// contact would slip at the impact instead of sticking as the plan assumes. The paper poses
+/// the cone as an option of the problem (Sect. 7, `optimize --impulse-cone`); without it a
+/// plan may need any friction, and the record says how much.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ImpactCone {
+    /// The free phase that ends at the impact, 0-based (text for readers counts from 1).
+    pub phase: usize,
+    /// ι on the finger (N s, world axes): the plan's own impulse parameter.
+    pub impulse: [f64; 3],
+    /// ι·n (N s): positive when the ball pushes the finger away, as a contact can.
+    pub normal: f64,
+    /// ‖ι_∥‖ = ‖ι − (ι·n) n‖ (N s).
+    pub tangential: f64,
+    /// μ_s ι·n − ‖ι_∥‖ (N s, eq. 66): non-negative when static friction holds the impulse.
+    pub margin: f64,
+    /// −n·v_c⁻ (m/s, eq. 36): the speed at which the contact point reaches the ball, from the
+    /// free phase's collocated last state. A larger impact speed gives the impulse more
+    /// normal part, which is how a plan meets the cone (the paper's Sect. 7 on COT).
+    pub impact_speed: f64,
+    /// Whether the problem imposed eq. 66 on its impulse (`impulse_cone`): then a margin below
+    /// its allowance fails the verdict; otherwise the record informs and a negative margin is
+    /// flagged where the plan is shown.
+    pub imposed: bool,
+}
+
+impl ImpactCone {
+    /// ‖ι_∥‖ / ι·n: the least static friction coefficient that holds the impulse (∞ when the
+    /// impulse does not push, ι·n ≤ 0).
+    pub fn friction_needed(&self) -> f64 {
+        if self.normal > 0.0 {
+            self.tangential / self.normal
+        } else {
+            f64::INFINITY
+        }
+    }
+}
+
 /// Result of the verification; meant for `solution.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Verification {
@@ -420,6 +459,10 @@ pub struct Verification {
     /// not executed); absent where the execution ran or was not asked for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub not_executed: Option<String>,
+    /// Every planned impact's impulse against the friction cone ([`ImpactCone`]), in phase
+    /// order; empty for problems without an impact and in older files.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub impacts: Vec<ImpactCone>,
 }
 
 /// A plan run in closed loop: the hybrid controller (computed torque in free flight, hybrid
@@ -627,6 +670,24 @@ impl fmt::Display for Verification {
              open-loop drift {:.3e})",
             self.max_defect, self.max_interval_defect, self.max_open_loop_defect
         )?;
+        for c in &self.impacts {
+            write!(
+                f,
+                "\nimpact at the end of phase {} at {:.3e} m/s: iota.n {:.3e} N s, |iota_t| \
+                 {:.3e} N s, needs static friction {:.3} (mu_s {}){}",
+                c.phase + 1,
+                c.impact_speed,
+                c.normal,
+                c.tangential,
+                c.friction_needed(),
+                self.mu_s,
+                if c.imposed {
+                    ", cone imposed (eq. 66)"
+                } else {
+                    ""
+                }
+            )?;
+        }
         if let Some(e) = &self.execution {
             write!(f, "\n{}", e.summary())?;
         }

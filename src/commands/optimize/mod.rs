@@ -24,7 +24,8 @@ use crate::pipeline::strategy::{
     self, DEFAULT_SEED, DEFAULT_STARTS, GLOBAL_STARTS, Shard, Strategy,
 };
 use crate::pipeline::verify::{
-    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, is_verified, robustness_miss, verdict_failure, verify,
+    MAX_VERIFY_JOINTS, VERIFIED_DEFECT, impulse_cone_warning, is_verified, robustness_miss,
+    verdict_failure, verify,
 };
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
@@ -240,6 +241,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     )?;
     let settings = plan.apply(ProblemSettings {
         cone_margin: args.cone_margin,
+        impulse_cone: args.impulse_cone,
         scene,
         points: args.points,
         scheme,
@@ -676,6 +678,9 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
                 .map(|p| format!("; {p}"))
                 .unwrap_or_default()
         )?;
+        if let Some(w) = impulse_cone_warning(v) {
+            crate::outln!("impulse cone: FLAGGED, {w}")?;
+        }
         if let Some(miss) = robustness_miss(v).filter(|_| is_verified(sol)) {
             crate::outln!(
                 "robustness: MISSED {miss}: the plan is executed on the plant it was planned \

@@ -60,13 +60,14 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolu
 
 /// What every file of one multi-start shares (the shards' `solution.json` and candidates):
 /// (quantity, value as shown). The scene text is compared apart ([`check_same_run`]).
-fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 9] {
+fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 10] {
     [
         ("problem", sol.problem.clone()),
         ("scene", sol.scene.clone()),
         ("runtime parameters", format!("{:?}", sol.scene_params)),
         ("impact law", sol.impact_law.name().to_string()),
         ("cone margin", format!("{:e}", sol.cone_margin)),
+        ("impulse cone", sol.impulse_cone.to_string()),
         ("torque margin", format!("{:e}", sol.torque_margin)),
         (
             "approach clearance",
