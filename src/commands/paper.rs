@@ -356,8 +356,9 @@ impl RunVerdict {
         s
     }
 
-    /// Adds what the optimum `sol` of the part `label` gives the verdict: its failure
-    /// ([`optimum_failure`]) and its flag ([`impulse_flag`]).
+    /// Adds what the optimum `sol` of the part `label` gives the verdict: its failure (not
+    /// solved, or unverified) and its flag (an impact that needs more static friction than
+    /// μ_s, where its problem leaves the impulse cone out).
     pub fn judge(&mut self, label: &str, sol: &bf_problem::OcpSolution) {
         self.failures
             .extend(optimum_failure(sol).map(|why| format!("{label}: {why}")));
@@ -712,11 +713,17 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                     .iter()
                     .map(|t| (t.feedback.map_or(String::new(), |pd| pd.label()), t)),
             );
+            // A failed energy-balance check is a failed check of the run (its figures rest on
+            // an integration that did not balance); the other warnings are measurements of
+            // the model, flagged.
             for (name, run) in runs {
-                for line in run.warning_lines() {
-                    verdict
-                        .flags
-                        .push(format!("section 5, {name}: {}", line.replace("**", "")));
+                for (failed_check, line) in run.warning_lines() {
+                    let line = format!("section 5, {name}: {line}");
+                    if failed_check {
+                        verdict.failures.push(line);
+                    } else {
+                        verdict.flags.push(line);
+                    }
                 }
             }
             writeln!(

@@ -538,9 +538,10 @@ const ENERGY_ERROR: &str = "energy_error";
 impl OpenLoop {
     /// The simulator's warnings of the run, one sentence per kind: how many, the worst (the
     /// largest energy gain of an impact, as a share of the run's initial energy), when the
-    /// first occurred. A failed energy-balance check is marked: the run's own accuracy check
-    /// failed, so its figures measure the integration as much as the open loop.
-    pub fn warning_lines(&self) -> Vec<String> {
+    /// first occurred; with each, whether it is the failed energy-balance check, the run's own
+    /// accuracy check (its figures then measure the integration as much as the open loop; the
+    /// report marks it), rather than a measurement of the model.
+    pub fn warning_lines(&self) -> Vec<(bool, String)> {
         let mut kinds: Vec<&str> = Vec::new();
         for w in &self.warnings {
             if !kinds.contains(&w.kind) {
@@ -550,11 +551,12 @@ impl OpenLoop {
         kinds
             .into_iter()
             .map(|kind| {
+                let failed_check = kind == ENERGY_ERROR;
                 let of: Vec<&bf_sim::SimWarning> =
                     self.warnings.iter().filter(|w| w.kind == kind).collect();
                 let first = of[0];
                 let n = of.len();
-                match kind {
+                let line = match kind {
                     "energy_raising_impact" => {
                         let share = if self.energy_initial.abs() > 0.0 {
                             format!(
@@ -575,7 +577,7 @@ impl OpenLoop {
                         )
                     }
                     ENERGY_ERROR => format!(
-                        "**the energy balance failed its check** (`{kind}`) at t = {:.4} s: {}",
+                        "the energy balance failed its check (`{kind}`) at t = {:.4} s: {}",
                         first.t,
                         crate::names::tidy(&first.message)
                     ),
@@ -585,14 +587,10 @@ impl OpenLoop {
                         first.t,
                         crate::names::tidy(&first.message)
                     ),
-                }
+                };
+                (failed_check, line)
             })
             .collect()
-    }
-
-    /// Whether the run's energy balance failed the simulator's check.
-    pub fn energy_check_failed(&self) -> bool {
-        self.warnings.iter().any(|w| w.kind == ENERGY_ERROR)
     }
 }
 
@@ -605,8 +603,12 @@ fn warnings_markdown(name: &str, o: &OpenLoop) -> String {
     }
     let n = o.warnings.len();
     let mut s = format!("Simulator warnings, {name} ({n} in its `summary.json`'s `warnings`):\n\n");
-    for l in lines {
-        s.push_str(&format!("- {l}\n"));
+    for (failed_check, l) in lines {
+        if failed_check {
+            s.push_str(&format!("- **failed check:** {l}\n"));
+        } else {
+            s.push_str(&format!("- {l}\n"));
+        }
     }
     s
 }
@@ -797,17 +799,28 @@ mod tests {
             ),
             "{md}"
         );
-        assert!(!o.energy_check_failed());
+        assert!(o.warning_lines().iter().all(|(failed, _)| !failed));
         let mut failed = run(vec![bf_sim::SimWarning {
             t: 1.4299208130706953,
             kind: "energy_error",
             message: "energy-balance error 3.211e-3 J from t = 0 s exceeds 1e-3 J".into(),
         }]);
         failed.feedback = Some(DEFAULT_PD_TRACK);
-        assert!(failed.energy_check_failed());
+        assert_eq!(
+            failed.warning_lines(),
+            [(
+                true,
+                "the energy balance failed its check (`energy_error`) at t = 1.4299 s: \
+                 energy-balance error 3.211e-3 J from t = 0 s exceeds 1e-3 J"
+                    .to_string()
+            )]
+        );
         let md = pd_markdown(&run(vec![]), &[failed]).unwrap();
         assert!(
-            md.contains("**the energy balance failed its check** (`energy_error`) at t = 1.4299 s"),
+            md.contains(
+                "- **failed check:** the energy balance failed its check (`energy_error`) at \
+                 t = 1.4299 s"
+            ),
             "{md}"
         );
         assert!(

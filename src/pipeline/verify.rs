@@ -786,6 +786,29 @@ pub fn passes(v: &Verification) -> bool {
         && verdict_failure(v).is_none()
 }
 
+/// Why the verification record `v` does not pass ([`passes`]), as a phrase for the places that
+/// show an unverified solution (`optimize`'s error, the reports): the verdict's own failure
+/// ([`verdict_failure`]) where every element reached its end within [`VERIFIED_DEFECT`],
+/// otherwise the defect against the tolerance and whether a phase stopped short. `None` when
+/// it passes.
+pub fn unverified_reason(v: &Verification) -> Option<String> {
+    if passes(v) {
+        return None;
+    }
+    Some(match verdict_failure(v) {
+        Some(why) if v.passes(VERIFIED_DEFECT) => why,
+        _ => format!(
+            "its re-integration defect {:.3e} exceeds {VERIFIED_DEFECT:e}{}",
+            v.max_defect,
+            if v.completed() {
+                ""
+            } else {
+                " (a phase could not be re-integrated to its end)"
+            }
+        ),
+    })
+}
+
 /// Why `v` fails its verdict other than by its defects: the first path check outside its
 /// allowance ([`path_failure`]), else a closed-loop execution that failed
 /// ([`execution_failure`]), else a closed-loop execution that the search did not run because

@@ -25,7 +25,7 @@ use crate::pipeline::strategy::{
 };
 use crate::pipeline::verify::{
     MAX_VERIFY_JOINTS, VERIFIED_DEFECT, impulse_cone_warning, is_verified, robustness_miss,
-    verdict_failure, verify,
+    unverified_reason, verdict_failure, verify,
 };
 use anyhow::{Context, Result, bail};
 use bf_optim::ipm::Status;
@@ -503,24 +503,10 @@ pub fn failure_of(sol: &OcpSolution) -> Option<String> {
             crate::names::name(&sol.status)
         ));
     }
-    match &sol.verification {
-        Some(v) if !is_verified(sol) => Some(match verdict_failure(v) {
-            Some(path) if v.passes(VERIFIED_DEFECT) => {
-                format!("the solution is unverified: {path}")
-            }
-            _ => format!(
-                "the solution is unverified: its re-integration defect {:.3e} exceeds {:e}{}",
-                v.max_defect,
-                VERIFIED_DEFECT,
-                if v.completed() {
-                    ""
-                } else {
-                    " (a phase could not be re-integrated to its end)"
-                }
-            ),
-        }),
-        _ => None,
-    }
+    sol.verification
+        .as_ref()
+        .and_then(unverified_reason)
+        .map(|why| format!("the solution is unverified: {why}"))
 }
 
 /// [`commit_solution`] with extra solution files (`--shard` candidates) in the set.

@@ -15,7 +15,7 @@ use std::time::Instant;
 
 use crate::pipeline::search::{VerifyPolicy, search};
 use crate::pipeline::strategy::{Shard, Strategy, solve_with_strategy};
-use crate::pipeline::verify::{VERIFIED_DEFECT, passes, verdict_failure, verify};
+use crate::pipeline::verify::{VERIFIED_DEFECT, verify};
 use anyhow::Result;
 use bf_problem::{OcpSolution, Problem, ProblemSettings};
 
@@ -43,10 +43,9 @@ pub struct StrategyRow {
     /// Largest state error at the collocation element ends, each element re-integrated from
     /// its collocated start (NaN if the re-integration could not run).
     pub defect: f64,
-    /// Whether the solution passes the verification (`pipeline::verify::passes`: every element
-    /// re-integrated, defect ≤ [`VERIFIED_DEFECT`], path checks within their allowances).
-    pub verified: bool,
-    /// Why it does not (`None` where it does, and for a row that errored).
+    /// Why the solution does not pass the verification
+    /// ([`crate::pipeline::verify::unverified_reason`]; `None` where it does, and for a row
+    /// that errored).
     pub unverified: Option<String>,
 }
 
@@ -58,6 +57,13 @@ impl StrategyRow {
         } else {
             self.strategy.to_string()
         }
+    }
+
+    /// Whether the row's solution passes the verification (`pipeline::verify::passes`: every
+    /// element re-integrated, defect ≤ [`VERIFIED_DEFECT`], path checks within their
+    /// allowances); false for a row that errored.
+    pub fn verified(&self) -> bool {
+        !self.errored() && self.unverified.is_none()
     }
 
     /// Whether the row's solve returned an error instead of a solution.
@@ -80,20 +86,6 @@ impl StrategyRow {
     fn is_baseline(&self) -> bool {
         self.strategy == Strategy::Direct && !self.global
     }
-}
-
-/// Why a verification record does not pass, in a few words.
-fn unverified_reason(v: &crate::pipeline::verify::Verification) -> Option<String> {
-    if passes(v) {
-        return None;
-    }
-    Some(if !v.completed() {
-        "a phase could not be re-integrated to its end".to_string()
-    } else if v.max_defect.is_nan() || v.max_defect > VERIFIED_DEFECT {
-        format!("defect {:.1e} > {VERIFIED_DEFECT:e}", v.max_defect)
-    } else {
-        verdict_failure(v).unwrap_or_else(|| "its verdict failed".to_string())
-    })
 }
 
 /// The strategies compared (with whether the global search runs on them).
@@ -143,7 +135,7 @@ fn row(problem: Problem, strategy: Strategy, global: bool) -> StrategyRow {
     match res {
         Ok((p, sol)) => {
             let (defect, unverified) = match verify(&p, &sol, 1e-10) {
-                Ok(v) => (v.max_defect, unverified_reason(&v)),
+                Ok(v) => (v.max_defect, crate::pipeline::verify::unverified_reason(&v)),
                 Err(e) => (
                     f64::NAN,
                     Some(format!(
@@ -163,7 +155,6 @@ fn row(problem: Problem, strategy: Strategy, global: bool) -> StrategyRow {
                 seconds,
                 successes: successes(&sol),
                 defect,
-                verified: unverified.is_none(),
                 unverified,
             }
         }
@@ -178,7 +169,6 @@ fn row(problem: Problem, strategy: Strategy, global: bool) -> StrategyRow {
             seconds,
             successes: (0, 0),
             defect: f64::NAN,
-            verified: false,
             unverified: None,
         },
     }
@@ -245,7 +235,7 @@ pub fn flags(rows: &[StrategyRow]) -> Vec<String> {
                 "{}: no φ/φ_cold ratios, its cold start errored",
                 r.problem
             )),
-            Some(b) if !b.verified => out.push(format!(
+            Some(b) if !b.verified() => out.push(format!(
                 "{}: the φ/φ_cold ratios are taken against an unverified cold start",
                 r.problem
             )),
@@ -320,7 +310,7 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
         let ratio = match base {
             Some(b) if !b.errored() && !r.errored() => {
                 let x = format!("{:.3}", r.objective / b.objective);
-                if b.verified {
+                if b.verified() {
                     x
                 } else {
                     format!("{x} (cold start **unverified**)")
@@ -330,7 +320,7 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
         };
         let verified = if r.errored() {
             "—"
-        } else if r.verified {
+        } else if r.verified() {
             "yes"
         } else {
             "**no**"
@@ -381,7 +371,6 @@ mod tests {
             seconds: 0.1,
             successes: (1, 1),
             defect: if unverified.is_some() { 2e-3 } else { 1e-6 },
-            verified: unverified.is_none(),
             unverified: unverified.map(String::from),
         }
     }
@@ -392,7 +381,6 @@ mod tests {
             objective: f64::NAN,
             period: f64::NAN,
             defect: f64::NAN,
-            verified: false,
             unverified: None,
             ..row(problem, strategy, 0.0, None)
         }
@@ -414,7 +402,7 @@ mod tests {
                 "periodic-qc",
                 Strategy::Continuation,
                 1.0,
-                Some("defect 2.0e-3 > 1e-4"),
+                Some("its re-integration defect 2.000e-3 exceeds 1e-4"),
             ),
         ];
         let md = markdown(&rows);
@@ -424,7 +412,7 @@ mod tests {
         assert!(cont.contains("| 0.500 |"), "{cont}");
         assert!(md.contains("defect ≤ 1e-4"), "{md}");
         assert!(
-            md.contains("- periodic-qc continuation: unverified, defect 2.0e-3 > 1e-4"),
+            md.contains("- periodic-qc continuation: unverified, its re-integration defect 2.000e-3 exceeds 1e-4"),
             "{md}"
         );
         // A measurement, not a failure of the report.
@@ -441,7 +429,7 @@ mod tests {
                 "periodic-cot",
                 Strategy::Direct,
                 2.0,
-                Some("defect 1.0e-2 > 1e-4"),
+                Some("its re-integration defect 1.000e-2 exceeds 1e-4"),
             ),
             row("periodic-cot", Strategy::Continuation, 1.0, None),
             errored("periodic-qc", Strategy::Direct),
