@@ -11,7 +11,9 @@
 //! * tracked with re-planning at every lift-off, every period of the nominal plant (Newton's
 //!   impact law, torques saturated at 1 N m) stays within the issue's 2 %, the plans are used,
 //!   and two runs give bit-identical figures (the plant waits for the plan in simulated time,
-//!   so nothing depends on the wall clock).
+//!   so nothing depends on the wall clock);
+//! * the default plans for the plant (`data/optima/`) track as closely with re-planning, used
+//!   or not, as without, and meet the nominal and robustness targets with it on every plant.
 
 #[path = "common/cli.rs"]
 mod cli;
@@ -193,20 +195,22 @@ fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
 
 /// The issue's targets with re-planning at every lift-off, bounded controller (1 N m), on the
 /// nominal plant (every period ≤ 2 %) and the perturbed plants of the robustness table
-/// (≤ 5 % from the 4th period, contact in every period), over `PERIODS` periods: asserted for
-/// the default `periodic-qc` optimum; printed, not asserted, for the default
-/// `periodic-cot-human` optimum, whose re-plans do not converge from the states its Newton
-/// impacts leave (docs/decisions/0030-replanning-at-lift-off.md, BENCHMARKS.md "Closed loop:
-/// re-planning at lift-off"). Slow (two default searches, 14 runs with a re-plan per period).
+/// (≤ 5 % from the 4th period, contact in every period), over `PERIODS` periods, for both
+/// default plans for the plant (`data/optima/`): every run meets them, every re-plan
+/// converges. The re-plans use the nominal model, so on the plants with model error they pull
+/// towards the nominal orbit against the outer loop (socket damping ×1.5 on the `periodic-qc`
+/// plan: 3.5 % from the 4th period, against 0.66 % without re-planning; decision record 0030).
 #[test]
-#[ignore = "two default searches and 14 runs with re-plans, about 17 min under load; run with `cargo test \
-            --release --test replan targets_with_replanning -- --ignored --nocapture`"]
 fn targets_with_replanning_on_every_plant() {
     use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs};
+    use ball_finger::paper::stored::stored_optimum;
     const PERIODS: usize = 10;
     let mut failures = Vec::new();
-    for (problem, asserted) in [("periodic-qc", true), ("periodic-cot-human", false)] {
-        let sol = cli::multistart_optimum(problem, &[]);
+    for problem in [Problem::PeriodicQc, Problem::PeriodicCotHuman] {
+        let sol = stored_optimum(problem, None, bf_problem::catalogue::MIN_STICK, false)
+            .unwrap()
+            .solution()
+            .unwrap();
         let nominal = run_tracking_replanned(
             &sol,
             ControllerKind::Hybrid,
@@ -247,6 +251,7 @@ fn targets_with_replanning_on_every_plant() {
                 t.lost
             );
             let met = t.lost.is_none()
+                && used == t.replans.replans.len()
                 && t.periods.len() == PERIODS
                 && t.periods.iter().all(|p| p.contact)
                 && if case == "nominal" {
@@ -254,10 +259,65 @@ fn targets_with_replanning_on_every_plant() {
                 } else {
                     max_error_from_fourth(&t).is_some_and(|e| e <= 0.05)
                 };
-            if asserted && !met {
+            if !met {
                 failures.push(format!("{problem} {case}"));
             }
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
+}
+
+/// Re-planning does not disturb what it does not change. The default plans for the plant
+/// (`data/optima/`), tracked by the bounded hybrid controller on their nominal Newton plant,
+/// with re-plans that never converge (an iteration limit of 1, so the controller tracks the
+/// optimum from each lift-off) and with the default re-plans, stay within 0.05 % of ω̄* in
+/// every period, as without re-planning (0.010 % and 0.16 %). The period that the first re-plan
+/// interrupted used to be measured by the outer loop over more than a period, and its wrong
+/// error was corrected: 0.85 % in the `periodic-qc` plan's third period with no re-plan used,
+/// 21 % in the human plan's second.
+#[test]
+fn replanning_tracks_the_plans_for_the_plant_as_closely_as_the_optimum_alone() {
+    use ball_finger::paper::stored::stored_optimum;
+    for (problem, periods, bound) in [
+        (Problem::PeriodicQc, 6, 5e-4),
+        (Problem::PeriodicCotHuman, 3, 2.5e-3),
+    ] {
+        let sol = stored_optimum(problem, None, bf_problem::catalogue::MIN_STICK, false)
+            .unwrap()
+            .solution()
+            .unwrap();
+        let run = |replan: Option<usize>| {
+            let plant = solution_model::<3>(&sol).unwrap().0;
+            run_tracking_replanned(
+                &sol,
+                ControllerKind::Hybrid,
+                periods,
+                plant,
+                ImpactLaw::Newton,
+                replan,
+            )
+            .unwrap()
+        };
+        let alone = run(None);
+        for replan in [Some(1), Some(REPLAN_MAX_ITER)] {
+            let t = run(replan);
+            assert!(t.lost.is_none(), "{problem} {replan:?}: {:?}", t.lost);
+            assert_eq!(t.periods.len(), periods);
+            let used = t.replans.replans.iter().filter(|r| r.used).count();
+            assert_eq!(
+                used > 0,
+                replan == Some(REPLAN_MAX_ITER),
+                "{problem}: {used}"
+            );
+            for (k, (p, q)) in t.periods.iter().zip(&alone.periods).enumerate() {
+                assert!(
+                    p.omega_error <= bound && q.omega_error <= bound,
+                    "{problem} {replan:?}, period {}: {} with re-planning, {} without",
+                    k + 1,
+                    p.omega_error,
+                    q.omega_error
+                );
+            }
+        }
+    }
 }

@@ -26,5 +26,7 @@ pub mod reference;
 pub use controller::{Clearance, ContactGains, HybridController, HybridGains, Replanner};
 pub use error::ControlError;
 pub use law::{ComputedTorque, InverseDynamics};
-pub use metrics::{MAX_PERIOD_RATIO, MIN_FLIGHT, PeriodMetrics, PeriodStarts, period_metrics};
+pub use metrics::{
+    MAX_PERIOD_RATIO, MIN_FLIGHT, MIN_PERIOD_RATIO, PeriodMetrics, PeriodStarts, period_metrics,
+};
 pub use reference::{Reference, ReferencePhase};

@@ -1,7 +1,7 @@
 //! Period figures of a run (`period_metrics`): periods from impact to impact, a bounce not
 //! counted, on sampled runs whose mean ω is known in closed form.
 
-use bf_control::{MAX_PERIOD_RATIO, MIN_FLIGHT, PeriodStarts, period_metrics};
+use bf_control::{MAX_PERIOD_RATIO, MIN_FLIGHT, MIN_PERIOD_RATIO, PeriodStarts, period_metrics};
 use bf_model::Mode;
 
 /// A sampled run: times, plant modes, ball angular velocities and torques.
@@ -31,7 +31,8 @@ fn run(contact: &[(f64, f64)], dt: f64, t_end: f64, (a, b): (f64, f64)) -> Run {
         })
         .collect();
     let omega = t.iter().map(|&x| [0.0, 0.0, a + b * x]).collect();
-    // |τ| peaks at 0.5 + t / 10 at a period's end sample.
+    // |τ| grows with t: a period's largest is at its last sample, before the next period's
+    // impact.
     let tau = t.iter().map(|&x| vec![0.5 + 0.1 * x, -0.5]).collect();
     (t, mode, omega, tau)
 }
@@ -62,7 +63,14 @@ fn a_bounce_is_part_of_its_contact_phase_not_a_period() {
             "{p:?}"
         );
         assert!(p.contact);
-        assert!((p.max_abs_tau - (0.5 + 0.1 * p.end)).abs() < 1e-12, "{p:?}");
+        // The sample at p.end is the next period's impact, not this period's.
+        let last = t
+            .iter()
+            .copied()
+            .filter(|&x| x < p.end)
+            .fold(p.start, f64::max);
+        assert!(last < p.end && last > p.end - 2e-3, "{last} {p:?}");
+        assert!((p.max_abs_tau - (0.5 + 0.1 * last)).abs() < 1e-12, "{p:?}");
     }
     // The bounce's contact is the second period's: 0.2 + 0.01 s of stick.
     assert!(
@@ -139,10 +147,15 @@ fn a_period_that_misses_the_ball_or_only_touches_it_has_no_contact() {
     assert_eq!(verdicts, [false, true, false]);
     let why = periods[1].contact_failure(1.0).unwrap();
     assert!(why.contains("2.00 times"), "{why}");
-    // A period just below MAX_PERIOD_RATIO plans passes; one at it does not.
+    // A period just below MAX_PERIOD_RATIO plans passes; one at it does not; and the same
+    // the other way: one just above MIN_PERIOD_RATIO plans passes, one at it does not.
     let p = &periods[0];
     assert!(p.contact_failure(1.0 / (MAX_PERIOD_RATIO - 1e-9)).is_none());
     assert!(p.contact_failure(1.0 / MAX_PERIOD_RATIO).is_some());
+    assert!(p.contact_failure(1.0 / (MIN_PERIOD_RATIO + 1e-9)).is_none());
+    let why = p.contact_failure(1.0 / MIN_PERIOD_RATIO).unwrap();
+    assert!(why.contains("struck the ball again"), "{why}");
+    assert!(why.contains("0.33 times"), "{why}");
 
     // The impact at 1.3 s lets go at once: its sample in Stick is followed by a Free sample
     // at the same time (the lift-off event), so the period holds no time on the ball.

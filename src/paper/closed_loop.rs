@@ -707,7 +707,10 @@ fn run_tracking_on<const N: usize>(
         .enumerate()
         .find_map(|(k, p)| p.contact_failure(sol.period).map(|w| (k, w)))
     {
-        Some(format!("no contact in period {}: {why}", k + 1))
+        Some(format!(
+            "period {} did not execute the plan's contact: {why}",
+            k + 1
+        ))
     } else if metrics.len() < periods {
         Some(format!(
             "{} of {periods} periods completed in {t_end:.3} s (1.25 times the planned time with the lead-in)",
@@ -1146,6 +1149,19 @@ pub struct RobustnessRow {
     /// Why the run could not be made (the plant could not be built or simulated), or why it is
     /// not a result (its energy balance failed the simulator's check).
     pub error: Option<String>,
+    /// With re-planning at every lift-off (`track --robustness --replan`): the re-plans made
+    /// and how many of them converged and were used; absent without.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replans: Option<ReplanCount>,
+}
+
+/// The re-plans of a run (`RobustnessRow::replans`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct ReplanCount {
+    /// Re-plans made, one per lift-off.
+    pub made: usize,
+    /// Of those, the ones that converged and were tracked.
+    pub used: usize,
 }
 
 impl RobustnessRow {
@@ -1162,6 +1178,7 @@ impl RobustnessRow {
             max_abs_tau: 0.0,
             meets_target: false,
             error: Some(error),
+            replans: None,
         }
     }
 }
@@ -1226,6 +1243,10 @@ pub fn robustness_row<const N: usize>(
         };
     }
     let later = max_error_from_fourth(t);
+    let replans = t.replans.setup.is_some().then(|| ReplanCount {
+        made: t.replans.replans.len(),
+        used: t.replans.replans.iter().filter(|r| r.used).count(),
+    });
     let contact = t.lost.is_none()
         && t.periods
             .iter()
@@ -1242,6 +1263,7 @@ pub fn robustness_row<const N: usize>(
             && t.periods.len() == periods
             && later.is_some_and(|e| e <= ROBUSTNESS_TARGET),
         error: None,
+        replans,
     }
 }
 
@@ -1256,21 +1278,32 @@ pub fn robustness_table(
 ) -> Result<String> {
     use std::fmt::Write as _;
     let pct = |e: f64| format!("{:.2}", 100.0 * e);
+    let replanned = rows.iter().any(|r| r.replans.is_some());
     let mut s = String::new();
     writeln!(
         s,
-        "**Robustness** of the {} controller on `{name}`, {periods} periods, Newton's impact \
+        "**Robustness** of the {} controller{} on `{name}`, {periods} periods, Newton's impact \
          law unless named; target: ≤ 5 % from the 4th period on, contact in every period:\n",
-        controller.name()
+        controller.name(),
+        if replanned {
+            ", re-planning at every lift-off on the nominal model"
+        } else {
+            ""
+        }
     )?;
+    let (head, rule, blank) = if replanned {
+        (" re-plans used |", "---|", " |")
+    } else {
+        ("", "", "")
+    };
     writeln!(
         s,
-        "| plant | periods completed | ω error, 1st period (%) | max ω error from the 4th period (%) | contact in every period | max \\|τ\\| (N m) |"
+        "| plant | periods completed | ω error, 1st period (%) | max ω error from the 4th period (%) | contact in every period | max \\|τ\\| (N m) |{head}"
     )?;
-    writeln!(s, "|---|---|---|---|---|---|")?;
+    writeln!(s, "|---|---|---|---|---|---|{rule}")?;
     for r in rows {
         if let Some(e) = &r.error {
-            writeln!(s, "| {} | **failed**: {e} | | | | |", r.plant)?;
+            writeln!(s, "| {} | **failed**: {e} | | | | |{blank}", r.plant)?;
             continue;
         }
         let first = r.first_error.map_or("—".into(), pct);
@@ -1289,9 +1322,14 @@ pub fn robustness_table(
                 r.lost.as_deref().unwrap_or("a period without contact")
             )
         };
+        let replans = match r.replans {
+            Some(c) => format!(" {} of {} |", c.used, c.made),
+            None if replanned => " — |".to_string(),
+            None => String::new(),
+        };
         writeln!(
             s,
-            "| {} | {} of {periods} | {first} | {later} | {contact} | {:.3} |",
+            "| {} | {} of {periods} | {first} | {later} | {contact} | {:.3} |{replans}",
             r.plant, r.completed_periods, r.max_abs_tau
         )?;
     }
