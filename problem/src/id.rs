@@ -16,7 +16,9 @@ pub enum Problem {
     PeriodicCotHuman,
     /// Reach the ball from rest (free phase).
     Reach,
-    /// Turn the ball by 90° about z (free–stick).
+    /// Spin the ball by ∫ω_z dt = 90° (free–stick): the z-component of ω integrated, which
+    /// is the ball's rotation only while ω stays along z (docs/optima.md, "The other
+    /// problems").
     Reorient,
     /// Track ω_ref over a fixed horizon (free–stick).
     RotateRef,

@@ -76,8 +76,9 @@ pub enum CostKind {
         /// ω_ref.
         omega_ref: [f64; 3],
     },
-    /// Time and effort with the rotation angle about an axis as second cost state:
-    /// c_1' = 1 + w‖τ‖², c_2' = ω·ê (so c_2(t_f) is the rotation angle for a fixed axis).
+    /// Time and effort with the spin about an axis integrated as second cost state:
+    /// c_1' = 1 + w‖τ‖², c_2' = ω·ê (so c_2(t_f) = ∫ω·ê dt, the rotation angle about ê only
+    /// while ω stays along ê).
     Reorient {
         /// Effort weight.
         w: f64,

@@ -231,7 +231,7 @@ fn converged_reference(
     presented: bool,
 ) -> Result<(OcpSolution, String)> {
     let (el, pe) = ladder.reference;
-    let j_start = start.objective;
+    let (j_start, period_start) = (start.objective, start.period);
     let settings = ProblemSettings {
         points: el * pe,
         scheme: Scheme::Radau { elements: el },
@@ -291,7 +291,10 @@ fn converged_reference(
                     let unrefined = if presented {
                         String::new()
                     } else {
-                        format!("the unrefined {el} × {pe} mesh gives J = {j_start:.8}, ")
+                        format!(
+                            "the unrefined {el} × {pe} mesh gives J = {j_start:.8} with \
+                             period {period_start:.4} s; refined, "
+                        )
                     };
                     format!(
                         "{origin}Radau {el} × {pe} refined by hp rounds to {elements} elements, \
@@ -409,17 +412,29 @@ pub(super) fn section(
 ) -> Result<String> {
     let mut md = String::new();
     let (ref_name, ref_j, ref_s) = reference;
+    // The periods the cold solves ended at, once each within 5 %: the local optima they found.
+    let mut periods: Vec<f64> = Vec::new();
+    for r in rows.iter().filter(|r| r.solved && r.period.is_finite()) {
+        if !periods.iter().any(|p| (p - r.period).abs() <= 0.05 * p) {
+            periods.push(r.period);
+        }
+    }
+    let periods: Vec<String> = periods.iter().map(|p| format!("{p:.2} s")).collect();
     let _ = writeln!(
         md,
         "### (b) Optimisation: mesh and smoothing\n\n\
          `periodic-qc` (Sect. 6.1), cold solves (default guess strategy, iteration cap {} \
          per stage). Objective error against the reference: {ref_name}: J_ref = \
-         {ref_j:.8}, solved and refined in {ref_s:.2} s. The problem has several local optima (periods \
-         ≈ 2.6 s and ≈ 0.95 s) and a cold start lands on one depending on the mesh; a \
-         cold solution on another optimum than the reference's is re-solved on the same mesh \
+         {ref_j:.8}, solved and refined in {ref_s:.2} s. The problem has several local optima \
+         and a cold start lands on one depending on the mesh (the cold solves below end at \
+         periods of {}); a cold solution on another optimum than the reference's (another \
+         period or phase durations, by more than 10 %) is re-solved on the same mesh \
          warm-started from the reference solution, which gives the mesh's discretisation \
-         error at the reference's optimum (column \"warm\").\n",
-        max_iter(quick)
+         error at the reference's optimum (column \"warm\"). Neighbouring optima of nearly \
+         the same shape pass that test, so an error far above its neighbours' may be the gap \
+         to such an optimum rather than the mesh's.\n",
+        max_iter(quick),
+        periods.join(", ")
     );
     match presented {
         Some(p) => {
