@@ -193,6 +193,51 @@ fn imposing_the_impulse_cone_on_cot_raises_the_impact_speed_as_the_paper_reports
     );
 }
 
+/// The bounds an optimum sits on include the inequality rows of its point constraints, each
+/// evaluated at the solution: the COT optimum under the impulse cone sits on the cone's row,
+/// whose value is μ_s² (ι·n)² − ‖ι_∥‖² of the verification's own impact record; the COT
+/// optimum without the cone has no such row; and the QC plan for the plant sits where its
+/// collocated states put it: its apex at h(0) = 0.3 r and its touch at h(t_f) = 1e-4 r.
+#[test]
+fn the_active_bounds_name_the_point_constraints_an_optimum_sits_on() {
+    use ball_finger::pipeline::bounds::active_bounds;
+    let of = |law: Option<&str>, problem: Problem, cone: bool| {
+        let s = stored_optimum(problem, law, bf_problem::catalogue::MIN_STICK, cone).unwrap();
+        let (p, sol) = s.resolve().unwrap();
+        let v = ball_finger::pipeline::verify::verify(&p, &sol, 1e-10).unwrap();
+        (active_bounds(&p.ocp, &sol), sol, v)
+    };
+    let (coned, _, v) = of(Some("stick"), Problem::PeriodicCot, true);
+    let row = coned
+        .iter()
+        .find(|b| b.what.contains("impulse cone (eq. 66)"))
+        .unwrap_or_else(|| panic!("{coned:?}"));
+    let c = v.impacts[0];
+    let margin = v.mu_s * v.mu_s * c.normal * c.normal - c.tangential * c.tangential;
+    assert!((row.value - margin).abs() <= 1e-12, "{row:?} {margin}");
+    assert!(row.lower && row.bound == 0.0, "{row:?}");
+    let (free, _, _) = of(Some("stick"), Problem::PeriodicCot, false);
+    assert!(!free.iter().any(|b| b.what.contains("impulse")), "{free:?}");
+    let (plan, sol, _) = of(None, Problem::PeriodicQc, false);
+    let radius = 1.0;
+    let h0 = sol.nodes.h[0];
+    let apex = plan
+        .iter()
+        .find(|b| b.what == "h(0) >= 0.3 r")
+        .unwrap_or_else(|| panic!("{plan:?}"));
+    // The row's value is the solution's own sampled h at its first node.
+    assert!((apex.value - h0).abs() <= 1e-9, "{apex:?} {h0}");
+    assert!(apex.lower && (h0 - 0.3 * radius).abs() <= 1e-7, "{apex:?}");
+    let touch = plan
+        .iter()
+        .find(|b| b.what.starts_with("0 <= h1(tf)"))
+        .unwrap_or_else(|| panic!("{plan:?}"));
+    assert!(
+        !touch.lower && (touch.value - 1e-4 * radius).abs() <= 1e-7,
+        "{touch:?}"
+    );
+}
+
 /// `paper --search` runs the searches; with `--quick` (one cold solve per problem) it is
 /// refused as a usage error.
 #[test]

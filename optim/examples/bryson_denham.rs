@@ -97,6 +97,7 @@ fn boundary() -> PointFunction {
         fixed: vec![],
         outputs,
         bounds,
+        row_names: Vec::new(),
     }
 }
 

@@ -204,6 +204,7 @@ fn assembled_derivatives_match_finite_differences() {
         fixed: vec![],
         outputs: vec![e1, e2],
         bounds: vec![(0.0, 1.0), (-1.0, 1.0)],
+        row_names: Vec::new(),
     };
     for scheme in [Scheme::Lg, Scheme::Radau { elements: 2 }] {
         let phase = Phase {

@@ -544,6 +544,7 @@ fn rest_at(
         fixed,
         outputs,
         bounds,
+        row_names: Vec::new(),
     })
 }
 

@@ -107,6 +107,7 @@ pub fn end_point(
         fixed,
         outputs,
         bounds,
+        row_names: Vec::new(),
     })
 }
 
@@ -135,6 +136,7 @@ pub fn continuity(nx: usize, from_phase: usize, to_phase: usize, name: &str) -> 
         fixed: vec![],
         outputs,
         bounds: vec![(0.0, 0.0); nx],
+        row_names: Vec::new(),
     }
 }
 
@@ -320,9 +322,13 @@ pub fn impact(
         }
     }
     let mut bounds = vec![(0.0, 0.0); out.len()];
+    // The inequality rows by name (`PointFunction::row_names`), where a bound they sit on is
+    // reported; the equality rows need none.
+    let mut row_names = vec![String::new(); out.len()];
     let iota_n = g.v3_dot(iota, ce.n);
     out.push(iota_n);
     bounds.push((0.0, f64::INFINITY));
+    row_names.push("impulse pushes: iota.n >= 0".into());
     if impulse_cone {
         let n2 = g.square(iota_n);
         let k = g.constant(1.0 + ph.mu_s * ph.mu_s);
@@ -330,6 +336,7 @@ pub fn impact(
         let ii = g.v3_dot(iota, iota);
         out.push(g.sub(a, ii));
         bounds.push((0.0, f64::INFINITY));
+        row_names.push("impulse cone (eq. 66): (1 + mu_s^2) (iota.n)^2 - |iota|^2 >= 0".into());
     }
     if lifted {
         newton_lifted_rows(
@@ -384,6 +391,25 @@ pub fn impact(
         let speed = NEWTON_APPROACH_SPEED * ph.radius;
         conditioning_and_approach_rows(g, d2, fro, ce.h_dot, speed, &mut out, &mut bounds);
     }
+    // Newton's rows after these: the box of q̇⁺ about the plant's velocity, the conditioning of
+    // J_c and the approach speed.
+    let mut boxed: usize = 0;
+    while row_names.len() < out.len() {
+        let k = row_names.len();
+        row_names.push(match bounds[k] {
+            (lo, hi) if lo == hi => String::new(),
+            _ if k + 2 == out.len() => "J_c conditioning".into(),
+            _ if k + 1 == out.len() => "approach speed: hdot(tf) <= -v".into(),
+            _ => {
+                // The box's rows come in pairs, one per side, joint by joint.
+                boxed += 1;
+                format!(
+                    "q̇⁺ of joint {} within its box about Newton's velocity",
+                    boxed.div_ceil(2)
+                )
+            }
+        });
+    }
     Ok(PointFunction {
         name: if newton {
             "impact (eq. 39)"
@@ -396,6 +422,7 @@ pub fn impact(
         fixed,
         outputs: out,
         bounds,
+        row_names,
     })
 }
 

@@ -1,6 +1,8 @@
 //! The bounds an optimum sits on, as `optimize` prints them and `solution.json` records them
 //! (`active_bounds`): phase durations, the period row, torque limits |τ_i| ≤ τ_max and joint
-//! limits (eq. 60–65 of the paper's Sect. 4).
+//! limits (eq. 60–65 of the paper's Sect. 4), and the inequality rows of the point constraints
+//! (eq. 57c–d: the touch and lift-off rows on h, the apex height, the impulse's normal part and
+//! cone, eq. 66).
 
 use bf_optim::ocp::Ocp;
 use bf_optim::terms::VarRef;
@@ -15,17 +17,30 @@ pub fn on_bound(v: f64, b: f64) -> bool {
     b.is_finite() && v.is_finite() && (v - b).abs() <= 1e-5 + 1e-4 * b.abs()
 }
 
-/// The bounds among `quantities` = (what, samples, (lower, upper)) that some sample sits on,
-/// one entry per side (value: the sample nearest to the bound).
+/// Whether the value `v` of a point constraint's row is on its bound `b`: within
+/// 1e-7 + 1e-4·|b|. The rows come in their own units, some of them small (the impulse cone of
+/// eq. 66 in N² s², about 1e-5 on the paper's taps), so the slack of [`on_bound`] would call
+/// inactive rows active; an interior-point optimum leaves an active row within about its
+/// tolerance (1e-8) of the bound.
+pub fn on_point_bound(v: f64, b: f64) -> bool {
+    b.is_finite() && v.is_finite() && (v - b).abs() <= 1e-7 + 1e-4 * b.abs()
+}
+
+/// The bounds among `quantities` = (what, samples, (lower, upper)) that some sample sits on
+/// ([`on_bound`]), one entry per side (value: the sample nearest to the bound).
 pub fn bound_hits(quantities: &[(String, Vec<f64>, (f64, f64))]) -> Vec<ActiveBound> {
+    hits_within(quantities, on_bound)
+}
+
+/// [`bound_hits`] with the test `on` of a sample against a bound.
+fn hits_within(
+    quantities: &[(String, Vec<f64>, (f64, f64))],
+    on: fn(f64, f64) -> bool,
+) -> Vec<ActiveBound> {
     let mut out = Vec::new();
     for (what, values, (lo, hi)) in quantities {
         for (bound, lower) in [(*lo, true), (*hi, false)] {
-            let hits: Vec<f64> = values
-                .iter()
-                .copied()
-                .filter(|&v| on_bound(v, bound))
-                .collect();
+            let hits: Vec<f64> = values.iter().copied().filter(|&v| on(v, bound)).collect();
             if let Some(&value) = hits
                 .iter()
                 .min_by(|a, b| (*a - bound).abs().total_cmp(&(*b - bound).abs()))
@@ -121,7 +136,73 @@ pub fn active_bounds(ocp: &Ocp, sol: &OcpSolution) -> Vec<ActiveBound> {
             q.push((format!("q{} in phase {} (rad)", i + 1, p + 1), v, *b));
         }
     }
-    bound_hits(&q)
+    let mut out = bound_hits(&q);
+    out.extend(hits_within(&point_rows(ocp, sol), on_point_bound));
+    out
+}
+
+/// The inequality rows of `ocp`'s point constraints at `sol` (what, its value, its bounds): each
+/// point function evaluated at the solution's phase end points, durations and parameters,
+/// which do not depend on the mesh (so a candidate on a refined mesh of the problem is
+/// evaluated alike). A row is named by its point function and its own name
+/// (`PointFunction::row_names`), or its row counted from 1 where the function has several
+/// and names none. Equality rows, and the duration rows that [`active_bounds`]
+/// names as the period, are left out; so is a function that reads a value the solution does
+/// not have.
+fn point_rows(ocp: &Ocp, sol: &OcpSolution) -> Vec<(String, Vec<f64>, (f64, f64))> {
+    let mut out = Vec::new();
+    for pf in &ocp.points {
+        let inequality = pf.bounds.iter().any(|(lo, hi)| lo < hi);
+        let durations = pf
+            .vars
+            .iter()
+            .all(|(_, v)| matches!(v, VarRef::Duration(_)));
+        if !inequality || durations {
+            continue;
+        }
+        let value = |v: &VarRef| -> Option<f64> {
+            match *v {
+                VarRef::Initial { phase, i } => sol.raw.get(phase)?.x.first()?.get(i).copied(),
+                VarRef::Final { phase, i } => sol.raw.get(phase)?.x.last()?.get(i).copied(),
+                VarRef::Duration(p) => sol.phase_durations.get(p).copied(),
+                VarRef::Param(i) => sol.params.get(i).copied(),
+            }
+        };
+        let len = pf
+            .vars
+            .iter()
+            .map(|(k, _)| *k)
+            .chain(pf.fixed.iter().map(|(k, _)| *k))
+            .max()
+            .map_or(0, |k| k as usize + 1);
+        let mut vars = vec![0.0; len];
+        let mut complete = true;
+        for (k, v) in &pf.vars {
+            match value(v) {
+                Some(x) => vars[*k as usize] = x,
+                None => complete = false,
+            }
+        }
+        if !complete {
+            continue;
+        }
+        for &(k, x) in &pf.fixed {
+            vars[k as usize] = x;
+        }
+        let values = bf_codegen::interp::eval(&pf.graph, &pf.outputs, &vars);
+        let rows = pf.bounds.len();
+        for (r, (&v, &(lo, hi))) in values.iter().zip(&pf.bounds).enumerate() {
+            if lo < hi {
+                let what = match pf.row_names.get(r).filter(|n| !n.is_empty()) {
+                    Some(row) => format!("{}: {row}", pf.name),
+                    None if rows > 1 => format!("{}, row {}", pf.name, r + 1),
+                    None => pf.name.clone(),
+                };
+                out.push((what, vec![v], (lo, hi)));
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -29,6 +29,10 @@ pub struct PointFunction {
     pub outputs: Vec<Id>,
     /// Their bounds.
     pub bounds: Vec<(f64, f64)>,
+    /// What each row is, for the rows a reader may need told apart (e.g. the impulse cone
+    /// among an impact's rows); empty, or shorter than `outputs`, where the function's name
+    /// says enough.
+    pub row_names: Vec<String>,
 }
 
 /// Initial guess of a phase: samples at normalised times s ∈ [0, 1] (ascending), linearly

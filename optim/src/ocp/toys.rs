@@ -91,6 +91,7 @@ pub fn fixed_ends(
         fixed: vec![],
         outputs,
         bounds,
+        row_names: Vec::new(),
     }
 }
 
@@ -149,6 +150,7 @@ pub fn rest_to_rest(nphases: usize) -> Vec<PointFunction> {
             fixed: vec![],
             outputs: vec![d0, d1],
             bounds: vec![(0.0, 0.0); 2],
+            row_names: Vec::new(),
         });
     }
     pts

@@ -477,6 +477,7 @@ fn duration_sum(nphases: usize, lo: f64, hi: f64, name: &str) -> PointFunction {
         fixed: vec![],
         outputs: vec![s],
         bounds: vec![(lo, hi)],
+        row_names: Vec::new(),
     }
 }
 
@@ -505,6 +506,7 @@ fn fixed_state(phase: usize, fin: bool, x: &[f64], name: &str) -> PointFunction 
         fixed: vec![],
         outputs: v,
         bounds: x.iter().map(|&v| (v, v)).collect(),
+        row_names: Vec::new(),
     }
 }
 
@@ -523,5 +525,6 @@ fn final_zero(phase: usize, idx: &[usize], name: &str) -> PointFunction {
         fixed: vec![],
         outputs: v,
         bounds: vec![(0.0, 0.0); idx.len()],
+        row_names: Vec::new(),
     }
 }
