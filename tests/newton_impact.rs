@@ -810,3 +810,53 @@ fn pre_impact(sol: &ball_finger::pipeline::OcpSolution) -> (usize, State) {
     );
     (last, pre)
 }
+
+/// Every inequality row of an impact is named (what `active_bounds` reports an optimum sitting
+/// on) and no equality row is: the impulse's normal part, the cone where imposed, each joint's
+/// box about the plant's velocity (two one-sided rows per joint for 3 joints, one two-sided
+/// row per joint for a redundant finger), the conditioning and the approach speed.
+#[test]
+fn an_impacts_inequality_rows_are_named_joint_by_joint() {
+    let paper4 = {
+        let text = std::fs::read_to_string(cli::root().join("scenes/paper4.toml")).unwrap();
+        bf_codegen::Scene::from_toml_str(&text, "scenes/paper4.toml").unwrap()
+    };
+    for (scene, joints, per_joint) in [(None, 3, 2), (Some(paper4), 4, 1)] {
+        let s = ProblemSettings {
+            scene,
+            points: 4,
+            impact_law: PlannedImpact::Newton,
+            impulse_cone: true,
+            ..ProblemSettings::default()
+        };
+        let p = build(bf_problem::Problem::PeriodicQc, &s).unwrap();
+        let pf = p
+            .ocp
+            .points
+            .iter()
+            .find(|f| f.name.starts_with("impact"))
+            .unwrap();
+        assert_eq!(pf.row_names.len(), pf.bounds.len());
+        let mut named = Vec::new();
+        for (name, (lo, hi)) in pf.row_names.iter().zip(&pf.bounds) {
+            assert_eq!(name.is_empty(), lo == hi, "{name:?} {lo} {hi}");
+            if !name.is_empty() {
+                named.push(name.as_str());
+            }
+        }
+        let mut want = vec![
+            "impulse pushes: iota.n >= 0".to_string(),
+            "impulse cone (eq. 66): (1 + mu_s^2) (iota.n)^2 - |iota|^2 >= 0".to_string(),
+        ];
+        for j in 1..=joints {
+            for _ in 0..per_joint {
+                want.push(format!(
+                    "q̇⁺ of joint {j} within its box about Newton's velocity"
+                ));
+            }
+        }
+        want.push("J_c conditioning".into());
+        want.push("approach speed: hdot(tf) <= -v".into());
+        assert_eq!(named, want, "{joints} joints");
+    }
+}

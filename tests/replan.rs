@@ -203,14 +203,11 @@ fn tracking_with_replanning_meets_the_nominal_target_deterministically() {
 #[test]
 fn targets_with_replanning_on_every_plant() {
     use ball_finger::paper::closed_loop::{max_error_from_fourth, robustness_runs};
-    use ball_finger::paper::stored::stored_optimum;
+    use ball_finger::paper::stored::plan_for_the_plant;
     const PERIODS: usize = 10;
     let mut failures = Vec::new();
     for problem in [Problem::PeriodicQc, Problem::PeriodicCotHuman] {
-        let sol = stored_optimum(problem, None, bf_problem::catalogue::MIN_STICK, false)
-            .unwrap()
-            .solution()
-            .unwrap();
+        let sol = plan_for_the_plant(problem).unwrap().solution().unwrap();
         let nominal = run_tracking_replanned(
             &sol,
             ControllerKind::Hybrid,
@@ -277,15 +274,12 @@ fn targets_with_replanning_on_every_plant() {
 /// 21 % in the human plan's second.
 #[test]
 fn replanning_tracks_the_plans_for_the_plant_as_closely_as_the_optimum_alone() {
-    use ball_finger::paper::stored::stored_optimum;
+    use ball_finger::paper::stored::plan_for_the_plant;
     for (problem, periods, bound) in [
         (Problem::PeriodicQc, 6, 5e-4),
         (Problem::PeriodicCotHuman, 3, 2.5e-3),
     ] {
-        let sol = stored_optimum(problem, None, bf_problem::catalogue::MIN_STICK, false)
-            .unwrap()
-            .solution()
-            .unwrap();
+        let sol = plan_for_the_plant(problem).unwrap().solution().unwrap();
         let run = |replan: Option<usize>| {
             let plant = solution_model::<3>(&sol).unwrap().0;
             run_tracking_replanned(

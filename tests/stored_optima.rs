@@ -139,7 +139,7 @@ fn every_stored_optimum_is_solved_again_to_itself_and_verified() {
         assert_eq!(c.imposed, s.impulse_cone, "{}", s.dir);
         if c.imposed {
             assert!(
-                c.margin >= -ball_finger::pipeline::verify::impulse_allowance(v.mu_s, c.normal),
+                !ball_finger::pipeline::verify::outside_impulse_cone(v.mu_s, &c),
                 "{}: {c:?}",
                 s.dir
             );

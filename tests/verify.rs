@@ -751,13 +751,8 @@ fn the_impact_record_agrees_with_the_kernels_and_flags_an_impulse_outside_the_co
     use ball_finger::pipeline::verify::{
         impulse_cone_failure, impulse_cone_warning, is_verified, passes,
     };
-    let stored = ball_finger::paper::stored::stored_optimum(
-        bf_problem::Problem::PeriodicCot,
-        Some("stick"),
-        bf_problem::catalogue::MIN_STICK,
-        false,
-    )
-    .unwrap();
+    let stored =
+        ball_finger::paper::stored::sticking_optimum(bf_problem::Problem::PeriodicCot).unwrap();
     let (p, mut sol) = stored.resolve().unwrap();
     let v = verify(&p, &sol, RTOL).unwrap();
     assert_eq!(v.impacts.len(), 1, "{v}");

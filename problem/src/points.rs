@@ -321,35 +321,23 @@ pub fn impact(
             out.push(g.sub(wr[r], jq));
         }
     }
-    let mut bounds = vec![(0.0, 0.0); out.len()];
-    // The inequality rows by name (`PointFunction::row_names`), where a bound they sit on is
-    // reported; the equality rows need none.
-    let mut row_names = vec![String::new(); out.len()];
+    let mut rows = Rows::equalities(out);
     let iota_n = g.v3_dot(iota, ce.n);
-    out.push(iota_n);
-    bounds.push((0.0, f64::INFINITY));
-    row_names.push("impulse pushes: iota.n >= 0".into());
+    rows.push(iota_n, (0.0, f64::INFINITY), "impulse pushes: iota.n >= 0");
     if impulse_cone {
         let n2 = g.square(iota_n);
         let k = g.constant(1.0 + ph.mu_s * ph.mu_s);
         let a = g.mul(k, n2);
         let ii = g.v3_dot(iota, iota);
-        out.push(g.sub(a, ii));
-        bounds.push((0.0, f64::INFINITY));
-        row_names.push("impulse cone (eq. 66): (1 + mu_s^2) (iota.n)^2 - |iota|^2 >= 0".into());
+        rows.push(
+            g.sub(a, ii),
+            (0.0, f64::INFINITY),
+            "impulse cone (eq. 66): (1 + mu_s^2) (iota.n)^2 - |iota|^2 >= 0",
+        );
     }
     if lifted {
         newton_lifted_rows(
-            g,
-            &ce,
-            ph.radius,
-            &mass,
-            &qdmi,
-            &qdpi,
-            &qdn,
-            &ion,
-            &mut out,
-            &mut bounds,
+            g, &ce, ph.radius, &mass, &qdmi, &qdpi, &qdn, &ion, &mut rows,
         );
     } else if newton {
         // J_c and v_c in ball radii (see the function's docs): rows a_r of J_c / r,
@@ -379,37 +367,18 @@ pub fn impact(
             let at = g.sum(&terms);
             let e = g.sub(dq, at);
             let ed = g.mul(e, det);
-            out.push(g.sub(ed, wd2));
-            bounds.push((f64::NEG_INFINITY, 0.0));
+            let name = box_row_name(i);
+            rows.push(g.sub(ed, wd2), (f64::NEG_INFINITY, 0.0), &name);
             let ned = g.neg(ed);
-            out.push(g.sub(ned, wd2));
-            bounds.push((f64::NEG_INFINITY, 0.0));
+            rows.push(g.sub(ned, wd2), (f64::NEG_INFINITY, 0.0), &name);
         }
         // det² ≥ κ² (‖J_c‖_F² / 3)³ (NEWTON_MIN_CONDITION), squared so that its sign is free.
         let fro_terms: Vec<Id> = [a0, a1, a2].iter().map(|&r| g.v3_dot(r, r)).collect();
         let fro = g.sum(&fro_terms);
         let speed = NEWTON_APPROACH_SPEED * ph.radius;
-        conditioning_and_approach_rows(g, d2, fro, ce.h_dot, speed, &mut out, &mut bounds);
+        conditioning_and_approach_rows(g, d2, fro, ce.h_dot, speed, &mut rows);
     }
-    // Newton's rows after these: the box of q̇⁺ about the plant's velocity, the conditioning of
-    // J_c and the approach speed.
-    let mut boxed: usize = 0;
-    while row_names.len() < out.len() {
-        let k = row_names.len();
-        row_names.push(match bounds[k] {
-            (lo, hi) if lo == hi => String::new(),
-            _ if k + 2 == out.len() => "J_c conditioning".into(),
-            _ if k + 1 == out.len() => "approach speed: hdot(tf) <= -v".into(),
-            _ => {
-                // The box's rows come in pairs, one per side, joint by joint.
-                boxed += 1;
-                format!(
-                    "q̇⁺ of joint {} within its box about Newton's velocity",
-                    boxed.div_ceil(2)
-                )
-            }
-        });
-    }
+    let Rows { out, bounds, names } = rows;
     Ok(PointFunction {
         name: if newton {
             "impact (eq. 39)"
@@ -422,8 +391,43 @@ pub fn impact(
         fixed,
         outputs: out,
         bounds,
-        row_names,
+        row_names: names,
     })
+}
+
+/// The rows of a point function as they are built: expressions, bounds and names in step
+/// (`PointFunction::row_names`: the inequality rows are named, so that a bound one sits on is
+/// reported by what it is; the equality rows need no name).
+struct Rows {
+    out: Vec<Id>,
+    bounds: Vec<(f64, f64)>,
+    names: Vec<String>,
+}
+
+impl Rows {
+    /// The equality rows `out` = 0, unnamed.
+    fn equalities(out: Vec<Id>) -> Rows {
+        Rows {
+            bounds: vec![(0.0, 0.0); out.len()],
+            names: vec![String::new(); out.len()],
+            out,
+        }
+    }
+
+    /// Row `e` within `bounds`, named `name` (empty for none).
+    fn push(&mut self, e: Id, bounds: (f64, f64), name: &str) {
+        self.out.push(e);
+        self.bounds.push(bounds);
+        self.names.push(name.to_string());
+    }
+}
+
+/// The name of joint `i`'s rows (0-based) of a Newton plan's box about the plant's velocity.
+fn box_row_name(i: usize) -> String {
+    format!(
+        "q̇⁺ of joint {} within its box about Newton's velocity",
+        i + 1
+    )
 }
 
 /// The Newton rows of a redundant finger (N > 3 joints, see [`impact`]): the plant's
@@ -440,8 +444,7 @@ fn newton_lifted_rows(
     qdp: &[Id],
     qdn: &[u32],
     ion: &[u32],
-    out: &mut Vec<Id>,
-    bounds: &mut Vec<(f64, f64)>,
+    rows: &mut Rows,
 ) {
     let nq = qdm.len();
     let qdn = vars(g, qdn);
@@ -452,8 +455,7 @@ fn newton_lifted_rows(
         let m = g.dot(m_row, &dqd);
         let col = [ce.j_c[0][i], ce.j_c[1][i], ce.j_c[2][i]];
         let ji = g.v3_dot(col, iota_n);
-        out.push(g.sub(m, ji));
-        bounds.push((0.0, 0.0));
+        rows.push(g.sub(m, ji), (0.0, 0.0), "");
     }
     // (J_c q̇_N − T_n v_c⁻) / r = 0 (eq. 39): with the balance above, the q̇_N closest to q̇⁻ in
     // the kinetic-energy norm, which is what the plant's law computes (bf_model::impact). J_c
@@ -471,15 +473,13 @@ fn newton_lifted_rows(
     let t = g.v3_scale(per_radius, tv);
     for (r, &tr) in t.iter().enumerate() {
         let jq = g.dot(&j_c[r], &qdn);
-        out.push(g.sub(jq, tr));
-        bounds.push((0.0, 0.0));
+        rows.push(g.sub(jq, tr), (0.0, 0.0), "");
     }
     // |q̇⁺_i − q̇_N,i| ≤ v / √N: the box inside the ball of radius v, as for 3 joints.
     let half_width = NEWTON_VELOCITY_LIMIT / (nq as f64).sqrt();
     for i in 0..nq {
         let d = g.sub(qdp[i], qdn[i]);
-        out.push(d);
-        bounds.push((-half_width, half_width));
+        rows.push(d, (-half_width, half_width), &box_row_name(i));
     }
     // det(J_c J_cᵀ) ≥ κ² (‖J_c‖_F² / 3)³: the Gram determinant is det(J_c)² for 3 joints, so
     // this is the 3-joint row on the product of J_c's three squared singular values.
@@ -491,7 +491,7 @@ fn newton_lifted_rows(
     let det = g.v3_dot(gram[0], cross);
     let fro = g.sum(&[gram[0][0], gram[1][1], gram[2][2]]);
     let speed = NEWTON_APPROACH_SPEED * radius;
-    conditioning_and_approach_rows(g, det, fro, ce.h_dot, speed, out, bounds);
+    conditioning_and_approach_rows(g, det, fro, ce.h_dot, speed, rows);
 }
 
 /// The last two rows of every Newton plan: `det2` ≥ κ² (`fro` / 3)³
@@ -503,8 +503,7 @@ fn conditioning_and_approach_rows(
     fro: Id,
     h_dot: Id,
     speed: f64,
-    out: &mut Vec<Id>,
-    bounds: &mut Vec<(f64, f64)>,
+    rows: &mut Rows,
 ) {
     let third = g.constant(1.0 / 3.0);
     let mean = g.mul(fro, third);
@@ -512,10 +511,12 @@ fn conditioning_and_approach_rows(
     let cube = g.mul(mean2, mean);
     let k2 = g.constant(NEWTON_MIN_CONDITION * NEWTON_MIN_CONDITION);
     let least = g.mul(k2, cube);
-    out.push(g.sub(det2, least));
-    bounds.push((0.0, f64::INFINITY));
-    out.push(h_dot);
-    bounds.push((f64::NEG_INFINITY, -speed));
+    rows.push(g.sub(det2, least), (0.0, f64::INFINITY), "J_c conditioning");
+    rows.push(
+        h_dot,
+        (f64::NEG_INFINITY, -speed),
+        "approach speed: hdot(tf) <= -v",
+    );
 }
 
 /// The names of the parameters a Newton impact plan adds after the impulse ι for a finger of

@@ -112,15 +112,16 @@ fn plan_dir(problem: bf_problem::Problem) -> String {
 /// ([`crate::paper::stored`]) or, with `--search`, the search itself; verified, written to
 /// `DIR/P-newton/`, executed by every controller
 /// ([`crate::paper::closed_loop::comparison_markdown`]) and against perturbed plants.
-/// `sticking` is the problem's sticking optimum above, for comparison. Returns the section,
-/// the plan's failure (the run is FAILED) and its flag ([`impulse_flag`]).
+/// `sticking` is the problem's sticking optimum above, for comparison. The plan's failure and
+/// flag go to `verdict` ([`RunVerdict::judge`]).
 fn plan_markdown(
     args: &PaperArgs,
     problem: bf_problem::Problem,
     sticking: &bf_problem::OcpSolution,
     periods: usize,
     dir: &std::path::Path,
-) -> Result<(String, Option<String>, Option<String>)> {
+    verdict: &mut RunVerdict,
+) -> Result<String> {
     let name = plan_dir(problem);
     // The paper's problems are posed on its compiled scenes: 3 joints, a ball of 1 m.
     let gap = bf_control::HybridGains::default().clearance.gap;
@@ -130,13 +131,8 @@ fn plan_markdown(
         let strategy = crate::pipeline::strategy::default_strategy(problem, settings.scheme);
         super::optimize::solve_globally_with_progress(problem, settings, strategy)?
     } else {
-        let stored = crate::paper::stored::stored_optimum(
-            problem,
-            None,
-            bf_problem::catalogue::MIN_STICK,
-            false,
-        )
-        .with_context(|| format!("no stored plan of {problem} (data/optima/)"))?;
+        let stored = crate::paper::stored::plan_for_the_plant(problem)
+            .with_context(|| format!("no stored plan of {problem} (data/optima/)"))?;
         stored
             .resolve()
             .with_context(|| format!("the stored plan {}", stored.path().display()))?
@@ -181,9 +177,8 @@ fn plan_markdown(
     // 10 s periods make it the longer run, about 2 s per plant).
     let robustness =
         crate::paper::closed_loop::robustness_markdown(&name, &sol, ROBUSTNESS_PERIODS)?;
-    let failure = optimum_failure(&sol).map(|why| format!("the plan of `{problem}`: {why}"));
-    let flag = impulse_flag(&format!("the plan of `{problem}`"), &sol);
-    Ok((format!("{head}\n{table}\n{robustness}"), failure, flag))
+    verdict.judge(&format!("the plan of `{problem}`"), &sol);
+    Ok(format!("{head}\n{table}\n{robustness}"))
 }
 
 /// A variant of `problem`'s scenario, the report's part `label`, posed with `settings` (their
@@ -788,13 +783,15 @@ pub fn run(args: &PaperArgs) -> Result<()> {
             .find(|r| r.name == problem.name() && !args.quick)
         {
             let pb = stage(1, &format!("{problem}: plan for the plant"));
-            let md = plan_markdown(args, problem, &sticking.solution, periods, &dir);
+            let md = plan_markdown(
+                args,
+                problem,
+                &sticking.solution,
+                periods,
+                &dir,
+                &mut verdict,
+            );
             pb.finish();
-            let md = md.map(|(md, failure, flag)| {
-                verdict.failures.extend(failure);
-                verdict.flags.extend(flag);
-                md
-            });
             section(
                 &mut report,
                 md,
@@ -990,13 +987,8 @@ mod tests {
     /// A presented optimum fails the run when it is unverified or was not re-integrated at all.
     #[test]
     fn an_unverified_or_unchecked_optimum_is_a_failure() {
-        let stored = crate::paper::stored::stored_optimum(
-            bf_problem::Problem::PeriodicQc,
-            Some("stick"),
-            bf_problem::catalogue::MIN_STICK,
-            false,
-        )
-        .unwrap();
+        let stored =
+            crate::paper::stored::sticking_optimum(bf_problem::Problem::PeriodicQc).unwrap();
         let sol = stored.solution().unwrap();
         assert!(crate::pipeline::verify::is_verified(&sol));
         assert_eq!(optimum_failure(&sol), None);

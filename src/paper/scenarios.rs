@@ -868,13 +868,7 @@ mod tests {
     /// own for an optimum that differs from the last round.
     #[test]
     fn solve_stages_end_with_the_reported_optimum() {
-        let stored = crate::paper::stored::stored_optimum(
-            Problem::PeriodicCotHuman,
-            Some("stick"),
-            bf_problem::catalogue::MIN_STICK,
-            false,
-        )
-        .unwrap();
+        let stored = crate::paper::stored::sticking_optimum(Problem::PeriodicCotHuman).unwrap();
         let sol = stored.solution().unwrap();
         let history = &sol.refinement.as_ref().unwrap().history;
         assert!(history.len() > 1, "the stored optimum was refined");
@@ -919,13 +913,7 @@ mod tests {
     /// verification summary, and so are the verdict's sentences.
     #[test]
     fn phases_are_numbered_from_one_in_every_text() {
-        let stored = crate::paper::stored::stored_optimum(
-            Problem::PeriodicQc,
-            Some("stick"),
-            bf_problem::catalogue::MIN_STICK,
-            false,
-        )
-        .unwrap();
+        let stored = crate::paper::stored::sticking_optimum(Problem::PeriodicQc).unwrap();
         let sol = stored.solution().unwrap();
         let v = sol.verification.clone().unwrap();
         assert_eq!(v.phases[1].phase, 1, "the file's index is 0-based");
@@ -967,13 +955,7 @@ mod tests {
     /// plan on its own scene, written under the plan's name.
     #[test]
     fn a_plan_gets_its_animation() {
-        let stored = crate::paper::stored::stored_optimum(
-            Problem::PeriodicCotHuman,
-            None,
-            bf_problem::catalogue::MIN_STICK,
-            false,
-        )
-        .unwrap();
+        let stored = crate::paper::stored::plan_for_the_plant(Problem::PeriodicCotHuman).unwrap();
         let sol = stored.solution().unwrap();
         let (built, _) = crate::pipeline::solve::own_problem(&sol).unwrap();
         let dir = std::env::temp_dir().join(format!("bf-plan-animation-{}", std::process::id()));

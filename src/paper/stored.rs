@@ -170,3 +170,15 @@ pub fn stored_optimum(
             && s.impulse_cone == impulse_cone
     })
 }
+
+/// The stored optimum of `problem` posed as the paper's Sect. 6.1 poses it: the sticking law,
+/// the default stick-phase bound, no impulse cone ([`stored_optimum`]).
+pub fn sticking_optimum(problem: Problem) -> Option<&'static StoredOptimum> {
+    stored_optimum(problem, Some("stick"), MIN_STICK, false)
+}
+
+/// The stored plan for the plant of `problem`: what `optimize --problem P` makes by default
+/// (Newton's law with the plan margins, [`stored_optimum`] with no `--impact-law`).
+pub fn plan_for_the_plant(problem: Problem) -> Option<&'static StoredOptimum> {
+    stored_optimum(problem, None, MIN_STICK, false)
+}

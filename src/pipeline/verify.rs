@@ -1322,27 +1322,28 @@ fn impact_cones<const N: usize>(
     Ok(impacts)
 }
 
-/// The impulse allowance of an impact whose impulse pushes with `normal` = ι·n: the margin
-/// μ_s ι·n − ‖ι_∥‖ an impact that imposes eq. 66 may show, [`CONE_TOLERANCE`] · μ_s · ι·n as
-/// for the stick phases' forces ([`cone_allowance`]).
-pub fn impulse_allowance(mu_s: f64, normal: f64) -> f64 {
-    cone_allowance(mu_s, normal)
+/// Whether the impulse of the impact `c` leaves the friction cone of `mu_s` (eq. 66): its
+/// margin μ_s ι·n − ‖ι_∥‖ below −[`cone_allowance`] of ι·n, the allowance of the stick
+/// phases' forces. One test for the verdict of an imposed cone ([`impulse_cone_failure`]),
+/// the flag of an unimposed one ([`impulse_cone_warning`]) and the report's table.
+pub fn outside_impulse_cone(mu_s: f64, c: &ImpactCone) -> bool {
+    c.margin < -cone_allowance(mu_s, c.normal)
 }
 
-/// The first impact of `v` that imposed the impulse cone (eq. 66) and leaves it by more than
-/// its [`impulse_allowance`], as a sentence naming the phase, the margin and the allowance.
+/// The first impact of `v` that imposed the impulse cone (eq. 66) and leaves it
+/// ([`outside_impulse_cone`]), as a sentence naming the phase, the margin and the allowance.
 /// The cone is a point constraint of the NLP, so only an inaccurate solve breaks it.
 pub fn impulse_cone_failure(v: &Verification) -> Option<String> {
     v.impacts
         .iter()
-        .find(|c| c.imposed && c.margin < -impulse_allowance(v.mu_s, c.normal))
+        .find(|c| c.imposed && outside_impulse_cone(v.mu_s, c))
         .map(|c| {
             format!(
                 "the impact at the end of phase {} leaves the impulse cone it imposed (eq. 66): \
                  mu_s iota.n - |iota_t| = {:.3e} N s below the allowance -{:.3e} N s",
                 c.phase + 1,
                 c.margin,
-                impulse_allowance(v.mu_s, c.normal)
+                cone_allowance(v.mu_s, c.normal)
             )
         })
 }
@@ -1353,7 +1354,7 @@ pub fn impulse_cone_failure(v: &Verification) -> Option<String> {
 pub fn impulse_cone_warning(v: &Verification) -> Option<String> {
     v.impacts
         .iter()
-        .find(|c| !c.imposed && c.margin < -impulse_allowance(v.mu_s, c.normal))
+        .find(|c| !c.imposed && outside_impulse_cone(v.mu_s, c))
         .map(|c| {
             format!(
                 "the impact at the end of phase {} needs static friction {} against mu_s = {} \

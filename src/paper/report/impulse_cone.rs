@@ -22,19 +22,14 @@ use std::fmt::Write as _;
 use bf_problem::OcpSolution;
 use bf_problem::solution::records::ImpactCone;
 
+use crate::pipeline::verify::outside_impulse_cone;
+
 /// Output subdirectory (of the report) of the COT run with the cone imposed.
 pub const CONE_DIR: &str = "impulse-cone";
 
 /// The first impact's cone record of `sol`'s verification, if it has one.
 pub fn first_impact(sol: &OcpSolution) -> Option<&ImpactCone> {
     sol.verification.as_ref()?.impacts.first()
-}
-
-/// Whether the impulse of `c` needs more static friction than `mu_s`: a margin of eq. 66
-/// below the allowance the verdict grants an imposed cone
-/// ([`crate::pipeline::verify::impulse_allowance`]), so that the table and the verdict agree.
-fn outside(c: &ImpactCone, mu_s: f64) -> bool {
-    c.margin < -crate::pipeline::verify::impulse_allowance(mu_s, c.normal)
 }
 
 /// The friction an impulse needs, as a table cell.
@@ -66,7 +61,7 @@ pub fn cone_table(rows: &[(String, &OcpSolution)], mu_s: f64) -> String {
             );
             continue;
         };
-        let within = if !outside(c, mu_s) {
+        let within = if !outside_impulse_cone(mu_s, c) {
             "yes"
         } else if c.imposed {
             "**no**"
@@ -135,7 +130,7 @@ pub fn comparison(free: &CotFacts, imposed: &CotFacts, mu_s: f64) -> String {
         imposed.objective,
         free.objective
     );
-    if !outside(&free.impact, mu_s) {
+    if !outside_impulse_cone(mu_s, &free.impact) {
         s += &format!(
             " The optimum without it already needs only μ = {} ≤ μ_s = {mu_s}: the cone \
              does not bind there, so it is also an optimum with the cone, and a different one \
@@ -185,7 +180,7 @@ pub fn comparison(free: &CotFacts, imposed: &CotFacts, mu_s: f64) -> String {
 /// The sentence on the QC optimum: within the cone (inactive there, so the QC optimum is also
 /// a local optimum of QC with the cone, as the paper's "no significant effect") or not.
 pub fn qc_sentence(qc: &ImpactCone, mu_s: f64) -> String {
-    if outside(qc, mu_s) {
+    if outside_impulse_cone(mu_s, qc) {
         format!(
             "The QC optimum's impact needs μ = {} > μ_s = {mu_s}: imposing the cone would change \
              it, unlike the paper's QC example.",
@@ -261,15 +256,10 @@ mod tests {
     /// did; a row whose impulse does not push needs infinite friction.
     #[test]
     fn the_table_flags_the_impulses_outside_the_cone() {
-        let mut a = crate::paper::stored::stored_optimum(
-            bf_problem::Problem::PeriodicCot,
-            Some("stick"),
-            bf_problem::catalogue::MIN_STICK,
-            false,
-        )
-        .unwrap()
-        .solution()
-        .unwrap();
+        let mut a = crate::paper::stored::sticking_optimum(bf_problem::Problem::PeriodicCot)
+            .unwrap()
+            .solution()
+            .unwrap();
         a.verification.as_mut().unwrap().impacts = vec![cone(1e-3, 3e-3, 0.1, false)];
         let mut b = a.clone();
         b.verification.as_mut().unwrap().impacts = vec![cone(5e-3, 4e-3, 0.2, true)];
