@@ -99,6 +99,12 @@ pub struct Cli {
     /// The command to run.
     #[command(subcommand)]
     pub command: Command,
+    /// Nodes an expression graph may hold (kernels and node functions of a scene): a robot
+    /// whose kernels need more ends with an error that names them instead of exhausting the
+    /// machine's memory (up to about 400 bytes a node at the generator's peak) [default:
+    /// 16777216, about 6 GiB]
+    #[arg(long, global = true, value_name = "NODES", value_parser = clap::value_parser!(u64).range(1..u32::MAX as u64))]
+    pub max_graph_nodes: Option<u64>,
 }
 
 /// Subcommands.

@@ -18,6 +18,9 @@ const EXIT_BROKEN_PIPE: i32 = 141;
 
 fn main() {
     let cli = Cli::parse();
+    if let Some(nodes) = cli.max_graph_nodes {
+        bf_codegen::graph::set_node_limit(nodes as usize);
+    }
     let result = match cli.command {
         Command::Generate(a) => commands::generate::run(&a),
         Command::Eval(a) => commands::eval::run(&a),

@@ -7,7 +7,7 @@ use std::process::Output;
 
 #[path = "common/cli.rs"]
 mod cli_util;
-use cli_util::{bin, root, run, tmpdir};
+use cli_util::{bin, ok, root, run, tmpdir};
 
 /// [`assert_clean_failure`] of a wrong command line: exit status 2 (clap's, and the commands'
 /// own checks of their options), as `optimize --help` documents.
@@ -887,4 +887,66 @@ fn a_tool_that_moves_the_contact_segment_off_the_link_is_refused() {
         let out = run(&args);
         assert_clean_failure(&out, &[&format!("finger2_tool.toml:{line}:"), "tool: "]);
     }
+}
+
+/// `--max-graph-nodes` bounds every expression graph of the run: a request that needs more
+/// ends with exit status 1 and an error that names the kernel (or the problem's node function)
+/// and the option, and writes no module; a limit of 0 is a wrong command line.
+#[test]
+fn a_graph_past_max_graph_nodes_is_refused_by_name() {
+    let dir = tmpdir("graph-limit");
+    let module = dir.join("paper.rs");
+    let module_s = module.to_str().unwrap();
+    let out = run(&[
+        "--max-graph-nodes",
+        "2000",
+        "generate",
+        "scenes/paper.toml",
+        "-o",
+        module_s,
+    ]);
+    assert_clean_failure(
+        &out,
+        &["scenes/paper.toml", "kernel `", "--max-graph-nodes"],
+    );
+    assert_eq!(out.status.code(), Some(1));
+    assert!(!module.exists());
+    // With the default limit the same command writes the module.
+    ok(&run(&["generate", "scenes/paper.toml", "-o", module_s]));
+    assert!(module.exists());
+
+    // A user's robot is interpreted, so `eval` builds its graphs; the option goes anywhere.
+    let urdf = "testkit/tests/urdf/ur5_like.urdf";
+    let q = "0.1,0.2,0.3,0.4,0.5,0.6";
+    let out = run(&[
+        "eval",
+        urdf,
+        "--q",
+        q,
+        "--qd",
+        q,
+        "--max-graph-nodes",
+        "500",
+    ]);
+    assert_clean_failure(&out, &["ur5_like.urdf", "6-joint", "--max-graph-nodes"]);
+    assert_eq!(out.status.code(), Some(1));
+    ok(&run(&["eval", urdf, "--q", q, "--qd", q]));
+
+    // An optimal-control problem's node function past the limit.
+    let out = run(&[
+        "--max-graph-nodes",
+        "1000",
+        "optimize",
+        "--problem",
+        "reach",
+        "--out",
+        dir.join("reach").to_str().unwrap(),
+    ]);
+    assert_clean_failure(&out, &["graph nodes", "--max-graph-nodes"]);
+    assert_eq!(out.status.code(), Some(1));
+
+    assert_usage_error(
+        &run(&["--max-graph-nodes", "0", "generate", "scenes/paper.toml"]),
+        &["--max-graph-nodes"],
+    );
 }

@@ -71,6 +71,7 @@ pub struct Builder {
     settings: EmitSettings,
     file_name: Option<String>,
     cargo_metadata: bool,
+    max_graph_nodes: Option<usize>,
 }
 
 /// What [`Builder::emit_to`] wrote.
@@ -95,6 +96,7 @@ impl Builder {
             settings: EmitSettings::default(),
             file_name: None,
             cargo_metadata: true,
+            max_graph_nodes: None,
         }
     }
 
@@ -152,6 +154,15 @@ impl Builder {
         self
     }
 
+    /// The node limit of the module's expression graph (default: the process's,
+    /// [`crate::graph::node_limit`], [`crate::graph::DEFAULT_NODE_LIMIT`] unless set; about
+    /// 6 GiB at the generator's peak): a robot whose kernels need more ends with
+    /// [`crate::CodegenError::TooLarge`], naming the kernel, instead of exhausting the machine.
+    pub fn max_graph_nodes(mut self, nodes: usize) -> Self {
+        self.max_graph_nodes = Some(nodes);
+        self
+    }
+
     fn file(&self) -> String {
         self.source.display().to_string()
     }
@@ -196,9 +207,15 @@ impl Builder {
     }
 
     fn generate_scene(&self, scene: &Scene, text: &str) -> Result<Generated, BuildError> {
-        crate::generate_with(scene, text, &self.settings).map_err(|source| BuildError::Codegen {
-            file: self.file(),
-            source,
+        let limit = self
+            .max_graph_nodes
+            .unwrap_or_else(crate::graph::node_limit);
+        let split = crate::emit::ModuleSplit::Auto;
+        crate::generate_bounded(scene, text, &self.settings, split, limit).map_err(|source| {
+            BuildError::Codegen {
+                file: self.file(),
+                source,
+            }
         })
     }
 

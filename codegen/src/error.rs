@@ -1,6 +1,7 @@
 //! The generator's error type [`CodegenError`] and the typed defects it carries: what in a
 //! scene keeps it from becoming kernels ([`SceneDefect`]), what is wrong with the numbers given
-//! to [`crate::eval_all`] ([`InputDefect`]), and the generator's own inconsistencies
+//! to [`crate::eval_all`] ([`InputDefect`]), a request whose expression graph would outgrow
+//! its node limit ([`GraphTooLarge`]), and the generator's own inconsistencies
 //! ([`InternalDefect`], bugs). The defects are descriptions, not causes: their text is part of
 //! the variant's message; only a real error of another library (syn's parse error) is a
 //! `source()`.
@@ -19,6 +20,9 @@ pub enum CodegenError {
     /// Emit settings that cannot be combined (e.g. fused multiply-add in a no_std module).
     #[error("emit settings: {0}")]
     Settings(&'static str),
+    /// The request's expression graph would exceed its node limit ([`crate::graph::Graph::limit`]).
+    #[error("{0}")]
+    TooLarge(GraphTooLarge),
     /// A bug in the generator (an inconsistency between its own parts).
     #[error("internal generator error: {0}")]
     Internal(InternalDefect),
@@ -57,6 +61,42 @@ impl CodegenError {
     /// [`CodegenError::Unparsable`] for the text `what`, for `map_err`.
     pub(crate) fn unparsable(what: &'static str) -> impl FnOnce(syn::Error) -> CodegenError {
         move |source| CodegenError::Unparsable { what, source }
+    }
+}
+
+/// Peak memory per graph node of generating or evaluating kernels (bytes): the graph, its memo
+/// table and the tape or the emitted text (measured 250–370 bytes on chains of 10–40 joints,
+/// more on the larger ones).
+pub const BYTES_PER_NODE: usize = 400;
+
+/// A request whose expression graph would hold more nodes than its limit: which quantity was
+/// being built, on how many joints, and what to do about it.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error(
+    "{what}: the expression graph of this {joints}-joint robot would hold more than {limit} \
+     nodes, about {} of memory at {BYTES_PER_NODE} bytes a node; {advice}; or, if the \
+     machine has the memory, raise the limit (`--max-graph-nodes`, `Builder::max_graph_nodes`)",
+    memory(*limit)
+)]
+pub struct GraphTooLarge {
+    /// What was being built (`kernel `christoffel``, `eval`, a node function).
+    pub what: String,
+    /// The robot's joints.
+    pub joints: usize,
+    /// The graph's node limit.
+    pub limit: usize,
+    /// What makes the request smaller.
+    pub advice: &'static str,
+}
+
+/// The peak memory of a graph of `nodes` nodes ([`BYTES_PER_NODE`]) in GiB, or MiB below one.
+fn memory(nodes: usize) -> String {
+    let bytes = nodes as f64 * BYTES_PER_NODE as f64;
+    let gib = bytes / (1u64 << 30) as f64;
+    if gib >= 1.0 {
+        format!("{gib:.1} GiB")
+    } else {
+        format!("{:.0} MiB", bytes / (1u64 << 20) as f64)
     }
 }
 

@@ -7,12 +7,45 @@
 //! which fold constants and apply algebraic identities (x·0, x·1, x+0, x−x, −(−x), …) and then
 //! look the node up in a memo table, so equal subexpressions are one node (CSE for free).
 //!
+//! Size: a graph holds at most [`Graph::limit`] nodes ([`DEFAULT_NODE_LIMIT`],
+//! [`set_node_limit`]); past it, construction yields one NaN constant (the poison) and
+//! [`Graph::exceeded`] is true, which the builders of kernels and node functions report.
+//!
 //! Exact constants: DH angles that are rational multiples of π are folded through
 //! [`Graph::cos_pi`] / [`Graph::sin_pi`], which return exactly 0, ±1, ±½ where those are the
 //! true values, so cos(π/2) is exactly 0 and whole subtrees vanish.
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hash, Hasher};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Nodes a [`Graph`] holds at most unless [`set_node_limit`] says otherwise: 2²⁴ ≈ 16.8 million,
+/// some 500 times the largest built-in scene's graph (the 7-joint arm's 34 thousand nodes).
+/// Generating or evaluating a robot's kernels takes about 250–370 bytes per node at its peak
+/// (the graph, its memo table, the interpreter's tape or the emitted text; BENCHMARKS.md,
+/// "Expression graphs of long chains"), so a request that would grow past about 6 GiB ends
+/// with an error that names it instead of exhausting the machine: with every kernel, a chain
+/// of some 48 joints.
+pub const DEFAULT_NODE_LIMIT: usize = 1 << 24;
+
+/// The node limit of graphs created from now on in this process ([`set_node_limit`]).
+static NODE_LIMIT: AtomicUsize = AtomicUsize::new(DEFAULT_NODE_LIMIT);
+
+/// Sets the node limit of the graphs this process creates from now on (at least 1, below
+/// `u32::MAX`; [`DEFAULT_NODE_LIMIT`] until set): the CLI's `--max-graph-nodes`.
+pub fn set_node_limit(limit: usize) {
+    NODE_LIMIT.store(clamp_limit(limit), Ordering::Relaxed);
+}
+
+/// A node limit that leaves the poison an id: 1 ..= u32::MAX − 1.
+fn clamp_limit(limit: usize) -> usize {
+    limit.clamp(1, u32::MAX as usize - 1)
+}
+
+/// The node limit that a graph created now gets ([`set_node_limit`]).
+pub fn node_limit() -> usize {
+    NODE_LIMIT.load(Ordering::Relaxed)
+}
 
 /// A multiply–rotate hasher for the memo table (the scheme of rustc's `FxHasher`): the keys are
 /// small fixed-size nodes made by this program, so SipHash's defence against chosen keys buys
@@ -138,12 +171,34 @@ impl Node {
 }
 
 /// A hash-consed expression arena.
-#[derive(Debug, Clone, Default)]
+///
+/// It holds at most [`Graph::limit`] nodes. A construction that would add more gets, for every
+/// node it would add, one constant NaN (the *poison*, the one node beyond the limit), and the graph says so
+/// ([`Graph::exceeded`]): its memory stays bounded, whatever still uses it evaluates to NaN
+/// ([`crate::interp::Tape::new`] of an exceeded graph computes NaN for every output), and the
+/// builders that finish a kernel turn it into an error that names what grew too large.
+#[derive(Debug, Clone)]
 pub struct Graph {
     nodes: Vec<Node>,
     memo: HashMap<Node, Id, BuildHasherDefault<NodeHasher>>,
     /// Running hash of `nodes` ([`History`]), two lanes.
     history: [u64; 2],
+    /// Nodes at most ([`node_limit`] when the graph was created).
+    limit: usize,
+    /// The NaN constant that stands for every node beyond the limit, once one was asked for.
+    poison: Option<Id>,
+}
+
+impl Default for Graph {
+    fn default() -> Self {
+        Graph {
+            nodes: Vec::new(),
+            memo: HashMap::default(),
+            history: [0; 2],
+            limit: node_limit(),
+            poison: None,
+        }
+    }
 }
 
 fn norm_bits(v: f64) -> u64 {
@@ -195,9 +250,17 @@ fn gcd(a: i128, b: i128) -> i128 {
 }
 
 impl Graph {
-    /// An empty graph.
+    /// An empty graph with the process's node limit ([`node_limit`]).
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// An empty graph that holds at most `limit` nodes (at least 1, below `u32::MAX`).
+    pub fn with_limit(limit: usize) -> Self {
+        Graph {
+            limit: clamp_limit(limit),
+            ..Self::default()
+        }
     }
 
     /// Number of nodes.
@@ -208,6 +271,23 @@ impl Graph {
     /// True if there are no nodes.
     pub fn is_empty(&self) -> bool {
         self.nodes.is_empty()
+    }
+
+    /// Nodes this graph holds at most.
+    pub fn limit(&self) -> usize {
+        self.limit
+    }
+
+    /// True once a construction asked for more than [`Graph::limit`] nodes: the expressions
+    /// built since then contain the NaN poison in place of the nodes that did not fit, so
+    /// nothing built on this graph may be used.
+    pub fn exceeded(&self) -> bool {
+        self.poison.is_some()
+    }
+
+    /// The poison if the graph was exceeded, so that evaluations of an exceeded graph give NaN.
+    pub fn poison(&self) -> Option<Id> {
+        self.poison
     }
 
     /// The node with id `id`.
@@ -227,9 +307,27 @@ impl Graph {
         self.push_new(n)
     }
 
-    /// Appends `n`, which the graph does not hold yet.
+    /// Appends `n`, which the graph does not hold yet; past the limit, returns the poison
+    /// instead (pushed once, the one node beyond the limit).
     fn push_new(&mut self, n: Node) -> Id {
-        let id = Id(u32::try_from(self.nodes.len()).expect("graph exceeds u32::MAX nodes"));
+        if let Some(p) = self.poison {
+            return p;
+        }
+        if self.nodes.len() >= self.limit {
+            let nan = Node::Const(f64::NAN.to_bits());
+            let p = match self.memo.get(&nan) {
+                Some(&p) => p,
+                None => self.push_unchecked(nan),
+            };
+            self.poison = Some(p);
+            return p;
+        }
+        self.push_unchecked(n)
+    }
+
+    fn push_unchecked(&mut self, n: Node) -> Id {
+        // The limit is below u32::MAX, so the index (of the poison too) fits.
+        let id = Id(self.nodes.len() as u32);
         self.nodes.push(n);
         self.memo.insert(n, id);
         let mut h = NodeHasher::default();

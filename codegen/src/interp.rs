@@ -182,8 +182,17 @@ pub struct Tape {
 }
 
 impl Tape {
-    /// Compile the cone of `outputs`.
+    /// Compile the cone of `outputs`. On an exceeded graph ([`Graph::exceeded`]) every output
+    /// is NaN: its expressions are incomplete.
     pub fn new(g: &Graph, outputs: &[Id]) -> Self {
+        let poisoned: Vec<Id>;
+        let outputs = match g.poison() {
+            Some(p) => {
+                poisoned = vec![p; outputs.len()];
+                &poisoned[..]
+            }
+            None => outputs,
+        };
         let mark = g.cone(outputs);
         let max = outputs.iter().map(|o| o.index() + 1).max().unwrap_or(0);
         const NONE: u32 = u32::MAX;

@@ -417,6 +417,7 @@ pub fn build_kernel(model: &mut SymbolicRobot, name: &str) -> Result<KernelDef, 
             .into());
         }
     };
+    model.check_size(&format!("kernel `{name}`"), crate::robot::KERNELS_ADVICE)?;
     check_inputs(model, name, &inputs, &outputs)?;
     Ok(KernelDef {
         name: name.to_string(),

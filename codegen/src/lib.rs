@@ -49,7 +49,10 @@ pub use report::{KernelReport, OpCounts, Report};
 pub use robot::SymbolicRobot;
 pub use spec::Scene;
 
-pub use error::{CodegenError, ExtremeValues, InputDefect, InternalDefect, SceneDefect};
+pub use error::{
+    BYTES_PER_NODE, CodegenError, ExtremeValues, GraphTooLarge, InputDefect, InternalDefect,
+    SceneDefect,
+};
 
 #[cfg(feature = "emit")]
 /// Result of [`generate`].
@@ -106,6 +109,20 @@ pub fn generate_split(
     opts: &emit::EmitSettings,
     split: emit::ModuleSplit,
 ) -> Result<Generated, CodegenError> {
+    generate_bounded(scene, source_text, opts, split, graph::node_limit())
+}
+
+#[cfg(feature = "emit")]
+/// As [`generate_split`], on an expression graph of at most `max_graph_nodes` nodes: a scene
+/// whose kernels need more ends with [`CodegenError::TooLarge`], naming the kernel being built
+/// ([`Builder::max_graph_nodes`]; the others use the process's [`graph::node_limit`]).
+pub fn generate_bounded(
+    scene: &Scene,
+    source_text: &str,
+    opts: &emit::EmitSettings,
+    split: emit::ModuleSplit,
+    max_graph_nodes: usize,
+) -> Result<Generated, CodegenError> {
     let start = Instant::now();
     if opts.no_std && opts.fma {
         return Err(CodegenError::Settings(
@@ -114,7 +131,7 @@ pub fn generate_split(
         ));
     }
     check_kernel_list(scene)?;
-    let mut model = SymbolicRobot::new(scene)?;
+    let mut model = SymbolicRobot::with_node_limit(scene, max_graph_nodes)?;
     let mut defs = Vec::new();
     for k in &scene.kernels {
         defs.push(kernels::build_kernel(&mut model, k)?);
@@ -353,6 +370,7 @@ pub fn eval_all(
         items.push(("h_smooth".into(), Shape::S, vec![cs.h]));
         items.push(("J_c_smooth".into(), Shape::M(n), cs.j_c.concat()));
     }
+    model.check_size("eval", robot::EVAL_ADVICE)?;
     let all: Vec<graph::Id> = items.iter().flat_map(|i| i.2.iter().copied()).collect();
     // In `f64`, whose sine and cosine are the emitted kernels' own: the numbers are those of
     // the emitted f64 kernels bit for bit.

@@ -153,10 +153,17 @@ impl Derivatives {
         let made = lock().get(&key).cloned();
         if let Some(made) = made {
             g.extend_with(&made.0);
-            return made.1.clone();
+            return match g.poison() {
+                // The replayed nodes did not all fit: the ids refer to nodes that are not there.
+                Some(p) => made.1.poisoned(p),
+                None => made.1.clone(),
+            };
         }
         let before = g.len();
         let d = Self::differentiate(g, outputs, locals, fixed);
+        if g.exceeded() {
+            return d;
+        }
         let made = Arc::new((g.nodes()[before..].to_vec(), d.clone()));
         let mut cache = lock();
         if cache.len() >= DERIVATIVES_CACHED {
@@ -164,6 +171,15 @@ impl Derivatives {
         }
         cache.insert(key, made);
         d
+    }
+
+    /// These derivatives with every entry the poison `p` of an exceeded graph.
+    fn poisoned(&self, p: Id) -> Self {
+        Derivatives {
+            jac_ids: vec![p; self.jac_ids.len()],
+            hess_ids: vec![p; self.hess_ids.len()],
+            ..self.clone()
+        }
     }
 
     /// [`Derivatives::new`] without the cache.

@@ -187,3 +187,40 @@ fn a_large_robot_comes_split_per_kernel() {
     assert_eq!(split, 3, "all but gravity");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A robot whose kernels need more graph nodes than the builder allows ends with an error that
+/// names the file and the kernel, and writes nothing; with room it is `generate`'s module.
+#[test]
+fn a_robot_past_the_node_limit_is_refused_by_name() {
+    let kernels = ["gravity", "christoffel"];
+    let text = chain::chain_scene(8, &kernels);
+    let dir = out_dir("limit");
+    let path = dir.join("chain8.toml");
+    std::fs::write(&path, &text).unwrap();
+    let builder = Builder::new(&path).kernels(kernels).cargo_metadata(false);
+    let full = builder.generate().unwrap();
+    let nodes = full.report.graph_nodes;
+    let fits = builder.clone().max_graph_nodes(nodes).generate().unwrap();
+    assert_eq!(fits.code, full.code);
+    let out = dir.join("out");
+    std::fs::create_dir_all(&out).unwrap();
+    let e = builder
+        .max_graph_nodes(nodes / 2)
+        .emit_to(&out)
+        .unwrap_err();
+    let BuildError::Codegen {
+        file,
+        source: CodegenError::TooLarge(t),
+    } = &e
+    else {
+        panic!("{e}");
+    };
+    assert!(file.ends_with("chain8.toml"), "{file}");
+    assert_eq!(
+        (t.what.as_str(), t.limit),
+        ("kernel `christoffel`", nodes / 2)
+    );
+    assert!(e.to_string().contains("max_graph_nodes"), "{e}");
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -208,6 +208,17 @@ pub enum MeshDefect {
 /// What is wrong with a [`Phase`](crate::ocp::Phase) (or its trajectory).
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum PhaseDefect {
+    /// The node function's derivatives would exceed its graph's node limit
+    /// ([`bf_codegen::graph::Graph::limit`]).
+    #[error(
+        "the node function and its exact derivatives would hold more than {limit} graph nodes; \
+         raise the limit with --max-graph-nodes if the machine has the memory (about 400 bytes \
+         a node)"
+    )]
+    GraphTooLarge {
+        /// The graph's node limit.
+        limit: usize,
+    },
     /// `xdot` must have one entry per state.
     #[error("xdot has {found} entries for {states} states")]
     XdotLength {
@@ -263,6 +274,17 @@ pub enum PhaseDefect {
 /// What is wrong with a [`PointFunction`](crate::ocp::PointFunction).
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum PointDefect {
+    /// The point function's derivatives would exceed its graph's node limit
+    /// ([`bf_codegen::graph::Graph::limit`]).
+    #[error(
+        "the point function and its exact derivatives would hold more than {limit} graph \
+         nodes; raise the limit with --max-graph-nodes if the machine has the memory (about \
+         400 bytes a node)"
+    )]
+    GraphTooLarge {
+        /// The graph's node limit.
+        limit: usize,
+    },
     /// `bounds` must have one entry per output.
     #[error("{bounds} bounds for {outputs} outputs")]
     BoundsLength {

@@ -198,6 +198,7 @@ impl Potential {
         let v = model.potential();
         let g = model.gravity();
         let outs: Vec<Id> = std::iter::once(v).chain(g).collect();
+        model.check_size("the gravity torques", bf_codegen::robot::PROBLEM_ADVICE)?;
         let tape = bf_codegen::interp::Tape::new(&model.g, &outs);
         let mut vars = vec![0.0; lay.n_vars()];
         for (i, p) in model.params.iter().enumerate() {
@@ -570,6 +571,10 @@ pub fn rest_to_rest_guess(
     let mass = model.mass_matrix();
     let bias = model.cqd_g_rnea();
     let outs: Vec<Id> = mass.iter().flatten().chain(&bias).copied().collect();
+    model.check_size(
+        "the guess's inverse dynamics",
+        bf_codegen::robot::PROBLEM_ADVICE,
+    )?;
     let tape = bf_codegen::interp::Tape::new(&model.g, &outs);
     let mu_v = scene.friction.as_ref().map_or(0.0, |f| f.mu_v);
     let mut vars = vec![0.0; lay.n_vars()];

@@ -571,6 +571,9 @@ impl Diagnostics {
         let mut outs = vec![ce.alpha, ce.sat_alpha, ce.h, ce.h_dot];
         outs.extend(ce.n);
         outs.extend(ce.delta_v);
+        model
+            .check_size("the contact quantities", bf_codegen::robot::PROBLEM_ADVICE)
+            .map_err(ProblemError::model(&scene.name))?;
         Ok(Diagnostics {
             tape: Tape::new(&model.g, &outs),
             n_vars: base as usize,

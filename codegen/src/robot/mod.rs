@@ -40,6 +40,23 @@ use crate::graph::{Graph, Id, M3, V3, m3_transpose};
 use crate::spec::{Angle, DhConvention, JointType, RotationSpec, Scene, TransformSpec};
 use crate::{CodegenError, SceneDefect};
 
+/// How a scene's kernels become smaller ([`SymbolicRobot::check_size`]).
+pub const KERNELS_ADVICE: &str = "the kernels whose size grows fastest with the joint count are \
+     `christoffel` and `dmass_dq` (n³ entries), then `coriolis_matrix`, \
+     `inverse_dynamics_dq`, `inverse_dynamics_dqd` and `mass_cqd_g`; list only the kernels you \
+     need in the scene's `kernels`";
+
+/// How `eval` becomes smaller ([`SymbolicRobot::check_size`]): it computes M, C and the
+/// Jacobians whatever the scene's `kernels` say.
+pub const EVAL_ADVICE: &str = "`eval` builds M, C (from the n³ Christoffel symbols) and the \
+     Jacobians of every scene whatever its `kernels`; `generate` with a shorter `kernels` list \
+     needs less";
+
+/// How an optimal-control problem's graphs become smaller ([`SymbolicRobot::check_size`]):
+/// they are the dynamics and contact quantities of every joint with their exact derivatives.
+pub const PROBLEM_ADVICE: &str = "a problem needs the dynamics and contact quantities of \
+     every joint and their exact derivatives, so only a robot with fewer joints needs less";
+
 /// Layout of the input variables of the graph: q, q̇, ω, ε, then the runtime parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Layout {
@@ -267,8 +284,14 @@ struct Cache {
 }
 
 impl SymbolicRobot {
-    /// Build the kinematic skeleton of `scene` (world frames of every link, tip frame).
+    /// Build the kinematic skeleton of `scene` (world frames of every link, tip frame) on a
+    /// graph with the process's node limit ([`crate::graph::node_limit`]).
     pub fn new(scene: &Scene) -> Result<Self, CodegenError> {
+        Self::with_node_limit(scene, crate::graph::node_limit())
+    }
+
+    /// [`SymbolicRobot::new`] on a graph of at most `limit` nodes ([`Graph::with_limit`]).
+    pub fn with_node_limit(scene: &Scene, limit: usize) -> Result<Self, CodegenError> {
         let nq = scene.links.len();
         if nq == 0 {
             return Err(SceneDefect::NoLinks.into());
@@ -293,7 +316,7 @@ impl SymbolicRobot {
             np: params.len(),
         };
         let mut m = SymbolicRobot {
-            g: Graph::new(),
+            g: Graph::with_limit(limit),
             layout,
             params,
             scene: scene.clone(),
@@ -316,6 +339,21 @@ impl SymbolicRobot {
     /// Number of joints.
     pub fn nq(&self) -> usize {
         self.layout.nq
+    }
+
+    /// An error naming `what` if the graph has exceeded its node limit ([`Graph::exceeded`]):
+    /// what was built since is incomplete. `advice` says how to make the request smaller
+    /// ([`KERNELS_ADVICE`], [`EVAL_ADVICE`]).
+    pub fn check_size(&self, what: &str, advice: &'static str) -> Result<(), CodegenError> {
+        if !self.g.exceeded() {
+            return Ok(());
+        }
+        Err(CodegenError::TooLarge(crate::GraphTooLarge {
+            what: what.to_string(),
+            joints: self.nq(),
+            limit: self.g.limit(),
+            advice,
+        }))
     }
 
     /// The scene this model was built from.

@@ -379,6 +379,15 @@ impl Transcription {
                 &nd.fixed,
                 kernels,
             );
+            if col.graph.exceeded() {
+                return Err(OptimError::Phase {
+                    index: pi,
+                    name: ph.name.clone(),
+                    defect: PhaseDefect::GraphTooLarge {
+                        limit: col.graph.limit(),
+                    },
+                });
+            }
             if matches!(kernels, KernelUse::Require(_)) && f.kernel_name().is_none() {
                 return Err(OptimError::Phase {
                     index: pi,
@@ -524,6 +533,11 @@ impl Transcription {
             let mut graph = pf.graph.clone();
             let locals: Vec<u32> = pf.vars.iter().map(|v| v.0).collect();
             let f = GraphFn::new(&mut graph, &pf.outputs, &locals, &pf.fixed);
+            if graph.exceeded() {
+                return Err(bad(PointDefect::GraphTooLarge {
+                    limit: graph.limit(),
+                }));
+            }
             let r0 = m;
             let targets = (0..pf.outputs.len()).map(|i| vec![(r0 + i, 1.0)]).collect();
             for b in &pf.bounds {
