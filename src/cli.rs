@@ -346,8 +346,9 @@ pub struct SimulateArgs {
     /// --mode0 when it is not `free` (the default).
     #[arg(long)]
     pub init: Option<PathBuf>,
-    /// End time (s) [default: 10; for an arm's `solution.json` given with --init, its
-    /// duration].
+    /// End time (s) [default: 10; with --torques, the series' last time; for an arm's
+    /// `solution.json` given with --init, its duration]. Past the end of a --torques series
+    /// its last torque is held, which the run warns about (`torques_held`).
     #[arg(long, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Integrator: dopri5 or rk4.
@@ -768,9 +769,20 @@ pub const DEFAULT_H_MAX: f64 = 0.05;
 pub const DEFAULT_T_END: f64 = 10.0;
 
 impl SimulateArgs {
-    /// The end time: `--t-end`, or [`DEFAULT_T_END`].
+    /// The end time: `--t-end`, or the last time of the `--torques` series (a replay of a
+    /// solution's torques ends with them), or [`DEFAULT_T_END`]. A series that cannot be read
+    /// gives the default here; reading it for the run reports why.
     pub fn t_end(&self) -> f64 {
-        self.t_end.unwrap_or(DEFAULT_T_END)
+        self.t_end
+            .or_else(|| self.torques_end())
+            .unwrap_or(DEFAULT_T_END)
+    }
+
+    /// The last time of the `--torques` series (s), if one is given and can be read.
+    pub fn torques_end(&self) -> Option<f64> {
+        let path = self.torques.as_ref()?;
+        let series = bf_sim::TorqueSeries::from_path(path).ok()?;
+        series.times().last().copied().filter(|t| *t > 0.0)
     }
 }
 

@@ -477,7 +477,7 @@ fn resource_limits_are_checked() {
     let dir = tmpdir("limits");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    let cases: [(&[&str], &[&str]); 5] = [
+    let cases: [(&[&str], &[&str]); 6] = [
         // 65 points in one Radau element: more than the mesh's 64 (the solve used to fail
         // after its start with exit status 1).
         (
@@ -495,6 +495,11 @@ fn resource_limits_are_checked() {
         (
             &["simulate", "--output-dt", "1e-7", "--out", out_s],
             &["--output-dt", "--max-samples 1000000"],
+        ),
+        // The grid k·1e-5 s over 10 s is 1 000 001 samples, and the steps add at least 200.
+        (
+            &["simulate", "--output-dt", "1e-5", "--out", out_s],
+            &["1.000e6 grid samples", "at least 2.000e2 step samples"],
         ),
         (
             &["simulate", "--t-end", "1e300", "--out", out_s],
@@ -542,6 +547,23 @@ fn resource_limits_are_checked() {
     let sm = json(&out.join("summary.json"));
     assert!(sm["error"].as_str().unwrap().contains("--max-samples"));
     assert!(out.join(bf_output::FAILED).exists());
+    // An arm (a scene without a ball) keeps the same limits.
+    let arm = dir.join("arm");
+    let o = run(&[
+        "simulate",
+        "--scene",
+        "scenes/puma560.toml",
+        "--t-end",
+        "2",
+        "--max-samples",
+        "50",
+        "--out",
+        arm.to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["--max-samples 50", "sample limit reached"]);
+    let csv = std::fs::read_to_string(arm.join("trajectory.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 50, "a header and the 50 samples");
+    assert!(arm.join(bf_output::FAILED).exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

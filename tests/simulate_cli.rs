@@ -250,6 +250,18 @@ fn cli_bad_inputs_give_clear_errors() {
     let mode_file = dir.join("mode.json");
     std::fs::write(&mode_file, r#"{"q": [0.1, 0.5, 0.5], "mode": "flying"}"#).unwrap();
     let mode_file = mode_file.to_str().unwrap();
+    // A state of a sticking contact (Δv = 0) started in slip: the slip direction is undefined,
+    // and the model's reason must reach the user (it used to read "the energy is not finite").
+    let sticking = dir.join("sticking.json");
+    std::fs::write(
+        &sticking,
+        r#"{"q": [0.4714011146770635, 1.1162406379196423, 0.9352825204037364],
+            "qd": [-0.07209944221755044, 0.0008025915078182113, -0.0018200622220615012],
+            "omega": [0.0687896964370189, -0.0075820544898763985, -0.013019316170702675],
+            "mode": "stick"}"#,
+    )
+    .unwrap();
+    let sticking = sticking.to_str().unwrap();
     // (options, mentions, exit status: 2 for a wrong command line, 1 for a file or a state
     // that does not fit).
     let cases: Vec<(Vec<&str>, Vec<&str>, i32)> = vec![
@@ -351,6 +363,11 @@ fn cli_bad_inputs_give_clear_errors() {
             2,
         ),
         (vec!["--max-samples", "0"], vec!["--max-samples", "≥ 1"], 2),
+        (
+            vec!["--init", sticking, "--mode0", "slip"],
+            vec!["in mode slip", "slip direction undefined", "sticking.json"],
+            1,
+        ),
     ];
     for (extra, mention, status) in cases {
         let mut args = vec!["simulate", "--out", out];
@@ -910,4 +927,122 @@ fn impacts_record_their_impulse_and_an_impulse_no_contact_gives_is_warned() {
             "{law}: {pulling} of {impacts} impacts pull"
         );
     }
+}
+
+/// The sticking law on the default drop makes the stick phase chatter until the Zeno fallback
+/// holds the contact for one 10 ms step while the ball pulls the finger. The `held_contact`
+/// warning must give the hold's whole pull, which is largest at the step's end (the sample
+/// where the fallback lets go), recomputed here from `trajectory.json` over both ends of every
+/// step integrated in contact.
+#[test]
+fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
+    let dir = tmpdir("held");
+    let out_dir = dir.join("out");
+    let o = simulate_into(&out_dir, &["--impact-law", "stick", "--t-end", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = json(&out_dir.join("summary.json"));
+    let held = summary["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["kind"] == "held_contact")
+        .expect("a held contact")["message"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let tj = json(&out_dir.join("trajectory.json"));
+    let t: Vec<f64> = serde_json::from_value(tj["t"].clone()).unwrap();
+    let mode: Vec<String> = serde_json::from_value(tj["mode"].clone()).unwrap();
+    let d = tj["derived"].as_array().unwrap();
+    let lambda_n = |i: usize| d[i]["lambda_n"].as_f64().unwrap_or(f64::NAN);
+    let integrated = |i: usize| mode[i] != "free" && mode[i + 1] == mode[i] && t[i + 1] > t[i];
+    let (mut begin, mut both) = (f64::INFINITY, f64::INFINITY);
+    for i in (0..t.len() - 1).filter(|&i| integrated(i)) {
+        begin = begin.min(lambda_n(i));
+        both = both.min(lambda_n(i).min(lambda_n(i + 1)));
+    }
+    assert!(
+        both < begin,
+        "the hold's end pulls harder: {both} against {begin}"
+    );
+    assert!(
+        held.contains(&format!("λ_n down to {both:.3e} N")),
+        "{held}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A `--torques` run ends with its series unless `--t-end` says otherwise, and one that goes on
+/// past it says that it holds the last torque (`torques_held`, in `summary.json` and on
+/// stderr); `--no-projection` says that the drift was not projected instead of reporting a
+/// projected drift of 0; a solution replayed under another impact law than it was planned with
+/// says so.
+#[test]
+fn a_replay_says_what_it_does_not_replay() {
+    let dir = tmpdir("replay");
+    let tau = dir.join("tau.csv");
+    std::fs::write(&tau, "t,tau1,tau2,tau3\n0,0,0.1,0\n0.3,0,0.1,0\n").unwrap();
+    let tau = tau.to_str().unwrap();
+    let held = |s: &Value| {
+        s["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["kind"] == "torques_held")
+    };
+    let with_series = dir.join("series");
+    let o = simulate_into(&with_series, &["--torques", tau]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&with_series.join("summary.json"));
+    assert_eq!(s["t_final"].as_f64(), Some(0.3));
+    assert!(!held(&s), "{s}");
+    let past = dir.join("past");
+    let o = simulate_into(&past, &["--torques", tau, "--t-end", "0.5"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&past.join("summary.json"));
+    assert_eq!(s["t_final"].as_f64(), Some(0.5));
+    assert!(held(&s), "{s}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("holds its last torque"), "{stderr}");
+
+    let flat = dir.join("flat");
+    let o = simulate_into(&flat, &["--no-projection", "--t-end", "1"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}");
+    assert!(
+        stdout.contains("not projected (--no-projection)"),
+        "{stdout}"
+    );
+    assert!(!stdout.contains("before projection"), "{stdout}");
+    let s = json(&flat.join("summary.json"));
+    assert_eq!(s["projected"], Value::Bool(false));
+
+    // The stored paper optimum was planned with the sticking law (eq. 40).
+    let plan = "data/optima/periodic-qc/solution.json";
+    let other = run(&["simulate", "--init", plan, "--t-end", "0.01", "--out"]
+        .into_iter()
+        .chain([dir.join("newton").to_str().unwrap()])
+        .collect::<Vec<_>>());
+    let stderr = String::from_utf8_lossy(&other.stderr);
+    assert!(other.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("planned with the stick impact law, this run uses newton"),
+        "{stderr}"
+    );
+    let own = run(&[
+        "simulate",
+        "--init",
+        plan,
+        "--t-end",
+        "0.01",
+        "--impact-law",
+        "stick",
+    ]
+    .into_iter()
+    .chain(["--out", dir.join("stick").to_str().unwrap()])
+    .collect::<Vec<_>>());
+    let stderr = String::from_utf8_lossy(&own.stderr);
+    assert!(own.status.success(), "{stderr}");
+    assert!(!stderr.contains("impact law"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
 }

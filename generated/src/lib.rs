@@ -31,7 +31,7 @@ pub type PotentialFn = fn(q: &[f64], p: &[f64]) -> f64;
 /// The contact kernels of a scene with a ball (any number of joints NQ): `eps = None` runs
 /// `contact` (exact saturation, eq. 2–13), `Some(ε)` runs `contact_smooth` (eq. 58–59). Writes
 /// the fields of the scene's `Contact` struct flat into `out`, in bf-codegen's
-/// `CONTACT_FIELDS` order (J_c row-major 3 × NQ): 22 + 3 NQ values. Wrong lengths of `q`,
+/// `CONTACT_FIELDS` order (J_c row-major 3 × NQ): 25 + 3 NQ values. Wrong lengths of `q`,
 /// `qd`, `p` or `out` write NaN.
 pub type ContactFn =
     fn(q: &[f64], qd: &[f64], omega: &[f64; 3], eps: Option<f64>, p: &[f64], out: &mut [f64]);

@@ -508,7 +508,7 @@ struct ContactLayout {
     /// Offsets of alpha, sat_alpha, p_c, r_c, h, n, j_c, v_c, delta_v, h_dot, rc_dot,
     /// jc_dot_qd.
     offsets: [usize; 12],
-    /// Number of outputs (22 + 3 nq).
+    /// Number of outputs (25 + 3 nq).
     len: usize,
 }
 

@@ -475,11 +475,12 @@ pub fn markdown(entries: &[Entry]) -> Result<String> {
         s,
         "Each formula as printed, evaluated at {STATES} random states (q, q̇ ∈ [−4, 4]³) for each of \
          {} parameter sets (the paper's ℓ = r = 1; ℓ = r = 0.7; {RANDOM_SETS} random with \
-         ℓ ∈ [0.4, 1.6], r ∈ [0.5, 2], unequal masses and inertias, g ∈ [5, 12]), against a \
+         ℓ ∈ [0.4, 1.6], r ∈ [0.5, 2], unequal masses and inertias, g ∈ [5, 12]; a form printed \
+         for r = ℓ or for r ≠ ℓ only on the sets it is printed for), against a \
          derivation from the DH table (4×4 transforms, geometric Jacobian, M of eq. 22a, exact \
          derivatives by dual numbers). Errors are max |printed − derived| / (1 + max |derived|); \
-         \"printed / derived\" is the component and state where the printed form is furthest \
-         off.\n",
+         \"printed / derived\" is the component (at the sample) where |printed − derived| is \
+         largest.\n",
         param_sets().len()
     )?;
     writeln!(

@@ -363,6 +363,10 @@ pub struct RunSummary {
     pub mode_time_share: [(Mode, f64); 3],
     /// Largest penetration max(−h, 0) over all samples (m).
     pub max_penetration: f64,
+    /// Whether the contact steps were projected onto h = 0 and n·v_c = 0
+    /// (`BallFingerSettings::project`); without it the drift is only what `max_contact_gap`
+    /// and `max_normal_velocity` show, and `max_drift`, `final_drift` are 0.
+    pub projected: bool,
     /// Largest contact drift |h| removed by the projection (m, before projection).
     pub max_drift: f64,
     /// Drift |h| removed at the last projected step (m); 0 if the run never projected.
@@ -555,6 +559,7 @@ fn summarize<const N: usize>(
             (Mode::Slip, share(2)),
         ],
         max_penetration,
+        projected: settings.project,
         max_drift: out.stats.max_drift,
         final_drift,
         max_contact_gap,
@@ -606,9 +611,9 @@ fn balance_residual<const N: usize>(
 /// bounds otherwise, up to the event location's rounding.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct HeldContact {
-    /// The smallest λ_n over the samples that begin a step in contact (N; +∞ without).
+    /// The smallest λ_n over the samples at either end of a step in contact (N; +∞ without).
     min_lambda_n: f64,
-    /// The smallest σ over the samples that begin a step in Stick (N; +∞ without).
+    /// The smallest σ over the samples at either end of a step in Stick (N; +∞ without).
     min_sigma: f64,
     /// The time spent in contact with λ_n < 0 (s), and when it first was.
     pulling: (f64, Option<f64>),
@@ -680,16 +685,20 @@ fn held_contact<const N: usize>(
     // is the guard doing its work, not a held contact.
     let integrated =
         |i: usize| contact(i) && i + 1 < n && tr.mode[i + 1] == tr.mode[i] && tr.t[i + 1] > tr.t[i];
+    // Both ends of the interval: a hold of one step has no other sample in it, and its end
+    // (where the fallback lets go) is where the ball pulled hardest.
     for i in (0..n).filter(|&i| integrated(i)) {
-        let s = &samples[i];
+        let (a, b) = (&samples[i], &samples[i + 1]);
         let dt = tr.t[i + 1] - tr.t[i];
-        held.min_lambda_n = held.min_lambda_n.min(s.lambda_n);
+        let lambda_n = a.lambda_n.min(b.lambda_n);
+        let sigma = a.sigma.min(b.sigma);
+        held.min_lambda_n = held.min_lambda_n.min(lambda_n);
         if tr.mode[i] == Mode::Stick {
-            held.min_sigma = held.min_sigma.min(s.sigma);
+            held.min_sigma = held.min_sigma.min(sigma);
         }
-        let slot = if s.lambda_n < -tol {
+        let slot = if lambda_n < -tol {
             &mut held.pulling
-        } else if tr.mode[i] == Mode::Stick && s.sigma < -tol {
+        } else if tr.mode[i] == Mode::Stick && sigma < -tol {
             &mut held.outside_cone
         } else {
             continue;
@@ -807,6 +816,23 @@ impl RunSummary {
                 w.message
             ));
         }
+        // Kinds a caller added (e.g. the CLI's `torques_held`), one line each.
+        let summarised = [
+            "energy_raising_impact",
+            ENERGY_ERROR,
+            PULLING_IMPULSE,
+            IMPULSE_OUTSIDE_CONE,
+            HELD_CONTACT,
+            HELD_OUTSIDE_CONE,
+            "zeno_fallback",
+        ];
+        for w in self
+            .warnings
+            .iter()
+            .filter(|w| !summarised.contains(&w.kind))
+        {
+            lines.push(format!("t = {} s: {}", w.t, w.message));
+        }
         lines
     }
 }
@@ -833,11 +859,21 @@ impl std::fmt::Display for RunSummary {
             .collect();
         writeln!(f, "time in modes: {}", sh.join(", "))?;
         writeln!(f, "max penetration: {:.3e} m", self.max_penetration)?;
-        writeln!(
-            f,
-            "contact drift |h| before projection: max {:.3e} m, final {:.3e} m; after: max |h| {:.3e} m, max |n.v_c| {:.3e} m/s",
-            self.max_drift, self.final_drift, self.max_contact_gap, self.max_normal_velocity
-        )?;
+        if self.projected {
+            writeln!(
+                f,
+                "contact drift |h| before projection: max {:.3e} m, final {:.3e} m; after: max \
+                 |h| {:.3e} m, max |n.v_c| {:.3e} m/s",
+                self.max_drift, self.final_drift, self.max_contact_gap, self.max_normal_velocity
+            )?;
+        } else {
+            writeln!(
+                f,
+                "contact drift, not projected (--no-projection): max |h| {:.3e} m, max |n.v_c| \
+                 {:.3e} m/s",
+                self.max_contact_gap, self.max_normal_velocity
+            )?;
+        }
         writeln!(
             f,
             "energy: {:.9} J -> {:.9} J (change {:+.3e} J); balance error {:.3e} J of {:.3e} J \

@@ -5,7 +5,6 @@
 
 use super::torques::{CliInput, pd_controller};
 use super::{OUTPUT_DIR, RunSettings, check_limits, check_t_end, interpreted_note, settings};
-use crate::cli::DEFAULT_T_END;
 use crate::cli::Inputs as _;
 use crate::cli::SimulateArgs;
 use crate::errors::bail_usage;
@@ -36,7 +35,7 @@ pub(super) fn run_arm(
     let t_end = args
         .t_end
         .or(replay.as_ref().map(|r| r.2))
-        .unwrap_or(DEFAULT_T_END);
+        .unwrap_or_else(|| args.t_end());
     check_t_end(t_end)?;
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
@@ -97,25 +96,13 @@ pub(super) fn run_arm(
     if let Some(k) = run_opts.fail_at_write {
         out_dir.inject_fault_at_write(k);
     }
-    let start = Instant::now();
-    let (out, error) = match bf_sim::simulate(
-        &sys as &dyn bf_sim::HybridSystem<Mode = ArmMode>,
-        set,
-        ArmMode::Free,
-        0.0,
-        &x0,
-        t_end,
-    ) {
-        Ok(out) => (out, None),
-        Err(f) => {
-            let f = *f;
-            let e = format!("simulation failed at t = {} s: {}", f.t, f.error);
-            (f.partial, Some(e))
-        }
-    };
-    let mut report = sys
-        .report(&out, start.elapsed().as_secs_f64())
-        .map_err(|e| anyhow!("{e}"))?;
+    let arm: &dyn bf_sim::HybridSystem<Mode = ArmMode> = &sys;
+    let mut sim = bf_sim::Simulator::new(arm, set, ArmMode::Free, 0.0, &x0, t_end)
+        .map_err(|e| anyhow!("cannot start the simulation: {e}"))?;
+    let (error, cpu) = super::advance_within_limits(&mut sim, args, 0.0, t_end)?;
+    let error = error.map(|e| format!("simulation failed at t = {} s: {e}", sim.t()));
+    let out = sim.finish();
+    let mut report = sys.report(&out, cpu).map_err(|e| anyhow!("{e}"))?;
     report.summary.kernels = Some(source.name().to_string());
     // A run that ends but fails its energy check is no result either, as for the ball and
     // finger: written whole, marked as failed.

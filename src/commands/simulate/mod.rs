@@ -226,6 +226,23 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                     if verified { "verified" } else { "not verified" }
                 );
             }
+            // A plan replayed under another impact law than it was planned with is no replay
+            // of its impacts (files before the law was recorded planned with eq. 40).
+            let planned = v
+                .get("impact_law")
+                .and_then(|s| s.as_str())
+                .unwrap_or("stick");
+            let run_law = parse_impact_law(&args.impact_law).map(|l| l.name());
+            let modes = v.get("modes").and_then(|m| m.as_array());
+            let impacts = modes.is_some_and(|m| m.iter().any(|m| m != "free"));
+            if impacts && run_law.is_ok_and(|l| l != planned) {
+                eprintln!(
+                    "warning: --init {}: the solution was planned with the {planned} impact \
+                     law, this run uses {} (--impact-law {planned} replays it under its own)",
+                    path.display(),
+                    args.impact_law
+                );
+            }
             let (sq, sqd, sw, smode) = crate::pipeline::solution_io::initial_state_of(&v)
                 .with_context(|| {
                     format!(
@@ -319,18 +336,98 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Resul
         );
     }
     if let Some(dt) = args.output_dt {
-        let n = t_end / dt;
+        // The grid k·dt, k = 0 ..= ⌊t_end / dt⌋, besides the samples of the steps.
+        let grid = (t_end / dt).floor() + 1.0;
+        let steps = if set.record_steps { min_steps } else { 0.0 };
+        let n = grid + steps;
         if n > args.max_samples as f64 {
             bail_usage!(
-                "--output-dt {} s over --t-end {} s is {n:.3e} samples, more than \
+                "--output-dt {} s over --t-end {} s is {grid:.3e} grid samples{}, more than \
                  --max-samples {}; raise --output-dt or --max-samples",
                 crate::cli::shown(dt),
                 crate::cli::shown(t_end),
+                if steps > 0.0 {
+                    format!(" and at least {steps:.3e} step samples")
+                } else {
+                    String::new()
+                },
                 args.max_samples
             );
         }
     }
     Ok(())
+}
+
+/// Advances `sim` to its end, or until it fails or reaches a limit of `args` (`--max-samples`,
+/// `--max-time`), with the progress display: the error that stopped it, if any, and the
+/// seconds it ran. The ball-and-finger and the arm runs share it, so both keep the limits.
+pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
+    sim: &mut Simulator<'_, S>,
+    args: &SimulateArgs,
+    t0: f64,
+    t_end: f64,
+) -> Result<(Option<String>, f64)> {
+    let mut progress = Progress::new(t0, t_end)?;
+    let start = Instant::now();
+    let mut error = None;
+    loop {
+        match sim.advance() {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => {
+                error = Some(crate::errors::chain(&e));
+                break;
+            }
+        }
+        let samples = sim.trajectory().len();
+        if samples >= args.max_samples {
+            error = Some(format!(
+                "sample limit reached: {samples} samples (--max-samples {})",
+                args.max_samples
+            ));
+            break;
+        }
+        // The clock and the progress display are looked at every 64 steps only.
+        if sim.stats().accepted_steps % 64 == 0 {
+            let elapsed = start.elapsed();
+            if let Some(limit) = args.max_time
+                && elapsed.as_secs_f64() > limit
+            {
+                let secs = elapsed.as_secs_f64();
+                // One decimal of a second says nothing of a limit below a tenth.
+                let secs = if secs < 0.1 {
+                    format!("{secs:.1e}")
+                } else {
+                    format!("{secs:.1}")
+                };
+                error = Some(format!(
+                    "time limit reached: {secs} s of computation (--max-time {limit})"
+                ));
+                break;
+            }
+            progress.update(elapsed, sim.t(), sim.stats().accepted_steps, samples);
+        }
+    }
+    let cpu = start.elapsed().as_secs_f64();
+    progress.finish();
+    Ok((error, cpu))
+}
+
+/// The warning of a run that goes on past the end of its `--torques` series, whose last
+/// torque it then holds: a solution's `torques.csv` covers one period, and held torques are no
+/// replay of it.
+fn torques_held(args: &SimulateArgs, t_end: f64) -> Option<bf_sim::SimWarning> {
+    let end = args.torques_end()?;
+    (t_end > end * (1.0 + 1e-9)).then(|| bf_sim::SimWarning {
+        t: end,
+        kind: "torques_held",
+        message: format!(
+            "the --torques series ends at t = {end} s and the run holds its last torque from \
+             there to --t-end {} s; a solution's torques.csv covers one period (repeat it with \
+             --pd-track 0,0, or end the run with the series by leaving out --t-end)",
+            crate::cli::shown(t_end)
+        ),
+    })
 }
 
 /// Refuses an end time that is not a finite number > 0.
@@ -513,7 +610,15 @@ fn run_model<K: Kernels<N>, const N: usize>(
             crate::names::name(&mode0)
         );
     }
-    let info = sys.sample_info_or_nan(mode0, 0.0, &x0);
+    let info = sys.sample_info(mode0, 0.0, &x0).map_err(|e| {
+        anyhow!(
+            "the model cannot be evaluated at the initial state in mode {}: {}; initial state: \
+             {}; torques: {inputs}",
+            crate::names::name(&mode0),
+            crate::errors::chain(&e),
+            initial_state_options(args)
+        )
+    })?;
     let mut quantities = vec![
         ("energy".to_string(), info.energy),
         ("distance h".to_string(), info.h),
@@ -542,47 +647,12 @@ fn run_model<K: Kernels<N>, const N: usize>(
     let dyn_sys: &dyn HybridSystem<Mode = Mode> = &sys;
     let mut sim = Simulator::new(dyn_sys, set, mode0, t0, &x0, t_end)
         .map_err(|e| anyhow!("cannot start the simulation: {e}"))?;
-    let mut progress = Progress::new(t0, t_end)?;
-    let start = Instant::now();
-    let mut error = None;
-    loop {
-        match sim.advance() {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => {
-                error = Some(crate::errors::chain(&e));
-                break;
-            }
-        }
-        let samples = sim.trajectory().len();
-        if samples >= args.max_samples {
-            error = Some(format!(
-                "sample limit reached: {samples} samples (--max-samples {})",
-                args.max_samples
-            ));
-            break;
-        }
-        // The clock and the progress display are looked at every 64 steps only.
-        if sim.stats().accepted_steps % 64 == 0 {
-            let elapsed = start.elapsed();
-            if let Some(limit) = args.max_time
-                && elapsed.as_secs_f64() > limit
-            {
-                error = Some(format!(
-                    "time limit reached: {:.1} s of computation (--max-time {limit})",
-                    elapsed.as_secs_f64()
-                ));
-                break;
-            }
-            progress.update(elapsed, sim.t(), sim.stats().accepted_steps, samples);
-        }
-    }
-    let cpu = start.elapsed().as_secs_f64();
-    progress.finish();
+    let (error, cpu) = advance_within_limits(&mut sim, args, t0, t_end)?;
     let (t_stop, mode_stop) = (sim.t(), sim.mode());
     let out = sim.finish();
     let mut report = sys.report(&out, t0, cpu);
     report.summary.kernels = Some(source.name().to_string());
+    report.summary.warnings.extend(torques_held(args, t_end));
     // A run that ends with a non-finite energy has not produced a result, whatever the
     // integrator said.
     let s = &report.summary;

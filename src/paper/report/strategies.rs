@@ -268,12 +268,17 @@ pub fn failures(rows: &[StrategyRow]) -> Option<String> {
 /// The table of `rows`, with φ relative to the cold start of the same problem, its verdict
 /// column and, above it, what is flagged ([`flags`]).
 pub fn markdown(rows: &[StrategyRow]) -> String {
-    let mut md = String::from(
-        "Default problem settings (hp-Radau 3 × 10 points per phase, ε = 0.01); every \
-         strategy from scratch; wall time on this machine with 2 worker threads (rayon) for \
-         the parallel strategies. `multistart` keeps its best start (`optimize --hops 0`; \
-         each start draws every joint within 0.6 rad of the default guess); \
-         `+ global search` is the default of `optimize`: the starts (each joint anywhere in its \
+    let mut md = format!(
+        "The paper's problems: the sticking impact law (eq. 40) with the exact torque limits \
+         and no clearance, which `optimize --impact-law stick` poses (`optimize`'s default for \
+         the periodic problems is the plan for the plant, Newton's law with margins: \
+         docs/optima.md), on hp-Radau 3 × 10 points per phase, ε = 0.01; every strategy from \
+         scratch; wall time on this machine with {threads} worker threads (rayon) for the parallel \
+         strategies. `multistart` keeps its best start, each solved once from its guess (each \
+         start draws every joint within 0.6 rad of the default guess; `optimize --hops 0` \
+         also holds each start's stick phase at 0.1 s or more first and refines, so it can end \
+         elsewhere); `+ global search` is the search of `optimize --impact-law stick` (its \
+         {starts} starts; 8 with `--quick`): the starts (each joint anywhere in its \
          revolution) solved on a coarse mesh \
          (3 × 4 points per phase; on the COT problems every other start first held to the \
          period of its guess, then released), reshaping moves (the elbow flip, phase-duration bounds) \
@@ -285,6 +290,8 @@ pub fn markdown(rows: &[StrategyRow]) -> String {
          Defect: the largest state error at the ends of the collocation elements when each \
          element is re-integrated from its collocated start state with the optimal torques \
          (DOPRI5, rtol 1e-10). Verified: every element re-integrated to its end, defect ≤ ",
+        threads = rayon::current_num_threads(),
+        starts = crate::pipeline::strategy::GLOBAL_STARTS,
     );
     let _ = write!(
         md,
