@@ -257,7 +257,7 @@ impl std::fmt::Display for ArmSummary {
         )?;
         write!(
             f,
-            "steps: {} accepted, {} rejected; cpu time {:.3} ms",
+            "steps: {} accepted, {} rejected; wall time {:.3} ms",
             self.stats.accepted_steps,
             self.stats.rejected_steps,
             1e3 * self.cpu_seconds

@@ -379,8 +379,9 @@ pub struct RunSummary {
     pub energy_initial: f64,
     /// Energy at the last sample (J).
     pub energy_final: f64,
-    /// Largest energy change E⁺ − E⁻ over the impacts (J); > 0 only for Newton's law (eq. 39),
-    /// which does not guarantee dissipation. 0 without impacts.
+    /// Largest energy gain E⁺ − E⁻ over the impacts (J); > 0 only for Newton's law (eq. 39),
+    /// which does not guarantee dissipation. 0 when no impact raised the energy (a run whose
+    /// impacts all dissipate, or without impacts).
     pub max_impact_energy_gain: f64,
     /// The energy-balance error of the integration that the run is checked on (J): the largest
     /// change of the residual E(t) − E(t₀) − ∫ P dt − Σ ΔE_events over any
@@ -892,7 +893,7 @@ impl std::fmt::Display for RunSummary {
         )?;
         write!(
             f,
-            "cpu time: {:.3} ms, real-time factor {:.0}x",
+            "wall time: {:.3} ms, real-time factor {:.0}x",
             1e3 * self.cpu_seconds,
             self.real_time_factor
         )
