@@ -140,6 +140,12 @@ pub trait HybridSystem {
         Ok(None)
     }
 
+    /// The length of the steps the simulator takes from now on when its method cannot shorten
+    /// them (fixed-step RK4: `Some(h)`), or `None` for an adaptive method; called before every
+    /// step. A system whose guard must see a transition that happens inside one such step
+    /// (where the iteration cannot resolve it) can use it. Default: ignored.
+    fn fixed_step(&self, _h: Option<f64>) {}
+
     /// Optional validity check of `x` in `mode`, called on the (projected) end of every trial
     /// step and after every reset. After a trial step [`SimError::OutsideDomain`] rejects the
     /// step, which is retried shorter; any other `Err` (typically [`SimError::InvalidState`]),

@@ -4,7 +4,7 @@
 //! |---|---|---|
 //! | Free | eq. 26 | `h` (eq. 50: contact when h crosses 0 or leaves the band h ≥ −tol) |
 //! | Stick | eq. 29, λ from eq. 33 | `lambda_n` (λ_n < 0 → Free, eq. 48), `sigma` (σ ≤ 0 → Slip, eq. 19) |
-//! | Slip | eq. 37, λ from eq. 38 | `lambda_n` (→ Free), `slip_speed` = ‖Δv‖ − ε (→ Stick, Sect. 3.1), `slip_reversal` = Δv·d₀ − ½‖Δv‖ (Δv turned > 60° within a step: it passed ‖Δv‖ ≈ 0, → Stick) |
+//! | Slip | eq. 37, λ from eq. 38 | `lambda_n` (→ Free), `slip_speed` = ‖Δv‖ − ε (→ Stick, Sect. 3.1), `slip_reversal` = Δv·d₀ − ½‖Δv‖ (Δv turned > 60° within a step: it passed ‖Δv‖ ≈ 0, → Stick), `slip_stop` = Δv̂·Δv(x + h ẋ) (with a fixed step h only: the slip would stop within the step, → Stick; [`slip_stop`]) |
 //! | Stick, Slip | | `alpha_tip` = α, `alpha_base` = α + ℓ (either direction): the kinks of sat(α), eq. 3 (see below) |
 //!
 //! Resets: Free → impact law of Sect. 2.5 (eq. 39–43, [`bf_model::ImpactLaw`]); the post-impact ‖Δv⁺‖
@@ -67,6 +67,23 @@ use bf_model::{Kernels, Mode, State, Vec3};
 /// catches the zero passage that the ‖Δv‖ ≤ ε guard misses when a step jumps over the ε-ball
 /// (loose tolerances, fixed-step RK4).
 const REVERSAL_COS: f64 = 0.5;
+
+/// The `slip_stop` guard: the slip Δv′ one fixed step ahead (the state moved along its
+/// derivative, x + h ẋ) along the slip's direction now, Δv̂·Δv′. It falls through zero where
+/// the slip would stop within one step. A fixed-step explicit method cannot resolve that stop:
+/// the friction force turns within its stages, and the iteration hovers at ‖Δv‖ ≈ a h / 2 (a
+/// the slip's deceleration), in a numerical sliding mode that neither `slip_speed` (‖Δv‖ = ε)
+/// nor `slip_reversal` ever sees; so with a fixed step the slip ends at most one step before
+/// its true stop (the sticking impulse removes the ‖Δv‖ ≤ a h left), and the error falls with
+/// h. Adaptive methods shorten their steps onto the stop and leave the guard constant.
+fn slip_stop(dv: &Vec3, dv_ahead: &Vec3) -> f64 {
+    let n = dv.norm();
+    if n > 0.0 && n.is_finite() {
+        dv_ahead.dot(dv) / n
+    } else {
+        0.0
+    }
+}
 
 /// Value of a guard suspended by the Zeno fallback: constant and on the valid side, so it
 /// neither fires nor masks; when the hold ends the true value takes over (a crossing there is an
@@ -225,6 +242,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 Guard::falling("lambda_n"),
                 Guard::falling("slip_speed"),
                 Guard::falling("slip_reversal"),
+                Guard::falling("slip_stop"),
             ],
         };
         g.extend(KINK_GUARDS);
@@ -277,7 +295,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                 .map_err(&err)?;
                 let dv = kin.contact.delta_v;
                 if self.contact_held(t) {
-                    out[..3].fill(HELD_GUARD);
+                    out[..4].fill(HELD_GUARD);
                 } else {
                     out[0] = acc.force.lambda_n;
                     out[1] = dv.norm() - self.model.settings().slip_eps;
@@ -287,8 +305,20 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                     } else {
                         dv.dot(&d) - REVERSAL_COS * dv.norm()
                     };
+                    out[3] = match self.fixed_step.get() {
+                        Some(h) => {
+                            let mut dx = vec![0.0; x.len()];
+                            acc.write_state_derivative(&s.qd, &mut dx);
+                            let ahead: Vec<f64> =
+                                x.iter().zip(&dx).map(|(xi, di)| xi + h * di).collect();
+                            let ahead = state_of::<N>(&ahead)?;
+                            let dv_ahead = self.model.evaluate(&ahead).map_err(&err)?;
+                            slip_stop(&dv, &dv_ahead.contact.delta_v)
+                        }
+                        None => HELD_GUARD,
+                    };
                 }
-                self.kink_values(&kin.contact, t, &mut out[3..]);
+                self.kink_values(&kin.contact, t, &mut out[4..]);
             }
         }
         Ok(())
@@ -391,6 +421,10 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
             lambda: None,
         });
         Ok(Transition::To(next))
+    }
+
+    fn fixed_step(&self, h: Option<f64>) {
+        self.fixed_step.set(h);
     }
 
     fn project(&self, mode: Mode, t: f64, x: &mut [f64]) -> Result<Option<f64>, SimError> {

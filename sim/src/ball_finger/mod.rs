@@ -45,6 +45,9 @@ pub struct BallFinger<K: Kernels<N>, I: Input, const N: usize = 3> {
     /// the `slip_reversal` guard; updated by the resets into Slip and after every accepted
     /// Slip step (`project`).
     slip_ref: Cell<[f64; 3]>,
+    /// The fixed step of the integrator (s; `None` for an adaptive one), the horizon of the
+    /// `slip_stop` guard ([`crate::HybridSystem::fixed_step`]).
+    fixed_step: Cell<Option<f64>>,
     /// Length ℓ = a_N of the contact link (m), the lower limit of sat(α) in eq. 3.
     link_length: f64,
     /// Guards suspended by the Zeno fallback, and until when.
@@ -57,7 +60,8 @@ struct Hold {
     until: f64,
     /// The kink guards `alpha_tip`, `alpha_base`.
     kinks: bool,
-    /// The contact-mode guards `lambda_n`, `sigma`, `slip_speed`, `slip_reversal`.
+    /// The contact-mode guards `lambda_n`, `sigma`, `slip_speed`, `slip_reversal`,
+    /// `slip_stop`.
     contact: bool,
 }
 
@@ -181,6 +185,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             input,
             settings,
             slip_ref: Cell::new([0.0; 3]),
+            fixed_step: Cell::new(None),
             link_length,
             hold: Cell::new(Hold::NONE),
         })

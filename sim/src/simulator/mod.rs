@@ -343,6 +343,7 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
             h = remaining;
             last = true;
         }
+        self.sys.fixed_step(fixed.then_some(h));
         let mut domain_rejected = false;
         loop {
             self.steps_attempted += 1;

@@ -165,9 +165,10 @@ pub(super) fn section(t_end: f64, rows: &[WorkPrecisionRow], fig_dir: &Path) -> 
          The reference has its own error: errors near 1e-8 in x(T) and 1e-12 s in the event \
          times are of the order of its difference from a run at rtol = 1e-14, so rows there \
          do not rank the tolerances. Runs with the reference's transitions are compared event \
-         by event even where another guard fired: a fixed step can step over the zero that \
-         the slip speed touches and stick only at the slip's reversal, tens of ms later, an \
-         event-time error that a smaller step does not remove.\n",
+         by event even where another guard fired: a fixed step cannot resolve the slip's \
+         stop (the iteration hovers at a slip speed of about half its deceleration times the \
+         step), so RK4 ends the slip where it would stop within one step (the `slip_stop` \
+         guard), an event-time error of at most one step.\n",
         t_end
     );
     md.push_str(&format_table(rows));
