@@ -612,9 +612,9 @@ fn balance_residual<const N: usize>(
 /// bounds otherwise, up to the event location's rounding.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct HeldContact {
-    /// The smallest λ_n over the samples at either end of a step in contact (N; +∞ without).
+    /// The smallest λ_n over the samples that begin a step in contact (N; +∞ without).
     min_lambda_n: f64,
-    /// The smallest σ over the samples at either end of a step in Stick (N; +∞ without).
+    /// The smallest σ over the samples that begin a step in Stick (N; +∞ without).
     min_sigma: f64,
     /// The time spent in contact with λ_n < 0 (s), and when it first was.
     pulling: (f64, Option<f64>),
@@ -686,20 +686,16 @@ fn held_contact<const N: usize>(
     // is the guard doing its work, not a held contact.
     let integrated =
         |i: usize| contact(i) && i + 1 < n && tr.mode[i + 1] == tr.mode[i] && tr.t[i + 1] > tr.t[i];
-    // Both ends of the interval: a hold of one step has no other sample in it, and its end
-    // (where the fallback lets go) is where the ball pulled hardest.
     for i in (0..n).filter(|&i| integrated(i)) {
-        let (a, b) = (&samples[i], &samples[i + 1]);
+        let s = &samples[i];
         let dt = tr.t[i + 1] - tr.t[i];
-        let lambda_n = a.lambda_n.min(b.lambda_n);
-        let sigma = a.sigma.min(b.sigma);
-        held.min_lambda_n = held.min_lambda_n.min(lambda_n);
+        held.min_lambda_n = held.min_lambda_n.min(s.lambda_n);
         if tr.mode[i] == Mode::Stick {
-            held.min_sigma = held.min_sigma.min(sigma);
+            held.min_sigma = held.min_sigma.min(s.sigma);
         }
-        let slot = if lambda_n < -tol {
+        let slot = if s.lambda_n < -tol {
             &mut held.pulling
-        } else if tr.mode[i] == Mode::Stick && sigma < -tol {
+        } else if tr.mode[i] == Mode::Stick && s.sigma < -tol {
             &mut held.outside_cone
         } else {
             continue;
