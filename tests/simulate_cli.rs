@@ -1058,3 +1058,55 @@ fn rk4_ends_the_slip_within_one_step_of_the_reference() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The sticking law on the default drop makes the stick phase chatter until the Zeno fallback
+/// holds the contact for one 10 ms step while the ball pulls the finger. The `held_contact`
+/// warning must give the hold's whole pull, which is largest at the step's end (the sample
+/// where the fallback lets go), recomputed here from `trajectory.json`: the steps integrated in
+/// contact that begin with λ_n below −1e-6 of the largest contact force, at both their ends.
+#[test]
+fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
+    let dir = tmpdir("held");
+    let out_dir = dir.join("out");
+    let o = simulate_into(&out_dir, &["--impact-law", "stick", "--t-end", "1"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = json(&out_dir.join("summary.json"));
+    let held = summary["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|w| w["kind"] == "held_contact")
+        .expect("a held contact")["message"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let tj = json(&out_dir.join("trajectory.json"));
+    let t: Vec<f64> = serde_json::from_value(tj["t"].clone()).unwrap();
+    let mode: Vec<String> = serde_json::from_value(tj["mode"].clone()).unwrap();
+    let d = tj["derived"].as_array().unwrap();
+    let lambda_n = |i: usize| d[i]["lambda_n"].as_f64().unwrap_or(f64::NAN);
+    let force = (0..t.len())
+        .filter(|&i| mode[i] != "free")
+        .map(|i| {
+            let l: Vec<f64> = serde_json::from_value(d[i]["lambda"].clone()).unwrap();
+            l.iter().map(|v| v * v).sum::<f64>().sqrt()
+        })
+        .fold(0.0, f64::max);
+    let integrated = |i: usize| mode[i] != "free" && mode[i + 1] == mode[i] && t[i + 1] > t[i];
+    let (mut begin, mut both) = (f64::INFINITY, f64::INFINITY);
+    for i in (0..t.len() - 1).filter(|&i| integrated(i)) {
+        begin = begin.min(lambda_n(i));
+        if lambda_n(i) < -1e-6 * force {
+            both = both.min(lambda_n(i + 1));
+        }
+    }
+    assert!(
+        both < begin,
+        "the hold's end pulls harder: {both} against {begin}"
+    );
+    assert!(
+        held.contains(&format!("λ_n down to {both:.3e} N")),
+        "{held}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

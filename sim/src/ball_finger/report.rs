@@ -612,9 +612,11 @@ fn balance_residual<const N: usize>(
 /// bounds otherwise, up to the event location's rounding.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct HeldContact {
-    /// The smallest λ_n over the samples that begin a step in contact (N; +∞ without).
+    /// The smallest λ_n over the samples that begin a step in contact and the ends of the
+    /// steps held with λ_n < 0 (N; +∞ without).
     min_lambda_n: f64,
-    /// The smallest σ over the samples that begin a step in Stick (N; +∞ without).
+    /// The smallest σ over the samples that begin a step in Stick and the ends of the steps
+    /// held with σ < 0 (N; +∞ without).
     min_sigma: f64,
     /// The time spent in contact with λ_n < 0 (s), and when it first was.
     pulling: (f64, Option<f64>),
@@ -693,9 +695,16 @@ fn held_contact<const N: usize>(
         if tr.mode[i] == Mode::Stick {
             held.min_sigma = held.min_sigma.min(s.sigma);
         }
+        // A step held by the fallback has no sample inside it, and its end (where the hold
+        // lets go) may pull harder than its start: the end counts in the reported bound of a
+        // step already held at its start. (Judging by the end alone would count the sliver
+        // steps after an impact whose guard fires at once.)
+        let end = &samples[i + 1];
         let slot = if s.lambda_n < -tol {
+            held.min_lambda_n = held.min_lambda_n.min(end.lambda_n);
             &mut held.pulling
         } else if tr.mode[i] == Mode::Stick && s.sigma < -tol {
+            held.min_sigma = held.min_sigma.min(end.sigma);
             &mut held.outside_cone
         } else {
             continue;
