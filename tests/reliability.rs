@@ -601,7 +601,8 @@ fn errors_name_the_option_file_or_quantity() {
         );
     }
     let o = run(&["simulate", "--qd0", "1e300,0,0", "--out", out_s]);
-    assert_error(&o, 1, &["--qd0 1e300,0,0", "not finite"]);
+    // The model's own reason: "non-finite C q̇ + g or potential".
+    assert_error(&o, 1, &["--qd0 1e300,0,0", "non-finite"]);
     assert!(!out.exists());
     let tau = dir.join("huge.csv");
     std::fs::write(&tau, "t,tau1,tau2,tau3\n0,1e300,0,0\n1,1e300,0,0\n").unwrap();
