@@ -18,6 +18,9 @@
 //!   shorter, instead of ending the run.
 //! * `zeno_fallback` lets a system end an accumulation of events (Zeno behaviour, chattering)
 //!   by a documented regularisation instead of the default [`SimError::Zeno`].
+//! * `fixed_step` tells the system the step of a fixed-step method before every step, so a
+//!   guard can see a transition that one such step cannot resolve (the ball and finger's
+//!   `slip_stop`: the slip's stop, Sect. 3.1, decision record 0088).
 
 use crate::SimError;
 use std::fmt::Debug;
