@@ -1021,6 +1021,8 @@ fn a_contact_held_while_the_ball_pulls_the_finger_is_no_result() {
         serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
     };
     let (tracking, traj) = (read("tracking.json"), read("trajectory.json"));
+    // Friction is a parameter the model applies outside the kernels: the compiled ones run.
+    assert_eq!(read("summary.json")["kernels"], "compiled");
     let message = tracking["held_contact"].as_str().expect("held_contact");
     let t: Vec<f64> = serde_json::from_value(traj["t"].clone()).unwrap();
     let mode: Vec<String> = serde_json::from_value(traj["mode"].clone()).unwrap();
@@ -1044,5 +1046,57 @@ fn a_contact_held_while_the_ball_pulls_the_finger_is_no_result() {
         message.contains(&format!("for {held:.4} s")),
         "{message} against {held:.4} s"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `track` says which kernels its plant ran on, as `simulate` does: the compiled ones for the
+/// plan's own scene, interpreted ones for a plant whose geometry differs (a larger ball), in
+/// `summary.json` (`kernels`) and on stdout.
+#[test]
+fn track_says_which_kernels_the_plant_ran_on() {
+    let dir = cli::tmpdir("track-kernels");
+    let plan = "data/optima/periodic-qc-plan/solution.json";
+    let own = dir.join("own");
+    let r = cli::run(&[
+        "track",
+        plan,
+        "--periods",
+        "1",
+        "--out",
+        own.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(stdout.contains("(compiled kernels)"), "{stdout}");
+    let kernels = |dir: &std::path::Path| -> serde_json::Value {
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap())
+                .unwrap();
+        s["kernels"].clone()
+    };
+    assert_eq!(kernels(&own), "compiled");
+    let text = std::fs::read_to_string(cli::root().join("scenes/paper.toml")).unwrap();
+    assert!(text.contains("radius = 1.0"));
+    let plant = dir.join("paper_r105.toml");
+    std::fs::write(&plant, text.replace("radius = 1.0", "radius = 1.05")).unwrap();
+    let other = dir.join("other");
+    let r = cli::run(&[
+        "track",
+        plan,
+        "--plant-scene",
+        plant.to_str().unwrap(),
+        "--periods",
+        "1",
+        "--out",
+        other.to_str().unwrap(),
+    ]);
+    // The larger ball may well be missed; the set is written either way.
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    assert!(
+        stdout.contains("(interpreted kernels)"),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    assert_eq!(kernels(&other), "interpreted");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -253,19 +253,32 @@ fn run_n<const N: usize>(
     law: bf_model::ImpactLaw,
     sol: &OcpSolution,
 ) -> Result<()> {
-    let (plant, plant_name) = match &args.plant_scene {
+    let (plant, plant_name, plant_scene) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
             let (model, _) = finger_model::<N>(&scene)
                 .with_context(|| format!("--plant-scene {}", path.display()))?;
-            (model, path.display().to_string())
+            (model, path.display().to_string(), scene)
         }
-        None => solution_model::<N>(sol).with_context(|| args.solution.display().to_string())?,
+        None => {
+            let (model, name) =
+                solution_model::<N>(sol).with_context(|| args.solution.display().to_string())?;
+            let (scene, _) = crate::paper::closed_loop::solution_scene(sol)?;
+            (model, name, scene)
+        }
+    };
+    // The plant's kernels: compiled where its scene is a compiled one (as `finger_model`
+    // chose them), interpreted otherwise; `summary.json` and stdout say which, as `simulate`'s.
+    let kernels = if bf_model::registry::compiled_kernels_match(&plant_scene).is_some() {
+        bf_model::KernelSource::Compiled
+    } else {
+        bf_model::KernelSource::Interpreted
     };
     let replan = replan_limit(args, controller)?;
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
-    let run = run_tracking_replanned(sol, controller, args.periods, plant, law, replan)
+    let mut run = run_tracking_replanned(sol, controller, args.periods, plant, law, replan)
         .with_context(|| format!("tracking {}", args.solution.display()))?;
+    run.report.summary.kernels = Some(kernels.name().to_string());
     out_dir.file("summary.json")?;
     run.report
         .write_dir(out_dir.path(), &run.output, run.stopped.as_deref())
@@ -317,7 +330,8 @@ fn run_n<const N: usize>(
         }
     }
     crate::outln!(
-        "controller {}, plant {plant_name}, impact law {}: {} of {} periods, max omega error {:.3} %",
+        "controller {}, plant {plant_name} ({kernels} kernels), impact law {}: {} of {} periods, \
+         max omega error {:.3} %",
         controller.name(),
         law.name(),
         record.completed_periods,
