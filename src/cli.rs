@@ -769,20 +769,10 @@ pub const DEFAULT_H_MAX: f64 = 0.05;
 pub const DEFAULT_T_END: f64 = 10.0;
 
 impl SimulateArgs {
-    /// The end time: `--t-end`, or the last time of the `--torques` series (a replay of a
-    /// solution's torques ends with them), or [`DEFAULT_T_END`]. A series that cannot be read
-    /// gives the default here; reading it for the run reports why.
+    /// The end time of a run without a `--torques` series: `--t-end`, or [`DEFAULT_T_END`]
+    /// (`simulate` ends a series' run with the series unless `--t-end` is given).
     pub fn t_end(&self) -> f64 {
-        self.t_end
-            .or_else(|| self.torques_end())
-            .unwrap_or(DEFAULT_T_END)
-    }
-
-    /// The last time of the `--torques` series (s), if one is given and can be read.
-    pub fn torques_end(&self) -> Option<f64> {
-        let path = self.torques.as_ref()?;
-        let series = bf_sim::TorqueSeries::from_path(path).ok()?;
-        series.times().last().copied().filter(|t| *t > 0.0)
+        self.t_end.unwrap_or(DEFAULT_T_END)
     }
 }
 

@@ -212,8 +212,9 @@ pub enum PhaseDefect {
     /// ([`bf_codegen::graph::Graph::limit`]).
     #[error(
         "the node function and its exact derivatives would hold more than {limit} graph nodes; \
-         raise the limit with --max-graph-nodes if the machine has the memory (about 400 bytes \
-         a node)"
+         raise the limit with --max-graph-nodes if the machine has the memory (about {} bytes \
+         a node)",
+        bf_codegen::BYTES_PER_NODE
     )]
     GraphTooLarge {
         /// The graph's node limit.
@@ -279,7 +280,8 @@ pub enum PointDefect {
     #[error(
         "the point function and its exact derivatives would hold more than {limit} graph \
          nodes; raise the limit with --max-graph-nodes if the machine has the memory (about \
-         400 bytes a node)"
+         {} bytes a node)",
+        bf_codegen::BYTES_PER_NODE
     )]
     GraphTooLarge {
         /// The graph's node limit.

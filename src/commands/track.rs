@@ -11,7 +11,7 @@ use crate::cli::TrackArgs;
 use crate::errors::bail_usage;
 use crate::paper::closed_loop::{
     ControllerKind, FIRST_JUDGED_PERIOD, Tracking, finger_model, robustness_rows, robustness_table,
-    run_tracking_replanned, solution_model, solution_scene, tracked_joints, with_joints,
+    run_tracking_replanned, solution_scene, tracked_joints, with_joints,
 };
 use crate::paper::replan::{REPLAN_MAX_ITER, ReplanRecord};
 use crate::pipeline::SolutionIo as _;
@@ -253,26 +253,20 @@ fn run_n<const N: usize>(
     law: bf_model::ImpactLaw,
     sol: &OcpSolution,
 ) -> Result<()> {
-    let (plant, plant_name, plant_scene) = match &args.plant_scene {
+    let (plant, plant_name, kernels) = match &args.plant_scene {
         Some(path) => {
             let (scene, _) = super::load_scene(path, &args.chain)?;
-            let (model, _) = finger_model::<N>(&scene)
+            let (model, _, kernels) = finger_model::<N>(&scene)
                 .with_context(|| format!("--plant-scene {}", path.display()))?;
-            (model, path.display().to_string(), scene)
+            (model, path.display().to_string(), kernels)
         }
         None => {
-            let (model, name) =
-                solution_model::<N>(sol).with_context(|| args.solution.display().to_string())?;
-            let (scene, _) = crate::paper::closed_loop::solution_scene(sol)?;
-            (model, name, scene)
+            let (scene, name) = solution_scene(sol)?;
+            let (model, _, kernels) = finger_model::<N>(&scene).with_context(|| {
+                format!("{}: the solution's scene `{name}`", args.solution.display())
+            })?;
+            (model, name, kernels)
         }
-    };
-    // The plant's kernels: compiled where its scene is a compiled one (as `finger_model`
-    // chose them), interpreted otherwise; `summary.json` and stdout say which, as `simulate`'s.
-    let kernels = if bf_model::registry::compiled_kernels_match(&plant_scene).is_some() {
-        bf_model::KernelSource::Compiled
-    } else {
-        bf_model::KernelSource::Interpreted
     };
     let replan = replan_limit(args, controller)?;
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;

@@ -200,10 +200,14 @@ pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> 
 /// is a compiled one, interpreted otherwise) and its inverse dynamics for the hybrid
 /// controller: the compiled `inverse_dynamics` kernel where the kernels are compiled and the
 /// scene emits one, otherwise the model's own M q̈ + C q̇ + g
-/// ([`InverseDynamics::from_model`]).
+/// ([`InverseDynamics::from_model`]); and which kernels the model runs on.
 pub fn finger_model<const N: usize>(
     scene: &bf_codegen::Scene,
-) -> Result<(Model<DynKernels<N>, N>, InverseDynamics)> {
+) -> Result<(
+    Model<DynKernels<N>, N>,
+    InverseDynamics,
+    bf_model::KernelSource,
+)> {
     let n = tracked_joints(scene)?;
     if n != N {
         bail!("it has {n} joints where the plan's finger has {N}");
@@ -215,7 +219,7 @@ pub fn finger_model<const N: usize>(
         .then(|| InverseDynamics::compiled(&scene.name, model.kernels().param_values(), mu_v).ok())
         .flatten();
     let id = compiled.unwrap_or_else(|| InverseDynamics::from_model(N, mu_v));
-    Ok((model, id))
+    Ok((model, id, source))
 }
 
 /// The optimum's scene ([`solution_scene`]) as a model of a finger with `N` joints, with its
@@ -224,7 +228,7 @@ pub fn solution_model<const N: usize>(
     sol: &OcpSolution,
 ) -> Result<(Model<DynKernels<N>, N>, String)> {
     let (scene, name) = solution_scene(sol)?;
-    let (model, _) =
+    let (model, ..) =
         finger_model::<N>(&scene).with_context(|| format!("the solution's scene `{name}`"))?;
     Ok((model, name))
 }
@@ -340,7 +344,7 @@ fn execution_check_n<const N: usize>(
     sol: &OcpSolution,
     scene: &bf_codegen::Scene,
 ) -> Option<ExecutionCheck> {
-    let (plant, _) = finger_model::<N>(scene).ok()?;
+    let (plant, ..) = finger_model::<N>(scene).ok()?;
     let mut check = ExecutionCheck {
         controller: ControllerKind::Hybrid.name().to_string(),
         periods: EXECUTION_PERIODS,
@@ -669,7 +673,7 @@ fn run_tracking_on<const N: usize>(
             until,
         )?,
         ControllerKind::Hybrid | ControllerKind::HybridUnbounded => {
-            let (model, id) = finger_model::<N>(scene)
+            let (model, id, _) = finger_model::<N>(scene)
                 .with_context(|| format!("the solution's scene `{}`", scene.name))?;
             let reference = reference_of(sol, &model)?;
             let x0 = initial_state(sol)?;

@@ -307,11 +307,13 @@ impl<K: Kernels<N>, I: Input, const N: usize> HybridSystem for BallFinger<K, I, 
                     };
                     out[3] = match self.fixed_step.get() {
                         Some(h) => {
-                            let mut dx = vec![0.0; x.len()];
-                            acc.write_state_derivative(&s.qd, &mut dx);
-                            let ahead: Vec<f64> =
-                                x.iter().zip(&dx).map(|(xi, di)| xi + h * di).collect();
-                            let ahead = state_of::<N>(&ahead)?;
+                            // x + h ẋ, without leaving the stack (this runs at every guard
+                            // evaluation of a fixed-step slip).
+                            let ahead = State::new(
+                                s.q + s.qd * h,
+                                s.qd + acc.qdd * h,
+                                s.omega + acc.omega_dot * h,
+                            );
                             let dv_ahead = self.model.evaluate(&ahead).map_err(&err)?;
                             slip_stop(&dv, &dv_ahead.contact.delta_v)
                         }

@@ -32,10 +32,28 @@ pub(super) fn run_arm(
         Some(p) => Some(arm_replay(p, n)?),
         None => None,
     };
-    let t_end = args
-        .t_end
-        .or(replay.as_ref().map(|r| r.2))
-        .unwrap_or_else(|| args.t_end());
+    let inp = if let Some(path) = &args.torques {
+        let s = TorqueSeries::from_path(path)?;
+        if s.dim() != n {
+            bail!(
+                "{}: scene `{name}` has {n} joints, the torque series has {} columns",
+                path.display(),
+                s.dim()
+            );
+        }
+        CliInput::Series(s)
+    } else if let Some(target) = &args.pd {
+        CliInput::Pd(pd_controller(args, target, n)?)
+    } else if let Some((_, torque, _)) = &replay {
+        CliInput::Replay(torque.clone())
+    } else {
+        CliInput::Arm(n)
+    };
+    // A replayed solution ends with its duration unless --t-end says otherwise.
+    let t_end = match (&replay, args.t_end) {
+        (Some((_, _, duration)), None) => *duration,
+        _ => super::run_end(args, &inp),
+    };
     check_t_end(t_end)?;
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
@@ -64,23 +82,6 @@ pub(super) fn run_arm(
     let qd0 = match &args.qd0 {
         Some(s) => parse_list("--qd0", s, Some(n))?,
         None => vec![0.0; n],
-    };
-    let inp = if let Some(path) = &args.torques {
-        let s = TorqueSeries::from_path(path)?;
-        if s.dim() != n {
-            bail!(
-                "{}: scene `{name}` has {n} joints, the torque series has {} columns",
-                path.display(),
-                s.dim()
-            );
-        }
-        CliInput::Series(s)
-    } else if let Some(target) = &args.pd {
-        CliInput::Pd(pd_controller(args, target, n)?)
-    } else if let Some((_, torque, _)) = &replay {
-        CliInput::Replay(torque.clone())
-    } else {
-        CliInput::Arm(n)
     };
     let setup = Instant::now();
     let (model, source) = bf_model::arm::ArmModel::from_scene(scene)

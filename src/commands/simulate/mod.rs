@@ -416,8 +416,8 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
 /// The warning of a run that goes on past the end of its `--torques` series, whose last
 /// torque it then holds: a solution's `torques.csv` covers one period, and held torques are no
 /// replay of it.
-fn torques_held(args: &SimulateArgs, t_end: f64) -> Option<bf_sim::SimWarning> {
-    let end = args.torques_end()?;
+fn torques_held(series_end: Option<f64>, t_end: f64) -> Option<bf_sim::SimWarning> {
+    let end = series_end?;
     (t_end > end * (1.0 + 1e-9)).then(|| bf_sim::SimWarning {
         t: end,
         kind: "torques_held",
@@ -454,8 +454,10 @@ pub fn run_with(args: &SimulateArgs, opts: RunSettings) -> Result<()> {
     if scene.ball.is_none() {
         return run_arm(args, opts, &scene, &scene_label);
     }
-    // Validate every option before the (possibly long) run.
-    check_t_end(args.t_end())?;
+    // Validate every option before the (possibly long) run; a default end time is valid.
+    if let Some(t_end) = args.t_end {
+        check_t_end(t_end)?;
+    }
     let nq = scene.links.len();
     match nq {
         1 => run_contact::<1>(args, opts, &scene, &scene_label),
@@ -481,7 +483,9 @@ fn run_contact<const N: usize>(
     scene_label: &str,
 ) -> Result<()> {
     let set = settings(args)?;
-    check_limits(args, &set, args.t_end())?;
+    let inp = input(args, N)?;
+    let t_end = run_end(args, &inp);
+    check_limits(args, &set, t_end)?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state::<N>(args)?;
     crate::commands::check_angles(
@@ -489,7 +493,6 @@ fn run_contact<const N: usize>(
         scene,
         x0.q.as_slice(),
     )?;
-    let inp = input(args, N)?;
     if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
         let m = max_torque(s);
         if m > LARGE_TORQUE {
@@ -516,7 +519,29 @@ fn run_contact<const N: usize>(
         scene.name,
         interpreted_note(source, setup.elapsed())
     );
-    run_model(args, run_opts, model, source, inp, opts, set, mode0, x0)
+    let run = Run {
+        set,
+        mode0,
+        x0,
+        t_end,
+    };
+    run_model(args, run_opts, model, source, inp, opts, run)
+}
+
+/// Where a run ends: `--t-end`, or the end of its `--torques` series (a replay of a solution's
+/// torques ends with them), or [`crate::cli::DEFAULT_T_END`].
+pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput) -> f64 {
+    args.t_end
+        .or_else(|| inp.series_end())
+        .unwrap_or(crate::cli::DEFAULT_T_END)
+}
+
+/// The integration of a contact run: settings, initial mode and state, end time.
+struct Run<const N: usize> {
+    set: SimSettings,
+    mode0: Mode,
+    x0: State<N>,
+    t_end: f64,
 }
 
 /// What running on interpreted kernels means, for the stderr line (empty for compiled ones).
@@ -583,11 +608,16 @@ fn run_model<K: Kernels<N>, const N: usize>(
     source: KernelSource,
     inp: CliInput,
     opts: BallFingerSettings,
-    set: SimSettings,
-    mode0: Mode,
-    x0: State<N>,
+    run: Run<N>,
 ) -> Result<()> {
+    let Run {
+        set,
+        mode0,
+        x0,
+        t_end,
+    } = run;
     let inputs = input_options(args, &inp);
+    let held = torques_held(inp.series_end(), t_end);
     let sys = BallFinger::new(model, inp, opts)?;
     let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
@@ -641,7 +671,6 @@ fn run_model<K: Kernels<N>, const N: usize>(
         out_dir.inject_fault_at_write(n);
     }
     let t0 = 0.0;
-    let t_end = args.t_end();
     // A trait object: one compiled copy of the simulator serves every joint count (the virtual
     // calls cost nothing beside the kernels they make).
     let dyn_sys: &dyn HybridSystem<Mode = Mode> = &sys;
@@ -652,7 +681,7 @@ fn run_model<K: Kernels<N>, const N: usize>(
     let out = sim.finish();
     let mut report = sys.report(&out, t0, cpu);
     report.summary.kernels = Some(source.name().to_string());
-    report.summary.warnings.extend(torques_held(args, t_end));
+    report.summary.warnings.extend(held);
     // A run that ends with a non-finite energy has not produced a result, whatever the
     // integrator said.
     let s = &report.summary;

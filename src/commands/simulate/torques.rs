@@ -28,6 +28,17 @@ pub enum CliInput {
     Replay(crate::pipeline::arm::PhaseTorque),
 }
 
+impl CliInput {
+    /// The last time of a `--torques` series (s): where `simulate` ends its run unless
+    /// `--t-end` says otherwise, and past which the series holds its last torque.
+    pub fn series_end(&self) -> Option<f64> {
+        match self {
+            CliInput::Series(s) => s.times().last().copied().filter(|t| *t > 0.0),
+            _ => None,
+        }
+    }
+}
+
 impl Input for CliInput {
     fn dim(&self) -> usize {
         match self {
