@@ -708,8 +708,8 @@ pub struct PaperArgs {
     pub quick: bool,
     /// Run the global searches of Sect. 6.1 (`optimize`'s default search of the paper's
     /// sticking problems, seed 0) instead of presenting their stored optima (`data/optima/`,
-    /// re-solved and verified in the run) and of the two default plans: about three more
-    /// minutes on 2 cores.
+    /// re-solved and verified in the run) and of the two default plans: seven searches, about
+    /// four to seven more minutes on 2 cores.
     #[arg(long, conflicts_with = "quick")]
     pub search: bool,
 }

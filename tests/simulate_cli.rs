@@ -533,6 +533,10 @@ fn cli_joint_counts_are_checked() {
     let eight = format!("{}{}{}{}", &text[..a], &text[a..b], &text[a..b], &text[b..]);
     let eight_path = dir.join("finger8.toml");
     std::fs::write(&eight_path, eight).unwrap();
+    // Three torque columns: one too many for the 2-joint finger and the 2-joint arm alike.
+    let three = dir.join("three.csv");
+    std::fs::write(&three, "t,tau1,tau2,tau3\n0,0,0,0\n0.1,0,0,0\n").unwrap();
+    let three = three.to_str().unwrap();
     let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
         (
             vec![
@@ -550,6 +554,19 @@ fn cli_joint_counts_are_checked() {
         (
             vec!["--scene", eight_path.to_str().unwrap()],
             vec!["finger8.toml", "8 joints", "1 to 7"],
+        ),
+        (
+            vec!["--scene", "tests/fixtures/finger2.toml", "--torques", three],
+            vec!["three.csv", "2 joints", "3 columns"],
+        ),
+        (
+            vec![
+                "--scene",
+                "tests/fixtures/planar2_arm.toml",
+                "--torques",
+                three,
+            ],
+            vec!["three.csv", "2 joints", "3 columns"],
         ),
     ];
     for (extra, mention) in cases {
@@ -1060,10 +1077,12 @@ fn rk4_ends_the_slip_within_one_step_of_the_reference() {
 }
 
 /// The sticking law on the default drop makes the stick phase chatter until the Zeno fallback
-/// holds the contact for one 10 ms step while the ball pulls the finger. The `held_contact`
-/// warning must give the hold's whole pull, which is largest at the step's end (the sample
-/// where the fallback lets go), recomputed here from `trajectory.json`: the steps integrated in
-/// contact that begin with λ_n below −1e-6 of the largest contact force, at both their ends.
+/// holds the contact for one 10 ms step while the ball pulls the finger. `summary.json` lists
+/// the hold (`contact_holds`, starting at the fallback's warning), and the `held_contact`
+/// warning gives the hold's whole pull and time, recomputed here from `trajectory.json`: the
+/// steps integrated in contact, judged at both ends inside a hold and at their start outside
+/// (where a step's end may be the pre-sample of the event that ended it), against −1e-6 of the
+/// largest contact force. The pull is largest at the hold's end, where the fallback lets go.
 #[test]
 fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
     let dir = tmpdir("held");
@@ -1071,15 +1090,25 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
     let o = simulate_into(&out_dir, &["--impact-law", "stick", "--t-end", "1"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = json(&out_dir.join("summary.json"));
-    let held = summary["warnings"]
-        .as_array()
-        .unwrap()
+    let warnings = summary["warnings"].as_array().unwrap();
+    let held = warnings
         .iter()
         .find(|w| w["kind"] == "held_contact")
         .expect("a held contact")["message"]
         .as_str()
         .unwrap()
         .to_string();
+    let holds: Vec<[f64; 2]> = serde_json::from_value(summary["contact_holds"].clone()).unwrap();
+    assert!(!holds.is_empty(), "{summary}");
+    for h in &holds {
+        assert!(h[0] < h[1], "{h:?}");
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w["kind"] == "zeno_fallback" && w["t"].as_f64() == Some(h[0])),
+            "hold {h:?} without its fallback"
+        );
+    }
     let tj = json(&out_dir.join("trajectory.json"));
     let t: Vec<f64> = serde_json::from_value(tj["t"].clone()).unwrap();
     let mode: Vec<String> = serde_json::from_value(tj["mode"].clone()).unwrap();
@@ -1093,11 +1122,18 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
         })
         .fold(0.0, f64::max);
     let integrated = |i: usize| mode[i] != "free" && mode[i + 1] == mode[i] && t[i + 1] > t[i];
-    let (mut begin, mut both) = (f64::INFINITY, f64::INFINITY);
+    let in_hold = |i: usize| holds.iter().any(|h| t[i] < h[1] && t[i + 1] > h[0]);
+    let (mut begin, mut both, mut time) = (f64::INFINITY, f64::INFINITY, 0.0);
     for i in (0..t.len() - 1).filter(|&i| integrated(i)) {
         begin = begin.min(lambda_n(i));
-        if lambda_n(i) < -1e-6 * force {
-            both = both.min(lambda_n(i + 1));
+        let l = if in_hold(i) {
+            lambda_n(i).min(lambda_n(i + 1))
+        } else {
+            lambda_n(i)
+        };
+        both = both.min(l);
+        if l < -1e-6 * force {
+            time += t[i + 1] - t[i];
         }
     }
     assert!(
@@ -1105,8 +1141,9 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
         "the hold's end pulls harder: {both} against {begin}"
     );
     assert!(
-        held.contains(&format!("λ_n down to {both:.3e} N")),
-        "{held}"
+        held.contains(&format!("λ_n down to {both:.3e} N"))
+            && held.contains(&format!("for {time:.4} s")),
+        "{held} against {both:.3e} N for {time:.4} s"
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -205,21 +205,29 @@ pub enum MeshDefect {
     },
 }
 
+/// A node or point function whose exact derivatives would exceed its graph's node limit
+/// ([`bf_codegen::graph::Graph::limit`]): the defect of [`PhaseDefect::GraphTooLarge`] and
+/// [`PointDefect::GraphTooLarge`].
+#[derive(Debug, Error, Clone, PartialEq)]
+#[error(
+    "the {function} function and its exact derivatives would hold more than {limit} graph nodes; \
+     raise the limit with --max-graph-nodes if the machine has the memory (about {} bytes a \
+     node)",
+    bf_codegen::BYTES_PER_NODE
+)]
+pub struct FunctionTooLarge {
+    /// `"node"` or `"point"`.
+    pub function: &'static str,
+    /// The graph's node limit.
+    pub limit: usize,
+}
+
 /// What is wrong with a [`Phase`](crate::ocp::Phase) (or its trajectory).
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum PhaseDefect {
-    /// The node function's derivatives would exceed its graph's node limit
-    /// ([`bf_codegen::graph::Graph::limit`]).
-    #[error(
-        "the node function and its exact derivatives would hold more than {limit} graph nodes; \
-         raise the limit with --max-graph-nodes if the machine has the memory (about {} bytes \
-         a node)",
-        bf_codegen::BYTES_PER_NODE
-    )]
-    GraphTooLarge {
-        /// The graph's node limit.
-        limit: usize,
-    },
+    /// The node function's derivatives would exceed its graph's node limit.
+    #[error(transparent)]
+    GraphTooLarge(FunctionTooLarge),
     /// `xdot` must have one entry per state.
     #[error("xdot has {found} entries for {states} states")]
     XdotLength {
@@ -275,18 +283,9 @@ pub enum PhaseDefect {
 /// What is wrong with a [`PointFunction`](crate::ocp::PointFunction).
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum PointDefect {
-    /// The point function's derivatives would exceed its graph's node limit
-    /// ([`bf_codegen::graph::Graph::limit`]).
-    #[error(
-        "the point function and its exact derivatives would hold more than {limit} graph \
-         nodes; raise the limit with --max-graph-nodes if the machine has the memory (about \
-         {} bytes a node)",
-        bf_codegen::BYTES_PER_NODE
-    )]
-    GraphTooLarge {
-        /// The graph's node limit.
-        limit: usize,
-    },
+    /// The point function's derivatives would exceed its graph's node limit.
+    #[error(transparent)]
+    GraphTooLarge(FunctionTooLarge),
     /// `bounds` must have one entry per output.
     #[error("{bounds} bounds for {outputs} outputs")]
     BoundsLength {

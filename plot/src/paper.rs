@@ -427,12 +427,12 @@ pub fn fig_open_loop_vs_optimal_modes(
         p.bands = modes
             .slip
             .iter()
-            .map(|&i| band(i, "simulation: slip", C_ORANGE))
+            .map(|&i| band(i, "open loop: slip", C_ORANGE))
             .chain(
                 modes
                     .stick
                     .iter()
-                    .map(|&i| band(i, "simulation: stick", C_GREEN)),
+                    .map(|&i| band(i, "open loop: stick", C_GREEN)),
             )
             .collect();
         p.vertical_markers = phases

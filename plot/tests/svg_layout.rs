@@ -613,8 +613,8 @@ fn contact_forces_zoom_and_fig17_modes() {
     for n in [
         "optimal",
         "open-loop simulation",
-        "simulation: slip",
-        "simulation: stick",
+        "open loop: slip",
+        "open loop: stick",
     ] {
         assert_eq!(leg.iter().filter(|l| *l == n).count(), 3, "{n}: {leg:?}");
     }

@@ -15,6 +15,8 @@
 //!   to the common COG by the parallel-axis theorem, I = Σ R I_k Rᵀ + m_k (|d_k|² 1 − d_k d_kᵀ)
 //!   (the m_i, COG and I_i of paper eq. 22a);
 //! * bodies fixed to the base (before the first moving joint) do not move and are dropped;
+//! * an `<inertial>` of mass 0 and a zero inertia (a dummy link) counts as none;
+//! * any finite non-zero `<axis>` is normalised, as urdfdom does;
 //! * `<visual>`, `<collision>`, meshes, `<transmission>` and `<gazebo>` are ignored.
 //!
 //! Errors ([`SpecError::Urdf`], a [`UrdfError`]) name the file, line and column, the element and the attribute.
@@ -65,7 +67,13 @@ struct Inertial {
 struct Link {
     name: String,
     pos: usize,
+    /// `None` for a link without `<inertial>` and for one whose `<inertial>` has mass 0 and a
+    /// zero inertia (a dummy link).
     inertial: Option<Inertial>,
+    /// Where the `<inertia>` element of `inertial` is, to point at it.
+    inertia_pos: usize,
+    /// Its `<inertial>` was a massless one, dropped: errors about its missing mass say so.
+    massless_inertial: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -186,48 +194,68 @@ impl Reader<'_> {
 
     fn link(&self, n: roxmltree::Node) -> Result<Link, SpecError> {
         let name = self.attr(n, "name")?.to_string();
-        let inertial = match self.child(n, "inertial")? {
-            None => None,
-            Some(i) => {
-                let (r, c) = self.origin(i)?;
-                let m = self.child(i, "mass")?.ok_or_else(|| {
-                    self.node_err(i, "mass", "<inertial> has no <mass> element".to_string())
-                })?;
-                let [mass] = self.numbers::<1>(m, "value", None)?;
-                if mass <= 0.0 {
-                    return Err(self.node_err(
-                        m,
-                        "value",
-                        format!("mass must be > 0 (got {mass})"),
-                    ));
-                }
-                let t = self.child(i, "inertia")?.ok_or_else(|| {
-                    self.node_err(
-                        i,
-                        "inertia",
-                        "<inertial> has no <inertia> element".to_string(),
-                    )
-                })?;
-                let mut v = [0.0; 6];
-                for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
-                    .iter()
-                    .enumerate()
-                {
-                    [v[k]] = self.numbers::<1>(t, a, None)?;
-                }
-                let local = [[v[0], v[1], v[2]], [v[1], v[3], v[4]], [v[2], v[4], v[5]]];
-                Some(Inertial {
-                    mass,
-                    com: c,
-                    inertia: rotate_tensor(&r, &local),
-                })
-            }
-        };
-        Ok(Link {
+        let mut link = Link {
             name,
             pos: n.range().start,
-            inertial,
-        })
+            inertial: None,
+            inertia_pos: n.range().start,
+            massless_inertial: false,
+        };
+        let Some(i) = self.child(n, "inertial")? else {
+            return Ok(link);
+        };
+        let (r, c) = self.origin(i)?;
+        let m = self.child(i, "mass")?.ok_or_else(|| {
+            self.node_err(i, "mass", "<inertial> has no <mass> element".to_string())
+        })?;
+        let [mass] = self.numbers::<1>(m, "value", None)?;
+        if mass < 0.0 {
+            return Err(self.node_err(
+                m,
+                "value",
+                format!("mass must be > 0 (got {mass}), or 0 on a massless link"),
+            ));
+        }
+        let t = self.child(i, "inertia")?.ok_or_else(|| {
+            self.node_err(
+                i,
+                "inertia",
+                "<inertial> has no <inertia> element".to_string(),
+            )
+        })?;
+        let mut v = [0.0; 6];
+        for (k, a) in ["ixx", "ixy", "ixz", "iyy", "iyz", "izz"]
+            .iter()
+            .enumerate()
+        {
+            [v[k]] = self.numbers::<1>(t, a, None)?;
+        }
+        if mass == 0.0 {
+            // Published URDFs mark frames-only links by mass 0 and a zero inertia (urdfdom
+            // reads them as bodies of no mass); such a link carries nothing, exactly like one
+            // without <inertial>. A zero mass with an inertia is a contradiction, not a dummy.
+            if v.iter().any(|&x| x != 0.0) {
+                return Err(self.node_err(
+                    m,
+                    "value",
+                    format!(
+                        "link {:?}: mass is 0 but its <inertia> is not zero; give the mass, or \
+                         zero the inertia too for a massless link (as one without <inertial>)",
+                        link.name
+                    ),
+                ));
+            }
+            link.massless_inertial = true;
+            return Ok(link);
+        }
+        let local = [[v[0], v[1], v[2]], [v[1], v[3], v[4]], [v[2], v[4], v[5]]];
+        link.inertial = Some(Inertial {
+            mass,
+            com: c,
+            inertia: rotate_tensor(&r, &local),
+        });
+        link.inertia_pos = t.range().start;
+        Ok(link)
     }
 
     fn joint(&self, n: roxmltree::Node, links: &[Link]) -> Result<Joint, SpecError> {
@@ -275,15 +303,18 @@ impl Reader<'_> {
             None => [1.0, 0.0, 0.0],
             Some(a) => {
                 let v = self.numbers::<3>(a, "xyz", Some([1.0, 0.0, 0.0]))?;
-                let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-                if kind != JointKind::Fixed && norm < 1e-9 {
-                    return Err(self.node_err(
-                        a,
-                        "xyz",
-                        format!("joint {name:?}: the axis must not be zero (got {v:?})"),
-                    ));
+                match unit_axis(v) {
+                    Some(u) => u,
+                    // A fixed joint does not use its axis.
+                    None if kind == JointKind::Fixed => v,
+                    None => {
+                        return Err(self.node_err(
+                            a,
+                            "xyz",
+                            format!("joint {name:?}: the axis must not be zero (got {v:?})"),
+                        ));
+                    }
                 }
-                if norm < 1e-9 { v } else { v.map(|x| x / norm) }
             }
         };
         let limit = match (kind, self.child(n, "limit")?) {
@@ -319,6 +350,20 @@ impl Reader<'_> {
             limit,
         })
     }
+}
+
+/// The unit vector along the finite `v`, `None` if `v` is zero. As urdfdom, any non-zero axis
+/// gives its direction: `v` is divided by its largest |component| before the norm is taken,
+/// so that neither huge (1e200) components overflow the squares nor tiny (1e-200) ones
+/// underflow them.
+fn unit_axis(v: V3) -> Option<V3> {
+    let scale = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if scale == 0.0 {
+        return None;
+    }
+    let w = v.map(|x| x / scale);
+    let norm = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    Some(w.map(|x| x / norm))
 }
 
 /// R = R_z(yaw) R_y(pitch) R_x(roll), the URDF convention.
@@ -643,27 +688,59 @@ pub fn read_chain(
         }
         let c = &links[jt.child];
         let Some(body) = lumped[k].clone() else {
+            let what = if c.massless_inertial {
+                "has mass 0 (a massless <inertial>, as none)"
+            } else {
+                "has no <inertial>"
+            };
             return Err(rd.err(
                 c.pos,
                 "link",
                 "inertial",
                 format!(
-                    "link {:?} (moved by joint {:?}) has no <inertial>, nor has any link \
-                     fixed to it: a moving link needs a mass",
+                    "link {:?} (moved by joint {:?}) {what}, nor has any link fixed to it: a \
+                     moving link needs a mass",
                     c.name, jt.name
                 ),
             ));
         };
-        let bodies = owner
+        let bodies: Vec<&Link> = owner
             .iter()
             .zip(&links)
             .filter(|(o, l)| l.inertial.is_some() && matches!(o, Some((Some(i), _)) if *i == k))
-            .count();
-        let lumped_note = if bodies > 1 {
+            .map(|(_, l)| l)
+            .collect();
+        let lumped_note = if bodies.len() > 1 {
             " (with the links fixed to it)"
         } else {
             ""
         };
+        if body.inertia.iter().flatten().all(|&x| x == 0.0) {
+            // Point the user at the <inertia> they wrote: the link's own, or, when it has none,
+            // that of the body fixed to it.
+            let at = bodies
+                .iter()
+                .find(|l| l.name == c.name)
+                .or(bodies.first())
+                .copied()
+                .unwrap_or(c);
+            let whose = if at.name == c.name {
+                String::new()
+            } else {
+                format!(" (the <inertia> of link {:?}, fixed to it)", at.name)
+            };
+            return Err(rd.err(
+                at.inertia_pos,
+                "inertia",
+                "",
+                format!(
+                    "link {:?}{lumped_note}, moved by joint {:?}: the inertia is zero while the \
+                     mass is {} kg > 0{whose}; a moving link's inertia must be positive definite \
+                     (a point mass has no rotational inertia)",
+                    c.name, jt.name, body.mass
+                ),
+            ));
+        }
         if let Some(msg) = crate::validate::definiteness_violation(&body.inertia) {
             return Err(rd.err(
                 c.pos,

@@ -174,6 +174,20 @@ fn check_inertia(ix: &SourceIndex<'_>, path: &str, spec: &InertiaSpec) -> Result
 /// leading minors; `None` if it is.
 pub(super) fn definiteness_violation(m: &[[f64; 3]; 3]) -> Option<String> {
     let scale = m.iter().flatten().fold(0.0f64, |a, x| a.max(x.abs()));
+    // Scaling by a zero or infinite entry would turn every minor into NaN and the message
+    // into noise; these two cases have plainer words.
+    if scale == 0.0 {
+        return Some(
+            "inertia must be positive definite (it is zero: a point mass has no rotational \
+             inertia)"
+                .to_string(),
+        );
+    }
+    if !scale.is_finite() {
+        return Some(format!(
+            "inertia must be positive definite and finite (an entry is {scale})"
+        ));
+    }
     // Sylvester's criterion on the leading principal minors of the symmetric tensor, scaled by
     // its largest entry first so that tiny (1e-300) or huge inertias neither underflow nor
     // overflow the minors: definiteness does not depend on the unit.
@@ -181,7 +195,7 @@ pub(super) fn definiteness_violation(m: &[[f64; 3]; 3]) -> Option<String> {
     let m1 = n[0][0];
     let m2 = n[0][0] * n[1][1] - n[0][1] * n[1][0];
     let m3 = det3(&n);
-    (!(scale > 0.0 && m1 > 0.0 && m2 > 0.0 && m3 > 0.0)).then(|| {
+    (!(m1 > 0.0 && m2 > 0.0 && m3 > 0.0)).then(|| {
         format!(
             "inertia must be positive definite (leading minors of I / {scale:e}: \
              {m1:e}, {m2:e}, {m3:e})"

@@ -158,14 +158,227 @@ fn bad_numbers_name_the_attribute_and_the_value() {
         "xyz",
         "not a finite number",
     );
-    expect(
-        &arm(&J2.replace("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 0 0\"/>")),
+    // Exactly zero (of either sign) has no direction; NaN and inf are no numbers to take one
+    // from.
+    for (axis, needle) in [
+        ("0 0 0", "must not be zero"),
+        ("-0 0 -0", "must not be zero"),
+        ("0 NaN 1", "\"NaN\" is not a finite number"),
+        ("0 inf 1", "\"inf\" is not a finite number"),
+    ] {
+        expect(
+            &arm(&J2.replace("0 0 1", axis)),
+            None,
+            10,
+            "axis",
+            "xyz",
+            needle,
+        );
+    }
+}
+
+/// The URDF text of the arm with the second joint's axis `xyz`, read into a scene: the axis it
+/// got, after the scene's own validation (which wants a unit axis) accepted it.
+fn imported_axis(xyz: &str) -> [f64; 3] {
+    let text = arm(&J2.replace("0 0 1", xyz));
+    let toml = bf_scene::urdf_scene_text(&text, FILE, &ChainChoice::default())
+        .unwrap_or_else(|e| panic!("{xyz}: {e}"));
+    let scene = Scene::from_toml_str(&toml, FILE).unwrap_or_else(|e| panic!("{xyz}: {e}"));
+    scene.links[1].axis.unwrap()
+}
+
+/// Any finite non-zero axis has a direction (urdfdom normalises it too): neither huge
+/// components, whose squares overflow, nor tiny ones, whose squares underflow, lose it, and no
+/// length cut-off refuses a short one.
+#[test]
+fn an_axis_of_any_finite_non_zero_length_gives_its_direction() {
+    let h = std::f64::consts::FRAC_1_SQRT_2;
+    for (xyz, want) in [
+        ("1e200 1e200 0", [h, h, 0.0]),
+        ("1e155 0 0", [1.0, 0.0, 0.0]),
+        ("1.7e308 -1.7e308 0", [h, -h, 0.0]),
+        ("0 0 1e-10", [0.0, 0.0, 1.0]),
+        ("0 0 -1e-170", [0.0, 0.0, -1.0]),
+        ("0 1e-200 1e-200", [0.0, h, h]),
+        ("5e-324 0 0", [1.0, 0.0, 0.0]),
+        ("0 1e-5 1e-5", [0.0, h, h]),
+        ("0 0 -3", [0.0, 0.0, -1.0]),
+    ] {
+        let a = imported_axis(xyz);
+        for k in 0..3 {
+            assert!(
+                (a[k] - want[k]).abs() <= 2e-16,
+                "{xyz}: got {a:?}, want {want:?}"
+            );
+        }
+    }
+    // Exactly as the URDF reader gives it, before the scene's text: a unit vector.
+    let c = read_urdf_chain(
+        &arm(&J2.replace("0 0 1", "3e-300 4e-300 0")),
+        FILE,
         None,
-        10,
-        "axis",
-        "xyz",
-        "must not be zero",
+        None,
+        None,
+    )
+    .unwrap();
+    let a = c.links[1].axis.unwrap();
+    assert!(
+        (a[0] - 0.6).abs() <= 1e-16 && (a[1] - 0.8).abs() <= 1e-16,
+        "{a:?}"
     );
+}
+
+/// A zero inertia tensor on a link of positive mass is refused in words, at the `<inertia>`
+/// the user wrote: the link's own, or that of the link fixed to it that brings the mass.
+#[test]
+fn a_zero_inertia_with_a_positive_mass_is_named_as_such() {
+    let text = arm_with_l2_inertia("0", "0", "0");
+    expect(
+        &text,
+        None,
+        7,
+        "inertia",
+        "",
+        "link \"l2\", moved by joint \"j2\": the inertia is zero while the mass is 1 kg > 0",
+    );
+    let err = read_urdf_chain(&text, FILE, None, None, None).unwrap_err();
+    assert!(!err.to_string().contains("NaN"), "{err}");
+    // l2 carries nothing itself; its mass, a point, comes from the link fixed to it.
+    let point = r#"<inertial><mass value="2"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#;
+    let text = arm(&format!(
+        "{J2}\n  <link name=\"l2b\">\n    {point}\n  </link>\n  <joint name=\"f\" type=\"fixed\"><parent link=\"l2\"/><child link=\"l2b\"/></joint>"
+    ))
+    .replace(L2_INERTIAL, "");
+    expect(
+        &text,
+        None,
+        12,
+        "inertia",
+        "",
+        "link \"l2\", moved by joint \"j2\": the inertia is zero while the mass is 2 kg > 0 \
+         (the <inertia> of link \"l2b\", fixed to it)",
+    );
+    // A point mass lumped into a link with a rotational inertia of its own is a body.
+    let text = arm(&format!(
+        "{J2}\n  <link name=\"l2b\">{point}</link>\n  <joint name=\"f\" type=\"fixed\"><parent link=\"l2\"/><child link=\"l2b\"/><origin xyz=\"0.5 0 0\"/></joint>"
+    ));
+    let c = read_urdf_chain(&text, FILE, None, None, None).unwrap();
+    assert_eq!((c.links[1].mass, c.links[1].com), (3.0, [0.5, 0.0, 0.0]));
+}
+
+/// Two finite inertias can add up to more than f64 holds: the lumped tensor's inf is named, not
+/// hidden behind the NaN minors of I / inf.
+#[test]
+fn a_lumped_inertia_that_overflows_is_named_as_such() {
+    let huge = r#"<inertial><mass value="1"/><inertia ixx="1e308" ixy="0" ixz="0" iyy="1e308" iyz="0" izz="1e308"/></inertial>"#;
+    let text = with_fixed_link(
+        &arm_with_l2_inertia("1e308", "1e308", "1e308"),
+        "l2",
+        "l2b",
+        huge,
+    );
+    expect(
+        &text,
+        None,
+        6,
+        "link",
+        "inertial",
+        "link \"l2\" (with the links fixed to it), moved by joint \"j2\": inertia must be \
+         positive definite and finite (an entry is inf)",
+    );
+}
+
+/// `<inertial>` of the second link in `ARM`.
+const L2_INERTIAL: &str = r#"<inertial><origin xyz="0.5 0 0"/><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial>"#;
+
+/// A dummy link's `<inertial>` as published URDFs write it: mass 0, a zero inertia, and an
+/// origin that must not move any COG.
+const DUMMY: &str = r#"<inertial><origin xyz="0.3 0.1 0" rpy="0 1 0"/><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial>"#;
+
+/// The arm with a link `name` fixed to `parent` (0.2 m along x) whose body is `inertial`.
+fn with_fixed_link(text: &str, parent: &str, name: &str, inertial: &str) -> String {
+    text.replace(
+        "</robot>",
+        &format!(
+            "  <link name=\"{name}\">{inertial}</link>\n  <joint name=\"fix_{name}\" type=\"fixed\"><parent link=\"{parent}\"/><child link=\"{name}\"/><origin xyz=\"0.2 0 0\"/></joint>\n</robot>"
+        ),
+    )
+}
+
+/// A link whose `<inertial>` has mass 0 and a zero inertia reads exactly as one without
+/// `<inertial>`, wherever it is: fixed to the base (dropped), lumped into a moving link, or
+/// moved itself with the mass of a link fixed to it; and a moving one with no mass in front
+/// is refused as a link without `<inertial>` is.
+#[test]
+fn a_massless_dummy_link_reads_as_one_without_inertial() {
+    let read = |t: &str| read_urdf_chain(t, FILE, None, None, None);
+    let same = |with_dummy: &str, without: &str| {
+        assert_ne!(with_dummy, without);
+        let (a, b) = (read(with_dummy).unwrap(), read(without).unwrap());
+        assert_eq!(a, b);
+        // The dummy's origin moved no COG and its zero mass added none.
+        assert_eq!((a.links[1].mass, a.links[1].com), (1.0, [0.5, 0.0, 0.0]));
+        // The scene's own validation takes it too.
+        let toml = bf_scene::urdf_scene_text(with_dummy, FILE, &ChainChoice::default()).unwrap();
+        Scene::from_toml_str(&toml, FILE).unwrap();
+    };
+    // On the base: dropped.
+    let base = arm(J2).replace(
+        "<link name=\"base\"/>",
+        &format!("<link name=\"base\">{DUMMY}</link>"),
+    );
+    same(&base, &arm(J2));
+    // A root fixed to the base: dropped with it.
+    let mounted = |inertial: &str| {
+        arm(J2).replace(
+            "</robot>",
+            &format!(
+                "  <link name=\"world\">{inertial}</link>\n  <joint name=\"mount\" type=\"fixed\"><parent link=\"world\"/><child link=\"base\"/><origin xyz=\"0 0 0.4\"/></joint>\n</robot>"
+            ),
+        )
+    };
+    same(&mounted(DUMMY), &mounted(""));
+    // Lumped into the moving link l2 (the tip then is the dummy, hence the tool).
+    same(
+        &with_fixed_link(&arm(J2), "l2", "flange", DUMMY),
+        &with_fixed_link(&arm(J2), "l2", "flange", ""),
+    );
+    // Moved by j2, with its mass from the link fixed to it: l2's body moved to "l2b", 0.2 m
+    // out, so its inertial origin goes 0.2 m back.
+    let moved_body = L2_INERTIAL.replace("0.5 0 0", "0.3 0 0");
+    let moving =
+        |l2: &str| with_fixed_link(&arm(J2), "l2", "l2b", &moved_body).replace(L2_INERTIAL, l2);
+    same(&moving(DUMMY), &moving(""));
+    // Moved by j2, with nothing fixed to it: no mass, as without <inertial>.
+    expect(
+        &arm(J2).replace(L2_INERTIAL, DUMMY),
+        None,
+        6,
+        "link",
+        "inertial",
+        "link \"l2\" (moved by joint \"j2\") has mass 0 (a massless <inertial>, as none), nor \
+         has any link fixed to it: a moving link needs a mass",
+    );
+}
+
+/// Mass 0 with an inertia is no dummy but a contradiction: refused at the `<mass>`.
+#[test]
+fn a_zero_mass_with_an_inertia_is_refused() {
+    for (mass, entry) in [("0", r#"ixx="0.1""#), ("-0", r#"iyz="1e-300""#)] {
+        let inertial = DUMMY
+            .replace(r#"value="0""#, &format!(r#"value="{mass}""#))
+            .replace(&format!("{}=\"0\"", &entry[..3]), entry);
+        assert_ne!(inertial, DUMMY);
+        expect(
+            &with_fixed_link(&arm(J2), "base", "pedestal", &inertial),
+            None,
+            11,
+            "mass",
+            "value",
+            "link \"pedestal\": mass is 0 but its <inertia> is not zero; give the mass, or zero \
+             the inertia too for a massless link (as one without <inertial>)",
+        );
+    }
 }
 
 #[test]
@@ -338,15 +551,6 @@ fn an_inertia_no_rigid_body_has_names_the_urdf_link() {
     );
     let err = read_urdf_chain(&text, FILE, None, None, None).unwrap_err();
     assert!(err.to_string().contains("`nonphysical_inertia"), "{err}");
-    // A point mass (no rotational inertia) is not positive definite.
-    expect(
-        &arm_with_l2_inertia("0", "0", "0"),
-        None,
-        6,
-        "link",
-        "inertial",
-        "inertia must be positive definite",
-    );
     // The scene's source keeps the published values, on the violating link only.
     let c = read_urdf_chain(&text, FILE, None, None, Some("vendor data sheet")).unwrap();
     assert_eq!(c.links[0].nonphysical_inertia, None);

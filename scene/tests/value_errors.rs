@@ -45,6 +45,18 @@ fn inertia_must_be_symmetric_positive_definite() {
         "links[0].inertia",
         "positive definite",
     );
+    // All zero (a point mass): said in words, not as minors of I / 0, which are NaN.
+    let new = "inertia = [0.0, 0.0, 0.0]";
+    let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, new);
+    let line = line_no(&text, new, 0);
+    let shown = expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[0].inertia",
+        "inertia must be positive definite (it is zero: a point mass has no rotational inertia)",
+    );
+    assert!(!shown.contains("NaN"), "{shown}");
     // Positive diagonal but indefinite: the product of inertia is too large.
     let new = "inertia = [[1.0e-3, 3.0e-3, 0.0], [3.0e-3, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";
     let old = "inertia = [[1.0e-3, 0.0, 0.0], [0.0, 2.0e-3, 0.0], [0.0, 0.0, 2.0e-3]]";

@@ -142,6 +142,16 @@ fn plan_markdown(
     crate::paper::scenarios::write_animation(&name, &built, &sol, dir)?;
     let verified = crate::pipeline::verify::is_verified(&sol);
     let stick = sol.stick_duration().unwrap_or(f64::NAN);
+    let active = crate::pipeline::bounds::active_bounds(&built.ocp, &sol);
+    let active = if active.is_empty() {
+        "none".to_string()
+    } else {
+        active
+            .iter()
+            .map(|a| a.describe())
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
     let head = format!(
         "**`{problem}` planned for the plant.** The plan `optimize --problem {problem}` makes \
          by default (decision record 0040): Newton's law at the impact (eq. 39: ω unchanged, \
@@ -149,7 +159,8 @@ fn plan_markdown(
          within {:.0} % of their limits and an approach that keeps {:.0} mm from the ball until \
          its last 1 %, so that the plant's impact and the controller's feedback have what the \
          plan assumes; found by the same global search ({}): {} after {} iterations, J = {:.6} \
-         (sticking optimum above {:.6}), stick phase {:.3} s, {}. Solution: \
+         (sticking optimum above {:.6}), stick phase {:.3} s, {}; active bounds (as in \
+         section 4): {active}. Solution: \
          `{name}/solution.json`; animation of one period: \
          [animation_{name}.html](animation_{name}.html).\n",
         100.0 * (1.0 - plan.torque_margin),
@@ -507,8 +518,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     let mu_s = paper_scene.friction.as_ref().map_or(0.8, |f| f.mu_s);
     writeln!(
         report,
-        "Three phases (free, stick, free), periodic, {} collocation points per phase (hp \
-         Legendre–Gauss–Radau, 3 elements), ε = 0.01, |τ| ≤ 1 N m, h(0) ≥ 0.3 r. The COT period \
+        "Three phases (free, stick, free), periodic, {} collocation points per phase to start \
+         with (hp Legendre–Gauss–Radau, 3 elements; the table gives the mesh each optimum \
+         ends on), ε = 0.01, |τ| ≤ 1 N m, h(0) ≥ 0.3 r. The COT period \
          is bounded by {} s (COT lets the finger rest at no cost). The problems have many local \
          optima (`ball-finger report strategies` compares cold start, continuation, multi-start \
          and the global search). Strategy: {} Every solution is verified by re-integrating each \
@@ -546,7 +558,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                      again here, warm from their own primal-dual points on their own meshes, \
                      and re-integrated like any optimum: a stored optimum that this program no \
                      longer reproduces is marked unverified below. `paper --search` runs the \
-                     searches instead (about two more minutes on 2 cores; decision record 0041)."
+                     searches instead (seven searches, about four to seven more minutes on 2 cores; \
+                     decision record 0041)."
                 }
             )
         },
@@ -853,7 +866,8 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     writeln!(report, "## 9. Known limitations\n")?;
     writeln!(
         report,
-        "- The scenarios above use hp Legendre–Gauss–Radau (3 × 10 points per phase). \
+        "- The scenarios above use hp Legendre–Gauss–Radau (3 × 10 points per phase, refined \
+         where an optimum's re-integration asks for it; section 4 gives each optimum's mesh). \
          Legendre–Gauss collocation, the paper's scheme (`optimize --scheme lg`), solves the \
          problems too, with other costs in time (criterion figures for both schemes in \
          BENCHMARKS.md, `cargo bench --bench problems`).\n\

@@ -658,8 +658,10 @@ pub fn markdown(o: &OpenLoop) -> Result<String> {
     writeln!(
         s,
         "\n![Fig. 17 counterpart](figures/fig17_open_loop.svg)\n\n\
-         Shaded: the simulation's slip (orange) and stick (green) intervals; dashed lines: the \
-         optimum's switching times, repeated every period.\n\n\
+         Shaded: the open-loop simulation's slip (orange) and stick (green) intervals (the \
+         PD-tracked replays' modes are in their own `events.json`; a slip of no duration is \
+         drawn a few pixels wide); dashed lines: the optimum's switching times, repeated every \
+         period.\n\n\
          Paper (Sect. 6.2): the open-loop angular velocities match well at the beginning and \
          drift as time passes; a short slip window follows each impact with Newton's law, then \
          sticking. Here: the error in the first period is {:.3} rad/s and in the last {:.3} rad/s; \
@@ -680,7 +682,7 @@ pub fn pd_markdown(open: &OpenLoop, tracked: &[OpenLoop]) -> Result<String> {
     let mut s = String::new();
     writeln!(
         s,
-        "\n\n### Stabilised by joint-space PD tracking (Sect. 7)\n\n\
+        "\n\n### Joint-space PD tracking (Sect. 7)\n\n\
          The same torques with τ = τ*(t) + K_p (q*(t) − q) + K_d (q̇*(t) − q̇) added (q*, q̇*: \
          the optimal trajectory, repeated every period; gains in N m/rad and N m s/rad), either \
          only while the optimum is in a free phase (\"free phases\", the paper's suggestion) or \

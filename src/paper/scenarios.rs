@@ -566,17 +566,17 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
     let mut s = String::new();
     writeln!(
         s,
-        "| scenario | status | objective φ | period (s) | phase durations (s) | mean ω (rad/s) | max abs τ (N m) | contact distance from tip, min/mean/max (m) | contact on the friction-cone boundary | re-integration defect | verified | strategy | iterations | solve time (s) |"
+        "| scenario | status | objective φ | period (s) | phase durations (s) | mean ω (rad/s) | max abs τ (N m) | contact distance from tip, min/mean/max (m) | contact on the friction-cone boundary | re-integration defect | verified | mesh: points (elements) per phase | strategy | iterations | solve time (s) |"
     )?;
     writeln!(
         s,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     )?;
     for r in results {
         let o = &r.solution;
         writeln!(
             s,
-            "| {} | {} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {} | {:.2} |",
+            "| {} | {} | {:.5e} | {:.4} | {} | ({:.3}, {:.3}, {:.3}) | {:.3} | {:.3} / {:.3} / {:.3} | {:.0} % | {} | {} | {} | {} | {} | {:.2} |",
             r.name,
             crate::names::name(&o.status),
             o.objective,
@@ -602,6 +602,7 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
             } else {
                 "**no**"
             },
+            mesh_cell(o),
             o.strategy
                 .as_ref()
                 .map_or("direct".into(), |st| st.strategy.to_string()),
@@ -619,6 +620,26 @@ pub fn results_markdown(results: &[ScenarioResult]) -> Result<String> {
         crate::paper::claims::markdown(&crate::paper::claims::claims(&facts, QC_OMEGA_REF[2]))
     )?;
     Ok(s)
+}
+
+/// The mesh an optimum was solved on: the refined mesh of its hp refinement where it has one
+/// (the problem's mesh otherwise), as collocation points (elements) per phase.
+pub fn mesh_cell(o: &bf_problem::OcpSolution) -> String {
+    let per_phase: Vec<String> = match &o.refinement {
+        Some(r) if !r.mesh.is_empty() => r
+            .mesh
+            .iter()
+            .map(|m| format!("{} ({})", m.degrees.iter().sum::<usize>(), m.degrees.len()))
+            .collect(),
+        _ => {
+            let elements = match o.scheme {
+                bf_optim::ocp::Scheme::Radau { elements } => elements,
+                bf_optim::ocp::Scheme::Lg => 1,
+            };
+            vec![format!("{} ({elements})", o.points); o.phase_durations.len()]
+        }
+    };
+    per_phase.join(", ")
 }
 
 /// What the claims need of a scenario result.

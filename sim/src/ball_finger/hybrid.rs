@@ -206,6 +206,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             kinks,
             contact: true,
         });
+        self.contact_holds.borrow_mut().push((t, t + hold));
         Ok(Some((
             Mode::Stick,
             format!(

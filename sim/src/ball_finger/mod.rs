@@ -29,7 +29,7 @@ pub use settings::BallFingerSettings;
 
 use crate::{Input, SimError};
 use bf_model::{Kernels, Mode, Model, ModelError, State, Vec3, VecN};
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 
 /// The finger–ball [`HybridSystem`](crate::HybridSystem) of a finger with `N` joints (default
 /// 3): a bf-model [`Model`] plus a torque [`Input`].
@@ -52,6 +52,9 @@ pub struct BallFinger<K: Kernels<N>, I: Input, const N: usize = 3> {
     link_length: f64,
     /// Guards suspended by the Zeno fallback, and until when.
     hold: Cell<Hold>,
+    /// Every sticking contact the Zeno fallback held, as (start, until) (s): the one mechanism
+    /// that keeps a contact against λ_n ≥ 0 or σ ≥ 0, which the report judges by it.
+    contact_holds: RefCell<Vec<(f64, f64)>>,
 }
 
 /// Guards suspended by the Zeno fallback until `until` (s).
@@ -188,6 +191,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             fixed_step: Cell::new(None),
             link_length,
             hold: Cell::new(Hold::NONE),
+            contact_holds: RefCell::new(Vec::new()),
         })
     }
 

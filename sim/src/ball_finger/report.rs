@@ -218,11 +218,24 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         let work: Vec<f64> = (0..tr.len())
             .map(|i| self.interval_work(tr, i, &samples, &slopes))
             .collect();
+        // The holds of this run: each began at one of its Zeno fallbacks.
+        let holds: Vec<(f64, f64)> = self
+            .contact_holds
+            .borrow()
+            .iter()
+            .filter(|&&(a, _)| {
+                out.warnings
+                    .iter()
+                    .any(|w| w.kind == "zeno_fallback" && w.t == a)
+            })
+            .copied()
+            .collect();
         let summary = summarize(
             out,
             &samples,
             &events,
             &work,
+            &holds,
             t0,
             cpu_seconds,
             &self.settings,
@@ -405,6 +418,10 @@ pub struct RunSummary {
     /// (contact kept with λ_n < 0: only the Zeno fallback does), `held_outside_cone` (stick
     /// kept with σ < 0, likewise), `zeno_fallback` (see the module docs).
     pub warnings: Vec<SimWarning>,
+    /// The sticking contacts the Zeno fallback held regardless of λ_n and σ, as [start, end]
+    /// (s, the end at most `t_final`): the intervals where `held_contact` and
+    /// `held_outside_cone` judge both ends of a step.
+    pub contact_holds: Vec<[f64; 2]>,
     /// Accepted steps, rejected steps, vector-field evaluations.
     pub stats: crate::SimStats,
     /// Wall-clock time of the run (s).
@@ -422,6 +439,7 @@ fn summarize<const N: usize>(
     samples: &[SampleInfo<N>],
     events: &[EventInfo<N>],
     work: &[f64],
+    holds: &[(f64, f64)],
     t0: f64,
     cpu_seconds: f64,
     settings: &BallFingerSettings,
@@ -509,7 +527,7 @@ fn summarize<const N: usize>(
             ),
         });
     }
-    warnings.extend(held_contact(tr, samples).warnings());
+    warnings.extend(held_contact(tr, samples, holds).warnings());
     warnings.sort_by(|a, b| a.t.total_cmp(&b.t));
     let event_counts = kinds
         .iter()
@@ -572,6 +590,10 @@ fn summarize<const N: usize>(
         energy_drift,
         energy_tolerance,
         warnings,
+        contact_holds: holds
+            .iter()
+            .map(|&(a, b)| [a, b.min(out.t_final)])
+            .collect(),
         stats: out.stats,
         cpu_seconds,
         real_time_factor: if cpu_seconds > 0.0 {
@@ -613,10 +635,10 @@ fn balance_residual<const N: usize>(
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct HeldContact {
     /// The smallest λ_n over the samples that begin a step in contact and the ends of the
-    /// steps held with λ_n < 0 (N; +∞ without).
+    /// steps inside a contact hold (N; +∞ without).
     min_lambda_n: f64,
-    /// The smallest σ over the samples that begin a step in Stick and the ends of the steps
-    /// held with σ < 0 (N; +∞ without).
+    /// The smallest σ over the samples that begin a step in Stick and the ends of the Stick
+    /// steps inside a contact hold (N; +∞ without).
     min_sigma: f64,
     /// The time spent in contact with λ_n < 0 (s), and when it first was.
     pulling: (f64, Option<f64>),
@@ -665,9 +687,16 @@ impl HeldContact {
     }
 }
 
+/// The contact of a run kept against the model (module doc of [`HeldContact`]). `holds` are
+/// the run's contact holds (start, until) by the Zeno fallback: a step that overlaps one was
+/// integrated with the contact guards suspended and has no sample inside, so both its ends
+/// count. Outside them a step's end may be the pre-sample of the very event whose guard ended
+/// it (the sliver step after an impact whose λ_n < 0 lifts off at once), so only its start
+/// counts.
 fn held_contact<const N: usize>(
     tr: &crate::Trajectory<Mode>,
     samples: &[SampleInfo<N>],
+    holds: &[(f64, f64)],
 ) -> HeldContact {
     let n = tr.len().min(samples.len());
     let contact = |i: usize| tr.mode[i] != Mode::Free;
@@ -688,27 +717,27 @@ fn held_contact<const N: usize>(
     // is the guard doing its work, not a held contact.
     let integrated =
         |i: usize| contact(i) && i + 1 < n && tr.mode[i + 1] == tr.mode[i] && tr.t[i + 1] > tr.t[i];
+    let in_hold = |i: usize| holds.iter().any(|&(a, b)| tr.t[i] < b && tr.t[i + 1] > a);
     for i in (0..n).filter(|&i| integrated(i)) {
-        let s = &samples[i];
-        let dt = tr.t[i + 1] - tr.t[i];
-        held.min_lambda_n = held.min_lambda_n.min(s.lambda_n);
-        if tr.mode[i] == Mode::Stick {
-            held.min_sigma = held.min_sigma.min(s.sigma);
+        let stick = tr.mode[i] == Mode::Stick;
+        let (s, end) = (&samples[i], &samples[i + 1]);
+        let (mut lambda_n, mut sigma) = (s.lambda_n, if stick { s.sigma } else { f64::INFINITY });
+        if in_hold(i) {
+            lambda_n = lambda_n.min(end.lambda_n);
+            if stick {
+                sigma = sigma.min(end.sigma);
+            }
         }
-        // A step held by the fallback has no sample inside it, and its end (where the hold
-        // lets go) may pull harder than its start: the end counts in the reported bound of a
-        // step already held at its start. (Judging by the end alone would count the sliver
-        // steps after an impact whose guard fires at once.)
-        let end = &samples[i + 1];
-        let slot = if s.lambda_n < -tol {
-            held.min_lambda_n = held.min_lambda_n.min(end.lambda_n);
+        held.min_lambda_n = held.min_lambda_n.min(lambda_n);
+        held.min_sigma = held.min_sigma.min(sigma);
+        let slot = if lambda_n < -tol {
             &mut held.pulling
-        } else if tr.mode[i] == Mode::Stick && s.sigma < -tol {
-            held.min_sigma = held.min_sigma.min(end.sigma);
+        } else if sigma < -tol {
             &mut held.outside_cone
         } else {
             continue;
         };
+        let dt = tr.t[i + 1] - tr.t[i];
         slot.0 += dt;
         slot.1.get_or_insert(tr.t[i]);
     }

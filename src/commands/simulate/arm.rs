@@ -12,7 +12,6 @@ use crate::io::parse_list;
 use anyhow::{Context, Result, anyhow, bail};
 use bf_output::{Outcome, OutputDir};
 use bf_sim::arm::{ArmMode, FreeArm};
-use bf_sim::{Input as _, TorqueSeries};
 use std::time::Instant;
 
 /// Free motion of an arm without a ball (any number of joints, `bf_sim::arm`): τ from
@@ -33,15 +32,7 @@ pub(super) fn run_arm(
         None => None,
     };
     let inp = if let Some(path) = &args.torques {
-        let s = TorqueSeries::from_path(path)?;
-        if s.dim() != n {
-            bail!(
-                "{}: scene `{name}` has {n} joints, the torque series has {} columns",
-                path.display(),
-                s.dim()
-            );
-        }
-        CliInput::Series(s)
+        super::torques::series(path, name, n)?
     } else if let Some(target) = &args.pd {
         CliInput::Pd(pd_controller(args, target, n)?)
     } else if let Some((_, torque, _)) = &replay {

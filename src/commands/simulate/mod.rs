@@ -483,7 +483,7 @@ fn run_contact<const N: usize>(
     scene_label: &str,
 ) -> Result<()> {
     let set = settings(args)?;
-    let inp = input(args, N)?;
+    let inp = input(args, &scene.name, N)?;
     let t_end = run_end(args, &inp);
     check_limits(args, &set, t_end)?;
     let law = parse_impact_law(&args.impact_law)?;

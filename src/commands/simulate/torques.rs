@@ -93,18 +93,23 @@ pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Resu
     Ok(PdController::new(kp, kd, target)?)
 }
 
-/// The joint torques of a run of a finger with `n` joints.
-pub fn input(args: &SimulateArgs, n: usize) -> Result<CliInput> {
+/// The `--torques` series at `path` for a scene `name` with `n` joints: one column per joint.
+pub(super) fn series(path: &std::path::Path, name: &str, n: usize) -> Result<CliInput> {
+    let s = TorqueSeries::from_path(path)?;
+    if s.dim() != n {
+        bail!(
+            "{}: scene `{name}` has {n} joints, the torque series has {} columns",
+            path.display(),
+            s.dim()
+        );
+    }
+    Ok(CliInput::Series(s))
+}
+
+/// The joint torques of a run of the finger of scene `name` with `n` joints.
+pub fn input(args: &SimulateArgs, name: &str, n: usize) -> Result<CliInput> {
     if let Some(path) = &args.torques {
-        let s = TorqueSeries::from_path(path)?;
-        if s.dim() != n {
-            bail!(
-                "{}: the scene has {n} joints, the torque series has {} columns",
-                path.display(),
-                s.dim()
-            );
-        }
-        return Ok(CliInput::Series(s));
+        return series(path, name, n);
     }
     if let Some(gains) = &args.pd_track {
         return tracking(args, gains).map(CliInput::Tracking);

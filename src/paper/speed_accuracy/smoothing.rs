@@ -102,7 +102,11 @@ pub(super) fn section(rows: &[EpsRow], fig_dir: &Path) -> Result<String> {
     md.push_str(
         "Smoothing ε of |x| ≈ √(x² + ε²) (eq. 58–59), default mesh (Radau, cold solves): error of the \
          smooth contact point against the exact one (eq. 3) at the solution's contact \
-         nodes, and the change of J.\n\n\
+         nodes, and the change of J. Each row is one cold solve, **not verified** by \
+         re-integration: its J is the discretised problem's local optimum at that ε, and a \
+         cold solve can miss the verification's tolerance (`report strategies` verifies the \
+         cold solve at ε = 0.01); what a row measures is the smoothing's error in the contact \
+         point.\n\n\
          | ε (m) | status | J | period (s) | contact-point error (m) | solve (s) | iterations |\n\
          |---|---|---|---|---|---|---|\n",
     );

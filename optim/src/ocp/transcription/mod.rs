@@ -37,7 +37,7 @@ use super::block::{GraphFn, KernelUse};
 pub use super::mesh::{Colloc, Mesh};
 use super::problem::{Objective, Ocp, Scheme, VarRef};
 use crate::OptimError;
-use crate::error::{PhaseDefect, PointDefect};
+use crate::error::{FunctionTooLarge, PhaseDefect, PointDefect};
 use crate::ipm::{BOUND_INF, Nlp};
 
 mod between;
@@ -383,9 +383,10 @@ impl Transcription {
                 return Err(OptimError::Phase {
                     index: pi,
                     name: ph.name.clone(),
-                    defect: PhaseDefect::GraphTooLarge {
+                    defect: PhaseDefect::GraphTooLarge(FunctionTooLarge {
+                        function: "node",
                         limit: col.graph.limit(),
-                    },
+                    }),
                 });
             }
             if matches!(kernels, KernelUse::Require(_)) && f.kernel_name().is_none() {
@@ -534,9 +535,10 @@ impl Transcription {
             let locals: Vec<u32> = pf.vars.iter().map(|v| v.0).collect();
             let f = GraphFn::new(&mut graph, &pf.outputs, &locals, &pf.fixed);
             if graph.exceeded() {
-                return Err(bad(PointDefect::GraphTooLarge {
+                return Err(bad(PointDefect::GraphTooLarge(FunctionTooLarge {
+                    function: "point",
                     limit: graph.limit(),
-                }));
+                })));
             }
             let r0 = m;
             let targets = (0..pf.outputs.len()).map(|i| vec![(r0 + i, 1.0)]).collect();
