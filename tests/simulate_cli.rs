@@ -322,6 +322,7 @@ fn cli_bad_inputs_give_clear_errors() {
             2,
         ),
         (vec!["--rtol", "0"], vec!["--rtol"], 2),
+        (vec!["--rtol", "1000"], vec!["--rtol", "at most 0.1"], 2),
         (
             vec!["--pd", "0,0,0", "--pd-gains", "1,2,3"],
             vec!["--pd-gains"],
@@ -366,6 +367,20 @@ fn cli_bad_inputs_give_clear_errors() {
         (
             vec!["--init", sticking, "--mode0", "slip"],
             vec!["in mode slip", "slip direction undefined", "sticking.json"],
+            1,
+        ),
+        // On the ball but moving off it and sliding: no sticking contact, which the first
+        // step's projection used to remove without a word.
+        (
+            vec![
+                "--q0",
+                "0.1,1.0,1.2263822707834908",
+                "--qd0",
+                "0,0,-0.2",
+                "--mode0",
+                "stick",
+            ],
+            vec!["initial mode stick", "n·v_c = ", "‖Δv‖ = ", "--mode0 slip"],
             1,
         ),
     ];
@@ -978,6 +993,19 @@ fn a_replay_says_what_it_does_not_replay() {
     assert!(held(&s), "{s}");
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(stderr.contains("holds its last torque"), "{stderr}");
+    // A one-row series is a constant torque: the run goes on to --t-end, holding it, and says
+    // so as well.
+    let one = dir.join("one.csv");
+    std::fs::write(&one, "t,tau1,tau2,tau3\n0,0,0.1,0\n").unwrap();
+    let constant = dir.join("constant");
+    let o = simulate_into(
+        &constant,
+        &["--torques", one.to_str().unwrap(), "--t-end", "0.2"],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = json(&constant.join("summary.json"));
+    assert_eq!(s["t_final"].as_f64(), Some(0.2));
+    assert!(held(&s), "{s}");
 
     let flat = dir.join("flat");
     let o = simulate_into(&flat, &["--no-projection", "--t-end", "1"]);

@@ -462,6 +462,46 @@ fn penetration_beyond_the_allowance_is_not_verified() {
     assert!(path_failure(&deep).unwrap().contains("-5e-6 m"));
 }
 
+/// Honest output: a free phase that ends without an impact is judged by the exact contact
+/// distance too. `reach` bounds the smoothed distance at its end (h(t_f) = 1e-4 r); with a
+/// coarse ε (0.05 m) the smoothed contact point lies off the link, and the finger it plans
+/// ends inside the ball by the exact contact. The verification's exact min h must be at most
+/// the exact distance of the collocated end state (computed here with the generated exact
+/// contact kernel), below the allowance, and fail the verdict naming the exact contact; the
+/// same record with the exact min h within the allowance passes.
+#[test]
+fn a_path_inside_the_ball_by_the_exact_contact_is_not_verified() {
+    use ball_finger::pipeline::verify::{PENETRATION_TOLERANCE, path_failure};
+    let exact_h = |q: &[f64]| {
+        let z = [0.0; 3];
+        let mut c = k::Contact::default();
+        k::contact(&[q[0], q[1], q[2]], &z, &z, &k::PARAM_DEFAULTS, &mut c);
+        c.h
+    };
+    let s = ProblemSettings {
+        epsilon: Some(0.05),
+        ..ProblemSettings::default()
+    };
+    let (p, sol) = solved("reach", &s);
+    let mut v = verify(&p, &sol, RTOL).unwrap();
+    let ph = &v.phases[0];
+    assert_eq!(ph.mode, PhaseMode::Free);
+    let min_exact = ph.min_h_exact.expect("a reach ends without an impact");
+    let end = exact_h(&ph.x_colloc_end);
+    assert!(min_exact <= end + 1e-6, "{min_exact} against {end}");
+    assert!(end < -PENETRATION_TOLERANCE, "exact h at the end {end}");
+    // This test's single coarse solve sags between its nodes by the smoothed distance too; the
+    // record with that check passing is judged by the exact distance alone.
+    v.phases[0].min_h = Some(1e-4);
+    let why = path_failure(&v).expect("inside the ball by the exact contact");
+    assert!(
+        why.contains("phase 1 (free)") && why.contains("exact contact"),
+        "{why}"
+    );
+    v.phases[0].min_h_exact = Some(-0.5 * PENETRATION_TOLERANCE);
+    assert_eq!(path_failure(&v), None, "{v}");
+}
+
 /// Honest output: an optimum whose free path touches the ball by the exact contact (the
 /// plant's) well before its planned impact is not verified. The smoothed contact (eq. 58–59)
 /// keeps such a path a few µm clear, so its nodes and its min h pass; a plant strikes the
@@ -553,7 +593,7 @@ fn collocated_max_lambda_n(p: &BuiltProblem, sol: &OcpSolution, k: usize) -> f64
 #[test]
 fn cone_margin_beyond_the_allowance_is_not_verified() {
     use ball_finger::pipeline::verify::{
-        CONE_TOLERANCE, VERIFIED_DEFECT, cone_failure, is_verified, path_failure,
+        CONE_TOLERANCE, VERIFIED_DEFECT, cone_allowance, cone_failure, is_verified, path_failure,
         record_element_errors,
     };
     let (p, sol) = qc_default();
@@ -586,7 +626,8 @@ fn cone_margin_beyond_the_allowance_is_not_verified() {
     // The coarse optimum slips beyond the allowance; with its element defects within the
     // tolerance (the release phase exceeds it) it is still not verified, and the reason says
     // where and by how much.
-    let allowance = CONE_TOLERANCE * 0.8 * max_ln;
+    let allowance = cone_allowance(0.8, max_ln);
+    assert!(allowance > CONE_TOLERANCE * 0.8 * max_ln);
     assert!(min_sigma < -allowance, "{v}");
     v.max_defect = 1e-6;
     sol.verification = Some(v.clone());
@@ -643,14 +684,14 @@ fn cone_margin_beyond_the_allowance_is_not_verified() {
 #[test]
 fn report_tolerance_table_agrees_with_the_verdict() {
     use ball_finger::paper::scenarios::{ScenarioResult, tolerances_markdown};
-    use ball_finger::pipeline::verify::{CONE_TOLERANCE, is_verified};
+    use ball_finger::pipeline::verify::{cone_allowance, is_verified};
     let (p, sol) = qc_default();
     // The coarse optimum slips beyond the allowance (see above); the same record with a
     // margin within it; each with and without penetration.
     let mut slip = verify(p, sol, RTOL).unwrap();
     slip.max_defect = 1e-6;
     let k = stick_phase(&slip);
-    let allowance = CONE_TOLERANCE * slip.mu_s * slip.phases[k].max_lambda_n.unwrap();
+    let allowance = cone_allowance(slip.mu_s, slip.phases[k].max_lambda_n.unwrap());
     let mut v = slip.clone();
     v.phases[k].min_sigma = Some(-0.5 * allowance);
     let mut deep = v.clone();
@@ -818,4 +859,24 @@ fn the_impact_record_agrees_with_the_kernels_and_flags_an_impulse_outside_the_co
     let failure = impulse_cone_failure(&imposed).unwrap();
     assert!(failure.contains("end of phase 1"), "{failure}");
     assert!(!passes(&imposed));
+}
+
+/// Without friction (μ_s = 0) the cone is the normal direction alone: the allowance keeps a
+/// rounding floor of `CONE_ROUNDING` of the normal force, so that the tangential force an
+/// accurate solve leaves (1e-8 of λ_n) is not a slip, while a real one (1e-4 of λ_n) is; with
+/// friction the floor adds only that rounding to 1 % of the cone.
+#[test]
+fn a_frictionless_cone_allows_rounding_only() {
+    use ball_finger::pipeline::verify::{CONE_ROUNDING, CONE_TOLERANCE, cone_allowance};
+    let lambda_n = 2.5;
+    let a = cone_allowance(0.0, lambda_n);
+    assert_eq!(a, CONE_ROUNDING * lambda_n);
+    assert!(1e-8 * lambda_n < a && 1e-4 * lambda_n > a);
+    let with = cone_allowance(0.8, lambda_n);
+    assert!((with - (CONE_TOLERANCE * 0.8 + CONE_ROUNDING) * lambda_n).abs() < 1e-15);
+    assert_eq!(
+        cone_allowance(0.8, -1.0),
+        0.0,
+        "a pulling force has no cone"
+    );
 }

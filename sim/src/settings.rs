@@ -23,6 +23,9 @@ pub enum Method {
     },
 }
 
+/// The largest relative tolerance [`SimSettings::validate`] accepts: 10 % per step.
+pub const MAX_RTOL: f64 = 0.1;
+
 /// Settings of a simulation run. Every field is public; [`SimSettings::default`] documents the
 /// defaults and [`SimSettings::validate`] checks ranges.
 #[derive(Debug, Clone, PartialEq)]
@@ -111,6 +114,16 @@ impl SimSettings {
             }
         }
         pos("rtol", self.rtol)?;
+        if self.rtol > MAX_RTOL {
+            return Err(SimError::InvalidSetting {
+                name: "rtol",
+                msg: format!(
+                    "must be at most {MAX_RTOL} (a relative error of 10 % per step, beyond which \
+                     the step-size control no longer measures anything), got {}",
+                    self.rtol
+                ),
+            });
+        }
         pos("atol", self.atol)?;
         pos("h_min", self.h_min)?;
         pos("h_max", self.h_max)?;

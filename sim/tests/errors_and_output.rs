@@ -234,3 +234,67 @@ fn write_to_missing_directory_is_io_error() {
     assert!(matches!(e, SimError::Io { .. }));
     assert!(e.to_string().contains("run.json"));
 }
+
+/// x' = v, v' = g − k v with a huge damping k (the simulator's view of `μ_v` = 10⁹): an
+/// explicit step much longer than 1/k carries its stages to |v| ~ 10¹⁵ and beyond, where this
+/// system (like a model whose kernels overflow) refuses to evaluate.
+struct StiffDrag {
+    k: f64,
+    refused: std::cell::Cell<usize>,
+}
+
+impl HybridSystem for StiffDrag {
+    type Mode = ();
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&self, _: (), _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), SimError> {
+        if x.iter().any(|v| v.abs() > 1e13) {
+            self.refused.set(self.refused.get() + 1);
+            return Err(SimError::system("non-finite mass matrix"));
+        }
+        dx[0] = x[1];
+        dx[1] = 9.81 - self.k * x[1];
+        Ok(())
+    }
+}
+
+/// A trial step whose stages blew up far beyond the state it started from is a rejected step,
+/// retried shorter, not the end of the run with the system's complaint about the blown-up
+/// state: the run reaches its end at the closed-form terminal velocity g / k. A system error
+/// at a state the step did not blow up still ends the run as before.
+#[test]
+fn a_step_that_blows_up_is_retried_shorter() {
+    let sys = StiffDrag {
+        k: 1e9,
+        refused: std::cell::Cell::new(0),
+    };
+    // A first step of 10 µs, ten thousand times 1/k: its stages grow by about h k per stage.
+    let set = SimSettings {
+        h_init: Some(1e-5),
+        // v settles at about 1e-8 m/s: an absolute tolerance well below that.
+        atol: 1e-18,
+        ..SimSettings::default()
+    };
+    let out = simulate(&sys, set.clone(), (), 0.0, &[0.0, 0.0], 1e-4).unwrap_or_else(|e| {
+        panic!("{}", e.error);
+    });
+    assert!(
+        sys.refused.get() > 0,
+        "no stage blew up: the test tests nothing"
+    );
+    assert!(out.stats.rejected_steps > 0);
+    let v = out.trajectory.x.last().unwrap()[1];
+    let terminal = 9.81 / 1e9;
+    assert!(
+        ((v - terminal) / terminal).abs() < 1e-6,
+        "{v} against {terminal}"
+    );
+    // Started where the system refuses outright: its own error, unchanged.
+    let e = simulate(&sys, set, (), 0.0, &[0.0, 1e14], 1e-6).unwrap_err();
+    assert!(
+        matches!(&e.error, SimError::System { msg } if msg.contains("mass matrix")),
+        "{}",
+        e.error
+    );
+}

@@ -685,18 +685,18 @@ pub fn active_bounds_markdown(results: &[ScenarioResult]) -> String {
 /// the record), so the table and the `verified` column cannot disagree.
 pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
     use crate::pipeline::verify::{
-        CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT, penetration_failure,
+        CONE_ROUNDING, CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT, penetration_failure,
         worst_cone_margin,
     };
     let mut s = format!(
         "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e}; along the \
          re-integrated free phases, penetration min h ≥ −{PENETRATION_TOLERANCE:e} r, r the \
          ball's radius (the problem's own allowance at touch-down and release); along the re-integrated stick \
-         phases, friction-cone margin min σ ≥ −{CONE_TOLERANCE} · μ_s max λ_n of the phase \
+         phases, friction-cone margin min σ ≥ −({CONE_TOLERANCE} μ_s + {CONE_ROUNDING:e}) max λ_n of the phase \
          (σ = μ_s λ_n − ‖λ_∥‖, eq. 18; the optimum satisfies σ ≥ 0 at its collocation nodes \
          only). All three decide the verdict; the cone columns show the stick phase with the \
          lowest margin relative to its allowance.\n\n\
-         | scenario | min h (m) | within | phase | min σ (N) | −{CONE_TOLERANCE} · μ_s max λ_n (N) | within |\n\
+         | scenario | min h (m) | within | phase | min σ (N) | −({CONE_TOLERANCE} μ_s + {CONE_ROUNDING:e}) max λ_n (N) | within |\n\
          |---|---|---|---|---|---|---|\n"
     );
     for r in results {
@@ -707,7 +707,7 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
         let h = v
             .phases
             .iter()
-            .filter_map(|p| p.min_h)
+            .flat_map(|p| p.min_h.into_iter().chain(p.min_h_exact))
             .fold(f64::INFINITY, f64::min);
         let yes = |ok: bool| if ok { "yes" } else { "**no**" };
         let h_cells = if h.is_finite() {

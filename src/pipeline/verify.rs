@@ -9,8 +9,8 @@
 //! | stick phases: λ from the index-reduced stick law (`Model::stick`, d/dt Δv = 0) | eq. 29, 33 |
 //! | [`PhaseVerification::max_delta_v`]: drift of the stick constraint Δv = 0 | eq. 13–14 |
 //! | [`PhaseVerification::min_lambda_n`], [`PhaseVerification::max_lambda_n`], [`PhaseVerification::min_sigma`] | eq. 12, 18 |
-//! | [`cone_failure`]: min σ against [`CONE_TOLERANCE`] · μ_s max λ_n ([`cone_allowance`]), part of the verdict | eq. 18–19 |
-//! | [`PhaseVerification::min_h`], [`penetration_failure`]: penetration check of free phases, part of the verdict | eq. 4 |
+//! | [`cone_failure`]: min σ against ([`CONE_TOLERANCE`] · μ_s + [`CONE_ROUNDING`]) max λ_n ([`cone_allowance`]), part of the verdict | eq. 18–19 |
+//! | [`PhaseVerification::min_h`], [`PhaseVerification::min_h_exact`], [`penetration_failure`]: penetration check of free phases (the exact contact's too where a phase ends without an impact), part of the verdict | eq. 3–4 |
 //! | [`PhaseVerification::node_residual`]: the OCP's dynamics residual at the collocation nodes, evaluated with bf-model's kernels and parameters | eq. 26, 29 |
 //! | [`ImpactCone`] (`Verification::impacts`): each planned impulse against the friction cone, part of the verdict where the problem imposed it ([`impulse_cone_failure`]), a flag otherwise ([`impulse_cone_warning`], decision record 0087) | eq. 36, 66 |
 //! | contact geometry with the smooth saturation of the solution's ε | eq. 58–59 |
@@ -162,6 +162,18 @@ impl<const N: usize> ElementSystem<'_, N> {
             };
         }
         VecN::<N>::from(u)
+    }
+
+    /// The exact contact distance h₀ (the plant's, eq. 4 with the exact sat(α) of eq. 3) at
+    /// the state `x` (m).
+    fn exact_distance(&self, x: &[f64]) -> Result<f64, String> {
+        let st = Self::state(x).map_err(|e| e.to_string())?;
+        Ok(self
+            .exact
+            .evaluate(&st)
+            .map_err(|e| e.to_string())?
+            .contact
+            .h)
     }
 
     fn state(x: &[f64]) -> Result<State<N>, SimError> {
@@ -462,14 +474,7 @@ impl Touch {
         x: &[f64],
     ) -> Result<(), String> {
         if self.first.is_none() {
-            let st = ElementSystem::<N>::state(x).map_err(|e| e.to_string())?;
-            let h = sys
-                .exact
-                .evaluate(&st)
-                .map_err(|e| e.to_string())?
-                .contact
-                .h;
-            self.add_distance(t, h);
+            self.add_distance(t, sys.exact_distance(x)?);
         }
         Ok(())
     }
@@ -580,6 +585,10 @@ fn verify_phase<const N: usize>(
     let time = |s: f64| 0.5 * (s + 1.0) * big_t;
     let mut stats = PathStats::new();
     let mut touch = Touch::new(radius);
+    // A free phase that ends without an impact (a release, a reach) has no planned contact to
+    // excuse an exact distance below zero: its whole path is checked with the plant's contact.
+    let exact_path = mode == PhaseMode::Free && !ends_at_impact;
+    let mut min_h_exact = f64::INFINITY;
     let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
     let mut failure: Option<(f64, String)> = None;
     let mut parts = [0.0f64; 3];
@@ -651,6 +660,12 @@ fn verify_phase<const N: usize>(
                 .iter()
                 .zip(&out.trajectory.x)
                 .try_for_each(|(t, x)| touch.add(&sys, *t, x));
+        }
+        if exact_path && path.is_ok() {
+            path = out.trajectory.x.iter().try_for_each(|x| {
+                min_h_exact = min_h_exact.min(sys.exact_distance(x)?);
+                Ok(())
+            });
         }
         let measured = err.is_none() && path.is_ok();
         element_min_h.push(if measured { el.min_h } else { f64::NAN });
@@ -739,6 +754,7 @@ fn verify_phase<const N: usize>(
         min_h: finite_or_none(stats.min_h, !stick),
         element_min_h: if stick { Vec::new() } else { element_min_h },
         first_touch: touch.first,
+        min_h_exact: finite_or_none(min_h_exact, exact_path && !failed),
         max_delta_v: finite_or_none(stats.max_dv, stick),
         min_lambda_n: finite_or_none(stats.min_ln, stick),
         max_lambda_n: finite_or_none(stats.max_ln, stick),
@@ -768,6 +784,11 @@ pub const PENETRATION_TOLERANCE: f64 = 1e-4;
 /// one by up to [`VERIFIED_DEFECT`]. Margins down to −1 % of the cone pass; a lower one
 /// fails the verification ([`path_failure`]).
 pub const CONE_TOLERANCE: f64 = 0.01;
+
+/// The rounding a friction-cone margin may show whatever μ_s, as a fraction of the normal
+/// force (or impulse): with μ_s = 0 the cone is the normal direction alone, and the tangential
+/// force an accurate solve leaves is its rounding, not a slip.
+pub const CONE_ROUNDING: f64 = 1e-6;
 
 /// Whether `sol` carries a re-integration that reached the end of every element with an
 /// element-wise defect of at most [`VERIFIED_DEFECT`] and no path check outside its
@@ -899,7 +920,7 @@ pub fn path_excess(v: &Verification) -> f64 {
         v.phases
             .iter()
             .filter(|p| p.mode == PhaseMode::Free)
-            .filter_map(|p| p.min_h),
+            .flat_map(|p| p.min_h.into_iter().chain(p.min_h_exact)),
         PENETRATION_TOLERANCE * v.radius,
         worst_cone_margin(v),
     )
@@ -955,17 +976,31 @@ fn excess_of(min_h: impl Iterator<Item = f64>, tol: f64, cone: Option<ConeMargin
 /// The first free phase of `v` whose re-integrated path penetrates the ball deeper than
 /// [`PENETRATION_TOLERANCE`] radii (min h < −10⁻⁴ r), as a sentence naming the phase, min h
 /// and the allowance: a long free phase that grazes the ball can sag into it between its nodes.
+/// A free phase that ends without an impact is also judged by the exact contact distance
+/// ([`PhaseVerification::min_h_exact`]): with a coarse smoothing ε the smoothed distance can
+/// keep the path clear of a ball the plant's finger enters.
 pub fn penetration_failure(v: &Verification) -> Option<String> {
     let tol = PENETRATION_TOLERANCE * v.radius;
     v.phases.iter().find_map(|p| {
-        let h = p.min_h?;
-        (p.mode == PhaseMode::Free && h < -tol).then(|| {
-            format!(
+        if p.mode != PhaseMode::Free {
+            return None;
+        }
+        if let Some(h) = p.min_h.filter(|&h| h < -tol) {
+            return Some(format!(
                 "phase {} (free): the re-integrated path penetrates the ball, min h = {h:.3e} m \
                  below the allowance -{tol:e} m",
                 p.phase + 1
-            )
-        })
+            ));
+        }
+        let h = p.min_h_exact.filter(|&h| h < -tol)?;
+        Some(format!(
+            "phase {} (free): the re-integrated path penetrates the ball by the exact contact \
+             (the plant's), min h = {h:.3e} m below the allowance -{tol:e} m, while the \
+             smoothed distance the problem bounds stays at {}: the smoothing ε is too coarse \
+             for this path (a smaller --epsilon)",
+            p.phase + 1,
+            p.min_h.map_or("—".to_string(), |h| format!("{h:.3e} m"))
+        ))
     })
 }
 
@@ -999,10 +1034,11 @@ impl ConeMargin {
     }
 }
 
-/// [`CONE_TOLERANCE`] · μ_s · max λ_n (N): the margin σ a stick phase whose re-integrated
-/// normal force peaks at `max_lambda_n` may show (0 if the force never pushes).
+/// ([`CONE_TOLERANCE`] · μ_s + [`CONE_ROUNDING`]) · max λ_n (N): the margin σ a stick phase
+/// whose re-integrated normal force peaks at `max_lambda_n` may show (0 if the force never
+/// pushes); of an impulse, with its normal part ι·n for `max_lambda_n` (N s).
 pub fn cone_allowance(mu_s: f64, max_lambda_n: f64) -> f64 {
-    CONE_TOLERANCE * mu_s * max_lambda_n.max(0.0)
+    (CONE_TOLERANCE * mu_s + CONE_ROUNDING) * max_lambda_n.max(0.0)
 }
 
 /// The cone margin of every stick phase of `v` that has one (the record holds μ_s, and the

@@ -149,6 +149,13 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
         }
     };
     pos("--rtol", args.rtol)?;
+    if args.rtol > bf_sim::MAX_RTOL {
+        return Err(crate::errors::usage(format!(
+            "--rtol must be at most {} (a relative error of 10 % per step; got {})",
+            bf_sim::MAX_RTOL,
+            args.rtol
+        )));
+    }
     pos("--step", args.step)?;
     pos("--h-max", args.h_max)?;
     let atol = args.atol.unwrap_or(1e-2 * args.rtol);
@@ -532,7 +539,7 @@ fn run_contact<const N: usize>(
 /// torques ends with them), or [`crate::cli::DEFAULT_T_END`].
 pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput) -> f64 {
     args.t_end
-        .or_else(|| inp.series_end())
+        .or_else(|| inp.series_end().filter(|&t| t > 0.0))
         .unwrap_or(crate::cli::DEFAULT_T_END)
 }
 
@@ -665,6 +672,40 @@ fn run_model<K: Kernels<N>, const N: usize>(
              torques: {inputs}",
             initial_state_options(args)
         );
+    }
+    // A contact mode holds the contact point on the ball's surface (n·v_c = 0, eq. 36), and
+    // Stick also with it (Δv = 0, eq. 13). The first step's projection would remove any
+    // mismatch without an event, so a finger started moving off the ball, or slipping in
+    // Stick, would silently lose that motion and its energy.
+    if mode0 != Mode::Free {
+        let vtol = sys.model.settings().slip_eps;
+        let slip = if mode0 == Mode::Stick {
+            info.slip_speed
+        } else {
+            0.0
+        };
+        if info.normal_velocity.abs() > vtol || slip > vtol {
+            bail!(
+                "initial mode {} (--mode0 or --init): the contact point must move with the \
+                 ball's surface{}, but n·v_c = {:.3e} m/s and ‖Δv‖ = {:.3e} m/s at the initial \
+                 state (tolerance {vtol:e} m/s); give velocities that keep the contact (e.g. \
+                 --qd0 0 and --omega0 0), or start in {}; initial state: {}",
+                crate::names::name(&mode0),
+                if mode0 == Mode::Stick {
+                    " and stick to it (n·v_c = 0, Δv = 0)"
+                } else {
+                    " (n·v_c = 0)"
+                },
+                info.normal_velocity,
+                info.slip_speed,
+                if mode0 == Mode::Stick {
+                    "slip (--mode0 slip) if it slides, or free if it leaves the ball"
+                } else {
+                    "free (--mode0 free)"
+                },
+                initial_state_options(args)
+            );
+        }
     }
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     if let Some(n) = run_opts.fail_at_write {

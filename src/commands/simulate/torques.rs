@@ -29,11 +29,12 @@ pub enum CliInput {
 }
 
 impl CliInput {
-    /// The last time of a `--torques` series (s): where `simulate` ends its run unless
-    /// `--t-end` says otherwise, and past which the series holds its last torque.
+    /// The last time of a `--torques` series (s): past it the series holds its last torque,
+    /// and `simulate` ends its run there unless `--t-end` says otherwise or it is not after
+    /// the start (a one-row series is a constant torque, held over the default run).
     pub fn series_end(&self) -> Option<f64> {
         match self {
-            CliInput::Series(s) => s.times().last().copied().filter(|t| *t > 0.0),
+            CliInput::Series(s) => s.times().last().copied(),
             _ => None,
         }
     }
