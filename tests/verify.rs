@@ -462,44 +462,57 @@ fn penetration_beyond_the_allowance_is_not_verified() {
     assert!(path_failure(&deep).unwrap().contains("-5e-6 m"));
 }
 
-/// Honest output: a free phase that ends without an impact is judged by the exact contact
-/// distance too. `reach` bounds the smoothed distance at its end (h(t_f) = 1e-4 r); with a
-/// coarse ε (0.05 m) the smoothed contact point lies off the link, and the finger it plans
-/// ends inside the ball by the exact contact. The verification's exact min h must be at most
-/// the exact distance of the collocated end state (computed here with the generated exact
-/// contact kernel), below the allowance, and fail the verdict naming the exact contact; the
-/// same record with the exact min h within the allowance passes.
+/// Honest output: a free path is judged by the smoothing's error in the contact distance near
+/// the ball. `reach` bounds the smoothed distance at its end (h(t_f) = 1e-4 r); with a coarse ε
+/// (0.05 m) the smoothed contact point lies off the link, and the finger it plans ends inside
+/// the ball by the exact contact. The recorded error must be at least |h₀ − h_ε| of the
+/// collocated end state (both computed here with the generated exact and smooth contact
+/// kernels), beyond the allowance, and fail the verdict naming the exact contact; at the
+/// default ε (0.01 m) the same path's error is a fraction of the allowance.
 #[test]
-fn a_path_inside_the_ball_by_the_exact_contact_is_not_verified() {
+fn a_path_whose_smoothing_misplaces_the_ball_is_not_verified() {
     use ball_finger::pipeline::verify::{PENETRATION_TOLERANCE, path_failure};
-    let exact_h = |q: &[f64]| {
-        let z = [0.0; 3];
+    let h = |q: &[f64], eps: Option<f64>| {
+        let (z, q) = ([0.0; 3], [q[0], q[1], q[2]]);
         let mut c = k::Contact::default();
-        k::contact(&[q[0], q[1], q[2]], &z, &z, &k::PARAM_DEFAULTS, &mut c);
+        match eps {
+            Some(e) => k::contact_smooth(&q, &z, &z, e, &k::PARAM_DEFAULTS, &mut c),
+            None => k::contact(&q, &z, &z, &k::PARAM_DEFAULTS, &mut c),
+        }
         c.h
     };
-    let s = ProblemSettings {
-        epsilon: Some(0.05),
-        ..ProblemSettings::default()
-    };
-    let (p, sol) = solved("reach", &s);
-    let mut v = verify(&p, &sol, RTOL).unwrap();
-    let ph = &v.phases[0];
-    assert_eq!(ph.mode, PhaseMode::Free);
-    let min_exact = ph.min_h_exact.expect("a reach ends without an impact");
-    let end = exact_h(&ph.x_colloc_end);
-    assert!(min_exact <= end + 1e-6, "{min_exact} against {end}");
-    assert!(end < -PENETRATION_TOLERANCE, "exact h at the end {end}");
-    // This test's single coarse solve sags between its nodes by the smoothed distance too; the
-    // record with that check passing is judged by the exact distance alone.
-    v.phases[0].min_h = Some(1e-4);
-    let why = path_failure(&v).expect("inside the ball by the exact contact");
-    assert!(
-        why.contains("phase 1 (free)") && why.contains("exact contact"),
-        "{why}"
-    );
-    v.phases[0].min_h_exact = Some(-0.5 * PENETRATION_TOLERANCE);
-    assert_eq!(path_failure(&v), None, "{v}");
+    for (eps, coarse) in [(0.05, true), (0.01, false)] {
+        let s = ProblemSettings {
+            epsilon: Some(eps),
+            ..ProblemSettings::default()
+        };
+        let (p, sol) = solved("reach", &s);
+        let mut v = verify(&p, &sol, RTOL).unwrap();
+        let ph = &v.phases[0];
+        assert_eq!(ph.mode, PhaseMode::Free);
+        let error = ph.smoothing_error.expect("a free phase records it");
+        let q = &ph.x_colloc_end;
+        let at_end = (h(q, None) - h(q, Some(eps))).abs();
+        assert!(
+            error >= 0.99 * at_end,
+            "ε {eps}: {error} against {at_end} at the end"
+        );
+        // This test's single coarse solve sags between its nodes by the smoothed distance
+        // too; the record with that check passing is judged by the smoothing alone.
+        v.phases[0].min_h = Some(1e-4);
+        let why = path_failure(&v);
+        if coarse {
+            assert!(error > PENETRATION_TOLERANCE, "{v}");
+            let why = why.expect("the smoothing misplaces the ball");
+            assert!(
+                why.contains("phase 1 (free)") && why.contains("exact contact"),
+                "{why}"
+            );
+        } else {
+            assert!(error < 0.5 * PENETRATION_TOLERANCE, "{v}");
+            assert_eq!(why, None, "{v}");
+        }
+    }
 }
 
 /// Honest output: an optimum whose free path touches the ball by the exact contact (the

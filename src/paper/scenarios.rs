@@ -707,7 +707,7 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
         let h = v
             .phases
             .iter()
-            .flat_map(|p| p.min_h.into_iter().chain(p.min_h_exact))
+            .filter_map(|p| p.min_h)
             .fold(f64::INFINITY, f64::min);
         let yes = |ok: bool| if ok { "yes" } else { "**no**" };
         let h_cells = if h.is_finite() {

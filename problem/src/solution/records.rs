@@ -335,12 +335,13 @@ pub struct PhaseVerification {
     /// there, `duration` − this before the plan's own impact.
     #[serde(default)]
     pub first_touch: Option<f64>,
-    /// Free phases that do not end at an impact: min h along the element re-integrations by
-    /// the exact contact distance (the plant's, without the smoothing ε of eq. 58–59; m);
-    /// `None` in other phases and older files. The smoothed distance the problem bounds can
-    /// keep a path out of the ball that a plant would enter, the more so the larger ε.
+    /// Free phases: the largest |h₀ − h_ε| along the element re-integrations at the samples
+    /// where either distance is within 10⁻² radii of the ball (m): the exact contact distance
+    /// (the plant's, eq. 3–4) against the smoothed one the problem bounds (eq. 58–59, the
+    /// solution's ε). `None` in stick phases and older files. A coarse ε keeps a path clear
+    /// of the ball by the smoothed distance that a plant's finger enters.
     #[serde(default)]
-    pub min_h_exact: Option<f64>,
+    pub smoothing_error: Option<f64>,
     /// Stick phases: max ‖Δv‖ along the element re-integrations (m/s; drift of Δv = 0).
     pub max_delta_v: Option<f64>,
     /// Stick phases: min λ_n along the element re-integrations (N; < 0 means the contact
@@ -626,10 +627,11 @@ impl fmt::Display for Verification {
                 PhaseMode::Stick => "stick",
             };
             let path = match p.mode {
-                PhaseMode::Free => match p.min_h_exact {
-                    Some(h) => format!("min h {}  exact {}", fmt_opt(p.min_h), fmt_opt(Some(h))),
-                    None => format!("min h {}", fmt_opt(p.min_h)),
-                },
+                PhaseMode::Free => format!(
+                    "min h {}  smoothing {}",
+                    fmt_opt(p.min_h),
+                    fmt_opt(p.smoothing_error)
+                ),
                 PhaseMode::Stick => format!(
                     "max|dv| {}  lambda_n {} .. {}  min sigma {}  max|h| {}",
                     fmt_opt(p.max_delta_v),
