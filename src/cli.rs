@@ -180,7 +180,8 @@ pub struct GenerateArgs {
 /// `--base`/`--tip`: which serial chain of a URDF scene file is the model (docs/scene-format.md).
 #[derive(Debug, Clone, Default, Args)]
 pub struct ChainArgs {
-    /// URDF: the chain's base link, fixed to the world [default: the root link].
+    /// URDF: the chain's base link [default: the root link]; it stays where the URDF's joints
+    /// from the root put it (moving ones at 0), the root being at the world origin.
     #[arg(long = "base", value_name = "LINK")]
     pub base: Option<String>,
     /// URDF: the chain's tip link [default: the leaf of a tree that does not branch].

@@ -6,7 +6,9 @@
 //! ball (an impact on the surface that reverses the approach velocity); `periodic-qc` on the
 //! paper's finger taken from a URDF reaches the optima of the DH paper scene; its plan is
 //! tracked and replayed from the solution file alone; a branched URDF without `--tip` is
-//! refused naming the file, line and link; and `--base`/`--tip` without a URDF are usage errors.
+//! refused naming the file, line and link; `--base` below the root keeps the robot where the
+//! URDF (and a wrapping scene's `[base]`) puts it; and `--base`/`--tip` without a URDF are
+//! usage errors.
 
 #[path = "common/cli.rs"]
 mod cli_util;
@@ -167,6 +169,60 @@ fn a_branched_urdf_needs_a_tip() {
         "0,0,0,0,0,0,0",
     ]);
     ok(&o);
+}
+
+/// `--base LINK` below the root keeps the robot where the URDF puts it: the planar arm's base
+/// link is turned 90° about x on its mount, so the arm hangs in a vertical plane whichever
+/// link the chain starts from (before, `--base base` laid it flat and g was 0); a TOML scene
+/// that wraps the URDF with a `[base]` moves the root and the base link with it.
+#[test]
+fn a_base_link_below_the_root_keeps_its_placement() {
+    let eval = |scene: &str, extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["eval", scene, "--q", "0.3,0.2", "--qd", "0,0"];
+        args.extend(extra);
+        let o = run(&args);
+        ok(&o);
+        serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"))
+    };
+    fn flat(v: &serde_json::Value) -> Vec<f64> {
+        match v {
+            serde_json::Value::Array(a) => a.iter().flat_map(flat).collect(),
+            x => vec![x.as_f64().unwrap()],
+        }
+    }
+    let same = |what: &str, a: &serde_json::Value, b: &serde_json::Value| {
+        for key in ["g", "M", "p_e", "R3"] {
+            let (x, y) = (flat(&a[key]), flat(&b[key]));
+            assert_eq!(x.len(), y.len(), "{what}: {key}");
+            for (u, v) in x.iter().zip(&y) {
+                assert!((u - v).abs() <= 1e-12, "{what}: {key} {x:?} vs {y:?}");
+            }
+        }
+    };
+    let urdf = format!("{URDF}/planar2.urdf");
+    let root = eval(&urdf, &[]);
+    let base = eval(&urdf, &["--base", "base"]);
+    same("planar2 --base base", &base, &root);
+    let g = flat(&root["g"]);
+    assert!(
+        g[0].abs() > 1.0,
+        "the arm hangs in a vertical plane: g = {g:?}"
+    );
+    // A [base] that turns the mount back: the arm lies in the world's horizontal plane.
+    let dir = tmpdir("urdf-base-link");
+    std::fs::copy(cli_util::root().join(&urdf), dir.join("planar2.urdf")).unwrap();
+    let scene = dir.join("flat.toml");
+    std::fs::write(
+        &scene,
+        "name = \"flat\"\nurdf = \"planar2.urdf\"\nkernels = [\"gravity\"]\n\n[base]\n\
+         rotation = { axis = \"x\", angle = \"-pi/2\" }\n",
+    )
+    .unwrap();
+    let scene = scene.to_str().unwrap();
+    let (flat_root, flat_base) = (eval(scene, &[]), eval(scene, &["--base", "base"]));
+    same("[base] with --base base", &flat_base, &flat_root);
+    let g = flat(&flat_base["g"]);
+    assert!(g.iter().all(|x| x.abs() < 1e-12), "horizontal: g = {g:?}");
 }
 
 /// One `optimize --problem periodic-qc` run with `extra` arguments; its solution.json.

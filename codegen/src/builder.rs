@@ -100,7 +100,9 @@ impl Builder {
         }
     }
 
-    /// The chain's base link (fixed to the world); default: the URDF's root link.
+    /// The chain's base link; default: the URDF's root link. As `--base`: it stays where the
+    /// joints from the root put it (moving ones at q = 0), the root placed by the scene's
+    /// `[base]` (the world origin for a `.urdf` file).
     pub fn base(mut self, link: impl Into<String>) -> Self {
         self.chain.base = Some(link.into());
         self

@@ -276,7 +276,9 @@ pub struct Scene {
     /// DH convention of `links`.
     #[serde(default)]
     pub dh: DhConvention,
-    /// Base transform of the chain in world coordinates.
+    /// Base transform of the chain in world coordinates. For a robot read from a URDF: the
+    /// scene file's `[base]` (the root link in the world) followed by the base link's pose in
+    /// the root ([`UrdfChain::base`]), as the loaded scene text records it.
     #[serde(default)]
     pub base: TransformSpec,
     /// Tool transform after the last DH frame (default identity).

@@ -1,8 +1,8 @@
 //! Loading a scene from a file: a TOML scene (whose robot may come from a URDF named by its
 //! `urdf` key) or a URDF file directly. Either way the result is a self-contained scene text
-//! — the URDF chain written out as `[[links]]` in placement form and a `[tool]` — so what a
-//! command records (solution files, the generated module's scene text) parses again without
-//! the URDF.
+//! — the URDF chain written out as `[[links]]` in placement form, a `[tool]`, and a `[base]`
+//! where the base link is not the root's frame — so what a command records (solution files,
+//! the generated module's scene text) parses again without the URDF, to the same kinematics.
 
 use crate::urdf::{UrdfChain, read_chain};
 use crate::{Scene, SpecError, SpecErrorKind, TransformSpec};
@@ -68,9 +68,31 @@ fn transform(out: &mut String, t: &TransformSpec) {
     let _ = writeln!(out, "rotation = {}", mat3(t.rotation_matrix()));
 }
 
-/// The `[tool]` and `[[links]]` tables of a URDF chain, in placement form.
+/// The `[base]` (only when the base link is not at the root's frame, [`UrdfChain::base`]),
+/// `[tool]` and `[[links]]` tables of a URDF chain, in placement form.
 pub fn chain_toml(chain: &UrdfChain) -> String {
+    chain_tables(
+        chain,
+        chain.base.as_ref().map(|b| (b, placement_note(chain))),
+    )
+}
+
+/// The comment of a `[base]` that is the base link's placement alone.
+fn placement_note(chain: &UrdfChain) -> String {
+    format!(
+        "# Link {:?} where the joints from the root link {:?} put it (moving joints at q = 0).",
+        chain.base_link, chain.root_link
+    )
+}
+
+/// [`chain_toml`] with `base` (a transform and the comment that says what it is) as the
+/// `[base]` table.
+fn chain_tables(chain: &UrdfChain, base: Option<(&TransformSpec, String)>) -> String {
     let mut out = String::new();
+    if let Some((t, note)) = base {
+        let _ = writeln!(out, "\n[base]\n{note}");
+        transform(&mut out, t);
+    }
     if let Some(t) = &chain.tool {
         let _ = writeln!(out, "\n[tool]");
         transform(&mut out, t);
@@ -184,6 +206,17 @@ impl Imported {
                     ),
                 )
             }
+            _ if path.starts_with("base") => (
+                1,
+                1,
+                "robot",
+                path.clone(),
+                format!(
+                    "the placement of base link {:?} ({path} of the imported chain, with the \
+                     scene's [base] if it has one): {message}",
+                    self.chain.base_link
+                ),
+            ),
             _ => (1, 1, "robot", path.clone(), message.clone()),
         };
         SpecError::Urdf(Box::new(crate::error::UrdfError {
@@ -197,7 +230,8 @@ impl Imported {
     }
 }
 
-/// The scene text of a URDF file alone: its chain, gravity [`URDF_GRAVITY`], the kernels
+/// The scene text of a URDF file alone: its chain (with the base link's pose in the root as
+/// `[base]`, the root being the world), gravity [`URDF_GRAVITY`], the kernels
 /// [`URDF_KERNELS`], no ball.
 pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<String, SpecError> {
     urdf_scene(urdf, file, choice).map(|(text, _)| text)
@@ -240,10 +274,14 @@ fn urdf_scene(
 
 /// A TOML scene text with its `urdf`, `base_link` and `tip_link` keys resolved: the keys become
 /// comments (lines keep their numbers, so errors in the user's part point at the user's
-/// lines), gravity defaults to [`URDF_GRAVITY`], and the chain is appended. `dir` is the scene
-/// file's directory (the URDF path is relative to it); `choice` (command-line `--base`/`--tip`)
-/// overrides the scene's links. A text without `urdf` is returned unchanged, and then
-/// `choice` must be empty.
+/// lines), gravity defaults to [`URDF_GRAVITY`], and the chain is appended. The scene's
+/// `[base]` places the URDF's root link in the world; when the base link is not at the root's
+/// frame ([`UrdfChain::base`]), the chain's base transform is that `[base]` followed by the
+/// base link's pose in the root, written as one `[base]` table after the user's (checked
+/// first, at its own lines, then turned into comments). `dir` is the scene file's directory
+/// (the URDF path is relative to it); `choice` (command-line `--base`/`--tip`) overrides the
+/// scene's links. A text without `urdf` is returned unchanged, and then `choice` must be
+/// empty.
 pub fn expand_toml(
     text: &str,
     origin: &str,
@@ -346,26 +384,65 @@ fn expand(
         get("nonphysical_inertia").as_deref(),
     )?;
     let has_gravity = table.iter().any(|(k, _)| k.get_ref().as_ref() == "gravity");
-    let mut out = String::with_capacity(text.len() + 4096);
-    let mut last = 0;
-    keys.sort_by_key(|k| k.2.start);
-    for (n, _, span) in &keys {
+    // A base link away from the root's frame: the chain's base transform is the scene's own
+    // `[base]` (the root in the world) then the base link in the root, written as one `[base]`
+    // in place of the user's, whose lines become comments.
+    let user_base = table.iter().find(|(k, _)| k.get_ref().as_ref() == "base");
+    let mut hidden: Vec<(std::ops::Range<usize>, bool)> = keys
+        .iter()
+        .map(|(n, _, span)| (span.clone(), *n == "urdf" && !has_gravity))
+        .collect();
+    let base = match (&chain.base, user_base) {
+        (None, _) => None,
+        (Some(own), None) => Some((own.clone(), placement_note(&chain))),
+        (Some(own), Some((k, v))) => {
+            let user = scene_base(text, &ix)?;
+            let mut spans = Vec::new();
+            subtree_spans(k, v, &mut spans);
+            hidden.extend(spans.into_iter().map(|r| (r, false)));
+            let pose = |t: &TransformSpec| (t.rotation_matrix(), t.translation());
+            Some((
+                spec(compose(&pose(&user), &pose(own))),
+                format!(
+                    "# The scene's [base] above (root link {:?} in the world), then link {:?} \
+                     where the joints from the root put it (moving joints at q = 0).",
+                    chain.root_link, chain.base_link
+                ),
+            ))
+        }
+    };
+    // Whole lines, in text order, overlapping ones merged (a dotted `base.translation` key
+    // and its table share a line).
+    let mut lines: Vec<(std::ops::Range<usize>, bool)> = Vec::new();
+    hidden.sort_by_key(|h| h.0.start);
+    for (span, gravity) in hidden {
         let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
         let end = text[span.end..]
             .find('\n')
             .map_or(text.len(), |i| span.end + i);
-        out.push_str(&text[last..start]);
-        if *n == "urdf" && !has_gravity {
+        match lines.last_mut() {
+            Some((r, g)) if start <= r.end => {
+                r.end = r.end.max(end);
+                *g |= gravity;
+            }
+            _ => lines.push((start..end, gravity)),
+        }
+    }
+    let mut out = String::with_capacity(text.len() + 4096);
+    let mut last = 0;
+    for (range, gravity) in lines {
+        out.push_str(&text[last..range.start]);
+        if gravity {
             out.push_str(&format!("gravity = {} ", vec3(URDF_GRAVITY)));
         }
-        for (i, line) in text[start..end].split('\n').enumerate() {
+        for (i, line) in text[range.clone()].split('\n').enumerate() {
             if i > 0 {
                 out.push('\n');
             }
             out.push_str("# ");
             out.push_str(line);
         }
-        last = end;
+        last = range.end;
     }
     out.push_str(&text[last..]);
     let first_line = out.lines().count() + 1;
@@ -378,13 +455,45 @@ fn expand(
         chain.tip_link,
         chain.joint_names
     );
-    out.push_str(&chain_toml(&chain));
+    out.push_str(&chain_tables(
+        &chain,
+        base.as_ref().map(|(t, note)| (t, note.clone())),
+    ));
     let imported = Imported {
         chain,
         file,
         first_line,
     };
     Ok((out, Some(imported)))
+}
+
+/// The `[base]` of a TOML scene text (identity when absent), read and checked on its own,
+/// with errors at the user's lines: the scene text that is validated holds the composed one.
+fn scene_base(text: &str, ix: &crate::error::SourceIndex<'_>) -> Result<TransformSpec, SpecError> {
+    #[derive(serde::Deserialize)]
+    struct BaseOnly {
+        #[serde(default)]
+        base: TransformSpec,
+    }
+    let b: BaseOnly = toml::from_str(text).map_err(|e| ix.locate_toml_error(&e, false))?;
+    crate::validate::check_transform(ix, "base", &b.base)?;
+    Ok(b.base)
+}
+
+/// The spans of key `k` with value `v` and of everything under it: a table's header (or
+/// dotted key) and every key and value of its body, which need not follow it in the text.
+fn subtree_spans(
+    k: &toml::Spanned<toml::de::DeString<'_>>,
+    v: &toml::Spanned<toml::de::DeValue<'_>>,
+    out: &mut Vec<std::ops::Range<usize>>,
+) {
+    let (ks, vs) = (k.span(), v.span());
+    out.push(ks.start.min(vs.start)..ks.end.max(vs.end));
+    if let toml::de::DeValue::Table(t) = v.get_ref() {
+        for (k, v) in t.iter() {
+            subtree_spans(k, v, out);
+        }
+    }
 }
 
 /// The URDF file a TOML scene text names in its `urdf` key, resolved against `dir` (the scene

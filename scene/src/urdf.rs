@@ -2,6 +2,12 @@
 //! ([`LinkSpec`] with `origin` and `axis`), the same description the DH readers produce.
 //!
 //! Semantics (as Pinocchio's `buildReducedModel` with every joint off the chain locked at 0):
+//! * the root link is the world frame of the URDF; the base link (the root by default) sits
+//!   where the joints from the root down to it put it with their moving joints at q = 0, the
+//!   product of their origins ([`UrdfChain::base`]): a scene uses that pose as the chain's
+//!   base transform, after its own `[base]` (which places the root in the world), so the
+//!   choice of base link changes which joints move, never where the robot is or which way
+//!   gravity pulls;
 //! * the moving joints (revolute, continuous, prismatic) on the chain from the base link to the
 //!   tip link are the model's joints, in chain order; continuous joints are revolute joints
 //!   without limits;
@@ -14,7 +20,8 @@
 //!   the inertia tensors (rotated by the inertial origin's rpy and the link's pose) are moved
 //!   to the common COG by the parallel-axis theorem, I = Σ R I_k Rᵀ + m_k (|d_k|² 1 − d_k d_kᵀ)
 //!   (the m_i, COG and I_i of paper eq. 22a);
-//! * bodies fixed to the base (before the first moving joint) do not move and are dropped;
+//! * bodies that do not move (fixed to the base before the first moving joint, above the base
+//!   link, or on branches off the path from the root to it) are dropped;
 //! * an `<inertial>` of mass 0 and a zero inertia (a dummy link) counts as none;
 //! * any finite non-zero `<axis>` is normalised, as urdfdom does;
 //! * `<visual>`, `<collision>`, meshes, `<transmission>` and `<gazebo>` are ignored.
@@ -39,10 +46,18 @@ const I3: M3 = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
 pub struct UrdfChain {
     /// The `<robot name>`.
     pub robot: String,
-    /// The base link (fixed to the world).
+    /// The URDF's root link (the link no joint moves).
+    pub root_link: String,
+    /// The base link, where the chain starts: fixed to the world at [`UrdfChain::base`].
     pub base_link: String,
     /// The tip link (the end of the chain).
     pub tip_link: String,
+    /// The base link's pose in the root link's frame: the product of the joint origins from
+    /// the root down to the base link, every moving joint on that path at q = 0 (as
+    /// Pinocchio's `buildReducedModel` locks them); `None` when that is the identity (the base
+    /// link is the root, by default). A scene places the root in the world by its `[base]`,
+    /// so the chain's base transform is `[base]` ∘ this.
+    pub base: Option<TransformSpec>,
     /// One link per moving joint on the chain, in chain order.
     pub links: Vec<LinkSpec>,
     /// Transform from the last moving joint's frame to the tip link.
@@ -605,6 +620,19 @@ pub fn read_chain(
             }
         }
     };
+    // Where the base link sits: the joints from the root down to it, the moving ones locked at
+    // q = 0 (their motion is then the identity, so only their origins count).
+    let mut above: Vec<usize> = Vec::new();
+    let mut l = base_ix;
+    while let Some(j) = parent_joint[l] {
+        above.push(j);
+        l = joints[j].parent;
+    }
+    let root_ix = l;
+    let base_pose = above
+        .iter()
+        .rev()
+        .fold((I3, [0.0; 3]), |p, &j| compose(&p, &joints[j].origin));
     // The chain: joints from base to tip.
     let mut chain: Vec<usize> = Vec::new();
     let mut l = tip_ix;
@@ -809,8 +837,13 @@ pub fn read_chain(
     });
     Ok(UrdfChain {
         robot,
+        root_link: links[root_ix].name.clone(),
         base_link: links[base_ix].name.clone(),
         tip_link: links[tip_ix].name.clone(),
+        base: (base_pose != (I3, [0.0; 3])).then_some(TransformSpec {
+            translation: Some(base_pose.1),
+            rotation: Some(RotationSpec::Matrix(base_pose.0)),
+        }),
         links: out,
         tool,
         joint_names: moving.iter().map(|&j| joints[j].name.clone()).collect(),

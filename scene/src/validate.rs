@@ -379,7 +379,11 @@ fn check_link_form(
     Ok(())
 }
 
-fn check_transform(ix: &SourceIndex<'_>, path: &str, t: &TransformSpec) -> Result<(), SpecError> {
+pub(crate) fn check_transform(
+    ix: &SourceIndex<'_>,
+    path: &str,
+    t: &TransformSpec,
+) -> Result<(), SpecError> {
     if let Some(tr) = &t.translation {
         check_vec(ix, &format!("{path}.translation"), tr)?;
     }

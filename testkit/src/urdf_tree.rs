@@ -271,7 +271,8 @@ impl UrdfTree {
     }
 
     /// τ = M(q) q̈ + C(q, q̇) q̇ + g(q) of the chain joints `chain` (names), by RNEA on the whole
-    /// tree; `gravity` in the base link's coordinates.
+    /// tree; `gravity` in the root link's coordinates (the joints above the chain's base link
+    /// stay locked at 0, so the base link sits where they put it).
     pub fn rnea(
         &self,
         chain: &[String],

@@ -2,8 +2,9 @@
 //! kit's independent spatial-algebra reference on the URDF's whole tree (`urdf_tree`: its own
 //! XML reader, no lumping, locked joints kept in the tree): M (generator's Jacobian form and
 //! CRBA), C q̇ + g (Lagrangian and Newton–Euler paths), inverse dynamics and the tip pose, to
-//! 1e-12, for URDFs written from published robot data (tests/urdf/); and the DH scenes
-//! (PUMA 560, the paper's finger) against URDF equivalents of them.
+//! 1e-12, for URDFs written from published robot data (tests/urdf/); a chain from a base link
+//! below the root against the reference and the root's chain with the joints above it locked;
+//! and the DH scenes (PUMA 560, the paper's finger) against URDF equivalents of them.
 
 use bf_codegen::Scene;
 use bf_codegen::graph::Id;
@@ -426,4 +427,99 @@ fn paper_finger_urdf_scene_equals_the_dh_paper_scene_kernel_by_kernel() {
             close(&format!("state {k}: `{}` DH vs URDF", ka.name), &x, &y);
         }
     }
+}
+
+/// `scene` with the kernels the locked-joint comparison evaluates.
+fn with_kernels(scene: &Scene) -> Scene {
+    let mut s = scene.clone();
+    s.kernels = ["frames", "gravity", "mass_matrix", "cqd_g"]
+        .map(String::from)
+        .to_vec();
+    s
+}
+
+/// `sub`, the chain from a base link below the root, against `full`, the chain from the root
+/// through `locked` more joints above it, at q_full = (0, …, 0, q) (and q̇, q̈ likewise),
+/// kernel by kernel: the same frames of the sub-chain's links in the world (tip included),
+/// and the sub-chain's rows of g, M, C q̇ + g, the inverse dynamics and its derivatives.
+fn same_as_locked(what: &str, sub: &Scene, full: &Scene, locked: usize) {
+    use bf_codegen::interp::SceneKernels;
+    let (a, b) = (
+        SceneKernels::new(&with_kernels(sub)).unwrap(),
+        SceneKernels::new(&with_kernels(full)).unwrap(),
+    );
+    let (n, nf) = (sub.nq(), full.nq());
+    assert_eq!(n + locked, nf, "{what}");
+    let pad = |v: &[f64]| [vec![0.0; locked], v.to_vec()].concat();
+    for (k, [q, qd, u]) in states(n, 5, 41).into_iter().enumerate() {
+        let (va, vb) = (
+            a.vars(&q, &qd, [0.0; 3], 0.01, &u, None),
+            b.vars(&pad(&q), &pad(&qd), [0.0; 3], 0.01, &pad(&u), None),
+        );
+        for (ka, kb) in a.kernels.iter().zip(&b.kernels) {
+            assert_eq!(ka.name, kb.name);
+            let (x, y) = (ka.eval(&va), kb.eval(&vb));
+            // The sub-chain's part of the full chain's output.
+            let y: Vec<f64> = match ka.name.as_str() {
+                // Positions p_1..p_n, then rotations R_1..R_n (row-major).
+                "frames" => [&y[3 * locked..3 * nf], &y[3 * nf + 9 * locked..]].concat(),
+                "mass_matrix" | "inverse_dynamics_dq" | "inverse_dynamics_dqd" => (locked..nf)
+                    .flat_map(|i| y[i * nf + locked..(i + 1) * nf].to_vec())
+                    .collect(),
+                "gravity" | "cqd_g" | "inverse_dynamics" => y[locked..].to_vec(),
+                // The full chain's free upper joints take part in its accelerations, and the
+                // regressor's columns are the parameters of its own links.
+                _ => continue,
+            };
+            close(&format!("{what}, state {k}: `{}`", ka.name), &x, &y);
+        }
+    }
+}
+
+/// A base link below the root (`--base arm_base`: under a fixed joint, a revolute and a
+/// prismatic one, all with turned and offset origins) sits where those joints put it at q = 0,
+/// as Pinocchio's `buildReducedModel` places it: the imported kernels match the tree reference
+/// with those joints locked (gravity at the root, the tip in the root's frame), and, kernel by
+/// kernel, the chain from the root at (0, 0, q). Before, the base link was put at the world
+/// origin with its own axes, which turned gravity with the choice of base.
+#[test]
+fn a_base_link_below_the_root_sits_where_the_locked_joints_put_it() {
+    let file = "mounted_arm.urdf";
+    let text = read(file);
+    let sub = scene_of(&text, file, Some("arm_base"), Some("tip"));
+    let full = scene_of(&text, file, None, Some("tip"));
+    check_against_tree("mounted arm from arm_base", &sub, &text, "arm_base", "tip");
+    assert!(sub.base != Default::default(), "the base link is placed");
+    check_against_tree("mounted arm from the root", &full, &text, "world", "tip");
+    same_as_locked("--base arm_base", &sub, &full, 2);
+    // The shipped planar arm's base link is turned 90° about x on a fixed mount: chosen as the
+    // base, the arm still hangs in the vertical plane (gravity does work on it).
+    let text = read("planar2.urdf");
+    let sub = scene_of(&text, "planar2.urdf", Some("base"), None);
+    let full = scene_of(&text, "planar2.urdf", None, None);
+    same_as_locked("planar2 --base base", &sub, &full, 0);
+}
+
+/// A TOML scene's `[base]` places the URDF's root in the world, and the base link follows it
+/// where the joints from the root put it (world ← [base] ← root ← base link): the scene with
+/// `base_link` matches the scene from the root, with the same `[base]`, at (0, 0, q); and
+/// the recorded text re-reads to the same kernels.
+#[test]
+fn a_scene_base_and_the_base_links_placement_compose() {
+    let dir = std::path::PathBuf::from(dir());
+    let scene = |base_link: &str| {
+        let text = format!(
+            "name = \"mounted\"\nurdf = \"mounted_arm.urdf\"\n{base_link}tip_link = \"tip\"\n\
+             kernels = [\"gravity\"]\ngravity = [0.5, -1.0, -9.7]\n\n[base]\n\
+             translation = [1.0, -0.5, 0.25]\nrotation = {{ axis = \"y\", angle = \"-pi/3\" }}\n"
+        );
+        let text = bf_codegen::spec::expand_toml(&text, "mounted.toml", &dir, &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        let scene = Scene::from_toml_str(&text, "mounted.toml").unwrap_or_else(|e| panic!("{e}"));
+        (scene, text)
+    };
+    let (sub, text) = scene("base_link = \"arm_base\"\n");
+    let (full, _) = scene("");
+    same_as_locked("[base] with base_link arm_base", &sub, &full, 2);
+    assert_eq!(Scene::from_toml_str(&text, "again").unwrap(), sub, "{text}");
 }
