@@ -102,7 +102,25 @@ fn paper_quick_writes_a_consistent_report() {
                 "{name}: claims on an unverified solution are flagged"
             );
         }
-        assert_eq!(cells[12], "direct", "{name}: --quick solves directly");
+        // The mesh the optimum ends on: its refinement's, else the problem's (points per
+        // phase in `elements` Radau elements), read from the solution file.
+        let mesh: Vec<String> = match sol["refinement"]["mesh"].as_array() {
+            Some(phases) => phases
+                .iter()
+                .map(|m| {
+                    let d = m["degrees"].as_array().unwrap();
+                    let points: u64 = d.iter().map(|v| v.as_u64().unwrap()).sum();
+                    format!("{points} ({})", d.len())
+                })
+                .collect(),
+            None => {
+                let elements = sol["scheme"]["Radau"]["elements"].as_u64().unwrap();
+                let points = sol["points"].as_u64().unwrap();
+                vec![format!("{points} ({elements})"); sol["modes"].as_array().unwrap().len()]
+            }
+        };
+        assert_eq!(cells[12], mesh.join(", "), "{name}: the mesh it ends on");
+        assert_eq!(cells[13], "direct", "{name}: --quick solves directly");
         // Independent check of the period: the phase durations add up to it.
         let sum: f64 = sol["phase_durations"]
             .as_array()
