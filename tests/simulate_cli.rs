@@ -1175,3 +1175,53 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A run that fails at a state whose dynamics the model cannot evaluate (a Painlevé paradox of
+/// a slip with μ = 10⁶, eq. 20) still writes what that state gives without accelerations: its
+/// last sample has the distance h, the slip speed and the energy (recomputed here with the
+/// paper's model), and `null` forces, where every field used to be `null`.
+#[test]
+fn a_failed_runs_last_sample_keeps_its_kinematics() {
+    let dir = tmpdir("painleve");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml"))
+        .unwrap()
+        .replace("mu_s = 0.8", "mu_s = 1000000.0")
+        .replace("mu_k = 0.6", "mu_k = 1000000.0");
+    let scene = dir.join("mu_huge.toml");
+    std::fs::write(&scene, text).unwrap();
+    let out_dir = dir.join("out");
+    let o = simulate_into(
+        &out_dir,
+        &[
+            "--scene",
+            scene.to_str().unwrap(),
+            "--impact-law",
+            "stick",
+            "--t-end",
+            "1",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("Painlev"), "{stderr}");
+    let tj = json(&out_dir.join("trajectory.json"));
+    let x: Vec<Vec<f64>> = serde_json::from_value(tj["x"].clone()).unwrap();
+    let last = tj["derived"].as_array().unwrap().last().unwrap().clone();
+    assert!(last["lambda_n"].is_null(), "{last}");
+    // h, Δv and the energy do not depend on the friction: the paper's model gives them.
+    let model = Model::from_kernels(bf_model::PaperKernels::new()).unwrap();
+    let s = State::<3>::from_slice(x.last().unwrap()).unwrap();
+    let kin = model.evaluate(&s).unwrap();
+    let e = model.energy(&s).unwrap();
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * (1.0 + b.abs());
+    assert!(close(last["h"].as_f64().unwrap(), kin.contact.h), "{last}");
+    assert!(close(last["energy"].as_f64().unwrap(), e.total), "{last}");
+    assert!(
+        close(
+            last["slip_speed"].as_f64().unwrap(),
+            kin.contact.delta_v.norm()
+        ),
+        "{last}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -136,10 +136,35 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         })
     }
 
-    /// [`BallFinger::sample_info`] that never fails: a sample where the model cannot be
-    /// evaluated (e.g. the state a failed run stopped at) gets NaN fields (`null` in JSON).
+    /// [`BallFinger::sample_info`] that never fails: a sample where the mode's dynamics cannot
+    /// be evaluated (e.g. the state a failed run stopped at: a Painlevé configuration, a
+    /// singular contact matrix) keeps what the state alone gives (τ, h, ‖Δv‖, n·v_c and the
+    /// energies) and gets NaN for the forces and the power; a state the kinematics cannot
+    /// evaluate either gets NaN everywhere (`null` in JSON).
     pub fn sample_info_or_nan(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
-        self.sample_info(mode, t, x).unwrap_or(SampleInfo::NAN)
+        self.sample_info(mode, t, x)
+            .unwrap_or_else(|_| self.kinematic_info(mode, t, x))
+    }
+
+    /// The part of [`SampleInfo`] that needs no accelerations (module doc of
+    /// [`BallFinger::sample_info_or_nan`]).
+    fn kinematic_info(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
+        let Ok(s) = state_of::<N>(x) else {
+            return SampleInfo::NAN;
+        };
+        let (Ok(kin), Ok(e)) = (self.model.evaluate(&s), self.model.energy(&s)) else {
+            return SampleInfo::NAN;
+        };
+        let c = &kin.contact;
+        SampleInfo {
+            tau: self.tau(mode, t, &s).map_or([f64::NAN; N], Into::into),
+            h: c.h,
+            slip_speed: c.delta_v.norm(),
+            normal_velocity: c.normal_velocity(),
+            energy: e.total,
+            kinetic: e.kinetic_finger + e.kinetic_ball,
+            ..SampleInfo::NAN
+        }
     }
 
     /// ∫ P dt over the interval of the trajectory `tr` that ends at sample `i` (0 for the first
@@ -188,7 +213,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         let (samples, slopes): (Vec<SampleInfo<N>>, Vec<Option<Vec<f64>>>) = (0..tr.len())
             .map(|i| match self.sample_eval(tr.mode[i], tr.t[i], &tr.x[i]) {
                 Ok((info, dx)) => (info, Some(dx)),
-                Err(_) => (SampleInfo::NAN, None),
+                Err(_) => (self.kinematic_info(tr.mode[i], tr.t[i], &tr.x[i]), None),
             })
             .unzip();
         let events: Vec<EventInfo<N>> = out
