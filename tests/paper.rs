@@ -205,7 +205,9 @@ fn paper_quick_writes_a_consistent_report() {
     let on_max = (cot["period"].as_f64().unwrap() - 10.0).abs() <= 1e-5 + 1e-3;
     assert_eq!(line.contains("period (s) = "), on_max, "{line}");
     // Penetration and cone margins are stated with their tolerances.
-    assert!(report.contains("| scenario | min h (m) | within | phase | min σ (N) |"));
+    assert!(
+        report.contains("| scenario | min h (m) | smoothing (m) | within | phase | min σ (N) |")
+    );
     // The figures built from several scenarios or the open-loop run.
     for (stem, n) in [("fig11_compare_paths", 11), ("fig17_open_loop", 17)] {
         let svg = std::fs::read_to_string(out.join("figures").join(format!("{stem}.svg")))

@@ -711,21 +711,30 @@ fn report_tolerance_table_agrees_with_the_verdict() {
     deep.phases[0].min_h = Some(-2e-4);
     let mut both = slip.clone();
     both.phases[0].min_h = Some(-2e-4);
-    let results: Vec<ScenarioResult> = [("ok", v), ("slip", slip), ("deep", deep), ("both", both)]
-        .into_iter()
-        .map(|(name, v)| {
-            let mut solution = sol.clone();
-            solution.verification = Some(v);
-            ScenarioResult {
-                name: name.into(),
-                solution,
-                max_tau: 0.0,
-                contact_from_tip: (0.0, 0.0, 0.0),
-                cone_share: 0.0,
-                active: Vec::new(),
-            }
-        })
-        .collect();
+    // Outside the ball by the smoothed distance, misplaced by the smoothing (0089).
+    let mut coarse = v.clone();
+    coarse.phases[0].smoothing_error = Some(2e-4);
+    let results: Vec<ScenarioResult> = [
+        ("ok", v),
+        ("slip", slip),
+        ("deep", deep),
+        ("both", both),
+        ("coarse", coarse),
+    ]
+    .into_iter()
+    .map(|(name, v)| {
+        let mut solution = sol.clone();
+        solution.verification = Some(v);
+        ScenarioResult {
+            name: name.into(),
+            solution,
+            max_tau: 0.0,
+            contact_from_tip: (0.0, 0.0, 0.0),
+            cone_share: 0.0,
+            active: Vec::new(),
+        }
+    })
+    .collect();
     let table = tolerances_markdown(&results);
     for r in &results {
         let row = table
@@ -733,17 +742,17 @@ fn report_tolerance_table_agrees_with_the_verdict() {
             .find(|l| l.starts_with(&format!("| {} |", r.name)))
             .unwrap_or_else(|| panic!("no row for {}: {table}", r.name));
         let cells: Vec<&str> = row.trim_matches('|').split('|').map(str::trim).collect();
-        // scenario | min h | within | phase | min σ | allowance | within
-        let (h_ok, cone_ok) = (cells[2] == "yes", cells[6] == "yes");
+        // scenario | min h | smoothing | within | phase | min σ | allowance | within
+        let (h_ok, cone_ok) = (cells[3] == "yes", cells[7] == "yes");
         assert_eq!(h_ok && cone_ok, is_verified(&r.solution), "{row}");
-        assert_eq!(cells[3], (k + 1).to_string(), "{row}");
-        let (sigma, allow): (f64, f64) = (cells[4].parse().unwrap(), cells[5].parse().unwrap());
+        assert_eq!(cells[4], (k + 1).to_string(), "{row}");
+        let (sigma, allow): (f64, f64) = (cells[5].parse().unwrap(), cells[6].parse().unwrap());
         assert!((allow + allowance).abs() <= 1e-2 * allowance, "{row}");
         assert_eq!(cone_ok, sigma >= allow, "{row}");
         let expect = match r.name.as_str() {
             "ok" => (true, true),
             "slip" => (true, false),
-            "deep" => (false, true),
+            "deep" | "coarse" => (false, true),
             _ => (false, false),
         };
         assert_eq!((h_ok, cone_ok), expect, "{row}");
@@ -892,4 +901,32 @@ fn a_frictionless_cone_allows_rounding_only() {
         0.0,
         "a pulling force has no cone"
     );
+}
+
+/// `optimize` with a smoothing ε that misplaces the ball (`reach --epsilon 1`, the finger 0.1 m
+/// inside the ball by the exact contact) exits 1 naming the exact contact, after a single
+/// verification refinement: no finer mesh changes the smoothing's error (decision record
+/// 0089), where the refinement used to spend its five attempts on it.
+#[test]
+fn a_coarse_smoothing_is_refused_without_refining_on() {
+    let dir = cli_util::tmpdir("coarse-eps");
+    let r = cli_util::run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--epsilon",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("exact contact distance (the plant's) differs"),
+        "{stderr}"
+    );
+    let stdout = String::from_utf8_lossy(&r.stdout);
+    let refinements = stdout.matches("verification refinement:").count();
+    assert_eq!(refinements, 1, "{stdout}");
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -368,13 +368,18 @@ impl Reader<'_> {
 }
 
 /// The unit vector along the finite `v`, `None` if `v` is zero. As urdfdom, any non-zero axis
-/// gives its direction: `v` is divided by its largest |component| before the norm is taken,
-/// so that neither huge (1e200) components overflow the squares nor tiny (1e-200) ones
-/// underflow them.
+/// gives its direction: where its squares would overflow (1e200) or underflow (1e-200), `v`
+/// is divided by its largest |component| before the norm is taken.
 fn unit_axis(v: V3) -> Option<V3> {
     let scale = v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
     if scale == 0.0 {
         return None;
+    }
+    // Where the squares neither overflow nor underflow, the plain norm: the direction a URDF
+    // of ordinary axes has always given, bit for bit (generated code stays the same).
+    let norm = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if (1e-150..=1e150).contains(&scale) && norm.is_normal() {
+        return Some(v.map(|x| x / norm));
     }
     let w = v.map(|x| x / scale);
     let norm = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();

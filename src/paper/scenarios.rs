@@ -685,23 +685,26 @@ pub fn active_bounds_markdown(results: &[ScenarioResult]) -> String {
 /// the record), so the table and the `verified` column cannot disagree.
 pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
     use crate::pipeline::verify::{
-        CONE_ROUNDING, CONE_TOLERANCE, PENETRATION_TOLERANCE, VERIFIED_DEFECT, penetration_failure,
-        worst_cone_margin,
+        CONE_ROUNDING, CONE_TOLERANCE, NEAR_BALL, PENETRATION_TOLERANCE, VERIFIED_DEFECT,
+        penetration_failure, worst_cone_margin,
     };
     let mut s = format!(
         "Tolerances of \"verified\": re-integration defect ≤ {VERIFIED_DEFECT:e}; along the \
          re-integrated free phases, penetration min h ≥ −{PENETRATION_TOLERANCE:e} r, r the \
-         ball's radius (the problem's own allowance at touch-down and release); along the re-integrated stick \
+         ball's radius (the problem's own allowance at touch-down and release), and within \
+         {NEAR_BALL:e} r of the ball the exact contact distance (the plant's) within the same \
+         allowance of the smoothed one (the smoothing column, decision record 0089); along the re-integrated stick \
          phases, friction-cone margin min σ ≥ −({CONE_TOLERANCE} μ_s + {CONE_ROUNDING:e}) max λ_n of the phase \
          (σ = μ_s λ_n − ‖λ_∥‖, eq. 18; the optimum satisfies σ ≥ 0 at its collocation nodes \
-         only). All three decide the verdict; the cone columns show the stick phase with the \
-         lowest margin relative to its allowance.\n\n\
-         | scenario | min h (m) | within | phase | min σ (N) | −({CONE_TOLERANCE} μ_s + {CONE_ROUNDING:e}) max λ_n (N) | within |\n\
-         |---|---|---|---|---|---|---|\n"
+         only). All of them decide the verdict; the first \"within\" covers min h and the \
+         smoothing, the cone columns show the stick phase with the lowest margin relative to \
+         its allowance.\n\n\
+         | scenario | min h (m) | smoothing (m) | within | phase | min σ (N) | −({CONE_TOLERANCE} μ_s + {CONE_ROUNDING:e}) max λ_n (N) | within |\n\
+         |---|---|---|---|---|---|---|---|\n"
     );
     for r in results {
         let Some(v) = &r.solution.verification else {
-            s.push_str(&format!("| {} | not verified | | | | | |\n", r.name));
+            s.push_str(&format!("| {} | not verified | | | | | | |\n", r.name));
             continue;
         };
         let h = v
@@ -709,11 +712,24 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
             .iter()
             .filter_map(|p| p.min_h)
             .fold(f64::INFINITY, f64::min);
+        let smoothing = v
+            .phases
+            .iter()
+            .filter_map(|p| p.smoothing_error)
+            .fold(f64::NEG_INFINITY, f64::max);
         let yes = |ok: bool| if ok { "yes" } else { "**no**" };
-        let h_cells = if h.is_finite() {
-            format!("{h:.2e} | {}", yes(penetration_failure(v).is_none()))
+        let smoothing = if smoothing.is_finite() {
+            format!("{smoothing:.2e}")
         } else {
-            "— | —".to_string()
+            "—".to_string()
+        };
+        let h_cells = if h.is_finite() {
+            format!(
+                "{h:.2e} | {smoothing} | {}",
+                yes(penetration_failure(v).is_none())
+            )
+        } else {
+            format!("— | {smoothing} | —")
         };
         let cone_cells = match worst_cone_margin(v) {
             Some(m) => format!(

@@ -73,7 +73,7 @@ use super::strategy::{
 };
 use super::verify::{
     VERIFIED_DEFECT, execution_failure, is_robust, is_verified, passes, path_excess,
-    robustness_miss, verify,
+    robustness_miss, smoothing_failure, verify,
 };
 
 /// Relative objective difference within which two end points are one local optimum.
@@ -706,7 +706,12 @@ fn refine_until_verified(
                 // through four refinements (BENCHMARKS.md, "Mirror move and refinement
                 // progress").
                 let now = v.and_then(path_only_excess);
-                let no_progress = path_stalled(before, now);
+                // A smoothing ε that misplaces the ball (decision record 0089) is not a mesh's
+                // error: no refinement brings it closer.
+                let coarse_smoothing = v.is_some_and(|v| {
+                    v.passes(VERIFIED_DEFECT) && now.is_none() && smoothing_failure(v).is_some()
+                });
+                let no_progress = path_stalled(before, now) || coarse_smoothing;
                 before = now;
                 // A candidate whose defect does not fall is not brought to verify by finer
                 // meshes either: a `periodic-cot` candidate kept a defect of 1.8e2 through five

@@ -1019,14 +1019,30 @@ pub fn penetration_failure(v: &Verification) -> Option<String> {
                 p.phase + 1
             ));
         }
-        let e = p.smoothing_error.filter(|&e| e > tol)?;
-        Some(format!(
-            "phase {} (free): near the ball the exact contact distance (the plant's) differs \
-             from the smoothed one the problem bounds by {e:.3e} m, more than the allowance \
-             {tol:e} m: the smoothing ε is too coarse for this path (a smaller --epsilon)",
-            p.phase + 1
-        ))
+        smoothing_failure_of(p, tol)
     })
+}
+
+/// The first free phase of `v` whose smoothing error near the ball
+/// ([`PhaseVerification::smoothing_error`]) exceeds the penetration allowance, as a sentence:
+/// the part of [`penetration_failure`] that no finer mesh changes, since it measures the
+/// smoothing ε.
+pub fn smoothing_failure(v: &Verification) -> Option<String> {
+    let tol = PENETRATION_TOLERANCE * v.radius;
+    v.phases
+        .iter()
+        .filter(|p| p.mode == PhaseMode::Free)
+        .find_map(|p| smoothing_failure_of(p, tol))
+}
+
+fn smoothing_failure_of(p: &PhaseVerification, tol: f64) -> Option<String> {
+    let e = p.smoothing_error.filter(|&e| e > tol)?;
+    Some(format!(
+        "phase {} (free): near the ball the exact contact distance (the plant's) differs from \
+         the smoothed one the problem bounds by {e:.3e} m, more than the allowance {tol:e} m: \
+         the smoothing ε is too coarse for this path (a smaller --epsilon)",
+        p.phase + 1
+    ))
 }
 
 /// The friction-cone margin of one re-integrated stick phase against its allowance.
@@ -1102,7 +1118,7 @@ pub fn cone_failure(v: &Verification) -> Option<String> {
     (!m.within()).then(|| {
         format!(
             "phase {} (stick): the re-integrated contact force leaves the friction cone, min σ = \
-             {:.3e} N below the allowance -{:.3e} N ({CONE_TOLERANCE} · μ_s · max λ_n)",
+             {:.3e} N below the allowance -{:.3e} N (({CONE_TOLERANCE} μ_s + {CONE_ROUNDING:e}) · max λ_n)",
             m.phase + 1,
             m.min_sigma,
             m.allowance

@@ -172,6 +172,10 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         let names: Vec<String> = names.iter().map(|(n, c)| format!("{n} {c}")).collect();
         let names = names.join(", ");
         if mode != Mode::Free && recent.iter().all(|(g, _)| is_kink(g)) {
+            // This hold replaces a contact hold still running: that one ends here.
+            if let Some(last) = self.contact_holds.borrow_mut().last_mut() {
+                last.1 = last.1.min(t);
+            }
             self.hold.set(Hold {
                 until: t + hold,
                 kinks: true,

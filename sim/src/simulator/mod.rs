@@ -354,6 +354,8 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
         }
         self.sys.fixed_step(fixed.then_some(h));
         let mut domain_rejected = false;
+        // Only this step's trials may explain its failure.
+        self.blow_up = None;
         loop {
             self.steps_attempted += 1;
             if self.steps_attempted > self.set.max_steps {
@@ -452,6 +454,9 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
     /// error norm (0 for fixed steps, ∞ when a stage or the end state is not finite, or when
     /// the system could not evaluate a stage state that the step had blown up to).
     fn trial(&mut self, h: f64, fixed: bool) -> Result<f64, SimError> {
+        // The end state is written only before its own evaluation: cleared, it cannot carry a
+        // blown-up value of an earlier trial into the test below.
+        self.buf.x1.iter_mut().for_each(|v| *v = 0.0);
         let stepped = if fixed {
             self.stats.rhs_evals += 4;
             rk4_step(
