@@ -968,7 +968,7 @@ mod tests {
             .find(|l| l.starts_with("| periodic-qc |"))
             .unwrap();
         let cells: Vec<&str> = row.split('|').map(str::trim).collect();
-        assert_eq!(cells[4], "2", "{row}");
+        assert_eq!(cells[5], "2", "{row}");
         let summary = v.summary();
         assert!(
             summary.lines().any(|l| l.starts_with("    2 stick")),
