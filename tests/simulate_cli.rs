@@ -1006,6 +1006,26 @@ fn a_replay_says_what_it_does_not_replay() {
     let s = json(&constant.join("summary.json"));
     assert_eq!(s["t_final"].as_f64(), Some(0.2));
     assert!(held(&s), "{s}");
+    // The same for an arm without a ball (two joints).
+    let two = dir.join("two.csv");
+    std::fs::write(&two, "t,tau1,tau2\n0,0.1,0\n0.1,0.1,0\n").unwrap();
+    let arm = dir.join("arm");
+    let o = simulate_into(
+        &arm,
+        &[
+            "--scene",
+            "tests/fixtures/planar2_arm.toml",
+            "--torques",
+            two.to_str().unwrap(),
+            "--t-end",
+            "0.3",
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(stderr.contains("holds its last torque"), "{stderr}");
+    let s = json(&arm.join("summary.json"));
+    assert!(held(&s), "{s}");
 
     let flat = dir.join("flat");
     let o = simulate_into(&flat, &["--no-projection", "--t-end", "1"]);

@@ -148,6 +148,7 @@ impl<I: Input> FreeArm<I> {
             energy_tolerance,
             stats: out.stats,
             cpu_seconds,
+            warnings: Vec::new(),
         };
         Ok(ArmReport { samples, summary })
     }
@@ -218,6 +219,10 @@ pub struct ArmSummary {
     pub stats: SimStats,
     /// Wall-clock time (s).
     pub cpu_seconds: f64,
+    /// Conditions that qualify the run, added by the caller (e.g. `torques_held`: the run went
+    /// on past the end of its torque series, holding its last torque); the CLI prints them on
+    /// stderr.
+    pub warnings: Vec<crate::SimWarning>,
 }
 
 impl ArmSummary {

@@ -60,6 +60,10 @@ pub(super) fn run_arm(
     }
     let set = settings(args)?;
     check_limits(args, &set, t_end)?;
+    let held = super::torques_held(inp.series_end(), t_end);
+    if let Some(w) = &held {
+        eprintln!("warning: {}", w.message);
+    }
     let q0 = match (&args.q0, &replay) {
         (Some(s), _) => parse_list("--q0", s, Some(n))?,
         (None, Some((q, _, _))) => q.clone(),
@@ -96,6 +100,7 @@ pub(super) fn run_arm(
     let out = sim.finish();
     let mut report = sys.report(&out, cpu).map_err(|e| anyhow!("{e}"))?;
     report.summary.kernels = Some(source.name().to_string());
+    report.summary.warnings.extend(held);
     // A run that ends but fails its energy check is no result either, as for the ball and
     // finger: written whole, marked as failed.
     let failure = error.or_else(|| {

@@ -423,7 +423,7 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
 /// The warning of a run that goes on past the end of its `--torques` series, whose last
 /// torque it then holds: a solution's `torques.csv` covers one period, and held torques are no
 /// replay of it.
-fn torques_held(series_end: Option<f64>, t_end: f64) -> Option<bf_sim::SimWarning> {
+pub(super) fn torques_held(series_end: Option<f64>, t_end: f64) -> Option<bf_sim::SimWarning> {
     let end = series_end?;
     (t_end > end * (1.0 + 1e-9)).then(|| bf_sim::SimWarning {
         t: end,
