@@ -192,7 +192,7 @@ pub struct StepBuffers {
     /// Dense output of the step.
     pub dense: Dense,
     k: [Vec<f64>; 5],
-    pub(crate) tmp: Vec<f64>,
+    tmp: Vec<f64>,
 }
 
 impl StepBuffers {
@@ -209,24 +209,37 @@ impl StepBuffers {
     }
 }
 
-/// The vector field at a stage state `x` into `dx`. A stage state that is no longer finite
-/// (a step far too long for the dynamics, which blew up within it) gets a NaN field instead
-/// of a call: the trial then counts as non-finite and is retried shorter, rather than ending
-/// the run with whatever the system reports of a non-finite state (e.g. "non-finite mass
-/// matrix").
+/// The vector field at a stage state `x` of the step from `x0` into `dx`. A system error at a
+/// stage the step has blown up to (not finite, or more than [`BLOWN_UP`] times beyond the
+/// largest |x0|, plus 1) is the step's, not the model's (a step far too long for stiff
+/// dynamics, e.g. a huge damping or torque): the stage gets a NaN field, so the trial counts as
+/// non-finite and is retried shorter, instead of ending the run with the model's complaint
+/// about a state no trajectory reaches (e.g. "non-finite mass matrix"). Looked at only when
+/// the system fails.
 fn stage<S: HybridSystem + ?Sized>(
     sys: &S,
     mode: S::Mode,
     t: f64,
-    x: &[f64],
+    (x, x0): (&[f64], &[f64]),
     dx: &mut [f64],
 ) -> Result<(), SimError> {
-    if x.iter().all(|v| v.is_finite()) {
-        sys.rhs(mode, t, x, dx)
-    } else {
-        dx.iter_mut().for_each(|v| *v = f64::NAN);
-        Ok(())
+    match sys.rhs(mode, t, x, dx) {
+        Err(SimError::System { .. }) if blown_up(x, x0) => {
+            dx.iter_mut().for_each(|v| *v = f64::NAN);
+            Ok(())
+        }
+        r => r,
     }
+}
+
+/// How far beyond the largest |x0| (plus 1) a stage state counts as blown up: no step of a
+/// resolved trajectory moves a state by a factor of 10¹².
+pub(crate) const BLOWN_UP: f64 = 1e12;
+
+fn blown_up(x: &[f64], x0: &[f64]) -> bool {
+    let scale = 1.0 + x0.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    x.iter()
+        .any(|v| !v.is_finite() || v.abs() > BLOWN_UP * scale)
 }
 
 /// One DOPRI5 step of size `h` from (t₀, x₀) with f₀ = f(t₀, x₀) in mode `mode`. Fills
@@ -253,28 +266,28 @@ pub fn dopri5_step<S: HybridSystem + ?Sized>(
     for i in 0..n {
         tmp[i] = x0[i] + h * A21 * f0[i];
     }
-    stage(sys, mode, t0 + C2 * h, tmp, k2)?;
+    stage(sys, mode, t0 + C2 * h, (tmp, x0), k2)?;
     for i in 0..n {
         tmp[i] = x0[i] + h * (A31 * f0[i] + A32 * k2[i]);
     }
-    stage(sys, mode, t0 + C3 * h, tmp, k3)?;
+    stage(sys, mode, t0 + C3 * h, (tmp, x0), k3)?;
     for i in 0..n {
         tmp[i] = x0[i] + h * (A41 * f0[i] + A42 * k2[i] + A43 * k3[i]);
     }
-    stage(sys, mode, t0 + C4 * h, tmp, k4)?;
+    stage(sys, mode, t0 + C4 * h, (tmp, x0), k4)?;
     for i in 0..n {
         tmp[i] = x0[i] + h * (A51 * f0[i] + A52 * k2[i] + A53 * k3[i] + A54 * k4[i]);
     }
-    stage(sys, mode, t0 + C5 * h, tmp, k5)?;
+    stage(sys, mode, t0 + C5 * h, (tmp, x0), k5)?;
     for i in 0..n {
         tmp[i] = x0[i] + h * (A61 * f0[i] + A62 * k2[i] + A63 * k3[i] + A64 * k4[i] + A65 * k5[i]);
     }
     let t1 = t0 + h;
-    stage(sys, mode, t1, tmp, k6)?;
+    stage(sys, mode, t1, (tmp, x0), k6)?;
     for i in 0..n {
         x1[i] = x0[i] + h * (A71 * f0[i] + A73 * k3[i] + A74 * k4[i] + A75 * k5[i] + A76 * k6[i]);
     }
-    stage(sys, mode, t1, x1, f1)?;
+    stage(sys, mode, t1, (x1, x0), f1)?;
     for i in 0..n {
         err[i] = h * (E1 * f0[i] + E3 * k3[i] + E4 * k4[i] + E5 * k5[i] + E6 * k6[i] + E7 * f1[i]);
     }
@@ -322,20 +335,20 @@ pub fn rk4_step<S: HybridSystem + ?Sized>(
     for i in 0..n {
         tmp[i] = x0[i] + 0.5 * h * f0[i];
     }
-    stage(sys, mode, t0 + 0.5 * h, tmp, k2)?;
+    stage(sys, mode, t0 + 0.5 * h, (tmp, x0), k2)?;
     for i in 0..n {
         tmp[i] = x0[i] + 0.5 * h * k2[i];
     }
-    stage(sys, mode, t0 + 0.5 * h, tmp, k3)?;
+    stage(sys, mode, t0 + 0.5 * h, (tmp, x0), k3)?;
     for i in 0..n {
         tmp[i] = x0[i] + h * k3[i];
     }
     let t1 = t0 + h;
-    stage(sys, mode, t1, tmp, k4)?;
+    stage(sys, mode, t1, (tmp, x0), k4)?;
     for i in 0..n {
         x1[i] = x0[i] + h / 6.0 * (f0[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
     }
-    stage(sys, mode, t1, x1, f1)?;
+    stage(sys, mode, t1, (x1, x0), f1)?;
     err.iter_mut().for_each(|e| *e = 0.0);
     dense.t0 = t0;
     dense.h = h;
@@ -395,7 +408,7 @@ pub(crate) fn initial_step<S: HybridSystem + ?Sized>(
     h = h.min(h_max);
     let x1: Vec<f64> = (0..n).map(|i| x0[i] + h * f0[i]).collect();
     let mut f1 = vec![0.0; n];
-    stage(sys, mode, t0 + h, &x1, &mut f1)?;
+    stage(sys, mode, t0 + h, (&x1, x0), &mut f1)?;
     let mut der2 = 0.0;
     for i in 0..n {
         let sk = atol + rtol * x0[i].abs();

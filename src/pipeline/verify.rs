@@ -176,24 +176,6 @@ impl<const N: usize> ElementSystem<'_, N> {
             .h)
     }
 
-    /// |h₀ − h_ε| at the state `x` where either distance is within `near` (m) of the ball, 0
-    /// farther away: the smoothing's error in the distance (eq. 58–59 against eq. 3–4).
-    fn smoothing_error(&self, x: &[f64], near: f64) -> Result<f64, String> {
-        let st = Self::state(x).map_err(|e| e.to_string())?;
-        let smooth = self
-            .model
-            .evaluate(&st)
-            .map_err(|e| e.to_string())?
-            .contact
-            .h;
-        let exact = self.exact_distance(x)?;
-        Ok(if smooth.min(exact) <= near {
-            (exact - smooth).abs()
-        } else {
-            0.0
-        })
-    }
-
     fn state(x: &[f64]) -> Result<State<N>, SimError> {
         State::<N>::from_slice(x).ok_or(SimError::DimensionMismatch {
             what: "state",
@@ -381,6 +363,8 @@ fn node_residual<const N: usize>(
 #[derive(Clone, Copy)]
 struct PathStats {
     min_h: f64,
+    /// [`PhaseVerification::smoothing_error`].
+    smoothing_error: f64,
     max_dv: f64,
     min_ln: f64,
     max_ln: f64,
@@ -393,6 +377,7 @@ impl PathStats {
     fn new() -> Self {
         PathStats {
             min_h: f64::INFINITY,
+            smoothing_error: 0.0,
             max_dv: 0.0,
             min_ln: f64::INFINITY,
             max_ln: f64::NEG_INFINITY,
@@ -414,7 +399,17 @@ impl PathStats {
         let h = kin.contact.h;
         self.overshoot = self.overshoot.max(sys.overshoot(t));
         match mode {
-            PhaseMode::Free => self.min_h = self.min_h.min(h),
+            PhaseMode::Free => {
+                self.min_h = self.min_h.min(h);
+                // Near the ball the smoothed distance the problem bounds stands in for the
+                // plant's exact one; how far apart they are there is the smoothing's error in
+                // what the plan asserts.
+                let exact = sys.exact_distance(x)?;
+                let near = NEAR_BALL * sys.model.params().ball_radius();
+                if h.min(exact) <= near {
+                    self.smoothing_error = nan_max(self.smoothing_error, (exact - h).abs());
+                }
+            }
             PhaseMode::Stick => {
                 let acc = sys
                     .model
@@ -433,6 +428,7 @@ impl PathStats {
     /// Folds the checks of another stretch of the same phase into these.
     fn merge(&mut self, o: &PathStats) {
         self.min_h = self.min_h.min(o.min_h);
+        self.smoothing_error = nan_max(self.smoothing_error, o.smoothing_error);
         self.max_dv = self.max_dv.max(o.max_dv);
         self.min_ln = self.min_ln.min(o.min_ln);
         self.max_ln = self.max_ln.max(o.max_ln);
@@ -603,9 +599,6 @@ fn verify_phase<const N: usize>(
     let time = |s: f64| 0.5 * (s + 1.0) * big_t;
     let mut stats = PathStats::new();
     let mut touch = Touch::new(radius);
-    // Near the ball the smoothed distance the problem bounds stands in for the plant's exact
-    // one; how far apart they are there is the smoothing's error in what the plan asserts.
-    let mut smoothing_error = 0.0f64;
     let (mut steps, mut rejected, mut rhs) = (0, 0, 0);
     let mut failure: Option<(f64, String)> = None;
     let mut parts = [0.0f64; 3];
@@ -677,13 +670,6 @@ fn verify_phase<const N: usize>(
                 .iter()
                 .zip(&out.trajectory.x)
                 .try_for_each(|(t, x)| touch.add(&sys, *t, x));
-        }
-        if mode == PhaseMode::Free && path.is_ok() {
-            path = out.trajectory.x.iter().try_for_each(|x| {
-                let e = sys.smoothing_error(x, NEAR_BALL * radius)?;
-                smoothing_error = nan_max(smoothing_error, e);
-                Ok(())
-            });
         }
         let measured = err.is_none() && path.is_ok();
         element_min_h.push(if measured { el.min_h } else { f64::NAN });
@@ -772,7 +758,7 @@ fn verify_phase<const N: usize>(
         min_h: finite_or_none(stats.min_h, !stick),
         element_min_h: if stick { Vec::new() } else { element_min_h },
         first_touch: touch.first,
-        smoothing_error: finite_or_none(smoothing_error, !stick && !failed),
+        smoothing_error: finite_or_none(stats.smoothing_error, !stick && !failed),
         max_delta_v: finite_or_none(stats.max_dv, stick),
         min_lambda_n: finite_or_none(stats.min_ln, stick),
         max_lambda_n: finite_or_none(stats.max_ln, stick),

@@ -101,18 +101,12 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         let e = self.model.energy(&s).map_err(SimError::system)?;
         let mut dx = vec![0.0; x.len()];
         acc.write_state_derivative(&s.qd, &mut dx);
-        let c = &kin.contact;
         let info = SampleInfo {
-            tau: tau.into(),
             lambda: acc.force.lambda.into(),
             lambda_n: acc.force.lambda_n,
             sigma: acc.force.sigma,
-            h: c.h,
-            slip_speed: c.delta_v.norm(),
-            normal_velocity: c.normal_velocity(),
-            energy: e.total,
-            kinetic: e.kinetic_finger + e.kinetic_ball,
             power,
+            ..SampleInfo::of_state(tau.into(), &kin.contact, &e)
         };
         Ok((info, dx))
     }
@@ -155,16 +149,8 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         let (Ok(kin), Ok(e)) = (self.model.evaluate(&s), self.model.energy(&s)) else {
             return SampleInfo::NAN;
         };
-        let c = &kin.contact;
-        SampleInfo {
-            tau: self.tau(mode, t, &s).map_or([f64::NAN; N], Into::into),
-            h: c.h,
-            slip_speed: c.delta_v.norm(),
-            normal_velocity: c.normal_velocity(),
-            energy: e.total,
-            kinetic: e.kinetic_finger + e.kinetic_ball,
-            ..SampleInfo::NAN
-        }
+        let tau = self.tau(mode, t, &s).map_or([f64::NAN; N], Into::into);
+        SampleInfo::of_state(tau, &kin.contact, &e)
     }
 
     /// ∫ P dt over the interval of the trajectory `tr` that ends at sample `i` (0 for the first
@@ -339,6 +325,24 @@ impl<const N: usize> SampleInfo<N> {
         kinetic: f64::NAN,
         power: f64::NAN,
     };
+
+    /// What the state gives without accelerations: τ, h, ‖Δv‖, n·v_c and the energies, with
+    /// the forces and the power NaN.
+    fn of_state(
+        tau: [f64; N],
+        c: &bf_model::ContactGeometry<N>,
+        e: &bf_model::energy::Energy,
+    ) -> Self {
+        SampleInfo {
+            tau,
+            h: c.h,
+            slip_speed: c.delta_v.norm(),
+            normal_velocity: c.normal_velocity(),
+            energy: e.total,
+            kinetic: e.kinetic_finger + e.kinetic_ball,
+            ..SampleInfo::NAN
+        }
+    }
 }
 
 /// One event of the log with the derived quantities before and after the reset.

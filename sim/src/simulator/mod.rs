@@ -103,9 +103,6 @@ pub struct Simulator<'s, S: HybridSystem + ?Sized> {
     h: f64,
     err_old: f64,
     last_rejected: bool,
-    /// The system's error at the stage state of the last trial that blew up, for the message
-    /// of a run that no step short enough could save.
-    blow_up: Option<SimError>,
     guards: Vec<Guard>,
     gval: Vec<f64>,
     masked: Vec<bool>,
@@ -128,11 +125,6 @@ pub struct Simulator<'s, S: HybridSystem + ?Sized> {
 fn mode_name<M: Debug>(m: &M) -> String {
     format!("{m:?}")
 }
-
-/// How far beyond the largest |x| of the state it starts from (plus 1) a stage state counts
-/// as blown up: no step of a well-resolved trajectory moves a state by a factor of 10¹², so a
-/// system error at such a stage is the step's, not the model's.
-const BLOWN_UP: f64 = 1e12;
 
 impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
     /// Sets up a run of `sys` from (`t0`, `x0`) in `mode0` until `t_end`. Validates the
@@ -180,7 +172,6 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
             h: 0.0,
             err_old: 1e-4,
             last_rejected: false,
-            blow_up: None,
             guards: Vec::new(),
             gval: Vec::new(),
             masked: Vec::new(),
@@ -354,8 +345,6 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
         }
         self.sys.fixed_step(fixed.then_some(h));
         let mut domain_rejected = false;
-        // Only this step's trials may explain its failure.
-        self.blow_up = None;
         loop {
             self.steps_attempted += 1;
             if self.steps_attempted > self.set.max_steps {
@@ -426,18 +415,10 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
                         h,
                         mode: mode_name(&self.mode),
                     },
-                    None => match self.blow_up.take() {
-                        Some(e) => SimError::NonFinite {
-                            what: format!(
-                                "step (its stages blew up at every step down to h_min: the \
-                                 dynamics are too stiff for this step and tolerance; at the \
-                                 last one: {e})"
-                            ),
-                            t: self.t,
-                            mode: mode_name(&self.mode),
-                        },
-                        None => self.non_finite("step (stage values)"),
-                    },
+                    None => self.non_finite(
+                        "step (its stages blew up at every step down to h_min: the dynamics \
+                         are too stiff for this step and tolerance)",
+                    ),
                 });
             }
             if let Some(e) = cause {
@@ -451,13 +432,10 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
     }
 
     /// One Runge–Kutta trial of length `h` from the current state into `self.buf`; returns the
-    /// error norm (0 for fixed steps, ∞ when a stage or the end state is not finite, or when
-    /// the system could not evaluate a stage state that the step had blown up to).
+    /// error norm (0 for fixed steps, ∞ when a stage or the end state is not finite, or blew up
+    /// where the system could not evaluate it).
     fn trial(&mut self, h: f64, fixed: bool) -> Result<f64, SimError> {
-        // The end state is written only before its own evaluation: cleared, it cannot carry a
-        // blown-up value of an earlier trial into the test below.
-        self.buf.x1.iter_mut().for_each(|v| *v = 0.0);
-        let stepped = if fixed {
+        if fixed {
             self.stats.rhs_evals += 4;
             rk4_step(
                 self.sys,
@@ -467,7 +445,7 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
                 &self.f,
                 h,
                 &mut self.buf,
-            )
+            )?;
         } else {
             self.stats.rhs_evals += 6;
             dopri5_step(
@@ -478,24 +456,7 @@ impl<'s, S: HybridSystem + ?Sized> Simulator<'s, S> {
                 &self.f,
                 h,
                 &mut self.buf,
-            )
-        };
-        if let Err(e) = stepped {
-            // A step far too long for stiff dynamics (a huge damping, a huge torque) carries its
-            // stages to states the model cannot evaluate, and the model's complaint (e.g. a
-            // non-finite mass matrix) would name neither the step nor its cause. Such a trial
-            // is a non-finite one: it is retried shorter, and if no step is short enough the
-            // error says that the steps blew up.
-            let blown = |v: &[f64]| {
-                let scale = 1.0 + self.x.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-                v.iter().any(|x| x.is_nan() || x.abs() > BLOWN_UP * scale)
-            };
-            if matches!(e, SimError::System { .. }) && (blown(&self.buf.tmp) || blown(&self.buf.x1))
-            {
-                self.blow_up = Some(e);
-                return Ok(f64::INFINITY);
-            }
-            return Err(e);
+            )?;
         }
         let finite = self
             .buf
