@@ -283,6 +283,19 @@ fn bench_kkt(c: &mut Criterion) {
                 })
             });
         }
+        // The supernodal kernel on the calling thread alone, against `factor_block` (shared
+        // with a second thread where its supernodes are wide enough, decision record 0090).
+        let mut alone = SparseLdlt::with_options(LdltOptions {
+            backend: LdltBackend::Supernodal,
+            parallel: false,
+            ..LdltOptions::default()
+        });
+        alone
+            .analyse(dim, &pat.mat.col_ptr, &pat.mat.row_idx)
+            .expect("analyse");
+        g.bench_function("factor_block_one_thread", |b| {
+            b.iter(|| black_box(alone.factor(&pat.mat.values)))
+        });
         // Two matrices of an inertia-correction chain (δ_w and 8 δ_w): factored one after the
         // other on this thread, and at once with the second on the speculative factorization's
         // thread (decision record 0036), which is what a rejected first trial costs without

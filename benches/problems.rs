@@ -55,18 +55,24 @@ fn bench(c: &mut Criterion) {
         )
     };
     let (radau_check_all, lg_check_all) = (check_all(&radau), check_all(&lg));
-    // Without the speculative factorization on a second core (decision record 0036: the
-    // same path, every factor on the solve's own thread).
-    let sequential = |s| {
+    // Without the second core (decision records 0036 and 0090: the same path, every factor
+    // on the solve's own thread), and with speculation where the default shares the
+    // factorization instead (LG).
+    let second_core = |s, speculative, parallel| {
         with(
             s,
             LinearSolverSettings {
-                speculative_factorization: false,
+                speculative_factorization: speculative,
+                parallel_factorization: parallel,
                 ..Default::default()
             },
         )
     };
-    let (radau_sequential, lg_sequential) = (sequential(&radau), sequential(&lg));
+    let (radau_sequential, lg_sequential) = (
+        second_core(&radau, false, false),
+        second_core(&lg, false, false),
+    );
+    let lg_speculative = second_core(&lg, true, false);
     for (name, label, settings) in [
         (Problem::PeriodicQc, "radau3x10", &radau),
         (Problem::PeriodicQc, "radau3x10_check_all", &radau_check_all),
@@ -79,6 +85,7 @@ fn bench(c: &mut Criterion) {
         (Problem::PeriodicQc, "lg30", &lg),
         (Problem::PeriodicQc, "lg30_check_all", &lg_check_all),
         (Problem::PeriodicQc, "lg30_sequential", &lg_sequential),
+        (Problem::PeriodicQc, "lg30_speculative", &lg_speculative),
         (Problem::PeriodicCot, "radau3x10", &radau),
         (Problem::PeriodicCot, "lg30", &lg),
         (Problem::PeriodicCotHuman, "radau3x10", &radau),

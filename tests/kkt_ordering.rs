@@ -153,37 +153,23 @@ fn speculative_factorization_changes_no_path() {
     let radau = ProblemSettings::default();
     for (scheme, points) in [(radau.scheme, radau.points), (Scheme::Lg, 30)] {
         let with = |speculative: bool| {
-            periodic_qc(
-                ProblemSettings {
-                    scheme,
-                    points,
-                    ..ProblemSettings::default()
-                },
+            periodic_qc_on(
+                (scheme, points),
                 LinearSolverSettings {
                     speculative_factorization: speculative,
+                    // The shared factorization replaces speculation on LG (record 0090).
+                    parallel_factorization: false,
                     ..Default::default()
                 },
             )
         };
         let (on, off) = (with(true), with(false));
         let what = label(scheme, points);
-        assert_eq!(on.status, Status::Solved, "{what}");
-        assert_eq!(on.objective.to_bits(), off.objective.to_bits(), "{what}");
-        assert_eq!(on.iterations, off.iterations, "{what}");
-        assert_eq!(on.counters, off.counters, "{what}");
+        assert_same_path(&on, &off, &what);
         assert!(
             off.counters.rejected_factorizations > 0,
             "{what}: no retry to speculate on"
         );
-        for (a, b) in on
-            .nodes
-            .q
-            .iter()
-            .flatten()
-            .zip(off.nodes.q.iter().flatten())
-        {
-            assert_eq!(a.to_bits(), b.to_bits(), "{what}: a joint angle differs");
-        }
         assert_eq!(
             off.timing.speculative_factorization,
             Duration::ZERO,
@@ -196,6 +182,74 @@ fn speculative_factorization_changes_no_path() {
             );
         }
     }
+}
+
+/// The factorization shared with a second core (decision record 0090) changes no path: a cold
+/// LG-30 `periodic-qc` solve with it (the default) and without it ends at the same objective
+/// and point (bits), after the same iterations, with the same counters; with two or more
+/// cores it was shared there (speculation, which it replaces, did not run). Radau 3 × 10,
+/// whose supernodes are too narrow to share, keeps its path either way.
+#[test]
+fn a_shared_factorization_changes_no_path() {
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let radau = ProblemSettings::default();
+    let mut lg_off_objective = f64::NAN;
+    for (scheme, points) in [(Scheme::Lg, 30), (radau.scheme, radau.points)] {
+        let with = |parallel: bool| {
+            periodic_qc_on(
+                (scheme, points),
+                LinearSolverSettings {
+                    parallel_factorization: parallel,
+                    speculative_factorization: false,
+                    ..Default::default()
+                },
+            )
+        };
+        let (on, off) = (with(true), with(false));
+        let what = label(scheme, points);
+        if scheme == Scheme::Lg {
+            lg_off_objective = off.objective;
+        }
+        assert_same_path(&on, &off, &what);
+    }
+    // With the defaults (both on), LG-30 shares its factorization instead of speculating
+    // (Radau's speculation: `speculative_factorization_changes_no_path`).
+    if cores >= 2 {
+        let lg = periodic_qc_on((Scheme::Lg, 30), LinearSolverSettings::default());
+        assert_eq!(lg.objective.to_bits(), lg_off_objective.to_bits(), "LG-30");
+        assert_eq!(lg.timing.speculative_factorization, Duration::ZERO, "LG-30");
+    }
+}
+
+/// Two solves of one problem took the same path: solved, at the same objective and joint
+/// angles (bits), after the same iterations, with the same counters.
+fn assert_same_path(on: &OcpSolution, off: &OcpSolution, what: &str) {
+    assert_eq!(on.status, Status::Solved, "{what}");
+    assert_eq!(on.objective.to_bits(), off.objective.to_bits(), "{what}");
+    assert_eq!(on.iterations, off.iterations, "{what}");
+    assert_eq!(on.counters, off.counters, "{what}");
+    for (a, b) in on
+        .nodes
+        .q
+        .iter()
+        .flatten()
+        .zip(off.nodes.q.iter().flatten())
+    {
+        assert_eq!(a.to_bits(), b.to_bits(), "{what}: a joint angle differs");
+    }
+}
+
+/// [`periodic_qc`] on the default mesh of `(scheme, points)`.
+fn periodic_qc_on(
+    (scheme, points): (Scheme, usize),
+    linear_solver: LinearSolverSettings,
+) -> OcpSolution {
+    let mesh = ProblemSettings {
+        scheme,
+        points,
+        ..ProblemSettings::default()
+    };
+    periodic_qc(mesh, linear_solver)
 }
 
 /// A cold `periodic-qc` solve with the mesh of `mesh`, the cold solve's tolerance (1e-8) and

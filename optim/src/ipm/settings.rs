@@ -7,8 +7,8 @@
 //!   3.6), κ_Σ (eq. (16)), κ_d (Sect. 3.7), the slack safeguard and the proximal term;
 //! * [`ScalingSettings`]: the internal scaling of f and c;
 //! * [`LineSearchSettings`]: the filter line search (W&B eqs. (18)–(23), Sect. 2.3–2.4);
-//! * [`LinearSolverSettings`]: the static δ_c, the pivot-pair checks, the speculative
-//!   factorization on a second core and the iterative refinement of KKT solves;
+//! * [`LinearSolverSettings`]: the static δ_c, the pivot-pair checks, the speculative and the
+//!   shared factorization on a second core and the iterative refinement of KKT solves;
 //! * [`RecoverySettings`]: the inertia correction (W&B Algorithm IC, Sect. 3.1) and the
 //!   restoration phase (Sect. 3.3);
 //! * [`ExperimentalSettings`]: research switches no default path uses;
@@ -404,6 +404,17 @@ pub struct LinearSolverSettings {
     /// idle-core test keeps the second thread from taking the solve's own core (decision
     /// record 0036). Off: every factor on the solve's thread.
     speculative_factorization: bool = true,
+    /// Share the factorization of the widest supernodes (the dense blocks of Legendre–Gauss
+    /// collocation: on LG-30 the last supernode holds 318 columns) with a second core, each
+    /// thread on its own columns, so that the factor is the same bit for bit
+    /// ([`LdltOptions::parallel`](crate::ipm::kkt::LdltOptions::parallel)). Used where the
+    /// supernodal kernel finds such supernodes, the solve runs on a thread of its own (not a
+    /// worker of a rayon pool: a parallel multi-start's starts already keep every core busy)
+    /// and the machine has two cores; there it replaces `speculative_factorization`, which
+    /// would compete for the same core. A cold LG-30 `periodic-qc` solve takes about 0.85 of
+    /// the speculative one's wall time (decision record 0090). Off: every factor on the solve's
+    /// thread (speculation as before).
+    parallel_factorization: bool = true,
     /// Maximum iterative-refinement steps per solve (the default is Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for
     /// when refinement stops earlier. An unpivoted factor with pivot growth refines, but

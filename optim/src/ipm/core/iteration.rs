@@ -84,6 +84,7 @@ impl Core<'_> {
         let options = LdltOptions {
             backend,
             ordering,
+            parallel: settings.linear_solver.parallel_factorization,
             ..current.clone()
         };
         if options != *current {

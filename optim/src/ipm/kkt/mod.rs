@@ -28,6 +28,8 @@
 //!     bitwise faer's factor and solution (1 × 1 pivots only);
 //!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
 //!     simplicial structure (dense element blocks of Legendre–Gauss KKTs), with 2 × 2 pivots;
+//!     with [`LdltOptions::parallel`] its widest supernodes are shared with a second thread,
+//!     each thread on its own columns, the same factor bit for bit (decision record 0090);
 //!   * `faer`: faer's own numeric factorization and solve (reference and fallback);
 //!   * `multifrontal`: a multifrontal LDLᵀ with threshold Bunch–Kaufman pivoting (1 × 1 and
 //!     2 × 2 pivots among each front's fully summed columns, MA57's test with threshold
@@ -39,7 +41,8 @@
 //! * [`Speculator`] (`speculative`): a second thread that factors, with a
 //!   [`SparseLdlt::duplicate`] of the solver, the matrix the inertia correction would factor
 //!   next, so that a rejected trial's successor is ready when it is asked for (bit for bit the
-//!   factor the solver would compute; decision record 0036).
+//!   factor the solver would compute; decision record 0036). It gives way where the
+//!   factorization itself is shared ([`SparseLdlt::shares_factorization`]).
 //! * `ordering`: the elimination order. With plain AMD a constraint row eliminated before all
 //!   of its primal variables has the pivot exactly `−δ_c`, and for a small δ_c the update
 //!   `Jᵢᵀ Jᵢ / δ_c` swamps the reduced Hessian's curvature in rounding, so the sign count no
@@ -249,6 +252,12 @@ pub struct LdltOptions {
     /// into one front while both have fewer than this many columns (MA57's `nemin`; 1: the
     /// fundamental supernodes only). Default [`DEFAULT_AMALGAMATION`].
     pub amalgamation: usize,
+    /// Share the factorization of the supernodal kernel's widest supernodes (the dense
+    /// blocks of Legendre–Gauss collocation) with a second thread, when the solver runs on a
+    /// thread of its own (not a worker of a rayon pool, whose other workers keep the cores
+    /// busy) and the machine has two cores: the same factor bit for bit
+    /// ([`SparseLdlt::shares_factorization`], decision record 0090). Default `true`.
+    pub parallel: bool,
 }
 
 impl Default for LdltOptions {
@@ -260,6 +269,7 @@ impl Default for LdltOptions {
             pivot_delta: DEFAULT_PIVOT_DELTA,
             pivot_threshold: DEFAULT_PIVOT_THRESHOLD,
             amalgamation: DEFAULT_AMALGAMATION,
+            parallel: true,
         }
     }
 }
@@ -396,6 +406,28 @@ impl SparseLdlt {
             kept: Vec::new(),
             analyses: 0,
         })
+    }
+
+    /// Whether [`KktSolver::factor`] shares the factorization with a second thread: the
+    /// option [`LdltOptions::parallel`], a calling thread that is no rayon worker, two cores,
+    /// and a supernodal kernel whose analysis found supernodes wide enough to share
+    /// (`supernodal::MIN_PARALLEL_WORK` multiply–adds). The factor is the same either way.
+    pub fn shares_factorization(&self) -> bool {
+        self.may_share() && matches!(&self.kernel, Kernel::Supernodal(b) if b.shares_work())
+    }
+
+    fn may_share(&self) -> bool {
+        self.options.parallel && rayon::current_thread_index().is_none()
+    }
+
+    /// [`KktSolver::factor`] on the calling thread alone (a supernodal kernel's large
+    /// supernodes are not shared with a second thread); the same factor bit for bit.
+    pub fn factor_on_one_thread(
+        &mut self,
+        values: &[f64],
+    ) -> Result<Inertia, FactorizationFailure> {
+        self.last = self.factor_numeric(values, false);
+        self.last
     }
 
     /// Symbolic analyses this solver has computed; a pattern analysed before (the current one
@@ -589,7 +621,7 @@ impl KktSolver for SparseLdlt {
     }
 
     fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
-        self.last = self.factor_numeric(values);
+        self.last = self.factor_numeric(values, self.may_share());
         self.last
     }
 
@@ -611,7 +643,11 @@ impl KktSolver for SparseLdlt {
 
 impl SparseLdlt {
     /// The numeric phase behind [`KktSolver::factor`].
-    fn factor_numeric(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
+    fn factor_numeric(
+        &mut self,
+        values: &[f64],
+        parallel: bool,
+    ) -> Result<Inertia, FactorizationFailure> {
         let faer = self
             .faer
             .as_mut()
@@ -627,7 +663,9 @@ impl SparseLdlt {
             };
         let singular = || failure(FactorizationFailure::SingularPivot);
         let inertia = match &mut self.kernel {
-            Kernel::Supernodal(block) => block.factor(values, eps, delta).ok_or_else(singular)?,
+            Kernel::Supernodal(block) => block
+                .factor(values, eps, delta, parallel)
+                .ok_or_else(singular)?,
             Kernel::Multifrontal(mf) => mf.factor(values, eps, delta).ok_or_else(singular)?,
             Kernel::Simplicial(plan) => {
                 if !plan.factor(values, &mut faer.l_values, eps, delta) {

@@ -23,7 +23,7 @@ use std::sync::mpsc::{Receiver, Sender, TryRecvError, channel};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use super::{FactorizationFailure, Inertia, KktSolver, SparseLdlt};
+use super::{FactorizationFailure, Inertia, SparseLdlt};
 
 /// Smallest factorization work (multiply–adds, [`SparseLdlt::factor_flops`]) worth a second
 /// thread: about 0.1 ms of factoring, a few times the cost of handing a job over and back.
@@ -135,14 +135,19 @@ impl Speculator {
     }
 
     /// Whether speculation can pay for `solver` (analysed) on this thread: at least two
-    /// cores, a factorization of at least [`MIN_SPECULATION_FLOPS`], and the calling thread
+    /// cores, a factorization of at least [`MIN_SPECULATION_FLOPS`], the calling thread
     /// not a worker of a rayon pool that already has a thread per core (a parallel multi-start,
-    /// whose other workers keep the other cores busy).
+    /// whose other workers keep the other cores busy), and a factorization that does not
+    /// already share its work with the second core ([`SparseLdlt::shares_factorization`]:
+    /// both at once leave three threads spinning on two cores, decision record 0090).
     pub fn worthwhile(solver: &SparseLdlt) -> bool {
         let cores = std::thread::available_parallelism().map_or(1, usize::from);
         let pool_uses_every_core =
             rayon::current_thread_index().is_some() && rayon::current_num_threads() >= cores;
-        cores >= 2 && !pool_uses_every_core && solver.factor_flops() >= MIN_SPECULATION_FLOPS
+        cores >= 2
+            && !pool_uses_every_core
+            && !solver.shares_factorization()
+            && solver.factor_flops() >= MIN_SPECULATION_FLOPS
     }
 
     /// Collects a finished job without waiting.
@@ -271,7 +276,7 @@ impl Speculator {
             .spawn(move || {
                 for Job { mut solver, values } in job_rx {
                     let t = Instant::now();
-                    let result = solver.factor(&values);
+                    let result = solver.factor_on_one_thread(&values);
                     let done = Done {
                         solver,
                         values,

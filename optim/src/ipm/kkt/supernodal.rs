@@ -4,6 +4,23 @@
 //! dense column-major blocks per supernode so that the updates are dense column operations.
 //! Its rounding differs from the simplicial backend's; it is tested by reconstructing
 //! `P K Pᵀ` from `L D Lᵀ` and against dense eigenvalue inertia.
+//!
+//! Shared factorization (decision record 0090): the analysis marks the supernodes with work
+//! enough for two threads ([`MIN_PARALLEL_WORK`]; on Legendre–Gauss KKTs the phases' dense
+//! blocks). Their descendant updates are divided by target columns (balanced by multiply–adds),
+//! and their own columns are factored in panels of [`PANEL`] columns with look-ahead: while
+//! the calling thread updates and factors the next panel, the helper thread subtracts the
+//! finished panels from the later columns. Every entry receives the same operations in the
+//! same order as in one left-looking pass (descendants in list order, then the block's own
+//! columns in chunks of four from column 0), so the factor is the same bit for bit on one
+//! thread or two. The helper is the one worker of a pool of its own, woken once per
+//! factorization a little ahead of the first shared supernode (a wake-up costs some 60 µs on a
+//! virtual machine) and spinning between the halves it is handed.
+
+use std::ops::Range;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+use std::time::{Duration, Instant};
 
 use faer::sparse::linalg::cholesky::{SymbolicCholesky, SymbolicCholeskyRaw};
 
@@ -115,10 +132,23 @@ pub(super) struct BlockPlan {
     pub(super) l_col_ptr: Vec<usize>,
     pub(super) l_row_idx: Vec<u32>,
     pub(super) l: Vec<f64>,
-    // workspaces
+    /// First target column of supernode s's second half of the descendant updates when two
+    /// threads share them (balanced by multiply–adds), 0 where they are not shared.
+    pub(super) sn_split: Vec<u32>,
+    /// Whether supernode s's own columns are factored in panels whose updates two threads
+    /// share.
+    pub(super) sn_panels: Vec<bool>,
+    /// Whether any supernode is shared between two threads.
+    pub(super) parallel_work: bool,
+    /// The supernode before which the second thread is put on watch: about
+    /// [`WAKE_AHEAD_WORK`] of factoring before the first shared one.
+    pub(super) wake_at: usize,
+    // workspaces (the second `tmp`, `coef` for the second thread)
     pub(super) map: Vec<u32>,
     pub(super) tmp: Vec<f64>,
     pub(super) coef: Vec<f64>,
+    pub(super) tmp2: Vec<f64>,
+    pub(super) coef2: Vec<f64>,
     pub(super) x: Vec<f64>,
 }
 
@@ -199,7 +229,49 @@ impl BlockPlan {
         for sn in 0..ns {
             upd_ptr[sn + 1] += upd_ptr[sn];
         }
-        let upd = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        let upd: Vec<(u32, u32, u32)> = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        // Work per target column, to divide a large supernode's updates between two threads,
+        // and the work of its own columns' LDLᵀ.
+        let mut sn_split = vec![0u32; ns];
+        let mut sn_panels = vec![false; ns];
+        let mut sn_work = vec![0.0f64; ns];
+        for sn in 0..ns {
+            let (f, w) = (sn_begin[sn], sn_begin[sn + 1] - sn_begin[sn]);
+            let nr = sn_row_ptr[sn + 1] - sn_row_ptr[sn];
+            let own: f64 = (0..w).map(|t| (t * (nr - t)) as f64).sum();
+            sn_panels[sn] = w >= 2 * PANEL && own >= MIN_PARALLEL_WORK;
+            let mut col_work = vec![0.0f64; w];
+            for &(dd, p1, p2) in &upd[upd_ptr[sn]..upd_ptr[sn + 1]] {
+                let dd = dd as usize;
+                let wd = sn_begin[dd + 1] - sn_begin[dd];
+                let rd = &sn_rows[sn_row_ptr[dd]..sn_row_ptr[dd + 1]];
+                for q in p1 as usize..p2 as usize {
+                    col_work[rd[q] as usize - f] += ((rd.len() - q) * wd) as f64;
+                }
+            }
+            let total: f64 = col_work.iter().sum();
+            sn_work[sn] = own + total;
+            if total >= MIN_PARALLEL_WORK {
+                let mut acc = 0.0;
+                for (c, &cw) in col_work.iter().enumerate() {
+                    acc += cw;
+                    if 2.0 * acc >= total {
+                        if c + 1 < w {
+                            sn_split[sn] = (c + 1) as u32;
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+        let parallel_work = sn_split.iter().any(|&s| s > 0) || sn_panels.iter().any(|&p| p);
+        let first_shared = (0..ns).find(|&sn| sn_split[sn] > 0 || sn_panels[sn]);
+        let mut wake_at = first_shared.unwrap_or(ns);
+        let mut ahead = 0.0;
+        while wake_at > 0 && ahead < WAKE_AHEAD_WORK {
+            wake_at -= 1;
+            ahead += sn_work[wake_at];
+        }
         let sn_pair = (0..ns)
             .map(|sn| pair[sn_begin[sn]..sn_begin[sn + 1]].iter().any(|&p| p))
             .collect();
@@ -251,16 +323,56 @@ impl BlockPlan {
             l: vec![0.0; l_col_ptr[dim]],
             l_col_ptr,
             l_row_idx,
+            sn_split,
+            sn_panels,
+            parallel_work,
+            wake_at,
             map: vec![0; dim],
             tmp: vec![0.0; max_rows],
             coef: vec![0.0; max_rows],
+            tmp2: vec![0.0; max_rows],
+            coef2: vec![0.0; max_rows],
             x: vec![0.0; dim],
         })
     }
 
+    /// Whether the analysis found supernodes to share between two threads, and the machine
+    /// has a second core for them.
+    pub(super) fn shares_work(&self) -> bool {
+        self.parallel_work && factor_pool().is_some()
+    }
+
     /// Numeric LDLᵀ; pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
-    /// inertia, or `None` on a zero or non-finite pivot.
-    pub(super) fn factor(&mut self, values: &[f64], eps: f64, delta: f64) -> Option<Inertia> {
+    /// inertia, or `None` on a zero or non-finite pivot. With `parallel`, the supernodes whose
+    /// work the analysis divided ([`BlockPlan::sn_split`], [`BlockPlan::sn_panels`]) are
+    /// shared with the worker of [`factor_pool`], each thread on its own columns: every entry
+    /// receives the same operations in the same order as on one thread, so the factor is the
+    /// same bit for bit either way.
+    pub(super) fn factor(
+        &mut self,
+        values: &[f64],
+        eps: f64,
+        delta: f64,
+        parallel: bool,
+    ) -> Option<Inertia> {
+        let Some(pool) = factor_pool().filter(|_| parallel && self.parallel_work) else {
+            return self.factor_with(values, eps, delta, None);
+        };
+        let helper = Helper {
+            pool,
+            stop: Arc::new(AtomicBool::new(false)),
+        };
+        self.factor_with(values, eps, delta, Some(&helper))
+    }
+
+    /// [`BlockPlan::factor`], sharing the large supernodes with `helper`'s thread if given.
+    fn factor_with(
+        &mut self,
+        values: &[f64],
+        eps: f64,
+        delta: f64,
+        helper: Option<&Helper>,
+    ) -> Option<Inertia> {
         let (eps, delta) = (eps.abs(), delta.abs());
         self.vals.iter_mut().for_each(|v| *v = 0.0);
         for (&dst, &v) in self.a_dst.iter().zip(values) {
@@ -269,6 +381,9 @@ impl BlockPlan {
         let ns = self.sn_begin.len() - 1;
         let mut inertia = Inertia::default();
         for sn in 0..ns {
+            if sn == self.wake_at {
+                helper.inspect(|h| h.wake());
+            }
             let (f, l) = (self.sn_begin[sn], self.sn_begin[sn + 1]);
             let w = l - f;
             let rows = &self.sn_rows[self.sn_row_ptr[sn]..self.sn_row_ptr[sn + 1]];
@@ -278,123 +393,113 @@ impl BlockPlan {
             }
             let (done, rest) = self.vals.split_at_mut(self.sn_val_ptr[sn]);
             let blk = &mut rest[..nr * w];
-            for &(dd, p1, p2) in &self.upd[self.upd_ptr[sn]..self.upd_ptr[sn + 1]] {
-                let dd = dd as usize;
-                let (p1, p2) = (p1 as usize, p2 as usize);
-                let (fd, ld) = (self.sn_begin[dd], self.sn_begin[dd + 1]);
-                let wd = ld - fd;
-                let rd = &self.sn_rows[self.sn_row_ptr[dd]..self.sn_row_ptr[dd + 1]];
-                let nrd = rd.len();
-                let bd = &done[self.sn_val_ptr[dd]..self.sn_val_ptr[dd] + nrd * wd];
-                let dpiv = &self.d[fd..ld];
-                // Rows rd[p1..] land on consecutive rows of the target block: subtract
-                // in place without the row map.
-                let first = self.map[rd[p1] as usize] as usize;
-                let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
-                for q in p1..p2 {
-                    let c = rd[q] as usize - f;
-                    let len = nrd - q;
-                    let bcol = &mut blk[c * nr..(c + 1) * nr];
-                    if wd == 1 {
-                        let sc = bd[q] * dpiv[0];
-                        if contiguous {
-                            let start = first + (q - p1);
-                            for (b, &v) in bcol[start..start + len].iter_mut().zip(&bd[q..]) {
-                                *b -= v * sc;
-                            }
-                        } else {
-                            scatter_sub(bcol, &rd[q..], &bd[q..], sc, |r| {
-                                self.map[r as usize] as usize
-                            });
-                        }
-                        continue;
-                    }
-                    let coef = &mut self.coef[..wd];
-                    if self.sn_pair[dd] {
-                        dl_t(coef, bd, nrd, q, dpiv, &self.e[fd..ld], &self.pair[fd..ld]);
-                    } else {
-                        for (k, cf) in coef.iter_mut().enumerate() {
-                            *cf = bd[k * nrd + q] * dpiv[k];
-                        }
-                    }
-                    if contiguous {
-                        let start = first + (q - p1);
-                        lincomb_sub(&mut bcol[start..start + len], bd, nrd, q, coef);
-                    } else {
-                        let out = &mut self.tmp[..len];
-                        out.iter_mut().for_each(|o| *o = 0.0);
-                        lincomb_sub(out, bd, nrd, q, coef);
-                        scatter_sub(bcol, &rd[q..], out, -1.0, |r| self.map[r as usize] as usize);
-                    }
-                }
+            let upd = &self.upd[self.upd_ptr[sn]..self.upd_ptr[sn + 1]];
+            let frozen = Frozen {
+                sn_begin: &self.sn_begin,
+                sn_rows: &self.sn_rows,
+                sn_row_ptr: &self.sn_row_ptr,
+                sn_val_ptr: &self.sn_val_ptr,
+                d: &self.d,
+                e: &self.e,
+                pair: &self.pair,
+                sn_pair: &self.sn_pair,
+                map: &self.map,
+            };
+            let split = self.sn_split[sn] as usize;
+            if let Some(h) = helper.filter(|_| split > 0) {
+                let (a, b) = blk.split_at_mut(split * nr);
+                let (tmp_a, tmp_b) = (&mut self.tmp, &mut self.tmp2);
+                let (coef_a, coef_b) = (&mut self.coef, &mut self.coef2);
+                h.join(
+                    || frozen.update(done, upd, f, nr, 0..split, a, tmp_a, coef_a),
+                    || frozen.update(done, upd, f, nr, split..w, b, tmp_b, coef_b),
+                );
+            } else {
+                frozen.update(done, upd, f, nr, 0..w, blk, &mut self.tmp, &mut self.coef);
             }
-            // Dense left-looking LDLᵀ of the block's own columns.
+            // Dense LDLᵀ of the block's own columns, left-looking. With panels, the columns
+            // are factored panel by panel; while one thread factors the next panel, the
+            // other subtracts the finished panels from the later columns (look-ahead). The
+            // panels end at multiples of four, the lincomb's chunk, so that every entry sees
+            // the chunks of one left-looking pass.
             let has_pair = self.sn_pair[sn];
-            let mut c = 0;
-            while c < w {
-                let two = self.pair[f + c];
-                for t in c..c + 1 + usize::from(two) {
-                    let coef = &mut self.coef[..c];
-                    if has_pair {
-                        let (d, e, p) =
-                            (&self.d[f..f + c], &self.e[f..f + c], &self.pair[f..f + c]);
-                        dl_t(coef, blk, nr, t, d, e, p);
-                    } else {
-                        for (k, cf) in coef.iter_mut().enumerate() {
-                            *cf = blk[k * nr + t] * self.d[f + k];
-                        }
-                    }
-                    let (left, right) = blk.split_at_mut(t * nr);
-                    lincomb_sub(&mut right[t..nr], left, nr, t, coef);
+            let panels = helper.filter(|_| self.sn_panels[sn]);
+            let pair = &self.pair[f..l];
+            let panel_end = |p0: usize| {
+                if panels.is_none() {
+                    return w;
                 }
-                if !two {
-                    let col = &mut blk[c * nr + c..(c + 1) * nr];
-                    let (d, _) = counted_pivot(col[0], delta, eps, &mut inertia)?;
-                    col[0] = d;
-                    let inv = d.recip();
-                    col[1..].iter_mut().for_each(|v| *v *= inv);
-                    self.d[f + c] = d;
-                    self.inv_d[f + c] = inv;
-                    self.e[f + c] = 0.0;
-                    self.l[self.l_col_ptr[f + c]..self.l_col_ptr[f + c + 1]].copy_from_slice(col);
-                    c += 1;
-                    continue;
+                let mut p1 = (p0 + PANEL).min(w);
+                while p1 < w && pair[p1 - 1] {
+                    p1 = (p1 + 4).min(w);
                 }
-                // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it
-                // are [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
-                let (cc, c1) = blk.split_at_mut((c + 1) * nr);
-                let (col0, col1) = (&mut cc[c * nr + c..], &mut c1[c + 1..nr]);
-                let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
-                if a.abs() <= eps {
-                    a = 0.0;
-                    // Two 1 × 1 pivots: the static pivoting of each applies.
-                    for d in [&mut d1, &mut d2] {
-                        if delta > 0.0 && d.abs() <= eps {
-                            *d = if *d < 0.0 { -delta } else { delta };
-                        }
-                    }
-                }
-                let det = counted_pair(d1, a, d2, &mut inertia)?;
-                let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
-                for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
-                    let (u, v) = (*x, *y);
-                    *x = u * i11 + v * i12;
-                    *y = u * i12 + v * i22;
-                }
-                col0[0] = d1;
-                col0[1] = 0.0;
-                col1[0] = d2;
-                let j = f + c;
-                self.d[j] = d1;
-                self.d[j + 1] = d2;
-                self.e[j] = a;
-                self.e[j + 1] = 0.0;
-                self.inv_d[j] = i11;
-                self.inv_d[j + 1] = i22;
-                self.inv_e[j] = i12;
-                self.l[self.l_col_ptr[j]..self.l_col_ptr[j + 1]].copy_from_slice(col0);
-                self.l[self.l_col_ptr[j + 1]..self.l_col_ptr[j + 2]].copy_from_slice(col1);
-                c += 2;
+                p1
+            };
+            let mut p = panel_end(0);
+            let mut own = Own {
+                d: &mut self.d[f..l],
+                e: &mut self.e[f..l],
+                inv_d: &mut self.inv_d[f..l],
+                inv_e: &mut self.inv_e[f..l],
+                pair,
+                l: &mut self.l,
+                l_col_ptr: &self.l_col_ptr[f..],
+            };
+            factor_panel(
+                blk,
+                nr,
+                0..p,
+                has_pair,
+                &mut own,
+                &mut self.coef,
+                (eps, delta),
+                &mut inertia,
+            )?;
+            let mut a = 0;
+            while let Some(helper) = panels.filter(|_| p < w) {
+                let q = panel_end(p);
+                let ks = a..p;
+                let mid = look_ahead_split(nr, ks.len(), p, q, w);
+                let (left, right) = blk.split_at_mut(p * nr);
+                let (ra, rb) = right.split_at_mut((mid - p) * nr);
+                let (d_done, d_new) = own.d.split_at_mut(p);
+                let (e_done, e_new) = own.e.split_at_mut(p);
+                let piv = Pivots {
+                    d: d_done,
+                    e: e_done,
+                    pair,
+                    has_pair,
+                };
+                let mut next = Own {
+                    d: d_new,
+                    e: e_new,
+                    inv_d: &mut own.inv_d[p..],
+                    inv_e: &mut own.inv_e[p..],
+                    pair: &pair[p..],
+                    l: &mut *own.l,
+                    l_col_ptr: &own.l_col_ptr[p..],
+                };
+                let (coef_a, coef_b) = (&mut self.coef, &mut self.coef2);
+                let inertia = &mut inertia;
+                let factored = helper.join(
+                    || {
+                        piv.panel_update(left, nr, ks.clone(), p..mid, ra, coef_a);
+                        factor_panel(
+                            ra,
+                            nr,
+                            p..q,
+                            has_pair,
+                            &mut next,
+                            coef_a,
+                            (eps, delta),
+                            inertia,
+                        )
+                    },
+                    || piv.panel_update(left, nr, ks.clone(), mid..w, rb, coef_b),
+                );
+                factored?;
+                a = p;
+                p = q;
             }
         }
         Some(inertia)
@@ -443,11 +548,13 @@ impl BlockPlan {
     }
 }
 
-/// `coef[k] = (D Lᵀ)[k, q]` for the columns k of a block whose `D` has 2 × 2 pivots:
-/// `L[q, k] d[k]`, plus `L[q, k + 1] e[k]` where (k, k + 1) is a pair and `L[q, k − 1] e[k − 1]`
+/// `coef[i] = (D Lᵀ)[k, q]` for the columns k = a + i of a block whose `D` has 2 × 2 pivots
+/// (`coef.len()` of them), where the columns before `lim` are finished: `L[q, k] d[k]`, plus
+/// `L[q, k + 1] e[k]` where (k, k + 1) is a pair and k + 1 < `lim`, and `L[q, k − 1] e[k − 1]`
 /// where (k − 1, k) is one (`L[q, k]` = `blk[k·stride + q]`).
 #[inline(always)]
-fn dl_t(
+#[allow(clippy::too_many_arguments)]
+fn dl_range(
     coef: &mut [f64],
     blk: &[f64],
     stride: usize,
@@ -455,17 +562,19 @@ fn dl_t(
     d: &[f64],
     e: &[f64],
     pair: &[bool],
+    a: usize,
+    lim: usize,
 ) {
-    let w = coef.len();
-    for k in 0..w {
+    for (i, cf) in coef.iter_mut().enumerate() {
+        let k = a + i;
         let mut v = blk[k * stride + q] * d[k];
-        if pair[k] && k + 1 < w {
+        if pair[k] && k + 1 < lim {
             v += blk[(k + 1) * stride + q] * e[k];
         }
         if k > 0 && pair[k - 1] {
             v += blk[(k - 1) * stride + q] * e[k - 1];
         }
-        coef[k] = v;
+        *cf = v;
     }
 }
 
@@ -509,4 +618,358 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
         tail += v * x[r as usize];
     }
     (s[0] + s[1]) + (s[2] + s[3]) + tail
+}
+
+/// Columns of a panel of a shared supernode's own LDLᵀ (a multiple of four, the lincomb's
+/// chunk). Narrower panels leave less of the block to one thread, wider ones hand over
+/// fewer times: 16 and 32 columns measured alike on the LG-30 KKT (decision record 0090),
+/// and a supernode is factored in panels only from twice this width.
+const PANEL: usize = 16;
+
+/// Smallest work (multiply–adds) of a supernode's descendant updates, or of its own
+/// columns' LDLᵀ, that the analysis splits between two threads: about 50 µs of factoring,
+/// many times the cost of handing a half over to the other thread.
+pub(super) const MIN_PARALLEL_WORK: f64 = 2e5;
+
+/// Multiply–adds (about 0.1–0.2 ms) of the supernodes factored before the first shared one
+/// while the second thread wakes up: waking a sleeping thread takes some 60 µs on a virtual
+/// machine, more than a shared update saves, so the thread is woken once, ahead, and then
+/// watches for work until the factorization ends.
+const WAKE_AHEAD_WORK: f64 = 4e5;
+
+/// The second thread of a shared factorization ([`BlockPlan::factor`]): the calling thread
+/// factors, and hands one half of each shared supernode's work to the worker of
+/// [`factor_pool`], which watches for it ([`linger`]) from [`Helper::wake`] until the
+/// factorization ends (when the helper is dropped).
+struct Helper {
+    pool: &'static rayon::ThreadPool,
+    stop: Arc<AtomicBool>,
+}
+
+impl Helper {
+    /// Puts the worker on watch: waking a sleeping thread takes some 60 µs on a virtual
+    /// machine, more than many shared updates save, so it is woken once per factorization,
+    /// a little ahead ([`BlockPlan::wake_at`]).
+    fn wake(&self) {
+        let stop = Arc::clone(&self.stop);
+        self.pool.spawn(move || linger(&stop));
+    }
+
+    /// Runs `mine` on the calling thread and `theirs` on the worker, and returns when both
+    /// have ended; waits for the worker by spinning (for at most [`MAX_SPIN`]) rather than
+    /// by sleeping, whose wake-up would cost more than the halves save.
+    fn join<R>(&self, mine: impl FnOnce() -> R, theirs: impl FnOnce() + Send) -> R {
+        let done = AtomicBool::new(false);
+        self.pool.in_place_scope(|scope| {
+            scope.spawn(|_| {
+                theirs();
+                done.store(true, Ordering::Release);
+            });
+            let r = mine();
+            let start = Instant::now();
+            while !done.load(Ordering::Acquire) && start.elapsed() < MAX_SPIN {
+                std::hint::spin_loop();
+            }
+            r
+        })
+    }
+}
+
+impl Drop for Helper {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Release);
+    }
+}
+
+/// Longest the calling thread spins for the worker's half before it sleeps until it ends.
+const MAX_SPIN: Duration = Duration::from_micros(200);
+
+/// The worker's watch: runs the halves handed over as soon as they come, spinning in
+/// between, until `stop`. A watch that the worker takes up while it keeps another (two
+/// factorizations on two threads at once) returns at once: the running watch already runs
+/// every half handed over, and watches nested inside one another would grow the worker's
+/// stack for as long as the factorizations keep overlapping.
+fn linger(stop: &AtomicBool) {
+    thread_local! {
+        static WATCHING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+    if WATCHING.with(|w| w.replace(true)) {
+        return;
+    }
+    while !stop.load(Ordering::Acquire) {
+        if rayon::yield_now() != Some(rayon::Yield::Executed) {
+            std::hint::spin_loop();
+        }
+    }
+    WATCHING.with(|w| w.set(false));
+}
+
+/// The thread that takes half of the shared supernodes of a [`BlockPlan`] (a pool of its
+/// own, not rayon's global one, whose workers a parallel multi-start keeps busy); `None` on a
+/// single core.
+fn factor_pool() -> Option<&'static rayon::ThreadPool> {
+    static POOL: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
+    POOL.get_or_init(|| {
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        if cores < 2 {
+            return None;
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .thread_name(|i| format!("kkt-factor-{i}"))
+            .build()
+            .ok()
+    })
+    .as_ref()
+}
+
+/// What the descendant updates of a supernode read: the finished supernodes' layout and
+/// pivots, and the row map of the target.
+struct Frozen<'a> {
+    sn_begin: &'a [usize],
+    sn_rows: &'a [u32],
+    sn_row_ptr: &'a [usize],
+    sn_val_ptr: &'a [usize],
+    d: &'a [f64],
+    e: &'a [f64],
+    pair: &'a [bool],
+    sn_pair: &'a [bool],
+    map: &'a [u32],
+}
+
+impl Frozen<'_> {
+    /// Subtracts the updates `upd` of the finished supernodes (`done`) from the target
+    /// columns `cols` (relative to the target's first column `f`) of a block with `nr` rows,
+    /// whose columns `cols` are `blk`; descendants in the list's order, so that each entry's
+    /// operations do not depend on how the columns are divided.
+    #[allow(clippy::too_many_arguments)]
+    fn update(
+        &self,
+        done: &[f64],
+        upd: &[(u32, u32, u32)],
+        f: usize,
+        nr: usize,
+        cols: Range<usize>,
+        blk: &mut [f64],
+        tmp: &mut [f64],
+        coef: &mut [f64],
+    ) {
+        for &(dd, p1, p2) in upd {
+            let dd = dd as usize;
+            let (p1, p2) = (p1 as usize, p2 as usize);
+            let (fd, ld) = (self.sn_begin[dd], self.sn_begin[dd + 1]);
+            let wd = ld - fd;
+            let rd = &self.sn_rows[self.sn_row_ptr[dd]..self.sn_row_ptr[dd + 1]];
+            let nrd = rd.len();
+            let bd = &done[self.sn_val_ptr[dd]..self.sn_val_ptr[dd] + nrd * wd];
+            let dpiv = &self.d[fd..ld];
+            // Rows rd[p1..] land on consecutive rows of the target block: subtract in place
+            // without the row map.
+            let first = self.map[rd[p1] as usize] as usize;
+            let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
+            let span = &rd[p1..p2];
+            let qa = p1 + span.partition_point(|&r| (r as usize - f) < cols.start);
+            let qb = p1 + span.partition_point(|&r| (r as usize - f) < cols.end);
+            for q in qa..qb {
+                let c = rd[q] as usize - f - cols.start;
+                let len = nrd - q;
+                let bcol = &mut blk[c * nr..(c + 1) * nr];
+                if wd == 1 {
+                    let sc = bd[q] * dpiv[0];
+                    if contiguous {
+                        let start = first + (q - p1);
+                        for (b, &v) in bcol[start..start + len].iter_mut().zip(&bd[q..]) {
+                            *b -= v * sc;
+                        }
+                    } else {
+                        scatter_sub(bcol, &rd[q..], &bd[q..], sc, |r| {
+                            self.map[r as usize] as usize
+                        });
+                    }
+                    continue;
+                }
+                let coef = &mut coef[..wd];
+                if self.sn_pair[dd] {
+                    dl_range(
+                        coef,
+                        bd,
+                        nrd,
+                        q,
+                        dpiv,
+                        &self.e[fd..ld],
+                        &self.pair[fd..ld],
+                        0,
+                        wd,
+                    );
+                } else {
+                    for (k, cf) in coef.iter_mut().enumerate() {
+                        *cf = bd[k * nrd + q] * dpiv[k];
+                    }
+                }
+                if contiguous {
+                    let start = first + (q - p1);
+                    lincomb_sub(&mut bcol[start..start + len], bd, nrd, q, coef);
+                } else {
+                    let out = &mut tmp[..len];
+                    out.iter_mut().for_each(|o| *o = 0.0);
+                    lincomb_sub(out, bd, nrd, q, coef);
+                    scatter_sub(bcol, &rd[q..], out, -1.0, |r| self.map[r as usize] as usize);
+                }
+            }
+        }
+    }
+}
+
+/// The finished pivots of a supernode (from its first column), for a panel's update.
+struct Pivots<'a> {
+    d: &'a [f64],
+    e: &'a [f64],
+    pair: &'a [bool],
+    has_pair: bool,
+}
+
+impl Pivots<'_> {
+    /// Subtracts `Σ_{k ∈ ks} L[·, k] (D Lᵀ)[k, t]` from rows `t..nr` of the block's columns
+    /// `t ∈ cols`, which are `out`; `left` holds the block's finished columns (from 0), `ks`
+    /// starts at a multiple of four so that the chunks are those of one left-looking pass.
+    fn panel_update(
+        &self,
+        left: &[f64],
+        nr: usize,
+        ks: Range<usize>,
+        cols: Range<usize>,
+        out: &mut [f64],
+        coef: &mut [f64],
+    ) {
+        let coef = &mut coef[..ks.len()];
+        for t in cols.clone() {
+            if self.has_pair {
+                let lim = if t > 0 && self.pair[t - 1] { t - 1 } else { t };
+                dl_range(coef, left, nr, t, self.d, self.e, self.pair, ks.start, lim);
+            } else {
+                for (k, cf) in coef.iter_mut().enumerate() {
+                    *cf = left[(ks.start + k) * nr + t] * self.d[ks.start + k];
+                }
+            }
+            let c = t - cols.start;
+            lincomb_sub(
+                &mut out[c * nr + t..(c + 1) * nr],
+                &left[ks.start * nr..],
+                nr,
+                t,
+                coef,
+            );
+        }
+    }
+}
+
+/// What the factorization of a supernode's panel writes, from the panel's first column on:
+/// its pivots (`D`, their inverses) and `L`'s columns in the solves' layout.
+struct Own<'a> {
+    d: &'a mut [f64],
+    e: &'a mut [f64],
+    inv_d: &'a mut [f64],
+    inv_e: &'a mut [f64],
+    pair: &'a [bool],
+    l: &'a mut [f64],
+    l_col_ptr: &'a [usize],
+}
+
+/// Left-looking LDLᵀ of the block's columns `cols` (`blk` holds the columns from
+/// `cols.start` on, `nr` rows each), which have received every update but those of the
+/// earlier columns of `cols`; 1 × 1 and 2 × 2 pivots as marked in `own.pair`, static
+/// pivoting `(eps, delta)`, counted into `inertia`. `None` on a zero or non-finite pivot.
+#[allow(clippy::too_many_arguments)]
+fn factor_panel(
+    blk: &mut [f64],
+    nr: usize,
+    cols: Range<usize>,
+    has_pair: bool,
+    own: &mut Own<'_>,
+    coef: &mut [f64],
+    (eps, delta): (f64, f64),
+    inertia: &mut Inertia,
+) -> Option<()> {
+    let p = cols.start;
+    let mut c = p;
+    while c < cols.end {
+        let cl = c - p;
+        let two = own.pair[cl];
+        for t in c..c + 1 + usize::from(two) {
+            let coef = &mut coef[..cl];
+            if has_pair {
+                dl_range(coef, blk, nr, t, own.d, own.e, own.pair, 0, cl);
+            } else {
+                for (k, cf) in coef.iter_mut().enumerate() {
+                    *cf = blk[k * nr + t] * own.d[k];
+                }
+            }
+            let (left, right) = blk.split_at_mut((t - p) * nr);
+            lincomb_sub(&mut right[t..nr], left, nr, t, coef);
+        }
+        if !two {
+            let col = &mut blk[cl * nr + c..(cl + 1) * nr];
+            let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;
+            col[0] = d;
+            let inv = d.recip();
+            col[1..].iter_mut().for_each(|v| *v *= inv);
+            own.d[cl] = d;
+            own.inv_d[cl] = inv;
+            own.e[cl] = 0.0;
+            own.l[own.l_col_ptr[cl]..own.l_col_ptr[cl + 1]].copy_from_slice(col);
+            c += 1;
+            continue;
+        }
+        // 2 × 2 pivot B = [d1 a; a d2] on columns c, c + 1: L's two columns below it are
+        // [A_c A_{c+1}] B⁻¹, and L[c + 1, c] = 0.
+        let (cc, c1) = blk.split_at_mut((cl + 1) * nr);
+        let (col0, col1) = (&mut cc[cl * nr + c..], &mut c1[c + 1..nr]);
+        let (mut d1, mut a, mut d2) = (col0[0], col0[1], col1[0]);
+        if a.abs() <= eps {
+            a = 0.0;
+            // Two 1 × 1 pivots: the static pivoting of each applies.
+            for d in [&mut d1, &mut d2] {
+                if delta > 0.0 && d.abs() <= eps {
+                    *d = if *d < 0.0 { -delta } else { delta };
+                }
+            }
+        }
+        let det = counted_pair(d1, a, d2, inertia)?;
+        let (i11, i12, i22) = (d2 / det, -a / det, d1 / det);
+        for (x, y) in col0[2..].iter_mut().zip(col1[1..].iter_mut()) {
+            let (u, v) = (*x, *y);
+            *x = u * i11 + v * i12;
+            *y = u * i12 + v * i22;
+        }
+        col0[0] = d1;
+        col0[1] = 0.0;
+        col1[0] = d2;
+        own.d[cl] = d1;
+        own.d[cl + 1] = d2;
+        own.e[cl] = a;
+        own.e[cl + 1] = 0.0;
+        own.inv_d[cl] = i11;
+        own.inv_d[cl + 1] = i22;
+        own.inv_e[cl] = i12;
+        own.l[own.l_col_ptr[cl]..own.l_col_ptr[cl + 1]].copy_from_slice(col0);
+        own.l[own.l_col_ptr[cl + 1]..own.l_col_ptr[cl + 2]].copy_from_slice(col1);
+        c += 2;
+    }
+    Some(())
+}
+
+/// Where a look-ahead round divides the later columns `p..w` of a block with `nr` rows: the
+/// first thread updates columns `p..mid` by the `k` finished columns and factors the next
+/// panel `p..q`, the second updates `mid..w`; `mid ≥ q` balances the two by multiply–adds.
+fn look_ahead_split(nr: usize, k: usize, p: usize, q: usize, w: usize) -> usize {
+    let panel: usize = (p..q).map(|t| (t - p) * (nr - t)).sum();
+    let rest: usize = (p..w).map(|t| k * (nr - t)).sum();
+    let mut first = panel;
+    for t in p..w {
+        if t >= q && 2 * first >= panel + rest {
+            return t;
+        }
+        first += k * (nr - t);
+    }
+    w
 }

@@ -706,3 +706,80 @@ fn a_pattern_analysed_before_is_taken_back_bit_for_bit() {
     assert_eq!(s.analyses(), 2);
     assert_eq!(first, run(&mut SparseLdlt::with_options(options), &a));
 }
+
+/// The supernodal kernel with its large supernodes shared between two threads gives the
+/// factor of one thread bit for bit (the same operations per entry in the same order), with
+/// and without 2 × 2 pivot pairs, on KKTs whose dense element blocks make supernodes wide
+/// enough to be shared (both the descendant updates and the own columns' panels).
+#[test]
+fn a_factor_shared_between_two_threads_is_the_factor_of_one() {
+    let shape = KktShape {
+        zero_diag_every: 5,
+        block: 240,
+        density: 0.9,
+        row_vars: 60,
+        stride: 2,
+    };
+    for (seed, pairs) in [(11, false), (12, true), (13, true)] {
+        let (n, m) = (720, 300);
+        let (pat, _) = banded_kkt(seed, (n, m), &shape, &vec![0.5; n], 1e-9);
+        let ordering = if pairs {
+            LdltOrdering::AmdPivotPairs {
+                constraint_rows_from: n,
+            }
+        } else {
+            LdltOrdering::Amd
+        };
+        let mut s = SparseLdlt::with_options(LdltOptions {
+            backend: LdltBackend::Supernodal,
+            ordering,
+            ..LdltOptions::default()
+        });
+        s.analyse(n + m, &pat.mat.col_ptr, &pat.mat.row_idx)
+            .unwrap();
+        let bits = |s: &SparseLdlt| {
+            let Kernel::Supernodal(b) = &s.kernel else {
+                panic!("seed {seed}: the supernodal kernel");
+            };
+            let words = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            (words(&b.l), words(&b.d), words(&b.e), words(&b.inv_d))
+        };
+        {
+            let Kernel::Supernodal(b) = &s.kernel else {
+                panic!("seed {seed}: the supernodal kernel");
+            };
+            assert!(
+                b.sn_split.iter().any(|&c| c > 0),
+                "seed {seed}: no split updates"
+            );
+            let paneled = |with_pair: bool| {
+                (0..b.sn_panels.len()).any(|k| b.sn_panels[k] && b.sn_pair[k] == with_pair)
+            };
+            assert!(paneled(pairs), "seed {seed}: no panels (pairs: {pairs})");
+        }
+        let one = s.factor_numeric(&pat.mat.values, false).expect("factor");
+        let one_bits = bits(&s);
+        s.last = s.factor_numeric(&pat.mat.values, true);
+        let two = s.last.expect("factor");
+        assert_eq!(one, two, "seed {seed}: inertia");
+        assert!(one_bits == bits(&s), "seed {seed}: the factors differ");
+        assert!(
+            refined_residual(&mut s, &pat, 3) < 1e-10,
+            "seed {seed}: the shared factor solves K"
+        );
+        // Three threads sharing at once (the pool's one worker serves them all).
+        std::thread::scope(|scope| {
+            for _ in 0..3 {
+                let mut copy = s.duplicate().expect("a copy");
+                let (values, want) = (&pat.mat.values, &one_bits);
+                scope.spawn(move || {
+                    for _ in 0..4 {
+                        copy.last = copy.factor_numeric(values, true);
+                        assert_eq!(copy.last, Ok(one), "seed {seed}: inertia at once");
+                        assert!(*want == bits(&copy), "seed {seed}: a factor at once");
+                    }
+                });
+            }
+        });
+    }
+}
