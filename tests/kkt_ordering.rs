@@ -187,8 +187,10 @@ fn speculative_factorization_changes_no_path() {
 /// The factorization shared with a second core (decision record 0090) changes no path: a cold
 /// LG-30 `periodic-qc` solve with it (the default) and without it ends at the same objective
 /// and point (bits), after the same iterations, with the same counters; with two or more
-/// cores it was shared there (speculation, which it replaces, did not run). Radau 3 × 10,
-/// whose supernodes are too narrow to share, keeps its path either way.
+/// cores the default LG-30 solve does not speculate, which it does only where the
+/// factorization is not shared. Radau 3 × 10, whose main kernel has nothing to share, keeps
+/// its path either way. (That the kernel shares, bit for bit, is checked on its own:
+/// `bf-optim`'s `a_factor_shared_between_two_threads_is_the_factor_of_one`.)
 #[test]
 fn a_shared_factorization_changes_no_path() {
     let cores = std::thread::available_parallelism().map_or(1, usize::from);

@@ -632,11 +632,15 @@ pub fn mesh_cell(o: &bf_problem::OcpSolution) -> String {
             .map(|m| format!("{} ({})", m.degrees.iter().sum::<usize>(), m.degrees.len()))
             .collect(),
         _ => {
-            let elements = match o.scheme {
-                bf_optim::ocp::Scheme::Radau { elements } => elements,
-                bf_optim::ocp::Scheme::Lg => 1,
+            // The problem's own mesh, as the transcription builds it from `--points` (a
+            // Radau element count that does not divide the points rounds each element up);
+            // Legendre–Gauss: one element of `points`.
+            let (points, elements) = match bf_optim::ocp::MeshSpec::from_scheme(o.scheme, o.points)
+            {
+                Ok(spec) => (spec.degrees.iter().sum(), spec.degrees.len()),
+                Err(_) => (o.points, 1),
             };
-            vec![format!("{} ({elements})", o.points); o.phase_durations.len()]
+            vec![format!("{points} ({elements})"); o.phase_durations.len()]
         }
     };
     per_phase.join(", ")
@@ -931,6 +935,17 @@ mod tests {
             "{text}"
         );
         assert_eq!(last_round.objective.to_bits(), sol.objective.to_bits());
+
+        // Without a refinement the cell is the problem's mesh as the transcription built it:
+        // 10 points in 3 Radau elements are 3 elements of 4 (its nodes per phase, 12).
+        let mut plain = sol.clone();
+        plain.refinement = None;
+        plain.scheme = bf_optim::ocp::Scheme::Radau { elements: 3 };
+        plain.points = 10;
+        assert_eq!(mesh_cell(&plain), ["12 (3)"; 3].join(", "));
+        plain.scheme = bf_optim::ocp::Scheme::Lg;
+        plain.points = 30;
+        assert_eq!(mesh_cell(&plain), ["30 (1)"; 3].join(", "));
 
         let mut moved = sol.clone();
         moved.objective *= 1.001;

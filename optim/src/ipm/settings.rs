@@ -411,7 +411,7 @@ pub struct LinearSolverSettings {
     /// supernodal kernel finds such supernodes, the solve runs on a thread of its own (not a
     /// worker of a rayon pool: a parallel multi-start's starts already keep every core busy)
     /// and the machine has two cores; there it replaces `speculative_factorization`, which
-    /// would compete for the same core. A cold LG-30 `periodic-qc` solve takes about 0.85 of
+    /// would compete for the same core. A cold LG-30 `periodic-qc` solve takes about 0.88 of
     /// the speculative one's wall time (decision record 0090). Off: every factor on the solve's
     /// thread (speculation as before).
     parallel_factorization: bool = true,

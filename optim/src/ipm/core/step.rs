@@ -390,6 +390,9 @@ impl Core<'_> {
                 ordering: LdltOrdering::AmdPivotPairs {
                     constraint_rows_from: self.n,
                 },
+                // Never shared while a speculative job may run: both at once put three busy
+                // threads on two cores (decision record 0090).
+                parallel: self.kkt.solver.options().parallel && self.kkt.speculate != Some(true),
                 ..self.kkt.solver.options().clone()
             };
             // An earlier run's solver with these options keeps its analyses (bit for bit the

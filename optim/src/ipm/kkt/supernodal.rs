@@ -15,7 +15,9 @@
 //! columns in chunks of four from column 0), so the factor is the same bit for bit on one
 //! thread or two. The helper is the one worker of a pool of its own, woken once per
 //! factorization a little ahead of the first shared supernode (a wake-up costs some 60 µs on a
-//! virtual machine) and spinning between the halves it is handed.
+//! virtual machine) and spinning between the halves it is handed until the last shared
+//! supernode is done. One factorization at a time has the helper; a factorization on another
+//! thread meanwhile runs alone.
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -143,6 +145,8 @@ pub(super) struct BlockPlan {
     /// The supernode before which the second thread is put on watch: about
     /// [`WAKE_AHEAD_WORK`] of factoring before the first shared one.
     pub(super) wake_at: usize,
+    /// The supernode after the last shared one, where the helper's watch ends.
+    pub(super) after_shared: usize,
     // workspaces (the second `tmp`, `coef` for the second thread)
     pub(super) map: Vec<u32>,
     pub(super) tmp: Vec<f64>,
@@ -266,6 +270,10 @@ impl BlockPlan {
         }
         let parallel_work = sn_split.iter().any(|&s| s > 0) || sn_panels.iter().any(|&p| p);
         let first_shared = (0..ns).find(|&sn| sn_split[sn] > 0 || sn_panels[sn]);
+        let after_shared = (0..ns)
+            .rev()
+            .find(|&sn| sn_split[sn] > 0 || sn_panels[sn])
+            .map_or(ns, |sn| sn + 1);
         let mut wake_at = first_shared.unwrap_or(ns);
         let mut ahead = 0.0;
         while wake_at > 0 && ahead < WAKE_AHEAD_WORK {
@@ -327,6 +335,7 @@ impl BlockPlan {
             sn_panels,
             parallel_work,
             wake_at,
+            after_shared,
             map: vec![0; dim],
             tmp: vec![0.0; max_rows],
             coef: vec![0.0; max_rows],
@@ -355,7 +364,14 @@ impl BlockPlan {
         delta: f64,
         parallel: bool,
     ) -> Option<Inertia> {
-        let Some(pool) = factor_pool().filter(|_| parallel && self.parallel_work) else {
+        // One factorization at a time has the helper: another thread factoring meanwhile
+        // (several solvers on threads of their own) factors alone, the same factor, rather
+        // than queue its halves behind the first one's.
+        let claim = (parallel && self.parallel_work)
+            .then(factor_pool)
+            .flatten()
+            .and_then(|pool| HelperClaim::take().map(|claim| (pool, claim)));
+        let Some((pool, _claim)) = claim else {
             return self.factor_with(values, eps, delta, None);
         };
         let helper = Helper {
@@ -383,6 +399,9 @@ impl BlockPlan {
         for sn in 0..ns {
             if sn == self.wake_at {
                 helper.inspect(|h| h.wake());
+            }
+            if sn == self.after_shared {
+                helper.inspect(|h| h.finish());
             }
             let (f, l) = (self.sn_begin[sn], self.sn_begin[sn + 1]);
             let w = l - f;
@@ -624,7 +643,7 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
 /// chunk). Narrower panels leave less of the block to one thread, wider ones hand over
 /// fewer times: 16 and 32 columns measured alike on the LG-30 KKT (decision record 0090),
 /// and a supernode is factored in panels only from twice this width.
-const PANEL: usize = 16;
+pub(super) const PANEL: usize = 16;
 
 /// Smallest work (multiply–adds) of a supernode's descendant updates, or of its own
 /// columns' LDLᵀ, that the analysis splits between two threads: about 50 µs of factoring,
@@ -675,9 +694,38 @@ impl Helper {
     }
 }
 
+impl Helper {
+    /// Ends the worker's watch (after the last shared supernode).
+    fn finish(&self) {
+        self.stop.store(true, Ordering::Release);
+    }
+}
+
 impl Drop for Helper {
     fn drop(&mut self) {
-        self.stop.store(true, Ordering::Release);
+        self.finish();
+    }
+}
+
+/// The right to the helper for one factorization (module docs): taken with a
+/// compare-and-swap, returned when dropped.
+struct HelperClaim;
+
+static HELPER_TAKEN: AtomicBool = AtomicBool::new(false);
+
+impl HelperClaim {
+    /// The claim, or `None` while another factorization holds it.
+    fn take() -> Option<Self> {
+        HELPER_TAKEN
+            .compare_exchange(false, true, Ordering::Acquire, Ordering::Relaxed)
+            .ok()
+            .map(|_| HelperClaim)
+    }
+}
+
+impl Drop for HelperClaim {
+    fn drop(&mut self) {
+        HELPER_TAKEN.store(false, Ordering::Release);
     }
 }
 
@@ -685,10 +733,11 @@ impl Drop for Helper {
 const MAX_SPIN: Duration = Duration::from_micros(200);
 
 /// The worker's watch: runs the halves handed over as soon as they come, spinning in
-/// between, until `stop`. A watch that the worker takes up while it keeps another (two
-/// factorizations on two threads at once) returns at once: the running watch already runs
-/// every half handed over, and watches nested inside one another would grow the worker's
-/// stack for as long as the factorizations keep overlapping.
+/// between, until `stop`. A watch that the worker takes up while it still keeps another (the
+/// next factorization's, begun before the last one's watch saw its end) returns at once:
+/// watches nested inside one another could grow the worker's stack for as long as
+/// factorizations kept following one another that closely; the halves are then run by the
+/// worker's own loop.
 fn linger(stop: &AtomicBool) {
     thread_local! {
         static WATCHING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };

@@ -720,6 +720,7 @@ fn a_factor_shared_between_two_threads_is_the_factor_of_one() {
         row_vars: 60,
         stride: 2,
     };
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
     for (seed, pairs) in [(11, false), (12, true), (13, true)] {
         let (n, m) = (720, 300);
         let (pat, _) = banded_kkt(seed, (n, m), &shape, &vec![0.5; n], 1e-9);
@@ -742,7 +743,8 @@ fn a_factor_shared_between_two_threads_is_the_factor_of_one() {
                 panic!("seed {seed}: the supernodal kernel");
             };
             let words = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            (words(&b.l), words(&b.d), words(&b.e), words(&b.inv_d))
+            let w = (words(&b.d), words(&b.e), words(&b.inv_d), words(&b.inv_e));
+            (words(&b.l), w)
         };
         {
             let Kernel::Supernodal(b) = &s.kernel else {
@@ -756,6 +758,9 @@ fn a_factor_shared_between_two_threads_is_the_factor_of_one() {
                 (0..b.sn_panels.len()).any(|k| b.sn_panels[k] && b.sn_pair[k] == with_pair)
             };
             assert!(paneled(pairs), "seed {seed}: no panels (pairs: {pairs})");
+            if cores >= 2 {
+                assert!(b.shares_work(), "seed {seed}: nothing to share");
+            }
         }
         let one = s.factor_numeric(&pat.mat.values, false).expect("factor");
         let one_bits = bits(&s);
@@ -781,5 +786,76 @@ fn a_factor_shared_between_two_threads_is_the_factor_of_one() {
                 });
             }
         });
+        // A factorization that stops at a non-finite pivot in a shared supernode returns
+        // the failure, as on one thread, and leaves the helper free for the next.
+        let mut bad = pat.mat.values.clone();
+        let last = *pat.mat.col_ptr.last().expect("columns") - 1;
+        bad[last] = f64::NAN;
+        let alone = s.factor_numeric(&bad, false);
+        assert!(alone.is_err(), "seed {seed}: a NaN factored");
+        assert_eq!(
+            s.factor_numeric(&bad, true),
+            alone,
+            "seed {seed}: the failure"
+        );
+        assert_eq!(
+            s.factor_numeric(&pat.mat.values, true),
+            Ok(one),
+            "seed {seed}"
+        );
+        assert!(
+            one_bits == bits(&s),
+            "seed {seed}: the factor after a failure"
+        );
     }
+}
+
+/// A 2 × 2 pivot where a panel of the fixed width would end (the panels step over it, so that
+/// no pivot is cut): one dense supernode of 200 columns whose pairs start at odd columns
+/// (3, 7, 11, …: (15, 16) sits on the first panel's end), factored shared and on one thread,
+/// bit for bit the same, and `L D Lᵀ` reproduces the matrix.
+#[test]
+fn a_pair_on_a_panel_end_is_stepped_over() {
+    use rand::{Rng, SeedableRng};
+    let dim = 200;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+    let mut dense = vec![vec![0.0; dim]; dim];
+    for j in 0..dim {
+        for i in j..dim {
+            let v: f64 = rng.random_range(-1.0..1.0) + if i == j { 0.3 } else { 0.0 };
+            row_idx.push(i);
+            values.push(v);
+            dense[i][j] = v;
+            dense[j][i] = v;
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let mut s = SparseLdlt::with_backend(LdltBackend::Supernodal);
+    s.analyse(dim, &col_ptr, &row_idx).unwrap();
+    let sym = &s.faer.as_ref().expect("analysed").symbolic;
+    let pair_first: Vec<bool> = (0..dim).map(|j| j % 4 == 3 && j + 1 < dim).collect();
+    let mut plan = BlockPlan::new(sym, dim, &col_ptr, &row_idx, &pair_first).expect("a plan");
+    assert_eq!(plan.sn_begin.len(), 2, "one supernode");
+    assert!(plan.sn_panels[0], "factored in panels");
+    let cut = (0..dim - 1).filter(|&j| plan.pair[j] && (j + 1) % supernodal::PANEL == 0);
+    assert!(cut.count() > 1, "pairs on the panels' ends");
+    let words = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let bits = |p: &BlockPlan| {
+        let w = (words(&p.d), words(&p.e), words(&p.inv_d), words(&p.inv_e));
+        (words(&p.l), w)
+    };
+    let one = plan.factor(&values, 0.0, 0.0, false).expect("a factor");
+    let one_bits = bits(&plan);
+    let two = plan.factor(&values, 0.0, 0.0, true).expect("a factor");
+    assert_eq!(one, two);
+    assert!(one_bits == bits(&plan), "the factors differ");
+    // L D Lᵀ against the permuted matrix: solve K x = b and check the residual.
+    let b: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64)).collect();
+    let mut x = b.clone();
+    plan.solve(&mut x);
+    let res = (0..dim)
+        .map(|i| (dense[i].iter().zip(&x).map(|(a, x)| a * x).sum::<f64>() - b[i]).abs())
+        .fold(0.0, f64::max);
+    assert!(res < 1e-8, "residual {res}");
 }
