@@ -410,7 +410,8 @@ pub struct LinearSolverSettings {
     /// ([`LdltOptions::parallel`](crate::ipm::kkt::LdltOptions::parallel)). Used where the
     /// supernodal kernel finds such supernodes, the solve runs on a thread of its own (not a
     /// worker of a rayon pool: a parallel multi-start's starts already keep every core busy)
-    /// and the machine has two cores; there it replaces `speculative_factorization`, which
+    /// and the machine has two cores, and each factorization shares only while the second
+    /// core is idle; there it replaces `speculative_factorization`, which
     /// would compete for the same core. A cold LG-30 `periodic-qc` solve takes about 0.88 of
     /// the speculative one's wall time (decision record 0090). Off: every factor on the solve's
     /// thread (speculation as before).

@@ -68,6 +68,7 @@ use self::faer::FaerFactor;
 use self::multifrontal::MultifrontalPlan;
 pub use self::pattern::KktPattern;
 use self::simplicial::SimplicialPlan;
+use self::speculative::CoreWatch;
 pub use self::speculative::{MIN_SPECULATION_FLOPS, Speculator};
 use self::supernodal::BlockPlan;
 use crate::error::{FactorizationError, OptimError};
@@ -328,6 +329,9 @@ pub struct SparseLdlt {
     kept: Vec<Analysis>,
     /// Symbolic analyses computed (not taken from `kept` or the current one).
     analyses: usize,
+    /// Whether this solver's thread waits for a core: a shared factorization needs the
+    /// second core idle (decision record 0090).
+    cores: CoreWatch,
 }
 
 /// Earlier patterns' analyses a [`SparseLdlt`] keeps besides its current one: a search's
@@ -388,6 +392,7 @@ impl SparseLdlt {
             last: Err(FactorizationFailure::NotAnalysed),
             kept: Vec::new(),
             analyses: 0,
+            cores: CoreWatch::default(),
         }
     }
 
@@ -405,13 +410,19 @@ impl SparseLdlt {
             last: Err(FactorizationFailure::NotAnalysed),
             kept: Vec::new(),
             analyses: 0,
+            cores: CoreWatch::default(),
         })
     }
 
-    /// Whether [`KktSolver::factor`] shares the factorization with a second thread: the
+    /// Whether [`KktSolver::factor`] may share the factorization with a second thread: the
     /// option [`LdltOptions::parallel`], a calling thread that is no rayon worker, two cores,
     /// and a supernodal kernel whose analysis found supernodes wide enough to share
-    /// (`supernodal::MIN_PARALLEL_WORK` multiply–adds). The factor is the same either way.
+    /// (`supernodal::MIN_PARALLEL_WORK` multiply–adds). It then shares only while the
+    /// second core is idle: the calling thread has not been waiting for a core (the
+    /// speculation's run-queue test, `MAX_RUN_QUEUE_WAIT`) and no other thread is ready to
+    /// run (`/proc/loadavg`). Under load a shared factorization waits for a helper that gets
+    /// no core: with two busy loops beside it a cold LG-30 solve took 1.8–2.7 s shared
+    /// against 1.2 s alone (decision record 0090). The factor is the same either way.
     pub fn shares_factorization(&self) -> bool {
         self.may_share() && matches!(&self.kernel, Kernel::Supernodal(b) if b.shares_work())
     }
@@ -621,7 +632,10 @@ impl KktSolver for SparseLdlt {
     }
 
     fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
-        self.last = self.factor_numeric(values, self.may_share());
+        // The run-queue test only where the kernel would share (it reads a /proc file).
+        let share =
+            self.shares_factorization() && self.cores.idle_core() && CoreWatch::machine_idle();
+        self.last = self.factor_numeric(values, share);
         self.last
     }
 

@@ -69,10 +69,8 @@ pub struct Speculator {
     thread: Option<JoinHandle<()>>,
     /// Time the second thread spent factoring (jobs received back so far).
     busy: Duration,
-    /// The calling thread's run-queue delay (ns) when last asked, and when.
-    last_wait: Option<(Instant, f64)>,
-    /// Smoothed share of the wall time the calling thread waited for a core.
-    waiting: f64,
+    /// Whether the calling thread waits for a core.
+    cores: CoreWatch,
 }
 
 impl Default for Speculator {
@@ -99,8 +97,7 @@ impl Speculator {
             done: None,
             thread: None,
             busy: Duration::ZERO,
-            last_wait: None,
-            waiting: 0.0,
+            cores: CoreWatch::default(),
         }
     }
 
@@ -109,22 +106,7 @@ impl Speculator {
     /// its second field), halved with each call and averaged with the new share, is below
     /// `MAX_RUN_QUEUE_WAIT`. Without that file (other systems): always.
     pub fn idle_core(&mut self) -> bool {
-        let Some(wait) = std::fs::read_to_string("/proc/thread-self/schedstat")
-            .ok()
-            .and_then(|s| s.split_whitespace().nth(1)?.parse::<f64>().ok())
-        else {
-            return true;
-        };
-        let now = Instant::now();
-        if let Some((then, before)) = self.last_wait {
-            let wall = now.duration_since(then).as_secs_f64() * 1e9;
-            if wall > 0.0 {
-                let share = ((wait - before) / wall).clamp(0.0, 1.0);
-                self.waiting = 0.5 * (self.waiting + share);
-            }
-        }
-        self.last_wait = Some((now, wait));
-        self.waiting < MAX_RUN_QUEUE_WAIT
+        self.cores.idle_core()
     }
 
     /// Time the second thread spent factoring in the jobs that came back since the last call
@@ -304,5 +286,52 @@ impl Drop for Speculator {
     fn drop(&mut self) {
         // Closing the job channel ends the thread's loop after its current job.
         self.stop();
+    }
+}
+
+/// Whether the calling thread waits for a core, from the run-queue delay Linux records for
+/// it, smoothed over the intervals between the calls: what both uses of the second core
+/// (speculation here, the shared factorization of `supernodal`) ask before they start.
+#[derive(Debug, Default, Clone)]
+pub(super) struct CoreWatch {
+    /// The calling thread's run-queue delay (ns) when last asked, and when.
+    last_wait: Option<(Instant, f64)>,
+    /// Smoothed share of the wall time the calling thread waited for a core.
+    waiting: f64,
+}
+
+impl CoreWatch {
+    /// Whether no other thread on the machine is ready to run besides the caller: the
+    /// runnable count of Linux `/proc/loadavg` (its fourth field, `runnable/total`) below the
+    /// number of cores. Without that file: always.
+    pub(super) fn machine_idle() -> bool {
+        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        std::fs::read_to_string("/proc/loadavg")
+            .ok()
+            .and_then(|s| {
+                let field = s.split_whitespace().nth(3)?;
+                field.split('/').next()?.parse::<usize>().ok()
+            })
+            .is_none_or(|runnable| runnable < cores)
+    }
+
+    /// [`Speculator::idle_core`], for either use of the second core.
+    pub(super) fn idle_core(&mut self) -> bool {
+        let Some(wait) = std::fs::read_to_string("/proc/thread-self/schedstat")
+            .ok()
+            .and_then(|s| s.split_whitespace().nth(1)?.parse::<f64>().ok())
+        else {
+            return true;
+        };
+        let now = Instant::now();
+        if let Some((then, before)) = self.last_wait {
+            let wall = now.duration_since(then).as_secs_f64() * 1e9;
+            if wall > 0.0 {
+                let share = ((wait - before) / wall).clamp(0.0, 1.0);
+                self.waiting = 0.5 * (self.waiting + share);
+            }
+        }
+        self.last_wait = Some((now, wait));
+        self.waiting < MAX_RUN_QUEUE_WAIT
     }
 }
