@@ -102,24 +102,26 @@ fn paper_quick_writes_a_consistent_report() {
                 "{name}: claims on an unverified solution are flagged"
             );
         }
-        // The mesh the optimum ends on: its refinement's, else the problem's (`--points` per
-        // phase in `elements` Radau elements), read from the solution file.
-        let mesh: Vec<String> = match sol["refinement"]["mesh"].as_array() {
-            Some(phases) => phases
-                .iter()
-                .map(|m| {
-                    let d = m["degrees"].as_array().unwrap();
-                    let points: u64 = d.iter().map(|v| v.as_u64().unwrap()).sum();
-                    format!("{points} ({})", d.len())
-                })
-                .collect(),
-            None => {
-                // Each of the equal elements holds the points rounded up.
-                let elements = sol["scheme"]["Radau"]["elements"].as_u64().unwrap();
-                let points = sol["points"].as_u64().unwrap().div_ceil(elements).max(2) * elements;
-                vec![format!("{points} ({elements})"); sol["modes"].as_array().unwrap().len()]
-            }
-        };
+        // The mesh the optimum ends on, from the solution file: its collocation points per
+        // phase counted from its nodes (each phase's nodes are its points and its start
+        // state), its elements from the refinement's mesh, else from the scheme.
+        let node_phase: Vec<u64> = sol["nodes"]["phase"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_u64().unwrap())
+            .collect();
+        let phases = sol["modes"].as_array().unwrap().len() as u64;
+        let mesh: Vec<String> = (0..phases)
+            .map(|p| {
+                let points = node_phase.iter().filter(|&&q| q == p).count() - 1;
+                let elements = match sol["refinement"]["mesh"].as_array() {
+                    Some(m) => m[p as usize]["degrees"].as_array().unwrap().len() as u64,
+                    None => sol["scheme"]["Radau"]["elements"].as_u64().unwrap(),
+                };
+                format!("{points} ({elements})")
+            })
+            .collect();
         assert_eq!(cells[12], mesh.join(", "), "{name}: the mesh it ends on");
         assert_eq!(cells[13], "direct", "{name}: --quick solves directly");
         // Independent check of the period: the phase durations add up to it.

@@ -305,7 +305,11 @@ impl CoreWatch {
     /// runnable count of Linux `/proc/loadavg` (its fourth field, `runnable/total`) below the
     /// number of cores. Without that file: always.
     pub(super) fn machine_idle() -> bool {
-        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        // Asked before every factorization that could share: the core count (cgroup files
+        // on Linux) is read once.
+        static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+        let cores =
+            *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from));
         std::fs::read_to_string("/proc/loadavg")
             .ok()
             .and_then(|s| {

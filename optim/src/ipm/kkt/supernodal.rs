@@ -268,12 +268,10 @@ impl BlockPlan {
                 }
             }
         }
-        let parallel_work = sn_split.iter().any(|&s| s > 0) || sn_panels.iter().any(|&p| p);
-        let first_shared = (0..ns).find(|&sn| sn_split[sn] > 0 || sn_panels[sn]);
-        let after_shared = (0..ns)
-            .rev()
-            .find(|&sn| sn_split[sn] > 0 || sn_panels[sn])
-            .map_or(ns, |sn| sn + 1);
+        let shared = |sn: &usize| sn_split[*sn] > 0 || sn_panels[*sn];
+        let first_shared = (0..ns).find(shared);
+        let parallel_work = first_shared.is_some();
+        let after_shared = (0..ns).rev().find(shared).map_or(ns, |sn| sn + 1);
         let mut wake_at = first_shared.unwrap_or(ns);
         let mut ahead = 0.0;
         while wake_at > 0 && ahead < WAKE_AHEAD_WORK {
