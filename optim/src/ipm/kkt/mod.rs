@@ -29,7 +29,9 @@
 //!   * `supernodal`: a left-looking supernodal LDLᵀ on the fundamental supernodes of the same
 //!     simplicial structure (dense element blocks of Legendre–Gauss KKTs), with 2 × 2 pivots;
 //!     with [`LdltOptions::parallel`] its widest supernodes are shared with a second thread,
-//!     each thread on its own columns, the same factor bit for bit (decision record 0090);
+//!     each thread on its own columns, and the small supernodes between them are divided
+//!     into pairs of independent ranges, one per thread: the same factor bit for bit
+//!     (decision records 0090 and 0091);
 //!   * `faer`: faer's own numeric factorization and solve (reference and fallback);
 //!   * `multifrontal`: a multifrontal LDLᵀ with threshold Bunch–Kaufman pivoting (1 × 1 and
 //!     2 × 2 pivots among each front's fully summed columns, MA57's test with threshold
@@ -254,7 +256,9 @@ pub struct LdltOptions {
     /// fundamental supernodes only). Default [`DEFAULT_AMALGAMATION`].
     pub amalgamation: usize,
     /// Share the factorization of the supernodal kernel's widest supernodes (the dense
-    /// blocks of Legendre–Gauss collocation) with a second thread, when the solver runs on a
+    /// blocks of Legendre–Gauss collocation), and of pairs of independent ranges of the
+    /// small supernodes between them (decision record 0091), with a second thread, when the
+    /// solver runs on a
     /// thread of its own (not a worker of a rayon pool, whose other workers keep the cores
     /// busy) and the machine has two cores: the same factor bit for bit
     /// ([`SparseLdlt::shares_factorization`], decision record 0090). Default `true`.

@@ -13,11 +13,21 @@
 //! finished panels from the later columns. Every entry receives the same operations in the
 //! same order as in one left-looking pass (descendants in list order, then the block's own
 //! columns in chunks of four from column 0), so the factor is the same bit for bit on one
-//! thread or two. The helper is the one worker of a pool of its own, woken once per
-//! factorization a little ahead of the first shared supernode (a wake-up costs some 60 µs on a
-//! virtual machine) and spinning between the halves it is handed until the last shared
-//! supernode is done. One factorization at a time has the helper; a factorization on another
-//! thread meanwhile runs alone.
+//! thread or two.
+//!
+//! The small supernodes between the shared ones (decision record 0091): in each stretch of
+//! them the analysis finds two consecutive ranges, the second depending on nothing in the
+//! first ([`split_stretch`], balanced by an estimate of their time, [`SMALL_COSTS`]), and the
+//! two threads factor one range each ([`BlockPlan::pairs`]), each on its own slices of the
+//! arrays and reading the supernodes finished before the stretch. A supernode's operations do
+//! not depend on which thread runs them, so this too gives the same bits. Each block is filled
+//! with the matrix's entries just before it is factored, by the thread that factors it.
+//!
+//! The helper is the one worker of a pool of its own, woken once per factorization a little
+//! ahead of the first shared work (a wake-up costs some 60 µs on a virtual machine) and
+//! spinning between the halves it is handed until the last shared work is done. One
+//! factorization at a time has the helper; a factorization on another thread meanwhile runs
+//! alone.
 
 use std::ops::Range;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -113,8 +123,12 @@ pub(super) struct BlockPlan {
     /// `rows_d[p1..p2]` are columns of s (rows `rows_d[p1..]` receive the update).
     pub(super) upd_ptr: Vec<usize>,
     pub(super) upd: Vec<(u32, u32, u32)>,
-    /// Position in `vals` of each entry of the caller's lower-triangle value array.
-    pub(super) a_dst: Vec<usize>,
+    /// The entries of the caller's lower-triangle value array in supernode s's block:
+    /// `a_map[a_ptr[s]..a_ptr[s + 1]]` = (index in the value array, position in the block),
+    /// by position. A block is filled from them just before it is factored, while it is
+    /// about to be in cache anyway, by whichever thread factors it.
+    pub(super) a_ptr: Vec<usize>,
+    pub(super) a_map: Vec<(u32, u32)>,
     /// Block values (`L` below the diagonal, pivots on it, unused upper triangles).
     pub(super) vals: Vec<f64>,
     /// Diagonal of `D` and, for 1 × 1 pivots, its reciprocals, permuted order. For a 2 × 2
@@ -140,19 +154,20 @@ pub(super) struct BlockPlan {
     /// Whether supernode s's own columns are factored in panels whose updates two threads
     /// share.
     pub(super) sn_panels: Vec<bool>,
-    /// Whether any supernode is shared between two threads.
+    /// Whether any work is shared: a supernode, or [`BlockPlan::pairs`].
     pub(super) parallel_work: bool,
     /// The supernode before which the second thread is put on watch: about
     /// [`WAKE_AHEAD_WORK`] of factoring before the first shared one.
     pub(super) wake_at: usize,
     /// The supernode after the last shared one, where the helper's watch ends.
     pub(super) after_shared: usize,
-    // workspaces (the second `tmp`, `coef` for the second thread)
-    pub(super) map: Vec<u32>,
-    pub(super) tmp: Vec<f64>,
-    pub(super) coef: Vec<f64>,
-    pub(super) tmp2: Vec<f64>,
-    pub(super) coef2: Vec<f64>,
+    /// Pairs of consecutive ranges of supernodes that two threads factor at once, in order:
+    /// `(s, x, y)` = `s..x` and `x..y`, no supernode of the second depending on one of the
+    /// first; each within a stretch between shared supernodes ([`split_stretch`]).
+    pub(super) pairs: Vec<(usize, usize, usize)>,
+    /// The workspaces of the calling thread and of the helper.
+    pub(super) work: Work,
+    pub(super) work2: Work,
     pub(super) x: Vec<f64>,
 }
 
@@ -269,10 +284,40 @@ impl BlockPlan {
             }
         }
         let shared = |sn: &usize| sn_split[*sn] > 0 || sn_panels[*sn];
-        let first_shared = (0..ns).find(shared);
-        let parallel_work = first_shared.is_some();
-        let after_shared = (0..ns).rev().find(shared).map_or(ns, |sn| sn + 1);
-        let mut wake_at = first_shared.unwrap_or(ns);
+        let cost: Vec<f64> = (0..ns)
+            .map(|sn| {
+                let w = sn_begin[sn + 1] - sn_begin[sn];
+                let nr = sn_row_ptr[sn + 1] - sn_row_ptr[sn];
+                let updates = upd_ptr[sn + 1] - upd_ptr[sn];
+                sn_work[sn]
+                    + SMALL_COSTS[0] * updates as f64
+                    + SMALL_COSTS[1] * w as f64
+                    + SMALL_COSTS[2] * nr as f64
+            })
+            .collect();
+        // The stretches of supernodes between the shared ones, each divided where it can be.
+        let mut pairs = Vec::new();
+        let mut s0 = 0;
+        for s1 in (0..ns).filter(shared).chain([ns]) {
+            if let Some((x, y)) = split_stretch(&cost[s0..s1], s0, &upd_ptr, &upd) {
+                pairs.push((s0, x, y));
+            }
+            s0 = s1 + 1;
+        }
+        let parallel_work = (0..ns).any(|sn| shared(&sn)) || !pairs.is_empty();
+        // The helper is on watch from a little before the first shared work to the end of
+        // the last.
+        let first_work = (0..ns)
+            .find(shared)
+            .into_iter()
+            .chain(pairs.first().map(|p| p.0));
+        let last_work = (0..ns).rev().find(shared).map(|sn| sn + 1);
+        let after_shared = last_work
+            .into_iter()
+            .chain(pairs.last().map(|p| p.2))
+            .max()
+            .unwrap_or(ns);
+        let mut wake_at = first_work.min().unwrap_or(ns);
         let mut ahead = 0.0;
         while wake_at > 0 && ahead < WAKE_AHEAD_WORK {
             wake_at -= 1;
@@ -293,8 +338,12 @@ impl BlockPlan {
                 l_col_ptr.push(l_row_idx.len());
             }
         }
-        // Value map of the permuted lower triangle.
-        let mut a_dst = Vec::with_capacity(row_idx.len());
+        // Value map of the permuted lower triangle, per supernode in the order of its block
+        // (a stable sort: of two values for one entry, the later wins, as in the caller's array).
+        if row_idx.len() > u32::MAX as usize || sn_val_ptr[ns] > u32::MAX as usize {
+            return None;
+        }
+        let mut a_entries: Vec<(u32, u32, u32)> = Vec::with_capacity(row_idx.len());
         for j in 0..dim {
             for &i in &row_idx[col_ptr[j]..col_ptr[j + 1]] {
                 let (pi, pj) = (inv[i], inv[j]);
@@ -302,9 +351,19 @@ impl BlockPlan {
                 let sn = col2sn[c] as usize;
                 let rows = &sn_rows[sn_row_ptr[sn]..sn_row_ptr[sn + 1]];
                 let pos = rows.binary_search(&(r as u32)).ok()?;
-                a_dst.push(sn_val_ptr[sn] + (c - sn_begin[sn]) * rows.len() + pos);
+                let at = (c - sn_begin[sn]) * rows.len() + pos;
+                a_entries.push((sn as u32, at as u32, a_entries.len() as u32));
             }
         }
+        a_entries.sort_by_key(|&(sn, at, _)| (sn, at));
+        let mut a_ptr = vec![0usize; ns + 1];
+        for &(sn, ..) in &a_entries {
+            a_ptr[sn as usize + 1] += 1;
+        }
+        for sn in 0..ns {
+            a_ptr[sn + 1] += a_ptr[sn];
+        }
+        let a_map = a_entries.iter().map(|&(_, at, v)| (v, at)).collect();
         let max_rows = (0..ns)
             .map(|sn| sn_row_ptr[sn + 1] - sn_row_ptr[sn])
             .max()
@@ -319,7 +378,8 @@ impl BlockPlan {
             sn_val_ptr,
             upd_ptr,
             upd,
-            a_dst,
+            a_ptr,
+            a_map,
             d: vec![0.0; dim],
             inv_d: vec![0.0; dim],
             e: vec![0.0; dim],
@@ -334,11 +394,9 @@ impl BlockPlan {
             parallel_work,
             wake_at,
             after_shared,
-            map: vec![0; dim],
-            tmp: vec![0.0; max_rows],
-            coef: vec![0.0; max_rows],
-            tmp2: vec![0.0; max_rows],
-            coef2: vec![0.0; max_rows],
+            pairs,
+            work: Work::new(dim, max_rows),
+            work2: Work::new(dim, max_rows),
             x: vec![0.0; dim],
         })
     }
@@ -379,7 +437,8 @@ impl BlockPlan {
         self.factor_with(values, eps, delta, Some(&helper))
     }
 
-    /// [`BlockPlan::factor`], sharing the large supernodes with `helper`'s thread if given.
+    /// [`BlockPlan::factor`], sharing work with `helper`'s thread if given: the two ranges of
+    /// each of [`BlockPlan::pairs`] factored at once, and the shared supernodes' halves.
     fn factor_with(
         &mut self,
         values: &[f64],
@@ -388,136 +447,83 @@ impl BlockPlan {
         helper: Option<&Helper>,
     ) -> Option<Inertia> {
         let (eps, delta) = (eps.abs(), delta.abs());
-        self.vals.iter_mut().for_each(|v| *v = 0.0);
-        for (&dst, &v) in self.a_dst.iter().zip(values) {
-            self.vals[dst] = v;
-        }
         let ns = self.sn_begin.len() - 1;
+        let lay = Layout {
+            sn_begin: &self.sn_begin,
+            sn_rows: &self.sn_rows,
+            sn_row_ptr: &self.sn_row_ptr,
+            sn_val_ptr: &self.sn_val_ptr,
+            upd_ptr: &self.upd_ptr,
+            upd: &self.upd,
+            pair: &self.pair,
+            sn_pair: &self.sn_pair,
+            sn_split: &self.sn_split,
+            sn_panels: &self.sn_panels,
+            l_col_ptr: &self.l_col_ptr,
+            a_ptr: &self.a_ptr,
+            a_map: &self.a_map,
+            values,
+            pivots: (eps, delta),
+        };
         let mut inertia = Inertia::default();
-        for sn in 0..ns {
+        let mut pairs = self.pairs.iter().peekable();
+        let mut sn = 0;
+        while sn < ns {
             if sn == self.wake_at {
                 helper.inspect(|h| h.wake());
             }
             if sn == self.after_shared {
                 helper.inspect(|h| h.finish());
             }
-            let (f, l) = (self.sn_begin[sn], self.sn_begin[sn + 1]);
-            let w = l - f;
-            let rows = &self.sn_rows[self.sn_row_ptr[sn]..self.sn_row_ptr[sn + 1]];
-            let nr = rows.len();
-            for (pos, &r) in rows.iter().enumerate() {
-                self.map[r as usize] = pos as u32;
-            }
-            let (done, rest) = self.vals.split_at_mut(self.sn_val_ptr[sn]);
-            let blk = &mut rest[..nr * w];
-            let upd = &self.upd[self.upd_ptr[sn]..self.upd_ptr[sn + 1]];
-            let frozen = Frozen {
-                sn_begin: &self.sn_begin,
-                sn_rows: &self.sn_rows,
-                sn_row_ptr: &self.sn_row_ptr,
-                sn_val_ptr: &self.sn_val_ptr,
-                d: &self.d,
-                e: &self.e,
-                pair: &self.pair,
-                sn_pair: &self.sn_pair,
-                map: &self.map,
-            };
-            let split = self.sn_split[sn] as usize;
-            if let Some(h) = helper.filter(|_| split > 0) {
-                let (a, b) = blk.split_at_mut(split * nr);
-                let (tmp_a, tmp_b) = (&mut self.tmp, &mut self.tmp2);
-                let (coef_a, coef_b) = (&mut self.coef, &mut self.coef2);
-                h.join(
-                    || frozen.update(done, upd, f, nr, 0..split, a, tmp_a, coef_a),
-                    || frozen.update(done, upd, f, nr, split..w, b, tmp_b, coef_b),
+            let pair = pairs.next_if(|p| p.0 == sn);
+            if let Some((h, &(s, x, y))) = helper.zip(pair) {
+                // Two independent ranges, each on its own slices of the arrays from its
+                // first supernode on; both read the finished supernodes before `s`.
+                let c = [self.sn_begin[s], self.sn_begin[x], self.sn_begin[y]];
+                let v = [self.sn_val_ptr[s], self.sn_val_ptr[x], self.sn_val_ptr[y]];
+                let lc = c.map(|c| self.l_col_ptr[c]);
+                let (vals_0, vals_a, vals_b) = thirds(&mut self.vals, v);
+                let (d_0, d_a, d_b) = thirds(&mut self.d, c);
+                let (e_0, e_a, e_b) = thirds(&mut self.e, c);
+                let (_, id_a, id_b) = thirds(&mut self.inv_d, c);
+                let (_, ie_a, ie_b) = thirds(&mut self.inv_e, c);
+                let (_, l_a, l_b) = thirds(&mut self.l, lc);
+                let before = Finished {
+                    vals: vals_0,
+                    d: d_0,
+                    e: e_0,
+                };
+                let parts_a = [vals_a, d_a, e_a, id_a, ie_a, l_a];
+                let parts_b = [vals_b, d_b, e_b, id_b, ie_b, l_b];
+                let at = |k: usize| (c[k], v[k], lc[k]);
+                let mut a = Region::range(at(0), before, parts_a, &mut self.work);
+                let mut b = Region::range(at(1), before, parts_b, &mut self.work2);
+                let mut theirs = None;
+                let mine = h.join(
+                    || factor_range(&lay, &mut a, s..x),
+                    || theirs = Some(factor_range(&lay, &mut b, x..y)),
                 );
-            } else {
-                frozen.update(done, upd, f, nr, 0..w, blk, &mut self.tmp, &mut self.coef);
+                let (mine, theirs) = (mine?, theirs.flatten()?);
+                inertia.positive += mine.positive + theirs.positive;
+                inertia.negative += mine.negative + theirs.negative;
+                inertia.zero += mine.zero + theirs.zero;
+                sn = y;
+                continue;
             }
-            // Dense LDLᵀ of the block's own columns, left-looking. With panels, the columns
-            // are factored panel by panel; while one thread factors the next panel, the
-            // other subtracts the finished panels from the later columns (look-ahead). The
-            // panels end at multiples of four, the lincomb's chunk, so that every entry sees
-            // the chunks of one left-looking pass.
-            let has_pair = self.sn_pair[sn];
-            let panels = helper.filter(|_| self.sn_panels[sn]);
-            let pair = &self.pair[f..l];
-            let panel_end = |p0: usize| {
-                if panels.is_none() {
-                    return w;
-                }
-                let mut p1 = (p0 + PANEL).min(w);
-                while p1 < w && pair[p1 - 1] {
-                    p1 = (p1 + 4).min(w);
-                }
-                p1
-            };
-            let mut p = panel_end(0);
-            let mut own = Own {
-                d: &mut self.d[f..l],
-                e: &mut self.e[f..l],
-                inv_d: &mut self.inv_d[f..l],
-                inv_e: &mut self.inv_e[f..l],
-                pair,
+            let mut all = Region {
+                at: (0, 0, 0),
+                before: Finished::default(),
+                vals: &mut self.vals,
+                d: &mut self.d,
+                e: &mut self.e,
+                inv_d: &mut self.inv_d,
+                inv_e: &mut self.inv_e,
                 l: &mut self.l,
-                l_col_ptr: &self.l_col_ptr[f..],
+                work: &mut self.work,
+                second: Some(&mut self.work2),
             };
-            factor_panel(
-                blk,
-                nr,
-                0..p,
-                has_pair,
-                &mut own,
-                &mut self.coef,
-                (eps, delta),
-                &mut inertia,
-            )?;
-            let mut a = 0;
-            while let Some(helper) = panels.filter(|_| p < w) {
-                let q = panel_end(p);
-                let ks = a..p;
-                let mid = look_ahead_split(nr, ks.len(), p, q, w);
-                let (left, right) = blk.split_at_mut(p * nr);
-                let (ra, rb) = right.split_at_mut((mid - p) * nr);
-                let (d_done, d_new) = own.d.split_at_mut(p);
-                let (e_done, e_new) = own.e.split_at_mut(p);
-                let piv = Pivots {
-                    d: d_done,
-                    e: e_done,
-                    pair,
-                    has_pair,
-                };
-                let mut next = Own {
-                    d: d_new,
-                    e: e_new,
-                    inv_d: &mut own.inv_d[p..],
-                    inv_e: &mut own.inv_e[p..],
-                    pair: &pair[p..],
-                    l: &mut *own.l,
-                    l_col_ptr: &own.l_col_ptr[p..],
-                };
-                let (coef_a, coef_b) = (&mut self.coef, &mut self.coef2);
-                let inertia = &mut inertia;
-                let factored = helper.join(
-                    || {
-                        piv.panel_update(left, nr, ks.clone(), p..mid, ra, coef_a);
-                        factor_panel(
-                            ra,
-                            nr,
-                            p..q,
-                            has_pair,
-                            &mut next,
-                            coef_a,
-                            (eps, delta),
-                            inertia,
-                        )
-                    },
-                    || piv.panel_update(left, nr, ks.clone(), mid..w, rb, coef_b),
-                );
-                factored?;
-                a = p;
-                p = q;
-            }
+            factor_supernode(&lay, &mut all, sn, helper, &mut inertia)?;
+            sn += 1;
         }
         Some(inertia)
     }
@@ -648,6 +654,14 @@ pub(super) const PANEL: usize = 16;
 /// many times the cost of handing a half over to the other thread.
 pub(super) const MIN_PARALLEL_WORK: f64 = 2e5;
 
+/// What a supernode's factorization costs besides its multiply–adds, in multiply–adds: per
+/// descendant update, per column and per row. Small supernodes cost mostly this: on the
+/// LG-30 KKT the 2 092 supernodes before the shared ones took 0.74–0.80 ms for 7.2e5
+/// multiply–adds, and a least-squares fit of their times (decision record 0091) gave 44 ns
+/// per update, 83 ns per column and 0.9 ns per row against 0.33 ns per multiply–add.
+/// [`BlockPlan::pairs`] balances its two ranges by this cost.
+const SMALL_COSTS: [f64; 3] = [130.0, 250.0, 2.6];
+
 /// Multiply–adds (about 0.1–0.2 ms) of the supernodes factored before the first shared one
 /// while the second thread wakes up: waking a sleeping thread takes some 60 µs on a virtual
 /// machine, more than a shared update saves, so the thread is woken once, ahead, and then
@@ -777,6 +791,10 @@ struct Frozen<'a> {
     sn_rows: &'a [u32],
     sn_row_ptr: &'a [usize],
     sn_val_ptr: &'a [usize],
+    /// The first column and block value of `d`, `e` and `done` (a [`Region`]'s `at`); the
+    /// supernodes before them are in `before`.
+    at: (usize, usize),
+    before: Finished<'a>,
     d: &'a [f64],
     e: &'a [f64],
     pair: &'a [bool],
@@ -808,8 +826,16 @@ impl Frozen<'_> {
             let wd = ld - fd;
             let rd = &self.sn_rows[self.sn_row_ptr[dd]..self.sn_row_ptr[dd + 1]];
             let nrd = rd.len();
-            let bd = &done[self.sn_val_ptr[dd]..self.sn_val_ptr[dd] + nrd * wd];
-            let dpiv = &self.d[fd..ld];
+            let (col0, val0) = self.at;
+            let (bd, dpiv, epiv) = if fd < col0 {
+                let b = &self.before;
+                let at = self.sn_val_ptr[dd];
+                (&b.vals[at..at + nrd * wd], &b.d[fd..ld], &b.e[fd..ld])
+            } else {
+                let at = self.sn_val_ptr[dd] - val0;
+                let c = fd - col0..ld - col0;
+                (&done[at..at + nrd * wd], &self.d[c.clone()], &self.e[c])
+            };
             // Rows rd[p1..] land on consecutive rows of the target block: subtract in place
             // without the row map.
             let first = self.map[rd[p1] as usize] as usize;
@@ -837,17 +863,7 @@ impl Frozen<'_> {
                 }
                 let coef = &mut coef[..wd];
                 if self.sn_pair[dd] {
-                    dl_range(
-                        coef,
-                        bd,
-                        nrd,
-                        q,
-                        dpiv,
-                        &self.e[fd..ld],
-                        &self.pair[fd..ld],
-                        0,
-                        wd,
-                    );
+                    dl_range(coef, bd, nrd, q, dpiv, epiv, &self.pair[fd..ld], 0, wd);
                 } else {
                     for (k, cf) in coef.iter_mut().enumerate() {
                         *cf = bd[k * nrd + q] * dpiv[k];
@@ -920,6 +936,8 @@ struct Own<'a> {
     pair: &'a [bool],
     l: &'a mut [f64],
     l_col_ptr: &'a [usize],
+    /// The entry of `L`'s column layout that `l` starts at.
+    l0: usize,
 }
 
 /// Left-looking LDLᵀ of the block's columns `cols` (`blk` holds the columns from
@@ -963,7 +981,7 @@ fn factor_panel(
             own.d[cl] = d;
             own.inv_d[cl] = inv;
             own.e[cl] = 0.0;
-            own.l[own.l_col_ptr[cl]..own.l_col_ptr[cl + 1]].copy_from_slice(col);
+            own.l[own.l_col_ptr[cl] - own.l0..own.l_col_ptr[cl + 1] - own.l0].copy_from_slice(col);
             c += 1;
             continue;
         }
@@ -998,8 +1016,9 @@ fn factor_panel(
         own.inv_d[cl] = i11;
         own.inv_d[cl + 1] = i22;
         own.inv_e[cl] = i12;
-        own.l[own.l_col_ptr[cl]..own.l_col_ptr[cl + 1]].copy_from_slice(col0);
-        own.l[own.l_col_ptr[cl + 1]..own.l_col_ptr[cl + 2]].copy_from_slice(col1);
+        let (l0, lp) = (own.l0, own.l_col_ptr);
+        own.l[lp[cl] - l0..lp[cl + 1] - l0].copy_from_slice(col0);
+        own.l[lp[cl + 1] - l0..lp[cl + 2] - l0].copy_from_slice(col1);
         c += 2;
     }
     Some(())
@@ -1019,4 +1038,320 @@ fn look_ahead_split(nr: usize, k: usize, p: usize, q: usize, w: usize) -> usize 
         first += k * (nr - t);
     }
     w
+}
+
+/// `a[..at[2]]` divided at `at[0]` and `at[1]`: the finished part before, and two ranges.
+fn thirds(a: &mut [f64], at: [usize; 3]) -> (&[f64], &mut [f64], &mut [f64]) {
+    let (finished, rest) = a[..at[2]].split_at_mut(at[0]);
+    let (first, second) = rest.split_at_mut(at[1] - at[0]);
+    (finished, first, second)
+}
+
+/// The finished supernodes before a [`Region`] (their block values and pivots, from the
+/// first), which its supernodes read but do not write.
+#[derive(Clone, Copy, Default)]
+struct Finished<'a> {
+    vals: &'a [f64],
+    d: &'a [f64],
+    e: &'a [f64],
+}
+
+/// The analysis's structure that every supernode's factorization reads, and the pivot rule
+/// `(eps, delta)` of [`BlockPlan::factor`].
+struct Layout<'a> {
+    sn_begin: &'a [usize],
+    sn_rows: &'a [u32],
+    sn_row_ptr: &'a [usize],
+    sn_val_ptr: &'a [usize],
+    upd_ptr: &'a [usize],
+    upd: &'a [(u32, u32, u32)],
+    pair: &'a [bool],
+    sn_pair: &'a [bool],
+    sn_split: &'a [u32],
+    sn_panels: &'a [bool],
+    l_col_ptr: &'a [usize],
+    a_ptr: &'a [usize],
+    a_map: &'a [(u32, u32)],
+    /// The matrix's values ([`BlockPlan::a_map`]).
+    values: &'a [f64],
+    pivots: (f64, f64),
+}
+
+impl Layout<'_> {
+    /// Fills `part`, the positions `at..at + part.len()` of supernode `sn`'s block, with the
+    /// matrix's entries there and zeros elsewhere.
+    fn fill(&self, sn: usize, part: &mut [f64], at: usize) {
+        part.iter_mut().for_each(|v| *v = 0.0);
+        let entries = &self.a_map[self.a_ptr[sn]..self.a_ptr[sn + 1]];
+        let lo = entries.partition_point(|&(_, p)| (p as usize) < at);
+        for &(v, p) in &entries[lo..] {
+            let Some(slot) = part.get_mut(p as usize - at) else {
+                break;
+            };
+            *slot = self.values[v as usize];
+        }
+    }
+}
+
+/// A thread's scratch: the target's row map, a gathered update, the coefficients `D Lᵀ`.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Work {
+    map: Vec<u32>,
+    tmp: Vec<f64>,
+    coef: Vec<f64>,
+}
+
+impl Work {
+    fn new(dim: usize, max_rows: usize) -> Self {
+        Self {
+            map: vec![0; dim],
+            tmp: vec![0.0; max_rows],
+            coef: vec![0.0; max_rows],
+        }
+    }
+}
+
+/// The arrays a range of consecutive supernodes writes, from the range's first supernode on:
+/// `at` = (its first column, its first block value, its first entry of `L`'s column layout),
+/// which the indices of the whole arrays are reduced by. A range reads only its own
+/// supernodes and those `before` it, so two ranges that do not depend on each other are
+/// factored at once.
+struct Region<'a> {
+    at: (usize, usize, usize),
+    before: Finished<'a>,
+    vals: &'a mut [f64],
+    d: &'a mut [f64],
+    e: &'a mut [f64],
+    inv_d: &'a mut [f64],
+    inv_e: &'a mut [f64],
+    l: &'a mut [f64],
+    work: &'a mut Work,
+    /// The helper's scratch, for the shared supernodes' halves.
+    second: Option<&'a mut Work>,
+}
+
+impl<'a> Region<'a> {
+    /// A range's region without the helper's scratch: its `[vals, d, e, inv_d, inv_e, l]`
+    /// from `at` on.
+    fn range(
+        at: (usize, usize, usize),
+        before: Finished<'a>,
+        [vals, d, e, inv_d, inv_e, l]: [&'a mut [f64]; 6],
+        work: &'a mut Work,
+    ) -> Self {
+        Self {
+            at,
+            before,
+            vals,
+            d,
+            e,
+            inv_d,
+            inv_e,
+            l,
+            work,
+            second: None,
+        }
+    }
+}
+
+/// Factors the supernodes `sns` of `reg` on this thread alone; their inertia.
+fn factor_range(lay: &Layout<'_>, reg: &mut Region<'_>, sns: Range<usize>) -> Option<Inertia> {
+    let mut inertia = Inertia::default();
+    for sn in sns {
+        factor_supernode(lay, reg, sn, None, &mut inertia)?;
+    }
+    Some(inertia)
+}
+
+/// Factors supernode `sn` (every supernode it depends on finished in `reg`): its descendants'
+/// updates, then its own columns; with `helper` and the region's second scratch, a shared
+/// supernode's work is divided with the helper's thread. `None` on a zero or non-finite
+/// pivot.
+fn factor_supernode(
+    lay: &Layout<'_>,
+    reg: &mut Region<'_>,
+    sn: usize,
+    helper: Option<&Helper>,
+    inertia: &mut Inertia,
+) -> Option<()> {
+    let (col0, val0, l0) = reg.at;
+    let (f, l) = (lay.sn_begin[sn], lay.sn_begin[sn + 1]);
+    let w = l - f;
+    let rows = &lay.sn_rows[lay.sn_row_ptr[sn]..lay.sn_row_ptr[sn + 1]];
+    let nr = rows.len();
+    let Work { map, tmp, coef } = &mut *reg.work;
+    for (pos, &r) in rows.iter().enumerate() {
+        map[r as usize] = pos as u32;
+    }
+    let (done, rest) = reg.vals.split_at_mut(lay.sn_val_ptr[sn] - val0);
+    let blk = &mut rest[..nr * w];
+    let upd = &lay.upd[lay.upd_ptr[sn]..lay.upd_ptr[sn + 1]];
+    let frozen = Frozen {
+        sn_begin: lay.sn_begin,
+        sn_rows: lay.sn_rows,
+        sn_row_ptr: lay.sn_row_ptr,
+        sn_val_ptr: lay.sn_val_ptr,
+        at: (col0, val0),
+        before: reg.before,
+        d: &*reg.d,
+        e: &*reg.e,
+        pair: lay.pair,
+        sn_pair: lay.sn_pair,
+        map: &map[..],
+    };
+    let mut helper = helper.zip(reg.second.as_deref_mut());
+    let split = lay.sn_split[sn] as usize;
+    match helper.as_mut() {
+        Some((h, second)) if split > 0 => {
+            let (a, b) = blk.split_at_mut(split * nr);
+            let (tmp_b, coef_b) = (&mut second.tmp, &mut second.coef);
+            h.join(
+                || {
+                    lay.fill(sn, a, 0);
+                    frozen.update(done, upd, f, nr, 0..split, a, tmp, coef);
+                },
+                || {
+                    lay.fill(sn, b, split * nr);
+                    frozen.update(done, upd, f, nr, split..w, b, tmp_b, coef_b);
+                },
+            );
+        }
+        _ => {
+            lay.fill(sn, blk, 0);
+            frozen.update(done, upd, f, nr, 0..w, blk, tmp, coef);
+        }
+    }
+    // Dense LDLᵀ of the block's own columns, left-looking. With panels, the columns are
+    // factored panel by panel; while one thread factors the next panel, the other subtracts
+    // the finished panels from the later columns (look-ahead). The panels end at multiples of
+    // four, the lincomb's chunk, so that every entry sees the chunks of one left-looking pass.
+    let has_pair = lay.sn_pair[sn];
+    let mut panels = helper.filter(|_| lay.sn_panels[sn]);
+    let pair = &lay.pair[f..l];
+    let paneled = panels.is_some();
+    let panel_end = |p0: usize| {
+        if !paneled {
+            return w;
+        }
+        let mut p1 = (p0 + PANEL).min(w);
+        while p1 < w && pair[p1 - 1] {
+            p1 = (p1 + 4).min(w);
+        }
+        p1
+    };
+    let mut p = panel_end(0);
+    let mut own = Own {
+        d: &mut reg.d[f - col0..l - col0],
+        e: &mut reg.e[f - col0..l - col0],
+        inv_d: &mut reg.inv_d[f - col0..l - col0],
+        inv_e: &mut reg.inv_e[f - col0..l - col0],
+        pair,
+        l: &mut *reg.l,
+        l_col_ptr: &lay.l_col_ptr[f..],
+        l0,
+    };
+    factor_panel(blk, nr, 0..p, has_pair, &mut own, coef, lay.pivots, inertia)?;
+    let mut a = 0;
+    while let Some((helper, second)) = panels.as_mut().filter(|_| p < w) {
+        let q = panel_end(p);
+        let ks = a..p;
+        let mid = look_ahead_split(nr, ks.len(), p, q, w);
+        let (left, right) = blk.split_at_mut(p * nr);
+        let (ra, rb) = right.split_at_mut((mid - p) * nr);
+        let (d_done, d_new) = own.d.split_at_mut(p);
+        let (e_done, e_new) = own.e.split_at_mut(p);
+        let piv = Pivots {
+            d: d_done,
+            e: e_done,
+            pair,
+            has_pair,
+        };
+        let mut next = Own {
+            d: d_new,
+            e: e_new,
+            inv_d: &mut own.inv_d[p..],
+            inv_e: &mut own.inv_e[p..],
+            pair: &pair[p..],
+            l: &mut *own.l,
+            l_col_ptr: &own.l_col_ptr[p..],
+            l0,
+        };
+        let coef_a = &mut *coef;
+        let coef_b = &mut second.coef;
+        let inertia = &mut *inertia;
+        let factored = helper.join(
+            || {
+                piv.panel_update(left, nr, ks.clone(), p..mid, ra, coef_a);
+                factor_panel(
+                    ra,
+                    nr,
+                    p..q,
+                    has_pair,
+                    &mut next,
+                    coef_a,
+                    lay.pivots,
+                    inertia,
+                )
+            },
+            || piv.panel_update(left, nr, ks.clone(), mid..w, rb, coef_b),
+        );
+        factored?;
+        a = p;
+        p = q;
+    }
+    Some(())
+}
+
+/// Where a stretch of supernodes `s..s + work.len()` (`work` their costs, [`SMALL_COSTS`];
+/// the supernodes before `s` finished) holds two consecutive ranges `s..x` and `x..y` that
+/// two threads can factor at once: no supernode of the second depends on one of the first,
+/// directly or through others. Supernodes are numbered after their descendants, so one pass
+/// in order finds each one's lowest dependency in the stretch, and for each `x` the second
+/// range ends at the first supernode that depends below `x`. The pair that saves the most
+/// (the larger smaller range), if that range has at least [`MIN_PARALLEL_WORK`] of work.
+fn split_stretch(
+    work: &[f64],
+    s: usize,
+    upd_ptr: &[usize],
+    upd: &[(u32, u32, u32)],
+) -> Option<(usize, usize)> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let len = work.len();
+    // Indices relative to `s`; dependencies before the stretch are finished.
+    let mut lowest: Vec<usize> = (0..len).collect();
+    for k in 0..len {
+        for &(d, ..) in &upd[upd_ptr[s + k]..upd_ptr[s + k + 1]] {
+            if let Some(d) = (d as usize).checked_sub(s) {
+                lowest[k] = lowest[k].min(lowest[d]);
+            }
+        }
+    }
+    // by_lowest[j]: the supernodes whose lowest dependency is j (below x once x > j).
+    let mut by_lowest = vec![Vec::new(); len];
+    for k in 0..len {
+        if lowest[k] < k {
+            by_lowest[lowest[k]].push(k);
+        }
+    }
+    let prefix: Vec<f64> = std::iter::once(0.0)
+        .chain(work.iter().scan(0.0, |acc, &w| {
+            *acc += w;
+            Some(*acc)
+        }))
+        .collect();
+    let mut below = BinaryHeap::new();
+    let mut best: Option<(f64, usize, usize)> = None;
+    for x in 1..len {
+        below.extend(by_lowest[x - 1].iter().map(|&k| Reverse(k)));
+        while below.peek().is_some_and(|&Reverse(k)| k < x) {
+            below.pop();
+        }
+        let y = below.peek().map_or(len, |&Reverse(k)| k);
+        let smaller = prefix[x].min(prefix[y] - prefix[x]);
+        if smaller >= MIN_PARALLEL_WORK && best.is_none_or(|(m, ..)| smaller > m) {
+            best = Some((smaller, x, y));
+        }
+    }
+    best.map(|(_, x, y)| (s + x, s + y))
 }

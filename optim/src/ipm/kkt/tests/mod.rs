@@ -859,3 +859,118 @@ fn a_pair_on_a_panel_end_is_stepped_over() {
         .fold(0.0, f64::max);
     assert!(res < 1e-8, "residual {res}");
 }
+
+/// A stretch of supernodes divided into two ranges that two threads factor at once gives the
+/// factor of one thread bit for bit. The matrix: two dense blocks (a shared supernode each),
+/// then two banded halves, the first depending on the first dense block and the second on the
+/// second (eliminated in that order), then a few coupling rows; pivots of both signs. The
+/// halves form the divided stretch, each of whose ranges reads a dense block's finished factor.
+/// A NaN in a dense block, in either half or in the coupling block fails as on one thread.
+#[test]
+fn a_stretch_divided_between_two_threads_is_the_factor_of_one() {
+    use super::faer::FaerFactor;
+    use super::supernodal::BlockPlan;
+    use ::faer::sparse::linalg::SupernodalThreshold;
+    use rand::{Rng, SeedableRng};
+    let (dense, half, band, coupling) = (120, 400, 12, 16);
+    let dim = 2 * dense + 2 * half + coupling;
+    let (first, second, last) = (2 * dense, 2 * dense + half, 2 * dense + 2 * half);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+    let mut cols: Vec<Vec<(usize, f64)>> = vec![Vec::new(); dim];
+    for j in 0..dim {
+        let sign = if j % 7 == 3 { -1.0 } else { 1.0 };
+        let size = if j < first { dense } else { band };
+        cols[j].push((j, sign * (size as f64 + rng.random_range(1.0..2.0))));
+    }
+    for (block, start) in [(0, first), (dense, second)] {
+        for j in block..block + dense {
+            for i in (j + 1..block + dense).chain(start..start + 3) {
+                cols[j].push((i, rng.random_range(-0.5..0.5)));
+            }
+        }
+    }
+    for start in [first, second] {
+        for i in start..start + half {
+            for j in i.saturating_sub(band).max(start)..i {
+                cols[j].push((i, rng.random_range(-0.5..0.5)));
+            }
+            if i % 29 == 0 {
+                cols[i].push((last + (i / 29) % coupling, rng.random_range(-0.5..0.5)));
+            }
+        }
+    }
+    for j in last..dim {
+        for i in j + 1..dim {
+            cols[j].push((i, rng.random_range(-0.5..0.5)));
+        }
+    }
+    let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+    for c in &mut cols {
+        c.sort_by_key(|&(i, _)| i);
+        row_idx.extend(c.iter().map(|&(i, _)| i));
+        values.extend(c.iter().map(|&(_, v)| v));
+        col_ptr.push(row_idx.len());
+    }
+    let natural: Vec<usize> = (0..dim).collect();
+    let ff = FaerFactor::analyse(
+        dim,
+        &col_ptr,
+        &row_idx,
+        SupernodalThreshold::FORCE_SIMPLICIAL,
+        Some(&natural),
+    )
+    .expect("analysis");
+    let mut plan =
+        BlockPlan::new(&ff.symbolic, dim, &col_ptr, &row_idx, &[]).expect("a supernodal plan");
+    assert_eq!(
+        plan.sn_begin[1..3],
+        [dense, first],
+        "the dense blocks' supernodes"
+    );
+    assert!(
+        plan.sn_panels[0] && plan.sn_panels[1],
+        "the dense blocks are shared"
+    );
+    let &[(s, x, y)] = plan.pairs.as_slice() else {
+        panic!("one divided stretch, not {:?}", plan.pairs);
+    };
+    let columns = [s, x, y].map(|k| plan.sn_begin[k]);
+    assert_eq!(
+        columns[0], first,
+        "the stretch starts after the dense blocks"
+    );
+    assert!(
+        (second - band..=second).contains(&columns[1]),
+        "the ranges meet at column {}, not at the halves' boundary {second}",
+        columns[1]
+    );
+    assert_eq!(
+        columns[2], last,
+        "the second range ends where the coupling starts"
+    );
+    let words = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    let bits = |p: &BlockPlan| (words(&p.l), words(&p.d), words(&p.inv_d), words(&p.e));
+    let one = plan.factor(&values, 1e-12, 0.0, false).expect("factor");
+    assert_eq!(one.negative, (0..dim).filter(|j| j % 7 == 3).count());
+    let one_bits = bits(&plan);
+    for _ in 0..3 {
+        let two = plan.factor(&values, 1e-12, 0.0, true).expect("factor");
+        assert_eq!(one, two, "inertia");
+        assert!(one_bits == bits(&plan), "the factors differ");
+    }
+    for j in [7, dense + 7, first + 7, second + 7, dim - 1] {
+        let at = col_ptr[j];
+        let mut bad = values.clone();
+        bad[at] = f64::NAN;
+        assert!(
+            plan.factor(&bad, 1e-12, 0.0, false).is_none(),
+            "a NaN factored"
+        );
+        assert!(
+            plan.factor(&bad, 1e-12, 0.0, true).is_none(),
+            "a NaN factored"
+        );
+    }
+    assert_eq!(plan.factor(&values, 1e-12, 0.0, true), Some(one));
+    assert!(one_bits == bits(&plan), "the factor after a failure");
+}
