@@ -139,6 +139,13 @@ pub enum FactorizationFailure {
         /// Number of zero pivots.
         count: usize,
     },
+    /// The values array does not have one entry per entry of the analysed pattern.
+    ValueCount {
+        /// Entries of the analysed pattern.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
 }
 
 impl std::fmt::Display for FactorizationFailure {
@@ -148,6 +155,9 @@ impl std::fmt::Display for FactorizationFailure {
             Self::NonFiniteValue { index } => write!(f, "non-finite matrix entry at value {index}"),
             Self::SingularPivot => write!(f, "a zero or non-finite pivot (singular matrix)"),
             Self::ZeroPivots { count } => write!(f, "{count} zero pivots"),
+            Self::ValueCount { expected, got } => {
+                write!(f, "{got} matrix values for a pattern of {expected} entries")
+            }
         }
     }
 }
@@ -670,6 +680,12 @@ impl SparseLdlt {
             .faer
             .as_mut()
             .ok_or(FactorizationFailure::NotAnalysed)?;
+        if values.len() != faer.row_idx.len() {
+            return Err(FactorizationFailure::ValueCount {
+                expected: faer.row_idx.len(),
+                got: values.len(),
+            });
+        }
         let (eps, delta) = (self.options.pivot_epsilon, self.options.pivot_delta);
         // A non-finite entry makes a non-finite pivot, which every kernel reports (as a failure
         // or a zero pivot); only then are the values searched for it, off the per-iteration

@@ -154,17 +154,24 @@ pub(super) struct BlockPlan {
     /// Whether supernode s's own columns are factored in panels whose updates two threads
     /// share.
     pub(super) sn_panels: Vec<bool>,
-    /// Whether any work is shared: a supernode, or [`BlockPlan::pairs`].
+    /// Whether any supernode is shared between two threads ([`BlockPlan::pairs`] exist only
+    /// then).
     pub(super) parallel_work: bool,
     /// The supernode before which the second thread is put on watch: about
-    /// [`WAKE_AHEAD_WORK`] of factoring before the first shared one.
+    /// [`WAKE_AHEAD_WORK`] of factoring before the first shared supernode, or the first
+    /// pair's first supernode if that comes earlier (0 for a pair at the start).
     pub(super) wake_at: usize,
-    /// The supernode after the last shared one, where the helper's watch ends.
+    /// Where the helper's watch ends: after the last shared supernode or the last pair's
+    /// second range, whichever comes later.
     pub(super) after_shared: usize,
     /// Pairs of consecutive ranges of supernodes that two threads factor at once, in order:
     /// `(s, x, y)` = `s..x` and `x..y`, no supernode of the second depending on one of the
     /// first; each within a stretch between shared supernodes ([`split_stretch`]).
     pub(super) pairs: Vec<(usize, usize, usize)>,
+    /// Pairs factored on two threads so far (for the tests: that a shared factorization
+    /// took the pairs' path).
+    #[cfg(test)]
+    pub(super) pairs_run: usize,
     /// The workspaces of the calling thread and of the helper.
     pub(super) work: Work,
     pub(super) work2: Work,
@@ -295,16 +302,23 @@ impl BlockPlan {
                     + SMALL_COSTS[2] * nr as f64
             })
             .collect();
-        // The stretches of supernodes between the shared ones, each divided where it can be.
+        // The stretches of supernodes between the shared ones, each divided where it can be;
+        // the first stretch's pair is where the helper is woken, so its second range starts
+        // late by the wake-up. Only in plans with shared supernodes: a plan with pairs alone
+        // would give up the speculative factorization (decision record 0036) for them, a
+        // trade not measured.
         let mut pairs = Vec::new();
-        let mut s0 = 0;
-        for s1 in (0..ns).filter(shared).chain([ns]) {
-            if let Some((x, y)) = split_stretch(&cost[s0..s1], s0, &upd_ptr, &upd) {
-                pairs.push((s0, x, y));
+        if (0..ns).any(|sn| shared(&sn)) {
+            let mut s0 = 0;
+            for s1 in (0..ns).filter(shared).chain([ns]) {
+                let lead = if s0 == 0 { WAKE_LEAD } else { 0.0 };
+                if let Some((x, y)) = split_stretch(&cost[s0..s1], s0, lead, &upd_ptr, &upd) {
+                    pairs.push((s0, x, y));
+                }
+                s0 = s1 + 1;
             }
-            s0 = s1 + 1;
         }
-        let parallel_work = (0..ns).any(|sn| shared(&sn)) || !pairs.is_empty();
+        let parallel_work = (0..ns).any(|sn| shared(&sn));
         // The helper is on watch from a little before the first shared work to the end of
         // the last.
         let first_work = (0..ns)
@@ -395,14 +409,16 @@ impl BlockPlan {
             wake_at,
             after_shared,
             pairs,
+            #[cfg(test)]
+            pairs_run: 0,
             work: Work::new(dim, max_rows),
             work2: Work::new(dim, max_rows),
             x: vec![0.0; dim],
         })
     }
 
-    /// Whether the analysis found supernodes to share between two threads, and the machine
-    /// has a second core for them.
+    /// Whether the analysis found work to share between two threads (supernodes, and pairs
+    /// of ranges between them), and the machine has a second core for it.
     pub(super) fn shares_work(&self) -> bool {
         self.parallel_work && factor_pool().is_some()
     }
@@ -410,7 +426,8 @@ impl BlockPlan {
     /// Numeric LDLᵀ; pivots with |d| ≤ `eps` become ±`delta` when `delta > 0`. Returns the
     /// inertia, or `None` on a zero or non-finite pivot. With `parallel`, the supernodes whose
     /// work the analysis divided ([`BlockPlan::sn_split`], [`BlockPlan::sn_panels`]) are
-    /// shared with the worker of [`factor_pool`], each thread on its own columns: every entry
+    /// shared with the worker of [`factor_pool`], each thread on its own columns, and the two
+    /// ranges of each of [`BlockPlan::pairs`] are factored one on each thread: every entry
     /// receives the same operations in the same order as on one thread, so the factor is the
     /// same bit for bit either way.
     pub(super) fn factor(
@@ -507,6 +524,10 @@ impl BlockPlan {
                 inertia.positive += mine.positive + theirs.positive;
                 inertia.negative += mine.negative + theirs.negative;
                 inertia.zero += mine.zero + theirs.zero;
+                #[cfg(test)]
+                {
+                    self.pairs_run += 1;
+                }
                 sn = y;
                 continue;
             }
@@ -662,6 +683,11 @@ pub(super) const MIN_PARALLEL_WORK: f64 = 2e5;
 /// [`BlockPlan::pairs`] balances its two ranges by this cost.
 const SMALL_COSTS: [f64; 3] = [130.0, 250.0, 2.6];
 
+/// How late, in [`SMALL_COSTS`]' units (about 20 µs), the helper starts the second range of a
+/// pair when it is woken for that pair: on the LG-30 KKT it began 15–25 µs after the calling
+/// thread began the first (decision record 0091).
+const WAKE_LEAD: f64 = 6e4;
+
 /// Multiply–adds (about 0.1–0.2 ms) of the supernodes factored before the first shared one
 /// while the second thread wakes up: waking a sleeping thread takes some 60 µs on a virtual
 /// machine, more than a shared update saves, so the thread is woken once, ahead, and then
@@ -669,9 +695,9 @@ const SMALL_COSTS: [f64; 3] = [130.0, 250.0, 2.6];
 const WAKE_AHEAD_WORK: f64 = 4e5;
 
 /// The second thread of a shared factorization ([`BlockPlan::factor`]): the calling thread
-/// factors, and hands one half of each shared supernode's work to the worker of
-/// [`factor_pool`], which watches for it ([`linger`]) from [`Helper::wake`] until the
-/// factorization ends (when the helper is dropped).
+/// factors, and hands one half of each shared supernode's work, and the second range of each
+/// pair, to the worker of [`factor_pool`], which watches for it ([`linger`]) from
+/// [`Helper::wake`] until the last shared work is done (or the helper is dropped).
 struct Helper {
     pool: &'static rayon::ThreadPool,
     stop: Arc<AtomicBool>,
@@ -707,7 +733,7 @@ impl Helper {
 }
 
 impl Helper {
-    /// Ends the worker's watch (after the last shared supernode).
+    /// Ends the worker's watch (after the last shared work).
     fn finish(&self) {
         self.stop.store(true, Ordering::Release);
     }
@@ -1307,11 +1333,13 @@ fn factor_supernode(
 /// two threads can factor at once: no supernode of the second depends on one of the first,
 /// directly or through others. Supernodes are numbered after their descendants, so one pass
 /// in order finds each one's lowest dependency in the stretch, and for each `x` the second
-/// range ends at the first supernode that depends below `x`. The pair that saves the most
-/// (the larger smaller range), if that range has at least [`MIN_PARALLEL_WORK`] of work.
+/// range ends at the first supernode that depends below `x`. With the second range starting
+/// `lead` late, the pair saves `min(second, first − lead)` of the two ranges' time on one
+/// thread; the pair that saves the most, if it saves at least [`MIN_PARALLEL_WORK`].
 fn split_stretch(
     work: &[f64],
     s: usize,
+    lead: f64,
     upd_ptr: &[usize],
     upd: &[(u32, u32, u32)],
 ) -> Option<(usize, usize)> {
@@ -1348,9 +1376,9 @@ fn split_stretch(
             below.pop();
         }
         let y = below.peek().map_or(len, |&Reverse(k)| k);
-        let smaller = prefix[x].min(prefix[y] - prefix[x]);
-        if smaller >= MIN_PARALLEL_WORK && best.is_none_or(|(m, ..)| smaller > m) {
-            best = Some((smaller, x, y));
+        let saved = (prefix[y] - prefix[x]).min(prefix[x] - lead);
+        if saved >= MIN_PARALLEL_WORK && best.is_none_or(|(m, ..)| saved > m) {
+            best = Some((saved, x, y));
         }
     }
     best.map(|(_, x, y)| (s + x, s + y))

@@ -622,6 +622,14 @@ fn factorization_failures_are_typed() {
     let mut rhs = vec![1.0, 2.0, 3.0];
     assert_eq!(s.solve(&mut rhs), Err(FactorizationFailure::NotAnalysed));
     s.analyse(3, &pat.mat.col_ptr, &pat.mat.row_idx).unwrap();
+    let nnz = pat.mat.values.len();
+    assert_eq!(
+        s.factor(&pat.mat.values[..nnz - 1]),
+        Err(FactorizationFailure::ValueCount {
+            expected: nnz,
+            got: nnz - 1
+        })
+    );
     let good = s.factor(&pat.mat.values).unwrap();
     assert_eq!((good.positive, good.negative, good.zero), (2, 1, 0));
     // K x = b for K = [2 0 1; 0 3 0; 1 0 −1e-9]: x₂ = 2/3 and 2x₁ + x₃ = 1, x₁ ≈ 3.
@@ -864,8 +872,10 @@ fn a_pair_on_a_panel_end_is_stepped_over() {
 /// factor of one thread bit for bit. The matrix: two dense blocks (a shared supernode each),
 /// then two banded halves, the first depending on the first dense block and the second on the
 /// second (eliminated in that order), then a few coupling rows; pivots of both signs. The
-/// halves form the divided stretch, each of whose ranges reads a dense block's finished factor.
-/// A NaN in a dense block, in either half or in the coupling block fails as on one thread.
+/// halves form the divided stretch, each of whose ranges reads a dense block's finished factor,
+/// with 2 × 2 pivots in the dense blocks and in both halves. On two cores the pair must have
+/// run on two threads. A NaN in a dense block, in either half or in the coupling block fails
+/// as on one thread.
 #[test]
 fn a_stretch_divided_between_two_threads_is_the_factor_of_one() {
     use super::faer::FaerFactor;
@@ -920,8 +930,16 @@ fn a_stretch_divided_between_two_threads_is_the_factor_of_one() {
         Some(&natural),
     )
     .expect("analysis");
-    let mut plan =
-        BlockPlan::new(&ff.symbolic, dim, &col_ptr, &row_idx, &[]).expect("a supernodal plan");
+    // 2 × 2 pivots asked for everywhere (granted where L[j + 1, j] is structurally nonzero).
+    let pair_first: Vec<bool> = (0..dim).map(|j| j % 5 == 1).collect();
+    let mut plan = BlockPlan::new(&ff.symbolic, dim, &col_ptr, &row_idx, &pair_first)
+        .expect("a supernodal plan");
+    for (name, range) in [("first", first..second), ("second", second..last)] {
+        assert!(
+            plan.pair[range].iter().any(|&p| p),
+            "2 × 2 pivots in the {name} half"
+        );
+    }
     assert_eq!(
         plan.sn_begin[1..3],
         [dense, first],
@@ -949,15 +967,28 @@ fn a_stretch_divided_between_two_threads_is_the_factor_of_one() {
         "the second range ends where the coupling starts"
     );
     let words = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    let bits = |p: &BlockPlan| (words(&p.l), words(&p.d), words(&p.inv_d), words(&p.e));
+    let bits = |p: &BlockPlan| {
+        let pivots = (words(&p.d), words(&p.inv_d), words(&p.e), words(&p.inv_e));
+        (words(&p.l), pivots)
+    };
     let one = plan.factor(&values, 1e-12, 0.0, false).expect("factor");
     assert_eq!(one.negative, (0..dim).filter(|j| j % 7 == 3).count());
     let one_bits = bits(&plan);
-    for _ in 0..3 {
+    // On two cores the pair must run on two threads at least once: another test's
+    // factorization may hold the helper for a moment, and then this one factors alone.
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    assert_eq!(plan.shares_work(), cores >= 2);
+    let mut tries = 0;
+    while tries < 3 || (cores >= 2 && plan.pairs_run == 0 && tries < 200) {
         let two = plan.factor(&values, 1e-12, 0.0, true).expect("factor");
         assert_eq!(one, two, "inertia");
         assert!(one_bits == bits(&plan), "the factors differ");
+        tries += 1;
     }
+    assert!(
+        cores < 2 || plan.pairs_run > 0,
+        "the pair never ran on two threads"
+    );
     for j in [7, dense + 7, first + 7, second + 7, dim - 1] {
         let at = col_ptr[j];
         let mut bad = values.clone();
