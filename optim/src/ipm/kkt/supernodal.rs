@@ -7,7 +7,8 @@
 //!
 //! Shared factorization (decision record 0090): the analysis marks the supernodes with work
 //! enough for two threads ([`MIN_PARALLEL_WORK`]; on Legendre–Gauss KKTs the phases' dense
-//! blocks). Their descendant updates are divided by target columns (balanced by multiply–adds),
+//! blocks). Their descendant updates are divided by target columns (balanced by multiply–adds
+//! and the scatter's pass over each target column's rows, record 0091),
 //! and their own columns are factored in panels of [`PANEL`] columns with look-ahead: while
 //! the calling thread updates and factors the next panel, the helper thread subtracts the
 //! finished panels from the later columns. Every entry receives the same operations in the
@@ -149,7 +150,8 @@ pub(super) struct BlockPlan {
     pub(super) l_row_idx: Vec<u32>,
     pub(super) l: Vec<f64>,
     /// First target column of supernode s's second half of the descendant updates when two
-    /// threads share them (balanced by multiply–adds), 0 where they are not shared.
+    /// threads share them (balanced by multiply–adds and the scatter's rows), 0 where they are
+    /// not shared.
     pub(super) sn_split: Vec<u32>,
     /// Whether supernode s's own columns are factored in panels whose updates two threads
     /// share.
@@ -271,8 +273,11 @@ impl BlockPlan {
                 let dd = dd as usize;
                 let wd = sn_begin[dd + 1] - sn_begin[dd];
                 let rd = &sn_rows[sn_row_ptr[dd]..sn_row_ptr[dd + 1]];
+                // A target column's update: `wd` multiply–adds per row, and one pass over
+                // its rows to subtract them (the scatter), which costs about as much as a
+                // multiply–add (decision record 0091).
                 for q in p1 as usize..p2 as usize {
-                    col_work[rd[q] as usize - f] += ((rd.len() - q) * wd) as f64;
+                    col_work[rd[q] as usize - f] += ((rd.len() - q) * (wd + 1)) as f64;
                 }
             }
             let total: f64 = col_work.iter().sum();
