@@ -409,13 +409,13 @@ pub struct LinearSolverSettings {
     /// thread on its own columns, and the small supernodes between them in pairs of ranges
     /// that do not depend on each other, one range per thread, so that the factor is the same
     /// bit for bit ([`LdltOptions::parallel`](crate::ipm::kkt::LdltOptions::parallel)). Used
-    /// where the supernodal kernel finds such work, the solve runs on a thread of its own (not a
-    /// worker of a rayon pool: a parallel multi-start's starts already keep every core busy)
-    /// and the machine has two cores, and each factorization shares only while the second
-    /// core is idle; there it replaces `speculative_factorization`, which
-    /// would compete for the same core. A cold LG-30 `periodic-qc` solve takes about 0.8 of
-    /// the speculative one's wall time (decision records 0090 and 0091). Off: every factor on
-    /// the solve's thread (speculation as before).
+    /// where the supernodal kernel finds such work, the solve runs on a thread of its own
+    /// (not a worker of a rayon pool: a parallel multi-start's starts already keep every core
+    /// busy) and the machine has two cores, and each factorization shares only while the
+    /// second core is idle; there it replaces `speculative_factorization`, which would
+    /// compete for the same core. A cold LG-30 `periodic-qc` solve takes about 0.8 of the
+    /// speculative one's wall time (decision records 0090 and 0091). Off: every factor on the
+    /// solve's thread (speculation as before).
     parallel_factorization: bool = true,
     /// Maximum iterative-refinement steps per solve (the default is Ipopt's
     /// `max_refinement_steps`); see `min_refinement_steps` and `refinement_contraction` for

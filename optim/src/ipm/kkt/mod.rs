@@ -268,9 +268,8 @@ pub struct LdltOptions {
     /// Share the factorization of the supernodal kernel's widest supernodes (the dense
     /// blocks of Legendre–Gauss collocation), and of pairs of independent ranges of the
     /// small supernodes between them (decision record 0091), with a second thread, when the
-    /// solver runs on a
-    /// thread of its own (not a worker of a rayon pool, whose other workers keep the cores
-    /// busy) and the machine has two cores: the same factor bit for bit
+    /// solver runs on a thread of its own (not a worker of a rayon pool, whose other workers
+    /// keep the cores busy) and the machine has two cores: the same factor bit for bit
     /// ([`SparseLdlt::shares_factorization`], decision record 0090). Default `true`.
     pub parallel: bool,
 }

@@ -123,7 +123,7 @@ impl Speculator {
     /// already share its work with the second core ([`SparseLdlt::shares_factorization`]:
     /// both at once leave three threads spinning on two cores, decision record 0090).
     pub fn worthwhile(solver: &SparseLdlt) -> bool {
-        let cores = std::thread::available_parallelism().map_or(1, usize::from);
+        let cores = cores();
         let pool_uses_every_core =
             rayon::current_thread_index().is_some() && rayon::current_num_threads() >= cores;
         cores >= 2
@@ -289,6 +289,13 @@ impl Drop for Speculator {
     }
 }
 
+/// The cores this process may use, read once: both uses of the second core ask before every
+/// factorization, and on Linux the count comes from cgroup files.
+pub(super) fn cores() -> usize {
+    static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from))
+}
+
 /// Whether the calling thread waits for a core, from the run-queue delay Linux records for
 /// it, smoothed over the intervals between the calls: what both uses of the second core
 /// (speculation here, the shared factorization of `supernodal`) ask before they start.
@@ -305,11 +312,7 @@ impl CoreWatch {
     /// runnable count of Linux `/proc/loadavg` (its fourth field, `runnable/total`) below the
     /// number of cores. Without that file: always.
     pub(super) fn machine_idle() -> bool {
-        // Asked before every factorization that could share: the core count (cgroup files
-        // on Linux) is read once.
-        static CORES: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-        let cores =
-            *CORES.get_or_init(|| std::thread::available_parallelism().map_or(1, usize::from));
+        let cores = cores();
         std::fs::read_to_string("/proc/loadavg")
             .ok()
             .and_then(|s| {

@@ -536,18 +536,16 @@ impl BlockPlan {
                 sn = y;
                 continue;
             }
-            let mut all = Region {
-                at: (0, 0, 0),
-                before: Finished::default(),
-                vals: &mut self.vals,
-                d: &mut self.d,
-                e: &mut self.e,
-                inv_d: &mut self.inv_d,
-                inv_e: &mut self.inv_e,
-                l: &mut self.l,
-                work: &mut self.work,
-                second: Some(&mut self.work2),
-            };
+            let arrays = [
+                &mut self.vals[..],
+                &mut self.d,
+                &mut self.e,
+                &mut self.inv_d,
+                &mut self.inv_e,
+                &mut self.l,
+            ];
+            let mut all = Region::range((0, 0, 0), Finished::default(), arrays, &mut self.work);
+            all.second = Some(&mut self.work2);
             factor_supernode(&lay, &mut all, sn, helper, &mut inertia)?;
             sn += 1;
         }
@@ -802,8 +800,7 @@ fn linger(stop: &AtomicBool) {
 fn factor_pool() -> Option<&'static rayon::ThreadPool> {
     static POOL: OnceLock<Option<rayon::ThreadPool>> = OnceLock::new();
     POOL.get_or_init(|| {
-        let cores = std::thread::available_parallelism().map_or(1, usize::from);
-        if cores < 2 {
+        if super::speculative::cores() < 2 {
             return None;
         }
         rayon::ThreadPoolBuilder::new()
@@ -1162,8 +1159,8 @@ struct Region<'a> {
 }
 
 impl<'a> Region<'a> {
-    /// A range's region without the helper's scratch: its `[vals, d, e, inv_d, inv_e, l]`
-    /// from `at` on.
+    /// A region without the helper's scratch: its `[vals, d, e, inv_d, inv_e, l]` from `at`
+    /// on.
     fn range(
         at: (usize, usize, usize),
         before: Finished<'a>,
