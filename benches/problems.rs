@@ -118,6 +118,12 @@ fn bench(c: &mut Criterion) {
                     "{name}/{label}: second thread (speculative factorizations) {:.1} ms",
                     t.speculative_factorization.as_secs_f64() * 1e3
                 );
+                println!(
+                    "{name}/{label}: {} factorizations, {} of them rejected (inertia correction), {} pivot-pair checks",
+                    sol.counters.factorizations,
+                    sol.counters.rejected_factorizations,
+                    sol.counters.pivot_pair_checks
+                );
             }
             Err(e) => eprintln!("{name}/{label}: solve failed: {e}"),
         }

@@ -3,7 +3,9 @@
 //! `L` pattern (no relaxation zeros) and the same pivot rule as the simplicial backend, with
 //! dense column-major blocks per supernode so that the updates are dense column operations.
 //! Its rounding differs from the simplicial backend's; it is tested by reconstructing
-//! `P K Pᵀ` from `L D Lᵀ` and against dense eigenvalue inertia.
+//! `P K Pᵀ` from `L D Lᵀ` and against dense eigenvalue inertia. Where a descendant's rows
+//! land in its target's block is computed once per pattern ([`BlockPlan::upd_rel`]), so a
+//! scattered update reads one index per entry (decision record 0092).
 //!
 //! Shared factorization (decision record 0090): the analysis marks the supernodes with work
 //! enough for two threads ([`MIN_PARALLEL_WORK`]; on Legendre–Gauss KKTs the phases' dense
@@ -124,6 +126,11 @@ pub(super) struct BlockPlan {
     /// `rows_d[p1..p2]` are columns of s (rows `rows_d[p1..]` receive the update).
     pub(super) upd_ptr: Vec<usize>,
     pub(super) upd: Vec<(u32, u32, u32)>,
+    /// Where update k's rows `rows_d[p1..]` land in its target's block (positions among the
+    /// target's rows): `upd_rel[upd_rel_ptr[k]..upd_rel_ptr[k + 1]]`, so that the scatter
+    /// reads one index per entry instead of the row and then a row map filled per target.
+    pub(super) upd_rel_ptr: Vec<usize>,
+    pub(super) upd_rel: Vec<u32>,
     /// The entries of the caller's lower-triangle value array in supernode s's block:
     /// `a_map[a_ptr[s]..a_ptr[s + 1]]` = (index in the value array, position in the block),
     /// by position. A block is filled from them just before it is factored, while it is
@@ -258,6 +265,25 @@ impl BlockPlan {
             upd_ptr[sn + 1] += upd_ptr[sn];
         }
         let upd: Vec<(u32, u32, u32)> = pairs.iter().map(|&(_, d, p, q)| (d, p, q)).collect();
+        // Where each update's rows land in its target's block, once per pattern rather than
+        // through a row map in every factorization.
+        let mut upd_rel_ptr = Vec::with_capacity(upd.len() + 1);
+        let mut upd_rel = Vec::new();
+        upd_rel_ptr.push(0);
+        let mut map = vec![0u32; dim];
+        for sn in 0..ns {
+            for (pos, &r) in sn_rows[sn_row_ptr[sn]..sn_row_ptr[sn + 1]]
+                .iter()
+                .enumerate()
+            {
+                map[r as usize] = pos as u32;
+            }
+            for &(d, p1, _) in &upd[upd_ptr[sn]..upd_ptr[sn + 1]] {
+                let rd = &sn_rows[sn_row_ptr[d as usize]..sn_row_ptr[d as usize + 1]];
+                upd_rel.extend(rd[p1 as usize..].iter().map(|&r| map[r as usize]));
+                upd_rel_ptr.push(upd_rel.len());
+            }
+        }
         // Work per target column, to divide a large supernode's updates between two threads,
         // and the work of its own columns' LDLᵀ.
         let mut sn_split = vec![0u32; ns];
@@ -397,6 +423,8 @@ impl BlockPlan {
             sn_val_ptr,
             upd_ptr,
             upd,
+            upd_rel_ptr,
+            upd_rel,
             a_ptr,
             a_map,
             d: vec![0.0; dim],
@@ -416,8 +444,8 @@ impl BlockPlan {
             pairs,
             #[cfg(test)]
             pairs_run: 0,
-            work: Work::new(dim, max_rows),
-            work2: Work::new(dim, max_rows),
+            work: Work::new(max_rows),
+            work2: Work::new(max_rows),
             x: vec![0.0; dim],
         })
     }
@@ -476,6 +504,8 @@ impl BlockPlan {
             sn_row_ptr: &self.sn_row_ptr,
             sn_val_ptr: &self.sn_val_ptr,
             upd_ptr: &self.upd_ptr,
+            upd_rel_ptr: &self.upd_rel_ptr,
+            upd_rel: &self.upd_rel,
             upd: &self.upd,
             pair: &self.pair,
             sn_pair: &self.sn_pair,
@@ -813,7 +843,7 @@ fn factor_pool() -> Option<&'static rayon::ThreadPool> {
 }
 
 /// What the descendant updates of a supernode read: the finished supernodes' layout and
-/// pivots, and the row map of the target.
+/// pivots, and where the target's updates land in its block.
 struct Frozen<'a> {
     sn_begin: &'a [usize],
     sn_rows: &'a [u32],
@@ -827,7 +857,10 @@ struct Frozen<'a> {
     e: &'a [f64],
     pair: &'a [bool],
     sn_pair: &'a [bool],
-    map: &'a [u32],
+    /// [`BlockPlan::upd_rel_ptr`] from the target's first update on, and
+    /// [`BlockPlan::upd_rel`].
+    rel_ptr: &'a [usize],
+    rel: &'a [u32],
 }
 
 impl Frozen<'_> {
@@ -847,7 +880,8 @@ impl Frozen<'_> {
         tmp: &mut [f64],
         coef: &mut [f64],
     ) {
-        for &(dd, p1, p2) in upd {
+        for (k, &(dd, p1, p2)) in upd.iter().enumerate() {
+            let rel = &self.rel[self.rel_ptr[k]..self.rel_ptr[k + 1]];
             let dd = dd as usize;
             let (p1, p2) = (p1 as usize, p2 as usize);
             let (fd, ld) = (self.sn_begin[dd], self.sn_begin[dd + 1]);
@@ -865,9 +899,9 @@ impl Frozen<'_> {
                 (&done[at..at + nrd * wd], &self.d[c.clone()], &self.e[c])
             };
             // Rows rd[p1..] land on consecutive rows of the target block: subtract in place
-            // without the row map.
-            let first = self.map[rd[p1] as usize] as usize;
-            let contiguous = self.map[rd[nrd - 1] as usize] as usize - first == nrd - 1 - p1;
+            // without the relative rows.
+            let first = rel[0] as usize;
+            let contiguous = rel[nrd - 1 - p1] as usize - first == nrd - 1 - p1;
             let span = &rd[p1..p2];
             let qa = p1 + span.partition_point(|&r| (r as usize - f) < cols.start);
             let qb = p1 + span.partition_point(|&r| (r as usize - f) < cols.end);
@@ -883,9 +917,7 @@ impl Frozen<'_> {
                             *b -= v * sc;
                         }
                     } else {
-                        scatter_sub(bcol, &rd[q..], &bd[q..], sc, |r| {
-                            self.map[r as usize] as usize
-                        });
+                        scatter_sub(bcol, &rel[q - p1..], &bd[q..], sc, |r| r as usize);
                     }
                     continue;
                 }
@@ -904,7 +936,7 @@ impl Frozen<'_> {
                     let out = &mut tmp[..len];
                     out.iter_mut().for_each(|o| *o = 0.0);
                     lincomb_sub(out, bd, nrd, q, coef);
-                    scatter_sub(bcol, &rd[q..], out, -1.0, |r| self.map[r as usize] as usize);
+                    scatter_sub(bcol, &rel[q - p1..], out, -1.0, |r| r as usize);
                 }
             }
         }
@@ -1093,6 +1125,8 @@ struct Layout<'a> {
     sn_val_ptr: &'a [usize],
     upd_ptr: &'a [usize],
     upd: &'a [(u32, u32, u32)],
+    upd_rel_ptr: &'a [usize],
+    upd_rel: &'a [u32],
     pair: &'a [bool],
     sn_pair: &'a [bool],
     sn_split: &'a [u32],
@@ -1121,18 +1155,16 @@ impl Layout<'_> {
     }
 }
 
-/// A thread's scratch: the target's row map, a gathered update, the coefficients `D Lᵀ`.
+/// A thread's scratch: a gathered update, the coefficients `D Lᵀ`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Work {
-    map: Vec<u32>,
     tmp: Vec<f64>,
     coef: Vec<f64>,
 }
 
 impl Work {
-    fn new(dim: usize, max_rows: usize) -> Self {
+    fn new(max_rows: usize) -> Self {
         Self {
-            map: vec![0; dim],
             tmp: vec![0.0; max_rows],
             coef: vec![0.0; max_rows],
         }
@@ -1207,10 +1239,7 @@ fn factor_supernode(
     let w = l - f;
     let rows = &lay.sn_rows[lay.sn_row_ptr[sn]..lay.sn_row_ptr[sn + 1]];
     let nr = rows.len();
-    let Work { map, tmp, coef } = &mut *reg.work;
-    for (pos, &r) in rows.iter().enumerate() {
-        map[r as usize] = pos as u32;
-    }
+    let Work { tmp, coef } = &mut *reg.work;
     let (done, rest) = reg.vals.split_at_mut(lay.sn_val_ptr[sn] - val0);
     let blk = &mut rest[..nr * w];
     let upd = &lay.upd[lay.upd_ptr[sn]..lay.upd_ptr[sn + 1]];
@@ -1225,7 +1254,8 @@ fn factor_supernode(
         e: &*reg.e,
         pair: lay.pair,
         sn_pair: lay.sn_pair,
-        map: &map[..],
+        rel_ptr: &lay.upd_rel_ptr[lay.upd_ptr[sn]..],
+        rel: lay.upd_rel,
     };
     let mut helper = helper.zip(reg.second.as_deref_mut());
     let split = lay.sn_split[sn] as usize;
