@@ -236,8 +236,9 @@ pub(super) fn axpy_scatter(x: &mut [f64], rows: &[u32], vals: &[f64], s: f64) {
 
 /// `dst[index(rows[p])] -= vals[p] * s` for all p (distinct targets), unrolled by four (four
 /// independent loads before the stores): the scatter of the simplicial factorization and
-/// forward solve (`index` = identity) and of the supernodal kernel's updates through its row
-/// map. Each entry of `dst` is updated once, so the result does not depend on the unrolling.
+/// forward solve (`index` = identity) and of the supernodal kernel's updates at their
+/// relative rows. Each entry of `dst` is updated once, so the result does not depend on the
+/// unrolling.
 #[inline(always)]
 pub(super) fn scatter_sub(
     dst: &mut [f64],

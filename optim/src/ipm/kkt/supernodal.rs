@@ -678,9 +678,16 @@ fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[
     }
 }
 
-/// `Σ vals[p] x[rows[p]]` with four partial sums (breaks the add latency chain).
+/// `Σ vals[p] x[rows[p]]` with four partial sums (breaks the add latency chain). Rows are
+/// strictly increasing, so a run with first + len − 1 = last is contiguous (the dense blocks
+/// near the root): the same sums over a slice of `x`, without the row indices.
 #[inline(always)]
 fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
+    if let (Some(&first), Some(&last)) = (rows.first(), rows.last())
+        && (last - first) as usize + 1 == rows.len()
+    {
+        return dot4(vals, &x[first as usize..=last as usize]);
+    }
     let mut s = [0.0f64; 4];
     let (v4, r4) = (vals.chunks_exact(4), rows.chunks_exact(4));
     let (vr, rr) = (v4.remainder(), r4.remainder());
@@ -693,6 +700,25 @@ fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
     let mut tail = 0.0;
     for (v, &r) in vr.iter().zip(rr) {
         tail += v * x[r as usize];
+    }
+    (s[0] + s[1]) + (s[2] + s[3]) + tail
+}
+
+/// `Σ vals[p] xs[p]` in [`dot_gather4`]'s order of operations (the same bits).
+#[inline(always)]
+fn dot4(vals: &[f64], xs: &[f64]) -> f64 {
+    let mut s = [0.0f64; 4];
+    let (v4, x4) = (vals.chunks_exact(4), xs.chunks_exact(4));
+    let (vr, xr) = (v4.remainder(), x4.remainder());
+    for (v, y) in v4.zip(x4) {
+        s[0] += v[0] * y[0];
+        s[1] += v[1] * y[1];
+        s[2] += v[2] * y[2];
+        s[3] += v[3] * y[3];
+    }
+    let mut tail = 0.0;
+    for (v, y) in vr.iter().zip(xr) {
+        tail += v * y;
     }
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
