@@ -156,6 +156,10 @@ pub(super) struct BlockPlan {
     pub(super) l_col_ptr: Vec<usize>,
     pub(super) l_row_idx: Vec<u32>,
     pub(super) l: Vec<f64>,
+    /// Per column of `L`, how many of its rows below the diagonal come first as one run of
+    /// consecutive rows (its supernode's own columns, and the whole column near the root):
+    /// the solves treat them as a slice of `x`.
+    pub(super) l_head: Vec<u32>,
     /// First target column of supernode s's second half of the descendant updates when two
     /// threads share them (balanced by multiply–adds and the scatter's rows), 0 where they are
     /// not shared.
@@ -375,12 +379,16 @@ impl BlockPlan {
         // from j down (diagonal slot first).
         let mut l_col_ptr = Vec::with_capacity(dim + 1);
         let mut l_row_idx = Vec::new();
+        let mut l_head = Vec::with_capacity(dim);
         l_col_ptr.push(0);
         for sn in 0..ns {
             let rows = &sn_rows[sn_row_ptr[sn]..sn_row_ptr[sn + 1]];
             for c in 0..sn_begin[sn + 1] - sn_begin[sn] {
                 l_row_idx.extend_from_slice(&rows[c..]);
                 l_col_ptr.push(l_row_idx.len());
+                let below = rows.get(c + 1..).unwrap_or(&[]);
+                let run = below.windows(2).take_while(|p| p[1] == p[0] + 1).count();
+                l_head.push((run + usize::from(!below.is_empty())) as u32);
             }
         }
         // Value map of the permuted lower triangle, per supernode in the order of its block
@@ -436,6 +444,7 @@ impl BlockPlan {
             l: vec![0.0; l_col_ptr[dim]],
             l_col_ptr,
             l_row_idx,
+            l_head,
             sn_split,
             sn_panels,
             parallel_work,
@@ -590,11 +599,15 @@ impl BlockPlan {
         for i in 0..n {
             x[i] = rhs[self.perm_fwd[i]];
         }
-        let (lp, li, l) = (&self.l_col_ptr, &self.l_row_idx, &self.l);
+        let (lp, li, l, head) = (&self.l_col_ptr, &self.l_row_idx, &self.l, &self.l_head);
         for j in 0..n {
             let (a, b) = (lp[j] + 1, lp[j + 1]);
             let xj = x[j];
-            axpy_scatter(x, &li[a..b], &l[a..b], xj);
+            let h = a + head[j] as usize;
+            if h > a {
+                axpy_scatter(x, &li[a..h], &l[a..h], xj);
+            }
+            axpy_scatter(x, &li[h..b], &l[h..b], xj);
         }
         if self.sn_pair.iter().any(|&p| p) {
             let mut j = 0;
@@ -611,12 +624,12 @@ impl BlockPlan {
             }
             for j in (0..n).rev() {
                 let (a, b) = (lp[j] + 1, lp[j + 1]);
-                x[j] -= dot_gather4(&l[a..b], &li[a..b], x);
+                x[j] -= dot_gather4(&l[a..b], &li[a..b], head[j] as usize, x);
             }
         } else {
             for j in (0..n).rev() {
                 let (a, b) = (lp[j] + 1, lp[j + 1]);
-                x[j] = x[j] * self.inv_d[j] - dot_gather4(&l[a..b], &li[a..b], x);
+                x[j] = x[j] * self.inv_d[j] - dot_gather4(&l[a..b], &li[a..b], head[j] as usize, x);
             }
         }
         for i in 0..n {
@@ -678,47 +691,39 @@ fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[
     }
 }
 
-/// `Σ vals[p] x[rows[p]]` with four partial sums (breaks the add latency chain). Rows are
-/// strictly increasing, so a run with first + len − 1 = last is contiguous (the dense blocks
-/// near the root): the same sums over a slice of `x`, without the row indices.
+/// `Σ vals[p] x[rows[p]]` with four partial sums (breaks the add latency chain): entry p
+/// goes to sum p mod 4, the last `len mod 4` to a fifth. The first `head` rows are
+/// consecutive ([`BlockPlan::l_head`]), so the chunks of four among them read a slice of `x`
+/// instead of gathering: the same values in the same order, so the same bits.
 #[inline(always)]
-fn dot_gather4(vals: &[f64], rows: &[u32], x: &[f64]) -> f64 {
-    if let (Some(&first), Some(&last)) = (rows.first(), rows.last())
-        && (last - first) as usize + 1 == rows.len()
-    {
-        return dot4(vals, &x[first as usize..=last as usize]);
-    }
+pub(super) fn dot_gather4(vals: &[f64], rows: &[u32], head: usize, x: &[f64]) -> f64 {
+    let n4 = vals.len() - vals.len() % 4;
+    let h4 = head.min(n4) / 4 * 4;
     let mut s = [0.0f64; 4];
-    let (v4, r4) = (vals.chunks_exact(4), rows.chunks_exact(4));
-    let (vr, rr) = (v4.remainder(), r4.remainder());
-    for (v, r) in v4.zip(r4) {
+    if h4 > 0 {
+        let r0 = rows[0] as usize;
+        for (v, y) in vals[..h4]
+            .chunks_exact(4)
+            .zip(x[r0..r0 + h4].chunks_exact(4))
+        {
+            s[0] += v[0] * y[0];
+            s[1] += v[1] * y[1];
+            s[2] += v[2] * y[2];
+            s[3] += v[3] * y[3];
+        }
+    }
+    for (v, r) in vals[h4..n4]
+        .chunks_exact(4)
+        .zip(rows[h4..n4].chunks_exact(4))
+    {
         s[0] += v[0] * x[r[0] as usize];
         s[1] += v[1] * x[r[1] as usize];
         s[2] += v[2] * x[r[2] as usize];
         s[3] += v[3] * x[r[3] as usize];
     }
     let mut tail = 0.0;
-    for (v, &r) in vr.iter().zip(rr) {
+    for (v, &r) in vals[n4..].iter().zip(&rows[n4..]) {
         tail += v * x[r as usize];
-    }
-    (s[0] + s[1]) + (s[2] + s[3]) + tail
-}
-
-/// `Σ vals[p] xs[p]` in [`dot_gather4`]'s order of operations (the same bits).
-#[inline(always)]
-fn dot4(vals: &[f64], xs: &[f64]) -> f64 {
-    let mut s = [0.0f64; 4];
-    let (v4, x4) = (vals.chunks_exact(4), xs.chunks_exact(4));
-    let (vr, xr) = (v4.remainder(), x4.remainder());
-    for (v, y) in v4.zip(x4) {
-        s[0] += v[0] * y[0];
-        s[1] += v[1] * y[1];
-        s[2] += v[2] * y[2];
-        s[3] += v[3] * y[3];
-    }
-    let mut tail = 0.0;
-    for (v, y) in vr.iter().zip(xr) {
-        tail += v * y;
     }
     (s[0] + s[1]) + (s[2] + s[3]) + tail
 }
