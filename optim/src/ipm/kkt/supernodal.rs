@@ -342,8 +342,9 @@ impl BlockPlan {
         // late by the wake-up. Only in plans with shared supernodes: a plan with pairs alone
         // would give up the speculative factorization (decision record 0036) for them, a
         // trade not measured.
+        let parallel_work = (0..ns).any(|sn| shared(&sn));
         let mut pairs = Vec::new();
-        if (0..ns).any(|sn| shared(&sn)) {
+        if parallel_work {
             let mut s0 = 0;
             for s1 in (0..ns).filter(shared).chain([ns]) {
                 let lead = if s0 == 0 { WAKE_LEAD } else { 0.0 };
@@ -353,7 +354,6 @@ impl BlockPlan {
                 s0 = s1 + 1;
             }
         }
-        let parallel_work = (0..ns).any(|sn| shared(&sn));
         // The helper is on watch from a little before the first shared work to the end of
         // the last.
         let first_work = (0..ns)
@@ -876,22 +876,16 @@ fn factor_pool() -> Option<&'static rayon::ThreadPool> {
 /// What the descendant updates of a supernode read: the finished supernodes' layout and
 /// pivots, and where the target's updates land in its block.
 struct Frozen<'a> {
-    sn_begin: &'a [usize],
-    sn_rows: &'a [u32],
-    sn_row_ptr: &'a [usize],
-    sn_val_ptr: &'a [usize],
+    lay: &'a Layout<'a>,
+    /// The target's first update in [`BlockPlan::upd`] (its relative rows are those of the
+    /// updates from there on, [`BlockPlan::upd_rel`]).
+    first_update: usize,
     /// The first column and block value of `d`, `e` and `done` (a [`Region`]'s `at`); the
     /// supernodes before them are in `before`.
     at: (usize, usize),
     before: Finished<'a>,
     d: &'a [f64],
     e: &'a [f64],
-    pair: &'a [bool],
-    sn_pair: &'a [bool],
-    /// [`BlockPlan::upd_rel_ptr`] from the target's first update on, and
-    /// [`BlockPlan::upd_rel`].
-    rel_ptr: &'a [usize],
-    rel: &'a [u32],
 }
 
 impl Frozen<'_> {
@@ -912,20 +906,22 @@ impl Frozen<'_> {
         coef: &mut [f64],
     ) {
         for (k, &(dd, p1, p2)) in upd.iter().enumerate() {
-            let rel = &self.rel[self.rel_ptr[k]..self.rel_ptr[k + 1]];
+            let lay = self.lay;
+            let u = self.first_update + k;
+            let rel = &lay.upd_rel[lay.upd_rel_ptr[u]..lay.upd_rel_ptr[u + 1]];
             let dd = dd as usize;
             let (p1, p2) = (p1 as usize, p2 as usize);
-            let (fd, ld) = (self.sn_begin[dd], self.sn_begin[dd + 1]);
+            let (fd, ld) = (lay.sn_begin[dd], lay.sn_begin[dd + 1]);
             let wd = ld - fd;
-            let rd = &self.sn_rows[self.sn_row_ptr[dd]..self.sn_row_ptr[dd + 1]];
+            let rd = &lay.sn_rows[lay.sn_row_ptr[dd]..lay.sn_row_ptr[dd + 1]];
             let nrd = rd.len();
             let (col0, val0) = self.at;
             let (bd, dpiv, epiv) = if fd < col0 {
                 let b = &self.before;
-                let at = self.sn_val_ptr[dd];
+                let at = lay.sn_val_ptr[dd];
                 (&b.vals[at..at + nrd * wd], &b.d[fd..ld], &b.e[fd..ld])
             } else {
-                let at = self.sn_val_ptr[dd] - val0;
+                let at = lay.sn_val_ptr[dd] - val0;
                 let c = fd - col0..ld - col0;
                 (&done[at..at + nrd * wd], &self.d[c.clone()], &self.e[c])
             };
@@ -953,8 +949,8 @@ impl Frozen<'_> {
                     continue;
                 }
                 let coef = &mut coef[..wd];
-                if self.sn_pair[dd] {
-                    dl_range(coef, bd, nrd, q, dpiv, epiv, &self.pair[fd..ld], 0, wd);
+                if lay.sn_pair[dd] {
+                    dl_range(coef, bd, nrd, q, dpiv, epiv, &lay.pair[fd..ld], 0, wd);
                 } else {
                     for (k, cf) in coef.iter_mut().enumerate() {
                         *cf = bd[k * nrd + q] * dpiv[k];
@@ -1275,18 +1271,12 @@ fn factor_supernode(
     let blk = &mut rest[..nr * w];
     let upd = &lay.upd[lay.upd_ptr[sn]..lay.upd_ptr[sn + 1]];
     let frozen = Frozen {
-        sn_begin: lay.sn_begin,
-        sn_rows: lay.sn_rows,
-        sn_row_ptr: lay.sn_row_ptr,
-        sn_val_ptr: lay.sn_val_ptr,
+        lay,
+        first_update: lay.upd_ptr[sn],
         at: (col0, val0),
         before: reg.before,
         d: &*reg.d,
         e: &*reg.e,
-        pair: lay.pair,
-        sn_pair: lay.sn_pair,
-        rel_ptr: &lay.upd_rel_ptr[lay.upd_ptr[sn]..],
-        rel: lay.upd_rel,
     };
     let mut helper = helper.zip(reg.second.as_deref_mut());
     let split = lay.sn_split[sn] as usize;
