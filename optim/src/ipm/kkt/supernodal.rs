@@ -5,7 +5,12 @@
 //! Its rounding differs from the simplicial backend's; it is tested by reconstructing
 //! `P K Pᵀ` from `L D Lᵀ` and against dense eigenvalue inertia. Where a descendant's rows
 //! land in its target's block is computed once per pattern ([`BlockPlan::upd_rel`]), so a
-//! scattered update reads one index per entry (decision record 0092).
+//! scattered update reads one index per entry (decision record 0092). A descendant updates
+//! several target columns at once (decision record 0093): a one-column descendant four
+//! ([`rank1_scatter`]: each row's relative row and value read once for the four), a wider one
+//! and a panel's finished columns two ([`lincomb_sub_stair`]: each chunk of source columns
+//! read once for both sums). Every entry still receives its column's operations in their
+//! order, so the factor is the same bit for bit.
 //!
 //! Shared factorization (decision record 0090): the analysis marks the supernodes with work
 //! enough for two threads ([`MIN_PARALLEL_WORK`]; on Legendre–Gauss KKTs the phases' dense
@@ -671,7 +676,7 @@ fn dl_range(
 /// `out[i] -= Σ_k coef[k] · blk[k·stride + off + i]`: a dense multi-column update, four source
 /// columns per pass over `out` (one load/store of `out` per four multiply-adds).
 #[inline(always)]
-fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[f64]) {
+pub(super) fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[f64]) {
     let len = out.len();
     let col = |k: usize| &blk[k * stride + off..k * stride + off + len];
     let mut c4 = coef.chunks_exact(4);
@@ -686,6 +691,51 @@ fn lincomb_sub(out: &mut [f64], blk: &[f64], stride: usize, off: usize, coef: &[
     for &c in c4.remainder() {
         for (o, &a) in out.iter_mut().zip(col(k)) {
             *o -= c * a;
+        }
+        k += 1;
+    }
+}
+
+/// [`lincomb_sub`] of `G` columns at once: `outs[j][i] -= Σ_k coefs[j][k] · blk[k·stride +
+/// off + i]` (the `outs` of one length), each chunk of four source columns read once for the
+/// `G` sums; every entry receives [`lincomb_sub`]'s operations in its order.
+#[inline(always)]
+fn lincomb_sub_tile<const G: usize>(
+    outs: &mut [&mut [f64]; G],
+    blk: &[f64],
+    stride: usize,
+    off: usize,
+    coefs: [&[f64]; G],
+) {
+    let len = outs[0].len();
+    let wd = coefs[0].len();
+    let col = |k: usize| &blk[k * stride + off..k * stride + off + len];
+    let mut k = 0;
+    while k + 4 <= wd {
+        let (v0, v1, v2, v3) = (col(k), col(k + 1), col(k + 2), col(k + 3));
+        let c: [[f64; 4]; G] = std::array::from_fn(|j| {
+            [
+                coefs[j][k],
+                coefs[j][k + 1],
+                coefs[j][k + 2],
+                coefs[j][k + 3],
+            ]
+        });
+        for i in 0..len {
+            let (a, b, cc, d) = (v0[i], v1[i], v2[i], v3[i]);
+            for j in 0..G {
+                outs[j][i] -= (c[j][0] * a + c[j][1] * b) + (c[j][2] * cc + c[j][3] * d);
+            }
+        }
+        k += 4;
+    }
+    while k < wd {
+        let v = col(k);
+        let c: [f64; G] = std::array::from_fn(|j| coefs[j][k]);
+        for i in 0..len {
+            for j in 0..G {
+                outs[j][i] -= c[j] * v[i];
+            }
         }
         k += 1;
     }
@@ -733,6 +783,16 @@ pub(super) fn dot_gather4(vals: &[f64], rows: &[u32], head: usize, x: &[f64]) ->
 /// fewer times: 16 and 32 columns measured alike on the LG-30 KKT (decision record 0090),
 /// and a supernode is factored in panels only from twice this width.
 pub(super) const PANEL: usize = 16;
+
+/// Target columns that a one-column descendant updates at once ([`rank1_scatter`]): 4 and 8
+/// measured alike on the LG-30 KKT, 0.84 of the factor's time against one at a time
+/// (decision record 0093).
+const SCATTER_TILE: usize = 4;
+
+/// Target columns that a wider descendant, or a panel's finished columns, update at once
+/// ([`lincomb_sub_stair`]): with two, the sums' coefficients stay in the 16 registers of
+/// baseline x86-64; four spilled them and measured slower (decision record 0093).
+const LINCOMB_TILE: usize = 2;
 
 /// Smallest work (multiply–adds) of a supernode's descendant updates, or of its own
 /// columns' LDLᵀ, that the analysis splits between two threads: about 50 µs of factoring,
@@ -932,7 +992,57 @@ impl Frozen<'_> {
             let span = &rd[p1..p2];
             let qa = p1 + span.partition_point(|&r| (r as usize - f) < cols.start);
             let qb = p1 + span.partition_point(|&r| (r as usize - f) < cols.end);
-            for q in qa..qb {
+            let mut q0 = qa;
+            // (D Lᵀ)[k, q] of the descendant's columns k, for its row q.
+            let fill_coef = |coef: &mut [f64], q: usize| {
+                if lay.sn_pair[dd] {
+                    dl_range(coef, bd, nrd, q, dpiv, epiv, &lay.pair[fd..ld], 0, wd);
+                } else {
+                    for (k, cf) in coef.iter_mut().enumerate() {
+                        *cf = bd[k * nrd + q] * dpiv[k];
+                    }
+                }
+            };
+            if wd > 1 && !contiguous {
+                // Target columns in pairs: each chunk of the descendant's columns is read once
+                // for both sums, each summed in its own scratch column and then scattered.
+                while q0 + LINCOMB_TILE <= qb {
+                    let (cf, _) = coef.split_at_mut(LINCOMB_TILE * wd);
+                    for (j, c) in cf.chunks_exact_mut(wd).enumerate() {
+                        fill_coef(c, q0 + j);
+                    }
+                    let len0 = nrd - q0;
+                    let mut scratch = tmp[..LINCOMB_TILE * len0].chunks_exact_mut(len0);
+                    let mut outs: [&mut [f64]; LINCOMB_TILE] = std::array::from_fn(|j| {
+                        let o = &mut scratch.next().unwrap_or_default()[j..];
+                        o.iter_mut().for_each(|o| *o = 0.0);
+                        o
+                    });
+                    lincomb_sub_stair(&mut outs, bd, nrd, q0, cf);
+                    for (j, out) in outs.iter().enumerate() {
+                        let c = rd[q0 + j] as usize - f - cols.start;
+                        let bcol = &mut blk[c * nr..(c + 1) * nr];
+                        scatter_sub(bcol, &rel[q0 + j - p1..], out, -1.0, |r| r as usize);
+                    }
+                    q0 += LINCOMB_TILE;
+                }
+            }
+            if wd == 1 && !contiguous {
+                // Target columns four (then two) at a time: each row's relative row and value
+                // are read once for all of them.
+                let (base, d0) = (f + cols.start, dpiv[0]);
+                while q0 + SCATTER_TILE <= qb {
+                    let (rows, rel) = (&rd[q0..], &rel[q0 - p1..]);
+                    rank1_scatter::<SCATTER_TILE>(blk, nr, rows, base, rel, &bd[q0..], d0);
+                    q0 += SCATTER_TILE;
+                }
+                if q0 + 2 <= qb {
+                    let (rows, rel) = (&rd[q0..], &rel[q0 - p1..]);
+                    rank1_scatter::<2>(blk, nr, rows, base, rel, &bd[q0..], d0);
+                    q0 += 2;
+                }
+            }
+            for q in q0..qb {
                 let c = rd[q] as usize - f - cols.start;
                 let len = nrd - q;
                 let bcol = &mut blk[c * nr..(c + 1) * nr];
@@ -949,13 +1059,7 @@ impl Frozen<'_> {
                     continue;
                 }
                 let coef = &mut coef[..wd];
-                if lay.sn_pair[dd] {
-                    dl_range(coef, bd, nrd, q, dpiv, epiv, &lay.pair[fd..ld], 0, wd);
-                } else {
-                    for (k, cf) in coef.iter_mut().enumerate() {
-                        *cf = bd[k * nrd + q] * dpiv[k];
-                    }
-                }
+                fill_coef(coef, q);
                 if contiguous {
                     let start = first + (q - p1);
                     lincomb_sub(&mut bcol[start..start + len], bd, nrd, q, coef);
@@ -968,6 +1072,74 @@ impl Frozen<'_> {
             }
         }
     }
+}
+
+/// A one-column descendant's update of `G` consecutive target columns, whose rows start one
+/// further down each: `blk[c[j]·nr + rel[i]] −= v[i] · (v[j] d)` for `i ≥ j`, where `c[j] =
+/// rows[j] − base` is the target column of the descendant's row `j` (rows in increasing
+/// order, blocks of `nr` rows). Each row's relative row and value are read once for the `G`
+/// columns, and every entry receives the one multiply–subtract of [`scatter_sub`], so the bits
+/// are those of `G` calls of it.
+#[inline(always)]
+pub(super) fn rank1_scatter<const G: usize>(
+    blk: &mut [f64],
+    nr: usize,
+    rows: &[u32],
+    base: usize,
+    rel: &[u32],
+    v: &[f64],
+    d: f64,
+) {
+    let mut cols: [&mut [f64]; G] = std::array::from_fn(|_| Default::default());
+    let mut rest = blk;
+    let mut next = 0;
+    for (col, &r) in cols.iter_mut().zip(rows) {
+        let c = r as usize - base;
+        let (_, r) = std::mem::take(&mut rest).split_at_mut((c - next) * nr);
+        let (b, r) = r.split_at_mut(nr);
+        *col = b;
+        rest = r;
+        next = c + 1;
+    }
+    let sc: [f64; G] = std::array::from_fn(|j| v[j] * d);
+    let n = v.len().min(rel.len());
+    // The triangle: rows 0..G − 1 of the first columns.
+    for i in 0..G - 1 {
+        let r = rel[i] as usize;
+        for j in 0..=i {
+            cols[j][r] -= v[i] * sc[j];
+        }
+    }
+    for (&r, &x) in rel[G - 1..n].iter().zip(&v[G - 1..n]) {
+        let r = r as usize;
+        for j in 0..G {
+            cols[j][r] -= x * sc[j];
+        }
+    }
+}
+
+/// [`lincomb_sub`] of `G` consecutive target columns whose rows start one further down each:
+/// `outs[j][i] −= Σ_k coefs[j·wd + k] · blk[k·stride + off + j + i]` (`wd` = `coefs.len() /
+/// G`), the rows of all `G` columns ([`lincomb_sub_tile`]) after the rows of the first ones
+/// above them. Every entry receives [`lincomb_sub`]'s operations in its order, so the bits
+/// are those of `G` calls of it.
+#[inline(always)]
+pub(super) fn lincomb_sub_stair<const G: usize>(
+    outs: &mut [&mut [f64]; G],
+    blk: &[f64],
+    stride: usize,
+    off: usize,
+    coefs: &[f64],
+) {
+    let wd = coefs.len() / G;
+    let coefs: [&[f64]; G] = std::array::from_fn(|j| &coefs[j * wd..(j + 1) * wd]);
+    let mut common: [&mut [f64]; G] = std::array::from_fn(|_| Default::default());
+    for (j, (c, out)) in common.iter_mut().zip(outs.iter_mut()).enumerate() {
+        let (above, rest) = out.split_at_mut(G - 1 - j);
+        lincomb_sub(above, blk, stride, off + j, coefs[j]);
+        *c = rest;
+    }
+    lincomb_sub_tile(&mut common, blk, stride, off + G - 1, coefs);
 }
 
 /// The finished pivots of a supernode (from its first column), for a panel's update.
@@ -991,8 +1163,8 @@ impl Pivots<'_> {
         out: &mut [f64],
         coef: &mut [f64],
     ) {
-        let coef = &mut coef[..ks.len()];
-        for t in cols.clone() {
+        let nk = ks.len();
+        let fill_coef = |coef: &mut [f64], t: usize| {
             if self.has_pair {
                 let lim = if t > 0 && self.pair[t - 1] { t - 1 } else { t };
                 dl_range(coef, left, nr, t, self.d, self.e, self.pair, ks.start, lim);
@@ -1001,6 +1173,28 @@ impl Pivots<'_> {
                     *cf = left[(ks.start + k) * nr + t] * self.d[ks.start + k];
                 }
             }
+        };
+        let mut t0 = cols.start;
+        // Columns in pairs: each chunk of the finished columns is read once for both.
+        let from = &left[ks.start * nr..];
+        while t0 + LINCOMB_TILE <= cols.end {
+            let (cf, _) = coef.split_at_mut(LINCOMB_TILE * nk);
+            for (j, c) in cf.chunks_exact_mut(nk).enumerate() {
+                fill_coef(c, t0 + j);
+            }
+            let c = t0 - cols.start;
+            let mut rest = &mut out[c * nr..(c + LINCOMB_TILE) * nr];
+            let mut outs: [&mut [f64]; LINCOMB_TILE] = std::array::from_fn(|j| {
+                let (col, r) = std::mem::take(&mut rest).split_at_mut(nr);
+                rest = r;
+                &mut col[t0 + j..]
+            });
+            lincomb_sub_stair(&mut outs, from, nr, t0, cf);
+            t0 += LINCOMB_TILE;
+        }
+        let coef = &mut coef[..nk];
+        for t in t0..cols.end {
+            fill_coef(coef, t);
             let c = t - cols.start;
             lincomb_sub(
                 &mut out[c * nr + t..(c + 1) * nr],
@@ -1192,8 +1386,8 @@ pub(super) struct Work {
 impl Work {
     fn new(max_rows: usize) -> Self {
         Self {
-            tmp: vec![0.0; max_rows],
-            coef: vec![0.0; max_rows],
+            tmp: vec![0.0; LINCOMB_TILE * max_rows],
+            coef: vec![0.0; LINCOMB_TILE * max_rows],
         }
     }
 }

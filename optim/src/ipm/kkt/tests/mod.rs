@@ -1048,3 +1048,84 @@ fn a_column_sum_over_a_run_of_rows_is_the_gathered_sum() {
         }
     }
 }
+
+/// The tiled descendant updates (decision record 0093) give every entry the operations of the
+/// column-by-column updates in their order: a one-column descendant's update of 2 or 4
+/// target columns at once is the same bits as one [`scatter_sub`] per column, and the sums of
+/// 2 or 4 columns at once are those of one [`lincomb_sub`] per column, for every length and
+/// number of source columns (chunks of four and the rest).
+#[test]
+fn target_columns_updated_together_are_updated_as_one_by_one() {
+    use super::simplicial::scatter_sub;
+    use super::supernodal::{lincomb_sub, lincomb_sub_stair, rank1_scatter};
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(93);
+    let mut value = || rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-8..8));
+    fn check_rank1<const G: usize>(len: usize, value: &mut impl FnMut() -> f64, seed: u64) {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let nr = 2 * len + 3;
+        // The descendant's rows: the first G are target columns of the block (base 5).
+        let mut rows: Vec<u32> = Vec::new();
+        let mut r = 5u32;
+        for _ in 0..G {
+            r += rng.random_range(1..3);
+            rows.push(r);
+        }
+        let ncols = (r - 5 + 1) as usize;
+        let mut rel: Vec<u32> = (0..len as u32).map(|k| 2 * k).collect();
+        for x in rel.iter_mut() {
+            *x += rng.random_range(0..2);
+        }
+        let v: Vec<f64> = (0..len).map(|_| value()).collect();
+        let d = value();
+        let blk0: Vec<f64> = (0..ncols * nr).map(|_| value()).collect();
+        let mut tiled = blk0.clone();
+        rank1_scatter::<G>(&mut tiled, nr, &rows, 5, &rel, &v, d);
+        let mut single = blk0;
+        for j in 0..G {
+            let c = rows[j] as usize - 5;
+            let sc = v[j] * d;
+            scatter_sub(
+                &mut single[c * nr..(c + 1) * nr],
+                &rel[j..],
+                &v[j..],
+                sc,
+                |r| r as usize,
+            );
+        }
+        let bits = |a: &[f64]| a.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&tiled), bits(&single), "G {G}, {len} rows");
+    }
+    fn check_stair<const G: usize>(len: usize, wd: usize, value: &mut impl FnMut() -> f64) {
+        let stride = len + G + 3;
+        let off = 2;
+        let blk: Vec<f64> = (0..wd * stride).map(|_| value()).collect();
+        let coefs: Vec<f64> = (0..G * wd).map(|_| value()).collect();
+        let outs0: Vec<Vec<f64>> = (0..G)
+            .map(|j| (0..len + G - j).map(|_| value()).collect())
+            .collect();
+        let mut tiled = outs0.clone();
+        {
+            let mut it = tiled.iter_mut();
+            let mut outs: [&mut [f64]; G] =
+                std::array::from_fn(|_| it.next().map(|o| o.as_mut_slice()).unwrap_or_default());
+            lincomb_sub_stair(&mut outs, &blk, stride, off, &coefs);
+        }
+        let mut single = outs0;
+        for (j, out) in single.iter_mut().enumerate() {
+            lincomb_sub(out, &blk, stride, off + j, &coefs[j * wd..(j + 1) * wd]);
+        }
+        for (t, s) in tiled.iter().zip(&single) {
+            let bits = |a: &[f64]| a.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(t), bits(s), "G {G}, {len} rows, {wd} source columns");
+        }
+    }
+    for len in 4..20 {
+        check_rank1::<2>(len, &mut value, len as u64);
+        check_rank1::<4>(len, &mut value, 100 + len as u64);
+        for wd in 1..14 {
+            check_stair::<2>(len, wd, &mut value);
+            check_stair::<4>(len, wd, &mut value);
+        }
+    }
+}
