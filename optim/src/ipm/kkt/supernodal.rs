@@ -9,8 +9,9 @@
 //! several target columns at once (decision record 0093): a one-column descendant four
 //! ([`rank1_scatter`]: each row's relative row and value read once for the four), a wider one
 //! and a panel's finished columns two ([`lincomb_sub_stair`]: each chunk of source columns
-//! read once for both sums). Every entry still receives its column's operations in their
-//! order, so the factor is the same bit for bit.
+//! read once for both sums), and two 1 × 1 pivots in a row of a block's own columns share
+//! their sums' common chunks ([`factor_panel`]). Every entry still receives its column's
+//! operations in their order, so the factor is the same bit for bit.
 //!
 //! Shared factorization (decision record 0090): the analysis marks the supernodes with work
 //! enough for two threads ([`MIN_PARALLEL_WORK`]; on Legendre–Gauss KKTs the phases' dense
@@ -1238,21 +1239,41 @@ fn factor_panel(
 ) -> Option<()> {
     let p = cols.start;
     let mut c = p;
+    // The panel's columns already subtracted from column c, and from the next one.
+    let (mut done, mut next_done) = (0, 0);
     while c < cols.end {
         let cl = c - p;
         let two = own.pair[cl];
+        if !has_pair && !two && done == 0 && cl >= 4 && c + 1 < cols.end && !own.pair[cl + 1] {
+            // Two 1 × 1 pivots in a row: the chunks of four finished columns that both sums
+            // share are read once for both (the next column's sum continues after this
+            // column's pivot, with the chunk or the columns that this one's pivot finishes).
+            let n4 = cl / 4 * 4;
+            let (cf, _) = coef.split_at_mut(2 * n4);
+            for (j, cfj) in cf.chunks_exact_mut(n4).enumerate() {
+                for (k, x) in cfj.iter_mut().enumerate() {
+                    *x = blk[k * nr + c + j] * own.d[k];
+                }
+            }
+            let (left, right) = blk.split_at_mut(cl * nr);
+            let (col0, rest) = right.split_at_mut(nr);
+            let mut outs = [&mut col0[c..], &mut rest[c + 1..nr]];
+            lincomb_sub_stair(&mut outs, left, nr, c, cf);
+            (done, next_done) = (n4, n4);
+        }
         for t in c..c + 1 + usize::from(two) {
-            let coef = &mut coef[..cl];
+            let coef = &mut coef[..cl - done];
             if has_pair {
                 dl_range(coef, blk, nr, t, own.d, own.e, own.pair, 0, cl);
             } else {
                 for (k, cf) in coef.iter_mut().enumerate() {
-                    *cf = blk[k * nr + t] * own.d[k];
+                    *cf = blk[(done + k) * nr + t] * own.d[done + k];
                 }
             }
             let (left, right) = blk.split_at_mut((t - p) * nr);
-            lincomb_sub(&mut right[t..nr], left, nr, t, coef);
+            lincomb_sub(&mut right[t..nr], &left[done * nr..], nr, t, coef);
         }
+        (done, next_done) = (next_done, 0);
         if !two {
             let col = &mut blk[cl * nr + c..(cl + 1) * nr];
             let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;

@@ -1129,3 +1129,73 @@ fn target_columns_updated_together_are_updated_as_one_by_one() {
         }
     }
 }
+
+/// A dense supernode's own columns, factored with two 1 × 1 pivots' shared chunks read once
+/// (decision record 0093), give the factor of the plain left-looking loop bit for bit: each
+/// column `c` minus `Σ_k L[·, k] d_k L[c, k]` over the finished columns in [`lincomb_sub`]'s
+/// chunks of four, then divided by its pivot. One dense supernode of 151 columns (every
+/// remainder of the chunks and of the panels), on one thread (one panel) and shared (panels
+/// of 16).
+#[test]
+fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
+    use super::supernodal::lincomb_sub;
+    use rand::{Rng, SeedableRng};
+    let dim = 151;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(93);
+    let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
+    let mut dense = vec![vec![0.0; dim]; dim];
+    for j in 0..dim {
+        for i in j..dim {
+            let v: f64 = rng.random_range(-1.0..1.0)
+                + if i == j {
+                    8.0 * (1.0 - 2.0 * (j % 3 == 0) as u8 as f64)
+                } else {
+                    0.0
+                };
+            row_idx.push(i);
+            values.push(v);
+            dense[i][j] = v;
+            dense[j][i] = v;
+        }
+        col_ptr.push(row_idx.len());
+    }
+    let mut s = SparseLdlt::with_backend(LdltBackend::Supernodal);
+    s.analyse(dim, &col_ptr, &row_idx).unwrap();
+    let sym = &s.faer.as_ref().expect("analysed").symbolic;
+    let mut plan = BlockPlan::new(sym, dim, &col_ptr, &row_idx, &vec![false; dim]).expect("plan");
+    assert_eq!(plan.sn_begin.len(), 2, "one supernode");
+    assert!(plan.sn_panels[0], "factored in panels when shared");
+    // The reference, column by column, on the permuted matrix (L column-major).
+    let fwd = plan.perm_fwd.clone();
+    let mut l = vec![0.0; dim * dim];
+    let mut d = vec![0.0; dim];
+    for c in 0..dim {
+        let mut col: Vec<f64> = (0..dim).map(|r| dense[fwd[r]][fwd[c]]).collect();
+        let coef: Vec<f64> = (0..c).map(|k| l[k * dim + c] * d[k]).collect();
+        lincomb_sub(&mut col[c..], &l, dim, c, &coef);
+        d[c] = col[c];
+        let inv = d[c].recip();
+        for r in c + 1..dim {
+            l[c * dim + r] = col[r] * inv;
+        }
+    }
+    for parallel in [false, true] {
+        plan.factor(&values, 0.0, 0.0, parallel).expect("a factor");
+        for c in 0..dim {
+            assert_eq!(
+                plan.d[c].to_bits(),
+                d[c].to_bits(),
+                "d[{c}], shared {parallel}"
+            );
+            for p in plan.l_col_ptr[c]..plan.l_col_ptr[c + 1] {
+                let r = plan.l_row_idx[p] as usize;
+                let want = if r == c { d[c] } else { l[c * dim + r] };
+                assert_eq!(
+                    plan.l[p].to_bits(),
+                    want.to_bits(),
+                    "L[{r}, {c}], shared {parallel}"
+                );
+            }
+        }
+    }
+}
