@@ -818,20 +818,19 @@ fn a_factor_shared_between_two_threads_is_the_factor_of_one() {
     }
 }
 
-/// A 2 × 2 pivot where a panel of the fixed width would end (the panels step over it, so that
-/// no pivot is cut): one dense supernode of 200 columns whose pairs start at odd columns
-/// (3, 7, 11, …: (15, 16) sits on the first panel's end), factored shared and on one thread,
-/// bit for bit the same, and `L D Lᵀ` reproduces the matrix.
-#[test]
-fn a_pair_on_a_panel_end_is_stepped_over() {
-    use rand::{Rng, SeedableRng};
-    let dim = 200;
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+/// A dense symmetric matrix of entries uniform in [−1, 1), `diag(j)` added to the diagonal:
+/// its lower triangle as CSC `(col_ptr, row_idx, values)` and the whole matrix by rows.
+#[allow(clippy::type_complexity)]
+fn dense_lower(
+    dim: usize,
+    rng: &mut impl rand::Rng,
+    diag: impl Fn(usize) -> f64,
+) -> (Vec<usize>, Vec<usize>, Vec<f64>, Vec<Vec<f64>>) {
     let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
     let mut dense = vec![vec![0.0; dim]; dim];
     for j in 0..dim {
         for i in j..dim {
-            let v: f64 = rng.random_range(-1.0..1.0) + if i == j { 0.3 } else { 0.0 };
+            let v: f64 = rng.random_range(-1.0..1.0) + if i == j { diag(j) } else { 0.0 };
             row_idx.push(i);
             values.push(v);
             dense[i][j] = v;
@@ -839,6 +838,19 @@ fn a_pair_on_a_panel_end_is_stepped_over() {
         }
         col_ptr.push(row_idx.len());
     }
+    (col_ptr, row_idx, values, dense)
+}
+
+/// A 2 × 2 pivot where a panel of the fixed width would end (the panels step over it, so that
+/// no pivot is cut): one dense supernode of 200 columns whose pairs start at odd columns
+/// (3, 7, 11, …: (15, 16) sits on the first panel's end), factored shared and on one thread,
+/// bit for bit the same, and `L D Lᵀ` reproduces the matrix.
+#[test]
+fn a_pair_on_a_panel_end_is_stepped_over() {
+    use rand::SeedableRng;
+    let dim = 200;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    let (col_ptr, row_idx, values, dense) = dense_lower(dim, &mut rng, |_| 0.3);
     let mut s = SparseLdlt::with_backend(LdltBackend::Supernodal);
     s.analyse(dim, &col_ptr, &row_idx).unwrap();
     let sym = &s.faer.as_ref().expect("analysed").symbolic;
@@ -1139,26 +1151,12 @@ fn target_columns_updated_together_are_updated_as_one_by_one() {
 #[test]
 fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
     use super::supernodal::lincomb_sub;
-    use rand::{Rng, SeedableRng};
+    use rand::SeedableRng;
     let dim = 151;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(93);
-    let (mut col_ptr, mut row_idx, mut values) = (vec![0], Vec::new(), Vec::new());
-    let mut dense = vec![vec![0.0; dim]; dim];
-    for j in 0..dim {
-        for i in j..dim {
-            let v: f64 = rng.random_range(-1.0..1.0)
-                + if i == j {
-                    8.0 * (1.0 - 2.0 * (j % 3 == 0) as u8 as f64)
-                } else {
-                    0.0
-                };
-            row_idx.push(i);
-            values.push(v);
-            dense[i][j] = v;
-            dense[j][i] = v;
-        }
-        col_ptr.push(row_idx.len());
-    }
+    // Pivots of both signs.
+    let diag = |j: usize| if j.is_multiple_of(3) { -8.0 } else { 8.0 };
+    let (col_ptr, row_idx, values, dense) = dense_lower(dim, &mut rng, diag);
     let mut s = SparseLdlt::with_backend(LdltBackend::Supernodal);
     s.analyse(dim, &col_ptr, &row_idx).unwrap();
     let sym = &s.faer.as_ref().expect("analysed").symbolic;
