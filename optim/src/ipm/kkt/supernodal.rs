@@ -1103,6 +1103,8 @@ pub(super) fn rank1_scatter<const G: usize>(
         next = c + 1;
     }
     let sc: [f64; G] = std::array::from_fn(|j| v[j] * d);
+    // Both slices cut to one length up front: the loop below then compiles without a length
+    // check per row (zipping the uncut slices measured 2–3 % slower on the LG-30 factor).
     let n = v.len().min(rel.len());
     // The triangle: rows 0..G − 1 of the first columns.
     for i in 0..G - 1 {
@@ -1239,41 +1241,45 @@ fn factor_panel(
 ) -> Option<()> {
     let p = cols.start;
     let mut c = p;
-    // The panel's columns already subtracted from column c, and from the next one.
-    let (mut done, mut next_done) = (0, 0);
+    // `(D Lᵀ)[k, t]` of a block without 2 × 2 pivots, for its columns k from `from` on.
+    let plain_coef = |coef: &mut [f64], blk: &[f64], d: &[f64], t: usize, from: usize| {
+        for (k, cf) in coef.iter_mut().enumerate() {
+            *cf = blk[(from + k) * nr + t] * d[from + k];
+        }
+    };
+    // The panel's columns already subtracted from column c (by the pair of the column before).
+    let mut done = 0;
     while c < cols.end {
         let cl = c - p;
         let two = own.pair[cl];
-        if !has_pair && !two && done == 0 && cl >= 4 && c + 1 < cols.end && !own.pair[cl + 1] {
-            // Two 1 × 1 pivots in a row: the chunks of four finished columns that both sums
-            // share are read once for both (the next column's sum continues after this
-            // column's pivot, with the chunk or the columns that this one's pivot finishes).
+        // Two 1 × 1 pivots in a row (and at least one chunk): the chunks of four finished
+        // columns that both sums share are read once for both; the next column's sum
+        // continues after this column's pivot, with the chunk or the columns it finishes.
+        let paired = !has_pair && !two && done == 0 && cl >= 4 && c + 1 < cols.end;
+        let paired = (paired && !own.pair[cl + 1]).then(|| {
             let n4 = cl / 4 * 4;
             let (cf, _) = coef.split_at_mut(2 * n4);
             for (j, cfj) in cf.chunks_exact_mut(n4).enumerate() {
-                for (k, x) in cfj.iter_mut().enumerate() {
-                    *x = blk[k * nr + c + j] * own.d[k];
-                }
+                plain_coef(cfj, blk, own.d, c + j, 0);
             }
             let (left, right) = blk.split_at_mut(cl * nr);
             let (col0, rest) = right.split_at_mut(nr);
             let mut outs = [&mut col0[c..], &mut rest[c + 1..nr]];
             lincomb_sub_stair(&mut outs, left, nr, c, cf);
-            (done, next_done) = (n4, n4);
-        }
+            n4
+        });
+        let from = paired.unwrap_or(done);
         for t in c..c + 1 + usize::from(two) {
-            let coef = &mut coef[..cl - done];
+            let coef = &mut coef[..cl - from];
             if has_pair {
                 dl_range(coef, blk, nr, t, own.d, own.e, own.pair, 0, cl);
             } else {
-                for (k, cf) in coef.iter_mut().enumerate() {
-                    *cf = blk[(done + k) * nr + t] * own.d[done + k];
-                }
+                plain_coef(coef, blk, own.d, t, from);
             }
             let (left, right) = blk.split_at_mut((t - p) * nr);
-            lincomb_sub(&mut right[t..nr], &left[done * nr..], nr, t, coef);
+            lincomb_sub(&mut right[t..nr], &left[from * nr..], nr, t, coef);
         }
-        (done, next_done) = (next_done, 0);
+        done = paired.unwrap_or(0);
         if !two {
             let col = &mut blk[cl * nr + c..(cl + 1) * nr];
             let (d, _) = counted_pivot(col[0], delta, eps, inertia)?;

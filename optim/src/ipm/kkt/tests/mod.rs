@@ -1144,13 +1144,13 @@ fn target_columns_updated_together_are_updated_as_one_by_one() {
 
 /// A dense supernode's own columns, factored with two 1 × 1 pivots' shared chunks read once
 /// (decision record 0093), give the factor of the plain left-looking loop bit for bit: each
-/// column `c` minus `Σ_k L[·, k] d_k L[c, k]` over the finished columns in [`lincomb_sub`]'s
-/// chunks of four, then divided by its pivot. One dense supernode of 151 columns (every
-/// remainder of the chunks and of the panels), on one thread (one panel) and shared (panels
-/// of 16).
+/// column `c` minus `Σ_k L[·, k] d_k L[c, k]` over the finished columns, each chunk of four
+/// columns one pairwise sum `(c₀a₀ + c₁a₁) + (c₂a₂ + c₃a₃)` and the rest one by one (the
+/// kernel's documented order, written out here), then divided by its pivot; and the factor
+/// solves `K x = b`. One dense supernode of 151 columns (every remainder of the chunks and of
+/// the panels), on one thread (one panel) and shared (panels of 16).
 #[test]
 fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
-    use super::supernodal::lincomb_sub;
     use rand::SeedableRng;
     let dim = 151;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(93);
@@ -1169,8 +1169,16 @@ fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
     let mut d = vec![0.0; dim];
     for c in 0..dim {
         let mut col: Vec<f64> = (0..dim).map(|r| dense[fwd[r]][fwd[c]]).collect();
-        let coef: Vec<f64> = (0..c).map(|k| l[k * dim + c] * d[k]).collect();
-        lincomb_sub(&mut col[c..], &l, dim, c, &coef);
+        let a = |k: usize, r: usize| l[k * dim + r] * (l[k * dim + c] * d[k]);
+        for r in c..dim {
+            let n4 = c / 4 * 4;
+            for k in (0..n4).step_by(4) {
+                col[r] -= (a(k, r) + a(k + 1, r)) + (a(k + 2, r) + a(k + 3, r));
+            }
+            for k in n4..c {
+                col[r] -= a(k, r);
+            }
+        }
         d[c] = col[c];
         let inv = d[c].recip();
         for r in c + 1..dim {
@@ -1195,5 +1203,12 @@ fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
                 );
             }
         }
+        let b: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64)).collect();
+        let mut x = b.clone();
+        plan.solve(&mut x);
+        let res = (0..dim)
+            .map(|i| (dense[i].iter().zip(&x).map(|(a, x)| a * x).sum::<f64>() - b[i]).abs())
+            .fold(0.0, f64::max);
+        assert!(res < 1e-8, "residual {res}, shared {parallel}");
     }
 }
