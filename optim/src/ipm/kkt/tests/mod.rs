@@ -841,6 +841,18 @@ fn dense_lower(
     (col_ptr, row_idx, values, dense)
 }
 
+/// `max |K x − b|` for the plan's solution `x` of `K x = b` (`K` = `dense`, `b_i = sin i`).
+fn dense_residual(plan: &mut BlockPlan, dense: &[Vec<f64>]) -> f64 {
+    let b: Vec<f64> = (0..dense.len()).map(|i| libm::sin(i as f64)).collect();
+    let mut x = b.clone();
+    plan.solve(&mut x);
+    dense
+        .iter()
+        .zip(&b)
+        .map(|(row, bi)| (row.iter().zip(&x).map(|(a, x)| a * x).sum::<f64>() - bi).abs())
+        .fold(0.0, f64::max)
+}
+
 /// A 2 × 2 pivot where a panel of the fixed width would end (the panels step over it, so that
 /// no pivot is cut): one dense supernode of 200 columns whose pairs start at odd columns
 /// (3, 7, 11, …: (15, 16) sits on the first panel's end), factored shared and on one thread,
@@ -871,12 +883,7 @@ fn a_pair_on_a_panel_end_is_stepped_over() {
     assert_eq!(one, two);
     assert!(one_bits == bits(&plan), "the factors differ");
     // L D Lᵀ against the permuted matrix: solve K x = b and check the residual.
-    let b: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64)).collect();
-    let mut x = b.clone();
-    plan.solve(&mut x);
-    let res = (0..dim)
-        .map(|i| (dense[i].iter().zip(&x).map(|(a, x)| a * x).sum::<f64>() - b[i]).abs())
-        .fold(0.0, f64::max);
+    let res = dense_residual(&mut plan, &dense);
     assert!(res < 1e-8, "residual {res}");
 }
 
@@ -1203,12 +1210,7 @@ fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
                 );
             }
         }
-        let b: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64)).collect();
-        let mut x = b.clone();
-        plan.solve(&mut x);
-        let res = (0..dim)
-            .map(|i| (dense[i].iter().zip(&x).map(|(a, x)| a * x).sum::<f64>() - b[i]).abs())
-            .fold(0.0, f64::max);
+        let res = dense_residual(&mut plan, &dense);
         assert!(res < 1e-8, "residual {res}, shared {parallel}");
     }
 }
