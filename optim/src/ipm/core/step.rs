@@ -406,13 +406,15 @@ impl Core<'_> {
                 Some(k) => self.kkt.spare_pairs.remove(k),
                 None => SparseLdlt::with_options(options),
             };
-            let analysed = pairs
-                .analyse(
-                    self.n + self.m,
-                    &self.kkt.matrix.mat.col_ptr,
-                    &self.kkt.matrix.mat.row_idx,
-                )
-                .is_ok();
+            // The pairs start from AMD's order, which the solver's own analysis already made.
+            let (dim, pattern) = (self.n + self.m, &self.kkt.matrix.mat);
+            let analysed = match self.kkt.solver.amd_order() {
+                Some(amd) => {
+                    pairs.analyse_in_amd_order(dim, &pattern.col_ptr, &pattern.row_idx, amd)
+                }
+                None => pairs.analyse(dim, &pattern.col_ptr, &pattern.row_idx),
+            }
+            .is_ok();
             ctx.timing.factorization += t.elapsed();
             if !analysed || !pairs.has_pivot_pairs() {
                 self.kkt.check_pairs = false;

@@ -11,7 +11,10 @@
 //! * [`pattern`]: [`KktPattern`], the lower-triangle CSC pattern of `K` and its assembly.
 //! * [`KktSolver`]: the factor/solve interface the IPM uses, in typed phases: symbolic
 //!   analysis once per pattern (a [`SparseLdlt`] keeps the analyses of its last
-//!   [`KEPT_ANALYSES`] other patterns too), numeric refactorization per iteration returning
+//!   [`KEPT_ANALYSES`] other patterns too; one AMD ordering and one symbolic factorization,
+//!   which the pivot pairs' analysis of the same pattern starts from through
+//!   [`SparseLdlt::analyse_in_amd_order`], decision record 0094), numeric refactorization
+//!   per iteration returning
 //!   the inertia of the factor or a [`FactorizationFailure`] that says why there is none,
 //!   solves that refuse without a current factor.
 //! * [`LdltOptions`]: what a [`SparseLdlt`] is (backend, [`LdltOrdering`], static pivoting,
@@ -532,6 +535,70 @@ impl KktSolver for SparseLdlt {
         col_ptr: &[usize],
         row_idx: &[usize],
     ) -> Result<(), OptimError> {
+        self.analyse_with(dim, col_ptr, row_idx, None)
+    }
+
+    fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
+        // The run-queue test only where the kernel would share (it reads a /proc file).
+        let share =
+            self.shares_factorization() && self.cores.idle_core() && CoreWatch::machine_idle();
+        self.last = self.factor_numeric(values, share);
+        self.last
+    }
+
+    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), FactorizationFailure> {
+        self.last?;
+        let faer = self
+            .faer
+            .as_mut()
+            .ok_or(FactorizationFailure::NotAnalysed)?;
+        match &mut self.kernel {
+            Kernel::Supernodal(block) => block.solve(rhs),
+            Kernel::Multifrontal(mf) => mf.solve(rhs),
+            Kernel::Simplicial(plan) => plan.solve(&faer.l_values, rhs),
+            Kernel::Faer => faer.solve(rhs),
+        }
+        Ok(())
+    }
+}
+
+impl SparseLdlt {
+    /// The order of this solver's analysis when it is AMD's ([`LdltOrdering::Amd`]): what
+    /// [`SparseLdlt::analyse_in_amd_order`] of another solver on the same pattern can start
+    /// from instead of ordering again.
+    pub fn amd_order(&self) -> Option<&[usize]> {
+        if self.options.ordering != LdltOrdering::Amd {
+            return None;
+        }
+        let perm = self.faer.as_ref()?.symbolic.perm()?;
+        Some(perm.arrays().0)
+    }
+
+    /// [`KktSolver::analyse`] with AMD's order of this pattern already known (`amd`, from
+    /// [`SparseLdlt::amd_order`] of a solver that analysed the same pattern): the orderings
+    /// that start from AMD's (the pivot pairs') take it instead of ordering again, the larger
+    /// part of their analysis (decision record 0094). The analysis is the one
+    /// [`KktSolver::analyse`] makes; an order of another length is ignored.
+    pub fn analyse_in_amd_order(
+        &mut self,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        amd: &[usize],
+    ) -> Result<(), OptimError> {
+        if amd.len() != dim {
+            return self.analyse_with(dim, col_ptr, row_idx, None);
+        }
+        self.analyse_with(dim, col_ptr, row_idx, Some(amd))
+    }
+
+    fn analyse_with(
+        &mut self,
+        dim: usize,
+        col_ptr: &[usize],
+        row_idx: &[usize],
+        amd: Option<&[usize]>,
+    ) -> Result<(), OptimError> {
         self.last = Err(FactorizationFailure::NotAnalysed);
         // Same pattern as the last analysis (repeated solves of one NLP structure): keep the
         // symbolic factorization and the workspace (the options cannot have changed).
@@ -569,13 +636,13 @@ impl KktSolver for SparseLdlt {
             order if multifrontal && order.constraint_rows_from().is_some() => (
                 order
                     .constraint_rows_from()
-                    .and_then(|n| ordering::amd_pivot_pairs(n, col_ptr, row_idx))
+                    .and_then(|n| ordering::amd_pivot_pairs(n, col_ptr, row_idx, amd))
                     .map(|(fwd, _)| fwd),
                 Vec::new(),
             ),
             LdltOrdering::AmdPivotPairs {
                 constraint_rows_from: n,
-            } => match ordering::amd_pivot_pairs(*n, col_ptr, row_idx) {
+            } => match ordering::amd_pivot_pairs(*n, col_ptr, row_idx, amd) {
                 Some((fwd, pairs)) => (Some(fwd), pairs),
                 None => (None, Vec::new()),
             },
@@ -590,13 +657,27 @@ impl KktSolver for SparseLdlt {
         };
         let has_pairs = pair_first.iter().any(|&p| p);
         self.has_pairs = has_pairs;
-        let analyse =
-            |threshold| FaerFactor::analyse(dim, col_ptr, row_idx, threshold, custom.as_deref());
-        let mut faer = analyse(match opts.backend {
-            LdltBackend::Auto => SupernodalThreshold::AUTO,
-            LdltBackend::FaerSupernodal => SupernodalThreshold::FORCE_SUPERNODAL,
-            _ => SupernodalThreshold::FORCE_SIMPLICIAL,
-        })?;
+        // `Auto` decides by faer's own rule on the simplicial analysis that its kernels are
+        // built on (`faer::auto_supernodal`), with AMD run here where the order is AMD's, so
+        // that one ordering and one symbolic analysis serve both.
+        let (custom, amd_flops) = match (opts.backend, custom) {
+            (LdltBackend::Auto, None) => {
+                let (fwd, flops) = ordering::amd_order_counted(col_ptr, row_idx)
+                    .map_err(|e| OptimError::from(FactorizationError::SymbolicAnalysis(e)))?;
+                (Some(fwd), Some(flops))
+            }
+            (_, custom) => (custom, None),
+        };
+        let faer = FaerFactor::analyse(
+            dim,
+            col_ptr,
+            row_idx,
+            match opts.backend {
+                LdltBackend::FaerSupernodal => SupernodalThreshold::FORCE_SUPERNODAL,
+                _ => SupernodalThreshold::FORCE_SIMPLICIAL,
+            },
+            custom.as_deref(),
+        )?;
         if multifrontal {
             let plan = MultifrontalPlan::new(
                 &faer.symbolic,
@@ -613,16 +694,11 @@ impl KktSolver for SparseLdlt {
         }
         let supernodal = match opts.backend {
             LdltBackend::Supernodal => true,
-            // Where faer's flop rule picks its supernodal factor (dense LG blocks), the
+            // Where faer's flop rule would pick its supernodal factor (dense LG blocks), the
             // supernodal kernel on the simplicial structure replaces it (same factor speed
             // there, no relaxation fill, faster solves). 2 × 2 pivots exist in the supernodal
             // kernel only.
-            LdltBackend::Auto if faer.is_supernodal() || has_pairs => {
-                if faer.is_supernodal() {
-                    faer = analyse(SupernodalThreshold::FORCE_SIMPLICIAL)?;
-                }
-                true
-            }
+            LdltBackend::Auto => has_pairs || faer.auto_supernodal(amd_flops),
             _ => false,
         };
         let block = if supernodal {
@@ -641,29 +717,6 @@ impl KktSolver for SparseLdlt {
             (None, None) => Kernel::Faer,
         };
         self.faer = Some(faer);
-        Ok(())
-    }
-
-    fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure> {
-        // The run-queue test only where the kernel would share (it reads a /proc file).
-        let share =
-            self.shares_factorization() && self.cores.idle_core() && CoreWatch::machine_idle();
-        self.last = self.factor_numeric(values, share);
-        self.last
-    }
-
-    fn solve(&mut self, rhs: &mut [f64]) -> Result<(), FactorizationFailure> {
-        self.last?;
-        let faer = self
-            .faer
-            .as_mut()
-            .ok_or(FactorizationFailure::NotAnalysed)?;
-        match &mut self.kernel {
-            Kernel::Supernodal(block) => block.solve(rhs),
-            Kernel::Multifrontal(mf) => mf.solve(rhs),
-            Kernel::Simplicial(plan) => plan.solve(&faer.l_values, rhs),
-            Kernel::Faer => faer.solve(rhs),
-        }
         Ok(())
     }
 }

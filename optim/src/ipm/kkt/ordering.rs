@@ -18,8 +18,8 @@
 //!   after the first of its primal neighbours in the order.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
+use faer::sparse::{FaerError, SymbolicSparseColMatRef};
 
 /// The order `fwd` (`fwd[k]` = index eliminated k-th) with every constraint row `i ≥ n` that
 /// precedes all of its primal neighbours moved to right after the first of them (several rows
@@ -172,6 +172,16 @@ pub(super) fn paired_amd(
 /// AMD's order of the lower-triangle pattern `col_ptr`/`row_idx` (`fwd[k]` = index eliminated
 /// k-th). `None` if faer's AMD fails.
 pub(super) fn amd_order(col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usize>> {
+    amd_order_counted(col_ptr, row_idx).ok().map(|(fwd, _)| fwd)
+}
+
+/// [`amd_order`] with AMD's own count of the LDLᵀ's divisions and multiply–subtracts in that
+/// order (`n_div + n_mult_subs_ldl`): what faer's symbolic analysis with its AMD ordering
+/// compares against the fill to choose a supernodal factor (`faer::auto_supernodal`).
+pub(super) fn amd_order_counted(
+    col_ptr: &[usize],
+    row_idx: &[usize],
+) -> Result<(Vec<usize>, f64), FaerError> {
     let dim = col_ptr.len() - 1;
     let pattern = SymbolicSparseColMatRef::new_checked(dim, dim, col_ptr, None, row_idx);
     let (mut fwd, mut inv) = (vec![0usize; dim], vec![0usize; dim]);
@@ -179,16 +189,15 @@ pub(super) fn amd_order(col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usiz
         dim,
         row_idx.len(),
     ))
-    .ok()?;
-    amd::order_maybe_unsorted(
+    .map_err(|_| FaerError::OutOfMemory)?;
+    let flops = amd::order_maybe_unsorted(
         &mut fwd,
         &mut inv,
         pattern,
         amd::Control::default(),
         MemStack::new(&mut mem),
-    )
-    .ok()?;
-    Some(fwd)
+    )?;
+    Ok((fwd, flops.n_div + flops.n_mult_subs_ldl))
 }
 
 /// AMD's order with 2 × 2 pivot pairs (MA57-style delayed pivots, resolved symbolically).
@@ -206,14 +215,19 @@ pub(super) fn amd_order(col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usiz
 /// waiting at the end follow as 1 × 1 pivots; a delayed row that meanwhile got a 1 × 1
 /// variable in its row of `L` is placed before the next variable adjacent to it. Returns the
 /// order and, per position `k`, whether positions `k`, `k + 1` form a pair (the row is in the
-/// variable's structure, so `parent(k) = k + 1`). `None` if faer's AMD fails.
+/// variable's structure, so `parent(k) = k + 1`). `amd`: AMD's order of this pattern where
+/// it is known ([`amd_order`] otherwise). `None` if faer's AMD fails.
 pub(super) fn amd_pivot_pairs(
     n: usize,
     col_ptr: &[usize],
     row_idx: &[usize],
+    amd: Option<&[usize]>,
 ) -> Option<(Vec<usize>, Vec<bool>)> {
     let dim = col_ptr.len() - 1;
-    let fwd = amd_order(col_ptr, row_idx)?;
+    let fwd = match amd {
+        Some(fwd) => fwd.to_vec(),
+        None => amd_order(col_ptr, row_idx)?,
+    };
     let mut pos = vec![0usize; dim];
     for (k, &v) in fwd.iter().enumerate() {
         pos[v] = k;

@@ -1214,3 +1214,131 @@ fn a_dense_block_factored_two_columns_at_a_time_is_the_plain_factor() {
         assert!(res < 1e-8, "residual {res}, shared {parallel}");
     }
 }
+
+/// faer's `SupernodalThreshold::AUTO` choice, replicated on one simplicial analysis
+/// (`faer::auto_supernodal`), against faer's own analysis with `AUTO`, in AMD's order and in a
+/// given one, on patterns on both sides of the threshold: element blocks of 8 to 96 variables,
+/// and constraint rows coupling 6 to 80 of them. The simplicial analysis in AMD's order computed
+/// here is faer's own (the same permutation and structure of `L`).
+#[test]
+fn the_supernodal_choice_on_one_simplicial_analysis_is_faers() {
+    let mut seen = [false; 2];
+    for (seed, n, m, block, row_vars, density) in [
+        (1, 40, 20, 8, 6, 0.7),
+        (2, 120, 60, 8, 3, 0.3),
+        (3, 96, 40, 48, 12, 0.9),
+        (4, 192, 90, 96, 30, 1.0),
+        (5, 160, 150, 32, 80, 0.8),
+        (6, 300, 100, 4, 2, 0.5),
+    ] {
+        let shape = KktShape {
+            zero_diag_every: 7,
+            block,
+            density,
+            row_vars,
+            stride: 5,
+        };
+        let (pat, _) = banded_kkt(seed, (n, m), &shape, &vec![1.0; n], 1e-9);
+        let (cp, ri, dim) = (&pat.mat.col_ptr, &pat.mat.row_idx, n + m);
+        let faers = FaerFactor::analyse(dim, cp, ri, SupernodalThreshold::AUTO, None).unwrap();
+        let (fwd, flops) = ordering::amd_order_counted(cp, ri).unwrap();
+        let ours = FaerFactor::analyse(
+            dim,
+            cp,
+            ri,
+            SupernodalThreshold::FORCE_SIMPLICIAL,
+            Some(&fwd),
+        )
+        .unwrap();
+        let choice = faers.is_supernodal();
+        assert_eq!(
+            ours.auto_supernodal(Some(flops)),
+            choice,
+            "AMD order, seed {seed}"
+        );
+        seen[usize::from(choice)] = true;
+        let faer_amd =
+            FaerFactor::analyse(dim, cp, ri, SupernodalThreshold::FORCE_SIMPLICIAL, None).unwrap();
+        assert_eq!(
+            supernodal::simplicial_structure(&ours.symbolic),
+            supernodal::simplicial_structure(&faer_amd.symbolic),
+            "AMD order, seed {seed}"
+        );
+        // A given order (the reverse of AMD's): faer counts from the columns of L.
+        let rev: Vec<usize> = fwd.iter().rev().copied().collect();
+        let faers =
+            FaerFactor::analyse(dim, cp, ri, SupernodalThreshold::AUTO, Some(&rev)).unwrap();
+        let ours = FaerFactor::analyse(
+            dim,
+            cp,
+            ri,
+            SupernodalThreshold::FORCE_SIMPLICIAL,
+            Some(&rev),
+        )
+        .unwrap();
+        assert_eq!(
+            ours.auto_supernodal(None),
+            faers.is_supernodal(),
+            "given order, seed {seed}"
+        );
+        seen[usize::from(faers.is_supernodal())] = true;
+    }
+    assert_eq!(
+        seen,
+        [true, true],
+        "patterns on both sides of the threshold"
+    );
+}
+
+/// The pivot pairs' analysis started from another solver's AMD order
+/// ([`SparseLdlt::analyse_in_amd_order`]) is the analysis that orders anew: the same pairs,
+/// the same factor and solution bit for bit. That order is AMD's own.
+#[test]
+fn pivot_pairs_from_a_known_amd_order_are_the_pairs_ordered_anew() {
+    for (seed, n, m, shift) in [(1, 40, 24, 0.0), (3, 90, 50, -0.3), (5, 120, 100, 0.0)] {
+        let (pat, _) = random_kkt(seed, n, m, shift);
+        let (dim, cp, ri) = (n + m, &pat.mat.col_ptr, &pat.mat.row_idx);
+        let mut amd = SparseLdlt::new();
+        amd.analyse(dim, cp, ri).unwrap();
+        let order = amd.amd_order().expect("an AMD analysis").to_vec();
+        assert_eq!(
+            Some(order.clone()),
+            ordering::amd_order(cp, ri),
+            "seed {seed}"
+        );
+        let pairs = || {
+            SparseLdlt::with_options(LdltOptions {
+                ordering: LdltOrdering::AmdPivotPairs {
+                    constraint_rows_from: n,
+                },
+                ..LdltOptions::default()
+            })
+        };
+        assert!(
+            pairs().amd_order().is_none(),
+            "only an AMD analysis has one"
+        );
+        let (mut anew, mut given) = (pairs(), pairs());
+        anew.analyse(dim, cp, ri).unwrap();
+        given.analyse_in_amd_order(dim, cp, ri, &order).unwrap();
+        assert!(anew.has_pivot_pairs(), "seed {seed}: no pair formed");
+        let (Kernel::Supernodal(a), Kernel::Supernodal(b)) = (&anew.kernel, &given.kernel) else {
+            panic!("seed {seed}: pivot pairs need the block kernel");
+        };
+        assert_eq!(a.pair, b.pair, "seed {seed}");
+        assert_eq!(a.perm_fwd, b.perm_fwd, "seed {seed}");
+        assert_eq!(
+            anew.factor(&pat.mat.values),
+            given.factor(&pat.mat.values),
+            "seed {seed}"
+        );
+        let rhs: Vec<f64> = (0..dim).map(|i| libm::sin(i as f64 * 0.37)).collect();
+        let (mut x, mut y) = (rhs.clone(), rhs);
+        anew.solve(&mut x).unwrap();
+        given.solve(&mut y).unwrap();
+        assert!(
+            x.iter().zip(&y).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "seed {seed}"
+        );
+    }
+}
