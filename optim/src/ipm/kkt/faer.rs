@@ -103,18 +103,27 @@ impl FaerFactor {
         })
     }
 
-    /// Whether faer's symbolic analysis with `SupernodalThreshold::AUTO` would choose its
-    /// supernodal variant in this analysis's order, decided on a simplicial analysis
-    /// ([`auto_supernodal`]); `amd_flops`: AMD's own operation count where the order is AMD's
-    /// ([`ordering::amd_order_counted`](super::ordering::amd_order_counted)), `None` for a
-    /// given order (faer then counts from the columns of `L`).
+    /// Whether faer 0.24's symbolic analysis with `SupernodalThreshold::AUTO` would choose
+    /// its supernodal variant in this analysis's order, decided on this (simplicial) analysis
+    /// by faer's rule (`factorize_symbolic_cholesky`): more than [`AUTO_SUPERNODAL_RATIO`]
+    /// operations per entry of `L`, the operations counted by AMD where the order is AMD's
+    /// (`amd_flops`, from [`ordering::amd_order_counted`](super::ordering::amd_order_counted)),
+    /// else `Σ_j (c_j + c_j (c_j + 1) / 2)` over the column counts `c_j` of `L` (diagonal
+    /// included). Replicated so that one simplicial analysis serves both the choice and the
+    /// kernel: with faer's own rule a supernodal choice had to be analysed a second time as
+    /// simplicial (decision record 0094). A test checks it against faer's choice.
     pub(super) fn auto_supernodal(&self, amd_flops: Option<f64>) -> bool {
         let SymbolicCholeskyRaw::Simplicial(s) = self.symbolic.raw() else {
             return self.is_supernodal();
         };
         let cp = s.col_ptr();
         let counts = (0..s.nrows()).map(|k| (cp[k + 1] - cp[k]) as u128);
-        auto_supernodal(amd_flops, counts)
+        let nnz: u128 = counts.clone().sum();
+        let flops = amd_flops.unwrap_or_else(|| {
+            let n_mult: u128 = counts.map(|c| c * (c + 1) / 2).sum();
+            nnz as f64 + n_mult as f64
+        });
+        flops / nnz as f64 > SupernodalThreshold::AUTO.0 * AUTO_SUPERNODAL_RATIO
     }
 
     /// Whether the analysis chose the supernodal variant.
@@ -234,25 +243,6 @@ impl FaerFactor {
             stack,
         );
     }
-}
-
-/// faer 0.24's rule for `SupernodalThreshold::AUTO` (`factorize_symbolic_cholesky`): the
-/// supernodal factor where the operations per entry of `L` exceed
-/// [`AUTO_SUPERNODAL_RATIO`]; the operations are AMD's count where the order is AMD's
-/// (`amd_flops`), else `Σ_j (c_j + c_j (c_j + 1) / 2)` over the column counts `c_j` of `L`
-/// (diagonal included). Replicated so that one simplicial analysis serves both the choice and
-/// the kernel: with faer's own rule a supernodal choice had to be analysed a second time as
-/// simplicial, some 40 % of a Legendre–Gauss KKT's analysis. A test checks it against faer's
-/// choice.
-pub(super) fn auto_supernodal(amd_flops: Option<f64>, counts: impl Iterator<Item = u128>) -> bool {
-    let (mut nnz, mut n_div, mut n_mult) = (0u128, 0u128, 0u128);
-    for c in counts {
-        nnz += c;
-        n_div += c;
-        n_mult += c * (c + 1) / 2;
-    }
-    let flops = amd_flops.unwrap_or(n_div as f64 + n_mult as f64);
-    flops / nnz as f64 > SupernodalThreshold::AUTO.0 * AUTO_SUPERNODAL_RATIO
 }
 
 /// faer 0.24's `CHOLESKY_SUPERNODAL_RATIO_FACTOR` (private there): operations per entry of `L`

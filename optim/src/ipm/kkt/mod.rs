@@ -14,9 +14,8 @@
 //!   [`KEPT_ANALYSES`] other patterns too; one AMD ordering and one symbolic factorization,
 //!   which the pivot pairs' analysis of the same pattern starts from through
 //!   [`SparseLdlt::analyse_in_amd_order`], decision record 0094), numeric refactorization
-//!   per iteration returning
-//!   the inertia of the factor or a [`FactorizationFailure`] that says why there is none,
-//!   solves that refuse without a current factor.
+//!   per iteration returning the inertia of the factor or a [`FactorizationFailure`] that
+//!   says why there is none, solves that refuse without a current factor.
 //! * [`LdltOptions`]: what a [`SparseLdlt`] is (backend, [`LdltOrdering`], static pivoting,
 //!   pivot threshold, amalgamation), fixed at construction, so an analysis can never belong
 //!   to other options than the solver's; defaults as constants (`DEFAULT_*`).
@@ -586,10 +585,7 @@ impl SparseLdlt {
         row_idx: &[usize],
         amd: &[usize],
     ) -> Result<(), OptimError> {
-        if amd.len() != dim {
-            return self.analyse_with(dim, col_ptr, row_idx, None);
-        }
-        self.analyse_with(dim, col_ptr, row_idx, Some(amd))
+        self.analyse_with(dim, col_ptr, row_idx, (amd.len() == dim).then_some(amd))
     }
 
     fn analyse_with(
@@ -658,7 +654,7 @@ impl SparseLdlt {
         let has_pairs = pair_first.iter().any(|&p| p);
         self.has_pairs = has_pairs;
         // `Auto` decides by faer's own rule on the simplicial analysis that its kernels are
-        // built on (`faer::auto_supernodal`), with AMD run here where the order is AMD's, so
+        // built on (`FaerFactor::auto_supernodal`), with AMD run here where the order is AMD's, so
         // that one ordering and one symbolic analysis serve both.
         let (custom, amd_flops) = match (opts.backend, custom) {
             (LdltBackend::Auto, None) => {

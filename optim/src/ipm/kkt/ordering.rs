@@ -177,7 +177,7 @@ pub(super) fn amd_order(col_ptr: &[usize], row_idx: &[usize]) -> Option<Vec<usiz
 
 /// [`amd_order`] with AMD's own count of the LDLᵀ's divisions and multiply–subtracts in that
 /// order (`n_div + n_mult_subs_ldl`): what faer's symbolic analysis with its AMD ordering
-/// compares against the fill to choose a supernodal factor (`faer::auto_supernodal`).
+/// compares against the fill to choose a supernodal factor (`FaerFactor::auto_supernodal`).
 pub(super) fn amd_order_counted(
     col_ptr: &[usize],
     row_idx: &[usize],
