@@ -855,7 +855,7 @@ fn an_impacts_inequality_rows_are_named_joint_by_joint() {
                 ));
             }
         }
-        want.push("J_c conditioning".into());
+        want.push("J_c conditioning: det(J_c J_c^T) - k^2 (|J_c|_F^2 / 3)^3 >= 0, k = 0.1".into());
         want.push("approach speed: hdot(tf) <= -v".into());
         assert_eq!(named, want, "{joints} joints");
     }

@@ -494,6 +494,15 @@ fn newton_lifted_rows(
     conditioning_and_approach_rows(g, det, fro, ce.h_dot, speed, rows);
 }
 
+/// The name of a Newton plan's conditioning row, with its formula and κ, so that a plan that
+/// sits on it (every verified Newton plan so far: `optimize` lists it under `active bounds`)
+/// says which posture bound it is on; the row's value is 0 there whatever the posture.
+fn conditioning_row_name() -> String {
+    format!(
+        "J_c conditioning: det(J_c J_c^T) - k^2 (|J_c|_F^2 / 3)^3 >= 0, k = {NEWTON_MIN_CONDITION}"
+    )
+}
+
 /// The last two rows of every Newton plan: `det2` ≥ κ² (`fro` / 3)³
 /// ([`NEWTON_MIN_CONDITION`]; `det2` = det(J_c J_cᵀ), `fro` = ‖J_c‖_F², J_c in ball radii) and
 /// ḣ⁻ ≤ −`speed` ([`NEWTON_APPROACH_SPEED`] ball radii per second).
@@ -511,7 +520,11 @@ fn conditioning_and_approach_rows(
     let cube = g.mul(mean2, mean);
     let k2 = g.constant(NEWTON_MIN_CONDITION * NEWTON_MIN_CONDITION);
     let least = g.mul(k2, cube);
-    rows.push(g.sub(det2, least), (0.0, f64::INFINITY), "J_c conditioning");
+    rows.push(
+        g.sub(det2, least),
+        (0.0, f64::INFINITY),
+        &conditioning_row_name(),
+    );
     rows.push(
         h_dot,
         (f64::NEG_INFINITY, -speed),
