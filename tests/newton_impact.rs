@@ -850,8 +850,14 @@ fn an_impacts_inequality_rows_are_named_joint_by_joint() {
         ];
         for j in 1..=joints {
             for _ in 0..per_joint {
+                // A 3-joint plan's rows are scaled by det(J_c)², so they name their formula.
+                let formula = if joints == 3 {
+                    format!(": det(J_c)^2 (+-(qd+_{j} - qdN_{j}) - v/sqrt(3)) <= 0")
+                } else {
+                    String::new()
+                };
                 want.push(format!(
-                    "q̇⁺ of joint {j} within its box about Newton's velocity"
+                    "q̇⁺ of joint {j} within its box about Newton's velocity{formula}"
                 ));
             }
         }

@@ -367,7 +367,13 @@ pub fn impact(
             let at = g.sum(&terms);
             let e = g.sub(dq, at);
             let ed = g.mul(e, det);
-            let name = box_row_name(i);
+            // The row is det² (±(q̇⁺_i − q̇_N,i) − v/√3): 0 on the bound whatever the posture,
+            // so its name carries the formula (as the conditioning row's does).
+            let name = format!(
+                "{}: det(J_c)^2 (+-(qd+_{j} - qdN_{j}) - v/sqrt(3)) <= 0",
+                box_row_name(i),
+                j = i + 1
+            );
             rows.push(g.sub(ed, wd2), (f64::NEG_INFINITY, 0.0), &name);
             let ned = g.neg(ed);
             rows.push(g.sub(ned, wd2), (f64::NEG_INFINITY, 0.0), &name);
