@@ -1615,20 +1615,12 @@ fn on_the_mesh_of(
 }
 
 /// What the global search's [`StrategyReport::basin_hits`] says, as `optimize` and `paper`
-/// print it (`None` where no global search ran). A basin reached once has no second sighting,
-/// so the line then says what to try: which `periodic-cot` plan family a search reaches is a
-/// matter of the starts drawn (decision records 0075, 0076).
+/// print it (`None` where no global search ran).
 pub fn basin_line(report: &StrategyReport) -> Option<String> {
     report.basin_hits.map(|n| {
-        let once = if n == 1 {
-            "; reached once, so another --seed or more --starts may find a lower optimum \
-             (docs/optima.md)"
-        } else {
-            ""
-        };
         format!(
             "basin: {n} of the distinct sampled optima and basin hops ended in the optimum's \
-             basin (its shape: objective and every phase duration within {:.0} %){once}",
+             basin (its shape: objective and every phase duration within {:.0} %)",
             100.0 * SHAPE_RTOL
         )
     })
@@ -2087,33 +2079,6 @@ impl Search {
 #[cfg(test)]
 mod tests {
     use super::{DefectProgress, LeftOptimum, VERIFIED_DEFECT, path_stalled, refine_in_order};
-
-    /// A basin that one start or hop reached is a lottery win and the line says what to try;
-    /// a basin reached twice or more is not; no global search, no line.
-    #[test]
-    fn the_basin_line_names_a_basin_reached_once() {
-        use super::{StrategyReport, basin_line};
-        let report = |basin_hits| StrategyReport {
-            strategy: super::Strategy::Multistart {
-                starts: 128,
-                seed: 0,
-            },
-            records: Vec::new(),
-            chosen: None,
-            iterations: 0,
-            seconds: 0.0,
-            basin_hits,
-        };
-        let once = basin_line(&report(Some(1))).expect("a line");
-        assert!(once.starts_with("basin: 1 of"), "{once}");
-        assert!(once.contains("another --seed or more --starts"), "{once}");
-        for n in [2, 21] {
-            let line = basin_line(&report(Some(n))).expect("a line");
-            assert!(line.starts_with(&format!("basin: {n} of")), "{line}");
-            assert!(!line.contains("--seed"), "{line}");
-        }
-        assert_eq!(basin_line(&report(None)), None);
-    }
 
     /// The closed loop runs only on a plan that could be chosen (decision record 0067). The
     /// fixture is a human finger's plan, verified, executed and robust (J = 0.0505279).
