@@ -911,7 +911,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             crate::outln!("  {}", b.describe())?;
         }
     }
-    // How much evidence there is for this optimum: a basin reached once is a lottery win.
+    // How often the search met this optimum's basin: a count of sightings, not a forecast
+    // (docs/optima.md, "The global search").
     if let Some(line) = sol
         .strategy
         .as_ref()
