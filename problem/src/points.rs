@@ -500,9 +500,9 @@ fn newton_lifted_rows(
     conditioning_and_approach_rows(g, det, fro, ce.h_dot, speed, rows);
 }
 
-/// The name of a Newton plan's conditioning row, with its formula and κ, so that a plan that
-/// sits on it (every verified Newton plan so far: `optimize` lists it under `active bounds`)
-/// says which posture bound it is on; the row's value is 0 there whatever the posture.
+/// The name of a Newton plan's conditioning row, with its formula and κ: on its bound the
+/// row's value is 0 whatever the posture, so `active bounds` needs the formula to say which
+/// bound a plan sits on.
 fn conditioning_row_name() -> String {
     format!(
         "J_c conditioning: det(J_c J_c^T) - k^2 (|J_c|_F^2 / 3)^3 >= 0, k = {NEWTON_MIN_CONDITION}"

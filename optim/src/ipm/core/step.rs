@@ -408,13 +408,10 @@ impl Core<'_> {
             };
             // The pairs start from AMD's order, which the solver's own analysis already made.
             let (dim, pattern) = (self.n + self.m, &self.kkt.matrix.mat);
-            let analysed = match self.kkt.solver.amd_order() {
-                Some(amd) => {
-                    pairs.analyse_in_amd_order(dim, &pattern.col_ptr, &pattern.row_idx, amd)
-                }
-                None => pairs.analyse(dim, &pattern.col_ptr, &pattern.row_idx),
-            }
-            .is_ok();
+            let amd = self.kkt.solver.amd_order();
+            let analysed = pairs
+                .analyse_in_amd_order(dim, &pattern.col_ptr, &pattern.row_idx, amd)
+                .is_ok();
             ctx.timing.factorization += t.elapsed();
             if !analysed || !pairs.has_pivot_pairs() {
                 self.kkt.check_pairs = false;

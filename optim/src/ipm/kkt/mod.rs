@@ -573,19 +573,19 @@ impl SparseLdlt {
         Some(perm.arrays().0)
     }
 
-    /// [`KktSolver::analyse`] with AMD's order of this pattern already known (`amd`, from
+    /// [`KktSolver::analyse`] with AMD's order of this pattern where it is known (`amd`, from
     /// [`SparseLdlt::amd_order`] of a solver that analysed the same pattern): the orderings
     /// that start from AMD's (the pivot pairs') take it instead of ordering again, the larger
     /// part of their analysis (decision record 0094). The analysis is the one
-    /// [`KktSolver::analyse`] makes; an order of another length is ignored.
+    /// [`KktSolver::analyse`] makes; `None`, or an order of another length, orders anew.
     pub fn analyse_in_amd_order(
         &mut self,
         dim: usize,
         col_ptr: &[usize],
         row_idx: &[usize],
-        amd: &[usize],
+        amd: Option<&[usize]>,
     ) -> Result<(), OptimError> {
-        self.analyse_with(dim, col_ptr, row_idx, (amd.len() == dim).then_some(amd))
+        self.analyse_with(dim, col_ptr, row_idx, amd.filter(|a| a.len() == dim))
     }
 
     fn analyse_with(

@@ -1320,7 +1320,9 @@ fn pivot_pairs_from_a_known_amd_order_are_the_pairs_ordered_anew() {
         );
         let (mut anew, mut given) = (pairs(), pairs());
         anew.analyse(dim, cp, ri).unwrap();
-        given.analyse_in_amd_order(dim, cp, ri, &order).unwrap();
+        given
+            .analyse_in_amd_order(dim, cp, ri, Some(&order))
+            .unwrap();
         assert!(anew.has_pivot_pairs(), "seed {seed}: no pair formed");
         let (Kernel::Supernodal(a), Kernel::Supernodal(b)) = (&anew.kernel, &given.kernel) else {
             panic!("seed {seed}: pivot pairs need the block kernel");
@@ -1340,5 +1342,26 @@ fn pivot_pairs_from_a_known_amd_order_are_the_pairs_ordered_anew() {
             x.iter().zip(&y).all(|(a, b)| a.to_bits() == b.to_bits()),
             "seed {seed}"
         );
+        // The given order is the one used: another order gives other pairs' order, and an
+        // order of the wrong length is ignored (ordered anew).
+        let reversed: Vec<usize> = order.iter().rev().copied().collect();
+        let mut other = pairs();
+        other
+            .analyse_in_amd_order(dim, cp, ri, Some(&reversed))
+            .unwrap();
+        let mut short = pairs();
+        short
+            .analyse_in_amd_order(dim, cp, ri, Some(&order[1..]))
+            .unwrap();
+        let order_of = |l: &SparseLdlt| {
+            let perm = l.faer.as_ref().and_then(|f| f.symbolic.perm());
+            perm.map(|p| p.arrays().0.to_vec())
+        };
+        assert_ne!(
+            order_of(&other),
+            order_of(&anew),
+            "seed {seed}: the given order was not used"
+        );
+        assert_eq!(order_of(&short), order_of(&anew), "seed {seed}");
     }
 }
