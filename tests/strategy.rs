@@ -201,6 +201,52 @@ fn exact_warm_start_restarts_at_the_optimum_also_through_json() {
     assert!(w.iterations <= 15 && (w.objective - sol.objective).abs() < 1e-6 * sol.objective);
 }
 
+/// A guess of one's own goes in as a solution file whose raw collocation data hold it
+/// (docs/optima.md, "A guess of your own"). While the file keeps its primal–dual point
+/// (`nlp_warm`) and the mesh is the same, that point is taken as it is and edits of the raw
+/// data are not seen; without it the raw data are interpolated onto the mesh, durations
+/// included. The optimum's own raw data, interpolated so, solve back to the optimum.
+#[test]
+fn a_guess_of_ones_own_is_read_from_the_raw_data_once_the_stored_point_is_dropped() {
+    let p = build(Problem::PeriodicQc, &ProblemSettings::default()).unwrap();
+    let sol = solve(&p, None).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    let from = |guess: OcpSolution| {
+        let s = ProblemSettings {
+            warm_start: Some(guess),
+            ..ProblemSettings::default()
+        };
+        build(Problem::PeriodicQc, &s).unwrap()
+    };
+    let mut edited = sol.clone();
+    for phase in &mut edited.raw {
+        phase.duration *= 1.1;
+    }
+    let kept = solve(&from(edited.clone()), None).unwrap();
+    assert!(kept.stages[0].0.starts_with("exact warm start"));
+    assert!((kept.objective - sol.objective).abs() < 1e-6 * sol.objective);
+
+    edited.nlp_warm = None;
+    let p_edit = from(edited.clone());
+    for (layout, raw) in p_edit.nlp.phases.iter().zip(&edited.raw) {
+        assert_eq!(p_edit.nlp.initial()[layout.t], raw.duration);
+    }
+    let e = solve(&p_edit, None).unwrap();
+    assert!(e.stages[0].0.starts_with("interpolated warm start"));
+
+    let mut own = sol.clone();
+    own.nlp_warm = None;
+    let back = solve(&from(own), None).unwrap();
+    assert!(back.stages[0].0.starts_with("interpolated warm start"));
+    assert_eq!(back.status, Status::Solved);
+    assert!(
+        (back.objective - sol.objective).abs() < 1e-6 * sol.objective,
+        "{} against {}",
+        back.objective,
+        sol.objective
+    );
+}
+
 #[test]
 fn continuation_of_a_problem_without_period_is_an_eps_homotopy() {
     let s = ProblemSettings::default();
