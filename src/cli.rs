@@ -518,7 +518,10 @@ pub struct OptimizeArgs {
     /// (0.01 in every shipped scene).
     #[arg(long, allow_hyphen_values = true)]
     pub epsilon: Option<f64>,
-    /// Warm start from a previous solution.json.
+    /// Warm start from a previous solution.json: from its primal–dual point as it is when it has
+    /// one on the same problem and mesh, otherwise from its collocation data (its
+    /// solution-internals.json) interpolated onto the mesh; the strategy table names which.
+    /// A trajectory of one's own goes in the same way (docs/optima.md, "A guess of your own").
     #[arg(long)]
     pub warm_start: Option<PathBuf>,
     /// Static dual regularization δ_c of the KKT factorization at the start of a solve

@@ -233,6 +233,18 @@ fn a_guess_of_ones_own_is_read_from_the_raw_data_once_the_stored_point_is_droppe
     }
     let e = solve(&p_edit, None).unwrap();
     assert!(e.stages[0].0.starts_with("interpolated warm start"));
+    // The direct strategy (`optimize --strategy direct`) names the kind in its stage.
+    let direct = |guess: &OcpSolution| {
+        let s = ProblemSettings {
+            warm_start: Some(guess.clone()),
+            ..ProblemSettings::default()
+        };
+        let (_, sol) =
+            solve_with_strategy(Problem::PeriodicQc, &s, Strategy::Direct, None).unwrap();
+        sol.strategy.unwrap().records[0].stage.clone()
+    };
+    assert_eq!(direct(&edited), "direct, interpolated warm start");
+    assert_eq!(direct(&sol), "direct, exact warm start");
 
     let mut own = sol.clone();
     own.nlp_warm = None;

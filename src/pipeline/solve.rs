@@ -241,7 +241,7 @@ fn start_violation(p: &BuiltProblem) -> f64 {
 
 /// The primal-dual point of `ws` if it belongs to the same problem on the same mesh (same
 /// NLP layout), so that it can warm-start `p` exactly rather than by interpolation.
-fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a WarmStart> {
+pub(crate) fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a WarmStart> {
     let w = ws.nlp_warm.as_ref()?;
     let n = Nlp::num_variables(&p.nlp);
     let m = Nlp::num_constraints(&p.nlp);

@@ -50,7 +50,7 @@ use rayon::prelude::*;
 
 use super::build;
 use super::error::PipelineError;
-use super::solve::{solve, solve_warm};
+use super::solve::{exact_warm_start, solve, solve_warm};
 use bf_optim::ocp::Scheme;
 pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
 
@@ -309,7 +309,17 @@ fn chains_of(
     let nphases = target.modes.len();
     let periodic = problem.is_periodic();
     Ok(match strategy {
-        Strategy::Direct => vec![vec![("direct".into(), settings.clone())]],
+        Strategy::Direct => {
+            // Which warm start a file gives is decided by its content and the mesh; a user who
+            // edited the collocation data of a file that keeps its primal–dual point would
+            // otherwise not see that the edits were not used (docs/optima.md).
+            let label = match &settings.warm_start {
+                Some(ws) if exact_warm_start(target, ws).is_some() => "direct, exact warm start",
+                Some(_) => "direct, interpolated warm start",
+                None => "direct",
+            };
+            vec![vec![(label.into(), settings.clone())]]
+        }
         Strategy::Continuation if periodic => {
             let eps0 = EPS_FACTOR * eps;
             period_grid(problem)
