@@ -111,10 +111,9 @@ pub fn solve_with_mu_max(
         }
         (None, _) => solver_settings(&p.settings),
     };
-    let label = match (exact.is_some(), p.settings.warm_start.is_some()) {
-        (true, _) => "exact warm start".to_string(),
-        (false, true) => "interpolated warm start".to_string(),
-        (false, false) => format!("{} guess", crate::names::name(&p.settings.guess)),
+    let label = match warm_start_kind(p) {
+        Some(kind) => kind.to_string(),
+        None => format!("{} guess", crate::names::name(&p.settings.guess)),
     };
     let sol = solve_nlp(&p.nlp, &settings, exact, reborrow(&mut callback))?;
     iters += sol.iterations;
@@ -239,9 +238,22 @@ fn start_violation(p: &BuiltProblem) -> f64 {
         )
 }
 
+/// How [`solve`] starts `p` from its warm start, if it has one: `"exact warm start"` from
+/// the file's primal–dual point ([`exact_warm_start`]), otherwise `"interpolated warm start"`
+/// from its collocation data. The strategy table names a direct solve by it, so that a user
+/// who edited the collocation data of a file that keeps its point sees they were not used.
+pub(crate) fn warm_start_kind(p: &BuiltProblem) -> Option<&'static str> {
+    let ws = p.settings.warm_start.as_ref()?;
+    Some(if exact_warm_start(p, ws).is_some() {
+        "exact warm start"
+    } else {
+        "interpolated warm start"
+    })
+}
+
 /// The primal-dual point of `ws` if it belongs to the same problem on the same mesh (same
 /// NLP layout), so that it can warm-start `p` exactly rather than by interpolation.
-pub(crate) fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a WarmStart> {
+fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a WarmStart> {
     let w = ws.nlp_warm.as_ref()?;
     let n = Nlp::num_variables(&p.nlp);
     let m = Nlp::num_constraints(&p.nlp);

@@ -50,7 +50,7 @@ use rayon::prelude::*;
 
 use super::build;
 use super::error::PipelineError;
-use super::solve::{exact_warm_start, solve, solve_warm};
+use super::solve::{solve, solve_warm, warm_start_kind};
 use bf_optim::ocp::Scheme;
 pub use bf_problem::solution::records::{StageRecord, Strategy, StrategyReport};
 
@@ -309,16 +309,14 @@ fn chains_of(
     let nphases = target.modes.len();
     let periodic = problem.is_periodic();
     Ok(match strategy {
+        // `target` is built with `settings`, so its warm start is the chain's (docs/optima.md,
+        // "A guess of your own").
         Strategy::Direct => {
-            // Which warm start a file gives is decided by its content and the mesh; a user who
-            // edited the collocation data of a file that keeps its primal–dual point would
-            // otherwise not see that the edits were not used (docs/optima.md).
-            let label = match &settings.warm_start {
-                Some(ws) if exact_warm_start(target, ws).is_some() => "direct, exact warm start",
-                Some(_) => "direct, interpolated warm start",
-                None => "direct",
+            let label = match warm_start_kind(target) {
+                Some(kind) => format!("direct, {kind}"),
+                None => "direct".into(),
             };
-            vec![vec![(label.into(), settings.clone())]]
+            vec![vec![(label, settings.clone())]]
         }
         Strategy::Continuation if periodic => {
             let eps0 = EPS_FACTOR * eps;
