@@ -734,6 +734,20 @@ fn fmt_bound(b: f64) -> String {
     s.to_string()
 }
 
+/// A value on a bound as text: six decimals, or three significant digits where six decimals
+/// would round it to zero. A row bounded at 0 sits within rounding of it, on either side, and
+/// "-0.000000" would say neither how far nor on which side.
+fn fmt_value(v: f64) -> String {
+    if v == 0.0 {
+        // -0.0 included.
+        format!("{:.6}", 0.0)
+    } else if v.abs() < 5e-7 {
+        format!("{v:.2e}")
+    } else {
+        format!("{v:.6}")
+    }
+}
+
 impl ActiveBound {
     /// "phase 2 (stick) duration (s) = 0.010000 on its minimum 0.01".
     pub fn describe(&self) -> String {
@@ -748,9 +762,9 @@ impl ActiveBound {
             )
         } else {
             format!(
-                "{} = {:.6} on its {side} {}",
+                "{} = {} on its {side} {}",
                 self.what,
-                self.value,
+                fmt_value(self.value),
                 fmt_bound(self.bound)
             )
         }
@@ -889,6 +903,36 @@ mod tests {
         assert!(
             missed.contains("one gave no error") && missed.contains("`heavy ball` lost"),
             "{missed}"
+        );
+    }
+
+    /// A value within rounding of a bound at 0 says how far and on which side, never
+    /// "-0.000000"; a value away from zero keeps six decimals.
+    #[test]
+    fn a_value_on_a_bound_at_zero_keeps_its_sign_and_size() {
+        let at = |value, bound, lower| ActiveBound {
+            what: "row".into(),
+            value,
+            bound,
+            lower,
+            hits: 1,
+            of: 1,
+        };
+        let below = at(-2.5e-9, 0.0, false).describe();
+        assert_eq!(below, "row = -2.50e-9 on its maximum 0");
+        let above = at(3.1e-10, 0.0, true).describe();
+        assert_eq!(above, "row = 3.10e-10 on its minimum 0");
+        assert_eq!(
+            at(-0.0, 0.0, true).describe(),
+            "row = 0.000000 on its minimum 0"
+        );
+        assert_eq!(
+            at(0.010000307, 0.01, true).describe(),
+            "row = 0.010000 on its minimum 0.01"
+        );
+        assert_eq!(
+            at(-0.100009, -0.1, false).describe(),
+            "row = -0.100009 on its maximum -0.1"
         );
     }
 
