@@ -91,8 +91,9 @@ pub fn positive_whole(text: &str) -> Result<usize, String> {
     }
 }
 
-/// ball-finger: DH table → verified flat Rust dynamics kernels; simulate and optimise a finger
-/// rolling a trackball (Ball-and-finger system: modeling and optimal trajectories).
+/// ball-finger: a DH table or a URDF → verified flat Rust dynamics kernels; simulate, optimise
+/// and control a finger rolling a trackball (Ball-and-finger system: modeling and optimal
+/// trajectories).
 #[derive(Debug, Parser)]
 #[command(name = "ball-finger", version, about, long_about = None)]
 pub struct Cli {
