@@ -738,13 +738,16 @@ fn fmt_bound(b: f64) -> String {
 /// would round it to zero. A row bounded at 0 sits within rounding of it, on either side, and
 /// "-0.000000" would say neither how far nor on which side.
 fn fmt_value(v: f64) -> String {
-    if v == 0.0 {
+    let fixed = format!("{v:.6}");
+    // Decided on the printed digits themselves: a threshold such as 5e-7 is not exactly
+    // where the rounding to six decimals turns to zero.
+    if !fixed.bytes().all(|b| matches!(b, b'-' | b'0' | b'.')) {
+        fixed
+    } else if v == 0.0 {
         // -0.0 included.
-        format!("{:.6}", 0.0)
-    } else if v.abs() < 5e-7 {
-        format!("{v:.2e}")
+        "0.000000".into()
     } else {
-        format!("{v:.6}")
+        format!("{v:.2e}")
     }
 }
 
@@ -922,6 +925,16 @@ mod tests {
         assert_eq!(below, "row = -2.50e-9 on its maximum 0");
         let above = at(3.1e-10, 0.0, true).describe();
         assert_eq!(above, "row = 3.10e-10 on its minimum 0");
+        // At the edge of the rounding: 5e-7 is stored just below it and prints as zero
+        // with six decimals, so it is written out; 6e-7 rounds to 0.000001.
+        assert_eq!(
+            at(5e-7, 0.0, false).describe(),
+            "row = 5.00e-7 on its maximum 0"
+        );
+        assert_eq!(
+            at(-6e-7, 0.0, true).describe(),
+            "row = -0.000001 on its minimum 0"
+        );
         assert_eq!(
             at(-0.0, 0.0, true).describe(),
             "row = 0.000000 on its minimum 0"
