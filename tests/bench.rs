@@ -91,3 +91,29 @@ fn bench_of_a_user_scene_is_interpreted_and_tables_every_kernel() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--time"));
 }
+
+/// Limits as wide as a double holds (how some URDFs say "unlimited") are timed on angles of
+/// one turn, not refused by the random draw (it once panicked: the width overflowed); limits
+/// whose every angle is beyond 2^20 rad are an error that names the joint.
+#[test]
+fn bench_of_limits_beyond_one_turn() {
+    let dir = tmpdir("bench-limits");
+    let text = std::fs::read_to_string(root().join("scenes/puma560.toml")).unwrap();
+    let limits = "q_min = \"-160deg\"\nq_max = \"160deg\"";
+    assert!(text.contains(limits));
+    let wide = dir.join("wide.toml");
+    std::fs::write(
+        &wide,
+        text.replacen(limits, "q_min = -1.7e308\nq_max = 1.7e308", 1),
+    )
+    .unwrap();
+    let b = bench_json(wide.to_str().unwrap());
+    assert_eq!(b["compiled"], false);
+    let far = dir.join("far.toml");
+    std::fs::write(&far, text.replacen(limits, "q_min = 1e7\nq_max = 2e7", 1)).unwrap();
+    let out = run(&["bench", far.to_str().unwrap(), "--time", "0.1"]);
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("joint 1 (q_min 1e7, q_max 2e7)"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}

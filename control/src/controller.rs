@@ -712,6 +712,47 @@ impl<K: Kernels<N>, const N: usize> HybridController<K, N> {
         h[i]
     }
 
+    /// The discrete state in force just before `t`: the last one recorded before `t`, none of
+    /// those recorded at `t` itself ([`Input::tau_before`]); the first one for `t` at or before
+    /// the start.
+    fn state_before(&self, t: f64) -> Discrete {
+        let h = self.history.borrow();
+        h[h.partition_point(|e| e.t < t).saturating_sub(1)]
+    }
+
+    /// [`HybridController::law`] with the discrete state `d` at the plant's state
+    /// `(q, q̇, ω)`, clamped to the torque bounds: the τ of both [`Input::tau_in_mode`] and
+    /// [`Input::tau_before`].
+    fn clamped_law(
+        &self,
+        d: &Discrete,
+        mode: Mode,
+        t: f64,
+        (q, qd, omega): (&[f64], &[f64], &[f64]),
+        out: &mut [f64],
+    ) -> Result<(), SimError> {
+        let len_err = |what, expected, found| SimError::DimensionMismatch {
+            what,
+            expected,
+            found,
+        };
+        let q: [f64; N] = q.try_into().map_err(|_| len_err("q", N, q.len()))?;
+        let qd: [f64; N] = qd.try_into().map_err(|_| len_err("qd", N, qd.len()))?;
+        let w: [f64; 3] = omega
+            .try_into()
+            .map_err(|_| len_err("omega", 3, omega.len()))?;
+        let found = out.len();
+        let out: &mut [f64; N] = out
+            .try_into()
+            .map_err(|_| len_err("torque output", N, found))?;
+        let x = State::new(q.into(), qd.into(), w.into());
+        self.law(d, mode, t, &x, out).map_err(to_sim)?;
+        for (v, b) in out.iter_mut().zip(&self.tau_max) {
+            *v = v.clamp(-b, *b);
+        }
+        Ok(())
+    }
+
     /// τ in `mode` at time `t` and state (q, q̇, ω) with the discrete state `d`.
     fn law(
         &self,
@@ -1409,27 +1450,19 @@ impl<K: Kernels<N>, const N: usize> Input for HybridController<K, N> {
         omega: &[f64],
         out: &mut [f64],
     ) -> Result<(), SimError> {
-        let len_err = |what, expected, found| SimError::DimensionMismatch {
-            what,
-            expected,
-            found,
-        };
-        let q: [f64; N] = q.try_into().map_err(|_| len_err("q", N, q.len()))?;
-        let qd: [f64; N] = qd.try_into().map_err(|_| len_err("qd", N, qd.len()))?;
-        let w: [f64; 3] = omega
-            .try_into()
-            .map_err(|_| len_err("omega", 3, omega.len()))?;
-        let found = out.len();
-        let out: &mut [f64; N] = out
-            .try_into()
-            .map_err(|_| len_err("torque output", N, found))?;
-        let d = self.state_at(t, mode);
-        let x = State::new(q.into(), qd.into(), w.into());
-        self.law(&d, mode, t, &x, out).map_err(to_sim)?;
-        for (v, b) in out.iter_mut().zip(&self.tau_max) {
-            *v = v.clamp(-b, *b);
-        }
-        Ok(())
+        self.clamped_law(&self.state_at(t, mode), mode, t, (q, qd, omega), out)
+    }
+
+    fn tau_before(
+        &self,
+        mode: Mode,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        omega: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), SimError> {
+        self.clamped_law(&self.state_before(t), mode, t, (q, qd, omega), out)
     }
 
     fn wants_force(&self) -> bool {

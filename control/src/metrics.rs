@@ -12,7 +12,8 @@
 //! period: the mean ω̄_k = (1/T_k) ∫ ω dt (trapezoidal rule over the samples, the counterpart
 //! of the optimum's mean ω, eq. 61), its relative error ‖ω̄_k − ω̄*‖ / ‖ω̄*‖, whether it has a
 //! contact phase (more than the impact's instant), the time spent in Stick and in Slip, and the largest
-//! |τ_i| of its samples. [`PeriodMetrics::contact_failure`] says whether a period executed the
+//! |τ_i| of its samples, less those of modes passed through at one instant (their τ acts for
+//! no time). [`PeriodMetrics::contact_failure`] says whether a period executed the
 //! plan's contact phase and its flight: some time on the ball, and a length below
 //! [`MAX_PERIOD_RATIO`] times the plan's period (a longer one missed the ball) and above
 //! [`MIN_PERIOD_RATIO`] times it (a shorter one cut its flight short).
@@ -40,7 +41,8 @@ pub struct PeriodMetrics {
     pub stick_time: f64,
     /// Time in Slip (s).
     pub slip_time: f64,
-    /// Largest |τ_i| over the period's samples (N m).
+    /// Largest |τ_i| over the period's samples that begin or end a stretch of time (N m): a
+    /// sample between two at its own time (a mode passed through at one instant) is left out.
     pub max_abs_tau: f64,
 }
 
@@ -163,7 +165,13 @@ pub fn period_metrics(
         let mut last_contact = t[first];
         // Sample i, the next period's impact, is the next period's.
         for k in first..i {
-            p.max_abs_tau = tau[k].iter().fold(p.max_abs_tau, |m, v| m.max(v.abs()));
+            // A sample between two at its own time is a mode the plant passed through at one
+            // instant (the slip of a chained stick → slip → free lift-off): its τ acts for no
+            // time, so it is no torque the actuators delivered.
+            let instant = k > 0 && t[k - 1] == t[k] && t[k + 1] == t[k];
+            if !instant {
+                p.max_abs_tau = tau[k].iter().fold(p.max_abs_tau, |m, v| m.max(v.abs()));
+            }
             if mode[k] != Mode::Free {
                 last_contact = t[k];
             }

@@ -211,3 +211,36 @@ fn a_period_that_misses_the_ball_or_only_touches_it_has_no_contact() {
             .all(|p| p.contact && p.contact_failure(1.0).is_none())
     );
 }
+
+#[test]
+fn a_mode_passed_through_at_one_instant_adds_no_torque() {
+    // Contacts at 0.3 and 1.3 s; the first lets go at 0.5 s through a slip of no length, as the
+    // simulator records a chained stick → slip → free lift-off: three samples at 0.5 s.
+    let (mut t, mut mode, mut omega, mut tau) =
+        run(&[(0.3, 0.5), (1.3, 1.5)], 1e-3, 2.4, (1.0, 0.0));
+    let k = t.iter().position(|&x| x == 0.5).unwrap();
+    assert_eq!(mode[k], Mode::Free);
+    for (at, m) in [(k, Mode::Stick), (k + 1, Mode::Slip)] {
+        t.insert(at, 0.5);
+        mode.insert(at, m);
+        omega.insert(at, omega[k]);
+        tau.insert(at, vec![0.5 + 0.1 * 0.5, -0.5]);
+    }
+    // The slip's τ (the slip law's, applied for no time) is far above every other sample's.
+    tau[k + 1] = vec![9.0, -9.0];
+    let periods = period_metrics(&t, &mode, &omega, &tau, [0.0, 0.0, 1.0]);
+    assert_eq!(periods.len(), 1);
+    let p = &periods[0];
+    assert_eq!((p.start, p.end), (0.3, 1.3));
+    assert!(
+        (p.stick_time - 0.2).abs() < 1e-9 && p.slip_time == 0.0,
+        "{p:?}"
+    );
+    // The period's largest |τ| is that of its last sample before 1.3 s.
+    let last = t.iter().copied().filter(|&x| x < 1.3).fold(0.0, f64::max);
+    assert!((p.max_abs_tau - (0.5 + 0.1 * last)).abs() < 1e-12, "{p:?}");
+    // A sample at the lift-off that begins or ends a stretch of time still counts.
+    tau[k] = vec![7.0, 0.0];
+    let periods = period_metrics(&t, &mode, &omega, &tau, [0.0, 0.0, 1.0]);
+    assert_eq!(periods[0].max_abs_tau, 7.0);
+}

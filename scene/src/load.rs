@@ -55,6 +55,27 @@ fn num(x: f64) -> String {
     }
 }
 
+/// `s` as a TOML basic string that reads back as `s`: quotes and backslashes escaped, control
+/// characters as `\uXXXX`, every other character as it is. Rust's `{:?}` is no such form: it
+/// writes combining marks and some spaces (U+0301, U+00A0) as `\u{301}`, which TOML refuses,
+/// so a URDF joint named `coude` + U+0301 would read as a TOML syntax error.
+fn toml_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if c.is_control() => {
+                let _ = write!(out, "\\u{:04X}", u32::from(c));
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
 fn vec3(v: [f64; 3]) -> String {
     format!("[{}, {}, {}]", num(v[0]), num(v[1]), num(v[2]))
 }
@@ -100,7 +121,7 @@ fn chain_tables(chain: &UrdfChain, base: Option<(&TransformSpec, String)>) -> St
     for l in &chain.links {
         let _ = writeln!(out, "\n[[links]]");
         if let Some(n) = &l.name {
-            let _ = writeln!(out, "name = {n:?}");
+            let _ = writeln!(out, "name = {}", toml_string(n));
         }
         if l.joint == crate::JointType::Prismatic {
             let _ = writeln!(out, "joint = \"prismatic\"");
@@ -120,7 +141,7 @@ fn chain_tables(chain: &UrdfChain, base: Option<(&TransformSpec, String)>) -> St
         let _ = writeln!(out, "com = {}", vec3(l.com));
         let _ = writeln!(out, "inertia = {}", mat3(l.inertia_matrix()));
         if let Some(src) = &l.nonphysical_inertia {
-            let _ = writeln!(out, "nonphysical_inertia = {src:?}");
+            let _ = writeln!(out, "nonphysical_inertia = {}", toml_string(src));
         }
         for (key, v) in [
             ("q_min", l.q_min),
@@ -259,7 +280,7 @@ fn urdf_scene(
         chain.tip_link,
         chain.joint_names
     );
-    let _ = writeln!(out, "name = {:?}", identifier(&chain.robot));
+    let _ = writeln!(out, "name = {}", toml_string(&identifier(&chain.robot)));
     let _ = writeln!(out, "gravity = {}", vec3(URDF_GRAVITY));
     let kernels: Vec<String> = URDF_KERNELS.iter().map(|k| format!("{k:?}")).collect();
     let _ = writeln!(out, "kernels = [{}]", kernels.join(", "));

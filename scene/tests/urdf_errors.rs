@@ -187,6 +187,29 @@ fn imported_axis(xyz: &str) -> [f64; 3] {
     scene.links[1].axis.unwrap()
 }
 
+/// A joint's name is a label: any characters the URDF's XML holds reach the scene as they are,
+/// through the scene text the import writes (combining marks, no-break and zero-width spaces,
+/// quotes and backslashes once made a TOML syntax error of a valid URDF).
+#[test]
+fn a_joint_name_of_any_characters_reaches_the_scene_as_it_is() {
+    for (xml, name) in [
+        ("coude&#x301;", "coude\u{301}"),
+        ("j&#xA0;2", "j\u{a0}2"),
+        ("j&#xAD;2&#x200B;", "j\u{ad}2\u{200b}"),
+        (
+            "say &quot;hi&quot; \\ back\\slash",
+            "say \"hi\" \\ back\\slash",
+        ),
+        ("Ellenbogen ÄÖÜ 肘", "Ellenbogen ÄÖÜ 肘"),
+    ] {
+        let text = arm(&J2.replace("name=\"j2\"", &format!("name=\"{xml}\"")));
+        let toml = bf_scene::urdf_scene_text(&text, FILE, &ChainChoice::default())
+            .unwrap_or_else(|e| panic!("{name:?}: {e}"));
+        let scene = Scene::from_toml_str(&toml, FILE).unwrap_or_else(|e| panic!("{name:?}: {e}"));
+        assert_eq!(scene.links[1].name.as_deref(), Some(name), "{toml}");
+    }
+}
+
 /// Any finite non-zero axis has a direction (urdfdom normalises it too): neither huge
 /// components, whose squares overflow, nor tiny ones, whose squares underflow, lose it, and no
 /// length cut-off refuses a short one.

@@ -46,6 +46,24 @@ pub trait Input {
         let _ = (mode, omega);
         self.tau(t, q, qd, out)
     }
+    /// τ as it drove the plant up to time `t`: the limit from the left, with only what
+    /// [`Input::observe`] recorded before `t` (an input whose memory changes at an observation
+    /// has two values at its time; [`Input::tau_in_mode`] gives the one after it). The
+    /// per-sample report evaluates the state just before an event with it: that sample only ends
+    /// a step, since the step after the event starts from the state after the reset, so its τ,
+    /// forces and power are those the step ended with. Default: [`Input::tau_in_mode`] (an
+    /// input that ignores the measurements has one value).
+    fn tau_before(
+        &self,
+        mode: Mode,
+        t: f64,
+        q: &[f64],
+        qd: &[f64],
+        omega: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), SimError> {
+        self.tau_in_mode(mode, t, q, qd, omega, out)
+    }
     /// Whether [`Input::observe`] wants the measured contact force after every accepted step
     /// (it costs one contact-force evaluation per step). Default: no.
     fn wants_force(&self) -> bool {

@@ -4,7 +4,8 @@
 //! file is a compiled scene of `scenes/` (its text equals the compiled one) and through the run-time interpreter
 //! (`bf_codegen::interp`, the same graphs and f64 operations) for any scene file.
 //!
-//! Method: a fixed set of random states (seeded; q uniform in the joint limits or [−π, π],
+//! Method: a fixed set of random states (seeded; q uniform in the joint limits within [−π, π],
+//! or in the 2π of the limits next to it when they lie outside it ([`q_range`]),
 //! q̇ in [−2, 2], ω in [−2, 2]³, q̈ and τ in [−5, 5]) is cycled through in short batches of
 //! consecutive calls (about 50 µs each); the reported figure is the median over batches of
 //! wall-clock time per call, so batches preempted on a loaded machine do not count.
@@ -100,19 +101,49 @@ pub struct Bench {
     pub kernels: Vec<Row>,
 }
 
-fn random_states(scene: &Scene, n: usize, seed: u64) -> Vec<State> {
+/// The interval joint `i` (from 0) of `scene` draws its angles from: its limits within
+/// [−π, π] (the whole of [−π, π] without limits); for limits that lie outside [−π, π], the
+/// stretch of 2π of them next to it. A range of limits wider than a double holds (±1.7e308
+/// in a URDF that means "unlimited") or far beyond ±2²⁰ rad, where the kernels' sine and cosine
+/// are NaN, would time NaN paths or fail to draw at all. An error when no such stretch is
+/// within ±2²⁰ rad of a revolute joint.
+fn q_range(scene: &Scene, i: usize) -> Result<(f64, f64)> {
+    let pi = std::f64::consts::PI;
+    let l = &scene.links[i];
+    let (lo, hi) = (l.q_min.unwrap_or(-pi), l.q_max.unwrap_or(pi));
+    let range = if lo > pi {
+        (lo, hi.min(lo + 2.0 * pi))
+    } else if hi < -pi {
+        (lo.max(hi - 2.0 * pi), hi)
+    } else {
+        (lo.max(-pi), hi.min(pi))
+    };
+    let limit = bf_codegen::trig::ANGLE_RANGE;
+    if l.joint == bf_codegen::spec::JointType::Revolute && range.0.abs().min(range.1.abs()) > limit
+    {
+        bail!(
+            "joint {} (q_min {}, q_max {}): every angle within its limits is beyond ±2²⁰ = \
+             ±{limit} rad, where the kernels' sine and cosine are not defined; give the limits \
+             modulo 2π",
+            i + 1,
+            crate::cli::shown(lo),
+            crate::cli::shown(hi)
+        );
+    }
+    Ok(range)
+}
+
+fn random_states(scene: &Scene, n: usize, seed: u64) -> Result<Vec<State>> {
     let mut r = ChaCha8Rng::seed_from_u64(seed);
     let eps = scene.contact.as_ref().map_or(0.01, |c| c.smooth_eps);
-    let pi = std::f64::consts::PI;
-    (0..n)
+    let ranges = (0..scene.links.len())
+        .map(|i| q_range(scene, i))
+        .collect::<Result<Vec<_>>>()?;
+    Ok((0..n)
         .map(|_| {
-            let q = scene
-                .links
+            let q = ranges
                 .iter()
-                .map(|l| {
-                    let (lo, hi) = (l.q_min.unwrap_or(-pi), l.q_max.unwrap_or(pi));
-                    if hi > lo { r.random_range(lo..hi) } else { lo }
-                })
+                .map(|&(lo, hi)| if hi > lo { r.random_range(lo..hi) } else { lo })
                 .collect();
             let nq = scene.links.len();
             State {
@@ -123,7 +154,7 @@ fn random_states(scene: &Scene, n: usize, seed: u64) -> Vec<State> {
                 u: (0..nq).map(|_| r.random_range(-5.0..5.0)).collect(),
             }
         })
-        .collect()
+        .collect())
 }
 
 /// Target length of one timed batch: short against a scheduler time slice, so the median
@@ -175,7 +206,7 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
             );
         }
     }
-    let states = random_states(scene, n_states, seed);
+    let states = random_states(scene, n_states, seed)?;
     let vars: Vec<Vec<f64>> = states
         .iter()
         .map(|s| rt.vars(&s.q, &s.qd, s.omega, s.eps, &s.u, None))
@@ -302,4 +333,41 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         )?;
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::q_range;
+    use std::f64::consts::PI;
+
+    /// The PUMA 560 scene with the first joint's limits replaced by `limits` (TOML text of
+    /// `q_min`/`q_max`, empty for none).
+    fn puma(limits: &str) -> bf_codegen::Scene {
+        let text = bf_generated::scene_toml("puma560").unwrap().replacen(
+            "q_min = \"-160deg\"\nq_max = \"160deg\"",
+            limits,
+            1,
+        );
+        assert!(!text.contains("\"160deg\""));
+        bf_codegen::Scene::from_toml_str(&text, "puma.toml").unwrap()
+    }
+
+    #[test]
+    fn angles_are_drawn_within_the_limits_next_to_one_turn() {
+        let pi = PI;
+        for (limits, want) in [
+            ("", (-pi, pi)),
+            ("q_min = -1.0\nq_max = 0.5", (-1.0, 0.5)),
+            ("q_min = -1.7e308\nq_max = 1.7e308", (-pi, pi)),
+            ("q_min = -1e10\nq_max = 2.0", (-pi, 2.0)),
+            ("q_min = 4.0\nq_max = 100.0", (4.0, 4.0 + 2.0 * pi)),
+            ("q_min = -100.0\nq_max = -5.0", (-5.0 - 2.0 * pi, -5.0)),
+            ("q_min = 4.0\nq_max = 5.0", (4.0, 5.0)),
+        ] {
+            assert_eq!(q_range(&puma(limits), 0).unwrap(), want, "{limits}");
+        }
+        // Every angle the limits allow is beyond 2^20 rad: no state the kernels can evaluate.
+        let err = q_range(&puma("q_min = 1e7\nq_max = 2e7"), 0).unwrap_err();
+        assert!(err.to_string().contains("joint 1 (q_min 1e7"), "{err}");
+    }
 }

@@ -241,15 +241,23 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     }
 
     fn tau(&self, mode: Mode, t: f64, s: &State<N>) -> Result<VecN<N>, SimError> {
+        self.input_tau(report::Limit::After, mode, t, s)
+    }
+
+    /// τ at (t, s) in `mode`, on the given side of the input's observations at `t`.
+    fn input_tau(
+        &self,
+        limit: report::Limit,
+        mode: Mode,
+        t: f64,
+        s: &State<N>,
+    ) -> Result<VecN<N>, SimError> {
         let mut tau = [0.0; N];
-        self.input.tau_in_mode(
-            mode,
-            t,
-            s.q.as_slice(),
-            s.qd.as_slice(),
-            s.omega.as_slice(),
-            &mut tau,
-        )?;
+        let x = (s.q.as_slice(), s.qd.as_slice(), s.omega.as_slice());
+        match limit {
+            report::Limit::After => self.input.tau_in_mode(mode, t, x.0, x.1, x.2, &mut tau),
+            report::Limit::Before => self.input.tau_before(mode, t, x.0, x.1, x.2, &mut tau),
+        }?;
         Ok(VecN::<N>::from(tau))
     }
 

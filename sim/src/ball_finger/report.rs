@@ -4,7 +4,11 @@
 //! derived quantities τ, λ (eq. 33 / 37), λ_n (eq. 12), h (eq. 4), σ (eq. 18), ‖Δv‖ (eq. 13),
 //! n·v_c (eq. 36) and E = T + U (eq. 22) are recomputed from the model, so the files can be
 //! checked against the transition conditions of Sect. 3.1 without re-running the model; events
-//! are named by their Fig. 3 transition ([`event_kind`]).
+//! are named by their Fig. 3 transition ([`event_kind`]). τ is the input's at the sample; the
+//! state just before an event takes the τ that drove the step ending there, which differs from
+//! the input's value after its observations at that time when the input has a memory (a
+//! controller's phase and integrators), so that the forces, the power and the energy balance
+//! of that last step are those of the motion integrated.
 //!
 //! # Energy warnings
 //! The run summary reports each impact that raises the energy (only Newton's law, eq. 39, can:
@@ -27,6 +31,29 @@ use crate::trajectory::{SampleKind, SimOutput};
 use crate::{Input, SimError, SimWarning};
 use bf_model::{ImpactLaw, Kernels, Mode, State};
 use serde::Serialize;
+
+/// Which of an input's two values at the time of an observation a sample takes
+/// ([`Input::tau_before`]): the state just before an event ends the step that led to it, so it
+/// takes the τ that drove that step; every other sample starts a step (or lies inside one) and
+/// takes the τ after the observations, which drives the next step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Limit {
+    /// [`Input::tau_before`].
+    Before,
+    /// [`Input::tau_in_mode`].
+    After,
+}
+
+impl Limit {
+    /// The side a sample of this kind takes.
+    fn of(kind: SampleKind) -> Self {
+        if kind == SampleKind::EventPre {
+            Limit::Before
+        } else {
+            Limit::After
+        }
+    }
+}
 
 /// The model evaluated at one state in one mode, for the samples and the steps' midpoints.
 struct Evaluated<const N: usize> {
@@ -61,13 +88,20 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// Derived quantities at one sample (t, x) in `mode`: τ from the input, λ from the mode's
     /// dynamics (0 in Free, eq. 45), h, σ, ‖Δv‖, n·v_c, the energy and its rate.
     pub fn sample_info(&self, mode: Mode, t: f64, x: &[f64]) -> Result<SampleInfo<N>, SimError> {
-        self.sample_eval(mode, t, x).map(|(info, _)| info)
+        self.sample_eval(Limit::After, mode, t, x)
+            .map(|(info, _)| info)
     }
 
     /// The model at (t, x) in `mode` ([`Evaluated`]).
-    fn dynamics_at(&self, mode: Mode, t: f64, x: &[f64]) -> Result<Evaluated<N>, SimError> {
+    fn dynamics_at(
+        &self,
+        limit: Limit,
+        mode: Mode,
+        t: f64,
+        x: &[f64],
+    ) -> Result<Evaluated<N>, SimError> {
         let s = state_of::<N>(x)?;
-        let tau = self.tau(mode, t, &s)?;
+        let tau = self.input_tau(limit, mode, t, &s)?;
         let kin = self.model.evaluate(&s).map_err(SimError::system)?;
         let acc = self
             .model
@@ -87,6 +121,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// evaluation of the model.
     fn sample_eval(
         &self,
+        limit: Limit,
         mode: Mode,
         t: f64,
         x: &[f64],
@@ -97,7 +132,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
             kin,
             acc,
             power,
-        } = self.dynamics_at(mode, t, x)?;
+        } = self.dynamics_at(limit, mode, t, x)?;
         let e = self.model.energy(&s).map_err(SimError::system)?;
         let mut dx = vec![0.0; x.len()];
         acc.write_state_derivative(&s.qd, &mut dx);
@@ -136,20 +171,27 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     /// energies) and gets NaN for the forces and the power; a state the kinematics cannot
     /// evaluate either gets NaN everywhere (`null` in JSON).
     pub fn sample_info_or_nan(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
-        self.sample_info(mode, t, x)
-            .unwrap_or_else(|_| self.kinematic_info(mode, t, x))
+        self.info_or_nan(Limit::After, mode, t, x)
+    }
+
+    /// [`BallFinger::sample_info_or_nan`] on the given side of the input's observations.
+    fn info_or_nan(&self, limit: Limit, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
+        self.sample_eval(limit, mode, t, x)
+            .map_or_else(|_| self.kinematic_info(limit, mode, t, x), |(info, _)| info)
     }
 
     /// The part of [`SampleInfo`] that needs no accelerations (module doc of
     /// [`BallFinger::sample_info_or_nan`]).
-    fn kinematic_info(&self, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
+    fn kinematic_info(&self, limit: Limit, mode: Mode, t: f64, x: &[f64]) -> SampleInfo<N> {
         let Ok(s) = state_of::<N>(x) else {
             return SampleInfo::NAN;
         };
         let (Ok(kin), Ok(e)) = (self.model.evaluate(&s), self.model.energy(&s)) else {
             return SampleInfo::NAN;
         };
-        let tau = self.tau(mode, t, &s).map_or([f64::NAN; N], Into::into);
+        let tau = self
+            .input_tau(limit, mode, t, &s)
+            .map_or([f64::NAN; N], Into::into);
         SampleInfo::of_state(tau, &kin.contact, &e)
     }
 
@@ -183,7 +225,9 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
         };
         let simpson = match (end(i - 1), end(i)) {
             (Some(a), Some(b)) if tr.mode[i - 1] == mode => simpson_over_step(a, b, |t, x| {
-                self.dynamics_at(mode, t, x).ok().map(|e| e.power)
+                self.dynamics_at(Limit::After, mode, t, x)
+                    .ok()
+                    .map(|e| e.power)
             }),
             _ => None,
         };
@@ -197,9 +241,15 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     pub fn report(&self, out: &SimOutput<Mode>, t0: f64, cpu_seconds: f64) -> RunReport<N> {
         let tr = &out.trajectory;
         let (samples, slopes): (Vec<SampleInfo<N>>, Vec<Option<Vec<f64>>>) = (0..tr.len())
-            .map(|i| match self.sample_eval(tr.mode[i], tr.t[i], &tr.x[i]) {
-                Ok((info, dx)) => (info, Some(dx)),
-                Err(_) => (self.kinematic_info(tr.mode[i], tr.t[i], &tr.x[i]), None),
+            .map(|i| {
+                let limit = Limit::of(tr.kind[i]);
+                match self.sample_eval(limit, tr.mode[i], tr.t[i], &tr.x[i]) {
+                    Ok((info, dx)) => (info, Some(dx)),
+                    Err(_) => (
+                        self.kinematic_info(limit, tr.mode[i], tr.t[i], &tr.x[i]),
+                        None,
+                    ),
+                }
             })
             .unzip();
         let events: Vec<EventInfo<N>> = out
@@ -214,7 +264,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
                 chained: e.chained,
                 x_pre: e.x_pre.clone(),
                 x_post: e.x_post.clone(),
-                pre: self.sample_info_or_nan(e.mode_before, e.t, &e.x_pre),
+                pre: self.info_or_nan(Limit::Before, e.mode_before, e.t, &e.x_pre),
                 post: self.sample_info_or_nan(
                     e.mode_after.unwrap_or(e.mode_before),
                     e.t,
