@@ -322,6 +322,7 @@ pub struct SimulateArgs {
     #[arg(
         long,
         value_name = "KP,KD",
+        allow_hyphen_values = true,
         requires = "init",
         conflicts_with_all = ["torques", "pd"]
     )]
@@ -708,7 +709,9 @@ pub struct PaperArgs {
     /// ends (it must be new, empty or an earlier output of `paper`).
     #[arg(long, default_value = "out/paper")]
     pub out: PathBuf,
-    /// Shorter run (fewer states, smaller problems) for tests.
+    /// A smoke run for tests: one cold solve per problem (20 points per phase) in place of the
+    /// searches' optima, no plans for the plant and no robustness tables, shorter closed
+    /// loops, ladders and probes; about four fifths of the time.
     #[arg(long)]
     pub quick: bool,
     /// Run the global searches of Sect. 6.1 (`optimize`'s default search of the paper's

@@ -166,5 +166,10 @@ fn simulate_pd_track_replays_a_solution_file() {
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("--init"), "{e}");
+    // A negative gain is a wrong command line (status 2), as with `--pd-gains`.
+    let (o, _) = sim("-1,0.2", false, "negative");
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--pd-track -1,0.2: kp is -1"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }

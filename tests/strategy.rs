@@ -312,3 +312,45 @@ fn bad_strategy_inputs_are_errors() {
     };
     assert!(build(Problem::PeriodicQc, &bad).is_err());
 }
+
+/// A warm start from a solution of another problem is taken as a guess (a continuation a user
+/// may want), but `optimize` says so; one of the same problem and scene is taken silently.
+#[test]
+fn a_warm_start_of_another_problem_is_said_to_be_one() {
+    let dir = cli_util::tmpdir("warm-other");
+    let qc = dir.join("qc.json");
+    cli_util::qc_optimum().write_json(&qc).unwrap();
+    let warning = |problem: &str| {
+        let out = dir.join(format!("out-{problem}"));
+        let r = cli_util::run(&[
+            "optimize",
+            "--problem",
+            problem,
+            "--impact-law",
+            "stick",
+            "--strategy",
+            "direct",
+            "--max-iter",
+            "3",
+            "--verify-rtol",
+            "0",
+            "--warm-start",
+            qc.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let stderr = String::from_utf8_lossy(&r.stderr).to_string();
+        assert!(!stderr.contains("panicked"), "{stderr}");
+        stderr
+            .lines()
+            .find(|l| l.starts_with("warning: --warm-start"))
+            .map(str::to_string)
+    };
+    let other = warning("periodic-cot").expect("a warning for another problem");
+    assert!(
+        other.contains("a solution of `periodic-qc` on scene `paper`")
+            && other.contains("for `periodic-cot` on scene `paper`"),
+        "{other}"
+    );
+    assert_eq!(warning("periodic-qc"), None);
+}

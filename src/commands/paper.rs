@@ -188,6 +188,7 @@ fn plan_markdown(
     // 10 s periods make it the longer run, about 2 s per plant).
     let robustness =
         crate::paper::closed_loop::robustness_markdown(&name, &sol, ROBUSTNESS_PERIODS)?;
+    verdict.plans += 1;
     verdict.judge(&format!("the plan of `{problem}`"), &sol);
     Ok(format!("{head}\n{table}\n{robustness}"))
 }
@@ -323,6 +324,9 @@ pub struct RunVerdict {
     pub failures: Vec<String>,
     /// Flagged measurements, one sentence each.
     pub flags: Vec<String>,
+    /// Plans for the plant made in the run (none with `--quick`): the summary says they were
+    /// executed only when there were some.
+    pub plans: usize,
 }
 
 impl RunVerdict {
@@ -331,10 +335,13 @@ impl RunVerdict {
     pub fn summary_markdown(&self) -> String {
         let mut s = String::from("## Summary\n\n");
         if self.failures.is_empty() {
-            s.push_str(
+            s.push_str(if self.plans > 0 {
                 "Every scenario and plan was solved and verified, every plan executed, every \
-                 stability probe returned a finite number or a clear error.\n\n",
-            );
+                 stability probe returned a finite number or a clear error.\n\n"
+            } else {
+                "Every scenario was solved and verified (this run made no plan for the plant), \
+                 every stability probe returned a finite number or a clear error.\n\n"
+            });
         } else {
             let _ = writeln!(
                 s,
@@ -864,25 +871,33 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     )?;
 
     writeln!(report, "## 9. Known limitations\n")?;
+    let points = if args.quick { 20 } else { 30 };
+    let optima = if args.quick {
+        "The optima shown are one cold solve per problem (`--quick`), not the default \
+         search's optima, which a run without `--quick` presents."
+    } else {
+        "The optima shown are those `optimize`'s default global search verifies with seed 0: \
+         verified local optima, not certified global ones. Over seeds 0–9 the searches of the \
+         problems shown end within 0.3 % of each other; `optimize`'s default plan of \
+         `periodic-cot` (not shown here) ends a few percent apart from seed to seed \
+         (docs/optima.md gives the figures per problem and how to search further)."
+    };
     writeln!(
         report,
-        "- The scenarios above use hp Legendre–Gauss–Radau (3 × 10 points per phase, refined \
-         where an optimum's re-integration asks for it; section 4 gives each optimum's mesh). \
-         Legendre–Gauss collocation, the paper's scheme (`optimize --scheme lg`), solves the \
-         problems too, with other costs in time (criterion figures for both schemes in \
-         BENCHMARKS.md, `cargo bench --bench problems`).\n\
+        "- The scenarios above use hp Legendre–Gauss–Radau ({points} points per phase over 3 \
+         elements to start with, refined where an optimum's re-integration asks for it; \
+         section 4 gives each optimum's mesh). Legendre–Gauss collocation, the paper's scheme \
+         (`optimize --scheme lg`), solves the seven problems too, with other costs in time \
+         (criterion figures for both schemes in BENCHMARKS.md, `cargo bench --bench \
+         problems`), but with one polynomial per phase and no mesh refinement none of them \
+         verifies at 30 points per phase (`periodic-qc` does from about 120).\n\
          - The unpivoted KKT factorization eliminates constraint rows before their variables; \
          where that misleads the inertia test the solver switches to 2 × 2 (variable, row) \
          pivots within the solve, and where the factor grows unstable it raises its static \
          dual regularization from 1e-9 to 3e-8 (optim/README.md, \
          BENCHMARKS.md for the mesh sweep).\n\
          - The periodic problems have many local optima; which one a solve reaches depends on \
-         the strategy and on rounding (section 4 and `report strategies`). The optima shown \
-         are those `optimize`'s default global search verifies with seed 0: verified local \
-         optima, not certified global ones. Over seeds 0–9 the searches of the problems \
-         shown end within 0.3 % of each other; `optimize`'s default plan of `periodic-cot` \
-         (not shown here) ends a few percent apart from seed to seed (docs/optima.md gives \
-         the figures per problem and how to search further).\n\
+         the strategy and on rounding (section 4 and `report strategies`). {optima}\n\
          - Each verification summary gives the open-loop drift: one phase replayed whole from \
          its collocated initial state (informative; the verdict re-integrates element by \
          element). Replayed over whole periods in the plant (Newton's law, slip), the optimal \
@@ -969,12 +984,20 @@ mod tests {
         let flagged = RunVerdict {
             failures: vec![],
             flags: vec!["⚑ 5 of 75 error measures exceed their flag bound".into()],
+            plans: 2,
         };
         assert_eq!(flagged.failure(), None);
         let md = flagged.summary_markdown();
         assert!(md.starts_with("## Summary\n"), "{md}");
         assert!(!md.contains("FAILED"), "{md}");
         assert!(md.contains("- ⚑ 5 of 75 error measures"), "{md}");
+        assert!(md.contains("every plan executed"), "{md}");
+        // A run without plans (`--quick`) does not claim to have executed any.
+        let md = RunVerdict::default().summary_markdown();
+        assert!(
+            md.contains("made no plan") && !md.contains("plan executed"),
+            "{md}"
+        );
 
         let failed = RunVerdict {
             failures: vec![
@@ -982,6 +1005,7 @@ mod tests {
                 "the plan of `periodic-cot-human`: the solution is unverified".into(),
             ],
             flags: vec![],
+            plans: 1,
         };
         let md = failed.summary_markdown();
         assert!(md.contains("**FAILED**: 2 checks failed"), "{md}");

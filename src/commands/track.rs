@@ -110,7 +110,16 @@ impl<'a> TrackingJson<'a> {
             replan_setup: r.replans.setup.as_ref(),
             replans: &r.replans.replans,
             replan_budget_seconds: sol.period / 10.0,
-            replan_seconds_median: (!secs.is_empty()).then(|| secs[secs.len() / 2]),
+            // The mean of the middle two for an even count (the upper one alone was the
+            // maximum of two re-plans).
+            replan_seconds_median: (!secs.is_empty()).then(|| {
+                let m = secs.len() / 2;
+                if secs.len().is_multiple_of(2) {
+                    0.5 * (secs[m - 1] + secs[m])
+                } else {
+                    secs[m]
+                }
+            }),
             replan_seconds_max: secs.last().copied(),
         }
     }

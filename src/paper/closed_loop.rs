@@ -891,11 +891,9 @@ pub fn comparison_markdown(
                 s,
                 "![Fig. 17 counterpart, closed loop: ω error per period, `{name}`](figures/{stem}.svg)\n\n\
                  The dashed line is the nominal plant's target, {:.0} % in every period; the \
-                 verdict above counts a match up to {:.0} %, and the robustness table holds \
-                 perturbed plants to {:.0} % from the 4th period on.\n",
+                 verdict above counts a match up to {:.0} %.\n",
                 100.0 * NOMINAL_TARGET,
                 100.0 * MATCH_ERROR,
-                100.0 * ROBUSTNESS_TARGET
             )?;
         }
     }

@@ -618,10 +618,11 @@ pub fn markdown(o: &OpenLoop) -> Result<String> {
     let mut s = String::new();
     writeln!(
         s,
-        "{} periods of the optimal `periodic-cot` torques replayed open loop in the hybrid model \
-         (Newton's impact law, slip allowed, DOPRI5 rtol 1e-8), from the optimal initial state. \
-         Trajectory: `open-loop/trajectory.json`, events: `open-loop/events.csv`.\n",
-        o.periods
+        "{} period{} of the optimal `periodic-cot` torques replayed open loop in the hybrid \
+         model (Newton's impact law, slip allowed, DOPRI5 rtol 1e-8), from the optimal initial \
+         state. Trajectory: `open-loop/trajectory.json`, events: `open-loop/events.csv`.\n",
+        o.periods,
+        if o.periods == 1 { "" } else { "s" }
     )?;
     if let Some(msg) = &o.stopped {
         writeln!(

@@ -378,8 +378,9 @@ fn check_internals_belong(
         return Err(io_err(
             ipath,
             format!(
-                "its `problem` is {theirs:?}, {} is {:?}: the internals belong to another \
+                "its `problem` is {}, {}'s is `{}`: the internals belong to another \
                  solution",
+                theirs.map_or("missing".to_string(), |t| format!("`{t}`")),
                 path.display(),
                 sol.problem
             ),

@@ -227,6 +227,20 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         Some(s) => s.clone(),
         None => compiled_scene(problem)?,
     };
+    if let (Some(w), Some(path)) = (&warm_start, &args.warm_start)
+        && (w.problem != problem.name() || w.scene != built_on.name)
+    {
+        // A guess across problems or scenes is a continuation a user may want, so it is
+        // taken, but never silently: its trajectory is interpolated, its point not reused.
+        eprintln!(
+            "warning: --warm-start {}: a solution of `{}` on scene `{}`, taken as a guess for \
+             `{problem}` on scene `{}` (its trajectory interpolated onto this problem)",
+            path.display(),
+            w.problem,
+            w.scene,
+            built_on.name
+        );
+    }
     let joints = built_on.links.len();
     let gap = crate::paper::closed_loop::default_gains(&built_on)
         .clearance

@@ -61,9 +61,18 @@ fn best_found(
     strategy: Strategy,
     policy: &VerifyPolicy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
+    let record = super::shards::search_settings(&settings, policy);
     let found = search_with_progress(name, settings, strategy, Shard::WHOLE, policy)?;
-    let (p, sol) = found.best()?;
+    let (p, mut sol) = found.best()?;
     let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
+    // What `optimize` records beside the optimum, so that `paper`'s solution files are those
+    // of `optimize` (docs/files.md): the compiled scene's text, the search's settings and the
+    // active bounds.
+    sol.scene_toml = bf_generated::scene_toml(name.scene().as_str())
+        .with_context(|| format!("problem {name}: no compiled scene"))?
+        .to_string();
+    sol.search_settings = Some(record);
+    sol.active_bounds = Some(crate::pipeline::bounds::active_bounds(&p.ocp, &sol));
     Ok((p, sol))
 }
 

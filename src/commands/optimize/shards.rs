@@ -14,6 +14,7 @@ use crate::pipeline::search::{self, Candidate, Search, VerifyPolicy};
 use crate::pipeline::solve::{recompute_at_own_point, settings_of};
 use crate::pipeline::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result, bail};
+use bf_optim::ocp::Scheme;
 use bf_output::OutputDir;
 use bf_problem::solution::records::SearchSettings;
 use bf_problem::{OcpSolution, ProblemSettings};
@@ -73,7 +74,16 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 10] {
             "approach clearance",
             format!("{:e}", sol.approach_clearance),
         ),
-        ("mesh", format!("{} points, {:?}", sol.points, sol.scheme)),
+        (
+            "mesh",
+            match sol.scheme {
+                Scheme::Lg => format!("Legendre–Gauss, {} points per phase", sol.points),
+                Scheme::Radau { elements } => format!(
+                    "hp-Radau, {} points per phase over {elements} elements",
+                    sol.points
+                ),
+            },
+        ),
         ("epsilon", format!("{:e}", sol.epsilon)),
     ]
 }
@@ -367,7 +377,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     print_verification(&sol)?;
     commit_solution(&sol, out)?;
     crate::outln!(
-        "{}: merged {} candidates; chose start {k}: {}, objective {:.6e}, period {:.4} s",
+        "{}: merged {} candidates; chose chain {k}: {}, objective {:.6e}, period {:.4} s",
         problem,
         ncands,
         crate::names::name(&sol.status),

@@ -129,6 +129,15 @@ pub const MAX_TRACKED_PERIODS: f64 = 10_000.0;
 fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
     use crate::pipeline::SolutionIo as _;
     let g = parse_list("--pd-track", gains, Some(2))?;
+    // As for `--pd-gains`: a negative gain runs the joint away from its reference.
+    for (name, v) in [("kp", g[0]), ("kd", g[1])] {
+        if v < 0.0 {
+            bail_usage!(
+                "--pd-track {gains}: {name} is {v}; gains must be >= 0 (a negative gain \
+                 destabilises the joint)"
+            );
+        }
+    }
     let Some(path) = &args.init else {
         bail_usage!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
     };
@@ -144,7 +153,7 @@ fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
     }
     let periods = (args.t_end() / sol.period).ceil().max(1.0);
     if periods.is_nan() || periods > MAX_TRACKED_PERIODS {
-        bail!(
+        bail_usage!(
             "--pd-track: --t-end {} s is {periods} periods of {} s of {}, more than {}",
             args.t_end(),
             sol.period,
