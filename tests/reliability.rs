@@ -806,3 +806,62 @@ fn errors_name_the_cause_and_runs_are_bounded() {
     assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A solution file whose own fields disagree is refused when it is read (by `track`,
+/// `simulate --init` and `--warm-start` alike), naming the file and the field: a `period`
+/// that is not the sum of the phases' durations (`track` times the plan by the one, the
+/// verification by the other), a non-positive duration, trajectory columns of other lengths
+/// (once read as a shorter trajectory), and times that go back.
+#[test]
+fn a_solution_whose_fields_disagree_is_refused_when_read() {
+    use ball_finger::pipeline::{OcpSolution, SolutionIo};
+    let dir = tmpdir("disagreeing-solution");
+    let stored = root().join("data/optima/periodic-qc");
+    std::fs::copy(
+        stored.join("solution-internals.json"),
+        dir.join("solution-internals.json"),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(stored.join("solution.json")).unwrap();
+    let good: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let read = |edit: &dyn Fn(&mut serde_json::Value)| {
+        let mut v = good.clone();
+        edit(&mut v);
+        let path = dir.join("solution.json");
+        std::fs::write(&path, v.to_string()).unwrap();
+        OcpSolution::read_json(&path)
+            .map(drop)
+            .map_err(|e| e.to_string())
+    };
+    assert_eq!(read(&|_| {}), Ok(()));
+    let period = good["period"].as_f64().unwrap();
+    for (edit, needle) in [
+        (
+            Box::new(|v: &mut serde_json::Value| v["period"] = (2.0 * period).into())
+                as Box<dyn Fn(&mut serde_json::Value)>,
+            "`period` is",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| v["phase_durations"][1] = (-0.01).into()),
+            "`phase_durations[1]` is -0.01",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| {
+                v["nodes"]["q1"].as_array_mut().unwrap().truncate(10);
+            }),
+            "`nodes`: q1, q2, …: 10 samples",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| {
+                v["dense"]["t"].as_array_mut().unwrap().swap(0, 1);
+            }),
+            "`dense`: `t[1]`",
+        ),
+    ] {
+        let err = read(&*edit).unwrap_err();
+        assert!(
+            err.contains("solution.json") && err.contains(needle),
+            "{needle}: {err}"
+        );
+    }
+}

@@ -5,7 +5,7 @@
 //! (`bf_codegen::interp`, the same graphs and f64 operations) for any scene file.
 //!
 //! Method: a fixed set of random states (seeded; q uniform in the joint limits within [−π, π],
-//! or in the 2π of the limits next to it when they lie outside it ([`q_range`]),
+//! or in the 2π of the limits next to it when they lie outside it (`q_range`),
 //! q̇ in [−2, 2], ω in [−2, 2]³, q̈ and τ in [−5, 5]) is cycled through in short batches of
 //! consecutive calls (about 50 µs each); the reported figure is the median over batches of
 //! wall-clock time per call, so batches preempted on a loaded machine do not count.

@@ -489,6 +489,87 @@ fn check_phases(sol: &OcpSolution, path: &Path) -> Result<(), PipelineError> {
             ),
         ));
     }
+    if let Some((i, d)) = sol
+        .phase_durations
+        .iter()
+        .enumerate()
+        .find(|(_, d)| !(d.is_finite() && **d > 0.0))
+    {
+        return Err(io_err(
+            path,
+            format!("`phase_durations[{i}]` is {d}: a phase lasts a finite positive time"),
+        ));
+    }
+    // `track` and `simulate --init` time the plan by `period`, the verification and a warm
+    // start by the durations: an edit of one without the other would replay another plan.
+    let sum: f64 = sol.phase_durations.iter().sum();
+    if (sol.period - sum).abs() > 1e-9 * sum {
+        return Err(io_err(
+            path,
+            format!(
+                "`period` is {} s but `phase_durations` add up to {sum} s: the period is the \
+                 sum of the phases' durations",
+                sol.period
+            ),
+        ));
+    }
+    for (name, samples) in [("nodes", &sol.nodes), ("dense", &sol.dense)] {
+        check_samples(samples, sol.modes.len())
+            .map_err(|m| io_err(path, format!("`{name}`: {m}")))?;
+    }
+    Ok(())
+}
+
+/// Why a trajectory table of a solution of `phases` phases does not fit, if it does not: one
+/// entry per sample in every column, rows of one width per quantity (3 for ω and λ), times
+/// that do not decrease and phase indices below `phases`.
+fn check_samples(s: &bf_problem::Samples, phases: usize) -> Result<(), String> {
+    let n = s.t.len();
+    let lens = [
+        ("phase", s.phase.len()),
+        ("q1, q2, …", s.q.len()),
+        ("qd1, qd2, …", s.qd.len()),
+        ("omega_x, omega_y, omega_z", s.omega.len()),
+        ("tau1, tau2, …", s.tau.len()),
+        ("lambda_x, lambda_y, lambda_z", s.lambda.len()),
+        ("h", s.h.len()),
+        ("sigma", s.sigma.len()),
+        ("alpha", s.alpha.len()),
+    ];
+    if let Some((name, len)) = lens.iter().find(|(_, len)| *len != n) {
+        return Err(format!(
+            "{name}: {len} samples, t: {n}; every column holds one entry per sample"
+        ));
+    }
+    let nq = s.q.first().map_or(0, Vec::len);
+    for (name, rows, width) in [
+        ("q", &s.q, nq),
+        ("qd", &s.qd, nq),
+        ("tau", &s.tau, nq),
+        ("omega", &s.omega, 3),
+        ("lambda", &s.lambda, 3),
+    ] {
+        if let Some((k, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != width) {
+            return Err(format!(
+                "`{name}[{k}]` has {} values, the table's rows {width}",
+                r.len()
+            ));
+        }
+    }
+    if let Some(k) = (1..n).find(|&k| s.t[k].partial_cmp(&s.t[k - 1]).is_none_or(|o| o.is_lt())) {
+        return Err(format!(
+            "`t[{k}]` = {} comes before `t[{}]` = {}: times do not decrease",
+            s.t[k],
+            k - 1,
+            s.t[k - 1]
+        ));
+    }
+    if let Some(k) = s.phase.iter().position(|&p| p >= phases) {
+        return Err(format!(
+            "`phase[{k}]` is {}, but the solution has {phases} phases (numbered from 0)",
+            s.phase[k]
+        ));
+    }
     Ok(())
 }
 

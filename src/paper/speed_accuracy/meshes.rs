@@ -83,7 +83,8 @@ pub struct PresentedReference {
     pub presented_period: f64,
     /// Wall time of the refinement (s).
     pub seconds: f64,
-    /// Whether the presented solution is on the cold reference's optimum ([`same_branch`]).
+    /// Whether the presented solution is on the cold reference's optimum (period and phase
+    /// durations within 10 %, as the warm solves are judged).
     pub same_as_cold: bool,
     /// Whether its stick phase lies on the problem's lower bound
     /// ([`bf_problem::catalogue::MIN_STICK`], to 1e-6 relative).
