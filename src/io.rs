@@ -25,6 +25,17 @@ macro_rules! outln {
     ($($arg:tt)*) => { $crate::io::print_out(&format!("{}\n", format_args!($($arg)*))) };
 }
 
+/// `eprintln!` that drops what a standard error that cannot be written (closed, or on a full
+/// device) does not take, instead of panicking: a lost note must not take the command's
+/// result on standard output, its files and its exit status with it.
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), $($arg)*);
+    }};
+}
+
 /// Parse a comma-separated list of finite numbers given for the option `name`
 /// (e.g. `--q 0.1,0.2,0.3`), checking the expected length when one is given; a bad list is a
 /// [`crate::errors::UsageError`].

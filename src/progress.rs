@@ -48,7 +48,7 @@ impl Heartbeat {
                         .lock()
                         .map(|g| g.clone())
                         .unwrap_or_else(|e| e.into_inner().clone());
-                    eprintln!(
+                    crate::errln!(
                         "{label}: {name} ... {:.0} s in this stage, {:.0} s in all",
                         since.elapsed().as_secs_f64(),
                         start.elapsed().as_secs_f64()
@@ -75,7 +75,7 @@ impl Heartbeat {
             *g = (name.to_string(), Instant::now());
         }
         if self.lines {
-            eprintln!(
+            crate::errln!(
                 "{}: {name} (at {:.1} s)",
                 self.label,
                 self.start.elapsed().as_secs_f64()
@@ -86,7 +86,7 @@ impl Heartbeat {
     /// Prints one progress line within the current stage (line mode only).
     pub fn line(&self, text: &str) {
         if self.lines {
-            eprintln!("{}: {text}", self.label);
+            crate::errln!("{}: {text}", self.label);
         }
     }
 }

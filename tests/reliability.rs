@@ -453,19 +453,42 @@ fn io_errors_do_not_panic() {
     assert!(stderr(&out).is_empty(), "{}", stderr(&out));
 
     if Path::new("/dev/full").exists() {
-        let full = std::fs::OpenOptions::new()
-            .write(true)
-            .open("/dev/full")
-            .unwrap();
+        let full = || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .open("/dev/full")
+                .unwrap()
+        };
         let out = bin()
             .current_dir(root())
             .args(["eval", "scenes/paper.toml", "--q", "0,0,0", "--qd", "0,0,0"])
-            .stdout(full)
+            .stdout(full())
             .output()
             .unwrap();
         assert_error(&out, 1, &["standard output", "No space left"]);
         let out = run(&["generate", "scenes/paper.toml", "-o", "/dev/full"]);
         assert_error(&out, 1, &["/dev/full", "No space left"]);
+        // Standard error on a full device: its notes are lost, the result on standard output
+        // and the exit status are not (`eval` writes a note to stderr before its JSON).
+        let copy = std::env::temp_dir().join(format!("bf-full-{}.toml", std::process::id()));
+        std::fs::copy(root().join("scenes/paper.toml"), &copy).unwrap();
+        let out = bin()
+            .current_dir(root())
+            .args([
+                "eval",
+                copy.to_str().unwrap(),
+                "--q",
+                "0,0,0",
+                "--qd",
+                "0,0,0",
+            ])
+            .stderr(full())
+            .output()
+            .unwrap();
+        std::fs::remove_file(&copy).ok();
+        assert_eq!(out.status.code(), Some(0));
+        let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert!(json["M"].is_array(), "{json}");
     }
 }
 

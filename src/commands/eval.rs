@@ -111,14 +111,14 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let kernels = shape_kernels(&scene.name, &runtime, &kernels)?;
     let names: Vec<&str> = runtime.kernels.iter().map(|k| k.name.as_str()).collect();
     if source == kernels_source {
-        eprintln!(
+        crate::errln!(
             "evaluated {} on the {source} kernels of `{}`: {}",
             scene.name,
             scene.name,
             names.join(", ")
         );
     } else {
-        eprintln!(
+        crate::errln!(
             "evaluated {}: the named quantities on the {source} kernels, the kernels on the \
              {kernels_source} kernels of `{}` (the compiled scene does not emit all of them): {}",
             scene.name,

@@ -43,12 +43,12 @@ pub fn run(args: &GenerateArgs) -> Result<()> {
             if args.report {
                 crate::outln!("{}", generated.report)?;
             }
-            eprintln!("wrote {} ({} bytes)", path.display(), generated.code.len());
+            crate::errln!("wrote {} ({} bytes)", path.display(), generated.code.len());
         }
         None => {
             crate::io::print_out(&generated.code)?;
             if args.report {
-                eprintln!("{}", generated.report);
+                crate::errln!("{}", generated.report);
             }
         }
     }

@@ -33,7 +33,7 @@ pub fn load_scene(
         }
     })?;
     for w in scene.warnings() {
-        eprintln!("warning: {}: {w}", path.display());
+        crate::errln!("warning: {}: {w}", path.display());
     }
     Ok((scene, text))
 }

@@ -475,7 +475,7 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     )?;
     let pb = stage(BUILTIN_SCENES.len() as u64, "generating kernels");
     let (table, details) = codegen_table(&BUILTIN_SCENES, &|| pb.inc(1), &|w| {
-        pb.suspend(|| eprintln!("{w}"))
+        pb.suspend(|| crate::errln!("{w}"))
     })?;
     pb.finish();
     writeln!(report, "{table}\n{details}")?;
@@ -923,10 +923,10 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     hb.stage("done");
     drop(hb);
     for f in &verdict.failures {
-        eprintln!("paper: FAILED: {f}");
+        crate::errln!("paper: FAILED: {f}");
     }
     for f in &verdict.flags {
-        eprintln!("paper: flagged: {f}");
+        crate::errln!("paper: flagged: {f}");
     }
     crate::outln!("wrote {}", args.out.join("report.md").display())?;
     match failure {

@@ -309,7 +309,7 @@ fn run_n<const N: usize>(
         } else {
             "was not re-integrated (it has no `verification` record: `optimize --verify-rtol 0`)"
         };
-        eprintln!(
+        crate::errln!(
             "warning: {} {why}: the errors below include the plan's",
             args.solution.display()
         );
@@ -318,13 +318,13 @@ fn run_n<const N: usize>(
         // A sticking plan on a Newton plant: short stick phases spin the ball by an impulse
         // the plant does not give (docs/optima.md, "Low optima that a Newton plant cannot
         // execute").
-        eprintln!(
+        crate::errln!(
             "note: the optimum was planned with the {} impact law, the plant uses {}",
             sol.impact_law.name(),
             law.name()
         );
         if law == bf_model::ImpactLaw::Newton {
-            eprintln!(
+            crate::errln!(
                 "note: plans that the hybrid controller executes on a Newton plant, also with \
                  model error: `optimize` without --impact-law, which plans periodic problems \
                  for Newton's law with a torque margin and an approach clearance \
@@ -353,7 +353,7 @@ fn run_n<const N: usize>(
         )?;
     }
     for line in run.report.summary.warning_lines() {
-        eprintln!("warning: {line}");
+        crate::errln!("warning: {line}");
     }
     if let (Some(median), Some(max)) = (record.replan_seconds_median, record.replan_seconds_max) {
         let used = run.replans.replans.iter().filter(|p| p.used).count();
@@ -372,7 +372,7 @@ fn run_n<const N: usize>(
             // The plant waits for each plan in simulated time (so a run is the same on any
             // machine); on a real plant a plan that overruns arrives after the contact it was
             // made for.
-            eprintln!(
+            crate::errln!(
                 "warning: {late} of the re-plans used took longer than their budget of {:.3} s \
                  (wall time on this machine): a real-time controller would get them late",
                 record.replan_budget_seconds

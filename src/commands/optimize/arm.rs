@@ -154,13 +154,13 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         out.inject_fault_at_write(n);
     }
     if scene.ball.is_some() {
-        eprintln!(
+        crate::errln!(
             "note: {}: the ball of scene `{}` is ignored by {REACH_ARM} (the arm moves freely)",
             path.display(),
             scene.name
         );
     }
-    eprintln!(
+    crate::errln!(
         "optimize: {REACH_ARM} on scene `{}` from {} ({nq} joints), node functions on \
          interpreted graphs (no node kernels are emitted for arms)",
         scene.name,

@@ -232,7 +232,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     {
         // A guess across problems or scenes is a continuation a user may want, so it is
         // taken, but never silently: its trajectory is interpolated, its point not reused.
-        eprintln!(
+        crate::errln!(
             "warning: --warm-start {}: a solution of `{}` on scene `{}`, taken as a guess for \
              `{problem}` on scene `{}` (its trajectory interpolated onto this problem)",
             path.display(),
@@ -434,7 +434,7 @@ pub fn attach_verification(problem: &BuiltProblem, sol: &mut OcpSolution, rtol: 
             }
             sol.verification = Some(v);
         }
-        Err(e) => eprintln!(
+        Err(e) => crate::errln!(
             "warning: trajectory verification failed: {}",
             crate::errors::chain(&e)
         ),
@@ -862,7 +862,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         if sol.verification.is_none() {
             match verify(&problem, &sol, args.verify_rtol) {
                 Ok(v) => sol.verification = Some(v),
-                Err(e) => eprintln!("warning: trajectory verification failed: {e}"),
+                Err(e) => crate::errln!("warning: trajectory verification failed: {e}"),
             }
         }
         print_verification(&sol)?;
@@ -889,9 +889,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     let extra: Vec<(String, &OcpSolution)> =
         candidates.iter().map(|(n, c)| (n.clone(), c)).collect();
     commit_solution_with(&sol, &extra, out)?;
-    eprintln!(
+    crate::errln!(
         "optimize: scene `{}`, node functions on the {} kernels",
-        sol.scene, sol.kernels
+        sol.scene,
+        sol.kernels
     );
     crate::outln!(
         "{}: {} after {} iterations in {:.2} s; objective {:.6e} (c1 {:.6e}, c2 {:.6e})",

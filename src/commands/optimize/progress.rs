@@ -101,7 +101,7 @@ pub fn search_with_progress(
             r.period
         );
         if lines {
-            eprintln!("{name}: {msg}");
+            crate::errln!("{name}: {msg}");
         }
         pb.set_message(msg);
     };

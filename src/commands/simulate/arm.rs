@@ -62,7 +62,7 @@ pub(super) fn run_arm(
     check_limits(args, &set, t_end)?;
     let held = super::torques_held(inp.series_end(), t_end);
     if let Some(w) = &held {
-        eprintln!("warning: {}", w.message);
+        crate::errln!("warning: {}", w.message);
     }
     let q0 = match (&args.q0, &replay) {
         (Some(s), _) => parse_list("--q0", s, Some(n))?,
@@ -81,7 +81,7 @@ pub(super) fn run_arm(
     let setup = Instant::now();
     let (model, source) = bf_model::arm::ArmModel::from_scene(scene)
         .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
-    eprintln!(
+    crate::errln!(
         "simulate: scene `{name}` from {scene_label} (no ball: free motion of {n} joints) on the \
          {source} kernels{}",
         interpreted_note(source, setup.elapsed())

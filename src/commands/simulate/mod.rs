@@ -226,7 +226,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
             let status = v.get("status").and_then(|s| s.as_str()).unwrap_or("?");
             let verified = v.get("verified").and_then(|b| b.as_bool()) != Some(false);
             if !verified || !matches!(status, "Solved" | "Acceptable") {
-                eprintln!(
+                crate::errln!(
                     "warning: --init {}: the solution is {} (status {status}): its replay \
                      shows that plan, not a verified optimum",
                     path.display(),
@@ -243,7 +243,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
             let modes = v.get("modes").and_then(|m| m.as_array());
             let impacts = modes.is_some_and(|m| m.iter().any(|m| m != "free"));
             if impacts && run_law.is_ok_and(|l| l != planned) {
-                eprintln!(
+                crate::errln!(
                     "warning: --init {}: the solution was planned with the {planned} impact \
                      law, this run uses {} (--impact-law {planned} replays it under its own)",
                     path.display(),
@@ -503,7 +503,7 @@ fn run_contact<const N: usize>(
     if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
         let m = max_torque(s);
         if m > LARGE_TORQUE {
-            eprintln!(
+            crate::errln!(
                 "warning: --torques {}: |τ| reaches {m:e} N m (the paper's bound is 1 N m); \
                  expect very small steps",
                 path.display()
@@ -521,7 +521,7 @@ fn run_contact<const N: usize>(
         .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
     let model = Model::from_kernels(kernels)
         .with_context(|| format!("{scene_label}: scene cannot be simulated"))?;
-    eprintln!(
+    crate::errln!(
         "simulate: scene `{}` from {scene_label} on the {source} kernels{}",
         scene.name,
         interpreted_note(source, setup.elapsed())
@@ -790,7 +790,7 @@ fn run_model<K: Kernels<N>, const N: usize>(
     )?;
     crate::outln!("{}", report.summary)?;
     for line in report.summary.warning_lines() {
-        eprintln!("warning: {line}");
+        crate::errln!("warning: {line}");
     }
     crate::outln!("output: {}", args.out.display())?;
     match failure {

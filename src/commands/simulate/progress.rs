@@ -58,7 +58,7 @@ impl Progress {
                     .is_none_or(|last| elapsed >= last + Self::LINE_EVERY)
                 {
                     self.last_line = Some(elapsed);
-                    eprintln!(
+                    crate::errln!(
                         "simulate: t = {t:.4} s of {} s ({:.1} %), {steps} steps, {samples} \
                          samples, {:.0} s elapsed",
                         self.t_end,
