@@ -282,9 +282,25 @@ fn optimize_output_set_is_atomic_and_failures_are_marked() {
         "{}",
         stderr(&o)
     );
+    // Rows of another width read as data but do not fit the problem's phase: found where the
+    // problem is built, and still blamed on the file.
+    let mut narrow = internals.clone();
+    for row in narrow["raw"][0]["x"].as_array_mut().unwrap() {
+        row.as_array_mut().unwrap().truncate(5);
+    }
+    assert_error(
+        &warm(&narrow),
+        1,
+        &[
+            "--warm-start",
+            "good.json",
+            "raw[0]",
+            "rows of `x` have 5 values",
+        ],
+    );
     let mut other = internals;
     other["problem"] = serde_json::json!("roll");
-    assert_error(&warm(&other), 1, &["solution-internals.json", "\"roll\""]);
+    assert_error(&warm(&other), 1, &["solution-internals.json", "`roll`"]);
     assert!(!dir.join("never").exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -33,9 +33,16 @@ pub struct ChainChoice {
     pub tip: Option<String>,
 }
 
-fn is_urdf(path: &Path) -> bool {
+/// Whether the file at `path` with the text `raw` is a URDF: its extension says so, or its
+/// text starts with `<` (XML; no TOML document does), so that a URDF saved as `.xml` is read
+/// as one instead of failing as TOML.
+fn is_urdf(path: &Path, raw: &str) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+        || raw
+            .trim_start_matches('\u{feff}')
+            .trim_start()
+            .starts_with('<')
 }
 
 fn read(path: &Path) -> Result<String, SpecError> {
@@ -533,7 +540,8 @@ pub fn urdf_path(text: &str, dir: &Path) -> Option<std::path::PathBuf> {
 }
 
 impl Scene {
-    /// Reads a scene file — TOML (its `urdf`, if any, resolved next to it) or `.urdf` — and
+    /// Reads a scene file — TOML (its `urdf`, if any, resolved next to it) or a URDF (`.urdf`,
+    /// or any file whose text starts with `<`) — and
     /// returns the scene with its self-contained text (see [`expand_toml`]). Errors name the
     /// file as given (or the URDF file), the line and the field or element.
     pub fn load_with_text(
@@ -543,7 +551,7 @@ impl Scene {
         let path = path.as_ref();
         let file = path.display().to_string();
         let raw = read(path)?;
-        let (text, imported) = if is_urdf(path) {
+        let (text, imported) = if is_urdf(path, &raw) {
             let (text, imported) = urdf_scene(&raw, &file, choice)?;
             (text, Some(imported))
         } else {

@@ -829,3 +829,18 @@ fn a_placement_axis_is_normalised_when_read() {
         Some("links[0].axis")
     );
 }
+
+/// A URDF saved under another extension (`.xml`, as some exporters write it) is read as a URDF:
+/// a text that starts with `<` is no TOML document. It gives the scene the `.urdf` gives.
+#[test]
+fn a_urdf_under_another_extension_is_read_as_one() {
+    let dir = tmpdir("xml");
+    let text = format!("<?xml version=\"1.0\"?>\n{}", arm(J2));
+    let (urdf, xml) = (dir.join("robot.urdf"), dir.join("robot.xml"));
+    std::fs::write(&urdf, &text).unwrap();
+    std::fs::write(&xml, &text).unwrap();
+    let (a, _) = Scene::load_with_text(&urdf, &ChainChoice::default()).unwrap();
+    let (b, _) = Scene::load_with_text(&xml, &ChainChoice::default()).unwrap();
+    assert_eq!(a.links, b.links);
+    assert_eq!(a.name, b.name);
+}

@@ -44,7 +44,8 @@ use crate::{CodegenError, SceneDefect};
 pub const KERNELS_ADVICE: &str = "the kernels whose size grows fastest with the joint count are \
      `christoffel` and `dmass_dq` (n³ entries), then `coriolis_matrix`, \
      `inverse_dynamics_dq`, `inverse_dynamics_dqd` and `mass_cqd_g`; list only the kernels you \
-     need in the scene's `kernels`";
+     need in the scene's `kernels` (for a URDF read alone: in a scene file with `urdf = \
+     \"FILE\"` and `kernels = [...]`, docs/scene-format.md)";
 
 /// How `eval` becomes smaller ([`SymbolicRobot::check_size`]): it computes M, C and the
 /// Jacobians whatever the scene's `kernels` say.

@@ -718,9 +718,28 @@ pub fn hop_settings(
     }
 }
 
-/// Run `optimize`.
+/// Run `optimize`. A warm start that does not fit the problem is found where the problem is
+/// built, deep in the solve; its error then names the file it came from.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
-    run_with(args, RunSettings::default())
+    run_with(args, RunSettings::default()).map_err(|e| {
+        use bf_problem::ProblemError as P;
+        let warm = |p: &P| matches!(p, P::WarmStartShape { .. } | P::WarmStartPhases { .. });
+        // The pipeline wraps the problem's error transparently, so it is no link of its own.
+        let misfit = e.chain().any(|c| {
+            c.downcast_ref::<P>().is_some_and(warm)
+                || matches!(
+                    c.downcast_ref::<crate::pipeline::PipelineError>(),
+                    Some(crate::pipeline::PipelineError::Problem(p)) if warm(p)
+                )
+        });
+        match (&args.warm_start, misfit) {
+            (Some(path), true) => e.context(format!(
+                "--warm-start {} (its collocation data, solution-internals.json)",
+                path.display()
+            )),
+            _ => e,
+        }
+    })
 }
 
 /// Run `optimize` with `opts`.
