@@ -504,13 +504,14 @@ pub struct OptimizeArgs {
     #[arg(long = "param", value_name = "NAME=VALUE", allow_hyphen_values = true)]
     pub param: Vec<String>,
     /// Collocation points per phase (at most 200 with `--scheme lg`; with radau, split over
-    /// `--elements`, at most 64 per element and 5000 per phase).
+    /// `--elements`, rounded up to whole elements of at least 2 points, so `--points 2
+    /// --elements 3` solves on 6; at most 64 per element and 5000 per phase).
     #[arg(long, default_value_t = 30, allow_hyphen_values = true, value_parser = whole)]
     pub points: usize,
     /// Transcription: lg (Legendre–Gauss, as the paper) or radau (hp Legendre–Gauss–Radau).
     #[arg(long, default_value = "radau")]
     pub scheme: String,
-    /// Elements per phase for `--scheme radau`.
+    /// Elements per phase for `--scheme radau` (`--scheme lg` has one polynomial per phase).
     #[arg(long, default_value_t = 3, allow_hyphen_values = true, value_parser = whole)]
     pub elements: usize,
     /// Interior-point iteration limit.
