@@ -710,7 +710,7 @@ pub struct PaperArgs {
     /// ends (it must be new, empty or an earlier output of `paper`).
     #[arg(long, default_value = "out/paper")]
     pub out: PathBuf,
-    /// A smoke run for tests: one cold solve per problem (20 points per phase) in place of the
+    /// A smoke run for tests: one cold solve per problem (3 × 7 points per phase) in place of the
     /// searches' optima, no plans for the plant and no robustness tables, shorter closed
     /// loops, ladders and probes; about four fifths of the time.
     #[arg(long)]

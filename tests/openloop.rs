@@ -171,5 +171,20 @@ fn simulate_pd_track_replays_a_solution_file() {
     assert_eq!(o.status.code(), Some(2));
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("--pd-track -1,0.2: kp is -1"), "{e}");
+    // So is a run of more periods than the replay's series hold.
+    let o = cli::run(&[
+        "simulate",
+        "--init",
+        init.to_str().unwrap(),
+        "--t-end",
+        "1e9",
+        "--pd-track",
+        "1,0.2",
+        "--out",
+        dir.join("long").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("--t-end") && e.contains("periods"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }

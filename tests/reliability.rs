@@ -888,7 +888,20 @@ fn a_solution_whose_fields_disagree_is_refused_when_read() {
             Box::new(|v: &mut serde_json::Value| {
                 v["nodes"]["q1"].as_array_mut().unwrap().truncate(10);
             }),
-            "`nodes`: q1, q2, …: 10 samples",
+            "column `nodes.q1` has 10 samples",
+        ),
+        // Not the first column of its group: rows are built by index and once ran past it.
+        (
+            Box::new(|v: &mut serde_json::Value| {
+                v["dense"]["omega_y"].as_array_mut().unwrap().truncate(10);
+            }),
+            "column `dense.omega_y` has 10 samples",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| {
+                v["nodes"]["tau3"].as_array_mut().unwrap().push(0.0.into());
+            }),
+            "column `nodes.tau3` has",
         ),
         (
             Box::new(|v: &mut serde_json::Value| {

@@ -313,7 +313,7 @@ fn bad_strategy_inputs_are_errors() {
     assert!(build(Problem::PeriodicQc, &bad).is_err());
 }
 
-/// A warm start from a solution of another problem is taken as a guess (a continuation a user
+/// A warm start from a solution of another problem is taken as a start (a continuation a user
 /// may want), but `optimize` says so; one of the same problem and scene is taken silently.
 #[test]
 fn a_warm_start_of_another_problem_is_said_to_be_one() {
@@ -349,7 +349,7 @@ fn a_warm_start_of_another_problem_is_said_to_be_one() {
     let other = warning("periodic-cot").expect("a warning for another problem");
     assert!(
         other.contains("a solution of `periodic-qc` on scene `paper`")
-            && other.contains("for `periodic-cot` on scene `paper`"),
+            && other.contains("the start of `periodic-cot` on scene `paper`"),
         "{other}"
     );
     assert_eq!(warning("periodic-qc"), None);

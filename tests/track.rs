@@ -175,6 +175,18 @@ fn the_sample_before_an_impact_carries_the_torque_that_drove_its_step() {
             impacts += 1;
         }
         assert!(impacts >= 3, "{impacts} impacts");
+        // An event chained to the one before it (stick → slip → free at one instant) starts
+        // where that one's reset left the plant, with no step between: the same τ and forces.
+        let events = &run.report.events;
+        let mut chained = 0;
+        for k in 1..events.len() {
+            if events[k].chained {
+                assert_eq!(events[k].x_pre, events[k - 1].x_post);
+                assert_eq!(events[k].pre, events[k - 1].post, "t = {}", events[k].t);
+                chained += 1;
+            }
+        }
+        assert!(chained >= 1, "no chained event to check");
         let summary = &run.report.summary;
         assert!(
             summary.energy_error <= summary.energy_tolerance,

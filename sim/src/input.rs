@@ -20,8 +20,9 @@ use std::path::Path;
 /// A source of joint torques.
 ///
 /// The ball-and-finger system ([`crate::ball_finger::BallFinger`]) calls [`Input::tau_in_mode`]
-/// and reports what a real controller measures through [`Input::observe`]; both default to the
-/// plain law τ(t, q, q̇) and to ignoring the measurements, so an input that only implements
+/// and reports what a real controller measures through [`Input::observe`]; its report takes the
+/// state just before an event with [`Input::tau_before`]. They default to the plain law
+/// τ(t, q, q̇) and to ignoring the measurements, so an input that only implements
 /// [`Input::tau`] runs exactly as before (bit for bit). Feedback laws that switch with the
 /// contact (bf-control's hybrid controller) override them.
 pub trait Input {

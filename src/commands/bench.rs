@@ -105,8 +105,8 @@ pub struct Bench {
 /// [−π, π] (the whole of [−π, π] without limits); for limits that lie outside [−π, π], the
 /// stretch of 2π of them next to it. A range of limits wider than a double holds (±1.7e308
 /// in a URDF that means "unlimited") or far beyond ±2²⁰ rad, where the kernels' sine and cosine
-/// are NaN, would time NaN paths or fail to draw at all. An error when no such stretch is
-/// within ±2²⁰ rad of a revolute joint.
+/// are NaN, would time NaN paths or fail to draw at all; a revolute joint's stretch is cut to
+/// ±2²⁰ rad, and an error when nothing of it is left.
 fn q_range(scene: &Scene, i: usize) -> Result<(f64, f64)> {
     let pi = std::f64::consts::PI;
     let l = &scene.links[i];
@@ -118,9 +118,14 @@ fn q_range(scene: &Scene, i: usize) -> Result<(f64, f64)> {
     } else {
         (lo.max(-pi), hi.min(pi))
     };
+    if l.joint != bf_codegen::spec::JointType::Revolute {
+        return Ok(range);
+    }
+    // Within ±2²⁰ rad the kernels' sine and cosine are defined; an angle beyond would time
+    // their NaN path.
     let limit = bf_codegen::trig::ANGLE_RANGE;
-    if l.joint == bf_codegen::spec::JointType::Revolute && range.0.abs().min(range.1.abs()) > limit
-    {
+    let clamped = (range.0.max(-limit), range.1.min(limit));
+    if clamped.0 > clamped.1 {
         bail!(
             "joint {} (q_min {}, q_max {}): every angle within its limits is beyond ±2²⁰ = \
              ±{limit} rad, where the kernels' sine and cosine are not defined; give the limits \
@@ -130,7 +135,7 @@ fn q_range(scene: &Scene, i: usize) -> Result<(f64, f64)> {
             crate::cli::shown(hi)
         );
     }
-    Ok(range)
+    Ok(clamped)
 }
 
 fn random_states(scene: &Scene, n: usize, seed: u64) -> Result<Vec<State>> {
@@ -363,6 +368,8 @@ mod tests {
             ("q_min = 4.0\nq_max = 100.0", (4.0, 4.0 + 2.0 * pi)),
             ("q_min = -100.0\nq_max = -5.0", (-5.0 - 2.0 * pi, -5.0)),
             ("q_min = 4.0\nq_max = 5.0", (4.0, 5.0)),
+            // A turn that reaches past 2^20 rad is cut there.
+            ("q_min = 1048570.0\nq_max = 2e6", (1048570.0, 1048576.0)),
         ] {
             assert_eq!(q_range(&puma(limits), 0).unwrap(), want, "{limits}");
         }

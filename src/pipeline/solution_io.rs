@@ -156,16 +156,34 @@ fn columns(samples: &Value, nq: usize) -> Value {
     Value::Object(m)
 }
 
-fn uncolumns(cols: &Value, nq: usize, path: &Path) -> Result<Value, PipelineError> {
-    let get = |k: &str| -> Result<Vec<Value>, PipelineError> {
+/// The trajectory table `cols` (one named column per component) as rows per quantity. Every
+/// column holds one entry per sample of `t`: an edited column of another length is an error
+/// that names it (rows are built by index, so a shorter one would index past its end).
+fn uncolumns(cols: &Value, table: &str, nq: usize, path: &Path) -> Result<Value, PipelineError> {
+    let column = |k: &str| -> Result<Vec<Value>, PipelineError> {
         cols.get(k)
             .and_then(Value::as_array)
             .cloned()
-            .ok_or_else(|| io_err(path, format!("trajectory column `{k}` missing")))
+            .ok_or_else(|| io_err(path, format!("trajectory column `{table}.{k}` missing")))
+    };
+    let t = column("t")?;
+    let n = t.len();
+    let get = |k: &str| -> Result<Vec<Value>, PipelineError> {
+        let c = column(k)?;
+        if c.len() != n {
+            return Err(io_err(
+                path,
+                format!(
+                    "trajectory column `{table}.{k}` has {} samples, `{table}.t` {n}: every \
+                     column holds one entry per sample",
+                    c.len()
+                ),
+            ));
+        }
+        Ok(c)
     };
     let join = |names: Vec<String>| -> Result<Value, PipelineError> {
         let cs: Vec<Vec<Value>> = names.iter().map(|n| get(n)).collect::<Result<_, _>>()?;
-        let n = cs.first().map_or(0, Vec::len);
         Ok(Value::Array(
             (0..n)
                 .map(|i| Value::Array(cs.iter().map(|c| c[i].clone()).collect()))
@@ -175,7 +193,7 @@ fn uncolumns(cols: &Value, nq: usize, path: &Path) -> Result<Value, PipelineErro
     let idx = |p: &str| (1..=nq).map(|i| format!("{p}{i}")).collect::<Vec<_>>();
     let xyz = |p: &str| ["x", "y", "z"].map(|a| format!("{p}_{a}")).to_vec();
     let mut m = Map::new();
-    m.insert("t".into(), Value::Array(get("t")?));
+    m.insert("t".into(), Value::Array(t.clone()));
     m.insert("phase".into(), Value::Array(get("phase")?));
     m.insert("q".into(), join(idx("q"))?);
     m.insert("qd".into(), join(idx("qd"))?);
@@ -351,7 +369,7 @@ fn from_documents(
     }
     for k in ["nodes", "dense"] {
         let cols = p.get(k).cloned().unwrap_or(Value::Null);
-        all.insert(k.into(), uncolumns(&cols, nq, path)?);
+        all.insert(k.into(), uncolumns(&cols, k, nq, path)?);
     }
     for k in INTERNAL_FIELDS {
         let v = if k == "timing" {
@@ -469,9 +487,10 @@ fn check_internal_fields(internals: &Value, ipath: &Path) -> Result<(), Pipeline
     check::<Option<bf_optim::ipm::WarmStart>>(internals, "nlp_warm", ipath)
 }
 
-/// Errors naming `path` unless the solution's own phase lists agree: at least one phase, and
-/// one duration per mode. Checked before the internals, so an edited `modes` is blamed on the
-/// field and not on the internals it no longer matches.
+/// Errors naming `path` unless the solution's own fields agree: at least one phase, one
+/// positive duration per mode, a period that is their sum, and trajectory tables of times
+/// that do not decrease within the phases. Checked before the internals, so an edited `modes`
+/// is blamed on the field and not on the internals it no longer matches.
 fn check_phases(sol: &OcpSolution, path: &Path) -> Result<(), PipelineError> {
     if sol.modes.is_empty() {
         return Err(io_err(
@@ -520,42 +539,11 @@ fn check_phases(sol: &OcpSolution, path: &Path) -> Result<(), PipelineError> {
     Ok(())
 }
 
-/// Why a trajectory table of a solution of `phases` phases does not fit, if it does not: one
-/// entry per sample in every column, rows of one width per quantity (3 for ω and λ), times
-/// that do not decrease and phase indices below `phases`.
+/// Why a trajectory table of a solution of `phases` phases does not fit, if it does not: times
+/// that decrease, or phase indices beyond `phases` (the columns' lengths are checked where the
+/// table is read, in `uncolumns`).
 fn check_samples(s: &bf_problem::Samples, phases: usize) -> Result<(), String> {
     let n = s.t.len();
-    let lens = [
-        ("phase", s.phase.len()),
-        ("q1, q2, …", s.q.len()),
-        ("qd1, qd2, …", s.qd.len()),
-        ("omega_x, omega_y, omega_z", s.omega.len()),
-        ("tau1, tau2, …", s.tau.len()),
-        ("lambda_x, lambda_y, lambda_z", s.lambda.len()),
-        ("h", s.h.len()),
-        ("sigma", s.sigma.len()),
-        ("alpha", s.alpha.len()),
-    ];
-    if let Some((name, len)) = lens.iter().find(|(_, len)| *len != n) {
-        return Err(format!(
-            "{name}: {len} samples, t: {n}; every column holds one entry per sample"
-        ));
-    }
-    let nq = s.q.first().map_or(0, Vec::len);
-    for (name, rows, width) in [
-        ("q", &s.q, nq),
-        ("qd", &s.qd, nq),
-        ("tau", &s.tau, nq),
-        ("omega", &s.omega, 3),
-        ("lambda", &s.lambda, 3),
-    ] {
-        if let Some((k, r)) = rows.iter().enumerate().find(|(_, r)| r.len() != width) {
-            return Err(format!(
-                "`{name}[{k}]` has {} values, the table's rows {width}",
-                r.len()
-            ));
-        }
-    }
     if let Some(k) = (1..n).find(|&k| s.t[k].partial_cmp(&s.t[k - 1]).is_none_or(|o| o.is_lt())) {
         return Err(format!(
             "`t[{k}]` = {} comes before `t[{}]` = {}: times do not decrease",

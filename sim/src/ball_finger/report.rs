@@ -34,8 +34,10 @@ use serde::Serialize;
 
 /// Which of an input's two values at the time of an observation a sample takes
 /// ([`Input::tau_before`]): the state just before an event ends the step that led to it, so it
-/// takes the τ that drove that step; every other sample starts a step (or lies inside one) and
-/// takes the τ after the observations, which drives the next step.
+/// takes the τ that drove that step; every other sample (and a chained event's state before,
+/// which no step led to) takes the τ after the observations, which drives the next step. A
+/// step's end is also a step's start; it takes the latter's τ, whose difference from the
+/// former is the input's change over one observation, not an event's.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Limit {
     /// [`Input::tau_before`].
@@ -264,7 +266,18 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
                 chained: e.chained,
                 x_pre: e.x_pre.clone(),
                 x_post: e.x_post.clone(),
-                pre: self.info_or_nan(Limit::Before, e.mode_before, e.t, &e.x_pre),
+                // A chained event fires from the state the previous reset left, with no step
+                // between them: its guard saw the input after that event's observation.
+                pre: self.info_or_nan(
+                    if e.chained {
+                        Limit::After
+                    } else {
+                        Limit::Before
+                    },
+                    e.mode_before,
+                    e.t,
+                    &e.x_pre,
+                ),
                 post: self.sample_info_or_nan(
                     e.mode_after.unwrap_or(e.mode_before),
                     e.t,

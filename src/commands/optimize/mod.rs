@@ -230,11 +230,11 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     if let (Some(w), Some(path)) = (&warm_start, &args.warm_start)
         && (w.problem != problem.name() || w.scene != built_on.name)
     {
-        // A guess across problems or scenes is a continuation a user may want, so it is
-        // taken, but never silently: its trajectory is interpolated, its point not reused.
+        // A start across problems or scenes is a continuation a user may want, so it is
+        // taken, but never silently.
         crate::errln!(
-            "warning: --warm-start {}: a solution of `{}` on scene `{}`, taken as a guess for \
-             `{problem}` on scene `{}` (its trajectory interpolated onto this problem)",
+            "warning: --warm-start {}: a solution of `{}` on scene `{}`, taken as the start of \
+             `{problem}` on scene `{}`",
             path.display(),
             w.problem,
             w.scene,
@@ -600,11 +600,16 @@ pub fn scene_record(args: &OptimizeArgs, problem: Problem) -> Result<(String, Ve
                 .with_context(|| format!("--scene {}", p.display()))?
                 .1
         }
-        None => bf_generated::scene_toml(problem.scene().as_str())
-            .with_context(|| format!("problem {problem}: no compiled scene"))?
-            .to_string(),
+        None => compiled_scene_text(problem)?,
     };
     Ok((text, super::parse_params(&args.param)?))
+}
+
+/// The text of `problem`'s compiled scene, as a solution posed on it records it.
+pub fn compiled_scene_text(problem: Problem) -> Result<String> {
+    Ok(bf_generated::scene_toml(problem.scene().as_str())
+        .with_context(|| format!("problem {problem}: no compiled scene"))?
+        .to_string())
 }
 
 /// The hint for a plan that a Newton plant cannot execute, or `None`: a sticking-law plan
@@ -734,7 +739,7 @@ pub fn run(args: &OptimizeArgs) -> Result<()> {
         });
         match (&args.warm_start, misfit) {
             (Some(path), true) => e.context(format!(
-                "--warm-start {} (its collocation data, solution-internals.json)",
+                "--warm-start {} (its collocation data, `raw` in its internals file)",
                 path.display()
             )),
             _ => e,

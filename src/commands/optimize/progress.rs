@@ -62,15 +62,16 @@ fn best_found(
     policy: &VerifyPolicy,
 ) -> Result<(BuiltProblem, OcpSolution)> {
     let record = super::shards::search_settings(&settings, policy);
+    let compiled_scene = settings.scene.is_none();
     let found = search_with_progress(name, settings, strategy, Shard::WHOLE, policy)?;
     let (p, mut sol) = found.best()?;
     let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
     // What `optimize` records beside the optimum, so that `paper`'s solution files are those
-    // of `optimize` (docs/files.md): the compiled scene's text, the search's settings and the
-    // active bounds.
-    sol.scene_toml = bf_generated::scene_toml(name.scene().as_str())
-        .with_context(|| format!("problem {name}: no compiled scene"))?
-        .to_string();
+    // of `optimize` (docs/files.md): the compiled scene's text (a `--scene` file's is its
+    // caller's to record), the search's settings and the active bounds.
+    if compiled_scene {
+        sol.scene_toml = super::compiled_scene_text(name)?;
+    }
     sol.search_settings = Some(record);
     sol.active_bounds = Some(crate::pipeline::bounds::active_bounds(&p.ocp, &sol));
     Ok((p, sol))

@@ -65,7 +65,18 @@ fn run_identity(sol: &OcpSolution) -> [(&'static str, String); 10] {
     [
         ("problem", sol.problem.clone()),
         ("scene", sol.scene.clone()),
-        ("runtime parameters", format!("{:?}", sol.scene_params)),
+        (
+            "runtime parameters",
+            if sol.scene_params.is_empty() {
+                "none".to_string()
+            } else {
+                sol.scene_params
+                    .iter()
+                    .map(|(n, v)| format!("{n}={v}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+        ),
         ("impact law", sol.impact_law.name().to_string()),
         ("cone margin", format!("{:e}", sol.cone_margin)),
         ("impulse cone", sol.impulse_cone.to_string()),

@@ -87,7 +87,7 @@ pub struct PresentedReference {
     /// durations within 10 %, as the warm solves are judged).
     pub same_as_cold: bool,
     /// Whether its stick phase lies on the problem's lower bound
-    /// ([`bf_problem::catalogue::MIN_STICK`], to 1e-6 relative).
+    /// ([`bf_problem::catalogue::MIN_STICK`]), as `active bounds` judges it.
     pub stick_on_bound: bool,
 }
 
@@ -174,9 +174,9 @@ pub(super) fn measure(
                 presented_period: p.period,
                 seconds: t0.elapsed().as_secs_f64(),
                 same_as_cold: same_branch(p, &ref_sol),
-                stick_on_bound: p
-                    .stick_duration()
-                    .is_some_and(|d| d <= bf_problem::catalogue::MIN_STICK * (1.0 + 1e-6)),
+                stick_on_bound: p.stick_duration().is_some_and(|d| {
+                    crate::pipeline::bounds::on_bound(d, bf_problem::catalogue::MIN_STICK)
+                }),
             })
         }
         None => None,
@@ -470,7 +470,7 @@ pub(super) fn section(
             );
             if p.stick_on_bound {
                 md.push_str(
-                    " Its stick phase sits on its 0.01 s bound, and errors of some 1e-7 are its \
+                    " Its stick phase sits on its lower bound, and errors of some 1e-7 are its \
                      floor: warm solves on meshes finer than J_ref,p's differ from it by 2e-8 to \
                      1e-6 without falling as the mesh grows, so the column does not rank meshes \
                      below that, whatever the refinement's own estimate says.",
