@@ -38,9 +38,16 @@ impl PhaseTrajectory {
     /// point, each node with its weight, state point, algebraic and control row, rows of one
     /// width each, τ increasing within [−1, 1], and elements of at least two state points
     /// that start at the first, share their end points and end at the last (or, for
-    /// Legendre–Gauss, at the one before the phase end). The error says what does not fit,
-    /// naming the field.
+    /// Legendre–Gauss, at the one before the phase end), and a finite positive duration. The
+    /// error says what does not fit, naming the field.
     pub fn check_shape(&self) -> Result<(), String> {
+        // A warm start's phase lengths are its durations; a non-positive one is no phase.
+        if !(self.duration.is_finite() && self.duration > 0.0) {
+            return Err(format!(
+                "`duration` is {}: a phase lasts a finite positive time",
+                self.duration
+            ));
+        }
         let n = self.state_tau.len();
         if n < 2 || self.x.len() != n {
             return Err(format!(
@@ -405,7 +412,7 @@ mod tests {
             let tr = phase(mesh);
             assert_eq!(tr.check_shape(), Ok(()));
             type Edit = fn(&mut PhaseTrajectory);
-            let edits: [(Edit, &str); 6] = [
+            let edits: [(Edit, &str); 7] = [
                 (
                     |t| {
                         t.x.pop();
@@ -432,6 +439,7 @@ mod tests {
                     "elements",
                 ),
                 (|t| t.state_tau.swap(1, 2), "`state_tau` is not increasing"),
+                (|t| t.duration = -0.5, "`duration` is -0.5"),
             ];
             for (edit, needle) in edits {
                 let mut bad = tr.clone();
