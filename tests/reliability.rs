@@ -909,6 +909,11 @@ fn a_solution_whose_fields_disagree_is_refused_when_read() {
             }),
             "`dense`: `t[1]`",
         ),
+        // The stick phase relabelled: its collocation data still hold the contact force.
+        (
+            Box::new(|v: &mut serde_json::Value| v["modes"][1] = "free".into()),
+            "`modes[1]` is `free`, but its collocation data",
+        ),
     ] {
         let err = read(&*edit).unwrap_err();
         assert!(

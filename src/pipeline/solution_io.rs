@@ -20,7 +20,7 @@ use anyhow::Context;
 use serde_json::{Map, Value, json};
 
 use bf_output::FileError;
-use bf_problem::OcpSolution;
+use bf_problem::{OcpSolution, PhaseMode};
 
 use super::error::PipelineError;
 
@@ -419,6 +419,30 @@ fn check_internals_belong(
                 sol.modes.len()
             ),
         ));
+    }
+    // A node's algebraic variables are q̈ and ω̇, and λ after them in a stick phase
+    // (bf-problem's node layout): a mode edited in `solution.json` would time a contact phase
+    // as a flight, or the reverse, when the plan is replayed.
+    for (i, (raw, mode)) in sol.raw.iter().zip(&sol.modes).enumerate() {
+        let (Some(x), Some(a)) = (raw.x.first(), raw.a.first()) else {
+            continue;
+        };
+        let nq = x.len().saturating_sub(3) / 2;
+        let stick = matches!(mode, PhaseMode::Stick);
+        let expected = nq + 3 + if stick { 3 } else { 0 };
+        if a.len() != expected {
+            return Err(io_err(
+                path,
+                format!(
+                    "`modes[{i}]` is `{}`, but its collocation data (raw[{i}] of {}) hold {} \
+                     algebraic values per node, a {} phase's",
+                    crate::names::name(mode),
+                    ipath.display(),
+                    a.len(),
+                    if stick { "free" } else { "stick" }
+                ),
+            ));
+        }
     }
     Ok(())
 }
