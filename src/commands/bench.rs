@@ -1,7 +1,8 @@
 //! `ball-finger bench SCENE [--time SECS] [--states N] [--seed S] [--json]`: times every
 //! kernel of a scene's module (its `kernels` list and the inverse-dynamics family) over
 //! cycling random states, through the compiled kernels of `bf-generated`'s registry when the
-//! file is a compiled scene of `scenes/` (its text equals the compiled one) and through the run-time interpreter
+//! file is a compiled scene of `scenes/` (as `eval` decides: equal up to comments, description
+//! and limits, with the same kernel list) and through the run-time interpreter
 //! (`bf_codegen::interp`, the same graphs and f64 operations) for any scene file.
 //!
 //! Method: a fixed set of random states (seeded; q uniform in the joint limits within [−π, π],
@@ -41,30 +42,27 @@ struct State {
     u: Vec<f64>,
 }
 
-/// The registry entry of `scene` (file text `text`) when the file is a compiled scene: its
-/// text equals the compiled one, so the compiled kernels run at the scene's default runtime
-/// parameters, the values the interpreter uses.
-fn compiled_for(scene: &Scene, text: &str) -> Option<&'static bf_generated::SceneKernels> {
-    bf_generated::scene(&scene.name).filter(|e| e.toml == text)
+/// The compiled kernels of `scene` and its runtime parameters' values (the interpreter's),
+/// when the scene is a compiled one up to what does not enter the kernels
+/// (`bf_model::registry::compiled_match`, as `eval` decides: comments, description, limits)
+/// and lists the kernels `rt` builds; any other scene is timed through the interpreter alone.
+fn compiled_for(
+    scene: &Scene,
+    rt: &SceneKernels,
+) -> Option<(&'static bf_generated::SceneKernels, Vec<f64>)> {
+    let (entry, p) = bf_model::registry::compiled_match(scene)?;
+    let rt_names: Vec<&str> = rt.kernels.iter().map(|k| k.name.as_str()).collect();
+    (rt_names.as_slice() == entry.kernels).then_some((entry, p))
 }
 
 /// Kernel `k` of the compiled `entry` on one state, outputs into `out`.
 fn call_compiled(
-    entry: &bf_generated::SceneKernels,
+    (entry, params): (&bf_generated::SceneKernels, &[f64]),
     k: usize,
     s: &State,
     out: &mut [f64],
 ) -> Option<usize> {
-    (entry.eval_into)(
-        k,
-        &s.q,
-        &s.qd,
-        &s.omega,
-        s.eps,
-        &s.u,
-        entry.param_defaults,
-        out,
-    )
+    (entry.eval_into)(k, &s.q, &s.qd, &s.omega, s.eps, &s.u, params, out)
 }
 
 /// One row of the table.
@@ -196,21 +194,10 @@ fn time_batches(n_states: usize, budget: f64, mut call: impl FnMut(usize)) -> f6
     per_call[per_call.len() / 2]
 }
 
-/// Times every kernel of `scene` (file text `text`).
-pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -> Result<Bench> {
+/// Times every kernel of `scene`.
+pub fn bench(scene: &Scene, time: f64, n_states: usize, seed: u64) -> Result<Bench> {
     let rt = SceneKernels::new(scene).context("cannot build the kernels")?;
-    let compiled = compiled_for(scene, text);
-    if let Some(entry) = compiled {
-        let names = entry.kernels;
-        let rt_names: Vec<&str> = rt.kernels.iter().map(|k| k.name.as_str()).collect();
-        if rt_names != names {
-            bail!(
-                "internal: the compiled module of {} holds kernels {names:?}, the generator \
-                 builds {rt_names:?}",
-                scene.name
-            );
-        }
-    }
+    let compiled = compiled_for(scene, &rt);
     let states = random_states(scene, n_states, seed)?;
     let vars: Vec<Vec<f64>> = states
         .iter()
@@ -223,8 +210,8 @@ pub fn bench(scene: &Scene, text: &str, time: f64, n_states: usize, seed: u64) -
         let len: usize = kern.outputs.iter().map(|o| o.len()).sum();
         let mut out = vec![0.0; len];
         let (mut compiled_ns, mut max_rel) = (None, None);
-        if let Some(entry) = compiled {
-            let call = |k: usize, s: &State, out: &mut [f64]| call_compiled(entry, k, s, out);
+        if let Some((entry, p)) = &compiled {
+            let call = |k: usize, s: &State, out: &mut [f64]| call_compiled((entry, p), k, s, out);
             let mut worst: f64 = 0.0;
             for (s, v) in states.iter().zip(&vars) {
                 let want = kern.eval(v);
@@ -295,8 +282,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             args.states
         );
     }
-    let (scene, text) = super::load_scene(&args.scene, &args.chain)?;
-    let b = bench(&scene, &text, args.time, args.states, args.seed)
+    let (scene, _) = super::load_scene(&args.scene, &args.chain)?;
+    let b = bench(&scene, args.time, args.states, args.seed)
         .with_context(|| format!("{}: bench failed", args.scene.display()))?;
     if args.json {
         return crate::outln!("{}", serde_json::to_string_pretty(&b)?);
@@ -304,7 +291,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let source = if b.compiled {
         "compiled kernels and run-time interpreter"
     } else {
-        "run-time interpreter only (the file is not a built-in scene)"
+        "run-time interpreter only (the file is not a built-in scene, up to comments, description and limits)"
     };
     crate::outln!(
         "bench {}: {source}; {} random states (seed {}), median wall-clock ns/call over batches",
