@@ -62,25 +62,12 @@ fn num(x: f64) -> String {
     }
 }
 
-/// `s` as a TOML basic string that reads back as `s`: quotes and backslashes escaped, control
-/// characters as `\uXXXX`, every other character as it is. Rust's `{:?}` is no such form: it
-/// writes combining marks and some spaces (U+0301, U+00A0) as `\u{301}`, which TOML refuses,
-/// so a URDF joint named `coude` + U+0301 would read as a TOML syntax error.
+/// `s` as a TOML string that reads back as `s`, written by the TOML crate the scene is read
+/// with. Rust's `{:?}` is no such form: it writes combining marks and some spaces (U+0301,
+/// U+00A0) as `\u{301}`, which TOML refuses, so a URDF joint named `coude` + U+0301 would read
+/// as a TOML syntax error.
 fn toml_string(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            c if c.is_control() => {
-                let _ = write!(out, "\\u{:04X}", u32::from(c));
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
+    toml::Value::from(s).to_string()
 }
 
 fn vec3(v: [f64; 3]) -> String {

@@ -871,8 +871,12 @@ pub fn run(args: &PaperArgs) -> Result<()> {
     )?;
 
     writeln!(report, "## 9. Known limitations\n")?;
-    // The scenarios' `--points` over 3 Radau elements, rounded up to whole elements.
-    let per_element = (if args.quick { 20usize } else { 30 }).div_ceil(3);
+    // The scenarios' `--points` over 3 Radau elements, as the mesh rounds them.
+    let per_element = bf_optim::ocp::mesh::MeshSpec::from_scheme(
+        bf_optim::ocp::Scheme::Radau { elements: 3 },
+        if args.quick { 20 } else { 30 },
+    )?
+    .degrees[0];
     let optima = if args.quick {
         "The optima shown are one cold solve per problem (`--quick`), not the default \
          search's optima, which a run without `--quick` presents."

@@ -605,6 +605,23 @@ pub fn scene_record(args: &OptimizeArgs, problem: Problem) -> Result<(String, Ve
     Ok((text, super::parse_params(&args.param)?))
 }
 
+/// Records in `s`, an optimum of `problem` or a candidate of its search, what `optimize`
+/// writes beside it (docs/files.md): the scene text and runtime parameters it was posed on,
+/// the search's settings and the bounds it sits on. The bounds of the problem definition do
+/// not depend on the mesh, so the chosen problem's serve every candidate (each may sit on a
+/// refined mesh of it).
+pub fn record_run(
+    s: &mut OcpSolution,
+    problem: &BuiltProblem,
+    (scene_toml, scene_params): &(String, Vec<(String, f64)>),
+    settings: &bf_problem::solution::records::SearchSettings,
+) {
+    s.scene_toml.clone_from(scene_toml);
+    s.scene_params.clone_from(scene_params);
+    s.search_settings = Some(settings.clone());
+    s.active_bounds = Some(crate::pipeline::bounds::active_bounds(&problem.ocp, s));
+}
+
 /// The text of `problem`'s compiled scene, as a solution posed on it records it.
 pub fn compiled_scene_text(problem: Problem) -> Result<String> {
     Ok(bf_generated::scene_toml(problem.scene().as_str())
@@ -891,12 +908,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         }
         print_verification(&sol)?;
     }
-    let (scene_toml, scene_params) = scene_record(args, name)?;
+    let scene = scene_record(args, name)?;
     let record = shards::search_settings(&settings, &policy);
     for s in std::iter::once(&mut sol).chain(candidates.iter_mut().map(|(_, c)| c)) {
-        s.scene_toml.clone_from(&scene_toml);
-        s.scene_params.clone_from(&scene_params);
-        s.search_settings = Some(record.clone());
+        record_run(s, &problem, &scene, &record);
     }
     if let Some((field, v)) = first_non_finite(&sol) {
         bail!(
@@ -904,11 +919,6 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             name,
             args.out.display()
         );
-    }
-    // The bounds of the problem definition do not depend on the mesh, so the chosen
-    // problem's serve every candidate (each may sit on a refined mesh of it).
-    for s in std::iter::once(&mut sol).chain(candidates.iter_mut().map(|(_, c)| c)) {
-        s.active_bounds = Some(crate::pipeline::bounds::active_bounds(&problem.ocp, s));
     }
     let extra: Vec<(String, &OcpSolution)> =
         candidates.iter().map(|(n, c)| (n.clone(), c)).collect();

@@ -66,14 +66,14 @@ fn best_found(
     let found = search_with_progress(name, settings, strategy, Shard::WHOLE, policy)?;
     let (p, mut sol) = found.best()?;
     let p = p.ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
-    // What `optimize` records beside the optimum, so that `paper`'s solution files are those
-    // of `optimize` (docs/files.md): the compiled scene's text (a `--scene` file's is its
-    // caller's to record), the search's settings and the active bounds.
-    if compiled_scene {
-        sol.scene_toml = super::compiled_scene_text(name)?;
-    }
-    sol.search_settings = Some(record);
-    sol.active_bounds = Some(crate::pipeline::bounds::active_bounds(&p.ocp, &sol));
+    // `paper`'s solution files are those of `optimize`; a `--scene` file's text is its
+    // caller's to record.
+    let scene = if compiled_scene {
+        (super::compiled_scene_text(name)?, Vec::new())
+    } else {
+        (sol.scene_toml.clone(), sol.scene_params.clone())
+    };
+    super::record_run(&mut sol, &p, &scene, &record);
     Ok((p, sol))
 }
 
