@@ -422,9 +422,9 @@ fn check_internals_belong(
     }
     // A node's algebraic variables are q̈ and ω̇, and λ after them in a stick phase
     // (bf-problem's node layout): a mode edited in `solution.json` would time a contact phase
-    // as a flight, or the reverse, when the plan is replayed.
-    // Only a width that is the other mode's is blamed on `modes`; any other misfit is the
-    // collocation data's, which a warm start checks against the problem.
+    // as a flight, or the reverse, when the plan is replayed. Only a width that is the other
+    // mode's is blamed on `modes`; any other misfit is the collocation data's, which a warm
+    // start checks against the problem.
     let Some(nq) = sol.nodes.q.first().map(Vec::len) else {
         return Ok(());
     };
