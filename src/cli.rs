@@ -511,8 +511,9 @@ pub struct OptimizeArgs {
     /// Transcription: lg (Legendre–Gauss, as the paper) or radau (hp Legendre–Gauss–Radau).
     #[arg(long, default_value = "radau")]
     pub scheme: String,
-    /// Elements per phase for `--scheme radau` (`--scheme lg` has one polynomial per phase).
-    #[arg(long, default_value_t = 3, allow_hyphen_values = true, value_parser = whole)]
+    /// Elements per phase for `--scheme radau` (`--scheme lg` has one polynomial per phase and
+    /// refuses another count).
+    #[arg(long, default_value_t = DEFAULT_ELEMENTS, allow_hyphen_values = true, value_parser = whole)]
     pub elements: usize,
     /// Interior-point iteration limit.
     #[arg(long, default_value_t = 1500, allow_hyphen_values = true, value_parser = positive_whole)]
@@ -603,7 +604,7 @@ pub struct OptimizeArgs {
     /// starts most QC optima sit on it (short "taps" that spin the ball mostly by the impact
     /// impulse), and so do the default search's best optima of the sticking law (docs/optima.md).
     /// A larger value (e.g. 0.1) asks for a stick phase of real duration.
-    #[arg(long, value_name = "SECS", default_value_t = 0.01, allow_hyphen_values = true, value_parser = positive)]
+    #[arg(long, value_name = "SECS", default_value_t = bf_problem::MIN_STICK, allow_hyphen_values = true, value_parser = positive)]
     pub min_stick: f64,
     /// Impact law of the plan: `newton` (eq. 39, the law of the paper's Sect. 6.2 simulations
     /// and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint velocity
@@ -654,8 +655,8 @@ pub struct OptimizeArgs {
     /// that does not converge ends the refinement with the round before it.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub refine: Option<f64>,
-    /// Refinement rounds at most (with `--refine`).
-    #[arg(long, default_value_t = 8, allow_hyphen_values = true, value_parser = whole)]
+    /// Refinement rounds at most (with `--refine`; refused without it).
+    #[arg(long, default_value_t = DEFAULT_REFINE_ROUNDS, allow_hyphen_values = true, value_parser = whole)]
     pub refine_rounds: usize,
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
     /// 4 rounds driven by the element-wise re-integration defects, the first to 1e-4, each
@@ -766,6 +767,11 @@ pub fn scene_files(scene: &Path) -> Vec<PathBuf> {
     }
     out
 }
+
+/// `optimize --elements` when not given (hp-Radau elements per phase).
+pub const DEFAULT_ELEMENTS: usize = 3;
+/// `optimize --refine-rounds` when not given.
+pub const DEFAULT_REFINE_ROUNDS: usize = 8;
 
 /// `simulate --rtol` when not given.
 pub const DEFAULT_RTOL: f64 = 1e-8;

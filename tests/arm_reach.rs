@@ -202,19 +202,28 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
     let dir = tmpdir("reach-arm-user");
     let scene = user_scene(&dir);
     let out = dir.join("out");
-    let o = run(&[
-        "optimize",
-        "--problem",
-        "reach-arm",
-        "--scene",
-        scene.to_str().unwrap(),
-        &format!("--start={},0", HANGING[0]),
-        &format!("--target={},0.1", HANGING[0] + 0.1),
-        "--effort-weight",
-        "1e-3",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let reach = |out: &Path, extra: &[&str]| {
+        let (start, target) = (
+            format!("--start={},0", HANGING[0]),
+            format!("--target={},0.1", HANGING[0] + 0.1),
+        );
+        let mut args = vec![
+            "optimize",
+            "--problem",
+            "reach-arm",
+            "--scene",
+            scene.to_str().unwrap(),
+            &start,
+            &target,
+            "--effort-weight",
+            "1e-3",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        run(&args)
+    };
+    let o = reach(&out, &[]);
     let (stdout, stderr) = (
         String::from_utf8_lossy(&o.stdout),
         String::from_utf8_lossy(&o.stderr),
@@ -305,19 +314,92 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
     assert_eq!(&first[..5], &[0.0, HANGING[0], 0.0, 0.0, 0.0]);
 
     // --t-end, when given, ends the replay there.
+    let replay_for = |t_end: f64, into: &Path| {
+        run(&[
+            "simulate",
+            "--init",
+            out.join("solution.json").to_str().unwrap(),
+            &format!("--t-end={t_end}"),
+            "--out",
+            into.to_str().unwrap(),
+        ])
+    };
     let half = dir.join("half");
-    let o = run(&[
-        "simulate",
-        "--init",
-        out.join("solution.json").to_str().unwrap(),
-        &format!("--t-end={}", 0.5 * duration),
-        "--out",
-        half.to_str().unwrap(),
-    ]);
+    let o = replay_for(0.5 * duration, &half);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary = json(&half.join("summary.json"));
     let t_final = summary["t_final"].as_f64().unwrap();
     assert!((t_final - 0.5 * duration).abs() < 1e-9, "{summary}");
+
+    // A --t-end past the solution's duration holds the torque it ends with, and says so
+    // (the last polynomial used to be extrapolated, without a word, to the torque limits).
+    let longer = dir.join("longer");
+    let o = replay_for(1.5 * duration, &longer);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("torques of the --init solution end at"),
+        "{err}"
+    );
+    let summary = json(&longer.join("summary.json"));
+    assert!(
+        summary["warnings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|w| w["kind"] == "torques_held"),
+        "{summary}"
+    );
+    let numbers = |l: &str| -> Vec<f64> { l.split(',').map(|x| x.parse().unwrap()).collect() };
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(longer.join("trajectory.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(numbers)
+        .collect();
+    // The torque the solution ends with: the last row of its torques.csv, at its duration.
+    let end = numbers(csv.lines().last().unwrap());
+    assert!((end[0] - duration).abs() < 1e-9, "{end:?}");
+    let past: Vec<&Vec<f64>> = rows.iter().filter(|r| r[0] > duration + 1e-9).collect();
+    assert!(past.len() >= 2, "{}", past.len());
+    for r in past {
+        for j in 0..2 {
+            assert!(
+                (r[5 + j] - end[1 + j]).abs() <= 1e-9 * end[1 + j].abs().max(1.0),
+                "t = {}: tau{} {} against the end's {}",
+                r[0],
+                j + 1,
+                r[5 + j],
+                end[1 + j]
+            );
+        }
+    }
+    // --pd-track tracks a finger's solution; on an arm's it is refused (it was ignored).
+    let o = run(&[
+        "simulate",
+        "--init",
+        out.join("solution.json").to_str().unwrap(),
+        "--pd-track",
+        "1,0.2",
+        "--out",
+        dir.join("pd-track").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--pd-track") && err.contains("no ball"),
+        "{err}"
+    );
+    // Without a re-integration (--verify-rtol 0) the solve is no failure, as for the finger:
+    // exit 0, the file saying it is not verified.
+    let unchecked = dir.join("unchecked");
+    let o = reach(&unchecked, &["--verify-rtol", "0"]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{stdout}");
+    assert!(stdout.contains("verified: not checked"), "{stdout}");
+    assert!(stdout.contains("tau_max [4, 2]"), "{stdout}");
+    assert!(!unchecked.join("FAILED").exists());
+    assert_eq!(json(&unchecked.join("solution.json"))["verified"], false);
 
     // The optimum's directory holds the replay's input and is `optimize`'s: a replay into it
     // is refused before any work, and the optimum is left as it was.

@@ -526,6 +526,47 @@ fn optimize_refines_verifies_and_records_it() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// `--refine` goes on from the mesh the verification's refinements left the optimum on: on
+/// `reach` the direct solve's 30 points verify only once refined, and a `--refine` that
+/// started again from the 30 points met its error estimate there and ended unverified (a
+/// re-integration defect of 8e-3) where the run without it verifies.
+#[test]
+fn optimize_refine_starts_from_the_verified_mesh() {
+    let points = |dir: &std::path::Path| -> usize {
+        let sol: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap())
+                .unwrap();
+        assert_eq!(sol["verified"], true, "{}", dir.display());
+        sol["refinement"]["mesh"][0]["degrees"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|d| d.as_u64().unwrap() as usize)
+            .sum()
+    };
+    let mut meshes = Vec::new();
+    for extra in [&[][..], &["--refine", "1e-4"][..]] {
+        let dir = tmpdir("refine-verified");
+        let mut args = vec!["optimize", "--problem", "reach", "--strategy", "direct"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", dir.to_str().unwrap()]);
+        let out = run(&args);
+        assert!(
+            out.status.success(),
+            "{extra:?}: {}\n{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        meshes.push(points(&dir));
+        std::fs::remove_dir_all(dir).ok();
+    }
+    assert!(
+        meshes[0] > 30,
+        "the verification refined the mesh: {meshes:?}"
+    );
+    assert!(meshes[1] >= meshes[0], "{meshes:?}");
+}
+
 /// `--dual-regularization` reaches the solver: on a Radau mesh finer than the default
 /// (`periodic-cot`, 3 × 12) the solver, starting from its default δ_c = 1e-9, raises δ_c
 /// within the solve (at iteration 42, BENCHMARKS.md); started at `--dual-regularization 3e-8`,
@@ -692,6 +733,61 @@ fn reach_arm_refuses(flag: &str) {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert_eq!(out.status.code(), Some(2), "{stderr}");
     assert!(stderr.contains(flag), "{stderr}");
+}
+
+/// Options that the run would drop without a word are refused by name (exit status 2): they
+/// were accepted and ignored (the arm's problem has no stick phase or impact, Legendre–Gauss
+/// no elements, a direct solve no hops, and no `--refine` no rounds of it).
+#[test]
+fn options_a_run_would_drop_are_refused_by_name() {
+    let arm = ["--problem", "reach-arm", "--scene", "scenes/puma560.toml"];
+    for (extra, flag) in [
+        (&["--min-stick", "5"][..], "--min-stick"),
+        (&["--cone-margin", "0.5"][..], "--cone-margin"),
+        (&["--impulse-cone"][..], "--impulse-cone"),
+        (&["--refine-rounds", "3"][..], "--refine-rounds"),
+    ] {
+        let mut args = vec!["optimize"];
+        args.extend_from_slice(&arm);
+        args.extend_from_slice(extra);
+        assert_usage_error(&run(&args), &[flag]);
+    }
+    for (extra, flag) in [
+        (
+            &["--problem", "reach", "--strategy", "direct", "--hops", "3"][..],
+            "--hops",
+        ),
+        (
+            &[
+                "--problem",
+                "reach",
+                "--strategy",
+                "continuation",
+                "--hop-scale",
+                "0.5",
+            ][..],
+            "--hop-scale",
+        ),
+        (
+            &[
+                "--problem",
+                "periodic-qc",
+                "--scheme",
+                "lg",
+                "--elements",
+                "2",
+            ][..],
+            "--elements",
+        ),
+        (
+            &["--problem", "periodic-qc", "--refine-rounds", "3"][..],
+            "--refine-rounds",
+        ),
+    ] {
+        let mut args = vec!["optimize"];
+        args.extend_from_slice(extra);
+        assert_usage_error(&run(&args), &[flag]);
+    }
 }
 
 #[test]

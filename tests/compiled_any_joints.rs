@@ -373,6 +373,39 @@ fn a_finger_of_the_user_s_own_is_tracked_on_interpreted_kernels() {
     let t: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("tracking.json")).unwrap()).unwrap();
     assert_eq!(t["plan_verified"], false);
+    assert_eq!(t["plan_status"], "Solved");
+    // The same plan as the end of a solve that did not converge: its re-integration passes,
+    // but it is no optimum, and the run says so (it used to say nothing).
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&sol).unwrap()).unwrap();
+    v["status"] = serde_json::json!("MaxIterations");
+    std::fs::write(&unverified, serde_json::to_vec(&v).unwrap()).unwrap();
+    let out = dir.join("track-unconverged");
+    let o = run(&[
+        "track",
+        unverified.to_str().unwrap(),
+        "--periods",
+        "1",
+        "--impact-law",
+        "stick",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("ended MaxIterations") && err.contains("not an optimum"),
+        "{err}"
+    );
+    assert!(!err.contains("failed its own verification"), "{err}");
+    let t: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("tracking.json")).unwrap()).unwrap();
+    assert_eq!(
+        (&t["plan_verified"], &t["plan_status"]),
+        (
+            &serde_json::json!(true),
+            &serde_json::json!("MaxIterations")
+        )
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

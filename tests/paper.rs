@@ -124,6 +124,39 @@ fn paper_quick_writes_a_consistent_report() {
             .collect();
         assert_eq!(cells[12], mesh.join(", "), "{name}: the mesh it ends on");
         assert_eq!(cells[13], "direct", "{name}: --quick solves directly");
+        // The scenario's stage listing accounts for every iteration the table counts: its
+        // kept chain's solves and verification refinements (a refinement's hp rounds are
+        // indented under it, parts of its count), against the file's total.
+        let iterations: usize = cells[14].parse().unwrap();
+        assert_eq!(iterations as u64, sol["iterations"].as_u64().unwrap());
+        let section = &report[report.find(&format!("\n### {name}\n")).unwrap()..];
+        let listing = &section[section.find("Solve stages").unwrap()..];
+        let listing = &listing[listing.find("```text\n").unwrap() + 8..];
+        let listing = &listing[..listing.find("```").unwrap()];
+        let head = listing.lines().nth(1).unwrap();
+        let status_col = head.find("status").unwrap();
+        let mut listed = 0;
+        for l in listing.lines().skip(2) {
+            // Aligned columns whatever a stage is called: the status starts under its head.
+            assert!(
+                l[status_col..].starts_with("Solved") || l[status_col..].starts_with('A'),
+                "{name}: misaligned {l:?} under {head:?}"
+            );
+            let stage = l[8..status_col].trim_end();
+            if !stage.starts_with("  ") && !stage.starts_with("stored optimum") {
+                listed += l
+                    .split_whitespace()
+                    .rev()
+                    .nth(1)
+                    .unwrap()
+                    .parse::<usize>()
+                    .unwrap();
+            }
+        }
+        assert_eq!(
+            listed, iterations,
+            "{name}: the listing's iterations\n{listing}"
+        );
         // Independent check of the period: the phase durations add up to it.
         let sum: f64 = sol["phase_durations"]
             .as_array()

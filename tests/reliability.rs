@@ -914,6 +914,22 @@ fn a_solution_whose_fields_disagree_is_refused_when_read() {
             Box::new(|v: &mut serde_json::Value| v["modes"][1] = "free".into()),
             "`modes[1]` is `free`, but its collocation data",
         ),
+        // The internals are the file beside the solution that it names; a path in that name
+        // was followed wherever it led (and its error blamed the wrong file).
+        (
+            Box::new(|v: &mut serde_json::Value| v["internals"] = "/etc/passwd".into()),
+            "its `internals` (\"/etc/passwd\") is not the name of a file beside it",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| {
+                v["internals"] = "../periodic-qc/solution-internals.json".into();
+            }),
+            "its `internals`",
+        ),
+        (
+            Box::new(|v: &mut serde_json::Value| v["internals"] = 3.into()),
+            "its `internals` (3)",
+        ),
     ] {
         let err = read(&*edit).unwrap_err();
         assert!(

@@ -150,6 +150,117 @@ fn default_periodic_cot_search_beats_the_continuation_verified_and_thread_indepe
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// A merge takes neither a candidate's stated status nor its stated verification on trust:
+/// a failed start whose file was edited to say `Solved` and verified is refused (its own
+/// point violates the constraints far beyond what `Solved` allows), and a candidate whose
+/// verification was edited to pass is verified anew, so the merge ends as with the files
+/// as written (it used to choose the edited candidate with exit 0).
+#[test]
+fn a_merge_checks_the_status_and_verification_its_files_state() {
+    let dir = tmpdir("merge-claims");
+    let shard = dir.join("shard");
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--starts",
+        "4",
+        "--shard",
+        "2/2",
+        "--out",
+        shard.to_str().unwrap(),
+    ]);
+    ok(&o);
+    let merge = |from: &Path, to: &str| {
+        run(&[
+            "optimize",
+            "merge",
+            from.to_str().unwrap(),
+            "--out",
+            dir.join(to).to_str().unwrap(),
+        ])
+    };
+    let plain = merge(&shard, "plain");
+    ok(&plain);
+    let copy = |tag: &str| {
+        let to = dir.join(tag);
+        std::fs::create_dir_all(&to).unwrap();
+        for e in std::fs::read_dir(&shard).unwrap() {
+            let e = e.unwrap();
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+        to
+    };
+    let candidates: Vec<(String, serde_json::Value)> = std::fs::read_dir(&shard)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with("candidate-") && !n.ends_with("-internals.json"))
+        .map(|n| {
+            let v = json(&shard.join(&n));
+            (n, v)
+        })
+        .collect();
+    // Every defect of a verification record set to `value`, and its verdict to `verified`.
+    fn claim(v: &mut serde_json::Value, value: f64) {
+        match v {
+            serde_json::Value::Object(m) => {
+                for (k, x) in m.iter_mut() {
+                    if k.contains("defect") && x.is_number() {
+                        *x = serde_json::json!(value);
+                    } else {
+                        claim(x, value);
+                    }
+                }
+            }
+            serde_json::Value::Array(a) => a.iter_mut().for_each(|x| claim(x, value)),
+            _ => {}
+        }
+    }
+    let verified_claim = |c: &mut serde_json::Value| {
+        claim(&mut c["verification"], 1e-7);
+        c["verification"]["verified"] = serde_json::json!(true);
+        c["verified"] = serde_json::json!(true);
+    };
+    let (failed, mut c) = candidates
+        .iter()
+        .find(|(_, c)| c["status"] != "Solved" && c["constraint_violation"].as_f64() > Some(1e-2))
+        .cloned()
+        .expect("a start of reach that ends infeasible");
+    c["status"] = serde_json::json!("Solved");
+    verified_claim(&mut c);
+    let edited = copy("edited-status");
+    std::fs::write(edited.join(&failed), c.to_string()).unwrap();
+    let o = merge(&edited, "refused");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains(&failed) && e.contains("status Solved") && e.contains("violated"),
+        "{e}"
+    );
+    let (unverified, mut c) = candidates
+        .iter()
+        .find(|(_, c)| c["status"] == "Solved" && c["verified"] == false)
+        .cloned()
+        .expect("a solved start of reach that its own mesh does not verify");
+    verified_claim(&mut c);
+    let edited = copy("edited-verification");
+    std::fs::write(edited.join(&unverified), c.to_string()).unwrap();
+    let o = merge(&edited, "reverified");
+    ok(&o);
+    let (a, b) = (
+        json(&dir.join("plain").join("solution.json")),
+        json(&dir.join("reverified").join("solution.json")),
+    );
+    assert_eq!(a["objective"], b["objective"]);
+    assert_eq!(a["strategy"]["chosen"], b["strategy"]["chosen"]);
+    assert_eq!(
+        a["verification"]["max_defect"],
+        b["verification"]["max_defect"]
+    );
+    assert!(b["verification"]["max_defect"].as_f64().unwrap() > 1e-7);
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn shards_merged_give_the_unsharded_multistart_choice() {
     let dir = tmpdir("shards");

@@ -44,8 +44,8 @@ pub use node::{CostKind, PhaseMode, Physics, StickLevel};
 
 #[cfg(feature = "catalogue")]
 pub use catalogue::{
-    BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, Problem, ProblemSettings, QC_OMEGA_REF,
-    StartGuess, build, check_settings, mean_omega, solution_at, warm_initial_point,
+    BuiltProblem, COT_MAX_PERIOD, Generated, GuessKind, MIN_STICK, Problem, ProblemSettings,
+    QC_OMEGA_REF, StartGuess, build, check_settings, mean_omega, solution_at, warm_initial_point,
 };
 #[cfg(feature = "catalogue")]
 pub use error::ProblemError;

@@ -252,11 +252,35 @@ pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<S
     urdf_scene(urdf, file, choice).map(|(text, _)| text)
 }
 
+/// A command line's `--base`/`--tip` (`choice`) that names no link of the URDF `urdf` (the
+/// file `file`): a mistake in the command line (exit status 2), named by its flag.
+fn check_choice(urdf: &str, file: &str, choice: &ChainChoice) -> Result<(), SpecError> {
+    let Some(links) = crate::urdf::link_names(urdf) else {
+        return Ok(());
+    };
+    for (flag, name) in [("--base", &choice.base), ("--tip", &choice.tip)] {
+        if let Some(n) = name
+            && !links.contains(n)
+        {
+            return Err(SpecError::At {
+                kind: SpecErrorKind::ChainChoice,
+                file: file.to_string(),
+                line: 1,
+                column: 1,
+                path: flag.to_string(),
+                message: format!("{n:?} is not a link of the robot (links: {links:?})"),
+            });
+        }
+    }
+    Ok(())
+}
+
 fn urdf_scene(
     urdf: &str,
     file: &str,
     choice: &ChainChoice,
 ) -> Result<(String, Imported), SpecError> {
+    check_choice(urdf, file, choice)?;
     let chain = read_chain(
         urdf,
         file,
@@ -391,6 +415,23 @@ fn expand(
             format!("cannot read the URDF file {file} (relative to the scene file): {e}"),
         )
     })?;
+    check_choice(&urdf_text, &file, choice)?;
+    // A link the scene's own key names wrongly is the scene's mistake, at that key.
+    if let Some(links) = crate::urdf::link_names(&urdf_text) {
+        for (key, given, name) in [
+            ("base_link", &choice.base, &chain_choice.base),
+            ("tip_link", &choice.tip, &chain_choice.tip),
+        ] {
+            if let (None, Some(n)) = (given, name)
+                && !links.contains(n)
+            {
+                return Err(ix.invalid(
+                    key,
+                    format!("{n:?} is not a link of the URDF {file} (links: {links:?})"),
+                ));
+            }
+        }
+    }
     let chain = read_chain(
         &urdf_text,
         &file,

@@ -461,6 +461,20 @@ fn lump(acc: Option<Inertial>, b: Inertial) -> Inertial {
     }
 }
 
+/// The names of the `<link>` elements of the URDF text `text`; `None` where it does not parse
+/// as one (then [`read_chain`] says why). A chain's base and tip are checked against them
+/// where it is known who named them: the command line or a scene's key.
+pub(crate) fn link_names(text: &str) -> Option<Vec<String>> {
+    let doc = roxmltree::Document::parse(text).ok()?;
+    let root = doc.root_element();
+    Some(
+        root.children()
+            .filter(|c| c.is_element() && c.tag_name().name() == "link")
+            .filter_map(|c| c.attribute("name").map(str::to_string))
+            .collect(),
+    )
+}
+
 /// Reads the chain `base` → `tip` of the URDF text `text` (`file` names it in errors). `base`
 /// defaults to the root link, `tip` to the only leaf of a tree that does not branch.
 ///

@@ -498,6 +498,55 @@ fn tmpdir(name: &str) -> TempDir {
     )
 }
 
+/// A link name that is no link of the URDF is blamed on whoever gave it: the command line's
+/// `--base`/`--tip` (a `ChainChoice` error, which the program exits on with status 2, naming
+/// the flag), or the scene's `base_link`/`tip_link` key at its own line. Both used to be the
+/// URDF's `<robot>` element, with neither the flag nor the key named.
+#[test]
+fn an_unknown_chain_link_names_the_flag_or_the_key_that_gave_it() {
+    let dir = tmpdir("unknown-link");
+    std::fs::write(dir.join("arm.urdf"), arm(J2)).unwrap();
+    let tip = |t: &str| ChainChoice {
+        base: None,
+        tip: Some(t.to_string()),
+    };
+    let err = bf_scene::urdf_scene_text(&arm(J2), FILE, &tip("nope")).unwrap_err();
+    assert_eq!(
+        err.kind(),
+        Some(bf_scene::SpecErrorKind::ChainChoice),
+        "{err}"
+    );
+    assert_eq!(err.path(), Some("--tip"), "{err}");
+    assert!(err.to_string().contains("\"nope\" is not a link"), "{err}");
+    let base = ChainChoice {
+        base: Some("nope".to_string()),
+        tip: None,
+    };
+    let err = bf_scene::urdf_scene_text(&arm(J2), FILE, &base).unwrap_err();
+    assert_eq!(err.path(), Some("--base"), "{err}");
+    assert!(bf_scene::urdf_scene_text(&arm(J2), FILE, &tip("l2")).is_ok());
+
+    let path = dir.join("arm.toml");
+    std::fs::write(
+        &path,
+        "name = \"arm2\"\nurdf = \"arm.urdf\"\ntip_link = \"zzz\"\nkernels = [\"mass_matrix\"]\n",
+    )
+    .unwrap();
+    let err = Scene::load(&path).unwrap_err();
+    assert_eq!(err.kind(), Some(bf_scene::SpecErrorKind::Invalid), "{err}");
+    assert_eq!(
+        (err.path(), err.line()),
+        (Some("tip_link"), Some(3)),
+        "{err}"
+    );
+    // The command line's choice overrides the key, and is the one blamed.
+    let err = Scene::load_with_text(&path, &tip("nope")).unwrap_err();
+    assert_eq!(err.path(), Some("--tip"), "{err}");
+    if let Err(e) = Scene::load_with_text(&path, &tip("l2")) {
+        panic!("{e}");
+    }
+}
+
 #[test]
 fn a_toml_scene_takes_its_robot_from_a_urdf_next_to_it() {
     let dir = tmpdir("toml");

@@ -607,9 +607,11 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         ) {
             writeln!(
                 report,
-                "Solve stages (the search's summary, the kept chain, the rounds of the hp \
-                 refinement that verified it, and last the optimum of the table above; every \
-                 stage is in `{}/solution.json`):\n\n```text\n{stages}```\n",
+                "Solve stages (the search's summary, which counts every solve and iteration \
+                 of the table; the kept chain's solves and the hp refinements that the \
+                 verification ran on it, each from the mesh the one before it ended on; \
+                 indented, the rounds of the last refinement; and last the optimum of the table above where \
+                 it is another solve; every stage is in `{}/solution.json`):\n\n```text\n{stages}```\n",
                 r.name,
             )?;
             if let Some(line) = crate::pipeline::search::basin_line(st) {

@@ -44,6 +44,9 @@ pub struct TrackingJson<'a> {
     /// `verification` record (what `optimize` wrote as `verified`), false without a record.
     /// An unverified plan's errors include the plan's own.
     pub plan_verified: bool,
+    /// How the plan's solve ended (`solution.json`'s `status`): a plan of a solve that did not
+    /// converge (`MaxIterations`, …) is no optimum, whatever its re-integration shows.
+    pub plan_status: String,
     /// Periods asked for.
     pub requested_periods: usize,
     /// Periods completed (at most the requested ones).
@@ -98,6 +101,7 @@ impl<'a> TrackingJson<'a> {
             planned_impact_law,
             optimum_mean_omega: sol.mean_omega,
             plan_verified: crate::pipeline::verify::is_verified(sol),
+            plan_status: crate::names::name(&sol.status),
             requested_periods: r.requested_periods,
             completed_periods: r.periods.len(),
             lost_ball: r.lost.is_some(),
@@ -312,6 +316,14 @@ fn run_n<const N: usize>(
         crate::errln!(
             "warning: {} {why}: the errors below include the plan's",
             args.solution.display()
+        );
+    }
+    if !sol.status.is_success() {
+        crate::errln!(
+            "warning: {}: its solve ended {} (status): the plan tracked is where that solve \
+             stopped, not an optimum",
+            args.solution.display(),
+            crate::names::name(&sol.status)
         );
     }
     if law.name() != sol.impact_law.name() {

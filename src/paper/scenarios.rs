@@ -16,6 +16,7 @@ use anyhow::{Context, Result, anyhow};
 use bf_codegen::spec::SceneId;
 use bf_plot::paper::{Phases, TimeSeries};
 use bf_plot::scene3d::{FingerPaths, NamedPath, View};
+use bf_problem::solution::records::{StageRow, stage_table};
 use bf_problem::{BuiltProblem, OcpSolution, Problem, ProblemSettings, QC_OMEGA_REF, Samples};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -750,40 +751,36 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
     s
 }
 
-/// One line of [`solve_stages`], in the columns of `StrategyReport::kept_table`.
-fn stage_line(
-    chain: Option<usize>,
-    stage: &str,
-    status: &bf_optim::ipm::Status,
-    objective: f64,
-    period: Option<f64>,
-    iterations: usize,
-    seconds: f64,
-) -> String {
-    let period = period.map_or("-".to_string(), |p| format!("{p:.4}"));
-    let chain = chain.map_or("-".to_string(), |c| c.to_string());
-    format!(
-        "* {chain:>5}  {stage:<20}  {:<14} {objective:>12.6e} {period:>8} {iterations:>5} {seconds:>8.2}\n",
-        crate::names::name(status),
-    )
-}
-
-/// The solve stages of `sol` as the report shows them: the strategy's summary and the stages
-/// of its kept chain (`StrategyReport::kept_table`), then the rounds of the hp refinement
-/// that verified it (`solution.json`'s `refinement.history`), and last the optimum the
-/// results table reports: where `resolved`, the solve of the stored optimum from its own
-/// point in this run, otherwise a line of its own only where it differs from the line before.
-/// `None` for a solution without a strategy record.
+/// The solve stages of `sol` as the report shows them: the strategy's summary, the stages
+/// of its kept chain and the verification refinements of that chain
+/// (`StrategyReport::kept_rows`), then the rounds of the hp refinement that verified it
+/// (`solution.json`'s `refinement.history`: the last of those refinements, whose line counts
+/// their iterations), and last the optimum the results table reports: where `resolved`, the
+/// solve of the stored optimum from its own point in this run, otherwise a line of its own
+/// only where it differs from the line before. `None` for a solution without a strategy
+/// record.
 pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
     let st = sol.strategy.as_ref()?;
-    let mut s = st.kept_table();
+    let mut rows = st.kept_rows();
     let chain = st.chosen;
-    let mut last = st
-        .records
-        .iter()
-        .rev()
-        .find(|r| Some(r.chain) == chain)
-        .map(|r| r.objective);
+    let mut last = rows.last().map(|r| r.objective);
+    // Under a refinement's own line its rounds are its parts, indented so that no one sums
+    // them twice.
+    let indent = if st.refinements.iter().any(|r| Some(r.chain) == chain) {
+        "  "
+    } else {
+        ""
+    };
+    let row = |stage: String, status, objective, period, iterations, seconds| StageRow {
+        kept: true,
+        chain,
+        stage,
+        status,
+        objective,
+        period,
+        iterations,
+        seconds,
+    };
     if let Some(refinement) = &sol.refinement {
         let what = match refinement.criterion {
             bf_problem::solution::records::RefineCriterion::Estimate => "error estimate",
@@ -791,15 +788,14 @@ pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
         };
         for r in &refinement.history {
             let points: Vec<String> = r.points.iter().map(usize::to_string).collect();
-            s.push_str(&stage_line(
-                chain,
-                &format!(
-                    "hp round {}: {} points, {what} {:.1e}",
+            rows.push(row(
+                format!(
+                    "{indent}hp round {}: {} points, {what} {:.1e}",
                     r.round,
                     points.join("/"),
                     r.max_error
                 ),
-                &r.status,
+                r.status,
                 r.objective,
                 None,
                 r.iterations,
@@ -814,17 +810,16 @@ pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
         } else {
             "reported optimum"
         };
-        s.push_str(&stage_line(
-            chain,
-            stage,
-            &sol.status,
+        rows.push(row(
+            stage.to_string(),
+            sol.status,
             sol.objective,
             Some(sol.period),
             sol.iterations,
             sol.solve_seconds,
         ));
     }
-    Some(s)
+    Some(format!("{}\n{}", st.summary(), stage_table(&rows)))
 }
 
 /// Figures of one scenario as markdown image links (relative to the report).

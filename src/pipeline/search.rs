@@ -545,6 +545,16 @@ fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
     c.solution.verification = v;
 }
 
+/// `c`'s verification made anew as the sampling makes it (`attach_verification` before any
+/// plan is verified), in place of the one it carries: a candidate read from a file states a
+/// verdict that `optimize merge` does not take on trust. A candidate without one (a coarse
+/// sampling's) stays without.
+pub fn verify_again(c: &mut Candidate, policy: &VerifyPolicy) {
+    if c.solution.verification.take().is_some() && policy.rtol > 0.0 {
+        attach_verification(c, policy, f64::INFINITY);
+    }
+}
+
 /// Why the search left a plan unexecuted
 /// ([`bf_problem::solution::records::Verification::not_executed`]).
 pub const ABOVE_A_VERIFIED_PLAN: &str =
@@ -2071,6 +2081,7 @@ impl Search {
             iterations,
             seconds: self.seconds,
             basin_hits: self.basin_hits,
+            refinements: self.refinements,
         });
         Ok((c.problem, sol))
     }

@@ -453,10 +453,29 @@ fn check_internals_belong(
 
 /// The internals file of the solution file `path` with document `v`: the name its
 /// `internals` field gives, beside it ([`internals_file`] of `path` if the field is absent).
-pub fn internals_path(path: &Path, v: &Value) -> std::path::PathBuf {
-    match v.get("internals").and_then(Value::as_str) {
-        Some(name) => path.with_file_name(name),
-        None => path.with_file_name(internals_file(path)),
+/// Errors naming the field unless that is a plain file name: `optimize` writes the internals
+/// beside their solution, and a name with a directory in it would read whatever file it
+/// points to as one.
+pub fn internals_path(path: &Path, v: &Value) -> Result<std::path::PathBuf, PipelineError> {
+    let Some(field) = v.get("internals") else {
+        return Ok(path.with_file_name(internals_file(path)));
+    };
+    let plain = field.as_str().filter(|name| {
+        let mut parts = Path::new(name).components();
+        matches!(
+            (parts.next(), parts.next()),
+            (Some(std::path::Component::Normal(n)), None) if n == std::ffi::OsStr::new(name)
+        )
+    });
+    match plain {
+        Some(name) => Ok(path.with_file_name(name)),
+        None => Err(io_err(
+            path,
+            format!(
+                "its `internals` ({field}) is not the name of a file beside it, as `optimize` \
+                 writes it (e.g. \"solution-internals.json\")"
+            ),
+        )),
     }
 }
 
@@ -619,7 +638,7 @@ impl SolutionIo for OcpSolution {
         let s =
             std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
         from_texts(&s, path, |v| {
-            let ipath = internals_path(path, v);
+            let ipath = internals_path(path, v)?;
             let text = std::fs::read_to_string(&ipath).map_err(|e| {
                 io_err(
                     &ipath,

@@ -12,7 +12,8 @@ use std::time::Instant;
 
 use bf_optim::ipm::{
     BarrierSettings, ExperimentalSettings, ExtrapolationScope, IterationInfo, LineSearchSettings,
-    LinearSolverSettings, Nlp, OutputSettings, Settings, Solution, TerminationSettings, WarmStart,
+    LinearSolverSettings, Nlp, OutputSettings, Settings, Solution, Status, TerminationSettings,
+    WarmStart,
 };
 use bf_optim::ocp::solve_nlp;
 use bf_problem::{BuiltProblem, GuessKind, OcpSolution, ProblemSettings, solution_at};
@@ -351,6 +352,19 @@ pub fn own_problem(sol: &OcpSolution) -> Result<(BuiltProblem, &WarmStart), Pipe
 pub fn recompute_at_own_point(sol: &OcpSolution) -> Result<OcpSolution, PipelineError> {
     let (p, w) = own_problem(sol)?;
     Ok(solution_at(&p, &w.x, sol.status)?)
+}
+
+/// The largest constraint violation (in the NLP's own units, as [`recompute_at_own_point`]
+/// gives it) of a point at which the solver with the settings of `s` ends with `status`: its
+/// termination tests admit no point beyond it. `None` for a status that claims no feasible
+/// point. A file whose success its own point exceeds was edited, or is another run's.
+pub fn violation_allowed(s: &ProblemSettings, status: Status) -> Option<f64> {
+    let t = solver_settings(s).termination;
+    match status {
+        Status::Solved => Some(t.constr_viol_tol),
+        Status::Acceptable => Some(t.acceptable_constr_viol_tol),
+        _ => None,
+    }
 }
 
 /// `sol` solved again on its own problem, warm from its own primal-dual point

@@ -513,6 +513,7 @@ pub fn solve_with_strategy(
         iterations,
         seconds: sol.solve_seconds,
         basin_hits: None,
+        refinements: Vec::new(),
     });
     Ok((p, sol))
 }

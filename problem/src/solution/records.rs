@@ -80,48 +80,129 @@ pub struct StrategyReport {
     /// global search ran, or a file from before it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub basin_hits: Option<usize>,
+    /// The hp refinements that the verification ran on candidates (each a run of refinement
+    /// rounds, `refine start K to TOL`), in the order they ran; their iterations are in the
+    /// solution's total but not in [`StrategyReport::iterations`]. Empty in a file from
+    /// before they were recorded.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub refinements: Vec<StageRecord>,
 }
 
 impl StrategyReport {
-    /// A plain-text table of the records, one line each, the kept chain marked `*`.
+    /// A plain-text table of the records, one line each, the kept chain marked `*` (the
+    /// verification refinements are not in it: `optimize` prints them after it).
     pub fn table(&self) -> String {
-        self.table_of(|_| true)
+        let rows: Vec<StageRow> = self.records.iter().map(|r| self.row(r)).collect();
+        format!("{}\n{}", self.summary(), stage_table(&rows))
     }
 
-    /// [`StrategyReport::table`] with the stages of the kept chain only (the summary still
-    /// counts every solve): a global search records hundreds of stages.
+    /// The stages of the kept chain, then the verification refinements of that chain, under
+    /// the summary of every solve: a global search records hundreds of stages.
     pub fn kept_table(&self) -> String {
-        self.table_of(|r| Some(r.chain) == self.chosen)
+        format!("{}\n{}", self.summary(), stage_table(&self.kept_rows()))
     }
 
-    /// The table's summary and column heads, and a line for each record `keep` keeps.
-    fn table_of(&self, keep: impl Fn(&StageRecord) -> bool) -> String {
-        let mut s = format!(
-            "strategy {}: {} solves, {} iterations, {:.2} s\n  chain  stage                 status          objective     period  iter  time(s)\n",
+    /// The rows of [`StrategyReport::kept_table`], for a table that goes on after them.
+    pub fn kept_rows(&self) -> Vec<StageRow> {
+        let kept = |r: &&StageRecord| Some(r.chain) == self.chosen;
+        self.records
+            .iter()
+            .chain(&self.refinements)
+            .filter(kept)
+            .map(|r| self.row(r))
+            .collect()
+    }
+
+    /// One line: the strategy, its solves and iterations, the verification refinements'
+    /// where there were any, and the wall time of all of them.
+    pub fn summary(&self) -> String {
+        let refined = if self.refinements.is_empty() {
+            String::new()
+        } else {
+            let n = self.refinements.len();
+            format!(
+                ", {n} verification refinement{} of {} iterations",
+                if n == 1 { "" } else { "s" },
+                self.refinements.iter().map(|r| r.iterations).sum::<usize>()
+            )
+        };
+        format!(
+            "strategy {}: {} solves, {} iterations{refined}, {:.2} s",
             self.strategy,
             self.records.len(),
             self.iterations,
             self.seconds
-        );
-        for r in self.records.iter().filter(|r| keep(r)) {
-            s.push_str(&format!(
-                "{} {:5}  {:<20}  {:<14} {:>12.6e} {:>8.4} {:>5} {:>8.2}\n",
-                if Some(r.chain) == self.chosen {
-                    '*'
-                } else {
-                    ' '
-                },
-                r.chain,
-                r.stage,
-                status_name(r.status),
-                r.objective,
-                r.period,
-                r.iterations,
-                r.seconds
-            ));
-        }
-        s
+        )
     }
+
+    fn row(&self, r: &StageRecord) -> StageRow {
+        StageRow {
+            kept: Some(r.chain) == self.chosen,
+            chain: Some(r.chain),
+            stage: r.stage.clone(),
+            status: r.status,
+            objective: r.objective,
+            period: Some(r.period),
+            iterations: r.iterations,
+            seconds: r.seconds,
+        }
+    }
+}
+
+/// One line of a table of solve stages ([`stage_table`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct StageRow {
+    /// Marked `*`: a stage of the kept chain.
+    pub kept: bool,
+    /// Chain or start index (`-`: none).
+    pub chain: Option<usize>,
+    /// What ran.
+    pub stage: String,
+    /// Solver status.
+    pub status: Status,
+    /// Objective φ at its end.
+    pub objective: f64,
+    /// Period at its end (s; `-`: not recorded).
+    pub period: Option<f64>,
+    /// Interior-point iterations.
+    pub iterations: usize,
+    /// Wall time (s).
+    pub seconds: f64,
+}
+
+/// Column heads and one line per row, the stage column as wide as its longest name, so that
+/// the columns after it stay aligned whatever a stage is called.
+pub fn stage_table(rows: &[StageRow]) -> String {
+    let w = rows
+        .iter()
+        .map(|r| r.stage.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max("stage".len());
+    let sw = rows
+        .iter()
+        .map(|r| status_name(r.status).len())
+        .max()
+        .unwrap_or(0)
+        .max("status".len());
+    let mut s = format!(
+        "  chain  {:<w$}  {:<sw$} {:>12} {:>8} {:>5} {:>8}\n",
+        "stage", "status", "objective", "period", "iter", "time(s)"
+    );
+    for r in rows {
+        let chain = r.chain.map_or("-".to_string(), |c| c.to_string());
+        let period = r.period.map_or("-".to_string(), |p| format!("{p:.4}"));
+        s.push_str(&format!(
+            "{} {chain:>5}  {:<w$}  {:<sw$} {:>12.6e} {period:>8} {:>5} {:>8.2}\n",
+            if r.kept { '*' } else { ' ' },
+            r.stage,
+            status_name(r.status),
+            r.objective,
+            r.iterations,
+            r.seconds
+        ));
+    }
+    s
 }
 
 /// One solve of the refinement.
@@ -973,6 +1054,7 @@ mod tests {
             iterations: 30,
             seconds: 0.3,
             basin_hits: None,
+            refinements: Vec::new(),
         };
         let kept = report.kept_table();
         let lines: Vec<&str> = kept.lines().collect();
@@ -980,6 +1062,33 @@ mod tests {
         assert_eq!(lines.len(), 4, "{kept}");
         assert!(lines[2..].iter().all(|l| l.starts_with('*')), "{kept}");
         assert!(lines[3].contains("relax"));
+        assert_eq!(report.table().lines().count(), 5);
+
+        // The verification's refinements: the kept chain's follow its stages, counted in the
+        // summary; a long stage name widens its column instead of shifting the others.
+        let long = "refine start 1 to 1e-4 (defect 9.0e0, path 6143.4x its allowance)";
+        let report = StrategyReport {
+            refinements: vec![rec(0, "refine start 0 to 1e-4", 1.5), rec(1, long, 0.4)],
+            ..report
+        };
+        let kept = report.kept_table();
+        let lines: Vec<&str> = kept.lines().collect();
+        assert!(
+            lines[0]
+                .contains("3 solves, 30 iterations, 2 verification refinements of 20 iterations"),
+            "{kept}"
+        );
+        assert_eq!(lines.len(), 5, "{kept}");
+        assert!(
+            lines[4].contains(long) && lines[4].starts_with('*'),
+            "{kept}"
+        );
+        let col = lines[1].find("status").unwrap();
+        assert!(
+            lines[2..].iter().all(|l| l[col..].starts_with("Solved")),
+            "{kept}"
+        );
+        // The full table leaves them to the lines `optimize` prints after it.
         assert_eq!(report.table().lines().count(), 5);
     }
 }

@@ -64,6 +64,10 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--proximal-weight", args.proximal_weight.is_some()),
         ("--hops", args.hops.is_some()),
         ("--hop-scale", args.hop_scale.is_some()),
+        (
+            "--refine-rounds",
+            args.refine_rounds != crate::cli::DEFAULT_REFINE_ROUNDS,
+        ),
     ] {
         if given {
             bail_usage!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
@@ -75,6 +79,11 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--torque-margin", args.torque_margin.is_some()),
         ("--approach-clearance", args.approach_clearance.is_some()),
         ("--epsilon", args.epsilon.is_some()),
+        // Options of the stick phase and the impact, whose defaults are values: another
+        // value is one the arm's problem would drop unsaid.
+        ("--min-stick", args.min_stick != bf_problem::MIN_STICK),
+        ("--cone-margin", args.cone_margin != 0.0),
+        ("--impulse-cone", args.impulse_cone),
     ] {
         if given {
             bail_usage!("{opt}: --problem {REACH_ARM} moves an arm without a ball");
@@ -219,7 +228,15 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     let peak: Vec<f64> = (0..nq)
         .map(|i| sol.dense.tau.iter().map(|t| t[i].abs()).fold(0.0, f64::max))
         .collect();
-    crate::outln!("max |tau| per joint {peak:?}, tau_max {:?}", sol.tau_max)?;
+    let limits: Vec<String> = sol
+        .tau_max
+        .iter()
+        .map(|l| l.map_or("none".to_string(), |l| l.to_string()))
+        .collect();
+    crate::outln!(
+        "max |tau| per joint {peak:?}, tau_max [{}]",
+        limits.join(", ")
+    )?;
     crate::outln!(
         "constraint violation {:.2e}, dual infeasibility {:.2e}",
         sol.constraint_violation,
@@ -238,6 +255,8 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             VERIFIED_DEFECT,
             v.open_loop_end_error
         )?;
+    } else {
+        crate::outln!("verified: not checked (--verify-rtol 0: no re-integration)")?;
     }
     crate::outln!(
         "wrote {}/solution.json, torques.csv and trajectory.csv{}",

@@ -16,7 +16,7 @@
 //! `bf_optim::ocp::mesh::MAX_RADAU_DEGREE` of them.
 
 use crate::cli::Inputs as _;
-use crate::cli::{OptimizeArgs, OptimizeCommand};
+use crate::cli::{DEFAULT_ELEMENTS, DEFAULT_REFINE_ROUNDS, OptimizeArgs, OptimizeCommand};
 use crate::errors::bail_usage;
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::{Execution, VerifyPolicy};
@@ -71,6 +71,11 @@ pub struct RunSettings {
 /// Parse `--scheme`: `lg` or `radau` (hp elements from `elements`).
 pub fn parse_scheme(text: &str, elements: usize) -> Result<Scheme> {
     match text {
+        // One Legendre–Gauss polynomial per phase: an element count would be dropped unsaid.
+        "lg" if elements != DEFAULT_ELEMENTS => bail_usage!(
+            "--elements {elements}: --scheme lg has one polynomial per phase (refine it with \
+             --points, or use --scheme radau for elements)"
+        ),
         "lg" => Ok(Scheme::Lg),
         "radau" if elements >= 1 => Ok(Scheme::Radau { elements }),
         "radau" => bail_usage!("--elements must be at least 1"),
@@ -124,7 +129,8 @@ pub fn check_solution_values(option: &str, path: &Path) -> Result<serde_json::Va
     let value = read_json_value(option, path)?;
     check_json_values(option, path, &value)?;
     if value.get("schema_version").is_some() {
-        let ipath = crate::pipeline::solution_io::internals_path(path, &value);
+        let ipath = crate::pipeline::solution_io::internals_path(path, &value)
+            .with_context(|| format!("{option} {}", path.display()))?;
         if option != "--warm-start" && !ipath.exists() {
             // A replay reads only the solution itself; its internals may be left behind.
             return Ok(value);
@@ -812,6 +818,9 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         for (opt, given) in [
             ("--starts", args.starts.is_some()),
             ("--seed", args.seed.is_some()),
+            // `--hops 0` asks for no hops, which is what the other strategies run.
+            ("--hops", args.hops.is_some_and(|h| h > 0)),
+            ("--hop-scale", args.hop_scale.is_some()),
         ] {
             if given {
                 bail_usage!("{opt}: only the multi-start takes it (got --strategy {strategy})");
@@ -833,6 +842,12 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         }
         None => Shard::WHOLE,
     };
+    if args.refine.is_none() && args.refine_rounds != DEFAULT_REFINE_ROUNDS {
+        bail_usage!(
+            "--refine-rounds {}: the rounds of --refine TOL, which was not given",
+            args.refine_rounds
+        );
+    }
     if let Some(tol) = args.refine {
         if !(tol.is_finite() && tol > 0.0) {
             bail_usage!("--refine must be a finite positive tolerance (got {tol})");
@@ -874,29 +889,31 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     } else {
         Vec::new()
     };
-    let refinements = found.refinements.clone();
     let (problem, mut sol) = found.best()?;
     let mut problem = problem
         .ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
     if let Some(rep) = &sol.strategy {
         crate::io::print_out(&rep.table())?;
-    }
-    for r in &refinements {
-        crate::outln!(
-            "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} iterations in {:.1} s",
-            r.stage,
-            crate::names::name(&r.status),
-            r.objective,
-            r.period,
-            r.iterations,
-            r.seconds
-        )?;
+        for r in &rep.refinements {
+            crate::outln!(
+                "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} iterations in {:.1} s",
+                r.stage,
+                crate::names::name(&r.status),
+                r.objective,
+                r.period,
+                r.iterations,
+                r.seconds
+            )?;
+        }
     }
     if args.shard.is_some() {
         crate::outln!("shard {shard}: {} distinct optima kept", candidates.len())?;
     }
     if let Some(tol) = args.refine {
-        (problem, sol) = refine_with_progress(name, &settings, sol, tol, args.refine_rounds)?;
+        // From the mesh the solution is on: the verification may have refined it already,
+        // and a refinement from the problem's own mesh would solve the coarser mesh again.
+        let on_its_mesh = problem.settings.clone();
+        (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, args.refine_rounds)?;
         sol.verification = None;
     }
     if args.verify_rtol > 0.0 {

@@ -11,7 +11,7 @@ use crate::cli::MergeArgs;
 use crate::errors::bail_usage;
 use crate::pipeline::SolutionIo;
 use crate::pipeline::search::{self, Candidate, Search, VerifyPolicy};
-use crate::pipeline::solve::{recompute_at_own_point, settings_of};
+use crate::pipeline::solve::{recompute_at_own_point, settings_of, violation_allowed};
 use crate::pipeline::strategy::{Shard, StageRecord, Strategy};
 use anyhow::{Context, Result, bail};
 use bf_optim::ocp::Scheme;
@@ -186,8 +186,10 @@ fn check_same_run(
 
 /// Errors naming the file unless the objective, cost states and period that `sol` (read
 /// from `path`) states are those of its own trajectory: recomputed at its primal point on its
-/// problem rebuilt from the file ([`recompute_at_own_point`]). A file edited to claim a
-/// better objective is refused before the choice trusts it.
+/// problem rebuilt from the file ([`recompute_at_own_point`]), and unless that point lies
+/// within the constraint violation its stated status allows ([`violation_allowed`]). A file
+/// edited to claim a better objective or a converged solve is refused before the choice
+/// trusts it.
 fn check_own_objective(path: &Path, sol: &OcpSolution) -> Result<()> {
     let own = recompute_at_own_point(sol).with_context(|| {
         format!(
@@ -212,6 +214,20 @@ fn check_own_objective(path: &Path, sol: &OcpSolution) -> Result<()> {
                 path.display()
             );
         }
+    }
+    let (_, settings) = settings_of(sol)
+        .with_context(|| format!("optimize merge: {}: its problem", path.display()))?;
+    if let Some(allowed) = violation_allowed(&settings, sol.status)
+        && (own.constraint_violation.is_nan() || own.constraint_violation > allowed)
+    {
+        bail!(
+            "optimize merge: {}: its status {} is not its own point's: the constraints are \
+             violated by {:e} there, beyond the {allowed:e} that status allows: the file was \
+             altered or belongs to another run",
+            path.display(),
+            crate::names::name(&sol.status),
+            own.constraint_violation
+        );
     }
     Ok(())
 }
@@ -292,10 +308,13 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         let mut seen: Vec<usize> = records.iter().map(|r| r.chain).collect();
         seen.dedup();
         if seen.len() != starts {
-            crate::outln!(
-                "note: the shards ran {} of the {starts} starts of {strategy}",
+            // Shards may be merged as they finish; the result is then not the whole search's.
+            crate::errln!(
+                "warning: the shards ran {} of the {starts} starts of {strategy}: the merged \
+                 optimum is that of those starts, not the whole search's (merge every shard \
+                 for that)",
                 seen.len()
-            )?;
+            );
         }
     }
     if cands.is_empty() {
@@ -356,6 +375,9 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         None => policy,
     };
     let t0 = std::time::Instant::now();
+    for c in &mut found.candidates {
+        search::verify_again(c, &policy);
+    }
     found.candidates = search::representatives(std::mem::take(&mut found.candidates));
     found.candidates.sort_by_key(|c| c.index);
     found.explore(name, &settings, &policy, None);

@@ -46,6 +46,13 @@ pub(super) fn run_arm(
         _ => super::run_end(args, &inp),
     };
     check_t_end(t_end)?;
+    if args.pd_track.is_some() || args.pd_track_contact {
+        bail_usage!(
+            "--pd-track: scene `{name}` ({scene_label}) has no ball; --pd-track tracks a \
+             solution of the ball and finger, and an arm solution given as --init is replayed \
+             with its own torques (use --pd TARGETS for a PD law of the arm)"
+        );
+    }
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
         ("--mode0", args.mode0 != "free"),
@@ -60,7 +67,7 @@ pub(super) fn run_arm(
     }
     let set = settings(args)?;
     check_limits(args, &set, t_end)?;
-    let held = super::torques_held(inp.series_end(), t_end);
+    let held = super::torques_held(&inp, t_end);
     if let Some(w) = &held {
         crate::errln!("warning: {}", w.message);
     }

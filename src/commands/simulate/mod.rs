@@ -225,12 +225,17 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
             // Honest output: a replay of a plan that failed its own checks is no check of it.
             let status = v.get("status").and_then(|s| s.as_str()).unwrap_or("?");
             let verified = v.get("verified").and_then(|b| b.as_bool()) != Some(false);
-            if !verified || !matches!(status, "Solved" | "Acceptable") {
+            let converged = matches!(status, "Solved" | "Acceptable");
+            if !verified || !converged {
+                let why = match (verified, converged) {
+                    (false, false) => format!("not verified, and its solve ended {status}"),
+                    (false, true) => "not verified".to_string(),
+                    _ => format!("from a solve that ended {status} (not converged)"),
+                };
                 crate::errln!(
-                    "warning: --init {}: the solution is {} (status {status}): its replay \
-                     shows that plan, not a verified optimum",
+                    "warning: --init {}: the solution is {why}: its replay shows that plan, \
+                     not a verified optimum",
                     path.display(),
-                    if verified { "verified" } else { "not verified" }
                 );
             }
             // A plan replayed under another impact law than it was planned with is no replay
@@ -420,18 +425,31 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
     Ok((error, cpu))
 }
 
-/// The warning of a run that goes on past the end of its `--torques` series, whose last
-/// torque it then holds: a solution's `torques.csv` covers one period, and held torques are no
-/// replay of it.
-pub(super) fn torques_held(series_end: Option<f64>, t_end: f64) -> Option<bf_sim::SimWarning> {
-    let end = series_end?;
+/// The warning of a run that goes on past the end of its torques, whose last torque it then
+/// holds: a `--torques` series (a solution's `torques.csv` covers one period, and held torques
+/// are no replay of it) or an arm solution replayed by `--init` (its torques cover its own
+/// duration).
+pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarning> {
+    let (end, what, advice) = match inp {
+        CliInput::Series(s) => (
+            *s.times().last()?,
+            "the --torques series ends",
+            "a solution's torques.csv covers one period (repeat it with --pd-track 0,0, or end \
+             the run with the series by leaving out --t-end)",
+        ),
+        CliInput::Replay(p) => (
+            p.end()?,
+            "the torques of the --init solution end",
+            "they cover the solution's own duration (leave out --t-end to end the run with it)",
+        ),
+        _ => return None,
+    };
     (t_end > end * (1.0 + 1e-9)).then(|| bf_sim::SimWarning {
         t: end,
         kind: "torques_held",
         message: format!(
-            "the --torques series ends at t = {end} s and the run holds its last torque from \
-             there to --t-end {} s; a solution's torques.csv covers one period (repeat it with \
-             --pd-track 0,0, or end the run with the series by leaving out --t-end)",
+            "{what} at t = {end} s and the run holds its last torque from there to \
+             --t-end {} s; {advice}",
             crate::cli::shown(t_end)
         ),
     })
@@ -624,7 +642,7 @@ fn run_model<K: Kernels<N>, const N: usize>(
         t_end,
     } = run;
     let inputs = input_options(args, &inp);
-    let held = torques_held(inp.series_end(), t_end);
+    let held = torques_held(&inp, t_end);
     let sys = BallFinger::new(model, inp, opts)?;
     let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
