@@ -588,8 +588,8 @@ fn restoration_phases_take_their_analyses_back() {
 }
 
 /// The inertia correction ends only when δ_w exceeds `max_hessian_perturbation`, so an
-/// increase factor ≤ 1 would factor the same matrix forever; the KKT regularizations must be
-/// finite and ≥ 0. Each out-of-range value is refused by name before the solve starts.
+/// increase factor ≤ 1, or a smallest δ_w of 0 (from which δ_w may restart at 0), would
+/// factor the same matrix forever; the KKT regularizations must be finite and ≥ 0. Each out-of-range value is refused by name before the solve starts.
 #[test]
 fn recovery_and_regularization_settings_are_refused_by_name() {
     let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0] * x[0], none);
@@ -609,6 +609,13 @@ fn recovery_and_regularization_settings_are_refused_by_name() {
             ..Default::default()
         };
         cases.push(("perturb_inc_fact_first", v, recovery(r)));
+    }
+    for v in [0.0, -1e-20, f64::NAN, f64::INFINITY] {
+        let r = RecoverySettings {
+            min_hessian_perturbation: v,
+            ..Default::default()
+        };
+        cases.push(("min_hessian_perturbation", v, recovery(r)));
     }
     for v in [-1e-9, f64::NAN, f64::INFINITY] {
         let l = LinearSolverSettings {

@@ -469,7 +469,7 @@ settings! {
 pub struct RecoverySettings {
     /// First trial δ_w of the inertia correction.
     first_hessian_perturbation: f64 = 1e-4,
-    /// Smallest δ_w.
+    /// Smallest δ_w (positive and finite).
     min_hessian_perturbation: f64 = 1e-20,
     /// Largest δ_w before giving up on the step. Ipopt's is 1e20; this larger one lets the
     /// inertia correction go on for about 22 more factorizations (κ_w⁺ = 8) before the step
@@ -640,6 +640,12 @@ impl Settings {
         pos(
             "first_hessian_perturbation",
             self.recovery.first_hessian_perturbation,
+        )?;
+        // With 0 a δ_w_last that has shrunk to 0 by κ_w⁻ would restart the correction at 0,
+        // and δ_w would never grow.
+        pos(
+            "min_hessian_perturbation",
+            self.recovery.min_hessian_perturbation,
         )?;
         pos(
             "max_hessian_perturbation",
