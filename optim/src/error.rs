@@ -26,10 +26,12 @@ pub enum OptimError {
         /// Actual length.
         found: usize,
     },
-    /// A sparsity-pattern entry is out of range (or above the diagonal for the Hessian).
+    /// A sparsity-pattern entry is out of range, or above the diagonal for the Hessian and
+    /// the KKT matrix, or not above the previous row of its column in a KKT pattern
+    /// ([`KktSolver::analyse`](crate::ipm::KktSolver::analyse)).
     #[error("invalid sparsity pattern in {what}: entry {index} = ({row}, {col})")]
     InvalidPattern {
-        /// `"jacobian"` or `"hessian"`.
+        /// `"jacobian"`, `"hessian"` or `"kkt"`.
         what: &'static str,
         /// Triplet index.
         index: usize,
@@ -38,7 +40,23 @@ pub enum OptimError {
         /// Column of the entry.
         col: usize,
     },
-    /// Inconsistent bounds (lower > upper, or NaN).
+    /// The column pointers of a KKT pattern given to
+    /// [`KktSolver::analyse`](crate::ipm::KktSolver::analyse) do not rise from 0 to the
+    /// number of row indices.
+    #[error(
+        "invalid KKT column pointer {index} = {value}: the pointers must rise from 0 to the \
+         number of row indices ({entries})"
+    )]
+    InvalidColumnPointers {
+        /// Index of the first pointer out of place.
+        index: usize,
+        /// Its value.
+        value: usize,
+        /// Number of row indices.
+        entries: usize,
+    },
+    /// Inconsistent bounds: lower > upper, a NaN, a lower bound at +∞ (≥
+    /// [`BOUND_INF`](crate::ipm::BOUND_INF) = 1e19) or an upper bound at −∞ (≤ −1e19).
     #[error("invalid bounds for {what} {index}: [{lower}, {upper}]")]
     InvalidBounds {
         /// `"variable"` or `"constraint"`.
@@ -50,7 +68,22 @@ pub enum OptimError {
         /// Upper bound.
         upper: f64,
     },
-    /// A function or derivative was not finite at an accepted point (no step cut can help).
+    /// An entry of an input vector is out of its range: a non-finite warm-start value, or a
+    /// user scaling factor ([`NlpScaling`](crate::ipm::NlpScaling)) that is not positive and
+    /// finite.
+    #[error("invalid {what} entry {index}: {value} (must be {expected})")]
+    InvalidValue {
+        /// Which vector (`"warm-start lambda"`, `"constraint scaling"`, …).
+        what: &'static str,
+        /// Index of the entry (0 for the objective scaling factor).
+        index: usize,
+        /// The entry.
+        value: f64,
+        /// What it must be.
+        expected: &'static str,
+    },
+    /// A function or derivative was not finite at the initial point or at an accepted point,
+    /// or the Hessian was not finite (no step cut can help; see [`Nlp`](crate::ipm::Nlp)).
     #[error("non-finite {what} at iteration {iter}")]
     NonFinite {
         /// Iteration number.

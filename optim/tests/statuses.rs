@@ -7,8 +7,9 @@ mod hs;
 
 use bf_optim::OptimError;
 use bf_optim::ipm::{
-    BarrierSettings, IterationInfo, LinearSolverSettings, Nlp, RecoverySettings, ScalingMethod,
-    ScalingSettings, Settings, Solution, Status, TerminationSettings, WarmStart, solve, solve_with,
+    BarrierSettings, IterationInfo, LinearSolverSettings, Nlp, NlpScaling, RecoverySettings,
+    ScalingMethod, ScalingSettings, Settings, Solution, Status, TerminationSettings, WarmStart,
+    solve, solve_with,
 };
 use hs::Hs;
 use hs::dual::D;
@@ -584,4 +585,219 @@ fn restoration_phases_take_their_analyses_back() {
     };
     assert_eq!(untimed(&first), untimed(&fresh));
     assert_eq!(untimed(&second), untimed(&fresh));
+}
+
+/// The inertia correction ends only when δ_w exceeds `max_hessian_perturbation`, so an
+/// increase factor ≤ 1, or a smallest δ_w of 0 (from which δ_w may restart at 0), would
+/// factor the same matrix forever; the KKT regularizations must be finite and ≥ 0. Each out-of-range value is refused by name before the solve starts.
+#[test]
+fn recovery_and_regularization_settings_are_refused_by_name() {
+    let p = problem(&[0.0], &[-INF], &[INF], 0, 0, |x| x[0] * x[0], none);
+    let recovery = |r: RecoverySettings| Settings {
+        recovery: r,
+        ..Settings::default()
+    };
+    let mut cases: Vec<(&str, f64, Settings)> = Vec::new();
+    for v in [1.0, 0.5, 0.0, -8.0, f64::NAN, f64::INFINITY] {
+        let r = RecoverySettings {
+            perturb_inc_fact: v,
+            ..Default::default()
+        };
+        cases.push(("perturb_inc_fact", v, recovery(r)));
+        let r = RecoverySettings {
+            perturb_inc_fact_first: v,
+            ..Default::default()
+        };
+        cases.push(("perturb_inc_fact_first", v, recovery(r)));
+    }
+    for v in [0.0, -1e-20, f64::NAN, f64::INFINITY] {
+        let r = RecoverySettings {
+            min_hessian_perturbation: v,
+            ..Default::default()
+        };
+        cases.push(("min_hessian_perturbation", v, recovery(r)));
+    }
+    for v in [-1e-9, f64::NAN, f64::INFINITY] {
+        let l = LinearSolverSettings {
+            static_dual_regularization: v,
+            ..Default::default()
+        };
+        let s = Settings {
+            linear_solver: l,
+            ..Settings::default()
+        };
+        cases.push(("static_dual_regularization", v, s));
+        let r = RecoverySettings {
+            jacobian_regularization_value: v,
+            ..Default::default()
+        };
+        cases.push(("jacobian_regularization_value", v, recovery(r)));
+        let r = RecoverySettings {
+            jacobian_regularization_exponent: v,
+            ..Default::default()
+        };
+        cases.push(("jacobian_regularization_exponent", v, recovery(r)));
+    }
+    for (name, v, s) in &cases {
+        match s.validate() {
+            Err(OptimError::InvalidSetting { name: n, .. }) => assert_eq!(n, *name, "{v}"),
+            other => panic!("{name} = {v}: {other:?}"),
+        }
+        match solve(&p, s) {
+            Err(OptimError::InvalidSetting { name: n, .. }) => assert_eq!(n, *name, "{v}"),
+            other => panic!("{name} = {v}: {other:?}"),
+        }
+    }
+    // The limits themselves: any factor above 1, and regularizations of 0.
+    let s = Settings {
+        recovery: RecoverySettings {
+            perturb_inc_fact: 1.0 + 1e-12,
+            perturb_inc_fact_first: 1.5,
+            jacobian_regularization_value: 0.0,
+            jacobian_regularization_exponent: 0.0,
+            ..Default::default()
+        },
+        linear_solver: LinearSolverSettings {
+            static_dual_regularization: 0.0,
+            ..Default::default()
+        },
+        ..Settings::default()
+    };
+    assert_eq!(s.validate(), Ok(()));
+}
+
+/// A warm start with a non-finite entry is refused, naming the vector and the entry. On a
+/// problem with a linear constraint the Hessian does not see the multipliers, so a NaN λ
+/// would otherwise reach the dual infeasibility unchecked.
+#[test]
+fn a_non_finite_warm_start_is_refused_by_entry() {
+    let sol = solve(&Range, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    // Which entry to spoil, and how.
+    type Spoil = fn(&mut WarmStart);
+    let cases: [(&str, usize, Spoil); 4] = [
+        ("warm-start lambda", 0, |w| w.lambda[0] = f64::NAN),
+        ("warm-start x", 1, |w| w.x[1] = f64::INFINITY),
+        ("warm-start z_l", 1, |w| w.z_l[1] = f64::NAN),
+        ("warm-start z_u", 0, |w| w.z_u[0] = f64::NEG_INFINITY),
+    ];
+    for (what, index, spoil) in cases {
+        let mut warm = WarmStart::from(&sol);
+        spoil(&mut warm);
+        match solve_with(&Range, &Settings::default(), Some(&warm), None) {
+            Err(OptimError::InvalidValue {
+                what: w,
+                index: i,
+                value,
+                ..
+            }) => {
+                assert_eq!((w, i), (what, index));
+                assert!(!value.is_finite());
+            }
+            other => panic!("{what}[{index}]: {other:?}"),
+        }
+    }
+    // The unspoilt warm start is accepted.
+    let warm = WarmStart::from(&sol);
+    let again = solve_with(&Range, &Settings::default(), Some(&warm), None).unwrap();
+    assert_eq!(again.status, Status::Solved);
+}
+
+/// A constraint that is NaN everywhere but at the initial point: every trial point is cut,
+/// and the solve ends without success at the only point where it is finite (never `Solved`).
+/// The steps that leave x where it is (α ≈ 1e-16) are taken until the line search fails;
+/// then each restoration phase stops at once (its start is acceptable to the filter) and hands
+/// the run back where it was, which without the repetition test looped forever, with no
+/// iteration for `max_iter` to count.
+#[test]
+fn a_constraint_that_turns_nan_is_never_solved() {
+    let p = problem(
+        &[0.5],
+        &[-INF],
+        &[INF],
+        0,
+        1,
+        |x| (x[0] - 2.0).powi(2),
+        |x| {
+            vec![if x[0].a == 0.5 {
+                1.0 - x[0]
+            } else {
+                D::cst(f64::NAN)
+            }]
+        },
+    );
+    for settings in [Settings::default(), without_restoration()] {
+        let sol = solve(&p, &settings).unwrap();
+        assert_eq!(sol.status, Status::RestorationFailed, "{sol:?}");
+        assert_eq!(sol.x, [0.5]);
+        assert!(sol.iterations < settings.termination.max_iter);
+        assert_finite(&sol);
+    }
+}
+
+/// The reported constraint violation is measured at the returned x, the final iterate
+/// projected onto the bounds. Here the iterates approach the bound x ≥ 0 from inside its
+/// relaxation (x > −1e-8) and the projection lands on x = 0, where g is NaN: the violation is
+/// NaN, not the 0 that `f64::max` would leave after dropping it.
+#[test]
+fn a_nan_constraint_at_the_returned_point_is_a_nan_violation() {
+    let p = problem(
+        &[1.0],
+        &[0.0],
+        &[INF],
+        0,
+        1,
+        |x| x[0],
+        |x| {
+            vec![if x[0].a == 0.0 {
+                D::cst(f64::NAN)
+            } else {
+                x[0] + 1.0
+            }]
+        },
+    );
+    let sol = solve(&p, &Settings::default()).unwrap();
+    assert_eq!(sol.x, [0.0], "{sol:?}");
+    assert!(sol.constraint_violation.is_nan(), "{sol:?}");
+    // Where g is finite at the returned point, the violation is a number as before.
+    let q = problem(&[1.0], &[0.0], &[INF], 0, 1, |x| x[0], |x| vec![x[0] + 1.0]);
+    let sol = solve(&q, &Settings::default()).unwrap();
+    assert_eq!(sol.status, Status::Solved);
+    assert_eq!(sol.constraint_violation, 0.0);
+}
+
+/// A user scaling factor that is not positive and finite is an error naming it, as a wrong
+/// length is, instead of being replaced by 1.
+#[test]
+fn an_invalid_user_scaling_factor_is_refused_by_index() {
+    let user = Settings {
+        scaling: ScalingSettings {
+            method: ScalingMethod::User,
+            ..Default::default()
+        },
+        ..Settings::default()
+    };
+    let with = |objective: f64, constraints: Vec<f64>| hs::Transformed {
+        scaling: Some(NlpScaling {
+            objective,
+            constraints,
+        }),
+        ..hs::Transformed::new(hs071())
+    };
+    for (what, index, p) in [
+        ("constraint scaling", 1, with(1.0, vec![1.0, 0.0])),
+        ("constraint scaling", 0, with(1.0, vec![-2.0, 1.0])),
+        ("constraint scaling", 1, with(1.0, vec![1.0, f64::NAN])),
+        ("objective scaling", 0, with(f64::INFINITY, vec![1.0, 1.0])),
+        ("objective scaling", 0, with(0.0, vec![1.0, 1.0])),
+    ] {
+        match solve(&p, &user) {
+            Err(OptimError::InvalidValue {
+                what: w, index: i, ..
+            }) => assert_eq!((w, i), (what, index)),
+            other => panic!("{what}[{index}]: {other:?}"),
+        }
+    }
+    let good = with(0.5, vec![2.0, 1e-3]);
+    assert_eq!(solve(&good, &user).unwrap().status, Status::Solved);
 }

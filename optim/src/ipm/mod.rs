@@ -57,6 +57,25 @@ use crate::error::OptimError;
 use stdform::{Reformulated, StdProblem};
 
 /// Solves `nlp` from its initial point with `settings`.
+///
+/// Non-convergence is not an error: it is the [`Status`] of the returned [`Solution`].
+///
+/// # Errors
+///
+/// [`solve`], [`solve_with`] and [`solve_in`] return
+/// * [`OptimError::InvalidSetting`]: a setting out of its range ([`Settings::validate`]);
+/// * [`OptimError::DimensionMismatch`]: a warm-start vector or the user constraint scaling
+///   ([`Nlp::scaling`]) of the wrong length;
+/// * [`OptimError::InvalidValue`]: a non-finite warm-start entry, or a user scaling factor
+///   that is not positive and finite;
+/// * [`OptimError::InvalidBounds`]: variable or constraint bounds that are NaN, crossed, or a
+///   lower bound ≥ [`BOUND_INF`] or an upper bound ≤ −[`BOUND_INF`];
+/// * [`OptimError::InvalidPattern`]: a Jacobian or Hessian triplet out of range, or a Hessian
+///   triplet above the diagonal;
+/// * [`OptimError::NonFinite`]: a function or derivative value that no step cut can avoid
+///   (the cases are listed at [`Nlp`]);
+/// * [`OptimError::Factorization`]: the symbolic analysis of the KKT matrix failed (index
+///   overflow, a matrix too large, out of memory).
 pub fn solve(nlp: &dyn Nlp, settings: &Settings) -> Result<Solution, OptimError> {
     solve_with(nlp, settings, None, None)
 }
@@ -99,10 +118,13 @@ thread_local! {
 }
 
 /// Solves `nlp`, optionally from a primal-dual warm start (its multipliers in the convention of
-/// [`Solution`]; consider a small `mu_init`, e.g. 1e-6, and small `warm_start_bound_push`) and
+/// [`Solution`]; from the solution of the same problem, consider a small `mu_init` with small
+/// bound pushes, e.g. `mu_init` and `warm_start_bound_push` 1e-9, `warm_start_mult_bound_push`
+/// 1e-12, with which the tests' warm starts converge in at most three iterations) and
 /// with a per-iteration callback (return `false` to stop with [`Status::UserStop`]). The KKT
 /// solver of the thread's previous solve is reused, and with it its symbolic analysis when the
 /// pattern is the same (a [`Workspace`] kept per thread; [`solve_in`] takes one explicitly).
+/// Errors: as [`solve`].
 pub fn solve_with(
     nlp: &dyn Nlp,
     settings: &Settings,
@@ -117,7 +139,7 @@ pub fn solve_with(
 }
 
 /// [`solve_with`] reusing (and updating) `workspace` so that repeated solves of the same
-/// structure skip the symbolic analysis of the KKT matrix.
+/// structure skip the symbolic analysis of the KKT matrix. Errors: as [`solve`].
 pub fn solve_in(
     workspace: &mut Workspace,
     nlp: &dyn Nlp,
@@ -142,6 +164,24 @@ pub fn solve_in(
                         what,
                         expected: exp,
                         found: len,
+                    });
+                }
+            }
+            // A non-finite λ would reach the iterate, and every optimality measure, unchecked;
+            // a non-finite x or z would be silently replaced (pushed into the bounds, raised
+            // to the multiplier floor): either way not the start the caller meant.
+            for (what, v) in [
+                ("warm-start x", &w.x),
+                ("warm-start lambda", &w.lambda),
+                ("warm-start z_l", &w.z_l),
+                ("warm-start z_u", &w.z_u),
+            ] {
+                if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+                    return Err(OptimError::InvalidValue {
+                        what,
+                        index,
+                        value: v[index],
+                        expected: "finite",
                     });
                 }
             }
@@ -265,10 +305,16 @@ pub fn solve_in(
             }
         }
     }
-    let mut viol = 0.0f64;
-    for i in 0..m {
-        viol = viol.max(reform.g_l[i] - g[i]).max(g[i] - reform.g_u[i]);
-    }
+    // `f64::max` would drop a NaN row; a g(x) that is not finite has no violation to report.
+    let viol = if g.iter().all(|v| v.is_finite()) {
+        let mut viol = 0.0f64;
+        for i in 0..m {
+            viol = viol.max(reform.g_l[i] - g[i]).max(g[i] - reform.g_u[i]);
+        }
+        viol.max(0.0)
+    } else {
+        f64::NAN
+    };
     // As the termination test measures them at the final iterate, in user units.
     let (dual_inf, compl) = (out.dual_infeasibility, out.complementarity);
     ctx.timing.total = t_start.elapsed();
@@ -286,7 +332,7 @@ pub fn solve_in(
         z_u,
         objective,
         iterations: ctx.iter,
-        constraint_violation: viol.max(0.0),
+        constraint_violation: viol,
         dual_infeasibility: dual_inf,
         complementarity: compl,
         mu: out.mu,

@@ -14,17 +14,25 @@ pub const BOUND_INF: f64 = 1e19;
 /// Optional user scaling (multiplies the objective and each constraint row).
 #[derive(Debug, Clone, PartialEq)]
 pub struct NlpScaling {
-    /// Objective factor (> 0).
+    /// Objective factor (positive and finite, else the solve ends with
+    /// [`OptimError::InvalidValue`](crate::OptimError::InvalidValue)).
     pub objective: f64,
-    /// One factor per constraint (> 0).
+    /// One factor per constraint (each positive and finite, as `objective`; a wrong length is
+    /// [`OptimError::DimensionMismatch`](crate::OptimError::DimensionMismatch)).
     pub constraints: Vec<f64>,
 }
 
 /// A smooth nonlinear program with sparse first and second derivatives.
 ///
-/// Functions may return non-finite values (e.g. outside their domain); the line search then cuts
-/// the step. Sparsity patterns are queried once per solve; values are requested per iteration in
-/// the order of the pattern. Duplicate triplets are summed.
+/// The objective and the constraints may return non-finite values at a trial point (e.g.
+/// outside their domain): the line search then cuts the step (and a restoration point where
+/// they are not finite fails the restoration phase). Elsewhere a non-finite value ends the
+/// solve with [`OptimError::NonFinite`](crate::OptimError::NonFinite): the objective or a
+/// constraint at the initial point (after its push into the bounds), the gradient or the
+/// Jacobian at the initial point and at every point the solve moves to (an accepted trial
+/// point, the end of a restoration phase), and the Hessian wherever it is evaluated (once per
+/// iteration, at the current point). Sparsity patterns are queried once per solve; values are
+/// requested per iteration in the order of the pattern. Duplicate triplets are summed.
 pub trait Nlp {
     /// Number of variables `n`.
     fn num_variables(&self) -> usize;

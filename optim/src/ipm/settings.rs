@@ -1,6 +1,7 @@
 //! Solver settings. Names and defaults follow Ipopt's options (Wächter & Biegler 2006, "W&B",
-//! Sect. 2–3 and Table 1) wherever an equivalent exists. [`Settings`] is grouped by part of the
-//! algorithm (decision record 0019):
+//! Sect. 2–3 and Table 1) wherever an equivalent exists, except where a field's documentation
+//! says otherwise: `max_hessian_perturbation` is 1e40 where Ipopt's is 1e20. [`Settings`] is
+//! grouped by part of the algorithm (decision record 0019):
 //!
 //! * [`TerminationSettings`]: the termination test (W&B eq. (5), Sect. 2.1) and its limits;
 //! * [`BarrierSettings`]: the μ update (W&B eq. (7)), τ (eq. (8)), the initial point (Sect.
@@ -217,7 +218,10 @@ pub struct TerminationSettings {
     compl_inf_tol: f64 = 1e-4,
     /// "Acceptable" scaled optimality error.
     acceptable_tol: f64 = 1e-6,
-    /// Consecutive acceptable iterations before stopping with `Acceptable` (0 disables).
+    /// Consecutive acceptable iterations before stopping with `Acceptable` (0 disables this
+    /// count; an iterate at the acceptable level that has no acceptable step still stops
+    /// `Acceptable` instead of starting the restoration phase, see
+    /// [`Status::Acceptable`](crate::ipm::Status::Acceptable)).
     acceptable_iter: usize = 15,
     /// Unscaled constraint violation for the acceptable level.
     acceptable_constr_viol_tol: f64 = 1e-2,
@@ -465,15 +469,18 @@ settings! {
 pub struct RecoverySettings {
     /// First trial δ_w of the inertia correction.
     first_hessian_perturbation: f64 = 1e-4,
-    /// Smallest δ_w.
+    /// Smallest δ_w (positive and finite).
     min_hessian_perturbation: f64 = 1e-20,
-    /// Largest δ_w before giving up on the step.
+    /// Largest δ_w before giving up on the step. Ipopt's is 1e20; this larger one lets the
+    /// inertia correction go on for about 22 more factorizations (κ_w⁺ = 8) before the step
+    /// is given up.
     max_hessian_perturbation: f64 = 1e40,
     /// δ_w decrease factor κ_w⁻.
     perturb_dec_fact: f64 = 1.0 / 3.0,
-    /// δ_w increase factor κ_w⁺.
+    /// δ_w increase factor κ_w⁺ (finite and > 1, so that δ_w reaches
+    /// `max_hessian_perturbation`).
     perturb_inc_fact: f64 = 8.0,
-    /// δ_w first increase factor κ̄_w⁺.
+    /// δ_w first increase factor κ̄_w⁺ (finite and > 1).
     perturb_inc_fact_first: f64 = 100.0,
     /// δ_c = δ̄_c μ^κ_c used for a singular Jacobian: δ̄_c.
     jacobian_regularization_value: f64 = 1e-8,
@@ -522,7 +529,10 @@ settings! {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct OutputSettings {
-    /// 0 = silent, 1 = Ipopt-style iteration log on stdout, 2 = also restoration details.
+    /// 0 = silent, 1 = Ipopt-style iteration log and the final status on stdout, 2 = also
+    /// restoration details, 3 and above = also each KKT factorization (δ_w, δ_c, inertia),
+    /// refinement residuals, the parts of the optimality error and the recovery strategy that
+    /// acted.
     print_level: u8 = 0,
 }
 }
@@ -610,6 +620,10 @@ impl Settings {
                 ),
             });
         }
+        nonneg(
+            "static_dual_regularization",
+            self.linear_solver.static_dual_regularization,
+        )?;
         at_least_one(
             "static_dual_regularization_growth",
             self.linear_solver.static_dual_regularization_growth,
@@ -627,6 +641,12 @@ impl Settings {
             "first_hessian_perturbation",
             self.recovery.first_hessian_perturbation,
         )?;
+        // With 0 a δ_w_last that has shrunk to 0 by κ_w⁻ would restart the correction at 0,
+        // and δ_w would never grow.
+        pos(
+            "min_hessian_perturbation",
+            self.recovery.min_hessian_perturbation,
+        )?;
         pos(
             "max_hessian_perturbation",
             self.recovery.max_hessian_perturbation,
@@ -641,10 +661,21 @@ impl Settings {
                 "in (0, 1]",
             )?;
         }
-        pos("perturb_inc_fact", self.recovery.perturb_inc_fact)?;
-        pos(
+        // A factor ≤ 1 never grows δ_w, and the inertia correction, which stops only when δ_w
+        // exceeds `max_hessian_perturbation`, would factor the same matrix forever.
+        let above_one = |name, v: f64| check(name, v, v > 1.0 && v.is_finite(), "finite and > 1");
+        above_one("perturb_inc_fact", self.recovery.perturb_inc_fact)?;
+        above_one(
             "perturb_inc_fact_first",
             self.recovery.perturb_inc_fact_first,
+        )?;
+        nonneg(
+            "jacobian_regularization_value",
+            self.recovery.jacobian_regularization_value,
+        )?;
+        nonneg(
+            "jacobian_regularization_exponent",
+            self.recovery.jacobian_regularization_exponent,
         )?;
         unit("gamma_theta", self.line_search.gamma_theta)?;
         unit("gamma_phi", self.line_search.gamma_phi)?;

@@ -10,7 +10,11 @@ use serde::{Deserialize, Serialize};
 pub enum Status {
     /// Scaled optimality error ≤ `tol` and the unscaled tolerances hold.
     Solved,
-    /// `acceptable_iter` consecutive iterates met the acceptable tolerances.
+    /// The acceptable level (`acceptable_tol`, `acceptable_constr_viol_tol`) held at
+    /// `acceptable_iter` consecutive iterates, or at an iterate of the main run (not a
+    /// restoration phase's) that had no acceptable step, where the restoration phase would
+    /// have started: the latter also with `acceptable_iter = 0`, but never with the
+    /// restoration phase switched off (`RecoverySettings::restoration`).
     Acceptable,
     /// `max_iter` reached.
     MaxIterations,
@@ -26,9 +30,20 @@ pub enum Status {
     /// The scaled objective dropped below −`unbounded_objective` at a feasible point while a
     /// variable without a finite lower or upper bound grew.
     Unbounded,
-    /// The line search failed and the restoration phase could not find an acceptable point.
+    /// No acceptable step and no recovery: the restoration phase ended without a point from
+    /// which the main run can go on (its own run failed, or the point it reached is not
+    /// evaluable or not strictly inside the bounds) and without showing the constraints
+    /// infeasible; or, with the restoration phase switched off, the line search found no
+    /// acceptable step size or the trial point of a tiny step was not evaluable (then no
+    /// restoration phase ran). Also where a restoration phase hands the run back exactly where
+    /// the previous one did, with no iteration in between, in a run that met a trial point
+    /// that was not evaluable: the run would repeat the same failed step and phase forever.
     RestorationFailed,
-    /// No usable Newton step (inertia correction exhausted δ_w).
+    /// No usable Newton step: the inertia correction grew δ_w beyond
+    /// `max_hessian_perturbation`. Reported only with the restoration phase switched off
+    /// (`RecoverySettings::restoration`); with it on, such an iteration stops `Acceptable` at
+    /// the acceptable level or starts the restoration phase, whose failure is
+    /// `RestorationFailed`.
     ErrorInStepComputation,
     /// The callback asked to stop.
     UserStop,
@@ -46,7 +61,9 @@ impl Status {
 pub struct Timing {
     /// Whole solve.
     pub total: Duration,
-    /// Objective and constraint evaluations (including those at line-search trial points).
+    /// Objective and constraint evaluations (those at line-search trial points included),
+    /// and the evaluation of f, g, ∇f and the Jacobian at the returned point that gives the
+    /// [`Solution`]'s objective, constraint violation and fixed variables' multipliers.
     pub function_evals: Duration,
     /// Gradient, Jacobian and Hessian evaluations.
     pub derivative_evals: Duration,
@@ -138,7 +155,9 @@ pub struct Solution {
     pub objective: f64,
     /// Iterations (restoration included).
     pub iterations: usize,
-    /// Max violation of the variable and constraint bounds, unscaled.
+    /// Max violation of the variable and constraint bounds at `x`, unscaled; NaN if g(x) is
+    /// not finite there (`x` is the final iterate projected onto the bounds, which the
+    /// iterates, inside the relaxed bounds, may not have met).
     pub constraint_violation: f64,
     /// ‖∇f + Jᵀλ − z_L + z_U‖_∞ at the final iterate (the rows of the inequality slacks
     /// included), unscaled: exactly the value the termination test compares with
@@ -150,7 +169,8 @@ pub struct Solution {
     /// value it compares with `compl_inf_tol` (so a `Solved` run reports at most
     /// `compl_inf_tol`).
     pub complementarity: f64,
-    /// Final barrier parameter.
+    /// Final barrier parameter μ of the internal problem, i.e. in the units of the scaled
+    /// objective (`ScalingSettings`: σ_f f); unlike the other values it is not unscaled.
     pub mu: f64,
     /// Time breakdown.
     pub timing: Timing,

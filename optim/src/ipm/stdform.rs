@@ -210,14 +210,26 @@ impl<'a> Reformulated<'a> {
                             found: s.constraints.len(),
                         });
                     }
-                    if s.objective > 0.0 && s.objective.is_finite() {
-                        obj_scale = s.objective;
-                    }
-                    for i in 0..m {
-                        if s.constraints[i] > 0.0 && s.constraints[i].is_finite() {
-                            con_scale[i] = s.constraints[i];
+                    // A factor that is not positive and finite is a mistake of the caller, as a
+                    // wrong length is: no factor stands in for it.
+                    let factors = std::iter::once(("objective scaling", 0, s.objective)).chain(
+                        s.constraints
+                            .iter()
+                            .enumerate()
+                            .map(|(i, &v)| ("constraint scaling", i, v)),
+                    );
+                    for (what, index, value) in factors {
+                        if !(value > 0.0 && value.is_finite()) {
+                            return Err(OptimError::InvalidValue {
+                                what,
+                                index,
+                                value,
+                                expected: "positive and finite",
+                            });
                         }
                     }
+                    obj_scale = s.objective;
+                    con_scale.copy_from_slice(&s.constraints);
                 }
             }
             ScalingMethod::GradientBased => {

@@ -167,6 +167,12 @@ impl PhaseTrajectory {
 }
 
 /// Splits the NLP vector `x` into phase trajectories.
+///
+/// # Panics
+///
+/// If `x` is shorter than the transcription's number of variables
+/// ([`Nlp::num_variables`](crate::ipm::Nlp::num_variables) of `tr`), as a
+/// [`Solution::x`](crate::ipm::Solution::x) of a solve of `tr` never is.
 pub fn extract(tr: &Transcription, x: &[f64]) -> Vec<PhaseTrajectory> {
     let mut t0 = 0.0;
     let mut out = Vec::new();

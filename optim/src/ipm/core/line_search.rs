@@ -13,7 +13,7 @@
 
 use std::time::Instant;
 
-use super::{Core, Ctx, dot, norm_1, norm_inf};
+use super::{Core, Ctx, dot, max_or_nan, norm_1, norm_inf};
 use crate::ipm::settings::Settings;
 
 /// What a trial point is judged against (W&B eq. (18)–(21)): the current iterate's filter
@@ -436,9 +436,10 @@ impl Core<'_> {
         } else {
             1.0
         };
-        let e = (norm_inf(&rd) / s_d)
-            .max(norm_inf(&self.trial.c))
-            .max(compl / s_c);
+        let e = max_or_nan(
+            max_or_nan(norm_inf(&rd) / s_d, norm_inf(&self.trial.c)),
+            compl / s_c,
+        );
         if e.is_finite()
             && e <= 0.9999 * e_mu_current
             && norm_1(&self.trial.c) <= self.filter.theta_max

@@ -122,8 +122,20 @@ pub(crate) struct CoreOutput {
     pub dual_infeasibility: f64,
 }
 
+/// `a.max(b)`, except that a NaN in either is the result: `f64::max` returns the other
+/// operand, so a NaN entry would vanish from an error measure and a NaN iterate could pass the
+/// termination tests. Without a NaN it is `a.max(b)` bit for bit.
+fn max_or_nan(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() {
+        f64::NAN
+    } else {
+        a.max(b)
+    }
+}
+
+/// ‖v‖_∞, NaN if an entry is NaN ([`max_or_nan`]).
 fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+    v.iter().fold(0.0f64, |a, x| max_or_nan(a, x.abs()))
 }
 fn norm_1(v: &[f64]) -> f64 {
     v.iter().map(|x| x.abs()).sum()
@@ -154,6 +166,11 @@ pub(crate) struct Core<'p> {
     /// Largest |x_j| over the variables without a finite lower or upper bound, over all
     /// iterates so far (the unboundedness test).
     unboxed_max: std::cell::Cell<f64>,
+    /// A trial point of this run had a non-finite objective or constraint value.
+    met_non_finite_trial: bool,
+    /// Where the last restoration phase handed the run back, while `met_non_finite_trial`:
+    /// the iteration and the bits of μ, x, y, z_L and z_U (`Core::restoration_repeats`).
+    last_restoration_end: Option<(usize, Vec<u64>)>,
 }
 
 impl<'p> Core<'p> {
@@ -174,7 +191,7 @@ impl<'p> Core<'p> {
         let bounds = Bounds::new(prob.x_lower().to_vec(), prob.x_upper().to_vec(), relax);
         let jac_pat = prob.jac_pattern().to_vec();
         let hess_pat = prob.hess_pattern().to_vec();
-        let kkt = KktSystem::new(n, m, &hess_pat, &jac_pat, start.solvers.take());
+        let kkt = KktSystem::new(n, m, &hess_pat, &jac_pat, start.solvers.take())?;
         let nlo = bounds.lo.len();
         let nup = bounds.up.len();
         Ok(Self {
@@ -221,6 +238,8 @@ impl<'p> Core<'p> {
             filter: Filter::default(),
             restoration: start.restoration,
             unboxed_max: std::cell::Cell::new(f64::NEG_INFINITY),
+            met_non_finite_trial: false,
+            last_restoration_end: None,
             prob,
             bounds,
         })
@@ -241,6 +260,9 @@ impl<'p> Core<'p> {
         ctx.counters.constraint_evals += 1;
         ctx.timing.function_evals += t.elapsed();
         let ok = f.is_finite() && c.iter().all(|v| v.is_finite());
+        if trial && !ok {
+            self.met_non_finite_trial = true;
+        }
         (f, ok)
     }
 
@@ -456,5 +478,39 @@ impl<'p> Core<'p> {
             };
             self.accept_step(ctx, taken, &mut run)?;
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::termination::Errors;
+    use super::{max_or_nan, norm_inf};
+
+    /// A NaN entry is the ∞-norm wherever it stands (`f64::max` would return the other
+    /// operand and drop it), and so is a NaN part of the optimality error, which then passes
+    /// no tolerance test; without a NaN both are the plain maximum.
+    #[test]
+    fn a_nan_is_never_dropped_from_an_error_measure() {
+        assert!(norm_inf(&[f64::NAN]).is_nan());
+        assert!(norm_inf(&[f64::NAN, 1.0]).is_nan());
+        assert!(norm_inf(&[1.0, f64::NAN, -3.0]).is_nan());
+        assert_eq!(norm_inf(&[1.0, -3.0, 2.0]), 3.0);
+        assert_eq!(norm_inf(&[f64::NEG_INFINITY, 1.0]), f64::INFINITY);
+        assert_eq!(norm_inf(&[]), 0.0);
+        assert!(max_or_nan(f64::NAN, 2.0).is_nan() && max_or_nan(2.0, f64::NAN).is_nan());
+        assert_eq!(max_or_nan(-1.0, 2.0), 2.0);
+        let err = |dual_inf, primal_inf| Errors {
+            dual_inf,
+            primal_inf,
+            compl0: 0.0,
+            s_d: 1.0,
+            s_c: 1.0,
+        };
+        assert!(err(f64::NAN, 0.0).e(0.0).is_nan());
+        assert!(err(0.0, f64::NAN).e(0.0).is_nan());
+        assert!(err(0.0, 0.0).e(f64::NAN).is_nan());
+        // So it compares with no tolerance: `e0 <= tol` is false.
+        assert!(err(f64::NAN, 0.0).e(0.0).partial_cmp(&1e-8).is_none());
+        assert_eq!(err(1e-3, 2e-3).e(5e-4), 2e-3);
     }
 }

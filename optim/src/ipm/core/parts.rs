@@ -19,6 +19,7 @@
 //!   tiny-step and soft-restoration counts, the log record) and the step an iteration takes.
 
 use super::KeptSolvers;
+use crate::error::OptimError;
 use crate::ipm::kkt::{KktPattern, SparseLdlt, Speculator};
 use crate::ipm::settings::Settings;
 use crate::ipm::solution::IterationInfo;
@@ -179,9 +180,9 @@ impl KktSystem {
         hess_pat: &[(usize, usize)],
         jac_pat: &[(usize, usize)],
         kept: KeptSolvers,
-    ) -> Self {
-        Self {
-            matrix: KktPattern::new(n, m, hess_pat, jac_pat),
+    ) -> Result<Self, OptimError> {
+        Ok(Self {
+            matrix: KktPattern::try_new(n, m, hess_pat, jac_pat)?,
             solver: kept.main.unwrap_or_default(),
             other_solver: None,
             spare_pairs: kept.pairs,
@@ -196,7 +197,7 @@ impl KktSystem {
             sol_before: vec![0.0; n + m],
             speculation: Speculator::new(),
             speculate: None,
-        }
+        })
     }
 }
 

@@ -137,7 +137,9 @@ impl Core<'_> {
         };
         if out.early_stopped {
             if finish(self, ctx)? {
-                return Ok(None);
+                return Ok(self
+                    .restoration_repeats(ctx.iter)
+                    .then_some(Status::RestorationFailed));
             }
             return Ok(Some(Status::RestorationFailed));
         }
@@ -163,12 +165,38 @@ impl Core<'_> {
                 }
                 if finish(self, ctx)? {
                     self.filter.clear();
-                    return Ok(None);
+                    return Ok(self
+                        .restoration_repeats(ctx.iter)
+                        .then_some(Status::RestorationFailed));
                 }
                 Ok(Some(Status::RestorationFailed))
             }
             Status::MaxIterations | Status::MaxTime | Status::UserStop => Ok(Some(out.status)),
             _ => Ok(Some(Status::RestorationFailed)),
         }
+    }
+
+    /// Whether this restoration phase hands the run back at iteration `iter` exactly where the
+    /// previous one did (μ, x and the multipliers bit for bit, no iteration in between, neither
+    /// phase's nor the run's): the run would then repeat the same failed step and the same
+    /// phase forever, without an iteration that `max_iter` counts (a constraint that is not
+    /// finite at any trial point the line search tries, for instance). Judged only once a
+    /// trial point of the run was not evaluable, so that no solve on finite values changes.
+    fn restoration_repeats(&mut self, iter: usize) -> bool {
+        if !self.met_non_finite_trial {
+            return false;
+        }
+        let it = &self.iterate;
+        let bits = std::iter::once(&self.barrier.mu)
+            .chain(&it.x)
+            .chain(&it.y)
+            .chain(&it.zl)
+            .chain(&it.zu)
+            .map(|v| v.to_bits())
+            .collect();
+        let end = Some((iter, bits));
+        let repeats = self.last_restoration_end == end;
+        self.last_restoration_end = end;
+        repeats
     }
 }

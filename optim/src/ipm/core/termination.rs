@@ -11,7 +11,7 @@
 //!   feasible point while a variable with a free or one-sided bound grows; never for an
 //!   all-boxed problem), diverging iterates, the iteration limit and the wall-clock limit.
 
-use super::{Core, Ctx, norm_1, norm_inf};
+use super::{Core, Ctx, max_or_nan, norm_1, norm_inf};
 use crate::ipm::settings::Settings;
 use crate::ipm::solution::Status;
 
@@ -27,10 +27,13 @@ pub(super) struct Errors {
 }
 
 impl Errors {
+    /// The scaled optimality error with complementarity `compl` (W&B eq. (5)); NaN if a part
+    /// is NaN, so that a NaN measure never passes a test.
     pub(super) fn e(&self, compl: f64) -> f64 {
-        (self.dual_inf / self.s_d)
-            .max(self.primal_inf)
-            .max(compl / self.s_c)
+        max_or_nan(
+            max_or_nan(self.dual_inf / self.s_d, self.primal_inf),
+            compl / self.s_c,
+        )
     }
 }
 

@@ -148,6 +148,13 @@ pub enum FactorizationFailure {
         /// Entries given.
         got: usize,
     },
+    /// The right-hand side of a solve does not have one entry per row of the matrix.
+    RhsLength {
+        /// Rows of the analysed matrix.
+        expected: usize,
+        /// Entries given.
+        got: usize,
+    },
 }
 
 impl std::fmt::Display for FactorizationFailure {
@@ -160,6 +167,9 @@ impl std::fmt::Display for FactorizationFailure {
             Self::ValueCount { expected, got } => {
                 write!(f, "{got} matrix values for a pattern of {expected} entries")
             }
+            Self::RhsLength { expected, got } => {
+                write!(f, "a right-hand side of {got} entries for {expected} rows")
+            }
         }
     }
 }
@@ -171,7 +181,13 @@ impl std::fmt::Display for FactorizationFailure {
 /// [`factor`](KktSolver::factor) (same pattern, new values: the numeric phase), each
 /// followed by any number of [`solve`](KktSolver::solve).
 pub trait KktSolver {
-    /// Symbolic analysis (ordering, elimination tree, storage) of the lower-triangle pattern.
+    /// Symbolic analysis (ordering, elimination tree, storage) of the lower-triangle pattern
+    /// of dimension `dim` ([`LowerCsc`]: `dim + 1` column pointers rising from 0 to the
+    /// number of row indices, rows strictly increasing within a column, none above the
+    /// diagonal or beyond `dim`). A malformed pattern is an error
+    /// ([`OptimError::DimensionMismatch`], [`OptimError::InvalidColumnPointers`] or
+    /// [`OptimError::InvalidPattern`]), as is a failed analysis
+    /// ([`OptimError::Factorization`]).
     fn analyse(
         &mut self,
         dim: usize,
@@ -182,7 +198,8 @@ pub trait KktSolver {
     /// inertia of the computed factor, or why there is no usable factor.
     fn factor(&mut self, values: &[f64]) -> Result<Inertia, FactorizationFailure>;
     /// Solves `K x = rhs` in place with the last factorization; fails (leaving `rhs` as it
-    /// was) when that factorization failed or none was made.
+    /// was) when that factorization failed or none was made, or when `rhs` does not have one
+    /// entry per row.
     fn solve(&mut self, rhs: &mut [f64]) -> Result<(), FactorizationFailure>;
 }
 
@@ -551,6 +568,14 @@ impl KktSolver for SparseLdlt {
             .faer
             .as_mut()
             .ok_or(FactorizationFailure::NotAnalysed)?;
+        // The kernels take the length of `rhs` for the dimension.
+        let dim = faer.col_ptr.len() - 1;
+        if rhs.len() != dim {
+            return Err(FactorizationFailure::RhsLength {
+                expected: dim,
+                got: rhs.len(),
+            });
+        }
         match &mut self.kernel {
             Kernel::Supernodal(block) => block.solve(rhs),
             Kernel::Multifrontal(mf) => mf.solve(rhs),
@@ -577,7 +602,8 @@ impl SparseLdlt {
     /// [`SparseLdlt::amd_order`] of a solver that analysed the same pattern): the orderings
     /// that start from AMD's (the pivot pairs') take it instead of ordering again, the larger
     /// part of their analysis (decision record 0094). The analysis is the one
-    /// [`KktSolver::analyse`] makes; `None`, or an order of another length, orders anew.
+    /// [`KktSolver::analyse`] makes; `None`, or anything but a permutation of `0..dim`, orders
+    /// anew.
     pub fn analyse_in_amd_order(
         &mut self,
         dim: usize,
@@ -585,7 +611,12 @@ impl SparseLdlt {
         row_idx: &[usize],
         amd: Option<&[usize]>,
     ) -> Result<(), OptimError> {
-        self.analyse_with(dim, col_ptr, row_idx, amd.filter(|a| a.len() == dim))
+        self.analyse_with(
+            dim,
+            col_ptr,
+            row_idx,
+            amd.filter(|a| is_permutation(a, dim)),
+        )
     }
 
     fn analyse_with(
@@ -596,9 +627,12 @@ impl SparseLdlt {
         amd: Option<&[usize]>,
     ) -> Result<(), OptimError> {
         self.last = Err(FactorizationFailure::NotAnalysed);
+        // A pattern analysed before is well formed, but only for its own dimension.
+        let same_dim = col_ptr.len().checked_sub(1) == Some(dim);
         // Same pattern as the last analysis (repeated solves of one NLP structure): keep the
         // symbolic factorization and the workspace (the options cannot have changed).
         if let Some(a) = &self.faer
+            && same_dim
             && a.col_ptr == col_ptr
             && a.row_idx == row_idx
         {
@@ -610,7 +644,7 @@ impl SparseLdlt {
         if let Some(k) = self
             .kept
             .iter()
-            .position(|a| a.faer.col_ptr == col_ptr && a.faer.row_idx == row_idx)
+            .position(|a| same_dim && a.faer.col_ptr == col_ptr && a.faer.row_idx == row_idx)
         {
             let found = self.kept.remove(k);
             self.keep_current();
@@ -620,6 +654,7 @@ impl SparseLdlt {
             return Ok(());
         }
         self.keep_current();
+        check_lower_csc(dim, col_ptr, row_idx)?;
         self.analyses += 1;
         let opts = &self.options;
         // The elimination order: faer's AMD, AMD with 2 × 2 (variable, row) pivot pairs, or
@@ -715,6 +750,60 @@ impl SparseLdlt {
         self.faer = Some(faer);
         Ok(())
     }
+}
+
+/// Whether `order` holds each of `0..dim` once (an elimination order faer accepts).
+fn is_permutation(order: &[usize], dim: usize) -> bool {
+    let mut seen = vec![false; dim];
+    order.len() == dim
+        && order
+            .iter()
+            .all(|&k| k < dim && !std::mem::replace(&mut seen[k], true))
+}
+
+/// Checks that `col_ptr`/`row_idx` are a lower-triangle CSC pattern of dimension `dim` with
+/// rows strictly increasing within each column ([`LowerCsc`]): faer's analysis asserts it and
+/// the kernels index by it, so a malformed pattern from a caller is an error, not a panic.
+fn check_lower_csc(dim: usize, col_ptr: &[usize], row_idx: &[usize]) -> Result<(), OptimError> {
+    if col_ptr.len().checked_sub(1) != Some(dim) {
+        return Err(OptimError::DimensionMismatch {
+            what: "KKT column pointers",
+            expected: dim.saturating_add(1),
+            found: col_ptr.len(),
+        });
+    }
+    let entries = row_idx.len();
+    let rises = |k: usize| match k {
+        0 => col_ptr[0] == 0,
+        _ => col_ptr[k - 1] <= col_ptr[k] && col_ptr[k] <= entries,
+    };
+    if let Some(index) = (0..=dim)
+        .find(|&k| !rises(k))
+        .or((col_ptr[dim] != entries).then_some(dim))
+    {
+        return Err(OptimError::InvalidColumnPointers {
+            index,
+            value: col_ptr[index],
+            entries,
+        });
+    }
+    for j in 0..dim {
+        let start = col_ptr[j];
+        for (p, &row) in row_idx.iter().enumerate().take(col_ptr[j + 1]).skip(start) {
+            // Rows rise from the diagonal (or below it) and stay below `dim`; the previous
+            // row, already checked, is below `dim`, so `+ 1` cannot overflow.
+            let lowest = if p == start { j } else { row_idx[p - 1] + 1 };
+            if row < lowest || row >= dim {
+                return Err(OptimError::InvalidPattern {
+                    what: "kkt",
+                    index: p,
+                    row,
+                    col: j,
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 impl SparseLdlt {

@@ -5,6 +5,7 @@
 //! equality constraints.
 
 use super::LowerCsc;
+use crate::error::OptimError;
 
 /// Lower-triangle pattern of `K` plus scatter maps from the user triplets.
 #[derive(Debug, Clone)]
@@ -23,7 +24,38 @@ pub struct KktPattern {
 impl KktPattern {
     /// Builds the pattern from the Hessian lower-triangle triplets `(row ≥ col)` over the `n`
     /// primal variables and the Jacobian triplets `(constraint row, variable col)`.
+    ///
+    /// # Panics
+    ///
+    /// If a triplet is out of range or a Hessian triplet lies above the diagonal;
+    /// [`KktPattern::try_new`] returns that as an error instead.
     pub fn new(n: usize, m: usize, hess: &[(usize, usize)], jac: &[(usize, usize)]) -> Self {
+        match Self::try_new(n, m, hess, jac) {
+            Ok(pattern) => pattern,
+            Err(e) => panic!("KktPattern::new: {e}"),
+        }
+    }
+
+    /// [`KktPattern::new`], or [`OptimError::InvalidPattern`] for the first Hessian triplet
+    /// out of `0..n` or above the diagonal, or Jacobian triplet out of `0..m × 0..n`.
+    pub fn try_new(
+        n: usize,
+        m: usize,
+        hess: &[(usize, usize)],
+        jac: &[(usize, usize)],
+    ) -> Result<Self, OptimError> {
+        let invalid = |what, index, (row, col): (usize, usize)| OptimError::InvalidPattern {
+            what,
+            index,
+            row,
+            col,
+        };
+        if let Some(k) = hess.iter().position(|&(r, c)| r >= n || c > r) {
+            return Err(invalid("hessian", k, hess[k]));
+        }
+        if let Some(k) = jac.iter().position(|&(r, c)| r >= m || c >= n) {
+            return Err(invalid("jacobian", k, jac[k]));
+        }
         let dim = n + m;
         // (row, col) keys of every contribution, diagonal first so it always exists.
         let mut cols: Vec<Vec<usize>> = vec![Vec::new(); dim];
@@ -53,7 +85,7 @@ impl KktPattern {
         let jac_dst = jac.iter().map(|&(r, c)| find(n + r, c)).collect();
         let diag_dst = (0..dim).map(|j| find(j, j)).collect();
         let nnz = row_idx.len();
-        Self {
+        Ok(Self {
             n,
             m,
             mat: LowerCsc {
@@ -65,11 +97,16 @@ impl KktPattern {
             hess_dst,
             jac_dst,
             diag_dst,
-        }
+        })
     }
 
     /// Writes `K` for the given Hessian/Jacobian values, primal diagonal `diag_x` (Σ + δ_w) and
     /// dual diagonal `diag_y` (−δ_c).
+    ///
+    /// # Panics
+    ///
+    /// If `hess` or `jac` has fewer values than the pattern's triplets, or `diag_x` fewer than
+    /// `n`.
     pub fn assemble(&mut self, hess: &[f64], jac: &[f64], diag_x: &[f64], diag_y: f64) {
         let v = &mut self.mat.values;
         v.iter_mut().for_each(|e| *e = 0.0);

@@ -649,6 +649,142 @@ fn factorization_failures_are_typed() {
     assert_eq!(s.factor(&pat.mat.values), Ok(good));
 }
 
+/// The public KKT API refuses malformed input with an error instead of panicking: triplets of
+/// [`KktPattern::try_new`] out of range or above the diagonal, CSC patterns that faer's
+/// analysis would assert on or the kernels would index out of range, an elimination order that
+/// is no permutation, and a right-hand side of the wrong length. A refused pattern leaves the
+/// solver without an analysis, so no stale factor is used.
+#[test]
+fn malformed_kkt_input_is_an_error() {
+    let pattern = |what, index, row, col| OptimError::InvalidPattern {
+        what,
+        index,
+        row,
+        col,
+    };
+    assert_eq!(
+        KktPattern::try_new(2, 1, &[(0, 0), (2, 0)], &[]).err(),
+        Some(pattern("hessian", 1, 2, 0))
+    );
+    assert_eq!(
+        KktPattern::try_new(2, 1, &[(0, 1)], &[]).err(),
+        Some(pattern("hessian", 0, 0, 1))
+    );
+    assert_eq!(
+        KktPattern::try_new(2, 1, &[], &[(0, 0), (1, 0)]).err(),
+        Some(pattern("jacobian", 1, 1, 0))
+    );
+    assert_eq!(
+        KktPattern::try_new(2, 1, &[], &[(0, 2)]).err(),
+        Some(pattern("jacobian", 0, 0, 2))
+    );
+    let pat = KktPattern::new(2, 1, &[(0, 0), (1, 1)], &[(0, 0)]);
+    let same = KktPattern::try_new(2, 1, &[(0, 0), (1, 1)], &[(0, 0)]).unwrap();
+    assert_eq!(
+        (&same.mat.col_ptr, &same.mat.row_idx),
+        (&pat.mat.col_ptr, &pat.mat.row_idx)
+    );
+    // K = [2 0 1; 0 3 0; 1 0 −1e-9]: columns {0, 2}, {1}, {2}.
+    let mut pat = pat;
+    pat.assemble(&[2.0, 3.0], &[1.0], &[0.0, 0.0], -1e-9);
+    let (cp, ri) = (&pat.mat.col_ptr[..], &pat.mat.row_idx[..]);
+    assert_eq!((cp, ri), (&[0, 2, 3, 4][..], &[0, 2, 1, 2][..]));
+    let pointers = |index, value| OptimError::InvalidColumnPointers {
+        index,
+        value,
+        entries: 4,
+    };
+    let cases: Vec<(usize, Vec<usize>, Vec<usize>, OptimError)> = vec![
+        (
+            3,
+            vec![],
+            ri.to_vec(),
+            OptimError::DimensionMismatch {
+                what: "KKT column pointers",
+                expected: 4,
+                found: 0,
+            },
+        ),
+        (
+            2,
+            cp.to_vec(),
+            ri.to_vec(),
+            OptimError::DimensionMismatch {
+                what: "KKT column pointers",
+                expected: 3,
+                found: 4,
+            },
+        ),
+        (3, vec![1, 2, 3, 4], ri.to_vec(), pointers(0, 1)),
+        (3, vec![0, 3, 2, 4], ri.to_vec(), pointers(2, 2)),
+        (3, vec![0, 2, 3, 5], ri.to_vec(), pointers(3, 5)),
+        (3, vec![0, 2, 3, 3], ri.to_vec(), pointers(3, 3)),
+        (3, cp.to_vec(), vec![0, 3, 1, 2], pattern("kkt", 1, 3, 0)),
+        (3, cp.to_vec(), vec![0, 2, 0, 2], pattern("kkt", 2, 0, 1)),
+        (3, cp.to_vec(), vec![2, 0, 1, 2], pattern("kkt", 1, 0, 0)),
+        (3, cp.to_vec(), vec![0, 0, 1, 2], pattern("kkt", 1, 0, 0)),
+    ];
+    for backend in [LdltBackend::Auto, LdltBackend::Multifrontal] {
+        for (dim, cp_bad, ri_bad, expected) in &cases {
+            let mut s = SparseLdlt::with_backend(backend);
+            s.analyse(3, cp, ri).unwrap();
+            assert_eq!(
+                s.analyse(*dim, cp_bad, ri_bad),
+                Err(expected.clone()),
+                "{cp_bad:?} {ri_bad:?}"
+            );
+            assert_eq!(
+                s.factor(&pat.mat.values),
+                Err(FactorizationFailure::NotAnalysed)
+            );
+        }
+    }
+    // A diagonal entry need not be stored (it is then 0, as the kernels take it): here
+    // [0 1; 1 2], inertia (1, 1).
+    let mut s = SparseLdlt::new();
+    s.analyse(2, &[0, 1, 2], &[1, 1]).unwrap();
+    let inertia = s.factor(&[1.0, 2.0]).unwrap();
+    assert_eq!((inertia.positive, inertia.negative), (1, 1));
+    // An order that is no permutation of 0..dim is not taken: the pattern is ordered anew.
+    let pairs = LdltOptions {
+        ordering: LdltOrdering::AmdPivotPairs {
+            constraint_rows_from: 2,
+        },
+        ..LdltOptions::default()
+    };
+    for amd in [&[0, 0, 1][..], &[0, 1, 3], &[2, 1, 0, 3]] {
+        let mut s = SparseLdlt::with_options(pairs.clone());
+        s.analyse_in_amd_order(3, cp, ri, Some(amd)).unwrap();
+        let inertia = s.factor(&pat.mat.values).unwrap();
+        assert_eq!((inertia.positive, inertia.negative), (2, 1), "{amd:?}");
+    }
+    // A right-hand side of the wrong length is refused and left as it was.
+    let mut s = SparseLdlt::new();
+    s.analyse(3, cp, ri).unwrap();
+    s.factor(&pat.mat.values).unwrap();
+    for len in [2, 4] {
+        let mut rhs = vec![1.0; len];
+        assert_eq!(
+            s.solve(&mut rhs),
+            Err(FactorizationFailure::RhsLength {
+                expected: 3,
+                got: len
+            })
+        );
+        assert_eq!(rhs, vec![1.0; len]);
+    }
+    let mut rhs = vec![1.0, 2.0, 3.0];
+    s.solve(&mut rhs).unwrap();
+    assert!((rhs[1] - 2.0 / 3.0).abs() < 1e-12);
+}
+
+/// `KktPattern::new` panics on the triplets `try_new` refuses, with the error's message.
+#[test]
+#[should_panic(expected = "invalid sparsity pattern in hessian: entry 0 = (0, 1)")]
+fn a_kkt_pattern_above_the_diagonal_panics_in_new() {
+    let _ = KktPattern::new(2, 0, &[(0, 1)], &[]);
+}
+
 /// A solver that returns to a pattern it analysed before takes the kept analysis instead of
 /// analysing again, and factors and solves with it bit for bit as a new solver does; beyond
 /// [`KEPT_ANALYSES`] other patterns, the oldest is analysed again. Every backend that keeps
