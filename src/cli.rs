@@ -13,14 +13,10 @@ pub fn positive(text: &str) -> Result<f64, String> {
     finite_number(text, |v| v > 0.0, "> 0")
 }
 
-/// `x` as a message shows a user's number: plainly between 1e-3 and 1e6, in exponent form
-/// outside (a `--t-end 1e300` would otherwise print 300 digits).
+/// `x` as a message shows a user's number ([`bf_sim::shown`]: plainly between 1e-3 and 1e6,
+/// in exponent form outside).
 pub fn shown(x: f64) -> String {
-    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
-        format!("{x}")
-    } else {
-        format!("{x:e}")
-    }
+    bf_sim::shown(x)
 }
 
 /// Parses a number that must be finite and ≥ 1 (a step-size cap).

@@ -655,6 +655,60 @@ fn errors_name_the_option_file_or_quantity() {
         out_s,
     ]);
     assert_error(&o, 1, &["huge.csv", "1e300"]);
+
+    // What gave a value is what the message names: a series' end is not a `--t-end` never
+    // given, a missing series is `--torques`'s, an angle of an `--init` file is that file's
+    // (exit 1, not a command-line error), and a huge value is shown as a number, not as 309
+    // digits.
+    let long = dir.join("long.csv");
+    std::fs::write(
+        &long,
+        "t,tau1,tau2,tau3
+0,0,0,0
+1e308,0,0,0
+",
+    )
+    .unwrap();
+    let o = run(&[
+        "simulate",
+        "--torques",
+        long.to_str().unwrap(),
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 2, &["--torques series ends", "1e308 s", "--max-steps"]);
+    assert!(!stderr(&o).contains("--t-end 1e308"), "{}", stderr(&o));
+    let o = run(&["simulate", "--torques", "no-such.csv", "--out", out_s]);
+    assert_error(&o, 1, &["--torques no-such.csv"]);
+    let wound = dir.join("wound.json");
+    std::fs::write(&wound, r#"{"q": [1e10, 0.5, 0.5]}"#).unwrap();
+    let o = run(&[
+        "simulate",
+        "--init",
+        wound.to_str().unwrap(),
+        "--out",
+        out_s,
+    ]);
+    assert_error(&o, 1, &["wound.json", "initial state", "q1 = 1e10"]);
+    for args in [
+        &["simulate", "--rtol", "1e308", "--out", out_s][..],
+        &["optimize", "--problem", "reach", "--hop-scale", "1e308"][..],
+        &["optimize", "--problem", "reach", "--verify-rtol", "1e308"][..],
+    ] {
+        let o = run(args);
+        assert_error(&o, 2, &["got 1e308"]);
+    }
+    let tiny = dir.join("tiny");
+    let o = run(&[
+        "simulate",
+        "--t-end",
+        "1e-300",
+        "--out",
+        tiny.to_str().unwrap(),
+    ]);
+    let shown = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(shown.contains("simulated t = 0 .. 1e-300 s"), "{shown}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -182,6 +182,12 @@ fn a_merge_checks_the_status_and_verification_its_files_state() {
     };
     let plain = merge(&shard, "plain");
     ok(&plain);
+    // One shard of two: the merge is that of its starts, and says so on stderr.
+    let e = String::from_utf8_lossy(&plain.stderr);
+    assert!(
+        e.contains("warning: the shards ran 2 of the 4 starts"),
+        "{e}"
+    );
     let copy = |tag: &str| {
         let to = dir.join(tag);
         std::fs::create_dir_all(&to).unwrap();

@@ -52,5 +52,5 @@ pub use input::{Input, Measurement, PdController, TorqueSeries, TrackingPd};
 pub use settings::{MAX_RTOL, Method, SimSettings};
 pub use simulator::{SimFailure, Simulator, StopReason, simulate, simulate_until};
 pub use system::{Direction, Guard, HybridSystem, Transition};
-pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory};
+pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory, shown};
 pub use work_precision::{WorkPrecisionRow, format_table, work_precision};

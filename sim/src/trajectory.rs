@@ -352,3 +352,13 @@ impl<M: Debug> SimOutput<M> {
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), SimError> {
     bf_output::replace_file(path, bytes).map_err(|e| FileError::new("cannot write", path, e).into())
 }
+
+/// `x` as a message shows a number a user gave or a run reached: plainly between 1e-3 and 1e6,
+/// in exponent form outside (`{}` of a `--t-end 1e-300` would print 300 digits).
+pub fn shown(x: f64) -> String {
+    if x == 0.0 || (1e-3..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}

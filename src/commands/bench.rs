@@ -272,8 +272,8 @@ pub const MAX_STATES: usize = 100_000;
 pub fn run(args: &BenchArgs) -> Result<()> {
     if !(args.time.is_finite() && args.time > 0.0 && args.time <= MAX_TIME) {
         bail_usage!(
-            "--time must be a positive number of seconds, at most {MAX_TIME} (got {:?})",
-            args.time
+            "--time must be a positive number of seconds, at most {MAX_TIME} (got {})",
+            crate::cli::shown(args.time)
         );
     }
     if args.states > MAX_STATES {

@@ -64,7 +64,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
         .unwrap_or(0.01);
     if !(eps.is_finite() && eps > 0.0) {
-        bail_usage!("--eps must be a finite positive number (got {eps})");
+        bail_usage!(
+            "--eps must be a finite positive number (got {})",
+            crate::cli::shown(eps)
+        );
     }
     let state = State {
         q: &q,

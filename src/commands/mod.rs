@@ -42,18 +42,31 @@ pub fn load_scene(
 /// ±[`bf_codegen::trig::ANGLE_RANGE`] rad, where the kernels' sine and cosine are defined
 /// (beyond it every kernel output would be NaN).
 pub fn check_angles(option: &str, scene: &bf_codegen::Scene, q: &[f64]) -> Result<()> {
-    let range = bf_codegen::trig::ANGLE_RANGE;
-    for (i, (l, &v)) in scene.links.iter().zip(q).enumerate() {
-        if l.joint == bf_codegen::spec::JointType::Revolute && v.abs() > range {
-            return Err(crate::errors::usage(format!(
-                "{option}: q{} = {} rad is beyond ±2²⁰ = ±{range} rad, where the kernels' sine \
-                 and cosine are not defined; give the angle modulo 2π",
-                i + 1,
-                crate::cli::shown(v)
-            )));
-        }
+    match angle_beyond_range(option, scene, q) {
+        Some(why) => Err(crate::errors::usage(why)),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// Why the first revolute joint angle of `q` beyond ±[`bf_codegen::trig::ANGLE_RANGE`] rad is
+/// refused, naming `source` (what gave `q`); `None` if every angle is within it.
+pub fn angle_beyond_range(source: &str, scene: &bf_codegen::Scene, q: &[f64]) -> Option<String> {
+    let range = bf_codegen::trig::ANGLE_RANGE;
+    let revolute =
+        |l: &bf_codegen::spec::LinkSpec| l.joint == bf_codegen::spec::JointType::Revolute;
+    let (i, v) = scene
+        .links
+        .iter()
+        .zip(q)
+        .enumerate()
+        .find(|(_, (l, v))| revolute(l) && v.abs() > range)
+        .map(|(i, (_, &v))| (i, v))?;
+    Some(format!(
+        "{source}: q{} = {} rad is beyond ±2²⁰ = ±{range} rad, where the kernels' sine and \
+         cosine are not defined; give the angle modulo 2π",
+        i + 1,
+        crate::cli::shown(v)
+    ))
 }
 
 /// Load a scene file (as [`load_scene`]) and set its runtime parameters from `--param

@@ -918,7 +918,7 @@ impl RunSummary {
             ));
         }
         for w in of(ENERGY_ERROR) {
-            lines.push(format!("t = {} s: {}", w.t, w.message));
+            lines.push(format!("t = {} s: {}", crate::shown(w.t), w.message));
         }
         for kind in [PULLING_IMPULSE, IMPULSE_OUTSIDE_CONE] {
             let w: Vec<&SimWarning> = of(kind).collect();
@@ -932,7 +932,7 @@ impl RunSummary {
             }
         }
         for w in of(HELD_CONTACT).chain(of(HELD_OUTSIDE_CONE)) {
-            lines.push(format!("t = {} s: {}", w.t, w.message));
+            lines.push(format!("t = {} s: {}", crate::shown(w.t), w.message));
         }
         let z: Vec<&SimWarning> = of("zeno_fallback").collect();
         if let Some(w) = z.first() {
@@ -958,7 +958,7 @@ impl RunSummary {
             .iter()
             .filter(|w| !summarised.contains(&w.kind))
         {
-            lines.push(format!("t = {} s: {}", w.t, w.message));
+            lines.push(format!("t = {} s: {}", crate::shown(w.t), w.message));
         }
         lines
     }
@@ -969,8 +969,8 @@ impl std::fmt::Display for RunSummary {
         writeln!(
             f,
             "simulated t = {} .. {} s, final mode {}",
-            self.t0,
-            self.t_final,
+            crate::shown(self.t0),
+            crate::shown(self.t_final),
             mode_name(self.mode_final)
         )?;
         let ev: Vec<String> = self

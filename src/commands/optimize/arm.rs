@@ -103,7 +103,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
         bail_usage!(
             "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
-            args.verify_rtol
+            crate::cli::shown(args.verify_rtol)
         );
     }
     let (scene, text) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
@@ -127,7 +127,10 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
     let weight = |opt: &str, v: Option<f64>, default: f64| -> Result<f64> {
         match v {
             Some(w) if w.is_finite() && w >= 0.0 => Ok(w),
-            Some(w) => bail_usage!("{opt} must be a finite number >= 0 (got {w})"),
+            Some(w) => bail_usage!(
+                "{opt} must be a finite number >= 0 (got {})",
+                crate::cli::shown(w)
+            ),
             None => Ok(default),
         }
     };
@@ -145,7 +148,10 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         duration: match args.duration {
             Some(t) if (MIN_DURATION..=MAX_DURATION).contains(&t) => Some(t),
             Some(t) => {
-                bail_usage!("--duration must be in [{MIN_DURATION}, {MAX_DURATION}] s (got {t})")
+                bail_usage!(
+                    "--duration must be in [{MIN_DURATION}, {MAX_DURATION}] s (got {})",
+                    crate::cli::shown(t)
+                )
             }
             None => None,
         },

@@ -206,12 +206,18 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     if let Some(eps) = args.epsilon
         && !(eps.is_finite() && eps > 0.0)
     {
-        bail_usage!("--epsilon must be a finite positive number (got {eps})");
+        bail_usage!(
+            "--epsilon must be a finite positive number (got {})",
+            crate::cli::shown(eps)
+        );
     }
     if let Some(dc) = args.dual_regularization
         && !(dc.is_finite() && dc > 0.0 && dc <= 1e-4)
     {
-        bail_usage!("--dual-regularization must be in (0, 1e-4] (got {dc})");
+        bail_usage!(
+            "--dual-regularization must be in (0, 1e-4] (got {})",
+            crate::cli::shown(dc)
+        );
     }
     let scheme = parse_scheme(&args.scheme, args.elements)?;
     check_size(args.points, scheme)?;
@@ -225,7 +231,10 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         None => None,
     };
     if !(0.0..1.0).contains(&args.cone_margin) {
-        bail_usage!("--cone-margin must be in [0, 1) (got {})", args.cone_margin);
+        bail_usage!(
+            "--cone-margin must be in [0, 1) (got {})",
+            crate::cli::shown(args.cone_margin)
+        );
     }
     let scene = scene_from_args(args, problem)?;
     // The scene the problem will be built on: `--scene`'s, or the problem's compiled one.
@@ -367,7 +376,10 @@ impl PlanFor {
         let executable = problem.is_periodic() && impact_law == PlannedImpact::Newton;
         let torque_margin = match torque_margin {
             Some(m) if !(0.0..1.0).contains(&m) => {
-                bail_usage!("--torque-margin must be in [0, 1) (got {m})")
+                bail_usage!(
+                    "--torque-margin must be in [0, 1) (got {})",
+                    crate::cli::shown(m)
+                )
             }
             Some(m) => m,
             None if executable => EXECUTABLE_TORQUE_MARGIN,
@@ -732,7 +744,10 @@ pub fn hop_settings(
     let mut h = crate::pipeline::search::DEFAULT_HOPS;
     if let Some(s) = hop_scale {
         if !(s.is_finite() && s > 0.0 && s <= 3.0) {
-            bail_usage!("--hop-scale must be in (0, 3] (got {s})");
+            bail_usage!(
+                "--hop-scale must be in (0, 3] (got {})",
+                crate::cli::shown(s)
+            );
         }
         h.scale = s;
     }
@@ -850,7 +865,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     if let Some(tol) = args.refine {
         if !(tol.is_finite() && tol > 0.0) {
-            bail_usage!("--refine must be a finite positive tolerance (got {tol})");
+            bail_usage!(
+                "--refine must be a finite positive tolerance (got {})",
+                crate::cli::shown(tol)
+            );
         }
         if settings.scheme == Scheme::Lg {
             bail_usage!("--refine needs --scheme radau (mesh refinement splits Radau elements)");
@@ -859,7 +877,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
         bail_usage!(
             "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
-            args.verify_rtol
+            crate::cli::shown(args.verify_rtol)
         );
     }
     let mut out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
@@ -1028,10 +1046,32 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     {
         crate::outln!("{h}")?;
     }
+    if !sol.status.is_success()
+        && let Some(h) = friction_hint(&problem.scene, &sol.modes)
+    {
+        crate::outln!("{h}")?;
+    }
     if let Some(f) = failure_of(&sol) {
         bail!("{f}");
     }
     Ok(())
+}
+
+/// Why a problem with a stick phase may have no solution on `scene`: without static friction
+/// (μ_s = 0) the contact force of a stick phase must lie along the normal (the cone of eq. 18
+/// shrinks to its axis), through the ball's centre, where it exerts no moment on the ball.
+/// `None` where the scene has friction or the problem no stick phase.
+pub fn friction_hint(scene: &bf_codegen::Scene, modes: &[PhaseMode]) -> Option<String> {
+    let frictionless = scene.friction.as_ref().is_some_and(|f| f.mu_s == 0.0);
+    (frictionless && modes.contains(&PhaseMode::Stick)).then(|| {
+        format!(
+            "hint: scene `{}` has no static friction (mu_s = 0): a stick phase's contact force \
+             must then lie along the normal (the friction cone, eq. 18, is its axis), through \
+             the ball's centre, and cannot spin the ball; give the scene's [friction] a \
+             mu_s > 0",
+            scene.name
+        )
+    })
 }
 
 #[cfg(test)]
@@ -1114,5 +1154,23 @@ mod tests {
         assert!(tap_hint(PlannedImpact::Stick, &[Free, Free, Free], &tap, 0.01).is_none());
         // The larger minimum of `--min-stick 0.1` is the one compared with.
         assert!(tap_hint(PlannedImpact::Stick, &modes, &[0.5, 0.1, 0.1], 0.1).is_some());
+    }
+
+    /// A failed problem with a stick phase on a scene without static friction says why it
+    /// may have no solution (it used to end at its iteration limit without a word of it); a
+    /// scene with friction, or a problem without a stick phase, gets no such hint.
+    #[test]
+    fn the_friction_hint_names_a_scene_without_static_friction() {
+        use PhaseMode::{Free, Stick};
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/paper.toml");
+        let mut scene = bf_codegen::Scene::load(&path).unwrap();
+        assert!(friction_hint(&scene, &[Free, Stick, Free]).is_none());
+        scene.friction.as_mut().unwrap().mu_s = 0.0;
+        let hint = friction_hint(&scene, &[Free, Stick, Free]).unwrap();
+        assert!(
+            hint.contains("`paper`") && hint.contains("mu_s = 0"),
+            "{hint}"
+        );
+        assert!(friction_hint(&scene, &[Free]).is_none());
     }
 }

@@ -76,11 +76,7 @@ pub(super) fn run_arm(
         (None, Some((q, _, _))) => q.clone(),
         (None, None) => vec![0.0; n],
     };
-    crate::commands::check_angles(
-        if args.q0.is_some() { "--q0" } else { "--init" },
-        scene,
-        &q0,
-    )?;
+    super::check_initial_angles(args, scene, &q0)?;
     let qd0 = match &args.qd0 {
         Some(s) => parse_list("--qd0", s, Some(n))?,
         None => vec![0.0; n],

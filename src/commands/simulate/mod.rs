@@ -144,7 +144,8 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
             Ok(())
         } else {
             Err(crate::errors::usage(format!(
-                "{name} must be a finite number > 0 (got {v})"
+                "{name} must be a finite number > 0 (got {})",
+                crate::cli::shown(v)
             )))
         }
     };
@@ -153,7 +154,7 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
         return Err(crate::errors::usage(format!(
             "--rtol must be at most {} (a relative error of 10 % per step; got {})",
             bf_sim::MAX_RTOL,
-            args.rtol
+            crate::cli::shown(args.rtol)
         )));
     }
     pos("--step", args.step)?;
@@ -329,21 +330,32 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Resul
         Method::Rk4 { h } => (h, "--step"),
         Method::Dopri5 => (set.h_max, "--h-max"),
     };
+    // The end is the command line's only where it gave one: otherwise a --torques series or
+    // an --init solution set it, and the message must not blame a flag never given.
+    let shown = crate::cli::shown(t_end);
+    let end = match (args.t_end, &args.torques) {
+        (Some(_), _) => format!("--t-end {shown} s"),
+        (None, Some(_)) => format!(
+            "the run's end at {shown} s, where its --torques series ends (--t-end sets another)"
+        ),
+        (None, None) if t_end == crate::cli::DEFAULT_T_END => format!("--t-end {shown} s"),
+        (None, None) => format!(
+            "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
+             another)"
+        ),
+    };
     let min_steps = t_end / h;
     if min_steps > args.max_steps as f64 {
         bail_usage!(
-            "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more \
-             than --max-steps {}; shorten --t-end or raise --max-steps",
-            crate::cli::shown(t_end),
+            "{end} needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more than \
+             --max-steps {}; shorten --t-end or raise --max-steps",
             args.max_steps
         );
     }
     if set.record_steps && min_steps > args.max_samples as f64 {
         bail_usage!(
-            "--t-end {} s needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each \
-             stored as a sample, more than --max-samples {}; shorten --t-end or raise \
-             --max-samples",
-            crate::cli::shown(t_end),
+            "{end} needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each stored \
+             as a sample, more than --max-samples {}; shorten --t-end or raise --max-samples",
             args.max_samples
         );
     }
@@ -354,10 +366,9 @@ pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Resul
         let n = grid + steps;
         if n > args.max_samples as f64 {
             bail_usage!(
-                "--output-dt {} s over --t-end {} s is {grid:.3e} grid samples{}, more than \
+                "--output-dt {} s over {end} is {grid:.3e} grid samples{}, more than \
                  --max-samples {}; raise --output-dt or --max-samples",
                 crate::cli::shown(dt),
-                crate::cli::shown(t_end),
                 if steps > 0.0 {
                     format!(" and at least {steps:.3e} step samples")
                 } else {
@@ -455,10 +466,33 @@ pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarn
     })
 }
 
+/// The run's initial angles `q` against the kernels' range ([`crate::commands::check_angles`]):
+/// an angle of the command line's `--q0` is a usage error, one of an `--init` file's initial
+/// state an error of that file, named.
+pub(super) fn check_initial_angles(
+    args: &SimulateArgs,
+    scene: &bf_codegen::Scene,
+    q: &[f64],
+) -> Result<()> {
+    match (&args.q0, &args.init) {
+        (None, Some(path)) => {
+            let source = format!("--init {}: its initial state", path.display());
+            match crate::commands::angle_beyond_range(&source, scene, q) {
+                Some(why) => bail!("{why}"),
+                None => Ok(()),
+            }
+        }
+        _ => crate::commands::check_angles("--q0", scene, q),
+    }
+}
+
 /// Refuses an end time that is not a finite number > 0.
 pub(super) fn check_t_end(t_end: f64) -> Result<()> {
     if !(t_end.is_finite() && t_end > 0.0) {
-        bail_usage!("--t-end must be a finite number > 0 (got {t_end:e})");
+        bail_usage!(
+            "--t-end must be a finite number > 0 (got {})",
+            crate::cli::shown(t_end)
+        );
     }
     Ok(())
 }
@@ -513,11 +547,7 @@ fn run_contact<const N: usize>(
     check_limits(args, &set, t_end)?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state::<N>(args)?;
-    crate::commands::check_angles(
-        if args.q0.is_some() { "--q0" } else { "--init" },
-        scene,
-        x0.q.as_slice(),
-    )?;
+    check_initial_angles(args, scene, x0.q.as_slice())?;
     if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
         let m = max_torque(s);
         if m > LARGE_TORQUE {

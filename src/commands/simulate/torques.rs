@@ -96,10 +96,11 @@ pub(super) fn pd_controller(args: &SimulateArgs, target: &str, n: usize) -> Resu
 
 /// The `--torques` series at `path` for a scene `name` with `n` joints: one column per joint.
 pub(super) fn series(path: &std::path::Path, name: &str, n: usize) -> Result<CliInput> {
-    let s = TorqueSeries::from_path(path)?;
+    let s =
+        TorqueSeries::from_path(path).with_context(|| format!("--torques {}", path.display()))?;
     if s.dim() != n {
         bail!(
-            "{}: scene `{name}` has {n} joints, the torque series has {} columns",
+            "--torques {}: scene `{name}` has {n} joints, the torque series has {} columns",
             path.display(),
             s.dim()
         );
