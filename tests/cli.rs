@@ -813,7 +813,7 @@ fn scene_warnings_reach_stderr_and_nonphysical_inertias_are_refused() {
         .collect();
     assert_eq!(warnings.len(), 1, "{stderr}");
     assert!(
-        warnings[0].starts_with("warning: scenes/puma560.toml: links[2].inertia: ")
+        warnings[0].starts_with("warning: scenes/puma560.toml: links[2].inertia (`elbow`): ")
             && warnings[0].contains("8.6e-2 > 1.25e-2 + 6.6e-2")
             && warnings[0].contains("Armstrong"),
         "{stderr}"

@@ -518,8 +518,13 @@ impl Scene {
             }
         };
         for (i, l) in self.links.iter().enumerate() {
+            // A URDF's chain has no `links[i]` of the user's: its name (the joint's) finds it.
+            let named = l
+                .name
+                .as_ref()
+                .map_or(String::new(), |n| format!(" (`{n}`)"));
             inertia(
-                format!("links[{i}].inertia"),
+                format!("links[{i}].inertia{named}"),
                 l.inertia_matrix(),
                 l.nonphysical_inertia.as_ref(),
             );

@@ -654,6 +654,13 @@ fn a_scene_keeps_a_urdfs_nonphysical_inertia_by_naming_its_source() {
     .unwrap();
     let (scene, text) = Scene::load_with_text(&path, &ChainChoice::default()).unwrap();
     assert_eq!(scene.nq(), 2);
+    // Its warning names the URDF's joint: `links[1]` is no table of the user's scene file.
+    let w = scene.warnings();
+    assert_eq!(w.len(), 1, "{w:?}");
+    assert!(
+        w[0].starts_with("links[1].inertia (`j2`): ") && w[0].contains("vendor data sheet"),
+        "{w:?}"
+    );
     // The mark travels with the self-contained text.
     assert_eq!(Scene::from_toml_str(&text, "again").unwrap(), scene);
     // Without `urdf` the top-level key has nothing to apply to.

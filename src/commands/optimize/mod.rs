@@ -761,28 +761,27 @@ pub fn hop_settings(
     }
 }
 
-/// Run `optimize`. A warm start that does not fit the problem is found where the problem is
-/// built, deep in the solve; its error then names the file it came from.
+/// Run `optimize`.
 pub fn run(args: &OptimizeArgs) -> Result<()> {
-    run_with(args, RunSettings::default()).map_err(|e| {
-        use bf_problem::ProblemError as P;
-        let warm = |p: &P| matches!(p, P::WarmStartShape { .. } | P::WarmStartPhases { .. });
-        // The pipeline wraps the problem's error transparently, so it is no link of its own.
-        let misfit = e.chain().any(|c| {
-            c.downcast_ref::<P>().is_some_and(warm)
-                || matches!(
-                    c.downcast_ref::<crate::pipeline::PipelineError>(),
-                    Some(crate::pipeline::PipelineError::Problem(p)) if warm(p)
-                )
-        });
-        match (&args.warm_start, misfit) {
-            (Some(path), true) => e.context(format!(
-                "--warm-start {} (its collocation data, `raw` in its internals file)",
-                path.display()
-            )),
-            _ => e,
-        }
-    })
+    run_with(args, RunSettings::default())
+}
+
+/// Errors naming `--warm-start FILE` unless its collocation data fit the phases of `problem`
+/// built with `settings` (their count and the widths of their states, algebraic variables and
+/// controls, which no mesh changes): checked where the file is read, before any solve, and
+/// not where a stage of the search first builds the problem. Other errors of the build are
+/// left to the stage that meets them.
+fn check_warm_start_fits(problem: Problem, settings: &ProblemSettings, path: &Path) -> Result<()> {
+    use bf_problem::ProblemError as P;
+    match crate::pipeline::build(problem, settings) {
+        Err(crate::pipeline::PipelineError::Problem(
+            e @ (P::WarmStartShape { .. } | P::WarmStartPhases { .. }),
+        )) => Err(anyhow::Error::new(e).context(format!(
+            "--warm-start {} (its collocation data, `raw` in its internals file)",
+            path.display()
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// Run `optimize` with `opts`.
@@ -809,6 +808,9 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     let name = parse_problem(problem_arg(args))?;
     let settings = settings_from_args(args)?;
+    if let Some(path) = &args.warm_start {
+        check_warm_start_fits(name, &settings, path)?;
+    }
     // Without `--hops` the global search runs for the periodic problems only (the others'
     // default is the continuation; an explicit multi-start of them keeps its best start).
     let hops = hop_settings(args.hops, args.hop_scale)?
