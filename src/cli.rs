@@ -13,11 +13,7 @@ pub fn positive(text: &str) -> Result<f64, String> {
     finite_number(text, |v| v > 0.0, "> 0")
 }
 
-/// `x` as a message shows a user's number ([`bf_sim::shown`]: plainly between 1e-3 and 1e6,
-/// in exponent form outside).
-pub fn shown(x: f64) -> String {
-    bf_sim::shown(x)
-}
+pub use bf_sim::shown;
 
 /// Parses a number that must be finite and ≥ 1 (a step-size cap).
 pub fn at_least_one(text: &str) -> Result<f64, String> {

@@ -788,6 +788,15 @@ fn options_a_run_would_drop_are_refused_by_name() {
         args.extend_from_slice(extra);
         assert_usage_error(&run(&args), &[flag]);
     }
+    // Without --strategy the message names the default it met, not a flag never given.
+    assert_usage_error(
+        &run(&["optimize", "--problem", "reach", "--hops", "3"]),
+        &[
+            "--hops",
+            "default strategy of --problem reach",
+            "--strategy multistart",
+        ],
+    );
 }
 
 #[test]

@@ -142,8 +142,15 @@ fn paper_quick_writes_a_consistent_report() {
                 l[status_col..].starts_with("Solved") || l[status_col..].starts_with('A'),
                 "{name}: misaligned {l:?} under {head:?}"
             );
-            let stage = l[8..status_col].trim_end();
-            if !stage.starts_with("  ") && !stage.starts_with("stored optimum") {
+            // "* CHAIN  STAGE": the stage column starts under its head's "stage".
+            let stage = l[head.find("stage").unwrap()..status_col].trim_end();
+            let indented = stage.starts_with("  ");
+            assert_eq!(
+                indented,
+                stage.trim_start().starts_with("hp round"),
+                "{l:?}"
+            );
+            if !indented && !stage.starts_with("stored optimum") {
                 listed += l
                     .split_whitespace()
                     .rev()

@@ -753,9 +753,11 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
 
 /// The solve stages of `sol` as the report shows them: the strategy's summary, the stages
 /// of its kept chain and the verification refinements of that chain
-/// (`StrategyReport::kept_rows`), then the rounds of the hp refinement that verified it
-/// (`solution.json`'s `refinement.history`: the last of those refinements, whose line counts
-/// their iterations), and last the optimum the results table reports: where `resolved`, the
+/// (`StrategyReport::kept_rows`), then the rounds of the hp refinement of its mesh
+/// (`solution.json`'s `refinement.history`: indented where they are the last of those
+/// refinements, whose line counts their iterations; marked as the origin's where the
+/// winner inherited the mesh from another candidate), and last the optimum the results
+/// table reports: where `resolved`, the
 /// solve of the stored optimum from its own point in this run, otherwise a line of its own
 /// only where it differs from the line before. `None` for a solution without a strategy
 /// record.
@@ -765,11 +767,23 @@ pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
     let chain = st.chosen;
     let mut last = rows.last().map(|r| r.objective);
     // Under a refinement's own line its rounds are its parts, indented so that no one sums
-    // them twice.
-    let indent = if st.refinements.iter().any(|r| Some(r.chain) == chain) {
-        "  "
-    } else {
+    // them twice. A winner that a hop or the polish found on the mesh of its origin carries
+    // the rounds of the origin's refinement, which no line of its own chain counts.
+    let rounds: usize = sol
+        .refinement
+        .as_ref()
+        .map_or(0, |r| r.history.iter().map(|h| h.iterations).sum());
+    let own = st
+        .refinements
+        .iter()
+        .rev()
+        .find(|r| Some(r.chain) == chain)
+        .is_some_and(|r| r.iterations == rounds);
+    let indent = if own { "  " } else { "" };
+    let origin = if own || st.refinements.is_empty() {
         ""
+    } else {
+        "the mesh's origin's "
     };
     let row = |stage: String, status, objective, period, iterations, seconds| StageRow {
         kept: true,
@@ -790,7 +804,7 @@ pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
             let points: Vec<String> = r.points.iter().map(usize::to_string).collect();
             rows.push(row(
                 format!(
-                    "{indent}hp round {}: {} points, {what} {:.1e}",
+                    "{indent}{origin}hp round {}: {} points, {what} {:.1e}",
                     r.round,
                     points.join("/"),
                     r.max_error

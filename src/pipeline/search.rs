@@ -545,14 +545,16 @@ fn attach_verification(c: &mut Candidate, policy: &VerifyPolicy, bound: f64) {
     c.solution.verification = v;
 }
 
-/// `c`'s verification made anew as the sampling makes it (`attach_verification` before any
-/// plan is verified), in place of the one it carries: a candidate read from a file states a
-/// verdict that `optimize merge` does not take on trust. A candidate without one (a coarse
-/// sampling's) stays without.
-pub fn verify_again(c: &mut Candidate, policy: &VerifyPolicy) {
-    if c.solution.verification.take().is_some() && policy.rtol > 0.0 {
-        attach_verification(c, policy, f64::INFINITY);
-    }
+/// The candidates' verifications made anew as the sampling makes them (`attach_verification`
+/// before any plan is verified), in place of the ones they carry: a candidate read from a
+/// file states a verdict that `optimize merge` does not take on trust. A candidate without
+/// one (a coarse sampling's) stays without. In parallel, each candidate on its own.
+pub fn verify_again(cands: &mut [Candidate], policy: &VerifyPolicy) {
+    cands.par_iter_mut().for_each(|c| {
+        if c.solution.verification.take().is_some() && policy.rtol > 0.0 {
+            attach_verification(c, policy, f64::INFINITY);
+        }
+    });
 }
 
 /// Why the search left a plan unexecuted
@@ -2054,9 +2056,9 @@ impl Search {
     }
 
     /// The chosen candidate ([`select`]) with its [`OcpSolution::strategy`] record (every
-    /// stage, total iterations and time; the refinements are not in it, the chosen
-    /// candidate's own is in [`OcpSolution::refinement`]); its problem is `None` only for candidates read
-    /// from files. Errors when no chain produced a solution.
+    /// stage and the verification's refinements, total iterations and time; the rounds of the
+    /// chosen candidate's last refinement are in [`OcpSolution::refinement`]); its problem is
+    /// `None` only for candidates read from files. Errors when no chain produced a solution.
     pub fn best(mut self) -> Result<(Option<BuiltProblem>, OcpSolution), PipelineError> {
         let Some(i) = self.choice() else {
             let stages = self

@@ -135,6 +135,26 @@ impl StrategyReport {
         )
     }
 
+    /// One line per verification refinement, as `optimize` and `optimize merge` print them
+    /// after [`StrategyReport::table`].
+    pub fn refinement_lines(&self) -> String {
+        self.refinements
+            .iter()
+            .map(|r| {
+                format!(
+                    "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} \
+                     iterations in {:.1} s\n",
+                    r.stage,
+                    status_name(r.status),
+                    r.objective,
+                    r.period,
+                    r.iterations,
+                    r.seconds
+                )
+            })
+            .collect()
+    }
+
     fn row(&self, r: &StageRecord) -> StageRow {
         StageRow {
             kept: Some(r.chain) == self.chosen,

@@ -808,9 +808,6 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     let name = parse_problem(problem_arg(args))?;
     let settings = settings_from_args(args)?;
-    if let Some(path) = &args.warm_start {
-        check_warm_start_fits(name, &settings, path)?;
-    }
     // Without `--hops` the global search runs for the periodic problems only (the others'
     // default is the continuation; an explicit multi-start of them keeps its best start).
     let hops = hop_settings(args.hops, args.hop_scale)?
@@ -840,7 +837,15 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             ("--hop-scale", args.hop_scale.is_some()),
         ] {
             if given {
-                bail_usage!("{opt}: only the multi-start takes it (got --strategy {strategy})");
+                let why = match &args.strategy {
+                    Some(_) => format!("got --strategy {strategy}"),
+                    None => format!(
+                        "the default strategy of --problem {name} with --scheme {} is {strategy}; \
+                         give --strategy multistart",
+                        args.scheme
+                    ),
+                };
+                bail_usage!("{opt}: only the multi-start takes it ({why})");
             }
         }
     }
@@ -882,6 +887,10 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             crate::cli::shown(args.verify_rtol)
         );
     }
+    // After the usage checks: a wrong command line is said as such first.
+    if let Some(path) = &args.warm_start {
+        check_warm_start_fits(name, &settings, path)?;
+    }
     let mut out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     if let Some(n) = opts.fail_at_write {
         out.inject_fault_at_write(n);
@@ -914,17 +923,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         .ok_or_else(|| anyhow::anyhow!("internal: the chosen {name} solve has no problem"))?;
     if let Some(rep) = &sol.strategy {
         crate::io::print_out(&rep.table())?;
-        for r in &rep.refinements {
-            crate::outln!(
-                "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} iterations in {:.1} s",
-                r.stage,
-                crate::names::name(&r.status),
-                r.objective,
-                r.period,
-                r.iterations,
-                r.seconds
-            )?;
-        }
+        crate::io::print_out(&rep.refinement_lines())?;
     }
     if args.shard.is_some() {
         crate::outln!("shard {shard}: {} distinct optima kept", candidates.len())?;
@@ -932,7 +931,13 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     if let Some(tol) = args.refine {
         // From the mesh the solution is on: the verification may have refined it already,
         // and a refinement from the problem's own mesh would solve the coarser mesh again.
-        let on_its_mesh = problem.settings.clone();
+        // Only the mesh: the rest of a stage's settings (a hop's iteration cap) is the stage's.
+        let on_its_mesh = ProblemSettings {
+            points: problem.settings.points,
+            scheme: problem.settings.scheme,
+            mesh: problem.settings.mesh.clone(),
+            ..settings.clone()
+        };
         (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, args.refine_rounds)?;
         sol.verification = None;
     }
@@ -1064,13 +1069,14 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
 /// shrinks to its axis), through the ball's centre, where it exerts no moment on the ball.
 /// `None` where the scene has friction or the problem no stick phase.
 pub fn friction_hint(scene: &bf_codegen::Scene, modes: &[PhaseMode]) -> Option<String> {
-    let frictionless = scene.friction.as_ref().is_some_and(|f| f.mu_s == 0.0);
+    // A scene without a [friction] table has none (μ_s = 0, `Constants::of`).
+    let frictionless = scene.friction.as_ref().is_none_or(|f| f.mu_s == 0.0);
     (frictionless && modes.contains(&PhaseMode::Stick)).then(|| {
         format!(
             "hint: scene `{}` has no static friction (mu_s = 0): a stick phase's contact force \
              must then lie along the normal (the friction cone, eq. 18, is its axis), through \
-             the ball's centre, and cannot spin the ball; give the scene's [friction] a \
-             mu_s > 0",
+             the ball's centre, and cannot spin the ball; give the scene a [friction] table \
+             with mu_s > 0",
             scene.name
         )
     })
@@ -1174,5 +1180,8 @@ mod tests {
             "{hint}"
         );
         assert!(friction_hint(&scene, &[Free]).is_none());
+        // No [friction] table at all is no friction either.
+        scene.friction = None;
+        assert!(friction_hint(&scene, &[Free, Stick, Free]).is_some());
     }
 }

@@ -445,8 +445,8 @@ pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarn
         CliInput::Series(s) => (
             *s.times().last()?,
             "the --torques series ends",
-            "a solution's torques.csv covers one period (repeat it with --pd-track 0,0, or end \
-             the run with the series by leaving out --t-end)",
+            "a solution's torques.csv covers one period (end the run with the series by \
+             leaving out --t-end, or, for a finger's solution, repeat it with --pd-track 0,0)",
         ),
         CliInput::Replay(p) => (
             p.end()?,
@@ -459,8 +459,9 @@ pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarn
         t: end,
         kind: "torques_held",
         message: format!(
-            "{what} at t = {end} s and the run holds its last torque from there to \
+            "{what} at t = {} s and the run holds its last torque from there to \
              --t-end {} s; {advice}",
+            crate::cli::shown(end),
             crate::cli::shown(t_end)
         ),
     })
