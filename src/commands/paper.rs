@@ -610,7 +610,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
                 "Solve stages (the search's summary, which counts every solve and iteration \
                  of the table; the kept chain's solves and the hp refinements that the \
                  verification ran on it, each from the mesh the one before it ended on; \
-                 indented, the rounds of the last refinement; and last the optimum of the table above where \
+                 indented, the rounds of the last refinement (or of the refinement its mesh \
+                 comes from, marked as such, where the winner inherited it from a hop's \
+                 origin); and last the optimum of the table above where \
                  it is another solve; every stage is in `{}/solution.json`):\n\n```text\n{stages}```\n",
                 r.name,
             )?;
