@@ -641,8 +641,9 @@ pub struct OptimizeArgs {
     /// ball in free flight (0.005 r: 5 mm on the paper's ball of 1 m); 0 otherwise].
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub approach_clearance: Option<f64>,
-    /// Adaptive hp mesh refinement (Radau only) after the solve, until the largest element
-    /// error estimate is at most TOL (e.g. 1e-4). Each round after the first is solved warm
+    /// Adaptive hp mesh refinement (Radau only) after the solve, from the mesh the optimum is
+    /// on (the verification's refinements may have refined it already), until the largest
+    /// element error estimate is at most TOL (e.g. 1e-4). Each round after the first is solved warm
     /// from the round before in at most 500 iterations (or `--max-iter` if lower); a round
     /// that does not converge ends the refinement with the round before it.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
