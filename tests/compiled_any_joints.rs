@@ -357,21 +357,26 @@ fn a_finger_of_the_user_s_own_is_tracked_on_interpreted_kernels() {
         unverified_dir.join("solution-internals.json"),
     )
     .unwrap();
-    let out = dir.join("track-unverified");
-    let o = run(&[
-        "track",
-        unverified.to_str().unwrap(),
-        "--periods",
-        "2",
-        "--impact-law",
-        "stick",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    // `track` of the edited plan for `periods`: its stderr and its tracking.json.
+    let track_edited = |periods: &str, tag: &str| {
+        let out = dir.join(tag);
+        let o = run(&[
+            "track",
+            unverified.to_str().unwrap(),
+            "--periods",
+            periods,
+            "--impact-law",
+            "stick",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let t: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("tracking.json")).unwrap())
+                .unwrap();
+        (String::from_utf8_lossy(&o.stderr).into_owned(), t)
+    };
+    let (err, t) = track_edited("2", "track-unverified");
     assert!(err.contains("failed its own verification"), "{err}");
-    let t: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("tracking.json")).unwrap()).unwrap();
     assert_eq!(t["plan_verified"], false);
     assert_eq!(t["plan_status"], "Solved");
     // The same plan as the end of a solve that did not converge: its re-integration passes,
@@ -380,25 +385,12 @@ fn a_finger_of_the_user_s_own_is_tracked_on_interpreted_kernels() {
         serde_json::from_str(&std::fs::read_to_string(&sol).unwrap()).unwrap();
     v["status"] = serde_json::json!("MaxIterations");
     std::fs::write(&unverified, serde_json::to_vec(&v).unwrap()).unwrap();
-    let out = dir.join("track-unconverged");
-    let o = run(&[
-        "track",
-        unverified.to_str().unwrap(),
-        "--periods",
-        "1",
-        "--impact-law",
-        "stick",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
+    let (err, t) = track_edited("1", "track-unconverged");
     assert!(
         err.contains("ended MaxIterations") && err.contains("not an optimum"),
         "{err}"
     );
     assert!(!err.contains("failed its own verification"), "{err}");
-    let t: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("tracking.json")).unwrap()).unwrap();
     assert_eq!(
         (&t["plan_verified"], &t["plan_status"]),
         (

@@ -96,13 +96,9 @@ impl StrategyReport {
         format!("{}\n{}", self.summary(), stage_table(&rows))
     }
 
-    /// The stages of the kept chain, then the verification refinements of that chain, under
-    /// the summary of every solve: a global search records hundreds of stages.
-    pub fn kept_table(&self) -> String {
-        format!("{}\n{}", self.summary(), stage_table(&self.kept_rows()))
-    }
-
-    /// The rows of [`StrategyReport::kept_table`], for a table that goes on after them.
+    /// The rows of the kept chain: its stages, then the verification refinements of that
+    /// chain (a global search records hundreds of stages; [`stage_table`] prints them, under
+    /// [`StrategyReport::summary`], with the rows a report adds after them).
     pub fn kept_rows(&self) -> Vec<StageRow> {
         let kept = |r: &&StageRecord| Some(r.chain) == self.chosen;
         self.records
@@ -1076,7 +1072,7 @@ mod tests {
             basin_hits: None,
             refinements: Vec::new(),
         };
-        let kept = report.kept_table();
+        let kept = format!("{}\n{}", report.summary(), stage_table(&report.kept_rows()));
         let lines: Vec<&str> = kept.lines().collect();
         assert!(lines[0].contains("3 solves"), "{kept}");
         assert_eq!(lines.len(), 4, "{kept}");
@@ -1091,7 +1087,7 @@ mod tests {
             refinements: vec![rec(0, "refine start 0 to 1e-4", 1.5), rec(1, long, 0.4)],
             ..report
         };
-        let kept = report.kept_table();
+        let kept = format!("{}\n{}", report.summary(), stage_table(&report.kept_rows()));
         let lines: Vec<&str> = kept.lines().collect();
         assert!(
             lines[0]

@@ -441,19 +441,17 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
 /// are no replay of it) or an arm solution replayed by `--init` (its torques cover its own
 /// duration).
 pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarning> {
-    let (end, what, advice) = match inp {
-        CliInput::Series(s) => (
-            *s.times().last()?,
+    let end = inp.series_end()?;
+    let (what, advice) = match inp {
+        CliInput::Replay(_) => (
+            "the torques of the --init solution end",
+            "they cover the solution's own duration (leave out --t-end to end the run with it)",
+        ),
+        _ => (
             "the --torques series ends",
             "a solution's torques.csv covers one period (end the run with the series by \
              leaving out --t-end, or, for a finger's solution, repeat it with --pd-track 0,0)",
         ),
-        CliInput::Replay(p) => (
-            p.end()?,
-            "the torques of the --init solution end",
-            "they cover the solution's own duration (leave out --t-end to end the run with it)",
-        ),
-        _ => return None,
     };
     (t_end > end * (1.0 + 1e-9)).then(|| bf_sim::SimWarning {
         t: end,

@@ -29,12 +29,14 @@ pub enum CliInput {
 }
 
 impl CliInput {
-    /// The last time of a `--torques` series (s): past it the series holds its last torque,
-    /// and `simulate` ends its run there unless `--t-end` says otherwise or it is not after
-    /// the start (a one-row series is a constant torque, held over the default run).
+    /// The last time of a `--torques` series or of a replayed arm solution (s): past it the
+    /// input holds its last torque, and `simulate` ends its run there unless `--t-end` says
+    /// otherwise or it is not after the start (a one-row series is a constant torque, held
+    /// over the default run).
     pub fn series_end(&self) -> Option<f64> {
         match self {
             CliInput::Series(s) => s.times().last().copied(),
+            CliInput::Replay(p) => p.end(),
             _ => None,
         }
     }
