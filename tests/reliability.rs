@@ -690,6 +690,20 @@ fn errors_name_the_option_file_or_quantity() {
         out_s,
     ]);
     assert_error(&o, 1, &["wound.json", "initial state", "q1 = 1e10"]);
+    // A cost weight that makes the objective overflow is named beside the scene.
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach-arm",
+        "--scene",
+        "scenes/puma560.toml",
+        "--effort-weight",
+        "1e308",
+        "--out",
+        dir.join("arm").to_str().unwrap(),
+    ]);
+    assert_error(&o, 1, &["--effort-weight 1e308", "non-finite objective"]);
+    assert!(!dir.join("arm").exists());
     for args in [
         &["simulate", "--rtol", "1e308", "--out", out_s][..],
         &["optimize", "--problem", "reach", "--hop-scale", "1e308"][..],

@@ -60,6 +60,51 @@ pub enum SpecError {
     /// carry a `SpecError`).
     #[error(transparent)]
     Urdf(Box<UrdfError>),
+    /// A chain's base or tip names no link of the URDF. Who named it (a command line's
+    /// `--base`/`--tip`, a scene's `base_link`/`tip_link`) is known only to the caller, which
+    /// blames that flag or key; read on its own it is located at the URDF's `<robot>`.
+    #[error(transparent)]
+    UnknownLink(Box<UnknownLink>),
+}
+
+/// Which end of a chain a link name was given for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChainEnd {
+    /// The chain's base link (`--base`, `base_link`).
+    Base,
+    /// The chain's tip link (`--tip`, `tip_link`).
+    Tip,
+}
+
+impl std::fmt::Display for ChainEnd {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            ChainEnd::Base => "base",
+            ChainEnd::Tip => "tip",
+        })
+    }
+}
+
+/// A chain end that names no link of a URDF: `FILE:LINE:COLUMN: <robot> : END link "NAME" is
+/// not a link of the robot (links: [...])`, at the URDF's `<robot>` element.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{file}:{line}:{column}: <robot> : {end} link {name:?} is not a link of the robot \
+     (links: {links:?})"
+)]
+pub struct UnknownLink {
+    /// The URDF file as named by the user or the scene.
+    pub file: String,
+    /// 1-based line of the `<robot>` element.
+    pub line: usize,
+    /// 1-based column of the `<robot>` element.
+    pub column: usize,
+    /// The end the name was given for.
+    pub end: ChainEnd,
+    /// The name given.
+    pub name: String,
+    /// The robot's link names, in the file's order.
+    pub links: Vec<String>,
 }
 
 /// A problem in a URDF file: `FILE:LINE:COLUMN: <ELEMENT> ATTRIBUTE: message`.
@@ -85,7 +130,7 @@ impl SpecError {
     pub fn path(&self) -> Option<&str> {
         match self {
             SpecError::At { path, .. } => Some(path),
-            SpecError::Io { .. } | SpecError::Urdf(_) => None,
+            SpecError::Io { .. } | SpecError::Urdf(_) | SpecError::UnknownLink(_) => None,
         }
     }
 
@@ -94,6 +139,7 @@ impl SpecError {
         match self {
             SpecError::At { line, .. } => Some(*line),
             SpecError::Urdf(e) => Some(e.line),
+            SpecError::UnknownLink(e) => Some(e.line),
             SpecError::Io { .. } => None,
         }
     }
@@ -102,7 +148,7 @@ impl SpecError {
     pub fn kind(&self) -> Option<SpecErrorKind> {
         match self {
             SpecError::At { kind, .. } => Some(*kind),
-            SpecError::Io { .. } | SpecError::Urdf(_) => None,
+            SpecError::Io { .. } | SpecError::Urdf(_) | SpecError::UnknownLink(_) => None,
         }
     }
 }

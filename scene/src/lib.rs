@@ -52,7 +52,7 @@ mod validate;
 use serde::Deserialize;
 
 pub use constants::Constants;
-pub use error::{SpecError, SpecErrorKind, UrdfError};
+pub use error::{ChainEnd, SpecError, SpecErrorKind, UnknownLink, UrdfError};
 pub use id::{SceneId, UnknownScene};
 pub use load::{
     ChainChoice, URDF_GRAVITY, URDF_KERNELS, chain_toml, expand_toml, urdf_path, urdf_scene_text,

@@ -4,6 +4,7 @@
 //! where the base link is not the root's frame — so what a command records (solution files,
 //! the generated module's scene text) parses again without the URDF, to the same kinematics.
 
+use crate::error::ChainEnd;
 use crate::urdf::{UrdfChain, read_chain};
 use crate::{Scene, SpecError, SpecErrorKind, TransformSpec};
 use std::fmt::Write as _;
@@ -252,27 +253,27 @@ pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<S
     urdf_scene(urdf, file, choice).map(|(text, _)| text)
 }
 
-/// A command line's `--base`/`--tip` (`choice`) that names no link of the URDF `urdf` (the
-/// file `file`): a mistake in the command line (exit status 2), named by its flag.
-fn check_choice(urdf: &str, file: &str, choice: &ChainChoice) -> Result<(), SpecError> {
-    let Some(links) = crate::urdf::link_names(urdf) else {
-        return Ok(());
-    };
-    for (flag, name) in [("--base", &choice.base), ("--tip", &choice.tip)] {
-        if let Some(n) = name
-            && !links.contains(n)
-        {
-            return Err(SpecError::At {
-                kind: SpecErrorKind::ChainChoice,
-                file: file.to_string(),
-                line: 1,
-                column: 1,
-                path: flag.to_string(),
-                message: format!("{n:?} is not a link of the robot (links: {links:?})"),
-            });
-        }
+/// An unknown chain link given on the command line (`--base`/`--tip`): a mistake in the
+/// command line (exit status 2), named by its flag. Other errors pass unchanged.
+fn blame_flag(e: SpecError) -> SpecError {
+    match e {
+        SpecError::UnknownLink(u) => SpecError::At {
+            kind: SpecErrorKind::ChainChoice,
+            file: u.file.clone(),
+            line: 1,
+            column: 1,
+            path: match u.end {
+                ChainEnd::Base => "--base",
+                ChainEnd::Tip => "--tip",
+            }
+            .to_string(),
+            message: format!(
+                "{:?} is not a link of the robot (links: {:?})",
+                u.name, u.links
+            ),
+        },
+        e => e,
     }
-    Ok(())
 }
 
 fn urdf_scene(
@@ -280,14 +281,14 @@ fn urdf_scene(
     file: &str,
     choice: &ChainChoice,
 ) -> Result<(String, Imported), SpecError> {
-    check_choice(urdf, file, choice)?;
     let chain = read_chain(
         urdf,
         file,
         choice.base.as_deref(),
         choice.tip.as_deref(),
         None,
-    )?;
+    )
+    .map_err(blame_flag)?;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -415,30 +416,35 @@ fn expand(
             format!("cannot read the URDF file {file} (relative to the scene file): {e}"),
         )
     })?;
-    check_choice(&urdf_text, &file, choice)?;
-    // A link the scene's own key names wrongly is the scene's mistake, at that key.
-    if let Some(links) = crate::urdf::link_names(&urdf_text) {
-        for (key, given, name) in [
-            ("base_link", &choice.base, &chain_choice.base),
-            ("tip_link", &choice.tip, &chain_choice.tip),
-        ] {
-            if let (None, Some(n)) = (given, name)
-                && !links.contains(n)
-            {
-                return Err(ix.invalid(
-                    key,
-                    format!("{n:?} is not a link of the URDF {file} (links: {links:?})"),
-                ));
-            }
-        }
-    }
+    // A link named wrongly is the mistake of whoever named it: the command line's flag,
+    // which overrides the scene's key, or else the key.
     let chain = read_chain(
         &urdf_text,
         &file,
         chain_choice.base.as_deref(),
         chain_choice.tip.as_deref(),
         get("nonphysical_inertia").as_deref(),
-    )?;
+    )
+    .map_err(|e| match e {
+        SpecError::UnknownLink(u) => {
+            let (key, given) = match u.end {
+                ChainEnd::Base => ("base_link", &choice.base),
+                ChainEnd::Tip => ("tip_link", &choice.tip),
+            };
+            if given.is_some() {
+                blame_flag(SpecError::UnknownLink(u))
+            } else {
+                ix.invalid(
+                    key,
+                    format!(
+                        "{:?} is not a link of the URDF {file} (links: {:?})",
+                        u.name, u.links
+                    ),
+                )
+            }
+        }
+        e => e,
+    })?;
     let has_gravity = table.iter().any(|(k, _)| k.get_ref().as_ref() == "gravity");
     // A base link away from the root's frame: the chain's base transform is the scene's own
     // `[base]` (the root in the world) then the base link in the root, written as one `[base]`

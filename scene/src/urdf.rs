@@ -26,9 +26,11 @@
 //! * any finite non-zero `<axis>` is normalised, as urdfdom does;
 //! * `<visual>`, `<collision>`, meshes, `<transmission>` and `<gazebo>` are ignored.
 //!
-//! Errors ([`SpecError::Urdf`], a [`UrdfError`]) name the file, line and column, the element and the attribute.
+//! Errors ([`SpecError::Urdf`], a [`UrdfError`]) name the file, line and column, the element
+//! and the attribute. A base or tip that names no link is a [`SpecError::UnknownLink`], which
+//! the caller blames on whoever named it.
 
-use crate::error::UrdfError;
+use crate::error::{ChainEnd, UnknownLink, UrdfError};
 use crate::{InertiaSpec, JointType, LinkSpec, RotationSpec, SpecError, TransformSpec};
 
 /// A 3 × 3 matrix, row-major.
@@ -461,20 +463,6 @@ fn lump(acc: Option<Inertial>, b: Inertial) -> Inertial {
     }
 }
 
-/// The names of the `<link>` elements of the URDF text `text`; `None` where it does not parse
-/// as one (then [`read_chain`] says why). A chain's base and tip are checked against them
-/// where it is known who named them: the command line or a scene's key.
-pub(crate) fn link_names(text: &str) -> Option<Vec<String>> {
-    let doc = roxmltree::Document::parse(text).ok()?;
-    let root = doc.root_element();
-    Some(
-        root.children()
-            .filter(|c| c.is_element() && c.tag_name().name() == "link")
-            .filter_map(|c| c.attribute("name").map(str::to_string))
-            .collect(),
-    )
-}
-
 /// Reads the chain `base` → `tip` of the URDF text `text` (`file` names it in errors). `base`
 /// defaults to the root link, `tip` to the only leaf of a tree that does not branch.
 ///
@@ -595,23 +583,25 @@ pub fn read_chain(
             .filter(|&j| joints[j].parent == l)
             .collect()
     };
-    let find = |name: &str, what: &str| -> Result<usize, SpecError> {
+    let find = |name: &str, end: ChainEnd| -> Result<usize, SpecError> {
         links.iter().position(|k| k.name == name).ok_or_else(|| {
-            let known: Vec<&str> = links.iter().map(|k| k.name.as_str()).collect();
-            rd.err(
-                root.range().start,
-                "robot",
-                "",
-                format!("{what} link {name:?} is not a link of the robot (links: {known:?})"),
-            )
+            let p = doc.text_pos_at(root.range().start);
+            SpecError::UnknownLink(Box::new(UnknownLink {
+                file: file.to_string(),
+                line: p.row as usize,
+                column: p.col as usize,
+                end,
+                name: name.to_string(),
+                links: links.iter().map(|k| k.name.clone()).collect(),
+            }))
         })
     };
     let base_ix = match base {
-        Some(b) => find(b, "base")?,
+        Some(b) => find(b, ChainEnd::Base)?,
         None => roots[0],
     };
     let tip_ix = match tip {
-        Some(t) => find(t, "tip")?,
+        Some(t) => find(t, ChainEnd::Tip)?,
         None => {
             let mut l = base_ix;
             loop {

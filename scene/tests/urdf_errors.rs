@@ -545,6 +545,15 @@ fn an_unknown_chain_link_names_the_flag_or_the_key_that_gave_it() {
     if let Err(e) = Scene::load_with_text(&path, &tip("l2")) {
         panic!("{e}");
     }
+    // Read directly, the error says which end and lists the links, at the URDF's <robot>.
+    let Err(SpecError::UnknownLink(u)) = read_urdf_chain(&arm(J2), FILE, Some("zzz"), None, None)
+    else {
+        panic!("an unknown base must be an UnknownLink error");
+    };
+    assert_eq!(u.end, bf_scene::ChainEnd::Base);
+    assert_eq!(u.name, "zzz");
+    assert!(u.links.iter().any(|l| l == "l2"), "{u}");
+    assert!(u.to_string().contains("base link \"zzz\""), "{u}");
 }
 
 #[test]

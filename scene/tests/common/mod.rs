@@ -105,7 +105,7 @@ pub fn expect_err(
             );
         }
         SpecError::Io { .. } => panic!("unexpected I/O error {shown}"),
-        SpecError::Urdf(_) => panic!("unexpected URDF error {shown}"),
+        SpecError::Urdf(_) | SpecError::UnknownLink(_) => panic!("unexpected URDF error {shown}"),
     }
     shown
 }

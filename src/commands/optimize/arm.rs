@@ -190,7 +190,23 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         &text,
         &params,
     )
-    .with_context(|| format!("--scene {}", path.display()))?;
+    .with_context(|| {
+        // The cost's weights enter every value the solver computes: a weight given on the
+        // command line is named beside the scene, which alone would take the blame for an
+        // objective that overflows.
+        let given: Vec<String> = [
+            ("--effort-weight", args.effort_weight),
+            ("--acceleration-weight", args.acceleration_weight),
+        ]
+        .into_iter()
+        .filter_map(|(opt, w)| w.map(|w| format!("{opt} {}", crate::cli::shown(w))))
+        .collect();
+        if given.is_empty() {
+            format!("--scene {}", path.display())
+        } else {
+            format!("--scene {} with {}", path.display(), given.join(", "))
+        }
+    })?;
     for a in &attempts {
         let v = a.solution.verification.as_ref();
         crate::outln!(
