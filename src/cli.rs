@@ -816,3 +816,137 @@ impl Inputs for MergeArgs {
         self.dirs.clone()
     }
 }
+
+/// The command-line reference, `docs/cli.md`, written from the parser itself: every command,
+/// its usage and every option with its help, default and choices. A test holds the file equal
+/// to this text, so an option cannot be added, renamed or reworded without its reference.
+pub fn markdown_reference() -> String {
+    use clap::CommandFactory as _;
+    use std::fmt::Write as _;
+    let mut cli = Cli::command();
+    cli.build();
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Command-line reference\n\n\
+         Written from the program's own argument parser (`cargo test --release --test \
+         cli_reference` checks that this file is current; `BF_OVERWRITE_CLI_DOC=1` with the same \
+         command rewrites it). The same text, with line breaks, is each command's `--help`. \
+         Exit statuses: 0 success, 1 a failed or unverified run or a refused input, 2 a wrong \
+         command line (README, \"Commands\").\n"
+    );
+    let global: Vec<&clap::Arg> = cli.get_arguments().filter(|a| a.is_global_set()).collect();
+    if !global.is_empty() {
+        let _ = writeln!(out, "## Options of every command\n");
+        for a in &global {
+            arg_entry(&mut out, a);
+        }
+        out.push('\n');
+    }
+    for sub in cli.get_subcommands() {
+        command_section(&mut out, sub, &["ball-finger"]);
+    }
+    out
+}
+
+fn command_section(out: &mut String, cmd: &clap::Command, parents: &[&str]) {
+    use std::fmt::Write as _;
+    if cmd.is_hide_set() || cmd.get_name() == "help" {
+        return;
+    }
+    let mut path = parents.to_vec();
+    path.push(cmd.get_name());
+    let _ = writeln!(out, "## `{}`\n", path[1..].join(" "));
+    if let Some(about) = cmd.get_long_about().or(cmd.get_about()) {
+        let _ = writeln!(out, "{}\n", one_paragraph(&about.to_string()));
+    }
+    let usage = cmd
+        .clone()
+        .bin_name(path.join(" "))
+        .render_usage()
+        .to_string();
+    let usage = usage.trim_start_matches("Usage:").trim();
+    let _ = writeln!(out, "```text\n{usage}\n```\n");
+    let args: Vec<&clap::Arg> = cmd
+        .get_arguments()
+        .filter(|a| !a.is_hide_set() && !a.is_global_set() && a.get_id() != "help")
+        .collect();
+    for a in &args {
+        arg_entry(out, a);
+    }
+    if !args.is_empty() {
+        out.push('\n');
+    }
+    for sub in cmd.get_subcommands() {
+        command_section(out, sub, &path);
+    }
+}
+
+fn arg_entry(out: &mut String, a: &clap::Arg) {
+    use std::fmt::Write as _;
+    let values: Vec<String> = a
+        .get_value_names()
+        .map(|v| v.iter().map(|n| format!("<{n}>")).collect())
+        .unwrap_or_default();
+    let takes_value = a.get_action().takes_values();
+    let name = match (a.get_long(), a.get_short()) {
+        (Some(l), Some(s)) => format!("-{s}, --{l}"),
+        (Some(l), None) => format!("--{l}"),
+        (None, Some(s)) => format!("-{s}"),
+        (None, None) => String::new(),
+    };
+    let label = match (name.is_empty(), takes_value) {
+        (true, _) => values.join(" "),
+        (false, true) if !values.is_empty() => format!("{name} {}", values.join(" ")),
+        (false, true) => format!("{name} <{}>", a.get_id().as_str().to_uppercase()),
+        (false, false) => name,
+    };
+    let help = a
+        .get_long_help()
+        .or(a.get_help())
+        .map(|h| one_paragraph(&h.to_string()))
+        .unwrap_or_default();
+    let mut extra = Vec::new();
+    // A float default as clap prints it (`0.00000001`) reads better as the help writes it.
+    let defaults: Vec<String> = a
+        .get_default_values()
+        .iter()
+        .map(|v| {
+            let text = v.to_string_lossy();
+            match text.parse::<f64>() {
+                Ok(x) if text.contains('.') => shown(x),
+                _ => text.into_owned(),
+            }
+        })
+        .collect();
+    if takes_value && !defaults.is_empty() && !help.contains("[default:") {
+        extra.push(format!("default: `{}`", defaults.join(",")));
+    }
+    let choices: Vec<String> = a
+        .get_possible_values()
+        .iter()
+        .filter(|p| !p.is_hide_set())
+        .map(|p| format!("`{}`", p.get_name()))
+        .collect();
+    if takes_value && !choices.is_empty() {
+        extra.push(format!("one of {}", choices.join(", ")));
+    }
+    if a.is_required_set() {
+        extra.push("required".to_string());
+    }
+    let extra = if extra.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", extra.join("; "))
+    };
+    let _ = writeln!(out, "- `{label}`: {help}{extra}");
+}
+
+/// A help text as one Markdown paragraph: its lines joined, blank lines kept as breaks.
+fn one_paragraph(text: &str) -> String {
+    text.trim()
+        .split("\n\n")
+        .map(|p| p.split_whitespace().collect::<Vec<_>>().join(" "))
+        .collect::<Vec<_>>()
+        .join(" ")
+}

@@ -390,6 +390,27 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
         err.contains("--pd-track") && err.contains("no ball"),
         "{err}"
     );
+    // Nor can an arm's solution warm-start a finger's problem: the file is named for what it
+    // is, not for the internals file it never had.
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "periodic-qc",
+        "--strategy",
+        "direct",
+        "--warm-start",
+        out.join("solution.json").to_str().unwrap(),
+        "--out",
+        dir.join("warm").to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("cannot start a finger-and-ball problem"),
+        "{err}"
+    );
+    assert!(!err.contains("internals"), "{err}");
+    assert!(!dir.join("warm").exists());
     // Without a re-integration (--verify-rtol 0) the solve is no failure, as for the finger:
     // exit 0, the file saying it is not verified.
     let unchecked = dir.join("unchecked");

@@ -783,6 +783,29 @@ fn options_a_run_would_drop_are_refused_by_name() {
             &["--problem", "periodic-qc", "--refine-rounds", "3"][..],
             "--refine-rounds",
         ),
+        // `reach` ends touching the ball at rest: no impact, no stick phase.
+        (
+            &["--problem", "reach", "--impact-law", "newton"][..],
+            "--impact-law",
+        ),
+        (
+            &["--problem", "reach", "--impulse-cone"][..],
+            "--impulse-cone",
+        ),
+        (
+            &["--problem", "reach", "--cone-margin", "0.2"][..],
+            "--cone-margin",
+        ),
+        // The free-stick problems' stick phase has its own bound (0.05 s), and their approach
+        // no clearance.
+        (
+            &["--problem", "reorient", "--min-stick", "0.2"][..],
+            "--min-stick",
+        ),
+        (
+            &["--problem", "rotate-ref", "--approach-clearance", "0.001"][..],
+            "--approach-clearance",
+        ),
     ] {
         let mut args = vec!["optimize"];
         args.extend_from_slice(extra);

@@ -1006,6 +1006,21 @@ fn a_replay_says_what_it_does_not_replay() {
     let s = json(&constant.join("summary.json"));
     assert_eq!(s["t_final"].as_f64(), Some(0.2));
     assert!(held(&s), "{s}");
+    // Without --t-end it is held over the default run, and the warning names no --t-end
+    // that was not given.
+    let default_run = dir.join("default-run");
+    let o = simulate_into(&default_run, &["--torques", one.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    let s = json(&default_run.join("summary.json"));
+    assert_eq!(
+        s["t_final"].as_f64(),
+        Some(ball_finger::cli::DEFAULT_T_END),
+        "{s}"
+    );
+    assert!(held(&s), "{s}");
+    assert!(stderr.contains("held over the default run"), "{stderr}");
+    assert!(!stderr.contains("--t-end 10"), "{stderr}");
     // The same for an arm without a ball (two joints).
     let two = dir.join("two.csv");
     std::fs::write(&two, "t,tau1,tau2\n0,0.1,0\n0.1,0.1,0\n").unwrap();

@@ -721,9 +721,10 @@ pub fn emit_file_with(
     };
     let tail = quote! {
         #flat
-        /// Calls kernel `KERNELS[k]` with outputs on the stack and copies them, flattened as by
-        /// `eval_flat_u`, into the front of `out`; returns their number, or `None` if `k` is out
-        /// of range or `out` too short. Does not allocate (for benchmarks).
+        /// Calls kernel `KERNELS[k]` with outputs on the stack and copies them, flattened
+        /// row-major in argument order (`Contact` fields in declaration order), into the front
+        /// of `out`; returns their number, or `None` if `k` is out of range or `out` too short.
+        /// Does not allocate (for benchmarks).
         #[allow(unused_variables, clippy::too_many_arguments)]
         pub fn eval_index_into(
             k: usize,

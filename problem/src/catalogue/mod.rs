@@ -81,6 +81,13 @@ impl Problem {
         self.archetype() == Archetype::Periodic
     }
 
+    /// Whether the finger strikes the ball and then sticks to it: every problem but `reach`,
+    /// which ends touching the ball at rest. Only such a problem has an impact law, an
+    /// impulse cone and a friction cone for its stick phase to leave a margin of.
+    pub fn has_impact(self) -> bool {
+        self.archetype() != Archetype::Reach
+    }
+
     fn archetype(self) -> Archetype {
         match self {
             Problem::PeriodicQc | Problem::PeriodicCot | Problem::PeriodicCotHuman => {

@@ -117,6 +117,16 @@ pub const MAX_WARM_START_VALUE: f64 = 1e12;
 /// (`solution-internals.json`: the raw collocation data the warm start is built from) against
 /// [`MAX_WARM_START_VALUE`]; the error names the file, the field path and the value.
 pub fn check_warm_start_values(path: &Path) -> Result<()> {
+    // An arm's solution has no collocation data to start from: say so, rather than that
+    // the internals file it never had is missing.
+    let value = read_json_value("--warm-start", path)?;
+    if crate::pipeline::arm::is_arm_solution(&value) {
+        bail!(
+            "--warm-start {}: a solution of `{REACH_ARM}` (an arm without a ball) cannot start a \
+             finger-and-ball problem, and `{REACH_ARM}` takes no warm start",
+            path.display()
+        );
+    }
     check_solution_values("--warm-start", path).map(|_| ())
 }
 
@@ -200,6 +210,46 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
 /// ([`PlanFor::of`]).
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     let problem = parse_problem(problem_arg(args))?;
+    // An option that poses a part the problem does not have would be recorded in
+    // solution.json as if it had shaped the plan: it is refused instead.
+    for (opt, given, applies, part) in [
+        (
+            "--impact-law",
+            args.impact_law.is_some(),
+            problem.has_impact(),
+            "an impact",
+        ),
+        (
+            "--impulse-cone",
+            args.impulse_cone,
+            problem.has_impact(),
+            "an impact",
+        ),
+        (
+            "--cone-margin",
+            args.cone_margin != 0.0,
+            problem.has_impact(),
+            "a stick phase",
+        ),
+        (
+            "--approach-clearance",
+            args.approach_clearance.is_some(),
+            problem.is_periodic(),
+            "a periodic approach",
+        ),
+        (
+            "--min-stick",
+            args.min_stick != bf_problem::MIN_STICK,
+            problem.is_periodic(),
+            "a stick phase of free duration",
+        ),
+    ] {
+        if given && !applies {
+            bail_usage!(
+                "{opt}: problem `{problem}` has no {part} (only the problems with one take it)"
+            );
+        }
+    }
     if args.points < 2 {
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }

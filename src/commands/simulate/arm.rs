@@ -67,7 +67,7 @@ pub(super) fn run_arm(
     }
     let set = settings(args)?;
     check_limits(args, &set, t_end)?;
-    let held = super::torques_held(&inp, t_end);
+    let held = super::torques_held(&inp, t_end, args.t_end.is_some());
     if let Some(w) = &held {
         crate::errln!("warning: {}", w.message);
     }

@@ -439,9 +439,18 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
 /// The warning of a run that goes on past the end of its torques, whose last torque it then
 /// holds: a `--torques` series (a solution's `torques.csv` covers one period, and held torques
 /// are no replay of it) or an arm solution replayed by `--init` (its torques cover its own
-/// duration).
-pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarning> {
+/// duration). `t_end_given`: whether `--t-end` set the run's end; without it the run ends with
+/// its torques, unless they end where they start (a one-row series, a constant torque held
+/// over the default run).
+pub(super) fn torques_held(
+    inp: &CliInput,
+    t_end: f64,
+    t_end_given: bool,
+) -> Option<bf_sim::SimWarning> {
     let end = inp.series_end()?;
+    if t_end <= end * (1.0 + 1e-9) {
+        return None;
+    }
     let (what, advice) = match inp {
         CliInput::Replay(_) => (
             "the torques of the --init solution end",
@@ -453,15 +462,25 @@ pub(super) fn torques_held(inp: &CliInput, t_end: f64) -> Option<bf_sim::SimWarn
              leaving out --t-end, or, for a finger's solution, repeat it with --pd-track 0,0)",
         ),
     };
-    (t_end > end * (1.0 + 1e-9)).then(|| bf_sim::SimWarning {
-        t: end,
-        kind: "torques_held",
-        message: format!(
-            "{what} at t = {} s and the run holds its last torque from there to \
-             --t-end {} s; {advice}",
+    let message = if t_end_given {
+        format!(
+            "{what} at t = {} s and the run holds its last torque from there to --t-end {} s; \
+             {advice}",
             crate::cli::shown(end),
             crate::cli::shown(t_end)
-        ),
+        )
+    } else {
+        format!(
+            "{what} where it starts, at t = {} s: its one torque is held over the default run, \
+             to t = {} s (--t-end sets another end)",
+            crate::cli::shown(end),
+            crate::cli::shown(t_end)
+        )
+    };
+    Some(bf_sim::SimWarning {
+        t: end,
+        kind: "torques_held",
+        message,
     })
 }
 
@@ -671,7 +690,7 @@ fn run_model<K: Kernels<N>, const N: usize>(
         t_end,
     } = run;
     let inputs = input_options(args, &inp);
-    let held = torques_held(&inp, t_end);
+    let held = torques_held(&inp, t_end, args.t_end.is_some());
     let sys = BallFinger::new(model, inp, opts)?;
     let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
