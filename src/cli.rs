@@ -341,9 +341,9 @@ pub struct SimulateArgs {
     /// --mode0 when it is not `free` (the default).
     #[arg(long)]
     pub init: Option<PathBuf>,
-    /// End time (s) [default: 10; with --torques, the series' last time; for an arm's
-    /// `solution.json` given with --init, its duration]. Past the end of a --torques series
-    /// its last torque is held, which the run warns about (`torques_held`).
+    /// End time (s) [default: 10; with --torques, the series' last time where it is after the
+    /// start; for an arm's `solution.json` given with --init, its duration]. Past the end of a
+    /// --torques series its last torque is held, which the run warns about (`torques_held`).
     #[arg(long, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Integrator: dopri5 or rk4.
@@ -503,10 +503,10 @@ pub struct OptimizeArgs {
     /// Transcription: lg (Legendre–Gauss, as the paper) or radau (hp Legendre–Gauss–Radau).
     #[arg(long, default_value = "radau")]
     pub scheme: String,
-    /// Elements per phase for `--scheme radau` (`--scheme lg` has one polynomial per phase and
-    /// refuses another count).
-    #[arg(long, default_value_t = DEFAULT_ELEMENTS, allow_hyphen_values = true, value_parser = whole)]
-    pub elements: usize,
+    /// Elements per phase for `--scheme radau` [default: 3] (`--scheme lg` has one polynomial
+    /// per phase and refuses the option).
+    #[arg(long, allow_hyphen_values = true, value_parser = whole)]
+    pub elements: Option<usize>,
     /// Interior-point iteration limit.
     #[arg(long, default_value_t = 1500, allow_hyphen_values = true, value_parser = positive_whole)]
     pub max_iter: usize,
@@ -595,9 +595,9 @@ pub struct OptimizeArgs {
     /// Lower bound of the stick phase's duration in the periodic problems (s). From cold
     /// starts most QC optima sit on it (short "taps" that spin the ball mostly by the impact
     /// impulse), and so do the default search's best optima of the sticking law (docs/optima.md).
-    /// A larger value (e.g. 0.1) asks for a stick phase of real duration.
-    #[arg(long, value_name = "SECS", default_value_t = bf_problem::MIN_STICK, allow_hyphen_values = true, value_parser = positive)]
-    pub min_stick: f64,
+    /// A larger value (e.g. 0.1) asks for a stick phase of real duration [default: 0.01].
+    #[arg(long, value_name = "SECS", allow_hyphen_values = true, value_parser = positive)]
+    pub min_stick: Option<f64>,
     /// Impact law of the plan: `newton` (eq. 39, the law of the paper's Sect. 6.2 simulations
     /// and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint velocity
     /// within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at 0.1 m/s or
@@ -612,14 +612,9 @@ pub struct OptimizeArgs {
     pub impact_law: Option<String>,
     /// Share of the friction cone the plan's stick phases leave unused, in [0, 1): the plan
     /// keeps |λ_∥| ≤ (1 − M) μ_s λ_n, so that `track`'s force loop has grip to spare (it keeps
-    /// 20 % of μ_s λ_n for feedback). Recorded in solution.json as `cone_margin`.
-    #[arg(
-        long,
-        value_name = "M",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub cone_margin: f64,
+    /// 20 % of μ_s λ_n for feedback). Recorded in solution.json as `cone_margin` [default: 0].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub cone_margin: Option<f64>,
     /// Impose the impulse friction cone at the impact (eq. 66, the paper's Sect. 7):
     /// ‖ι_∥‖ ≤ μ_s ι·n, so that static friction holds the impulse the plan's impact law gives
     /// the finger. Without it a plan may need any friction at its impact; the verification
@@ -648,9 +643,9 @@ pub struct OptimizeArgs {
     /// that does not converge ends the refinement with the round before it.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub refine: Option<f64>,
-    /// Refinement rounds at most (with `--refine`; refused without it).
-    #[arg(long, default_value_t = DEFAULT_REFINE_ROUNDS, allow_hyphen_values = true, value_parser = whole)]
-    pub refine_rounds: usize,
+    /// Refinement rounds at most (with `--refine`; refused without it) [default: 8].
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
+    pub refine_rounds: Option<usize>,
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
     /// 4 rounds driven by the element-wise re-integration defects, the first to 1e-4, each
     /// further one 10× tighter; default 5). With `reach-arm`: re-solves on a mesh with twice
@@ -843,6 +838,17 @@ pub fn markdown_reference() -> String {
         }
         out.push('\n');
     }
+    let own: Vec<&clap::Arg> = cli
+        .get_arguments()
+        .filter(|a| !a.is_global_set() && a.get_id() != "help")
+        .collect();
+    if !own.is_empty() {
+        let _ = writeln!(out, "## `ball-finger` without a command\n");
+        for a in &own {
+            arg_entry(&mut out, a);
+        }
+        out.push('\n');
+    }
     for sub in cli.get_subcommands() {
         command_section(&mut out, sub, &["ball-finger"]);
     }
@@ -858,7 +864,7 @@ fn command_section(out: &mut String, cmd: &clap::Command, parents: &[&str]) {
     path.push(cmd.get_name());
     let _ = writeln!(out, "## `{}`\n", path[1..].join(" "));
     if let Some(about) = cmd.get_long_about().or(cmd.get_about()) {
-        let _ = writeln!(out, "{}\n", one_paragraph(&about.to_string()));
+        let _ = writeln!(out, "{}\n", paragraphs(&about.to_string(), "\n\n"));
     }
     let usage = cmd
         .clone()
@@ -889,6 +895,12 @@ fn arg_entry(out: &mut String, a: &clap::Arg) {
         .map(|v| v.iter().map(|n| format!("<{n}>")).collect())
         .unwrap_or_default();
     let takes_value = a.get_action().takes_values();
+    // A value that may repeat (`<DIRS>...`) is shown as clap's usage shows it.
+    let repeats = a.get_num_args().is_some_and(|n| n.max_values() > 1);
+    let values: Vec<String> = match (repeats, values.split_last()) {
+        (true, Some((last, rest))) => rest.iter().cloned().chain([format!("{last}...")]).collect(),
+        _ => values,
+    };
     let name = match (a.get_long(), a.get_short()) {
         (Some(l), Some(s)) => format!("-{s}, --{l}"),
         (Some(l), None) => format!("--{l}"),
@@ -904,7 +916,7 @@ fn arg_entry(out: &mut String, a: &clap::Arg) {
     let help = a
         .get_long_help()
         .or(a.get_help())
-        .map(|h| one_paragraph(&h.to_string()))
+        .map(|h| paragraphs(&h.to_string(), " "))
         .unwrap_or_default();
     let mut extra = Vec::new();
     // A float default as clap prints it (`0.00000001`) reads better as the help writes it.
@@ -942,11 +954,12 @@ fn arg_entry(out: &mut String, a: &clap::Arg) {
     let _ = writeln!(out, "- `{label}`: {help}{extra}");
 }
 
-/// A help text as one Markdown paragraph: its lines joined, blank lines kept as breaks.
-fn one_paragraph(text: &str) -> String {
+/// A help text with the lines of each paragraph joined, the paragraphs joined by `between`
+/// (a blank line for a command's text, a space inside a list item).
+fn paragraphs(text: &str, between: &str) -> String {
     text.trim()
         .split("\n\n")
         .map(|p| p.split_whitespace().collect::<Vec<_>>().join(" "))
         .collect::<Vec<_>>()
-        .join(" ")
+        .join(between)
 }

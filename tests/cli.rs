@@ -742,8 +742,9 @@ fn reach_arm_refuses(flag: &str) {
 fn options_a_run_would_drop_are_refused_by_name() {
     let arm = ["--problem", "reach-arm", "--scene", "scenes/puma560.toml"];
     for (extra, flag) in [
-        (&["--min-stick", "5"][..], "--min-stick"),
-        (&["--cone-margin", "0.5"][..], "--cone-margin"),
+        // Given at its default value, an option is still given, and still dropped.
+        (&["--min-stick", "0.01"][..], "--min-stick"),
+        (&["--cone-margin", "0"][..], "--cone-margin"),
         (&["--impulse-cone"][..], "--impulse-cone"),
         (&["--refine-rounds", "3"][..], "--refine-rounds"),
     ] {
@@ -775,12 +776,12 @@ fn options_a_run_would_drop_are_refused_by_name() {
                 "--scheme",
                 "lg",
                 "--elements",
-                "2",
+                "3",
             ][..],
             "--elements",
         ),
         (
-            &["--problem", "periodic-qc", "--refine-rounds", "3"][..],
+            &["--problem", "periodic-qc", "--refine-rounds", "8"][..],
             "--refine-rounds",
         ),
         // `reach` ends touching the ball at rest: no impact, no stick phase.
@@ -799,7 +800,7 @@ fn options_a_run_would_drop_are_refused_by_name() {
         // The free-stick problems' stick phase has its own bound (0.05 s), and their approach
         // no clearance.
         (
-            &["--problem", "reorient", "--min-stick", "0.2"][..],
+            &["--problem", "reorient", "--min-stick", "0.01"][..],
             "--min-stick",
         ),
         (

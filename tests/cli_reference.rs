@@ -21,11 +21,13 @@ fn the_reference_is_the_parsers_text() {
     );
 }
 
-/// Every long option of every command is named in its command's section (checked on the
-/// parser, independently of how the reference is written).
+/// Every option and positional argument of every command has an entry line of its own in its
+/// command's section (a line `- \`--name …\``, `- \`-x, --name …\`` or `- \`<NAME>…\``),
+/// checked on the parser, independently of how the reference is written: a mention in another
+/// option's help does not count.
 #[test]
-fn every_option_of_every_command_is_in_its_section() {
-    let text = ball_finger::cli::markdown_reference();
+fn every_option_of_every_command_has_its_entry() {
+    let text = std::fs::read_to_string(PATH).unwrap_or_default();
     let cli = ball_finger::cli::Cli::command();
     let mut checked = 0;
     let mut walk: Vec<(String, clap::Command)> = cli
@@ -42,28 +44,75 @@ fn every_option_of_every_command_is_in_its_section() {
             .unwrap_or_else(|| panic!("no section for `{path}`"));
         let rest = &text[start + heading.len()..];
         let section = &rest[..rest.find("\n## ").unwrap_or(rest.len())];
-        for a in cmd.get_arguments() {
-            if let Some(long) = a.get_long()
-                && long != "help"
-                && !a.is_global_set()
-            {
-                let named = ["`", ", "].iter().any(|before| {
-                    [" ", "`"]
-                        .iter()
-                        .any(|after| section.contains(&format!("{before}--{long}{after}")))
-                });
-                assert!(named, "`{path}`: --{long} is not in its section");
-                checked += 1;
-            }
+        let entries: Vec<&str> = section
+            .lines()
+            .filter_map(|l| l.strip_prefix("- `"))
+            .collect();
+        for a in cmd.get_arguments().filter(|a| !a.is_global_set()) {
+            let has = |head: &str| {
+                entries.iter().any(|e| {
+                    e.strip_prefix(head)
+                        .is_some_and(|r| r.starts_with([' ', '`', '.']))
+                })
+            };
+            let found = match (a.get_long(), a.get_short()) {
+                (Some("help"), _) => continue,
+                (Some(long), Some(short)) => has(&format!("-{short}, --{long}")),
+                (Some(long), None) => has(&format!("--{long}")),
+                (None, _) => {
+                    let name = a
+                        .get_value_names()
+                        .and_then(|v| v.first().map(ToString::to_string))
+                        .unwrap_or_else(|| a.get_id().as_str().to_uppercase());
+                    has(&format!("<{name}>"))
+                }
+            };
+            assert!(found, "`{path}`: {} has no entry line", a.get_id());
+            checked += 1;
         }
         walk.extend(
             cmd.get_subcommands()
                 .map(|c| (format!("{path} {}", c.get_name()), c.clone())),
         );
     }
-    assert!(checked > 100, "only {checked} options checked");
+    assert!(checked > 100, "only {checked} arguments checked");
     assert!(
-        text.contains("`--max-graph-nodes <NODES>`"),
+        text.contains("\n- `--max-graph-nodes <NODES>`"),
         "the global option"
     );
+    assert!(text.contains("\n- `-V, --version`"), "the version flag");
+}
+
+/// The options whose default is stated in their help (they are `Option`s, so that a value
+/// given equal to the default still counts as given) state the value the program uses.
+#[test]
+fn stated_defaults_are_the_programs() {
+    let text = ball_finger::cli::markdown_reference();
+    let entry = |option: &str| -> &str {
+        let start = text
+            .find(&format!("- `{option} "))
+            .unwrap_or_else(|| panic!("no entry for {option}"));
+        let rest = &text[start..];
+        &rest[..rest.find('\n').unwrap_or(rest.len())]
+    };
+    for (option, default) in [
+        ("--elements", ball_finger::cli::DEFAULT_ELEMENTS.to_string()),
+        (
+            "--refine-rounds",
+            ball_finger::cli::DEFAULT_REFINE_ROUNDS.to_string(),
+        ),
+        ("--min-stick", bf_problem::MIN_STICK.to_string()),
+        (
+            "--cone-margin",
+            bf_problem::ProblemSettings::default()
+                .cone_margin
+                .to_string(),
+        ),
+    ] {
+        assert!(
+            entry(option).contains(&format!("[default: {default}]")),
+            "{option}: {}",
+            entry(option)
+        );
+    }
 }

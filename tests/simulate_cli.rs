@@ -1019,8 +1019,19 @@ fn a_replay_says_what_it_does_not_replay() {
         "{s}"
     );
     assert!(held(&s), "{s}");
-    assert!(stderr.contains("held over the default run"), "{stderr}");
+    assert!(
+        stderr.contains("held to the default run's end at 10 s"),
+        "{stderr}"
+    );
     assert!(!stderr.contains("--t-end 10"), "{stderr}");
+    // So does a step limit that the default run's end exceeds.
+    let o = simulate_into(
+        &default_run,
+        &["--torques", one.to_str().unwrap(), "--max-steps", "10"],
+    );
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("the default run's end at 10 s"), "{stderr}");
     // The same for an arm without a ball (two joints).
     let two = dir.join("two.csv");
     std::fs::write(&two, "t,tau1,tau2\n0,0.1,0\n0.1,0.1,0\n").unwrap();

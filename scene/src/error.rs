@@ -85,12 +85,14 @@ impl std::fmt::Display for ChainEnd {
     }
 }
 
-/// A chain end that names no link of a URDF: `FILE:LINE:COLUMN: <robot> : END link "NAME" is
-/// not a link of the robot (links: [...])`, at the URDF's `<robot>` element.
+/// Chain ends that name no link of a URDF: `FILE:LINE:COLUMN: <robot> : base link "NAME" is
+/// not a link of the robot (links: [...])`, at the URDF's `<robot>` element. Both ends are
+/// checked before anything else in the file, so that a caller can blame a command line's
+/// flag before a scene's key or the URDF itself.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "{file}:{line}:{column}: <robot> : {end} link {name:?} is not a link of the robot \
-     (links: {links:?})"
+    "{file}:{line}:{column}: <robot> : {} (links: {links:?})",
+    describe_ends(unknown)
 )]
 pub struct UnknownLink {
     /// The URDF file as named by the user or the scene.
@@ -99,12 +101,21 @@ pub struct UnknownLink {
     pub line: usize,
     /// 1-based column of the `<robot>` element.
     pub column: usize,
-    /// The end the name was given for.
-    pub end: ChainEnd,
-    /// The name given.
-    pub name: String,
+    /// Each end whose name is no link, with that name (the base first).
+    pub unknown: Vec<(ChainEnd, String)>,
     /// The robot's link names, in the file's order.
     pub links: Vec<String>,
+}
+
+fn describe_ends(unknown: &[(ChainEnd, String)]) -> String {
+    let ends: Vec<String> = unknown
+        .iter()
+        .map(|(end, name)| format!("{end} link {name:?}"))
+        .collect();
+    match ends.len() {
+        1 => format!("{} is not a link of the robot", ends[0]),
+        _ => format!("{} are not links of the robot", ends.join(" and ")),
+    }
 }
 
 /// A problem in a URDF file: `FILE:LINE:COLUMN: <ELEMENT> ATTRIBUTE: message`.

@@ -4,7 +4,7 @@
 //! where the base link is not the root's frame — so what a command records (solution files,
 //! the generated module's scene text) parses again without the URDF, to the same kinematics.
 
-use crate::error::ChainEnd;
+use crate::error::{ChainEnd, UnknownLink};
 use crate::urdf::{UrdfChain, read_chain};
 use crate::{Scene, SpecError, SpecErrorKind, TransformSpec};
 use std::fmt::Write as _;
@@ -253,26 +253,28 @@ pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<S
     urdf_scene(urdf, file, choice).map(|(text, _)| text)
 }
 
-/// An unknown chain link given on the command line (`--base`/`--tip`): a mistake in the
-/// command line (exit status 2), named by its flag. Other errors pass unchanged.
+/// Unknown chain links, all given on the command line (`--base`/`--tip`): a mistake in the
+/// command line (exit status 2), named by the flag of the first. Other errors pass unchanged.
 fn blame_flag(e: SpecError) -> SpecError {
     match e {
-        SpecError::UnknownLink(u) => SpecError::At {
-            kind: SpecErrorKind::ChainChoice,
-            file: u.file.clone(),
-            line: 1,
-            column: 1,
-            path: match u.end {
-                ChainEnd::Base => "--base",
-                ChainEnd::Tip => "--tip",
-            }
-            .to_string(),
-            message: format!(
-                "{:?} is not a link of the robot (links: {:?})",
-                u.name, u.links
-            ),
-        },
+        SpecError::UnknownLink(u) => flag_error(&u, &u.unknown[0]),
         e => e,
+    }
+}
+
+/// The command-line error of the unknown end `(end, name)` of `u`, named by its flag.
+fn flag_error(u: &UnknownLink, (end, name): &(ChainEnd, String)) -> SpecError {
+    SpecError::At {
+        kind: SpecErrorKind::ChainChoice,
+        file: u.file.clone(),
+        line: 1,
+        column: 1,
+        path: match end {
+            ChainEnd::Base => "--base",
+            ChainEnd::Tip => "--tip",
+        }
+        .to_string(),
+        message: format!("{name:?} is not a link of the robot (links: {:?})", u.links),
     }
 }
 
@@ -427,20 +429,27 @@ fn expand(
     )
     .map_err(|e| match e {
         SpecError::UnknownLink(u) => {
-            let (key, given) = match u.end {
-                ChainEnd::Base => ("base_link", &choice.base),
-                ChainEnd::Tip => ("tip_link", &choice.tip),
+            // The command line's mistake first (exit status 2), then the scene's key.
+            let given = |end: &ChainEnd| match end {
+                ChainEnd::Base => choice.base.is_some(),
+                ChainEnd::Tip => choice.tip.is_some(),
             };
-            if given.is_some() {
-                blame_flag(SpecError::UnknownLink(u))
-            } else {
-                ix.invalid(
-                    key,
-                    format!(
-                        "{:?} is not a link of the URDF {file} (links: {:?})",
-                        u.name, u.links
-                    ),
-                )
+            match u.unknown.iter().find(|(end, _)| given(end)) {
+                Some(flagged) => flag_error(&u, flagged),
+                None => {
+                    let (end, name) = &u.unknown[0];
+                    let key = match end {
+                        ChainEnd::Base => "base_link",
+                        ChainEnd::Tip => "tip_link",
+                    };
+                    ix.invalid(
+                        key,
+                        format!(
+                            "{name:?} is not a link of the URDF {file} (links: {:?})",
+                            u.links
+                        ),
+                    )
+                }
             }
         }
         e => e,

@@ -503,6 +503,28 @@ pub fn read_chain(
         root.children()
             .filter(move |c| c.is_element() && c.tag_name().name() == tag)
     };
+    // The chain's ends first: a name the caller gave wrongly is reported before anything in
+    // the file, so that it is blamed on whoever gave it.
+    let names: Vec<String> = elems("link")
+        .filter_map(|n| n.attribute("name").map(str::to_string))
+        .collect();
+    let unknown: Vec<(ChainEnd, String)> = [(ChainEnd::Base, base), (ChainEnd::Tip, tip)]
+        .into_iter()
+        .filter_map(|(end, name)| {
+            name.filter(|n| !names.iter().any(|k| k == n))
+                .map(|n| (end, n.to_string()))
+        })
+        .collect();
+    if !unknown.is_empty() {
+        let p = doc.text_pos_at(root.range().start);
+        return Err(SpecError::UnknownLink(Box::new(UnknownLink {
+            file: file.to_string(),
+            line: p.row as usize,
+            column: p.col as usize,
+            unknown,
+            links: names,
+        })));
+    }
     let mut links: Vec<Link> = Vec::new();
     for n in elems("link") {
         let l = rd.link(n)?;
@@ -583,25 +605,23 @@ pub fn read_chain(
             .filter(|&j| joints[j].parent == l)
             .collect()
     };
-    let find = |name: &str, end: ChainEnd| -> Result<usize, SpecError> {
+    // Every given end names a link (checked above), so a miss here is the reader's own.
+    let find = |name: &str| -> Result<usize, SpecError> {
         links.iter().position(|k| k.name == name).ok_or_else(|| {
-            let p = doc.text_pos_at(root.range().start);
-            SpecError::UnknownLink(Box::new(UnknownLink {
-                file: file.to_string(),
-                line: p.row as usize,
-                column: p.col as usize,
-                end,
-                name: name.to_string(),
-                links: links.iter().map(|k| k.name.clone()).collect(),
-            }))
+            rd.err(
+                root.range().start,
+                "robot",
+                "",
+                format!("internal: link {name:?} was checked but not read"),
+            )
         })
     };
     let base_ix = match base {
-        Some(b) => find(b, ChainEnd::Base)?,
+        Some(b) => find(b)?,
         None => roots[0],
     };
     let tip_ix = match tip {
-        Some(t) => find(t, ChainEnd::Tip)?,
+        Some(t) => find(t)?,
         None => {
             let mut l = base_ix;
             loop {

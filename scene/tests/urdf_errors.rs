@@ -545,13 +545,25 @@ fn an_unknown_chain_link_names_the_flag_or_the_key_that_gave_it() {
     if let Err(e) = Scene::load_with_text(&path, &tip("l2")) {
         panic!("{e}");
     }
+    // The command line's mistake is reported before the file's: before a broken joint of the
+    // URDF, and before a wrong key of the scene at the other end.
+    let broken = arm(&J2.replace(r#"<parent link="l1"/>"#, r#"<parent link="nowhere"/>"#));
+    let err = bf_scene::urdf_scene_text(&broken, FILE, &tip("nope")).unwrap_err();
+    assert_eq!(err.path(), Some("--tip"), "{err}");
+    let keyed = dir.join("keyed.toml");
+    std::fs::write(
+        &keyed,
+        "name = \"arm3\"\nurdf = \"arm.urdf\"\nbase_link = \"zzz\"\nkernels = [\"mass_matrix\"]\n",
+    )
+    .unwrap();
+    let err = Scene::load_with_text(&keyed, &tip("nope")).unwrap_err();
+    assert_eq!(err.path(), Some("--tip"), "{err}");
     // Read directly, the error says which end and lists the links, at the URDF's <robot>.
     let Err(SpecError::UnknownLink(u)) = read_urdf_chain(&arm(J2), FILE, Some("zzz"), None, None)
     else {
         panic!("an unknown base must be an UnknownLink error");
     };
-    assert_eq!(u.end, bf_scene::ChainEnd::Base);
-    assert_eq!(u.name, "zzz");
+    assert_eq!(u.unknown, [(bf_scene::ChainEnd::Base, "zzz".to_string())]);
     assert!(u.links.iter().any(|l| l == "l2"), "{u}");
     assert!(u.to_string().contains("base link \"zzz\""), "{u}");
 }

@@ -64,10 +64,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--proximal-weight", args.proximal_weight.is_some()),
         ("--hops", args.hops.is_some()),
         ("--hop-scale", args.hop_scale.is_some()),
-        (
-            "--refine-rounds",
-            args.refine_rounds != crate::cli::DEFAULT_REFINE_ROUNDS,
-        ),
+        ("--refine-rounds", args.refine_rounds.is_some()),
     ] {
         if given {
             bail_usage!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
@@ -79,10 +76,8 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         ("--torque-margin", args.torque_margin.is_some()),
         ("--approach-clearance", args.approach_clearance.is_some()),
         ("--epsilon", args.epsilon.is_some()),
-        // Options of the stick phase and the impact, whose defaults are values: another
-        // value is one the arm's problem would drop unsaid.
-        ("--min-stick", args.min_stick != bf_problem::MIN_STICK),
-        ("--cone-margin", args.cone_margin != 0.0),
+        ("--min-stick", args.min_stick.is_some()),
+        ("--cone-margin", args.cone_margin.is_some()),
         ("--impulse-cone", args.impulse_cone),
     ] {
         if given {
@@ -99,6 +94,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
     let scheme = parse_scheme(&args.scheme, args.elements)?;
+    let elements = args.elements.unwrap_or(crate::cli::DEFAULT_ELEMENTS);
     check_size(args.points, scheme)?;
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
         bail_usage!(
@@ -135,8 +131,8 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         }
     };
     let settings = ArmSettings {
-        points: args.points.max(2 * args.elements),
-        elements: args.elements,
+        points: args.points.max(2 * elements),
+        elements,
         start: config("--start", "start", &args.start)?,
         target: config("--target", "target", &args.target)?,
         effort_weight: weight("--effort-weight", args.effort_weight, 1.0)?,

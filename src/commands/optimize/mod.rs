@@ -69,17 +69,19 @@ pub struct RunSettings {
 }
 
 /// Parse `--scheme`: `lg` or `radau` (hp elements from `elements`).
-pub fn parse_scheme(text: &str, elements: usize) -> Result<Scheme> {
-    match text {
+pub fn parse_scheme(text: &str, elements: Option<usize>) -> Result<Scheme> {
+    match (text, elements) {
         // One Legendre–Gauss polynomial per phase: an element count would be dropped unsaid.
-        "lg" if elements != DEFAULT_ELEMENTS => bail_usage!(
+        ("lg", Some(elements)) => bail_usage!(
             "--elements {elements}: --scheme lg has one polynomial per phase (refine it with \
              --points, or use --scheme radau for elements)"
         ),
-        "lg" => Ok(Scheme::Lg),
-        "radau" if elements >= 1 => Ok(Scheme::Radau { elements }),
-        "radau" => bail_usage!("--elements must be at least 1"),
-        other => bail_usage!("--scheme: unknown scheme {other:?}; use `lg` or `radau`"),
+        ("lg", None) => Ok(Scheme::Lg),
+        ("radau", elements) => match elements.unwrap_or(DEFAULT_ELEMENTS) {
+            0 => bail_usage!("--elements must be at least 1"),
+            elements => Ok(Scheme::Radau { elements }),
+        },
+        (other, _) => bail_usage!("--scheme: unknown scheme {other:?}; use `lg` or `radau`"),
     }
 }
 
@@ -217,31 +219,31 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
             "--impact-law",
             args.impact_law.is_some(),
             problem.has_impact(),
-            "an impact",
+            "impact",
         ),
         (
             "--impulse-cone",
             args.impulse_cone,
             problem.has_impact(),
-            "an impact",
+            "impact",
         ),
         (
             "--cone-margin",
-            args.cone_margin != 0.0,
+            args.cone_margin.is_some(),
             problem.has_impact(),
-            "a stick phase",
+            "stick phase",
         ),
         (
             "--approach-clearance",
             args.approach_clearance.is_some(),
             problem.is_periodic(),
-            "a periodic approach",
+            "periodic approach",
         ),
         (
             "--min-stick",
-            args.min_stick != bf_problem::MIN_STICK,
+            args.min_stick.is_some(),
             problem.is_periodic(),
-            "a stick phase of free duration",
+            "stick phase of free duration",
         ),
     ] {
         if given && !applies {
@@ -280,10 +282,11 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         }
         None => None,
     };
-    if !(0.0..1.0).contains(&args.cone_margin) {
+    let cone_margin = args.cone_margin.unwrap_or(0.0);
+    if !(0.0..1.0).contains(&cone_margin) {
         bail_usage!(
             "--cone-margin must be in [0, 1) (got {})",
-            crate::cli::shown(args.cone_margin)
+            crate::cli::shown(cone_margin)
         );
     }
     let scene = scene_from_args(args, problem)?;
@@ -319,7 +322,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         args.approach_clearance,
     )?;
     let settings = plan.apply(ProblemSettings {
-        cone_margin: args.cone_margin,
+        cone_margin,
         impulse_cone: args.impulse_cone,
         scene,
         points: args.points,
@@ -331,7 +334,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         max_iter: args.max_iter,
         print_level: args.print_level,
         dual_regularization: args.dual_regularization,
-        min_stick: args.min_stick,
+        min_stick: args.min_stick.unwrap_or(bf_problem::MIN_STICK),
         kkt_residual_ratio: args.kkt_residual_ratio,
         curvature_extrapolation: args.curvature_extrapolation,
         extrapolate_every_barrier: args.extrapolate_every_barrier,
@@ -914,11 +917,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         }
         None => Shard::WHOLE,
     };
-    if args.refine.is_none() && args.refine_rounds != DEFAULT_REFINE_ROUNDS {
-        bail_usage!(
-            "--refine-rounds {}: the rounds of --refine TOL, which was not given",
-            args.refine_rounds
-        );
+    if let (None, Some(rounds)) = (args.refine, args.refine_rounds) {
+        bail_usage!("--refine-rounds {rounds}: the rounds of --refine TOL, which was not given");
     }
     if let Some(tol) = args.refine {
         if !(tol.is_finite() && tol > 0.0) {
@@ -988,7 +988,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             mesh: problem.settings.mesh.clone(),
             ..settings.clone()
         };
-        (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, args.refine_rounds)?;
+        let rounds = args.refine_rounds.unwrap_or(DEFAULT_REFINE_ROUNDS);
+        (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, rounds)?;
         sol.verification = None;
     }
     if args.verify_rtol > 0.0 {
@@ -1071,7 +1072,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         sol.impact_law,
         &sol.modes,
         &sol.phase_durations,
-        args.min_stick,
+        args.min_stick.unwrap_or(bf_problem::MIN_STICK),
     ) {
         crate::outln!("{h}")?;
     }

@@ -66,8 +66,8 @@ pub(super) fn run_arm(
         }
     }
     let set = settings(args)?;
-    check_limits(args, &set, t_end)?;
-    let held = super::torques_held(&inp, t_end, args.t_end.is_some());
+    check_limits(args, &inp, &set, t_end)?;
+    let held = super::torques_held(args, &inp, t_end);
     if let Some(w) = &held {
         crate::errln!("warning: {}", w.message);
     }

@@ -325,25 +325,17 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
 
 /// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
 /// samples (see the module docs). The error names the options and the limit.
-pub fn check_limits(args: &SimulateArgs, set: &SimSettings, t_end: f64) -> Result<()> {
+pub fn check_limits(
+    args: &SimulateArgs,
+    inp: &CliInput,
+    set: &SimSettings,
+    t_end: f64,
+) -> Result<()> {
     let (h, h_opt) = match set.method {
         Method::Rk4 { h } => (h, "--step"),
         Method::Dopri5 => (set.h_max, "--h-max"),
     };
-    // The end is the command line's only where it gave one: otherwise a --torques series or
-    // an --init solution set it, and the message must not blame a flag never given.
-    let shown = crate::cli::shown(t_end);
-    let end = match (args.t_end, &args.torques) {
-        (Some(_), _) => format!("--t-end {shown} s"),
-        (None, Some(_)) => format!(
-            "the run's end at {shown} s, where its --torques series ends (--t-end sets another)"
-        ),
-        (None, None) if t_end == crate::cli::DEFAULT_T_END => format!("--t-end {shown} s"),
-        (None, None) => format!(
-            "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
-             another)"
-        ),
-    };
+    let end = end_named(args, inp, t_end);
     let min_steps = t_end / h;
     if min_steps > args.max_steps as f64 {
         bail_usage!(
@@ -436,16 +428,41 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
     Ok((error, cpu))
 }
 
+/// How a message names the run's end `t_end` (s): by what set it (`--t-end`, the end of a
+/// `--torques` series or of a replayed `--init` solution, or the default run), never by a
+/// flag the command line did not give.
+pub(super) fn end_named(args: &SimulateArgs, inp: &CliInput, t_end: f64) -> String {
+    let shown = crate::cli::shown(t_end);
+    if args.t_end.is_some() {
+        return format!("--t-end {shown} s");
+    }
+    match (inp.series_end(), inp) {
+        (Some(end), CliInput::Replay(_)) if end == t_end => format!(
+            "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
+             another)"
+        ),
+        (Some(end), _) if end == t_end => format!(
+            "the run's end at {shown} s, where its --torques series ends (--t-end sets another)"
+        ),
+        _ if t_end == crate::cli::DEFAULT_T_END => {
+            format!("the default run's end at {shown} s (--t-end sets another)")
+        }
+        _ => format!(
+            "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
+             another)"
+        ),
+    }
+}
+
 /// The warning of a run that goes on past the end of its torques, whose last torque it then
 /// holds: a `--torques` series (a solution's `torques.csv` covers one period, and held torques
 /// are no replay of it) or an arm solution replayed by `--init` (its torques cover its own
-/// duration). `t_end_given`: whether `--t-end` set the run's end; without it the run ends with
-/// its torques, unless they end where they start (a one-row series, a constant torque held
-/// over the default run).
+/// duration). Without `--t-end` the run ends with its torques, unless they end before the run
+/// starts (a one-row series: a constant torque, held over the default run).
 pub(super) fn torques_held(
+    args: &SimulateArgs,
     inp: &CliInput,
     t_end: f64,
-    t_end_given: bool,
 ) -> Option<bf_sim::SimWarning> {
     let end = inp.series_end()?;
     if t_end <= end * (1.0 + 1e-9) {
@@ -462,19 +479,17 @@ pub(super) fn torques_held(
              leaving out --t-end, or, for a finger's solution, repeat it with --pd-track 0,0)",
         ),
     };
-    let message = if t_end_given {
+    let message = if args.t_end.is_some() {
         format!(
-            "{what} at t = {} s and the run holds its last torque from there to --t-end {} s; \
-             {advice}",
+            "{what} at t = {} s and the run holds its last torque from there to {}; {advice}",
             crate::cli::shown(end),
-            crate::cli::shown(t_end)
+            end_named(args, inp, t_end)
         )
     } else {
         format!(
-            "{what} where it starts, at t = {} s: its one torque is held over the default run, \
-             to t = {} s (--t-end sets another end)",
+            "{what} at t = {} s, not after the run's start: its last torque is held to {}",
             crate::cli::shown(end),
-            crate::cli::shown(t_end)
+            end_named(args, inp, t_end)
         )
     };
     Some(bf_sim::SimWarning {
@@ -562,7 +577,7 @@ fn run_contact<const N: usize>(
     let set = settings(args)?;
     let inp = input(args, &scene.name, N)?;
     let t_end = run_end(args, &inp);
-    check_limits(args, &set, t_end)?;
+    check_limits(args, &inp, &set, t_end)?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state::<N>(args)?;
     check_initial_angles(args, scene, x0.q.as_slice())?;
@@ -690,7 +705,7 @@ fn run_model<K: Kernels<N>, const N: usize>(
         t_end,
     } = run;
     let inputs = input_options(args, &inp);
-    let held = torques_held(&inp, t_end, args.t_end.is_some());
+    let held = torques_held(args, &inp, t_end);
     let sys = BallFinger::new(model, inp, opts)?;
     let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
