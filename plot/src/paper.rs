@@ -531,15 +531,16 @@ pub struct WorkPrecisionSet {
     /// Label per run drawn next to its point (e.g. "rtol 1e-8", "Radau 3×12", "ε = 1e-4");
     /// empty: no labels.
     pub labels: Vec<String>,
-    /// `true`: the runs form a sequence (a tolerance ladder) and are joined in order of
-    /// computing time. `false`: unordered or unrelated runs (an ε ladder whose solve times are
+    /// `true`: the runs form a sequence (a tolerance ladder) and are joined in the order
+    /// given, the ladder's: computing times measured on a shared machine need not rise along
+    /// it, and a line through them sorted by time would draw that noise as a trend. `false`: unordered or unrelated runs (an ε ladder whose solve times are
     /// not monotone, meshes that landed on different local optima, different kernels), drawn
     /// as markers only.
     pub joined: bool,
 }
 
 /// Work–precision plot with labelled points: log–log error vs computing time, one series per
-/// set; joined sets are sorted by time (labels follow their runs).
+/// set; joined sets in the order of their runs.
 pub fn fig_work_precision_sets(
     title: &str,
     error_label: &str,
@@ -562,18 +563,15 @@ pub fn fig_work_precision_sets(
                 ),
             });
         }
-        let mut runs: Vec<((f64, f64), String)> = (0..m.time_s.len())
-            .map(|i| {
-                (
-                    (m.time_s[i], m.error[i]),
-                    m.labels.get(i).cloned().unwrap_or_default(),
-                )
-            })
+        let pts: Vec<(f64, f64)> = m
+            .time_s
+            .iter()
+            .copied()
+            .zip(m.error.iter().copied())
             .collect();
-        if m.joined {
-            runs.sort_by(|a, b| a.0.0.total_cmp(&b.0.0));
-        }
-        let (pts, labels): (Vec<(f64, f64)>, Vec<String>) = runs.into_iter().unzip();
+        let labels: Vec<String> = (0..pts.len())
+            .map(|i| m.labels.get(i).cloned().unwrap_or_default())
+            .collect();
         let mut s = Series::new(m.name.clone(), pts).styled(SeriesStyle {
             markers: true,
             ..SeriesStyle::default()
@@ -721,9 +719,12 @@ mod tests {
             labels: vec!["c".into(), "a".into(), "b".into()],
             joined,
         };
+        // A ladder is joined in its own order, whatever its computing times: times measured
+        // on a shared machine need not rise along it, and a line sorted by time would draw
+        // their noise as a trend.
         let f = fig_work_precision_sets("wp", "e", &[set(true)]).unwrap();
-        assert_eq!(f.series[0].labels, ["a", "b", "c"]);
-        assert_eq!(f.series[0].points[0], (1.0, 1e-3));
+        assert_eq!(f.series[0].labels, ["c", "a", "b"]);
+        assert_eq!(f.series[0].points, [(3.0, 1e-9), (1.0, 1e-3), (2.0, 1e-6)]);
         assert!(f.series[0].joined);
         let f = fig_work_precision_sets("wp", "e", &[set(false)]).unwrap();
         assert_eq!(f.series[0].labels, ["c", "a", "b"]);

@@ -879,10 +879,17 @@ pub fn comparison_markdown(
     if let Some(dir) = figures {
         // A run without a completed period (the open loop that never reaches the ball) has
         // no point to draw; it is in the table above.
-        let runs: Vec<(ControllerKind, &[PeriodMetrics])> = rows
+        let runs: Vec<ErrorRun<'_>> = rows
             .iter()
-            .filter_map(|r| Some((r.controller, r.tracking.as_ref().ok()?.periods.as_slice())))
-            .filter(|(_, p)| !p.is_empty())
+            .filter_map(|r| {
+                let t = r.tracking.as_ref().ok()?;
+                Some(ErrorRun {
+                    controller: r.controller,
+                    periods: t.periods.as_slice(),
+                    lost: t.lost.is_some(),
+                })
+            })
+            .filter(|r| !r.periods.is_empty())
             .collect();
         if !runs.is_empty() {
             let stem = format!("fig17_closed_loop_{name}");
@@ -900,29 +907,48 @@ pub fn comparison_markdown(
     Ok(s)
 }
 
+/// One controller's run in [`error_figure`].
+pub struct ErrorRun<'a> {
+    /// The controller.
+    pub controller: ControllerKind,
+    /// Its completed periods.
+    pub periods: &'a [PeriodMetrics],
+    /// Whether the run lost the ball ([`Tracking::lost`]): its errors are those of a finger
+    /// that no longer rolls the ball as planned, and its legend says so.
+    pub lost: bool,
+}
+
 /// The Fig. 17 counterpart for closed loops: the mean-ω error ‖ω̄_k − ω̄*‖ / ‖ω̄*‖ (%, log
 /// axis) of every period k of each controller's run of optimum `name`, with the 2 % target;
-/// written to `stem`.svg/.png. (The paper's Fig. 17 plots ω(t) of one open-loop run; over
-/// many periods of up to 10 s the per-period error is what separates the controllers.)
-pub fn error_figure(
-    name: &str,
-    runs: &[(ControllerKind, &[PeriodMetrics])],
-    stem: &Path,
-) -> Result<()> {
+/// written to `stem`.svg/.png. Each period is a marker (runs whose errors coincide stay
+/// countable), and a run that lost the ball is marked so in the legend. (The paper's Fig. 17
+/// plots ω(t) of one open-loop run; over many periods of up to 10 s the per-period error is
+/// what separates the controllers.)
+pub fn error_figure(name: &str, runs: &[ErrorRun<'_>], stem: &Path) -> Result<()> {
     let mut fig = bf_plot::LineFigure::new(
         format!("Fig. 17 counterpart: ω error per period under each controller ({name})"),
         "period",
         "‖ω̄_k − ω̄*‖ / ‖ω̄*‖ [%]",
     );
     fig.y_scale = bf_plot::Scale::Log10;
-    for (controller, periods) in runs {
-        let points = periods
+    for run in runs {
+        let points = run
+            .periods
             .iter()
             .enumerate()
             .map(|(k, p)| ((k + 1) as f64, 100.0 * p.omega_error))
             .collect();
-        fig.series
-            .push(bf_plot::Series::new(controller.name(), points));
+        let label = if run.lost {
+            format!("{} (lost the ball)", run.controller.name())
+        } else {
+            run.controller.name().to_string()
+        };
+        fig.series.push(
+            bf_plot::Series::new(label, points).styled(bf_plot::SeriesStyle {
+                markers: true,
+                ..bf_plot::SeriesStyle::default()
+            }),
+        );
     }
     fig.hlines.push(bf_plot::HLine {
         y: 100.0 * NOMINAL_TARGET,

@@ -58,11 +58,31 @@ pub fn figure_stem(scenario: &str, fig: &str) -> String {
     }
 }
 
-/// Title of a scenario figure, starting with "Fig. N counterpart" when it has one.
-fn figure_title(scenario: &str, fig: &str, caption: &str) -> String {
+/// Title of a scenario figure, starting with "Fig. N counterpart" when it has one; `variant`
+/// (see [`variant_note`]) follows the scenario's name.
+fn figure_title(scenario: &str, variant: &str, fig: &str, caption: &str) -> String {
     match paper_figure(scenario, fig) {
-        Some(n) => format!("Fig. {n} counterpart: {scenario}: {caption}"),
-        None => format!("{scenario}: {caption}"),
+        Some(n) => format!("Fig. {n} counterpart: {scenario}{variant}: {caption}"),
+        None => format!("{scenario}{variant}: {caption}"),
+    }
+}
+
+/// What sets a variant of a scenario apart from the scenario as the report presents it (its
+/// figures would otherwise carry the same titles): the impulse cone imposed, or another
+/// minimum stick duration; empty for the scenario itself.
+fn variant_note(settings: &ProblemSettings) -> String {
+    let plain = ProblemSettings::default();
+    let mut parts = Vec::new();
+    if settings.impulse_cone && !plain.impulse_cone {
+        parts.push("impulse cone imposed".to_string());
+    }
+    if settings.min_stick != plain.min_stick {
+        parts.push(format!("stick ≥ {} s", settings.min_stick));
+    }
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", parts.join(", "))
     }
 }
 
@@ -284,6 +304,7 @@ pub fn run_scenario(
     solve: Solver<'_>,
 ) -> Result<ScenarioResult> {
     let problem: Problem = name.parse().map_err(|e| anyhow!("{e}"))?;
+    let variant = variant_note(&settings);
     let (problem, mut sol) = solve(problem, settings, strategy)?;
     // Re-integration of every phase with the optimal torques: stored in solution.json and
     // shown in the results table; an optimum that fails it (or cannot be re-integrated) does
@@ -301,7 +322,7 @@ pub fn run_scenario(
             .iter()
             .find(|(f, _)| *f == s)
             .map_or(s, |(_, c)| *c);
-        figure_title(name, s, caption)
+        figure_title(name, &variant, s, caption)
     };
 
     // Geometry along the dense samples.
@@ -889,6 +910,40 @@ pub fn run_all(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A variant's figures say what makes them one; the scenario's own titles are unchanged.
+    #[test]
+    fn a_variants_figure_titles_say_what_it_is() {
+        let plain = ProblemSettings::default();
+        assert_eq!(variant_note(&plain), "");
+        assert_eq!(
+            figure_title(
+                "periodic-cot",
+                &variant_note(&plain),
+                "paths",
+                "finger path"
+            ),
+            "Fig. 5 counterpart: periodic-cot: finger path"
+        );
+        let coned = ProblemSettings {
+            impulse_cone: true,
+            ..ProblemSettings::default()
+        };
+        assert_eq!(
+            figure_title(
+                "periodic-cot",
+                &variant_note(&coned),
+                "paths",
+                "finger path"
+            ),
+            "Fig. 5 counterpart: periodic-cot (impulse cone imposed): finger path"
+        );
+        let long = ProblemSettings {
+            min_stick: 0.1,
+            ..ProblemSettings::default()
+        };
+        assert_eq!(variant_note(&long), " (stick ≥ 0.1 s)");
+    }
 
     #[test]
     fn path_taus_sample_every_period_finely_and_every_phase() {
