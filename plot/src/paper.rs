@@ -160,7 +160,7 @@ pub fn fig_distance(
         .push(Series::new("h", pts(h)).styled(fixed(C_BLUE, Dash::Solid)));
     a.hlines.push(HLine {
         y: 0.0,
-        label: String::new(),
+        label: "h = 0: touching the ball".into(),
         colour: Colour::Auto,
         fit: true,
     });

@@ -4,7 +4,8 @@
 //! exact decimal of the integer i·m times 10^k ([`decimal`]), so a label never rounds.
 //! Logarithmic (decadic) axes: major ticks at the decades 10^e, minor ticks at m·10^e
 //! (m = 2…9) at their true positions log10(m) + e. Labels are "me" strings such as `1e-7`,
-//! `2e-7`; the densest labelling (all mantissas, then 1-2-5, then decades, then every 2nd, 5th,
+//! `2e-7`, or plain decimals (`0.5`, `20`, `1000`) on an axis whose values all lie in
+//! 0.001 … 99 999; the densest labelling (all mantissas, then 1-2-5, then decades, then every 2nd, 5th,
 //! … decade) whose labels do not collide is chosen by the caller's `fits` test. A log axis
 //! spanning less than two labellable mantissas falls back to linear ticks mapped to log10.
 
@@ -108,7 +109,17 @@ pub fn log_ticks(lo: f64, hi: f64, fits: &dyn Fn(&[Tick]) -> bool) -> Vec<Tick> 
         }
     }
     let pos = |(m, e): (i64, i32)| libm::log10(m as f64) + e as f64;
-    let label = |(m, e): (i64, i32)| format!("{m}e{e}");
+    // An axis whose values all read plainly (0.001 to 99 999: percents, ratios, seconds) is
+    // labelled in plain decimals, as its linear ticks would be; any other keeps one notation,
+    // "me", for all its labels.
+    let plain = all.iter().all(|&(_, e)| (-3..=4).contains(&e));
+    let label = |(m, e): (i64, i32)| {
+        if plain {
+            decimal(m, e)
+        } else {
+            format!("{m}e{e}")
+        }
+    };
     let build = |keep: &dyn Fn((i64, i32)) -> bool| -> Vec<Tick> {
         all.iter()
             .map(|&me| Tick {
@@ -229,6 +240,10 @@ mod tests {
             .find(|t| t.label.as_deref() == Some("2e-7"))
             .unwrap();
         assert!((two.pos - libm::log10(2e-7f64)).abs() < 1e-12);
+        // An axis of plain values (a percentage from 0.1 to 1000) reads in decimals.
+        let pct = log_ticks(-1.0, 3.0, &|l: &[Tick]| l.len() <= 5);
+        let labels: Vec<&str> = pct.iter().filter_map(|t| t.label.as_deref()).collect();
+        assert_eq!(labels, ["0.1", "1", "10", "100", "1000"]);
         // Only decades fit: minor ticks stay, unlabelled, at m·10^e.
         let dec = log_ticks(-9.0, -3.0, &|l: &[Tick]| l.len() <= 7);
         let labels: Vec<&str> = dec.iter().filter_map(|t| t.label.as_deref()).collect();

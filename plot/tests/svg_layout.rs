@@ -288,6 +288,32 @@ fn linear_tick_labels_match_positions() {
     }
 }
 
+/// An x axis of counts (`x_whole`: periods 1, 2, 3) has ticks at whole numbers only, where
+/// the 1-2-5 ticks of the same range would put some at halves.
+#[test]
+fn an_axis_of_counts_has_whole_ticks() {
+    let d = tmp("whole");
+    let known = vec![(1.0, 1.0), (2.0, 3.0), (3.0, 2.0)];
+    let x_labels = |whole: bool, name: &str| -> Vec<String> {
+        let mut f = LineFigure::new("counts", "period", "e [%]");
+        f.x_whole = whole;
+        f.series
+            .push(Series::new("data", known.clone()).styled(st((0, 120, 60))));
+        let p = render(&f, d.join(name)).unwrap();
+        let els = read(&p[0]);
+        let ax = axes(&els)[0];
+        check_ticks(&els, &ax, &known, "#00783C");
+        els.iter()
+            .filter(|e| e.class() == "tick-x")
+            .map(|e| e.text.clone())
+            .collect()
+    };
+    let halves = x_labels(false, "halves");
+    assert!(halves.iter().any(|l| l == "1.5"), "{halves:?}");
+    let whole = x_labels(true, "whole");
+    assert_eq!(whole, ["1", "2", "3"]);
+}
+
 /// Half the capital height of DejaVu Sans in em (1493 of 2048 units): the layout centres texts
 /// on their capitals.
 const CAP_HALF: f64 = 0.5 * 1493.0 / 2048.0;

@@ -931,6 +931,7 @@ pub fn error_figure(name: &str, runs: &[ErrorRun<'_>], stem: &Path) -> Result<()
         "‖ω̄_k − ω̄*‖ / ‖ω̄*‖ [%]",
     );
     fig.y_scale = bf_plot::Scale::Log10;
+    fig.x_whole = true;
     for run in runs {
         let points = run
             .periods

@@ -381,7 +381,11 @@ pub(super) fn layout_panel(
             0.0
         };
         let m = mapping(fig, prep, area, title_h, y_area, strip, headroom, outside);
-        let x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true);
+        let mut x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true);
+        if fig.x_whole && fig.x_scale == Scale::Linear {
+            // Ticks are multiples of a 1-2-5 step: those of a step below 1 at fractions go.
+            x_ticks.retain(|t| (t.pos - t.pos.round()).abs() <= 1e-9 * t.pos.abs().max(1.0));
+        }
         let y_ticks = axis_ticks(fig.y_scale, m.yr, m.plot.h(), false);
         // Room for the widest y tick label and the rotated description.
         let widest = y_ticks

@@ -255,6 +255,9 @@ pub struct LineFigure {
     pub y_non_negative: bool,
     /// Same data-to-pixel scale on both axes (for geometric views; linear axes only).
     pub equal_aspect: bool,
+    /// The x values are counts (periods, iterations; linear axes; default false): ticks only
+    /// at whole numbers, so that no tick stands where no sample can be.
+    pub x_whole: bool,
     /// Legend placement (default [`LegendPos::Auto`]).
     pub legend: LegendPos,
     /// Output size in pixels when rendered alone (default 1000 × 600).
@@ -283,6 +286,7 @@ impl LineFigure {
             y_includes_zero: false,
             y_non_negative: false,
             equal_aspect: false,
+            x_whole: false,
             legend: LegendPos::Auto,
             size: (1000, 600),
         }
