@@ -480,7 +480,8 @@ pub fn fig_open_loop_vs_optimal(
 pub struct WorkPrecision {
     /// Method name (legend).
     pub name: String,
-    /// Computing time per run \[s\].
+    /// Computing time per run, in the figure's x unit (\[s\] unless the caller relabels the
+    /// axis).
     pub time_s: Vec<f64>,
     /// Error per run (same length); non-positive errors are skipped on the log axis.
     pub error: Vec<f64>,
@@ -524,7 +525,8 @@ pub fn fig_work_precision(
 pub struct WorkPrecisionSet {
     /// Legend text.
     pub name: String,
-    /// Computing time per run \[s\].
+    /// Computing time per run, in the figure's x unit (\[s\] unless the caller relabels the
+    /// axis).
     pub time_s: Vec<f64>,
     /// Error per run (same length); non-positive errors are skipped on the log axis.
     pub error: Vec<f64>,

@@ -293,25 +293,27 @@ fn linear_tick_labels_match_positions() {
 #[test]
 fn an_axis_of_counts_has_whole_ticks() {
     let d = tmp("whole");
-    let known = vec![(1.0, 1.0), (2.0, 3.0), (3.0, 2.0)];
-    let x_labels = |whole: bool, name: &str| -> Vec<String> {
+    let x_labels = |whole: bool, name: &str, known: &[(f64, f64)]| -> Vec<String> {
         let mut f = LineFigure::new("counts", "period", "e [%]");
         f.x_whole = whole;
         f.series
-            .push(Series::new("data", known.clone()).styled(st((0, 120, 60))));
+            .push(Series::new("data", known.to_vec()).styled(st((0, 120, 60))));
         let p = render(&f, d.join(name)).unwrap();
         let els = read(&p[0]);
         let ax = axes(&els)[0];
-        check_ticks(&els, &ax, &known, "#00783C");
+        check_ticks(&els, &ax, known, "#00783C");
         els.iter()
             .filter(|e| e.class() == "tick-x")
             .map(|e| e.text.clone())
             .collect()
     };
-    let halves = x_labels(false, "halves");
+    let known = [(1.0, 1.0), (2.0, 3.0), (3.0, 2.0)];
+    let halves = x_labels(false, "halves", &known);
     assert!(halves.iter().any(|l| l == "1.5"), "{halves:?}");
-    let whole = x_labels(true, "whole");
-    assert_eq!(whole, ["1", "2", "3"]);
+    assert_eq!(x_labels(true, "whole", &known), ["1", "2", "3"]);
+    // A range without a whole number keeps its ticks rather than losing them all.
+    let inside = x_labels(true, "inside", &[(1.2, 1.0), (1.8, 2.0)]);
+    assert!(inside.len() >= 2, "{inside:?}");
 }
 
 /// Half the capital height of DejaVu Sans in em (1493 of 2048 units): the layout centres texts

@@ -254,27 +254,44 @@ pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<S
 }
 
 /// Unknown chain links, all given on the command line (`--base`/`--tip`): a mistake in the
-/// command line (exit status 2), named by the flag of the first. Other errors pass unchanged.
+/// command line (exit status 2), named by its flags. Other errors pass unchanged.
 fn blame_flag(e: SpecError) -> SpecError {
     match e {
-        SpecError::UnknownLink(u) => flag_error(&u, &u.unknown[0]),
+        SpecError::UnknownLink(u) => flag_error(&u, &u.unknown),
         e => e,
     }
 }
 
-/// The command-line error of the unknown end `(end, name)` of `u`, named by its flag.
-fn flag_error(u: &UnknownLink, (end, name): &(ChainEnd, String)) -> SpecError {
+/// The flag that gives the chain end `end`.
+fn flag_of(end: ChainEnd) -> &'static str {
+    match end {
+        ChainEnd::Base => "--base",
+        ChainEnd::Tip => "--tip",
+    }
+}
+
+/// The command-line error of the unknown ends `flagged` of `u` (each given by its flag),
+/// located at the first one's flag and naming every one.
+fn flag_error(u: &UnknownLink, flagged: &[(ChainEnd, String)]) -> SpecError {
+    let mut message = String::new();
+    for (i, (end, name)) in flagged.iter().enumerate() {
+        if i == 0 {
+            let _ = write!(message, "{name:?} is not a link of the robot");
+        } else {
+            let _ = write!(message, ", nor is {} {name:?}", flag_of(*end));
+        }
+    }
+    let _ = write!(message, " (links: {:?})", u.links);
     SpecError::At {
         kind: SpecErrorKind::ChainChoice,
         file: u.file.clone(),
         line: 1,
         column: 1,
-        path: match end {
-            ChainEnd::Base => "--base",
-            ChainEnd::Tip => "--tip",
-        }
-        .to_string(),
-        message: format!("{name:?} is not a link of the robot (links: {:?})", u.links),
+        path: flagged
+            .first()
+            .map_or("--base", |(end, _)| flag_of(*end))
+            .to_string(),
+        message,
     }
 }
 
@@ -434,9 +451,15 @@ fn expand(
                 ChainEnd::Base => choice.base.is_some(),
                 ChainEnd::Tip => choice.tip.is_some(),
             };
-            match u.unknown.iter().find(|(end, _)| given(end)) {
-                Some(flagged) => flag_error(&u, flagged),
-                None => {
+            let flagged: Vec<(ChainEnd, String)> = u
+                .unknown
+                .iter()
+                .filter(|(end, _)| given(end))
+                .cloned()
+                .collect();
+            match flagged.is_empty() {
+                false => flag_error(&u, &flagged),
+                true => {
                     let (end, name) = &u.unknown[0];
                     let key = match end {
                         ChainEnd::Base => "base_link",

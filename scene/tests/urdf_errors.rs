@@ -558,6 +558,25 @@ fn an_unknown_chain_link_names_the_flag_or_the_key_that_gave_it() {
     .unwrap();
     let err = Scene::load_with_text(&keyed, &tip("nope")).unwrap_err();
     assert_eq!(err.path(), Some("--tip"), "{err}");
+    // Both flags wrong: the first is where the error is, and both are named.
+    let both = ChainChoice {
+        base: Some("nob".to_string()),
+        tip: Some("not".to_string()),
+    };
+    let err = bf_scene::urdf_scene_text(&arm(J2), FILE, &both).unwrap_err();
+    assert_eq!(err.path(), Some("--base"), "{err}");
+    assert!(err.to_string().contains("nor is --tip \"not\""), "{err}");
+    let Err(SpecError::UnknownLink(u)) =
+        read_urdf_chain(&arm(J2), FILE, Some("nob"), Some("not"), None)
+    else {
+        panic!("two unknown ends must be an UnknownLink error");
+    };
+    assert_eq!(u.unknown.len(), 2);
+    assert!(
+        u.to_string()
+            .contains("base link \"nob\" and tip link \"not\" are not links"),
+        "{u}"
+    );
     // Read directly, the error says which end and lists the links, at the URDF's <robot>.
     let Err(SpecError::UnknownLink(u)) = read_urdf_chain(&arm(J2), FILE, Some("zzz"), None, None)
     else {

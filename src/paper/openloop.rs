@@ -478,12 +478,12 @@ fn write_figure(
             ..bf_plot::SeriesStyle::default()
         };
         let name = o.feedback.map_or("replay".to_string(), |pd| pd.label());
-        // A replay whose finger never reaches the ball leaves ω at its start: a flat line
-        // that says nothing unless the legend does.
-        let name = if o.mode_time[1] + o.mode_time[2] > 0.0 || o.first_impact.is_some() {
-            name
-        } else {
-            format!("{name} (never reaches the ball)")
+        // A replay without a contact phase leaves ω as it was (Newton's impact law does not
+        // change it): a flat line that says nothing unless the legend does.
+        let name = match (o.mode_time[1] + o.mode_time[2] > 0.0, o.events.is_empty()) {
+            (true, _) => name,
+            (false, true) => format!("{name} (never reaches the ball)"),
+            (false, false) => format!("{name} (bounces off: no contact phase)"),
         };
         for (k, panel) in fig.panels.iter_mut().enumerate() {
             panel

@@ -383,8 +383,12 @@ pub(super) fn layout_panel(
         let m = mapping(fig, prep, area, title_h, y_area, strip, headroom, outside);
         let mut x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true);
         if fig.x_whole && fig.x_scale == Scale::Linear {
-            // Ticks are multiples of a 1-2-5 step: those of a step below 1 at fractions go.
-            x_ticks.retain(|t| (t.pos - t.pos.round()).abs() <= 1e-9 * t.pos.abs().max(1.0));
+            // Ticks are multiples of a 1-2-5 step: those of a step below 1 at fractions go,
+            // unless the range holds no whole number at all.
+            let whole = |t: &Tick| (t.pos - t.pos.round()).abs() <= 1e-9 * t.pos.abs().max(1.0);
+            if x_ticks.iter().any(whole) {
+                x_ticks.retain(whole);
+            }
         }
         let y_ticks = axis_ticks(fig.y_scale, m.yr, m.plot.h(), false);
         // Room for the widest y tick label and the rotated description.

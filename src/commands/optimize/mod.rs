@@ -282,7 +282,9 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         }
         None => None,
     };
-    let cone_margin = args.cone_margin.unwrap_or(0.0);
+    let cone_margin = args
+        .cone_margin
+        .unwrap_or(ProblemSettings::default().cone_margin);
     if !(0.0..1.0).contains(&cone_margin) {
         bail_usage!(
             "--cone-margin must be in [0, 1) (got {})",

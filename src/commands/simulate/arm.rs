@@ -41,10 +41,14 @@ pub(super) fn run_arm(
         CliInput::Arm(n)
     };
     // A replayed solution ends with its duration unless --t-end says otherwise.
-    let t_end = match (&replay, args.t_end) {
-        (Some((_, _, duration)), None) => *duration,
+    let end = match (&replay, args.t_end) {
+        (Some((_, _, duration)), None) => super::RunEnd {
+            t: *duration,
+            by: super::EndBy::Solution,
+        },
         _ => super::run_end(args, &inp),
     };
+    let t_end = end.t;
     check_t_end(t_end)?;
     if args.pd_track.is_some() || args.pd_track_contact {
         bail_usage!(
@@ -66,8 +70,8 @@ pub(super) fn run_arm(
         }
     }
     let set = settings(args)?;
-    check_limits(args, &inp, &set, t_end)?;
-    let held = super::torques_held(args, &inp, t_end);
+    check_limits(args, &set, end)?;
+    let held = super::torques_held(&inp, end);
     if let Some(w) = &held {
         crate::errln!("warning: {}", w.message);
     }

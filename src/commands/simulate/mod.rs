@@ -325,17 +325,13 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
 
 /// Refuses a run that cannot fit its limits: fewer than the necessary steps or too many
 /// samples (see the module docs). The error names the options and the limit.
-pub fn check_limits(
-    args: &SimulateArgs,
-    inp: &CliInput,
-    set: &SimSettings,
-    t_end: f64,
-) -> Result<()> {
+pub(super) fn check_limits(args: &SimulateArgs, set: &SimSettings, run_end: RunEnd) -> Result<()> {
     let (h, h_opt) = match set.method {
         Method::Rk4 { h } => (h, "--step"),
         Method::Dopri5 => (set.h_max, "--h-max"),
     };
-    let end = end_named(args, inp, t_end);
+    let t_end = run_end.t;
+    let end = run_end.named();
     let min_steps = t_end / h;
     if min_steps > args.max_steps as f64 {
         bail_usage!(
@@ -428,44 +424,60 @@ pub(super) fn advance_within_limits<S: HybridSystem + ?Sized>(
     Ok((error, cpu))
 }
 
-/// How a message names the run's end `t_end` (s): by what set it (`--t-end`, the end of a
-/// `--torques` series or of a replayed `--init` solution, or the default run), never by a
-/// flag the command line did not give.
-pub(super) fn end_named(args: &SimulateArgs, inp: &CliInput, t_end: f64) -> String {
-    let shown = crate::cli::shown(t_end);
-    if args.t_end.is_some() {
-        return format!("--t-end {shown} s");
-    }
-    match (inp.series_end(), inp) {
-        (Some(end), CliInput::Replay(_)) if end == t_end => format!(
-            "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
-             another)"
-        ),
-        (Some(end), _) if end == t_end => format!(
-            "the run's end at {shown} s, where its --torques series ends (--t-end sets another)"
-        ),
-        _ if t_end == crate::cli::DEFAULT_T_END => {
-            format!("the default run's end at {shown} s (--t-end sets another)")
+/// What set a run's end: a message names it by that, never by a flag the command line did
+/// not give.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum EndBy {
+    /// `--t-end`.
+    Flag,
+    /// The duration of the `--init` solution replayed (an arm's).
+    Solution,
+    /// The last time of the `--torques` series.
+    Series,
+    /// [`crate::cli::DEFAULT_T_END`].
+    Default,
+}
+
+/// A run's end time (s) and what set it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct RunEnd {
+    /// The end time (s).
+    pub t: f64,
+    /// What set it.
+    pub by: EndBy,
+}
+
+impl RunEnd {
+    /// The end as a message names it, e.g. "--t-end 2 s" or "the run's end at 0.3 s, where
+    /// its --torques series ends (--t-end sets another)".
+    pub(super) fn named(&self) -> String {
+        let shown = crate::cli::shown(self.t);
+        match self.by {
+            EndBy::Flag => format!("--t-end {shown} s"),
+            EndBy::Solution => format!(
+                "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
+                 another)"
+            ),
+            EndBy::Series => format!(
+                "the run's end at {shown} s, where its --torques series ends (--t-end sets \
+                 another)"
+            ),
+            EndBy::Default => {
+                format!("the default run's end at {shown} s (--t-end sets another)")
+            }
         }
-        _ => format!(
-            "the run's end at {shown} s, the duration of its --init solution (--t-end sets \
-             another)"
-        ),
     }
 }
 
 /// The warning of a run that goes on past the end of its torques, whose last torque it then
 /// holds: a `--torques` series (a solution's `torques.csv` covers one period, and held torques
 /// are no replay of it) or an arm solution replayed by `--init` (its torques cover its own
-/// duration). Without `--t-end` the run ends with its torques, unless they end before the run
-/// starts (a one-row series: a constant torque, held over the default run).
-pub(super) fn torques_held(
-    args: &SimulateArgs,
-    inp: &CliInput,
-    t_end: f64,
-) -> Option<bf_sim::SimWarning> {
-    let end = inp.series_end()?;
-    if t_end <= end * (1.0 + 1e-9) {
+/// duration). A run ends with its torques unless `--t-end` or a replayed solution sets
+/// another end, or they end where the run starts (a one-row series: a constant torque, held
+/// over the default run).
+pub(super) fn torques_held(inp: &CliInput, end: RunEnd) -> Option<bf_sim::SimWarning> {
+    let last = inp.series_end()?;
+    if end.t <= last * (1.0 + 1e-9) {
         return None;
     }
     let (what, advice) = match inp {
@@ -479,21 +491,21 @@ pub(super) fn torques_held(
              leaving out --t-end, or, for a finger's solution, repeat it with --pd-track 0,0)",
         ),
     };
-    let message = if args.t_end.is_some() {
+    let message = if last <= 0.0 && end.by == EndBy::Default {
         format!(
-            "{what} at t = {} s and the run holds its last torque from there to {}; {advice}",
-            crate::cli::shown(end),
-            end_named(args, inp, t_end)
+            "{what} at t = {} s, where the run starts: its last torque is held to {}",
+            crate::cli::shown(last),
+            end.named()
         )
     } else {
         format!(
-            "{what} at t = {} s, not after the run's start: its last torque is held to {}",
-            crate::cli::shown(end),
-            end_named(args, inp, t_end)
+            "{what} at t = {} s and the run holds its last torque from there to {}; {advice}",
+            crate::cli::shown(last),
+            end.named()
         )
     };
     Some(bf_sim::SimWarning {
-        t: end,
+        t: last,
         kind: "torques_held",
         message,
     })
@@ -576,8 +588,8 @@ fn run_contact<const N: usize>(
 ) -> Result<()> {
     let set = settings(args)?;
     let inp = input(args, &scene.name, N)?;
-    let t_end = run_end(args, &inp);
-    check_limits(args, &inp, &set, t_end)?;
+    let end = run_end(args, &inp);
+    check_limits(args, &set, end)?;
     let law = parse_impact_law(&args.impact_law)?;
     let (mode0, x0) = initial_state::<N>(args)?;
     check_initial_angles(args, scene, x0.q.as_slice())?;
@@ -611,17 +623,29 @@ fn run_contact<const N: usize>(
         set,
         mode0,
         x0,
-        t_end,
+        end,
     };
     run_model(args, run_opts, model, source, inp, opts, run)
 }
 
-/// Where a run ends: `--t-end`, or the end of its `--torques` series (a replay of a solution's
-/// torques ends with them), or [`crate::cli::DEFAULT_T_END`].
-pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput) -> f64 {
-    args.t_end
-        .or_else(|| inp.series_end().filter(|&t| t > 0.0))
-        .unwrap_or(crate::cli::DEFAULT_T_END)
+/// Where a run ends: `--t-end`, or the end of its `--torques` series or replayed solution
+/// where it is after the start (a replay of a solution's torques ends with them), or
+/// [`crate::cli::DEFAULT_T_END`].
+pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput) -> RunEnd {
+    match (args.t_end, inp.series_end().filter(|&t| t > 0.0)) {
+        (Some(t), _) => RunEnd { t, by: EndBy::Flag },
+        (None, Some(t)) => RunEnd {
+            t,
+            by: match inp {
+                CliInput::Replay(_) => EndBy::Solution,
+                _ => EndBy::Series,
+            },
+        },
+        (None, None) => RunEnd {
+            t: crate::cli::DEFAULT_T_END,
+            by: EndBy::Default,
+        },
+    }
 }
 
 /// The integration of a contact run: settings, initial mode and state, end time.
@@ -629,7 +653,7 @@ struct Run<const N: usize> {
     set: SimSettings,
     mode0: Mode,
     x0: State<N>,
-    t_end: f64,
+    end: RunEnd,
 }
 
 /// What running on interpreted kernels means, for the stderr line (empty for compiled ones).
@@ -702,10 +726,11 @@ fn run_model<K: Kernels<N>, const N: usize>(
         set,
         mode0,
         x0,
-        t_end,
+        end,
     } = run;
+    let t_end = end.t;
     let inputs = input_options(args, &inp);
-    let held = torques_held(args, &inp, t_end);
+    let held = torques_held(&inp, end);
     let sys = BallFinger::new(model, inp, opts)?;
     let x0 = x0.to_vec();
     // Overflow at the initial state (e.g. --qd0 1e300) would otherwise surface as an error
