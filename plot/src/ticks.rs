@@ -64,10 +64,16 @@ pub fn linear_ticks(
     let max_ticks = max_ticks.max(2) as f64;
     let mut k = libm::log10(span / max_ticks).floor() as i32 - 1;
     let mut last = Vec::new();
+    // A range that ends a rounding short of a tick (a period of 9.99998 s) keeps that tick:
+    // it is drawn within a hundred-thousandth of the span of the axis' end.
+    let slack = 1e-5 * span;
     for _ in 0..12 {
         for m in [1i64, 2, 5] {
             let step = m as f64 * 10f64.powi(k);
-            let (i0, i1) = ((lo / step).ceil() as i64, (hi / step).floor() as i64);
+            let (i0, i1) = (
+                ((lo - slack) / step).ceil() as i64,
+                ((hi + slack) / step).floor() as i64,
+            );
             if (i1 - i0 + 1) as f64 > max_ticks {
                 continue;
             }
@@ -224,6 +230,16 @@ mod tests {
                     .all(|w| ((w[1].pos - w[0].pos) - d).abs() < 1e-9 * d)
             );
         }
+    }
+
+    #[test]
+    fn a_range_a_rounding_short_of_a_tick_keeps_it() {
+        let t = linear_ticks(0.0, 9.99998, 11, &all_fit);
+        let labels: Vec<&str> = t.iter().filter_map(|t| t.label.as_deref()).collect();
+        assert_eq!(labels.last(), Some(&"10"), "{labels:?}");
+        // Not a tick that is really beyond the range.
+        let t = linear_ticks(0.0, 9.9, 11, &all_fit);
+        assert!(t.iter().all(|t| t.pos <= 9.9), "{t:?}");
     }
 
     #[test]
