@@ -648,8 +648,8 @@ pub struct OptimizeArgs {
     pub refine_rounds: Option<usize>,
     /// hp refinements of an unverified optimum before it is reported unverified (each up to
     /// 4 rounds driven by the element-wise re-integration defects, the first to 1e-4, each
-    /// further one 10× tighter; default 5). With `reach-arm`: re-solves on a mesh with twice
-    /// the elements (default 3).
+    /// further one 10× tighter; default 5). With `reach-arm`: re-solves of a converged but
+    /// unverified optimum on a mesh with twice the elements (default 3).
     #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = whole)]
     pub verify_refinements: Option<usize>,
     /// Relative tolerance of the DOPRI5 re-integration that verifies the solution (0 skips it).

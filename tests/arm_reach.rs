@@ -704,3 +704,37 @@ fn torque_hull_errors_name_the_option() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A solve that does not converge ends the attempts: the mesh doublings resolve an optimum
+/// better, they do not make an unreachable target reachable (a target of 1e6 rad used to be
+/// solved on four meshes, two minutes, before it failed). Exit 1, the set marked FAILED.
+#[test]
+fn an_unconverged_arm_solve_is_not_solved_again_on_finer_meshes() {
+    let dir = tmpdir("arm-unconverged");
+    let out = dir.join("out");
+    let o = run(&[
+        "optimize",
+        "--problem",
+        "reach-arm",
+        "--scene",
+        "tests/fixtures/planar2_arm.toml",
+        "--target",
+        "1e6,0",
+        "--max-iter",
+        "60",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let meshes: Vec<&str> = stdout.lines().filter(|l| l.starts_with("mesh ")).collect();
+    assert_eq!(meshes.len(), 1, "{stdout}");
+    assert!(!meshes[0].contains("Solved"), "{stdout}");
+    assert!(out.join("FAILED").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

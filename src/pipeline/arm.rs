@@ -74,10 +74,13 @@ pub struct ArmAttempt {
 pub const ARM_MESH_DOUBLINGS: usize = 3;
 
 /// [`solve_reach_arm`] then [`verify_arm`] at `rtol` (0: no verification, one solve); an
-/// unverified solution is solved again on a mesh with twice the elements and points (the
+/// unverified optimum is solved again on a mesh with twice the elements and points (the
 /// same points per element), up to `refinements` times: where the torque bounds are active
 /// the optimal torques have corners, which the element polynomials resolve only on short
-/// elements. Returns every attempt, the last one being the answer.
+/// elements. A solve that did not converge ends the attempts: a finer mesh resolves an
+/// optimum better, it does not make an unreachable target reachable (a target of 1e6 rad
+/// took four meshes and two minutes to fail). Returns every attempt, the last one being the
+/// answer.
 ///
 /// `optimize --problem reach-arm` uses [`ARM_MESH_DOUBLINGS`] unless told otherwise.
 pub fn solve_verified(
@@ -95,7 +98,8 @@ pub fn solve_verified(
         if rtol > 0.0 {
             sol.verification = Some(verify_arm(&sol, rtol)?);
         }
-        let done = rtol == 0.0 || is_verified(&sol) || attempts.len() >= refinements;
+        let done =
+            rtol == 0.0 || is_verified(&sol) || !sol.converged() || attempts.len() >= refinements;
         attempts.push(ArmAttempt {
             points: s.points,
             elements: s.elements,
