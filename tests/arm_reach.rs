@@ -479,17 +479,11 @@ fn cli_contact_problem_on_an_arm_is_refused_with_the_scene_and_the_reason() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("--scene"), "{err}");
     // A target outside the joint limits names the joint and the limits.
-    let o = run(&[
-        "optimize",
-        "--problem",
-        "reach-arm",
-        "--scene",
+    let o = reach_arm(
         "scenes/puma560.toml",
-        "--target",
-        "0,0,0,0,3,0",
-        "--out",
-        dir.join("out").to_str().unwrap(),
-    ]);
+        &["--target", "0,0,0,0,3,0"],
+        &dir.join("out"),
+    );
     // It is a value out of its range: a usage error naming the option, not the scene.
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
@@ -504,17 +498,7 @@ fn cli_contact_problem_on_an_arm_is_refused_with_the_scene_and_the_reason() {
 #[test]
 fn a_start_that_no_admissible_torque_holds_fails_with_the_gravity_hint() {
     let dir = tmpdir("reach-arm-gravity");
-    let o = run(&[
-        "optimize",
-        "--problem",
-        "reach-arm",
-        "--scene",
-        "tests/fixtures/planar2_arm.toml",
-        "--start",
-        "0,0",
-        "--out",
-        dir.join("out").to_str().unwrap(),
-    ]);
+    let o = reach_arm(FIXTURE, &["--start", "0,0"], &dir.join("out"));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(1), "{stdout}");
     let g1 = 9.81 * (1.2 * 0.45 + 0.7 * 1.3);
@@ -537,15 +521,7 @@ fn a_start_that_no_admissible_torque_holds_fails_with_the_gravity_hint() {
 fn the_default_start_is_one_the_torque_bounds_hold() {
     let dir = tmpdir("reach-arm-default");
     let out = dir.join("out");
-    let o = run(&[
-        "optimize",
-        "--problem",
-        "reach-arm",
-        "--scene",
-        "tests/fixtures/planar2_arm.toml",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = reach_arm(FIXTURE, &[], &out);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
         o.status.success(),
@@ -705,6 +681,17 @@ fn torque_hull_errors_name_the_option() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `optimize --problem reach-arm --scene SCENE EXTRA… --out OUT`.
+fn reach_arm(scene: &str, extra: &[&str], out: &Path) -> std::process::Output {
+    let mut args = vec!["optimize", "--problem", "reach-arm", "--scene", scene];
+    args.extend_from_slice(extra);
+    args.extend(["--out", out.to_str().unwrap()]);
+    run(&args)
+}
+
+/// The two-link test arm (τ_max 12 and 6 N m).
+const FIXTURE: &str = "tests/fixtures/planar2_arm.toml";
+
 /// A solve that does not converge ends the attempts: the mesh doublings resolve an optimum
 /// better, they do not make an unreachable target reachable (a target of 1e6 rad used to be
 /// solved on four meshes, two minutes, before it failed). Exit 1, the set marked FAILED.
@@ -712,19 +699,7 @@ fn torque_hull_errors_name_the_option() {
 fn an_unconverged_arm_solve_is_not_solved_again_on_finer_meshes() {
     let dir = tmpdir("arm-unconverged");
     let out = dir.join("out");
-    let o = run(&[
-        "optimize",
-        "--problem",
-        "reach-arm",
-        "--scene",
-        "tests/fixtures/planar2_arm.toml",
-        "--target",
-        "1e6,0",
-        "--max-iter",
-        "60",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = reach_arm(FIXTURE, &["--target", "1e6,0", "--max-iter", "60"], &out);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(
         o.status.code(),
