@@ -1,6 +1,6 @@
 //! `docs/cli.md`, the command-line reference, is the text the parser writes
-//! (`ball_finger::cli::markdown_reference`): every command and option is documented, with its
-//! current help, default and choices. `BF_OVERWRITE_CLI_DOC=1 cargo test --release --test
+//! (`markdown_reference` below, from clap's description of `ball_finger::cli::Cli`): every
+//! command and option is documented, with its current help, default and choices. `BF_OVERWRITE_CLI_DOC=1 cargo test --release --test
 //! cli_reference` rewrites the file after an intended change of the command line.
 
 use clap::CommandFactory as _;
@@ -9,7 +9,7 @@ const PATH: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/cli.md");
 
 #[test]
 fn the_reference_is_the_parsers_text() {
-    let text = ball_finger::cli::markdown_reference();
+    let text = markdown_reference();
     if std::env::var("BF_OVERWRITE_CLI_DOC").as_deref() == Ok("1") {
         std::fs::write(PATH, &text).unwrap();
     }
@@ -87,7 +87,7 @@ fn every_option_of_every_command_has_its_entry() {
 /// given equal to the default still counts as given) state the value the program uses.
 #[test]
 fn stated_defaults_are_the_programs() {
-    let text = ball_finger::cli::markdown_reference();
+    let text = markdown_reference();
     // `optimize`'s own section: another command's option of the same name is not checked.
     let section = {
         let start = text.find("## `optimize`\n").expect("optimize's section");
@@ -121,4 +121,155 @@ fn stated_defaults_are_the_programs() {
             entry(option)
         );
     }
+}
+
+/// The command-line reference, `docs/cli.md`, written from the parser itself: every command,
+/// its usage and every option with its help, default and choices. A test holds the file equal
+/// to this text, so an option cannot be added, renamed or reworded without its reference.
+fn markdown_reference() -> String {
+    use std::fmt::Write as _;
+    let mut cli = ball_finger::cli::Cli::command();
+    cli.build();
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# Command-line reference\n\n\
+         Written from the program's own argument parser (`cargo test --release --test \
+         cli_reference` checks that this file is current; `BF_OVERWRITE_CLI_DOC=1` with the same \
+         command rewrites it). The same text, with line breaks, is each command's `--help`. \
+         Exit statuses: 0 success, 1 a failed or unverified run or a refused input, 2 a wrong \
+         command line (README, \"Commands\").\n"
+    );
+    let global: Vec<&clap::Arg> = cli.get_arguments().filter(|a| a.is_global_set()).collect();
+    if !global.is_empty() {
+        let _ = writeln!(out, "## Options of every command\n");
+        for a in &global {
+            arg_entry(&mut out, a);
+        }
+        out.push('\n');
+    }
+    let own: Vec<&clap::Arg> = cli
+        .get_arguments()
+        .filter(|a| !a.is_global_set() && a.get_id() != "help")
+        .collect();
+    if !own.is_empty() {
+        let _ = writeln!(out, "## `ball-finger` without a command\n");
+        for a in &own {
+            arg_entry(&mut out, a);
+        }
+        out.push('\n');
+    }
+    for sub in cli.get_subcommands() {
+        command_section(&mut out, sub, &["ball-finger"]);
+    }
+    out
+}
+
+fn command_section(out: &mut String, cmd: &clap::Command, parents: &[&str]) {
+    use std::fmt::Write as _;
+    if cmd.is_hide_set() || cmd.get_name() == "help" {
+        return;
+    }
+    let mut path = parents.to_vec();
+    path.push(cmd.get_name());
+    let _ = writeln!(out, "## `{}`\n", path[1..].join(" "));
+    if let Some(about) = cmd.get_long_about().or(cmd.get_about()) {
+        let _ = writeln!(out, "{}\n", paragraphs(&about.to_string(), "\n\n"));
+    }
+    let usage = cmd
+        .clone()
+        .bin_name(path.join(" "))
+        .render_usage()
+        .to_string();
+    let usage = usage.trim_start_matches("Usage:").trim();
+    let _ = writeln!(out, "```text\n{usage}\n```\n");
+    let args: Vec<&clap::Arg> = cmd
+        .get_arguments()
+        .filter(|a| !a.is_hide_set() && !a.is_global_set() && a.get_id() != "help")
+        .collect();
+    for a in &args {
+        arg_entry(out, a);
+    }
+    if !args.is_empty() {
+        out.push('\n');
+    }
+    for sub in cmd.get_subcommands() {
+        command_section(out, sub, &path);
+    }
+}
+
+fn arg_entry(out: &mut String, a: &clap::Arg) {
+    use std::fmt::Write as _;
+    let values: Vec<String> = a
+        .get_value_names()
+        .map(|v| v.iter().map(|n| format!("<{n}>")).collect())
+        .unwrap_or_default();
+    let takes_value = a.get_action().takes_values();
+    // A value that may repeat (`<DIRS>...`) is shown as clap's usage shows it.
+    let repeats = a.get_num_args().is_some_and(|n| n.max_values() > 1);
+    let values: Vec<String> = match (repeats, values.split_last()) {
+        (true, Some((last, rest))) => rest.iter().cloned().chain([format!("{last}...")]).collect(),
+        _ => values,
+    };
+    let name = match (a.get_long(), a.get_short()) {
+        (Some(l), Some(s)) => format!("-{s}, --{l}"),
+        (Some(l), None) => format!("--{l}"),
+        (None, Some(s)) => format!("-{s}"),
+        (None, None) => String::new(),
+    };
+    let label = match (name.is_empty(), takes_value) {
+        (true, _) => values.join(" "),
+        (false, true) if !values.is_empty() => format!("{name} {}", values.join(" ")),
+        (false, true) => format!("{name} <{}>", a.get_id().as_str().to_uppercase()),
+        (false, false) => name,
+    };
+    let help = a
+        .get_long_help()
+        .or(a.get_help())
+        .map(|h| paragraphs(&h.to_string(), " "))
+        .unwrap_or_default();
+    let mut extra = Vec::new();
+    // A float default as clap prints it (`0.00000001`) reads better as the help writes it.
+    let defaults: Vec<String> = a
+        .get_default_values()
+        .iter()
+        .map(|v| {
+            let text = v.to_string_lossy();
+            match text.parse::<f64>() {
+                Ok(x) if text.contains('.') => ball_finger::cli::shown(x),
+                _ => text.into_owned(),
+            }
+        })
+        .collect();
+    if takes_value && !defaults.is_empty() && !help.contains("[default:") {
+        extra.push(format!("default: `{}`", defaults.join(",")));
+    }
+    let choices: Vec<String> = a
+        .get_possible_values()
+        .iter()
+        .filter(|p| !p.is_hide_set())
+        .map(|p| format!("`{}`", p.get_name()))
+        .collect();
+    if takes_value && !choices.is_empty() {
+        extra.push(format!("one of {}", choices.join(", ")));
+    }
+    if a.is_required_set() {
+        extra.push("required".to_string());
+    }
+    let extra = if extra.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", extra.join("; "))
+    };
+    let _ = writeln!(out, "- `{label}`: {help}{extra}");
+}
+
+/// A help text with the lines of each paragraph joined, the paragraphs joined by `between`
+/// (a blank line for a command's text, a space inside a list item).
+fn paragraphs(text: &str, between: &str) -> String {
+    text.trim()
+        .split("\n\n")
+        .map(|p| p.split_whitespace().collect::<Vec<_>>().join(" "))
+        .collect::<Vec<_>>()
+        .join(between)
 }

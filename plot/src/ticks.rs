@@ -57,12 +57,24 @@ pub fn linear_ticks(
     max_ticks: usize,
     fits: &dyn Fn(&[Tick]) -> bool,
 ) -> Vec<Tick> {
+    linear_ticks_of_step(lo, hi, max_ticks, i32::MIN, fits)
+}
+
+/// [`linear_ticks`] with steps of at least 10^`min_exp` (0: whole numbers, for an axis of
+/// counts); empty when no such tick lies in the range.
+pub fn linear_ticks_of_step(
+    lo: f64,
+    hi: f64,
+    max_ticks: usize,
+    min_exp: i32,
+    fits: &dyn Fn(&[Tick]) -> bool,
+) -> Vec<Tick> {
     if !(lo.is_finite() && hi.is_finite() && hi > lo) {
         return Vec::new();
     }
     let span = hi - lo;
     let max_ticks = max_ticks.max(2) as f64;
-    let mut k = libm::log10(span / max_ticks).floor() as i32 - 1;
+    let mut k = (libm::log10(span / max_ticks).floor() as i32 - 1).max(min_exp);
     let mut last = Vec::new();
     // A range that ends a rounding short of a tick (a period of 9.99998 s) keeps that tick:
     // it is drawn within a hundred-thousandth of the span of the axis' end.

@@ -320,7 +320,13 @@ pub(super) fn mapping(
     Mapping { plot, xr, yr }
 }
 
-pub(super) fn axis_ticks(scale: Scale, r: (f64, f64), len_px: f64, horizontal: bool) -> Vec<Tick> {
+pub(super) fn axis_ticks(
+    scale: Scale,
+    r: (f64, f64),
+    len_px: f64,
+    horizontal: bool,
+    whole: bool,
+) -> Vec<Tick> {
     // Labels of neighbouring ticks must be apart by the text extent plus a gap.
     let fits = |t: &[Tick]| -> bool {
         let ext: Vec<(f64, f64)> = t
@@ -338,7 +344,17 @@ pub(super) fn axis_ticks(scale: Scale, r: (f64, f64), len_px: f64, horizontal: b
     match scale {
         Scale::Linear => {
             let max = if horizontal { 10 } else { 8 };
-            ticks::linear_ticks(r.0, r.1, max, &fits)
+            // Counts tick whole numbers, unless the range holds fewer than two of them.
+            let whole_ticks = if whole {
+                ticks::linear_ticks_of_step(r.0, r.1, max, 0, &fits)
+            } else {
+                Vec::new()
+            };
+            if whole_ticks.len() >= 2 {
+                whole_ticks
+            } else {
+                ticks::linear_ticks(r.0, r.1, max, &fits)
+            }
         }
         Scale::Log10 => ticks::log_ticks(r.0, r.1, &fits),
     }
@@ -381,16 +397,8 @@ pub(super) fn layout_panel(
             0.0
         };
         let m = mapping(fig, prep, area, title_h, y_area, strip, headroom, outside);
-        let mut x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true);
-        if fig.x_whole && fig.x_scale == Scale::Linear {
-            // Ticks are multiples of a 1-2-5 step: those of a step below 1 at fractions go,
-            // unless the range holds no whole number at all.
-            let whole = |t: &Tick| (t.pos - t.pos.round()).abs() <= 1e-9 * t.pos.abs().max(1.0);
-            if x_ticks.iter().any(whole) {
-                x_ticks.retain(whole);
-            }
-        }
-        let y_ticks = axis_ticks(fig.y_scale, m.yr, m.plot.h(), false);
+        let x_ticks = axis_ticks(fig.x_scale, m.xr, m.plot.w(), true, fig.x_whole);
+        let y_ticks = axis_ticks(fig.y_scale, m.yr, m.plot.h(), false, false);
         // Room for the widest y tick label and the rotated description.
         let widest = y_ticks
             .iter()

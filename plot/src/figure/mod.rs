@@ -256,7 +256,8 @@ pub struct LineFigure {
     /// Same data-to-pixel scale on both axes (for geometric views; linear axes only).
     pub equal_aspect: bool,
     /// The x values are counts (periods, iterations; linear axes; default false): ticks only
-    /// at whole numbers, so that no tick stands where no sample can be.
+    /// at whole numbers, so that no tick stands where no sample can be (unless the range holds
+    /// fewer than two).
     pub x_whole: bool,
     /// Legend placement (default [`LegendPos::Auto`]).
     pub legend: LegendPos,

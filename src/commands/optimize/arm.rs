@@ -94,7 +94,11 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
     let scheme = parse_scheme(&args.scheme, args.elements)?;
-    let elements = args.elements.unwrap_or(crate::cli::DEFAULT_ELEMENTS);
+    // `--scheme radau` only (refused otherwise above): its element count, defaulted once.
+    let elements = match scheme {
+        bf_optim::ocp::Scheme::Radau { elements } => elements,
+        bf_optim::ocp::Scheme::Lg => crate::cli::DEFAULT_ELEMENTS,
+    };
     check_size(args.points, scheme)?;
     if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
         bail_usage!(

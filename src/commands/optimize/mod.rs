@@ -1074,7 +1074,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         sol.impact_law,
         &sol.modes,
         &sol.phase_durations,
-        args.min_stick.unwrap_or(bf_problem::MIN_STICK),
+        settings.min_stick,
     ) {
         crate::outln!("{h}")?;
     }
