@@ -332,35 +332,37 @@ pub struct SimulateArgs {
     /// Initial ball angular velocity ω(0) (rad/s, world axes) [default: 0,0,0].
     #[arg(long, allow_hyphen_values = true)]
     pub omega0: Option<String>,
-    /// Initial mode: free, stick or slip (contact modes need h(q0) ≈ 0).
-    #[arg(long, default_value = "free")]
-    pub mode0: String,
+    /// Initial mode: free, stick or slip (contact modes need h(q0) ≈ 0) [default: free; with
+    /// --init, the file's mode].
+    #[arg(long)]
+    pub mode0: Option<String>,
     /// Initial state file (JSON): `{"q":[..],"qd":[..],"omega":[..],"mode":"free"}`; `qd`,
     /// `omega` and `mode` are optional. A `solution.json` of `optimize` gives its own initial
     /// state and first mode (replay it with `--torques` of its `torques.csv`). --q0/--qd0/--omega0 override its entries, and so does
-    /// --mode0 when it is not `free` (the default).
+    /// --mode0.
     #[arg(long)]
     pub init: Option<PathBuf>,
     /// End time (s) [default: 10; with --torques, the series' last time where it is after the
-    /// start; for an arm's `solution.json` given with --init, its duration]. Past the end of a
-    /// --torques series its last torque is held, which the run warns about (`torques_held`).
+    /// start; for an arm's `solution.json` given with --init and no --torques, its duration].
+    /// Past the end of a --torques series its last torque is held, which the run warns about
+    /// (`torques_held`).
     #[arg(long, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Integrator: dopri5 or rk4.
     #[arg(long, default_value = "dopri5")]
     pub integrator: String,
-    /// Relative tolerance of the adaptive integrator (dopri5).
-    #[arg(long, default_value_t = DEFAULT_RTOL, allow_hyphen_values = true, value_parser = positive)]
-    pub rtol: f64,
+    /// Relative tolerance of the adaptive integrator (dopri5) [default: 1e-8].
+    #[arg(long, allow_hyphen_values = true, value_parser = positive)]
+    pub rtol: Option<f64>,
     /// Absolute tolerance of the adaptive integrator (dopri5) [default: 1e-2 · rtol].
     #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub atol: Option<f64>,
-    /// Fixed step of rk4 (s).
-    #[arg(long, default_value_t = DEFAULT_STEP, allow_hyphen_values = true, value_parser = positive)]
-    pub step: f64,
-    /// Largest step of dopri5 (s).
-    #[arg(long, default_value_t = DEFAULT_H_MAX, allow_hyphen_values = true, value_parser = positive)]
-    pub h_max: f64,
+    /// Fixed step of rk4 (s) [default: 0.001].
+    #[arg(long, allow_hyphen_values = true, value_parser = positive)]
+    pub step: Option<f64>,
+    /// Largest step of dopri5 (s) [default: 0.05].
+    #[arg(long, allow_hyphen_values = true, value_parser = positive)]
+    pub h_max: Option<f64>,
     /// Step limit (accepted + rejected); the run stops with an error when it is reached, and a
     /// run that needs more steps (--t-end over --h-max or --step) is refused up front.
     #[arg(long, default_value_t = 10_000_000, allow_hyphen_values = true, value_parser = positive_whole)]
@@ -375,9 +377,10 @@ pub struct SimulateArgs {
     pub max_time: Option<f64>,
     /// Impact law: newton, stick, max-dissipation, min-slip (or normal-impulse). Newton's law
     /// (eq. 39, the paper's choice and the default) can raise the energy at an impact; each
-    /// such impact is reported as a warning. stick, max-dissipation and min-slip dissipate.
-    #[arg(long, default_value = "newton")]
-    pub impact_law: String,
+    /// such impact is reported as a warning. stick, max-dissipation and min-slip dissipate
+    /// [default: newton].
+    #[arg(long)]
+    pub impact_law: Option<String>,
     /// Disable the projection of h and of the velocity constraint after contact steps (the
     /// drift is then only bounded by the integrator tolerance and the contact tolerance).
     #[arg(long)]
@@ -771,11 +774,34 @@ pub const DEFAULT_H_MAX: f64 = 0.05;
 /// The end time of a `simulate` run when neither `--t-end` nor an arm's solution gives one (s).
 pub const DEFAULT_T_END: f64 = 10.0;
 
+/// `simulate --impact-law` when not given: Newton's law (eq. 39), the paper's.
+pub const DEFAULT_IMPACT_LAW: &str = "newton";
+
 impl SimulateArgs {
     /// The end time of a run without a `--torques` series: `--t-end`, or [`DEFAULT_T_END`]
     /// (`simulate` ends a series' run with the series unless `--t-end` is given).
     pub fn t_end(&self) -> f64 {
         self.t_end.unwrap_or(DEFAULT_T_END)
+    }
+
+    /// `--rtol`, or [`DEFAULT_RTOL`].
+    pub fn rtol(&self) -> f64 {
+        self.rtol.unwrap_or(DEFAULT_RTOL)
+    }
+
+    /// `--step`, or [`DEFAULT_STEP`].
+    pub fn step(&self) -> f64 {
+        self.step.unwrap_or(DEFAULT_STEP)
+    }
+
+    /// `--h-max`, or [`DEFAULT_H_MAX`].
+    pub fn h_max(&self) -> f64 {
+        self.h_max.unwrap_or(DEFAULT_H_MAX)
+    }
+
+    /// `--impact-law`, or [`DEFAULT_IMPACT_LAW`].
+    pub fn impact_law(&self) -> &str {
+        self.impact_law.as_deref().unwrap_or(DEFAULT_IMPACT_LAW)
     }
 }
 

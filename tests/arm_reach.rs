@@ -390,6 +390,29 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
         err.contains("--pd-track") && err.contains("no ball"),
         "{err}"
     );
+    // What drives the arm from the solution's start sets the run's end: a --pd law runs over
+    // the solution's duration, a --torques series to its own last time.
+    let solution = out.join("solution.json");
+    let t_final_of = |extra: &[&str], into: &Path| {
+        let mut args = vec!["simulate", "--init", solution.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", into.to_str().unwrap()]);
+        let o = run(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        json(&into.join("summary.json"))["t_final"]
+            .as_f64()
+            .unwrap()
+    };
+    let t = t_final_of(&["--pd", "0,0"], &dir.join("pd"));
+    assert!((t - duration).abs() < 1e-9, "{t} against {duration}");
+    let series = dir.join("series.csv");
+    let series_end = 0.3 * duration;
+    std::fs::write(&series, format!("t,tau1,tau2\n0,0,0\n{series_end},0,0\n")).unwrap();
+    let t = t_final_of(
+        &["--torques", series.to_str().unwrap()],
+        &dir.join("series"),
+    );
+    assert!((t - series_end).abs() < 1e-9, "{t} against {series_end}");
     // Nor can an arm's solution warm-start a finger's problem: the file is named for what it
     // is, not for the internals file it never had.
     let o = run(&[
@@ -643,7 +666,7 @@ fn torque_hull_errors_name_the_option() {
         ),
         (
             vec!["--problem", "periodic-qc", "--torque-hull", "2"],
-            "--torque-hull: only `--problem reach-arm` takes it",
+            "--torque-hull: --problem periodic-qc moves a finger on a ball (only --problem reach-arm takes it)",
         ),
         // The ball's options have nothing to act on, and no search hops.
         (
@@ -666,7 +689,7 @@ fn torque_hull_errors_name_the_option() {
                 "--hops",
                 "4",
             ],
-            "--hops: not available with --problem reach-arm",
+            "--hops: --problem reach-arm is one direct Radau solve",
         ),
     ] {
         let mut all = vec!["optimize"];

@@ -88,37 +88,67 @@ fn every_option_of_every_command_has_its_entry() {
 #[test]
 fn stated_defaults_are_the_programs() {
     let text = markdown_reference();
-    // `optimize`'s own section: another command's option of the same name is not checked.
-    let section = {
-        let start = text.find("## `optimize`\n").expect("optimize's section");
+    // A command's own section: another command's option of the same name is not checked.
+    let section = |command: &str| -> &str {
+        let start = text
+            .find(&format!("## `{command}`\n"))
+            .unwrap_or_else(|| panic!("{command}'s section"));
         let rest = &text[start + 1..];
         &rest[..rest.find("\n## ").unwrap_or(rest.len())]
     };
-    let entry = |option: &str| -> &str {
+    let entry = |command: &str, option: &str| -> &str {
+        let section = section(command);
         let start = section
             .find(&format!("\n- `{option} "))
-            .unwrap_or_else(|| panic!("no entry for {option}"));
+            .unwrap_or_else(|| panic!("no entry for {command} {option}"));
         let rest = &section[start + 1..];
         &rest[..rest.find('\n').unwrap_or(rest.len())]
     };
-    for (option, default) in [
-        ("--elements", ball_finger::cli::DEFAULT_ELEMENTS.to_string()),
+    for (command, option, default) in [
         (
+            "optimize",
+            "--elements",
+            ball_finger::cli::DEFAULT_ELEMENTS.to_string(),
+        ),
+        (
+            "optimize",
             "--refine-rounds",
             ball_finger::cli::DEFAULT_REFINE_ROUNDS.to_string(),
         ),
-        ("--min-stick", bf_problem::MIN_STICK.to_string()),
+        ("optimize", "--min-stick", bf_problem::MIN_STICK.to_string()),
         (
+            "optimize",
             "--cone-margin",
             bf_problem::ProblemSettings::default()
                 .cone_margin
                 .to_string(),
         ),
+        (
+            "simulate",
+            "--rtol",
+            format!("{:e}", ball_finger::cli::DEFAULT_RTOL),
+        ),
+        (
+            "simulate",
+            "--step",
+            ball_finger::cli::DEFAULT_STEP.to_string(),
+        ),
+        (
+            "simulate",
+            "--h-max",
+            ball_finger::cli::DEFAULT_H_MAX.to_string(),
+        ),
+        (
+            "simulate",
+            "--impact-law",
+            ball_finger::cli::DEFAULT_IMPACT_LAW.to_string(),
+        ),
+        ("simulate", "--mode0", "free".to_string()),
     ] {
+        let entry = entry(command, option);
         assert!(
-            entry(option).contains(&format!("[default: {default}]")),
-            "{option}: {}",
-            entry(option)
+            entry.contains(&format!("[default: {default}")),
+            "{command} {option}: {entry}"
         );
     }
 }

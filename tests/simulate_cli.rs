@@ -306,6 +306,18 @@ fn cli_bad_inputs_give_clear_errors() {
             vec!["--h-max does not apply to --integrator rk4"],
             2,
         ),
+        // Given at its default value, the other integrator's option is still given, and
+        // still ignored by this one.
+        (
+            vec!["--step", "0.001"],
+            vec!["--step does not apply to --integrator dopri5"],
+            2,
+        ),
+        (
+            vec!["--integrator", "rk4", "--rtol", "1e-8"],
+            vec!["--rtol does not apply to --integrator rk4"],
+            2,
+        ),
         (
             vec!["--integrator", "rk4", "--atol", "1e-9"],
             vec!["--atol does not apply"],
@@ -313,6 +325,11 @@ fn cli_bad_inputs_give_clear_errors() {
         ),
         (
             vec!["--scene", "scenes/puma560.toml", "--impact-law", "stick"],
+            vec!["--impact-law", "no ball"],
+            2,
+        ),
+        (
+            vec!["--scene", "scenes/puma560.toml", "--impact-law", "newton"],
             vec!["--impact-law", "no ball"],
             2,
         ),

@@ -76,6 +76,24 @@ pub enum ChainEnd {
     Tip,
 }
 
+impl ChainEnd {
+    /// The command-line flag that names this end (`--base`, `--tip`).
+    pub fn flag(self) -> &'static str {
+        match self {
+            ChainEnd::Base => "--base",
+            ChainEnd::Tip => "--tip",
+        }
+    }
+
+    /// The scene key that names this end (`base_link`, `tip_link`).
+    pub fn key(self) -> &'static str {
+        match self {
+            ChainEnd::Base => "base_link",
+            ChainEnd::Tip => "tip_link",
+        }
+    }
+}
+
 impl std::fmt::Display for ChainEnd {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {

@@ -253,46 +253,29 @@ pub fn urdf_scene_text(urdf: &str, file: &str, choice: &ChainChoice) -> Result<S
     urdf_scene(urdf, file, choice).map(|(text, _)| text)
 }
 
-/// Unknown chain links, all given on the command line (`--base`/`--tip`): a mistake in the
-/// command line (exit status 2), named by its flags. Other errors pass unchanged.
-fn blame_flag(e: SpecError) -> SpecError {
-    match e {
-        SpecError::UnknownLink(u) => flag_error(&u, &u.unknown),
-        e => e,
-    }
-}
-
-/// The flag that gives the chain end `end`.
-fn flag_of(end: ChainEnd) -> &'static str {
-    match end {
-        ChainEnd::Base => "--base",
-        ChainEnd::Tip => "--tip",
-    }
-}
-
-/// The command-line error of the unknown ends `flagged` of `u` (each given by its flag),
-/// located at the first one's flag and naming every one.
-fn flag_error(u: &UnknownLink, flagged: &[(ChainEnd, String)]) -> SpecError {
-    let mut message = String::new();
-    for (i, (end, name)) in flagged.iter().enumerate() {
-        if i == 0 {
-            let _ = write!(message, "{name:?} is not a link of the robot");
-        } else {
-            let _ = write!(message, ", nor is {} {name:?}", flag_of(*end));
-        }
+/// The command-line error (exit status 2) of the ends of `u` that `choice` gave by flag
+/// (`--base`/`--tip`), located at the first one's flag and naming every one; `None` when no
+/// unknown end came from the command line (a scene's key named it).
+fn flag_error(u: &UnknownLink, choice: &ChainChoice) -> Option<SpecError> {
+    let given = |end: ChainEnd| match end {
+        ChainEnd::Base => choice.base.is_some(),
+        ChainEnd::Tip => choice.tip.is_some(),
+    };
+    let mut flagged = u.unknown.iter().filter(|(end, _)| given(*end));
+    let (first, name) = flagged.next()?;
+    let mut message = format!("{name:?} is not a link of the robot");
+    for (end, name) in flagged {
+        let _ = write!(message, ", nor is {} {name:?}", end.flag());
     }
     let _ = write!(message, " (links: {:?})", u.links);
-    SpecError::At {
+    Some(SpecError::At {
         kind: SpecErrorKind::ChainChoice,
         file: u.file.clone(),
         line: 1,
         column: 1,
-        path: flagged
-            .first()
-            .map_or("--base", |(end, _)| flag_of(*end))
-            .to_string(),
+        path: first.flag().to_string(),
         message,
-    }
+    })
 }
 
 fn urdf_scene(
@@ -307,7 +290,10 @@ fn urdf_scene(
         choice.tip.as_deref(),
         None,
     )
-    .map_err(blame_flag)?;
+    .map_err(|e| match e {
+        SpecError::UnknownLink(u) => flag_error(&u, choice).unwrap_or(SpecError::UnknownLink(u)),
+        e => e,
+    })?;
     let mut out = String::new();
     let _ = writeln!(
         out,
@@ -445,36 +431,17 @@ fn expand(
         get("nonphysical_inertia").as_deref(),
     )
     .map_err(|e| match e {
-        SpecError::UnknownLink(u) => {
-            // The command line's mistake first (exit status 2), then the scene's key.
-            let given = |end: &ChainEnd| match end {
-                ChainEnd::Base => choice.base.is_some(),
-                ChainEnd::Tip => choice.tip.is_some(),
-            };
-            let flagged: Vec<(ChainEnd, String)> = u
-                .unknown
-                .iter()
-                .filter(|(end, _)| given(end))
-                .cloned()
-                .collect();
-            match flagged.is_empty() {
-                false => flag_error(&u, &flagged),
-                true => {
-                    let (end, name) = &u.unknown[0];
-                    let key = match end {
-                        ChainEnd::Base => "base_link",
-                        ChainEnd::Tip => "tip_link",
-                    };
-                    ix.invalid(
-                        key,
-                        format!(
-                            "{name:?} is not a link of the URDF {file} (links: {:?})",
-                            u.links
-                        ),
-                    )
-                }
-            }
-        }
+        // The command line's mistake first (exit status 2), then the scene's key.
+        SpecError::UnknownLink(u) => flag_error(&u, choice).unwrap_or_else(|| {
+            let (end, name) = &u.unknown[0];
+            ix.invalid(
+                end.key(),
+                format!(
+                    "{name:?} is not a link of the URDF {file} (links: {:?})",
+                    u.links
+                ),
+            )
+        }),
         e => e,
     })?;
     let has_gravity = table.iter().any(|(k, _)| k.get_ref().as_ref() == "gravity");

@@ -504,15 +504,19 @@ pub fn read_chain(
             .filter(move |c| c.is_element() && c.tag_name().name() == tag)
     };
     // The chain's ends first: a name the caller gave wrongly is reported before anything in
-    // the file, so that it is blamed on whoever gave it.
-    let names: Vec<String> = elems("link")
-        .filter_map(|n| n.attribute("name").map(str::to_string))
-        .collect();
-    let unknown: Vec<(ChainEnd, String)> = [(ChainEnd::Base, base), (ChainEnd::Tip, tip)]
+    // the file, so that it is blamed on whoever gave it. An end found here is the index of its
+    // `<link>` element, which is its index in `links` below (one link per element, in order).
+    let names: Vec<Option<&str>> = elems("link").map(|n| n.attribute("name")).collect();
+    let index_of = |name: &str| names.iter().position(|k| *k == Some(name));
+    let (base_at, tip_at) = (
+        base.map(|b| (b, index_of(b))),
+        tip.map(|t| (t, index_of(t))),
+    );
+    let unknown: Vec<(ChainEnd, String)> = [(ChainEnd::Base, base_at), (ChainEnd::Tip, tip_at)]
         .into_iter()
-        .filter_map(|(end, name)| {
-            name.filter(|n| !names.iter().any(|k| k == n))
-                .map(|n| (end, n.to_string()))
+        .filter_map(|(end, at)| match at {
+            Some((name, None)) => Some((end, name.to_string())),
+            _ => None,
         })
         .collect();
     if !unknown.is_empty() {
@@ -522,7 +526,7 @@ pub fn read_chain(
             line: p.row as usize,
             column: p.col as usize,
             unknown,
-            links: names,
+            links: names.iter().flatten().map(|n| n.to_string()).collect(),
         })));
     }
     let mut links: Vec<Link> = Vec::new();
@@ -605,24 +609,13 @@ pub fn read_chain(
             .filter(|&j| joints[j].parent == l)
             .collect()
     };
-    // Every given end names a link (checked above), so a miss here is the reader's own.
-    let find = |name: &str| -> Result<usize, SpecError> {
-        links.iter().position(|k| k.name == name).ok_or_else(|| {
-            rd.err(
-                root.range().start,
-                "robot",
-                "",
-                format!("internal: link {name:?} was checked but not read"),
-            )
-        })
+    let base_ix = match base_at {
+        Some((_, Some(ix))) => ix,
+        _ => roots[0],
     };
-    let base_ix = match base {
-        Some(b) => find(b)?,
-        None => roots[0],
-    };
-    let tip_ix = match tip {
-        Some(t) => find(t)?,
-        None => {
+    let tip_ix = match tip_at {
+        Some((_, Some(ix))) => ix,
+        _ => {
             let mut l = base_ix;
             loop {
                 let c = children(l);

@@ -44,46 +44,6 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
              no built-in scene"
         );
     };
-    for (opt, given) in [
-        ("--strategy", args.strategy.is_some()),
-        ("--starts", args.starts.is_some()),
-        ("--seed", args.seed.is_some()),
-        ("--shard", args.shard.is_some()),
-        ("--refine", args.refine.is_some()),
-        ("--warm-start", args.warm_start.is_some()),
-        ("--dual-regularization", args.dual_regularization.is_some()),
-        ("--kkt-residual-ratio", args.kkt_residual_ratio),
-        (
-            "--curvature-extrapolation",
-            args.curvature_extrapolation.is_some(),
-        ),
-        (
-            "--extrapolate-every-barrier",
-            args.extrapolate_every_barrier,
-        ),
-        ("--proximal-weight", args.proximal_weight.is_some()),
-        ("--hops", args.hops.is_some()),
-        ("--hop-scale", args.hop_scale.is_some()),
-        ("--refine-rounds", args.refine_rounds.is_some()),
-    ] {
-        if given {
-            bail_usage!("{opt}: not available with --problem {REACH_ARM} (one direct Radau solve)");
-        }
-    }
-    // The ball's options: an arm's motion has no contact to plan.
-    for (opt, given) in [
-        ("--impact-law", args.impact_law.is_some()),
-        ("--torque-margin", args.torque_margin.is_some()),
-        ("--approach-clearance", args.approach_clearance.is_some()),
-        ("--epsilon", args.epsilon.is_some()),
-        ("--min-stick", args.min_stick.is_some()),
-        ("--cone-margin", args.cone_margin.is_some()),
-        ("--impulse-cone", args.impulse_cone),
-    ] {
-        if given {
-            bail_usage!("{opt}: --problem {REACH_ARM} moves an arm without a ball");
-        }
-    }
     if args.scheme != "radau" {
         bail_usage!(
             "--scheme {}: --problem {REACH_ARM} is transcribed with radau only",

@@ -39,6 +39,7 @@ use bf_problem::{
 use std::path::Path;
 
 mod arm;
+mod parts;
 mod progress;
 mod shards;
 
@@ -212,46 +213,6 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
 /// ([`PlanFor::of`]).
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     let problem = parse_problem(problem_arg(args))?;
-    // An option that poses a part the problem does not have would be recorded in
-    // solution.json as if it had shaped the plan: it is refused instead.
-    for (opt, given, applies, part) in [
-        (
-            "--impact-law",
-            args.impact_law.is_some(),
-            problem.has_impact(),
-            "impact",
-        ),
-        (
-            "--impulse-cone",
-            args.impulse_cone,
-            problem.has_impact(),
-            "impact",
-        ),
-        (
-            "--cone-margin",
-            args.cone_margin.is_some(),
-            problem.has_impact(),
-            "stick phase",
-        ),
-        (
-            "--approach-clearance",
-            args.approach_clearance.is_some(),
-            problem.is_periodic(),
-            "periodic approach",
-        ),
-        (
-            "--min-stick",
-            args.min_stick.is_some(),
-            problem.is_periodic(),
-            "stick phase of free duration",
-        ),
-    ] {
-        if given && !applies {
-            bail_usage!(
-                "{opt}: problem `{problem}` has no {part} (only the problems with one take it)"
-            );
-        }
-    }
     if args.points < 2 {
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
@@ -847,21 +808,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     args.chain
         .check_given_with(args.scene.as_deref(), "--scene")?;
     if problem_arg(args) == REACH_ARM {
+        parts::refuse_missing_parts(args, parts::Posed::ReachArm)?;
         return run_reach_arm(args, opts);
     }
-    for (opt, given) in [
-        ("--start", args.start.is_some()),
-        ("--target", args.target.is_some()),
-        ("--effort-weight", args.effort_weight.is_some()),
-        ("--acceleration-weight", args.acceleration_weight.is_some()),
-        ("--duration", args.duration.is_some()),
-        ("--torque-hull", args.torque_hull.is_some()),
-    ] {
-        if given {
-            bail_usage!("{opt}: only `--problem {REACH_ARM}` takes it");
-        }
-    }
     let name = parse_problem(problem_arg(args))?;
+    parts::refuse_missing_parts(args, parts::Posed::Catalogue(name))?;
     let settings = settings_from_args(args)?;
     // Without `--hops` the global search runs for the periodic problems only (the others'
     // default is the continuation; an explicit multi-start of them keeps its best start).

@@ -40,14 +40,9 @@ pub(super) fn run_arm(
     } else {
         CliInput::Arm(n)
     };
-    // A replayed solution ends with its duration unless --t-end says otherwise.
-    let end = match (&replay, args.t_end) {
-        (Some((_, _, duration)), None) => super::RunEnd {
-            t: *duration,
-            by: super::EndBy::Solution,
-        },
-        _ => super::run_end(args, &inp),
-    };
+    // A replayed solution ends with its duration unless --t-end or a --torques series says
+    // otherwise, also when --pd drives the arm from its start.
+    let end = super::run_end(args, &inp, replay.as_ref().map(|(_, _, d)| *d));
     let t_end = end.t;
     check_t_end(t_end)?;
     if args.pd_track.is_some() || args.pd_track_contact {
@@ -59,8 +54,8 @@ pub(super) fn run_arm(
     }
     for (opt, given) in [
         ("--omega0", args.omega0.is_some()),
-        ("--mode0", args.mode0 != "free"),
-        ("--impact-law", args.impact_law != "newton"),
+        ("--mode0", args.mode0.is_some()),
+        ("--impact-law", args.impact_law.is_some()),
         ("--no-projection", args.no_projection),
     ] {
         if given {

@@ -119,17 +119,17 @@ fn parse_mode(name: &str) -> Result<Mode> {
 pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
     let method = match args.integrator.as_str() {
         "dopri5" => Method::Dopri5,
-        "rk4" => Method::Rk4 { h: args.step },
+        "rk4" => Method::Rk4 { h: args.step() },
         other => bail_usage!("--integrator: unknown integrator `{other}`; expected dopri5 or rk4"),
     };
-    // An option of the other integrator would be ignored: refused instead. Given at its
-    // default value it changes nothing and passes.
+    // An option of the other integrator would be ignored: refused instead, also at its
+    // default value (given is given).
     let foreign: &[(&str, bool)] = match method {
-        Method::Dopri5 => &[("--step", args.step != crate::cli::DEFAULT_STEP)],
+        Method::Dopri5 => &[("--step", args.step.is_some())],
         Method::Rk4 { .. } => &[
-            ("--rtol", args.rtol != crate::cli::DEFAULT_RTOL),
+            ("--rtol", args.rtol.is_some()),
             ("--atol", args.atol.is_some()),
-            ("--h-max", args.h_max != crate::cli::DEFAULT_H_MAX),
+            ("--h-max", args.h_max.is_some()),
         ],
     };
     if let Some((opt, _)) = foreign.iter().find(|(_, given)| *given) {
@@ -149,26 +149,27 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
             )))
         }
     };
-    pos("--rtol", args.rtol)?;
-    if args.rtol > bf_sim::MAX_RTOL {
+    let rtol = args.rtol();
+    pos("--rtol", rtol)?;
+    if rtol > bf_sim::MAX_RTOL {
         return Err(crate::errors::usage(format!(
             "--rtol must be at most {} (a relative error of 10 % per step; got {})",
             bf_sim::MAX_RTOL,
-            crate::cli::shown(args.rtol)
+            crate::cli::shown(rtol)
         )));
     }
-    pos("--step", args.step)?;
-    pos("--h-max", args.h_max)?;
-    let atol = args.atol.unwrap_or(1e-2 * args.rtol);
+    pos("--step", args.step())?;
+    pos("--h-max", args.h_max())?;
+    let atol = args.atol.unwrap_or(1e-2 * rtol);
     pos("--atol", atol)?;
     if let Some(dt) = args.output_dt {
         pos("--output-dt", dt)?;
     }
     let set = SimSettings {
         method,
-        rtol: args.rtol,
+        rtol,
         atol,
-        h_max: args.h_max,
+        h_max: args.h_max(),
         max_steps: args.max_steps,
         output_dt: args.output_dt,
         ..SimSettings::default()
@@ -245,7 +246,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                 .get("impact_law")
                 .and_then(|s| s.as_str())
                 .unwrap_or("stick");
-            let run_law = parse_impact_law(&args.impact_law).map(|l| l.name());
+            let run_law = parse_impact_law(args.impact_law()).map(|l| l.name());
             let modes = v.get("modes").and_then(|m| m.as_array());
             let impacts = modes.is_some_and(|m| m.iter().any(|m| m != "free"));
             if impacts && run_law.is_ok_and(|l| l != planned) {
@@ -253,7 +254,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                     "warning: --init {}: the solution was planned with the {planned} impact \
                      law, this run uses {} (--impact-law {planned} replays it under its own)",
                     path.display(),
-                    args.impact_law
+                    args.impact_law()
                 );
             }
             let (sq, sqd, sw, smode) = crate::pipeline::solution_io::initial_state_of(&v)
@@ -311,11 +312,11 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
     if let Some(s) = &args.omega0 {
         w.copy_from_slice(&parse_list("--omega0", s, Some(3))?);
     }
-    // --mode0 has a default, so the file's mode wins unless --mode0 is given explicitly as
-    // something other than the default.
-    let mode = match (mode, args.mode0.as_str()) {
-        (Some(m), "free") => parse_mode(&m)?,
-        (_, m) => parse_mode(m).map_err(|e| crate::errors::usage(format!("--mode0: {e}")))?,
+    // --mode0, given, overrides the file's mode; neither starts free.
+    let mode = match (mode, args.mode0.as_deref()) {
+        (_, Some(m)) => parse_mode(m).map_err(|e| crate::errors::usage(format!("--mode0: {e}")))?,
+        (Some(m), None) => parse_mode(&m)?,
+        (None, None) => Mode::Free,
     };
     Ok((
         mode,
@@ -588,9 +589,9 @@ fn run_contact<const N: usize>(
 ) -> Result<()> {
     let set = settings(args)?;
     let inp = input(args, &scene.name, N)?;
-    let end = run_end(args, &inp);
+    let end = run_end(args, &inp, None);
     check_limits(args, &set, end)?;
-    let law = parse_impact_law(&args.impact_law)?;
+    let law = parse_impact_law(args.impact_law())?;
     let (mode0, x0) = initial_state::<N>(args)?;
     check_initial_angles(args, scene, x0.q.as_slice())?;
     if let (CliInput::Series(s), Some(path)) = (&inp, &args.torques) {
@@ -629,22 +630,27 @@ fn run_contact<const N: usize>(
 }
 
 /// Where a run ends: `--t-end`, or the end of its `--torques` series or replayed solution
-/// where it is after the start (a replay of a solution's torques ends with them), or
-/// [`crate::cli::DEFAULT_T_END`].
-pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput) -> RunEnd {
-    match (args.t_end, inp.series_end().filter(|&t| t > 0.0)) {
-        (Some(t), _) => RunEnd { t, by: EndBy::Flag },
-        (None, Some(t)) => RunEnd {
-            t,
-            by: match inp {
-                CliInput::Replay(_) => EndBy::Solution,
-                _ => EndBy::Series,
-            },
+/// where it is after the start (a replay of a solution's torques ends with them), or the
+/// `solution` duration of an arm's `--init` solution (when `--pd` drives the arm from its
+/// start), or [`crate::cli::DEFAULT_T_END`].
+pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput, solution: Option<f64>) -> RunEnd {
+    let by_input = inp.series_end().filter(|&t| t > 0.0).map(|t| RunEnd {
+        t,
+        by: match inp {
+            CliInput::Replay(_) => EndBy::Solution,
+            _ => EndBy::Series,
         },
-        (None, None) => RunEnd {
+    });
+    let by_solution = solution.map(|t| RunEnd {
+        t,
+        by: EndBy::Solution,
+    });
+    match args.t_end {
+        Some(t) => RunEnd { t, by: EndBy::Flag },
+        None => by_input.or(by_solution).unwrap_or(RunEnd {
             t: crate::cli::DEFAULT_T_END,
             by: EndBy::Default,
-        },
+        }),
     }
 }
 
@@ -907,12 +913,12 @@ fn run_model<K: Kernels<N>, const N: usize>(
 
 fn describe_method(name: &str, args: &SimulateArgs) -> String {
     if name == "rk4" {
-        format!("rk4, step {} s", args.step)
+        format!("rk4, step {} s", args.step())
     } else {
         format!(
             "dopri5, rtol {:e}, atol {:e}",
-            args.rtol,
-            args.atol.unwrap_or(1e-2 * args.rtol)
+            args.rtol(),
+            args.atol.unwrap_or(1e-2 * args.rtol())
         )
     }
 }
