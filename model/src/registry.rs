@@ -142,6 +142,8 @@ fn match_by(
     let compiled = Scene::from_toml_str(entry.toml, entry.name).ok()?;
     let mut p = Vec::with_capacity(entry.param_names.len());
     let mut mine = scene.clone();
+    // A default ball inertia follows the radius and mass set below, as it follows the
+    // compiled kernels' runtime values (`Constants::with_runtime_parameters`).
     mine.runtime_parameters = compiled.runtime_parameters.clone();
     for (name, &default) in entry.param_names.iter().zip(entry.param_defaults) {
         p.push(scene.constant(name)?);
@@ -155,9 +157,9 @@ fn match_by(
 /// parameter and lists the valid names. The scene with each value set passes the scene file's
 /// validation (`Scene::validate`: masses and radii > 0, inertias positive definite, the scale
 /// floor), the error naming the parameter, its value and the failed rule; on any error `out`
-/// is unchanged. A ball whose inertia is the default (2/5) m r² keeps the inertia of the
-/// file's radius and mass (the compiled kernels' runtime `ball.radius` changes the
-/// contact geometry only).
+/// is unchanged. A ball whose inertia is the default (2/5) m r² has that of the new radius and
+/// mass, as a scene file with those values would (and as [`bf_scene::Constants`] gives the
+/// compiled kernels' runtime `ball.radius`).
 pub fn set_parameters(out: &mut Scene, assignments: &[(String, f64)]) -> Result<()> {
     // Applied to a copy, so a refused value leaves `out` as it was.
     let mut next = out.clone();
@@ -247,10 +249,6 @@ fn set_constant(scene: &mut Scene, name: &str, value: f64) -> Result<()> {
         ["ball", rest @ ..] => {
             let err = unknown();
             let b = scene.ball.as_mut().ok_or(err)?;
-            // Keep the file's inertia when the radius or mass changes (see `set_parameters`).
-            if b.inertia.is_none() {
-                b.inertia = Some(InertiaSpec::Full(b.inertia_matrix()));
-            }
             match rest {
                 ["radius"] => b.radius = value,
                 ["mass"] => b.mass = value,

@@ -177,9 +177,18 @@ fn runtime_parameters_keep_the_compiled_kernels_and_reach_the_physics() {
     let (model, source) = fixtures::model_for_scene(&human).unwrap();
     assert_eq!(source, KernelSource::Compiled);
     assert_eq!(model.params().ball_radius(), 0.8);
-    // the ball inertia stays the file's (2/5) m r² with r = 1 m
+    // The default ball inertia (2/5) m r² is that of the new radius, as in a scene file that
+    // gives r = 0.8 m (it used to stay the file's r = 1 m), through the scene and through the
+    // compiled kernels' own parameter vector alike.
     let base = fixtures::human_scene().unwrap();
-    assert_eq!(model.params().ball_inertia(), base.params().ball_inertia());
+    let small = parse(&HUMAN_TOML.replacen("radius = 1.0", "radius = 0.8", 1));
+    let file = bf_model::Model::from_kernels(InterpretedKernels::new(&small).unwrap()).unwrap();
+    assert_eq!(model.params().ball_inertia(), file.params().ball_inertia());
+    let by_p =
+        bf_model::Model::from_kernels(bf_model::HumanKernels::with_params(&p).unwrap()).unwrap();
+    assert_eq!(by_p.params(), model.params());
+    let ratio = model.params().ball_inertia()[(0, 0)] / base.params().ball_inertia()[(0, 0)];
+    assert!((ratio - 0.64).abs() < 1e-12, "{ratio}");
     // the interpreter on the same modified scene gives the same contact
     let interp = InterpretedKernels::new(&human).unwrap();
     assert_identical(&interp, model.kernels());
@@ -201,6 +210,12 @@ fn bad_parameters_and_scenes_are_errors_naming_them() {
     );
     let e = set_parameters(&mut human, &[("ball.radius".into(), f64::NAN)]).unwrap_err();
     assert!(e.to_string().contains("finite"), "{e}");
+    // A radius whose default inertia (2/5) m r² underflows is refused as in a scene file.
+    let e = set_parameters(&mut human, &[("ball.radius".into(), 1e-200)]).unwrap_err();
+    assert!(
+        e.to_string().contains("ball.radius") && e.to_string().contains("inertia"),
+        "{e}"
+    );
     let mut paper = parse(PAPER_TOML);
     let e = set_parameters(&mut paper, &[("ball.radius".into(), 1.0)]).unwrap_err();
     assert!(e.to_string().contains("no runtime parameters"), "{e}");

@@ -2,8 +2,8 @@
 //! expression graph, read once from a [`Scene`] by both the physics layer (bf-model) and the
 //! optimal-control problem (bf-problem):
 //!
-//! - I_b, the ball inertia about its centre (eq. 25; default (2/5) m r² 1), and the radius r
-//!   (eq. 4);
+//! - I_b, the ball inertia about its centre (eq. 25; default (2/5) m r² 1, which follows a
+//!   runtime radius or mass), and the radius r (eq. 4);
 //! - the Coulomb coefficients μ_s (stick cone, eq. 18–19) and μ_k (slip force, eq. 20);
 //! - joint viscous friction μ_v (eq. 24) and ball–socket damping D (eq. 25);
 //! - the joint limits q_min, q_max and torque limits τ_max that the problems use as bounds.
@@ -24,6 +24,11 @@ pub struct Constants {
     pub ib: [[f64; 3]; 3],
     /// Ball radius r (m).
     pub radius: f64,
+    /// Ball mass m (kg).
+    pub ball_mass: f64,
+    /// Whether the scene gives I_b; otherwise it is the default (2/5) m r² 1 and follows the
+    /// runtime parameters `ball.radius` and `ball.mass`.
+    pub inertia_given: bool,
     /// Static Coulomb coefficient μ_s.
     pub mu_s: f64,
     /// Kinetic Coulomb coefficient μ_k.
@@ -50,6 +55,8 @@ impl Constants {
             nq: scene.links.len(),
             ib: ball.inertia_matrix(),
             radius: ball.radius,
+            ball_mass: ball.mass,
+            inertia_given: ball.inertia.is_some(),
             mu_s,
             mu_k,
             mu_v,
@@ -75,12 +82,18 @@ impl Constants {
     /// These constants with the values of the runtime parameters `names` (registry names such
     /// as `"ball.radius"`, `"ball.inertia.xy"`, `"friction.mu_s"`) replaced by `values` (same
     /// order). Off-diagonal inertia entries set both symmetric entries; names of constants that
-    /// are not held here (link geometry, masses, ...) are ignored.
+    /// are not held here (link geometry, link masses, ...) are ignored. A default inertia
+    /// (none given by the scene or by `ball.inertia.*`) is that of the solid sphere of the
+    /// runtime radius and mass, as a scene file with those values would have.
     pub fn with_runtime_parameters(mut self, names: &[&str], values: &[f64]) -> Constants {
         for (name, &v) in names.iter().zip(values) {
             let ib = &mut self.ib;
+            if name.starts_with("ball.inertia.") {
+                self.inertia_given = true;
+            }
             match *name {
                 "ball.radius" => self.radius = v,
+                "ball.mass" => self.ball_mass = v,
                 "ball.inertia.xx" => ib[0][0] = v,
                 "ball.inertia.yy" => ib[1][1] = v,
                 "ball.inertia.zz" => ib[2][2] = v,
@@ -93,6 +106,10 @@ impl Constants {
                 "friction.socket_damping" => self.damping = v,
                 _ => {}
             }
+        }
+        if !self.inertia_given {
+            let j = 0.4 * self.ball_mass * self.radius * self.radius;
+            self.ib = [[j, 0.0, 0.0], [0.0, j, 0.0], [0.0, 0.0, j]];
         }
         self
     }

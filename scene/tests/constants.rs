@@ -71,3 +71,24 @@ fn runtime_parameters_override_ball_and_friction_only() {
 fn a_scene_without_a_ball_has_none() {
     assert!(Constants::of(&scene("puma560")).is_none());
 }
+
+/// A default ball inertia, (2/5) m r² 1, follows a runtime radius as a scene file with that
+/// radius would have it; one given by `ball.inertia.*` stays as given.
+#[test]
+fn a_default_ball_inertia_follows_the_runtime_radius() {
+    let base = Constants::of(&scene("paper")).unwrap();
+    assert!(!base.inertia_given);
+    let c = base
+        .clone()
+        .with_runtime_parameters(&["ball.radius"], &[0.5]);
+    let mut file = scene("paper");
+    file.ball.as_mut().unwrap().radius = 0.5;
+    assert_eq!(c, Constants::of(&file).unwrap());
+    assert!((c.ib[1][1] / base.ib[1][1] - 0.25).abs() < 1e-15);
+    let given = base.with_runtime_parameters(&["ball.inertia.yy", "ball.radius"], &[0.003, 0.5]);
+    assert_eq!(given.ib[1][1], 0.003);
+    assert_eq!(
+        given.ib[0][0],
+        Constants::of(&scene("paper")).unwrap().ib[0][0]
+    );
+}
