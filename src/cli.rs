@@ -603,8 +603,9 @@ pub struct OptimizeArgs {
     pub min_stick: Option<f64>,
     /// Impact law of the plan: `newton` (eq. 39, the law of the paper's Sect. 6.2 simulations
     /// and of `track`'s nominal plant: ω unchanged, the finger's post-impact joint velocity
-    /// within 1e-3 rad/s of what Newton's law gives the plant, reaching the ball at 0.1 m/s or
-    /// faster; 3 joints or more) or `stick` (eq. 40, the paper's Sect. 6: the impulse stops the contact
+    /// within 1e-3 rad/s of what Newton's law gives from the same state on the plan's smoothed
+    /// contact (the plant's exact contact adds the smoothing's difference), reaching the ball at
+    /// 0.1 m/s or faster; 3 joints or more) or `stick` (eq. 40, the paper's Sect. 6: the impulse stops the contact
     /// point and spins the ball). A `stick` plan whose stick phase is short spins the ball
     /// mostly by the impact and cannot be executed on a Newton plant. Recorded in
     /// solution.json as `impact_law` [default: `newton` for the periodic problems on a
@@ -626,7 +627,10 @@ pub struct OptimizeArgs {
     #[arg(long)]
     pub impulse_cone: bool,
     /// Share of every joint's torque limit the plan leaves unused, in [0, 1): |τ_i| ≤ (1 − M)
-    /// τ_max,i, so that feedback keeps authority under the limit. Recorded in solution.json as
+    /// τ_max,i at the collocation nodes (between them, and at a phase's end, the control
+    /// polynomial of the element may pass it by a little; the verification reports any excess
+    /// over τ_max itself), so that feedback keeps authority under the limit. Recorded in
+    /// solution.json as
     /// `torque_margin` [default: 0.3 for a `newton` plan of a periodic problem
     /// (docs/closed-loop.md); 0 otherwise].
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
@@ -643,7 +647,10 @@ pub struct OptimizeArgs {
     /// on (the verification's refinements may have refined it already), until the largest
     /// element error estimate is at most TOL (e.g. 1e-4). Each round after the first is solved warm
     /// from the round before in at most 500 iterations (or `--max-iter` if lower); a round
-    /// that does not converge ends the refinement with the round before it.
+    /// that does not converge ends the refinement with the round before it. A refined optimum
+    /// that does not re-integrate within the verification's tolerance goes on to the
+    /// verification's own refinements (`--verify-refinements`); solution.json's `refinement`
+    /// is then the last of them, and its stages list them.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub refine: Option<f64>,
     /// Refinement rounds at most (with `--refine`; refused without it) [default: 8].

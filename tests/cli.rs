@@ -530,6 +530,43 @@ fn optimize_refines_verifies_and_records_it() {
 /// `reach` the direct solve's 30 points verify only once refined, and a `--refine` that
 /// started again from the 30 points met its error estimate there and ended unverified (a
 /// re-integration defect of 8e-3) where the run without it verifies.
+/// A mesh refinement whose error estimate meets its tolerance on a mesh that does not
+/// re-integrate within the verification's (a bang-bang torque clamped next to its switch)
+/// goes on to the verification's refinements: verified, exit 0. It used to end unverified.
+#[test]
+fn an_unverified_refinement_is_refined_until_verified() {
+    let dir = tmpdir("refine-verify");
+    let out = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "direct",
+        "--points",
+        "6",
+        "--elements",
+        "2",
+        "--refine",
+        "1e-6",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{stdout}");
+    assert!(stdout.contains("tolerance met"), "{stdout}");
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    let defect = sol["verification"]["max_defect"].as_f64().unwrap();
+    assert!(
+        defect <= ball_finger::pipeline::verify::VERIFIED_DEFECT,
+        "{defect}"
+    );
+    // Both verification refinements are stages of the solution: the search's, before the
+    // mesh refinement, and the one after it.
+    let stages = sol["strategy"]["refinements"].as_array().unwrap();
+    assert_eq!(stages.len(), 2, "{stages:?}");
+}
+
 #[test]
 fn optimize_refine_starts_from_the_verified_mesh() {
     let points = |dir: &std::path::Path| -> usize {

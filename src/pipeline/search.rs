@@ -765,6 +765,42 @@ fn refine_until_verified(
     }
 }
 
+/// The verification's hp refinements ([`refine_until_verified`], `policy.refine_attempts` of
+/// them) of a solution that a refinement outside the search (`optimize --refine`) left
+/// unverified: the error estimate of a mesh refinement can meet its tolerance on a mesh whose
+/// element-wise re-integration does not (a bang-bang torque whose polynomial overshoots its
+/// bound next to a switch, clamped in the re-integration). `built` is the problem `sol` was
+/// solved on, with its verification attached. Returns where the chain ended (`sol` itself
+/// when no refinement succeeded) and the chain's stage records, which the solution's
+/// strategy report keeps with its other verification refinements. The problem is `None`
+/// only where the chain's end carries none, which no chain started from a built problem does.
+pub fn refine_to_verify(
+    problem: Problem,
+    settings: &ProblemSettings,
+    built: BuiltProblem,
+    sol: OcpSolution,
+    policy: &VerifyPolicy,
+) -> (Option<BuiltProblem>, OcpSolution) {
+    let start = Candidate {
+        index: 0,
+        problem: Some(built),
+        solution: sol,
+    };
+    let chain = refine_until_verified(problem, settings, start, policy, f64::INFINITY, &|| {
+        Some(f64::INFINITY)
+    });
+    let records = chain.records.clone();
+    let Candidate {
+        problem: end_problem,
+        solution: mut sol,
+        ..
+    } = chain.end();
+    if let Some(rep) = &mut sol.strategy {
+        rep.refinements.extend(records);
+    }
+    (end_problem, sol)
+}
+
 /// The stage label of a refinement's record: `label` (the attempt) with the refined point's
 /// re-integration defect, its path checks where one is beyond its allowance, and what the
 /// closed loop made of it: the search ranks a robustness miss below every robust plan, so a

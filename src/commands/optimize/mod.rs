@@ -944,6 +944,33 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         let rounds = args.refine_rounds.unwrap_or(DEFAULT_REFINE_ROUNDS);
         (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, rounds)?;
         sol.verification = None;
+        // A mesh whose error estimate meets `tol` need not re-integrate within the
+        // verification's tolerance: the verification's own hp refinements go on from it, as
+        // they do for any unverified optimum of the search.
+        if args.verify_rtol > 0.0 {
+            sol.verification = verify(&problem, &sol, args.verify_rtol).ok();
+            if sol.verification.is_some() && !is_verified(&sol) {
+                let before = sol.strategy.as_ref().map_or(0, |r| r.refinements.len());
+                let (built, refined) = crate::pipeline::search::refine_to_verify(
+                    name,
+                    &on_its_mesh,
+                    problem,
+                    sol,
+                    &policy,
+                );
+                problem = built.ok_or_else(|| {
+                    anyhow::anyhow!("internal: the refined {name} solve has no problem")
+                })?;
+                sol = refined;
+                if let Some(rep) = &sol.strategy {
+                    let mut added = rep.clone();
+                    added
+                        .refinements
+                        .drain(..before.min(added.refinements.len()));
+                    crate::io::print_out(&added.refinement_lines())?;
+                }
+            }
+        }
     }
     if args.verify_rtol > 0.0 {
         if sol.verification.is_none() {
