@@ -612,10 +612,44 @@ fn errors_name_the_option_file_or_quantity() {
     let dir = tmpdir("names");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    let usage: [(&[&str], &[&str]); 4] = [
+    let usage: [(&[&str], &[&str]); 9] = [
         (
             &["simulate", "--rtol", "-1e-8"],
             &["--rtol", "must be a finite number > 0", "-1e-8"],
+        ),
+        // Tolerances below the f64 rounding that the error estimate can measure, and a largest
+        // step below the adaptive step's floor, are the command line's (they ended as a
+        // "stiff dynamics" failure, an internal `h_min` setting, or an unverified optimum).
+        (
+            &["simulate", "--rtol", "1e-30"],
+            &["--rtol", "at least 1e-14", "1e-30"],
+        ),
+        (
+            &["simulate", "--h-max", "1e-15"],
+            &["--h-max", "at least 1e-14", "1e-15"],
+        ),
+        (
+            &["optimize", "--problem", "reach", "--verify-rtol", "1e-308"],
+            &["--verify-rtol", "1e-14", "1e-308"],
+        ),
+        // An arm's configuration beyond the kernels' angle range names its option (it was
+        // blamed on --scene, as "invalid bounds" of a constraint).
+        (
+            &[
+                "optimize",
+                "--problem",
+                "reach-arm",
+                "--scene",
+                "tests/fixtures/planar2_arm.toml",
+                "--start",
+                "1e20,0",
+            ],
+            &["--start", "beyond ±2²⁰"],
+        ),
+        // A step count beyond f64 is said as such, the step plainly.
+        (
+            &["simulate", "--integrator", "rk4", "--step", "1e-308"],
+            &["--step 1e-308 s"],
         ),
         (
             &["simulate", "--step", "-0.001"],
@@ -642,6 +676,10 @@ fn errors_name_the_option_file_or_quantity() {
     let o = run(&["simulate", "--qd0", "1e300,0,0", "--out", out_s]);
     // The model's own reason: "non-finite C q̇ + g or potential".
     assert_error(&o, 1, &["--qd0 1e300,0,0", "non-finite"]);
+    assert!(!out.exists());
+    // Finite torques whose accelerations overflow name the torque options.
+    let o = run(&["simulate", "--pd", "1e308,0,0", "--out", out_s]);
+    assert_error(&o, 1, &["cannot start", "--pd 1e308,0,0"]);
     assert!(!out.exists());
     let tau = dir.join("huge.csv");
     std::fs::write(&tau, "t,tau1,tau2,tau3\n0,1e300,0,0\n1,1e300,0,0\n").unwrap();

@@ -222,6 +222,8 @@ fn periodic_and_odd_even() {
 #[test]
 fn the_angle_range_is_where_sine_and_cosine_end() {
     let r = bf_codegen::trig::ANGLE_RANGE;
+    // The scene's validation refuses DH angles beyond the same range.
+    assert_eq!(r, bf_scene::MAX_ANGLE);
     for x in [r, -r] {
         let (s, c) = sin_cos(x);
         assert!(s.is_finite() && c.is_finite(), "{x}");

@@ -478,6 +478,18 @@ pub fn check_configuration(scene: &Scene, what: &str, q: &[f64]) -> Result<(), P
                 format!("the {what}'s joint {} is not finite ({v})", i + 1),
             ));
         }
+        // The kernels' sine and cosine are defined within ±2²⁰ rad only.
+        if scene.links[i].joint == JointType::Revolute && v.abs() > bf_scene::MAX_ANGLE {
+            return Err(arm_err(
+                scene,
+                format!(
+                    "the {what}'s joint {} = {v:e} rad is beyond ±2²⁰ = ±{} rad, where the \
+                     kernels' sine and cosine are defined; give the angle modulo 2π",
+                    i + 1,
+                    bf_scene::MAX_ANGLE
+                ),
+            ));
+        }
         if v < lo || v > hi {
             return Err(arm_err(
                 scene,

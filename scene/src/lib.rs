@@ -311,6 +311,10 @@ pub struct Scene {
     pub ocp_kernels: Option<Vec<String>>,
 }
 
+/// Largest |angle| (rad) of a joint or DH angle, 2²⁰: the range in which the kernels' sine
+/// and cosine are defined (bf-codegen's `trig::ANGLE_RANGE`, which a test holds equal).
+pub const MAX_ANGLE: f64 = 1048576.0;
+
 /// Cost kinds of the optimal-control node kernels (`bf_problem::CostKind::tag`).
 pub const OCP_COSTS: &[&str] = &["qc", "cot", "time_effort", "track", "reorient", "spin"];
 

@@ -131,13 +131,29 @@ fn check_nonnegative(ix: &SourceIndex<'_>, path: &str, v: f64) -> Result<(), Spe
 
 fn check_angle(ix: &SourceIndex<'_>, path: &str, a: &Angle) -> Result<(), SpecError> {
     match a {
-        Angle::Radians(x) => check_finite(ix, path, *x),
-        Angle::PiMultiple { den, .. } if *den > 0 => Ok(()),
-        Angle::PiMultiple { num, den } => Err(ix.invalid(
-            path,
-            format!("pi multiple {num}/{den} needs a positive denominator"),
-        )),
+        Angle::Radians(x) => check_finite(ix, path, *x)?,
+        Angle::PiMultiple { den, .. } if *den > 0 => {}
+        Angle::PiMultiple { num, den } => {
+            return Err(ix.invalid(
+                path,
+                format!("pi multiple {num}/{den} needs a positive denominator"),
+            ));
+        }
     }
+    // A DH angle that is a runtime parameter goes through the kernels' sine and cosine, which
+    // are defined within ±MAX_ANGLE only; no scene needs one beyond it.
+    let x = a.radians();
+    if x.abs() > crate::MAX_ANGLE {
+        return Err(ix.invalid(
+            path,
+            format!(
+                "{x:e} rad is beyond ±2²⁰ = ±{} rad, where the kernels' sine and cosine are \
+                 defined; give the angle modulo 2π",
+                crate::MAX_ANGLE
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn check_inertia(ix: &SourceIndex<'_>, path: &str, spec: &InertiaSpec) -> Result<(), SpecError> {

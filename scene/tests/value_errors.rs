@@ -836,3 +836,23 @@ fn a_dh_convention_on_placement_links_is_refused() {
     let text = placement.replace("dh = \"modified\"\n", "");
     assert!(Scene::from_toml_str(&text, "p.toml").is_ok());
 }
+
+/// A DH angle beyond ±2²⁰ rad, where the kernels' sine and cosine are defined, is refused at
+/// its line (as a runtime parameter it would make every kernel output NaN).
+#[test]
+fn dh_angles_stay_within_the_kernels_range() {
+    for new in ["alpha = 2e6", "alpha = -1.1e6"] {
+        let text = edit("alpha = 0.0", 0, new);
+        let line = line_no(&text, new, 0);
+        expect_err(
+            &text,
+            SpecErrorKind::Invalid,
+            line,
+            "links[1].alpha",
+            "beyond ±2²⁰",
+        );
+    }
+    // Within it, any angle is taken.
+    let text = edit("alpha = 0.0", 0, "alpha = 1e6");
+    assert!(Scene::from_toml_str(&text, "paper.toml").is_ok());
+}

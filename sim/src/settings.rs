@@ -26,6 +26,11 @@ pub enum Method {
 /// The largest relative tolerance [`SimSettings::validate`] accepts: 10 % per step.
 pub const MAX_RTOL: f64 = 0.1;
 
+/// The smallest relative tolerance [`SimSettings::validate`] accepts: about 50 times the f64
+/// rounding unit (2.2e-16). Below it the embedded error estimate measures the rounding of the
+/// stages, not their truncation, and the step size drifts down to `h_min` or the sample limit.
+pub const MIN_RTOL: f64 = 1e-14;
+
 /// Settings of a simulation run. Every field is public; [`SimSettings::default`] documents the
 /// defaults and [`SimSettings::validate`] checks ranges.
 #[derive(Debug, Clone, PartialEq)]
@@ -114,6 +119,16 @@ impl SimSettings {
             }
         }
         pos("rtol", self.rtol)?;
+        if self.rtol < MIN_RTOL {
+            return Err(SimError::InvalidSetting {
+                name: "rtol",
+                msg: format!(
+                    "must be at least {MIN_RTOL} (about 50 times the f64 rounding unit, below \
+                     which the error estimate measures rounding), got {}",
+                    self.rtol
+                ),
+            });
+        }
         if self.rtol > MAX_RTOL {
             return Err(SimError::InvalidSetting {
                 name: "rtol",

@@ -38,6 +38,21 @@ pub fn load_scene(
     Ok((scene, text))
 }
 
+/// A usage error unless `--verify-rtol` is 0 (no re-integration) or a relative tolerance the
+/// re-integration can meet: in [`bf_sim::MIN_RTOL`], [`bf_sim::MAX_RTOL`].
+pub fn check_verify_rtol(rtol: f64) -> Result<()> {
+    if rtol == 0.0 || (bf_sim::MIN_RTOL..=bf_sim::MAX_RTOL).contains(&rtol) {
+        return Ok(());
+    }
+    Err(crate::errors::usage(format!(
+        "--verify-rtol must be 0 (skip) or in [{:e}, {}] (below it the error estimate measures \
+         rounding; got {})",
+        bf_sim::MIN_RTOL,
+        bf_sim::MAX_RTOL,
+        crate::cli::shown(rtol)
+    )))
+}
+
 /// A usage error naming `option` unless every revolute joint angle of `q` lies within
 /// ±[`bf_codegen::trig::ANGLE_RANGE`] rad, where the kernels' sine and cosine are defined
 /// (beyond it every kernel output would be NaN).

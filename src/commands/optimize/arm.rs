@@ -60,12 +60,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         bf_optim::ocp::Scheme::Lg => crate::cli::DEFAULT_ELEMENTS,
     };
     check_size(args.points, scheme)?;
-    if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
-        bail_usage!(
-            "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
-            crate::cli::shown(args.verify_rtol)
-        );
-    }
+    crate::commands::check_verify_rtol(args.verify_rtol)?;
     let (scene, text) = crate::commands::load_scene_with_params(path, &args.chain, &args.param)?;
     let params = crate::commands::parse_params(&args.param)?;
     let nq = scene.links.len();

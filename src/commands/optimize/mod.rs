@@ -884,12 +884,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             bail_usage!("--refine needs --scheme radau (mesh refinement splits Radau elements)");
         }
     }
-    if !(args.verify_rtol == 0.0 || (args.verify_rtol > 0.0 && args.verify_rtol <= 0.1)) {
-        bail_usage!(
-            "--verify-rtol must be 0 (skip) or in (0, 0.1] (got {})",
-            crate::cli::shown(args.verify_rtol)
-        );
-    }
+    crate::commands::check_verify_rtol(args.verify_rtol)?;
     // After the usage checks: a wrong command line is said as such first.
     if let Some(path) = &args.warm_start {
         check_warm_start_fits(name, &settings, path)?;

@@ -88,6 +88,7 @@ pub(super) fn run_arm(
          {source} kernels{}",
         interpreted_note(source, setup.elapsed())
     );
+    let inputs = super::input_options(args, &inp);
     let sys = FreeArm::new(model, inp)?;
     let x0: Vec<f64> = q0.iter().chain(&qd0).copied().collect();
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
@@ -95,8 +96,13 @@ pub(super) fn run_arm(
         out_dir.inject_fault_at_write(k);
     }
     let arm: &dyn bf_sim::HybridSystem<Mode = ArmMode> = &sys;
-    let mut sim = bf_sim::Simulator::new(arm, set, ArmMode::Free, 0.0, &x0, t_end)
-        .map_err(|e| anyhow!("cannot start the simulation: {e}"))?;
+    let mut sim =
+        bf_sim::Simulator::new(arm, set, ArmMode::Free, 0.0, &x0, t_end).map_err(|e| {
+            anyhow!(
+                "cannot start the simulation: {e}; initial state: {}; torques: {inputs}",
+                super::initial_state_options(args)
+            )
+        })?;
     let (error, cpu) = super::advance_within_limits(&mut sim, args, 0.0, t_end)?;
     let error = error.map(|e| format!("simulation failed at t = {} s: {e}", sim.t()));
     let out = sim.finish();

@@ -151,6 +151,14 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
     };
     let rtol = args.rtol();
     pos("--rtol", rtol)?;
+    if rtol < bf_sim::MIN_RTOL {
+        return Err(crate::errors::usage(format!(
+            "--rtol must be at least {:e} (about 50 times the f64 rounding unit, below which the \
+             step-size control measures rounding; got {})",
+            bf_sim::MIN_RTOL,
+            crate::cli::shown(rtol)
+        )));
+    }
     if rtol > bf_sim::MAX_RTOL {
         return Err(crate::errors::usage(format!(
             "--rtol must be at most {} (a relative error of 10 % per step; got {})",
@@ -160,6 +168,14 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
     }
     pos("--step", args.step())?;
     pos("--h-max", args.h_max())?;
+    // The adaptive step's floor: a largest step below it leaves the controller no step.
+    let h_min = SimSettings::default().h_min;
+    if args.h_max() < h_min {
+        return Err(crate::errors::usage(format!(
+            "--h-max must be at least {h_min:e} s, the adaptive step's floor (got {})",
+            crate::cli::shown(args.h_max())
+        )));
+    }
     let atol = args.atol.unwrap_or(1e-2 * rtol);
     pos("--atol", atol)?;
     if let Some(dt) = args.output_dt {
@@ -334,16 +350,22 @@ pub(super) fn check_limits(args: &SimulateArgs, set: &SimSettings, run_end: RunE
     let t_end = run_end.t;
     let end = run_end.named();
     let min_steps = t_end / h;
+    // t_end / h overflows for a t_end near f64's largest; no count of steps is that large.
+    let at_least = match min_steps.is_finite() {
+        true => format!("{min_steps:.3e}"),
+        false => "more than 1e308".to_string(),
+    };
+    let h = crate::cli::shown(h);
     if min_steps > args.max_steps as f64 {
         bail_usage!(
-            "{end} needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, more than \
+            "{end} needs at least {at_least} steps of at most {h_opt} {h} s, more than \
              --max-steps {}; shorten --t-end or raise --max-steps",
             args.max_steps
         );
     }
     if set.record_steps && min_steps > args.max_samples as f64 {
         bail_usage!(
-            "{end} needs at least {min_steps:.3e} steps of at most {h_opt} {h} s, each stored \
+            "{end} needs at least {at_least} steps of at most {h_opt} {h} s, each stored \
              as a sample, more than --max-samples {}; shorten --t-end or raise --max-samples",
             args.max_samples
         );
@@ -675,7 +697,7 @@ fn interpreted_note(source: KernelSource, setup: Duration) -> String {
 }
 
 /// Names the options the initial state came from, for errors about it.
-fn initial_state_options(args: &SimulateArgs) -> String {
+pub(super) fn initial_state_options(args: &SimulateArgs) -> String {
     let mut v: Vec<String> = Vec::new();
     if let Some(p) = &args.init {
         v.push(format!("--init {}", p.display()));
@@ -697,7 +719,7 @@ fn initial_state_options(args: &SimulateArgs) -> String {
 }
 
 /// Names the torque input, for errors about non-finite values.
-fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
+pub(super) fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
     match (inp, &args.torques) {
         (CliInput::Series(s), Some(p)) => {
             format!(
@@ -715,6 +737,7 @@ fn input_options(args: &SimulateArgs, inp: &CliInput) -> String {
             args.pd.as_deref().unwrap_or(""),
             args.pd_gains
         ),
+        (CliInput::Replay(_), _) => "the torques of the --init solution".into(),
         _ => "zero torques".into(),
     }
 }
@@ -827,8 +850,13 @@ fn run_model<K: Kernels<N>, const N: usize>(
     // A trait object: one compiled copy of the simulator serves every joint count (the virtual
     // calls cost nothing beside the kernels they make).
     let dyn_sys: &dyn HybridSystem<Mode = Mode> = &sys;
-    let mut sim = Simulator::new(dyn_sys, set, mode0, t0, &x0, t_end)
-        .map_err(|e| anyhow!("cannot start the simulation: {e}"))?;
+    // Finite torques can still overflow the accelerations (M⁻¹ τ): the error names the inputs.
+    let mut sim = Simulator::new(dyn_sys, set, mode0, t0, &x0, t_end).map_err(|e| {
+        anyhow!(
+            "cannot start the simulation: {e}; initial state: {}; torques: {inputs}",
+            initial_state_options(args)
+        )
+    })?;
     let (error, cpu) = advance_within_limits(&mut sim, args, t0, t_end)?;
     let (t_stop, mode_stop) = (sim.t(), sim.mode());
     let out = sim.finish();
