@@ -93,3 +93,101 @@ mod tests {
         }
     }
 }
+
+/// Parses a JSON document that a user gives (a state file, a solution, its internals) into a
+/// `serde_json::Value`, refusing an object that gives a key twice: `Value` would keep the last
+/// one without a word, while the typed readers (`--torques`) and the TOML scenes refuse it.
+/// The error names the key, with serde_json's line and column.
+pub fn json_value(text: &str) -> serde_json::Result<serde_json::Value> {
+    serde_json::from_str::<StrictJson>(text).map(|v| v.0)
+}
+
+/// A JSON value read with duplicate keys refused ([`json_value`]).
+struct StrictJson(serde_json::Value);
+
+impl<'de> serde::Deserialize<'de> for StrictJson {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        d.deserialize_any(StrictVisitor)
+    }
+}
+
+struct StrictVisitor;
+
+impl<'de> serde::de::Visitor<'de> for StrictVisitor {
+    type Value = StrictJson;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> std::result::Result<StrictJson, E> {
+        Ok(StrictJson(v.into()))
+    }
+
+    fn visit_i64<E>(self, v: i64) -> std::result::Result<StrictJson, E> {
+        Ok(StrictJson(v.into()))
+    }
+
+    fn visit_u64<E>(self, v: u64) -> std::result::Result<StrictJson, E> {
+        Ok(StrictJson(v.into()))
+    }
+
+    fn visit_f64<E>(self, v: f64) -> std::result::Result<StrictJson, E> {
+        Ok(StrictJson(v.into()))
+    }
+
+    fn visit_str<E>(self, v: &str) -> std::result::Result<StrictJson, E> {
+        Ok(StrictJson(v.into()))
+    }
+
+    fn visit_unit<E>(self) -> std::result::Result<StrictJson, E> {
+        Ok(StrictJson(serde_json::Value::Null))
+    }
+
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(
+        self,
+        mut seq: A,
+    ) -> std::result::Result<StrictJson, A::Error> {
+        let mut items = Vec::new();
+        while let Some(StrictJson(v)) = seq.next_element()? {
+            items.push(v);
+        }
+        Ok(StrictJson(serde_json::Value::Array(items)))
+    }
+
+    fn visit_map<A: serde::de::MapAccess<'de>>(
+        self,
+        mut map: A,
+    ) -> std::result::Result<StrictJson, A::Error> {
+        let mut object = serde_json::Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if object.contains_key(&key) {
+                return Err(serde::de::Error::custom(format!(
+                    "the key `{key}` is given twice in one object"
+                )));
+            }
+            let StrictJson(v) = map.next_value()?;
+            object.insert(key, v);
+        }
+        Ok(StrictJson(serde_json::Value::Object(object)))
+    }
+}
+
+#[cfg(test)]
+mod json_tests {
+    use super::json_value;
+
+    /// The strict reader gives serde_json's own value (numbers bit for bit) and refuses a key
+    /// given twice, at any depth, naming it.
+    #[test]
+    fn a_key_given_twice_is_refused_and_the_rest_reads_as_serde_json() {
+        let text = r#"{"q":[0.1,-2.5e-300,3],"n":{"a":null,"b":true,"c":"x"},"k":18446744073709551615,"i":-7}"#;
+        let strict = json_value(text).unwrap();
+        let plain: serde_json::Value = serde_json::from_str(text).unwrap();
+        assert_eq!(strict, plain);
+        for bad in [r#"{"q":[1],"q":[2]}"#, r#"{"n":{"a":1,"a":1}}"#] {
+            let e = json_value(bad).unwrap_err().to_string();
+            assert!(e.contains("given twice") && e.contains("line 1"), "{e}");
+        }
+    }
+}

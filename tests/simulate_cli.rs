@@ -250,6 +250,10 @@ fn cli_bad_inputs_give_clear_errors() {
     let mode_file = dir.join("mode.json");
     std::fs::write(&mode_file, r#"{"q": [0.1, 0.5, 0.5], "mode": "flying"}"#).unwrap();
     let mode_file = mode_file.to_str().unwrap();
+    // A key given twice: the reader kept the last one without a word.
+    let twice = dir.join("twice.json");
+    std::fs::write(&twice, r#"{"q": [0.1, 0.5, 0.5], "q": [0, 0, 0]}"#).unwrap();
+    let twice = twice.to_str().unwrap();
     // A state of a sticking contact (Δv = 0) started in slip: the slip direction is undefined,
     // and the model's reason must reach the user (it used to read "the energy is not finite").
     let sticking = dir.join("sticking.json");
@@ -365,6 +369,11 @@ fn cli_bad_inputs_give_clear_errors() {
         (
             vec!["--init", newer],
             vec!["newer.json", "schema_version 99"],
+            1,
+        ),
+        (
+            vec!["--init", twice],
+            vec!["twice.json", "`q` is given twice"],
             1,
         ),
         (vec!["--max-steps", "0"], vec!["--max-steps", "≥ 1"], 2),

@@ -487,7 +487,7 @@ pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, PipelineError> {
     let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Arm {
         message: format!("{}: cannot read: {e}", path.display()),
     })?;
-    let doc: serde_json::Value = serde_json::from_str(&text).map_err(|e| PipelineError::Arm {
+    let doc: serde_json::Value = crate::io::json_value(&text).map_err(|e| PipelineError::Arm {
         message: format!("{}: not JSON: {e}", path.display()),
     })?;
     // Files written before arm solutions had a schema version have the same fields.

@@ -765,7 +765,7 @@ fn refine_until_verified(
     }
 }
 
-/// The verification's hp refinements ([`refine_until_verified`], `policy.refine_attempts` of
+/// The verification's hp refinements (`refine_until_verified`, `policy.refine_attempts` of
 /// them) of a solution that a refinement outside the search (`optimize --refine`) left
 /// unverified: the error estimate of a mesh refinement can meet its tolerance on a mesh whose
 /// element-wise re-integration does not (a bang-bang torque whose polynomial overshoots its

@@ -501,13 +501,13 @@ fn from_texts(
     path: &Path,
     internals: impl FnOnce(&Value) -> Result<(String, std::path::PathBuf), PipelineError>,
 ) -> Result<OcpSolution, PipelineError> {
-    let v: Value = serde_json::from_str(s).map_err(|e| io_err(path, e))?;
+    let v: Value = crate::io::json_value(s).map_err(|e| io_err(path, e))?;
     check_schema_version(&v, path)?;
     if v.get("schema_version").is_none() {
         return serde_json::from_value(v).map_err(|e| io_err(path, e));
     }
     let (text, ipath) = internals(&v)?;
-    let internals: Value = serde_json::from_str(&text).map_err(|e| io_err(&ipath, e))?;
+    let internals: Value = crate::io::json_value(&text).map_err(|e| io_err(&ipath, e))?;
     check_internal_fields(&internals, &ipath)?;
     let sol = from_documents(&v, &internals, path)?;
     check_phases(&sol, path)?;

@@ -157,8 +157,8 @@ pub fn check_solution_values(option: &str, path: &Path) -> Result<serde_json::Va
 fn read_json_value(option: &str, path: &Path) -> Result<serde_json::Value> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("{option} {}: cannot read", path.display()))?;
-    serde_json::from_str(&text)
-        .with_context(|| format!("{option} {}: not a JSON document", path.display()))
+    crate::io::json_value(&text)
+        .with_context(|| format!("{option} {}: not a valid JSON document", path.display()))
 }
 
 /// Errors naming `option`, `path`, the field path and the value if a number of `value` is NaN or beyond

@@ -225,7 +225,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                 path.display()
             )
         };
-        let v: serde_json::Value = serde_json::from_str(&text).with_context(shape)?;
+        let v: serde_json::Value = crate::io::json_value(&text).with_context(shape)?;
         if crate::pipeline::arm::is_arm_solution(&v) {
             bail!(
                 "--init {}: an arm solution of `optimize --problem {}` (scene `{}`, without \

@@ -17,8 +17,8 @@ pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)>
     if let Some(init) = &args.init {
         let text = std::fs::read_to_string(init)
             .with_context(|| format!("{}: cannot read initial-state file", init.display()))?;
-        let v: serde_json::Value = serde_json::from_str(&text)
-            .with_context(|| format!("{}: initial-state file is not JSON", init.display()))?;
+        let v: serde_json::Value = crate::io::json_value(&text)
+            .with_context(|| format!("{}: initial-state file is not valid JSON", init.display()))?;
         let label = format!("the scene recorded in {}", init.display());
         let mut scene = if let Some(toml) = v
             .get("scene_toml")
