@@ -781,6 +781,9 @@ pub const DEFAULT_H_MAX: f64 = 0.05;
 /// The end time of a `simulate` run when neither `--t-end` nor an arm's solution gives one (s).
 pub const DEFAULT_T_END: f64 = 10.0;
 
+/// `simulate --mode0` when neither it nor an `--init` file gives the initial mode.
+pub const DEFAULT_MODE0: &str = "free";
+
 /// `simulate --impact-law` when not given: Newton's law (eq. 39), the paper's.
 pub const DEFAULT_IMPACT_LAW: &str = "newton";
 

@@ -143,11 +143,16 @@ fn stated_defaults_are_the_programs() {
             "--impact-law",
             ball_finger::cli::DEFAULT_IMPACT_LAW.to_string(),
         ),
-        ("simulate", "--mode0", "free".to_string()),
+        (
+            "simulate",
+            "--mode0",
+            ball_finger::cli::DEFAULT_MODE0.to_string(),
+        ),
     ] {
         let entry = entry(command, option);
         assert!(
-            entry.contains(&format!("[default: {default}")),
+            entry.contains(&format!("[default: {default}]"))
+                || entry.contains(&format!("[default: {default};")),
             "{command} {option}: {entry}"
         );
     }

@@ -612,7 +612,7 @@ fn errors_name_the_option_file_or_quantity() {
     let dir = tmpdir("names");
     let out = dir.join("out");
     let out_s = out.to_str().unwrap();
-    let usage: [(&[&str], &[&str]); 9] = [
+    let usage: [(&[&str], &[&str]); 11] = [
         (
             &["simulate", "--rtol", "-1e-8"],
             &["--rtol", "must be a finite number > 0", "-1e-8"],
@@ -646,10 +646,18 @@ fn errors_name_the_option_file_or_quantity() {
             ],
             &["--start", "beyond ±2²⁰"],
         ),
+        (
+            &["optimize", "--problem", "reach", "--verify-rtol", "0.5"],
+            &["--verify-rtol", "10 % per step", "0.5"],
+        ),
         // A step count beyond f64 is said as such, the step plainly.
         (
             &["simulate", "--integrator", "rk4", "--step", "1e-308"],
             &["--step 1e-308 s"],
+        ),
+        (
+            &["simulate", "--t-end", "1e308"],
+            &["needs more than 1e308 steps"],
         ),
         (
             &["simulate", "--step", "-0.001"],

@@ -44,9 +44,15 @@ pub fn check_verify_rtol(rtol: f64) -> Result<()> {
     if rtol == 0.0 || (bf_sim::MIN_RTOL..=bf_sim::MAX_RTOL).contains(&rtol) {
         return Ok(());
     }
+    let why = match rtol > bf_sim::MAX_RTOL {
+        true => {
+            "a relative error of 10 % per step, beyond which the step-size control no longer \
+                 measures anything"
+        }
+        false => "below it the error estimate measures rounding",
+    };
     Err(crate::errors::usage(format!(
-        "--verify-rtol must be 0 (skip) or in [{:e}, {}] (below it the error estimate measures \
-         rounding; got {})",
+        "--verify-rtol must be 0 (skip) or in [{:e}, {}] ({why}; got {})",
         bf_sim::MIN_RTOL,
         bf_sim::MAX_RTOL,
         crate::cli::shown(rtol)

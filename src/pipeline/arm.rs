@@ -488,7 +488,7 @@ pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, PipelineError> {
         message: format!("{}: cannot read: {e}", path.display()),
     })?;
     let doc: serde_json::Value = crate::io::json_value(&text).map_err(|e| PipelineError::Arm {
-        message: format!("{}: not JSON: {e}", path.display()),
+        message: format!("{}: not valid JSON: {e}", path.display()),
     })?;
     // Files written before arm solutions had a schema version have the same fields.
     super::solution_io::check_schema_version(&doc, path)?;

@@ -765,40 +765,52 @@ fn refine_until_verified(
     }
 }
 
-/// The verification's hp refinements (`refine_until_verified`, `policy.refine_attempts` of
-/// them) of a solution that a refinement outside the search (`optimize --refine`) left
-/// unverified: the error estimate of a mesh refinement can meet its tolerance on a mesh whose
-/// element-wise re-integration does not (a bang-bang torque whose polynomial overshoots its
-/// bound next to a switch, clamped in the re-integration). `built` is the problem `sol` was
-/// solved on, with its verification attached. Returns where the chain ended (`sol` itself
-/// when no refinement succeeded) and the chain's stage records, which the solution's
-/// strategy report keeps with its other verification refinements. The problem is `None`
-/// only where the chain's end carries none, which no chain started from a built problem does.
-pub fn refine_to_verify(
+/// The verification of a solution refined outside the search (`optimize --refine`), as the
+/// search verifies its candidates: re-integrated and, for a plan the policy executes, run in
+/// closed loop. One that does not verify goes on to the verification's hp refinements
+/// (`refine_until_verified`, `policy.refine_attempts` of them): the error estimate of a mesh
+/// refinement can meet its tolerance on a mesh whose element-wise re-integration does not (a
+/// bang-bang torque whose polynomial overshoots its bound next to a switch, clamped in the
+/// re-integration). `built` is the problem `sol` was solved on. Returns the chain's end where
+/// it verifies, else `sol` with its verification (a refinement that does not verify is no
+/// better a result than the one the user's tolerance made); the chain's stage records join
+/// the strategy report's other verification refinements either way. The problem is `None`
+/// only where the result carries none, which none started from a built problem does.
+pub fn verify_refined(
     problem: Problem,
     settings: &ProblemSettings,
     built: BuiltProblem,
     sol: OcpSolution,
     policy: &VerifyPolicy,
 ) -> (Option<BuiltProblem>, OcpSolution) {
-    let start = Candidate {
+    let mut start = Candidate {
         index: 0,
         problem: Some(built),
         solution: sol,
     };
+    attach_verification(&mut start, policy, f64::INFINITY);
+    if is_verified(&start.solution) || start.solution.verification.is_none() {
+        return (start.problem, start.solution);
+    }
     let chain = refine_until_verified(problem, settings, start, policy, f64::INFINITY, &|| {
         Some(f64::INFINITY)
     });
     let records = chain.records.clone();
+    let start = chain.start.clone();
+    let end = chain.end();
     let Candidate {
-        problem: end_problem,
+        problem: built,
         solution: mut sol,
         ..
-    } = chain.end();
+    } = if is_verified(&end.solution) {
+        end
+    } else {
+        start
+    };
     if let Some(rep) = &mut sol.strategy {
         rep.refinements.extend(records);
     }
-    (end_problem, sol)
+    (built, sol)
 }
 
 /// The stage label of a refinement's record: `label` (the attempt) with the refined point's

@@ -1215,11 +1215,11 @@ pub fn verify_with(
 ) -> Result<Verification, PipelineError> {
     let start = Instant::now();
     let rtol = opt.rtol;
-    if !(rtol.is_finite() && rtol > 0.0 && rtol <= 0.1) {
+    if !(bf_sim::MIN_RTOL..=bf_sim::MAX_RTOL).contains(&rtol) {
         return Err(PipelineError::InvalidOption {
             name: "verification rtol",
             value: rtol,
-            expected: "in (0, 0.1]",
+            expected: "in [1e-14, 0.1] (bf_sim::MIN_RTOL to MAX_RTOL)",
         });
     }
     let atol = opt.atol.unwrap_or(rtol * ATOL_FACTOR);

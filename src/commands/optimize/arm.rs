@@ -202,8 +202,13 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         sol.duration
     )?;
     crate::outln!("start  {:?}\ntarget {:?}", sol.start, sol.target)?;
+    // The state points too: the dense grid can fall between them where the torque peaks.
     let peak: Vec<f64> = (0..nq)
-        .map(|i| sol.dense.tau.iter().map(|t| t[i].abs()).fold(0.0, f64::max))
+        .map(|i| {
+            (sol.dense.tau.iter().chain(&sol.nodes.tau))
+                .map(|t| t[i].abs())
+                .fold(0.0, f64::max)
+        })
         .collect();
     let limits: Vec<String> = sol
         .tau_max

@@ -208,7 +208,8 @@ pub fn parse_problem(text: &str) -> Result<Problem> {
     })
 }
 
-/// Build the problem settings from the command line: every option checked, the scene of
+/// Build the problem settings from the command line: every value checked (an option of a part
+/// the problem lacks is refused before, by `parts::refuse_missing_parts`), the scene of
 /// `--scene` / `--param` ([`scene_from_args`]) and what the plan is planned for
 /// ([`PlanFor::of`]).
 pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
@@ -939,31 +940,23 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         let rounds = args.refine_rounds.unwrap_or(DEFAULT_REFINE_ROUNDS);
         (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, rounds)?;
         sol.verification = None;
-        // A mesh whose error estimate meets `tol` need not re-integrate within the
-        // verification's tolerance: the verification's own hp refinements go on from it, as
-        // they do for any unverified optimum of the search.
+        // Verified as the search verifies (closed loop included); a mesh whose error estimate
+        // meets `tol` need not re-integrate within the verification's tolerance, so the
+        // verification's own hp refinements go on from it, as for the search's optima.
         if args.verify_rtol > 0.0 {
-            sol.verification = verify(&problem, &sol, args.verify_rtol).ok();
-            if sol.verification.is_some() && !is_verified(&sol) {
-                let before = sol.strategy.as_ref().map_or(0, |r| r.refinements.len());
-                let (built, refined) = crate::pipeline::search::refine_to_verify(
-                    name,
-                    &on_its_mesh,
-                    problem,
-                    sol,
-                    &policy,
-                );
-                problem = built.ok_or_else(|| {
-                    anyhow::anyhow!("internal: the refined {name} solve has no problem")
-                })?;
-                sol = refined;
-                if let Some(rep) = &sol.strategy {
-                    let mut added = rep.clone();
-                    added
-                        .refinements
-                        .drain(..before.min(added.refinements.len()));
-                    crate::io::print_out(&added.refinement_lines())?;
-                }
+            let before = sol.strategy.as_ref().map_or(0, |r| r.refinements.len());
+            let (built, verified) =
+                crate::pipeline::search::verify_refined(name, &on_its_mesh, problem, sol, &policy);
+            problem = built.ok_or_else(|| {
+                anyhow::anyhow!("internal: the refined {name} solve has no problem")
+            })?;
+            sol = verified;
+            if let Some(rep) = &sol.strategy {
+                let mut added = rep.clone();
+                added
+                    .refinements
+                    .drain(..before.min(added.refinements.len()));
+                crate::io::print_out(&added.refinement_lines())?;
             }
         }
     }

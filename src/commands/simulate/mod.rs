@@ -332,7 +332,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
     let mode = match (mode, args.mode0.as_deref()) {
         (_, Some(m)) => parse_mode(m).map_err(|e| crate::errors::usage(format!("--mode0: {e}")))?,
         (Some(m), None) => parse_mode(&m)?,
-        (None, None) => Mode::Free,
+        (None, None) => parse_mode(crate::cli::DEFAULT_MODE0)?,
     };
     Ok((
         mode,
@@ -352,20 +352,20 @@ pub(super) fn check_limits(args: &SimulateArgs, set: &SimSettings, run_end: RunE
     let min_steps = t_end / h;
     // t_end / h overflows for a t_end near f64's largest; no count of steps is that large.
     let at_least = match min_steps.is_finite() {
-        true => format!("{min_steps:.3e}"),
+        true => format!("at least {min_steps:.3e}"),
         false => "more than 1e308".to_string(),
     };
     let h = crate::cli::shown(h);
     if min_steps > args.max_steps as f64 {
         bail_usage!(
-            "{end} needs at least {at_least} steps of at most {h_opt} {h} s, more than \
+            "{end} needs {at_least} steps of at most {h_opt} {h} s, more than \
              --max-steps {}; shorten --t-end or raise --max-steps",
             args.max_steps
         );
     }
     if set.record_steps && min_steps > args.max_samples as f64 {
         bail_usage!(
-            "{end} needs at least {at_least} steps of at most {h_opt} {h} s, each stored \
+            "{end} needs {at_least} steps of at most {h_opt} {h} s, each stored \
              as a sample, more than --max-samples {}; shorten --t-end or raise --max-samples",
             args.max_samples
         );
