@@ -1050,6 +1050,23 @@ fn a_replay_says_what_it_does_not_replay() {
         "{stderr}"
     );
     assert!(!stderr.contains("--t-end 10"), "{stderr}");
+    // A series that ends before the run starts says so (it said "where the run starts").
+    let early = dir.join("early.csv");
+    std::fs::write(
+        &early,
+        "t,tau1,tau2,tau3
+-1,0,0.1,0
+-0.5,0,0.1,0
+",
+    )
+    .unwrap();
+    let o = simulate_into(&dir.join("early"), &["--torques", early.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(
+        stderr.contains("ends at t = -0.5 s, before the run starts at t = 0"),
+        "{stderr}"
+    );
     // So does a step limit that the default run's end exceeds.
     let o = simulate_into(
         &default_run,

@@ -135,11 +135,22 @@ impl<const N: usize> Tracking<N> {
     pub fn failure(&self) -> Option<String> {
         if let Some(lost) = &self.lost {
             return Some(format!(
-                "the {} controller lost the ball: {lost}",
-                self.controller.name()
+                "the {} controller {}: {lost}",
+                self.controller.name(),
+                self.loss()
             ));
         }
         self.check_failure()
+    }
+
+    /// What [`Tracking::lost`] means for this run: "lost the ball", or, where the simulation
+    /// itself stopped (a step limit, a model error), that its periods were not completed: the
+    /// ball may still have been in hand.
+    pub fn loss(&self) -> &'static str {
+        match self.stopped {
+            Some(_) => "did not complete its periods",
+            None => "lost the ball",
+        }
     }
 
     /// Why the simulation is not the plant's physics, if it is not: its energy balance failed
@@ -383,7 +394,7 @@ fn execution_check_n<const N: usize>(
         .reduce(nan_max)
         .unwrap_or(f64::NAN);
     if let Some(lost) = &t.lost {
-        check.failure = Some(format!("the nominal plant lost the ball ({lost})"));
+        check.failure = Some(format!("the nominal plant {} ({lost})", t.loss()));
         return Some(check);
     }
     if let Some(unbalanced) = t.check_failure() {

@@ -515,8 +515,13 @@ pub(super) fn torques_held(inp: &CliInput, end: RunEnd) -> Option<bf_sim::SimWar
         ),
     };
     let message = if last <= 0.0 && end.by == EndBy::Default {
+        let at = if last < 0.0 {
+            "before the run starts at t = 0"
+        } else {
+            "where the run starts"
+        };
         format!(
-            "{what} at t = {} s, where the run starts: its last torque is held to {}",
+            "{what} at t = {} s, {at}: its last torque is held to {}",
             crate::cli::shown(last),
             end.named()
         )
