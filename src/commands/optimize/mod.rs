@@ -130,7 +130,7 @@ pub fn check_warm_start_values(path: &Path) -> Result<()> {
             path.display()
         );
     }
-    check_solution_values("--warm-start", path).map(|_| ())
+    check_document_values("--warm-start", path, &value)
 }
 
 /// [`check_warm_start_values`] for the file given to `option` (`--warm-start`, `simulate
@@ -140,17 +140,23 @@ pub fn check_warm_start_values(path: &Path) -> Result<()> {
 /// none. Returns the file's document, so that a caller reads it once.
 pub fn check_solution_values(option: &str, path: &Path) -> Result<serde_json::Value> {
     let value = read_json_value(option, path)?;
-    check_json_values(option, path, &value)?;
+    check_document_values(option, path, &value)?;
+    Ok(value)
+}
+
+/// [`check_solution_values`] of the document `value` already read from `path`.
+fn check_document_values(option: &str, path: &Path, value: &serde_json::Value) -> Result<()> {
+    check_json_values(option, path, value)?;
     if value.get("schema_version").is_some() {
-        let ipath = crate::pipeline::solution_io::internals_path(path, &value)
+        let ipath = crate::pipeline::solution_io::internals_path(path, value)
             .with_context(|| format!("{option} {}", path.display()))?;
         if option != "--warm-start" && !ipath.exists() {
             // A replay reads only the solution itself; its internals may be left behind.
-            return Ok(value);
+            return Ok(());
         }
         check_json_values(option, &ipath, &read_json_value(option, &ipath)?)?;
     }
-    Ok(value)
+    Ok(())
 }
 
 /// The JSON document of the file `path` given to `option`; the error names both.
