@@ -31,14 +31,14 @@ pub enum SpecErrorKind {
 /// (`links[1]` is the second `[[links]]` table, i.e. DH link 2).
 #[derive(Debug, thiserror::Error)]
 pub enum SpecError {
-    /// The file could not be read.
-    #[error("{file}: cannot read scene file")]
+    /// The file could not be read. The I/O error is part of the message, not a source: a
+    /// build script that prints the error alone (`panic!("{e}")`) must say why.
+    #[error("{file}: cannot read scene file: {cause}")]
     Io {
         /// The path as given.
         file: String,
         /// The underlying I/O error.
-        #[source]
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     /// A located problem in the scene text.
     #[error("{file}:{line}:{column}: {path}: {message}")]

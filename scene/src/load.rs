@@ -47,9 +47,9 @@ fn is_urdf(path: &Path, raw: &str) -> bool {
 }
 
 fn read(path: &Path) -> Result<String, SpecError> {
-    std::fs::read_to_string(path).map_err(|source| SpecError::Io {
+    std::fs::read_to_string(path).map_err(|cause| SpecError::Io {
         file: path.display().to_string(),
-        source,
+        cause,
     })
 }
 

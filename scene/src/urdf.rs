@@ -181,9 +181,7 @@ impl Reader<'_> {
         n: roxmltree::Node<'n, 'n>,
         tag: &str,
     ) -> Result<Option<roxmltree::Node<'n, 'n>>, SpecError> {
-        let mut found = n
-            .children()
-            .filter(|c| c.is_element() && c.tag_name().name() == tag);
+        let mut found = n.children().filter(|c| is_urdf(c, tag));
         let first = found.next();
         if let Some(second) = found.next() {
             return Err(self.err(
@@ -463,6 +461,16 @@ fn lump(acc: Option<Inertial>, b: Inertial) -> Inertial {
     }
 }
 
+/// Whether `n` is the URDF element `tag`: an element of that local name in no namespace or in
+/// the `<robot>` element's own (`<robot xmlns="…">`, `<urdf:robot xmlns:urdf="…">`), so that
+/// another tool's elements of the same name (`<gz:link>`) are ignored like any unknown element.
+fn is_urdf(n: &roxmltree::Node<'_, '_>, tag: &str) -> bool {
+    let ns = n.tag_name().namespace();
+    n.is_element()
+        && n.tag_name().name() == tag
+        && (ns.is_none() || ns == n.document().root_element().tag_name().namespace())
+}
+
 /// Reads the chain `base` → `tip` of the URDF text `text` (`file` names it in errors). `base`
 /// defaults to the root link, `tip` to the only leaf of a tree that does not branch.
 ///
@@ -477,7 +485,13 @@ pub fn read_chain(
     tip: Option<&str>,
     nonphysical: Option<&str>,
 ) -> Result<UrdfChain, SpecError> {
-    let doc = roxmltree::Document::parse(text).map_err(|e| {
+    // A document type declaration is well-formed XML that some exporters write; roxmltree
+    // refuses one unless asked (it still guards against entity expansion attacks).
+    let options = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..roxmltree::ParsingOptions::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(text, options).map_err(|e| {
         let p = e.pos();
         SpecError::Urdf(Box::new(UrdfError {
             file: file.to_string(),
@@ -499,10 +513,7 @@ pub fn read_chain(
         ));
     }
     let robot = root.attribute("name").unwrap_or("robot").to_string();
-    let elems = |tag: &'static str| {
-        root.children()
-            .filter(move |c| c.is_element() && c.tag_name().name() == tag)
-    };
+    let elems = |tag: &'static str| root.children().filter(move |c| is_urdf(c, tag));
     // The chain's ends first: a name the caller gave wrongly is reported before anything in
     // the file, so that it is blamed on whoever gave it. An end found here is the index of its
     // `<link>` element, which is its index in `links` below (one link per element, in order).

@@ -940,3 +940,26 @@ fn a_urdf_under_another_extension_is_read_as_one() {
     assert_eq!(a.links, b.links);
     assert_eq!(a.name, b.name);
 }
+
+/// Well-formed documents that exporters write are read like the plain one: a document type
+/// declaration, and another tool's elements of URDF's names in their own namespace (ignored,
+/// as unknown elements are); the robot's own namespace, default or prefixed, is URDF's.
+#[test]
+fn doctypes_and_foreign_namespaces_are_read() {
+    let plain = read_urdf_chain(&arm(J2), FILE, None, None, None).unwrap();
+    let doctype = format!("<?xml version=\"1.0\"?>\n<!DOCTYPE robot>\n{}", arm(J2));
+    let foreign = arm(J2).replace(
+        "<robot name=\"arm\">",
+        "<robot name=\"arm\" xmlns:gz=\"http://gazebosim.org\">\n  <gz:link name=\"ghost\"/>\n  \
+         <gz:joint name=\"gj\" type=\"fixed\"><parent link=\"l2\"/><child link=\"ghost\"/></gz:joint>",
+    );
+    let defaulted = arm(J2).replace(
+        "<robot name=\"arm\">",
+        "<robot name=\"arm\" xmlns=\"http://www.ros.org\">",
+    );
+    for text in [doctype, foreign, defaulted] {
+        let chain = read_urdf_chain(&text, FILE, None, None, None).unwrap();
+        assert_eq!(chain.joint_names, plain.joint_names, "{text}");
+        assert_eq!(chain.tip_link, plain.tip_link, "{text}");
+    }
+}
