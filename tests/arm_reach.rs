@@ -413,6 +413,11 @@ fn cli_reach_arm_on_a_user_scene_respects_its_torque_bounds() {
         &dir.join("series"),
     );
     assert!((t - series_end).abs() < 1e-9, "{t} against {series_end}");
+    // A one-row series (a constant torque) ends with the default run, not with the solution.
+    let one = dir.join("one.csv");
+    std::fs::write(&one, "t,tau1,tau2\n0,0,0\n").unwrap();
+    let t = t_final_of(&["--torques", one.to_str().unwrap()], &dir.join("one"));
+    assert_eq!(t, ball_finger::cli::DEFAULT_T_END);
     // Nor can an arm's solution warm-start a finger's problem: the file is named for what it
     // is, not for the internals file it never had.
     let o = run(&[

@@ -668,10 +668,14 @@ pub(super) fn run_end(args: &SimulateArgs, inp: &CliInput, solution: Option<f64>
             _ => EndBy::Series,
         },
     });
-    let by_solution = solution.map(|t| RunEnd {
-        t,
-        by: EndBy::Solution,
-    });
+    // A --torques series sets the end itself, or leaves the default (one that ends where the
+    // run starts is a constant torque): the solution gives only the start then.
+    let by_solution = solution
+        .filter(|_| !matches!(inp, CliInput::Series(_)))
+        .map(|t| RunEnd {
+            t,
+            by: EndBy::Solution,
+        });
     match args.t_end {
         Some(t) => RunEnd { t, by: EndBy::Flag },
         None => by_input.or(by_solution).unwrap_or(RunEnd {
