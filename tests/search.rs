@@ -548,6 +548,21 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("--hops 0") && e.contains("--hops 8"), "{e}");
     assert!(!dir.join("refused").exists());
+    // A whole search is no shard: its records hold the chains of its hops after its starts.
+    let o = merge_with(&whole);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("not the output of optimize --shard"), "{e}");
+    assert!(!e.contains("the shards ran"), "{e}");
+    // Another multi-start is refused naming both files.
+    let other_seed = copy("other-seed");
+    let mut sol = json(&other_seed.join("solution.json"));
+    sol["strategy"]["strategy"]["Multistart"]["seed"] = serde_json::json!(7);
+    std::fs::write(other_seed.join("solution.json"), sol.to_string()).unwrap();
+    let o = merge_with(&other_seed);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(e.contains("other-seed") && e.contains("shard1"), "{e}");
     // A start in two directories is refused.
     let o = run(&[
         "optimize",

@@ -245,7 +245,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
     let mut records: Vec<StageRecord> = Vec::new();
-    let mut head: Option<(String, Strategy)> = None;
+    let mut head: Option<(std::path::PathBuf, String, Strategy)> = None;
     let mut first: Option<(std::path::PathBuf, OcpSolution)> = None;
     let mut first_candidate: Option<(std::path::PathBuf, OcpSolution)> = None;
     let mut seconds: f64 = 0.0;
@@ -260,14 +260,29 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             );
         };
         match &head {
-            None => head = Some((sol.problem.clone(), rep.strategy)),
-            Some((p, st)) if *p != sol.problem || *st != rep.strategy => bail!(
-                "optimize merge: {} is {} with {}, the first directory {p} with {st}",
+            None => head = Some((path.clone(), sol.problem.clone(), rep.strategy)),
+            Some((first, p, st)) if *p != sol.problem || *st != rep.strategy => bail!(
+                "optimize merge: {} is {} with {}, {} {p} with {st}",
                 path.display(),
                 sol.problem,
-                rep.strategy
+                rep.strategy,
+                first.display()
             ),
             Some(_) => {}
+        }
+        // A shard records its own starts only; the chains of a whole search's hops and
+        // reshapes are numbered after them.
+        if let Strategy::Multistart { starts, .. } = rep.strategy
+            && let Some(r) = rep.records.iter().find(|r| r.chain >= starts)
+        {
+            bail!(
+                "optimize merge: {}: not the output of optimize --shard (its search ran chain {} \
+                 ({}) beyond its {starts} starts: a whole search, whose optimum is already \
+                 chosen)",
+                path.display(),
+                r.chain,
+                r.stage
+            );
         }
         match &first {
             None => first = Some((path.clone(), sol.clone())),
@@ -301,7 +316,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             cands.push((k, c));
         }
     }
-    let Some((problem, strategy)) = head else {
+    let Some((_, problem, strategy)) = head else {
         bail!("optimize merge: no directories given");
     };
     // A shard re-solved its own best coarse optima on the problem's mesh for its own output;
