@@ -3,7 +3,8 @@
 //!
 //! Every error of the workspace names only its own context (operation, file, option, value)
 //! and leaves the underlying error to `source()`, so the chain that `anyhow`'s `{:#}` prints
-//! states each reason once.
+//! states each reason once; the one exception, bf-scene's `SpecError::Io`, states its cause
+//! in its message and has no source (a build script prints it alone).
 
 /// A wrong command line that the argument parser could not see: an option's value out of its
 /// range, an unknown name, or options that do not go together. The binary exits with status 2

@@ -590,6 +590,39 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// `--shard 1/1` runs the whole search and keeps its candidates: `optimize merge` takes it as
+/// a shard (its hop chains beyond the starts made it look like a whole search's directory),
+/// continues from its starts, and chooses what the unsharded run chooses.
+#[test]
+#[ignore = "about 40 s on a loaded 2-core machine: a search and a merge"]
+fn a_single_shard_merges_to_the_unsharded_choice() {
+    let dir = tmpdir("one-shard");
+    let base = ["--problem", "periodic-qc", "--starts", "2", "--hops", "1"];
+    let whole = dir.join("whole");
+    ok(&optimize_in(&whole, None, &base));
+    let shard = dir.join("shard");
+    let mut a = base.to_vec();
+    a.extend(["--shard", "1/1"]);
+    ok(&optimize_in(&shard, None, &a));
+    let merged = dir.join("merged");
+    let o = run(&[
+        "optimize",
+        "merge",
+        shard.to_str().unwrap(),
+        "--out",
+        merged.to_str().unwrap(),
+    ]);
+    ok(&o);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("the shards ran"));
+    let (w, m) = (
+        json(&whole.join("solution.json")),
+        json(&merged.join("solution.json")),
+    );
+    assert_eq!(w["strategy"]["chosen"], m["strategy"]["chosen"]);
+    assert_eq!(w["objective"], m["objective"]);
+    std::fs::remove_dir_all(dir).ok();
+}
+
 #[test]
 fn unverified_solution_is_marked_failed_with_its_defect() {
     // periodic-cot on the default 3 × 10 mesh: the 6–9 s free phase is far too coarse, and

@@ -270,15 +270,18 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             ),
             Some(_) => {}
         }
-        // A shard records its own starts only; the chains of a whole search's hops and
-        // reshapes are numbered after them.
+        // A shard of several records its own starts only; the chains of a whole search's hops
+        // and reshapes are numbered after them. A whole search writes no candidate files,
+        // which a shard always does (`--shard 1/1` runs the whole search and keeps them).
+        let found = read_candidates(dir)?;
         if let Strategy::Multistart { starts, .. } = rep.strategy
+            && found.is_empty()
             && let Some(r) = rep.records.iter().find(|r| r.chain >= starts)
         {
             bail!(
-                "optimize merge: {}: not the output of optimize --shard (its search ran chain {} \
-                 ({}) beyond its {starts} starts: a whole search, whose optimum is already \
-                 chosen)",
+                "optimize merge: {}: not the output of optimize --shard (no candidate files, and \
+                 its search ran chain {} ({}) beyond its {starts} starts: a whole search, whose \
+                 optimum is already chosen)",
                 path.display(),
                 r.chain,
                 r.stage
@@ -303,7 +306,6 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
             }
         }
         records.extend(rep.records.iter().cloned());
-        let found = read_candidates(dir)?;
         if found.is_empty() {
             crate::outln!("note: {} has no candidate files", dir.display())?;
         }
@@ -322,6 +324,11 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     // A shard re-solved its own best coarse optima on the problem's mesh for its own output;
     // the merge re-solves the best of the union, as the unsharded run does.
     records.retain(|r| !search::is_promotion(&r.stage));
+    // So does the search after the starts (hops, reshapes, polish), which only a `--shard
+    // 1/1` ran: the merge continues from the starts, as the unsharded run does.
+    if let Strategy::Multistart { starts, .. } = strategy {
+        records.retain(|r| r.chain < starts);
+    }
     // Stable: the stages of a chain keep their order.
     records.sort_by_key(|r| r.chain);
     if let Strategy::Multistart { starts, .. } = strategy {
