@@ -957,7 +957,26 @@ fn doctypes_and_foreign_namespaces_are_read() {
         "<robot name=\"arm\">",
         "<robot name=\"arm\" xmlns=\"http://www.ros.org\">",
     );
-    for text in [doctype, foreign, defaulted] {
+    // Every element prefixed with the robot's own namespace, closing tags included.
+    let prefixed = {
+        let mut t = arm(J2);
+        for tag in [
+            "robot", "link", "joint", "inertial", "mass", "inertia", "origin", "parent", "child",
+            "axis",
+        ] {
+            t = t
+                .replace(&format!("<{tag} "), &format!("<urdf:{tag} "))
+                .replace(&format!("<{tag}>"), &format!("<urdf:{tag}>"))
+                .replace(&format!("</{tag}>"), &format!("</urdf:{tag}>"));
+        }
+        t.replacen(
+            "<urdf:robot ",
+            "<urdf:robot xmlns:urdf=\"http://www.ros.org\" ",
+            1,
+        )
+    };
+    assert!(prefixed.contains("<urdf:inertia ") && prefixed.contains("</urdf:link>"));
+    for text in [doctype, foreign, defaulted, prefixed] {
         let chain = read_urdf_chain(&text, FILE, None, None, None).unwrap();
         assert_eq!(chain.joint_names, plain.joint_names, "{text}");
         assert_eq!(chain.tip_link, plain.tip_link, "{text}");
