@@ -31,6 +31,27 @@ pub const MAX_RTOL: f64 = 0.1;
 /// stages, not their truncation, and the step size drifts down to `h_min` or the sample limit.
 pub const MIN_RTOL: f64 = 1e-14;
 
+/// Why a positive relative tolerance `rtol` is outside [[`MIN_RTOL`], [`MAX_RTOL`]] ("must be at
+/// least …, got …" with the reason), or `None` within it: the one statement of the range, for
+/// [`SimSettings::validate`] and the command lines that name their option.
+pub fn rtol_out_of_range(rtol: f64) -> Option<String> {
+    if rtol < MIN_RTOL {
+        Some(format!(
+            "must be at least {MIN_RTOL:e} (about 50 times the f64 rounding unit, below which the \
+             error estimate measures rounding), got {}",
+            crate::shown(rtol)
+        ))
+    } else if rtol > MAX_RTOL {
+        Some(format!(
+            "must be at most {MAX_RTOL} (a relative error of 10 % per step, beyond which the \
+             step-size control no longer measures anything), got {}",
+            crate::shown(rtol)
+        ))
+    } else {
+        None
+    }
+}
+
 /// Settings of a simulation run. Every field is public; [`SimSettings::default`] documents the
 /// defaults and [`SimSettings::validate`] checks ranges.
 #[derive(Debug, Clone, PartialEq)]
@@ -119,25 +140,8 @@ impl SimSettings {
             }
         }
         pos("rtol", self.rtol)?;
-        if self.rtol < MIN_RTOL {
-            return Err(SimError::InvalidSetting {
-                name: "rtol",
-                msg: format!(
-                    "must be at least {MIN_RTOL} (about 50 times the f64 rounding unit, below \
-                     which the error estimate measures rounding), got {}",
-                    self.rtol
-                ),
-            });
-        }
-        if self.rtol > MAX_RTOL {
-            return Err(SimError::InvalidSetting {
-                name: "rtol",
-                msg: format!(
-                    "must be at most {MAX_RTOL} (a relative error of 10 % per step, beyond which \
-                     the step-size control no longer measures anything), got {}",
-                    self.rtol
-                ),
-            });
+        if let Some(msg) = rtol_out_of_range(self.rtol) {
+            return Err(SimError::InvalidSetting { name: "rtol", msg });
         }
         pos("atol", self.atol)?;
         pos("h_min", self.h_min)?;

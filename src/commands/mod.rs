@@ -41,22 +41,18 @@ pub fn load_scene(
 /// A usage error unless `--verify-rtol` is 0 (no re-integration) or a relative tolerance the
 /// re-integration can meet: in [`bf_sim::MIN_RTOL`], [`bf_sim::MAX_RTOL`].
 pub fn check_verify_rtol(rtol: f64) -> Result<()> {
-    if rtol == 0.0 || (bf_sim::MIN_RTOL..=bf_sim::MAX_RTOL).contains(&rtol) {
-        return Ok(());
-    }
-    let why = match rtol > bf_sim::MAX_RTOL {
-        true => {
-            "a relative error of 10 % per step, beyond which the step-size control no longer \
-                 measures anything"
-        }
-        false => "below it the error estimate measures rounding",
+    let why = match rtol {
+        0.0 => None,
+        r if !(r.is_finite() && r > 0.0) => Some(format!(
+            "must be 0 (skip) or a finite number > 0, got {}",
+            crate::cli::shown(r)
+        )),
+        r => bf_sim::rtol_out_of_range(r).map(|why| format!("must be 0 (skip) or {why}")),
     };
-    Err(crate::errors::usage(format!(
-        "--verify-rtol must be 0 (skip) or in [{:e}, {}] ({why}; got {})",
-        bf_sim::MIN_RTOL,
-        bf_sim::MAX_RTOL,
-        crate::cli::shown(rtol)
-    )))
+    match why {
+        Some(why) => Err(crate::errors::usage(format!("--verify-rtol {why}"))),
+        None => Ok(()),
+    }
 }
 
 /// A usage error naming `option` unless every revolute joint angle of `q` lies within

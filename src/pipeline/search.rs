@@ -795,17 +795,18 @@ pub fn verify_refined(
     let chain = refine_until_verified(problem, settings, start, policy, f64::INFINITY, &|| {
         Some(f64::INFINITY)
     });
-    let records = chain.records.clone();
-    let start = chain.start.clone();
-    let end = chain.end();
+    let RefinedChain {
+        start,
+        records,
+        steps,
+    } = chain;
     let Candidate {
         problem: built,
         solution: mut sol,
         ..
-    } = if is_verified(&end.solution) {
-        end
-    } else {
-        start
+    } = match steps.into_iter().last() {
+        Some(s) if is_verified(&s.point.solution) => s.point,
+        _ => start,
     };
     if let Some(rep) = &mut sol.strategy {
         rep.refinements.extend(records);

@@ -134,8 +134,15 @@ impl StrategyReport {
     /// One line per verification refinement, as `optimize` and `optimize merge` print them
     /// after [`StrategyReport::table`].
     pub fn refinement_lines(&self) -> String {
+        self.refinement_lines_from(0)
+    }
+
+    /// [`StrategyReport::refinement_lines`] of the refinements from the `first`-th on (those
+    /// a step after the search added).
+    pub fn refinement_lines_from(&self, first: usize) -> String {
         self.refinements
             .iter()
+            .skip(first)
             .map(|r| {
                 format!(
                     "verification refinement: {}: {}, objective {:.6e}, period {:.4} s, {} \

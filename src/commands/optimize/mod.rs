@@ -958,11 +958,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             })?;
             sol = verified;
             if let Some(rep) = &sol.strategy {
-                let mut added = rep.clone();
-                added
-                    .refinements
-                    .drain(..before.min(added.refinements.len()));
-                crate::io::print_out(&added.refinement_lines())?;
+                crate::io::print_out(&rep.refinement_lines_from(before))?;
             }
         }
     }

@@ -62,10 +62,10 @@ impl Posed {
         }
     }
 
-    fn name(self) -> String {
+    fn name(self) -> &'static str {
         match self {
-            Posed::Catalogue(p) => p.to_string(),
-            Posed::ReachArm => REACH_ARM.to_string(),
+            Posed::Catalogue(p) => p.name(),
+            Posed::ReachArm => REACH_ARM,
         }
     }
 }

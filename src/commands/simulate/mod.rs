@@ -151,20 +151,8 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
     };
     let rtol = args.rtol();
     pos("--rtol", rtol)?;
-    if rtol < bf_sim::MIN_RTOL {
-        return Err(crate::errors::usage(format!(
-            "--rtol must be at least {:e} (about 50 times the f64 rounding unit, below which the \
-             step-size control measures rounding; got {})",
-            bf_sim::MIN_RTOL,
-            crate::cli::shown(rtol)
-        )));
-    }
-    if rtol > bf_sim::MAX_RTOL {
-        return Err(crate::errors::usage(format!(
-            "--rtol must be at most {} (a relative error of 10 % per step; got {})",
-            bf_sim::MAX_RTOL,
-            crate::cli::shown(rtol)
-        )));
+    if let Some(why) = bf_sim::rtol_out_of_range(rtol) {
+        bail_usage!("--rtol {why}");
     }
     pos("--step", args.step())?;
     pos("--h-max", args.h_max())?;
