@@ -388,7 +388,8 @@ pub struct SimulateArgs {
     /// Also store samples on the uniform grid k · dt (s), besides every step and event.
     #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub output_dt: Option<f64>,
-    /// Output directory (trajectory.{json,csv}, events.{json,csv}, summary.json; a failed run
+    /// Output directory (trajectory.{json,csv}, events.{json,csv}, summary.json; the free
+    /// motion of a scene without a ball writes trajectory.csv and summary.json; a failed run
     /// adds FAILED). It is replaced as a whole when the run ends, so it must be new, empty or
     /// an earlier output of `simulate`.
     #[arg(long, default_value = "out/simulate")]

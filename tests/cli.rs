@@ -338,6 +338,11 @@ fn bad_cli_input_gives_clear_errors() {
         &run(&["optimize", "--problem", "periodic-qc", "--epsilon", "-1"]),
         &["--epsilon"],
     );
+    // An ε whose square leaves f64's range would make every smoothed quantity NaN.
+    assert_usage_error(
+        &run(&["optimize", "--problem", "periodic-qc", "--epsilon", "1e308"]),
+        &["--epsilon", "1e150"],
+    );
     assert_clean_failure(
         &run(&[
             "optimize",
@@ -565,6 +570,9 @@ fn an_unverified_refinement_is_refined_until_verified() {
     // mesh refinement, and the one after it.
     let stages = sol["strategy"]["refinements"].as_array().unwrap();
     assert_eq!(stages.len(), 2, "{stages:?}");
+    // The mesh's rounds name the second as the refinement that made them.
+    assert_eq!(sol["refinement"]["stage"], stages[1]["stage"], "{stages:?}");
+    assert_eq!(stages[1]["chain"], sol["strategy"]["chosen"]);
 }
 
 #[test]

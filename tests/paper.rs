@@ -73,6 +73,23 @@ fn paper_quick_writes_a_consistent_report() {
             "{name} objective"
         );
         assert!((period - expect_period).abs() <= 1e-4, "{name} period");
+        // The active bounds the report lists are the ones the solution file records.
+        let listed = report
+            .lines()
+            .find(|l| l.starts_with(&format!("- `{name}`: ")))
+            .unwrap_or_else(|| panic!("no active-bounds line for {name}"));
+        let recorded = sol["active_bounds"]
+            .as_array()
+            .unwrap_or_else(|| panic!("{name}: no active_bounds in solution.json"));
+        if recorded.is_empty() {
+            assert!(listed.ends_with(": none"), "{listed}");
+        } else {
+            assert_eq!(listed.matches("; ").count() + 1, recorded.len(), "{listed}");
+            for b in recorded {
+                let what = b["what"].as_str().unwrap();
+                assert!(listed.contains(what), "{name}: {what} not in {listed}");
+            }
+        }
         // The re-integration defect shown is the one stored with the solution.
         let defect: f64 = cells[10].parse().unwrap();
         let expect_defect = sol["verification"]["max_defect"].as_f64().unwrap();

@@ -554,6 +554,33 @@ fn shards_merged_give_the_unsharded_multistart_choice() {
     assert!(!o.status.success());
     assert!(e.contains("not the output of optimize --shard"), "{e}");
     assert!(!e.contains("the shards ran"), "{e}");
+    // Without hops a whole search's records are its starts only, as a shard's; merged alone,
+    // its directory is named as one without the candidate files every shard keeps.
+    let hopless = dir.join("hopless");
+    std::fs::create_dir_all(&hopless).unwrap();
+    for e in std::fs::read_dir(&whole).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), hopless.join(e.file_name())).unwrap();
+    }
+    let mut sol = json(&hopless.join("solution.json"));
+    sol["strategy"]["records"]
+        .as_array_mut()
+        .unwrap()
+        .retain(|r| r["chain"].as_u64().unwrap() < 12);
+    std::fs::write(hopless.join("solution.json"), sol.to_string()).unwrap();
+    let o = run(&[
+        "optimize",
+        "merge",
+        hopless.to_str().unwrap(),
+        "--out",
+        dir.join("refused").to_str().unwrap(),
+    ]);
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        e.contains("hopless") && e.contains("no candidate files") && e.contains("whole search"),
+        "{e}"
+    );
     // Another multi-start is refused naming both files.
     let other_seed = copy("other-seed");
     let mut sol = json(&other_seed.join("solution.json"));

@@ -247,6 +247,13 @@ fn cli_bad_inputs_give_clear_errors() {
     sol["schema_version"] = serde_json::json!(99);
     std::fs::write(&newer, sol.to_string()).unwrap();
     let newer = newer.to_str().unwrap();
+    // A solution whose own fields disagree (a period that is not the phases' sum) is refused
+    // as `track` and `optimize --warm-start` refuse it: the replay is timed by the period.
+    let edited = dir.join("edited.json");
+    let mut sol = json(&root().join("data/optima/periodic-qc/solution.json"));
+    sol["period"] = serde_json::json!(1.0);
+    std::fs::write(&edited, sol.to_string()).unwrap();
+    let edited = edited.to_str().unwrap();
     let mode_file = dir.join("mode.json");
     std::fs::write(&mode_file, r#"{"q": [0.1, 0.5, 0.5], "mode": "flying"}"#).unwrap();
     let mode_file = mode_file.to_str().unwrap();
@@ -369,6 +376,16 @@ fn cli_bad_inputs_give_clear_errors() {
         (
             vec!["--init", newer],
             vec!["newer.json", "schema_version 99"],
+            1,
+        ),
+        (
+            vec!["--init", edited],
+            vec![
+                "--init",
+                "edited.json",
+                "`period` is 1 s",
+                "phase_durations",
+            ],
             1,
         ),
         (

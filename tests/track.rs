@@ -88,6 +88,18 @@ fn a_tracking_run_fails_on_a_lost_ball_or_a_failed_energy_check() {
     run.lost = Some("no contact in period 1".into());
     let failure = run.failure().expect("a lost ball fails the run");
     assert!(failure.contains("lost the ball"), "{failure}");
+    let row = robustness_row("nominal".into(), &run, 1);
+    assert!(!row.stopped && !row.meets_target, "{row:?}");
+    // A simulation that stopped (a step limit) did not complete its periods: the ball may
+    // still have been in hand, and neither the verdict nor the robustness row says it fell.
+    run.stopped = Some("step limit reached".into());
+    let failure = run.failure().expect("a stopped run fails");
+    assert!(
+        failure.contains("did not complete its periods") && !failure.contains("lost the ball"),
+        "{failure}"
+    );
+    let row = robustness_row("nominal".into(), &run, 1);
+    assert!(row.stopped && !row.meets_target, "{row:?}");
 }
 
 /// The paper scene with ball mass ×1.1, μ_s and μ_k ×0.8, every link's mass and inertia ×1.05

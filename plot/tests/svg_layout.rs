@@ -626,7 +626,7 @@ fn contact_forces_zoom_and_fig17_modes() {
     let omega = ts(&t, &[&|x| x, &|x| -x, &|x| 0.1 * x], &["ω_x", "ω_y", "ω_z"]);
     let ol = ts(
         &t,
-        &[&|x| 1.1 * x, &|x| -0.9 * x, &|x| 0.1 * x],
+        &[&|x| 1.1 * x, &|x| -0.9 * x, &|x| 0.12 * x],
         &["ω_x", "ω_y", "ω_z"],
     );
     let modes = SimModes {
@@ -903,4 +903,97 @@ fn contact_bands_are_visible_or_not_listed() {
     let els = read(&p[0]);
     assert!(els.iter().all(|e| e.class() != "band"));
     assert!(!legend_texts(&els).iter().any(|l| l == "contact"));
+}
+
+/// The paper's Fig. 17 counterpart: five legend entries, two of them long, over three short
+/// panels whose optimum jumps near the left edge to 2.5 times the start of the other runs.
+/// Head room above the data cannot hold such a legend (the mapping gives at most 60 % of an
+/// axes' height), so it goes beside the axes, clear of every line.
+#[test]
+fn a_tall_legend_over_short_panels_stays_off_the_data() {
+    let d = tmp("fig17-tall");
+    let t = grid(3000, 11.6);
+    let ph = Phases {
+        switches: vec![
+            (2.07, "impact".into()),
+            (5.93, "impact".into()),
+            (9.79, "impact".into()),
+        ],
+        contact: vec![],
+    };
+    // The optimum's ω jumps at every impact (every 3.86 s from 2.07 s) and decays in flight.
+    let jump = |x: f64, a: f64, b: f64| {
+        if x < 2.07 {
+            a * libm::exp(-0.5 * x)
+        } else {
+            b * libm::exp(-0.5 * ((x - 2.07) % 3.86))
+        }
+    };
+    let optimal = ts(
+        &t,
+        &[&|x| jump(x, 0.3, 0.77), &|x| jump(x, -0.4, -1.0), &|x| {
+            jump(x, 0.035, 0.14)
+        }],
+        &["ω_x", "ω_y", "ω_z"],
+    );
+    let open = ts(
+        &t,
+        &[
+            &|x| 0.3 * libm::exp(-0.4 * x),
+            &|x| -0.4 * libm::exp(-0.4 * x),
+            &|x| 0.035 * libm::exp(-0.4 * x),
+        ],
+        &["ω_x", "ω_y", "ω_z"],
+    );
+    let modes = SimModes {
+        slip: vec![(2.07, 2.12), (9.7, 9.8)],
+        stick: vec![],
+    };
+    let mut f = fig_open_loop_vs_optimal_modes("Fig. 17 counterpart", &optimal, &open, &ph, &modes)
+        .unwrap();
+    for (k, name) in [
+        "PD 1/0.2, free phases",
+        "PD 1/0.2, always (bounces off: no contact phase)",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let s = 1.0 + 0.05 * k as f64;
+        for (j, panel) in f.panels.iter_mut().enumerate() {
+            let pts = open
+                .points(j)
+                .into_iter()
+                .map(|(x, y)| (x, s * y))
+                .collect();
+            panel.series.push(Series::new(name.to_string(), pts));
+        }
+    }
+    let p = render_panels(&f, d.join("fig17")).unwrap();
+    let els = read(&p[0]);
+    assert_no_text_overlap(&els, "fig17 tall");
+    assert_legend_clear_of_data(&els, "fig17 tall");
+}
+
+/// A series drawn over an earlier one with the same points hides it; its legend entry names
+/// the hidden one, and a series that differs in one point keeps its plain name.
+#[test]
+fn a_series_that_hides_another_says_so_in_the_legend() {
+    let d = tmp("same-points");
+    let pts: Vec<(f64, f64)> = (0..50)
+        .map(|i| (i as f64, libm::sin(i as f64 * 0.3)))
+        .collect();
+    let mut f = LineFigure::new("same points", "t [s]", "y [-]");
+    f.series.push(Series::new("hybrid", pts.clone()));
+    f.series.push(Series::new("hybrid-unbounded", pts.clone()));
+    let mut moved = pts;
+    moved[10].1 += 0.5;
+    f.series.push(Series::new("pd", moved));
+    let p = render(&f, d.join("same")).unwrap();
+    let leg = legend_texts(&read(&p[0]));
+    assert!(leg.contains(&"hybrid".to_string()), "{leg:?}");
+    assert!(
+        leg.contains(&"hybrid-unbounded (the same points as hybrid)".to_string()),
+        "{leg:?}"
+    );
+    assert!(leg.contains(&"pd".to_string()), "{leg:?}");
 }

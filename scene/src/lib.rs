@@ -315,6 +315,23 @@ pub struct Scene {
 /// and cosine are defined (bf-codegen's `trig::ANGLE_RANGE`, which a test holds equal).
 pub const MAX_ANGLE: f64 = 1048576.0;
 
+/// Largest ε (m) of the smooth saturation sqrt(x² + ε²) (eq. 59): beyond it ε² leaves f64's
+/// range and every smoothed quantity is NaN. (An ε far below this but coarse for the ball is
+/// a matter for the verification, which compares the smoothed contact with the exact one.)
+pub const MAX_SMOOTH_EPS: f64 = 1e150;
+
+/// Why `eps` cannot be the smooth saturation's ε, if it cannot: it must be finite, positive
+/// and at most [`MAX_SMOOTH_EPS`]. The scene's `contact.smooth_eps` and `optimize --epsilon`
+/// are checked by this one rule (the message names [`MAX_SMOOTH_EPS`], which a test holds
+/// equal).
+pub fn smooth_eps_out_of_range(eps: f64) -> Option<&'static str> {
+    if eps.is_finite() && eps > 0.0 && eps <= MAX_SMOOTH_EPS {
+        None
+    } else {
+        Some("must be a finite number in (0, 1e150] m, where ε² stays within f64's range")
+    }
+}
+
 /// Cost kinds of the optimal-control node kernels (`bf_problem::CostKind::tag`).
 pub const OCP_COSTS: &[&str] = &["qc", "cot", "time_effort", "track", "reorient", "spin"];
 

@@ -737,7 +737,13 @@ impl Scene {
                     ),
                 ));
             }
-            check_positive(ix, "contact.smooth_eps", c.smooth_eps)?;
+            check_finite(ix, "contact.smooth_eps", c.smooth_eps)?;
+            if let Some(why) = crate::smooth_eps_out_of_range(c.smooth_eps) {
+                return Err(ix.invalid(
+                    "contact.smooth_eps",
+                    format!("{why} (got {})", c.smooth_eps),
+                ));
+            }
             self.check_contact_link(ix)?;
         }
         if self.kernels.is_empty() {

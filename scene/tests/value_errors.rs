@@ -548,6 +548,30 @@ fn contact_kind_must_be_segment_or_tip() {
     assert_eq!((c.kind.as_str(), c.smooth_eps), ("segment", 0.01));
 }
 
+/// ε of the saturation sqrt(x² + ε²) (eq. 59) up to `MAX_SMOOTH_EPS`, whose square (plus any
+/// squared distance up to 1e100 m) stays finite; beyond it, and at 0, the file is refused.
+#[test]
+fn smooth_eps_keeps_its_square_finite() {
+    let max = bf_scene::MAX_SMOOTH_EPS;
+    assert!((max * max + 1e200).sqrt().is_finite());
+    assert!(!((1e5 * max) * (1e5 * max)).is_finite());
+    let why = bf_scene::smooth_eps_out_of_range(2.0 * max).unwrap();
+    assert!(why.contains(&format!("{max:e}")), "{why}");
+    assert_eq!(bf_scene::smooth_eps_out_of_range(max), None);
+    for bad in ["1e200", "0.0", "-0.01"] {
+        let new = format!("smooth_eps = {bad}");
+        let text = edit("smooth_eps = 0.01", 0, &new);
+        let line = line_no(&text, &new, 0);
+        expect_err(
+            &text,
+            SpecErrorKind::Invalid,
+            line,
+            "contact.smooth_eps",
+            "(0, 1e150]",
+        );
+    }
+}
+
 #[test]
 fn bad_angle_strings_name_the_field() {
     for bad in [

@@ -63,11 +63,8 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         .eps
         .or(scene.contact.as_ref().map(|c| c.smooth_eps))
         .unwrap_or(0.01);
-    if !(eps.is_finite() && eps > 0.0) {
-        bail_usage!(
-            "--eps must be a finite positive number (got {})",
-            crate::cli::shown(eps)
-        );
+    if let Some(why) = bf_codegen::spec::smooth_eps_out_of_range(eps) {
+        bail_usage!("--eps {why} (got {})", crate::cli::shown(eps));
     }
     let state = State {
         q: &q,

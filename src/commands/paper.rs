@@ -138,11 +138,12 @@ fn plan_markdown(
             .with_context(|| format!("the stored plan {}", stored.path().display()))?
     };
     sol.verification = crate::pipeline::verify::verify(&built, &sol, 1e-10).ok();
+    let active = crate::pipeline::bounds::active_bounds(&built.ocp, &sol);
+    sol.active_bounds = Some(active.clone());
     crate::pipeline::solution_io::write_solution(&sol, &dir.join(&name))?;
     crate::paper::scenarios::write_animation(&name, &built, &sol, dir)?;
     let verified = crate::pipeline::verify::is_verified(&sol);
     let stick = sol.stick_duration().unwrap_or(f64::NAN);
-    let active = crate::pipeline::bounds::active_bounds(&built.ocp, &sol);
     let active = if active.is_empty() {
         "none".to_string()
     } else {
@@ -513,8 +514,9 @@ pub fn run(args: &PaperArgs) -> Result<()> {
         report,
         "![Fig. 4 counterpart: exact vs smooth saturation](figures/fig4_saturation.svg)\n\n\
          With ε = 0.01 the smooth saturation (eq. 58–59) differs from the exact one by at most \
-         {worst:.2e} (at the corners), which agrees with the paper's remark that the two are \
-         hardly distinguishable.\n"
+         {worst:.2e} (at the corners x = −1 and x = 0; the figure shows, as the paper's \
+         Fig. 4 does, the quadrant around the symmetry point, with the corner at 0), which \
+         agrees with the paper's remark that the two are hardly distinguishable.\n"
     )?;
 
     // Stage 4: the optimal-control scenarios of Sect. 6.1.

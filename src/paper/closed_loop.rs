@@ -147,10 +147,7 @@ impl<const N: usize> Tracking<N> {
     /// itself stopped (a step limit, a model error), that its periods were not completed: the
     /// ball may still have been in hand.
     pub fn loss(&self) -> &'static str {
-        match self.stopped {
-            Some(_) => "did not complete its periods",
-            None => "lost the ball",
-        }
+        loss_wording(self.stopped.is_some())
     }
 
     /// Why the simulation is not the plant's physics, if it is not: its energy balance failed
@@ -432,7 +429,11 @@ fn execution_check_n<const N: usize>(
     if let Some(r) = rows.iter().find(|r| !r.meets_target) {
         check.robustness_failure = Some(match (&r.error, &r.lost, r.max_error_from_fourth) {
             (Some(e), _, _) => format!("the plant `{}` could not be run: {e}", r.plant),
-            (_, Some(lost), _) => format!("the plant `{}` lost the ball ({lost})", r.plant),
+            (_, Some(lost), _) => format!(
+                "the plant `{}` {} ({lost})",
+                r.plant,
+                loss_wording(r.stopped)
+            ),
             (_, _, Some(e)) if r.contact_every_period => format!(
                 "on the plant `{}` a period from the 4th on is {:.2} % off the plan's mean \
                  spin (target {} %)",
@@ -825,7 +826,7 @@ pub fn comparison_markdown(
                     format!("{tau:.3}")
                 };
                 let ball = match (&t.lost, t.check_failure()) {
-                    (Some(why), _) => format!("**lost**: {why}"),
+                    (Some(why), _) => format!("**{}**: {why}", t.loss()),
                     (None, Some(why)) => format!("kept, but **not a result**: {why}"),
                     (None, None) => "kept".into(),
                 };
@@ -897,7 +898,7 @@ pub fn comparison_markdown(
                 Some(ErrorRun {
                     controller: r.controller,
                     periods: t.periods.as_slice(),
-                    lost: t.lost.is_some(),
+                    lost: t.lost.as_ref().map(|_| t.loss()),
                 })
             })
             .filter(|r| !r.periods.is_empty())
@@ -918,15 +919,27 @@ pub fn comparison_markdown(
     Ok(s)
 }
 
+/// What a lost run ([`Tracking::lost`]) is called: "lost the ball", or, where the simulation
+/// itself `stopped` (a step limit, a model error), "did not complete its periods", since the
+/// ball may still have been in hand.
+pub fn loss_wording(stopped: bool) -> &'static str {
+    if stopped {
+        "did not complete its periods"
+    } else {
+        "lost the ball"
+    }
+}
+
 /// One controller's run in [`error_figure`].
 pub struct ErrorRun<'a> {
     /// The controller.
     pub controller: ControllerKind,
     /// Its completed periods.
     pub periods: &'a [PeriodMetrics],
-    /// Whether the run lost the ball ([`Tracking::lost`]): its errors are those of a finger
-    /// that no longer rolls the ball as planned, and its legend says so.
-    pub lost: bool,
+    /// Where the run is lost ([`Tracking::lost`]), what that means ([`Tracking::loss`]): its
+    /// errors are those of a finger that no longer rolls the ball as planned, or of a
+    /// simulation that stopped, and its legend says which.
+    pub lost: Option<&'static str>,
 }
 
 /// The Fig. 17 counterpart for closed loops: the mean-ω error ‖ω̄_k − ω̄*‖ / ‖ω̄*‖ (%, log
@@ -939,7 +952,7 @@ pub fn error_figure(name: &str, runs: &[ErrorRun<'_>], stem: &Path) -> Result<()
     let mut fig = bf_plot::LineFigure::new(
         format!("Fig. 17 counterpart: ω error per period under each controller ({name})"),
         "period",
-        "‖ω̄_k − ω̄*‖ / ‖ω̄*‖ [%]",
+        "‖ω_k − ω*‖ / ‖ω*‖ of the period means [%]",
     );
     fig.y_scale = bf_plot::Scale::Log10;
     fig.x_whole = true;
@@ -950,10 +963,9 @@ pub fn error_figure(name: &str, runs: &[ErrorRun<'_>], stem: &Path) -> Result<()
             .enumerate()
             .map(|(k, p)| ((k + 1) as f64, 100.0 * p.omega_error))
             .collect();
-        let label = if run.lost {
-            format!("{} (lost the ball)", run.controller.name())
-        } else {
-            run.controller.name().to_string()
+        let label = match run.lost {
+            Some(loss) => format!("{} ({loss})", run.controller.name()),
+            None => run.controller.name().to_string(),
         };
         fig.series.push(
             bf_plot::Series::new(label, points).styled(bf_plot::SeriesStyle {
@@ -1181,6 +1193,9 @@ pub struct RobustnessRow {
     pub contact_every_period: bool,
     /// Why the run lost the ball, if it did.
     pub lost: Option<String>,
+    /// Whether the simulation itself stopped (a step limit, a model error): then a
+    /// [`RobustnessRow::lost`] run did not complete its periods, rather than lost the ball.
+    pub stopped: bool,
     /// The largest |τ| of any period (N m).
     pub max_abs_tau: f64,
     /// Whether the run met the target: all periods completed, contact in each, error ≤
@@ -1215,6 +1230,7 @@ impl RobustnessRow {
             max_error_from_fourth: None,
             contact_every_period: false,
             lost: None,
+            stopped: false,
             max_abs_tau: 0.0,
             meets_target: false,
             error: Some(error),
@@ -1298,6 +1314,7 @@ pub fn robustness_row<const N: usize>(
         max_error_from_fourth: later,
         contact_every_period: contact,
         lost: t.lost.clone(),
+        stopped: t.stopped.is_some(),
         max_abs_tau: t.periods.iter().map(|p| p.max_abs_tau).fold(0.0, f64::max),
         meets_target: contact
             && t.periods.len() == periods

@@ -310,6 +310,8 @@ pub fn run_scenario(
     // shown in the results table; an optimum that fails it (or cannot be re-integrated) does
     // not stop the run here, but marks the whole set FAILED at its end (`commands::paper`).
     sol.verification = crate::pipeline::verify::verify(&problem, &sol, 1e-10).ok();
+    let active = crate::pipeline::bounds::active_bounds(&problem.ocp, &sol);
+    sol.active_bounds = Some(active.clone());
     write_solution(&sol, &dir.join(name))?;
     let scene = problem.problem.scene();
     let base = problem.scene.base_translation();
@@ -431,7 +433,7 @@ pub fn run_scenario(
     };
     Ok(ScenarioResult {
         name: name.to_string(),
-        active: crate::pipeline::bounds::active_bounds(&problem.ocp, &sol),
+        active,
         max_tau,
         contact_from_tip: (loc.0, mean, loc.2),
         cone_share: if cone.1 > 0 {
@@ -775,9 +777,10 @@ pub fn tolerances_markdown(results: &[ScenarioResult]) -> String {
 /// The solve stages of `sol` as the report shows them: the strategy's summary, the stages
 /// of its kept chain and the verification refinements of that chain
 /// (`StrategyReport::kept_rows`), then the rounds of the hp refinement of its mesh
-/// (`solution.json`'s `refinement.history`: indented where they are the last of those
-/// refinements, whose line counts their iterations; marked as the origin's where the
-/// winner inherited the mesh from another candidate), and last the optimum the results
+/// (`solution.json`'s `refinement.history`: indented where they are one of those
+/// refinements, whose line counts their iterations (`RefineReport::stage` names it); marked
+/// as the origin's where the winner inherited the mesh from another candidate), and last the
+/// optimum the results
 /// table reports: where `resolved`, the
 /// solve of the stored optimum from its own point in this run, otherwise a line of its own
 /// only where it differs from the line before. `None` for a solution without a strategy
@@ -789,22 +792,19 @@ pub fn solve_stages(sol: &OcpSolution, resolved: bool) -> Option<String> {
     let mut last = rows.last().map(|r| r.objective);
     // Under a refinement's own line its rounds are its parts, indented so that no one sums
     // them twice. A winner that a hop or the polish found on the mesh of its origin carries
-    // the rounds of the origin's refinement, which no line of its own chain counts.
-    let rounds: usize = sol
+    // the rounds of the origin's refinement, which no line of its own chain counts; rounds
+    // of a refinement the strategy did not record (`optimize --refine`) are no line's parts.
+    let source = sol
         .refinement
         .as_ref()
-        .map_or(0, |r| r.history.iter().map(|h| h.iterations).sum());
-    let own = st
-        .refinements
-        .iter()
-        .rev()
-        .find(|r| Some(r.chain) == chain)
-        .is_some_and(|r| r.iterations == rounds);
+        .and_then(|r| r.stage.as_deref())
+        .and_then(|stage| st.refinements.iter().rev().find(|r| r.stage == stage));
+    let own = source.is_some_and(|r| Some(r.chain) == chain);
     let indent = if own { "  " } else { "" };
-    let origin = if own || st.refinements.is_empty() {
-        ""
-    } else {
+    let origin = if source.is_some() && !own {
         "the mesh's origin's "
+    } else {
+        ""
     };
     let row = |stage: String, status, objective, period, iterations, seconds| StageRow {
         kept: true,
@@ -1052,6 +1052,63 @@ mod tests {
         let tail = text.lines().last().unwrap();
         assert!(tail.contains("solved again here"), "{text}");
         assert!(tail.contains(&format!("{:.6e}", sol.objective)), "{text}");
+    }
+
+    /// The hp rounds are indented under the line of the kept chain's refinement that sums
+    /// them, marked as the origin's where the refinement was another chain's (a hop solved on
+    /// its mesh), and neither where no line of the strategy sums them, whatever the
+    /// iteration counts: the link is the record's stage, not a count that may coincide.
+    #[test]
+    fn hp_rounds_follow_the_refinement_that_made_them() {
+        use bf_problem::solution::records::StageRecord;
+        let stored = crate::paper::stored::sticking_optimum(Problem::PeriodicCotHuman).unwrap();
+        let mut sol = stored.solution().unwrap();
+        let rounds: usize = sol
+            .refinement
+            .as_ref()
+            .unwrap()
+            .history
+            .iter()
+            .map(|h| h.iterations)
+            .sum();
+        let record = |chain: usize, iterations: usize| StageRecord {
+            chain,
+            stage: format!("refine start {chain} to 1e-4 (defect 1.0e-6)"),
+            status: bf_optim::ipm::Status::Solved,
+            objective: sol.objective,
+            period: sol.period,
+            iterations,
+            seconds: 1.0,
+        };
+        let st = sol.strategy.as_mut().unwrap();
+        let kept = st.chosen.unwrap();
+        let other = kept + 1;
+        // The other chain's count equals the rounds' sum and the kept chain's does not: a
+        // comparison of counts would take the rounds for the wrong chain's.
+        st.refinements = vec![record(kept, rounds + 7), record(other, rounds)];
+        let round_lines = |sol: &OcpSolution| -> Vec<String> {
+            solve_stages(sol, false)
+                .unwrap()
+                .lines()
+                .filter(|l| l.contains("hp round"))
+                .map(str::to_string)
+                .collect()
+        };
+        let own_stage = record(kept, 0).stage;
+        let origin_stage = record(other, 0).stage;
+        for (stage, indented, origin) in [
+            (Some(own_stage), true, false),
+            (Some(origin_stage), false, true),
+            (None, false, false),
+        ] {
+            sol.refinement.as_mut().unwrap().stage = stage.clone();
+            let lines = round_lines(&sol);
+            assert!(!lines.is_empty());
+            for l in &lines {
+                assert_eq!(l.contains("    hp round"), indented, "{stage:?}: {l}");
+                assert_eq!(l.contains("the mesh's origin's"), origin, "{stage:?}: {l}");
+            }
+        }
     }
 
     /// Text for readers counts phases from 1, as the active bounds do: the stick phase of

@@ -357,6 +357,7 @@ pub fn refine(
             mesh,
             errors,
             history,
+            stage: None,
         },
         solution,
     })

@@ -696,6 +696,11 @@ fn refine_until_verified(
                     t0,
                 );
                 r.iterations = next.solution.iterations.saturating_sub(iters0);
+                // The rounds' own link to the line that sums them, which the report follows
+                // (and which a hop's result on this mesh carries as its origin's).
+                if let Some(rep) = next.solution.refinement.as_mut() {
+                    rep.stage = Some(r.stage.clone());
+                }
                 records.push(r);
                 if !next.solution.status.is_success() {
                     break;

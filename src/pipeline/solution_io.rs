@@ -515,6 +515,30 @@ fn from_texts(
     Ok(sol)
 }
 
+/// Errors naming `path` unless the fields of the `solution.json` document `v` agree among
+/// themselves (the checks of [`SolutionIo::read_json`] that need no internals: phases, durations,
+/// period, the trajectory tables' columns and times). For a reader that uses the public
+/// document alone, as `simulate --init` does: it replays a plan by its period and first node,
+/// so a file whose own fields disagree is refused there as everywhere.
+pub fn check_public_fields(v: &Value, path: &Path) -> Result<(), PipelineError> {
+    check_schema_version(v, path)?;
+    let sol: OcpSolution = if v.get("schema_version").is_none() {
+        serde_json::from_value(v.clone()).map_err(|e| io_err(path, e))?
+    } else {
+        // Internals without data, in the form the writer gives them.
+        let timing = serde_json::to_value(bf_optim::ipm::Timing::default());
+        let counters = serde_json::to_value(bf_optim::ipm::Counters::default());
+        let (timing, counters) = (
+            timing.map_err(|e| io_err(path, e))?,
+            counters.map_err(|e| io_err(path, e))?,
+        );
+        let empty = json!({"raw": [], "params": [], "nlp_warm": null, "counters": counters,
+            "timing_seconds": timing_seconds(&timing)});
+        from_documents(v, &empty, path)?
+    };
+    check_phases(&sol, path)
+}
+
 /// Errors naming the internals file `ipath` and the field unless its collocation data,
 /// parameters and NLP point read as their types: the two documents are read as one, and a
 /// field missing from the internals would otherwise be blamed on `solution.json`.

@@ -20,6 +20,11 @@ pub(super) const TICK_FONT: f64 = 13.0;
 pub(super) const LEGEND_FONT: f64 = 13.0;
 pub(super) const MARKER_FONT: f64 = 11.0;
 pub(super) const POINT_LABEL_FONT: f64 = 10.5;
+
+/// The largest share of an axes' height that head room for a legend may take: the data keep
+/// at least the rest.
+const MAX_HEADROOM: f64 = 0.6;
+
 /// Titles and axis descriptions are never drawn smaller than this fraction of their size; a
 /// longer one is cut to fit (with an ellipsis) rather than drawn unreadably small.
 const MIN_FIT_SCALE: f64 = 0.7;
@@ -182,7 +187,8 @@ pub(super) fn legend_entries(
     xr: (f64, f64),
 ) -> Vec<(String, Sample)> {
     let mut out: Vec<(String, Sample)> = Vec::new();
-    for s in prep.series.iter().filter(|s| s.in_legend) {
+    let listed: Vec<_> = prep.series.iter().filter(|s| s.in_legend).collect();
+    for (i, s) in listed.iter().enumerate() {
         let c = s.colour;
         let sample = if s.joined {
             Sample::Line {
@@ -194,7 +200,13 @@ pub(super) fn legend_entries(
         } else {
             Sample::Marker(c)
         };
-        out.push((s.name.clone(), sample));
+        // A series drawn over an earlier one with the very same points hides it: the legend
+        // says so, or the earlier one would seem missing.
+        let name = match listed[..i].iter().find(|o| o.pieces == s.pieces) {
+            Some(o) => format!("{} (the same points as {})", s.name, o.name),
+            None => s.name.clone(),
+        };
+        out.push((name, sample));
     }
     for (h, &off) in fig.hlines.iter().zip(off_scale) {
         if h.label.is_empty() {
@@ -309,7 +321,7 @@ pub(super) fn mapping(
     };
     let (xr, mut yr) = (prep.xr, prep.yr);
     if headroom > 0.0 && fig.y_range.is_none() {
-        let f = (headroom / plot.h()).min(0.6);
+        let f = (headroom / plot.h()).min(MAX_HEADROOM);
         yr.1 += (yr.1 - yr.0) * f / (1.0 - f);
     }
     let (xr, yr) = if fig.equal_aspect {
@@ -546,16 +558,19 @@ pub(super) fn layout_panel(
                         }
                     }
                     // No free corner: beside the axes when head room would take more than a
-                    // quarter of a (non-geometric) axes and 60 % of its width remain, otherwise
-                    // room above the data and an upper corner.
+                    // quarter of a (non-geometric) axes and 60 % of its width remain, or when
+                    // head room cannot hold the legend at all (`mapping` gives at most
+                    // `MAX_HEADROOM` of the height) and 40 % remain; otherwise room above the
+                    // data and an upper corner.
                     let room = bh + 22.0;
-                    let wide = m.plot.w() - bw - 30.0 >= (0.6 * m.plot.w()).max(300.0);
-                    if best.0 > 0
-                        && !last
-                        && forced_corner.is_none()
-                        && !fig.equal_aspect
-                        && wide
-                        && (room > 0.25 * m.plot.h() || fig.y_range.is_some())
+                    let remains =
+                        |share: f64| m.plot.w() - bw - 30.0 >= (share * m.plot.w()).max(300.0);
+                    let beside = if fig.y_range.is_some() || room > MAX_HEADROOM * m.plot.h() {
+                        remains(0.4)
+                    } else {
+                        room > 0.25 * m.plot.h() && remains(0.6)
+                    };
+                    if best.0 > 0 && !last && forced_corner.is_none() && !fig.equal_aspect && beside
                     {
                         outside = bw + 30.0;
                         continue;

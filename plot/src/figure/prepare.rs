@@ -163,6 +163,23 @@ pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
                 },
             }
         };
+    // The PNG draws glyph by glyph: a combining mark (ω̄ as ω + U+0304) lands beside its
+    // letter or not at all, so the PNG would name another quantity than the SVG.
+    let texts = [&fig.title, &fig.x_label, &fig.y_label]
+        .into_iter()
+        .chain(fig.series.iter().map(|s| &s.name));
+    for t in texts {
+        if let Some(c) = t.chars().find(|c| ('\u{300}'..='\u{36f}').contains(c)) {
+            return Err(invalid(
+                fig,
+                "text",
+                format!(
+                    "'{t}' holds the combining mark U+{:04X}, which the PNG cannot place",
+                    u32::from(c)
+                ),
+            ));
+        }
+    }
     let xr_fixed = check(fig.x_range, fig.x_scale, "x_range")?;
     let yr_fixed = check(fig.y_range, fig.y_scale, "y_range")?;
     for &(t, ref l) in &fig.vertical_markers {
@@ -215,12 +232,15 @@ pub(super) fn prepare(fig: &LineFigure) -> Result<Prepared, PlotError> {
         }
         let non_negative = fig.y_non_negative && fig.y_scale == Scale::Linear && lo >= 0.0;
         if non_negative && hi <= 0.0 {
-            // Identically 0: the axis of a quantity that cannot be negative starts at 0.
-            return (0.0, 1.0);
+            // Identically 0: the axis of a quantity that cannot be negative is [0, 1], its
+            // line lifted off the frame as below.
+            return (-ZERO_LIFT, 1.0);
         }
         let (lo, hi) = widen((lo, hi), 0.05);
         if non_negative {
-            (lo.max(0.0), hi)
+            // No negative range (nor tick) for a quantity that cannot be negative, but a line
+            // at 0 is drawn just above the frame, not hidden in it.
+            (lo.max(-ZERO_LIFT * hi), hi)
         } else {
             snap_log((lo, hi), fig.y_scale)
         }
@@ -262,6 +282,11 @@ pub(super) fn snap_log((lo, hi): (f64, f64), scale: Scale) -> (f64, f64) {
     };
     (down(lo), up(hi))
 }
+
+/// The share of a non-negative axis's range left below 0, so that a line at 0 is not drawn
+/// on the frame: under half the smallest tick step (a tenth of the range at most 8 ticks),
+/// so that no tick falls below 0.
+pub(super) const ZERO_LIFT: f64 = 0.02;
 
 /// Pads a range by `frac` of its span and makes degenerate ranges non-empty.
 pub(super) fn widen((lo, hi): (f64, f64), frac: f64) -> (f64, f64) {

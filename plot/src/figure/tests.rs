@@ -16,7 +16,8 @@ fn widen_handles_degenerate_ranges() {
 }
 
 /// A quantity that cannot be negative gets a [0, …] axis: [0, 1] when it is identically 0
-/// (not −1…1), and never a padding below 0 otherwise; without the flag nothing changes.
+/// (not −1…1), and no tick below 0 otherwise; only a sliver of the range lies below 0, so
+/// that a line at 0 is drawn off the frame; without the flag nothing changes.
 #[test]
 fn non_negative_axes_start_at_zero() {
     let mut f = LineFigure::new("t", "t [s]", "d [m]");
@@ -24,11 +25,26 @@ fn non_negative_axes_start_at_zero() {
         .push(Series::new("d", vec![(0.0, 0.0), (1.0, 0.0), (2.0, 0.0)]));
     assert_eq!(prepare(&f).unwrap().yr, (-1.0, 1.0));
     f.y_non_negative = true;
-    assert_eq!(prepare(&f).unwrap().yr, (0.0, 1.0));
-    f.series[0].points[1].1 = 0.5;
+    let ticks_from_zero = |r: (f64, f64)| {
+        let t = axis_ticks(Scale::Linear, r, 150.0, false, false);
+        assert!(t.iter().all(|t| t.pos >= -1e-12 * r.1), "{r:?}: {t:?}");
+        assert!(
+            t.iter().any(|t| t.pos.abs() <= 1e-12 * r.1),
+            "{r:?}: no tick at 0"
+        );
+    };
     let (lo, hi) = prepare(&f).unwrap().yr;
-    assert_eq!(lo, 0.0);
-    assert!(hi > 0.5, "{hi}");
+    assert!((-ZERO_LIFT..0.0).contains(&lo) && hi == 1.0, "{lo} {hi}");
+    ticks_from_zero((lo, hi));
+    for top in [0.5, 0.013, 7.0, 1e-6] {
+        f.series[0].points[1].1 = top;
+        let (lo, hi) = prepare(&f).unwrap().yr;
+        assert!(
+            (-ZERO_LIFT * hi..0.0).contains(&lo) && hi > top,
+            "{lo} {hi}"
+        );
+        ticks_from_zero((lo, hi));
+    }
 }
 
 /// An autoscaled log axis ends at ticks: at whole decades when it spans two or more (both
@@ -360,4 +376,19 @@ fn point_labels_follow_their_kept_points() {
     assert!(!p.series[0].joined);
     f.series[0].labels.pop();
     assert!(matches!(prepare(&f), Err(PlotError::InvalidInput { .. })));
+}
+
+/// A combining mark in a figure's text is refused, naming it: the PNG cannot place it, and
+/// would show another symbol than the SVG (ω̄ as ω and a stray bar).
+#[test]
+fn combining_marks_are_refused() {
+    let mut f = LineFigure::new("t", "t [s]", "\u{3c9}\u{304} [rad/s]");
+    f.series
+        .push(Series::new("w", vec![(0.0, 1.0), (1.0, 2.0)]));
+    let e = prepare(&f).err().expect("refused").to_string();
+    assert!(e.contains("U+0304"), "{e}");
+    f.y_label = "ω [rad/s]".into();
+    assert!(prepare(&f).is_ok());
+    f.series[0].name = "a\u{301}".into();
+    assert!(prepare(&f).is_err());
 }

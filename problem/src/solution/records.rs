@@ -289,6 +289,13 @@ pub struct RefineReport {
     pub errors: Vec<Vec<f64>>,
     /// One entry per solve.
     pub history: Vec<RefineRound>,
+    /// The strategy's verification refinement whose iterations these rounds are: the
+    /// [`StageRecord::stage`] of its record in [`StrategyReport::refinements`], whose chain is
+    /// the candidate the mesh was refined for. A hop or reshaping move solved on that mesh
+    /// keeps the record, so its chain differs from the kept one. `None` for a refinement the
+    /// strategy did not record (`optimize --refine`) or a file from before this field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stage: Option<String>,
 }
 
 /// JSON has no NaN/∞: non-finite values are written as `null` and read back as NaN.

@@ -224,12 +224,9 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         bail_usage!("--points must be at least 2 (got {})", args.points);
     }
     if let Some(eps) = args.epsilon
-        && !(eps.is_finite() && eps > 0.0)
+        && let Some(why) = bf_codegen::spec::smooth_eps_out_of_range(eps)
     {
-        bail_usage!(
-            "--epsilon must be a finite positive number (got {})",
-            crate::cli::shown(eps)
-        );
+        bail_usage!("--epsilon {why} (got {})", crate::cli::shown(eps));
     }
     if let Some(dc) = args.dual_regularization
         && !(dc.is_finite() && dc > 0.0 && dc <= 1e-4)

@@ -245,6 +245,8 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let out = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let mut cands: Vec<(usize, OcpSolution)> = Vec::new();
     let mut records: Vec<StageRecord> = Vec::new();
+    // Directories without candidate files, which the error names when none has any.
+    let mut without: Vec<String> = Vec::new();
     let mut head: Option<(std::path::PathBuf, String, Strategy)> = None;
     let mut first: Option<(std::path::PathBuf, OcpSolution)> = None;
     let mut first_candidate: Option<(std::path::PathBuf, OcpSolution)> = None;
@@ -308,6 +310,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         records.extend(rep.records.iter().cloned());
         if found.is_empty() {
             crate::outln!("note: {} has no candidate files", dir.display())?;
+            without.push(dir.display().to_string());
         }
         // Candidates may be on the sampling's coarse mesh: they are compared with each other.
         for (k, cpath, c) in found {
@@ -345,7 +348,13 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
         }
     }
     if cands.is_empty() {
-        bail!("optimize merge: the directories hold no candidate of {problem}");
+        bail!(
+            "optimize merge: the directories hold no candidate of {problem}: {} {} no \
+             candidate files (a whole search's output, which is no shard's, or shards whose \
+             starts all failed)",
+            without.join(", "),
+            if without.len() == 1 { "has" } else { "have" }
+        );
     }
     let ncands = cands.len();
     // The global search's exploitation runs here, on the union of the shards' candidates,

@@ -226,7 +226,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
         }
         if v.get("nodes").is_some() && v.get("modes").is_some() {
             // A solution of `optimize`: replay it from its own initial state and mode.
-            crate::pipeline::solution_io::check_schema_version(&v, path)
+            crate::pipeline::solution_io::check_public_fields(&v, path)
                 .with_context(|| format!("--init {}", path.display()))?;
             // Honest output: a replay of a plan that failed its own checks is no check of it.
             let status = v.get("status").and_then(|s| s.as_str()).unwrap_or("?");
