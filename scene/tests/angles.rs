@@ -46,6 +46,11 @@ fn angle_strings_parse_exactly() {
         let e = Angle::parse_str(bad).unwrap_err();
         assert!(e.contains("invalid angle"), "{bad}: {e}");
     }
+    // An exponent is named as the reason, whatever the number's size.
+    for bad in ["1e400", "1e3deg", "2.5E2 degrees"] {
+        let e = Angle::parse_str(bad).unwrap_err();
+        assert!(e.contains("exponent"), "{bad}: {e}");
+    }
 }
 
 #[test]
