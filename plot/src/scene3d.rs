@@ -3,7 +3,8 @@
 //! The scene of Sect. 2.1: ball of radius r centred at o_b, finger frames from the base o_f through
 //! the DH frames to the fingertip p_e. Each [`View`] is an orthographic projection, so the sphere's
 //! outline is exactly a circle of radius r around the projected centre; a wireframe of three great
-//! circles (equator and two meridians) gives depth cues. Paths: fingertip p_e(t) and contact point
+//! circles (equator and two meridians) gives depth cues, all but one lying in the view plane,
+//! which would only retrace the outline. Paths: fingertip p_e(t) and contact point
 //! p_c(t) (eq. 3; NaN samples = not in contact leave gaps). [`fig_finger_paths`] draws one
 //! finger (Fig. 5, 10, 12); [`fig_compare_paths`] overlays several paths (Fig. 11: the closest
 //! points of the human and the robotic finger).
@@ -119,17 +120,6 @@ pub fn fig_finger_paths(
         )));
     }
     let (c, r) = (data.ball_center, data.ball_radius);
-    let circle = |a: [f64; 3], b: [f64; 3]| -> Vec<[f64; 3]> {
-        (0..=120)
-            .map(|i| {
-                let th = i as f64 * std::f64::consts::TAU / 120.0;
-                let (s, co) = libm::sincos(th);
-                [0, 1, 2].map(|k| c[k] + r * (co * a[k] + s * b[k]))
-            })
-            .collect()
-    };
-    let (ex, ey, ez) = ([1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
-    let wire = [circle(ex, ey), circle(ex, ez), circle(ey, ez)];
     let mut panels = Vec::with_capacity(views.len());
     for &v in views {
         let (name, xl, yl) = v.labels();
@@ -137,30 +127,7 @@ pub fn fig_finger_paths(
         p.equal_aspect = true;
         p.legend = LegendPos::Auto;
         let proj = |pts: &[[f64; 3]]| pts.iter().map(|&q| v.project(q)).collect::<Vec<_>>();
-        // Orthographic outline of a sphere: a circle of radius r around the projected centre.
-        let (cu, cv) = v.project(c);
-        let outline = (0..=120)
-            .map(|i| {
-                let th = i as f64 * std::f64::consts::TAU / 120.0;
-                (cu + r * libm::cos(th), cv + r * libm::sin(th))
-            })
-            .collect();
-        p.series.push(Series::new("ball", outline).styled(style(
-            (60, 60, 60),
-            Dash::Solid,
-            2,
-            false,
-            true,
-        )));
-        for w in &wire {
-            p.series.push(Series::new("", proj(w)).styled(style(
-                (190, 190, 190),
-                Dash::Solid,
-                1,
-                false,
-                false,
-            )));
-        }
+        p.series.extend(sphere_series(c, r, v));
         for (k, snap) in data.snapshots.iter().enumerate() {
             if snap.len() < 2 {
                 return Err(PlotError::Shape {
@@ -241,7 +208,16 @@ fn sphere_series(c: [f64; 3], r: f64, v: View) -> Vec<Series> {
     let mut out =
         vec![Series::new("ball", outline).styled(style((60, 60, 60), Dash::Solid, 2, false, true))];
     for (a, b) in [(ex, ey), (ex, ez), (ey, ez)] {
-        out.push(Series::new("", circle(a, b)).styled(style(
+        let wire = circle(a, b);
+        // The great circle in the view plane projects onto the outline itself: drawn again,
+        // thinner and grey, over it, it only blurs the outline.
+        let on_outline = wire
+            .iter()
+            .all(|&(x, y)| (libm::hypot(x - cu, y - cv) - r).abs() <= 1e-9 * r);
+        if on_outline {
+            continue;
+        }
+        out.push(Series::new("", wire).styled(style(
             (190, 190, 190),
             Dash::Solid,
             1,
@@ -338,20 +314,29 @@ mod tests {
 
     #[test]
     fn projected_wireframe_stays_inside_outline() {
-        // Orthographic projection never moves a sphere point outside the outline circle.
+        // Orthographic projection never moves a sphere point outside the outline circle; the
+        // great circle in the view plane, which would retrace the outline, is left out (the
+        // front view shows two of the three, the iso view all three).
         let data = FingerPaths {
             ball_center: [0.5, -0.2, 0.1],
             ball_radius: 1.0,
             tip_path: vec![[2.0, 0.0, 0.0]],
             ..Default::default()
         };
-        let f = fig_finger_paths("t", &data, &[View::FrontXZ, View::Iso]).unwrap();
-        for (p, v) in f.panels.iter().zip([View::FrontXZ, View::Iso]) {
+        let views = [View::FrontXZ, View::SideYZ, View::Iso];
+        let f = fig_finger_paths("t", &data, &views).unwrap();
+        for ((p, v), n) in f.panels.iter().zip(views).zip([2, 2, 3]) {
             let (cu, cv) = v.project(data.ball_center);
-            for s in &p.series[1..4] {
-                for &(u, w) in &s.points {
-                    assert!(libm::hypot(u - cu, w - cv) <= 1.0 + 1e-12);
-                }
+            let wire: Vec<&Series> = p.series.iter().filter(|s| s.name.is_empty()).collect();
+            assert_eq!(wire.len(), n, "{v:?}");
+            for s in wire {
+                let d: Vec<f64> = s
+                    .points
+                    .iter()
+                    .map(|&(u, w)| libm::hypot(u - cu, w - cv))
+                    .collect();
+                assert!(d.iter().all(|&d| d <= 1.0 + 1e-12), "{v:?}");
+                assert!(d.iter().any(|&d| d < 0.99), "{v:?}: a wire on the outline");
             }
         }
     }
