@@ -121,8 +121,9 @@ pub enum Command {
     /// printed as "robustness: MISSED" and recorded in solution.json, and the search prefers
     /// plans that meet it: docs/closed-loop.md) or not re-integrated (--verify-rtol 0); 1 when
     /// it did not converge or is unverified (the output set is still written, marked FAILED;
-    /// solution.json has `verification.verified: false` and the defect) and for other errors;
-    /// 2 for usage errors.
+    /// solution.json's `status` says whether the solve converged, and `verification.verified`
+    /// whether its re-integration agrees, with the defect: a solve stopped early can describe
+    /// the model's motion and still be no optimum) and for other errors; 2 for usage errors.
     Optimize(OptimizeArgs),
     /// Reproduce the paper's study (Sect. 6) and write a report.
     Paper(PaperArgs),
@@ -651,7 +652,9 @@ pub struct OptimizeArgs {
     /// that does not converge ends the refinement with the round before it. A refined optimum
     /// that does not re-integrate within the verification's tolerance goes on to the
     /// verification's own refinements (`--verify-refinements`); solution.json's `refinement`
-    /// is then the last of them, and its stages list them.
+    /// is then the last of them, and its stages list them. Refinement rounds that end without
+    /// reaching TOL (the round or point limit, a round that did not converge) mark the set
+    /// FAILED and exit with status 1, naming the largest element error reached.
     #[arg(long, value_name = "TOL", allow_hyphen_values = true)]
     pub refine: Option<f64>,
     /// Refinement rounds at most (with `--refine`; refused without it) [default: 8].

@@ -489,11 +489,7 @@ fn optimize_refines_verifies_and_records_it() {
         dir.to_str().unwrap(),
     ]);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stdout.contains("multistart (2 starts, seed 0)"), "{stdout}");
     assert!(stdout.contains("mesh refinement to 1e-6"), "{stdout}");
     assert!(stdout.contains("trajectory verification"), "{stdout}");
@@ -507,8 +503,12 @@ fn optimize_refines_verifies_and_records_it() {
     // refinement says which limit stopped it.
     let within = last["max_error"].as_f64().unwrap() <= 1e-6;
     assert_eq!(r["converged"].as_bool(), Some(within), "{r}");
+    // An unmet tolerance is a failed check: exit 1 and a FAILED set, naming it.
+    assert_eq!(out.status.success(), within, "{stdout}\n{stderr}");
+    assert_eq!(dir.join("FAILED").exists(), !within);
     if !within {
         assert!(r["stop_reason"].as_str().unwrap().contains("limit"), "{r}");
+        assert!(stderr.contains("did not reach --refine 1e-6"), "{stderr}");
     }
     assert_eq!(last["objective"].as_f64(), sol["objective"].as_f64());
     // The refined mesh has at least as many points as the default 30 per phase.
@@ -1123,4 +1123,87 @@ fn a_graph_past_max_graph_nodes_is_refused_by_name() {
         &run(&["--max-graph-nodes", "0", "generate", "scenes/paper.toml"]),
         &["--max-graph-nodes"],
     );
+}
+
+/// `torques.csv` is clamped to the limits of the scene the solution was posed on: a user's copy
+/// of `scenes/paper.toml` with τ_max = 2 N m lets the reach optimum's τ₂ beyond the compiled
+/// scene's 1 N m, and the file keeps it there (it used to clamp to the compiled scene's limits
+/// found by name, and its replay then missed the planned end by 0.29 in the state).
+#[test]
+fn torques_csv_keeps_the_limits_of_the_solutions_own_scene() {
+    let dir = tmpdir("own-limits");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml")).unwrap();
+    let wide = text.replace("tau_max = 1.0", "tau_max = 2.0");
+    assert_eq!(wide.matches("tau_max = 2.0").count(), 3);
+    let scene = dir.join("paper.toml");
+    std::fs::write(&scene, wide).unwrap();
+    let out = dir.join("out");
+    ok(&run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "direct",
+        "--scene",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("solution.json")).unwrap()).unwrap();
+    let peak = |col: &[f64]| col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    let dense: Vec<f64> = sol["dense"]["tau2"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(peak(&dense) > 1.05, "τ₂ of the optimum: {}", peak(&dense));
+    let csv = std::fs::read_to_string(out.join("torques.csv")).unwrap();
+    let rows: Vec<Vec<f64>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    // The polynomial samples (1000 per phase), not the 100 dense ones.
+    assert!(rows.len() > 900, "{} rows", rows.len());
+    let tau2: Vec<f64> = rows.iter().map(|r| r[2]).collect();
+    assert!(
+        peak(&tau2) >= peak(&dense) - 1e-6,
+        "{} against {}",
+        peak(&tau2),
+        peak(&dense)
+    );
+    assert!(peak(&tau2) <= 2.0, "{}", peak(&tau2));
+}
+
+/// A `--refine` tolerance that the rounds do not reach is a check the result failed: with one
+/// round, 1e-12 is out of reach on `reach`; the set is written, marked FAILED, and the run
+/// exits 1 naming the tolerance and the largest element error reached.
+#[test]
+fn an_unmet_refine_tolerance_fails_the_run() {
+    let dir = tmpdir("refine-unmet");
+    let out = run(&[
+        "optimize",
+        "--problem",
+        "reach",
+        "--strategy",
+        "direct",
+        "--refine",
+        "1e-12",
+        "--refine-rounds",
+        "1",
+        "--out",
+        dir.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("did not reach --refine 1e-12") && stderr.contains("largest element error"),
+        "{stderr}"
+    );
+    assert!(dir.join("FAILED").exists() && dir.join("solution.json").exists());
+    let sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();
+    assert_eq!(sol["refinement"]["converged"], false);
 }

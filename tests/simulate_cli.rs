@@ -652,6 +652,15 @@ fn a_run_whose_energy_balance_fails_is_marked_failed() {
         assert_eq!(summary["energy_drift"].as_f64(), Some(error), "step {step}");
         assert_eq!(summary["t_final"].as_f64().unwrap(), 2.0, "step {step}");
         assert_eq!(out_dir.join("FAILED").exists(), fails, "step {step}");
+        // summary.json names the reason too, as an arm's does.
+        assert_eq!(
+            summary["error"]
+                .as_str()
+                .is_some_and(|e| e.contains("energy balance failed its check")),
+            fails,
+            "step {step}: {}",
+            summary["error"]
+        );
         if fails {
             assert_clean_failure(&o, &["energy balance failed its check"]);
             assert_eq!(o.status.code(), Some(1));

@@ -1205,3 +1205,43 @@ fn track_says_which_kernels_the_plant_ran_on() {
     assert_eq!(kernels(&other), "interpreted");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `track --robustness` of a plan whose solve stopped before converging says so, on stderr and
+/// at the head of robustness.md, as a plain `track` run does: the table measures where that
+/// solve stopped, not an optimum.
+#[test]
+fn robustness_of_an_unconverged_plan_is_flagged() {
+    let dir = cli::tmpdir("track-unconverged");
+    let plan = dir.join("plan");
+    std::fs::create_dir_all(&plan).unwrap();
+    let stored = cli::root().join("data/optima/periodic-qc-plan");
+    for f in ["solution.json", "solution-internals.json"] {
+        std::fs::copy(stored.join(f), plan.join(f)).unwrap();
+    }
+    let path = plan.join("solution.json");
+    let mut sol: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    assert_eq!(sol["status"], "Solved");
+    sol["status"] = serde_json::json!("MaxIterations");
+    std::fs::write(&path, sol.to_string()).unwrap();
+    let out = dir.join("rob");
+    let r = cli::run(&[
+        "track",
+        path.to_str().unwrap(),
+        "--robustness",
+        "--periods",
+        "4",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        stderr.contains("MaxIterations") && stderr.contains("not an optimum"),
+        "{stderr}"
+    );
+    let md = std::fs::read_to_string(out.join("robustness.md")).unwrap();
+    assert!(
+        md.starts_with("**Warning**") && md.contains("MaxIterations"),
+        "{md}"
+    );
+}

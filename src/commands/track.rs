@@ -153,7 +153,15 @@ fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -
     let mut out_dir = OutputDir::create(&args.out, &OUTPUT_DIR, &args.inputs())?;
     let name = args.solution.display().to_string();
     let rows = robustness_rows(sol, controller, args.periods, replan);
-    let md = robustness_table(&name, controller, args.periods, &rows)?;
+    let caveats = plan_caveats(args, sol);
+    let mut md: String = caveats
+        .iter()
+        .map(|c| format!("**Warning**: {c}.\n\n"))
+        .collect();
+    md.push_str(&robustness_table(&name, controller, args.periods, &rows)?);
+    for caveat in &caveats {
+        crate::errln!("warning: {caveat}");
+    }
     out_dir.write("robustness.md", md.as_bytes())?;
     out_dir.write("robustness.json", &serde_json::to_vec_pretty(&rows)?)?;
     let missed: Vec<&str> = rows
@@ -179,6 +187,31 @@ fn robustness(args: &TrackArgs, controller: ControllerKind, sol: &OcpSolution) -
         Some(f) => bail!("{f}"),
         None => Ok(()),
     }
+}
+
+/// What a run of the plan `sol` measures besides the controller, as sentences naming the
+/// file: a plan that failed its own verification or was not re-integrated (its errors are the
+/// plan's too), a solve that stopped before converging (no optimum). Printed as warnings by
+/// both kinds of run and written at the head of the robustness table.
+fn plan_caveats(args: &TrackArgs, sol: &OcpSolution) -> Vec<String> {
+    let path = args.solution.display();
+    let mut out = Vec::new();
+    if !crate::pipeline::verify::is_verified(sol) {
+        let why = if sol.verification.is_some() {
+            "failed its own verification (solution.json `verification`)"
+        } else {
+            "was not re-integrated (it has no `verification` record: `optimize --verify-rtol 0`)"
+        };
+        out.push(format!("{path} {why}: the errors below include the plan's"));
+    }
+    if !sol.status.is_success() {
+        out.push(format!(
+            "{path}: its solve ended {} (status): the plan tracked is where that solve \
+             stopped, not an optimum",
+            crate::names::name(&sol.status)
+        ));
+    }
+    out
 }
 
 /// Runs `track`.
@@ -306,25 +339,8 @@ fn run_n<const N: usize>(
         Some(f) => Outcome::Failed(f),
         None => Outcome::Success,
     })?;
-    if !record.plan_verified {
-        // Honest output: the run measures the plan's own error as well as the controller's.
-        let why = if sol.verification.is_some() {
-            "failed its own verification (solution.json `verification`)"
-        } else {
-            "was not re-integrated (it has no `verification` record: `optimize --verify-rtol 0`)"
-        };
-        crate::errln!(
-            "warning: {} {why}: the errors below include the plan's",
-            args.solution.display()
-        );
-    }
-    if !sol.status.is_success() {
-        crate::errln!(
-            "warning: {}: its solve ended {} (status): the plan tracked is where that solve \
-             stopped, not an optimum",
-            args.solution.display(),
-            crate::names::name(&sol.status)
-        );
+    for caveat in plan_caveats(args, sol) {
+        crate::errln!("warning: {caveat}");
     }
     if law.name() != sol.impact_law.name() {
         // A sticking plan on a Newton plant: short stick phases spin the ball by an impulse

@@ -684,9 +684,22 @@ impl SolutionIo for OcpSolution {
 /// state errors of order 1e-4 in a replay).
 pub const TORQUE_SAMPLES_PER_PHASE: usize = 1000;
 
-/// Torque limits of the scene the solution was computed on (a built-in scene: the one its
-/// verification names, else its problem's), if known.
+/// Torque limits of the scene the solution was computed on: the scene it records
+/// (`scene_toml` with its `scene_params`, a user's file as much as a compiled one); for a file
+/// that records none (written before), the built-in scene its verification or its problem
+/// names. `None` where neither is known.
 fn tau_max_of(sol: &OcpSolution) -> Option<Vec<f64>> {
+    // A joint without a limit is unbounded (as the problem poses it).
+    let limits = |scene: &bf_codegen::Scene| -> Vec<f64> {
+        scene
+            .links
+            .iter()
+            .map(|l| l.tau_max.unwrap_or(f64::INFINITY))
+            .collect()
+    };
+    if let Some(scene) = super::solve::recorded_scene(sol).ok()? {
+        return Some(limits(&scene));
+    }
     let scene = match &sol.verification {
         Some(v) => v.scene.clone(),
         None => sol
@@ -698,7 +711,7 @@ fn tau_max_of(sol: &OcpSolution) -> Option<Vec<f64>> {
     };
     let text = bf_generated::scene_toml(&scene)?;
     let spec = bf_codegen::Scene::from_toml_str(text, &scene).ok()?;
-    spec.links.iter().map(|l| l.tau_max).collect()
+    Some(limits(&spec))
 }
 
 /// `torques.csv`: `t [s],tau1 [N m],…`, [`TORQUE_SAMPLES_PER_PHASE`] samples per phase of the

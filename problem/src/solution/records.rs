@@ -640,11 +640,24 @@ impl ExecutionCheck {
         // periods; `robustness_failure` says which).
         if self.robustness_periods > 0 {
             if self.robustness_error.is_finite() {
+                // A run ends at its first missed period, so after a miss the largest error is
+                // a floor: the later periods (`track --robustness`) may be worse.
+                let floor = if self.robustness_failure.is_some() {
+                    "at least "
+                } else {
+                    ""
+                };
                 out += &format!(
-                    "; perturbed plants {:.3} % from the 4th of {} periods (tolerance {} %)",
+                    "; perturbed plants {floor}{:.3} % from the 4th of {} periods (tolerance {} \
+                     %{})",
                     100.0 * self.robustness_error,
                     self.robustness_periods,
                     100.0 * self.robustness_tolerance,
+                    if floor.is_empty() {
+                        ""
+                    } else {
+                        "; each plant's run ends at its first miss"
+                    }
                 );
             } else {
                 out += &format!(
@@ -989,6 +1002,38 @@ impl SearchSettings {
 
 #[cfg(test)]
 mod tests {
+
+    /// After a perturbed plant's miss its run has ended there, so the error printed is a
+    /// floor and the line says so; without a miss it is the largest error over all periods.
+    #[test]
+    fn a_robustness_error_after_a_miss_reads_as_a_floor() {
+        let mut c = ExecutionCheck {
+            controller: "hybrid".into(),
+            periods: 10,
+            max_omega_error: 1e-4,
+            tolerance: 0.02,
+            robustness_periods: 10,
+            robustness_error: 0.02,
+            robustness_tolerance: 0.05,
+            failure: None,
+            robustness_failure: None,
+        };
+        let line = c.summary();
+        assert!(line.contains("perturbed plants 2.000 %"), "{line}");
+        assert!(!line.contains("at least"), "{line}");
+        c.robustness_error = 0.409;
+        c.robustness_failure = Some("socket damping x1.5".into());
+        let line = c.summary();
+        assert!(
+            line.contains("perturbed plants at least 40.900 %"),
+            "{line}"
+        );
+        assert!(
+            line.contains("first miss") && line.contains("MISSED"),
+            "{line}"
+        );
+    }
+
     use super::*;
 
     /// A perturbed plant that gave no error (NaN) is said so, with the reason, never "NaN %".

@@ -530,7 +530,7 @@ pub fn first_non_finite(sol: &OcpSolution) -> Option<(String, f64)> {
 /// a solution that did not succeed, or whose re-integration does not verify it, is marked
 /// [`bf_output::FAILED`].
 pub fn commit_solution(sol: &OcpSolution, out: OutputDir) -> Result<()> {
-    commit_solution_with(sol, &[], out)
+    commit_solution_with(sol, &[], out, failure_of(sol).as_deref())
 }
 
 /// The line naming the files of `sol` written to `dir`, and whether they are marked failed.
@@ -561,11 +561,13 @@ pub fn failure_of(sol: &OcpSolution) -> Option<String> {
         .map(|why| format!("the solution is unverified: {why}"))
 }
 
-/// [`commit_solution`] with extra solution files (`--shard` candidates) in the set.
+/// [`commit_solution`] with extra solution files (`--shard` candidates) in the set, marked
+/// failed for `failure` (the caller's verdict: [`failure_of`] and its own checks).
 pub fn commit_solution_with(
     sol: &OcpSolution,
     extra: &[(String, &OcpSolution)],
     mut out: OutputDir,
+    failure: Option<&str>,
 ) -> Result<()> {
     let path = out.file("solution.json")?;
     sol.write_json(&path)
@@ -578,8 +580,7 @@ pub fn commit_solution_with(
         c.write_json(&path)
             .map_err(|e| anyhow::anyhow!(out.rename_in(&crate::errors::chain(&e))))?;
     }
-    let failure = failure_of(sol);
-    let outcome = match &failure {
+    let outcome = match failure {
         None => Outcome::Success,
         Some(f) => Outcome::Failed(f),
     };
@@ -729,8 +730,18 @@ pub fn candidate_file(k: usize) -> String {
 fn print_verification(sol: &OcpSolution) -> Result<()> {
     if let Some(v) = &sol.verification {
         crate::outln!("{}", v.summary().trim_end())?;
+        // The verdict is the re-integration's: a solve that stopped before converging can
+        // still describe the model's motion, but it is no optimum, which the line says.
+        let unconverged = if sol.status.is_success() {
+            String::new()
+        } else {
+            format!(
+                "; but the solve ended {:?} before converging: no optimum",
+                sol.status
+            )
+        };
         crate::outln!(
-            "verified: {} (re-integration defect {:.3e}, tolerance {:e}{})",
+            "verified: {} (re-integration defect {:.3e}, tolerance {:e}{}{unconverged})",
             if is_verified(sol) { "yes" } else { "NO" },
             v.max_defect,
             VERIFIED_DEFECT,
@@ -748,6 +759,8 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
                  error (docs/closed-loop.md)"
             )?;
         }
+    } else {
+        crate::outln!("verified: NO (the re-integration did not run: see the warning above)")?;
     }
     Ok(())
 }
@@ -930,6 +943,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     if args.shard.is_some() {
         crate::outln!("shard {shard}: {} distinct optima kept", candidates.len())?;
     }
+    let mut refine_unmet: Option<String> = None;
     if let Some(tol) = args.refine {
         // From the mesh the solution is on: the verification may have refined it already,
         // and a refinement from the problem's own mesh would solve the coarser mesh again.
@@ -942,6 +956,16 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         };
         let rounds = args.refine_rounds.unwrap_or(DEFAULT_REFINE_ROUNDS);
         (problem, sol) = refine_with_progress(name, &on_its_mesh, sol, tol, rounds)?;
+        // A tolerance the user asked for and the rounds did not reach is a check the result
+        // failed, whatever the verification says after it.
+        refine_unmet = sol.refinement.as_ref().filter(|r| !r.converged).map(|r| {
+            let largest = r.errors.iter().flatten().fold(0.0f64, |a, &e| a.max(e));
+            format!(
+                "the mesh refinement did not reach --refine {tol:e}: {} (largest element \
+                 error {largest:.2e})",
+                r.stop_reason
+            )
+        });
         sol.verification = None;
         // Verified as the search verifies (closed loop included); a mesh whose error estimate
         // meets `tol` need not re-integrate within the verification's tolerance, so the
@@ -967,6 +991,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             }
         }
         print_verification(&sol)?;
+    } else {
+        crate::outln!("verified: not checked (--verify-rtol 0: no re-integration)")?;
     }
     let scene = scene_record(args, name)?;
     let record = shards::search_settings(&settings, &policy);
@@ -982,7 +1008,8 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     let extra: Vec<(String, &OcpSolution)> =
         candidates.iter().map(|(n, c)| (n.clone(), c)).collect();
-    commit_solution_with(&sol, &extra, out)?;
+    let failure = failure_of(&sol).or(refine_unmet);
+    commit_solution_with(&sol, &extra, out, failure.as_deref())?;
     crate::errln!(
         "optimize: scene `{}`, node functions on the {} kernels",
         sol.scene,
@@ -1076,7 +1103,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     {
         crate::outln!("{h}")?;
     }
-    if let Some(f) = failure_of(&sol) {
+    if let Some(f) = failure {
         bail!("{f}");
     }
     Ok(())

@@ -901,7 +901,12 @@ fn run_model<K: Kernels<N>, const N: usize>(
     });
     out_dir.file("summary.json")?;
     report
-        .write_dir(out_dir.path(), &out, error.as_deref())
+        // summary.json's `error` says why the run is no result, as an arm's does.
+        .write_dir(
+            out_dir.path(),
+            &out,
+            error.as_deref().or(unbalanced.as_deref()),
+        )
         .map_err(|e| anyhow!(out_dir.rename_in(&crate::errors::chain(&e))))
         .with_context(|| format!("cannot write the output to {}", args.out.display()))?;
     let failure = error.as_ref().map(|e| {
