@@ -1197,11 +1197,13 @@ fn an_unmet_refine_tolerance_fails_the_run() {
         dir.to_str().unwrap(),
     ]);
     let stderr = String::from_utf8_lossy(&out.stderr);
+    let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(1), "{stderr}");
     assert!(
         stderr.contains("did not reach --refine 1e-12") && stderr.contains("largest element error"),
         "{stderr}"
     );
+    assert!(stdout.contains("(marked FAILED)"), "{stdout}");
     assert!(dir.join("FAILED").exists() && dir.join("solution.json").exists());
     let sol: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("solution.json")).unwrap()).unwrap();

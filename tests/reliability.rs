@@ -772,12 +772,14 @@ fn errors_name_the_option_file_or_quantity() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `eval` at states or ε where a kernel overflows: an error naming the entry, exit 1, and
-/// nothing on stdout (previously `null` in the JSON and exit 0).
+/// `eval` at states where a kernel overflows: an error naming the entry, exit 1, and nothing
+/// on stdout (previously `null` in the JSON and exit 0); an ε that would overflow is a usage
+/// error (exit 2), found before any kernel runs.
 #[test]
 fn non_finite_eval_results_are_errors() {
-    // An ε whose square overflows is refused before the evaluation, as an option out of its
-    // range (`bf_scene::MAX_SMOOTH_EPS`); a velocity that overflows a kernel is found after.
+    // A velocity that overflows a kernel is found after the evaluation; an ε whose square
+    // would overflow is refused before it, as an option out of its range
+    // (`bf_scene::MAX_SMOOTH_EPS`).
     for (extra, status, mention) in [
         (["--qd", "1e200,0,0"], 1, ["not finite", "--qd 1e200,0,0"]),
         (["--eps", "1e308"], 2, ["--eps", "(0, 1e150]"]),

@@ -172,7 +172,7 @@ fn parse_decimal(s: &str) -> Result<(i128, i128), String> {
     if !int.chars().chain(frac.chars()).all(|c| c.is_ascii_digit()) {
         // An angle string is exact: digits and one point, so "1e400" (whatever its size) is
         // refused for its exponent, which the message says rather than blaming the number.
-        if s.contains(['e', 'E']) && s.chars().any(|c| c.is_ascii_digit()) {
+        if s.contains(['e', 'E']) && s.parse::<f64>().is_ok() {
             return Err(format!(
                 "{s:?} has an exponent: an angle string takes digits and one point \
                  (a TOML number without quotes is radians)"

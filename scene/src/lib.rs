@@ -321,14 +321,16 @@ pub const MAX_ANGLE: f64 = 1048576.0;
 pub const MAX_SMOOTH_EPS: f64 = 1e150;
 
 /// Why `eps` cannot be the smooth saturation's ε, if it cannot: it must be finite, positive
-/// and at most [`MAX_SMOOTH_EPS`]. The scene's `contact.smooth_eps` and `optimize --epsilon`
-/// are checked by this one rule (the message names [`MAX_SMOOTH_EPS`], which a test holds
-/// equal).
-pub fn smooth_eps_out_of_range(eps: f64) -> Option<&'static str> {
+/// and at most [`MAX_SMOOTH_EPS`]. The scene's `contact.smooth_eps`, `optimize --epsilon` and
+/// `eval --eps` are checked by this one rule.
+pub fn smooth_eps_out_of_range(eps: f64) -> Option<String> {
     if eps.is_finite() && eps > 0.0 && eps <= MAX_SMOOTH_EPS {
         None
     } else {
-        Some("must be a finite number in (0, 1e150] m, where ε² stays within f64's range")
+        Some(format!(
+            "must be a finite number in (0, {MAX_SMOOTH_EPS:e}] m, where ε² stays within f64's \
+             range"
+        ))
     }
 }
 

@@ -881,7 +881,12 @@ impl RefinedChain {
             let step = &mut self.steps[i];
             if !could_be_chosen(step.point.solution.objective, c) {
                 leave_unexecuted(&mut step.point);
-                self.records[n - 1].stage = refinement_label(&step.label, &step.point.solution);
+                let label = refinement_label(&step.label, &step.point.solution);
+                // The rounds keep naming their line (`RefineReport::stage`).
+                if let Some(rep) = step.point.solution.refinement.as_mut() {
+                    rep.stage = Some(label.clone());
+                }
+                self.records[n - 1].stage = label;
             }
         }
         self
@@ -1884,6 +1889,15 @@ impl Search {
         self.candidates
             .extend(found.candidates.into_iter().map(|mut c| {
                 c.index += offset;
+                // The rounds keep naming their line, relabelled as the records are.
+                if let Some(stage) = c
+                    .solution
+                    .refinement
+                    .as_mut()
+                    .and_then(|r| r.stage.as_mut())
+                {
+                    *stage = format!("{FALLBACK_LABEL}: {stage}");
+                }
                 c
             }));
         self.candidates.sort_by_key(|c| c.index);

@@ -534,11 +534,13 @@ pub fn commit_solution(sol: &OcpSolution, out: OutputDir) -> Result<()> {
 }
 
 /// The line naming the files of `sol` written to `dir`, and whether they are marked failed.
-fn print_wrote(dir: &Path, sol: &OcpSolution) -> Result<()> {
+/// Prints where the set was written, marked as failed where `failure` (the verdict the set
+/// was committed with) is given.
+fn print_wrote(dir: &Path, failure: Option<&str>) -> Result<()> {
     crate::outln!(
         "wrote {}/solution.json and torques.csv{}",
         dir.display(),
-        if failure_of(sol).is_none() {
+        if failure.is_none() {
             ""
         } else {
             " (marked FAILED)"
@@ -759,8 +761,6 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
                  error (docs/closed-loop.md)"
             )?;
         }
-    } else {
-        crate::outln!("verified: NO (the re-integration did not run: see the warning above)")?;
     }
     Ok(())
 }
@@ -959,7 +959,11 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
         // A tolerance the user asked for and the rounds did not reach is a check the result
         // failed, whatever the verification says after it.
         refine_unmet = sol.refinement.as_ref().filter(|r| !r.converged).map(|r| {
-            let largest = r.errors.iter().flatten().fold(0.0f64, |a, &e| a.max(e));
+            let largest = r
+                .errors
+                .iter()
+                .flatten()
+                .fold(0.0f64, |a, &e| crate::pipeline::verify::nan_max(a, e));
             format!(
                 "the mesh refinement did not reach --refine {tol:e}: {} (largest element \
                  error {largest:.2e})",
@@ -983,14 +987,25 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
             }
         }
     }
+    // A re-integration that could not run leaves the solution unverified: a failed check.
+    let mut unverifiable = None;
     if args.verify_rtol > 0.0 {
         if sol.verification.is_none() {
             match verify(&problem, &sol, args.verify_rtol) {
                 Ok(v) => sol.verification = Some(v),
-                Err(e) => crate::errln!("warning: trajectory verification failed: {e}"),
+                Err(e) => {
+                    crate::errln!("warning: trajectory verification failed: {e}");
+                    unverifiable = Some(format!(
+                        "the solution is unverified: its re-integration did not run: {e}"
+                    ));
+                }
             }
         }
-        print_verification(&sol)?;
+        if sol.verification.is_some() {
+            print_verification(&sol)?;
+        } else {
+            crate::outln!("verified: NO (the re-integration did not run: see the warning above)")?;
+        }
     } else {
         crate::outln!("verified: not checked (--verify-rtol 0: no re-integration)")?;
     }
@@ -1008,7 +1023,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     }
     let extra: Vec<(String, &OcpSolution)> =
         candidates.iter().map(|(n, c)| (n.clone(), c)).collect();
-    let failure = failure_of(&sol).or(refine_unmet);
+    let failure = failure_of(&sol).or(unverifiable).or(refine_unmet);
     commit_solution_with(&sol, &extra, out, failure.as_deref())?;
     crate::errln!(
         "optimize: scene `{}`, node functions on the {} kernels",
@@ -1070,7 +1085,7 @@ pub fn run_with(args: &OptimizeArgs, opts: RunSettings) -> Result<()> {
     ) {
         crate::outln!("{h}")?;
     }
-    print_wrote(&args.out, &sol)?;
+    print_wrote(&args.out, failure.as_deref())?;
     // An Acceptable end of the default KKT settings may end Solved on another path.
     if sol.status == Status::Acceptable
         && !args.kkt_residual_ratio

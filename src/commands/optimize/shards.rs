@@ -459,8 +459,9 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     {
         crate::outln!("{line}")?;
     }
-    print_wrote(&args.out, &sol)?;
-    if let Some(f) = failure_of(&sol) {
+    let failure = failure_of(&sol);
+    print_wrote(&args.out, failure.as_deref())?;
+    if let Some(f) = failure {
         bail!("{f}");
     }
     Ok(())
