@@ -555,8 +555,7 @@ fn smooth_eps_keeps_its_square_finite() {
     let max = bf_scene::MAX_SMOOTH_EPS;
     assert!((max * max + 1e200).sqrt().is_finite());
     assert!(!((1e5 * max) * (1e5 * max)).is_finite());
-    let why = bf_scene::smooth_eps_out_of_range(2.0 * max).unwrap();
-    assert!(why.contains(&format!("{max:e}")), "{why}");
+    assert!(bf_scene::smooth_eps_out_of_range(2.0 * max).is_some());
     assert_eq!(bf_scene::smooth_eps_out_of_range(max), None);
     for bad in ["1e200", "0.0", "-0.01"] {
         let new = format!("smooth_eps = {bad}");

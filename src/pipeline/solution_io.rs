@@ -690,15 +690,9 @@ pub const TORQUE_SAMPLES_PER_PHASE: usize = 1000;
 /// names. `None` where neither is known.
 fn tau_max_of(sol: &OcpSolution) -> Option<Vec<f64>> {
     // A joint without a limit is unbounded (as the problem poses it).
-    let limits = |scene: &bf_codegen::Scene| -> Vec<f64> {
-        scene
-            .links
-            .iter()
-            .map(|l| l.tau_max.unwrap_or(f64::INFINITY))
-            .collect()
-    };
+    use bf_problem::arm::torque_limits;
     if let Some(scene) = super::solve::recorded_scene(sol).ok()? {
-        return Some(limits(&scene));
+        return Some(torque_limits(&scene));
     }
     let scene = match &sol.verification {
         Some(v) => v.scene.clone(),
@@ -711,7 +705,7 @@ fn tau_max_of(sol: &OcpSolution) -> Option<Vec<f64>> {
     };
     let text = bf_generated::scene_toml(&scene)?;
     let spec = bf_codegen::Scene::from_toml_str(text, &scene).ok()?;
-    Some(limits(&spec))
+    Some(torque_limits(&spec))
 }
 
 /// `torques.csv`: `t [s],tau1 [N m],…`, [`TORQUE_SAMPLES_PER_PHASE`] samples per phase of the

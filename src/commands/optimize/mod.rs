@@ -533,9 +533,8 @@ pub fn commit_solution(sol: &OcpSolution, out: OutputDir) -> Result<()> {
     commit_solution_with(sol, &[], out, failure_of(sol).as_deref())
 }
 
-/// The line naming the files of `sol` written to `dir`, and whether they are marked failed.
-/// Prints where the set was written, marked as failed where `failure` (the verdict the set
-/// was committed with) is given.
+/// The line naming the files written to `dir`, marked as failed where `failure` (the verdict
+/// the set was committed with) is given.
 fn print_wrote(dir: &Path, failure: Option<&str>) -> Result<()> {
     crate::outln!(
         "wrote {}/solution.json and torques.csv{}",
@@ -738,8 +737,8 @@ fn print_verification(sol: &OcpSolution) -> Result<()> {
             String::new()
         } else {
             format!(
-                "; but the solve ended {:?} before converging: no optimum",
-                sol.status
+                "; but the solve ended {} before converging: no optimum",
+                crate::names::name(&sol.status)
             )
         };
         crate::outln!(
