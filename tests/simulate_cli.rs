@@ -1291,6 +1291,51 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// A slip with large friction ends where its slip speed reaches zero (eq. 37, Sect. 3.1), not in a
+/// Painlevé error: an adaptive trial stage past the stop reverses Δv and with it t̂, which with
+/// μ_k = 10 alone makes nᵀ W (n + μ_k t̂) negative (the run used to fail there, right after the
+/// first impact). The adaptive run's stop agrees with fixed-step RK4 at 2 µs, whose `slip_stop`
+/// guard finds it without stages beyond it, and the slip is over when its speed is nil.
+#[test]
+fn a_slip_with_large_friction_ends_at_its_stop() {
+    let dir = tmpdir("mu10");
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml"))
+        .unwrap()
+        .replace("mu_s = 0.8", "mu_s = 10.0")
+        .replace("mu_k = 0.6", "mu_k = 10.0");
+    let scene = dir.join("mu10.toml");
+    std::fs::write(&scene, text).unwrap();
+    let stop = |extra: &[&str], name: &str| {
+        let out_dir = dir.join(name);
+        let mut args = vec!["--scene", scene.to_str().unwrap(), "--t-end", "0.56"];
+        args.extend_from_slice(extra);
+        let o = simulate_into(&out_dir, &args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(0), "{name}: {stderr}");
+        let ev = json(&out_dir.join("events.json"));
+        let kinds: Vec<&str> = ev["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|e| e["kind"].as_str().unwrap())
+            .collect();
+        assert_eq!(kinds, ["impact", "slip_to_stick"], "{name}");
+        let e = &ev["events"][1];
+        (
+            e["t"].as_f64().unwrap(),
+            e["pre"]["slip_speed"].as_f64().unwrap(),
+        )
+    };
+    let (t_adaptive, speed) = stop(&[], "dopri5");
+    let (t_fixed, _) = stop(&["--integrator", "rk4", "--step", "2e-6"], "rk4");
+    assert!(speed <= 1.01e-6, "slip speed {speed} at the stop");
+    assert!(
+        (t_adaptive - t_fixed).abs() <= 5e-6,
+        "the slip stops at {t_adaptive} s (dopri5) against {t_fixed} s (RK4)"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// A run that fails at a state whose dynamics the model cannot evaluate (a Painlevé paradox of
 /// a slip with μ = 10⁶, eq. 20) still writes what that state gives without accelerations: its
 /// last sample has the distance h, the slip speed and the energy (recomputed here with the

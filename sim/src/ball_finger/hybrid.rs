@@ -36,7 +36,10 @@
 //! non-smooth point, |r_c| = 0 (n undefined), cannot occur near contact (|r_c| = r + h).
 //! Besides, a trial step whose stage or end state leaves the contact band |h| ≤
 //! `contact_tolerance`·r is rejected and retried shorter ([`SimError::OutsideDomain`]), so a
-//! step cannot jump out of the contact modes' domain.
+//! step cannot jump out of the contact modes' domain. So is a Slip stage where eq. 37 has no
+//! unique normal force (Painlevé, k = nᵀ W (n + μ_k t̂) ≤ 0): a stage past the slip's stop has
+//! Δv, and so t̂, reversed, which with a large μ_k alone makes k negative; a paradox on the
+//! trajectory itself still ends the run.
 //!
 //! # Zeno fallback
 //! More than `SimSettings::zeno_max_events` events within `zeno_window` (an accumulation of

@@ -201,14 +201,21 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
     }
 
     /// Maps a model error at a trial state: far from contact is outside the contact modes'
-    /// domain (the step is retried shorter), everything else is a system error.
+    /// domain, and so is a slip whose normal force has no unique solution (Painlevé, eq. 37):
+    /// the step is retried shorter. A trial stage past the end of a slip has Δv reversed and
+    /// with it the friction direction t̂ (eq. 20), and with a large μ_k that alone makes
+    /// nᵀ W (n + μ_k t̂) negative; a shorter step ends before the slip stops, where the
+    /// `slip_speed` guard takes over. A paradox on the trajectory itself still ends the run
+    /// (no step short enough avoids it). Everything else is a system error.
     fn model_err(mode: Mode, t: f64) -> impl Fn(ModelError) -> SimError {
         move |e| match e {
-            ModelError::NotInContact { .. } => SimError::OutsideDomain {
-                t,
-                mode: format!("{mode:?}"),
-                msg: e.to_string(),
-            },
+            ModelError::NotInContact { .. } | ModelError::Painleve { .. } => {
+                SimError::OutsideDomain {
+                    t,
+                    mode: format!("{mode:?}"),
+                    msg: e.to_string(),
+                }
+            }
             e => SimError::system(e),
         }
     }
