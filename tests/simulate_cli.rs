@@ -1291,6 +1291,21 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// `scenes/paper.toml` with both friction coefficients μ_s = μ_k = `mu`, written into `dir`.
+fn friction_scene(dir: &Path, mu: &str) -> std::path::PathBuf {
+    let text = std::fs::read_to_string(root().join("scenes/paper.toml"))
+        .unwrap()
+        .replace("mu_s = 0.8", &format!("mu_s = {mu}"))
+        .replace("mu_k = 0.6", &format!("mu_k = {mu}"));
+    assert!(
+        text.contains(&format!("mu_k = {mu}")),
+        "scenes/paper.toml's friction moved"
+    );
+    let scene = dir.join("friction.toml");
+    std::fs::write(&scene, text).unwrap();
+    scene
+}
+
 /// A slip with large friction ends where its slip speed reaches zero (eq. 37, Sect. 3.1), not in a
 /// Painlevé error: an adaptive trial stage past the stop reverses Δv and with it t̂, which with
 /// μ_k = 10 alone makes nᵀ W (n + μ_k t̂) negative (the run used to fail there, right after the
@@ -1299,12 +1314,7 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
 #[test]
 fn a_slip_with_large_friction_ends_at_its_stop() {
     let dir = tmpdir("mu10");
-    let text = std::fs::read_to_string(root().join("scenes/paper.toml"))
-        .unwrap()
-        .replace("mu_s = 0.8", "mu_s = 10.0")
-        .replace("mu_k = 0.6", "mu_k = 10.0");
-    let scene = dir.join("mu10.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = friction_scene(&dir, "10.0");
     let stop = |extra: &[&str], name: &str| {
         let out_dir = dir.join(name);
         let mut args = vec!["--scene", scene.to_str().unwrap(), "--t-end", "0.56"];
@@ -1343,12 +1353,7 @@ fn a_slip_with_large_friction_ends_at_its_stop() {
 #[test]
 fn a_failed_runs_last_sample_keeps_its_kinematics() {
     let dir = tmpdir("painleve");
-    let text = std::fs::read_to_string(root().join("scenes/paper.toml"))
-        .unwrap()
-        .replace("mu_s = 0.8", "mu_s = 1000000.0")
-        .replace("mu_k = 0.6", "mu_k = 1000000.0");
-    let scene = dir.join("mu_huge.toml");
-    std::fs::write(&scene, text).unwrap();
+    let scene = friction_scene(&dir, "1000000.0");
     let out_dir = dir.join("out");
     let o = simulate_into(
         &out_dir,
