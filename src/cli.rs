@@ -761,7 +761,7 @@ pub trait Inputs {
 /// with its own error).
 pub fn scene_files(scene: &Path) -> Vec<PathBuf> {
     let mut out = vec![scene.to_path_buf()];
-    if let Ok(text) = std::fs::read_to_string(scene)
+    if let Ok(text) = bf_codegen::spec::read_input_text(scene)
         && let Some(urdf) =
             bf_codegen::spec::urdf_path(&text, scene.parent().unwrap_or(Path::new("")))
     {

@@ -240,6 +240,41 @@ fn generate_emits_the_robot_kernels_in_every_variant() {
     );
 }
 
+/// A stream that does not end, given where a file is read, is refused once it passes the input
+/// bound (`bf_scene::MAX_INPUT_BYTES`), with exit status 1, for every kind of input; it used to
+/// be read until the machine's memory ran out.
+#[cfg(target_os = "linux")]
+#[test]
+fn an_endless_input_is_refused() {
+    let dir = tmpdir("endless");
+    let scene = dir.join("urdf_zero.toml");
+    std::fs::write(&scene, "name = \"u\"\nurdf = \"/dev/zero\"\n").unwrap();
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    for args in [
+        vec!["generate", "/dev/zero"],
+        vec!["generate", scene.to_str().unwrap()],
+        vec!["simulate", "--init", "/dev/zero", "--out", out],
+        vec!["simulate", "--torques", "/dev/zero", "--out", out],
+        vec![
+            "optimize",
+            "--problem",
+            "reach",
+            "--warm-start",
+            "/dev/zero",
+            "--out",
+            out,
+        ],
+        vec!["track", "/dev/zero", "--out", out],
+    ] {
+        let o = run(&args);
+        assert_clean_failure(&o, &["/dev/zero", "more than 256 MiB"]);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+    }
+    assert!(!dir.join("out").exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 #[test]
 fn bad_cli_input_gives_clear_errors() {
     let missing = run(&["eval", "scenes/nope.toml", "--q", "0,0,0", "--qd", "0,0,0"]);

@@ -32,6 +32,8 @@
 //! - [`Mode`]: the contact modes free, stick and slip of Sect. 2.6; [`state_len`]: the length
 //!   of the state x = (q, q̇, ω) of eq. 44.
 //! - [`SceneId`]: the typed scene name the registries and the problem catalogue key scenes by.
+//! - [`read_input_text`]: every input file of the program (scenes, URDFs, solutions, torque
+//!   series) read with one bound, [`MAX_INPUT_BYTES`].
 //!
 //! Loading: [`Scene::load`] / [`Scene::from_toml_str`] parse with toml's span-preserving
 //! `DeTable`, deserialise with serde (`deny_unknown_fields`), then validate; every error is
@@ -43,6 +45,7 @@ mod constants;
 mod de;
 mod error;
 mod id;
+mod input_file;
 mod load;
 mod mode;
 mod state;
@@ -54,6 +57,7 @@ use serde::Deserialize;
 pub use constants::Constants;
 pub use error::{ChainEnd, SpecError, SpecErrorKind, UnknownLink, UrdfError};
 pub use id::{SceneId, UnknownScene};
+pub use input_file::{MAX_INPUT_BYTES, read_input_text};
 pub use load::{
     ChainChoice, URDF_GRAVITY, URDF_KERNELS, chain_toml, expand_toml, urdf_path, urdf_scene_text,
 };

@@ -47,7 +47,7 @@ fn is_urdf(path: &Path, raw: &str) -> bool {
 }
 
 fn read(path: &Path) -> Result<String, SpecError> {
-    std::fs::read_to_string(path).map_err(|cause| SpecError::Io {
+    crate::read_input_text(path).map_err(|cause| SpecError::Io {
         file: path.display().to_string(),
         cause,
     })
@@ -415,7 +415,7 @@ fn expand(
     };
     let path = dir.join(&urdf);
     let file = path.display().to_string();
-    let urdf_text = std::fs::read_to_string(&path).map_err(|e| {
+    let urdf_text = crate::read_input_text(&path).map_err(|e| {
         ix.invalid(
             "urdf",
             format!("cannot read the URDF file {file} (relative to the scene file): {e}"),

@@ -185,7 +185,7 @@ impl TorqueSeries {
     /// Reads a CSV file with header `t,tau1,...,tauN`.
     pub fn from_csv_path(path: &Path) -> Result<Self, SimError> {
         let text =
-            std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
+            bf_scene::read_input_text(path).map_err(|e| FileError::new("cannot read", path, e))?;
         Self::from_csv_str(&text, path)
     }
 
@@ -272,7 +272,7 @@ impl TorqueSeries {
     /// Reads a JSON file `{ "t": [...], "tau": [[...], ...] }`.
     pub fn from_json_path(path: &Path) -> Result<Self, SimError> {
         let text =
-            std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
+            bf_scene::read_input_text(path).map_err(|e| FileError::new("cannot read", path, e))?;
         Self::from_json_str(&text, path)
     }
 

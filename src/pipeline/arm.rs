@@ -484,7 +484,7 @@ pub fn is_arm_solution(doc: &serde_json::Value) -> bool {
 
 /// Reads an arm `solution.json`.
 pub fn read_arm_solution(path: &Path) -> Result<ArmSolution, PipelineError> {
-    let text = std::fs::read_to_string(path).map_err(|e| PipelineError::Arm {
+    let text = bf_codegen::spec::read_input_text(path).map_err(|e| PipelineError::Arm {
         message: format!("{}: cannot read: {e}", path.display()),
     })?;
     let doc: serde_json::Value = crate::io::json_value(&text).map_err(|e| PipelineError::Arm {

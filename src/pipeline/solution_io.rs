@@ -659,11 +659,11 @@ impl SolutionIo for OcpSolution {
     }
 
     fn read_json(path: &Path) -> Result<OcpSolution, PipelineError> {
-        let s =
-            std::fs::read_to_string(path).map_err(|e| FileError::new("cannot read", path, e))?;
+        let s = bf_codegen::spec::read_input_text(path)
+            .map_err(|e| FileError::new("cannot read", path, e))?;
         from_texts(&s, path, |v| {
             let ipath = internals_path(path, v)?;
-            let text = std::fs::read_to_string(&ipath).map_err(|e| {
+            let text = bf_codegen::spec::read_input_text(&ipath).map_err(|e| {
                 io_err(
                     &ipath,
                     format!("cannot read the internals of {} ({e})", path.display()),

@@ -161,7 +161,7 @@ fn check_document_values(option: &str, path: &Path, value: &serde_json::Value) -
 
 /// The JSON document of the file `path` given to `option`; the error names both.
 fn read_json_value(option: &str, path: &Path) -> Result<serde_json::Value> {
-    let text = std::fs::read_to_string(path)
+    let text = bf_codegen::spec::read_input_text(path)
         .with_context(|| format!("{option} {}: cannot read", path.display()))?;
     crate::io::json_value(&text)
         .with_context(|| format!("{option} {}: not a valid JSON document", path.display()))

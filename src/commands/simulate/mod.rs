@@ -203,7 +203,7 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
     }
     let (mut qd, mut w, mut mode) = ([0.0; N], [0.0; 3], None);
     if let Some(path) = &args.init {
-        let text = std::fs::read_to_string(path)
+        let text = bf_codegen::spec::read_input_text(path)
             .with_context(|| format!("{}: cannot read initial-state file", path.display()))?;
         let shape = || {
             format!(

@@ -15,7 +15,7 @@ pub fn scene_of_args(args: &SimulateArgs) -> Result<(bf_codegen::Scene, String)>
         return Ok((scene, path.display().to_string()));
     }
     if let Some(init) = &args.init {
-        let text = std::fs::read_to_string(init)
+        let text = bf_codegen::spec::read_input_text(init)
             .with_context(|| format!("{}: cannot read initial-state file", init.display()))?;
         let v: serde_json::Value = crate::io::json_value(&text)
             .with_context(|| format!("{}: initial-state file is not valid JSON", init.display()))?;
