@@ -355,7 +355,7 @@ pub struct SimulateArgs {
     /// Relative tolerance of the adaptive integrator (dopri5) [default: 1e-8].
     #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub rtol: Option<f64>,
-    /// Absolute tolerance of the adaptive integrator (dopri5) [default: 1e-2 · rtol].
+    /// Absolute tolerance of the adaptive integrator (dopri5), at most 0.1 [default: 1e-2 · rtol].
     #[arg(long, allow_hyphen_values = true, value_parser = positive)]
     pub atol: Option<f64>,
     /// Fixed step of rk4 (s) [default: 0.001].

@@ -778,11 +778,12 @@ fn errors_name_the_option_file_or_quantity() {
 #[test]
 fn non_finite_eval_results_are_errors() {
     // A velocity that overflows a kernel is found after the evaluation; an ε whose square
-    // would overflow is refused before it, as an option out of its range
-    // (`bf_scene::MAX_SMOOTH_EPS`).
+    // would overflow, or be 0, is refused before it, as an option out of its range
+    // (`bf_scene::MAX_SMOOTH_EPS`, `MIN_SMOOTH_EPS`).
     for (extra, status, mention) in [
         (["--qd", "1e200,0,0"], 1, ["not finite", "--qd 1e200,0,0"]),
-        (["--eps", "1e308"], 2, ["--eps", "(0, 1e150]"]),
+        (["--eps", "1e308"], 2, ["--eps", "[1e-150, 1e150]"]),
+        (["--eps", "1e-320"], 2, ["--eps", "[1e-150, 1e150]"]),
     ] {
         let mut args = vec!["eval", "scenes/paper.toml", "--q", "0.3,-0.5,0.8"];
         if extra[0] != "--qd" {

@@ -191,6 +191,132 @@ fn edited_phase_lists_are_blamed_on_the_field() {
     }
 }
 
+/// What a solution records of its problem is checked by the one reader every command uses,
+/// whether or not the command at hand needs the field: `track` without `--replan` used to
+/// execute a plan whose file recorded a cone margin of 2 or a negative ε, `--warm-start` to take
+/// a file whose scene text did not parse, and `optimize merge` a candidate with q₁ = 1e300. Each
+/// edit of the stored `periodic-qc` optimum below is refused by `read_json`, by the public
+/// reader of `simulate --init` and, for one case each, by the commands themselves (exit 1, the
+/// file and the field named).
+#[test]
+fn every_reader_checks_the_recorded_problem() {
+    use ball_finger::pipeline::solution_io::check_public_fields;
+    let dir = cli::tmpdir("recorded");
+    let stored = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("data/optima/periodic-qc");
+    let text = std::fs::read_to_string(stored.join("solution.json")).unwrap();
+    let internals = std::fs::read_to_string(stored.join(INTERNALS_FILE)).unwrap();
+    let sol: Value = serde_json::from_str(&text).unwrap();
+    let inner: Value = serde_json::from_str(&internals).unwrap();
+    let p = dir.join("solution.json");
+    let edits: Vec<(&str, Value, &str)> = vec![
+        ("problem", "bogus".into(), "unknown problem `bogus`"),
+        ("points", 0.into(), "at least 2 are needed"),
+        (
+            "points",
+            1_000_000_000_000u64.into(),
+            "at most 5000 per phase",
+        ),
+        (
+            "scheme",
+            serde_json::json!({"Radau": {"elements": 0}}),
+            "0 elements",
+        ),
+        (
+            "epsilon",
+            (-1.0).into(),
+            "epsilon must be a finite number in [1e-150, 1e150]",
+        ),
+        ("cone_margin", 2.0.into(), "cone_margin must be in [0, 1)"),
+        (
+            "torque_margin",
+            (-1.0).into(),
+            "torque_margin must be in [0, 1)",
+        ),
+        (
+            "approach_clearance",
+            1e6.into(),
+            "approach_clearance must be in [0, r / 10]",
+        ),
+        ("scene_toml", "name = ".into(), "its `scene_toml`"),
+        (
+            "objective",
+            1e300.into(),
+            "`objective` = 1e300 is out of range",
+        ),
+    ];
+    for (field, value, needle) in &edits {
+        let mut edited = sol.clone();
+        edited[*field] = value.clone();
+        std::fs::write(dir.join(INTERNALS_FILE), &internals).unwrap();
+        std::fs::write(&p, edited.to_string()).unwrap();
+        let e = OcpSolution::read_json(&p).unwrap_err().to_string();
+        assert!(
+            e.contains(needle) && e.contains("solution.json"),
+            "{field}: {e}"
+        );
+        let e = check_public_fields(&edited, &p).unwrap_err().to_string();
+        assert!(e.contains(needle), "{field}, public reader: {e}");
+    }
+    // The internals: another schema, and a number out of range, named in their own file.
+    for (edit, needle) in [
+        (("schema_version", Value::from(99)), "schema_version 99"),
+        (
+            ("params", serde_json::json!([1e300])),
+            "`params[0]` = 1e300",
+        ),
+    ] {
+        let mut edited = inner.clone();
+        edited[edit.0] = edit.1;
+        std::fs::write(&p, &text).unwrap();
+        std::fs::write(dir.join(INTERNALS_FILE), edited.to_string()).unwrap();
+        let e = OcpSolution::read_json(&p).unwrap_err().to_string();
+        assert!(e.contains(needle) && e.contains(INTERNALS_FILE), "{e}");
+    }
+    // The commands: each refuses its edited file before any work.
+    std::fs::write(dir.join(INTERNALS_FILE), &internals).unwrap();
+    let p_str = p.to_str().unwrap();
+    let out = dir.join("out");
+    let out = out.to_str().unwrap();
+    for (field, value, args) in [
+        (
+            "cone_margin",
+            Value::from(2.0),
+            vec!["track", p_str, "--periods", "1", "--out", out],
+        ),
+        (
+            "epsilon",
+            Value::from(-1.0),
+            vec!["simulate", "--init", p_str, "--out", out],
+        ),
+        (
+            "scene_toml",
+            Value::from("name = "),
+            vec![
+                "optimize",
+                "--problem",
+                "periodic-qc",
+                "--warm-start",
+                p_str,
+                "--out",
+                out,
+            ],
+        ),
+    ] {
+        let mut edited = sol.clone();
+        edited[field] = value;
+        std::fs::write(&p, edited.to_string()).unwrap();
+        let o = cli::run(&args);
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {stderr}");
+        assert!(
+            stderr.contains(field) && stderr.contains("solution.json"),
+            "{stderr}"
+        );
+        assert!(!dir.join("out").exists(), "{args:?}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// Every f64 the commands write to JSON reads back bit for bit (serde_json's
 /// `float_roundtrip`), so `simulate --init solution.json` starts exactly at the optimum's first
 /// node and a warm start from a file is the solution itself. The first value was 1 ulp off

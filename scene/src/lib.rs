@@ -324,17 +324,23 @@ pub const MAX_ANGLE: f64 = 1048576.0;
 /// a matter for the verification, which compares the smoothed contact with the exact one.)
 pub const MAX_SMOOTH_EPS: f64 = 1e150;
 
-/// Why `eps` cannot be the smooth saturation's ε, if it cannot: it must be finite, positive
-/// and at most [`MAX_SMOOTH_EPS`]. The scene's `contact.smooth_eps`, `optimize --epsilon` and
-/// `eval --eps` are checked by this one rule.
+/// Smallest ε (m) of the smooth saturation: below it ε² is subnormal or 0, and at x = 0 the
+/// saturation's derivative x / sqrt(x² + ε²) is then 0/0.
+pub const MIN_SMOOTH_EPS: f64 = 1e-150;
+
+/// The range of ε as the messages state it: [`MIN_SMOOTH_EPS`] to [`MAX_SMOOTH_EPS`] (a test
+/// holds the text to the constants).
+pub const SMOOTH_EPS_RANGE: &str =
+    "a finite number in [1e-150, 1e150] m, where ε² stays a normal f64";
+
+/// Why `eps` cannot be the smooth saturation's ε, if it cannot: it must be finite and in
+/// [[`MIN_SMOOTH_EPS`], [`MAX_SMOOTH_EPS`]]. The scene's `contact.smooth_eps`, `optimize
+/// --epsilon`, `eval --eps` and the ε a solution file records are checked by this one rule.
 pub fn smooth_eps_out_of_range(eps: f64) -> Option<String> {
-    if eps.is_finite() && eps > 0.0 && eps <= MAX_SMOOTH_EPS {
+    if (MIN_SMOOTH_EPS..=MAX_SMOOTH_EPS).contains(&eps) {
         None
     } else {
-        Some(format!(
-            "must be a finite number in (0, {MAX_SMOOTH_EPS:e}] m, where ε² stays within f64's \
-             range"
-        ))
+        Some(format!("must be {SMOOTH_EPS_RANGE}"))
     }
 }
 

@@ -482,6 +482,17 @@ impl Scene {
                 |a, b| if key(b) > a.1 { (&b.0, key(b)) } else { a },
             )
         };
+        // A trace that overflows would make every other body negligible beside it: refuse
+        // the body itself (each moment is finite, their sum is not).
+        if let Some((p, _, i)) = bodies.iter().find(|b| !b.2.is_finite()) {
+            return Err(ix.invalid(
+                &format!("{p}.inertia"),
+                format!(
+                    "inertia trace {i:e} kg m²: the principal moments overflow f64 when \
+                     summed, as M(q) sums them"
+                ),
+            ));
+        }
         let (m_name, m_max) = largest(|b| b.1);
         let (i_name, i_max) = largest(|b| b.2);
         for (p, m, i) in &bodies {

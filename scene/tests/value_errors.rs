@@ -21,6 +21,23 @@ fn masses_must_be_positive() {
     }
 }
 
+/// A body whose principal moments are each finite but overflow when summed (the trace M(q)
+/// adds up) is refused itself, not the other bodies that look negligible beside its infinite
+/// trace.
+#[test]
+fn an_inertia_whose_trace_overflows_is_named() {
+    let new = "inertia = [1e308, 1e308, 1e308]";
+    let text = edit("inertia = [1.0e-3, 2.0e-3, 2.0e-3]", 0, new);
+    let line = line_no(&text, new, 0);
+    expect_err(
+        &text,
+        SpecErrorKind::Invalid,
+        line,
+        "links[0].inertia",
+        "overflow f64 when summed",
+    );
+}
+
 #[test]
 fn inertia_must_be_symmetric_positive_definite() {
     // Negative principal moment.
@@ -548,16 +565,26 @@ fn contact_kind_must_be_segment_or_tip() {
     assert_eq!((c.kind.as_str(), c.smooth_eps), ("segment", 0.01));
 }
 
-/// ε of the saturation sqrt(x² + ε²) (eq. 59) up to `MAX_SMOOTH_EPS`, whose square (plus any
-/// squared distance up to 1e100 m) stays finite; beyond it, and at 0, the file is refused.
+/// ε of the saturation sqrt(x² + ε²) (eq. 59) from `MIN_SMOOTH_EPS` to `MAX_SMOOTH_EPS`: the
+/// square of the largest (plus any squared distance up to 1e100 m) stays finite, and that of
+/// the smallest a normal number, so the derivative x / sqrt(x² + ε²) is defined at x = 0; beyond
+/// them, and at 0, the file is refused, with the range the constants give.
 #[test]
-fn smooth_eps_keeps_its_square_finite() {
-    let max = bf_scene::MAX_SMOOTH_EPS;
+fn smooth_eps_keeps_its_square_finite_and_normal() {
+    let (min, max) = (bf_scene::MIN_SMOOTH_EPS, bf_scene::MAX_SMOOTH_EPS);
     assert!((max * max + 1e200).sqrt().is_finite());
     assert!(!((1e5 * max) * (1e5 * max)).is_finite());
+    assert!((min * min).is_normal());
+    assert!(!((1e-5 * min) * (1e-5 * min)).is_normal());
+    let slope_at_zero = |eps: f64| 0.0 / (eps * eps).sqrt();
+    assert!(slope_at_zero(min).is_finite() && slope_at_zero(1e-170).is_nan());
     assert!(bf_scene::smooth_eps_out_of_range(2.0 * max).is_some());
+    assert!(bf_scene::smooth_eps_out_of_range(0.5 * min).is_some());
     assert_eq!(bf_scene::smooth_eps_out_of_range(max), None);
-    for bad in ["1e200", "0.0", "-0.01"] {
+    assert_eq!(bf_scene::smooth_eps_out_of_range(min), None);
+    let range = format!("[{min:e}, {max:e}]");
+    assert!(bf_scene::SMOOTH_EPS_RANGE.contains(&range), "{range}");
+    for bad in ["1e200", "0.0", "-0.01", "1e-320"] {
         let new = format!("smooth_eps = {bad}");
         let text = edit("smooth_eps = 0.01", 0, &new);
         let line = line_no(&text, &new, 0);
@@ -566,7 +593,7 @@ fn smooth_eps_keeps_its_square_finite() {
             SpecErrorKind::Invalid,
             line,
             "contact.smooth_eps",
-            "(0, 1e150]",
+            &range,
         );
     }
 }

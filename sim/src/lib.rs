@@ -49,7 +49,9 @@ pub mod work_precision;
 
 pub use error::SimError;
 pub use input::{Input, Measurement, PdController, TorqueSeries, TrackingPd};
-pub use settings::{MAX_RTOL, MIN_RTOL, Method, SimSettings, rtol_out_of_range};
+pub use settings::{
+    MAX_ATOL, MAX_RTOL, MIN_RTOL, Method, SimSettings, atol_out_of_range, rtol_out_of_range,
+};
 pub use simulator::{SimFailure, Simulator, StopReason, simulate, simulate_until};
 pub use system::{Direction, Guard, HybridSystem, Transition};
 pub use trajectory::{EventRecord, SampleKind, SimOutput, SimStats, SimWarning, Trajectory, shown};

@@ -31,6 +31,23 @@ pub const MAX_RTOL: f64 = 0.1;
 /// stages, not their truncation, and the step size drifts down to `h_min` or the sample limit.
 pub const MIN_RTOL: f64 = 1e-14;
 
+/// The largest absolute tolerance [`SimSettings::validate`] accepts: 0.1 (rad, rad/s) per step,
+/// as [`MAX_RTOL`] is 10 %; beyond it the error control no longer bounds the steps, and the
+/// states of the finger are of order 1.
+pub const MAX_ATOL: f64 = 0.1;
+
+/// Why a positive absolute tolerance `atol` is above [`MAX_ATOL`], or `None`: the one statement
+/// of the bound, for [`SimSettings::validate`] and `simulate --atol`.
+pub fn atol_out_of_range(atol: f64) -> Option<String> {
+    (atol > MAX_ATOL).then(|| {
+        format!(
+            "must be at most {MAX_ATOL} (an absolute error of 0.1 rad or rad/s per step, beyond \
+             which the step-size control no longer measures anything), got {}",
+            crate::shown(atol)
+        )
+    })
+}
+
 /// Why a positive relative tolerance `rtol` is outside [[`MIN_RTOL`], [`MAX_RTOL`]] ("must be at
 /// least …, got …" with the reason), or `None` within it: the one statement of the range, for
 /// [`SimSettings::validate`] and the command lines that name their option.
@@ -144,6 +161,9 @@ impl SimSettings {
             return Err(SimError::InvalidSetting { name: "rtol", msg });
         }
         pos("atol", self.atol)?;
+        if let Some(msg) = atol_out_of_range(self.atol) {
+            return Err(SimError::InvalidSetting { name: "atol", msg });
+        }
         pos("h_min", self.h_min)?;
         pos("h_max", self.h_max)?;
         if let Some(h) = self.h_init {

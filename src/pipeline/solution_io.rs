@@ -503,16 +503,75 @@ fn from_texts(
 ) -> Result<OcpSolution, PipelineError> {
     let v: Value = crate::io::json_value(s).map_err(|e| io_err(path, e))?;
     check_schema_version(&v, path)?;
+    check_range(&v, path)?;
     if v.get("schema_version").is_none() {
-        return serde_json::from_value(v).map_err(|e| io_err(path, e));
+        let sol = serde_json::from_value(v).map_err(|e| io_err(path, e))?;
+        check_recorded(&sol, path)?;
+        return Ok(sol);
     }
     let (text, ipath) = internals(&v)?;
     let internals: Value = crate::io::json_value(&text).map_err(|e| io_err(&ipath, e))?;
+    check_schema_version(&internals, &ipath)?;
+    check_range(&internals, &ipath)?;
     check_internal_fields(&internals, &ipath)?;
     let sol = from_documents(&v, &internals, path)?;
     check_phases(&sol, path)?;
+    check_recorded(&sol, path)?;
     check_internals_belong(&sol, &internals, path, &ipath)?;
     Ok(sol)
+}
+
+/// Largest magnitude of any number in a solution's files: values beyond it are not a solution
+/// of these problems (angles, velocities, torques, durations, multipliers) and overflow the
+/// solver's products when the file comes back as a warm start.
+pub const MAX_SOLUTION_VALUE: f64 = 1e12;
+
+/// The first number of the document `v` that is NaN or beyond [`MAX_SOLUTION_VALUE`] in
+/// magnitude, with its field path (`nodes.q1[3]`).
+pub fn out_of_range(v: &Value) -> Option<(String, f64)> {
+    fn walk(v: &Value, at: &mut String) -> Option<(String, f64)> {
+        match v {
+            Value::Number(n) => n
+                .as_f64()
+                .filter(|x| x.is_nan() || x.abs() > MAX_SOLUTION_VALUE)
+                .map(|x| (at.clone(), x)),
+            Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| {
+                let len = at.len();
+                at.push_str(&format!("[{i}]"));
+                let r = walk(x, at);
+                at.truncate(len);
+                r
+            }),
+            Value::Object(o) => o.iter().find_map(|(k, x)| {
+                let len = at.len();
+                if !at.is_empty() {
+                    at.push('.');
+                }
+                at.push_str(k);
+                let r = walk(x, at);
+                at.truncate(len);
+                r
+            }),
+            _ => None,
+        }
+    }
+    walk(v, &mut String::new())
+}
+
+/// Errors naming `path`, the field and the value at [`out_of_range`]'s first find.
+fn check_range(v: &Value, path: &Path) -> Result<(), PipelineError> {
+    match out_of_range(v) {
+        None => Ok(()),
+        Some((field, x)) => Err(io_err(
+            path,
+            format!("`{field}` = {x:e} is out of range (|value| ≤ {MAX_SOLUTION_VALUE:e})"),
+        )),
+    }
+}
+
+/// [`super::solve::check_recorded_problem`] of `sol`, the error naming `path`.
+fn check_recorded(sol: &OcpSolution, path: &Path) -> Result<(), PipelineError> {
+    super::solve::check_recorded_problem(sol).map_err(|why| io_err(path, why))
 }
 
 /// Errors naming `path` unless the fields of the `solution.json` document `v` agree among
@@ -522,6 +581,7 @@ fn from_texts(
 /// so a file whose own fields disagree is refused there as everywhere.
 pub fn check_public_fields(v: &Value, path: &Path) -> Result<(), PipelineError> {
     check_schema_version(v, path)?;
+    check_range(v, path)?;
     let sol: OcpSolution = if v.get("schema_version").is_none() {
         serde_json::from_value(v.clone()).map_err(|e| io_err(path, e))?
     } else {
@@ -536,7 +596,8 @@ pub fn check_public_fields(v: &Value, path: &Path) -> Result<(), PipelineError> 
             "timing_seconds": timing_seconds(&timing)});
         from_documents(v, &empty, path)?
     };
-    check_phases(&sol, path)
+    check_phases(&sol, path)?;
+    check_recorded(&sol, path)
 }
 
 /// Errors naming the internals file `ipath` and the field unless its collocation data,

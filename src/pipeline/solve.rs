@@ -270,6 +270,82 @@ fn exact_warm_start<'a>(p: &BuiltProblem, ws: &'a OcpSolution) -> Option<&'a War
     same.then_some(w)
 }
 
+/// Largest number of Legendre–Gauss collocation points per phase (`optimize`'s module docs say
+/// why).
+pub const MAX_LG_POINTS: usize = 200;
+
+/// Largest number of collocation points per phase with the Radau scheme (its elements' points
+/// together): it bounds the memory of the NLP.
+pub const MAX_RADAU_POINTS: usize = 5000;
+
+/// Why a transcription of `points` collocation points per phase on `scheme` is not built: fewer
+/// than 2 points, no Radau element, more than [`MAX_LG_POINTS`] Legendre–Gauss points, or more
+/// than [`MAX_RADAU_POINTS`] Radau points per phase or `MAX_RADAU_DEGREE` per element. `None`
+/// when it is built. The one rule for `optimize`'s options and for the mesh a solution file
+/// records.
+pub fn transcription_size_error(
+    points: usize,
+    scheme: bf_optim::ocp::problem::Scheme,
+) -> Option<String> {
+    use bf_optim::ocp::problem::Scheme;
+    match scheme {
+        _ if points < 2 => Some(format!(
+            "{points} collocation points per phase; at least 2 are needed"
+        )),
+        Scheme::Lg if points > MAX_LG_POINTS => Some(format!(
+            "at most {MAX_LG_POINTS} Legendre–Gauss points per phase are supported (the nodes' \
+             interpolation weights overflow at about 900 points, and the dense differentiation \
+             blocks grow as N²)"
+        )),
+        Scheme::Lg => None,
+        Scheme::Radau { elements: 0 } => Some("Radau with 0 elements; at least 1 is needed".into()),
+        Scheme::Radau { elements } => {
+            let per_element = points.div_ceil(elements).max(2);
+            let total = per_element.saturating_mul(elements);
+            let max_degree = bf_optim::ocp::mesh::MAX_RADAU_DEGREE;
+            (per_element > max_degree || total > MAX_RADAU_POINTS).then(|| {
+                format!(
+                    "{elements} Radau elements of {per_element} points are {total} points per \
+                     phase; at most {MAX_RADAU_POINTS} per phase (and {max_degree} per element) \
+                     are supported"
+                )
+            })
+        }
+    }
+}
+
+/// Errors naming the field unless the problem a solution records is one this program poses: a
+/// catalogue `problem`, a mesh it builds (`points`, `scheme`: [`transcription_size_error`]), a
+/// `scene_toml` that parses with its `scene_params`, and settings its problems accept (ε, the
+/// cone and torque margins, the approach clearance, the stick-phase bound:
+/// [`bf_problem::check_settings`]). Every reader of a solution file applies it, so an edited
+/// value is refused whether or not the command at hand uses it. A file that records no scene
+/// text (written before it was recorded) is checked against its problem's built-in scene.
+pub fn check_recorded_problem(sol: &OcpSolution) -> Result<(), String> {
+    let problem: bf_problem::Problem = sol
+        .problem
+        .parse()
+        .map_err(|e| format!("`problem` {:?}: {e}", sol.problem))?;
+    if let Some(why) = transcription_size_error(sol.points, sol.scheme) {
+        return Err(format!(
+            "`points` {} on `scheme` {:?}: {why}",
+            sol.points, sol.scheme
+        ));
+    }
+    let scene = match recorded_scene(sol).map_err(|e| e.to_string())? {
+        Some(scene) => scene,
+        None => {
+            let id = problem.scene();
+            let text = bf_generated::scene_toml(id.as_str()).ok_or_else(|| {
+                format!("`problem` {}: its scene {id} is not built in", sol.problem)
+            })?;
+            bf_codegen::Scene::from_toml_str(text, id.as_str()).map_err(|e| e.to_string())?
+        }
+    };
+    let settings = recorded_settings(sol, None);
+    bf_problem::check_settings(problem, &settings, &scene).map_err(|e| e.to_string())
+}
+
 /// The scene a solution file records: its `scene_toml` parsed, with its `scene_params` set;
 /// `None` for a file that records no scene text (written before it was recorded). The error
 /// names the field that does not parse or set.
@@ -305,27 +381,29 @@ pub fn settings_of(
     let compiled = sol.scene_params.is_empty()
         && bf_generated::scene_toml(problem.scene().as_str()) == Some(sol.scene_toml.as_str());
     let scene = if compiled { None } else { recorded_scene(sol)? };
-    Ok((
-        problem,
-        ProblemSettings {
-            points: sol.points,
-            scheme: sol.scheme,
-            epsilon: Some(sol.epsilon),
-            scene,
-            impact_law: sol.impact_law,
-            cone_margin: sol.cone_margin,
-            impulse_cone: sol.impulse_cone,
-            torque_margin: sol.torque_margin,
-            approach_clearance: sol.approach_clearance,
-            // The stick-phase bound is a bound of the problem (eq. 66), recorded with the
-            // search's settings; a file without them was posed with the default.
-            min_stick: sol
-                .search_settings
-                .as_ref()
-                .map_or(ProblemSettings::default().min_stick, |s| s.min_stick),
-            ..ProblemSettings::default()
-        },
-    ))
+    Ok((problem, recorded_settings(sol, scene)))
+}
+
+/// The settings `sol` records, on `scene` (`None`: the problem's compiled scene).
+fn recorded_settings(sol: &OcpSolution, scene: Option<bf_codegen::Scene>) -> ProblemSettings {
+    ProblemSettings {
+        points: sol.points,
+        scheme: sol.scheme,
+        epsilon: Some(sol.epsilon),
+        scene,
+        impact_law: sol.impact_law,
+        cone_margin: sol.cone_margin,
+        impulse_cone: sol.impulse_cone,
+        torque_margin: sol.torque_margin,
+        approach_clearance: sol.approach_clearance,
+        // The stick-phase bound is a bound of the problem (eq. 66), recorded with the
+        // search's settings; a file without them was posed with the default.
+        min_stick: sol
+            .search_settings
+            .as_ref()
+            .map_or(ProblemSettings::default().min_stick, |s| s.min_stick),
+        ..ProblemSettings::default()
+    }
 }
 
 /// `sol`'s own problem rebuilt from what the solution records (problem, scene text and

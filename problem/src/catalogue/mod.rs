@@ -383,11 +383,11 @@ fn check_settings_on(
     ph: &Physics,
 ) -> Result<(), ProblemError> {
     let eps = smoothing_eps(settings, scene);
-    if !(eps.is_finite() && eps > 0.0) {
+    if bf_scene::smooth_eps_out_of_range(eps).is_some() {
         return Err(ProblemError::InvalidSetting {
             name: "epsilon",
             value: eps,
-            expected: "positive",
+            expected: bf_scene::SMOOTH_EPS_RANGE,
         });
     }
     for (name, value) in [

@@ -50,11 +50,7 @@ pub use progress::{
 };
 pub use shards::merge;
 
-/// Largest `--points` with `--scheme lg` (see the module docs).
-pub const MAX_LG_POINTS: usize = 200;
-
-/// Largest number of collocation points per phase with `--scheme radau`.
-pub const MAX_RADAU_POINTS: usize = 5000;
+pub use crate::pipeline::solve::{MAX_LG_POINTS, MAX_RADAU_POINTS};
 
 /// The output directory of `optimize`.
 pub const OUTPUT_DIR: DirSpec<'static> = DirSpec {
@@ -86,35 +82,24 @@ pub fn parse_scheme(text: &str, elements: Option<usize>) -> Result<Scheme> {
     }
 }
 
-/// Checks the size of the transcription before anything is allocated (see the module docs).
+/// Checks the size of the transcription before anything is allocated (see the module docs and
+/// [`crate::pipeline::solve::transcription_size_error`], which every solution file's reader
+/// applies to the mesh the file records).
 pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
+    let Some(why) = crate::pipeline::solve::transcription_size_error(points, scheme) else {
+        return Ok(());
+    };
     match scheme {
-        Scheme::Lg if points > MAX_LG_POINTS => bail_usage!(
-            "--points {points} with --scheme lg: at most {MAX_LG_POINTS} Legendre–Gauss points \
-             per phase are supported (the nodes' interpolation weights overflow at about 900 \
-             points, and the dense differentiation blocks grow as N²); for a finer mesh use \
-             --scheme radau with --elements"
+        Scheme::Lg => bail_usage!(
+            "--points {points} with --scheme lg: {why}; for a finer mesh use --scheme radau \
+             with --elements"
         ),
-        Scheme::Radau { elements } => {
-            let per_element = points.div_ceil(elements).max(2);
-            let total = per_element.saturating_mul(elements);
-            let max_degree = bf_optim::ocp::mesh::MAX_RADAU_DEGREE;
-            if per_element > max_degree || total > MAX_RADAU_POINTS {
-                bail_usage!(
-                    "--points {points} --elements {elements}: {elements} Radau elements of \
-                     {per_element} points are {total} points per phase; at most \
-                     {MAX_RADAU_POINTS} per phase (and {max_degree} per element) are supported"
-                );
-            }
-            Ok(())
-        }
-        _ => Ok(()),
+        Scheme::Radau { elements } => bail_usage!("--points {points} --elements {elements}: {why}"),
     }
 }
 
-/// Largest magnitude accepted in a warm-start file: values beyond it are not a solution of
-/// these problems and overflow the solver's products.
-pub const MAX_WARM_START_VALUE: f64 = 1e12;
+/// Largest magnitude accepted in a warm-start file (the bound of every solution file's reader).
+pub use crate::pipeline::solution_io::MAX_SOLUTION_VALUE as MAX_WARM_START_VALUE;
 
 /// Checks every number of a warm-start file (read as JSON) and of the internals file it names
 /// (`solution-internals.json`: the raw collocation data the warm start is built from) against
@@ -170,33 +155,7 @@ fn read_json_value(option: &str, path: &Path) -> Result<serde_json::Value> {
 /// Errors naming `option`, `path`, the field path and the value if a number of `value` is NaN or beyond
 /// [`MAX_WARM_START_VALUE`].
 fn check_json_values(option: &str, path: &Path, value: &serde_json::Value) -> Result<()> {
-    fn walk(v: &serde_json::Value, at: &mut String) -> Option<(String, f64)> {
-        match v {
-            serde_json::Value::Number(n) => n
-                .as_f64()
-                .filter(|x| x.is_nan() || x.abs() > MAX_WARM_START_VALUE)
-                .map(|x| (at.clone(), x)),
-            serde_json::Value::Array(a) => a.iter().enumerate().find_map(|(i, x)| {
-                let len = at.len();
-                at.push_str(&format!("[{i}]"));
-                let r = walk(x, at);
-                at.truncate(len);
-                r
-            }),
-            serde_json::Value::Object(o) => o.iter().find_map(|(k, x)| {
-                let len = at.len();
-                if !at.is_empty() {
-                    at.push('.');
-                }
-                at.push_str(k);
-                let r = walk(x, at);
-                at.truncate(len);
-                r
-            }),
-            _ => None,
-        }
-    }
-    if let Some((field, x)) = walk(value, &mut String::new()) {
+    if let Some((field, x)) = crate::pipeline::solution_io::out_of_range(value) {
         bail!(
             "{option} {}: `{field}` = {x:e} is out of range (|value| ≤ {MAX_WARM_START_VALUE:e})",
             path.display()

@@ -166,6 +166,9 @@ pub fn settings(args: &SimulateArgs) -> Result<SimSettings> {
     }
     let atol = args.atol.unwrap_or(1e-2 * rtol);
     pos("--atol", atol)?;
+    if let Some(why) = bf_sim::atol_out_of_range(atol) {
+        bail_usage!("--atol {why}");
+    }
     if let Some(dt) = args.output_dt {
         pos("--output-dt", dt)?;
     }
