@@ -345,8 +345,8 @@ pub struct SimulateArgs {
     pub init: Option<PathBuf>,
     /// End time (s) [default: 10; with --torques, the series' last time where it is after the
     /// start; for an arm's `solution.json` given with --init and no --torques, its duration].
-    /// Past the end of a --torques series its last torque is held, which the run warns about
-    /// (`torques_held`).
+    /// Past the end of a --torques series its last torque is held, and before its start its
+    /// first, which the run warns about (`torques_held`).
     #[arg(long, allow_hyphen_values = true)]
     pub t_end: Option<f64>,
     /// Integrator: dopri5 or rk4.

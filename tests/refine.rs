@@ -154,6 +154,14 @@ fn hp_rule_raises_degree_or_splits() {
         spec.refined(&[1.01e-4, 0.0, 0.0], 1e-4, rule).degrees,
         vec![5, 10, 6]
     );
+    // A tolerance so small that e/tol overflows (subnormal, as `--refine 1e-320` gives) splits
+    // each element into a bounded number of valid ones: the point count used to saturate and
+    // wrap to a degree of 1.
+    let r = spec.refined(&[1e-2, 1e-1, 1e-4], 1e-320, rule);
+    r.validate().unwrap();
+    // P at its cap, 4 × 64: ⌈(n + 256) / 4⌉ elements of 4 points for each.
+    assert_eq!(r.n_elements(), 65 + 67 + 66, "{:?}", r.degrees);
+    assert!(r.degrees.iter().all(|&d| d == 4));
     // Serialisable for solution.json.
     let s = serde_json::to_string(&r).unwrap();
     assert_eq!(serde_json::from_str::<MeshSpec>(&s).unwrap(), r);

@@ -1014,7 +1014,7 @@ fn impacts_record_their_impulse_and_an_impulse_no_contact_gives_is_warned() {
 }
 
 /// A `--torques` run ends with its series unless `--t-end` says otherwise, and one that goes on
-/// past it says that it holds the last torque (`torques_held`, in `summary.json` and on
+/// past it (or starts before it) says that it holds the last (first) torque (`torques_held`, in `summary.json` and on
 /// stderr); `--no-projection` says that the drift was not projected instead of reporting a
 /// projected drift of 0; a solution replayed under another impact law than it was planned with
 /// says so.
@@ -1076,6 +1076,18 @@ fn a_replay_says_what_it_does_not_replay() {
         "{stderr}"
     );
     assert!(!stderr.contains("--t-end 10"), "{stderr}");
+    // A series that starts after the run does says that its first torque is held until then.
+    let late = dir.join("late.csv");
+    std::fs::write(&late, "t,tau1,tau2,tau3\n0.1,0,0.1,0\n0.2,0,0.1,0\n").unwrap();
+    let late_run = dir.join("late-run");
+    let o = simulate_into(&late_run, &["--torques", late.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{stderr}");
+    assert!(held(&json(&late_run.join("summary.json"))), "{stderr}");
+    assert!(
+        stderr.contains("starts at t = 0.1 s") && stderr.contains("holds its first torque"),
+        "{stderr}"
+    );
     // A series that ends before the run starts says so (it said "where the run starts").
     let early = dir.join("early.csv");
     std::fs::write(

@@ -210,6 +210,11 @@ fn every_reader_checks_the_recorded_problem() {
     let p = dir.join("solution.json");
     let edits: Vec<(&str, Value, &str)> = vec![
         ("problem", "bogus".into(), "unknown problem `bogus`"),
+        (
+            "verified",
+            "yes".into(),
+            "`verified` is \"yes\", not true or false",
+        ),
         ("points", 0.into(), "at least 2 are needed"),
         (
             "points",
@@ -244,6 +249,22 @@ fn every_reader_checks_the_recorded_problem() {
             "`objective` = 1e300 is out of range",
         ),
     ];
+    let mut unversioned = sol.clone();
+    unversioned
+        .as_object_mut()
+        .unwrap()
+        .remove("schema_version");
+    let e = check_public_fields(&unversioned, &p)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("`schema_version` is missing"), "{e}");
+    let mut far = sol.clone();
+    far["nodes"]["q1"][2] = 1e11.into();
+    let e = check_public_fields(&far, &p).unwrap_err().to_string();
+    assert!(
+        e.contains("`nodes.q1` = 1e11 rad at sample 2 is beyond ±2²⁰"),
+        "{e}"
+    );
     for (field, value, needle) in &edits {
         let mut edited = sol.clone();
         edited[*field] = value.clone();

@@ -94,7 +94,18 @@ impl std::error::Error for OutputError {}
 /// targets are never replaced. Errors name the file.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     let dir = parent_of(path);
-    fs::create_dir_all(&dir).map_err(|e| OutputError::io("cannot create directory", &dir, &e))?;
+    fs::create_dir_all(&dir).map_err(|e| {
+        // "File exists" alone does not say which: name the file in the way.
+        let in_the_way = dir.ancestors().find(|a| a.is_file());
+        match in_the_way {
+            Some(file) => OutputError::io(
+                "cannot create directory",
+                &dir,
+                &std::io::Error::other(format!("{} is a file, not a directory", file.display())),
+            ),
+            None => OutputError::io("cannot create directory", &dir, &e),
+        }
+    })?;
     replace_file(path, bytes).map_err(|e| OutputError::io("cannot write", path, &e))
 }
 
@@ -604,6 +615,18 @@ mod tests {
         write_atomic(&path, b"second").unwrap();
         assert_eq!(fs::read(&path).unwrap(), b"second");
         assert_eq!(names(&dir.join("sub")), ["out.txt"]);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn write_atomic_under_a_file_names_the_file_in_the_way() {
+        let dir = scratch("under-a-file");
+        let file = dir.join("afile");
+        fs::write(&file, "kept").unwrap();
+        let e = write_atomic(&file.join("sub/out.txt"), b"x").unwrap_err();
+        let shown = format!("{} is a file, not a directory", file.display());
+        assert!(e.to_string().contains(&shown), "{e}");
+        assert_eq!(fs::read_to_string(&file).unwrap(), "kept");
         fs::remove_dir_all(&dir).unwrap();
     }
 

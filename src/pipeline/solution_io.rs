@@ -322,6 +322,13 @@ fn from_documents(
     let Value::Object(p) = public else {
         return Err(io_err(path, "not a JSON object"));
     };
+    // Derived from `verification` when read, but a reader of the file alone takes it as said.
+    if let Some(v) = p.get("verified").filter(|v| !v.is_boolean()) {
+        return Err(io_err(
+            path,
+            format!("`verified` is {v}, not true or false"),
+        ));
+    }
     let mut all = p.clone();
     let nq = p
         .get("state_names")
@@ -697,6 +704,14 @@ fn check_samples(s: &bf_problem::Samples, phases: usize) -> Result<(), String> {
 /// does not read: a newer schema may mean other things by the same fields.
 pub fn check_schema_version(v: &Value, path: &Path) -> Result<(), PipelineError> {
     match v.get("schema_version").map(|x| (x, x.as_u64())) {
+        // Only schema 2 names an internals file: without its version it would be read as the
+        // older one-file record, and blamed for the fields that went to the internals.
+        None if v.get("internals").is_some() => Err(io_err(
+            path,
+            format!(
+                "`schema_version` is missing (a file that names its `internals` is of schema {SCHEMA_VERSION})"
+            ),
+        )),
         None | Some((_, Some(SCHEMA_VERSION))) => Ok(()),
         Some((x, _)) => Err(io_err(
             path,

@@ -318,7 +318,8 @@ pub fn transcription_size_error(
 /// catalogue `problem`, a mesh it builds (`points`, `scheme`: [`transcription_size_error`]), a
 /// `scene_toml` that parses with its `scene_params`, and settings its problems accept (ε, the
 /// cone and torque margins, the approach clearance, the stick-phase bound:
-/// [`bf_problem::check_settings`]). Every reader of a solution file applies it, so an edited
+/// [`bf_problem::check_settings`]), and joint angles within the kernels' ±2²⁰ rad. Every reader
+/// of a solution file applies it, so an edited
 /// value is refused whether or not the command at hand uses it. A file that records no scene
 /// text (written before it was recorded) is checked against its problem's built-in scene.
 pub fn check_recorded_problem(sol: &OcpSolution) -> Result<(), String> {
@@ -343,7 +344,25 @@ pub fn check_recorded_problem(sol: &OcpSolution) -> Result<(), String> {
         }
     };
     let settings = recorded_settings(sol, None);
-    bf_problem::check_settings(problem, &settings, &scene).map_err(|e| e.to_string())
+    bf_problem::check_settings(problem, &settings, &scene).map_err(|e| e.to_string())?;
+    // Beyond ±2²⁰ rad the kernels' sine and cosine are not defined: every replay or warm start
+    // from such a sample would evaluate NaN.
+    let range = bf_codegen::trig::ANGLE_RANGE;
+    for (table, samples) in [("nodes", &sol.nodes), ("dense", &sol.dense)] {
+        for (k, q) in samples.q.iter().enumerate() {
+            let beyond = scene.links.iter().zip(q).enumerate().find(|(_, (l, v))| {
+                l.joint == bf_codegen::spec::JointType::Revolute && v.abs() > range
+            });
+            if let Some((i, (_, v))) = beyond {
+                return Err(format!(
+                    "`{table}.q{}` = {v:e} rad at sample {k} is beyond ±2²⁰ = ±{range} rad, where \
+                     the kernels' sine and cosine are not defined",
+                    i + 1
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The scene a solution file records: its `scene_toml` parsed, with its `scene_params` set;

@@ -131,7 +131,12 @@ impl MeshSpec {
                 degrees.push(n);
                 continue;
             }
-            let p = (libm::log(err / tol) / libm::log(n as f64)).ceil().max(1.0) as usize;
+            // At most 4 × MAX_RADAU_DEGREE points more (an error ratio beyond n^256, 1e77 for
+            // n = 2, which no tolerance above 1e-60 gives): a ratio that overflows (a subnormal
+            // tolerance) would otherwise saturate the count and wrap n + p.
+            let p = (libm::log(err / tol) / libm::log(n as f64))
+                .ceil()
+                .clamp(1.0, (4 * MAX_RADAU_DEGREE) as f64) as usize;
             if n + p <= n_max {
                 breaks.push(b);
                 degrees.push(n + p);

@@ -67,7 +67,7 @@ pub(super) fn run_arm(
     let set = settings(args)?;
     check_limits(args, &set, end)?;
     let held = super::torques_held(&inp, end);
-    if let Some(w) = &held {
+    for w in &held {
         crate::errln!("warning: {}", w.message);
     }
     let q0 = match (&args.q0, &replay) {

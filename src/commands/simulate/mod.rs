@@ -227,8 +227,12 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
                 v.get("scene").and_then(|s| s.as_str()).unwrap_or("?")
             );
         }
-        if v.get("nodes").is_some() && v.get("modes").is_some() {
-            // A solution of `optimize`: replay it from its own initial state and mode.
+        let is_solution = ["schema_version", "problem", "nodes"]
+            .iter()
+            .any(|k| v.get(k).is_some());
+        if is_solution {
+            // A solution of `optimize` (one with a field deleted too, which the solution's
+            // checks then name): replay it from its own initial state and mode.
             crate::pipeline::solution_io::check_public_fields(&v, path)
                 .with_context(|| format!("--init {}", path.display()))?;
             // Honest output: a replay of a plan that failed its own checks is no check of it.
@@ -483,13 +487,36 @@ impl RunEnd {
     }
 }
 
+/// The warnings of a run that holds a torque its series does not give: the first torque of a
+/// `--torques` series that starts after the run does (at t = 0), until the series starts
+/// ([`torques_held_after`] for its end).
+pub(super) fn torques_held(inp: &CliInput, end: RunEnd) -> Vec<bf_sim::SimWarning> {
+    let first = match inp {
+        CliInput::Series(s) => s.times().first().copied().filter(|&t| t > 0.0),
+        _ => None,
+    };
+    let before = first.map(|first| bf_sim::SimWarning {
+        t: 0.0,
+        kind: "torques_held",
+        message: format!(
+            "the --torques series starts at t = {} s, after the run starts at t = 0: the run \
+             holds its first torque until then",
+            crate::cli::shown(first)
+        ),
+    });
+    before
+        .into_iter()
+        .chain(torques_held_after(inp, end))
+        .collect()
+}
+
 /// The warning of a run that goes on past the end of its torques, whose last torque it then
 /// holds: a `--torques` series (a solution's `torques.csv` covers one period, and held torques
 /// are no replay of it) or an arm solution replayed by `--init` (its torques cover its own
 /// duration). A run ends with its torques unless `--t-end` or a replayed solution sets
 /// another end, or they end where the run starts (a one-row series: a constant torque, held
 /// over the default run).
-pub(super) fn torques_held(inp: &CliInput, end: RunEnd) -> Option<bf_sim::SimWarning> {
+fn torques_held_after(inp: &CliInput, end: RunEnd) -> Option<bf_sim::SimWarning> {
     let last = inp.series_end()?;
     if end.t <= last * (1.0 + 1e-9) {
         return None;
