@@ -1264,6 +1264,29 @@ fn a_held_contact_reports_the_pull_at_the_end_of_its_step() {
             "hold {h:?} without its fallback"
         );
     }
+    // The event each fallback replaced says so: one per hold, at the hold's start, whose
+    // `mode_after` is the stick held rather than the mode its kind names; and no other event
+    // ends in a mode its kind does not name.
+    let events = json(&out_dir.join("events.json"));
+    let events = events["events"].as_array().unwrap();
+    let replaced: Vec<f64> = events
+        .iter()
+        .filter(|e| e["zeno_fallback"] == true)
+        .map(|e| {
+            assert_eq!(e["mode_after"], "stick", "{e}");
+            e["t"].as_f64().unwrap()
+        })
+        .collect();
+    assert_eq!(replaced, holds.iter().map(|h| h[0]).collect::<Vec<_>>());
+    for e in events.iter().filter(|e| e["zeno_fallback"] == false) {
+        let named = match e["kind"].as_str().unwrap() {
+            "stick_to_slip" => Some("slip"),
+            "slip_to_stick" => Some("stick"),
+            "lift_off" => Some("free"),
+            _ => None,
+        };
+        assert!(named.is_none_or(|m| e["mode_after"] == m), "{e}");
+    }
     let tj = json(&out_dir.join("trajectory.json"));
     let t: Vec<f64> = serde_json::from_value(tj["t"].clone()).unwrap();
     let mode: Vec<String> = serde_json::from_value(tj["mode"].clone()).unwrap();

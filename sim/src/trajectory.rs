@@ -152,6 +152,9 @@ pub struct EventRecord<M> {
     /// Whether the event fired immediately after a previous reset at the same instant (a chained
     /// transition) rather than from a located crossing.
     pub chained: bool,
+    /// Whether the Zeno fallback replaced the transition the guard asked for (`mode_after` is
+    /// then the fallback's mode, e.g. a stick held where σ asked for slip).
+    pub zeno_fallback: bool,
 }
 
 /// Counters of one run.
@@ -299,6 +302,7 @@ pub(crate) fn events_csv<M: Debug>(events: &[EventRecord<M>]) -> Result<Vec<u8>,
         "mode_before".into(),
         "mode_after".into(),
         "chained".into(),
+        "zeno_fallback".into(),
     ];
     header.extend((0..n).map(|i| format!("pre{i}")));
     header.extend((0..n).map(|i| format!("post{i}")));
@@ -314,6 +318,7 @@ pub(crate) fn events_csv<M: Debug>(events: &[EventRecord<M>]) -> Result<Vec<u8>,
                 .map(|m| format!("{m:?}"))
                 .unwrap_or_else(|| "Terminate".into()),
             e.chained.to_string(),
+            e.zeno_fallback.to_string(),
         ];
         rec.extend(e.x_pre.iter().map(|&v| fmt_f64(v)));
         rec.extend(e.x_post.iter().map(|&v| fmt_f64(v)));

@@ -150,6 +150,7 @@ impl<const N: usize> RunReport<N> {
             "mode_before",
             "mode_after",
             "chained",
+            "zeno_fallback",
         ]
         .map(String::from)
         .to_vec();
@@ -168,6 +169,7 @@ impl<const N: usize> RunReport<N> {
                 mode_name(e.mode_before).to_string(),
                 e.mode_after.map_or("terminate", mode_name).to_string(),
                 e.chained.to_string(),
+                e.zeno_fallback.to_string(),
             ];
             rec.extend(e.x_pre.iter().map(|&v| f(v)));
             rec.extend(info_fields(&e.pre));

@@ -264,6 +264,7 @@ impl<K: Kernels<N>, I: Input, const N: usize> BallFinger<K, I, N> {
                 mode_before: e.mode_before,
                 mode_after: e.mode_after,
                 chained: e.chained,
+                zeno_fallback: e.zeno_fallback,
                 x_pre: e.x_pre.clone(),
                 x_post: e.x_post.clone(),
                 // A chained event fires from the state the previous reset left, with no step
@@ -423,6 +424,9 @@ pub struct EventInfo<const N: usize = 3> {
     pub mode_after: Option<Mode>,
     /// Whether it fired at the same instant as the previous event (chained).
     pub chained: bool,
+    /// Whether the Zeno fallback replaced the guard's transition: `mode_after` is the mode it
+    /// held (`kind` still names the transition the guard asked for).
+    pub zeno_fallback: bool,
     /// State (q, q̇, ω) before the reset.
     pub x_pre: Vec<f64>,
     /// State after the reset.

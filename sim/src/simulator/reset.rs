@@ -44,6 +44,7 @@ impl<S: HybridSystem + ?Sized> Simulator<'_, S> {
         {
             self.recent_events.pop_front();
         }
+        let mut zeno_fallback = false;
         let mut mode_after = match tr {
             Transition::To(m) => Some(m),
             Transition::Terminate => None,
@@ -69,6 +70,7 @@ impl<S: HybridSystem + ?Sized> Simulator<'_, S> {
                 return Err(self.non_finite("state after the Zeno fallback"));
             }
             mode_after = Some(m);
+            zeno_fallback = true;
             self.stats.zeno_fallbacks += 1;
             self.warnings.push(SimWarning {
                 t,
@@ -89,6 +91,7 @@ impl<S: HybridSystem + ?Sized> Simulator<'_, S> {
             x_pre,
             x_post: self.x.clone(),
             chained: p.chained,
+            zeno_fallback,
         });
         if self.chain > self.set.max_chained_events {
             return Err(SimError::ChainLimit {
