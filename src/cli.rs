@@ -377,9 +377,11 @@ pub struct SimulateArgs {
     #[arg(long, value_name = "SECONDS", allow_hyphen_values = true, value_parser = positive)]
     pub max_time: Option<f64>,
     /// Impact law: newton, stick, max-dissipation, min-slip (or normal-impulse). Newton's law
-    /// (eq. 39, the paper's choice and the default) can raise the energy at an impact; each
-    /// such impact is reported as a warning. stick, max-dissipation and min-slip dissipate
-    /// [default: newton].
+    /// (eq. 39, the paper's choice and the default) keeps the contact point's tangential
+    /// velocity, which takes an impulse on the finger with a tangential part and no reaction on
+    /// the ball (the paper's text calls it perpendicular; normal-impulse is that reading), so it
+    /// can raise the energy at an impact; each such impact is reported as a warning. stick,
+    /// max-dissipation, min-slip and normal-impulse dissipate [default: newton].
     #[arg(long)]
     pub impact_law: Option<String>,
     /// Disable the projection of h and of the velocity constraint after contact steps (the
