@@ -136,7 +136,16 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         scene.name,
         path.display()
     );
-    let mut attempts = solve_verified(
+    // The arm's node functions are interpreted: a long chain takes minutes, which the spinner
+    // (on a terminal) shows are being spent.
+    let pb = super::iteration_spinner(REACH_ARM);
+    pb.set_message(format!(
+        "solving on {} elements of {} points, then re-integrating (the mesh doubled until it \
+         verifies) ...",
+        settings.elements, settings.points
+    ));
+    pb.enable_steady_tick(std::time::Duration::from_millis(120));
+    let attempts = solve_verified(
         &scene,
         &settings,
         args.verify_rtol,
@@ -146,6 +155,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         &params,
     )
     .with_context(|| {
+        pb.finish_and_clear();
         // The cost's weights enter every value the solver computes: a weight given on the
         // command line is named beside the scene, which alone would take the blame for an
         // objective that overflows.
@@ -162,6 +172,8 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             format!("--scene {} with {}", path.display(), given.join(", "))
         }
     })?;
+    pb.finish_and_clear();
+    let mut attempts = attempts;
     for a in &attempts {
         let v = a.solution.verification.as_ref();
         crate::outln!(
