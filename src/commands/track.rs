@@ -242,7 +242,8 @@ pub fn run(args: &TrackArgs) -> Result<()> {
         );
     }
     let sol = OcpSolution::read_json(&args.solution)
-        .with_context(|| format!("reading the solution {}", args.solution.display()))?;
+        // Every error of the reader names the file it is about.
+        .context("reading the solution")?;
     // Another problem's solution is refused by the closed loop itself, naming the problem.
     if sol
         .problem

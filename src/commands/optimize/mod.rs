@@ -201,7 +201,8 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
         Some(path) => {
             check_warm_start_values(path)?;
             let sol = OcpSolution::read_json(path)
-                .with_context(|| format!("--warm-start {}", path.display()))?;
+                // Every error of the reader names the file it is about.
+                .context("--warm-start")?;
             Some(sol)
         }
         None => None,

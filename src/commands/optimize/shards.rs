@@ -51,8 +51,7 @@ fn read_candidates(dir: &Path) -> Result<Vec<(usize, std::path::PathBuf, OcpSolu
     names
         .into_iter()
         .map(|(k, path)| {
-            let sol = OcpSolution::read_json(&path)
-                .with_context(|| format!("optimize merge: {}", path.display()))?;
+            let sol = OcpSolution::read_json(&path).context("optimize merge")?;
             check_own_objective(&path, &sol)?;
             Ok((k, path, sol))
         })
@@ -253,8 +252,7 @@ pub fn merge(args: &MergeArgs) -> Result<()> {
     let mut seconds: f64 = 0.0;
     for dir in &args.dirs {
         let path = dir.join("solution.json");
-        let sol = OcpSolution::read_json(&path)
-            .with_context(|| format!("optimize merge: {}", path.display()))?;
+        let sol = OcpSolution::read_json(&path).context("optimize merge")?;
         let Some(rep) = &sol.strategy else {
             bail!(
                 "optimize merge: {} has no strategy record (not written by optimize --shard)",

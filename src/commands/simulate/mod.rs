@@ -233,8 +233,8 @@ pub fn initial_state<const N: usize>(args: &SimulateArgs) -> Result<(Mode, State
         if is_solution {
             // A solution of `optimize` (one with a field deleted too, which the solution's
             // checks then name): replay it from its own initial state and mode.
-            crate::pipeline::solution_io::check_public_fields(&v, path)
-                .with_context(|| format!("--init {}", path.display()))?;
+            // Every error of the check names the file it is about.
+            crate::pipeline::solution_io::check_public_fields(&v, path).context("--init")?;
             // Honest output: a replay of a plan that failed its own checks is no check of it.
             let status = v.get("status").and_then(|s| s.as_str()).unwrap_or("?");
             let verified = v.get("verified").and_then(|b| b.as_bool()) != Some(false);

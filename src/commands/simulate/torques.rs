@@ -145,7 +145,8 @@ fn tracking(args: &SimulateArgs, gains: &str) -> Result<TrackingPd> {
         bail_usage!("--pd-track needs --init SOLUTION (a solution.json of `optimize`)");
     };
     let sol = bf_problem::OcpSolution::read_json(path)
-        .with_context(|| format!("--pd-track: reading the solution {}", path.display()))?;
+        // Every error of the reader names the file it is about.
+        .context("--pd-track: reading the solution")?;
     if sol.dense.t.len() < 2 || !(sol.period.is_finite() && sol.period > 0.0) {
         bail!(
             "--pd-track: {} has no trajectory to track (period {} s, {} dense samples)",
