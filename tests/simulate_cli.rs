@@ -22,6 +22,16 @@ fn json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// The `kind` of each event of an `events.json` document, in order.
+fn event_kinds(events: &Value) -> Vec<&str> {
+    events["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["kind"].as_str().unwrap())
+        .collect()
+}
+
 /// `simulate ARGS --out OUT_DIR`.
 fn simulate_into(out_dir: &Path, args: &[&str]) -> Output {
     let mut all = vec!["simulate"];
@@ -84,13 +94,7 @@ fn cli_scripted_push_writes_consistent_files() {
         assert!(stdout.contains(key), "summary lacks {key:?}: {stdout}");
     }
     let ev = json(&out_dir.join("events.json"));
-    let kinds: Vec<&str> = ev["events"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|e| e["kind"].as_str().unwrap())
-        .collect();
-    assert_eq!(kinds, ["impact", "stick_to_slip", "lift_off"]);
+    assert_eq!(event_kinds(&ev), ["impact", "stick_to_slip", "lift_off"]);
     assert!(ev["events"][0]["pre"]["h"].as_f64().unwrap().abs() < 1e-9);
     // The CSV has the documented columns and the same number of rows as the JSON.
     let csv = std::fs::read_to_string(out_dir.join("trajectory.csv")).unwrap();
@@ -1358,13 +1362,7 @@ fn a_slip_with_large_friction_ends_at_its_stop() {
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(0), "{name}: {stderr}");
         let ev = json(&out_dir.join("events.json"));
-        let kinds: Vec<&str> = ev["events"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|e| e["kind"].as_str().unwrap())
-            .collect();
-        assert_eq!(kinds, ["impact", "slip_to_stick"], "{name}");
+        assert_eq!(event_kinds(&ev), ["impact", "slip_to_stick"], "{name}");
         let e = &ev["events"][1];
         (
             e["t"].as_f64().unwrap(),

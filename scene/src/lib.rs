@@ -580,6 +580,18 @@ impl Scene {
         out
     }
 
+    /// The first revolute joint angle of `q` (index, value) beyond ±[`MAX_ANGLE`] rad, where
+    /// the kernels' sine and cosine are not defined; `None` if every one is within it (a
+    /// prismatic joint's q is a length, not bounded here).
+    pub fn angle_beyond_range(&self, q: &[f64]) -> Option<(usize, f64)> {
+        self.links
+            .iter()
+            .zip(q)
+            .enumerate()
+            .find(|(_, (l, v))| l.joint == JointType::Revolute && v.abs() > MAX_ANGLE)
+            .map(|(i, (_, &v))| (i, v))
+    }
+
     /// Number of joints (= DH links).
     pub fn nq(&self) -> usize {
         self.links.len()

@@ -69,15 +69,7 @@ pub fn check_angles(option: &str, scene: &bf_codegen::Scene, q: &[f64]) -> Resul
 /// refused, naming `source` (what gave `q`); `None` if every angle is within it.
 pub fn angle_beyond_range(source: &str, scene: &bf_codegen::Scene, q: &[f64]) -> Option<String> {
     let range = bf_codegen::trig::ANGLE_RANGE;
-    let revolute =
-        |l: &bf_codegen::spec::LinkSpec| l.joint == bf_codegen::spec::JointType::Revolute;
-    let (i, v) = scene
-        .links
-        .iter()
-        .zip(q)
-        .enumerate()
-        .find(|(_, (l, v))| revolute(l) && v.abs() > range)
-        .map(|(i, (_, &v))| (i, v))?;
+    let (i, v) = scene.angle_beyond_range(q)?;
     Some(format!(
         "{source}: q{} = {} rad is beyond ±2²⁰ = ±{range} rad, where the kernels' sine and \
          cosine are not defined; give the angle modulo 2π",

@@ -228,9 +228,9 @@ pub fn run(args: &TrackArgs) -> Result<()> {
             args.periods
         );
     }
-    // The same range check as `simulate --init` and `--warm-start`: a value no optimum has
-    // would otherwise surface as a lost ball.
-    let doc = super::optimize::check_solution_values("track", &args.solution)?;
+    // An arm's solution is named as one; the reader below checks the rest of a finger's (the
+    // range of every number included: a value no optimum has would surface as a lost ball).
+    let doc = super::optimize::read_json_value("track", &args.solution)?;
     if crate::pipeline::arm::is_arm_solution(&doc) {
         bail!(
             "{}: a solution of `optimize --problem {}` (an arm without a ball); `track` \

@@ -179,29 +179,9 @@ impl<const N: usize> Tracking<N> {
     }
 }
 
-/// The optimum's scene parsed, with its name: the scene file's text the solution records
-/// (`scene_toml`, with `scene_params`), or, in files that record none, the compiled scene it
-/// names (`paper` for solutions that name none).
-/// A solution on a scene of the user's own runs on interpreted kernels, like its `optimize`
-/// and `simulate`.
+/// The optimum's scene parsed, with its name ([`crate::pipeline::solve::solution_scene`]).
 pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String)> {
-    let name = if sol.scene.is_empty() {
-        "paper"
-    } else {
-        &sol.scene
-    };
-    if let Some(scene) = crate::pipeline::solve::recorded_scene(sol)
-        .with_context(|| format!("the solution's scene `{name}`"))?
-    {
-        return Ok((scene, name.into()));
-    }
-    let text = bf_generated::scene_toml(name).ok_or_else(|| {
-        anyhow!(
-            "the solution records no scene text (`scene_toml`), and its scene `{name}` is not \
-             a compiled scene"
-        )
-    })?;
-    Ok((bf_codegen::Scene::from_toml_str(text, name)?, name.into()))
+    Ok(crate::pipeline::solve::solution_scene(sol)?)
 }
 
 /// The model of a finger with `N` joints on the kernels of `scene` (compiled where the scene

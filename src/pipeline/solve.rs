@@ -333,36 +333,52 @@ pub fn check_recorded_problem(sol: &OcpSolution) -> Result<(), String> {
             sol.points, sol.scheme
         ));
     }
-    let scene = match recorded_scene(sol).map_err(|e| e.to_string())? {
-        Some(scene) => scene,
-        None => {
-            let id = problem.scene();
-            let text = bf_generated::scene_toml(id.as_str()).ok_or_else(|| {
-                format!("`problem` {}: its scene {id} is not built in", sol.problem)
-            })?;
-            bf_codegen::Scene::from_toml_str(text, id.as_str()).map_err(|e| e.to_string())?
-        }
-    };
+    let (scene, _) = solution_scene(sol).map_err(|e| e.to_string())?;
     let settings = recorded_settings(sol, None);
     bf_problem::check_settings(problem, &settings, &scene).map_err(|e| e.to_string())?;
-    // Beyond ±2²⁰ rad the kernels' sine and cosine are not defined: every replay or warm start
-    // from such a sample would evaluate NaN.
-    let range = bf_codegen::trig::ANGLE_RANGE;
+    // Every replay or warm start from a sample beyond the kernels' angle range would evaluate
+    // NaN.
     for (table, samples) in [("nodes", &sol.nodes), ("dense", &sol.dense)] {
         for (k, q) in samples.q.iter().enumerate() {
-            let beyond = scene.links.iter().zip(q).enumerate().find(|(_, (l, v))| {
-                l.joint == bf_codegen::spec::JointType::Revolute && v.abs() > range
-            });
-            if let Some((i, (_, v))) = beyond {
+            if let Some((i, v)) = scene.angle_beyond_range(q) {
                 return Err(format!(
-                    "`{table}.q{}` = {v:e} rad at sample {k} is beyond ±2²⁰ = ±{range} rad, where \
+                    "`{table}.q{}` = {v:e} rad at sample {k} is beyond ±2²⁰ = ±{} rad, where \
                      the kernels' sine and cosine are not defined",
-                    i + 1
+                    i + 1,
+                    bf_codegen::spec::MAX_ANGLE
                 ));
             }
         }
     }
     Ok(())
+}
+
+/// The optimum's scene parsed, with its name: the scene file's text the solution records
+/// (`scene_toml`, with `scene_params`), or, in files that record none, the compiled scene it
+/// names (`paper` for solutions that name none).
+/// A solution on a scene of the user's own runs on interpreted kernels, like its `optimize`
+/// and `simulate`.
+pub fn solution_scene(sol: &OcpSolution) -> Result<(bf_codegen::Scene, String), PipelineError> {
+    let name = if sol.scene.is_empty() {
+        "paper"
+    } else {
+        &sol.scene
+    };
+    let fail = |why: String| PipelineError::Unrecomputable(why);
+    if let Some(scene) =
+        recorded_scene(sol).map_err(|e| fail(format!("the solution's scene `{name}`: {e}")))?
+    {
+        return Ok((scene, name.into()));
+    }
+    let text = bf_generated::scene_toml(name).ok_or_else(|| {
+        fail(format!(
+            "the solution records no scene text (`scene_toml`), and its scene `{name}` is not \
+             a compiled scene"
+        ))
+    })?;
+    let scene = bf_codegen::Scene::from_toml_str(text, name)
+        .map_err(|e| fail(format!("the compiled scene `{name}`: {e}")))?;
+    Ok((scene, name.into()))
 }
 
 /// The scene a solution file records: its `scene_toml` parsed, with its `scene_params` set;

@@ -145,7 +145,7 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
         settings.elements, settings.points
     ));
     pb.enable_steady_tick(std::time::Duration::from_millis(120));
-    let attempts = solve_verified(
+    let solved = solve_verified(
         &scene,
         &settings,
         args.verify_rtol,
@@ -153,9 +153,9 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             .unwrap_or(crate::pipeline::arm::ARM_MESH_DOUBLINGS),
         &text,
         &params,
-    )
-    .with_context(|| {
-        pb.finish_and_clear();
+    );
+    pb.finish_and_clear();
+    let mut attempts = solved.with_context(|| {
         // The cost's weights enter every value the solver computes: a weight given on the
         // command line is named beside the scene, which alone would take the blame for an
         // objective that overflows.
@@ -172,8 +172,6 @@ pub(super) fn run_reach_arm(args: &OptimizeArgs, opts: RunSettings) -> Result<()
             format!("--scene {} with {}", path.display(), given.join(", "))
         }
     })?;
-    pb.finish_and_clear();
-    let mut attempts = attempts;
     for a in &attempts {
         let v = a.solution.verification.as_ref();
         crate::outln!(

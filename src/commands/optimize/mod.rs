@@ -101,67 +101,42 @@ pub fn check_size(points: usize, scheme: Scheme) -> Result<()> {
 /// Largest magnitude accepted in a warm-start file (the bound of every solution file's reader).
 pub use crate::pipeline::solution_io::MAX_SOLUTION_VALUE as MAX_WARM_START_VALUE;
 
-/// Checks every number of a warm-start file (read as JSON) and of the internals file it names
-/// (`solution-internals.json`: the raw collocation data the warm start is built from) against
-/// [`MAX_WARM_START_VALUE`]; the error names the file, the field path and the value.
-pub fn check_warm_start_values(path: &Path) -> Result<()> {
-    // An arm's solution has no collocation data to start from: say so, rather than that
-    // the internals file it never had is missing.
-    let value = read_json_value("--warm-start", path)?;
-    if crate::pipeline::arm::is_arm_solution(&value) {
+/// Refuses an arm's solution as a warm start: it has no collocation data to start from, and
+/// saying so beats saying that the internals file it never had is missing. Everything else of
+/// the file, the range of every number included, the reader checks
+/// ([`crate::pipeline::SolutionIo::read_json`]).
+pub fn refuse_arm_warm_start(path: &Path) -> Result<()> {
+    if crate::pipeline::arm::is_arm_solution(&read_json_value("--warm-start", path)?) {
         bail!(
             "--warm-start {}: a solution of `{REACH_ARM}` (an arm without a ball) cannot start a \
              finger-and-ball problem, and `{REACH_ARM}` takes no warm start",
             path.display()
         );
     }
-    check_document_values("--warm-start", path, &value)
-}
-
-/// [`check_warm_start_values`] for the file given to `option` (`--warm-start`, `simulate
-/// --init`): the same range check wherever a solution file comes back in, the error naming
-/// the option, the file, the field path and the value. The internals file is checked where the
-/// file names one (a `solution.json` with `schema_version`); a plain initial-state file has
-/// none. Returns the file's document, so that a caller reads it once.
-pub fn check_solution_values(option: &str, path: &Path) -> Result<serde_json::Value> {
-    let value = read_json_value(option, path)?;
-    check_document_values(option, path, &value)?;
-    Ok(value)
-}
-
-/// [`check_solution_values`] of the document `value` already read from `path`.
-fn check_document_values(option: &str, path: &Path, value: &serde_json::Value) -> Result<()> {
-    check_json_values(option, path, value)?;
-    if value.get("schema_version").is_some() {
-        let ipath = crate::pipeline::solution_io::internals_path(path, value)
-            .with_context(|| format!("{option} {}", path.display()))?;
-        if option != "--warm-start" && !ipath.exists() {
-            // A replay reads only the solution itself; its internals may be left behind.
-            return Ok(());
-        }
-        check_json_values(option, &ipath, &read_json_value(option, &ipath)?)?;
-    }
     Ok(())
 }
 
-/// The JSON document of the file `path` given to `option`; the error names both.
-fn read_json_value(option: &str, path: &Path) -> Result<serde_json::Value> {
-    let text = bf_codegen::spec::read_input_text(path)
-        .with_context(|| format!("{option} {}: cannot read", path.display()))?;
-    crate::io::json_value(&text)
-        .with_context(|| format!("{option} {}: not a valid JSON document", path.display()))
-}
-
-/// Errors naming `option`, `path`, the field path and the value if a number of `value` is NaN or beyond
-/// [`MAX_WARM_START_VALUE`].
-fn check_json_values(option: &str, path: &Path, value: &serde_json::Value) -> Result<()> {
-    if let Some((field, x)) = crate::pipeline::solution_io::out_of_range(value) {
+/// The document of the file given to `option` (`simulate --init`: an initial state, a finger's
+/// or an arm's solution) with every number checked against [`MAX_WARM_START_VALUE`], the error
+/// naming the option, the file, the field path and the value: a plain initial-state file and
+/// an arm's solution are not read by the finger's solution reader, which checks its own.
+pub fn check_solution_values(option: &str, path: &Path) -> Result<serde_json::Value> {
+    let value = read_json_value(option, path)?;
+    if let Some((field, x)) = crate::pipeline::solution_io::out_of_range(&value) {
         bail!(
             "{option} {}: `{field}` = {x:e} is out of range (|value| ≤ {MAX_WARM_START_VALUE:e})",
             path.display()
         );
     }
-    Ok(())
+    Ok(value)
+}
+
+/// The JSON document of the file `path` given to `option`; the error names both.
+pub fn read_json_value(option: &str, path: &Path) -> Result<serde_json::Value> {
+    let text = bf_codegen::spec::read_input_text(path)
+        .with_context(|| format!("{option} {}: cannot read", path.display()))?;
+    crate::io::json_value(&text)
+        .with_context(|| format!("{option} {}: not a valid JSON document", path.display()))
 }
 
 /// Parse `--problem` (a catalogue problem; `reach-arm` is dispatched before, by [`run_with`]).
@@ -199,7 +174,7 @@ pub fn settings_from_args(args: &OptimizeArgs) -> Result<ProblemSettings> {
     check_size(args.points, scheme)?;
     let warm_start = match &args.warm_start {
         Some(path) => {
-            check_warm_start_values(path)?;
+            refuse_arm_warm_start(path)?;
             let sol = OcpSolution::read_json(path)
                 // Every error of the reader names the file it is about.
                 .context("--warm-start")?;
